@@ -1,0 +1,65 @@
+//! `positioning` — linear positioning error of an axis (ISO 230-1 E_XX; VDI 2617-3 xTx).
+//!
+//! d = δ_k(q_k)·e_k, with δ_k(q) = Σ_i c_i·φ_i(u(q)) an [`ErrorSeries`] over the axis travel.
+//! Frame: machine; displacement of the tool relative to the workpiece (realised − commanded),
+//! i.e. δ is defined as seen by a laser interferometer between tool and table.
+//! Options: `axis`, `basis`, `order` (default 1), `travel`.
+
+use nalgebra::DMatrix;
+
+use super::error_series::ErrorSeries;
+use crate::catalog::TermId;
+use crate::config::Options;
+use crate::error::PhysicsError;
+use crate::signals::{Axis, SignalKind, Signals};
+use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+
+#[derive(Debug, Clone)]
+pub struct Positioning {
+    pub axis: Axis,
+    pub series: ErrorSeries,
+}
+
+impl Positioning {
+    pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
+        Ok(Self { axis: o.axis("axis", None)?, series: ErrorSeries::from_options(o, 1)? })
+    }
+}
+
+/// Coefficient descriptors c0..cn shared by the series-based geometric terms.
+pub(crate) fn series_params(series: &ErrorSeries, unit: &'static str, bound: f64, what: &str) -> Vec<ParamSpec> {
+    (0..series.len()).map(|i| ParamSpec::new(format!("c{i}"), unit, -bound, bound, 0.0, format!("{what}: coefficient of basis function {i} ({:?})", series.basis))).collect()
+}
+
+impl PhysicsTerm for Positioning {
+    fn id(&self) -> TermId {
+        TermId::Positioning
+    }
+    fn label(&self) -> String {
+        format!("positioning[{}]", self.axis)
+    }
+    fn effect(&self) -> EffectKind {
+        EffectKind::Displacement(Frame::Machine)
+    }
+    fn params(&self) -> Vec<ParamSpec> {
+        series_params(&self.series, "m", 1e-3, "positioning error")
+    }
+    fn signals(&self) -> Vec<SignalKind> {
+        vec![SignalKind::AxisPosition(self.axis)]
+    }
+    fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
+        check_len(&self.label(), p, self.series.len())?;
+        let q = s.position(&self.label(), self.axis)?;
+        Ok(displacement(Frame::Machine, self.axis.unit() * self.series.eval(p, q)))
+    }
+    fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
+        check_len(&self.label(), p, self.series.len())?;
+        let q = s.position(&self.label(), self.axis)?;
+        let mut j = DMatrix::zeros(3, p.len());
+        for (i, b) in self.series.basis_values(q).into_iter().enumerate() {
+            j[(self.axis.index(), i)] = b;
+        }
+        Ok(j)
+    }
+}
+

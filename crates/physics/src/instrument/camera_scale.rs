@@ -1,0 +1,47 @@
+//! `camera_scale` — metric scale error of a camera measurement (wrong marker size, focal length
+//! or working distance): a camera-frame point is reported at (1 + s)·p.
+//!
+//! d = s·p,  p = signal `point` in the camera frame. Frame: camera.
+
+use nalgebra::DMatrix;
+
+use crate::catalog::TermId;
+use crate::config::Options;
+use crate::error::PhysicsError;
+use crate::signals::{SignalKind, Signals};
+use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+
+#[derive(Debug, Clone, Default)]
+pub struct CameraScale;
+
+impl CameraScale {
+    pub fn from_options(_o: &Options) -> Result<Self, PhysicsError> {
+        Ok(Self)
+    }
+}
+
+impl PhysicsTerm for CameraScale {
+    fn id(&self) -> TermId {
+        TermId::CameraScale
+    }
+    fn label(&self) -> String {
+        "camera_scale".into()
+    }
+    fn effect(&self) -> EffectKind {
+        EffectKind::Displacement(Frame::Camera)
+    }
+    fn params(&self) -> Vec<ParamSpec> {
+        vec![ParamSpec::new("scale", "1", -0.05, 0.05, 0.0, "relative scale error s")]
+    }
+    fn signals(&self) -> Vec<SignalKind> {
+        vec![SignalKind::Point]
+    }
+    fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
+        check_len(&self.label(), p, 1)?;
+        Ok(displacement(Frame::Camera, s.point3(&self.label())? * p[0]))
+    }
+    fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
+        check_len(&self.label(), p, 1)?;
+        Ok(DMatrix::from_column_slice(3, 1, s.point3(&self.label())?.as_slice()))
+    }
+}

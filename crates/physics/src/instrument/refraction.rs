@@ -1,0 +1,63 @@
+//! `refraction` — range error of a tracker whose weather station misreads the air on the beam.
+//!
+//! Δρ = ρ·( n(t + ΔT, p + Δp, h) / n(t, p, h) − 1 )      (thesis eq. 5.7 with one uniform section)
+//!
+//! n is the shop-floor Edlén index ([`super::edlen::shop_floor_index`]); (t, p, h) are the
+//! station readings (signals), ΔT and Δp the mean offsets of the beam's air from them
+//! (parameters). Hotter air → lower n → the tracker reads short (Δρ < 0). Effect: range change, m.
+
+use nalgebra::{DMatrix, DVector};
+
+use super::edlen::{shop_floor_index, shop_floor_index_dp, shop_floor_index_dt, shop_floor_refractivity};
+use crate::catalog::TermId;
+use crate::config::Options;
+use crate::error::PhysicsError;
+use crate::signals::{SignalKind, Signals};
+use crate::term::{check_len, EffectKind, ParamSpec, PhysicsTerm, Prediction};
+
+#[derive(Debug, Clone, Default)]
+pub struct Refraction;
+
+impl Refraction {
+    pub fn from_options(_o: &Options) -> Result<Self, PhysicsError> {
+        Ok(Self)
+    }
+}
+
+impl PhysicsTerm for Refraction {
+    fn id(&self) -> TermId {
+        TermId::Refraction
+    }
+    fn label(&self) -> String {
+        "refraction".into()
+    }
+    fn effect(&self) -> EffectKind {
+        EffectKind::RangeChange
+    }
+    fn params(&self) -> Vec<ParamSpec> {
+        vec![
+            ParamSpec::new("path_temperature_offset", "K", -10.0, 10.0, 0.0, "mean air temperature on the beam minus the station reading"),
+            ParamSpec::new("path_pressure_offset", "Pa", -500.0, 500.0, 0.0, "mean air pressure on the beam minus the station reading"),
+        ]
+    }
+    fn signals(&self) -> Vec<SignalKind> {
+        vec![SignalKind::TrackerRange, SignalKind::AirTemperature, SignalKind::AirPressure, SignalKind::AirHumidity]
+    }
+    fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
+        check_len(&self.label(), p, 2)?;
+        let rho = s.range(&self.label())?;
+        let (t, pa, h) = s.air(&self.label())?;
+        // n_path/n_lt − 1 = (N_path − N_lt)/(1 + N_lt) with N = n − 1: no cancellation.
+        let n_lt = shop_floor_refractivity(pa, t, h);
+        let n_path = shop_floor_refractivity(pa + p[1], t + p[0], h);
+        Ok(Prediction { kind: self.effect(), value: DVector::from_element(1, rho * (n_path - n_lt) / (1.0 + n_lt)) })
+    }
+    fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
+        check_len(&self.label(), p, 2)?;
+        let rho = s.range(&self.label())?;
+        let (t, pa, h) = s.air(&self.label())?;
+        let n_lt = shop_floor_index(pa, t, h);
+        let (tp, pp) = (t + p[0], pa + p[1]);
+        Ok(DMatrix::from_row_slice(1, 2, &[rho * shop_floor_index_dt(pp, tp, h) / n_lt, rho * shop_floor_index_dp(pp, tp, h) / n_lt]))
+    }
+}

@@ -1,0 +1,93 @@
+//! `tracker_pose` — 6-dof pose of a laser tracker (or any instrument) in the machine frame.
+//!
+//! X_LT = R_LTᵀ·(p − T_LT),  R_LT = Rx(α)·Ry(β)·Rz(δ)   (thesis P5 eqs 2, 21–22; Euler XYZ)
+//!
+//! p is a machine-frame point (signal `point`), T_LT = (tx, ty, tz) the tracker origin and
+//! (α, β, δ) the Euler angles. R_LT is orthonormal, so R_LT⁻¹ = R_LTᵀ. Effect: the point in the
+//! tracker frame, m.
+
+use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+
+use crate::catalog::TermId;
+use crate::config::Options;
+use crate::error::PhysicsError;
+use crate::signals::{SignalKind, Signals};
+use crate::term::{check_len, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+
+fn rx(a: f64) -> Matrix3<f64> {
+    Matrix3::new(1.0, 0.0, 0.0, 0.0, a.cos(), -a.sin(), 0.0, a.sin(), a.cos())
+}
+fn ry(a: f64) -> Matrix3<f64> {
+    Matrix3::new(a.cos(), 0.0, a.sin(), 0.0, 1.0, 0.0, -a.sin(), 0.0, a.cos())
+}
+fn rz(a: f64) -> Matrix3<f64> {
+    Matrix3::new(a.cos(), -a.sin(), 0.0, a.sin(), a.cos(), 0.0, 0.0, 0.0, 1.0)
+}
+fn drx(a: f64) -> Matrix3<f64> {
+    Matrix3::new(0.0, 0.0, 0.0, 0.0, -a.sin(), -a.cos(), 0.0, a.cos(), -a.sin())
+}
+fn dry(a: f64) -> Matrix3<f64> {
+    Matrix3::new(-a.sin(), 0.0, a.cos(), 0.0, 0.0, 0.0, -a.cos(), 0.0, -a.sin())
+}
+fn drz(a: f64) -> Matrix3<f64> {
+    Matrix3::new(-a.sin(), -a.cos(), 0.0, a.cos(), -a.sin(), 0.0, 0.0, 0.0, 0.0)
+}
+
+/// R_LT = Rx(α)·Ry(β)·Rz(δ) (thesis P5 eq. 22).
+pub fn euler_xyz(alpha: f64, beta: f64, delta: f64) -> Matrix3<f64> {
+    rx(alpha) * ry(beta) * rz(delta)
+}
+
+#[derive(Debug, Clone, Default)]
+pub struct TrackerPose;
+
+impl TrackerPose {
+    pub fn from_options(_o: &Options) -> Result<Self, PhysicsError> {
+        Ok(Self)
+    }
+}
+
+impl PhysicsTerm for TrackerPose {
+    fn id(&self) -> TermId {
+        TermId::TrackerPose
+    }
+    fn label(&self) -> String {
+        "tracker_pose".into()
+    }
+    fn effect(&self) -> EffectKind {
+        EffectKind::PointInFrame(Frame::Tracker)
+    }
+    fn params(&self) -> Vec<ParamSpec> {
+        let pi = std::f64::consts::PI;
+        vec![
+            ParamSpec::new("tx", "m", -30.0, 30.0, 0.0, "tracker origin x in the machine frame"),
+            ParamSpec::new("ty", "m", -30.0, 30.0, 0.0, "tracker origin y in the machine frame"),
+            ParamSpec::new("tz", "m", -30.0, 30.0, 0.0, "tracker origin z in the machine frame"),
+            ParamSpec::new("alpha", "rad", -pi, pi, 0.0, "Euler angle about X (first)"),
+            ParamSpec::new("beta", "rad", -pi, pi, 0.0, "Euler angle about Y (second)"),
+            ParamSpec::new("delta", "rad", -pi, pi, 0.0, "Euler angle about Z (third)"),
+        ]
+    }
+    fn signals(&self) -> Vec<SignalKind> {
+        vec![SignalKind::Point]
+    }
+    fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
+        check_len(&self.label(), p, 6)?;
+        let d = s.point3(&self.label())? - Vector3::new(p[0], p[1], p[2]);
+        let x = euler_xyz(p[3], p[4], p[5]).transpose() * d;
+        Ok(Prediction { kind: self.effect(), value: DVector::from_column_slice(x.as_slice()) })
+    }
+    fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
+        check_len(&self.label(), p, 6)?;
+        let d = s.point3(&self.label())? - Vector3::new(p[0], p[1], p[2]);
+        let (a, b, c) = (p[3], p[4], p[5]);
+        let r = euler_xyz(a, b, c);
+        let mut j = DMatrix::zeros(3, 6);
+        j.view_mut((0, 0), (3, 3)).copy_from(&(-r.transpose()));
+        let dr = [drx(a) * ry(b) * rz(c), rx(a) * dry(b) * rz(c), rx(a) * ry(b) * drz(c)];
+        for (k, m) in dr.iter().enumerate() {
+            j.set_column(3 + k, &(m.transpose() * d));
+        }
+        Ok(j)
+    }
+}

@@ -1,0 +1,48 @@
+//! `tool_offset` — error of the tool (or probe, or reflector) offset vector T: length and
+//! radius errors of the tool as mounted.
+//!
+//! d = (dx, dy, dz)  (machine frame; on a 3-axis machine the tool frame is parallel to it —
+//! rotary axes rotate this vector in crates/kinematics). Frame: machine.
+
+use nalgebra::{DMatrix, Vector3};
+
+use crate::catalog::TermId;
+use crate::config::Options;
+use crate::error::PhysicsError;
+use crate::signals::{SignalKind, Signals};
+use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+
+#[derive(Debug, Clone, Default)]
+pub struct ToolOffset;
+
+impl ToolOffset {
+    pub fn from_options(_o: &Options) -> Result<Self, PhysicsError> {
+        Ok(Self)
+    }
+}
+
+impl PhysicsTerm for ToolOffset {
+    fn id(&self) -> TermId {
+        TermId::ToolOffset
+    }
+    fn label(&self) -> String {
+        "tool_offset".into()
+    }
+    fn effect(&self) -> EffectKind {
+        EffectKind::Displacement(Frame::Machine)
+    }
+    fn params(&self) -> Vec<ParamSpec> {
+        ["dx", "dy", "dz"].iter().map(|n| ParamSpec::new(*n, "m", -0.05, 0.05, 0.0, format!("tool offset error along {}", &n[1..]))).collect()
+    }
+    fn signals(&self) -> Vec<SignalKind> {
+        vec![]
+    }
+    fn predict(&self, p: &[f64], _s: &Signals) -> Result<Prediction, PhysicsError> {
+        check_len(&self.label(), p, 3)?;
+        Ok(displacement(Frame::Machine, Vector3::new(p[0], p[1], p[2])))
+    }
+    fn jacobian(&self, p: &[f64], _s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
+        check_len(&self.label(), p, 3)?;
+        Ok(DMatrix::identity(3, 3))
+    }
+}

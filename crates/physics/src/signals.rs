@@ -1,0 +1,202 @@
+//! The signals a term reads: what the twin knows about the machine and its surroundings at the
+//! instant a prediction is made. Every value is SI except temperatures, which are °C (as
+//! `sensor_msgs/Temperature`), and relative humidity, which is in % (as the thesis' Edlén formula).
+
+use nalgebra::{Vector2, Vector3};
+use std::collections::BTreeMap;
+use std::fmt;
+
+use crate::error::PhysicsError;
+
+/// A linear machine axis.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum Axis {
+    X,
+    Y,
+    Z,
+}
+
+impl Axis {
+    pub const ALL: [Axis; 3] = [Axis::X, Axis::Y, Axis::Z];
+    /// 0, 1, 2 for X, Y, Z.
+    pub fn index(self) -> usize {
+        self as usize
+    }
+    /// Unit vector of the axis in the machine frame.
+    pub fn unit(self) -> Vector3<f64> {
+        let mut v = Vector3::zeros();
+        v[self.index()] = 1.0;
+        v
+    }
+    pub fn name(self) -> &'static str {
+        ["x", "y", "z"][self.index()]
+    }
+    pub fn parse(s: &str) -> Option<Axis> {
+        match s.trim().to_ascii_lowercase().as_str() {
+            "x" => Some(Axis::X),
+            "y" => Some(Axis::Y),
+            "z" => Some(Axis::Z),
+            _ => None,
+        }
+    }
+}
+
+impl fmt::Display for Axis {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        f.write_str(self.name())
+    }
+}
+
+/// Kind of signal a term needs (the declaration; values live in [`Signals`]).
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum SignalKind {
+    /// Commanded position of a linear axis, m.
+    AxisPosition(Axis),
+    /// Direction of approach of an axis: +1 moving positive, −1 moving negative.
+    ApproachDirection(Axis),
+    /// Velocity of an axis, m/s.
+    AxisVelocity(Axis),
+    /// Latest reading of a named temperature sensor, °C.
+    Temperature(String),
+    /// Time history of a named temperature sensor (for first-order lags), s and °C.
+    TemperatureHistory(String),
+    /// Air temperature at the weather station, °C.
+    AirTemperature,
+    /// Air pressure at the weather station, Pa.
+    AirPressure,
+    /// Relative humidity at the weather station, %.
+    AirHumidity,
+    /// Time since the instrument was powered on, s.
+    TimeSincePowerOn,
+    /// Load force acting on the structure (e.g. m·g of a payload), N, machine frame.
+    LoadForce,
+    /// Range (distance) measured by a tracker, m.
+    TrackerRange,
+    /// Point in normalised image coordinates (x/z, y/z) of the camera.
+    ImagePoint,
+    /// A 3-D point the term acts on (workpiece feature, machine point, camera-frame point), m.
+    Point,
+    /// Unit vector of the probing (approach) direction in the probe frame.
+    ProbeDirection,
+}
+
+impl fmt::Display for SignalKind {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SignalKind::AxisPosition(a) => write!(f, "axis_position[{a}] (m)"),
+            SignalKind::ApproachDirection(a) => write!(f, "approach_direction[{a}] (±1)"),
+            SignalKind::AxisVelocity(a) => write!(f, "axis_velocity[{a}] (m/s)"),
+            SignalKind::Temperature(s) => write!(f, "temperature[{s}] (°C)"),
+            SignalKind::TemperatureHistory(s) => write!(f, "temperature_history[{s}] (s, °C)"),
+            SignalKind::AirTemperature => write!(f, "air_temperature (°C)"),
+            SignalKind::AirPressure => write!(f, "air_pressure (Pa)"),
+            SignalKind::AirHumidity => write!(f, "air_humidity (%RH)"),
+            SignalKind::TimeSincePowerOn => write!(f, "time_since_power_on (s)"),
+            SignalKind::LoadForce => write!(f, "load_force (N)"),
+            SignalKind::TrackerRange => write!(f, "tracker_range (m)"),
+            SignalKind::ImagePoint => write!(f, "image_point (normalised)"),
+            SignalKind::Point => write!(f, "point (m)"),
+            SignalKind::ProbeDirection => write!(f, "probe_direction (unit vector)"),
+        }
+    }
+}
+
+/// Samples of one temperature sensor: (time s, temperature °C), strictly increasing in time.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct TemperatureHistory {
+    pub samples: Vec<(f64, f64)>,
+}
+
+/// Values of the signals at one instant. Missing values are `None`; a term that needs one
+/// returns [`PhysicsError::MissingSignal`].
+#[derive(Debug, Clone, Default)]
+pub struct Signals {
+    pub axis_position: [Option<f64>; 3],
+    pub approach_direction: [Option<f64>; 3],
+    pub axis_velocity: [Option<f64>; 3],
+    pub temperatures: BTreeMap<String, f64>,
+    pub temperature_histories: BTreeMap<String, TemperatureHistory>,
+    pub air_temperature: Option<f64>,
+    pub air_pressure: Option<f64>,
+    pub air_humidity: Option<f64>,
+    pub time_since_power_on: Option<f64>,
+    pub load_force: Option<Vector3<f64>>,
+    pub tracker_range: Option<f64>,
+    pub image_point: Option<Vector2<f64>>,
+    pub point: Option<Vector3<f64>>,
+    pub probe_direction: Option<Vector3<f64>>,
+}
+
+fn missing(term: &str, kind: SignalKind) -> PhysicsError {
+    PhysicsError::MissingSignal { term: term.to_string(), signal: kind.to_string() }
+}
+
+impl Signals {
+    /// Set all three commanded axis positions (m).
+    pub fn with_positions(mut self, p: Vector3<f64>) -> Self {
+        self.axis_position = [Some(p.x), Some(p.y), Some(p.z)];
+        self
+    }
+    pub fn position(&self, term: &str, a: Axis) -> Result<f64, PhysicsError> {
+        self.axis_position[a.index()].ok_or_else(|| missing(term, SignalKind::AxisPosition(a)))
+    }
+    pub fn approach(&self, term: &str, a: Axis) -> Result<f64, PhysicsError> {
+        let s = self.approach_direction[a.index()].ok_or_else(|| missing(term, SignalKind::ApproachDirection(a)))?;
+        if s == 1.0 || s == -1.0 {
+            Ok(s)
+        } else {
+            Err(PhysicsError::BadSignal { term: term.into(), signal: SignalKind::ApproachDirection(a).to_string(), reason: format!("must be +1 or -1, got {s}") })
+        }
+    }
+    pub fn velocity(&self, term: &str) -> Result<Vector3<f64>, PhysicsError> {
+        let mut v = Vector3::zeros();
+        for a in Axis::ALL {
+            v[a.index()] = self.axis_velocity[a.index()].ok_or_else(|| missing(term, SignalKind::AxisVelocity(a)))?;
+        }
+        Ok(v)
+    }
+    pub fn temperature(&self, term: &str, sensor: &str) -> Result<f64, PhysicsError> {
+        self.temperatures.get(sensor).copied().ok_or_else(|| missing(term, SignalKind::Temperature(sensor.to_string())))
+    }
+    pub fn history(&self, term: &str, sensor: &str) -> Result<&TemperatureHistory, PhysicsError> {
+        let h = self.temperature_histories.get(sensor).ok_or_else(|| missing(term, SignalKind::TemperatureHistory(sensor.to_string())))?;
+        if h.samples.is_empty() || h.samples.windows(2).any(|w| w[1].0 <= w[0].0) {
+            return Err(PhysicsError::BadSignal {
+                term: term.into(),
+                signal: SignalKind::TemperatureHistory(sensor.into()).to_string(),
+                reason: "must be non-empty with strictly increasing times".into(),
+            });
+        }
+        Ok(h)
+    }
+    pub fn air(&self, term: &str) -> Result<(f64, f64, f64), PhysicsError> {
+        Ok((
+            self.air_temperature.ok_or_else(|| missing(term, SignalKind::AirTemperature))?,
+            self.air_pressure.ok_or_else(|| missing(term, SignalKind::AirPressure))?,
+            self.air_humidity.ok_or_else(|| missing(term, SignalKind::AirHumidity))?,
+        ))
+    }
+    pub fn time_on(&self, term: &str) -> Result<f64, PhysicsError> {
+        self.time_since_power_on.ok_or_else(|| missing(term, SignalKind::TimeSincePowerOn))
+    }
+    pub fn load(&self, term: &str) -> Result<Vector3<f64>, PhysicsError> {
+        self.load_force.ok_or_else(|| missing(term, SignalKind::LoadForce))
+    }
+    pub fn range(&self, term: &str) -> Result<f64, PhysicsError> {
+        self.tracker_range.ok_or_else(|| missing(term, SignalKind::TrackerRange))
+    }
+    pub fn image(&self, term: &str) -> Result<Vector2<f64>, PhysicsError> {
+        self.image_point.ok_or_else(|| missing(term, SignalKind::ImagePoint))
+    }
+    pub fn point3(&self, term: &str) -> Result<Vector3<f64>, PhysicsError> {
+        self.point.ok_or_else(|| missing(term, SignalKind::Point))
+    }
+    pub fn probe_dir(&self, term: &str) -> Result<Vector3<f64>, PhysicsError> {
+        let u = self.probe_direction.ok_or_else(|| missing(term, SignalKind::ProbeDirection))?;
+        let n = u.norm();
+        if !(n.is_finite() && (n - 1.0).abs() < 1e-6) {
+            return Err(PhysicsError::BadSignal { term: term.into(), signal: SignalKind::ProbeDirection.to_string(), reason: format!("must be a unit vector, norm is {n}") });
+        }
+        Ok(u)
+    }
+}

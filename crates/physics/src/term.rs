@@ -1,0 +1,121 @@
+//! The [`PhysicsTerm`] trait: one named piece of physics with SI parameters, declared signals,
+//! a prediction of the effect it causes and the analytic Jacobian of that prediction with
+//! respect to its parameters.
+//!
+//! Parameter vectors are plain `&[f64]` in the order of [`PhysicsTerm::params`], each value in
+//! the canonical unit of its [`ParamSpec`]; this is the layout estimators stack into their
+//! state vector.
+
+use nalgebra::{DMatrix, DVector};
+
+use crate::catalog::TermId;
+use crate::error::PhysicsError;
+use crate::signals::{SignalKind, Signals};
+
+/// Description of one parameter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ParamSpec {
+    pub name: String,
+    /// Canonical unit string, parseable by [`crate::units::parse_unit`] (e.g. `m`, `rad`, `1/K`, `s`).
+    pub unit: &'static str,
+    /// Plausible range (inclusive). Values outside are rejected by config validation.
+    pub min: f64,
+    pub max: f64,
+    pub default: f64,
+    pub doc: String,
+}
+
+impl ParamSpec {
+    pub fn new(name: impl Into<String>, unit: &'static str, min: f64, max: f64, default: f64, doc: impl Into<String>) -> Self {
+        Self { name: name.into(), unit, min, max, default, doc: doc.into() }
+    }
+}
+
+/// Frame a displacement is expressed in.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Frame {
+    /// Machine (axis) frame; the displacement is of the tool point relative to the workpiece:
+    /// realised relative position minus commanded relative position.
+    Machine,
+    /// Workpiece frame (feature displacement on the part or artefact).
+    Workpiece,
+    /// Probe frame (stylus): displacement of the recorded contact point.
+    Probe,
+    /// Camera frame (x right, y down, z along the optical axis).
+    Camera,
+    /// Laser-tracker frame.
+    Tracker,
+}
+
+/// What a term's prediction is, and therefore its dimension and unit.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum EffectKind {
+    /// 3-vector displacement in metres, in the stated frame.
+    Displacement(Frame),
+    /// Change of a measured range, m (measured − true).
+    RangeChange,
+    /// Standard deviation of range readings, m (scatter; flagged, never fitted as a bias).
+    RangeScatter,
+    /// 2-vector shift in normalised image coordinates (distorted − ideal); multiply by the focal
+    /// length in pixels to get pixels.
+    ImageShift,
+    /// 3-vector: the input point expressed in another frame, m.
+    PointInFrame(Frame),
+    /// The term changes parameters of a kinematic chain; crates/kinematics evaluates it.
+    Kinematic,
+}
+
+impl EffectKind {
+    /// Number of components of the prediction.
+    pub fn dimension(&self) -> usize {
+        match self {
+            EffectKind::Displacement(_) | EffectKind::PointInFrame(_) => 3,
+            EffectKind::RangeChange | EffectKind::RangeScatter => 1,
+            EffectKind::ImageShift => 2,
+            EffectKind::Kinematic => 0,
+        }
+    }
+}
+
+/// A term's prediction: its kind and value (length = `kind.dimension()`).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Prediction {
+    pub kind: EffectKind,
+    pub value: DVector<f64>,
+}
+
+/// One named piece of physics (see the crate docs for the catalog).
+pub trait PhysicsTerm: std::fmt::Debug + Send + Sync {
+    /// Stable catalog id (DESIGN.md vocabulary).
+    fn id(&self) -> TermId;
+    /// Instance label, e.g. `angular[x:z]`; unique within one model.
+    fn label(&self) -> String;
+    /// What the prediction is.
+    fn effect(&self) -> EffectKind;
+    /// Parameter descriptors, in the order of the parameter vector.
+    fn params(&self) -> Vec<ParamSpec>;
+    /// Signals the prediction reads.
+    fn signals(&self) -> Vec<SignalKind>;
+    /// Effect of the term for parameter vector `p` at the instant described by `s`.
+    fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError>;
+    /// ∂prediction/∂p, analytic; rows = effect dimension, columns = parameters.
+    fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError>;
+
+    /// Default parameter vector.
+    fn defaults(&self) -> Vec<f64> {
+        self.params().iter().map(|p| p.default).collect()
+    }
+}
+
+/// Check the parameter count (used by every term at the top of predict/jacobian).
+pub(crate) fn check_len(label: &str, p: &[f64], expected: usize) -> Result<(), PhysicsError> {
+    if p.len() != expected {
+        return Err(PhysicsError::ParameterCount { term: label.to_string(), expected, got: p.len() });
+    }
+    Ok(())
+}
+
+/// Shorthand: a displacement prediction.
+pub(crate) fn displacement(frame: Frame, v: nalgebra::Vector3<f64>) -> Prediction {
+    Prediction { kind: EffectKind::Displacement(frame), value: DVector::from_column_slice(v.as_slice()) }
+}

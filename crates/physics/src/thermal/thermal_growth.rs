@@ -1,0 +1,111 @@
+//! `thermal_growth` — growth of a structural element (column, ram, spindle head) with its
+//! temperature, optionally lagging behind the sensor by a first-order time constant
+//! (thesis Ch. 5.5.3, eq. 5.9: Δz = L_col·α_L·ΔT).
+//!
+//! d = n̂ · g·(T_f − T_ref),   g = L·α (m/K; L and α are not separable from growth alone)
+//!
+//! Without lag, T_f is the sensor's latest reading (signal `temperature[sensor]`). With
+//! `lag: true`, T_f is the sensor history (signal `temperature_history[sensor]`) passed through
+//! the exact discrete first-order filter
+//! `T_f[0] = T[0],  T_f[k] = T_f[k−1] + (1 − e^(−Δt_k/τ))·(T[k] − T_f[k−1])`
+//! and the prediction is at the last sample; τ is then the second parameter. The Jacobian with
+//! respect to τ is propagated through the recursion analytically.
+//! Frame: machine, tool relative to workpiece. Options: `sensor`, `direction` (default `[0, 0, 1]`),
+//! `lag` (default false), `reference_temperature` (°C, default 20).
+
+use nalgebra::{DMatrix, Vector3};
+
+use crate::catalog::TermId;
+use crate::config::Options;
+use crate::error::PhysicsError;
+use crate::signals::{SignalKind, Signals, TemperatureHistory};
+use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+
+/// First-order lag of a temperature history; returns (T_f at the last sample, ∂T_f/∂τ).
+pub fn first_order_lag(history: &TemperatureHistory, tau: f64) -> (f64, f64) {
+    let mut tf = history.samples[0].1;
+    let mut dtf = 0.0;
+    for w in history.samples.windows(2) {
+        let dt = w[1].0 - w[0].0;
+        let e = (-dt / tau).exp();
+        let a = 1.0 - e;
+        let da = -e * dt / (tau * tau);
+        let innov = w[1].1 - tf;
+        dtf = (1.0 - a) * dtf + da * innov;
+        tf += a * innov;
+    }
+    (tf, dtf)
+}
+
+#[derive(Debug, Clone)]
+pub struct ThermalGrowth {
+    pub sensor: String,
+    pub direction: Vector3<f64>,
+    pub lag: bool,
+    pub reference_temperature: f64,
+}
+
+impl ThermalGrowth {
+    pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
+        let direction = o.vector3("direction", "1", Some(Vector3::z()))?;
+        let n = direction.norm();
+        if !(n > 0.0) {
+            return Err(o.bad("direction", "must be a non-zero vector"));
+        }
+        Ok(Self { sensor: o.text("sensor", None)?, direction: direction / n, lag: o.flag("lag", false)?, reference_temperature: o.quantity("reference_temperature", "degC", Some(20.0))? })
+    }
+    fn n_params(&self) -> usize {
+        if self.lag { 2 } else { 1 }
+    }
+    /// (T_f − T_ref, ∂T_f/∂τ)
+    fn state(&self, p: &[f64], s: &Signals) -> Result<(f64, f64), PhysicsError> {
+        let label = self.label();
+        if self.lag {
+            let (tf, d) = first_order_lag(s.history(&label, &self.sensor)?, p[1]);
+            Ok((tf - self.reference_temperature, d))
+        } else {
+            Ok((s.temperature(&label, &self.sensor)? - self.reference_temperature, 0.0))
+        }
+    }
+}
+
+impl PhysicsTerm for ThermalGrowth {
+    fn id(&self) -> TermId {
+        TermId::ThermalGrowth
+    }
+    fn label(&self) -> String {
+        format!("thermal_growth[{}]", self.sensor)
+    }
+    fn effect(&self) -> EffectKind {
+        EffectKind::Displacement(Frame::Machine)
+    }
+    fn params(&self) -> Vec<ParamSpec> {
+        let mut v = vec![ParamSpec::new("coefficient", "m/K", -1e-4, 1e-4, 11.5e-6, "g = L·α: growth per kelvin")];
+        if self.lag {
+            v.push(ParamSpec::new("time_constant", "s", 1.0, 1e5, 1800.0, "τ: lag of the structure behind the sensor"));
+        }
+        v
+    }
+    fn signals(&self) -> Vec<SignalKind> {
+        if self.lag {
+            vec![SignalKind::TemperatureHistory(self.sensor.clone())]
+        } else {
+            vec![SignalKind::Temperature(self.sensor.clone())]
+        }
+    }
+    fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
+        check_len(&self.label(), p, self.n_params())?;
+        let (dt, _) = self.state(p, s)?;
+        Ok(displacement(Frame::Machine, self.direction * (p[0] * dt)))
+    }
+    fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
+        check_len(&self.label(), p, self.n_params())?;
+        let (dt, dtau) = self.state(p, s)?;
+        let mut j = DMatrix::zeros(3, self.n_params());
+        j.set_column(0, &(self.direction * dt));
+        if self.lag {
+            j.set_column(1, &(self.direction * (p[0] * dtau)));
+        }
+        Ok(j)
+    }
+}

@@ -1,0 +1,57 @@
+//! Every catalog term's analytic Jacobian matches 4th-order central finite differences to
+//! 1e-6 relative (per column) on seeded random parameters and states.
+
+mod common;
+
+use metrocell_physics::catalog::{configure, example_config};
+use metrocell_physics::{EffectKind, TermId};
+
+#[test]
+fn analytic_jacobians_match_finite_differences() {
+    let mut r = common::rng(20_261_121);
+    let mut checked = 0;
+    for &id in TermId::ALL {
+        let built = configure(&example_config(id)).unwrap_or_else(|e| panic!("{id}: {e}"));
+        let term = built.term.as_ref();
+        if term.effect() == EffectKind::Kinematic {
+            continue;
+        }
+        for trial in 0..25 {
+            let p = common::random_params(&mut r, &term.params());
+            let s = common::random_signals(&mut r);
+            let ja = term.jacobian(&p, &s).unwrap_or_else(|e| panic!("{id}: {e}"));
+            let jn = common::finite_difference_jacobian(term, &p, &s);
+            assert_eq!(ja.shape(), jn.shape(), "{id}: Jacobian shape");
+            assert_eq!(ja.nrows(), term.effect().dimension(), "{id}: rows = effect dimension");
+            // Absolute floor: a column whose effect over the whole plausible range is below
+            // 1e-10 of the prediction's size (e.g. ∂/∂τ long after warm-up) is numerically zero.
+            let out = term.predict(&p, &s).unwrap().value.amax().max(1e-300);
+            for c in 0..ja.ncols() {
+                let spec = &term.params()[c];
+                let (a, n) = (ja.column(c), jn.column(c));
+                let err = (a - n).norm();
+                let scale = a.norm().max(n.norm());
+                let floor = 1e-10 * out / (spec.max - spec.min);
+                assert!(err <= 1e-6 * scale + floor, "{id} trial {trial} param {}: analytic {:?} vs numeric {:?} (err {err:e})", spec.name, a.iter().collect::<Vec<_>>(), n.iter().collect::<Vec<_>>());
+            }
+            checked += 1;
+        }
+    }
+    // 20 non-kinematic ids × 25 states
+    assert_eq!(checked, 20 * 25);
+}
+
+#[test]
+fn predictions_have_the_declared_dimension_and_are_linear_where_documented() {
+    let mut r = common::rng(7);
+    for &id in TermId::ALL {
+        let built = configure(&example_config(id)).unwrap();
+        let term = built.term.as_ref();
+        if term.effect() == EffectKind::Kinematic {
+            continue;
+        }
+        let p = common::random_params(&mut r, &term.params());
+        let s = common::random_signals(&mut r);
+        assert_eq!(term.predict(&p, &s).unwrap().value.len(), term.effect().dimension(), "{id}");
+    }
+}

@@ -1,0 +1,116 @@
+//! 21-error XFYZ synthesis (thesis P5 chain): identity, first-order accuracy, agreement with
+//! the sum of catalog terms, and the squareness figure.
+
+mod common;
+
+use metrocell_physics::geometry::angular::Angular;
+use metrocell_physics::geometry::error_series::{ErrorSeries, SeriesBasis};
+use metrocell_physics::geometry::positioning::Positioning;
+use metrocell_physics::geometry::squareness::Squareness;
+use metrocell_physics::geometry::straightness::Straightness;
+use metrocell_physics::geometry::volumetric::*;
+use metrocell_physics::{Axis, PhysicsTerm, Signals};
+use nalgebra::Vector3;
+use rand::Rng;
+
+fn random_model(r: &mut impl Rng, scale_t: f64, scale_r: f64) -> GeometricErrorModel {
+    let s = ErrorSeries::new(SeriesBasis::Legendre, 2, (0.0, 0.8)).unwrap();
+    let mut coef = |k: f64| (s, (0..3).map(|_| k * (2.0 * r.random::<f64>() - 1.0)).collect::<Vec<_>>());
+    let translation = std::array::from_fn(|_| std::array::from_fn(|_| coef(scale_t)));
+    let rotation = std::array::from_fn(|_| std::array::from_fn(|_| coef(scale_r)));
+    let mut sq = || scale_r * (2.0 * r.random::<f64>() - 1.0);
+    GeometricErrorModel { translation, rotation, squareness: SquarenessValues { xy: sq(), xz: sq(), yz: sq() } }
+}
+
+#[test]
+fn zero_errors_give_the_nominal_tool_point() {
+    let zero = |_: Axis, _: f64| AxisErrorValues::default();
+    let q = Vector3::new(0.3, 0.2, 0.1);
+    let tool = Vector3::new(0.0, 0.0, -0.15);
+    let p = xfyz_tool_position_exact(&q, &tool, &zero, &SquarenessValues::default()).unwrap();
+    assert!((p - (tool + q)).amax() < 1e-16);
+}
+
+#[test]
+fn first_order_model_matches_full_chain_to_second_order() {
+    let mut r = common::rng(5);
+    for scale in [1e-4, 1e-5] {
+        let m = random_model(&mut r, scale, scale);
+        m.validate().unwrap();
+        let f = |a: Axis, q: f64| m.axis_errors(a, q);
+        let mut worst: f64 = 0.0;
+        for _ in 0..50 {
+            let q = Vector3::new(0.8 * r.random::<f64>(), 0.8 * r.random::<f64>(), 0.8 * r.random::<f64>());
+            let tool = Vector3::new(0.05, -0.02, -0.2);
+            let exact = xfyz_tool_position_exact(&q, &tool, &f, &m.squareness).unwrap() - (tool + q);
+            let lin = xfyz_volumetric_error_first_order(&q, &tool, &f, &m.squareness);
+            worst = worst.max((exact - lin).amax());
+        }
+        // errors are O(scale); the neglected products O(scale²)·(lever ≤ 2 m) — a few × scale²
+        assert!(worst < 20.0 * scale * scale, "scale {scale}: worst difference {worst:e}");
+    }
+}
+
+#[test]
+fn sum_of_catalog_terms_equals_first_order_synthesis() {
+    let mut r = common::rng(11);
+    let m = random_model(&mut r, 5e-5, 5e-5);
+    let f = |a: Axis, q: f64| m.axis_errors(a, q);
+    let tool = Vector3::new(0.03, 0.01, -0.18);
+    // X is on the workpiece side: the relative (catalog) errors of X are minus P5's table errors.
+    let side = |a: Axis| if a == Axis::X { -1.0 } else { 1.0 };
+    let lever = |a: Axis| match a {
+        Axis::X => vec![Axis::X, Axis::Y, Axis::Z],
+        Axis::Y => vec![Axis::Z],
+        Axis::Z => vec![],
+    };
+    let mut terms: Vec<(Box<dyn PhysicsTerm>, Vec<f64>)> = Vec::new();
+    for a in Axis::ALL {
+        for c in Axis::ALL {
+            let (series, k) = &m.translation[a.index()][c.index()];
+            let p: Vec<f64> = k.iter().map(|v| side(a) * v).collect();
+            if c == a {
+                terms.push((Box::new(Positioning { axis: a, series: *series }), p));
+            } else {
+                terms.push((Box::new(Straightness { axis: a, direction: c, series: *series }), p));
+            }
+            let (series, k) = &m.rotation[a.index()][c.index()];
+            let p: Vec<f64> = k.iter().map(|v| side(a) * v).collect();
+            terms.push((Box::new(Angular { axis: a, about: c, lever_axes: lever(a), abbe_offset: tool, series: *series }), p));
+        }
+    }
+    terms.push((Box::new(Squareness { affected: Axis::X, driver: Axis::Y }), vec![m.squareness.xy]));
+    terms.push((Box::new(Squareness { affected: Axis::X, driver: Axis::Z }), vec![m.squareness.xz]));
+    terms.push((Box::new(Squareness { affected: Axis::Y, driver: Axis::Z }), vec![m.squareness.yz]));
+    assert_eq!(terms.len(), 21, "the 21 geometric errors of a 3-axis machine");
+    for _ in 0..30 {
+        let q = Vector3::new(0.8 * r.random::<f64>(), 0.8 * r.random::<f64>(), 0.8 * r.random::<f64>());
+        let s = Signals::default().with_positions(q);
+        let mut sum = Vector3::zeros();
+        for (t, p) in &terms {
+            let v = t.predict(p, &s).unwrap().value;
+            sum += Vector3::new(v[0], v[1], v[2]);
+        }
+        let synth = xfyz_volumetric_error_first_order(&q, &tool, &f, &m.squareness);
+        assert!((sum - synth).amax() < 1e-15, "terms {sum:?} vs synthesis {synth:?}");
+    }
+}
+
+/// Thesis Ch. 5.5: xWy = 0.20448 mrad; over 400 mm of Y it displaces X by ≈81.8 µm.
+#[test]
+fn squareness_figure() {
+    let zero = |_: Axis, _: f64| AxisErrorValues::default();
+    let sq = SquarenessValues { xy: 0.20448e-3, xz: 0.0, yz: 0.0 };
+    let e = xfyz_volumetric_error_first_order(&Vector3::new(0.0, 0.4, 0.0), &Vector3::zeros(), &zero, &sq);
+    assert!((e.x.abs() * 1e6 - 81.792).abs() < 1e-6, "{} µm", e.x * 1e6);
+    assert!(e.x < 0.0, "P5 sign: Y's x-component is −y·s_xy");
+}
+
+#[test]
+fn abbe_error_of_pitch_grows_with_tool_offset() {
+    // Pitch of Y (rotation about X) of 20 µrad with a 150 mm probe below the spindle: 3 µm in y.
+    let s = ErrorSeries::new(SeriesBasis::Polynomial, 0, (0.0, 1.0)).unwrap();
+    let t = Angular { axis: Axis::Y, about: Axis::X, lever_axes: vec![], abbe_offset: Vector3::new(0.0, 0.0, -0.15), series: s };
+    let d = t.predict(&[20e-6], &Signals::default().with_positions(Vector3::new(0.0, 0.3, 0.0))).unwrap().value;
+    assert!((d[1] - 3e-6).abs() < 1e-15 && d[0] == 0.0 && d[2] == 0.0);
+}

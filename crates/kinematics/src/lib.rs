@@ -1,0 +1,28 @@
+//! Kinematics of the digital twin's machine families: Cartesian 3-axis machines in any stacking order
+//! (nominal and with the thesis error chain), the five-axis tilting/rotary-table machine, the linear delta
+//! (Marlin conventions), serial arms from DH tables or URDF, and camera-to-tool frame alignment; plus the
+//! Jacobians of forward kinematics w.r.t. geometric parameters that the estimator needs.
+//!
+//! # Conventions (stated once, apply everywhere)
+//! - Units: SI in the whole API — metres and radians. Seed figures in mm/degrees are converted in the tests.
+//! - Frames: right-handed. `Isometry3` values named `t_a_b` map coordinates of frame `b` into frame `a`.
+//! - Rotations: active; a positive angle is counter-clockwise looking down the axis towards the origin
+//!   (right-hand rule). Roll–pitch–yaw is the URDF convention `R = Rz(yaw)·Ry(pitch)·Rx(roll)`.
+//! - Small-angle error matrices (thesis P5 eq. 6): `R(ε) = I + [ε]×`, with `ε = (εx, εy, εz)` the rotation
+//!   about x, y, z of the moving carriage.
+//! - Each module documents its own machine frame once, at the top.
+
+pub mod cartesian;
+pub mod cartesian_error_chain;
+pub mod delta;
+pub mod delta_rod_correction;
+pub mod dh;
+pub mod error;
+pub mod five_axis;
+pub mod frame_alignment;
+pub mod numeric_jacobian;
+pub mod serial;
+pub mod transform;
+pub mod urdf_chain;
+
+pub use error::KinematicsError;

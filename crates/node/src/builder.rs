@@ -1,0 +1,175 @@
+//! Setting a node up: command line → name, namespace and parameters; environment → DDS
+//! participant; then the ros2-client node, its Spinner, rosout, diagnostics and `/clock`.
+
+use std::time::Duration;
+
+use ros2_client::{NodeName, NodeOptions};
+
+use crate::background::{Background, BackgroundTasks, SimTime};
+use crate::diagnostics::Diagnostics;
+use crate::environment::DdsEnvironment;
+use crate::error::{create_error, NodeError};
+use crate::logging::Logger;
+use crate::names::{fully_qualified_node_name, normalize_namespace, validate_node_name};
+use crate::node::MetrocellNode;
+use crate::params::{problem_error, ParamDecl, ParamSource, ParamValue, Parameters, USE_SIM_TIME};
+use crate::ros_args::{parse_command_line, RosArgs};
+use crate::shutdown::{trigger_on_signals, ShutdownToken};
+
+/// Builder of a [`MetrocellNode`].
+pub struct NodeBuilder {
+    name: String,
+    namespace: String,
+    decls: Vec<ParamDecl>,
+    ros_args: RosArgs,
+    environment: Option<DdsEnvironment>,
+    diagnostics_period: Option<Duration>,
+    handle_signals: bool,
+}
+
+impl NodeBuilder {
+    /// `default_name` is the node name unless `--ros-args -r __node:=...` renames it.
+    pub fn new(default_name: &str) -> NodeBuilder {
+        NodeBuilder {
+            name: default_name.to_string(),
+            namespace: "/".to_string(),
+            decls: Vec::new(),
+            ros_args: RosArgs::default(),
+            environment: None,
+            diagnostics_period: Some(Duration::from_secs(1)),
+            handle_signals: true,
+        }
+    }
+
+    /// Default namespace (overridden by `-r __ns:=...`).
+    pub fn namespace(mut self, ns: &str) -> NodeBuilder {
+        self.namespace = ns.to_string();
+        self
+    }
+
+    /// Parse a full argv (argv[0] first); returns the builder and the node's own arguments.
+    pub fn args<I, S>(mut self, argv: I) -> Result<(NodeBuilder, Vec<String>), NodeError>
+    where
+        I: IntoIterator<Item = S>,
+        S: Into<String>,
+    {
+        let cl = parse_command_line(argv)?;
+        self.ros_args = cl.ros;
+        Ok((self, cl.node_args))
+    }
+
+    /// Use already parsed ROS arguments.
+    pub fn ros_args(mut self, ros: RosArgs) -> NodeBuilder {
+        self.ros_args = ros;
+        self
+    }
+
+    pub fn param(mut self, decl: ParamDecl) -> NodeBuilder {
+        self.decls.push(decl);
+        self
+    }
+
+    pub fn params(mut self, decls: impl IntoIterator<Item = ParamDecl>) -> NodeBuilder {
+        self.decls.extend(decls);
+        self
+    }
+
+    /// Use this DDS environment instead of reading `ROS_DOMAIN_ID` etc. from the process.
+    pub fn environment(mut self, env: DdsEnvironment) -> NodeBuilder {
+        self.environment = Some(env);
+        self
+    }
+
+    /// Heartbeat period on `/diagnostics` (default 1 s); `None` disables it (e.g. for CLI tools).
+    pub fn diagnostics_period(mut self, period: Option<Duration>) -> NodeBuilder {
+        self.diagnostics_period = period;
+        self
+    }
+
+    /// Whether SIGINT/SIGTERM trigger the node's shutdown token (default true).
+    pub fn handle_signals(mut self, yes: bool) -> NodeBuilder {
+        self.handle_signals = yes;
+        self
+    }
+
+    pub fn build(self) -> Result<MetrocellNode, NodeError> {
+        let ros = self.ros_args;
+        let original = self.name.clone();
+        let name = ros.node_name_remap(&original).unwrap_or(original.clone());
+        validate_node_name(&name)?;
+        let namespace = normalize_namespace(&ros.namespace_remap(&original).unwrap_or(self.namespace))?;
+        let fqn = fully_qualified_node_name(&namespace, &name);
+
+        let min_level = crate::logging::effective_log_level(&ros, &fqn);
+
+        let parameters = Parameters::resolve(&self.decls, &ros, &fqn, &name)?;
+        let early = Logger::stderr_only(&fqn, min_level);
+        for w in parameters.warnings() {
+            early.warn(w);
+        }
+
+        let env = match self.environment {
+            Some(e) => e,
+            None => DdsEnvironment::from_env()?,
+        };
+        let context = crate::participant::create_context(&env)?;
+
+        let mut options = NodeOptions::new().enable_rosout(!ros.disable_rosout);
+        for p in parameters.iter() {
+            options = options.declare_parameter(&p.decl.name, p.value.to_ros());
+        }
+        let decls: Vec<ParamDecl> = parameters.iter().map(|p| p.decl.clone()).collect();
+        options = options.parameter_validator(Box::new(move |pname: &str, value: &ros2_client::ParameterValue| {
+            let Some(d) = decls.iter().find(|d| d.name == pname) else {
+                return Err(format!("parameter '{pname}' is not declared"));
+            };
+            let v = ParamValue::from_ros(value).ok_or_else(|| format!("parameter '{pname}': unsupported value type"))?;
+            d.check(&v).map(|_| ()).map_err(|p| problem_error(d, &v, ParamSource::Service, p).to_string())
+        }));
+
+        let node_name = NodeName::new(&namespace, &name).map_err(|e| create_error(format!("node '{fqn}'"), e))?;
+        let mut ros_node = context.new_node(node_name, options).map_err(|e| create_error(format!("node '{fqn}'"), e))?;
+        let spinner = ros_node.spinner().map_err(|e| create_error("ros2-client spinner", e))?;
+
+        let logger = Logger::new(Some(ros_node.logging_handle()), &fqn, min_level, !ros.disable_stdout);
+        let diagnostics = Diagnostics::new(&fqn);
+        let sim_time = SimTime::default();
+        let use_sim_time = parameters.get::<bool>(USE_SIM_TIME).unwrap_or(false);
+
+        let mut node = MetrocellNode::assemble(crate::node::Parts {
+            name,
+            namespace,
+            ros_args: ros,
+            parameters,
+            context,
+            ros_node,
+            logger,
+            diagnostics: diagnostics.clone(),
+            sim_time: sim_time.clone(),
+            use_sim_time,
+            shutdown: ShutdownToken::new(),
+        });
+        if self.handle_signals {
+            trigger_on_signals(&node.shutdown_token()).map_err(|e| create_error("SIGINT/SIGTERM handler", e))?;
+        }
+
+        let heartbeat = match self.diagnostics_period {
+            Some(period) => {
+                let publisher = node.publisher("/diagnostics", crate::qos::reliable())?;
+                Some((publisher, diagnostics, period))
+            }
+            None => None,
+        };
+        let clock = if use_sim_time {
+            // rclcpp's ClockQoS: best effort, keep last 1.
+            let qos = crate::qos::sensor_data().history(ros2_client::qos::History::KeepLast { depth: 1 });
+            Some((node.subscription("/clock", qos)?, sim_time))
+        } else {
+            None
+        };
+        let background = Background::start(BackgroundTasks { spinner, heartbeat, clock }, &fqn)
+            .map_err(|e| create_error("node background thread", e))?;
+        node.set_background(background);
+        Ok(node)
+    }
+}

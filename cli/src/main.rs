@@ -1,1 +1,42 @@
-fn main() {}
+//! `metrocell`: one command for a metrology cell — start it, inspect it, record it, simulate it.
+//!
+//! Thin by design: every subcommand parses its arguments and calls a library crate.
+
+mod launch_command;
+mod topic;
+
+use clap::{Parser, Subcommand};
+
+#[derive(Parser)]
+#[command(
+    name = "metrocell",
+    version,
+    about = "In-process metrology for robot cells and machine tools, as ROS 2 nodes",
+    long_about = "In-process metrology for robot cells and machine tools, as ROS 2 nodes.\n\n\
+Nodes talk over DDS with ROS 2 names and types, so `ros2` tools can join; these commands let you start\n\
+and inspect a cell without a ROS install. DDS honours ROS_DOMAIN_ID and\n\
+ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST (or ROS_LOCALHOST_ONLY=1) to keep traffic on this machine.",
+    after_help = "Examples:\n  metrocell launch launch-configs/cell.launch.yaml\n  metrocell topic list\n  metrocell topic echo /tracker/measurements --count 3"
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Start the nodes of a ROS 2 YAML launch file, each as its own process
+    Launch(launch_command::LaunchArgs),
+    /// Inspect and publish on topics (list, echo, pub, hz), like `ros2 topic`
+    #[command(subcommand)]
+    Topic(topic::TopicCommand),
+}
+
+fn main() {
+    let cli = Cli::parse();
+    let code = match cli.command {
+        Command::Launch(args) => launch_command::run(args),
+        Command::Topic(command) => topic::run(command),
+    };
+    std::process::exit(code);
+}

@@ -164,7 +164,7 @@ impl MetrocellNode {
             .expect("created above")
             .create_datawriter_no_key(&t, Some(rustdds::QosPolicies::from(&qos)))
             .map_err(|e| create_error(format!("raw writer on '{resolved}' ({ros_type})"), e))?;
-        Ok(RawPublisher { writer, topic: resolved, ros_type: ros_type.to_string() })
+        Ok(RawPublisher { writer, topic: resolved, ros_type: ros_type.to_string(), matched: Default::default() })
     }
 
     /// Subscription that yields payload bytes, source timestamp and publisher GID, for any type.

@@ -96,6 +96,8 @@ pub struct RawPublisher {
     pub(crate) writer: no_key::DataWriter<EncodedPayload, RawCdrLeSerializer>,
     pub(crate) topic: String,
     pub(crate) ros_type: String,
+    /// Last matched-reader count seen in the writer's status events.
+    pub(crate) matched: std::cell::Cell<usize>,
 }
 
 impl RawPublisher {
@@ -128,6 +130,18 @@ impl RawPublisher {
     pub fn gid(&self) -> Gid {
         use rustdds::RTPSEntity;
         Gid::from(self.writer.guid())
+    }
+
+    /// How many DDS readers currently match this writer (QoS-compatible, same topic and type),
+    /// as RustDDS last reported in a PublicationMatched status event.
+    pub fn matched_subscriptions(&self) -> usize {
+        use rustdds::{DataWriterStatus, StatusEvented};
+        while let Some(status) = self.writer.try_recv_status() {
+            if let DataWriterStatus::PublicationMatched { current, .. } = status {
+                self.matched.set(current.count().max(0) as usize);
+            }
+        }
+        self.matched.get()
     }
 }
 

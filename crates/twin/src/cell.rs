@@ -1,0 +1,540 @@
+//! The validated cell: everything from the cell file in SI units, the physics terms configured
+//! by the physics catalog, the thermal model as a physics [`ShiftThermalModel`], and the
+//! measurement program. Built by [`Cell::from_yaml_str`] / [`Cell::from_path`]; fields are
+//! public so tests and tools can adjust a loaded cell (e.g. zero the noise).
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::path::Path;
+
+use metrocell_kinematics::cartesian::StackingOrder;
+use metrocell_kinematics::delta::DeltaGeometry;
+use metrocell_physics::instrument::tracker_pose::euler_xyz;
+use metrocell_physics::model::TermModel;
+use metrocell_physics::thermal::shift_model::{AmbientCycle, DutySegment, HeatSource, SensorLocation, ShiftThermalModel, StructureNode, ThermalSensor};
+use metrocell_physics::{configure, ConfiguredTerm, EffectKind, Frame, SignalKind, TermConfig, TermId};
+use nalgebra::{Matrix3, Vector3};
+
+use crate::cell_file::*;
+use crate::error::CellError;
+use crate::program::Program;
+use crate::quantity::{vector3, Quantity};
+
+/// The kinematic chain of the machine (crates/kinematics).
+#[derive(Debug, Clone, PartialEq)]
+pub enum MachineKinematics {
+    /// Cartesian 3-axis machine in a stacking order.
+    Cartesian(StackingOrder),
+    /// Linear delta: the program's axis coordinates are the commanded effector position; the
+    /// firmware's inverse kinematics uses this nominal geometry, the true geometry adds the
+    /// `delta_*` terms' trims.
+    Delta(DeltaGeometry),
+}
+
+/// Nominal geometry of the machine.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MachineGeometry {
+    pub kinematics: MachineKinematics,
+    /// `[min, max]` of x, y, z (m): axis travels (Cartesian) or the effector box (delta).
+    pub travel: [[f64; 2]; 3],
+    /// Tool tip (tracker target) relative to the tool-carrying body at q = 0 (m).
+    pub tool_offset: Vector3<f64>,
+}
+
+impl MachineGeometry {
+    /// Nominal forward kinematics (crates/kinematics convention, any stacking order; for a delta
+    /// q is the effector position): tool tip in the workpiece frame, `q + tool_offset`.
+    pub fn nominal_tool_point(&self, q: &Vector3<f64>) -> Vector3<f64> {
+        q + self.tool_offset
+    }
+
+    /// The stacking order of a Cartesian machine.
+    pub fn stacking(&self) -> Option<&StackingOrder> {
+        match &self.kinematics {
+            MachineKinematics::Cartesian(o) => Some(o),
+            MachineKinematics::Delta(_) => None,
+        }
+    }
+}
+
+/// Pose of an instrument frame in the workpiece frame: `p_wp = rotation·p_inst + translation`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct InstrumentPose {
+    pub rotation: Matrix3<f64>,
+    pub translation: Vector3<f64>,
+    /// The Euler XYZ angles `rotation` was built from (rad).
+    pub euler_xyz: [f64; 3],
+}
+
+impl InstrumentPose {
+    pub fn from_euler_xyz(translation: Vector3<f64>, e: [f64; 3]) -> Self {
+        Self { rotation: euler_xyz(e[0], e[1], e[2]), translation, euler_xyz: e }
+    }
+    /// Workpiece-frame point → instrument frame: `R_LTᵀ·(p − T_LT)` (thesis eq. 3.5, outer part).
+    pub fn to_instrument(&self, p: &Vector3<f64>) -> Vector3<f64> {
+        self.rotation.transpose() * (p - self.translation)
+    }
+}
+
+/// Warm-up drift of the range, Δρ = A + B·(1 − e^(−t/τ)).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct WarmupSpec {
+    pub offset: f64,
+    pub amplitude: f64,
+    pub time_constant: f64,
+}
+
+/// Errors of the tracker's weather station (reading − truth, and white noise σ).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct StationSpec {
+    pub temperature_bias: f64,
+    pub pressure_bias: f64,
+    pub humidity_bias: f64,
+    pub temperature_noise: f64,
+    pub pressure_noise: f64,
+    pub humidity_noise: f64,
+}
+
+/// A window of turbulent air: σ inflation coefficient c on [start, end).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TurbulenceSpec {
+    pub start: f64,
+    pub end: f64,
+    pub coefficient: f64,
+}
+
+/// Poisson beam breaks.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BeamBreakSpec {
+    /// Breaks per second.
+    pub rate: f64,
+    /// Mean duration (s), exponential.
+    pub mean_duration: f64,
+}
+
+/// Laser tracker model parameters (see [`crate::tracker_model`]).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrackerSpec {
+    pub pose: InstrumentPose,
+    pub rate: f64,
+    /// σ_ρ = range_noise_constant + range_noise_per_metre·ρ (m).
+    pub range_noise_constant: f64,
+    pub range_noise_per_metre: f64,
+    /// σ of azimuth and elevation (rad).
+    pub angular_noise: f64,
+    pub warmup: Option<WarmupSpec>,
+    pub powered_on_before_start: f64,
+    pub station: StationSpec,
+    pub turbulence: Vec<TurbulenceSpec>,
+    pub beam_breaks: Option<BeamBreakSpec>,
+}
+
+/// A thermocouple: reads the true temperature of its location + offset + white noise.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ThermocoupleSpec {
+    pub name: String,
+    /// `None` = ambient; `Some(node)` = a structure node.
+    pub node: Option<String>,
+    pub noise: f64,
+    pub offset: f64,
+    pub calibration_uncertainty: f64,
+    pub rate: f64,
+}
+
+/// Touch probe: hits at each program point.
+#[derive(Debug)]
+pub struct ProbeSpec {
+    pub directions: Vec<Vector3<f64>>,
+    pub hit_interval: f64,
+    pub noise: f64,
+    /// The physics `probe_pretravel` term with its true parameters.
+    pub pretravel: Option<ConfiguredTerm>,
+}
+
+/// Camera frame requests, once per dwell.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CameraSpec {
+    /// Camera frame relative to the tool tip (translation) and its orientation, workpiece axes.
+    pub mount: InstrumentPose,
+    pub delay: f64,
+}
+
+/// True air on the tracker beam.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct AirSpec {
+    pub pressure: f64,
+    pub humidity: f64,
+    pub beam_temperature_offset: f64,
+}
+
+/// A validated cell description.
+#[derive(Debug)]
+pub struct Cell {
+    pub name: String,
+    pub description: String,
+    pub machine: MachineGeometry,
+    pub tracker: Option<TrackerSpec>,
+    pub thermocouples: Vec<ThermocoupleSpec>,
+    pub machine_state_rate: Option<f64>,
+    pub probe: Option<ProbeSpec>,
+    pub camera: Option<CameraSpec>,
+    /// Lumped thermal model; its sensors are the thermocouples (bias = offset, noise).
+    pub thermal: ShiftThermalModel,
+    pub thermal_step: f64,
+    pub air: AirSpec,
+    pub load_force: Option<Vector3<f64>>,
+    pub program: Program,
+    /// The machine's true error terms (machine-frame displacements).
+    pub terms: TermModel,
+    /// The term configs as written (for reports and for deriving nominal models).
+    pub term_configs: Vec<TermConfig>,
+}
+
+impl Cell {
+    /// Parse and validate a cell file's text; `file` names it in errors.
+    pub fn from_yaml_str(text: &str, file: &str) -> Result<Cell, CellError> {
+        let raw: CellFile = serde_yaml::from_str(text).map_err(|e| CellError::Yaml { file: file.into(), message: e.to_string() })?;
+        Cell::from_file(&raw)
+    }
+
+    /// Read, parse and validate a cell file.
+    pub fn from_path(path: impl AsRef<Path>) -> Result<Cell, CellError> {
+        let p = path.as_ref();
+        let text = std::fs::read_to_string(p).map_err(|e| CellError::Io { file: p.display().to_string(), reason: e.to_string() })?;
+        Cell::from_yaml_str(&text, &p.display().to_string())
+    }
+
+    /// Validate a parsed file.
+    pub fn from_file(f: &CellFile) -> Result<Cell, CellError> {
+        let machine = machine(&f.machine)?;
+        let thermocouples = f
+            .sensors
+            .thermocouples
+            .iter()
+            .enumerate()
+            .map(|(i, t)| thermocouple(i, t))
+            .collect::<Result<Vec<_>, _>>()?;
+        let thermal = thermal_model(&f.environment, &f.sensors.thermocouples)?;
+        let tracker = f.sensors.tracker.as_ref().map(tracker).transpose()?;
+        let machine_state_rate = f.sensors.machine_state.as_ref().map(|m| m.rate.positive("sensors.machine_state.rate", "1/s")).transpose()?;
+        let probe = f.sensors.probe.as_ref().map(probe).transpose()?;
+        let camera = f.sensors.camera.as_ref().map(camera).transpose()?;
+        let env = &f.environment;
+        let thermal_step = match &env.thermal_step {
+            Some(q) => q.positive("environment.thermal_step", "s")?,
+            None => 1.0,
+        };
+        let humidity = env.air.humidity;
+        if !(0.0..=100.0).contains(&humidity) {
+            return Err(CellError::OutOfRange { path: "environment.air.humidity".into(), value: humidity, reason: "must be in [0, 100] %RH".into() });
+        }
+        let air = AirSpec {
+            pressure: env.air.pressure.positive("environment.air.pressure", "Pa")?,
+            humidity,
+            beam_temperature_offset: opt(&env.air.beam_temperature_offset, "environment.air.beam_temperature_offset", "K")?,
+        };
+        let load_force = env.load_force.as_ref().map(|v| vector3(v, "environment.load_force", "N")).transpose()?;
+        let program = Program::from_section(&f.program, &machine)?;
+        let sensor_names: BTreeSet<String> = thermocouples.iter().map(|t| t.name.clone()).collect();
+        let terms = terms(&f.terms, &sensor_names, load_force.is_some(), matches!(machine.kinematics, MachineKinematics::Delta(_)))?;
+        if let MachineKinematics::Delta(g) = &machine.kinematics {
+            for (i, q) in program.points.iter().chain(std::iter::once(&program.home)).enumerate() {
+                g.inverse(q).map_err(|e| CellError::invalid(if i == program.points.len() { "program.home".to_string() } else { format!("program point {i}") }, format!("not reachable by the delta: {e}")))?;
+            }
+        }
+        Ok(Cell {
+            name: f.name.clone(),
+            description: f.description.clone(),
+            machine,
+            tracker,
+            thermocouples,
+            machine_state_rate,
+            probe,
+            camera,
+            thermal,
+            thermal_step,
+            air,
+            load_force,
+            program,
+            terms,
+            term_configs: f.terms.clone(),
+        })
+    }
+}
+
+impl Cell {
+    /// For a delta: the true geometry, the nominal one plus the trims of the `delta_*` terms
+    /// (tower order A, B, C). `None` for other families.
+    pub fn true_delta_geometry(&self) -> Option<DeltaGeometry> {
+        let MachineKinematics::Delta(nominal) = &self.machine.kinematics else { return None };
+        let mut g = *nominal;
+        for t in &self.terms.terms {
+            let p = [t.params[0], t.params[1], t.params[2]];
+            let add = |a: &mut [f64; 3]| (0..3).for_each(|i| a[i] += p[i]);
+            match t.term.id() {
+                TermId::DeltaRodLength => add(&mut g.rod_trim),
+                TermId::DeltaRadius => add(&mut g.radius_trim),
+                TermId::DeltaTowerAngle => add(&mut g.tower_angle_trim),
+                TermId::DeltaEndstop => add(&mut g.endstop),
+                _ => {}
+            }
+        }
+        Some(g)
+    }
+}
+
+fn opt(q: &Option<Quantity>, path: &str, unit: &str) -> Result<f64, CellError> {
+    q.as_ref().map(|q| q.to_si(path, unit)).transpose().map(|v| v.unwrap_or(0.0))
+}
+
+fn machine(m: &MachineSection) -> Result<MachineGeometry, CellError> {
+    let kinematics = match m.family {
+        MachineFamily::Cartesian => {
+            if m.delta.is_some() {
+                return Err(CellError::invalid("machine.delta", "is for family: delta; a cartesian machine takes machine.stacking"));
+            }
+            let stacking = m.stacking.as_deref().ok_or_else(|| CellError::invalid("machine.stacking", "is required for a cartesian machine (e.g. XFYZ, FXYZ, XYFZ)"))?;
+            MachineKinematics::Cartesian(stacking.parse().map_err(|e| CellError::invalid("machine.stacking", format!("{e}; allowed: the letters X, Y, Z and F once each, e.g. XFYZ")))?)
+        }
+        MachineFamily::Delta => {
+            if m.stacking.is_some() {
+                return Err(CellError::invalid("machine.stacking", "is for family: cartesian; a delta takes machine.delta {rod_length, radius}"));
+            }
+            let d = m.delta.as_ref().ok_or_else(|| CellError::invalid("machine.delta", "is required for a delta machine: {rod_length, radius}"))?;
+            let rod = d.rod_length.positive("machine.delta.rod_length", "m")?;
+            let radius = d.radius.positive("machine.delta.radius", "m")?;
+            MachineKinematics::Delta(DeltaGeometry::new(rod, radius).map_err(|e| CellError::invalid("machine.delta", e.to_string()))?)
+        }
+        other => {
+            return Err(CellError::invalid(
+                "machine.family",
+                format!("family `{other:?}` is described by crates/kinematics but not simulated by the twin yet; allowed today: cartesian, delta").to_lowercase(),
+            ))
+        }
+    };
+    let mut travel = [[0.0; 2]; 3];
+    for (i, (name, r)) in [("x", &m.travel.x), ("y", &m.travel.y), ("z", &m.travel.z)].into_iter().enumerate() {
+        let lo = r[0].to_si(&format!("machine.travel.{name}[0]"), "m")?;
+        let hi = r[1].to_si(&format!("machine.travel.{name}[1]"), "m")?;
+        if !(hi > lo) {
+            return Err(CellError::invalid(format!("machine.travel.{name}"), format!("needs min < max, got [{lo}, {hi}] m")));
+        }
+        travel[i] = [lo, hi];
+    }
+    let tool_offset = m.tool_offset.as_ref().map(|v| vector3(v, "machine.tool_offset", "m")).transpose()?.unwrap_or_else(Vector3::zeros);
+    Ok(MachineGeometry { kinematics, travel, tool_offset })
+}
+
+fn pose(p: &PoseSection, path: &str) -> Result<InstrumentPose, CellError> {
+    let t = vector3(&p.translation, &format!("{path}.translation"), "m")?;
+    let e = match &p.euler_xyz {
+        Some(e) => vector3(e, &format!("{path}.euler_xyz"), "rad")?,
+        None => Vector3::zeros(),
+    };
+    Ok(InstrumentPose::from_euler_xyz(t, [e.x, e.y, e.z]))
+}
+
+fn tracker(t: &TrackerSection) -> Result<TrackerSpec, CellError> {
+    let p = "sensors.tracker";
+    let warmup = match &t.warmup {
+        None => None,
+        Some(params) => {
+            let c = configure(&TermConfig { id: "tracker_warmup".into(), options: BTreeMap::new(), params: params.clone(), use_defaults: false }).map_err(|e| CellError::term(format!("{p}.warmup"), e))?;
+            Some(WarmupSpec { offset: c.params[0], amplitude: c.params[1], time_constant: c.params[2] })
+        }
+    };
+    let s = t.station.clone().unwrap_or_default();
+    let sp = format!("{p}.station");
+    let station = StationSpec {
+        temperature_bias: opt(&s.temperature_bias, &format!("{sp}.temperature_bias"), "K")?,
+        pressure_bias: opt(&s.pressure_bias, &format!("{sp}.pressure_bias"), "Pa")?,
+        humidity_bias: opt(&s.humidity_bias, &format!("{sp}.humidity_bias"), "1")?,
+        temperature_noise: s.temperature_noise.as_ref().map(|q| q.non_negative(&format!("{sp}.temperature_noise"), "K")).transpose()?.unwrap_or(0.0),
+        pressure_noise: s.pressure_noise.as_ref().map(|q| q.non_negative(&format!("{sp}.pressure_noise"), "Pa")).transpose()?.unwrap_or(0.0),
+        humidity_noise: s.humidity_noise.as_ref().map(|q| q.non_negative(&format!("{sp}.humidity_noise"), "1")).transpose()?.unwrap_or(0.0),
+    };
+    let mut turbulence = Vec::new();
+    for (i, w) in t.turbulence.iter().enumerate() {
+        let wp = format!("{p}.turbulence[{i}]");
+        let start = w.start.non_negative(&format!("{wp}.start"), "s")?;
+        let end = w.end.to_si(&format!("{wp}.end"), "s")?;
+        if !(end > start) {
+            return Err(CellError::invalid(&wp, format!("needs start < end, got [{start}, {end}] s")));
+        }
+        let coefficient = w.coefficient.non_negative(&format!("{wp}.coefficient"), "1")?;
+        if coefficient > 1e-3 {
+            return Err(CellError::OutOfRange { path: format!("{wp}.coefficient"), value: coefficient, reason: "plausible range is [0, 1e-3] (physics `turbulence.turbulence`)".into() });
+        }
+        turbulence.push(TurbulenceSpec { start, end, coefficient });
+    }
+    let beam_breaks = match &t.beam_breaks {
+        None => None,
+        Some(b) => {
+            if !(b.per_hour >= 0.0 && b.per_hour <= 3600.0) {
+                return Err(CellError::OutOfRange { path: format!("{p}.beam_breaks.per_hour"), value: b.per_hour, reason: "must be in [0, 3600]".into() });
+            }
+            Some(BeamBreakSpec { rate: b.per_hour / 3600.0, mean_duration: b.mean_duration.positive(&format!("{p}.beam_breaks.mean_duration"), "s")? })
+        }
+    };
+    Ok(TrackerSpec {
+        pose: pose(&t.pose, &format!("{p}.pose"))?,
+        rate: t.rate.positive(&format!("{p}.rate"), "1/s")?,
+        range_noise_constant: t.range_noise.constant.non_negative(&format!("{p}.range_noise.constant"), "m")?,
+        range_noise_per_metre: t.range_noise.per_metre.non_negative(&format!("{p}.range_noise.per_metre"), "1")?,
+        angular_noise: t.angular_noise.non_negative(&format!("{p}.angular_noise"), "rad")?,
+        warmup,
+        powered_on_before_start: t.powered_on_before_start.as_ref().map(|q| q.non_negative(&format!("{p}.powered_on_before_start"), "s")).transpose()?.unwrap_or(0.0),
+        station,
+        turbulence,
+        beam_breaks,
+    })
+}
+
+fn thermocouple(i: usize, t: &ThermocoupleSection) -> Result<ThermocoupleSpec, CellError> {
+    let p = format!("sensors.thermocouples[{i}]");
+    Ok(ThermocoupleSpec {
+        name: t.name.clone(),
+        node: if t.location == "ambient" { None } else { Some(t.location.clone()) },
+        noise: t.noise.non_negative(&format!("{p}.noise"), "K")?,
+        offset: opt(&t.offset, &format!("{p}.offset"), "K")?,
+        calibration_uncertainty: t.calibration_uncertainty.as_ref().map(|q| q.non_negative(&format!("{p}.calibration_uncertainty"), "K")).transpose()?.unwrap_or(0.0),
+        rate: t.rate.positive(&format!("{p}.rate"), "1/s")?,
+    })
+}
+
+fn probe(s: &ProbeSection) -> Result<ProbeSpec, CellError> {
+    let p = "sensors.probe";
+    if s.directions.is_empty() {
+        return Err(CellError::invalid(format!("{p}.directions"), "needs at least one direction"));
+    }
+    let mut directions = Vec::new();
+    for (i, d) in s.directions.iter().enumerate() {
+        let v = Vector3::new(d[0], d[1], d[2]);
+        let n = v.norm();
+        if !(n.is_finite() && n > 0.0) {
+            return Err(CellError::invalid(format!("{p}.directions[{i}]"), "must be a non-zero vector"));
+        }
+        directions.push(v / n);
+    }
+    let pretravel = match &s.pretravel {
+        None => None,
+        Some(pt) => Some(
+            configure(&TermConfig { id: "probe_pretravel".into(), options: pt.options.clone(), params: pt.params.clone(), use_defaults: false })
+                .map_err(|e| CellError::term(format!("{p}.pretravel"), e))?,
+        ),
+    };
+    let hit_interval = s.hit_interval.positive(&format!("{p}.hit_interval"), "s")?;
+    Ok(ProbeSpec { directions, hit_interval, noise: s.noise.non_negative(&format!("{p}.noise"), "m")?, pretravel })
+}
+
+fn camera(c: &CameraSection) -> Result<CameraSpec, CellError> {
+    Ok(CameraSpec { mount: pose(&c.mount, "sensors.camera.mount")?, delay: c.delay.as_ref().map(|q| q.non_negative("sensors.camera.delay", "s")).transpose()?.unwrap_or(0.0) })
+}
+
+fn thermal_model(env: &EnvironmentSection, tcs: &[ThermocoupleSection]) -> Result<ShiftThermalModel, CellError> {
+    let a = &env.ambient;
+    let ap = "environment.ambient";
+    let ambient = AmbientCycle {
+        mean: a.mean.to_si(&format!("{ap}.mean"), "degC")?,
+        amplitude: opt(&a.amplitude, &format!("{ap}.amplitude"), "K")?,
+        period: a.period.as_ref().map(|q| q.positive(&format!("{ap}.period"), "s")).transpose()?.unwrap_or(86_400.0),
+        phase: opt(&a.phase, &format!("{ap}.phase"), "rad")?,
+        drift: opt(&a.drift, &format!("{ap}.drift"), "K/s")?,
+        walk_std: a.walk_std.unwrap_or(0.0),
+    };
+    if !(ambient.walk_std >= 0.0 && ambient.walk_std.is_finite()) {
+        return Err(CellError::OutOfRange { path: format!("{ap}.walk_std"), value: ambient.walk_std, reason: "must be ≥ 0 K/√s".into() });
+    }
+    let mut sources = Vec::new();
+    for (i, s) in env.heat_sources.iter().enumerate() {
+        let mut duty = Vec::new();
+        for (j, d) in s.duty.iter().enumerate() {
+            let dp = format!("environment.heat_sources[{i}].duty[{j}]");
+            duty.push(DutySegment { start: d.start.to_si(&format!("{dp}.start"), "s")?, end: d.end.to_si(&format!("{dp}.end"), "s")?, level: d.level });
+        }
+        sources.push(HeatSource { name: s.name.clone(), duty });
+    }
+    let mut nodes = Vec::new();
+    for (i, n) in env.nodes.iter().enumerate() {
+        let np = format!("environment.nodes[{i}]");
+        let mut heating = Vec::new();
+        for (src, g) in &n.heating {
+            heating.push((src.clone(), g.to_si(&format!("{np}.heating.{src}"), "K")?));
+        }
+        nodes.push(StructureNode {
+            name: n.name.clone(),
+            time_constant: n.time_constant.positive(&format!("{np}.time_constant"), "s")?,
+            heating,
+            initial: n.initial.as_ref().map(|q| q.to_si(&format!("{np}.initial"), "degC")).transpose()?,
+        });
+    }
+    let node_names: Vec<&str> = nodes.iter().map(|n| n.name.as_str()).collect();
+    let mut sensors = Vec::new();
+    for (i, t) in tcs.iter().enumerate() {
+        let location = if t.location == "ambient" {
+            SensorLocation::Ambient
+        } else if node_names.contains(&t.location.as_str()) {
+            SensorLocation::Node(t.location.clone())
+        } else {
+            let mut allowed = vec!["ambient"];
+            allowed.extend(&node_names);
+            return Err(CellError::invalid(format!("sensors.thermocouples[{i}].location"), format!("`{}` is not a location; allowed: {}", t.location, allowed.join(", "))));
+        };
+        sensors.push(ThermalSensor { name: t.name.clone(), location, bias: opt(&t.offset, "offset", "K")?, noise_std: t.noise.non_negative("noise", "K")? });
+    }
+    let model = ShiftThermalModel { ambient, sources, nodes, sensors };
+    model.validate().map_err(|e| CellError::term("environment", e))?;
+    Ok(model)
+}
+
+/// Instrument and camera terms live with their sensor; say where.
+fn home_of(id: &str) -> Option<&'static str> {
+    match id {
+        "tracker_warmup" => Some("sensors.tracker.warmup"),
+        "refraction" => Some("sensors.tracker.station and environment.air.beam_temperature_offset"),
+        "turbulence" => Some("sensors.tracker.turbulence and sensors.tracker.range_noise"),
+        "probe_pretravel" => Some("sensors.probe.pretravel"),
+        "tracker_pose" => Some("sensors.tracker.pose"),
+        _ => None,
+    }
+}
+
+fn terms(configs: &[TermConfig], sensors: &BTreeSet<String>, has_load: bool, is_delta: bool) -> Result<TermModel, CellError> {
+    let mut model = TermModel::default();
+    for (i, c) in configs.iter().enumerate() {
+        let path = format!("terms[{i}] (id `{}`)", c.id);
+        if let Some(home) = home_of(&c.id) {
+            return Err(CellError::invalid(path, format!("is a sensor term; give it in {home}")));
+        }
+        let t = configure(c).map_err(|e| CellError::term(&path, e))?;
+        let is_delta_term = matches!(t.term.id(), TermId::DeltaRodLength | TermId::DeltaRadius | TermId::DeltaTowerAngle | TermId::DeltaEndstop);
+        if is_delta_term && !is_delta {
+            return Err(CellError::invalid(path, "is a delta term; it needs machine.family: delta"));
+        }
+        if t.term.effect() != EffectKind::Displacement(Frame::Machine) && !is_delta_term {
+            return Err(CellError::invalid(
+                path,
+                format!("has effect {:?}; the twin's `terms` take machine-frame displacement terms (geometry, thermal_scale, thermal_growth, compliance, tool_offset, frame_misalignment) and, for a delta, delta_rod_length, delta_radius, delta_tower_angle, delta_endstop", t.term.effect()),
+            ));
+        }
+        for s in t.term.signals() {
+            match &s {
+                SignalKind::Temperature(name) if !sensors.contains(name) => {
+                    return Err(CellError::invalid(
+                        format!("{path}.options"),
+                        format!("refers to temperature sensor `{name}`, which is not a thermocouple; allowed: {}", sensors.iter().cloned().collect::<Vec<_>>().join(", ")),
+                    ))
+                }
+                SignalKind::TemperatureHistory(name) if !sensors.contains(name) => {
+                    return Err(CellError::invalid(
+                        format!("{path}.options"),
+                        format!("refers to temperature sensor `{name}`, which is not a thermocouple; allowed: {}", sensors.iter().cloned().collect::<Vec<_>>().join(", ")),
+                    ))
+                }
+                SignalKind::LoadForce if !has_load => return Err(CellError::invalid(path, "needs environment.load_force")),
+                _ => {}
+            }
+        }
+        model.push(t).map_err(|e| CellError::term(format!("terms[{i}]"), e))?;
+    }
+    Ok(model)
+}

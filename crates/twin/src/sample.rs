@@ -1,0 +1,163 @@
+//! The typed samples a simulation streams, and the ground truth that goes with each.
+//!
+//! Units SI (m, rad, s, Pa); temperatures °C; humidity %RH. Times `t` are seconds from the start
+//! of the shift. Tracker points are in the tracker frame; probe and camera points in the
+//! workpiece frame (which coincides with the machine frame at q = 0).
+
+use std::sync::Arc;
+
+use nalgebra::{Matrix3, Vector3};
+
+/// Tracker sample status.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TrackerStatus {
+    /// A valid measurement.
+    Ok,
+    /// The beam was broken: the sample was dropped; every measured field is NaN.
+    BeamBroken,
+}
+
+/// One laser-tracker reading (see [`crate::tracker_model`] for the model and conventions).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrackerSample {
+    pub t: f64,
+    /// Program point index while the machine dwells at a point; `None` while it moves or idles.
+    pub target_id: Option<u32>,
+    /// Program cycle (0-based) or `None` outside cycles.
+    pub cycle: Option<u32>,
+    /// Measured target position in the tracker frame (m).
+    pub point: Vector3<f64>,
+    pub range: f64,
+    pub azimuth: f64,
+    pub elevation: f64,
+    /// Stated covariance of `point` (m²).
+    pub covariance: Matrix3<f64>,
+    /// Weather-station readings the tracker used: °C, Pa, %RH.
+    pub air_temperature: f64,
+    pub air_pressure: f64,
+    pub air_humidity: f64,
+    /// Refractive index the tracker applied (shop-floor Edlén of the station readings).
+    pub refractive_index: f64,
+    pub status: TrackerStatus,
+}
+
+/// One thermocouple reading.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TemperatureSample {
+    pub t: f64,
+    pub sensor: Arc<str>,
+    /// °C.
+    pub value: f64,
+    /// Stated variance (K²): noise² + calibration uncertainty².
+    pub variance: f64,
+}
+
+/// Commanded and actual axis positions.
+#[derive(Debug, Clone, PartialEq)]
+pub struct MachineStateSample {
+    pub t: f64,
+    /// Axis names, shared by every sample (`x`, `y`, `z`).
+    pub names: Arc<[String]>,
+    /// Commanded axis positions (m).
+    pub commanded: Vec<f64>,
+    /// Actual positions: commanded + the true terms' displacement (tool relative to workpiece).
+    pub actual: Vec<f64>,
+}
+
+/// A touch-probe trigger.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ProbeHitSample {
+    pub t: f64,
+    pub target_id: u32,
+    pub cycle: u32,
+    /// Index into the probe's configured directions.
+    pub direction_index: u32,
+    /// Unit probing (approach) direction, machine frame.
+    pub direction: Vector3<f64>,
+    /// Nominal contact point (the program point on a perfect artefact), workpiece frame (m).
+    pub nominal: Vector3<f64>,
+    /// Point the machine recorded at the trigger (nominal kinematics of the axis reading), m.
+    pub recorded: Vector3<f64>,
+    /// Stated covariance of `recorded` (m²), isotropic noise σ².
+    pub covariance: Matrix3<f64>,
+}
+
+/// A request to render a camera frame (rendering is another component's job).
+#[derive(Debug, Clone, PartialEq)]
+pub struct CameraFrameRequest {
+    pub t: f64,
+    pub target_id: u32,
+    pub cycle: u32,
+    /// True camera pose in the workpiece frame: `p_wp = rotation·p_cam + position`.
+    pub position: Vector3<f64>,
+    pub rotation: Matrix3<f64>,
+    /// Commanded (nominal) tool point, workpiece frame.
+    pub nominal_tool_point: Vector3<f64>,
+}
+
+/// Everything a simulation streams, in time order.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Sample {
+    Tracker(TrackerSample),
+    Temperature(TemperatureSample),
+    MachineState(MachineStateSample),
+    ProbeHit(ProbeHitSample),
+    CameraFrameRequest(CameraFrameRequest),
+}
+
+impl Sample {
+    /// Time of the sample (s).
+    pub fn t(&self) -> f64 {
+        match self {
+            Sample::Tracker(s) => s.t,
+            Sample::Temperature(s) => s.t,
+            Sample::MachineState(s) => s.t,
+            Sample::ProbeHit(s) => s.t,
+            Sample::CameraFrameRequest(s) => s.t,
+        }
+    }
+}
+
+/// Ground truth behind a tracker sample.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrackerTruth {
+    /// Commanded axis positions (m).
+    pub commanded: Vector3<f64>,
+    /// True machine displacement (tool relative to workpiece, machine frame): Σ true terms.
+    pub displacement: Vector3<f64>,
+    /// True tool (target) point, workpiece frame.
+    pub tool_point: Vector3<f64>,
+    /// True target point in the tracker frame (no instrument error).
+    pub point: Vector3<f64>,
+    /// True range |point| (m).
+    pub range: f64,
+    pub warmup_range_error: f64,
+    pub refraction_range_error: f64,
+    /// Index of the air on the beam.
+    pub true_index: f64,
+    /// σ of the range noise actually applied (turbulence included).
+    pub range_sigma: f64,
+}
+
+/// Ground truth paired with each sample by [`crate::Simulation::samples_with_truth`].
+#[derive(Debug, Clone, PartialEq)]
+pub enum SampleTruth {
+    Tracker(TrackerTruth),
+    /// True temperature at the sensor location (°C).
+    Temperature { true_value: f64 },
+    /// True displacement (machine frame, m).
+    MachineState { displacement: Vector3<f64> },
+    /// True machine displacement and pretravel vector at the hit (m).
+    ProbeHit { displacement: Vector3<f64>, pretravel: Vector3<f64> },
+    /// True tool point (workpiece frame).
+    CameraFrameRequest { tool_point: Vector3<f64> },
+}
+
+/// True value of one term parameter.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TrueParameter {
+    /// `label.param`, e.g. `thermal_scale[x].alpha`.
+    pub name: String,
+    pub value: f64,
+    pub unit: &'static str,
+}

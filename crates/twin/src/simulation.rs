@@ -1,0 +1,581 @@
+//! The simulation: a cell, a duration and a seed → a time-ordered stream of typed samples.
+//!
+//! Streams are iterators with state independent of the duration (lazily advanced thermal model,
+//! analytic program timeline, per-channel sample counters), so an 8-hour shift streams in flat
+//! memory. Channels fire at t = k/rate (k = 0, 1, …) for t < duration; probe hits and camera
+//! requests fire inside program dwells. Ties are broken in a fixed order: thermocouples (file
+//! order), machine state, tracker, probe, camera.
+//!
+//! The true machine displacement at time t is Σ of the cell's terms (physics `predict`), with
+//! signals: commanded axis positions, approach directions and velocity from the program, and the
+//! *true* temperatures of the thermocouples' locations (the sensors' offsets and noise are
+//! concealed from the physics, as in a real machine). Terms with a first-order lag read the
+//! true temperature history sampled every [`HISTORY_STEP`] (at most [`HISTORY_CAP`] samples, so
+//! memory stays flat); a term that reads nothing but histories is re-evaluated only when a
+//! history sample is added.
+
+use std::sync::Arc;
+
+use metrocell_physics::instrument::edlen::shop_floor_refractivity;
+use metrocell_physics::instrument::tracker_warmup::warmup_drift;
+use metrocell_physics::instrument::turbulence::range_scatter;
+use metrocell_kinematics::delta::DeltaGeometry;
+use metrocell_physics::{EffectKind, PhysicsError, SignalKind, Signals, TemperatureHistory};
+use nalgebra::{Matrix3, Vector3};
+
+use crate::cell::{Cell, MachineKinematics};
+use crate::error::CellError;
+use crate::noise::{stream, NoiseStream};
+use crate::program::MotionState;
+use crate::sample::*;
+use crate::thermal_stepper::ThermalStepper;
+use crate::tracker_model::{from_spherical, point_covariance, refraction_range_error, stated_range_sigma, to_spherical, BeamBreakProcess};
+
+/// Spacing of the true temperature histories given to lagged terms (s).
+pub const HISTORY_STEP: f64 = 10.0;
+/// Longest history kept (samples); older samples are dropped (55 h at 10 s: ≫ any lag τ).
+pub const HISTORY_CAP: usize = 20_000;
+
+/// A configured simulation run.
+#[derive(Debug)]
+pub struct Simulation {
+    cell: Cell,
+    duration: f64,
+    seed: u64,
+}
+
+/// The true parameters behind a simulation (for tests and reports).
+#[derive(Debug, Clone, PartialEq)]
+pub struct GroundTruth {
+    /// Every true term parameter, `label.param` in term order.
+    pub term_parameters: Vec<TrueParameter>,
+    /// Tracker pose in the workpiece frame (translation m, Euler XYZ rad), if there is a tracker.
+    pub tracker_translation: Option<Vector3<f64>>,
+    pub tracker_euler_xyz: Option<[f64; 3]>,
+    /// (A, B, τ) of the warm-up drift, if any.
+    pub warmup: Option<(f64, f64, f64)>,
+    /// Station biases (K, Pa, %RH).
+    pub station_bias: Option<(f64, f64, f64)>,
+    /// Thermocouple offsets by name (K).
+    pub thermocouple_offsets: Vec<(String, f64)>,
+}
+
+impl Simulation {
+    /// Check the run parameters and evaluate every true term once (so a term that cannot be
+    /// evaluated is an error here, not in the middle of a stream).
+    pub fn new(cell: Cell, duration: f64, seed: u64) -> Result<Self, CellError> {
+        if !(duration > 0.0 && duration.is_finite()) {
+            return Err(CellError::Simulation { reason: format!("duration must be > 0 s and finite, got {duration}") });
+        }
+        let sim = Simulation { cell, duration, seed };
+        let mut e = Engine::new(&sim);
+        let ms = sim.cell.program.state_at(0.0);
+        e.displacement(0.0, &ms).map_err(|err| CellError::Simulation { reason: format!("true terms cannot be evaluated: {err}") })?;
+        Ok(sim)
+    }
+
+    pub fn cell(&self) -> &Cell {
+        &self.cell
+    }
+    pub fn duration(&self) -> f64 {
+        self.duration
+    }
+    pub fn seed(&self) -> u64 {
+        self.seed
+    }
+
+    /// The sample stream (restarts from t = 0 on every call; deterministic in the seed).
+    pub fn samples(&self) -> SampleStream<'_> {
+        SampleStream { engine: Engine::new(self) }
+    }
+
+    /// The sample stream with the ground truth of each sample.
+    pub fn samples_with_truth(&self) -> TruthStream<'_> {
+        TruthStream { engine: Engine::new(self) }
+    }
+
+    /// True parameters of the cell.
+    pub fn ground_truth(&self) -> GroundTruth {
+        let names = self.cell.terms.param_specs();
+        let values = self.cell.terms.params();
+        let tr = self.cell.tracker.as_ref();
+        GroundTruth {
+            term_parameters: names.into_iter().zip(values).map(|(s, v)| TrueParameter { name: s.name, value: v, unit: s.unit }).collect(),
+            tracker_translation: tr.map(|t| t.pose.translation),
+            tracker_euler_xyz: tr.map(|t| t.pose.euler_xyz),
+            warmup: tr.and_then(|t| t.warmup.map(|w| (w.offset, w.amplitude, w.time_constant))),
+            station_bias: tr.map(|t| (t.station.temperature_bias, t.station.pressure_bias, t.station.humidity_bias)),
+            thermocouple_offsets: self.cell.thermocouples.iter().map(|t| (t.name.clone(), t.offset)).collect(),
+        }
+    }
+}
+
+/// Iterator over samples (truth dropped). If a term fails mid-stream (not expected after
+/// [`Simulation::new`]'s check) the stream ends and [`SampleStream::error`] says why.
+pub struct SampleStream<'a> {
+    engine: Engine<'a>,
+}
+
+impl SampleStream<'_> {
+    pub fn error(&self) -> Option<&PhysicsError> {
+        self.engine.error.as_ref()
+    }
+}
+
+impl Iterator for SampleStream<'_> {
+    type Item = Sample;
+    fn next(&mut self) -> Option<Sample> {
+        self.engine.next_event().map(|(s, _)| s)
+    }
+}
+
+/// Iterator over (sample, truth).
+pub struct TruthStream<'a> {
+    engine: Engine<'a>,
+}
+
+impl TruthStream<'_> {
+    pub fn error(&self) -> Option<&PhysicsError> {
+        self.engine.error.as_ref()
+    }
+}
+
+impl Iterator for TruthStream<'_> {
+    type Item = (Sample, SampleTruth);
+    fn next(&mut self) -> Option<(Sample, SampleTruth)> {
+        self.engine.next_event()
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum ChannelKind {
+    Thermocouple(usize),
+    MachineState,
+    Tracker,
+}
+
+struct Periodic {
+    kind: ChannelKind,
+    rate: f64,
+    k: u64,
+}
+
+impl Periodic {
+    fn next_t(&self) -> f64 {
+        self.k as f64 / self.rate
+    }
+}
+
+/// Walks the dwells of the program in time order, `per_dwell` events at given offsets.
+struct DwellEvents {
+    offsets: Vec<f64>,
+    cycle: u32,
+    dwell: usize,
+    sub: usize,
+    dwell_segments: Vec<usize>,
+    done: bool,
+}
+
+struct DwellEvent {
+    t: f64,
+    cycle: u32,
+    segment: usize,
+    sub: usize,
+}
+
+impl DwellEvents {
+    fn new(cell: &Cell, offsets: Vec<f64>) -> Self {
+        let dwell_segments: Vec<usize> = cell.program.segments.iter().enumerate().filter(|(_, s)| s.dwell_point.is_some()).map(|(i, _)| i).collect();
+        let offsets: Vec<f64> = offsets.into_iter().filter(|o| *o < cell.program.dwell).collect();
+        let done = offsets.is_empty() || dwell_segments.is_empty();
+        Self { offsets, cycle: 0, dwell: 0, sub: 0, dwell_segments, done }
+    }
+    fn peek(&self, cell: &Cell) -> Option<DwellEvent> {
+        if self.done {
+            return None;
+        }
+        let start = cell.program.cycle_start(self.cycle)?;
+        let seg = self.dwell_segments[self.dwell];
+        Some(DwellEvent { t: start + cell.program.segments[seg].start + self.offsets[self.sub], cycle: self.cycle, segment: seg, sub: self.sub })
+    }
+    fn advance(&mut self) {
+        self.sub += 1;
+        if self.sub == self.offsets.len() {
+            self.sub = 0;
+            self.dwell += 1;
+            if self.dwell == self.dwell_segments.len() {
+                self.dwell = 0;
+                self.cycle = match self.cycle.checked_add(1) {
+                    Some(c) => c,
+                    None => {
+                        self.done = true;
+                        0
+                    }
+                };
+            }
+        }
+    }
+}
+
+struct TrackerState {
+    noise: NoiseStream,
+    station: NoiseStream,
+    breaks: Option<BeamBreakProcess>,
+}
+
+struct Engine<'a> {
+    sim: &'a Simulation,
+    cell: &'a Cell,
+    thermal: ThermalStepper,
+    periodic: Vec<Periodic>,
+    probe_events: Option<DwellEvents>,
+    camera_events: Option<DwellEvents>,
+    tc_noise: Vec<NoiseStream>,
+    tc_slots: Vec<usize>,
+    tc_names: Vec<Arc<str>>,
+    tracker: Option<TrackerState>,
+    probe_noise: NoiseStream,
+    axis_names: Arc<[String]>,
+    signals: Signals,
+    /// (sensor name, thermal slot) of every history a term reads.
+    history_sensors: Vec<(String, usize)>,
+    /// Index of the next history sample (at history_k·HISTORY_STEP).
+    history_k: u64,
+    /// Per term: reads only histories (cacheable), and its cached displacement.
+    history_only: Vec<bool>,
+    cache: Vec<Option<Vector3<f64>>>,
+    /// Delta: (nominal geometry the firmware inverts, true geometry).
+    delta: Option<(DeltaGeometry, DeltaGeometry)>,
+    error: Option<PhysicsError>,
+}
+
+impl<'a> Engine<'a> {
+    fn new(sim: &'a Simulation) -> Self {
+        let cell = &sim.cell;
+        let seed = sim.seed;
+        let thermal = ThermalStepper::new(&cell.thermal, cell.thermal_step, seed);
+        let mut periodic: Vec<Periodic> = cell.thermocouples.iter().enumerate().map(|(i, t)| Periodic { kind: ChannelKind::Thermocouple(i), rate: t.rate, k: 0 }).collect();
+        if let Some(r) = cell.machine_state_rate {
+            periodic.push(Periodic { kind: ChannelKind::MachineState, rate: r, k: 0 });
+        }
+        if let Some(t) = &cell.tracker {
+            periodic.push(Periodic { kind: ChannelKind::Tracker, rate: t.rate, k: 0 });
+        }
+        let probe_events = cell.probe.as_ref().map(|p| DwellEvents::new(cell, (0..p.directions.len()).map(|j| (j + 1) as f64 * p.hit_interval).collect()));
+        let camera_events = cell.camera.as_ref().map(|c| DwellEvents::new(cell, vec![c.delay]));
+        let tc_slots = cell.thermocouples.iter().map(|t| thermal.slot_of_node(t.node.as_deref())).collect();
+        let mut signals = Signals::default();
+        for t in &cell.thermocouples {
+            signals.temperatures.insert(t.name.clone(), 20.0);
+        }
+        signals.load_force = cell.load_force;
+        let mut history_sensors: Vec<(String, usize)> = Vec::new();
+        let mut history_only = Vec::new();
+        for t in &cell.terms.terms {
+            let sig = t.term.signals();
+            history_only.push(!sig.is_empty() && sig.iter().all(|s| matches!(s, SignalKind::TemperatureHistory(_))));
+            for s in sig {
+                if let SignalKind::TemperatureHistory(name) = s {
+                    if !history_sensors.iter().any(|(n, _)| n == &name) {
+                        let node = cell.thermocouples.iter().find(|tc| tc.name == name).and_then(|tc| tc.node.as_deref());
+                        history_sensors.push((name.clone(), thermal.slot_of_node(node)));
+                        signals.temperature_histories.insert(name, TemperatureHistory::default());
+                    }
+                }
+            }
+        }
+        Engine {
+            sim,
+            cell,
+            thermal,
+            periodic,
+            probe_events,
+            camera_events,
+            tc_noise: (0..cell.thermocouples.len()).map(|i| NoiseStream::new(seed, stream::THERMOCOUPLE_BASE + i as u64)).collect(),
+            tc_slots,
+            tc_names: cell.thermocouples.iter().map(|t| Arc::from(t.name.as_str())).collect(),
+            tracker: cell.tracker.as_ref().map(|t| TrackerState {
+                noise: NoiseStream::new(seed, stream::TRACKER),
+                station: NoiseStream::new(seed, stream::STATION),
+                breaks: t.beam_breaks.map(|b| BeamBreakProcess::new(NoiseStream::new(seed, stream::BEAM_BREAKS), b.rate, b.mean_duration)),
+            }),
+            probe_noise: NoiseStream::new(seed, stream::PROBE),
+            axis_names: Arc::from(vec!["x".to_string(), "y".to_string(), "z".to_string()]),
+            signals,
+            history_sensors,
+            history_k: 0,
+            cache: vec![None; history_only.len()],
+            history_only,
+            delta: match (&cell.machine.kinematics, cell.true_delta_geometry()) {
+                (MachineKinematics::Delta(n), Some(t)) => Some((*n, t)),
+                _ => None,
+            },
+            error: None,
+        }
+    }
+
+    /// Append the true temperature of every history a term reads, on the HISTORY_STEP grid up
+    /// to t (called in time order, before the thermal model is advanced past t by anything else).
+    fn update_histories(&mut self, t: f64) {
+        if !self.history_sensors.is_empty() && self.history_k as f64 * HISTORY_STEP <= t {
+            while self.history_k as f64 * HISTORY_STEP <= t {
+                let th = self.history_k as f64 * HISTORY_STEP;
+                for (name, slot) in &self.history_sensors {
+                    let v = self.thermal.at(*slot, th);
+                    if let Some(h) = self.signals.temperature_histories.get_mut(name) {
+                        if h.samples.len() == HISTORY_CAP {
+                            h.samples.remove(0);
+                        }
+                        h.samples.push((th, v));
+                    }
+                }
+                self.history_k += 1;
+            }
+            self.cache.iter_mut().for_each(|c| *c = None);
+        }
+    }
+
+    /// True machine displacement at t for the motion state (machine frame, m).
+    fn displacement(&mut self, t: f64, ms: &MotionState) -> Result<Vector3<f64>, PhysicsError> {
+        self.update_histories(t);
+        let s = &mut self.signals;
+        s.axis_position = [Some(ms.q.x), Some(ms.q.y), Some(ms.q.z)];
+        s.approach_direction = [Some(ms.approach[0]), Some(ms.approach[1]), Some(ms.approach[2])];
+        s.axis_velocity = [Some(ms.velocity.x), Some(ms.velocity.y), Some(ms.velocity.z)];
+        s.point = Some(self.cell.machine.nominal_tool_point(&ms.q));
+        for (i, tc) in self.cell.thermocouples.iter().enumerate() {
+            let v = self.thermal.at(self.tc_slots[i], t);
+            if let Some(x) = s.temperatures.get_mut(&tc.name) {
+                *x = v;
+            }
+        }
+        let mut d = match &self.delta {
+            // the firmware inverts the nominal geometry; the carriages at those heights put the
+            // effector where the true geometry says
+            Some((nominal, truth)) => {
+                let kin = |e: metrocell_kinematics::KinematicsError| PhysicsError::InvalidInput { what: format!("delta kinematics at t = {t} s, q = {:?}", ms.q.as_slice()), reason: e.to_string() };
+                let joints = nominal.inverse(&ms.q).map_err(kin)?;
+                truth.forward(&joints).map_err(kin)? - ms.q
+            }
+            None => Vector3::zeros(),
+        };
+        for (i, t) in self.cell.terms.terms.iter().enumerate() {
+            if t.term.effect() == EffectKind::Kinematic {
+                continue;
+            }
+            if let Some(c) = self.cache[i] {
+                d += c;
+                continue;
+            }
+            let v = t.term.predict(&t.params, s)?.value;
+            let v = Vector3::new(v[0], v[1], v[2]);
+            if self.history_only[i] {
+                self.cache[i] = Some(v);
+            }
+            d += v;
+        }
+        Ok(d)
+    }
+
+    fn next_event(&mut self) -> Option<(Sample, SampleTruth)> {
+        if self.error.is_some() {
+            return None;
+        }
+        // Earliest channel; ties by channel order (periodic in construction order, probe, camera).
+        let mut best: Option<(f64, usize)> = None;
+        for (i, c) in self.periodic.iter().enumerate() {
+            let t = c.next_t();
+            if best.is_none_or(|(bt, _)| t < bt) {
+                best = Some((t, i));
+            }
+        }
+        let n = self.periodic.len();
+        if let Some(ev) = self.probe_events.as_ref().and_then(|p| p.peek(self.cell)) {
+            if best.is_none_or(|(bt, _)| ev.t < bt) {
+                best = Some((ev.t, n));
+            }
+        }
+        if let Some(ev) = self.camera_events.as_ref().and_then(|p| p.peek(self.cell)) {
+            if best.is_none_or(|(bt, _)| ev.t < bt) {
+                best = Some((ev.t, n + 1));
+            }
+        }
+        let (t, which) = best?;
+        if t >= self.sim.duration {
+            return None;
+        }
+        self.update_histories(t);
+        let out = if which < n {
+            self.periodic[which].k += 1;
+            match self.periodic[which].kind {
+                ChannelKind::Thermocouple(i) => Ok(self.thermocouple(i, t)),
+                ChannelKind::MachineState => self.machine_state(t),
+                ChannelKind::Tracker => self.tracker_sample(t),
+            }
+        } else if which == n {
+            let ev = self.probe_events.as_ref().and_then(|p| p.peek(self.cell))?;
+            self.probe_events.as_mut()?.advance();
+            self.probe_hit(ev)
+        } else {
+            let ev = self.camera_events.as_ref().and_then(|p| p.peek(self.cell))?;
+            self.camera_events.as_mut()?.advance();
+            self.camera_request(ev)
+        };
+        match out {
+            Ok(v) => Some(v),
+            Err(e) => {
+                self.error = Some(e);
+                None
+            }
+        }
+    }
+
+    fn thermocouple(&mut self, i: usize, t: f64) -> (Sample, SampleTruth) {
+        let spec = &self.cell.thermocouples[i];
+        let truth = self.thermal.at(self.tc_slots[i], t);
+        let noise = if spec.noise > 0.0 { spec.noise * self.tc_noise[i].normal() } else { 0.0 };
+        let s = TemperatureSample { t, sensor: self.tc_names[i].clone(), value: truth + spec.offset + noise, variance: spec.noise * spec.noise + spec.calibration_uncertainty * spec.calibration_uncertainty };
+        (Sample::Temperature(s), SampleTruth::Temperature { true_value: truth })
+    }
+
+    fn machine_state(&mut self, t: f64) -> Result<(Sample, SampleTruth), PhysicsError> {
+        let ms = self.cell.program.state_at(t);
+        let d = self.displacement(t, &ms)?;
+        let actual = ms.q + d;
+        let s = MachineStateSample { t, names: self.axis_names.clone(), commanded: ms.q.as_slice().to_vec(), actual: actual.as_slice().to_vec() };
+        Ok((Sample::MachineState(s), SampleTruth::MachineState { displacement: d }))
+    }
+
+    fn tracker_sample(&mut self, t: f64) -> Result<(Sample, SampleTruth), PhysicsError> {
+        let spec = self.cell.tracker.as_ref().expect("tracker channel exists only with a tracker");
+        let ms = self.cell.program.state_at(t);
+        let d = self.displacement(t, &ms)?;
+        let tool_point = self.cell.machine.nominal_tool_point(&ms.q) + d;
+        let x = spec.pose.to_instrument(&tool_point);
+        let (rho, az, el) = to_spherical(&x);
+        // air: truth on the beam vs the station's reading
+        let ambient = self.thermal.ambient(t);
+        let air = self.cell.air;
+        let st = &spec.station;
+        let state = self.tracker.as_mut().expect("tracker state exists with a tracker");
+        let mut station_noise = |sigma: f64| if sigma > 0.0 { sigma * state.station.normal() } else { 0.0 };
+        let t_station = ambient + st.temperature_bias + station_noise(st.temperature_noise);
+        let p_station = air.pressure + st.pressure_bias + station_noise(st.pressure_noise);
+        let h_station = air.humidity + st.humidity_bias + station_noise(st.humidity_noise);
+        let n_true = shop_floor_refractivity(air.pressure, ambient + air.beam_temperature_offset, air.humidity);
+        let n_station = shop_floor_refractivity(p_station, t_station, h_station);
+        let refraction = refraction_range_error(rho, n_true, n_station);
+        let warmup = spec.warmup.map(|w| warmup_drift(w.offset, w.amplitude, w.time_constant, t + spec.powered_on_before_start)).unwrap_or(0.0);
+        let c = spec.turbulence.iter().filter(|w| t >= w.start && t < w.end).map(|w| w.coefficient).fold(0.0, f64::max);
+        let sigma_eff = range_scatter(spec.range_noise_constant, spec.range_noise_per_metre, c, rho);
+        let broken = state.breaks.as_mut().map(|b| b.broken(t)).unwrap_or(false);
+        let target_id = ms.dwell_point.map(|i| i as u32);
+        let truth = TrackerTruth {
+            commanded: ms.q,
+            displacement: d,
+            tool_point,
+            point: x,
+            range: rho,
+            warmup_range_error: warmup,
+            refraction_range_error: refraction,
+            true_index: 1.0 + n_true,
+            range_sigma: sigma_eff,
+        };
+        let sample = if broken {
+            TrackerSample {
+                t,
+                target_id,
+                cycle: ms.cycle,
+                point: Vector3::repeat(f64::NAN),
+                range: f64::NAN,
+                azimuth: f64::NAN,
+                elevation: f64::NAN,
+                covariance: Matrix3::repeat(f64::NAN),
+                air_temperature: t_station,
+                air_pressure: p_station,
+                air_humidity: h_station,
+                refractive_index: 1.0 + n_station,
+                status: TrackerStatus::BeamBroken,
+            }
+        } else {
+            let noise = &mut state.noise;
+            let rho_m = rho + refraction + warmup + if sigma_eff > 0.0 { sigma_eff * noise.normal() } else { 0.0 };
+            let (az_m, el_m) = if spec.angular_noise > 0.0 { (az + spec.angular_noise * noise.normal(), el + spec.angular_noise * noise.normal()) } else { (az, el) };
+            let stated = stated_range_sigma(spec.range_noise_constant, spec.range_noise_per_metre, rho_m);
+            TrackerSample {
+                t,
+                target_id,
+                cycle: ms.cycle,
+                point: from_spherical(rho_m, az_m, el_m),
+                range: rho_m,
+                azimuth: az_m,
+                elevation: el_m,
+                covariance: point_covariance(rho_m, az_m, el_m, stated, spec.angular_noise, spec.angular_noise),
+                air_temperature: t_station,
+                air_pressure: p_station,
+                air_humidity: h_station,
+                refractive_index: 1.0 + n_station,
+                status: TrackerStatus::Ok,
+            }
+        };
+        Ok((Sample::Tracker(sample), SampleTruth::Tracker(truth)))
+    }
+
+    fn probe_hit(&mut self, ev: DwellEvent) -> Result<(Sample, SampleTruth), PhysicsError> {
+        let spec = self.cell.probe.as_ref().expect("probe events exist only with a probe");
+        let seg = &self.cell.program.segments[ev.segment];
+        let point = seg.dwell_point.unwrap_or(0);
+        let u = spec.directions[ev.sub];
+        // The approach of each axis that moves while probing is the probing direction.
+        let mut approach = seg.approach;
+        for k in 0..3 {
+            if u[k] != 0.0 {
+                approach[k] = u[k].signum();
+            }
+        }
+        let ms = MotionState { q: seg.to, velocity: Vector3::zeros(), approach, dwell_point: Some(point), cycle: Some(ev.cycle) };
+        let d = self.displacement(ev.t, &ms)?;
+        let pretravel = match &spec.pretravel {
+            Some(pt) => {
+                let s = Signals { probe_direction: Some(u), ..Signals::default() };
+                let v = pt.term.predict(&pt.params, &s)?.value;
+                Vector3::new(v[0], v[1], v[2])
+            }
+            None => Vector3::zeros(),
+        };
+        let nominal = self.cell.machine.nominal_tool_point(&seg.to);
+        // Touching P with a machine that is off by d needs an axis reading P − d; the trigger
+        // comes pretravel further along the approach direction.
+        let noise = Vector3::new(self.probe_noise.normal(), self.probe_noise.normal(), self.probe_noise.normal()) * spec.noise;
+        let recorded = nominal - d + pretravel + noise;
+        let s = ProbeHitSample {
+            t: ev.t,
+            target_id: point as u32,
+            cycle: ev.cycle,
+            direction_index: ev.sub as u32,
+            direction: u,
+            nominal,
+            recorded,
+            covariance: Matrix3::identity() * (spec.noise * spec.noise),
+        };
+        Ok((Sample::ProbeHit(s), SampleTruth::ProbeHit { displacement: d, pretravel }))
+    }
+
+    fn camera_request(&mut self, ev: DwellEvent) -> Result<(Sample, SampleTruth), PhysicsError> {
+        let spec = self.cell.camera.as_ref().expect("camera events exist only with a camera");
+        let seg = &self.cell.program.segments[ev.segment];
+        let ms = MotionState { q: seg.to, velocity: Vector3::zeros(), approach: seg.approach, dwell_point: seg.dwell_point, cycle: Some(ev.cycle) };
+        let d = self.displacement(ev.t, &ms)?;
+        let nominal = self.cell.machine.nominal_tool_point(&seg.to);
+        let tool_point = nominal + d;
+        let s = CameraFrameRequest {
+            t: ev.t,
+            target_id: seg.dwell_point.unwrap_or(0) as u32,
+            cycle: ev.cycle,
+            position: tool_point + spec.mount.translation,
+            rotation: spec.mount.rotation,
+            nominal_tool_point: nominal,
+        };
+        Ok((Sample::CameraFrameRequest(s), SampleTruth::CameraFrameRequest { tool_point }))
+    }
+}

@@ -1,0 +1,152 @@
+//! Helpers shared by the cross-process tests: where the binaries and the Python peers are, and
+//! child processes that never outlive a failing test.
+
+use std::path::{Path, PathBuf};
+use std::process::{Child, Command, Output, Stdio};
+use std::time::{Duration, Instant};
+
+/// The repository root.
+pub fn workspace_root() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("tests/ has a parent").to_path_buf()
+}
+
+/// A binary of the workspace (metrocell, metrocell-thermal, ...), from the same target directory
+/// as the running test.
+pub fn bin(name: &str) -> PathBuf {
+    let exe = std::env::current_exe().expect("current_exe");
+    // target/<profile>/deps/<test>-<hash>
+    let dir = exe.parent().and_then(Path::parent).expect("test binary lives in target/<profile>/deps");
+    let path = dir.join(name);
+    assert!(
+        path.exists(),
+        "{} is not built; build the workspace binaries first (`cargo build --workspace --bins`, which tests/run does)",
+        path.display()
+    );
+    path
+}
+
+/// The Python interpreter of the test venv holding the real peers (cyclonedds, rosbags, mcap).
+pub fn python() -> PathBuf {
+    if let Ok(p) = std::env::var("METROCELL_PYTHON") {
+        return PathBuf::from(p);
+    }
+    let venv = workspace_root().join(".venv/bin/python");
+    assert!(venv.exists(), "no Python peers: run tests/run, which creates .venv with cyclonedds, rosbags and mcap");
+    venv
+}
+
+/// The Cyclone DDS peer script.
+pub fn ros2_peer() -> PathBuf {
+    workspace_root().join("tests/py/ros2_peer.py")
+}
+
+pub use metrocell_node::testing::require_isolated_network;
+
+/// A child process killed (SIGKILL) when dropped, so a failing assertion cannot leak it.
+pub struct ChildGuard(pub Option<Child>);
+
+impl ChildGuard {
+    pub fn spawn(cmd: &mut Command) -> ChildGuard {
+        ChildGuard(Some(cmd.spawn().unwrap_or_else(|e| panic!("cannot start {cmd:?}: {e}"))))
+    }
+
+    pub fn child(&mut self) -> &mut Child {
+        self.0.as_mut().expect("child already taken")
+    }
+
+    pub fn pid(&self) -> i32 {
+        self.0.as_ref().expect("child").id() as i32
+    }
+
+    /// Waits for the process to exit, at most `timeout`; returns its output or panics.
+    pub fn wait_output(mut self, timeout: Duration) -> Output {
+        let deadline = Instant::now() + timeout;
+        loop {
+            match self.child().try_wait().expect("try_wait") {
+                Some(_) => return self.0.take().unwrap().wait_with_output().expect("wait_with_output"),
+                None if Instant::now() >= deadline => {
+                    let _ = self.child().kill();
+                    let out = self.0.take().unwrap().wait_with_output().expect("wait_with_output");
+                    panic!(
+                        "process did not finish within {timeout:?}\nstdout:\n{}\nstderr:\n{}",
+                        String::from_utf8_lossy(&out.stdout),
+                        String::from_utf8_lossy(&out.stderr)
+                    );
+                }
+                None => std::thread::sleep(Duration::from_millis(20)),
+            }
+        }
+    }
+}
+
+impl Drop for ChildGuard {
+    fn drop(&mut self) {
+        if let Some(mut c) = self.0.take() {
+            let _ = c.kill();
+            let _ = c.wait();
+        }
+    }
+}
+
+/// A command with piped stdout/stderr and no stdin.
+pub fn piped(program: impl AsRef<std::ffi::OsStr>) -> Command {
+    let mut c = Command::new(program);
+    c.stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped());
+    c
+}
+
+/// Runs a command to completion (at most `timeout`).
+pub fn run(cmd: &mut Command, timeout: Duration) -> Output {
+    ChildGuard::spawn(cmd).wait_output(timeout)
+}
+
+/// Compares two JSON values, numbers by value (1 == 1.0) with a relative tolerance, so that
+/// Python's and Rust's printing of the same number do not matter.
+pub fn json_close(a: &serde_json::Value, b: &serde_json::Value, path: &str) -> Result<(), String> {
+    use serde_json::Value as J;
+    match (a, b) {
+        (J::Number(x), J::Number(y)) => {
+            let (x, y) = (x.as_f64().unwrap(), y.as_f64().unwrap());
+            if x == y || (x - y).abs() <= 1e-12 * x.abs().max(y.abs()) {
+                Ok(())
+            } else {
+                Err(format!("{path}: {x} != {y}"))
+            }
+        }
+        (J::Array(x), J::Array(y)) => {
+            if x.len() != y.len() {
+                return Err(format!("{path}: length {} != {}", x.len(), y.len()));
+            }
+            x.iter().zip(y).enumerate().try_for_each(|(i, (u, v))| json_close(u, v, &format!("{path}.{i}")))
+        }
+        (J::Object(x), J::Object(y)) => {
+            let mut kx: Vec<_> = x.keys().collect();
+            let mut ky: Vec<_> = y.keys().collect();
+            kx.sort();
+            ky.sort();
+            if kx != ky {
+                return Err(format!("{path}: fields {kx:?} != {ky:?}"));
+            }
+            x.iter().try_for_each(|(k, v)| json_close(v, &y[k], &format!("{path}.{k}")))
+        }
+        _ if a == b => Ok(()),
+        _ => Err(format!("{path}: {a} != {b}")),
+    }
+}
+
+/// Sends SIGINT to a process.
+pub fn interrupt(pid: i32) {
+    nix::sys::signal::kill(nix::unistd::Pid::from_raw(pid), nix::sys::signal::Signal::SIGINT).expect("kill -INT");
+}
+
+/// Whether a process (not a zombie) with this pid exists.
+pub fn alive(pid: i32) -> bool {
+    match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
+        Ok(stat) => {
+            // state is the field after the parenthesised command name
+            let state = stat.rsplit(')').next().and_then(|s| s.split_whitespace().next());
+            state != Some("Z")
+        }
+        Err(_) => false,
+    }
+}

@@ -48,6 +48,8 @@ def msg_paths():
     idir = os.path.join(ROOT, "msgs", "interfaces")
     for pkg in os.listdir(idir):
         mdir = os.path.join(idir, pkg, "msg")
+        if not os.path.isdir(mdir):
+            continue
         for f in os.listdir(mdir):
             if f.endswith(".msg"):
                 found[pkg + "/" + f[:-4]] = os.path.join(mdir, f)

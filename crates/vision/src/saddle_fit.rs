@@ -1,0 +1,179 @@
+//! Sub-pixel checkerboard corners: fit two crossing blurred step edges to the pixels around a
+//! saddle point.
+//!
+//! Model for pixel centre p, with s_i = n_i·(p − c), n_i = (cos θ_i, sin θ_i), A = Φ(s_1/σ),
+//! B = Φ(s_2/σ):  I(p) = a + b·(A + B − 2AB)  (bright where exactly one side is positive).
+//! Both edges pass through the corner c, so c is their intersection; the model is symmetric
+//! about each line, hence unbiased for pixel integration and symmetric blur. Solved by
+//! Levenberg–Marquardt; covariance s²(JᵀJ)⁻¹.
+
+use crate::edge_fit::normal_cdf_pdf;
+use image::GrayImage;
+use nalgebra::{Matrix2, Point2, SMatrix, SVector};
+
+/// A refined checkerboard corner.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct SaddleCorner {
+    pub position: Point2<f64>,
+    /// Covariance of the position (px²).
+    pub covariance: Matrix2<f64>,
+    /// Edge normal angles (rad), blur σ (px), residual RMS (grey levels).
+    pub theta: [f64; 2],
+    pub blur_sigma: f64,
+    pub residual_rms: f64,
+}
+
+/// Refine a corner near `guess` whose two edges run along directions `dir1`, `dir2` (any sign),
+/// using pixels within `radius` px of the guess. None if the fit fails or wanders off.
+pub fn refine_saddle(
+    img: &GrayImage,
+    guess: Point2<f64>,
+    dir1: [f64; 2],
+    dir2: [f64; 2],
+    radius: f64,
+) -> Option<SaddleCorner> {
+    let (w, h) = (img.width() as i64, img.height() as i64);
+    let r = radius.max(2.0);
+    let mut samples = Vec::new();
+    for y in (guess.y - r).floor() as i64..=(guess.y + r).ceil() as i64 {
+        for x in (guess.x - r).floor() as i64..=(guess.x + r).ceil() as i64 {
+            if x < 0 || y < 0 || x >= w || y >= h {
+                continue;
+            }
+            let (dx, dy) = (x as f64 - guess.x, y as f64 - guess.y);
+            if dx * dx + dy * dy <= r * r {
+                samples.push([
+                    x as f64,
+                    y as f64,
+                    img.get_pixel(x as u32, y as u32)[0] as f64,
+                ]);
+            }
+        }
+    }
+    if samples.len() < 20 {
+        return None;
+    }
+    // Edge along direction d has normal (−d.y, d.x).
+    let th1 = dir1[0].atan2(-dir1[1]);
+    let th2 = dir2[0].atan2(-dir2[1]);
+    let vals: Vec<f64> = samples.iter().map(|s| s[2]).collect();
+    let lo = vals.iter().cloned().fold(f64::INFINITY, f64::min);
+    let hi = vals.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
+    // x = (cx, cy, θ1, θ2, a, b, ln σ); try both contrast signs, keep the better fit.
+    let mut best: Option<(f64, SVector<f64, 7>, SMatrix<f64, 7, 7>)> = None;
+    for (a0, b0) in [(lo, hi - lo), (hi, lo - hi)] {
+        let x0 = SVector::<f64, 7>::from_column_slice(&[
+            guess.x,
+            guess.y,
+            th1,
+            th2,
+            a0,
+            b0,
+            0.8f64.ln(),
+        ]);
+        if let Some((f, x, jtj)) = lm(&samples, x0) {
+            if best.as_ref().map_or(true, |b| f < b.0) {
+                best = Some((f, x, jtj));
+            }
+        }
+    }
+    let (f, x, jtj) = best?;
+    let c = Point2::new(x[0], x[1]);
+    if (c - guess).norm() > 0.5 * r || !x.iter().all(|v| v.is_finite()) {
+        return None;
+    }
+    let s2 = f / (samples.len() as f64 - 7.0).max(1.0);
+    let inv = jtj.try_inverse()?;
+    Some(SaddleCorner {
+        position: c,
+        covariance: Matrix2::new(inv[(0, 0)], inv[(0, 1)], inv[(1, 0)], inv[(1, 1)]) * s2,
+        theta: [x[2], x[3]],
+        blur_sigma: x[6].exp(),
+        residual_rms: s2.sqrt(),
+    })
+}
+
+fn residual_and_jacobian(p: &[f64; 3], x: &SVector<f64, 7>) -> (f64, SVector<f64, 7>) {
+    let (dx, dy) = (p[0] - x[0], p[1] - x[1]);
+    let sig = x[6].exp();
+    let (c1, s1) = (x[2].cos(), x[2].sin());
+    let (c2, s2) = (x[3].cos(), x[3].sin());
+    let z1 = (c1 * dx + s1 * dy) / sig;
+    let z2 = (c2 * dx + s2 * dy) / sig;
+    let ((a, pdf1), (b, pdf2)) = (normal_cdf_pdf(z1), normal_cdf_pdf(z2));
+    let f = a + b - 2.0 * a * b;
+    let r = x[4] + x[5] * f - p[2];
+    let (g1, g2) = (
+        x[5] * (1.0 - 2.0 * b) * pdf1 / sig,
+        x[5] * (1.0 - 2.0 * a) * pdf2 / sig,
+    );
+    let j = SVector::<f64, 7>::from_column_slice(&[
+        -g1 * c1 - g2 * c2,
+        -g1 * s1 - g2 * s2,
+        g1 * (-s1 * dx + c1 * dy),
+        g2 * (-s2 * dx + c2 * dy),
+        1.0,
+        f,
+        -(g1 * z1 + g2 * z2) * sig,
+    ]);
+    (r, j)
+}
+
+fn lm(
+    samples: &[[f64; 3]],
+    mut x: SVector<f64, 7>,
+) -> Option<(f64, SVector<f64, 7>, SMatrix<f64, 7, 7>)> {
+    let cost = |x: &SVector<f64, 7>| {
+        samples
+            .iter()
+            .map(|p| residual_and_jacobian(p, x).0.powi(2))
+            .sum::<f64>()
+    };
+    let mut f = cost(&x);
+    let mut lambda = 1e-3;
+    let mut jtj = SMatrix::<f64, 7, 7>::zeros();
+    for _ in 0..60 {
+        jtj.fill(0.0);
+        let mut jtr = SVector::<f64, 7>::zeros();
+        for p in samples {
+            let (r, j) = residual_and_jacobian(p, &x);
+            jtj += j * j.transpose();
+            jtr += j * r;
+        }
+        let mut improved = false;
+        for _ in 0..10 {
+            let mut a = jtj;
+            for k in 0..7 {
+                a[(k, k)] *= 1.0 + lambda;
+                a[(k, k)] += 1e-12;
+            }
+            let Some(ch) = a.cholesky() else {
+                lambda *= 10.0;
+                continue;
+            };
+            let step = ch.solve(&(-jtr));
+            let xn = x + step;
+            if xn[6] > 2.5 || xn[6] < -4.0 {
+                lambda *= 10.0;
+                continue;
+            }
+            let fnew = cost(&xn);
+            if fnew <= f {
+                let small = step[0].abs() < 1e-7 && step[1].abs() < 1e-7;
+                x = xn;
+                f = fnew;
+                lambda = (lambda * 0.3).max(1e-9);
+                improved = true;
+                if small {
+                    return Some((f, x, jtj));
+                }
+                break;
+            }
+            lambda *= 10.0;
+        }
+        if !improved {
+            break;
+        }
+    }
+    Some((f, x, jtj))
+}

@@ -1,0 +1,29 @@
+//! The simulated camera's intrinsics, published as `sensor_msgs/CameraInfo`.
+//!
+//! The cell file describes where the camera is mounted, not its lens, so the intrinsics are a
+//! simulator option with a documented default: a 5 MP machine-vision camera (2448 × 2048 px,
+//! 3.45 µm pixels) behind a 12 mm lens, i.e. f = 12 mm / 3.45 µm ≈ 3478 px, principal point at
+//! the image centre, no distortion (`plumb_bob` with zero coefficients). Pixel convention is
+//! OpenCV's (centre of the top-left pixel at (0, 0)), so the centre is ((w−1)/2, (h−1)/2).
+
+/// Pinhole intrinsics with Brown–Conrady (`plumb_bob`) distortion, OpenCV order k1 k2 p1 p2 k3.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CameraIntrinsics {
+    pub width: u32,
+    pub height: u32,
+    /// Focal lengths and principal point (px).
+    pub fx: f64,
+    pub fy: f64,
+    pub cx: f64,
+    pub cy: f64,
+    pub distortion: [f64; 5],
+    /// `header.frame_id` of camera messages (optical frame: x right, y down, z forward).
+    pub frame_id: String,
+}
+
+impl Default for CameraIntrinsics {
+    fn default() -> Self {
+        let f = 12e-3 / 3.45e-6;
+        CameraIntrinsics { width: 2448, height: 2048, fx: f, fy: f, cx: 1223.5, cy: 1023.5, distortion: [0.0; 5], frame_id: "camera_optical".into() }
+    }
+}

@@ -1,0 +1,39 @@
+//! # metrocell-sim — the digital twin as ROS 2 messages
+//!
+//! The twin ([`metrocell_twin`]) streams typed samples; this crate turns them into the ROS 2
+//! messages a real cell would publish, on the topics of one documented [`topic_map`], stamped
+//! in deterministic simulated time ([`sim_time`]), and records them as a rosbag2 MCAP bag
+//! ([`write_bag`]) or hands them to the live node (`nodes/sim`, binary `metrocell-sim`).
+//!
+//! | module | what it holds |
+//! |---|---|
+//! | [`topic_map`] | the topic table: names, types, QoS |
+//! | [`sim_time`] | start epoch, stamps, RFC 3339 parsing |
+//! | [`convert`] | pure sample → message conversions (field conventions stated there) |
+//! | [`message_stream`] | the merged, time-ordered message stream with `/clock` ticks |
+//! | [`pacing`] | simulated time vs wall clock for the live node |
+//! | [`cdr`] | CDR bytes with the encapsulation header |
+//! | [`bag`] | [`write_bag`]: a deterministic bag of a simulation |
+//! | [`cli`] | [`SimArgs`] and [`run_sim_command`] for `metrocell sim` |
+//!
+//! Camera images are not rendered yet: a camera frame request yields its `CameraInfo` only.
+
+pub mod bag;
+pub mod camera_intrinsics;
+pub mod cdr;
+pub mod cli;
+pub mod convert;
+pub mod duration_text;
+pub mod error;
+pub mod message_stream;
+pub mod pacing;
+pub mod sim_time;
+pub mod topic_map;
+
+pub use bag::{write_bag, BagOptions, BagSummary, Progress};
+pub use camera_intrinsics::CameraIntrinsics;
+pub use cli::{run_sim_command, SimArgs};
+pub use error::SimError;
+pub use pacing::Pacer;
+pub use message_stream::{MessageConverter, MessageStream, SimMessage, TypedMessage};
+pub use topic_map::{QosKind, TopicMap, TopicRole, TopicSpec};

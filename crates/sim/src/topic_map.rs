@@ -1,0 +1,171 @@
+//! The topic map: every stream the simulator publishes, in one place.
+//!
+//! | topic | type | QoS | content |
+//! |---|---|---|---|
+//! | `/clock` | `rosgraph_msgs/msg/Clock` | [`QosKind::Clock`] | simulated time, so nodes can run with `use_sim_time` |
+//! | `/machine/joint_states` | `sensor_msgs/msg/JointState` | [`QosKind::SensorData`] | **actual** axis positions (commanded + the true error terms), m, names `x y z` |
+//! | `/machine/commanded_joint_states` | `sensor_msgs/msg/JointState` | [`QosKind::SensorData`] | **commanded** axis positions (what the controller was told), m |
+//! | `/temperature/<sensor>` | `sensor_msgs/msg/Temperature` | [`QosKind::Reliable`] | one topic per thermocouple, °C, `variance` = noise² + calibration² (K²) |
+//! | `/tracker/measurements` | `metrocell_msgs/msg/TrackerMeasurement` | [`QosKind::Reliable`] | laser-tracker points in the tracker frame, covariance row-major, station air data, applied index; beam breaks as `STATUS_BEAM_BREAK` with NaN point |
+//! | `/probe/hits` | `metrocell_msgs/msg/ProbeHit` | [`QosKind::Reliable`] | touch-probe triggers (workpiece frame) |
+//! | `/camera/camera_info` | `sensor_msgs/msg/CameraInfo` | [`QosKind::SensorData`] | one per camera frame request (the image itself is not rendered yet) |
+//!
+//! Only the topics whose sensor exists in the cell are in a cell's map, in the order above
+//! (thermocouples in file order). Joint states exist when the cell has `machine_state`.
+//! Why actual positions on `joint_states`: that topic is what the machine's encoders would
+//! report and what robot_state_publisher consumes; the command is kept apart so the pair shows
+//! the machine's error directly.
+
+use metrocell_msgs::msg::{ProbeHit, TrackerMeasurement};
+use metrocell_msgs::rosgraph_msgs::msg::Clock;
+use metrocell_msgs::sensor_msgs::msg::{CameraInfo, JointState, Temperature};
+use metrocell_twin::Cell;
+use rosmsg::RosMessage;
+
+use crate::error::SimError;
+
+pub const CLOCK_TOPIC: &str = "/clock";
+pub const JOINT_STATES_TOPIC: &str = "/machine/joint_states";
+pub const COMMANDED_JOINT_STATES_TOPIC: &str = "/machine/commanded_joint_states";
+/// Prefix of the per-thermocouple topics: `/temperature/<sensor name>`.
+pub const TEMPERATURE_TOPIC_PREFIX: &str = "/temperature/";
+pub const TRACKER_TOPIC: &str = "/tracker/measurements";
+pub const PROBE_TOPIC: &str = "/probe/hits";
+pub const CAMERA_INFO_TOPIC: &str = "/camera/camera_info";
+
+/// QoS of a simulated stream, matching rclcpp's named profiles.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum QosKind {
+    /// rclcpp `ClockQoS`: best effort, keep last 1, volatile.
+    Clock,
+    /// rclcpp `SensorDataQoS`: best effort, keep last 5, volatile (high-rate streams).
+    SensorData,
+    /// rclcpp default: reliable, keep last 10, volatile (measurements a recorder must not miss).
+    Reliable,
+}
+
+impl QosKind {
+    /// The same profile as rosbag2 stores it.
+    pub fn bag_profile(self) -> metrocell_bag::QosProfile {
+        match self {
+            QosKind::Clock => metrocell_bag::QosProfile { keep_last: true, depth: 1, reliable: false, transient_local: false },
+            QosKind::SensorData => metrocell_bag::QosProfile::sensor_data(),
+            QosKind::Reliable => metrocell_bag::QosProfile::default_publisher(),
+        }
+    }
+}
+
+/// What a topic carries.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum TopicRole {
+    Clock,
+    JointStates,
+    CommandedJointStates,
+    /// Thermocouple by name.
+    Temperature(String),
+    Tracker,
+    Probe,
+    CameraInfo,
+}
+
+/// One topic of the map.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TopicSpec {
+    pub name: String,
+    pub role: TopicRole,
+    /// `pkg/msg/Type`.
+    pub ros_type: &'static str,
+    /// Full ros2msg definition (the type's .msg text and its dependencies).
+    pub definition: &'static str,
+    pub qos: QosKind,
+}
+
+impl TopicSpec {
+    fn of<T: RosMessage>(name: impl Into<String>, role: TopicRole, qos: QosKind) -> TopicSpec {
+        TopicSpec { name: name.into(), role, ros_type: T::ROS_TYPE, definition: T::DEFINITION, qos }
+    }
+}
+
+/// Index of a topic in a [`TopicMap`].
+pub type TopicId = usize;
+
+/// The topics of one cell, with fixed ids for the hot path.
+#[derive(Debug, Clone, PartialEq)]
+pub struct TopicMap {
+    pub topics: Vec<TopicSpec>,
+    pub clock: TopicId,
+    pub joint_states: Option<(TopicId, TopicId)>,
+    /// Per thermocouple, in the cell's order.
+    pub temperatures: Vec<TopicId>,
+    pub tracker: Option<TopicId>,
+    pub probe: Option<TopicId>,
+    pub camera_info: Option<TopicId>,
+}
+
+impl TopicMap {
+    /// The map of a cell (see the module table). Fails when a thermocouple name is not a
+    /// valid ROS name token (`[A-Za-z_][A-Za-z0-9_]*`), as it becomes part of a topic name.
+    pub fn for_cell(cell: &Cell) -> Result<TopicMap, SimError> {
+        for (i, tc) in cell.thermocouples.iter().enumerate() {
+            if !is_name_token(&tc.name) {
+                return Err(SimError::invalid(
+                    format!("sensors.thermocouples[{i}].name {:?}", tc.name),
+                    "must be a ROS name token ([A-Za-z_][A-Za-z0-9_]*) because it names the topic /temperature/<name>",
+                ));
+            }
+        }
+        let mut topics = vec![TopicSpec::of::<Clock>(CLOCK_TOPIC, TopicRole::Clock, QosKind::Clock)];
+        let mut push = |t: TopicSpec| {
+            topics.push(t);
+            topics.len() - 1
+        };
+        let joint_states = cell.machine_state_rate.map(|_| {
+            (
+                push(TopicSpec::of::<JointState>(JOINT_STATES_TOPIC, TopicRole::JointStates, QosKind::SensorData)),
+                push(TopicSpec::of::<JointState>(COMMANDED_JOINT_STATES_TOPIC, TopicRole::CommandedJointStates, QosKind::SensorData)),
+            )
+        });
+        let temperatures = cell
+            .thermocouples
+            .iter()
+            .map(|tc| push(TopicSpec::of::<Temperature>(temperature_topic(&tc.name), TopicRole::Temperature(tc.name.clone()), QosKind::Reliable)))
+            .collect();
+        let tracker = cell.tracker.as_ref().map(|_| push(TopicSpec::of::<TrackerMeasurement>(TRACKER_TOPIC, TopicRole::Tracker, QosKind::Reliable)));
+        let probe = cell.probe.as_ref().map(|_| push(TopicSpec::of::<ProbeHit>(PROBE_TOPIC, TopicRole::Probe, QosKind::Reliable)));
+        let camera_info = cell.camera.as_ref().map(|_| push(TopicSpec::of::<CameraInfo>(CAMERA_INFO_TOPIC, TopicRole::CameraInfo, QosKind::SensorData)));
+        Ok(TopicMap { topics, clock: 0, joint_states, temperatures, tracker, probe, camera_info })
+    }
+
+    pub fn get(&self, id: TopicId) -> &TopicSpec {
+        &self.topics[id]
+    }
+
+    /// Topic id of a thermocouple by name.
+    pub fn temperature(&self, sensor: &str) -> Option<TopicId> {
+        self.temperatures.iter().copied().find(|&i| self.topics[i].role == TopicRole::Temperature(sensor.to_string()))
+    }
+}
+
+/// `/temperature/<sensor>`.
+pub fn temperature_topic(sensor: &str) -> String {
+    format!("{TEMPERATURE_TOPIC_PREFIX}{sensor}")
+}
+
+fn is_name_token(s: &str) -> bool {
+    let mut chars = s.chars();
+    matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_') && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn name_tokens() {
+        assert!(is_name_token("x_left"));
+        assert!(is_name_token("_t1"));
+        assert!(!is_name_token("1t"));
+        assert!(!is_name_token("x-left"));
+        assert!(!is_name_token(""));
+    }
+}

@@ -1,0 +1,50 @@
+//! Parameters of `metrocell-sim` and their checked values.
+
+use metrocell_node::{MetrocellNode, ParamDecl};
+use metrocell_sim::duration_text::parse_duration;
+use metrocell_sim::sim_time::{check_span, parse_start_time, DEFAULT_START_TIME};
+use metrocell_sim::{Pacer, SimError};
+
+pub fn declarations() -> Vec<ParamDecl> {
+    vec![
+        ParamDecl::new("cell", "", "cell description file (YAML), e.g. crates/twin/examples/cells/quick_demo.yaml"),
+        ParamDecl::new("duration", "3min", "simulated duration of one run: 8h, 90min, 30s or seconds"),
+        ParamDecl::new("seed", 1i64, "seed of every noise source").with_range(0.0, 9.007_199_254_740_992e15),
+        ParamDecl::new("speed", 1.0, "simulated seconds per wall-clock second").with_range(1e-3, 1e5),
+        ParamDecl::new("loop", false, "start over when the run ends (time keeps advancing, same data)"),
+        ParamDecl::new("start_time", DEFAULT_START_TIME, "RFC 3339 start of simulated time"),
+        ParamDecl::new("clock_rate", 100.0, "/clock messages per wall-clock second").with_range(1.0, 1000.0),
+    ]
+}
+
+/// Checked parameter values.
+pub struct Settings {
+    pub cell: String,
+    pub duration: f64,
+    pub seed: u64,
+    pub pacer: Pacer,
+    pub repeat: bool,
+    pub start_ns: u64,
+    pub clock_period: f64,
+}
+
+pub fn settings(node: &MetrocellNode) -> Result<Settings, Box<dyn std::error::Error>> {
+    let cell = node.param::<String>("cell")?;
+    if cell.trim().is_empty() {
+        return Err("parameter cell is empty: give a cell file, e.g. --ros-args -p cell:=crates/twin/examples/cells/quick_demo.yaml".into());
+    }
+    let duration = parse_duration(&node.param::<String>("duration")?)?;
+    let speed = node.param::<f64>("speed")?;
+    let pacer = Pacer::new(speed).ok_or_else(|| SimError::InvalidArgument { what: "parameter speed".into(), reason: format!("must be > 0, got {speed}") })?;
+    let start_ns = parse_start_time(&node.param::<String>("start_time")?)?;
+    check_span(start_ns, duration)?;
+    Ok(Settings {
+        cell,
+        duration,
+        seed: node.param::<i64>("seed")?.max(0) as u64,
+        pacer,
+        repeat: node.param::<bool>("loop")?,
+        start_ns,
+        clock_period: 1.0 / node.param::<f64>("clock_rate")?,
+    })
+}

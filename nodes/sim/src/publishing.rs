@@ -1,0 +1,147 @@
+//! The publishing loop: one raw publisher per topic of the cell's map, messages released when
+//! their simulated time is due, `/clock` ticks in between.
+
+use std::time::{Duration, Instant};
+
+use metrocell_node::{qos, Diagnostics, MetrocellNode, QosProfile, RawPublisher};
+use metrocell_sim::{CameraIntrinsics, MessageConverter, MessageStream, QosKind};
+use metrocell_twin::{Cell, Simulation};
+use ros2_client::qos::History;
+
+use crate::parameters::Settings;
+
+/// How often diagnostics values are refreshed (wall clock).
+const DIAGNOSTICS_PERIOD: Duration = Duration::from_millis(500);
+/// Lag behind schedule above which the node reports a warning (s of wall time).
+const LAG_WARNING: f64 = 1.0;
+
+fn qos_of(kind: QosKind) -> QosProfile {
+    match kind {
+        QosKind::Clock => qos::sensor_data().history(History::KeepLast { depth: 1 }),
+        QosKind::SensorData => qos::sensor_data(),
+        QosKind::Reliable => qos::reliable(),
+    }
+}
+
+pub struct LiveSim {
+    converter: MessageConverter,
+    publishers: Vec<RawPublisher>,
+    diagnostics: Diagnostics,
+    published: u64,
+    wall_start: Instant,
+    next_clock: Instant,
+    next_diagnostics: Instant,
+    /// Last /clock value published (ns), to keep it monotonic.
+    last_clock_ns: u64,
+}
+
+impl LiveSim {
+    pub fn new(node: &mut MetrocellNode, s: &Settings) -> Result<LiveSim, Box<dyn std::error::Error>> {
+        let cell = Cell::from_path(&s.cell)?;
+        let converter = MessageConverter::new(&cell, s.start_ns, CameraIntrinsics::default())?;
+        let publishers = converter
+            .topics
+            .topics
+            .iter()
+            .map(|t| node.raw_publisher(&t.name, t.ros_type, qos_of(t.qos)))
+            .collect::<Result<Vec<_>, _>>()?;
+        let now = Instant::now();
+        Ok(LiveSim {
+            converter,
+            publishers,
+            diagnostics: node.diagnostics(),
+            published: 0,
+            wall_start: now,
+            next_clock: now,
+            next_diagnostics: now,
+            last_clock_ns: 0,
+        })
+    }
+
+    pub fn published(&self) -> u64 {
+        self.published
+    }
+
+    /// Run until the simulation ends (true) or shutdown is requested (false).
+    pub fn run(&mut self, node: &MetrocellNode, s: &Settings) -> Result<bool, Box<dyn std::error::Error>> {
+        let token = node.shutdown_token();
+        self.diagnostics.set_value("speed", s.pacer.speed());
+        self.diagnostics.set_value("cell", &s.cell);
+        self.wall_start = Instant::now();
+        for run in 0u64.. {
+            // Each repetition continues simulated time where the previous one ended.
+            let offset = run as f64 * s.duration;
+            let mut converter = self.converter.clone();
+            converter.start_ns = metrocell_sim::sim_time::stamp_ns(s.start_ns, offset);
+            let sim = Simulation::new(Cell::from_path(&s.cell)?, s.duration, s.seed)?;
+            let mut stream = MessageStream::new(&sim, &converter, None);
+            for m in stream.by_ref() {
+                if !self.wait_until(node, s, offset + m.t)? {
+                    return Ok(false);
+                }
+                let bytes = m.message.encode()?;
+                match self.publishers[m.topic].publish(&bytes) {
+                    Ok(()) => self.published += 1,
+                    Err(e) => self.diagnostics.warn(format!("publishing on {} failed: {e}", converter.topics.get(m.topic).name)),
+                }
+            }
+            if let Some(e) = stream.error() {
+                return Err(e.into());
+            }
+            if !self.wait_until(node, s, offset + s.duration)? {
+                return Ok(false);
+            }
+            self.publish_clock(s.start_ns, offset + s.duration);
+            self.diagnostics.set_value("runs_completed", run + 1);
+            if !s.repeat || token.is_triggered() {
+                return Ok(!token.is_triggered());
+            }
+        }
+        Ok(true)
+    }
+
+    /// Publish /clock = start + t, never going backwards.
+    fn publish_clock(&mut self, start_ns: u64, t: f64) {
+        let ns = metrocell_sim::sim_time::stamp_ns(start_ns, t).max(self.last_clock_ns);
+        self.last_clock_ns = ns;
+        let clock = metrocell_sim::TypedMessage::Clock(metrocell_sim::convert::clock(metrocell_sim::sim_time::ros_time(ns)));
+        if let Ok(bytes) = clock.encode() {
+            if self.publishers[self.converter.topics.clock].publish(&bytes).is_err() {
+                self.diagnostics.add_count("clock_publish_failures", 1);
+            }
+        }
+    }
+
+    /// Sleep until simulated time `t` is due, publishing /clock and diagnostics meanwhile.
+    /// Returns false when shutdown was requested.
+    fn wait_until(&mut self, node: &MetrocellNode, s: &Settings, t: f64) -> Result<bool, Box<dyn std::error::Error>> {
+        let token = node.shutdown_token();
+        let due = self.wall_start + s.pacer.wall_offset(t);
+        loop {
+            let now = Instant::now();
+            if now >= self.next_clock {
+                let sim_now = s.pacer.sim_time(now - self.wall_start).min(t);
+                self.publish_clock(s.start_ns, sim_now);
+                self.next_clock = (self.next_clock + Duration::from_secs_f64(s.clock_period)).max(now);
+            }
+            if now >= self.next_diagnostics {
+                let lag = s.pacer.lag(t, now - self.wall_start);
+                self.diagnostics.set_value("sim_time_s", format!("{t:.3}"));
+                self.diagnostics.set_value("messages_published", self.published);
+                self.diagnostics.set_value("lag_s", format!("{lag:.3}"));
+                if lag > LAG_WARNING {
+                    self.diagnostics.warn(format!("{lag:.1} s behind schedule: lower speed"));
+                } else {
+                    self.diagnostics.ok("publishing on schedule");
+                }
+                self.next_diagnostics = now + DIAGNOSTICS_PERIOD;
+            }
+            if now >= due {
+                return Ok(!token.is_triggered());
+            }
+            if token.wait_timeout(due.min(self.next_clock).min(self.next_diagnostics) - now) {
+                return Ok(false);
+            }
+        }
+    }
+}

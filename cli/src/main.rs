@@ -2,6 +2,8 @@
 //!
 //! Thin by design: every subcommand parses its arguments and calls a library crate.
 
+mod bag;
+mod demo;
 mod launch_command;
 mod topic;
 
@@ -25,8 +27,15 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Inspect, repair, replay, cut, merge, export and import rosbag2 MCAP bags
+    #[command(subcommand)]
+    Bag(bag::BagCommand),
+    /// Run the main job on the built-in simulated cell: twin, thermal compensation, recorder
+    Demo(demo::DemoArgs),
     /// Start the nodes of a ROS 2 YAML launch file, each as its own process
     Launch(launch_command::LaunchArgs),
+    /// Simulate a cell into a bag, faster than real time (the digital twin)
+    Sim(metrocell_sim::SimArgs),
     /// Inspect and publish on topics (list, echo, pub, hz), like `ros2 topic`
     #[command(subcommand)]
     Topic(topic::TopicCommand),
@@ -35,7 +44,10 @@ enum Command {
 fn main() {
     let cli = Cli::parse();
     let code = match cli.command {
+        Command::Bag(command) => bag::run(command),
+        Command::Demo(args) => demo::run(args),
         Command::Launch(args) => launch_command::run(args),
+        Command::Sim(args) => metrocell_sim::run_sim_command(args),
         Command::Topic(command) => topic::run(command),
     };
     std::process::exit(code);

@@ -1,0 +1,180 @@
+//! `metrocell demo`: the main job on the built-in simulated cell.
+//!
+//! Starts `launch-configs/demo.launch.yaml` (the digital twin publishing live, the thermal
+//! compensation node, the recorder), watches the cell over DDS like a shift supervisor would —
+//! tracker points, beam breaks, the X-scale strain the thermal node estimates — stops everything
+//! when the simulated run is over, and summarises the recorded bag.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use metrocell_msgs::msg::{ErrorModel, TrackerMeasurement};
+use metrocell_msgs::rosgraph_msgs::msg::Clock;
+use metrocell_node::{qos, MetrocellNode};
+
+#[derive(clap::Args)]
+#[command(after_help = "Runs inside a private network namespace when started as\n  \
+tests/isolated target/release/metrocell demo\n\nExamples:\n  metrocell demo\n  metrocell demo --duration 300 --speed 50 --output /tmp/demo_bag")]
+pub struct DemoArgs {
+    /// Cell description (default: the built-in three-minute XFYZ cell)
+    #[arg(long)]
+    cell: Option<PathBuf>,
+    /// Simulated seconds
+    #[arg(long, default_value_t = 180.0)]
+    duration: f64,
+    /// Simulated seconds per wall-clock second
+    #[arg(long, default_value_t = 20.0)]
+    speed: f64,
+    /// Random seed of the twin
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// Bag directory to record into (must not exist)
+    #[arg(long, short = 'o')]
+    output: Option<PathBuf>,
+}
+
+/// The directory holding `launch-configs/`: next to the executable's build tree, or the cwd.
+fn share_dir() -> Option<PathBuf> {
+    if let Ok(dir) = std::env::var("METROCELL_SHARE") {
+        return Some(PathBuf::from(dir));
+    }
+    let exe = std::env::current_exe().ok()?;
+    let mut candidates: Vec<PathBuf> = exe.ancestors().map(Path::to_path_buf).collect();
+    candidates.extend(std::env::current_dir().ok());
+    candidates.into_iter().find(|d| d.join("launch-configs/demo.launch.yaml").exists())
+}
+
+struct Watch {
+    sim_time_s: f64,
+    tracker_points: u64,
+    beam_breaks: u64,
+    last_strain: Option<(f64, f64)>,
+}
+
+pub fn run(args: DemoArgs) -> i32 {
+    match demo(args) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("metrocell demo: {e:#}");
+            2
+        }
+    }
+}
+
+fn demo(args: DemoArgs) -> anyhow::Result<i32> {
+    if !(args.speed > 0.0 && args.duration > 0.0) {
+        anyhow::bail!("--speed and --duration must be positive");
+    }
+    let share = share_dir().ok_or_else(|| {
+        anyhow::anyhow!("cannot find launch-configs/demo.launch.yaml; run from the repository or set METROCELL_SHARE")
+    })?;
+    let output = args.output.clone().unwrap_or_else(|| {
+        std::env::temp_dir().join(format!("metrocell_demo_{}", std::process::id()))
+    });
+    if output.exists() {
+        anyhow::bail!("{} exists; give a new --output directory", output.display());
+    }
+    let mut launch_args = vec![
+        ("duration".to_string(), args.duration.to_string()),
+        ("speed".to_string(), args.speed.to_string()),
+        ("seed".to_string(), args.seed.to_string()),
+        ("output".to_string(), output.display().to_string()),
+    ];
+    if let Some(cell) = &args.cell {
+        launch_args.push(("cell".to_string(), std::fs::canonicalize(cell)?.display().to_string()));
+    }
+    println!(
+        "metrocell demo: simulating {:.0} s of the cell at {}× real time; recording to {}",
+        args.duration,
+        args.speed,
+        output.display()
+    );
+
+    let options = metrocell_launch::LaunchOptions { share_dir: Some(share.clone()), ..Default::default() };
+    let shutdown = options.shutdown.clone();
+    let launch_file = share.join("launch-configs/demo.launch.yaml");
+    let launcher = std::thread::spawn(move || metrocell_launch::run_launch(&launch_file, &launch_args, &options));
+
+    let watch = watch_cell(&args, &shutdown, &launcher)?;
+    // Let the recorder write the tail, then stop every node.
+    std::thread::sleep(Duration::from_millis(800));
+    shutdown.request();
+    let outcome = launcher.join().map_err(|_| anyhow::anyhow!("launcher thread panicked"))??;
+
+    println!();
+    println!(
+        "watched: {:.0} s simulated, {} tracker points, {} beam breaks{}",
+        watch.sim_time_s,
+        watch.tracker_points,
+        watch.beam_breaks,
+        match watch.last_strain {
+            Some((e, var)) => format!(", X-scale strain {:+.2} ± {:.2} µm/m", e * 1e6, var.sqrt() * 1e6),
+            None => String::new(),
+        }
+    );
+    match metrocell_bag::info(&output) {
+        Ok(info) => println!("\nrecorded bag:\n{info}"),
+        Err(e) => eprintln!("metrocell demo: the recorded bag cannot be read: {e}"),
+    }
+    Ok(if outcome.success() { 0 } else { 1 })
+}
+
+/// Follows the run over DDS until the simulated clock reaches the end (or the nodes stop).
+fn watch_cell(
+    args: &DemoArgs,
+    shutdown: &metrocell_launch::ShutdownHandle,
+    launcher: &std::thread::JoinHandle<Result<metrocell_launch::LaunchOutcome, metrocell_launch::LaunchError>>,
+) -> anyhow::Result<Watch> {
+    let mut node = MetrocellNode::builder("demo_watch").diagnostics_period(None).handle_signals(false).build()?;
+    let clock = node.subscription::<Clock>("/clock", qos::sensor_data())?;
+    let tracker = node.subscription::<TrackerMeasurement>("/tracker/measurements", qos::sensor_data())?;
+    let model = node.subscription::<ErrorModel>("/thermal/error_model", qos::sensor_data())?;
+    let mut w = Watch { sim_time_s: 0.0, tracker_points: 0, beam_breaks: 0, last_strain: None };
+    let mut start_ns: Option<i64> = None;
+    let mut next_print = 0.0;
+    // Wall-clock budget: the run at speed, plus start-up, plus slack for a loaded machine.
+    let deadline = Instant::now() + Duration::from_secs_f64(args.duration / args.speed * 3.0 + 30.0);
+    while !shutdown.is_requested() && !launcher.is_finished() {
+        while let Ok(Some((c, _))) = clock.take() {
+            let ns = c.clock.sec as i64 * 1_000_000_000 + c.clock.nanosec as i64;
+            let s = *start_ns.get_or_insert(ns);
+            w.sim_time_s = w.sim_time_s.max((ns - s) as f64 * 1e-9);
+        }
+        while let Ok(Some((m, _))) = tracker.take() {
+            if m.status & TrackerMeasurement::STATUS_BEAM_BREAK != 0 {
+                w.beam_breaks += 1;
+            } else {
+                w.tracker_points += 1;
+            }
+        }
+        while let Ok(Some((m, _))) = model.take() {
+            if let Some(i) = m.parameter_names.iter().position(|p| p == "thermal_scale.x.strain") {
+                let n = m.values.len();
+                w.last_strain = Some((m.values[i], m.covariance.get(i * n + i).copied().unwrap_or(f64::NAN)));
+            }
+        }
+        if w.sim_time_s >= next_print {
+            next_print += 30.0;
+            println!(
+                "  t = {:>5.0} s   tracker points {:>5}   beam breaks {:>3}   X-scale strain {}",
+                w.sim_time_s,
+                w.tracker_points,
+                w.beam_breaks,
+                w.last_strain.map_or("(waiting for thermocouples)".to_string(), |(e, v)| format!(
+                    "{:+.2} ± {:.2} µm/m",
+                    e * 1e6,
+                    v.sqrt() * 1e6
+                ))
+            );
+        }
+        if w.sim_time_s >= args.duration - 0.5 {
+            break;
+        }
+        if Instant::now() > deadline {
+            eprintln!("metrocell demo: the simulated clock stopped at {:.1} s; stopping", w.sim_time_s);
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    }
+    Ok(w)
+}

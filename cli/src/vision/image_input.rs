@@ -1,0 +1,69 @@
+//! Image files → 8-bit grey for the detectors, with errors naming the file.
+
+use std::path::Path;
+
+/// Decode `path` (PNG, JPEG, TIFF; 8 or 16 bit; grey or colour) to 8-bit grey. 16-bit images are
+/// scaled so their brightest pixel maps to 255 (as the fiducial node does for mono16).
+pub fn load_gray(path: &Path) -> anyhow::Result<image::GrayImage> {
+    let img = image::ImageReader::open(path)
+        .map_err(|e| anyhow::anyhow!("{}: cannot open ({e})", path.display()))?
+        .with_guessed_format()
+        .map_err(|e| anyhow::anyhow!("{}: cannot read ({e})", path.display()))?
+        .decode()
+        .map_err(|e| anyhow::anyhow!("{}: cannot decode ({e})", path.display()))?;
+    let is16 = matches!(img.color().bytes_per_pixel() / img.color().channel_count(), 2);
+    if is16 {
+        let g = img.to_luma16();
+        let max = g.as_raw().iter().copied().max().unwrap_or(0).max(1) as f64;
+        let raw = g.as_raw().iter().map(|&v| (v as f64 * 255.0 / max).round() as u8).collect();
+        return Ok(image::GrayImage::from_raw(g.width(), g.height(), raw).expect("same size"));
+    }
+    Ok(img.to_luma8())
+}
+
+/// "10mm", "0.01m", "1cm", "25.4 mm" → metres; a bare number is millimetres.
+pub fn parse_length(s: &str) -> Result<f64, String> {
+    let t = s.trim();
+    let (num, scale) = if let Some(n) = t.strip_suffix("mm") {
+        (n, 1e-3)
+    } else if let Some(n) = t.strip_suffix("cm") {
+        (n, 1e-2)
+    } else if let Some(n) = t.strip_suffix("um").or_else(|| t.strip_suffix("µm")) {
+        (n, 1e-6)
+    } else if let Some(n) = t.strip_suffix('m') {
+        (n, 1.0)
+    } else {
+        (t, 1e-3)
+    };
+    let v: f64 = num.trim().parse().map_err(|_| format!("`{s}` is not a length (e.g. 10mm, 0.01m)"))?;
+    if !(v.is_finite() && v > 0.0) {
+        return Err(format!("`{s}` must be a positive length"));
+    }
+    Ok(v * scale)
+}
+
+/// "9x6" → (9, 6).
+pub fn parse_board(s: &str) -> Result<(usize, usize), String> {
+    let (a, b) = s.to_ascii_lowercase().split_once('x').map(|(a, b)| (a.trim().to_string(), b.trim().to_string())).ok_or_else(|| format!("`{s}`: expected COLSxROWS inner corners, e.g. 9x6"))?;
+    let (c, r) = (a.parse::<usize>().map_err(|_| format!("`{s}`: bad column count"))?, b.parse::<usize>().map_err(|_| format!("`{s}`: bad row count"))?);
+    if c < 2 || r < 2 {
+        return Err(format!("`{s}`: need at least 2x2 inner corners"));
+    }
+    Ok((c, r))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn lengths_and_boards_parse() {
+        assert_eq!(parse_length("10mm").unwrap(), 0.01);
+        assert_eq!(parse_length("0.025m").unwrap(), 0.025);
+        assert_eq!(parse_length("2.5cm").unwrap(), 0.025);
+        assert_eq!(parse_length("12").unwrap(), 0.012);
+        assert!(parse_length("-1mm").is_err() && parse_length("ten").is_err());
+        assert_eq!(parse_board("9x6").unwrap(), (9, 6));
+        assert!(parse_board("9").is_err() && parse_board("1x6").is_err());
+    }
+}

@@ -1,0 +1,5 @@
+//! `metrocell detect` and `metrocell camera ...`: the vision library on image files.
+
+pub mod camera_command;
+pub mod detect;
+mod image_input;

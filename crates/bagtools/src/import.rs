@@ -1,0 +1,478 @@
+//! `bag import`: point-measurement logs (CSV) → a bag.
+//!
+//! # The metrocell point CSV layout
+//! One row per measured point, a header row naming the columns (any order; unknown columns are
+//! an error so typos do not go unnoticed). Units are SI unless a mapping converts them.
+//!
+//! | column | meaning | required |
+//! |---|---|---|
+//! | `timestamp` | seconds since the Unix epoch (`1714557600.125`) or UTC date-time `2024-05-01T10:00:00.125Z` (`T` or space; `Z` optional) | yes |
+//! | `point_id` | name of the point | yes |
+//! | `measured_x`, `measured_y`, `measured_z` | measured coordinates [m] | yes |
+//! | `u_x`, `u_y`, `u_z` | standard uncertainties (k = 1) of the measured coordinates [m] | one of these, |
+//! | `u95` | expanded uncertainty, k = 2, same on each axis [m]: σ = U95 / 2 | `u_*`, or |
+//! | | | `default_uncertainty` in the mapping |
+//! | `nominal_x`, `nominal_y`, `nominal_z` | commanded position [m] (NaN in the message when absent) | no |
+//! | `joint.<name>` | commanded joint value [rad or m] | no |
+//! | `temperature.<name>` | temperature [°C] | no |
+//! | `pressure` | air pressure [Pa] | no |
+//! | `humidity` | relative humidity, 0..1 | no |
+//! | `aux.<name>` | any other channel (accelerometer, ...), in its SI unit | no |
+//!
+//! # Topics written (log time = publish time = the row's timestamp)
+//! * `/measured_points` `metrocell_msgs/msg/MeasuredPoint` (covariance diagonal σ², off-diagonal 0)
+//! * `/commanded_joints` `sensor_msgs/msg/JointState` (names from `joint.<name>`, positions)
+//! * `/temperature/<name>` `sensor_msgs/msg/Temperature` (variance 0 = unknown, as ROS defines)
+//! * `/air/pressure` `sensor_msgs/msg/FluidPressure`, `/air/humidity` `sensor_msgs/msg/RelativeHumidity`
+//! * `/aux_channels` `sensor_msgs/msg/JointState` used as a named-value vector: `name` holds the
+//!   channel names, `position` their values (ROS has no standard named-scalar array).
+//!
+//! # Mapping file (YAML)
+//! For exports of other software, a mapping says which source column feeds which field above
+//! and how to convert it to SI: `value_SI = raw * scale + offset`.
+//! ```yaml
+//! delimiter: ","            # optional, one character
+//! frame_id: tracker         # header.frame_id of every message (default "import")
+//! source: leica_at960       # MeasuredPoint.source (default "import")
+//! default_uncertainty: 1.0e-5   # [m] σ per axis when the file has no uncertainty column
+//! columns:
+//!   timestamp: {column: "Timestamp"}
+//!   point_id: {column: "Point Name"}
+//!   measured_x: {column: "X", scale: 0.001}    # mm → m
+//!   u95: {column: "U95", scale: 0.001}
+//!   temperature.air: {column: "Temperature"}
+//!   pressure: {column: "Pressure", scale: 100.0}   # hPa → Pa
+//! ignore: ["Comment"]       # source columns to skip
+//! ```
+//! Without a mapping the header names are the layout's names and every scale is 1.
+//!
+//! Bad rows (a cell that does not parse, a missing required value) are reported with file,
+//! line and column and skipped; the other rows are imported.
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use byteorder::LittleEndian;
+use metrocell_bag::{qos_profiles_yaml, BagWriter, QosProfile, WriterOptions};
+use metrocell_msgs::builtin_interfaces::msg::Time;
+use metrocell_msgs::geometry_msgs::msg::Point;
+use metrocell_msgs::msg::MeasuredPoint;
+use metrocell_msgs::sensor_msgs::msg::{FluidPressure, JointState, RelativeHumidity, Temperature};
+use metrocell_msgs::std_msgs::msg::Header;
+use rosmsg::RosMessage;
+use serde::Deserialize;
+
+use crate::error::{io, Result, ToolError};
+
+/// One mapped column: source column name and linear conversion to SI.
+#[derive(Debug, Clone, Deserialize, PartialEq)]
+#[serde(deny_unknown_fields)]
+pub struct ColumnMap {
+    pub column: String,
+    #[serde(default = "one")]
+    pub scale: f64,
+    #[serde(default)]
+    pub offset: f64,
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+/// The column-mapping file.
+#[derive(Debug, Clone, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct Mapping {
+    #[serde(default)]
+    pub delimiter: Option<char>,
+    #[serde(default)]
+    pub frame_id: Option<String>,
+    #[serde(default)]
+    pub source: Option<String>,
+    #[serde(default)]
+    pub default_uncertainty: Option<f64>,
+    #[serde(default)]
+    pub columns: BTreeMap<String, ColumnMap>,
+    #[serde(default)]
+    pub ignore: Vec<String>,
+}
+
+impl Mapping {
+    pub fn load(path: &Path) -> Result<Self> {
+        let text = std::fs::read_to_string(path).map_err(io(path))?;
+        serde_yaml::from_str(&text).map_err(|e| ToolError::Mapping { path: path.to_path_buf(), reason: e.to_string() })
+    }
+}
+
+/// Canonical field of the layout.
+#[derive(Debug, Clone, PartialEq)]
+enum Field {
+    Timestamp,
+    PointId,
+    Measured(usize),
+    Nominal(usize),
+    U(usize),
+    U95,
+    Joint(String),
+    Temperature(String),
+    Pressure,
+    Humidity,
+    Aux(String),
+}
+
+fn parse_field(name: &str) -> Option<Field> {
+    let axis = |s: &str| ["x", "y", "z"].iter().position(|a| *a == s);
+    let named = |prefix: &str| name.strip_prefix(prefix).filter(|n| !n.is_empty() && n.chars().all(|c| c.is_ascii_alphanumeric() || c == '_'));
+    Some(match name {
+        "timestamp" => Field::Timestamp,
+        "point_id" => Field::PointId,
+        "u95" => Field::U95,
+        "pressure" => Field::Pressure,
+        "humidity" => Field::Humidity,
+        _ => {
+            if let Some(a) = name.strip_prefix("measured_").and_then(axis) {
+                Field::Measured(a)
+            } else if let Some(a) = name.strip_prefix("nominal_").and_then(axis) {
+                Field::Nominal(a)
+            } else if let Some(a) = name.strip_prefix("u_").and_then(axis) {
+                Field::U(a)
+            } else if let Some(n) = named("joint.") {
+                Field::Joint(n.to_string())
+            } else if let Some(n) = named("temperature.") {
+                Field::Temperature(n.to_string())
+            } else if let Some(n) = named("aux.") {
+                Field::Aux(n.to_string())
+            } else {
+                return None;
+            }
+        }
+    })
+}
+
+/// Parse a timestamp cell: epoch seconds, or `YYYY-MM-DD[T ]HH:MM:SS[.f][Z]` in UTC. → ns.
+pub fn parse_timestamp(s: &str) -> std::result::Result<u64, String> {
+    let s = s.trim();
+    if let Ok(secs) = s.parse::<f64>() {
+        if secs.is_finite() && secs >= 0.0 {
+            // split to keep ns precision for values like 1714557600.125
+            let (int, frac) = s.split_once('.').unwrap_or((s, ""));
+            let whole: u64 = int.parse().map_err(|_| format!("timestamp '{s}' is not a number of seconds"))?;
+            return Ok(whole * 1_000_000_000 + frac_ns(frac)?);
+        }
+        return Err(format!("timestamp '{s}' is negative or not finite"));
+    }
+    let bad = || format!("timestamp '{s}' is neither epoch seconds nor YYYY-MM-DD HH:MM:SS[.fff][Z]");
+    let s2 = s.strip_suffix('Z').unwrap_or(s);
+    let (date, time) = s2.split_once(['T', ' ']).ok_or_else(bad)?;
+    let d: Vec<&str> = date.split('-').collect();
+    let (hms, frac) = time.split_once('.').unwrap_or((time, ""));
+    let t: Vec<&str> = hms.split(':').collect();
+    if d.len() != 3 || t.len() != 3 {
+        return Err(bad());
+    }
+    let num = |x: &str| x.parse::<i64>().map_err(|_| bad());
+    let (y, mo, da, h, mi, se) = (num(d[0])?, num(d[1])?, num(d[2])?, num(t[0])?, num(t[1])?, num(t[2])?);
+    if !(1..=12).contains(&mo) || !(1..=31).contains(&da) || h > 23 || mi > 59 || se > 60 || y < 1970 {
+        return Err(bad());
+    }
+    // days from civil (Howard Hinnant's algorithm), proleptic Gregorian, UTC.
+    let yy = if mo <= 2 { y - 1 } else { y };
+    let era = yy.div_euclid(400);
+    let yoe = yy - era * 400;
+    let doy = (153 * (if mo > 2 { mo - 3 } else { mo + 9 }) + 2) / 5 + da - 1;
+    let doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
+    let days = era * 146_097 + doe - 719_468;
+    let secs = days * 86_400 + h * 3600 + mi * 60 + se;
+    Ok(secs as u64 * 1_000_000_000 + frac_ns(frac).map_err(|_| bad())?)
+}
+
+/// `raw * scale`, exact to the nearest f64 when `scale` is a power of ten (mm → m): the
+/// decimal text is re-parsed with a shifted exponent, so "1250.1234" mm gives the f64 nearest
+/// to 1.2501234, not 1250.1234 × 0.001 = 1.2501233999999999.
+fn scale_decimal(text: &str, raw: f64, scale: f64) -> f64 {
+    let k = scale.log10().round() as i32;
+    if (-18..=18).contains(&k) && 10f64.powi(k) == scale && !text.contains(['e', 'E']) {
+        if let Ok(v) = format!("{text}e{k}").parse::<f64>() {
+            return v;
+        }
+    }
+    raw * scale
+}
+
+fn frac_ns(frac: &str) -> std::result::Result<u64, String> {
+    if frac.is_empty() {
+        return Ok(0);
+    }
+    if !frac.chars().all(|c| c.is_ascii_digit()) {
+        return Err(format!("fraction '{frac}' is not digits"));
+    }
+    let digits: String = frac.chars().chain(std::iter::repeat('0')).take(9).collect();
+    Ok(digits.parse().expect("nine digits"))
+}
+
+/// Counts of an import.
+#[derive(Debug, Default)]
+pub struct ImportReport {
+    pub rows_read: u64,
+    pub rows_imported: u64,
+    /// One error per bad cell (a row with several bad cells lists each), naming file/line/column.
+    pub errors: Vec<ToolError>,
+    pub messages_per_topic: BTreeMap<String, u64>,
+}
+
+impl ImportReport {
+    pub fn rows_rejected(&self) -> u64 {
+        self.rows_read - self.rows_imported
+    }
+}
+
+struct Bound {
+    index: usize,
+    source_name: String,
+    field: Field,
+    scale: f64,
+    offset: f64,
+}
+
+fn cdr<T: RosMessage>(m: &T) -> Vec<u8> {
+    let mut v = vec![0, 1, 0, 0];
+    v.extend(rustdds::serialization::to_vec::<T, LittleEndian>(m).expect("generated types serialise"));
+    v
+}
+
+fn stamp(ns: u64) -> Time {
+    Time { sec: (ns / 1_000_000_000) as i32, nanosec: (ns % 1_000_000_000) as u32 }
+}
+
+/// Import `csv_path` into the new bag `bag_dir` using `mapping` (None: the file uses the
+/// layout's own column names).
+pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, options: WriterOptions) -> Result<ImportReport> {
+    let default_mapping = Mapping::default();
+    let mapping = mapping.unwrap_or(&default_mapping);
+    let file = std::fs::File::open(csv_path).map_err(io(csv_path))?;
+    let mut rdr = csv::ReaderBuilder::new()
+        .delimiter(mapping.delimiter.unwrap_or(',') as u8)
+        .flexible(true)
+        .trim(csv::Trim::All)
+        .from_reader(std::io::BufReader::new(file));
+    let header_err = |reason: String| ToolError::Row { path: csv_path.to_path_buf(), line: 1, column: "header".into(), reason };
+    let headers = rdr.headers().map_err(|e| header_err(e.to_string()))?.clone();
+    let find = |name: &str| headers.iter().position(|h| h == name);
+
+    // Bind every layout field to a source column.
+    let mut bound: Vec<Bound> = Vec::new();
+    if mapping.columns.is_empty() {
+        for (i, h) in headers.iter().enumerate() {
+            if mapping.ignore.iter().any(|x| x == h) {
+                continue;
+            }
+            let field = parse_field(h).ok_or_else(|| header_err(format!("column '{h}' is not part of the point CSV layout (see `metrocell bag import --help`)")))?;
+            bound.push(Bound { index: i, source_name: h.to_string(), field, scale: 1.0, offset: 0.0 });
+        }
+    } else {
+        for (target, cm) in &mapping.columns {
+            let field = parse_field(target).ok_or_else(|| ToolError::Mapping { path: PathBuf::from("mapping"), reason: format!("'{target}' is not a field of the point CSV layout") })?;
+            let index = find(&cm.column).ok_or_else(|| header_err(format!("mapped column '{}' (for {target}) is not in the header", cm.column)))?;
+            bound.push(Bound { index, source_name: cm.column.clone(), field, scale: cm.scale, offset: cm.offset });
+        }
+    }
+    let has = |f: &dyn Fn(&Field) -> bool| bound.iter().any(|b| f(&b.field));
+    for (need, what) in [
+        (&(|f: &Field| *f == Field::Timestamp) as &dyn Fn(&Field) -> bool, "timestamp"),
+        (&|f: &Field| *f == Field::PointId, "point_id"),
+        (&|f: &Field| *f == Field::Measured(0), "measured_x"),
+        (&|f: &Field| *f == Field::Measured(1), "measured_y"),
+        (&|f: &Field| *f == Field::Measured(2), "measured_z"),
+    ] {
+        if !has(need) {
+            return Err(header_err(format!("no column for the required field {what}")));
+        }
+    }
+    let has_u = has(&|f| matches!(f, Field::U(_) | Field::U95));
+    if !has_u && mapping.default_uncertainty.is_none() {
+        return Err(header_err("no uncertainty column (u_x/u_y/u_z or u95) and no default_uncertainty in a mapping: \
+                               a measured point needs its uncertainty".into()));
+    }
+    let frame_id = mapping.frame_id.clone().unwrap_or_else(|| "import".into());
+    let source = mapping.source.clone().unwrap_or_else(|| "import".into());
+
+    let mut writer = BagWriter::create(bag_dir, options)?;
+    let qos = qos_profiles_yaml(&[QosProfile::default_publisher()]);
+    let mut added: BTreeMap<String, ()> = BTreeMap::new();
+    let mut add = |w: &mut BagWriter, topic: &str, ty: &str, def: &str| -> Result<()> {
+        if added.insert(topic.to_string(), ()).is_none() {
+            w.add_topic(topic, ty, def, &qos)?;
+        }
+        Ok(())
+    };
+    let mut report = ImportReport::default();
+    let mut record = csv::StringRecord::new();
+    loop {
+        let line = rdr.position().line() + 0;
+        match rdr.read_record(&mut record) {
+            Ok(false) => break,
+            Ok(true) => {}
+            Err(e) => {
+                report.rows_read += 1;
+                report.errors.push(ToolError::Row { path: csv_path.to_path_buf(), line: line.max(2), column: "-".into(), reason: e.to_string() });
+                continue;
+            }
+        }
+        let line = record.position().map_or(line, |p| p.line());
+        if record.iter().all(|c| c.is_empty()) {
+            continue;
+        }
+        report.rows_read += 1;
+        let mut row_errors = Vec::new();
+        let mut err = |b: &Bound, reason: String| {
+            row_errors.push(ToolError::Row { path: csv_path.to_path_buf(), line, column: b.source_name.clone(), reason })
+        };
+        let mut t_ns = None;
+        let mut point_id = None;
+        let mut measured = [f64::NAN; 3];
+        let mut nominal = [f64::NAN; 3];
+        let mut u = [mapping.default_uncertainty.unwrap_or(f64::NAN); 3];
+        let mut joints = Vec::new();
+        let mut temps = Vec::new();
+        let mut aux = Vec::new();
+        let (mut pressure, mut humidity) = (None, None);
+        for b in &bound {
+            let cell = record.get(b.index).unwrap_or("");
+            let number = || -> std::result::Result<f64, String> {
+                let v: f64 = cell.parse().map_err(|_| format!("'{cell}' is not a number"))?;
+                if !v.is_finite() {
+                    return Err(format!("'{cell}' is not finite"));
+                }
+                Ok(scale_decimal(cell, v, b.scale) + b.offset)
+            };
+            match &b.field {
+                Field::Timestamp => match parse_timestamp(cell) {
+                    Ok(t) => t_ns = Some(t),
+                    Err(e) => err(b, e),
+                },
+                Field::PointId if cell.is_empty() => err(b, "empty point id".into()),
+                Field::PointId => point_id = Some(cell.to_string()),
+                Field::Measured(a) => match number() {
+                    Ok(v) => measured[*a] = v,
+                    Err(e) => err(b, e),
+                },
+                Field::Nominal(a) if cell.is_empty() => nominal[*a] = f64::NAN,
+                Field::Nominal(a) => match number() {
+                    Ok(v) => nominal[*a] = v,
+                    Err(e) => err(b, e),
+                },
+                Field::U(a) => match number() {
+                    Ok(v) if v > 0.0 => u[*a] = v,
+                    Ok(v) => err(b, format!("uncertainty {v} m is not positive")),
+                    Err(e) => err(b, e),
+                },
+                Field::U95 => match number() {
+                    Ok(v) if v > 0.0 => u = [v / 2.0; 3],
+                    Ok(v) => err(b, format!("U95 {v} m is not positive")),
+                    Err(e) => err(b, e),
+                },
+                Field::Joint(n) => match number() {
+                    Ok(v) => joints.push((n.clone(), v)),
+                    Err(e) => err(b, e),
+                },
+                Field::Temperature(_) | Field::Pressure | Field::Humidity | Field::Aux(_) if cell.is_empty() => {}
+                Field::Temperature(n) => match number() {
+                    Ok(v) => temps.push((n.clone(), v)),
+                    Err(e) => err(b, e),
+                },
+                Field::Pressure => match number() {
+                    Ok(v) => pressure = Some(v),
+                    Err(e) => err(b, e),
+                },
+                Field::Humidity => match number() {
+                    Ok(v) if (0.0..=1.0).contains(&v) => humidity = Some(v),
+                    Ok(v) => err(b, format!("relative humidity {v} is outside 0..1 (a %RH column needs scale: 0.01)")),
+                    Err(e) => err(b, e),
+                },
+                Field::Aux(n) => match number() {
+                    Ok(v) => aux.push((n.clone(), v)),
+                    Err(e) => err(b, e),
+                },
+            }
+        }
+        if !row_errors.is_empty() {
+            report.errors.extend(row_errors);
+            continue;
+        }
+        let t = t_ns.expect("required column bound and parsed");
+        let header = Header { stamp: stamp(t), frame_id: frame_id.clone() };
+        let mut out: Vec<(String, &str, &str, Vec<u8>)> = Vec::new();
+        let mut cov = [0.0; 9];
+        for a in 0..3 {
+            cov[a * 4] = u[a] * u[a];
+        }
+        let p = MeasuredPoint {
+            header: header.clone(),
+            point_id: point_id.expect("required"),
+            source: source.clone(),
+            nominal: Point { x: nominal[0], y: nominal[1], z: nominal[2] },
+            measured: Point { x: measured[0], y: measured[1], z: measured[2] },
+            covariance: cov,
+        };
+        out.push(("/measured_points".into(), MeasuredPoint::ROS_TYPE, MeasuredPoint::DEFINITION, cdr(&p)));
+        if !joints.is_empty() {
+            let js = JointState { header: header.clone(), name: joints.iter().map(|j| j.0.clone()).collect(), position: joints.iter().map(|j| j.1).collect(), ..Default::default() };
+            out.push(("/commanded_joints".into(), JointState::ROS_TYPE, JointState::DEFINITION, cdr(&js)));
+        }
+        for (n, v) in temps {
+            let m = Temperature { header: Header { stamp: stamp(t), frame_id: n.clone() }, temperature: v, variance: 0.0 };
+            out.push((format!("/temperature/{n}"), Temperature::ROS_TYPE, Temperature::DEFINITION, cdr(&m)));
+        }
+        if let Some(v) = pressure {
+            let m = FluidPressure { header: header.clone(), fluid_pressure: v, variance: 0.0 };
+            out.push(("/air/pressure".into(), FluidPressure::ROS_TYPE, FluidPressure::DEFINITION, cdr(&m)));
+        }
+        if let Some(v) = humidity {
+            let m = RelativeHumidity { header: header.clone(), relative_humidity: v, variance: 0.0 };
+            out.push(("/air/humidity".into(), RelativeHumidity::ROS_TYPE, RelativeHumidity::DEFINITION, cdr(&m)));
+        }
+        if !aux.is_empty() {
+            let m = JointState { header: header.clone(), name: aux.iter().map(|j| j.0.clone()).collect(), position: aux.iter().map(|j| j.1).collect(), ..Default::default() };
+            out.push(("/aux_channels".into(), JointState::ROS_TYPE, JointState::DEFINITION, cdr(&m)));
+        }
+        for (topic, ty, def, bytes) in out {
+            add(&mut writer, &topic, ty, def)?;
+            writer.write(&topic, t, t, &bytes)?;
+            *report.messages_per_topic.entry(topic).or_default() += 1;
+        }
+        report.rows_imported += 1;
+    }
+    writer.finish()?;
+    Ok(report)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn timestamps_parse_to_utc_nanoseconds() {
+        assert_eq!(parse_timestamp("1714557600.125").unwrap(), 1_714_557_600_125_000_000);
+        assert_eq!(parse_timestamp("2024-05-01T10:00:00.125Z").unwrap(), 1_714_557_600_125_000_000);
+        assert_eq!(parse_timestamp("2024-05-01 10:00:00").unwrap(), 1_714_557_600_000_000_000);
+        assert_eq!(parse_timestamp("1970-01-01 00:00:00").unwrap(), 0);
+        assert!(parse_timestamp("01/05/2024 10:00").is_err());
+        assert!(parse_timestamp("2024-13-01 10:00:00").is_err());
+    }
+
+    #[test]
+    fn power_of_ten_scales_are_exact() {
+        assert_eq!(scale_decimal("1250.1234", 1250.1234, 0.001), 1.2501234);
+        assert_eq!(scale_decimal("-240.4988", -240.4988, 0.001), -0.2404988);
+        assert_eq!(scale_decimal("1013.25", 1013.25, 100.0), 101325.0);
+        assert_eq!(scale_decimal("2.5", 2.5, 0.3), 2.5 * 0.3);
+    }
+
+    #[test]
+    fn layout_fields_parse() {
+        assert_eq!(parse_field("measured_y"), Some(Field::Measured(1)));
+        assert_eq!(parse_field("temperature.air"), Some(Field::Temperature("air".into())));
+        assert_eq!(parse_field("temperature."), None);
+        assert_eq!(parse_field("X"), None);
+    }
+}

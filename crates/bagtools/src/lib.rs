@@ -1,0 +1,26 @@
+//! Library code of the `metrocell bag` command and the `metrocell-recorder` node. No DDS here:
+//! the node and the CLI own the DDS endpoints and call these functions with bytes and times.
+//!
+//! * [`TopicSelection`]: which topics a recorder records (list, regex, exclude).
+//! * [`Recording`]: a [`metrocell_bag::BagWriter`] plus per-topic counts and dropped-message
+//!   detection from per-publisher sequence numbers.
+//! * [`filter_bag`] / [`merge_bags`]: copy selected messages into a new bag.
+//! * [`export`]: one CSV file per topic, one column per leaf field.
+//! * [`import`]: point-measurement CSV (own layout or a mapped tracker export) → bag.
+//! * [`playback`]: the timing of `bag play` (rate, pause, step) as a pure schedule.
+//! * [`BagSource`]: offline replay — a node reads typed messages from a bag instead of DDS.
+
+mod bag_source;
+mod copy;
+mod error;
+pub mod export;
+pub mod import;
+pub mod playback;
+mod recording;
+mod topic_selection;
+
+pub use bag_source::{BagSource, SourcedMessage};
+pub use copy::{filter_bag, merge_bags, CopyReport};
+pub use error::{Result, ToolError};
+pub use recording::{Recording, TopicCounts};
+pub use topic_selection::TopicSelection;

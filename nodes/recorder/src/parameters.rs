@@ -1,0 +1,81 @@
+//! The recorder's parameters and the writer options built from them.
+
+use std::time::Duration;
+
+use metrocell_bag::{ChunkCompression, SplitPolicy, WriterOptions};
+use metrocell_bagtools::TopicSelection;
+use metrocell_node::{MetrocellNode, ParamDecl};
+
+pub fn declarations() -> Vec<ParamDecl> {
+    vec![
+        ParamDecl::new("output", String::new(), "bag directory to create (default bag_<UTC timestamp>)"),
+        ParamDecl::new("topics", Vec::<String>::new(), "topics to record (empty: every discovered topic)"),
+        ParamDecl::new("regex", String::new(), "record only topics matching this regex (whole name)"),
+        ParamDecl::new("exclude", String::new(), "do not record topics matching this regex (whole name)"),
+        ParamDecl::new("compression", "zstd".to_string(), "chunk compression: zstd, lz4 or none"),
+        ParamDecl::new("flush_interval", 1.0, "seconds between flushes to disk: a kill loses at most ~2x this").with_range(0.1, 60.0),
+        ParamDecl::new("max_bag_size", 0i64, "split into a new .mcap file after this many bytes (0: never)"),
+        ParamDecl::new("max_bag_duration", 0.0, "split into a new .mcap file after this many seconds (0: never)").with_range(0.0, 1e9),
+        ParamDecl::new("queue_depth", 1000i64, "DDS reader history (keep-last depth) of ordinary topics: covers recorder stalls (disk flushes) of depth / rate seconds").with_range(1.0, 1e6),
+        ParamDecl::new("fail_after_bytes", 0i64, "testing only: simulate a full disk after this many bytes per file (0: off)"),
+        ParamDecl::new("bulk_queue_depth", 30i64, "history of bulk topics (types with a byte-array field, e.g. images); RustDDS keeps this many samples in memory, so memory ≈ depth × message size").with_range(1.0, 1e6),
+    ]
+}
+
+pub fn selection(node: &MetrocellNode) -> Result<TopicSelection, Box<dyn std::error::Error>> {
+    let topics = node.param::<Vec<String>>("topics")?.iter().map(|t| node.resolve_topic(t)).collect::<Result<Vec<_>, _>>()?;
+    Ok(TopicSelection::new(topics, &node.param::<String>("regex")?, &node.param::<String>("exclude")?)?)
+}
+
+pub fn writer_options(node: &MetrocellNode) -> Result<WriterOptions, Box<dyn std::error::Error>> {
+    let compression = match node.param::<String>("compression")?.as_str() {
+        "zstd" => ChunkCompression::Zstd,
+        "lz4" => ChunkCompression::Lz4,
+        "none" | "" => ChunkCompression::None,
+        other => return Err(format!("parameter compression: '{other}' is not one of zstd, lz4, none").into()),
+    };
+    let size = node.param::<i64>("max_bag_size")?;
+    let duration = node.param::<f64>("max_bag_duration")?;
+    Ok(WriterOptions {
+        compression,
+        flush_interval: Duration::from_secs_f64(node.param::<f64>("flush_interval")?),
+        split: SplitPolicy {
+            max_file_bytes: (size > 0).then_some(size as u64),
+            max_file_duration: (duration > 0.0).then(|| Duration::from_secs_f64(duration)),
+        },
+        fail_after_bytes: match node.param::<i64>("fail_after_bytes")? {
+            n if n > 0 => Some(n as u64),
+            _ => None,
+        },
+        ..WriterOptions::default()
+    })
+}
+
+/// `bag_YYYY_MM_DD-HH_MM_SS` in UTC, like rosbag2's default names.
+pub fn default_output() -> String {
+    let secs = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs() as i64).unwrap_or(0);
+    let (days, rem) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
+    // civil from days (Howard Hinnant)
+    let z = days + 719_468;
+    let era = z.div_euclid(146_097);
+    let doe = z - era * 146_097;
+    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
+    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
+    let mp = (5 * doy + 2) / 153;
+    let d = doy - (153 * mp + 2) / 5 + 1;
+    let m = if mp < 10 { mp + 3 } else { mp - 9 };
+    let y = yoe + era * 400 + i64::from(m <= 2);
+    format!("bag_{y:04}_{m:02}_{d:02}-{:02}_{:02}_{:02}", rem / 3600, rem / 60 % 60, rem % 60)
+}
+
+/// A "bulk" type carries a variable-length byte array at top level (sensor_msgs/Image data,
+/// CompressedImage, PointCloud2): megabytes per message, so the recorder gives it a short queue.
+pub fn is_bulk_type(ros_type: &str) -> bool {
+    use rosmsg::{ArrayKind, BaseType, Primitive};
+    metrocell_msgs::registry().get(ros_type).is_some_and(|spec| {
+        spec.fields.iter().any(|f| {
+            matches!(f.ty.base, BaseType::Primitive(Primitive::UInt8 | Primitive::Byte | Primitive::Int8))
+                && matches!(f.ty.array, ArrayKind::Unbounded | ArrayKind::Bounded(_))
+        })
+    })
+}

@@ -132,13 +132,22 @@ fn watch_cell(
     let mut w = Watch { sim_time_s: 0.0, tracker_points: 0, beam_breaks: 0, last_strain: None };
     let mut start_ns: Option<i64> = None;
     let mut next_print = 0.0;
+    // The run is over when the simulated clock, once started, stops advancing.
+    let mut last_advance = Instant::now();
     // Wall-clock budget: the run at speed, plus start-up, plus slack for a loaded machine.
     let deadline = Instant::now() + Duration::from_secs_f64(args.duration / args.speed * 3.0 + 30.0);
     while !shutdown.is_requested() && !launcher.is_finished() {
         while let Ok(Some((c, _))) = clock.take() {
             let ns = c.clock.sec as i64 * 1_000_000_000 + c.clock.nanosec as i64;
-            let s = *start_ns.get_or_insert(ns);
-            w.sim_time_s = w.sim_time_s.max((ns - s) as f64 * 1e-9);
+            let s = *start_ns.get_or_insert_with(|| {
+                last_advance = Instant::now();
+                ns
+            });
+            let t = (ns - s) as f64 * 1e-9;
+            if t > w.sim_time_s {
+                w.sim_time_s = t;
+                last_advance = Instant::now();
+            }
         }
         while let Ok(Some((m, _))) = tracker.take() {
             if m.status & TrackerMeasurement::STATUS_BEAM_BREAK != 0 {
@@ -167,7 +176,7 @@ fn watch_cell(
                 ))
             );
         }
-        if w.sim_time_s >= args.duration - 0.5 {
+        if w.sim_time_s >= args.duration - 0.5 || (start_ns.is_some() && last_advance.elapsed() > Duration::from_secs(2)) {
             break;
         }
         if Instant::now() > deadline {

@@ -57,7 +57,9 @@ fn discover_type(node: &MetrocellNode, topic: &str, wait: Duration) -> anyhow::R
     let deadline = std::time::Instant::now() + wait;
     let token = node.shutdown_token();
     loop {
-        if let Some(t) = node.discovered_topics().into_iter().find(|t| t.name == topic) {
+        // The publishers' type is what arrives; a reader may declare another.
+        let mut known = node.discovered_publications().into_iter().chain(node.discovered_topics());
+        if let Some(t) = known.find(|t| t.name == topic) {
             return Ok(t.type_name);
         }
         if std::time::Instant::now() >= deadline || token.wait_timeout(Duration::from_millis(50)) {

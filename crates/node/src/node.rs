@@ -194,6 +194,18 @@ impl MetrocellNode {
         ros_topics_from_dds(raw.iter().map(|t| (t.name.as_str(), t.type_name.as_str())))
     }
 
+    /// ROS topics that have at least one publisher (discovered DDS writers), with the type the
+    /// publishers declare. Prefer this to [`Self::discovered_topics`] when the type matters:
+    /// readers can declare other types on the same topic (ros2-client's own spinner reads
+    /// `/clock` as `builtin_interfaces/msg/Time`, while `/clock` publishers send
+    /// `rosgraph_msgs/msg/Clock`).
+    pub fn discovered_publications(&self) -> Vec<TopicInfo> {
+        let writers = self.parts.context.domain_participant().discovered_writers();
+        ros_topics_from_dds(
+            writers.iter().map(|w| (w.publication_topic_data.topic_name.as_str(), w.publication_topic_data.type_name.as_str())),
+        )
+    }
+
     /// Wait for discovery to settle, then list topics: polls until the list has not changed for
     /// `quiet` (or `max_wait` passes). For `metrocell topic list` and friends.
     pub fn discovered_topics_settled(&self, quiet: std::time::Duration, max_wait: std::time::Duration) -> Vec<TopicInfo> {

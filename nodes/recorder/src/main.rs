@@ -67,7 +67,8 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     'record: while !token.is_triggered() {
         if Instant::now() >= next_scan {
             next_scan += Duration::from_secs(1);
-            for t in node.discovered_topics() {
+            // Publishers declare what is sent; a reader may declare another type on the same topic.
+            for t in node.discovered_publications() {
                 if !selection.matches(&t.name) || recording.has_topic(&t.name) || skipped.contains(&t.name) {
                     continue;
                 }

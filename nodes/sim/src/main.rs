@@ -33,6 +33,10 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         settings.pacer.speed(),
         if settings.repeat { ", looping" } else { "" }
     ));
+    let start_delay = node.param::<f64>("start_delay")?;
+    if start_delay > 0.0 && node.shutdown_token().wait_timeout(std::time::Duration::from_secs_f64(start_delay)) {
+        return Ok(());
+    }
     let finished = sim.run(&node, &settings)?;
     if finished {
         node.info(format!("simulation finished: {} messages published", sim.published()));

@@ -14,6 +14,8 @@ pub fn declarations() -> Vec<ParamDecl> {
         ParamDecl::new("loop", false, "start over when the run ends (time keeps advancing, same data)"),
         ParamDecl::new("start_time", DEFAULT_START_TIME, "RFC 3339 start of simulated time"),
         ParamDecl::new("clock_rate", 100.0, "/clock messages per wall-clock second").with_range(1.0, 1000.0),
+        ParamDecl::new("start_delay", 0.0, "wall-clock seconds to wait before the first message, so recorders and other nodes discover the topics first")
+            .with_range(0.0, 3600.0),
     ]
 }
 

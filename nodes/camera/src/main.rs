@@ -1,0 +1,111 @@
+//! `metrocell-camera`: publishes frames read from image files.
+//!
+//! Publishes `image` (sensor_msgs/Image: mono8, mono16 or rgb8) and `camera_info`
+//! (sensor_msgs/CameraInfo from the ROS camera_info YAML given by `camera_info_url`), both with
+//! the same header: stamp = the publication instant (node clock, sim time honoured), frame_id =
+//! `frame_id`. An unreadable or truncated file is a warning naming it; the node moves on.
+//! V4L2 devices are not supported (no small pure-Rust V4L2 crate was adopted; use a ROS driver).
+//!
+//!   metrocell-camera --ros-args -p path:="views/*.png" -p rate:=10.0 -p loop:=true \
+//!       -p camera_info_url:=camera_info.yaml -p frame_id:=camera_optical
+
+use std::time::{Duration, Instant};
+
+use metrocell_camera::CameraInfo as CameraInfoYaml;
+use metrocell_camera_node::{camera_info_msg, file_list, image_file};
+use metrocell_msgs::builtin_interfaces::msg::Time;
+use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image};
+
+use metrocell_msgs::std_msgs::msg::Header;
+use metrocell_node::{qos, MetrocellNode, ParamDecl};
+
+fn declarations() -> Vec<ParamDecl> {
+    vec![
+        ParamDecl::new("path", String::new(), "directory of images, or a glob such as views/*.png"),
+        ParamDecl::new("rate", 10.0, "frames per second; 0 = as fast as possible").with_range(0.0, 10000.0),
+        ParamDecl::new("loop", false, "start again after the last file"),
+        ParamDecl::new("frame_id", "camera_optical_frame".to_string(), "frame_id of image and camera_info"),
+        ParamDecl::new("camera_info_url", String::new(), "ROS camera_info YAML (path or file:// URL); empty = no camera_info"),
+    ]
+}
+
+fn main() -> std::process::ExitCode {
+    match run() {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("metrocell-camera: {e}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run() -> Result<(), Box<dyn std::error::Error>> {
+    let (mut node, _) = MetrocellNode::from_env_args("camera", declarations())?;
+    let files = file_list::list_image_files(&node.param::<String>("path")?)?;
+    let rate = node.param::<f64>("rate")?;
+    let looping = node.param::<bool>("loop")?;
+    let frame_id = node.param::<String>("frame_id")?;
+    let url = node.param::<String>("camera_info_url")?;
+    let info = if url.is_empty() {
+        None
+    } else {
+        Some(CameraInfoYaml::load(std::path::Path::new(url.trim_start_matches("file://")))?)
+    };
+    node.info(format!("{} files, {} fps, loop {looping}, camera_info {}", files.len(), rate, if url.is_empty() { "none" } else { &url }));
+
+    let images = node.publisher::<Image>("image", qos::sensor_data())?;
+    let infos = node.publisher::<CameraInfo>("camera_info", qos::sensor_data())?;
+    let diagnostics = node.diagnostics();
+    let token = node.shutdown_token();
+    let period = (rate > 0.0).then(|| Duration::from_secs_f64(1.0 / rate));
+    let mut next = Instant::now();
+    'outer: loop {
+        let mut published_any = false;
+        for path in &files {
+            if token.is_triggered() {
+                break 'outer;
+            }
+            let mut img = match image_file::read_image_file(path) {
+                Ok(m) => m,
+                Err(e) => {
+                    diagnostics.add_count("files_unreadable", 1);
+                    node.warn(e.to_string());
+                    continue;
+                }
+            };
+            if let Some(p) = period {
+                let now = Instant::now();
+                if next > now {
+                    token.wait_timeout(next - now);
+                }
+                next = next.max(now) + p;
+            }
+            let ns = node.now().to_nanos();
+            let header = Header { stamp: Time { sec: ns.div_euclid(1_000_000_000) as i32, nanosec: ns.rem_euclid(1_000_000_000) as u32 }, frame_id: frame_id.clone() };
+            img.header = header.clone();
+            if let Some(info) = &info {
+                if info.image_width != img.width || info.image_height != img.height {
+                    diagnostics.add_count("size_mismatch", 1);
+                    node.warn(format!("{}: {}x{} but camera_info is {}x{}", path.display(), img.width, img.height, info.image_width, info.image_height));
+                }
+                let mut ci = camera_info_msg::camera_info_msg(info);
+                ci.header = header;
+                let _ = infos.publish(ci);
+            }
+            if images.publish(img).is_ok() {
+                published_any = true;
+                diagnostics.add_count("frames_published", 1);
+            }
+        }
+        if !looping {
+            break;
+        }
+        if !published_any {
+            return Err("no file could be read; stopping instead of looping on nothing".into());
+        }
+    }
+    diagnostics.ok("all files published");
+    // Give reliable late joiners' readers a moment before the participant goes away.
+    token.wait_timeout(Duration::from_millis(500));
+    Ok(())
+}

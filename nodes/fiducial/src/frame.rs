@@ -1,0 +1,107 @@
+//! sensor_msgs/Image → 8-bit grey image for the detectors.
+//!
+//! Supported encodings: mono8, mono16 (scaled so the frame's brightest pixel maps to 255, which keeps
+//! 10/12-bit sensors usable), rgb8, bgr8, rgba8, bgra8 (grey = 0.299 R + 0.587 G + 0.114 B, as
+//! OpenCV's cvtColor). Anything else, an empty frame or data shorter than step × height is a
+//! [`FrameError`] naming the frame's problem; the node logs it and keeps running.
+
+use image::GrayImage;
+use metrocell_msgs::sensor_msgs::msg::Image;
+use thiserror::Error;
+
+#[derive(Debug, Error, Clone, PartialEq)]
+pub enum FrameError {
+    #[error("empty frame ({width}x{height})")]
+    Empty { width: u32, height: u32 },
+    #[error("unsupported encoding `{0}` (supported: mono8, mono16, rgb8, bgr8, rgba8, bgra8)")]
+    Encoding(String),
+    #[error("encoding {encoding}: step {step} B is smaller than width {width} × {bytes_per_pixel} B")]
+    Step { encoding: String, step: u32, width: u32, bytes_per_pixel: u32 },
+    #[error("truncated frame: {got} B of data, {expected} B expected (step {step} × height {height})")]
+    Truncated { got: usize, expected: usize, step: u32, height: u32 },
+}
+
+/// Convert one frame to grey.
+pub fn gray_from_image(msg: &Image) -> Result<GrayImage, FrameError> {
+    let (w, h) = (msg.width, msg.height);
+    if w == 0 || h == 0 {
+        return Err(FrameError::Empty { width: w, height: h });
+    }
+    let bpp: u32 = match msg.encoding.as_str() {
+        "mono8" | "8UC1" => 1,
+        "mono16" | "16UC1" => 2,
+        "rgb8" | "bgr8" => 3,
+        "rgba8" | "bgra8" => 4,
+        other => return Err(FrameError::Encoding(other.to_string())),
+    };
+    if (msg.step as u64) < w as u64 * bpp as u64 {
+        return Err(FrameError::Step { encoding: msg.encoding.clone(), step: msg.step, width: w, bytes_per_pixel: bpp });
+    }
+    // The last row only needs width × bpp bytes, but ROS requires step × height; insist on it.
+    let expected = msg.step as usize * h as usize;
+    if msg.data.len() < expected {
+        return Err(FrameError::Truncated { got: msg.data.len(), expected, step: msg.step, height: h });
+    }
+    let row = |y: u32| &msg.data[y as usize * msg.step as usize..][..(w * bpp) as usize];
+    let mut out = GrayImage::new(w, h);
+    match msg.encoding.as_str() {
+        "mono8" | "8UC1" => {
+            for y in 0..h {
+                for (x, &v) in row(y).iter().enumerate() {
+                    out.put_pixel(x as u32, y, image::Luma([v]));
+                }
+            }
+        }
+        "mono16" | "16UC1" => {
+            let read = |b: &[u8]| if msg.is_bigendian != 0 { u16::from_be_bytes([b[0], b[1]]) } else { u16::from_le_bytes([b[0], b[1]]) };
+            let max = (0..h).flat_map(|y| row(y).chunks_exact(2).map(read)).max().unwrap_or(0).max(1) as f64;
+            for y in 0..h {
+                for (x, b) in row(y).chunks_exact(2).enumerate() {
+                    let v = (read(b) as f64 * 255.0 / max).round() as u8;
+                    out.put_pixel(x as u32, y, image::Luma([v]));
+                }
+            }
+        }
+        enc => {
+            let (ri, bi) = if enc.starts_with("rgb") { (0, 2) } else { (2, 0) };
+            for y in 0..h {
+                for (x, p) in row(y).chunks_exact(bpp as usize).enumerate() {
+                    let g = 0.299 * p[ri] as f64 + 0.587 * p[1] as f64 + 0.114 * p[bi] as f64;
+                    out.put_pixel(x as u32, y, image::Luma([g.round() as u8]));
+                }
+            }
+        }
+    }
+    Ok(out)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn msg(encoding: &str, w: u32, h: u32, step: u32, data: Vec<u8>) -> Image {
+        Image { encoding: encoding.into(), width: w, height: h, step, data, ..Default::default() }
+    }
+
+    #[test]
+    fn encodings_convert_and_bad_frames_name_the_problem() {
+        let g = gray_from_image(&msg("mono8", 2, 2, 3, vec![1, 2, 99, 3, 4, 99])).unwrap();
+        assert_eq!(g.as_raw(), &vec![1, 2, 3, 4]);
+        let g = gray_from_image(&msg("rgb8", 1, 1, 3, vec![255, 0, 0])).unwrap();
+        assert_eq!(g.as_raw(), &vec![76]);
+        let g = gray_from_image(&msg("bgr8", 1, 1, 3, vec![255, 0, 0])).unwrap();
+        assert_eq!(g.as_raw(), &vec![29]);
+        let g = gray_from_image(&msg("mono16", 2, 1, 4, vec![0x00, 0x08, 0x00, 0x10])).unwrap();
+        assert_eq!(g.as_raw(), &vec![128, 255]);
+        let mut be = msg("mono16", 2, 1, 4, vec![0x08, 0x00, 0x10, 0x00]);
+        be.is_bigendian = 1;
+        assert_eq!(gray_from_image(&be).unwrap().as_raw(), &vec![128, 255]);
+
+        assert_eq!(gray_from_image(&msg("mono8", 0, 0, 0, vec![])), Err(FrameError::Empty { width: 0, height: 0 }));
+        let e = gray_from_image(&msg("yuv422", 2, 2, 4, vec![0; 8])).unwrap_err();
+        assert!(e.to_string().contains("yuv422"), "{e}");
+        let e = gray_from_image(&msg("mono8", 4, 4, 4, vec![0; 15])).unwrap_err();
+        assert_eq!(e, FrameError::Truncated { got: 15, expected: 16, step: 4, height: 4 });
+        assert!(matches!(gray_from_image(&msg("rgb8", 4, 1, 4, vec![0; 4])), Err(FrameError::Step { .. })));
+    }
+}

@@ -6,6 +6,7 @@ mod bag;
 mod demo;
 mod launch_command;
 mod topic;
+mod vision;
 
 use clap::{Parser, Subcommand};
 
@@ -30,6 +31,11 @@ enum Command {
     /// Inspect, repair, replay, cut, merge, export and import rosbag2 MCAP bags
     #[command(subcommand)]
     Bag(bag::BagCommand),
+    /// Camera tools: calibrate from checkerboard images → ROS camera_info YAML
+    #[command(subcommand)]
+    Camera(vision::camera_command::CameraCommand),
+    /// Find fiducials (ArUco/AprilTag markers, checkerboards) in image files
+    Detect(vision::detect::DetectArgs),
     /// Run the main job on the built-in simulated cell: twin, thermal compensation, recorder
     Demo(demo::DemoArgs),
     /// Start the nodes of a ROS 2 YAML launch file, each as its own process
@@ -45,7 +51,9 @@ fn main() {
     let cli = Cli::parse();
     let code = match cli.command {
         Command::Bag(command) => bag::run(command),
+        Command::Camera(command) => vision::camera_command::run(command),
         Command::Demo(args) => demo::run(args),
+        Command::Detect(args) => vision::detect::run(args),
         Command::Launch(args) => launch_command::run(args),
         Command::Sim(args) => metrocell_sim::run_sim_command(args),
         Command::Topic(command) => topic::run(command),

@@ -104,6 +104,64 @@ impl Distortion {
         }
     }
 
+    /// Distorted → ideal normalised coordinates by Newton iteration to 1e-12 (exact inverse of
+    /// [`Self::distort`], unlike OpenCV's fixed-iteration `undistortPoints`). None when it does not
+    /// converge (outside the model's invertible region). No allocation: used per pixel by renderers.
+    pub fn undistort(&self, xd: f64, yd: f64) -> Option<(f64, f64)> {
+        match self {
+            Distortion::BrownConrady(k) => {
+                let [k1, k2, p1, p2, k3] = *k;
+                let (mut x, mut y) = (xd, yd);
+                for _ in 0..30 {
+                    let r2 = x * x + y * y;
+                    let radial = 1.0 + r2 * (k1 + r2 * (k2 + r2 * k3));
+                    let ex = x * radial + 2.0 * p1 * x * y + p2 * (r2 + 2.0 * x * x) - xd;
+                    let ey = y * radial + p1 * (r2 + 2.0 * y * y) + 2.0 * p2 * x * y - yd;
+                    if ex.abs() < 1e-12 && ey.abs() < 1e-12 {
+                        return Some((x, y));
+                    }
+                    let drad = k1 + r2 * (2.0 * k2 + 3.0 * r2 * k3); // d radial / d r²
+                    let j11 = radial + 2.0 * x * x * drad + 2.0 * p1 * y + 6.0 * p2 * x;
+                    let j12 = 2.0 * x * y * drad + 2.0 * p1 * x + 2.0 * p2 * y;
+                    let j22 = radial + 2.0 * y * y * drad + 6.0 * p1 * y + 2.0 * p2 * x;
+                    let det = j11 * j22 - j12 * j12;
+                    if !(det.abs() > 1e-15 && det.is_finite()) {
+                        return None;
+                    }
+                    x -= (j22 * ex - j12 * ey) / det;
+                    y -= (-j12 * ex + j11 * ey) / det;
+                }
+                None
+            }
+            Distortion::Fisheye(k) => {
+                // Radial model: solve θ(1 + k1θ² + …) = r_d for θ ∈ [0, π/2), then r = tan θ.
+                let rd = (xd * xd + yd * yd).sqrt();
+                if rd <= FISHEYE_SMALL_R {
+                    return Some((xd, yd));
+                }
+                let mut theta = rd.min(1.5);
+                for _ in 0..50 {
+                    let t2 = theta * theta;
+                    let f = theta * (1.0 + t2 * (k[0] + t2 * (k[1] + t2 * (k[2] + t2 * k[3])))) - rd;
+                    if f.abs() < 1e-13 {
+                        if !(0.0..std::f64::consts::FRAC_PI_2).contains(&theta) {
+                            return None;
+                        }
+                        let s = theta.tan() / rd;
+                        return Some((xd * s, yd * s));
+                    }
+                    let df = 1.0
+                        + t2 * (3.0 * k[0] + t2 * (5.0 * k[1] + t2 * (7.0 * k[2] + t2 * 9.0 * k[3])));
+                    if !(df.abs() > 1e-15) {
+                        return None;
+                    }
+                    theta -= f / df;
+                }
+                None
+            }
+        }
+    }
+
     /// Ideal → distorted with analytic derivatives.
     pub fn distort_with_jacobians(&self, x: f64, y: f64) -> DistortionEval {
         match self {
@@ -194,6 +252,23 @@ impl Distortion {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn newton_undistort_inverts_distort() {
+        for d in [
+            Distortion::BrownConrady([-0.28, 0.09, 0.001, -0.0015, -0.01]),
+            Distortion::Fisheye([0.02, -0.01, 0.004, -0.001]),
+        ] {
+            for &(x, y) in &[(0.0, 0.0), (0.3, -0.2), (-0.5, 0.4), (0.6, 0.45)] {
+                let (xd, yd) = d.distort(x, y);
+                let (xu, yu) = d.undistort(xd, yd).unwrap();
+                assert!(
+                    (xu - x).abs() < 1e-11 && (yu - y).abs() < 1e-11,
+                    "{d:?}: ({x}, {y}) -> ({xu}, {yu})"
+                );
+            }
+        }
+    }
 
     fn check_jacobians(d: Distortion, x: f64, y: f64) {
         let e = d.distort_with_jacobians(x, y);

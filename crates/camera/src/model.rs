@@ -129,6 +129,15 @@ impl CameraModel {
         [self.fx * xd + self.cx, self.fy * yd + self.cy]
     }
 
+    /// Pixel → ideal normalised coordinates (x, y) = (X/Z, Y/Z) of the viewing ray, by the exact
+    /// (Newton) inverse of the distortion; None outside the model's invertible region.
+    pub fn pixel_to_normalized(&self, u: f64, v: f64) -> Option<[f64; 2]> {
+        let (x, y) = self
+            .distortion
+            .undistort((u - self.cx) / self.fx, (v - self.cy) / self.fy)?;
+        Some([x, y])
+    }
+
     /// Projects a camera-frame point; errors if it is not in front of the camera (z ≤ 0).
     pub fn project_camera_point(&self, p: &Vector3<f64>) -> Result<[f64; 2]> {
         if !(p.z > 0.0) {

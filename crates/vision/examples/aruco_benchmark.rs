@@ -7,7 +7,7 @@
 //! ours / OpenCV, both single-threaded and both on all cores.
 
 use metrocell_vision::aruco::{detect_markers, DetectorParams, Dictionary};
-use metrocell_vision::{render_view, PinholeCamera, PlanarTarget, RenderSettings, TargetItem};
+use metrocell_vision::{render_view, CameraModel, Distortion, PlanarTarget, RenderSettings, TargetItem};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 use std::path::PathBuf;
 use std::process::Command;
@@ -39,7 +39,7 @@ fn main() {
             // 0.6 m × 0.34 m plane at 1 m; f chosen so it fills the frame width.
             let f = w as f64 * 1.0 / 0.7;
             let cam =
-                PinholeCamera::new(f, f, (w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0, w, h)
+                CameraModel::new(w, h, f, f, (w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0, Distortion::none())
                     .unwrap();
             let (cols, rows) = if n == 1 { (1, 1) } else { (5, 4) };
             let side = 0.06;

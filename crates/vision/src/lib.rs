@@ -11,16 +11,19 @@ pub mod edge_fit;
 pub mod edge_profile;
 pub mod error;
 pub mod filters;
+pub mod holes;
 pub mod homography;
 pub mod marker_pose;
 pub mod polygon;
 pub mod render;
 pub mod saddle_fit;
 pub mod scale;
+pub mod targets;
 pub mod threshold;
 
-pub use camera::{BrownConrady, PinholeCamera};
+pub use camera::{CameraModel, Distortion};
 pub use error::{Result, VisionError};
 pub use render::{
     render_view, MarkerTruth, PlanarTarget, RenderSettings, RenderedView, TargetItem,
 };
+pub use targets::{detect_targets, PoseInputs, Target, TargetFamily, TargetPose};

@@ -10,7 +10,7 @@
 //! Gauss–Newton on the distorted reprojection error weighted by the corner covariances. The
 //! pose covariance is (JᵀWJ)⁻¹ over (rotation vector increment [rad], translation [m]).
 
-use crate::camera::PinholeCamera;
+use crate::camera::{pixel_to_normalized, project, CameraModel};
 use crate::error::{invalid, Result, VisionError};
 use crate::homography::homography_4pt;
 use nalgebra::{
@@ -44,7 +44,7 @@ pub fn marker_object_points(side: f64) -> [Point3<f64>; 4] {
 /// (px) with covariances `corner_covariance` (px²); corners with a non-finite covariance get an
 /// isotropic `fallback_sigma_px`.
 pub fn estimate_marker_pose(
-    camera: &PinholeCamera,
+    camera: &CameraModel,
     corners: &[Point2<f64>; 4],
     corner_covariance: &[Matrix2<f64>; 4],
     side: f64,
@@ -78,8 +78,7 @@ pub fn estimate_marker_pose(
     // Initial pose from the homography model plane → normalised image plane.
     let mut norm = [[0.0; 2]; 4];
     for k in 0..4 {
-        let (x, y) = camera
-            .pixel_to_normalized(corners[k].x, corners[k].y)
+        let (x, y) = pixel_to_normalized(camera, corners[k].x, corners[k].y)
             .ok_or_else(|| {
                 no_solution("corner outside the distortion model's invertible region")
             })?;
@@ -126,7 +125,7 @@ pub fn estimate_marker_pose(
         let pose = Isometry3::from_parts(Translation3::from(*t), *r);
         let mut out = SVector::<f64, 8>::zeros();
         for k in 0..4 {
-            let p = camera.project(&pose, &obj[k])?;
+            let p = project(camera, &pose, &obj[k])?;
             let e = whiten[k] * (p - corners[k]);
             out[2 * k] = e.x;
             out[2 * k + 1] = e.y;
@@ -185,8 +184,7 @@ pub fn estimate_marker_pose(
     let pose = Isometry3::from_parts(Translation3::from(t), r);
     let sq: f64 = (0..4)
         .map(|k| {
-            camera
-                .project(&pose, &obj[k])
+            project(camera, &pose, &obj[k])
                 .map_or(f64::NAN, |p| (p - corners[k]).norm_squared())
         })
         .sum();

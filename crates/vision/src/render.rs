@@ -1,4 +1,4 @@
-//! Digital-twin renderer: planar targets (ArUco markers, checkerboards) seen by a pinhole camera
+//! Digital-twin renderer: planar targets (ArUco markers, checkerboards, drilled holes) seen by a pinhole camera
 //! with Brown–Conrady distortion, with the exact ground-truth pixel positions of their corners.
 //!
 //! Target frame: the target is the plane z = 0, x to the right, y down as printed (so a front view
@@ -10,7 +10,7 @@
 //! blur (optics), a multiplicative lighting gradient, additive Gaussian noise, and rounding to u8.
 
 use crate::aruco::Dictionary;
-use crate::camera::PinholeCamera;
+use crate::camera::{pixel_to_normalized, project, CameraModel};
 use crate::error::{invalid, Result};
 use image::GrayImage;
 use nalgebra::{Isometry3, Point2, Point3, Vector3};
@@ -36,6 +36,10 @@ pub enum TargetItem {
         squares_x: u32,
         squares_y: u32,
     },
+    /// A drilled through-hole of `diameter` (m) centred at `centre` (m), seen against an
+    /// inverse-contrast backing (seed 000): it shows the opposite of what lies beneath it
+    /// (black under a white square, white under a black one).
+    Hole { centre: [f64; 2], diameter: f64 },
 }
 
 /// White plane carrying items (later items paint over earlier ones).
@@ -142,6 +146,8 @@ impl TargetItem {
                     1.0
                 })
             }
+            // Depends on what is beneath: resolved by PlanarTarget::reflectance.
+            TargetItem::Hole { .. } => None,
         }
     }
 
@@ -178,6 +184,14 @@ impl TargetItem {
                     return Err(invalid("Checkerboard.squares", "need at least 2×2 squares"));
                 }
             }
+            TargetItem::Hole { centre, diameter } => {
+                if !(diameter.is_finite() && *diameter > 0.0) {
+                    return Err(invalid("Hole.diameter", format!("must be > 0, got {diameter}")));
+                }
+                if !(centre[0].is_finite() && centre[1].is_finite()) {
+                    return Err(invalid("Hole.centre", "must be finite"));
+                }
+            }
         }
         Ok(())
     }
@@ -185,17 +199,28 @@ impl TargetItem {
 
 impl PlanarTarget {
     fn reflectance(&self, x: f64, y: f64) -> f64 {
-        self.items
-            .iter()
-            .rev()
-            .find_map(|it| it.reflectance(x, y))
-            .unwrap_or(1.0)
+        Self::reflectance_of(&self.items, x, y)
+    }
+
+    /// Topmost item at (x, y); a hole inverts whatever the items below it show there.
+    fn reflectance_of(items: &[TargetItem], x: f64, y: f64) -> f64 {
+        for (k, it) in items.iter().enumerate().rev() {
+            if let TargetItem::Hole { centre, diameter } = it {
+                let (dx, dy) = (x - centre[0], y - centre[1]);
+                if dx * dx + dy * dy < diameter * diameter / 4.0 {
+                    return 1.0 - Self::reflectance_of(&items[..k], x, y);
+                }
+            } else if let Some(r) = it.reflectance(x, y) {
+                return r;
+            }
+        }
+        1.0
     }
 }
 
 /// Geometry of one view: pixel → target reflectance (NaN where the plane is not seen).
 struct ViewGeometry<'a> {
-    camera: &'a PinholeCamera,
+    camera: &'a CameraModel,
     target: &'a PlanarTarget,
     origin: Vector3<f64>,          // camera centre in the target frame
     rot_t: nalgebra::Matrix3<f64>, // camera → target rotation
@@ -203,7 +228,7 @@ struct ViewGeometry<'a> {
 
 impl ViewGeometry<'_> {
     fn sample(&self, u: f64, v: f64) -> f64 {
-        let Some((x, y)) = self.camera.pixel_to_normalized(u, v) else {
+        let Some((x, y)) = pixel_to_normalized(self.camera, u, v) else {
             return f64::NAN;
         };
         let dir = self.rot_t * Vector3::new(x, y, 1.0);
@@ -221,7 +246,7 @@ impl ViewGeometry<'_> {
 
 /// Render `target` seen by `camera` with `pose` (target → camera).
 pub fn render_view(
-    camera: &PinholeCamera,
+    camera: &CameraModel,
     pose: &Isometry3<f64>,
     target: &PlanarTarget,
     settings: &RenderSettings,
@@ -338,8 +363,7 @@ pub fn render_view(
     let mut markers = Vec::new();
     let mut checkerboard_corners = Vec::new();
     let project = |x: f64, y: f64| -> Result<Point2<f64>> {
-        camera
-            .project(pose, &Point3::new(x, y, 0.0))
+        project(camera, pose, &Point3::new(x, y, 0.0))
             .ok_or_else(|| crate::error::VisionError::NoSolution {
                 what: "render ground truth",
                 reason: format!("target point ({x}, {y}) is behind the camera"),
@@ -375,6 +399,7 @@ pub fn render_view(
                 }
                 checkerboard_corners.push(pts);
             }
+            TargetItem::Hole { .. } => {}
         }
     }
     Ok(RenderedView {

@@ -4,7 +4,7 @@ use metrocell_vision::aruco::{detect_markers, DetectorParams, Dictionary};
 use metrocell_vision::checkerboard::detect_checkerboard;
 use metrocell_vision::edge_profile::{find_profile_edges, sample_line_profile};
 use metrocell_vision::{
-    render_view, PinholeCamera, PlanarTarget, RenderSettings, TargetItem, VisionError,
+    render_view, CameraModel, Distortion, PlanarTarget, RenderSettings, TargetItem, VisionError,
 };
 use nalgebra::{Isometry3, Point2};
 
@@ -35,7 +35,7 @@ fn errors_name_the_problem() {
     assert!(e.to_string().contains("outside"), "{e}");
     assert!(find_profile_edges(&[1.0; 5], 1.5, 1.0).is_err());
 
-    let cam = PinholeCamera::new(500.0, 500.0, 31.5, 31.5, 64, 64).unwrap();
+    let cam = CameraModel::new(64, 64, 500.0, 500.0, 31.5, 31.5, Distortion::none()).unwrap();
     let pose = Isometry3::translation(0.0, 0.0, 1.0);
     let bad_marker = PlanarTarget {
         items: vec![TargetItem::Marker {

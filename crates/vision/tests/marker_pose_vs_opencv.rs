@@ -75,10 +75,10 @@ fn marker_poses_match_truth_at_least_as_well_as_opencv() {
         paths.push(p.to_str().unwrap().to_string());
         truths.push(truth);
     }
-    let d = cam.distortion;
-    let nums: Vec<String> = [
-        side, cam.fx, cam.fy, cam.cx, cam.cy, d.k1, d.k2, d.p1, d.p2, d.k3,
-    ]
+    let metrocell_vision::Distortion::BrownConrady(d) = cam.distortion else {
+        panic!("the test camera is Brown–Conrady");
+    };
+    let nums: Vec<String> = [side, cam.fx, cam.fy, cam.cx, cam.cy, d[0], d[1], d[2], d[3], d[4]]
     .iter()
     .map(|v| v.to_string())
     .collect();

@@ -97,18 +97,21 @@ fn detects_markers_with_pose_and_survives_bad_frames() {
         let _ = images.publish(good(1_000_000_000 + i));
         std::thread::sleep(Duration::from_millis(150));
         while let Ok(Some((d, _))) = detections.take() {
-            first = Some(d);
+            assert!(stamp_ns(&d.header) >= 1_000_000_000, "detections only for good frames, got stamp {:?}", d.header.stamp);
+            // Frames that overtook the first camera_info on the wire legitimately come without pose.
+            if d.detections.iter().all(|m| m.has_pose) {
+                first = Some(d);
+            }
         }
         i += 1;
     }
     let d = first.unwrap();
-    assert!(stamp_ns(&d.header) >= 1_000_000_000, "detections only for good frames, got stamp {:?}", d.header.stamp);
     assert_eq!((d.header.frame_id.as_str(), d.image_width, d.image_height), ("cam_optical", 640, 480));
     assert_eq!(d.detections.len(), 1);
     let m = &d.detections[0];
     assert_eq!((m.family.as_str(), m.id, m.corners.len(), m.corner_covariance.len()), ("aruco_4x4_50", 7, 8, 16));
-    for k in 0..4 {
-        let e = ((m.corners[2 * k] - truth[k].x).powi(2) + (m.corners[2 * k + 1] - truth[k].y).powi(2)).sqrt();
+    for (k, t) in truth.iter().enumerate() {
+        let e = ((m.corners[2 * k] - t.x).powi(2) + (m.corners[2 * k + 1] - t.y).powi(2)).sqrt();
         assert!(e < 0.1, "corner {k} error {e} px");
         assert!(m.corner_covariance[4 * k] > 0.0 && m.corner_covariance[4 * k] < 0.01, "corner {k} variance {}", m.corner_covariance[4 * k]);
     }

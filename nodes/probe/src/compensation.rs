@@ -55,7 +55,7 @@ pub struct CompensatedHit {
 /// Unit approach direction from the axis velocities at the trigger, or `fallback` if they are zero.
 pub fn approach_direction(velocity: Option<Vector3<f64>>, fallback: Vector3<f64>) -> Result<Vector3<f64>, ProbeError> {
     let v = velocity.filter(|v| v.norm() > 1e-12 && v.iter().all(|c| c.is_finite())).unwrap_or(fallback);
-    if !(v.norm() > 1e-12) {
+    if v.norm() <= 1e-12 || !v.norm().is_finite() {
         return Err(ProbeError::NoDirection([v.x, v.y, v.z]));
     }
     Ok(v.normalize())

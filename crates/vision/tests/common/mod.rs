@@ -56,20 +56,14 @@ pub fn temp_dir(name: &str) -> PathBuf {
 }
 
 use metrocell_vision::aruco::Dictionary;
-use metrocell_vision::{BrownConrady, PinholeCamera, PlanarTarget, TargetItem};
+use metrocell_vision::{CameraModel, Distortion, PlanarTarget, TargetItem};
 use nalgebra::{Isometry3, Point2, Translation3, UnitQuaternion, Vector2, Vector3};
 
 /// 800×600 camera with moderate barrel distortion.
-pub fn test_camera() -> PinholeCamera {
-    PinholeCamera::new(900.0, 905.0, 401.3, 297.8, 800, 600)
-        .unwrap()
-        .with_distortion(BrownConrady {
-            k1: -0.12,
-            k2: 0.05,
-            p1: 0.0008,
-            p2: -0.0006,
-            k3: 0.0,
-        })
+pub fn test_camera() -> CameraModel {
+    // Brown–Conrady (k1, k2, p1, p2, k3).
+    let d = Distortion::BrownConrady([-0.12, 0.05, 0.0008, -0.0006, 0.0]);
+    CameraModel::new(800, 600, 900.0, 905.0, 401.3, 297.8, d).unwrap()
 }
 
 /// Pose of a target whose centre (cx, cy) (m) sits `dist` m in front of the camera, tilted by

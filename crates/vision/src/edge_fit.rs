@@ -13,6 +13,9 @@
 use image::GrayImage;
 use nalgebra::{Matrix2, Matrix3, Point2, SMatrix, SVector, Vector2};
 
+/// Variance (px²) of the box a pixel integrates over: the smallest blur any sampled edge has.
+const PIXEL_BOX_VARIANCE: f64 = 1.0 / 12.0;
+
 /// A fitted edge: n·p − d − κ·(t₀·(p − m₀))² = 0, n = (cos θ, sin θ) towards the bright side.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct EdgeLine {
@@ -167,12 +170,15 @@ fn collect_band(
             out.push([p.x, p.y, img.get_pixel(x as u32, y as u32)[0] as f64]);
         }
     }
-    // Long sides carry far more pixels than the fit needs: keep an evenly spread subset.
+    // Long sides carry far more pixels than the fit needs: keep whole cross-sections at evenly
+    // spaced stations along the edge. (Taking every k-th pixel in scan order aliases with the
+    // band's width and can drop the two pixel columns next to a vertical edge altogether.)
     if out.len() > max_samples {
-        let step = out.len() as f64 / max_samples as f64;
-        out = (0..max_samples)
-            .map(|k| out[(k as f64 * step) as usize])
-            .collect();
+        let keep_every = out.len().div_ceil(max_samples) as i64;
+        out.retain(|s| {
+            let station = t.dot(&(Vector2::new(s[0], s[1]) - p0)).floor() as i64;
+            station.rem_euclid(keep_every) == 0
+        });
     }
     (out.len() >= 12).then_some(out)
 }
@@ -222,7 +228,11 @@ fn levenberg_marquardt(
     ]);
     // One pass over the pixels gives the cost and the normal equations at x.
     let eval = |x: &SVector<f64, 8>| -> (f64, SMatrix<f64, 8, 8>, SVector<f64, 8>) {
-        let (c, s, sig) = (x[0].cos(), x[0].sin(), x[5].exp());
+        // Pixels integrate the image over their area, a box of variance 1/12 px², on top of the
+        // optical blur exp(x5): without that floor a perfectly sharp step (synthetic or printed
+        // markers) leaves the edge position undetermined within a pixel and the fit fails.
+        let optical2 = (2.0 * x[5]).exp();
+        let (c, s, sig) = (x[0].cos(), x[0].sin(), (optical2 + PIXEL_BOX_VARIANCE).sqrt());
         let mut jtj = SMatrix::<f64, 8, 8>::zeros();
         let mut jtr = SVector::<f64, 8>::zeros();
         let mut f = 0.0;
@@ -240,7 +250,7 @@ fn levenberg_marquardt(
                 if fit_kappa { -g * u * u } else { 0.0 },
                 1.0,
                 cdf,
-                -contrast * pdf * z,
+                -contrast * pdf * z * optical2 / (sig * sig),
                 v,
                 cdf * v,
             ]);
@@ -277,7 +287,7 @@ fn levenberg_marquardt(
             cov,
             dark: x[3],
             contrast: x[4],
-            blur_sigma: x[5].exp(),
+            blur_sigma: ((2.0 * x[5]).exp() + PIXEL_BOX_VARIANCE).sqrt(),
             residual_rms: s2.sqrt(),
             pixels: samples.len(),
         })
@@ -291,7 +301,9 @@ fn levenberg_marquardt(
             }
             let step = a.cholesky()?.solve(&(-jtr));
             let xn = x + step;
-            if xn[5] > 3.0 || xn[5] < -4.0 {
+            // Optical blur between 0.05 and 20 px; below 0.05 px the pixel box dominates and
+            // the blur stops being observable (its column of JᵀJ would vanish).
+            if xn[5] > 3.0 || xn[5] < -3.0 {
                 lambda *= 10.0;
                 continue;
             }

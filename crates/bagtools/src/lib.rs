@@ -9,7 +9,9 @@
 //! * [`import`]: point-measurement CSV (own layout or a mapped tracker export) → bag.
 //! * [`playback`]: the timing of `bag play` (rate, pause, step) as a pure schedule.
 //! * [`BagSource`]: offline replay — a node reads typed messages from a bag instead of DDS.
+//! * [`BagSink`]: offline replay — the node writes its outputs to a bag at bag time.
 
+mod bag_sink;
 mod bag_source;
 mod copy;
 mod error;
@@ -19,6 +21,7 @@ pub mod playback;
 mod recording;
 mod topic_selection;
 
+pub use bag_sink::{encode_cdr, BagSink};
 pub use bag_source::{BagSource, SourcedMessage};
 pub use copy::{filter_bag, merge_bags, CopyReport};
 pub use error::{Result, ToolError};

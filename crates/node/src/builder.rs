@@ -92,6 +92,23 @@ impl NodeBuilder {
         self
     }
 
+    /// Resolve name, namespace and parameters without opening DDS: for a node replaying a bag.
+    pub fn build_offline(self) -> Result<crate::offline::OfflineNode, NodeError> {
+        let ros = self.ros_args;
+        let original = self.name.clone();
+        let name = ros.node_name_remap(&original).unwrap_or(original.clone());
+        validate_node_name(&name)?;
+        let namespace = normalize_namespace(&ros.namespace_remap(&original).unwrap_or(self.namespace))?;
+        let fqn = fully_qualified_node_name(&namespace, &name);
+        let min_level = crate::logging::effective_log_level(&ros, &fqn);
+        let parameters = Parameters::resolve(&self.decls, &ros, &fqn, &name)?;
+        let logger = Logger::stderr_only(&fqn, min_level);
+        for w in parameters.warnings() {
+            logger.warn(w);
+        }
+        Ok(crate::offline::OfflineNode { name, namespace, ros_args: ros, parameters, logger })
+    }
+
     pub fn build(self) -> Result<MetrocellNode, NodeError> {
         let ros = self.ros_args;
         let original = self.name.clone();

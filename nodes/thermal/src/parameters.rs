@@ -5,7 +5,7 @@ use metrocell_compensation::{AxisSensorPlacement, ThermalError, ThermalScaleComp
 use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_msgs::msg::ErrorModel;
 use metrocell_msgs::std_msgs::msg::Header;
-use metrocell_node::{MetrocellNode, ParamDecl};
+use metrocell_node::{ParamDecl, Parameters};
 
 pub fn declarations() -> Vec<ParamDecl> {
     vec![
@@ -21,10 +21,11 @@ pub fn declarations() -> Vec<ParamDecl> {
     ]
 }
 
-pub fn compensator(node: &MetrocellNode) -> Result<ThermalScaleCompensator, Box<dyn std::error::Error>> {
-    let names = node.param::<Vec<String>>("sensors")?;
-    let axes = node.param::<Vec<String>>("sensor_axes")?;
-    let positions = node.param::<Vec<f64>>("sensor_positions")?;
+/// The compensator from the start-up parameters (live node: `node.parameters()`; replay: the offline node's).
+pub fn compensator(node: &Parameters) -> Result<ThermalScaleCompensator, Box<dyn std::error::Error>> {
+    let names = node.get::<Vec<String>>("sensors")?;
+    let axes = node.get::<Vec<String>>("sensor_axes")?;
+    let positions = node.get::<Vec<f64>>("sensor_positions")?;
     if axes.len() != names.len() || positions.len() != names.len() {
         return Err(format!(
             "parameters sensors ({}), sensor_axes ({}) and sensor_positions ({}) must have the same length",
@@ -45,9 +46,9 @@ pub fn compensator(node: &MetrocellNode) -> Result<ThermalScaleCompensator, Box<
         placements.push(AxisSensorPlacement { name, axis, position });
     }
     Ok(ThermalScaleCompensator::new(
-        node.param::<f64>("alpha")?,
-        node.param::<f64>("alpha_uncertainty")?,
-        node.param::<f64>("reference_temperature")?,
+        node.get::<f64>("alpha")?,
+        node.get::<f64>("alpha_uncertainty")?,
+        node.get::<f64>("reference_temperature")?,
         placements,
     )?)
 }
@@ -81,4 +82,15 @@ pub fn error_model(c: &ThermalScaleCompensator, reading: &dyn Fn(&str) -> Option
         m.covariance[i * n + i] = *v;
     }
     Ok(m)
+}
+
+/// One log line describing the configuration.
+pub fn describe(c: &ThermalScaleCompensator) -> String {
+    format!(
+        "alpha={:e} 1/K ± {:e}, T_ref={} °C, sensors: {}",
+        c.alpha,
+        c.alpha_uncertainty,
+        c.reference_temperature,
+        c.sensors().iter().map(|s| format!("{}@{}{:+.3}m", s.name, ["x", "y", "z"][s.axis], s.position)).collect::<Vec<_>>().join(", ")
+    )
 }

@@ -15,6 +15,7 @@ use std::time::Duration;
 use metrocell_bag::{qos_profiles_yaml, BagMetadata, BagWriter, ChunkCompression, WriterOptions};
 use metrocell_twin::{Cell, Simulation};
 
+use crate::camera_frame::FrameRendering;
 use crate::camera_intrinsics::CameraIntrinsics;
 use crate::error::SimError;
 use crate::message_stream::{MessageConverter, MessageStream};
@@ -32,6 +33,8 @@ pub struct BagOptions {
     /// `/clock` ticks per simulated second; `None` leaves `/clock` out of the bag.
     pub clock_rate: Option<f64>,
     pub camera: CameraIntrinsics,
+    /// How camera frames are rendered; `None` records `CameraInfo` only.
+    pub frames: Option<FrameRendering>,
     /// Uncompressed MCAP chunk size (bytes).
     pub chunk_size: u64,
 }
@@ -43,6 +46,7 @@ impl Default for BagOptions {
             compression: ChunkCompression::Zstd,
             clock_rate: Some(DEFAULT_BAG_CLOCK_RATE),
             camera: CameraIntrinsics::default(),
+            frames: Some(FrameRendering::default()),
             chunk_size: 4 << 20,
         }
     }
@@ -88,7 +92,10 @@ pub fn write_bag(
             return Err(SimError::invalid("clock rate", format!("must be > 0 Hz and finite, got {r}")));
         }
     }
-    let converter = MessageConverter::new(&cell, options.start_ns, options.camera.clone())?;
+    let mut converter = MessageConverter::new(&cell, options.start_ns, options.camera.clone())?;
+    if let Some(rendering) = &options.frames {
+        converter = converter.with_frames(rendering.clone(), seed)?;
+    }
     let sim = Simulation::new(cell, duration_s, seed)?;
     let bag_err = |source| SimError::Bag { dir: out_dir.to_path_buf(), source };
     let writer_options = WriterOptions {

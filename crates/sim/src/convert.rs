@@ -21,7 +21,7 @@ use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_msgs::geometry_msgs::msg::{Point, Vector3 as RosVector3};
 use metrocell_msgs::msg::{ProbeHit, TrackerMeasurement};
 use metrocell_msgs::rosgraph_msgs::msg::Clock;
-use metrocell_msgs::sensor_msgs::msg::{CameraInfo, JointState, RegionOfInterest, Temperature};
+use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, JointState, RegionOfInterest, Temperature};
 use metrocell_msgs::std_msgs::msg::Header;
 use metrocell_twin::{MachineStateSample, ProbeHitSample, TemperatureSample, TrackerSample, TrackerStatus};
 use nalgebra::{Matrix3, Vector3};
@@ -134,6 +134,12 @@ pub fn camera_info(c: &CameraIntrinsics, stamp: Time) -> CameraInfo {
         binning_y: 0,
         roi: RegionOfInterest { x_offset: 0, y_offset: 0, height: 0, width: 0, do_rectify: false },
     }
+}
+
+/// A mono8 `Image` (row-major, step = width, `is_bigendian` 0) in the camera's optical frame.
+pub fn mono8_image(image: image::GrayImage, frame_id: &str, stamp: Time) -> Image {
+    let (width, height) = image.dimensions();
+    Image { header: header(stamp, frame_id), height, width, encoding: "mono8".into(), is_bigendian: 0, step: width, data: image.into_raw() }
 }
 
 #[cfg(test)]

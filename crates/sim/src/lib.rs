@@ -12,13 +12,16 @@
 //! | [`convert`] | pure sample → message conversions (field conventions stated there) |
 //! | [`message_stream`] | the merged, time-ordered message stream with `/clock` ticks |
 //! | [`pacing`] | simulated time vs wall clock for the live node |
+//! | [`camera_frame`] | rendering a camera frame request as an image (plate, pose, seed) |
 //! | [`cdr`] | CDR bytes with the encapsulation header |
 //! | [`bag`] | [`write_bag`]: a deterministic bag of a simulation |
 //! | [`cli`] | [`SimArgs`] and [`run_sim_command`] for `metrocell sim` |
 //!
-//! Camera images are not rendered yet: a camera frame request yields its `CameraInfo` only.
+//! Camera frame requests are rendered ([`camera_frame`]) as mono8 images of an ArUco plate on
+//! `/camera/image_raw`, next to their `CameraInfo`.
 
 pub mod bag;
+pub mod camera_frame;
 pub mod camera_intrinsics;
 pub mod cdr;
 pub mod cli;
@@ -31,6 +34,7 @@ pub mod sim_time;
 pub mod topic_map;
 
 pub use bag::{write_bag, BagOptions, BagSummary, Progress};
+pub use camera_frame::{FramePlate, FrameRenderer, FrameRendering};
 pub use camera_intrinsics::CameraIntrinsics;
 pub use cli::{run_sim_command, SimArgs};
 pub use error::SimError;

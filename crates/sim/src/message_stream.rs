@@ -4,17 +4,20 @@
 //! Order: messages come in the twin's sample order (time order, ties broken by the twin);
 //! a machine-state sample gives the actual joint state, then the commanded one. A `/clock`
 //! tick at time t_k = k·clock_period (k = 0, 1, …, t_k < duration) comes before every
-//! sample with t ≥ t_k. Camera frame requests give a `CameraInfo` (images come later).
+//! sample with t ≥ t_k. A camera frame request gives its `CameraInfo`, then (when the
+//! converter renders frames, see [`MessageConverter::with_frames`]) its mono8 `Image` with the
+//! same stamp.
 
 use std::collections::VecDeque;
 
 use metrocell_msgs::msg::{ProbeHit, TrackerMeasurement};
 use metrocell_msgs::rosgraph_msgs::msg::Clock;
-use metrocell_msgs::sensor_msgs::msg::{CameraInfo, JointState, Temperature};
+use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, JointState, Temperature};
 use metrocell_twin::{Cell, Sample, SampleStream, Simulation};
 use nalgebra::Vector3;
 use rosmsg::RosMessage;
 
+use crate::camera_frame::{FrameRenderer, FrameRendering};
 use crate::camera_intrinsics::CameraIntrinsics;
 use crate::cdr::encode_cdr;
 use crate::convert;
@@ -31,6 +34,7 @@ pub enum TypedMessage {
     Tracker(TrackerMeasurement),
     Probe(ProbeHit),
     CameraInfo(CameraInfo),
+    Image(Image),
 }
 
 impl TypedMessage {
@@ -43,6 +47,7 @@ impl TypedMessage {
             TypedMessage::Tracker(_) => TrackerMeasurement::ROS_TYPE,
             TypedMessage::Probe(_) => ProbeHit::ROS_TYPE,
             TypedMessage::CameraInfo(_) => CameraInfo::ROS_TYPE,
+            TypedMessage::Image(_) => Image::ROS_TYPE,
         }
     }
 
@@ -56,6 +61,7 @@ impl TypedMessage {
             TypedMessage::Tracker(m) => encode_cdr(m, ty),
             TypedMessage::Probe(m) => encode_cdr(m, ty),
             TypedMessage::CameraInfo(m) => encode_cdr(m, ty),
+            TypedMessage::Image(m) => encode_cdr(m, ty),
         }
     }
 }
@@ -82,6 +88,9 @@ pub struct MessageConverter {
     tool_offset: Vector3<f64>,
     /// Per thermocouple: (name, topic, location).
     thermocouples: Vec<(String, TopicId, String)>,
+    /// Camera mount on the tool (rotation, translation), when the cell has a camera.
+    camera_mount: Option<(nalgebra::Matrix3<f64>, Vector3<f64>)>,
+    frames: Option<FrameRenderer>,
 }
 
 impl MessageConverter {
@@ -93,7 +102,23 @@ impl MessageConverter {
             .zip(&topics.temperatures)
             .map(|(tc, &id)| (tc.name.clone(), id, tc.node.clone().unwrap_or_else(|| "ambient".into())))
             .collect();
-        Ok(MessageConverter { topics, start_ns, camera, tool_offset: cell.machine.tool_offset, thermocouples })
+        let camera_mount = cell.camera.as_ref().map(|c| (c.mount.rotation, c.mount.translation));
+        Ok(MessageConverter { topics, start_ns, camera, tool_offset: cell.machine.tool_offset, thermocouples, camera_mount, frames: None })
+    }
+
+    /// Also render an image for every camera frame request (module doc of
+    /// [`crate::camera_frame`]); `seed` is the simulation seed (per-frame noise derives from
+    /// it). A cell without a camera ignores this. Fails on invalid intrinsics or settings.
+    pub fn with_frames(mut self, rendering: FrameRendering, seed: u64) -> Result<MessageConverter, SimError> {
+        if let Some((rotation, translation)) = self.camera_mount {
+            self.frames = Some(FrameRenderer::new(&self.camera, rendering, rotation, translation, seed)?);
+        }
+        Ok(self)
+    }
+
+    /// The frame renderer, if images are rendered (tests use it for the ground truth).
+    pub fn frames(&self) -> Option<&FrameRenderer> {
+        self.frames.as_ref()
     }
 
     /// The `/clock` message at simulation time t.
@@ -132,9 +157,16 @@ impl MessageConverter {
                     push(id, TypedMessage::Probe(convert::probe_hit(s, stamp, &self.tool_offset)));
                 }
             }
-            Sample::CameraFrameRequest(_) => {
+            Sample::CameraFrameRequest(r) => {
                 if let Some(id) = self.topics.camera_info {
-                    push(id, TypedMessage::CameraInfo(convert::camera_info(&self.camera, stamp)));
+                    push(id, TypedMessage::CameraInfo(convert::camera_info(&self.camera, stamp.clone())));
+                }
+                if let (Some(id), Some(frames)) = (self.topics.camera_image, &self.frames) {
+                    // Settings were validated by FrameRenderer::new; a failure here would be a
+                    // renderer bug, and dropping the image keeps the rest of the recording.
+                    if let Ok(view) = frames.render(r, ns) {
+                        push(id, TypedMessage::Image(convert::mono8_image(view.image, &self.camera.frame_id, stamp)));
+                    }
                 }
             }
         }

@@ -8,7 +8,8 @@
 //! | `/temperature/<sensor>` | `sensor_msgs/msg/Temperature` | [`QosKind::Reliable`] | one topic per thermocouple, °C, `variance` = noise² + calibration² (K²) |
 //! | `/tracker/measurements` | `metrocell_msgs/msg/TrackerMeasurement` | [`QosKind::Reliable`] | laser-tracker points in the tracker frame, covariance row-major, station air data, applied index; beam breaks as `STATUS_BEAM_BREAK` with NaN point |
 //! | `/probe/hits` | `metrocell_msgs/msg/ProbeHit` | [`QosKind::Reliable`] | touch-probe triggers (workpiece frame) |
-//! | `/camera/camera_info` | `sensor_msgs/msg/CameraInfo` | [`QosKind::SensorData`] | one per camera frame request (the image itself is not rendered yet) |
+//! | `/camera/camera_info` | `sensor_msgs/msg/CameraInfo` | [`QosKind::SensorData`] | one per camera frame request |
+//! | `/camera/image_raw` | `sensor_msgs/msg/Image` (mono8) | [`QosKind::SensorData`] | the rendered frame of each request, same stamp as its CameraInfo (see `camera_frame`) |
 //!
 //! Only the topics whose sensor exists in the cell are in a cell's map, in the order above
 //! (thermocouples in file order). Joint states exist when the cell has `machine_state`.
@@ -18,7 +19,7 @@
 
 use metrocell_msgs::msg::{ProbeHit, TrackerMeasurement};
 use metrocell_msgs::rosgraph_msgs::msg::Clock;
-use metrocell_msgs::sensor_msgs::msg::{CameraInfo, JointState, Temperature};
+use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, JointState, Temperature};
 use metrocell_twin::Cell;
 use rosmsg::RosMessage;
 
@@ -32,6 +33,7 @@ pub const TEMPERATURE_TOPIC_PREFIX: &str = "/temperature/";
 pub const TRACKER_TOPIC: &str = "/tracker/measurements";
 pub const PROBE_TOPIC: &str = "/probe/hits";
 pub const CAMERA_INFO_TOPIC: &str = "/camera/camera_info";
+pub const CAMERA_IMAGE_TOPIC: &str = "/camera/image_raw";
 
 /// QoS of a simulated stream, matching rclcpp's named profiles.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -66,6 +68,7 @@ pub enum TopicRole {
     Tracker,
     Probe,
     CameraInfo,
+    CameraImage,
 }
 
 /// One topic of the map.
@@ -100,6 +103,7 @@ pub struct TopicMap {
     pub tracker: Option<TopicId>,
     pub probe: Option<TopicId>,
     pub camera_info: Option<TopicId>,
+    pub camera_image: Option<TopicId>,
 }
 
 impl TopicMap {
@@ -133,7 +137,8 @@ impl TopicMap {
         let tracker = cell.tracker.as_ref().map(|_| push(TopicSpec::of::<TrackerMeasurement>(TRACKER_TOPIC, TopicRole::Tracker, QosKind::Reliable)));
         let probe = cell.probe.as_ref().map(|_| push(TopicSpec::of::<ProbeHit>(PROBE_TOPIC, TopicRole::Probe, QosKind::Reliable)));
         let camera_info = cell.camera.as_ref().map(|_| push(TopicSpec::of::<CameraInfo>(CAMERA_INFO_TOPIC, TopicRole::CameraInfo, QosKind::SensorData)));
-        Ok(TopicMap { topics, clock: 0, joint_states, temperatures, tracker, probe, camera_info })
+        let camera_image = cell.camera.as_ref().map(|_| push(TopicSpec::of::<Image>(CAMERA_IMAGE_TOPIC, TopicRole::CameraImage, QosKind::SensorData)));
+        Ok(TopicMap { topics, clock: 0, joint_states, temperatures, tracker, probe, camera_info, camera_image })
     }
 
     pub fn get(&self, id: TopicId) -> &TopicSpec {

@@ -66,6 +66,7 @@ fn same_seed_gives_byte_identical_bags_and_counts_follow_the_rates() {
     // 30 s cycles of 6 points, 4 probe directions each; one camera frame per dwell.
     assert!(n["/probe/hits"] >= 24 && n["/probe/hits"].is_multiple_of(4), "{}", n["/probe/hits"]);
     assert!(n["/camera/camera_info"] >= 6, "{}", n["/camera/camera_info"]);
+    assert_eq!(n["/camera/image_raw"], n["/camera/camera_info"], "one rendered image per camera frame request");
     assert_eq!(a.total_messages, n.values().sum::<u64>());
     assert_eq!(a.metadata.message_count, a.total_messages);
 

@@ -25,7 +25,8 @@ fn topic_map_of_the_demo_cell() {
             "/temperature/x_right",
             "/tracker/measurements",
             "/probe/hits",
-            "/camera/camera_info"
+            "/camera/camera_info",
+            "/camera/image_raw"
         ]
     );
     assert_eq!(c.topics.get(c.topics.temperature("x_right").unwrap()).role, TopicRole::Temperature("x_right".into()));

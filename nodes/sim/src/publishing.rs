@@ -4,7 +4,7 @@
 use std::time::{Duration, Instant};
 
 use metrocell_node::{qos, Diagnostics, MetrocellNode, QosProfile, RawPublisher};
-use metrocell_sim::{CameraIntrinsics, MessageConverter, MessageStream, QosKind};
+use metrocell_sim::{CameraIntrinsics, FrameRendering, MessageConverter, MessageStream, QosKind};
 use metrocell_twin::{Cell, Simulation};
 use ros2_client::qos::History;
 
@@ -38,7 +38,11 @@ pub struct LiveSim {
 impl LiveSim {
     pub fn new(node: &mut MetrocellNode, s: &Settings) -> Result<LiveSim, Box<dyn std::error::Error>> {
         let cell = Cell::from_path(&s.cell)?;
-        let converter = MessageConverter::new(&cell, s.start_ns, CameraIntrinsics::default())?;
+        // Camera frame requests are rendered as images on /camera/image_raw, like the bag writer.
+        let mut converter = MessageConverter::new(&cell, s.start_ns, CameraIntrinsics::default())?;
+        if s.camera_images {
+            converter = converter.with_frames(FrameRendering::default(), s.seed)?;
+        }
         let publishers = converter
             .topics
             .topics

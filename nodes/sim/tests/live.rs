@@ -58,7 +58,9 @@ fn temperatures_tracker_and_clock_arrive_with_plausible_values() {
     let clock = node.subscription::<Clock>("/clock", qos::sensor_data()).unwrap();
     // 90 simulated seconds at 15x: 6 s of wall time.
     let cell = demo_cell();
-    let mut child = spawn(0, &[&format!("cell:={cell}"), "duration:=90s", "speed:=15", "seed:=2"]);
+    // Images off: a debug build renders a 5 MP frame in seconds, which would stall 15x pacing
+    // (frames are checked in crates/sim/tests/camera_frames.rs).
+    let mut child = spawn(0, &[&format!("cell:={cell}"), "duration:=90s", "speed:=15", "seed:=2", "camera_images:=false"]);
 
     let (mut t_values, mut t_stamps, mut points, mut broken, mut clocks) = (vec![], vec![], vec![], 0, vec![]);
     let started = Instant::now();

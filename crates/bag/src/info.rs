@@ -148,7 +148,7 @@ pub(crate) fn metadata_from_reader(r: &BagReader) -> BagMetadata {
 
 /// `YYYY-MM-DD hh:mm:ss.nnnnnnnnn` UTC of a ns timestamp (civil-from-days, proleptic
 /// Gregorian).
-pub(crate) fn format_utc(ns: u64) -> String {
+pub fn format_utc(ns: u64) -> String {
     let secs = ns / 1_000_000_000;
     let nanos = ns % 1_000_000_000;
     let days = (secs / 86_400) as i64;

@@ -24,7 +24,7 @@ mod scan;
 mod writer;
 
 pub use error::{BagError, Result};
-pub use info::{info, BagInfo, FileSummary, TopicSummary};
+pub use info::{format_utc, info, BagInfo, FileSummary, TopicSummary};
 pub use metadata::{
     BagMetadata, FileInformation, Nanoseconds, NanosecondsSinceEpoch, TopicMetadata, TopicWithMessageCount,
     METADATA_FILE,

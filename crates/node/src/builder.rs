@@ -94,36 +94,37 @@ impl NodeBuilder {
 
     /// Resolve name, namespace and parameters without opening DDS: for a node replaying a bag.
     pub fn build_offline(self) -> Result<crate::offline::OfflineNode, NodeError> {
-        let ros = self.ros_args;
-        let original = self.name.clone();
-        let name = ros.node_name_remap(&original).unwrap_or(original.clone());
-        validate_node_name(&name)?;
-        let namespace = normalize_namespace(&ros.namespace_remap(&original).unwrap_or(self.namespace))?;
-        let fqn = fully_qualified_node_name(&namespace, &name);
-        let min_level = crate::logging::effective_log_level(&ros, &fqn);
-        let parameters = Parameters::resolve(&self.decls, &ros, &fqn, &name)?;
-        let logger = Logger::stderr_only(&fqn, min_level);
-        for w in parameters.warnings() {
-            logger.warn(w);
-        }
-        Ok(crate::offline::OfflineNode { name, namespace, ros_args: ros, parameters, logger })
+        let (ros, id) = self.resolve_identity()?;
+        let logger = Logger::stderr_only(&id.fqn, id.min_level);
+        Ok(crate::offline::OfflineNode {
+            name: id.name,
+            namespace: id.namespace,
+            ros_args: ros,
+            parameters: id.parameters,
+            logger,
+        })
     }
 
-    pub fn build(self) -> Result<MetrocellNode, NodeError> {
-        let ros = self.ros_args;
+    /// Name, namespace (remaps applied) and parameters, shared by live and offline nodes.
+    /// Parameter warnings are printed here, before any DDS exists.
+    fn resolve_identity(&self) -> Result<(RosArgs, Identity), NodeError> {
+        let ros = self.ros_args.clone();
         let original = self.name.clone();
         let name = ros.node_name_remap(&original).unwrap_or(original.clone());
         validate_node_name(&name)?;
-        let namespace = normalize_namespace(&ros.namespace_remap(&original).unwrap_or(self.namespace))?;
+        let namespace = normalize_namespace(&ros.namespace_remap(&original).unwrap_or(self.namespace.clone()))?;
         let fqn = fully_qualified_node_name(&namespace, &name);
-
         let min_level = crate::logging::effective_log_level(&ros, &fqn);
-
         let parameters = Parameters::resolve(&self.decls, &ros, &fqn, &name)?;
         let early = Logger::stderr_only(&fqn, min_level);
         for w in parameters.warnings() {
             early.warn(w);
         }
+        Ok((ros, Identity { name, namespace, fqn, min_level, parameters }))
+    }
+
+    pub fn build(self) -> Result<MetrocellNode, NodeError> {
+        let (ros, Identity { name, namespace, fqn, min_level, parameters }) = self.resolve_identity()?;
 
         let env = match self.environment {
             Some(e) => e,
@@ -189,4 +190,13 @@ impl NodeBuilder {
         node.set_background(background);
         Ok(node)
     }
+}
+
+/// What `resolve_identity` settles before a node is built.
+struct Identity {
+    name: String,
+    namespace: String,
+    fqn: String,
+    min_level: crate::ros_args::LogLevel,
+    parameters: Parameters,
 }

@@ -53,19 +53,10 @@ pub fn writer_options(node: &MetrocellNode) -> Result<WriterOptions, Box<dyn std
 
 /// `bag_YYYY_MM_DD-HH_MM_SS` in UTC, like rosbag2's default names.
 pub fn default_output() -> String {
-    let secs = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_secs() as i64).unwrap_or(0);
-    let (days, rem) = (secs.div_euclid(86_400), secs.rem_euclid(86_400));
-    // civil from days (Howard Hinnant)
-    let z = days + 719_468;
-    let era = z.div_euclid(146_097);
-    let doe = z - era * 146_097;
-    let yoe = (doe - doe / 1460 + doe / 36_524 - doe / 146_096) / 365;
-    let doy = doe - (365 * yoe + yoe / 4 - yoe / 100);
-    let mp = (5 * doy + 2) / 153;
-    let d = doy - (153 * mp + 2) / 5 + 1;
-    let m = if mp < 10 { mp + 3 } else { mp - 9 };
-    let y = yoe + era * 400 + i64::from(m <= 2);
-    format!("bag_{y:04}_{m:02}_{d:02}-{:02}_{:02}_{:02}", rem / 3600, rem / 60 % 60, rem % 60)
+    let now_ns = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_nanos() as u64).unwrap_or(0);
+    // "YYYY-MM-DD hh:mm:ss.nnnnnnnnn" → "bag_YYYY_MM_DD-hh_mm_ss"
+    let stamp = metrocell_bag::format_utc(now_ns);
+    format!("bag_{}", stamp[..19].replace('-', "_").replace(' ', "-").replace(':', "_"))
 }
 
 /// A "bulk" type carries a variable-length byte array at top level (sensor_msgs/Image data,

@@ -10,7 +10,9 @@
 //!   sample has `status = STATUS_BEAM_BREAK` and NaN point, spherical coordinates and
 //!   covariance, but keeps its air data.
 //! * Temperature: `frame_id` is the sensor's location (structure node name or `ambient`).
-//! * Joint states: names `x y z`, positions in m, `velocity`/`effort` empty, `frame_id` empty.
+//! * Joint states: the names of the cell's joint vector as the twin gives them — `x y z` (m) for
+//!   cartesian and delta, `x y z b c` (m, m, m, rad, rad) for five_axis, the arm's joint names
+//!   (rad or m) for serial_arm — `velocity`/`effort` empty, `frame_id` empty.
 //! * Probe: `frame_id = "workpiece"`, `probe_id = "probe"`; the twin records the contact point
 //!   as the machine reads it (nominal kinematics, no radius or pretravel compensation), so
 //!   `stylus_centre = surface_point =` that point, `stylus_radius = pretravel = 0`, and
@@ -223,6 +225,17 @@ mod tests {
         assert_eq!(actual.position, [0.100_008, 0.2, 0.299_999]);
         assert_eq!(commanded.position, [0.1, 0.2, 0.3]);
         assert!(actual.velocity.is_empty() && actual.effort.is_empty());
+    }
+
+    #[test]
+    fn joint_states_keep_any_number_of_named_joints() {
+        let names: Vec<String> = (1..=6).map(|i| format!("joint_{i}")).collect();
+        let s = MachineStateSample { t: 0.05, names: Arc::from(names.clone()), commanded: vec![0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0], actual: vec![0.0, -1.5706, 1.57065, -1.5708, -1.5708, 0.0] };
+        let (actual, commanded) = joint_states(&s, stamp());
+        assert_eq!(actual.name, names);
+        assert_eq!(actual.position.len(), 6);
+        assert_eq!(actual.position[1], -1.5706);
+        assert_eq!(commanded.position[2], 1.5708);
     }
 
     #[test]

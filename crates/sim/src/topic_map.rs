@@ -3,8 +3,8 @@
 //! | topic | type | QoS | content |
 //! |---|---|---|---|
 //! | `/clock` | `rosgraph_msgs/msg/Clock` | [`QosKind::Clock`] | simulated time, so nodes can run with `use_sim_time` |
-//! | `/machine/joint_states` | `sensor_msgs/msg/JointState` | [`QosKind::SensorData`] | **actual** axis positions (commanded + the true error terms), m, names `x y z` |
-//! | `/machine/commanded_joint_states` | `sensor_msgs/msg/JointState` | [`QosKind::SensorData`] | **commanded** axis positions (what the controller was told), m |
+//! | `/machine/joint_states` | `sensor_msgs/msg/JointState` | [`QosKind::SensorData`] | **actual** joint values (commanded + the true error terms), names `x y z` (cartesian, delta; m), `x y z b c` (five_axis; m, rad), the arm's joints (serial_arm; rad or m) |
+//! | `/machine/commanded_joint_states` | `sensor_msgs/msg/JointState` | [`QosKind::SensorData`] | **commanded** joint values (what the controller was told), same names |
 //! | `/temperature/<sensor>` | `sensor_msgs/msg/Temperature` | [`QosKind::Reliable`] | one topic per thermocouple, °C, `variance` = noise² + calibration² (K²) |
 //! | `/tracker/measurements` | `metrocell_msgs/msg/TrackerMeasurement` | [`QosKind::Reliable`] | laser-tracker points in the tracker frame, covariance row-major, station air data, applied index; beam breaks as `STATUS_BEAM_BREAK` with NaN point |
 //! | `/probe/hits` | `metrocell_msgs/msg/ProbeHit` | [`QosKind::Reliable`] | touch-probe triggers (workpiece frame) |

@@ -16,6 +16,7 @@ use nalgebra::{Matrix3, Vector3};
 
 use crate::cell_file::*;
 use crate::error::CellError;
+use crate::families::{FiveAxisMachine, SerialArm, FIVE_AXIS_JOINTS};
 use crate::program::Program;
 use crate::quantity::{vector3, Quantity};
 
@@ -28,13 +29,18 @@ pub enum MachineKinematics {
     /// firmware's inverse kinematics uses this nominal geometry, the true geometry adds the
     /// `delta_*` terms' trims.
     Delta(DeltaGeometry),
+    /// Five-axis B/C table; program joint vectors `[X, Y, Z, B, C]` (see [`crate::families`]).
+    FiveAxis(FiveAxisMachine),
+    /// Serial arm; program joint vectors hold one value per movable joint.
+    SerialArm(SerialArm),
 }
 
 /// Nominal geometry of the machine.
 #[derive(Debug, Clone, PartialEq)]
 pub struct MachineGeometry {
     pub kinematics: MachineKinematics,
-    /// `[min, max]` of x, y, z (m): axis travels (Cartesian) or the effector box (delta).
+    /// `[min, max]` of x, y, z (m): axis travels (Cartesian, five-axis X Y Z) or the effector
+    /// box (delta); unbounded for a serial arm.
     pub travel: [[f64; 2]; 3],
     /// Tool tip (tracker target) relative to the tool-carrying body at q = 0 (m).
     pub tool_offset: Vector3<f64>,
@@ -51,8 +57,42 @@ impl MachineGeometry {
     pub fn stacking(&self) -> Option<&StackingOrder> {
         match &self.kinematics {
             MachineKinematics::Cartesian(o) => Some(o),
-            MachineKinematics::Delta(_) => None,
+            _ => None,
         }
+    }
+
+    /// Names of the joint vector the program and machine state use.
+    pub fn joint_names(&self) -> Vec<String> {
+        match &self.kinematics {
+            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => vec!["x".into(), "y".into(), "z".into()],
+            MachineKinematics::FiveAxis(_) => FIVE_AXIS_JOINTS.iter().map(|s| s.to_string()).collect(),
+            MachineKinematics::SerialArm(a) => a.joint_names(),
+        }
+    }
+
+    /// Per joint: `[min, max]` and unit (`m` or `rad`), unbounded where the file gives no limit.
+    pub fn joint_limits(&self) -> Vec<([f64; 2], &'static str)> {
+        let inf = [f64::NEG_INFINITY, f64::INFINITY];
+        match &self.kinematics {
+            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => self.travel.iter().map(|t| (*t, "m")).collect(),
+            MachineKinematics::FiveAxis(f) => {
+                let mut v: Vec<_> = self.travel.iter().map(|t| (*t, "m")).collect();
+                v.push(([f.geometry.b_limits.0, f.geometry.b_limits.1], "rad"));
+                v.push((f.c_limits, "rad"));
+                v
+            }
+            MachineKinematics::SerialArm(a) => a
+                .revolute
+                .iter()
+                .enumerate()
+                .map(|(i, r)| (a.joint_limits.as_ref().map(|l| l[i]).unwrap_or(inf), if *r { "rad" } else { "m" }))
+                .collect(),
+        }
+    }
+
+    /// True for the families whose joint vector is not the tool position (five_axis, serial_arm).
+    pub fn is_jointed(&self) -> bool {
+        matches!(self.kinematics, MachineKinematics::FiveAxis(_) | MachineKinematics::SerialArm(_))
     }
 }
 
@@ -156,6 +196,20 @@ pub struct CameraSpec {
     /// Camera frame relative to the tool tip (translation) and its orientation, workpiece axes.
     pub mount: InstrumentPose,
     pub delay: f64,
+    /// The lens the file states, if any (else the simulator's default camera).
+    pub intrinsics: Option<CameraLens>,
+}
+
+/// Pinhole intrinsics (px) with Brown–Conrady distortion k1 k2 p1 p2 k3.
+#[derive(Debug, Clone, PartialEq)]
+pub struct CameraLens {
+    pub width: u32,
+    pub height: u32,
+    pub fx: f64,
+    pub fy: f64,
+    pub cx: f64,
+    pub cy: f64,
+    pub distortion: [f64; 5],
 }
 
 /// True air on the tracker beam.
@@ -192,20 +246,30 @@ pub struct Cell {
 impl Cell {
     /// Parse and validate a cell file's text; `file` names it in errors.
     pub fn from_yaml_str(text: &str, file: &str) -> Result<Cell, CellError> {
+        Cell::from_yaml_str_in(text, file, Path::new("."))
+    }
+
+    /// As [`Cell::from_yaml_str`], with paths in the file (a URDF) relative to `base_dir`.
+    pub fn from_yaml_str_in(text: &str, file: &str, base_dir: &Path) -> Result<Cell, CellError> {
         let raw: CellFile = serde_yaml::from_str(text).map_err(|e| CellError::Yaml { file: file.into(), message: e.to_string() })?;
-        Cell::from_file(&raw)
+        Cell::from_file_in(&raw, base_dir)
     }
 
     /// Read, parse and validate a cell file.
     pub fn from_path(path: impl AsRef<Path>) -> Result<Cell, CellError> {
         let p = path.as_ref();
         let text = std::fs::read_to_string(p).map_err(|e| CellError::Io { file: p.display().to_string(), reason: e.to_string() })?;
-        Cell::from_yaml_str(&text, &p.display().to_string())
+        Cell::from_yaml_str_in(&text, &p.display().to_string(), p.parent().unwrap_or(Path::new(".")))
     }
 
-    /// Validate a parsed file.
+    /// Validate a parsed file (relative paths from the current directory).
     pub fn from_file(f: &CellFile) -> Result<Cell, CellError> {
-        let machine = machine(&f.machine)?;
+        Cell::from_file_in(f, Path::new("."))
+    }
+
+    /// Validate a parsed file; relative paths in it (a URDF) are relative to `base_dir`.
+    pub fn from_file_in(f: &CellFile, base_dir: &Path) -> Result<Cell, CellError> {
+        let machine = machine(&f.machine, base_dir)?;
         let thermocouples = f
             .sensors
             .thermocouples
@@ -217,6 +281,9 @@ impl Cell {
         let tracker = f.sensors.tracker.as_ref().map(tracker).transpose()?;
         let machine_state_rate = f.sensors.machine_state.as_ref().map(|m| m.rate.positive("sensors.machine_state.rate", "1/s")).transpose()?;
         let probe = f.sensors.probe.as_ref().map(probe).transpose()?;
+        if probe.is_some() && machine.is_jointed() {
+            return Err(CellError::invalid("sensors.probe", "is simulated for family: cartesian and delta only; a five_axis or serial_arm cell takes tracker, thermocouples, machine_state and camera"));
+        }
         let camera = f.sensors.camera.as_ref().map(camera).transpose()?;
         let env = &f.environment;
         let thermal_step = match &env.thermal_step {
@@ -235,10 +302,10 @@ impl Cell {
         let load_force = env.load_force.as_ref().map(|v| vector3(v, "environment.load_force", "N")).transpose()?;
         let program = Program::from_section(&f.program, &machine)?;
         let sensor_names: BTreeSet<String> = thermocouples.iter().map(|t| t.name.clone()).collect();
-        let terms = terms(&f.terms, &sensor_names, load_force.is_some(), matches!(machine.kinematics, MachineKinematics::Delta(_)))?;
+        let terms = terms(&f.terms, &sensor_names, load_force.is_some(), &machine)?;
         if let MachineKinematics::Delta(g) = &machine.kinematics {
             for (i, q) in program.points.iter().chain(std::iter::once(&program.home)).enumerate() {
-                g.inverse(q).map_err(|e| CellError::invalid(if i == program.points.len() { "program.home".to_string() } else { format!("program point {i}") }, format!("not reachable by the delta: {e}")))?;
+                g.inverse(&Vector3::new(q[0], q[1], q[2])).map_err(|e| CellError::invalid(if i == program.points.len() { "program.home".to_string() } else { format!("program point {i}") }, format!("not reachable by the delta: {e}")))?;
             }
         }
         Ok(Cell {
@@ -280,13 +347,54 @@ impl Cell {
         }
         Some(g)
     }
+
+    /// For a serial arm: the true chain, the nominal one with the `joint_offset` and
+    /// `link_length` terms applied (see [`crate::families`]). `None` for other families.
+    pub fn true_arm_chain(&self) -> Option<metrocell_kinematics::serial::SerialChain> {
+        let MachineKinematics::SerialArm(arm) = &self.machine.kinematics else { return None };
+        let mut offsets = vec![0.0; arm.chain.dof()];
+        let mut lengths = vec![0.0; arm.link_count()];
+        for t in &self.terms.terms {
+            let target = match t.term.id() {
+                TermId::JointOffset => &mut offsets,
+                TermId::LinkLength => &mut lengths,
+                _ => continue,
+            };
+            for (a, p) in target.iter_mut().zip(&t.params) {
+                *a += p;
+            }
+        }
+        Some(arm.true_chain(&offsets, &lengths))
+    }
 }
 
 fn opt(q: &Option<Quantity>, path: &str, unit: &str) -> Result<f64, CellError> {
     q.as_ref().map(|q| q.to_si(path, unit)).transpose().map(|v| v.unwrap_or(0.0))
 }
 
-fn machine(m: &MachineSection) -> Result<MachineGeometry, CellError> {
+fn machine(m: &MachineSection, base_dir: &Path) -> Result<MachineGeometry, CellError> {
+    // Each family's own section; the others' must be absent.
+    let own: &[&str] = match m.family {
+        MachineFamily::Cartesian => &["stacking"],
+        MachineFamily::Delta => &["delta"],
+        MachineFamily::FiveAxis => &["five_axis"],
+        MachineFamily::SerialArm => &["serial_arm"],
+    };
+    for (key, present, family, takes) in [
+        ("five_axis", m.five_axis.is_some(), "five_axis", "five_axis {d0, tool_length, b_pivot, c_offset, workpiece_offset, b_limits, c_limits}"),
+        ("serial_arm", m.serial_arm.is_some(), "serial_arm", "serial_arm {dh | urdf, base, tool, joint_limits}"),
+    ] {
+        if present && !own.contains(&key) {
+            return Err(CellError::invalid(format!("machine.{key}"), format!("is for family: {family} (machine.{takes}); this cell's family is {}", family_name(m.family))));
+        }
+    }
+    if m.family == MachineFamily::FiveAxis || m.family == MachineFamily::SerialArm {
+        for (key, present) in [("stacking", m.stacking.is_some()), ("delta", m.delta.is_some())] {
+            if present {
+                return Err(CellError::invalid(format!("machine.{key}"), format!("is for family: {}; a {} machine takes machine.{}", if key == "stacking" { "cartesian" } else { "delta" }, family_name(m.family), own[0])));
+            }
+        }
+    }
     let kinematics = match m.family {
         MachineFamily::Cartesian => {
             if m.delta.is_some() {
@@ -304,15 +412,29 @@ fn machine(m: &MachineSection) -> Result<MachineGeometry, CellError> {
             let radius = d.radius.positive("machine.delta.radius", "m")?;
             MachineKinematics::Delta(DeltaGeometry::new(rod, radius).map_err(|e| CellError::invalid("machine.delta", e.to_string()))?)
         }
-        other => {
-            return Err(CellError::invalid(
-                "machine.family",
-                format!("family `{other:?}` is described by crates/kinematics but not simulated by the twin yet; allowed today: cartesian, delta").to_lowercase(),
-            ))
+        MachineFamily::FiveAxis => {
+            let s = m.five_axis.as_ref().ok_or_else(|| CellError::invalid("machine.five_axis", "is required for a five_axis machine: {d0, tool_length, b_pivot, c_offset, workpiece_offset, b_limits, c_limits}"))?;
+            MachineKinematics::FiveAxis(crate::families::five_axis(s)?)
+        }
+        MachineFamily::SerialArm => {
+            let s = m.serial_arm.as_ref().ok_or_else(|| CellError::invalid("machine.serial_arm", "is required for a serial_arm machine: {dh: {convention, rows} | urdf: {path, root_link, tip_link}, base, tool, joint_limits}"))?;
+            if m.travel.is_some() {
+                return Err(CellError::invalid("machine.travel", "is not used by a serial_arm; give machine.serial_arm.joint_limits"));
+            }
+            if m.tool_offset.is_some() {
+                return Err(CellError::invalid("machine.tool_offset", "is not used by a serial_arm; give machine.serial_arm.tool"));
+            }
+            let arm = crate::families::serial_arm(s, base_dir, pose)?;
+            let inf = [f64::NEG_INFINITY, f64::INFINITY];
+            return Ok(MachineGeometry { kinematics: MachineKinematics::SerialArm(arm), travel: [inf; 3], tool_offset: Vector3::zeros() });
         }
     };
+    if m.family == MachineFamily::FiveAxis && m.tool_offset.is_some() {
+        return Err(CellError::invalid("machine.tool_offset", "is not used by a five_axis machine; give machine.five_axis.tool_length"));
+    }
+    let tr = m.travel.as_ref().ok_or_else(|| CellError::invalid("machine.travel", format!("is required for a {} machine: {{x: [min, max], y: [min, max], z: [min, max]}} (m)", family_name(m.family))))?;
     let mut travel = [[0.0; 2]; 3];
-    for (i, (name, r)) in [("x", &m.travel.x), ("y", &m.travel.y), ("z", &m.travel.z)].into_iter().enumerate() {
+    for (i, (name, r)) in [("x", &tr.x), ("y", &tr.y), ("z", &tr.z)].into_iter().enumerate() {
         let lo = r[0].to_si(&format!("machine.travel.{name}[0]"), "m")?;
         let hi = r[1].to_si(&format!("machine.travel.{name}[1]"), "m")?;
         if !(hi > lo) {
@@ -322,6 +444,15 @@ fn machine(m: &MachineSection) -> Result<MachineGeometry, CellError> {
     }
     let tool_offset = m.tool_offset.as_ref().map(|v| vector3(v, "machine.tool_offset", "m")).transpose()?.unwrap_or_else(Vector3::zeros);
     Ok(MachineGeometry { kinematics, travel, tool_offset })
+}
+
+fn family_name(f: MachineFamily) -> &'static str {
+    match f {
+        MachineFamily::Cartesian => "cartesian",
+        MachineFamily::Delta => "delta",
+        MachineFamily::FiveAxis => "five_axis",
+        MachineFamily::SerialArm => "serial_arm",
+    }
 }
 
 fn pose(p: &PoseSection, path: &str) -> Result<InstrumentPose, CellError> {
@@ -427,7 +558,31 @@ fn probe(s: &ProbeSection) -> Result<ProbeSpec, CellError> {
 }
 
 fn camera(c: &CameraSection) -> Result<CameraSpec, CellError> {
-    Ok(CameraSpec { mount: pose(&c.mount, "sensors.camera.mount")?, delay: c.delay.as_ref().map(|q| q.non_negative("sensors.camera.delay", "s")).transpose()?.unwrap_or(0.0) })
+    let intrinsics = match &c.intrinsics {
+        None => None,
+        Some(i) => {
+            let p = "sensors.camera.intrinsics";
+            for (key, v) in [("width", i.width), ("height", i.height)] {
+                if v == 0 || v > 65_536 {
+                    return Err(CellError::OutOfRange { path: format!("{p}.{key}"), value: v as f64, reason: "must be in 1..=65536 px".into() });
+                }
+            }
+            let (fx, fy) = (i.fx.positive(&format!("{p}.fx"), "px")?, i.fy.positive(&format!("{p}.fy"), "px")?);
+            let (cx, cy) = (i.cx.to_si(&format!("{p}.cx"), "px")?, i.cy.to_si(&format!("{p}.cy"), "px")?);
+            for (key, v, n) in [("cx", cx, i.width), ("cy", cy, i.height)] {
+                if !(v >= 0.0 && v <= n as f64) {
+                    return Err(CellError::OutOfRange { path: format!("{p}.{key}"), value: v, reason: format!("the principal point must lie on the image, [0, {n}] px") });
+                }
+            }
+            if i.distortion.len() > 5 || i.distortion.iter().any(|d| !d.is_finite()) {
+                return Err(CellError::invalid(format!("{p}.distortion"), "takes at most 5 finite coefficients: k1, k2, p1, p2, k3 (OpenCV order)"));
+            }
+            let mut distortion = [0.0; 5];
+            distortion[..i.distortion.len()].copy_from_slice(&i.distortion);
+            Some(CameraLens { width: i.width, height: i.height, fx, fy, cx, cy, distortion })
+        }
+    };
+    Ok(CameraSpec { mount: pose(&c.mount, "sensors.camera.mount")?, delay: c.delay.as_ref().map(|q| q.non_negative("sensors.camera.delay", "s")).transpose()?.unwrap_or(0.0), intrinsics })
 }
 
 fn thermal_model(env: &EnvironmentSection, tcs: &[ThermocoupleSection]) -> Result<ShiftThermalModel, CellError> {
@@ -498,7 +653,15 @@ fn home_of(id: &str) -> Option<&'static str> {
     }
 }
 
-fn terms(configs: &[TermConfig], sensors: &BTreeSet<String>, has_load: bool, is_delta: bool) -> Result<TermModel, CellError> {
+/// Machine-frame displacement terms that read no axis signal: the ones a serial arm takes.
+const ARM_DISPLACEMENT_TERMS: &str = "thermal_growth, workpiece_expansion, tool_offset, frame_misalignment";
+
+fn terms(configs: &[TermConfig], sensors: &BTreeSet<String>, has_load: bool, machine: &MachineGeometry) -> Result<TermModel, CellError> {
+    let is_delta = matches!(machine.kinematics, MachineKinematics::Delta(_));
+    let arm = match &machine.kinematics {
+        MachineKinematics::SerialArm(a) => Some(a),
+        _ => None,
+    };
     let mut model = TermModel::default();
     for (i, c) in configs.iter().enumerate() {
         let path = format!("terms[{i}] (id `{}`)", c.id);
@@ -510,10 +673,39 @@ fn terms(configs: &[TermConfig], sensors: &BTreeSet<String>, has_load: bool, is_
         if is_delta_term && !is_delta {
             return Err(CellError::invalid(path, "is a delta term; it needs machine.family: delta"));
         }
+        let is_arm_term = matches!(t.term.id(), TermId::JointOffset | TermId::LinkLength);
+        if is_arm_term {
+            let Some(a) = arm else {
+                return Err(CellError::invalid(path, "is a serial-arm term; it needs machine.family: serial_arm"));
+            };
+            let (key, want) = if t.term.id() == TermId::JointOffset { ("joints", a.chain.dof()) } else { ("links", a.link_count()) };
+            if t.params.len() != want {
+                return Err(CellError::invalid(
+                    format!("{path}.options.{key}"),
+                    format!("is {}; this arm has {want} ({})", t.params.len(), if key == "joints" { "movable joints" } else { "DH rows / URDF joints" }),
+                ));
+            }
+            if t.term.id() == TermId::LinkLength && a.dh.is_none() {
+                // a URDF link length is the length of the joint's <origin xyz>; a zero one has no direction
+                for (k, (j, p)) in a.chain.joints.iter().zip(&t.params).enumerate() {
+                    if *p != 0.0 && j.pre.translation.vector.norm() == 0.0 {
+                        return Err(CellError::invalid(format!("{path}.params.l{}", k + 1), format!("URDF joint `{}` has a zero-length <origin xyz>, so it has no link length to change; set l{} to 0", j.name, k + 1)));
+                    }
+                }
+            }
+            model.push(t).map_err(|e| CellError::term(format!("terms[{i}]"), e))?;
+            continue;
+        }
+        if arm.is_some() && t.term.signals().iter().any(|s| matches!(s, SignalKind::AxisPosition(_) | SignalKind::ApproachDirection(_) | SignalKind::AxisVelocity(_) | SignalKind::LoadForce)) {
+            return Err(CellError::invalid(
+                path,
+                format!("reads linear-axis signals, which a serial_arm does not have; a serial_arm takes joint_offset, link_length and {ARM_DISPLACEMENT_TERMS}"),
+            ));
+        }
         if t.term.effect() != EffectKind::Displacement(Frame::Machine) && !is_delta_term {
             return Err(CellError::invalid(
                 path,
-                format!("has effect {:?}; the twin's `terms` take machine-frame displacement terms (geometry, thermal_scale, thermal_growth, compliance, tool_offset, frame_misalignment) and, for a delta, delta_rod_length, delta_radius, delta_tower_angle, delta_endstop", t.term.effect()),
+                format!("has effect {:?}; the twin's `terms` take machine-frame displacement terms (geometry, thermal_scale, thermal_growth, compliance, tool_offset, frame_misalignment), for a delta delta_rod_length, delta_radius, delta_tower_angle, delta_endstop, and for a serial_arm joint_offset, link_length", t.term.effect()),
             ));
         }
         for s in t.term.signals() {

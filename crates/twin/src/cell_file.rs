@@ -26,9 +26,9 @@ pub struct CellFile {
     pub terms: Vec<TermConfig>,
 }
 
-/// Machine families. `cartesian` and `delta` are simulated; `five_axis` and `serial_arm` are
-/// accepted by the schema so a file can name them (crates/kinematics has their chains), and are
-/// rejected at validation with a clear message until the twin wires them.
+/// Machine families, all simulated: `cartesian` (3 axes in a stacking order), `delta` (linear
+/// delta), `five_axis` (B/C tilting-rotary table, crates/kinematics `FiveAxisGeometry`) and
+/// `serial_arm` (DH table or URDF chain).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
 #[serde(rename_all = "snake_case")]
 pub enum MachineFamily {
@@ -48,8 +48,16 @@ pub struct MachineSection {
     /// Linear delta nominal geometry (Marlin conventions, crates/kinematics `DeltaGeometry`).
     #[serde(default)]
     pub delta: Option<DeltaSection>,
-    /// Travel of each axis, `[min, max]` (m).
-    pub travel: TravelSection,
+    /// Five-axis B/C table geometry (crates/kinematics `FiveAxisGeometry`).
+    #[serde(default)]
+    pub five_axis: Option<FiveAxisSection>,
+    /// Serial arm: DH table or URDF, base and tool frames, joint limits.
+    #[serde(default)]
+    pub serial_arm: Option<SerialArmSection>,
+    /// Travel of each axis, `[min, max]` (m): Cartesian axes, the delta's effector box, the
+    /// five-axis X, Y, Z. Not used by a serial arm (its limits are `serial_arm.joint_limits`).
+    #[serde(default)]
+    pub travel: Option<TravelSection>,
     /// Tool tip (or tracker target) relative to the tool-carrying body at q = 0 (m).
     #[serde(default)]
     pub tool_offset: Option<[Quantity; 3]>,
@@ -62,6 +70,99 @@ pub struct DeltaSection {
     pub rod_length: Quantity,
     /// `DELTA_RADIUS` (m).
     pub radius: Quantity,
+}
+
+/// Five-axis table/table machine (seed 004). Axis coordinates of the program: X, Y, Z (m) and
+/// B, C (rad); X = DH d2, Y = DH d1, Z = −d3 (ISO: +Z moves the tool up, away from the table).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct FiveAxisSection {
+    /// DH constant d0: height of the spindle gauge point at Z = 0 (m).
+    pub d0: Quantity,
+    /// Gauge point to tool tip, along −z (m).
+    pub tool_length: Quantity,
+    /// A point on the B axis, machine frame (m; default origin).
+    #[serde(default)]
+    pub b_pivot: Option<[Quantity; 3]>,
+    /// B pivot → a point on the C axis, cradle frame at B = 0 (m; default zero).
+    #[serde(default)]
+    pub c_offset: Option<[Quantity; 3]>,
+    /// C-axis point → workpiece origin, table frame at C = 0 (m; default zero).
+    #[serde(default)]
+    pub workpiece_offset: Option<[Quantity; 3]>,
+    /// `[min, max]` of B (rad); default ±90°.
+    #[serde(default)]
+    pub b_limits: Option<[Quantity; 2]>,
+    /// `[min, max]` of C (rad); default ±360°.
+    #[serde(default)]
+    pub c_limits: Option<[Quantity; 2]>,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DhConventionName {
+    Standard,
+    Modified,
+}
+
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum JointKindName {
+    #[default]
+    Revolute,
+    Prismatic,
+    Fixed,
+}
+
+/// One DH row: θ, α (rad) and d, a (m); a modified row holds a_{i−1}, α_{i−1} in `a`, `alpha`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DhRowSection {
+    #[serde(default)]
+    pub theta: Option<Quantity>,
+    #[serde(default)]
+    pub d: Option<Quantity>,
+    #[serde(default)]
+    pub a: Option<Quantity>,
+    #[serde(default)]
+    pub alpha: Option<Quantity>,
+    #[serde(default)]
+    pub joint: JointKindName,
+}
+
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DhSection {
+    pub convention: DhConventionName,
+    pub rows: Vec<DhRowSection>,
+}
+
+/// A URDF chain; `path` is relative to the cell file.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct UrdfSection {
+    pub path: String,
+    pub root_link: String,
+    pub tip_link: String,
+}
+
+/// Serial arm (crates/kinematics `SerialChain`): exactly one of `dh` and `urdf`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SerialArmSection {
+    #[serde(default)]
+    pub dh: Option<DhSection>,
+    #[serde(default)]
+    pub urdf: Option<UrdfSection>,
+    /// Arm base in the cell (workpiece/world) frame; default identity.
+    #[serde(default)]
+    pub base: Option<PoseSection>,
+    /// Tool point (tracker target) relative to the last link; default identity.
+    #[serde(default)]
+    pub tool: Option<PoseSection>,
+    /// `[min, max]` per movable joint (rad or m); absent: unlimited.
+    #[serde(default)]
+    pub joint_limits: Vec<[Quantity; 2]>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -226,7 +327,24 @@ pub struct CameraSection {
     pub mount: PoseSection,
     /// Delay after the start of each dwell at which a frame is requested (s).
     #[serde(default)]
-    pub delay: Option<Quantity>,
+    pub delay: Option<Quantity>,    /// Lens and sensor (pinhole + Brown–Conrady); absent: the simulator's default camera.
+    #[serde(default)]
+    pub intrinsics: Option<IntrinsicsSection>,
+}
+
+/// Pinhole intrinsics in pixels (OpenCV convention: centre of the top-left pixel at (0, 0)).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct IntrinsicsSection {
+    pub width: u32,
+    pub height: u32,
+    pub fx: Quantity,
+    pub fy: Quantity,
+    pub cx: Quantity,
+    pub cy: Quantity,
+    /// Brown–Conrady coefficients in OpenCV order k1 k2 p1 p2 k3 (missing trailing ones are 0).
+    #[serde(default)]
+    pub distortion: Vec<f64>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -319,9 +437,19 @@ pub struct ProgramSection {
     /// A grid of commanded axis positions …
     #[serde(default)]
     pub grid: Option<GridSection>,
-    /// … or an explicit list (m).
+    /// … or an explicit list (m) (cartesian, delta) …
     #[serde(default)]
     pub points: Vec<[Quantity; 3]>,
+    /// … or joint targets: five_axis `[X, Y, Z, B, C]` (m, m, m, rad, rad), serial_arm one
+    /// value per movable joint (rad or m) …
+    #[serde(default)]
+    pub joints: Vec<Vec<Quantity>>,
+    /// … or tool poses solved by the family's inverse kinematics (five_axis, serial_arm).
+    #[serde(default)]
+    pub poses: Vec<PoseTargetSection>,
+    /// Speed of rotary joints in moves (rad/s; five_axis and serial_arm; default 30 deg/s).
+    #[serde(default)]
+    pub rotary_rate: Option<Quantity>,
     #[serde(default)]
     pub order: VisitOrder,
     /// Path speed of moves (m/s).
@@ -340,6 +468,22 @@ pub struct ProgramSection {
     /// Home position, start and end of every cycle (m, default the first point).
     #[serde(default)]
     pub home: Option<[Quantity; 3]>,
+    /// Home as joint values (five_axis, serial_arm; default the first target).
+    #[serde(default)]
+    pub home_joints: Option<Vec<Quantity>>,
+}
+
+/// A tool pose target. Five-axis: tool tip `position` and tool `axis` (tip → spindle) in the
+/// workpiece frame (default axis +z). Serial arm: tool point `position` in the cell frame and,
+/// optionally, its orientation `euler_xyz` (R = Rx·Ry·Rz); without it the IK is position-only.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PoseTargetSection {
+    pub position: [Quantity; 3],
+    #[serde(default)]
+    pub axis: Option<[f64; 3]>,
+    #[serde(default)]
+    pub euler_xyz: Option<[Quantity; 3]>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]

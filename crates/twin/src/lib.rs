@@ -15,6 +15,8 @@
 //! * Axis coordinates q follow ISO 841 / crates/kinematics: the commanded motion of the tool
 //!   relative to the workpiece; the nominal tool point in the workpiece frame is q + tool_offset
 //!   for every stacking order. The workpiece frame coincides with the machine frame at q = 0.
+//!   Five-axis and serial-arm programs use joint vectors instead (`x y z b c`; the arm's joints),
+//!   with the tool point from forward kinematics: see [`families`].
 //! * Machine errors: displacement of the tool relative to the workpiece, realised − commanded,
 //!   machine frame (physics crate convention); actual = commanded + Σ true terms.
 //! * The laser tracker sits on the workpiece side (thesis set-up: on the X table) with pose
@@ -28,6 +30,7 @@
 pub mod cell;
 pub mod cell_file;
 pub mod error;
+pub mod families;
 pub mod noise;
 pub mod program;
 pub mod quantity;

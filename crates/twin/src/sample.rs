@@ -56,11 +56,13 @@ pub struct TemperatureSample {
 #[derive(Debug, Clone, PartialEq)]
 pub struct MachineStateSample {
     pub t: f64,
-    /// Axis names, shared by every sample (`x`, `y`, `z`).
+    /// Joint names, shared by every sample (`x y z`; five-axis `x y z b c`; arm joint names).
     pub names: Arc<[String]>,
-    /// Commanded axis positions (m).
+    /// Commanded joint values (m or rad).
     pub commanded: Vec<f64>,
-    /// Actual positions: commanded + the true terms' displacement (tool relative to workpiece).
+    /// Actual values: cartesian/delta and five-axis X, Y, Z commanded + the true terms'
+    /// displacement (tool relative to workpiece); rotary B, C as commanded; arm joints
+    /// commanded + their true zero offsets (`joint_offset`).
     pub actual: Vec<f64>,
 }
 
@@ -121,8 +123,11 @@ impl Sample {
 /// Ground truth behind a tracker sample.
 #[derive(Debug, Clone, PartialEq)]
 pub struct TrackerTruth {
-    /// Commanded axis positions (m).
+    /// Commanded axis positions (m) of a cartesian or delta machine; for five_axis and
+    /// serial_arm the nominal tool point (forward kinematics of `joints`, workpiece/cell frame).
     pub commanded: Vector3<f64>,
+    /// Commanded joint vector (the family's, see [`crate::families`]).
+    pub joints: Vec<f64>,
     /// True machine displacement (tool relative to workpiece, machine frame): Σ true terms.
     pub displacement: Vector3<f64>,
     /// True tool (target) point, workpiece frame.

@@ -20,10 +20,12 @@ use metrocell_physics::instrument::edlen::shop_floor_refractivity;
 use metrocell_physics::instrument::tracker_warmup::warmup_drift;
 use metrocell_physics::instrument::turbulence::range_scatter;
 use metrocell_kinematics::delta::DeltaGeometry;
+use metrocell_kinematics::serial::SerialChain;
 use metrocell_physics::{EffectKind, PhysicsError, SignalKind, Signals, TemperatureHistory};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{DVector, Matrix3, Vector3};
 
 use crate::cell::{Cell, MachineKinematics};
+use crate::families::SerialArm;
 use crate::error::CellError;
 use crate::noise::{stream, NoiseStream};
 use crate::program::MotionState;
@@ -246,6 +248,8 @@ struct Engine<'a> {
     cache: Vec<Option<Vector3<f64>>>,
     /// Delta: (nominal geometry the firmware inverts, true geometry).
     delta: Option<(DeltaGeometry, DeltaGeometry)>,
+    /// Serial arm: the true chain (joint_offset and link_length applied) and the joint offsets.
+    arm_truth: Option<(SerialChain, Vec<f64>)>,
     error: Option<PhysicsError>,
 }
 
@@ -300,7 +304,7 @@ impl<'a> Engine<'a> {
                 breaks: t.beam_breaks.map(|b| BeamBreakProcess::new(NoiseStream::new(seed, stream::BEAM_BREAKS), b.rate, b.mean_duration)),
             }),
             probe_noise: NoiseStream::new(seed, stream::PROBE),
-            axis_names: Arc::from(vec!["x".to_string(), "y".to_string(), "z".to_string()]),
+            axis_names: Arc::from(cell.machine.joint_names()),
             signals,
             history_sensors,
             history_k: 0,
@@ -310,6 +314,10 @@ impl<'a> Engine<'a> {
                 (MachineKinematics::Delta(n), Some(t)) => Some((*n, t)),
                 _ => None,
             },
+            arm_truth: cell.true_arm_chain().map(|c| {
+                let offsets = c.joints.iter().filter(|j| j.kind != metrocell_kinematics::serial::JointKind::Fixed).map(|j| j.offset).collect();
+                (c, offsets)
+            }),
             error: None,
         }
     }
@@ -335,14 +343,57 @@ impl<'a> Engine<'a> {
         }
     }
 
-    /// True machine displacement at t for the motion state (machine frame, m).
+    /// Nominal tool point in the frame the family's displacement terms act in: workpiece frame
+    /// (cartesian, delta), machine frame (five-axis tip before the table rotation), cell frame (arm).
+    fn nominal_machine_point(&self, q: &DVector<f64>) -> Result<Vector3<f64>, PhysicsError> {
+        let kin = |e: metrocell_kinematics::KinematicsError| PhysicsError::InvalidInput { what: format!("forward kinematics at q = {:?}", q.as_slice()), reason: e.to_string() };
+        Ok(match &self.cell.machine.kinematics {
+            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => self.cell.machine.nominal_tool_point(&v3(q)),
+            MachineKinematics::FiveAxis(f) => f.tip_machine(q.as_slice()),
+            MachineKinematics::SerialArm(a) => SerialArm::tool_point(&a.chain, q.as_slice()).map_err(kin)?,
+        })
+    }
+
+    /// (nominal, true) tool point and the true displacement d (see [`crate::families`]):
+    /// cartesian/delta workpiece frame, d = true − nominal; five-axis workpiece frame, d the
+    /// linear axes' machine-frame displacement; arm cell frame, d = true − nominal.
+    fn tool_points(&mut self, t: f64, ms: &MotionState) -> Result<(Vector3<f64>, Vector3<f64>, Vector3<f64>), PhysicsError> {
+        let d = self.displacement(t, ms)?;
+        let kin = |e: metrocell_kinematics::KinematicsError| PhysicsError::InvalidInput { what: format!("forward kinematics at t = {t} s, q = {:?}", ms.q.as_slice()), reason: e.to_string() };
+        Ok(match &self.cell.machine.kinematics {
+            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => {
+                let n = self.cell.machine.nominal_tool_point(&v3(&ms.q));
+                (n, n + d, d)
+            }
+            MachineKinematics::FiveAxis(f) => {
+                let q = ms.q.as_slice();
+                let tip = f.tip_machine(q);
+                (f.to_workpiece(&tip, q), f.to_workpiece(&(tip + d), q), d)
+            }
+            MachineKinematics::SerialArm(a) => {
+                let n = SerialArm::tool_point(&a.chain, ms.q.as_slice()).map_err(kin)?;
+                (n, n + d, d)
+            }
+        })
+    }
+
+    /// True machine displacement at t for the motion state (m): Σ displacement terms, plus for
+    /// a delta or an arm the effect of the kinematic terms (true − nominal forward kinematics).
     fn displacement(&mut self, t: f64, ms: &MotionState) -> Result<Vector3<f64>, PhysicsError> {
         self.update_histories(t);
+        let point = self.nominal_machine_point(&ms.q)?;
         let s = &mut self.signals;
-        s.axis_position = [Some(ms.q.x), Some(ms.q.y), Some(ms.q.z)];
-        s.approach_direction = [Some(ms.approach[0]), Some(ms.approach[1]), Some(ms.approach[2])];
-        s.axis_velocity = [Some(ms.velocity.x), Some(ms.velocity.y), Some(ms.velocity.z)];
-        s.point = Some(self.cell.machine.nominal_tool_point(&ms.q));
+        if matches!(self.cell.machine.kinematics, MachineKinematics::SerialArm(_)) {
+            // an arm has no linear axes; its terms were checked not to read axis signals
+            s.axis_position = [None; 3];
+            s.approach_direction = [None; 3];
+            s.axis_velocity = [None; 3];
+        } else {
+            s.axis_position = [Some(ms.q[0]), Some(ms.q[1]), Some(ms.q[2])];
+            s.approach_direction = [Some(ms.approach[0]), Some(ms.approach[1]), Some(ms.approach[2])];
+            s.axis_velocity = [Some(ms.velocity[0]), Some(ms.velocity[1]), Some(ms.velocity[2])];
+        }
+        s.point = Some(point);
         for (i, tc) in self.cell.thermocouples.iter().enumerate() {
             let v = self.thermal.at(self.tc_slots[i], t);
             if let Some(x) = s.temperatures.get_mut(&tc.name) {
@@ -354,10 +405,17 @@ impl<'a> Engine<'a> {
             // effector where the true geometry says
             Some((nominal, truth)) => {
                 let kin = |e: metrocell_kinematics::KinematicsError| PhysicsError::InvalidInput { what: format!("delta kinematics at t = {t} s, q = {:?}", ms.q.as_slice()), reason: e.to_string() };
-                let joints = nominal.inverse(&ms.q).map_err(kin)?;
-                truth.forward(&joints).map_err(kin)? - ms.q
+                let q = v3(&ms.q);
+                let joints = nominal.inverse(&q).map_err(kin)?;
+                truth.forward(&joints).map_err(kin)? - q
             }
-            None => Vector3::zeros(),
+            None => match &self.arm_truth {
+                Some((chain, _)) => {
+                    let kin = |e: metrocell_kinematics::KinematicsError| PhysicsError::InvalidInput { what: format!("arm kinematics at t = {t} s, q = {:?}", ms.q.as_slice()), reason: e.to_string() };
+                    SerialArm::tool_point(chain, ms.q.as_slice()).map_err(kin)? - point
+                }
+                None => Vector3::zeros(),
+            },
         };
         for (i, t) in self.cell.terms.terms.iter().enumerate() {
             if t.term.effect() == EffectKind::Kinematic {
@@ -440,17 +498,22 @@ impl<'a> Engine<'a> {
 
     fn machine_state(&mut self, t: f64) -> Result<(Sample, SampleTruth), PhysicsError> {
         let ms = self.cell.program.state_at(t);
-        let d = self.displacement(t, &ms)?;
-        let actual = ms.q + d;
-        let s = MachineStateSample { t, names: self.axis_names.clone(), commanded: ms.q.as_slice().to_vec(), actual: actual.as_slice().to_vec() };
+        let (_, _, d) = self.tool_points(t, &ms)?;
+        // actual: cartesian/delta and the five-axis linear axes commanded + d; rotary axes as
+        // commanded; an arm's joints at commanded + their true zero offsets.
+        let mut actual = ms.q.as_slice().to_vec();
+        match &self.arm_truth {
+            Some((_, offsets)) => actual.iter_mut().zip(offsets).for_each(|(a, o)| *a += o),
+            None => (0..3).for_each(|k| actual[k] += d[k]),
+        }
+        let s = MachineStateSample { t, names: self.axis_names.clone(), commanded: ms.q.as_slice().to_vec(), actual };
         Ok((Sample::MachineState(s), SampleTruth::MachineState { displacement: d }))
     }
 
     fn tracker_sample(&mut self, t: f64) -> Result<(Sample, SampleTruth), PhysicsError> {
         let spec = self.cell.tracker.as_ref().expect("tracker channel exists only with a tracker");
         let ms = self.cell.program.state_at(t);
-        let d = self.displacement(t, &ms)?;
-        let tool_point = self.cell.machine.nominal_tool_point(&ms.q) + d;
+        let (nominal_point, tool_point, d) = self.tool_points(t, &ms)?;
         let x = spec.pose.to_instrument(&tool_point);
         let (rho, az, el) = to_spherical(&x);
         // air: truth on the beam vs the station's reading
@@ -471,7 +534,8 @@ impl<'a> Engine<'a> {
         let broken = state.breaks.as_mut().map(|b| b.broken(t)).unwrap_or(false);
         let target_id = ms.dwell_point.map(|i| i as u32);
         let truth = TrackerTruth {
-            commanded: ms.q,
+            commanded: if self.cell.machine.is_jointed() { nominal_point } else { v3(&ms.q) },
+            joints: ms.q.as_slice().to_vec(),
             displacement: d,
             tool_point,
             point: x,
@@ -527,13 +591,13 @@ impl<'a> Engine<'a> {
         let point = seg.dwell_point.unwrap_or(0);
         let u = spec.directions[ev.sub];
         // The approach of each axis that moves while probing is the probing direction.
-        let mut approach = seg.approach;
+        let mut approach = seg.approach.clone();
         for k in 0..3 {
             if u[k] != 0.0 {
                 approach[k] = u[k].signum();
             }
         }
-        let ms = MotionState { q: seg.to, velocity: Vector3::zeros(), approach, dwell_point: Some(point), cycle: Some(ev.cycle) };
+        let ms = MotionState { q: seg.to.clone(), velocity: DVector::zeros(seg.to.len()), approach, dwell_point: Some(point), cycle: Some(ev.cycle) };
         let d = self.displacement(ev.t, &ms)?;
         let pretravel = match &spec.pretravel {
             Some(pt) => {
@@ -543,7 +607,7 @@ impl<'a> Engine<'a> {
             }
             None => Vector3::zeros(),
         };
-        let nominal = self.cell.machine.nominal_tool_point(&seg.to);
+        let nominal = self.cell.machine.nominal_tool_point(&v3(&seg.to));
         // Touching P with a machine that is off by d needs an axis reading P − d; the trigger
         // comes pretravel further along the approach direction.
         let noise = Vector3::new(self.probe_noise.normal(), self.probe_noise.normal(), self.probe_noise.normal()) * spec.noise;
@@ -564,10 +628,8 @@ impl<'a> Engine<'a> {
     fn camera_request(&mut self, ev: DwellEvent) -> Result<(Sample, SampleTruth), PhysicsError> {
         let spec = self.cell.camera.as_ref().expect("camera events exist only with a camera");
         let seg = &self.cell.program.segments[ev.segment];
-        let ms = MotionState { q: seg.to, velocity: Vector3::zeros(), approach: seg.approach, dwell_point: seg.dwell_point, cycle: Some(ev.cycle) };
-        let d = self.displacement(ev.t, &ms)?;
-        let nominal = self.cell.machine.nominal_tool_point(&seg.to);
-        let tool_point = nominal + d;
+        let ms = MotionState { q: seg.to.clone(), velocity: DVector::zeros(seg.to.len()), approach: seg.approach.clone(), dwell_point: seg.dwell_point, cycle: Some(ev.cycle) };
+        let (nominal, tool_point, _) = self.tool_points(ev.t, &ms)?;
         let s = CameraFrameRequest {
             t: ev.t,
             target_id: seg.dwell_point.unwrap_or(0) as u32,
@@ -578,4 +640,9 @@ impl<'a> Engine<'a> {
         };
         Ok((Sample::CameraFrameRequest(s), SampleTruth::CameraFrameRequest { tool_point }))
     }
+}
+
+/// The first three joint values (x, y, z of a cartesian or delta program).
+fn v3(q: &DVector<f64>) -> Vector3<f64> {
+    Vector3::new(q[0], q[1], q[2])
 }

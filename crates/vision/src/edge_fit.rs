@@ -156,9 +156,22 @@ fn collect_band(
     let xmax = (p0.x.max(p1.x) + pad).ceil().min((w - 1) as f64) as i64;
     let ymin = (p0.y.min(p1.y) - pad).floor().max(0.0) as i64;
     let ymax = (p0.y.max(p1.y) + pad).ceil().min((h - 1) as f64) as i64;
+    // Per row, only the columns near the edge can pass the band test (a diagonal side's
+    // bounding box is mostly far from it): |n·p − d| ≤ band + |κ|·u² with |u| ≤ reach, plus a
+    // pixel of margin so that the exact test below decides.
+    let n = edge.normal();
+    let reach = 0.5 * len + 2.0 * pad;
+    let slack = win.band + edge.kappa.abs() * reach * reach + 1.0;
     let mut out = Vec::new();
     for y in ymin..=ymax {
-        for x in xmin..=xmax {
+        let (mut xa, mut xb) = (xmin, xmax);
+        if n.x.abs() > 0.2 {
+            let c = edge.d - n.y * y as f64;
+            let (u0, u1) = ((c - slack) / n.x, (c + slack) / n.x);
+            xa = xa.max(u0.min(u1).floor() as i64);
+            xb = xb.min(u0.max(u1).ceil() as i64);
+        }
+        for x in xa..=xb {
             let p = Point2::new(x as f64, y as f64);
             let u = t.dot(&(p.coords - p0)) / len;
             if u < win.trim || u > 1.0 - win.trim {
@@ -254,10 +267,16 @@ fn levenberg_marquardt(
                 v,
                 cdf * v,
             ]);
-            jtj += j * j.transpose();
+            // JᵀJ is symmetric: accumulate the upper triangle, mirror after the loop.
+            for a in 0..8 {
+                for b in a..8 {
+                    jtj[(a, b)] += j[a] * j[b];
+                }
+            }
             jtr += j * r;
             f += r * r;
         }
+        jtj.fill_lower_triangle_with_upper_triangle();
         if !fit_kappa {
             jtj[(2, 2)] = 1.0; // κ frozen: decoupled unit row keeps the system regular
         }

@@ -11,7 +11,7 @@ use crate::edge_fit::{fit_step_edge, intersect, EdgeWindow};
 use crate::error::{invalid, Result, VisionError};
 use crate::homography::{apply, homography_4pt};
 use crate::polygon::{approx_closed, is_convex};
-use crate::threshold::{adaptive_threshold_mean_into, IntegralImage};
+use crate::threshold::adaptive_threshold_mean_into;
 use image::GrayImage;
 use nalgebra::{Matrix2, Point2};
 
@@ -110,7 +110,6 @@ pub fn detect_markers(
     let min_perim = (params.min_perimeter_rate * max_side).max(12.0);
     let max_perim = params.max_perimeter_rate * max_side;
     let max_bit_errors = (dict.max_correction_bits as f64 * params.error_correction_rate) as u32;
-    let integral = IntegralImage::new(img);
     let threads = match params.threads {
         0 => std::thread::available_parallelism().map_or(1, |n| n.get()),
         n => n,
@@ -119,7 +118,7 @@ pub fn detect_markers(
     // Stage 1: candidate quads per threshold window (independent, so in parallel).
     let window_quads = |win: u32| -> Vec<[[f64; 2]; 4]> {
         let mut mask = Vec::new();
-        adaptive_threshold_mean_into(img, &integral, win, params.threshold_constant, &mut mask);
+        adaptive_threshold_mean_into(img, win, params.threshold_constant, &mut mask);
         let contours = outer_contours(
             &mut mask,
             w,

@@ -1,4 +1,5 @@
-//! `metrocell bag play BAG`: publish a bag's messages over DDS with the recorded spacing ÷ rate.
+//! `metrocell bag play BAG`: publish a bag's messages over DDS with the recorded spacing ÷ rate,
+//! each topic offering the reliability and durability its recorded publishers offered.
 
 use std::collections::HashMap;
 use std::path::PathBuf;
@@ -6,9 +7,11 @@ use std::time::{Duration, Instant};
 
 use metrocell_bag::{BagReader, MessageFilter};
 use metrocell_bagtools::playback::{parse_remap, PlaybackClock};
+use metrocell_bagtools::recorded_qos::replay_qos;
 use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_msgs::rosgraph_msgs::msg::Clock;
 use metrocell_node::{qos, MetrocellNode, RawPublisher};
+use ros2_client::qos::{Durability, History, Reliability, WhenFull};
 
 use super::keyboard::Keyboard;
 
@@ -74,7 +77,14 @@ pub fn run(a: PlayArgs) -> anyhow::Result<i32> {
     let mut publishers: HashMap<String, RawPublisher> = HashMap::new();
     for t in &topics {
         let name = remaps.get(&t.name).cloned().unwrap_or_else(|| t.name.clone());
-        publishers.insert(t.name.clone(), node.raw_publisher(&name, &t.type_name, qos::reliable())?);
+        // Offer what the recorded publishers offered (rosbag2's rule, see recorded_qos).
+        let recorded = metrocell_bag::parse_offered_qos(&t.name, &t.offered_qos_profiles)?;
+        let r = replay_qos(&recorded);
+        let offered = qos::reliable()
+            .reliability(if r.reliable { Reliability::Reliable { when_full: WhenFull::DEFAULT } } else { Reliability::BestEffort })
+            .durability(if r.transient_local { Durability::TransientLocal } else { Durability::Volatile })
+            .history(History::KeepLast { depth: r.depth as usize });
+        publishers.insert(t.name.clone(), node.raw_publisher(&name, &t.type_name, offered)?);
     }
     let clock_pub = match a.clock {
         Some(_) => Some(node.publisher::<Clock>("/clock", qos::reliable())?),

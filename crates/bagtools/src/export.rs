@@ -9,8 +9,7 @@
 //! the topic without the leading `/` and with `/` replaced by `.` (`/tracker/points` →
 //! `tracker.points.csv`).
 //!
-//! Parquet is not offered: the `arrow`/`parquet` crates add several minutes of build on the
-//! 2-core build machines for a format every analysis tool also reads as CSV.
+//! The same columns, typed, as Parquet: [`crate::export_parquet`].
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -99,17 +98,23 @@ pub struct ExportedTopic {
     pub columns: usize,
 }
 
-/// Export `topics` (all when empty) of `bag` to CSV files in `out_dir` (created if missing).
-pub fn export_csv(bag: &Path, topics: &[String], out_dir: &Path) -> Result<BTreeMap<String, ExportedTopic>> {
-    let reader = BagReader::open(bag)?;
+/// The topics of `bag` to export: `topics` in the bag's order (all when empty); a name the bag
+/// does not hold is an error listing the topics it does hold.
+pub(crate) fn chosen_topics<'a>(reader: &'a BagReader, bag: &Path, topics: &[String]) -> Result<Vec<&'a TopicInfo>> {
     for t in topics {
         if reader.topic(t).is_none() {
             let known: Vec<&str> = reader.topics().iter().map(|t| t.name.as_str()).collect();
             return Err(ToolError::Topic { topic: t.clone(), reason: format!("not in {} (topics: {})", bag.display(), known.join(", ")) });
         }
     }
+    Ok(reader.topics().iter().filter(|t| topics.is_empty() || topics.contains(&t.name)).collect())
+}
+
+/// Export `topics` (all when empty) of `bag` to CSV files in `out_dir` (created if missing).
+pub fn export_csv(bag: &Path, topics: &[String], out_dir: &Path) -> Result<BTreeMap<String, ExportedTopic>> {
+    let reader = BagReader::open(bag)?;
+    let chosen = chosen_topics(&reader, bag, topics)?;
     std::fs::create_dir_all(out_dir).map_err(io(out_dir))?;
-    let chosen: Vec<&TopicInfo> = reader.topics().iter().filter(|t| topics.is_empty() || topics.contains(&t.name)).collect();
     let mut result = BTreeMap::new();
     for t in chosen {
         let registry = registry_for(t)?;

@@ -6,19 +6,26 @@
 //!   detection from per-publisher sequence numbers.
 //! * [`filter_bag`] / [`merge_bags`]: copy selected messages into a new bag.
 //! * [`export`]: one CSV file per topic, one column per leaf field.
+//! * [`export_parquet`]: the same columns, typed, as one Parquet file per topic.
 //! * [`import`]: point-measurement CSV (own layout or a mapped tracker export) → bag.
+//! * [`recorded_qos`]: offered QoS of discovered publishers → `offered_qos_profiles`; stored
+//!   profiles → the QoS `bag play` offers.
 //! * [`playback`]: the timing of `bag play` (rate, pause, step) as a pure schedule.
 //! * [`BagSource`]: offline replay — a node reads typed messages from a bag instead of DDS.
 //! * [`BagSink`]: offline replay — the node writes its outputs to a bag at bag time.
+//! * [`ReplayOutput`]: a replaying node's outputs, to a bag or as JSON lines on stdout.
 
 mod bag_sink;
 mod bag_source;
 mod copy;
 mod error;
 pub mod export;
+pub mod export_parquet;
 pub mod import;
 pub mod playback;
+pub mod recorded_qos;
 mod recording;
+mod replay_output;
 mod topic_selection;
 
 pub use bag_sink::{encode_cdr, BagSink};
@@ -26,4 +33,5 @@ pub use bag_source::{BagSource, SourcedMessage};
 pub use copy::{filter_bag, merge_bags, CopyReport};
 pub use error::{Result, ToolError};
 pub use recording::{Recording, TopicCounts};
+pub use replay_output::ReplayOutput;
 pub use topic_selection::TopicSelection;

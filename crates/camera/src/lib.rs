@@ -1,5 +1,6 @@
 //! metrocell-camera: camera models, calibration and planar pose estimation on point
-//! correspondences (no image decoding here; detection lives in `metrocell-vision`).
+//! correspondences (no image decoding here; detection lives in `metrocell-vision`), and raw frame
+//! capture from V4L2 devices.
 //!
 //! | module | what it holds |
 //! |---|---|
@@ -13,6 +14,7 @@
 //! | [`pose_estimation`] | IPPE, DLT, LM refinement, 6×6 pose covariance (ROS PoseWithCovariance) |
 //! | [`camera_info`] | ROS camera_info YAML load/save |
 //! | [`scale`] | object-plane mm/px scale from a known length (seed 002 eq. 4) |
+//! | [`v4l2`] | V4L2 streaming capture (raw ioctls, mmap) and GREY/YUYV → mono8/rgb8 |
 //!
 //! Conventions, stated once:
 //! * Pixels: the centre of the top-left pixel is (0, 0), u right, v down (OpenCV).
@@ -37,6 +39,7 @@ pub mod pose;
 pub mod pose_estimation;
 pub mod scale;
 pub mod undistort;
+pub mod v4l2;
 pub mod zhang;
 
 pub use calibrate::{

@@ -8,6 +8,7 @@
 //! * [`qos`]: rclcpp's named QoS profiles.
 //! * [`MetrocellNode`]: typed and raw endpoints, topic discovery, rosout [`Logger`],
 //!   [`Diagnostics`] heartbeat, simulated time, [`ShutdownToken`].
+//! * [`ReplayArgs`]: `--bag IN [--output OUT]`, the offline-replay switch of every node.
 //! * [`testing`]: the guard DDS tests call first.
 //!
 //! ```no_run
@@ -37,6 +38,7 @@ pub mod params;
 pub mod participant;
 pub mod qos;
 pub mod raw;
+pub mod replay_args;
 pub mod ros_args;
 pub mod shutdown;
 pub mod testing;
@@ -52,6 +54,7 @@ pub use node::MetrocellNode;
 pub use offline::OfflineNode;
 pub use params::{ParamDecl, ParamError, ParamKind, ParamSource, ParamType, ParamValue, Parameters};
 pub use raw::{RawMessage, RawPublisher, RawSubscription};
+pub use replay_args::ReplayArgs;
 pub use ros_args::{parse_command_line, CommandLine, LogLevel, RosArgs, RosArgsError};
 pub use shutdown::ShutdownToken;
 pub use topics::TopicInfo;

@@ -37,6 +37,9 @@ pub struct BagOptions {
     pub frames: Option<FrameRendering>,
     /// Uncompressed MCAP chunk size (bytes).
     pub chunk_size: u64,
+    /// Threads rendering camera frames while the simulation runs ahead (0 = render on the
+    /// writing thread). The bag's bytes do not depend on it. Default: one per core.
+    pub render_threads: usize,
 }
 
 impl Default for BagOptions {
@@ -48,6 +51,7 @@ impl Default for BagOptions {
             camera: CameraIntrinsics::default(),
             frames: Some(FrameRendering::default()),
             chunk_size: 4 << 20,
+            render_threads: std::thread::available_parallelism().map_or(1, |n| n.get()),
         }
     }
 }
@@ -114,7 +118,7 @@ pub fn write_bag(
     }
     let mut counts = vec![0u64; topics.len()];
     let mut total = 0u64;
-    let mut stream = MessageStream::new(&sim, &converter, options.clock_rate.map(|r| 1.0 / r));
+    let mut stream = MessageStream::new(&sim, &converter, options.clock_rate.map(|r| 1.0 / r)).with_render_threads(options.render_threads);
     for m in stream.by_ref() {
         let bytes = m.message.encode()?;
         writer.write(&topics[m.topic].name, m.stamp_ns, m.stamp_ns, &bytes).map_err(bag_err)?;

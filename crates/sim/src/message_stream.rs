@@ -7,19 +7,28 @@
 //! sample with t ≥ t_k. A camera frame request gives its `CameraInfo`, then (when the
 //! converter renders frames, see [`MessageConverter::with_frames`]) its mono8 `Image` with the
 //! same stamp.
+//!
+//! Rendering a frame costs far more than simulating between frames, so a stream can render on
+//! worker threads ([`MessageStream::with_render_threads`]): it reads ahead of the frame at the
+//! front of its queue, hands later frames to the workers, and still yields every message in the
+//! order above. Each frame is a pure function of its request and stamp, so the messages are the
+//! same whatever the thread count.
 
 use std::collections::VecDeque;
+use std::sync::{mpsc, Arc, Mutex};
+use std::thread::JoinHandle;
 
 use metrocell_msgs::msg::{ProbeHit, TrackerMeasurement};
 use metrocell_msgs::rosgraph_msgs::msg::Clock;
 use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, JointState, Temperature};
-use metrocell_twin::{Cell, Sample, SampleStream, Simulation};
+use metrocell_msgs::builtin_interfaces::msg::Time;
+use metrocell_twin::{CameraFrameRequest, Cell, Sample, SampleStream, Simulation};
 use nalgebra::Vector3;
 use rosmsg::RosMessage;
 
 use crate::camera_frame::{FrameRenderer, FrameRendering};
 use crate::camera_intrinsics::CameraIntrinsics;
-use crate::cdr::encode_cdr;
+use crate::cdr::{encode_cdr, encode_image};
 use crate::convert;
 use crate::error::SimError;
 use crate::sim_time::{ros_time, stamp_ns};
@@ -61,7 +70,7 @@ impl TypedMessage {
             TypedMessage::Tracker(m) => encode_cdr(m, ty),
             TypedMessage::Probe(m) => encode_cdr(m, ty),
             TypedMessage::CameraInfo(m) => encode_cdr(m, ty),
-            TypedMessage::Image(m) => encode_cdr(m, ty),
+            TypedMessage::Image(m) => Ok(encode_image(m)),
         }
     }
 }
@@ -103,6 +112,7 @@ impl MessageConverter {
             .map(|(tc, &id)| (tc.name.clone(), id, tc.node.clone().unwrap_or_else(|| "ambient".into())))
             .collect();
         let camera_mount = cell.camera.as_ref().map(|c| (c.mount.rotation, c.mount.translation));
+        let camera = CameraIntrinsics::for_cell(cell, camera);
         Ok(MessageConverter { topics, start_ns, camera, tool_offset: cell.machine.tool_offset, thermocouples, camera_mount, frames: None })
     }
 
@@ -130,6 +140,24 @@ impl MessageConverter {
     /// The messages of one sample (0, 1 or 2), appended to `out`. A sample whose sensor has
     /// no topic (cannot happen for samples of the same cell) is dropped.
     pub fn convert_into(&self, sample: &Sample, out: &mut VecDeque<SimMessage>) {
+        if let Some(frame) = self.convert_all_but_image(sample, out) {
+            if let Some(image) = self.render_image(&frame.request, frame.stamp_ns, frame.stamp.clone()) {
+                out.push_back(frame.message(image));
+            }
+        }
+    }
+
+    /// The image message of a frame request, or None if rendering failed: settings were
+    /// validated by FrameRenderer::new, so a failure here would be a renderer bug, and dropping
+    /// the image keeps the rest of the recording.
+    fn render_image(&self, request: &CameraFrameRequest, stamp_ns: u64, stamp: Time) -> Option<Image> {
+        let view = self.frames.as_ref()?.render(request, stamp_ns).ok()?;
+        Some(convert::mono8_image(view.image, &self.camera.frame_id, stamp))
+    }
+
+    /// [`Self::convert_into`] without rendering: the frame to render, if this sample asks for
+    /// an image, is returned instead (its message goes after those pushed here).
+    fn convert_all_but_image(&self, sample: &Sample, out: &mut VecDeque<SimMessage>) -> Option<FrameJob> {
         let t = sample.t();
         let ns = stamp_ns(self.start_ns, t);
         let stamp = ros_time(ns);
@@ -161,15 +189,12 @@ impl MessageConverter {
                 if let Some(id) = self.topics.camera_info {
                     push(id, TypedMessage::CameraInfo(convert::camera_info(&self.camera, stamp.clone())));
                 }
-                if let (Some(id), Some(frames)) = (self.topics.camera_image, &self.frames) {
-                    // Settings were validated by FrameRenderer::new; a failure here would be a
-                    // renderer bug, and dropping the image keeps the rest of the recording.
-                    if let Ok(view) = frames.render(r, ns) {
-                        push(id, TypedMessage::Image(convert::mono8_image(view.image, &self.camera.frame_id, stamp)));
-                    }
+                if let (Some(topic), Some(_)) = (self.topics.camera_image, &self.frames) {
+                    return Some(FrameJob { t, stamp_ns: ns, stamp, topic, request: r.clone() });
                 }
             }
         }
+        None
     }
 
     /// The messages of one sample as a vector.
@@ -180,11 +205,85 @@ impl MessageConverter {
     }
 }
 
+/// A camera frame still to be rendered, with where its message goes.
+struct FrameJob {
+    t: f64,
+    stamp_ns: u64,
+    stamp: Time,
+    topic: TopicId,
+    request: CameraFrameRequest,
+}
+
+impl FrameJob {
+    fn message(&self, image: Image) -> SimMessage {
+        SimMessage { t: self.t, stamp_ns: self.stamp_ns, topic: self.topic, message: TypedMessage::Image(image) }
+    }
+}
+
+/// A queued message: ready, or a frame a worker is rendering (None = rendering failed).
+enum Slot {
+    Ready(SimMessage),
+    Rendering { job: FrameJob, image: mpsc::Receiver<Option<Image>> },
+}
+
+impl Slot {
+    fn t(&self) -> f64 {
+        match self {
+            Slot::Ready(m) => m.t,
+            Slot::Rendering { job, .. } => job.t,
+        }
+    }
+}
+
+/// Worker threads rendering frames for one stream.
+struct RenderPool {
+    jobs: Option<mpsc::Sender<(CameraFrameRequest, u64, Time, mpsc::SyncSender<Option<Image>>)>>,
+    workers: Vec<JoinHandle<()>>,
+    /// Frames handed out and not yet taken from the queue.
+    in_flight: usize,
+}
+
+impl RenderPool {
+    fn new(converter: &MessageConverter, threads: usize) -> RenderPool {
+        let (tx, rx) = mpsc::channel::<(CameraFrameRequest, u64, Time, mpsc::SyncSender<Option<Image>>)>();
+        let rx = Arc::new(Mutex::new(rx));
+        let converter = Arc::new(converter.clone());
+        let workers = (0..threads)
+            .map(|_| {
+                let (rx, converter) = (Arc::clone(&rx), Arc::clone(&converter));
+                std::thread::spawn(move || loop {
+                    // The lock is held only while waiting for a job, not while rendering.
+                    let job = rx.lock().map(|r| r.recv());
+                    let Ok(Ok((request, stamp_ns, stamp, reply))) = job else { return };
+                    // The stream may have been dropped meanwhile: nobody to tell.
+                    let _ = reply.send(converter.render_image(&request, stamp_ns, stamp));
+                })
+            })
+            .collect();
+        RenderPool { jobs: Some(tx), workers, in_flight: 0 }
+    }
+}
+
+impl Drop for RenderPool {
+    fn drop(&mut self) {
+        self.jobs = None; // closes the channel: workers finish their frame and return
+        for w in self.workers.drain(..) {
+            let _ = w.join();
+        }
+    }
+}
+
+/// Most messages a stream with render threads queues while it reads ahead.
+const MAX_READ_AHEAD: usize = 1 << 17;
+
 /// Iterator over the messages of a simulation (see the module doc for the order).
 pub struct MessageStream<'a> {
     samples: SampleStream<'a>,
     converter: &'a MessageConverter,
-    pending: VecDeque<SimMessage>,
+    pending: VecDeque<Slot>,
+    /// Scratch for one sample's ready messages.
+    converted: VecDeque<SimMessage>,
+    pool: Option<RenderPool>,
     clock_period: Option<f64>,
     clock_k: u64,
     duration: f64,
@@ -200,12 +299,21 @@ impl<'a> MessageStream<'a> {
             samples: sim.samples(),
             converter,
             pending: VecDeque::new(),
+            converted: VecDeque::new(),
+            pool: None,
             clock_period: clock_period.filter(|p| *p > 0.0 && p.is_finite()),
             clock_k: 0,
             duration: sim.duration(),
             samples_done: false,
             last_t: 0.0,
         }
+    }
+
+    /// Render camera frames on `threads` worker threads (0 = on the calling thread, the
+    /// default), reading ahead by up to `threads + 1` frames. Same messages, same order.
+    pub fn with_render_threads(mut self, threads: usize) -> MessageStream<'a> {
+        self.pool = (threads > 0 && self.converter.frames.is_some()).then(|| RenderPool::new(self.converter, threads));
+        self
     }
 
     /// Why the twin's stream ended early, if it did (a physics term failed mid-run).
@@ -217,26 +325,69 @@ impl<'a> MessageStream<'a> {
         let t = self.clock_period? * self.clock_k as f64;
         (t < self.duration).then_some(t)
     }
+
+    /// Convert the next sample into the queue; false when the twin's stream has ended.
+    fn pull(&mut self) -> bool {
+        let Some(s) = self.samples.next() else {
+            self.samples_done = true;
+            return false;
+        };
+        self.last_t = s.t();
+        let Some(pool) = self.pool.as_mut() else {
+            self.converter.convert_into(&s, &mut self.converted);
+            self.pending.extend(self.converted.drain(..).map(Slot::Ready));
+            return true;
+        };
+        let frame = self.converter.convert_all_but_image(&s, &mut self.converted);
+        self.pending.extend(self.converted.drain(..).map(Slot::Ready));
+        if let Some(job) = frame {
+            let (reply, image) = mpsc::sync_channel(1);
+            let sent = pool.jobs.as_ref().is_some_and(|tx| tx.send((job.request.clone(), job.stamp_ns, job.stamp.clone(), reply)).is_ok());
+            if sent {
+                pool.in_flight += 1;
+                self.pending.push_back(Slot::Rendering { job, image });
+            } else if let Some(img) = self.converter.render_image(&job.request, job.stamp_ns, job.stamp.clone()) {
+                self.pending.push_back(Slot::Ready(job.message(img)));
+            }
+        }
+        true
+    }
+
+    /// Whether to read further ahead: the front frame is still rendering and the workers
+    /// could take another one.
+    fn read_ahead(&self) -> bool {
+        match (&self.pool, self.pending.front()) {
+            (Some(pool), Some(Slot::Rendering { .. })) => pool.in_flight <= pool.workers.len() && self.pending.len() < MAX_READ_AHEAD,
+            _ => false,
+        }
+    }
 }
 
 impl Iterator for MessageStream<'_> {
     type Item = SimMessage;
     fn next(&mut self) -> Option<SimMessage> {
-        while self.pending.is_empty() && !self.samples_done {
-            match self.samples.next() {
-                Some(s) => {
-                    self.last_t = s.t();
-                    self.converter.convert_into(&s, &mut self.pending)
+        loop {
+            while (self.pending.is_empty() || self.read_ahead()) && !self.samples_done {
+                self.pull();
+            }
+            if let Some(tick) = self.next_tick() {
+                if self.pending.front().is_none_or(|m| tick <= m.t()) {
+                    self.clock_k += 1;
+                    return Some(self.converter.clock(tick));
                 }
-                None => self.samples_done = true,
+            }
+            match self.pending.pop_front()? {
+                Slot::Ready(m) => return Some(m),
+                Slot::Rendering { job, image } => {
+                    if let Some(pool) = self.pool.as_mut() {
+                        pool.in_flight -= 1;
+                    }
+                    // A worker that died (panicked) counts as a failed render.
+                    if let Ok(Some(img)) = image.recv() {
+                        return Some(job.message(img));
+                    }
+                }
             }
         }
-        if let Some(tick) = self.next_tick() {
-            if self.pending.front().is_none_or(|m| tick <= m.t) {
-                self.clock_k += 1;
-                return Some(self.converter.clock(tick));
-            }
-        }
-        self.pending.pop_front()
     }
 }

@@ -11,6 +11,7 @@ pub mod edge_fit;
 pub mod edge_profile;
 pub mod error;
 pub mod filters;
+pub mod hole_grid;
 pub mod holes;
 pub mod homography;
 pub mod marker_pose;

@@ -14,6 +14,8 @@ use crate::aruco::{detect_markers, DetectorParams, Dictionary};
 use crate::camera::CameraModel;
 use crate::checkerboard::detect_checkerboard;
 use crate::error::{invalid, Result, VisionError};
+use crate::hole_grid::detect_hole_grid;
+use crate::holes::HoleSearch;
 use crate::marker_pose::estimate_marker_pose;
 use image::GrayImage;
 use nalgebra::{Matrix2, Point2, UnitQuaternion};
@@ -25,14 +27,26 @@ pub enum TargetFamily {
     Markers(Dictionary),
     /// Inner corners of a cols × rows checkerboard with squares of `square` metres.
     Checkerboard { cols: usize, rows: usize, square: f64 },
+    /// Drilled-hole plate (seed 000, [`crate::hole_grid`]): a checkerboard with `cols` × `rows`
+    /// inner corners, i.e. (cols + 1) × (rows + 1) squares, a hole at every square's centre.
+    /// One target per measured hole: id = cell (row-major over squares), one point = the hole
+    /// centre with its covariance, no pose; cells whose hole is rejected are left out.
+    DrilledHoles { cols: usize, rows: usize },
 }
 
 impl TargetFamily {
     /// Parse a family name: an OpenCV dictionary name with or without `DICT_` (`DICT_4X4_50`,
     /// `4x4_50`, `aruco_4x4_50`, `apriltag_36h11`), or `checkerboard` (then `board` = (cols, rows)
-    /// inner corners and `square` [m] are used). Case-insensitive.
+    /// inner corners and `square` [m] are used), or `drilled_holes` (alias `holes`, `hole_plate`;
+    /// `board` = the plate's inner corners). Case-insensitive.
     pub fn parse(name: &str, board: Option<(usize, usize)>, square: Option<f64>) -> Result<Self> {
         let lower = name.trim().to_ascii_lowercase();
+        if ["drilled_holes", "holes", "hole_plate"].contains(&lower.as_str()) {
+            let (cols, rows) = board.ok_or_else(|| {
+                invalid("board", "family drilled_holes needs the plate's inner-corner count COLSxROWS")
+            })?;
+            return Ok(TargetFamily::DrilledHoles { cols, rows });
+        }
         if lower == "checkerboard" || lower == "chessboard" {
             let (cols, rows) = board.ok_or_else(|| {
                 invalid("board", "family checkerboard needs the inner-corner count COLSxROWS")
@@ -55,7 +69,7 @@ impl TargetFamily {
             }
         }
         Err(VisionError::UnknownDictionary(format!(
-            "{name} (families: an OpenCV dictionary such as DICT_4X4_50 or DICT_APRILTAG_36h11, or checkerboard)"
+            "{name} (families: an OpenCV dictionary such as DICT_4X4_50 or DICT_APRILTAG_36h11, checkerboard, or drilled_holes)"
         )))
     }
 
@@ -72,6 +86,7 @@ impl TargetFamily {
                 }
             }
             TargetFamily::Checkerboard { .. } => "checkerboard".into(),
+            TargetFamily::DrilledHoles { .. } => "drilled_holes".into(),
         }
     }
 }
@@ -166,6 +181,25 @@ pub fn detect_targets(
                 pose,
             }])
         }
+        TargetFamily::DrilledHoles { cols, rows } => {
+            let Some(holes) = detect_hole_grid(img, cols + 1, rows + 1, &HoleSearch { window_half_px: 0, ..Default::default() })? else {
+                return Ok(Vec::new());
+            };
+            Ok(holes
+                .into_iter()
+                .filter_map(|h| {
+                    let m = h.result.ok()?;
+                    Some(Target {
+                        id: h.cell as i64,
+                        corners: vec![m.centre],
+                        corner_covariance: vec![m.covariance],
+                        // FiducialDetection: 0..1 contrast for circles.
+                        decision_margin: (m.contrast.abs() / 255.0).min(1.0),
+                        pose: None,
+                    })
+                })
+                .collect())
+        }
     }
 }
 
@@ -245,6 +279,10 @@ mod tests {
         let b = TargetFamily::parse("checkerboard", Some((9, 6)), Some(0.01)).unwrap();
         assert!(matches!(b, TargetFamily::Checkerboard { cols: 9, rows: 6, square } if square == 0.01));
         assert!(TargetFamily::parse("checkerboard", None, None).is_err());
+        let h = TargetFamily::parse("Drilled_Holes", Some((5, 5)), None).unwrap();
+        assert!(matches!(h, TargetFamily::DrilledHoles { cols: 5, rows: 5 }));
+        assert_eq!(h.message_name(), "drilled_holes");
+        assert!(TargetFamily::parse("holes", None, None).is_err());
         let e = TargetFamily::parse("DICT_9X9_50", None, None).unwrap_err();
         assert!(e.to_string().contains("DICT_9X9_50"), "{e}");
     }

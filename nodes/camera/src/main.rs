@@ -2,16 +2,25 @@
 //!
 //! Publishes `image` (sensor_msgs/Image: mono8, mono16 or rgb8) and `camera_info`
 //! (sensor_msgs/CameraInfo from the ROS camera_info YAML given by `camera_info_url`), both with
-//! the same header: stamp = the publication instant (node clock, sim time honoured), frame_id =
-//! `frame_id`. An unreadable or truncated file is a warning naming it; the node moves on.
-//! V4L2 devices are not supported (no small pure-Rust V4L2 crate was adopted; use a ROS driver).
+//! the same header: stamp = the frame's capture time per `stamp_source` (default: the file's
+//! modification time; `filename` parses it from the name; `now` = the publication instant on the
+//! node clock — see `metrocell_camera_node::capture_stamp`), frame_id = `frame_id`. An unreadable
+//! or truncated file, or one without a usable stamp, is a warning naming it; the node moves on.
+//! With `device:=/dev/videoN` frames come from a V4L2 capture device instead (GREY → mono8,
+//! YUYV → rgb8, stamped with the driver's capture time; `width`, `height`, `pixel_format`);
+//! the capture path is untested on hardware (no camera on the build machines).
 //!
 //!   metrocell-camera --ros-args -p path:="views/*.png" -p rate:=10.0 -p loop:=true \
 //!       -p camera_info_url:=camera_info.yaml -p frame_id:=camera_optical
+//!   metrocell-camera --ros-args -p path:=shots -p stamp_source:=filename -p stamp_pattern:="cam0_{ns}.tiff"
+//!   metrocell-camera --ros-args -p device:=/dev/video0 -p width:=1920 -p height:=1080 -p pixel_format:=YUYV
+
+mod device;
 
 use std::time::{Duration, Instant};
 
 use metrocell_camera::CameraInfo as CameraInfoYaml;
+use metrocell_camera_node::capture_stamp::StampSource;
 use metrocell_camera_node::{camera_info_msg, file_list, image_file};
 use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image};
@@ -22,10 +31,16 @@ use metrocell_node::{qos, MetrocellNode, ParamDecl};
 fn declarations() -> Vec<ParamDecl> {
     vec![
         ParamDecl::new("path", String::new(), "directory of images, or a glob such as views/*.png"),
+        ParamDecl::new("device", String::new(), "V4L2 capture device such as /dev/video0 (instead of path)"),
+        ParamDecl::new("width", 0i64, "device: requested frame width [px]; 0 = the driver's current"),
+        ParamDecl::new("height", 0i64, "device: requested frame height [px]; 0 = the driver's current"),
+        ParamDecl::new("pixel_format", "auto".to_string(), "device: GREY, YUYV or auto (GREY, else YUYV)"),
         ParamDecl::new("rate", 10.0, "frames per second; 0 = as fast as possible").with_range(0.0, 10000.0),
         ParamDecl::new("loop", false, "start again after the last file"),
         ParamDecl::new("frame_id", "camera_optical_frame".to_string(), "frame_id of image and camera_info"),
         ParamDecl::new("camera_info_url", String::new(), "ROS camera_info YAML (path or file:// URL); empty = no camera_info"),
+        ParamDecl::new("stamp_source", "mtime".to_string(), "header stamp of a frame: mtime (file modification time), filename (see stamp_pattern) or now (publication instant)"),
+        ParamDecl::new("stamp_pattern", String::new(), "with stamp_source filename: the file name with one of {ns}, {us}, {ms}, {s} where the time is, e.g. frame_{ns}.png"),
     ]
 }
 
@@ -41,16 +56,24 @@ fn main() -> std::process::ExitCode {
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
     let (mut node, _) = MetrocellNode::from_env_args("camera", declarations())?;
-    let files = file_list::list_image_files(&node.param::<String>("path")?)?;
     let rate = node.param::<f64>("rate")?;
     let looping = node.param::<bool>("loop")?;
     let frame_id = node.param::<String>("frame_id")?;
     let url = node.param::<String>("camera_info_url")?;
+    let stamps = StampSource::parse(&node.param::<String>("stamp_source")?, &node.param::<String>("stamp_pattern")?)?;
     let info = if url.is_empty() {
         None
     } else {
         Some(CameraInfoYaml::load(std::path::Path::new(url.trim_start_matches("file://")))?)
     };
+    let device = node.param::<String>("device")?;
+    if !device.is_empty() {
+        let images = node.publisher::<Image>("image", qos::sensor_data())?;
+        let infos = node.publisher::<CameraInfo>("camera_info", qos::sensor_data())?;
+        let info = info.as_ref().map(camera_info_msg::camera_info_msg);
+        return device::run(&node, &device, device::Outputs { images: &images, infos: &infos, info, frame_id });
+    }
+    let files = file_list::list_image_files(&node.param::<String>("path")?)?;
     node.info(format!("{} files, {} fps, loop {looping}, camera_info {}", files.len(), rate, if url.is_empty() { "none" } else { &url }));
 
     let images = node.publisher::<Image>("image", qos::sensor_data())?;
@@ -73,6 +96,14 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                     continue;
                 }
             };
+            let capture_ns = match stamps.file_stamp_ns(path) {
+                Ok(t) => t,
+                Err(e) => {
+                    diagnostics.add_count("files_without_stamp", 1);
+                    node.warn(e.to_string());
+                    continue;
+                }
+            };
             if let Some(p) = period {
                 let now = Instant::now();
                 if next > now {
@@ -80,7 +111,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                 }
                 next = next.max(now) + p;
             }
-            let ns = node.now().to_nanos();
+            let ns = capture_ns.unwrap_or_else(|| node.now().to_nanos());
             let header = Header { stamp: Time { sec: ns.div_euclid(1_000_000_000) as i32, nanosec: ns.rem_euclid(1_000_000_000) as u32 }, frame_id: frame_id.clone() };
             img.header = header.clone();
             if let Some(info) = &info {

@@ -1,6 +1,6 @@
 //! The `metrocell-camera` binary over DDS in a private network namespace: files (8-bit PNG,
 //! 16-bit TIFF, a truncated PNG in between) are published as sensor_msgs/Image + CameraInfo with
-//! the configured frame_id and increasing stamps; the truncated file is skipped and named in a
+//! the configured frame_id and increasing stamps (`stamp_source:=now`: looping replays the files); the truncated file is skipped and named in a
 //! warning, and the node carries on. With `METROCELL_FIDUCIAL_BIN` pointing at the fiducial
 //! binary the test also runs camera → fiducial and prints the frame-in → detection-out latency.
 //!
@@ -47,7 +47,7 @@ fn publishes_files_with_camera_info_and_skips_bad_ones() {
     // Let discovery settle, then run the camera through the files several times.
     std::thread::sleep(Duration::from_secs(2));
     let child = Command::new(env!("CARGO_BIN_EXE_metrocell-camera"))
-        .args(["--ros-args", "-p", &format!("path:={}", dir.display()), "-p", "rate:=20.0", "-p", "loop:=true", "-p", "frame_id:=cam_optical", "-p", &format!("camera_info_url:=file://{}", info.display())])
+        .args(["--ros-args", "-p", &format!("path:={}", dir.display()), "-p", "rate:=20.0", "-p", "loop:=true", "-p", "frame_id:=cam_optical", "-p", "stamp_source:=now", "-p", &format!("camera_info_url:=file://{}", info.display())])
         .stderr(Stdio::piped())
         .spawn()
         .unwrap();

@@ -11,8 +11,11 @@
 //! both reliable and best-effort writers, so nothing is left unrecorded for a QoS mismatch;
 //! the consequence is that a sample lost on the wire is not retransmitted to the recorder even
 //! when its publisher is reliable. Losses show up as `dropped` (gaps in each publisher's
-//! sequence numbers) in the diagnostics and the final log line. Topics are stored with the
-//! offered QoS of a default reliable publisher, which `ros2 bag play` then offers.
+//! sequence numbers) in the diagnostics and the final log line. Each topic's
+//! `offered_qos_profiles` holds the QoS its publishers announced in discovery when recording of
+//! the topic began, one profile per publisher, as rosbag2 stores them
+//! (`metrocell_bagtools::recorded_qos`); `metrocell bag play` and `ros2 bag play` offer that
+//! reliability and durability again (a latched topic replays transient-local).
 //!
 //! Exit: SIGINT/SIGTERM finish the bag (exit 0). A write failure (disk full) logs the file,
 //! stops recording, leaves the bag sealed and valid, exits 1.
@@ -25,7 +28,8 @@ use std::collections::BTreeSet;
 use std::hash::{Hash, Hasher};
 use std::time::{Duration, Instant};
 
-use metrocell_bag::{qos_profiles_yaml, QosProfile};
+use metrocell_bag::offered_qos_yaml;
+use metrocell_bagtools::recorded_qos::offered_qos_of_topic;
 use metrocell_bagtools::Recording;
 use metrocell_node::{qos, MetrocellNode, RawSubscription};
 
@@ -54,7 +58,6 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     };
     let reader_qos = |depth: i64| qos::sensor_data().history(ros2_client::qos::History::KeepLast { depth: depth.clamp(1, 1_000_000) as usize });
     let (depth, bulk_depth) = (node.param::<i64>("queue_depth")?, node.param::<i64>("bulk_queue_depth")?);
-    let stored_qos = qos_profiles_yaml(&[QosProfile::default_publisher()]);
     let mut recording = Recording::create(&output, parameters::writer_options(&node)?)?;
     node.info(format!("recording into {output}"));
 
@@ -68,11 +71,13 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         if Instant::now() >= next_scan {
             next_scan += Duration::from_secs(1);
             // Publishers declare what is sent; a reader may declare another type on the same topic.
+            let writers = node.context().domain_participant().discovered_writers();
             for t in node.discovered_publications() {
                 if !selection.matches(&t.name) || recording.has_topic(&t.name) || skipped.contains(&t.name) {
                     continue;
                 }
-                if !recording.add_topic(&t.name, &t.type_name, &stored_qos)? {
+                let offered = offered_qos_of_topic(writers.iter().map(|w| &w.publication_topic_data), &t.name);
+                if !recording.add_topic(&t.name, &t.type_name, &offered_qos_yaml(&offered))? {
                     node.warn(format!("not recording {}: metrocell does not know its type {}", t.name, t.type_name));
                     skipped.insert(t.name);
                     continue;

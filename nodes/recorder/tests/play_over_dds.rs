@@ -81,3 +81,88 @@ fn play_keeps_spacing_over_rate_and_delivers_every_message() {
     assert!(clocks.len() >= 10, "/clock published ({} received)", clocks.len());
     assert!(clocks.iter().all(|c| (t0..=t0 + 2_000_000_000).contains(c)), "/clock within the bag's time range");
 }
+
+fn python() -> PathBuf {
+    if let Ok(p) = std::env::var("METROCELL_PYTHON") {
+        return p.into();
+    }
+    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../.venv/bin/python");
+    assert!(p.exists(), "no Python with rosbags: set METROCELL_PYTHON or run tests/run (which creates .venv)");
+    p
+}
+
+/// Durability and reliability the writers of DDS topic `rt<topic>` announce in discovery.
+fn offered_by_writers(node: &MetrocellNode, topic: &str) -> Vec<(Option<rustdds::policy::Durability>, Option<rustdds::policy::Reliability>)> {
+    let dds = format!("rt{topic}");
+    node.context()
+        .domain_participant()
+        .discovered_writers()
+        .into_iter()
+        .filter(|w| w.publication_topic_data.topic_name == dds)
+        .map(|w| (w.publication_topic_data.durability, w.publication_topic_data.reliability))
+        .collect()
+}
+
+/// A bag written by Python `rosbags` (metadata v9, standard types, a latched topic) is played
+/// over DDS: every Temperature and PointStamped arrives with the field values the script wrote,
+/// and the latched topic is offered transient-local, so a subscriber that joins after it was
+/// published still receives it.
+#[test]
+fn rosbags_written_bag_plays_with_equal_fields_and_latched_topic_replays_latched() {
+    use metrocell_msgs::geometry_msgs::msg::PointStamped;
+    use metrocell_msgs::sensor_msgs::msg::Temperature;
+    use metrocell_msgs::std_msgs::msg::String as RosString;
+    use rustdds::policy::{Durability, Reliability};
+
+    metrocell_node::testing::require_isolated_network();
+    let dir = std::env::temp_dir().join(format!("play_rosbags_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let n = 100;
+    let script = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/py/write_rosbags_std_types.py");
+    let out = Command::new(python()).arg(&script).arg(&dir).arg(n.to_string()).output().unwrap();
+    assert!(out.status.success(), "rosbags writer failed: {}", String::from_utf8_lossy(&out.stderr));
+
+    let mut node = MetrocellNode::builder("play_rosbags_sub").diagnostics_period(None).handle_signals(false).build().unwrap();
+    let temps = node.subscription::<Temperature>("/rb/temperature", qos::reliable()).unwrap();
+    let points = node.subscription::<PointStamped>("/rb/point", qos::reliable()).unwrap();
+    let mut play = Command::new(cli()).args(["bag", "play", dir.to_str().unwrap(), "--delay", "2"]).spawn().unwrap();
+
+    let (mut got_t, mut got_p, mut late_latched) = (Vec::new(), Vec::new(), Vec::new());
+    let mut late = None;
+    let mut offers = Vec::new();
+    let deadline = Instant::now() + Duration::from_secs(25);
+    while (got_t.len() < n || got_p.len() < n || late_latched.is_empty()) && Instant::now() < deadline {
+        while let Some((m, _)) = temps.take().unwrap() {
+            got_t.push(m);
+        }
+        while let Some((m, _)) = points.take().unwrap() {
+            got_p.push(m);
+        }
+        // The latched message was published 1 s (bag time) before the first temperature:
+        // subscribe only now, and with transient-local durability it must still arrive.
+        if late.is_none() && !got_t.is_empty() {
+            offers = offered_by_writers(&node, "/rb/latched");
+            late = Some(node.subscription::<RosString>("/rb/latched", qos::latched()).unwrap());
+        }
+        if let Some(s) = &late {
+            while let Some((m, _)) = s.take().unwrap() {
+                late_latched.push(m.data);
+            }
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    assert!(play.wait().unwrap().success());
+    assert_eq!((got_t.len(), got_p.len()), (n, n), "every Temperature and PointStamped received");
+    for (i, t) in got_t.iter().enumerate() {
+        assert_eq!((t.header.stamp.sec, t.header.stamp.nanosec), (1000 + i as i32, i as u32 * 1000), "temperature {i} stamp");
+        assert_eq!(t.header.frame_id, format!("probe{}", i % 3));
+        assert_eq!((t.temperature, t.variance), (20.0 + 0.25 * i as f64, 0.01 * i as f64), "temperature {i} values");
+    }
+    for (i, p) in got_p.iter().enumerate() {
+        assert_eq!((p.header.stamp.sec, p.header.stamp.nanosec, p.header.frame_id.as_str()), (2000 + i as i32, 7, "tracker"));
+        assert_eq!((p.point.x, p.point.y, p.point.z), (0.1 * i as f64, -0.2 * i as f64, 1e-6 * i as f64), "point {i}");
+    }
+    assert!(!offers.is_empty(), "bag play's /rb/latched writer discovered");
+    assert!(offers.iter().all(|(d, r)| *d == Some(Durability::TransientLocal) && matches!(r, Some(Reliability::Reliable { .. }))), "offered {offers:?}");
+    assert_eq!(late_latched, ["cell model v3"], "late transient-local subscriber got the latched message once");
+}

@@ -175,3 +175,109 @@ fn full_disk_stops_with_an_error_naming_the_file_and_leaves_a_valid_bag() {
         assert_eq!(m.data, payload(k), "kept message {k} intact");
     }
 }
+
+fn cli() -> PathBuf {
+    if let Ok(p) = std::env::var("METROCELL_CLI") {
+        return p.into();
+    }
+    let p = PathBuf::from(env!("CARGO_BIN_EXE_metrocell-recorder")).with_file_name("metrocell");
+    assert!(p.exists(), "{} missing: run `cargo build -p metrocell-cli` first or set METROCELL_CLI", p.display());
+    p
+}
+
+fn string_payload(s: &str) -> Vec<u8> {
+    let reg = metrocell_msgs::registry();
+    let v = rosmsg::from_json(reg, "std_msgs/msg/String", &serde_json::json!({ "data": s })).unwrap();
+    rosmsg::encode(reg, "std_msgs/msg/String", &v).unwrap()
+}
+
+/// The recorder stores each topic's offered QoS as rosbag2 does (one profile per discovered
+/// publisher, history unknown/depth 0), and `bag play` offers it again: the latched topic is
+/// replayed transient-local (a late subscriber gets it), the best-effort one best-effort.
+#[test]
+fn offered_qos_is_recorded_and_offered_again_on_play() {
+    use metrocell_bag::{parse_offered_qos, BagMetadata};
+    use rustdds::policy::{Durability, Reliability};
+
+    metrocell_node::testing::require_isolated_network();
+    let dir = scratch("qos");
+    let mut node = MetrocellNode::builder("recorder_test_qos").diagnostics_period(None).handle_signals(false).build().unwrap();
+    let latched = node.raw_publisher("/qos_test/latched", "std_msgs/msg/String", qos::latched()).unwrap();
+    let fast = node.raw_publisher("/qos_test/fast", TYPE, qos::sensor_data()).unwrap();
+    let plain = node.raw_publisher("/qos_test/plain", TYPE, qos::reliable()).unwrap();
+    let mut recorder = start_recorder(&dir, "/qos_test/.*");
+    wait_matched(&[&latched, &fast, &plain]);
+    latched.publish(&string_payload("cell model v3")).unwrap();
+    std::thread::sleep(Duration::from_millis(200));
+    let n = 150;
+    for i in 0..n {
+        fast.publish(&payload(i)).unwrap();
+        plain.publish(&payload(i)).unwrap();
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    std::thread::sleep(Duration::from_millis(500));
+    signal(&recorder, "-INT");
+    assert!(recorder.wait().unwrap().success());
+    drop((latched, fast, plain));
+
+    let meta = BagMetadata::read_dir(&dir).unwrap();
+    let qos_of = |topic: &str| {
+        let t = meta.topics_with_message_count.iter().find(|t| t.topic_metadata.name == topic).unwrap_or_else(|| panic!("{topic} recorded"));
+        parse_offered_qos(topic, &t.topic_metadata.offered_qos_profiles).unwrap()
+    };
+    let (l, f, p) = (qos_of("/qos_test/latched"), qos_of("/qos_test/fast"), qos_of("/qos_test/plain"));
+    assert_eq!((l.len(), f.len(), p.len()), (1, 1, 1), "one profile per publisher");
+    assert_eq!((l[0].reliability, l[0].durability), (1, 1), "latched: reliable, transient_local");
+    assert_eq!((f[0].reliability, f[0].durability), (2, 2), "sensor data: best_effort, volatile");
+    assert_eq!((p[0].reliability, p[0].durability), (1, 2), "default: reliable, volatile");
+    assert_eq!((p[0].history, p[0].depth), (3, 0), "history unknown from discovery, as rosbag2");
+    let plain_recorded = meta.topics_with_message_count.iter().find(|t| t.topic_metadata.name == "/qos_test/plain").unwrap().message_count as usize;
+    assert!(plain_recorded > n / 2, "recorded {plain_recorded} of {n} plain messages");
+    let yaml = &meta.topics_with_message_count[0].topic_metadata.offered_qos_profiles;
+    for key in ["history", "depth", "reliability", "durability", "deadline", "lifespan", "liveliness", "liveliness_lease_duration", "avoid_ros_namespace_conventions"] {
+        assert!(yaml.contains(&format!("{key}:")), "{key} in {yaml}");
+    }
+
+    // Replay under other names, so only bag play's writers are on these topics.
+    let plain_sub = node.raw_subscription("/qos_replay/plain", TYPE, qos::reliable()).unwrap();
+    let mut play = Command::new(cli())
+        .args(["bag", "play", dir.to_str().unwrap(), "--delay", "2"])
+        .args(["--remap", "/qos_test/latched:=/qos_replay/latched", "--remap", "/qos_test/fast:=/qos_replay/fast", "--remap", "/qos_test/plain:=/qos_replay/plain"])
+        .spawn()
+        .unwrap();
+    let writers_of = |node: &MetrocellNode, topic: &str| {
+        let dds = format!("rt{topic}");
+        node.context().domain_participant().discovered_writers().into_iter().filter(|w| w.publication_topic_data.topic_name == dds).map(|w| w.publication_topic_data).collect::<Vec<_>>()
+    };
+    let (mut plain_got, mut late_got, mut late) = (0, Vec::new(), None);
+    let (mut latched_offer, mut fast_offer) = (Vec::new(), Vec::new());
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while (plain_got < plain_recorded || late_got.is_empty()) && Instant::now() < deadline {
+        while plain_sub.take().unwrap().is_some() {
+            plain_got += 1;
+        }
+        // The latched message precedes the first plain one by 0.2 s: subscribing now is late.
+        if late.is_none() && plain_got > 0 {
+            latched_offer = writers_of(&node, "/qos_replay/latched");
+            fast_offer = writers_of(&node, "/qos_replay/fast");
+            late = Some(node.raw_subscription("/qos_replay/latched", "std_msgs/msg/String", qos::latched()).unwrap());
+        }
+        if let Some(s) = &late {
+            while let Some(m) = s.take().unwrap() {
+                late_got.push(m.payload);
+            }
+        }
+        std::thread::sleep(Duration::from_millis(1));
+    }
+    assert!(play.wait().unwrap().success());
+    assert_eq!(plain_got, plain_recorded, "reliable topic replayed completely");
+    assert_eq!(latched_offer.len(), 1, "one replay writer for the latched topic");
+    assert_eq!(latched_offer[0].durability, Some(Durability::TransientLocal), "latched topic replayed transient-local");
+    assert!(matches!(latched_offer[0].reliability, Some(Reliability::Reliable { .. })));
+    assert_eq!(fast_offer.len(), 1);
+    assert_eq!(fast_offer[0].reliability, Some(Reliability::BestEffort), "sensor-data topic replayed best-effort");
+    // Compare decoded: the wire payload may carry CDR alignment padding after the string.
+    let reg = metrocell_msgs::registry();
+    let texts: Vec<serde_json::Value> = late_got.iter().map(|p| rosmsg::to_json(&rosmsg::decode(reg, "std_msgs/msg/String", p).unwrap())).collect();
+    assert_eq!(texts, [serde_json::json!({"data": "cell model v3"})], "late subscriber received the latched message");
+}

@@ -18,7 +18,7 @@ mod parameters;
 mod replay;
 mod thermal_state;
 
-use metrocell_node::MetrocellNode;
+use metrocell_node::{MetrocellNode, ReplayArgs};
 
 fn main() -> std::process::ExitCode {
     match run() {
@@ -32,7 +32,7 @@ fn main() -> std::process::ExitCode {
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
     let (builder, rest) = MetrocellNode::builder("thermal").params(parameters::declarations()).args(std::env::args())?;
-    match replay::ReplayArgs::parse(&rest[1..])? {
+    match ReplayArgs::parse(&rest[1..])? {
         Some(args) => replay::run(builder.build_offline()?, &args),
         None => live::run(builder.build()?),
     }

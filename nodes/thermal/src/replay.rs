@@ -3,63 +3,13 @@
 //! numbers equal those of the live node fed by `metrocell bag play`. Outputs are stamped with
 //! the log time of the input that caused them.
 
-use std::io::Write;
-use std::path::PathBuf;
-
-use metrocell_bagtools::{BagSink, BagSource};
+use metrocell_bagtools::{BagSource, ReplayOutput};
 use metrocell_msgs::msg::{ErrorModel, MeasuredPoint};
 use metrocell_msgs::sensor_msgs::msg::Temperature;
-use metrocell_node::OfflineNode;
-use rosmsg::RosMessage;
+use metrocell_node::{OfflineNode, ReplayArgs};
 
 use crate::parameters;
 use crate::thermal_state::ThermalState;
-
-/// `--bag FILE [--output OUT_BAG]`, the node's own (non-ROS) arguments.
-pub struct ReplayArgs {
-    pub bag: PathBuf,
-    pub output: Option<PathBuf>,
-}
-
-impl ReplayArgs {
-    /// `None` when `--bag` is absent (live run).
-    pub fn parse(args: &[String]) -> Result<Option<ReplayArgs>, String> {
-        let (mut bag, mut output) = (None, None);
-        let mut it = args.iter();
-        while let Some(a) = it.next() {
-            let mut value = |flag: &str| it.next().map(PathBuf::from).ok_or_else(|| format!("{flag} needs a path"));
-            match a.as_str() {
-                "--bag" => bag = Some(value("--bag")?),
-                "--output" => output = Some(value("--output")?),
-                other => return Err(format!("unknown argument '{other}' (expected --bag FILE [--output OUT_BAG] before --ros-args)")),
-            }
-        }
-        match (bag, output) {
-            (Some(bag), output) => Ok(Some(ReplayArgs { bag, output })),
-            (None, Some(_)) => Err("--output needs --bag".into()),
-            (None, None) => Ok(None),
-        }
-    }
-}
-
-/// Where replay outputs go.
-enum Output {
-    Bag(BagSink),
-    JsonLines(std::io::StdoutLock<'static>),
-}
-
-impl Output {
-    fn write<T: RosMessage>(&mut self, topic: &str, m: &T, time_ns: u64) -> Result<(), Box<dyn std::error::Error>> {
-        match self {
-            Output::Bag(sink) => sink.write(topic, m, time_ns)?,
-            Output::JsonLines(out) => {
-                let line = serde_json::json!({ "topic": topic, "time_ns": time_ns, "message": m });
-                writeln!(out, "{line}")?;
-            }
-        }
-        Ok(())
-    }
-}
 
 pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::error::Error>> {
     let compensator = parameters::compensator(node.parameters())?;
@@ -78,15 +28,9 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     let compensated_topic = node.resolve_topic("measured_points/thermal_compensated")?;
     let model_topic = node.resolve_topic("thermal/error_model")?;
 
-    let mut output = match &args.output {
-        Some(dir) => {
-            let mut sink = BagSink::create(dir, Default::default())?;
-            sink.advertise::<MeasuredPoint>(&compensated_topic)?;
-            sink.advertise::<ErrorModel>(&model_topic)?;
-            Output::Bag(sink)
-        }
-        None => Output::JsonLines(std::io::stdout().lock()),
-    };
+    let mut output = ReplayOutput::open(args.output.as_deref())?;
+    output.advertise::<MeasuredPoint>(&compensated_topic)?;
+    output.advertise::<ErrorModel>(&model_topic)?;
 
     let (mut inputs, mut compensated, mut not_compensated) = (0u64, 0u64, 0u64);
     for m in source.messages()? {
@@ -94,7 +38,16 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
         inputs += 1;
         let now = m.log_time_ns as i64;
         if m.topic == points_topic {
-            match state.compensate(&m.decode::<MeasuredPoint>()?, now) {
+            // A malformed message is reported and skipped; the replay goes on.
+            let point = match m.decode::<MeasuredPoint>() {
+                Ok(point) => point,
+                Err(e) => {
+                    node.logger().warn(format!("{} at log time {} ns skipped: {e}", m.topic, m.log_time_ns));
+                    not_compensated += 1;
+                    continue;
+                }
+            };
+            match state.compensate(&point, now) {
                 Ok(out) => {
                     output.write(&compensated_topic, &out, m.log_time_ns)?;
                     compensated += 1;
@@ -105,8 +58,13 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
                 }
             }
         } else if let Some((_, sensor)) = sensor_of_topic.iter().find(|(t, _)| *t == m.topic) {
-            if let Err(e) = state.temperature(sensor, &m.decode::<Temperature>()?, now) {
-                node.logger().warn(e);
+            match m.decode::<Temperature>() {
+                Ok(t) => {
+                    if let Err(e) = state.temperature(sensor, &t, now) {
+                        node.logger().warn(e);
+                    }
+                }
+                Err(e) => node.logger().warn(format!("{} at log time {} ns skipped: {e}", m.topic, m.log_time_ns)),
             }
         }
         match state.model_if_due(now) {
@@ -115,9 +73,7 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
             None => {}
         }
     }
-    if let Output::Bag(sink) = output {
-        sink.finish()?;
-    }
+    output.finish()?;
     node.logger().info(format!(
         "replayed {inputs} messages from {}: {compensated} points compensated, {not_compensated} not",
         args.bag.display()

@@ -1,0 +1,166 @@
+//! `export_parquet` read back by pyarrow: every ROS primitive type, strings, fixed and variable
+//! arrays, nested and arrays of messages. Column names and values must equal the CSV export of
+//! the same bag (the CSV export is the reference layout), and the Arrow types must be the
+//! typed ones the module doc promises.
+//!
+//! Needs Python with pyarrow: `METROCELL_PYTHON=/tmp/venv/bin/python cargo test -p metrocell-bagtools`.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use metrocell_bag::{BagWriter, WriterOptions};
+use metrocell_bagtools::{export, export_parquet};
+use serde_json::{json, Value as Json};
+
+const TYPE: &str = "test_msgs/msg/AllTypes";
+
+fn python() -> PathBuf {
+    if let Ok(p) = std::env::var("METROCELL_PYTHON") {
+        return p.into();
+    }
+    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../.venv/bin/python");
+    assert!(p.exists(), "no Python with pyarrow: set METROCELL_PYTHON or run tests/run (which creates .venv)");
+    p
+}
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("bagtools_pq_{}_{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn registry() -> rosmsg::Registry {
+    let mut reg = rosmsg::Registry::new();
+    reg.add_msg("test_msgs", "Inner", "float64 x\nstring label\n").unwrap();
+    reg.add_msg(
+        "test_msgs",
+        "AllTypes",
+        "bool b\nbyte by\nchar c\nint8 i8\nuint8 u8\nint16 i16\nuint16 u16\nint32 i32\nuint32 u32\n\
+         int64 i64\nuint64 u64\nfloat32 f32\nfloat64 f64\nstring s\nfloat64[3] fixed\nint32[] ints\n\
+         string[] names\nuint8[<=4] small\nInner single\nInner[2] pair\nInner[] many\n",
+    )
+    .unwrap();
+    reg
+}
+
+fn message(i: i64) -> Json {
+    let inner = |k: i64| json!({"x": 0.1 * k as f64, "label": format!("in{k}")});
+    json!({
+        "b": i % 2 == 0, "by": 255 - i, "c": 65 + i, "i8": -128 + i, "u8": 200 + i, "i16": -32768 + i, "u16": 65535 - i,
+        "i32": -2147483648i64 + i, "u32": 4294967295u64 - i as u64, "i64": i64::MIN + i, "u64": u64::MAX - i as u64,
+        "f32": 0.1 * i as f64, "f64": 0.1 + 0.2 * i as f64, "s": format!("row {i} – µm"),
+        "fixed": [i as f64, -1.5, 1e-300],
+        "ints": (0..i).map(|k| k as i32 - 1).collect::<Vec<_>>(),
+        "names": (0..i % 3).map(|k| format!("n{k}")).collect::<Vec<_>>(),
+        "small": (0..(i % 5)).map(|k| k as u8 * 60).collect::<Vec<_>>(),
+        "single": inner(i), "pair": [inner(10 + i), inner(20 + i)],
+        "many": (0..i % 2 + 1).map(|k| inner(100 * k)).collect::<Vec<_>>(),
+    })
+}
+
+#[test]
+fn parquet_export_read_by_pyarrow_equals_bag_content_with_typed_columns() {
+    let reg = registry();
+    let dir = scratch("bag");
+    let mut w = BagWriter::create(&dir, WriterOptions::default()).unwrap();
+    w.add_topic("/test/all", TYPE, &reg.full_definition(TYPE).unwrap(), "").unwrap();
+    let n = 6;
+    let t0 = 1_700_000_000_000_000_000u64;
+    for i in 0..n {
+        let v = rosmsg::from_json(&reg, TYPE, &message(i as i64)).unwrap();
+        w.write("/test/all", t0 + i * 1_000_000, t0 + i * 1_000_000 - 7, &rosmsg::encode(&reg, TYPE, &v).unwrap()).unwrap();
+    }
+    w.finish().unwrap();
+
+    let pq_dir = scratch("pq");
+    let exported = export_parquet::export_parquet(&dir, &["/test/all".into()], &pq_dir).unwrap();
+    let e = &exported["/test/all"];
+    assert_eq!((e.rows, e.path.file_name().unwrap().to_str().unwrap()), (n, "test.all.parquet"));
+    let csv_dir = scratch("csv");
+    export::export_csv(&dir, &["/test/all".into()], &csv_dir).unwrap();
+
+    let out = Command::new(python())
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/py/read_parquet.py"))
+        .arg(&e.path)
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "pyarrow failed: {}", String::from_utf8_lossy(&out.stderr));
+    let doc: Json = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(doc["rows"].as_u64(), Some(n));
+
+    // Arrow types: numeric of the field's width and signedness, UTF-8, lists for T[].
+    let types = doc["types"].as_object().unwrap();
+    let expect = [
+        ("log_time_ns", "int64"), ("b", "bool"), ("by", "uint8"), ("c", "uint8"), ("i8", "int8"), ("u8", "uint8"),
+        ("i16", "int16"), ("u16", "uint16"), ("i32", "int32"), ("u32", "uint32"), ("i64", "int64"), ("u64", "uint64"),
+        ("f32", "float"), ("f64", "double"), ("s", "string"), ("fixed.2", "double"), ("ints", "list<element: int32 not null>"),
+        ("names", "list<element: string not null>"), ("small", "list<element: uint8 not null>"), ("single.x", "double"),
+        ("pair.1.label", "string"), ("many", "string"),
+    ];
+    for (col, ty) in expect {
+        assert_eq!(types.get(col).and_then(|t| t.as_str()), Some(ty), "type of column {col}");
+    }
+
+    // Same columns in the same order as the CSV export, and equal values cell by cell.
+    let mut csv = csv::Reader::from_path(csv_dir.join("test.all.csv")).unwrap();
+    let header: Vec<String> = csv.headers().unwrap().iter().map(String::from).collect();
+    let pq_names: Vec<String> = serde_json::from_value(doc["names"].clone()).unwrap();
+    assert_eq!(pq_names, header, "same column names, same order as the CSV export");
+    for (row, rec) in csv.records().enumerate() {
+        let rec = rec.unwrap();
+        for (col, cell) in header.iter().zip(rec.iter()) {
+            let got = &doc["columns"][col][row];
+            let ty = types[col].as_str().unwrap();
+            let same = if ty == "string" {
+                got.as_str() == Some(cell)
+            } else if ty == "bool" {
+                got.as_bool().map(|b| b.to_string()).as_deref() == Some(cell)
+            } else if ty.starts_with("list") {
+                *got == serde_json::from_str::<Json>(cell).unwrap()
+            } else if ty == "float" || ty == "double" {
+                got.as_f64() == Some(cell.parse::<f64>().unwrap())
+            } else if ty == "uint64" {
+                got.as_u64() == Some(cell.parse::<u64>().unwrap())
+            } else {
+                got.as_i64() == Some(cell.parse::<i64>().unwrap())
+            };
+            assert!(same, "row {row} column {col}: parquet {got} vs CSV {cell:?}");
+        }
+    }
+
+    // Spot checks against the written values (not through the CSV export).
+    let col = |c: &str| doc["columns"][c].clone();
+    assert_eq!(col("u64")[0].as_u64(), Some(u64::MAX), "uint64 keeps its full range");
+    assert_eq!(col("u32")[1].as_u64(), Some(4_294_967_294));
+    assert_eq!(col("i64")[2].as_i64(), Some(i64::MIN + 2));
+    assert_eq!(col("i8")[0].as_i64(), Some(-128));
+    assert_eq!(col("f64")[1].as_f64(), Some(0.1 + 0.2), "float64 bit-exact");
+    assert_eq!(col("f32")[3].as_f64(), Some((0.1f64 * 3.0) as f32 as f64), "float32 value");
+    assert_eq!(col("s")[4].as_str(), Some("row 4 – µm"));
+    assert_eq!(col("ints")[0], json!([]), "empty list stays an empty list, not null");
+    assert_eq!(col("ints")[3], json!([-1, 0, 1]));
+    assert_eq!(col("names")[2], json!(["n0", "n1"]));
+    assert_eq!(col("small")[4], json!([0, 60, 120, 180]));
+    assert_eq!(col("pair.1.label")[5].as_str(), Some("in25"));
+    assert_eq!(col("fixed.2")[0].as_f64(), Some(1e-300));
+    let many: Json = serde_json::from_str(col("many")[1].as_str().unwrap()).unwrap();
+    assert_eq!(many[1]["label"], "in100", "arrays of messages are JSON text");
+    assert_eq!(col("log_time_ns")[5].as_i64(), Some((t0 + 5_000_000) as i64));
+    assert_eq!(col("publish_time_ns")[5].as_i64(), Some((t0 + 5_000_000 - 7) as i64));
+}
+
+#[test]
+fn unknown_topic_is_an_error_naming_the_bag_and_the_topics() {
+    let reg = registry();
+    let dir = scratch("unknown");
+    let mut w = BagWriter::create(&dir, WriterOptions::default()).unwrap();
+    w.add_topic("/test/all", TYPE, &reg.full_definition(TYPE).unwrap(), "").unwrap();
+    w.finish().unwrap();
+    let e = export_parquet::export_parquet(&dir, &["/nope".into()], &scratch("unknown_out")).unwrap_err().to_string();
+    assert!(e.contains("/nope") && e.contains("/test/all"), "{e}");
+    // A topic without messages still gets a file with its full schema.
+    let out = scratch("empty_out");
+    let r = export_parquet::export_parquet(&dir, &[], &out).unwrap();
+    assert_eq!(r["/test/all"].rows, 0);
+    assert!(r["/test/all"].columns > 20);
+}

@@ -1,0 +1,83 @@
+//! What the node does with each input, shared by the live run and the bag replay so both give
+//! the same numbers: parameters → [`FiducialProcessor`]; a CameraInfo updates the camera model;
+//! an Image becomes a FiducialDetectionArray (header = the image's: its stamp and frame_id) and
+//! one PoseWithCovarianceStamped per target with a pose.
+
+use metrocell_camera::CameraModel;
+use metrocell_msgs::geometry_msgs::msg::PoseWithCovarianceStamped;
+use metrocell_msgs::msg::FiducialDetectionArray;
+use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image};
+use metrocell_node::{ParamDecl, Parameters};
+use metrocell_vision::aruco::DetectorParams;
+use metrocell_vision::{detect_targets, PoseInputs, TargetFamily};
+
+use crate::{camera_info_msg, detection_msgs, frame};
+
+pub fn declarations() -> Vec<ParamDecl> {
+    vec![
+        ParamDecl::new("family", "DICT_4X4_50".to_string(), "OpenCV dictionary name (DICT_4X4_50, DICT_APRILTAG_36h11, ...), checkerboard, or drilled_holes"),
+        ParamDecl::new("marker_size", 0.0, "marker side [m] for marker poses; 0 = no marker pose").with_range(0.0, 10.0),
+        ParamDecl::new("board_cols", 9i64, "checkerboard / hole plate: inner corners along a row (squares − 1)"),
+        ParamDecl::new("board_rows", 6i64, "checkerboard / hole plate: inner corners along a column (squares − 1)"),
+        ParamDecl::new("square_size", 0.01, "checkerboard square side [m]").with_range(0.0, 10.0),
+        ParamDecl::new("corner_sigma_px", 0.1, "corner σ [px] where a corner has no covariance").with_range(1e-6, 100.0),
+        ParamDecl::new("threads", 0i64, "detector worker threads; 0 = all cores"),
+    ]
+}
+
+/// Outputs of one frame.
+#[derive(Debug, Clone, PartialEq)]
+pub struct FrameOutputs {
+    pub detections: FiducialDetectionArray,
+    pub poses: Vec<PoseWithCovarianceStamped>,
+}
+
+pub struct FiducialProcessor {
+    family: TargetFamily,
+    family_name: String,
+    marker_size: Option<f64>,
+    sigma: f64,
+    params: DetectorParams,
+    camera: Option<CameraModel>,
+}
+
+impl FiducialProcessor {
+    pub fn from_parameters(p: &Parameters) -> Result<Self, Box<dyn std::error::Error>> {
+        let board = (p.get::<i64>("board_cols")?.max(0) as usize, p.get::<i64>("board_rows")?.max(0) as usize);
+        let family = TargetFamily::parse(&p.get::<String>("family")?, Some(board), Some(p.get::<f64>("square_size")?))?;
+        Ok(FiducialProcessor {
+            family_name: family.message_name(),
+            family,
+            marker_size: Some(p.get::<f64>("marker_size")?).filter(|s| *s > 0.0),
+            sigma: p.get::<f64>("corner_sigma_px")?,
+            params: DetectorParams { threads: p.get::<i64>("threads")?.max(0) as usize, ..Default::default() },
+            camera: None,
+        })
+    }
+
+    pub fn describe(&self) -> String {
+        format!("detecting {}, marker_size {:?} m", self.family_name, self.marker_size)
+    }
+
+    /// Use this camera for poses from now on; a bad message keeps the previous camera.
+    pub fn camera_info(&mut self, info: &CameraInfo) -> Result<(), metrocell_camera::CameraError> {
+        self.camera = Some(camera_info_msg::camera_model_from_msg(info)?);
+        Ok(())
+    }
+
+    /// Detect in one frame. Errors name the frame (stamp, frame_id) and the problem.
+    pub fn frame(&self, img: &Image) -> Result<FrameOutputs, String> {
+        let name = || format!("frame {}.{:09} ({})", img.header.stamp.sec, img.header.stamp.nanosec, img.header.frame_id);
+        let gray = frame::gray_from_image(img).map_err(|e| format!("{}: {e}", name()))?;
+        let pose_inputs = self
+            .camera
+            .as_ref()
+            .filter(|c| c.width == gray.width() && c.height == gray.height())
+            .map(|c| PoseInputs { camera: c, marker_side: self.marker_size, fallback_sigma_px: self.sigma });
+        let targets = detect_targets(&gray, &self.family, &self.params, pose_inputs).map_err(|e| format!("{}: {e}", name()))?;
+        Ok(FrameOutputs {
+            detections: detection_msgs::detection_array(&img.header, img.width, img.height, &self.family_name, &targets),
+            poses: detection_msgs::pose_messages(&img.header, &targets),
+        })
+    }
+}

@@ -1,0 +1,197 @@
+//! `metrocell-probe --bag` gives the same outputs as the live node over DDS. The input bag: six
+//! triggers along different approach directions, a nominal before four of them, and one trigger
+//! missing an axis (rejected: no hit, no count). Live, this test plays the machine: nominal, then
+//! trigger, waiting for each hit. ProbeHits and MeasuredPoints must be bit-identical.
+//!
+//! Run: `tests/isolated cargo test -p metrocell-probe-node --test replay_equals_live`
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::time::{Duration, Instant};
+
+use metrocell_bag::{qos_profiles_yaml, BagWriter, QosProfile, WriterOptions};
+use metrocell_bagtools::{encode_cdr, BagSource};
+use metrocell_msgs::builtin_interfaces::msg::Time;
+use metrocell_msgs::geometry_msgs::msg::{Point, PointStamped};
+use metrocell_msgs::msg::{MeasuredPoint, ProbeHit};
+use metrocell_msgs::sensor_msgs::msg::JointState;
+use metrocell_msgs::std_msgs::msg::Header;
+use metrocell_node::{qos, MetrocellNode};
+use rosmsg::RosMessage;
+
+const T0: u64 = 1_700_000_000_000_000_000;
+const MS: u64 = 1_000_000;
+
+fn header(ns: u64) -> Header {
+    Header { stamp: Time { sec: (ns / 1_000_000_000) as i32, nanosec: (ns % 1_000_000_000) as u32 }, frame_id: "machine".into() }
+}
+
+fn stamp_ns(h: &Header) -> u64 {
+    h.stamp.sec as u64 * 1_000_000_000 + h.stamp.nanosec as u64
+}
+
+enum Input {
+    Nominal(PointStamped),
+    Trigger(JointState),
+}
+
+/// (log time, input) in time order.
+fn inputs() -> Vec<(u64, Input)> {
+    let mut v = Vec::new();
+    for k in 0..6u64 {
+        let t = T0 + (k + 1) * 200 * MS;
+        let a = k as f64 * 1.1;
+        let (x, y, z) = (0.1 + 0.01 * a.cos(), 0.2 + 0.01 * a.sin(), 0.05 - 0.001 * k as f64);
+        if k != 2 && k != 4 {
+            v.push((t - 50 * MS, Input::Nominal(PointStamped { header: header(t - 50 * MS), point: Point { x, y, z } })));
+        }
+        let mut names = vec!["x".to_string(), "y".into(), "z".into()];
+        if k == 3 {
+            names[1] = "q".into(); // missing axis y: rejected
+        }
+        v.push((t, Input::Trigger(JointState { header: header(t), name: names, position: vec![x + 1e-5, y - 2e-5, z], velocity: vec![a.cos(), a.sin(), -0.2], effort: vec![] })));
+    }
+    v
+}
+
+fn write_input_bag(dir: &Path, inputs: &[(u64, Input)]) {
+    let mut w = BagWriter::create(dir, WriterOptions::default()).unwrap();
+    let qos = qos_profiles_yaml(&[QosProfile::default_publisher()]);
+    w.add_topic("/replay/probe/nominal", PointStamped::ROS_TYPE, PointStamped::DEFINITION, &qos).unwrap();
+    w.add_topic("/replay/probe/trigger", JointState::ROS_TYPE, JointState::DEFINITION, &qos).unwrap();
+    for (t, i) in inputs {
+        match i {
+            Input::Nominal(n) => w.write("/replay/probe/nominal", *t, *t, &encode_cdr(n).unwrap()).unwrap(),
+            Input::Trigger(j) => w.write("/replay/probe/trigger", *t, *t, &encode_cdr(j).unwrap()).unwrap(),
+        }
+    }
+    w.finish().unwrap();
+}
+
+struct Killed(std::process::Child);
+impl Drop for Killed {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
+const ARGS: [&str; 9] = ["--ros-args", "-r", "__ns:=/replay", "-p", "stylus_radius:=0.002", "-p", "pretravel:=[8e-6, 2e-6, 0.0, 5e-6]", "-p", "probe_id:=ts1"];
+
+#[test]
+fn replay_from_bag_equals_live_run_over_dds() {
+    metrocell_node::testing::require_isolated_network();
+    let tmp = std::env::temp_dir().join(format!("metrocell-probe-replay-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&tmp);
+    std::fs::create_dir_all(&tmp).unwrap();
+    let inputs = inputs();
+    let input = tmp.join("input");
+    write_input_bag(&input, &inputs);
+
+    // --- live
+    let _node = Killed(Command::new(env!("CARGO_BIN_EXE_metrocell-probe")).args(ARGS).stderr(Stdio::null()).spawn().unwrap());
+    let mut machine = MetrocellNode::builder("replay_test_machine").namespace("/replay").diagnostics_period(None).handle_signals(false).build().unwrap();
+    let nominal_pub = machine.publisher::<PointStamped>("probe/nominal", qos::reliable()).unwrap();
+    let trigger_pub = machine.publisher::<JointState>("probe/trigger", qos::reliable()).unwrap();
+    let hit_sub = machine.subscription::<ProbeHit>("probe/hits", qos::reliable()).unwrap();
+    let point_sub = machine.subscription::<MeasuredPoint>("measured_points", qos::reliable()).unwrap();
+    // Reliable endpoints: wait until the node's subscriptions are matched before publishing.
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while machine.discovered_topics().iter().filter(|t| t.name.ends_with("probe/hits")).count() == 0 {
+        assert!(Instant::now() < deadline, "probe node not discovered");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    std::thread::sleep(Duration::from_secs(1));
+    let (mut live_hits, mut live_points) = (BTreeMap::new(), BTreeMap::new());
+    let collect = |hits: &mut BTreeMap<u64, ProbeHit>, points: &mut BTreeMap<u64, MeasuredPoint>| {
+        while let Ok(Some((h, _))) = hit_sub.take() {
+            hits.insert(stamp_ns(&h.header), h);
+        }
+        while let Ok(Some((p, _))) = point_sub.take() {
+            points.insert(stamp_ns(&p.header), p);
+        }
+    };
+    for (_, i) in &inputs {
+        match i {
+            Input::Nominal(n) => {
+                let _ = nominal_pub.publish(n.clone());
+                // Let the nominal arrive before its trigger, as the bag's order has it.
+                std::thread::sleep(Duration::from_millis(100));
+            }
+            Input::Trigger(j) => {
+                let _ = trigger_pub.publish(j.clone());
+                let s = stamp_ns(&j.header);
+                let wait = Instant::now() + Duration::from_secs(if j.name[1] == "y" { 10 } else { 1 });
+                while Instant::now() < wait && !live_hits.contains_key(&s) {
+                    collect(&mut live_hits, &mut live_points);
+                    std::thread::sleep(Duration::from_millis(5));
+                }
+            }
+        }
+    }
+    std::thread::sleep(Duration::from_millis(300));
+    collect(&mut live_hits, &mut live_points);
+
+    // --- offline
+    let output = tmp.join("output");
+    let status = Command::new(env!("CARGO_BIN_EXE_metrocell-probe")).arg("--bag").arg(&input).arg("--output").arg(&output).args(ARGS).stderr(Stdio::null()).status().unwrap();
+    assert!(status.success(), "metrocell-probe --bag failed: {status}");
+    let mut source = BagSource::open(&output).unwrap();
+    source.subscribe::<ProbeHit>("/replay/probe/hits").unwrap();
+    source.subscribe::<MeasuredPoint>("/replay/measured_points").unwrap();
+    let (mut hits, mut points) = (BTreeMap::new(), BTreeMap::new());
+    for m in source.messages().unwrap() {
+        let m = m.unwrap();
+        if m.topic.ends_with("hits") {
+            let h: ProbeHit = m.decode().unwrap();
+            assert_eq!(m.log_time_ns, stamp_ns(&h.header));
+            hits.insert(stamp_ns(&h.header), h);
+        } else {
+            let p: MeasuredPoint = m.decode().unwrap();
+            points.insert(stamp_ns(&p.header), p);
+        }
+    }
+
+    // 6 triggers, one rejected; nominals before triggers 0, 1, 3 (rejected: kept for 4), 5.
+    assert_eq!(hits.len(), 5, "replay hits at {:?}", hits.keys());
+    let ids: Vec<&str> = points.values().map(|p| p.point_id.as_str()).collect();
+    assert_eq!(ids, ["ts1_1", "ts1_2", "ts1_4", "ts1_5"]);
+    // Compensation moved the point off the axis readings by about the stylus radius.
+    let h0 = hits.values().next().unwrap();
+    let d = ((h0.surface_point.x - h0.axis_positions[0]).powi(2) + (h0.surface_point.y - h0.axis_positions[1]).powi(2) + (h0.surface_point.z - h0.axis_positions[2]).powi(2)).sqrt();
+    assert!((d - 0.002).abs() < 5e-5, "stylus compensation {d} m");
+    assert_eq!(live_hits, hits, "live and replay ProbeHits differ");
+    assert_eq!(live_points, points, "live and replay MeasuredPoints differ");
+    let _ = std::fs::remove_dir_all(&tmp);
+}
+
+/// A malformed trigger in the bag (bytes that are not a JointState) is reported with its topic
+/// and log time and skipped; the replay goes on and the output bag holds every valid trigger's hit.
+#[test]
+fn replay_skips_a_malformed_message_and_keeps_going() {
+    let tmp = std::env::temp_dir().join(format!("metrocell-probe-replay-bad-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&tmp);
+    std::fs::create_dir_all(&tmp).unwrap();
+    let input = tmp.join("input");
+    let mut w = BagWriter::create(&input, WriterOptions::default()).unwrap();
+    let qos = qos_profiles_yaml(&[QosProfile::default_publisher()]);
+    w.add_topic("/replay/probe/trigger", JointState::ROS_TYPE, JointState::DEFINITION, &qos).unwrap();
+    let trigger = |t: u64| JointState { header: header(t), name: vec!["x".into(), "y".into(), "z".into()], position: vec![0.1, 0.2, 0.05], velocity: vec![0.0, 0.0, -1.0], effort: vec![] };
+    w.write("/replay/probe/trigger", T0, T0, &encode_cdr(&trigger(T0)).unwrap()).unwrap();
+    let bad_time = T0 + 100 * MS;
+    w.write("/replay/probe/trigger", bad_time, bad_time, &[0, 1, 0, 0, 0xff, 0xff, 0xff, 0x7f]).unwrap();
+    w.write("/replay/probe/trigger", T0 + 200 * MS, T0 + 200 * MS, &encode_cdr(&trigger(T0 + 200 * MS)).unwrap()).unwrap();
+    w.finish().unwrap();
+
+    let output = tmp.join("output");
+    let run = Command::new(env!("CARGO_BIN_EXE_metrocell-probe")).arg("--bag").arg(&input).arg("--output").arg(&output).args(ARGS).output().unwrap();
+    let stderr = String::from_utf8_lossy(&run.stderr);
+    assert!(run.status.success(), "replay stopped on a malformed message: {stderr}");
+    assert!(stderr.contains("/replay/probe/trigger") && stderr.contains(&bad_time.to_string()), "warning does not name topic and log time: {stderr}");
+    let mut source = BagSource::open(&output).unwrap();
+    source.subscribe::<ProbeHit>("/replay/probe/hits").unwrap();
+    let hits: Vec<u64> = source.messages().unwrap().map(|m| m.unwrap().log_time_ns).collect();
+    assert_eq!(hits, [T0, T0 + 200 * MS]);
+    let _ = std::fs::remove_dir_all(&tmp);
+}

@@ -21,6 +21,8 @@ pub struct NodeBuilder {
     name: String,
     namespace: String,
     decls: Vec<ParamDecl>,
+    /// The node's own arguments (flag, what it does), for `--help`.
+    own_arguments: Vec<(String, String)>,
     ros_args: RosArgs,
     environment: Option<DdsEnvironment>,
     diagnostics_period: Option<Duration>,
@@ -34,6 +36,7 @@ impl NodeBuilder {
             name: default_name.to_string(),
             namespace: "/".to_string(),
             decls: Vec::new(),
+            own_arguments: Vec::new(),
             ros_args: RosArgs::default(),
             environment: None,
             diagnostics_period: Some(Duration::from_secs(1)),
@@ -47,13 +50,27 @@ impl NodeBuilder {
         self
     }
 
+    /// Document one of the node's own (non-ROS) arguments for `--help`, e.g.
+    /// `("--bag IN_BAG [--output OUT_BAG]", "run on a recorded bag instead of DDS")`.
+    pub fn node_argument(mut self, flag: &str, what: &str) -> NodeBuilder {
+        self.own_arguments.push((flag.to_string(), what.to_string()));
+        self
+    }
+
     /// Parse a full argv (argv[0] first); returns the builder and the node's own arguments.
+    /// `--help` or `-h` among the node's own arguments prints the help (parameters declared so
+    /// far, so declare them first) and exits the process with status 0, before any DDS exists.
     pub fn args<I, S>(mut self, argv: I) -> Result<(NodeBuilder, Vec<String>), NodeError>
     where
         I: IntoIterator<Item = S>,
         S: Into<String>,
     {
         let cl = parse_command_line(argv)?;
+        if crate::help::asks_for_help(cl.node_args.get(1..).unwrap_or_default()) {
+            let program = cl.node_args.first().map(|p| p.rsplit('/').next().unwrap_or(p).to_string()).unwrap_or_else(|| self.name.clone());
+            print!("{}", crate::help::help_text(&program, &self.name, &self.own_arguments, &self.decls));
+            std::process::exit(0);
+        }
         self.ros_args = cl.ros;
         Ok((self, cl.node_args))
     }

@@ -30,6 +30,7 @@ mod builder;
 pub mod diagnostics;
 pub mod environment;
 pub mod error;
+pub mod help;
 pub mod logging;
 pub mod names;
 pub mod offline;

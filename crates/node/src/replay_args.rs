@@ -13,6 +13,11 @@ pub struct ReplayArgs {
 }
 
 impl ReplayArgs {
+    /// The flags and what they do, for the node's `--help` ([`crate::NodeBuilder::node_argument`]).
+    pub const FLAG: &'static str = "--bag IN_BAG [--output OUT_BAG]";
+    pub const HELP: &'static str = "run on a recorded bag instead of DDS, as fast as the CPU allows, with the outputs the live \
+node would publish; they go to OUT_BAG (a rosbag2 MCAP directory) or, without --output, to stdout as JSON lines";
+
     /// Parse the arguments left over after the ROS command line (program name excluded).
     /// `Ok(None)` when `--bag` is absent (live run).
     pub fn parse(args: &[String]) -> Result<Option<ReplayArgs>, String> {

@@ -73,7 +73,11 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         let info = info.as_ref().map(camera_info_msg::camera_info_msg);
         return device::run(&node, &device, device::Outputs { images: &images, infos: &infos, info, frame_id });
     }
-    let files = file_list::list_image_files(&node.param::<String>("path")?)?;
+    let path = node.param::<String>("path")?;
+    if path.is_empty() {
+        return Err("no source: set -p path:=DIR_OR_GLOB (image files) or -p device:=/dev/videoN (V4L2); --help lists the parameters".into());
+    }
+    let files = file_list::list_image_files(&path)?;
     node.info(format!("{} files, {} fps, loop {looping}, camera_info {}", files.len(), rate, if url.is_empty() { "none" } else { &url }));
 
     let images = node.publisher::<Image>("image", qos::sensor_data())?;

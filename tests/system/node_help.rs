@@ -1,0 +1,35 @@
+//! `NODE --help` teaches and does nothing else: every node binary prints its usage and every
+//! declared parameter, and exits 0 at once — before a DDS participant exists (the help is printed
+//! while the command line is parsed, ahead of `NodeBuilder::build`).
+
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use system_tests::bin;
+
+#[test]
+fn every_node_prints_help_and_exits_without_starting() {
+    // (binary, parameters its help must list, whether it replays bags)
+    let nodes: [(&str, &[&str], bool); 6] = [
+        ("metrocell-sim", &["cell", "duration", "seed"], false),
+        ("metrocell-thermal", &["sensors", "alpha"], true),
+        ("metrocell-recorder", &["output", "topics", "max_bag_size"], false),
+        ("metrocell-camera", &["path", "device", "stamp_source"], false),
+        ("metrocell-fiducial", &["family"], true),
+        ("metrocell-probe", &["stylus_radius", "pretravel"], true),
+    ];
+    for (name, params, replays) in nodes {
+        for flag in ["--help", "-h"] {
+            let start = Instant::now();
+            let out = Command::new(bin(name)).arg(flag).output().unwrap();
+            let text = String::from_utf8_lossy(&out.stdout);
+            assert!(out.status.success(), "{name} {flag}: exit {:?}, stderr {}", out.status, String::from_utf8_lossy(&out.stderr));
+            assert!(start.elapsed() < Duration::from_secs(5), "{name} {flag} took {:?}: did it start the node?", start.elapsed());
+            assert!(text.contains("Usage:") && text.contains("--ros-args"), "{name} help: {text}");
+            for p in params {
+                assert!(text.contains(&format!("  {p} (")), "{name} help does not list parameter {p}: {text}");
+            }
+            assert_eq!(text.contains("--bag IN_BAG"), replays, "{name} help and --bag: {text}");
+        }
+    }
+}

@@ -138,7 +138,7 @@ fn watch_cell(
     let deadline = Instant::now() + Duration::from_secs_f64(args.duration / args.speed * 3.0 + 30.0);
     while !shutdown.is_requested() && !launcher.is_finished() {
         while let Ok(Some((c, _))) = clock.take() {
-            let ns = c.clock.sec as i64 * 1_000_000_000 + c.clock.nanosec as i64;
+            let ns = c.clock.nanos();
             let s = *start_ns.get_or_insert_with(|| {
                 last_advance = Instant::now();
                 ns
@@ -159,7 +159,7 @@ fn watch_cell(
         while let Ok(Some((m, _))) = model.take() {
             if let Some(i) = m.parameter_names.iter().position(|p| p == "thermal_scale.x.strain") {
                 let n = m.values.len();
-                w.last_strain = Some((m.values[i], m.covariance.get(i * n + i).copied().unwrap_or(f64::NAN)));
+                w.last_strain = m.values.get(i).map(|&v| (v, m.covariance.get(i * n + i).copied().unwrap_or(f64::NAN)));
             }
         }
         if w.sim_time_s >= next_print {

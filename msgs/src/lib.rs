@@ -11,6 +11,8 @@ use std::sync::OnceLock;
 
 include!(concat!(env!("OUT_DIR"), "/metrocell_msgs.rs"));
 
+mod time;
+
 pub use rosmsg::RosMessage;
 
 /// Every message type of this crate, parsed from the embedded `.msg` texts. The build script

@@ -116,7 +116,7 @@ pub fn run(a: PlayArgs) -> anyhow::Result<i32> {
                     while let Ok(key) = k.keys.try_recv() {
                         match key {
                             b' ' => {
-                                clock.toggle_pause();
+                                clock.toggle_pause(Instant::now());
                                 eprintln!("{}", if clock.is_paused() { "paused" } else { "resumed" });
                             }
                             b's' if clock.is_paused() => step = true,
@@ -128,7 +128,7 @@ pub fn run(a: PlayArgs) -> anyhow::Result<i32> {
                 if let (Some(p), Some(period)) = (&clock_pub, clock_period) {
                     if now >= next_clock {
                         if let Some(t) = clock.bag_time_at(now) {
-                            let _ = p.publish(Clock { clock: Time { sec: (t / 1_000_000_000) as i32, nanosec: (t % 1_000_000_000) as u32 } });
+                            let _ = p.publish(Clock { clock: Time::from_nanos(t as i64) });
                         }
                         next_clock = now + period;
                     }

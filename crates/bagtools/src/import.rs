@@ -241,7 +241,7 @@ fn cdr<T: RosMessage>(m: &T) -> Vec<u8> {
 }
 
 fn stamp(ns: u64) -> Time {
-    Time { sec: (ns / 1_000_000_000) as i32, nanosec: (ns % 1_000_000_000) as u32 }
+    Time::from_nanos(ns as i64)
 }
 
 /// Import `csv_path` into the new bag `bag_dir` using `mapping` (None: the file uses the

@@ -41,21 +41,28 @@ impl PlaybackClock {
         self.paused
     }
 
-    pub fn pause(&mut self) {
-        self.paused = true;
+    /// Pause at `now`: bag time (and `/clock`) stands still at the bag time of `now`.
+    pub fn pause(&mut self, now: Instant) {
+        if !self.paused {
+            self.anchor = self.bag_time_at(now).map(|t| (now, t));
+            self.paused = true;
+        }
     }
 
-    /// Resume: the next message plays at once and re-anchors the clock.
-    pub fn resume(&mut self) {
-        self.paused = false;
-        self.anchor = None;
-    }
-
-    pub fn toggle_pause(&mut self) {
+    /// Resume at `now`: bag time goes on from where the pause froze it, so everything after the
+    /// pause is shifted by the pause's length.
+    pub fn resume(&mut self, now: Instant) {
         if self.paused {
-            self.resume()
+            self.anchor = self.anchor.map(|(_, t)| (now, t));
+            self.paused = false;
+        }
+    }
+
+    pub fn toggle_pause(&mut self, now: Instant) {
+        if self.paused {
+            self.resume(now)
         } else {
-            self.pause()
+            self.pause(now)
         }
     }
 
@@ -70,7 +77,7 @@ impl PlaybackClock {
     }
 
     /// Bag time (ns) corresponding to wall instant `now`, for `/clock`; `None` before the first
-    /// message. While paused the clock stands at the anchor.
+    /// message. While paused the clock stands at the bag time the pause froze.
     pub fn bag_time_at(&self, now: Instant) -> Option<u64> {
         let (wall, log0) = self.anchor?;
         if self.paused {
@@ -107,19 +114,36 @@ mod tests {
         let t0 = Instant::now();
         let mut c = PlaybackClock::new(1.0);
         c.wait_for(0, t0);
-        c.pause();
+        c.pause(t0);
         assert_eq!(c.wait_for(100, t0), None);
         let t1 = t0 + Duration::from_secs(10);
         c.stepped(1_000_000_000, t1);
-        c.resume();
-        // after resume the next message is immediate and re-anchors
-        assert_eq!(c.wait_for(2_000_000_000, t1), Some(Duration::ZERO));
-        assert_eq!(c.wait_for(2_500_000_000, t1), Some(Duration::from_millis(500)));
+        c.resume(t1);
+        // after resume bag time goes on from the stepped message (1 s): the one at 2 s waits 1 s
+        assert_eq!(c.wait_for(2_000_000_000, t1), Some(Duration::from_secs(1)));
+        assert_eq!(c.wait_for(2_500_000_000, t1), Some(Duration::from_millis(1500)));
     }
 
     #[test]
     fn remaps_parse() {
         assert_eq!(parse_remap("/a:=/b").unwrap(), ("/a".into(), "/b".into()));
         assert!(parse_remap("/a=/b").is_err());
+    }
+
+    #[test]
+    fn a_pause_freezes_bag_time_and_shifts_what_follows() {
+        let t0 = Instant::now();
+        let s = Duration::from_secs;
+        let mut c = PlaybackClock::new(1.0);
+        assert_eq!(c.wait_for(10_000_000_000, t0), Some(Duration::ZERO));
+        // Paused 4 s into the bag: /clock stays at bag time +4 s for the whole pause.
+        c.pause(t0 + s(4));
+        assert_eq!(c.bag_time_at(t0 + s(4)), Some(14_000_000_000));
+        assert_eq!(c.bag_time_at(t0 + s(60)), Some(14_000_000_000));
+        assert_eq!(c.wait_for(15_000_000_000, t0 + s(60)), None);
+        // Resumed after 56 s: bag time goes on from +4 s, and a message logged at +5 s plays 1 s later.
+        c.resume(t0 + s(60));
+        assert_eq!(c.bag_time_at(t0 + s(60)), Some(14_000_000_000));
+        assert_eq!(c.wait_for(15_000_000_000, t0 + s(60)), Some(s(1)));
     }
 }

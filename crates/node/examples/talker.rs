@@ -37,7 +37,7 @@ fn run() -> Result<(), metrocell_node::NodeError> {
     let diagnostics = node.diagnostics();
     while !node.shutdown_token().wait_timeout(period) {
         let now = node.now().to_nanos();
-        let stamp = Time { sec: now.div_euclid(1_000_000_000) as i32, nanosec: now.rem_euclid(1_000_000_000) as u32 };
+        let stamp = Time::from_nanos(now);
         match publisher.publish(Header { stamp, frame_id: frame_id.clone() }) {
             Ok(()) => {
                 diagnostics.add_count("messages_published", 1);

@@ -88,7 +88,7 @@ async fn run(tasks: BackgroundTasks, stop: ShutdownToken) {
         loop {
             futures::select! {
                 r = subscription.async_take().fuse() => if let Ok((c, _)) = r {
-                    sim_time.set(c.clock.sec as i64 * 1_000_000_000 + c.clock.nanosec as i64);
+                    sim_time.set(c.clock.nanos());
                 },
                 _ = stop.triggered().fuse() => return,
             }

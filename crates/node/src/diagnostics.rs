@@ -107,7 +107,7 @@ impl Diagnostics {
         values.extend(s.values.iter().map(|(k, v)| KeyValue { key: k.clone(), value: v.clone() }));
         DiagnosticArray {
             header: Header {
-                stamp: Time { sec: stamp_ns.div_euclid(1_000_000_000) as i32, nanosec: stamp_ns.rem_euclid(1_000_000_000) as u32 },
+                stamp: Time::from_nanos(stamp_ns),
                 frame_id: String::new(),
             },
             status: vec![DiagnosticStatus {

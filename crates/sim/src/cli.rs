@@ -39,7 +39,7 @@ Topics written (only those whose sensor is in the cell):
   /temperature/<sensor>             sensor_msgs/Temperature, one per thermocouple (degC)
   /tracker/measurements             metrocell_msgs/TrackerMeasurement (beam breaks flagged, NaN point)
   /probe/hits                       metrocell_msgs/ProbeHit
-  /camera/camera_info               sensor_msgs/CameraInfo (images are not rendered yet)
+  /camera/camera_info               sensor_msgs/CameraInfo (and the rendered frame on /camera/image_raw)
 
 The same cell, duration, seed and start time always give byte-identical bags.
 

@@ -44,7 +44,7 @@ pub fn stamp_ns(start_ns: u64, t: f64) -> u64 {
 /// [`check_span`] keeps real runs below it).
 pub fn ros_time(ns: u64) -> Time {
     let ns = ns.min(MAX_STAMP_NS);
-    Time { sec: (ns / 1_000_000_000) as i32, nanosec: (ns % 1_000_000_000) as u32 }
+    Time::from_nanos(ns as i64)
 }
 
 /// Check that a run of `duration_s` seconds starting at `start_ns` stays inside ROS time.

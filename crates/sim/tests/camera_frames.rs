@@ -53,14 +53,14 @@ fn rendered_frames_in_the_bag_decode_and_detect_at_the_ground_truth() {
     let msgs = reader.read_all(&MessageFilter { topics: Some(vec!["/camera/image_raw".into(), "/camera/camera_info".into()]), ..MessageFilter::default() }).unwrap();
     let infos: Vec<u64> = msgs.iter().filter(|m| m.topic == "/camera/camera_info").map(|m| {
         let i: CameraInfo = decode(&m.data);
-        i.header.stamp.sec as u64 * 1_000_000_000 + i.header.stamp.nanosec as u64
+        i.header.stamp.nanos() as u64
     }).collect();
     let images: Vec<_> = msgs.iter().filter(|m| m.topic == "/camera/image_raw").collect();
     let dict = Dictionary::predefined("DICT_4X4_50").unwrap();
     let (mut sq, mut n) = (0.0, 0usize);
     for (k, (m, req)) in images.iter().zip(&requests).enumerate() {
         let img: Image = decode(&m.data);
-        let stamp = img.header.stamp.sec as u64 * 1_000_000_000 + img.header.stamp.nanosec as u64;
+        let stamp = img.header.stamp.nanos() as u64;
         assert_eq!(stamp, infos[k], "image and its CameraInfo share the stamp");
         assert_eq!(stamp, stamp_ns(start, req.t));
         assert_eq!((img.width, img.height, img.step, img.encoding.as_str(), img.is_bigendian), (2448, 2048, 2448, "mono8", 0));

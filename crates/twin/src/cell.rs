@@ -654,7 +654,7 @@ fn home_of(id: &str) -> Option<&'static str> {
 }
 
 /// Machine-frame displacement terms that read no axis signal: the ones a serial arm takes.
-const ARM_DISPLACEMENT_TERMS: &str = "thermal_growth, workpiece_expansion, tool_offset, frame_misalignment";
+const ARM_DISPLACEMENT_TERMS: &str = "thermal_growth, tool_offset";
 
 fn terms(configs: &[TermConfig], sensors: &BTreeSet<String>, has_load: bool, machine: &MachineGeometry) -> Result<TermModel, CellError> {
     let is_delta = matches!(machine.kinematics, MachineKinematics::Delta(_));

@@ -2,29 +2,13 @@
 
 mod common;
 
+use common::{assert_mentions, error_of};
+
 use metrocell_twin::Cell;
 
 /// The demo file with `from` replaced by `to` (exactly once).
 fn edited(from: &str, to: &str) -> String {
-    let text = std::fs::read_to_string(common::cell_path("quick_demo.yaml")).unwrap();
-    assert_eq!(text.matches(from).count(), 1, "edit target `{from}` must occur once");
-    text.replace(from, to)
-}
-
-fn error_of(text: &str) -> String {
-    match Cell::from_yaml_str(text, "bad.yaml") {
-        Ok(_) => panic!("cell accepted"),
-        Err(e) => {
-            println!("{e}");
-            e.to_string()
-        }
-    }
-}
-
-fn assert_mentions(msg: &str, needles: &[&str]) {
-    for n in needles {
-        assert!(msg.contains(n), "message lacks `{n}`: {msg}");
-    }
+    common::edited_example("quick_demo.yaml", from, to)
 }
 
 #[test]

@@ -40,7 +40,7 @@ pub fn run(node: &MetrocellNode, device: &str, out: Outputs<'_>) -> Result<(), B
             diagnostics.add_count("frames_dropped_by_driver", f.sequence.wrapping_sub(prev).saturating_sub(1) as u64);
         }
         last_sequence = Some(f.sequence);
-        let header = Header { stamp: Time { sec: f.stamp_ns.div_euclid(1_000_000_000) as i32, nanosec: f.stamp_ns.rem_euclid(1_000_000_000) as u32 }, frame_id: out.frame_id.clone() };
+        let header = Header { stamp: Time::from_nanos(f.stamp_ns), frame_id: out.frame_id.clone() };
         if let Some(info) = &out.info {
             let _ = out.infos.publish(CameraInfo { header: header.clone(), ..info.clone() });
         }

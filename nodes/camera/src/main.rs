@@ -116,7 +116,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                 next = next.max(now) + p;
             }
             let ns = capture_ns.unwrap_or_else(|| node.now().to_nanos());
-            let header = Header { stamp: Time { sec: ns.div_euclid(1_000_000_000) as i32, nanosec: ns.rem_euclid(1_000_000_000) as u32 }, frame_id: frame_id.clone() };
+            let header = Header { stamp: Time::from_nanos(ns), frame_id: frame_id.clone() };
             img.header = header.clone();
             if let Some(info) = &info {
                 if info.image_width != img.width || info.image_height != img.height {

@@ -15,7 +15,7 @@ use metrocell_node::{qos, MetrocellNode};
 use metrocell_vision::aruco::{generate_marker_image, Dictionary};
 
 fn stamp(h: &metrocell_msgs::std_msgs::msg::Header) -> i64 {
-    h.stamp.sec as i64 * 1_000_000_000 + h.stamp.nanosec as i64
+    h.stamp.nanos()
 }
 
 #[test]

@@ -13,7 +13,7 @@ use metrocell_msgs::sensor_msgs::msg::Image;
 use metrocell_node::{qos, MetrocellNode};
 
 fn stamp(h: &metrocell_msgs::std_msgs::msg::Header) -> i64 {
-    h.stamp.sec as i64 * 1_000_000_000 + h.stamp.nanosec as i64
+    h.stamp.nanos()
 }
 
 fn write_frame(path: &Path, mtime_ns: u64) {

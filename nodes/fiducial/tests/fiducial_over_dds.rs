@@ -27,11 +27,11 @@ impl Drop for Kill {
 }
 
 fn header(stamp_ns: i64) -> Header {
-    Header { stamp: Time { sec: (stamp_ns / 1_000_000_000) as i32, nanosec: (stamp_ns % 1_000_000_000) as u32 }, frame_id: "cam_optical".into() }
+    Header { stamp: Time::from_nanos(stamp_ns as i64), frame_id: "cam_optical".into() }
 }
 
 fn stamp_ns(h: &Header) -> i64 {
-    h.stamp.sec as i64 * 1_000_000_000 + h.stamp.nanosec as i64
+    h.stamp.nanos()
 }
 
 #[test]

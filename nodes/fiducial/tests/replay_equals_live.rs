@@ -29,11 +29,11 @@ const W: u32 = 480;
 const H: u32 = 360;
 
 fn header(ns: u64) -> Header {
-    Header { stamp: Time { sec: (ns / 1_000_000_000) as i32, nanosec: (ns % 1_000_000_000) as u32 }, frame_id: "cam_optical".into() }
+    Header { stamp: Time::from_nanos(ns as i64), frame_id: "cam_optical".into() }
 }
 
 fn stamp_ns(h: &Header) -> u64 {
-    h.stamp.sec as u64 * 1_000_000_000 + h.stamp.nanosec as u64
+    h.stamp.nanos() as u64
 }
 
 fn camera_info() -> CameraInfo {

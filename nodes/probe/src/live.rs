@@ -1,5 +1,5 @@
-//! The node on live DDS. Nominals are taken before triggers in each cycle, so a nominal published
-//! before its trigger is paired with it, as in the replay's log-time order.
+//! The node on live DDS. Nominals pair with triggers by header stamp (see `processing`), so the
+//! order in which a cycle takes them does not matter.
 
 use std::time::Duration;
 

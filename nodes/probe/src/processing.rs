@@ -1,8 +1,16 @@
 //! What the node does with each input, shared by the live run and the bag replay so both give
-//! the same numbers: parameters → [`ProbeProcessor`]; a nominal (PointStamped) is held for the
-//! next trigger; a trigger (JointState) becomes a ProbeHit and, when a nominal is held, a
-//! MeasuredPoint (point_id `<probe_id>_<n>`, n counting accepted triggers from 1).
+//! the same numbers: parameters → [`ProbeProcessor`]; a trigger (JointState) becomes a ProbeHit
+//! and, when a nominal (PointStamped) belongs to it, a MeasuredPoint (point_id `<probe_id>_<n>`,
+//! n counting accepted triggers from 1).
+//!
+//! Pairing is by header stamp, not by arrival, so a live node (which may take a cycle's nominals
+//! and triggers in either order) pairs exactly as a replay in log-time order does: a trigger at
+//! stamp t takes the newest held nominal stamped ≤ t; older held nominals were never used and are
+//! dropped; nominals stamped after t wait for a later trigger. A rejected trigger uses up its
+//! nominal too, so the next trigger can never be measured against another point's nominal.
 //! Header of both outputs: the trigger's stamp, frame_id = the `frame_id` parameter.
+
+use std::collections::VecDeque;
 
 use metrocell_msgs::geometry_msgs::msg::{Point, PointStamped, Vector3 as Vector3Msg};
 use metrocell_msgs::msg::{MeasuredPoint, ProbeHit};
@@ -22,7 +30,7 @@ pub fn declarations() -> Vec<ParamDecl> {
         ParamDecl::new("stylus_offset", vec![0.0, 0.0, 0.0], "axis readings → ball centre offset [m] (x, y, z)"),
         ParamDecl::new("pretravel", vec![0.0, 0.0, 0.0, 0.0], "probe_pretravel (p0, a, b, pz) [m]"),
         ParamDecl::new("pretravel_std", vec![1e-6, 1e-6, 1e-6, 1e-6], "their standard uncertainties [m]"),
-        ParamDecl::new("lobes", 3i64, "pretravel lobe count"),
+        ParamDecl::new("lobes", 3i64, "pretravel lobe count").with_range(1.0, 12.0),
         ParamDecl::new("axis_std", 1e-6, "standard uncertainty of one axis reading [m]").with_range(0.0, 1e-3),
         ParamDecl::new("default_approach", vec![0.0, 0.0, -1.0], "approach direction when the trigger has no velocity"),
     ]
@@ -38,9 +46,14 @@ pub struct ProbeProcessor {
     fallback: Vector3<f64>,
     probe_id: String,
     frame_id: String,
-    nominal: Option<PointStamped>,
+    /// Nominals not yet paired, in arrival order (at most [`MAX_HELD_NOMINALS`]).
+    nominals: VecDeque<PointStamped>,
     count: u64,
 }
+
+/// Nominals held without a trigger beyond this many are dropped oldest first (a nominal stream
+/// without triggers must not grow the node's memory).
+const MAX_HELD_NOMINALS: usize = 256;
 
 impl ProbeProcessor {
     pub fn from_parameters(p: &Parameters) -> Result<Self, Box<dyn std::error::Error>> {
@@ -54,7 +67,7 @@ impl ProbeProcessor {
             stylus_offset: vec3(&p.get::<Vec<f64>>("stylus_offset")?, "stylus_offset")?,
             pretravel: four("pretravel")?,
             pretravel_std: four("pretravel_std")?,
-            lobes: p.get::<i64>("lobes")?.clamp(1, 12) as usize,
+            lobes: p.get::<i64>("lobes")? as usize,
             axis_std: p.get("axis_std")?,
         };
         let axes: Vec<String> = p.get("axes")?;
@@ -67,7 +80,7 @@ impl ProbeProcessor {
             fallback: vec3(&p.get::<Vec<f64>>("default_approach")?, "default_approach")?,
             probe_id: p.get("probe_id")?,
             frame_id: p.get("frame_id")?,
-            nominal: None,
+            nominals: VecDeque::new(),
             count: 0,
         })
     }
@@ -77,14 +90,25 @@ impl ProbeProcessor {
         self.count
     }
 
-    /// Hold `n` as the nominal of the next trigger (a newer nominal replaces an unused one).
+    /// Hold `n` for the trigger it belongs to (see the module doc).
     pub fn nominal(&mut self, n: PointStamped) {
-        self.nominal = Some(n);
+        if self.nominals.len() == MAX_HELD_NOMINALS {
+            self.nominals.pop_front();
+        }
+        self.nominals.push_back(n);
     }
 
-    /// One trigger → its ProbeHit and, if a nominal was held, the MeasuredPoint (which uses it up).
-    /// A rejected trigger leaves the nominal held; the error names the trigger's stamp.
+    /// The newest held nominal stamped at or before `stamp_ns`; it and every older one leave.
+    fn take_nominal(&mut self, stamp_ns: i64) -> Option<PointStamped> {
+        let (due, later): (VecDeque<_>, VecDeque<_>) = self.nominals.drain(..).partition(|n| n.header.stamp.nanos() <= stamp_ns);
+        self.nominals = later;
+        due.into_iter().max_by_key(|n| n.header.stamp.nanos())
+    }
+
+    /// One trigger → its ProbeHit and, if a nominal belongs to it, the MeasuredPoint. A rejected
+    /// trigger uses up its nominal as well; the error names the trigger's stamp.
     pub fn trigger(&mut self, t: &JointState) -> Result<(ProbeHit, Option<MeasuredPoint>), String> {
+        let nominal = self.take_nominal(t.header.stamp.nanos());
         let result = (|| -> Result<_, ProbeError> {
             let mut pos = [0.0; 3];
             let mut vel = [0.0; 3];
@@ -119,7 +143,7 @@ impl ProbeProcessor {
             surface_point: p(hit.surface_point),
             covariance: cov,
         };
-        let point = self.nominal.take().map(|n| MeasuredPoint {
+        let point = nominal.map(|n| MeasuredPoint {
             header,
             point_id: format!("{}_{}", self.probe_id, self.count),
             source: "probe".into(),

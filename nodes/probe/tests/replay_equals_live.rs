@@ -24,11 +24,11 @@ const T0: u64 = 1_700_000_000_000_000_000;
 const MS: u64 = 1_000_000;
 
 fn header(ns: u64) -> Header {
-    Header { stamp: Time { sec: (ns / 1_000_000_000) as i32, nanosec: (ns % 1_000_000_000) as u32 }, frame_id: "machine".into() }
+    Header { stamp: Time::from_nanos(ns as i64), frame_id: "machine".into() }
 }
 
 fn stamp_ns(h: &Header) -> u64 {
-    h.stamp.sec as u64 * 1_000_000_000 + h.stamp.nanosec as u64
+    h.stamp.nanos() as u64
 }
 
 enum Input {
@@ -153,10 +153,19 @@ fn replay_from_bag_equals_live_run_over_dds() {
         }
     }
 
-    // 6 triggers, one rejected; nominals before triggers 0, 1, 3 (rejected: kept for 4), 5.
+    // 6 triggers, one rejected; nominals before triggers 0, 1, 3 (rejected: its nominal goes with
+    // it, so trigger 4 has none) and 5.
     assert_eq!(hits.len(), 5, "replay hits at {:?}", hits.keys());
     let ids: Vec<&str> = points.values().map(|p| p.point_id.as_str()).collect();
-    assert_eq!(ids, ["ts1_1", "ts1_2", "ts1_4", "ts1_5"]);
+    assert_eq!(ids, ["ts1_1", "ts1_2", "ts1_5"]);
+    // Each point is measured against the nominal stamped 50 ms before its own trigger.
+    for p in points.values() {
+        let k = inputs.iter().position(|(t, i)| matches!(i, Input::Trigger(_)) && *t == stamp_ns(&p.header)).unwrap();
+        match &inputs[k - 1].1 {
+            Input::Nominal(n) => assert_eq!(p.nominal, n.point, "{}", p.point_id),
+            Input::Trigger(_) => panic!("{} has a nominal but its trigger had none", p.point_id),
+        }
+    }
     // Compensation moved the point off the axis readings by about the stylus radius.
     let h0 = hits.values().next().unwrap();
     let d = ((h0.surface_point.x - h0.axis_positions[0]).powi(2) + (h0.surface_point.y - h0.axis_positions[1]).powi(2) + (h0.surface_point.z - h0.axis_positions[2]).powi(2)).sqrt();

@@ -21,7 +21,7 @@ fn cdr<T: RosMessage>(m: &T) -> Vec<u8> {
 
 fn header(frame: &str) -> Header {
     let ns = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).unwrap().as_nanos() as u64;
-    Header { stamp: Time { sec: (ns / 1_000_000_000) as i32, nanosec: (ns % 1_000_000_000) as u32 }, frame_id: frame.into() }
+    Header { stamp: Time::from_nanos(ns as i64), frame_id: frame.into() }
 }
 
 fn main() {

@@ -60,7 +60,7 @@ fn play_keeps_spacing_over_rate_and_delivers_every_message() {
             got.push((Instant::now(), m));
         }
         while let Ok(Some((c, _))) = clock.take() {
-            clocks.push(c.clock.sec as u64 * 1_000_000_000 + c.clock.nanosec as u64);
+            clocks.push(c.clock.nanos() as u64);
         }
         std::thread::sleep(Duration::from_millis(1));
     }

@@ -57,7 +57,7 @@ pub fn compensator(node: &Parameters) -> Result<ThermalScaleCompensator, Box<dyn
 pub fn error_model(c: &ThermalScaleCompensator, reading: &dyn Fn(&str) -> Option<Reading>, now_ns: i64) -> Result<ErrorModel, ThermalError> {
     let mut m = ErrorModel {
         header: Header {
-            stamp: Time { sec: now_ns.div_euclid(1_000_000_000) as i32, nanosec: now_ns.rem_euclid(1_000_000_000) as u32 },
+            stamp: Time::from_nanos(now_ns),
             frame_id: "machine".into(),
         },
         machine_id: String::new(),

@@ -26,7 +26,7 @@ const MS: u64 = 1_000_000;
 const BAG_SECONDS: f64 = 3.0;
 
 fn stamp(ns: u64) -> Time {
-    Time { sec: (ns / 1_000_000_000) as i32, nanosec: (ns % 1_000_000_000) as u32 }
+    Time::from_nanos(ns as i64)
 }
 
 fn write_input_bag(dir: &Path) {

@@ -9,6 +9,30 @@ pub fn cell_path(name: &str) -> String {
     format!("{}/examples/cells/{name}", env!("CARGO_MANIFEST_DIR"))
 }
 
+/// Example cell `file` with `from` replaced by `to` (which must occur exactly once).
+pub fn edited_example(file: &str, from: &str, to: &str) -> String {
+    let text = std::fs::read_to_string(cell_path(file)).unwrap();
+    assert_eq!(text.matches(from).count(), 1, "edit target `{from}` must occur once");
+    text.replace(from, to)
+}
+
+/// The error a cell text must give (panics if the cell is accepted).
+pub fn error_of(text: &str) -> String {
+    match Cell::from_yaml_str(text, "bad.yaml") {
+        Ok(_) => panic!("cell accepted"),
+        Err(e) => {
+            println!("{e}");
+            e.to_string()
+        }
+    }
+}
+
+pub fn assert_mentions(msg: &str, needles: &[&str]) {
+    for n in needles {
+        assert!(msg.contains(n), "message lacks `{n}`: {msg}");
+    }
+}
+
 /// The parsed (not yet validated) example file, for tests to modify.
 pub fn example_file(name: &str) -> CellFile {
     let text = std::fs::read_to_string(cell_path(name)).expect("example cell exists");

@@ -9,7 +9,7 @@
 //! | `timestamp` | seconds since the Unix epoch (`1714557600.125`) or UTC date-time `2024-05-01T10:00:00.125Z` (`T` or space; `Z` optional) | yes |
 //! | `point_id` | name of the point | yes |
 //! | `measured_x`, `measured_y`, `measured_z` | measured coordinates [m] | yes |
-//! | `u_x`, `u_y`, `u_z` | standard uncertainties (k = 1) of the measured coordinates [m] | one of these, |
+//! | `u_x`, `u_y`, `u_z` | standard uncertainties (k = 1) of the measured coordinates [m] | all three, or |
 //! | `u95` | expanded uncertainty, k = 2, same on each axis [m]: σ = U95 / 2 | `u_*`, or |
 //! | | | `default_uncertainty` in the mapping |
 //! | `nominal_x`, `nominal_y`, `nominal_z` | commanded position [m] (NaN in the message when absent) | no |
@@ -288,10 +288,16 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
             return Err(header_err(format!("no column for the required field {what}")));
         }
     }
-    let has_u = has(&|f| matches!(f, Field::U(_) | Field::U95));
-    if !has_u && mapping.default_uncertainty.is_none() {
-        return Err(header_err("no uncertainty column (u_x/u_y/u_z or u95) and no default_uncertainty in a mapping: \
-                               a measured point needs its uncertainty".into()));
+    // Every axis needs an uncertainty: from u95, its own u_<axis> column, or the mapping's default.
+    if !has(&|f| matches!(f, Field::U95)) && mapping.default_uncertainty.is_none() {
+        let missing: Vec<&str> = ["u_x", "u_y", "u_z"].into_iter().enumerate().filter(|&(a, _)| !has(&|f| matches!(f, Field::U(b) if *b == a))).map(|(_, n)| n).collect();
+        if !missing.is_empty() {
+            return Err(header_err(format!(
+                "no uncertainty column for {} (give u_x, u_y and u_z, or u95, or a default_uncertainty in a mapping): \
+                 a measured point needs its uncertainty on every axis",
+                missing.join(", ")
+            )));
+        }
     }
     let frame_id = mapping.frame_id.clone().unwrap_or_else(|| "import".into());
     let source = mapping.source.clone().unwrap_or_else(|| "import".into());

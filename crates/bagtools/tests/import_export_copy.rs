@@ -100,6 +100,10 @@ fn missing_uncertainty_is_refused() {
     std::fs::write(&csv, "timestamp,point_id,measured_x,measured_y,measured_z\n1,A,1,2,3\n").unwrap();
     let e = import_csv(&csv, &dir, None, WriterOptions::default()).unwrap_err().to_string();
     assert!(e.contains("uncertainty") && e.contains("line 1"), "{e}");
+    // Uncertainty for x only: the axes without one are named (before: NaN covariance, no error).
+    std::fs::write(&csv, "timestamp,point_id,measured_x,measured_y,measured_z,u_x\n1,A,1,2,3,0.001\n").unwrap();
+    let e = import_csv(&csv, &dir, None, WriterOptions::default()).unwrap_err().to_string();
+    assert!(e.contains("no uncertainty column for u_y, u_z ("), "{e}");
 }
 
 #[test]

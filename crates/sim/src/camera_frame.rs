@@ -5,17 +5,19 @@
 //! `DICT_4X4_50` ArUco markers (ids 0–3, side [`FramePlate::marker_side`], gap
 //! [`FramePlate::gap`], one-cell border as OpenCV prints them) square to the *nominal* camera's
 //! optical axis at [`FramePlate::standoff`] in front of it, its centre on that axis, its x/y
-//! axes along the nominal camera's x/y. The nominal camera is the mount applied to the
-//! commanded tool point; the true camera is the mount applied to the true (displaced) tool
-//! point ([`CameraFrameRequest::position`]). So a perfect machine sees the board centred, and
-//! the machine's displacement d moves the markers by ≈ f·d/standoff pixels — the image carries
-//! the machine error as a real camera would.
+//! axes along the nominal camera's x/y. The camera turns with the tool: the nominal camera is
+//! the mount applied to the commanded tool pose, the true camera the mount applied to the true
+//! (displaced) tool pose (the twin computes both per machine family:
+//! [`CameraFrameRequest::nominal_position`], [`CameraFrameRequest::position`]). So a perfect
+//! machine sees the board centred, and the machine's displacement d moves the markers by
+//! ≈ f·d/standoff pixels along the camera's axes, whatever the table or arm orientation —
+//! the image carries the machine error as a real camera would.
 //!
 //! Frames (stated once): workpiece frame wp; camera optical frame c (x right, y down, z forward);
 //! plate frame p (the renderer's target frame: plane z = 0, x right, y down as printed).
 //! `p_wp = R_cam·p_c + c_cam` (the request's rotation/position), `p_wp = R_nom·p_p + o_plate`
-//! with `o_plate = c_nom + R_nom·(0, 0, standoff)`. The render pose (plate → camera) is then
-//! `p_c = R_camᵀ·R_nom·p_p + R_camᵀ·(o_plate − c_cam)`.
+//! with `o_plate = c_nom + R_nom·(0, 0, standoff)` (c_nom, R_nom: the request's nominal pose).
+//! The render pose (plate → camera) is then `p_c = R_camᵀ·R_nom·p_p + R_camᵀ·(o_plate − c_cam)`.
 //!
 //! Determinism: noise comes from the renderer's seeded generator, seeded per frame from the
 //! simulation seed and the frame's stamp ([`frame_seed`]).
@@ -24,7 +26,7 @@ use metrocell_twin::CameraFrameRequest;
 use metrocell_vision::aruco::Dictionary;
 use metrocell_vision::camera::{CameraModel, Distortion};
 use metrocell_vision::render::{render_view, PlanarTarget, RenderSettings, RenderedView, TargetItem};
-use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Rotation3, Translation3, UnitQuaternion, Vector3};
 
 use crate::camera_intrinsics::CameraIntrinsics;
 use crate::error::SimError;
@@ -89,12 +91,12 @@ pub fn camera_model(c: &CameraIntrinsics) -> Result<CameraModel, SimError> {
     CameraModel::new(c.width, c.height, c.fx, c.fy, c.cx, c.cy, Distortion::BrownConrady(c.distortion)).map_err(|e| SimError::invalid("camera intrinsics", e.to_string()))
 }
 
-/// Plate → camera pose of a request (module doc), given the camera mount on the tool.
-pub fn plate_to_camera(request: &CameraFrameRequest, mount_rotation: &Matrix3<f64>, mount_translation: &Vector3<f64>, plate: &FramePlate) -> Isometry3<f64> {
-    let c_nom = request.nominal_tool_point + mount_translation;
-    let o_plate = c_nom + mount_rotation * Vector3::new(0.0, 0.0, plate.standoff);
+/// Plate → camera pose of a request (module doc).
+pub fn plate_to_camera(request: &CameraFrameRequest, plate: &FramePlate) -> Isometry3<f64> {
+    let r_nom = &request.nominal_rotation;
+    let o_plate = request.nominal_position + r_nom * Vector3::new(0.0, 0.0, plate.standoff);
     let r_cam_t = request.rotation.transpose();
-    let r = Rotation3::from_matrix(&(r_cam_t * mount_rotation));
+    let r = Rotation3::from_matrix(&(r_cam_t * r_nom));
     let t = r_cam_t * (o_plate - request.position);
     Isometry3::from_parts(Translation3::from(t), UnitQuaternion::from_rotation_matrix(&r))
 }
@@ -113,22 +115,20 @@ pub struct FrameRenderer {
     pub camera: CameraModel,
     pub rendering: FrameRendering,
     target: PlanarTarget,
-    mount_rotation: Matrix3<f64>,
-    mount_translation: Vector3<f64>,
     sim_seed: u64,
 }
 
 impl FrameRenderer {
-    pub fn new(intrinsics: &CameraIntrinsics, rendering: FrameRendering, mount_rotation: Matrix3<f64>, mount_translation: Vector3<f64>, sim_seed: u64) -> Result<FrameRenderer, SimError> {
+    pub fn new(intrinsics: &CameraIntrinsics, rendering: FrameRendering, sim_seed: u64) -> Result<FrameRenderer, SimError> {
         let camera = camera_model(intrinsics)?;
         let target = rendering.plate.target()?;
-        Ok(FrameRenderer { camera, rendering, target, mount_rotation, mount_translation, sim_seed })
+        Ok(FrameRenderer { camera, rendering, target, sim_seed })
     }
 
     /// The frame of `request` stamped `stamp_ns`, with the markers' true corners (pixels,
     /// OpenCV order) — the ground truth the image was drawn from.
     pub fn render(&self, request: &CameraFrameRequest, stamp_ns: u64) -> Result<RenderedView, SimError> {
-        let pose = plate_to_camera(request, &self.mount_rotation, &self.mount_translation, &self.rendering.plate);
+        let pose = plate_to_camera(request, &self.rendering.plate);
         let settings = RenderSettings { seed: frame_seed(self.sim_seed, stamp_ns), ..self.rendering.settings };
         render_view(&self.camera, &pose, &self.target, &settings).map_err(|e| SimError::invalid("camera frame rendering", e.to_string()))
     }
@@ -140,15 +140,16 @@ mod tests {
     use nalgebra::Point3;
 
     fn request(d: Vector3<f64>) -> CameraFrameRequest {
-        let nominal = Vector3::new(0.1, 0.2, 0.05);
-        CameraFrameRequest { t: 1.0, target_id: 0, cycle: 0, position: nominal + d + Vector3::new(0.05, 0.0, 0.0), rotation: Rotation3::from_euler_angles(std::f64::consts::PI, 0.0, 0.0).into_inner(), nominal_tool_point: nominal }
+        let nominal = Vector3::new(0.15, 0.2, 0.05);
+        let down = Rotation3::from_euler_angles(std::f64::consts::PI, 0.0, 0.0).into_inner();
+        CameraFrameRequest { t: 1.0, target_id: 0, cycle: 0, position: nominal + d, rotation: down, nominal_position: nominal, nominal_rotation: down }
     }
 
     #[test]
     fn nominal_camera_sees_the_plate_centred_at_the_standoff() {
         let r = request(Vector3::zeros());
         let plate = FramePlate::default();
-        let pose = plate_to_camera(&r, &r.rotation, &Vector3::new(0.05, 0.0, 0.0), &plate);
+        let pose = plate_to_camera(&r, &plate);
         let c = pose * Point3::origin();
         assert!((c.coords - Vector3::new(0.0, 0.0, 0.150)).norm() < 1e-12, "{c}");
         assert!((pose.rotation.angle()).abs() < 1e-12);
@@ -159,9 +160,29 @@ mod tests {
         // Tool displaced +10 µm along workpiece x; camera x = workpiece x (Rx(π)), so the plate
         // appears 10 µm towards −x in the camera frame.
         let r = request(Vector3::new(10e-6, 0.0, 0.0));
-        let pose = plate_to_camera(&r, &r.rotation, &Vector3::new(0.05, 0.0, 0.0), &FramePlate::default());
+        let pose = plate_to_camera(&r, &FramePlate::default());
         let c = pose * Point3::origin();
         assert!((c.x + 10e-6).abs() < 1e-12 && c.y.abs() < 1e-12, "{c}");
+    }
+
+    #[test]
+    fn a_camera_turned_about_its_axis_sees_the_plate_turned_back_in_any_nominal_orientation() {
+        // a tilted nominal camera (as on a turned table or an arm), the true one turned a
+        // further 1 mrad about its optical axis at the same place
+        let nominal = Rotation3::from_euler_angles(0.3, -0.5, 1.0);
+        let r = CameraFrameRequest {
+            t: 0.0,
+            target_id: 0,
+            cycle: 0,
+            position: Vector3::new(0.1, -0.2, 0.3),
+            rotation: (nominal * Rotation3::from_axis_angle(&Vector3::z_axis(), 1e-3)).into_inner(),
+            nominal_position: Vector3::new(0.1, -0.2, 0.3),
+            nominal_rotation: nominal.into_inner(),
+        };
+        let pose = plate_to_camera(&r, &FramePlate::default());
+        assert!(((pose * Point3::origin()).coords - Vector3::new(0.0, 0.0, 0.150)).norm() < 1e-12);
+        let (axis, angle) = pose.rotation.axis_angle().unwrap();
+        assert!((angle - 1e-3).abs() < 1e-12 && (axis.into_inner() + Vector3::z()).norm() < 1e-9, "{axis:?} {angle}");
     }
 
     #[test]

@@ -97,8 +97,7 @@ pub struct MessageConverter {
     tool_offset: Vector3<f64>,
     /// Per thermocouple: (name, topic, location).
     thermocouples: Vec<(String, TopicId, String)>,
-    /// Camera mount on the tool (rotation, translation), when the cell has a camera.
-    camera_mount: Option<(nalgebra::Matrix3<f64>, Vector3<f64>)>,
+    has_camera: bool,
     frames: Option<FrameRenderer>,
 }
 
@@ -111,17 +110,16 @@ impl MessageConverter {
             .zip(&topics.temperatures)
             .map(|(tc, &id)| (tc.name.clone(), id, tc.node.clone().unwrap_or_else(|| "ambient".into())))
             .collect();
-        let camera_mount = cell.camera.as_ref().map(|c| (c.mount.rotation, c.mount.translation));
         let camera = CameraIntrinsics::for_cell(cell, camera);
-        Ok(MessageConverter { topics, start_ns, camera, tool_offset: cell.machine.tool_offset, thermocouples, camera_mount, frames: None })
+        Ok(MessageConverter { topics, start_ns, camera, tool_offset: cell.machine.tool_offset, thermocouples, has_camera: cell.camera.is_some(), frames: None })
     }
 
     /// Also render an image for every camera frame request (module doc of
     /// [`crate::camera_frame`]); `seed` is the simulation seed (per-frame noise derives from
     /// it). A cell without a camera ignores this. Fails on invalid intrinsics or settings.
     pub fn with_frames(mut self, rendering: FrameRendering, seed: u64) -> Result<MessageConverter, SimError> {
-        if let Some((rotation, translation)) = self.camera_mount {
-            self.frames = Some(FrameRenderer::new(&self.camera, rendering, rotation, translation, seed)?);
+        if self.has_camera {
+            self.frames = Some(FrameRenderer::new(&self.camera, rendering, seed)?);
         }
         Ok(self)
     }

@@ -193,7 +193,10 @@ pub struct ProbeSpec {
 /// Camera frame requests, once per dwell.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CameraSpec {
-    /// Camera frame relative to the tool tip (translation) and its orientation, workpiece axes.
+    /// Camera frame relative to the tool frame, `p_tool = rotation·p_cam + translation`, with
+    /// the tool frame's axes of the family (workpiece axes on cartesian and delta machines,
+    /// machine axes on a five-axis machine, the tool frame on an arm): the camera turns with
+    /// the tool.
     pub mount: InstrumentPose,
     pub delay: f64,
     /// The lens the file states, if any (else the simulator's default camera).
@@ -373,65 +376,29 @@ fn opt(q: &Option<Quantity>, path: &str, unit: &str) -> Result<f64, CellError> {
 }
 
 fn machine(m: &MachineSection, base_dir: &Path) -> Result<MachineGeometry, CellError> {
-    // Each family's own section; the others' must be absent.
-    let own: &[&str] = match m.family {
-        MachineFamily::Cartesian => &["stacking"],
-        MachineFamily::Delta => &["delta"],
-        MachineFamily::FiveAxis => &["five_axis"],
-        MachineFamily::SerialArm => &["serial_arm"],
-    };
-    for (key, present, family, takes) in [
-        ("five_axis", m.five_axis.is_some(), "five_axis", "five_axis {d0, tool_length, b_pivot, c_offset, workpiece_offset, b_limits, c_limits}"),
-        ("serial_arm", m.serial_arm.is_some(), "serial_arm", "serial_arm {dh | urdf, base, tool, joint_limits}"),
-    ] {
-        if present && !own.contains(&key) {
-            return Err(CellError::invalid(format!("machine.{key}"), format!("is for family: {family} (machine.{takes}); this cell's family is {}", family_name(m.family))));
-        }
-    }
-    if m.family == MachineFamily::FiveAxis || m.family == MachineFamily::SerialArm {
-        for (key, present) in [("stacking", m.stacking.is_some()), ("delta", m.delta.is_some())] {
-            if present {
-                return Err(CellError::invalid(format!("machine.{key}"), format!("is for family: {}; a {} machine takes machine.{}", if key == "stacking" { "cartesian" } else { "delta" }, family_name(m.family), own[0])));
-            }
-        }
-    }
+    check_family_sections(m)?;
     let kinematics = match m.family {
         MachineFamily::Cartesian => {
-            if m.delta.is_some() {
-                return Err(CellError::invalid("machine.delta", "is for family: delta; a cartesian machine takes machine.stacking"));
-            }
             let stacking = m.stacking.as_deref().ok_or_else(|| CellError::invalid("machine.stacking", "is required for a cartesian machine (e.g. XFYZ, FXYZ, XYFZ)"))?;
             MachineKinematics::Cartesian(stacking.parse().map_err(|e| CellError::invalid("machine.stacking", format!("{e}; allowed: the letters X, Y, Z and F once each, e.g. XFYZ")))?)
         }
         MachineFamily::Delta => {
-            if m.stacking.is_some() {
-                return Err(CellError::invalid("machine.stacking", "is for family: cartesian; a delta takes machine.delta {rod_length, radius}"));
-            }
             let d = m.delta.as_ref().ok_or_else(|| CellError::invalid("machine.delta", "is required for a delta machine: {rod_length, radius}"))?;
             let rod = d.rod_length.positive("machine.delta.rod_length", "m")?;
             let radius = d.radius.positive("machine.delta.radius", "m")?;
             MachineKinematics::Delta(DeltaGeometry::new(rod, radius).map_err(|e| CellError::invalid("machine.delta", e.to_string()))?)
         }
         MachineFamily::FiveAxis => {
-            let s = m.five_axis.as_ref().ok_or_else(|| CellError::invalid("machine.five_axis", "is required for a five_axis machine: {d0, tool_length, b_pivot, c_offset, workpiece_offset, b_limits, c_limits}"))?;
+            let s = m.five_axis.as_ref().ok_or_else(|| CellError::invalid("machine.five_axis", format!("is required for a five_axis machine: {}", FIVE_AXIS_KEYS)))?;
             MachineKinematics::FiveAxis(crate::families::five_axis(s)?)
         }
         MachineFamily::SerialArm => {
-            let s = m.serial_arm.as_ref().ok_or_else(|| CellError::invalid("machine.serial_arm", "is required for a serial_arm machine: {dh: {convention, rows} | urdf: {path, root_link, tip_link}, base, tool, joint_limits}"))?;
-            if m.travel.is_some() {
-                return Err(CellError::invalid("machine.travel", "is not used by a serial_arm; give machine.serial_arm.joint_limits"));
-            }
-            if m.tool_offset.is_some() {
-                return Err(CellError::invalid("machine.tool_offset", "is not used by a serial_arm; give machine.serial_arm.tool"));
-            }
+            let s = m.serial_arm.as_ref().ok_or_else(|| CellError::invalid("machine.serial_arm", format!("is required for a serial_arm machine: {}", SERIAL_ARM_KEYS)))?;
             let arm = crate::families::serial_arm(s, base_dir, pose)?;
             let inf = [f64::NEG_INFINITY, f64::INFINITY];
             return Ok(MachineGeometry { kinematics: MachineKinematics::SerialArm(arm), travel: [inf; 3], tool_offset: Vector3::zeros() });
         }
     };
-    if m.family == MachineFamily::FiveAxis && m.tool_offset.is_some() {
-        return Err(CellError::invalid("machine.tool_offset", "is not used by a five_axis machine; give machine.five_axis.tool_length"));
-    }
     let tr = m.travel.as_ref().ok_or_else(|| CellError::invalid("machine.travel", format!("is required for a {} machine: {{x: [min, max], y: [min, max], z: [min, max]}} (m)", family_name(m.family))))?;
     let mut travel = [[0.0; 2]; 3];
     for (i, (name, r)) in [("x", &tr.x), ("y", &tr.y), ("z", &tr.z)].into_iter().enumerate() {
@@ -444,6 +411,36 @@ fn machine(m: &MachineSection, base_dir: &Path) -> Result<MachineGeometry, CellE
     }
     let tool_offset = m.tool_offset.as_ref().map(|v| vector3(v, "machine.tool_offset", "m")).transpose()?.unwrap_or_else(Vector3::zeros);
     Ok(MachineGeometry { kinematics, travel, tool_offset })
+}
+
+const FIVE_AXIS_KEYS: &str = "{d0, tool_length, b_pivot, c_offset, workpiece_offset, b_limits, c_limits}";
+const SERIAL_ARM_KEYS: &str = "{dh: {convention, rows} | urdf: {path, root_link, tip_link}, base, tool, joint_limits}";
+
+/// The `machine.*` keys that belong to some families only: a key given for another family is
+/// an error naming who takes it and what this family takes instead.
+fn check_family_sections(m: &MachineSection) -> Result<(), CellError> {
+    use MachineFamily::*;
+    let own = match m.family {
+        Cartesian => "machine.stacking (e.g. XFYZ)".to_string(),
+        Delta => "machine.delta {rod_length, radius}".to_string(),
+        FiveAxis => format!("machine.five_axis {FIVE_AXIS_KEYS}"),
+        SerialArm => format!("machine.serial_arm {SERIAL_ARM_KEYS} with joint limits and tool frame in it"),
+    };
+    let rules: [(&str, bool, &[MachineFamily]); 6] = [
+        ("stacking", m.stacking.is_some(), &[Cartesian]),
+        ("delta", m.delta.is_some(), &[Delta]),
+        ("five_axis", m.five_axis.is_some(), &[FiveAxis]),
+        ("serial_arm", m.serial_arm.is_some(), &[SerialArm]),
+        ("travel", m.travel.is_some(), &[Cartesian, Delta, FiveAxis]),
+        ("tool_offset", m.tool_offset.is_some(), &[Cartesian, Delta]),
+    ];
+    for (key, present, families) in rules {
+        if present && !families.contains(&m.family) {
+            let owners = families.iter().map(|f| family_name(*f)).collect::<Vec<_>>().join(", ");
+            return Err(CellError::invalid(format!("machine.{key}"), format!("is for family: {owners}; this cell's family is {}, a {} machine takes {own}", family_name(m.family), family_name(m.family))));
+        }
+    }
+    Ok(())
 }
 
 fn family_name(f: MachineFamily) -> &'static str {

@@ -323,7 +323,8 @@ pub struct PretravelSection {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct CameraSection {
-    /// Camera frame relative to the tool tip, in the workpiece frame axes.
+    /// Camera frame relative to the tool frame (axes: workpiece on cartesian and delta, machine
+    /// on five_axis, the arm's tool frame on serial_arm); the camera turns with the tool.
     pub mount: PoseSection,
     /// Delay after the start of each dwell at which a frame is requested (s).
     #[serde(default)]

@@ -12,15 +12,19 @@
 //!   joints. The tool point is `base · FK(q) · tool` in the cell frame (the frame of the tracker
 //!   pose). The arm's kinematic terms: `joint_offset` q_i adds to movable joint i's variable;
 //!   `link_length` l_i adds to the DH `a` of row i (the DH "link length"), or for a URDF chain
-//!   lengthens joint i's `<origin xyz>` along itself.
+//!   lengthens joint i's `<origin xyz>` along itself. `tool_offset` on an arm is an error of the
+//!   tool vector as mounted on the flange, so it turns with the tool: d = R_tool(q)·(dx, dy, dz).
+//!
+//! Tool frame (what a camera mount is relative to, see `ToolState` in the simulation): the
+//! machine axes on a five-axis machine (the spindle does not turn; the workpiece does), the
+//! arm's tool frame `base · FK(q) · tool` on an arm.
 
 use std::path::Path;
 
 use metrocell_kinematics::dh::{DhConvention, DhRow, DhTable};
-use metrocell_kinematics::five_axis::{FiveAxisGeometry, FiveAxisJoints};
+use metrocell_kinematics::five_axis::FiveAxisGeometry;
 use metrocell_kinematics::serial::{JointKind, SerialChain};
 use metrocell_kinematics::urdf_chain::chain_from_urdf_file;
-use metrocell_kinematics::KinematicsError;
 use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
 use crate::cell::InstrumentPose;
@@ -40,24 +44,9 @@ pub struct FiveAxisMachine {
 }
 
 impl FiveAxisMachine {
-    /// `[X, Y, Z, B, C]` → crates/kinematics joints.
-    pub fn joints(q: &[f64]) -> FiveAxisJoints {
-        FiveAxisJoints { d1: q[1], d2: q[0], d3: -q[2], b: q[3], c: q[4] }
-    }
-
     /// Tool tip in the machine frame for the linear axes (independent of B, C).
     pub fn tip_machine(&self, q: &[f64]) -> Vector3<f64> {
         Vector3::new(q[0], q[1], self.geometry.d0 + q[2] - self.geometry.tool_length)
-    }
-
-    /// Tool tip in the workpiece frame for a machine-frame tip.
-    pub fn to_workpiece(&self, tip_machine: &Vector3<f64>, q: &[f64]) -> Vector3<f64> {
-        self.geometry.machine_from_workpiece(q[3], q[4]).inverse_transform_point(&(*tip_machine).into()).coords
-    }
-
-    /// Nominal forward kinematics (crates/kinematics): tool tip in the workpiece frame.
-    pub fn forward(&self, q: &[f64]) -> Result<Vector3<f64>, KinematicsError> {
-        Ok(self.geometry.forward(&Self::joints(q))?.tip)
     }
 }
 
@@ -116,11 +105,6 @@ impl SerialArm {
             }
         }
         chain
-    }
-
-    /// Tool point of a chain at q, cell frame.
-    pub fn tool_point(chain: &SerialChain, q: &[f64]) -> Result<Vector3<f64>, KinematicsError> {
-        Ok(chain.tool_pose(q)?.translation.vector)
     }
 }
 

@@ -90,11 +90,15 @@ pub struct CameraFrameRequest {
     pub t: f64,
     pub target_id: u32,
     pub cycle: u32,
-    /// True camera pose in the workpiece frame: `p_wp = rotation·p_cam + position`.
+    /// True camera pose in the frame tool points are reported in (workpiece; cell for an arm):
+    /// `p = rotation·p_cam + position`, with the camera optical frame (x right, y down, z
+    /// forward). The camera rides on the tool, so this is the true tool pose followed by the
+    /// cell's `sensors.camera.mount`.
     pub position: Vector3<f64>,
     pub rotation: Matrix3<f64>,
-    /// Commanded (nominal) tool point, workpiece frame.
-    pub nominal_tool_point: Vector3<f64>,
+    /// Nominal camera pose (the commanded tool pose followed by the mount), same convention.
+    pub nominal_position: Vector3<f64>,
+    pub nominal_rotation: Matrix3<f64>,
 }
 
 /// Everything a simulation streams, in time order.
@@ -154,8 +158,10 @@ pub enum SampleTruth {
     MachineState { displacement: Vector3<f64> },
     /// True machine displacement and pretravel vector at the hit (m).
     ProbeHit { displacement: Vector3<f64>, pretravel: Vector3<f64> },
-    /// True tool point (workpiece frame).
-    CameraFrameRequest { tool_point: Vector3<f64> },
+    /// True tool point (workpiece frame; cell frame for an arm), the commanded joint vector
+    /// of the dwell (the family's, see [`crate::families`]) and the true displacement d (as in
+    /// [`TrackerTruth::displacement`]).
+    CameraFrameRequest { tool_point: Vector3<f64>, joints: Vec<f64>, displacement: Vector3<f64> },
 }
 
 /// True value of one term parameter.

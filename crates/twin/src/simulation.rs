@@ -21,11 +21,10 @@ use metrocell_physics::instrument::tracker_warmup::warmup_drift;
 use metrocell_physics::instrument::turbulence::range_scatter;
 use metrocell_kinematics::delta::DeltaGeometry;
 use metrocell_kinematics::serial::SerialChain;
-use metrocell_physics::{EffectKind, PhysicsError, SignalKind, Signals, TemperatureHistory};
-use nalgebra::{DVector, Matrix3, Vector3};
+use metrocell_physics::{EffectKind, PhysicsError, SignalKind, Signals, TemperatureHistory, TermId};
+use nalgebra::{DVector, Isometry3, Matrix3, UnitQuaternion, Vector3};
 
 use crate::cell::{Cell, MachineKinematics};
-use crate::families::SerialArm;
 use crate::error::CellError;
 use crate::noise::{stream, NoiseStream};
 use crate::program::MotionState;
@@ -72,7 +71,7 @@ impl Simulation {
         let sim = Simulation { cell, duration, seed };
         let mut e = Engine::new(&sim);
         let ms = sim.cell.program.state_at(0.0);
-        e.displacement(0.0, &ms).map_err(|err| CellError::Simulation { reason: format!("true terms cannot be evaluated: {err}") })?;
+        e.tool_state(0.0, &ms).map_err(|err| CellError::Simulation { reason: format!("true terms cannot be evaluated: {err}") })?;
         Ok(sim)
     }
 
@@ -225,6 +224,18 @@ struct TrackerState {
     breaks: Option<BeamBreakProcess>,
 }
 
+/// The tool at one instant. Poses are of the tool frame in the frame tool points are reported
+/// in (workpiece: cartesian, delta, five_axis; cell: serial_arm), `p = pose·p_tool`. Tool-frame
+/// axes: the workpiece axes on cartesian and delta machines (the tool does not turn), the
+/// machine (spindle) axes on a five-axis machine, the arm's tool frame on an arm.
+struct ToolState {
+    nominal: Isometry3<f64>,
+    truth: Isometry3<f64>,
+    /// True displacement d (m): true − nominal tool point (cartesian, delta, arm); for a
+    /// five-axis machine the linear axes' displacement in the machine frame.
+    d: Vector3<f64>,
+}
+
 struct Engine<'a> {
     sim: &'a Simulation,
     cell: &'a Cell,
@@ -343,45 +354,57 @@ impl<'a> Engine<'a> {
         }
     }
 
-    /// Nominal tool point in the frame the family's displacement terms act in: workpiece frame
-    /// (cartesian, delta), machine frame (five-axis tip before the table rotation), cell frame (arm).
-    fn nominal_machine_point(&self, q: &DVector<f64>) -> Result<Vector3<f64>, PhysicsError> {
-        let kin = |e: metrocell_kinematics::KinematicsError| PhysicsError::InvalidInput { what: format!("forward kinematics at q = {:?}", q.as_slice()), reason: e.to_string() };
-        Ok(match &self.cell.machine.kinematics {
-            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => self.cell.machine.nominal_tool_point(&v3(q)),
-            MachineKinematics::FiveAxis(f) => f.tip_machine(q.as_slice()),
-            MachineKinematics::SerialArm(a) => SerialArm::tool_point(&a.chain, q.as_slice()).map_err(kin)?,
-        })
-    }
-
-    /// (nominal, true) tool point and the true displacement d (see [`crate::families`]):
-    /// cartesian/delta workpiece frame, d = true − nominal; five-axis workpiece frame, d the
-    /// linear axes' machine-frame displacement; arm cell frame, d = true − nominal.
-    fn tool_points(&mut self, t: f64, ms: &MotionState) -> Result<(Vector3<f64>, Vector3<f64>, Vector3<f64>), PhysicsError> {
-        let d = self.displacement(t, ms)?;
-        let kin = |e: metrocell_kinematics::KinematicsError| PhysicsError::InvalidInput { what: format!("forward kinematics at t = {t} s, q = {:?}", ms.q.as_slice()), reason: e.to_string() };
-        Ok(match &self.cell.machine.kinematics {
+    /// The tool at t for the motion state: its nominal and true pose and the true displacement
+    /// d (see [`ToolState`] and [`crate::families`]). Forward kinematics runs once per call.
+    fn tool_state(&mut self, t: f64, ms: &MotionState) -> Result<ToolState, PhysicsError> {
+        let cell = self.cell;
+        let q = ms.q.as_slice();
+        let kin = |what: &str, e: metrocell_kinematics::KinematicsError| PhysicsError::InvalidInput { what: format!("{what} at t = {t} s, q = {q:?}"), reason: e.to_string() };
+        let identity = Matrix3::identity();
+        Ok(match &cell.machine.kinematics {
             MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => {
-                let n = self.cell.machine.nominal_tool_point(&v3(&ms.q));
-                (n, n + d, d)
+                let n = cell.machine.nominal_tool_point(&v3(&ms.q));
+                // a delta's firmware inverts the nominal geometry; the carriages at those
+                // heights put the effector where the true geometry says
+                let kinematic = match &self.delta {
+                    Some((nominal, truth)) => {
+                        let joints = nominal.inverse(&v3(&ms.q)).map_err(|e| kin("delta kinematics", e))?;
+                        truth.forward(&joints).map_err(|e| kin("delta kinematics", e))? - v3(&ms.q)
+                    }
+                    None => Vector3::zeros(),
+                };
+                let d = kinematic + self.term_displacement(t, ms, n, &identity)?;
+                ToolState { nominal: Isometry3::translation(n.x, n.y, n.z), truth: Isometry3::translation(n.x + d.x, n.y + d.y, n.z + d.z), d }
             }
             MachineKinematics::FiveAxis(f) => {
-                let q = ms.q.as_slice();
+                // the spindle does not turn: the tool frame is the machine frame seen from the
+                // workpiece, which turns with the table
                 let tip = f.tip_machine(q);
-                (f.to_workpiece(&tip, q), f.to_workpiece(&(tip + d), q), d)
+                let d = self.term_displacement(t, ms, tip, &identity)?;
+                let workpiece_from_machine = f.geometry.machine_from_workpiece(q[3], q[4]).inverse();
+                ToolState { nominal: workpiece_from_machine * Isometry3::translation(tip.x, tip.y, tip.z), truth: workpiece_from_machine * Isometry3::translation(tip.x + d.x, tip.y + d.y, tip.z + d.z), d }
             }
             MachineKinematics::SerialArm(a) => {
-                let n = SerialArm::tool_point(&a.chain, ms.q.as_slice()).map_err(kin)?;
-                (n, n + d, d)
+                let nominal = a.chain.tool_pose(q).map_err(|e| kin("arm forward kinematics", e))?;
+                let true_pose = match &self.arm_truth {
+                    Some((chain, _)) => chain.tool_pose(q).map_err(|e| kin("true arm forward kinematics", e))?,
+                    None => nominal,
+                };
+                let n = nominal.translation.vector;
+                let tool_rotation = true_pose.rotation.to_rotation_matrix().into_inner();
+                let d = true_pose.translation.vector - n + self.term_displacement(t, ms, n, &tool_rotation)?;
+                ToolState { nominal, truth: Isometry3::from_parts((n + d).into(), true_pose.rotation), d }
             }
         })
     }
 
-    /// True machine displacement at t for the motion state (m): Σ displacement terms, plus for
-    /// a delta or an arm the effect of the kinematic terms (true − nominal forward kinematics).
-    fn displacement(&mut self, t: f64, ms: &MotionState) -> Result<Vector3<f64>, PhysicsError> {
+    /// Σ of the cell's displacement terms at t (m), in the frame they act in, for the nominal
+    /// tool point `point` of that frame. `tool_rotation` turns tool-frame vectors into that
+    /// frame: `tool_offset` is an error of the offset vector as mounted on the tool, so it
+    /// turns with the tool (identity where the tool does not turn: cartesian, delta, the
+    /// five-axis spindle; the tool frame's rotation on an arm).
+    fn term_displacement(&mut self, t: f64, ms: &MotionState, point: Vector3<f64>, tool_rotation: &Matrix3<f64>) -> Result<Vector3<f64>, PhysicsError> {
         self.update_histories(t);
-        let point = self.nominal_machine_point(&ms.q)?;
         let s = &mut self.signals;
         if matches!(self.cell.machine.kinematics, MachineKinematics::SerialArm(_)) {
             // an arm has no linear axes; its terms were checked not to read axis signals
@@ -400,23 +423,7 @@ impl<'a> Engine<'a> {
                 *x = v;
             }
         }
-        let mut d = match &self.delta {
-            // the firmware inverts the nominal geometry; the carriages at those heights put the
-            // effector where the true geometry says
-            Some((nominal, truth)) => {
-                let kin = |e: metrocell_kinematics::KinematicsError| PhysicsError::InvalidInput { what: format!("delta kinematics at t = {t} s, q = {:?}", ms.q.as_slice()), reason: e.to_string() };
-                let q = v3(&ms.q);
-                let joints = nominal.inverse(&q).map_err(kin)?;
-                truth.forward(&joints).map_err(kin)? - q
-            }
-            None => match &self.arm_truth {
-                Some((chain, _)) => {
-                    let kin = |e: metrocell_kinematics::KinematicsError| PhysicsError::InvalidInput { what: format!("arm kinematics at t = {t} s, q = {:?}", ms.q.as_slice()), reason: e.to_string() };
-                    SerialArm::tool_point(chain, ms.q.as_slice()).map_err(kin)? - point
-                }
-                None => Vector3::zeros(),
-            },
-        };
+        let mut d = Vector3::zeros();
         for (i, t) in self.cell.terms.terms.iter().enumerate() {
             if t.term.effect() == EffectKind::Kinematic {
                 continue;
@@ -427,6 +434,7 @@ impl<'a> Engine<'a> {
             }
             let v = t.term.predict(&t.params, s)?.value;
             let v = Vector3::new(v[0], v[1], v[2]);
+            let v = if t.term.id() == TermId::ToolOffset { tool_rotation * v } else { v };
             if self.history_only[i] {
                 self.cache[i] = Some(v);
             }
@@ -498,7 +506,7 @@ impl<'a> Engine<'a> {
 
     fn machine_state(&mut self, t: f64) -> Result<(Sample, SampleTruth), PhysicsError> {
         let ms = self.cell.program.state_at(t);
-        let (_, _, d) = self.tool_points(t, &ms)?;
+        let d = self.tool_state(t, &ms)?.d;
         // actual: cartesian/delta and the five-axis linear axes commanded + d; rotary axes as
         // commanded; an arm's joints at commanded + their true zero offsets.
         let mut actual = ms.q.as_slice().to_vec();
@@ -513,7 +521,8 @@ impl<'a> Engine<'a> {
     fn tracker_sample(&mut self, t: f64) -> Result<(Sample, SampleTruth), PhysicsError> {
         let spec = self.cell.tracker.as_ref().expect("tracker channel exists only with a tracker");
         let ms = self.cell.program.state_at(t);
-        let (nominal_point, tool_point, d) = self.tool_points(t, &ms)?;
+        let tool = self.tool_state(t, &ms)?;
+        let (nominal_point, tool_point, d) = (tool.nominal.translation.vector, tool.truth.translation.vector, tool.d);
         let x = spec.pose.to_instrument(&tool_point);
         let (rho, az, el) = to_spherical(&x);
         // air: truth on the beam vs the station's reading
@@ -598,7 +607,7 @@ impl<'a> Engine<'a> {
             }
         }
         let ms = MotionState { q: seg.to.clone(), velocity: DVector::zeros(seg.to.len()), approach, dwell_point: Some(point), cycle: Some(ev.cycle) };
-        let d = self.displacement(ev.t, &ms)?;
+        let d = self.tool_state(ev.t, &ms)?.d;
         let pretravel = match &spec.pretravel {
             Some(pt) => {
                 let s = Signals { probe_direction: Some(u), ..Signals::default() };
@@ -629,16 +638,21 @@ impl<'a> Engine<'a> {
         let spec = self.cell.camera.as_ref().expect("camera events exist only with a camera");
         let seg = &self.cell.program.segments[ev.segment];
         let ms = MotionState { q: seg.to.clone(), velocity: DVector::zeros(seg.to.len()), approach: seg.approach.clone(), dwell_point: seg.dwell_point, cycle: Some(ev.cycle) };
-        let (nominal, tool_point, _) = self.tool_points(ev.t, &ms)?;
+        let tool = self.tool_state(ev.t, &ms)?;
+        // the camera is mounted on the tool: its pose is the tool pose followed by the mount
+        let mount = Isometry3::from_parts(spec.mount.translation.into(), UnitQuaternion::from_matrix(&spec.mount.rotation));
+        let (camera, nominal_camera) = (tool.truth * mount, tool.nominal * mount);
         let s = CameraFrameRequest {
             t: ev.t,
             target_id: seg.dwell_point.unwrap_or(0) as u32,
             cycle: ev.cycle,
-            position: tool_point + spec.mount.translation,
-            rotation: spec.mount.rotation,
-            nominal_tool_point: nominal,
+            position: camera.translation.vector,
+            rotation: camera.rotation.to_rotation_matrix().into_inner(),
+            nominal_position: nominal_camera.translation.vector,
+            nominal_rotation: nominal_camera.rotation.to_rotation_matrix().into_inner(),
         };
-        Ok((Sample::CameraFrameRequest(s), SampleTruth::CameraFrameRequest { tool_point }))
+        let tool_point = tool.truth.translation.vector;
+        Ok((Sample::CameraFrameRequest(s), SampleTruth::CameraFrameRequest { tool_point, joints: seg.to.as_slice().to_vec(), displacement: tool.d }))
     }
 }
 

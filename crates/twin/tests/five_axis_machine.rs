@@ -113,3 +113,35 @@ fn pose_targets_put_the_nominal_tip_on_the_pose() {
         assert!((pose.axis - axis).norm() < 1e-7, "pose {i}: axis {:?}", pose.axis);
     }
 }
+
+/// A camera on the spindle rides the machine frame, which the workpiece sees turned by the
+/// table: its pose in the workpiece frame is W(B, C)⁻¹·(tip + d)·mount, so the image shows the
+/// machine error d in the camera's own axes whatever B and C are (W built here with
+/// crates/kinematics; the nominal tip from its forward kinematics).
+#[test]
+fn camera_on_the_spindle_sees_the_machine_error_in_its_own_axes_at_any_b_and_c() {
+    let cell = Cell::from_path(common::cell_path("five_axis_table.yaml")).unwrap();
+    let MachineKinematics::FiveAxis(m) = &cell.machine.kinematics else { panic!("not five-axis") };
+    let g = m.geometry.clone();
+    let mount = cell.camera.as_ref().expect("the example has a camera").mount;
+    let sim = Simulation::new(cell, 600.0, 3).unwrap();
+    let (mut frames, mut turned) = (0, 0);
+    for (s, t) in sim.samples_with_truth() {
+        let (Sample::CameraFrameRequest(r), SampleTruth::CameraFrameRequest { tool_point, joints: q, displacement: d }) = (s, t) else { continue };
+        let w = g.machine_from_workpiece(q[3], q[4]).rotation.to_rotation_matrix().into_inner();
+        let tip = g.forward(&FiveAxisJoints { d1: q[1], d2: q[0], d3: -q[2], b: q[3], c: q[4] }).unwrap().tip;
+        let rotation = w.transpose() * mount.rotation;
+        assert!((r.rotation - rotation).norm() < 1e-12 && (r.nominal_rotation - rotation).norm() < 1e-12, "B = {}, C = {}", q[3], q[4]);
+        assert!((r.nominal_position - (tip + w.transpose() * mount.translation)).norm() < 1e-12);
+        assert!((r.position - (tool_point + w.transpose() * mount.translation)).norm() < 1e-12);
+        // the nominal camera centre (where the plate is centred) seen from the true camera
+        let seen = r.rotation.transpose() * (r.nominal_position - r.position);
+        assert!(d.norm() > 1e-6, "the example's concealed terms move the tool");
+        assert!((seen + mount.rotation.transpose() * d).norm() < 1e-12, "seen {seen:?}, d {d:?} at B = {}, C = {}", q[3], q[4]);
+        frames += 1;
+        if q[3].abs() > 0.1 || q[4].abs() > 0.1 {
+            turned += 1;
+        }
+    }
+    assert!(frames >= 7 && turned >= 3, "{frames} frames, {turned} with the table turned");
+}

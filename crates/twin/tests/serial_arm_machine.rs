@@ -177,3 +177,59 @@ fn urdf_arm_is_read_relative_to_the_cell_file() {
     assert!(err.contains("machine.serial_arm.urdf") && err.contains("robots/two_link.urdf"), "{err}");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// The UR5 example with a camera on the flange: 30 mm off the tool point, turned 90° about the
+/// tool z axis, and without the (translation-only) pedestal growth.
+fn ur5_with_camera(extra_terms: &str) -> Cell {
+    let text = common::edited_example("serial_arm_ur5.yaml", "  machine_state: {rate: 20 Hz}", "  camera: {mount: {translation: [30 mm, 0 mm, 20 mm], euler_xyz: [0 deg, 0 deg, 90 deg]}, delay: 1 s}\n  machine_state: {rate: 20 Hz}");
+    let text = text.replacen("  - id: thermal_growth\n", &format!("{extra_terms}  - id: thermal_growth\n"), 1);
+    let mut cell = Cell::from_yaml_str(&text, "ur5_camera.yaml").unwrap();
+    cell.terms.terms.retain(|t| t.term.id() != metrocell_physics::TermId::ThermalGrowth);
+    cell
+}
+
+/// A camera on the flange turns with it: its true pose is the FK of the perturbed chain followed
+/// by the mount, its nominal pose the nominal FK followed by the mount, and the joint offsets of
+/// the parallel joints 2 and 3 (0.2 and −0.15 mrad) tilt it by their sum, 0.05 mrad.
+#[test]
+fn camera_on_the_flange_turns_with_the_true_joints() {
+    let cell = ur5_with_camera("");
+    let mount = cell.camera.as_ref().unwrap().mount;
+    let mount = Isometry3::from_parts(mount.translation.into(), nalgebra::UnitQuaternion::from_matrix(&mount.rotation));
+    let (nominal, truth) = (ur5(0.0, [0.0; 6]), ur5(0.3e-3, OFFSETS));
+    let sim = Simulation::new(cell, 120.0, 5).unwrap();
+    let mut frames = 0;
+    for (s, t) in sim.samples_with_truth() {
+        let (Sample::CameraFrameRequest(r), SampleTruth::CameraFrameRequest { joints: q, .. }) = (s, t) else { continue };
+        let (n, c) = (nominal.tool_pose(&q).unwrap() * mount, truth.tool_pose(&q).unwrap() * mount);
+        assert!((r.nominal_position - n.translation.vector).norm() < 1e-12 && (r.nominal_rotation - n.rotation.to_rotation_matrix().into_inner()).norm() < 1e-12, "q {q:?}");
+        assert!((r.position - c.translation.vector).norm() < 1e-12 && (r.rotation - c.rotation.to_rotation_matrix().into_inner()).norm() < 1e-12, "q {q:?}");
+        let tilt = nalgebra::Rotation3::from_matrix(&(r.nominal_rotation.transpose() * r.rotation)).angle();
+        assert!((tilt - 0.05e-3).abs() < 1e-9, "tilt {tilt} rad");
+        frames += 1;
+    }
+    assert!(frames >= 5, "{frames} frames");
+}
+
+/// `tool_offset` on an arm is an error of the tool vector on the flange: the true tool point is
+/// the true tool pose applied to δ = (2, 0, −1) mm, R_tool(q)·δ away from the FK, not δ.
+#[test]
+fn tool_offset_on_an_arm_turns_with_the_flange() {
+    let cell = ur5_with_camera("  - id: tool_offset\n    params: {dx: 2 mm, dy: 0 mm, dz: -1 mm}\n");
+    let truth = ur5(0.3e-3, OFFSETS);
+    let delta = Vector3::new(2e-3, 0.0, -1e-3);
+    let sim = Simulation::new(cell, 120.0, 5).unwrap();
+    let (mut n, mut turned) = (0, 0);
+    for (_, t) in sim.samples_with_truth() {
+        let SampleTruth::Tracker(tt) = t else { continue };
+        let pose = truth.tool_pose(&tt.joints).unwrap();
+        let expected = (pose * nalgebra::Point3::from(delta)).coords;
+        assert!((tt.tool_point - expected).norm() < 1e-12, "{:?} vs {expected:?}", tt.tool_point);
+        // a fixed cell-frame δ would miss by |R·δ − δ|
+        if (pose.rotation * delta - delta).norm() > 1e-3 {
+            turned += 1;
+        }
+        n += 1;
+    }
+    assert!(n == 1200 && turned > n / 2, "{turned} of {n} samples with the tool turned");
+}

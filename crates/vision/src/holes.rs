@@ -5,10 +5,20 @@
 //! blob is rejected with a reason, never silently matched to a neighbour.
 //!
 //! Measurement (per window), with both polarities handled:
-//! 1. background level b = median of the window's border pixels; the hole is on the far side of
-//!    the window's extreme value; hole level f = median of the pixels past the midpoint;
-//! 2. rough blob: pixels with coverage w = (I − b)/(f − b) > 0.5, their centroid and area;
-//! 3. sub-pixel centre and ellipse: *unclamped* coverage weights over a disc of radius
+//! 1. background level b = median of the window's border pixels; polarity from the pixels
+//!    around the prediction (else the window's stronger extreme); the pixels past the midpoint
+//!    between b and the extreme of that polarity are the candidate pixels;
+//! 2. rough blob: the 8-connected component of candidate pixels that holds the candidate pixel
+//!    nearest the prediction; hole level f = median of its pixels, coverage w = (I − b)/(f − b);
+//!    its centroid and area;
+//! 3. other blobs in the window (a neighbouring hole reaching in, a burr, dirt): ignored while
+//!    they stay clear of the disc of step 4 by more than the margin (they do not enter its sums,
+//!    so they cannot move the centre); otherwise the cell is rejected ([`HoleRejection::BlobTooClose`]),
+//!    as it is when a second hole-sized blob lies wholly in the window ([`HoleRejection::SeveralBlobs`]).
+//!    Why reject rather than mask: a blob inside the blur margin overlaps the hole's own blurred
+//!    edge, so no mask removes it without cutting the edge the centroid relies on; a biased
+//!    centre reported as good is invisible downstream, a rejected cell is not;
+//! 4. sub-pixel centre and ellipse: *unclamped* coverage weights over a disc of radius
 //!    r_blob + margin around the rough centre; centroid = Σw·x/Σw (exact for box-filtered edges,
 //!    unbiased under zero-mean noise because the weights are not clamped), ellipse from the
 //!    weighted second moments (a uniform ellipse with semi-axes a, b has moments a²/4, b²/4).
@@ -62,6 +72,12 @@ pub enum HoleRejection {
     LowContrast { contrast: f64 },
     AreaOutOfRange { area_px: f64 },
     TouchesWindowBorder,
+    /// Another hole-sized blob (≥ half the hole's area) lies wholly inside the search window:
+    /// the assignment to the nominal cell would be a guess.
+    SeveralBlobs { blobs: usize },
+    /// Another blob (burr, dirt, a neighbour's edge) comes within `margin_px` of the disc the
+    /// centre is measured over (`gap_px` from its edge), so it would bias the centre.
+    BlobTooClose { gap_px: f64 },
 }
 
 impl std::fmt::Display for HoleRejection {
@@ -71,6 +87,8 @@ impl std::fmt::Display for HoleRejection {
             HoleRejection::LowContrast { contrast } => write!(f, "contrast {contrast:.1} grey levels is too low"),
             HoleRejection::AreaOutOfRange { area_px } => write!(f, "blob area {area_px:.1} px² outside the accepted range"),
             HoleRejection::TouchesWindowBorder => write!(f, "blob touches the search window border (prediction off or blob too large)"),
+            HoleRejection::SeveralBlobs { blobs } => write!(f, "{blobs} hole-sized blobs in the search window: which one is the hole is ambiguous"),
+            HoleRejection::BlobTooClose { gap_px } => write!(f, "another blob {gap_px:.1} px from the measured disc would bias the centre"),
         }
     }
 }
@@ -102,6 +120,49 @@ pub fn measure_holes(
     Ok(predicted.iter().map(|p| measure_one(img, p, search)).collect())
 }
 
+/// One 8-connected set of window pixels with coverage > 0.5.
+struct Component {
+    pixels: Vec<(i64, i64)>,
+    on_border: bool,
+}
+
+/// The 8-connected components of `on` (row-major, `side` × `side`, window origin `(x0, y0)`).
+fn components(on: &[bool], side: usize, x0: i64, y0: i64) -> (Vec<Component>, Vec<usize>) {
+    const NONE: usize = usize::MAX;
+    let mut label = vec![NONE; on.len()];
+    let mut comps = Vec::new();
+    let mut stack = Vec::new();
+    for start in 0..on.len() {
+        if !on[start] || label[start] != NONE {
+            continue;
+        }
+        let id = comps.len();
+        let mut c = Component { pixels: Vec::new(), on_border: false };
+        label[start] = id;
+        stack.push(start);
+        while let Some(k) = stack.pop() {
+            let (u, v) = (k % side, k / side);
+            c.pixels.push((x0 + u as i64, y0 + v as i64));
+            c.on_border |= u == 0 || v == 0 || u == side - 1 || v == side - 1;
+            for dv in -1i64..=1 {
+                for du in -1i64..=1 {
+                    let (nu, nv) = (u as i64 + du, v as i64 + dv);
+                    if nu < 0 || nv < 0 || nu >= side as i64 || nv >= side as i64 {
+                        continue;
+                    }
+                    let n = nv as usize * side + nu as usize;
+                    if on[n] && label[n] == NONE {
+                        label[n] = id;
+                        stack.push(n);
+                    }
+                }
+            }
+        }
+        comps.push(c);
+    }
+    (comps, label)
+}
+
 fn measure_one(img: &GrayImage, p: &Point2<f64>, s: &HoleSearch) -> std::result::Result<HoleMeasurement, HoleRejection> {
     let h = s.window_half_px as i64;
     let (cx, cy) = (p.x.round() as i64, p.y.round() as i64);
@@ -129,49 +190,81 @@ fn measure_one(img: &GrayImage, p: &Point2<f64>, s: &HoleSearch) -> std::result:
             hi = hi.max(at(x, y));
         }
     }
-    let extreme = if b - lo > hi - b { lo } else { hi };
+    // Polarity: from the pixels around the prediction when they clearly differ from the
+    // background (so a brighter burr cannot turn the search for a dark hole into a search for
+    // bright blobs), else from the window's stronger extreme.
+    let mut near: Vec<f64> = (cy - 2..=cy + 2).flat_map(|y| (cx - 2..=cx + 2).map(move |x| (x, y))).map(|(x, y)| at(x, y)).collect();
+    let near = median(&mut near);
+    let dark = if (near - b).abs() >= s.min_contrast { near < b } else { b - lo > hi - b };
+    let extreme = if dark { lo } else { hi };
     let mid = (b + extreme) / 2.0;
-    let mut beyond: Vec<f64> = Vec::new();
-    for y in y0..=y1 {
-        for x in x0..=x1 {
-            let v = at(x, y);
-            if (v - mid) * (extreme - mid) > 0.0 {
-                beyond.push(v);
-            }
-        }
-    }
-    if beyond.is_empty() {
+    let side = (2 * h + 1) as usize;
+    let on: Vec<bool> = (y0..=y1).flat_map(|y| (x0..=x1).map(move |x| (x, y))).map(|(x, y)| (at(x, y) - mid) * (extreme - mid) > 0.0).collect();
+    if !on.contains(&true) {
         return Err(HoleRejection::LowContrast { contrast: 0.0 });
     }
-    let f = median(&mut beyond);
+    // Rough blob: the connected component of the above-threshold pixel nearest the prediction.
+    // (Taking every such pixel of the window merged a neighbouring hole, burr or dirt into the
+    // hole and moved its centre.)
+    let (comps, label) = components(&on, side, x0, y0);
+    let dist2 = |(x, y): (i64, i64), q: &Point2<f64>| (x as f64 - q.x).powi(2) + (y as f64 - q.y).powi(2);
+    let seed = (0..on.len())
+        .filter(|&k| on[k])
+        .min_by(|&i, &j| {
+            let xy = |k: usize| (x0 + (k % side) as i64, y0 + (k / side) as i64);
+            dist2(xy(i), p).total_cmp(&dist2(xy(j), p))
+        })
+        .expect("some pixel is on");
+    let hole_id = label[seed];
+    let hole = &comps[hole_id];
+    let mut levels: Vec<f64> = hole.pixels.iter().map(|&(x, y)| at(x, y)).collect();
+    let f = median(&mut levels);
     let contrast = f - b;
     if contrast.abs() < s.min_contrast {
         return Err(HoleRejection::LowContrast { contrast });
     }
-    let w = |x: i64, y: i64| (at(x, y) - b) / contrast;
-    // Rough blob (binary), connected to the pixel nearest the prediction's strongest response.
-    let (mut n, mut sx, mut sy, mut on_border) = (0.0, 0.0, 0.0, false);
-    for y in y0..=y1 {
-        for x in x0..=x1 {
-            if w(x, y) > 0.5 {
-                n += 1.0;
-                sx += x as f64;
-                sy += y as f64;
-                on_border |= x == x0 || x == x1 || y == y0 || y == y1;
-            }
-        }
-    }
+    let n = hole.pixels.len() as f64;
     if !(s.min_area_px..=s.max_area_px).contains(&n) {
         return Err(HoleRejection::AreaOutOfRange { area_px: n });
     }
-    if on_border {
+    if hole.on_border {
         return Err(HoleRejection::TouchesWindowBorder);
     }
-    let (rx, ry) = (sx / n, sy / n);
+    // Another hole-sized blob wholly inside the window: two candidates for one nominal cell;
+    // which one is the hole is a guess, so the cell is rejected rather than possibly matched
+    // to the wrong blob.
+    let rivals = comps.iter().enumerate().filter(|&(k, c)| k != hole_id && !c.on_border && c.pixels.len() as f64 >= s.min_area_px.max(0.5 * n)).count();
+    if rivals > 0 {
+        return Err(HoleRejection::SeveralBlobs { blobs: rivals + 1 });
+    }
+    let (rx, ry) = (hole.pixels.iter().map(|q| q.0 as f64).sum::<f64>() / n, hole.pixels.iter().map(|q| q.1 as f64).sum::<f64>() / n);
     let radius = (n / std::f64::consts::PI).sqrt() + s.margin_px;
     if rx - radius < x0 as f64 || ry - radius < y0 as f64 || rx + radius > x1 as f64 || ry + radius > y1 as f64 {
         return Err(HoleRejection::TouchesWindowBorder);
     }
+    // Any other blob (either polarity) whose pixels or blurred edge (margin) reach the moment
+    // disc would pull the centre towards it; masking it would also cut the hole's own blurred
+    // edge, so the hole is rejected. Blobs farther away do not enter the sums and are ignored.
+    let rough = Point2::new(rx, ry);
+    let reach = radius + s.margin_px;
+    let mut gap = f64::INFINITY;
+    for (k, c) in comps.iter().enumerate() {
+        for &q in c.pixels.iter().filter(|_| k != hole_id) {
+            gap = gap.min(dist2(q, &rough).sqrt() - radius);
+        }
+    }
+    for y in (ry - reach).floor() as i64..=(ry + reach).ceil() as i64 {
+        for x in (rx - reach).floor() as i64..=(rx + reach).ceil() as i64 {
+            // Opposite polarity beyond half the contrast: a blob the components do not include.
+            if x >= x0 && y >= y0 && x <= x1 && y <= y1 && (at(x, y) - b) / contrast < -0.5 {
+                gap = gap.min(dist2((x, y), &rough).sqrt() - radius);
+            }
+        }
+    }
+    if gap < s.margin_px {
+        return Err(HoleRejection::BlobTooClose { gap_px: gap.max(0.0) });
+    }
+    let w = |x: i64, y: i64| (at(x, y) - b) / contrast;
     // Sub-pixel moments with unclamped weights over the disc.
     let (mut sw, mut swx, mut swy) = (0.0, 0.0, 0.0);
     let mut pts = Vec::new();

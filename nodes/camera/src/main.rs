@@ -8,7 +8,10 @@
 //! or truncated file, or one without a usable stamp, is a warning naming it; the node moves on.
 //! With `device:=/dev/videoN` frames come from a V4L2 capture device instead (GREY → mono8,
 //! YUYV → rgb8, stamped with the driver's capture time; `width`, `height`, `pixel_format`);
-//! the capture path is untested on hardware (no camera on the build machines).
+//! the capture path is untested on hardware (no camera on the build machines). With a
+//! camera_info, width/height 0 request the calibration's size and a driver that delivers
+//! another size is an error (the calibration would be wrong); buffers the driver flags as
+//! corrupt are skipped with a warning (`corrupt_buffers` in diagnostics).
 //!
 //!   metrocell-camera --ros-args -p path:="views/*.png" -p rate:=10.0 -p loop:=true \
 //!       -p camera_info_url:=camera_info.yaml -p frame_id:=camera_optical
@@ -21,28 +24,13 @@ use std::time::{Duration, Instant};
 
 use metrocell_camera::CameraInfo as CameraInfoYaml;
 use metrocell_camera_node::capture_stamp::StampSource;
+use metrocell_camera_node::parameters::declarations;
 use metrocell_camera_node::{camera_info_msg, file_list, image_file};
 use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image};
 
 use metrocell_msgs::std_msgs::msg::Header;
-use metrocell_node::{qos, MetrocellNode, ParamDecl};
-
-fn declarations() -> Vec<ParamDecl> {
-    vec![
-        ParamDecl::new("path", String::new(), "directory of images, or a glob such as views/*.png"),
-        ParamDecl::new("device", String::new(), "V4L2 capture device such as /dev/video0 (instead of path)"),
-        ParamDecl::new("width", 0i64, "device: requested frame width [px]; 0 = the driver's current"),
-        ParamDecl::new("height", 0i64, "device: requested frame height [px]; 0 = the driver's current"),
-        ParamDecl::new("pixel_format", "auto".to_string(), "device: GREY, YUYV or auto (GREY, else YUYV)"),
-        ParamDecl::new("rate", 10.0, "frames per second; 0 = as fast as possible").with_range(0.0, 10000.0),
-        ParamDecl::new("loop", false, "start again after the last file"),
-        ParamDecl::new("frame_id", "camera_optical_frame".to_string(), "frame_id of image and camera_info"),
-        ParamDecl::new("camera_info_url", String::new(), "ROS camera_info YAML (path or file:// URL); empty = no camera_info"),
-        ParamDecl::new("stamp_source", "mtime".to_string(), "header stamp of a frame: mtime (file modification time), filename (see stamp_pattern) or now (publication instant)"),
-        ParamDecl::new("stamp_pattern", String::new(), "with stamp_source filename: the file name with one of {ns}, {us}, {ms}, {s} where the time is, e.g. frame_{ns}.png"),
-    ]
-}
+use metrocell_node::{qos, MetrocellNode};
 
 fn main() -> std::process::ExitCode {
     match run() {

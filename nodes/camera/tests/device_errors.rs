@@ -7,7 +7,11 @@
 use std::process::Command;
 
 fn run(device: &str) -> (bool, String) {
-    let out = Command::new(env!("CARGO_BIN_EXE_metrocell-camera")).args(["--ros-args", "-p", &format!("device:={device}")]).output().unwrap();
+    run_with(device, &[])
+}
+
+fn run_with(device: &str, extra: &[&str]) -> (bool, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_metrocell-camera")).args(["--ros-args", "-p", &format!("device:={device}")]).args(extra).output().unwrap();
     (out.status.success(), String::from_utf8_lossy(&out.stderr).into_owned())
 }
 
@@ -19,4 +23,7 @@ fn missing_or_non_capture_devices_stop_the_node_with_the_device_named() {
     assert!(err.contains("/dev/video_metrocell_missing: cannot open"), "{err}");
     let (ok, err) = run("/dev/null");
     assert!(!ok && err.contains("/dev/null: not a V4L2 device"), "{err}");
+    // A negative size is refused by its declared range before any device is touched.
+    let (ok, err) = run_with("/dev/null", &["-p", "width:=-1"]);
+    assert!(!ok && err.contains("'width'") && err.contains("[0, 16384]"), "{err}");
 }

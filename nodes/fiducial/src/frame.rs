@@ -4,6 +4,9 @@
 //! 10/12-bit sensors usable), rgb8, bgr8, rgba8, bgra8 (grey = 0.299 R + 0.587 G + 0.114 B, as
 //! OpenCV's cvtColor). Anything else, an empty frame or data shorter than step × height is a
 //! [`FrameError`] naming the frame's problem; the node logs it and keeps running.
+//!
+//! mono8 (what the camera node publishes for GREY sensors) takes a fast path: a buffer copy, or
+//! one row copy per line when `step` has padding; the other encodings one pixel at a time.
 
 use image::GrayImage;
 use metrocell_msgs::sensor_msgs::msg::Image;
@@ -42,37 +45,57 @@ pub fn gray_from_image(msg: &Image) -> Result<GrayImage, FrameError> {
     if msg.data.len() < expected {
         return Err(FrameError::Truncated { got: msg.data.len(), expected, step: msg.step, height: h });
     }
+    Ok(match msg.encoding.as_str() {
+        "mono8" | "8UC1" => mono8_rows(msg),
+        _ => gray_per_pixel(msg, bpp),
+    })
+}
+
+/// mono8 fast path: the pixels already are the grey image; copy the buffer in one piece when
+/// rows are unpadded (step = width), else row by row without the `step − width` padding.
+/// Requires the checks of [`gray_from_image`].
+fn mono8_rows(msg: &Image) -> GrayImage {
+    let (w, h, step) = (msg.width as usize, msg.height as usize, msg.step as usize);
+    let data = if step == w {
+        msg.data[..w * h].to_vec()
+    } else {
+        let mut data = Vec::with_capacity(w * h);
+        for row in msg.data.chunks(step).take(h) {
+            data.extend_from_slice(&row[..w]);
+        }
+        data
+    };
+    GrayImage::from_raw(msg.width, msg.height, data).expect("width × height bytes")
+}
+
+/// Any supported encoding, one pixel at a time into a preallocated buffer (the general path;
+/// mono8 goes through it only in tests, as the reference for the fast path).
+/// Requires the checks of [`gray_from_image`].
+fn gray_per_pixel(msg: &Image, bpp: u32) -> GrayImage {
+    let (w, h) = (msg.width, msg.height);
     let row = |y: u32| &msg.data[y as usize * msg.step as usize..][..(w * bpp) as usize];
-    let mut out = GrayImage::new(w, h);
+    let mut data = Vec::with_capacity(w as usize * h as usize);
     match msg.encoding.as_str() {
         "mono8" | "8UC1" => {
             for y in 0..h {
-                for (x, &v) in row(y).iter().enumerate() {
-                    out.put_pixel(x as u32, y, image::Luma([v]));
-                }
+                data.extend(row(y).iter().copied());
             }
         }
         "mono16" | "16UC1" => {
             let read = |b: &[u8]| if msg.is_bigendian != 0 { u16::from_be_bytes([b[0], b[1]]) } else { u16::from_le_bytes([b[0], b[1]]) };
             let max = (0..h).flat_map(|y| row(y).chunks_exact(2).map(read)).max().unwrap_or(0).max(1) as f64;
             for y in 0..h {
-                for (x, b) in row(y).chunks_exact(2).enumerate() {
-                    let v = (read(b) as f64 * 255.0 / max).round() as u8;
-                    out.put_pixel(x as u32, y, image::Luma([v]));
-                }
+                data.extend(row(y).chunks_exact(2).map(|b| (read(b) as f64 * 255.0 / max).round() as u8));
             }
         }
         enc => {
             let (ri, bi) = if enc.starts_with("rgb") { (0, 2) } else { (2, 0) };
             for y in 0..h {
-                for (x, p) in row(y).chunks_exact(bpp as usize).enumerate() {
-                    let g = 0.299 * p[ri] as f64 + 0.587 * p[1] as f64 + 0.114 * p[bi] as f64;
-                    out.put_pixel(x as u32, y, image::Luma([g.round() as u8]));
-                }
+                data.extend(row(y).chunks_exact(bpp as usize).map(|p| (0.299 * p[ri] as f64 + 0.587 * p[1] as f64 + 0.114 * p[bi] as f64).round() as u8));
             }
         }
     }
-    Ok(out)
+    GrayImage::from_raw(w, h, data).expect("width × height bytes")
 }
 
 #[cfg(test)]
@@ -103,5 +126,40 @@ mod tests {
         let e = gray_from_image(&msg("mono8", 4, 4, 4, vec![0; 15])).unwrap_err();
         assert_eq!(e, FrameError::Truncated { got: 15, expected: 16, step: 4, height: 4 });
         assert!(matches!(gray_from_image(&msg("rgb8", 4, 1, 4, vec![0; 4])), Err(FrameError::Step { .. })));
+    }
+
+    /// Deterministic "random" bytes (an LCG), so padding bytes differ from pixels.
+    fn bytes(n: usize, seed: u32) -> Vec<u8> {
+        let mut s = seed;
+        (0..n).map(|_| { s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223); (s >> 24) as u8 }).collect()
+    }
+
+    #[test]
+    fn mono8_fast_path_equals_the_per_pixel_path() {
+        // Unpadded, padded rows (step > width, as V4L2 drivers and ROS publishers with aligned
+        // rows produce), one row, one column, and data longer than step × height.
+        for (w, h, step, extra) in [(37, 23, 37, 0), (37, 23, 64, 0), (1, 5, 4, 0), (50, 1, 50, 0), (640, 480, 640, 0), (641, 7, 704, 13)] {
+            let m = msg("mono8", w, h, step, bytes((step * h) as usize + extra, w * 31 + step));
+            let fast = gray_from_image(&m).unwrap();
+            let general = gray_per_pixel(&m, 1);
+            assert_eq!(fast, general, "{w}x{h} step {step}");
+            // And both are the right pixels: row y starts at y · step.
+            assert_eq!(fast.get_pixel(w - 1, h - 1)[0], m.data[((h - 1) * step + w - 1) as usize], "{w}x{h} step {step}");
+        }
+    }
+
+    #[test]
+    fn colour_and_mono16_rows_with_padding_convert_per_pixel() {
+        // Every supported encoding with step > width × bpp: the padding is never read as pixels.
+        for (enc, bpp) in [("rgb8", 3u32), ("bgr8", 3), ("rgba8", 4), ("bgra8", 4), ("mono16", 2)] {
+            let (w, h) = (5u32, 3u32);
+            let step = w * bpp + 3;
+            let mut m = msg(enc, w, h, step, bytes((step * h) as usize, bpp));
+            let padded = gray_from_image(&m).unwrap();
+            // The same pixels without padding give the same image.
+            m.data = (0..h).flat_map(|y| m.data[(y * step) as usize..][..(w * bpp) as usize].to_vec()).collect();
+            m.step = w * bpp;
+            assert_eq!(padded, gray_from_image(&m).unwrap(), "{enc}");
+        }
     }
 }

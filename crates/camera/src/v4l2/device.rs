@@ -2,13 +2,15 @@
 //! be a capture device with streaming I/O) → VIDIOC_S_FMT (GREY or YUYV at the requested size;
 //! the driver may adjust the size, never accepted silently for the pixel format) → VIDIOC_REQBUFS
 //! (mmap) → VIDIOC_QUERYBUF + mmap + VIDIOC_QBUF per buffer → VIDIOC_STREAMON; each
-//! [`CaptureDevice::next_frame`] polls, dequeues, converts and re-queues one buffer.
+//! [`CaptureDevice::next_frame`] polls, dequeues, converts and re-queues one buffer (a buffer
+//! the driver flags V4L2_BUF_FLAG_ERROR is re-queued without conversion: [`Dequeued::Corrupt`]).
 
 use std::ffi::CString;
 use std::time::Duration;
 
 use super::ioctl::*;
 use super::pixel_format::{convert_frame, PixelFormat};
+use super::timestamp::{capture_stamp, ClockSample, StampOrigin};
 use super::{CaptureError, Result};
 
 /// One converted frame.
@@ -21,10 +23,40 @@ pub struct Frame {
     pub step: u32,
     pub data: Vec<u8>,
     /// Capture instant on the system clock (ns since the epoch): the driver's timestamp moved
-    /// from the monotonic clock.
+    /// from the monotonic clock, or the dequeue instant (see `stamp_origin`).
     pub stamp_ns: i64,
+    pub stamp_origin: StampOrigin,
     /// The driver's frame counter (gaps = frames the driver dropped).
     pub sequence: u32,
+}
+
+/// One dequeued buffer.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Dequeued {
+    Frame(Frame),
+    /// The driver flagged the buffer V4L2_BUF_FLAG_ERROR (data may be corrupt: lost packets, a
+    /// broken transfer); it was re-queued and must not be published.
+    Corrupt { sequence: u32, bytes_used: u32 },
+}
+
+/// Geometry of the negotiated format, what [`dequeued`] needs besides the buffer.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Layout {
+    pub format: PixelFormat,
+    pub width: u32,
+    pub height: u32,
+    pub bytes_per_line: u32,
+}
+
+/// What a dequeued buffer is: a converted frame with its stamp, or corrupt. Pure, so the error
+/// and timestamp handling are tested without a camera. `data` = the first `bytesused` bytes.
+pub fn dequeued(layout: &Layout, flags: u32, sequence: u32, driver_ns: i64, data: &[u8], clocks: ClockSample) -> Result<Dequeued> {
+    if flags & BUF_FLAG_ERROR != 0 {
+        return Ok(Dequeued::Corrupt { sequence, bytes_used: data.len() as u32 });
+    }
+    let (encoding, step, data) = convert_frame(layout.format, layout.width, layout.height, layout.bytes_per_line, data)?;
+    let (stamp_ns, stamp_origin) = capture_stamp(flags, driver_ns, clocks);
+    Ok(Dequeued::Frame(Frame { width: layout.width, height: layout.height, encoding, step, data, stamp_ns, stamp_origin, sequence }))
 }
 
 struct Mapping {
@@ -174,8 +206,8 @@ impl CaptureDevice {
         Ok(())
     }
 
-    /// Wait up to `timeout` for the next frame; `Ok(None)` on timeout.
-    pub fn next_frame(&mut self, timeout: Duration) -> Result<Option<Frame>> {
+    /// Wait up to `timeout` for the next buffer; `Ok(None)` on timeout.
+    pub fn next_frame(&mut self, timeout: Duration) -> Result<Option<Dequeued>> {
         let mut pfd = libc::pollfd { fd: self.fd, events: libc::POLLIN, revents: 0 };
         // SAFETY: one valid pollfd.
         let r = unsafe { libc::poll(&mut pfd, 1, timeout.as_millis().min(i32::MAX as u128) as i32) };
@@ -192,16 +224,19 @@ impl CaptureDevice {
             Err(e) if e.kind() == std::io::ErrorKind::WouldBlock => return Ok(None),
             Err(e) => return Err(CaptureError::Ioctl { device: self.path.clone(), call: "VIDIOC_DQBUF", reason: e.to_string() }),
         }
+        // Both clocks right after DQBUF, back to back: their offset moves the driver's
+        // monotonic timestamp to the system clock (an NTP step between them is not guarded).
+        let clocks = ClockSample { realtime_ns: now_ns(libc::CLOCK_REALTIME), monotonic_ns: now_ns(libc::CLOCK_MONOTONIC) };
         let m = &self.buffers[b.index as usize];
         // SAFETY: the buffer is dequeued (the driver does not write it) and mapped with m.len bytes.
         let bytes = unsafe { std::slice::from_raw_parts(m.ptr as *const u8, (b.bytesused as usize).min(m.len)) };
-        let converted = convert_frame(self.format, self.width, self.height, self.bytes_per_line, bytes);
-        let ts = b.timestamp.tv_sec as i64 * 1_000_000_000 + b.timestamp.tv_usec as i64 * 1_000;
-        let stamp_ns = now_ns(libc::CLOCK_REALTIME) - (now_ns(libc::CLOCK_MONOTONIC) - ts);
-        let sequence = b.sequence;
+        let layout = Layout { format: self.format, width: self.width, height: self.height, bytes_per_line: self.bytes_per_line };
+        let driver_ns = b.timestamp.tv_sec as i64 * 1_000_000_000 + b.timestamp.tv_usec as i64 * 1_000;
+        let out = dequeued(&layout, b.flags, b.sequence, driver_ns, bytes, clocks);
+        // Re-queue whatever happened (a corrupt or unconvertible buffer too), else the driver
+        // runs out of buffers and the stream stalls.
         self.call("VIDIOC_QBUF", VIDIOC_QBUF, &mut b)?;
-        let (encoding, step, data) = converted?;
-        Ok(Some(Frame { width: self.width, height: self.height, encoding, step, data, stamp_ns, sequence }))
+        out.map(Some)
     }
 }
 
@@ -239,5 +274,33 @@ mod tests {
         let e = CaptureDevice::open(file.to_str().unwrap(), 0, 0, &[PixelFormat::Yuyv]).err().unwrap();
         assert!(matches!(e, CaptureError::NotV4l2 { .. }), "{e}");
         std::fs::remove_file(&file).unwrap();
+    }
+
+    const CLOCKS: ClockSample = ClockSample { realtime_ns: 1_700_000_000_000_000_000, monotonic_ns: 9_000_000_000 };
+    const GREY_3X2: Layout = Layout { format: PixelFormat::Grey, width: 3, height: 2, bytes_per_line: 4 };
+
+    #[test]
+    fn error_flagged_buffers_are_corrupt_not_frames() {
+        // A short (aborted) transfer flagged ERROR: reported as corrupt, not converted (the old
+        // code converted it, and the size error then ended the node).
+        let short = [1u8, 2, 3];
+        let flags = BUF_FLAG_ERROR | BUF_FLAG_TIMESTAMP_MONOTONIC;
+        assert_eq!(dequeued(&GREY_3X2, flags, 17, 8_000_000_000, &short, CLOCKS), Ok(Dequeued::Corrupt { sequence: 17, bytes_used: 3 }));
+        // A full-size buffer flagged ERROR is not published either (its pixels may be garbage).
+        let full = [1u8, 2, 3, 0, 4, 5, 6, 0];
+        assert!(matches!(dequeued(&GREY_3X2, flags, 18, 8_000_000_000, &full, CLOCKS), Ok(Dequeued::Corrupt { sequence: 18, .. })));
+        // The same buffer without the flag is a frame, stamped from the monotonic timestamp.
+        let Ok(Dequeued::Frame(f)) = dequeued(&GREY_3X2, BUF_FLAG_TIMESTAMP_MONOTONIC, 19, 8_000_000_000, &full, CLOCKS) else { panic!("not a frame") };
+        assert_eq!((f.data, f.sequence, f.stamp_ns, f.stamp_origin), (vec![1, 2, 3, 4, 5, 6], 19, CLOCKS.realtime_ns - 1_000_000_000, StampOrigin::DriverMonotonic));
+        // Without the flag a short buffer is still an error naming the sizes.
+        assert!(dequeued(&GREY_3X2, BUF_FLAG_TIMESTAMP_MONOTONIC, 20, 1, &short, CLOCKS).is_err());
+    }
+
+    #[test]
+    fn frames_with_a_copied_timestamp_are_stamped_at_dequeue() {
+        let full = [1u8, 2, 3, 0, 4, 5, 6, 0];
+        let Ok(Dequeued::Frame(f)) = dequeued(&GREY_3X2, BUF_FLAG_TIMESTAMP_COPY, 1, 123, &full, CLOCKS) else { panic!("not a frame") };
+        assert_eq!(f.stamp_ns, CLOCKS.realtime_ns);
+        assert!(matches!(f.stamp_origin, StampOrigin::Dequeue { .. }));
     }
 }

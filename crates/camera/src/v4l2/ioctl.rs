@@ -10,6 +10,15 @@ pub const BUF_TYPE_VIDEO_CAPTURE: u32 = 1;
 pub const MEMORY_MMAP: u32 = 1;
 pub const FIELD_NONE: u32 = 1;
 
+/// `v4l2_buffer.flags`: the driver marks a buffer whose data may be corrupt (e.g. lost USB
+/// packets) but hands it back anyway.
+pub const BUF_FLAG_ERROR: u32 = 0x0000_0040;
+/// `v4l2_buffer.flags & BUF_FLAG_TIMESTAMP_MASK`: the clock of `timestamp` (see timestamp.rs).
+pub const BUF_FLAG_TIMESTAMP_MASK: u32 = 0x0000_e000;
+pub const BUF_FLAG_TIMESTAMP_UNKNOWN: u32 = 0x0000_0000;
+pub const BUF_FLAG_TIMESTAMP_MONOTONIC: u32 = 0x0000_2000;
+pub const BUF_FLAG_TIMESTAMP_COPY: u32 = 0x0000_4000;
+
 /// `v4l2_fourcc(a, b, c, d)`.
 pub const fn fourcc(code: &[u8; 4]) -> u32 {
     code[0] as u32 | (code[1] as u32) << 8 | (code[2] as u32) << 16 | (code[3] as u32) << 24
@@ -168,5 +177,9 @@ mod tests {
         assert_eq!(VIDIOC_ENUM_FMT, 0xc040_5602);
         assert_eq!(PIX_FMT_YUYV, 0x5659_5559);
         assert_eq!(fourcc_name(PIX_FMT_GREY), "GREY");
+        // Buffer flags, as #defined in /usr/include/linux/videodev2.h (Linux 6.x uapi).
+        assert_eq!(BUF_FLAG_ERROR, 0x40);
+        assert_eq!(BUF_FLAG_TIMESTAMP_MASK, 0xe000);
+        assert_eq!((BUF_FLAG_TIMESTAMP_UNKNOWN, BUF_FLAG_TIMESTAMP_MONOTONIC, BUF_FLAG_TIMESTAMP_COPY), (0, 0x2000, 0x4000));
     }
 }

@@ -5,15 +5,22 @@
 //! Supported: single-planar video capture devices (`V4L2_CAP_VIDEO_CAPTURE` + streaming) in
 //! GREY (→ mono8) or YUYV (→ rgb8), on 64-bit Linux. Multi-planar devices, compressed formats
 //! (MJPEG, H.264) and other pixel formats are refused with an error naming the device and what it
-//! offers. Frame stamps: the driver's capture timestamp (monotonic clock) moved to the system
-//! clock, so a frame is stamped when it was exposed, not when it was dequeued.
+//! offers. Frame stamps ([`timestamp`]): the driver's capture timestamp moved from
+//! CLOCK_MONOTONIC to the system clock, so a frame is stamped when it was exposed, not when it
+//! was dequeued; drivers whose timestamps are on no known clock get the dequeue instant, flagged.
+//! Buffers the driver flags V4L2_BUF_FLAG_ERROR are re-queued and reported, never converted.
+//! [`frame_size`]: the size to request and what to do when the driver picks another.
 
 pub mod device;
+pub mod frame_size;
 pub mod ioctl;
 pub mod pixel_format;
+pub mod timestamp;
 
-pub use device::{CaptureDevice, Frame};
+pub use device::{CaptureDevice, Dequeued, Frame};
+pub use frame_size::{check_frame_size, requested_size};
 pub use pixel_format::{convert_frame, PixelFormat};
+pub use timestamp::{capture_stamp, ClockSample, StampOrigin};
 
 use thiserror::Error;
 
@@ -31,6 +38,8 @@ pub enum CaptureError {
     Ioctl { device: String, call: &'static str, reason: String },
     #[error("{0}")]
     Frame(String),
+    #[error("{device}: the driver delivers {width}x{height} frames but camera_info is calibrated for {cal_width}x{cal_height}; a calibration only holds at its own resolution: request {cal_width}x{cal_height} (-p width:={cal_width} -p height:={cal_height}) or use a camera_info made at {width}x{height}")]
+    CalibrationSize { device: String, width: u32, height: u32, cal_width: u32, cal_height: u32 },
     #[error("V4L2 capture needs 64-bit Linux")]
     Unsupported,
 }

@@ -1,8 +1,10 @@
 //! `tool_offset` — error of the tool (or probe, or reflector) offset vector T: length and
 //! radius errors of the tool as mounted.
 //!
-//! d = (dx, dy, dz)  (machine frame; on a 3-axis machine the tool frame is parallel to it —
-//! rotary axes rotate this vector in crates/kinematics). Frame: machine.
+//! d = (dx, dy, dz)  in the tool frame. On a 3-axis machine and a five-axis spindle the tool
+//! frame is parallel to the machine frame, so d is a machine-frame displacement; where the tool
+//! turns (an arm's flange) the caller turns it with the tool, R_tool(q)·d (crates/twin does).
+//! Frame: machine.
 
 use nalgebra::{DMatrix, Vector3};
 

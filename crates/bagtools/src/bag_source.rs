@@ -51,7 +51,7 @@ impl SourcedMessage {
         let decoded = match self.payload[1] {
             0x01 => rustdds::serialization::from_bytes::<T, LittleEndian>(body),
             0x00 => rustdds::serialization::from_bytes::<T, BigEndian>(body),
-            other => return Err(bad(format!("encapsulation kind {other:#04x} is not plain CDR"))),
+            other => return Err(bad(format!("message at log time {} ns has encapsulation kind {other:#04x}, which is not plain CDR", self.log_time_ns))),
         };
         decoded
             .map(|(v, _)| v)
@@ -72,25 +72,34 @@ impl BagSource {
 
     /// Read `topic` (a fully resolved name such as `/temperature/x_left`) as `T`. The bag must
     /// record it with type `T::ROS_TYPE`; a topic absent from the bag is accepted and yields
-    /// nothing, as a live subscription with no publisher would.
-    pub fn subscribe<T: RosMessage>(&mut self, topic: &str) -> Result<()> {
-        if let Some(t) = self.reader.topic(topic) {
-            if t.type_name != T::ROS_TYPE {
+    /// nothing, as a live subscription with no publisher would. Returns whether the bag holds
+    /// the topic, so a node can say when an input it needs is not there.
+    pub fn subscribe<T: RosMessage>(&mut self, topic: &str) -> Result<bool> {
+        let present = match self.reader.topic(topic) {
+            Some(t) if t.type_name != T::ROS_TYPE => {
                 return Err(ToolError::Topic {
                     topic: topic.to_string(),
                     reason: format!("recorded as {} in {}, but the node reads {}", t.type_name, self.reader.path().display(), T::ROS_TYPE),
                 });
             }
-        }
-        if !self.topics.iter().any(|t| t == topic) {
+            Some(_) => true,
+            None => false,
+        };
+        // only topics the bag holds go into the read filter (the reader rejects others)
+        if present && !self.topics.iter().any(|t| t == topic) {
             self.topics.push(topic.to_string());
         }
-        Ok(())
+        Ok(present)
     }
 
-    /// Whether the bag holds `topic` at all.
-    pub fn has_topic(&self, topic: &str) -> bool {
-        self.reader.topic(topic).is_some()
+    /// What to tell a user whose bag lacks `topic`: the bag's path and the topics it does hold.
+    pub fn missing_topic_hint(&self, topic: &str) -> String {
+        let held: Vec<&str> = self.reader.topics().iter().map(|t| t.name.as_str()).collect();
+        format!(
+            "{} has no topic {topic}, so this replay has nothing to read from it; the bag holds: {} (remap the node's input with --ros-args -r, or record that topic)",
+            self.reader.path().display(),
+            if held.is_empty() { "no topics".to_string() } else { held.join(", ") }
+        )
     }
 
     /// The subscribed topics' messages in log-time order.

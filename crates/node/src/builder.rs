@@ -113,12 +113,17 @@ impl NodeBuilder {
     pub fn build_offline(self) -> Result<crate::offline::OfflineNode, NodeError> {
         let (ros, id) = self.resolve_identity()?;
         let logger = Logger::stderr_only(&id.fqn, id.min_level);
+        let shutdown = ShutdownToken::new();
+        if self.handle_signals {
+            trigger_on_signals(&shutdown).map_err(|e| create_error("SIGINT/SIGTERM handler", e))?;
+        }
         Ok(crate::offline::OfflineNode {
             name: id.name,
             namespace: id.namespace,
             ros_args: ros,
             parameters: id.parameters,
             logger,
+            shutdown,
         })
     }
 

@@ -52,7 +52,7 @@ pub use environment::{DdsEnvironment, DiscoveryRange, EnvError};
 pub use error::NodeError;
 pub use logging::Logger;
 pub use node::MetrocellNode;
-pub use offline::OfflineNode;
+pub use offline::{Interrupted, OfflineNode};
 pub use params::{ParamDecl, ParamError, ParamKind, ParamSource, ParamType, ParamValue, Parameters};
 pub use raw::{RawMessage, RawPublisher, RawSubscription};
 pub use replay_args::ReplayArgs;

@@ -7,6 +7,14 @@ use crate::logging::Logger;
 use crate::names::{fully_qualified_node_name, resolve_topic_name};
 use crate::params::{ParamError, ParamKind, Parameters};
 use crate::ros_args::RosArgs;
+use crate::shutdown::ShutdownToken;
+
+/// A replay stopped by SIGINT/SIGTERM before the end of its bag.
+#[derive(Debug, thiserror::Error)]
+#[error("interrupted before the message at log time {log_time_ns} ns; the output holds everything before it and is finished (readable)")]
+pub struct Interrupted {
+    pub log_time_ns: u64,
+}
 
 /// Name, namespace, remaps and start-up parameters of a node that runs on a bag.
 pub struct OfflineNode {
@@ -15,6 +23,7 @@ pub struct OfflineNode {
     pub(crate) ros_args: RosArgs,
     pub(crate) parameters: Parameters,
     pub(crate) logger: Logger,
+    pub(crate) shutdown: ShutdownToken,
 }
 
 impl OfflineNode {
@@ -44,8 +53,50 @@ impl OfflineNode {
         &self.parameters
     }
 
+    /// Triggered by SIGINT/SIGTERM (when the builder handles signals, as it does by default):
+    /// a replay checks it between messages, stops, and still finishes its output bag, so what
+    /// it has written stays readable.
+    pub fn shutdown_token(&self) -> &ShutdownToken {
+        &self.shutdown
+    }
+
+    /// `Err` once SIGINT/SIGTERM has asked the replay to stop; a replay calls it before each
+    /// message (`log_time_ns`, the message's) and, on `Err`, finishes its output and returns it.
+    pub fn check_interrupted(&self, log_time_ns: u64) -> Result<(), Interrupted> {
+        if self.shutdown.is_triggered() {
+            Err(Interrupted { log_time_ns })
+        } else {
+            Ok(())
+        }
+    }
+
     /// Console logger (no rosout: there is no DDS).
     pub fn logger(&self) -> &Logger {
         &self.logger
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use std::time::{Duration, Instant};
+
+    use crate::MetrocellNode;
+
+    /// A signal to the process interrupts an offline node (no DDS involved), naming the log time
+    /// of the message it stopped before.
+    #[test]
+    fn sigterm_interrupts_an_offline_node() {
+        let node = MetrocellNode::builder("offline_signal_test").build_offline().unwrap();
+        assert!(node.check_interrupted(1).is_ok());
+        let status = std::process::Command::new("kill").args(["-TERM", &std::process::id().to_string()]).status().unwrap();
+        assert!(status.success());
+        let deadline = Instant::now() + Duration::from_secs(2);
+        while node.check_interrupted(7).is_ok() {
+            assert!(Instant::now() < deadline, "SIGTERM did not interrupt the offline node within 2 s");
+            std::thread::sleep(Duration::from_millis(5));
+        }
+        let e = node.check_interrupted(42).unwrap_err();
+        assert_eq!(e.log_time_ns, 42);
+        assert!(e.to_string().contains("42 ns") && e.to_string().contains("finished"), "{e}");
     }
 }

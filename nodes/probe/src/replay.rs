@@ -14,10 +14,11 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     let trigger_topic = node.resolve_topic("probe/trigger")?;
     let nominal_topic = node.resolve_topic("probe/nominal")?;
     let mut source = BagSource::open(&args.bag)?;
-    source.subscribe::<JointState>(&trigger_topic)?;
-    if source.has_topic(&nominal_topic) {
-        source.subscribe::<PointStamped>(&nominal_topic)?;
+    if !source.subscribe::<JointState>(&trigger_topic)? {
+        node.logger().warn(source.missing_topic_hint(&trigger_topic));
     }
+    // nominals are optional: without them, hits are published but no measured points
+    source.subscribe::<PointStamped>(&nominal_topic)?;
     let hits_topic = node.resolve_topic("probe/hits")?;
     let points_topic = node.resolve_topic("measured_points")?;
     let mut output = ReplayOutput::open(args.output.as_deref())?;
@@ -25,12 +26,17 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     output.advertise::<MeasuredPoint>(&points_topic)?;
 
     let mut rejected = 0u64;
+    let mut stopped = Ok(());
     for m in source.messages()? {
         let m = m?;
+        if let Err(e) = node.check_interrupted(m.log_time_ns) {
+            stopped = Err(e);
+            break;
+        }
         if m.topic == nominal_topic {
             match m.decode() {
                 Ok(nominal) => processor.nominal(nominal),
-                Err(e) => node.logger().warn(format!("{} at log time {} ns skipped: {e}", m.topic, m.log_time_ns)),
+                Err(e) => node.logger().warn(format!("skipped: {e}")),
             }
             continue;
         }
@@ -39,7 +45,7 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
             Ok(trigger) => trigger,
             Err(e) => {
                 rejected += 1;
-                node.logger().warn(format!("{} at log time {} ns skipped: {e}", m.topic, m.log_time_ns));
+                node.logger().warn(format!("skipped: {e}"));
                 continue;
             }
         };
@@ -58,5 +64,5 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     }
     output.finish()?;
     node.logger().info(format!("replayed {} triggers from {}: {rejected} rejected", processor.count() + rejected, args.bag.display()));
-    Ok(())
+    Ok(stopped?)
 }

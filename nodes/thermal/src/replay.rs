@@ -20,11 +20,15 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     let mut sensor_of_topic = Vec::new();
     for s in state.compensator.sensors() {
         let topic = node.resolve_topic(&format!("temperature/{}", s.name))?;
-        source.subscribe::<Temperature>(&topic)?;
+        if !source.subscribe::<Temperature>(&topic)? {
+            node.logger().warn(source.missing_topic_hint(&topic));
+        }
         sensor_of_topic.push((topic, s.name.clone()));
     }
     let points_topic = node.resolve_topic("measured_points")?;
-    source.subscribe::<MeasuredPoint>(&points_topic)?;
+    if !source.subscribe::<MeasuredPoint>(&points_topic)? {
+        node.logger().warn(source.missing_topic_hint(&points_topic));
+    }
     let compensated_topic = node.resolve_topic("measured_points/thermal_compensated")?;
     let model_topic = node.resolve_topic("thermal/error_model")?;
 
@@ -33,8 +37,13 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     output.advertise::<ErrorModel>(&model_topic)?;
 
     let (mut inputs, mut compensated, mut not_compensated) = (0u64, 0u64, 0u64);
+    let mut stopped = Ok(());
     for m in source.messages()? {
         let m = m?;
+        if let Err(e) = node.check_interrupted(m.log_time_ns) {
+            stopped = Err(e);
+            break;
+        }
         inputs += 1;
         let now = m.log_time_ns as i64;
         if m.topic == points_topic {
@@ -42,7 +51,7 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
             let point = match m.decode::<MeasuredPoint>() {
                 Ok(point) => point,
                 Err(e) => {
-                    node.logger().warn(format!("{} at log time {} ns skipped: {e}", m.topic, m.log_time_ns));
+                    node.logger().warn(format!("skipped: {e}"));
                     not_compensated += 1;
                     continue;
                 }
@@ -64,7 +73,7 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
                         node.logger().warn(e);
                     }
                 }
-                Err(e) => node.logger().warn(format!("{} at log time {} ns skipped: {e}", m.topic, m.log_time_ns)),
+                Err(e) => node.logger().warn(format!("skipped: {e}")),
             }
         }
         match state.model_if_due(now) {
@@ -78,5 +87,5 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
         "replayed {inputs} messages from {}: {compensated} points compensated, {not_compensated} not",
         args.bag.display()
     ));
-    Ok(())
+    Ok(stopped?)
 }

@@ -7,6 +7,10 @@
 //! default here is [`UndistortCriteria::CONVERGED`]. The tolerance, when set, is the pixel distance
 //! between the re-distorted estimate and the input, checked before each iteration (as OpenCV).
 //! Fisheye: Newton on θ from θ_d = r_d, OpenCV's default 10 iterations / 1e-8 rad.
+//!
+//! These reproduce OpenCV's results (including where its iteration stops short) for comparisons
+//! with it; the exact inverse of the distortion model, for rendering and geometry, is
+//! [`Distortion::undistort`] (Newton on both coordinates).
 
 use crate::distortion::Distortion;
 use crate::model::CameraModel;

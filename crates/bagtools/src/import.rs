@@ -52,7 +52,6 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use byteorder::LittleEndian;
 use metrocell_bag::{qos_profiles_yaml, BagWriter, QosProfile, WriterOptions};
 use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_msgs::geometry_msgs::msg::Point;
@@ -62,6 +61,7 @@ use metrocell_msgs::std_msgs::msg::Header;
 use rosmsg::RosMessage;
 use serde::Deserialize;
 
+use crate::bag_sink::encode_cdr;
 use crate::error::{io, Result, ToolError};
 
 /// One mapped column: source column name and linear conversion to SI.
@@ -232,12 +232,6 @@ struct Bound {
     field: Field,
     scale: f64,
     offset: f64,
-}
-
-fn cdr<T: RosMessage>(m: &T) -> Vec<u8> {
-    let mut v = vec![0, 1, 0, 0];
-    v.extend(rustdds::serialization::to_vec::<T, LittleEndian>(m).expect("generated types serialise"));
-    v
 }
 
 fn stamp(ns: u64) -> Time {
@@ -420,26 +414,26 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
             measured: Point { x: measured[0], y: measured[1], z: measured[2] },
             covariance: cov,
         };
-        out.push(("/measured_points".into(), MeasuredPoint::ROS_TYPE, MeasuredPoint::DEFINITION, cdr(&p)));
+        out.push(("/measured_points".into(), MeasuredPoint::ROS_TYPE, MeasuredPoint::DEFINITION, encode_cdr(&p)?));
         if !joints.is_empty() {
             let js = JointState { header: header.clone(), name: joints.iter().map(|j| j.0.clone()).collect(), position: joints.iter().map(|j| j.1).collect(), ..Default::default() };
-            out.push(("/commanded_joints".into(), JointState::ROS_TYPE, JointState::DEFINITION, cdr(&js)));
+            out.push(("/commanded_joints".into(), JointState::ROS_TYPE, JointState::DEFINITION, encode_cdr(&js)?));
         }
         for (n, v) in temps {
             let m = Temperature { header: Header { stamp: stamp(t), frame_id: n.clone() }, temperature: v, variance: 0.0 };
-            out.push((format!("/temperature/{n}"), Temperature::ROS_TYPE, Temperature::DEFINITION, cdr(&m)));
+            out.push((format!("/temperature/{n}"), Temperature::ROS_TYPE, Temperature::DEFINITION, encode_cdr(&m)?));
         }
         if let Some(v) = pressure {
             let m = FluidPressure { header: header.clone(), fluid_pressure: v, variance: 0.0 };
-            out.push(("/air/pressure".into(), FluidPressure::ROS_TYPE, FluidPressure::DEFINITION, cdr(&m)));
+            out.push(("/air/pressure".into(), FluidPressure::ROS_TYPE, FluidPressure::DEFINITION, encode_cdr(&m)?));
         }
         if let Some(v) = humidity {
             let m = RelativeHumidity { header: header.clone(), relative_humidity: v, variance: 0.0 };
-            out.push(("/air/humidity".into(), RelativeHumidity::ROS_TYPE, RelativeHumidity::DEFINITION, cdr(&m)));
+            out.push(("/air/humidity".into(), RelativeHumidity::ROS_TYPE, RelativeHumidity::DEFINITION, encode_cdr(&m)?));
         }
         if !aux.is_empty() {
             let m = JointState { header: header.clone(), name: aux.iter().map(|j| j.0.clone()).collect(), position: aux.iter().map(|j| j.1).collect(), ..Default::default() };
-            out.push(("/aux_channels".into(), JointState::ROS_TYPE, JointState::DEFINITION, cdr(&m)));
+            out.push(("/aux_channels".into(), JointState::ROS_TYPE, JointState::DEFINITION, encode_cdr(&m)?));
         }
         for (topic, ty, def, bytes) in out {
             add(&mut writer, &topic, ty, def)?;

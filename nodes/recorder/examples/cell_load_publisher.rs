@@ -14,9 +14,7 @@ use metrocell_msgs::RosMessage;
 use metrocell_node::{qos, MetrocellNode};
 
 fn cdr<T: RosMessage>(m: &T) -> Vec<u8> {
-    let mut v = vec![0, 1, 0, 0];
-    v.extend(rustdds::serialization::to_vec::<T, byteorder::LittleEndian>(m).unwrap());
-    v
+    metrocell_bagtools::encode_cdr(m).expect("generated types serialise")
 }
 
 fn header(frame: &str) -> Header {

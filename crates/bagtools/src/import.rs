@@ -95,12 +95,17 @@ pub struct Mapping {
     pub columns: BTreeMap<String, ColumnMap>,
     #[serde(default)]
     pub ignore: Vec<String>,
+    /// The file it was read from (for messages); None when built in code.
+    #[serde(skip)]
+    pub path: Option<PathBuf>,
 }
 
 impl Mapping {
     pub fn load(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path).map_err(io(path))?;
-        serde_yaml::from_str(&text).map_err(|e| ToolError::Mapping { path: path.to_path_buf(), reason: e.to_string() })
+        let mut m: Mapping = serde_yaml::from_str(&text).map_err(|e| ToolError::Mapping { path: path.to_path_buf(), reason: e.to_string() })?;
+        m.path = Some(path.to_path_buf());
+        Ok(m)
     }
 }
 
@@ -265,7 +270,7 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
         }
     } else {
         for (target, cm) in &mapping.columns {
-            let field = parse_field(target).ok_or_else(|| ToolError::Mapping { path: PathBuf::from("mapping"), reason: format!("'{target}' is not a field of the point CSV layout") })?;
+            let field = parse_field(target).ok_or_else(|| ToolError::Mapping { path: mapping.path.clone().unwrap_or_else(|| PathBuf::from("column mapping")), reason: format!("columns.{target}: '{target}' is not a field of the point CSV layout (see `metrocell bag import --help`)") })?;
             let index = find(&cm.column).ok_or_else(|| header_err(format!("mapped column '{}' (for {target}) is not in the header", cm.column)))?;
             bound.push(Bound { index, source_name: cm.column.clone(), field, scale: cm.scale, offset: cm.offset });
         }

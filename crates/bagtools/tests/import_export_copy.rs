@@ -150,3 +150,17 @@ fn filter_and_merge_counts() {
     assert_eq!(all.len(), 20);
     assert!(all.windows(2).all(|w| w[0].log_time <= w[1].log_time), "merged in log-time order");
 }
+
+/// A mapping that maps onto a field the layout does not have is refused naming the mapping file
+/// and the key.
+#[test]
+fn mapping_to_an_unknown_field_names_the_file_and_key() {
+    let dir = scratch("badmap");
+    let map = dir.with_extension("yaml");
+    let text = std::fs::read_to_string(examples().join("leica_mapping.yaml")).unwrap().replace("  u95: {column:", "  u_95: {column:");
+    std::fs::write(&map, text).unwrap();
+    let mapping = Mapping::load(&map).unwrap();
+    let e = import_csv(&examples().join("leica_export.csv"), &dir, Some(&mapping), WriterOptions::default()).unwrap_err().to_string();
+    assert!(e.contains(&map.display().to_string()) && e.contains("columns.u_95"), "{e}");
+    let _ = std::fs::remove_file(&map);
+}

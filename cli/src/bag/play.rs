@@ -62,7 +62,7 @@ pub fn run(a: PlayArgs) -> anyhow::Result<i32> {
         }
     }
     let topics: Vec<_> = reader.topics().iter().filter(|t| a.topics.is_empty() || a.topics.contains(&t.name)).collect();
-    let bag_start = metrocell_bag::info(&a.bag)?.start_ns.unwrap_or(0);
+    let bag_start = reader.info().start_ns.unwrap_or(0);
     let start_ns = super::offset_ns(bag_start, a.start)?;
     let end_ns = match a.duration {
         Some(d) => super::offset_ns(start_ns.unwrap_or(bag_start), Some(d))?,
@@ -78,7 +78,12 @@ pub fn run(a: PlayArgs) -> anyhow::Result<i32> {
     for t in &topics {
         let name = remaps.get(&t.name).cloned().unwrap_or_else(|| t.name.clone());
         // Offer what the recorded publishers offered (rosbag2's rule, see recorded_qos).
-        let recorded = metrocell_bag::parse_offered_qos(&t.name, &t.offered_qos_profiles)?;
+        // A profile text that does not parse is reported and the topic played with the
+        // default publisher QoS, as for a bag without profiles.
+        let recorded = metrocell_bag::parse_offered_qos(&t.name, &t.offered_qos_profiles).unwrap_or_else(|e| {
+            eprintln!("warning: {e}; playing {} with the default QoS (reliable, volatile)", t.name);
+            Vec::new()
+        });
         let r = replay_qos(&recorded);
         let offered = qos::reliable()
             .reliability(if r.reliable { Reliability::Reliable { when_full: WhenFull::DEFAULT } } else { Reliability::BestEffort })

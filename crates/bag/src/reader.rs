@@ -259,6 +259,11 @@ impl BagReader {
         self.topics.iter().map(|t| t.message_count).sum()
     }
 
+    /// What `metrocell bag info` prints, from this reader (no second open or scan).
+    pub fn info(&self) -> crate::info::BagInfo {
+        crate::info::info_from_reader(self)
+    }
+
     /// Iterate messages in log-time order.
     pub fn messages(&self, filter: &MessageFilter) -> Result<MessageIter<'_>> {
         let wanted: Option<Vec<usize>> = match &filter.topics {

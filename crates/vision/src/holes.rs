@@ -253,10 +253,13 @@ fn measure_one(img: &GrayImage, p: &Point2<f64>, s: &HoleSearch) -> std::result:
             gap = gap.min(dist2(q, &rough).sqrt() - radius);
         }
     }
+    // Opposite polarity (a reflection on a burr next to a dark hole): not in the components,
+    // and bounded by the grey scale (255 is 55 levels above a 200 background), so any clear
+    // deviation counts: more than 10 % of the contrast, half of min_contrast and 4 σ_I.
+    let opposite = (0.1 * contrast.abs()).max(0.5 * s.min_contrast).max(4.0 * sigma_i);
     for y in (ry - reach).floor() as i64..=(ry + reach).ceil() as i64 {
         for x in (rx - reach).floor() as i64..=(rx + reach).ceil() as i64 {
-            // Opposite polarity beyond half the contrast: a blob the components do not include.
-            if x >= x0 && y >= y0 && x <= x1 && y <= y1 && (at(x, y) - b) / contrast < -0.5 {
+            if x >= x0 && y >= y0 && x <= x1 && y <= y1 && (at(x, y) - b) * contrast.signum() < -opposite {
                 gap = gap.min(dist2((x, y), &rough).sqrt() - radius);
             }
         }

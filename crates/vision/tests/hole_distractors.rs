@@ -131,13 +131,15 @@ fn seed000_t8_with_burrs_and_dirt_stays_below_20_um() {
     let (nominal, truth) = holes();
     let mut items = vec![TargetItem::Checkerboard { top_left: [0.0, 0.0], square: SQUARE, squares_x: N as u32, squares_y: N as u32 }];
     items.extend(truth.iter().map(|c| TargetItem::Hole { centre: *c, diameter: 0.001 }));
-    // Next to every hole (0.04 mm/px, search window ±40 px = ±1.6 mm): a 0.35 mm burr/dirt speck
-    // 1.25 mm from its centre (0.45 mm clear of the 1 mm hole, inside the window), in a
+    // Next to every hole (0.04 mm/px, search window ±40 px = ±1.6 mm): a 0.5 mm burr/dirt blob
+    // 1.1 mm from its centre (0.35 mm = 9 px clear of the 1 mm hole, inside the window), in a
     // different direction for each hole; every third hole also has a 1 mm blob 2.0 mm away,
-    // reaching into the window from outside like a neighbouring hole would.
+    // reaching into the window from outside like a neighbouring hole would. Merged into the
+    // hole, the burr alone moves the rough centre by ≈ 5 px, enough to pull it into the moment
+    // disc.
     for (k, c) in truth.iter().enumerate() {
         let a = k as f64 * 2.399_963; // golden angle: directions spread over the circle
-        items.push(TargetItem::Hole { centre: [c[0] + 0.00125 * a.cos(), c[1] + 0.00125 * a.sin()], diameter: 0.00035 });
+        items.push(TargetItem::Hole { centre: [c[0] + 0.0011 * a.cos(), c[1] + 0.0011 * a.sin()], diameter: 0.0005 });
         if k % 3 == 0 {
             let b = a + std::f64::consts::PI;
             items.push(TargetItem::Hole { centre: [c[0] + 0.0020 * b.cos(), c[1] + 0.0020 * b.sin()], diameter: 0.001 });

@@ -148,6 +148,39 @@ mod tests {
         }
     }
 
+    /// Benchmark (ignored; prints ratios, asserts only equality): 1920×1080 mono8, unpadded and
+    /// with 64-byte-aligned rows, fast path against two peers in the same run: the per-pixel
+    /// path and the former `put_pixel` loop.
+    /// Run: `cargo test --release -p metrocell-fiducial-node --lib mono8_speed -- --ignored --nocapture`
+    #[test]
+    #[ignore]
+    fn mono8_speed() {
+        let time = |f: &dyn Fn() -> GrayImage| {
+            let start = std::time::Instant::now();
+            let mut last = f();
+            for _ in 0..19 {
+                last = f();
+            }
+            (start.elapsed().as_secs_f64() / 20.0, last)
+        };
+        for step in [1920u32, 1984] {
+            let m = msg("mono8", 1920, 1080, step, bytes((step * 1080) as usize, 7));
+            let (fast, a) = time(&|| gray_from_image(&m).unwrap());
+            let (general, b) = time(&|| gray_per_pixel(&m, 1));
+            let (put, c) = time(&|| {
+                let mut out = GrayImage::new(m.width, m.height);
+                for y in 0..m.height {
+                    for (x, &v) in m.data[(y * m.step) as usize..][..m.width as usize].iter().enumerate() {
+                        out.put_pixel(x as u32, y, image::Luma([v]));
+                    }
+                }
+                out
+            });
+            assert!(a == b && b == c);
+            println!("1920x1080 mono8 step {step}: fast {:.3} ms; per-pixel {:.3} ms ({:.1}x); put_pixel {:.3} ms ({:.1}x)", fast * 1e3, general * 1e3, general / fast, put * 1e3, put / fast);
+        }
+    }
+
     #[test]
     fn colour_and_mono16_rows_with_padding_convert_per_pixel() {
         // Every supported encoding with step > width × bpp: the padding is never read as pixels.

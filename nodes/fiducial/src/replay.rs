@@ -16,10 +16,11 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     let image_topic = node.resolve_topic("image")?;
     let info_topic = node.resolve_topic("camera_info")?;
     let mut source = BagSource::open(&args.bag)?;
-    source.subscribe::<Image>(&image_topic)?;
-    if source.has_topic(&info_topic) {
-        source.subscribe::<CameraInfo>(&info_topic)?;
+    if !source.subscribe::<Image>(&image_topic)? {
+        node.logger().warn(source.missing_topic_hint(&image_topic));
     }
+    // Optional: without camera_info there are detections but no poses, as live.
+    source.subscribe::<CameraInfo>(&info_topic)?;
     let detections_topic = node.resolve_topic("fiducials")?;
     let poses_topic = node.resolve_topic("fiducials/pose")?;
     let mut output = ReplayOutput::open(args.output.as_deref())?;
@@ -27,11 +28,21 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     output.advertise::<PoseWithCovarianceStamped>(&poses_topic)?;
 
     let (mut frames, mut rejected) = (0u64, 0u64);
+    let mut stopped = Ok(());
     for m in source.messages()? {
         let m = m?;
+        if let Err(e) = node.check_interrupted(m.log_time_ns) {
+            stopped = Err(e);
+            break;
+        }
         if m.topic == info_topic {
-            if let Err(e) = m.decode::<CameraInfo>().map_err(|e| e.to_string()).and_then(|info| processor.camera_info(&info).map_err(|e| e.to_string())) {
-                node.logger().warn(format!("{} at log time {} ns ignored: {e}", m.topic, m.log_time_ns));
+            match m.decode::<CameraInfo>() {
+                Ok(info) => {
+                    if let Err(e) = processor.camera_info(&info) {
+                        node.logger().warn(format!("{} at log time {} ns ignored: {e}", m.topic, m.log_time_ns));
+                    }
+                }
+                Err(e) => node.logger().warn(format!("ignored: {e}")),
             }
             continue;
         }
@@ -41,7 +52,7 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
             Ok(image) => image,
             Err(e) => {
                 rejected += 1;
-                node.logger().warn(format!("{} at log time {} ns skipped: {e}", m.topic, m.log_time_ns));
+                node.logger().warn(format!("skipped: {e}"));
                 continue;
             }
         };
@@ -60,5 +71,5 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     }
     output.finish()?;
     node.logger().info(format!("replayed {frames} frames from {}: {rejected} rejected", args.bag.display()));
-    Ok(())
+    Ok(stopped?)
 }

@@ -27,7 +27,7 @@ impl Drop for Kill {
 }
 
 fn header(stamp_ns: i64) -> Header {
-    Header { stamp: Time::from_nanos(stamp_ns as i64), frame_id: "cam_optical".into() }
+    Header { stamp: Time::from_nanos(stamp_ns), frame_id: "cam_optical".into() }
 }
 
 fn stamp_ns(h: &Header) -> i64 {

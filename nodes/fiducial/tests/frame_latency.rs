@@ -58,7 +58,7 @@ fn frame_in_to_detection_out_latency() {
     for (w, h) in [(640u32, 480u32), (1920, 1080), (3840, 2160)] {
         let img = frame(w, h);
         let msg = |stamp: i64| Image {
-            header: Header { stamp: Time::from_nanos(stamp as i64), frame_id: "cam".into() },
+            header: Header { stamp: Time::from_nanos(stamp), frame_id: "cam".into() },
             height: h,
             width: w,
             encoding: "mono8".into(),

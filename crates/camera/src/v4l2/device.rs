@@ -83,11 +83,18 @@ fn c_str(bytes: &[u8]) -> String {
     String::from_utf8_lossy(bytes.split(|&b| b == 0).next().unwrap_or(&[])).into_owned()
 }
 
+#[allow(clippy::unnecessary_cast)] // time_t is 32-bit on some targets
 fn now_ns(clock: libc::clockid_t) -> i64 {
     let mut ts = libc::timespec { tv_sec: 0, tv_nsec: 0 };
     // SAFETY: ts is a valid out-pointer.
     unsafe { libc::clock_gettime(clock, &mut ts) };
     ts.tv_sec as i64 * 1_000_000_000 + ts.tv_nsec as i64
+}
+
+/// A `timeval` (the driver's buffer timestamp) in ns.
+#[allow(clippy::unnecessary_cast)] // time_t and suseconds_t are 32-bit on some targets
+fn timeval_ns(tv: libc::timeval) -> i64 {
+    tv.tv_sec as i64 * 1_000_000_000 + tv.tv_usec as i64 * 1_000
 }
 
 impl CaptureDevice {
@@ -231,7 +238,7 @@ impl CaptureDevice {
         // SAFETY: the buffer is dequeued (the driver does not write it) and mapped with m.len bytes.
         let bytes = unsafe { std::slice::from_raw_parts(m.ptr as *const u8, (b.bytesused as usize).min(m.len)) };
         let layout = Layout { format: self.format, width: self.width, height: self.height, bytes_per_line: self.bytes_per_line };
-        let driver_ns = b.timestamp.tv_sec as i64 * 1_000_000_000 + b.timestamp.tv_usec as i64 * 1_000;
+        let driver_ns = timeval_ns(b.timestamp);
         let out = dequeued(&layout, b.flags, b.sequence, driver_ns, bytes, clocks);
         // Re-queue whatever happened (a corrupt or unconvertible buffer too), else the driver
         // runs out of buffers and the stream stalls.

@@ -30,6 +30,7 @@
 
 pub mod calibrate;
 pub mod camera_info;
+pub mod camera_info_msg;
 pub mod distortion;
 pub mod error;
 pub mod homography;
@@ -47,6 +48,7 @@ pub use calibrate::{
     RejectionReason, View,
 };
 pub use camera_info::CameraInfo;
+pub use camera_info_msg::camera_model_from_msg;
 pub use distortion::Distortion;
 pub use error::{CameraError, Result};
 pub use model::{CameraModel, Projection};

@@ -25,7 +25,7 @@ use std::time::{Duration, Instant};
 use metrocell_camera::CameraInfo as CameraInfoYaml;
 use metrocell_camera_node::capture_stamp::StampSource;
 use metrocell_camera_node::parameters::declarations;
-use metrocell_camera_node::{camera_info_msg, file_list, image_file};
+use metrocell_camera_node::{file_list, image_file};
 use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image};
 
@@ -58,7 +58,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     if !device.is_empty() {
         let images = node.publisher::<Image>("image", qos::sensor_data())?;
         let infos = node.publisher::<CameraInfo>("camera_info", qos::sensor_data())?;
-        let info = info.as_ref().map(camera_info_msg::camera_info_msg);
+        let info = info.as_ref().map(CameraInfoYaml::to_msg);
         return device::run(&node, &device, device::Outputs { images: &images, infos: &infos, info, frame_id });
     }
     let path = node.param::<String>("path")?;
@@ -111,7 +111,7 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                     diagnostics.add_count("size_mismatch", 1);
                     node.warn(format!("{}: {}x{} but camera_info is {}x{}", path.display(), img.width, img.height, info.image_width, info.image_height));
                 }
-                let mut ci = camera_info_msg::camera_info_msg(info);
+                let mut ci = info.to_msg();
                 ci.header = header;
                 let _ = infos.publish(ci);
             }

@@ -11,7 +11,7 @@ use metrocell_node::{ParamDecl, Parameters};
 use metrocell_vision::aruco::DetectorParams;
 use metrocell_vision::{detect_targets, PoseInputs, TargetFamily};
 
-use crate::{camera_info_msg, detection_msgs, frame};
+use crate::{detection_msgs, frame};
 
 pub fn declarations() -> Vec<ParamDecl> {
     vec![
@@ -65,7 +65,7 @@ impl FiducialProcessor {
 
     /// Use this camera for poses from now on; a bad message keeps the previous camera.
     pub fn camera_info(&mut self, info: &CameraInfo) -> Result<(), metrocell_camera::CameraError> {
-        self.camera = Some(camera_info_msg::camera_model_from_msg(info)?);
+        self.camera = Some(metrocell_camera::camera_model_from_msg(info)?);
         Ok(())
     }
 

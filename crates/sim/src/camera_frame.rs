@@ -28,7 +28,7 @@ use metrocell_vision::camera::{CameraModel, Distortion};
 use metrocell_vision::render::{render_view, PlanarTarget, RenderSettings, RenderedView, TargetItem};
 use nalgebra::{Isometry3, Rotation3, Translation3, UnitQuaternion, Vector3};
 
-use crate::camera_intrinsics::CameraIntrinsics;
+use crate::camera_intrinsics::{CameraIntrinsics, LensDistortion};
 use crate::error::SimError;
 
 /// The fiducial plate in front of the camera (see the module doc). Lengths in metres.
@@ -88,7 +88,11 @@ impl Default for FrameRendering {
 
 /// The intrinsics as the vision crate's camera model.
 pub fn camera_model(c: &CameraIntrinsics) -> Result<CameraModel, SimError> {
-    CameraModel::new(c.width, c.height, c.fx, c.fy, c.cx, c.cy, Distortion::BrownConrady(c.distortion)).map_err(|e| SimError::invalid("camera intrinsics", e.to_string()))
+    let distortion = match c.distortion {
+        LensDistortion::PlumbBob(k) => Distortion::BrownConrady(k),
+        LensDistortion::Equidistant(k) => Distortion::Fisheye(k),
+    };
+    CameraModel::new(c.width, c.height, c.fx, c.fy, c.cx, c.cy, distortion).map_err(|e| SimError::invalid("camera intrinsics", e.to_string()))
 }
 
 /// Plate → camera pose of a request (module doc).

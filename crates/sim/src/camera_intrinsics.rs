@@ -7,7 +7,10 @@
 //! the image centre, no distortion (`plumb_bob` with zero coefficients). Pixel convention is
 //! OpenCV's (centre of the top-left pixel at (0, 0)), so the centre is ((w−1)/2, (h−1)/2).
 
-/// Pinhole intrinsics with Brown–Conrady (`plumb_bob`) distortion, OpenCV order k1 k2 p1 p2 k3.
+pub use metrocell_twin::cell::LensDistortion;
+
+/// Pinhole intrinsics with a lens distortion model (`plumb_bob` Brown–Conrady or `equidistant`
+/// fisheye, coefficients in OpenCV order).
 #[derive(Debug, Clone, PartialEq)]
 pub struct CameraIntrinsics {
     pub width: u32,
@@ -17,7 +20,7 @@ pub struct CameraIntrinsics {
     pub fy: f64,
     pub cx: f64,
     pub cy: f64,
-    pub distortion: [f64; 5],
+    pub distortion: LensDistortion,
     /// `header.frame_id` of camera messages (optical frame: x right, y down, z forward).
     pub frame_id: String,
 }
@@ -25,7 +28,7 @@ pub struct CameraIntrinsics {
 impl Default for CameraIntrinsics {
     fn default() -> Self {
         let f = 12e-3 / 3.45e-6;
-        CameraIntrinsics { width: 2448, height: 2048, fx: f, fy: f, cx: 1223.5, cy: 1023.5, distortion: [0.0; 5], frame_id: "camera_optical".into() }
+        CameraIntrinsics { width: 2448, height: 2048, fx: f, fy: f, cx: 1223.5, cy: 1023.5, distortion: LensDistortion::PlumbBob([0.0; 5]), frame_id: "camera_optical".into() }
     }
 }
 

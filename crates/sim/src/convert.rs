@@ -121,14 +121,14 @@ pub fn probe_hit(s: &ProbeHitSample, stamp: Time, tool_offset: &Vector3<f64>) ->
     }
 }
 
-/// `CameraInfo` of the intrinsics: K, R = I, P = [K | 0], plumb_bob distortion, no binning, full ROI.
+/// `CameraInfo` of the intrinsics: K, R = I, P = [K | 0], the lens's distortion model, no binning, full ROI.
 pub fn camera_info(c: &CameraIntrinsics, stamp: Time) -> CameraInfo {
     CameraInfo {
         header: header(stamp, &c.frame_id),
         height: c.height,
         width: c.width,
-        distortion_model: "plumb_bob".into(),
-        d: c.distortion.to_vec(),
+        distortion_model: c.distortion.ros_name().into(),
+        d: c.distortion.coefficients(),
         k: [c.fx, 0.0, c.cx, 0.0, c.fy, c.cy, 0.0, 0.0, 1.0],
         r: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
         p: [c.fx, 0.0, c.cx, 0.0, 0.0, c.fy, c.cy, 0.0, 0.0, 0.0, 1.0, 0.0],

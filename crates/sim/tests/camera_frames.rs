@@ -84,3 +84,51 @@ fn rendered_frames_in_the_bag_decode_and_detect_at_the_ground_truth() {
     assert!(rms < 0.1, "corner RMS {rms} px");
     std::fs::remove_dir_all(&dir).unwrap();
 }
+
+/// A fisheye (`equidistant`) lens stated in the cell: the bag's CameraInfo carries that model and
+/// its four coefficients, the calibration it states is the lens the frames were drawn with, and
+/// the markers on the frames detect at the ground truth.
+#[test]
+fn a_fisheye_lens_in_the_cell_is_rendered_and_published() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../twin/examples/cells/quick_demo.yaml");
+    let text = std::fs::read_to_string(path).unwrap();
+    assert_eq!(text.matches("    delay: 1 s\n").count(), 1);
+    let lens = "    intrinsics: {width: 1600, height: 1200, fx: 700 px, fy: 702 px, cx: 801.5 px, cy: 598.5 px, model: equidistant, distortion: [0.05, -0.01, 0.002, -0.0004]}\n";
+    let text = text.replace("    delay: 1 s\n", &format!("    delay: 1 s\n{lens}"));
+    let cell = || Cell::from_yaml_str(&text, "fisheye_demo.yaml").unwrap();
+    let dir = std::env::temp_dir().join(format!("metrocell-sim-fisheye-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let options = BagOptions { frames: Some(noise_free()), ..BagOptions::default() };
+    write_bag(cell(), DURATION, SEED, &dir.join("bag"), &options, |_| {}).unwrap();
+
+    let start = parse_start_time(DEFAULT_START_TIME).unwrap();
+    let converter = MessageConverter::new(&cell(), start, CameraIntrinsics::default()).unwrap().with_frames(noise_free(), SEED).unwrap();
+    let renderer = converter.frames().unwrap();
+    let reader = BagReader::open(dir.join("bag")).unwrap();
+    let msgs = reader.read_all(&MessageFilter { topics: Some(vec!["/camera/image_raw".into(), "/camera/camera_info".into()]), ..MessageFilter::default() }).unwrap();
+    let info: CameraInfo = decode(&msgs.iter().find(|m| m.topic == "/camera/camera_info").unwrap().data);
+    assert_eq!((info.distortion_model.as_str(), info.d.as_slice()), ("equidistant", &[0.05, -0.01, 0.002, -0.0004][..]));
+    assert_eq!(metrocell_camera::camera_model_from_msg(&info).unwrap(), renderer.camera, "the published calibration is the rendering lens");
+
+    let sim = Simulation::new(cell(), DURATION, SEED).unwrap();
+    let request = sim.samples().find_map(|s| if let Sample::CameraFrameRequest(r) = s { Some(r) } else { None }).unwrap();
+    let img: Image = decode(&msgs.iter().find(|m| m.topic == "/camera/image_raw").unwrap().data);
+    assert_eq!((img.width, img.height), (1600, 1200));
+    let truth = renderer.render(&request, img.header.stamp.nanos() as u64).unwrap();
+    assert!(img.data == *truth.image.as_raw());
+    let gray = image::GrayImage::from_raw(img.width, img.height, img.data).unwrap();
+    let found = detect_markers(&gray, &Dictionary::predefined("DICT_4X4_50").unwrap(), &DetectorParams::default()).unwrap();
+    assert_eq!(found.len(), 4, "all four plate markers");
+    let (mut sq, mut n) = (0.0, 0usize);
+    for d in &found {
+        let t = truth.markers.iter().find(|t| t.id == d.id).unwrap();
+        for (a, b) in d.corners.iter().zip(&t.corners) {
+            sq += (a - b).norm_squared();
+            n += 1;
+        }
+    }
+    let rms = (sq / n as f64).sqrt();
+    println!("fisheye lens: {n} corners, RMS vs ground truth {rms:.4} px");
+    assert!(rms < 0.1, "corner RMS {rms} px");
+    std::fs::remove_dir_all(&dir).unwrap();
+}

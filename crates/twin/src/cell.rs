@@ -203,7 +203,7 @@ pub struct CameraSpec {
     pub intrinsics: Option<CameraLens>,
 }
 
-/// Pinhole intrinsics (px) with Brown–Conrady distortion k1 k2 p1 p2 k3.
+/// Pinhole intrinsics (px) with a lens distortion model.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CameraLens {
     pub width: u32,
@@ -212,7 +212,33 @@ pub struct CameraLens {
     pub fy: f64,
     pub cx: f64,
     pub cy: f64,
-    pub distortion: [f64; 5],
+    pub distortion: LensDistortion,
+}
+
+/// Lens distortion, coefficients in OpenCV order (ROS camera_info names in the docs).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum LensDistortion {
+    /// `plumb_bob`: Brown–Conrady k1 k2 p1 p2 k3.
+    PlumbBob([f64; 5]),
+    /// `equidistant`: fisheye k1 k2 k3 k4 (θ_d = θ(1 + k1θ² + k2θ⁴ + k3θ⁶ + k4θ⁸)).
+    Equidistant([f64; 4]),
+}
+
+impl LensDistortion {
+    /// The ROS camera_info `distortion_model` name.
+    pub fn ros_name(&self) -> &'static str {
+        match self {
+            LensDistortion::PlumbBob(_) => "plumb_bob",
+            LensDistortion::Equidistant(_) => "equidistant",
+        }
+    }
+
+    pub fn coefficients(&self) -> Vec<f64> {
+        match self {
+            LensDistortion::PlumbBob(k) => k.to_vec(),
+            LensDistortion::Equidistant(k) => k.to_vec(),
+        }
+    }
 }
 
 /// True air on the tracker beam.
@@ -571,11 +597,17 @@ fn camera(c: &CameraSection) -> Result<CameraSpec, CellError> {
                     return Err(CellError::OutOfRange { path: format!("{p}.{key}"), value: v, reason: format!("the principal point must lie on the image, [0, {n}] px") });
                 }
             }
-            if i.distortion.len() > 5 || i.distortion.iter().any(|d| !d.is_finite()) {
-                return Err(CellError::invalid(format!("{p}.distortion"), "takes at most 5 finite coefficients: k1, k2, p1, p2, k3 (OpenCV order)"));
+            let (n, names) = match i.model.as_deref().unwrap_or("plumb_bob") {
+                "plumb_bob" => (5, "k1, k2, p1, p2, k3"),
+                "equidistant" => (4, "k1, k2, k3, k4"),
+                other => return Err(CellError::invalid(format!("{p}.model"), format!("`{other}` is not a lens model here; allowed: plumb_bob (Brown-Conrady), equidistant (fisheye)"))),
+            };
+            if i.distortion.len() > n || i.distortion.iter().any(|d| !d.is_finite()) {
+                return Err(CellError::invalid(format!("{p}.distortion"), format!("takes at most {n} finite coefficients: {names} (OpenCV order)")));
             }
-            let mut distortion = [0.0; 5];
-            distortion[..i.distortion.len()].copy_from_slice(&i.distortion);
+            let mut k = [0.0; 5];
+            k[..i.distortion.len()].copy_from_slice(&i.distortion);
+            let distortion = if n == 5 { LensDistortion::PlumbBob(k) } else { LensDistortion::Equidistant([k[0], k[1], k[2], k[3]]) };
             Some(CameraLens { width: i.width, height: i.height, fx, fy, cx, cy, distortion })
         }
     };

@@ -343,7 +343,12 @@ pub struct IntrinsicsSection {
     pub fy: Quantity,
     pub cx: Quantity,
     pub cy: Quantity,
-    /// Brown–Conrady coefficients in OpenCV order k1 k2 p1 p2 k3 (missing trailing ones are 0).
+    /// Lens model, with ROS camera_info's names: `plumb_bob` (Brown–Conrady, the default) or
+    /// `equidistant` (fisheye, OpenCV's `cv::fisheye`).
+    #[serde(default)]
+    pub model: Option<String>,
+    /// Coefficients in OpenCV order: plumb_bob k1 k2 p1 p2 k3, equidistant k1 k2 k3 k4 (missing
+    /// trailing ones are 0).
     #[serde(default)]
     pub distortion: Vec<f64>,
 }

@@ -117,13 +117,21 @@ fn camera_intrinsics_are_read_and_checked() {
     let cell = Cell::from_path(common::cell_path(f)).unwrap();
     let lens = cell.camera.as_ref().unwrap().intrinsics.clone().unwrap();
     assert_eq!((lens.width, lens.height, lens.fx, lens.cy), (1280, 1024, 1600.0, 511.5));
-    assert_eq!(lens.distortion, [-0.08, 0.02, 0.0, 0.0, 0.0]);
+    assert_eq!(lens.distortion, metrocell_twin::cell::LensDistortion::PlumbBob([-0.08, 0.02, 0.0, 0.0, 0.0]));
     let msg = error_of(&common::edited_example(f, "cx: 639.5 px", "cx: 1639.5 px"));
     assert_mentions(&msg, &["sensors.camera.intrinsics.cx", "1639.5", "[0, 1280] px"]);
     let msg = error_of(&common::edited_example(f, "fx: 1600 px", "fx: 1600 mm"));
     assert_mentions(&msg, &["sensors.camera.intrinsics.fx", "`mm`", "use `px`"]);
     let msg = error_of(&common::edited_example(f, "distortion: [-0.08, 0.02, 0, 0, 0]", "distortion: [-0.08, 0.02, 0, 0, 0, 0.1]"));
     assert_mentions(&msg, &["sensors.camera.intrinsics.distortion", "k1, k2, p1, p2, k3"]);
+    // a fisheye lens: four coefficients
+    let fisheye = common::edited_example(f, "distortion: [-0.08, 0.02, 0, 0, 0]", "distortion: [0.03, -0.01, 0.002]").replacen("model: plumb_bob", "model: equidistant", 1);
+    let cell = Cell::from_yaml_str(&fisheye, "fisheye.yaml").unwrap();
+    assert_eq!(cell.camera.unwrap().intrinsics.unwrap().distortion, metrocell_twin::cell::LensDistortion::Equidistant([0.03, -0.01, 0.002, 0.0]));
+    let msg = error_of(&fisheye.replace("[0.03, -0.01, 0.002]", "[0.03, -0.01, 0.002, 0, 0]"));
+    assert_mentions(&msg, &["sensors.camera.intrinsics.distortion", "at most 4", "k1, k2, k3, k4"]);
+    let msg = error_of(&fisheye.replace("model: equidistant", "model: rational_polynomial"));
+    assert_mentions(&msg, &["sensors.camera.intrinsics.model", "rational_polynomial", "plumb_bob", "equidistant"]);
     let msg = error_of(&common::edited_example(f, "      width: 1280              # px", "      width: 1280
       skew: 0"));
     assert_mentions(&msg, &["unknown field `skew`", "distortion"]);

@@ -30,6 +30,21 @@ fn noise_free() -> FrameRendering {
     FrameRendering { settings: RenderSettings { supersampling: 8, blur_sigma_px: 0.8, noise_sigma: 0.0, ..RenderSettings::default() }, ..FrameRendering::default() }
 }
 
+/// Detects the plate's markers on `gray`: all four must be found; returns the sum of squared
+/// corner errors against the render's ground truth (px²) and the number of corners.
+fn plate_corner_errors(gray: &image::GrayImage, truth: &metrocell_vision::RenderedView) -> (f64, usize) {
+    let found = detect_markers(gray, &Dictionary::predefined("DICT_4X4_50").unwrap(), &DetectorParams::default()).unwrap();
+    let mut ids: Vec<usize> = found.iter().map(|d| d.id).collect();
+    ids.sort();
+    assert_eq!(ids, [0, 1, 2, 3], "all four plate markers");
+    let mut sq = 0.0;
+    for d in &found {
+        let t = truth.markers.iter().find(|t| t.id == d.id).unwrap();
+        sq += d.corners.iter().zip(&t.corners).map(|(a, b)| (a - b).norm_squared()).sum::<f64>();
+    }
+    (sq, 4 * found.len())
+}
+
 #[test]
 fn rendered_frames_in_the_bag_decode_and_detect_at_the_ground_truth() {
     let dir = std::env::temp_dir().join(format!("metrocell-sim-frames-{}", std::process::id()));
@@ -56,7 +71,6 @@ fn rendered_frames_in_the_bag_decode_and_detect_at_the_ground_truth() {
         i.header.stamp.nanos() as u64
     }).collect();
     let images: Vec<_> = msgs.iter().filter(|m| m.topic == "/camera/image_raw").collect();
-    let dict = Dictionary::predefined("DICT_4X4_50").unwrap();
     let (mut sq, mut n) = (0.0, 0usize);
     for (k, (m, req)) in images.iter().zip(&requests).enumerate() {
         let img: Image = decode(&m.data);
@@ -67,17 +81,9 @@ fn rendered_frames_in_the_bag_decode_and_detect_at_the_ground_truth() {
         let truth = renderer.render(req, stamp).unwrap();
         assert!(img.data == *truth.image.as_raw(), "frame {k}: bag bytes are the rendered image");
         let gray = image::GrayImage::from_raw(img.width, img.height, img.data).unwrap();
-        let found = detect_markers(&gray, &dict, &DetectorParams::default()).unwrap();
-        let mut ids: Vec<usize> = found.iter().map(|d| d.id).collect();
-        ids.sort();
-        assert_eq!(ids, [0, 1, 2, 3], "frame {k}: all four plate markers");
-        for d in &found {
-            let t = truth.markers.iter().find(|t| t.id == d.id).unwrap();
-            for (a, b) in d.corners.iter().zip(&t.corners) {
-                sq += (a - b).norm_squared();
-                n += 1;
-            }
-        }
+        let (frame_sq, frame_n) = plate_corner_errors(&gray, &truth);
+        sq += frame_sq;
+        n += frame_n;
     }
     let rms = (sq / n as f64).sqrt();
     println!("{n} corners, RMS vs ground truth {rms:.4} px");
@@ -117,16 +123,7 @@ fn a_fisheye_lens_in_the_cell_is_rendered_and_published() {
     let truth = renderer.render(&request, img.header.stamp.nanos() as u64).unwrap();
     assert!(img.data == *truth.image.as_raw());
     let gray = image::GrayImage::from_raw(img.width, img.height, img.data).unwrap();
-    let found = detect_markers(&gray, &Dictionary::predefined("DICT_4X4_50").unwrap(), &DetectorParams::default()).unwrap();
-    assert_eq!(found.len(), 4, "all four plate markers");
-    let (mut sq, mut n) = (0.0, 0usize);
-    for d in &found {
-        let t = truth.markers.iter().find(|t| t.id == d.id).unwrap();
-        for (a, b) in d.corners.iter().zip(&t.corners) {
-            sq += (a - b).norm_squared();
-            n += 1;
-        }
-    }
+    let (sq, n) = plate_corner_errors(&gray, &truth);
     let rms = (sq / n as f64).sqrt();
     println!("fisheye lens: {n} corners, RMS vs ground truth {rms:.4} px");
     assert!(rms < 0.1, "corner RMS {rms} px");

@@ -175,18 +175,34 @@ fn replay_from_bag_equals_live_run_over_dds() {
     let _ = std::fs::remove_dir_all(&tmp);
 }
 
+/// A fresh scratch directory for one test.
+fn scratch(name: &str) -> std::path::PathBuf {
+    let tmp = std::env::temp_dir().join(format!("metrocell-probe-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&tmp);
+    std::fs::create_dir_all(&tmp).unwrap();
+    tmp
+}
+
+/// A bag writer at `dir` with a JointState trigger topic named `topic`.
+fn trigger_bag(dir: &Path, topic: &str) -> BagWriter {
+    let mut w = BagWriter::create(dir, WriterOptions::default()).unwrap();
+    let qos = qos_profiles_yaml(&[QosProfile::default_publisher()]);
+    w.add_topic(topic, JointState::ROS_TYPE, JointState::DEFINITION, &qos).unwrap();
+    w
+}
+
+/// A trigger at t on x, y, z, approaching along −z.
+fn trigger(t: u64) -> JointState {
+    JointState { header: header(t), name: vec!["x".into(), "y".into(), "z".into()], position: vec![0.1, 0.2, 0.05], velocity: vec![0.0, 0.0, -1.0], effort: vec![] }
+}
+
 /// A malformed trigger in the bag (bytes that are not a JointState) is reported with its topic
 /// and log time and skipped; the replay goes on and the output bag holds every valid trigger's hit.
 #[test]
 fn replay_skips_a_malformed_message_and_keeps_going() {
-    let tmp = std::env::temp_dir().join(format!("metrocell-probe-replay-bad-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&tmp);
-    std::fs::create_dir_all(&tmp).unwrap();
+    let tmp = scratch("replay-bad");
     let input = tmp.join("input");
-    let mut w = BagWriter::create(&input, WriterOptions::default()).unwrap();
-    let qos = qos_profiles_yaml(&[QosProfile::default_publisher()]);
-    w.add_topic("/replay/probe/trigger", JointState::ROS_TYPE, JointState::DEFINITION, &qos).unwrap();
-    let trigger = |t: u64| JointState { header: header(t), name: vec!["x".into(), "y".into(), "z".into()], position: vec![0.1, 0.2, 0.05], velocity: vec![0.0, 0.0, -1.0], effort: vec![] };
+    let mut w = trigger_bag(&input, "/replay/probe/trigger");
     w.write("/replay/probe/trigger", T0, T0, &encode_cdr(&trigger(T0)).unwrap()).unwrap();
     let bad_time = T0 + 100 * MS;
     w.write("/replay/probe/trigger", bad_time, bad_time, &[0, 1, 0, 0, 0xff, 0xff, 0xff, 0x7f]).unwrap();
@@ -210,18 +226,13 @@ fn replay_skips_a_malformed_message_and_keeps_going() {
 /// where it stopped.
 #[test]
 fn an_interrupted_replay_finishes_its_output_bag() {
-    let tmp = std::env::temp_dir().join(format!("metrocell-probe-replay-int-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&tmp);
-    std::fs::create_dir_all(&tmp).unwrap();
+    let tmp = scratch("replay-int");
     let input = tmp.join("input");
     let n = 300_000u64;
-    let mut w = BagWriter::create(&input, WriterOptions::default()).unwrap();
-    let qos = qos_profiles_yaml(&[QosProfile::default_publisher()]);
-    w.add_topic("/replay/probe/trigger", JointState::ROS_TYPE, JointState::DEFINITION, &qos).unwrap();
+    let mut w = trigger_bag(&input, "/replay/probe/trigger");
     for k in 0..n {
         let t = T0 + k * MS;
-        let j = JointState { header: header(t), name: vec!["x".into(), "y".into(), "z".into()], position: vec![0.1, 0.2, 0.05], velocity: vec![0.0, 0.0, -1.0], effort: vec![] };
-        w.write("/replay/probe/trigger", t, t, &encode_cdr(&j).unwrap()).unwrap();
+        w.write("/replay/probe/trigger", t, t, &encode_cdr(&trigger(t)).unwrap()).unwrap();
     }
     w.finish().unwrap();
 
@@ -253,14 +264,9 @@ fn an_interrupted_replay_finishes_its_output_bag() {
 /// holds, writes an empty (readable) output and succeeds.
 #[test]
 fn a_bag_without_the_input_topic_is_named() {
-    let tmp = std::env::temp_dir().join(format!("metrocell-probe-replay-missing-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&tmp);
-    std::fs::create_dir_all(&tmp).unwrap();
+    let tmp = scratch("replay-missing");
     let input = tmp.join("input");
-    let mut w = BagWriter::create(&input, WriterOptions::default()).unwrap();
-    let qos = qos_profiles_yaml(&[QosProfile::default_publisher()]);
-    w.add_topic("/machine/probe/trigger", JointState::ROS_TYPE, JointState::DEFINITION, &qos).unwrap();
-    w.finish().unwrap();
+    trigger_bag(&input, "/machine/probe/trigger").finish().unwrap();
     let output = tmp.join("output");
     let run = Command::new(env!("CARGO_BIN_EXE_metrocell-probe")).arg("--bag").arg(&input).arg("--output").arg(&output).args(ARGS).output().unwrap();
     let stderr = String::from_utf8_lossy(&run.stderr);

@@ -110,4 +110,50 @@ impl BagSource {
             Ok(SourcedMessage { topic: m.topic, log_time_ns: m.log_time, publish_time_ns: m.publish_time, payload: m.data })
         }))
     }
+
+    /// Feed the subscribed messages to `each` in log-time order, asking `stop` before each one:
+    /// a replay told to stop (SIGINT) ends between messages, so the caller can still finish its
+    /// output whole. Returns the log time of the message it stopped before, or None at the end
+    /// of the bag. An error from `each` or from reading the bag ends the replay with that error.
+    pub fn replay<E: From<ToolError>>(&self, stop: impl Fn() -> bool, mut each: impl FnMut(SourcedMessage) -> std::result::Result<(), E>) -> std::result::Result<Option<u64>, E> {
+        for m in self.messages()? {
+            let m = m?;
+            if stop() {
+                return Ok(Some(m.log_time_ns));
+            }
+            each(m)?;
+        }
+        Ok(None)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use metrocell_bag::{BagWriter, WriterOptions};
+    use metrocell_msgs::sensor_msgs::msg::Temperature;
+
+    #[test]
+    fn replay_stops_between_messages_and_says_where() {
+        let dir = std::env::temp_dir().join(format!("bagtools_replay_stop_{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let mut w = BagWriter::create(&dir, WriterOptions::default()).unwrap();
+        w.add_topic("/t", Temperature::ROS_TYPE, Temperature::DEFINITION, "").unwrap();
+        for k in 1..=5u64 {
+            w.write("/t", k * 10, k * 10, &crate::encode_cdr(&Temperature { temperature: k as f64, ..Default::default() }).unwrap()).unwrap();
+        }
+        w.finish().unwrap();
+        let mut source = BagSource::open(&dir).unwrap();
+        assert!(source.subscribe::<Temperature>("/t").unwrap());
+        let seen = std::cell::RefCell::new(Vec::new());
+        let stopped = source.replay::<ToolError>(|| seen.borrow().len() == 2, |m| {
+            seen.borrow_mut().push(m.decode::<Temperature>()?.temperature);
+            Ok(())
+        });
+        assert_eq!(stopped.unwrap(), Some(30), "stopped before the third message");
+        assert_eq!(*seen.borrow(), [1.0, 2.0]);
+        let all = source.replay::<ToolError>(|| false, |_| Ok(())).unwrap();
+        assert_eq!(all, None, "an unstopped replay runs to the end");
+        std::fs::remove_dir_all(&dir).unwrap();
+    }
 }

@@ -60,13 +60,17 @@ impl OfflineNode {
         &self.shutdown
     }
 
-    /// `Err` once SIGINT/SIGTERM has asked the replay to stop; a replay calls it before each
-    /// message (`log_time_ns`, the message's) and, on `Err`, finishes its output and returns it.
-    pub fn check_interrupted(&self, log_time_ns: u64) -> Result<(), Interrupted> {
-        if self.shutdown.is_triggered() {
-            Err(Interrupted { log_time_ns })
-        } else {
-            Ok(())
+    /// Whether SIGINT/SIGTERM has asked the node to stop (the `stop` of a bag replay).
+    pub fn interrupted(&self) -> bool {
+        self.shutdown.is_triggered()
+    }
+
+    /// The end of a replay that stopped before the message at `stopped` (None: it read the
+    /// whole bag), as the node's result; call it after finishing the output.
+    pub fn finish_replay(&self, stopped: Option<u64>) -> Result<(), Interrupted> {
+        match stopped {
+            Some(log_time_ns) => Err(Interrupted { log_time_ns }),
+            None => Ok(()),
         }
     }
 
@@ -80,16 +84,19 @@ impl OfflineNode {
 mod tests {
     use crate::MetrocellNode;
 
-    /// Once shutdown is triggered, an offline node says so, naming the log time of the message
-    /// it stopped before. (SIGINT/SIGTERM trigger the same token, see `shutdown`; a real signal
-    /// to a replaying node is tested end to end in nodes/probe: a second signal here would end
-    /// the test process, as the shutdown module's own signal test already sends one.)
+    /// Once shutdown is triggered, an offline node says so, and a replay that stopped names the
+    /// log time of the message it stopped before. (SIGINT/SIGTERM trigger the same token, see
+    /// `shutdown`; a real signal to a replaying node is tested end to end in nodes/probe: a
+    /// second signal here would end the test process, as the shutdown module's own signal test
+    /// already sends one.)
     #[test]
     fn a_triggered_shutdown_interrupts_an_offline_node() {
         let node = MetrocellNode::builder("offline_interrupt_test").handle_signals(false).build_offline().unwrap();
-        assert!(node.check_interrupted(1).is_ok());
+        assert!(!node.interrupted());
         node.shutdown_token().trigger();
-        let e = node.check_interrupted(42).unwrap_err();
+        assert!(node.interrupted());
+        assert!(node.finish_replay(None).is_ok());
+        let e = node.finish_replay(Some(42)).unwrap_err();
         assert_eq!(e.log_time_ns, 42);
         assert!(e.to_string().contains("42 ns") && e.to_string().contains("finished"), "{e}");
     }

@@ -28,13 +28,8 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     output.advertise::<PoseWithCovarianceStamped>(&poses_topic)?;
 
     let (mut frames, mut rejected) = (0u64, 0u64);
-    let mut stopped = Ok(());
-    for m in source.messages()? {
-        let m = m?;
-        if let Err(e) = node.check_interrupted(m.log_time_ns) {
-            stopped = Err(e);
-            break;
-        }
+    // SIGINT/SIGTERM stop it between messages, and the output below is still finished
+    let stopped = source.replay::<Box<dyn std::error::Error>>(|| node.interrupted(), |m| {
         if m.topic == info_topic {
             match m.decode::<CameraInfo>() {
                 Ok(info) => {
@@ -44,7 +39,7 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
                 }
                 Err(e) => node.logger().warn(format!("ignored: {e}")),
             }
-            continue;
+            return Ok(());
         }
         frames += 1;
         // A malformed message is reported and skipped, like a frame the detector rejects.
@@ -53,7 +48,7 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
             Err(e) => {
                 rejected += 1;
                 node.logger().warn(format!("skipped: {e}"));
-                continue;
+                return Ok(());
             }
         };
         match processor.frame(&image) {
@@ -68,8 +63,9 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
                 node.logger().warn(format!("{e} (log time {} ns)", m.log_time_ns));
             }
         }
-    }
+        Ok(())
+    })?;
     output.finish()?;
     node.logger().info(format!("replayed {frames} frames from {}: {rejected} rejected", args.bag.display()));
-    Ok(stopped?)
+    Ok(node.finish_replay(stopped)?)
 }

@@ -26,19 +26,14 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     output.advertise::<MeasuredPoint>(&points_topic)?;
 
     let mut rejected = 0u64;
-    let mut stopped = Ok(());
-    for m in source.messages()? {
-        let m = m?;
-        if let Err(e) = node.check_interrupted(m.log_time_ns) {
-            stopped = Err(e);
-            break;
-        }
+    // SIGINT/SIGTERM stop it between messages, and the output below is still finished
+    let stopped = source.replay::<Box<dyn std::error::Error>>(|| node.interrupted(), |m| {
         if m.topic == nominal_topic {
             match m.decode() {
                 Ok(nominal) => processor.nominal(nominal),
                 Err(e) => node.logger().warn(format!("skipped: {e}")),
             }
-            continue;
+            return Ok(());
         }
         // A malformed message is reported and skipped, like a trigger the processor rejects.
         let trigger = match m.decode::<JointState>() {
@@ -46,7 +41,7 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
             Err(e) => {
                 rejected += 1;
                 node.logger().warn(format!("skipped: {e}"));
-                continue;
+                return Ok(());
             }
         };
         match processor.trigger(&trigger) {
@@ -61,8 +56,9 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
                 node.logger().warn(format!("{e} (log time {} ns)", m.log_time_ns));
             }
         }
-    }
+        Ok(())
+    })?;
     output.finish()?;
     node.logger().info(format!("replayed {} triggers from {}: {rejected} rejected", processor.count() + rejected, args.bag.display()));
-    Ok(stopped?)
+    Ok(node.finish_replay(stopped)?)
 }

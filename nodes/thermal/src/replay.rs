@@ -37,13 +37,8 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     output.advertise::<ErrorModel>(&model_topic)?;
 
     let (mut inputs, mut compensated, mut not_compensated) = (0u64, 0u64, 0u64);
-    let mut stopped = Ok(());
-    for m in source.messages()? {
-        let m = m?;
-        if let Err(e) = node.check_interrupted(m.log_time_ns) {
-            stopped = Err(e);
-            break;
-        }
+    // SIGINT/SIGTERM stop it between messages, and the output below is still finished
+    let stopped = source.replay::<Box<dyn std::error::Error>>(|| node.interrupted(), |m| {
         inputs += 1;
         let now = m.log_time_ns as i64;
         if m.topic == points_topic {
@@ -53,7 +48,7 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
                 Err(e) => {
                     node.logger().warn(format!("skipped: {e}"));
                     not_compensated += 1;
-                    continue;
+                    return Ok(());
                 }
             };
             match state.compensate(&point, now) {
@@ -81,11 +76,12 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
             Some(Err(e)) => node.logger().debug(format!("error model at {now} ns: {e}")),
             None => {}
         }
-    }
+        Ok(())
+    })?;
     output.finish()?;
     node.logger().info(format!(
         "replayed {inputs} messages from {}: {compensated} points compensated, {not_compensated} not",
         args.bag.display()
     ));
-    Ok(stopped?)
+    Ok(node.finish_replay(stopped)?)
 }

@@ -36,22 +36,17 @@ fn stamp_ns(h: &Header) -> u64 {
     h.stamp.nanos() as u64
 }
 
+fn camera() -> CameraModel {
+    CameraModel::new(W, H, 600.0, 600.0, 239.5, 179.5, Distortion::none()).unwrap()
+}
+
+/// The calibration of the camera the frames are rendered with.
 fn camera_info() -> CameraInfo {
-    CameraInfo {
-        header: header(T0),
-        height: H,
-        width: W,
-        distortion_model: "plumb_bob".into(),
-        d: vec![0.0; 5],
-        k: [600.0, 0.0, 239.5, 0.0, 600.0, 179.5, 0.0, 0.0, 1.0],
-        r: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
-        p: [600.0, 0.0, 239.5, 0.0, 0.0, 600.0, 179.5, 0.0, 0.0, 0.0, 1.0, 0.0],
-        ..Default::default()
-    }
+    CameraInfo { header: header(T0), ..metrocell_camera::CameraInfo::from_model("cam", &camera()).to_msg() }
 }
 
 fn frames() -> Vec<Image> {
-    let cam = CameraModel::new(W, H, 600.0, 600.0, 239.5, 179.5, Distortion::none()).unwrap();
+    let cam = camera();
     let target = PlanarTarget {
         items: vec![TargetItem::Marker { dictionary: Dictionary::predefined("DICT_4X4_50").unwrap(), id: 3, top_left: [0.0, 0.0], side: 0.04, border_bits: 1 }],
     };

@@ -97,7 +97,6 @@ pub struct MessageConverter {
     tool_offset: Vector3<f64>,
     /// Per thermocouple: (name, topic, location).
     thermocouples: Vec<(String, TopicId, String)>,
-    has_camera: bool,
     frames: Option<FrameRenderer>,
 }
 
@@ -111,14 +110,15 @@ impl MessageConverter {
             .map(|(tc, &id)| (tc.name.clone(), id, tc.node.clone().unwrap_or_else(|| "ambient".into())))
             .collect();
         let camera = CameraIntrinsics::for_cell(cell, camera);
-        Ok(MessageConverter { topics, start_ns, camera, tool_offset: cell.machine.tool_offset, thermocouples, has_camera: cell.camera.is_some(), frames: None })
+        Ok(MessageConverter { topics, start_ns, camera, tool_offset: cell.machine.tool_offset, thermocouples, frames: None })
     }
 
     /// Also render an image for every camera frame request (module doc of
     /// [`crate::camera_frame`]); `seed` is the simulation seed (per-frame noise derives from
     /// it). A cell without a camera ignores this. Fails on invalid intrinsics or settings.
     pub fn with_frames(mut self, rendering: FrameRendering, seed: u64) -> Result<MessageConverter, SimError> {
-        if self.has_camera {
+        // the cell has a camera exactly when it has an image topic
+        if self.topics.camera_image.is_some() {
             self.frames = Some(FrameRenderer::new(&self.camera, rendering, seed)?);
         }
         Ok(self)

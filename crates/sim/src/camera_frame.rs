@@ -24,11 +24,11 @@
 
 use metrocell_twin::CameraFrameRequest;
 use metrocell_vision::aruco::Dictionary;
-use metrocell_vision::camera::{CameraModel, Distortion};
+use metrocell_vision::camera::CameraModel;
 use metrocell_vision::render::{render_view, PlanarTarget, RenderSettings, RenderedView, TargetItem};
 use nalgebra::{Isometry3, Rotation3, Translation3, UnitQuaternion, Vector3};
 
-use crate::camera_intrinsics::{CameraIntrinsics, LensDistortion};
+use crate::camera_intrinsics::CameraIntrinsics;
 use crate::error::SimError;
 
 /// The fiducial plate in front of the camera (see the module doc). Lengths in metres.
@@ -86,14 +86,6 @@ impl Default for FrameRendering {
     }
 }
 
-/// The intrinsics as the vision crate's camera model.
-pub fn camera_model(c: &CameraIntrinsics) -> Result<CameraModel, SimError> {
-    let distortion = match c.distortion {
-        LensDistortion::PlumbBob(k) => Distortion::BrownConrady(k),
-        LensDistortion::Equidistant(k) => Distortion::Fisheye(k),
-    };
-    CameraModel::new(c.width, c.height, c.fx, c.fy, c.cx, c.cy, distortion).map_err(|e| SimError::invalid("camera intrinsics", e.to_string()))
-}
 
 /// Plate → camera pose of a request (module doc).
 pub fn plate_to_camera(request: &CameraFrameRequest, plate: &FramePlate) -> Isometry3<f64> {
@@ -124,7 +116,7 @@ pub struct FrameRenderer {
 
 impl FrameRenderer {
     pub fn new(intrinsics: &CameraIntrinsics, rendering: FrameRendering, sim_seed: u64) -> Result<FrameRenderer, SimError> {
-        let camera = camera_model(intrinsics)?;
+        let camera = intrinsics.lens.clone();
         let target = rendering.plate.target()?;
         Ok(FrameRenderer { camera, rendering, target, sim_seed })
     }

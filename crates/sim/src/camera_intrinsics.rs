@@ -7,20 +7,12 @@
 //! the image centre, no distortion (`plumb_bob` with zero coefficients). Pixel convention is
 //! OpenCV's (centre of the top-left pixel at (0, 0)), so the centre is ((w−1)/2, (h−1)/2).
 
-pub use metrocell_twin::cell::LensDistortion;
+use metrocell_camera::{CameraModel, Distortion};
 
-/// Pinhole intrinsics with a lens distortion model (`plumb_bob` Brown–Conrady or `equidistant`
-/// fisheye, coefficients in OpenCV order).
+/// The simulated camera: its lens (pinhole, distortion) and the frame id of its messages.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CameraIntrinsics {
-    pub width: u32,
-    pub height: u32,
-    /// Focal lengths and principal point (px).
-    pub fx: f64,
-    pub fy: f64,
-    pub cx: f64,
-    pub cy: f64,
-    pub distortion: LensDistortion,
+    pub lens: CameraModel,
     /// `header.frame_id` of camera messages (optical frame: x right, y down, z forward).
     pub frame_id: String,
 }
@@ -28,7 +20,8 @@ pub struct CameraIntrinsics {
 impl Default for CameraIntrinsics {
     fn default() -> Self {
         let f = 12e-3 / 3.45e-6;
-        CameraIntrinsics { width: 2448, height: 2048, fx: f, fy: f, cx: 1223.5, cy: 1023.5, distortion: LensDistortion::PlumbBob([0.0; 5]), frame_id: "camera_optical".into() }
+        let lens = CameraModel::new(2448, 2048, f, f, 1223.5, 1023.5, Distortion::none()).expect("the default lens is valid");
+        CameraIntrinsics { lens, frame_id: "camera_optical".into() }
     }
 }
 
@@ -37,7 +30,7 @@ impl CameraIntrinsics {
     /// else `fallback`.
     pub fn for_cell(cell: &metrocell_twin::Cell, fallback: CameraIntrinsics) -> CameraIntrinsics {
         match cell.camera.as_ref().and_then(|c| c.intrinsics.as_ref()) {
-            Some(l) => CameraIntrinsics { width: l.width, height: l.height, fx: l.fx, fy: l.fy, cx: l.cx, cy: l.cy, distortion: l.distortion, frame_id: fallback.frame_id },
+            Some(lens) => CameraIntrinsics { lens: lens.clone(), frame_id: fallback.frame_id },
             None => fallback,
         }
     }

@@ -23,7 +23,7 @@ use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_msgs::geometry_msgs::msg::{Point, Vector3 as RosVector3};
 use metrocell_msgs::msg::{ProbeHit, TrackerMeasurement};
 use metrocell_msgs::rosgraph_msgs::msg::Clock;
-use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, JointState, RegionOfInterest, Temperature};
+use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, JointState, Temperature};
 use metrocell_msgs::std_msgs::msg::Header;
 use metrocell_twin::{MachineStateSample, ProbeHitSample, TemperatureSample, TrackerSample, TrackerStatus};
 use nalgebra::{Matrix3, Vector3};
@@ -121,21 +121,10 @@ pub fn probe_hit(s: &ProbeHitSample, stamp: Time, tool_offset: &Vector3<f64>) ->
     }
 }
 
-/// `CameraInfo` of the intrinsics: K, R = I, P = [K | 0], the lens's distortion model, no binning, full ROI.
+/// `CameraInfo` of the simulated camera: its lens as camera_info (K, R = I, P = [K | 0], the
+/// lens's distortion model), no binning, full ROI.
 pub fn camera_info(c: &CameraIntrinsics, stamp: Time) -> CameraInfo {
-    CameraInfo {
-        header: header(stamp, &c.frame_id),
-        height: c.height,
-        width: c.width,
-        distortion_model: c.distortion.ros_name().into(),
-        d: c.distortion.coefficients(),
-        k: [c.fx, 0.0, c.cx, 0.0, c.fy, c.cy, 0.0, 0.0, 1.0],
-        r: [1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0],
-        p: [c.fx, 0.0, c.cx, 0.0, 0.0, c.fy, c.cy, 0.0, 0.0, 0.0, 1.0, 0.0],
-        binning_x: 0,
-        binning_y: 0,
-        roi: RegionOfInterest { x_offset: 0, y_offset: 0, height: 0, width: 0, do_rectify: false },
-    }
+    CameraInfo { header: header(stamp, &c.frame_id), ..metrocell_camera::CameraInfo::from_model(&c.frame_id, &c.lens).to_msg() }
 }
 
 /// A mono8 `Image` (row-major, step = width, `is_bigendian` 0) in the camera's optical frame.

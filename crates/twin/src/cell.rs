@@ -6,6 +6,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
+use metrocell_camera::{CameraModel, Distortion};
 use metrocell_kinematics::cartesian::StackingOrder;
 use metrocell_kinematics::delta::DeltaGeometry;
 use metrocell_physics::instrument::tracker_pose::euler_xyz;
@@ -200,45 +201,7 @@ pub struct CameraSpec {
     pub mount: InstrumentPose,
     pub delay: f64,
     /// The lens the file states, if any (else the simulator's default camera).
-    pub intrinsics: Option<CameraLens>,
-}
-
-/// Pinhole intrinsics (px) with a lens distortion model.
-#[derive(Debug, Clone, PartialEq)]
-pub struct CameraLens {
-    pub width: u32,
-    pub height: u32,
-    pub fx: f64,
-    pub fy: f64,
-    pub cx: f64,
-    pub cy: f64,
-    pub distortion: LensDistortion,
-}
-
-/// Lens distortion, coefficients in OpenCV order (ROS camera_info names in the docs).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub enum LensDistortion {
-    /// `plumb_bob`: Brown–Conrady k1 k2 p1 p2 k3.
-    PlumbBob([f64; 5]),
-    /// `equidistant`: fisheye k1 k2 k3 k4 (θ_d = θ(1 + k1θ² + k2θ⁴ + k3θ⁶ + k4θ⁸)).
-    Equidistant([f64; 4]),
-}
-
-impl LensDistortion {
-    /// The ROS camera_info `distortion_model` name.
-    pub fn ros_name(&self) -> &'static str {
-        match self {
-            LensDistortion::PlumbBob(_) => "plumb_bob",
-            LensDistortion::Equidistant(_) => "equidistant",
-        }
-    }
-
-    pub fn coefficients(&self) -> Vec<f64> {
-        match self {
-            LensDistortion::PlumbBob(k) => k.to_vec(),
-            LensDistortion::Equidistant(k) => k.to_vec(),
-        }
-    }
+    pub intrinsics: Option<CameraModel>,
 }
 
 /// True air on the tracker beam.
@@ -607,8 +570,8 @@ fn camera(c: &CameraSection) -> Result<CameraSpec, CellError> {
             }
             let mut k = [0.0; 5];
             k[..i.distortion.len()].copy_from_slice(&i.distortion);
-            let distortion = if n == 5 { LensDistortion::PlumbBob(k) } else { LensDistortion::Equidistant([k[0], k[1], k[2], k[3]]) };
-            Some(CameraLens { width: i.width, height: i.height, fx, fy, cx, cy, distortion })
+            let distortion = if n == 5 { Distortion::BrownConrady(k) } else { Distortion::Fisheye([k[0], k[1], k[2], k[3]]) };
+            Some(CameraModel::new(i.width, i.height, fx, fy, cx, cy, distortion).map_err(|e| CellError::invalid(p, e.to_string()))?)
         }
     };
     Ok(CameraSpec { mount: pose(&c.mount, "sensors.camera.mount")?, delay: c.delay.as_ref().map(|q| q.non_negative("sensors.camera.delay", "s")).transpose()?.unwrap_or(0.0), intrinsics })

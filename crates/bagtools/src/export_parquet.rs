@@ -37,8 +37,11 @@ use rosmsg::{ArrayKind, BaseType, Primitive, Registry, Value};
 use crate::error::{io, Result, ToolError};
 use crate::export::{chosen_topics, registry_for, ExportedTopic};
 
-/// Rows buffered before a row group is written (bounds memory for long bags).
+/// A row group is written when it holds this many rows or [`VALUES_PER_GROUP`] buffered
+/// values and levels, whichever comes first: rows bound memory for long bags of small messages,
+/// values for large ones (a 5 MP image is 5 M list values, ≈ 40 MB buffered with its levels).
 const ROWS_PER_GROUP: usize = 64 * 1024;
+const VALUES_PER_GROUP: usize = 4 << 20;
 
 /// Physical storage of one leaf, with the logical annotation pyarrow uses for the dtype.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -160,6 +163,19 @@ impl Column {
         Some(())
     }
 
+    /// Values and Dremel levels held for the next row group.
+    fn buffered(&self) -> usize {
+        let values = match &self.values {
+            Values::Bool(v) => v.len(),
+            Values::I32(v) => v.len(),
+            Values::I64(v) => v.len(),
+            Values::F32(v) => v.len(),
+            Values::F64(v) => v.len(),
+            Values::Text(v) => v.len(),
+        };
+        values + self.def.len() + self.rep.len()
+    }
+
     fn clear(&mut self) {
         self.def.clear();
         self.rep.clear();
@@ -205,13 +221,13 @@ fn fill(value: &Value, columns: &mut [Column], next: &mut usize) -> std::result:
     let Value::Struct(s) = value else { return Err("expected a message value".into()) };
     for (name, v) in &s.fields {
         let c = columns.get(*next).ok_or_else(|| format!("field {name} has no column"))?;
-        let (list, json) = (c.list, c.json);
-        let described = format!("field {name} does not match column {} ({:?})", c.name, c.leaf);
-        let mismatch = || described.clone();
+        let (list, json, at) = (c.list, c.json, *next);
+        // built only on the error path (this loop runs per field of every message)
+        let mismatch = |columns: &[Column]| format!("field {name} does not match column {} ({:?})", columns[at].name, columns[at].leaf);
         match v {
             Value::Array(_) if json => {
                 let text = rosmsg::to_json(v).to_string();
-                columns[*next].push(&Value::String(text)).ok_or_else(mismatch)?;
+                columns[*next].push(&Value::String(text)).ok_or(()).map_err(|_| mismatch(columns))?;
                 *next += 1;
             }
             Value::Array(items) if list => {
@@ -222,7 +238,9 @@ fn fill(value: &Value, columns: &mut [Column], next: &mut usize) -> std::result:
                     c.rep.push(0);
                 }
                 for (j, item) in items.iter().enumerate() {
-                    c.push(item).ok_or_else(mismatch)?;
+                    if c.push(item).is_none() {
+                        return Err(mismatch(columns));
+                    }
                     c.def.push(1);
                     c.rep.push(if j == 0 { 0 } else { 1 });
                 }
@@ -242,7 +260,7 @@ fn fill(value: &Value, columns: &mut [Column], next: &mut usize) -> std::result:
             }
             Value::Struct(_) => fill(v, columns, next)?,
             scalar => {
-                columns[*next].push(scalar).ok_or_else(mismatch)?;
+                columns[*next].push(scalar).ok_or(()).map_err(|_| mismatch(columns))?;
                 *next += 1;
             }
         }
@@ -312,7 +330,7 @@ pub fn export_parquet(bag: &Path, topics: &[String], out_dir: &Path) -> Result<B
             }
             rows += 1;
             buffered += 1;
-            if buffered == ROWS_PER_GROUP {
+            if buffered == ROWS_PER_GROUP || columns.iter().map(Column::buffered).sum::<usize>() >= VALUES_PER_GROUP {
                 write_group(&mut writer, &mut columns).map_err(pq_err)?;
                 buffered = 0;
             }

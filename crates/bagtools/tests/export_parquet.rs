@@ -164,3 +164,34 @@ fn unknown_topic_is_an_error_naming_the_bag_and_the_topics() {
     assert_eq!(r["/test/all"].rows, 0);
     assert!(r["/test/all"].columns > 20);
 }
+
+/// Large messages close row groups by buffered values, not only by rows: each 3 MB image (3 M
+/// list values and 6 M Dremel levels, over the 4 M cap) closes its own row group, where the
+/// row count alone (64 Ki rows) would have buffered the whole topic; pyarrow reads every byte back.
+#[test]
+fn large_messages_are_flushed_in_bounded_row_groups() {
+    use metrocell_msgs::sensor_msgs::msg::Image;
+    use rosmsg::RosMessage;
+    let dir = scratch("images");
+    let mut w = BagWriter::create(&dir, WriterOptions::default()).unwrap();
+    w.add_topic("/img", Image::ROS_TYPE, Image::DEFINITION, "").unwrap();
+    let n = 3_000_000usize;
+    for k in 0..3u64 {
+        let m = Image { height: 1000, width: 3000, encoding: "mono8".into(), step: 3000, data: (0..n).map(|i| ((i as u64 * 7 + k) % 251) as u8).collect(), ..Default::default() };
+        w.write("/img", k + 1, k + 1, &metrocell_bagtools::encode_cdr(&m).unwrap()).unwrap();
+    }
+    w.finish().unwrap();
+    let out = dir.with_extension("out");
+    let done = export_parquet::export_parquet(&dir, &[], &out).unwrap();
+    let path = &done["/img"].path;
+    let script = "import sys, pyarrow.parquet as pq\nf = pq.ParquetFile(sys.argv[1])\nt = f.read()\n\
+                  d = t.column('data').to_pylist()\n\
+                  print(f.num_row_groups, t.num_rows, [len(x) for x in d], [x[12345] for x in d])";
+    let o = Command::new(python()).args(["-c", script, path.to_str().unwrap()]).output().unwrap();
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let text = String::from_utf8_lossy(&o.stdout);
+    let expect = |k: u64| (12345u64 * 7 + k) % 251;
+    assert_eq!(text.trim(), format!("3 3 [{n}, {n}, {n}] [{}, {}, {}]", expect(0), expect(1), expect(2)));
+    let _ = std::fs::remove_dir_all(&dir);
+    let _ = std::fs::remove_dir_all(&out);
+}

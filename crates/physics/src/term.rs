@@ -45,6 +45,10 @@ pub enum Frame {
     Camera,
     /// Laser-tracker frame.
     Tracker,
+    /// Tool frame: a vector fixed to the tool (or probe, or reflector) as mounted, which turns
+    /// with the tool. Where the tool does not turn (3-axis machines, a five-axis spindle) it is
+    /// parallel to the machine frame; on an arm the caller turns it by the tool's rotation.
+    Tool,
 }
 
 /// What a term's prediction is, and therefore its dimension and unit.

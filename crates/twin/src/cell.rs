@@ -694,7 +694,7 @@ fn terms(configs: &[TermConfig], sensors: &BTreeSet<String>, has_load: bool, mac
                 format!("reads linear-axis signals, which a serial_arm does not have; a serial_arm takes joint_offset, link_length and {ARM_DISPLACEMENT_TERMS}"),
             ));
         }
-        if t.term.effect() != EffectKind::Displacement(Frame::Machine) && !is_delta_term {
+        if !matches!(t.term.effect(), EffectKind::Displacement(Frame::Machine | Frame::Tool)) && !is_delta_term {
             return Err(CellError::invalid(
                 path,
                 format!("has effect {:?}; the twin's `terms` take machine-frame displacement terms (geometry, thermal_scale, thermal_growth, compliance, tool_offset, frame_misalignment), for a delta delta_rod_length, delta_radius, delta_tower_angle, delta_endstop, and for a serial_arm joint_offset, link_length", t.term.effect()),

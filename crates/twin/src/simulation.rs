@@ -21,7 +21,7 @@ use metrocell_physics::instrument::tracker_warmup::warmup_drift;
 use metrocell_physics::instrument::turbulence::range_scatter;
 use metrocell_kinematics::delta::DeltaGeometry;
 use metrocell_kinematics::serial::SerialChain;
-use metrocell_physics::{EffectKind, PhysicsError, SignalKind, Signals, TemperatureHistory, TermId};
+use metrocell_physics::{EffectKind, Frame, PhysicsError, SignalKind, Signals, TemperatureHistory};
 use nalgebra::{DVector, Isometry3, Matrix3, UnitQuaternion, Vector3};
 
 use crate::cell::{Cell, MachineKinematics};
@@ -399,10 +399,10 @@ impl<'a> Engine<'a> {
     }
 
     /// Σ of the cell's displacement terms at t (m), in the frame they act in, for the nominal
-    /// tool point `point` of that frame. `tool_rotation` turns tool-frame vectors into that
-    /// frame: `tool_offset` is an error of the offset vector as mounted on the tool, so it
-    /// turns with the tool (identity where the tool does not turn: cartesian, delta, the
-    /// five-axis spindle; the tool frame's rotation on an arm).
+    /// tool point `point` of that frame. `tool_rotation` turns the displacements of tool-frame
+    /// terms (`Frame::Tool`, e.g. `tool_offset`: the offset vector as mounted) into that frame:
+    /// identity where the tool does not turn (cartesian, delta, the five-axis spindle), the
+    /// tool frame's rotation on an arm.
     fn term_displacement(&mut self, t: f64, ms: &MotionState, point: Vector3<f64>, tool_rotation: &Matrix3<f64>) -> Result<Vector3<f64>, PhysicsError> {
         self.update_histories(t);
         let s = &mut self.signals;
@@ -434,7 +434,7 @@ impl<'a> Engine<'a> {
             }
             let v = t.term.predict(&t.params, s)?.value;
             let v = Vector3::new(v[0], v[1], v[2]);
-            let v = if t.term.id() == TermId::ToolOffset { tool_rotation * v } else { v };
+            let v = if t.term.effect() == EffectKind::Displacement(Frame::Tool) { tool_rotation * v } else { v };
             if self.history_only[i] {
                 self.cache[i] = Some(v);
             }

@@ -1,10 +1,10 @@
 //! `tool_offset` — error of the tool (or probe, or reflector) offset vector T: length and
 //! radius errors of the tool as mounted.
 //!
-//! d = (dx, dy, dz)  in the tool frame. On a 3-axis machine and a five-axis spindle the tool
-//! frame is parallel to the machine frame, so d is a machine-frame displacement; where the tool
-//! turns (an arm's flange) the caller turns it with the tool, R_tool(q)·d (crates/twin does).
-//! Frame: machine.
+//! d = (dx, dy, dz)  in the tool frame ([`Frame::Tool`]). On a 3-axis machine and a five-axis
+//! spindle the tool frame is parallel to the machine frame, so d is a machine-frame
+//! displacement; where the tool turns (an arm's flange) the caller turns it with the tool,
+//! R_tool(q)·d (crates/twin does).
 
 use nalgebra::{DMatrix, Vector3};
 
@@ -31,7 +31,7 @@ impl PhysicsTerm for ToolOffset {
         "tool_offset".into()
     }
     fn effect(&self) -> EffectKind {
-        EffectKind::Displacement(Frame::Machine)
+        EffectKind::Displacement(Frame::Tool)
     }
     fn params(&self) -> Vec<ParamSpec> {
         ["dx", "dy", "dz"].iter().map(|n| ParamSpec::new(*n, "m", -0.05, 0.05, 0.0, format!("tool offset error along {}", &n[1..]))).collect()
@@ -41,7 +41,7 @@ impl PhysicsTerm for ToolOffset {
     }
     fn predict(&self, p: &[f64], _s: &Signals) -> Result<Prediction, PhysicsError> {
         check_len(&self.label(), p, 3)?;
-        Ok(displacement(Frame::Machine, Vector3::new(p[0], p[1], p[2])))
+        Ok(displacement(Frame::Tool, Vector3::new(p[0], p[1], p[2])))
     }
     fn jacobian(&self, p: &[f64], _s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         check_len(&self.label(), p, 3)?;

@@ -28,7 +28,7 @@ use rosmsg::RosMessage;
 
 use crate::camera_frame::{FrameRenderer, FrameRendering};
 use crate::camera_intrinsics::CameraIntrinsics;
-use crate::cdr::{encode_cdr, encode_image};
+use crate::cdr::encode_cdr;
 use crate::convert;
 use crate::error::SimError;
 use crate::sim_time::{ros_time, stamp_ns};
@@ -70,7 +70,7 @@ impl TypedMessage {
             TypedMessage::Tracker(m) => encode_cdr(m, ty),
             TypedMessage::Probe(m) => encode_cdr(m, ty),
             TypedMessage::CameraInfo(m) => encode_cdr(m, ty),
-            TypedMessage::Image(m) => Ok(encode_image(m)),
+            TypedMessage::Image(m) => encode_cdr(m, ty),
         }
     }
 }

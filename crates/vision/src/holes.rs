@@ -248,8 +248,8 @@ fn measure_one(img: &GrayImage, p: &Point2<f64>, s: &HoleSearch) -> std::result:
     let rough = Point2::new(rx, ry);
     let reach = radius + s.margin_px;
     let mut gap = f64::INFINITY;
-    for (k, c) in comps.iter().enumerate() {
-        for &q in c.pixels.iter().filter(|_| k != hole_id) {
+    for (_, c) in comps.iter().enumerate().filter(|&(k, _)| k != hole_id) {
+        for &q in &c.pixels {
             gap = gap.min(dist2(q, &rough).sqrt() - radius);
         }
     }

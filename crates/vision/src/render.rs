@@ -8,8 +8,9 @@
 //! filter, the pixel convention of the crate doc). The target's boundaries are traced through
 //! the camera into an edge mask ([`edges`]): pixels an edge may cross are supersampled on an
 //! s×s grid, and each row's runs of unmarked pixels, which see one reflectance, are sampled once.
-//! (When the whole image does not see the target plane — horizon or lens limit in view — every
-//! pixel is tested instead: flat when its four corners and centre agree, else supersampled.)
+//! (When the whole image does not see the target plane — horizon or lens limit in view — or the
+//! tracing budget runs out, every pixel is supersampled instead: s² samples per pixel, 16–64×
+//! slower, but no edge can slip between samples of a flatness test.)
 //! Then optional Gaussian blur (optics; computed only near edges, [`edge_blur`]), a
 //! multiplicative lighting gradient, additive Gaussian noise ([`normal_table`]), and rounding
 //! to u8. Cost: ~1 sample per run plus s² per edge pixel, not ~2 per pixel.
@@ -49,6 +50,19 @@ pub enum TargetItem {
     /// inverse-contrast backing (seed 000): it shows the opposite of what lies beneath it
     /// (black under a white square, white under a black one).
     Hole { centre: [f64; 2], diameter: f64 },
+}
+
+/// Bit of cell (row r, column c) of a marker with an n × n payload inside a `border`-cell black
+/// border: 0 (black) on the border, else the code's bit, row-major from the top-left payload
+/// cell in the most significant bit (OpenCV's layout). Shared by the shading and the edge
+/// tracer, so both see the same cells.
+fn marker_cell(code: u64, n: u32, border: u32, r: u32, c: u32) -> u64 {
+    let inner = |k: u32| k >= border && k < n + border;
+    if inner(r) && inner(c) {
+        (code >> (n * n - 1 - ((r - border) * n + (c - border)))) & 1
+    } else {
+        0
+    }
 }
 
 /// White plane carrying items (later items paint over earlier ones).
@@ -126,16 +140,8 @@ impl TargetItem {
                 if !(0.0..cells as f64).contains(&u) || !(0.0..cells as f64).contains(&v) {
                     return None;
                 }
-                let (c, r) = (u as u32, v as u32);
-                let inner = |k: u32| k >= *border_bits && k < cells - border_bits;
-                if inner(r) && inner(c) {
-                    let n = dictionary.marker_size as u32;
-                    let code = dictionary.code(*id).ok()?;
-                    let bit = n * n - 1 - ((r - border_bits) * n + (c - border_bits));
-                    Some(((code >> bit) & 1) as f64)
-                } else {
-                    Some(0.0)
-                }
+                let code = dictionary.code(*id).ok()?;
+                Some(marker_cell(code, dictionary.marker_size as u32, *border_bits, v as u32, u as u32) as f64)
             }
             TargetItem::Checkerboard {
                 top_left,

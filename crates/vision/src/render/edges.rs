@@ -14,7 +14,7 @@
 //! grown by [`SLACK_PX`], touches. Over half a pixel the distorted curve departs from its chord
 //! by ≈ L²κ/8, orders of magnitude below [`SLACK_PX`] for any lens the camera model holds.
 
-use super::TargetItem;
+use super::{marker_cell, TargetItem};
 use crate::camera::CameraModel;
 use nalgebra::{Matrix3, Vector3};
 
@@ -22,7 +22,7 @@ use nalgebra::{Matrix3, Vector3};
 const CHORD_PX: f64 = 0.5;
 /// Margin around each chord's bounding box, pixels.
 const SLACK_PX: f64 = 0.05;
-/// Most chords one view may trace before the caller falls back to testing every pixel.
+/// Most chords one view may trace before the caller falls back to supersampling every pixel.
 const MAX_CHORDS: usize = 50_000_000;
 
 /// A reflectance boundary on the target plane (metres, target frame).
@@ -30,17 +30,6 @@ const MAX_CHORDS: usize = 50_000_000;
 pub(super) enum Boundary {
     Segment([f64; 2], [f64; 2]),
     Circle { centre: [f64; 2], radius: f64 },
-}
-
-/// Reflectance of cell (r, c) of a marker with `cells` cells per side: border black, payload
-/// from the code (bit order of [`TargetItem`]'s reflectance).
-fn marker_cell(code: u64, n: u32, border: u32, r: u32, c: u32) -> u64 {
-    let inner = |k: u32| k >= border && k < n + border;
-    if inner(r) && inner(c) {
-        (code >> (n * n - 1 - ((r - border) * n + (c - border)))) & 1
-    } else {
-        0
-    }
 }
 
 /// Every boundary of `items` (see the module doc). Items were validated by the caller.

@@ -54,7 +54,8 @@ pub fn dequeued(layout: &Layout, flags: u32, sequence: u32, driver_ns: i64, data
     if flags & BUF_FLAG_ERROR != 0 {
         return Ok(Dequeued::Corrupt { sequence, bytes_used: data.len() as u32 });
     }
-    let (encoding, step, data) = convert_frame(layout.format, layout.width, layout.height, layout.bytes_per_line, data)?;
+    let data = convert_frame(layout.format, layout.width, layout.height, layout.bytes_per_line, data)?;
+    let (encoding, step) = (layout.format.ros_encoding(), layout.format.converted_step(layout.width));
     let (stamp_ns, stamp_origin) = capture_stamp(flags, driver_ns, clocks);
     Ok(Dequeued::Frame(Frame { width: layout.width, height: layout.height, encoding, step, data, stamp_ns, stamp_origin, sequence }))
 }

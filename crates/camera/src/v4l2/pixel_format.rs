@@ -33,6 +33,14 @@ impl PixelFormat {
             PixelFormat::Yuyv => "rgb8",
         }
     }
+
+    /// Row length in bytes of the converted image (rows are packed: no padding).
+    pub fn converted_step(self, width: u32) -> u32 {
+        match self {
+            PixelFormat::Grey => width,
+            PixelFormat::Yuyv => 3 * width,
+        }
+    }
 }
 
 fn check(format: PixelFormat, width: u32, height: u32, bytes_per_line: u32, len: usize) -> Result<()> {
@@ -53,25 +61,33 @@ fn check(format: PixelFormat, width: u32, height: u32, bytes_per_line: u32, len:
     Ok(())
 }
 
-/// Convert one frame; returns (encoding, step, data) for a sensor_msgs/Image.
-pub fn convert_frame(format: PixelFormat, width: u32, height: u32, bytes_per_line: u32, buf: &[u8]) -> Result<(&'static str, u32, Vec<u8>)> {
+/// Convert one frame to the packed rows of a sensor_msgs/Image with encoding
+/// [`PixelFormat::ros_encoding`] and step [`PixelFormat::converted_step`].
+pub fn convert_frame(format: PixelFormat, width: u32, height: u32, bytes_per_line: u32, buf: &[u8]) -> Result<Vec<u8>> {
     check(format, width, height, bytes_per_line, buf.len())?;
-    let row = |y: u32| &buf[y as usize * bytes_per_line as usize..][..(width * format.bytes_per_pixel()) as usize];
-    match format {
-        PixelFormat::Grey => Ok(("mono8", width, (0..height).flat_map(|y| row(y).iter().copied()).collect())),
+    let row_bytes = (width * format.bytes_per_pixel()) as usize;
+    let rows = || buf.chunks(bytes_per_line as usize).take(height as usize).map(|r| &r[..row_bytes]);
+    Ok(match format {
+        // one copy when lines are unpadded, else one copy per line
+        PixelFormat::Grey if bytes_per_line as usize == row_bytes => buf[..row_bytes * height as usize].to_vec(),
+        PixelFormat::Grey => {
+            let mut out = Vec::with_capacity(row_bytes * height as usize);
+            rows().for_each(|r| out.extend_from_slice(r));
+            out
+        }
         PixelFormat::Yuyv => {
             let mut out = Vec::with_capacity(width as usize * height as usize * 3);
-            for y in 0..height {
-                for q in row(y).chunks_exact(4) {
+            for r in rows() {
+                for q in r.chunks_exact(4) {
                     let (d, e) = (q[1] as i32 - 128, q[3] as i32 - 128);
                     for luma in [q[0], q[2]] {
                         out.extend(yuv_to_rgb(luma as i32 - 16, d, e));
                     }
                 }
             }
-            Ok(("rgb8", 3 * width, out))
+            out
         }
-    }
+    })
 }
 
 fn yuv_to_rgb(c: i32, d: i32, e: i32) -> [u8; 3] {
@@ -95,8 +111,8 @@ mod tests {
     fn yuyv_matches_bt601_and_known_colours() {
         // Black, white and the BT.601 limited-range primaries.
         for (yuv, rgb) in [([16, 128, 128], [0, 0, 0]), ([235, 128, 128], [255, 255, 255]), ([81, 90, 240], [255, 0, 0]), ([145, 54, 34], [0, 255, 0]), ([41, 240, 110], [0, 0, 255])] {
-            let (enc, step, data) = convert_frame(PixelFormat::Yuyv, 2, 1, 4, &[yuv[0], yuv[1], yuv[0], yuv[2]]).unwrap();
-            assert_eq!((enc, step), ("rgb8", 6));
+            let data = convert_frame(PixelFormat::Yuyv, 2, 1, 4, &[yuv[0], yuv[1], yuv[0], yuv[2]]).unwrap();
+            assert_eq!((data.len(), PixelFormat::Yuyv.converted_step(2)), (6, 6));
             for (got, want) in data[..3].iter().zip(rgb) {
                 assert!((*got as i32 - want).abs() <= 2, "YUV {yuv:?} → {:?}, expected ≈ {rgb:?}", &data[..3]);
             }
@@ -119,7 +135,8 @@ mod tests {
     #[test]
     fn grey_drops_line_padding_and_bad_buffers_are_named() {
         let buf = [1, 2, 3, 0xee, 4, 5, 6, 0xee];
-        assert_eq!(convert_frame(PixelFormat::Grey, 3, 2, 4, &buf).unwrap(), ("mono8", 3, vec![1, 2, 3, 4, 5, 6]));
+        assert_eq!(convert_frame(PixelFormat::Grey, 3, 2, 4, &buf).unwrap(), [1, 2, 3, 4, 5, 6]);
+        assert_eq!(convert_frame(PixelFormat::Grey, 4, 2, 4, &buf).unwrap(), buf, "unpadded lines: the buffer as is");
         // The last line needs no padding.
         assert!(convert_frame(PixelFormat::Grey, 3, 2, 4, &buf[..7]).is_ok());
         let e = convert_frame(PixelFormat::Grey, 3, 2, 4, &buf[..6]).unwrap_err();

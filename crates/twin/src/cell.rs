@@ -114,6 +114,12 @@ impl InstrumentPose {
     pub fn to_instrument(&self, p: &Vector3<f64>) -> Vector3<f64> {
         self.rotation.transpose() * (p - self.translation)
     }
+
+    /// The pose as an isometry (`rotation` is a proper rotation, built from Euler angles).
+    pub fn isometry(&self) -> nalgebra::Isometry3<f64> {
+        let r = nalgebra::Rotation3::from_matrix_unchecked(self.rotation);
+        nalgebra::Isometry3::from_parts(self.translation.into(), nalgebra::UnitQuaternion::from_rotation_matrix(&r))
+    }
 }
 
 /// Warm-up drift of the range, Δρ = A + B·(1 − e^(−t/τ)).

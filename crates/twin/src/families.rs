@@ -25,7 +25,7 @@ use metrocell_kinematics::dh::{DhConvention, DhRow, DhTable};
 use metrocell_kinematics::five_axis::FiveAxisGeometry;
 use metrocell_kinematics::serial::{JointKind, SerialChain};
 use metrocell_kinematics::urdf_chain::chain_from_urdf_file;
-use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::Vector3;
 
 use crate::cell::InstrumentPose;
 use crate::cell_file::{DhConventionName, FiveAxisSection, JointKindName, SerialArmSection};
@@ -136,11 +136,6 @@ pub fn five_axis(s: &FiveAxisSection) -> Result<FiveAxisMachine, CellError> {
     Ok(FiveAxisMachine { geometry: g, c_limits })
 }
 
-fn pose_iso(p: &InstrumentPose) -> Isometry3<f64> {
-    let r = nalgebra::Rotation3::from_matrix_unchecked(p.rotation);
-    Isometry3::from_parts(Translation3::from(p.translation), UnitQuaternion::from_rotation_matrix(&r))
-}
-
 /// Validated serial arm from `machine.serial_arm`; a URDF `path` is relative to `base_dir`.
 pub fn serial_arm(s: &SerialArmSection, base_dir: &Path, pose: impl Fn(&crate::cell_file::PoseSection, &str) -> Result<InstrumentPose, CellError>) -> Result<SerialArm, CellError> {
     let p = "machine.serial_arm";
@@ -178,10 +173,10 @@ pub fn serial_arm(s: &SerialArmSection, base_dir: &Path, pose: impl Fn(&crate::c
         return Err(CellError::invalid(p, "the chain has no movable joint"));
     }
     if let Some(b) = &s.base {
-        chain.base = pose_iso(&pose(b, &format!("{p}.base"))?);
+        chain.base = pose(b, &format!("{p}.base"))?.isometry();
     }
     if let Some(t) = &s.tool {
-        chain.tool = pose_iso(&pose(t, &format!("{p}.tool"))?);
+        chain.tool = pose(t, &format!("{p}.tool"))?.isometry();
     }
     let revolute: Vec<bool> = chain.joints.iter().filter(|j| j.kind != JointKind::Fixed).map(|j| j.kind == JointKind::Revolute).collect();
     let joint_limits = if s.joint_limits.is_empty() {

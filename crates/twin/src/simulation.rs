@@ -22,7 +22,7 @@ use metrocell_physics::instrument::turbulence::range_scatter;
 use metrocell_kinematics::delta::DeltaGeometry;
 use metrocell_kinematics::serial::SerialChain;
 use metrocell_physics::{EffectKind, Frame, PhysicsError, SignalKind, Signals, TemperatureHistory};
-use nalgebra::{DVector, Isometry3, Matrix3, UnitQuaternion, Vector3};
+use nalgebra::{DVector, Isometry3, Matrix3, Vector3};
 
 use crate::cell::{Cell, MachineKinematics};
 use crate::error::CellError;
@@ -640,7 +640,7 @@ impl<'a> Engine<'a> {
         let ms = MotionState { q: seg.to.clone(), velocity: DVector::zeros(seg.to.len()), approach: seg.approach.clone(), dwell_point: seg.dwell_point, cycle: Some(ev.cycle) };
         let tool = self.tool_state(ev.t, &ms)?;
         // the camera is mounted on the tool: its pose is the tool pose followed by the mount
-        let mount = Isometry3::from_parts(spec.mount.translation.into(), UnitQuaternion::from_matrix(&spec.mount.rotation));
+        let mount = spec.mount.isometry();
         let (camera, nominal_camera) = (tool.truth * mount, tool.nominal * mount);
         let s = CameraFrameRequest {
             t: ev.t,

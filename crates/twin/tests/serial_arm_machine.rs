@@ -194,8 +194,7 @@ fn ur5_with_camera(extra_terms: &str) -> Cell {
 #[test]
 fn camera_on_the_flange_turns_with_the_true_joints() {
     let cell = ur5_with_camera("");
-    let mount = cell.camera.as_ref().unwrap().mount;
-    let mount = Isometry3::from_parts(mount.translation.into(), nalgebra::UnitQuaternion::from_matrix(&mount.rotation));
+    let mount = cell.camera.as_ref().unwrap().mount.isometry();
     let (nominal, truth) = (ur5(0.0, [0.0; 6]), ur5(0.3e-3, OFFSETS));
     let sim = Simulation::new(cell, 120.0, 5).unwrap();
     let mut frames = 0;

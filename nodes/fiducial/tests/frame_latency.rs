@@ -1,4 +1,4 @@
-//! Benchmark (ignored by default; run it in a release build): frame-in → detection-out latency
+//! Benchmark (ignored by default): frame-in → detection-out latency
 //! through the `metrocell-fiducial` node over DDS at 640×480, 1920×1080 and 3840×2160, one
 //! DICT_4X4_50 marker per frame. Latency = this process publishing the Image → this process
 //! taking the FiducialDetectionArray with the same stamp (DDS both ways, the node's conversion and
@@ -6,7 +6,8 @@
 //! frame in this process (same thread count as the node); the ratio node / library is what DDS,
 //! message conversion and scheduling add.
 //!
-//! Run: `tests/isolated cargo test --release -p metrocell-fiducial-node --test frame_latency -- --ignored --nocapture`
+//! Run: `tests/isolated cargo test -p metrocell-fiducial-node --test frame_latency -- --ignored --nocapture`
+//! (the test profile, as BENCHMARKS.md's figures; add `--release` for release-build latencies).
 
 use std::process::{Child, Command};
 use std::time::{Duration, Instant};

@@ -14,7 +14,7 @@ pub fn declarations() -> Vec<ParamDecl> {
         ParamDecl::new("loop", false, "start over when the run ends (time keeps advancing, same data)"),
         ParamDecl::new("start_time", DEFAULT_START_TIME, "RFC 3339 start of simulated time"),
         ParamDecl::new("clock_rate", 100.0, "/clock messages per wall-clock second").with_range(1.0, 1000.0),
-        ParamDecl::new("camera_images", true, "render an image on /camera/image_raw for every camera frame request (about 0.07 s of CPU per 5 MP frame in release builds; see BENCHMARKS.md)"),
+        ParamDecl::new("camera_images", true, "render an image on /camera/image_raw for every camera frame request (render, encode and write: about 0.05 s of CPU per 5 MP frame in a release build, measured in BENCHMARKS.md)"),
         ParamDecl::new("start_delay", 0.0, "wall-clock seconds to wait before the first message, so recorders and other nodes discover the topics first")
             .with_range(0.0, 3600.0),
     ]

@@ -184,20 +184,9 @@ pub fn parse_offered_qos(topic: &str, yaml: &str) -> Result<Vec<OfferedQos>> {
 }
 
 /// Check that a caller-supplied `offered_qos_profiles` string is empty or a YAML sequence of
-/// mappings (what rosbag2 and rosbags expect); returns it unchanged.
+/// mappings (what rosbag2 and rosbags expect): it must parse as [`parse_offered_qos`] reads it.
 pub fn validate_qos_yaml(topic: &str, yaml: &str) -> Result<()> {
-    if yaml.trim().is_empty() {
-        return Ok(());
-    }
-    let value: serde_yaml::Value = serde_yaml::from_str(yaml).map_err(|e| {
-        BagError::InvalidArgument(format!("offered_qos_profiles of topic {topic} is not YAML: {e}"))
-    })?;
-    match value {
-        serde_yaml::Value::Sequence(items) if items.iter().all(|i| i.is_mapping()) => Ok(()),
-        _ => Err(BagError::InvalidArgument(format!(
-            "offered_qos_profiles of topic {topic} must be a YAML sequence of QoS mappings"
-        ))),
-    }
+    parse_offered_qos(topic, yaml).map(|_| ())
 }
 
 #[cfg(test)]

@@ -2,9 +2,10 @@
 //! pause/resume and single steps. Pure (the caller passes `now`), so it is unit-tested.
 //!
 //! Convention: an *anchor* pairs a wall-clock instant with a bag log time; message `m` is due
-//! at `anchor.wall + (m.log_time − anchor.log_time) / rate`. The first message, the first after
-//! a resume and each stepped message re-anchor the clock, so a pause shifts everything after it
-//! by the pause's length and gaps between messages keep their recorded length ÷ rate.
+//! at `anchor.wall + (m.log_time − anchor.log_time) / rate`. The first message and each stepped
+//! message anchor the clock; a pause freezes bag time where it is and a resume re-anchors at
+//! that bag time, so a pause shifts everything after it by the pause's length and gaps between
+//! messages keep their recorded length ÷ rate.
 
 use std::time::{Duration, Instant};
 

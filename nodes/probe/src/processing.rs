@@ -100,9 +100,10 @@ impl ProbeProcessor {
 
     /// The newest held nominal stamped at or before `stamp_ns`; it and every older one leave.
     fn take_nominal(&mut self, stamp_ns: i64) -> Option<PointStamped> {
-        let (due, later): (VecDeque<_>, VecDeque<_>) = self.nominals.drain(..).partition(|n| n.header.stamp.nanos() <= stamp_ns);
-        self.nominals = later;
-        due.into_iter().max_by_key(|n| n.header.stamp.nanos())
+        let newest = self.nominals.iter().enumerate().filter(|(_, n)| n.header.stamp.nanos() <= stamp_ns).max_by_key(|(_, n)| n.header.stamp.nanos()).map(|(i, _)| i);
+        let taken = newest.and_then(|i| self.nominals.remove(i));
+        self.nominals.retain(|n| n.header.stamp.nanos() > stamp_ns);
+        taken
     }
 
     /// One trigger → its ProbeHit and, if a nominal belongs to it, the MeasuredPoint. A rejected

@@ -1,6 +1,7 @@
 //! The node on a bag (`--bag IN_BAG`): no DDS. `probe/nominal` and `probe/trigger` are read in
-//! log-time order, so a nominal pairs with the next trigger as live; outputs are written at the
-//! trigger's log time, with the trigger's header stamp as live.
+//! log-time order and paired by header stamp as live (`processing`: a trigger takes the newest
+//! nominal stamped at or before it); outputs are written at the trigger's log time, with the
+//! trigger's header stamp as live.
 
 use metrocell_bagtools::{BagSource, ReplayOutput};
 use metrocell_msgs::geometry_msgs::msg::PointStamped;

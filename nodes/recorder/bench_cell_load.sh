@@ -1,6 +1,6 @@
 #!/bin/sh
 # Cell-like load recorded through DDS: publisher process + recorder, RSS sampled every 5 s.
-# Usage (inside the isolated namespace): /work/shared/tools/isolated sh nodes/recorder/bench_cell_load.sh SECONDS BINDIR
+# Usage (inside the isolated namespace): tests/isolated sh nodes/recorder/bench_cell_load.sh SECONDS BINDIR
 set -e
 S=${1:-60}; BIN=${2:-target/release}; OUT=/tmp/bench_cell_bag_$$
 $BIN/metrocell-recorder --ros-args -p output:=$OUT -p compression:=zstd $REC_ARGS &

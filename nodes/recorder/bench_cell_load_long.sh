@@ -8,7 +8,7 @@
 # remaining files are counted the same way, and totals are compared with what was published.
 #
 # Usage (inside the isolated namespace):
-#   /work/shared/tools/isolated sh nodes/recorder/bench_cell_load_long.sh SECONDS BINDIR [SPLIT]
+#   tests/isolated sh nodes/recorder/bench_cell_load_long.sh SECONDS BINDIR [SPLIT]
 set -e
 S=${1:-600}; BIN=${2:-target/release}; SPLIT=${3:-60}; OUT=/tmp/bench_cell_long_$$
 COUNTS=$OUT.counts
@@ -21,7 +21,10 @@ PUB=$!
 
 # Append "topic count" lines of one .mcap file to $COUNTS; fail loudly on an unreadable file.
 count_file() {
-  $BIN/metrocell bag info "$1" > $OUT.info 2>&1 || { echo "UNREADABLE: $1"; cat $OUT.info; exit 1; }
+  # bag info reads tolerantly and exits 0 when it lists problems: treat a listed problem as a failure too
+  if ! $BIN/metrocell bag info "$1" > $OUT.info 2>&1 || grep -q "Problem" $OUT.info; then
+    echo "UNREADABLE: $1"; cat $OUT.info; exit 1
+  fi
   sed -n 's/.*Topic: *\([^ |]*\) *| Type: [^|]*| Count: \([0-9]*\).*/\1 \2/p' $OUT.info >> "$COUNTS"
 }
 

@@ -1,7 +1,7 @@
 //! How thin a metrocell node is: parse the ROS 2 command line, declare parameters, publish,
 //! stop on Ctrl-C / SIGTERM.
 //!
-//!   ../shared/tools/isolated cargo run -p metrocell-node --example talker -- \
+//!   tests/isolated cargo run -p metrocell-node --example talker -- \
 //!       --ros-args -p rate_hz:=5 -r chatter:=/cell/chatter
 
 use std::time::Duration;

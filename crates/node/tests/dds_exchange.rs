@@ -1,5 +1,5 @@
 //! DDS tests: two nodes (two participants) in one process exchange messages over loopback.
-//! Must run inside a private network namespace: `../shared/tools/isolated cargo test -p metrocell-node`.
+//! Must run inside a private network namespace: `tests/isolated cargo test -p metrocell-node`.
 
 use std::time::{Duration, Instant};
 

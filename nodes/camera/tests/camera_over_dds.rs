@@ -4,7 +4,7 @@
 //! warning, and the node carries on. With `METROCELL_FIDUCIAL_BIN` pointing at the fiducial
 //! binary the test also runs camera → fiducial and prints the frame-in → detection-out latency.
 //!
-//! Run: `/work/shared/tools/isolated cargo test -p metrocell-camera-node --test camera_over_dds -- --nocapture`
+//! Run: `tests/isolated cargo test -p metrocell-camera-node --test camera_over_dds -- --nocapture`
 
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};

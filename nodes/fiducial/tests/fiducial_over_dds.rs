@@ -3,7 +3,7 @@
 //! and checks the detections, the pose messages and that the node survived; it prints the
 //! frame-in → detection-out latency (publish of the image → arrival of FiducialDetectionArray).
 //!
-//! Run: `/work/shared/tools/isolated cargo test -p metrocell-fiducial-node --test fiducial_over_dds -- --nocapture`
+//! Run: `tests/isolated cargo test -p metrocell-fiducial-node --test fiducial_over_dds -- --nocapture`
 
 use std::process::{Child, Command};
 use std::time::{Duration, Instant};

@@ -1,7 +1,7 @@
 //! Benchmark load for the recorder: a cell-like set of publishers for `--seconds S` (default 60):
 //! 1 kHz tracker (metrocell_msgs/TrackerMeasurement, reliable), 100 Hz joint states (reliable),
 //! 30 Hz 1920x1080 mono8 images (sensor_msgs/Image, best effort), 1 Hz temperatures (reliable).
-//! Prints the number of messages published per topic. Run inside `/work/shared/tools/isolated`
+//! Prints the number of messages published per topic. Run inside `tests/isolated`
 //! together with `metrocell-recorder` (see nodes/recorder/bench_cell_load.sh).
 
 use std::time::{Duration, Instant};

@@ -2,7 +2,7 @@
 //! check, with typed subscriptions in this process, that temperatures and tracker
 //! measurements arrive with plausible values, that /clock advances in simulated time from the
 //! configured epoch, and that the node exits cleanly at the end of the run and on SIGTERM.
-//! Must run in a private network namespace: `../shared/tools/isolated cargo test -p metrocell-sim-node`.
+//! Must run in a private network namespace: `tests/isolated cargo test -p metrocell-sim-node`.
 
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};

@@ -11,7 +11,7 @@ use metrocell_bagtools::recorded_qos::replay_qos;
 use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_msgs::rosgraph_msgs::msg::Clock;
 use metrocell_node::{qos, MetrocellNode, RawPublisher};
-use ros2_client::qos::{Durability, History, Reliability, WhenFull};
+use ros2_client::qos::{Durability, Reliability, WhenFull};
 
 use super::keyboard::Keyboard;
 
@@ -85,10 +85,10 @@ pub fn run(a: PlayArgs) -> anyhow::Result<i32> {
             Vec::new()
         });
         let r = replay_qos(&recorded);
+        // keep-last 10, rosbag2's replay history, comes with qos::reliable()
         let offered = qos::reliable()
             .reliability(if r.reliable { Reliability::Reliable { when_full: WhenFull::DEFAULT } } else { Reliability::BestEffort })
-            .durability(if r.transient_local { Durability::TransientLocal } else { Durability::Volatile })
-            .history(History::KeepLast { depth: r.depth as usize });
+            .durability(if r.transient_local { Durability::TransientLocal } else { Durability::Volatile });
         publishers.insert(t.name.clone(), node.raw_publisher(&name, &t.type_name, offered)?);
     }
     let clock_pub = match a.clock {

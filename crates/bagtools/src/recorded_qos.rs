@@ -20,9 +20,6 @@ use metrocell_bag::{
 use rustdds::discovery::PublicationBuiltinTopicData;
 use rustdds::policy::{Durability, Liveliness, Reliability};
 
-/// Depth of the replay publishers (rosbag2's default history).
-pub const REPLAY_DEPTH: u32 = 10;
-
 fn rmw_duration(d: rustdds::Duration) -> RmwDuration {
     if d == rustdds::Duration::INFINITE {
         RmwDuration::INFINITE
@@ -62,10 +59,10 @@ pub fn offered_qos_from_dds(p: &PublicationBuiltinTopicData) -> OfferedQos {
     q
 }
 
-/// The offered QoS of every discovered publisher of ROS topic `topic` (DDS topic `rt<topic>`).
-pub fn offered_qos_of_topic<'a>(publications: impl IntoIterator<Item = &'a PublicationBuiltinTopicData>, topic: &str) -> Vec<OfferedQos> {
-    let dds_name = format!("rt{topic}");
-    publications.into_iter().filter(|p| p.topic_name == dds_name).map(offered_qos_from_dds).collect()
+/// The offered QoS of every discovered publisher of DDS topic `dds_topic` (the ROS name mapped
+/// by `metrocell_node::names::dds_topic_name`, e.g. `rt/scan`).
+pub fn offered_qos_of_topic<'a>(publications: impl IntoIterator<Item = &'a PublicationBuiltinTopicData>, dds_topic: &str) -> Vec<OfferedQos> {
+    publications.into_iter().filter(|p| p.topic_name == dds_topic).map(offered_qos_from_dds).collect()
 }
 
 /// What a replay publisher offers.
@@ -73,13 +70,11 @@ pub fn offered_qos_of_topic<'a>(publications: impl IntoIterator<Item = &'a Publi
 pub struct ReplayQos {
     pub reliable: bool,
     pub transient_local: bool,
-    /// Keep-last depth.
-    pub depth: u32,
 }
 
 /// rosbag2's adaptation of the recorded offers (see the module doc).
 pub fn replay_qos(recorded: &[OfferedQos]) -> ReplayQos {
-    let default = ReplayQos { reliable: true, transient_local: false, depth: REPLAY_DEPTH };
+    let default = ReplayQos { reliable: true, transient_local: false };
     let Some(first) = recorded.first() else { return default };
     let agree = recorded.iter().all(|q| q.reliability == first.reliability && q.durability == first.durability);
     if !agree {
@@ -88,7 +83,6 @@ pub fn replay_qos(recorded: &[OfferedQos]) -> ReplayQos {
     ReplayQos {
         reliable: first.reliability != RELIABILITY_BEST_EFFORT,
         transient_local: first.durability == DURABILITY_TRANSIENT_LOCAL,
-        depth: REPLAY_DEPTH,
     }
 }
 
@@ -112,25 +106,25 @@ mod tests {
         sensor.liveliness = Some(Liveliness::ManualByTopic { lease_duration: rustdds::Duration::from_secs(2) });
         let all = [latched, sensor, publication("rt/other")];
 
-        let l = offered_qos_of_topic(&all, "/robot_description");
+        let l = offered_qos_of_topic(&all, "rt/robot_description");
         assert_eq!(l.len(), 1);
         assert_eq!((l[0].reliability, l[0].durability), (RELIABILITY_RELIABLE, DURABILITY_TRANSIENT_LOCAL));
         assert_eq!(l[0].deadline, RmwDuration { sec: 0, nsec: 250_000_000 });
         assert_eq!((l[0].lifespan, l[0].history, l[0].depth), (RmwDuration::INFINITE, metrocell_bag::HISTORY_UNKNOWN, 0));
 
-        let s = offered_qos_of_topic(&all, "/scan");
+        let s = offered_qos_of_topic(&all, "rt/scan");
         assert_eq!((s[0].reliability, s[0].durability, s[0].liveliness), (RELIABILITY_BEST_EFFORT, DURABILITY_VOLATILE, LIVELINESS_MANUAL_BY_TOPIC));
         assert_eq!(s[0].liveliness_lease_duration, RmwDuration { sec: 2, nsec: 0 });
-        assert!(offered_qos_of_topic(&all, "/absent").is_empty());
+        assert!(offered_qos_of_topic(&all, "rt/absent").is_empty());
     }
 
     #[test]
     fn replay_uses_agreeing_offers_else_the_default() {
         let latched = OfferedQos { durability: DURABILITY_TRANSIENT_LOCAL, ..OfferedQos::default() };
         let best_effort = OfferedQos { reliability: RELIABILITY_BEST_EFFORT, ..OfferedQos::default() };
-        assert_eq!(replay_qos(&[latched, latched]), ReplayQos { reliable: true, transient_local: true, depth: 10 });
-        assert_eq!(replay_qos(&[best_effort]), ReplayQos { reliable: false, transient_local: false, depth: 10 });
-        let default = ReplayQos { reliable: true, transient_local: false, depth: 10 };
+        assert_eq!(replay_qos(&[latched, latched]), ReplayQos { reliable: true, transient_local: true });
+        assert_eq!(replay_qos(&[best_effort]), ReplayQos { reliable: false, transient_local: false });
+        let default = ReplayQos { reliable: true, transient_local: false };
         assert_eq!(replay_qos(&[latched, best_effort]), default, "disagreeing publishers");
         assert_eq!(replay_qos(&[]), default);
     }

@@ -30,6 +30,7 @@ use std::time::{Duration, Instant};
 
 use metrocell_bag::offered_qos_yaml;
 use metrocell_bagtools::recorded_qos::offered_qos_of_topic;
+use metrocell_node::names::dds_topic_name;
 use metrocell_bagtools::Recording;
 use metrocell_node::{qos, MetrocellNode, RawSubscription};
 
@@ -71,12 +72,14 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         if Instant::now() >= next_scan {
             next_scan += Duration::from_secs(1);
             // Publishers declare what is sent; a reader may declare another type on the same topic.
-            let writers = node.context().domain_participant().discovered_writers();
+            // Their offered QoS is read only when a topic is new (most scans find none).
+            let mut writers = None;
             for t in node.discovered_publications() {
                 if !selection.matches(&t.name) || recording.has_topic(&t.name) || skipped.contains(&t.name) {
                     continue;
                 }
-                let offered = offered_qos_of_topic(writers.iter().map(|w| &w.publication_topic_data), &t.name);
+                let writers = writers.get_or_insert_with(|| node.context().domain_participant().discovered_writers());
+                let offered = offered_qos_of_topic(writers.iter().map(|w| &w.publication_topic_data), &dds_topic_name(&t.name));
                 if !recording.add_topic(&t.name, &t.type_name, &offered_qos_yaml(&offered))? {
                     node.warn(format!("not recording {}: metrocell does not know its type {}", t.name, t.type_name));
                     skipped.insert(t.name);

@@ -4,24 +4,17 @@
 //! Needs the `metrocell` binary next to this package's binary (build it with
 //! `cargo build -p metrocell-cli`) or its path in `METROCELL_CLI`.
 
-use std::path::PathBuf;
 use std::process::Command;
 use std::time::{Duration, Instant};
 
+mod common;
+
+use common::{cli, python, writers_of};
 use metrocell_msgs::rosgraph_msgs::msg::Clock;
 use metrocell_msgs::RosMessage;
 use metrocell_node::{qos, MetrocellNode};
 
 const TYPE: &str = "sensor_msgs/msg/Temperature";
-
-fn cli() -> PathBuf {
-    if let Ok(p) = std::env::var("METROCELL_CLI") {
-        return p.into();
-    }
-    let p = PathBuf::from(env!("CARGO_BIN_EXE_metrocell-recorder")).with_file_name("metrocell");
-    assert!(p.exists(), "{} missing: run `cargo build -p metrocell-cli` first or set METROCELL_CLI", p.display());
-    p
-}
 
 fn payload(i: usize) -> Vec<u8> {
     let v = rosmsg::from_json(metrocell_msgs::registry(), TYPE, &serde_json::json!({"header": {"frame_id": "play"}, "temperature": i as f64})).unwrap();
@@ -101,27 +94,6 @@ fn play_keeps_spacing_over_rate_and_delivers_every_message() {
     assert!(clocks.iter().all(|c| (t0..=t0 + 2_000_000_000).contains(c)), "/clock within the bag's time range");
 }
 
-fn python() -> PathBuf {
-    if let Ok(p) = std::env::var("METROCELL_PYTHON") {
-        return p.into();
-    }
-    let p = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../.venv/bin/python");
-    assert!(p.exists(), "no Python with rosbags: set METROCELL_PYTHON or run tests/run (which creates .venv)");
-    p
-}
-
-/// Durability and reliability the writers of DDS topic `rt<topic>` announce in discovery.
-fn offered_by_writers(node: &MetrocellNode, topic: &str) -> Vec<(Option<rustdds::policy::Durability>, Option<rustdds::policy::Reliability>)> {
-    let dds = format!("rt{topic}");
-    node.context()
-        .domain_participant()
-        .discovered_writers()
-        .into_iter()
-        .filter(|w| w.publication_topic_data.topic_name == dds)
-        .map(|w| (w.publication_topic_data.durability, w.publication_topic_data.reliability))
-        .collect()
-}
-
 /// A bag written by Python `rosbags` (metadata v9, standard types, a latched topic) is played
 /// over DDS: every Temperature and PointStamped arrives with the field values the script wrote,
 /// and the latched topic is offered transient-local, so a subscriber that joins after it was
@@ -160,7 +132,7 @@ fn rosbags_written_bag_plays_with_equal_fields_and_latched_topic_replays_latched
         // The latched message was published 1 s (bag time) before the first temperature:
         // subscribe only now, and with transient-local durability it must still arrive.
         if late.is_none() && !got_t.is_empty() {
-            offers = offered_by_writers(&node, "/rb/latched");
+            offers = writers_of(&node, "/rb/latched").into_iter().map(|w| (w.durability, w.reliability)).collect();
             late = Some(node.subscription::<RosString>("/rb/latched", qos::latched()).unwrap());
         }
         if let Some(s) = &late {

@@ -8,19 +8,13 @@ use std::path::{Path, PathBuf};
 use std::process::{Child, Command};
 use std::time::{Duration, Instant};
 
+mod common;
+
+use common::{cli, python, writers_of};
 use metrocell_bag::{BagReader, MessageFilter};
 use metrocell_node::{qos, MetrocellNode, RawPublisher};
 
 const TYPE: &str = "sensor_msgs/msg/Temperature";
-
-fn python() -> PathBuf {
-    if let Ok(p) = std::env::var("METROCELL_PYTHON") {
-        return p.into();
-    }
-    let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../.venv/bin/python");
-    assert!(p.exists(), "no Python with rosbags: set METROCELL_PYTHON or run tests/run (which creates .venv)");
-    p
-}
 
 fn scratch(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("recorder_it_{}_{name}", std::process::id()));
@@ -176,15 +170,6 @@ fn full_disk_stops_with_an_error_naming_the_file_and_leaves_a_valid_bag() {
     }
 }
 
-fn cli() -> PathBuf {
-    if let Ok(p) = std::env::var("METROCELL_CLI") {
-        return p.into();
-    }
-    let p = PathBuf::from(env!("CARGO_BIN_EXE_metrocell-recorder")).with_file_name("metrocell");
-    assert!(p.exists(), "{} missing: run `cargo build -p metrocell-cli` first or set METROCELL_CLI", p.display());
-    p
-}
-
 fn string_payload(s: &str) -> Vec<u8> {
     let reg = metrocell_msgs::registry();
     let v = rosmsg::from_json(reg, "std_msgs/msg/String", &serde_json::json!({ "data": s })).unwrap();
@@ -245,10 +230,6 @@ fn offered_qos_is_recorded_and_offered_again_on_play() {
         .args(["--remap", "/qos_test/latched:=/qos_replay/latched", "--remap", "/qos_test/fast:=/qos_replay/fast", "--remap", "/qos_test/plain:=/qos_replay/plain"])
         .spawn()
         .unwrap();
-    let writers_of = |node: &MetrocellNode, topic: &str| {
-        let dds = format!("rt{topic}");
-        node.context().domain_participant().discovered_writers().into_iter().filter(|w| w.publication_topic_data.topic_name == dds).map(|w| w.publication_topic_data).collect::<Vec<_>>()
-    };
     let (mut plain_got, mut late_got, mut late) = (0, Vec::new(), None);
     let (mut latched_offer, mut fast_offer) = (Vec::new(), Vec::new());
     let deadline = Instant::now() + Duration::from_secs(20);

@@ -47,9 +47,10 @@ fn print_report(out: &std::path::Path, r: &CopyReport) {
 
 pub fn run_filter(a: FilterArgs) -> anyhow::Result<i32> {
     let selection = TopicSelection::new(a.topics, &a.regex, &a.exclude)?;
-    let start_ns = metrocell_bag::info(&a.input)?.start_ns.unwrap_or(0);
+    let input = metrocell_bag::BagReader::open(&a.input)?;
+    let start_ns = input.info().start_ns.unwrap_or(0);
     let report = filter_bag(
-        &a.input,
+        &input,
         &a.output,
         &selection,
         super::offset_ns(start_ns, a.start)?,

@@ -27,17 +27,18 @@ fn add_topic(writer: &mut BagWriter, t: &TopicInfo) -> Result<()> {
     Ok(())
 }
 
-/// Copy the messages of `input` whose topic is selected and whose log time lies in
-/// `[start_ns, end_ns]` (inclusive, ns since the epoch) into the new bag `output`.
+/// Copy the messages of the open bag `input` whose topic is selected and whose log time lies in
+/// `[start_ns, end_ns]` (inclusive, ns since the epoch) into the new bag `output`. The caller
+/// opens the bag, so it can read its start time (`input.info()`) without a second scan.
 pub fn filter_bag(
-    input: &Path,
+    input: &BagReader,
     output: &Path,
     selection: &TopicSelection,
     start_ns: Option<u64>,
     end_ns: Option<u64>,
     options: WriterOptions,
 ) -> Result<CopyReport> {
-    let reader = BagReader::open(input)?;
+    let reader = input;
     let topics: Vec<&TopicInfo> = reader.topics().iter().filter(|t| selection.matches(&t.name)).collect();
     let mut writer = BagWriter::create(output, options)?;
     for t in &topics {

@@ -138,7 +138,7 @@ fn filter_and_merge_counts() {
     let f = scratch("filtered");
     // topics by regex, time window [t0 + 2 s, t0 + 6 s): rows 2 and 3 (2.25 s and 4.375 s after 10:00:00)
     let t0 = 1_714_557_600_125_000_000u64;
-    let r = filter_bag(&a, &f, &TopicSelection::new(vec![], "/air/.*", "").unwrap(), Some(t0 + 2_000_000_000), Some(t0 + 6_000_000_000), WriterOptions::default()).unwrap();
+    let r = filter_bag(&BagReader::open(&a).unwrap(), &f, &TopicSelection::new(vec![], "/air/.*", "").unwrap(), Some(t0 + 2_000_000_000), Some(t0 + 6_000_000_000), WriterOptions::default()).unwrap();
     assert_eq!(r.per_topic.len(), 2);
     assert_eq!((r.per_topic["/air/pressure"], r.per_topic["/air/humidity"], r.total()), (2, 2, 4));
     assert_eq!(BagReader::open(&f).unwrap().message_count(), 4);

@@ -28,7 +28,7 @@ fn add_topic(writer: &mut BagWriter, t: &TopicInfo) -> Result<()> {
 }
 
 /// Copy the messages of the open bag `input` whose topic is selected and whose log time lies in
-/// `[start_ns, end_ns]` (inclusive, ns since the epoch) into the new bag `output`. The caller
+/// `[start_ns, end_ns)` (end excluded, ns since the epoch) into the new bag `output`. The caller
 /// opens the bag, so it can read its start time (`input.info()`) without a second scan.
 pub fn filter_bag(
     input: &BagReader,

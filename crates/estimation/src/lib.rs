@@ -1,0 +1,17 @@
+//! # metrocell-estimation — learning a machine's error model from measurements
+//!
+//! Pure functions, no DDS; used by `metrocell calibrate`, the estimator node and `diagnose`.
+//!
+//! * [`uncertainty_budget`] — GUM combination of standard uncertainties and the ISO/TS 15530-3
+//!   expanded uncertainty U = k·√(u_cal² + u_p² + u_b² + u_w²) (seed 001, eq. 3.4), with each
+//!   component's share.
+//! * [`improvement`] — before/after error statistics and percent improvement as seed 000 reports
+//!   them (its Table 3).
+//! * [`design_of_experiments`] — D-optimal choice of measurement rows from candidates (Fedorov
+//!   exchange, the family DETMAX belongs to; seed 000 §4).
+//!
+//! Units: SI (m) in and out; reports convert to mm and µm.
+
+pub mod design_of_experiments;
+pub mod improvement;
+pub mod uncertainty_budget;

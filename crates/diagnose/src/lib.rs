@@ -1,0 +1,21 @@
+//! # metrocell-diagnose — where a model and a recording disagree
+//!
+//! `diagnose` fits the model the user declared, then asks of the residuals: are they what the
+//! stated noise predicts, and if not, where do they live? This crate holds those questions as
+//! pure functions over [`residual::ResidualSample`]s (one component of one measurement's residual
+//! with its stated σ and the conditions it was taken in), so they hold on any honest data, not
+//! only on the twin's:
+//!
+//! * [`noise_tests`] — χ² of the normalised residuals against their stated σ, a mean-shift test,
+//!   whiteness in time (Ljung–Box) and a runs test on signs.
+//! * [`locate`] — structure by channel and axis in regions of the workspace, windows of time,
+//!   directions of motion and ranges of recorded conditions (velocity, temperature, load), with
+//!   effect sizes and p-values corrected for the number of tests made ([`multiple_testing`]).
+//!
+//! Convention: residual = measured − predicted (m); σ is the measurement's stated standard
+//! uncertainty of that component (m).
+
+pub mod locate;
+pub mod multiple_testing;
+pub mod noise_tests;
+pub mod residual;

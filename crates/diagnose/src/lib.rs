@@ -11,11 +11,15 @@
 //! * [`locate`] — structure by channel and axis in regions of the workspace, windows of time,
 //!   directions of motion and ranges of recorded conditions (velocity, temperature, load), with
 //!   effect sizes and p-values corrected for the number of tests made ([`multiple_testing`]).
+//! * [`selection`] — which candidate terms explain the structure: greedy forward selection judged
+//!   on held-out blocks of time and workspace ([`folds`]), significance, plausible ranges and BIC.
 //!
 //! Convention: residual = measured − predicted (m); σ is the measurement's stated standard
 //! uncertainty of that component (m).
 
+pub mod folds;
 pub mod locate;
 pub mod multiple_testing;
 pub mod noise_tests;
 pub mod residual;
+pub mod selection;

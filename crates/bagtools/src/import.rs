@@ -6,7 +6,7 @@
 //!
 //! | column | meaning | required |
 //! |---|---|---|
-//! | `timestamp` | seconds since the Unix epoch (`1714557600.125`) or UTC date-time `2024-05-01T10:00:00.125Z` (`T` or space; `Z` optional) | yes |
+//! | `timestamp` | seconds since the Unix epoch (`1714557600.125`) or UTC date-time `2024-05-01T10:00:00.125Z` (`T` or space; `Z` optional); a mapping's `scale`/`offset` apply (seconds since a job's start + `offset: <epoch start>`; a date-time takes an offset only) | yes |
 //! | `point_id` | name of the point | yes |
 //! | `measured_x`, `measured_y`, `measured_z` | measured coordinates [m] | yes |
 //! | `u_x`, `u_y`, `u_z` | standard uncertainties (k = 1) of the measured coordinates [m] | all three, or |
@@ -191,6 +191,41 @@ pub fn parse_timestamp(s: &str) -> std::result::Result<u64, String> {
     Ok(secs as u64 * 1_000_000_000 + frac_ns(frac).map_err(|_| bad())?)
 }
 
+/// A timestamp cell through its mapping: `seconds·scale + offset` for a number of seconds (so
+/// `{column: t_s, offset: 1767225600}` turns seconds since the start of a job into epoch time, and
+/// `scale: 0.001` reads milliseconds), `date-time + offset` for a date-time (a time-zone shift;
+/// a scale other than 1 makes no sense there and is an error). Exact to the nanosecond when the
+/// scale is 1; the result must not fall before 1970. → ns since the epoch.
+pub fn mapped_timestamp(cell: &str, scale: f64, offset: f64) -> std::result::Result<u64, String> {
+    let numeric = cell.trim().parse::<f64>().is_ok();
+    let offset_ns = (offset * 1e9).round();
+    let base_ns: f64 = if numeric && scale != 1.0 {
+        let v: f64 = cell.trim().parse().map_err(|_| format!("timestamp '{cell}' is not a number"))?;
+        if !v.is_finite() {
+            return Err(format!("timestamp '{cell}' is not finite"));
+        }
+        (v * scale * 1e9).round()
+    } else {
+        if !numeric && scale != 1.0 {
+            return Err(format!("timestamp '{cell}' is a date-time: its mapping may shift it (offset, s) but not scale it (scale {scale})"));
+        }
+        if offset == 0.0 {
+            return parse_timestamp(cell);
+        }
+        parse_timestamp(cell)? as f64
+    };
+    let t = base_ns + offset_ns;
+    if !(t >= 0.0 && t < 1.8e19) {
+        return Err(format!("timestamp '{cell}' with scale {scale} and offset {offset} s falls at {:.3} s, before 1970 or past 2540", t / 1e9));
+    }
+    // exact when the scale is 1: integer nanoseconds plus the offset's nanoseconds
+    if scale == 1.0 {
+        let exact = parse_timestamp(cell)? as i128 + offset_ns as i128;
+        return Ok(exact as u64);
+    }
+    Ok(t as u64)
+}
+
 /// `raw * scale`, exact to the nearest f64 when `scale` is a power of ten (mm → m): the
 /// decimal text is re-parsed with a shifted exponent, so "1250.1234" mm gives the f64 nearest
 /// to 1.2501234, not 1250.1234 × 0.001 = 1.2501233999999999.
@@ -351,7 +386,7 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
                 Ok(scale_decimal(cell, v, b.scale) + b.offset)
             };
             match &b.field {
-                Field::Timestamp => match parse_timestamp(cell) {
+                Field::Timestamp => match mapped_timestamp(cell, b.scale, b.offset) {
                     Ok(t) => t_ns = Some(t),
                     Err(e) => err(b, e),
                 },
@@ -463,6 +498,20 @@ mod tests {
         assert_eq!(parse_timestamp("1970-01-01 00:00:00").unwrap(), 0);
         assert!(parse_timestamp("01/05/2024 10:00").is_err());
         assert!(parse_timestamp("2024-13-01 10:00:00").is_err());
+    }
+
+    /// Issue 12: a mapping's scale and offset apply to the timestamp column too.
+    #[test]
+    fn timestamp_mapping_scales_and_offsets() {
+        // seconds since the start of a job + the job's epoch start
+        assert_eq!(mapped_timestamp("12.5", 1.0, 1_767_225_600.0).unwrap(), 1_767_225_612_500_000_000);
+        // milliseconds since the start
+        assert_eq!(mapped_timestamp("12500", 0.001, 1_767_225_600.0).unwrap(), 1_767_225_612_500_000_000);
+        // a local date-time one hour ahead of UTC
+        assert_eq!(mapped_timestamp("2024-05-01 11:00:00.125", 1.0, -3600.0).unwrap(), 1_714_557_600_125_000_000);
+        assert_eq!(mapped_timestamp("1714557600.125", 1.0, 0.0).unwrap(), 1_714_557_600_125_000_000);
+        assert!(mapped_timestamp("2024-05-01 11:00:00", 0.001, 0.0).unwrap_err().contains("date-time"));
+        assert!(mapped_timestamp("5", 1.0, -10.0).unwrap_err().contains("before 1970"));
     }
 
     #[test]

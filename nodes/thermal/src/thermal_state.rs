@@ -205,33 +205,29 @@ impl ThermalState {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use metrocell_compensation::{AxisSensorPlacement, GrowthCompensator, GrowthSpec, ThermalScaleCompensator};
     use metrocell_msgs::builtin_interfaces::msg::Time;
     use metrocell_msgs::geometry_msgs::msg::Point;
     use metrocell_msgs::std_msgs::msg::Header;
 
     const S: i64 = 1_000_000_000;
 
-    /// x scale on x_left/x_right, column growth (lag 600 s); stale after 10 s; limits [-20, 80] °C.
+    /// From the node's own parameters: x scale on x_left/x_right (u(α) by the ISO/TR 230-9 rule),
+    /// column growth 4 µm/K down with a 600 s lag; stale after 10 s; limits [-20, 80] °C.
     fn state() -> ThermalState {
-        let scale = ThermalScaleCompensator::new(11.5e-6, 5.77e-7, 20.0, vec![
-            AxisSensorPlacement { name: "x_left".into(), axis: 0, position: 0.0 },
-            AxisSensorPlacement { name: "x_right".into(), axis: 0, position: 0.8 },
-        ])
-        .unwrap();
-        let growth = GrowthCompensator::new(GrowthSpec {
-            sensor: "column".into(),
-            direction: Vector3::new(0.0, 0.0, -1.0),
-            coefficient: 4e-6,
-            coefficient_uncertainty: 0.4e-6,
-            time_constant: Some(600.0),
-            time_constant_uncertainty: 60.0,
-            reference_temperature: 20.0,
-            calibration_uncertainty: 0.05,
-        })
-        .unwrap();
-        let settings = Settings { period_s: 1.0, stale_after_s: 10.0, calibration_uncertainty: 0.05, limits: (-20.0, 80.0), drift_point: Vector3::new(0.4, 0.0, 0.0) };
-        ThermalState::new(ThermalCompensator { scale, growth: vec![growth], workpiece: None }, None, settings)
+        let args = [
+            "metrocell-thermal", "--ros-args", "-p", "sensors:=[x_left, x_right]", "-p", "sensor_axes:=[x, x]", "-p", "sensor_positions:=[0.0, 0.8]",
+            "-p", "alpha_uncertainty:=5.77e-7", "-p", "sensor_calibration_uncertainty:=0.05", "-p", "growth_sensors:=[column]",
+            "-p", "growth_directions:=[0.0, 0.0, -1.0]", "-p", "growth_coefficients:=[4e-6]", "-p", "growth_time_constants:=[600.0]",
+            "-p", "growth_time_constant_uncertainties:=[60.0]", "-p", "growth_coefficient_uncertainties:=[4e-7]", "-p", "drift_point:=[0.4, 0.0, 0.0]",
+        ];
+        let cl = metrocell_node::parse_command_line(args).unwrap();
+        let p = metrocell_node::Parameters::resolve(&crate::parameters::declarations(), &cl.ros, "/thermal", "thermal").unwrap();
+        let log = std::cell::RefCell::new(Vec::new());
+        let st = crate::start(&p, &|line| log.borrow_mut().push(line)).unwrap();
+        let log = log.into_inner();
+        assert!(log[0].contains("strain computed from the configured alpha=1.15e-5"), "{log:?}");
+        assert!(log[1].starts_with("thermal_growth[column]: configured g=4e-6 m/K ± 4e-7, lag τ=600 s ± 60 s"), "{log:?}");
+        st
     }
 
     fn temp(value: f64, at_ns: i64) -> Temperature {

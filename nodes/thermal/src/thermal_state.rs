@@ -214,12 +214,19 @@ mod tests {
     /// From the node's own parameters: x scale on x_left/x_right (u(α) by the ISO/TR 230-9 rule),
     /// column growth 4 µm/K down with a 600 s lag; stale after 10 s; limits [-20, 80] °C.
     fn state() -> ThermalState {
-        let args = [
+        state_with(&[])
+    }
+
+    fn state_with(extra: &[&'static str]) -> ThermalState {
+        let mut args = vec![
             "metrocell-thermal", "--ros-args", "-p", "sensors:=[x_left, x_right]", "-p", "sensor_axes:=[x, x]", "-p", "sensor_positions:=[0.0, 0.8]",
             "-p", "alpha_uncertainty:=5.77e-7", "-p", "sensor_calibration_uncertainty:=0.05", "-p", "growth_sensors:=[column]",
             "-p", "growth_directions:=[0.0, 0.0, -1.0]", "-p", "growth_coefficients:=[4e-6]", "-p", "growth_time_constants:=[600.0]",
             "-p", "growth_time_constant_uncertainties:=[60.0]", "-p", "growth_coefficient_uncertainties:=[4e-7]", "-p", "drift_point:=[0.4, 0.0, 0.0]",
         ];
+        for p in extra {
+            args.extend(["-p", p]);
+        }
         let cl = metrocell_node::parse_command_line(args).unwrap();
         let p = metrocell_node::Parameters::resolve(&crate::parameters::declarations(), &cl.ros, "/thermal", "thermal").unwrap();
         let log = std::cell::RefCell::new(Vec::new());
@@ -336,5 +343,58 @@ mod tests {
         p.nominal.z = f64::INFINITY;
         assert_eq!(st.compensate(&p, S).unwrap_err().reason(), "not_finite");
         assert_eq!(st.counters.points_not_compensated.get("not_finite"), Some(&2));
+    }
+
+    #[test]
+    fn online_fit_replaces_the_configured_growth_once_it_fits() {
+        // Truth g = 5 µm/K, τ = 1500 s (configured: 4 µm/K, 600 s). The column warms 3 K in 1.5-h
+        // blocks; the reference point (0.1, 0.1, 0.1) is measured every 5 min with 1 µm noise.
+        let mut st = state_with(&["fit_reference_point:=[0.1, 0.1, 0.1]", "fit_min_observations:=20", "stale_after:=100.0"]);
+        assert!(st.fit.is_some());
+        let (g_true, tau_true) = (5e-6, 1500.0);
+        let mut truth = metrocell_compensation::FirstOrderLag::new(tau_true);
+        let (mut column, mut used_at) = (20.0, None);
+        for k in 0..(6 * 360) {
+            let t_ns = k as i64 * 10 * S;
+            let heating = if (k as f64 / 360.0) % 2.5 < 1.5 { 3.0 } else { 0.0 };
+            column += (20.0 + heating - column) * (1.0 - (-10.0f64 / 3600.0).exp());
+            truth.advance(t_ns as f64 * 1e-9, column, 0.0);
+            for (n, v) in [("x_left", 20.0), ("x_right", 20.0), ("column", column)] {
+                st.temperature(n, &temp(v, t_ns), t_ns).unwrap();
+            }
+            if k % 30 == 29 {
+                let (_, tf, _, _) = truth.output().unwrap();
+                // deterministic ±1 µm "noise" that does not correlate with the heating
+                let noise = 1e-6 * ((k as f64) * 0.7).sin();
+                let mut p = point(0.1);
+                p.header.stamp = Time::from_nanos(t_ns);
+                (p.nominal.y, p.nominal.z) = (0.1, 0.1);
+                (p.measured.y, p.measured.z) = (0.1, 0.1 - g_true * (tf - 20.0) + noise);
+                if let Some(FitEvent::Used(_)) = st.reference_measurement(&p) {
+                    used_at.get_or_insert(k);
+                }
+            }
+        }
+        assert_eq!(used_at, Some(20 * 30 - 1), "used from the 20th measurement on");
+        let (r, used) = st.fit_result.clone().unwrap();
+        assert!(used && st.compensator.growth[0].is_fitted());
+        let (ug, utau) = (r.covariance[(1, 1)].sqrt(), r.covariance[(2, 2)].sqrt());
+        assert!((r.coefficient - g_true).abs() < 3.0 * ug && ug < 0.5e-6, "g {} ± {ug}", r.coefficient);
+        assert!((r.time_constant - tau_true).abs() < 3.0 * utau && utau < 300.0, "τ {} ± {utau}", r.time_constant);
+        // the error model now carries the fitted values, with the fit's covariance
+        let (model, _) = st.model_if_due(6 * 3600 * S).unwrap();
+        let model = model.unwrap();
+        let i = model.parameter_names.iter().position(|n| n == "thermal_growth[column].coefficient").unwrap();
+        assert_eq!(model.values[i], r.coefficient);
+        assert_eq!(model.values[i + 1], r.time_constant);
+        let n = model.values.len();
+        assert_eq!(model.covariance[(i + 1) * n + i + 1], r.covariance[(2, 2)]);
+        assert_eq!(model.degrees_of_freedom as usize, r.observations - 3);
+        // and a point is now corrected with them: the reference point's Z error is gone to ~1 µm
+        let (_, tf, _, _) = truth.output().unwrap();
+        let mut p = point(0.1);
+        (p.nominal.y, p.nominal.z, p.measured.y, p.measured.z) = (0.1, 0.1, 0.1, 0.1 - g_true * (tf - 20.0));
+        let out = st.compensate(&p, 6 * 3600 * S).unwrap();
+        assert!((out.measured.z - 0.1).abs() < 1.5e-6, "left {:.2} µm", (out.measured.z - 0.1) * 1e6);
     }
 }

@@ -186,13 +186,17 @@ pub fn compensator(node: &Parameters) -> Result<(ThermalCompensator, Option<FitC
 /// Log lines describing the configuration: which values are configured and which are fitted.
 pub fn describe(c: &ThermalCompensator, fit: Option<&FitConfig>) -> Vec<String> {
     let s = &c.scale;
-    let mut lines = vec![format!(
+    let mut lines = vec![if s.sensors().is_empty() {
+        "thermal_scale: no axis-scale sensors configured".to_string()
+    } else {
+        format!(
         "thermal_scale: strain computed from the configured alpha={:e} 1/K ± {:e} (not estimated), T_ref={} °C, sensors: {}",
         s.alpha,
         s.alpha_uncertainty,
         s.reference_temperature,
         s.sensors().iter().map(|p| format!("{}@{}{:+.3}m", p.name, ["x", "y", "z"][p.axis], p.position)).collect::<Vec<_>>().join(", ")
-    )];
+    )
+    }];
     for g in &c.growth {
         let lag = g.spec.time_constant.map_or("no lag".to_string(), |t| format!("lag τ={t} s ± {} s", g.spec.time_constant_uncertainty));
         lines.push(format!(

@@ -157,15 +157,22 @@ impl ThermalState {
         Ok(out)
     }
 
-    /// If `p` is the fit's reference point, add it (uncorrected: measured − nominal) and refit;
-    /// once enough measurements fit with τ inside its range, the fitted g and τ are used.
+    /// If `p` is the fit's reference point, add its error (measured − nominal, less the drift
+    /// of every other term) and refit; once enough measurements fit with τ inside its range,
+    /// the fitted g and τ are used.
     pub fn reference_measurement(&mut self, p: &MeasuredPoint) -> Option<FitEvent> {
-        let f = self.fit.as_mut()?;
+        let f = self.fit.as_ref()?;
         let nominal = Vector3::new(p.nominal.x, p.nominal.y, p.nominal.z);
         if !((nominal - f.point).norm() <= f.tolerance) {
             return None;
         }
-        let error = Vector3::new(p.measured.x, p.measured.y, p.measured.z) - nominal;
+        let others = self.compensator.drift(&nominal, &|n: &str| self.reading(n)).and_then(|(all, _)| Ok(all - self.compensator.growth[f.growth_index].drift(&nominal)?.displacement));
+        let others = match others {
+            Ok(d) => d,
+            Err(e) => return Some(FitEvent::NotYet(format!("reference point not used: {e}"))),
+        };
+        let f = self.fit.as_mut()?;
+        let error = Vector3::new(p.measured.x, p.measured.y, p.measured.z) - nominal - others;
         if let Err(e) = f.fit.add_observation(stamp_seconds(&p.header.stamp), &error, &Matrix3::from_row_slice(&p.covariance)) {
             return Some(FitEvent::NotYet(e.to_string()));
         }

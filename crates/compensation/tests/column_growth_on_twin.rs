@@ -6,6 +6,7 @@
 //!   * with the known coefficient and lag, over the whole shift;
 //!   * with g and τ fitted online from the point's measurements in hours 0–4, on the held-out
 //!     hours 4–8 (and the fit recovers g and τ within 3 of its standard uncertainties).
+//!
 //! The Z drift of one dwell is the mean of its ~30 tracker readings (single readings scatter by
 //! ~4 µm, the tracker's stated noise). The cell's tracker warm-up is switched off (it drifts the
 //! range by 75 µm and is the tracker node's correction, not this one); no other term of the

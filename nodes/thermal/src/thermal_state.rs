@@ -121,7 +121,7 @@ impl ThermalState {
 
     /// Sensors with no reading yet or none within `stale_after` at `now_ns`.
     pub fn stale_sensors(&self, now_ns: i64) -> Vec<String> {
-        self.compensator.sensor_names().into_iter().filter(|n| self.latest.get(n).map_or(true, |r| now_ns - r.2 > self.stale_after_ns)).collect()
+        self.compensator.sensor_names().into_iter().filter(|n| self.latest.get(n).is_none_or(|r| now_ns - r.2 > self.stale_after_ns)).collect()
     }
 
     fn check_fresh(&self, now_ns: i64) -> Result<(), ThermalError> {
@@ -163,6 +163,8 @@ impl ThermalState {
     pub fn reference_measurement(&mut self, p: &MeasuredPoint) -> Option<FitEvent> {
         let f = self.fit.as_ref()?;
         let nominal = Vector3::new(p.nominal.x, p.nominal.y, p.nominal.z);
+        // `!(a <= b)` also rejects a NaN nominal
+        #[allow(clippy::neg_cmp_op_on_partial_ord)]
         if !((nominal - f.point).norm() <= f.tolerance) {
             return None;
         }

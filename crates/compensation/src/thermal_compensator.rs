@@ -20,18 +20,13 @@ pub struct ThermalCompensator {
 }
 
 impl ThermalCompensator {
-    /// Every sensor any term reads, each once, sorted.
+    /// Every sensor any term reads, each once, sorted. A correction needs a fresh reading of each
+    /// (the lagged growth terms carry their own state, but their sensor must still be reporting).
     pub fn sensor_names(&self) -> Vec<String> {
         let mut s: BTreeSet<String> = self.scale.sensors().iter().map(|p| p.name.clone()).collect();
         s.extend(self.growth.iter().map(|g| g.spec.sensor.clone()));
         s.extend(self.workpiece.iter().map(|w| w.sensor.clone()));
         s.into_iter().collect()
-    }
-
-    /// Sensors whose latest reading a correction at one instant needs (the lagged growth terms
-    /// carry their own state; their sensor must still be fresh, so they are included).
-    pub fn required_sensors(&self) -> Vec<String> {
-        self.sensor_names()
     }
 
     /// Feed a reading (°C, K²) of `sensor` at `time` (s) to every lagged term that reads it.

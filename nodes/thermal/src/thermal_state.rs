@@ -125,7 +125,7 @@ impl ThermalState {
     }
 
     fn check_fresh(&self, now_ns: i64) -> Result<(), ThermalError> {
-        for name in self.compensator.required_sensors() {
+        for name in self.compensator.sensor_names() {
             if let Some(r) = self.latest.get(&name) {
                 if now_ns - r.2 > self.stale_after_ns {
                     return Err(ThermalError::StaleReading { sensor: name, age_s: (now_ns - r.2) as f64 * 1e-9, limit_s: self.stale_after_ns as f64 * 1e-9 });

@@ -33,6 +33,7 @@ pub fn declarations() -> Vec<ParamDecl> {
         ParamDecl::new("fit_growth_sensor", String::new(), "growth term whose g and τ are fitted (its sensor; empty = the only growth term)"),
         ParamDecl::new("fit_min_observations", 8i64, "reference measurements needed before the fitted values replace the configured ones").with_range(4.0, 1e6),
         ParamDecl::new("fit_time_constant_range", vec![60.0, 1e5], "[min, max] s searched for τ"),
+        ParamDecl::new("fit_interval", 60.0, "least time [s, message stamps] between refits; every reference measurement enters the next fit (a refit re-runs the lag over the whole window)").with_range(0.0, 86400.0),
     ]
 }
 
@@ -44,6 +45,8 @@ pub struct FitConfig {
     pub point: Vector3<f64>,
     pub tolerance: f64,
     pub min_observations: usize,
+    /// s between refits
+    pub interval: f64,
 }
 
 fn err(name: &str, reason: impl std::fmt::Display) -> Box<dyn std::error::Error> {
@@ -177,6 +180,7 @@ pub fn compensator(node: &Parameters) -> Result<(ThermalCompensator, Option<FitC
                 point,
                 tolerance: node.get::<f64>("fit_reference_tolerance")?,
                 min_observations: node.get::<i64>("fit_min_observations")? as usize,
+                interval: node.get::<f64>("fit_interval")?,
             })
         }
     };

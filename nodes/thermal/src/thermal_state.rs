@@ -36,6 +36,8 @@ pub struct ThermalState {
     pub fit: Option<FitConfig>,
     /// Latest accepted fit, and whether its values are in use.
     pub fit_result: Option<(GrowthFitResult, bool)>,
+    /// Stamp (s) of the measurement that triggered the last refit.
+    last_fit_time: Option<f64>,
     pub counters: Counters,
     drift_point: Vector3<f64>,
     calibration_variance: f64,
@@ -72,6 +74,7 @@ impl ThermalState {
             compensator,
             fit,
             fit_result: None,
+            last_fit_time: None,
             counters: Counters::default(),
             drift_point: s.drift_point,
             calibration_variance: s.calibration_uncertainty.powi(2),
@@ -175,9 +178,14 @@ impl ThermalState {
         };
         let f = self.fit.as_mut()?;
         let error = Vector3::new(p.measured.x, p.measured.y, p.measured.z) - nominal - others;
-        if let Err(e) = f.fit.add_observation(stamp_seconds(&p.header.stamp), &error, &Matrix3::from_row_slice(&p.covariance)) {
+        let time = stamp_seconds(&p.header.stamp);
+        if let Err(e) = f.fit.add_observation(time, &error, &Matrix3::from_row_slice(&p.covariance)) {
             return Some(FitEvent::NotYet(e.to_string()));
         }
+        if self.last_fit_time.is_some_and(|t| time - t < f.interval) {
+            return None;
+        }
+        self.last_fit_time = Some(time);
         let r = match f.fit.fit() {
             Ok(r) => r,
             Err(e) => return Some(FitEvent::NotYet(e.to_string())),
@@ -358,7 +366,7 @@ mod tests {
     fn online_fit_replaces_the_configured_growth_once_it_fits() {
         // Truth g = 5 µm/K, τ = 1500 s (configured: 4 µm/K, 600 s). The column warms 3 K in 1.5-h
         // blocks; the reference point (0.1, 0.1, 0.1) is measured every 5 min with 1 µm noise.
-        let mut st = state_with(&["fit_reference_point:=[0.1, 0.1, 0.1]", "fit_min_observations:=20", "stale_after:=100.0"]);
+        let mut st = state_with(&["fit_reference_point:=[0.1, 0.1, 0.1]", "fit_min_observations:=20", "stale_after:=100.0", "fit_interval:=600.0"]);
         assert!(st.fit.is_some());
         let (g_true, tau_true) = (5e-6, 1500.0);
         let mut truth = metrocell_compensation::FirstOrderLag::new(tau_true);
@@ -384,7 +392,8 @@ mod tests {
                 }
             }
         }
-        assert_eq!(used_at, Some(20 * 30 - 1), "used from the 20th measurement on");
+        // refits every 600 s (every other measurement, from the first), so from the 21st on
+        assert_eq!(used_at, Some(21 * 30 - 1), "used from the first refit with ≥ 20 measurements");
         let (r, used) = st.fit_result.clone().unwrap();
         assert!(used && st.compensator.growth[0].is_fitted());
         let (ug, utau) = (r.covariance[(1, 1)].sqrt(), r.covariance[(2, 2)].sqrt());

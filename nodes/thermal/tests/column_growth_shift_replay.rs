@@ -92,9 +92,12 @@ fn write_shift_bag(dir: &Path) -> [f64; 3] {
     reference
 }
 
+/// (time s, Z error m) per dwell.
+type Dwells = Vec<(f64, f64)>;
+
 /// Runs the node on the bag; returns (point 1's dwell means of the Z error (s, m) uncorrected and
 /// corrected, the last error model, the log).
-fn run(input: &Path, output: &Path, params: &[String]) -> (Vec<(f64, f64)>, Vec<(f64, f64)>, ErrorModel, String) {
+fn run(input: &Path, output: &Path, params: &[String]) -> (Dwells, Dwells, ErrorModel, String) {
     let mut args = vec!["--ros-args".to_string(), "-r".into(), "__ns:=/cg".into()];
     for p in params {
         args.extend(["-p".to_string(), p.clone()]);

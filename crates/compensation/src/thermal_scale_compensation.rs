@@ -1,13 +1,19 @@
 //! Removing the thermal growth of the axis scales from measured points, online.
 //!
-//! The `thermal_scale` term (metrocell-physics) says the tool overshoots the commanded axis
-//! coordinate q_k by α·q_k·(T(q_k) − T_ref) along axis k, T(q) interpolated between the sensors
-//! on that axis. A point measured while the machine is warm is therefore corrected by
-//! subtracting that displacement, evaluated at the point's nominal coordinates (the commanded
-//! axis positions). Its covariance grows by the uncertainty of α and of the temperatures.
+//! The catalog's `thermal_scale` term (metrocell-physics) says the tool overshoots the commanded
+//! axis coordinate q_k by α·q_k·(T(q_k) − T_ref) along axis k, T(q) interpolated between the
+//! sensors on that axis. A point measured while the machine is warm is therefore corrected by
+//! subtracting that displacement, evaluated by the catalog term itself at the point's nominal
+//! coordinates (the commanded axis positions). α is validated against the catalog's range for
+//! `thermal_scale.alpha`. The covariance grows by u(α) and by each sensor's variance through its
+//! interpolation weight.
 
-use metrocell_physics::thermal::thermal_scale::interpolate_temperature;
+use metrocell_physics::{configure, ConfigValue, ConfiguredTerm, PhysicsError, TermConfig};
 use nalgebra::{Matrix3, Vector3};
+
+use crate::thermal_drift::{total_drift, TemperatureSensitivity, TermDrift};
+use crate::thermal_signals::thermal_signals;
+pub use crate::thermal_error::{Reading, ThermalError};
 
 /// Where a temperature sensor sits: on which axis (0 = x, 1 = y, 2 = z) and at which axis
 /// coordinate (m).
@@ -18,23 +24,8 @@ pub struct AxisSensorPlacement {
     pub position: f64,
 }
 
-/// A temperature reading: value (°C) and variance (K²), as sensor_msgs/Temperature carries.
-pub type Reading = (f64, f64);
-
-#[derive(Debug, thiserror::Error, PartialEq)]
-pub enum ThermalError {
-    #[error("sensor '{sensor}': axis index {axis} is not 0 (x), 1 (y) or 2 (z)")]
-    BadAxis { sensor: String, axis: usize },
-    #[error("sensor '{0}' is listed twice")]
-    DuplicateSensor(String),
-    #[error("no reading yet from sensor '{0}' (axis {1}); compensation on that axis waits for it")]
-    NoReading(String, &'static str),
-    #[error("alpha {0} 1/K is not a plausible expansion coefficient (expected 0..5e-5 1/K)")]
-    BadAlpha(f64),
-}
-
 /// Thermal-scale compensation of the three axes with one expansion coefficient.
-#[derive(Debug, Clone)]
+#[derive(Debug)]
 pub struct ThermalScaleCompensator {
     /// 1/K
     pub alpha: f64,
@@ -43,9 +34,30 @@ pub struct ThermalScaleCompensator {
     /// °C
     pub reference_temperature: f64,
     sensors: Vec<AxisSensorPlacement>,
+    /// The catalog term of each covered axis.
+    terms: Vec<(usize, ConfiguredTerm)>,
 }
 
 const AXIS_NAMES: [&str; 3] = ["x", "y", "z"];
+
+/// The catalog's `thermal_scale` term for one axis, configured like the compensator.
+fn catalog_term(axis: usize, sensors: &[&AxisSensorPlacement], alpha: f64, reference_temperature: f64) -> Result<ConfiguredTerm, PhysicsError> {
+    let sensor = |s: &AxisSensorPlacement| {
+        ConfigValue::Map([("name".to_string(), ConfigValue::Text(s.name.clone())), ("position".to_string(), ConfigValue::Number(s.position))].into_iter().collect())
+    };
+    configure(&TermConfig {
+        id: "thermal_scale".into(),
+        options: [
+            ("axis".to_string(), ConfigValue::Text(AXIS_NAMES[axis].into())),
+            ("sensors".to_string(), ConfigValue::List(sensors.iter().map(|s| sensor(s)).collect())),
+            ("reference_temperature".to_string(), ConfigValue::Number(reference_temperature)),
+        ]
+        .into_iter()
+        .collect(),
+        params: [("alpha".to_string(), ConfigValue::Number(alpha))].into_iter().collect(),
+        use_defaults: false,
+    })
+}
 
 impl ThermalScaleCompensator {
     pub fn new(
@@ -54,8 +66,14 @@ impl ThermalScaleCompensator {
         reference_temperature: f64,
         sensors: Vec<AxisSensorPlacement>,
     ) -> Result<Self, ThermalError> {
-        if !(alpha.is_finite() && (0.0..=5e-5).contains(&alpha)) {
+        if !alpha.is_finite() {
             return Err(ThermalError::BadAlpha(alpha));
+        }
+        if !(alpha_uncertainty >= 0.0 && alpha_uncertainty.is_finite()) {
+            return Err(ThermalError::BadParameter { name: "alpha_uncertainty".into(), reason: format!("must be ≥ 0 and finite, got {alpha_uncertainty}") });
+        }
+        if !reference_temperature.is_finite() {
+            return Err(ThermalError::NotFinite { what: "reference_temperature".into() });
         }
         for (i, s) in sensors.iter().enumerate() {
             if s.axis > 2 {
@@ -64,8 +82,28 @@ impl ThermalScaleCompensator {
             if sensors[..i].iter().any(|o| o.name == s.name) {
                 return Err(ThermalError::DuplicateSensor(s.name.clone()));
             }
+            if !s.position.is_finite() {
+                return Err(ThermalError::NotFinite { what: format!("position of sensor '{}'", s.name) });
+            }
         }
-        Ok(Self { alpha, alpha_uncertainty, reference_temperature, sensors })
+        let mut terms = Vec::new();
+        for k in 0..3 {
+            let on_axis: Vec<&AxisSensorPlacement> = sensors.iter().filter(|s| s.axis == k).collect();
+            if on_axis.is_empty() {
+                continue;
+            }
+            let term = catalog_term(k, &on_axis, alpha, reference_temperature).map_err(|e| match e {
+                PhysicsError::OutOfRange { .. } => ThermalError::BadAlpha(alpha),
+                other => ThermalError::Physics(other),
+            })?;
+            terms.push((k, term));
+        }
+        if terms.is_empty() {
+            // no sensor: still validate α against the catalog range
+            catalog_term(0, &[&AxisSensorPlacement { name: "-".into(), axis: 0, position: 0.0 }], alpha, reference_temperature)
+                .map_err(|_| ThermalError::BadAlpha(alpha))?;
+        }
+        Ok(Self { alpha, alpha_uncertainty, reference_temperature, sensors, terms })
     }
 
     pub fn sensors(&self) -> &[AxisSensorPlacement] {
@@ -77,20 +115,9 @@ impl ThermalScaleCompensator {
         self.sensors.iter().any(|s| s.axis == k)
     }
 
-    /// Temperature (°C) and its variance at coordinate q of axis k, interpolated between that
-    /// axis's sensors. `reading(name)` gives a sensor's latest reading.
-    fn temperature_at(&self, k: usize, q: f64, reading: &dyn Fn(&str) -> Option<Reading>) -> Result<Reading, ThermalError> {
-        let mut pts: Vec<(f64, Reading)> = Vec::new();
-        for s in self.sensors.iter().filter(|s| s.axis == k) {
-            let r = reading(&s.name).ok_or_else(|| ThermalError::NoReading(s.name.clone(), AXIS_NAMES[k]))?;
-            pts.push((s.position, r));
-        }
-        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-        let t = interpolate_temperature(&pts.iter().map(|(p, r)| (*p, r.0)).collect::<Vec<_>>(), q);
-        // The interpolation weights are at most 1 and sum to 1; the larger neighbour variance is
-        // a safe (slightly pessimistic) bound for the interpolated one.
-        let var = pts.iter().map(|(_, r)| r.1).fold(0.0, f64::max);
-        Ok((t, var))
+    /// Catalog labels of the configured terms with their axis index, e.g. (0, `thermal_scale[x]`).
+    pub fn labels(&self) -> Vec<(usize, String)> {
+        self.terms.iter().map(|(k, t)| (*k, t.term.label())).collect()
     }
 
     /// Mean scale strain of axis k (m/m) over its sensors and its variance: what a supervisor
@@ -112,6 +139,44 @@ impl ThermalScaleCompensator {
         Ok((strain, var))
     }
 
+    /// The displacement the catalog terms predict at `nominal` (commanded axis coordinates, m),
+    /// one [`TermDrift`] per covered axis.
+    pub fn drift(&self, nominal: &Vector3<f64>, reading: &dyn Fn(&str) -> Option<Reading>) -> Result<Vec<TermDrift>, ThermalError> {
+        let mut out = Vec::with_capacity(self.terms.len());
+        for (k, term) in &self.terms {
+            let on_axis: Vec<&AxisSensorPlacement> = self.sensors.iter().filter(|s| s.axis == *k).collect();
+            let mut temps = Vec::with_capacity(on_axis.len());
+            let mut variances = Vec::with_capacity(on_axis.len());
+            for s in &on_axis {
+                let (t, var) = reading(&s.name).ok_or_else(|| ThermalError::NoReading(s.name.clone(), AXIS_NAMES[*k]))?;
+                if !(t.is_finite() && var.is_finite()) {
+                    return Err(ThermalError::NotFinite { what: format!("reading of sensor '{}'", s.name) });
+                }
+                temps.push((s.name.as_str(), t));
+                variances.push(var);
+            }
+            let p = &term.params;
+            let s = thermal_signals(nominal, &temps, &[]);
+            let d = term.term.predict(p, &s)?.value;
+            let lever = term.term.jacobian(p, &s)?.column(0).into_owned();
+            let lever = Vector3::new(lever[0], lever[1], lever[2]);
+            // The term is linear in each temperature; with sensor i at T_ref + 1 K and the others
+            // at T_ref it returns ∂d/∂T_i (α·q·w_i along the axis).
+            let mut temperatures = Vec::with_capacity(on_axis.len());
+            for (i, (name, _)) in temps.iter().enumerate() {
+                let unit: Vec<(&str, f64)> = temps.iter().enumerate().map(|(j, (n, _))| (*n, self.reference_temperature + if i == j { 1.0 } else { 0.0 })).collect();
+                let v = term.term.predict(p, &thermal_signals(nominal, &unit, &[]))?.value;
+                temperatures.push(TemperatureSensitivity { input: name.to_string(), d_drift_d_temperature: Vector3::new(v[0], v[1], v[2]), variance: variances[i] });
+            }
+            out.push(TermDrift {
+                displacement: Vector3::new(d[0], d[1], d[2]),
+                temperatures,
+                parameter_covariance: lever * lever.transpose() * self.alpha_uncertainty.powi(2),
+            });
+        }
+        Ok(out)
+    }
+
     /// The compensated point and covariance for a point measured at `nominal` (the commanded
     /// axis coordinates, m) with `measured` and covariance `cov` (m²).
     pub fn compensate(
@@ -121,19 +186,8 @@ impl ThermalScaleCompensator {
         cov: &Matrix3<f64>,
         reading: &dyn Fn(&str) -> Option<Reading>,
     ) -> Result<(Vector3<f64>, Matrix3<f64>), ThermalError> {
-        let mut out = *measured;
-        let mut out_cov = *cov;
-        for k in 0..3 {
-            if !self.covers(k) {
-                continue;
-            }
-            let q = nominal[k];
-            let (t, var_t) = self.temperature_at(k, q, reading)?;
-            let dt = t - self.reference_temperature;
-            out[k] -= self.alpha * q * dt;
-            out_cov[(k, k)] += (self.alpha * q).powi(2) * var_t + (q * dt * self.alpha_uncertainty).powi(2);
-        }
-        Ok((out, out_cov))
+        let (d, d_cov) = total_drift(&self.drift(nominal, reading)?);
+        Ok((measured - d, cov + d_cov))
     }
 }
 

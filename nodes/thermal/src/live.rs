@@ -6,23 +6,24 @@ use metrocell_msgs::msg::{ErrorModel, MeasuredPoint};
 use metrocell_msgs::sensor_msgs::msg::Temperature;
 use metrocell_node::{qos, MetrocellNode, NodeError};
 
-use crate::parameters;
-use crate::thermal_state::ThermalState;
+use crate::thermal_state::FitEvent;
 
 pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
-    let compensator = parameters::compensator(node.parameters())?;
-    node.info(parameters::describe(&compensator));
-    let mut state = ThermalState::new(compensator, node.param::<f64>("publish_period")?, node.param::<f64>("stale_after")?);
+    let mut state = crate::start(node.parameters(), &|line| node.info(line))?;
 
     let temperature_subs = state
         .compensator
-        .sensors()
-        .iter()
-        .map(|s| Ok((s.name.clone(), node.subscription::<Temperature>(&format!("temperature/{}", s.name), qos::sensor_data())?)))
+        .sensor_names()
+        .into_iter()
+        .map(|name| {
+            let sub = node.subscription::<Temperature>(&format!("temperature/{name}"), qos::sensor_data())?;
+            Ok((name, sub))
+        })
         .collect::<Result<Vec<_>, NodeError>>()?;
     let points = node.subscription::<MeasuredPoint>("measured_points", qos::reliable())?;
     let compensated = node.publisher::<MeasuredPoint>("measured_points/thermal_compensated", qos::reliable())?;
     let model_pub = node.publisher::<ErrorModel>("thermal/error_model", qos::latched())?;
+    let drift_pub = node.publisher::<MeasuredPoint>("thermal/predicted_drift", qos::reliable())?;
 
     let diagnostics = node.diagnostics();
     let token = node.shutdown_token();
@@ -31,33 +32,45 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
             while let Ok(Some((t, _))) = sub.take() {
                 match state.temperature(name, &t, node.now().to_nanos()) {
                     Ok(()) => diagnostics.set_value(&format!("temperature/{name}"), format!("{:.3} °C", t.temperature)),
-                    Err(e) => {
-                        node.warn(e);
-                        diagnostics.add_count("rejected_readings", 1);
-                    }
+                    Err(e) => node.warn(e),
                 }
             }
         }
         while let Ok(Some((p, _))) = points.take() {
             match state.compensate(&p, node.now().to_nanos()) {
                 Ok(out) => {
-                    if compensated.publish(out).is_ok() {
-                        diagnostics.add_count("points_compensated", 1);
-                    }
+                    let _ = compensated.publish(out);
                 }
-                Err(e) => {
-                    diagnostics.warn(e.to_string());
-                    diagnostics.add_count("points_not_compensated", 1);
-                }
+                Err(e) => diagnostics.warn(e.to_string()),
+            }
+            match state.reference_measurement(&p) {
+                Some(FitEvent::Used(r)) => node.info(crate::describe_fit(&state, &r, true)),
+                Some(FitEvent::Fitted(r)) => node.info(crate::describe_fit(&state, &r, false)),
+                Some(FitEvent::NotYet(why)) => node.logger().debug(format!("online fit: {why}")),
+                None => {}
             }
         }
-        match state.model_if_due(node.now().to_nanos()) {
-            Some(Ok(model)) => {
-                let _ = model_pub.publish(model);
-                diagnostics.ok("compensating");
+        let now = node.now().to_nanos();
+        if let Some((model, drift)) = state.model_if_due(now) {
+            match model {
+                Ok(model) => {
+                    let _ = model_pub.publish(model);
+                    diagnostics.ok("compensating");
+                }
+                Err(e) => diagnostics.warn(e.to_string()),
             }
-            Some(Err(e)) => diagnostics.warn(e.to_string()),
-            None => {}
+            if let Ok(d) = drift {
+                diagnostics.set_value("predicted_drift_um", format!("[{:.2}, {:.2}, {:.2}]", (d.measured.x - d.nominal.x) * 1e6, (d.measured.y - d.nominal.y) * 1e6, (d.measured.z - d.nominal.z) * 1e6));
+                let _ = drift_pub.publish(d);
+            }
+            let c = &state.counters;
+            diagnostics.set_value("points_compensated", c.points_compensated);
+            diagnostics.set_value("points_not_compensated", c.not_compensated_total());
+            for (reason, n) in &c.points_not_compensated {
+                diagnostics.set_value(&format!("points_not_compensated/{reason}"), n);
+            }
+            diagnostics.set_value("rejected_readings", c.rejected_readings);
+            diagnostics.set_value("stale_sensors", state.stale_sensors(now).join(", "));
         }
         token.wait_timeout(Duration::from_millis(2));
     }

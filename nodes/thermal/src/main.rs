@@ -1,12 +1,22 @@
 //! `metrocell-thermal`: thermal drift correction.
 //!
-//! Subscribes `temperature/<sensor>` (sensor_msgs/Temperature) for every configured sensor and
+//! Subscribes `temperature/<sensor>` (sensor_msgs/Temperature) for every sensor a term reads and
 //! `measured_points` (metrocell_msgs/MeasuredPoint); publishes `measured_points/thermal_compensated`
-//! with the axis-scale growth α·q·(T(q) − T_ref) removed and the covariance enlarged, and a
-//! latched `thermal/error_model` (metrocell_msgs/ErrorModel) with each axis's current strain.
+//! with the drift of the configured catalog terms removed and the covariance enlarged:
+//! `thermal_scale` α·q·(T(q) − T_ref) per axis (T interpolated between that axis's sensors),
+//! `thermal_growth` n·g·(T_f − T_ref) with T_f a first-order lag τ behind its sensor, and
+//! `workpiece_expansion` α·(T − T_ref)·(p − clamp). Also a latched `thermal/error_model`
+//! (metrocell_msgs/ErrorModel: the parameters in use named `label.param` as the catalog names
+//! them, and each scale axis's current strain) and `thermal/predicted_drift` (MeasuredPoint: the
+//! drift point and where the terms predict it now). The strains are computed from configured
+//! coefficients, not estimated; only a growth term's g and τ can be fitted online, from
+//! repeated measurements of a reference point (`fit_reference_point`), and the node logs when the
+//! fitted values replace the configured ones.
 //!
 //!   metrocell-thermal --ros-args -p sensors:="[x_left, x_right]" -p sensor_axes:="[x, x]" \
-//!       -p sensor_positions:="[0.0, 0.8]" -p alpha:=11.5e-6
+//!       -p sensor_positions:="[0.0, 0.8]" -p alpha:=11.5e-6 \
+//!       -p growth_sensors:="[column]" -p growth_directions:="[0.0, 0.0, -1.0]" \
+//!       -p growth_coefficients:="[4e-6]" -p growth_time_constants:="[1200.0]"
 //!
 //! Offline replay (no DDS; inputs from the bag in log-time order, as fast as the CPU allows;
 //! outputs to OUT_BAG, or as JSON lines on stdout without `--output`):
@@ -14,11 +24,49 @@
 //!   metrocell-thermal --bag DEMO_BAG [--output OUT_BAG] --ros-args -p ...
 
 mod live;
+mod model_message;
 mod parameters;
 mod replay;
 mod thermal_state;
 
-use metrocell_node::{MetrocellNode, ReplayArgs};
+use metrocell_compensation::GrowthFitResult;
+use metrocell_node::{MetrocellNode, Parameters, ReplayArgs};
+use nalgebra::Vector3;
+
+use crate::thermal_state::{Settings, ThermalState};
+
+/// The state from the parameters, its configuration logged through `log` (live and replay alike).
+fn start(p: &Parameters, log: &dyn Fn(String)) -> Result<ThermalState, Box<dyn std::error::Error>> {
+    let (compensator, fit) = parameters::compensator(p)?;
+    for line in parameters::describe(&compensator, fit.as_ref()) {
+        log(line);
+    }
+    let limits = p.get::<Vec<f64>>("temperature_limits")?;
+    let d = p.get::<Vec<f64>>("drift_point")?;
+    let settings = Settings {
+        period_s: p.get::<f64>("publish_period")?,
+        stale_after_s: p.get::<f64>("stale_after")?,
+        calibration_uncertainty: p.get::<f64>("sensor_calibration_uncertainty")?,
+        limits: (limits[0], limits[1]),
+        drift_point: Vector3::new(d[0], d[1], d[2]),
+    };
+    Ok(ThermalState::new(compensator, fit, settings))
+}
+
+/// One log line on a fit of the reference point.
+fn describe_fit(state: &ThermalState, r: &GrowthFitResult, used: bool) -> String {
+    let label = state.fit.as_ref().map(|f| state.compensator.growth[f.growth_index].label()).unwrap_or_default();
+    format!(
+        "{label}: fitted g = {:.4} ± {:.4} µm/K, τ = {:.0} ± {:.0} s from {} reference measurements (rms {:.2} µm){}",
+        r.coefficient * 1e6,
+        r.covariance[(1, 1)].sqrt() * 1e6,
+        r.time_constant,
+        r.covariance[(2, 2)].sqrt(),
+        r.observations,
+        r.rms * 1e6,
+        if used { "; using the fitted values" } else if r.at_bound { "; τ at the end of its range, configured values kept" } else { "; configured values kept until enough measurements" }
+    )
+}
 
 fn main() -> std::process::ExitCode {
     match run() {

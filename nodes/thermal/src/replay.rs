@@ -8,22 +8,19 @@ use metrocell_msgs::msg::{ErrorModel, MeasuredPoint};
 use metrocell_msgs::sensor_msgs::msg::Temperature;
 use metrocell_node::{OfflineNode, ReplayArgs};
 
-use crate::parameters;
-use crate::thermal_state::ThermalState;
+use crate::thermal_state::FitEvent;
 
 pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::error::Error>> {
-    let compensator = parameters::compensator(node.parameters())?;
-    node.logger().info(parameters::describe(&compensator));
-    let mut state = ThermalState::new(compensator, node.param::<f64>("publish_period")?, node.param::<f64>("stale_after")?);
+    let mut state = crate::start(node.parameters(), &|line| node.logger().info(line))?;
 
     let mut source = BagSource::open(&args.bag)?;
     let mut sensor_of_topic = Vec::new();
-    for s in state.compensator.sensors() {
-        let topic = node.resolve_topic(&format!("temperature/{}", s.name))?;
+    for name in state.compensator.sensor_names() {
+        let topic = node.resolve_topic(&format!("temperature/{name}"))?;
         if !source.subscribe::<Temperature>(&topic)? {
             node.logger().warn(source.missing_topic_hint(&topic));
         }
-        sensor_of_topic.push((topic, s.name.clone()));
+        sensor_of_topic.push((topic, name));
     }
     let points_topic = node.resolve_topic("measured_points")?;
     if !source.subscribe::<MeasuredPoint>(&points_topic)? {
@@ -31,12 +28,14 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     }
     let compensated_topic = node.resolve_topic("measured_points/thermal_compensated")?;
     let model_topic = node.resolve_topic("thermal/error_model")?;
+    let drift_topic = node.resolve_topic("thermal/predicted_drift")?;
 
     let mut output = ReplayOutput::open(args.output.as_deref())?;
     output.advertise::<MeasuredPoint>(&compensated_topic)?;
     output.advertise::<ErrorModel>(&model_topic)?;
+    output.advertise::<MeasuredPoint>(&drift_topic)?;
 
-    let (mut inputs, mut compensated, mut not_compensated) = (0u64, 0u64, 0u64);
+    let (mut inputs, mut malformed) = (0u64, 0u64);
     // SIGINT/SIGTERM stop it between messages, and the output below is still finished
     let stopped = source.replay::<Box<dyn std::error::Error>>(|| node.interrupted(), |m| {
         inputs += 1;
@@ -47,19 +46,19 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
                 Ok(point) => point,
                 Err(e) => {
                     node.logger().warn(format!("skipped: {e}"));
-                    not_compensated += 1;
+                    malformed += 1;
                     return Ok(());
                 }
             };
             match state.compensate(&point, now) {
-                Ok(out) => {
-                    output.write(&compensated_topic, &out, m.log_time_ns)?;
-                    compensated += 1;
-                }
-                Err(e) => {
-                    node.logger().warn(format!("{} at log time {} ns: {e}", m.topic, m.log_time_ns));
-                    not_compensated += 1;
-                }
+                Ok(out) => output.write(&compensated_topic, &out, m.log_time_ns)?,
+                Err(e) => node.logger().warn(format!("{} at log time {} ns: {e}", m.topic, m.log_time_ns)),
+            }
+            match state.reference_measurement(&point) {
+                Some(FitEvent::Used(r)) => node.logger().info(crate::describe_fit(&state, &r, true)),
+                Some(FitEvent::Fitted(r)) => node.logger().info(crate::describe_fit(&state, &r, false)),
+                Some(FitEvent::NotYet(why)) => node.logger().debug(format!("online fit: {why}")),
+                None => {}
             }
         } else if let Some((_, sensor)) = sensor_of_topic.iter().find(|(t, _)| *t == m.topic) {
             match m.decode::<Temperature>() {
@@ -71,17 +70,22 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
                 Err(e) => node.logger().warn(format!("skipped: {e}")),
             }
         }
-        match state.model_if_due(now) {
-            Some(Ok(model)) => output.write(&model_topic, &model, m.log_time_ns)?,
-            Some(Err(e)) => node.logger().debug(format!("error model at {now} ns: {e}")),
-            None => {}
+        if let Some((model, drift)) = state.model_if_due(now) {
+            match model {
+                Ok(model) => output.write(&model_topic, &model, m.log_time_ns)?,
+                Err(e) => node.logger().debug(format!("error model at {now} ns: {e}")),
+            }
+            if let Ok(d) = drift {
+                output.write(&drift_topic, &d, m.log_time_ns)?;
+            }
         }
         Ok(())
     })?;
     output.finish()?;
     node.logger().info(format!(
-        "replayed {inputs} messages from {}: {compensated} points compensated, {not_compensated} not",
-        args.bag.display()
+        "replayed {inputs} messages from {}: {}, {malformed} malformed point messages skipped",
+        args.bag.display(),
+        state.counters.summary()
     ));
     Ok(node.finish_replay(stopped)?)
 }

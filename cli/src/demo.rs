@@ -2,7 +2,8 @@
 //!
 //! Starts `launch-configs/demo.launch.yaml` (the digital twin publishing live, the thermal
 //! compensation node, the recorder), watches the cell over DDS like a shift supervisor would —
-//! tracker points, beam breaks, the X-scale strain the thermal node estimates — stops everything
+//! tracker points, beam breaks, the X-scale strain the thermal node computes from its configured α
+//! (a handbook value, not an estimate) — stops everything
 //! when the simulated run is over, and summarises the recorded bag.
 
 use std::path::{Path, PathBuf};
@@ -108,7 +109,7 @@ fn demo(args: DemoArgs) -> anyhow::Result<i32> {
         watch.tracker_points,
         watch.beam_breaks,
         match watch.last_strain {
-            Some((e, var)) => format!(", X-scale strain {:+.2} ± {:.2} µm/m", e * 1e6, var.sqrt() * 1e6),
+            Some((e, var)) => format!(", X-scale strain (configured α) {:+.2} ± {:.2} µm/m", e * 1e6, var.sqrt() * 1e6),
             None => String::new(),
         }
     );
@@ -157,7 +158,7 @@ fn watch_cell(
             }
         }
         while let Ok(Some((m, _))) = model.take() {
-            if let Some(i) = m.parameter_names.iter().position(|p| p == "thermal_scale.x.strain") {
+            if let Some(i) = m.parameter_names.iter().position(|p| p == "thermal_scale[x].strain") {
                 let n = m.values.len();
                 w.last_strain = m.values.get(i).map(|&v| (v, m.covariance.get(i * n + i).copied().unwrap_or(f64::NAN)));
             }
@@ -165,7 +166,7 @@ fn watch_cell(
         if w.sim_time_s >= next_print {
             next_print += 30.0;
             println!(
-                "  t = {:>5.0} s   tracker points {:>5}   beam breaks {:>3}   X-scale strain {}",
+                "  t = {:>5.0} s   tracker points {:>5}   beam breaks {:>3}   X-scale strain (configured α) {}",
                 w.sim_time_s,
                 w.tracker_points,
                 w.beam_breaks,

@@ -1,10 +1,12 @@
 //! `refraction` — range error of a tracker whose weather station misreads the air on the beam.
 //!
-//! Δρ = ρ·( n(t + ΔT, p + Δp, h) / n(t, p, h) − 1 )      (thesis eq. 5.7 with one uniform section)
+//! Δρ = ρ·( n(t + ΔT, p + Δp, h + Δh) / n(t, p, h) − 1 )      (thesis eq. 5.7 with one uniform section)
 //!
 //! n is the shop-floor Edlén index ([`super::edlen::shop_floor_index`]); (t, p, h) are the
 //! station readings (signals), ΔT and Δp the mean offsets of the beam's air from them
-//! (parameters). Hotter air → lower n → the tracker reads short (Δρ < 0). Effect: range change, m.
+//! (parameters). Δh (%RH), option `path_humidity_offset` (default 0), is a known, fixed offset:
+//! at 8·10⁻⁹ per %RH it is never worth fitting. Hotter air → lower n → the tracker reads short
+//! (Δρ < 0). Effect: range change, m.
 
 use nalgebra::{DMatrix, DVector};
 
@@ -16,11 +18,18 @@ use crate::signals::{SignalKind, Signals};
 use crate::term::{check_len, EffectKind, ParamSpec, PhysicsTerm, Prediction};
 
 #[derive(Debug, Clone, Default)]
-pub struct Refraction;
+pub struct Refraction {
+    /// Δh, %RH: relative humidity on the beam minus the station reading.
+    pub path_humidity_offset: f64,
+}
 
 impl Refraction {
-    pub fn from_options(_o: &Options) -> Result<Self, PhysicsError> {
-        Ok(Self)
+    pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
+        let path_humidity_offset = o.quantity("path_humidity_offset", "1", Some(0.0))?;
+        if !(path_humidity_offset.abs() <= 100.0) {
+            return Err(o.bad("path_humidity_offset", format!("must be within ±100 %RH, got {path_humidity_offset}")));
+        }
+        Ok(Self { path_humidity_offset })
     }
 }
 
@@ -49,7 +58,7 @@ impl PhysicsTerm for Refraction {
         let (t, pa, h) = s.air(&self.label())?;
         // n_path/n_lt − 1 = (N_path − N_lt)/(1 + N_lt) with N = n − 1: no cancellation.
         let n_lt = shop_floor_refractivity(pa, t, h);
-        let n_path = shop_floor_refractivity(pa + p[1], t + p[0], h);
+        let n_path = shop_floor_refractivity(pa + p[1], t + p[0], h + self.path_humidity_offset);
         Ok(Prediction { kind: self.effect(), value: DVector::from_element(1, rho * (n_path - n_lt) / (1.0 + n_lt)) })
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
@@ -58,6 +67,7 @@ impl PhysicsTerm for Refraction {
         let (t, pa, h) = s.air(&self.label())?;
         let n_lt = shop_floor_index(pa, t, h);
         let (tp, pp) = (t + p[0], pa + p[1]);
-        Ok(DMatrix::from_row_slice(1, 2, &[rho * shop_floor_index_dt(pp, tp, h) / n_lt, rho * shop_floor_index_dp(pp, tp, h) / n_lt]))
+        let hp = h + self.path_humidity_offset;
+        Ok(DMatrix::from_row_slice(1, 2, &[rho * shop_floor_index_dt(pp, tp, hp) / n_lt, rho * shop_floor_index_dp(pp, tp, hp) / n_lt]))
     }
 }

@@ -1,8 +1,10 @@
-//! `tracker_pose` — 6-dof pose of a laser tracker (or any instrument) in the machine frame.
+//! `tracker_pose` — 6-dof pose of a laser tracker (or any instrument) in the frame tool points
+//! are reported in (the workpiece frame; an arm's cell frame — the convention is stated once, in
+//! crates/model `instrument_pose`).
 //!
 //! X_LT = R_LTᵀ·(p − T_LT),  R_LT = Rx(α)·Ry(β)·Rz(δ)   (thesis P5 eqs 2, 21–22; Euler XYZ)
 //!
-//! p is a machine-frame point (signal `point`), T_LT = (tx, ty, tz) the tracker origin and
+//! p is the tool point (signal `point`), T_LT = (tx, ty, tz) the tracker origin and
 //! (α, β, δ) the Euler angles. R_LT is orthonormal, so R_LT⁻¹ = R_LTᵀ. Effect: the point in the
 //! tracker frame, m.
 
@@ -60,9 +62,9 @@ impl PhysicsTerm for TrackerPose {
     fn params(&self) -> Vec<ParamSpec> {
         let pi = std::f64::consts::PI;
         vec![
-            ParamSpec::new("tx", "m", -30.0, 30.0, 0.0, "tracker origin x in the machine frame"),
-            ParamSpec::new("ty", "m", -30.0, 30.0, 0.0, "tracker origin y in the machine frame"),
-            ParamSpec::new("tz", "m", -30.0, 30.0, 0.0, "tracker origin z in the machine frame"),
+            ParamSpec::new("tx", "m", -30.0, 30.0, 0.0, "tracker origin x"),
+            ParamSpec::new("ty", "m", -30.0, 30.0, 0.0, "tracker origin y"),
+            ParamSpec::new("tz", "m", -30.0, 30.0, 0.0, "tracker origin z"),
             ParamSpec::new("alpha", "rad", -pi, pi, 0.0, "Euler angle about X (first)"),
             ParamSpec::new("beta", "rad", -pi, pi, 0.0, "Euler angle about Y (second)"),
             ParamSpec::new("delta", "rad", -pi, pi, 0.0, "Euler angle about Z (third)"),

@@ -14,7 +14,7 @@
 
 use std::time::Instant;
 
-use metrocell_model::{ForwardModel, MachineGeometry, MachineKinematics, TRACKER_ROWS};
+use metrocell_model::{ForwardModel, MachineGeometry, MachineKinematics, Workspace, TRACKER_ROWS};
 use metrocell_physics::model::TermModel;
 use metrocell_physics::{Frame, Signals, TermConfig};
 use nalgebra::{DMatrix, Vector3};
@@ -80,13 +80,14 @@ fn main() {
         })
         .collect();
     let mut jac = DMatrix::zeros(TRACKER_ROWS, model.param_count());
+    let mut ws = Workspace::new(&model);
     let mut work: Vec<Signals> = readings.iter().map(|(_, s)| s.clone()).collect();
 
-    let run_new = |work: &mut [Signals], jac: &mut DMatrix<f64>| {
+    let mut run_new = |work: &mut [Signals], jac: &mut DMatrix<f64>| {
         let start = Instant::now();
         let mut check = 0.0;
         for (((q, _), s), m) in readings.iter().zip(work.iter_mut()).zip(&measured) {
-            let y = model.tracker_jacobian(&p, &kin, q, s, jac).expect("tracker Jacobian");
+            let y = model.tracker_jacobian(&p, &kin, q, s, &mut ws, jac).expect("tracker Jacobian");
             let yp = y.measured_point();
             let r = [m[0] - yp.x, m[1] - yp.y, m[2] - yp.z, m[3] - y.measured_range()];
             check += r.iter().map(|v| v * v).sum::<f64>() + jac[(0, 0)];

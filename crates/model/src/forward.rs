@@ -325,6 +325,13 @@ impl<'a> ForwardModel<'a> {
     /// its `point` is set here. Forward kinematics runs once per call.
     pub fn tool_state(&self, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, cache: Option<&mut DisplacementCache>) -> Result<ToolState, PhysicsError> {
         self.check(p)?;
+        let mut cache = cache;
+        self.tool_state_with(kin, q, |point, rotation| self.displacement(p, s, point, rotation, cache.as_deref_mut()))
+    }
+
+    /// The family's tool state, with the terms' displacement sum `displacement(nominal point of
+    /// the frame the terms act in, tool rotation)`.
+    fn tool_state_with(&self, kin: &KinematicTruth, q: &[f64], mut displacement: impl FnMut(Vector3<f64>, &Matrix3<f64>) -> Result<Vector3<f64>, PhysicsError>) -> Result<ToolState, PhysicsError> {
         let identity = Matrix3::identity();
         Ok(match &self.machine.kinematics {
             MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => {
@@ -339,14 +346,14 @@ impl<'a> ForwardModel<'a> {
                     }
                     _ => Vector3::zeros(),
                 };
-                let d = kinematic + self.displacement(p, s, n, &identity, cache)?;
+                let d = kinematic + displacement(n, &identity)?;
                 ToolState { nominal: Isometry3::translation(n.x, n.y, n.z), truth: Isometry3::translation(n.x + d.x, n.y + d.y, n.z + d.z), d }
             }
             MachineKinematics::FiveAxis(f) => {
                 // the spindle does not turn: the tool frame is the machine frame seen from the
                 // workpiece, which turns with the table
                 let tip = f.tip_machine(q);
-                let d = self.displacement(p, s, tip, &identity, cache)?;
+                let d = displacement(tip, &identity)?;
                 let workpiece_from_machine = f.geometry.machine_from_workpiece(q[3], q[4]).inverse();
                 ToolState { nominal: workpiece_from_machine * Isometry3::translation(tip.x, tip.y, tip.z), truth: workpiece_from_machine * Isometry3::translation(tip.x + d.x, tip.y + d.y, tip.z + d.z), d }
             }
@@ -358,46 +365,56 @@ impl<'a> ForwardModel<'a> {
                 };
                 let n = nominal.translation.vector;
                 let tool_rotation = true_pose.rotation.to_rotation_matrix().into_inner();
-                let d = true_pose.translation.vector - n + self.displacement(p, s, n, &tool_rotation, cache)?;
+                let d = true_pose.translation.vector - n + displacement(n, &tool_rotation)?;
                 ToolState { nominal, truth: Isometry3::from_parts((n + d).into(), true_pose.rotation), d }
             }
         })
     }
 
     /// The true tool point and its Jacobian w.r.t. the stacked parameters, written into `out`
-    /// (3 × [`Self::param_count`]; columns of instrument terms are left zero).
+    /// (3 × [`Self::param_count`]; columns of instrument terms are left zero). The point is the
+    /// one [`Self::tool_state`] gives, bit for bit.
     pub fn tool_point_jacobian(&self, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, out: &mut DMatrix<f64>) -> Result<Vector3<f64>, PhysicsError> {
         self.check(p)?;
         if out.nrows() != 3 || out.ncols() != self.n_params {
             return Err(PhysicsError::InvalidInput { what: "forward model, tool-point Jacobian buffer".into(), reason: format!("must be 3 × {}, is {} × {}", self.n_params, out.nrows(), out.ncols()) });
         }
         out.fill(0.0);
-        let tool = self.tool_state(p, kin, q, s, None)?;
-        // s.point is now the nominal point the displacement terms were evaluated at.
-        let (map, tool_rotation) = match (&self.machine.kinematics, kin) {
-            (MachineKinematics::FiveAxis(f), _) => (f.geometry.machine_from_workpiece(q[3], q[4]).inverse().rotation.to_rotation_matrix().into_inner(), Matrix3::identity()),
-            (MachineKinematics::SerialArm(_), KinematicTruth::Arm { chain, .. }) => {
-                (Matrix3::identity(), chain.tool_pose(q).map_err(|e| kin_error("true arm forward kinematics", q, e))?.rotation.to_rotation_matrix().into_inner())
-            }
-            _ => (Matrix3::identity(), Matrix3::identity()),
-        };
-        // tool-frame displacement before turning (an arm's joint offsets turn it)
+        // tool-frame displacement before turning (an arm's joint offsets turn it), and the
+        // tool rotation the terms were turned by
         let mut tool_frame_sum = Vector3::zeros();
-        for (i, t) in self.machine_terms.terms.iter().enumerate() {
-            let slot = self.slots[i];
-            match t.term.effect() {
-                EffectKind::Kinematic => {}
-                effect => {
-                    let j = t.term.jacobian(self.part(i, p), s)?;
-                    let rot = if effect == EffectKind::Displacement(Frame::Tool) {
-                        tool_frame_sum += v3(&t.term.predict(self.part(i, p), s)?.value);
-                        map * tool_rotation
-                    } else {
-                        map
-                    };
-                    let mut view = out.view_mut((0, slot.start), (3, slot.len));
-                    view.copy_from(&(rot * j));
+        let mut tool_rotation = Matrix3::identity();
+        let tool = self.tool_state_with(kin, q, |point, rotation| {
+            tool_rotation = *rotation;
+            s.point = Some(point);
+            let mut d = Vector3::zeros();
+            let mut v = [0.0; 3];
+            for (i, t) in self.machine_terms.terms.iter().enumerate() {
+                let effect = t.term.effect();
+                if effect == EffectKind::Kinematic {
+                    continue;
                 }
+                let slot = self.slots[i];
+                t.term.evaluate_into(self.part(i, p), s, &mut v, out.view_mut((0, slot.start), (3, slot.len)))?;
+                let mut value = Vector3::new(v[0], v[1], v[2]);
+                if effect == EffectKind::Displacement(Frame::Tool) {
+                    tool_frame_sum += value;
+                    value = rotation * value;
+                    for c in slot.start..slot.start + slot.len {
+                        let turned = rotation * out.fixed_view::<3, 1>(0, c);
+                        out.fixed_view_mut::<3, 1>(0, c).copy_from(&turned);
+                    }
+                }
+                d += value;
+            }
+            Ok(d)
+        })?;
+        if let MachineKinematics::FiveAxis(f) = &self.machine.kinematics {
+            // the terms act in the machine frame; the tool point is in the workpiece frame
+            let r = f.geometry.machine_from_workpiece(q[3], q[4]).inverse().rotation.to_rotation_matrix().into_inner();
+            for c in 0..self.n_params {
+                let turned = r * out.fixed_view::<3, 1>(0, c);
+                out.fixed_view_mut::<3, 1>(0, c).copy_from(&turned);
             }
         }
         match kin {
@@ -417,7 +434,7 @@ impl<'a> ForwardModel<'a> {
                     };
                     let start = self.slots[i].start;
                     for k in 0..3 {
-                        out.view_mut((0, start + k), (3, 1)).copy_from(&fpj.fixed_view::<3, 1>(0, base + k));
+                        out.fixed_view_mut::<3, 1>(0, start + k).copy_from(&fpj.fixed_view::<3, 1>(0, base + k));
                     }
                 }
             }
@@ -433,27 +450,29 @@ impl<'a> ForwardModel<'a> {
                                 let lin = geometric.fixed_view::<3, 1>(0, k).into_owned();
                                 let ang = geometric.fixed_view::<3, 1>(3, k).into_owned();
                                 // the offset turns the tool, and the tool-frame terms with it
-                                out.view_mut((0, start + k), (3, 1)).copy_from(&(lin + ang.cross(&turned)));
+                                out.fixed_view_mut::<3, 1>(0, start + k).copy_from(&(lin + ang.cross(&turned)));
                             }
                         }
                         TermId::LinkLength => match dh {
                             Some(table) => {
+                                // a DH `a` translates everything after it along the row's x axis
                                 let qo: Vec<f64> = q.iter().zip(joint_offsets).map(|(a, b)| a + b).collect();
                                 let pj = table.parameter_jacobian(&qo).map_err(|e| kin_error("DH parameter Jacobian", q, e))?;
                                 let base_rotation = chain.base.rotation.to_rotation_matrix().into_inner();
                                 for k in 0..table.rows.len() {
                                     let col = base_rotation * pj.fixed_view::<3, 1>(0, 4 * k + 2);
-                                    out.view_mut((0, start + k), (3, 1)).copy_from(&col);
+                                    out.fixed_view_mut::<3, 1>(0, start + k).copy_from(&col);
                                 }
                             }
                             None => {
+                                // a URDF length stretches the joint's <origin xyz> along itself
                                 let oj = chain.origin_translation_jacobian(q).map_err(|e| kin_error("URDF origin Jacobian", q, e))?;
                                 for (k, joint) in arm.chain.joints.iter().enumerate() {
                                     let v = joint.pre.translation.vector;
                                     let n = v.norm();
                                     if n > 0.0 {
                                         let col = oj.fixed_view::<3, 3>(0, 3 * k) * (v / n);
-                                        out.view_mut((0, start + k), (3, 1)).copy_from(&col);
+                                        out.fixed_view_mut::<3, 1>(0, start + k).copy_from(&col);
                                     }
                                 }
                             }
@@ -467,12 +486,16 @@ impl<'a> ForwardModel<'a> {
         Ok(tool.truth.translation.vector)
     }
 
+    fn tracker_pose_slot(&self) -> Result<usize, PhysicsError> {
+        self.tracker_pose.ok_or_else(|| PhysicsError::InvalidInput { what: "forward model".into(), reason: "a tracker reading needs a `tracker_pose` instrument term".into() })
+    }
+
     /// The tracker's reading of the true tool point `tool_point`. `s` carries
     /// `time_since_power_on` (warm-up) and the station's air (refraction); its `point` and
     /// `tracker_range` are set here.
     pub fn tracker(&self, p: &[f64], tool_point: Vector3<f64>, s: &mut Signals) -> Result<TrackerPrediction, PhysicsError> {
         self.check(p)?;
-        let pose = self.tracker_pose.ok_or_else(|| PhysicsError::InvalidInput { what: "forward model".into(), reason: "a tracker reading needs a `tracker_pose` instrument term".into() })?;
+        let pose = self.tracker_pose_slot()?;
         s.point = Some(tool_point);
         let x = v3(&self.term(pose).term.predict(self.part(pose, p), s)?.value);
         let (rho, az, el) = to_spherical(&x);
@@ -490,40 +513,81 @@ impl<'a> ForwardModel<'a> {
 
     /// The tracker reading at joint vector `q` and its Jacobian w.r.t. the stacked parameters,
     /// written into `out` ([`TRACKER_ROWS`] × [`Self::param_count`]: the reported point x, y, z
-    /// in the tracker frame, then the measured range).
-    pub fn tracker_jacobian(&self, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, out: &mut DMatrix<f64>) -> Result<TrackerPrediction, PhysicsError> {
-        if out.nrows() != TRACKER_ROWS || out.ncols() != self.n_params {
-            return Err(PhysicsError::InvalidInput { what: "forward model, tracker Jacobian buffer".into(), reason: format!("must be {TRACKER_ROWS} × {}, is {} × {}", self.n_params, out.nrows(), out.ncols()) });
+    /// in the tracker frame, then the measured range). The prediction is [`Self::tracker`]'s
+    /// bit for bit. No allocation on cartesian and five-axis machines with the catalog's hot
+    /// terms (see `PhysicsTerm::evaluate_into`); `work` holds the intermediate Jacobians.
+    pub fn tracker_jacobian(&self, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, work: &mut Workspace, out: &mut DMatrix<f64>) -> Result<TrackerPrediction, PhysicsError> {
+        let n = self.n_params;
+        if out.nrows() != TRACKER_ROWS || out.ncols() != n || work.tool.ncols() != n {
+            return Err(PhysicsError::InvalidInput { what: "forward model, tracker Jacobian buffers".into(), reason: format!("must be {TRACKER_ROWS} × {n} (workspace: Workspace::new of this model), are {} × {} and 3 × {}", out.nrows(), out.ncols(), work.tool.ncols()) });
         }
-        let mut jp = DMatrix::zeros(3, self.n_params);
-        let tool_point = self.tool_point_jacobian(p, kin, q, s, &mut jp)?;
-        let pred = self.tracker(p, tool_point, s)?;
-        let rho = pred.range;
+        let pose = self.tracker_pose_slot()?;
+        let tool_point = self.tool_point_jacobian(p, kin, q, s, &mut work.tool)?;
+        // x = Rᵀ(P − T) and ∂x/∂pose
+        s.point = Some(tool_point);
+        let mut xv = [0.0; 3];
+        let ps = self.slots[pose];
+        self.term(pose).term.evaluate_into(self.part(pose, p), s, &mut xv, work.pose.columns_mut(0, ps.len))?;
+        let x = Vector3::new(xv[0], xv[1], xv[2]);
+        let (rho, az, el) = to_spherical(&x);
         if !(rho > 0.0) {
             return Err(PhysicsError::InvalidInput { what: "forward model, tracker reading".into(), reason: "the target is at the tracker origin (range 0): no direction".into() });
         }
-        let pose = self.tracker_pose.expect("checked by tracker()");
-        let jpose = self.term(pose).term.jacobian(self.part(pose, p), s)?;
-        // ∂x/∂P = Rᵀ = −(∂x/∂T)
-        let rt: Matrix3<f64> = -jpose.fixed_view::<3, 3>(0, 0).into_owned();
-        let mut jx = rt * jp;
-        jx.view_mut((0, self.slots[pose].start), (3, 6)).copy_from(&jpose);
-        let u = pred.point / rho;
-        // Δρ_refraction is proportional to ρ
-        let drange_dx = u.transpose() * (1.0 + pred.refraction / rho);
-        let mut jr = drange_dx * &jx;
-        for i in [self.warmup, self.refraction].into_iter().flatten() {
-            let j = self.term(i).term.jacobian(self.part(i, p), s)?;
-            let st = self.slots[i].start;
-            for k in 0..self.slots[i].len {
-                jr[(0, st + k)] += j[(0, k)];
+        s.tracker_range = Some(rho);
+        // ∂x/∂P = Rᵀ = −∂x/∂T
+        let rt: Matrix3<f64> = -work.pose.fixed_view::<3, 3>(0, 0).into_owned();
+        work.point.gemm(1.0, &rt, &work.tool, 0.0);
+        work.point.columns_mut(ps.start, ps.len).copy_from(&work.pose.columns(0, ps.len));
+        let mut range_changes = [0.0; 2];
+        for (k, i) in [self.warmup, self.refraction].into_iter().enumerate() {
+            if let Some(i) = i {
+                let sl = self.slots[i];
+                let mut v = [0.0; 1];
+                self.term(i).term.evaluate_into(self.part(i, p), s, &mut v, work.range_terms.view_mut((k, 0), (1, sl.len)))?;
+                range_changes[k] = v[0];
             }
         }
+        let pred = TrackerPrediction { point: x, range: rho, azimuth: az, elevation: el, warmup: range_changes[0], refraction: range_changes[1] };
+        let u = x / rho;
+        // Δρ_refraction is proportional to ρ: ∂ρ_m/∂x = (1 + Δρ_refraction/ρ)·uᵀ
+        let g = 1.0 + pred.refraction / rho;
         let measured = pred.measured_range();
-        let radial = (Matrix3::identity() - u * u.transpose()) * (measured / rho);
-        let jy = radial * jx + u * &jr;
-        out.view_mut((0, 0), (3, self.n_params)).copy_from(&jy);
-        out.view_mut((3, 0), (1, self.n_params)).copy_from(&jr);
+        let f = measured / rho;
+        for c in 0..n {
+            let dx = work.point.fixed_view::<3, 1>(0, c).into_owned();
+            out[(3, c)] = g * u.dot(&dx);
+        }
+        for (row, i) in [self.warmup, self.refraction].into_iter().enumerate() {
+            if let Some(i) = i {
+                let sl = self.slots[i];
+                for k in 0..sl.len {
+                    out[(3, sl.start + k)] += work.range_terms[(row, k)];
+                }
+            }
+        }
+        // reported point y = ρ_m·u: ∂y = (ρ_m/ρ)(I − u uᵀ)∂x + u ∂ρ_m
+        for c in 0..n {
+            let dx = work.point.fixed_view::<3, 1>(0, c).into_owned();
+            let dy = (dx - u * u.dot(&dx)) * f + u * out[(3, c)];
+            out.fixed_view_mut::<3, 1>(0, c).copy_from(&dy);
+        }
         Ok(pred)
+    }
+}
+
+/// Scratch Jacobians of [`ForwardModel::tracker_jacobian`], allocated once per model.
+#[derive(Debug, Clone)]
+pub struct Workspace {
+    tool: DMatrix<f64>,
+    point: DMatrix<f64>,
+    pose: DMatrix<f64>,
+    /// ∂Δρ/∂(own parameters): row 0 warm-up, row 1 refraction.
+    range_terms: DMatrix<f64>,
+}
+
+impl Workspace {
+    pub fn new(model: &ForwardModel) -> Self {
+        let n = model.param_count();
+        Self { tool: DMatrix::zeros(3, n), point: DMatrix::zeros(3, n), pose: DMatrix::zeros(3, 6), range_terms: DMatrix::zeros(2, 3) }
     }
 }

@@ -19,6 +19,6 @@ pub mod forward;
 pub mod instrument_pose;
 pub mod machine;
 
-pub use forward::{DisplacementCache, ForwardModel, KinematicTruth, ToolState, TrackerPrediction, TRACKER_ROWS};
+pub use forward::{DisplacementCache, ForwardModel, KinematicTruth, ToolState, TrackerPrediction, Workspace, TRACKER_ROWS};
 pub use instrument_pose::InstrumentPose;
 pub use machine::{FiveAxisMachine, MachineGeometry, MachineKinematics, SerialArm, FIVE_AXIS_JOINTS};

@@ -174,7 +174,8 @@ fn analytic_jacobians_match_central_differences() {
         for (s, tt) in readings.iter().step_by(37) {
             let sig = reading_signals(&sim, s);
             let mut j = DMatrix::zeros(metrocell_model::TRACKER_ROWS, model.param_count());
-            let pred = model.tracker_jacobian(&p, &kin, &tt.joints, &mut sig.clone(), &mut j).unwrap();
+            let mut work = metrocell_model::Workspace::new(&model);
+            let pred = model.tracker_jacobian(&p, &kin, &tt.joints, &mut sig.clone(), &mut work, &mut j).unwrap();
             let y = reading(&sim, &p, &tt.joints, &sig);
             assert_eq!(y[3], pred.measured_range(), "{name}: the Jacobian's prediction is the model's");
             // a column below 1e-9 of the largest entry is zero up to rounding (e.g. the arm's

@@ -8,14 +8,24 @@
 //! at 8·10⁻⁹ per %RH it is never worth fitting. Hotter air → lower n → the tracker reads short
 //! (Δρ < 0). Effect: range change, m.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DMatrixViewMut, DVector};
 
 use super::edlen::{shop_floor_index, shop_floor_index_dp, shop_floor_index_dt, shop_floor_refractivity};
 use crate::catalog::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
-use crate::term::{check_len, EffectKind, ParamSpec, PhysicsTerm, Prediction};
+use crate::term::{check_len, check_len_with, EffectKind, ParamSpec, PhysicsTerm, Prediction};
+
+/// Range change and its derivatives w.r.t. (ΔT, Δp) at range ρ and station air (t, p, h).
+fn range_change(rho: f64, t: f64, pa: f64, h: f64, dh: f64, p: &[f64]) -> (f64, [f64; 2]) {
+    // n_path/n_lt − 1 = (N_path − N_lt)/(1 + N_lt) with N = n − 1: no cancellation.
+    let n_lt = shop_floor_refractivity(pa, t, h);
+    let n_path = shop_floor_refractivity(pa + p[1], t + p[0], h + dh);
+    let n_lt_index = shop_floor_index(pa, t, h);
+    let (tp, pp, hp) = (t + p[0], pa + p[1], h + dh);
+    (rho * (n_path - n_lt) / (1.0 + n_lt), [rho * shop_floor_index_dt(pp, tp, hp) / n_lt_index, rho * shop_floor_index_dp(pp, tp, hp) / n_lt_index])
+}
 
 #[derive(Debug, Clone, Default)]
 pub struct Refraction {
@@ -56,18 +66,27 @@ impl PhysicsTerm for Refraction {
         check_len(&self.label(), p, 2)?;
         let rho = s.range(&self.label())?;
         let (t, pa, h) = s.air(&self.label())?;
-        // n_path/n_lt − 1 = (N_path − N_lt)/(1 + N_lt) with N = n − 1: no cancellation.
-        let n_lt = shop_floor_refractivity(pa, t, h);
-        let n_path = shop_floor_refractivity(pa + p[1], t + p[0], h + self.path_humidity_offset);
-        Ok(Prediction { kind: self.effect(), value: DVector::from_element(1, rho * (n_path - n_lt) / (1.0 + n_lt)) })
+        Ok(Prediction { kind: self.effect(), value: DVector::from_element(1, range_change(rho, t, pa, h, self.path_humidity_offset, p).0) })
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         check_len(&self.label(), p, 2)?;
         let rho = s.range(&self.label())?;
         let (t, pa, h) = s.air(&self.label())?;
-        let n_lt = shop_floor_index(pa, t, h);
-        let (tp, pp) = (t + p[0], pa + p[1]);
-        let hp = h + self.path_humidity_offset;
-        Ok(DMatrix::from_row_slice(1, 2, &[rho * shop_floor_index_dt(pp, tp, hp) / n_lt, rho * shop_floor_index_dp(pp, tp, hp) / n_lt]))
+        Ok(DMatrix::from_row_slice(1, 2, &range_change(rho, t, pa, h, self.path_humidity_offset, p).1))
+    }
+    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
+        check_len_with(|| self.label(), p, 2)?;
+        let (rho, t, pa, h) = match (s.tracker_range, s.air_temperature, s.air_pressure, s.air_humidity) {
+            (Some(rho), Some(t), Some(pa), Some(h)) => (rho, t, pa, h),
+            _ => {
+                let (t, pa, h) = s.air(&self.label())?;
+                (s.range(&self.label())?, t, pa, h)
+            }
+        };
+        let (v, j) = range_change(rho, t, pa, h, self.path_humidity_offset, p);
+        value[0] = v;
+        jac[(0, 0)] = j[0];
+        jac[(0, 1)] = j[1];
+        Ok(())
     }
 }

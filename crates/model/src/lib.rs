@@ -9,6 +9,8 @@
 //! * [`instrument_pose`] — the one instrument pose type and its frame convention.
 //! * [`forward`] — [`ForwardModel`]: tool state, predicted tracker reading and its analytic
 //!   Jacobian w.r.t. the stacked parameter vector.
+//! * [`parameters`] — free/fixed mask and priors per parameter ([`ParameterSetup`]), and the
+//!   pairs of parameters parallel by construction ([`ForwardModel::parallel_pairs`]).
 //!
 //! Units SI (m, rad, s, Pa), temperatures °C, as in crates/physics.
 
@@ -18,7 +20,9 @@
 pub mod forward;
 pub mod instrument_pose;
 pub mod machine;
+pub mod parameters;
 
 pub use forward::{DisplacementCache, ForwardModel, KinematicTruth, ToolState, TrackerPrediction, Workspace, TRACKER_ROWS};
 pub use instrument_pose::InstrumentPose;
+pub use parameters::{ParallelPair, ParameterSetup, Prior};
 pub use machine::{FiveAxisMachine, MachineGeometry, MachineKinematics, SerialArm, FIVE_AXIS_JOINTS};

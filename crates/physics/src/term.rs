@@ -8,7 +8,7 @@
 
 use nalgebra::{DMatrix, DMatrixViewMut, DVector};
 
-use crate::catalog::TermId;
+use crate::term_id::TermId;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
 
@@ -88,8 +88,26 @@ pub struct Prediction {
     pub value: DVector<f64>,
 }
 
+/// Cloning a boxed term, so a configured model can be copied (an estimator's declared model
+/// plus a `diagnose` candidate, a model per thread).
+pub trait TermClone {
+    fn clone_box(&self) -> Box<dyn PhysicsTerm>;
+}
+
+impl<T: PhysicsTerm + Clone + 'static> TermClone for T {
+    fn clone_box(&self) -> Box<dyn PhysicsTerm> {
+        Box::new(self.clone())
+    }
+}
+
+impl Clone for Box<dyn PhysicsTerm> {
+    fn clone(&self) -> Self {
+        self.clone_box()
+    }
+}
+
 /// One named piece of physics (see the crate docs for the catalog).
-pub trait PhysicsTerm: std::fmt::Debug + Send + Sync {
+pub trait PhysicsTerm: TermClone + std::fmt::Debug + Send + Sync {
     /// Stable catalog id (DESIGN.md vocabulary).
     fn id(&self) -> TermId;
     /// Instance label, e.g. `angular[x:z]`; unique within one model.

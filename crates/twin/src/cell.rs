@@ -138,6 +138,8 @@ pub struct Cell {
     pub terms: TermModel,
     /// The term configs as written (for reports and for deriving nominal models).
     pub term_configs: Vec<TermConfig>,
+    /// The file's `estimation` settings (free parameters, priors), checked against the terms.
+    pub estimation: BTreeMap<String, metrocell_physics::EstimationConfig>,
 }
 
 impl Cell {
@@ -221,6 +223,11 @@ impl Cell {
             program,
             terms,
             term_configs: f.terms.clone(),
+            estimation: f.estimation.clone(),
+        })
+        .and_then(|cell: Cell| {
+            cell.parameter_setup()?;
+            Ok(cell)
         })
     }
 }
@@ -254,6 +261,14 @@ impl Cell {
             KinematicTruth::Arm { chain, .. } => Some(chain),
             _ => None,
         }
+    }
+
+    /// The free parameters and priors of the `estimation` section over the forward model of the
+    /// machine terms and the tracker's terms (stacked in that order).
+    pub fn parameter_setup(&self) -> Result<metrocell_model::ParameterSetup, CellError> {
+        let instruments = self.tracker_terms()?;
+        let model = self.forward_model(&instruments).map_err(|e| CellError::term("terms", e))?;
+        metrocell_model::ParameterSetup::new(&model, &self.estimation).map_err(|e| CellError::term("estimation", e))
     }
 
     /// The tracker's instrument effects as catalog terms with their true parameters: the

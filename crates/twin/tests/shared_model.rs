@@ -214,3 +214,59 @@ fn analytic_jacobians_match_central_differences() {
         }
     }
 }
+
+/// The `estimation` section: free parameters and priors per term label, checked against the
+/// terms with errors naming the key.
+#[test]
+fn estimation_section_gives_the_free_mask_and_priors() {
+    let add = "\nestimation:\n  \"positioning[y]\": {free: [c1, c2], priors: {c0: {value: 0 um, sigma: 5 um}}}\n  tracker_pose: {free: [tx, ty, tz]}\n";
+    let text = std::fs::read_to_string(common::cell_path("xfyz_shift.yaml")).unwrap() + add;
+    let cell = Cell::from_yaml_str(&text, "estimation.yaml").unwrap();
+    let setup = cell.parameter_setup().unwrap();
+    let at = |n: &str| setup.names.iter().position(|x| x == n).unwrap_or_else(|| panic!("{n} not in {:?}", setup.names));
+    assert!(!setup.free[at("positioning[y].c0")] && setup.free[at("positioning[y].c1")] && setup.free[at("positioning[y].c2")]);
+    assert!(setup.free[at("tracker_pose.tz")] && !setup.free[at("tracker_pose.alpha")]);
+    assert!(setup.free[at("squareness[xy].s")], "terms without settings stay free");
+    assert_eq!(setup.priors[at("positioning[y].c0")], Some(metrocell_model::Prior { value: 0.0, sigma: 5e-6 }));
+    assert_eq!(setup.priors.iter().filter(|p| p.is_some()).count(), 1);
+    // fixed: positioning[y].c0 and tracker_pose's three angles
+    assert_eq!(setup.free.iter().filter(|f| !**f).count(), 4);
+
+    for (bad, needles) in [
+        ("\nestimation:\n  \"positioning[q]\": {free: [c0]}\n", vec!["estimation.positioning[q]", "positioning[y]", "tracker_pose"]),
+        ("\nestimation:\n  \"positioning[y]\": {free: [c7]}\n", vec!["estimation.positioning[y].free", "c7", "allowed: c0, c1, c2"]),
+        ("\nestimation:\n  \"positioning[y]\": {priors: {c0: {value: 0 um, sigma: 0 um}}}\n", vec!["estimation.positioning[y].priors.c0", "σ > 0"]),
+        ("\nestimation:\n  tracker_pose: {priors: {tx: {value: 3 K, sigma: 1 mm}}}\n", vec!["estimation.tracker_pose.priors.tx.value", "`K`"]),
+    ] {
+        let text = std::fs::read_to_string(common::cell_path("xfyz_shift.yaml")).unwrap() + bad;
+        let msg = common::error_of(&text);
+        common::assert_mentions(&msg, &needles);
+    }
+}
+
+/// The declared parallel pairs really are parallel: their Jacobian columns are equal up to the
+/// declared sign at every reading (and the cells declare the ones expected).
+#[test]
+fn declared_parallel_pairs_have_parallel_jacobian_columns() {
+    let text = common::edited_example("xfyz_shift.yaml", "  - id: squareness\n", "  - {id: tool_offset, params: {dx: 0.1 mm, dy: 0 mm, dz: -0.2 mm}}\n  - id: squareness\n");
+    let cells = [("xfyz + tool_offset", Cell::from_yaml_str(&text, "xfyz_tool.yaml").unwrap(), 5), ("xfyz_shift", common::validate(&common::example_file("xfyz_shift.yaml")), 1), ("five_axis_table", common::validate(&common::example_file("five_axis_table.yaml")), 0)];
+    for (name, cell, expected) in cells {
+        let sim = Simulation::new(cell, 6.0, 2).unwrap();
+        let model = sim.forward_model();
+        let names = model.param_names();
+        let pairs = model.parallel_pairs();
+        assert_eq!(pairs.len(), expected, "{name}: {:?}", pairs.iter().map(|p| (&names[p.a], &names[p.b])).collect::<Vec<_>>());
+        let p = model.params();
+        let kin = model.kinematic_truth(&p).unwrap();
+        let mut work = metrocell_model::Workspace::new(&model);
+        let mut j = DMatrix::zeros(metrocell_model::TRACKER_ROWS, model.param_count());
+        for (s, tt) in tracker_readings(&sim).iter().step_by(13) {
+            model.tracker_jacobian(&p, &kin, &tt.joints, &mut reading_signals(&sim, s), &mut work, &mut j).unwrap();
+            for pair in &pairs {
+                let (a, b) = (j.column(pair.a), j.column(pair.b));
+                assert!((a - b * pair.sign).amax() <= 1e-9 * a.amax(), "{name}: {} vs {}: {a} vs {b}", names[pair.a], names[pair.b]);
+                assert!(a.amax() > 0.1, "{name}: {} moves the reading", names[pair.a]);
+            }
+        }
+    }
+}

@@ -16,7 +16,7 @@ use nalgebra::{DMatrix, DMatrixViewMut, Vector3};
 
 use super::error_series::ErrorSeries;
 use super::positioning::series_params;
-use crate::catalog::TermId;
+use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{Axis, SignalKind, Signals};

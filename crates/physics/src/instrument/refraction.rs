@@ -11,7 +11,7 @@
 use nalgebra::{DMatrix, DMatrixViewMut, DVector};
 
 use super::edlen::{shop_floor_index, shop_floor_index_dp, shop_floor_index_dt, shop_floor_refractivity};
-use crate::catalog::TermId;
+use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};

@@ -31,6 +31,17 @@ pub(crate) fn series_params(series: &ErrorSeries, unit: &'static str, bound: f64
     (0..series.len()).map(|i| ParamSpec::new(format!("c{i}"), unit, -bound, bound, 0.0, format!("{what}: coefficient of basis function {i} ({:?})", series.basis))).collect()
 }
 
+/// Value and Jacobian of a series error along `direction` (d = e_dir·δ(q)), into buffers; the
+/// value's arithmetic is `predict`'s.
+pub(crate) fn series_along_into(series: &ErrorSeries, direction: Axis, p: &[f64], q: f64, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) {
+    let v = direction.unit() * series.eval(p, q);
+    value[..3].copy_from_slice(v.as_slice());
+    jac.fill(0.0);
+    for (i, b) in series.basis_array(q)[..p.len()].iter().enumerate() {
+        jac[(direction.index(), i)] = *b;
+    }
+}
+
 impl PhysicsTerm for Positioning {
     fn id(&self) -> TermId {
         TermId::Positioning
@@ -61,16 +72,10 @@ impl PhysicsTerm for Positioning {
         }
         Ok(j)
     }
-    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
+    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
         check_len_with(|| self.label(), p, self.series.len())?;
         let q = position_with(s, || self.label(), self.axis)?;
-        let b = self.series.basis_array(q);
-        let v = self.axis.unit() * self.series.eval(p, q);
-        value[..3].copy_from_slice(v.as_slice());
-        jac.fill(0.0);
-        for (i, b) in b[..p.len()].iter().enumerate() {
-            jac[(self.axis.index(), i)] = *b;
-        }
+        series_along_into(&self.series, self.axis, p, q, value, jac);
         Ok(())
     }
 }

@@ -9,7 +9,7 @@
 use nalgebra::{DMatrix, DMatrixViewMut};
 
 use super::error_series::ErrorSeries;
-use super::positioning::series_params;
+use super::positioning::{series_along_into, series_params};
 use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
@@ -64,16 +64,10 @@ impl PhysicsTerm for Straightness {
         }
         Ok(j)
     }
-    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
+    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
         check_len_with(|| self.label(), p, self.series.len())?;
         let q = position_with(s, || self.label(), self.axis)?;
-        let b = self.series.basis_array(q);
-        let v = self.direction.unit() * self.series.eval(p, q);
-        value[..3].copy_from_slice(v.as_slice());
-        jac.fill(0.0);
-        for (i, b) in b[..p.len()].iter().enumerate() {
-            jac[(self.direction.index(), i)] = *b;
-        }
+        series_along_into(&self.series, self.direction, p, q, value, jac);
         Ok(())
     }
 }

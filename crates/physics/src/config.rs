@@ -56,6 +56,26 @@ pub struct TermConfig {
     pub use_defaults: bool,
 }
 
+/// How an estimator treats one term's parameters (a cell file's `estimation: {<term label>: …}`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+pub struct EstimationConfig {
+    /// Parameters to fit; absent = all of the term's. The others stay at their configured values.
+    #[serde(default)]
+    pub free: Option<Vec<String>>,
+    /// Prior knowledge per parameter name: value and standard uncertainty.
+    #[serde(default)]
+    pub priors: BTreeMap<String, PriorConfig>,
+}
+
+/// A prior of one parameter: value and σ, numbers in the canonical unit or quantities.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct PriorConfig {
+    pub value: ConfigValue,
+    pub sigma: ConfigValue,
+}
+
 /// Convert a config value to a quantity in `unit`, naming term and key on failure.
 pub fn quantity(term: &str, key: &str, v: &ConfigValue, unit: &str) -> Result<f64, PhysicsError> {
     let text = match v {

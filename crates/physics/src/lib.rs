@@ -3,7 +3,7 @@
 //! One catalog, used three ways: the simulator evaluates *true* terms, the estimator fits the
 //! terms a model *declares*, and `diagnose` tries *candidate* terms the model lacks.
 //!
-//! * [`term::PhysicsTerm`] — a term: stable [`catalog::TermId`], documented equation, parameter
+//! * [`term::PhysicsTerm`] — a term: stable [`term_id::TermId`], documented equation, parameter
 //!   descriptors ([`term::ParamSpec`], SI unit, plausible range, default), declared signals
 //!   ([`signals::SignalKind`]), `predict` → [`term::Prediction`] (kind from
 //!   [`term::EffectKind`]: displacement in a stated frame, range change, range scatter, image
@@ -37,11 +37,13 @@ pub mod load;
 pub mod machine_family;
 pub mod signals;
 pub mod term;
+pub mod term_id;
 pub mod thermal;
 pub mod units;
 
-pub use catalog::{configure, entries, lookup, CatalogEntry, Category, ConfiguredTerm, TermId};
-pub use config::{ConfigValue, TermConfig};
+pub use catalog::{configure, entries, lookup, CatalogEntry, ConfiguredTerm};
+pub use term_id::{Category, TermId};
+pub use config::{ConfigValue, EstimationConfig, PriorConfig, TermConfig};
 pub use error::PhysicsError;
 pub use signals::{Axis, SignalKind, Signals, TemperatureHistory};
 pub use term::{EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};

@@ -12,7 +12,7 @@ use crate::signals::Signals;
 use crate::term::{EffectKind, Frame, ParamSpec};
 
 /// Configured terms with stacked parameters.
-#[derive(Debug, Default)]
+#[derive(Debug, Default, Clone)]
 pub struct TermModel {
     pub terms: Vec<ConfiguredTerm>,
 }

@@ -6,9 +6,9 @@
 //! the canonical unit of its [`ParamSpec`]; this is the layout estimators stack into their
 //! state vector.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DMatrixViewMut, DVector};
 
-use crate::catalog::TermId;
+use crate::term_id::TermId;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
 
@@ -88,8 +88,26 @@ pub struct Prediction {
     pub value: DVector<f64>,
 }
 
+/// Cloning a boxed term, so a configured model can be copied (an estimator's declared model
+/// plus a `diagnose` candidate, a model per thread).
+pub trait TermClone {
+    fn clone_box(&self) -> Box<dyn PhysicsTerm>;
+}
+
+impl<T: PhysicsTerm + Clone + 'static> TermClone for T {
+    fn clone_box(&self) -> Box<dyn PhysicsTerm> {
+        Box::new(self.clone())
+    }
+}
+
+impl Clone for Box<dyn PhysicsTerm> {
+    fn clone(&self) -> Self {
+        self.clone_box()
+    }
+}
+
 /// One named piece of physics (see the crate docs for the catalog).
-pub trait PhysicsTerm: std::fmt::Debug + Send + Sync {
+pub trait PhysicsTerm: TermClone + std::fmt::Debug + Send + Sync {
     /// Stable catalog id (DESIGN.md vocabulary).
     fn id(&self) -> TermId;
     /// Instance label, e.g. `angular[x:z]`; unique within one model.
@@ -105,6 +123,18 @@ pub trait PhysicsTerm: std::fmt::Debug + Send + Sync {
     /// ∂prediction/∂p, analytic; rows = effect dimension, columns = parameters.
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError>;
 
+    /// Prediction and Jacobian together into caller buffers: `value[..dimension]` and `jac`
+    /// (dimension × parameters). The default goes through [`Self::predict`] and
+    /// [`Self::jacobian`] (allocating); the terms on an estimator's hot path (the XFYZ geometry,
+    /// the tracker's terms) override it without allocating, with the same arithmetic as
+    /// `predict`.
+    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
+        let v = self.predict(p, s)?.value;
+        value[..v.len()].copy_from_slice(v.as_slice());
+        jac.copy_from(&self.jacobian(p, s)?);
+        Ok(())
+    }
+
     /// Default parameter vector.
     fn defaults(&self) -> Vec<f64> {
         self.params().iter().map(|p| p.default).collect()
@@ -117,6 +147,22 @@ pub(crate) fn check_len(label: &str, p: &[f64], expected: usize) -> Result<(), P
         return Err(PhysicsError::ParameterCount { term: label.to_string(), expected, got: p.len() });
     }
     Ok(())
+}
+
+/// [`check_len`] that builds the label only on error (hot paths).
+pub(crate) fn check_len_with(label: impl Fn() -> String, p: &[f64], expected: usize) -> Result<(), PhysicsError> {
+    if p.len() != expected {
+        return check_len(&label(), p, expected);
+    }
+    Ok(())
+}
+
+/// The commanded position of axis `a`, building the label only on error (hot paths).
+pub(crate) fn position_with(s: &Signals, label: impl Fn() -> String, a: crate::signals::Axis) -> Result<f64, PhysicsError> {
+    match s.axis_position[a.index()] {
+        Some(q) => Ok(q),
+        None => s.position(&label(), a),
+    }
 }
 
 /// Shorthand: a displacement prediction.

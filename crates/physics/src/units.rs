@@ -95,6 +95,8 @@ fn atom(name: &str) -> Option<(Dimension, f64)> {
         "us" | "µs" | "μs" => (time, 1e-6),
         "min" => (time, 60.0),
         "h" => (time, 3600.0),
+        "Hz" => (d(0, 0, -1, 0, 0, 0, 0), 1.0),
+        "kHz" => (d(0, 0, -1, 0, 0, 0, 0), 1e3),
         "K" | "degC" | "°C" | "C" => (temp, 1.0),
         "Pa" => (pres, 1.0),
         "hPa" | "mbar" => (pres, 100.0),

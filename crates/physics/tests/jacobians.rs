@@ -55,3 +55,38 @@ fn predictions_have_the_declared_dimension_and_are_linear_where_documented() {
         assert_eq!(term.predict(&p, &s).unwrap().value.len(), term.effect().dimension(), "{id}");
     }
 }
+
+/// `evaluate_into` (the allocation-free path estimators use) gives `predict`'s value and
+/// `jacobian`'s matrix bit for bit, for every term, whether it overrides the method or not.
+#[test]
+fn evaluate_into_is_predict_and_jacobian_bit_for_bit() {
+    let mut r = common::rng(7);
+    for &id in TermId::ALL {
+        let built = configure(&example_config(id)).unwrap_or_else(|e| panic!("{id}: {e}"));
+        let term = built.term.as_ref();
+        if term.effect() == EffectKind::Kinematic {
+            continue;
+        }
+        for _ in 0..10 {
+            let p = common::random_params(&mut r, &term.params());
+            let s = common::random_signals(&mut r);
+            let dim = term.effect().dimension();
+            let mut value = [f64::NAN; 3];
+            let mut jac = nalgebra::DMatrix::from_element(dim, p.len(), f64::NAN);
+            term.evaluate_into(&p, &s, &mut value, jac.view_mut((0, 0), (dim, p.len()))).unwrap_or_else(|e| panic!("{id}: {e}"));
+            let v = term.predict(&p, &s).unwrap().value;
+            for k in 0..dim {
+                assert_eq!(value[k].to_bits(), v[k].to_bits(), "{id}: value {k}");
+            }
+            assert_eq!(jac, term.jacobian(&p, &s).unwrap(), "{id}: Jacobian");
+        }
+        // a missing signal is still an error naming the term, not a panic
+        if !term.signals().is_empty() {
+            let mut value = [0.0; 3];
+            let mut jac = nalgebra::DMatrix::zeros(term.effect().dimension(), term.params().len());
+            let dim = term.effect().dimension();
+            let err = term.evaluate_into(&term.defaults(), &metrocell_physics::Signals::default(), &mut value, jac.view_mut((0, 0), (dim, term.params().len()))).unwrap_err();
+            assert!(err.to_string().contains(&term.label()), "{id}: {err}");
+        }
+    }
+}

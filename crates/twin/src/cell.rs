@@ -7,120 +7,19 @@ use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
 use metrocell_camera::{CameraModel, Distortion};
-use metrocell_kinematics::cartesian::StackingOrder;
 use metrocell_kinematics::delta::DeltaGeometry;
-use metrocell_physics::instrument::tracker_pose::euler_xyz;
+use metrocell_model::{ForwardModel, KinematicTruth};
+use metrocell_physics::config::ConfigValue;
 use metrocell_physics::model::TermModel;
 use metrocell_physics::thermal::shift_model::{AmbientCycle, DutySegment, HeatSource, SensorLocation, ShiftThermalModel, StructureNode, ThermalSensor};
 use metrocell_physics::{configure, ConfiguredTerm, EffectKind, Frame, SignalKind, TermConfig, TermId};
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 
 use crate::cell_file::*;
 use crate::error::CellError;
-use crate::families::{FiveAxisMachine, SerialArm, FIVE_AXIS_JOINTS};
+pub use metrocell_model::{InstrumentPose, MachineGeometry, MachineKinematics};
 use crate::program::Program;
 use crate::quantity::{vector3, Quantity};
-
-/// The kinematic chain of the machine (crates/kinematics).
-#[derive(Debug, Clone, PartialEq)]
-pub enum MachineKinematics {
-    /// Cartesian 3-axis machine in a stacking order.
-    Cartesian(StackingOrder),
-    /// Linear delta: the program's axis coordinates are the commanded effector position; the
-    /// firmware's inverse kinematics uses this nominal geometry, the true geometry adds the
-    /// `delta_*` terms' trims.
-    Delta(DeltaGeometry),
-    /// Five-axis B/C table; program joint vectors `[X, Y, Z, B, C]` (see [`crate::families`]).
-    FiveAxis(FiveAxisMachine),
-    /// Serial arm; program joint vectors hold one value per movable joint.
-    SerialArm(SerialArm),
-}
-
-/// Nominal geometry of the machine.
-#[derive(Debug, Clone, PartialEq)]
-pub struct MachineGeometry {
-    pub kinematics: MachineKinematics,
-    /// `[min, max]` of x, y, z (m): axis travels (Cartesian, five-axis X Y Z) or the effector
-    /// box (delta); unbounded for a serial arm.
-    pub travel: [[f64; 2]; 3],
-    /// Tool tip (tracker target) relative to the tool-carrying body at q = 0 (m).
-    pub tool_offset: Vector3<f64>,
-}
-
-impl MachineGeometry {
-    /// Nominal forward kinematics (crates/kinematics convention, any stacking order; for a delta
-    /// q is the effector position): tool tip in the workpiece frame, `q + tool_offset`.
-    pub fn nominal_tool_point(&self, q: &Vector3<f64>) -> Vector3<f64> {
-        q + self.tool_offset
-    }
-
-    /// The stacking order of a Cartesian machine.
-    pub fn stacking(&self) -> Option<&StackingOrder> {
-        match &self.kinematics {
-            MachineKinematics::Cartesian(o) => Some(o),
-            _ => None,
-        }
-    }
-
-    /// Names of the joint vector the program and machine state use.
-    pub fn joint_names(&self) -> Vec<String> {
-        match &self.kinematics {
-            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => vec!["x".into(), "y".into(), "z".into()],
-            MachineKinematics::FiveAxis(_) => FIVE_AXIS_JOINTS.iter().map(|s| s.to_string()).collect(),
-            MachineKinematics::SerialArm(a) => a.joint_names(),
-        }
-    }
-
-    /// Per joint: `[min, max]` and unit (`m` or `rad`), unbounded where the file gives no limit.
-    pub fn joint_limits(&self) -> Vec<([f64; 2], &'static str)> {
-        let inf = [f64::NEG_INFINITY, f64::INFINITY];
-        match &self.kinematics {
-            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => self.travel.iter().map(|t| (*t, "m")).collect(),
-            MachineKinematics::FiveAxis(f) => {
-                let mut v: Vec<_> = self.travel.iter().map(|t| (*t, "m")).collect();
-                v.push(([f.geometry.b_limits.0, f.geometry.b_limits.1], "rad"));
-                v.push((f.c_limits, "rad"));
-                v
-            }
-            MachineKinematics::SerialArm(a) => a
-                .revolute
-                .iter()
-                .enumerate()
-                .map(|(i, r)| (a.joint_limits.as_ref().map(|l| l[i]).unwrap_or(inf), if *r { "rad" } else { "m" }))
-                .collect(),
-        }
-    }
-
-    /// True for the families whose joint vector is not the tool position (five_axis, serial_arm).
-    pub fn is_jointed(&self) -> bool {
-        matches!(self.kinematics, MachineKinematics::FiveAxis(_) | MachineKinematics::SerialArm(_))
-    }
-}
-
-/// Pose of an instrument frame in the workpiece frame: `p_wp = rotation·p_inst + translation`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct InstrumentPose {
-    pub rotation: Matrix3<f64>,
-    pub translation: Vector3<f64>,
-    /// The Euler XYZ angles `rotation` was built from (rad).
-    pub euler_xyz: [f64; 3],
-}
-
-impl InstrumentPose {
-    pub fn from_euler_xyz(translation: Vector3<f64>, e: [f64; 3]) -> Self {
-        Self { rotation: euler_xyz(e[0], e[1], e[2]), translation, euler_xyz: e }
-    }
-    /// Workpiece-frame point → instrument frame: `R_LTᵀ·(p − T_LT)` (thesis eq. 3.5, outer part).
-    pub fn to_instrument(&self, p: &Vector3<f64>) -> Vector3<f64> {
-        self.rotation.transpose() * (p - self.translation)
-    }
-
-    /// The pose as an isometry (`rotation` is a proper rotation, built from Euler angles).
-    pub fn isometry(&self) -> nalgebra::Isometry3<f64> {
-        let r = nalgebra::Rotation3::from_matrix_unchecked(self.rotation);
-        nalgebra::Isometry3::from_parts(self.translation.into(), nalgebra::UnitQuaternion::from_rotation_matrix(&r))
-    }
-}
 
 /// Warm-up drift of the range, Δρ = A + B·(1 − e^(−t/τ)).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -239,6 +138,8 @@ pub struct Cell {
     pub terms: TermModel,
     /// The term configs as written (for reports and for deriving nominal models).
     pub term_configs: Vec<TermConfig>,
+    /// The file's `estimation` settings (free parameters, priors), checked against the terms.
+    pub estimation: BTreeMap<String, metrocell_physics::EstimationConfig>,
 }
 
 impl Cell {
@@ -322,47 +223,84 @@ impl Cell {
             program,
             terms,
             term_configs: f.terms.clone(),
+            estimation: f.estimation.clone(),
+        })
+        .and_then(|cell: Cell| {
+            cell.parameter_setup()?;
+            Ok(cell)
         })
     }
 }
 
 impl Cell {
+    /// The shared forward model of this cell's machine and terms, with `instruments` as its
+    /// instrument terms (e.g. [`Cell::tracker_terms`]).
+    pub fn forward_model<'a>(&'a self, instruments: &'a TermModel) -> Result<ForwardModel<'a>, metrocell_physics::PhysicsError> {
+        ForwardModel::new(&self.machine, &self.terms, instruments)
+    }
+
+    fn kinematic_truth(&self) -> Option<KinematicTruth> {
+        let none = TermModel::default();
+        let m = self.forward_model(&none).ok()?;
+        m.kinematic_truth(&m.params()).ok()
+    }
+
     /// For a delta: the true geometry, the nominal one plus the trims of the `delta_*` terms
     /// (tower order A, B, C). `None` for other families.
     pub fn true_delta_geometry(&self) -> Option<DeltaGeometry> {
-        let MachineKinematics::Delta(nominal) = &self.machine.kinematics else { return None };
-        let mut g = *nominal;
-        for t in &self.terms.terms {
-            let p = [t.params[0], t.params[1], t.params[2]];
-            let add = |a: &mut [f64; 3]| (0..3).for_each(|i| a[i] += p[i]);
-            match t.term.id() {
-                TermId::DeltaRodLength => add(&mut g.rod_trim),
-                TermId::DeltaRadius => add(&mut g.radius_trim),
-                TermId::DeltaTowerAngle => add(&mut g.tower_angle_trim),
-                TermId::DeltaEndstop => add(&mut g.endstop),
-                _ => {}
-            }
+        match self.kinematic_truth()? {
+            KinematicTruth::Delta { truth, .. } => Some(truth),
+            _ => None,
         }
-        Some(g)
     }
 
     /// For a serial arm: the true chain, the nominal one with the `joint_offset` and
-    /// `link_length` terms applied (see [`crate::families`]). `None` for other families.
+    /// `link_length` terms applied (see [`metrocell_model::machine`]). `None` for other families.
     pub fn true_arm_chain(&self) -> Option<metrocell_kinematics::serial::SerialChain> {
-        let MachineKinematics::SerialArm(arm) = &self.machine.kinematics else { return None };
-        let mut offsets = vec![0.0; arm.chain.dof()];
-        let mut lengths = vec![0.0; arm.link_count()];
-        for t in &self.terms.terms {
-            let target = match t.term.id() {
-                TermId::JointOffset => &mut offsets,
-                TermId::LinkLength => &mut lengths,
-                _ => continue,
-            };
-            for (a, p) in target.iter_mut().zip(&t.params) {
-                *a += p;
-            }
+        match self.kinematic_truth()? {
+            KinematicTruth::Arm { chain, .. } => Some(chain),
+            _ => None,
         }
-        Some(arm.true_chain(&offsets, &lengths))
+    }
+
+    /// The free parameters and priors of the `estimation` section over the forward model of the
+    /// machine terms and the tracker's terms (stacked in that order).
+    pub fn parameter_setup(&self) -> Result<metrocell_model::ParameterSetup, CellError> {
+        let instruments = self.tracker_terms()?;
+        let model = self.forward_model(&instruments).map_err(|e| CellError::term("terms", e))?;
+        metrocell_model::ParameterSetup::new(&model, &self.estimation).map_err(|e| CellError::term("estimation", e))
+    }
+
+    /// The tracker's instrument effects as catalog terms with their true parameters: the
+    /// `tracker_pose` of `sensors.tracker.pose`, the `tracker_warmup` of `sensors.tracker.warmup`
+    /// (if given), and the `refraction` of the air on the beam against the weather station:
+    /// path temperature offset = `environment.air.beam_temperature_offset` − station temperature
+    /// bias, path pressure offset = −station pressure bias, option `path_humidity_offset` =
+    /// −station humidity bias. Empty without a tracker. Built from the (adjustable) fields of
+    /// the cell, so it follows a test's edits of `tracker`.
+    pub fn tracker_terms(&self) -> Result<TermModel, CellError> {
+        let mut m = TermModel::default();
+        let Some(tr) = &self.tracker else { return Ok(m) };
+        let path = "sensors.tracker";
+        let term = |id: &str, names: &[&str], values: &[f64], options: Vec<(&str, f64)>| -> Result<ConfiguredTerm, CellError> {
+            let params = names.iter().zip(values).map(|(n, v)| (n.to_string(), ConfigValue::Number(*v))).collect();
+            let options = options.into_iter().map(|(k, v)| (k.to_string(), ConfigValue::Number(v))).collect();
+            configure(&TermConfig { id: id.into(), options, params, use_defaults: false }).map_err(|e| CellError::term(path, e))
+        };
+        let push = |m: &mut TermModel, t: ConfiguredTerm| m.push(t).map_err(|e| CellError::term(path, e));
+        push(&mut m, term("tracker_pose", &["tx", "ty", "tz", "alpha", "beta", "delta"], &tr.pose.term_params(), vec![])?)?;
+        if let Some(w) = tr.warmup {
+            push(&mut m, term("tracker_warmup", &["offset", "amplitude", "time_constant"], &[w.offset, w.amplitude, w.time_constant], vec![])?)?;
+        }
+        let st = &tr.station;
+        let refraction = term(
+            "refraction",
+            &["path_temperature_offset", "path_pressure_offset"],
+            &[self.air.beam_temperature_offset - st.temperature_bias, -st.pressure_bias],
+            vec![("path_humidity_offset", -st.humidity_bias)],
+        )?;
+        push(&mut m, refraction)?;
+        Ok(m)
     }
 }
 

@@ -4,7 +4,7 @@
 
 use std::collections::BTreeMap;
 
-use metrocell_physics::{ConfigValue, TermConfig};
+use metrocell_physics::{ConfigValue, EstimationConfig, TermConfig};
 use serde::{Deserialize, Serialize};
 
 use crate::quantity::Quantity;
@@ -24,6 +24,10 @@ pub struct CellFile {
     /// terms is a user's nominal model.
     #[serde(default)]
     pub terms: Vec<TermConfig>,
+    /// For an estimator of this cell: per term label (`positioning[x]`, `tracker_pose`, …)
+    /// the free parameters and priors, `{free: [c0, c1], priors: {c0: {value: 0 um, sigma: 5 um}}}`.
+    #[serde(default)]
+    pub estimation: BTreeMap<String, EstimationConfig>,
 }
 
 /// Machine families, all simulated: `cartesian` (3 axes in a stacking order), `delta` (linear

@@ -29,15 +29,7 @@ impl Quantity {
             Quantity::Number(n) => return finite(path, *n),
             Quantity::Text(t) => t.trim().to_string(),
         };
-        // Frequencies: the physics parser has no hertz; `Hz` is `1/s`.
-        let normalised = if let Some(v) = text.strip_suffix("kHz") {
-            return finite(path, parse(path, &format!("{v} 1/s"), unit, &text)? * 1e3);
-        } else if let Some(v) = text.strip_suffix("Hz") {
-            format!("{v} 1/s")
-        } else {
-            text.clone()
-        };
-        finite(path, parse(path, &normalised, unit, &text)?)
+        finite(path, parse(path, &text, unit)?)
     }
 
     /// Like [`Quantity::to_si`] and also requires the value to be > 0.
@@ -67,9 +59,9 @@ fn finite(path: &str, v: f64) -> Result<f64, CellError> {
     }
 }
 
-fn parse(path: &str, text: &str, unit: &str, original: &str) -> Result<f64, CellError> {
+fn parse(path: &str, text: &str, unit: &str) -> Result<f64, CellError> {
     parse_quantity(text, unit).map_err(|e| match e {
-        QuantityError::Parse(reason) => CellError::BadQuantity { path: path.into(), text: original.into(), reason },
+        QuantityError::Parse(reason) => CellError::BadQuantity { path: path.into(), text: text.into(), reason },
         QuantityError::Dimension { given, .. } => CellError::WrongUnit {
             path: path.into(),
             given,

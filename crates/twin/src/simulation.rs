@@ -6,31 +6,33 @@
 //! requests fire inside program dwells. Ties are broken in a fixed order: thermocouples (file
 //! order), machine state, tracker, probe, camera.
 //!
-//! The true machine displacement at time t is Σ of the cell's terms (physics `predict`), with
-//! signals: commanded axis positions, approach directions and velocity from the program, and the
-//! *true* temperatures of the thermocouples' locations (the sensors' offsets and noise are
-//! concealed from the physics, as in a real machine). Terms with a first-order lag read the
+//! The tool state and the tracker's reading come from the shared forward model
+//! ([`metrocell_model::ForwardModel`]) at the true parameters: the cell's terms and the
+//! tracker's instrument terms ([`Cell::tracker_terms`]). The engine computes the signals
+//! (commanded axis positions, approach directions and velocity from the program, the *true*
+//! temperatures of the thermocouples' locations — the sensors' offsets and noise are concealed
+//! from the physics, as in a real machine — and the weather station's readings), adds noise,
+//! and schedules; nothing else. Terms with a first-order lag read the
 //! true temperature history sampled every [`HISTORY_STEP`] (at most [`HISTORY_CAP`] samples, so
 //! memory stays flat); a term that reads nothing but histories is re-evaluated only when a
 //! history sample is added.
 
 use std::sync::Arc;
 
+use metrocell_model::{DisplacementCache, ForwardModel, KinematicTruth, ToolState};
 use metrocell_physics::instrument::edlen::shop_floor_refractivity;
-use metrocell_physics::instrument::tracker_warmup::warmup_drift;
 use metrocell_physics::instrument::turbulence::range_scatter;
-use metrocell_kinematics::delta::DeltaGeometry;
-use metrocell_kinematics::serial::SerialChain;
-use metrocell_physics::{EffectKind, Frame, PhysicsError, SignalKind, Signals, TemperatureHistory};
-use nalgebra::{DVector, Isometry3, Matrix3, Vector3};
+use metrocell_physics::model::TermModel;
+use metrocell_physics::{PhysicsError, SignalKind, Signals, TemperatureHistory, TermId};
+use nalgebra::{DVector, Matrix3, Vector3};
 
-use crate::cell::{Cell, MachineKinematics};
+use crate::cell::Cell;
 use crate::error::CellError;
 use crate::noise::{stream, NoiseStream};
 use crate::program::MotionState;
 use crate::sample::*;
 use crate::thermal_stepper::ThermalStepper;
-use crate::tracker_model::{from_spherical, point_covariance, refraction_range_error, stated_range_sigma, to_spherical, BeamBreakProcess};
+use crate::tracker_model::{from_spherical, point_covariance, stated_range_sigma, BeamBreakProcess};
 
 /// Spacing of the true temperature histories given to lagged terms (s).
 pub const HISTORY_STEP: f64 = 10.0;
@@ -41,6 +43,8 @@ pub const HISTORY_CAP: usize = 20_000;
 #[derive(Debug)]
 pub struct Simulation {
     cell: Cell,
+    /// The tracker's instrument terms at their true values ([`Cell::tracker_terms`]).
+    instruments: TermModel,
     duration: f64,
     seed: u64,
 }
@@ -59,6 +63,10 @@ pub struct GroundTruth {
     pub station_bias: Option<(f64, f64, f64)>,
     /// Thermocouple offsets by name (K).
     pub thermocouple_offsets: Vec<(String, f64)>,
+    /// The tracker's instrument terms' true parameters (`tracker_pose.tx`, …,
+    /// `refraction.path_temperature_offset`, …), named as an estimate names them; they follow
+    /// `term_parameters` in the forward model's stacked vector.
+    pub instrument_parameters: Vec<TrueParameter>,
 }
 
 impl Simulation {
@@ -68,7 +76,9 @@ impl Simulation {
         if !(duration > 0.0 && duration.is_finite()) {
             return Err(CellError::Simulation { reason: format!("duration must be > 0 s and finite, got {duration}") });
         }
-        let sim = Simulation { cell, duration, seed };
+        let instruments = cell.tracker_terms()?;
+        cell.forward_model(&instruments).map_err(|err| CellError::Simulation { reason: format!("the forward model cannot be built: {err}") })?;
+        let sim = Simulation { cell, instruments, duration, seed };
         let mut e = Engine::new(&sim);
         let ms = sim.cell.program.state_at(0.0);
         e.tool_state(0.0, &ms).map_err(|err| CellError::Simulation { reason: format!("true terms cannot be evaluated: {err}") })?;
@@ -83,6 +93,27 @@ impl Simulation {
     }
     pub fn seed(&self) -> u64 {
         self.seed
+    }
+
+    /// The tracker's instrument terms at their true values.
+    pub fn instrument_terms(&self) -> &TermModel {
+        &self.instruments
+    }
+
+    /// The shared forward model of this simulation (machine terms + instrument terms).
+    pub fn forward_model(&self) -> ForwardModel<'_> {
+        self.cell.forward_model(&self.instruments).expect("checked by Simulation::new")
+    }
+
+    /// The signals the twin evaluates its model with at time t (temperatures, temperature
+    /// histories, load, and the program's motion at t), computed afresh (cost grows with t:
+    /// for tests and tools, not for streaming). The station's air and the tracker's time since
+    /// power-on are the tracker sample's (`air_*`) and `t + powered_on_before_start`.
+    pub fn signals_at(&self, t: f64) -> Signals {
+        let mut e = Engine::new(self);
+        let ms = self.cell.program.state_at(t);
+        e.set_signals(t, &ms);
+        e.signals
     }
 
     /// The sample stream (restarts from t = 0 on every call; deterministic in the seed).
@@ -107,6 +138,7 @@ impl Simulation {
             warmup: tr.and_then(|t| t.warmup.map(|w| (w.offset, w.amplitude, w.time_constant))),
             station_bias: tr.map(|t| (t.station.temperature_bias, t.station.pressure_bias, t.station.humidity_bias)),
             thermocouple_offsets: self.cell.thermocouples.iter().map(|t| (t.name.clone(), t.offset)).collect(),
+            instrument_parameters: self.instruments.param_specs().into_iter().zip(self.instruments.params()).map(|(s, v)| TrueParameter { name: s.name, value: v, unit: s.unit }).collect(),
         }
     }
 }
@@ -224,18 +256,6 @@ struct TrackerState {
     breaks: Option<BeamBreakProcess>,
 }
 
-/// The tool at one instant. Poses are of the tool frame in the frame tool points are reported
-/// in (workpiece: cartesian, delta, five_axis; cell: serial_arm), `p = pose·p_tool`. Tool-frame
-/// axes: the workpiece axes on cartesian and delta machines (the tool does not turn), the
-/// machine (spindle) axes on a five-axis machine, the arm's tool frame on an arm.
-struct ToolState {
-    nominal: Isometry3<f64>,
-    truth: Isometry3<f64>,
-    /// True displacement d (m): true − nominal tool point (cartesian, delta, arm); for a
-    /// five-axis machine the linear axes' displacement in the machine frame.
-    d: Vector3<f64>,
-}
-
 struct Engine<'a> {
     sim: &'a Simulation,
     cell: &'a Cell,
@@ -254,13 +274,17 @@ struct Engine<'a> {
     history_sensors: Vec<(String, usize)>,
     /// Index of the next history sample (at history_k·HISTORY_STEP).
     history_k: u64,
-    /// Per term: reads only histories (cacheable), and its cached displacement.
-    history_only: Vec<bool>,
-    cache: Vec<Option<Vector3<f64>>>,
-    /// Delta: (nominal geometry the firmware inverts, true geometry).
-    delta: Option<(DeltaGeometry, DeltaGeometry)>,
-    /// Serial arm: the true chain (joint_offset and link_length applied) and the joint offsets.
-    arm_truth: Option<(SerialChain, Vec<f64>)>,
+    /// The shared forward model, the true stacked parameters, and a copy whose refraction
+    /// parameters carry the weather station's noise of the current reading.
+    model: ForwardModel<'a>,
+    params: Vec<f64>,
+    reading_params: Vec<f64>,
+    /// Index of `refraction.path_temperature_offset` in the stacked vector.
+    refraction_at: Option<usize>,
+    /// The kinematic part of the truth (delta geometry, arm chain).
+    kinematics: KinematicTruth,
+    /// Displacements of the terms that read only histories, until a history grows.
+    cache: DisplacementCache,
     error: Option<PhysicsError>,
 }
 
@@ -285,11 +309,8 @@ impl<'a> Engine<'a> {
         }
         signals.load_force = cell.load_force;
         let mut history_sensors: Vec<(String, usize)> = Vec::new();
-        let mut history_only = Vec::new();
         for t in &cell.terms.terms {
-            let sig = t.term.signals();
-            history_only.push(!sig.is_empty() && sig.iter().all(|s| matches!(s, SignalKind::TemperatureHistory(_))));
-            for s in sig {
+            for s in t.term.signals() {
                 if let SignalKind::TemperatureHistory(name) = s {
                     if !history_sensors.iter().any(|(n, _)| n == &name) {
                         let node = cell.thermocouples.iter().find(|tc| tc.name == name).and_then(|tc| tc.node.as_deref());
@@ -299,6 +320,9 @@ impl<'a> Engine<'a> {
                 }
             }
         }
+        let model = sim.forward_model();
+        let params = model.params();
+        let kinematics = model.kinematic_truth(&params).expect("the parameter vector is the model's own");
         Engine {
             sim,
             cell,
@@ -319,16 +343,12 @@ impl<'a> Engine<'a> {
             signals,
             history_sensors,
             history_k: 0,
-            cache: vec![None; history_only.len()],
-            history_only,
-            delta: match (&cell.machine.kinematics, cell.true_delta_geometry()) {
-                (MachineKinematics::Delta(n), Some(t)) => Some((*n, t)),
-                _ => None,
-            },
-            arm_truth: cell.true_arm_chain().map(|c| {
-                let offsets = c.joints.iter().filter(|j| j.kind != metrocell_kinematics::serial::JointKind::Fixed).map(|j| j.offset).collect();
-                (c, offsets)
-            }),
+            cache: DisplacementCache::new(&model),
+            kinematics,
+            refraction_at: model.instrument_param_start(TermId::Refraction),
+            reading_params: params.clone(),
+            params,
+            model,
             error: None,
         }
     }
@@ -350,97 +370,26 @@ impl<'a> Engine<'a> {
                 }
                 self.history_k += 1;
             }
-            self.cache.iter_mut().for_each(|c| *c = None);
+            self.cache.invalidate();
         }
     }
 
-    /// The tool at t for the motion state: its nominal and true pose and the true displacement
-    /// d (see [`ToolState`] and [`crate::families`]). Forward kinematics runs once per call.
-    fn tool_state(&mut self, t: f64, ms: &MotionState) -> Result<ToolState, PhysicsError> {
-        let cell = self.cell;
-        let q = ms.q.as_slice();
-        let kin = |what: &str, e: metrocell_kinematics::KinematicsError| PhysicsError::InvalidInput { what: format!("{what} at t = {t} s, q = {q:?}"), reason: e.to_string() };
-        let identity = Matrix3::identity();
-        Ok(match &cell.machine.kinematics {
-            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => {
-                let n = cell.machine.nominal_tool_point(&v3(&ms.q));
-                // a delta's firmware inverts the nominal geometry; the carriages at those
-                // heights put the effector where the true geometry says
-                let kinematic = match &self.delta {
-                    Some((nominal, truth)) => {
-                        let joints = nominal.inverse(&v3(&ms.q)).map_err(|e| kin("delta kinematics", e))?;
-                        truth.forward(&joints).map_err(|e| kin("delta kinematics", e))? - v3(&ms.q)
-                    }
-                    None => Vector3::zeros(),
-                };
-                let d = kinematic + self.term_displacement(t, ms, n, &identity)?;
-                ToolState { nominal: Isometry3::translation(n.x, n.y, n.z), truth: Isometry3::translation(n.x + d.x, n.y + d.y, n.z + d.z), d }
-            }
-            MachineKinematics::FiveAxis(f) => {
-                // the spindle does not turn: the tool frame is the machine frame seen from the
-                // workpiece, which turns with the table
-                let tip = f.tip_machine(q);
-                let d = self.term_displacement(t, ms, tip, &identity)?;
-                let workpiece_from_machine = f.geometry.machine_from_workpiece(q[3], q[4]).inverse();
-                ToolState { nominal: workpiece_from_machine * Isometry3::translation(tip.x, tip.y, tip.z), truth: workpiece_from_machine * Isometry3::translation(tip.x + d.x, tip.y + d.y, tip.z + d.z), d }
-            }
-            MachineKinematics::SerialArm(a) => {
-                let nominal = a.chain.tool_pose(q).map_err(|e| kin("arm forward kinematics", e))?;
-                let true_pose = match &self.arm_truth {
-                    Some((chain, _)) => chain.tool_pose(q).map_err(|e| kin("true arm forward kinematics", e))?,
-                    None => nominal,
-                };
-                let n = nominal.translation.vector;
-                let tool_rotation = true_pose.rotation.to_rotation_matrix().into_inner();
-                let d = true_pose.translation.vector - n + self.term_displacement(t, ms, n, &tool_rotation)?;
-                ToolState { nominal, truth: Isometry3::from_parts((n + d).into(), true_pose.rotation), d }
-            }
-        })
-    }
-
-    /// Σ of the cell's displacement terms at t (m), in the frame they act in, for the nominal
-    /// tool point `point` of that frame. `tool_rotation` turns the displacements of tool-frame
-    /// terms (`Frame::Tool`, e.g. `tool_offset`: the offset vector as mounted) into that frame:
-    /// identity where the tool does not turn (cartesian, delta, the five-axis spindle), the
-    /// tool frame's rotation on an arm.
-    fn term_displacement(&mut self, t: f64, ms: &MotionState, point: Vector3<f64>, tool_rotation: &Matrix3<f64>) -> Result<Vector3<f64>, PhysicsError> {
+    /// Signals at t for the motion state: histories up to t, motion, true temperatures.
+    fn set_signals(&mut self, t: f64, ms: &MotionState) {
         self.update_histories(t);
-        let s = &mut self.signals;
-        if matches!(self.cell.machine.kinematics, MachineKinematics::SerialArm(_)) {
-            // an arm has no linear axes; its terms were checked not to read axis signals
-            s.axis_position = [None; 3];
-            s.approach_direction = [None; 3];
-            s.axis_velocity = [None; 3];
-        } else {
-            s.axis_position = [Some(ms.q[0]), Some(ms.q[1]), Some(ms.q[2])];
-            s.approach_direction = [Some(ms.approach[0]), Some(ms.approach[1]), Some(ms.approach[2])];
-            s.axis_velocity = [Some(ms.velocity[0]), Some(ms.velocity[1]), Some(ms.velocity[2])];
-        }
-        s.point = Some(point);
+        self.model.set_motion(&mut self.signals, ms.q.as_slice(), ms.velocity.as_slice(), &ms.approach);
         for (i, tc) in self.cell.thermocouples.iter().enumerate() {
             let v = self.thermal.at(self.tc_slots[i], t);
-            if let Some(x) = s.temperatures.get_mut(&tc.name) {
+            if let Some(x) = self.signals.temperatures.get_mut(&tc.name) {
                 *x = v;
             }
         }
-        let mut d = Vector3::zeros();
-        for (i, t) in self.cell.terms.terms.iter().enumerate() {
-            if t.term.effect() == EffectKind::Kinematic {
-                continue;
-            }
-            if let Some(c) = self.cache[i] {
-                d += c;
-                continue;
-            }
-            let v = t.term.predict(&t.params, s)?.value;
-            let v = Vector3::new(v[0], v[1], v[2]);
-            let v = if t.term.effect() == EffectKind::Displacement(Frame::Tool) { tool_rotation * v } else { v };
-            if self.history_only[i] {
-                self.cache[i] = Some(v);
-            }
-            d += v;
-        }
-        Ok(d)
+    }
+
+    /// The tool at t for the motion state (the shared model at the true parameters).
+    fn tool_state(&mut self, t: f64, ms: &MotionState) -> Result<ToolState, PhysicsError> {
+        self.set_signals(t, ms);
+        self.model.tool_state(&self.params, &self.kinematics, ms.q.as_slice(), &mut self.signals, Some(&mut self.cache))
     }
 
     fn next_event(&mut self) -> Option<(Sample, SampleTruth)> {
@@ -510,9 +459,9 @@ impl<'a> Engine<'a> {
         // actual: cartesian/delta and the five-axis linear axes commanded + d; rotary axes as
         // commanded; an arm's joints at commanded + their true zero offsets.
         let mut actual = ms.q.as_slice().to_vec();
-        match &self.arm_truth {
-            Some((_, offsets)) => actual.iter_mut().zip(offsets).for_each(|(a, o)| *a += o),
-            None => (0..3).for_each(|k| actual[k] += d[k]),
+        match &self.kinematics {
+            KinematicTruth::Arm { joint_offsets, .. } => actual.iter_mut().zip(joint_offsets).for_each(|(a, o)| *a += o),
+            _ => (0..3).for_each(|k| actual[k] += d[k]),
         }
         let s = MachineStateSample { t, names: self.axis_names.clone(), commanded: ms.q.as_slice().to_vec(), actual };
         Ok((Sample::MachineState(s), SampleTruth::MachineState { displacement: d }))
@@ -523,21 +472,30 @@ impl<'a> Engine<'a> {
         let ms = self.cell.program.state_at(t);
         let tool = self.tool_state(t, &ms)?;
         let (nominal_point, tool_point, d) = (tool.nominal.translation.vector, tool.truth.translation.vector, tool.d);
-        let x = spec.pose.to_instrument(&tool_point);
-        let (rho, az, el) = to_spherical(&x);
         // air: truth on the beam vs the station's reading
         let ambient = self.thermal.ambient(t);
         let air = self.cell.air;
         let st = &spec.station;
         let state = self.tracker.as_mut().expect("tracker state exists with a tracker");
         let mut station_noise = |sigma: f64| if sigma > 0.0 { sigma * state.station.normal() } else { 0.0 };
-        let t_station = ambient + st.temperature_bias + station_noise(st.temperature_noise);
-        let p_station = air.pressure + st.pressure_bias + station_noise(st.pressure_noise);
-        let h_station = air.humidity + st.humidity_bias + station_noise(st.humidity_noise);
+        let (noise_t, noise_p, noise_h) = (station_noise(st.temperature_noise), station_noise(st.pressure_noise), station_noise(st.humidity_noise));
+        let t_station = ambient + st.temperature_bias + noise_t;
+        let p_station = air.pressure + st.pressure_bias + noise_p;
+        let h_station = air.humidity + st.humidity_bias + noise_h;
         let n_true = shop_floor_refractivity(air.pressure, ambient + air.beam_temperature_offset, air.humidity);
         let n_station = shop_floor_refractivity(p_station, t_station, h_station);
-        let refraction = refraction_range_error(rho, n_true, n_station);
-        let warmup = spec.warmup.map(|w| warmup_drift(w.offset, w.amplitude, w.time_constant, t + spec.powered_on_before_start)).unwrap_or(0.0);
+        // The refraction term's path offsets are relative to the station's reading, so this
+        // reading's station noise moves them (the beam's air does not see the station's noise).
+        if let Some(r) = self.refraction_at {
+            self.reading_params[r] = self.params[r] - noise_t;
+            self.reading_params[r + 1] = self.params[r + 1] - noise_p;
+        }
+        let s = &mut self.signals;
+        (s.air_temperature, s.air_pressure, s.air_humidity) = (Some(t_station), Some(p_station), Some(h_station));
+        s.time_since_power_on = Some(t + spec.powered_on_before_start);
+        let prediction = self.model.tracker(&self.reading_params, tool_point, s)?;
+        let (x, rho, az, el) = (prediction.point, prediction.range, prediction.azimuth, prediction.elevation);
+        let (refraction, warmup) = (prediction.refraction, prediction.warmup);
         let c = spec.turbulence.iter().filter(|w| t >= w.start && t < w.end).map(|w| w.coefficient).fold(0.0, f64::max);
         let sigma_eff = range_scatter(spec.range_noise_constant, spec.range_noise_per_metre, c, rho);
         let broken = state.breaks.as_mut().map(|b| b.broken(t)).unwrap_or(false);
@@ -572,7 +530,7 @@ impl<'a> Engine<'a> {
             }
         } else {
             let noise = &mut state.noise;
-            let rho_m = rho + refraction + warmup + if sigma_eff > 0.0 { sigma_eff * noise.normal() } else { 0.0 };
+            let rho_m = prediction.measured_range() + if sigma_eff > 0.0 { sigma_eff * noise.normal() } else { 0.0 };
             let (az_m, el_m) = if spec.angular_noise > 0.0 { (az + spec.angular_noise * noise.normal(), el + spec.angular_noise * noise.normal()) } else { (az, el) };
             let stated = stated_range_sigma(spec.range_noise_constant, spec.range_noise_per_metre, rho_m);
             TrackerSample {

@@ -126,22 +126,13 @@ fn cartesian_pose_targets_are_solved_by_ik_and_unreachable_ones_are_named() {
     assert!(err.contains("program.poses[1]") && err.contains("did not converge") && err.contains("mm"), "{err}");
 }
 
-const TWO_LINK_URDF: &str = r#"<robot name="two_link">
-  <link name="base"/><link name="upper"/><link name="fore"/><link name="tip"/>
-  <joint name="shoulder" type="revolute"><parent link="base"/><child link="upper"/>
-    <origin xyz="0 0 0.3" rpy="0 0 0"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
-  <joint name="elbow" type="revolute"><parent link="upper"/><child link="fore"/>
-    <origin xyz="0.5 0 0" rpy="0 0 0"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
-  <joint name="flange" type="fixed"><parent link="fore"/><child link="tip"/><origin xyz="0.4 0 0" rpy="0 0 0"/></joint>
-</robot>"#;
-
 /// A planar two-link URDF arm, referenced relative to the cell file: the tool point is
 /// (0.5 cos q1 + (0.4 + l3) cos(q1 + q2 + δ2), …, 0.3) with the link_length and joint_offset terms.
 #[test]
 fn urdf_arm_is_read_relative_to_the_cell_file() {
     let dir = std::env::temp_dir().join(format!("metrocell-twin-urdf-{}", std::process::id()));
     std::fs::create_dir_all(dir.join("robots")).unwrap();
-    std::fs::write(dir.join("robots/two_link.urdf"), TWO_LINK_URDF).unwrap();
+    std::fs::write(dir.join("robots/two_link.urdf"), common::TWO_LINK_URDF).unwrap();
     let text = std::fs::read_to_string(common::cell_path("serial_arm_ur5.yaml")).unwrap();
     let m0 = text.find("  serial_arm:\n").unwrap();
     let m1 = text.find("\nsensors:").unwrap();
@@ -168,7 +159,7 @@ fn urdf_arm_is_read_relative_to_the_cell_file() {
     }
     assert_eq!(n, 1200);
     // a URDF joint without an origin offset has no length to change
-    std::fs::write(dir.join("robots/two_link.urdf"), TWO_LINK_URDF.replace(r#"<origin xyz="0 0 0.3" rpy="0 0 0"/>"#, r#"<origin xyz="0 0 0" rpy="0 0 0"/>"#)).unwrap();
+    std::fs::write(dir.join("robots/two_link.urdf"), common::TWO_LINK_URDF.replace(r#"<origin xyz="0 0 0.3" rpy="0 0 0"/>"#, r#"<origin xyz="0 0 0" rpy="0 0 0"/>"#)).unwrap();
     std::fs::write(dir.join("cell.yaml"), text.replace("l1: 0, l2", "l1: 0.1 mm, l2")).unwrap();
     let err = Cell::from_path(dir.join("cell.yaml")).unwrap_err().to_string();
     assert!(err.contains("terms[1]") && err.contains("params.l1") && err.contains("`shoulder`") && err.contains("zero-length"), "{err}");

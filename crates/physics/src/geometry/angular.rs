@@ -12,15 +12,15 @@
 //! Frame: machine, tool relative to workpiece. Options: `axis`, `about`, `lever_axes`,
 //! `abbe_offset`, `basis`, `order` (default 1), `travel`.
 
-use nalgebra::{DMatrix, Vector3};
+use nalgebra::{DMatrix, DMatrixViewMut, Vector3};
 
 use super::error_series::ErrorSeries;
 use super::positioning::series_params;
-use crate::catalog::TermId;
+use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{Axis, SignalKind, Signals};
-use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term::{check_len, check_len_with, displacement, position_with, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
 
 #[derive(Debug, Clone)]
 pub struct Angular {
@@ -43,11 +43,10 @@ impl Angular {
     }
 
     fn lever(&self, s: &Signals) -> Result<(f64, Vector3<f64>), PhysicsError> {
-        let label = self.label();
-        let q = s.position(&label, self.axis)?;
+        let q = position_with(s, || self.label(), self.axis)?;
         let mut l = self.abbe_offset;
         for a in &self.lever_axes {
-            l += a.unit() * s.position(&label, *a)?;
+            l += a.unit() * position_with(s, || self.label(), *a)?;
         }
         Ok((q, self.about.unit().cross(&l)))
     }
@@ -88,5 +87,15 @@ impl PhysicsTerm for Angular {
             j.set_column(i, &(arm * b));
         }
         Ok(j)
+    }
+    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
+        check_len_with(|| self.label(), p, self.series.len())?;
+        let (q, arm) = self.lever(s)?;
+        let v = arm * self.series.eval(p, q);
+        value[..3].copy_from_slice(v.as_slice());
+        for (i, b) in self.series.basis_array(q)[..p.len()].iter().enumerate() {
+            jac.set_column(i, &(arm * *b));
+        }
+        Ok(())
     }
 }

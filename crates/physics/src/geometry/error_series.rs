@@ -16,6 +16,9 @@ pub enum SeriesBasis {
     Legendre,
 }
 
+/// Highest series order a config may ask for.
+pub const MAX_ORDER: usize = 8;
+
 /// Shape of an error series: basis, order and travel (m).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ErrorSeries {
@@ -40,7 +43,7 @@ impl ErrorSeries {
             "polynomial" => SeriesBasis::Polynomial,
             other => return Err(o.bad("basis", format!("`{other}` is not a basis; allowed: legendre, polynomial"))),
         };
-        let order = o.count("order", default_order, 8)?;
+        let order = o.count("order", default_order, MAX_ORDER)?;
         let travel = o.length_range("travel")?.unwrap_or((0.0, 1.0));
         Self::new(basis, order, travel).map_err(|e| o.bad("travel", e.to_string()))
     }
@@ -55,36 +58,42 @@ impl ErrorSeries {
         2.0 * (q - self.travel.0) / (self.travel.1 - self.travel.0) - 1.0
     }
 
-    /// Basis values φ_0..φ_order at axis position q (also the Jacobian row of the series).
-    pub fn basis_values(&self, q: f64) -> Vec<f64> {
+    /// Basis values φ_0..φ_order at axis position q (also the Jacobian row of the series), in
+    /// the first [`Self::len`] entries, without allocating.
+    pub fn basis_array(&self, q: f64) -> [f64; MAX_ORDER + 1] {
         let u = self.normalised(q);
-        let mut out = Vec::with_capacity(self.len());
+        let mut out = [0.0; MAX_ORDER + 1];
+        let n = self.len().min(MAX_ORDER + 1);
         match self.basis {
             SeriesBasis::Polynomial => {
                 let mut v = 1.0;
-                for _ in 0..self.len() {
-                    out.push(v);
+                for o in out.iter_mut().take(n) {
+                    *o = v;
                     v *= u;
                 }
             }
             SeriesBasis::Legendre => {
-                out.push(1.0);
-                if self.order >= 1 {
-                    out.push(u);
+                out[0] = 1.0;
+                if n >= 2 {
+                    out[1] = u;
                 }
-                for n in 1..self.order {
-                    let nf = n as f64;
-                    let next = ((2.0 * nf + 1.0) * u * out[n] - nf * out[n - 1]) / (nf + 1.0);
-                    out.push(next);
+                for k in 1..n - 1 {
+                    let kf = k as f64;
+                    out[k + 1] = ((2.0 * kf + 1.0) * u * out[k] - kf * out[k - 1]) / (kf + 1.0);
                 }
             }
         }
         out
     }
 
+    /// Basis values φ_0..φ_order at axis position q (also the Jacobian row of the series).
+    pub fn basis_values(&self, q: f64) -> Vec<f64> {
+        self.basis_array(q)[..self.len()].to_vec()
+    }
+
     /// Value of the series with coefficients `c` at q.
     pub fn eval(&self, c: &[f64], q: f64) -> f64 {
-        self.basis_values(q).iter().zip(c).map(|(b, c)| b * c).sum()
+        self.basis_array(q)[..self.len()].iter().zip(c).map(|(b, c)| b * c).sum()
     }
 }
 

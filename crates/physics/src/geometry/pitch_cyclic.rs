@@ -8,7 +8,7 @@
 use nalgebra::DMatrix;
 use std::f64::consts::TAU;
 
-use crate::catalog::TermId;
+use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{Axis, SignalKind, Signals};

@@ -5,14 +5,14 @@
 //! i.e. δ is defined as seen by a laser interferometer between tool and table.
 //! Options: `axis`, `basis`, `order` (default 1), `travel`.
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DMatrixViewMut};
 
 use super::error_series::ErrorSeries;
-use crate::catalog::TermId;
+use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{Axis, SignalKind, Signals};
-use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term::{check_len, check_len_with, displacement, position_with, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
 
 #[derive(Debug, Clone)]
 pub struct Positioning {
@@ -29,6 +29,17 @@ impl Positioning {
 /// Coefficient descriptors c0..cn shared by the series-based geometric terms.
 pub(crate) fn series_params(series: &ErrorSeries, unit: &'static str, bound: f64, what: &str) -> Vec<ParamSpec> {
     (0..series.len()).map(|i| ParamSpec::new(format!("c{i}"), unit, -bound, bound, 0.0, format!("{what}: coefficient of basis function {i} ({:?})", series.basis))).collect()
+}
+
+/// Value and Jacobian of a series error along `direction` (d = e_dir·δ(q)), into buffers; the
+/// value's arithmetic is `predict`'s.
+pub(crate) fn series_along_into(series: &ErrorSeries, direction: Axis, p: &[f64], q: f64, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) {
+    let v = direction.unit() * series.eval(p, q);
+    value[..3].copy_from_slice(v.as_slice());
+    jac.fill(0.0);
+    for (i, b) in series.basis_array(q)[..p.len()].iter().enumerate() {
+        jac[(direction.index(), i)] = *b;
+    }
 }
 
 impl PhysicsTerm for Positioning {
@@ -60,6 +71,12 @@ impl PhysicsTerm for Positioning {
             j[(self.axis.index(), i)] = b;
         }
         Ok(j)
+    }
+    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
+        check_len_with(|| self.label(), p, self.series.len())?;
+        let q = position_with(s, || self.label(), self.axis)?;
+        series_along_into(&self.series, self.axis, p, q, value, jac);
+        Ok(())
     }
 }
 

@@ -6,15 +6,15 @@
 //! `order` (default 2), `travel`. A linear coefficient is indistinguishable from squareness —
 //! declare one or the other, not both.
 
-use nalgebra::DMatrix;
+use nalgebra::{DMatrix, DMatrixViewMut};
 
 use super::error_series::ErrorSeries;
-use super::positioning::series_params;
-use crate::catalog::TermId;
+use super::positioning::{series_along_into, series_params};
+use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{Axis, SignalKind, Signals};
-use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term::{check_len, check_len_with, displacement, position_with, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
 
 #[derive(Debug, Clone)]
 pub struct Straightness {
@@ -63,5 +63,11 @@ impl PhysicsTerm for Straightness {
             j[(self.direction.index(), i)] = b;
         }
         Ok(j)
+    }
+    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
+        check_len_with(|| self.label(), p, self.series.len())?;
+        let q = position_with(s, || self.label(), self.axis)?;
+        series_along_into(&self.series, self.direction, p, q, value, jac);
+        Ok(())
     }
 }

@@ -5,6 +5,7 @@ pub mod edlen;
 pub mod lens_distortion;
 pub mod probe_pretravel;
 pub mod refraction;
+pub mod spherical;
 pub mod time_offset;
 pub mod tracker_pose;
 pub mod tracker_uncertainty;

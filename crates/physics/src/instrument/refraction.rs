@@ -1,26 +1,45 @@
 //! `refraction` — range error of a tracker whose weather station misreads the air on the beam.
 //!
-//! Δρ = ρ·( n(t + ΔT, p + Δp, h) / n(t, p, h) − 1 )      (thesis eq. 5.7 with one uniform section)
+//! Δρ = ρ·( n(t + ΔT, p + Δp, h + Δh) / n(t, p, h) − 1 )      (thesis eq. 5.7 with one uniform section)
 //!
 //! n is the shop-floor Edlén index ([`super::edlen::shop_floor_index`]); (t, p, h) are the
 //! station readings (signals), ΔT and Δp the mean offsets of the beam's air from them
-//! (parameters). Hotter air → lower n → the tracker reads short (Δρ < 0). Effect: range change, m.
+//! (parameters). Δh (%RH), option `path_humidity_offset` (default 0), is a known, fixed offset:
+//! at 8·10⁻⁹ per %RH it is never worth fitting. Hotter air → lower n → the tracker reads short
+//! (Δρ < 0). Effect: range change, m.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DMatrixViewMut, DVector};
 
 use super::edlen::{shop_floor_index, shop_floor_index_dp, shop_floor_index_dt, shop_floor_refractivity};
-use crate::catalog::TermId;
+use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
-use crate::term::{check_len, EffectKind, ParamSpec, PhysicsTerm, Prediction};
+use crate::term::{check_len, check_len_with, EffectKind, ParamSpec, PhysicsTerm, Prediction};
+
+/// Range change and its derivatives w.r.t. (ΔT, Δp) at range ρ and station air (t, p, h).
+fn range_change(rho: f64, t: f64, pa: f64, h: f64, dh: f64, p: &[f64]) -> (f64, [f64; 2]) {
+    // n_path/n_lt − 1 = (N_path − N_lt)/(1 + N_lt) with N = n − 1: no cancellation.
+    let n_lt = shop_floor_refractivity(pa, t, h);
+    let n_path = shop_floor_refractivity(pa + p[1], t + p[0], h + dh);
+    let n_lt_index = shop_floor_index(pa, t, h);
+    let (tp, pp, hp) = (t + p[0], pa + p[1], h + dh);
+    (rho * (n_path - n_lt) / (1.0 + n_lt), [rho * shop_floor_index_dt(pp, tp, hp) / n_lt_index, rho * shop_floor_index_dp(pp, tp, hp) / n_lt_index])
+}
 
 #[derive(Debug, Clone, Default)]
-pub struct Refraction;
+pub struct Refraction {
+    /// Δh, %RH: relative humidity on the beam minus the station reading.
+    pub path_humidity_offset: f64,
+}
 
 impl Refraction {
-    pub fn from_options(_o: &Options) -> Result<Self, PhysicsError> {
-        Ok(Self)
+    pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
+        let path_humidity_offset = o.quantity("path_humidity_offset", "1", Some(0.0))?;
+        if !(path_humidity_offset.abs() <= 100.0) {
+            return Err(o.bad("path_humidity_offset", format!("must be within ±100 %RH, got {path_humidity_offset}")));
+        }
+        Ok(Self { path_humidity_offset })
     }
 }
 
@@ -47,17 +66,27 @@ impl PhysicsTerm for Refraction {
         check_len(&self.label(), p, 2)?;
         let rho = s.range(&self.label())?;
         let (t, pa, h) = s.air(&self.label())?;
-        // n_path/n_lt − 1 = (N_path − N_lt)/(1 + N_lt) with N = n − 1: no cancellation.
-        let n_lt = shop_floor_refractivity(pa, t, h);
-        let n_path = shop_floor_refractivity(pa + p[1], t + p[0], h);
-        Ok(Prediction { kind: self.effect(), value: DVector::from_element(1, rho * (n_path - n_lt) / (1.0 + n_lt)) })
+        Ok(Prediction { kind: self.effect(), value: DVector::from_element(1, range_change(rho, t, pa, h, self.path_humidity_offset, p).0) })
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         check_len(&self.label(), p, 2)?;
         let rho = s.range(&self.label())?;
         let (t, pa, h) = s.air(&self.label())?;
-        let n_lt = shop_floor_index(pa, t, h);
-        let (tp, pp) = (t + p[0], pa + p[1]);
-        Ok(DMatrix::from_row_slice(1, 2, &[rho * shop_floor_index_dt(pp, tp, h) / n_lt, rho * shop_floor_index_dp(pp, tp, h) / n_lt]))
+        Ok(DMatrix::from_row_slice(1, 2, &range_change(rho, t, pa, h, self.path_humidity_offset, p).1))
+    }
+    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
+        check_len_with(|| self.label(), p, 2)?;
+        let (rho, t, pa, h) = match (s.tracker_range, s.air_temperature, s.air_pressure, s.air_humidity) {
+            (Some(rho), Some(t), Some(pa), Some(h)) => (rho, t, pa, h),
+            _ => {
+                let (t, pa, h) = s.air(&self.label())?;
+                (s.range(&self.label())?, t, pa, h)
+            }
+        };
+        let (v, j) = range_change(rho, t, pa, h, self.path_humidity_offset, p);
+        value[0] = v;
+        jac[(0, 0)] = j[0];
+        jac[(0, 1)] = j[1];
+        Ok(())
     }
 }

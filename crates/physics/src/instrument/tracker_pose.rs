@@ -1,18 +1,20 @@
-//! `tracker_pose` — 6-dof pose of a laser tracker (or any instrument) in the machine frame.
+//! `tracker_pose` — 6-dof pose of a laser tracker (or any instrument) in the frame tool points
+//! are reported in (the workpiece frame; an arm's cell frame — the convention is stated once, in
+//! crates/model `instrument_pose`).
 //!
 //! X_LT = R_LTᵀ·(p − T_LT),  R_LT = Rx(α)·Ry(β)·Rz(δ)   (thesis P5 eqs 2, 21–22; Euler XYZ)
 //!
-//! p is a machine-frame point (signal `point`), T_LT = (tx, ty, tz) the tracker origin and
+//! p is the tool point (signal `point`), T_LT = (tx, ty, tz) the tracker origin and
 //! (α, β, δ) the Euler angles. R_LT is orthonormal, so R_LT⁻¹ = R_LTᵀ. Effect: the point in the
 //! tracker frame, m.
 
-use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
+use nalgebra::{DMatrix, DMatrixViewMut, DVector, Matrix3, Vector3};
 
-use crate::catalog::TermId;
+use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
-use crate::term::{check_len, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term::{check_len, check_len_with, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
 
 fn rx(a: f64) -> Matrix3<f64> {
     Matrix3::new(1.0, 0.0, 0.0, 0.0, a.cos(), -a.sin(), 0.0, a.sin(), a.cos())
@@ -60,9 +62,9 @@ impl PhysicsTerm for TrackerPose {
     fn params(&self) -> Vec<ParamSpec> {
         let pi = std::f64::consts::PI;
         vec![
-            ParamSpec::new("tx", "m", -30.0, 30.0, 0.0, "tracker origin x in the machine frame"),
-            ParamSpec::new("ty", "m", -30.0, 30.0, 0.0, "tracker origin y in the machine frame"),
-            ParamSpec::new("tz", "m", -30.0, 30.0, 0.0, "tracker origin z in the machine frame"),
+            ParamSpec::new("tx", "m", -30.0, 30.0, 0.0, "tracker origin x"),
+            ParamSpec::new("ty", "m", -30.0, 30.0, 0.0, "tracker origin y"),
+            ParamSpec::new("tz", "m", -30.0, 30.0, 0.0, "tracker origin z"),
             ParamSpec::new("alpha", "rad", -pi, pi, 0.0, "Euler angle about X (first)"),
             ParamSpec::new("beta", "rad", -pi, pi, 0.0, "Euler angle about Y (second)"),
             ParamSpec::new("delta", "rad", -pi, pi, 0.0, "Euler angle about Z (third)"),
@@ -89,5 +91,22 @@ impl PhysicsTerm for TrackerPose {
             j.set_column(3 + k, &(m.transpose() * d));
         }
         Ok(j)
+    }
+    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
+        check_len_with(|| self.label(), p, 6)?;
+        let point = match s.point {
+            Some(v) => v,
+            None => s.point3(&self.label())?,
+        };
+        let d = point - Vector3::new(p[0], p[1], p[2]);
+        let (a, b, c) = (p[3], p[4], p[5]);
+        let r = euler_xyz(a, b, c);
+        value[..3].copy_from_slice((r.transpose() * d).as_slice());
+        jac.fixed_view_mut::<3, 3>(0, 0).copy_from(&(-r.transpose()));
+        let dr = [drx(a) * ry(b) * rz(c), rx(a) * dry(b) * rz(c), rx(a) * ry(b) * drz(c)];
+        for (k, m) in dr.iter().enumerate() {
+            jac.column_mut(3 + k).copy_from(&(m.transpose() * d));
+        }
+        Ok(())
     }
 }

@@ -7,13 +7,13 @@
 //! ρ = 154.999 + 0.075(1 − e^(−t/90)) (the nest distances are the A of ρ, the drift is B).
 //! Effect: range change (measured − true), m.
 
-use nalgebra::{DMatrix, DVector};
+use nalgebra::{DMatrix, DMatrixViewMut, DVector};
 
-use crate::catalog::TermId;
+use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
-use crate::term::{check_len, EffectKind, ParamSpec, PhysicsTerm, Prediction};
+use crate::term::{check_len, check_len_with, EffectKind, ParamSpec, PhysicsTerm, Prediction};
 
 /// A + B·(1 − e^(−t/τ)).
 pub fn warmup_drift(a: f64, b: f64, tau: f64, t: f64) -> f64 {
@@ -65,5 +65,18 @@ impl PhysicsTerm for TrackerWarmup {
         let t = s.time_on(&self.label())?;
         let e = (-t / p[2]).exp();
         Ok(DMatrix::from_row_slice(1, 3, &[1.0, 1.0 - e, -p[1] * t / (p[2] * p[2]) * e]))
+    }
+    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
+        check_len_with(|| self.label(), p, 3)?;
+        let t = match s.time_since_power_on {
+            Some(t) => t,
+            None => s.time_on(&self.label())?,
+        };
+        value[0] = warmup_drift(p[0], p[1], p[2], t);
+        let e = (-t / p[2]).exp();
+        jac[(0, 0)] = 1.0;
+        jac[(0, 1)] = 1.0 - e;
+        jac[(0, 2)] = -p[1] * t / (p[2] * p[2]) * e;
+        Ok(())
     }
 }

@@ -15,7 +15,7 @@
 
 use nalgebra::{DMatrix, Vector3};
 
-use crate::catalog::TermId;
+use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals, TemperatureHistory};

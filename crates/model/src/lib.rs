@@ -1,0 +1,28 @@
+//! # metrocell-model — the shared forward model
+//!
+//! One model, three users: the twin (crates/twin) evaluates it at the true parameters and adds
+//! noise, scheduling and rendering; the estimator fits its parameters; `diagnose` adds candidate
+//! terms to it. No DDS, no I/O.
+//!
+//! * [`machine`] — the machine families' validated geometry ([`MachineGeometry`],
+//!   [`MachineKinematics`], [`FiveAxisMachine`], [`SerialArm`]) and the joint-vector conventions.
+//! * [`instrument_pose`] — the one instrument pose type and its frame convention.
+//! * [`forward`] — [`ForwardModel`]: tool state, predicted tracker reading and its analytic
+//!   Jacobian w.r.t. the stacked parameter vector.
+//! * [`parameters`] — free/fixed mask and priors per parameter ([`ParameterSetup`]), and the
+//!   pairs of parameters parallel by construction ([`ForwardModel::parallel_pairs`]).
+//!
+//! Units SI (m, rad, s, Pa), temperatures °C, as in crates/physics.
+
+// `!(x > 0.0)` is used on purpose: unlike `x <= 0.0` it also rejects NaN.
+#![allow(clippy::neg_cmp_op_on_partial_ord)]
+
+pub mod forward;
+pub mod instrument_pose;
+pub mod machine;
+pub mod parameters;
+
+pub use forward::{DisplacementCache, ForwardModel, KinematicTruth, ToolState, TrackerPrediction, Workspace, TRACKER_ROWS};
+pub use instrument_pose::InstrumentPose;
+pub use parameters::{ParallelPair, ParameterSetup, Prior};
+pub use machine::{FiveAxisMachine, MachineGeometry, MachineKinematics, SerialArm, FIVE_AXIS_JOINTS};

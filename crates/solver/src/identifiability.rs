@@ -143,9 +143,15 @@ impl Identifiability {
     }
 }
 
-/// Index of the largest |v|.
+/// Whether |a| beats |b| as a pivot: larger beyond round-off (ties go to the earlier parameter,
+/// so that equal shares read in the labels' order).
+fn beats(a: f64, b: f64) -> bool {
+    a.abs() > b.abs() * (1.0 + 1e-9)
+}
+
+/// Index of the largest |v| (the first of equals).
 fn leading(v: &[f64]) -> usize {
-    (0..v.len()).max_by(|&a, &b| v[a].abs().total_cmp(&v[b].abs())).unwrap_or(0)
+    (0..v.len()).fold(0, |best, k| if beats(v[k], v[best]) { k } else { best })
 }
 
 /// `x` with `digits` significant digits, without trailing zeros ("0.71", "1200", "3.5e-7").
@@ -177,7 +183,7 @@ fn echelon(rows: &[(f64, Vec<f64>)]) -> Vec<(f64, Vec<f64>)> {
         let mut best = (i, 0, 0.0f64);
         for (r, row) in b.iter().enumerate().skip(i) {
             for (c, v) in row.1.iter().enumerate() {
-                if !used[c] && v.abs() > best.2 {
+                if !used[c] && (beats(*v, best.2) || (best.2 == 0.0 && *v != 0.0)) {
                     best = (r, c, v.abs());
                 }
             }

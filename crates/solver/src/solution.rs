@@ -43,10 +43,11 @@ pub struct Solution {
     pub residuals: Vec<f64>,
     /// √(Σ rᵢ²/m), in the residuals' units.
     pub residual_rms: f64,
-    /// Observations (residuals + priors) minus free parameters.
+    /// Observations (residuals not down-weighted + priors) minus free parameters.
     pub degrees_of_freedom: usize,
-    /// A-posteriori variance factor σ̂₀² = r̂ᵀWr̂/(n − p), W the whitening times the robust
-    /// weights ρ' at the solution (priors included as observations); None with no redundancy.
+    /// A-posteriori variance factor σ̂₀² = r̂ᵀWr̂/(n − p), W the whitening, over the residuals
+    /// the loss keeps quadratic (all for the linear loss; the down-weighted ones are left out of
+    /// both the sum and n) and the priors; None with no redundancy.
     pub variance_factor: Option<f64>,
     /// (J̃ᵀWJ̃ + priors)⁻¹ on the free parameters, zero rows and columns for fixed ones: the
     /// covariance if the σᵢ given are right. None if the free parameters are not all

@@ -19,6 +19,11 @@ pub fn relative_steps(x: &[f64], relative: f64, typical: &[f64]) -> Vec<f64> {
     x.iter().zip(typical).map(|(v, t)| relative * v.abs().max(*t)).collect()
 }
 
+/// Steps hᵢ = `relative`·max(|xᵢ|, 1): for parameters of order one (angles in rad, lengths in m).
+pub fn steps_with_unit_floor(x: &[f64], relative: f64) -> Vec<f64> {
+    x.iter().map(|v| relative * v.abs().max(1.0)).collect()
+}
+
 /// Jacobian of `f` at `x` (rows: outputs, columns: parameters) with per-parameter steps
 /// `steps` (see [`relative_steps`]). None when `f` fails at a stepped point.
 pub fn central_difference<F>(mut f: F, x: &[f64], steps: &[f64], order: Order) -> Option<DMatrix<f64>>

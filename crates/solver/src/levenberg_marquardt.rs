@@ -206,7 +206,7 @@ pub fn solve<P: Problem + ?Sized>(problem: &P, x0: &[f64], options: &Options) ->
             break Termination::Step;
         }
     };
-    finish(ws, x, f, iterations, evaluations, termination, options)
+    finish(ws, x, f, iterations, evaluations, termination, lambda, options)
 }
 
 /// (A + λ·D²)·δ = −g with the active parameters held (δₖ = 0), into `delta`. False if the
@@ -263,6 +263,7 @@ fn finish(
     iterations: usize,
     evaluations: usize,
     termination: Termination,
+    damping: f64,
     options: &Options,
 ) -> Result<Solution, SolverError> {
     let (m, n) = ws.j.shape();
@@ -297,6 +298,7 @@ fn finish(
         iterations,
         evaluations,
         termination,
+        damping,
         residuals,
         residual_rms,
         degrees_of_freedom: dof,

@@ -39,6 +39,8 @@ pub struct Solution {
     /// Residual evaluations, the start included.
     pub evaluations: usize,
     pub termination: Termination,
+    /// The damping λ at the end (relative to the column-scaled normal matrix).
+    pub damping: f64,
     /// r(x) as the problem returns it (unwhitened).
     pub residuals: Vec<f64>,
     /// √(Σ rᵢ²/m), in the residuals' units.

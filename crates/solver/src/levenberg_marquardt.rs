@@ -26,6 +26,8 @@ struct Workspace {
     /// The same whitened and robust-weighted: √ρ'ᵢ·rᵢ/σᵢ.
     r: Vec<f64>,
     j: DMatrix<f64>,
+    /// The trial point's Jacobian, when trials are evaluated with it (swapped in on acceptance).
+    trial_j: DMatrix<f64>,
     inv_sigma: Vec<f64>,
     row_scale: Vec<f64>,
     a: DMatrix<f64>,
@@ -49,20 +51,34 @@ fn cost(r: &[f64], inv_sigma: &[f64], x: &[f64], options: &Options) -> Option<f6
     c.is_finite().then_some(c)
 }
 
+/// r(x) and J(x) into the buffers, with non-finite values reported as not evaluable.
+fn evaluate<P: Problem + ?Sized>(problem: &P, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>) -> Result<(), NotEvaluable> {
+    problem.residuals_and_jacobian(x, r, j)?;
+    if let Some(i) = r.iter().position(|v| !v.is_finite()) {
+        return Err(NotEvaluable(format!("residual {i} is {}", r[i])));
+    }
+    if let Some(i) = j.iter().position(|v| !v.is_finite()) {
+        let m = j.nrows().max(1);
+        return Err(NotEvaluable(format!("Jacobian entry ({}, {}) is not finite", i % m, i / m)));
+    }
+    Ok(())
+}
+
 impl Workspace {
-    /// Evaluates r and J at x, then whitens and robust-weights them in place and forms A, g.
-    /// Returns the cost at x.
+    /// Evaluates r and J at x, then linearises (see [`Workspace::weigh`]).
     fn linearise<P: Problem + ?Sized>(&mut self, problem: &P, x: &[f64], options: &Options) -> Result<f64, NotEvaluable> {
-        problem.residuals_and_jacobian(x, &mut self.r, &mut self.j)?;
+        evaluate(problem, x, &mut self.r, &mut self.j)?;
+        self.weigh(x, options)
+    }
+
+    /// With r and J evaluated at x: whitens and robust-weights them in place and forms A, g.
+    /// Returns the cost at x.
+    fn weigh(&mut self, x: &[f64], options: &Options) -> Result<f64, NotEvaluable> {
         if let Some(i) = self.r.iter().position(|v| !v.is_finite()) {
             return Err(NotEvaluable(format!("residual {i} is {}", self.r[i])));
         }
         self.raw.copy_from_slice(&self.r);
         let f = cost(&self.raw, &self.inv_sigma, x, options).ok_or_else(|| NotEvaluable("cost is not finite".into()))?;
-        if let Some(i) = self.j.iter().position(|v| !v.is_finite()) {
-            let m = self.j.nrows().max(1);
-            return Err(NotEvaluable(format!("Jacobian entry ({}, {}) is not finite", i % m, i / m)));
-        }
         for ((q, ri), si) in self.row_scale.iter_mut().zip(&self.r).zip(&self.inv_sigma) {
             let z = ri * si;
             *q = si * options.loss.evaluate(z * z).1.sqrt();
@@ -96,6 +112,7 @@ pub fn solve<P: Problem + ?Sized>(problem: &P, x0: &[f64], options: &Options) ->
         raw: vec![0.0; m],
         r: vec![0.0; m],
         j: DMatrix::zeros(m, n),
+        trial_j: if options.jacobian_on_trials { DMatrix::zeros(m, n) } else { DMatrix::zeros(0, 0) },
         inv_sigma,
         row_scale: vec![1.0; m],
         a: DMatrix::zeros(n, n),
@@ -167,7 +184,12 @@ pub fn solve<P: Problem + ?Sized>(problem: &P, x0: &[f64], options: &Options) ->
             }
             let predicted: f64 = (0..n).map(|k| -ws.g[k] * delta[k] - 0.5 * delta[k] * ad[k]).sum();
             evaluations += 1;
-            let trial_cost = match problem.residuals(&x_trial, &mut r_trial) {
+            let evaluated = if options.jacobian_on_trials {
+                evaluate(problem, &x_trial, &mut r_trial, &mut ws.trial_j)
+            } else {
+                problem.residuals(&x_trial, &mut r_trial)
+            };
+            let trial_cost = match evaluated {
                 Ok(()) => cost(&r_trial, &ws.inv_sigma, &x_trial, options),
                 Err(_) => None,
             };
@@ -196,9 +218,16 @@ pub fn solve<P: Problem + ?Sized>(problem: &P, x0: &[f64], options: &Options) ->
         };
         std::mem::swap(&mut x, &mut x_trial);
         let reduction = f - ft;
-        // The same point as the trial, re-evaluated with its Jacobian: the cost is recomputed
-        // (identical up to the problem's own round-off) so that f always matches ws.
-        f = ws.linearise(problem, &x, options).map_err(|e| SolverError::SolutionNotEvaluable(e.0))?;
+        // The cost is recomputed from the accepted point's residuals (the same as the trial's)
+        // so that f always matches ws.
+        f = if options.jacobian_on_trials {
+            std::mem::swap(&mut ws.r, &mut r_trial);
+            std::mem::swap(&mut ws.j, &mut ws.trial_j);
+            ws.weigh(&x, options)
+        } else {
+            ws.linearise(problem, &x, options)
+        }
+        .map_err(|e| SolverError::SolutionNotEvaluable(e.0))?;
         if reduction <= options.ftol * (f + reduction) && rho > 0.25 {
             break Termination::Cost;
         }

@@ -50,6 +50,10 @@ pub struct Options {
     /// Initial damping λ₀ relative to the scaled normal matrix (unit diagonal).
     pub initial_damping: f64,
     pub null_space: NullSpace,
+    /// Evaluate each trial point with its Jacobian (one pass per accepted step instead of two,
+    /// at the price of a Jacobian for each rejected one and a second m × n buffer). Set false for
+    /// problems whose Jacobian costs much more than their residuals.
+    pub jacobian_on_trials: bool,
 }
 
 impl Default for Options {
@@ -66,6 +70,7 @@ impl Default for Options {
             gtol: 1e-12,
             initial_damping: 1e-3,
             null_space: NullSpace::Damped,
+            jacobian_on_trials: true,
         }
     }
 }

@@ -299,8 +299,10 @@ fn levenberg_marquardt(
         bounds: Some((vec![ninf, ninf, ninf, ninf, ninf, -3.0, ninf, ninf], vec![inf, inf, inf, inf, inf, 3.0, inf, inf])),
         fixed: vec![false, false, !fit_kappa, false, false, false, false, false],
         max_iterations: 30,
-        ftol: 1e-10,
-        xtol: 1e-9,
+        // Converged when a step changes the cost by < 1e-9 of itself: parameters then move by
+        // well under 1 % of their standard uncertainty.
+        ftol: 1e-9,
+        xtol: 1e-8,
         gtol: 1e-10,
         ..Options::default()
     };

@@ -8,7 +8,6 @@
 //! rows 3–5 the angular velocity in the base frame.
 
 use crate::error::{check_finite, KinematicsError};
-use metrocell_solver::{solve, NotEvaluable, Options, Problem};
 use nalgebra::{DMatrix, DVector, Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
 
 /// What a joint does with its variable.
@@ -93,7 +92,7 @@ pub struct IkSettings {
     pub position_tolerance: f64,
     /// ... and the orientation error below this (rad) (ignored for position-only targets).
     pub orientation_tolerance: f64,
-    /// Initial damping λ of Levenberg–Marquardt, relative to the column-scaled JᵀJ (unit diagonal).
+    /// Initial damping λ (adapted Levenberg–Marquardt style).
     pub initial_damping: f64,
     /// Weight of 1 rad of orientation error relative to 1 m of position error.
     pub orientation_weight: f64,
@@ -121,7 +120,7 @@ pub struct IkReport {
     pub position_error: f64,
     /// Final orientation error angle (rad) (0 for position-only targets).
     pub orientation_error: f64,
-    /// Final damping λ (relative, as `IkSettings::initial_damping`).
+    /// Final damping λ.
     pub damping: f64,
 }
 
@@ -258,9 +257,8 @@ impl SerialChain {
         Ok(jac)
     }
 
-    /// Damped-least-squares inverse kinematics from the initial guess `q0`: Levenberg–Marquardt
-    /// ([`metrocell_solver::solve`]) on the residual (tool − target) with the geometric Jacobian,
-    /// iterated to round-off; `converged` says whether the tolerances are met.
+    /// Damped-least-squares inverse kinematics from the initial guess `q0`.
+    /// Each step solves `(JᵀJ + λ²I) Δq = Jᵀe`; λ shrinks after an accepted step and grows after a rejected one.
     pub fn inverse(
         &self,
         target: &IkTarget,
@@ -268,85 +266,74 @@ impl SerialChain {
         settings: &IkSettings,
     ) -> Result<IkReport, KinematicsError> {
         self.check_q(q0)?;
-        let problem = IkProblem { chain: self, target, orientation_weight: settings.orientation_weight };
-        let options = Options {
-            max_iterations: settings.max_iterations,
-            initial_damping: settings.initial_damping,
-            ftol: 0.0,
-            xtol: 1e-15,
-            gtol: 0.0,
-            ..Options::default()
-        };
-        let solution = solve(&problem, q0, &options).map_err(|e| KinematicsError::InvalidValue {
-            field: "inverse kinematics".into(),
-            value: f64::NAN,
-            reason: e.to_string(),
-        })?;
-        let (pe, oe) = tool_errors(&self.tool_pose(&solution.x)?, target);
+        let n = self.dof();
         let with_orientation = matches!(target, IkTarget::Pose(_));
-        Ok(IkReport {
-            converged: pe <= settings.position_tolerance
-                && (!with_orientation || oe <= settings.orientation_tolerance),
-            q: DVector::from_vec(solution.x),
-            iterations: solution.iterations,
-            position_error: pe,
-            orientation_error: oe,
-            damping: solution.damping,
-        })
-    }
-}
-
-/// Position error norm (m) and orientation error angle (rad; 0 for a position target) of `pose`.
-fn tool_errors(pose: &Isometry3<f64>, target: &IkTarget) -> (f64, f64) {
-    match target {
-        IkTarget::Position(p) => ((pose.translation.vector - p).norm(), 0.0),
-        IkTarget::Pose(t) => (
-            (pose.translation.vector - t.translation.vector).norm(),
-            (pose.rotation * t.rotation.inverse()).angle(),
-        ),
-    }
-}
-
-/// Inverse kinematics as least squares: residual (tool position − target, weight·rotation vector
-/// of R_tool·R_targetᵀ), whose Jacobian is the geometric Jacobian (exact for the position rows,
-/// to first order in the orientation error for the rotation rows, which is what LM needs).
-struct IkProblem<'a> {
-    chain: &'a SerialChain,
-    target: &'a IkTarget,
-    orientation_weight: f64,
-}
-
-impl Problem for IkProblem<'_> {
-    fn residual_count(&self) -> usize {
-        match self.target {
-            IkTarget::Position(_) => 3,
-            IkTarget::Pose(_) => 6,
-        }
-    }
-    fn parameter_count(&self) -> usize {
-        self.chain.dof()
-    }
-    fn residuals(&self, q: &[f64], r: &mut [f64]) -> Result<(), NotEvaluable> {
-        let pose = self.chain.tool_pose(q).map_err(|e| NotEvaluable(e.to_string()))?;
-        match self.target {
-            IkTarget::Position(p) => r.copy_from_slice((pose.translation.vector - p).as_slice()),
-            IkTarget::Pose(t) => {
-                r[..3].copy_from_slice((pose.translation.vector - t.translation.vector).as_slice());
-                let w = (pose.rotation * t.rotation.inverse()).scaled_axis() * self.orientation_weight;
-                r[3..].copy_from_slice(w.as_slice());
+        let rows = if with_orientation { 6 } else { 3 };
+        let residual = |q: &DVector<f64>| -> Result<(DVector<f64>, f64, f64), KinematicsError> {
+            let pose = self.tool_pose(q.as_slice())?;
+            let mut e = DVector::zeros(rows);
+            let (pe, oe) = match target {
+                IkTarget::Position(p) => {
+                    let d = p - pose.translation.vector;
+                    e.rows_mut(0, 3).copy_from(&d);
+                    (d.norm(), 0.0)
+                }
+                IkTarget::Pose(t) => {
+                    let d = t.translation.vector - pose.translation.vector;
+                    let r = (t.rotation * pose.rotation.inverse()).scaled_axis();
+                    e.rows_mut(0, 3).copy_from(&d);
+                    e.rows_mut(3, 3)
+                        .copy_from(&(r * settings.orientation_weight));
+                    (d.norm(), r.norm())
+                }
+            };
+            Ok((e, pe, oe))
+        };
+        let done = |pe: f64, oe: f64| {
+            pe <= settings.position_tolerance
+                && (!with_orientation || oe <= settings.orientation_tolerance)
+        };
+        let mut q = DVector::from_row_slice(q0);
+        let (mut e, mut pe, mut oe) = residual(&q)?;
+        let mut lambda = settings.initial_damping;
+        let mut iterations = 0;
+        while iterations < settings.max_iterations && !done(pe, oe) {
+            iterations += 1;
+            let full = self.jacobian(q.as_slice())?;
+            let mut jac = full.rows(0, rows).into_owned();
+            if with_orientation {
+                let mut ang = jac.rows_mut(3, 3);
+                ang *= settings.orientation_weight;
+            }
+            let jt = jac.transpose();
+            let a = &jt * &jac + DMatrix::identity(n, n) * (lambda * lambda);
+            let g = &jt * &e;
+            let Some(dq) = a.clone().cholesky().map(|c| c.solve(&g)) else {
+                lambda *= 10.0;
+                continue;
+            };
+            let q_new = &q + dq;
+            let (e_new, pe_new, oe_new) = residual(&q_new)?;
+            if e_new.norm() < e.norm() {
+                q = q_new;
+                e = e_new;
+                pe = pe_new;
+                oe = oe_new;
+                lambda = (lambda / 10.0).max(1e-12);
+            } else {
+                lambda *= 10.0;
+                if lambda > 1e12 {
+                    break;
+                }
             }
         }
-        Ok(())
-    }
-    fn residuals_and_jacobian(&self, q: &[f64], r: &mut [f64], j: &mut DMatrix<f64>) -> Result<(), NotEvaluable> {
-        self.residuals(q, r)?;
-        let full = self.chain.jacobian(q).map_err(|e| NotEvaluable(e.to_string()))?;
-        let rows = r.len();
-        j.copy_from(&full.rows(0, rows));
-        if rows == 6 {
-            let mut ang = j.rows_mut(3, 3);
-            ang *= self.orientation_weight;
-        }
-        Ok(())
+        Ok(IkReport {
+            converged: done(pe, oe),
+            q,
+            iterations,
+            position_error: pe,
+            orientation_error: oe,
+            damping: lambda,
+        })
     }
 }

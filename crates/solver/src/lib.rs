@@ -1,5 +1,5 @@
-//! Nonlinear least squares for metrocell: one solver for camera calibration, edge fitting,
-//! inverse kinematics and error-model identification.
+//! Nonlinear least squares for metrocell: one solver for camera calibration and pose refinement,
+//! edge and corner fitting, and error-model identification.
 //!
 //! **Approach.** A dense Levenberg–Marquardt ([`solve`]) on a [`Problem`] that writes residuals
 //! and its analytic Jacobian into buffers allocated once per solve, with per-residual whitening

@@ -25,11 +25,15 @@ pub fn steps_with_unit_floor(x: &[f64], relative: f64) -> Vec<f64> {
 }
 
 /// Jacobian of `f` at `x` (rows: outputs, columns: parameters) with per-parameter steps
-/// `steps` (see [`relative_steps`]). None when `f` fails at a stepped point.
+/// `steps` (see [`relative_steps`]). None when `f` fails at a stepped point, when `steps` and `x`
+/// differ in length or a step is not finite and positive.
 pub fn central_difference<F>(mut f: F, x: &[f64], steps: &[f64], order: Order) -> Option<DMatrix<f64>>
 where
     F: FnMut(&[f64]) -> Option<DVector<f64>>,
 {
+    if steps.len() != x.len() || steps.iter().any(|h| !(h.is_finite() && *h > 0.0)) {
+        return None;
+    }
     let mut q = x.to_vec();
     let mut at = |i: usize, k: f64, q: &mut Vec<f64>| {
         q[i] = x[i] + k * steps[i];
@@ -82,5 +86,7 @@ mod tests {
         let j2c = central_difference(f, &x, &coarse, Order::Second).unwrap();
         assert!(max_relative_difference(&j2c, &exact) > 1e-8);
         assert!(central_difference(|_: &[f64]| None, &x, &coarse, Order::Second).is_none());
+        assert!(central_difference(f, &x, &coarse[..1], Order::Second).is_none());
+        assert!(central_difference(f, &x, &[1e-6, 0.0], Order::Second).is_none());
     }
 }

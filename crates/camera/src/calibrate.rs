@@ -11,7 +11,8 @@
 use crate::distortion::Distortion;
 use crate::error::{invalid, CameraError, Result};
 use crate::homography::homography_dlt;
-use crate::least_squares::{levenberg_marquardt, normal_inverse, LeastSquares};
+use crate::solver_bridge::{not_evaluable, solve_pixels};
+use metrocell_solver::{NotEvaluable, Problem};
 use crate::model::CameraModel;
 use crate::pose::Pose;
 use crate::pose_estimation::refine_pose;
@@ -175,72 +176,92 @@ fn intrinsic_map(
 /// (object points, image points) of one view.
 type Correspondences<'a> = (&'a [[f64; 3]], &'a [[f64; 2]]);
 
-struct Problem<'a> {
+/// Flat state: the free intrinsics as offsets from `base` through the map `t` (full parameters
+/// = base + t·x[..ni]), then each view's pose as (t, rvec); steps on the poses are the
+/// perturbation δ of [`crate::pose`].
+struct CalibrationProblem<'a> {
     views: Vec<Correspondences<'a>>,
     t: DMatrix<f64>,
+    base: CameraModel,
+    base_params: DVector<f64>,
     n_points: usize,
 }
 
-#[derive(Clone)]
-struct State {
-    cam: CameraModel,
-    poses: Vec<Pose>,
+impl CalibrationProblem<'_> {
+    fn camera(&self, x: &[f64]) -> CameraModel {
+        let ni = self.t.ncols();
+        let p = &self.base_params + &self.t * DVector::from_column_slice(&x[..ni]);
+        self.base.with_params_unchecked(p.as_slice())
+    }
+
+    fn pose(&self, x: &[f64], v: usize) -> Pose {
+        Pose::from_state(&x[self.t.ncols() + 6 * v..])
+    }
 }
 
-impl LeastSquares for Problem<'_> {
-    type State = State;
-    fn evaluate(&self, s: &State, jacobian: bool) -> Option<(DVector<f64>, Option<DMatrix<f64>>)> {
-        let ni = self.t.ncols();
-        let np = ni + 6 * self.views.len();
-        let mut r = DVector::zeros(2 * self.n_points);
-        let mut j = if jacobian {
-            Some(DMatrix::zeros(2 * self.n_points, np))
-        } else {
-            None
-        };
-        let nfull = self.t.nrows();
+impl Problem for CalibrationProblem<'_> {
+    fn residual_count(&self) -> usize {
+        2 * self.n_points
+    }
+    fn parameter_count(&self) -> usize {
+        self.t.ncols() + 6 * self.views.len()
+    }
+    fn residuals(&self, x: &[f64], r: &mut [f64]) -> std::result::Result<(), NotEvaluable> {
+        let cam = self.camera(x);
         let mut row = 0;
         for (v, (obj, img)) in self.views.iter().enumerate() {
+            let pose = self.pose(x, v);
             for (o, m) in obj.iter().zip(img.iter()) {
-                let pr = s
-                    .cam
-                    .project_with_jacobians(&s.poses[v], &Vector3::from(*o))
-                    .ok()?;
-                r[row] = pr.u - m[0];
-                r[row + 1] = pr.v - m[1];
-                if let Some(j) = j.as_mut() {
-                    let mut full = DMatrix::zeros(2, nfull);
-                    full.view_mut((0, 0), (2, 4)).copy_from(&pr.d_intrinsics);
-                    full.view_mut((0, 4), (2, nfull - 4))
-                        .copy_from(&pr.d_distortion);
-                    j.view_mut((row, 0), (2, ni)).copy_from(&(full * &self.t));
-                    j.view_mut((row, ni + 6 * v), (2, 6)).copy_from(&pr.d_pose);
-                }
+                let [u, w] = cam.project(&pose, &Vector3::from(*o)).map_err(not_evaluable)?;
+                r[row] = u - m[0];
+                r[row + 1] = w - m[1];
                 row += 2;
             }
         }
-        Some((r, j))
+        Ok(())
     }
-    fn apply(&self, s: &State, d: &DVector<f64>) -> State {
+    fn residuals_and_jacobian(&self, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>) -> std::result::Result<(), NotEvaluable> {
+        let cam = self.camera(x);
         let ni = self.t.ncols();
-        let dfull = &self.t * d.rows(0, ni);
-        let p: Vec<f64> = s
-            .cam
-            .params()
-            .iter()
-            .zip(dfull.iter())
-            .map(|(a, b)| a + b)
-            .collect();
-        State {
-            cam: s.cam.with_params_unchecked(&p),
-            poses: s
-                .poses
-                .iter()
-                .enumerate()
-                .map(|(v, pose)| pose.perturbed(d.rows(ni + 6 * v, 6).as_slice()))
-                .collect(),
+        let nfull = self.t.nrows();
+        j.fill(0.0);
+        let mut full = DMatrix::zeros(2, nfull);
+        let mut row = 0;
+        for (v, (obj, img)) in self.views.iter().enumerate() {
+            let pose = self.pose(x, v);
+            for (o, m) in obj.iter().zip(img.iter()) {
+                let pr = cam.project_with_jacobians(&pose, &Vector3::from(*o)).map_err(not_evaluable)?;
+                r[row] = pr.u - m[0];
+                r[row + 1] = pr.v - m[1];
+                full.view_mut((0, 0), (2, 4)).copy_from(&pr.d_intrinsics);
+                full.view_mut((0, 4), (2, nfull - 4)).copy_from(&pr.d_distortion);
+                j.view_mut((row, 0), (2, ni)).copy_from(&(&full * &self.t));
+                j.view_mut((row, ni + 6 * v), (2, 6)).copy_from(&pr.d_pose);
+                row += 2;
+            }
+        }
+        Ok(())
+    }
+    fn retract(&self, x: &[f64], delta: &[f64], out: &mut [f64]) {
+        let ni = self.t.ncols();
+        for k in 0..ni {
+            out[k] = x[k] + delta[k];
+        }
+        for v in 0..self.views.len() {
+            let at = ni + 6 * v;
+            out[at..at + 6].copy_from_slice(&self.pose(x, v).perturbed(&delta[at..at + 6]).to_state());
         }
     }
+}
+
+/// The fitted state and what the covariance needs.
+struct Fit {
+    cam: CameraModel,
+    poses: Vec<Pose>,
+    residuals: DVector<f64>,
+    /// (JᵀJ)⁻¹ over the free parameters; None if they are not all observable.
+    normal_inverse: Option<DMatrix<f64>>,
+    iterations: usize,
 }
 
 fn validate_view(view: &View, min_points: usize) -> std::result::Result<(), RejectionReason> {
@@ -284,17 +305,27 @@ fn run_lm(
     poses: Vec<Pose>,
     t: &DMatrix<f64>,
     max_it: usize,
-) -> Result<(State, DVector<f64>, DMatrix<f64>, usize)> {
-    let problem = Problem {
+) -> Result<Fit> {
+    let problem = CalibrationProblem {
         views: views
             .iter()
             .map(|(_, v)| (v.object_points.as_slice(), v.image_points.as_slice()))
             .collect(),
         t: t.clone(),
+        base_params: DVector::from_vec(cam.params()),
+        base: cam,
         n_points: views.iter().map(|(_, v)| v.object_points.len()).sum(),
     };
-    let out = levenberg_marquardt(&problem, State { cam, poses }, max_it, "calibration")?;
-    Ok((out.state, out.residuals, out.jacobian, out.iterations))
+    let mut x0 = vec![0.0; t.ncols()];
+    x0.extend(poses.iter().flat_map(|p| p.to_state()));
+    let out = solve_pixels(&problem, &x0, max_it, "calibration")?;
+    Ok(Fit {
+        cam: problem.camera(&out.x),
+        poses: (0..views.len()).map(|v| problem.pose(&out.x, v)).collect(),
+        residuals: DVector::from_vec(out.residuals),
+        normal_inverse: out.covariance_unscaled,
+        iterations: out.iterations,
+    })
 }
 
 fn view_rms(res: &DVector<f64>, views: &[(usize, &View)]) -> Vec<f64> {
@@ -431,11 +462,10 @@ pub fn calibrate(
         )));
     }
     let t = intrinsic_map(n_dist, model, flags, aspect);
-    let (mut state, mut res, mut jac, mut iterations) =
-        run_lm(&used, cam, poses, &t, flags.max_iterations)?;
+    let mut fit = run_lm(&used, cam, poses, &t, flags.max_iterations)?;
     // Outlier views after the first pass.
     if let Some(kratio) = flags.outlier_view_ratio {
-        let rms = view_rms(&res, &used);
+        let rms = view_rms(&fit.residuals, &used);
         let mut sorted = rms.clone();
         sorted.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
         let median = if sorted.len() % 2 == 1 {
@@ -458,18 +488,16 @@ pub fn calibrate(
                 });
             }
             let keep: Vec<usize> = (0..used.len()).filter(|k| !bad.contains(k)).collect();
-            let poses: Vec<Pose> = keep.iter().map(|&k| state.poses[k]).collect();
+            let poses: Vec<Pose> = keep.iter().map(|&k| fit.poses[k]).collect();
             used = keep.iter().map(|&k| used[k]).collect();
-            let out = run_lm(&used, state.cam, poses, &t, flags.max_iterations)?;
-            state = out.0;
-            res = out.1;
-            jac = out.2;
-            iterations += out.3;
+            let first_pass = fit.iterations;
+            fit = run_lm(&used, fit.cam, poses, &t, flags.max_iterations)?;
+            fit.iterations += first_pass;
         }
     }
     rejected.sort_by_key(|r| r.index);
     let n_points: usize = used.iter().map(|(_, v)| v.object_points.len()).sum();
-    let p = jac.ncols();
+    let p = t.ncols() + 6 * used.len();
     if 2 * n_points <= p {
         return Err(CameraError::TooFewPoints {
             what: "calibration (observations vs free parameters)".into(),
@@ -477,9 +505,9 @@ pub fn calibrate(
             got: n_points,
         });
     }
-    let ss = res.norm_squared();
+    let ss = fit.residuals.norm_squared();
     let sigma2 = ss / (2 * n_points - p) as f64;
-    let inv = normal_inverse(&jac).ok_or_else(|| CameraError::Degenerate {
+    let inv = fit.normal_inverse.ok_or_else(|| CameraError::Degenerate {
         what: "calibration".into(),
         reason: "parameters not observable (JᵀJ singular): add views with more tilt".into(),
     })?;
@@ -489,13 +517,13 @@ pub fn calibrate(
     let param_std: Vec<f64> = (0..cov_intr.nrows())
         .map(|i| cov_intr[(i, i)].max(0.0).sqrt())
         .collect();
-    let rms_views = view_rms(&res, &used);
+    let rms_views = view_rms(&fit.residuals, &used);
     let views_out = used
         .iter()
         .enumerate()
         .map(|(k, (i, v))| CalibratedView {
             index: *i,
-            pose: state.poses[k],
+            pose: fit.poses[k],
             pose_std: std::array::from_fn(|a| {
                 cov[(ni + 6 * k + a, ni + 6 * k + a)].max(0.0).sqrt()
             }),
@@ -504,7 +532,7 @@ pub fn calibrate(
         })
         .collect();
     Ok(Calibration {
-        camera: state.cam,
+        camera: fit.cam,
         param_std,
         param_covariance: cov_intr,
         views: views_out,
@@ -513,6 +541,6 @@ pub fn calibrate(
         sigma_px: sigma2.sqrt(),
         n_points,
         n_free_params: p,
-        iterations,
+        iterations: fit.iterations,
     })
 }

@@ -34,7 +34,7 @@ pub mod camera_info_msg;
 pub mod distortion;
 pub mod error;
 pub mod homography;
-pub(crate) mod least_squares;
+pub(crate) mod solver_bridge;
 pub mod model;
 pub mod pose;
 pub mod pose_estimation;

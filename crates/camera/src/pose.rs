@@ -52,6 +52,17 @@ impl Pose {
         self.rotation * p + self.translation
     }
 
+    /// The pose as the solver's flat state (t, rvec): translation (m), then rotation vector (rad).
+    pub(crate) fn to_state(self) -> [f64; 6] {
+        let r = self.rvec();
+        [self.translation.x, self.translation.y, self.translation.z, r[0], r[1], r[2]]
+    }
+
+    /// Inverse of [`Self::to_state`] (the first six values of `x`).
+    pub(crate) fn from_state(x: &[f64]) -> Pose {
+        Pose::from_rvec_tvec([x[3], x[4], x[5]], [x[0], x[1], x[2]])
+    }
+
     /// Applies the perturbation δ = (δt, δθ) of the module-level convention.
     pub fn perturbed(&self, delta: &[f64]) -> Pose {
         let dt = Vector3::new(delta[0], delta[1], delta[2]);

@@ -10,11 +10,12 @@
 
 use crate::error::{CameraError, Result};
 use crate::homography::homography_dlt;
-use crate::least_squares::{levenberg_marquardt, normal_inverse, LeastSquares};
+use crate::solver_bridge::{not_evaluable, solve_pixels};
+use metrocell_solver::{NotEvaluable, Problem};
 use crate::model::CameraModel;
 use crate::pose::Pose;
 use crate::undistort::{undistort_to_normalized, UndistortCriteria};
-use nalgebra::{DMatrix, DVector, Matrix3, Matrix6, Rotation3, Vector3};
+use nalgebra::{DMatrix, Matrix3, Matrix6, Rotation3, Vector3};
 
 /// A refined pose with its uncertainty.
 #[derive(Debug, Clone, PartialEq)]
@@ -247,28 +248,35 @@ struct PoseProblem<'a> {
     image: &'a [[f64; 2]],
 }
 
-impl LeastSquares for PoseProblem<'_> {
-    type State = Pose;
-    fn evaluate(&self, s: &Pose, jacobian: bool) -> Option<(DVector<f64>, Option<DMatrix<f64>>)> {
-        let n = self.object.len();
-        let mut r = DVector::zeros(2 * n);
-        let mut j = if jacobian {
-            Some(DMatrix::zeros(2 * n, 6))
-        } else {
-            None
-        };
-        for (i, (x, m)) in self.object.iter().zip(self.image).enumerate() {
-            let pr = self.cam.project_with_jacobians(s, x).ok()?;
+/// State: the pose as (t, rvec); steps: the perturbation δ of [`crate::pose`].
+impl Problem for PoseProblem<'_> {
+    fn residual_count(&self) -> usize {
+        2 * self.object.len()
+    }
+    fn parameter_count(&self) -> usize {
+        6
+    }
+    fn residuals(&self, x: &[f64], r: &mut [f64]) -> std::result::Result<(), NotEvaluable> {
+        let pose = Pose::from_state(x);
+        for (i, (p, m)) in self.object.iter().zip(self.image).enumerate() {
+            let [u, v] = self.cam.project(&pose, p).map_err(not_evaluable)?;
+            r[2 * i] = u - m[0];
+            r[2 * i + 1] = v - m[1];
+        }
+        Ok(())
+    }
+    fn residuals_and_jacobian(&self, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>) -> std::result::Result<(), NotEvaluable> {
+        let pose = Pose::from_state(x);
+        for (i, (p, m)) in self.object.iter().zip(self.image).enumerate() {
+            let pr = self.cam.project_with_jacobians(&pose, p).map_err(not_evaluable)?;
             r[2 * i] = pr.u - m[0];
             r[2 * i + 1] = pr.v - m[1];
-            if let Some(j) = j.as_mut() {
-                j.view_mut((2 * i, 0), (2, 6)).copy_from(&pr.d_pose);
-            }
+            j.view_mut((2 * i, 0), (2, 6)).copy_from(&pr.d_pose);
         }
-        Some((r, j))
+        Ok(())
     }
-    fn apply(&self, s: &Pose, d: &DVector<f64>) -> Pose {
-        s.perturbed(d.as_slice())
+    fn retract(&self, x: &[f64], delta: &[f64], out: &mut [f64]) {
+        out.copy_from_slice(&Pose::from_state(x).perturbed(delta).to_state());
     }
 }
 
@@ -286,13 +294,13 @@ pub fn refine_pose(
         object: object.iter().map(|p| Vector3::from(*p)).collect(),
         image,
     };
-    let out = levenberg_marquardt(&problem, initial, 100, "pose refinement")?;
-    let rms = (out.residuals.norm_squared() / object.len() as f64).sqrt();
-    let inv = normal_inverse(&out.jacobian).ok_or_else(|| CameraError::Degenerate {
+    let out = solve_pixels(&problem, &initial.to_state(), 100, "pose refinement")?;
+    let rms = (out.residuals.iter().map(|v| v * v).sum::<f64>() / object.len() as f64).sqrt();
+    let inv = out.covariance_unscaled.ok_or_else(|| CameraError::Degenerate {
         what: "pose refinement".into(),
         reason: "pose not observable (JᵀJ singular)".into(),
     })?;
-    Ok((out.state, rms, Matrix6::from_iterator(inv.iter().copied())))
+    Ok((Pose::from_state(&out.x), rms, Matrix6::from_iterator(inv.iter().copied())))
 }
 
 fn check_sigma(sigma_px: f64) -> Result<()> {

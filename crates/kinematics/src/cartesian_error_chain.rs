@@ -24,6 +24,7 @@
 use crate::cartesian::{LinearAxis, StackingOrder};
 use crate::error::{check_finite, KinematicsError};
 use crate::transform::{euler_xyz_intrinsic, rodrigues, skew};
+use metrocell_solver::numeric_jacobian::{central_difference, Order};
 use nalgebra::{Matrix3, Vector3};
 
 /// Error values of one axis at its current position (metres, radians).
@@ -274,17 +275,23 @@ pub fn error_jacobian(
     errors: &MachineErrors,
     tracker: &TrackerPose,
 ) -> Result<nalgebra::SMatrix<f64, 3, 21>, KinematicsError> {
-    let h = 1e-7;
     let base = errors.to_vector();
-    let mut jac = nalgebra::SMatrix::<f64, 3, 21>::zeros();
-    for i in 0..21 {
-        let mut plus = base;
-        plus[i] += h;
-        let mut minus = base;
-        minus[i] -= h;
-        let fp = tracker_point(order, q, tool, &MachineErrors::from_vector(&plus), tracker)?;
-        let fm = tracker_point(order, q, tool, &MachineErrors::from_vector(&minus), tracker)?;
-        jac.set_column(i, &((fp - fm) / (2.0 * h)));
+    let mut failure = None;
+    let point = |v: &[f64]| {
+        let e = MachineErrors::from_vector(&nalgebra::SVector::<f64, 21>::from_column_slice(v));
+        match tracker_point(order, q, tool, &e, tracker) {
+            Ok(p) => Some(nalgebra::DVector::from_column_slice(p.as_slice())),
+            Err(err) => {
+                failure.get_or_insert(err);
+                None
+            }
+        }
+    };
+    let jac = central_difference(point, base.as_slice(), &[1e-7; 21], Order::Second);
+    match (jac, failure) {
+        (_, Some(err)) => Err(err),
+        (Some(j), None) => Ok(nalgebra::SMatrix::<f64, 3, 21>::from_column_slice(j.as_slice())),
+        // The closure fails only through tracker_point, whose error is kept above.
+        (None, None) => Err(KinematicsError::InvalidValue { field: "error_jacobian".into(), value: f64::NAN, reason: "central difference failed".into() }),
     }
-    Ok(jac)
 }

@@ -20,7 +20,6 @@ pub mod dh;
 pub mod error;
 pub mod five_axis;
 pub mod frame_alignment;
-pub mod numeric_jacobian;
 pub mod serial;
 pub mod transform;
 pub mod urdf_chain;

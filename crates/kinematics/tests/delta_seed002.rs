@@ -1,7 +1,7 @@
 //! Seed 002 (delta ArUco calibration digest), fixtures T5–T7, plus parameter-Jacobian checks.
 
 use metrocell_kinematics::delta::{DeltaGeometry, DELTA_PARAMETER_COUNT};
-use metrocell_kinematics::numeric_jacobian::{central_difference, max_relative_difference};
+use metrocell_solver::numeric_jacobian::{central_difference, max_relative_difference, steps_with_unit_floor, Order};
 use metrocell_kinematics::KinematicsError;
 use nalgebra::{DMatrix, DVector, SMatrix, Vector3};
 
@@ -108,24 +108,24 @@ fn parameter_jacobians_match_central_differences_to_1e_6() {
         Vector3::new(-55.0, 60.0, 80.0) * MM,
     ] {
         // IK parameter Jacobian.
-        let ik = |th: &DVector<f64>| {
+        let ik = |th: &[f64]| {
             let gg = DeltaGeometry::from_vector(&SMatrix::from_iterator(th.iter().cloned()));
             gg.inverse(&p).ok().map(|q| DVector::from_row_slice(&q))
         };
-        let fd = central_difference(ik, &theta0, 1e-7).unwrap();
+        let fd = central_difference(ik, theta0.as_slice(), &steps_with_unit_floor(theta0.as_slice(), 1e-7), Order::Second).unwrap();
         let an = to_dmatrix(&g.inverse_parameter_jacobian(&p).unwrap());
         let rel = max_relative_difference(&an, &fd);
         assert!(rel < 1e-6, "IK param Jacobian at {p:?}: rel diff {rel:e}");
 
         // FK parameter Jacobian with carriage heights fixed.
         let q = g.inverse(&p).unwrap();
-        let fk = |th: &DVector<f64>| {
+        let fk = |th: &[f64]| {
             let gg = DeltaGeometry::from_vector(&SMatrix::from_iterator(th.iter().cloned()));
             gg.forward(&q)
                 .ok()
                 .map(|v| DVector::from_row_slice(v.as_slice()))
         };
-        let fd = central_difference(fk, &theta0, 1e-7).unwrap();
+        let fd = central_difference(fk, theta0.as_slice(), &steps_with_unit_floor(theta0.as_slice(), 1e-7), Order::Second).unwrap();
         let an = to_dmatrix(&g.forward_parameter_jacobian(&q).unwrap());
         let rel = max_relative_difference(&an, &fd);
         assert!(rel < 1e-6, "FK param Jacobian at {p:?}: rel diff {rel:e}");

@@ -1,7 +1,7 @@
 //! Serial arms from DH (standard and modified) and URDF: FK, geometric Jacobian, DLS IK, DH parameter Jacobian.
 
 use metrocell_kinematics::dh::{DhConvention, DhRow, DhTable};
-use metrocell_kinematics::numeric_jacobian::{central_difference, max_relative_difference};
+use metrocell_solver::numeric_jacobian::{central_difference, max_relative_difference, steps_with_unit_floor, Order};
 use metrocell_kinematics::serial::{IkSettings, IkTarget, JointKind};
 use metrocell_kinematics::urdf_chain::chain_from_urdf_str;
 use metrocell_kinematics::KinematicsError;
@@ -87,13 +87,13 @@ fn pose_vec(t: &Isometry3<f64>, reference: &Isometry3<f64>) -> DVector<f64> {
 fn geometric_jacobian_matches_central_differences() {
     let chain = ur5().to_chain();
     let t0 = chain.tool_pose(&Q).unwrap();
-    let f = |q: &DVector<f64>| {
+    let f = |q: &[f64]| {
         chain
-            .tool_pose(q.as_slice())
+            .tool_pose(q)
             .ok()
             .map(|t| pose_vec(&t, &t0))
     };
-    let fd = central_difference(f, &DVector::from_row_slice(&Q), 1e-6).unwrap();
+    let fd = central_difference(f, &Q, &steps_with_unit_floor(&Q, 1e-6), Order::Second).unwrap();
     let an = chain.jacobian(&Q).unwrap();
     let rel = max_relative_difference(&an, &fd);
     assert!(rel < 1e-6, "rel {rel:e}\n{an}\n{fd}");
@@ -109,7 +109,7 @@ fn dh_parameter_jacobian_matches_central_differences_both_conventions() {
             4 * n,
             table.rows.iter().flat_map(|r| [r.theta, r.d, r.a, r.alpha]),
         );
-        let f = |x: &DVector<f64>| {
+        let f = |x: &[f64]| {
             let rows = (0..n)
                 .map(|i| DhRow {
                     theta: x[4 * i],
@@ -124,7 +124,7 @@ fn dh_parameter_jacobian_matches_central_differences_both_conventions() {
                 .ok()
                 .map(|fr| pose_vec(fr.last().unwrap(), &t0))
         };
-        let fd = central_difference(f, &x0, 1e-6).unwrap();
+        let fd = central_difference(f, x0.as_slice(), &steps_with_unit_floor(x0.as_slice(), 1e-6), Order::Second).unwrap();
         let rel = max_relative_difference(&an, &fd);
         assert!(rel < 1e-6, "{:?}: rel {rel:e}", table.convention);
     }
@@ -205,13 +205,13 @@ fn urdf_chain_matches_hand_computed_planar_arm() {
     );
     assert!((p - expected).norm() < 1e-12, "{p:?} vs {expected:?}");
     let jac = chain.jacobian(&[q1, q2, s]).unwrap();
-    let f = |q: &DVector<f64>| {
+    let f = |q: &[f64]| {
         chain
-            .tool_pose(q.as_slice())
+            .tool_pose(q)
             .ok()
             .map(|t| DVector::from_row_slice(t.translation.vector.as_slice()))
     };
-    let fd = central_difference(f, &DVector::from_row_slice(&[q1, q2, s]), 1e-6).unwrap();
+    let fd = central_difference(f, &[q1, q2, s], &steps_with_unit_floor(&[q1, q2, s], 1e-6), Order::Second).unwrap();
     let lin: DMatrix<f64> = jac.rows(0, 3).into_owned();
     assert!(max_relative_difference(&lin, &fd) < 1e-6);
 }
@@ -250,7 +250,7 @@ fn urdf_origin_and_joint_offset_jacobians_match_central_differences() {
             .iter()
             .flat_map(|j| j.pre.translation.vector.iter().cloned().collect::<Vec<_>>()),
     );
-    let f = |x: &DVector<f64>| {
+    let f = |x: &[f64]| {
         let mut c = chain.clone();
         for (i, j) in c.joints.iter_mut().enumerate() {
             j.pre.translation.vector = Vector3::new(x[3 * i], x[3 * i + 1], x[3 * i + 2]);
@@ -259,7 +259,7 @@ fn urdf_origin_and_joint_offset_jacobians_match_central_differences() {
             .ok()
             .map(|t| DVector::from_row_slice(t.translation.vector.as_slice()))
     };
-    let fd = central_difference(f, &x0, 1e-6).unwrap();
+    let fd = central_difference(f, x0.as_slice(), &steps_with_unit_floor(x0.as_slice(), 1e-6), Order::Second).unwrap();
     let lin: DMatrix<f64> = an.rows(0, 3).into_owned();
     assert!(max_relative_difference(&lin, &fd) < 1e-6);
     assert!(an.rows(3, 3).amax() == 0.0);
@@ -269,7 +269,7 @@ fn urdf_origin_and_joint_offset_jacobians_match_central_differences() {
         .filter(|&i| chain.joints[i].kind != JointKind::Fixed)
         .collect();
     let off0 = DVector::zeros(movable.len());
-    let f = |o: &DVector<f64>| {
+    let f = |o: &[f64]| {
         let mut c = chain.clone();
         for (k, &i) in movable.iter().enumerate() {
             c.joints[i].offset = o[k];
@@ -278,7 +278,7 @@ fn urdf_origin_and_joint_offset_jacobians_match_central_differences() {
             .ok()
             .map(|t| DVector::from_row_slice(t.translation.vector.as_slice()))
     };
-    let fd = central_difference(f, &off0, 1e-6).unwrap();
+    let fd = central_difference(f, off0.as_slice(), &steps_with_unit_floor(off0.as_slice(), 1e-6), Order::Second).unwrap();
     let lin: DMatrix<f64> = an.rows(0, 3).into_owned();
     assert!(max_relative_difference(&lin, &fd) < 1e-6);
 }

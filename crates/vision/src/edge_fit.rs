@@ -7,11 +7,12 @@
 //! into a parabola, which is what a straight printed edge becomes under lens distortion; without
 //! it a line fit to a long distorted side misplaces the corners by a few hundredths of a pixel.
 //! The model is symmetric about the edge, so a box-filtered (pixel-integrated) or Gaussian-
-//! blurred edge is located without bias. Parameters by Levenberg–Marquardt; covariance
+//! blurred edge is located without bias. Parameters by Levenberg–Marquardt (metrocell_solver); covariance
 //! s²(JᵀJ)⁻¹ with s² the residual variance.
 
 use image::GrayImage;
-use nalgebra::{Matrix2, Matrix3, Point2, SMatrix, SVector, Vector2};
+use metrocell_solver::{solve, NotEvaluable, Options, Problem};
+use nalgebra::{DMatrix, Matrix2, Matrix3, Point2, Vector2};
 
 /// Variance (px²) of the box a pixel integrates over: the smallest blur any sampled edge has.
 const PIXEL_BOX_VARIANCE: f64 = 1.0 / 12.0;
@@ -196,9 +197,71 @@ fn collect_band(
     (out.len() >= 12).then_some(out)
 }
 
-/// LM over x = (θ, d, κ, a, b, ln σ, a₁, b₁) with dark level a + a₁·v and contrast b + b₁·v,
-/// v = u / half-length (illumination changing along the edge). κ is held at its start value
-/// unless `fit_kappa`.
+/// The blurred-step model over x = (θ, d, κ, a, b, ln σ, a₁, b₁) with dark level a + a₁·v and
+/// contrast b + b₁·v, v = u / half-length (illumination changing along the edge).
+struct StepEdge<'a> {
+    samples: &'a [[f64; 3]],
+    /// Per sample (u, v): position along the start edge and its share of the half-length.
+    along: Vec<(f64, f64)>,
+}
+
+impl StepEdge<'_> {
+    /// Residual (model − pixel) of sample i and, if asked, its Jacobian row.
+    fn row(&self, x: &[f64], i: usize, jac: Option<&mut [f64; 8]>) -> f64 {
+        // Pixels integrate the image over their area, a box of variance 1/12 px², on top of the
+        // optical blur exp(x5): without that floor a perfectly sharp step (synthetic or printed
+        // markers) leaves the edge position undetermined within a pixel and the fit fails.
+        let optical2 = (2.0 * x[5]).exp();
+        let (c, s, sig) = (x[0].cos(), x[0].sin(), (optical2 + PIXEL_BOX_VARIANCE).sqrt());
+        let p = &self.samples[i];
+        let (u, v) = self.along[i];
+        let z = (c * p[0] + s * p[1] - x[1] - x[2] * u * u) / sig;
+        let (cdf, pdf) = normal_cdf_pdf(z);
+        let contrast = x[4] + x[7] * v;
+        if let Some(j) = jac {
+            let g = contrast * pdf / sig;
+            *j = [
+                g * (-s * p[0] + c * p[1]),
+                -g,
+                -g * u * u,
+                1.0,
+                cdf,
+                -contrast * pdf * z * optical2 / (sig * sig),
+                v,
+                cdf * v,
+            ];
+        }
+        x[3] + x[6] * v + contrast * cdf - p[2]
+    }
+}
+
+impl Problem for StepEdge<'_> {
+    fn residual_count(&self) -> usize {
+        self.samples.len()
+    }
+    fn parameter_count(&self) -> usize {
+        8
+    }
+    fn residuals(&self, x: &[f64], r: &mut [f64]) -> Result<(), NotEvaluable> {
+        for (i, ri) in r.iter_mut().enumerate() {
+            *ri = self.row(x, i, None);
+        }
+        Ok(())
+    }
+    fn residuals_and_jacobian(&self, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>) -> Result<(), NotEvaluable> {
+        let mut row = [0.0; 8];
+        for (i, ri) in r.iter_mut().enumerate() {
+            *ri = self.row(x, i, Some(&mut row));
+            for (k, v) in row.iter().enumerate() {
+                j[(i, k)] = *v;
+            }
+        }
+        Ok(())
+    }
+}
+
+/// Fits the step-edge model to `samples` from `start` (metrocell_solver's Levenberg–Marquardt).
+/// κ is held at its start value unless `fit_kappa`.
 fn levenberg_marquardt(
     samples: &[[f64; 3]],
     start: &EdgeLine,
@@ -225,125 +288,43 @@ fn levenberg_marquardt(
     if b0 <= 0.0 {
         return None;
     }
-    let half = samples
-        .iter()
-        .map(|p| (tg.x * (p[0] - mid.x) + tg.y * (p[1] - mid.y)).abs())
-        .fold(1.0, f64::max);
-    let x0 = SVector::<f64, 8>::from_column_slice(&[
-        start.theta,
-        start.d,
-        start.kappa,
-        a0,
-        b0,
-        start.blur_sigma.max(0.3).ln(),
-        0.0,
-        0.0,
-    ]);
-    // One pass over the pixels gives the cost and the normal equations at x.
-    let eval = |x: &SVector<f64, 8>| -> (f64, SMatrix<f64, 8, 8>, SVector<f64, 8>) {
-        // Pixels integrate the image over their area, a box of variance 1/12 px², on top of the
-        // optical blur exp(x5): without that floor a perfectly sharp step (synthetic or printed
-        // markers) leaves the edge position undetermined within a pixel and the fit fails.
-        let optical2 = (2.0 * x[5]).exp();
-        let (c, s, sig) = (x[0].cos(), x[0].sin(), (optical2 + PIXEL_BOX_VARIANCE).sqrt());
-        let mut jtj = SMatrix::<f64, 8, 8>::zeros();
-        let mut jtr = SVector::<f64, 8>::zeros();
-        let mut f = 0.0;
-        for p in samples {
-            let u = tg.x * (p[0] - mid.x) + tg.y * (p[1] - mid.y);
-            let v = u / half;
-            let z = (c * p[0] + s * p[1] - x[1] - x[2] * u * u) / sig;
-            let (cdf, pdf) = normal_cdf_pdf(z);
-            let contrast = x[4] + x[7] * v;
-            let r = x[3] + x[6] * v + contrast * cdf - p[2];
-            let g = contrast * pdf / sig;
-            let j = SVector::<f64, 8>::from_column_slice(&[
-                g * (-s * p[0] + c * p[1]),
-                -g,
-                if fit_kappa { -g * u * u } else { 0.0 },
-                1.0,
-                cdf,
-                -contrast * pdf * z * optical2 / (sig * sig),
-                v,
-                cdf * v,
-            ]);
-            // JᵀJ is symmetric: accumulate the upper triangle, mirror after the loop.
-            for a in 0..8 {
-                for b in a..8 {
-                    jtj[(a, b)] += j[a] * j[b];
-                }
-            }
-            jtr += j * r;
-            f += r * r;
-        }
-        jtj.fill_lower_triangle_with_upper_triangle();
-        if !fit_kappa {
-            jtj[(2, 2)] = 1.0; // κ frozen: decoupled unit row keeps the system regular
-        }
-        (f, jtj, jtr)
+    let u: Vec<f64> = samples.iter().map(|p| tg.x * (p[0] - mid.x) + tg.y * (p[1] - mid.y)).collect();
+    let half = u.iter().fold(1.0, |a: f64, v| a.max(v.abs()));
+    let problem = StepEdge { samples, along: u.iter().map(|&u| (u, u / half)).collect() };
+    let x0 = [start.theta, start.d, start.kappa, a0, b0, start.blur_sigma.max(0.3).ln(), 0.0, 0.0];
+    // Optical blur between 0.05 and 20 px (ln σ in [−3, 3]); below 0.05 px the pixel box
+    // dominates and the blur stops being observable (its column of JᵀJ would vanish).
+    let (inf, ninf) = (f64::INFINITY, f64::NEG_INFINITY);
+    let options = Options {
+        bounds: Some((vec![ninf, ninf, ninf, ninf, ninf, -3.0, ninf, ninf], vec![inf, inf, inf, inf, inf, 3.0, inf, inf])),
+        fixed: vec![false, false, !fit_kappa, false, false, false, false, false],
+        max_iterations: 30,
+        // Converged when a step changes the cost by < 1e-9 of itself: parameters then move by
+        // well under 1 % of their standard uncertainty.
+        ftol: 1e-9,
+        xtol: 1e-8,
+        gtol: 1e-10,
+        ..Options::default()
     };
-    let mut x = x0;
-    let (mut f, mut jtj, mut jtr) = eval(&x);
-    let mut lambda = 1e-3;
-    let finish = |x: SVector<f64, 8>, f: f64, jtj: SMatrix<f64, 8, 8>| -> Option<EdgeLine> {
-        if x[4] - x[7].abs() <= 0.0 || !x.iter().all(|v| v.is_finite()) {
-            return None;
-        }
-        let npar = if fit_kappa { 8.0 } else { 7.0 };
-        let s2 = f / (samples.len() as f64 - npar).max(1.0);
-        let inv = jtj.try_inverse()?;
-        let mut cov = inv.fixed_view::<3, 3>(0, 0) * s2;
-        if !fit_kappa {
-            cov.row_mut(2).fill(0.0);
-            cov.column_mut(2).fill(0.0);
-        }
-        Some(EdgeLine {
-            theta: x[0],
-            d: x[1],
-            kappa: x[2],
-            tangent: tg,
-            mid,
-            cov,
-            dark: x[3],
-            contrast: x[4],
-            blur_sigma: ((2.0 * x[5]).exp() + PIXEL_BOX_VARIANCE).sqrt(),
-            residual_rms: s2.sqrt(),
-            pixels: samples.len(),
-        })
-    };
-    for _iter in 0..30 {
-        let mut improved = false;
-        for _ in 0..10 {
-            let mut a = jtj;
-            for k in 0..8 {
-                a[(k, k)] *= 1.0 + lambda;
-            }
-            let step = a.cholesky()?.solve(&(-jtr));
-            let xn = x + step;
-            // Optical blur between 0.05 and 20 px; below 0.05 px the pixel box dominates and
-            // the blur stops being observable (its column of JᵀJ would vanish).
-            if xn[5] > 3.0 || xn[5] < -3.0 {
-                lambda *= 10.0;
-                continue;
-            }
-            let (fnew, jn, rn) = eval(&xn);
-            if fnew <= f {
-                let small = step[0].abs() < 1e-7 && step[1].abs() < 1e-5;
-                (x, f, jtj, jtr) = (xn, fnew, jn, rn);
-                lambda = (lambda * 0.3).max(1e-9);
-                improved = true;
-                if small {
-                    return finish(x, f, jtj);
-                }
-                break;
-            }
-            lambda *= 10.0;
-        }
-        if !improved {
-            break;
-        }
+    let fit = solve(&problem, &x0, &options).ok()?;
+    let x = &fit.x;
+    if x[4] - x[7].abs() <= 0.0 || !x.iter().all(|v| v.is_finite()) {
+        return None;
     }
-    finish(x, f, jtj)
+    let cov = fit.covariance()?;
+    Some(EdgeLine {
+        theta: x[0],
+        d: x[1],
+        kappa: x[2],
+        tangent: tg,
+        mid,
+        cov: cov.fixed_view::<3, 3>(0, 0).into_owned(),
+        dark: x[3],
+        contrast: x[4],
+        blur_sigma: ((2.0 * x[5]).exp() + PIXEL_BOX_VARIANCE).sqrt(),
+        residual_rms: fit.variance_factor?.sqrt(),
+        pixels: samples.len(),
+    })
 }
 
 /// Intersection of two edges (Newton from the straight-line intersection) and its 2×2

@@ -5,11 +5,12 @@
 //! B = Φ(s_2/σ):  I(p) = a + b·(A + B − 2AB)  (bright where exactly one side is positive).
 //! Both edges pass through the corner c, so c is their intersection; the model is symmetric
 //! about each line, hence unbiased for pixel integration and symmetric blur. Solved by
-//! Levenberg–Marquardt; covariance s²(JᵀJ)⁻¹.
+//! Levenberg–Marquardt (metrocell_solver); covariance s²(JᵀJ)⁻¹.
 
 use crate::edge_fit::normal_cdf_pdf;
 use image::GrayImage;
-use nalgebra::{Matrix2, Point2, SMatrix, SVector};
+use metrocell_solver::{solve, NotEvaluable, Options, Problem, Solution};
+use nalgebra::{DMatrix, Matrix2, Point2};
 
 /// A refined checkerboard corner.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -60,40 +61,45 @@ pub fn refine_saddle(
     let lo = vals.iter().cloned().fold(f64::INFINITY, f64::min);
     let hi = vals.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
     // x = (cx, cy, θ1, θ2, a, b, ln σ); try both contrast signs, keep the better fit.
-    let mut best: Option<(f64, SVector<f64, 7>, SMatrix<f64, 7, 7>)> = None;
+    let problem = Saddle { samples: &samples };
+    // Blur between e⁻⁴ and e^2.5 px: outside, σ stops being observable.
+    let (inf, ninf) = (f64::INFINITY, f64::NEG_INFINITY);
+    let options = Options {
+        bounds: Some((vec![ninf, ninf, ninf, ninf, ninf, ninf, -4.0], vec![inf, inf, inf, inf, inf, inf, 2.5])),
+        max_iterations: 60,
+        // Converged when a step changes the cost by < 1e-9 of itself: parameters then move by
+        // well under 1 % of their standard uncertainty.
+        ftol: 1e-9,
+        xtol: 1e-8,
+        gtol: 1e-10,
+        ..Options::default()
+    };
+    let mut best: Option<Solution> = None;
     for (a0, b0) in [(lo, hi - lo), (hi, lo - hi)] {
-        let x0 = SVector::<f64, 7>::from_column_slice(&[
-            guess.x,
-            guess.y,
-            th1,
-            th2,
-            a0,
-            b0,
-            0.8f64.ln(),
-        ]);
-        if let Some((f, x, jtj)) = lm(&samples, x0) {
-            if best.as_ref().map_or(true, |b| f < b.0) {
-                best = Some((f, x, jtj));
+        let x0 = [guess.x, guess.y, th1, th2, a0, b0, 0.8f64.ln()];
+        if let Ok(fit) = solve(&problem, &x0, &options) {
+            if best.as_ref().map_or(true, |b| fit.cost < b.cost) {
+                best = Some(fit);
             }
         }
     }
-    let (f, x, jtj) = best?;
+    let fit = best?;
+    let x = &fit.x;
     let c = Point2::new(x[0], x[1]);
     if (c - guess).norm() > 0.5 * r || !x.iter().all(|v| v.is_finite()) {
         return None;
     }
-    let s2 = f / (samples.len() as f64 - 7.0).max(1.0);
-    let inv = jtj.try_inverse()?;
+    let cov = fit.covariance()?;
     Some(SaddleCorner {
         position: c,
-        covariance: Matrix2::new(inv[(0, 0)], inv[(0, 1)], inv[(1, 0)], inv[(1, 1)]) * s2,
+        covariance: Matrix2::new(cov[(0, 0)], cov[(0, 1)], cov[(1, 0)], cov[(1, 1)]),
         theta: [x[2], x[3]],
         blur_sigma: x[6].exp(),
-        residual_rms: s2.sqrt(),
+        residual_rms: fit.variance_factor?.sqrt(),
     })
 }
 
-fn residual_and_jacobian(p: &[f64; 3], x: &SVector<f64, 7>) -> (f64, SVector<f64, 7>) {
+fn residual_and_jacobian(p: &[f64; 3], x: &[f64]) -> (f64, [f64; 7]) {
     let (dx, dy) = (p[0] - x[0], p[1] - x[1]);
     let sig = x[6].exp();
     let (c1, s1) = (x[2].cos(), x[2].sin());
@@ -107,7 +113,7 @@ fn residual_and_jacobian(p: &[f64; 3], x: &SVector<f64, 7>) -> (f64, SVector<f64
         x[5] * (1.0 - 2.0 * b) * pdf1 / sig,
         x[5] * (1.0 - 2.0 * a) * pdf2 / sig,
     );
-    let j = SVector::<f64, 7>::from_column_slice(&[
+    let j = [
         -g1 * c1 - g2 * c2,
         -g1 * s1 - g2 * s2,
         g1 * (-s1 * dx + c1 * dy),
@@ -115,65 +121,36 @@ fn residual_and_jacobian(p: &[f64; 3], x: &SVector<f64, 7>) -> (f64, SVector<f64
         1.0,
         f,
         -(g1 * z1 + g2 * z2) * sig,
-    ]);
+    ];
     (r, j)
 }
 
-fn lm(
-    samples: &[[f64; 3]],
-    mut x: SVector<f64, 7>,
-) -> Option<(f64, SVector<f64, 7>, SMatrix<f64, 7, 7>)> {
-    let cost = |x: &SVector<f64, 7>| {
-        samples
-            .iter()
-            .map(|p| residual_and_jacobian(p, x).0.powi(2))
-            .sum::<f64>()
-    };
-    let mut f = cost(&x);
-    let mut lambda = 1e-3;
-    let mut jtj = SMatrix::<f64, 7, 7>::zeros();
-    for _ in 0..60 {
-        jtj.fill(0.0);
-        let mut jtr = SVector::<f64, 7>::zeros();
-        for p in samples {
-            let (r, j) = residual_and_jacobian(p, &x);
-            jtj += j * j.transpose();
-            jtr += j * r;
-        }
-        let mut improved = false;
-        for _ in 0..10 {
-            let mut a = jtj;
-            for k in 0..7 {
-                a[(k, k)] *= 1.0 + lambda;
-                a[(k, k)] += 1e-12;
-            }
-            let Some(ch) = a.cholesky() else {
-                lambda *= 10.0;
-                continue;
-            };
-            let step = ch.solve(&(-jtr));
-            let xn = x + step;
-            if xn[6] > 2.5 || xn[6] < -4.0 {
-                lambda *= 10.0;
-                continue;
-            }
-            let fnew = cost(&xn);
-            if fnew <= f {
-                let small = step[0].abs() < 1e-7 && step[1].abs() < 1e-7;
-                x = xn;
-                f = fnew;
-                lambda = (lambda * 0.3).max(1e-9);
-                improved = true;
-                if small {
-                    return Some((f, x, jtj));
-                }
-                break;
-            }
-            lambda *= 10.0;
-        }
-        if !improved {
-            break;
-        }
+/// The saddle model as a least-squares problem over x = (cx, cy, θ1, θ2, a, b, ln σ).
+struct Saddle<'a> {
+    samples: &'a [[f64; 3]],
+}
+
+impl Problem for Saddle<'_> {
+    fn residual_count(&self) -> usize {
+        self.samples.len()
     }
-    Some((f, x, jtj))
+    fn parameter_count(&self) -> usize {
+        7
+    }
+    fn residuals(&self, x: &[f64], r: &mut [f64]) -> Result<(), NotEvaluable> {
+        for (ri, p) in r.iter_mut().zip(self.samples) {
+            *ri = residual_and_jacobian(p, x).0;
+        }
+        Ok(())
+    }
+    fn residuals_and_jacobian(&self, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>) -> Result<(), NotEvaluable> {
+        for (i, p) in self.samples.iter().enumerate() {
+            let (ri, row) = residual_and_jacobian(p, x);
+            r[i] = ri;
+            for (k, v) in row.iter().enumerate() {
+                j[(i, k)] = *v;
+            }
+        }
+        Ok(())
+    }
 }

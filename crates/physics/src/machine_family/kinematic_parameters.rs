@@ -10,6 +10,7 @@
 //!
 //! Per-tower parameters (delta) are ordered A, B, C = Marlin's towers at 210°, 330°, 90°.
 
+use metrocell_solver::numeric_jacobian::{central_difference, relative_steps, Order};
 use nalgebra::{DMatrix, DVector, Vector3};
 
 use crate::term_id::TermId;
@@ -73,23 +74,6 @@ impl PhysicsTerm for KinematicParameters {
     }
 }
 
-/// Central-difference Jacobian of `f` at `p`; step_i = `rel_step`·max(|p_i|, `scale_i`).
-pub fn numeric_jacobian(f: &dyn Fn(&[f64]) -> DVector<f64>, p: &[f64], scale: &[f64], rel_step: f64) -> DMatrix<f64> {
-    let f0 = f(p);
-    let mut j = DMatrix::zeros(f0.len(), p.len());
-    let mut q = p.to_vec();
-    for i in 0..p.len() {
-        let h = rel_step * p[i].abs().max(scale[i]);
-        q[i] = p[i] + h;
-        let fp = f(&q);
-        q[i] = p[i] - h;
-        let fm = f(&q);
-        q[i] = p[i];
-        j.set_column(i, &((fp - fm) / (2.0 * h)));
-    }
-    j
-}
-
 /// Displacement caused by a kinematic term and its Jacobian, given the forward kinematics as a
 /// closure `forward(term_params) -> tool point (m)`: d = forward(p) − forward(0).
 pub fn predict_through_kinematics(term: &dyn PhysicsTerm, p: &[f64], forward: &dyn Fn(&[f64]) -> Vector3<f64>) -> Result<(Vector3<f64>, DMatrix<f64>), PhysicsError> {
@@ -99,7 +83,9 @@ pub fn predict_through_kinematics(term: &dyn PhysicsTerm, p: &[f64], forward: &d
     }
     let zero = vec![0.0; p.len()];
     let d = forward(p) - forward(&zero);
-    let scale: Vec<f64> = specs.iter().map(|s| (s.max - s.min).abs() * 1e-3).collect();
-    let f = |q: &[f64]| DVector::from_column_slice(forward(q).as_slice());
-    Ok((d, numeric_jacobian(&f, p, &scale, 1e-4)))
+    let typical: Vec<f64> = specs.iter().map(|s| (s.max - s.min).abs() * 1e-3).collect();
+    let f = |q: &[f64]| Some(DVector::from_column_slice(forward(q).as_slice()));
+    let j = central_difference(f, p, &relative_steps(p, 1e-4, &typical), Order::Second)
+        .ok_or_else(|| PhysicsError::InvalidInput { what: format!("term `{}`", term.label()), reason: "central-difference Jacobian of the forward kinematics failed".into() })?;
+    Ok((d, j))
 }

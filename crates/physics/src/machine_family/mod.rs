@@ -1,3 +1,3 @@
 //! Machine-family terms whose effect needs a kinematic chain (delta printers, serial arms).
 pub mod kinematic_parameters;
-pub use kinematic_parameters::{numeric_jacobian, predict_through_kinematics, KinematicParameters};
+pub use kinematic_parameters::{predict_through_kinematics, KinematicParameters};

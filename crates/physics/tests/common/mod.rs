@@ -3,6 +3,7 @@
 #![allow(dead_code)]
 
 use metrocell_physics::{ParamSpec, PhysicsTerm, Signals, TemperatureHistory};
+use metrocell_solver::numeric_jacobian::{central_difference, Order};
 use nalgebra::{DMatrix, Vector2, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -53,19 +54,6 @@ pub fn random_params(r: &mut ChaCha8Rng, specs: &[ParamSpec]) -> Vec<f64> {
 
 /// 4th-order central differences, step h_i = 1e-4·(|p_i| + 1e-3·(max_i − min_i)).
 pub fn finite_difference_jacobian(term: &dyn PhysicsTerm, p: &[f64], s: &Signals) -> DMatrix<f64> {
-    let specs = term.params();
-    let f = |q: &[f64]| term.predict(q, s).unwrap().value;
-    let n = f(p).len();
-    let mut j = DMatrix::zeros(n, p.len());
-    for i in 0..p.len() {
-        let h = 1e-4 * (p[i].abs() + 1e-3 * (specs[i].max - specs[i].min));
-        let at = |k: f64| {
-            let mut q = p.to_vec();
-            q[i] += k * h;
-            f(&q)
-        };
-        let col = (-at(2.0) + at(1.0) * 8.0 - at(-1.0) * 8.0 + at(-2.0)) / (12.0 * h);
-        j.set_column(i, &col);
-    }
-    j
+    let steps: Vec<f64> = term.params().iter().zip(p).map(|(spec, v)| 1e-4 * (v.abs() + 1e-3 * (spec.max - spec.min))).collect();
+    central_difference(|q: &[f64]| Some(term.predict(q, s).unwrap().value), p, &steps, Order::Fourth).unwrap()
 }

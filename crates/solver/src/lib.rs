@@ -1,0 +1,46 @@
+//! Nonlinear least squares for metrocell: one solver for camera calibration and pose refinement,
+//! edge and corner fitting, and error-model identification.
+//!
+//! **Approach.** A dense Levenberg–Marquardt ([`solve`]) on a [`Problem`] that writes residuals
+//! and its analytic Jacobian into buffers allocated once per solve, with per-residual whitening
+//! (σᵢ), robust losses ([`Loss::Huber`], [`Loss::Cauchy`]) by iteratively reweighted least
+//! squares, projected box bounds, Moré's column scaling, a fixed-parameter mask, Gaussian priors
+//! as extra residuals, and a truncated-SVD step that stays on the identifiable subspace
+//! ([`NullSpace::Truncated`]). The normal equations JᵀWJ are formed from the column-major
+//! Jacobian by contiguous dot products (no Jᵀ copy, no m × m weight matrix); at 70 parameters the
+//! n × n solve is negligible next to forming them, which is why a dense method is used rather than
+//! a QR or SVD of the full Jacobian per iteration (scipy's "trf").
+//!
+//! **Why not a crate.** `levenberg-marquardt` (nalgebra-based, a MINPACK port) has scaling and
+//! termination reasons but no weights, robust losses, bounds, priors, fixed parameters or
+//! covariance, and solves by QR of the full Jacobian each iteration; `argmin` offers
+//! Gauss–Newton/LM-free trust regions over generic operators, again without bounds, robust losses
+//! or covariance. Each would need most of this crate around it, so the solver is written here.
+//!
+//! **Uncertainty.** [`Solution`] carries the a-posteriori variance factor σ̂₀² = r̂ᵀWr̂/(n − p),
+//! the covariance (JᵀWJ)⁻¹·σ̂₀² (and unscaled), correlations and the count of measurements the
+//! robust loss down-weighted; [`Identifiability`] names the combinations the data do not
+//! determine; [`monte_carlo`] re-solves with simulated noise.
+//!
+//! **Conventions.** Residuals are r = model − measurement or measurement − model as the problem
+//! likes (the solver only squares them); σᵢ in the residuals' units; parameters in SI units.
+
+mod error;
+pub mod identifiability;
+mod levenberg_marquardt;
+mod loss;
+pub mod monte_carlo;
+mod normal_equations;
+pub mod numeric_jacobian;
+mod options;
+mod problem;
+mod solution;
+
+pub use error::{NotEvaluable, SolverError};
+pub use identifiability::{Identifiability, NullDirection};
+pub use levenberg_marquardt::solve;
+pub use loss::Loss;
+pub use monte_carlo::{monte_carlo, MonteCarlo, Noise};
+pub use options::{NullSpace, Options, Prior};
+pub use problem::Problem;
+pub use solution::{Solution, Termination};

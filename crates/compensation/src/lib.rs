@@ -11,4 +11,4 @@ pub mod tracker_correction;
 
 pub use spherical::{spherical_to_cartesian, SphericalNoise};
 pub use thermal_scale_compensation::{AxisSensorPlacement, ThermalScaleCompensator, ThermalError};
-pub use tracker_correction::{refraction_corrected_range, warmup_status, AirData};
+pub use tracker_correction::{range_for_index, refraction_corrected_range, warmup_status, AirData};

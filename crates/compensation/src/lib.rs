@@ -9,6 +9,6 @@ pub mod spherical;
 pub mod thermal_scale_compensation;
 pub mod tracker_correction;
 
-pub use spherical::{spherical_to_cartesian, SphericalNoise};
+pub use spherical::{cartesian_to_spherical, spherical_to_cartesian, SphericalNoise};
 pub use thermal_scale_compensation::{AxisSensorPlacement, ThermalScaleCompensator, ThermalError};
 pub use tracker_correction::{range_for_index, refraction_corrected_range, warmup_status, AirData};

@@ -46,6 +46,11 @@ pub fn spherical_to_cartesian(range: f64, azimuth: f64, elevation: f64, noise: &
     (p, j * s * j.transpose())
 }
 
+/// (range, azimuth, elevation) of a Cartesian point, the inverse of [`spherical_to_cartesian`].
+pub fn cartesian_to_spherical(p: &Vector3<f64>) -> (f64, f64, f64) {
+    (p.norm(), p.y.atan2(p.x), p.z.atan2(p.x.hypot(p.y)))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -61,6 +66,14 @@ mod tests {
         assert!((p - Vector3::new(0.0, 2.0, 0.0)).norm() < 1e-15);
         let (p, _) = spherical_to_cartesian(2.0, 0.3, std::f64::consts::FRAC_PI_2, &n);
         assert!((p - Vector3::new(0.0, 0.0, 2.0)).norm() < 1e-15);
+    }
+
+    #[test]
+    fn cartesian_round_trip() {
+        let zero = SphericalNoise { radial_base: 0.0, radial_per_metre: 0.0, angular: 0.0 };
+        let (r, a, e) = cartesian_to_spherical(&Vector3::new(1.2, -0.7, 0.4));
+        assert!((spherical_to_cartesian(r, a, e, &zero).0 - Vector3::new(1.2, -0.7, 0.4)).norm() < 1e-15);
+        assert!((a + 0.52807).abs() < 1e-5 && (e - 0.28034).abs() < 1e-5);
     }
 
     #[test]

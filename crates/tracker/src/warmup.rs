@@ -33,6 +33,8 @@ pub struct WarmupFit {
     pub covariance: Matrix3<f64>,
     /// χ²/(n − 3) of the residuals against their σ
     pub reduced_chi2: f64,
+    /// root mean square residual, m
+    pub rms: f64,
     pub samples: usize,
     /// τ ended on the search limits: the data do not constrain it
     pub tau_at_limit: bool,
@@ -131,7 +133,8 @@ pub fn fit_warmup(samples: &[WarmupSample]) -> Result<WarmupFit, WarmupError> {
     let reduced_chi2 = if dof > 0 { chi2_min / dof as f64 } else { f64::NAN };
     let covariance = info.try_inverse().ok_or(WarmupError::Singular)? * reduced_chi2.max(1.0);
     let tau_at_limit = best == 0 || best == steps;
-    Ok(WarmupFit { a: fa, b: fb, tau, covariance, reduced_chi2, samples: samples.len(), tau_at_limit })
+    let rms = (samples.iter().map(|x| (x.value - warmup_drift(fa, fb, tau, x.t)).powi(2)).sum::<f64>() / samples.len() as f64).sqrt();
+    Ok(WarmupFit { a: fa, b: fb, tau, covariance, reduced_chi2, rms, samples: samples.len(), tau_at_limit })
 }
 
 /// Repeated readings of one nest, refitted as they come.

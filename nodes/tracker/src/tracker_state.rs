@@ -1,0 +1,314 @@
+//! The node's logic, shared by the live run and the bag replay. Time is the readings' own
+//! stamps (and the commanded states'), never the wall clock, so a replay makes the same
+//! decisions as the live run that was recorded.
+//!
+//! Per reading: refraction re-correction and covariance (or a beam break / rejection, counted).
+//! Per dwell (consecutive readings of one target): average and standard error, the χ²
+//! turbulence test, the warm-up fit when the target is the warm-up nest, the nominal from the
+//! commanded joint states at the dwell's mid time, and — once the tracker pose is registered
+//! from the first `registration_points` targets — the point in the machine frame.
+
+use std::collections::BTreeMap;
+
+use metrocell_compensation::{cartesian_to_spherical, AirData};
+use metrocell_msgs::msg::{ErrorModel, MeasuredPoint, TrackerMeasurement};
+use metrocell_msgs::sensor_msgs::msg::JointState;
+use metrocell_tracker::dwell::DwellAverage;
+use metrocell_tracker::line_protocol::LineReading;
+use metrocell_tracker::reading::{RawReading, ReadingError};
+use metrocell_tracker::registration::{register, Correspondence, Registration};
+use metrocell_tracker::time_alignment::CommandedTrajectory;
+use metrocell_tracker::warmup::{WarmupSample, WarmupTracker};
+use metrocell_tracker::DwellGrouper;
+use nalgebra::{Matrix3, Vector3};
+
+use crate::messages;
+use crate::parameters::TrackerConfig;
+
+/// What the node publishes.
+#[derive(Debug, Clone, PartialEq)]
+pub enum Output {
+    /// `measured_points`
+    Point(MeasuredPoint),
+    /// `tracker/dwells`: the averaged, flagged reading of a dwell (tracker frame)
+    Dwell(TrackerMeasurement),
+    /// `/tf_static` and `tracker/pose`, stamped at the mid time of the dwell that completed it
+    Pose(Registration, i64),
+    /// `tracker/warmup`
+    Warmup(ErrorModel),
+    /// something to log as a warning (not published)
+    Warning(String),
+}
+
+/// Counters for `/diagnostics`.
+#[derive(Debug, Clone, Default, PartialEq)]
+pub struct Counters {
+    pub readings: u64,
+    pub beam_breaks: u64,
+    pub rejected: u64,
+    pub dwells: u64,
+    pub short_dwells: u64,
+    pub turbulence_flags: u64,
+    pub points: u64,
+    pub no_nominal: u64,
+}
+
+/// A dwell waiting for the tracker pose.
+#[derive(Debug, Clone)]
+struct PendingPoint {
+    target: String,
+    stamp_ns: i64,
+    point: Vector3<f64>,
+    covariance: Matrix3<f64>,
+    nominal: Vector3<f64>,
+}
+
+pub struct TrackerState {
+    config: TrackerConfig,
+    grouper: DwellGrouper,
+    commanded: CommandedTrajectory,
+    warmup: WarmupTracker,
+    power_on_ns: Option<i64>,
+    pose: Option<Registration>,
+    collected: BTreeMap<String, Correspondence>,
+    pending: Vec<PendingPoint>,
+    last_warmup: Option<(f64, bool)>,
+    imported_air: (Option<f64>, Option<f64>, Option<f64>),
+    pub counters: Counters,
+}
+
+impl TrackerState {
+    pub fn new(config: TrackerConfig) -> Self {
+        Self {
+            grouper: DwellGrouper::new(config.dwell_gap_ns),
+            // commanded history: a minute is far more than any dwell waits for its nominal
+            commanded: CommandedTrajectory::new(60_000_000_000, config.commanded_gap_ns),
+            warmup: WarmupTracker::new(),
+            power_on_ns: config.power_on_ns,
+            pose: None,
+            collected: BTreeMap::new(),
+            pending: Vec::new(),
+            last_warmup: None,
+            imported_air: (None, None, None),
+            counters: Counters::default(),
+            config,
+        }
+    }
+
+    pub fn config(&self) -> &TrackerConfig {
+        &self.config
+    }
+
+    pub fn pose(&self) -> Option<&Registration> {
+        self.pose.as_ref()
+    }
+
+    /// A `tracker/measurements` message (topic backend, bag replay).
+    pub fn measurement(&mut self, m: &TrackerMeasurement) -> Vec<Output> {
+        let air = AirData { temperature: m.air_temperature, pressure: m.air_pressure, humidity: m.air_humidity };
+        let raw = RawReading {
+            time_ns: m.header.stamp.nanos(),
+            target: m.target_id.clone(),
+            range: m.range,
+            azimuth: m.azimuth,
+            elevation: m.elevation,
+            refractive_index: m.refractive_index,
+            air: Some(air),
+            status: m.status,
+        };
+        self.reading(&raw)
+    }
+
+    /// A point of a CSV export imported through the `bag import` layout (tracker frame,
+    /// Cartesian, ranges divided by `instrument_refractive_index`), with the latest imported air.
+    pub fn imported_point(&mut self, p: &MeasuredPoint) -> Vec<Output> {
+        let (range, azimuth, elevation) = cartesian_to_spherical(&Vector3::new(p.measured.x, p.measured.y, p.measured.z));
+        let air = match self.imported_air {
+            (Some(temperature), Some(pressure), Some(humidity)) => Some(AirData { temperature, pressure, humidity }),
+            _ => None,
+        };
+        let raw = RawReading {
+            time_ns: p.header.stamp.nanos(),
+            target: p.point_id.clone(),
+            range,
+            azimuth,
+            elevation,
+            refractive_index: self.config.instrument_index,
+            air,
+            status: 0,
+        };
+        self.reading(&raw)
+    }
+
+    /// Imported air: temperature (°C), pressure (Pa), relative humidity (0..1); None leaves a value as it was.
+    pub fn imported_air(&mut self, temperature: Option<f64>, pressure: Option<f64>, humidity: Option<f64>) {
+        let a = &mut self.imported_air;
+        a.0 = temperature.or(a.0);
+        a.1 = pressure.or(a.1);
+        a.2 = humidity.or(a.2);
+    }
+
+    /// A line from the TCP instrument.
+    pub fn line(&mut self, l: &LineReading) -> Vec<Output> {
+        let raw = l.to_raw(self.config.instrument_index);
+        self.reading(&raw)
+    }
+
+    pub fn reading(&mut self, raw: &RawReading) -> Vec<Output> {
+        self.counters.readings += 1;
+        self.power_on_ns.get_or_insert(raw.time_ns - self.config.warmup_elapsed_at_first_ns);
+        let mut out = Vec::new();
+        // a silence closes the open dwell even when this reading is rejected
+        if let Some(d) = self.grouper.close_if_stale(raw.time_ns) {
+            out.extend(self.dwell(d));
+        }
+        match self.config.processor.process(raw) {
+            Ok(p) => {
+                if let Some(d) = self.grouper.push(p) {
+                    out.extend(self.dwell(d));
+                }
+            }
+            Err(ReadingError::BeamBreak(_)) => self.counters.beam_breaks += 1,
+            Err(e) => {
+                self.counters.rejected += 1;
+                out.push(Output::Warning(format!("reading at {} ns rejected: {e}", raw.time_ns)));
+            }
+        }
+        out
+    }
+
+    /// A `machine/commanded_joint_states` message.
+    pub fn commanded(&mut self, j: &JointState) -> Vec<Output> {
+        let t = j.header.stamp.nanos();
+        let mut out = Vec::new();
+        if let Err(e) = self.commanded.push(t, &j.name, &j.position) {
+            out.push(Output::Warning(format!("machine/commanded_joint_states: {e}")));
+        }
+        out
+    }
+
+    /// Forget the pose and register again from the next `registration_points` targets (the
+    /// tracker was moved).
+    pub fn reregister(&mut self) {
+        self.pose = None;
+        self.collected.clear();
+        self.pending.clear();
+    }
+
+    /// ((A, B, τ), (σ_A, σ_B, σ_τ), stable at the last dwell, samples) of the warm-up fit.
+    pub fn warmup_summary(&self) -> Option<(Vector3<f64>, Vector3<f64>, bool, usize)> {
+        let f = self.warmup.fit()?;
+        Some((Vector3::new(f.a, f.b, f.tau), f.sigma(), self.last_warmup.is_some_and(|w| w.1), f.samples))
+    }
+
+    fn dwell(&mut self, d: DwellAverage) -> Vec<Output> {
+        let mut out = Vec::new();
+        if d.n < self.config.min_dwell_readings {
+            self.counters.short_dwells += 1;
+            return out;
+        }
+        self.counters.dwells += 1;
+        let verdict = self.config.turbulence.test(&d.ranges, self.config.processor.radial_sigma(d.range));
+        let flagged = verdict.is_some_and(|v| v.flagged);
+        if flagged {
+            self.counters.turbulence_flags += 1;
+        }
+        let covariance = d.covariance_given(verdict.as_ref());
+        let warming_up = self.warmup_step(&d, flagged, &mut out);
+        out.push(Output::Dwell(messages::dwell_measurement(&d, &covariance, &self.config.tracker_frame, flagged, warming_up)));
+
+        let nominal = match self.commanded.joints_at(d.mid_ns(), &self.config.nominal_joints) {
+            Ok(q) => Vector3::new(q[0], q[1], q[2]) + self.config.tool_offset,
+            Err(e) => {
+                self.counters.no_nominal += 1;
+                out.push(Output::Warning(format!("dwell of '{}' at {} ns has no nominal: {e}", d.target, d.mid_ns())));
+                return out;
+            }
+        };
+        let pending = PendingPoint { target: d.target.clone(), stamp_ns: d.mid_ns(), point: d.point, covariance, nominal };
+        match &self.pose {
+            Some(pose) => {
+                let p = messages::measured_point(pose, &pending.target, pending.stamp_ns, &pending.point, &pending.covariance, &pending.nominal, &self.config.machine_frame);
+                self.counters.points += 1;
+                out.push(Output::Point(p));
+            }
+            None => {
+                if !flagged && !self.collected.contains_key(&d.target) {
+                    self.collected.insert(
+                        d.target.clone(),
+                        Correspondence { tracker: d.point, tracker_covariance: covariance, machine: nominal, machine_covariance: Matrix3::zeros() },
+                    );
+                }
+                self.pending.push(pending);
+                if self.collected.len() >= self.config.registration_points {
+                    out.extend(self.try_register(d.mid_ns()));
+                }
+            }
+        }
+        out
+    }
+
+    /// Warm-up bookkeeping for one dwell; returns whether the tracker is still warming up
+    /// (false when no warm-up nest is configured).
+    fn warmup_step(&mut self, d: &DwellAverage, flagged: bool, out: &mut Vec<Output>) -> bool {
+        if self.config.warmup_target.is_empty() {
+            return false;
+        }
+        let t_on = (d.mid_ns() - self.power_on_ns.unwrap_or(d.first_ns)) as f64 * 1e-9;
+        if d.target == self.config.warmup_target && !flagged {
+            let sigma = self.config.processor.radial_sigma(d.range) / (d.n as f64).sqrt();
+            match self.warmup.add(WarmupSample { t: t_on, value: d.range, sigma }) {
+                Ok(fit) => out.push(Output::Warmup(messages::warmup_model(fit, d.mid_ns(), &self.config.warmup_target))),
+                Err(e) => out.push(Output::Warning(format!("warm-up: {e}"))),
+            }
+        }
+        let stable = self.warmup.stable_at(t_on);
+        self.last_warmup = Some((t_on, stable));
+        !stable
+    }
+
+    fn try_register(&mut self, stamp_ns: i64) -> Vec<Output> {
+        let points: Vec<Correspondence> = self.collected.values().copied().collect();
+        match register(&points) {
+            Ok(pose) => {
+                let mut out = vec![Output::Pose(pose.clone(), stamp_ns)];
+                for p in std::mem::take(&mut self.pending) {
+                    out.push(Output::Point(messages::measured_point(&pose, &p.target, p.stamp_ns, &p.point, &p.covariance, &p.nominal, &self.config.machine_frame)));
+                    self.counters.points += 1;
+                }
+                self.pose = Some(pose);
+                out
+            }
+            Err(e) => vec![Output::Warning(format!("registration from {} targets failed: {e}; collecting more", points.len()))],
+        }
+    }
+
+    /// Key/value pairs for `/diagnostics`.
+    pub fn diagnostics(&self) -> Vec<(String, String)> {
+        let c = &self.counters;
+        let mut v: Vec<(String, String)> = [
+            ("readings", c.readings),
+            ("beam_breaks", c.beam_breaks),
+            ("rejected_readings", c.rejected),
+            ("dwells", c.dwells),
+            ("short_dwells", c.short_dwells),
+            ("turbulence_flags", c.turbulence_flags),
+            ("measured_points", c.points),
+            ("dwells_without_nominal", c.no_nominal),
+        ]
+        .into_iter()
+        .map(|(k, n)| (k.to_string(), n.to_string()))
+        .collect();
+        if let Some((p, s, stable, n)) = self.warmup_summary() {
+            v.push(("warmup_A".into(), format!("{:.4} mm ± {:.2} µm", p[0] * 1e3, s[0] * 1e6)));
+            v.push(("warmup_B".into(), format!("{:.2} µm ± {:.2} µm", p[1] * 1e6, s[1] * 1e6)));
+            v.push(("warmup_tau".into(), format!("{:.1} min ± {:.1} min", p[2] / 60.0, s[2] / 60.0)));
+            v.push(("warmup_stable".into(), stable.to_string()));
+            v.push(("warmup_samples".into(), n.to_string()));
+        }
+        if let Some(pose) = &self.pose {
+            v.push(("registration_rms".into(), format!("{:.1} µm", pose.rms * 1e6)));
+        }
+        v
+    }
+}

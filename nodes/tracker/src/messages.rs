@@ -18,13 +18,10 @@ fn point(v: &Vector3<f64>) -> Point {
     Point { x: v.x, y: v.y, z: v.z }
 }
 
+/// Row-major, as the messages' covariance fields are (nalgebra stores column-major).
 fn row_major(m: &Matrix3<f64>) -> [f64; 9] {
     let mut a = [0.0; 9];
-    for i in 0..3 {
-        for j in 0..3 {
-            a[3 * i + j] = m[(i, j)];
-        }
-    }
+    a.copy_from_slice(m.transpose().as_slice());
     a
 }
 

@@ -84,30 +84,49 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     output.advertise::<TFMessage>("/tf_static")?;
     output.advertise::<PoseWithCovarianceStamped>(&pose_topic)?;
 
-    // SIGINT/SIGTERM stop it between messages, and the output below is still finished
-    let stopped = source.replay::<Box<dyn std::error::Error>>(|| node.interrupted(), |m| {
-        let outputs = match input(&mut state, &inputs, &m) {
-            Ok(o) => o,
-            Err(e) => {
-                // a malformed message is reported and skipped; the replay goes on
-                node.logger().warn(format!("skipped {} at log time {} ns: {e}", m.topic, m.log_time_ns));
-                return Ok(());
-            }
-        };
+    let mut write = |outputs: Vec<Output>, log_time_ns: u64| -> Result<(), Box<dyn std::error::Error>> {
         for o in outputs {
             match o {
-                Output::Point(p) => output.write(&points_topic, &p, m.log_time_ns)?,
-                Output::Dwell(d) => output.write(&dwells_topic, &d, m.log_time_ns)?,
-                Output::Warmup(w) => output.write(&warmup_topic, &w, m.log_time_ns)?,
+                Output::Point(p) => output.write(&points_topic, &p, log_time_ns)?,
+                Output::Dwell(d) => output.write(&dwells_topic, &d, log_time_ns)?,
+                Output::Warmup(w) => output.write(&warmup_topic, &w, log_time_ns)?,
                 Output::Pose(reg, stamp) => {
-                    output.write("/tf_static", &messages::tf_static(&reg, stamp, &machine_frame, &tracker_frame), m.log_time_ns)?;
-                    output.write(&pose_topic, &messages::pose_with_covariance(&reg, stamp, &machine_frame), m.log_time_ns)?;
+                    output.write("/tf_static", &messages::tf_static(&reg, stamp, &machine_frame, &tracker_frame), log_time_ns)?;
+                    output.write(&pose_topic, &messages::pose_with_covariance(&reg, stamp, &machine_frame), log_time_ns)?;
                 }
                 Output::Warning(w) => node.logger().warn(w),
             }
         }
         Ok(())
+    };
+    // An imported CSV row is several messages at one log time, the point first: the point waits
+    // until the row's joints and air have been taken.
+    let mut row_point: Option<(MeasuredPoint, u64)> = None;
+    // SIGINT/SIGTERM stop it between messages, and the output below is still finished
+    let stopped = source.replay::<Box<dyn std::error::Error>>(|| node.interrupted(), |m| {
+        if let Some((p, t)) = row_point.take_if(|(_, t)| *t != m.log_time_ns) {
+            write(state.imported_point(&p), t)?;
+        }
+        if inputs.csv && m.topic == inputs.readings {
+            match m.decode::<MeasuredPoint>() {
+                Ok(p) => row_point = Some((p, m.log_time_ns)),
+                Err(e) => node.logger().warn(format!("skipped {} at log time {} ns: {e}", m.topic, m.log_time_ns)),
+            }
+            return Ok(());
+        }
+        match input(&mut state, &inputs, &m) {
+            Ok(o) => write(o, m.log_time_ns),
+            Err(e) => {
+                // a malformed message is reported and skipped; the replay goes on
+                node.logger().warn(format!("skipped {} at log time {} ns: {e}", m.topic, m.log_time_ns));
+                Ok(())
+            }
+        }
     })?;
+    if let Some((p, t)) = row_point.take() {
+        write(state.imported_point(&p), t)?;
+    }
+    drop(write);
     output.finish()?;
     if csv {
         let _ = std::fs::remove_dir_all(&scratch);
@@ -119,11 +138,7 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
 
 fn input(state: &mut TrackerState, inputs: &Inputs, m: &SourcedMessage) -> Result<Vec<Output>, Box<dyn std::error::Error>> {
     Ok(if m.topic == inputs.readings {
-        if inputs.csv {
-            state.imported_point(&m.decode::<MeasuredPoint>()?)
-        } else {
-            state.measurement(&m.decode::<TrackerMeasurement>()?)
-        }
+        state.measurement(&m.decode::<TrackerMeasurement>()?)
     } else if m.topic == inputs.commanded {
         state.commanded(&m.decode::<JointState>()?)
     } else if !inputs.csv && m.topic == inputs.reregister {

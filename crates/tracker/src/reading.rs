@@ -117,7 +117,10 @@ impl ReadingProcessor {
         finite("azimuth", r.azimuth)?;
         finite("elevation", r.elevation)?;
         finite("refractive_index", r.refractive_index)?;
-        within("range", r.range, f64::MIN_POSITIVE, self.max_range)?;
+        if r.range <= 0.0 {
+            return Err(ReadingError::OutOfRange { field: "range", value: r.range, min: 0.0, max: self.max_range });
+        }
+        within("range", r.range, 0.0, self.max_range)?;
         within("azimuth", r.azimuth, -2.0 * std::f64::consts::PI, 2.0 * std::f64::consts::PI)?;
         within("elevation", r.elevation, -std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_PI_2)?;
         if r.refractive_index != 0.0 {

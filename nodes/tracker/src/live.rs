@@ -97,5 +97,17 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
         }
         token.wait_timeout(Duration::from_millis(2));
     }
+    // shutting down closes the open dwell, as the end of a bag does in a replay
+    for o in state.finish() {
+        match o {
+            Output::Point(p) => {
+                let _ = points.publish(p);
+            }
+            Output::Dwell(d) => {
+                let _ = dwells.publish(d);
+            }
+            _ => {}
+        }
+    }
     Ok(())
 }

@@ -1,6 +1,7 @@
 //! The node on a bag (`--bag IN`): no DDS. Inputs are read in log-time order; the logic runs on
 //! the messages' own stamps as live, so the outputs equal the live node's fed by `bag play`.
-//! Outputs are written at the log time of the input that caused them.
+//! Outputs are written at the log time of the input that caused them; the end of the input
+//! closes the open dwell, as a live node's shutdown does.
 //!
 //! `IN` ending in `.csv` is a CSV export: it is first imported with `bag import`'s importer
 //! (layout and mapping file: parameter `csv_mapping`) into a scratch bag, whose
@@ -103,7 +104,9 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     // until the row's joints and air have been taken.
     let mut row_point: Option<(MeasuredPoint, u64)> = None;
     // SIGINT/SIGTERM stop it between messages, and the output below is still finished
+    let mut last_log_time = 0u64;
     let stopped = source.replay::<Box<dyn std::error::Error>>(|| node.interrupted(), |m| {
+        last_log_time = m.log_time_ns;
         if let Some((p, t)) = row_point.take_if(|(_, t)| *t != m.log_time_ns) {
             write(state.imported_point(&p), t)?;
         }
@@ -125,6 +128,10 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     })?;
     if let Some((p, t)) = row_point.take() {
         write(state.imported_point(&p), t)?;
+    }
+    // the end of the input closes the open dwell (stamped at its last log time)
+    if stopped.is_none() {
+        write(state.finish(), last_log_time)?;
     }
     drop(write);
     output.finish()?;

@@ -187,6 +187,14 @@ impl TrackerState {
         out
     }
 
+    /// The input ended (end of a bag or export, node shutdown): close the open dwell.
+    pub fn finish(&mut self) -> Vec<Output> {
+        match self.grouper.flush() {
+            Some(d) => self.dwell(d),
+            None => Vec::new(),
+        }
+    }
+
     /// Forget the pose and register again from the next `registration_points` targets (the
     /// tracker was moved).
     pub fn reregister(&mut self) {

@@ -61,7 +61,7 @@ fn csv_export_replays_with_bad_rows_reported() {
     let mut s = BagSource::open(&output).unwrap();
     s.subscribe::<MeasuredPoint>("/measured_points").unwrap();
     let points: Vec<MeasuredPoint> = s.messages().unwrap().map(|m| m.unwrap().decode().unwrap()).collect();
-    assert_eq!(points.iter().map(|p| p.point_id.as_str()).collect::<Vec<_>>(), ["point_0", "point_1", "point_2", "point_3"]);
+    assert_eq!(points.iter().map(|p| p.point_id.as_str()).collect::<Vec<_>>(), ["point_0", "point_1", "point_2", "point_3"], "{stderr}");
     for (p, q) in points.iter().zip(&nominals) {
         assert_eq!((p.nominal.x, p.nominal.y, p.nominal.z), (q.x, q.y, q.z));
         let m = Vector3::new(p.measured.x, p.measured.y, p.measured.z);

@@ -73,7 +73,7 @@ fn twin_to_tracker_over_dds_equals_replay_and_measures_every_dwell_once() {
     let last_dwell_end = program.segments.iter().filter(|s| s.dwell_point.is_some()).map(|s| s.end).fold(0.0, f64::max);
     let input = tmp.join("input");
     let options = BagOptions { frames: None, clock_rate: None, ..BagOptions::default() };
-    write_bag(cell.clone(), program.start + last_dwell_end + 5.0, 3, &input, &options, |_| {}).unwrap();
+    write_bag(cell, program.start + last_dwell_end + 5.0, 3, &input, &options, |_| {}).unwrap();
     let inputs = inputs(&input);
 
     // --- live

@@ -11,13 +11,12 @@
 use std::time::Instant;
 
 use metrocell_bagtools::{encode_cdr, SourcedMessage};
-use metrocell_compensation::{cartesian_to_spherical, SphericalNoise};
+use metrocell_compensation::cartesian_to_spherical;
 use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_msgs::geometry_msgs::msg::Point;
 use metrocell_msgs::msg::TrackerMeasurement;
 use metrocell_msgs::sensor_msgs::msg::JointState;
 use metrocell_msgs::std_msgs::msg::Header;
-use metrocell_tracker::{AirSource, EdlenForm, ReadingProcessor, TurbulenceTest};
 use metrocell_tracker_node::parameters::TrackerConfig;
 use metrocell_tracker_node::tracker_state::{Output, TrackerState};
 use nalgebra::Vector3;
@@ -28,27 +27,7 @@ const T0: i64 = 1_700_000_000_000_000_000;
 const PERIOD_NS: i64 = 1_000_000; // 1 kHz
 
 fn config() -> TrackerConfig {
-    TrackerConfig {
-        processor: ReadingProcessor {
-            noise: SphericalNoise { radial_base: 4e-6, radial_per_metre: 0.8e-6, angular: 3e-6 },
-            air: AirSource::Station,
-            form: EdlenForm::ShopFloor,
-            max_range: 80.0,
-        },
-        turbulence: TurbulenceTest { false_alarm: 0.001 },
-        instrument_index: 0.0,
-        dwell_gap_ns: 500_000_000,
-        min_dwell_readings: 5,
-        warmup_target: String::new(),
-        power_on_ns: None,
-        warmup_elapsed_at_first_ns: 0,
-        nominal_joints: vec!["x".into(), "y".into(), "z".into()],
-        tool_offset: Vector3::zeros(),
-        commanded_gap_ns: 500_000_000,
-        registration_points: 10,
-        machine_frame: "machine".into(),
-        tracker_frame: "tracker".into(),
-    }
+    TrackerConfig { registration_points: 10, ..TrackerConfig::defaults() }
 }
 
 fn message(topic: &str, payload: Vec<u8>, t: i64) -> SourcedMessage {

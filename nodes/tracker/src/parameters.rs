@@ -99,6 +99,12 @@ impl TrackerConfig {
         })
     }
 
+    /// The configuration of the declared defaults (tests, benchmarks).
+    pub fn defaults() -> Self {
+        let p = Parameters::resolve(&declarations(), &metrocell_node::RosArgs::default(), "/tracker", "tracker").expect("the declared defaults resolve");
+        Self::from_parameters(&p).expect("the declared defaults form a configuration")
+    }
+
     /// One log line describing the configuration.
     pub fn describe(&self) -> String {
         let n = &self.processor.noise;

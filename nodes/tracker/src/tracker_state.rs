@@ -320,3 +320,124 @@ impl TrackerState {
         v
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use metrocell_compensation::cartesian_to_spherical;
+    use metrocell_msgs::builtin_interfaces::msg::Time;
+    use metrocell_msgs::geometry_msgs::msg::Point;
+    use metrocell_msgs::std_msgs::msg::Header;
+    use nalgebra::Rotation3;
+
+    const AIR: AirData = AirData { temperature: 20.0, pressure: 101_325.0, humidity: 0.5 };
+    const NOMINALS: [[f64; 3]; 4] = [[0.0, 0.0, 0.0], [0.4, 0.0, 0.1], [0.4, 0.3, 0.0], [0.0, 0.3, 0.2]];
+
+    fn header(t_ns: i64) -> Header {
+        Header { stamp: Time::from_nanos(t_ns), frame_id: String::new() }
+    }
+
+    /// Dwells of 10 readings at 10 Hz on each nominal, seen from a tracker at pose (r, t); the
+    /// commanded joints say where the machine is. `scatter` (m) alternates on the range.
+    fn visit(state: &mut TrackerState, t0_ns: i64, r: &Rotation3<f64>, t: &Vector3<f64>, scatter: f64) -> Vec<Output> {
+        let mut out = Vec::new();
+        let mut time = t0_ns;
+        for (k, q) in NOMINALS.iter().enumerate() {
+            let q = Vector3::from(*q);
+            let (range, azimuth, elevation) = cartesian_to_spherical(&(r.inverse() * (q - t)));
+            for i in 0..10 {
+                time += 100_000_000;
+                let j = JointState { header: header(time), name: vec!["x".into(), "y".into(), "z".into()], position: vec![q.x, q.y, q.z], velocity: vec![], effort: vec![] };
+                out.extend(state.commanded(&j));
+                let m = TrackerMeasurement {
+                    header: header(time),
+                    target_id: format!("p{k}"),
+                    point: Point::default(),
+                    range: range + if i % 2 == 0 { scatter } else { -scatter },
+                    azimuth,
+                    elevation,
+                    covariance: [0.0; 9],
+                    air_temperature: AIR.temperature,
+                    air_pressure: AIR.pressure,
+                    air_humidity: AIR.humidity,
+                    refractive_index: AIR.refractive_index(),
+                    status: if k == 1 && i == 4 { TrackerMeasurement::STATUS_BEAM_BREAK } else { 0 },
+                };
+                out.extend(state.measurement(&m));
+            }
+            time += 2_000_000_000;
+        }
+        out
+    }
+
+    fn points(out: &[Output]) -> Vec<&MeasuredPoint> {
+        out.iter().filter_map(|o| if let Output::Point(p) = o { Some(p) } else { None }).collect()
+    }
+
+    fn poses(out: &[Output]) -> Vec<&Registration> {
+        out.iter().filter_map(|o| if let Output::Pose(p, _) = o { Some(p) } else { None }).collect()
+    }
+
+    #[test]
+    fn registers_publishes_every_dwell_and_reregisters_when_moved() {
+        let mut state = TrackerState::new(TrackerConfig { registration_points: 4, ..TrackerConfig::defaults() });
+        let (ra, ta) = (Rotation3::from_euler_angles(0.0, 0.0, 0.5), Vector3::new(-1.2, 0.2, 0.6));
+        let mut out = visit(&mut state, 0, &ra, &ta, 0.0);
+        out.extend(state.finish());
+        assert_eq!(poses(&out).len(), 1);
+        assert!((poses(&out)[0].translation - ta).norm() < 1e-9);
+        let ids: Vec<&str> = points(&out).iter().map(|p| p.point_id.as_str()).collect();
+        assert_eq!(ids, ["p0", "p1", "p2", "p3"], "held back until registered, then each once");
+        for (p, q) in points(&out).iter().zip(NOMINALS) {
+            assert_eq!([p.nominal.x, p.nominal.y, p.nominal.z], q);
+            assert!((Vector3::new(p.measured.x, p.measured.y, p.measured.z) - Vector3::from(q)).norm() < 1e-9);
+        }
+        assert_eq!((state.counters.readings, state.counters.beam_breaks, state.counters.dwells), (40, 1, 4));
+
+        // the tracker is moved: without re-registration the points are off by the move
+        let (rb, tb) = (Rotation3::from_euler_angles(0.0, 0.0, 0.9), Vector3::new(-1.0, -0.4, 0.5));
+        let mut moved = visit(&mut state, 60_000_000_000, &rb, &tb, 0.0);
+        moved.extend(state.finish());
+        assert_eq!(points(&moved).len(), 4);
+        assert!(points(&moved).iter().all(|p| (p.measured.x - p.nominal.x).abs() > 1e-3 || (p.measured.y - p.nominal.y).abs() > 1e-3));
+        state.reregister();
+        let mut again = visit(&mut state, 120_000_000_000, &rb, &tb, 0.0);
+        again.extend(state.finish());
+        assert!((poses(&again)[0].translation - tb).norm() < 1e-9);
+        assert_eq!(points(&again).len(), 4);
+    }
+
+    #[test]
+    fn turbulent_dwells_are_flagged_inflated_and_not_used_for_registration() {
+        let mut state = TrackerState::new(TrackerConfig { registration_points: 4, ..TrackerConfig::defaults() });
+        let (r, t) = (Rotation3::identity(), Vector3::new(-1.5, 0.0, 0.5));
+        // ±60 µm on the range against σ ≈ 5.4 µm: every dwell fails the χ² test
+        let mut out = visit(&mut state, 0, &r, &t, 60e-6);
+        out.extend(state.finish());
+        assert_eq!(state.counters.turbulence_flags, 4);
+        assert!(poses(&out).is_empty() && points(&out).is_empty(), "no registration from turbulent dwells");
+        let dwells: Vec<&TrackerMeasurement> = out.iter().filter_map(|o| if let Output::Dwell(d) = o { Some(d) } else { None }).collect();
+        assert_eq!(dwells.len(), 4);
+        for d in dwells {
+            assert_ne!(d.status & TrackerMeasurement::STATUS_TURBULENCE, 0);
+            // covariance of the mean inflated to the scatter: radial σ_mean ≈ 60 µm/√n
+            let n = if d.target_id == "p1" { 9.0 } else { 10.0 };
+            let u = Vector3::new(d.point.x, d.point.y, d.point.z).normalize();
+            let c = nalgebra::Matrix3::from_row_slice(&d.covariance);
+            let radial = (u.transpose() * c * u)[(0, 0)].sqrt();
+            assert!((radial / (60e-6 / f64::sqrt(n)) - 1.0).abs() < 0.1, "{radial}");
+        }
+    }
+
+    #[test]
+    fn short_dwells_and_missing_nominals_are_counted() {
+        let mut state = TrackerState::new(TrackerConfig { min_dwell_readings: 11, ..TrackerConfig::defaults() });
+        visit(&mut state, 0, &Rotation3::identity(), &Vector3::new(-1.5, 0.0, 0.5), 0.0);
+        state.finish();
+        assert_eq!((state.counters.short_dwells, state.counters.dwells), (4, 0));
+        let mut state = TrackerState::new(TrackerConfig { nominal_joints: vec!["a".into(), "b".into(), "c".into()], ..TrackerConfig::defaults() });
+        let out = visit(&mut state, 0, &Rotation3::identity(), &Vector3::new(-1.5, 0.0, 0.5), 0.0);
+        assert_eq!(state.counters.no_nominal, 3);
+        assert!(out.iter().any(|o| matches!(o, Output::Warning(w) if w.contains("lacks joint 'a'"))));
+    }
+}

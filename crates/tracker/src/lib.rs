@@ -21,6 +21,9 @@ pub mod time_alignment;
 pub mod turbulence;
 pub mod warmup;
 
+#[cfg(test)]
+mod test_noise;
+
 pub use dwell::{DwellAverage, DwellGrouper};
 pub use reading::{AirSource, EdlenForm, ProcessedReading, RawReading, ReadingError, ReadingProcessor};
 pub use registration::{register, Registration, RegistrationError};

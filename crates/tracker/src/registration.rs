@@ -153,14 +153,10 @@ fn kabsch(points: &[Correspondence]) -> Result<(Rotation3<f64>, Vector3<f64>), R
 mod tests {
     use super::*;
     use metrocell_compensation::{spherical_to_cartesian, SphericalNoise};
-    use rand::{Rng, SeedableRng};
+    use crate::test_noise::normal;
+    use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
-    fn normal(rng: &mut ChaCha8Rng) -> f64 {
-        let u1: f64 = 1.0 - rng.random::<f64>();
-        let u2: f64 = rng.random();
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    }
 
     /// Thesis P3 pose: translation (−863.527, 194.373, 677.782) mm, Euler XYZ (0.0339°, 0.0343°, 59.4652°).
     fn thesis_pose() -> (Rotation3<f64>, Vector3<f64>) {

@@ -137,14 +137,10 @@ fn ln_gamma(x: f64) -> f64 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rand::{Rng, SeedableRng};
+    use crate::test_noise::normal;
+    use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
-    fn normal(rng: &mut ChaCha8Rng) -> f64 {
-        let u1: f64 = 1.0 - rng.random::<f64>();
-        let u2: f64 = rng.random();
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    }
 
     #[test]
     fn quantiles_match_tables() {

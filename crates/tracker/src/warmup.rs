@@ -180,14 +180,10 @@ impl WarmupTracker {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use rand::{Rng, SeedableRng};
+    use crate::test_noise::normal;
+    use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
-    fn normal(rng: &mut ChaCha8Rng) -> f64 {
-        let u1: f64 = 1.0 - rng.random::<f64>();
-        let u2: f64 = rng.random();
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    }
 
     /// Thesis eq. 3.2 / 3.3 sampled every 30 s for 270 min (P1), σ = 1 µm.
     fn curve(a_mm: f64, b_mm: f64, tau_min: f64, seed: u64) -> Vec<WarmupSample> {

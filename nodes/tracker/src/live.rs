@@ -4,7 +4,7 @@ use std::time::Duration;
 
 use metrocell_msgs::geometry_msgs::msg::PoseWithCovarianceStamped;
 use metrocell_msgs::msg::{ErrorModel, MeasuredPoint, TrackerMeasurement};
-use metrocell_msgs::sensor_msgs::msg::JointState;
+use metrocell_msgs::sensor_msgs::msg::{FluidPressure, JointState, RelativeHumidity, Temperature};
 use metrocell_msgs::std_msgs::msg::String as RosString;
 use metrocell_msgs::tf2_msgs::msg::TFMessage;
 use metrocell_node::{qos, MetrocellNode};
@@ -29,6 +29,15 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
         None => Some(node.subscription::<TrackerMeasurement>("tracker/measurements", qos::reliable())?),
         Some(_) => None,
     };
+    let weather = if state.config().air_from_topics {
+        Some((
+            node.subscription::<Temperature>("weather/temperature", qos::reliable())?,
+            node.subscription::<FluidPressure>("weather/pressure", qos::reliable())?,
+            node.subscription::<RelativeHumidity>("weather/humidity", qos::reliable())?,
+        ))
+    } else {
+        None
+    };
     let commanded = node.subscription::<JointState>("machine/commanded_joint_states", qos::sensor_data())?;
     let reregister = node.subscription::<RosString>("tracker/reregister", qos::reliable())?;
     let points = node.publisher::<MeasuredPoint>("measured_points", qos::reliable())?;
@@ -42,6 +51,17 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
     let token = node.shutdown_token();
     let mut outputs = Vec::new();
     while !token.is_triggered() {
+        if let Some((t, p, h)) = &weather {
+            while let Ok(Some((m, _))) = t.take() {
+                state.station_air(Some(m.temperature), None, None);
+            }
+            while let Ok(Some((m, _))) = p.take() {
+                state.station_air(None, Some(m.fluid_pressure), None);
+            }
+            while let Ok(Some((m, _))) = h.take() {
+                state.station_air(None, None, Some(m.relative_humidity));
+            }
+        }
         while let Ok(Some((j, _))) = commanded.take() {
             outputs.extend(state.commanded(&j));
         }

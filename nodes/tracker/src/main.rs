@@ -7,7 +7,8 @@
 //!     at `tcp_address` (reconnects with back-off; repeats, garbage and bad values counted);
 //!   * `--bag IN`: a recorded bag, or a CSV export (`IN` ending in `.csv`) imported through the
 //!     `bag import` layout and the mapping file in parameter `csv_mapping`.
-//! Each reading is re-corrected for the air (Edlén), given its covariance (σ angle; σ range
+//! Each reading is re-corrected for the air (Edlén; the reading's station air, the
+//! `weather/{temperature,pressure,humidity}` topics, or configured values), given its covariance (σ angle; σ range
 //! a + b·range), grouped into dwells (consecutive readings of one target), averaged with its
 //! standard error and tested for turbulence (χ² of the range scatter). The warm-up nest's dwells
 //! feed a fit of A + B(1 − e^(−t/τ)). The first `registration_points` targets register the

@@ -6,7 +6,8 @@
 //! `IN` ending in `.csv` is a CSV export: it is first imported with `bag import`'s importer
 //! (layout and mapping file: parameter `csv_mapping`) into a scratch bag, whose
 //! `/measured_points` (tracker-frame points), `/commanded_joints`, `/temperature/air`,
-//! `/air/pressure` and `/air/humidity` are then replayed.
+//! `/air/pressure` and `/air/humidity` are then replayed. With `air_source:=topics` the
+//! weather-station topics `weather/temperature`, `weather/pressure`, `weather/humidity` are read.
 
 use std::path::{Path, PathBuf};
 
@@ -23,11 +24,13 @@ use metrocell_tracker_node::messages;
 use metrocell_tracker_node::parameters::TrackerConfig;
 use metrocell_tracker_node::tracker_state::{Output, TrackerState};
 
-/// Input topics: (readings, commanded joints, re-register, CSV air topics).
+/// Input topics.
 struct Inputs {
     readings: String,
     commanded: String,
     reregister: String,
+    /// weather station: temperature, pressure, humidity (empty when the air comes otherwise)
+    air: [String; 3],
     csv: bool,
 }
 
@@ -50,12 +53,24 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     };
     let mut source = BagSource::open(&bag)?;
     let inputs = if csv {
-        Inputs { readings: "/measured_points".into(), commanded: "/commanded_joints".into(), reregister: String::new(), csv: true }
+        Inputs {
+            readings: "/measured_points".into(),
+            commanded: "/commanded_joints".into(),
+            reregister: String::new(),
+            air: ["/temperature/air".into(), "/air/pressure".into(), "/air/humidity".into()],
+            csv: true,
+        }
     } else {
+        let air = if state.config().air_from_topics {
+            [node.resolve_topic("weather/temperature")?, node.resolve_topic("weather/pressure")?, node.resolve_topic("weather/humidity")?]
+        } else {
+            Default::default()
+        };
         Inputs {
             readings: node.resolve_topic("tracker/measurements")?,
             commanded: node.resolve_topic("machine/commanded_joint_states")?,
             reregister: node.resolve_topic("tracker/reregister")?,
+            air,
             csv: false,
         }
     };
@@ -66,11 +81,18 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     if !source.subscribe::<JointState>(&inputs.commanded)? {
         node.logger().warn(source.missing_topic_hint(&inputs.commanded));
     }
-    if csv {
-        source.subscribe::<Temperature>("/temperature/air")?;
-        source.subscribe::<FluidPressure>("/air/pressure")?;
-        source.subscribe::<RelativeHumidity>("/air/humidity")?;
-    } else {
+    if !inputs.air[0].is_empty() {
+        for (topic, found) in inputs.air.iter().zip([
+            source.subscribe::<Temperature>(&inputs.air[0])?,
+            source.subscribe::<FluidPressure>(&inputs.air[1])?,
+            source.subscribe::<RelativeHumidity>(&inputs.air[2])?,
+        ]) {
+            if !found {
+                node.logger().warn(source.missing_topic_hint(topic));
+            }
+        }
+    }
+    if !csv {
         source.subscribe::<RosString>(&inputs.reregister)?;
     }
 
@@ -152,14 +174,14 @@ fn input(state: &mut TrackerState, inputs: &Inputs, m: &SourcedMessage) -> Resul
         m.decode::<RosString>()?;
         state.reregister();
         Vec::new()
-    } else if m.topic == "/temperature/air" {
-        state.imported_air(Some(m.decode::<Temperature>()?.temperature), None, None);
+    } else if m.topic == inputs.air[0] {
+        state.station_air(Some(m.decode::<Temperature>()?.temperature), None, None);
         Vec::new()
-    } else if m.topic == "/air/pressure" {
-        state.imported_air(None, Some(m.decode::<FluidPressure>()?.fluid_pressure), None);
+    } else if m.topic == inputs.air[1] {
+        state.station_air(None, Some(m.decode::<FluidPressure>()?.fluid_pressure), None);
         Vec::new()
-    } else if m.topic == "/air/humidity" {
-        state.imported_air(None, None, Some(m.decode::<RelativeHumidity>()?.relative_humidity));
+    } else if m.topic == inputs.air[2] {
+        state.station_air(None, None, Some(m.decode::<RelativeHumidity>()?.relative_humidity));
         Vec::new()
     } else {
         Vec::new()

@@ -73,7 +73,7 @@ pub struct TrackerState {
     collected: BTreeMap<String, Correspondence>,
     pending: Vec<PendingPoint>,
     last_warmup: Option<(f64, bool)>,
-    imported_air: (Option<f64>, Option<f64>, Option<f64>),
+    station_air: (Option<f64>, Option<f64>, Option<f64>),
     pub counters: Counters,
 }
 
@@ -89,7 +89,7 @@ impl TrackerState {
             collected: BTreeMap::new(),
             pending: Vec::new(),
             last_warmup: None,
-            imported_air: (None, None, None),
+            station_air: (None, None, None),
             counters: Counters::default(),
             config,
         }
@@ -105,7 +105,11 @@ impl TrackerState {
 
     /// A `tracker/measurements` message (topic backend, bag replay).
     pub fn measurement(&mut self, m: &TrackerMeasurement) -> Vec<Output> {
-        let air = AirData { temperature: m.air_temperature, pressure: m.air_pressure, humidity: m.air_humidity };
+        let air = if self.config.air_from_topics {
+            self.latest_station_air()
+        } else {
+            Some(AirData { temperature: m.air_temperature, pressure: m.air_pressure, humidity: m.air_humidity })
+        };
         let raw = RawReading {
             time_ns: m.header.stamp.nanos(),
             target: m.target_id.clone(),
@@ -113,20 +117,17 @@ impl TrackerState {
             azimuth: m.azimuth,
             elevation: m.elevation,
             refractive_index: m.refractive_index,
-            air: Some(air),
+            air,
             status: m.status,
         };
         self.reading(&raw)
     }
 
     /// A point of a CSV export imported through the `bag import` layout (tracker frame,
-    /// Cartesian, ranges divided by `instrument_refractive_index`), with the latest imported air.
+    /// Cartesian, ranges divided by `instrument_refractive_index`), with the latest station air.
     pub fn imported_point(&mut self, p: &MeasuredPoint) -> Vec<Output> {
         let (range, azimuth, elevation) = cartesian_to_spherical(&Vector3::new(p.measured.x, p.measured.y, p.measured.z));
-        let air = match self.imported_air {
-            (Some(temperature), Some(pressure), Some(humidity)) => Some(AirData { temperature, pressure, humidity }),
-            _ => None,
-        };
+        let air = self.latest_station_air();
         let raw = RawReading {
             time_ns: p.header.stamp.nanos(),
             target: p.point_id.clone(),
@@ -140,9 +141,17 @@ impl TrackerState {
         self.reading(&raw)
     }
 
-    /// Imported air: temperature (°C), pressure (Pa), relative humidity (0..1); None leaves a value as it was.
-    pub fn imported_air(&mut self, temperature: Option<f64>, pressure: Option<f64>, humidity: Option<f64>) {
-        let a = &mut self.imported_air;
+    /// The weather station's latest complete air (topics, or an imported export's columns).
+    fn latest_station_air(&self) -> Option<AirData> {
+        match self.station_air {
+            (Some(temperature), Some(pressure), Some(humidity)) => Some(AirData { temperature, pressure, humidity }),
+            _ => None,
+        }
+    }
+
+    /// Weather-station air: temperature (°C), pressure (Pa), relative humidity (0..1); None leaves a value as it was.
+    pub fn station_air(&mut self, temperature: Option<f64>, pressure: Option<f64>, humidity: Option<f64>) {
+        let a = &mut self.station_air;
         a.0 = temperature.or(a.0);
         a.1 = pressure.or(a.1);
         a.2 = humidity.or(a.2);
@@ -439,5 +448,35 @@ mod tests {
         let out = visit(&mut state, 0, &Rotation3::identity(), &Vector3::new(-1.5, 0.0, 0.5), 0.0);
         assert_eq!(state.counters.no_nominal, 3);
         assert!(out.iter().any(|o| matches!(o, Output::Warning(w) if w.contains("lacks joint 'a'"))));
+    }
+
+    #[test]
+    fn weather_station_topics_replace_the_readings_air() {
+        let mut state = TrackerState::new(TrackerConfig { air_from_topics: true, ..TrackerConfig::defaults() });
+        let m = TrackerMeasurement {
+            header: header(1),
+            target_id: "p".into(),
+            point: Point::default(),
+            range: 2.0,
+            azimuth: 0.1,
+            elevation: 0.1,
+            covariance: [0.0; 9],
+            air_temperature: 20.0,
+            air_pressure: 101_325.0,
+            air_humidity: 0.5,
+            refractive_index: AIR.refractive_index(),
+            status: 0,
+        };
+        let out = state.measurement(&m);
+        assert!(out.iter().any(|o| matches!(o, Output::Warning(w) if w.contains("no air data"))), "no station air yet: rejected");
+        // the station says 1 K warmer than the instrument assumed: the range grows by ~0.95 ppm
+        state.station_air(Some(21.0), Some(101_325.0), Some(0.5));
+        for k in 0..5 {
+            state.measurement(&TrackerMeasurement { header: header(2 + k), ..m.clone() });
+        }
+        let out = state.finish();
+        let d = out.iter().find_map(|o| if let Output::Dwell(d) = o { Some(d) } else { None }).unwrap();
+        assert!(((d.range - 2.0) / 2.0 * 1e6 - 0.95).abs() < 0.05, "{} ppm", (d.range - 2.0) / 2.0 * 1e6);
+        assert_eq!(d.air_temperature, 21.0);
     }
 }

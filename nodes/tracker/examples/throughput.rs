@@ -84,6 +84,7 @@ fn main() {
         let out = if m.topic == "m" { state.measurement(&m.decode::<TrackerMeasurement>().unwrap()) } else { state.commanded(&m.decode::<JointState>().unwrap()) };
         points += out.iter().filter(|o| matches!(o, Output::Point(_))).count();
     }
+    points += state.finish().iter().filter(|o| matches!(o, Output::Point(_))).count();
     let process_s = start.elapsed().as_secs_f64();
 
     let rate = |s: f64| READINGS as f64 / s;

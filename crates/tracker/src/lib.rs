@@ -27,6 +27,6 @@ mod test_noise;
 pub use dwell::{DwellAverage, DwellGrouper};
 pub use reading::{AirSource, EdlenForm, ProcessedReading, RawReading, ReadingError, ReadingProcessor};
 pub use registration::{register, Registration, RegistrationError};
-pub use time_alignment::{program_point_time, CommandedTrajectory};
+pub use time_alignment::{program_point_time, CommandedTrajectory, ProgramSchedule};
 pub use turbulence::{TurbulenceTest, TurbulenceVerdict};
 pub use warmup::{fit_warmup, WarmupFit, WarmupTracker};

@@ -14,6 +14,43 @@ pub fn program_point_time(path_length: f64, feed: f64, stop_time: f64, n: u32) -
     path_length / feed + stop_time * (n.max(1) - 1) as f64
 }
 
+/// The program's timing when no machine state is streamed: the machine leaves `home` at
+/// `start_ns`, travels at `feed` between points and stops `stop_time` at each; point n (1-based)
+/// is reached at start + T_v(n) with L_T the path length from home through points 1..n.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ProgramSchedule {
+    pub start_ns: i64,
+    pub home: nalgebra::Vector3<f64>,
+    pub points: Vec<nalgebra::Vector3<f64>>,
+    /// m/s
+    pub feed: f64,
+    /// s
+    pub stop_time: f64,
+}
+
+impl ProgramSchedule {
+    /// Arrival times (s after start) at each point.
+    pub fn arrivals(&self) -> Vec<f64> {
+        let mut path = 0.0;
+        let mut at = self.home;
+        self.points
+            .iter()
+            .enumerate()
+            .map(|(k, p)| {
+                path += (p - at).norm();
+                at = *p;
+                program_point_time(path, self.feed, self.stop_time, k as u32 + 1)
+            })
+            .collect()
+    }
+
+    /// The point the machine stands at `t_ns` (index, position), if it is in a stop.
+    pub fn point_at(&self, t_ns: i64) -> Option<(usize, nalgebra::Vector3<f64>)> {
+        let t = (t_ns - self.start_ns) as f64 * 1e-9;
+        self.arrivals().into_iter().position(|a| t >= a && t <= a + self.stop_time).map(|k| (k, self.points[k]))
+    }
+}
+
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum AlignmentError {
     #[error("commanded joint state has {names} names but {positions} positions")]
@@ -143,6 +180,23 @@ mod tests {
         }
         assert!(c.samples.len() <= 101);
         assert_eq!(c.at(0), Err(AlignmentError::NoState(0)));
+    }
+
+    #[test]
+    fn schedule_finds_the_stop_of_a_time() {
+        use nalgebra::Vector3;
+        let s = ProgramSchedule {
+            start_ns: 1_000_000_000,
+            home: Vector3::zeros(),
+            points: vec![Vector3::new(0.1, 0.0, 0.0), Vector3::new(0.1, 0.2, 0.0)],
+            feed: 0.05,
+            stop_time: 3.0,
+        };
+        // 0.1 m at 50 mm/s: point 1 at 2 s; then 0.2 m more: 6 s of travel + 3 s stop → 9 s
+        assert_eq!(s.arrivals(), vec![2.0, 9.0]);
+        assert_eq!(s.point_at(1_000_000_000 + 3_500_000_000).map(|p| p.0), Some(0));
+        assert_eq!(s.point_at(1_000_000_000 + 10_000_000_000).map(|p| p.0), Some(1));
+        assert_eq!(s.point_at(1_000_000_000 + 6_000_000_000), None, "moving");
     }
 
     #[test]

@@ -13,7 +13,8 @@
 //! standard error and tested for turbulence (χ² of the range scatter). The warm-up nest's dwells
 //! feed a fit of A + B(1 − e^(−t/τ)). The first `registration_points` targets register the
 //! tracker in the machine frame (nominals = `machine/commanded_joint_states` at the dwell's mid
-//! time + `tool_offset`); from then on every dwell is published on `measured_points`.
+//! time + `tool_offset`; without them, the program's timing T_v = L_T/F + T_s(n − 1) from the
+//! `program_*` parameters); from then on every dwell is published on `measured_points`.
 //!
 //! Publishes: `measured_points` (MeasuredPoint, machine frame), `tracker/dwells`
 //! (TrackerMeasurement: averaged, STATUS_TURBULENCE / STATUS_WARMING_UP set), `tracker/warmup`

@@ -3,7 +3,7 @@
 
 use metrocell_compensation::{AirData, SphericalNoise};
 use metrocell_node::{ParamDecl, Parameters};
-use metrocell_tracker::{AirSource, EdlenForm, ReadingProcessor, TurbulenceTest};
+use metrocell_tracker::{AirSource, EdlenForm, ProgramSchedule, ReadingProcessor, TurbulenceTest};
 use nalgebra::Vector3;
 
 pub fn declarations() -> Vec<ParamDecl> {
@@ -33,6 +33,11 @@ pub fn declarations() -> Vec<ParamDecl> {
         ParamDecl::new("nominal_joints", vec![s("x"), s("y"), s("z")], "commanded JointState names giving the nominal X, Y, Z of the target [m] (Cartesian machines)"),
         ParamDecl::new("tool_offset", vec![0.0, 0.0, 0.0], "target (SMR) position relative to the commanded axis position [m], machine frame"),
         ParamDecl::new("commanded_gap", 0.5, "longest gap between commanded joint states the node interpolates across [s]").with_range(0.001, 60.0),
+        ParamDecl::new("program_points", Vec::<f64>::new(), "without machine/commanded_joint_states: the program's points in visiting order, x y z per point [m] (flat list); their time comes from T_v = L_T/F + T_s(n − 1)"),
+        ParamDecl::new("program_home", vec![0.0, 0.0, 0.0], "where the program starts [m] (commanded axis position)"),
+        ParamDecl::new("program_feed", 0.05, "feed rate F between program points [m/s]").with_range(1e-6, 10.0),
+        ParamDecl::new("program_stop_time", 3.0, "stop time T_s at each program point [s]").with_range(0.0, 3600.0),
+        ParamDecl::new("program_start_time", 0.0, "ROS time the program left home [s since epoch]; 0 = no program timing").with_range(0.0, 1e10),
         ParamDecl::new("registration_points", 12i64, "dwells (distinct targets) collected before the tracker pose is fitted; re-collected on tracker/reregister").with_range(3.0, 1e5),
         ParamDecl::new("machine_frame", s("machine"), "frame of nominal and measured points, parent of the tracker in /tf_static"),
         ParamDecl::new("tracker_frame", s("tracker"), "frame of the tracker's readings"),
@@ -57,6 +62,8 @@ pub struct TrackerConfig {
     pub tool_offset: Vector3<f64>,
     pub commanded_gap_ns: i64,
     pub registration_points: usize,
+    /// program timing used when no commanded joint state covers a dwell
+    pub schedule: Option<ProgramSchedule>,
     pub machine_frame: String,
     pub tracker_frame: String,
 }
@@ -83,6 +90,20 @@ impl TrackerConfig {
             return Err(format!("parameter nominal_joints: expected the 3 joint names of X, Y, Z, got {joints:?}").into());
         }
         let power_on: f64 = p.get("power_on_time")?;
+        let flat = p.get::<Vec<f64>>("program_points")?;
+        let home = p.get::<Vec<f64>>("program_home")?;
+        if flat.len() % 3 != 0 || home.len() != 3 || flat.iter().chain(&home).any(|v| !v.is_finite()) {
+            return Err(format!("parameters program_points ({} values) and program_home ({} values) must hold finite x y z triples", flat.len(), home.len()).into());
+        }
+        let start: f64 = p.get("program_start_time")?;
+        let (feed, stop_time): (f64, f64) = (p.get("program_feed")?, p.get("program_stop_time")?);
+        let schedule = (start > 0.0 && !flat.is_empty()).then(|| ProgramSchedule {
+            start_ns: ns(start),
+            home: Vector3::new(home[0], home[1], home[2]),
+            points: flat.chunks(3).map(|c| Vector3::new(c[0], c[1], c[2])).collect(),
+            feed,
+            stop_time,
+        });
         Ok(TrackerConfig {
             processor,
             turbulence: TurbulenceTest { false_alarm: p.get("turbulence_false_alarm")? },
@@ -97,6 +118,7 @@ impl TrackerConfig {
             tool_offset: Vector3::new(offset[0], offset[1], offset[2]),
             commanded_gap_ns: ns(p.get("commanded_gap")?),
             registration_points: p.get::<i64>("registration_points")? as usize,
+            schedule,
             machine_frame: p.get("machine_frame")?,
             tracker_frame: p.get("tracker_frame")?,
         })

@@ -234,9 +234,12 @@ impl TrackerState {
         let warming_up = self.warmup_step(&d, flagged, &mut out);
         out.push(Output::Dwell(messages::dwell_measurement(&d, &covariance, &self.config.tracker_frame, flagged, warming_up)));
 
-        let nominal = match self.commanded.joints_at(d.mid_ns(), &self.config.nominal_joints) {
-            Ok(q) => Vector3::new(q[0], q[1], q[2]) + self.config.tool_offset,
-            Err(e) => {
+        // commanded joint states first; the program's timing (T_v) when they do not cover the dwell
+        let commanded = self.commanded.joints_at(d.mid_ns(), &self.config.nominal_joints).map(|q| Vector3::new(q[0], q[1], q[2]));
+        let scheduled = || self.config.schedule.as_ref().and_then(|s| s.point_at(d.mid_ns())).map(|(_, p)| p);
+        let nominal = match (commanded, scheduled()) {
+            (Ok(q), _) | (Err(_), Some(q)) => q + self.config.tool_offset,
+            (Err(e), None) => {
                 self.counters.no_nominal += 1;
                 out.push(Output::Warning(format!("dwell of '{}' at {} ns has no nominal: {e}", d.target, d.mid_ns())));
                 return out;

@@ -6,9 +6,9 @@
 //! (`thermal_growth`), workpiece expansion about its clamp (`workpiece_expansion`), each
 //! evaluated by the catalog term, with u(α), u(g), u(τ) and sensor variances propagated into the
 //! point's covariance, and an online fit of a growth term's g and τ from a reference point.
-//! Not yet used by any node (the tracker node is to use them): re-correcting a tracker range
-//! for the air the instrument did not see (`tracker_correction`), propagating spherical noise
-//! into a Cartesian covariance (`spherical`).
+//! Used by `metrocell-tracker`: re-correcting a tracker range for the air the instrument did not
+//! see (`tracker_correction`), and spherical ↔ Cartesian with the covariance that follows
+//! (`spherical`, re-exported from `metrocell_physics::instrument::spherical`).
 //! Units are SI throughout (m, rad, Pa, s, °C, relative humidity as a 0..1 fraction).
 
 pub mod spherical;
@@ -23,7 +23,7 @@ pub mod thermal_signals;
 pub mod thermal_workpiece_compensation;
 pub mod tracker_correction;
 
-pub use spherical::{spherical_to_cartesian, SphericalNoise};
+pub use spherical::{spherical_to_cartesian, to_spherical, SphericalNoise};
 pub use thermal_compensator::ThermalCompensator;
 pub use thermal_error::{Reading, ThermalError};
 pub use thermal_growth_compensation::{GrowthCompensator, GrowthSpec};
@@ -31,4 +31,4 @@ pub use thermal_growth_fit::{GrowthFit, GrowthFitResult};
 pub use thermal_lag_filter::FirstOrderLag;
 pub use thermal_scale_compensation::{AxisSensorPlacement, ThermalScaleCompensator};
 pub use thermal_workpiece_compensation::WorkpieceCompensator;
-pub use tracker_correction::{refraction_corrected_range, warmup_status, AirData};
+pub use tracker_correction::{range_for_index, refraction_corrected_range, warmup_status, AirData};

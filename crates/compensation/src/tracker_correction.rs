@@ -1,7 +1,7 @@
 //! What the tracker logger corrects in each reading: the air the instrument assumed, and the
 //! warm-up it is still in.
 
-use metrocell_physics::instrument::edlen::shop_floor_index;
+use metrocell_physics::instrument::edlen::{birch_downs_index, shop_floor_index};
 use metrocell_physics::instrument::tracker_warmup::settling_time;
 
 /// Air at the beam, as a weather station reports it.
@@ -19,6 +19,12 @@ impl AirData {
     /// Refractive index of this air by the shop-floor Edlén equation (thesis eq. 5.5).
     pub fn refractive_index(&self) -> f64 {
         shop_floor_index(self.pressure, self.temperature, self.humidity * 100.0)
+    }
+
+    /// Refractive index of this air by the full (Birch & Downs modified) Edlén equation at the
+    /// vacuum wavelength `wavelength` (m), e.g. 633e-9 for a HeNe interferometer.
+    pub fn refractive_index_full(&self, wavelength: f64) -> f64 {
+        birch_downs_index(wavelength, self.pressure, self.temperature, self.humidity * 100.0)
     }
 
     /// Whether every field is finite and physically possible; a station glitch must not
@@ -43,8 +49,14 @@ impl AirData {
 /// geometric range is `r_reported · n_applied / n_actual`. An `n_applied` of 0 means the
 /// instrument applied none (it reports optical path / vacuum distance, i.e. n = 1).
 pub fn refraction_corrected_range(reported_range: f64, n_applied: f64, air: &AirData) -> f64 {
+    range_for_index(reported_range, n_applied, air.refractive_index())
+}
+
+/// Range re-corrected from the index the instrument applied (`n_applied`, 0 = none, i.e. 1) to
+/// the index `n_actual` of the air at the beam, whichever Edlén form gave it.
+pub fn range_for_index(reported_range: f64, n_applied: f64, n_actual: f64) -> f64 {
     let applied = if n_applied == 0.0 { 1.0 } else { n_applied };
-    reported_range * applied / air.refractive_index()
+    reported_range * applied / n_actual
 }
 
 /// Whether a tracker `seconds_since_power_on` after switch-on is still warming up, for a
@@ -78,6 +90,14 @@ mod tests {
         let air = AirData { temperature: 20.0, pressure: 101_325.0, humidity: 0.5 };
         let r = refraction_corrected_range(2.0, 0.0, &air);
         assert!((r - 2.0 / air.refractive_index()).abs() < 1e-15);
+    }
+
+    #[test]
+    fn full_form_agrees_with_shop_floor_form_to_a_tenth_of_a_ppm() {
+        // The shop-floor form is the full form simplified for ~633 nm and shop-floor air.
+        let air = AirData { temperature: 20.0, pressure: 99_000.0, humidity: 0.5 };
+        let d = air.refractive_index_full(633e-9) - air.refractive_index();
+        assert!(d.abs() < 1e-7, "full − shop floor = {d:e}");
     }
 
     #[test]

@@ -1,0 +1,133 @@
+//! The node on live DDS (backend topic or tcp).
+
+use std::time::Duration;
+
+use metrocell_msgs::geometry_msgs::msg::PoseWithCovarianceStamped;
+use metrocell_msgs::msg::{ErrorModel, MeasuredPoint, TrackerMeasurement};
+use metrocell_msgs::sensor_msgs::msg::{FluidPressure, JointState, RelativeHumidity, Temperature};
+use metrocell_msgs::std_msgs::msg::String as RosString;
+use metrocell_msgs::tf2_msgs::msg::TFMessage;
+use metrocell_node::{qos, MetrocellNode};
+use metrocell_tracker::tcp_client::{DriverEvent, TcpClientConfig, TcpTrackerClient};
+use metrocell_tracker_node::messages;
+use metrocell_tracker_node::parameters::TrackerConfig;
+use metrocell_tracker_node::tracker_state::{Output, TrackerState};
+
+pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
+    let config = TrackerConfig::from_parameters(node.parameters())?;
+    node.info(config.describe());
+    let mut state = TrackerState::new(config);
+    let tcp = match node.param::<String>("backend")?.as_str() {
+        "tcp" => Some(TcpTrackerClient::start(TcpClientConfig {
+            address: node.param("tcp_address")?,
+            initial_backoff: Duration::from_secs_f64(node.param("tcp_initial_backoff")?),
+            max_backoff: Duration::from_secs_f64(node.param("tcp_max_backoff")?),
+        })),
+        _ => None,
+    };
+    let measurements = match tcp {
+        None => Some(node.subscription::<TrackerMeasurement>("tracker/measurements", qos::reliable())?),
+        Some(_) => None,
+    };
+    let weather = if state.config().air_from_topics {
+        Some((
+            node.subscription::<Temperature>("weather/temperature", qos::reliable())?,
+            node.subscription::<FluidPressure>("weather/pressure", qos::reliable())?,
+            node.subscription::<RelativeHumidity>("weather/humidity", qos::reliable())?,
+        ))
+    } else {
+        None
+    };
+    let commanded = node.subscription::<JointState>("machine/commanded_joint_states", qos::sensor_data())?;
+    let reregister = node.subscription::<RosString>("tracker/reregister", qos::reliable())?;
+    let points = node.publisher::<MeasuredPoint>("measured_points", qos::reliable())?;
+    let dwells = node.publisher::<TrackerMeasurement>("tracker/dwells", qos::reliable())?;
+    let warmup = node.publisher::<ErrorModel>("tracker/warmup", qos::latched())?;
+    let tf_static = node.publisher::<TFMessage>("/tf_static", qos::latched())?;
+    let pose = node.publisher::<PoseWithCovarianceStamped>("tracker/pose", qos::latched())?;
+    let (machine_frame, tracker_frame) = (state.config().machine_frame.clone(), state.config().tracker_frame.clone());
+
+    let diagnostics = node.diagnostics();
+    let token = node.shutdown_token();
+    let mut outputs = Vec::new();
+    while !token.is_triggered() {
+        if let Some((t, p, h)) = &weather {
+            while let Ok(Some((m, _))) = t.take() {
+                state.station_air(Some(m.temperature), None, None);
+            }
+            while let Ok(Some((m, _))) = p.take() {
+                state.station_air(None, Some(m.fluid_pressure), None);
+            }
+            while let Ok(Some((m, _))) = h.take() {
+                state.station_air(None, None, Some(m.relative_humidity));
+            }
+        }
+        while let Ok(Some((j, _))) = commanded.take() {
+            outputs.extend(state.commanded(&j));
+        }
+        if let Some(sub) = &measurements {
+            while let Ok(Some((m, _))) = sub.take() {
+                outputs.extend(state.measurement(&m));
+            }
+        }
+        if let Some(client) = &tcp {
+            while let Some(event) = client.try_next() {
+                match event {
+                    DriverEvent::Reading(l) => outputs.extend(state.line(&l)),
+                    DriverEvent::Connected(a) => node.info(format!("connected to the tracker at {a}")),
+                    DriverEvent::Disconnected { reason, retry_in } => {
+                        diagnostics.add_count("tcp_disconnects", 1);
+                        diagnostics.warn(format!("tracker link: {reason}; retrying in {retry_in:?}"));
+                    }
+                    DriverEvent::Garbage(e) => {
+                        diagnostics.add_count("tcp_garbage_lines", 1);
+                        node.warn(format!("tracker link: {e}"));
+                    }
+                    DriverEvent::Repeat(_) => {
+                        diagnostics.add_count("tcp_repeated_readings", 1);
+                    }
+                }
+            }
+        }
+        while let Ok(Some((why, _))) = reregister.take() {
+            node.info(format!("re-registering the tracker pose: {}", why.data));
+            state.reregister();
+        }
+        for o in outputs.drain(..) {
+            match o {
+                Output::Point(p) => {
+                    let _ = points.publish(p);
+                }
+                Output::Dwell(d) => {
+                    let _ = dwells.publish(d);
+                }
+                Output::Warmup(w) => {
+                    let _ = warmup.publish(w);
+                }
+                Output::Pose(reg, stamp) => {
+                    node.info(format!("tracker registered: rms {:.1} µm, χ²/dof {:.2}", reg.rms * 1e6, reg.chi2 / reg.dof.max(1) as f64));
+                    let _ = tf_static.publish(messages::tf_static(&reg, stamp, &machine_frame, &tracker_frame));
+                    let _ = pose.publish(messages::pose_with_covariance(&reg, stamp, &machine_frame));
+                }
+                Output::Warning(w) => node.warn(w),
+            }
+        }
+        for (k, v) in state.diagnostics() {
+            diagnostics.set_value(&k, v);
+        }
+        token.wait_timeout(Duration::from_millis(2));
+    }
+    // shutting down closes the open dwell, as the end of a bag does in a replay
+    for o in state.finish() {
+        match o {
+            Output::Point(p) => {
+                let _ = points.publish(p);
+            }
+            Output::Dwell(d) => {
+                let _ = dwells.publish(d);
+            }
+            _ => {}
+        }
+    }
+    Ok(())
+}

@@ -120,7 +120,8 @@ impl DashboardState {
         entry.1 = error.to_string();
     }
 
-    pub fn clock(&mut self, nanos: i64) {
+    pub fn clock(&mut self, topic: &str, nanos: i64) {
+        *self.messages.entry(topic.to_string()).or_insert(0) += 1;
         self.clock = Some(crate::nanos_seconds(nanos));
     }
 
@@ -232,7 +233,7 @@ mod tests {
                 ("drift_rate /measured_points/thermal_compensated".to_string(), Level::Ok),
             ]
         );
-        s.clock(1_000_005_000_000_000_000);
+        s.clock("/clock", 1_000_005_000_000_000_000);
         assert_eq!(s.snapshot().cell_time, Some(1.000005e9));
         // the snapshot serialises and carries SI numbers the page reads
         let json = serde_json::to_value(s.snapshot()).unwrap();

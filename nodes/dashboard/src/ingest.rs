@@ -128,7 +128,7 @@ fn apply(s: &mut DashboardState, topic: &str, role: &Role, m: &RawMessage) {
         }
         Role::Clock => {
             if let Some(c) = decoded::<Clock>(s, &msg) {
-                s.clock(c.clock.nanos());
+                s.clock(topic, c.clock.nanos());
             }
         }
         Role::Other => {}

@@ -87,11 +87,12 @@ fn http_get(port: u16, path: &str) -> String {
     body.to_string()
 }
 
-/// Poll `/api/state` until `ready` holds (at most `timeout`).
+/// Poll `/api/state` until `ready` holds for its `state` (at most `timeout`); returns that state.
 fn state_when(port: u16, timeout: Duration, ready: impl Fn(&Value) -> bool) -> Value {
     let deadline = Instant::now() + timeout;
     loop {
-        let v: Value = serde_json::from_str(&http_get(port, "/api/state")).expect("/api/state is JSON");
+        let body: Value = serde_json::from_str(&http_get(port, "/api/state")).expect("/api/state is JSON");
+        let v = body["state"].clone();
         if ready(&v) || Instant::now() > deadline {
             return v;
         }
@@ -114,7 +115,7 @@ fn drift_alert_and_the_page_in_headless_chromium() {
     let has = |v: &Value, topic: &str| v["messages"][topic].as_u64().unwrap_or(0) > 0;
     let state = state_when(cell.web_port, Duration::from_secs(90), |v| {
         ["/clock", "/temperature/x_left", "/tracker/measurements", "/thermal/error_model"].iter().all(|t| has(v, t))
-            && v["volumetric"][0]["window_span"].as_f64().unwrap_or(0.0) >= 3600.0
+            && v["volumetric"][0]["window_span"].as_f64().unwrap_or(0.0) >= 3599.0
     });
     // The peer's x error drifts 36 µm/h with ±0.5 µm alternating noise; y is constant.
     let raw = state["volumetric"].as_array().unwrap().iter().find(|s| s["topic"] == "/measured_points").expect("/measured_points stream");

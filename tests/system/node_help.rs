@@ -10,13 +10,14 @@ use system_tests::{bin, piped, run};
 fn every_node_prints_help_and_exits_without_starting() {
     system_tests::require_isolated_network();
     // (binary, parameters its help must list, whether it replays bags)
-    let nodes: [(&str, &[&str], bool); 6] = [
+    let nodes: [(&str, &[&str], bool); 7] = [
         ("metrocell-sim", &["cell", "duration", "seed"], false),
         ("metrocell-thermal", &["sensors", "alpha"], true),
         ("metrocell-recorder", &["output", "topics", "max_bag_size"], false),
         ("metrocell-camera", &["path", "device", "stamp_source"], false),
         ("metrocell-fiducial", &["family"], true),
         ("metrocell-probe", &["stylus_radius", "pretravel"], true),
+        ("metrocell-dashboard", &["port", "foxglove_port", "error_warn_um", "drift_warn_um_per_h"], false),
     ];
     for (name, params, replays) in nodes {
         for flag in ["--help", "-h"] {

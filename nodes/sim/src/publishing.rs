@@ -3,6 +3,7 @@
 
 use std::time::{Duration, Instant};
 
+use metrocell_msgs::RosMessage;
 use metrocell_node::{qos, Diagnostics, MetrocellNode, QosProfile, RawPublisher};
 use metrocell_sim::{CameraIntrinsics, FrameRendering, MessageConverter, MessageStream, QosKind};
 use metrocell_twin::{Cell, Simulation};
@@ -15,11 +16,19 @@ const DIAGNOSTICS_PERIOD: Duration = Duration::from_millis(500);
 /// Lag behind schedule above which the node reports a warning (s of wall time).
 const LAG_WARNING: f64 = 1.0;
 
-fn qos_of(kind: QosKind) -> QosProfile {
+/// History of the live writers: 2.5 s of the fastest stream (joint states at 400 Hz when
+/// speed is 20), so a reliable reader that stalls that long still gets every sample.
+const LIVE_HISTORY: usize = 1000;
+
+/// Live, every stream but camera frames is published reliably, whatever its nominal kind (the
+/// bag `metrocell sim` writes keeps the nominal profiles): a reliable writer also matches
+/// best-effort readers (ClockQoS, SensorDataQoS subscribers), and a recorder, which reads
+/// reliably when every publisher is reliable, then gets every message even on a busy machine.
+/// Frames stay best effort: megabytes each, a deep reliable history would hold them all.
+fn qos_of(kind: QosKind, ros_type: &str) -> QosProfile {
     match kind {
-        QosKind::Clock => qos::sensor_data().history(History::KeepLast { depth: 1 }),
-        QosKind::SensorData => qos::sensor_data(),
-        QosKind::Reliable => qos::reliable(),
+        QosKind::SensorData if ros_type == metrocell_msgs::sensor_msgs::msg::Image::ROS_TYPE => qos::sensor_data(),
+        QosKind::Clock | QosKind::SensorData | QosKind::Reliable => qos::reliable().history(History::KeepLast { depth: LIVE_HISTORY }),
     }
 }
 
@@ -49,7 +58,7 @@ impl LiveSim {
             .topics
             .topics
             .iter()
-            .map(|t| node.raw_publisher(&t.name, t.ros_type, qos_of(t.qos)))
+            .map(|t| node.raw_publisher(&t.name, t.ros_type, qos_of(t.qos, t.ros_type)))
             .collect::<Result<Vec<_>, _>>()?;
         let now = Instant::now();
         Ok(LiveSim {

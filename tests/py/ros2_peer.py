@@ -109,6 +109,11 @@ class Types:
                 ann[fname] = ty
                 fields.append((fname, base, array, nested))
 
+        if not ann:
+            # rosidl gives a message without fields one uint8 member on the wire (as rosbags does).
+            ann["structure_needs_at_least_one_member"] = t.uint8
+            fields.append(("structure_needs_at_least_one_member", "uint8", None, None))
+
         def body(ns):
             ns["__annotations__"] = ann
         cls = pytypes.new_class(name, (IdlStruct,), {"typename": f"{pkg}::msg::dds_::{name}_"}, body)

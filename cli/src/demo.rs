@@ -3,12 +3,18 @@
 //! Starts `launch-configs/demo.launch.yaml` (the digital twin publishing live, the thermal
 //! compensation node, the recorder), watches the cell over DDS like a shift supervisor would —
 //! tracker points, beam breaks, the X-scale strain the thermal node computes from its configured α
-//! (a handbook value, not an estimate) — stops everything
-//! when the simulated run is over, and summarises the recorded bag.
+//! (a handbook value, not an estimate) — stops everything when the simulated run is over, and
+//! summarises the recorded bag. The twin waits until the recorder subscribes to every topic
+//! before it publishes; at the end the bag's count of each topic is checked against the twin's
+//! own (its `published/<topic>` diagnostics), and the demo fails (exit 1) if any message is
+//! missing.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
+use std::collections::BTreeMap;
+
+use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
 use metrocell_msgs::msg::{ErrorModel, TrackerMeasurement};
 use metrocell_msgs::rosgraph_msgs::msg::Clock;
 use metrocell_node::{qos, MetrocellNode};
@@ -50,6 +56,9 @@ struct Watch {
     tracker_points: u64,
     beam_breaks: u64,
     last_strain: Option<(f64, f64)>,
+    /// The twin's messages published per topic (its latest diagnostics), and whether it said it finished.
+    twin_published: BTreeMap<String, u64>,
+    twin_finished: bool,
 }
 
 pub fn run(args: DemoArgs) -> i32 {
@@ -97,7 +106,8 @@ fn demo(args: DemoArgs) -> anyhow::Result<i32> {
     let launcher = std::thread::spawn(move || metrocell_launch::run_launch(&launch_file, &launch_args, &options));
 
     let watch = watch_cell(&args, &shutdown, &launcher)?;
-    // Let the recorder write the tail, then stop every node.
+    // The twin lingers 1.5 s after its last message (final diagnostics, reliable acks); the
+    // recorder takes what it holds when stopped. Then stop every node.
     std::thread::sleep(Duration::from_millis(800));
     shutdown.request();
     let outcome = launcher.join().map_err(|_| anyhow::anyhow!("launcher thread panicked"))??;
@@ -117,7 +127,35 @@ fn demo(args: DemoArgs) -> anyhow::Result<i32> {
         Ok(info) => println!("\nrecorded bag:\n{info}"),
         Err(e) => eprintln!("metrocell demo: the recorded bag cannot be read: {e}"),
     }
-    Ok(if outcome.success() { 0 } else { 1 })
+    let complete = check_recording(&output, &watch);
+    Ok(if outcome.success() && complete { 0 } else { 1 })
+}
+
+/// The bag's count of each topic against the twin's; prints the verdict, true when complete.
+fn check_recording(output: &Path, watch: &Watch) -> bool {
+    if watch.twin_published.is_empty() || !watch.twin_finished {
+        println!("recording check: the twin's final counts never arrived (no diagnostics from /sim); cannot say whether the bag is complete");
+        return false;
+    }
+    let recorded: BTreeMap<String, u64> = match metrocell_bag::BagReader::open(output) {
+        Ok(r) => r.topics().iter().map(|t| (t.name.clone(), t.message_count)).collect(),
+        Err(e) => {
+            println!("recording check: the bag cannot be read: {e}");
+            return false;
+        }
+    };
+    let published: u64 = watch.twin_published.values().sum();
+    let mismatches = metrocell_bagtools::compare_counts(&watch.twin_published, &recorded);
+    if mismatches.is_empty() {
+        println!("recording check: complete — the bag holds every message the twin published ({published} on {} topics, 0 missing)", watch.twin_published.len());
+        true
+    } else {
+        println!("recording check: INCOMPLETE — {} of {} topics differ from the twin's count (the recorder's last log line gives the causes):", mismatches.len(), watch.twin_published.len());
+        for m in &mismatches {
+            println!("  {m}");
+        }
+        false
+    }
 }
 
 /// Follows the run over DDS until the simulated clock reaches the end (or the nodes stop).
@@ -130,7 +168,8 @@ fn watch_cell(
     let clock = node.subscription::<Clock>("/clock", qos::sensor_data())?;
     let tracker = node.subscription::<TrackerMeasurement>("/tracker/measurements", qos::sensor_data())?;
     let model = node.subscription::<ErrorModel>("/thermal/error_model", qos::sensor_data())?;
-    let mut w = Watch { sim_time_s: 0.0, tracker_points: 0, beam_breaks: 0, last_strain: None };
+    let diagnostics = node.subscription::<DiagnosticArray>("/diagnostics", qos::reliable().history(ros2_client::qos::History::KeepLast { depth: 100 }))?;
+    let mut w = Watch { sim_time_s: 0.0, tracker_points: 0, beam_breaks: 0, last_strain: None, twin_published: BTreeMap::new(), twin_finished: false };
     let mut start_ns: Option<i64> = None;
     let mut next_print = 0.0;
     // The run is over when the simulated clock, once started, stops advancing.
@@ -163,6 +202,9 @@ fn watch_cell(
                 w.last_strain = m.values.get(i).map(|&v| (v, m.covariance.get(i * n + i).copied().unwrap_or(f64::NAN)));
             }
         }
+        while let Ok(Some((d, _))) = diagnostics.take() {
+            take_twin_counts(&d, &mut w);
+        }
         if w.sim_time_s >= next_print {
             next_print += 30.0;
             println!(
@@ -177,7 +219,9 @@ fn watch_cell(
                 ))
             );
         }
-        if w.sim_time_s >= args.duration - 0.5 || (start_ns.is_some() && last_advance.elapsed() > Duration::from_secs(2)) {
+        let clock_done = w.sim_time_s >= args.duration - 0.5 || (start_ns.is_some() && last_advance.elapsed() > Duration::from_secs(2));
+        // Wait for the twin's final counts too (it publishes them within ~1 s of its end).
+        if clock_done && (w.twin_finished || last_advance.elapsed() > Duration::from_secs(5)) {
             break;
         }
         if Instant::now() > deadline {
@@ -187,4 +231,19 @@ fn watch_cell(
         std::thread::sleep(Duration::from_millis(5));
     }
     Ok(w)
+}
+
+/// The twin's `published/<topic>` values and `finished` flag from a diagnostics message.
+fn take_twin_counts(d: &DiagnosticArray, w: &mut Watch) {
+    for status in d.status.iter().filter(|s| s.name == "/sim") {
+        for kv in &status.values {
+            if let Some(topic) = kv.key.strip_prefix("published") {
+                if let (true, Ok(n)) = (topic.starts_with('/'), kv.value.parse::<u64>()) {
+                    w.twin_published.insert(topic.to_string(), n);
+                }
+            } else if kv.key == "finished" {
+                w.twin_finished = kv.value == "true";
+            }
+        }
+    }
 }

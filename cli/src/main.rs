@@ -28,7 +28,7 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
-    /// Inspect, repair, replay, cut, merge, export and import rosbag2 MCAP bags
+    /// Record, inspect, repair, replay, cut, merge, export and import rosbag2 MCAP bags
     #[command(subcommand)]
     Bag(bag::BagCommand),
     /// Camera tools: calibrate from checkerboard images → ROS camera_info YAML

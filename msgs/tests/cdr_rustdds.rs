@@ -7,7 +7,19 @@ use metrocell_msgs::RosMessage;
 
 fn check<T: RosMessage>() -> usize {
     let registry = metrocell_msgs::registry();
-    let sample = rosmsg::sample_value(registry, T::ROS_TYPE, 7).unwrap();
+    // Seed 7, or the next seed whose sample is not the default (a lone bool can draw false).
+    let default = rosmsg::default_value(registry, T::ROS_TYPE).unwrap();
+    let sample = (7..40).map(|seed| rosmsg::sample_value(registry, T::ROS_TYPE, seed).unwrap()).find(|v| *v != default).unwrap_or(default);
+    if registry.get(T::ROS_TYPE).is_some_and(|spec| spec.fields.is_empty()) {
+        // No fields (std_msgs/Empty, rcl_interfaces/ParameterType): no non-default sample
+        // exists; the typed struct's rosidl placeholder byte must equal the dynamic encoding.
+        let dynamic = rosmsg::encode(registry, T::ROS_TYPE, &sample).unwrap();
+        let mut rustdds_bytes = rosmsg::cdr::CDR_LE_HEADER.to_vec();
+        rustdds_bytes.extend(rustdds::serialization::to_vec::<T, LittleEndian>(&T::default()).unwrap());
+        assert_eq!((rustdds_bytes.as_slice(), dynamic.len()), (dynamic.as_slice(), 5), "{}: one placeholder byte", T::ROS_TYPE);
+        assert_eq!(rosmsg::decode(registry, T::ROS_TYPE, &rustdds_bytes).unwrap(), sample, "{}", T::ROS_TYPE);
+        return dynamic.len();
+    }
     // Dynamic value → typed struct through JSON (exercises the serde field mapping too).
     let typed: T = serde_json::from_value(rosmsg::to_json(&sample))
         .unwrap_or_else(|e| panic!("{}: JSON of the sample does not fit the struct: {e}", T::ROS_TYPE));

@@ -13,6 +13,9 @@ protocol come from Cyclone DDS, which is the point of the test.
   ros2_peer.py encode  --type pkg/msg/T --json '{...}'
       prints the CDR encoding (with encapsulation header) as hex; opens no participant.
 
+--msg-dir DIR (repeatable) adds the types of DIR/<pkg>/msg/*.msg, e.g. a package metrocell
+does not ship, to test how metrocell handles a type it does not know.
+
 Topic /t is the DDS topic rt/t and type pkg/msg/T the DDS type pkg::msg::dds_::T_,
 as ROS 2 maps them. QoS: reliable, volatile, keep last 10 (the ROS 2 default).
 """
@@ -38,29 +41,29 @@ PRIMITIVES = {
 FIELD = re.compile(r"^(?P<type>[A-Za-z0-9_/]+)(?P<sbound><=\d+)?(?P<array>\[(?:<=)?\d*\])?\s+(?P<name>[a-z][a-z0-9_]*)(\s+.*)?$")
 
 
-def msg_paths():
-    """Map 'pkg/Type' -> .msg path for every interface metrocell ships."""
+def msg_paths(extra_dirs=()):
+    """Map 'pkg/Type' -> .msg path for every interface metrocell ships (and those of extra_dirs)."""
     found = {}
     for d in [os.path.join(ROOT, "msgs", "msg")]:
         for f in os.listdir(d):
             if f.endswith(".msg"):
                 found["metrocell_msgs/" + f[:-4]] = os.path.join(d, f)
-    idir = os.path.join(ROOT, "msgs", "interfaces")
-    for pkg in os.listdir(idir):
-        mdir = os.path.join(idir, pkg, "msg")
-        if not os.path.isdir(mdir):
-            continue
-        for f in os.listdir(mdir):
-            if f.endswith(".msg"):
-                found[pkg + "/" + f[:-4]] = os.path.join(mdir, f)
+    for idir in [os.path.join(ROOT, "msgs", "interfaces"), *extra_dirs]:
+        for pkg in os.listdir(idir):
+            mdir = os.path.join(idir, pkg, "msg")
+            if not os.path.isdir(mdir):
+                continue
+            for f in os.listdir(mdir):
+                if f.endswith(".msg"):
+                    found[pkg + "/" + f[:-4]] = os.path.join(mdir, f)
     return found
 
 
 class Types:
     """Builds Cyclone IdlStruct classes for ROS types on demand."""
 
-    def __init__(self):
-        self.paths = msg_paths()
+    def __init__(self, extra_dirs=()):
+        self.paths = msg_paths(extra_dirs)
         self.classes = {}
         self.fields = {}
 
@@ -105,6 +108,11 @@ class Types:
                         ty = t.array[ty, int(inner)]
                 ann[fname] = ty
                 fields.append((fname, base, array, nested))
+
+        if not ann:
+            # rosidl gives a message without fields one uint8 member on the wire (as rosbags does).
+            ann["structure_needs_at_least_one_member"] = t.uint8
+            fields.append(("structure_needs_at_least_one_member", "uint8", None, None))
 
         def body(ns):
             ns["__annotations__"] = ann
@@ -174,8 +182,9 @@ def main():
     ap.add_argument("--rate", type=float, default=10.0)
     ap.add_argument("--timeout", type=float, default=20.0)
     ap.add_argument("--domain", type=int, default=int(os.environ.get("ROS_DOMAIN_ID", "0")))
+    ap.add_argument("--msg-dir", action="append", default=[])
     a = ap.parse_args()
-    types = Types()
+    types = Types(a.msg_dir)
     cls = types.get(a.type)
     if a.mode == "encode":
         print(types.from_json(a.type, json.loads(a.json)).serialize().hex())

@@ -1,14 +1,15 @@
-//! `metrocell bag ...`: inspect, repair, replay, cut, merge, export and import rosbag2 MCAP bags.
+//! `metrocell bag ...`: record, inspect, repair, replay, cut, merge, export and import rosbag2 MCAP bags.
 //!
 //! The library work lives in `metrocell-bag` (reading/writing/recovery) and
 //! `metrocell-bagtools` (filter/merge/export/import/playback timing); these files parse
-//! arguments, print, and own the DDS endpoints of `bag play`.
+//! arguments, print, and own the DDS endpoints of `bag play` (`bag record` runs the recorder node's library).
 
 mod export;
 mod import;
 mod info;
 mod keyboard;
 mod play;
+mod record;
 mod reshape;
 
 #[derive(clap::Subcommand)]
@@ -17,6 +18,8 @@ pub enum BagCommand {
     Info(info::InfoArgs),
     /// Rebuild a valid bag after a crash (kill -9, power loss, truncated file)
     Recover(info::RecoverArgs),
+    /// Record DDS topics into a new bag (ros2 bag record's options; the recorder node in-process)
+    Record(record::RecordArgs),
     /// Publish a bag's messages over DDS with their original timing
     Play(play::PlayArgs),
     /// Copy chosen topics and a time window into a new bag
@@ -33,6 +36,7 @@ pub fn run(command: BagCommand) -> i32 {
     let result = match command {
         BagCommand::Info(a) => info::run_info(a),
         BagCommand::Recover(a) => info::run_recover(a),
+        BagCommand::Record(a) => record::run(a),
         BagCommand::Play(a) => play::run(a),
         BagCommand::Filter(a) => reshape::run_filter(a),
         BagCommand::Merge(a) => reshape::run_merge(a),

@@ -82,6 +82,8 @@ impl Span {
 
 struct TopicEntry {
     meta: TopicMetadata,
+    /// MCAP schema encoding: `ros2msg`, or "" for a type recorded without its definition.
+    schema_encoding: &'static str,
     definition: String,
     sequence: u32,
     /// Messages handed to `write` (all files).
@@ -181,6 +183,15 @@ impl BagWriter {
         self.add_topic_with_hash(name, ros_type, definition, qos_yaml, "")
     }
 
+    /// Declare a topic whose type's definition is not known (raw CDR is still recorded).
+    /// Its MCAP schema has the type's name, an empty encoding and no data — what the MCAP
+    /// specification prescribes for "no definition" and what `rosbags` reads as a message
+    /// definition of format NONE. (rosbag2 writes encoding `unknown` in this case, which
+    /// rosbags rejects.)
+    pub fn add_topic_without_definition(&mut self, name: &str, ros_type: &str, qos_yaml: &str) -> Result<()> {
+        self.declare_topic(name, ros_type, None, qos_yaml, "")
+    }
+
     /// [`Self::add_topic`] with a type description hash (`RIHS01_...`, may be empty).
     pub fn add_topic_with_hash(
         &mut self,
@@ -190,6 +201,11 @@ impl BagWriter {
         qos_yaml: &str,
         type_hash: &str,
     ) -> Result<()> {
+        self.declare_topic(name, ros_type, Some(definition), qos_yaml, type_hash)
+    }
+
+    /// `definition`: the full ros2msg text, or `None` when the type's definition is unknown.
+    fn declare_topic(&mut self, name: &str, ros_type: &str, definition: Option<&str>, qos_yaml: &str, type_hash: &str) -> Result<()> {
         self.check_open()?;
         if !name.starts_with('/') {
             return Err(BagError::InvalidArgument(format!("topic name {name:?} must start with '/'")));
@@ -200,7 +216,9 @@ impl BagWriter {
                 "type {ros_type:?} of topic {name} is not of the form pkg/msg/Type"
             )));
         }
-        crate::msgdef::parse_definition(ros_type, definition)?;
+        if let Some(definition) = definition {
+            crate::msgdef::parse_definition(ros_type, definition)?;
+        }
         validate_qos_yaml(name, qos_yaml)?;
         if let Some(&i) = self.topic_index.get(name) {
             if self.topics[i].meta.type_name == ros_type {
@@ -219,7 +237,8 @@ impl BagWriter {
                 offered_qos_profiles: qos_yaml.to_string(),
                 type_description_hash: type_hash.to_string(),
             },
-            definition: definition.to_string(),
+            schema_encoding: if definition.is_some() { "ros2msg" } else { "" },
+            definition: definition.unwrap_or_default().to_string(),
             sequence: 0,
             written: 0,
             durable: 0,
@@ -382,7 +401,7 @@ impl BagWriter {
         let t = &self.topics[idx];
         let schema_id = f
             .mcap
-            .add_schema(&t.meta.type_name, "ros2msg", t.definition.as_bytes())
+            .add_schema(&t.meta.type_name, t.schema_encoding, t.definition.as_bytes())
             .map_err(|e| mcap_to_bag(&f.path, &f.sink, e))?;
         let mut md = BTreeMap::new();
         md.insert("offered_qos_profiles".to_string(), t.meta.offered_qos_profiles.clone());

@@ -23,7 +23,12 @@ impl CopyReport {
 }
 
 fn add_topic(writer: &mut BagWriter, t: &TopicInfo) -> Result<()> {
-    writer.add_topic(&t.name, &t.type_name, &t.definition, &t.offered_qos_profiles)?;
+    // A topic recorded without its type's definition (empty schema encoding) stays so.
+    if t.schema_encoding.is_empty() {
+        writer.add_topic_without_definition(&t.name, &t.type_name, &t.offered_qos_profiles)?;
+    } else {
+        writer.add_topic(&t.name, &t.type_name, &t.definition, &t.offered_qos_profiles)?;
+    }
     Ok(())
 }
 

@@ -4,12 +4,14 @@
 //! * [`TopicSelection`]: which topics a recorder records (list, regex, exclude).
 //! * [`Recording`]: a [`metrocell_bag::BagWriter`] plus per-topic counts and dropped-message
 //!   detection from per-publisher sequence numbers.
+//! * [`compare_counts`]: a bag's per-topic counts against what a publisher says it sent.
 //! * [`filter_bag`] / [`merge_bags`]: copy selected messages into a new bag.
 //! * [`export`]: one CSV file per topic, one column per leaf field.
 //! * [`export_parquet`]: the same columns, typed, as one Parquet file per topic.
 //! * [`import`]: point-measurement CSV (own layout or a mapped tracker export) → bag.
-//! * [`recorded_qos`]: offered QoS of discovered publishers → `offered_qos_profiles`; stored
-//!   profiles → the QoS `bag play` offers.
+//! * [`recorded_qos`]: offered QoS of discovered publishers → `offered_qos_profiles` and the
+//!   QoS the recorder requests; stored profiles → the QoS `bag play` offers.
+//! * [`qos_overrides`]: the `--qos-profile-overrides-path` file of `ros2 bag record/play`.
 //! * [`playback`]: the timing of `bag play` (rate, pause, step) as a pure schedule.
 //! * [`BagSource`]: offline replay — a node reads typed messages from a bag instead of DDS.
 //! * [`BagSink`]: offline replay — the node writes its outputs to a bag at bag time.
@@ -17,12 +19,14 @@
 
 mod bag_sink;
 mod bag_source;
+mod completeness;
 mod copy;
 mod error;
 pub mod export;
 pub mod export_parquet;
 pub mod import;
 pub mod playback;
+pub mod qos_overrides;
 pub mod recorded_qos;
 mod recording;
 mod replay_output;
@@ -30,8 +34,9 @@ mod topic_selection;
 
 pub use bag_sink::{encode_cdr, BagSink};
 pub use bag_source::{BagSource, SourcedMessage};
+pub use completeness::{compare_counts, CountMismatch};
 pub use copy::{filter_bag, merge_bags, CopyReport};
 pub use error::{Result, ToolError};
-pub use recording::{Recording, TopicCounts};
+pub use recording::{Recording, TopicCounts, TopicDefinition};
 pub use replay_output::ReplayOutput;
 pub use topic_selection::TopicSelection;

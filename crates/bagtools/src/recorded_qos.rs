@@ -65,6 +65,24 @@ pub fn offered_qos_of_topic<'a>(publications: impl IntoIterator<Item = &'a Publi
     publications.into_iter().filter(|p| p.topic_name == dds_topic).map(offered_qos_from_dds).collect()
 }
 
+/// What the recorder's reader of a topic requests.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct RecordingQos {
+    pub reliable: bool,
+    pub transient_local: bool,
+}
+
+/// rosbag2's `adapt_request_to_offers`: reliable when every publisher offers reliable (so the
+/// recorder gets retransmissions and loses nothing on the wire), else best effort (which matches
+/// every publisher); transient-local when every publisher offers it (so latched samples sent
+/// before the recorder came are recorded), else volatile. No publisher: reliable, volatile.
+pub fn recording_qos(offers: &[OfferedQos]) -> RecordingQos {
+    RecordingQos {
+        reliable: offers.iter().all(|q| q.reliability != RELIABILITY_BEST_EFFORT),
+        transient_local: !offers.is_empty() && offers.iter().all(|q| q.durability == DURABILITY_TRANSIENT_LOCAL),
+    }
+}
+
 /// What a replay publisher offers.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct ReplayQos {
@@ -116,6 +134,18 @@ mod tests {
         assert_eq!((s[0].reliability, s[0].durability, s[0].liveliness), (RELIABILITY_BEST_EFFORT, DURABILITY_VOLATILE, LIVELINESS_MANUAL_BY_TOPIC));
         assert_eq!(s[0].liveliness_lease_duration, RmwDuration { sec: 2, nsec: 0 });
         assert!(offered_qos_of_topic(&all, "rt/absent").is_empty());
+    }
+
+    #[test]
+    fn recorder_requests_what_every_publisher_offers() {
+        let latched = OfferedQos { durability: DURABILITY_TRANSIENT_LOCAL, ..OfferedQos::default() };
+        let best_effort = OfferedQos { reliability: RELIABILITY_BEST_EFFORT, ..OfferedQos::default() };
+        let plain = OfferedQos::default();
+        assert_eq!(recording_qos(&[plain, plain]), RecordingQos { reliable: true, transient_local: false });
+        assert_eq!(recording_qos(&[latched]), RecordingQos { reliable: true, transient_local: true });
+        assert_eq!(recording_qos(&[latched, plain]), RecordingQos { reliable: true, transient_local: false });
+        assert_eq!(recording_qos(&[plain, best_effort]), RecordingQos { reliable: false, transient_local: false }, "one best-effort publisher");
+        assert_eq!(recording_qos(&[]), RecordingQos { reliable: true, transient_local: false });
     }
 
     #[test]

@@ -1,6 +1,13 @@
 //! A bag being recorded: the writer plus what the recorder reports in its diagnostics —
-//! messages and bytes per topic, and messages dropped on the way (gaps in each publisher's
-//! DDS sequence numbers, which count consecutively from 1 per writer).
+//! messages and bytes per topic, and the messages that did not make it into the bag, by cause:
+//!
+//! * `dropped`: gaps in a publisher's DDS sequence numbers (which count consecutively from 1
+//!   per writer) between two samples the recorder received — lost on the wire, or overwritten
+//!   in a keep-last queue (the writer's or the recorder's reader's) before they were taken;
+//! * `before_subscription`: the samples a publisher sent before the recorder's first sample
+//!   from it (its first sequence number − 1) — sent before the recorder subscribed, or lost
+//!   like a gap before the first sample arrived (the two cannot be told apart);
+//! * `unreadable`: samples DDS delivered that could not be taken (not CDR, for example).
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
@@ -13,11 +20,34 @@ use crate::error::Result;
 #[derive(Debug, Clone, Default, PartialEq, Eq)]
 pub struct TopicCounts {
     pub ros_type: String,
+    /// The type's definition is not known to metrocell: recorded as raw CDR without it.
+    pub without_definition: bool,
     pub messages: u64,
     /// Payload bytes including the 4-byte encapsulation header.
     pub bytes: u64,
     /// Messages the publishers sent that never reached the recorder (sequence-number gaps).
     pub dropped: u64,
+    /// Messages the publishers sent before the recorder's first sample from them.
+    pub before_subscription: u64,
+    /// Samples received that could not be taken (see [`Recording::count_unreadable`]).
+    pub unreadable: u64,
+}
+
+impl TopicCounts {
+    /// Every message known to be missing from the bag, whatever the cause.
+    pub fn missing(&self) -> u64 {
+        self.dropped + self.before_subscription + self.unreadable
+    }
+}
+
+/// How a topic's type went into the bag.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum TopicDefinition {
+    /// With its full definition from metrocell's registry.
+    Known,
+    /// metrocell does not know the type: raw CDR with an empty schema (see
+    /// [`BagWriter::add_topic_without_definition`]).
+    Unknown,
 }
 
 pub struct Recording {
@@ -45,37 +75,57 @@ impl Recording {
         self.topics.contains_key(topic)
     }
 
-    /// Add `topic` with the full definition of `ros_type` from metrocell's registry.
-    /// Returns `Ok(false)` without adding it when metrocell does not know the type: a bag
-    /// without the definition could not be decoded by rosbags or Foxglove, so such topics are
-    /// skipped (the caller warns, naming the type).
-    pub fn add_topic(&mut self, topic: &str, ros_type: &str, qos_yaml: &str) -> Result<bool> {
-        if self.topics.contains_key(topic) {
-            return Ok(true);
+    /// Add `topic` with the full definition of `ros_type` from metrocell's registry, or, when
+    /// metrocell does not know the type, without a definition (the payloads are still recorded
+    /// byte for byte, as rosbag2 does for a type it has no definition of).
+    pub fn add_topic(&mut self, topic: &str, ros_type: &str, qos_yaml: &str) -> Result<TopicDefinition> {
+        if let Some(c) = self.topics.get(topic) {
+            return Ok(if c.without_definition { TopicDefinition::Unknown } else { TopicDefinition::Known });
         }
-        let Ok(definition) = metrocell_msgs::registry().full_definition(ros_type) else {
-            return Ok(false);
+        let kind = match metrocell_msgs::registry().full_definition(ros_type) {
+            Ok(definition) => {
+                self.writer.add_topic(topic, ros_type, &definition, qos_yaml)?;
+                TopicDefinition::Known
+            }
+            Err(_) => {
+                self.writer.add_topic_without_definition(topic, ros_type, qos_yaml)?;
+                TopicDefinition::Unknown
+            }
         };
-        self.writer.add_topic(topic, ros_type, &definition, qos_yaml)?;
-        self.topics.insert(topic.to_string(), TopicCounts { ros_type: ros_type.to_string(), ..Default::default() });
-        Ok(true)
+        let counts = TopicCounts { ros_type: ros_type.to_string(), without_definition: kind == TopicDefinition::Unknown, ..Default::default() };
+        self.topics.insert(topic.to_string(), counts);
+        Ok(kind)
     }
 
     /// Record one message. `publisher` identifies the DDS writer (e.g. a hash of its GID) and
-    /// `sequence` is its sequence number (≤ 0 = unknown, no drop detection).
+    /// `sequence` is its sequence number (≤ 0 = unknown, no loss accounting).
     pub fn record(&mut self, topic: &str, log_ns: u64, publish_ns: u64, payload: &[u8], publisher: u64, sequence: i64) -> Result<()> {
         self.writer.write(topic, log_ns, publish_ns, payload)?;
         let counts = self.topics.get_mut(topic).expect("write succeeded, so the topic was added");
         counts.messages += 1;
         counts.bytes += payload.len() as u64;
         if sequence > 0 {
-            let last = self.last_sequence.entry((topic.to_string(), publisher)).or_insert(sequence - 1);
-            if sequence > *last + 1 {
-                counts.dropped += (sequence - *last - 1) as u64;
+            match self.last_sequence.get_mut(&(topic.to_string(), publisher)) {
+                None => {
+                    counts.before_subscription += (sequence - 1) as u64;
+                    self.last_sequence.insert((topic.to_string(), publisher), sequence);
+                }
+                Some(last) => {
+                    if sequence > *last + 1 {
+                        counts.dropped += (sequence - *last - 1) as u64;
+                    }
+                    *last = (*last).max(sequence);
+                }
             }
-            *last = (*last).max(sequence);
         }
         Ok(())
+    }
+
+    /// Count a sample of `topic` that DDS delivered but that could not be taken.
+    pub fn count_unreadable(&mut self, topic: &str) {
+        if let Some(c) = self.topics.get_mut(topic) {
+            c.unreadable += 1;
+        }
     }
 
     /// Flush if the flush interval has passed; call at least every flush interval.
@@ -95,6 +145,11 @@ impl Recording {
         self.topics.values().map(|c| c.dropped).sum()
     }
 
+    /// Every message known to be missing, all causes, all topics.
+    pub fn total_missing(&self) -> u64 {
+        self.topics.values().map(TopicCounts::missing).sum()
+    }
+
     pub fn finish(self) -> Result<BagMetadata> {
         Ok(self.writer.finish()?)
     }
@@ -109,8 +164,7 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("bagtools_recording_{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         let mut r = Recording::create(&dir, WriterOptions::default()).unwrap();
-        assert!(r.add_topic("/t", "sensor_msgs/msg/Temperature", "").unwrap());
-        assert!(!r.add_topic("/u", "unknown_pkg/msg/Nope", "").unwrap());
+        assert_eq!(r.add_topic("/t", "sensor_msgs/msg/Temperature", "").unwrap(), TopicDefinition::Known);
         let payload = rosmsg::encode(
             metrocell_msgs::registry(),
             "sensor_msgs/msg/Temperature",
@@ -121,10 +175,31 @@ mod tests {
             r.record("/t", seq as u64 * 10, seq as u64, &payload, 7, seq).unwrap();
         }
         r.record("/t", 100, 100, &payload, 8, 3).unwrap(); // another publisher, starting late
+        r.count_unreadable("/t");
         let c = r.counts()["/t"].clone();
-        assert_eq!((c.messages, c.bytes, c.dropped), (5, 5 * payload.len() as u64, 2));
+        assert_eq!((c.messages, c.bytes, c.dropped, c.before_subscription, c.unreadable), (5, 5 * payload.len() as u64, 2, 2, 1));
+        assert_eq!((r.total_dropped(), r.total_missing()), (2, 5));
         let meta = r.finish().unwrap();
         assert_eq!(meta.message_count, 5);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_type_metrocell_does_not_know_is_recorded_raw_without_a_definition() {
+        let dir = std::env::temp_dir().join(format!("bagtools_recording_raw_{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let mut r = Recording::create(&dir, WriterOptions::default()).unwrap();
+        assert_eq!(r.add_topic("/u", "unknown_pkg/msg/Nope", "").unwrap(), TopicDefinition::Unknown);
+        let raw = [0u8, 1, 0, 0, 0xde, 0xad, 0xbe, 0xef, 7];
+        r.record("/u", 10, 10, &raw, 1, 1).unwrap();
+        assert!(r.counts()["/u"].without_definition);
+        r.finish().unwrap();
+        let reader = metrocell_bag::BagReader::open(&dir).unwrap();
+        let t = reader.topics().iter().find(|t| t.name == "/u").expect("topic in the bag").clone();
+        assert_eq!((t.type_name.as_str(), t.schema_encoding.as_str(), t.definition.as_str()), ("unknown_pkg/msg/Nope", "", ""));
+        let msgs = reader.read_all(&metrocell_bag::MessageFilter::default()).unwrap();
+        assert_eq!(msgs.len(), 1);
+        assert_eq!(msgs[0].data, raw, "payload stored byte for byte");
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -1,10 +1,45 @@
 //! The recorder's parameters and the writer options built from them.
 
+use std::collections::BTreeMap;
 use std::time::Duration;
 
 use metrocell_bag::{ChunkCompression, SplitPolicy, WriterOptions};
+use metrocell_bagtools::qos_overrides::{read_qos_overrides, QosOverride};
 use metrocell_bagtools::TopicSelection;
 use metrocell_node::{MetrocellNode, ParamDecl};
+
+/// Everything the recorder needs, checked.
+#[derive(Debug, Clone)]
+pub struct RecorderSettings {
+    pub output: String,
+    pub selection: TopicSelection,
+    pub writer_options: WriterOptions,
+    pub queue_depth: usize,
+    pub bulk_queue_depth: usize,
+    pub qos_overrides: BTreeMap<String, QosOverride>,
+    pub scan_interval: Duration,
+}
+
+impl RecorderSettings {
+    pub fn from_node(node: &MetrocellNode) -> Result<Self, Box<dyn std::error::Error>> {
+        let output = match node.param::<String>("output")? {
+            o if o.is_empty() => default_output(),
+            o => o,
+        };
+        let path = node.param::<String>("qos_profile_overrides_path")?;
+        let qos_overrides = if path.is_empty() { BTreeMap::new() } else { read_qos_overrides(std::path::Path::new(&path))? };
+        let depth = |name: &str| -> Result<usize, Box<dyn std::error::Error>> { Ok(node.param::<i64>(name)?.clamp(1, 1_000_000) as usize) };
+        Ok(Self {
+            output,
+            selection: selection(node)?,
+            writer_options: writer_options(node)?,
+            queue_depth: depth("queue_depth")?,
+            bulk_queue_depth: depth("bulk_queue_depth")?,
+            qos_overrides,
+            scan_interval: Duration::from_secs_f64(node.param::<f64>("scan_interval")?),
+        })
+    }
+}
 
 pub fn declarations() -> Vec<ParamDecl> {
     vec![
@@ -18,6 +53,8 @@ pub fn declarations() -> Vec<ParamDecl> {
         ParamDecl::new("max_bag_duration", 0.0, "split into a new .mcap file after this many seconds (0: never)").with_range(0.0, 1e9),
         ParamDecl::new("queue_depth", 1000i64, "DDS reader history (keep-last depth) of ordinary topics: covers recorder stalls (disk flushes) of depth / rate seconds").with_range(1.0, 1e6),
         ParamDecl::new("fail_after_bytes", 0i64, "testing only: simulate a full disk after this many bytes per file (0: off)"),
+        ParamDecl::new("qos_profile_overrides_path", String::new(), "YAML file of per-topic reader QoS (rosbag2's format: /topic: {reliability: reliable, durability: transient_local, history: keep_last, depth: 100})"),
+        ParamDecl::new("scan_interval", 1.0, "seconds between looks at discovery for new topics").with_range(0.05, 60.0),
         ParamDecl::new("bulk_queue_depth", 30i64, "history of bulk topics (types with a byte-array field, e.g. images); RustDDS keeps this many samples in memory, so memory ≈ depth × message size").with_range(1.0, 1e6),
     ]
 }

@@ -6,6 +6,10 @@
 //!   metrocell-sim --ros-args -p cell:=crates/twin/examples/cells/xfyz_shift.yaml \
 //!       -p duration:=8h -p speed:=60 -p seed:=7
 //!
+//! With `wait_for_recorder`, the first message waits until a recorder subscribes to every topic.
+//! The messages published per topic are in the diagnostics (`published/<topic>`) and the last
+//! log line, so a recording can be checked against them.
+//!
 //! Exits 0 when the run ends (unless `loop`) or on Ctrl-C / SIGTERM.
 
 mod parameters;
@@ -37,13 +41,26 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     if start_delay > 0.0 && node.shutdown_token().wait_timeout(std::time::Duration::from_secs_f64(start_delay)) {
         return Ok(());
     }
+    let wait_for_recorder = node.param::<f64>("wait_for_recorder")?;
+    if wait_for_recorder > 0.0 {
+        if sim.wait_for_recorder(&node, std::time::Duration::from_secs_f64(wait_for_recorder)) {
+            node.info("a recorder subscribes to every topic: starting");
+        } else if node.shutdown_token().is_triggered() {
+            return Ok(());
+        } else {
+            node.warn(format!("no participant subscribed to every topic within {wait_for_recorder} s: starting anyway"));
+        }
+    }
     let finished = sim.run(&node, &settings)?;
+    sim.report_counts(finished);
+    let per_topic: Vec<String> = sim.published_per_topic().iter().map(|(t, n)| format!("{t} {n}")).collect();
     if finished {
-        node.info(format!("simulation finished: {} messages published", sim.published()));
-        // Let reliable subscribers acknowledge the last samples before the writers go away.
-        node.shutdown_token().wait_timeout(std::time::Duration::from_millis(500));
+        node.info(format!("simulation finished: {} messages published (per topic, /clock included: {})", sim.published(), per_topic.join(", ")));
+        // Let reliable subscribers acknowledge the last samples, and the final diagnostics
+        // (published every second) go out, before the writers go away.
+        node.shutdown_token().wait_timeout(std::time::Duration::from_millis(1500));
     } else {
-        node.info("shutting down");
+        node.info(format!("shutting down; published per topic: {}", per_topic.join(", ")));
     }
     Ok(())
 }

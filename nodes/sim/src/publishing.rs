@@ -3,6 +3,7 @@
 
 use std::time::{Duration, Instant};
 
+use metrocell_msgs::RosMessage;
 use metrocell_node::{qos, Diagnostics, MetrocellNode, QosProfile, RawPublisher};
 use metrocell_sim::{CameraIntrinsics, FrameRendering, MessageConverter, MessageStream, QosKind};
 use metrocell_twin::{Cell, Simulation};
@@ -15,11 +16,19 @@ const DIAGNOSTICS_PERIOD: Duration = Duration::from_millis(500);
 /// Lag behind schedule above which the node reports a warning (s of wall time).
 const LAG_WARNING: f64 = 1.0;
 
-fn qos_of(kind: QosKind) -> QosProfile {
+/// History of the live writers: 2.5 s of the fastest stream (joint states at 400 Hz when
+/// speed is 20), so a reliable reader that stalls that long still gets every sample.
+const LIVE_HISTORY: usize = 1000;
+
+/// Live, every stream but camera frames is published reliably, whatever its nominal kind (the
+/// bag `metrocell sim` writes keeps the nominal profiles): a reliable writer also matches
+/// best-effort readers (ClockQoS, SensorDataQoS subscribers), and a recorder, which reads
+/// reliably when every publisher is reliable, then gets every message even on a busy machine.
+/// Frames stay best effort: megabytes each, a deep reliable history would hold them all.
+fn qos_of(kind: QosKind, ros_type: &str) -> QosProfile {
     match kind {
-        QosKind::Clock => qos::sensor_data().history(History::KeepLast { depth: 1 }),
-        QosKind::SensorData => qos::sensor_data(),
-        QosKind::Reliable => qos::reliable(),
+        QosKind::SensorData if ros_type == metrocell_msgs::sensor_msgs::msg::Image::ROS_TYPE => qos::sensor_data(),
+        QosKind::Clock | QosKind::SensorData | QosKind::Reliable => qos::reliable().history(History::KeepLast { depth: LIVE_HISTORY }),
     }
 }
 
@@ -28,6 +37,8 @@ pub struct LiveSim {
     publishers: Vec<RawPublisher>,
     diagnostics: Diagnostics,
     published: u64,
+    /// Messages published per topic (index = topic id of the cell's map), /clock included.
+    published_per_topic: Vec<u64>,
     wall_start: Instant,
     next_clock: Instant,
     next_diagnostics: Instant,
@@ -47,10 +58,11 @@ impl LiveSim {
             .topics
             .topics
             .iter()
-            .map(|t| node.raw_publisher(&t.name, t.ros_type, qos_of(t.qos)))
+            .map(|t| node.raw_publisher(&t.name, t.ros_type, qos_of(t.qos, t.ros_type)))
             .collect::<Result<Vec<_>, _>>()?;
         let now = Instant::now();
         Ok(LiveSim {
+            published_per_topic: vec![0; publishers.len()],
             converter,
             publishers,
             diagnostics: node.diagnostics(),
@@ -64,6 +76,50 @@ impl LiveSim {
 
     pub fn published(&self) -> u64 {
         self.published
+    }
+
+    /// (topic, messages published on it), in the cell map's order.
+    pub fn published_per_topic(&self) -> Vec<(&str, u64)> {
+        self.publishers.iter().zip(&self.published_per_topic).map(|(p, n)| (p.topic(), *n)).collect()
+    }
+
+    /// Put the per-topic counts in the diagnostics (`published/<topic>`), which is how the demo
+    /// checks that the bag holds every message the twin sent.
+    pub fn report_counts(&self, finished: bool) {
+        for (topic, n) in self.published_per_topic() {
+            self.diagnostics.set_value(&format!("published{topic}"), n);
+        }
+        self.diagnostics.set_value("messages_published", self.published);
+        self.diagnostics.set_value("finished", finished);
+    }
+
+    /// Wait until one other participant (a recorder: metrocell-recorder, `metrocell bag record
+    /// -a`, `ros2 bag record -a`) subscribes to every topic this twin publishes and each writer
+    /// has matched it, or `timeout` passes. Returns whether it did; false on timeout or shutdown.
+    pub fn wait_for_recorder(&self, node: &MetrocellNode, timeout: Duration) -> bool {
+        use std::collections::{BTreeMap, BTreeSet};
+        let token = node.shutdown_token();
+        let participant = node.context().domain_participant();
+        let own = rustdds::RTPSEntity::guid(&participant).prefix;
+        let wanted: BTreeSet<String> = self.publishers.iter().map(|p| metrocell_node::names::dds_topic_name(p.topic())).collect();
+        let deadline = Instant::now() + timeout;
+        loop {
+            // Keyed by the participant's GUID prefix (its Debug form: the type is not exported).
+            let mut by_participant: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
+            for r in participant.discovered_readers() {
+                let prefix = r.reader_proxy.remote_reader_guid.prefix;
+                if prefix != own && wanted.contains(&r.subscription_topic_data.topic_name) {
+                    by_participant.entry(format!("{prefix:?}")).or_default().insert(r.subscription_topic_data.topic_name.clone());
+                }
+            }
+            let recorder = by_participant.values().any(|topics| topics.len() == wanted.len());
+            if recorder && self.publishers.iter().all(|p| p.matched_subscriptions() > 0) {
+                return true;
+            }
+            if Instant::now() >= deadline || token.wait_timeout(Duration::from_millis(20)) {
+                return false;
+            }
+        }
     }
 
     /// Run until the simulation ends (true) or shutdown is requested (false).
@@ -85,7 +141,10 @@ impl LiveSim {
                 }
                 let bytes = m.message.encode()?;
                 match self.publishers[m.topic].publish(&bytes) {
-                    Ok(()) => self.published += 1,
+                    Ok(()) => {
+                        self.published += 1;
+                        self.published_per_topic[m.topic] += 1;
+                    }
                     Err(e) => self.diagnostics.warn(format!("publishing on {} failed: {e}", converter.topics.get(m.topic).name)),
                 }
             }
@@ -110,8 +169,12 @@ impl LiveSim {
         self.last_clock_ns = ns;
         let clock = metrocell_sim::TypedMessage::Clock(metrocell_sim::convert::clock(metrocell_sim::sim_time::ros_time(ns)));
         if let Ok(bytes) = clock.encode() {
-            if self.publishers[self.converter.topics.clock].publish(&bytes).is_err() {
-                self.diagnostics.add_count("clock_publish_failures", 1);
+            let id = self.converter.topics.clock;
+            match self.publishers[id].publish(&bytes) {
+                Ok(()) => self.published_per_topic[id] += 1,
+                Err(_) => {
+                    self.diagnostics.add_count("clock_publish_failures", 1);
+                }
             }
         }
     }
@@ -131,7 +194,7 @@ impl LiveSim {
             if now >= self.next_diagnostics {
                 let lag = s.pacer.lag(t, now - self.wall_start);
                 self.diagnostics.set_value("sim_time_s", format!("{t:.3}"));
-                self.diagnostics.set_value("messages_published", self.published);
+                self.report_counts(false);
                 self.diagnostics.set_value("lag_s", format!("{lag:.3}"));
                 if lag > LAG_WARNING {
                     self.diagnostics.warn(format!("{lag:.1} s behind schedule: lower speed"));

@@ -1,0 +1,258 @@
+//! The recorder: records DDS topics into a crash-safe rosbag2 MCAP bag. One implementation,
+//! run by the `metrocell-recorder` node binary and in-process by `metrocell bag record`.
+//!
+//! Subscribes every discovered topic (discovery is re-scanned every `scan_interval`, so late
+//! publishers are recorded too), or the `topics` list, or those matching `regex`, minus
+//! `exclude`. Payloads are stored as received (raw CDR), with the type's full definition from
+//! metrocell's registry; a type metrocell does not know is recorded all the same, raw, with an
+//! empty schema (see `metrocell_bag::BagWriter::add_topic_without_definition`).
+//! log_time = receive time, publish_time = the publisher's DDS source timestamp.
+//!
+//! QoS, as rosbag2 adapts it (`metrocell_bagtools::recorded_qos::recording_qos`): a topic is
+//! read reliably when every publisher discovered when recording of it began offers reliable
+//! (so nothing is lost on the wire: DDS retransmits), best effort otherwise (a best-effort
+//! reader matches every publisher); transient-local when every publisher is latched. History
+//! keep-last `queue_depth` (`bulk_queue_depth` for byte-array types such as images). The
+//! `qos_profile_overrides_path` file replaces these per topic. A publisher that appears later
+//! offering best effort on a topic read reliably does not match: a warning names it.
+//!
+//! Losses are accounted by cause (`metrocell_bagtools::TopicCounts`): sequence gaps between
+//! received samples (`dropped`), samples sent before the recorder's first one from that
+//! publisher (`before_subscription`), samples that could not be taken (`unreadable`); each in
+//! the diagnostics and, per topic, in the final log line.
+//!
+//! Each topic's `offered_qos_profiles` holds the QoS its publishers announced in discovery when
+//! recording of the topic began, one profile per publisher, as rosbag2 stores them.
+
+pub mod parameters;
+mod reader_qos;
+
+use std::collections::{BTreeMap, BTreeSet};
+use std::hash::{Hash, Hasher};
+use std::time::{Duration, Instant};
+
+use metrocell_bag::offered_qos_yaml;
+use metrocell_bagtools::recorded_qos::{offered_qos_of_topic, recording_qos};
+use metrocell_bagtools::{Recording, TopicCounts, TopicDefinition};
+use metrocell_node::names::dds_topic_name;
+use metrocell_node::{MetrocellNode, RawSubscription};
+
+pub use parameters::RecorderSettings;
+
+fn publisher_key(gid: &impl Hash) -> u64 {
+    let mut h = std::collections::hash_map::DefaultHasher::new();
+    gid.hash(&mut h);
+    h.finish()
+}
+
+/// What a finished (or failed) recording holds.
+#[derive(Debug, Clone)]
+pub struct RecordingSummary {
+    pub output: String,
+    pub counts: BTreeMap<String, TopicCounts>,
+    /// Per topic: whether it was read reliably, and its reader's keep-last depth (0 = keep all).
+    pub readers: BTreeMap<String, (bool, usize)>,
+}
+
+impl RecordingSummary {
+    pub fn total_messages(&self) -> u64 {
+        self.counts.values().map(|c| c.messages).sum()
+    }
+
+    pub fn total_missing(&self) -> u64 {
+        self.counts.values().map(TopicCounts::missing).sum()
+    }
+
+    /// "N messages recorded, M missing" and, for each topic that lost any, how many and why.
+    pub fn describe(&self) -> String {
+        let mut s = format!("{} messages recorded on {} topics, {} missing", self.total_messages(), self.counts.len(), self.total_missing());
+        for (topic, c) in self.counts.iter().filter(|(_, c)| c.missing() > 0) {
+            let (reliable, depth) = self.readers.get(topic).copied().unwrap_or((false, 0));
+            let mut causes = Vec::new();
+            if c.dropped > 0 {
+                causes.push(if reliable {
+                    format!("{} sequence gaps (read reliably: overwritten in the reader queue of {depth} before the recorder took them, or in the publisher's history)", c.dropped)
+                } else {
+                    format!("{} sequence gaps (read best effort: lost on the wire or overwritten in the reader queue of {depth})", c.dropped)
+                });
+            }
+            if c.before_subscription > 0 {
+                causes.push(format!("{} sent before the first sample received from their publisher (before the recorder subscribed, or lost like a gap)", c.before_subscription));
+            }
+            if c.unreadable > 0 {
+                causes.push(format!("{} samples that could not be taken (not CDR)", c.unreadable));
+            }
+            s.push_str(&format!("\n  {topic}: {} missing: {}", c.missing(), causes.join(", ")));
+        }
+        s
+    }
+}
+
+/// The error of a recording that stopped early, with what it holds.
+#[derive(Debug)]
+pub struct RecordingFailed {
+    pub message: String,
+    pub summary: Option<RecordingSummary>,
+}
+
+impl std::fmt::Display for RecordingFailed {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.message)
+    }
+}
+
+impl std::error::Error for RecordingFailed {}
+
+fn failed(message: impl std::fmt::Display) -> RecordingFailed {
+    RecordingFailed { message: message.to_string(), summary: None }
+}
+
+/// Record until the node's shutdown token triggers (SIGINT/SIGTERM when the node handles
+/// signals), then finish the bag. On a write failure (disk full) the bag is left sealed and
+/// valid and the error names the file.
+pub fn record(node: &mut MetrocellNode, settings: &RecorderSettings) -> Result<RecordingSummary, RecordingFailed> {
+    let mut recording = Recording::create(&settings.output, settings.writer_options.clone()).map_err(failed)?;
+    node.info(format!("recording into {}", settings.output));
+    let diagnostics = node.diagnostics();
+    let token = node.shutdown_token();
+    let mut subscriptions: Vec<RawSubscription> = Vec::new();
+    let mut readers: BTreeMap<String, (bool, usize)> = BTreeMap::new();
+    // Writers (by GUID) already seen on recorded topics, so a late best-effort one is reported once.
+    let mut known_writers: BTreeSet<String> = BTreeSet::new();
+    let mut next_scan = Instant::now();
+    let mut failure = None;
+    let mut draining = false;
+    loop {
+        if token.is_triggered() {
+            // One last pass takes what the readers already hold, so the tail is not lost.
+            if draining {
+                break;
+            }
+            draining = true;
+        }
+        if !draining && Instant::now() >= next_scan {
+            next_scan += settings.scan_interval;
+            if let Err(e) = scan(node, settings, &mut recording, &mut subscriptions, &mut readers, &mut known_writers) {
+                failure = Some(e);
+                break;
+            }
+            for (topic, c) in recording.counts() {
+                diagnostics.set_value(&format!("{topic}/messages"), c.messages);
+                diagnostics.set_value(&format!("{topic}/dropped"), c.dropped);
+                diagnostics.set_value(&format!("{topic}/before_subscription"), c.before_subscription);
+                diagnostics.set_value(&format!("{topic}/unreadable"), c.unreadable);
+            }
+            diagnostics.set_value("messages", recording.total_messages());
+            diagnostics.set_value("dropped", recording.total_dropped());
+            diagnostics.set_value("missing", recording.total_missing());
+        }
+        let mut received = 0usize;
+        'take: for sub in &subscriptions {
+            loop {
+                let m = match sub.take() {
+                    Ok(Some(m)) => m,
+                    Ok(None) => break,
+                    Err(e) => {
+                        recording.count_unreadable(sub.topic());
+                        node.warn(format!("{}: a sample could not be taken: {e}", sub.topic()));
+                        break;
+                    }
+                };
+                received += 1;
+                let log = m.receive_time_ns.max(0) as u64;
+                let publish = m.source_time_ns.map_or(log, |t| t.max(0) as u64);
+                if let Err(e) = recording.record(sub.topic(), log, publish, &m.payload, publisher_key(&m.publisher_gid), m.sequence_number) {
+                    failure = Some(e.to_string());
+                    break 'take;
+                }
+            }
+        }
+        if failure.is_some() {
+            break;
+        }
+        if let Err(e) = recording.tick() {
+            failure = Some(e.to_string());
+            break;
+        }
+        if received == 0 && !draining {
+            token.wait_timeout(Duration::from_millis(1));
+        }
+    }
+    let summary = RecordingSummary { output: settings.output.clone(), counts: recording.counts().clone(), readers };
+    if let Some(e) = failure {
+        let file = recording.current_file().map(|p| p.display().to_string()).unwrap_or_else(|| settings.output.clone());
+        node.error(format!("recording stopped: {e} (file {file}); {}", summary.describe()));
+        diagnostics.error(format!("write failed: {e}"));
+        return Err(RecordingFailed { message: format!("recording into {file} stopped: {e}"), summary: Some(summary) });
+    }
+    recording.finish().map_err(failed)?;
+    node.info(format!("bag {} finished: {}", settings.output, summary.describe()));
+    Ok(summary)
+}
+
+/// Subscribe the selected topics discovery shows that are not recorded yet.
+fn scan(
+    node: &mut MetrocellNode,
+    settings: &RecorderSettings,
+    recording: &mut Recording,
+    subscriptions: &mut Vec<RawSubscription>,
+    readers: &mut BTreeMap<String, (bool, usize)>,
+    known_writers: &mut BTreeSet<String>,
+) -> Result<(), String> {
+    let discovered = node.discovered_publications();
+    let recorded_wanted = discovered.iter().any(|t| settings.selection.matches(&t.name) && !recording.has_topic(&t.name));
+    // Reading every discovered writer's QoS costs a copy of discovery: only when a topic is new,
+    // or every scan while some topic is read reliably (to name a late best-effort publisher).
+    if !recorded_wanted && !readers.values().any(|(reliable, _)| *reliable) {
+        return Ok(());
+    }
+    let writers = node.context().domain_participant().discovered_writers();
+    let publications: Vec<_> = writers.iter().map(|w| &w.publication_topic_data).collect();
+    for t in discovered {
+        if !settings.selection.matches(&t.name) {
+            continue;
+        }
+        let dds = dds_topic_name(&t.name);
+        if let Some(&(true, _)) = readers.get(&t.name) {
+            for p in publications.iter().filter(|p| p.topic_name == dds) {
+                let id = format!("{:?}", p.key);
+                if known_writers.insert(id) && matches!(p.reliability, Some(rustdds::policy::Reliability::BestEffort)) {
+                    node.warn(format!("{}: a publisher appeared offering best effort; the recorder reads this topic reliably, so it does not match and its messages are not recorded (restart the recorder, or give the topic best_effort in a QoS overrides file)", t.name));
+                }
+            }
+            continue;
+        }
+        if recording.has_topic(&t.name) {
+            continue;
+        }
+        let offered = offered_qos_of_topic(publications.iter().copied(), &dds);
+        for p in publications.iter().filter(|p| p.topic_name == dds) {
+            known_writers.insert(format!("{:?}", p.key));
+        }
+        let definition = recording.add_topic(&t.name, &t.type_name, &offered_qos_yaml(&offered)).map_err(|e| e.to_string())?;
+        let depth = if parameters::is_bulk_type(&t.type_name) { settings.bulk_queue_depth } else { settings.queue_depth };
+        let adapted = recording_qos(&offered);
+        let over = settings.qos_overrides.get(&t.name);
+        let qos = reader_qos::reader_qos(adapted, depth, over);
+        if let Some(o) = over.filter(|o| !o.ignored.is_empty()) {
+            node.warn(format!("{}: QoS override keys {} do not apply to a recorder's reader; ignored", t.name, o.ignored.join(", ")));
+        }
+        let sub = node.raw_subscription(&t.name, &t.type_name, qos.clone()).map_err(|e| e.to_string())?;
+        subscriptions.push(sub);
+        let reliable = matches!(qos.reliability, ros2_client::qos::Reliability::Reliable { .. });
+        let kept = match qos.history {
+            ros2_client::qos::History::KeepLast { depth } => depth,
+            ros2_client::qos::History::KeepAll => 0,
+        };
+        readers.insert(t.name.clone(), (reliable, kept));
+        let how = if reliable { "reliable" } else { "best effort" };
+        match definition {
+            TopicDefinition::Known => node.info(format!("recording {} ({}, {how})", t.name, t.type_name)),
+            TopicDefinition::Unknown => node.warn(format!(
+                "recording {} ({}, {how}) as raw CDR without a definition: metrocell does not know this type, so bag readers get the bytes but cannot decode them without it",
+                t.name, t.type_name
+            )),
+        }
+    }
+    Ok(())
+}

@@ -1,0 +1,281 @@
+//! Recording over DDS, end to end (inside tests/isolated): `metrocell bag record` and the
+//! recorder node give the same bag; `/rosout` is recorded and rosbags decodes it; a type
+//! metrocell does not know, published by Cyclone DDS, is recorded raw and read back byte-exact;
+//! and `metrocell demo` (twin → recorder) loses nothing, also with both cores busy.
+//!
+//! Needs the workspace binaries (`cargo build --workspace --bins`) and the Python peers
+//! (METROCELL_PYTHON or .venv).
+
+use std::collections::BTreeMap;
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::process::{Command, Stdio};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+use metrocell_bag::{BagReader, MessageFilter};
+use metrocell_node::{qos, MetrocellNode, RawPublisher};
+use system_tests::{bin, interrupt, piped, python, require_isolated_network, ros2_peer, run, workspace_root, ChildGuard};
+
+fn scratch(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("recording_it_{}_{name}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    d
+}
+
+fn encode(ty: &str, json: serde_json::Value) -> Vec<u8> {
+    let reg = metrocell_msgs::registry();
+    rosmsg::encode(reg, ty, &rosmsg::from_json(reg, ty, &json).unwrap()).unwrap()
+}
+
+/// Every message of every topic: topic → (type, payloads in log-time order).
+fn bag_contents(dir: &Path) -> BTreeMap<String, (String, Vec<Vec<u8>>)> {
+    let reader = BagReader::open(dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
+    let mut out: BTreeMap<String, (String, Vec<Vec<u8>>)> = BTreeMap::new();
+    for t in reader.topics() {
+        out.insert(t.name.clone(), (t.type_name.clone(), Vec::new()));
+    }
+    for m in reader.read_all(&MessageFilter::default()).unwrap() {
+        out.get_mut(&m.topic).expect("topic listed").1.push(m.data);
+    }
+    out
+}
+
+/// Spawns with stderr read line by line into a channel (stdout inherited).
+fn spawn_with_log(cmd: &mut Command) -> (ChildGuard, mpsc::Receiver<String>) {
+    cmd.stdin(Stdio::null()).stderr(Stdio::piped());
+    let mut guard = ChildGuard::spawn(cmd);
+    let stderr = guard.child().stderr.take().unwrap();
+    let (tx, rx) = mpsc::channel();
+    std::thread::spawn(move || {
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            eprintln!("  | {line}");
+            if tx.send(line).is_err() {
+                break;
+            }
+        }
+    });
+    (guard, rx)
+}
+
+fn wait_for_line(rx: &mpsc::Receiver<String>, needle: &str, timeout: Duration) {
+    let deadline = Instant::now() + timeout;
+    loop {
+        let left = deadline.saturating_duration_since(Instant::now());
+        match rx.recv_timeout(left) {
+            Ok(line) if line.contains(needle) => return,
+            Ok(_) => {}
+            Err(_) => panic!("no log line containing {needle:?} within {timeout:?}"),
+        }
+    }
+}
+
+fn stop(mut guard: ChildGuard) {
+    interrupt(guard.pid());
+    let deadline = Instant::now() + Duration::from_secs(10);
+    loop {
+        if let Some(status) = guard.child().try_wait().unwrap() {
+            assert!(status.success(), "recorder exits 0 on SIGINT, got {status}");
+            return;
+        }
+        assert!(Instant::now() < deadline, "recorder did not stop within 10 s of SIGINT");
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+fn wait_matched(p: &RawPublisher, n: usize) {
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while p.matched_subscriptions() < n {
+        assert!(Instant::now() < deadline, "{}: {n} subscribers did not match within 20 s", p.topic());
+        std::thread::sleep(Duration::from_millis(20));
+    }
+}
+
+#[test]
+fn bag_record_and_the_recorder_node_give_the_same_bag() {
+    require_isolated_network();
+    let (cli_dir, node_dir) = (scratch("same_cli"), scratch("same_node"));
+    let mut node = MetrocellNode::builder("same_bag_pub").diagnostics_period(None).handle_signals(false).build().unwrap();
+    let temps = node.raw_publisher("/same_test/temperature", "sensor_msgs/msg/Temperature", qos::reliable()).unwrap();
+    let text = node.raw_publisher("/same_test/status", "std_msgs/msg/String", qos::reliable()).unwrap();
+    let fast = node.raw_publisher("/same_test/fast", "sensor_msgs/msg/Temperature", qos::sensor_data()).unwrap();
+    let (cli, _cli_log) = spawn_with_log(Command::new(bin("metrocell")).args(["bag", "record", "-e", "/same_test/.*", "-x", "/same_test/fast", "-o"]).arg(&cli_dir));
+    let (rec, _rec_log) = spawn_with_log(
+        Command::new(bin("metrocell-recorder")).args(["--ros-args", "-p"]).arg(format!("output:={}", node_dir.display())).args(["-p", "regex:=/same_test/.*", "-p", "exclude:=/same_test/fast"]),
+    );
+    wait_matched(&temps, 2);
+    wait_matched(&text, 2);
+    let n = 400;
+    for i in 0..n {
+        temps.publish(&encode("sensor_msgs/msg/Temperature", serde_json::json!({"temperature": 20.0 + i as f64 * 1e-3, "variance": 1e-4}))).unwrap();
+        if i % 4 == 0 {
+            text.publish(&encode("std_msgs/msg/String", serde_json::json!({"data": format!("status {i}")}))).unwrap();
+        }
+        fast.publish(&encode("sensor_msgs/msg/Temperature", serde_json::json!({"temperature": 1.0}))).unwrap();
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    std::thread::sleep(Duration::from_millis(500));
+    stop(cli);
+    stop(rec);
+    let (a, b) = (bag_contents(&cli_dir), bag_contents(&node_dir));
+    let ours = |m: &BTreeMap<String, (String, Vec<Vec<u8>>)>| -> BTreeMap<String, (String, Vec<Vec<u8>>)> {
+        m.iter().filter(|(t, _)| t.starts_with("/same_test/")).map(|(t, v)| (t.clone(), v.clone())).collect()
+    };
+    let (a, b) = (ours(&a), ours(&b));
+    assert_eq!(a.keys().collect::<Vec<_>>(), ["/same_test/status", "/same_test/temperature"], "bag record: topics (fast excluded)");
+    assert_eq!(a["/same_test/temperature"].1.len(), n);
+    assert_eq!(a["/same_test/status"].1.len(), n / 4);
+    assert_eq!(a, b, "bag record and the recorder node: same topics, types, counts and payload bytes");
+}
+
+#[test]
+fn rosout_is_recorded_and_rosbags_decodes_it() {
+    require_isolated_network();
+    let dir = scratch("rosout");
+    let (rec, log) = spawn_with_log(Command::new(bin("metrocell")).args(["bag", "record", "/rosout", "/parameter_events", "-o"]).arg(&dir));
+    wait_for_line(&log, "recording into", Duration::from_secs(20));
+    let node = MetrocellNode::builder("rosout_probe").diagnostics_period(None).handle_signals(false).build().unwrap();
+    // The recorder subscribes /rosout once it discovers a publisher of it (within a scan).
+    wait_for_line(&log, "recording /rosout (rcl_interfaces/msg/Log", Duration::from_secs(20));
+    std::thread::sleep(Duration::from_millis(500));
+    for i in 0..5 {
+        node.warn(format!("rosout probe line {i}"));
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::thread::sleep(Duration::from_millis(500));
+    stop(rec);
+    drop(node);
+    let meta = metrocell_bag::BagMetadata::read_dir(&dir).unwrap();
+    let rosout = meta.topics_with_message_count.iter().find(|t| t.topic_metadata.name == "/rosout").expect("/rosout in the bag");
+    assert_eq!(rosout.topic_metadata.type_name, "rcl_interfaces/msg/Log");
+    let script = r#"
+import json, sys
+from pathlib import Path
+from rosbags.rosbag2 import Reader
+from rosbags.typesys import Stores, get_typestore
+ts = get_typestore(Stores.ROS2_JAZZY)
+out = []
+with Reader(Path(sys.argv[1])) as r:
+    conns = [c for c in r.connections if c.topic == '/rosout']
+    for c, t, raw in r.messages(connections=conns):
+        m = ts.deserialize_cdr(raw, c.msgtype)
+        out.append({'level': m.level, 'name': m.name, 'msg': m.msg})
+print(json.dumps(out))
+"#;
+    let out = run(Command::new(python()).args(["-c", script]).arg(&dir).stdout(Stdio::piped()).stderr(Stdio::piped()), Duration::from_secs(60));
+    assert!(out.status.success(), "rosbags failed: {}", String::from_utf8_lossy(&out.stderr));
+    let logs: Vec<serde_json::Value> = serde_json::from_slice(&out.stdout).unwrap();
+    let probe: Vec<&serde_json::Value> = logs.iter().filter(|l| l["name"] == "rosout_probe").collect();
+    let expected: Vec<serde_json::Value> = (0..5).map(|i| serde_json::json!({"level": 30, "name": "rosout_probe", "msg": format!("rosout probe line {i}")})).collect();
+    assert_eq!(probe.into_iter().cloned().collect::<Vec<_>>(), expected, "rosbags decodes the probe's five WARN lines (level 30) from /rosout");
+}
+
+#[test]
+fn a_type_unknown_to_metrocell_published_by_cyclone_is_recorded_raw_byte_exact() {
+    require_isolated_network();
+    let dir = scratch("unknown_type");
+    let ty = "cell_vendor_msgs/msg/SpindleState";
+    assert!(metrocell_msgs::registry().get(ty).is_none(), "the test type must be unknown to metrocell");
+    let msg_dir = workspace_root().join("tests/py/msgs_unknown_to_metrocell");
+    let sample = serde_json::json!({"spindle_id": "S1", "mode": 1, "speed_rad_s": 1047.25, "bearing_temperatures": [31.5, 33.25, 35.0], "cycle_count": -42});
+    let enc = run(
+        piped(python()).arg(ros2_peer()).args(["encode", "--type", ty, "--json", &sample.to_string(), "--msg-dir"]).arg(&msg_dir),
+        Duration::from_secs(60),
+    );
+    assert!(enc.status.success(), "encode: {}", String::from_utf8_lossy(&enc.stderr));
+    let hex = String::from_utf8(enc.stdout).unwrap();
+    let expected: Vec<u8> = (0..hex.trim().len()).step_by(2).map(|i| u8::from_str_radix(&hex.trim()[i..i + 2], 16).unwrap()).collect();
+
+    let (rec, log) = spawn_with_log(Command::new(bin("metrocell")).args(["bag", "record", "/vendor/spindle", "-o"]).arg(&dir));
+    wait_for_line(&log, "recording into", Duration::from_secs(20));
+    let n = 20;
+    let peer = run(
+        piped(python()).arg(ros2_peer()).args(["publish", "--topic", "/vendor/spindle", "--type", ty, "--json", &sample.to_string(), "--count", &n.to_string(), "--rate", "50", "--msg-dir"]).arg(&msg_dir),
+        Duration::from_secs(60),
+    );
+    assert!(peer.status.success(), "cyclone peer: {}", String::from_utf8_lossy(&peer.stderr));
+    std::thread::sleep(Duration::from_millis(300));
+    stop(rec);
+
+    let reader = BagReader::open(&dir).unwrap();
+    let topic = reader.topics().iter().find(|t| t.name == "/vendor/spindle").expect("unknown type recorded, not skipped").clone();
+    assert_eq!((topic.type_name.as_str(), topic.schema_encoding.as_str(), topic.definition.as_str()), (ty, "", ""), "raw: no definition");
+    let msgs = reader.read_all(&MessageFilter::default()).unwrap();
+    assert_eq!(msgs.len(), n, "every sample the peer sent");
+    for (i, m) in msgs.iter().enumerate() {
+        assert_eq!(m.data, expected, "message {i}: the bytes Cyclone serialised");
+    }
+    // rosbags reads the bag (definition format NONE) and, given the type from elsewhere, decodes it.
+    let script = r#"
+import json, sys
+from pathlib import Path
+from rosbags.rosbag2 import Reader
+from rosbags.typesys import Stores, get_typestore, get_types_from_msg
+ts = get_typestore(Stores.ROS2_JAZZY)
+ts.register(get_types_from_msg(Path(sys.argv[2]).read_text(), 'cell_vendor_msgs/msg/SpindleState'))
+out = []
+with Reader(Path(sys.argv[1])) as r:
+    for c, t, raw in r.messages():
+        m = ts.deserialize_cdr(raw, c.msgtype)
+        out.append([c.msgtype, c.msgdef.format.name, bytes(raw).hex(), m.spindle_id, m.mode, m.speed_rad_s, [float(x) for x in m.bearing_temperatures], m.cycle_count])
+print(json.dumps(out))
+"#;
+    let out = run(
+        Command::new(python()).args(["-c", script]).arg(&dir).arg(msg_dir.join("cell_vendor_msgs/msg/SpindleState.msg")).stdout(Stdio::piped()).stderr(Stdio::piped()),
+        Duration::from_secs(60),
+    );
+    assert!(out.status.success(), "rosbags failed: {}", String::from_utf8_lossy(&out.stderr));
+    let rows: Vec<serde_json::Value> = serde_json::from_slice(&out.stdout).unwrap();
+    assert_eq!(rows.len(), n);
+    let expected_row = serde_json::json!([ty, "NONE", hex.trim(), "S1", 1, 1047.25, [31.5, 33.25, 35.0], -42]);
+    for r in &rows {
+        assert_eq!(r, &expected_row, "rosbags: raw bytes and decoded fields");
+    }
+}
+
+/// `metrocell demo` for a short run: the twin's per-topic counts (from its final log line)
+/// against the bag, topic by topic, and the demo's own verdict.
+fn demo_loses_nothing(name: &str, busy_cores: usize) {
+    require_isolated_network();
+    let dir = scratch(name);
+    // Busy loops on both cores for the whole run: they stop with the test (ChildGuard).
+    let _busy: Vec<ChildGuard> = (0..busy_cores).map(|_| ChildGuard::spawn(Command::new("sh").args(["-c", "while :; do :; done"]))).collect();
+    let started = Instant::now();
+    let out = ChildGuard::spawn(
+        piped(bin("metrocell")).args(["demo", "--duration", "60", "--speed", "20", "-o"]).arg(&dir).env("METROCELL_SHARE", workspace_root()),
+    )
+    .wait_output(Duration::from_secs(240));
+    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
+    let twin_line = stderr.lines().chain(stdout.lines()).find(|l| l.contains("per topic, /clock included:")).unwrap_or_else(|| panic!("the twin's final counts:\n{stdout}\n{stderr}"));
+    let published: BTreeMap<String, u64> = twin_line
+        .split("per topic, /clock included: ")
+        .nth(1)
+        .unwrap()
+        .trim_end_matches(')')
+        .split(", ")
+        .map(|item| {
+            let (t, n) = item.rsplit_once(' ').unwrap();
+            (t.to_string(), n.parse().unwrap())
+        })
+        .collect();
+    let bag = bag_contents(&dir);
+    for (topic, n) in &published {
+        let got = bag.get(topic).map_or(0, |(_, m)| m.len() as u64);
+        assert_eq!(got, *n, "{topic}: bag holds {got} of the {n} the twin published ({busy_cores} busy cores)\n{stdout}");
+    }
+    // The demo renders no camera frames (/camera/image_raw: 0); every other stream is busy.
+    assert!(published.values().filter(|n| **n > 0).count() >= 6, "twin topics with messages: {published:?}");
+    assert!(stdout.contains("recording check: complete"), "the demo's verdict:\n{stdout}\n{stderr}");
+    assert!(out.status.success(), "demo exit status {:?}\n{stdout}\n{stderr}", out.status);
+    eprintln!("{name}: {} messages on {} topics, none lost, in {:.1} s", published.values().sum::<u64>(), published.len(), started.elapsed().as_secs_f64());
+}
+
+#[test]
+fn demo_twin_to_recorder_loses_nothing() {
+    demo_loses_nothing("demo_idle", 0);
+}
+
+#[test]
+fn demo_twin_to_recorder_loses_nothing_with_both_cores_busy() {
+    demo_loses_nothing("demo_loaded", 2);
+}

@@ -23,14 +23,15 @@ fn calibrate_from_png_files_recovers_the_camera_within_its_uncertainty() {
     // The truth: Brown–Conrady k1 k2 p1 p2 k3 (OpenCV order).
     let truth = [("fx", 700.0), ("fy", 705.0), ("cx", 405.3), ("cy", 296.8), ("k1", -0.12), ("k2", 0.05), ("p1", 0.0), ("p2", 0.0), ("k3", 0.0)];
     let camera = json!({"width": 800, "height": 600, "fx": 700.0, "fy": 705.0, "cx": 405.3, "cy": 296.8, "dist": [-0.12, 0.05, 0.0, 0.0, 0.0]});
-    // Board centres over a 3×4 grid of the image, 0.40–0.52 m away, each tilted differently.
+    // Board centres over a 4×3 grid of the image (the whole board inside the frame), 0.40–0.51 m
+    // away, each tilted differently.
     let centre = Vector3::new((cols - 1) as f64 * square / 2.0, (rows - 1) as f64 * square / 2.0, 0.0);
     let mut views = Vec::new();
     for k in 0..12 {
         let (i, j) = (k % 4, k / 4);
         let axis = Vector3::new(0.35 * ((k as f64) * 1.3).sin(), 0.35 * ((k as f64) * 0.7).cos(), 0.15 * ((k as f64) * 2.1).sin());
         let r = Rotation3::from_scaled_axis(axis);
-        let at = Vector3::new(-0.18 + 0.12 * i as f64, -0.09 + 0.09 * j as f64, 0.40 + 0.01 * k as f64);
+        let at = Vector3::new(-0.09 + 0.06 * i as f64, -0.06 + 0.06 * j as f64, 0.40 + 0.01 * k as f64);
         let t = at - r * centre;
         views.push(json!({"rvec": [axis.x, axis.y, axis.z], "tvec": [t.x, t.y, t.z], "blur": 0.7, "noise": 1.0, "seed": k}));
     }

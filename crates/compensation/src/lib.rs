@@ -1,8 +1,11 @@
-//! Corrections the nodes apply online, as pure functions over plain numbers.
+//! Corrections of single measurements, as pure functions over plain numbers.
 //!
-//! The physics lives in `metrocell-physics`; this crate turns it into what a node does to one
-//! measurement: re-correct a tracker range for the air the instrument did not see, propagate
-//! spherical noise into a Cartesian covariance, remove the thermal growth of the axis scales.
+//! The physics lives in `metrocell-physics`; this crate turns it into what is done to one
+//! measurement: remove the thermal growth of the axis scales (`ThermalScaleCompensator`, used by
+//! the thermal node, nodes/thermal), re-correct a tracker range for the air the instrument did
+//! not see and report its warm-up (`refraction_corrected_range`, `warmup_status`), and propagate
+//! spherical noise into a Cartesian covariance (`spherical_to_cartesian`). The tracker functions
+//! are used by no node yet (there is no tracker node); they are tested here only.
 //! Units are SI throughout (m, rad, Pa, °C, relative humidity as a 0..1 fraction).
 
 pub mod spherical;

@@ -1,5 +1,5 @@
-//! What the tracker logger corrects in each reading: the air the instrument assumed, and the
-//! warm-up it is still in.
+//! What a tracker logger would correct in each reading (no node does yet): the air the
+//! instrument assumed, and the warm-up it is still in.
 
 use metrocell_physics::instrument::edlen::{birch_downs_index, shop_floor_index};
 use metrocell_physics::instrument::tracker_warmup::settling_time;

@@ -91,7 +91,7 @@ fn parse_duration_arg(s: &str) -> Result<f64, String> {
 /// Run `metrocell sim`; returns the process exit code (0 success, 1 failure with the error on
 /// stderr, 2 bad arguments).
 pub fn run_sim_command(args: SimArgs) -> i32 {
-    match run(&args) {
+    match run_sim(&args) {
         Ok(()) => 0,
         Err(e @ SimError::InvalidArgument { .. }) => {
             eprintln!("metrocell sim: {e}");
@@ -104,7 +104,8 @@ pub fn run_sim_command(args: SimArgs) -> i32 {
     }
 }
 
-fn run(args: &SimArgs) -> Result<(), SimError> {
+/// `metrocell sim` itself: the bag, or the error that `run_sim_command` prints.
+pub fn run_sim(args: &SimArgs) -> Result<(), SimError> {
     let start_ns = parse_start_time(&args.start_time)?;
     if !(args.clock_rate >= 0.0 && args.clock_rate.is_finite()) {
         return Err(SimError::invalid("--clock-rate", format!("must be >= 0 and finite, got {}", args.clock_rate)));

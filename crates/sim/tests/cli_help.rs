@@ -34,5 +34,7 @@ fn arguments_parse() {
 #[test]
 fn a_missing_cell_file_fails_with_its_name() {
     let c = Cli::try_parse_from(["x", "--cell", "/nonexistent/cell.yaml", "--duration", "1s", "-o", "/tmp/never", "--quiet"]).unwrap();
+    let e = metrocell_sim::cli::run_sim(&c.sim).err().expect("a missing cell file is an error").to_string();
+    assert!(e.contains("/nonexistent/cell.yaml"), "the error does not name the file: {e}");
     assert_eq!(metrocell_sim::run_sim_command(c.sim), 1);
 }

@@ -171,13 +171,23 @@ mod tests {
         });
         for win in [3u32, 7, 13, 41] {
             let m = adaptive_threshold_mean(&img, win, 7.0);
-            // The run-time dispatch must not change the result.
+            // Both paths, whatever the dispatch picks: the portable loop and, where the CPU has
+            // it, the AVX2 build of the same loop, each against the direct mean below.
             let mut portable = Vec::new();
             threshold_portable(&img, win, 7.0, &mut portable);
             assert_eq!(
                 portable, m,
                 "win {win}: portable and dispatched paths differ"
             );
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!("avx2") {
+                let mut avx2 = Vec::new();
+                // SAFETY: the CPU supports AVX2 (checked just above).
+                unsafe { threshold_avx2(&img, win, 7.0, &mut avx2) };
+                assert_eq!(avx2, portable, "win {win}: AVX2 and portable paths differ");
+            } else {
+                eprintln!("matches_direct_mean_threshold: this CPU has no AVX2; only the portable path was checked");
+            }
             let r = (win / 2) as i64;
             for y in 0..23i64 {
                 for x in 0..37i64 {

@@ -33,10 +33,18 @@ fn foxglove_decodes_every_message_type_of_a_metrocell_bag() {
         let dir = tmp.join(name);
         let mut w = BagWriter::create(&dir, WriterOptions { compression, ..Default::default() }).unwrap();
         let mut expected = Vec::new();
+        let mut without_fields = Vec::new();
         for (k, t) in types.iter().enumerate() {
+            let value = rosmsg::sample_value(registry, t, 17 + k as u64).unwrap();
+            if rosmsg::to_json(&value).as_object().is_some_and(|o| o.is_empty()) {
+                // Known limit of Foxglove's reader, not of the bag: a message with constants only
+                // (rcl_interfaces/msg/ParameterType) has an empty ros2msg definition, and
+                // @foxglove/rosmsg2-serialization refuses to build a reader for it.
+                without_fields.push(t.clone());
+                continue;
+            }
             let topic = format!("/fox/{}", t.replace("/msg/", "/"));
             w.add_topic(&topic, t, &registry.full_definition(t).unwrap(), &qos).unwrap();
-            let value = rosmsg::sample_value(registry, t, 17 + k as u64).unwrap();
             let time = T0 + k as u64 * 1_000_000;
             w.write(&topic, time, time - 500, &rosmsg::encode(registry, t, &value).unwrap()).unwrap();
             expected.push((topic, t.clone(), time, rosmsg::to_json(&value)));
@@ -55,7 +63,8 @@ fn foxglove_decodes_every_message_type_of_a_metrocell_bag() {
             assert_eq!(g["publish_time"].as_str(), Some((time - 500).to_string().as_str()), "{name} {topic}");
             json_close(&g["message"], value, &format!("{name} {topic}")).unwrap_or_else(|e| panic!("Foxglove decoded {topic} differently: {e}\n{}\n{value}", g["message"]));
         }
-        println!("{name}: Foxglove's reader decoded all {} message types equal to what was written", expected.len());
+        assert!(without_fields.len() <= 2, "types without fields: {without_fields:?}");
+        println!("{name}: Foxglove's reader decoded all {} message types with fields equal to what was written (not tried: {without_fields:?})", expected.len());
     }
     let _ = std::fs::remove_dir_all(&tmp);
 }

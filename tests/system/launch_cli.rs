@@ -54,8 +54,11 @@ fn first_strain(topic: &str) -> f64 {
     );
     assert!(out.status.success(), "echo {topic}: {}", String::from_utf8_lossy(&out.stderr));
     let v: serde_json::Value = serde_json::from_slice(out.stdout.split(|b| *b == b'\n').next().unwrap()).unwrap();
-    assert_eq!(v["term_ids"][0], "thermal_scale");
-    v["values"][0].as_f64().unwrap()
+    // the scale strain, by its catalog name `thermal_scale[<axis>].strain`
+    let names = v["parameter_names"].as_array().unwrap();
+    let i = names.iter().position(|n| n.as_str().is_some_and(|n| n.starts_with("thermal_scale[") && n.ends_with("].strain"))).unwrap_or_else(|| panic!("no scale strain in {names:?}"));
+    assert_eq!(v["term_ids"][i], "thermal_scale");
+    v["values"][i].as_f64().unwrap()
 }
 
 #[test]

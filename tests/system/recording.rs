@@ -235,14 +235,20 @@ print(json.dumps(out))
 
 /// `metrocell demo` for a short run: the twin's per-topic counts (from its final log line)
 /// against the bag, topic by topic, and the demo's own verdict.
-fn demo_loses_nothing(name: &str, busy_cores: usize) {
+///
+/// The two demo runs take turns (one lock) and each has its own ROS_DOMAIN_ID: the tests of this
+/// binary run in parallel in one network namespace, and a demo's recorder records every topic it
+/// sees, so otherwise each would record the other's twin (and the idle run would not be idle).
+fn demo_loses_nothing(name: &str, busy_cores: usize, domain: u32) {
+    static ONE_DEMO_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
+    let _turn = ONE_DEMO_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
     require_isolated_network();
     let dir = scratch(name);
     // Busy loops on both cores for the whole run: they stop with the test (ChildGuard).
     let _busy: Vec<ChildGuard> = (0..busy_cores).map(|_| ChildGuard::spawn(Command::new("sh").args(["-c", "while :; do :; done"]))).collect();
     let started = Instant::now();
     let out = ChildGuard::spawn(
-        piped(bin("metrocell")).args(["demo", "--duration", "60", "--speed", "20", "-o"]).arg(&dir).env("METROCELL_SHARE", workspace_root()),
+        piped(bin("metrocell")).args(["demo", "--duration", "60", "--speed", "20", "-o"]).arg(&dir).env("METROCELL_SHARE", workspace_root()).env("ROS_DOMAIN_ID", domain.to_string()),
     )
     .wait_output(Duration::from_secs(240));
     let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
@@ -272,10 +278,10 @@ fn demo_loses_nothing(name: &str, busy_cores: usize) {
 
 #[test]
 fn demo_twin_to_recorder_loses_nothing() {
-    demo_loses_nothing("demo_idle", 0);
+    demo_loses_nothing("demo_idle", 0, 21);
 }
 
 #[test]
 fn demo_twin_to_recorder_loses_nothing_with_both_cores_busy() {
-    demo_loses_nothing("demo_loaded", 2);
+    demo_loses_nothing("demo_loaded", 2, 22);
 }

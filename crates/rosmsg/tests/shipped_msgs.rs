@@ -9,7 +9,7 @@ fn shipped() -> Registry {
     let own = r.add_package_dir("metrocell_msgs", &msgs.join("msg")).unwrap();
     assert_eq!(own, 6);
     let std = r.add_tree(&msgs.join("interfaces")).unwrap();
-    assert_eq!(std, 25);
+    assert_eq!(std, 66);
     r.check().unwrap();
     r
 }

@@ -91,7 +91,7 @@ fn twin_to_tracker_over_dds_equals_replay_and_measures_every_dwell_once() {
     }
     std::thread::sleep(Duration::from_secs(1));
     let (mut live_points, mut live_dwells, mut live_tf) = (BTreeMap::new(), BTreeMap::new(), Vec::new());
-    let mut collect = |points: &mut BTreeMap<i64, MeasuredPoint>, dwells: &mut BTreeMap<i64, TrackerMeasurement>, tf: &mut Vec<TFMessage>| {
+    let collect = |points: &mut BTreeMap<i64, MeasuredPoint>, dwells: &mut BTreeMap<i64, TrackerMeasurement>, tf: &mut Vec<TFMessage>| {
         while let Ok(Some((p, _))) = points_sub.take() {
             assert!(points.insert(p.header.stamp.nanos(), p).is_none(), "a point published twice");
         }

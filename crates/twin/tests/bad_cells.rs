@@ -26,7 +26,7 @@ fn unknown_term_id_lists_the_allowed_ids() {
 
 #[test]
 fn missing_parameter_is_named_with_its_unit() {
-    let msg = error_of(&edited("    params: {alpha: 11.5e-6 1/K}", "    params: {}"));
+    let msg = error_of(&edited("    params: {alpha: 10.2e-6 1/K}", "    params: {}"));
     assert_mentions(&msg, &["terms[0]", "thermal_scale[x]", "missing parameter `alpha`", "1/K"]);
 }
 

@@ -140,8 +140,7 @@ pub fn select(data: &SelectionData, candidates: &[Candidate], options: &Selectio
         }
         hstack(n, &blocks)
     };
-    let (mut current_cv, first_pred) = heldout(&design(&[], None), &b, &data.folds);
-    let before_pred = first_pred;
+    let (mut current_cv, before_pred) = heldout(&design(&[], None), &b, &data.folds);
     let mut current_fit = fit(&design(&[], None), &b);
     while chosen_idx.len() < options.max_terms {
         let remaining: Vec<usize> = (0..candidates.len()).filter(|i| !chosen_idx.contains(i)).collect();

@@ -91,7 +91,8 @@ pub fn d_optimal(candidates: &DMatrix<f64>, rows: usize, restarts: usize, seed: 
         if best.as_ref().is_none_or(|b| ld > b.log_det + 1e-12) {
             let mut sorted = chosen;
             sorted.sort_unstable();
-            let rank = information(candidates, &sorted, 0.0).svd(false, false).rank(1e-9 * (ridge / 1e-9).max(f64::MIN_POSITIVE));
+            // singular values of XᵀX below the ridge are what the ridge alone holds up
+            let rank = information(candidates, &sorted, 0.0).svd(false, false).rank(ridge);
             best = Some(Design { rows: sorted, log_det: ld, rank, exchanges });
         }
     }

@@ -294,8 +294,8 @@ impl State<'_> {
         }
         let decimals = if self.unit_mm == 1.0 { 4 } else { 5 };
         let unchanged = commanded.len() == path.len()
-            && commanded.iter().zip(&path).all(|(c, p)| self.same(c, p, decimals))
-            && (self.absolute || self.same(&self.commanded, &self.programmed, decimals))
+            && commanded.iter().zip(&path).all(|(c, p)| same(c, p, decimals))
+            && (self.absolute || same(&self.commanded, &self.programmed, decimals))
             && (explicit_motion.is_some() || self.controller_motion == Some(motion));
         let before = self.commanded;
         self.programmed = target;
@@ -407,9 +407,6 @@ impl State<'_> {
         self.bisect(pm, cm, p1, c1, tol, depth + 1, out)
     }
 
-    fn same(&self, a: &Vector3<f64>, b: &Vector3<f64>, decimals: usize) -> bool {
-        (0..3).all(|k| format_coordinate(a[k], decimals) == format_coordinate(b[k], decimals))
-    }
 
     /// Axis words moving the controller from commanded `from` to `to`: every axis whose written
     /// value changes (absolute), or whose increment is not zero (incremental).
@@ -430,6 +427,11 @@ impl State<'_> {
         }
         words
     }
+}
+
+/// The two points are written the same at `decimals` places.
+fn same(a: &Vector3<f64>, b: &Vector3<f64>, decimals: usize) -> bool {
+    (0..3).all(|k| format_coordinate(a[k], decimals) == format_coordinate(b[k], decimals))
 }
 
 /// The first line of a compensated move: the original line with its axis numbers replaced (axes

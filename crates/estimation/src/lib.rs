@@ -2,6 +2,12 @@
 //!
 //! Pure functions, no DDS; used by `metrocell calibrate`, the estimator node and `diagnose`.
 //!
+//! * [`records`] — measurement records (a measured point, its covariance, its commanded joints
+//!   and the signals at its time) and the frame they are in.
+//! * [`residuals`] — measured − predicted on the shared forward model (crates/model), whitened
+//!   by each record's covariance, with the model's analytic Jacobian: a solver problem.
+//! * [`fit`] — batch identification of the declared free parameters: registration of the
+//!   instrument frame, bounded robust Levenberg–Marquardt, scaled covariance, identifiability.
 //! * [`uncertainty_budget`] — GUM combination of standard uncertainties and the ISO/TS 15530-3
 //!   expanded uncertainty U = k·√(u_cal² + u_p² + u_b² + u_w²) (seed 001, eq. 3.4), with each
 //!   component's share.
@@ -13,5 +19,12 @@
 //! Units: SI (m) in and out; reports convert to mm and µm.
 
 pub mod design_of_experiments;
+pub mod fit;
 pub mod improvement;
+pub mod records;
+pub mod residuals;
 pub mod uncertainty_budget;
+
+pub use fit::{fit, rms, start_vector, Fit, FitError, FitOptions, ParameterEstimate};
+pub use records::{MeasurementRecord, RecordFrame, RecordSet, Rejected};
+pub use residuals::PointResiduals;

@@ -25,6 +25,16 @@ impl InstrumentPose {
     pub fn from_euler_xyz(translation: Vector3<f64>, e: [f64; 3]) -> Self {
         Self { rotation: euler_xyz(e[0], e[1], e[2]), translation, euler_xyz: e }
     }
+    /// The pose of a rotation matrix (proper, orthonormal) and translation, its Euler XYZ angles
+    /// recovered from R = Rx(α)·Ry(β)·Rz(δ): β = asin R₀₂, α = atan2(−R₁₂, R₂₂),
+    /// δ = atan2(−R₀₁, R₀₀) (β in [−90°, 90°]).
+    pub fn from_rotation(translation: Vector3<f64>, rotation: &Matrix3<f64>) -> Self {
+        let beta = rotation[(0, 2)].clamp(-1.0, 1.0).asin();
+        let alpha = (-rotation[(1, 2)]).atan2(rotation[(2, 2)]);
+        let delta = (-rotation[(0, 1)]).atan2(rotation[(0, 0)]);
+        Self::from_euler_xyz(translation, [alpha, beta, delta])
+    }
+
     /// Workpiece-frame point → instrument frame: `R_LTᵀ·(p − T_LT)` (thesis eq. 3.5, outer part).
     pub fn to_instrument(&self, p: &Vector3<f64>) -> Vector3<f64> {
         self.rotation.transpose() * (p - self.translation)
@@ -43,3 +53,19 @@ impl InstrumentPose {
     }
 }
 
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn euler_angles_round_trip_through_the_rotation() {
+        for e in [[0.1, -0.4, 2.5], [-3.0, 1.2, -0.3], [0.0, 0.0, 0.0]] {
+            let p = InstrumentPose::from_euler_xyz(Vector3::new(1.0, 2.0, 3.0), e);
+            let q = InstrumentPose::from_rotation(p.translation, &p.rotation);
+            assert!((q.rotation - p.rotation).abs().max() < 1e-14, "{e:?} -> {:?}", q.euler_xyz);
+            for k in 0..3 {
+                assert!((q.euler_xyz[k] - e[k]).abs() < 1e-12, "{e:?} -> {:?}", q.euler_xyz);
+            }
+        }
+    }
+}

@@ -1,0 +1,71 @@
+//! Measurement records: what one measured point says, with everything the model needs to
+//! predict it. Built from recordings by [`crate::records_from_bag`] (bags recorded by the nodes,
+//! simulated by `metrocell sim`, or imported with `bag import`), or directly by tests.
+//!
+//! Frame convention (stated once): `measured` is in the frame of the [`RecordSet`]. When that is
+//! the instrument's own frame (a tracker frame), the instrument pose is a nuisance parameter of
+//! the fit (`tracker_pose.*`, the workpiece → instrument transform of crates/model
+//! `instrument_pose`). When the points are already in the machine (workpiece) frame, the pose is
+//! the identity and fixed.
+
+use metrocell_physics::Signals;
+use nalgebra::{Matrix3, Vector3};
+
+/// One measured point.
+#[derive(Debug, Clone)]
+pub struct MeasurementRecord {
+    /// Time of the measurement, s (the bag's clock: seconds since the Unix epoch for recordings).
+    pub time: f64,
+    pub point_id: String,
+    /// The instrument or stream it came from (`tracker`, an import's `source`, …).
+    pub channel: String,
+    /// Commanded joint vector of the machine family at `time` (cartesian and delta: x, y, z in m;
+    /// five-axis: x y z b c; arm: its joints).
+    pub q: Vec<f64>,
+    /// Measured point, m, in the record set's frame.
+    pub measured: Vector3<f64>,
+    /// Its covariance, m², same frame. Positive definite.
+    pub covariance: Matrix3<f64>,
+    /// Signals at `time`: axis positions, velocities and approach directions, temperatures and
+    /// their histories, station air, time since the instrument was powered on, load.
+    /// `point` and `tracker_range` are set by the model when it predicts.
+    pub signals: Signals,
+}
+
+/// The frame the records' points are in.
+#[derive(Debug, Clone, PartialEq)]
+pub enum RecordFrame {
+    /// The machine's (workpiece) frame: instrument pose = identity, fixed.
+    Machine,
+    /// An instrument frame (`header.frame_id`): the pose is estimated with the model.
+    Instrument(String),
+}
+
+/// A measurement dropped while building records, and why (shown to the user, never silent).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Rejected {
+    /// Where it was: topic and index, or file and line.
+    pub at: String,
+    pub point_id: String,
+    pub reason: String,
+}
+
+/// Records of one recording (or several concatenated), in one frame.
+#[derive(Debug, Clone)]
+pub struct RecordSet {
+    pub frame: RecordFrame,
+    pub records: Vec<MeasurementRecord>,
+    pub rejected: Vec<Rejected>,
+    /// Topics (or columns) each signal came from, for reports and error messages.
+    pub sources: Vec<(String, String)>,
+}
+
+impl RecordSet {
+    /// Commanded tool points are not stored: the model computes them from `q`.
+    pub fn len(&self) -> usize {
+        self.records.len()
+    }
+    pub fn is_empty(&self) -> bool {
+        self.records.is_empty()
+    }
+}

@@ -8,6 +8,9 @@
 //!   by each record's covariance, with the model's analytic Jacobian: a solver problem.
 //! * [`fit`] — batch identification of the declared free parameters: registration of the
 //!   instrument frame, bounded robust Levenberg–Marquardt, scaled covariance, identifiability.
+//! * [`recursive`] — online estimation: an extended Kalman filter with random-walk drift,
+//!   outlier gating and a moving normalised-innovation χ² test that flags when the model stops
+//!   explaining the data.
 //! * [`uncertainty_budget`] — GUM combination of standard uncertainties and the ISO/TS 15530-3
 //!   expanded uncertainty U = k·√(u_cal² + u_p² + u_b² + u_w²) (seed 001, eq. 3.4), with each
 //!   component's share.
@@ -22,9 +25,11 @@ pub mod design_of_experiments;
 pub mod fit;
 pub mod improvement;
 pub mod records;
+pub mod recursive;
 pub mod residuals;
 pub mod uncertainty_budget;
 
 pub use fit::{fit, rms, start_vector, Fit, FitError, FitOptions, ParameterEstimate};
 pub use records::{MeasurementRecord, RecordFrame, RecordSet, Rejected};
 pub use residuals::PointResiduals;
+pub use recursive::{RecursiveEstimator, RecursiveOptions, Update};

@@ -530,10 +530,20 @@ impl<'a> ForwardModel<'a> {
         self.term(pose).term.evaluate_into(self.part(pose, p), s, &mut xv, work.pose.columns_mut(0, ps.len))?;
         let x = Vector3::new(xv[0], xv[1], xv[2]);
         let (rho, az, el) = to_spherical(&x);
-        if !(rho > 0.0) {
-            return Err(PhysicsError::InvalidInput { what: "forward model, tracker reading".into(), reason: "the target is at the tracker origin (range 0): no direction".into() });
-        }
         s.tracker_range = Some(rho);
+        if rho == 0.0 && self.warmup.is_none() && self.refraction.is_none() {
+            // points given in the machine frame (pose = identity) can sit at the origin: with no
+            // range terms the reported point is x itself, whose Jacobian needs no direction
+            let rt: Matrix3<f64> = -work.pose.fixed_view::<3, 3>(0, 0).into_owned();
+            work.point.gemm(1.0, &rt, &work.tool, 0.0);
+            work.point.columns_mut(ps.start, ps.len).copy_from(&work.pose.columns(0, ps.len));
+            out.rows_mut(0, 3).copy_from(&work.point);
+            out.row_mut(3).fill(0.0);
+            return Ok(TrackerPrediction { point: x, range: rho, azimuth: az, elevation: el, warmup: 0.0, refraction: 0.0 });
+        }
+        if !(rho > 0.0) {
+            return Err(PhysicsError::InvalidInput { what: "forward model, tracker reading".into(), reason: "the target is at the tracker origin (range 0): no direction for the range terms".into() });
+        }
         // ∂x/∂P = Rᵀ = −∂x/∂T
         let rt: Matrix3<f64> = -work.pose.fixed_view::<3, 3>(0, 0).into_owned();
         work.point.gemm(1.0, &rt, &work.tool, 0.0);

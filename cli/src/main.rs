@@ -41,7 +41,7 @@ enum Command {
     /// Start the nodes of a ROS 2 YAML launch file, each as its own process
     Launch(launch_command::LaunchArgs),
     /// Simulate a cell into a bag, faster than real time (the digital twin)
-    Sim(metrocell_sim::SimArgs),
+    Sim(metrocell_simulation::SimArgs),
     /// Inspect and publish on topics (list, echo, pub, hz), like `ros2 topic`
     #[command(subcommand)]
     Topic(topic::TopicCommand),
@@ -55,7 +55,7 @@ fn main() {
         Command::Demo(args) => demo::run(args),
         Command::Detect(args) => vision::detect::run(args),
         Command::Launch(args) => launch_command::run(args),
-        Command::Sim(args) => metrocell_sim::run_sim_command(args),
+        Command::Sim(args) => metrocell_simulation::run_sim_command(args),
         Command::Topic(command) => topic::run(command),
     };
     std::process::exit(code);

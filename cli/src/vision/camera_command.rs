@@ -4,7 +4,7 @@
 
 use std::path::PathBuf;
 
-use metrocell_camera::{calibrate, CalibrationFlags, CameraInfo, LensModel, View};
+use metrocell_camera_model::{calibrate, CalibrationFlags, CameraInfo, LensModel, View};
 use metrocell_camera_node::file_list::list_image_files;
 use metrocell_vision::checkerboard::detect_checkerboard;
 

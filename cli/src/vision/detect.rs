@@ -57,7 +57,7 @@ pub fn run(args: DetectArgs) -> i32 {
     };
     let camera = match &args.camera_info {
         None => None,
-        Some(p) => match metrocell_camera::CameraInfo::load(p).and_then(|c| c.to_model()) {
+        Some(p) => match metrocell_camera_model::CameraInfo::load(p).and_then(|c| c.to_model()) {
             Ok(c) => Some(c),
             Err(e) => {
                 eprintln!("metrocell detect: --camera-info: {e}");

@@ -3,7 +3,7 @@
 
 mod common;
 use common::*;
-use metrocell_camera::{calibrate, CalibrationFlags, LensModel, RejectionReason, View};
+use metrocell_camera_model::{calibrate, CalibrationFlags, LensModel, RejectionReason, View};
 
 fn z_scores(model: LensModel, seeds: &[u64], sigma: f64) -> Vec<f64> {
     let truth = if model == LensModel::Fisheye {
@@ -134,7 +134,7 @@ fn bad_views_are_rejected_with_reasons() {
     assert_eq!(cal.rejected.len(), 3);
     assert!(matches!(
         cal.rejected[0],
-        metrocell_camera::RejectedView {
+        metrocell_camera_model::RejectedView {
             index: 3,
             reason: RejectionReason::OutlierRms { .. }
         }

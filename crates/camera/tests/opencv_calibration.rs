@@ -2,7 +2,7 @@
 
 mod common;
 use common::*;
-use metrocell_camera::{calibrate, CalibrationFlags, LensModel};
+use metrocell_camera_model::{calibrate, CalibrationFlags, LensModel};
 use serde_json::json;
 
 fn compare(model: LensModel, seed: u64, sigma: f64) {

@@ -2,7 +2,7 @@
 
 mod common;
 use common::*;
-use metrocell_camera::{
+use metrocell_camera_model::{
     estimate_planar_pose, estimate_pose, ippe, undistort_to_normalized, CameraModel, Pose,
     UndistortCriteria,
 };

@@ -2,7 +2,7 @@
 
 mod common;
 use common::*;
-use metrocell_camera::{
+use metrocell_camera_model::{
     undistort_points, undistort_rectify_map, CameraModel, Pose, UndistortCriteria,
 };
 use nalgebra::{Matrix3, Rotation3, Vector3};

@@ -1,7 +1,7 @@
 //! Pose estimation on synthetic data: exact recovery without noise, and the propagated 6×6
 //! covariance against the empirical covariance of a Monte Carlo over corner noise.
 
-use metrocell_camera::{estimate_planar_pose, estimate_pose, CameraModel, Distortion, Pose};
+use metrocell_camera_model::{estimate_planar_pose, estimate_pose, CameraModel, Distortion, Pose};
 use nalgebra::{Matrix6, Vector3, Vector6};
 use rand::Rng;
 use rand::SeedableRng;
@@ -150,7 +150,7 @@ fn covariance_matches_monte_carlo() {
 
 #[test]
 fn bad_pose_input_is_an_error_naming_the_problem() {
-    use metrocell_camera::CameraError;
+    use metrocell_camera_model::CameraError;
     let cam = camera();
     let obj = marker(0.02);
     let truth = Pose::from_rvec_tvec([0.1, 0.2, 0.0], [0.0, 0.0, 0.3]);

@@ -17,7 +17,7 @@
 use metrocell_model::{ForwardModel, ParameterSetup};
 use metrocell_physics::{PhysicsError, TermId};
 use metrocell_solver::{solve, Identifiability, Loss, NullSpace, Options, Prior, Solution, SolverError};
-use metrocell_tracker::registration::{register, Correspondence};
+use metrocell_laser_tracker::registration::{register, Correspondence};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
 use crate::records::{RecordFrame, RecordSet};

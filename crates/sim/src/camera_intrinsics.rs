@@ -7,7 +7,7 @@
 //! the image centre, no distortion (`plumb_bob` with zero coefficients). Pixel convention is
 //! OpenCV's (centre of the top-left pixel at (0, 0)), so the centre is ((w−1)/2, (h−1)/2).
 
-use metrocell_camera::{CameraModel, Distortion};
+use metrocell_camera_model::{CameraModel, Distortion};
 
 /// The simulated camera: its lens (pinhole, distortion) and the frame id of its messages.
 #[derive(Debug, Clone, PartialEq)]

@@ -124,7 +124,7 @@ pub fn probe_hit(s: &ProbeHitSample, stamp: Time, tool_offset: &Vector3<f64>) ->
 /// `CameraInfo` of the simulated camera: its lens as camera_info (K, R = I, P = [K | 0], the
 /// lens's distortion model), no binning, full ROI.
 pub fn camera_info(c: &CameraIntrinsics, stamp: Time) -> CameraInfo {
-    CameraInfo { header: header(stamp, &c.frame_id), ..metrocell_camera::CameraInfo::from_model(&c.frame_id, &c.lens).to_msg() }
+    CameraInfo { header: header(stamp, &c.frame_id), ..metrocell_camera_model::CameraInfo::from_model(&c.frame_id, &c.lens).to_msg() }
 }
 
 /// A mono8 `Image` (row-major, step = width, `is_bigendian` 0) in the camera's optical frame.

@@ -8,8 +8,8 @@ use metrocell_bag::{BagReader, MessageFilter};
 use metrocell_msgs::msg::TrackerMeasurement;
 use metrocell_msgs::rosgraph_msgs::msg::Clock;
 use metrocell_msgs::sensor_msgs::msg::{JointState, Temperature};
-use metrocell_sim::sim_time::{parse_start_time, DEFAULT_START_TIME};
-use metrocell_sim::{write_bag, BagOptions, BagSummary};
+use metrocell_simulation::sim_time::{parse_start_time, DEFAULT_START_TIME};
+use metrocell_simulation::{write_bag, BagOptions, BagSummary};
 use metrocell_twin::Cell;
 
 const DURATION: f64 = 60.0;

@@ -8,8 +8,8 @@ use std::path::Path;
 
 use metrocell_bag::{BagReader, MessageFilter};
 use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image};
-use metrocell_sim::sim_time::{parse_start_time, stamp_ns, DEFAULT_START_TIME};
-use metrocell_sim::{write_bag, BagOptions, CameraIntrinsics, FrameRendering, MessageConverter};
+use metrocell_simulation::sim_time::{parse_start_time, stamp_ns, DEFAULT_START_TIME};
+use metrocell_simulation::{write_bag, BagOptions, CameraIntrinsics, FrameRendering, MessageConverter};
 use metrocell_twin::{Cell, Sample, Simulation};
 use metrocell_vision::aruco::{detect_markers, DetectorParams, Dictionary};
 use metrocell_vision::RenderSettings;
@@ -114,7 +114,7 @@ fn a_fisheye_lens_in_the_cell_is_rendered_and_published() {
     let msgs = reader.read_all(&MessageFilter { topics: Some(vec!["/camera/image_raw".into(), "/camera/camera_info".into()]), ..MessageFilter::default() }).unwrap();
     let info: CameraInfo = decode(&msgs.iter().find(|m| m.topic == "/camera/camera_info").unwrap().data);
     assert_eq!((info.distortion_model.as_str(), info.d.as_slice()), ("equidistant", &[0.05, -0.01, 0.002, -0.0004][..]));
-    assert_eq!(metrocell_camera::camera_model_from_msg(&info).unwrap(), renderer.camera, "the published calibration is the rendering lens");
+    assert_eq!(metrocell_camera_model::camera_model_from_msg(&info).unwrap(), renderer.camera, "the published calibration is the rendering lens");
 
     let sim = Simulation::new(cell(), DURATION, SEED).unwrap();
     let request = sim.samples().find_map(|s| if let Sample::CameraFrameRequest(r) = s { Some(r) } else { None }).unwrap();

@@ -2,8 +2,8 @@
 //! compression parse, and bad values are rejected with the offending text.
 
 use clap::{CommandFactory, Parser};
-use metrocell_sim::cli::Compression;
-use metrocell_sim::SimArgs;
+use metrocell_simulation::cli::Compression;
+use metrocell_simulation::SimArgs;
 
 #[derive(Parser)]
 #[command(name = "metrocell-sim-test")]
@@ -34,7 +34,7 @@ fn arguments_parse() {
 #[test]
 fn a_missing_cell_file_fails_with_its_name() {
     let c = Cli::try_parse_from(["x", "--cell", "/nonexistent/cell.yaml", "--duration", "1s", "-o", "/tmp/never", "--quiet"]).unwrap();
-    let e = metrocell_sim::cli::run_sim(&c.sim).err().expect("a missing cell file is an error").to_string();
+    let e = metrocell_simulation::cli::run_sim(&c.sim).err().expect("a missing cell file is an error").to_string();
     assert!(e.contains("/nonexistent/cell.yaml"), "the error does not name the file: {e}");
-    assert_eq!(metrocell_sim::run_sim_command(c.sim), 1);
+    assert_eq!(metrocell_simulation::run_sim_command(c.sim), 1);
 }

@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use metrocell_bag::{BagReader, MessageFilter};
 use metrocell_msgs::msg::TrackerMeasurement;
 use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, JointState};
-use metrocell_sim::{write_bag, BagOptions};
+use metrocell_simulation::{write_bag, BagOptions};
 use metrocell_twin::Cell;
 
 const DURATION: f64 = 20.0;

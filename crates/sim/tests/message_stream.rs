@@ -3,8 +3,8 @@
 
 use std::path::Path;
 
-use metrocell_sim::sim_time::{parse_start_time, DEFAULT_START_TIME};
-use metrocell_sim::{CameraIntrinsics, MessageConverter, MessageStream, TopicRole, TypedMessage};
+use metrocell_simulation::sim_time::{parse_start_time, DEFAULT_START_TIME};
+use metrocell_simulation::{CameraIntrinsics, MessageConverter, MessageStream, TopicRole, TypedMessage};
 use metrocell_twin::{Cell, Sample, Simulation};
 
 fn demo() -> Cell {

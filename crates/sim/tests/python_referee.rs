@@ -6,8 +6,8 @@
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-use metrocell_sim::sim_time::{parse_start_time, DEFAULT_START_TIME};
-use metrocell_sim::{write_bag, BagOptions};
+use metrocell_simulation::sim_time::{parse_start_time, DEFAULT_START_TIME};
+use metrocell_simulation::{write_bag, BagOptions};
 use metrocell_twin::Cell;
 
 fn python() -> PathBuf {

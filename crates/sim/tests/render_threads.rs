@@ -4,8 +4,8 @@
 
 use std::path::{Path, PathBuf};
 
-use metrocell_sim::sim_time::{parse_start_time, DEFAULT_START_TIME};
-use metrocell_sim::{write_bag, BagOptions, CameraIntrinsics, FrameRendering, MessageConverter, MessageStream};
+use metrocell_simulation::sim_time::{parse_start_time, DEFAULT_START_TIME};
+use metrocell_simulation::{write_bag, BagOptions, CameraIntrinsics, FrameRendering, MessageConverter, MessageStream};
 use metrocell_twin::{Cell, Simulation};
 
 const DURATION: f64 = 60.0;

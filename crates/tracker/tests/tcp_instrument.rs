@@ -3,16 +3,16 @@
 //! buffer resent after a reconnect, and a refused connection. Everything is reported and
 //! survived; each reading is accepted exactly once.
 //!
-//! Run: `cargo test -p metrocell-tracker --test tcp_instrument` (localhost only, no DDS).
+//! Run: `cargo test -p metrocell-laser-tracker --test tcp_instrument` (localhost only, no DDS).
 
 use std::io::Write;
 use std::net::TcpListener;
 use std::time::{Duration, Instant};
 
 use metrocell_compensation::SphericalNoise;
-use metrocell_tracker::line_protocol::LineError;
-use metrocell_tracker::reading::{AirSource, EdlenForm, ReadingError, ReadingProcessor};
-use metrocell_tracker::tcp_client::{DriverEvent, TcpClientConfig, TcpTrackerClient};
+use metrocell_laser_tracker::line_protocol::LineError;
+use metrocell_laser_tracker::reading::{AirSource, EdlenForm, ReadingError, ReadingProcessor};
+use metrocell_laser_tracker::tcp_client::{DriverEvent, TcpClientConfig, TcpTrackerClient};
 
 fn line(t: u32) -> String {
     format!("{t}.0,nest,2.{t:06},0.5,0.1,20.0,101325,0.45\n")

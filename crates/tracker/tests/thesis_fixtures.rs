@@ -1,12 +1,12 @@
 //! Thesis (seed 001) fixtures through this crate's processing, to their stated digits.
 //!
-//! Run: `cargo test -p metrocell-tracker --test thesis_fixtures`
+//! Run: `cargo test -p metrocell-laser-tracker --test thesis_fixtures`
 
 use metrocell_compensation::{AirData, SphericalNoise};
 use metrocell_physics::instrument::tracker_uncertainty::TrackerRangeBudget;
 use metrocell_physics::instrument::tracker_warmup::warmup_drift;
-use metrocell_tracker::reading::{AirSource, EdlenForm, ReadingProcessor};
-use metrocell_tracker::warmup::{fit_warmup, WarmupSample};
+use metrocell_laser_tracker::reading::{AirSource, EdlenForm, ReadingProcessor};
+use metrocell_laser_tracker::warmup::{fit_warmup, WarmupSample};
 
 #[test]
 fn refractive_index_at_99_kpa_20_c_50_percent() {

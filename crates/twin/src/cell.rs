@@ -6,7 +6,7 @@
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::Path;
 
-use metrocell_camera::{CameraModel, Distortion};
+use metrocell_camera_model::{CameraModel, Distortion};
 use metrocell_kinematics::delta::DeltaGeometry;
 use metrocell_model::{ForwardModel, KinematicTruth};
 use metrocell_physics::config::ConfigValue;

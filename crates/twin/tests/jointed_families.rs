@@ -117,7 +117,7 @@ fn camera_intrinsics_are_read_and_checked() {
     let cell = Cell::from_path(common::cell_path(f)).unwrap();
     let lens = cell.camera.as_ref().unwrap().intrinsics.clone().unwrap();
     assert_eq!((lens.width, lens.height, lens.fx, lens.cy), (1280, 1024, 1600.0, 511.5));
-    assert_eq!(lens.distortion, metrocell_camera::Distortion::BrownConrady([-0.08, 0.02, 0.0, 0.0, 0.0]));
+    assert_eq!(lens.distortion, metrocell_camera_model::Distortion::BrownConrady([-0.08, 0.02, 0.0, 0.0, 0.0]));
     let msg = error_of(&common::edited_example(f, "cx: 639.5 px", "cx: 1639.5 px"));
     assert_mentions(&msg, &["sensors.camera.intrinsics.cx", "1639.5", "[0, 1280] px"]);
     let msg = error_of(&common::edited_example(f, "fx: 1600 px", "fx: 1600 mm"));
@@ -127,7 +127,7 @@ fn camera_intrinsics_are_read_and_checked() {
     // a fisheye lens: four coefficients
     let fisheye = common::edited_example(f, "distortion: [-0.08, 0.02, 0, 0, 0]", "distortion: [0.03, -0.01, 0.002]").replacen("model: plumb_bob", "model: equidistant", 1);
     let cell = Cell::from_yaml_str(&fisheye, "fisheye.yaml").unwrap();
-    assert_eq!(cell.camera.unwrap().intrinsics.unwrap().distortion, metrocell_camera::Distortion::Fisheye([0.03, -0.01, 0.002, 0.0]));
+    assert_eq!(cell.camera.unwrap().intrinsics.unwrap().distortion, metrocell_camera_model::Distortion::Fisheye([0.03, -0.01, 0.002, 0.0]));
     let msg = error_of(&fisheye.replace("[0.03, -0.01, 0.002]", "[0.03, -0.01, 0.002, 0, 0]"));
     assert_mentions(&msg, &["sensors.camera.intrinsics.distortion", "at most 4", "k1, k2, k3, k4"]);
     let msg = error_of(&fisheye.replace("model: equidistant", "model: rational_polynomial"));

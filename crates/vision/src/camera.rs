@@ -1,16 +1,16 @@
-//! The camera model of this crate is `metrocell_camera::CameraModel` (pinhole K + Brown–Conrady or
+//! The camera model of this crate is `metrocell_camera_model::CameraModel` (pinhole K + Brown–Conrady or
 //! Kannala–Brandt fisheye distortion, OpenCV formulas); there is no second copy here. This module
 //! only adapts it to the nalgebra isometry/point types the renderer and detectors use.
 //!
 //! Frames: camera x right, y down, z forward (OpenCV). An `Isometry3` pose maps target → camera:
 //! X_cam = R·X_target + t.
 
-pub use metrocell_camera::{CameraModel, Distortion};
+pub use metrocell_camera_model::{CameraModel, Distortion};
 use nalgebra::{Isometry3, Point2, Point3};
 
 /// The camera crate's pose type for a nalgebra isometry (same meaning: target → camera).
-pub fn pose_from_isometry(iso: &Isometry3<f64>) -> metrocell_camera::Pose {
-    metrocell_camera::Pose {
+pub fn pose_from_isometry(iso: &Isometry3<f64>) -> metrocell_camera_model::Pose {
+    metrocell_camera_model::Pose {
         rotation: iso.rotation.to_rotation_matrix(),
         translation: iso.translation.vector,
     }

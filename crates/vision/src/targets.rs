@@ -224,7 +224,7 @@ fn board_pose(
     } else {
         (vars.iter().sum::<f64>() / vars.len() as f64).sqrt()
     };
-    let est = metrocell_camera::estimate_planar_pose(pi.camera, &object, &image, sigma).ok()?;
+    let est = metrocell_camera_model::estimate_planar_pose(pi.camera, &object, &image, sigma).ok()?;
     let ros = est.to_ros();
     Some(TargetPose {
         position: ros.position,

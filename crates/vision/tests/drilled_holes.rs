@@ -5,7 +5,7 @@
 //! distortion-free leaves a systematic radial bias far above that. A burr or dirt blob next to
 //! every hole (and a neighbour-like blob reaching into every third window) leaves them there.
 
-use metrocell_camera::{estimate_planar_pose, CameraModel, Distortion};
+use metrocell_camera_model::{estimate_planar_pose, CameraModel, Distortion};
 use metrocell_vision::checkerboard::detect_checkerboard;
 use metrocell_vision::holes::{measure_holes, HoleSearch};
 use metrocell_vision::{render_view, PlanarTarget, RenderSettings, TargetItem};

@@ -1,9 +1,9 @@
 //! Frames from a V4L2 capture device (`device:=/dev/videoN`), published with the driver's
-//! capture stamp. Capture and conversion live in `metrocell_camera::v4l2`.
+//! capture stamp. Capture and conversion live in `metrocell_camera_model::v4l2`.
 
 use std::time::Duration;
 
-use metrocell_camera::v4l2::{check_frame_size, requested_size, CaptureDevice, Dequeued, PixelFormat, StampOrigin};
+use metrocell_camera_model::v4l2::{check_frame_size, requested_size, CaptureDevice, Dequeued, PixelFormat, StampOrigin};
 use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image};
 use metrocell_msgs::std_msgs::msg::Header;

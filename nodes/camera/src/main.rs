@@ -22,7 +22,7 @@ mod device;
 
 use std::time::{Duration, Instant};
 
-use metrocell_camera::CameraInfo as CameraInfoYaml;
+use metrocell_camera_model::CameraInfo as CameraInfoYaml;
 use metrocell_camera_node::capture_stamp::StampSource;
 use metrocell_camera_node::parameters::declarations;
 use metrocell_camera_node::{file_list, image_file};

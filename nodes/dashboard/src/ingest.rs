@@ -8,7 +8,7 @@ use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
 use metrocell_bagtools::SourcedMessage;
-use metrocell_dashboard::DashboardState;
+use metrocell_dashboard_state::DashboardState;
 use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
 use metrocell_msgs::msg::{ErrorModel, MeasuredPoint, TrackerMeasurement};
 use metrocell_msgs::rosgraph_msgs::msg::Clock;

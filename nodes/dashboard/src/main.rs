@@ -21,8 +21,8 @@ mod web;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use metrocell_dashboard::alerts::to_statuses;
-use metrocell_dashboard::{DashboardState, Level};
+use metrocell_dashboard_state::alerts::to_statuses;
+use metrocell_dashboard_state::{DashboardState, Level};
 use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
 use metrocell_msgs::std_msgs::msg::Header;

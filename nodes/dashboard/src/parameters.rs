@@ -1,6 +1,6 @@
 //! The node's parameters.
 
-use metrocell_dashboard::{AlertThresholds, StateConfig};
+use metrocell_dashboard_state::{AlertThresholds, StateConfig};
 use metrocell_node::{ParamDecl, Parameters};
 
 pub fn declarations() -> Vec<ParamDecl> {

@@ -12,7 +12,7 @@ use axum::http::header;
 use axum::response::{Html, IntoResponse, Response};
 use axum::routing::get;
 use axum::Router;
-use metrocell_dashboard::DashboardState;
+use metrocell_dashboard_state::DashboardState;
 use tokio::sync::watch;
 
 const PAGE: &str = include_str!("../assets/dashboard.html");

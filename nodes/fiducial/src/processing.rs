@@ -3,7 +3,7 @@
 //! an Image becomes a FiducialDetectionArray (header = the image's: its stamp and frame_id) and
 //! one PoseWithCovarianceStamped per target with a pose.
 
-use metrocell_camera::CameraModel;
+use metrocell_camera_model::CameraModel;
 use metrocell_msgs::geometry_msgs::msg::PoseWithCovarianceStamped;
 use metrocell_msgs::msg::FiducialDetectionArray;
 use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image};
@@ -64,8 +64,8 @@ impl FiducialProcessor {
     }
 
     /// Use this camera for poses from now on; a bad message keeps the previous camera.
-    pub fn camera_info(&mut self, info: &CameraInfo) -> Result<(), metrocell_camera::CameraError> {
-        self.camera = Some(metrocell_camera::camera_model_from_msg(info)?);
+    pub fn camera_info(&mut self, info: &CameraInfo) -> Result<(), metrocell_camera_model::CameraError> {
+        self.camera = Some(metrocell_camera_model::camera_model_from_msg(info)?);
         Ok(())
     }
 

@@ -67,7 +67,7 @@ fn detects_markers_with_pose_and_survives_bad_frames() {
         step: 640,
         data: view.image.as_raw().clone(),
     };
-    let info = CameraInfo { header: header(0), ..metrocell_camera::CameraInfo::from_model("cam", &cam).to_msg() };
+    let info = CameraInfo { header: header(0), ..metrocell_camera_model::CameraInfo::from_model("cam", &cam).to_msg() };
     // Bad frames first, interleaved with good ones until the node answers; the answer must be for a
     // good frame, proving the node kept running after the bad ones.
     let deadline = Instant::now() + Duration::from_secs(30);

@@ -42,7 +42,7 @@ fn camera() -> CameraModel {
 
 /// The calibration of the camera the frames are rendered with.
 fn camera_info() -> CameraInfo {
-    CameraInfo { header: header(T0), ..metrocell_camera::CameraInfo::from_model("cam", &camera()).to_msg() }
+    CameraInfo { header: header(T0), ..metrocell_camera_model::CameraInfo::from_model("cam", &camera()).to_msg() }
 }
 
 fn frames() -> Vec<Image> {

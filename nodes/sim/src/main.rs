@@ -1,5 +1,5 @@
 //! `metrocell-sim`: the digital twin's sensor streams published live over DDS, at real time ×
-//! `speed`, on the topics of `metrocell_sim::topic_map` (the same bytes `metrocell sim` writes
+//! `speed`, on the topics of `metrocell_simulation::topic_map` (the same bytes `metrocell sim` writes
 //! into a bag). `/clock` is published `clock_rate` times per wall-clock second so other nodes
 //! can run with `use_sim_time:=true`.
 //!

@@ -1,9 +1,9 @@
 //! Parameters of `metrocell-sim` and their checked values.
 
 use metrocell_node::{MetrocellNode, ParamDecl};
-use metrocell_sim::duration_text::parse_duration;
-use metrocell_sim::sim_time::{check_span, parse_start_time, DEFAULT_START_TIME};
-use metrocell_sim::{Pacer, SimError};
+use metrocell_simulation::duration_text::parse_duration;
+use metrocell_simulation::sim_time::{check_span, parse_start_time, DEFAULT_START_TIME};
+use metrocell_simulation::{Pacer, SimError};
 
 pub fn declarations() -> Vec<ParamDecl> {
     vec![

@@ -5,7 +5,7 @@ use std::time::{Duration, Instant};
 
 use metrocell_msgs::RosMessage;
 use metrocell_node::{qos, Diagnostics, MetrocellNode, QosProfile, RawPublisher};
-use metrocell_sim::{CameraIntrinsics, FrameRendering, MessageConverter, MessageStream, QosKind};
+use metrocell_simulation::{CameraIntrinsics, FrameRendering, MessageConverter, MessageStream, QosKind};
 use metrocell_twin::{Cell, Simulation};
 use ros2_client::qos::History;
 
@@ -132,7 +132,7 @@ impl LiveSim {
             // Each repetition continues simulated time where the previous one ended.
             let offset = run as f64 * s.duration;
             let mut converter = self.converter.clone();
-            converter.start_ns = metrocell_sim::sim_time::stamp_ns(s.start_ns, offset);
+            converter.start_ns = metrocell_simulation::sim_time::stamp_ns(s.start_ns, offset);
             let sim = Simulation::new(Cell::from_path(&s.cell)?, s.duration, s.seed)?;
             let mut stream = MessageStream::new(&sim, &converter, None);
             for m in stream.by_ref() {
@@ -165,9 +165,9 @@ impl LiveSim {
 
     /// Publish /clock = start + t, never going backwards.
     fn publish_clock(&mut self, start_ns: u64, t: f64) {
-        let ns = metrocell_sim::sim_time::stamp_ns(start_ns, t).max(self.last_clock_ns);
+        let ns = metrocell_simulation::sim_time::stamp_ns(start_ns, t).max(self.last_clock_ns);
         self.last_clock_ns = ns;
-        let clock = metrocell_sim::TypedMessage::Clock(metrocell_sim::convert::clock(metrocell_sim::sim_time::ros_time(ns)));
+        let clock = metrocell_simulation::TypedMessage::Clock(metrocell_simulation::convert::clock(metrocell_simulation::sim_time::ros_time(ns)));
         if let Ok(bytes) = clock.encode() {
             let id = self.converter.topics.clock;
             match self.publishers[id].publish(&bytes) {

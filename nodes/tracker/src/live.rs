@@ -8,7 +8,7 @@ use metrocell_msgs::sensor_msgs::msg::{FluidPressure, JointState, RelativeHumidi
 use metrocell_msgs::std_msgs::msg::String as RosString;
 use metrocell_msgs::tf2_msgs::msg::TFMessage;
 use metrocell_node::{qos, MetrocellNode};
-use metrocell_tracker::tcp_client::{DriverEvent, TcpClientConfig, TcpTrackerClient};
+use metrocell_laser_tracker::tcp_client::{DriverEvent, TcpClientConfig, TcpTrackerClient};
 use metrocell_tracker_node::messages;
 use metrocell_tracker_node::parameters::TrackerConfig;
 use metrocell_tracker_node::tracker_state::{Output, TrackerState};

@@ -5,9 +5,9 @@ use metrocell_msgs::geometry_msgs::msg::{Point, Pose, PoseWithCovariance, PoseWi
 use metrocell_msgs::msg::{ErrorModel, MeasuredPoint, TrackerMeasurement};
 use metrocell_msgs::std_msgs::msg::Header;
 use metrocell_msgs::tf2_msgs::msg::TFMessage;
-use metrocell_tracker::dwell::DwellAverage;
-use metrocell_tracker::registration::Registration;
-use metrocell_tracker::warmup::WarmupFit;
+use metrocell_laser_tracker::dwell::DwellAverage;
+use metrocell_laser_tracker::registration::Registration;
+use metrocell_laser_tracker::warmup::WarmupFit;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
 fn header(stamp_ns: i64, frame: &str) -> Header {

@@ -3,7 +3,7 @@
 
 use metrocell_compensation::{AirData, SphericalNoise};
 use metrocell_node::{ParamDecl, Parameters};
-use metrocell_tracker::{AirSource, EdlenForm, ProgramSchedule, ReadingProcessor, TurbulenceTest};
+use metrocell_laser_tracker::{AirSource, EdlenForm, ProgramSchedule, ReadingProcessor, TurbulenceTest};
 use nalgebra::Vector3;
 
 pub fn declarations() -> Vec<ParamDecl> {

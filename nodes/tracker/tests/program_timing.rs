@@ -8,8 +8,8 @@ use std::process::Command;
 
 use metrocell_bagtools::BagSource;
 use metrocell_msgs::msg::MeasuredPoint;
-use metrocell_sim::bag::{write_bag, BagOptions};
-use metrocell_tracker::ProgramSchedule;
+use metrocell_simulation::bag::{write_bag, BagOptions};
+use metrocell_laser_tracker::ProgramSchedule;
 use metrocell_twin::Cell;
 use nalgebra::Vector3;
 

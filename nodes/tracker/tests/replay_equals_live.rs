@@ -17,7 +17,7 @@ use metrocell_msgs::sensor_msgs::msg::JointState;
 use metrocell_msgs::tf2_msgs::msg::TFMessage;
 use metrocell_msgs::RosMessage;
 use metrocell_node::{qos, MetrocellNode};
-use metrocell_sim::bag::{write_bag, BagOptions};
+use metrocell_simulation::bag::{write_bag, BagOptions};
 use metrocell_twin::Cell;
 use nalgebra::Vector3;
 

@@ -13,7 +13,7 @@ use std::process::Command;
 
 use metrocell_bagtools::BagSource;
 use metrocell_msgs::msg::{ErrorModel, MeasuredPoint, TrackerMeasurement};
-use metrocell_sim::bag::{write_bag, BagOptions};
+use metrocell_simulation::bag::{write_bag, BagOptions};
 use metrocell_twin::Cell;
 use nalgebra::Vector3;
 

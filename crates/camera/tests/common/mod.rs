@@ -2,7 +2,7 @@
 //! reference script runner.
 #![allow(dead_code)]
 
-use metrocell_camera::{CameraModel, Distortion, Pose, View};
+use metrocell_camera_model::{CameraModel, Distortion, Pose, View};
 use nalgebra::{Rotation3, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;

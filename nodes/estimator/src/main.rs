@@ -11,7 +11,7 @@
 //! (moving normalised-innovation χ² test), an ERROR on `/diagnostics`.
 //!
 //!   metrocell-estimator --ros-args -p model:=launch-configs/cells/demo_model.yaml \
-//!       -p process_noise:="[positioning[z].c0=1e-8]" -p predict_points:="[0.2, 0.15, 0.1]" \
+//!       -p process_noise:="['positioning[z].c0=1e-7']" -p predict_points:="[0.2, 0.15, 0.1]" \
 //!       -p state_file:=/var/lib/metrocell/estimator.json
 //!
 //! Offline replay (no DDS; the same outputs as the live node fed by `metrocell bag play`):

@@ -16,7 +16,7 @@ use crate::state_file::SavedState;
 pub fn declarations() -> Vec<ParamDecl> {
     vec![
         ParamDecl::new("model", "", "model cell file (YAML, the twin's format): machine, `terms:` = the error model to estimate (their params are the start values), `estimation:` = free parameters and priors per term label"),
-        ParamDecl::new("process_noise", Vec::<String>::new(), "random-walk intensity of drifting parameters, `label.param=q` with q in the parameter's SI unit per √s (e.g. positioning[z].c0=1e-8 for a Z offset that may drift 1 µm in ~3 h); others are constant"),
+        ParamDecl::new("process_noise", Vec::<String>::new(), "random-walk intensity of drifting parameters, `label.param=q` with q in the parameter's SI unit per √s (e.g. positioning[z].c0=1e-7 for a Z offset that may drift 1 µm in ~3 h); others are constant"),
         ParamDecl::new("publish_every", 1i64, "publish the error model after this many accepted measurements (and on every alarm)").with_range(1.0, 1e9),
         ParamDecl::new("signal_wait", 5.0, "s of stamp time a measured point waits for a signal stream that has stopped (its last value then holds)").with_range(0.0, 86400.0),
         ParamDecl::new("predict_points", Vec::<f64>::new(), "joint vectors (machine family order, m/rad) at which the volumetric error is predicted, flattened: x1 y1 z1 x2 y2 z2 … for a cartesian machine"),

@@ -47,13 +47,13 @@ program:
   dwell: 1 s
 terms:
   - id: positioning
-    options: {axis: x, order: 1}
+    options: {axis: x, order: 1, travel: [0 mm, 800 mm]}
     params: {c0: 0 um, c1: 0 um}
   - id: positioning
-    options: {axis: y, order: 1}
+    options: {axis: y, order: 1, travel: [0 mm, 500 mm]}
     params: {c0: 0 um, c1: 0 um}
   - id: positioning
-    options: {axis: z, order: 1}
+    options: {axis: z, order: 1, travel: [0 mm, 400 mm]}
     params: {c0: 0 um, c1: 0 um}
   - id: squareness
     options: {pair: xy}
@@ -146,7 +146,7 @@ impl Run {
         let mut a: Vec<String> = ["--ros-args", "-p"].iter().map(|s| s.to_string()).collect();
         a.push(format!("model:={}", self.dir.join("model.yaml").display()));
         // the column's growth may move Z's offset ~10 nm/√s (1 µm in ~3 h of random walk)
-        a.extend(["-p", "process_noise:=[positioning[z].c0=1e-8]", "-p", "predict_points:=[0.4, 0.25, 0.2]"].iter().map(|s| s.to_string()));
+        a.extend(["-p", "process_noise:=['positioning[z].c0=1e-7']", "-p", "predict_points:=[0.4, 0.25, 0.2]"].iter().map(|s| s.to_string()));
         a.extend(extra.iter().cloned());
         a
     }

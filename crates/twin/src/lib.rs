@@ -29,6 +29,7 @@
 
 pub mod cell;
 pub mod cell_file;
+pub mod cell_model;
 pub mod error;
 pub mod families;
 pub mod noise;
@@ -40,6 +41,7 @@ pub mod thermal_stepper;
 pub mod tracker_model;
 
 pub use cell::{Cell, MachineGeometry, MachineKinematics};
+pub use cell_model::CellModel;
 pub use error::CellError;
 pub use sample::{CameraFrameRequest, MachineStateSample, ProbeHitSample, Sample, SampleTruth, TemperatureSample, TrackerSample, TrackerStatus, TrackerTruth, TrueParameter};
 pub use simulation::{GroundTruth, SampleStream, Simulation, TruthStream};

@@ -28,6 +28,10 @@ pub struct CellFile {
     /// the free parameters and priors, `{free: [c0, c1], priors: {c0: {value: 0 um, sigma: 5 um}}}`.
     #[serde(default)]
     pub estimation: BTreeMap<String, EstimationConfig>,
+    /// Test-only, non-physical structures (a drift cycling in time, a local bump in the
+    /// workspace) for the concealed-effect suite: see [`crate::disturbance`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub disturbances: Option<crate::disturbance::DisturbanceSection>,
 }
 
 /// Machine families, all simulated: `cartesian` (3 axes in a stacking order), `delta` (linear

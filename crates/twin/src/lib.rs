@@ -29,6 +29,7 @@
 
 pub mod cell;
 pub mod cell_file;
+pub mod disturbance;
 pub mod error;
 pub mod families;
 pub mod noise;

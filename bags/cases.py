@@ -49,7 +49,7 @@ TIME_POINTS = serpentine(X_SPARSE, [50, 450], [50, 350])
 X_MID = [0, 73, 151, 229, 318, 390, 462, 551, 633, 711, 800]
 MID_POINTS = serpentine(X_MID, [50, 450], [50, 350])
 # sweeps: the whole X travel in one move, for readings taken while moving
-SWEEP_POINTS = serpentine([0, 800], [0, 250, 500], [0, 200, 400])
+SWEEP_POINTS = serpentine([0, 800], [0, 500], [0, 400])
 
 
 def points_yaml(pts, unit="mm"):
@@ -75,7 +75,8 @@ STEADY_ENV = """\
 environment:
   ambient: {mean: 20.3 degC, drift: 0.05 K/h, walk_std: 0.001}
   nodes:
-    - {name: table, time_constant: 2 h}
+    - {name: table_left, time_constant: 2 h}
+    - {name: table_right, time_constant: 2 h}
     - {name: column, time_constant: 1 h}
   air: {pressure: 101.3 kPa, humidity: 45}
 """
@@ -90,7 +91,8 @@ environment:
     - name: spindle
       duty: [{start: 1 h, end: 2 h, level: 0.9}, {start: 3.5 h, end: 4.5 h, level: 0.9}]
   nodes:
-    - {name: table, time_constant: 70 min, heating: {axis_motors: 3.5 K}}
+    - {name: table_left, time_constant: 70 min, heating: {axis_motors: 3.5 K}}
+    - {name: table_right, time_constant: 95 min, heating: {axis_motors: 2.8 K, spindle: 0.6 K}}
     - {name: column, time_constant: 45 min, heating: {spindle: 3.0 K, axis_motors: 1.0 K}}
   thermal_step: 5 s
   air: {pressure: 101.3 kPa, humidity: 45}
@@ -99,8 +101,8 @@ environment:
 THERMOCOUPLES = """\
   thermocouples:               # location: ambient or an environment node
     - {name: ambient, location: ambient, noise: 0.02 K, rate: 0.05 Hz, calibration_uncertainty: 0.05 K}
-    - {name: x_left, location: table, noise: 0.02 K, rate: 0.05 Hz, calibration_uncertainty: 0.05 K}
-    - {name: x_right, location: ambient, noise: 0.02 K, rate: 0.05 Hz, calibration_uncertainty: 0.05 K}
+    - {name: x_left, location: table_left, noise: 0.02 K, rate: 0.05 Hz, calibration_uncertainty: 0.05 K}
+    - {name: x_right, location: table_right, noise: 0.02 K, rate: 0.05 Hz, calibration_uncertainty: 0.05 K}
     - {name: column, location: column, noise: 0.02 K, rate: 0.05 Hz, calibration_uncertainty: 0.05 K}
 """
 
@@ -258,7 +260,7 @@ def term(kind, **subs):
 # the recording plan (duration, windows to keep) and the answer.
 
 GEO_PROGRAM = Program(GEO_POINTS, cycles=2)
-SWEEP = Program(SWEEP_POINTS, feed=250.0, dwell=1.0, cycles=2)
+SWEEP = Program(SWEEP_POINTS, feed=50.0, dwell=2.0, cycles=3)
 GEO = dict(env=STEADY_ENV, program=GEO_PROGRAM, tracker=tracker_yaml())
 GEO_DURATION = 720.0       # two cycles of ~5.4 min
 LONG_DURATION = 5 * 3600.0  # a 5-hour shift
@@ -294,9 +296,9 @@ CASES = [
     # ---- single concealed effects ------------------------------------------------------------
     long_case("thermal_scale", TIME_POINTS, term("thermal_scale", alpha="10.8e-6 1/K"),
               answer={"concealed": [concealed("thermal_scale", "thermal_scale[x]", ["alpha"], {"alpha": 10.8e-6})]}),
-    long_case("thermal_growth", TIME_POINTS, term("thermal_growth", coef="5 um/K", tau="25 min"),
+    long_case("thermal_growth", TIME_POINTS, term("thermal_growth", coef="6 um/K", tau="25 min"),
               answer={"concealed": [concealed("thermal_growth", "thermal_growth[column]", ["coefficient", "time_constant"],
-                                              {"coefficient": 5e-6, "time_constant": 1500.0})]}),
+                                              {"coefficient": 6e-6, "time_constant": 1500.0})]}),
     geo_case("backlash", term("backlash", axis="x", rev="14 um"),
              answer={"concealed": [concealed("backlash", "backlash[x]", ["reversal"], {"reversal": 14e-6})]}),
     geo_case("squareness", term("squareness", pair="xy", s="40 urad"),
@@ -307,10 +309,12 @@ CASES = [
              answer={"concealed": [concealed("positioning", "positioning[y]", ["c1", "c2", "c3"], {"c1": 15e-6, "c2": -8e-6, "c3": 5e-6})]}),
     geo_case("straightness", term("straightness", c2="12 um", c3="-6 um"),
              answer={"concealed": [concealed("straightness", "straightness[x:z]", ["c2", "c3"], {"c2": 12e-6, "c3": -6e-6})]}),
-    case("time_offset", "single", 130.0, SWEEP,
-         lambda c, r: cartesian_cell(c, r, env=STEADY_ENV, program=SWEEP, tracker=tracker_yaml(rate="5 Hz"), machine_rate="5 Hz", terms=term("time_offset", lat="60 ms")),
-         lambda c, r: cartesian_cell(c, r, env=STEADY_ENV, program=SWEEP, tracker=tracker_yaml(rate="5 Hz"), machine_rate="5 Hz", terms=""),
-         {"concealed": [concealed("time_offset", "time_offset", ["latency"], {"latency": 0.06})]}),
+    # readings taken while moving: the tracker's stream is 0.3 ms late against the controller's
+    # (15 um at 50 mm/s); both streams at 2 Hz
+    case("time_offset", "single", 270.0, SWEEP,
+         lambda c, r: cartesian_cell(c, r, env=STEADY_ENV, program=SWEEP, tracker=tracker_yaml(rate="2 Hz"), machine_rate="2 Hz", terms=term("time_offset", lat="0.3 ms")),
+         lambda c, r: cartesian_cell(c, r, env=STEADY_ENV, program=SWEEP, tracker=tracker_yaml(rate="2 Hz"), machine_rate="2 Hz", terms=""),
+         {"concealed": [concealed("time_offset", "time_offset", ["latency"], {"latency": 3e-4})]}),
 
     # ---- null recordings (the model is complete) ---------------------------------------------
     geo_case("null_plain", "", kind="null"),

@@ -199,6 +199,86 @@ class Program:
         return text
 
 
+def arm_cell(case, role, *, terms, program):
+    """A UR5 on a pedestal (published DH, crates/twin/examples/cells/serial_arm_ur5.yaml), its SMR
+    followed by a tracker 2.5 m away."""
+    text = HEADER.format(role=role, case=case, role_text=ROLE_TEXT[role])
+    text += f"name: {case}\ndescription: six-axis arm measured with a laser tracker\n\n"
+    text += """\
+machine:
+  family: serial_arm
+  serial_arm:
+    dh:
+      convention: standard
+      rows:
+        - {d: 0.089159, alpha: 90 deg}
+        - {a: -0.425}
+        - {a: -0.39225}
+        - {d: 0.10915, alpha: 90 deg}
+        - {d: 0.09465, alpha: -90 deg}
+        - {d: 0.0823}
+    base: {translation: [0 m, 0 m, 0.8 m]}
+    tool: {translation: [0 mm, 30 mm, 60 mm]}   # SMR on a bracket, off the flange axis
+    joint_limits: [[-360 deg, 360 deg], [-360 deg, 360 deg], [-360 deg, 360 deg], [-360 deg, 360 deg], [-360 deg, 360 deg], [-360 deg, 360 deg]]
+
+sensors:
+"""
+    text += tracker_yaml(pose="[2.5 m, 0.3 m, 1.0 m]", euler="[0 deg, 0 deg, 180 deg]")
+    text += """\
+  thermocouples:
+    - {name: ambient, location: ambient, noise: 0.02 K, rate: 0.05 Hz}
+  machine_state: {rate: 1 Hz}
+
+environment:
+  ambient: {mean: 20.8 degC, drift: 0.05 K/h}
+  air: {pressure: 101.3 kPa, humidity: 50}
+
+"""
+    text += program + "\n" + "terms:" + (" []\n" if not terms else "\n" + terms)
+    return text
+
+
+def arm_program():
+    """Joint targets (deg) that turn the wrist through many orientations."""
+    import itertools
+    rows = []
+    bases = [(-40, -100, 95), (0, -80, 110), (35, -110, 80), (70, -95, 100)]
+    wrists = [(-90, -90, 0), (-60, -70, 90), (-120, -110, -90), (-30, -100, 180), (-150, -60, 45)]
+    for (a, b, c), (d, e, f) in itertools.product(bases, wrists):
+        rows.append(f"    - [{a} deg, {b} deg, {c} deg, {d} deg, {e} deg, {f} deg]")
+    return ("program:\n  joints:\n" + "\n".join(rows) + "\n"
+            "  home_joints: [0 deg, -90 deg, 90 deg, -90 deg, -90 deg, 0 deg]\n"
+            "  feed_rate: 100 mm/s\n  rotary_rate: 40 deg/s\n  dwell: 3 s\n  cycles: 2\n")
+
+
+def delta_cell(case, role, *, terms, program):
+    """A linear delta (crates/twin/examples/cells/delta_printer.yaml) with a tracker on its bed side."""
+    text = HEADER.format(role=role, case=case, role_text=ROLE_TEXT[role])
+    text += f"name: {case}\ndescription: linear delta measured with a laser tracker\n\n"
+    text += """\
+machine:
+  family: delta
+  delta: {rod_length: 250 mm, radius: 124 mm}
+  travel: {x: [-80 mm, 80 mm], y: [-80 mm, 80 mm], z: [0 mm, 120 mm]}
+  tool_offset: [0 mm, 0 mm, -20 mm]
+
+sensors:
+"""
+    text += tracker_yaml(pose="[1.1 m, -0.4 m, 0.3 m]", euler="[0 deg, 0 deg, 160 deg]")
+    text += """\
+  thermocouples:
+    - {name: ambient, location: ambient, noise: 0.02 K, rate: 0.05 Hz}
+  machine_state: {rate: 1 Hz}
+
+environment:
+  ambient: {mean: 22 degC}
+  air: {pressure: 101.3 kPa, humidity: 40}
+
+"""
+    text += program.yaml() + "\n" + "terms:" + (" []\n" if not terms else "\n" + terms)
+    return text
+
+
 # --------------------------------------------------------------------------------------------
 # Terms (the catalog's configs, crates/physics/README.md)
 # --------------------------------------------------------------------------------------------
@@ -243,6 +323,14 @@ T = {
   - id: time_offset
     params: {latency: LAT}
 """,
+    "tool_offset": """\
+  - id: tool_offset            # the SMR bracket's offset error, tool frame
+    params: {dx: DX, dy: DY, dz: DZ}
+""",
+    "delta_rod_length": """\
+  - id: delta_rod_length
+    params: {rod_length_a: A, rod_length_b: B, rod_length_c: 0 um}
+""",
 }
 
 
@@ -260,6 +348,18 @@ def term(kind, **subs):
 # the recording plan (duration, windows to keep) and the answer.
 
 GEO_PROGRAM = Program(GEO_POINTS, cycles=2)
+# a 3 m gantry: 9 x positions, 3 y, 2 z; the tracker stands beyond its X = 0 end
+GANTRY_TRAVEL = ("3000 mm", "1500 mm", "600 mm")
+GANTRY = Program(serpentine([0, 310, 720, 1090, 1460, 1880, 2270, 2630, 3000], [0, 750, 1500], [0, 600]),
+                 feed=200.0, cycles=3, home=(0, 0, 600))
+GANTRY_TRACKER = "[-1500 mm, 600 mm, 900 mm]"
+# the delta's effector box: 5 x 5 x 3 points
+DELTA = Program(serpentine([-70, -35, 0, 35, 70], [-70, -35, 0, 35, 70], [10, 60, 110]), feed=50.0, cycles=2, home=(0, 0, 115))
+ARM_JOINT_OFFSETS = """\
+  - id: joint_offset           # calibrated zero offsets (declared in the model at these values)
+    options: {joints: 6}
+    params: {q1: 0 rad, q2: 0.12 mrad, q3: -0.09 mrad, q4: 0.05 mrad, q5: 0 rad, q6: 0 rad}
+"""
 SWEEP = Program(SWEEP_POINTS, feed=50.0, dwell=2.0, cycles=3)
 GEO = dict(env=STEADY_ENV, program=GEO_PROGRAM, tracker=tracker_yaml())
 GEO_DURATION = 720.0       # two cycles of ~5.4 min
@@ -316,6 +416,33 @@ CASES = [
          lambda c, r: cartesian_cell(c, r, env=STEADY_ENV, program=SWEEP, tracker=tracker_yaml(rate="2 Hz"), machine_rate="2 Hz", terms=""),
          {"concealed": [concealed("time_offset", "time_offset", ["latency"], {"latency": 3e-4})]}),
 
+    # the tracker switched on just before the shift: its ranges drift A + B(1 - exp(-t/tau))
+    long_case("tracker_warmup", TIME_POINTS, "", env=STEADY_ENV,
+              tracker_truth=tracker_yaml(warmup="{offset: 0 um, amplitude: 40 um, time_constant: 60 min}", powered_on="0 s"),
+              tracker_model=tracker_yaml(powered_on="0 s"),
+              answer={"concealed": [concealed("tracker_warmup", "tracker_warmup", ["amplitude", "time_constant"],
+                                              {"amplitude": 40e-6, "time_constant": 3600.0})]}),
+    # a gantry 3 m long; the weather station sits in a cold draught and reads 4 K low, so the
+    # tracker's index is wrong by ~3.7 ppm along every beam (up to ~17 um at 4.7 m)
+    case("refraction", "single", 1500.0, GANTRY,
+         lambda c, r: cartesian_cell(c, r, env=STEADY_ENV, program=GANTRY, travel=GANTRY_TRAVEL, terms="",
+                                     tracker=tracker_yaml(pose=GANTRY_TRACKER, euler="[0 deg, 0 deg, 10 deg]", station={"temperature_bias": "-4 K"})),
+         lambda c, r: cartesian_cell(c, r, env=STEADY_ENV, program=GANTRY, travel=GANTRY_TRAVEL, terms="",
+                                     tracker=tracker_yaml(pose=GANTRY_TRACKER, euler="[0 deg, 0 deg, 10 deg]")),
+         {"concealed": [concealed("refraction", "refraction", ["path_temperature_offset"], {"path_temperature_offset": 4.0})]}),
+    # a UR5 whose SMR bracket is not where the model says (the joint zero offsets are calibrated
+    # and declared at their true values)
+    case("tool_offset", "single", 400.0, None,
+         lambda c, r: arm_cell(c, r, program=arm_program(), terms=ARM_JOINT_OFFSETS + term("tool_offset", dx="20 um", dy="-15 um", dz="18 um")),
+         lambda c, r: arm_cell(c, r, program=arm_program(), terms=ARM_JOINT_OFFSETS),
+         {"concealed": [concealed("tool_offset", "tool_offset", ["dx", "dy", "dz"], {"dx": 20e-6, "dy": -15e-6, "dz": 18e-6})]}),
+    # a linear delta whose diagonal rods are not all the nominal length
+    case("delta_rod_length", "single", 480.0, DELTA,
+         lambda c, r: delta_cell(c, r, program=DELTA, terms=term("delta_rod_length", a="30 um", b="-20 um")),
+         lambda c, r: delta_cell(c, r, program=DELTA, terms=""),
+         {"concealed": [concealed("delta_rod_length", "delta_rod_length", ["rod_length_a", "rod_length_b", "rod_length_c"],
+                                  {"rod_length_a": 30e-6, "rod_length_b": -20e-6, "rod_length_c": 0.0})]}),
+
     # ---- null recordings (the model is complete) ---------------------------------------------
     geo_case("null_plain", "", kind="null"),
     long_case("null_long", TIME_POINTS, "", kind="null"),
@@ -352,7 +479,7 @@ CASES = [
 ]
 
 # A fixed shuffle of the case order (so that case numbers say nothing about the kind).
-ORDER = [10, 3, 15, 7, 1, 12, 16, 5, 9, 0, 14, 6, 11, 2, 13, 4, 8]
+ORDER = [10, 3, 15, 7, 1, 20, 12, 16, 5, 9, 17, 0, 14, 6, 19, 11, 2, 13, 4, 18, 8]
 
 
 def build():
@@ -365,7 +492,8 @@ def build():
         files[f"cases/{name}/truth.yaml"] = c["truth"](name, "truth")
         files[f"cases/{name}/model.yaml"] = c["model"](name, "model")
         answers[name] = {"kind": c["kind"], "duration_s": c["duration"], **c["answer"]}
-        recordings[name] = {"duration_s": c["duration"], "windows_s": [[round(a, 3), round(b, 3)] for a, b in c["program"].windows(c["duration"])]}
+        windows = c["program"].windows(c["duration"]) if c["program"] else [(0.0, c["duration"])]
+        recordings[name] = {"duration_s": c["duration"], "windows_s": [[round(a, 3), round(b, 3)] for a, b in windows]}
         if c["kind"] in ("null", "out_of_catalog"):
             answers[name].setdefault("concealed", [])
     files["answers.json"] = json.dumps(answers, indent=1, sort_keys=True) + "\n"

@@ -19,7 +19,7 @@ Nothing in the result names the concealed term: the bag's directory and file nam
 
 Deterministic: the same cell files and seed give the same messages (topics, log times, bytes);
 the MCAP chunking of `bag filter`/`merge` may differ between runs, the messages do not.
-Standard library only.
+Standard library only (`--verify` reads the bags with the `mcap` packages).
 """
 
 import argparse
@@ -65,6 +65,65 @@ def generate(metrocell, case, seed, plan, out_dir):
         run([metrocell, "bag", "merge", out_dir, *parts])
 
 
+# catalog ids (crates/physics/src/term_id.rs) and words that would give the answer away
+TELLTALES = ["angular", "backlash", "camera_scale", "compliance", "delta_endstop", "delta_radius", "delta_rod_length",
+             "delta_tower_angle", "frame_misalignment", "joint_offset", "lens_distortion", "link_length", "pitch_cyclic",
+             "positioning", "probe_pretravel", "refraction", "squareness", "straightness", "thermal_growth", "thermal_scale",
+             "time_offset", "tool_offset", "tracker_pose", "tracker_warmup", "turbulence", "workpiece_expansion",
+             "concealed", "truth", "disturb", "answer"]
+
+
+def strings_of(value):
+    """Every string inside a decoded ROS message (fields, arrays, nested messages)."""
+    if isinstance(value, str):
+        yield value
+    elif isinstance(value, (list, tuple)):
+        for v in value:
+            yield from strings_of(v)
+    elif hasattr(value, "__slots__") or hasattr(value, "__dict__"):
+        names = getattr(value, "__slots__", None) or list(vars(value))
+        for n in names:
+            yield from strings_of(getattr(value, n, None))
+
+
+def verify(out_dir):
+    """Problems with a recording: a topic that gives the answer (actual joint states), or a
+    catalog id / telltale word in a file name, metadata.yaml, the MCAP header, metadata or
+    channel records, or any string field of any message. Message definitions (schemas) are the
+    shipped .msg texts, the same in every recording, and are not searched. Needs the Python
+    packages `mcap` and `mcap-ros2-support` (tests/requirements.txt)."""
+    from mcap.reader import make_reader
+    from mcap_ros2.decoder import DecoderFactory
+
+    problems = []
+
+    def scan(where, text):
+        low = text.lower()
+        problems.extend(f"{where}: `{w}` in {text[:120]!r}" for w in TELLTALES if w in low)
+
+    for name in os.listdir(out_dir):
+        scan(f"file name {name}", name)
+    scan("metadata.yaml", open(os.path.join(out_dir, "metadata.yaml")).read())
+    for name in sorted(n for n in os.listdir(out_dir) if n.endswith(".mcap")):
+        with open(os.path.join(out_dir, name), "rb") as f:
+            reader = make_reader(f, decoder_factories=[DecoderFactory()])
+            h = reader.get_header()
+            scan(f"{name} header", f"{h.profile} {h.library}")
+            for m in reader.iter_metadata():
+                scan(f"{name} metadata {m.name}", m.name + " " + json.dumps(m.metadata))
+            for ch in reader.get_summary().channels.values():
+                if ch.topic in DROPPED:
+                    problems.append(f"{name}: topic {ch.topic} must not be in a suite recording")
+                scan(f"{name} channel {ch.topic}", ch.topic + " " + json.dumps(ch.metadata))
+            seen = set()
+            for _, ch, _, msg in reader.iter_decoded_messages():
+                for s in strings_of(msg):
+                    if s not in seen:
+                        seen.add(s)
+                        scan(f"{name} {ch.topic} message", s)
+    return problems
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--metrocell", required=True, help="the metrocell binary (cargo build --release -p metrocell-cli)")
@@ -72,6 +131,7 @@ def main(argv=None):
     ap.add_argument("--seeds", type=int, nargs="+", default=[1])
     ap.add_argument("--cases", nargs="*", help="case names (default: every case)")
     ap.add_argument("--force", action="store_true", help="replace recordings that already exist")
+    ap.add_argument("--verify", action="store_true", help="check each recording names nothing of the answer (needs mcap, mcap-ros2-support)")
     a = ap.parse_args(argv)
     plans = json.load(open(os.path.join(HERE, "recordings.json")))
     cases = a.cases or sorted(plans)
@@ -89,6 +149,10 @@ def main(argv=None):
             generate(a.metrocell, case, seed, plans[case], out_dir)
             size = sum(os.path.getsize(os.path.join(out_dir, f)) for f in os.listdir(out_dir))
             print(f"{out_dir}: {size / 1024:.0f} KiB")
+            if a.verify:
+                problems = verify(out_dir)
+                if problems:
+                    sys.exit(f"generate.py: {out_dir} gives the answer away:\n  " + "\n  ".join(problems))
     return 0
 
 

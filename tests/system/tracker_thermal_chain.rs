@@ -40,7 +40,7 @@ use system_tests::{bin, piped, require_isolated_network, workspace_root, ChildGu
 const HOUR: f64 = 3600.0;
 const SHIFT: f64 = 8.0 * HOUR;
 /// Simulated seconds per wall-clock second.
-const SPEED: f64 = 240.0;
+const SPEED: f64 = 160.0;
 /// Hours whose dwells give each point's reference Z error; the rest are held out.
 const REFERENCE_HOURS: f64 = 4.0;
 /// The column growth the twin applies (xfyz_shift.yaml's thermal_growth term) and the thermal
@@ -72,7 +72,7 @@ fn cell_text() -> String {
         }
         let line = line
             .replace("amplitude: 75 um", "amplitude: 0 um")
-            .replace("machine_state: {rate: 100 Hz}", "machine_state: {rate: 4 Hz}")
+            .replace("machine_state: {rate: 100 Hz}", "machine_state: {rate: 2 Hz}")
             .replace("rate: 1 Hz,", "rate: 0.2 Hz,");
         out.push_str(&line);
         out.push('\n');

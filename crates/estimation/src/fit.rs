@@ -65,6 +65,28 @@ pub enum FitError {
     Solver(#[from] SolverError),
     #[error("{needed} parameters are free but only {available} residuals: measure at least {points} points")]
     TooFew { needed: usize, available: usize, points: usize },
+    /// A record the model cannot predict (a signal a term needs is missing, a joint vector
+    /// the kinematics cannot reach, …).
+    #[error("record {index} (point `{point_id}`, t = {time} s): {source}{hint}")]
+    Record { index: usize, point_id: String, time: f64, source: PhysicsError, hint: String },
+}
+
+/// What to do about a missing signal, by the kind of signal.
+fn missing_signal_hint(e: &PhysicsError) -> String {
+    let PhysicsError::MissingSignal { signal, .. } = e else { return String::new() };
+    let s = signal.to_lowercase();
+    let source = if s.contains("temperature") && !s.contains("air") {
+        "a `sensor_msgs/Temperature` topic `/temperature/<sensor>` for the sensor the term names (or a `temperature.<sensor>` column in a CSV import)"
+    } else if s.contains("power") {
+        "the instrument's power-on time (the tracker's power-on topic, or `instrument_on_time` in a CSV import)"
+    } else if s.contains("air") {
+        "the weather station's air temperature, pressure and humidity"
+    } else if s.contains("load") {
+        "the load force"
+    } else {
+        "the commanded joint states (`/machine/commanded_joint_states`) with velocities"
+    };
+    format!(". The recording does not carry it: record {source}, or take the term out of the model")
 }
 
 /// A parameter held at its start value because the data cannot separate it from others.
@@ -202,6 +224,20 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
     let n_priors = setup.priors.iter().zip(&free).filter(|(p, f)| p.is_some() && **f).count();
     if 3 * kept.len() + n_priors < n_free {
         return Err(FitError::TooFew { needed: n_free, available: 3 * kept.len(), points: n_free.div_ceil(3) });
+    }
+    // every record must be predictable from the model at its configured values: name the first
+    // that is not (a missing signal, an unreachable joint vector) before any solving
+    {
+        let p = model.params();
+        let kin = model.kinematic_truth(&p)?;
+        for (i, r) in kept.records.iter().enumerate() {
+            let mut s = r.signals.clone();
+            let checked = model.tool_state(&p, &kin, &r.q, &mut s, None).and_then(|t| model.tracker(&p, t.truth.translation.vector, &mut s));
+            if let Err(e) = checked {
+                let hint = missing_signal_hint(&e);
+                return Err(FitError::Record { index: used[i], point_id: r.point_id.clone(), time: r.time, source: e, hint });
+            }
+        }
     }
     let x0 = match start {
         Some(x) => x,

@@ -140,6 +140,8 @@ pub struct Cell {
     pub term_configs: Vec<TermConfig>,
     /// The file's `estimation` settings (free parameters, priors), checked against the terms.
     pub estimation: BTreeMap<String, metrocell_physics::EstimationConfig>,
+    /// Test-only, non-physical disturbances ([`crate::disturbance`]); empty for real cells.
+    pub disturbances: crate::disturbance::Disturbances,
 }
 
 impl Cell {
@@ -208,6 +210,10 @@ impl Cell {
                 g.inverse(&Vector3::new(q[0], q[1], q[2])).map_err(|e| CellError::invalid(if i == program.points.len() { "program.home".to_string() } else { format!("program point {i}") }, format!("not reachable by the delta: {e}")))?;
             }
         }
+        let disturbances = crate::disturbance::Disturbances::from_section(
+            &f.disturbances.clone().unwrap_or_default(),
+            matches!(machine.kinematics, MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_)),
+        )?;
         Ok(Cell {
             name: f.name.clone(),
             description: f.description.clone(),
@@ -225,6 +231,7 @@ impl Cell {
             terms,
             term_configs: f.terms.clone(),
             estimation: f.estimation.clone(),
+            disturbances,
         })
         .and_then(|cell: Cell| {
             cell.parameter_setup()?;

@@ -44,6 +44,10 @@ pub struct CellFile {
     /// free-form, for the reader. The simulator and the loader ignore it.
     #[serde(default)]
     pub fit: Option<serde_yaml::Value>,
+    /// Test-only, non-physical structures (a drift cycling in time, a local bump in the
+    /// workspace) for the concealed-effect suite: see [`crate::disturbance`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub disturbances: Option<crate::disturbance::DisturbanceSection>,
 }
 
 /// Machine families, all simulated: `cartesian` (3 axes in a stacking order), `delta` (linear

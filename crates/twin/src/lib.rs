@@ -31,6 +31,7 @@ pub mod cell;
 pub mod cell_file;
 pub mod cell_model;
 pub mod model_writer;
+pub mod disturbance;
 pub mod error;
 pub mod families;
 pub mod noise;

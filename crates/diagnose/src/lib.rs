@@ -17,6 +17,7 @@
 //! Convention: residual = measured − predicted (m); σ is the measurement's stated standard
 //! uncertainty of that component (m).
 
+pub mod blocked_least_squares;
 pub mod folds;
 pub mod locate;
 pub mod multiple_testing;

@@ -153,7 +153,6 @@ fn cell_sums(rows: &BlockedRows, a: &DMatrix<f64>, b: &DVector<f64>) -> CellSums
 pub struct BaseFit {
     b: DVector<f64>,
     a: DMatrix<f64>,
-    sums: CellSums,
     /// Full data: pseudo-inverse, h, solution, SSR, rank.
     full: Solved,
     /// Per held-out fold: (scheme, cells, training solve, test sums).
@@ -222,7 +221,7 @@ impl BaseFit {
             let train = solve(&(&total_g - &test_g), &(&total_h - &test_h), total_s - test_s);
             folds.push(FoldFit { scheme, cells, train, test_g, test_h, test_s });
         }
-        Self { b, a, sums, full, folds }
+        Self { b, a, full, folds }
     }
 
     pub fn ssr(&self) -> f64 {

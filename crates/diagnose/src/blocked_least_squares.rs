@@ -200,6 +200,8 @@ pub struct CandidateFit {
     pub separable: bool,
     /// Held-out SSR summed over every fold of every scheme.
     pub heldout_ssr: f64,
+    /// Held-out SSR of each scheme.
+    pub heldout_by_scheme: Vec<f64>,
     /// SSR reduction the candidate explains, rhsᵀS⁻¹rhs.
     pub explained: f64,
 }
@@ -247,7 +249,17 @@ impl BaseFit {
 
     /// Held-out SSR of the base columns, summed over every fold of every scheme.
     pub fn heldout_ssr(&self) -> f64 {
-        self.folds.iter().map(|f| f.test_s - 2.0 * f.train.x.dot(&f.test_h) + f.train.x.dot(&(&f.test_g * &f.train.x))).sum()
+        self.heldout_by_scheme().iter().sum()
+    }
+
+    /// Held-out SSR of the base columns, per scheme.
+    pub fn heldout_by_scheme(&self) -> Vec<f64> {
+        let schemes = self.folds.iter().map(|f| f.scheme + 1).max().unwrap_or(0);
+        let mut out = vec![0.0; schemes];
+        for f in &self.folds {
+            out[f.scheme] += f.test_s - 2.0 * f.train.x.dot(&f.test_h) + f.train.x.dot(&(&f.test_g * &f.train.x));
+        }
+        out
     }
 
     /// Held-out residual of every (arranged) row, one vector per scheme.
@@ -290,7 +302,8 @@ impl BaseFit {
         // full data: Schur complement of the base block
         let (y, s_inv, explained, sep_rank) = schur(&self.full, &x_all, &cc_all, &cb_all);
         let ssr = (self.full.ssr - explained).max(0.0);
-        let mut heldout = 0.0;
+        let schemes = self.folds.iter().map(|f| f.scheme + 1).max().unwrap_or(0);
+        let mut by_scheme = vec![0.0; schemes];
         for f in &self.folds {
             let xt = sum_m(&cross, &mut f.cells.iter().copied(), p, k);
             let cct = sum_m(&cc, &mut f.cells.iter().copied(), k, k);
@@ -299,9 +312,9 @@ impl BaseFit {
             // base coefficients of the training fit with the candidate: x = P(h − X y)
             let xf = &f.train.p * (&f.train.h - (&x_all - &xt) * &yf);
             let quad = xf.dot(&(&f.test_g * &xf)) + 2.0 * xf.dot(&(&xt * &yf)) + yf.dot(&(&cct * &yf));
-            heldout += f.test_s - 2.0 * (xf.dot(&f.test_h) + yf.dot(&cbt)) + quad;
+            by_scheme[f.scheme] += f.test_s - 2.0 * (xf.dot(&f.test_h) + yf.dot(&cbt)) + quad;
         }
-        CandidateFit { values: y, unscaled_covariance: s_inv, ssr, rank: self.full.rank + sep_rank, separable: sep_rank == k, heldout_ssr: heldout, explained }
+        CandidateFit { values: y, unscaled_covariance: s_inv, ssr, rank: self.full.rank + sep_rank, separable: sep_rank == k, heldout_ssr: by_scheme.iter().sum(), heldout_by_scheme: by_scheme, explained }
     }
 }
 

@@ -23,6 +23,10 @@ pub struct EmpiricalBasis {
     pub axis: usize,
     #[serde(flatten)]
     pub shape: EmpiricalShape,
+    /// The basis functions in use (the others are spanned by the declared model's parameters —
+    /// a spline's constant is the instrument's position — and left out); None: all.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub kept: Option<Vec<usize>>,
 }
 
 /// The cardinal cubic B-spline on [0, 4].
@@ -41,12 +45,17 @@ fn cubic_b(x: f64) -> f64 {
 }
 
 impl EmpiricalBasis {
-    /// Number of coefficients.
-    pub fn len(&self) -> usize {
+    /// Number of basis functions of the shape.
+    fn full_len(&self) -> usize {
         match self.shape {
             EmpiricalShape::TimeSpline { knots, .. } => knots,
             EmpiricalShape::WorkspaceBump { .. } => 1,
         }
+    }
+
+    /// Number of coefficients (basis functions in use).
+    pub fn len(&self) -> usize {
+        self.kept.as_ref().map(|k| k.len()).unwrap_or_else(|| self.full_len())
     }
 
     pub fn is_empty(&self) -> bool {
@@ -63,6 +72,14 @@ impl EmpiricalBasis {
 
     /// The basis values at time t and commanded position p (one per coefficient).
     pub fn values(&self, t: f64, p: &Vector3<f64>) -> Vec<f64> {
+        let all = self.all_values(t, p);
+        match &self.kept {
+            Some(k) => k.iter().map(|&j| all[j]).collect(),
+            None => all,
+        }
+    }
+
+    fn all_values(&self, t: f64, p: &Vector3<f64>) -> Vec<f64> {
         match self.shape {
             EmpiricalShape::TimeSpline { start, end, knots } => {
                 let h = (end - start) / (knots - 3) as f64;
@@ -107,11 +124,11 @@ pub fn time_variants(times: &[f64], axis: usize) -> Vec<EmpiricalBasis> {
     [4usize, 6, 10, 16, 24, 32]
         .into_iter()
         .filter(|k| times.len() >= 8 * k)
-        .map(|knots| EmpiricalBasis { axis, shape: EmpiricalShape::TimeSpline { start: t0, end: t1, knots } })
+        .map(|knots| EmpiricalBasis { axis, shape: EmpiricalShape::TimeSpline { start: t0, end: t1, knots }, kept: None })
         .collect()
 }
 
-/// Bump variants for each axis: for widths of 8 %, 15 % and 25 % of the workspace diagonal, the
+/// Bump variants for each axis: for widths of 5, 8, 12, 18 and 25 % of the workspace diagonal, the
 /// centre where the kernel-smoothed residual along the axis stands out most (smoothed mean ×
 /// √(kernel weight), so a lone point does not win).
 pub fn bump_variants(positions: &[Vector3<f64>], residual: &[f64], weight: &[f64], axis: usize) -> Vec<EmpiricalBasis> {
@@ -127,7 +144,7 @@ pub fn bump_variants(positions: &[Vector3<f64>], residual: &[f64], weight: &[f64
     let stride = n.div_ceil(400);
     let centres: Vec<Vector3<f64>> = positions.iter().step_by(stride).copied().collect();
     let mut out = Vec::new();
-    for fraction in [0.08, 0.15, 0.25] {
+    for fraction in [0.05, 0.08, 0.12, 0.18, 0.25] {
         let width = fraction * diagonal;
         let mut best: Option<(f64, Vector3<f64>)> = None;
         for c in &centres {
@@ -148,7 +165,7 @@ pub fn bump_variants(positions: &[Vector3<f64>], residual: &[f64], weight: &[f64
             }
         }
         if let Some((_, c)) = best {
-            out.push(EmpiricalBasis { axis, shape: EmpiricalShape::WorkspaceBump { centre: [c.x, c.y, c.z], width } });
+            out.push(EmpiricalBasis { axis, shape: EmpiricalShape::WorkspaceBump { centre: [c.x, c.y, c.z], width }, kept: None });
         }
     }
     out
@@ -160,7 +177,7 @@ mod tests {
 
     #[test]
     fn splines_partition_unity_and_bumps_peak_at_their_centre() {
-        let b = EmpiricalBasis { axis: 2, shape: EmpiricalShape::TimeSpline { start: 10.0, end: 70.0, knots: 7 } };
+        let b = EmpiricalBasis { axis: 2, shape: EmpiricalShape::TimeSpline { start: 10.0, end: 70.0, knots: 7 }, kept: None };
         for t in [10.0, 23.3, 55.0, 70.0] {
             let v = b.values(t, &Vector3::zeros());
             assert_eq!(v.len(), 7);

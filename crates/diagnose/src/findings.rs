@@ -32,6 +32,8 @@ pub struct FoundTerm {
 pub struct Inputs<'a> {
     pub model: &'a ForwardModel<'a>,
     pub x: &'a [f64],
+    /// Which parameters were fitted (the findings list those).
+    pub free: &'a [bool],
     pub sigmas: &'a [Option<f64>],
     pub names: &'a [String],
     pub records: &'a [MeasurementRecord],
@@ -81,6 +83,7 @@ fn params_of(inputs: &Inputs, label: &str) -> Vec<(String, f64, Option<f64>, Str
         .names
         .iter()
         .enumerate()
+        .filter(|(k, _)| inputs.free[*k])
         .filter_map(|(k, n)| n.strip_prefix(&format!("{label}.")).map(|p| (p.to_string(), inputs.x[k], inputs.sigmas[k], specs[k].unit.to_string())))
         .collect()
 }
@@ -316,10 +319,21 @@ fn material(alpha: f64, sigma: f64) -> Option<&'static str> {
     MATERIALS.iter().find(|(lo, hi, _)| alpha + 2.0 * sigma >= *lo && alpha - 2.0 * sigma <= *hi && alpha >= lo - 2.0 * sigma).map(|m| m.2)
 }
 
-fn pm(v: f64, s: Option<f64>, scale: f64, digits: usize) -> String {
+/// Value ± σ in a display unit (`scale` from SI), σ to one significant digit (two below 2) and
+/// the value to the same decimal place, as uncertainty is quoted; `_digits` is the fallback
+/// precision without a σ.
+fn pm(v: f64, s: Option<f64>, scale: f64, _digits: usize) -> String {
     match s {
-        Some(s) => format!("{:.*} ± {:.*}", digits, v * scale, digits, s * scale),
-        None => format!("{:.*} (σ not identifiable)", digits, v * scale),
+        Some(s) if s * scale > 0.0 && (s * scale).is_finite() => {
+            let u = s * scale;
+            let mut decimals = (-u.log10().floor()) as i32;
+            if u / 10f64.powi(-decimals) < 2.0 {
+                decimals += 1;
+            }
+            let d = decimals.clamp(0, 6) as usize;
+            format!("{:.*} ± {:.*}", d, v * scale, d, u)
+        }
+        _ => format!("{:.3}", v * scale),
     }
 }
 
@@ -397,7 +411,11 @@ pub fn unexplained(empirical: &[(EmpiricalBasis, Vec<f64>, Vec<f64>)], view: &cr
     let t0 = view.time.iter().cloned().fold(f64::INFINITY, f64::min);
     let mut out = Vec::new();
     for (basis, coefficients, sigmas) in empirical {
-        let values: Vec<f64> = (0..n).map(|i| basis.value(coefficients, view.time[i], &view.position[i])).collect();
+        // the correction's varying part: its mean is a constant shift the instrument's position
+        // takes as well, so only the variation about it is a structure
+        let raw: Vec<f64> = (0..n).map(|i| basis.value(coefficients, view.time[i], &view.position[i])).collect();
+        let mean = raw.iter().sum::<f64>() / n.max(1) as f64;
+        let values: Vec<f64> = raw.iter().map(|v| v - mean).collect();
         let peak = values.iter().map(|v| v.abs()).fold(0.0, f64::max);
         let rms = (values.iter().map(|v| v * v).sum::<f64>() / (3 * n).max(1) as f64).sqrt();
         let axis = axis_name(basis.axis);
@@ -461,7 +479,7 @@ pub fn advice(selection: &FamilySelection, families: &[Family], records: &[Measu
             if !s.separable && s.wald_p_adjusted >= 1.0 && families.iter().any(|f| f.label == s.label && f.physical) {
                 // not separable from the declared terms after pruning: only said for terms whose
                 // held-out gain would have been large
-                let gain = if step.heldout_ssr_before > 0.0 { 1.0 - s.heldout_ssr / step.heldout_ssr_before } else { 0.0 };
+                let gain = s.heldout_gain;
                 if gain > 0.05 {
                     out.push(format!("{} would explain {:.0} % of the held-out error but cannot be separated from terms already in the model with these records", s.label, 100.0 * gain));
                 }

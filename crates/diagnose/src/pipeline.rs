@@ -360,29 +360,35 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         // variants kept only where their columns were computed; keep configs aligned
         let kept_variants: Vec<_> = tf.variants.iter().filter(|v| variants.iter().any(|w| w.name == v.name)).cloned().collect();
         let family = TermFamily { variants: kept_variants, ..tf.clone() };
-        prepared.push(Prepared { family: Family { label: tf.label.clone(), term: tf.id.as_str().into(), physical: true, variants }, source: Source::Term { family, kept: kept_all } });
+        prepared.push(Prepared { family: Family { label: tf.label.clone(), term: tf.id.as_str().into(), physical: true, variants, judged_by: None }, source: Source::Term { family, kept: kept_all } });
     }
     if options.empirical {
         for axis in 0..3 {
             let res: Vec<f64> = (0..sel_view.len()).map(|i| sel_view.workpiece(i)[axis]).collect();
             let w: Vec<f64> = sel_records.iter().map(|r| 1.0 / (sel_view.rotation * r.covariance * sel_view.rotation.transpose())[(axis, axis)]).collect();
-            for bases in [time_variants(&sel_view.time, axis), bump_variants(&sel_view.position, &res, &w, axis)] {
+            // scheme 0 = blocks of time, 1 = blocks of workspace: each empirical shape is judged
+            // on the scheme it can predict
+            for (all_bases, judged_by) in [(time_variants(&sel_view.time, axis), 1usize), (bump_variants(&sel_view.position, &res, &w, axis), 0usize)] {
+                // basis functions the declared parameters already span are left out
+                let mut bases = Vec::new();
+                let mut variants = Vec::new();
+                for mut b in all_bases {
+                    let cols = empirical_columns(&sel_view, &b);
+                    let kept = separable_columns(&declared_pinv, &declared_cols, &cols);
+                    if kept.is_empty() {
+                        continue;
+                    }
+                    let columns = cols.select_columns(&kept);
+                    if kept.len() < cols.ncols() {
+                        b.kept = Some(kept);
+                    }
+                    variants.push(Variant { name: b.variant_name(), columns, parameter_names: (0..b.len()).map(|j| format!("c{j}")).collect(), units: vec!["m".into(); b.len()], ranges: vec![(-1.0, 1.0); b.len()], base_values: vec![0.0; b.len()], profiled: b.searched() });
+                    bases.push(b);
+                }
                 if bases.is_empty() {
                     continue;
                 }
-                let variants = bases
-                    .iter()
-                    .map(|b| Variant {
-                        name: b.variant_name(),
-                        columns: empirical_columns(&sel_view, b),
-                        parameter_names: (0..b.len()).map(|j| format!("c{j}")).collect(),
-                        units: vec!["m".into(); b.len()],
-                        ranges: vec![(-1.0, 1.0); b.len()],
-                        base_values: vec![0.0; b.len()],
-                        profiled: b.searched(),
-                    })
-                    .collect();
-                prepared.push(Prepared { family: Family { label: bases[0].label(), term: "empirical".into(), physical: false, variants }, source: Source::Empirical(bases) });
+                prepared.push(Prepared { family: Family { label: bases[0].label(), term: "empirical".into(), physical: false, variants, judged_by: Some(vec![judged_by]) }, source: Source::Empirical(bases) });
             }
         }
     }
@@ -549,6 +555,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     let built = findings::build(&findings::Inputs {
         model: &model_aug,
         x: &x1,
+        free: &setup_aug.free,
         sigmas: &sigmas1,
         names: &names_aug,
         records: &set.records,
@@ -647,7 +654,7 @@ fn step_summaries(selection: &FamilySelection, families: &[Family]) -> Vec<Step>
             let mut top: Vec<StepScore> = s
                 .scores
                 .iter()
-                .map(|c| StepScore { label: c.label.clone(), variant: c.variant.clone(), heldout_gain: if s.heldout_ssr_before > 0.0 { 1.0 - c.heldout_ssr / s.heldout_ssr_before } else { 0.0 }, p_adjusted: c.wald_p_adjusted, delta_bic: c.delta_bic, plausible: c.plausible, separable: c.separable, accepted: c.accepted })
+                .map(|c| StepScore { label: c.label.clone(), variant: c.variant.clone(), heldout_gain: c.heldout_gain, p_adjusted: c.wald_p_adjusted, delta_bic: c.delta_bic, plausible: c.plausible, separable: c.separable, accepted: c.accepted })
                 .collect();
             top.sort_by(|a, b| b.heldout_gain.total_cmp(&a.heldout_gain));
             top.truncate(10);

@@ -75,7 +75,23 @@ pub struct Family {
     pub term: String,
     pub physical: bool,
     pub variants: Vec<Variant>,
+    /// The blocking schemes whose held-out error judges it (None: all). An empirical correction
+    /// in time cannot predict a held-out block of time by construction, nor a local bump a
+    /// held-out slab of workspace: each is judged on the other scheme.
+    pub judged_by: Option<Vec<usize>>,
 }
+
+/// Which of two equally good physical explanations to name: where the data cannot tell them
+/// apart (BIC within [`TIE_BIC`]), the conventional, simpler name — a linear x error along z is
+/// reported as squareness, not as a first-order straightness or an angular error.
+pub fn preference(term: &str) -> usize {
+    const ORDER: [&str; 17] = ["squareness", "positioning", "backlash", "pitch_cyclic", "thermal_scale", "thermal_growth", "tracker_warmup", "refraction", "time_offset", "tool_offset", "straightness", "compliance", "workpiece_expansion", "frame_misalignment", "rotary_axis_location", "angular", "probe_pretravel"];
+    ORDER.iter().position(|t| *t == term).unwrap_or(ORDER.len())
+}
+
+/// BIC difference below which two candidates count as equally supported (Kass & Raftery:
+/// "not worth more than a bare mention").
+pub const TIE_BIC: f64 = 2.0;
 
 /// The data: residuals after the declared fit, their σ, the declared free parameters' Jacobian,
 /// and fold assignments (one vector per blocking scheme, fold ids 0..k).
@@ -120,6 +136,8 @@ pub struct CandidateScore {
     pub variant: String,
     /// Held-out sum of squared whitened residuals with the candidate added.
     pub heldout_ssr: f64,
+    /// Relative fall of the held-out error on the schemes that judge it.
+    pub heldout_gain: f64,
     pub wald_p_adjusted: f64,
     pub plausible: bool,
     pub separable: bool,
@@ -205,6 +223,7 @@ pub fn select(data: &SelectionData, candidates: &[Candidate], options: &Selectio
             term: c.term.clone(),
             physical: c.physical,
             variants: vec![Variant { name: String::new(), columns: whiten(&c.columns), parameter_names: c.parameter_names.clone(), units: c.units.clone(), ranges: c.ranges.clone(), base_values: c.base_values.clone(), profiled: 0 }],
+            judged_by: None,
         })
         .collect();
     let s = select_families(&whitened, &families, options);
@@ -273,8 +292,15 @@ pub fn select_families(data: &WhitenedData, families: &[Family], options: &Selec
     let before_fit = base.clone();
     let mut steps = Vec::new();
     let tried: usize = families.iter().map(|f| f.variants.len()).sum();
+    let judged = |by: &Option<Vec<usize>>, per_scheme: &[f64]| -> f64 {
+        match by {
+            None => per_scheme.iter().sum(),
+            Some(list) => list.iter().filter_map(|&s| per_scheme.get(s)).sum(),
+        }
+    };
     while chosen.len() < options.max_terms {
         let current_cv = base.heldout_ssr();
+        let current_by_scheme = base.heldout_by_scheme();
         let current_bic = bic(nf, base.ssr(), (base.rank() + profiled_of(&chosen)) as f64);
         let mut per_family: Vec<Scored> = Vec::new();
         for (fi, fam) in families.iter().enumerate() {
@@ -294,8 +320,10 @@ pub fn select_families(data: &WhitenedData, families: &[Family], options: &Selec
                 let plausible = values.iter().zip(&var.ranges).all(|(v, (lo, hi))| *v >= *lo && *v <= *hi);
                 let bic_with = bic(nf, c.ssr, (c.rank + profiled_of(&chosen) + var.profiled) as f64);
                 let delta_bic = bic_with - current_bic;
-                let accepted = c.separable && plausible && p_adjusted <= options.alpha && delta_bic < 0.0 && c.heldout_ssr <= current_cv * (1.0 - options.min_cv_gain);
-                let score = CandidateScore { label: fam.label.clone(), variant: var.name.clone(), heldout_ssr: c.heldout_ssr, wald_p_adjusted: p_adjusted, plausible, separable: c.separable, delta_bic, values, sigmas, accepted };
+                let (cv_with, cv_without) = (judged(&fam.judged_by, &c.heldout_by_scheme), judged(&fam.judged_by, &current_by_scheme));
+                let heldout_gain = if cv_without > 0.0 { 1.0 - cv_with / cv_without } else { 0.0 };
+                let accepted = c.separable && plausible && p_adjusted <= options.alpha && delta_bic < 0.0 && heldout_gain >= options.min_cv_gain;
+                let score = CandidateScore { label: fam.label.clone(), variant: var.name.clone(), heldout_ssr: c.heldout_ssr, heldout_gain, wald_p_adjusted: p_adjusted, plausible, separable: c.separable, delta_bic, values, sigmas, accepted };
                 let better = match &best {
                     None => true,
                     Some(b) => (accepted && !b.score.accepted) || (accepted == b.score.accepted && bic_with < b.bic),
@@ -308,7 +336,14 @@ pub fn select_families(data: &WhitenedData, families: &[Family], options: &Selec
                 per_family.push(b);
             }
         }
-        let best_of = |physical: bool| per_family.iter().filter(|s| s.score.accepted && families[s.family].physical == physical).min_by(|a, b| a.bic.total_cmp(&b.bic));
+        let best_of = |physical: bool| {
+            let accepted: Vec<&Scored> = per_family.iter().filter(|s| s.score.accepted && families[s.family].physical == physical).collect();
+            let lowest = accepted.iter().map(|s| s.bic).fold(f64::INFINITY, f64::min);
+            let size = |s: &Scored| families[s.family].variants[s.variant].columns.ncols() + families[s.family].variants[s.variant].profiled;
+            accepted.into_iter().filter(|s| s.bic <= lowest + TIE_BIC).min_by(|a, b| {
+                preference(&families[a.family].term).cmp(&preference(&families[b.family].term)).then(size(a).cmp(&size(b))).then(a.bic.total_cmp(&b.bic))
+            })
+        };
         let pick = match (best_of(true), best_of(false)) {
             (Some(p), Some(e)) => Some(if e.bic < p.bic - options.empirical_margin { e } else { p }),
             (Some(p), None) => Some(p),
@@ -339,7 +374,8 @@ pub fn select_families(data: &WhitenedData, families: &[Family], options: &Selec
             let c = without.candidate(&rows, &arranged[f][v]);
             let dof = nf - c.rank as f64;
             let p = if c.separable { (f_test(c.explained, arranged[f][v].ncols(), c.ssr, dof) * chosen.len() as f64).min(1.0) } else { 1.0 };
-            let cv_ok = c.heldout_ssr <= without.heldout_ssr() * (1.0 - options.min_cv_gain);
+            let by = &families[f].judged_by;
+            let cv_ok = judged(by, &c.heldout_by_scheme) <= judged(by, &without.heldout_by_scheme()) * (1.0 - options.min_cv_gain);
             let p = if cv_ok { p } else { 1.0 };
             if p > options.alpha && worst.is_none_or(|(_, wp)| p > wp) {
                 worst = Some((i, p));

@@ -2,7 +2,7 @@
 //! namespace: every message recorded with identical bytes, the bag readable by Python
 //! `rosbags`, and after SIGKILL `recover` keeps everything up to the last flush.
 //!
-//! Run: `METROCELL_PYTHON=/tmp/venv/bin/python tests/isolated cargo test -p metrocell-recorder-node`
+//! Run: `METROCELL_PYTHON=.venv/bin/python tests/isolated cargo test -p metrocell-recorder-node`
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command};

@@ -23,6 +23,7 @@ pub mod candidates;
 pub mod empirical;
 pub mod findings;
 pub mod folds;
+pub mod html_report;
 pub mod locate;
 pub mod multiple_testing;
 pub mod noise_tests;

@@ -55,7 +55,8 @@ mod tests {
     #[test]
     fn finds_an_odd_lead_among_noise() {
         let n = 400;
-        let q: Vec<f64> = (0..n).map(|i| 0.8 * ((i * 7919) % n) as f64 / n as f64).collect();
+        // irregular positions (a regular grid has aliases the data cannot tell from the truth)
+        let q: Vec<f64> = (0..n).map(|i| 0.8 * (i as f64 * 0.618_033_988_75).fract()).collect();
         let r: Vec<f64> = q.iter().enumerate().map(|(i, x)| 3e-6 * (std::f64::consts::TAU * x / 0.0137).cos() + 2e-6 * (((i * 31) % 17) as f64 / 8.0 - 1.0)).collect();
         let (p, share) = strongest_period(&q, &r, &vec![1.0; n], 0.002, 0.2).unwrap();
         assert!((p - 0.0137).abs() < 2e-5, "{p}");

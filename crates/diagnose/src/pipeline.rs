@@ -484,17 +484,32 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         c0.declared_columns(&free0)?
     };
     let before_fit = BaseFit::new(&rows, rows.arrange(&ctx_before_cols), rows.arrange_vector(&view0.whitened()));
+    // the blockings every chosen term can be judged on
+    let mut schemes: Vec<usize> = vec![0, 1];
+    for c in &selection.chosen {
+        if let Some(by) = &families[c.candidate].judged_by {
+            schemes.retain(|s| by.contains(s));
+        }
+    }
+    if schemes.is_empty() {
+        messages.push("the empirical corrections in time and over the workspace cannot both be judged on held-out blocks; the held-out figures use both blockings".into());
+        schemes = vec![0, 1];
+    }
+    let scheme_names: Vec<String> = schemes.iter().map(|&s| if s == 0 { "time".to_string() } else { "workspace".to_string() }).collect();
     let figures = |fitb: &BaseFit, view: &ResidualView| -> (FitFigures, Vec<Vector3<f64>>, Vec<f64>) {
         let held = fitb.heldout_residuals(&rows);
         let (mut ss, mut count, mut max) = (0.0, 0usize, 0.0f64);
         let mut first = vec![0.0; view.len()];
         for (s, h) in held.iter().enumerate() {
+            if !schemes.contains(&s) {
+                continue;
+            }
             let e = view.to_workpiece_metres(&rows.restore_vector(h));
             for (i, v) in e.iter().enumerate() {
                 ss += v.norm_squared();
                 count += 3;
                 max = max.max(v.norm());
-                if s == 0 {
+                if s == schemes[0] {
                     first[i] = v.norm();
                 }
             }
@@ -502,7 +517,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         let full = view.to_workpiece_metres(&rows.restore_vector(&fitb.residuals()));
         let rms = (full.iter().map(|v| v.norm_squared()).sum::<f64>() / (3 * view.len()) as f64).sqrt();
         let dof = (fitb.rows() as f64 - fitb.rank() as f64).max(1.0);
-        (FitFigures { heldout_rms_m: (ss / count.max(1) as f64).sqrt(), heldout_max_m: max, chi2_per_dof: fitb.ssr() / dof, rms_m: rms }, full, first)
+        (FitFigures { heldout_rms_m: (ss / count.max(1) as f64).sqrt(), heldout_max_m: max, chi2_per_dof: fitb.ssr() / dof, rms_m: rms, heldout_blocks: scheme_names.clone() }, full, first)
     };
     let (before, before_res, held_before) = figures(&before_fit, &view0);
     let (after, after_res, held_after) = figures(&after_fit, &view1);

@@ -24,6 +24,10 @@ pub struct FitFigures {
     pub chi2_per_dof: f64,
     /// RMS per coordinate of the full-data fit's residuals, m.
     pub rms_m: f64,
+    /// The blockings the held-out figures use (`time`, `workspace`): both, unless an empirical
+    /// correction was added that one of them cannot judge (a correction in time cannot predict
+    /// a held-out block of time); before and after use the same.
+    pub heldout_blocks: Vec<String>,
 }
 
 /// A fitted parameter.

@@ -47,6 +47,24 @@ impl fmt::Display for Axis {
     }
 }
 
+/// A rotary machine axis (ISO 841: A, B, C turn about x, y, z).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum RotaryAxis {
+    A,
+    B,
+    C,
+}
+
+impl RotaryAxis {
+    /// 0, 1, 2 for A, B, C.
+    pub fn index(self) -> usize {
+        self as usize
+    }
+    pub fn name(self) -> &'static str {
+        ["a", "b", "c"][self.index()]
+    }
+}
+
 /// Kind of signal a term needs (the declaration; values live in [`Signals`]).
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum SignalKind {
@@ -78,6 +96,8 @@ pub enum SignalKind {
     Point,
     /// Unit vector of the probing (approach) direction in the probe frame.
     ProbeDirection,
+    /// Commanded angle of a rotary axis, rad.
+    RotaryPosition(RotaryAxis),
 }
 
 impl fmt::Display for SignalKind {
@@ -97,6 +117,7 @@ impl fmt::Display for SignalKind {
             SignalKind::ImagePoint => write!(f, "image_point (normalised)"),
             SignalKind::Point => write!(f, "point (m)"),
             SignalKind::ProbeDirection => write!(f, "probe_direction (unit vector)"),
+            SignalKind::RotaryPosition(a) => write!(f, "rotary_position[{}] (rad)", a.name()),
         }
     }
 }
@@ -125,6 +146,8 @@ pub struct Signals {
     pub image_point: Option<Vector2<f64>>,
     pub point: Option<Vector3<f64>>,
     pub probe_direction: Option<Vector3<f64>>,
+    /// Commanded angles of the rotary axes A, B, C (rad), where the machine has them.
+    pub rotary_position: [Option<f64>; 3],
 }
 
 fn missing(term: &str, kind: SignalKind) -> PhysicsError {
@@ -190,6 +213,9 @@ impl Signals {
     }
     pub fn point3(&self, term: &str) -> Result<Vector3<f64>, PhysicsError> {
         self.point.ok_or_else(|| missing(term, SignalKind::Point))
+    }
+    pub fn rotary(&self, term: &str, a: RotaryAxis) -> Result<f64, PhysicsError> {
+        self.rotary_position[a.index()].ok_or_else(|| missing(term, SignalKind::RotaryPosition(a)))
     }
     pub fn probe_dir(&self, term: &str) -> Result<Vector3<f64>, PhysicsError> {
         let u = self.probe_direction.ok_or_else(|| missing(term, SignalKind::ProbeDirection))?;

@@ -124,16 +124,41 @@ def verify(out_dir):
     return problems
 
 
+def digest(out_dir):
+    """sha256 over every message of a recording in log-time order (topic, log time, CDR bytes):
+    equal for equal messages, whatever the MCAP chunking."""
+    import hashlib
+    from mcap.reader import make_reader
+
+    h = hashlib.sha256()
+    for name in sorted(n for n in os.listdir(out_dir) if n.endswith(".mcap")):
+        with open(os.path.join(out_dir, name), "rb") as f:
+            for _, ch, msg in make_reader(f).iter_messages(log_time_order=True):
+                h.update(ch.topic.encode() + b"\0" + msg.log_time.to_bytes(8, "little") + len(msg.data).to_bytes(8, "little") + msg.data)
+    return h.hexdigest()
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--metrocell", required=True, help="the metrocell binary (cargo build --release -p metrocell-cli)")
-    ap.add_argument("--out", required=True, help="directory for OUT/case_NN/seed_S bags")
+    ap.add_argument("--metrocell", help="the metrocell binary (cargo build --release -p metrocell-cli)")
+    ap.add_argument("--out", help="directory for OUT/case_NN/seed_S bags")
     ap.add_argument("--seeds", type=int, nargs="+", default=[1])
     ap.add_argument("--cases", nargs="*", help="case names (default: every case)")
     ap.add_argument("--force", action="store_true", help="replace recordings that already exist")
     ap.add_argument("--verify", action="store_true", help="check each recording names nothing of the answer (needs mcap, mcap-ros2-support)")
+    ap.add_argument("--verify-only", metavar="BAG", help="only check an existing bag (any bag) and exit 1 if it names the answer")
+    ap.add_argument("--digest", metavar="BAG", help="only print the message digest of an existing bag")
     a = ap.parse_args(argv)
+    if a.verify_only:
+        problems = verify(a.verify_only)
+        print("\n".join(problems) if problems else f"{a.verify_only}: names nothing of the answer")
+        return 1 if problems else 0
+    if a.digest:
+        print(digest(a.digest))
+        return 0
     plans = json.load(open(os.path.join(HERE, "recordings.json")))
+    if not (a.metrocell and a.out):
+        ap.error("--metrocell and --out are required to generate recordings")
     cases = a.cases or sorted(plans)
     unknown = [c for c in cases if c not in plans]
     if unknown:

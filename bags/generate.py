@@ -69,7 +69,7 @@ def generate(metrocell, case, seed, plan, out_dir):
 TELLTALES = ["angular", "backlash", "camera_scale", "compliance", "delta_endstop", "delta_radius", "delta_rod_length",
              "delta_tower_angle", "frame_misalignment", "joint_offset", "lens_distortion", "link_length", "pitch_cyclic",
              "positioning", "probe_pretravel", "refraction", "squareness", "straightness", "thermal_growth", "thermal_scale",
-             "time_offset", "tool_offset", "tracker_pose", "tracker_warmup", "turbulence", "workpiece_expansion",
+             "time_offset", "tool_offset", "tracker_pose", "tracker_warmup", "turbulence", "workpiece_expansion", "rotary_axis_location",
              "concealed", "truth", "disturb", "answer"]
 
 

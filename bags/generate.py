@@ -48,9 +48,16 @@ def anchored(topics):
     return "^(" + "|".join(t.replace("/", "\\/") for t in topics) + ")$"
 
 
-def generate(metrocell, case, seed, plan, out_dir):
+def run_dirs(out, case, seed, plan):
+    """Bag directories of one case and seed: OUT/case/seed_S, and OUT/case/seed_S_run2, ... when
+    the case is recorded in several runs (e.g. unloaded and loaded)."""
+    base = os.path.join(out, case, f"seed_{seed}")
+    return [base] + [f"{base}_run{k}" for k in range(2, len(plan.get("runs", ["truth.yaml"])) + 1)]
+
+
+def generate(metrocell, case, seed, plan, out_dir, truth_file="truth.yaml"):
     """Write one recording to out_dir (which must not exist)."""
-    truth = os.path.join(HERE, "cases", case, "truth.yaml")
+    truth = os.path.join(HERE, "cases", case, truth_file)
     with tempfile.TemporaryDirectory(prefix=f"suite_{case}_") as tmp:
         raw = os.path.join(tmp, "raw")
         run([metrocell, "sim", "--cell", truth, "--duration", str(plan["duration_s"]), "--seed", str(seed),
@@ -164,20 +171,22 @@ def main(argv=None):
     if unknown:
         sys.exit(f"generate.py: unknown case(s) {unknown}; the suite has {sorted(plans)}")
     for case in cases:
+        plan = plans[case]
         for seed in a.seeds:
-            out_dir = os.path.join(a.out, case, f"seed_{seed}")
-            if os.path.exists(out_dir):
-                if not a.force:
-                    print(f"{out_dir}: exists, kept (--force replaces it)")
-                    continue
-                shutil.rmtree(out_dir)
-            generate(a.metrocell, case, seed, plans[case], out_dir)
-            size = sum(os.path.getsize(os.path.join(out_dir, f)) for f in os.listdir(out_dir))
-            print(f"{out_dir}: {size / 1024:.0f} KiB")
-            if a.verify:
-                problems = verify(out_dir)
-                if problems:
-                    sys.exit(f"generate.py: {out_dir} gives the answer away:\n  " + "\n  ".join(problems))
+            for k, (out_dir, truth_file) in enumerate(zip(run_dirs(a.out, case, seed, plan), plan.get("runs", ["truth.yaml"]))):
+                if os.path.exists(out_dir):
+                    if not a.force:
+                        print(f"{out_dir}: exists, kept (--force replaces it)")
+                        continue
+                    shutil.rmtree(out_dir)
+                # run k of a case gets its own noise: seed + 1000 k
+                generate(a.metrocell, case, seed + 1000 * k, plan, out_dir, truth_file)
+                size = sum(os.path.getsize(os.path.join(out_dir, f)) for f in os.listdir(out_dir))
+                print(f"{out_dir}: {size / 1024:.0f} KiB")
+                if a.verify:
+                    problems = verify(out_dir)
+                    if problems:
+                        sys.exit(f"generate.py: {out_dir} gives the answer away:\n  " + "\n  ".join(problems))
     return 0
 
 

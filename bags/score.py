@@ -36,6 +36,8 @@ import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import generate  # noqa: E402  (where the recordings of a case and seed are)
 
 TARGETS = {
     "single_first": 0.90,
@@ -209,18 +211,21 @@ def main(argv=None):
     ap.add_argument("--out", required=True, help="results JSON (every diagnose result and verdict, and the summary)")
     a = ap.parse_args(argv)
     answers = load_answers()
+    with open(os.path.join(HERE, "recordings.json")) as f:
+        plans = json.load(f)
     cases = a.cases or sorted(answers)
     runs = []
     for case in cases:
         for seed in a.seeds:
-            bag = os.path.join(a.recordings, case, f"seed_{seed}")
-            if not os.path.isdir(bag):
-                sys.exit(f"score.py: {bag} is missing; make it with bags/generate.py --seeds {seed} --cases {case}")
+            bags = generate.run_dirs(a.recordings, case, seed, plans[case])
+            missing = [b for b in bags if not os.path.isdir(b)]
+            if missing:
+                sys.exit(f"score.py: {missing} missing; make them with bags/generate.py --seeds {seed} --cases {case}")
             residuals = None
             if a.residuals_dir:
                 os.makedirs(a.residuals_dir, exist_ok=True)
                 residuals = os.path.join(a.residuals_dir, f"{case}_seed_{seed}.csv")
-            result, stderr, wall = run_diagnose(a.metrocell, case, [bag], a.strategy, residuals)
+            result, stderr, wall = run_diagnose(a.metrocell, case, bags, a.strategy, residuals)
             verdict = judge(answers[case], result)
             runs.append({"case": case, "seed": seed, "wall_s": wall, "verdict": verdict, "result": result,
                          "stderr": stderr[-4000:] if stderr else ""})

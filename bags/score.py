@@ -200,7 +200,44 @@ def table(summary):
     return "\n".join(l for l in lines if l)
 
 
+def self_test():
+    """The judging rules on crafted results (each must pass and fail where it should)."""
+    single = {"kind": "single", "concealed": [{"term": "backlash", "label": "backlash[x]", "checked_parameters": {"reversal": 14e-6}}]}
+    good = {"noise_rms_m": 5e-6, "before": {"heldout_rms_m": 9e-6}, "after": {"heldout_rms_m": 5.5e-6}, "unexplained": [],
+            "findings": [{"term": "backlash", "label": "backlash[x]", "parameters": {"backlash[x].reversal": {"value": 13.2, "sigma": 0.5, "unit": "um"}}}]}
+    v = judge(single, good)
+    assert v["ok"] and v["rms_ok"] and v["parameters"][0]["ok"] and v["false_claims"] == 0, v
+    assert abs(v["parameters"][0]["z"] + 1.6) < 1e-9, v          # (13.2 - 14) / 0.5
+    off = json.loads(json.dumps(good))
+    off["findings"][0]["parameters"]["backlash[x].reversal"]["value"] = 12.0   # 4 sigma off
+    off["after"]["heldout_rms_m"] = 6.5e-6                                       # 1.3x the floor
+    v = judge(single, off)
+    assert v["ok"] and not v["parameters"][0]["ok"] and not v["rms_ok"], v
+    wrong_axis = json.loads(json.dumps(good))
+    wrong_axis["findings"].insert(0, {"term": "backlash", "label": "backlash[y]", "parameters": {}})
+    v = judge(single, wrong_axis)
+    assert not v["ok"] and v["false_claims"] == 1, v
+    assert not judge({"kind": "null", "concealed": []}, good)["ok"]
+    assert judge({"kind": "null", "concealed": []}, {**good, "findings": []})["ok"]
+    ooc = {"kind": "out_of_catalog", "concealed": []}
+    assert not judge(ooc, {**good, "findings": []})["ok"], "unexplained must say where"
+    assert judge(ooc, {**good, "findings": [], "unexplained": [{"where": "z, 2.1-3.4 h"}]})["ok"]
+    assert not judge(ooc, {**good, "unexplained": [{"where": "z"}]})["ok"], "a physical name is a false claim"
+    two = {"kind": "two", "concealed": single["concealed"] + [{"term": "squareness", "label": "squareness[xy]", "checked_parameters": {}}]}
+    assert not judge(two, good)["ok"]
+    both = {**good, "findings": good["findings"] + [{"term": "squareness", "label": "squareness[xy]", "parameters": {}}]}
+    assert judge(two, both)["ok"]
+    assert not judge(single, None)["ok"]
+    s = aggregate([judge(single, good), judge(single, off), judge(single, wrong_axis), judge(two, both)])
+    assert s["single_first"][:2] == (2, 3) and s["two_both"][:2] == (1, 1) and s["parameters_within_3_sigma"][:2] == (3, 4), s
+    assert not targets_met(s)["single_first"][2] and targets_met(s)["two_both"][2]
+    print("score.py self-test: ok")
+
+
 def main(argv=None):
+    if argv is None and sys.argv[1:] == ["--self-test"]:
+        self_test()
+        return 0
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--metrocell", required=True)
     ap.add_argument("--recordings", required=True, help="directory of RECORDINGS/case_NN/seed_S bags (bags/generate.py)")

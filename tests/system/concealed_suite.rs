@@ -92,6 +92,12 @@ fn case_files_are_what_the_case_table_writes() {
 }
 
 #[test]
+fn the_scorer_judges_crafted_results_right() {
+    let o = py(&[os("bags/score.py"), os("--self-test")], Duration::from_secs(60));
+    assert!(o.status.success() && String::from_utf8_lossy(&o.stdout).contains("self-test: ok"), "bags/score.py --self-test failed");
+}
+
+#[test]
 fn recordings_are_deterministic_and_name_nothing_of_the_answer() {
     let a = temp_dir("det_a");
     let b = temp_dir("det_b");

@@ -102,6 +102,15 @@ def same_term(finding, concealed):
     return finding.get("term") == concealed["term"] and finding.get("label") == concealed["label"]
 
 
+def says_where(where):
+    """A `where` that says something: a non-empty text, or an object with a description or axis."""
+    if isinstance(where, str):
+        return bool(where.strip())
+    if isinstance(where, dict):
+        return bool(str(where.get("description") or "").strip() or str(where.get("axis") or "").strip())
+    return False
+
+
 def judge(answer, result):
     """Verdict of one diagnose result (dict) against its answer-key entry."""
     kind = answer["kind"]
@@ -126,7 +135,7 @@ def judge(answer, result):
     elif kind == "out_of_catalog":
         unexplained = result.get("unexplained") or []
         v["unexplained_where"] = [u.get("where") for u in unexplained]
-        v["ok"] = not findings and any(u.get("where") for u in unexplained)
+        v["ok"] = not findings and any(says_where(u.get("where")) for u in unexplained)
     else:
         raise ValueError(f"unknown case kind {kind}")
     # parameters and RMS of the runs where every concealed term was found
@@ -222,6 +231,8 @@ def self_test():
     ooc = {"kind": "out_of_catalog", "concealed": []}
     assert not judge(ooc, {**good, "findings": []})["ok"], "unexplained must say where"
     assert judge(ooc, {**good, "findings": [], "unexplained": [{"where": "z, 2.1-3.4 h"}]})["ok"]
+    assert judge(ooc, {**good, "findings": [], "unexplained": [{"where": {"axis": "z", "description": "47 min cycle", "channels": []}}]})["ok"]
+    assert not judge(ooc, {**good, "findings": [], "unexplained": [{"where": {"axis": "", "description": "", "channels": []}}]})["ok"]
     assert not judge(ooc, {**good, "unexplained": [{"where": "z"}]})["ok"], "a physical name is a false claim"
     two = {"kind": "two", "concealed": single["concealed"] + [{"term": "squareness", "label": "squareness[xy]", "checked_parameters": {}}]}
     assert not judge(two, good)["ok"]

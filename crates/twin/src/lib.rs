@@ -31,6 +31,7 @@ pub mod cell;
 pub mod cell_file;
 pub mod error;
 pub mod families;
+pub mod fiducial_plate;
 pub mod noise;
 pub mod program;
 pub mod quantity;
@@ -41,5 +42,6 @@ pub mod tracker_model;
 
 pub use cell::{Cell, MachineGeometry, MachineKinematics};
 pub use error::CellError;
+pub use fiducial_plate::FiducialPlate;
 pub use sample::{CameraFrameRequest, MachineStateSample, ProbeHitSample, Sample, SampleTruth, TemperatureSample, TrackerSample, TrackerStatus, TrackerTruth, TrueParameter};
 pub use simulation::{GroundTruth, SampleStream, Simulation, TruthStream};

@@ -123,7 +123,8 @@ fn two_trackers_and_two_cameras_are_separate_instruments() {
     }
 
     // cameras: cam1 carries the scale (metric point), cam2 the lens (pixels)
-    let feature = Vector3::new(0.25, 0.15, 0.2 - 0.15);
+    // a part feature 150 mm below the tool point, a little off the cameras' axes
+    let feature = tool.nominal.translation.vector + Vector3::new(0.01, 0.02, -0.15);
     let cam1 = model.camera(Some("cam1"), &p, &tool, &mut sig.clone(), &feature).unwrap();
     let cam2 = model.camera(Some("cam2"), &p, &tool, &mut sig.clone(), &feature).unwrap();
     assert!((cam1.measured_point - cam1.point * (1.0 + 5e-4)).norm() < 1e-15 && cam1.distorted == cam1.normalised);

@@ -581,9 +581,11 @@ impl<'a> Engine<'a> {
         let nominal = self.cell.machine.nominal_tool_point(&v3(&seg.to));
         let hit = ProbeTarget { surface: nominal, approach: u, stylus_radius: 0.0 };
         let prediction = self.model.probe_hit(None, &self.params, &self.kinematics, ms.q.as_slice(), &mut self.signals, &hit)?;
-        let (d, pretravel) = (prediction.machine, prediction.pretravel);
+        // the test-only disturbances move the machine as the true terms do: the axes read P − δ
+        let delta = if self.cell.disturbances.is_empty() { Vector3::zeros() } else { self.cell.disturbances.displacement(ev.t, &v3(&seg.to)) };
+        let (d, pretravel) = (prediction.machine + delta, prediction.pretravel);
         let noise = Vector3::new(self.probe_noise.normal(), self.probe_noise.normal(), self.probe_noise.normal()) * spec.noise;
-        let recorded = prediction.centre + noise;
+        let recorded = prediction.centre - delta + noise;
         let s = ProbeHitSample {
             t: ev.t,
             target_id: point as u32,

@@ -118,6 +118,8 @@ pub enum DiagnoseError {
     DeclaredFit(FitError),
     #[error("the model: {0}")]
     Model(#[from] PhysicsError),
+    #[error("the model does not fit the recording: {0}")]
+    Mismatch(String),
 }
 
 /// A term added to the model, as it goes into the augmented model file.
@@ -146,12 +148,16 @@ pub struct PlotData {
     pub evidence: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)>,
 }
 
-/// The diagnosis: the report, the terms to add to the model file, data for plots.
+/// The diagnosis: the report, the terms to add to the model file, data for plots, the records
+/// it used (after averaging repeats and setting outliers aside) with their stated σ along the
+/// workpiece axes.
 #[derive(Debug, Clone)]
 pub struct Diagnosis {
     pub report: Report,
     pub added_terms: Vec<AddedTerm>,
     pub plots: PlotData,
+    pub records: Vec<MeasurementRecord>,
+    pub sigma_workpiece: Vec<Vector3<f64>>,
 }
 
 /// The declared model with a tracker pose (the model's reading needs one: free if the records
@@ -262,6 +268,17 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
             needed
         )));
     }
+    let joints = declared.machine.joint_names();
+    if let Some(r) = prep.records.iter().find(|r| r.q.len() != joints.len()) {
+        return Err(DiagnoseError::Mismatch(format!(
+            "the records carry {} joint values per point (point `{}` at t = {:.3} s), the model's machine has {} ({}): the recording is of another machine, or the model file is the wrong one",
+            r.q.len(),
+            r.point_id,
+            r.time,
+            joints.len(),
+            joints.join(" ")
+        )));
+    }
     let mut set = RecordSet { frame: records.frame.clone(), records: prep.records.clone(), rejected: vec![], sources: records.sources.clone() };
     // 2. declared fit, outliers, refit
     let mut declared_fit = fit(&model, &setup, &set, None, &options.fit).map_err(DiagnoseError::DeclaredFit)?;
@@ -282,6 +299,19 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     }
     let n = set.records.len();
     let x0 = declared_fit.x.clone();
+    {
+        // a model of another machine leaves millimetres after its own fit
+        let rms = metrocell_estimation::rms(&declared_fit.residuals_after);
+        let noise = (set.records.iter().map(|r| r.covariance.trace()).sum::<f64>() / (3 * n) as f64).sqrt();
+        if rms > 5e-4 && rms > 100.0 * noise {
+            return Err(DiagnoseError::Mismatch(format!(
+                "after fitting its own parameters the model still misses the measured points by {:.2} mm RMS ({:.0}× the stated noise of {:.1} µm): check the machine family and geometry, the tool offset, the instrument frame of the points, and the units of the recording",
+                rms * 1e3,
+                rms / noise,
+                noise * 1e6
+            )));
+        }
+    }
     let free0: Vec<usize> = declared_fit.parameters.iter().enumerate().filter(|(_, p)| p.free).map(|(k, _)| k).collect();
     let view0 = ResidualView::new(&model, &x0, &set.records, &set.frame)?;
     // 3. where the declared model's residuals disagree with noise
@@ -635,7 +665,8 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     }
     temperatures.retain(|_, v| v.len() == n);
     let plots = PlotData { time: view1.time.clone(), position: view1.position.clone(), before: before_res, after: after_res, heldout_before: held_before, heldout_after: held_after, temperatures, evidence: built.evidence };
-    Ok(Diagnosis { report, added_terms, plots })
+    let sigma_workpiece = set.records.iter().map(|r| view0.workpiece_sigma(&r.covariance)).collect();
+    Ok(Diagnosis { report, added_terms, plots, records: set.records, sigma_workpiece })
 }
 
 /// Which noise level the verdicts rely on: the stated one when the data's own measure agrees

@@ -128,6 +128,25 @@ def tracker_yaml(rate="1 Hz", pose="[-863.527 mm, 194.373 mm, 677.782 mm]", eule
     return "\n".join(lines) + "\n"
 
 
+# The user knows the tracker's pose only roughly (the fit estimates it as a nuisance): model
+# files carry the true pose moved by a few millimetres and a few hundredths of a degree.
+POSE_ERROR_MM = (3.1, -2.4, 1.7)
+POSE_ERROR_DEG = (0.021, -0.016, 0.047)
+
+
+def roughen(tracker_text):
+    """The tracker section with its pose moved by POSE_ERROR_* (units as written)."""
+    import re
+
+    def shift(match, errors, scale):
+        vals = re.findall(r"(-?[0-9.]+) ?([a-z]+)", match.group(1))
+        moved = [f"{float(v) + e * scale[u]:.6g} {u}" for (v, u), e in zip(vals, errors)]
+        return match.group(0).replace(match.group(1), ", ".join(moved))
+
+    text = re.sub(r"translation: \[([^\]]*)\]", lambda m: shift(m, POSE_ERROR_MM, {"mm": 1.0, "m": 1e-3}), tracker_text, count=1)
+    return re.sub(r"euler_xyz: \[([^\]]*)\]", lambda m: shift(m, POSE_ERROR_DEG, {"deg": 1.0}), text, count=1)
+
+
 def cartesian_cell(case, role, *, env, program, tracker, terms, estimation="", disturbances="",
                    travel=("800 mm", "500 mm", "400 mm"), machine_rate="1 Hz", load=""):
     """A cartesian XFYZ cell (the thesis' machine layout) with a tracker and thermocouples."""
@@ -142,7 +161,7 @@ machine:
 
 sensors:
 """
-    text += tracker + THERMOCOUPLES + f"  machine_state: {{rate: {machine_rate}}}\n\n"
+    text += (roughen(tracker) if role == "model" else tracker) + THERMOCOUPLES + f"  machine_state: {{rate: {machine_rate}}}\n\n"
     text += env.replace("  air:", load + "  air:") if load else env
     text += "\n" + program.yaml() + "\n"
     text += "terms:" + (" []\n" if not terms else "\n" + terms)
@@ -223,7 +242,8 @@ machine:
 
 sensors:
 """
-    text += tracker_yaml(pose="[2.5 m, 0.3 m, 1.0 m]", euler="[0 deg, 0 deg, 180 deg]")
+    tracker = tracker_yaml(pose="[2.5 m, 0.3 m, 1.0 m]", euler="[0 deg, 0 deg, 180 deg]")
+    text += roughen(tracker) if role == "model" else tracker
     text += """\
   thermocouples:
     - {name: ambient, location: ambient, noise: 0.02 K, rate: 0.05 Hz}
@@ -264,7 +284,8 @@ machine:
 
 sensors:
 """
-    text += tracker_yaml(pose="[1.1 m, -0.4 m, 0.3 m]", euler="[0 deg, 0 deg, 160 deg]")
+    tracker = tracker_yaml(pose="[1.1 m, -0.4 m, 0.3 m]", euler="[0 deg, 0 deg, 160 deg]")
+    text += roughen(tracker) if role == "model" else tracker
     text += """\
   thermocouples:
     - {name: ambient, location: ambient, noise: 0.02 K, rate: 0.05 Hz}

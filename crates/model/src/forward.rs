@@ -374,11 +374,23 @@ impl<'a> ForwardModel<'a> {
     pub fn tool_state(&self, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, cache: Option<&mut DisplacementCache>) -> Result<ToolState, PhysicsError> {
         self.check(p)?;
         let mut cache = cache;
+        s.machine_point = self.nominal_machine_point(q);
         let mut tool = self.tool_state_with(kin, q, |rotation| self.displacement(p, s, rotation, cache.as_deref_mut()))?;
         if self.has_workpiece_terms() {
             tool.workpiece = self.workpiece_displacement(p, s, tool.nominal.translation.vector, None, 1.0)?;
         }
         Ok(tool)
+    }
+
+    /// The nominal tool tip in the machine (axis) frame at joint vector `q`, the point
+    /// `Signals::machine_point` carries to the machine terms (None for an arm: its terms read no
+    /// machine point, and its forward kinematics is not worth running twice).
+    pub fn nominal_machine_point(&self, q: &[f64]) -> Option<Vector3<f64>> {
+        match &self.machine.kinematics {
+            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => Some(self.machine.nominal_tool_point(&Vector3::new(q[0], q[1], q[2]))),
+            MachineKinematics::FiveAxis(f) => Some(f.tip_machine(q)),
+            MachineKinematics::SerialArm(_) => None,
+        }
     }
 
     /// The family's tool state, with the machine terms' displacement sum `displacement(tool
@@ -429,6 +441,7 @@ impl<'a> ForwardModel<'a> {
     /// columns of instrument terms are left zero). The point is `tool_state(..).target()`, bit
     /// for bit.
     pub fn tool_point_jacobian(&self, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, out: &mut DMatrix<f64>) -> Result<Vector3<f64>, PhysicsError> {
+        s.machine_point = self.nominal_machine_point(q);
         let mut tool = self.tool_jacobian(p, kin, q, s, out, None)?;
         if self.has_workpiece_terms() {
             tool.workpiece = self.workpiece_displacement(p, s, tool.nominal.translation.vector, Some(out), -1.0)?;

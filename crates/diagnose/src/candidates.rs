@@ -144,8 +144,8 @@ fn lever_axes(machine: &MachineGeometry, axis: usize) -> Vec<usize> {
                 None => vec![0, 1, 2],
             }
         }
-        // the five-axis linear chain carries the spindle on X → Y → Z? its DH chain: Y (d1)
-        // carries X (d2) carries Z (d3): X and Y levers include the axes after them
+        // the five-axis linear chain (crates/kinematics `five_axis`, DH rows Y = d1, X = d2,
+        // Z = d3): Y carries X carries Z, so each lever holds the axes it carries
         MachineKinematics::FiveAxis(_) => match axis {
             1 => vec![0, 2],
             0 => vec![2],
@@ -334,8 +334,17 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
             skip("refraction", "no station air (temperature, pressure, humidity) in the records".into());
         }
     }
-    for id in [TermId::WorkpieceExpansion, TermId::FrameMisalignment] {
-        skip(id.as_str(), "the shared model does not yet evaluate workpiece-frame terms".into());
+    // the part: its expansion about the workpiece origin with each temperature (the clamp
+    // point is not known; expansion about another point differs by a shift growing with the
+    // same temperature, which a thermal growth candidate covers), and a misalignment of the
+    // part's frame (separable only from points not registered to the part, e.g. probe hits)
+    if !declared.has(TermId::WorkpieceExpansion) {
+        for s in &inventory.temperatures {
+            out.extend(family(vec![linear_variant("", TermId::WorkpieceExpansion, vec![("sensor", text(s))])], TermId::WorkpieceExpansion, Placement::Machine));
+        }
+    }
+    if !declared.has(TermId::FrameMisalignment) {
+        out.extend(family(vec![linear_variant("", TermId::FrameMisalignment, vec![])], TermId::FrameMisalignment, Placement::Machine));
     }
     out.retain(|f| !labels.contains(&f.label) && !(f.id == TermId::ToolOffset && declared.has(TermId::ToolOffset)));
     (out, not_tried)

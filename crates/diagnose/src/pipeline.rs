@@ -158,6 +158,10 @@ pub struct Diagnosis {
     pub plots: PlotData,
     pub records: Vec<MeasurementRecord>,
     pub sigma_workpiece: Vec<Vector3<f64>>,
+    /// Every parameter of the augmented model after the final refit: `label.param`, value, and
+    /// standard uncertainty where it was fitted and is identifiable (the model file's writer
+    /// rewrites those).
+    pub fitted: Vec<(String, f64, Option<f64>)>,
 }
 
 /// The declared model with a tracker pose (the model's reading needs one: free if the records
@@ -200,6 +204,8 @@ struct Prepared {
 
 enum Source {
     Term { family: TermFamily, kept: Vec<Vec<usize>> },
+    /// Declared parameters the model holds fixed, freed (`label.param` names).
+    Freed { id: TermId, label: String, names: Vec<String> },
     Empirical(Vec<EmpiricalBasis>),
 }
 
@@ -392,6 +398,25 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         let family = TermFamily { variants: kept_variants, ..tf.clone() };
         prepared.push(Prepared { family: Family { label: tf.label.clone(), term: tf.id.as_str().into(), physical: true, variants, judged_by: None }, source: Source::Term { family, kept: kept_all } });
     }
+    // a term the model declares but holds fixed at values the data may contradict: the air on
+    // the beam (a model with a weather station declares refraction with no offset)
+    let names0_all = model.param_names();
+    for t in instruments.terms.iter().filter(|t| t.term.id() == TermId::Refraction) {
+        let label = t.term.label();
+        let name = format!("{label}.path_temperature_offset");
+        let Some(k) = names0_all.iter().position(|n| *n == name) else { continue };
+        if setup.free[k] {
+            continue;
+        }
+        let cols = ctx.declared_columns(&[k])?;
+        if separable_columns(&declared_pinv, &declared_cols, &cols).is_empty() {
+            not_tried.push(NotTried { term: label.clone(), reason: "these records cannot separate the air's offset from the declared parameters".into() });
+            continue;
+        }
+        let spec = &t.term.params()[0];
+        let variant = Variant { name: "freed".into(), columns: cols, parameter_names: vec![spec.name.clone()], units: vec![spec.unit.into()], ranges: vec![(spec.min, spec.max)], base_values: vec![x0[k]], profiled: 0 };
+        prepared.push(Prepared { family: Family { label: label.clone(), term: TermId::Refraction.as_str().into(), physical: true, variants: vec![variant], judged_by: None }, source: Source::Freed { id: TermId::Refraction, label, names: vec![name] } });
+    }
     if options.empirical {
         for axis in 0..3 {
             let res: Vec<f64> = (0..sel_view.len()).map(|i| sel_view.workpiece(i)[axis]).collect();
@@ -434,6 +459,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     let mut machine_aug = declared.machine_terms.clone();
     let mut instruments_aug = instruments.clone();
     let mut added: Vec<(usize, TermConfig, Placement, Vec<String>)> = Vec::new();
+    let mut freed: Vec<(usize, TermId, String, Vec<(String, f64)>)> = Vec::new();
     let mut empirical_chosen: Vec<(usize, EmpiricalBasis, Vec<f64>)> = Vec::new();
     for c in &selection.chosen {
         match &prepared[c.candidate].source {
@@ -452,6 +478,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
                 }
                 added.push((c.candidate, config, family.placement, free_names));
             }
+            Source::Freed { id, label, names } => freed.push((c.candidate, *id, label.clone(), names.iter().cloned().zip(c.parameters.iter().map(|p| p.1)).collect())),
             Source::Empirical(bases) => {
                 empirical_chosen.push((c.candidate, bases[c.variant].clone(), c.parameters.iter().map(|p| p.1).collect()));
             }
@@ -462,7 +489,14 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         let label = configure(config).map(|t| t.term.label()).unwrap_or_default();
         free.iter().map(move |p| format!("{label}.{p}"))
     }).collect();
-    let setup_aug = setup_by_name(&model_aug, &setup, &|name| added_free.iter().any(|f| f == name));
+    let mut setup_aug = setup_by_name(&model_aug, &setup, &|name| added_free.iter().any(|f| f == name));
+    for (_, _, _, values) in &freed {
+        for (name, _) in values {
+            if let Some(k) = model_aug.param_names().iter().position(|n| n == name) {
+                setup_aug.free[k] = true;
+            }
+        }
+    }
     // start: the declared fit, the chosen terms at their selection values
     let names_aug = model_aug.param_names();
     let names0 = model.param_names();
@@ -470,6 +504,9 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     for (k, name) in names_aug.iter().enumerate() {
         if let Some(j) = names0.iter().position(|n| n == name) {
             start[k] = x0[j];
+        }
+        if let Some(v) = freed.iter().flat_map(|f| f.3.iter()).find(|(n, _)| n == name) {
+            start[k] = v.1;
         }
     }
     // the empirical corrections are taken off the measurements while the physics is refitted
@@ -588,6 +625,10 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         let Source::Term { family, .. } = &prepared[*cand].source else { unreachable!("terms only") };
         found.push(FoundTerm { label, id: family.id, variant: family.variants[chosen.variant].name.clone(), placement: *placement, order: k, config: config.clone() });
     }
+    for (_, id, label, _) in &freed {
+        let config = TermConfig { id: id.as_str().into(), ..Default::default() };
+        found.push(FoundTerm { label: label.clone(), id: *id, variant: "declared, freed".into(), placement: Placement::Instrument, order: found.len(), config });
+    }
     let sigmas1 = {
         // σ from the joint linear fit at the solution (pseudo-inverse: valid on the identifiable
         // directions even when a declared combination is not)
@@ -666,7 +707,8 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     temperatures.retain(|_, v| v.len() == n);
     let plots = PlotData { time: view1.time.clone(), position: view1.position.clone(), before: before_res, after: after_res, heldout_before: held_before, heldout_after: held_after, temperatures, evidence: built.evidence };
     let sigma_workpiece = set.records.iter().map(|r| view0.workpiece_sigma(&r.covariance)).collect();
-    Ok(Diagnosis { report, added_terms, plots, records: set.records, sigma_workpiece })
+    let fitted = names_aug.iter().enumerate().map(|(k, name)| (name.clone(), x1[k], if setup_aug.free[k] { sigmas1[k] } else { None })).collect();
+    Ok(Diagnosis { report, added_terms, plots, records: set.records, sigma_workpiece, fitted })
 }
 
 /// Which noise level the verdicts rely on: the stated one when the data's own measure agrees

@@ -157,8 +157,9 @@ fn lever_axes(machine: &MachineGeometry, axis: usize) -> Vec<usize> {
 
 /// Every candidate family for the declared model and the signals the records hold, and the
 /// catalog terms not tried with the reason. `periodogram_leads[k]` adds a lead found in the
-/// residuals of axis k.
-pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, periodogram_leads: &[Option<f64>; 3]) -> (Vec<TermFamily>, Vec<NotTried>) {
+/// residuals of axis k; `points_in_machine_frame`: the records' points are in the machine
+/// (part) frame rather than an instrument's.
+pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, periodogram_leads: &[Option<f64>; 3], points_in_machine_frame: bool) -> (Vec<TermFamily>, Vec<NotTried>) {
     let labels = declared.labels();
     let machine = declared.machine;
     let mut out: Vec<TermFamily> = Vec::new();
@@ -337,13 +338,21 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
     // the part: its expansion about the workpiece origin with each temperature (the clamp
     // point is not known; expansion about another point differs by a shift growing with the
     // same temperature, which a thermal growth candidate covers), and a misalignment of the
-    // part's frame (separable only from points not registered to the part, e.g. probe hits)
-    if !declared.has(TermId::WorkpieceExpansion) {
+    // part's frame. Only points taken in the part's (machine) frame show them: an instrument
+    // registered to the part sights the tool, and a uniform scale or turn of its frame is the
+    // same as its own pose, or its range scale
+    if !points_in_machine_frame {
+        for id in [TermId::WorkpieceExpansion, TermId::FrameMisalignment] {
+            if !declared.has(id) {
+                skip(id.as_str(), "the points are in an instrument frame registered to the part: a change of the part's frame or scale is the instrument's own pose or range scale there; points measured in the part's frame (probe hits, a CMM export) show it".into());
+            }
+        }
+    } else if !declared.has(TermId::WorkpieceExpansion) {
         for s in &inventory.temperatures {
             out.extend(family(vec![linear_variant("", TermId::WorkpieceExpansion, vec![("sensor", text(s))])], TermId::WorkpieceExpansion, Placement::Machine));
         }
     }
-    if !declared.has(TermId::FrameMisalignment) {
+    if points_in_machine_frame && !declared.has(TermId::FrameMisalignment) {
         out.extend(family(vec![linear_variant("", TermId::FrameMisalignment, vec![])], TermId::FrameMisalignment, Placement::Machine));
     }
     out.retain(|f| !labels.contains(&f.label) && !(f.id == TermId::ToolOffset && declared.has(TermId::ToolOffset)));

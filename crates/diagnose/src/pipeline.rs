@@ -355,7 +355,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         }
     }
     let decl = Declared { machine: declared.machine, machine_terms: declared.machine_terms, instrument_terms: &instruments };
-    let (term_families, mut not_tried) = candidate_families(&decl, &inventory, &leads);
+    let (term_families, mut not_tried) = candidate_families(&decl, &inventory, &leads, set.frame == RecordFrame::Machine);
     let (declared_pinv, _) = pseudo_inverse(&declared_cols.tr_mul(&declared_cols));
     let mut prepared: Vec<Prepared> = Vec::new();
     for tf in term_families {

@@ -33,6 +33,7 @@ pub mod pipeline;
 pub mod record_preparation;
 pub mod report;
 pub mod residual;
+pub mod residual_table;
 pub mod residual_view;
 pub mod selection;
 pub mod signal_inventory;

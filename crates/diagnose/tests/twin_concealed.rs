@@ -140,3 +140,24 @@ fn local_bump_is_unexplained() {
     assert!(d.report.findings.is_empty(), "{:?}", d.report.findings.iter().map(|f| &f.label).collect::<Vec<_>>());
     assert!(!d.report.unexplained.is_empty());
 }
+
+#[test]
+fn two_concealed_effects_are_both_found() {
+    let (d, data) = conceal(
+        "  - id: backlash\n    options: {axis: y}\n    params: {reversal: 9 um}\n  - id: thermal_scale\n    options: {axis: x, sensors: [{name: x_left, position: 0 m}, {name: x_right, position: 0.8 m}]}\n    params: {alpha: 11.5e-6 1/K}\n",
+        41,
+        Take::default(),
+        "",
+        "",
+    );
+    let labels: Vec<&str> = d.report.findings.iter().map(|f| f.label.as_str()).collect();
+    assert!(labels.contains(&"backlash[y]") && labels.contains(&"thermal_scale[x]"), "{labels:?}");
+    assert_eq!(labels.len(), 2, "{labels:?}");
+    for (label, p) in [("backlash[y]", "reversal"), ("thermal_scale[x]", "alpha")] {
+        let f = d.report.findings.iter().find(|f| f.label == label).unwrap();
+        let v = &f.parameters[p];
+        let t = truth(&data.cell, &format!("{label}.{p}"));
+        assert!((v.value - t).abs() < 3.0 * v.sigma.unwrap(), "{label}.{p} = {} ± {:?}, truth {t}", v.value, v.sigma);
+    }
+    assert!(d.report.after.heldout_rms_m < 1.2 * d.report.noise_rms_m);
+}

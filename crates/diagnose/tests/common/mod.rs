@@ -9,7 +9,7 @@ use std::collections::BTreeMap;
 use metrocell_diagnose::{diagnose, DeclaredModel, Diagnosis, DiagnoseOptions};
 use metrocell_estimation::{MeasurementRecord, RecordFrame, RecordSet};
 use metrocell_physics::{Signals, TemperatureHistory};
-use metrocell_twin::{Cell, Sample, Simulation};
+use metrocell_twin::{Cell, CellModel, Sample, Simulation};
 use nalgebra::{Matrix3, Vector3};
 
 /// The base cell: an XFYZ machine measured by a tracker over a serpentine 5 × 4 × 3 grid every
@@ -61,9 +61,7 @@ terms:
   - id: squareness
     options: {{pair: xy}}
     params: {{s: 20 urad}}
-{terms}estimation:
-  refraction: {{free: [path_temperature_offset]}}
-"#,
+{terms}"#,
         cycle = (hours * 60.0 / 6.0).round()
     )
 }
@@ -149,13 +147,16 @@ pub fn twin_records(cell_text: &str, hours: f64, seed: u64, take: Take) -> TwinR
     TwinRecords { records: RecordSet { frame: RecordFrame::Instrument("tracker".into()), records: out, rejected: vec![], sources: vec![] }, cell: truth_for_records }
 }
 
-/// Diagnose `records` against the model cell `model_text`.
+/// Diagnose `records` against the model file `model_text` (read as `metrocell diagnose` reads
+/// a model: crates/twin `CellModel`).
+pub fn try_run(model_text: &str, records: &RecordSet, options: &DiagnoseOptions) -> Result<Diagnosis, metrocell_diagnose::DiagnoseError> {
+    let m = CellModel::from_yaml_str_in(model_text, "model.yaml", std::path::Path::new(".")).expect("model file");
+    let declared = DeclaredModel { machine: &m.machine, machine_terms: &m.machine_terms, instrument_terms: &m.instrument_terms, setup: &m.setup };
+    diagnose(&declared, records, options)
+}
+
 pub fn run(model_text: &str, records: &RecordSet, options: &DiagnoseOptions) -> Diagnosis {
-    let cell = Cell::from_yaml_str(model_text, "model cell").expect("model cell");
-    let instruments = cell.tracker_terms().unwrap();
-    let setup = cell.parameter_setup().unwrap();
-    let declared = DeclaredModel { machine: &cell.machine, machine_terms: &cell.terms, instrument_terms: &instruments, setup: &setup };
-    diagnose(&declared, records, options).unwrap_or_else(|e| panic!("diagnose: {e}"))
+    try_run(model_text, records, options).unwrap_or_else(|e| panic!("diagnose: {e}"))
 }
 
 /// Add a workpiece-frame displacement `f(t, commanded position)` to every measured point (in the

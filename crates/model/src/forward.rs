@@ -242,7 +242,8 @@ impl<'a> ForwardModel<'a> {
     }
 
     /// Set the axis signals from a joint vector and its velocity and approach directions: the
-    /// first three joints of a cartesian, delta or five-axis machine; none for an arm (it has no
+    /// first three joints of a cartesian, delta or five-axis machine (and a five-axis machine's
+    /// B and C as rotary positions); none for an arm (it has no
     /// linear axes, and its terms were checked not to read axis signals).
     pub fn set_motion(&self, s: &mut Signals, q: &[f64], velocity: &[f64], approach: &[f64]) {
         if matches!(self.machine.kinematics, MachineKinematics::SerialArm(_)) {
@@ -254,6 +255,11 @@ impl<'a> ForwardModel<'a> {
             s.approach_direction = [Some(approach[0]), Some(approach[1]), Some(approach[2])];
             s.axis_velocity = [Some(velocity[0]), Some(velocity[1]), Some(velocity[2])];
         }
+        // a five-axis B/C table's rotary angles (rotary-axis location errors read them)
+        s.rotary_position = match self.machine.kinematics {
+            MachineKinematics::FiveAxis(_) if q.len() >= 5 => [None, Some(q[3]), Some(q[4])],
+            _ => [None; 3],
+        };
     }
 
     /// The kinematic part of the machine at parameters `p`.

@@ -47,6 +47,24 @@ impl fmt::Display for Axis {
     }
 }
 
+/// A rotary machine axis (ISO 841: A, B, C turn about x, y, z).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum RotaryAxis {
+    A,
+    B,
+    C,
+}
+
+impl RotaryAxis {
+    /// 0, 1, 2 for A, B, C.
+    pub fn index(self) -> usize {
+        self as usize
+    }
+    pub fn name(self) -> &'static str {
+        ["a", "b", "c"][self.index()]
+    }
+}
+
 /// Kind of signal a term needs (the declaration; values live in [`Signals`]).
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum SignalKind {
@@ -85,6 +103,8 @@ pub enum SignalKind {
     CameraPoint,
     /// Unit vector of the probing (approach) direction in the probe frame.
     ProbeDirection,
+    /// Commanded angle of a rotary axis, rad.
+    RotaryPosition(RotaryAxis),
 }
 
 impl fmt::Display for SignalKind {
@@ -106,6 +126,7 @@ impl fmt::Display for SignalKind {
             SignalKind::TargetPoint => write!(f, "target_point (m, workpiece frame)"),
             SignalKind::CameraPoint => write!(f, "camera_point (m, camera frame)"),
             SignalKind::ProbeDirection => write!(f, "probe_direction (unit vector)"),
+            SignalKind::RotaryPosition(a) => write!(f, "rotary_position[{}] (rad)", a.name()),
         }
     }
 }
@@ -144,6 +165,8 @@ pub struct Signals {
     /// A point in the camera frame, m ([`SignalKind::CameraPoint`]).
     pub camera_point: Option<Vector3<f64>>,
     pub probe_direction: Option<Vector3<f64>>,
+    /// Commanded angles of the rotary axes A, B, C (rad), where the machine has them.
+    pub rotary_position: [Option<f64>; 3],
 }
 
 fn missing(term: &str, kind: SignalKind) -> PhysicsError {
@@ -215,6 +238,9 @@ impl Signals {
     }
     pub fn camera(&self, term: &str) -> Result<Vector3<f64>, PhysicsError> {
         self.camera_point.ok_or_else(|| missing(term, SignalKind::CameraPoint))
+    }
+    pub fn rotary(&self, term: &str, a: RotaryAxis) -> Result<f64, PhysicsError> {
+        self.rotary_position[a.index()].ok_or_else(|| missing(term, SignalKind::RotaryPosition(a)))
     }
     pub fn probe_dir(&self, term: &str) -> Result<Vector3<f64>, PhysicsError> {
         let u = self.probe_direction.ok_or_else(|| missing(term, SignalKind::ProbeDirection))?;

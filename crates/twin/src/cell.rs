@@ -159,6 +159,8 @@ pub struct Cell {
     pub term_configs: Vec<TermConfig>,
     /// The file's `estimation` settings (free parameters, priors), checked against the terms.
     pub estimation: BTreeMap<String, metrocell_physics::EstimationConfig>,
+    /// Test-only, non-physical disturbances ([`crate::disturbance`]); empty for real cells.
+    pub disturbances: crate::disturbance::Disturbances,
 }
 
 impl Cell {
@@ -195,7 +197,9 @@ impl Cell {
             .enumerate()
             .map(|(i, t)| thermocouple(i, t))
             .collect::<Result<Vec<_>, _>>()?;
-        let thermal = thermal_model(&f.environment, &f.sensors.thermocouples)?;
+        let env = f.environment.as_ref().ok_or_else(|| CellError::invalid("environment", "is required to simulate a cell: {ambient, air, ...} (only a model file for `metrocell calibrate` may leave it out)"))?;
+        let program_section = f.program.as_ref().ok_or_else(|| CellError::invalid("program", "is required to simulate a cell: {grid | points | joints | poses, feed_rate, dwell, ...} (only a model file for `metrocell calibrate` may leave it out)"))?;
+        let thermal = thermal_model(env, &f.sensors.thermocouples)?;
         let tracker = f.sensors.tracker.as_ref().map(tracker).transpose()?;
         let machine_state_rate = f.sensors.machine_state.as_ref().map(|m| m.rate.positive("sensors.machine_state.rate", "1/s")).transpose()?;
         let probe = f.sensors.probe.as_ref().map(probe).transpose()?;
@@ -203,7 +207,6 @@ impl Cell {
             return Err(CellError::invalid("sensors.probe", "is simulated for family: cartesian and delta only; a five_axis or serial_arm cell takes tracker, thermocouples, machine_state and camera"));
         }
         let camera = f.sensors.camera.as_ref().map(camera).transpose()?;
-        let env = &f.environment;
         let thermal_step = match &env.thermal_step {
             Some(q) => q.positive("environment.thermal_step", "s")?,
             None => 1.0,
@@ -218,14 +221,18 @@ impl Cell {
             beam_temperature_offset: opt(&env.air.beam_temperature_offset, "environment.air.beam_temperature_offset", "K")?,
         };
         let load_force = env.load_force.as_ref().map(|v| vector3(v, "environment.load_force", "N")).transpose()?;
-        let program = Program::from_section(&f.program, &machine)?;
+        let program = Program::from_section(program_section, &machine)?;
         let sensor_names: BTreeSet<String> = thermocouples.iter().map(|t| t.name.clone()).collect();
-        let terms = terms(&f.terms, &sensor_names, load_force.is_some(), &machine)?;
+        let terms = terms(&f.terms, Some(&sensor_names), Some(load_force.is_some()), &machine)?;
         if let MachineKinematics::Delta(g) = &machine.kinematics {
             for (i, q) in program.points.iter().chain(std::iter::once(&program.home)).enumerate() {
                 g.inverse(&Vector3::new(q[0], q[1], q[2])).map_err(|e| CellError::invalid(if i == program.points.len() { "program.home".to_string() } else { format!("program point {i}") }, format!("not reachable by the delta: {e}")))?;
             }
         }
+        let disturbances = crate::disturbance::Disturbances::from_section(
+            &f.disturbances.clone().unwrap_or_default(),
+            matches!(machine.kinematics, MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_)),
+        )?;
         Ok(Cell {
             name: f.name.clone(),
             description: f.description.clone(),
@@ -243,6 +250,7 @@ impl Cell {
             terms,
             term_configs: f.terms.clone(),
             estimation: f.estimation.clone(),
+            disturbances,
         })
         .and_then(|cell: Cell| {
             cell.parameter_setup()?;
@@ -325,36 +333,48 @@ impl Cell {
     /// −station humidity bias. Empty without a tracker. Built from the (adjustable) fields of
     /// the cell, so it follows a test's edits of `tracker`.
     pub fn tracker_terms(&self) -> Result<TermModel, CellError> {
-        let mut m = TermModel::default();
-        let Some(tr) = &self.tracker else { return Ok(m) };
-        let path = "sensors.tracker";
-        let term = |id: &str, names: &[&str], values: &[f64], options: Vec<(&str, f64)>| -> Result<ConfiguredTerm, CellError> {
-            let params = names.iter().zip(values).map(|(n, v)| (n.to_string(), ConfigValue::Number(*v))).collect();
-            let options = options.into_iter().map(|(k, v)| (k.to_string(), ConfigValue::Number(v))).collect();
-            configure(&TermConfig { id: id.into(), options, params, use_defaults: false }).map_err(|e| CellError::term(path, e))
-        };
-        let push = |m: &mut TermModel, t: ConfiguredTerm| m.push(t).map_err(|e| CellError::term(path, e));
-        push(&mut m, term("tracker_pose", &["tx", "ty", "tz", "alpha", "beta", "delta"], &tr.pose.term_params(), vec![])?)?;
-        if let Some(w) = tr.warmup {
-            push(&mut m, term("tracker_warmup", &["offset", "amplitude", "time_constant"], &[w.offset, w.amplitude, w.time_constant], vec![])?)?;
-        }
+        let Some(tr) = &self.tracker else { return Ok(TermModel::default()) };
         let st = &tr.station;
-        let refraction = term(
-            "refraction",
-            &["path_temperature_offset", "path_pressure_offset"],
-            &[self.air.beam_temperature_offset - st.temperature_bias, -st.pressure_bias],
-            vec![("path_humidity_offset", -st.humidity_bias)],
-        )?;
-        push(&mut m, refraction)?;
-        Ok(m)
+        let refraction = RefractionOffsets { temperature: self.air.beam_temperature_offset - st.temperature_bias, pressure: -st.pressure_bias, humidity: -st.humidity_bias };
+        tracker_term_model(&tr.pose, tr.warmup.as_ref(), Some(refraction))
     }
+}
+
+/// The path air minus the weather station's reading (the `refraction` term's parameters and
+/// option): temperature K, pressure Pa, humidity %RH.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct RefractionOffsets {
+    pub temperature: f64,
+    pub pressure: f64,
+    pub humidity: f64,
+}
+
+/// The tracker's instrument terms: `tracker_pose`, then `tracker_warmup` and `refraction` if
+/// given (the order of the stacked parameter vector).
+pub(crate) fn tracker_term_model(pose: &InstrumentPose, warmup: Option<&WarmupSpec>, refraction: Option<RefractionOffsets>) -> Result<TermModel, CellError> {
+    let mut m = TermModel::default();
+    let path = "sensors.tracker";
+    let term = |id: &str, names: &[&str], values: &[f64], options: Vec<(&str, f64)>| -> Result<ConfiguredTerm, CellError> {
+        let params = names.iter().zip(values).map(|(n, v)| (n.to_string(), ConfigValue::Number(*v))).collect();
+        let options = options.into_iter().map(|(k, v)| (k.to_string(), ConfigValue::Number(v))).collect();
+        configure(&TermConfig { id: id.into(), options, params, use_defaults: false }).map_err(|e| CellError::term(path, e))
+    };
+    let push = |m: &mut TermModel, t: ConfiguredTerm| m.push(t).map_err(|e| CellError::term(path, e));
+    push(&mut m, term("tracker_pose", &["tx", "ty", "tz", "alpha", "beta", "delta"], &pose.term_params(), vec![])?)?;
+    if let Some(w) = warmup {
+        push(&mut m, term("tracker_warmup", &["offset", "amplitude", "time_constant"], &[w.offset, w.amplitude, w.time_constant], vec![])?)?;
+    }
+    if let Some(r) = refraction {
+        push(&mut m, term("refraction", &["path_temperature_offset", "path_pressure_offset"], &[r.temperature, r.pressure], vec![("path_humidity_offset", r.humidity)])?)?;
+    }
+    Ok(m)
 }
 
 fn opt(q: &Option<Quantity>, path: &str, unit: &str) -> Result<f64, CellError> {
     q.as_ref().map(|q| q.to_si(path, unit)).transpose().map(|v| v.unwrap_or(0.0))
 }
 
-fn machine(m: &MachineSection, base_dir: &Path) -> Result<MachineGeometry, CellError> {
+pub(crate) fn machine(m: &MachineSection, base_dir: &Path) -> Result<MachineGeometry, CellError> {
     check_family_sections(m)?;
     let kinematics = match m.family {
         MachineFamily::Cartesian => {
@@ -431,7 +451,7 @@ fn family_name(f: MachineFamily) -> &'static str {
     }
 }
 
-fn pose(p: &PoseSection, path: &str) -> Result<InstrumentPose, CellError> {
+pub(crate) fn pose(p: &PoseSection, path: &str) -> Result<InstrumentPose, CellError> {
     let t = vector3(&p.translation, &format!("{path}.translation"), "m")?;
     let e = match &p.euler_xyz {
         Some(e) => vector3(e, &format!("{path}.euler_xyz"), "rad")?,
@@ -440,25 +460,35 @@ fn pose(p: &PoseSection, path: &str) -> Result<InstrumentPose, CellError> {
     Ok(InstrumentPose::from_euler_xyz(t, [e.x, e.y, e.z]))
 }
 
-fn tracker(t: &TrackerSection) -> Result<TrackerSpec, CellError> {
-    let p = "sensors.tracker";
-    let warmup = match &t.warmup {
-        None => None,
-        Some(params) => {
-            let c = configure(&TermConfig { id: "tracker_warmup".into(), options: BTreeMap::new(), params: params.clone(), use_defaults: false }).map_err(|e| CellError::term(format!("{p}.warmup"), e))?;
-            Some(WarmupSpec { offset: c.params[0], amplitude: c.params[1], time_constant: c.params[2] })
-        }
-    };
+/// `sensors.tracker.warmup` as the `tracker_warmup` parameters.
+pub(crate) fn tracker_warmup(t: &TrackerSection) -> Result<Option<WarmupSpec>, CellError> {
+    let Some(params) = &t.warmup else { return Ok(None) };
+    let c = configure(&TermConfig { id: "tracker_warmup".into(), options: BTreeMap::new(), params: params.clone(), use_defaults: false }).map_err(|e| CellError::term("sensors.tracker.warmup", e))?;
+    Ok(Some(WarmupSpec { offset: c.params[0], amplitude: c.params[1], time_constant: c.params[2] }))
+}
+
+/// `sensors.tracker.station` (biases and noise; absent: none).
+pub(crate) fn tracker_station(t: &TrackerSection) -> Result<StationSpec, CellError> {
     let s = t.station.clone().unwrap_or_default();
-    let sp = format!("{p}.station");
-    let station = StationSpec {
+    let sp = "sensors.tracker.station";
+    Ok(StationSpec {
         temperature_bias: opt(&s.temperature_bias, &format!("{sp}.temperature_bias"), "K")?,
         pressure_bias: opt(&s.pressure_bias, &format!("{sp}.pressure_bias"), "Pa")?,
         humidity_bias: opt(&s.humidity_bias, &format!("{sp}.humidity_bias"), "1")?,
         temperature_noise: s.temperature_noise.as_ref().map(|q| q.non_negative(&format!("{sp}.temperature_noise"), "K")).transpose()?.unwrap_or(0.0),
         pressure_noise: s.pressure_noise.as_ref().map(|q| q.non_negative(&format!("{sp}.pressure_noise"), "Pa")).transpose()?.unwrap_or(0.0),
         humidity_noise: s.humidity_noise.as_ref().map(|q| q.non_negative(&format!("{sp}.humidity_noise"), "1")).transpose()?.unwrap_or(0.0),
-    };
+    })
+}
+
+fn tracker(t: &TrackerSection) -> Result<TrackerSpec, CellError> {
+    let p = "sensors.tracker";
+    let warmup = tracker_warmup(t)?;
+    let station = tracker_station(t)?;
+    let needed = |what: &str| CellError::invalid(format!("{p}.{what}"), "is required to simulate the tracker (only a model file for `metrocell calibrate` may leave the noise model out)");
+    let rate = t.rate.as_ref().ok_or_else(|| needed("rate"))?;
+    let range_noise = t.range_noise.as_ref().ok_or_else(|| needed("range_noise"))?;
+    let angular_noise = t.angular_noise.as_ref().ok_or_else(|| needed("angular_noise"))?;
     let mut turbulence = Vec::new();
     for (i, w) in t.turbulence.iter().enumerate() {
         let wp = format!("{p}.turbulence[{i}]");
@@ -484,10 +514,10 @@ fn tracker(t: &TrackerSection) -> Result<TrackerSpec, CellError> {
     };
     Ok(TrackerSpec {
         pose: pose(&t.pose, &format!("{p}.pose"))?,
-        rate: t.rate.positive(&format!("{p}.rate"), "1/s")?,
-        range_noise_constant: t.range_noise.constant.non_negative(&format!("{p}.range_noise.constant"), "m")?,
-        range_noise_per_metre: t.range_noise.per_metre.non_negative(&format!("{p}.range_noise.per_metre"), "1")?,
-        angular_noise: t.angular_noise.non_negative(&format!("{p}.angular_noise"), "rad")?,
+        rate: rate.positive(&format!("{p}.rate"), "1/s")?,
+        range_noise_constant: range_noise.constant.non_negative(&format!("{p}.range_noise.constant"), "m")?,
+        range_noise_per_metre: range_noise.per_metre.non_negative(&format!("{p}.range_noise.per_metre"), "1")?,
+        angular_noise: angular_noise.non_negative(&format!("{p}.angular_noise"), "rad")?,
         warmup,
         powered_on_before_start: t.powered_on_before_start.as_ref().map(|q| q.non_negative(&format!("{p}.powered_on_before_start"), "s")).transpose()?.unwrap_or(0.0),
         station,
@@ -640,7 +670,10 @@ fn home_of(id: &str) -> Option<&'static str> {
 /// Displacement terms that read no axis signal: the ones a serial arm takes.
 const ARM_DISPLACEMENT_TERMS: &str = "thermal_growth, tool_offset, frame_misalignment, workpiece_expansion";
 
-fn terms(configs: &[TermConfig], sensors: &BTreeSet<String>, has_load: bool, machine: &MachineGeometry) -> Result<TermModel, CellError> {
+/// Validate the `terms` list against the machine. `sensors` (the thermocouple names) and
+/// `has_load` are checked when known (a cell to simulate); a model file leaves them to the
+/// recording (None), which names a missing signal when records are built.
+pub(crate) fn terms(configs: &[TermConfig], sensors: Option<&BTreeSet<String>>, has_load: Option<bool>, machine: &MachineGeometry) -> Result<TermModel, CellError> {
     let is_delta = matches!(machine.kinematics, MachineKinematics::Delta(_));
     let arm = match &machine.kinematics {
         MachineKinematics::SerialArm(a) => Some(a),
@@ -693,20 +726,21 @@ fn terms(configs: &[TermConfig], sensors: &BTreeSet<String>, has_load: bool, mac
             ));
         }
         for s in t.term.signals() {
+            let unknown = |name: &String| sensors.is_some_and(|known| !known.contains(name));
             match &s {
-                SignalKind::Temperature(name) if !sensors.contains(name) => {
+                SignalKind::Temperature(name) if unknown(name) => {
                     return Err(CellError::invalid(
                         format!("{path}.options"),
-                        format!("refers to temperature sensor `{name}`, which is not a thermocouple; allowed: {}", sensors.iter().cloned().collect::<Vec<_>>().join(", ")),
+                        format!("refers to temperature sensor `{name}`, which is not a thermocouple; allowed: {}", sensors.into_iter().flatten().cloned().collect::<Vec<_>>().join(", ")),
                     ))
                 }
-                SignalKind::TemperatureHistory(name) if !sensors.contains(name) => {
+                SignalKind::TemperatureHistory(name) if unknown(name) => {
                     return Err(CellError::invalid(
                         format!("{path}.options"),
-                        format!("refers to temperature sensor `{name}`, which is not a thermocouple; allowed: {}", sensors.iter().cloned().collect::<Vec<_>>().join(", ")),
+                        format!("refers to temperature sensor `{name}`, which is not a thermocouple; allowed: {}", sensors.into_iter().flatten().cloned().collect::<Vec<_>>().join(", ")),
                     ))
                 }
-                SignalKind::LoadForce if !has_load => return Err(CellError::invalid(path, "needs environment.load_force")),
+                SignalKind::LoadForce if has_load == Some(false) => return Err(CellError::invalid(path, "needs environment.load_force")),
                 _ => {}
             }
         }

@@ -389,10 +389,17 @@ impl<'a> Engine<'a> {
         }
     }
 
-    /// The tool at t for the motion state (the shared model at the true parameters).
+    /// The tool at t for the motion state (the shared model at the true parameters, plus the
+    /// cell's test-only `disturbances`, which no model knows).
     fn tool_state(&mut self, t: f64, ms: &MotionState) -> Result<ToolState, PhysicsError> {
         self.set_signals(t, ms);
-        self.model.tool_state(&self.params, &self.kinematics, ms.q.as_slice(), &mut self.signals, Some(&mut self.cache))
+        let mut tool = self.model.tool_state(&self.params, &self.kinematics, ms.q.as_slice(), &mut self.signals, Some(&mut self.cache))?;
+        if !self.cell.disturbances.is_empty() {
+            let delta = self.cell.disturbances.displacement(t, &v3(&ms.q));
+            tool.truth.translation.vector += delta;
+            tool.d += delta;
+        }
+        Ok(tool)
     }
 
     fn next_event(&mut self) -> Option<(Sample, SampleTruth)> {

@@ -81,8 +81,13 @@ impl TrackerState {
     pub fn new(config: TrackerConfig) -> Self {
         Self {
             grouper: DwellGrouper::new(config.dwell_gap_ns),
-            // commanded history: a minute is far more than any dwell waits for its nominal
-            commanded: CommandedTrajectory::new(60_000_000_000, config.commanded_gap_ns),
+            // Commanded history, in message time. Live, the readings and the commanded states
+            // come through separate reader queues and the readings may be processed well behind
+            // the states (a backlog after a stall; a twin or bag played at 100× and more turns a
+            // wall-clock second into minutes): a dwell must still find the states around it. Ten
+            // minutes (60 000 states at 100 Hz) covers the readings queue (qos::STREAM_DEPTH) at
+            // the rates the cells use; one minute did not (dwells without nominal at 240×).
+            commanded: CommandedTrajectory::new(600_000_000_000, config.commanded_gap_ns),
             warmup: WarmupTracker::new(),
             power_on_ns: config.power_on_ns,
             pose: None,

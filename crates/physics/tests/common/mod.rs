@@ -46,6 +46,7 @@ pub fn random_signals(r: &mut ChaCha8Rng) -> Signals {
     s.camera_point = Some(Vector3::new(uni(r, -0.1, 0.1), uni(r, -0.1, 0.1), uni(r, 0.1, 0.5)));
     let u = Vector3::new(uni(r, -1.0, 1.0), uni(r, -1.0, 1.0), uni(r, -1.0, 1.0));
     s.probe_direction = Some(u.normalize());
+    s.rotary_position = [None, Some(uni(r, -1.5, 1.5)), Some(uni(r, -3.0, 3.0))];
     s
 }
 

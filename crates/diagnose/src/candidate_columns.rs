@@ -151,11 +151,11 @@ impl<'m, 'a> ColumnContext<'m, 'a> {
         let mut out = DMatrix::zeros(3 * self.records.len(), k);
         let mut value = [0.0; 3];
         let mut jac = DMatrix::zeros(3, k);
-        let reads_point = term.term.signals().contains(&metrocell_physics::SignalKind::Point);
+        let reads_point = term.term.signals().contains(&metrocell_physics::SignalKind::MachinePoint);
         for i in 0..self.records.len() {
             let s = &mut self.signals[i];
             if reads_point {
-                s.point = Some(self.machine_points[i]);
+                s.machine_point = Some(self.machine_points[i]);
             }
             term.term.evaluate_into(&term.params, s, &mut value, jac.columns_mut(0, k))?;
             out.view_mut((3 * i, 0), (3, k)).copy_from(&(sens[i] * &jac));

@@ -92,6 +92,10 @@ pub enum SignalKind {
     TrackerRange,
     /// Point in normalised image coordinates (x/z, y/z) of the camera.
     ImagePoint,
+    /// The nominal tool point in the frame machine-frame terms act in (the machine frame: q +
+    /// tool offset on cartesian and delta machines, the tool tip in the machine frame on a
+    /// five-axis machine, the nominal tool point on an arm), m.
+    MachinePoint,
     /// Nominal position of a feature on the workpiece (the part, fixture or artefact), in the
     /// workpiece frame, m: what workpiece-frame terms displace.
     WorkpiecePoint,
@@ -122,6 +126,7 @@ impl fmt::Display for SignalKind {
             SignalKind::LoadForce => write!(f, "load_force (N)"),
             SignalKind::TrackerRange => write!(f, "tracker_range (m)"),
             SignalKind::ImagePoint => write!(f, "image_point (normalised)"),
+            SignalKind::MachinePoint => write!(f, "machine_point (m, machine frame)"),
             SignalKind::WorkpiecePoint => write!(f, "workpiece_point (m, workpiece frame)"),
             SignalKind::TargetPoint => write!(f, "target_point (m, workpiece frame)"),
             SignalKind::CameraPoint => write!(f, "camera_point (m, camera frame)"),
@@ -142,7 +147,7 @@ pub struct TemperatureHistory {
 ///
 /// Points: one slot per frame a term acts in, so terms of different frames evaluated for one
 /// reading never read each other's point (the forward model, crates/model, fills them:
-/// `workpiece_point` before the workpiece terms, `target_point` before `tracker_pose`,
+/// `machine_point` before the machine-frame terms, `workpiece_point` before the workpiece terms, `target_point` before `tracker_pose`,
 /// `camera_point` before `camera_scale`).
 #[derive(Debug, Clone, Default)]
 pub struct Signals {
@@ -158,6 +163,8 @@ pub struct Signals {
     pub load_force: Option<Vector3<f64>>,
     pub tracker_range: Option<f64>,
     pub image_point: Option<Vector2<f64>>,
+    /// Nominal tool point in the machine frame, m ([`SignalKind::MachinePoint`]).
+    pub machine_point: Option<Vector3<f64>>,
     /// Nominal feature position on the workpiece, workpiece frame, m ([`SignalKind::WorkpiecePoint`]).
     pub workpiece_point: Option<Vector3<f64>>,
     /// True point an instrument sights, workpiece (cell) frame, m ([`SignalKind::TargetPoint`]).
@@ -229,6 +236,9 @@ impl Signals {
     }
     pub fn image(&self, term: &str) -> Result<Vector2<f64>, PhysicsError> {
         self.image_point.ok_or_else(|| missing(term, SignalKind::ImagePoint))
+    }
+    pub fn machine(&self, term: &str) -> Result<Vector3<f64>, PhysicsError> {
+        self.machine_point.ok_or_else(|| missing(term, SignalKind::MachinePoint))
     }
     pub fn workpiece(&self, term: &str) -> Result<Vector3<f64>, PhysicsError> {
         self.workpiece_point.ok_or_else(|| missing(term, SignalKind::WorkpiecePoint))

@@ -13,7 +13,7 @@
 //! To first order in the errors W' = W + δW with
 //! `δW·p = δX_B(q_B) + Ry(B)·δX_C(q_C)`, q_C = w + p (table frame), q_B = c + Rz(C)·q_C,
 //! `δX(y) = ε×(R y) − R(ε×y) + δ − R δ + θ₀·(e × R y)` (e = the axis: y for B, z for C).
-//! The tool tip t (machine frame, signal `point` as the model gives machine-frame terms) then
+//! The tool tip t (machine frame, signal `machine_point`) then
 //! lands at the workpiece point W'⁻¹t ≈ W⁻¹(t − δW·p) with p = W⁻¹t, so in the convention of
 //! every machine-frame term (`tip_wp = W⁻¹(t + d)`, crates/model):
 //!
@@ -76,7 +76,7 @@ impl RotaryAxisLocation {
     /// The columns −∂(δW·p)/∂θ (3 × 10) at the instant `s`.
     fn columns(&self, s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         let label = self.label();
-        let t = s.point3(&label)?;
+        let t = s.machine(&label)?;
         let b = s.rotary(&label, RotaryAxis::B)?;
         let c = s.rotary(&label, RotaryAxis::C)?;
         let (ry, rz) = (rot_y(b), rot_z(c));
@@ -118,7 +118,7 @@ impl PhysicsTerm for RotaryAxisLocation {
         NAMES.iter().map(|(n, unit, bound, doc)| ParamSpec::new(*n, unit, -bound, *bound, 0.0, *doc)).collect()
     }
     fn signals(&self) -> Vec<SignalKind> {
-        vec![SignalKind::Point, SignalKind::RotaryPosition(RotaryAxis::B), SignalKind::RotaryPosition(RotaryAxis::C)]
+        vec![SignalKind::MachinePoint, SignalKind::RotaryPosition(RotaryAxis::B), SignalKind::RotaryPosition(RotaryAxis::C)]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
         check_len(&self.label(), p, 10)?;
@@ -154,7 +154,7 @@ mod tests {
             let xc = tr(dc) * small(ec) * iso(rot_z(c + e[9])) * small(ec).inverse() * tr(-dc);
             let truth = tr(term.b_pivot) * xb * tr(term.c_offset) * xc * tr(term.workpiece_offset);
             let exact_wp = truth.inverse() * Point3::from(t);
-            let s = Signals { point: Some(t), rotary_position: [None, Some(b), Some(c)], ..Default::default() };
+            let s = Signals { machine_point: Some(t), rotary_position: [None, Some(b), Some(c)], ..Default::default() };
             let d = term.predict(&e, &s).unwrap().value;
             let model_wp = nominal.inverse() * Point3::from(t + Vector3::new(d[0], d[1], d[2]));
             let gap = (exact_wp - model_wp).norm();

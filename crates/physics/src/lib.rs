@@ -45,5 +45,5 @@ pub use catalog::{configure, configure_described, entries, lookup, CatalogEntry,
 pub use term_id::{Category, TermId};
 pub use config::{ConfigValue, EstimationConfig, PriorConfig, TermConfig};
 pub use error::PhysicsError;
-pub use signals::{Axis, SignalKind, Signals, TemperatureHistory};
+pub use signals::{Axis, RotaryAxis, SignalKind, Signals, TemperatureHistory};
 pub use term::{EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};

@@ -11,18 +11,26 @@
 //!   Jacobian w.r.t. the stacked parameter vector.
 //! * [`parameters`] — free/fixed mask and priors per parameter ([`ParameterSetup`]), and the
 //!   pairs of parameters parallel by construction ([`ForwardModel::parallel_pairs`]).
+//! * [`signals_builder`] — [`SignalsBuilder`]: recorded streams (commanded joints, temperatures,
+//!   air, power-on, load) → `Signals` at any instant, offline or streaming; with
+//!   [`approach_rule`] (approach direction from the commanded trajectory) and
+//!   [`sampled_series`] (interpolation and states on integer-ns times).
 //!
 //! Units SI (m, rad, s, Pa), temperatures °C, as in crates/physics.
 
 // `!(x > 0.0)` is used on purpose: unlike `x <= 0.0` it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod approach_rule;
 pub mod forward;
 pub mod instrument_pose;
 pub mod machine;
 pub mod parameters;
+pub mod sampled_series;
+pub mod signals_builder;
 
 pub use forward::{DisplacementCache, ForwardModel, KinematicTruth, ToolState, TrackerPrediction, Workspace, TRACKER_ROWS};
 pub use instrument_pose::InstrumentPose;
 pub use parameters::{ParallelPair, ParameterSetup, Prior};
+pub use signals_builder::{JointMotion, SignalsBuilder, SignalsBuilderOptions};
 pub use machine::{FiveAxisMachine, MachineGeometry, MachineKinematics, SerialArm, FIVE_AXIS_JOINTS};

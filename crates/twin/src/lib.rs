@@ -42,4 +42,4 @@ pub mod tracker_model;
 pub use cell::{Cell, MachineGeometry, MachineKinematics};
 pub use error::CellError;
 pub use sample::{CameraFrameRequest, MachineStateSample, ProbeHitSample, Sample, SampleTruth, TemperatureSample, TrackerSample, TrackerStatus, TrackerTruth, TrueParameter};
-pub use simulation::{GroundTruth, SampleStream, Simulation, TruthStream};
+pub use simulation::{GroundTruth, SampleStream, SignalsStream, Simulation, TruthStream};

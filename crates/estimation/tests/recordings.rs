@@ -193,6 +193,17 @@ fn records_carry_the_readings_air_and_the_builders_signals() {
     let sim = Simulation::new(cell(&text, "quick_demo"), 60.0, 5).unwrap();
     let readings: Vec<_> = sim.samples_with_signals().filter_map(|(s, sig)| if let Sample::Tracker(r) = s { Some((r, sig.unwrap())) } else { None }).collect();
     assert_eq!(set.records.len() + set.rejected.len(), readings.len(), "every reading is a record or a rejection");
+    // the records were made streaming (a bounded joint window, each measurement resolved as soon
+    // as the streams around it were read): their signals are those of the whole bag read at once
+    let (whole, _) = signals_from_bag(&bag, &c.machine, &SignalsBuilderOptions::default()).unwrap();
+    let start_ns = parse_start_time(DEFAULT_START_TIME).unwrap();
+    let mut streamed_records = set.records.iter();
+    for (r, _) in readings.iter().filter(|(r, _)| set.records.iter().any(|rec| (rec.time - start_ns as f64 / 1e9 - r.t).abs() < 1e-6)) {
+        let offline = whole.signals_at(stamp_ns(start_ns, r.t) as i64);
+        let streamed = &streamed_records.next().unwrap().signals;
+        assert_eq!((streamed.time, streamed.axis_position, streamed.axis_velocity, streamed.approach_direction), (offline.time, offline.axis_position, offline.axis_velocity, offline.approach_direction));
+        assert_eq!((&streamed.temperatures, streamed.time_since_power_on, streamed.load_force), (&offline.temperatures, offline.time_since_power_on, offline.load_force));
+    }
     assert_eq!(set.frame, metrocell_estimation::RecordFrame::Instrument("tracker".into()));
     let start = parse_start_time(DEFAULT_START_TIME).unwrap() as f64 / 1e9;
     let mut records = set.records.iter().peekable();

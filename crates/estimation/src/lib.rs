@@ -29,7 +29,7 @@ pub mod recursive;
 pub mod residuals;
 pub mod uncertainty_budget;
 
-pub use fit::{fit, rms, start_vector, Fit, FitError, FitOptions, HeldParameter, ParameterEstimate, RecordNote};
+pub use fit::{fit, inseparable, rms, start_vector, Fit, FitError, FitOptions, HeldParameter, ParameterEstimate, RecordNote};
 pub use records::{MeasurementRecord, RecordFrame, RecordSet, Rejected};
 pub use residuals::PointResiduals;
 pub use recursive::{RecursiveEstimator, RecursiveOptions, Update};

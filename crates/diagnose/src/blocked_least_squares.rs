@@ -21,6 +21,11 @@ use nalgebra::{DMatrix, DVector};
 /// (1e-11 on eigenvalues = about 3e-6 on singular values).
 pub const RANK_TOLERANCE: f64 = 1e-11;
 
+/// Share of a candidate column's squared norm (in the candidate's own column scaling) that must
+/// be left after projecting out the base columns for it to count as separable from them: a
+/// column the base already spans keeps almost nothing (1e-8 = 1e-4 of its norm).
+pub const SEPARABLE_TOLERANCE: f64 = 1e-8;
+
 /// Rows arranged cell by cell, with the fold of each cell in each scheme.
 #[derive(Debug, Clone)]
 pub struct BlockedRows {
@@ -327,6 +332,15 @@ fn schur(base: &Solved, x: &DMatrix<f64>, cc: &DMatrix<f64>, cb: &DVector<f64>) 
     let rhs = cb - px.tr_mul(&base.h);
     // rank relative to the candidate's own scale: a column the base already spans keeps almost
     // nothing of its norm after elimination
+    let (inv, rank) = scaled_inverse(&s, cc);
+    let y = &inv * &rhs;
+    let explained = rhs.dot(&y);
+    (y, inv, explained, rank)
+}
+
+/// Pseudo-inverse of a Schur complement `s` in the scaling of the candidate's own columns
+/// (`cc` = their normal matrix), directions below [`SEPARABLE_TOLERANCE`] dropped; and its rank.
+fn scaled_inverse(s: &DMatrix<f64>, cc: &DMatrix<f64>) -> (DMatrix<f64>, usize) {
     let k = cc.nrows();
     let d: Vec<f64> = (0..k).map(|i| if cc[(i, i)] > 0.0 { 1.0 / cc[(i, i)].sqrt() } else { 0.0 }).collect();
     let scaled = DMatrix::from_fn(k, k, |i, j| s[(i, j)] * d[i] * d[j]);
@@ -334,7 +348,7 @@ fn schur(base: &Solved, x: &DMatrix<f64>, cc: &DMatrix<f64>, cb: &DVector<f64>) 
     let mut inv = DMatrix::zeros(k, k);
     let mut rank = 0;
     for (j, &l) in eig.eigenvalues.iter().enumerate() {
-        if l > 1e-8 {
+        if l > SEPARABLE_TOLERANCE {
             rank += 1;
             let v = eig.eigenvectors.column(j);
             inv += v * v.transpose() / l;
@@ -345,9 +359,29 @@ fn schur(base: &Solved, x: &DMatrix<f64>, cc: &DMatrix<f64>, cb: &DVector<f64>) 
             inv[(i, j)] *= d[i] * d[j];
         }
     }
-    let y = &inv * &rhs;
-    let explained = rhs.dot(&y);
-    (y, inv, explained, rank)
+    (inv, rank)
+}
+
+/// The columns of `c` (whitened, any row order) that, taken in order, each add a direction the
+/// base columns `a` (with `a_pinv` = (aᵀa)⁺) and the columns kept before them do not span — by
+/// the same test the selection applies, so what is kept is separable there.
+pub fn separable_columns(a_pinv: &DMatrix<f64>, a: &DMatrix<f64>, c: &DMatrix<f64>) -> Vec<usize> {
+    let mut kept: Vec<usize> = Vec::new();
+    for j in 0..c.ncols() {
+        if !(c.column(j).norm_squared() > 0.0) {
+            continue;
+        }
+        let mut trial = kept.clone();
+        trial.push(j);
+        let sub = c.select_columns(&trial);
+        let x = a.tr_mul(&sub);
+        let s = sub.tr_mul(&sub) - x.tr_mul(&(a_pinv * &x));
+        let (_, rank) = scaled_inverse(&((&s + s.transpose()) * 0.5), &sub.tr_mul(&sub));
+        if rank == trial.len() {
+            kept = trial;
+        }
+    }
+    kept
 }
 
 #[cfg(test)]

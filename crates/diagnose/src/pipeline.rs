@@ -26,7 +26,7 @@ use metrocell_physics::model::TermModel;
 use metrocell_physics::{configure, ConfigValue, PhysicsError, TermConfig, TermId};
 use nalgebra::{DMatrix, DVector, Vector3};
 
-use crate::blocked_least_squares::{pseudo_inverse, BaseFit, BlockedRows};
+use crate::blocked_least_squares::{pseudo_inverse, separable_columns, BaseFit, BlockedRows};
 use crate::candidate_columns::ColumnContext;
 use crate::candidates::{candidate_families, Declared, NotTried, Placement, TermFamily};
 use crate::empirical::{bump_variants, time_variants, EmpiricalBasis};
@@ -207,30 +207,6 @@ enum Source {
     /// Declared parameters the model holds fixed, freed (`label.param` names).
     Freed { id: TermId, label: String, names: Vec<String> },
     Empirical(Vec<EmpiricalBasis>),
-}
-
-/// Columns a base (whitened) already spans are set aside: each column's share of its norm left
-/// after projecting out the base, and joint rank, as [`crate::blocked_least_squares`] judges.
-fn separable_columns(base_pinv: &DMatrix<f64>, base: &DMatrix<f64>, c: &DMatrix<f64>) -> Vec<usize> {
-    let mut kept: Vec<usize> = Vec::new();
-    for j in 0..c.ncols() {
-        let col = c.column(j);
-        let norm2 = col.norm_squared();
-        if !(norm2 > 0.0) {
-            continue;
-        }
-        let mut trial = kept.clone();
-        trial.push(j);
-        let sub = c.select_columns(&trial);
-        let x = base.tr_mul(&sub);
-        let s = sub.tr_mul(&sub) - x.tr_mul(&(base_pinv * &x));
-        let (_, rank) = pseudo_inverse(&s);
-        let left = s[(trial.len() - 1, trial.len() - 1)] / norm2;
-        if rank == trial.len() && left > 1e-8 {
-            kept = trial;
-        }
-    }
-    kept
 }
 
 /// Empirical columns (whitened, records frame) of a basis for the records of `view`.

@@ -17,6 +17,7 @@ Standard library only (Python >= 3.8); no YAML library is needed to write the ce
 """
 
 import json
+import math
 import os
 import sys
 
@@ -300,6 +301,45 @@ environment:
     return text
 
 
+def probe_cell(case, role, *, terms, program, probe):
+    """An XFYZ machine probing a part with a touch probe (no tracker): hits in several directions
+    at each program point."""
+    text = HEADER.format(role=role, case=case, role_text=ROLE_TEXT[role])
+    text += f"name: {case}\ndescription: XFYZ machine probing a part\n\n"
+    text += """\
+machine:
+  family: cartesian
+  stacking: XFYZ
+  travel: {x: [0 mm, 800 mm], y: [0 mm, 500 mm], z: [0 mm, 400 mm]}
+  tool_offset: [0 mm, 0 mm, -150 mm]   # stylus tip relative to the Z carriage
+
+sensors:
+"""
+    text += probe + """\
+  thermocouples:
+    - {name: ambient, location: ambient, noise: 0.02 K, rate: 0.05 Hz}
+  machine_state: {rate: 1 Hz}
+
+"""
+    text += STEADY_ENV + "\n" + program.yaml() + "\n" + "terms:" + (" []\n" if not terms else "\n" + terms)
+    return text
+
+
+def probe_yaml(directions, noise="0.6 um", pretravel=None):
+    text = "  probe:\n    directions: [" + ", ".join(f"[{x:g}, {y:g}, {z:g}]" for x, y, z in directions) + "]\n"
+    text += f"    hit_interval: 0.5 s\n    noise: {noise}\n"
+    if pretravel:
+        text += "    pretravel:\n" + pretravel
+    return text
+
+
+_c, _d = math.cos(math.radians(45)), math.sin(math.radians(45))
+# eight directions in the XY plane (45 deg apart) and one down: what a lobing study probes
+PROBE_RING = [(1, 0, 0), (_c, _d, 0), (0, 1, 0), (-_c, _d, 0), (-1, 0, 0), (-_c, -_d, 0), (0, -1, 0), (_c, -_d, 0), (0, 0, -1)]
+# a part's faces: +-X, +-Y and the top
+PROBE_FACES = [(1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, -1)]
+
+
 # --------------------------------------------------------------------------------------------
 # Terms (the catalog's configs, crates/physics/README.md)
 # --------------------------------------------------------------------------------------------
@@ -348,6 +388,10 @@ T = {
   - id: tool_offset            # the SMR bracket's offset error, tool frame
     params: {dx: DX, dy: DY, dz: DZ}
 """,
+    "frame_misalignment": """\
+  - id: frame_misalignment     # the part on its fixture, relative to the machine axes
+    params: {rx: RX, ry: RY, rz: RZ, tx: TX, ty: TY, tz: TZ}
+""",
     "delta_rod_length": """\
   - id: delta_rod_length
     params: {rod_length_a: A, rod_length_b: B, rod_length_c: 0 um}
@@ -369,6 +413,10 @@ def term(kind, **subs):
 # the recording plan (duration, windows to keep) and the answer.
 
 GEO_PROGRAM = Program(GEO_POINTS, cycles=2)
+PRETRAVEL = """\
+      options: {lobes: 3}
+      params: {mean: 4 um, lobe_cos: 2 um, lobe_sin: -1.5 um, vertical: 3 um}
+"""
 # a 3 m gantry: 9 x positions, 3 y, 2 z; the tracker stands beyond its X = 0 end
 GANTRY_TRAVEL = ("3000 mm", "1500 mm", "600 mm")
 GANTRY = Program(serpentine([0, 310, 720, 1090, 1460, 1880, 2270, 2630, 3000], [0, 750, 1500], [0, 600]),
@@ -376,6 +424,8 @@ GANTRY = Program(serpentine([0, 310, 720, 1090, 1460, 1880, 2270, 2630, 3000], [
 GANTRY_TRACKER = "[-1500 mm, 600 mm, 900 mm]"
 # the delta's effector box: 5 x 5 x 3 points
 DELTA = Program(serpentine([-70, -35, 0, 35, 70], [-70, -35, 0, 35, 70], [10, 60, 110]), feed=50.0, cycles=2, home=(0, 0, 115))
+# probing: 4 x 3 x 2 points over a part, 9 (ring) or 5 (faces) hits each
+PROBE_PROGRAM = Program(serpentine([50, 260, 470, 680], [60, 250, 440], [40, 220]), dwell=5.0, cycles=2, home=(0, 0, 400))
 ARM_JOINT_OFFSETS = """\
   - id: joint_offset           # calibrated zero offsets (declared in the model at these values)
     options: {joints: 6}
@@ -464,6 +514,20 @@ CASES = [
          {"concealed": [concealed("delta_rod_length", "delta_rod_length", ["rod_length_a", "rod_length_b", "rod_length_c"],
                                   {"rod_length_a": 30e-6, "rod_length_b": -20e-6, "rod_length_c": 0.0})]}),
 
+    # a touch probe with 3-lobe pretravel (a kinematic seat), probed in 8 directions and down;
+    # repeatability 0.6 um, lobing and mean pretravel a few um
+    case("probe_pretravel", "single", 360.0, PROBE_PROGRAM,
+         lambda c, r: probe_cell(c, r, program=PROBE_PROGRAM, terms="", probe=probe_yaml(PROBE_RING, pretravel=PRETRAVEL)),
+         lambda c, r: probe_cell(c, r, program=PROBE_PROGRAM, terms="", probe=probe_yaml(PROBE_RING)),
+         {"concealed": [concealed("probe_pretravel", "probe_pretravel", ["mean", "lobe_cos", "lobe_sin", "vertical"],
+                                  {"mean": 4e-6, "lobe_cos": 2e-6, "lobe_sin": -1.5e-6, "vertical": 3e-6})]}),
+    # the part sits turned and tilted on the table by a few urad (a fixture not square to the axes)
+    case("frame_misalignment", "single", 360.0, PROBE_PROGRAM,
+         lambda c, r: probe_cell(c, r, program=PROBE_PROGRAM, probe=probe_yaml(PROBE_FACES),
+                                 terms=term("frame_misalignment", rx="4 urad", ry="-6 urad", rz="10 urad", tx="3 um", ty="-2 um", tz="2 um")),
+         lambda c, r: probe_cell(c, r, program=PROBE_PROGRAM, probe=probe_yaml(PROBE_FACES), terms=""),
+         {"concealed": [concealed("frame_misalignment", "frame_misalignment", ["rx", "ry", "rz"], {"rx": 4e-6, "ry": -6e-6, "rz": 10e-6})]}),
+
     # ---- null recordings (the model is complete) ---------------------------------------------
     geo_case("null_plain", "", kind="null"),
     long_case("null_long", TIME_POINTS, "", kind="null"),
@@ -500,7 +564,7 @@ CASES = [
 ]
 
 # A fixed shuffle of the case order (so that case numbers say nothing about the kind).
-ORDER = [10, 3, 15, 7, 1, 20, 12, 16, 5, 9, 17, 0, 14, 6, 19, 11, 2, 13, 4, 18, 8]
+ORDER = [10, 3, 15, 7, 1, 20, 12, 21, 16, 5, 9, 17, 0, 14, 6, 22, 19, 11, 2, 13, 4, 18, 8]
 
 
 def build():

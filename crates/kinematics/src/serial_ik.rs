@@ -12,9 +12,10 @@
 //! The log map flips its axis at θ = π, and a chain can have several solutions and local minima
 //! of |r|: when the solve from `q0` does not meet the tolerances, it restarts from `q0` with one
 //! revolute joint turned by ±90° at a time (deterministic order) and returns the first start that
-//! converges, else the best.
+//! converges, else the best. Revolute joints are returned within π of `q0` (a turn by 2π is the
+//! same pose). Joint limits are not enforced (the caller checks them).
 
-use metrocell_solver::{solve, NotEvaluable, Options, Problem};
+use metrocell_solver::{solve, NotEvaluable, NullSpace, Options, Problem};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 use crate::error::KinematicsError;
@@ -76,6 +77,15 @@ impl Problem for IkProblem<'_> {
             let turn = inverse_left_jacobian(&phi) * self.weight;
             jacobian.rows_mut(3, 3).copy_from(&(turn * geometric.rows(3, 3)));
         }
+        // a joint whose column is round-off (a wrist turning the tool point about itself, for a
+        // position target) does not move the residual: an exact zero column keeps the solver's
+        // unit-invariant scaling from blowing that noise up into a step
+        let largest = jacobian.column_iter().map(|c| c.norm()).fold(0.0, f64::max);
+        for mut c in jacobian.column_iter_mut() {
+            if c.norm() < 1e-12 * largest {
+                c.fill(0.0);
+            }
+        }
         Ok(())
     }
 }
@@ -88,8 +98,19 @@ impl SerialChain {
         let problem = IkProblem { chain: self, target, weight: settings.orientation_weight };
         let with_orientation = matches!(target, IkTarget::Pose(_));
         let done = |pe: f64, oe: f64| pe <= settings.position_tolerance && (!with_orientation || oe <= settings.orientation_tolerance);
-        // converged means the tolerances are met, so the solver's own tests are set to round-off
-        let options = Options { max_iterations: settings.max_iterations, ftol: 0.0, gtol: 0.0, xtol: 1e-15, initial_damping: settings.initial_damping, ..Options::default() };
+        // converged means the tolerances are met, so the solver's own tests are set to round-off;
+        // a redundant chain (a position target of a 6-axis arm, a wrist joint that only turns the
+        // tool about its point) has directions the residuals do not see: truncated-SVD steps leave
+        // them at the start (a minimum-norm step, as damped least squares takes)
+        let options = Options {
+            max_iterations: settings.max_iterations,
+            ftol: 0.0,
+            gtol: 0.0,
+            xtol: 1e-15,
+            initial_damping: settings.initial_damping,
+            null_space: NullSpace::Truncated { rcond: 1e-10 },
+            ..Options::default()
+        };
         let mut starts = vec![q0.to_vec()];
         for (k, j) in self.joints.iter().filter(|j| j.kind != JointKind::Fixed).enumerate() {
             if j.kind == JointKind::Revolute {
@@ -105,8 +126,16 @@ impl SerialChain {
         for start in starts {
             let solution = solve(&problem, &start, &options).map_err(|e| KinematicsError::InvalidValue { field: "inverse kinematics".into(), value: f64::NAN, reason: e.to_string() })?;
             iterations += solution.iterations;
-            let (dp, phi) = problem.errors(&solution.x)?;
-            let report = IkReport { converged: done(dp.norm(), phi.norm()), q: DVector::from_vec(solution.x), iterations, position_error: dp.norm(), orientation_error: phi.norm(), damping: solution.damping };
+            // a revolute joint turned by 2π gives the same pose: return the turn nearest q0
+            let mut x = solution.x;
+            for (k, j) in self.joints.iter().filter(|j| j.kind != JointKind::Fixed).enumerate() {
+                if j.kind == JointKind::Revolute {
+                    let turns = ((x[k] - q0[k]) / std::f64::consts::TAU).round();
+                    x[k] -= turns * std::f64::consts::TAU;
+                }
+            }
+            let (dp, phi) = problem.errors(&x)?;
+            let report = IkReport { converged: done(dp.norm(), phi.norm()), q: DVector::from_vec(x), iterations, position_error: dp.norm(), orientation_error: phi.norm(), damping: solution.damping };
             let score = |r: &IkReport| r.position_error + settings.orientation_weight * r.orientation_error;
             if report.converged {
                 return Ok(report);

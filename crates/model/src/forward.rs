@@ -308,10 +308,11 @@ impl<'a> ForwardModel<'a> {
     }
 
     /// Σ of the machine- and tool-frame terms' displacements for the nominal point `point` of
-    /// the frame they act in. `tool_rotation` turns tool-frame terms (`Frame::Tool`, e.g.
-    /// `tool_offset`) into that frame: identity where the tool does not turn, the tool frame's
-    /// rotation on an arm.
-    fn displacement(&self, p: &[f64], s: &mut Signals, tool_rotation: &Matrix3<f64>, mut cache: Option<&mut DisplacementCache>) -> Result<Vector3<f64>, PhysicsError> {
+    /// the frame they act in (set as `s.machine_point`). `tool_rotation` turns tool-frame terms
+    /// (`Frame::Tool`, e.g. `tool_offset`) into that frame: identity where the tool does not
+    /// turn, the tool frame's rotation on an arm.
+    fn displacement(&self, p: &[f64], s: &mut Signals, point: Vector3<f64>, tool_rotation: &Matrix3<f64>, mut cache: Option<&mut DisplacementCache>) -> Result<Vector3<f64>, PhysicsError> {
+        s.machine_point = Some(point);
         let mut d = Vector3::zeros();
         for (i, t) in self.machine_terms.terms.iter().enumerate() {
             let effect = t.term.effect();
@@ -374,28 +375,17 @@ impl<'a> ForwardModel<'a> {
     pub fn tool_state(&self, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, cache: Option<&mut DisplacementCache>) -> Result<ToolState, PhysicsError> {
         self.check(p)?;
         let mut cache = cache;
-        s.machine_point = self.nominal_machine_point(q);
-        let mut tool = self.tool_state_with(kin, q, |rotation| self.displacement(p, s, rotation, cache.as_deref_mut()))?;
+        let mut tool = self.tool_state_with(kin, q, |point, rotation| self.displacement(p, s, point, rotation, cache.as_deref_mut()))?;
         if self.has_workpiece_terms() {
             tool.workpiece = self.workpiece_displacement(p, s, tool.nominal.translation.vector, None, 1.0)?;
         }
         Ok(tool)
     }
 
-    /// The nominal tool tip in the machine (axis) frame at joint vector `q`, the point
-    /// `Signals::machine_point` carries to the machine terms (None for an arm: its terms read no
-    /// machine point, and its forward kinematics is not worth running twice).
-    pub fn nominal_machine_point(&self, q: &[f64]) -> Option<Vector3<f64>> {
-        match &self.machine.kinematics {
-            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => Some(self.machine.nominal_tool_point(&Vector3::new(q[0], q[1], q[2]))),
-            MachineKinematics::FiveAxis(f) => Some(f.tip_machine(q)),
-            MachineKinematics::SerialArm(_) => None,
-        }
-    }
-
-    /// The family's tool state, with the machine terms' displacement sum `displacement(tool
-    /// rotation)` (the terms read axis signals; tool-frame terms are turned by the rotation).
-    fn tool_state_with(&self, kin: &KinematicTruth, q: &[f64], mut displacement: impl FnMut(&Matrix3<f64>) -> Result<Vector3<f64>, PhysicsError>) -> Result<ToolState, PhysicsError> {
+    /// The family's tool state, with the machine terms' displacement sum `displacement(nominal
+    /// point of the frame the terms act in, tool rotation)` (tool-frame terms are turned by the
+    /// rotation).
+    fn tool_state_with(&self, kin: &KinematicTruth, q: &[f64], mut displacement: impl FnMut(Vector3<f64>, &Matrix3<f64>) -> Result<Vector3<f64>, PhysicsError>) -> Result<ToolState, PhysicsError> {
         let identity = Matrix3::identity();
         let zero = Vector3::zeros();
         Ok(match &self.machine.kinematics {
@@ -411,14 +401,14 @@ impl<'a> ForwardModel<'a> {
                     }
                     _ => Vector3::zeros(),
                 };
-                let d = kinematic + displacement(&identity)?;
+                let d = kinematic + displacement(n, &identity)?;
                 ToolState { nominal: Isometry3::translation(n.x, n.y, n.z), truth: Isometry3::translation(n.x + d.x, n.y + d.y, n.z + d.z), d, workpiece: zero }
             }
             MachineKinematics::FiveAxis(f) => {
                 // the spindle does not turn: the tool frame is the machine frame seen from the
                 // workpiece, which turns with the table
                 let tip = f.tip_machine(q);
-                let d = displacement(&identity)?;
+                let d = displacement(tip, &identity)?;
                 let workpiece_from_machine = f.geometry.machine_from_workpiece(q[3], q[4]).inverse();
                 ToolState { nominal: workpiece_from_machine * Isometry3::translation(tip.x, tip.y, tip.z), truth: workpiece_from_machine * Isometry3::translation(tip.x + d.x, tip.y + d.y, tip.z + d.z), d, workpiece: zero }
             }
@@ -430,7 +420,7 @@ impl<'a> ForwardModel<'a> {
                 };
                 let n = nominal.translation.vector;
                 let tool_rotation = true_pose.rotation.to_rotation_matrix().into_inner();
-                let d = true_pose.translation.vector - n + displacement(&tool_rotation)?;
+                let d = true_pose.translation.vector - n + displacement(n, &tool_rotation)?;
                 ToolState { nominal, truth: Isometry3::from_parts((n + d).into(), true_pose.rotation), d, workpiece: zero }
             }
         })
@@ -441,7 +431,6 @@ impl<'a> ForwardModel<'a> {
     /// columns of instrument terms are left zero). The point is `tool_state(..).target()`, bit
     /// for bit.
     pub fn tool_point_jacobian(&self, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, out: &mut DMatrix<f64>) -> Result<Vector3<f64>, PhysicsError> {
-        s.machine_point = self.nominal_machine_point(q);
         let mut tool = self.tool_jacobian(p, kin, q, s, out, None)?;
         if self.has_workpiece_terms() {
             tool.workpiece = self.workpiece_displacement(p, s, tool.nominal.translation.vector, Some(out), -1.0)?;
@@ -468,8 +457,9 @@ impl<'a> ForwardModel<'a> {
         // tool rotation the terms were turned by
         let mut tool_frame_sum = Vector3::zeros();
         let mut tool_rotation = Matrix3::identity();
-        let tool = self.tool_state_with(kin, q, |rotation| {
+        let tool = self.tool_state_with(kin, q, |point, rotation| {
             tool_rotation = *rotation;
+            s.machine_point = Some(point);
             let mut d = Vector3::zeros();
             let mut v = [0.0; 3];
             for (i, t) in self.machine_terms.terms.iter().enumerate() {
@@ -572,5 +562,18 @@ impl<'a> ForwardModel<'a> {
             KinematicTruth::None => {}
         }
         Ok(tool)
+    }
+}
+
+impl ForwardModel<'_> {
+    /// The nominal tool point in the machine (axis) frame at joint vector `q` — the point
+    /// `Signals::machine_point` carries to the machine terms — without running the model (None
+    /// for an arm: its nominal tool point needs forward kinematics; use [`Self::tool_state`]).
+    pub fn nominal_machine_point(&self, q: &[f64]) -> Option<Vector3<f64>> {
+        match &self.machine.kinematics {
+            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => Some(self.machine.nominal_tool_point(&Vector3::new(q[0], q[1], q[2]))),
+            MachineKinematics::FiveAxis(f) => Some(f.tip_machine(q)),
+            MachineKinematics::SerialArm(_) => None,
+        }
     }
 }

@@ -92,9 +92,9 @@ pub enum SignalKind {
     TrackerRange,
     /// Point in normalised image coordinates (x/z, y/z) of the camera.
     ImagePoint,
-    /// Nominal tool tip in the machine (axis) frame, m: what machine-frame terms that depend on
-    /// where the tip is (not only on the axis positions) read, e.g. a five-axis table's rotary
-    /// location errors.
+    /// The nominal tool point in the frame machine-frame terms act in (the machine frame: q +
+    /// tool offset on cartesian and delta machines, the tool tip in the machine frame on a
+    /// five-axis machine, the nominal tool point on an arm), m.
     MachinePoint,
     /// Nominal position of a feature on the workpiece (the part, fixture or artefact), in the
     /// workpiece frame, m: what workpiece-frame terms displace.
@@ -147,7 +147,7 @@ pub struct TemperatureHistory {
 ///
 /// Points: one slot per frame a term acts in, so terms of different frames evaluated for one
 /// reading never read each other's point (the forward model, crates/model, fills them:
-/// `machine_point` before the machine terms, `workpiece_point` before the workpiece terms, `target_point` before `tracker_pose`,
+/// `machine_point` before the machine-frame terms, `workpiece_point` before the workpiece terms, `target_point` before `tracker_pose`,
 /// `camera_point` before `camera_scale`).
 #[derive(Debug, Clone, Default)]
 pub struct Signals {
@@ -163,7 +163,7 @@ pub struct Signals {
     pub load_force: Option<Vector3<f64>>,
     pub tracker_range: Option<f64>,
     pub image_point: Option<Vector2<f64>>,
-    /// Nominal tool tip, machine frame, m ([`SignalKind::MachinePoint`]).
+    /// Nominal tool point in the machine frame, m ([`SignalKind::MachinePoint`]).
     pub machine_point: Option<Vector3<f64>>,
     /// Nominal feature position on the workpiece, workpiece frame, m ([`SignalKind::WorkpiecePoint`]).
     pub workpiece_point: Option<Vector3<f64>>,

@@ -581,9 +581,16 @@ impl<'a> Engine<'a> {
         let nominal = self.cell.machine.nominal_tool_point(&v3(&seg.to));
         let hit = ProbeTarget { surface: nominal, approach: u, stylus_radius: 0.0 };
         let prediction = self.model.probe_hit(None, &self.params, &self.kinematics, ms.q.as_slice(), &mut self.signals, &hit)?;
-        let (d, pretravel) = (prediction.machine, prediction.pretravel);
+        let (mut d, pretravel) = (prediction.machine, prediction.pretravel);
+        let mut centre = prediction.centre;
+        // the test-only disturbances displace the machine as a term would: the axes read −δ
+        if !self.cell.disturbances.is_empty() {
+            let delta = self.cell.disturbances.displacement(ev.t, &v3(&ms.q));
+            d += delta;
+            centre -= delta;
+        }
         let noise = Vector3::new(self.probe_noise.normal(), self.probe_noise.normal(), self.probe_noise.normal()) * spec.noise;
-        let recorded = prediction.centre + noise;
+        let recorded = centre + noise;
         let s = ProbeHitSample {
             t: ev.t,
             target_id: point as u32,

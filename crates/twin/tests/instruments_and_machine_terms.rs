@@ -34,30 +34,6 @@ fn camera(mount_x: f64) -> CameraGeometry {
     CameraGeometry { mount: InstrumentPose::from_euler_xyz(Vector3::new(mount_x, 0.0, 0.0), [std::f64::consts::PI, 0.0, 0.0]), fx: 3000.0, fy: 3002.0, cx: 1023.5, cy: 767.5 }
 }
 
-/// Central-difference check of every column of `j` (rows of one unit) for `reading` at `p`.
-fn matches_central_differences(what: &str, p: &[f64], j: &DMatrix<f64>, reading: impl Fn(&[f64]) -> Vec<f64>) {
-    let y = reading(p);
-    let y_scale = y.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-    for c in 0..p.len() {
-        let col = j.column(c);
-        let scale = col.amax().max(1e-9 * j.amax());
-        let mut h = 1e-6 * y_scale / scale;
-        if p[c] != 0.0 {
-            h = h.min(1e-3 * p[c].abs());
-        }
-        let at = |k: f64| {
-            let mut q = p.to_vec();
-            q[c] += k * h;
-            reading(&q)
-        };
-        let (m2, m1, p1, p2) = (at(-2.0), at(-1.0), at(1.0), at(2.0));
-        for r in 0..y.len() {
-            let fd = (m2[r] - 8.0 * m1[r] + 8.0 * p1[r] - p2[r]) / (12.0 * h);
-            assert!((fd - col[r]).abs() <= 1e-6 * scale + 4.0 * f64::EPSILON * y_scale / h, "{what}: column {c} row {r}: analytic {} vs central {fd}", col[r]);
-        }
-    }
-}
-
 #[test]
 fn two_trackers_and_two_cameras_are_separate_instruments() {
     let cell = common::validate(&common::example_file("quick_demo.yaml"));
@@ -119,7 +95,7 @@ fn two_trackers_and_two_cameras_are_separate_instruments() {
             let y = r.measured_point();
             vec![y.x, y.y, y.z, r.measured_range()]
         };
-        matches_central_differences(&format!("tracker {me}"), &p, &j, reading);
+        common::check_columns(&format!("tracker {me}"), &names, &p, &j, reading);
     }
 
     // cameras: cam1 carries the scale (metric point), cam2 the lens (pixels)
@@ -141,8 +117,8 @@ fn two_trackers_and_two_cameras_are_separate_instruments() {
             let c = model.camera(Some(me), x, &tool, &mut s, &feature).unwrap();
             vec![c.pixel.x, c.pixel.y, c.measured_point.x, c.measured_point.y, c.measured_point.z]
         };
-        matches_central_differences(&format!("camera {me} pixels"), &p, &j.rows(0, 2).into_owned(), |x| reading(x)[..2].to_vec());
-        matches_central_differences(&format!("camera {me} point"), &p, &j.rows(2, 3).into_owned(), |x| reading(x)[2..].to_vec());
+        common::check_columns(&format!("camera {me} pixels"), &names, &p, &j.rows(0, 2).into_owned(), |x| reading(x)[..2].to_vec());
+        common::check_columns(&format!("camera {me} point"), &names, &p, &j.rows(2, 3).into_owned(), |x| reading(x)[2..].to_vec());
     }
 }
 

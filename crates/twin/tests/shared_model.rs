@@ -147,42 +147,6 @@ fn reading(model: &ForwardModel, p: &[f64], joints: &[f64], sig: &Signals) -> Ve
     vec![y.x, y.y, y.z, pred.measured_range()]
 }
 
-/// Every column of the analytic Jacobian `j` of `reading` at `p` (rows of one unit) against
-/// 4th-order central differences: |analytic − central| ≤ 1e-6 × (the column's largest entry) +
-/// the stencil's rounding. Returns the number of columns checked.
-fn check_columns(what: &str, names: &[String], p: &[f64], j: &DMatrix<f64>, reading: impl Fn(&[f64]) -> Vec<f64>) -> usize {
-    let y = reading(p);
-    let y_scale = y.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-    // a column below 1e-9 of the largest entry is zero up to rounding (e.g. the arm's last
-    // joint turning the tool point about itself)
-    let floor = 1e-9 * j.amax();
-    for c in 0..p.len() {
-        let col = j.column(c);
-        let scale = col.amax().max(floor);
-        // a step that moves the reading by ~1e-6 of its size (a few µm of a tracker reading,
-        // ~1e-3 px of a pixel), and at most 0.1 % of the parameter
-        let step = 1e-6 * y_scale.max(1e-3);
-        let mut h = if scale > 0.0 { step / scale } else { step };
-        if p[c] != 0.0 {
-            h = h.min(1e-3 * p[c].abs());
-        }
-        let at = |k: f64| {
-            let mut q = p.to_vec();
-            q[c] += k * h;
-            reading(&q)
-        };
-        let (m2, m1, p1, p2) = (at(-2.0), at(-1.0), at(1.0), at(2.0));
-        for r in 0..y.len() {
-            let fd = (m2[r] - 8.0 * m1[r] + 8.0 * p1[r] - p2[r]) / (12.0 * h);
-            let err = (fd - col[r]).abs();
-            // plus the rounding error of the stencil itself (≈ 18·ε·|y|/(12·h))
-            let rounding = 4.0 * f64::EPSILON * y_scale / h;
-            assert!(err <= 1e-6 * scale + rounding, "{what}: ∂y{r}/∂{} analytic {} vs central {fd} (column scale {scale})", names[c], col[r]);
-        }
-    }
-    p.len()
-}
-
 /// The example cells, plus the UR5 with a tool offset (a tool-frame term the joint offsets turn)
 /// and a two-link URDF arm (link lengths along the URDF origins).
 fn jacobian_cells() -> Vec<(String, Cell)> {
@@ -227,7 +191,7 @@ fn analytic_jacobians_match_central_differences() {
             let pred = model.tracker_jacobian(&p, &kin, &tt.joints, &mut sig.clone(), &mut work, &mut j).unwrap();
             let y = reading(&model, &p, &tt.joints, &sig);
             assert_eq!(y[3], pred.measured_range(), "{name}: the Jacobian's prediction is the model's");
-            check_columns(&format!("{name} tracker t = {}", s.t), &names, &p, &j, |q| reading(&model, q, &tt.joints, &sig));
+            common::check_columns(&format!("{name} tracker t = {}", s.t), &names, &p, &j, |q| reading(&model, q, &tt.joints, &sig));
             checked += 1;
         }
         assert!(checked >= 3, "{name}: {checked} readings checked");
@@ -451,7 +415,7 @@ fn probe_and_camera_jacobians_match_central_differences() {
                 vec![c.x, c.y, c.z]
             };
             assert_eq!(probe(&p), pred.centre.as_slice(), "{name}: the Jacobian's prediction is the model's");
-            columns += check_columns(&format!("{name} probe t = {}", h.t), &names, &p, &j, probe);
+            columns += common::check_columns(&format!("{name} probe t = {}", h.t), &names, &p, &j, probe);
         }
         let spec = sim.cell().camera.clone();
         for (r, joints) in camera_requests(&sim).iter().take(3) {
@@ -472,8 +436,8 @@ fn probe_and_camera_jacobians_match_central_differences() {
                 assert_eq!((y[0], y[1], y[4]), (pred.pixel.x, pred.pixel.y, pred.measured_point.z), "{name}: the Jacobian's prediction is the model's");
                 let what = format!("{name} camera t = {}", r.t);
                 // pixel rows and metre rows separately (each against its own scale)
-                columns += check_columns(&format!("{what} pixels"), &names, &p, &j.rows(0, 2).into_owned(), |x| camera(x)[..2].to_vec());
-                columns += check_columns(&format!("{what} camera point"), &names, &p, &j.rows(2, 3).into_owned(), |x| camera(x)[2..].to_vec());
+                columns += common::check_columns(&format!("{what} pixels"), &names, &p, &j.rows(0, 2).into_owned(), |x| camera(x)[..2].to_vec());
+                columns += common::check_columns(&format!("{what} camera point"), &names, &p, &j.rows(2, 3).into_owned(), |x| camera(x)[2..].to_vec());
             }
         }
         assert!(columns > 0, "{name}: nothing checked");

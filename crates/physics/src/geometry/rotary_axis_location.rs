@@ -13,7 +13,7 @@
 //! To first order in the errors W' = W + δW with
 //! `δW·p = δX_B(q_B) + Ry(B)·δX_C(q_C)`, q_C = w + p (table frame), q_B = c + Rz(C)·q_C,
 //! `δX(y) = ε×(R y) − R(ε×y) + δ − R δ + θ₀·(e × R y)` (e = the axis: y for B, z for C).
-//! The tool tip t (machine frame, signal `machine_point`, which the model sets before the machine terms) then
+//! The tool tip t (machine frame, signal `machine_point`) then
 //! lands at the workpiece point W'⁻¹t ≈ W⁻¹(t − δW·p) with p = W⁻¹t, so in the convention of
 //! every machine-frame term (`tip_wp = W⁻¹(t + d)`, crates/model):
 //!

@@ -105,21 +105,33 @@ impl BlockedRows {
     }
 }
 
-/// Pseudo-inverse of a symmetric positive semi-definite matrix by column scaling and eigen-
-/// decomposition, and its rank.
-pub fn pseudo_inverse(g: &DMatrix<f64>) -> (DMatrix<f64>, usize) {
-    let p = g.nrows();
+/// Which eigenvalues of a scaled symmetric matrix count as directions.
+#[derive(Clone, Copy)]
+enum Keep {
+    /// Above this fraction of the largest.
+    Relative(f64),
+    /// Above this value.
+    Absolute(f64),
+}
+
+/// Pseudo-inverse of the symmetric matrix `m`, scaled by the diagonal of `scale` (columns to
+/// unit norm) before its eigen-decomposition, and its rank.
+fn scaled_pseudo_inverse(m: &DMatrix<f64>, scale: &DMatrix<f64>, keep: Keep) -> (DMatrix<f64>, usize) {
+    let p = m.nrows();
     if p == 0 {
         return (DMatrix::zeros(0, 0), 0);
     }
-    let d: Vec<f64> = (0..p).map(|i| if g[(i, i)] > 0.0 { 1.0 / g[(i, i)].sqrt() } else { 0.0 }).collect();
-    let scaled = DMatrix::from_fn(p, p, |i, j| g[(i, j)] * d[i] * d[j]);
+    let d: Vec<f64> = (0..p).map(|i| if scale[(i, i)] > 0.0 { 1.0 / scale[(i, i)].sqrt() } else { 0.0 }).collect();
+    let scaled = DMatrix::from_fn(p, p, |i, j| m[(i, j)] * d[i] * d[j]);
     let eig = scaled.symmetric_eigen();
-    let top = eig.eigenvalues.iter().cloned().fold(0.0, f64::max);
+    let floor = match keep {
+        Keep::Relative(f) => f * eig.eigenvalues.iter().cloned().fold(0.0, f64::max),
+        Keep::Absolute(a) => a,
+    };
     let mut inv = DMatrix::zeros(p, p);
     let mut rank = 0;
     for (k, &l) in eig.eigenvalues.iter().enumerate() {
-        if l > RANK_TOLERANCE * top && l > 0.0 {
+        if l > floor && l > 0.0 {
             rank += 1;
             let v = eig.eigenvectors.column(k);
             inv += v * v.transpose() / l;
@@ -131,6 +143,12 @@ pub fn pseudo_inverse(g: &DMatrix<f64>) -> (DMatrix<f64>, usize) {
         }
     }
     (inv, rank)
+}
+
+/// Pseudo-inverse of a symmetric positive semi-definite matrix by column scaling and eigen-
+/// decomposition (directions below [`RANK_TOLERANCE`] of the largest dropped), and its rank.
+pub fn pseudo_inverse(g: &DMatrix<f64>) -> (DMatrix<f64>, usize) {
+    scaled_pseudo_inverse(g, g, Keep::Relative(RANK_TOLERANCE))
 }
 
 /// Normal-equation sums of columns `a` (arranged) per cell.
@@ -341,25 +359,7 @@ fn schur(base: &Solved, x: &DMatrix<f64>, cc: &DMatrix<f64>, cb: &DVector<f64>) 
 /// Pseudo-inverse of a Schur complement `s` in the scaling of the candidate's own columns
 /// (`cc` = their normal matrix), directions below [`SEPARABLE_TOLERANCE`] dropped; and its rank.
 fn scaled_inverse(s: &DMatrix<f64>, cc: &DMatrix<f64>) -> (DMatrix<f64>, usize) {
-    let k = cc.nrows();
-    let d: Vec<f64> = (0..k).map(|i| if cc[(i, i)] > 0.0 { 1.0 / cc[(i, i)].sqrt() } else { 0.0 }).collect();
-    let scaled = DMatrix::from_fn(k, k, |i, j| s[(i, j)] * d[i] * d[j]);
-    let eig = scaled.symmetric_eigen();
-    let mut inv = DMatrix::zeros(k, k);
-    let mut rank = 0;
-    for (j, &l) in eig.eigenvalues.iter().enumerate() {
-        if l > SEPARABLE_TOLERANCE {
-            rank += 1;
-            let v = eig.eigenvectors.column(j);
-            inv += v * v.transpose() / l;
-        }
-    }
-    for i in 0..k {
-        for j in 0..k {
-            inv[(i, j)] *= d[i] * d[j];
-        }
-    }
-    (inv, rank)
+    scaled_pseudo_inverse(s, cc, Keep::Absolute(SEPARABLE_TOLERANCE))
 }
 
 /// The columns of `c` (whitened, any row order) that, taken in order, each add a direction the

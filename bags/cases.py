@@ -135,13 +135,18 @@ POSE_ERROR_MM = (3.1, -2.4, 1.7)
 POSE_ERROR_DEG = (0.021, -0.016, 0.047)
 
 
+def wrap(v, unit):
+    """Angles in degrees into [-180, 180) (the pose parameters' range)."""
+    return (v + 180.0) % 360.0 - 180.0 if unit == "deg" else v
+
+
 def roughen(tracker_text):
     """The tracker section with its pose moved by POSE_ERROR_* (units as written)."""
     import re
 
     def shift(match, errors, scale):
         vals = re.findall(r"(-?[0-9.]+) ?([a-z]+)", match.group(1))
-        moved = [f"{float(v) + e * scale[u]:.6g} {u}" for (v, u), e in zip(vals, errors)]
+        moved = [f"{wrap(float(v) + e * scale[u], u):.6g} {u}" for (v, u), e in zip(vals, errors)]
         return match.group(0).replace(match.group(1), ", ".join(moved))
 
     text = re.sub(r"translation: \[([^\]]*)\]", lambda m: shift(m, POSE_ERROR_MM, {"mm": 1.0, "m": 1e-3}), tracker_text, count=1)
@@ -219,7 +224,7 @@ class Program:
         return text
 
 
-def arm_cell(case, role, *, terms, program):
+def arm_cell(case, role, *, terms, program, estimation=""):
     """A UR5 on a pedestal (published DH, crates/twin/examples/cells/serial_arm_ur5.yaml), its SMR
     followed by a tracker 2.5 m away."""
     text = HEADER.format(role=role, case=case, role_text=ROLE_TEXT[role])
@@ -243,7 +248,7 @@ machine:
 
 sensors:
 """
-    tracker = tracker_yaml(pose="[2.5 m, 0.3 m, 1.0 m]", euler="[0 deg, 0 deg, 180 deg]")
+    tracker = tracker_yaml(pose="[2.5 m, 0.3 m, 1.0 m]", euler="[0 deg, 0 deg, 170 deg]")
     text += roughen(tracker) if role == "model" else tracker
     text += """\
   thermocouples:
@@ -256,6 +261,8 @@ environment:
 
 """
     text += program + "\n" + "terms:" + (" []\n" if not terms else "\n" + terms)
+    if estimation:
+        text += "\nestimation:\n" + estimation
     return text
 
 
@@ -351,8 +358,8 @@ T = {
     params: {alpha: ALPHA}
 """,
     "thermal_growth": """\
-  - id: thermal_growth         # column growth pushes the spindle down, lagging its sensor
-    options: {sensor: column, direction: [0, 0, -1], lag: true}
+  - id: thermal_growth         # the warm column lowers the spindle (a negative growth along +z), lagging its sensor
+    options: {sensor: column, direction: [0, 0, 1], lag: true}
     params: {coefficient: COEF, time_constant: TAU}
 """,
     "backlash": """\
@@ -467,9 +474,9 @@ CASES = [
     # ---- single concealed effects ------------------------------------------------------------
     long_case("thermal_scale", TIME_POINTS, term("thermal_scale", alpha="10.8e-6 1/K"),
               answer={"concealed": [concealed("thermal_scale", "thermal_scale[x]", ["alpha"], {"alpha": 10.8e-6})]}),
-    long_case("thermal_growth", TIME_POINTS, term("thermal_growth", coef="6 um/K", tau="25 min"),
+    long_case("thermal_growth", TIME_POINTS, term("thermal_growth", coef="-6 um/K", tau="25 min"),
               answer={"concealed": [concealed("thermal_growth", "thermal_growth[column]", ["coefficient", "time_constant"],
-                                              {"coefficient": 6e-6, "time_constant": 1500.0})]}),
+                                              {"coefficient": -6e-6, "time_constant": 1500.0})]}),
     geo_case("backlash", term("backlash", axis="x", rev="14 um"),
              answer={"concealed": [concealed("backlash", "backlash[x]", ["reversal"], {"reversal": 14e-6})]}),
     geo_case("squareness", term("squareness", pair="xy", s="40 urad"),
@@ -505,7 +512,8 @@ CASES = [
     # and declared at their true values)
     case("tool_offset", "single", 400.0, None,
          lambda c, r: arm_cell(c, r, program=arm_program(), terms=ARM_JOINT_OFFSETS + term("tool_offset", dx="20 um", dy="-15 um", dz="18 um")),
-         lambda c, r: arm_cell(c, r, program=arm_program(), terms=ARM_JOINT_OFFSETS),
+         lambda c, r: arm_cell(c, r, program=arm_program(), terms=ARM_JOINT_OFFSETS,
+                               estimation="  joint_offset: {free: []}     # calibrated earlier: held at these values\n"),
          {"concealed": [concealed("tool_offset", "tool_offset", ["dx", "dy", "dz"], {"dx": 20e-6, "dy": -15e-6, "dz": 18e-6})]}),
     # a linear delta whose diagonal rods are not all the nominal length
     case("delta_rod_length", "single", 480.0, DELTA,
@@ -532,8 +540,8 @@ CASES = [
     geo_case("null_plain", "", kind="null"),
     long_case("null_long", TIME_POINTS, "", kind="null"),
     long_case("null_thermal_declared", TIME_POINTS,
-              term("thermal_scale", alpha="12.1e-6 1/K") + term("thermal_growth", coef="3.5 um/K", tau="30 min"),
-              model_terms=term("thermal_scale", alpha="11.5e-6 1/K") + term("thermal_growth", coef="4 um/K", tau="20 min"),
+              term("thermal_scale", alpha="12.1e-6 1/K") + term("thermal_growth", coef="-3.5 um/K", tau="30 min"),
+              model_terms=term("thermal_scale", alpha="11.5e-6 1/K") + term("thermal_growth", coef="-4 um/K", tau="20 min"),
               estimation="  thermal_scale[x]: {free: [alpha]}\n  thermal_growth[column]: {free: [coefficient, time_constant]}\n",
               kind="null"),
     geo_case("null_geometry_declared", term("backlash", axis="x", rev="11 um") + term("squareness", pair="xy", s="-30 urad"),
@@ -541,10 +549,10 @@ CASES = [
              estimation="  backlash[x]: {free: [reversal]}\n  squareness[xy]: {free: [s]}\n", kind="null"),
 
     # ---- two concealed effects ---------------------------------------------------------------
-    long_case("two_backlash_growth", TIME_POINTS, term("backlash", axis="x", rev="15 um") + term("thermal_growth", coef="5 um/K", tau="25 min"),
+    long_case("two_backlash_growth", TIME_POINTS, term("backlash", axis="x", rev="15 um") + term("thermal_growth", coef="-5 um/K", tau="25 min"),
               kind="two", answer={"concealed": [
                   concealed("backlash", "backlash[x]", ["reversal"], {"reversal": 15e-6}),
-                  concealed("thermal_growth", "thermal_growth[column]", ["coefficient", "time_constant"], {"coefficient": 5e-6, "time_constant": 1500.0})]}),
+                  concealed("thermal_growth", "thermal_growth[column]", ["coefficient", "time_constant"], {"coefficient": -5e-6, "time_constant": 1500.0})]}),
     long_case("two_pitch_scale", MID_POINTS, term("pitch_cyclic", a1="9 um", b1="-7 um") + term("thermal_scale", alpha="11.0e-6 1/K"),
               kind="two", interval=1800.0, answer={"concealed": [
                   concealed("pitch_cyclic", "pitch_cyclic[x]", ["a1", "b1"], {"a1": 9e-6, "b1": -7e-6}),

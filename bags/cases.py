@@ -420,6 +420,12 @@ def term(kind, **subs):
 # the recording plan (duration, windows to keep) and the answer.
 
 GEO_PROGRAM = Program(GEO_POINTS, cycles=2)
+COMPLIANCE = """\
+  - id: compliance             # the Y carriage is a cantilever: it sags under the payload
+    options: {extension_axis: y, extension_origin: 0 mm}
+    params: {translational: 2e-8 m/N, rotational: 8e-8 rad/(N m), bending: 3e-7 1/(N m^2)}
+"""
+LOAD = "  load_force: [0 N, 0 N, {f}]     # the tool's weight on the Y carriage (N, machine frame)\n"
 PRETRAVEL = """\
       options: {lobes: 3}
       params: {mean: 4 um, lobe_cos: 2 um, lobe_sin: -1.5 um, vertical: 3 um}
@@ -444,8 +450,11 @@ GEO_DURATION = 720.0       # two cycles of ~5.4 min
 LONG_DURATION = 5 * 3600.0  # a 5-hour shift
 
 
-def case(key, kind, duration, program, truth, model, answer):
-    return dict(key=key, kind=kind, duration=duration, program=program, truth=truth, model=model, answer=answer or {})
+def case(key, kind, duration, program, truth, model, answer, more_runs=()):
+    """A case; `more_runs` are further truth cells recorded after the first (an hour apart), for
+    effects that need a second condition (e.g. another load)."""
+    return dict(key=key, kind=kind, duration=duration, program=program, truth=truth, model=model, answer=answer or {},
+                more_runs=list(more_runs))
 
 
 def geo_case(key, truth_terms, model_terms="", estimation="", answer=None, kind="single", disturbances=""):
@@ -536,6 +545,16 @@ CASES = [
          lambda c, r: probe_cell(c, r, program=PROBE_PROGRAM, probe=probe_yaml(PROBE_FACES), terms=""),
          {"concealed": [concealed("frame_misalignment", "frame_misalignment", ["rx", "ry", "rz"], {"rx": 4e-6, "ry": -6e-6, "rz": 10e-6})]}),
 
+    # a cantilevered Y carriage sags under the tool's weight, d = F (c0 + c_t y^2 + c_b y^3): recorded
+    # with a heavy tool (300 N) and, an hour later, a light one (50 N), as one would to see a load
+    # effect at all — under one constant load it is indistinguishable from a straightness error
+    case("compliance", "single", GEO_DURATION, GEO_PROGRAM,
+         lambda c, r: cartesian_cell(c, r, terms=COMPLIANCE, load=LOAD.format(f="-300 N"), **GEO),
+         lambda c, r: cartesian_cell(c, r, terms="", **GEO),
+         {"concealed": [concealed("compliance", "compliance[y]", ["translational", "rotational", "bending"],
+                                  {"translational": 2e-8, "rotational": 8e-8, "bending": 3e-7})]},
+         more_runs=[lambda c, r: cartesian_cell(c, r, terms=COMPLIANCE, load=LOAD.format(f="-50 N"), **GEO)]),
+
     # ---- null recordings (the model is complete) ---------------------------------------------
     geo_case("null_plain", "", kind="null"),
     long_case("null_long", TIME_POINTS, "", kind="null"),
@@ -572,7 +591,7 @@ CASES = [
 ]
 
 # A fixed shuffle of the case order (so that case numbers say nothing about the kind).
-ORDER = [10, 3, 15, 7, 1, 20, 12, 21, 16, 5, 9, 17, 0, 14, 6, 22, 19, 11, 2, 13, 4, 18, 8]
+ORDER = [10, 3, 15, 7, 1, 21, 12, 22, 16, 5, 9, 17, 0, 14, 6, 23, 19, 11, 2, 20, 13, 4, 18, 8]
 
 
 def build():
@@ -583,10 +602,16 @@ def build():
         c = CASES[i]
         name = f"case_{n:02d}"
         files[f"cases/{name}/truth.yaml"] = c["truth"](name, "truth")
+        runs = ["truth.yaml"]
+        for k, extra in enumerate(c["more_runs"], start=2):
+            runs.append(f"truth_run{k}.yaml")
+            files[f"cases/{name}/{runs[-1]}"] = extra(name, "truth")
         files[f"cases/{name}/model.yaml"] = c["model"](name, "model")
         answers[name] = {"kind": c["kind"], "duration_s": c["duration"], **c["answer"]}
         windows = c["program"].windows(c["duration"]) if c["program"] else [(0.0, c["duration"])]
         recordings[name] = {"duration_s": c["duration"], "windows_s": [[round(a, 3), round(b, 3)] for a, b in windows]}
+        if len(runs) > 1:
+            recordings[name]["runs"] = runs
         if c["kind"] in ("null", "out_of_catalog"):
             answers[name].setdefault("concealed", [])
     files["answers.json"] = json.dumps(answers, indent=1, sort_keys=True) + "\n"

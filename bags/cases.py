@@ -19,6 +19,7 @@ Standard library only (Python >= 3.8); no YAML library is needed to write the ce
 import json
 import math
 import os
+import random
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -567,6 +568,16 @@ CASES = [
              model_terms=term("backlash", axis="x", rev="0 um") + term("squareness", pair="xy", s="0 urad"),
              estimation="  backlash[x]: {free: [reversal]}\n  squareness[xy]: {free: [s]}\n", kind="null"),
 
+    case("null_arm", "null", 400.0, None,
+         lambda c, r: arm_cell(c, r, program=arm_program(), terms=ARM_JOINT_OFFSETS),
+         lambda c, r: arm_cell(c, r, program=arm_program(), terms=ARM_JOINT_OFFSETS,
+                               estimation="  joint_offset: {free: []}     # calibrated earlier: held at these values\n"),
+         {}),
+    case("null_delta_declared", "null", 480.0, DELTA,
+         lambda c, r: delta_cell(c, r, program=DELTA, terms=term("delta_rod_length", a="30 um", b="-20 um")),
+         lambda c, r: delta_cell(c, r, program=DELTA, terms=term("delta_rod_length", a="0 um", b="0 um")),
+         {}),
+
     # ---- two concealed effects ---------------------------------------------------------------
     long_case("two_backlash_growth", TIME_POINTS, term("backlash", axis="x", rev="15 um") + term("thermal_growth", coef="-5 um/K", tau="25 min"),
               kind="two", answer={"concealed": [
@@ -588,10 +599,17 @@ CASES = [
     geo_case("local_bump", "", kind="out_of_catalog",
              disturbances="  workspace_bumps: [{amplitude: [0 um, 18 um, 0 um], centre: [590 mm, 250 mm, 200 mm], width: 90 mm}]\n",
              answer={"unexplained": {"structure": "workspace", "amplitude_m": [0, 18e-6, 0], "centre_m": [0.59, 0.25, 0.2], "width_m": 0.09}}),
+    long_case("cycle_in_time_x", TIME_POINTS, "", env=THERMAL_ENV, kind="out_of_catalog", interval=900.0,
+              disturbances="  time_cycles: [{amplitude: [11 um, 0 um, 0 um], period: 21 min, phase: -40 deg}]\n",
+              answer={"unexplained": {"structure": "time", "amplitude_m": [11e-6, 0, 0], "period_s": 1260.0}}),
+    geo_case("corner_bump", "", kind="out_of_catalog",
+             disturbances="  workspace_bumps: [{amplitude: [0 um, 0 um, -15 um], centre: [120 mm, 430 mm, 380 mm], width: 110 mm}]\n",
+             answer={"unexplained": {"structure": "workspace", "amplitude_m": [0, 0, -15e-6], "centre_m": [0.12, 0.43, 0.38], "width_m": 0.11}}),
 ]
 
-# A fixed shuffle of the case order (so that case numbers say nothing about the kind).
-ORDER = [10, 3, 15, 7, 1, 21, 12, 22, 16, 5, 9, 17, 0, 14, 6, 23, 19, 11, 2, 20, 13, 4, 18, 8]
+# A fixed shuffle of the case table (so that case numbers say nothing about the kind).
+ORDER = list(range(len(CASES)))
+random.Random(13).shuffle(ORDER)
 
 
 def build():

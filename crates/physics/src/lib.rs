@@ -36,6 +36,7 @@ pub mod instrument;
 pub mod load;
 pub mod machine_family;
 pub mod signals;
+pub mod temperature_timeline;
 pub mod term;
 pub mod term_id;
 pub mod thermal;
@@ -45,5 +46,6 @@ pub use catalog::{configure, configure_described, entries, lookup, CatalogEntry,
 pub use term_id::{Category, TermId};
 pub use config::{ConfigValue, EstimationConfig, PriorConfig, TermConfig};
 pub use error::PhysicsError;
-pub use signals::{Axis, RotaryAxis, SignalKind, Signals, TemperatureHistory};
+pub use signals::{Axis, RotaryAxis, SignalKind, Signals};
+pub use temperature_timeline::{TemperatureHistory, TemperatureTimeline};
 pub use term::{EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};

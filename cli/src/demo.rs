@@ -21,7 +21,7 @@ use metrocell_node::{qos, MetrocellNode};
 
 #[derive(clap::Args)]
 #[command(after_help = "Runs inside a private network namespace when started as\n  \
-tests/isolated target/release/metrocell demo\n\nExamples:\n  metrocell demo\n  metrocell demo --duration 300 --speed 50 --output /tmp/demo_bag")]
+tests/isolated target/release/metrocell demo\n\nExamples:\n  metrocell demo\n  metrocell demo --duration 300 --speed 50 --output /tmp/demo_bag\n  metrocell demo --quick")]
 pub struct DemoArgs {
     /// Cell description (default: the built-in three-minute XFYZ cell)
     #[arg(long)]
@@ -38,6 +38,9 @@ pub struct DemoArgs {
     /// Bag directory to record into (must not exist)
     #[arg(long, short = 'o')]
     output: Option<PathBuf>,
+    /// A short run for CI: 60 simulated seconds at 30× real time (overrides --duration and --speed)
+    #[arg(long)]
+    quick: bool,
     /// TCP port of the live dashboard (web page; the Foxglove WebSocket takes the next one)
     #[arg(long, default_value_t = 8765)]
     dashboard_port: u16,
@@ -76,7 +79,10 @@ pub fn run(args: DemoArgs) -> i32 {
     }
 }
 
-fn demo(args: DemoArgs) -> anyhow::Result<i32> {
+fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
+    if args.quick {
+        (args.duration, args.speed) = (60.0, 30.0);
+    }
     if !(args.speed > 0.0 && args.duration > 0.0) {
         anyhow::bail!("--speed and --duration must be positive");
     }

@@ -124,7 +124,7 @@ fn inputs_of(cell: &Cell, path: &str, power_on_known: bool) -> Result<Inputs, St
     for t in &cell.terms.terms {
         for s in t.term.signals() {
             match s {
-                SignalKind::AxisPosition(_) | SignalKind::ApproachDirection(_) | SignalKind::AxisVelocity(_) | SignalKind::Point => {}
+                SignalKind::AxisPosition(_) | SignalKind::ApproachDirection(_) | SignalKind::AxisVelocity(_) | SignalKind::RotaryPosition(_) | SignalKind::MachinePoint | SignalKind::WorkpiecePoint => {}
                 SignalKind::Temperature(name) => sensors.push(name),
                 SignalKind::TemperatureHistory(name) => {
                     sensors.push(name.clone());

@@ -113,7 +113,8 @@ fn in_place(place: &Place, s: &ResidualSample) -> Option<bool> {
 }
 
 /// Localisation findings the effect `c` (workpiece frame, per record) accounts for: its mean
-/// over the finding's subset is at least half the finding's effect, with the same sign.
+/// over the finding's subset is at least half the finding's effect, with the same sign (the six
+/// strongest).
 fn accounted(located: &[Located], samples: &[ResidualSample], c: &[Vector3<f64>]) -> Vec<String> {
     let mut out = Vec::new();
     for f in located.iter().take(30) {
@@ -160,6 +161,9 @@ fn accounted(located: &[Located], samples: &[ResidualSample], c: &[Vector3<f64>]
         };
         if effect * f.effect_m > 0.0 && effect.abs() >= 0.5 * f.effect_m.abs() {
             out.push(f.describe());
+            if out.len() == 6 {
+                break;
+            }
         }
     }
     out

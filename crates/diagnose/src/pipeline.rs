@@ -26,7 +26,7 @@ use metrocell_physics::model::TermModel;
 use metrocell_physics::{configure, ConfigValue, PhysicsError, TermConfig, TermId};
 use nalgebra::{DMatrix, DVector, Vector3};
 
-use crate::blocked_least_squares::{pseudo_inverse, BaseFit, BlockedRows};
+use crate::blocked_least_squares::{pseudo_inverse, separable_columns, BaseFit, BlockedRows};
 use crate::candidate_columns::ColumnContext;
 use crate::candidates::{candidate_families, Declared, NotTried, Placement, TermFamily};
 use crate::empirical::{bump_variants, time_variants, EmpiricalBasis};
@@ -88,6 +88,8 @@ pub struct DiagnoseOptions {
     /// Try empirical corrections for structure no catalog term explains.
     pub empirical: bool,
     pub locate: LocateOptions,
+    /// Say on stderr what is being done and how long each step took.
+    pub progress: bool,
 }
 
 impl Default for DiagnoseOptions {
@@ -104,6 +106,7 @@ impl Default for DiagnoseOptions {
             max_selection_records: 12_000,
             empirical: true,
             locate: LocateOptions::default(),
+            progress: false,
         }
     }
 }
@@ -209,30 +212,6 @@ enum Source {
     Empirical(Vec<EmpiricalBasis>),
 }
 
-/// Columns a base (whitened) already spans are set aside: each column's share of its norm left
-/// after projecting out the base, and joint rank, as [`crate::blocked_least_squares`] judges.
-fn separable_columns(base_pinv: &DMatrix<f64>, base: &DMatrix<f64>, c: &DMatrix<f64>) -> Vec<usize> {
-    let mut kept: Vec<usize> = Vec::new();
-    for j in 0..c.ncols() {
-        let col = c.column(j);
-        let norm2 = col.norm_squared();
-        if !(norm2 > 0.0) {
-            continue;
-        }
-        let mut trial = kept.clone();
-        trial.push(j);
-        let sub = c.select_columns(&trial);
-        let x = base.tr_mul(&sub);
-        let s = sub.tr_mul(&sub) - x.tr_mul(&(base_pinv * &x));
-        let (_, rank) = pseudo_inverse(&s);
-        let left = s[(trial.len() - 1, trial.len() - 1)] / norm2;
-        if rank == trial.len() && left > 1e-8 {
-            kept = trial;
-        }
-    }
-    kept
-}
-
 /// Empirical columns (whitened, records frame) of a basis for the records of `view`.
 fn empirical_columns(view: &ResidualView, basis: &EmpiricalBasis) -> DMatrix<f64> {
     let k = basis.len();
@@ -258,6 +237,12 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     let (instruments, setup) = with_tracker_pose(declared)?;
     let model = ForwardModel::new(declared.machine, declared.machine_terms, &instruments)?;
     let mut messages = Vec::new();
+    let clock = std::time::Instant::now();
+    let step = |what: &str| {
+        if options.progress {
+            eprintln!("diagnose: {:7.2} s  {what}", clock.elapsed().as_secs_f64());
+        }
+    };
     // 1. records
     let prep = prepare(&records.records, options.average_repeats, options.repeat_gap_s);
     let mut rejected: Vec<String> = records.rejected.iter().chain(&prep.rejected).map(|r| format!("{} ({}): {}", r.at, r.point_id, r.reason)).collect();
@@ -286,6 +271,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         )));
     }
     let mut set = RecordSet { frame: records.frame.clone(), records: prep.records.clone(), rejected: vec![], sources: records.sources.clone() };
+    step(&format!("{} readings → {} records ({} groups of repeats averaged); fitting the declared model", prep.readings, prep.records.len(), prep.groups));
     // 2. declared fit, outliers, refit
     let mut declared_fit = fit(&model, &setup, &set, None, &options.fit).map_err(DiagnoseError::DeclaredFit)?;
     let mut outlier_notes = Vec::new();
@@ -320,6 +306,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     }
     let free0: Vec<usize> = declared_fit.parameters.iter().enumerate().filter(|(_, p)| p.free).map(|(k, _)| k).collect();
     let view0 = ResidualView::new(&model, &x0, &set.records, &set.frame)?;
+    step("declared model fitted; testing and locating its residuals");
     // 3. where the declared model's residuals disagree with noise
     let before_wp: Vec<Vector3<f64>> = (0..n).map(|i| view0.workpiece(i)).collect();
     let samples0 = view0.samples(&set.records, &before_wp);
@@ -339,6 +326,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     let declared_cols = ctx.declared_columns(&free0)?;
     let b_sel = sel_view.whitened();
     let sel_folds = vec![expand_folds(&sel_idx.iter().map(|&i| folds_time[i]).collect::<Vec<_>>()), expand_folds(&sel_idx.iter().map(|&i| folds_space[i]).collect::<Vec<_>>())];
+    step(&format!("candidate columns on {} records", sel_records.len()));
     // 4. candidates
     let inventory = crate::signal_inventory::SignalInventory::of(&sel_records);
     let mut leads = [None; 3];
@@ -447,6 +435,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
             }
         }
     }
+    step(&format!("{} candidate families, {} variants; selecting", prepared.len(), prepared.iter().map(|p| p.family.variants.len()).sum::<usize>()));
     // 5. selection
     let families: Vec<Family> = prepared.iter().map(|p| p.family.clone()).collect();
     let data = WhitenedData { b: b_sel.clone(), declared: declared_cols.clone(), folds: sel_folds };
@@ -455,6 +444,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         Strategy::AllAtOnce => all_at_once(&data, &families, options.selection.alpha),
     };
     let steps = step_summaries(&selection, &families);
+    step(&format!("selected {:?}; refitting the augmented model", selection.chosen.iter().map(|c| c.label.as_str()).collect::<Vec<_>>()));
     // 6. augmented model and its refit
     let mut machine_aug = declared.machine_terms.clone();
     let mut instruments_aug = instruments.clone();
@@ -529,6 +519,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         }
     };
     let x1: Vec<f64> = final_fit.as_ref().map(|f| f.x.clone()).unwrap_or(start);
+    step("refitted; held-out before and after");
     // 7. after: residual at x1 (empirical not yet subtracted) with the free columns of the
     // augmented model and the empirical columns, refitted linearly per held-out block
     let view1 = ResidualView::new(&model_aug, &x1, &set.records, &set.frame)?;
@@ -617,6 +608,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         .collect();
     let located1 = locate(&rescaled, &options.locate);
     remaining.extend(located1.iter().take(10).map(|f| format!("structure left: {}", f.describe())));
+    step("findings");
     // 9. findings
     let mut found = Vec::new();
     for (k, (cand, config, placement, _)) in added.iter().enumerate() {
@@ -706,6 +698,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     }
     temperatures.retain(|_, v| v.len() == n);
     let plots = PlotData { time: view1.time.clone(), position: view1.position.clone(), before: before_res, after: after_res, heldout_before: held_before, heldout_after: held_after, temperatures, evidence: built.evidence };
+    step("done");
     let sigma_workpiece = set.records.iter().map(|r| view0.workpiece_sigma(&r.covariance)).collect();
     let fitted = names_aug.iter().enumerate().map(|(k, name)| (name.clone(), x1[k], if setup_aug.free[k] { sigmas1[k] } else { None })).collect();
     Ok(Diagnosis { report, added_terms, plots, records: set.records, sigma_workpiece, fitted })

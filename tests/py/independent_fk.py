@@ -1,7 +1,7 @@
 """Forward kinematics written from the sources, not from metrocell's code: the reference the
 `independent_kinematics` test compares the twin and crates/kinematics with.
 
-- five_axis: seed 004 (/work/shared/seeds/004_five_axis_model.md), the linear axes by the
+- five_axis: seed 004 (`shared/seeds/004_five_axis_model.md`, the project notes kept outside this repository), the linear axes by the
   reconstructed DH table (the printed table has its a/alpha headers swapped: digest section 2.1),
   standard DH A = Rz(theta) Tz(d) Tx(a) Rx(alpha); the table/table rotary axes as the digest's
   section 6.1 item 2 extends it: p_machine = Trans(b_pivot) Ry(B) Trans(c_offset) Rz(C)

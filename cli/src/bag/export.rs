@@ -33,7 +33,7 @@ pub struct ExportArgs {
 pub fn run(a: ExportArgs) -> anyhow::Result<i32> {
     let exported = match a.format {
         Format::Csv => metrocell_bagtools::export::export_csv(&a.bag, &a.topics, &a.output)?,
-        Format::Parquet => metrocell_bagtools::export_parquet::export_parquet(&a.bag, &a.topics, &a.output)?,
+        Format::Parquet => metrocell_parquet_export::export_parquet(&a.bag, &a.topics, &a.output)?,
     };
     for (topic, e) in exported {
         println!("{topic}: {} rows x {} columns -> {}", e.rows, e.columns, e.path.display());

@@ -26,7 +26,8 @@ pub enum ToolError {
 
 pub type Result<T> = std::result::Result<T, ToolError>;
 
-pub(crate) fn io(path: impl Into<PathBuf>) -> impl FnOnce(std::io::Error) -> ToolError {
+/// `map_err` adapter: an I/O error about `path`.
+pub fn io(path: impl Into<PathBuf>) -> impl FnOnce(std::io::Error) -> ToolError {
     let path = path.into();
     move |source| ToolError::Io { path, source }
 }

@@ -9,7 +9,7 @@
 //! the topic without the leading `/` and with `/` replaced by `.` (`/tracker/points` →
 //! `tracker.points.csv`).
 //!
-//! The same columns, typed, as Parquet: [`crate::export_parquet`].
+//! The same columns, typed, as Parquet: `metrocell_parquet_export` (a crate of its own, so the nodes do not link Parquet).
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -100,7 +100,7 @@ pub struct ExportedTopic {
 
 /// The topics of `bag` to export: `topics` in the bag's order (all when empty); a name the bag
 /// does not hold is an error listing the topics it does hold.
-pub(crate) fn chosen_topics<'a>(reader: &'a BagReader, bag: &Path, topics: &[String]) -> Result<Vec<&'a TopicInfo>> {
+pub fn chosen_topics<'a>(reader: &'a BagReader, bag: &Path, topics: &[String]) -> Result<Vec<&'a TopicInfo>> {
     for t in topics {
         if reader.topic(t).is_none() {
             let known: Vec<&str> = reader.topics().iter().map(|t| t.name.as_str()).collect();

@@ -7,7 +7,8 @@
 //! * [`compare_counts`]: a bag's per-topic counts against what a publisher says it sent.
 //! * [`filter_bag`] / [`merge_bags`]: copy selected messages into a new bag.
 //! * [`export`]: one CSV file per topic, one column per leaf field.
-//! * [`export_parquet`]: the same columns, typed, as one Parquet file per topic.
+//! * Parquet export (the same columns, typed) lives in `metrocell-parquet-export`, so that the
+//!   nodes, which link this crate for offline replay, do not link Parquet.
 //! * [`import`]: point-measurement CSV (own layout or a mapped tracker export) → bag.
 //! * [`recorded_qos`]: offered QoS of discovered publishers → `offered_qos_profiles` and the
 //!   QoS the recorder requests; stored profiles → the QoS `bag play` offers.
@@ -23,7 +24,6 @@ mod completeness;
 mod copy;
 mod error;
 pub mod export;
-pub mod export_parquet;
 pub mod import;
 pub mod playback;
 pub mod qos_overrides;
@@ -36,7 +36,7 @@ pub use bag_sink::{encode_cdr, BagSink};
 pub use bag_source::{BagSource, SourcedMessage};
 pub use completeness::{compare_counts, CountMismatch};
 pub use copy::{filter_bag, merge_bags, CopyReport};
-pub use error::{Result, ToolError};
+pub use error::{io, Result, ToolError};
 pub use recording::{Recording, TopicCounts, TopicDefinition};
 pub use replay_output::ReplayOutput;
 pub use topic_selection::TopicSelection;

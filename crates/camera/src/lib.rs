@@ -1,4 +1,4 @@
-//! metrocell-camera: camera models, calibration and planar pose estimation on point
+//! metrocell-camera-model (`crates/camera`): camera models, calibration and planar pose estimation on point
 //! correspondences (no image decoding here; detection lives in `metrocell-vision`), and raw frame
 //! capture from V4L2 devices.
 //!

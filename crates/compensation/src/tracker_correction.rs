@@ -1,5 +1,7 @@
-//! What a tracker logger would correct in each reading (no node does yet): the air the
-//! instrument assumed, and the warm-up it is still in.
+//! What the tracker logger corrects in each reading: the air the instrument assumed, and the
+//! warm-up it is still in. `metrocell-laser-tracker` (`crates/tracker`, behind the
+//! `metrocell-tracker` node) calls `AirData`, `range_for_index` and `warmup_status`;
+//! `refraction_corrected_range` is the one-call form of the same correction, used by tests.
 
 use metrocell_physics::instrument::edlen::{birch_downs_index, shop_floor_index};
 use metrocell_physics::instrument::tracker_warmup::settling_time;

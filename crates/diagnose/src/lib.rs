@@ -17,9 +17,26 @@
 //! Convention: residual = measured − predicted (m); σ is the measurement's stated standard
 //! uncertainty of that component (m).
 
+pub mod blocked_least_squares;
+pub mod candidate_columns;
+pub mod candidates;
+pub mod empirical;
+pub mod findings;
 pub mod folds;
+pub mod html_report;
 pub mod locate;
 pub mod multiple_testing;
 pub mod noise_tests;
+pub mod outliers;
+pub mod periodogram;
+pub mod pipeline;
+pub mod record_preparation;
+pub mod report;
 pub mod residual;
+pub mod residual_table;
+pub mod residual_view;
 pub mod selection;
+pub mod signal_inventory;
+
+pub use pipeline::{diagnose, AddedTerm, DeclaredModel, Diagnosis, DiagnoseError, DiagnoseOptions, Strategy};
+pub use report::Report;

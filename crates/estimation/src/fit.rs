@@ -13,10 +13,18 @@
 //! 3. Honest uncertainty: covariance (JᵀWJ)⁻¹ scaled by the a-posteriori variance factor σ̂₀²,
 //!    standard uncertainties, correlations, and the identifiability analysis (rank, condition
 //!    number, each unidentifiable combination in words).
+//! 4. When the free parameters are not all identifiable, one parameter of each null direction
+//!    is **held** at its start value (a machine-term parameter rather than the instrument pose,
+//!    which then absorbs the combination) and the fit is repeated, so every other parameter
+//!    gets an uncertainty. The held ones are named with the combination they take part in
+//!    ([`Fit::held`]); their values are conventions, not estimates.
+//!
+//! Records whose measured point, joints or covariance are not finite are left out and named
+//! ([`Fit::skipped`]); records the robust loss down-weighted are named too ([`Fit::outliers`]).
 
 use metrocell_model::{ForwardModel, ParameterSetup};
 use metrocell_physics::{PhysicsError, TermId};
-use metrocell_solver::{solve, Identifiability, Loss, NullSpace, Options, Prior, Solution, SolverError};
+use metrocell_solver::{solve, Identifiability, Loss, NullSpace, Options, Prior, Problem, Solution, SolverError};
 use metrocell_laser_tracker::registration::{register, Correspondence};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
@@ -30,13 +38,15 @@ pub struct FitOptions {
     /// an outlier can pull.
     pub loss: Loss,
     pub max_iterations: usize,
-    /// Relative singular value below which a direction counts as unidentifiable.
+    /// Relative singular value (of the column-scaled Jacobian) below which a direction counts
+    /// as unidentifiable: 1e-6, where the solver's covariance stops being computed (normal
+    /// matrix eigenvalues below 1e-12 of the largest).
     pub rcond: f64,
 }
 
 impl Default for FitOptions {
     fn default() -> Self {
-        Self { loss: Loss::Huber(4.0), max_iterations: 100, rcond: 1e-9 }
+        Self { loss: Loss::Huber(4.0), max_iterations: 100, rcond: 1e-6 }
     }
 }
 
@@ -55,6 +65,48 @@ pub enum FitError {
     Solver(#[from] SolverError),
     #[error("{needed} parameters are free but only {available} residuals: measure at least {points} points")]
     TooFew { needed: usize, available: usize, points: usize },
+    /// A record the model cannot predict (a signal a term needs is missing, a joint vector
+    /// the kinematics cannot reach, …).
+    #[error("record {index} (point `{point_id}`, t = {time} s): {source}{hint}")]
+    Record { index: usize, point_id: String, time: f64, source: PhysicsError, hint: String },
+}
+
+/// What to do about a missing signal, by the kind of signal.
+fn missing_signal_hint(e: &PhysicsError) -> String {
+    let PhysicsError::MissingSignal { signal, .. } = e else { return String::new() };
+    let s = signal.to_lowercase();
+    let source = if s.contains("temperature") && !s.contains("air") {
+        "a `sensor_msgs/Temperature` topic `/temperature/<sensor>` for the sensor the term names (or a `temperature.<sensor>` column in a CSV import)"
+    } else if s.contains("power") {
+        "the instrument's power-on time (the tracker's power-on topic, or `instrument_on_time` in a CSV import)"
+    } else if s.contains("air") {
+        "the weather station's air temperature, pressure and humidity"
+    } else if s.contains("load") {
+        "the load force"
+    } else {
+        "the commanded joint states (`/machine/commanded_joint_states`) with velocities"
+    };
+    format!(". The recording does not carry it: record {source}, or take the term out of the model")
+}
+
+/// A parameter held at its start value because the data cannot separate it from others.
+#[derive(Debug, Clone, PartialEq)]
+pub struct HeldParameter {
+    /// Index in the stacked vector, and `label.param`.
+    pub index: usize,
+    pub name: String,
+    /// The combination in words ("a and b are not separable: a − 0.5·b").
+    pub combination: String,
+}
+
+/// A record left out of the fit, or down-weighted by it.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RecordNote {
+    /// Index in the record set.
+    pub index: usize,
+    pub point_id: String,
+    pub time: f64,
+    pub reason: String,
 }
 
 /// One fitted parameter.
@@ -88,6 +140,16 @@ pub struct Fit {
     pub identifiability: Identifiability,
     /// Whitened residual components the robust loss down-weighted (outliers), of 3 per record.
     pub downweighted: usize,
+    /// Records with a component beyond the robust loss's threshold at the solution.
+    pub outliers: Vec<RecordNote>,
+    /// Records left out because a value was not finite (never silently).
+    pub skipped: Vec<RecordNote>,
+    /// Parameters held at their start to make the rest identifiable (empty when all are).
+    pub held: Vec<HeldParameter>,
+    /// Identifiability of the declared free parameters at the start (before holding any).
+    pub declared_identifiability: Identifiability,
+    /// Records used (after skipping).
+    pub used: Vec<usize>,
     pub solution: Solution,
 }
 
@@ -132,33 +194,68 @@ pub fn start_vector(model: &ForwardModel, setup: &ParameterSetup, records: &Reco
 
 /// Fit the free parameters of `setup` to `records` from `start` (None: [`start_vector`]).
 pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, start: Option<Vec<f64>>, options: &FitOptions) -> Result<Fit, FitError> {
-    if records.is_empty() {
+    // records with a non-finite value are named and left out
+    let mut skipped = Vec::new();
+    let mut used = Vec::new();
+    for (i, r) in records.records.iter().enumerate() {
+        let bad = if !r.measured.iter().all(|v| v.is_finite()) {
+            Some("measured point is not finite (NaN or ∞)")
+        } else if !r.q.iter().all(|v| v.is_finite()) {
+            Some("commanded joints are not finite")
+        } else if crate::residuals::whitening(&r.covariance).is_none() {
+            Some("covariance is not finite and positive definite")
+        } else {
+            None
+        };
+        match bad {
+            Some(reason) => skipped.push(RecordNote { index: i, point_id: r.point_id.clone(), time: r.time, reason: reason.into() }),
+            None => used.push(i),
+        }
+    }
+    let kept = RecordSet { frame: records.frame.clone(), records: used.iter().map(|&i| records.records[i].clone()).collect(), rejected: vec![], sources: vec![] };
+    if kept.is_empty() {
         return Err(FitError::NoRecords);
     }
     let mut free = setup.free.clone();
-    if let (RecordFrame::Machine, Some(pose)) = (&records.frame, model.instrument_param_start(TermId::TrackerPose)) {
+    if let (RecordFrame::Machine, Some(pose)) = (&kept.frame, model.instrument_param_start(TermId::TrackerPose)) {
         free[pose..pose + 6].iter_mut().for_each(|f| *f = false);
     }
     let n_free = free.iter().filter(|f| **f).count();
     let n_priors = setup.priors.iter().zip(&free).filter(|(p, f)| p.is_some() && **f).count();
-    if 3 * records.len() + n_priors < n_free {
-        return Err(FitError::TooFew { needed: n_free, available: 3 * records.len(), points: n_free.div_ceil(3) });
+    if 3 * kept.len() + n_priors < n_free {
+        return Err(FitError::TooFew { needed: n_free, available: 3 * kept.len(), points: n_free.div_ceil(3) });
+    }
+    // every record must be predictable from the model at its configured values: name the first
+    // that is not (a missing signal, an unreachable joint vector) before any solving
+    {
+        let p = model.params();
+        let kin = model.kinematic_truth(&p)?;
+        for (i, r) in kept.records.iter().enumerate() {
+            let mut s = r.signals.clone();
+            let checked = model.tool_state(&p, &kin, &r.q, &mut s, None).and_then(|t| model.tracker(&p, &t, &mut s));
+            if let Err(e) = checked {
+                let hint = missing_signal_hint(&e);
+                return Err(FitError::Record { index: used[i], point_id: r.point_id.clone(), time: r.time, source: e, hint });
+            }
+        }
     }
     let x0 = match start {
         Some(x) => x,
-        None => start_vector(model, setup, records)?,
+        None => start_vector(model, setup, &kept)?,
     };
-    let problem = PointResiduals::new(model, &records.records).map_err(|b| FitError::BadCovariance { index: b.index, point_id: b.point_id })?;
+    let problem = PointResiduals::new(model, &kept.records).map_err(|b| FitError::BadCovariance { index: used[b.index], point_id: b.point_id })?;
     let specs: Vec<_> = model.machine_terms.param_specs().into_iter().chain(model.instrument_terms.param_specs()).collect();
+    let names = model.param_names();
+    let labels: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
     // bounds: the documented range, widened to include the start so a start outside it is legal
     let lower: Vec<f64> = specs.iter().zip(&x0).map(|(s, v)| s.min.min(*v)).collect();
     let upper: Vec<f64> = specs.iter().zip(&x0).map(|(s, v)| s.max.max(*v)).collect();
     let priors: Vec<Prior> = setup.priors.iter().enumerate().filter_map(|(index, p)| p.map(|p| Prior { index, value: p.value, sigma: p.sigma })).collect();
-    let solver_options = Options {
-        loss: options.loss,
-        bounds: Some((lower, upper)),
+    let solver_options = |free: &[bool], loss: Loss| Options {
+        loss,
+        bounds: Some((lower.clone(), upper.clone())),
         fixed: free.iter().map(|f| !f).collect(),
-        priors,
+        priors: priors.clone(),
         max_iterations: options.max_iterations,
         ftol: 1e-14,
         xtol: 1e-14,
@@ -167,11 +264,56 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
         ..Options::default()
     };
     let residuals_before = problem.raw_residuals(&x0)?;
-    let solution = solve(&problem, &x0, &solver_options)?;
+    // a robust loss from a far start calls every residual an outlier and crawls: reach the
+    // basin with plain least squares first, then let the robust loss judge the residuals
+    let two_stage = |free: &[bool]| -> Result<Solution, FitError> {
+        if options.loss == Loss::Linear {
+            return Ok(solve(&problem, &x0, &solver_options(free, Loss::Linear))?);
+        }
+        let near = solve(&problem, &x0, &solver_options(free, Loss::Linear))?;
+        Ok(solve(&problem, &near.x, &solver_options(free, options.loss))?)
+    };
+    // what the design can identify, judged at the start: a parameter whose effect is nil or a
+    // combination of others there (e.g. a joint offset about the axis the target sits on) is
+    // held before the solver can wander along it
+    let mut r0 = vec![0.0; problem.residual_count()];
+    let mut j0 = DMatrix::zeros(problem.residual_count(), problem.parameter_count());
+    problem.residuals_and_jacobian(&x0, &mut r0, &mut j0).map_err(|e| FitError::Registration(format!("the model cannot be evaluated at the start: {}", e.0)))?;
+    let free_idx: Vec<usize> = (0..free.len()).filter(|&k| free[k]).collect();
+    let free_labels: Vec<&str> = free_idx.iter().map(|&k| labels[k]).collect();
+    let declared_identifiability = Identifiability::analyze(&j0.select_columns(&free_idx), &free_labels, Some(options.rcond))?;
+    let machine_params = model.machine_terms.param_specs().len();
+    let mut held = Vec::new();
+    if !declared_identifiability.null_directions.is_empty() {
+        for (k, sentence) in dependent_parameters(&j0, &free, machine_params, &names) {
+            free[k] = false;
+            held.push(HeldParameter { index: k, name: names[k].clone(), combination: sentence });
+        }
+    }
+    let mut solution = two_stage(&free)?;
+    let mut identifiability = solution.identifiability(&labels, Some(options.rcond))?;
+    // at the solution: hold what became inseparable there too (from the start again, so the
+    // held ones keep their start values exactly) until the rest is identifiable
+    while !identifiability.null_directions.is_empty() && held.len() < n_free {
+        let before = held.len();
+        for (k, sentence) in dependent_parameters(&solution.weighted_jacobian, &free, machine_params, &names) {
+            free[k] = false;
+            held.push(HeldParameter { index: k, name: names[k].clone(), combination: sentence });
+        }
+        if held.len() == before {
+            // numerically weak directions the column test does not call dependent: hold the
+            // weakest direction's leading parameter
+            let d = &identifiability.null_directions[0];
+            let free_idx: Vec<usize> = (0..free.len()).filter(|&k| free[k]).collect();
+            let j = (0..d.scaled.len()).fold(0, |b, j| if d.scaled[j].abs() > d.scaled[b].abs() { j } else { b });
+            let k = free_idx[j];
+            free[k] = false;
+            held.push(HeldParameter { index: k, name: names[k].clone(), combination: identifiability.describe()[0].clone() });
+        }
+        solution = two_stage(&free)?;
+        identifiability = solution.identifiability(&labels, Some(options.rcond))?;
+    }
     let residuals_after = problem.raw_residuals(&solution.x)?;
-    let names = model.param_names();
-    let labels: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
-    let identifiability = solution.identifiability(&labels, Some(options.rcond))?;
     let covariance = solution.covariance();
     let sigmas = solution.standard_uncertainties();
     let chi2: f64 = solution.residuals.iter().map(|r| r * r).sum();
@@ -188,5 +330,115 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
             range: (s.min, s.max),
         })
         .collect();
-    Ok(Fit { parameters, x: solution.x.clone(), covariance, residuals_before, residuals_after, chi2_per_dof: chi2 / dof as f64, identifiability, downweighted: solution.downweighted, solution })
+    let threshold = match options.loss {
+        Loss::Huber(c) | Loss::Cauchy(c) => Some(c),
+        _ => None,
+    };
+    let outliers = match threshold {
+        Some(c) => (0..kept.len())
+            .filter_map(|i| {
+                let z = &solution.residuals[3 * i..3 * i + 3];
+                let worst = z.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+                (worst > c).then(|| RecordNote { index: used[i], point_id: kept.records[i].point_id.clone(), time: kept.records[i].time, reason: format!("{worst:.1}σ from the model") })
+            })
+            .collect(),
+        None => vec![],
+    };
+    Ok(Fit {
+        parameters,
+        x: solution.x.clone(),
+        covariance,
+        residuals_before,
+        residuals_after,
+        chi2_per_dof: chi2 / dof as f64,
+        identifiability,
+        downweighted: solution.downweighted,
+        outliers,
+        skipped,
+        held,
+        declared_identifiability,
+        used,
+        solution,
+    })
+}
+
+/// Relative size (of a unit column) below which a column is taken as a combination of the
+/// columns kept before it. Structural dependence leaves ~1e-12 (more after round-off in a
+/// badly scaled model); 10× the fit's default `rcond`, so that what this test keeps is not
+/// called unidentifiable by the SVD at the solution — the margin keeps the held set the same
+/// whatever the noise.
+const DEPENDENT: f64 = 1e-5;
+
+/// The free parameters whose (weighted, unit-scaled) Jacobian column is a combination of the
+/// columns kept before it, in a fixed priority order — instrument parameters first (the
+/// instrument pose is a nuisance that absorbs what it can), then machine coefficients of order
+/// ≥ 1, then the constants `c0` (a constant offset is the conventional one to hold) — with a
+/// sentence naming the parameters it cannot be told from. Deterministic for a design: the
+/// noise moves the columns far less than the threshold.
+fn dependent_parameters(jw: &DMatrix<f64>, free: &[bool], machine_params: usize, names: &[String]) -> Vec<(usize, String)> {
+    let mut order: Vec<usize> = (machine_params..free.len()).filter(|&k| free[k]).collect();
+    // squareness before the series: ISO 230-1 refers straightness to its reference line, so a
+    // linear straightness term is what gives way to the squareness it aliases
+    order.extend((0..machine_params).filter(|&k| free[k] && names[k].starts_with("squareness")));
+    order.extend((0..machine_params).filter(|&k| free[k] && !names[k].starts_with("squareness") && !names[k].ends_with(".c0")));
+    order.extend((0..machine_params).filter(|&k| free[k] && names[k].ends_with(".c0")));
+    let largest = order.iter().map(|&k| jw.column(k).norm()).fold(0.0f64, f64::max);
+    let m = jw.nrows();
+    // orthonormal basis of the kept columns (modified Gram–Schmidt), and each kept column's norm
+    let mut basis: Vec<nalgebra::DVector<f64>> = Vec::new();
+    let mut kept: Vec<(usize, f64)> = Vec::new();
+    let mut out = Vec::new();
+    for &k in &order {
+        let col = jw.column(k).into_owned();
+        let norm = col.norm();
+        if !(norm > 1e-9 * largest) {
+            out.push((k, format!("{} is not identifiable: no measurement depends on it; held at its start value", names[k])));
+            continue;
+        }
+        let mut r = col / norm;
+        // Gram–Schmidt twice ("twice is enough"): one pass loses orthogonality in proportion to
+        // the conditioning, which would let a dependent column through
+        for _ in 0..2 {
+            for b in &basis {
+                let c = b.dot(&r);
+                r -= b * c;
+            }
+        }
+        let rest = r.norm();
+        if rest > DEPENDENT {
+            basis.push(r / rest);
+            kept.push((k, norm));
+            continue;
+        }
+        // express the column by the kept ones (least squares on the unit columns)
+        let a = DMatrix::from_fn(m, kept.len(), |i, j| jw[(i, kept[j].0)] / kept[j].1);
+        let target = jw.column(k) / norm;
+        let coef = a.clone().svd(true, true).solve(&target, 1e-12).unwrap_or_else(|_| nalgebra::DVector::zeros(kept.len()));
+        let max = coef.iter().fold(0.0f64, |x, c| x.max(c.abs()));
+        let mut parts = Vec::new();
+        for (j, c) in coef.iter().enumerate() {
+            if c.abs() > 1e-3 * max {
+                // δk = 1 (parameter units) is matched by δj = −c·norm_k/norm_j
+                let d = -c * norm / kept[j].1;
+                parts.push((names[kept[j].0].clone(), d));
+            }
+        }
+        let with: Vec<String> = parts.iter().map(|(n, _)| n.clone()).collect();
+        let how: Vec<String> = parts.iter().map(|(n, d)| format!("{} {}·{n}", if *d < 0.0 { "−" } else { "+" }, significant(d.abs()))).collect();
+        out.push((k, format!("{} is not separable from {}: moving it by δ and the others by {} δ leaves every residual unchanged; held at its start value", names[k], with.join(", "), how.join(" "))));
+    }
+    out
+}
+
+/// Three significant digits.
+fn significant(x: f64) -> String {
+    if x == 0.0 {
+        return "0".into();
+    }
+    let e = x.abs().log10().floor() as i32;
+    if (-3..4).contains(&e) {
+        format!("{:.*}", (2 - e).max(0) as usize, x)
+    } else {
+        format!("{x:.2e}")
+    }
 }

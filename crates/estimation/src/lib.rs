@@ -36,7 +36,7 @@ pub mod residuals;
 pub mod signal_topics;
 pub mod uncertainty_budget;
 
-pub use fit::{fit, rms, start_vector, Fit, FitError, FitOptions, ParameterEstimate};
+pub use fit::{fit, rms, start_vector, Fit, FitError, FitOptions, HeldParameter, ParameterEstimate, RecordNote};
 pub use records::{MeasurementRecord, RecordFrame, RecordSet, Rejected};
 pub use recordings::{records_from_bags, PointSource, RecordingError, RecordingOptions};
 pub use residuals::PointResiduals;

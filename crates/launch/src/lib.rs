@@ -6,7 +6,7 @@
 //! ```no_run
 //! use metrocell_launch::{parse_launch_arguments, run_launch, LaunchOptions};
 //! let args = parse_launch_arguments(&["rate:=10"]).unwrap();
-//! let outcome = run_launch("launch-configs/cell.launch.yaml".as_ref(), &args, &LaunchOptions::default())?;
+//! let outcome = run_launch("launch-configs/demo.launch.yaml".as_ref(), &args, &LaunchOptions::default())?;
 //! std::process::exit(outcome.exit_code());
 //! # Ok::<(), metrocell_launch::LaunchError>(())
 //! ```

@@ -74,7 +74,7 @@ fn main() {
         .map(|(q, s)| {
             let mut s = s.clone();
             let tool = model.tool_state(&p, &kin, q, &mut s, None).expect("tool state");
-            let y = model.tracker(&p, tool.truth.translation.vector, &mut s).expect("tracker");
+            let y = model.tracker(&p, &tool, &mut s).expect("tracker");
             let m = y.measured_point();
             [m.x + 5e-6, m.y - 5e-6, m.z, y.measured_range()]
         })
@@ -98,10 +98,8 @@ fn main() {
     let mut run_old = || {
         let start = Instant::now();
         let mut check = 0.0;
-        for (q, s) in &readings {
-            let mut s = s.clone();
-            s.point = Some(Vector3::new(q[0], q[1], q[2]) + machine.tool_offset);
-            let (d, j) = terms.displacement(Frame::Machine, p_machine, &s).expect("displacement");
+        for (_, s) in &readings {
+            let (d, j) = terms.displacement(Frame::Machine, p_machine, s).expect("displacement");
             check += d.norm() + j[(0, 0)];
         }
         (start.elapsed().as_secs_f64(), check)

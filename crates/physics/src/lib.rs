@@ -46,6 +46,6 @@ pub use catalog::{configure, entries, lookup, CatalogEntry, ConfiguredTerm};
 pub use term_id::{Category, TermId};
 pub use config::{ConfigValue, EstimationConfig, PriorConfig, TermConfig};
 pub use error::PhysicsError;
-pub use signals::{Axis, SignalKind, Signals};
+pub use signals::{Axis, RotaryAxis, SignalKind, Signals};
 pub use temperature_timeline::{TemperatureHistory, TemperatureTimeline};
 pub use term::{EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};

@@ -153,9 +153,9 @@ pub enum QuantityError {
     Dimension { given: String, expected: Dimension },
 }
 
-/// Read `text` ("12 um", "1.2e-5 1/K", "20 degC", or a bare number meaning the canonical unit)
-/// and return the value expressed in `canonical` (the parameter's unit string).
-pub fn parse_quantity(text: &str, canonical: &str) -> Result<f64, QuantityError> {
+/// The number and the unit of a quantity's text (`"12.5 um"` → `("12.5", "um")`; the unit is
+/// empty for a bare number).
+pub fn split_quantity(text: &str) -> (&str, &str) {
     let text = text.trim();
     let split = text
         .char_indices()
@@ -165,6 +165,13 @@ pub fn parse_quantity(text: &str, canonical: &str) -> Result<f64, QuantityError>
         .map(|(i, _)| i)
         .unwrap_or(text.len());
     let (num, unit) = text.split_at(split);
+    (num.trim(), unit.trim())
+}
+
+/// Read `text` ("12 um", "1.2e-5 1/K", "20 degC", or a bare number meaning the canonical unit)
+/// and return the value expressed in `canonical` (the parameter's unit string).
+pub fn parse_quantity(text: &str, canonical: &str) -> Result<f64, QuantityError> {
+    let (num, unit) = split_quantity(text);
     let value: f64 = num.trim().parse().map_err(|_| QuantityError::Parse(format!("`{num}` is not a number")))?;
     let unit = unit.trim();
     let target = parse_unit(canonical).map_err(QuantityError::Parse)?;

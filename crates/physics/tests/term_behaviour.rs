@@ -124,7 +124,7 @@ fn compliance_grows_with_extension() {
 #[test]
 fn frame_misalignment_rotates_about_its_origin() {
     let t = term(TermId::FrameMisalignment);
-    let s = Signals { point: Some(Vector3::new(0.3, 0.0, 0.0)), ..Default::default() };
+    let s = Signals { workpiece_point: Some(Vector3::new(0.3, 0.0, 0.0)), ..Default::default() };
     let d = t.predict(&[0.0, 0.0, 1e-4, 0.0, 0.0, 0.0], &s).unwrap().value;
     assert!((d[1] - 3e-5).abs() < 1e-18 && d[0] == 0.0);
 }

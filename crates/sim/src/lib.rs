@@ -1,4 +1,4 @@
-//! # metrocell-sim — the digital twin as ROS 2 messages
+//! # metrocell-simulation (`crates/sim`) — the digital twin as ROS 2 messages
 //!
 //! The twin ([`metrocell_twin`]) streams typed samples; this crate turns them into the ROS 2
 //! messages a real cell would publish, on the topics of one documented [`topic_map`], stamped

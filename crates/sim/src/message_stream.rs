@@ -110,6 +110,8 @@ pub struct MessageConverter {
     /// Per thermocouple: (name, topic, location).
     thermocouples: Vec<(String, TopicId, String)>,
     frames: Option<FrameRenderer>,
+    /// The cell camera's fiducial plate (what the frames show).
+    plate: Option<crate::camera_frame::FramePlate>,
 }
 
 impl MessageConverter {
@@ -126,6 +128,7 @@ impl MessageConverter {
             topics,
             start_ns,
             camera,
+            plate: cell.camera.as_ref().map(|c| c.plate),
             tool_offset: cell.machine.tool_offset,
             powered_on_before_start: cell.tracker.as_ref().map(|t| t.powered_on_before_start),
             load_force: cell.load_force,
@@ -139,8 +142,8 @@ impl MessageConverter {
     /// it). A cell without a camera ignores this. Fails on invalid intrinsics or settings.
     pub fn with_frames(mut self, rendering: FrameRendering, seed: u64) -> Result<MessageConverter, SimError> {
         // the cell has a camera exactly when it has an image topic
-        if self.topics.camera_image.is_some() {
-            self.frames = Some(FrameRenderer::new(&self.camera, rendering, seed)?);
+        if let (Some(_), Some(plate)) = (self.topics.camera_image, &self.plate) {
+            self.frames = Some(FrameRenderer::new(&self.camera, plate, rendering, seed)?);
         }
         Ok(self)
     }

@@ -8,7 +8,7 @@ use std::path::Path;
 
 use metrocell_camera_model::{CameraModel, Distortion};
 use metrocell_kinematics::delta::DeltaGeometry;
-use metrocell_model::{ForwardModel, KinematicTruth};
+use metrocell_model::{CameraGeometry, ForwardModel, KinematicTruth};
 use metrocell_physics::config::ConfigValue;
 use metrocell_physics::model::TermModel;
 use metrocell_physics::thermal::shift_model::{AmbientCycle, DutySegment, HeatSource, SensorLocation, ShiftThermalModel, StructureNode, ThermalSensor};
@@ -17,6 +17,7 @@ use nalgebra::Vector3;
 
 use crate::cell_file::*;
 use crate::error::CellError;
+use crate::fiducial_plate::FiducialPlate;
 pub use metrocell_model::{InstrumentPose, MachineGeometry, MachineKinematics};
 use crate::program::Program;
 use crate::quantity::{vector3, Quantity};
@@ -105,8 +106,26 @@ pub struct CameraSpec {
     /// the tool.
     pub mount: InstrumentPose,
     pub delay: f64,
-    /// The lens the file states, if any (else the simulator's default camera).
+    /// The lens the file states, if any (else [`default_camera_lens`]).
     pub intrinsics: Option<CameraModel>,
+    /// The fiducial plate placed in front of the camera at each dwell.
+    pub plate: FiducialPlate,
+}
+
+impl CameraSpec {
+    /// The lens: the file's, or [`default_camera_lens`].
+    pub fn lens(&self) -> CameraModel {
+        self.intrinsics.unwrap_or_else(default_camera_lens)
+    }
+}
+
+/// The camera a cell without `sensors.camera.intrinsics` has: a 5 MP machine-vision camera
+/// (2448 × 2048 px, 3.45 µm pixels) behind a 12 mm lens, i.e. f = 12 mm / 3.45 µm ≈ 3478 px,
+/// principal point at the image centre ((w−1)/2, (h−1)/2, OpenCV's pixel convention), no
+/// distortion.
+pub fn default_camera_lens() -> CameraModel {
+    let f = 12e-3 / 3.45e-6;
+    CameraModel::new(2448, 2048, f, f, 1223.5, 1023.5, Distortion::none()).expect("the default lens is valid")
 }
 
 /// True air on the tracker beam.
@@ -140,6 +159,8 @@ pub struct Cell {
     pub term_configs: Vec<TermConfig>,
     /// The file's `estimation` settings (free parameters, priors), checked against the terms.
     pub estimation: BTreeMap<String, metrocell_physics::EstimationConfig>,
+    /// Test-only, non-physical disturbances ([`crate::disturbance`]); empty for real cells.
+    pub disturbances: crate::disturbance::Disturbances,
 }
 
 impl Cell {
@@ -176,7 +197,9 @@ impl Cell {
             .enumerate()
             .map(|(i, t)| thermocouple(i, t))
             .collect::<Result<Vec<_>, _>>()?;
-        let thermal = thermal_model(&f.environment, &f.sensors.thermocouples)?;
+        let env = f.environment.as_ref().ok_or_else(|| CellError::invalid("environment", "is required to simulate a cell: {ambient, air, ...} (only a model file for `metrocell calibrate` may leave it out)"))?;
+        let program_section = f.program.as_ref().ok_or_else(|| CellError::invalid("program", "is required to simulate a cell: {grid | points | joints | poses, feed_rate, dwell, ...} (only a model file for `metrocell calibrate` may leave it out)"))?;
+        let thermal = thermal_model(env, &f.sensors.thermocouples)?;
         let tracker = f.sensors.tracker.as_ref().map(tracker).transpose()?;
         let machine_state_rate = f.sensors.machine_state.as_ref().map(|m| m.rate.positive("sensors.machine_state.rate", "1/s")).transpose()?;
         let probe = f.sensors.probe.as_ref().map(probe).transpose()?;
@@ -184,7 +207,6 @@ impl Cell {
             return Err(CellError::invalid("sensors.probe", "is simulated for family: cartesian and delta only; a five_axis or serial_arm cell takes tracker, thermocouples, machine_state and camera"));
         }
         let camera = f.sensors.camera.as_ref().map(camera).transpose()?;
-        let env = &f.environment;
         let thermal_step = match &env.thermal_step {
             Some(q) => q.positive("environment.thermal_step", "s")?,
             None => 1.0,
@@ -199,14 +221,18 @@ impl Cell {
             beam_temperature_offset: opt(&env.air.beam_temperature_offset, "environment.air.beam_temperature_offset", "K")?,
         };
         let load_force = env.load_force.as_ref().map(|v| vector3(v, "environment.load_force", "N")).transpose()?;
-        let program = Program::from_section(&f.program, &machine)?;
+        let program = Program::from_section(program_section, &machine)?;
         let sensor_names: BTreeSet<String> = thermocouples.iter().map(|t| t.name.clone()).collect();
-        let terms = terms(&f.terms, &sensor_names, load_force.is_some(), &machine)?;
+        let terms = terms(&f.terms, Some(&sensor_names), Some(load_force.is_some()), &machine)?;
         if let MachineKinematics::Delta(g) = &machine.kinematics {
             for (i, q) in program.points.iter().chain(std::iter::once(&program.home)).enumerate() {
                 g.inverse(&Vector3::new(q[0], q[1], q[2])).map_err(|e| CellError::invalid(if i == program.points.len() { "program.home".to_string() } else { format!("program point {i}") }, format!("not reachable by the delta: {e}")))?;
             }
         }
+        let disturbances = crate::disturbance::Disturbances::from_section(
+            &f.disturbances.clone().unwrap_or_default(),
+            matches!(machine.kinematics, MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_)),
+        )?;
         Ok(Cell {
             name: f.name.clone(),
             description: f.description.clone(),
@@ -224,6 +250,7 @@ impl Cell {
             terms,
             term_configs: f.terms.clone(),
             estimation: f.estimation.clone(),
+            disturbances,
         })
         .and_then(|cell: Cell| {
             cell.parameter_setup()?;
@@ -234,9 +261,35 @@ impl Cell {
 
 impl Cell {
     /// The shared forward model of this cell's machine and terms, with `instruments` as its
-    /// instrument terms (e.g. [`Cell::tracker_terms`]).
+    /// instrument terms (e.g. [`Cell::tracker_terms`], [`Cell::instrument_terms`]) and, if the
+    /// cell has a camera, its geometry (mount and the lens's pinhole intrinsics).
     pub fn forward_model<'a>(&'a self, instruments: &'a TermModel) -> Result<ForwardModel<'a>, metrocell_physics::PhysicsError> {
-        ForwardModel::new(&self.machine, &self.terms, instruments)
+        let model = ForwardModel::new(&self.machine, &self.terms, instruments)?;
+        match &self.camera {
+            Some(c) => {
+                let lens = c.lens();
+                model.with_camera(None, CameraGeometry { mount: c.mount, fx: lens.fx, fy: lens.fy, cx: lens.cx, cy: lens.cy })
+            }
+            None => Ok(model),
+        }
+    }
+
+    /// Every instrument's effects as catalog terms with their true parameters: the tracker's
+    /// ([`Cell::tracker_terms`]), the probe's `probe_pretravel` (`sensors.probe.pretravel`), and
+    /// the camera's `lens_distortion` when `sensors.camera.intrinsics` states a Brown–Conrady
+    /// lens (OpenCV k1 k2 p1 p2 k3 → the term's k1 k2 k3 p1 p2).
+    pub fn instrument_terms(&self) -> Result<TermModel, CellError> {
+        let mut m = self.tracker_terms()?;
+        if let Some(pt) = self.probe.as_ref().and_then(|p| p.pretravel.clone()) {
+            m.push(pt).map_err(|e| CellError::term("sensors.probe.pretravel", e))?;
+        }
+        if let Some(Distortion::BrownConrady(k)) = self.camera.as_ref().and_then(|c| c.intrinsics.as_ref()).map(|l| l.distortion) {
+            let path = "sensors.camera.intrinsics.distortion";
+            let params = [("k1", k[0]), ("k2", k[1]), ("k3", k[4]), ("p1", k[2]), ("p2", k[3])].into_iter().map(|(n, v)| (n.to_string(), ConfigValue::Number(v))).collect();
+            let t = configure(&TermConfig { id: "lens_distortion".into(), options: Default::default(), params, use_defaults: false }).map_err(|e| CellError::term(path, e))?;
+            m.push(t).map_err(|e| CellError::term(path, e))?;
+        }
+        Ok(m)
     }
 
     fn kinematic_truth(&self) -> Option<KinematicTruth> {
@@ -264,9 +317,10 @@ impl Cell {
     }
 
     /// The free parameters and priors of the `estimation` section over the forward model of the
-    /// machine terms and the tracker's terms (stacked in that order).
+    /// machine terms and every instrument's terms ([`Cell::instrument_terms`], stacked in that
+    /// order).
     pub fn parameter_setup(&self) -> Result<metrocell_model::ParameterSetup, CellError> {
-        let instruments = self.tracker_terms()?;
+        let instruments = self.instrument_terms()?;
         let model = self.forward_model(&instruments).map_err(|e| CellError::term("terms", e))?;
         metrocell_model::ParameterSetup::new(&model, &self.estimation).map_err(|e| CellError::term("estimation", e))
     }
@@ -279,36 +333,48 @@ impl Cell {
     /// −station humidity bias. Empty without a tracker. Built from the (adjustable) fields of
     /// the cell, so it follows a test's edits of `tracker`.
     pub fn tracker_terms(&self) -> Result<TermModel, CellError> {
-        let mut m = TermModel::default();
-        let Some(tr) = &self.tracker else { return Ok(m) };
-        let path = "sensors.tracker";
-        let term = |id: &str, names: &[&str], values: &[f64], options: Vec<(&str, f64)>| -> Result<ConfiguredTerm, CellError> {
-            let params = names.iter().zip(values).map(|(n, v)| (n.to_string(), ConfigValue::Number(*v))).collect();
-            let options = options.into_iter().map(|(k, v)| (k.to_string(), ConfigValue::Number(v))).collect();
-            configure(&TermConfig { id: id.into(), options, params, use_defaults: false }).map_err(|e| CellError::term(path, e))
-        };
-        let push = |m: &mut TermModel, t: ConfiguredTerm| m.push(t).map_err(|e| CellError::term(path, e));
-        push(&mut m, term("tracker_pose", &["tx", "ty", "tz", "alpha", "beta", "delta"], &tr.pose.term_params(), vec![])?)?;
-        if let Some(w) = tr.warmup {
-            push(&mut m, term("tracker_warmup", &["offset", "amplitude", "time_constant"], &[w.offset, w.amplitude, w.time_constant], vec![])?)?;
-        }
+        let Some(tr) = &self.tracker else { return Ok(TermModel::default()) };
         let st = &tr.station;
-        let refraction = term(
-            "refraction",
-            &["path_temperature_offset", "path_pressure_offset"],
-            &[self.air.beam_temperature_offset - st.temperature_bias, -st.pressure_bias],
-            vec![("path_humidity_offset", -st.humidity_bias)],
-        )?;
-        push(&mut m, refraction)?;
-        Ok(m)
+        let refraction = RefractionOffsets { temperature: self.air.beam_temperature_offset - st.temperature_bias, pressure: -st.pressure_bias, humidity: -st.humidity_bias };
+        tracker_term_model(&tr.pose, tr.warmup.as_ref(), Some(refraction))
     }
+}
+
+/// The path air minus the weather station's reading (the `refraction` term's parameters and
+/// option): temperature K, pressure Pa, humidity %RH.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub(crate) struct RefractionOffsets {
+    pub temperature: f64,
+    pub pressure: f64,
+    pub humidity: f64,
+}
+
+/// The tracker's instrument terms: `tracker_pose`, then `tracker_warmup` and `refraction` if
+/// given (the order of the stacked parameter vector).
+pub(crate) fn tracker_term_model(pose: &InstrumentPose, warmup: Option<&WarmupSpec>, refraction: Option<RefractionOffsets>) -> Result<TermModel, CellError> {
+    let mut m = TermModel::default();
+    let path = "sensors.tracker";
+    let term = |id: &str, names: &[&str], values: &[f64], options: Vec<(&str, f64)>| -> Result<ConfiguredTerm, CellError> {
+        let params = names.iter().zip(values).map(|(n, v)| (n.to_string(), ConfigValue::Number(*v))).collect();
+        let options = options.into_iter().map(|(k, v)| (k.to_string(), ConfigValue::Number(v))).collect();
+        configure(&TermConfig { id: id.into(), options, params, use_defaults: false }).map_err(|e| CellError::term(path, e))
+    };
+    let push = |m: &mut TermModel, t: ConfiguredTerm| m.push(t).map_err(|e| CellError::term(path, e));
+    push(&mut m, term("tracker_pose", &["tx", "ty", "tz", "alpha", "beta", "delta"], &pose.term_params(), vec![])?)?;
+    if let Some(w) = warmup {
+        push(&mut m, term("tracker_warmup", &["offset", "amplitude", "time_constant"], &[w.offset, w.amplitude, w.time_constant], vec![])?)?;
+    }
+    if let Some(r) = refraction {
+        push(&mut m, term("refraction", &["path_temperature_offset", "path_pressure_offset"], &[r.temperature, r.pressure], vec![("path_humidity_offset", r.humidity)])?)?;
+    }
+    Ok(m)
 }
 
 fn opt(q: &Option<Quantity>, path: &str, unit: &str) -> Result<f64, CellError> {
     q.as_ref().map(|q| q.to_si(path, unit)).transpose().map(|v| v.unwrap_or(0.0))
 }
 
-fn machine(m: &MachineSection, base_dir: &Path) -> Result<MachineGeometry, CellError> {
+pub(crate) fn machine(m: &MachineSection, base_dir: &Path) -> Result<MachineGeometry, CellError> {
     check_family_sections(m)?;
     let kinematics = match m.family {
         MachineFamily::Cartesian => {
@@ -385,7 +451,7 @@ fn family_name(f: MachineFamily) -> &'static str {
     }
 }
 
-fn pose(p: &PoseSection, path: &str) -> Result<InstrumentPose, CellError> {
+pub(crate) fn pose(p: &PoseSection, path: &str) -> Result<InstrumentPose, CellError> {
     let t = vector3(&p.translation, &format!("{path}.translation"), "m")?;
     let e = match &p.euler_xyz {
         Some(e) => vector3(e, &format!("{path}.euler_xyz"), "rad")?,
@@ -394,25 +460,35 @@ fn pose(p: &PoseSection, path: &str) -> Result<InstrumentPose, CellError> {
     Ok(InstrumentPose::from_euler_xyz(t, [e.x, e.y, e.z]))
 }
 
-fn tracker(t: &TrackerSection) -> Result<TrackerSpec, CellError> {
-    let p = "sensors.tracker";
-    let warmup = match &t.warmup {
-        None => None,
-        Some(params) => {
-            let c = configure(&TermConfig { id: "tracker_warmup".into(), options: BTreeMap::new(), params: params.clone(), use_defaults: false }).map_err(|e| CellError::term(format!("{p}.warmup"), e))?;
-            Some(WarmupSpec { offset: c.params[0], amplitude: c.params[1], time_constant: c.params[2] })
-        }
-    };
+/// `sensors.tracker.warmup` as the `tracker_warmup` parameters.
+pub(crate) fn tracker_warmup(t: &TrackerSection) -> Result<Option<WarmupSpec>, CellError> {
+    let Some(params) = &t.warmup else { return Ok(None) };
+    let c = configure(&TermConfig { id: "tracker_warmup".into(), options: BTreeMap::new(), params: params.clone(), use_defaults: false }).map_err(|e| CellError::term("sensors.tracker.warmup", e))?;
+    Ok(Some(WarmupSpec { offset: c.params[0], amplitude: c.params[1], time_constant: c.params[2] }))
+}
+
+/// `sensors.tracker.station` (biases and noise; absent: none).
+pub(crate) fn tracker_station(t: &TrackerSection) -> Result<StationSpec, CellError> {
     let s = t.station.clone().unwrap_or_default();
-    let sp = format!("{p}.station");
-    let station = StationSpec {
+    let sp = "sensors.tracker.station";
+    Ok(StationSpec {
         temperature_bias: opt(&s.temperature_bias, &format!("{sp}.temperature_bias"), "K")?,
         pressure_bias: opt(&s.pressure_bias, &format!("{sp}.pressure_bias"), "Pa")?,
         humidity_bias: opt(&s.humidity_bias, &format!("{sp}.humidity_bias"), "1")?,
         temperature_noise: s.temperature_noise.as_ref().map(|q| q.non_negative(&format!("{sp}.temperature_noise"), "K")).transpose()?.unwrap_or(0.0),
         pressure_noise: s.pressure_noise.as_ref().map(|q| q.non_negative(&format!("{sp}.pressure_noise"), "Pa")).transpose()?.unwrap_or(0.0),
         humidity_noise: s.humidity_noise.as_ref().map(|q| q.non_negative(&format!("{sp}.humidity_noise"), "1")).transpose()?.unwrap_or(0.0),
-    };
+    })
+}
+
+fn tracker(t: &TrackerSection) -> Result<TrackerSpec, CellError> {
+    let p = "sensors.tracker";
+    let warmup = tracker_warmup(t)?;
+    let station = tracker_station(t)?;
+    let needed = |what: &str| CellError::invalid(format!("{p}.{what}"), "is required to simulate the tracker (only a model file for `metrocell calibrate` may leave the noise model out)");
+    let rate = t.rate.as_ref().ok_or_else(|| needed("rate"))?;
+    let range_noise = t.range_noise.as_ref().ok_or_else(|| needed("range_noise"))?;
+    let angular_noise = t.angular_noise.as_ref().ok_or_else(|| needed("angular_noise"))?;
     let mut turbulence = Vec::new();
     for (i, w) in t.turbulence.iter().enumerate() {
         let wp = format!("{p}.turbulence[{i}]");
@@ -438,10 +514,10 @@ fn tracker(t: &TrackerSection) -> Result<TrackerSpec, CellError> {
     };
     Ok(TrackerSpec {
         pose: pose(&t.pose, &format!("{p}.pose"))?,
-        rate: t.rate.positive(&format!("{p}.rate"), "1/s")?,
-        range_noise_constant: t.range_noise.constant.non_negative(&format!("{p}.range_noise.constant"), "m")?,
-        range_noise_per_metre: t.range_noise.per_metre.non_negative(&format!("{p}.range_noise.per_metre"), "1")?,
-        angular_noise: t.angular_noise.non_negative(&format!("{p}.angular_noise"), "rad")?,
+        rate: rate.positive(&format!("{p}.rate"), "1/s")?,
+        range_noise_constant: range_noise.constant.non_negative(&format!("{p}.range_noise.constant"), "m")?,
+        range_noise_per_metre: range_noise.per_metre.non_negative(&format!("{p}.range_noise.per_metre"), "1")?,
+        angular_noise: angular_noise.non_negative(&format!("{p}.angular_noise"), "rad")?,
         warmup,
         powered_on_before_start: t.powered_on_before_start.as_ref().map(|q| q.non_negative(&format!("{p}.powered_on_before_start"), "s")).transpose()?.unwrap_or(0.0),
         station,
@@ -518,7 +594,7 @@ fn camera(c: &CameraSection) -> Result<CameraSpec, CellError> {
             Some(CameraModel::new(i.width, i.height, fx, fy, cx, cy, distortion).map_err(|e| CellError::invalid(p, e.to_string()))?)
         }
     };
-    Ok(CameraSpec { mount: pose(&c.mount, "sensors.camera.mount")?, delay: c.delay.as_ref().map(|q| q.non_negative("sensors.camera.delay", "s")).transpose()?.unwrap_or(0.0), intrinsics })
+    Ok(CameraSpec { mount: pose(&c.mount, "sensors.camera.mount")?, delay: c.delay.as_ref().map(|q| q.non_negative("sensors.camera.delay", "s")).transpose()?.unwrap_or(0.0), intrinsics, plate: FiducialPlate::default() })
 }
 
 fn thermal_model(env: &EnvironmentSection, tcs: &[ThermocoupleSection]) -> Result<ShiftThermalModel, CellError> {
@@ -585,14 +661,19 @@ fn home_of(id: &str) -> Option<&'static str> {
         "turbulence" => Some("sensors.tracker.turbulence and sensors.tracker.range_noise"),
         "probe_pretravel" => Some("sensors.probe.pretravel"),
         "tracker_pose" => Some("sensors.tracker.pose"),
+        "lens_distortion" => Some("sensors.camera.intrinsics (model plumb_bob, distortion)"),
+        "camera_scale" => Some("the fiducial node's `marker_size` parameter (the twin's camera itself has no scale error)"),
         _ => None,
     }
 }
 
-/// Machine-frame displacement terms that read no axis signal: the ones a serial arm takes.
-const ARM_DISPLACEMENT_TERMS: &str = "thermal_growth, tool_offset";
+/// Displacement terms that read no axis signal: the ones a serial arm takes.
+const ARM_DISPLACEMENT_TERMS: &str = "thermal_growth, tool_offset, frame_misalignment, workpiece_expansion";
 
-fn terms(configs: &[TermConfig], sensors: &BTreeSet<String>, has_load: bool, machine: &MachineGeometry) -> Result<TermModel, CellError> {
+/// Validate the `terms` list against the machine. `sensors` (the thermocouple names) and
+/// `has_load` are checked when known (a cell to simulate); a model file leaves them to the
+/// recording (None), which names a missing signal when records are built.
+pub(crate) fn terms(configs: &[TermConfig], sensors: Option<&BTreeSet<String>>, has_load: Option<bool>, machine: &MachineGeometry) -> Result<TermModel, CellError> {
     let is_delta = matches!(machine.kinematics, MachineKinematics::Delta(_));
     let arm = match &machine.kinematics {
         MachineKinematics::SerialArm(a) => Some(a),
@@ -638,27 +719,28 @@ fn terms(configs: &[TermConfig], sensors: &BTreeSet<String>, has_load: bool, mac
                 format!("reads linear-axis signals, which a serial_arm does not have; a serial_arm takes joint_offset, link_length and {ARM_DISPLACEMENT_TERMS}"),
             ));
         }
-        if !matches!(t.term.effect(), EffectKind::Displacement(Frame::Machine | Frame::Tool)) && !is_delta_term {
+        if !matches!(t.term.effect(), EffectKind::Displacement(Frame::Machine | Frame::Tool | Frame::Workpiece)) && !is_delta_term {
             return Err(CellError::invalid(
                 path,
-                format!("has effect {:?}; the twin's `terms` take machine-frame displacement terms (geometry, thermal_scale, thermal_growth, compliance, tool_offset, frame_misalignment), for a delta delta_rod_length, delta_radius, delta_tower_angle, delta_endstop, and for a serial_arm joint_offset, link_length", t.term.effect()),
+                format!("has effect {:?}; the twin's `terms` take machine-frame displacement terms (geometry, thermal_scale, thermal_growth, compliance, tool_offset, time_offset), workpiece-frame terms (frame_misalignment, workpiece_expansion), for a delta delta_rod_length, delta_radius, delta_tower_angle, delta_endstop, and for a serial_arm joint_offset, link_length", t.term.effect()),
             ));
         }
         for s in t.term.signals() {
+            let unknown = |name: &String| sensors.is_some_and(|known| !known.contains(name));
             match &s {
-                SignalKind::Temperature(name) if !sensors.contains(name) => {
+                SignalKind::Temperature(name) if unknown(name) => {
                     return Err(CellError::invalid(
                         format!("{path}.options"),
-                        format!("refers to temperature sensor `{name}`, which is not a thermocouple; allowed: {}", sensors.iter().cloned().collect::<Vec<_>>().join(", ")),
+                        format!("refers to temperature sensor `{name}`, which is not a thermocouple; allowed: {}", sensors.into_iter().flatten().cloned().collect::<Vec<_>>().join(", ")),
                     ))
                 }
-                SignalKind::TemperatureHistory(name) if !sensors.contains(name) => {
+                SignalKind::TemperatureHistory(name) if unknown(name) => {
                     return Err(CellError::invalid(
                         format!("{path}.options"),
-                        format!("refers to temperature sensor `{name}`, which is not a thermocouple; allowed: {}", sensors.iter().cloned().collect::<Vec<_>>().join(", ")),
+                        format!("refers to temperature sensor `{name}`, which is not a thermocouple; allowed: {}", sensors.into_iter().flatten().cloned().collect::<Vec<_>>().join(", ")),
                     ))
                 }
-                SignalKind::LoadForce if !has_load => return Err(CellError::invalid(path, "needs environment.load_force")),
+                SignalKind::LoadForce if has_load == Some(false) => return Err(CellError::invalid(path, "needs environment.load_force")),
                 _ => {}
             }
         }

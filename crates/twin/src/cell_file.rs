@@ -17,9 +17,16 @@ pub struct CellFile {
     #[serde(default)]
     pub description: String,
     pub machine: MachineSection,
+    /// Required to simulate only what the cell has; a model file may leave it out.
+    #[serde(default)]
     pub sensors: SensorsSection,
-    pub environment: EnvironmentSection,
-    pub program: ProgramSection,
+    /// Required to simulate; optional in a model file (`metrocell calibrate` reads the
+    /// environment from the recording).
+    #[serde(default)]
+    pub environment: Option<EnvironmentSection>,
+    /// Required to simulate; optional in a model file.
+    #[serde(default)]
+    pub program: Option<ProgramSection>,
     /// The machine's true error terms (physics catalog configs). The same file with fewer
     /// terms is a user's nominal model.
     #[serde(default)]
@@ -28,6 +35,19 @@ pub struct CellFile {
     /// the free parameters and priors, `{free: [c0, c1], priors: {c0: {value: 0 um, sigma: 5 um}}}`.
     #[serde(default)]
     pub estimation: BTreeMap<String, EstimationConfig>,
+    /// Standard uncertainties (k = 1) of fitted parameters, per term label and parameter
+    /// (`{"thermal_scale[x]": {alpha: 4.1e-7 1/K}}`), as `metrocell calibrate` writes them next
+    /// to the fitted values. Read back by the model loader; the simulator ignores it.
+    #[serde(default)]
+    pub uncertainty: BTreeMap<String, BTreeMap<String, ConfigValue>>,
+    /// What the fit that wrote this file saw (records, residuals, what was not identifiable);
+    /// free-form, for the reader. The simulator and the loader ignore it.
+    #[serde(default)]
+    pub fit: Option<serde_yaml::Value>,
+    /// Test-only, non-physical structures (a drift cycling in time, a local bump in the
+    /// workspace) for the concealed-effect suite: see [`crate::disturbance`].
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub disturbances: Option<crate::disturbance::DisturbanceSection>,
 }
 
 /// Machine families, all simulated: `cartesian` (3 axes in a stacking order), `delta` (linear
@@ -177,7 +197,7 @@ pub struct TravelSection {
     pub z: [Quantity; 2],
 }
 
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct SensorsSection {
     #[serde(default)]
@@ -206,12 +226,15 @@ pub struct PoseSection {
 #[serde(deny_unknown_fields)]
 pub struct TrackerSection {
     pub pose: PoseSection,
-    /// Sample rate (Hz).
-    pub rate: Quantity,
-    /// σ_ρ = constant + per_metre·ρ.
-    pub range_noise: RangeNoiseSection,
-    /// σ of azimuth and of elevation (rad).
-    pub angular_noise: Quantity,
+    /// Sample rate (Hz). Required to simulate; a model file may leave the noise model out.
+    #[serde(default)]
+    pub rate: Option<Quantity>,
+    /// σ_ρ = constant + per_metre·ρ. Required to simulate.
+    #[serde(default)]
+    pub range_noise: Option<RangeNoiseSection>,
+    /// σ of azimuth and of elevation (rad). Required to simulate.
+    #[serde(default)]
+    pub angular_noise: Option<Quantity>,
     /// Warm-up drift of the range, the physics `tracker_warmup` parameters
     /// (`offset` A, `amplitude` B, `time_constant` τ). Absent: no drift.
     #[serde(default)]

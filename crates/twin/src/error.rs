@@ -33,6 +33,10 @@ pub enum CellError {
     #[error("cell file: `{path}`: {reason}")]
     Invalid { path: String, reason: String },
 
+    /// An error in a named file (the model loader wraps its validation errors in it).
+    #[error("{file}: {source}")]
+    InFile { file: String, source: Box<CellError> },
+
     #[error("simulation: {reason}")]
     Simulation { reason: String },
 }

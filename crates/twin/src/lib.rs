@@ -29,8 +29,12 @@
 
 pub mod cell;
 pub mod cell_file;
+pub mod cell_model;
+pub mod model_writer;
+pub mod disturbance;
 pub mod error;
 pub mod families;
+pub mod fiducial_plate;
 pub mod noise;
 pub mod program;
 pub mod quantity;
@@ -38,8 +42,12 @@ pub mod sample;
 pub mod simulation;
 pub mod thermal_stepper;
 pub mod tracker_model;
+pub mod yaml_edit;
 
 pub use cell::{Cell, MachineGeometry, MachineKinematics};
+pub use cell_model::CellModel;
+pub use model_writer::{write_model, FittedParameter, ModelUpdate};
 pub use error::CellError;
+pub use fiducial_plate::FiducialPlate;
 pub use sample::{CameraFrameRequest, MachineStateSample, ProbeHitSample, Sample, SampleTruth, TemperatureSample, TrackerSample, TrackerStatus, TrackerTruth, TrueParameter};
 pub use simulation::{GroundTruth, SampleStream, SignalsStream, Simulation, TruthStream};

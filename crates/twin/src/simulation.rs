@@ -6,9 +6,9 @@
 //! requests fire inside program dwells. Ties are broken in a fixed order: thermocouples (file
 //! order), machine state, tracker, probe, camera.
 //!
-//! The tool state and the tracker's reading come from the shared forward model
-//! ([`metrocell_model::ForwardModel`]) at the true parameters: the cell's terms and the
-//! tracker's instrument terms ([`Cell::tracker_terms`]). The engine computes the signals
+//! The tool state and every instrument's reading (tracker, probe, camera) come from the shared
+//! forward model ([`metrocell_model::ForwardModel`]) at the true parameters: the cell's terms and
+//! the instruments' terms ([`Cell::instrument_terms`]). The engine computes the signals
 //! (commanded axis positions, approach directions and velocity from the program, the *true*
 //! temperatures of the thermocouples' locations — the sensors' offsets and noise are concealed
 //! from the physics, as in a real machine — and the weather station's readings), adds noise,
@@ -20,7 +20,8 @@
 
 use std::sync::Arc;
 
-use metrocell_model::{DisplacementCache, ForwardModel, KinematicTruth, ToolState};
+use metrocell_camera_model::Distortion;
+use metrocell_model::{DisplacementCache, ForwardModel, KinematicTruth, ProbeTarget, ToolState};
 use metrocell_physics::instrument::edlen::shop_floor_refractivity;
 use metrocell_physics::instrument::turbulence::range_scatter;
 use metrocell_physics::model::TermModel;
@@ -29,6 +30,7 @@ use nalgebra::{DVector, Matrix3, Vector3};
 
 use crate::cell::Cell;
 use crate::error::CellError;
+use crate::fiducial_plate::PLATE_MARKERS;
 use crate::noise::{stream, NoiseStream};
 use crate::program::MotionState;
 use crate::sample::*;
@@ -44,7 +46,7 @@ pub const HISTORY_CAP: usize = 20_000;
 #[derive(Debug)]
 pub struct Simulation {
     cell: Cell,
-    /// The tracker's instrument terms at their true values ([`Cell::tracker_terms`]).
+    /// The instruments' terms at their true values ([`Cell::instrument_terms`]).
     instruments: TermModel,
     duration: f64,
     seed: u64,
@@ -64,9 +66,10 @@ pub struct GroundTruth {
     pub station_bias: Option<(f64, f64, f64)>,
     /// Thermocouple offsets by name (K).
     pub thermocouple_offsets: Vec<(String, f64)>,
-    /// The tracker's instrument terms' true parameters (`tracker_pose.tx`, …,
-    /// `refraction.path_temperature_offset`, …), named as an estimate names them; they follow
-    /// `term_parameters` in the forward model's stacked vector.
+    /// The instruments' terms' true parameters (`tracker_pose.tx`, …,
+    /// `refraction.path_temperature_offset`, …, `probe_pretravel.mean`, `lens_distortion.k1`, …),
+    /// named as an estimate names them; they follow `term_parameters` in the forward model's
+    /// stacked vector.
     pub instrument_parameters: Vec<TrueParameter>,
 }
 
@@ -77,7 +80,7 @@ impl Simulation {
         if !(duration > 0.0 && duration.is_finite()) {
             return Err(CellError::Simulation { reason: format!("duration must be > 0 s and finite, got {duration}") });
         }
-        let instruments = cell.tracker_terms()?;
+        let instruments = cell.instrument_terms()?;
         cell.forward_model(&instruments).map_err(|err| CellError::Simulation { reason: format!("the forward model cannot be built: {err}") })?;
         let sim = Simulation { cell, instruments, duration, seed };
         let mut e = Engine::new(&sim);
@@ -96,7 +99,7 @@ impl Simulation {
         self.seed
     }
 
-    /// The tracker's instrument terms at their true values.
+    /// The instruments' terms at their true values ([`Cell::instrument_terms`]).
     pub fn instrument_terms(&self) -> &TermModel {
         &self.instruments
     }
@@ -418,10 +421,17 @@ impl<'a> Engine<'a> {
         }
     }
 
-    /// The tool at t for the motion state (the shared model at the true parameters).
+    /// The tool at t for the motion state (the shared model at the true parameters, plus the
+    /// cell's test-only `disturbances`, which no model knows).
     fn tool_state(&mut self, t: f64, ms: &MotionState) -> Result<ToolState, PhysicsError> {
         self.set_signals(t, ms);
-        self.model.tool_state(&self.params, &self.kinematics, ms.q.as_slice(), &mut self.signals, Some(&mut self.cache))
+        let mut tool = self.model.tool_state(&self.params, &self.kinematics, ms.q.as_slice(), &mut self.signals, Some(&mut self.cache))?;
+        if !self.cell.disturbances.is_empty() {
+            let delta = self.cell.disturbances.displacement(t, &v3(&ms.q));
+            tool.truth.translation.vector += delta;
+            tool.d += delta;
+        }
+        Ok(tool)
     }
 
     fn next_event(&mut self) -> Option<(Sample, SampleTruth)> {
@@ -525,7 +535,7 @@ impl<'a> Engine<'a> {
         let s = &mut self.signals;
         (s.air_temperature, s.air_pressure, s.air_humidity) = (Some(t_station), Some(p_station), Some(h_station));
         s.time_since_power_on = Some(t + spec.powered_on_before_start);
-        let prediction = self.model.tracker(&self.reading_params, tool_point, s)?;
+        let prediction = self.model.tracker(&self.reading_params, &tool, s)?;
         let (x, rho, az, el) = (prediction.point, prediction.range, prediction.azimuth, prediction.elevation);
         let (refraction, warmup) = (prediction.refraction, prediction.warmup);
         let c = spec.turbulence.iter().filter(|w| t >= w.start && t < w.end).map(|w| w.coefficient).fold(0.0, f64::max);
@@ -597,20 +607,22 @@ impl<'a> Engine<'a> {
             }
         }
         let ms = MotionState { q: seg.to.clone(), velocity: DVector::zeros(seg.to.len()), approach, dwell_point: Some(point), cycle: Some(ev.cycle) };
-        let d = self.tool_state(ev.t, &ms)?.d;
-        let pretravel = match &spec.pretravel {
-            Some(pt) => {
-                let s = Signals { probe_direction: Some(u), ..Signals::default() };
-                let v = pt.term.predict(&pt.params, &s)?.value;
-                Vector3::new(v[0], v[1], v[2])
-            }
-            None => Vector3::zeros(),
-        };
+        self.set_signals(ev.t, &ms);
+        // the surface point is the program point; the stylus is a point (radius 0), so the
+        // reading is where the machine thinks the contact is
         let nominal = self.cell.machine.nominal_tool_point(&v3(&seg.to));
-        // Touching P with a machine that is off by d needs an axis reading P − d; the trigger
-        // comes pretravel further along the approach direction.
+        let hit = ProbeTarget { surface: nominal, approach: u, stylus_radius: 0.0 };
+        let prediction = self.model.probe_hit(None, &self.params, &self.kinematics, ms.q.as_slice(), &mut self.signals, &hit)?;
+        let (mut d, pretravel) = (prediction.machine, prediction.pretravel);
+        let mut centre = prediction.centre;
+        // the test-only disturbances displace the machine as a term would: the axes read −δ
+        if !self.cell.disturbances.is_empty() {
+            let delta = self.cell.disturbances.displacement(ev.t, &v3(&ms.q));
+            d += delta;
+            centre -= delta;
+        }
         let noise = Vector3::new(self.probe_noise.normal(), self.probe_noise.normal(), self.probe_noise.normal()) * spec.noise;
-        let recorded = nominal - d + pretravel + noise;
+        let recorded = centre + noise;
         let s = ProbeHitSample {
             t: ev.t,
             target_id: point as u32,
@@ -630,8 +642,22 @@ impl<'a> Engine<'a> {
         let ms = MotionState { q: seg.to.clone(), velocity: DVector::zeros(seg.to.len()), approach: seg.approach.clone(), dwell_point: seg.dwell_point, cycle: Some(ev.cycle) };
         let tool = self.tool_state(ev.t, &ms)?;
         // the camera is mounted on the tool: its pose is the tool pose followed by the mount
-        let mount = spec.mount.isometry();
-        let (camera, nominal_camera) = (tool.truth * mount, tool.nominal * mount);
+        let (nominal_camera, camera) = self.model.camera_pose(None, &tool)?;
+        let plate = spec.plate.pose(&nominal_camera);
+        let centre = plate.translation.vector;
+        let plate_position = centre + self.model.workpiece_displacement(&self.params, &mut self.signals, centre, None, 1.0)?;
+        let brown_conrady = matches!(spec.lens().distortion, Distortion::BrownConrady(_));
+        let mut corners = Vec::with_capacity(4 * PLATE_MARKERS);
+        for f in spec.plate.corners_in_workpiece(&nominal_camera) {
+            corners.push(self.model.camera(None, &self.params, &tool, &mut self.signals, &f)?.pixel);
+        }
+        let mut marker_points = Vec::with_capacity(PLATE_MARKERS);
+        for k in 0..PLATE_MARKERS {
+            let [x, y] = spec.plate.marker_top_left(k);
+            let h = spec.plate.marker_side / 2.0;
+            let f = plate.transform_point(&nalgebra::Point3::new(x + h, y + h, 0.0)).coords;
+            marker_points.push(self.model.camera(None, &self.params, &tool, &mut self.signals, &f)?.measured_point);
+        }
         let s = CameraFrameRequest {
             t: ev.t,
             target_id: seg.dwell_point.unwrap_or(0) as u32,
@@ -640,6 +666,10 @@ impl<'a> Engine<'a> {
             rotation: camera.rotation.to_rotation_matrix().into_inner(),
             nominal_position: nominal_camera.translation.vector,
             nominal_rotation: nominal_camera.rotation.to_rotation_matrix().into_inner(),
+            plate_position,
+            plate_rotation: plate.rotation.to_rotation_matrix().into_inner(),
+            corners: brown_conrady.then_some(corners),
+            marker_points,
         };
         let tool_point = tool.truth.translation.vector;
         Ok((Sample::CameraFrameRequest(s), SampleTruth::CameraFrameRequest { tool_point, joints: seg.to.as_slice().to_vec(), displacement: tool.d }))

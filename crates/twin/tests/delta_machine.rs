@@ -51,7 +51,7 @@ fn delta_terms_need_a_delta_and_unreachable_points_are_named() {
     assert!(msg.contains("terms[0]") && msg.contains("machine.family: delta"), "{msg}");
     let mut f = common::example_file("delta_printer.yaml");
     f.machine.travel.as_mut().unwrap().x = [common::q("-400 mm"), common::q("400 mm")];
-    f.program.grid.as_mut().unwrap().x.to = common::q("350 mm");
+    f.program.as_mut().unwrap().grid.as_mut().unwrap().x.to = common::q("350 mm");
     let msg = metrocell_twin::Cell::from_file(&f).unwrap_err().to_string();
     assert!(msg.contains("program point") && msg.contains("not reachable by the delta"), "{msg}");
 }

@@ -28,9 +28,9 @@ fn seed_004_fixture_through_a_twin_cell() {
     fa.b_pivot = None;
     fa.c_offset = None;
     fa.workpiece_offset = None;
-    f.program.poses.clear();
-    f.program.home_joints = None;
-    f.program.joints = vec![["308 mm", "228 mm", "-140 mm", "0 deg", "0 deg"].iter().map(|s| common::q(s)).collect()];
+    f.program.as_mut().unwrap().poses.clear();
+    f.program.as_mut().unwrap().home_joints = None;
+    f.program.as_mut().unwrap().joints = vec![["308 mm", "228 mm", "-140 mm", "0 deg", "0 deg"].iter().map(|s| common::q(s)).collect()];
     f.terms.clear();
     let mut cell = common::validate(&f);
     quiet(&mut cell);
@@ -104,8 +104,8 @@ fn pose_targets_put_the_nominal_tip_on_the_pose() {
     let f = common::example_file("five_axis_table.yaml");
     let cell = common::validate(&f);
     let MachineKinematics::FiveAxis(m) = cell.machine.kinematics.clone() else { panic!("not five-axis") };
-    assert_eq!(cell.program.points.len(), f.program.poses.len());
-    for (i, (q, p)) in cell.program.points.iter().zip(&f.program.poses).enumerate() {
+    assert_eq!(cell.program.points.len(), f.program.as_ref().unwrap().poses.len());
+    for (i, (q, p)) in cell.program.points.iter().zip(&f.program.as_ref().unwrap().poses).enumerate() {
         let pose = m.geometry.forward(&FiveAxisJoints { d1: q[1], d2: q[0], d3: -q[2], b: q[3], c: q[4] }).unwrap();
         let want = Vector3::new(p.position[0].to_si("p", "m").unwrap(), p.position[1].to_si("p", "m").unwrap(), p.position[2].to_si("p", "m").unwrap());
         assert!((pose.tip - want).norm() < 1e-12, "pose {i}: tip {:?}", pose.tip);

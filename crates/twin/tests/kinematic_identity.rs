@@ -13,9 +13,10 @@ fn zero_errors_and_noise_give_the_nominal_point_in_the_tracker_frame() {
     f.terms.clear();
     common::quiet_tracker(&mut f);
     let t = f.sensors.tracker.as_mut().unwrap();
-    t.range_noise.constant = 0.0.into();
-    t.range_noise.per_metre = 0.0.into();
-    t.angular_noise = 0.0.into();
+    let noise = t.range_noise.as_mut().unwrap();
+    noise.constant = 0.0.into();
+    noise.per_metre = 0.0.into();
+    t.angular_noise = Some(0.0.into());
     let cell = common::validate(&f);
     let tr = cell.tracker.clone().unwrap();
     let e = tr.pose.euler_xyz;

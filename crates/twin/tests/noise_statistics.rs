@@ -12,9 +12,9 @@ fn fixed_target_cell() -> CellFile {
     common::quiet_tracker(&mut f);
     f.sensors.probe = None;
     f.sensors.camera = None;
-    f.program.grid = None;
-    f.program.points = vec![[common::q("200 mm"), common::q("150 mm"), common::q("100 mm")]];
-    f.program.dwell = common::q("100 h");
+    f.program.as_mut().unwrap().grid = None;
+    f.program.as_mut().unwrap().points = vec![[common::q("200 mm"), common::q("150 mm"), common::q("100 mm")]];
+    f.program.as_mut().unwrap().dwell = common::q("100 h");
     f
 }
 
@@ -73,7 +73,7 @@ fn turbulence_inflates_scatter_only_inside_its_window() {
 fn warmup_curve_is_recovered_by_fitting() {
     let mut f = fixed_target_cell();
     let t = f.sensors.tracker.as_mut().unwrap();
-    t.rate = common::q("1 Hz");
+    t.rate = Some(common::q("1 Hz"));
     t.warmup = Some(serde_yaml::from_str("{offset: 5 um, amplitude: 75 um, time_constant: 90 min}").unwrap());
     let sim = Simulation::new(common::validate(&f), 6.0 * 3600.0, 21).unwrap();
     // residual = measured range − true geometric range (the tracker's own error)

@@ -4,7 +4,7 @@
 //! * `metrocell-tracker --bag` gives the same `measured_points`, `tracker/dwells` and
 //!   `/tf_static` as the live node, bit for bit.
 //!
-//! Run: `/work/main/tests/isolated cargo test -p metrocell-tracker-node --test replay_equals_live`
+//! Run: `tests/isolated cargo test -p metrocell-tracker-node --test replay_equals_live`
 
 use std::collections::BTreeMap;
 use std::path::Path;

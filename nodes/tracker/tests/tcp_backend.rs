@@ -2,7 +2,7 @@
 //! across writes, garbage, a connection dropped mid-line and the buffer resent. Every dwell
 //! appears once on `measured_points` at its nominal; nothing is accepted twice.
 //!
-//! Run: `/work/main/tests/isolated cargo test -p metrocell-tracker-node --test tcp_backend`
+//! Run: `tests/isolated cargo test -p metrocell-tracker-node --test tcp_backend`
 
 use std::io::Write;
 use std::net::TcpListener;

@@ -1,6 +1,9 @@
 //! `bag export --format parquet`: one Parquet file per topic, one column per leaf field.
 //!
-//! Column names and order are those of the CSV export ([`crate::export`]): `log_time_ns`,
+//! A crate of its own so that the nodes, which link `metrocell-bagtools` for offline replay,
+//! do not link the `parquet` crate (issue 11 item 7); the `metrocell` command depends on it.
+//!
+//! Column names and order are those of the CSV export ([`metrocell_bagtools::export`]): `log_time_ns`,
 //! `publish_time_ns` (INT64), then every leaf field with a dotted name; fixed-size arrays are
 //! expanded element by element (`covariance.0` … `covariance.8`). The difference is that
 //! every column is typed, so `pandas.read_parquet` gives numeric dtypes without parsing:
@@ -34,8 +37,8 @@ use parquet::file::writer::SerializedFileWriter;
 use parquet::schema::types::{Type, TypePtr};
 use rosmsg::{ArrayKind, BaseType, Primitive, Registry, Value};
 
-use crate::error::{io, Result, ToolError};
-use crate::export::{chosen_topics, registry_for, ExportedTopic};
+use metrocell_bagtools::export::{chosen_topics, registry_for, ExportedTopic};
+use metrocell_bagtools::{io, Result, ToolError};
 
 /// A row group is written when it holds this many rows or [`VALUES_PER_GROUP`] buffered
 /// values and levels, whichever comes first: rows bound memory for long bags of small messages,
@@ -363,7 +366,7 @@ mod tests {
         let v = rosmsg::default_value(reg, "metrocell_msgs/msg/MeasuredPoint").unwrap();
         let mut cols = Vec::new();
         plan(reg, "metrocell_msgs/msg/MeasuredPoint", "", &mut cols).unwrap();
-        let csv_names: Vec<String> = crate::export::flatten(reg, &v).into_iter().map(|c| c.0).collect();
+        let csv_names: Vec<String> = metrocell_bagtools::export::flatten(reg, &v).into_iter().map(|c| c.0).collect();
         let names: Vec<String> = cols.iter().map(|c| c.name.clone()).collect();
         assert_eq!(names, csv_names, "same columns as the CSV export");
     }

@@ -3,13 +3,14 @@
 //! the same bag (the CSV export is the reference layout), and the Arrow types must be the
 //! typed ones the module doc promises.
 //!
-//! Needs Python with pyarrow: `METROCELL_PYTHON=/tmp/venv/bin/python cargo test -p metrocell-bagtools`.
+//! Needs Python with pyarrow: `METROCELL_PYTHON=.venv/bin/python cargo test -p metrocell-parquet-export`.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use metrocell_bag::{BagWriter, WriterOptions};
-use metrocell_bagtools::{export, export_parquet};
+use metrocell_bagtools::export;
+use metrocell_parquet_export as export_parquet;
 use serde_json::{json, Value as Json};
 
 const TYPE: &str = "test_msgs/msg/AllTypes";

@@ -262,7 +262,7 @@ pub fn providers(kind: &SignalKind) -> String {
         SignalKind::AirHumidity => "record /air/humidity or /weather/humidity (sensor_msgs/RelativeHumidity), or use /tracker/measurements (bag import: column humidity)".into(),
         SignalKind::TimeSincePowerOn => format!("record {POWER_ON_TOPIC} (sensor_msgs/TimeReference, time_ref = when the instrument was switched on; bag import: column instrument_on_time)"),
         SignalKind::LoadForce => format!("record {LOAD_TOPIC} (geometry_msgs/WrenchStamped, force in N, machine frame)"),
-        SignalKind::RotaryPosition(a) => format!("record the rotary axis {} in the commanded joint states (rad)", a.name()),
+        SignalKind::RotaryPosition(a) => format!("record {COMMANDED_JOINTS_TOPIC} with joint `{}` (bag import: column joint.{})", a.name(), a.name()),
         SignalKind::TrackerRange | SignalKind::ImagePoint | SignalKind::MachinePoint | SignalKind::WorkpiecePoint | SignalKind::TargetPoint | SignalKind::CameraPoint | SignalKind::ProbeDirection => "it is computed by the model".into(),
     }
 }
@@ -276,12 +276,18 @@ fn declared_signals(model: &ForwardModel) -> Vec<(String, SignalKind)> {
             continue;
         }
         for s in t.term.signals() {
-            if !matches!(s, SignalKind::TrackerRange | SignalKind::ImagePoint | SignalKind::MachinePoint | SignalKind::WorkpiecePoint | SignalKind::TargetPoint | SignalKind::CameraPoint | SignalKind::ProbeDirection) {
+            if !model_computed(&s) {
                 out.push((t.term.label(), s));
             }
         }
     }
     out
+}
+
+/// Signals the model computes itself for each reading (ranges, the points of each frame, the
+/// probing direction) rather than reading them from the recording.
+fn model_computed(kind: &SignalKind) -> bool {
+    matches!(kind, SignalKind::TrackerRange | SignalKind::ImagePoint | SignalKind::MachinePoint | SignalKind::WorkpiecePoint | SignalKind::TargetPoint | SignalKind::CameraPoint | SignalKind::ProbeDirection)
 }
 
 /// Whether the instant's signals hold `kind`.
@@ -301,7 +307,7 @@ fn present(s: &Signals, kind: &SignalKind) -> bool {
         SignalKind::TimeSincePowerOn => s.time_since_power_on.is_some(),
         SignalKind::LoadForce => s.load_force.is_some(),
         SignalKind::RotaryPosition(a) => s.rotary_position[a.index()].is_some(),
-        SignalKind::TrackerRange | SignalKind::ImagePoint | SignalKind::MachinePoint | SignalKind::WorkpiecePoint | SignalKind::TargetPoint | SignalKind::CameraPoint | SignalKind::ProbeDirection => true,
+        k => model_computed(k),
     }
 }
 

@@ -13,7 +13,8 @@ signals. Two baselines read them:
   same signals — per axis Legendre polynomials of the position (positioning, straightness), the
   other axes' positions (squareness), sines and cosines over common ball-screw leads (pitch),
   the approach direction (backlash), position x temperature (thermal scale), temperatures
-  (thermal growth), velocity (time offset), 1 - exp(-t/tau) of the time since power-on (warm-up).
+  (thermal growth, also through first-order lags), velocity (time offset), 1 - exp(-t/tau) of the
+  time since power-on (warm-up); a signal some record lacks gives no column.
   The STLSQ threshold is chosen by cross-validation over blocks of time (never random rows).
   A catalog term is "named" when any of its library columns keeps a non-zero coefficient; terms
   are ordered by the size of their fitted contribution.
@@ -43,6 +44,7 @@ import score  # noqa: E402  (the same judging rules and answer key)
 
 LEADS_M = [0.005, 0.01, 0.016, 0.02, 0.025, 0.032, 0.04]
 WARMUP_TAUS_S = [900.0, 1800.0, 3600.0, 5400.0, 7200.0]
+LAG_TAUS_S = [600.0, 1200.0, 2400.0, 4800.0]
 AXES = "xyz"
 
 
@@ -116,12 +118,29 @@ def library(cols):
                 lib[k].append((f"{a}*(T_{name}-20)", "thermal_scale", f"thermal_scale[{a}]", pos[k] * dT))
         for j in range(3):
             lib[j].append((f"T_{name}-20", "thermal_growth", f"thermal_growth[{name}]", dT))
+            if t is not None:
+                for tau in LAG_TAUS_S:
+                    lib[j].append((f"lag{tau / 60:g}min(T_{name})-20", "thermal_growth", f"thermal_growth[{name}]", first_order_lag(t, temp, tau) - 20.0))
     on = find(cols, "time_since_power_on", "power_on_s")
-    if on is not None:
+    if on is not None and np.all(np.isfinite(on)):
         for tau in WARMUP_TAUS_S:
             for j in range(3):
                 lib[j].append((f"1-exp(-t_on/{tau:g}s)", "tracker_warmup", "tracker_warmup", 1 - np.exp(-on / tau)))
-    return t, lib
+    # a signal some record lacks (an empty cell) is no library column
+    return t, {j: [f for f in feats if np.all(np.isfinite(f[3]))] for j, feats in lib.items()}
+
+
+def first_order_lag(t, temp, tau):
+    """The temperatures through a first-order lag of time constant tau, over the records' own
+    (irregular) times: the exact response to a piecewise-constant input."""
+    order = np.argsort(t)
+    out = np.empty_like(temp)
+    y = temp[order[0]]
+    prev = t[order[0]]
+    for i in order:
+        y += (1 - np.exp(-(t[i] - prev) / tau)) * (temp[i] - y)
+        out[i], prev = y, t[i]
+    return out
 
 
 def residual_components(cols):

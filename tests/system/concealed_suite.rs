@@ -15,11 +15,10 @@
 //! (needs `cargo build -p metrocell-cli`).
 
 use std::path::{Path, PathBuf};
-use std::process::Command;
 use std::time::Duration;
 
 use serde_json::Value;
-use system_tests::{bin, python, run, workspace_root};
+use system_tests::{bin, piped, python, run, workspace_root};
 
 /// Seeds of the CI subset.
 const CI_SEEDS: [&str; 2] = ["1", "2"];
@@ -29,7 +28,7 @@ fn bags_dir() -> PathBuf {
 }
 
 fn py(args: &[&std::ffi::OsStr], timeout: Duration) -> std::process::Output {
-    let out = run(Command::new(python()).args(args).current_dir(workspace_root()), timeout);
+    let out = run(piped(python()).args(args).current_dir(workspace_root()), timeout);
     println!("{}", String::from_utf8_lossy(&out.stdout));
     eprintln!("{}", String::from_utf8_lossy(&out.stderr));
     out
@@ -119,7 +118,7 @@ fn recordings_are_deterministic_and_name_nothing_of_the_answer() {
     let csv = a.join("leak.csv");
     std::fs::write(&csv, "timestamp,point_id,measured_x,measured_y,measured_z,u95\n1714557600,thermal_scale_probe,0.1,0.2,0.3,0.00001\n").unwrap();
     let leak = a.join("leak_bag");
-    let o = run(Command::new(bin("metrocell")).args([os("bag"), os("import"), csv.as_os_str(), os("-o"), leak.as_os_str()]), Duration::from_secs(60));
+    let o = run(piped(bin("metrocell")).args([os("bag"), os("import"), csv.as_os_str(), os("-o"), leak.as_os_str()]), Duration::from_secs(60));
     assert!(o.status.success(), "bag import: {}", String::from_utf8_lossy(&o.stderr));
     let o = py(&[os("bags/generate.py"), os("--verify-only"), leak.as_os_str()], Duration::from_secs(60));
     assert!(!o.status.success() && String::from_utf8_lossy(&o.stdout).contains("thermal_scale"), "the leak checker missed a planted catalog id");
@@ -167,7 +166,7 @@ fn diagnose_names_effects_in_numpy_made_exports() {
     for (variant, t) in truth.as_object().unwrap() {
         let bag = dir.join(format!("{variant}_bag"));
         let o = run(
-            Command::new(&metrocell)
+            piped(&metrocell)
                 .args([os("bag"), os("import")])
                 .arg(dir.join(format!("{variant}.csv")))
                 .args([os("--mapping")])
@@ -178,7 +177,7 @@ fn diagnose_names_effects_in_numpy_made_exports() {
         );
         assert!(o.status.success(), "{variant}: bag import failed: {}", String::from_utf8_lossy(&o.stderr));
         let o = run(
-            Command::new(&metrocell).args([os("diagnose"), os("--model")]).arg(bags_dir().join("independent/model.yaml")).arg(&bag).args(["--json", "-"]),
+            piped(&metrocell).args([os("diagnose"), os("--model")]).arg(bags_dir().join("independent/model.yaml")).arg(&bag).args(["--json", "-"]),
             Duration::from_secs(600),
         );
         assert!(o.status.success(), "{variant}: diagnose failed: {}", String::from_utf8_lossy(&o.stderr));

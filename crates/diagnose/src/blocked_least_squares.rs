@@ -21,6 +21,11 @@ use nalgebra::{DMatrix, DVector};
 /// (1e-11 on eigenvalues = about 3e-6 on singular values).
 pub const RANK_TOLERANCE: f64 = 1e-11;
 
+/// Share of a candidate column's squared norm (in the candidate's own column scaling) that must
+/// be left after projecting out the base columns for it to count as separable from them: a
+/// column the base already spans keeps almost nothing (1e-8 = 1e-4 of its norm).
+pub const SEPARABLE_TOLERANCE: f64 = 1e-8;
+
 /// Rows arranged cell by cell, with the fold of each cell in each scheme.
 #[derive(Debug, Clone)]
 pub struct BlockedRows {
@@ -100,21 +105,33 @@ impl BlockedRows {
     }
 }
 
-/// Pseudo-inverse of a symmetric positive semi-definite matrix by column scaling and eigen-
-/// decomposition, and its rank.
-pub fn pseudo_inverse(g: &DMatrix<f64>) -> (DMatrix<f64>, usize) {
-    let p = g.nrows();
+/// Which eigenvalues of a scaled symmetric matrix count as directions.
+#[derive(Clone, Copy)]
+enum Keep {
+    /// Above this fraction of the largest.
+    Relative(f64),
+    /// Above this value.
+    Absolute(f64),
+}
+
+/// Pseudo-inverse of the symmetric matrix `m`, scaled by the diagonal of `scale` (columns to
+/// unit norm) before its eigen-decomposition, and its rank.
+fn scaled_pseudo_inverse(m: &DMatrix<f64>, scale: &DMatrix<f64>, keep: Keep) -> (DMatrix<f64>, usize) {
+    let p = m.nrows();
     if p == 0 {
         return (DMatrix::zeros(0, 0), 0);
     }
-    let d: Vec<f64> = (0..p).map(|i| if g[(i, i)] > 0.0 { 1.0 / g[(i, i)].sqrt() } else { 0.0 }).collect();
-    let scaled = DMatrix::from_fn(p, p, |i, j| g[(i, j)] * d[i] * d[j]);
+    let d: Vec<f64> = (0..p).map(|i| if scale[(i, i)] > 0.0 { 1.0 / scale[(i, i)].sqrt() } else { 0.0 }).collect();
+    let scaled = DMatrix::from_fn(p, p, |i, j| m[(i, j)] * d[i] * d[j]);
     let eig = scaled.symmetric_eigen();
-    let top = eig.eigenvalues.iter().cloned().fold(0.0, f64::max);
+    let floor = match keep {
+        Keep::Relative(f) => f * eig.eigenvalues.iter().cloned().fold(0.0, f64::max),
+        Keep::Absolute(a) => a,
+    };
     let mut inv = DMatrix::zeros(p, p);
     let mut rank = 0;
     for (k, &l) in eig.eigenvalues.iter().enumerate() {
-        if l > RANK_TOLERANCE * top && l > 0.0 {
+        if l > floor && l > 0.0 {
             rank += 1;
             let v = eig.eigenvectors.column(k);
             inv += v * v.transpose() / l;
@@ -126,6 +143,12 @@ pub fn pseudo_inverse(g: &DMatrix<f64>) -> (DMatrix<f64>, usize) {
         }
     }
     (inv, rank)
+}
+
+/// Pseudo-inverse of a symmetric positive semi-definite matrix by column scaling and eigen-
+/// decomposition (directions below [`RANK_TOLERANCE`] of the largest dropped), and its rank.
+pub fn pseudo_inverse(g: &DMatrix<f64>) -> (DMatrix<f64>, usize) {
+    scaled_pseudo_inverse(g, g, Keep::Relative(RANK_TOLERANCE))
 }
 
 /// Normal-equation sums of columns `a` (arranged) per cell.
@@ -327,27 +350,38 @@ fn schur(base: &Solved, x: &DMatrix<f64>, cc: &DMatrix<f64>, cb: &DVector<f64>) 
     let rhs = cb - px.tr_mul(&base.h);
     // rank relative to the candidate's own scale: a column the base already spans keeps almost
     // nothing of its norm after elimination
-    let k = cc.nrows();
-    let d: Vec<f64> = (0..k).map(|i| if cc[(i, i)] > 0.0 { 1.0 / cc[(i, i)].sqrt() } else { 0.0 }).collect();
-    let scaled = DMatrix::from_fn(k, k, |i, j| s[(i, j)] * d[i] * d[j]);
-    let eig = scaled.symmetric_eigen();
-    let mut inv = DMatrix::zeros(k, k);
-    let mut rank = 0;
-    for (j, &l) in eig.eigenvalues.iter().enumerate() {
-        if l > 1e-8 {
-            rank += 1;
-            let v = eig.eigenvectors.column(j);
-            inv += v * v.transpose() / l;
-        }
-    }
-    for i in 0..k {
-        for j in 0..k {
-            inv[(i, j)] *= d[i] * d[j];
-        }
-    }
+    let (inv, rank) = scaled_inverse(&s, cc);
     let y = &inv * &rhs;
     let explained = rhs.dot(&y);
     (y, inv, explained, rank)
+}
+
+/// Pseudo-inverse of a Schur complement `s` in the scaling of the candidate's own columns
+/// (`cc` = their normal matrix), directions below [`SEPARABLE_TOLERANCE`] dropped; and its rank.
+fn scaled_inverse(s: &DMatrix<f64>, cc: &DMatrix<f64>) -> (DMatrix<f64>, usize) {
+    scaled_pseudo_inverse(s, cc, Keep::Absolute(SEPARABLE_TOLERANCE))
+}
+
+/// The columns of `c` (whitened, any row order) that, taken in order, each add a direction the
+/// base columns `a` (with `a_pinv` = (aᵀa)⁺) and the columns kept before them do not span — by
+/// the same test the selection applies, so what is kept is separable there.
+pub fn separable_columns(a_pinv: &DMatrix<f64>, a: &DMatrix<f64>, c: &DMatrix<f64>) -> Vec<usize> {
+    let mut kept: Vec<usize> = Vec::new();
+    for j in 0..c.ncols() {
+        if !(c.column(j).norm_squared() > 0.0) {
+            continue;
+        }
+        let mut trial = kept.clone();
+        trial.push(j);
+        let sub = c.select_columns(&trial);
+        let x = a.tr_mul(&sub);
+        let s = sub.tr_mul(&sub) - x.tr_mul(&(a_pinv * &x));
+        let (_, rank) = scaled_inverse(&((&s + s.transpose()) * 0.5), &sub.tr_mul(&sub));
+        if rank == trial.len() {
+            kept = trial;
+        }
+    }
+    kept
 }
 
 #[cfg(test)]

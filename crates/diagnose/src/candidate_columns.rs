@@ -5,7 +5,8 @@
 //! Two routes, the same numbers (a test holds them equal):
 //! * the model with the candidate added — [`ForwardModel::tracker_jacobian`] of the augmented
 //!   model, the candidate's columns — for instrument terms (warm-up, refraction), kinematic
-//!   terms (delta, arm) and every term on an arm (whose tool frame turns);
+//!   terms (delta, arm), workpiece-frame terms (they move the part, not the tool) and every
+//!   term on an arm (whose tool frame turns);
 //! * for machine- and tool-frame displacement terms on cartesian, delta and five-axis machines,
 //!   the same chain taken in two pieces: ∂reading/∂d (3 × 3 per record, the columns of a
 //!   `tool_offset` added to the model — a displacement d of the tool point in the machine frame,
@@ -16,7 +17,7 @@
 use metrocell_estimation::MeasurementRecord;
 use metrocell_model::{ForwardModel, MachineKinematics, Workspace, TRACKER_ROWS};
 use metrocell_physics::model::TermModel;
-use metrocell_physics::{configure, ConfiguredTerm, EffectKind, Frame, PhysicsError, Signals, TermConfig, TermId};
+use metrocell_physics::{configure, ConfiguredTerm, EffectKind, Frame, PhysicsError, Signals, TermConfig};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
 use crate::candidates::Placement;
@@ -56,22 +57,11 @@ fn with_inserted(x: &[f64], at: usize, extra: &[f64]) -> Vec<f64> {
     out
 }
 
-/// The point machine-frame terms are evaluated at for joint vector q (the machine families'
-/// convention, crates/model `machine`): q + tool offset on cartesian and delta machines, the
-/// tool tip in the machine frame on a five-axis machine.
-pub fn machine_point(model: &ForwardModel, q: &[f64]) -> Option<Vector3<f64>> {
-    match &model.machine.kinematics {
-        MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => Some(model.machine.nominal_tool_point(&Vector3::new(q[0], q[1], q[2]))),
-        MachineKinematics::FiveAxis(f) => Some(f.tip_machine(q)),
-        MachineKinematics::SerialArm(_) => None,
-    }
-}
-
 impl<'m, 'a> ColumnContext<'m, 'a> {
     /// `x` is the declared fit (the model's stacked order), `whitening` L⁻¹ of each record.
     pub fn new(model: &'m ForwardModel<'a>, x: &[f64], records: &'m [MeasurementRecord], whitening: &'m [Matrix3<f64>]) -> Result<Self, PhysicsError> {
         let signals: Vec<Signals> = records.iter().map(|r| r.signals.clone()).collect();
-        let machine_points: Vec<Vector3<f64>> = records.iter().map(|r| machine_point(model, &r.q).unwrap_or_else(Vector3::zeros)).collect();
+        let machine_points: Vec<Vector3<f64>> = records.iter().map(|r| model.nominal_machine_point(&r.q).unwrap_or_else(Vector3::zeros)).collect();
         let mut ctx = Self { model, x: x.to_vec(), records, whitening, signals, sensitivity: None, machine_points };
         if !matches!(model.machine.kinematics, MachineKinematics::SerialArm(_)) {
             // ∂reading/∂d: the columns of a tool offset (declared, or added at zero)
@@ -187,9 +177,4 @@ impl<'m, 'a> ColumnContext<'m, 'a> {
     pub fn sensitivity(&self) -> Option<&[Matrix3<f64>]> {
         self.sensitivity.as_deref()
     }
-}
-
-/// Is the term one the chain route handles (a machine- or tool-frame displacement)?
-pub fn is_displacement(id: TermId) -> bool {
-    configure(&metrocell_physics::catalog::example_config(id)).map(|t| matches!(t.term.effect(), EffectKind::Displacement(Frame::Machine | Frame::Tool))).unwrap_or(false)
 }

@@ -144,8 +144,8 @@ fn lever_axes(machine: &MachineGeometry, axis: usize) -> Vec<usize> {
                 None => vec![0, 1, 2],
             }
         }
-        // the five-axis linear chain carries the spindle on X → Y → Z? its DH chain: Y (d1)
-        // carries X (d2) carries Z (d3): X and Y levers include the axes after them
+        // the five-axis linear chain (crates/kinematics `five_axis`, DH rows Y = d1, X = d2,
+        // Z = d3): Y carries X carries Z, so each lever holds the axes it carries
         MachineKinematics::FiveAxis(_) => match axis {
             1 => vec![0, 2],
             0 => vec![2],
@@ -157,8 +157,9 @@ fn lever_axes(machine: &MachineGeometry, axis: usize) -> Vec<usize> {
 
 /// Every candidate family for the declared model and the signals the records hold, and the
 /// catalog terms not tried with the reason. `periodogram_leads[k]` adds a lead found in the
-/// residuals of axis k.
-pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, periodogram_leads: &[Option<f64>; 3]) -> (Vec<TermFamily>, Vec<NotTried>) {
+/// residuals of axis k; `points_in_machine_frame`: the records' points are in the machine
+/// (part) frame rather than an instrument's.
+pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, periodogram_leads: &[Option<f64>; 3], points_in_machine_frame: bool) -> (Vec<TermFamily>, Vec<NotTried>) {
     let labels = declared.labels();
     let machine = declared.machine;
     let mut out: Vec<TermFamily> = Vec::new();
@@ -334,8 +335,25 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
             skip("refraction", "no station air (temperature, pressure, humidity) in the records".into());
         }
     }
-    for id in [TermId::WorkpieceExpansion, TermId::FrameMisalignment] {
-        skip(id.as_str(), "the shared model does not yet evaluate workpiece-frame terms".into());
+    // the part: its expansion about the workpiece origin with each temperature (the clamp
+    // point is not known; expansion about another point differs by a shift growing with the
+    // same temperature, which a thermal growth candidate covers), and a misalignment of the
+    // part's frame. Only points taken in the part's (machine) frame show them: an instrument
+    // registered to the part sights the tool, and a uniform scale or turn of its frame is the
+    // same as its own pose, or its range scale
+    if !points_in_machine_frame {
+        for id in [TermId::WorkpieceExpansion, TermId::FrameMisalignment] {
+            if !declared.has(id) {
+                skip(id.as_str(), "the points are in an instrument frame registered to the part: a change of the part's frame or scale is the instrument's own pose or range scale there; points measured in the part's frame (probe hits, a CMM export) show it".into());
+            }
+        }
+    } else if !declared.has(TermId::WorkpieceExpansion) {
+        for s in &inventory.temperatures {
+            out.extend(family(vec![linear_variant("", TermId::WorkpieceExpansion, vec![("sensor", text(s))])], TermId::WorkpieceExpansion, Placement::Machine));
+        }
+    }
+    if points_in_machine_frame && !declared.has(TermId::FrameMisalignment) {
+        out.extend(family(vec![linear_variant("", TermId::FrameMisalignment, vec![])], TermId::FrameMisalignment, Placement::Machine));
     }
     out.retain(|f| !labels.contains(&f.label) && !(f.id == TermId::ToolOffset && declared.has(TermId::ToolOffset)));
     (out, not_tried)

@@ -113,7 +113,8 @@ fn in_place(place: &Place, s: &ResidualSample) -> Option<bool> {
 }
 
 /// Localisation findings the effect `c` (workpiece frame, per record) accounts for: its mean
-/// over the finding's subset is at least half the finding's effect, with the same sign.
+/// over the finding's subset is at least half the finding's effect, with the same sign (the six
+/// strongest).
 fn accounted(located: &[Located], samples: &[ResidualSample], c: &[Vector3<f64>]) -> Vec<String> {
     let mut out = Vec::new();
     for f in located.iter().take(30) {
@@ -160,6 +161,9 @@ fn accounted(located: &[Located], samples: &[ResidualSample], c: &[Vector3<f64>]
         };
         if effect * f.effect_m > 0.0 && effect.abs() >= 0.5 * f.effect_m.abs() {
             out.push(f.describe());
+            if out.len() == 6 {
+                break;
+            }
         }
     }
     out
@@ -466,8 +470,8 @@ pub fn advice(selection: &FamilySelection, families: &[Family], records: &[Measu
         let name = upper(axis_name(k));
         if travel.is_finite() && hi - lo < 0.25 * travel {
             out.push(format!("{name} moves over only {:.0} mm of its {:.0} mm travel: errors that grow along {name} (positioning, scale, straightness) cannot be told apart from a constant; measure points spanning the {name} travel", (hi - lo) * 1e3, travel * 1e3));
-        } else if distinct.len() < 4 {
-            out.push(format!("only {} distinct {name} positions: needs at least 4 (better 10) points spanning the {name} travel to separate positioning of order 2–3 from scale and reversal errors", distinct.len()));
+        } else if distinct.len() < 3 {
+            out.push(format!("only {} distinct {name} positions: needs at least 3 (better 10) points spanning the {name} travel to tell a curved positioning error from a scale error, and both from a reversal error", distinct.len()));
         }
         let approaches: BTreeSet<i64> = records.iter().filter_map(|r| r.signals.approach_direction[k]).map(|v| v as i64).collect();
         if distinct.len() >= 2 && approaches.len() < 2 {

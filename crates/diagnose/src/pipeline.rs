@@ -26,7 +26,7 @@ use metrocell_physics::model::TermModel;
 use metrocell_physics::{configure, ConfigValue, PhysicsError, TermConfig, TermId};
 use nalgebra::{DMatrix, DVector, Vector3};
 
-use crate::blocked_least_squares::{pseudo_inverse, BaseFit, BlockedRows};
+use crate::blocked_least_squares::{pseudo_inverse, separable_columns, BaseFit, BlockedRows};
 use crate::candidate_columns::ColumnContext;
 use crate::candidates::{candidate_families, Declared, NotTried, Placement, TermFamily};
 use crate::empirical::{bump_variants, time_variants, EmpiricalBasis};
@@ -88,6 +88,8 @@ pub struct DiagnoseOptions {
     /// Try empirical corrections for structure no catalog term explains.
     pub empirical: bool,
     pub locate: LocateOptions,
+    /// Say on stderr what is being done and how long each step took.
+    pub progress: bool,
 }
 
 impl Default for DiagnoseOptions {
@@ -104,6 +106,7 @@ impl Default for DiagnoseOptions {
             max_selection_records: 12_000,
             empirical: true,
             locate: LocateOptions::default(),
+            progress: false,
         }
     }
 }
@@ -118,6 +121,8 @@ pub enum DiagnoseError {
     DeclaredFit(FitError),
     #[error("the model: {0}")]
     Model(#[from] PhysicsError),
+    #[error("the model does not fit the recording: {0}")]
+    Mismatch(String),
 }
 
 /// A term added to the model, as it goes into the augmented model file.
@@ -146,12 +151,20 @@ pub struct PlotData {
     pub evidence: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)>,
 }
 
-/// The diagnosis: the report, the terms to add to the model file, data for plots.
+/// The diagnosis: the report, the terms to add to the model file, data for plots, the records
+/// it used (after averaging repeats and setting outliers aside) with their stated σ along the
+/// workpiece axes.
 #[derive(Debug, Clone)]
 pub struct Diagnosis {
     pub report: Report,
     pub added_terms: Vec<AddedTerm>,
     pub plots: PlotData,
+    pub records: Vec<MeasurementRecord>,
+    pub sigma_workpiece: Vec<Vector3<f64>>,
+    /// Every parameter of the augmented model after the final refit: `label.param`, value, and
+    /// standard uncertainty where it was fitted and is identifiable (the model file's writer
+    /// rewrites those).
+    pub fitted: Vec<(String, f64, Option<f64>)>,
 }
 
 /// The declared model with a tracker pose (the model's reading needs one: free if the records
@@ -194,31 +207,9 @@ struct Prepared {
 
 enum Source {
     Term { family: TermFamily, kept: Vec<Vec<usize>> },
+    /// Declared parameters the model holds fixed, freed (`label.param` names).
+    Freed { id: TermId, label: String, names: Vec<String> },
     Empirical(Vec<EmpiricalBasis>),
-}
-
-/// Columns a base (whitened) already spans are set aside: each column's share of its norm left
-/// after projecting out the base, and joint rank, as [`crate::blocked_least_squares`] judges.
-fn separable_columns(base_pinv: &DMatrix<f64>, base: &DMatrix<f64>, c: &DMatrix<f64>) -> Vec<usize> {
-    let mut kept: Vec<usize> = Vec::new();
-    for j in 0..c.ncols() {
-        let col = c.column(j);
-        let norm2 = col.norm_squared();
-        if !(norm2 > 0.0) {
-            continue;
-        }
-        let mut trial = kept.clone();
-        trial.push(j);
-        let sub = c.select_columns(&trial);
-        let x = base.tr_mul(&sub);
-        let s = sub.tr_mul(&sub) - x.tr_mul(&(base_pinv * &x));
-        let (_, rank) = pseudo_inverse(&s);
-        let left = s[(trial.len() - 1, trial.len() - 1)] / norm2;
-        if rank == trial.len() && left > 1e-8 {
-            kept = trial;
-        }
-    }
-    kept
 }
 
 /// Empirical columns (whitened, records frame) of a basis for the records of `view`.
@@ -246,6 +237,12 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     let (instruments, setup) = with_tracker_pose(declared)?;
     let model = ForwardModel::new(declared.machine, declared.machine_terms, &instruments)?;
     let mut messages = Vec::new();
+    let clock = std::time::Instant::now();
+    let step = |what: &str| {
+        if options.progress {
+            eprintln!("diagnose: {:7.2} s  {what}", clock.elapsed().as_secs_f64());
+        }
+    };
     // 1. records
     let prep = prepare(&records.records, options.average_repeats, options.repeat_gap_s);
     let mut rejected: Vec<String> = records.rejected.iter().chain(&prep.rejected).map(|r| format!("{} ({}): {}", r.at, r.point_id, r.reason)).collect();
@@ -262,7 +259,19 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
             needed
         )));
     }
+    let joints = declared.machine.joint_names();
+    if let Some(r) = prep.records.iter().find(|r| r.q.len() != joints.len()) {
+        return Err(DiagnoseError::Mismatch(format!(
+            "the records carry {} joint values per point (point `{}` at t = {:.3} s), the model's machine has {} ({}): the recording is of another machine, or the model file is the wrong one",
+            r.q.len(),
+            r.point_id,
+            r.time,
+            joints.len(),
+            joints.join(" ")
+        )));
+    }
     let mut set = RecordSet { frame: records.frame.clone(), records: prep.records.clone(), rejected: vec![], sources: records.sources.clone() };
+    step(&format!("{} readings → {} records ({} groups of repeats averaged); fitting the declared model", prep.readings, prep.records.len(), prep.groups));
     // 2. declared fit, outliers, refit
     let mut declared_fit = fit(&model, &setup, &set, None, &options.fit).map_err(DiagnoseError::DeclaredFit)?;
     let mut outlier_notes = Vec::new();
@@ -282,8 +291,22 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     }
     let n = set.records.len();
     let x0 = declared_fit.x.clone();
+    {
+        // a model of another machine leaves millimetres after its own fit
+        let rms = metrocell_estimation::rms(&declared_fit.residuals_after);
+        let noise = (set.records.iter().map(|r| r.covariance.trace()).sum::<f64>() / (3 * n) as f64).sqrt();
+        if rms > 5e-4 && rms > 100.0 * noise {
+            return Err(DiagnoseError::Mismatch(format!(
+                "after fitting its own parameters the model still misses the measured points by {:.2} mm RMS ({:.0}× the stated noise of {:.1} µm): check the machine family and geometry, the tool offset, the instrument frame of the points, and the units of the recording",
+                rms * 1e3,
+                rms / noise,
+                noise * 1e6
+            )));
+        }
+    }
     let free0: Vec<usize> = declared_fit.parameters.iter().enumerate().filter(|(_, p)| p.free).map(|(k, _)| k).collect();
     let view0 = ResidualView::new(&model, &x0, &set.records, &set.frame)?;
+    step("declared model fitted; testing and locating its residuals");
     // 3. where the declared model's residuals disagree with noise
     let before_wp: Vec<Vector3<f64>> = (0..n).map(|i| view0.workpiece(i)).collect();
     let samples0 = view0.samples(&set.records, &before_wp);
@@ -303,6 +326,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     let declared_cols = ctx.declared_columns(&free0)?;
     let b_sel = sel_view.whitened();
     let sel_folds = vec![expand_folds(&sel_idx.iter().map(|&i| folds_time[i]).collect::<Vec<_>>()), expand_folds(&sel_idx.iter().map(|&i| folds_space[i]).collect::<Vec<_>>())];
+    step(&format!("candidate columns on {} records", sel_records.len()));
     // 4. candidates
     let inventory = crate::signal_inventory::SignalInventory::of(&sel_records);
     let mut leads = [None; 3];
@@ -319,7 +343,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         }
     }
     let decl = Declared { machine: declared.machine, machine_terms: declared.machine_terms, instrument_terms: &instruments };
-    let (term_families, mut not_tried) = candidate_families(&decl, &inventory, &leads);
+    let (term_families, mut not_tried) = candidate_families(&decl, &inventory, &leads, set.frame == RecordFrame::Machine);
     let (declared_pinv, _) = pseudo_inverse(&declared_cols.tr_mul(&declared_cols));
     let mut prepared: Vec<Prepared> = Vec::new();
     for tf in term_families {
@@ -362,6 +386,25 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         let family = TermFamily { variants: kept_variants, ..tf.clone() };
         prepared.push(Prepared { family: Family { label: tf.label.clone(), term: tf.id.as_str().into(), physical: true, variants, judged_by: None }, source: Source::Term { family, kept: kept_all } });
     }
+    // a term the model declares but holds fixed at values the data may contradict: the air on
+    // the beam (a model with a weather station declares refraction with no offset)
+    let names0_all = model.param_names();
+    for t in instruments.terms.iter().filter(|t| t.term.id() == TermId::Refraction) {
+        let label = t.term.label();
+        let name = format!("{label}.path_temperature_offset");
+        let Some(k) = names0_all.iter().position(|n| *n == name) else { continue };
+        if setup.free[k] {
+            continue;
+        }
+        let cols = ctx.declared_columns(&[k])?;
+        if separable_columns(&declared_pinv, &declared_cols, &cols).is_empty() {
+            not_tried.push(NotTried { term: label.clone(), reason: "these records cannot separate the air's offset from the declared parameters".into() });
+            continue;
+        }
+        let spec = &t.term.params()[0];
+        let variant = Variant { name: "freed".into(), columns: cols, parameter_names: vec![spec.name.clone()], units: vec![spec.unit.into()], ranges: vec![(spec.min, spec.max)], base_values: vec![x0[k]], profiled: 0 };
+        prepared.push(Prepared { family: Family { label: label.clone(), term: TermId::Refraction.as_str().into(), physical: true, variants: vec![variant], judged_by: None }, source: Source::Freed { id: TermId::Refraction, label, names: vec![name] } });
+    }
     if options.empirical {
         for axis in 0..3 {
             let res: Vec<f64> = (0..sel_view.len()).map(|i| sel_view.workpiece(i)[axis]).collect();
@@ -392,6 +435,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
             }
         }
     }
+    step(&format!("{} candidate families, {} variants; selecting", prepared.len(), prepared.iter().map(|p| p.family.variants.len()).sum::<usize>()));
     // 5. selection
     let families: Vec<Family> = prepared.iter().map(|p| p.family.clone()).collect();
     let data = WhitenedData { b: b_sel.clone(), declared: declared_cols.clone(), folds: sel_folds };
@@ -400,10 +444,12 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         Strategy::AllAtOnce => all_at_once(&data, &families, options.selection.alpha),
     };
     let steps = step_summaries(&selection, &families);
+    step(&format!("selected {:?}; refitting the augmented model", selection.chosen.iter().map(|c| c.label.as_str()).collect::<Vec<_>>()));
     // 6. augmented model and its refit
     let mut machine_aug = declared.machine_terms.clone();
     let mut instruments_aug = instruments.clone();
     let mut added: Vec<(usize, TermConfig, Placement, Vec<String>)> = Vec::new();
+    let mut freed: Vec<(usize, TermId, String, Vec<(String, f64)>)> = Vec::new();
     let mut empirical_chosen: Vec<(usize, EmpiricalBasis, Vec<f64>)> = Vec::new();
     for c in &selection.chosen {
         match &prepared[c.candidate].source {
@@ -422,6 +468,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
                 }
                 added.push((c.candidate, config, family.placement, free_names));
             }
+            Source::Freed { id, label, names } => freed.push((c.candidate, *id, label.clone(), names.iter().cloned().zip(c.parameters.iter().map(|p| p.1)).collect())),
             Source::Empirical(bases) => {
                 empirical_chosen.push((c.candidate, bases[c.variant].clone(), c.parameters.iter().map(|p| p.1).collect()));
             }
@@ -432,7 +479,14 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         let label = configure(config).map(|t| t.term.label()).unwrap_or_default();
         free.iter().map(move |p| format!("{label}.{p}"))
     }).collect();
-    let setup_aug = setup_by_name(&model_aug, &setup, &|name| added_free.iter().any(|f| f == name));
+    let mut setup_aug = setup_by_name(&model_aug, &setup, &|name| added_free.iter().any(|f| f == name));
+    for (_, _, _, values) in &freed {
+        for (name, _) in values {
+            if let Some(k) = model_aug.param_names().iter().position(|n| n == name) {
+                setup_aug.free[k] = true;
+            }
+        }
+    }
     // start: the declared fit, the chosen terms at their selection values
     let names_aug = model_aug.param_names();
     let names0 = model.param_names();
@@ -440,6 +494,9 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     for (k, name) in names_aug.iter().enumerate() {
         if let Some(j) = names0.iter().position(|n| n == name) {
             start[k] = x0[j];
+        }
+        if let Some(v) = freed.iter().flat_map(|f| f.3.iter()).find(|(n, _)| n == name) {
+            start[k] = v.1;
         }
     }
     // the empirical corrections are taken off the measurements while the physics is refitted
@@ -462,6 +519,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         }
     };
     let x1: Vec<f64> = final_fit.as_ref().map(|f| f.x.clone()).unwrap_or(start);
+    step("refitted; held-out before and after");
     // 7. after: residual at x1 (empirical not yet subtracted) with the free columns of the
     // augmented model and the empirical columns, refitted linearly per held-out block
     let view1 = ResidualView::new(&model_aug, &x1, &set.records, &set.frame)?;
@@ -550,6 +608,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         .collect();
     let located1 = locate(&rescaled, &options.locate);
     remaining.extend(located1.iter().take(10).map(|f| format!("structure left: {}", f.describe())));
+    step("findings");
     // 9. findings
     let mut found = Vec::new();
     for (k, (cand, config, placement, _)) in added.iter().enumerate() {
@@ -557,6 +616,10 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         let label = configure(config)?.term.label();
         let Source::Term { family, .. } = &prepared[*cand].source else { unreachable!("terms only") };
         found.push(FoundTerm { label, id: family.id, variant: family.variants[chosen.variant].name.clone(), placement: *placement, order: k, config: config.clone() });
+    }
+    for (_, id, label, _) in &freed {
+        let config = TermConfig { id: id.as_str().into(), ..Default::default() };
+        found.push(FoundTerm { label: label.clone(), id: *id, variant: "declared, freed".into(), placement: Placement::Instrument, order: found.len(), config });
     }
     let sigmas1 = {
         // σ from the joint linear fit at the solution (pseudo-inverse: valid on the identifiable
@@ -635,7 +698,10 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     }
     temperatures.retain(|_, v| v.len() == n);
     let plots = PlotData { time: view1.time.clone(), position: view1.position.clone(), before: before_res, after: after_res, heldout_before: held_before, heldout_after: held_after, temperatures, evidence: built.evidence };
-    Ok(Diagnosis { report, added_terms, plots })
+    step("done");
+    let sigma_workpiece = set.records.iter().map(|r| view0.workpiece_sigma(&r.covariance)).collect();
+    let fitted = names_aug.iter().enumerate().map(|(k, name)| (name.clone(), x1[k], if setup_aug.free[k] { sigmas1[k] } else { None })).collect();
+    Ok(Diagnosis { report, added_terms, plots, records: set.records, sigma_workpiece, fitted })
 }
 
 /// Which noise level the verdicts rely on: the stated one when the data's own measure agrees

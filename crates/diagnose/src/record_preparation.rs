@@ -23,6 +23,10 @@ pub struct Prepared {
     pub repeatability_scale: Option<(f64, usize)>,
 }
 
+/// Longest stretch of time averaged into one record (s): a tracker's dwell at a point lasts a
+/// few seconds; drifts (warm-up, temperature) over longer stays are kept.
+pub const MAX_GROUP_SPAN: f64 = 10.0;
+
 fn usable(r: &MeasurementRecord) -> Result<(), String> {
     if !r.measured.iter().all(|v| v.is_finite()) {
         return Err("measured point is not finite (NaN or infinite)".into());
@@ -67,7 +71,9 @@ pub fn prepare(records: &[MeasurementRecord], average_repeats: bool, max_gap: f6
         if stationary(first) {
             while j < good.len() {
                 let (prev, next) = (good[j - 1], good[j]);
-                let same = next.channel == first.channel && next.q.len() == first.q.len() && next.q.iter().zip(&first.q).all(|(a, b)| (a - b).abs() <= 1e-9) && stationary(next) && next.time - prev.time <= max_gap;
+                // a long stay at one place (a machine idling at home) is cut into pieces of
+                // `MAX_GROUP_SPAN`, so drifts over the stay are kept
+                let same = next.channel == first.channel && next.q.len() == first.q.len() && next.q.iter().zip(&first.q).all(|(a, b)| (a - b).abs() <= 1e-9) && stationary(next) && next.time - prev.time <= max_gap && next.time - first.time <= MAX_GROUP_SPAN;
                 if !same {
                     break;
                 }

@@ -10,7 +10,6 @@ use metrocell_model::{ForwardModel, InstrumentPose};
 use metrocell_physics::{PhysicsError, TermId};
 use nalgebra::{DVector, Matrix3, Vector3};
 
-use crate::candidate_columns::machine_point;
 use crate::residual::ResidualSample;
 
 /// Per-record residual data.
@@ -46,7 +45,7 @@ pub fn records_rotation(model: &ForwardModel, x: &[f64], frame: &RecordFrame) ->
 pub fn record_position(model: &ForwardModel, r: &MeasurementRecord) -> Vector3<f64> {
     match r.signals.axis_position {
         [Some(x), Some(y), Some(z)] => Vector3::new(x, y, z),
-        _ => machine_point(model, &r.q).unwrap_or(r.measured),
+        _ => model.nominal_machine_point(&r.q).unwrap_or(r.measured),
     }
 }
 

@@ -8,6 +8,10 @@
 //! * [`error_field::ErrorField`] — what the compensator needs of a model: e at a commanded
 //!   position and approach direction, and the region where the model was calibrated.
 //!   [`planar_quadratic::PlanarQuadraticField`] is seed 000's eq. 7 (nine coefficients A–I).
+//! * [`model_field::ModelErrorField`] — a fitted model file's machine terms (the shared forward
+//!   model) as an error field, at stated conditions (temperatures, load).
+//! * [`controller_table`] — per-axis pitch/straightness/reversal tables and squareness sampled
+//!   from a field, in a documented CSV layout a controller loads.
 //! * [`inverse`] — solving C + e(C) = T by fixed-point iteration (or the paper's first-order
 //!   C = T − e(T)).
 //! * [`block`] — one G-code line split into words and comments, exactly as written.
@@ -25,13 +29,16 @@
 
 pub mod arc;
 pub mod block;
+pub mod controller_table;
 pub mod error_field;
 pub mod inverse;
+pub mod model_field;
 pub mod number_format;
 pub mod planar_quadratic;
 pub mod program;
 
 pub use error_field::{ErrorField, FieldError, Region, ZeroField};
 pub use inverse::{InverseMethod, compensate_point};
+pub use model_field::{ModelErrorField, ModelFieldError};
 pub use planar_quadratic::PlanarQuadraticField;
 pub use program::{compensate_program, CompensationOptions, CompensationReport, LineIssue};

@@ -377,12 +377,21 @@ impl State<'_> {
     /// within the chord tolerance of the chord's midpoint. The commanded points, `c1` last (if a
     /// point on the way cannot be compensated, the move is left whole).
     fn split_bent_line(&mut self, p1: Vector3<f64>, c1: Vector3<f64>) -> Vec<Vector3<f64>> {
-        let (p0, c0) = (self.programmed, self.commanded);
+        let (p0, mut c0) = (self.programmed, self.commanded);
         let tol = self.options.chord_tolerance_mm / self.unit_mm;
         let approach = self.approach;
         let mut out = Vec::new();
+        // a reversal: the start point, compensated for this move's approach directions, is not
+        // where the controller is (backlash): take it up with a move of its own first, rather
+        // than bending the whole move towards a jump at its start
+        if let Ok((start, _)) = self.compensate(p0 - (p1 - p0), p0) {
+            if (start - c0).norm() > tol {
+                out.push(start);
+                c0 = start;
+            }
+        }
         if !self.bisect(p0, c0, p1, c1, tol, 0, &mut out) {
-            out.clear();
+            out.truncate(usize::from(c0 != self.commanded));
         }
         self.approach = approach;
         out.push(c1);

@@ -564,3 +564,16 @@ impl<'a> ForwardModel<'a> {
         Ok(tool)
     }
 }
+
+impl ForwardModel<'_> {
+    /// The nominal tool point in the machine (axis) frame at joint vector `q` — the point
+    /// `Signals::machine_point` carries to the machine terms — without running the model (None
+    /// for an arm: its nominal tool point needs forward kinematics; use [`Self::tool_state`]).
+    pub fn nominal_machine_point(&self, q: &[f64]) -> Option<Vector3<f64>> {
+        match &self.machine.kinematics {
+            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => Some(self.machine.nominal_tool_point(&Vector3::new(q[0], q[1], q[2]))),
+            MachineKinematics::FiveAxis(f) => Some(f.tip_machine(q)),
+            MachineKinematics::SerialArm(_) => None,
+        }
+    }
+}

@@ -8,8 +8,8 @@ use std::collections::BTreeMap;
 
 use metrocell_diagnose::{diagnose, DeclaredModel, Diagnosis, DiagnoseOptions};
 use metrocell_estimation::{MeasurementRecord, RecordFrame, RecordSet};
-use metrocell_physics::{Signals, TemperatureHistory};
-use metrocell_twin::{Cell, Sample, Simulation};
+use metrocell_physics::{Signals, TemperatureTimeline};
+use metrocell_twin::{Cell, CellModel, Sample, Simulation};
 use nalgebra::{Matrix3, Vector3};
 
 /// The base cell: an XFYZ machine measured by a tracker over a serpentine 5 × 4 × 3 grid every
@@ -61,9 +61,7 @@ terms:
   - id: squareness
     options: {{pair: xy}}
     params: {{s: 20 urad}}
-{terms}estimation:
-  refraction: {{free: [path_temperature_offset]}}
-"#,
+{terms}"#,
         cycle = (hours * 60.0 / 6.0).round()
     )
 }
@@ -96,7 +94,8 @@ pub fn twin_records(cell_text: &str, hours: f64, seed: u64, take: Take) -> TwinR
     let sim = Simulation::new(cell, hours * 3600.0, seed).expect("simulation");
     let powered = sim.cell().tracker.as_ref().map(|t| t.powered_on_before_start).unwrap_or(0.0);
     let mut latest: BTreeMap<String, f64> = BTreeMap::new();
-    let mut history: BTreeMap<String, TemperatureHistory> = BTreeMap::new();
+    // one shared timeline, decimated to a sample a minute; each record reads it up to its time
+    let timeline = std::sync::Arc::new(TemperatureTimeline::new());
     let mut last_history_t: BTreeMap<String, f64> = BTreeMap::new();
     let model = sim.forward_model();
     let mut out = Vec::new();
@@ -108,7 +107,7 @@ pub fn twin_records(cell_text: &str, hours: f64, seed: u64, take: Take) -> TwinR
                 let last = last_history_t.entry(t.sensor.to_string()).or_insert(f64::NEG_INFINITY);
                 if t.t - *last >= 60.0 {
                     *last = t.t;
-                    history.entry(t.sensor.to_string()).or_default().samples.push((t.t, t.value));
+                    timeline.push(&t.sensor.to_string(), t.t, t.value).expect("increasing sample times");
                 }
             }
             Sample::Tracker(s) => {
@@ -131,7 +130,8 @@ pub fn twin_records(cell_text: &str, hours: f64, seed: u64, take: Take) -> TwinR
                 model.set_motion(&mut sig, ms.q.as_slice(), ms.velocity.as_slice(), &ms.approach);
                 sig.temperatures = latest.clone();
                 if take.histories {
-                    sig.temperature_histories = history.clone();
+                    sig.timeline = Some(timeline.clone());
+                    sig.time = Some(s.t);
                 }
                 out.push(MeasurementRecord {
                     time: s.t,
@@ -149,13 +149,16 @@ pub fn twin_records(cell_text: &str, hours: f64, seed: u64, take: Take) -> TwinR
     TwinRecords { records: RecordSet { frame: RecordFrame::Instrument("tracker".into()), records: out, rejected: vec![], sources: vec![] }, cell: truth_for_records }
 }
 
-/// Diagnose `records` against the model cell `model_text`.
+/// Diagnose `records` against the model file `model_text` (read as `metrocell diagnose` reads
+/// a model: crates/twin `CellModel`).
+pub fn try_run(model_text: &str, records: &RecordSet, options: &DiagnoseOptions) -> Result<Diagnosis, metrocell_diagnose::DiagnoseError> {
+    let m = CellModel::from_yaml_str_in(model_text, "model.yaml", std::path::Path::new(".")).expect("model file");
+    let declared = DeclaredModel { machine: &m.machine, machine_terms: &m.machine_terms, instrument_terms: &m.instrument_terms, setup: &m.setup };
+    diagnose(&declared, records, options)
+}
+
 pub fn run(model_text: &str, records: &RecordSet, options: &DiagnoseOptions) -> Diagnosis {
-    let cell = Cell::from_yaml_str(model_text, "model cell").expect("model cell");
-    let instruments = cell.tracker_terms().unwrap();
-    let setup = cell.parameter_setup().unwrap();
-    let declared = DeclaredModel { machine: &cell.machine, machine_terms: &cell.terms, instrument_terms: &instruments, setup: &setup };
-    diagnose(&declared, records, options).unwrap_or_else(|e| panic!("diagnose: {e}"))
+    try_run(model_text, records, options).unwrap_or_else(|e| panic!("diagnose: {e}"))
 }
 
 /// Add a workpiece-frame displacement `f(t, commanded position)` to every measured point (in the

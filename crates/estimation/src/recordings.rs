@@ -50,7 +50,7 @@ use metrocell_msgs::RosMessage;
 use metrocell_physics::{Axis, EffectKind, SignalKind, Signals};
 use nalgebra::{Matrix3, Vector3};
 
-use crate::records::{MeasurementRecord, RecordFrame, RecordSet, Rejected};
+use crate::records::{MeasurementRecord, RecordFrame, RecordKind, RecordSet, Rejected};
 use crate::residuals::whitening;
 use crate::signal_topics::{feed, message_time, SignalTopic, AIR_SENSOR, COMMANDED_JOINTS_TOPIC, LOAD_TOPIC, POWER_ON_TOPIC};
 
@@ -556,7 +556,7 @@ fn resolve(p: Pending, builder: &SignalsBuilder, needs: &[(String, SignalKind)],
         out.rejected.push(reject(p.at, &p.point_id, format!("term `{term}` needs {kind}, which the recording does not give at {:.3} s: {why}", p.t_ns as f64 / 1e9)));
         return;
     }
-    let record = MeasurementRecord { time: p.t_ns as f64 / 1e9, point_id: p.point_id, channel: p.channel, q, measured: p.measured, covariance: p.covariance, signals };
+    let record = MeasurementRecord { time: p.t_ns as f64 / 1e9, point_id: p.point_id, channel: p.channel, q, measured: p.measured, covariance: p.covariance, signals, kind: RecordKind::Point };
     match out.by_frame.iter_mut().find(|(f, _)| *f == p.frame) {
         Some((_, v)) => v.push(record),
         None => out.by_frame.push((p.frame, vec![record])),

@@ -653,9 +653,7 @@ impl<'a> Engine<'a> {
         }
         let mut marker_points = Vec::with_capacity(PLATE_MARKERS);
         for k in 0..PLATE_MARKERS {
-            let [x, y] = spec.plate.marker_top_left(k);
-            let h = spec.plate.marker_side / 2.0;
-            let f = plate.transform_point(&nalgebra::Point3::new(x + h, y + h, 0.0)).coords;
+            let f = plate.transform_point(&spec.plate.marker_centre(k).into()).coords;
             marker_points.push(self.model.camera(None, &self.params, &tool, &mut self.signals, &f)?.measured_point);
         }
         let s = CameraFrameRequest {

@@ -513,7 +513,8 @@ impl<'a> Engine<'a> {
         let spec = self.cell.tracker.as_ref().expect("tracker channel exists only with a tracker");
         let ms = self.cell.program.state_at(t);
         let tool = self.tool_state(t, &ms)?;
-        let (nominal_point, tool_point, d) = (tool.nominal.translation.vector, tool.truth.translation.vector, tool.d);
+        // the tracker sights the tool relative to the part (truth − d_w, crates/model `forward`)
+        let (nominal_point, tool_point, d) = (tool.nominal.translation.vector, tool.target(), tool.d);
         // air: truth on the beam vs the station's reading
         let ambient = self.thermal.ambient(t);
         let air = self.cell.air;

@@ -2,11 +2,14 @@
 //!
 //! Pure functions, no DDS; used by `metrocell calibrate`, the estimator node and `diagnose`.
 //!
-//! * [`records`] — measurement records (a measured point, its covariance, its commanded joints
-//!   and the signals at its time) and the frame they are in.
+//! * [`records`] — measurement records (what was measured — a tracker or machine-frame point, a
+//!   probe hit, a camera point — with its covariance, its commanded joints and the signals at its
+//!   time) and the frame they are in.
 //! * [`recordings`] — [`records_from_bags`]: bags (the nodes', `metrocell sim`'s, `bag import`'s)
 //!   → a [`RecordSet`] for the shared model, signals by the model's `SignalsBuilder`; missing
 //!   signals named with the topics and columns that would provide them.
+//! * [`instrument_readings`] — probe hits and camera marker poses in a recording → what their
+//!   records measure and what the model needs to predict them.
 //! * [`signal_topics`] — the recorded topics that carry signals and how each message feeds the
 //!   signals builder (shared with the online estimator).
 //! * [`residuals`] — measured − predicted on the shared forward model (crates/model), whitened
@@ -29,6 +32,7 @@
 pub mod design_of_experiments;
 pub mod fit;
 pub mod improvement;
+pub mod instrument_readings;
 pub mod records;
 pub mod recordings;
 pub mod recursive;
@@ -37,7 +41,7 @@ pub mod signal_topics;
 pub mod uncertainty_budget;
 
 pub use fit::{fit, inseparable, rms, start_vector, Fit, FitError, FitOptions, HeldParameter, ParameterEstimate, RecordNote};
-pub use records::{MeasurementRecord, RecordFrame, RecordSet, Rejected};
+pub use records::{MeasurementRecord, RecordFrame, RecordKind, RecordSet, Rejected};
 pub use recordings::{records_from_bags, PointSource, RecordingError, RecordingOptions};
 pub use residuals::PointResiduals;
 pub use recursive::{RecursiveEstimator, RecursiveOptions, Update};

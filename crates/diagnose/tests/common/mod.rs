@@ -7,7 +7,7 @@
 use std::collections::BTreeMap;
 
 use metrocell_diagnose::{diagnose, DeclaredModel, Diagnosis, DiagnoseOptions};
-use metrocell_estimation::{MeasurementRecord, RecordFrame, RecordSet};
+use metrocell_estimation::{MeasurementRecord, RecordFrame, RecordKind, RecordSet};
 use metrocell_physics::{Signals, TemperatureTimeline};
 use metrocell_twin::{Cell, CellModel, Sample, Simulation};
 use nalgebra::{Matrix3, Vector3};
@@ -141,6 +141,7 @@ pub fn twin_records(cell_text: &str, hours: f64, seed: u64, take: Take) -> TwinR
                     measured: s.point,
                     covariance: s.covariance,
                     signals: sig,
+                    kind: RecordKind::Point,
                 });
             }
             _ => {}

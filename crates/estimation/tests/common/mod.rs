@@ -3,7 +3,7 @@
 //! tracker's spherical noise (range a + b·ρ, angles σ) and its stated covariance — the data a
 //! recording of `metrocell sim` would give, built in memory.
 
-use metrocell_estimation::{MeasurementRecord, RecordFrame, RecordSet};
+use metrocell_estimation::{MeasurementRecord, RecordFrame, RecordKind, RecordSet};
 use metrocell_model::ForwardModel;
 use metrocell_physics::instrument::spherical::{from_spherical, point_covariance, to_spherical};
 use metrocell_physics::Signals;
@@ -58,6 +58,7 @@ pub fn records(model: &ForwardModel, p: &[f64], plan: &[Planned], noise: Tracker
                 measured,
                 covariance: point_covariance(r2, a2, e2, noise.constant + noise.per_metre * r2, noise.angular, noise.angular),
                 signals: signals(model, d),
+                kind: RecordKind::Point,
             }
         })
         .collect();

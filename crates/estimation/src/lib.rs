@@ -8,6 +8,10 @@
 //!   by each record's covariance, with the model's analytic Jacobian: a solver problem.
 //! * [`fit`] — batch identification of the declared free parameters: registration of the
 //!   instrument frame, bounded robust Levenberg–Marquardt, scaled covariance, identifiability.
+//! * [`fit_summary`] — a fit in words: values ± σ in µm/µrad, what is not identifiable and
+//!   why, residuals before/after, consistency with the stated noise, outliers and skipped records.
+//! * [`error_functions`] — the fitted error along each axis with its uncertainty band
+//!   (u_e = √diag(J·C·Jᵀ)).
 //! * [`recursive`] — online estimation: an extended Kalman filter with random-walk drift,
 //!   outlier gating and a moving normalised-innovation χ² test that flags when the model stops
 //!   explaining the data.
@@ -22,7 +26,9 @@
 //! Units: SI (m) in and out; reports convert to mm and µm.
 
 pub mod design_of_experiments;
+pub mod error_functions;
 pub mod fit;
+pub mod fit_summary;
 pub mod improvement;
 pub mod records;
 pub mod recursive;

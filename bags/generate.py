@@ -23,6 +23,7 @@ Standard library only (`--verify` reads the bags with the `mcap` packages).
 """
 
 import argparse
+import datetime
 import json
 import os
 import shutil
@@ -48,13 +49,27 @@ def anchored(topics):
     return "^(" + "|".join(t.replace("/", "\\/") for t in topics) + ")$"
 
 
-def generate(metrocell, case, seed, plan, out_dir):
+def run_dirs(out, case, seed, plan):
+    """Bag directories of one case and seed: OUT/case/seed_S, and OUT/case/seed_S_run2, ... when
+    the case is recorded in several runs (e.g. unloaded and loaded)."""
+    base = os.path.join(out, case, f"seed_{seed}")
+    return [base] + [f"{base}_run{k}" for k in range(2, len(plan.get("runs", ["truth.yaml"])) + 1)]
+
+
+# the first run of every case starts at metrocell sim's default start time; run k an hour per
+# run later, so the runs of one case follow each other in time
+START = datetime.datetime(2026, 1, 5, 6, 0, 0, tzinfo=datetime.timezone.utc)
+RUN_SPACING = datetime.timedelta(hours=1)
+
+
+def generate(metrocell, case, seed, plan, out_dir, truth_file="truth.yaml", run_index=0):
     """Write one recording to out_dir (which must not exist)."""
-    truth = os.path.join(HERE, "cases", case, "truth.yaml")
+    truth = os.path.join(HERE, "cases", case, truth_file)
+    start = (START + run_index * max(RUN_SPACING, datetime.timedelta(seconds=plan["duration_s"] + 600))).strftime("%Y-%m-%dT%H:%M:%SZ")
     with tempfile.TemporaryDirectory(prefix=f"suite_{case}_") as tmp:
         raw = os.path.join(tmp, "raw")
         run([metrocell, "sim", "--cell", truth, "--duration", str(plan["duration_s"]), "--seed", str(seed),
-             "--clock-rate", "0", "--quiet", "-o", raw])
+             "--start-time", start, "--clock-rate", "0", "--quiet", "-o", raw])
         parts = [os.path.join(tmp, "whole")]
         run([metrocell, "bag", "filter", raw, parts[0], "--exclude", anchored(HIGH_RATE + DROPPED)])
         for k, (a, b) in enumerate(plan["windows_s"]):
@@ -69,7 +84,7 @@ def generate(metrocell, case, seed, plan, out_dir):
 TELLTALES = ["angular", "backlash", "camera_scale", "compliance", "delta_endstop", "delta_radius", "delta_rod_length",
              "delta_tower_angle", "frame_misalignment", "joint_offset", "lens_distortion", "link_length", "pitch_cyclic",
              "positioning", "probe_pretravel", "refraction", "squareness", "straightness", "thermal_growth", "thermal_scale",
-             "time_offset", "tool_offset", "tracker_pose", "tracker_warmup", "turbulence", "workpiece_expansion",
+             "time_offset", "tool_offset", "tracker_pose", "tracker_warmup", "turbulence", "workpiece_expansion", "rotary_axis_location",
              "concealed", "truth", "disturb", "answer"]
 
 
@@ -124,35 +139,62 @@ def verify(out_dir):
     return problems
 
 
+def digest(out_dir):
+    """sha256 over every message of a recording in log-time order (topic, log time, CDR bytes):
+    equal for equal messages, whatever the MCAP chunking."""
+    import hashlib
+    from mcap.reader import make_reader
+
+    h = hashlib.sha256()
+    for name in sorted(n for n in os.listdir(out_dir) if n.endswith(".mcap")):
+        with open(os.path.join(out_dir, name), "rb") as f:
+            for _, ch, msg in make_reader(f).iter_messages(log_time_order=True):
+                h.update(ch.topic.encode() + b"\0" + msg.log_time.to_bytes(8, "little") + len(msg.data).to_bytes(8, "little") + msg.data)
+    return h.hexdigest()
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--metrocell", required=True, help="the metrocell binary (cargo build --release -p metrocell-cli)")
-    ap.add_argument("--out", required=True, help="directory for OUT/case_NN/seed_S bags")
+    ap.add_argument("--metrocell", help="the metrocell binary (cargo build --release -p metrocell-cli)")
+    ap.add_argument("--out", help="directory for OUT/case_NN/seed_S bags")
     ap.add_argument("--seeds", type=int, nargs="+", default=[1])
     ap.add_argument("--cases", nargs="*", help="case names (default: every case)")
     ap.add_argument("--force", action="store_true", help="replace recordings that already exist")
     ap.add_argument("--verify", action="store_true", help="check each recording names nothing of the answer (needs mcap, mcap-ros2-support)")
+    ap.add_argument("--verify-only", metavar="BAG", help="only check an existing bag (any bag) and exit 1 if it names the answer")
+    ap.add_argument("--digest", metavar="BAG", help="only print the message digest of an existing bag")
     a = ap.parse_args(argv)
+    if a.verify_only:
+        problems = verify(a.verify_only)
+        print("\n".join(problems) if problems else f"{a.verify_only}: names nothing of the answer")
+        return 1 if problems else 0
+    if a.digest:
+        print(digest(a.digest))
+        return 0
     plans = json.load(open(os.path.join(HERE, "recordings.json")))
+    if not (a.metrocell and a.out):
+        ap.error("--metrocell and --out are required to generate recordings")
     cases = a.cases or sorted(plans)
     unknown = [c for c in cases if c not in plans]
     if unknown:
         sys.exit(f"generate.py: unknown case(s) {unknown}; the suite has {sorted(plans)}")
     for case in cases:
+        plan = plans[case]
         for seed in a.seeds:
-            out_dir = os.path.join(a.out, case, f"seed_{seed}")
-            if os.path.exists(out_dir):
-                if not a.force:
-                    print(f"{out_dir}: exists, kept (--force replaces it)")
-                    continue
-                shutil.rmtree(out_dir)
-            generate(a.metrocell, case, seed, plans[case], out_dir)
-            size = sum(os.path.getsize(os.path.join(out_dir, f)) for f in os.listdir(out_dir))
-            print(f"{out_dir}: {size / 1024:.0f} KiB")
-            if a.verify:
-                problems = verify(out_dir)
-                if problems:
-                    sys.exit(f"generate.py: {out_dir} gives the answer away:\n  " + "\n  ".join(problems))
+            for k, (out_dir, truth_file) in enumerate(zip(run_dirs(a.out, case, seed, plan), plan.get("runs", ["truth.yaml"]))):
+                if os.path.exists(out_dir):
+                    if not a.force:
+                        print(f"{out_dir}: exists, kept (--force replaces it)")
+                        continue
+                    shutil.rmtree(out_dir)
+                # run k of a case gets its own noise: seed + 1000 k
+                generate(a.metrocell, case, seed + 1000 * k, plan, out_dir, truth_file, k)
+                size = sum(os.path.getsize(os.path.join(out_dir, f)) for f in os.listdir(out_dir))
+                print(f"{out_dir}: {size / 1024:.0f} KiB")
+                if a.verify:
+                    problems = verify(out_dir)
+                    if problems:
+                        sys.exit(f"generate.py: {out_dir} gives the answer away:\n  " + "\n  ".join(problems))
     return 0
 
 

@@ -36,6 +36,8 @@ import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import generate  # noqa: E402  (where the recordings of a case and seed are)
 
 TARGETS = {
     "single_first": 0.90,
@@ -100,6 +102,15 @@ def same_term(finding, concealed):
     return finding.get("term") == concealed["term"] and finding.get("label") == concealed["label"]
 
 
+def says_where(where):
+    """A `where` that says something: a non-empty text, or an object with a description or axis."""
+    if isinstance(where, str):
+        return bool(where.strip())
+    if isinstance(where, dict):
+        return bool(str(where.get("description") or "").strip() or str(where.get("axis") or "").strip())
+    return False
+
+
 def judge(answer, result):
     """Verdict of one diagnose result (dict) against its answer-key entry."""
     kind = answer["kind"]
@@ -124,7 +135,7 @@ def judge(answer, result):
     elif kind == "out_of_catalog":
         unexplained = result.get("unexplained") or []
         v["unexplained_where"] = [u.get("where") for u in unexplained]
-        v["ok"] = not findings and any(u.get("where") for u in unexplained)
+        v["ok"] = not findings and any(says_where(u.get("where")) for u in unexplained)
     else:
         raise ValueError(f"unknown case kind {kind}")
     # parameters and RMS of the runs where every concealed term was found
@@ -198,7 +209,46 @@ def table(summary):
     return "\n".join(l for l in lines if l)
 
 
+def self_test():
+    """The judging rules on crafted results (each must pass and fail where it should)."""
+    single = {"kind": "single", "concealed": [{"term": "backlash", "label": "backlash[x]", "checked_parameters": {"reversal": 14e-6}}]}
+    good = {"noise_rms_m": 5e-6, "before": {"heldout_rms_m": 9e-6}, "after": {"heldout_rms_m": 5.5e-6}, "unexplained": [],
+            "findings": [{"term": "backlash", "label": "backlash[x]", "parameters": {"backlash[x].reversal": {"value": 13.2, "sigma": 0.5, "unit": "um"}}}]}
+    v = judge(single, good)
+    assert v["ok"] and v["rms_ok"] and v["parameters"][0]["ok"] and v["false_claims"] == 0, v
+    assert abs(v["parameters"][0]["z"] + 1.6) < 1e-9, v          # (13.2 - 14) / 0.5
+    off = json.loads(json.dumps(good))
+    off["findings"][0]["parameters"]["backlash[x].reversal"]["value"] = 12.0   # 4 sigma off
+    off["after"]["heldout_rms_m"] = 6.5e-6                                       # 1.3x the floor
+    v = judge(single, off)
+    assert v["ok"] and not v["parameters"][0]["ok"] and not v["rms_ok"], v
+    wrong_axis = json.loads(json.dumps(good))
+    wrong_axis["findings"].insert(0, {"term": "backlash", "label": "backlash[y]", "parameters": {}})
+    v = judge(single, wrong_axis)
+    assert not v["ok"] and v["false_claims"] == 1, v
+    assert not judge({"kind": "null", "concealed": []}, good)["ok"]
+    assert judge({"kind": "null", "concealed": []}, {**good, "findings": []})["ok"]
+    ooc = {"kind": "out_of_catalog", "concealed": []}
+    assert not judge(ooc, {**good, "findings": []})["ok"], "unexplained must say where"
+    assert judge(ooc, {**good, "findings": [], "unexplained": [{"where": "z, 2.1-3.4 h"}]})["ok"]
+    assert judge(ooc, {**good, "findings": [], "unexplained": [{"where": {"axis": "z", "description": "47 min cycle", "channels": []}}]})["ok"]
+    assert not judge(ooc, {**good, "findings": [], "unexplained": [{"where": {"axis": "", "description": "", "channels": []}}]})["ok"]
+    assert not judge(ooc, {**good, "unexplained": [{"where": "z"}]})["ok"], "a physical name is a false claim"
+    two = {"kind": "two", "concealed": single["concealed"] + [{"term": "squareness", "label": "squareness[xy]", "checked_parameters": {}}]}
+    assert not judge(two, good)["ok"]
+    both = {**good, "findings": good["findings"] + [{"term": "squareness", "label": "squareness[xy]", "parameters": {}}]}
+    assert judge(two, both)["ok"]
+    assert not judge(single, None)["ok"]
+    s = aggregate([judge(single, good), judge(single, off), judge(single, wrong_axis), judge(two, both)])
+    assert s["single_first"][:2] == (2, 3) and s["two_both"][:2] == (1, 1) and s["parameters_within_3_sigma"][:2] == (3, 4), s
+    assert not targets_met(s)["single_first"][2] and targets_met(s)["two_both"][2]
+    print("score.py self-test: ok")
+
+
 def main(argv=None):
+    if argv is None and sys.argv[1:] == ["--self-test"]:
+        self_test()
+        return 0
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--metrocell", required=True)
     ap.add_argument("--recordings", required=True, help="directory of RECORDINGS/case_NN/seed_S bags (bags/generate.py)")
@@ -209,18 +259,21 @@ def main(argv=None):
     ap.add_argument("--out", required=True, help="results JSON (every diagnose result and verdict, and the summary)")
     a = ap.parse_args(argv)
     answers = load_answers()
+    with open(os.path.join(HERE, "recordings.json")) as f:
+        plans = json.load(f)
     cases = a.cases or sorted(answers)
     runs = []
     for case in cases:
         for seed in a.seeds:
-            bag = os.path.join(a.recordings, case, f"seed_{seed}")
-            if not os.path.isdir(bag):
-                sys.exit(f"score.py: {bag} is missing; make it with bags/generate.py --seeds {seed} --cases {case}")
+            bags = generate.run_dirs(a.recordings, case, seed, plans[case])
+            missing = [b for b in bags if not os.path.isdir(b)]
+            if missing:
+                sys.exit(f"score.py: {missing} missing; make them with bags/generate.py --seeds {seed} --cases {case}")
             residuals = None
             if a.residuals_dir:
                 os.makedirs(a.residuals_dir, exist_ok=True)
                 residuals = os.path.join(a.residuals_dir, f"{case}_seed_{seed}.csv")
-            result, stderr, wall = run_diagnose(a.metrocell, case, [bag], a.strategy, residuals)
+            result, stderr, wall = run_diagnose(a.metrocell, case, bags, a.strategy, residuals)
             verdict = judge(answers[case], result)
             runs.append({"case": case, "seed": seed, "wall_s": wall, "verdict": verdict, "result": result,
                          "stderr": stderr[-4000:] if stderr else ""})

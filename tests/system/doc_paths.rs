@@ -4,7 +4,7 @@
 //! Documents: every `.md` file, and the doc comments (`//!`, `///`) of every `.rs` file, outside
 //! `target/`, `.venv/`, `node_modules/` and `.git/`. A citation is a word made of path
 //! characters that contains a `/` and ends in a file extension (`crates/bag/README.md`,
-//! `src/replay.rs`, `tests/py/opencv_render.py`). It must name an existing path relative to the
+//! `nodes/thermal/src/replay.rs`, `tests/py/opencv_render.py`). It must name an existing path relative to the
 //! document's directory, to one of that directory's ancestors (a crate's README citing
 //! `src/lib.rs`, a test citing `tests/isolated`), or to the repository root. Words with
 //! placeholders (`<node>`, `*`, `{`) and paths under `target/` (build outputs) are not

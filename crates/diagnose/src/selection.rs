@@ -1,31 +1,41 @@
 //! Naming what the model left out: greedy forward selection of candidate terms, judged on
 //! held-out blocks.
 //!
-//! Each candidate is a catalog term the model lacks (or an empirical correction, which is never
-//! given a physical name), given as the columns of its Jacobian at each residual row: how the
-//! prediction moves per unit of each of its parameters. Around the declared fit the residual r is
-//! then linear in the candidate's parameters, so each step solves, for every remaining candidate,
-//! the weighted least-squares problem of the declared free parameters, the terms chosen so far and
-//! the candidate together (rows whitened by σ, columns scaled to unit norm, solved by SVD so
-//! candidates the data cannot separate from what is already there are recognised as such).
+//! Each candidate *family* is a catalog term instance the model lacks (`backlash[y]`) — or an
+//! empirical correction, which is never given a physical name — with one or more *variants*
+//! (series orders, a screw lead, a lag time constant, a sensor pair), each given as the columns
+//! of its Jacobian at each whitened residual row: how the prediction moves per unit of each of
+//! its linear parameters. Around the declared fit the residual is linear in them, so each step
+//! solves, for every remaining variant, the least-squares problem of the declared free
+//! parameters, the terms chosen so far and the variant together
+//! ([`crate::blocked_least_squares`]: column-scaled, rank-revealing, so a variant the data cannot
+//! separate from what is already there is recognised as such).
 //!
-//! A candidate is accepted when, at once:
+//! A variant is acceptable when, at once:
 //! * it lowers the held-out error — the sum of squared whitened residuals of each block predicted
-//!   by a fit to the other blocks, over time blocks and workspace blocks — by at least
-//!   `min_cv_gain` of what it was;
-//! * its parameters are significant (Wald χ² on the full-data fit, Bonferroni-corrected for the
-//!   candidates tried in the step);
+//!   by a fit to the other blocks, over blocks of time and blocks of workspace (never random
+//!   rows) — by at least `min_cv_gain` of what it was;
+//! * its parameters are significant: an F test of the SSR it explains against the residual
+//!   variance the data show (so stated uncertainties that are off by a factor neither invent nor
+//!   hide effects), Bonferroni-corrected over every variant tried in the step;
 //! * every parameter lies in the term's documented plausible range;
-//! * the Bayesian information criterion falls.
+//! * the Bayesian information criterion n·ln(SSR/n) + k·ln n falls, with k counting the
+//!   parameters a variant fixed by search (a lag τ, a screw lead) as well as the linear ones.
 //!
-//! Among the acceptable, the lowest held-out error wins; physical terms are preferred, and an
-//! empirical correction is only chosen when no physical term is acceptable. The loop stops when
-//! nothing is acceptable or `max_terms` were added.
+//! Among the acceptable, each family keeps its variant of lowest BIC and the family of lowest BIC
+//! wins, physical terms first: an empirical correction wins only when its BIC is lower than the
+//! best physical term's by more than `empirical_margin` (strong evidence that no catalog term
+//! explains the structure as well). The loop stops when nothing is acceptable or `max_terms` were
+//! added; then every chosen term is tested again given all the others (backward elimination), so
+//! a term that only stood in for a later one is dropped.
 
 use nalgebra::{DMatrix, DVector};
-use statrs::distribution::{ChiSquared, ContinuousCDF};
+use statrs::distribution::{ContinuousCDF, FisherSnedecor};
 
-/// One candidate, as columns over the residual rows.
+use crate::blocked_least_squares::{BaseFit, BlockedRows, CandidateFit};
+
+/// One candidate, as columns over the residual rows (a family with a single variant; the form
+/// used before variants existed, whitened by [`SelectionData::sigma`]).
 #[derive(Debug, Clone)]
 pub struct Candidate {
     /// Instance label, e.g. `backlash[y]`.
@@ -43,6 +53,46 @@ pub struct Candidate {
     pub base_values: Vec<f64>,
 }
 
+/// One variant of a family: its whitened columns and what they mean.
+#[derive(Debug, Clone)]
+pub struct Variant {
+    /// What distinguishes it within the family (`order 2`, `lead 10 mm`, `τ = 20 min`), or "".
+    pub name: String,
+    /// n × p whitened columns, rows in the order of [`WhitenedData`].
+    pub columns: DMatrix<f64>,
+    pub parameter_names: Vec<String>,
+    pub units: Vec<String>,
+    pub ranges: Vec<(f64, f64)>,
+    pub base_values: Vec<f64>,
+    /// Parameters fixed by a search over values (counted in the BIC).
+    pub profiled: usize,
+}
+
+/// A candidate family.
+#[derive(Debug, Clone)]
+pub struct Family {
+    pub label: String,
+    pub term: String,
+    pub physical: bool,
+    pub variants: Vec<Variant>,
+    /// The blocking schemes whose held-out error judges it (None: all). An empirical correction
+    /// in time cannot predict a held-out block of time by construction, nor a local bump a
+    /// held-out slab of workspace: each is judged on the other scheme.
+    pub judged_by: Option<Vec<usize>>,
+}
+
+/// Which of two equally good physical explanations to name: where the data cannot tell them
+/// apart (BIC within [`TIE_BIC`]), the conventional, simpler name — a linear x error along z is
+/// reported as squareness, not as a first-order straightness or an angular error.
+pub fn preference(term: &str) -> usize {
+    const ORDER: [&str; 17] = ["squareness", "positioning", "backlash", "pitch_cyclic", "thermal_scale", "thermal_growth", "tracker_warmup", "refraction", "time_offset", "tool_offset", "straightness", "compliance", "workpiece_expansion", "frame_misalignment", "rotary_axis_location", "angular", "probe_pretravel"];
+    ORDER.iter().position(|t| *t == term).unwrap_or(ORDER.len())
+}
+
+/// BIC difference below which two candidates count as equally supported (Kass & Raftery:
+/// "not worth more than a bare mention").
+pub const TIE_BIC: f64 = 2.0;
+
 /// The data: residuals after the declared fit, their σ, the declared free parameters' Jacobian,
 /// and fold assignments (one vector per blocking scheme, fold ids 0..k).
 #[derive(Debug, Clone)]
@@ -53,25 +103,41 @@ pub struct SelectionData {
     pub folds: Vec<Vec<usize>>,
 }
 
+/// Whitened data: residual rows b, the declared free parameters' whitened Jacobian, and the fold
+/// of each row in each blocking scheme.
+#[derive(Debug, Clone)]
+pub struct WhitenedData {
+    pub b: DVector<f64>,
+    pub declared: DMatrix<f64>,
+    pub folds: Vec<Vec<usize>>,
+}
+
 #[derive(Debug, Clone)]
 pub struct SelectionOptions {
     pub alpha: f64,
     pub min_cv_gain: f64,
     pub max_terms: usize,
+    /// How much lower (BIC units) an empirical correction's BIC must be than the best physical
+    /// term's to be preferred to it.
+    pub empirical_margin: f64,
 }
 
 impl Default for SelectionOptions {
     fn default() -> Self {
-        Self { alpha: 0.01, min_cv_gain: 0.02, max_terms: 3 }
+        Self { alpha: 0.01, min_cv_gain: 0.02, max_terms: 3, empirical_margin: 10.0 }
     }
 }
 
-/// How one candidate fared in one step.
+/// How one candidate (the best variant of a family, or a variant) fared in one step.
 #[derive(Debug, Clone, PartialEq)]
 pub struct CandidateScore {
     pub label: String,
+    /// The variant's name ("" for a single-variant family).
+    pub variant: String,
     /// Held-out sum of squared whitened residuals with the candidate added.
     pub heldout_ssr: f64,
+    /// Relative fall of the held-out error on the schemes that judge it.
+    pub heldout_gain: f64,
     pub wald_p_adjusted: f64,
     pub plausible: bool,
     pub separable: bool,
@@ -85,20 +151,43 @@ pub struct CandidateScore {
 #[derive(Debug, Clone, PartialEq)]
 pub struct SelectionStep {
     pub heldout_ssr_before: f64,
+    /// One score per family: its acceptable variant of lowest BIC, else its variant of lowest BIC.
     pub scores: Vec<CandidateScore>,
-    /// Index into the candidates of the term added, if any.
+    /// Index into the families (candidates) of the term added, if any.
     pub chosen: Option<usize>,
 }
 
 /// A chosen term with its fitted parameters.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ChosenTerm {
+    /// Index of the family (candidate) and of its variant.
     pub candidate: usize,
+    pub variant: usize,
     pub label: String,
     pub term: String,
     pub physical: bool,
     /// (name, value, σ, unit).
     pub parameters: Vec<(String, f64, f64, String)>,
+}
+
+/// The outcome on whitened data.
+#[derive(Debug, Clone)]
+pub struct FamilySelection {
+    pub chosen: Vec<ChosenTerm>,
+    pub steps: Vec<SelectionStep>,
+    /// Labels dropped by the backward pass.
+    pub dropped: Vec<String>,
+    /// Held-out whitened residual of every row, one vector per scheme, before and after.
+    pub heldout_before: Vec<DVector<f64>>,
+    pub heldout_after: Vec<DVector<f64>>,
+    /// Full-data whitened residual after the selection.
+    pub residual_after: DVector<f64>,
+    /// SSR/(n − rank) of the declared fit and of the fit with the chosen terms.
+    pub chi2_per_dof_before: f64,
+    pub chi2_per_dof_after: f64,
+    /// The fitted coefficients of the declared columns after the selection (increments to the
+    /// declared fit).
+    pub declared_increment: DVector<f64>,
 }
 
 #[derive(Debug, Clone, PartialEq)]
@@ -117,10 +206,8 @@ pub struct Selection {
     pub chi2_per_dof_after: f64,
 }
 
-/// Run the forward selection.
+/// Run the forward selection on single-variant candidates with per-row σ (whitening is r/σ).
 pub fn select(data: &SelectionData, candidates: &[Candidate], options: &SelectionOptions) -> Selection {
-    let n = data.residual.len();
-    let b = data.residual.component_div(&data.sigma);
     let whiten = |m: &DMatrix<f64>| {
         let mut w = m.clone();
         for (i, mut row) in w.row_iter_mut().enumerate() {
@@ -128,183 +215,206 @@ pub fn select(data: &SelectionData, candidates: &[Candidate], options: &Selectio
         }
         w
     };
-    let declared = whiten(&data.declared);
-    let cand_w: Vec<DMatrix<f64>> = candidates.iter().map(|c| whiten(&c.columns)).collect();
-    let mut chosen_idx: Vec<usize> = Vec::new();
-    let mut steps = Vec::new();
-    let design = |chosen: &[usize], extra: Option<usize>| {
-        let mut blocks: Vec<&DMatrix<f64>> = vec![&declared];
-        blocks.extend(chosen.iter().map(|&i| &cand_w[i]));
-        if let Some(e) = extra {
-            blocks.push(&cand_w[e]);
+    let whitened = WhitenedData { b: data.residual.component_div(&data.sigma), declared: whiten(&data.declared), folds: data.folds.clone() };
+    let families: Vec<Family> = candidates
+        .iter()
+        .map(|c| Family {
+            label: c.label.clone(),
+            term: c.term.clone(),
+            physical: c.physical,
+            variants: vec![Variant { name: String::new(), columns: whiten(&c.columns), parameter_names: c.parameter_names.clone(), units: c.units.clone(), ranges: c.ranges.clone(), base_values: c.base_values.clone(), profiled: 0 }],
+            judged_by: None,
+        })
+        .collect();
+    let s = select_families(&whitened, &families, options);
+    let stats = |heldout: &[DVector<f64>]| {
+        let (mut z2, mut m2, mut max, mut count) = (0.0, 0.0, 0.0f64, 0usize);
+        for e in heldout {
+            for i in 0..e.len() {
+                z2 += e[i] * e[i];
+                let m = e[i] * data.sigma[i];
+                m2 += m * m;
+                max = max.max(m.abs());
+                count += 1;
+            }
         }
-        hstack(n, &blocks)
+        let c = count.max(1) as f64;
+        ((z2 / c).sqrt(), (m2 / c).sqrt(), max)
     };
-    let (mut current_cv, before_pred) = heldout(&design(&[], None), &b, &data.folds);
-    let mut current_fit = fit(&design(&[], None), &b);
-    while chosen_idx.len() < options.max_terms {
-        let remaining: Vec<usize> = (0..candidates.len()).filter(|i| !chosen_idx.contains(i)).collect();
-        if remaining.is_empty() {
-            break;
+    let (z0, m0, max0) = stats(&s.heldout_before);
+    let (z1, m1, max1) = stats(&s.heldout_after);
+    Selection { chosen: s.chosen, steps: s.steps, heldout_rms_z_before: z0, heldout_rms_z_after: z1, heldout_rms_m_before: m0, heldout_rms_m_after: m1, heldout_max_m_before: max0, heldout_max_m_after: max1, chi2_per_dof_after: s.chi2_per_dof_after }
+}
+
+struct Scored {
+    family: usize,
+    variant: usize,
+    bic: f64,
+    score: CandidateScore,
+}
+
+/// F test of the SSR a block of k columns explains, against the residual variance with it.
+fn f_test(explained: f64, k: usize, ssr: f64, dof: f64) -> f64 {
+    if k == 0 || !(explained > 0.0) || !(dof > 0.0) || !(ssr > 0.0) {
+        return 1.0;
+    }
+    let f = (explained / k as f64) / (ssr / dof);
+    FisherSnedecor::new(k as f64, dof).map(|d| d.sf(f)).unwrap_or(1.0)
+}
+
+fn bic(n: f64, ssr: f64, k: f64) -> f64 {
+    n * (ssr.max(f64::MIN_POSITIVE) / n).ln() + k * n.ln()
+}
+
+/// Run the forward selection over candidate families on whitened data.
+pub fn select_families(data: &WhitenedData, families: &[Family], options: &SelectionOptions) -> FamilySelection {
+    let n = data.b.len();
+    let nf = n as f64;
+    let rows = BlockedRows::new(&data.folds, n);
+    let b = rows.arrange_vector(&data.b);
+    let arranged: Vec<Vec<DMatrix<f64>>> = families.iter().map(|f| f.variants.iter().map(|v| rows.arrange(&v.columns)).collect()).collect();
+    let arranged_declared = rows.arrange(&data.declared);
+    let base_of = |chosen: &[(usize, usize)]| {
+        let extra: Vec<&DMatrix<f64>> = chosen.iter().map(|&(f, v)| &arranged[f][v]).collect();
+        let p = arranged_declared.ncols() + extra.iter().map(|c| c.ncols()).sum::<usize>();
+        let mut all = DMatrix::zeros(n, p);
+        all.columns_mut(0, arranged_declared.ncols()).copy_from(&arranged_declared);
+        let mut at = arranged_declared.ncols();
+        for c in extra {
+            all.columns_mut(at, c.ncols()).copy_from(c);
+            at += c.ncols();
         }
-        let tried = remaining.len() as f64;
-        let mut scores = Vec::new();
-        let mut best: Option<(usize, f64, bool)> = None;
-        for &ci in &remaining {
-            let c = &candidates[ci];
-            let a = design(&chosen_idx, Some(ci));
-            let f = fit(&a, &b);
-            let p_k = c.columns.ncols();
-            let start = a.ncols() - p_k;
-            let separable = f.rank >= current_fit.rank + p_k;
-            let values: Vec<f64> = (0..p_k).map(|j| c.base_values[j] + f.x[start + j]).collect();
-            let sigmas: Vec<f64> = (0..p_k).map(|j| f.cov[(start + j, start + j)].max(0.0).sqrt()).collect();
-            let wald_p = if separable { wald(&f, start, p_k) } else { 1.0 };
-            let wald_p_adjusted = (wald_p * tried).min(1.0);
-            let plausible = values.iter().zip(&c.ranges).all(|(v, (lo, hi))| *v >= *lo && *v <= *hi);
-            let (cv, _) = heldout(&a, &b, &data.folds);
-            let delta_bic = (f.ssr - current_fit.ssr) + (p_k as f64) * (n as f64).ln();
-            let accepted = separable && plausible && wald_p_adjusted <= options.alpha && delta_bic < 0.0 && cv <= current_cv * (1.0 - options.min_cv_gain);
-            if accepted {
-                let better = match best {
+        BaseFit::new(&rows, all, b.clone())
+    };
+    let profiled_of = |chosen: &[(usize, usize)]| chosen.iter().map(|&(f, v)| families[f].variants[v].profiled).sum::<usize>();
+    let mut chosen: Vec<(usize, usize)> = Vec::new();
+    let mut base = base_of(&chosen);
+    let before_fit = base.clone();
+    let mut steps = Vec::new();
+    let tried: usize = families.iter().map(|f| f.variants.len()).sum();
+    let judged = |by: &Option<Vec<usize>>, per_scheme: &[f64]| -> f64 {
+        match by {
+            None => per_scheme.iter().sum(),
+            Some(list) => list.iter().filter_map(|&s| per_scheme.get(s)).sum(),
+        }
+    };
+    while chosen.len() < options.max_terms {
+        let current_cv = base.heldout_ssr();
+        let current_by_scheme = base.heldout_by_scheme();
+        let current_bic = bic(nf, base.ssr(), (base.rank() + profiled_of(&chosen)) as f64);
+        let mut per_family: Vec<Scored> = Vec::new();
+        for (fi, fam) in families.iter().enumerate() {
+            if chosen.iter().any(|&(f, _)| f == fi) {
+                continue;
+            }
+            let mut best: Option<Scored> = None;
+            for (vi, var) in fam.variants.iter().enumerate() {
+                let c: CandidateFit = base.candidate(&rows, &arranged[fi][vi]);
+                let k = var.columns.ncols();
+                let dof = nf - c.rank as f64;
+                let sigma2 = if dof > 0.0 { c.ssr / dof } else { f64::INFINITY };
+                let values: Vec<f64> = (0..k).map(|j| var.base_values[j] + c.values[j]).collect();
+                let sigmas: Vec<f64> = (0..k).map(|j| (c.unscaled_covariance[(j, j)].max(0.0) * sigma2).sqrt()).collect();
+                let p = if c.separable { f_test(c.explained, k, c.ssr, dof) } else { 1.0 };
+                let p_adjusted = (p * tried as f64).min(1.0);
+                let plausible = values.iter().zip(&var.ranges).all(|(v, (lo, hi))| *v >= *lo && *v <= *hi);
+                let bic_with = bic(nf, c.ssr, (c.rank + profiled_of(&chosen) + var.profiled) as f64);
+                let delta_bic = bic_with - current_bic;
+                let (cv_with, cv_without) = (judged(&fam.judged_by, &c.heldout_by_scheme), judged(&fam.judged_by, &current_by_scheme));
+                let heldout_gain = if cv_without > 0.0 { 1.0 - cv_with / cv_without } else { 0.0 };
+                let accepted = c.separable && plausible && p_adjusted <= options.alpha && delta_bic < 0.0 && heldout_gain >= options.min_cv_gain;
+                let score = CandidateScore { label: fam.label.clone(), variant: var.name.clone(), heldout_ssr: c.heldout_ssr, heldout_gain, wald_p_adjusted: p_adjusted, plausible, separable: c.separable, delta_bic, values, sigmas, accepted };
+                let better = match &best {
                     None => true,
-                    Some((_, bcv, bphys)) => (c.physical && !bphys) || (c.physical == bphys && cv < bcv),
+                    Some(b) => (accepted && !b.score.accepted) || (accepted == b.score.accepted && bic_with < b.bic),
                 };
                 if better {
-                    best = Some((ci, cv, c.physical));
+                    best = Some(Scored { family: fi, variant: vi, bic: bic_with, score });
                 }
             }
-            scores.push(CandidateScore { label: c.label.clone(), heldout_ssr: cv, wald_p_adjusted, plausible, separable, delta_bic, values, sigmas, accepted });
+            if let Some(b) = best {
+                per_family.push(b);
+            }
         }
-        let step = SelectionStep { heldout_ssr_before: current_cv, scores, chosen: best.map(|b| b.0) };
-        steps.push(step);
-        match best {
-            Some((ci, cv, _)) => {
-                chosen_idx.push(ci);
-                current_cv = cv;
-                current_fit = fit(&design(&chosen_idx, None), &b);
+        let best_of = |physical: bool| {
+            let accepted: Vec<&Scored> = per_family.iter().filter(|s| s.score.accepted && families[s.family].physical == physical).collect();
+            let lowest = accepted.iter().map(|s| s.bic).fold(f64::INFINITY, f64::min);
+            let size = |s: &Scored| families[s.family].variants[s.variant].columns.ncols() + families[s.family].variants[s.variant].profiled;
+            accepted.into_iter().filter(|s| s.bic <= lowest + TIE_BIC).min_by(|a, b| {
+                preference(&families[a.family].term).cmp(&preference(&families[b.family].term)).then(size(a).cmp(&size(b))).then(a.bic.total_cmp(&b.bic))
+            })
+        };
+        let pick = match (best_of(true), best_of(false)) {
+            (Some(p), Some(e)) => Some(if e.bic < p.bic - options.empirical_margin { e } else { p }),
+            (Some(p), None) => Some(p),
+            (None, Some(e)) => Some(e),
+            (None, None) => None,
+        }
+        .map(|s| (s.family, s.variant));
+        steps.push(SelectionStep { heldout_ssr_before: current_cv, scores: per_family.into_iter().map(|s| s.score).collect(), chosen: pick.map(|p| p.0) });
+        match pick {
+            Some(p) => {
+                chosen.push(p);
+                base = base_of(&chosen);
+            }
+            None => break,
+        }
+    }
+    // backward elimination: each chosen term given all the others
+    let mut dropped = Vec::new();
+    loop {
+        if chosen.is_empty() {
+            break;
+        }
+        let mut worst: Option<(usize, f64)> = None;
+        for i in 0..chosen.len() {
+            let others: Vec<(usize, usize)> = chosen.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, c)| *c).collect();
+            let without = base_of(&others);
+            let (f, v) = chosen[i];
+            let c = without.candidate(&rows, &arranged[f][v]);
+            let dof = nf - c.rank as f64;
+            let p = if c.separable { (f_test(c.explained, arranged[f][v].ncols(), c.ssr, dof) * chosen.len() as f64).min(1.0) } else { 1.0 };
+            let by = &families[f].judged_by;
+            let cv_ok = judged(by, &c.heldout_by_scheme) <= judged(by, &without.heldout_by_scheme()) * (1.0 - options.min_cv_gain);
+            let p = if cv_ok { p } else { 1.0 };
+            if p > options.alpha && worst.is_none_or(|(_, wp)| p > wp) {
+                worst = Some((i, p));
+            }
+        }
+        match worst {
+            Some((i, _)) => {
+                let (f, _) = chosen.remove(i);
+                dropped.push(families[f].label.clone());
+                base = base_of(&chosen);
             }
             None => break,
         }
     }
     // final parameters from the full-data fit of everything chosen
-    let a = design(&chosen_idx, None);
-    let f = fit(&a, &b);
-    let mut col = declared.ncols();
-    let mut chosen = Vec::new();
-    for &ci in &chosen_idx {
-        let c = &candidates[ci];
-        let p_k = c.columns.ncols();
-        let parameters = (0..p_k).map(|j| (c.parameter_names[j].clone(), c.base_values[j] + f.x[col + j], f.cov[(col + j, col + j)].max(0.0).sqrt(), c.units[j].clone())).collect();
-        chosen.push(ChosenTerm { candidate: ci, label: c.label.clone(), term: c.term.clone(), physical: c.physical, parameters });
-        col += p_k;
+    let x = base.solution();
+    let dof = (nf - base.rank() as f64).max(1.0);
+    let sigma2 = base.ssr() / dof;
+    let cov = base.unscaled_covariance();
+    let mut col = data.declared.ncols();
+    let mut chosen_terms = Vec::new();
+    for &(f, v) in &chosen {
+        let fam = &families[f];
+        let var = &fam.variants[v];
+        let k = var.columns.ncols();
+        let parameters = (0..k).map(|j| (var.parameter_names[j].clone(), var.base_values[j] + x[col + j], (cov[(col + j, col + j)].max(0.0) * sigma2).sqrt(), var.units[j].clone())).collect();
+        chosen_terms.push(ChosenTerm { candidate: f, variant: v, label: fam.label.clone(), term: fam.term.clone(), physical: fam.physical, parameters });
+        col += k;
     }
-    let (_, after_pred) = heldout(&a, &b, &data.folds);
-    let stats = |pred: &DVector<f64>| {
-        // pred holds the held-out predictions of the whitened residual; back to metres
-        let e_z = &b - pred;
-        let e_m = e_z.component_mul(&data.sigma);
-        ((e_z.norm_squared() / n as f64).sqrt(), (e_m.norm_squared() / n as f64).sqrt(), e_m.amax())
-    };
-    let (z0, m0, max0) = stats(&before_pred);
-    let (z1, m1, max1) = stats(&after_pred);
-    let dof = (n as f64 - f.rank as f64).max(1.0);
-    Selection { chosen, steps, heldout_rms_z_before: z0, heldout_rms_z_after: z1, heldout_rms_m_before: m0, heldout_rms_m_after: m1, heldout_max_m_before: max0, heldout_max_m_after: max1, chi2_per_dof_after: f.ssr / dof }
-}
-
-fn hstack(n: usize, blocks: &[&DMatrix<f64>]) -> DMatrix<f64> {
-    let p: usize = blocks.iter().map(|b| b.ncols()).sum();
-    let mut m = DMatrix::zeros(n, p);
-    let mut at = 0;
-    for b in blocks {
-        m.view_mut((0, at), (n, b.ncols())).copy_from(b);
-        at += b.ncols();
+    let restore = |v: Vec<DVector<f64>>| v.iter().map(|e| rows.restore_vector(e)).collect::<Vec<_>>();
+    FamilySelection {
+        chosen: chosen_terms,
+        steps,
+        dropped,
+        heldout_before: restore(before_fit.heldout_residuals(&rows)),
+        heldout_after: restore(base.heldout_residuals(&rows)),
+        residual_after: rows.restore_vector(&base.residuals()),
+        chi2_per_dof_before: before_fit.ssr() / (nf - before_fit.rank() as f64).max(1.0),
+        chi2_per_dof_after: base.ssr() / dof,
+        declared_increment: x.rows(0, data.declared.ncols()).into_owned(),
     }
-    m
-}
-
-struct Fit {
-    x: DVector<f64>,
-    cov: DMatrix<f64>,
-    ssr: f64,
-    rank: usize,
-}
-
-/// Whitened least squares by SVD of the column-scaled design; the covariance is scaled by the
-/// a-posteriori variance factor when the residuals scatter more than stated (never below 1).
-fn fit(a: &DMatrix<f64>, b: &DVector<f64>) -> Fit {
-    let p = a.ncols();
-    if p == 0 {
-        return Fit { x: DVector::zeros(0), cov: DMatrix::zeros(0, 0), ssr: b.norm_squared(), rank: 0 };
-    }
-    let scale: Vec<f64> = (0..p).map(|j| a.column(j).norm().max(f64::MIN_POSITIVE)).collect();
-    let mut s = a.clone();
-    for (j, mut c) in s.column_iter_mut().enumerate() {
-        c /= scale[j];
-    }
-    let svd = s.clone().svd(true, true);
-    let tol = 1e-9 * svd.singular_values.max();
-    let rank = svd.singular_values.iter().filter(|v| **v > tol).count();
-    let y = svd.solve(b, tol).unwrap_or_else(|_| DVector::zeros(p));
-    let r = b - &s * &y;
-    let ssr = r.norm_squared();
-    let n = a.nrows() as f64;
-    let factor = (ssr / (n - rank as f64).max(1.0)).max(1.0);
-    let v_t = svd.v_t.as_ref().expect("V computed");
-    let mut cov = DMatrix::zeros(p, p);
-    for (k, sv) in svd.singular_values.iter().enumerate() {
-        if *sv > tol {
-            let v = v_t.row(k).transpose();
-            cov += &v * v.transpose() / (sv * sv);
-        }
-    }
-    let x = DVector::from_iterator(p, (0..p).map(|j| y[j] / scale[j]));
-    for i in 0..p {
-        for j in 0..p {
-            cov[(i, j)] *= factor / (scale[i] * scale[j]);
-        }
-    }
-    Fit { x, cov, ssr, rank }
-}
-
-/// Wald test that parameters start..start+k are zero.
-fn wald(f: &Fit, start: usize, k: usize) -> f64 {
-    let xk = f.x.rows(start, k).into_owned();
-    let ck = f.cov.view((start, start), (k, k)).into_owned();
-    match ck.try_inverse() {
-        Some(inv) => {
-            let stat = (xk.transpose() * inv * &xk)[0];
-            ChiSquared::new(k as f64).map(|d| d.sf(stat)).unwrap_or(1.0)
-        }
-        None => 1.0,
-    }
-}
-
-/// Held-out SSR summed over every blocking scheme, and the held-out prediction of each row from
-/// the first scheme (for RMS and max reporting).
-fn heldout(a: &DMatrix<f64>, b: &DVector<f64>, folds: &[Vec<usize>]) -> (f64, DVector<f64>) {
-    let n = b.len();
-    let mut total = 0.0;
-    let mut first_pred = DVector::zeros(n);
-    for (scheme, assignment) in folds.iter().enumerate() {
-        let k = assignment.iter().copied().max().map(|m| m + 1).unwrap_or(0);
-        for fold in 0..k {
-            let train: Vec<usize> = (0..n).filter(|&i| assignment[i] != fold).collect();
-            let test: Vec<usize> = (0..n).filter(|&i| assignment[i] == fold).collect();
-            if test.is_empty() {
-                continue;
-            }
-            let a_train = a.select_rows(&train);
-            let b_train = b.select_rows(&train);
-            let f = fit(&a_train, &b_train);
-            for &i in &test {
-                let pred = if a.ncols() == 0 { 0.0 } else { a.row(i).dot(&f.x.transpose()) };
-                total += (b[i] - pred).powi(2);
-                if scheme == 0 {
-                    first_pred[i] = pred;
-                }
-            }
-        }
-    }
-    (total, first_pred)
 }

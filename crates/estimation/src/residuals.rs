@@ -80,7 +80,7 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
         let mut out = Vec::with_capacity(self.records.len());
         for (r, s) in self.records.iter().zip(scratch.signals.iter_mut()) {
             let tool = self.model.tool_state(p, &kin, &r.q, s, None)?;
-            out.push(self.model.tracker(p, tool.truth.translation.vector, s)?.measured_point());
+            out.push(self.model.tracker(p, &tool, s)?.measured_point());
         }
         Ok(out)
     }
@@ -122,7 +122,7 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
                 }
                 None => {
                     let tool = self.model.tool_state(p, &kin, &r.q, s, None).map_err(|e| fail(i, e))?;
-                    self.model.tracker(p, tool.truth.translation.vector, s).map_err(|e| fail(i, e))?.measured_point()
+                    self.model.tracker(p, &tool, s).map_err(|e| fail(i, e))?.measured_point()
                 }
             };
             let z = w * (r.measured - predicted);

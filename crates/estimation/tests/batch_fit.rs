@@ -62,9 +62,9 @@ fn records(cell: &Cell, sigma: f64, seed: u64) -> RecordSet {
                     let mut s = Signals { air_temperature: Some(20.0), air_pressure: Some(101_300.0), air_humidity: Some(45.0), ..Signals::default() };
                     model.set_motion(&mut s, &q, &[0.0; 3], &[approach; 3]);
                     let tool = model.tool_state(&p, &kin, &q, &mut s, None).unwrap();
-                    let pred = model.tracker(&p, tool.truth.translation.vector, &mut s).unwrap();
+                    let pred = model.tracker(&p, &tool, &mut s).unwrap();
                     let measured = pred.measured_point() + Vector3::from_fn(|_, _| noise.sample(&mut rng));
-                    s.point = None;
+                    s.target_point = None;
                     s.tracker_range = None;
                     out.push(MeasurementRecord { time: out.len() as f64, point_id: format!("p{i}{j}{k}"), channel: "tracker".into(), q: q.to_vec(), measured, covariance: Matrix3::identity() * sigma * sigma, signals: s });
                 }

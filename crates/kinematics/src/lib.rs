@@ -21,6 +21,7 @@ pub mod error;
 pub mod five_axis;
 pub mod frame_alignment;
 pub mod serial;
+pub mod serial_ik;
 pub mod transform;
 pub mod urdf_chain;
 

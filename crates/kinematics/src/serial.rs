@@ -1,5 +1,5 @@
 //! Serial arms: a chain of joints, each `pre · motion(q) · post`, with forward kinematics of every link,
-//! the geometric Jacobian and damped-least-squares inverse kinematics.
+//! the geometric Jacobian; inverse kinematics on the shared solver is in [`crate::serial_ik`].
 //!
 //! Frame of a joint: `pre` carries the parent link frame to the joint frame, in which the unit `axis` is
 //! expressed (URDF: `pre` = `<origin>`, `post` = identity; DH: see [`crate::dh`]). A revolute joint rotates
@@ -84,7 +84,7 @@ pub enum IkTarget {
     Pose(Isometry3<f64>),
 }
 
-/// Settings of the damped-least-squares solver.
+/// Settings of the inverse kinematics ([`crate::serial_ik`]).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct IkSettings {
     pub max_iterations: usize,
@@ -92,7 +92,7 @@ pub struct IkSettings {
     pub position_tolerance: f64,
     /// ... and the orientation error below this (rad) (ignored for position-only targets).
     pub orientation_tolerance: f64,
-    /// Initial damping λ (adapted Levenberg–Marquardt style).
+    /// Initial Levenberg–Marquardt damping λ₀ (relative to the column-scaled normal matrix).
     pub initial_damping: f64,
     /// Weight of 1 rad of orientation error relative to 1 m of position error.
     pub orientation_weight: f64,
@@ -151,7 +151,7 @@ impl SerialChain {
             .collect()
     }
 
-    fn check_q(&self, q: &[f64]) -> Result<(), KinematicsError> {
+    pub(crate) fn check_q(&self, q: &[f64]) -> Result<(), KinematicsError> {
         if q.len() != self.dof() {
             return Err(KinematicsError::LengthMismatch {
                 field: "joint values q".into(),
@@ -255,85 +255,5 @@ impl SerialChain {
             t *= j.transform(v);
         }
         Ok(jac)
-    }
-
-    /// Damped-least-squares inverse kinematics from the initial guess `q0`.
-    /// Each step solves `(JᵀJ + λ²I) Δq = Jᵀe`; λ shrinks after an accepted step and grows after a rejected one.
-    pub fn inverse(
-        &self,
-        target: &IkTarget,
-        q0: &[f64],
-        settings: &IkSettings,
-    ) -> Result<IkReport, KinematicsError> {
-        self.check_q(q0)?;
-        let n = self.dof();
-        let with_orientation = matches!(target, IkTarget::Pose(_));
-        let rows = if with_orientation { 6 } else { 3 };
-        let residual = |q: &DVector<f64>| -> Result<(DVector<f64>, f64, f64), KinematicsError> {
-            let pose = self.tool_pose(q.as_slice())?;
-            let mut e = DVector::zeros(rows);
-            let (pe, oe) = match target {
-                IkTarget::Position(p) => {
-                    let d = p - pose.translation.vector;
-                    e.rows_mut(0, 3).copy_from(&d);
-                    (d.norm(), 0.0)
-                }
-                IkTarget::Pose(t) => {
-                    let d = t.translation.vector - pose.translation.vector;
-                    let r = (t.rotation * pose.rotation.inverse()).scaled_axis();
-                    e.rows_mut(0, 3).copy_from(&d);
-                    e.rows_mut(3, 3)
-                        .copy_from(&(r * settings.orientation_weight));
-                    (d.norm(), r.norm())
-                }
-            };
-            Ok((e, pe, oe))
-        };
-        let done = |pe: f64, oe: f64| {
-            pe <= settings.position_tolerance
-                && (!with_orientation || oe <= settings.orientation_tolerance)
-        };
-        let mut q = DVector::from_row_slice(q0);
-        let (mut e, mut pe, mut oe) = residual(&q)?;
-        let mut lambda = settings.initial_damping;
-        let mut iterations = 0;
-        while iterations < settings.max_iterations && !done(pe, oe) {
-            iterations += 1;
-            let full = self.jacobian(q.as_slice())?;
-            let mut jac = full.rows(0, rows).into_owned();
-            if with_orientation {
-                let mut ang = jac.rows_mut(3, 3);
-                ang *= settings.orientation_weight;
-            }
-            let jt = jac.transpose();
-            let a = &jt * &jac + DMatrix::identity(n, n) * (lambda * lambda);
-            let g = &jt * &e;
-            let Some(dq) = a.clone().cholesky().map(|c| c.solve(&g)) else {
-                lambda *= 10.0;
-                continue;
-            };
-            let q_new = &q + dq;
-            let (e_new, pe_new, oe_new) = residual(&q_new)?;
-            if e_new.norm() < e.norm() {
-                q = q_new;
-                e = e_new;
-                pe = pe_new;
-                oe = oe_new;
-                lambda = (lambda / 10.0).max(1e-12);
-            } else {
-                lambda *= 10.0;
-                if lambda > 1e12 {
-                    break;
-                }
-            }
-        }
-        Ok(IkReport {
-            converged: done(pe, oe),
-            q,
-            iterations,
-            position_error: pe,
-            orientation_error: oe,
-            damping: lambda,
-        })
     }
 }

@@ -1,35 +1,41 @@
 //! The forward model: machine geometry + configured catalog terms + instrument terms + a stacked
-//! parameter vector + [`Signals`] → the tool state and the predicted tracker reading, with the
-//! analytic Jacobian of the reading w.r.t. the whole stacked parameter vector.
+//! parameter vector + [`Signals`] → the tool state and the predicted reading of every instrument
+//! (tracker, touch probe, camera: see [`crate::tracker`], [`crate::probe`], [`crate::camera`]),
+//! with the analytic Jacobian of each reading w.r.t. the whole stacked parameter vector.
 //!
 //! Parameter vector (stated once): the machine terms' parameters in term order, then the
 //! instrument terms' parameters in term order; names are `label.param`
-//! ([`ForwardModel::param_names`]). The machine terms are the cell's `terms` (machine- and
-//! tool-frame displacements, and the kinematic terms of a delta or an arm); the instrument terms
-//! are the tracker's `tracker_pose` (required for a tracker reading), `tracker_warmup`,
-//! `refraction` and `turbulence` (a scatter: it never enters a prediction).
+//! ([`ForwardModel::param_names`]). The machine terms are the cell's `terms`: displacements in
+//! the machine, tool or workpiece frame, and the kinematic terms of a delta or an arm. The
+//! instrument terms belong to instruments ([`crate::instruments`]): a tracker's `tracker_pose`,
+//! `tracker_warmup`, `refraction`, `turbulence`; a probe's `probe_pretravel`; a camera's
+//! `camera_scale`, `lens_distortion`.
 //!
-//! What the tracker reads for the true tool point P (tool-point frame of the family, see
-//! [`crate::machine`]):
-//! * x = `tracker_pose`(P) = Rᵀ(P − T), ρ = |x|, azimuth and elevation of x
-//!   ([`metrocell_physics::instrument::spherical`]);
-//! * measured range ρ_m = ρ + Δρ_refraction(ρ) + Δρ_warmup (in that order of summation);
-//! * the reported point is ρ_m along the direction of x.
+//! Frames (stated once for the model):
+//! * machine- and tool-frame terms move the tool relative to the machine's idea of the workpiece
+//!   frame: [`ToolState::truth`] (the physics convention: realised minus commanded tool point);
+//! * workpiece-frame terms (`frame_misalignment`, `workpiece_expansion`) move the part: a feature
+//!   with nominal position f (workpiece frame) truly lies at f + d_w(f), first order (both terms
+//!   are first-order models). So an instrument that sights a part feature (a probe, a camera)
+//!   sees it at f + d_w(f), and an instrument registered to the part (a tracker, whose pose is
+//!   given in the workpiece frame) sees the tool at truth − d_w(nominal tool point)
+//!   ([`ToolState::target`]). Both are the same first-order statement: only the tool's position
+//!   relative to the part's features matters.
 //!
 //! Kinematic terms enter the Jacobian through crates/kinematics' analytic parameter Jacobians:
 //! a delta's `forward_parameter_jacobian` at the firmware carriage heights, an arm's geometric
-//! Jacobian (joint offsets), DH `parameter_jacobian` (DH `a`) or `origin_translation_jacobian`
-//! (URDF origin lengths).
+//! Jacobian (joint offsets, which also turn the tool), DH `parameter_jacobian` (DH `a`) or
+//! `origin_translation_jacobian` (URDF origin lengths).
 
 use metrocell_kinematics::delta::DeltaGeometry;
 use metrocell_kinematics::dh::DhTable;
 use metrocell_kinematics::serial::SerialChain;
 use metrocell_kinematics::KinematicsError;
-use metrocell_physics::instrument::spherical::to_spherical;
 use metrocell_physics::model::TermModel;
 use metrocell_physics::{ConfiguredTerm, EffectKind, Frame, PhysicsError, SignalKind, Signals, TermId};
 use nalgebra::{DMatrix, Isometry3, Matrix3, Vector3};
 
+use crate::instruments::{group_instruments, Instrument};
 use crate::machine::{MachineGeometry, MachineKinematics};
 
 /// The tool at one instant. Poses are of the tool frame in the frame tool points are reported
@@ -37,10 +43,22 @@ use crate::machine::{MachineGeometry, MachineKinematics};
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ToolState {
     pub nominal: Isometry3<f64>,
+    /// The tool as the machine terms place it (relative to the machine's idea of the workpiece).
     pub truth: Isometry3<f64>,
     /// Displacement d (m): true − nominal tool point (cartesian, delta, arm); for a five-axis
-    /// machine the linear axes' displacement in the machine frame.
+    /// machine the linear axes' displacement in the machine frame. Machine terms only.
     pub d: Vector3<f64>,
+    /// d_w: the workpiece terms' displacement of the part at the nominal tool point (workpiece
+    /// frame, m; zero without workpiece terms).
+    pub workpiece: Vector3<f64>,
+}
+
+impl ToolState {
+    /// The tool point relative to the true part: `truth − d_w` (first order, see the module
+    /// doc). What an instrument whose pose is given in the workpiece frame sights.
+    pub fn target(&self) -> Vector3<f64> {
+        self.truth.translation.vector - self.workpiece
+    }
 }
 
 /// The kinematic part of the machine at one parameter vector (built once per parameter vector:
@@ -55,35 +73,6 @@ pub enum KinematicTruth {
     /// true DH table if the arm came from one.
     Arm { chain: SerialChain, joint_offsets: Vec<f64>, dh: Option<DhTable> },
 }
-
-/// The predicted reading of a laser tracker.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TrackerPrediction {
-    /// The true tool point in the tracker frame, m.
-    pub point: Vector3<f64>,
-    /// Its geometric range ρ = |point|, azimuth and elevation (rad).
-    pub range: f64,
-    pub azimuth: f64,
-    pub elevation: f64,
-    /// Range change of the `tracker_warmup` term (0 without one), m.
-    pub warmup: f64,
-    /// Range change of the `refraction` term (0 without one), m.
-    pub refraction: f64,
-}
-
-impl TrackerPrediction {
-    /// What the interferometer reports: ρ + Δρ_refraction + Δρ_warmup.
-    pub fn measured_range(&self) -> f64 {
-        self.range + self.refraction + self.warmup
-    }
-    /// The reported point: the measured range along the true direction.
-    pub fn measured_point(&self) -> Vector3<f64> {
-        metrocell_physics::instrument::spherical::from_spherical(self.measured_range(), self.azimuth, self.elevation)
-    }
-}
-
-/// Rows of [`ForwardModel::tracker_jacobian`]: the reported point (x, y, z), then the measured range.
-pub const TRACKER_ROWS: usize = 4;
 
 /// Cached displacements of terms that read nothing but temperature histories (valid while the
 /// parameters and the histories are unchanged; the caller invalidates it when a history grows).
@@ -112,9 +101,9 @@ impl DisplacementCache {
 }
 
 #[derive(Debug, Clone, Copy)]
-struct Slot {
-    start: usize,
-    len: usize,
+pub(crate) struct Slot {
+    pub(crate) start: usize,
+    pub(crate) len: usize,
 }
 
 /// The forward model over a machine, its terms and its instruments (borrowed; cheap to build).
@@ -124,25 +113,44 @@ pub struct ForwardModel<'a> {
     pub machine_terms: &'a TermModel,
     pub instrument_terms: &'a TermModel,
     /// Column range of every term: machine terms, then instrument terms.
-    slots: Vec<Slot>,
-    n_params: usize,
-    tracker_pose: Option<usize>,
-    warmup: Option<usize>,
-    refraction: Option<usize>,
+    pub(crate) slots: Vec<Slot>,
+    pub(crate) n_params: usize,
+    /// The instruments, their terms grouped by instance name.
+    pub(crate) instruments: Vec<Instrument>,
 }
 
-fn kin_error(what: &str, q: &[f64], e: KinematicsError) -> PhysicsError {
+pub(crate) fn kin_error(what: &str, q: &[f64], e: KinematicsError) -> PhysicsError {
     PhysicsError::InvalidInput { what: format!("{what} at q = {q:?}"), reason: e.to_string() }
 }
 
-fn v3(v: &nalgebra::DVector<f64>) -> Vector3<f64> {
+pub(crate) fn v3(v: &nalgebra::DVector<f64>) -> Vector3<f64> {
     Vector3::new(v[0], v[1], v[2])
+}
+
+/// Which machine terms a displacement sum takes.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Acting {
+    /// Machine- and tool-frame displacements (they move the tool).
+    OnTool,
+    /// Workpiece-frame displacements (they move the part).
+    OnPart,
+}
+
+impl Acting {
+    fn takes(self, effect: EffectKind) -> bool {
+        match self {
+            Acting::OnTool => matches!(effect, EffectKind::Displacement(Frame::Machine | Frame::Tool)),
+            Acting::OnPart => effect == EffectKind::Displacement(Frame::Workpiece),
+        }
+    }
 }
 
 impl<'a> ForwardModel<'a> {
     /// Check that every term is one the model evaluates: machine terms are displacements in the
-    /// machine or tool frame or kinematic terms of the machine's family; instrument terms are
-    /// `tracker_pose`, `tracker_warmup`, `refraction`, `turbulence`, each at most once.
+    /// machine, tool or workpiece frame or kinematic terms of the machine's family; instrument
+    /// terms are those of a tracker, a probe or a camera, each at most once per instrument
+    /// (instruments are told apart by the terms' `instrument` option, see
+    /// [`crate::instruments`]).
     pub fn new(machine: &'a MachineGeometry, machine_terms: &'a TermModel, instrument_terms: &'a TermModel) -> Result<Self, PhysicsError> {
         let bad = |label: String, reason: &str| PhysicsError::InvalidInput { what: format!("forward model, term `{label}`"), reason: reason.into() };
         let mut slots = Vec::new();
@@ -150,7 +158,7 @@ impl<'a> ForwardModel<'a> {
         for t in &machine_terms.terms {
             let id = t.term.id();
             let ok = match t.term.effect() {
-                EffectKind::Displacement(Frame::Machine | Frame::Tool) => true,
+                EffectKind::Displacement(Frame::Machine | Frame::Tool | Frame::Workpiece) => true,
                 EffectKind::Kinematic => match &machine.kinematics {
                     MachineKinematics::Delta(_) => matches!(id, TermId::DeltaRodLength | TermId::DeltaRadius | TermId::DeltaTowerAngle | TermId::DeltaEndstop),
                     MachineKinematics::SerialArm(_) => matches!(id, TermId::JointOffset | TermId::LinkLength),
@@ -159,30 +167,19 @@ impl<'a> ForwardModel<'a> {
                 _ => false,
             };
             if !ok {
-                return Err(bad(t.term.label(), "is not a machine term of this family (machine- or tool-frame displacement, or a kinematic term of the family)"));
+                return Err(bad(t.term.label(), "is not a machine term of this family (machine-, tool- or workpiece-frame displacement, or a kinematic term of the family)"));
             }
             let len = t.params.len();
             slots.push(Slot { start: at, len });
             at += len;
         }
-        let (mut tracker_pose, mut warmup, mut refraction, mut turbulence) = (None, None, None, None);
-        for (k, t) in instrument_terms.terms.iter().enumerate() {
-            let i = machine_terms.terms.len() + k;
-            let which = match t.term.id() {
-                TermId::TrackerPose => &mut tracker_pose,
-                TermId::TrackerWarmup => &mut warmup,
-                TermId::Refraction => &mut refraction,
-                TermId::Turbulence => &mut turbulence,
-                _ => return Err(bad(t.term.label(), "is not an instrument term of the tracker model (tracker_pose, tracker_warmup, refraction, turbulence)")),
-            };
-            if which.replace(i).is_some() {
-                return Err(bad(t.term.label(), "is given twice"));
-            }
+        for t in &instrument_terms.terms {
             let len = t.params.len();
             slots.push(Slot { start: at, len });
             at += len;
         }
-        Ok(Self { machine, machine_terms, instrument_terms, slots, n_params: at, tracker_pose, warmup, refraction })
+        let instruments = group_instruments(machine_terms.terms.len(), &instrument_terms.terms)?;
+        Ok(Self { machine, machine_terms, instrument_terms, slots, n_params: at, instruments })
     }
 
     /// Length of the stacked parameter vector.
@@ -202,18 +199,21 @@ impl<'a> ForwardModel<'a> {
         p
     }
 
-    /// Index in the stacked vector of the first parameter of the instrument term `id`.
+    /// Index in the stacked vector of the first parameter of the instrument term `id` (of the
+    /// first instrument that has one).
     pub fn instrument_param_start(&self, id: TermId) -> Option<usize> {
-        let i = match id {
-            TermId::TrackerPose => self.tracker_pose,
-            TermId::TrackerWarmup => self.warmup,
-            TermId::Refraction => self.refraction,
-            _ => None,
-        }?;
-        Some(self.slots[i].start)
+        let n = self.machine_terms.terms.len();
+        let k = self.instrument_terms.terms.iter().position(|t| t.term.id() == id)?;
+        Some(self.slots[n + k].start)
     }
 
-    fn term(&self, i: usize) -> &ConfiguredTerm {
+    /// Column range (start, length) of term `label` in the stacked vector.
+    pub fn term_columns(&self, label: &str) -> Option<(usize, usize)> {
+        let i = self.machine_terms.terms.iter().chain(&self.instrument_terms.terms).position(|t| t.term.label() == label)?;
+        Some((self.slots[i].start, self.slots[i].len))
+    }
+
+    pub(crate) fn term(&self, i: usize) -> &ConfiguredTerm {
         let n = self.machine_terms.terms.len();
         if i < n {
             &self.machine_terms.terms[i]
@@ -222,20 +222,28 @@ impl<'a> ForwardModel<'a> {
         }
     }
 
-    fn part<'p>(&self, i: usize, p: &'p [f64]) -> &'p [f64] {
+    pub(crate) fn part<'p>(&self, i: usize, p: &'p [f64]) -> &'p [f64] {
         let s = self.slots[i];
         &p[s.start..s.start + s.len]
     }
 
-    fn check(&self, p: &[f64]) -> Result<(), PhysicsError> {
+    pub(crate) fn check(&self, p: &[f64]) -> Result<(), PhysicsError> {
         if p.len() != self.n_params {
             return Err(PhysicsError::ParameterCount { term: "forward model".into(), expected: self.n_params, got: p.len() });
         }
         Ok(())
     }
 
+    pub(crate) fn check_buffer(&self, what: &str, m: &DMatrix<f64>, rows: usize) -> Result<(), PhysicsError> {
+        if m.nrows() != rows || m.ncols() != self.n_params {
+            return Err(PhysicsError::InvalidInput { what: format!("forward model, {what} buffer"), reason: format!("must be {rows} × {}, is {} × {}", self.n_params, m.nrows(), m.ncols()) });
+        }
+        Ok(())
+    }
+
     /// Set the axis signals from a joint vector and its velocity and approach directions: the
-    /// first three joints of a cartesian, delta or five-axis machine; none for an arm (it has no
+    /// first three joints of a cartesian, delta or five-axis machine (and a five-axis machine's
+    /// B and C as rotary positions); none for an arm (it has no
     /// linear axes, and its terms were checked not to read axis signals).
     pub fn set_motion(&self, s: &mut Signals, q: &[f64], velocity: &[f64], approach: &[f64]) {
         if matches!(self.machine.kinematics, MachineKinematics::SerialArm(_)) {
@@ -247,6 +255,11 @@ impl<'a> ForwardModel<'a> {
             s.approach_direction = [Some(approach[0]), Some(approach[1]), Some(approach[2])];
             s.axis_velocity = [Some(velocity[0]), Some(velocity[1]), Some(velocity[2])];
         }
+        // a five-axis B/C table's rotary angles (rotary-axis location errors read them)
+        s.rotary_position = match self.machine.kinematics {
+            MachineKinematics::FiveAxis(_) if q.len() >= 5 => [None, Some(q[3]), Some(q[4])],
+            _ => [None; 3],
+        };
     }
 
     /// The kinematic part of the machine at parameters `p`.
@@ -294,14 +307,16 @@ impl<'a> ForwardModel<'a> {
         })
     }
 
-    /// Σ of the machine terms' displacements for the nominal point `point` of the frame they
-    /// act in. `tool_rotation` turns tool-frame terms (`Frame::Tool`, e.g. `tool_offset`) into
-    /// that frame: identity where the tool does not turn, the tool frame's rotation on an arm.
+    /// Σ of the machine- and tool-frame terms' displacements for the nominal point `point` of
+    /// the frame they act in (set as `s.machine_point`). `tool_rotation` turns tool-frame terms
+    /// (`Frame::Tool`, e.g. `tool_offset`) into that frame: identity where the tool does not
+    /// turn, the tool frame's rotation on an arm.
     fn displacement(&self, p: &[f64], s: &mut Signals, point: Vector3<f64>, tool_rotation: &Matrix3<f64>, mut cache: Option<&mut DisplacementCache>) -> Result<Vector3<f64>, PhysicsError> {
-        s.point = Some(point);
+        s.machine_point = Some(point);
         let mut d = Vector3::zeros();
         for (i, t) in self.machine_terms.terms.iter().enumerate() {
-            if t.term.effect() == EffectKind::Kinematic {
+            let effect = t.term.effect();
+            if !Acting::OnTool.takes(effect) {
                 continue;
             }
             if let Some(Some(c)) = cache.as_deref().map(|c| c.values[i]) {
@@ -309,7 +324,7 @@ impl<'a> ForwardModel<'a> {
                 continue;
             }
             let v = v3(&t.term.predict(self.part(i, p), s)?.value);
-            let v = if t.term.effect() == EffectKind::Displacement(Frame::Tool) { tool_rotation * v } else { v };
+            let v = if effect == EffectKind::Displacement(Frame::Tool) { tool_rotation * v } else { v };
             if let Some(c) = cache.as_deref_mut() {
                 if c.history_only[i] {
                     c.values[i] = Some(v);
@@ -320,19 +335,59 @@ impl<'a> ForwardModel<'a> {
         Ok(d)
     }
 
+    /// Whether any machine term acts in the workpiece frame.
+    pub fn has_workpiece_terms(&self) -> bool {
+        self.machine_terms.terms.iter().any(|t| Acting::OnPart.takes(t.term.effect()))
+    }
+
+    /// d_w: Σ of the workpiece terms' displacements of the part at its nominal point `point`
+    /// (workpiece frame, m); `s.workpiece_point` is set to `point`. With `jac` (3 × parameters),
+    /// `sign`·∂d_w/∂p is written into the workpiece terms' columns (the others are left as they
+    /// are). No allocation when the terms override `evaluate_into`.
+    pub fn workpiece_displacement(&self, p: &[f64], s: &mut Signals, point: Vector3<f64>, mut jac: Option<&mut DMatrix<f64>>, sign: f64) -> Result<Vector3<f64>, PhysicsError> {
+        s.workpiece_point = Some(point);
+        let mut d = Vector3::zeros();
+        let mut v = [0.0; 3];
+        for (i, t) in self.machine_terms.terms.iter().enumerate() {
+            if !Acting::OnPart.takes(t.term.effect()) {
+                continue;
+            }
+            match jac.as_deref_mut() {
+                Some(out) => {
+                    let slot = self.slots[i];
+                    let mut view = out.view_mut((0, slot.start), (3, slot.len));
+                    t.term.evaluate_into(self.part(i, p), s, &mut v, view.rows_mut(0, 3))?;
+                    if sign != 1.0 {
+                        view *= sign;
+                    }
+                    d += Vector3::new(v[0], v[1], v[2]);
+                }
+                None => d += v3(&t.term.predict(self.part(i, p), s)?.value),
+            }
+        }
+        Ok(d)
+    }
+
     /// The tool at joint vector `q` for parameters `p` (`kin` = [`Self::kinematic_truth`] of the
     /// same `p`). `s` carries the axis signals ([`Self::set_motion`]), temperatures, load…;
-    /// its `point` is set here. Forward kinematics runs once per call.
+    /// its `workpiece_point` is set here (the nominal tool point, for [`ToolState::workpiece`]).
+    /// Forward kinematics runs once per call.
     pub fn tool_state(&self, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, cache: Option<&mut DisplacementCache>) -> Result<ToolState, PhysicsError> {
         self.check(p)?;
         let mut cache = cache;
-        self.tool_state_with(kin, q, |point, rotation| self.displacement(p, s, point, rotation, cache.as_deref_mut()))
+        let mut tool = self.tool_state_with(kin, q, |point, rotation| self.displacement(p, s, point, rotation, cache.as_deref_mut()))?;
+        if self.has_workpiece_terms() {
+            tool.workpiece = self.workpiece_displacement(p, s, tool.nominal.translation.vector, None, 1.0)?;
+        }
+        Ok(tool)
     }
 
-    /// The family's tool state, with the terms' displacement sum `displacement(nominal point of
-    /// the frame the terms act in, tool rotation)`.
+    /// The family's tool state, with the machine terms' displacement sum `displacement(nominal
+    /// point of the frame the terms act in, tool rotation)` (tool-frame terms are turned by the
+    /// rotation).
     fn tool_state_with(&self, kin: &KinematicTruth, q: &[f64], mut displacement: impl FnMut(Vector3<f64>, &Matrix3<f64>) -> Result<Vector3<f64>, PhysicsError>) -> Result<ToolState, PhysicsError> {
         let identity = Matrix3::identity();
+        let zero = Vector3::zeros();
         Ok(match &self.machine.kinematics {
             MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => {
                 let qv = Vector3::new(q[0], q[1], q[2]);
@@ -347,7 +402,7 @@ impl<'a> ForwardModel<'a> {
                     _ => Vector3::zeros(),
                 };
                 let d = kinematic + displacement(n, &identity)?;
-                ToolState { nominal: Isometry3::translation(n.x, n.y, n.z), truth: Isometry3::translation(n.x + d.x, n.y + d.y, n.z + d.z), d }
+                ToolState { nominal: Isometry3::translation(n.x, n.y, n.z), truth: Isometry3::translation(n.x + d.x, n.y + d.y, n.z + d.z), d, workpiece: zero }
             }
             MachineKinematics::FiveAxis(f) => {
                 // the spindle does not turn: the tool frame is the machine frame seen from the
@@ -355,7 +410,7 @@ impl<'a> ForwardModel<'a> {
                 let tip = f.tip_machine(q);
                 let d = displacement(tip, &identity)?;
                 let workpiece_from_machine = f.geometry.machine_from_workpiece(q[3], q[4]).inverse();
-                ToolState { nominal: workpiece_from_machine * Isometry3::translation(tip.x, tip.y, tip.z), truth: workpiece_from_machine * Isometry3::translation(tip.x + d.x, tip.y + d.y, tip.z + d.z), d }
+                ToolState { nominal: workpiece_from_machine * Isometry3::translation(tip.x, tip.y, tip.z), truth: workpiece_from_machine * Isometry3::translation(tip.x + d.x, tip.y + d.y, tip.z + d.z), d, workpiece: zero }
             }
             MachineKinematics::SerialArm(a) => {
                 let nominal = a.chain.tool_pose(q).map_err(|e| kin_error("arm forward kinematics", q, e))?;
@@ -366,32 +421,50 @@ impl<'a> ForwardModel<'a> {
                 let n = nominal.translation.vector;
                 let tool_rotation = true_pose.rotation.to_rotation_matrix().into_inner();
                 let d = true_pose.translation.vector - n + displacement(n, &tool_rotation)?;
-                ToolState { nominal, truth: Isometry3::from_parts((n + d).into(), true_pose.rotation), d }
+                ToolState { nominal, truth: Isometry3::from_parts((n + d).into(), true_pose.rotation), d, workpiece: zero }
             }
         })
     }
 
-    /// The true tool point and its Jacobian w.r.t. the stacked parameters, written into `out`
-    /// (3 × [`Self::param_count`]; columns of instrument terms are left zero). The point is the
-    /// one [`Self::tool_state`] gives, bit for bit.
+    /// The tool point an instrument registered to the part sights ([`ToolState::target`]) and
+    /// its Jacobian w.r.t. the stacked parameters, written into `out` (3 × [`Self::param_count`];
+    /// columns of instrument terms are left zero). The point is `tool_state(..).target()`, bit
+    /// for bit.
     pub fn tool_point_jacobian(&self, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, out: &mut DMatrix<f64>) -> Result<Vector3<f64>, PhysicsError> {
-        self.check(p)?;
-        if out.nrows() != 3 || out.ncols() != self.n_params {
-            return Err(PhysicsError::InvalidInput { what: "forward model, tool-point Jacobian buffer".into(), reason: format!("must be 3 × {}, is {} × {}", self.n_params, out.nrows(), out.ncols()) });
+        let mut tool = self.tool_jacobian(p, kin, q, s, out, None)?;
+        if self.has_workpiece_terms() {
+            tool.workpiece = self.workpiece_displacement(p, s, tool.nominal.translation.vector, Some(out), -1.0)?;
         }
-        out.fill(0.0);
+        Ok(tool.target())
+    }
+
+    /// The tool state at `q` (as [`Self::tool_state`], bit for bit, with `workpiece` left zero),
+    /// ∂(true tool point)/∂p of the machine terms into `lin` (3 × parameters; every other column
+    /// zero) and, with `ang`, ∂(tool rotation)/∂p as angular-velocity columns in the frame tool
+    /// points are reported in (non-zero only for an arm's joint offsets: no other parameter
+    /// turns the tool).
+    pub(crate) fn tool_jacobian(&self, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, lin: &mut DMatrix<f64>, mut ang: Option<&mut DMatrix<f64>>) -> Result<ToolState, PhysicsError> {
+        self.check(p)?;
+        self.check_buffer("tool-point Jacobian", lin, 3)?;
+        lin.fill(0.0);
+        if let Some(a) = ang.as_deref_mut() {
+            self.check_buffer("tool-rotation Jacobian", a, 3)?;
+            a.fill(0.0);
+        }
+        let out = lin;
+        let mut ang_out = ang;
         // tool-frame displacement before turning (an arm's joint offsets turn it), and the
         // tool rotation the terms were turned by
         let mut tool_frame_sum = Vector3::zeros();
         let mut tool_rotation = Matrix3::identity();
         let tool = self.tool_state_with(kin, q, |point, rotation| {
             tool_rotation = *rotation;
-            s.point = Some(point);
+            s.machine_point = Some(point);
             let mut d = Vector3::zeros();
             let mut v = [0.0; 3];
             for (i, t) in self.machine_terms.terms.iter().enumerate() {
                 let effect = t.term.effect();
-                if effect == EffectKind::Kinematic {
+                if !Acting::OnTool.takes(effect) {
                     continue;
                 }
                 let slot = self.slots[i];
@@ -441,7 +514,9 @@ impl<'a> ForwardModel<'a> {
             KinematicTruth::Arm { chain, joint_offsets, dh } => {
                 let geometric = chain.joint_offset_jacobian(q).map_err(|e| kin_error("arm Jacobian", q, e))?;
                 let turned = tool_rotation * tool_frame_sum;
-                let MachineKinematics::SerialArm(arm) = &self.machine.kinematics else { unreachable!("arm truth only for an arm") };
+                let MachineKinematics::SerialArm(arm) = &self.machine.kinematics else {
+                    return Err(PhysicsError::InvalidInput { what: "forward model".into(), reason: "an arm's kinematic truth given for a machine that is not an arm".into() });
+                };
                 for (i, t) in self.machine_terms.terms.iter().enumerate() {
                     let start = self.slots[i].start;
                     match t.term.id() {
@@ -451,6 +526,9 @@ impl<'a> ForwardModel<'a> {
                                 let ang = geometric.fixed_view::<3, 1>(3, k).into_owned();
                                 // the offset turns the tool, and the tool-frame terms with it
                                 out.fixed_view_mut::<3, 1>(0, start + k).copy_from(&(lin + ang.cross(&turned)));
+                                if let Some(a) = ang_out.as_deref_mut() {
+                                    a.fixed_view_mut::<3, 1>(0, start + k).copy_from(&ang);
+                                }
                             }
                         }
                         TermId::LinkLength => match dh {
@@ -483,121 +561,19 @@ impl<'a> ForwardModel<'a> {
             }
             KinematicTruth::None => {}
         }
-        Ok(tool.truth.translation.vector)
-    }
-
-    fn tracker_pose_slot(&self) -> Result<usize, PhysicsError> {
-        self.tracker_pose.ok_or_else(|| PhysicsError::InvalidInput { what: "forward model".into(), reason: "a tracker reading needs a `tracker_pose` instrument term".into() })
-    }
-
-    /// The tracker's reading of the true tool point `tool_point`. `s` carries
-    /// `time_since_power_on` (warm-up) and the station's air (refraction); its `point` and
-    /// `tracker_range` are set here.
-    pub fn tracker(&self, p: &[f64], tool_point: Vector3<f64>, s: &mut Signals) -> Result<TrackerPrediction, PhysicsError> {
-        self.check(p)?;
-        let pose = self.tracker_pose_slot()?;
-        s.point = Some(tool_point);
-        let x = v3(&self.term(pose).term.predict(self.part(pose, p), s)?.value);
-        let (rho, az, el) = to_spherical(&x);
-        s.tracker_range = Some(rho);
-        let range_change = |i: Option<usize>, s: &Signals| -> Result<f64, PhysicsError> {
-            match i {
-                Some(i) => Ok(self.term(i).term.predict(self.part(i, p), s)?.value[0]),
-                None => Ok(0.0),
-            }
-        };
-        let warmup = range_change(self.warmup, s)?;
-        let refraction = range_change(self.refraction, s)?;
-        Ok(TrackerPrediction { point: x, range: rho, azimuth: az, elevation: el, warmup, refraction })
-    }
-
-    /// The tracker reading at joint vector `q` and its Jacobian w.r.t. the stacked parameters,
-    /// written into `out` ([`TRACKER_ROWS`] × [`Self::param_count`]: the reported point x, y, z
-    /// in the tracker frame, then the measured range). The prediction is [`Self::tracker`]'s
-    /// bit for bit. No allocation on cartesian and five-axis machines with the catalog's hot
-    /// terms (see `PhysicsTerm::evaluate_into`); `work` holds the intermediate Jacobians.
-    pub fn tracker_jacobian(&self, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, work: &mut Workspace, out: &mut DMatrix<f64>) -> Result<TrackerPrediction, PhysicsError> {
-        let n = self.n_params;
-        if out.nrows() != TRACKER_ROWS || out.ncols() != n || work.tool.ncols() != n {
-            return Err(PhysicsError::InvalidInput { what: "forward model, tracker Jacobian buffers".into(), reason: format!("must be {TRACKER_ROWS} × {n} (workspace: Workspace::new of this model), are {} × {} and 3 × {}", out.nrows(), out.ncols(), work.tool.ncols()) });
-        }
-        let pose = self.tracker_pose_slot()?;
-        let tool_point = self.tool_point_jacobian(p, kin, q, s, &mut work.tool)?;
-        // x = Rᵀ(P − T) and ∂x/∂pose
-        s.point = Some(tool_point);
-        let mut xv = [0.0; 3];
-        let ps = self.slots[pose];
-        self.term(pose).term.evaluate_into(self.part(pose, p), s, &mut xv, work.pose.columns_mut(0, ps.len))?;
-        let x = Vector3::new(xv[0], xv[1], xv[2]);
-        let (rho, az, el) = to_spherical(&x);
-        s.tracker_range = Some(rho);
-        if rho == 0.0 && self.warmup.is_none() && self.refraction.is_none() {
-            // points given in the machine frame (pose = identity) can sit at the origin: with no
-            // range terms the reported point is x itself, whose Jacobian needs no direction
-            let rt: Matrix3<f64> = -work.pose.fixed_view::<3, 3>(0, 0).into_owned();
-            work.point.gemm(1.0, &rt, &work.tool, 0.0);
-            work.point.columns_mut(ps.start, ps.len).copy_from(&work.pose.columns(0, ps.len));
-            out.rows_mut(0, 3).copy_from(&work.point);
-            out.row_mut(3).fill(0.0);
-            return Ok(TrackerPrediction { point: x, range: rho, azimuth: az, elevation: el, warmup: 0.0, refraction: 0.0 });
-        }
-        if !(rho > 0.0) {
-            return Err(PhysicsError::InvalidInput { what: "forward model, tracker reading".into(), reason: "the target is at the tracker origin (range 0): no direction for the range terms".into() });
-        }
-        // ∂x/∂P = Rᵀ = −∂x/∂T
-        let rt: Matrix3<f64> = -work.pose.fixed_view::<3, 3>(0, 0).into_owned();
-        work.point.gemm(1.0, &rt, &work.tool, 0.0);
-        work.point.columns_mut(ps.start, ps.len).copy_from(&work.pose.columns(0, ps.len));
-        let mut range_changes = [0.0; 2];
-        for (k, i) in [self.warmup, self.refraction].into_iter().enumerate() {
-            if let Some(i) = i {
-                let sl = self.slots[i];
-                let mut v = [0.0; 1];
-                self.term(i).term.evaluate_into(self.part(i, p), s, &mut v, work.range_terms.view_mut((k, 0), (1, sl.len)))?;
-                range_changes[k] = v[0];
-            }
-        }
-        let pred = TrackerPrediction { point: x, range: rho, azimuth: az, elevation: el, warmup: range_changes[0], refraction: range_changes[1] };
-        let u = x / rho;
-        // Δρ_refraction is proportional to ρ: ∂ρ_m/∂x = (1 + Δρ_refraction/ρ)·uᵀ
-        let g = 1.0 + pred.refraction / rho;
-        let measured = pred.measured_range();
-        let f = measured / rho;
-        for c in 0..n {
-            let dx = work.point.fixed_view::<3, 1>(0, c).into_owned();
-            out[(3, c)] = g * u.dot(&dx);
-        }
-        for (row, i) in [self.warmup, self.refraction].into_iter().enumerate() {
-            if let Some(i) = i {
-                let sl = self.slots[i];
-                for k in 0..sl.len {
-                    out[(3, sl.start + k)] += work.range_terms[(row, k)];
-                }
-            }
-        }
-        // reported point y = ρ_m·u: ∂y = (ρ_m/ρ)(I − u uᵀ)∂x + u ∂ρ_m
-        for c in 0..n {
-            let dx = work.point.fixed_view::<3, 1>(0, c).into_owned();
-            let dy = (dx - u * u.dot(&dx)) * f + u * out[(3, c)];
-            out.fixed_view_mut::<3, 1>(0, c).copy_from(&dy);
-        }
-        Ok(pred)
+        Ok(tool)
     }
 }
 
-/// Scratch Jacobians of [`ForwardModel::tracker_jacobian`], allocated once per model.
-#[derive(Debug, Clone)]
-pub struct Workspace {
-    tool: DMatrix<f64>,
-    point: DMatrix<f64>,
-    pose: DMatrix<f64>,
-    /// ∂Δρ/∂(own parameters): row 0 warm-up, row 1 refraction.
-    range_terms: DMatrix<f64>,
-}
-
-impl Workspace {
-    pub fn new(model: &ForwardModel) -> Self {
-        let n = model.param_count();
-        Self { tool: DMatrix::zeros(3, n), point: DMatrix::zeros(3, n), pose: DMatrix::zeros(3, 6), range_terms: DMatrix::zeros(2, 3) }
+impl ForwardModel<'_> {
+    /// The nominal tool point in the machine (axis) frame at joint vector `q` — the point
+    /// `Signals::machine_point` carries to the machine terms — without running the model (None
+    /// for an arm: its nominal tool point needs forward kinematics; use [`Self::tool_state`]).
+    pub fn nominal_machine_point(&self, q: &[f64]) -> Option<Vector3<f64>> {
+        match &self.machine.kinematics {
+            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => Some(self.machine.nominal_tool_point(&Vector3::new(q[0], q[1], q[2]))),
+            MachineKinematics::FiveAxis(f) => Some(f.tip_machine(q)),
+            MachineKinematics::SerialArm(_) => None,
+        }
     }
 }

@@ -95,31 +95,51 @@ pub struct ParallelPair {
 }
 
 impl ForwardModel<'_> {
-    /// The declared pairs of parallel parameters of this model:
+    /// The declared pairs of parallel parameters of this model, per axis k:
     /// * cartesian, delta and five-axis: `positioning[k].c0` (the constant of the series, φ₀ = 1)
-    ///   and `tool_offset.dk` both shift the tool point by a constant along machine axis k;
-    /// * cartesian and delta: either of those and `tracker_pose.tk` (the workpiece frame does
-    ///   not turn, so a constant shift of the tool point is a shift of the tracker, sign −1).
+    ///   and `tool_offset.dk` both shift the tool point by a constant along machine axis k
+    ///   (every reading);
+    /// * cartesian and delta: either of those and `frame_misalignment.tk` (a constant shift of
+    ///   the part is the opposite shift of the tool relative to it, sign −1; every reading), and
+    ///   each tracker's `tracker_pose.tk` (the workpiece frame does not turn, so a constant shift
+    ///   of the tool point is a shift of the tracker, sign −1; tracker readings);
+    /// * every family: `frame_misalignment.tk` and each tracker's `tracker_pose.tk` (both shift
+    ///   the tracker relative to the part, in the workpiece frame, sign +1; tracker readings).
     pub fn parallel_pairs(&self) -> Vec<ParallelPair> {
         let names = self.param_names();
         let find = |n: &str| names.iter().position(|x| x == n);
         let mut pairs = Vec::new();
-        let turns_workpiece = match &self.machine.kinematics {
-            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => false,
-            MachineKinematics::FiveAxis(_) => true,
-            MachineKinematics::SerialArm(_) => return pairs,
+        let fixed_workpiece = match &self.machine.kinematics {
+            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => Some(true),
+            MachineKinematics::FiveAxis(_) => Some(false),
+            MachineKinematics::SerialArm(_) => None,
         };
         let has_tool_offset = self.machine_terms.terms.iter().any(|t| t.term.id() == TermId::ToolOffset);
+        let misalignment = self.machine_terms.terms.iter().find(|t| t.term.id() == TermId::FrameMisalignment).map(|t| t.term.label());
+        let tracker_labels: Vec<String> = self.instruments().iter().filter_map(|i| i.pose).map(|i| self.term(i).term.label()).collect();
         for axis in ["x", "y", "z"] {
-            let c0 = find(&format!("positioning[{axis}].c0"));
-            let d = if has_tool_offset { find(&format!("tool_offset.d{axis}")) } else { None };
-            let t = if turns_workpiece { None } else { find(&format!("tracker_pose.t{axis}")) };
+            let (c0, d) = match fixed_workpiece {
+                Some(_) => (find(&format!("positioning[{axis}].c0")), if has_tool_offset { find(&format!("tool_offset.d{axis}")) } else { None }),
+                None => (None, None),
+            };
+            let fm = misalignment.as_ref().and_then(|l| find(&format!("{l}.t{axis}")));
+            let trackers: Vec<usize> = tracker_labels.iter().filter_map(|l| find(&format!("{l}.t{axis}"))).collect();
             if let (Some(a), Some(b)) = (c0, d) {
                 pairs.push(ParallelPair { a, b, sign: 1.0, reason: "constant shift of the tool point along a machine axis (positioning series constant vs tool offset)" });
             }
-            for x in [c0, d].into_iter().flatten() {
-                if let Some(b) = t {
-                    pairs.push(ParallelPair { a: x, b, sign: -1.0, reason: "constant shift of the tool point in the workpiece frame vs the tracker's position" });
+            if fixed_workpiece == Some(true) {
+                for x in [c0, d].into_iter().flatten() {
+                    if let Some(b) = fm {
+                        pairs.push(ParallelPair { a: x, b, sign: -1.0, reason: "constant shift of the tool point vs the opposite shift of the part (frame misalignment)" });
+                    }
+                    for &b in &trackers {
+                        pairs.push(ParallelPair { a: x, b, sign: -1.0, reason: "constant shift of the tool point in the workpiece frame vs the tracker's position (tracker readings)" });
+                    }
+                }
+            }
+            if let Some(a) = fm {
+                for &b in &trackers {
+                    pairs.push(ParallelPair { a, b, sign: 1.0, reason: "the part's translation vs the tracker's position, both in the workpiece frame (tracker readings)" });
                 }
             }
         }

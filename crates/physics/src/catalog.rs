@@ -5,7 +5,7 @@ use std::collections::BTreeMap;
 
 use crate::config::{quantity, ConfigValue, Options, TermConfig};
 use crate::error::PhysicsError;
-use crate::geometry::{angular::Angular, backlash::Backlash, frame_misalignment::FrameMisalignment, pitch_cyclic::PitchCyclic, positioning::Positioning, squareness::Squareness, straightness::Straightness};
+use crate::geometry::{angular::Angular, backlash::Backlash, frame_misalignment::FrameMisalignment, pitch_cyclic::PitchCyclic, positioning::Positioning, rotary_axis_location::RotaryAxisLocation, squareness::Squareness, straightness::Straightness};
 use crate::instrument::{camera_scale::CameraScale, lens_distortion::LensDistortion, probe_pretravel::ProbePretravel, refraction::Refraction, time_offset::TimeOffset, tracker_pose::TrackerPose, tracker_warmup::TrackerWarmup, turbulence::Turbulence};
 use crate::load::{compliance::Compliance, tool_offset::ToolOffset};
 use crate::machine_family::KinematicParameters;
@@ -54,6 +54,7 @@ pub fn build_term(id: TermId, options: &BTreeMap<String, ConfigValue>) -> Result
         TermId::Squareness => Box::new(Squareness::from_options(&o)?),
         TermId::PitchCyclic => Box::new(PitchCyclic::from_options(&o)?),
         TermId::Backlash => Box::new(Backlash::from_options(&o)?),
+        TermId::RotaryAxisLocation => Box::new(RotaryAxisLocation::from_options(&o)?),
         TermId::ThermalScale => Box::new(ThermalScale::from_options(&o)?),
         TermId::ThermalGrowth => Box::new(ThermalGrowth::from_options(&o)?),
         TermId::WorkpieceExpansion => Box::new(WorkpieceExpansion::from_options(&o)?),
@@ -123,6 +124,7 @@ pub fn example_config(id: TermId) -> TermConfig {
         TermId::Squareness => vec![("pair", t("xy"))],
         TermId::PitchCyclic => vec![("axis", t("x")), ("lead", t("10 mm")), ("harmonics", n(2.0))],
         TermId::Backlash => vec![("axis", t("y"))],
+        TermId::RotaryAxisLocation => vec![("b_pivot", l(vec![t("500 mm"), t("500 mm"), t("150 mm")])), ("c_offset", l(vec![n(0.0), n(0.0), t("50 mm")]))],
         TermId::ThermalScale => vec![("axis", t("x")), ("sensors", l(vec![sensor("x_left", 0.0), sensor("x_right", 1.2)]))],
         TermId::ThermalGrowth => vec![("sensor", t("column")), ("direction", l(vec![n(0.0), n(0.0), n(-1.0)])), ("lag", ConfigValue::Bool(true))],
         TermId::WorkpieceExpansion => vec![("sensor", t("plate")), ("clamp", l(vec![t("200 mm"), t("250 mm"), n(0.0)]))],

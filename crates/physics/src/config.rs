@@ -113,6 +113,10 @@ impl<'a> Options<'a> {
     pub fn bad(&self, key: &str, reason: impl Into<String>) -> PhysicsError {
         PhysicsError::BadOption { term: self.term.into(), key: key.into(), reason: reason.into() }
     }
+    /// Whether the config gives `key` (does not count as reading it).
+    pub fn has(&self, key: &str) -> bool {
+        self.map.contains_key(key)
+    }
     pub fn required(&self, key: &str) -> Result<&'a ConfigValue, PhysicsError> {
         self.get(key).ok_or_else(|| self.bad(key, "is required"))
     }

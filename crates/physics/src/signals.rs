@@ -5,8 +5,10 @@
 use nalgebra::{Vector2, Vector3};
 use std::collections::BTreeMap;
 use std::fmt;
+use std::sync::Arc;
 
 use crate::error::PhysicsError;
+use crate::temperature_timeline::{LagUnavailable, TemperatureTimeline};
 
 /// A linear machine axis.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -47,6 +49,24 @@ impl fmt::Display for Axis {
     }
 }
 
+/// A rotary machine axis (ISO 841: A, B, C turn about x, y, z).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum RotaryAxis {
+    A,
+    B,
+    C,
+}
+
+impl RotaryAxis {
+    /// 0, 1, 2 for A, B, C.
+    pub fn index(self) -> usize {
+        self as usize
+    }
+    pub fn name(self) -> &'static str {
+        ["a", "b", "c"][self.index()]
+    }
+}
+
 /// Kind of signal a term needs (the declaration; values live in [`Signals`]).
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum SignalKind {
@@ -58,7 +78,8 @@ pub enum SignalKind {
     AxisVelocity(Axis),
     /// Latest reading of a named temperature sensor, °C.
     Temperature(String),
-    /// Time history of a named temperature sensor (for first-order lags), s and °C.
+    /// Time history of a named temperature sensor (for first-order lags), s and °C: the
+    /// sensor's samples in [`Signals::timeline`] up to [`Signals::time`].
     TemperatureHistory(String),
     /// Air temperature at the weather station, °C.
     AirTemperature,
@@ -74,10 +95,23 @@ pub enum SignalKind {
     TrackerRange,
     /// Point in normalised image coordinates (x/z, y/z) of the camera.
     ImagePoint,
-    /// A 3-D point the term acts on (workpiece feature, machine point, camera-frame point), m.
-    Point,
+    /// The nominal tool point in the frame machine-frame terms act in (the machine frame: q +
+    /// tool offset on cartesian and delta machines, the tool tip in the machine frame on a
+    /// five-axis machine, the nominal tool point on an arm), m.
+    MachinePoint,
+    /// Nominal position of a feature on the workpiece (the part, fixture or artefact), in the
+    /// workpiece frame, m: what workpiece-frame terms displace.
+    WorkpiecePoint,
+    /// The true point an instrument sights (a tracker's reflector), in the frame instrument poses
+    /// are given in (workpiece; an arm's cell frame), m: what `tracker_pose` maps into the
+    /// instrument frame.
+    TargetPoint,
+    /// A point in the camera frame (x right, y down, z along the optical axis), m.
+    CameraPoint,
     /// Unit vector of the probing (approach) direction in the probe frame.
     ProbeDirection,
+    /// Commanded angle of a rotary axis, rad.
+    RotaryPosition(RotaryAxis),
 }
 
 impl fmt::Display for SignalKind {
@@ -95,27 +129,36 @@ impl fmt::Display for SignalKind {
             SignalKind::LoadForce => write!(f, "load_force (N)"),
             SignalKind::TrackerRange => write!(f, "tracker_range (m)"),
             SignalKind::ImagePoint => write!(f, "image_point (normalised)"),
-            SignalKind::Point => write!(f, "point (m)"),
+            SignalKind::MachinePoint => write!(f, "machine_point (m, machine frame)"),
+            SignalKind::WorkpiecePoint => write!(f, "workpiece_point (m, workpiece frame)"),
+            SignalKind::TargetPoint => write!(f, "target_point (m, workpiece frame)"),
+            SignalKind::CameraPoint => write!(f, "camera_point (m, camera frame)"),
             SignalKind::ProbeDirection => write!(f, "probe_direction (unit vector)"),
+            SignalKind::RotaryPosition(a) => write!(f, "rotary_position[{}] (rad)", a.name()),
         }
     }
 }
 
-/// Samples of one temperature sensor: (time s, temperature °C), strictly increasing in time.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct TemperatureHistory {
-    pub samples: Vec<(f64, f64)>,
-}
-
 /// Values of the signals at one instant. Missing values are `None`; a term that needs one
 /// returns [`PhysicsError::MissingSignal`].
+///
+/// Points: one slot per frame a term acts in, so terms of different frames evaluated for one
+/// reading never read each other's point (the forward model, crates/model, fills them:
+/// `machine_point` before the machine-frame terms, `workpiece_point` before the workpiece terms, `target_point` before `tracker_pose`,
+/// `camera_point` before `camera_scale`).
 #[derive(Debug, Clone, Default)]
 pub struct Signals {
+    /// Time of the instant, s, on the recording's clock (a bag's: seconds since the Unix epoch;
+    /// the twin's: seconds since the start of the shift). The clock of [`Self::timeline`].
+    pub time: Option<f64>,
     pub axis_position: [Option<f64>; 3],
     pub approach_direction: [Option<f64>; 3],
     pub axis_velocity: [Option<f64>; 3],
+    /// Each sensor's reading at this instant, °C.
     pub temperatures: BTreeMap<String, f64>,
-    pub temperature_histories: BTreeMap<String, TemperatureHistory>,
+    /// Every sensor's samples of the recording, shared by all its instants (cheap to clone);
+    /// lagged temperatures read it up to [`Self::time`].
+    pub timeline: Option<Arc<TemperatureTimeline>>,
     pub air_temperature: Option<f64>,
     pub air_pressure: Option<f64>,
     pub air_humidity: Option<f64>,
@@ -123,8 +166,17 @@ pub struct Signals {
     pub load_force: Option<Vector3<f64>>,
     pub tracker_range: Option<f64>,
     pub image_point: Option<Vector2<f64>>,
-    pub point: Option<Vector3<f64>>,
+    /// Nominal tool point in the machine frame, m ([`SignalKind::MachinePoint`]).
+    pub machine_point: Option<Vector3<f64>>,
+    /// Nominal feature position on the workpiece, workpiece frame, m ([`SignalKind::WorkpiecePoint`]).
+    pub workpiece_point: Option<Vector3<f64>>,
+    /// True point an instrument sights, workpiece (cell) frame, m ([`SignalKind::TargetPoint`]).
+    pub target_point: Option<Vector3<f64>>,
+    /// A point in the camera frame, m ([`SignalKind::CameraPoint`]).
+    pub camera_point: Option<Vector3<f64>>,
     pub probe_direction: Option<Vector3<f64>>,
+    /// Commanded angles of the rotary axes A, B, C (rad), where the machine has them.
+    pub rotary_position: [Option<f64>; 3],
 }
 
 fn missing(term: &str, kind: SignalKind) -> PhysicsError {
@@ -158,16 +210,23 @@ impl Signals {
     pub fn temperature(&self, term: &str, sensor: &str) -> Result<f64, PhysicsError> {
         self.temperatures.get(sensor).copied().ok_or_else(|| missing(term, SignalKind::Temperature(sensor.to_string())))
     }
-    pub fn history(&self, term: &str, sensor: &str) -> Result<&TemperatureHistory, PhysicsError> {
-        let h = self.temperature_histories.get(sensor).ok_or_else(|| missing(term, SignalKind::TemperatureHistory(sensor.to_string())))?;
-        if h.samples.is_empty() || h.samples.windows(2).any(|w| w[1].0 <= w[0].0) {
-            return Err(PhysicsError::BadSignal {
+    /// (T_f °C, ∂T_f/∂τ K/s): the first-order lag with time constant `tau` (s) of the sensor's
+    /// samples in the timeline up to [`Self::time`] (all of them when the time is not set).
+    pub fn lagged_temperature(&self, term: &str, sensor: &str, tau: f64) -> Result<(f64, f64), PhysicsError> {
+        let kind = || SignalKind::TemperatureHistory(sensor.to_string());
+        let timeline = self.timeline.as_ref().ok_or_else(|| missing(term, kind()))?;
+        timeline.lagged(sensor, self.time, tau).map_err(|why| match why {
+            LagUnavailable::UnknownSensor => missing(term, kind()),
+            LagUnavailable::NoSampleYet { first } => PhysicsError::BadSignal {
                 term: term.into(),
-                signal: SignalKind::TemperatureHistory(sensor.into()).to_string(),
-                reason: "must be non-empty with strictly increasing times".into(),
-            });
-        }
-        Ok(h)
+                signal: kind().to_string(),
+                reason: match first {
+                    Some(first) => format!("no sample at or before t = {} s (the first is at {first} s)", self.time.unwrap_or(f64::NAN)),
+                    None => "the sensor has no samples".into(),
+                },
+            },
+            LagUnavailable::BadTimeConstant => PhysicsError::InvalidInput { what: format!("term `{term}`: time_constant"), reason: format!("must be > 0 s and finite, got {tau}") },
+        })
     }
     pub fn air(&self, term: &str) -> Result<(f64, f64, f64), PhysicsError> {
         Ok((
@@ -188,8 +247,20 @@ impl Signals {
     pub fn image(&self, term: &str) -> Result<Vector2<f64>, PhysicsError> {
         self.image_point.ok_or_else(|| missing(term, SignalKind::ImagePoint))
     }
-    pub fn point3(&self, term: &str) -> Result<Vector3<f64>, PhysicsError> {
-        self.point.ok_or_else(|| missing(term, SignalKind::Point))
+    pub fn machine(&self, term: &str) -> Result<Vector3<f64>, PhysicsError> {
+        self.machine_point.ok_or_else(|| missing(term, SignalKind::MachinePoint))
+    }
+    pub fn workpiece(&self, term: &str) -> Result<Vector3<f64>, PhysicsError> {
+        self.workpiece_point.ok_or_else(|| missing(term, SignalKind::WorkpiecePoint))
+    }
+    pub fn target(&self, term: &str) -> Result<Vector3<f64>, PhysicsError> {
+        self.target_point.ok_or_else(|| missing(term, SignalKind::TargetPoint))
+    }
+    pub fn camera(&self, term: &str) -> Result<Vector3<f64>, PhysicsError> {
+        self.camera_point.ok_or_else(|| missing(term, SignalKind::CameraPoint))
+    }
+    pub fn rotary(&self, term: &str, a: RotaryAxis) -> Result<f64, PhysicsError> {
+        self.rotary_position[a.index()].ok_or_else(|| missing(term, SignalKind::RotaryPosition(a)))
     }
     pub fn probe_dir(&self, term: &str) -> Result<Vector3<f64>, PhysicsError> {
         let u = self.probe_direction.ok_or_else(|| missing(term, SignalKind::ProbeDirection))?;

@@ -112,6 +112,11 @@ pub trait PhysicsTerm: TermClone + std::fmt::Debug + Send + Sync {
     fn id(&self) -> TermId;
     /// Instance label, e.g. `angular[x:z]`; unique within one model.
     fn label(&self) -> String;
+    /// The instrument instance an instrument term belongs to (option `instrument`), `None`
+    /// for the cell's only instrument of its kind and for every machine term.
+    fn instrument(&self) -> Option<&str> {
+        None
+    }
     /// What the prediction is.
     fn effect(&self) -> EffectKind;
     /// Parameter descriptors, in the order of the parameter vector.

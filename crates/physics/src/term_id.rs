@@ -32,6 +32,7 @@ term_ids! {
     Angular => "angular", Geometry, "roll/pitch/yaw of an axis with its Abbe lever (VDI xRx, xRy, xRz)", "d = ε(q_k)·e_a × (r_abbe + Σ_{j∈lever_axes} q_j·e_j)";
     Squareness => "squareness", Geometry, "out-of-squareness of an axis pair (VDI xWy, xWz, yWz; P5 s_xy, s_xz, s_yz)", "xy: d = (−y·s,0,0); xz: d = (−z·s,0,0); yz: d = (0,−z·s,0)";
     PitchCyclic => "pitch_cyclic", Geometry, "periodic ball-screw error repeating every lead", "d = e_k·Σ_h [a_h cos(2πh q/P) + b_h sin(2πh q/P)]";
+    RotaryAxisLocation => "rotary_axis_location", Geometry, "location errors of the B/C rotary axes of a five-axis table (ISO 230-1 E_XOB … E_C0C)", "d = −δW·W⁻¹t: each rotary axis turns about a line offset by (x_o, y_o/z_o), tilted by (a_o, b_o/c_o), from a zero off by θ₀ (first order)";
     Backlash => "backlash", Geometry, "reversal error by sign of approach", "d = −(β/2)·s_k·e_k, s_k = ±1 direction of approach";
     ThermalScale => "thermal_scale", Thermal, "thermal expansion of an axis scale, temperature interpolated between sensors", "d = e_k·α·q_k·(T(q_k) − 20 °C)";
     ThermalGrowth => "thermal_growth", Thermal, "growth of a structural element with its (optionally lagged) temperature", "d = n̂·g·(T_f − 20 °C), T_f = first-order lag (τ) of the sensor history";

@@ -37,8 +37,8 @@ fn analytic_jacobians_match_finite_differences() {
             checked += 1;
         }
     }
-    // 20 non-kinematic ids × 25 states
-    assert_eq!(checked, 20 * 25);
+    // 21 non-kinematic ids × 25 states
+    assert_eq!(checked, 21 * 25);
 }
 
 /// Parameters in which a term's documented equation (crates/physics/README.md) is NOT linear:

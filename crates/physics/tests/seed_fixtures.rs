@@ -115,7 +115,7 @@ fn plate_thermal_correction() {
     let mut cfg = example_config(TermId::WorkpieceExpansion);
     cfg.params.insert("alpha".into(), ConfigValue::Text("24e-6 1/K".into()));
     let t = configure(&cfg).unwrap();
-    let s = Signals { point: Some(Vector3::new(0.2 + 0.3, 0.25, 0.0)), temperatures: [("plate".to_string(), 21.0)].into_iter().collect(), ..Default::default() };
+    let s = Signals { workpiece_point: Some(Vector3::new(0.2 + 0.3, 0.25, 0.0)), temperatures: [("plate".to_string(), 21.0)].into_iter().collect(), ..Default::default() };
     let d = t.term.predict(&t.params, &s).unwrap().value;
     assert!((d[0] / UM - 7.2).abs() < 1e-9 && d[1].abs() < 1e-15);
 }
@@ -144,7 +144,7 @@ fn tracker_pose_rotation_fixture() {
     let t = configure(&example_config(TermId::TrackerPose)).unwrap();
     let pose = [-0.863527, 0.194373, 0.677782, 0.0339 * d, 0.0343 * d, 59.4652 * d];
     let p = Vector3::new(0.4, 0.4, 0.0);
-    let s = Signals { point: Some(p), ..Default::default() };
+    let s = Signals { target_point: Some(p), ..Default::default() };
     let x = t.term.predict(&pose, &s).unwrap().value;
     let back = r * Vector3::new(x[0], x[1], x[2]) + Vector3::new(pose[0], pose[1], pose[2]);
     assert!((back - p).amax() < 1e-15);

@@ -1,13 +1,13 @@
 //! The simulated camera's intrinsics, published as `sensor_msgs/CameraInfo`.
 //!
-//! A cell file may state the lens (`sensors.camera.intrinsics`); then [`CameraIntrinsics::for_cell`]
-//! takes it (the cell describes the camera; the simulator option is only the fallback). Otherwise
-//! the intrinsics are a simulator option with a documented default: a 5 MP machine-vision camera (2448 × 2048 px,
-//! 3.45 µm pixels) behind a 12 mm lens, i.e. f = 12 mm / 3.45 µm ≈ 3478 px, principal point at
-//! the image centre, no distortion (`plumb_bob` with zero coefficients). Pixel convention is
-//! OpenCV's (centre of the top-left pixel at (0, 0)), so the centre is ((w−1)/2, (h−1)/2).
+//! The lens is the cell's: `sensors.camera.intrinsics`, or the twin's documented default when the
+//! file states none (crates/twin `cell::default_camera_lens`: a 5 MP machine-vision camera,
+//! 2448 × 2048 px, 3.45 µm pixels, 12 mm lens, f ≈ 3478 px, principal point at the image centre,
+//! no distortion), so the rendered images and the twin's predicted corners (the shared model's
+//! camera reading) come from one lens. Pixel convention is OpenCV's (centre of the top-left
+//! pixel at (0, 0)).
 
-use metrocell_camera_model::{CameraModel, Distortion};
+use metrocell_camera_model::CameraModel;
 
 /// The simulated camera: its lens (pinhole, distortion) and the frame id of its messages.
 #[derive(Debug, Clone, PartialEq)]
@@ -18,19 +18,18 @@ pub struct CameraIntrinsics {
 }
 
 impl Default for CameraIntrinsics {
+    /// The twin's default lens ([`metrocell_twin::cell::default_camera_lens`]).
     fn default() -> Self {
-        let f = 12e-3 / 3.45e-6;
-        let lens = CameraModel::new(2448, 2048, f, f, 1223.5, 1023.5, Distortion::none()).expect("the default lens is valid");
-        CameraIntrinsics { lens, frame_id: "camera_optical".into() }
+        CameraIntrinsics { lens: metrocell_twin::cell::default_camera_lens(), frame_id: "camera_optical".into() }
     }
 }
 
 impl CameraIntrinsics {
-    /// The cell's `sensors.camera.intrinsics` if it states them (keeping `fallback`'s frame id),
-    /// else `fallback`.
+    /// The lens of the cell's camera (its `sensors.camera.intrinsics`, else the twin's default)
+    /// with `fallback`'s frame id; `fallback` itself for a cell without a camera.
     pub fn for_cell(cell: &metrocell_twin::Cell, fallback: CameraIntrinsics) -> CameraIntrinsics {
-        match cell.camera.as_ref().and_then(|c| c.intrinsics.as_ref()) {
-            Some(lens) => CameraIntrinsics { lens: lens.clone(), frame_id: fallback.frame_id },
+        match &cell.camera {
+            Some(c) => CameraIntrinsics { lens: c.lens(), frame_id: fallback.frame_id },
             None => fallback,
         }
     }

@@ -111,6 +111,11 @@ impl CommandedTrajectory {
         Ok(())
     }
 
+    /// Time of the newest commanded state, if any.
+    pub fn latest_ns(&self) -> Option<i64> {
+        self.samples.back().map(|(t, _)| *t)
+    }
+
     /// Commanded positions at `t_ns` (same order as `names()`).
     pub fn at(&self, t_ns: i64) -> Result<Vec<f64>, AlignmentError> {
         let i = self.samples.partition_point(|(t, _)| *t <= t_ns);

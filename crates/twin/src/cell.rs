@@ -8,7 +8,7 @@ use std::path::Path;
 
 use metrocell_camera_model::{CameraModel, Distortion};
 use metrocell_kinematics::delta::DeltaGeometry;
-use metrocell_model::{ForwardModel, KinematicTruth};
+use metrocell_model::{CameraGeometry, ForwardModel, KinematicTruth};
 use metrocell_physics::config::ConfigValue;
 use metrocell_physics::model::TermModel;
 use metrocell_physics::thermal::shift_model::{AmbientCycle, DutySegment, HeatSource, SensorLocation, ShiftThermalModel, StructureNode, ThermalSensor};
@@ -17,6 +17,7 @@ use nalgebra::Vector3;
 
 use crate::cell_file::*;
 use crate::error::CellError;
+use crate::fiducial_plate::FiducialPlate;
 pub use metrocell_model::{InstrumentPose, MachineGeometry, MachineKinematics};
 use crate::program::Program;
 use crate::quantity::{vector3, Quantity};
@@ -105,8 +106,26 @@ pub struct CameraSpec {
     /// the tool.
     pub mount: InstrumentPose,
     pub delay: f64,
-    /// The lens the file states, if any (else the simulator's default camera).
+    /// The lens the file states, if any (else [`default_camera_lens`]).
     pub intrinsics: Option<CameraModel>,
+    /// The fiducial plate placed in front of the camera at each dwell.
+    pub plate: FiducialPlate,
+}
+
+impl CameraSpec {
+    /// The lens: the file's, or [`default_camera_lens`].
+    pub fn lens(&self) -> CameraModel {
+        self.intrinsics.unwrap_or_else(default_camera_lens)
+    }
+}
+
+/// The camera a cell without `sensors.camera.intrinsics` has: a 5 MP machine-vision camera
+/// (2448 × 2048 px, 3.45 µm pixels) behind a 12 mm lens, i.e. f = 12 mm / 3.45 µm ≈ 3478 px,
+/// principal point at the image centre ((w−1)/2, (h−1)/2, OpenCV's pixel convention), no
+/// distortion.
+pub fn default_camera_lens() -> CameraModel {
+    let f = 12e-3 / 3.45e-6;
+    CameraModel::new(2448, 2048, f, f, 1223.5, 1023.5, Distortion::none()).expect("the default lens is valid")
 }
 
 /// True air on the tracker beam.
@@ -242,9 +261,35 @@ impl Cell {
 
 impl Cell {
     /// The shared forward model of this cell's machine and terms, with `instruments` as its
-    /// instrument terms (e.g. [`Cell::tracker_terms`]).
+    /// instrument terms (e.g. [`Cell::tracker_terms`], [`Cell::instrument_terms`]) and, if the
+    /// cell has a camera, its geometry (mount and the lens's pinhole intrinsics).
     pub fn forward_model<'a>(&'a self, instruments: &'a TermModel) -> Result<ForwardModel<'a>, metrocell_physics::PhysicsError> {
-        ForwardModel::new(&self.machine, &self.terms, instruments)
+        let model = ForwardModel::new(&self.machine, &self.terms, instruments)?;
+        match &self.camera {
+            Some(c) => {
+                let lens = c.lens();
+                model.with_camera(None, CameraGeometry { mount: c.mount, fx: lens.fx, fy: lens.fy, cx: lens.cx, cy: lens.cy })
+            }
+            None => Ok(model),
+        }
+    }
+
+    /// Every instrument's effects as catalog terms with their true parameters: the tracker's
+    /// ([`Cell::tracker_terms`]), the probe's `probe_pretravel` (`sensors.probe.pretravel`), and
+    /// the camera's `lens_distortion` when `sensors.camera.intrinsics` states a Brown–Conrady
+    /// lens (OpenCV k1 k2 p1 p2 k3 → the term's k1 k2 k3 p1 p2).
+    pub fn instrument_terms(&self) -> Result<TermModel, CellError> {
+        let mut m = self.tracker_terms()?;
+        if let Some(pt) = self.probe.as_ref().and_then(|p| p.pretravel.clone()) {
+            m.push(pt).map_err(|e| CellError::term("sensors.probe.pretravel", e))?;
+        }
+        if let Some(Distortion::BrownConrady(k)) = self.camera.as_ref().and_then(|c| c.intrinsics.as_ref()).map(|l| l.distortion) {
+            let path = "sensors.camera.intrinsics.distortion";
+            let params = [("k1", k[0]), ("k2", k[1]), ("k3", k[4]), ("p1", k[2]), ("p2", k[3])].into_iter().map(|(n, v)| (n.to_string(), ConfigValue::Number(v))).collect();
+            let t = configure(&TermConfig { id: "lens_distortion".into(), options: Default::default(), params, use_defaults: false }).map_err(|e| CellError::term(path, e))?;
+            m.push(t).map_err(|e| CellError::term(path, e))?;
+        }
+        Ok(m)
     }
 
     fn kinematic_truth(&self) -> Option<KinematicTruth> {
@@ -272,9 +317,10 @@ impl Cell {
     }
 
     /// The free parameters and priors of the `estimation` section over the forward model of the
-    /// machine terms and the tracker's terms (stacked in that order).
+    /// machine terms and every instrument's terms ([`Cell::instrument_terms`], stacked in that
+    /// order).
     pub fn parameter_setup(&self) -> Result<metrocell_model::ParameterSetup, CellError> {
-        let instruments = self.tracker_terms()?;
+        let instruments = self.instrument_terms()?;
         let model = self.forward_model(&instruments).map_err(|e| CellError::term("terms", e))?;
         metrocell_model::ParameterSetup::new(&model, &self.estimation).map_err(|e| CellError::term("estimation", e))
     }
@@ -548,7 +594,7 @@ fn camera(c: &CameraSection) -> Result<CameraSpec, CellError> {
             Some(CameraModel::new(i.width, i.height, fx, fy, cx, cy, distortion).map_err(|e| CellError::invalid(p, e.to_string()))?)
         }
     };
-    Ok(CameraSpec { mount: pose(&c.mount, "sensors.camera.mount")?, delay: c.delay.as_ref().map(|q| q.non_negative("sensors.camera.delay", "s")).transpose()?.unwrap_or(0.0), intrinsics })
+    Ok(CameraSpec { mount: pose(&c.mount, "sensors.camera.mount")?, delay: c.delay.as_ref().map(|q| q.non_negative("sensors.camera.delay", "s")).transpose()?.unwrap_or(0.0), intrinsics, plate: FiducialPlate::default() })
 }
 
 fn thermal_model(env: &EnvironmentSection, tcs: &[ThermocoupleSection]) -> Result<ShiftThermalModel, CellError> {
@@ -615,12 +661,14 @@ fn home_of(id: &str) -> Option<&'static str> {
         "turbulence" => Some("sensors.tracker.turbulence and sensors.tracker.range_noise"),
         "probe_pretravel" => Some("sensors.probe.pretravel"),
         "tracker_pose" => Some("sensors.tracker.pose"),
+        "lens_distortion" => Some("sensors.camera.intrinsics (model plumb_bob, distortion)"),
+        "camera_scale" => Some("the fiducial node's `marker_size` parameter (the twin's camera itself has no scale error)"),
         _ => None,
     }
 }
 
-/// Machine-frame displacement terms that read no axis signal: the ones a serial arm takes.
-const ARM_DISPLACEMENT_TERMS: &str = "thermal_growth, tool_offset";
+/// Displacement terms that read no axis signal: the ones a serial arm takes.
+const ARM_DISPLACEMENT_TERMS: &str = "thermal_growth, tool_offset, frame_misalignment, workpiece_expansion";
 
 /// Validate the `terms` list against the machine. `sensors` (the thermocouple names) and
 /// `has_load` are checked when known (a cell to simulate); a model file leaves them to the
@@ -671,10 +719,10 @@ pub(crate) fn terms(configs: &[TermConfig], sensors: Option<&BTreeSet<String>>, 
                 format!("reads linear-axis signals, which a serial_arm does not have; a serial_arm takes joint_offset, link_length and {ARM_DISPLACEMENT_TERMS}"),
             ));
         }
-        if !matches!(t.term.effect(), EffectKind::Displacement(Frame::Machine | Frame::Tool)) && !is_delta_term {
+        if !matches!(t.term.effect(), EffectKind::Displacement(Frame::Machine | Frame::Tool | Frame::Workpiece)) && !is_delta_term {
             return Err(CellError::invalid(
                 path,
-                format!("has effect {:?}; the twin's `terms` take machine-frame displacement terms (geometry, thermal_scale, thermal_growth, compliance, tool_offset, frame_misalignment), for a delta delta_rod_length, delta_radius, delta_tower_angle, delta_endstop, and for a serial_arm joint_offset, link_length", t.term.effect()),
+                format!("has effect {:?}; the twin's `terms` take machine-frame displacement terms (geometry, thermal_scale, thermal_growth, compliance, tool_offset, time_offset), workpiece-frame terms (frame_misalignment, workpiece_expansion), for a delta delta_rod_length, delta_radius, delta_tower_angle, delta_endstop, and for a serial_arm joint_offset, link_length", t.term.effect()),
             ));
         }
         for s in t.term.signals() {

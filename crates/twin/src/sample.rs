@@ -6,7 +6,7 @@
 
 use std::sync::Arc;
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::{Matrix3, Vector2, Vector3};
 
 /// Tracker sample status.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -60,6 +60,9 @@ pub struct MachineStateSample {
     pub names: Arc<[String]>,
     /// Commanded joint values (m or rad).
     pub commanded: Vec<f64>,
+    /// Commanded joint velocities (m/s or rad/s): the program's, constant along a move, 0 at a
+    /// dwell and while idle.
+    pub commanded_velocity: Vec<f64>,
     /// Actual values: cartesian/delta and five-axis X, Y, Z commanded + the true terms'
     /// displacement (tool relative to workpiece); rotary B, C as commanded; arm joints
     /// commanded + their true zero offsets (`joint_offset`).
@@ -99,6 +102,20 @@ pub struct CameraFrameRequest {
     /// Nominal camera pose (the commanded tool pose followed by the mount), same convention.
     pub nominal_position: Vector3<f64>,
     pub nominal_rotation: Matrix3<f64>,
+    /// The fiducial plate's pose, same frame: `p = plate_rotation·p_plate + plate_position`
+    /// ([`crate::fiducial_plate`]): in front of the nominal camera, moved by the workpiece terms'
+    /// displacement at its centre. A renderer draws this rigid plate; the part's small rotation
+    /// and expansion across the 50 mm plate (first order in the workpiece terms) are in
+    /// `corners`, not in a rigid pose.
+    pub plate_position: Vector3<f64>,
+    pub plate_rotation: Matrix3<f64>,
+    /// The shared model's noise-free reading of the plate: the pixel (u, v) of every marker
+    /// corner (markers 0–3, OpenCV order each); `None` when the lens is not pinhole +
+    /// Brown–Conrady (the model's `lens_distortion`), e.g. an equidistant fisheye.
+    pub corners: Option<Vec<Vector2<f64>>>,
+    /// The model's metric reading of each marker's centre (what a marker pose's translation
+    /// reports: the camera frame, `camera_scale` applied), m.
+    pub marker_points: Vec<Vector3<f64>>,
 }
 
 /// Everything a simulation streams, in time order.

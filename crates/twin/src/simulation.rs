@@ -6,28 +6,31 @@
 //! requests fire inside program dwells. Ties are broken in a fixed order: thermocouples (file
 //! order), machine state, tracker, probe, camera.
 //!
-//! The tool state and the tracker's reading come from the shared forward model
-//! ([`metrocell_model::ForwardModel`]) at the true parameters: the cell's terms and the
-//! tracker's instrument terms ([`Cell::tracker_terms`]). The engine computes the signals
+//! The tool state and every instrument's reading (tracker, probe, camera) come from the shared
+//! forward model ([`metrocell_model::ForwardModel`]) at the true parameters: the cell's terms and
+//! the instruments' terms ([`Cell::instrument_terms`]). The engine computes the signals
 //! (commanded axis positions, approach directions and velocity from the program, the *true*
 //! temperatures of the thermocouples' locations — the sensors' offsets and noise are concealed
 //! from the physics, as in a real machine — and the weather station's readings), adds noise,
 //! and schedules; nothing else. Terms with a first-order lag read the
 //! true temperature history sampled every [`HISTORY_STEP`] (at most [`HISTORY_CAP`] samples, so
-//! memory stays flat); a term that reads nothing but histories is re-evaluated only when a
-//! history sample is added.
+//! memory stays flat), held in one shared [`TemperatureTimeline`] that the signals of every
+//! instant point to (`Signals::time` is the simulation time t, s since the start of the shift);
+//! a term that reads nothing but histories is re-evaluated only when a history sample is added.
 
 use std::sync::Arc;
 
-use metrocell_model::{DisplacementCache, ForwardModel, KinematicTruth, ToolState};
+use metrocell_camera_model::Distortion;
+use metrocell_model::{DisplacementCache, ForwardModel, KinematicTruth, ProbeTarget, ToolState};
 use metrocell_physics::instrument::edlen::shop_floor_refractivity;
 use metrocell_physics::instrument::turbulence::range_scatter;
 use metrocell_physics::model::TermModel;
-use metrocell_physics::{PhysicsError, SignalKind, Signals, TemperatureHistory, TermId};
+use metrocell_physics::{PhysicsError, SignalKind, Signals, TemperatureTimeline, TermId};
 use nalgebra::{DVector, Matrix3, Vector3};
 
 use crate::cell::Cell;
 use crate::error::CellError;
+use crate::fiducial_plate::PLATE_MARKERS;
 use crate::noise::{stream, NoiseStream};
 use crate::program::MotionState;
 use crate::sample::*;
@@ -43,7 +46,7 @@ pub const HISTORY_CAP: usize = 20_000;
 #[derive(Debug)]
 pub struct Simulation {
     cell: Cell,
-    /// The tracker's instrument terms at their true values ([`Cell::tracker_terms`]).
+    /// The instruments' terms at their true values ([`Cell::instrument_terms`]).
     instruments: TermModel,
     duration: f64,
     seed: u64,
@@ -63,9 +66,10 @@ pub struct GroundTruth {
     pub station_bias: Option<(f64, f64, f64)>,
     /// Thermocouple offsets by name (K).
     pub thermocouple_offsets: Vec<(String, f64)>,
-    /// The tracker's instrument terms' true parameters (`tracker_pose.tx`, …,
-    /// `refraction.path_temperature_offset`, …), named as an estimate names them; they follow
-    /// `term_parameters` in the forward model's stacked vector.
+    /// The instruments' terms' true parameters (`tracker_pose.tx`, …,
+    /// `refraction.path_temperature_offset`, …, `probe_pretravel.mean`, `lens_distortion.k1`, …),
+    /// named as an estimate names them; they follow `term_parameters` in the forward model's
+    /// stacked vector.
     pub instrument_parameters: Vec<TrueParameter>,
 }
 
@@ -76,7 +80,7 @@ impl Simulation {
         if !(duration > 0.0 && duration.is_finite()) {
             return Err(CellError::Simulation { reason: format!("duration must be > 0 s and finite, got {duration}") });
         }
-        let instruments = cell.tracker_terms()?;
+        let instruments = cell.instrument_terms()?;
         cell.forward_model(&instruments).map_err(|err| CellError::Simulation { reason: format!("the forward model cannot be built: {err}") })?;
         let sim = Simulation { cell, instruments, duration, seed };
         let mut e = Engine::new(&sim);
@@ -95,7 +99,7 @@ impl Simulation {
         self.seed
     }
 
-    /// The tracker's instrument terms at their true values.
+    /// The instruments' terms at their true values ([`Cell::instrument_terms`]).
     pub fn instrument_terms(&self) -> &TermModel {
         &self.instruments
     }
@@ -124,6 +128,15 @@ impl Simulation {
     /// The sample stream with the ground truth of each sample.
     pub fn samples_with_truth(&self) -> TruthStream<'_> {
         TruthStream { engine: Engine::new(self) }
+    }
+
+    /// The sample stream with, for every tracker reading, the [`Signals`] the shared model was
+    /// evaluated with for it (time, commanded axis positions, velocities and approach
+    /// directions, the true temperatures at the thermocouples' locations and the timeline of the
+    /// lagged terms, the station's air of the reading, time since power-on, load; `point` and
+    /// `tracker_range` as the model set them). `None` for other samples.
+    pub fn samples_with_signals(&self) -> SignalsStream<'_> {
+        SignalsStream { engine: Engine::new(self) }
     }
 
     /// True parameters of the cell.
@@ -177,6 +190,26 @@ impl Iterator for TruthStream<'_> {
     type Item = (Sample, SampleTruth);
     fn next(&mut self) -> Option<(Sample, SampleTruth)> {
         self.engine.next_event()
+    }
+}
+
+/// Iterator over (sample, the model's signals of a tracker reading).
+pub struct SignalsStream<'a> {
+    engine: Engine<'a>,
+}
+
+impl SignalsStream<'_> {
+    pub fn error(&self) -> Option<&PhysicsError> {
+        self.engine.error.as_ref()
+    }
+}
+
+impl Iterator for SignalsStream<'_> {
+    type Item = (Sample, Option<Signals>);
+    fn next(&mut self) -> Option<(Sample, Option<Signals>)> {
+        let (sample, _) = self.engine.next_event()?;
+        let signals = matches!(sample, Sample::Tracker(_)).then(|| self.engine.signals.clone());
+        Some((sample, signals))
     }
 }
 
@@ -270,6 +303,8 @@ struct Engine<'a> {
     probe_noise: NoiseStream,
     axis_names: Arc<[String]>,
     signals: Signals,
+    /// The true temperature histories of the lagged terms (shared with `signals`).
+    timeline: Arc<TemperatureTimeline>,
     /// (sensor name, thermal slot) of every history a term reads.
     history_sensors: Vec<(String, usize)>,
     /// Index of the next history sample (at history_k·HISTORY_STEP).
@@ -308,6 +343,8 @@ impl<'a> Engine<'a> {
             signals.temperatures.insert(t.name.clone(), 20.0);
         }
         signals.load_force = cell.load_force;
+        let timeline = Arc::new(TemperatureTimeline::with_capacity(HISTORY_CAP));
+        signals.timeline = Some(timeline.clone());
         let mut history_sensors: Vec<(String, usize)> = Vec::new();
         for t in &cell.terms.terms {
             for s in t.term.signals() {
@@ -315,7 +352,7 @@ impl<'a> Engine<'a> {
                     if !history_sensors.iter().any(|(n, _)| n == &name) {
                         let node = cell.thermocouples.iter().find(|tc| tc.name == name).and_then(|tc| tc.node.as_deref());
                         history_sensors.push((name.clone(), thermal.slot_of_node(node)));
-                        signals.temperature_histories.insert(name, TemperatureHistory::default());
+                        timeline.add_sensor(&name);
                     }
                 }
             }
@@ -341,6 +378,7 @@ impl<'a> Engine<'a> {
             probe_noise: NoiseStream::new(seed, stream::PROBE),
             axis_names: Arc::from(cell.machine.joint_names()),
             signals,
+            timeline,
             history_sensors,
             history_k: 0,
             cache: DisplacementCache::new(&model),
@@ -361,12 +399,8 @@ impl<'a> Engine<'a> {
                 let th = self.history_k as f64 * HISTORY_STEP;
                 for (name, slot) in &self.history_sensors {
                     let v = self.thermal.at(*slot, th);
-                    if let Some(h) = self.signals.temperature_histories.get_mut(name) {
-                        if h.samples.len() == HISTORY_CAP {
-                            h.samples.remove(0);
-                        }
-                        h.samples.push((th, v));
-                    }
+                    // times advance on the grid and the thermal model is finite: cannot fail
+                    let _ = self.timeline.push(name, th, v);
                 }
                 self.history_k += 1;
             }
@@ -374,9 +408,10 @@ impl<'a> Engine<'a> {
         }
     }
 
-    /// Signals at t for the motion state: histories up to t, motion, true temperatures.
+    /// Signals at t for the motion state: time, histories up to t, motion, true temperatures.
     fn set_signals(&mut self, t: f64, ms: &MotionState) {
         self.update_histories(t);
+        self.signals.time = Some(t);
         self.model.set_motion(&mut self.signals, ms.q.as_slice(), ms.velocity.as_slice(), &ms.approach);
         for (i, tc) in self.cell.thermocouples.iter().enumerate() {
             let v = self.thermal.at(self.tc_slots[i], t);
@@ -470,7 +505,7 @@ impl<'a> Engine<'a> {
             KinematicTruth::Arm { joint_offsets, .. } => actual.iter_mut().zip(joint_offsets).for_each(|(a, o)| *a += o),
             _ => (0..3).for_each(|k| actual[k] += d[k]),
         }
-        let s = MachineStateSample { t, names: self.axis_names.clone(), commanded: ms.q.as_slice().to_vec(), actual };
+        let s = MachineStateSample { t, names: self.axis_names.clone(), commanded: ms.q.as_slice().to_vec(), commanded_velocity: ms.velocity.as_slice().to_vec(), actual };
         Ok((Sample::MachineState(s), SampleTruth::MachineState { displacement: d }))
     }
 
@@ -500,7 +535,7 @@ impl<'a> Engine<'a> {
         let s = &mut self.signals;
         (s.air_temperature, s.air_pressure, s.air_humidity) = (Some(t_station), Some(p_station), Some(h_station));
         s.time_since_power_on = Some(t + spec.powered_on_before_start);
-        let prediction = self.model.tracker(&self.reading_params, tool_point, s)?;
+        let prediction = self.model.tracker(&self.reading_params, &tool, s)?;
         let (x, rho, az, el) = (prediction.point, prediction.range, prediction.azimuth, prediction.elevation);
         let (refraction, warmup) = (prediction.refraction, prediction.warmup);
         let c = spec.turbulence.iter().filter(|w| t >= w.start && t < w.end).map(|w| w.coefficient).fold(0.0, f64::max);
@@ -572,20 +607,22 @@ impl<'a> Engine<'a> {
             }
         }
         let ms = MotionState { q: seg.to.clone(), velocity: DVector::zeros(seg.to.len()), approach, dwell_point: Some(point), cycle: Some(ev.cycle) };
-        let d = self.tool_state(ev.t, &ms)?.d;
-        let pretravel = match &spec.pretravel {
-            Some(pt) => {
-                let s = Signals { probe_direction: Some(u), ..Signals::default() };
-                let v = pt.term.predict(&pt.params, &s)?.value;
-                Vector3::new(v[0], v[1], v[2])
-            }
-            None => Vector3::zeros(),
-        };
+        self.set_signals(ev.t, &ms);
+        // the surface point is the program point; the stylus is a point (radius 0), so the
+        // reading is where the machine thinks the contact is
         let nominal = self.cell.machine.nominal_tool_point(&v3(&seg.to));
-        // Touching P with a machine that is off by d needs an axis reading P − d; the trigger
-        // comes pretravel further along the approach direction.
+        let hit = ProbeTarget { surface: nominal, approach: u, stylus_radius: 0.0 };
+        let prediction = self.model.probe_hit(None, &self.params, &self.kinematics, ms.q.as_slice(), &mut self.signals, &hit)?;
+        let (mut d, pretravel) = (prediction.machine, prediction.pretravel);
+        let mut centre = prediction.centre;
+        // the test-only disturbances displace the machine as a term would: the axes read −δ
+        if !self.cell.disturbances.is_empty() {
+            let delta = self.cell.disturbances.displacement(ev.t, &v3(&ms.q));
+            d += delta;
+            centre -= delta;
+        }
         let noise = Vector3::new(self.probe_noise.normal(), self.probe_noise.normal(), self.probe_noise.normal()) * spec.noise;
-        let recorded = nominal - d + pretravel + noise;
+        let recorded = centre + noise;
         let s = ProbeHitSample {
             t: ev.t,
             target_id: point as u32,
@@ -605,8 +642,22 @@ impl<'a> Engine<'a> {
         let ms = MotionState { q: seg.to.clone(), velocity: DVector::zeros(seg.to.len()), approach: seg.approach.clone(), dwell_point: seg.dwell_point, cycle: Some(ev.cycle) };
         let tool = self.tool_state(ev.t, &ms)?;
         // the camera is mounted on the tool: its pose is the tool pose followed by the mount
-        let mount = spec.mount.isometry();
-        let (camera, nominal_camera) = (tool.truth * mount, tool.nominal * mount);
+        let (nominal_camera, camera) = self.model.camera_pose(None, &tool)?;
+        let plate = spec.plate.pose(&nominal_camera);
+        let centre = plate.translation.vector;
+        let plate_position = centre + self.model.workpiece_displacement(&self.params, &mut self.signals, centre, None, 1.0)?;
+        let brown_conrady = matches!(spec.lens().distortion, Distortion::BrownConrady(_));
+        let mut corners = Vec::with_capacity(4 * PLATE_MARKERS);
+        for f in spec.plate.corners_in_workpiece(&nominal_camera) {
+            corners.push(self.model.camera(None, &self.params, &tool, &mut self.signals, &f)?.pixel);
+        }
+        let mut marker_points = Vec::with_capacity(PLATE_MARKERS);
+        for k in 0..PLATE_MARKERS {
+            let [x, y] = spec.plate.marker_top_left(k);
+            let h = spec.plate.marker_side / 2.0;
+            let f = plate.transform_point(&nalgebra::Point3::new(x + h, y + h, 0.0)).coords;
+            marker_points.push(self.model.camera(None, &self.params, &tool, &mut self.signals, &f)?.measured_point);
+        }
         let s = CameraFrameRequest {
             t: ev.t,
             target_id: seg.dwell_point.unwrap_or(0) as u32,
@@ -615,6 +666,10 @@ impl<'a> Engine<'a> {
             rotation: camera.rotation.to_rotation_matrix().into_inner(),
             nominal_position: nominal_camera.translation.vector,
             nominal_rotation: nominal_camera.rotation.to_rotation_matrix().into_inner(),
+            plate_position,
+            plate_rotation: plate.rotation.to_rotation_matrix().into_inner(),
+            corners: brown_conrady.then_some(corners),
+            marker_points,
         };
         let tool_point = tool.truth.translation.vector;
         Ok((Sample::CameraFrameRequest(s), SampleTruth::CameraFrameRequest { tool_point, joints: seg.to.as_slice().to_vec(), displacement: tool.d }))

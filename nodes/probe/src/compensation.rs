@@ -63,7 +63,7 @@ pub fn approach_direction(velocity: Option<Vector3<f64>>, fallback: Vector3<f64>
 
 /// Compensate one trigger at axis readings `axes` (x, y, z) with approach direction `u` (unit).
 pub fn compensate(model: &ProbeModel, axes: Vector3<f64>, u: Vector3<f64>) -> Result<CompensatedHit, ProbeError> {
-    let term = ProbePretravel { lobes: model.lobes };
+    let term = ProbePretravel::new(model.lobes);
     let signals = Signals { probe_direction: Some(u), ..Default::default() };
     let d = term.predict(&model.pretravel, &signals).map_err(|e| ProbeError::Physics(e.to_string()))?;
     let j = term.jacobian(&model.pretravel, &signals).map_err(|e| ProbeError::Physics(e.to_string()))?;

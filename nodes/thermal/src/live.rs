@@ -16,12 +16,12 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
         .sensor_names()
         .into_iter()
         .map(|name| {
-            let sub = node.subscription::<Temperature>(&format!("temperature/{name}"), qos::sensor_data())?;
+            let sub = node.subscription::<Temperature>(&format!("temperature/{name}"), qos::stream(qos::sensor_data()))?;
             Ok((name, sub))
         })
         .collect::<Result<Vec<_>, NodeError>>()?;
-    let points = node.subscription::<MeasuredPoint>("measured_points", qos::reliable())?;
-    let compensated = node.publisher::<MeasuredPoint>("measured_points/thermal_compensated", qos::reliable())?;
+    let points = node.subscription::<MeasuredPoint>("measured_points", qos::stream(qos::reliable()))?;
+    let compensated = node.publisher::<MeasuredPoint>("measured_points/thermal_compensated", qos::stream(qos::reliable()))?;
     let model_pub = node.publisher::<ErrorModel>("thermal/error_model", qos::latched())?;
     let drift_pub = node.publisher::<MeasuredPoint>("thermal/predicted_drift", qos::reliable())?;
 

@@ -26,7 +26,7 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
         _ => None,
     };
     let measurements = match tcp {
-        None => Some(node.subscription::<TrackerMeasurement>("tracker/measurements", qos::reliable())?),
+        None => Some(node.subscription::<TrackerMeasurement>("tracker/measurements", qos::stream(qos::reliable()))?),
         Some(_) => None,
     };
     let weather = if state.config().air_from_topics {
@@ -38,9 +38,9 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
     } else {
         None
     };
-    let commanded = node.subscription::<JointState>("machine/commanded_joint_states", qos::sensor_data())?;
+    let commanded = node.subscription::<JointState>("machine/commanded_joint_states", qos::stream(qos::sensor_data()))?;
     let reregister = node.subscription::<RosString>("tracker/reregister", qos::reliable())?;
-    let points = node.publisher::<MeasuredPoint>("measured_points", qos::reliable())?;
+    let points = node.publisher::<MeasuredPoint>("measured_points", qos::stream(qos::reliable()))?;
     let dwells = node.publisher::<TrackerMeasurement>("tracker/dwells", qos::reliable())?;
     let warmup = node.publisher::<ErrorModel>("tracker/warmup", qos::latched())?;
     let tf_static = node.publisher::<TFMessage>("/tf_static", qos::latched())?;

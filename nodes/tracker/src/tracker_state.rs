@@ -53,6 +53,24 @@ pub struct Counters {
     pub no_nominal: u64,
 }
 
+/// Longest a dwell waits, in message time, for the commanded state after its mid time. The
+/// readings and the commanded states come through separate DDS readers: a commanded sample lost
+/// on the wire is resent only after the writer's next heartbeat, and the readings that close the
+/// dwell may be processed first. A minute covers that at any replay speed a twin or bag is played
+/// (160× turns 0.4 s of wall clock into a minute); a commanded stream that stopped for good makes
+/// dwells fall back to the program's timing, or go without nominal, after this.
+const COMMANDED_WAIT_NS: i64 = 60_000_000_000;
+
+/// A dwell averaged and flagged, waiting for the commanded state after its mid time.
+#[derive(Debug, Clone)]
+struct AwaitingNominal {
+    target: String,
+    mid_ns: i64,
+    point: Vector3<f64>,
+    covariance: Matrix3<f64>,
+    flagged: bool,
+}
+
 /// A dwell waiting for the tracker pose.
 #[derive(Debug, Clone)]
 struct PendingPoint {
@@ -72,6 +90,8 @@ pub struct TrackerState {
     pose: Option<Registration>,
     collected: BTreeMap<String, Correspondence>,
     pending: Vec<PendingPoint>,
+    /// Dwells whose nominal waits for the commanded states (in dwell order).
+    awaiting: std::collections::VecDeque<AwaitingNominal>,
     last_warmup: Option<(f64, bool)>,
     station_air: (Option<f64>, Option<f64>, Option<f64>),
     pub counters: Counters,
@@ -81,13 +101,19 @@ impl TrackerState {
     pub fn new(config: TrackerConfig) -> Self {
         Self {
             grouper: DwellGrouper::new(config.dwell_gap_ns),
-            // commanded history: a minute is far more than any dwell waits for its nominal
-            commanded: CommandedTrajectory::new(60_000_000_000, config.commanded_gap_ns),
+            // Commanded history, in message time. Live, the readings and the commanded states
+            // come through separate reader queues and the readings may be processed well behind
+            // the states (a backlog after a stall; a twin or bag played at 100× and more turns a
+            // wall-clock second into minutes): a dwell must still find the states around it. Ten
+            // minutes (60 000 states at 100 Hz) covers the readings queue (qos::STREAM_DEPTH) at
+            // the rates the cells use; one minute did not (dwells without nominal at 240×).
+            commanded: CommandedTrajectory::new(600_000_000_000, config.commanded_gap_ns),
             warmup: WarmupTracker::new(),
             power_on_ns: config.power_on_ns,
             pose: None,
             collected: BTreeMap::new(),
             pending: Vec::new(),
+            awaiting: std::collections::VecDeque::new(),
             last_warmup: None,
             station_air: (None, None, None),
             counters: Counters::default(),
@@ -167,6 +193,9 @@ impl TrackerState {
         self.counters.readings += 1;
         self.power_on_ns.get_or_insert(raw.time_ns - self.config.warmup_elapsed_at_first_ns);
         let mut out = Vec::new();
+        if self.awaiting.front().is_some_and(|a| raw.time_ns - a.mid_ns > COMMANDED_WAIT_NS) {
+            self.resolve_awaiting(true, &mut out);
+        }
         // a silence closes the open dwell even when this reading is rejected
         if let Some(d) = self.grouper.close_if_stale(raw.time_ns) {
             out.extend(self.dwell(d));
@@ -193,15 +222,18 @@ impl TrackerState {
         if let Err(e) = self.commanded.push(t, &j.name, &j.position) {
             out.push(Output::Warning(format!("machine/commanded_joint_states: {e}")));
         }
+        self.resolve_awaiting(false, &mut out);
         out
     }
 
     /// The input ended (end of a bag or export, node shutdown): close the open dwell.
     pub fn finish(&mut self) -> Vec<Output> {
-        match self.grouper.flush() {
+        let mut out = match self.grouper.flush() {
             Some(d) => self.dwell(d),
             None => Vec::new(),
-        }
+        };
+        self.resolve_awaiting(true, &mut out);
+        out
     }
 
     /// Forget the pose and register again from the next `registration_points` targets (the
@@ -233,19 +265,40 @@ impl TrackerState {
         let covariance = d.covariance_given(verdict.as_ref());
         let warming_up = self.warmup_step(&d, flagged, &mut out);
         out.push(Output::Dwell(messages::dwell_measurement(&d, &covariance, &self.config.tracker_frame, flagged, warming_up)));
+        self.awaiting.push_back(AwaitingNominal { target: d.target.clone(), mid_ns: d.mid_ns(), point: d.point, covariance, flagged });
+        self.resolve_awaiting(false, &mut out);
+        out
+    }
 
-        // commanded joint states first; the program's timing (T_v) when they do not cover the dwell
-        let commanded = self.commanded.joints_at(d.mid_ns(), &self.config.nominal_joints).map(|q| Vector3::new(q[0], q[1], q[2]));
-        let scheduled = || self.config.schedule.as_ref().and_then(|s| s.point_at(d.mid_ns())).map(|(_, p)| p);
+    /// Give the waiting dwells, oldest first, their nominal and place them, as long as the
+    /// commanded states cover them (a state after the mid time has arrived), there are no
+    /// commanded states at all (the program's timing is the only source), or `force`.
+    fn resolve_awaiting(&mut self, force: bool, out: &mut Vec<Output>) {
+        while let Some(a) = self.awaiting.front() {
+            let covered = !matches!(self.commanded.latest_ns(), Some(latest) if latest < a.mid_ns);
+            if !covered && !force {
+                break;
+            }
+            let a = self.awaiting.pop_front().expect("front exists");
+            self.place(a, out);
+        }
+    }
+
+    /// The nominal of a dwell (commanded joint states first; the program's timing, T_v, when they
+    /// do not cover it), then the point: published, or held until the tracker pose is fitted.
+    fn place(&mut self, a: AwaitingNominal, out: &mut Vec<Output>) {
+        let AwaitingNominal { target, mid_ns, point, covariance, flagged } = a;
+        let commanded = self.commanded.joints_at(mid_ns, &self.config.nominal_joints).map(|q| Vector3::new(q[0], q[1], q[2]));
+        let scheduled = || self.config.schedule.as_ref().and_then(|s| s.point_at(mid_ns)).map(|(_, p)| p);
         let nominal = match (commanded, scheduled()) {
             (Ok(q), _) | (Err(_), Some(q)) => q + self.config.tool_offset,
             (Err(e), None) => {
                 self.counters.no_nominal += 1;
-                out.push(Output::Warning(format!("dwell of '{}' at {} ns has no nominal: {e}", d.target, d.mid_ns())));
-                return out;
+                out.push(Output::Warning(format!("dwell of '{target}' at {mid_ns} ns has no nominal: {e}")));
+                return;
             }
         };
-        let pending = PendingPoint { target: d.target.clone(), stamp_ns: d.mid_ns(), point: d.point, covariance, nominal };
+        let pending = PendingPoint { target: target.clone(), stamp_ns: mid_ns, point, covariance, nominal };
         match &self.pose {
             Some(pose) => {
                 let p = messages::measured_point(pose, &pending.target, pending.stamp_ns, &pending.point, &pending.covariance, &pending.nominal, &self.config.machine_frame);
@@ -253,19 +306,15 @@ impl TrackerState {
                 out.push(Output::Point(p));
             }
             None => {
-                if !flagged && !self.collected.contains_key(&d.target) {
-                    self.collected.insert(
-                        d.target.clone(),
-                        Correspondence { tracker: d.point, tracker_covariance: covariance, machine: nominal, machine_covariance: Matrix3::zeros() },
-                    );
+                if !flagged && !self.collected.contains_key(&target) {
+                    self.collected.insert(target, Correspondence { tracker: point, tracker_covariance: covariance, machine: nominal, machine_covariance: Matrix3::zeros() });
                 }
                 self.pending.push(pending);
                 if self.collected.len() >= self.config.registration_points {
-                    out.extend(self.try_register(d.mid_ns()));
+                    out.extend(self.try_register(mid_ns));
                 }
             }
         }
-        out
     }
 
     /// Warm-up bookkeeping for one dwell; returns whether the tracker is still warming up
@@ -439,6 +488,88 @@ mod tests {
             let radial = (u.transpose() * c * u)[(0, 0)].sqrt();
             assert!((radial / (60e-6 / f64::sqrt(n)) - 1.0).abs() < 0.1, "{radial}");
         }
+    }
+
+    /// Live, the commanded states come through their own reader and can lag the readings (a
+    /// sample resent after a loss): a dwell closed before the state after its mid time arrived
+    /// waits for it, and gets the same nominal as when the states come first.
+    #[test]
+    fn a_dwell_waits_for_commanded_states_that_arrive_after_its_readings() {
+        let (r, t) = (Rotation3::from_euler_angles(0.0, 0.0, 0.5), Vector3::new(-1.2, 0.2, 0.6));
+        let mut in_order = TrackerState::new(TrackerConfig { registration_points: 4, ..TrackerConfig::defaults() });
+        let mut expected = visit(&mut in_order, 0, &r, &t, 0.0);
+        expected.extend(in_order.finish());
+        // the same inputs, every commanded state held back until all readings are in
+        let mut state = TrackerState::new(TrackerConfig { registration_points: 4, ..TrackerConfig::defaults() });
+        let mut commanded = Vec::new();
+        let mut time = 0;
+        for (k, q) in NOMINALS.iter().enumerate() {
+            let q = Vector3::from(*q);
+            let (range, azimuth, elevation) = to_spherical(&(r.inverse() * (q - t)));
+            for i in 0..10 {
+                time += 100_000_000;
+                commanded.push(JointState { header: header(time), name: vec!["x".into(), "y".into(), "z".into()], position: vec![q.x, q.y, q.z], velocity: vec![], effort: vec![] });
+                let m = TrackerMeasurement {
+                    header: header(time),
+                    target_id: format!("p{k}"),
+                    point: Point::default(),
+                    range,
+                    azimuth,
+                    elevation,
+                    covariance: [0.0; 9],
+                    air_temperature: AIR.temperature,
+                    air_pressure: AIR.pressure,
+                    air_humidity: AIR.humidity,
+                    refractive_index: AIR.refractive_index(),
+                    status: if k == 1 && i == 4 { TrackerMeasurement::STATUS_BEAM_BREAK } else { 0 },
+                };
+                // one early commanded state, so the node knows the stream exists
+                if k == 0 && i == 0 {
+                    let _ = state.commanded(commanded.last().unwrap());
+                }
+                assert!(points(&state.measurement(&m)).is_empty(), "no point before its commanded states");
+            }
+            time += 2_000_000_000;
+        }
+        let mut out = Vec::new();
+        for j in &commanded[1..] {
+            out.extend(state.commanded(j));
+        }
+        out.extend(state.finish());
+        assert_eq!(state.counters.no_nominal, 0);
+        let got: Vec<_> = points(&out).into_iter().cloned().collect();
+        let want: Vec<_> = points(&expected).into_iter().cloned().collect();
+        assert_eq!(got.len(), 4);
+        assert_eq!(got, want, "same points as with the states in order");
+    }
+
+    #[test]
+    fn a_dwell_whose_commanded_states_never_come_is_counted_after_the_wait() {
+        let mut state = TrackerState::new(TrackerConfig { registration_points: 4, ..TrackerConfig::defaults() });
+        let j = |t: i64| JointState { header: header(t), name: vec!["x".into(), "y".into(), "z".into()], position: vec![0.0; 3], velocity: vec![], effort: vec![] };
+        let _ = state.commanded(&j(0));
+        let m = |t: i64, target: &str| TrackerMeasurement {
+            header: header(t),
+            target_id: target.into(),
+            point: Point::default(),
+            range: 2.0,
+            azimuth: 0.1,
+            elevation: 0.1,
+            covariance: [0.0; 9],
+            air_temperature: AIR.temperature,
+            air_pressure: AIR.pressure,
+            air_humidity: AIR.humidity,
+            refractive_index: AIR.refractive_index(),
+            status: 0,
+        };
+        for i in 1..=10 {
+            let _ = state.measurement(&m(i * 100_000_000, "p0"));
+        }
+        let _ = state.measurement(&m(1_200_000_000, ""));
+        assert_eq!(state.counters.no_nominal, 0, "still waiting");
+        let out = state.measurement(&m(1_000_000_000 + COMMANDED_WAIT_NS + 600_000_000, ""));
+        assert_eq!(state.counters.no_nominal, 1, "given up after the wait");
+        assert!(out.iter().any(|o| matches!(o, Output::Warning(w) if w.contains("no nominal"))));
     }
 
     #[test]

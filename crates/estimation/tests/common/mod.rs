@@ -45,7 +45,7 @@ pub fn records(model: &ForwardModel, p: &[f64], plan: &[Planned], noise: Tracker
         .map(|(i, d)| {
             let mut s = signals(model, d);
             let tool = model.tool_state(p, &kin, &d.q, &mut s, None).expect("tool state");
-            let y = model.tracker(p, tool.truth.translation.vector, &mut s).expect("tracker reading");
+            let y = model.tracker(p, &tool, &mut s).expect("tracker reading");
             let (rho, az, el) = to_spherical(&y.measured_point());
             let sr = noise.constant + noise.per_metre * rho;
             let measured = from_spherical(rho + sr * n(), az + noise.angular * n(), el + noise.angular * n());

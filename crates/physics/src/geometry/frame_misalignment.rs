@@ -2,7 +2,8 @@
 //! rotated by θ about Z on the table (thesis P4 eq. 6) or a fixture offset.
 //!
 //! d = ω × (p − o) + t,   ω = (rx, ry, rz) small rotation (rad), t = (tx, ty, tz) (m),
-//! o = option `origin` (m, default 0), p = signal `point` (nominal feature position).
+//! o = option `origin` (m, default 0), p = signal `workpiece_point` (nominal feature position,
+//! workpiece frame).
 //! First order in ω (small-angle): valid while |ω|·|p − o| is far below the tolerance of interest;
 //! large rotations are a `tracker_pose`-style full transform. Frame: workpiece.
 
@@ -41,17 +42,17 @@ impl PhysicsTerm for FrameMisalignment {
         v
     }
     fn signals(&self) -> Vec<SignalKind> {
-        vec![SignalKind::Point]
+        vec![SignalKind::WorkpiecePoint]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
         check_len(&self.label(), p, 6)?;
-        let r = s.point3(&self.label())? - self.origin;
+        let r = s.workpiece(&self.label())? - self.origin;
         let w = Vector3::new(p[0], p[1], p[2]);
         Ok(displacement(Frame::Workpiece, w.cross(&r) + Vector3::new(p[3], p[4], p[5])))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         check_len(&self.label(), p, 6)?;
-        let r = s.point3(&self.label())? - self.origin;
+        let r = s.workpiece(&self.label())? - self.origin;
         let mut j = DMatrix::zeros(3, 6);
         // ∂(ω × r)/∂ω = −[r]×
         let neg_skew = -r.cross_matrix();

@@ -12,7 +12,10 @@
 //! Z = (δx(z) − z·s_xz, δy(z) − z·s_yz, z + δz(z))                      (eq. 9)
 //! ```
 //! P is the tool point T (tool offset, m) expressed in the workpiece (table) frame; with all
-//! errors zero P₀ = T + (x, y, z). The volumetric error is E = P − P₀.
+//! errors zero P₀ = T + (x, y, z). The volumetric error is E = P − P₀. The exact chain (any
+//! stacking order, R(k) inverted exactly) is crates/kinematics `cartesian_error_chain`, the
+//! project's one copy; this module holds the first-order synthesis the catalog terms sum to, and
+//! the crate tests hold the two together to second order.
 //!
 //! Sign conventions (exactly P5's): δ(k) and ε(k) are the error motions of axis k's carriage.
 //! X is on the workpiece side, so its errors enter the tool-relative-to-workpiece error with a
@@ -28,7 +31,7 @@
 //! (`lever_axes: []`, `abbe_offset: T`), of Y (`lever_axes: [z]`, abbe T) and of X with −ε(x)
 //! (`lever_axes: [x, y, z]`, abbe T); squareness pairs xy, xz, yz. The crate tests check this.
 
-use nalgebra::{Matrix3, Vector3};
+use nalgebra::Vector3;
 
 use super::error_series::ErrorSeries;
 use crate::error::PhysicsError;
@@ -98,30 +101,6 @@ impl GeometricErrorModel {
         }
         Ok(())
     }
-}
-
-/// R(k) of P5 eq. (6): I + \[ε\]× (first-order rotation; not exactly orthonormal).
-pub fn small_rotation(eps: &Vector3<f64>) -> Matrix3<f64> {
-    Matrix3::identity() + eps.cross_matrix()
-}
-
-fn axis_vectors(q: &Vector3<f64>, e: &dyn Fn(Axis, f64) -> AxisErrorValues, sq: &SquarenessValues) -> [(Vector3<f64>, Vector3<f64>); 3] {
-    let ex = e(Axis::X, q.x);
-    let ey = e(Axis::Y, q.y);
-    let ez = e(Axis::Z, q.z);
-    let xv = Vector3::new(-q.x, 0.0, 0.0) + ex.translation;
-    let yv = Vector3::new(-q.y * sq.xy, q.y, 0.0) + ey.translation;
-    let zv = Vector3::new(-q.z * sq.xz, -q.z * sq.yz, q.z) + ez.translation;
-    [(xv, ex.rotation), (yv, ey.rotation), (zv, ez.rotation)]
-}
-
-/// Tool point in the workpiece frame by the full P5 chain (eq. 2 with R_LT = I, T_LT = 0).
-/// `q` = commanded (x, y, z), `tool` = tool offset T, `errors(axis, q_axis)` = error motions.
-/// Returns `None` only if R_X is singular (impossible for physically small angles).
-pub fn xfyz_tool_position_exact(q: &Vector3<f64>, tool: &Vector3<f64>, errors: &dyn Fn(Axis, f64) -> AxisErrorValues, sq: &SquarenessValues) -> Option<Vector3<f64>> {
-    let [(xv, ex), (yv, ey), (zv, ez)] = axis_vectors(q, errors, sq);
-    let rx_inv = small_rotation(&ex).try_inverse()?;
-    Some(rx_inv * (small_rotation(&ey) * (small_rotation(&ez) * tool + zv) + yv - xv))
 }
 
 /// First-order volumetric error E = P − (T + q) of the XFYZ chain (see the module docs).

@@ -1,7 +1,7 @@
 //! `camera_scale` — metric scale error of a camera measurement (wrong marker size, focal length
 //! or working distance): a camera-frame point is reported at (1 + s)·p.
 //!
-//! d = s·p,  p = signal `point` in the camera frame. Frame: camera.
+//! d = s·p,  p = signal `camera_point` (camera frame). Frame: camera.
 
 use nalgebra::DMatrix;
 
@@ -12,11 +12,14 @@ use crate::signals::{SignalKind, Signals};
 use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
 
 #[derive(Debug, Clone, Default)]
-pub struct CameraScale;
+pub struct CameraScale {
+    /// Instance name (option `instrument`), see [`super::instance`].
+    pub instrument: Option<String>,
+}
 
 impl CameraScale {
-    pub fn from_options(_o: &Options) -> Result<Self, PhysicsError> {
-        Ok(Self)
+    pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
+        Ok(Self { instrument: super::instance(o)? })
     }
 }
 
@@ -25,7 +28,10 @@ impl PhysicsTerm for CameraScale {
         TermId::CameraScale
     }
     fn label(&self) -> String {
-        "camera_scale".into()
+        super::instance_label("camera_scale", &self.instrument)
+    }
+    fn instrument(&self) -> Option<&str> {
+        self.instrument.as_deref()
     }
     fn effect(&self) -> EffectKind {
         EffectKind::Displacement(Frame::Camera)
@@ -34,14 +40,14 @@ impl PhysicsTerm for CameraScale {
         vec![ParamSpec::new("scale", "1", -0.05, 0.05, 0.0, "relative scale error s")]
     }
     fn signals(&self) -> Vec<SignalKind> {
-        vec![SignalKind::Point]
+        vec![SignalKind::CameraPoint]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
         check_len(&self.label(), p, 1)?;
-        Ok(displacement(Frame::Camera, s.point3(&self.label())? * p[0]))
+        Ok(displacement(Frame::Camera, s.camera(&self.label())? * p[0]))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         check_len(&self.label(), p, 1)?;
-        Ok(DMatrix::from_column_slice(3, 1, s.point3(&self.label())?.as_slice()))
+        Ok(DMatrix::from_column_slice(3, 1, s.camera(&self.label())?.as_slice()))
     }
 }

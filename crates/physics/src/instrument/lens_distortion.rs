@@ -15,12 +15,30 @@ use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
 use crate::term::{check_len, EffectKind, ParamSpec, PhysicsTerm, Prediction};
 
+/// ∂(Δx, Δy)/∂(x, y) at the ideal normalised point (x, y) for parameters (k1, k2, k3, p1, p2):
+/// with R = k1 r² + k2 r⁴ + k3 r⁶ and R' = dR/d(r²) = k1 + 2 k2 r² + 3 k3 r⁴,
+///   ∂Δx/∂x = R + 2x²R' + 2 p1 y + 6 p2 x,   ∂Δx/∂y = 2xyR' + 2 p1 x + 2 p2 y,
+///   ∂Δy/∂x = 2xyR' + 2 p1 x + 2 p2 y,       ∂Δy/∂y = R + 2y²R' + 6 p1 y + 2 p2 x.
+/// Rows Δx, Δy; columns x, y. (A camera prediction needs it to carry a point's motion through
+/// the lens.)
+pub fn image_point_jacobian(p: &[f64], x: f64, y: f64) -> [[f64; 2]; 2] {
+    let (k1, k2, k3, p1, p2) = (p[0], p[1], p[2], p[3], p[4]);
+    let r2 = x * x + y * y;
+    let radial = k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2;
+    let slope = k1 + 2.0 * k2 * r2 + 3.0 * k3 * r2 * r2;
+    let cross = 2.0 * x * y * slope + 2.0 * p1 * x + 2.0 * p2 * y;
+    [[radial + 2.0 * x * x * slope + 2.0 * p1 * y + 6.0 * p2 * x, cross], [cross, radial + 2.0 * y * y * slope + 6.0 * p1 * y + 2.0 * p2 * x]]
+}
+
 #[derive(Debug, Clone, Default)]
-pub struct LensDistortion;
+pub struct LensDistortion {
+    /// Instance name (option `instrument`), see [`super::instance`].
+    pub instrument: Option<String>,
+}
 
 impl LensDistortion {
-    pub fn from_options(_o: &Options) -> Result<Self, PhysicsError> {
-        Ok(Self)
+    pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
+        Ok(Self { instrument: super::instance(o)? })
     }
     fn jac(&self, s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         let q = s.image(&self.label())?;
@@ -39,7 +57,10 @@ impl PhysicsTerm for LensDistortion {
         TermId::LensDistortion
     }
     fn label(&self) -> String {
-        "lens_distortion".into()
+        super::instance_label("lens_distortion", &self.instrument)
+    }
+    fn instrument(&self) -> Option<&str> {
+        self.instrument.as_deref()
     }
     fn effect(&self) -> EffectKind {
         EffectKind::ImageShift

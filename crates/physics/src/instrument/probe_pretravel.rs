@@ -19,6 +19,8 @@ use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, Physics
 #[derive(Debug, Clone)]
 pub struct ProbePretravel {
     pub lobes: usize,
+    /// Instance name (option `instrument`), see [`super::instance`].
+    pub instrument: Option<String>,
 }
 
 impl ProbePretravel {
@@ -27,7 +29,11 @@ impl ProbePretravel {
         if lobes == 0 {
             return Err(o.bad("lobes", "must be at least 1"));
         }
-        Ok(Self { lobes })
+        Ok(Self { lobes, instrument: super::instance(o)? })
+    }
+    /// The term of an unnamed probe with `lobes` lobes.
+    pub fn new(lobes: usize) -> Self {
+        Self { lobes, instrument: None }
     }
     /// ∂pt/∂(p0, a, b, pz) and the direction.
     fn row(&self, s: &Signals) -> Result<([f64; 4], Vector3<f64>), PhysicsError> {
@@ -44,7 +50,10 @@ impl PhysicsTerm for ProbePretravel {
         TermId::ProbePretravel
     }
     fn label(&self) -> String {
-        "probe_pretravel".into()
+        super::instance_label("probe_pretravel", &self.instrument)
+    }
+    fn instrument(&self) -> Option<&str> {
+        self.instrument.as_deref()
     }
     fn effect(&self) -> EffectKind {
         EffectKind::Displacement(Frame::Probe)

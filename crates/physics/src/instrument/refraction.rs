@@ -31,6 +31,8 @@ fn range_change(rho: f64, t: f64, pa: f64, h: f64, dh: f64, p: &[f64]) -> (f64, 
 pub struct Refraction {
     /// Δh, %RH: relative humidity on the beam minus the station reading.
     pub path_humidity_offset: f64,
+    /// Instance name (option `instrument`), see [`super::instance`].
+    pub instrument: Option<String>,
 }
 
 impl Refraction {
@@ -39,7 +41,7 @@ impl Refraction {
         if !(path_humidity_offset.abs() <= 100.0) {
             return Err(o.bad("path_humidity_offset", format!("must be within ±100 %RH, got {path_humidity_offset}")));
         }
-        Ok(Self { path_humidity_offset })
+        Ok(Self { path_humidity_offset, instrument: super::instance(o)? })
     }
 }
 
@@ -48,7 +50,10 @@ impl PhysicsTerm for Refraction {
         TermId::Refraction
     }
     fn label(&self) -> String {
-        "refraction".into()
+        super::instance_label("refraction", &self.instrument)
+    }
+    fn instrument(&self) -> Option<&str> {
+        self.instrument.as_deref()
     }
     fn effect(&self) -> EffectKind {
         EffectKind::RangeChange

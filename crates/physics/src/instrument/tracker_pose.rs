@@ -4,7 +4,7 @@
 //!
 //! X_LT = R_LTᵀ·(p − T_LT),  R_LT = Rx(α)·Ry(β)·Rz(δ)   (thesis P5 eqs 2, 21–22; Euler XYZ)
 //!
-//! p is the tool point (signal `point`), T_LT = (tx, ty, tz) the tracker origin and
+//! p is the sighted tool point (signal `target_point`), T_LT = (tx, ty, tz) the tracker origin and
 //! (α, β, δ) the Euler angles. R_LT is orthonormal, so R_LT⁻¹ = R_LTᵀ. Effect: the point in the
 //! tracker frame, m.
 
@@ -41,11 +41,14 @@ pub fn euler_xyz(alpha: f64, beta: f64, delta: f64) -> Matrix3<f64> {
 }
 
 #[derive(Debug, Clone, Default)]
-pub struct TrackerPose;
+pub struct TrackerPose {
+    /// Instance name (option `instrument`), see [`super::instance`].
+    pub instrument: Option<String>,
+}
 
 impl TrackerPose {
-    pub fn from_options(_o: &Options) -> Result<Self, PhysicsError> {
-        Ok(Self)
+    pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
+        Ok(Self { instrument: super::instance(o)? })
     }
 }
 
@@ -54,7 +57,10 @@ impl PhysicsTerm for TrackerPose {
         TermId::TrackerPose
     }
     fn label(&self) -> String {
-        "tracker_pose".into()
+        super::instance_label("tracker_pose", &self.instrument)
+    }
+    fn instrument(&self) -> Option<&str> {
+        self.instrument.as_deref()
     }
     fn effect(&self) -> EffectKind {
         EffectKind::PointInFrame(Frame::Tracker)
@@ -71,17 +77,17 @@ impl PhysicsTerm for TrackerPose {
         ]
     }
     fn signals(&self) -> Vec<SignalKind> {
-        vec![SignalKind::Point]
+        vec![SignalKind::TargetPoint]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
         check_len(&self.label(), p, 6)?;
-        let d = s.point3(&self.label())? - Vector3::new(p[0], p[1], p[2]);
+        let d = s.target(&self.label())? - Vector3::new(p[0], p[1], p[2]);
         let x = euler_xyz(p[3], p[4], p[5]).transpose() * d;
         Ok(Prediction { kind: self.effect(), value: DVector::from_column_slice(x.as_slice()) })
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         check_len(&self.label(), p, 6)?;
-        let d = s.point3(&self.label())? - Vector3::new(p[0], p[1], p[2]);
+        let d = s.target(&self.label())? - Vector3::new(p[0], p[1], p[2]);
         let (a, b, c) = (p[3], p[4], p[5]);
         let r = euler_xyz(a, b, c);
         let mut j = DMatrix::zeros(3, 6);
@@ -94,9 +100,9 @@ impl PhysicsTerm for TrackerPose {
     }
     fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
         check_len_with(|| self.label(), p, 6)?;
-        let point = match s.point {
+        let point = match s.target_point {
             Some(v) => v,
-            None => s.point3(&self.label())?,
+            None => s.target(&self.label())?,
         };
         let d = point - Vector3::new(p[0], p[1], p[2]);
         let (a, b, c) = (p[3], p[4], p[5]);

@@ -27,11 +27,14 @@ pub fn settling_time(tau: f64, fraction: f64) -> f64 {
 }
 
 #[derive(Debug, Clone, Default)]
-pub struct TrackerWarmup;
+pub struct TrackerWarmup {
+    /// Instance name (option `instrument`), see [`super::instance`].
+    pub instrument: Option<String>,
+}
 
 impl TrackerWarmup {
-    pub fn from_options(_o: &Options) -> Result<Self, PhysicsError> {
-        Ok(Self)
+    pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
+        Ok(Self { instrument: super::instance(o)? })
     }
 }
 
@@ -40,7 +43,10 @@ impl PhysicsTerm for TrackerWarmup {
         TermId::TrackerWarmup
     }
     fn label(&self) -> String {
-        "tracker_warmup".into()
+        super::instance_label("tracker_warmup", &self.instrument)
+    }
+    fn instrument(&self) -> Option<&str> {
+        self.instrument.as_deref()
     }
     fn effect(&self) -> EffectKind {
         EffectKind::RangeChange

@@ -34,11 +34,14 @@ pub fn turbulence_flag(observed_sigma: f64, expected_sigma: f64, factor: f64) ->
 }
 
 #[derive(Debug, Clone, Default)]
-pub struct Turbulence;
+pub struct Turbulence {
+    /// Instance name (option `instrument`), see [`super::instance`].
+    pub instrument: Option<String>,
+}
 
 impl Turbulence {
-    pub fn from_options(_o: &Options) -> Result<Self, PhysicsError> {
-        Ok(Self)
+    pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
+        Ok(Self { instrument: super::instance(o)? })
     }
 }
 
@@ -47,7 +50,10 @@ impl PhysicsTerm for Turbulence {
         TermId::Turbulence
     }
     fn label(&self) -> String {
-        "turbulence".into()
+        super::instance_label("turbulence", &self.instrument)
+    }
+    fn instrument(&self) -> Option<&str> {
+        self.instrument.as_deref()
     }
     fn effect(&self) -> EffectKind {
         EffectKind::RangeScatter

@@ -3,7 +3,7 @@
 //!
 //! d = α·(T_w − T_ref)·(p − c)
 //!
-//! p = nominal feature position (signal `point`), c = clamp point (option `clamp`, m), T_w the
+//! p = nominal feature position (signal `workpiece_point`), c = clamp point (option `clamp`, m), T_w the
 //! workpiece sensor (option `sensor`), T_ref = 20 °C. The correction back to 20 °C is
 //! d_f = d₀·(1 − α(T − 20)) to first order (P2 eq. 2); see [`corrected_distance`].
 //! Frame: workpiece.
@@ -39,7 +39,7 @@ impl WorkpieceExpansion {
     }
     fn lever(&self, s: &Signals) -> Result<Vector3<f64>, PhysicsError> {
         let label = self.label();
-        Ok((s.point3(&label)? - self.clamp) * (s.temperature(&label, &self.sensor)? - self.reference_temperature))
+        Ok((s.workpiece(&label)? - self.clamp) * (s.temperature(&label, &self.sensor)? - self.reference_temperature))
     }
 }
 
@@ -57,7 +57,7 @@ impl PhysicsTerm for WorkpieceExpansion {
         vec![ParamSpec::new("alpha", "1/K", -2e-6, 30e-6, 11.5e-6, "α: expansion coefficient of the workpiece material")]
     }
     fn signals(&self) -> Vec<SignalKind> {
-        vec![SignalKind::Point, SignalKind::Temperature(self.sensor.clone())]
+        vec![SignalKind::WorkpiecePoint, SignalKind::Temperature(self.sensor.clone())]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
         check_len(&self.label(), p, 1)?;

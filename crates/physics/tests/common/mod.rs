@@ -2,7 +2,7 @@
 //! finite-difference Jacobian.
 #![allow(dead_code)]
 
-use metrocell_physics::{ParamSpec, PhysicsTerm, Signals, TemperatureHistory};
+use metrocell_physics::{ParamSpec, PhysicsTerm, Signals, TemperatureHistory, TemperatureTimeline};
 use metrocell_solver::numeric_jacobian::{central_difference, Order};
 use nalgebra::{DMatrix, Vector2, Vector3};
 use rand::{Rng, SeedableRng};
@@ -33,7 +33,8 @@ pub fn random_signals(r: &mut ChaCha8Rng) -> Signals {
         t += uni(r, 10.0, 600.0);
         samples.push((t, uni(r, 19.0, 25.0)));
     }
-    s.temperature_histories.insert("column".into(), TemperatureHistory { samples });
+    let history = TemperatureHistory { samples };
+    s.timeline = Some(std::sync::Arc::new(TemperatureTimeline::from_histories([("column", &history)]).unwrap()));
     s.air_temperature = Some(uni(r, 18.0, 24.0));
     s.air_pressure = Some(uni(r, 95_000.0, 103_000.0));
     s.air_humidity = Some(uni(r, 20.0, 80.0));
@@ -41,9 +42,14 @@ pub fn random_signals(r: &mut ChaCha8Rng) -> Signals {
     s.load_force = Some(Vector3::new(uni(r, -200.0, 200.0), uni(r, -200.0, 200.0), uni(r, -200.0, 200.0)));
     s.tracker_range = Some(uni(r, 0.5, 15.0));
     s.image_point = Some(Vector2::new(uni(r, -0.6, 0.6), uni(r, -0.6, 0.6)));
-    s.point = Some(Vector3::new(uni(r, -1.0, 1.0), uni(r, -1.0, 1.0), uni(r, -1.0, 1.0)));
+    s.machine_point = Some(Vector3::new(uni(r, -1.0, 1.0), uni(r, -1.0, 1.0), uni(r, -1.0, 1.0)));
+    s.workpiece_point = Some(Vector3::new(uni(r, -1.0, 1.0), uni(r, -1.0, 1.0), uni(r, -1.0, 1.0)));
+    s.target_point = Some(Vector3::new(uni(r, -3.0, 3.0), uni(r, -3.0, 3.0), uni(r, -1.0, 1.0)));
+    s.camera_point = Some(Vector3::new(uni(r, -0.1, 0.1), uni(r, -0.1, 0.1), uni(r, 0.1, 0.5)));
     let u = Vector3::new(uni(r, -1.0, 1.0), uni(r, -1.0, 1.0), uni(r, -1.0, 1.0));
     s.probe_direction = Some(u.normalize());
+    s.rotary_position = [None, Some(uni(r, -1.5, 1.5)), Some(uni(r, -3.0, 3.0))];
+    s.machine_point = Some(Vector3::new(uni(r, -0.5, 0.5), uni(r, -0.5, 0.5), uni(r, -0.2, 0.4)));
     s
 }
 

@@ -71,3 +71,40 @@ pub const TWO_LINK_URDF: &str = r#"<robot name="two_link">
     <origin xyz="0.5 0 0" rpy="0 0 0"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
   <joint name="flange" type="fixed"><parent link="fore"/><child link="tip"/><origin xyz="0.4 0 0" rpy="0 0 0"/></joint>
 </robot>"#;
+
+/// Every column of the analytic Jacobian `j` of `reading` at `p` (rows of one unit) against
+/// 4th-order central differences: |analytic − central| ≤ 1e-6 × (the column's largest entry) +
+/// the stencil's rounding. Returns the number of columns checked.
+pub fn check_columns(what: &str, names: &[String], p: &[f64], j: &nalgebra::DMatrix<f64>, reading: impl Fn(&[f64]) -> Vec<f64>) -> usize {
+    let y = reading(p);
+    let y_scale = y.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+    // a column below 1e-9 of the largest entry is zero up to rounding (e.g. the arm's last
+    // joint turning the tool point about itself)
+    let floor = 1e-9 * j.amax();
+    for c in 0..p.len() {
+        let col = j.column(c);
+        let scale = col.amax().max(floor);
+        // a step that moves the reading by ~1e-6 of its size (a few µm of a tracker reading,
+        // ~1e-3 px of a pixel), and at most 0.1 % of the parameter
+        let step = 1e-6 * y_scale.max(1e-3);
+        let mut h = if scale > 0.0 { step / scale } else { step };
+        if p[c] != 0.0 {
+            h = h.min(1e-3 * p[c].abs());
+        }
+        let at = |k: f64| {
+            let mut q = p.to_vec();
+            q[c] += k * h;
+            reading(&q)
+        };
+        let (m2, m1, p1, p2) = (at(-2.0), at(-1.0), at(1.0), at(2.0));
+        for r in 0..y.len() {
+            let fd = (m2[r] - 8.0 * m1[r] + 8.0 * p1[r] - p2[r]) / (12.0 * h);
+            let err = (fd - col[r]).abs();
+            // plus the rounding error of the stencil itself (≈ 18·ε·|y|/(12·h))
+            let rounding = 4.0 * f64::EPSILON * y_scale / h;
+            assert!(err <= 1e-6 * scale + rounding, "{what}: ∂y{r}/∂{} analytic {} vs central {fd} (column scale {scale})", names[c], col[r]);
+        }
+    }
+    p.len()
+}
+

@@ -1,0 +1,364 @@
+//! Candidate terms: every catalog term the declared model lacks that the machine family admits
+//! and the recording's signals can inform, each as a family of variants (series orders, screw
+//! leads, lag time constants, sensors and directions). Nothing here knows what wrote the
+//! recording: sensors, axes and travels come from the model file and the records.
+//!
+//! Parameters of a variant are either *linear* (they enter the selection as Jacobian columns
+//! about zero) or fixed at the variant's value (a lead, a τ: found by trying the grid, then
+//! refined by the final nonlinear refit). Which linear parameters the data can separate from the
+//! declared ones is decided later, on the columns ([`crate::candidate_columns`]).
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use metrocell_model::{MachineGeometry, MachineKinematics};
+use metrocell_physics::model::TermModel;
+use metrocell_physics::{configure, ConfigValue, TermConfig, TermId};
+
+use crate::signal_inventory::SignalInventory;
+
+/// Where a candidate goes in the forward model.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Placement {
+    /// A machine term (machine- or tool-frame displacement, or a kinematic term of the family).
+    Machine,
+    /// An instrument term of the tracker (warm-up, refraction).
+    Instrument,
+}
+
+/// One variant of a candidate term.
+#[derive(Debug, Clone)]
+pub struct TermVariant {
+    /// What distinguishes it (`order 2`, `lead 10 mm`, `z, τ = 20 min`), or "".
+    pub name: String,
+    /// The term as it would be written in the model file; its params are the values the
+    /// columns are taken at (0 for linear parameters).
+    pub config: TermConfig,
+    /// Per term parameter (in the term's order): true if it enters the selection linearly.
+    pub linear: Vec<bool>,
+    /// Parameters fixed by the variant (lead, τ), counted by the information criterion.
+    pub profiled: usize,
+}
+
+/// A candidate term instance and its variants.
+#[derive(Debug, Clone)]
+pub struct TermFamily {
+    /// Instance label (`backlash[y]`), unique in the augmented model.
+    pub label: String,
+    pub id: TermId,
+    pub placement: Placement,
+    pub variants: Vec<TermVariant>,
+}
+
+/// A catalog term that was not tried, and why.
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct NotTried {
+    pub term: String,
+    pub reason: String,
+}
+
+/// Ball-screw leads tried for a cyclic error (m): the ISO 3408 preferred leads and the common
+/// metric ones (the periodogram of the residuals adds its own peak).
+pub const COMMON_LEADS_MM: [f64; 14] = [2.0, 2.5, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 16.0, 20.0, 25.0, 32.0, 40.0, 50.0];
+
+/// Time constants tried for a structure's lag behind its sensor and for a tracker's warm-up (s).
+pub const LAG_GRID_S: [f64; 8] = [120.0, 300.0, 600.0, 1200.0, 2400.0, 4800.0, 9600.0, 19200.0];
+pub const WARMUP_GRID_S: [f64; 9] = [300.0, 600.0, 1200.0, 1800.0, 2700.0, 3600.0, 5400.0, 7200.0, 10800.0];
+
+fn text(s: &str) -> ConfigValue {
+    ConfigValue::Text(s.into())
+}
+fn num(x: f64) -> ConfigValue {
+    ConfigValue::Number(x)
+}
+fn list(v: Vec<ConfigValue>) -> ConfigValue {
+    ConfigValue::List(v)
+}
+const AXES: [&str; 3] = ["x", "y", "z"];
+
+fn config(id: TermId, options: Vec<(&str, ConfigValue)>, params: Vec<(String, f64)>) -> TermConfig {
+    TermConfig { id: id.as_str().into(), options: options.into_iter().map(|(k, v)| (k.to_string(), v)).collect(), params: params.into_iter().map(|(k, v)| (k, num(v))).collect::<BTreeMap<_, _>>(), use_defaults: false }
+}
+
+/// The configured parameter names of a term config (in the term's order).
+fn param_names(c: &TermConfig) -> Option<Vec<String>> {
+    let mut probe = c.clone();
+    probe.use_defaults = true;
+    probe.params.clear();
+    configure(&probe).ok().map(|t| t.term.params().into_iter().map(|p| p.name).collect())
+}
+
+/// A variant whose parameters are all linear and start at zero.
+fn linear_variant(name: impl Into<String>, id: TermId, options: Vec<(&str, ConfigValue)>) -> Option<TermVariant> {
+    let mut c = config(id, options, vec![]);
+    let names = param_names(&c)?;
+    c.params = names.iter().map(|n| (n.clone(), num(0.0))).collect();
+    let linear = vec![true; names.len()];
+    Some(TermVariant { name: name.into(), config: c, linear, profiled: 0 })
+}
+
+/// A variant with some parameters fixed at given values (the rest linear, at zero).
+fn profiled_variant(name: impl Into<String>, id: TermId, options: Vec<(&str, ConfigValue)>, fixed: &[(&str, f64)]) -> Option<TermVariant> {
+    let mut v = linear_variant(name, id, options)?;
+    let names = param_names(&v.config)?;
+    for (n, value) in fixed {
+        let k = names.iter().position(|x| x == n)?;
+        v.config.params.insert(n.to_string(), num(*value));
+        v.linear[k] = false;
+    }
+    v.profiled = fixed.len();
+    Some(v)
+}
+
+fn family(variants: Vec<Option<TermVariant>>, id: TermId, placement: Placement) -> Option<TermFamily> {
+    let variants: Vec<TermVariant> = variants.into_iter().flatten().collect();
+    let first = variants.first()?;
+    let label = configure(&first.config).ok()?.term.label();
+    Some(TermFamily { label, id, placement, variants })
+}
+
+/// What the candidates need to know about the declared model.
+pub struct Declared<'a> {
+    pub machine: &'a MachineGeometry,
+    pub machine_terms: &'a TermModel,
+    pub instrument_terms: &'a TermModel,
+}
+
+impl Declared<'_> {
+    fn labels(&self) -> BTreeSet<String> {
+        self.machine_terms.terms.iter().chain(&self.instrument_terms.terms).map(|t| t.term.label()).collect()
+    }
+    fn has(&self, id: TermId) -> bool {
+        self.machine_terms.terms.iter().chain(&self.instrument_terms.terms).any(|t| t.term.id() == id)
+    }
+}
+
+/// The lever axes of an angular error of `axis` on a cartesian machine: the axes between the
+/// rotating carriage and the tool (tool side: the axes it carries; workpiece side: the tool
+/// point's whole position relative to the table, as crates/physics `angular` documents).
+fn lever_axes(machine: &MachineGeometry, axis: usize) -> Vec<usize> {
+    match &machine.kinematics {
+        MachineKinematics::Cartesian(order) => {
+            let tool: Vec<usize> = order.tool_side.iter().map(|a| a.index()).collect();
+            match tool.iter().position(|&a| a == axis) {
+                Some(i) => tool[i + 1..].to_vec(),
+                None => vec![0, 1, 2],
+            }
+        }
+        // the five-axis linear chain (crates/kinematics `five_axis`, DH rows Y = d1, X = d2,
+        // Z = d3): Y carries X carries Z, so each lever holds the axes it carries
+        MachineKinematics::FiveAxis(_) => match axis {
+            1 => vec![0, 2],
+            0 => vec![2],
+            _ => vec![],
+        },
+        _ => vec![],
+    }
+}
+
+/// Every candidate family for the declared model and the signals the records hold, and the
+/// catalog terms not tried with the reason. `periodogram_leads[k]` adds a lead found in the
+/// residuals of axis k; `points_in_machine_frame`: the records' points are in the machine
+/// (part) frame rather than an instrument's.
+pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, periodogram_leads: &[Option<f64>; 3], points_in_machine_frame: bool) -> (Vec<TermFamily>, Vec<NotTried>) {
+    let labels = declared.labels();
+    let machine = declared.machine;
+    let mut out: Vec<TermFamily> = Vec::new();
+    let mut not_tried = Vec::new();
+    let mut skip = |term: &str, reason: String| not_tried.push(NotTried { term: term.into(), reason });
+    let axis_family = matches!(machine.kinematics, MachineKinematics::Cartesian(_) | MachineKinematics::FiveAxis(_));
+    let travel = |k: usize| list(vec![num(machine.travel[k][0]), num(machine.travel[k][1])]);
+    let lead_mm = |l: f64| format!("{:.4}", l * 1e3).trim_end_matches('0').trim_end_matches('.').to_string();
+    if axis_family {
+        for k in 0..3 {
+            if !inventory.positions[k] {
+                skip(&format!("geometry of axis {}", AXES[k]), format!("no commanded {} position in the records", AXES[k]));
+                continue;
+            }
+            let orders = |id: TermId, extra: Vec<(&'static str, ConfigValue)>, from: usize| -> Vec<Option<TermVariant>> {
+                (from..=3)
+                    .map(|o| {
+                        let mut opts = extra.clone();
+                        opts.push(("order", num(o as f64)));
+                        opts.push(("travel", travel(k)));
+                        linear_variant(format!("order {o}"), id, opts)
+                    })
+                    .collect()
+            };
+            out.extend(family(orders(TermId::Positioning, vec![("axis", text(AXES[k]))], 1), TermId::Positioning, Placement::Machine));
+        }
+        for (pair, driver) in [("xy", 1), ("xz", 2), ("yz", 2)] {
+            if inventory.positions[driver] {
+                out.extend(family(vec![linear_variant("", TermId::Squareness, vec![("pair", text(pair))])], TermId::Squareness, Placement::Machine));
+            }
+        }
+        for k in 0..3 {
+            if !inventory.positions[k] {
+                continue;
+            }
+            for j in 0..3 {
+                if j == k {
+                    continue;
+                }
+                let variants = (1..=3).map(|o| linear_variant(format!("order {o}"), TermId::Straightness, vec![("axis", text(AXES[k])), ("direction", text(AXES[j])), ("order", num(o as f64)), ("travel", travel(k))])).collect();
+                out.extend(family(variants, TermId::Straightness, Placement::Machine));
+            }
+            for a in 0..3 {
+                let lever = lever_axes(machine, k);
+                if lever.iter().any(|&l| !inventory.positions[l]) {
+                    continue;
+                }
+                let abbe = list(machine.tool_offset.iter().map(|v| num(*v)).collect());
+                let variants = (1..=2)
+                    .map(|o| {
+                        linear_variant(
+                            format!("order {o}"),
+                            TermId::Angular,
+                            vec![("axis", text(AXES[k])), ("about", text(AXES[a])), ("lever_axes", list(lever.iter().map(|l| text(AXES[*l])).collect())), ("abbe_offset", abbe.clone()), ("order", num(o as f64)), ("travel", travel(k))],
+                        )
+                    })
+                    .collect();
+                out.extend(family(variants, TermId::Angular, Placement::Machine));
+            }
+            // cyclic screw error: the common leads shorter than a third of the travel, and the
+            // residuals' own periodogram peak
+            let span = machine.travel[k][1] - machine.travel[k][0];
+            let mut leads: Vec<f64> = COMMON_LEADS_MM.iter().map(|l| l * 1e-3).filter(|l| *l < span / 3.0).collect();
+            if let Some(l) = periodogram_leads[k] {
+                if !leads.iter().any(|x| (x - l).abs() < 1e-3 * l) {
+                    leads.push(l);
+                }
+            }
+            let variants = leads.iter().map(|&l| profiled_variant(format!("lead {} mm", lead_mm(l)), TermId::PitchCyclic, vec![("axis", text(AXES[k])), ("lead", num(l)), ("harmonics", num(1.0))], &[])).map(|v| v.map(|mut v| { v.profiled = 1; v })).collect();
+            out.extend(family(variants, TermId::PitchCyclic, Placement::Machine));
+            if inventory.approach_both[k] {
+                out.extend(family(vec![linear_variant("", TermId::Backlash, vec![("axis", text(AXES[k]))])], TermId::Backlash, Placement::Machine));
+            } else {
+                skip(&format!("backlash[{}]", AXES[k]), format!("needs both directions of approach on {} (approach.{} columns, or commanded joint states the approach can be derived from)", AXES[k], AXES[k]));
+            }
+            // axis scale with each sensor, or each ordered pair at the two ends of the travel
+            let t = &inventory.temperatures;
+            let mut variants = Vec::new();
+            for s in t {
+                variants.push(linear_variant(format!("sensor {s}"), TermId::ThermalScale, vec![("axis", text(AXES[k])), ("sensors", list(vec![sensor(s, machine.travel[k][0])]))]));
+            }
+            for a in t {
+                for b in t {
+                    if a != b {
+                        variants.push(linear_variant(format!("sensors {a} → {b}"), TermId::ThermalScale, vec![("axis", text(AXES[k])), ("sensors", list(vec![sensor(a, machine.travel[k][0]), sensor(b, machine.travel[k][1])]))]));
+                    }
+                }
+            }
+            if variants.is_empty() {
+                skip(&format!("thermal_scale[{}]", AXES[k]), "no temperature sensor in the records (temperature/<sensor> topics or temperature.<sensor> columns)".into());
+            }
+            out.extend(family(variants, TermId::ThermalScale, Placement::Machine));
+        }
+    }
+    // structure growth: each sensor, along each axis, without lag or lagging by τ on a grid
+    if inventory.temperatures.is_empty() {
+        skip("thermal_growth", "no temperature sensor in the records".into());
+    }
+    for s in &inventory.temperatures {
+        let mut variants = Vec::new();
+        for (k, dir) in AXES.iter().enumerate() {
+            let direction = list((0..3).map(|i| num(if i == k { 1.0 } else { 0.0 })).collect());
+            variants.push(linear_variant(format!("along {dir}"), TermId::ThermalGrowth, vec![("sensor", text(s)), ("direction", direction.clone())]));
+            if inventory.histories.contains(s) {
+                for tau in LAG_GRID_S {
+                    variants.push(profiled_variant(format!("along {dir}, lag τ = {:.0} min", tau / 60.0), TermId::ThermalGrowth, vec![("sensor", text(s)), ("direction", direction.clone()), ("lag", ConfigValue::Bool(true))], &[("time_constant", tau)]));
+                }
+            }
+        }
+        out.extend(family(variants, TermId::ThermalGrowth, Placement::Machine));
+    }
+    if inventory.moving {
+        out.extend(family(vec![linear_variant("", TermId::TimeOffset, vec![])], TermId::TimeOffset, Placement::Machine));
+    } else {
+        skip("time_offset", "no record was taken while an axis moved (needs axis velocities: velocity.<axis> columns or joint-state velocities)".into());
+    }
+    if inventory.load && axis_family {
+        for k in 0..3 {
+            if inventory.positions[k] {
+                out.extend(family(vec![linear_variant("", TermId::Compliance, vec![("extension_axis", text(AXES[k]))])], TermId::Compliance, Placement::Machine));
+            }
+        }
+    } else if axis_family {
+        skip("compliance", "no load force in the records".into());
+    }
+    out.extend(family(vec![linear_variant("", TermId::ToolOffset, vec![])], TermId::ToolOffset, Placement::Machine));
+    match &machine.kinematics {
+        MachineKinematics::Delta(_) => {
+            for id in [TermId::DeltaRodLength, TermId::DeltaRadius, TermId::DeltaTowerAngle, TermId::DeltaEndstop] {
+                out.extend(family(vec![linear_variant("", id, vec![])], id, Placement::Machine));
+            }
+        }
+        MachineKinematics::SerialArm(arm) => {
+            out.extend(family(vec![linear_variant("", TermId::JointOffset, vec![("joints", num(arm.chain.dof() as f64))])], TermId::JointOffset, Placement::Machine));
+            out.extend(family(vec![linear_variant("", TermId::LinkLength, vec![("links", num(arm.link_count() as f64))])], TermId::LinkLength, Placement::Machine));
+        }
+        MachineKinematics::FiveAxis(f) => {
+            if inventory.rotary[1] && inventory.rotary[2] {
+                let v3 = |v: &nalgebra::Vector3<f64>| list(v.iter().map(|x| num(*x)).collect());
+                let opts = vec![("b_pivot", v3(&f.geometry.b_pivot)), ("c_offset", v3(&f.geometry.c_offset)), ("workpiece_offset", v3(&f.geometry.workpiece_offset))];
+                out.extend(family(vec![linear_variant("", TermId::RotaryAxisLocation, opts)], TermId::RotaryAxisLocation, Placement::Machine));
+            } else {
+                skip("rotary_axis_location", "no B and C angles in the records".into());
+            }
+        }
+        MachineKinematics::Cartesian(_) => {}
+    }
+    // instrument terms of the tracker
+    if !declared.has(TermId::TrackerWarmup) {
+        match inventory.power_on {
+            Some((lo, hi)) => {
+                let variants = WARMUP_GRID_S
+                    .iter()
+                    .filter(|&&tau| tau < 3.0 * hi.max(1.0) && tau > 0.05 * (hi - lo))
+                    .map(|&tau| {
+                        let mut v = profiled_variant(format!("τ = {:.0} min", tau / 60.0), TermId::TrackerWarmup, vec![], &[("time_constant", tau)]);
+                        if let Some(v) = v.as_mut() {
+                            // the constant range offset A: a fixed option of a tracker, tried with B
+                            v.linear[0] = true;
+                        }
+                        v
+                    })
+                    .collect();
+                out.extend(family(variants, TermId::TrackerWarmup, Placement::Instrument));
+            }
+            None => skip("tracker_warmup", "no time since power-on in the records (the tracker's power-on time: /tracker/power_on, or an instrument_on_time column)".into()),
+        }
+    }
+    if !declared.has(TermId::Refraction) {
+        if inventory.air {
+            out.extend(family(vec![profiled_variant("", TermId::Refraction, vec![], &[("path_pressure_offset", 0.0)]).map(|mut v| { v.profiled = 0; v })], TermId::Refraction, Placement::Instrument));
+        } else {
+            skip("refraction", "no station air (temperature, pressure, humidity) in the records".into());
+        }
+    }
+    // the part: its expansion about the workpiece origin with each temperature (the clamp
+    // point is not known; expansion about another point differs by a shift growing with the
+    // same temperature, which a thermal growth candidate covers), and a misalignment of the
+    // part's frame. Only points taken in the part's (machine) frame show them: an instrument
+    // registered to the part sights the tool, and a uniform scale or turn of its frame is the
+    // same as its own pose, or its range scale
+    if !points_in_machine_frame {
+        for id in [TermId::WorkpieceExpansion, TermId::FrameMisalignment] {
+            if !declared.has(id) {
+                skip(id.as_str(), "the points are in an instrument frame registered to the part: a change of the part's frame or scale is the instrument's own pose or range scale there; points measured in the part's frame (probe hits, a CMM export) show it".into());
+            }
+        }
+    } else if !declared.has(TermId::WorkpieceExpansion) {
+        for s in &inventory.temperatures {
+            out.extend(family(vec![linear_variant("", TermId::WorkpieceExpansion, vec![("sensor", text(s))])], TermId::WorkpieceExpansion, Placement::Machine));
+        }
+    }
+    if points_in_machine_frame && !declared.has(TermId::FrameMisalignment) {
+        out.extend(family(vec![linear_variant("", TermId::FrameMisalignment, vec![])], TermId::FrameMisalignment, Placement::Machine));
+    }
+    out.retain(|f| !labels.contains(&f.label) && !(f.id == TermId::ToolOffset && declared.has(TermId::ToolOffset)));
+    (out, not_tried)
+}
+
+fn sensor(name: &str, position: f64) -> ConfigValue {
+    ConfigValue::Map([("name".to_string(), text(name)), ("position".to_string(), num(position))].into_iter().collect())
+}

@@ -1,0 +1,70 @@
+//! What a recording can inform: which signals every record carries, and whether they vary
+//! enough to tell a term apart. Candidate terms are made only for signals that are there —
+//! whatever wrote the recording — and the terms that cannot be tried are named with the signal
+//! they miss.
+
+use std::collections::BTreeSet;
+
+use metrocell_estimation::MeasurementRecord;
+
+/// Signals present in every record (a term evaluated on a record without its signal would be an
+/// error, so "present" means present everywhere).
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct SignalInventory {
+    /// Commanded position of each linear axis.
+    pub positions: [bool; 3],
+    /// Both directions of approach occur on the axis.
+    pub approach_both: [bool; 3],
+    /// Axis velocities are present and some records were taken while moving (|v| > 1 µm/s).
+    pub moving: bool,
+    /// Temperature sensors with a latest reading in every record.
+    pub temperatures: Vec<String>,
+    /// Temperature sensors with a history in every record (for lagged terms).
+    pub histories: Vec<String>,
+    /// Station air (temperature, pressure, humidity) in every record.
+    pub air: bool,
+    /// Time since the instrument was powered on, and its spread over the records (s).
+    pub power_on: Option<(f64, f64)>,
+    /// A load force in every record, non-zero somewhere.
+    pub load: bool,
+    /// Rotary axis positions (A, B, C) in every record.
+    pub rotary: [bool; 3],
+}
+
+impl SignalInventory {
+    pub fn of(records: &[MeasurementRecord]) -> Self {
+        let mut inv = SignalInventory::default();
+        if records.is_empty() {
+            return inv;
+        }
+        let all = |f: &dyn Fn(&MeasurementRecord) -> bool| records.iter().all(f);
+        for k in 0..3 {
+            inv.positions[k] = all(&|r| r.signals.axis_position[k].is_some_and(f64::is_finite));
+            let has = |sign: f64| records.iter().any(|r| r.signals.approach_direction[k] == Some(sign));
+            inv.approach_both[k] = all(&|r| r.signals.approach_direction[k].is_some()) && has(1.0) && has(-1.0);
+            inv.rotary[k] = all(&|r| r.signals.rotary_position[k].is_some_and(f64::is_finite));
+        }
+        inv.moving = all(&|r| r.signals.axis_velocity.iter().all(|v| v.is_some_and(f64::is_finite))) && records.iter().any(|r| r.signals.axis_velocity.iter().any(|v| v.is_some_and(|v| v.abs() > 1e-6)));
+        let names = |f: &dyn Fn(&MeasurementRecord) -> BTreeSet<String>| -> Vec<String> {
+            let mut common = f(&records[0]);
+            for r in &records[1..] {
+                let here = f(r);
+                common.retain(|n| here.contains(n));
+            }
+            common.into_iter().collect()
+        };
+        inv.temperatures = names(&|r| r.signals.temperatures.iter().filter(|(_, v)| v.is_finite()).map(|(n, _)| n.clone()).collect());
+        // a lagged temperature needs the sensor's history up to the record's time
+        inv.histories = names(&|r| match (&r.signals.timeline, r.signals.time) {
+            (Some(tl), Some(t)) => tl.sensors().into_iter().filter(|n| tl.time_span(n).is_some_and(|(first, _)| first <= t)).collect(),
+            _ => BTreeSet::new(),
+        });
+        inv.air = all(&|r| r.signals.air_temperature.is_some() && r.signals.air_pressure.is_some() && r.signals.air_humidity.is_some());
+        if all(&|r| r.signals.time_since_power_on.is_some_and(f64::is_finite)) {
+            let (lo, hi) = records.iter().filter_map(|r| r.signals.time_since_power_on).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| (a.min(t), b.max(t)));
+            inv.power_on = Some((lo, hi));
+        }
+        inv.load = all(&|r| r.signals.load_force.is_some()) && records.iter().any(|r| r.signals.load_force.is_some_and(|f| f.norm() > 0.0));
+        inv
+    }
+}

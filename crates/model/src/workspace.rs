@@ -1,0 +1,52 @@
+//! Scratch Jacobians of the model's `*_jacobian` methods, allocated once per model so that an
+//! estimator's inner loop does not allocate.
+
+use metrocell_physics::PhysicsError;
+use nalgebra::DMatrix;
+
+use crate::forward::ForwardModel;
+
+/// Most parameters of one instrument term (`tracker_pose`: 6).
+const TERM_COLUMNS: usize = 6;
+
+/// Scratch Jacobians for one [`ForwardModel`] ([`Workspace::new`] of that model).
+#[derive(Debug, Clone)]
+pub struct Workspace {
+    /// ∂(tool point)/∂p, 3 × parameters.
+    pub(crate) tool: DMatrix<f64>,
+    /// ∂(tool rotation)/∂p as angular-velocity columns, 3 × parameters.
+    pub(crate) ang: DMatrix<f64>,
+    /// ∂(a point in an instrument frame)/∂p, 3 × parameters.
+    pub(crate) point: DMatrix<f64>,
+    /// ∂d_w(feature)/∂p, 3 × parameters.
+    pub(crate) feature: DMatrix<f64>,
+    /// ∂x/∂(tracker pose), 3 × 6.
+    pub(crate) pose: DMatrix<f64>,
+    /// ∂Δρ/∂(own parameters): row 0 warm-up, row 1 refraction.
+    pub(crate) range_terms: DMatrix<f64>,
+    /// ∂(an instrument term)/∂(its parameters), up to 3 × 6.
+    pub(crate) term: DMatrix<f64>,
+}
+
+impl Workspace {
+    pub fn new(model: &ForwardModel) -> Self {
+        let n = model.param_count();
+        Self {
+            tool: DMatrix::zeros(3, n),
+            ang: DMatrix::zeros(3, n),
+            point: DMatrix::zeros(3, n),
+            feature: DMatrix::zeros(3, n),
+            pose: DMatrix::zeros(3, 6),
+            range_terms: DMatrix::zeros(2, 3),
+            term: DMatrix::zeros(3, TERM_COLUMNS),
+        }
+    }
+
+    /// Error unless this workspace was made for `model`.
+    pub(crate) fn check(&self, model: &ForwardModel) -> Result<(), PhysicsError> {
+        if self.tool.ncols() != model.param_count() {
+            return Err(PhysicsError::InvalidInput { what: "forward model, workspace".into(), reason: format!("made for {} parameters, the model has {}: use Workspace::new of this model", self.tool.ncols(), model.param_count()) });
+        }
+        Ok(())
+    }
+}

@@ -6,10 +6,13 @@
 use crate::fit::{rms, Fit};
 use crate::records::RecordSet;
 
-/// A parameter's value and σ in display units: lengths µm, angles µrad, 1/K as µm/m/K, others
-/// as they are. Returns (value, σ, unit text).
+/// A parameter's value and σ in display units: lengths µm (mm from 1 cm), angles µrad (degrees
+/// from 10 mrad), 1/K as µm/m/K, others as they are. Returns (value, σ, unit text).
 pub fn display(value: f64, sigma: Option<f64>, unit: &str) -> (f64, Option<f64>, String) {
     let (scale, shown) = match unit {
+        // an instrument's position (metres away) reads in mm, its orientation in degrees
+        "m" if value.abs() >= 0.01 => (1e3, "mm".to_string()),
+        "rad" if value.abs() >= 0.01 => (180.0 / std::f64::consts::PI, "°".to_string()),
         "m" => (1e6, "µm".to_string()),
         "rad" => (1e6, "µrad".to_string()),
         "1/K" => (1e6, "µm/m/K".to_string()),
@@ -72,17 +75,25 @@ pub fn summary_lines(fit: &Fit, records: &RecordSet) -> Vec<String> {
             lines.push(format!("  {}", h.combination));
         }
     }
+    let t0 = records.records.iter().map(|r| r.time).fold(f64::INFINITY, f64::min);
+    let who = |id: &str, index: usize| if id.is_empty() { format!("record {index}") } else { format!("`{id}` (record {index})") };
     if fit.outliers.is_empty() {
         lines.push("No measurement was down-weighted as an outlier.".into());
     } else {
-        let list: Vec<String> = fit.outliers.iter().take(10).map(|o| format!("{} at t = {:.1} s ({})", o.point_id, o.time, o.reason)).collect();
+        let list: Vec<String> = fit.outliers.iter().take(10).map(|o| format!("{} at {:.1} s ({})", who(&o.point_id, o.index), o.time - t0, o.reason)).collect();
         let more = if fit.outliers.len() > 10 { format!(", and {} more", fit.outliers.len() - 10) } else { String::new() };
-        lines.push(format!("{} measurements were down-weighted as outliers by the robust loss ({} residual components): {}{more}.", fit.outliers.len(), fit.downweighted, list.join(", ")));
+        // how many an honest Gaussian sample puts beyond the threshold anyway
+        let expected = match fit.options_threshold {
+            Some(c) => format!("; Gaussian noise alone puts about {:.1} of {} components beyond {c}σ", 3.0 * fit.used.len() as f64 * statrs::function::erf::erfc(c / std::f64::consts::SQRT_2), 3 * fit.used.len()),
+            None => String::new(),
+        };
+        lines.push(format!("{} measurements were down-weighted as outliers by the robust loss ({} residual components{expected}; times from the first record): {}{more}.", fit.outliers.len(), fit.downweighted, list.join(", ")));
     }
     if !fit.skipped.is_empty() || !records.rejected.is_empty() {
         let n = fit.skipped.len() + records.rejected.len();
-        let first: Vec<String> = records.rejected.iter().map(|r| format!("{} ({}): {}", r.point_id, r.at, r.reason)).chain(fit.skipped.iter().map(|s| format!("{} at t = {:.1} s: {}", s.point_id, s.time, s.reason))).take(5).collect();
-        lines.push(format!("{n} measurements were left out: {}{}.", first.join("; "), if n > 5 { "; …" } else { "" }));
+        let first = records.rejected.first().map(|r| format!("{} ({}): {}", if r.point_id.is_empty() { "a measurement" } else { &r.point_id }, r.at, r.reason)).or_else(|| fit.skipped.first().map(|s| format!("{} at {:.1} s: {}", who(&s.point_id, s.index), s.time - t0, s.reason))).unwrap_or_default();
+        let more = if n > 1 { format!(" — and {} more (all listed in --json)", n - 1) } else { String::new() };
+        lines.push(format!("{n} measurements were left out, the first: {first}{more}."));
     }
     lines
 }

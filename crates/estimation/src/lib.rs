@@ -20,6 +20,9 @@
 //! * [`recursive`] — online estimation: an extended Kalman filter with random-walk drift,
 //!   outlier gating and a moving normalised-innovation χ² test that flags when the model stops
 //!   explaining the data.
+//! * [`volumetric_monte_carlo`] — N simulated verifications (noise, tracker placement) fitted
+//!   like a real one: the volumetric error map with its uncertainty and the residual error after
+//!   compensation (seed 001, P3).
 //! * [`uncertainty_budget`] — GUM combination of standard uncertainties and the ISO/TS 15530-3
 //!   expanded uncertainty U = k·√(u_cal² + u_p² + u_b² + u_w²) (seed 001, eq. 3.4), with each
 //!   component's share.
@@ -41,6 +44,7 @@ pub mod recursive;
 pub mod residuals;
 pub mod signal_topics;
 pub mod uncertainty_budget;
+pub mod volumetric_monte_carlo;
 
 pub use fit::{fit, inseparable, rms, start_vector, Fit, FitError, FitOptions, HeldParameter, ParameterEstimate, RecordNote};
 pub use records::{MeasurementRecord, RecordFrame, RecordSet, Rejected};

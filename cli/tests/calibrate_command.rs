@@ -4,19 +4,12 @@
 //! stated uncertainty — and far outside it from 11.5e-6 — because it fitted α, not because it
 //! was told. The fitted model reads back (sim, calibrate), the report and the JSON are written.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("metrocell_calibrate_{name}_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use common::metrocell;
 
-fn metrocell(args: &[&str], cwd: &Path) -> (i32, String, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_metrocell")).args(args).current_dir(cwd).output().unwrap();
-    (o.status.code().unwrap_or(-1), String::from_utf8_lossy(&o.stdout).into(), String::from_utf8_lossy(&o.stderr).into())
+fn dir(name: &str) -> std::path::PathBuf {
+    common::scratch("calibrate", name)
 }
 
 fn cell(name: &str) -> String {

@@ -45,16 +45,22 @@ pub fn mean_sd(v: &[f64]) -> (f64, f64) {
     (m, (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0).max(1.0)).sqrt())
 }
 
+/// The conditions with the axes at `q`, at rest, approached in +.
+fn signals_at(model: &ForwardModel, q: &[f64], conditions: &Signals) -> Signals {
+    let mut s = conditions.clone();
+    if q.len() >= 3 {
+        model.set_motion(&mut s, q, &[0.0; 3], &[1.0; 3]);
+    }
+    s
+}
+
 /// The error map of `model` at parameters `p` at the joint vectors `points`.
 pub fn error_map(model: &ForwardModel, p: &[f64], points: &[Vec<f64>], conditions: &Signals) -> Result<Vec<Vector3<f64>>, FitError> {
     let kin = model.kinematic_truth(p)?;
     points
         .iter()
         .map(|q| {
-            let mut s = conditions.clone();
-            if q.len() >= 3 {
-                model.set_motion(&mut s, q, &[0.0; 3], &[1.0; 3]);
-            }
+            let mut s = signals_at(model, q, conditions);
             Ok(model.tool_state(p, &kin, q, &mut s, None)?.d)
         })
         .collect()
@@ -114,10 +120,7 @@ fn linearised(model: &ForwardModel, p: &[f64], covariance: Option<&nalgebra::DMa
     points
         .iter()
         .map(|q| {
-            let mut s = conditions.clone();
-            if q.len() >= 3 {
-                model.set_motion(&mut s, q, &[0.0; 3], &[1.0; 3]);
-            }
+            let mut s = signals_at(model, q, conditions);
             model.tool_point_jacobian(p, &kin, q, &mut s, &mut j)?;
             let jc = &j * c;
             Ok(Vector3::from_fn(|i, _| jc.row(i).dot(&j.row(i)).max(0.0).sqrt()))

@@ -3,6 +3,7 @@
 //! Thin by design: every subcommand parses its arguments and calls a library crate.
 
 mod bag;
+mod calibrate;
 mod compensate;
 mod demo;
 mod launch_command;
@@ -35,6 +36,8 @@ enum Command {
     /// Camera tools: calibrate from checkerboard images → ROS camera_info YAML
     #[command(subcommand)]
     Camera(vision::camera_command::CameraCommand),
+    /// Fit a model file's declared error terms to recordings; write the fitted model with uncertainties
+    Calibrate(calibrate::CalibrateArgs),
     /// Turn a fitted model into what the machine runs: compensated G-code, controller tables
     #[command(subcommand)]
     Compensate(compensate::CompensateCommand),
@@ -56,6 +59,7 @@ fn main() {
     let code = match cli.command {
         Command::Bag(command) => bag::run(command),
         Command::Camera(command) => vision::camera_command::run(command),
+        Command::Calibrate(args) => calibrate::run(args),
         Command::Compensate(command) => compensate::run(command),
         Command::Demo(args) => demo::run(args),
         Command::Detect(args) => vision::detect::run(args),

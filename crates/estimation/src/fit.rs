@@ -150,6 +150,8 @@ pub struct Fit {
     pub declared_identifiability: Identifiability,
     /// Records used (after skipping).
     pub used: Vec<usize>,
+    /// The robust loss's threshold (σ), None for plain least squares.
+    pub options_threshold: Option<f64>,
     pub solution: Solution,
 }
 
@@ -359,6 +361,7 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
         held,
         declared_identifiability,
         used,
+        options_threshold: threshold,
         solution,
     })
 }

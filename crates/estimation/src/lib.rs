@@ -16,9 +16,16 @@
 //!   by each record's covariance, with the model's analytic Jacobian: a solver problem.
 //! * [`fit`] — batch identification of the declared free parameters: registration of the
 //!   instrument frame, bounded robust Levenberg–Marquardt, scaled covariance, identifiability.
+//! * [`fit_summary`] — a fit in words: values ± σ in µm/µrad, what is not identifiable and
+//!   why, residuals before/after, consistency with the stated noise, outliers and skipped records.
+//! * [`error_functions`] — the fitted error along each axis with its uncertainty band
+//!   (u_e = √diag(J·C·Jᵀ)).
 //! * [`recursive`] — online estimation: an extended Kalman filter with random-walk drift,
 //!   outlier gating and a moving normalised-innovation χ² test that flags when the model stops
 //!   explaining the data.
+//! * [`volumetric_monte_carlo`] — N simulated verifications (noise, tracker placement) fitted
+//!   like a real one: the volumetric error map with its uncertainty and the residual error after
+//!   compensation (seed 001, P3).
 //! * [`uncertainty_budget`] — GUM combination of standard uncertainties and the ISO/TS 15530-3
 //!   expanded uncertainty U = k·√(u_cal² + u_p² + u_b² + u_w²) (seed 001, eq. 3.4), with each
 //!   component's share.
@@ -30,7 +37,9 @@
 //! Units: SI (m) in and out; reports convert to mm and µm.
 
 pub mod design_of_experiments;
+pub mod error_functions;
 pub mod fit;
+pub mod fit_summary;
 pub mod improvement;
 pub mod instrument_readings;
 pub mod records;
@@ -39,6 +48,7 @@ pub mod recursive;
 pub mod residuals;
 pub mod signal_topics;
 pub mod uncertainty_budget;
+pub mod volumetric_monte_carlo;
 
 pub use fit::{fit, inseparable, rms, start_vector, Fit, FitError, FitOptions, HeldParameter, ParameterEstimate, RecordNote};
 pub use records::{MeasurementRecord, RecordFrame, RecordKind, RecordSet, Rejected};

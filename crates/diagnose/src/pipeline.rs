@@ -28,7 +28,7 @@ use nalgebra::{DMatrix, DVector, Vector3};
 
 use crate::blocked_least_squares::{pseudo_inverse, separable_columns, BaseFit, BlockedRows};
 use crate::candidate_columns::ColumnContext;
-use crate::candidates::{candidate_families, Declared, NotTried, Placement, TermFamily};
+use crate::candidates::{candidate_families, conventional_signs, Declared, NotTried, Placement, TermFamily};
 use crate::empirical::{bump_variants, time_variants, EmpiricalBasis};
 use crate::findings::{self, FoundTerm};
 use crate::folds::{time_blocks, workspace_blocks};
@@ -448,7 +448,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     // 6. augmented model and its refit
     let mut machine_aug = declared.machine_terms.clone();
     let mut instruments_aug = instruments.clone();
-    let mut added: Vec<(usize, TermConfig, Placement, Vec<String>)> = Vec::new();
+    let mut added: Vec<(usize, TermConfig, Placement, Vec<String>, String)> = Vec::new();
     let mut freed: Vec<(usize, TermId, String, Vec<(String, f64)>)> = Vec::new();
     let mut empirical_chosen: Vec<(usize, EmpiricalBasis, Vec<f64>)> = Vec::new();
     for c in &selection.chosen {
@@ -459,6 +459,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
                 for (name, value, _, _) in &c.parameters {
                     config.params.insert(name.clone(), ConfigValue::Number(*value));
                 }
+                let variant_name = conventional_signs(&mut config, &v.name);
                 let term = configure(&config)?;
                 let specs = term.term.params();
                 let free_names: Vec<String> = kept[c.variant].iter().map(|&j| specs[j].name.clone()).chain(specs.iter().enumerate().filter(|(j, _)| !v.linear[*j] && v.profiled > 0 && family.id != TermId::Refraction).map(|(_, s)| s.name.clone())).collect();
@@ -466,7 +467,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
                     Placement::Machine => machine_aug.push(term)?,
                     Placement::Instrument => instruments_aug.push(term)?,
                 }
-                added.push((c.candidate, config, family.placement, free_names));
+                added.push((c.candidate, config, family.placement, free_names, variant_name));
             }
             Source::Freed { id, label, names } => freed.push((c.candidate, *id, label.clone(), names.iter().cloned().zip(c.parameters.iter().map(|p| p.1)).collect())),
             Source::Empirical(bases) => {
@@ -475,7 +476,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         }
     }
     let model_aug = ForwardModel::new(declared.machine, &machine_aug, &instruments_aug)?;
-    let added_free: Vec<String> = added.iter().flat_map(|(_, config, _, free)| {
+    let added_free: Vec<String> = added.iter().flat_map(|(_, config, _, free, _)| {
         let label = configure(config).map(|t| t.term.label()).unwrap_or_default();
         free.iter().map(move |p| format!("{label}.{p}"))
     }).collect();
@@ -611,11 +612,10 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     step("findings");
     // 9. findings
     let mut found = Vec::new();
-    for (k, (cand, config, placement, _)) in added.iter().enumerate() {
-        let chosen = selection.chosen.iter().find(|c| c.candidate == *cand).expect("added from the chosen");
+    for (k, (cand, config, placement, _, variant)) in added.iter().enumerate() {
         let label = configure(config)?.term.label();
         let Source::Term { family, .. } = &prepared[*cand].source else { unreachable!("terms only") };
-        found.push(FoundTerm { label, id: family.id, variant: family.variants[chosen.variant].name.clone(), placement: *placement, order: k, config: config.clone() });
+        found.push(FoundTerm { label, id: family.id, variant: variant.clone(), placement: *placement, order: k, config: config.clone() });
     }
     for (_, id, label, _) in &freed {
         let config = TermConfig { id: id.as_str().into(), ..Default::default() };
@@ -645,7 +645,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     })?;
     let added_terms: Vec<AddedTerm> = added
         .iter()
-        .map(|(_, config, placement, _)| {
+        .map(|(_, config, placement, _, _)| {
             let label = configure(config).map(|t| t.term.label()).unwrap_or_default();
             let mut c = config.clone();
             let mut sig = BTreeMap::new();

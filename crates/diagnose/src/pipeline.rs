@@ -35,7 +35,7 @@ use crate::folds::{time_blocks, workspace_blocks};
 use crate::locate::{locate, LocateOptions};
 use crate::noise_tests::noise_report;
 use crate::outliers::{outliers, robust_scale};
-use crate::periodogram::strongest_period;
+use crate::periodogram::{independent_frequencies, strongest_period};
 use crate::record_preparation::prepare;
 use crate::report::*;
 use crate::residual_view::ResidualView;
@@ -339,7 +339,8 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         let w: Vec<f64> = sel_records.iter().map(|r| 1.0 / (sel_view.rotation * r.covariance * sel_view.rotation.transpose())[(k, k)]).collect();
         let span = declared.machine.travel[k][1] - declared.machine.travel[k][0];
         if span.is_finite() {
-            *lead = strongest_period(&q, &res, &w, 1.5e-3, span / 3.0).map(|p| p.0);
+            let covered = q.iter().cloned().fold(f64::NEG_INFINITY, f64::max) - q.iter().cloned().fold(f64::INFINITY, f64::min);
+            *lead = strongest_period(&q, &res, &w, 1.5e-3, span / 3.0).map(|p| (p.0, independent_frequencies(covered, 1.5e-3, span / 3.0)));
         }
     }
     let decl = Declared { machine: declared.machine, machine_terms: declared.machine_terms, instrument_terms: &instruments };
@@ -374,6 +375,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
                 ranges: kept.iter().map(|&j| (specs[j].min, specs[j].max)).collect(),
                 base_values: kept.iter().map(|&j| cols.term.params[j]).collect(),
                 profiled: v.profiled,
+                search_multiplicity: v.search_multiplicity,
             });
             kept_all.push(kept);
         }
@@ -402,7 +404,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
             continue;
         }
         let spec = &t.term.params()[0];
-        let variant = Variant { name: "freed".into(), columns: cols, parameter_names: vec![spec.name.clone()], units: vec![spec.unit.into()], ranges: vec![(spec.min, spec.max)], base_values: vec![x0[k]], profiled: 0 };
+        let variant = Variant { name: "freed".into(), columns: cols, parameter_names: vec![spec.name.clone()], units: vec![spec.unit.into()], ranges: vec![(spec.min, spec.max)], base_values: vec![x0[k]], profiled: 0, search_multiplicity: 1.0 };
         prepared.push(Prepared { family: Family { label: label.clone(), term: TermId::Refraction.as_str().into(), physical: true, variants: vec![variant], judged_by: None }, source: Source::Freed { id: TermId::Refraction, label, names: vec![name] } });
     }
     if options.empirical {
@@ -425,7 +427,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
                     if kept.len() < cols.ncols() {
                         b.kept = Some(kept);
                     }
-                    variants.push(Variant { name: b.variant_name(), columns, parameter_names: (0..b.len()).map(|j| format!("c{j}")).collect(), units: vec!["m".into(); b.len()], ranges: vec![(-1.0, 1.0); b.len()], base_values: vec![0.0; b.len()], profiled: b.searched() });
+                    variants.push(Variant { name: b.variant_name(), columns, parameter_names: (0..b.len()).map(|j| format!("c{j}")).collect(), units: vec!["m".into(); b.len()], ranges: vec![(-1.0, 1.0); b.len()], base_values: vec![0.0; b.len()], profiled: b.searched(), search_multiplicity: b.search_multiplicity() });
                     bases.push(b);
                 }
                 if bases.is_empty() {

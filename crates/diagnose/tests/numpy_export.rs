@@ -76,3 +76,32 @@ fn numpy_exports_are_diagnosed() {
     }
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Stated uncertainties off by a factor of two either way (an export whose U95 was taken for σ,
+/// or σ for U95): the selection does not rely on them (its tests use the residual variance), so
+/// the same term is named and null data stay quiet; the noise verdict says which level it used.
+#[test]
+fn stated_uncertainties_off_by_a_factor_change_no_verdict() {
+    let dir = std::env::temp_dir().join(format!("metrocell_numpy_factor_{}", std::process::id()));
+    let status = std::process::Command::new(python()).arg(bags().join("make_exports.py")).arg("--out").arg(&dir).arg("--seed").arg("5").arg("--variants").arg("scale").arg("null").status().expect("run the generator");
+    assert!(status.success());
+    let model = std::fs::read_to_string(bags().join("model.yaml")).unwrap();
+    for factor in [2.0, 0.5] {
+        for variant in ["scale", "null"] {
+            let mut data = records(&std::fs::read_to_string(dir.join(format!("{variant}.csv"))).unwrap());
+            data.records.iter_mut().for_each(|r| r.covariance *= factor * factor);
+            let d = common::run(&model, &data, &DiagnoseOptions::default());
+            eprintln!("--- {variant}, stated σ × {factor}");
+            common::show(&d);
+            let labels: Vec<&str> = d.report.findings.iter().map(|f| f.label.as_str()).collect();
+            match variant {
+                "scale" => assert_eq!(labels, vec!["thermal_scale[x]"], "σ × {factor}"),
+                _ => assert!(labels.is_empty() && d.report.unexplained.is_empty(), "σ × {factor}: {labels:?}"),
+            }
+            assert_eq!(d.report.noise.basis, "residual_scatter", "σ × {factor}: {}", d.report.noise.statement);
+            assert!((d.report.noise.scale * factor - 1.0).abs() < 0.15, "σ × {factor}: scale {}", d.report.noise.scale);
+            assert!(d.report.explained, "σ × {factor}: {:?}", d.report.remaining);
+        }
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}

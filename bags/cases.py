@@ -19,6 +19,7 @@ Standard library only (Python >= 3.8); no YAML library is needed to write the ce
 import json
 import math
 import os
+import random
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -135,13 +136,18 @@ POSE_ERROR_MM = (3.1, -2.4, 1.7)
 POSE_ERROR_DEG = (0.021, -0.016, 0.047)
 
 
+def wrap(v, unit):
+    """Angles in degrees into [-180, 180) (the pose parameters' range)."""
+    return (v + 180.0) % 360.0 - 180.0 if unit == "deg" else v
+
+
 def roughen(tracker_text):
     """The tracker section with its pose moved by POSE_ERROR_* (units as written)."""
     import re
 
     def shift(match, errors, scale):
         vals = re.findall(r"(-?[0-9.]+) ?([a-z]+)", match.group(1))
-        moved = [f"{float(v) + e * scale[u]:.6g} {u}" for (v, u), e in zip(vals, errors)]
+        moved = [f"{wrap(float(v) + e * scale[u], u):.6g} {u}" for (v, u), e in zip(vals, errors)]
         return match.group(0).replace(match.group(1), ", ".join(moved))
 
     text = re.sub(r"translation: \[([^\]]*)\]", lambda m: shift(m, POSE_ERROR_MM, {"mm": 1.0, "m": 1e-3}), tracker_text, count=1)
@@ -219,7 +225,7 @@ class Program:
         return text
 
 
-def arm_cell(case, role, *, terms, program):
+def arm_cell(case, role, *, terms, program, estimation=""):
     """A UR5 on a pedestal (published DH, crates/twin/examples/cells/serial_arm_ur5.yaml), its SMR
     followed by a tracker 2.5 m away."""
     text = HEADER.format(role=role, case=case, role_text=ROLE_TEXT[role])
@@ -243,7 +249,7 @@ machine:
 
 sensors:
 """
-    tracker = tracker_yaml(pose="[2.5 m, 0.3 m, 1.0 m]", euler="[0 deg, 0 deg, 180 deg]")
+    tracker = tracker_yaml(pose="[2.5 m, 0.3 m, 1.0 m]", euler="[0 deg, 0 deg, 170 deg]")
     text += roughen(tracker) if role == "model" else tracker
     text += """\
   thermocouples:
@@ -256,6 +262,8 @@ environment:
 
 """
     text += program + "\n" + "terms:" + (" []\n" if not terms else "\n" + terms)
+    if estimation:
+        text += "\nestimation:\n" + estimation
     return text
 
 
@@ -351,8 +359,8 @@ T = {
     params: {alpha: ALPHA}
 """,
     "thermal_growth": """\
-  - id: thermal_growth         # column growth pushes the spindle down, lagging its sensor
-    options: {sensor: column, direction: [0, 0, -1], lag: true}
+  - id: thermal_growth         # the warm column lowers the spindle (a negative growth along +z), lagging its sensor
+    options: {sensor: column, direction: [0, 0, 1], lag: true}
     params: {coefficient: COEF, time_constant: TAU}
 """,
     "backlash": """\
@@ -413,6 +421,12 @@ def term(kind, **subs):
 # the recording plan (duration, windows to keep) and the answer.
 
 GEO_PROGRAM = Program(GEO_POINTS, cycles=2)
+COMPLIANCE = """\
+  - id: compliance             # the Y carriage is a cantilever: it sags under the payload
+    options: {extension_axis: y, extension_origin: 0 mm}
+    params: {translational: 2e-8 m/N, rotational: 8e-8 rad/(N m), bending: 3e-7 1/(N m^2)}
+"""
+LOAD = "  load_force: [0 N, 0 N, {f}]     # the tool's weight on the Y carriage (N, machine frame)\n"
 PRETRAVEL = """\
       options: {lobes: 3}
       params: {mean: 4 um, lobe_cos: 2 um, lobe_sin: -1.5 um, vertical: 3 um}
@@ -437,8 +451,11 @@ GEO_DURATION = 720.0       # two cycles of ~5.4 min
 LONG_DURATION = 5 * 3600.0  # a 5-hour shift
 
 
-def case(key, kind, duration, program, truth, model, answer):
-    return dict(key=key, kind=kind, duration=duration, program=program, truth=truth, model=model, answer=answer or {})
+def case(key, kind, duration, program, truth, model, answer, more_runs=()):
+    """A case; `more_runs` are further truth cells recorded after the first (an hour apart), for
+    effects that need a second condition (e.g. another load)."""
+    return dict(key=key, kind=kind, duration=duration, program=program, truth=truth, model=model, answer=answer or {},
+                more_runs=list(more_runs))
 
 
 def geo_case(key, truth_terms, model_terms="", estimation="", answer=None, kind="single", disturbances=""):
@@ -467,9 +484,9 @@ CASES = [
     # ---- single concealed effects ------------------------------------------------------------
     long_case("thermal_scale", TIME_POINTS, term("thermal_scale", alpha="10.8e-6 1/K"),
               answer={"concealed": [concealed("thermal_scale", "thermal_scale[x]", ["alpha"], {"alpha": 10.8e-6})]}),
-    long_case("thermal_growth", TIME_POINTS, term("thermal_growth", coef="6 um/K", tau="25 min"),
+    long_case("thermal_growth", TIME_POINTS, term("thermal_growth", coef="-6 um/K", tau="25 min"),
               answer={"concealed": [concealed("thermal_growth", "thermal_growth[column]", ["coefficient", "time_constant"],
-                                              {"coefficient": 6e-6, "time_constant": 1500.0})]}),
+                                              {"coefficient": -6e-6, "time_constant": 1500.0})]}),
     geo_case("backlash", term("backlash", axis="x", rev="14 um"),
              answer={"concealed": [concealed("backlash", "backlash[x]", ["reversal"], {"reversal": 14e-6})]}),
     geo_case("squareness", term("squareness", pair="xy", s="40 urad"),
@@ -505,7 +522,8 @@ CASES = [
     # and declared at their true values)
     case("tool_offset", "single", 400.0, None,
          lambda c, r: arm_cell(c, r, program=arm_program(), terms=ARM_JOINT_OFFSETS + term("tool_offset", dx="20 um", dy="-15 um", dz="18 um")),
-         lambda c, r: arm_cell(c, r, program=arm_program(), terms=ARM_JOINT_OFFSETS),
+         lambda c, r: arm_cell(c, r, program=arm_program(), terms=ARM_JOINT_OFFSETS,
+                               estimation="  joint_offset: {free: []}     # calibrated earlier: held at these values\n"),
          {"concealed": [concealed("tool_offset", "tool_offset", ["dx", "dy", "dz"], {"dx": 20e-6, "dy": -15e-6, "dz": 18e-6})]}),
     # a linear delta whose diagonal rods are not all the nominal length
     case("delta_rod_length", "single", 480.0, DELTA,
@@ -528,23 +546,43 @@ CASES = [
          lambda c, r: probe_cell(c, r, program=PROBE_PROGRAM, probe=probe_yaml(PROBE_FACES), terms=""),
          {"concealed": [concealed("frame_misalignment", "frame_misalignment", ["rx", "ry", "rz"], {"rx": 4e-6, "ry": -6e-6, "rz": 10e-6})]}),
 
+    # a cantilevered Y carriage sags under the tool's weight, d = F (c0 + c_t y^2 + c_b y^3): recorded
+    # with a heavy tool (300 N) and, an hour later, a light one (50 N), as one would to see a load
+    # effect at all — under one constant load it is indistinguishable from a straightness error
+    case("compliance", "single", GEO_DURATION, GEO_PROGRAM,
+         lambda c, r: cartesian_cell(c, r, terms=COMPLIANCE, load=LOAD.format(f="-300 N"), **GEO),
+         lambda c, r: cartesian_cell(c, r, terms="", **GEO),
+         {"concealed": [concealed("compliance", "compliance[y]", ["translational", "rotational", "bending"],
+                                  {"translational": 2e-8, "rotational": 8e-8, "bending": 3e-7})]},
+         more_runs=[lambda c, r: cartesian_cell(c, r, terms=COMPLIANCE, load=LOAD.format(f="-50 N"), **GEO)]),
+
     # ---- null recordings (the model is complete) ---------------------------------------------
     geo_case("null_plain", "", kind="null"),
     long_case("null_long", TIME_POINTS, "", kind="null"),
     long_case("null_thermal_declared", TIME_POINTS,
-              term("thermal_scale", alpha="12.1e-6 1/K") + term("thermal_growth", coef="3.5 um/K", tau="30 min"),
-              model_terms=term("thermal_scale", alpha="11.5e-6 1/K") + term("thermal_growth", coef="4 um/K", tau="20 min"),
+              term("thermal_scale", alpha="12.1e-6 1/K") + term("thermal_growth", coef="-3.5 um/K", tau="30 min"),
+              model_terms=term("thermal_scale", alpha="11.5e-6 1/K") + term("thermal_growth", coef="-4 um/K", tau="20 min"),
               estimation="  thermal_scale[x]: {free: [alpha]}\n  thermal_growth[column]: {free: [coefficient, time_constant]}\n",
               kind="null"),
     geo_case("null_geometry_declared", term("backlash", axis="x", rev="11 um") + term("squareness", pair="xy", s="-30 urad"),
              model_terms=term("backlash", axis="x", rev="0 um") + term("squareness", pair="xy", s="0 urad"),
              estimation="  backlash[x]: {free: [reversal]}\n  squareness[xy]: {free: [s]}\n", kind="null"),
 
+    case("null_arm", "null", 400.0, None,
+         lambda c, r: arm_cell(c, r, program=arm_program(), terms=ARM_JOINT_OFFSETS),
+         lambda c, r: arm_cell(c, r, program=arm_program(), terms=ARM_JOINT_OFFSETS,
+                               estimation="  joint_offset: {free: []}     # calibrated earlier: held at these values\n"),
+         {}),
+    case("null_delta_declared", "null", 480.0, DELTA,
+         lambda c, r: delta_cell(c, r, program=DELTA, terms=term("delta_rod_length", a="30 um", b="-20 um")),
+         lambda c, r: delta_cell(c, r, program=DELTA, terms=term("delta_rod_length", a="0 um", b="0 um")),
+         {}),
+
     # ---- two concealed effects ---------------------------------------------------------------
-    long_case("two_backlash_growth", TIME_POINTS, term("backlash", axis="x", rev="15 um") + term("thermal_growth", coef="5 um/K", tau="25 min"),
+    long_case("two_backlash_growth", TIME_POINTS, term("backlash", axis="x", rev="15 um") + term("thermal_growth", coef="-5 um/K", tau="25 min"),
               kind="two", answer={"concealed": [
                   concealed("backlash", "backlash[x]", ["reversal"], {"reversal": 15e-6}),
-                  concealed("thermal_growth", "thermal_growth[column]", ["coefficient", "time_constant"], {"coefficient": 5e-6, "time_constant": 1500.0})]}),
+                  concealed("thermal_growth", "thermal_growth[column]", ["coefficient", "time_constant"], {"coefficient": -5e-6, "time_constant": 1500.0})]}),
     long_case("two_pitch_scale", MID_POINTS, term("pitch_cyclic", a1="9 um", b1="-7 um") + term("thermal_scale", alpha="11.0e-6 1/K"),
               kind="two", interval=1800.0, answer={"concealed": [
                   concealed("pitch_cyclic", "pitch_cyclic[x]", ["a1", "b1"], {"a1": 9e-6, "b1": -7e-6}),
@@ -561,10 +599,17 @@ CASES = [
     geo_case("local_bump", "", kind="out_of_catalog",
              disturbances="  workspace_bumps: [{amplitude: [0 um, 18 um, 0 um], centre: [590 mm, 250 mm, 200 mm], width: 90 mm}]\n",
              answer={"unexplained": {"structure": "workspace", "amplitude_m": [0, 18e-6, 0], "centre_m": [0.59, 0.25, 0.2], "width_m": 0.09}}),
+    long_case("cycle_in_time_x", TIME_POINTS, "", env=THERMAL_ENV, kind="out_of_catalog", interval=900.0,
+              disturbances="  time_cycles: [{amplitude: [11 um, 0 um, 0 um], period: 21 min, phase: -40 deg}]\n",
+              answer={"unexplained": {"structure": "time", "amplitude_m": [11e-6, 0, 0], "period_s": 1260.0}}),
+    geo_case("corner_bump", "", kind="out_of_catalog",
+             disturbances="  workspace_bumps: [{amplitude: [0 um, 0 um, -15 um], centre: [120 mm, 430 mm, 380 mm], width: 110 mm}]\n",
+             answer={"unexplained": {"structure": "workspace", "amplitude_m": [0, 0, -15e-6], "centre_m": [0.12, 0.43, 0.38], "width_m": 0.11}}),
 ]
 
-# A fixed shuffle of the case order (so that case numbers say nothing about the kind).
-ORDER = [10, 3, 15, 7, 1, 20, 12, 21, 16, 5, 9, 17, 0, 14, 6, 22, 19, 11, 2, 13, 4, 18, 8]
+# A fixed shuffle of the case table (so that case numbers say nothing about the kind).
+ORDER = list(range(len(CASES)))
+random.Random(13).shuffle(ORDER)
 
 
 def build():
@@ -575,10 +620,16 @@ def build():
         c = CASES[i]
         name = f"case_{n:02d}"
         files[f"cases/{name}/truth.yaml"] = c["truth"](name, "truth")
+        runs = ["truth.yaml"]
+        for k, extra in enumerate(c["more_runs"], start=2):
+            runs.append(f"truth_run{k}.yaml")
+            files[f"cases/{name}/{runs[-1]}"] = extra(name, "truth")
         files[f"cases/{name}/model.yaml"] = c["model"](name, "model")
         answers[name] = {"kind": c["kind"], "duration_s": c["duration"], **c["answer"]}
         windows = c["program"].windows(c["duration"]) if c["program"] else [(0.0, c["duration"])]
         recordings[name] = {"duration_s": c["duration"], "windows_s": [[round(a, 3), round(b, 3)] for a, b in windows]}
+        if len(runs) > 1:
+            recordings[name]["runs"] = runs
         if c["kind"] in ("null", "out_of_catalog"):
             answers[name].setdefault("concealed", [])
     files["answers.json"] = json.dumps(answers, indent=1, sort_keys=True) + "\n"

@@ -23,6 +23,7 @@ Standard library only (`--verify` reads the bags with the `mcap` packages).
 """
 
 import argparse
+import datetime
 import json
 import os
 import shutil
@@ -55,13 +56,20 @@ def run_dirs(out, case, seed, plan):
     return [base] + [f"{base}_run{k}" for k in range(2, len(plan.get("runs", ["truth.yaml"])) + 1)]
 
 
-def generate(metrocell, case, seed, plan, out_dir, truth_file="truth.yaml"):
+# the first run of every case starts at metrocell sim's default start time; run k an hour per
+# run later, so the runs of one case follow each other in time
+START = datetime.datetime(2026, 1, 5, 6, 0, 0, tzinfo=datetime.timezone.utc)
+RUN_SPACING = datetime.timedelta(hours=1)
+
+
+def generate(metrocell, case, seed, plan, out_dir, truth_file="truth.yaml", run_index=0):
     """Write one recording to out_dir (which must not exist)."""
     truth = os.path.join(HERE, "cases", case, truth_file)
+    start = (START + run_index * max(RUN_SPACING, datetime.timedelta(seconds=plan["duration_s"] + 600))).strftime("%Y-%m-%dT%H:%M:%SZ")
     with tempfile.TemporaryDirectory(prefix=f"suite_{case}_") as tmp:
         raw = os.path.join(tmp, "raw")
         run([metrocell, "sim", "--cell", truth, "--duration", str(plan["duration_s"]), "--seed", str(seed),
-             "--clock-rate", "0", "--quiet", "-o", raw])
+             "--start-time", start, "--clock-rate", "0", "--quiet", "-o", raw])
         parts = [os.path.join(tmp, "whole")]
         run([metrocell, "bag", "filter", raw, parts[0], "--exclude", anchored(HIGH_RATE + DROPPED)])
         for k, (a, b) in enumerate(plan["windows_s"]):
@@ -180,7 +188,7 @@ def main(argv=None):
                         continue
                     shutil.rmtree(out_dir)
                 # run k of a case gets its own noise: seed + 1000 k
-                generate(a.metrocell, case, seed + 1000 * k, plan, out_dir, truth_file)
+                generate(a.metrocell, case, seed + 1000 * k, plan, out_dir, truth_file, k)
                 size = sum(os.path.getsize(os.path.join(out_dir, f)) for f in os.listdir(out_dir))
                 print(f"{out_dir}: {size / 1024:.0f} KiB")
                 if a.verify:

@@ -3,6 +3,7 @@
 //! Thin by design: every subcommand parses its arguments and calls a library crate.
 
 mod bag;
+mod compensate;
 mod demo;
 mod launch_command;
 mod topic;
@@ -34,6 +35,9 @@ enum Command {
     /// Camera tools: calibrate from checkerboard images → ROS camera_info YAML
     #[command(subcommand)]
     Camera(vision::camera_command::CameraCommand),
+    /// Turn a fitted model into what the machine runs: compensated G-code, controller tables
+    #[command(subcommand)]
+    Compensate(compensate::CompensateCommand),
     /// Find fiducials (ArUco/AprilTag markers, checkerboards) in image files
     Detect(vision::detect::DetectArgs),
     /// Run the main job on the built-in simulated cell: twin, thermal compensation, recorder
@@ -52,6 +56,7 @@ fn main() {
     let code = match cli.command {
         Command::Bag(command) => bag::run(command),
         Command::Camera(command) => vision::camera_command::run(command),
+        Command::Compensate(command) => compensate::run(command),
         Command::Demo(args) => demo::run(args),
         Command::Detect(args) => vision::detect::run(args),
         Command::Launch(args) => launch_command::run(args),

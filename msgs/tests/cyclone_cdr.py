@@ -76,6 +76,14 @@ class FluidPressure(IdlStruct, typename="sensor_msgs::msg::dds_::FluidPressure_"
     variance: t.float64
 
 
+@ros("sensor_msgs", "TimeReference")
+@dataclass
+class TimeReference(IdlStruct, typename="sensor_msgs::msg::dds_::TimeReference_"):
+    header: Header
+    time_ref: Time
+    source: str
+
+
 @ros("sensor_msgs", "Image")
 @dataclass
 class Image(IdlStruct, typename="sensor_msgs::msg::dds_::Image_"):
@@ -145,6 +153,20 @@ class Vector3(IdlStruct, typename="geometry_msgs::msg::dds_::Vector3_"):
     x: t.float64
     y: t.float64
     z: t.float64
+
+
+@ros("geometry_msgs", "Wrench")
+@dataclass
+class Wrench(IdlStruct, typename="geometry_msgs::msg::dds_::Wrench_"):
+    force: Vector3
+    torque: Vector3
+
+
+@ros("geometry_msgs", "WrenchStamped")
+@dataclass
+class WrenchStamped(IdlStruct, typename="geometry_msgs::msg::dds_::WrenchStamped_"):
+    header: Header
+    wrench: Wrench
 
 
 @ros("geometry_msgs", "Quaternion")

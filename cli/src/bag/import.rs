@@ -7,8 +7,12 @@ use metrocell_bagtools::import::{import_csv, Mapping};
 
 #[derive(clap::Args)]
 #[command(after_help = "CSV layout (header row): timestamp, point_id, measured_x/y/z [m], u_x/u_y/u_z or u95 [m], \
-optional nominal_x/y/z [m], joint.<name>, temperature.<name> [°C], pressure [Pa], humidity [0..1], aux.<name>.\n\
-Topics: /measured_points, /commanded_joints, /temperature/<name>, /air/pressure, /air/humidity, /aux_channels.\n\
+optional nominal_x/y/z [m, the commanded tool point], joint.<name>, velocity.<name> [m/s], approach.<axis> [+1/-1], \
+instrument_on_time [same forms as timestamp], temperature.<name> [°C], pressure [Pa], humidity [0..1], aux.<name>.\n\
+Topics: /measured_points, /machine/commanded_joint_states (joints and velocities), /machine/approach_directions, \
+/tracker/power_on, /temperature/<name>, /air/pressure, /air/humidity, /aux_channels.\n\
+A mapping's scale/offset apply to the time columns too: timestamp: {column: t_s, offset: 1767225600} reads seconds since \
+a job's start.\n\
 A mapping YAML maps these fields to another file's columns with unit conversion (see \
 crates/bagtools/examples/leica_mapping.yaml).\n\
 Bad rows are reported (file:line, column) and skipped; exit status 1 if any row was skipped.\n\n\

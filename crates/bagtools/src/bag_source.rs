@@ -92,6 +92,26 @@ impl BagSource {
         Ok(present)
     }
 
+    /// The bag's topics (name, type, count, time range), merged over its files.
+    pub fn topics(&self) -> &[metrocell_bag::TopicInfo] {
+        self.reader.topics()
+    }
+
+    /// The bag's path.
+    pub fn path(&self) -> &Path {
+        self.reader.path()
+    }
+
+    /// Read `topic` whatever its type (the caller decodes by the type [`Self::topics`] lists).
+    /// Returns whether the bag holds it.
+    pub fn subscribe_any(&mut self, topic: &str) -> bool {
+        let present = self.reader.topic(topic).is_some();
+        if present && !self.topics.iter().any(|t| t == topic) {
+            self.topics.push(topic.to_string());
+        }
+        present
+    }
+
     /// What to tell a user whose bag lacks `topic`: the bag's path and the topics it does hold.
     pub fn missing_topic_hint(&self, topic: &str) -> String {
         let held: Vec<&str> = self.reader.topics().iter().map(|t| t.name.as_str()).collect();

@@ -12,8 +12,11 @@
 //! | `u_x`, `u_y`, `u_z` | standard uncertainties (k = 1) of the measured coordinates [m] | all three, or |
 //! | `u95` | expanded uncertainty, k = 2, same on each axis [m]: σ = U95 / 2 | `u_*`, or |
 //! | | | `default_uncertainty` in the mapping |
-//! | `nominal_x`, `nominal_y`, `nominal_z` | commanded position [m] (NaN in the message when absent) | no |
-//! | `joint.<name>` | commanded joint value [rad or m] | no |
+//! | `nominal_x`, `nominal_y`, `nominal_z` | commanded tool point [m], machine frame: where the target should be (NaN in the message when absent); on cartesian and delta machines it gives the commanded axes as nominal − tool offset | no |
+//! | `joint.<name>` | commanded joint value [rad or m], any family's joint names (`x y z`, `x y z b c`, `joint_1` …) | no |
+//! | `velocity.<name>` | commanded velocity of joint/axis `<name>` [m/s or rad/s] | no |
+//! | `approach.<axis>` | approach direction of axis `x`, `y` or `z`: `+1` or `-1` (the sign of its last motion, when the export knows it) | no |
+//! | `instrument_on_time` | when the instrument was powered on: same forms as `timestamp`, and a mapping's `scale`/`offset` apply to it as to `timestamp` | no |
 //! | `temperature.<name>` | temperature [°C] | no |
 //! | `pressure` | air pressure [Pa] | no |
 //! | `humidity` | relative humidity, 0..1 | no |
@@ -21,7 +24,15 @@
 //!
 //! # Topics written (log time = publish time = the row's timestamp)
 //! * `/measured_points` `metrocell_msgs/msg/MeasuredPoint` (covariance diagonal σ², off-diagonal 0)
-//! * `/commanded_joints` `sensor_msgs/msg/JointState` (names from `joint.<name>`, positions)
+//! * `/machine/commanded_joint_states` `sensor_msgs/msg/JointState` (the topic `metrocell sim`
+//!   and the nodes use): `name` = the `joint.<name>` columns then any `velocity.<name>` without
+//!   a joint column, `position` from `joint.*` and `velocity` from `velocity.*` (NaN where a
+//!   row has a velocity but no position or the reverse; an array is empty when no column feeds it)
+//! * `/machine/approach_directions` `sensor_msgs/msg/JointState` used as a named-value vector:
+//!   `name` = the axes of the row's `approach.<axis>` cells, `position` = ±1
+//! * `/tracker/power_on` `sensor_msgs/msg/TimeReference` (`time_ref` = `instrument_on_time`,
+//!   `source` = the mapping's `source`), written at the first row and whenever the value changes;
+//!   latched QoS, as `metrocell sim` writes it
 //! * `/temperature/<name>` `sensor_msgs/msg/Temperature` (variance 0 = unknown, as ROS defines)
 //! * `/air/pressure` `sensor_msgs/msg/FluidPressure`, `/air/humidity` `sensor_msgs/msg/RelativeHumidity`
 //! * `/aux_channels` `sensor_msgs/msg/JointState` used as a named-value vector: `name` holds the
@@ -56,7 +67,7 @@ use metrocell_bag::{qos_profiles_yaml, BagWriter, QosProfile, WriterOptions};
 use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_msgs::geometry_msgs::msg::Point;
 use metrocell_msgs::msg::MeasuredPoint;
-use metrocell_msgs::sensor_msgs::msg::{FluidPressure, JointState, RelativeHumidity, Temperature};
+use metrocell_msgs::sensor_msgs::msg::{FluidPressure, JointState, RelativeHumidity, Temperature, TimeReference};
 use metrocell_msgs::std_msgs::msg::Header;
 use rosmsg::RosMessage;
 use serde::Deserialize;
@@ -119,6 +130,9 @@ enum Field {
     U(usize),
     U95,
     Joint(String),
+    Velocity(String),
+    Approach(String),
+    InstrumentOnTime,
     Temperature(String),
     Pressure,
     Humidity,
@@ -134,6 +148,7 @@ fn parse_field(name: &str) -> Option<Field> {
         "u95" => Field::U95,
         "pressure" => Field::Pressure,
         "humidity" => Field::Humidity,
+        "instrument_on_time" => Field::InstrumentOnTime,
         _ => {
             if let Some(a) = name.strip_prefix("measured_").and_then(axis) {
                 Field::Measured(a)
@@ -143,6 +158,10 @@ fn parse_field(name: &str) -> Option<Field> {
                 Field::U(a)
             } else if let Some(n) = named("joint.") {
                 Field::Joint(n.to_string())
+            } else if let Some(n) = named("velocity.") {
+                Field::Velocity(n.to_string())
+            } else if let Some(a) = name.strip_prefix("approach.").filter(|a| axis(a).is_some()) {
+                Field::Approach(a.to_string())
             } else if let Some(n) = named("temperature.") {
                 Field::Temperature(n.to_string())
             } else if let Some(n) = named("aux.") {
@@ -192,36 +211,28 @@ pub fn parse_timestamp(s: &str) -> std::result::Result<u64, String> {
 }
 
 /// A timestamp cell through its mapping: `seconds·scale + offset` for a number of seconds (so
-/// `{column: t_s, offset: 1767225600}` turns seconds since the start of a job into epoch time, and
-/// `scale: 0.001` reads milliseconds), `date-time + offset` for a date-time (a time-zone shift;
-/// a scale other than 1 makes no sense there and is an error). Exact to the nanosecond when the
-/// scale is 1; the result must not fall before 1970. → ns since the epoch.
+/// `{column: t_s, offset: 1767225600}` turns seconds since the start of a job into epoch time —
+/// negative seconds, before the job's start, included — and `scale: 0.001` reads
+/// milliseconds), `date-time + offset` for a date-time (a time-zone shift; a scale other than 1
+/// makes no sense there and is an error). Exact to the nanosecond when the scale is 1; the
+/// result must not fall before 1970. → ns since the epoch.
 pub fn mapped_timestamp(cell: &str, scale: f64, offset: f64) -> std::result::Result<u64, String> {
-    let numeric = cell.trim().parse::<f64>().is_ok();
-    let offset_ns = (offset * 1e9).round();
-    let base_ns: f64 = if numeric && scale != 1.0 {
-        let v: f64 = cell.trim().parse().map_err(|_| format!("timestamp '{cell}' is not a number"))?;
-        if !v.is_finite() {
-            return Err(format!("timestamp '{cell}' is not finite"));
-        }
-        (v * scale * 1e9).round()
-    } else {
-        if !numeric && scale != 1.0 {
-            return Err(format!("timestamp '{cell}' is a date-time: its mapping may shift it (offset, s) but not scale it (scale {scale})"));
-        }
-        if offset == 0.0 {
-            return parse_timestamp(cell);
-        }
-        parse_timestamp(cell)? as f64
+    let text = cell.trim();
+    let offset_ns = (offset * 1e9).round() as i128;
+    let base_ns: i128 = match text.parse::<f64>() {
+        Ok(v) if !v.is_finite() => return Err(format!("timestamp '{cell}' is not finite")),
+        // exact when the scale is 1: integer nanoseconds of the decimal text
+        Ok(_) if scale == 1.0 => match text.strip_prefix('-') {
+            Some(magnitude) => -(parse_timestamp(magnitude)? as i128),
+            None => parse_timestamp(text.strip_prefix('+').unwrap_or(text))? as i128,
+        },
+        Ok(v) => (v * scale * 1e9).round() as i128,
+        Err(_) if scale != 1.0 => return Err(format!("timestamp '{cell}' is a date-time: its mapping may shift it (offset, s) but not scale it (scale {scale})")),
+        Err(_) => parse_timestamp(text)? as i128,
     };
     let t = base_ns + offset_ns;
-    if !(t >= 0.0 && t < 1.8e19) {
-        return Err(format!("timestamp '{cell}' with scale {scale} and offset {offset} s falls at {:.3} s, before 1970 or past 2540", t / 1e9));
-    }
-    // exact when the scale is 1: integer nanoseconds plus the offset's nanoseconds
-    if scale == 1.0 {
-        let exact = parse_timestamp(cell)? as i128 + offset_ns as i128;
-        return Ok(exact as u64);
+    if !(0..18_000_000_000_000_000_000i128).contains(&t) {
+        return Err(format!("timestamp '{cell}' with scale {scale} and offset {offset} s falls at {:.3} s, before 1970 or past 2540", t as f64 / 1e9));
     }
     Ok(t as u64)
 }
@@ -248,6 +259,25 @@ fn frac_ns(frac: &str) -> std::result::Result<u64, String> {
     }
     let digits: String = frac.chars().chain(std::iter::repeat('0')).take(9).collect();
     Ok(digits.parse().expect("nine digits"))
+}
+
+/// Topic of the commanded joints (the one `metrocell sim` and the nodes use).
+pub const COMMANDED_JOINTS_TOPIC: &str = "/machine/commanded_joint_states";
+/// Topic of recorded approach directions.
+pub const APPROACH_TOPIC: &str = "/machine/approach_directions";
+/// Topic of the instrument's power-on time.
+pub const POWER_ON_TOPIC: &str = "/tracker/power_on";
+
+/// The commanded joint state of a row: the joint columns' names, then velocity-only names;
+/// positions and velocities aligned with the names, NaN where one of the pair is missing,
+/// an array left empty when no column feeds it (as ROS allows).
+fn commanded_joint_state(header: Header, joints: &[(String, f64)], velocities: &[(String, f64)]) -> JointState {
+    let mut name: Vec<String> = joints.iter().map(|j| j.0.clone()).collect();
+    name.extend(velocities.iter().filter(|v| !joints.iter().any(|j| j.0 == v.0)).map(|v| v.0.clone()));
+    let value = |list: &[(String, f64)], n: &String| list.iter().find(|x| &x.0 == n).map_or(f64::NAN, |x| x.1);
+    let position = if joints.is_empty() { Vec::new() } else { name.iter().map(|n| value(joints, n)).collect() };
+    let velocity = if velocities.is_empty() { Vec::new() } else { name.iter().map(|n| value(velocities, n)).collect() };
+    JointState { header, name, position, velocity, effort: Vec::new() }
 }
 
 /// Counts of an import.
@@ -338,13 +368,15 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
 
     let mut writer = BagWriter::create(bag_dir, options)?;
     let qos = qos_profiles_yaml(&[QosProfile::default_publisher()]);
+    let latched = qos_profiles_yaml(&[QosProfile { keep_last: true, depth: 1, reliable: true, transient_local: true }]);
     let mut added: BTreeMap<String, ()> = BTreeMap::new();
     let mut add = |w: &mut BagWriter, topic: &str, ty: &str, def: &str| -> Result<()> {
         if added.insert(topic.to_string(), ()).is_none() {
-            w.add_topic(topic, ty, def, &qos)?;
+            w.add_topic(topic, ty, def, if topic == POWER_ON_TOPIC { &latched } else { &qos })?;
         }
         Ok(())
     };
+    let mut last_on_time: Option<u64> = None;
     let mut report = ImportReport::default();
     let mut record = csv::StringRecord::new();
     loop {
@@ -373,6 +405,9 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
         let mut nominal = [f64::NAN; 3];
         let mut u = [mapping.default_uncertainty.unwrap_or(f64::NAN); 3];
         let mut joints = Vec::new();
+        let mut velocities = Vec::new();
+        let mut approach = Vec::new();
+        let mut on_time = None;
         let mut temps = Vec::new();
         let mut aux = Vec::new();
         let (mut pressure, mut humidity) = (None, None);
@@ -415,6 +450,20 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
                     Ok(v) => joints.push((n.clone(), v)),
                     Err(e) => err(b, e),
                 },
+                Field::Velocity(_) | Field::Approach(_) | Field::InstrumentOnTime if cell.is_empty() => {}
+                Field::Velocity(n) => match number() {
+                    Ok(v) => velocities.push((n.clone(), v)),
+                    Err(e) => err(b, e),
+                },
+                Field::Approach(a) => match number() {
+                    Ok(v) if v == 1.0 || v == -1.0 => approach.push((a.clone(), v)),
+                    Ok(v) => err(b, format!("approach direction {v} is neither +1 nor -1")),
+                    Err(e) => err(b, e),
+                },
+                Field::InstrumentOnTime => match mapped_timestamp(cell, b.scale, b.offset) {
+                    Ok(t) => on_time = Some(t),
+                    Err(e) => err(b, format!("instrument_on_time: {e}")),
+                },
                 Field::Temperature(_) | Field::Pressure | Field::Humidity | Field::Aux(_) if cell.is_empty() => {}
                 Field::Temperature(n) => match number() {
                     Ok(v) => temps.push((n.clone(), v)),
@@ -455,9 +504,18 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
             covariance: cov,
         };
         out.push(("/measured_points".into(), MeasuredPoint::ROS_TYPE, MeasuredPoint::DEFINITION, encode_cdr(&p)?));
-        if !joints.is_empty() {
-            let js = JointState { header: header.clone(), name: joints.iter().map(|j| j.0.clone()).collect(), position: joints.iter().map(|j| j.1).collect(), ..Default::default() };
-            out.push(("/commanded_joints".into(), JointState::ROS_TYPE, JointState::DEFINITION, encode_cdr(&js)?));
+        if !joints.is_empty() || !velocities.is_empty() {
+            let js = commanded_joint_state(header.clone(), &joints, &velocities);
+            out.push((COMMANDED_JOINTS_TOPIC.into(), JointState::ROS_TYPE, JointState::DEFINITION, encode_cdr(&js)?));
+        }
+        if !approach.is_empty() {
+            let js = JointState { header: header.clone(), name: approach.iter().map(|a| a.0.clone()).collect(), position: approach.iter().map(|a| a.1).collect(), ..Default::default() };
+            out.push((APPROACH_TOPIC.into(), JointState::ROS_TYPE, JointState::DEFINITION, encode_cdr(&js)?));
+        }
+        if let Some(on) = on_time.filter(|on| last_on_time != Some(*on)) {
+            last_on_time = Some(on);
+            let m = TimeReference { header: header.clone(), time_ref: stamp(on), source: source.clone() };
+            out.push((POWER_ON_TOPIC.into(), TimeReference::ROS_TYPE, TimeReference::DEFINITION, encode_cdr(&m)?));
         }
         for (n, v) in temps {
             let m = Temperature { header: Header { stamp: stamp(t), frame_id: n.clone() }, temperature: v, variance: 0.0 };
@@ -512,6 +570,10 @@ mod tests {
         assert_eq!(mapped_timestamp("1714557600.125", 1.0, 0.0).unwrap(), 1_714_557_600_125_000_000);
         assert!(mapped_timestamp("2024-05-01 11:00:00", 0.001, 0.0).unwrap_err().contains("date-time"));
         assert!(mapped_timestamp("5", 1.0, -10.0).unwrap_err().contains("before 1970"));
+        // an instrument switched on 20 min before the job started
+        assert_eq!(mapped_timestamp("-1200", 1.0, 1_767_225_600.0).unwrap(), 1_767_224_400_000_000_000);
+        assert_eq!(mapped_timestamp("-0.5", 1.0, 10.0).unwrap(), 9_500_000_000);
+        assert!(mapped_timestamp("-5", 1.0, 0.0).unwrap_err().contains("before 1970"));
     }
 
     #[test]
@@ -523,7 +585,22 @@ mod tests {
     }
 
     #[test]
+    fn commanded_joints_pair_positions_and_velocities_by_name() {
+        let h = Header::default();
+        let js = commanded_joint_state(h.clone(), &[("x".into(), 0.1), ("y".into(), 0.2)], &[("y".into(), -0.05), ("z".into(), 0.01)]);
+        assert_eq!(js.name, ["x", "y", "z"]);
+        assert!(js.position[..2] == [0.1, 0.2] && js.position[2].is_nan());
+        assert!(js.velocity[0].is_nan() && js.velocity[1..] == [-0.05, 0.01]);
+        let only_positions = commanded_joint_state(h, &[("x".into(), 0.1)], &[]);
+        assert!(only_positions.velocity.is_empty());
+    }
+
+    #[test]
     fn layout_fields_parse() {
+        assert_eq!(parse_field("velocity.x"), Some(Field::Velocity("x".into())));
+        assert_eq!(parse_field("approach.z"), Some(Field::Approach("z".into())));
+        assert_eq!(parse_field("approach.b"), None);
+        assert_eq!(parse_field("instrument_on_time"), Some(Field::InstrumentOnTime));
         assert_eq!(parse_field("measured_y"), Some(Field::Measured(1)));
         assert_eq!(parse_field("temperature.air"), Some(Field::Temperature("air".into())));
         assert_eq!(parse_field("temperature."), None);

@@ -17,7 +17,6 @@ pub mod thermal_drift;
 pub mod thermal_error;
 pub mod thermal_growth_compensation;
 pub mod thermal_growth_fit;
-pub mod thermal_lag_filter;
 pub mod thermal_scale_compensation;
 pub mod thermal_signals;
 pub mod thermal_workpiece_compensation;
@@ -28,7 +27,8 @@ pub use thermal_compensator::ThermalCompensator;
 pub use thermal_error::{Reading, ThermalError};
 pub use thermal_growth_compensation::{GrowthCompensator, GrowthSpec};
 pub use thermal_growth_fit::{GrowthFit, GrowthFitResult};
-pub use thermal_lag_filter::FirstOrderLag;
+/// The one first-order lag filter of the workspace (crates/physics).
+pub use metrocell_physics::thermal::first_order_lag::FirstOrderLag;
 pub use thermal_scale_compensation::{AxisSensorPlacement, ThermalScaleCompensator};
 pub use thermal_workpiece_compensation::WorkpieceCompensator;
 pub use tracker_correction::{range_for_index, refraction_corrected_range, warmup_status, AirData};

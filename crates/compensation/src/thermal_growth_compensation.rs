@@ -3,7 +3,8 @@
 //! sensor's reading passed through a first-order lag of time constant τ (or the reading itself
 //! when there is no lag).
 //!
-//! The lag is advanced here one reading at a time ([`FirstOrderLag`]) and the catalog term is
+//! The lag is advanced here one reading at a time ([`FirstOrderLag`], the workspace's one lag
+//! filter, crates/physics) and the catalog term is
 //! evaluated on its output. Uncertainty: u(g) and u(τ) (through ∂T_f/∂τ), the filtered
 //! reading variance, and the sensor's calibration uncertainty, which the lag does not average
 //! down (a calibration error is the same in every reading).
@@ -13,7 +14,7 @@ use nalgebra::{Matrix2, Vector3};
 
 use crate::thermal_drift::{TemperatureSensitivity, TermDrift};
 use crate::thermal_error::ThermalError;
-use crate::thermal_lag_filter::FirstOrderLag;
+use metrocell_physics::thermal::first_order_lag::FirstOrderLag;
 use crate::thermal_signals::thermal_signals;
 
 /// One growth term as configured.
@@ -161,7 +162,7 @@ impl GrowthCompensator {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use metrocell_physics::TemperatureHistory;
+    use metrocell_physics::{TemperatureHistory, TemperatureTimeline};
 
     fn column(lag: Option<f64>) -> GrowthSpec {
         GrowthSpec {
@@ -187,7 +188,7 @@ mod tests {
         let d = g.drift(&Vector3::zeros()).unwrap();
         let cfg = catalog_term(&column(Some(1200.0)), 4e-6, Some(1200.0)).unwrap();
         let mut s = metrocell_physics::Signals::default();
-        s.temperature_histories.insert("column".into(), TemperatureHistory { samples: history.clone() });
+        s.timeline = Some(std::sync::Arc::new(TemperatureTimeline::from_histories([("column", &TemperatureHistory { samples: history.clone() })]).unwrap()));
         let whole = cfg.term.predict(&cfg.params, &s).unwrap().value;
         assert!((d.displacement.z - whole[2]).abs() < 1e-15, "{} vs {}", d.displacement.z, whole[2]);
         assert!(d.displacement.z < -10e-6, "a 3 K rise pushes the spindle down by ~12 µm: {}", d.displacement.z);

@@ -17,7 +17,7 @@
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
 
 use crate::thermal_error::ThermalError;
-use crate::thermal_lag_filter::FirstOrderLag;
+use metrocell_physics::thermal::first_order_lag::FirstOrderLag;
 
 /// A fit of (c, g, τ).
 #[derive(Debug, Clone, PartialEq)]

@@ -1,10 +1,13 @@
 //! The one place the thermal corrections build physics [`Signals`]: the point's commanded
 //! coordinates (machine frame, also used as the workpiece-frame feature position), the
 //! instantaneous sensor temperatures, and for lagged terms the lagged temperature as a
-//! one-sample history (the lag itself is advanced incrementally by
-//! [`crate::thermal_lag_filter::FirstOrderLag`], so the catalog term sees T_f directly).
+//! one-sample timeline at the instant's time (the lag itself is advanced incrementally by
+//! [`metrocell_physics::thermal::first_order_lag::FirstOrderLag`], so the catalog term sees T_f
+//! directly).
 
-use metrocell_physics::{Signals, TemperatureHistory};
+use std::sync::Arc;
+
+use metrocell_physics::{Signals, TemperatureTimeline};
 use nalgebra::Vector3;
 
 /// `temperatures`: (sensor, °C); `lagged`: (sensor, time s, lagged temperature °C).
@@ -14,8 +17,14 @@ pub fn thermal_signals(nominal: &Vector3<f64>, temperatures: &[(&str, f64)], lag
     for (name, t) in temperatures {
         s.temperatures.insert(name.to_string(), *t);
     }
-    for (name, time, tf) in lagged {
-        s.temperature_histories.insert(name.to_string(), TemperatureHistory { samples: vec![(*time, *tf)] });
+    if !lagged.is_empty() {
+        let timeline = TemperatureTimeline::new();
+        for (name, time, tf) in lagged {
+            // one sample per sensor: it cannot be out of order; a non-finite one is left out
+            // and the term then reports the sensor as missing
+            let _ = timeline.push(name, *time, *tf);
+        }
+        s.timeline = Some(Arc::new(timeline));
     }
     s
 }

@@ -54,7 +54,11 @@ impl SignalInventory {
             common.into_iter().collect()
         };
         inv.temperatures = names(&|r| r.signals.temperatures.iter().filter(|(_, v)| v.is_finite()).map(|(n, _)| n.clone()).collect());
-        inv.histories = names(&|r| r.signals.temperature_histories.iter().filter(|(_, h)| !h.samples.is_empty()).map(|(n, _)| n.clone()).collect());
+        // a lagged temperature needs the sensor's history up to the record's time
+        inv.histories = names(&|r| match (&r.signals.timeline, r.signals.time) {
+            (Some(tl), Some(t)) => tl.sensors().into_iter().filter(|n| tl.time_span(n).is_some_and(|(first, _)| first <= t)).collect(),
+            _ => BTreeSet::new(),
+        });
         inv.air = all(&|r| r.signals.air_temperature.is_some() && r.signals.air_pressure.is_some() && r.signals.air_humidity.is_some());
         if all(&|r| r.signals.time_since_power_on.is_some_and(f64::is_finite)) {
             let (lo, hi) = records.iter().filter_map(|r| r.signals.time_since_power_on).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| (a.min(t), b.max(t)));

@@ -382,13 +382,21 @@ fn dependent_parameters(jw: &DMatrix<f64>, free: &[bool], machine_params: usize,
     order.extend((0..machine_params).filter(|&k| free[k] && names[k].starts_with("squareness")));
     order.extend((0..machine_params).filter(|&k| free[k] && !names[k].starts_with("squareness") && !names[k].ends_with(".c0")));
     order.extend((0..machine_params).filter(|&k| free[k] && names[k].ends_with(".c0")));
+    inseparable(jw, &order, names)
+}
+
+/// The columns of `jw` (parameters `names`) among `order` that are combinations of columns
+/// earlier in `order` (those are kept), each with a sentence naming what it cannot be told
+/// from and the combination that leaves every residual unchanged. Columns are compared scaled
+/// to unit norm; a nil column (below 1e-9 of the largest) is "not identifiable".
+pub fn inseparable(jw: &DMatrix<f64>, order: &[usize], names: &[String]) -> Vec<(usize, String)> {
     let largest = order.iter().map(|&k| jw.column(k).norm()).fold(0.0f64, f64::max);
     let m = jw.nrows();
     // orthonormal basis of the kept columns (modified Gram–Schmidt), and each kept column's norm
     let mut basis: Vec<nalgebra::DVector<f64>> = Vec::new();
     let mut kept: Vec<(usize, f64)> = Vec::new();
     let mut out = Vec::new();
-    for &k in &order {
+    for &k in order {
         let col = jw.column(k).into_owned();
         let norm = col.norm();
         if !(norm > 1e-9 * largest) {

@@ -4,6 +4,11 @@
 //!
 //! * [`records`] — measurement records (a measured point, its covariance, its commanded joints
 //!   and the signals at its time) and the frame they are in.
+//! * [`recordings`] — [`records_from_bags`]: bags (the nodes', `metrocell sim`'s, `bag import`'s)
+//!   → a [`RecordSet`] for the shared model, signals by the model's `SignalsBuilder`; missing
+//!   signals named with the topics and columns that would provide them.
+//! * [`signal_topics`] — the recorded topics that carry signals and how each message feeds the
+//!   signals builder (shared with the online estimator).
 //! * [`residuals`] — measured − predicted on the shared forward model (crates/model), whitened
 //!   by each record's covariance, with the model's analytic Jacobian: a solver problem.
 //! * [`fit`] — batch identification of the declared free parameters: registration of the
@@ -25,11 +30,14 @@ pub mod design_of_experiments;
 pub mod fit;
 pub mod improvement;
 pub mod records;
+pub mod recordings;
 pub mod recursive;
 pub mod residuals;
+pub mod signal_topics;
 pub mod uncertainty_budget;
 
-pub use fit::{fit, rms, start_vector, Fit, FitError, FitOptions, HeldParameter, ParameterEstimate, RecordNote};
+pub use fit::{fit, inseparable, rms, start_vector, Fit, FitError, FitOptions, HeldParameter, ParameterEstimate, RecordNote};
 pub use records::{MeasurementRecord, RecordFrame, RecordSet, Rejected};
+pub use recordings::{records_from_bags, PointSource, RecordingError, RecordingOptions};
 pub use residuals::PointResiduals;
 pub use recursive::{RecursiveEstimator, RecursiveOptions, Update};

@@ -1,5 +1,5 @@
 //! Measurement records: what one measured point says, with everything the model needs to
-//! predict it. Built from recordings by [`crate::records_from_bag`] (bags recorded by the nodes,
+//! predict it. Built from recordings by [`crate::records_from_bags`] (bags recorded by the nodes,
 //! simulated by `metrocell sim`, or imported with `bag import`), or directly by tests.
 //!
 //! Frame convention (stated once): `measured` is in the frame of the [`RecordSet`]. When that is
@@ -55,6 +55,8 @@ pub struct Rejected {
 pub struct RecordSet {
     pub frame: RecordFrame,
     pub records: Vec<MeasurementRecord>,
+    /// Measurements dropped, with where and why; entries with an empty `point_id` are signal
+    /// samples a topic gave that could not be used (one entry per topic, with the count).
     pub rejected: Vec<Rejected>,
     /// Topics (or columns) each signal came from, for reports and error messages.
     pub sources: Vec<(String, String)>,

@@ -71,6 +71,11 @@ pub fn axis_tables(field: &dyn ErrorField, region: &Region, reference: &Vector3<
     Ok(out)
 }
 
+/// `v` to three decimals without a negative zero.
+fn fixed3(v: f64) -> String {
+    format!("{:.3}", (v * 1e3).round() / 1e3 + 0.0)
+}
+
 /// Least-squares slope of `y` over `x`.
 fn slope(x: &[f64], y: &[f64]) -> f64 {
     let n = x.len() as f64;
@@ -104,7 +109,7 @@ pub fn axis_csv(t: &AxisTable, title: &str) -> String {
     );
     s += &format!("position_mm,pitch_um,straightness_{}_um,straightness_{}_um,reversal_um\n", AXES[others[0]], AXES[others[1]]);
     for ((p, e), r) in t.positions.iter().zip(&t.errors).zip(&t.reversal) {
-        s += &format!("{:.3},{:.3},{:.3},{:.3},{:.3}\n", p * 1e3, e[t.axis] * 1e6, e[others[0]] * 1e6, e[others[1]] * 1e6, r * 1e6);
+        s += &format!("{},{},{},{},{}\n", fixed3(p * 1e3), fixed3(e[t.axis] * 1e6), fixed3(e[others[0]] * 1e6), fixed3(e[others[1]] * 1e6), fixed3(r * 1e6));
     }
     s
 }
@@ -113,7 +118,7 @@ pub fn axis_csv(t: &AxisTable, title: &str) -> String {
 pub fn squareness_csv(values: &[(String, f64)], title: &str) -> String {
     let mut s = format!("# metrocell squareness of {title}: from the least-squares lines of the axis tables' straightness, the catalog's sign (xy: d = (−y·s, 0, 0))\npair,squareness_urad\n");
     for (pair, v) in values {
-        s += &format!("{pair},{:.3}\n", v * 1e6);
+        s += &format!("{pair},{}\n", fixed3(v * 1e6));
     }
     s
 }

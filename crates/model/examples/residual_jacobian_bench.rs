@@ -10,8 +10,13 @@
 //! the terms' displacements and Jacobians, as on main) for the 21 machine terms alone — it
 //! does less work than the new path (no tracker chain), so the ratio is a lower bound.
 //!
+//! Allocations are counted (a counting global allocator): the new path must make none per
+//! reading; the count of each path is printed, and a non-zero count for the new path fails.
+//!
 //! `cargo run --release -p metrocell-model --example residual_jacobian_bench`
 
+use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use metrocell_model::{ForwardModel, MachineGeometry, MachineKinematics, Workspace, TRACKER_ROWS};
@@ -22,6 +27,31 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 const READINGS: usize = 10_000;
+
+/// The system allocator, counting every allocation.
+struct Counting;
+
+static ALLOCATIONS: AtomicUsize = AtomicUsize::new(0);
+
+unsafe impl GlobalAlloc for Counting {
+    unsafe fn alloc(&self, layout: Layout) -> *mut u8 {
+        ALLOCATIONS.fetch_add(1, Ordering::Relaxed);
+        unsafe { System.alloc(layout) }
+    }
+    unsafe fn dealloc(&self, ptr: *mut u8, layout: Layout) {
+        unsafe { System.dealloc(ptr, layout) }
+    }
+}
+
+#[global_allocator]
+static COUNTING: Counting = Counting;
+
+/// Allocations made while `f` runs.
+fn allocations_of<T>(f: impl FnOnce() -> T) -> (T, usize) {
+    let before = ALLOCATIONS.load(Ordering::Relaxed);
+    let out = f();
+    (out, ALLOCATIONS.load(Ordering::Relaxed) - before)
+}
 
 fn machine_terms() -> Vec<TermConfig> {
     let mut yaml = String::new();
@@ -104,9 +134,9 @@ fn main() {
         }
         (start.elapsed().as_secs_f64(), check)
     };
-    // warm up once, then take the best of three
-    run_new(&mut work, &mut jac);
-    run_old();
+    // warm up once (counting allocations), then take the best of three
+    let (_, alloc_new) = allocations_of(|| run_new(&mut work, &mut jac));
+    let (_, alloc_old) = allocations_of(&mut run_old);
     let best = |f: &mut dyn FnMut() -> (f64, f64)| (0..3).map(|_| f()).fold((f64::INFINITY, 0.0), |a, b| if b.0 < a.0 { b } else { a });
     let (t_new, c_new) = best(&mut || run_new(&mut work, &mut jac));
     let (t_old, c_old) = best(&mut run_old);
@@ -114,4 +144,6 @@ fn main() {
     println!("new   residual + 4×{} Jacobian (shared forward model): {:8.2} ms  ({:.2} µs/reading)  [checksum {c_new:.6e}]", model.param_count(), t_new * 1e3, t_new / READINGS as f64 * 1e6);
     println!("old   TermModel::displacement + 3×{} Jacobian (machine terms only): {:8.2} ms  ({:.2} µs/reading)  [checksum {c_old:.6e}]", p_machine.len(), t_old * 1e3, t_old / READINGS as f64 * 1e6);
     println!("ratio old/new: {:.2}×", t_old / t_new);
+    println!("allocations: new {alloc_new} ({:.2} per reading), old {alloc_old} ({:.2} per reading)", alloc_new as f64 / READINGS as f64, alloc_old as f64 / READINGS as f64);
+    assert_eq!(alloc_new, 0, "the shared model's XFYZ tracker path must not allocate per reading");
 }

@@ -15,12 +15,17 @@
 //!   Jacobian w.r.t. every stacked parameter; [`workspace`] — their scratch buffers.
 //! * [`parameters`] — free/fixed mask and priors per parameter ([`ParameterSetup`]), and the
 //!   pairs of parameters parallel by construction ([`ForwardModel::parallel_pairs`]).
+//! * [`signals_builder`] — [`SignalsBuilder`]: recorded streams (commanded joints, temperatures,
+//!   air, power-on, load) → `Signals` at any instant, offline or streaming; with
+//!   [`approach_rule`] (approach direction from the commanded trajectory) and
+//!   [`sampled_series`] (interpolation and states on integer-ns times).
 //!
 //! Units SI (m, rad, s, Pa), temperatures °C, as in crates/physics.
 
 // `!(x > 0.0)` is used on purpose: unlike `x <= 0.0` it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+pub mod approach_rule;
 pub mod camera;
 pub mod forward;
 pub mod instrument_pose;
@@ -28,6 +33,8 @@ pub mod instruments;
 pub mod machine;
 pub mod parameters;
 pub mod probe;
+pub mod sampled_series;
+pub mod signals_builder;
 pub mod tracker;
 pub mod workspace;
 
@@ -39,4 +46,5 @@ pub use tracker::{TrackerPrediction, TRACKER_ROWS};
 pub use workspace::Workspace;
 pub use instrument_pose::InstrumentPose;
 pub use parameters::{ParallelPair, ParameterSetup, Prior};
+pub use signals_builder::{JointMotion, SignalsBuilder, SignalsBuilderOptions};
 pub use machine::{FiveAxisMachine, MachineGeometry, MachineKinematics, SerialArm, FIVE_AXIS_JOINTS};

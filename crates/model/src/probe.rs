@@ -58,7 +58,8 @@ impl ForwardModel<'_> {
             return Err(PhysicsError::InvalidInput { what: "forward model, probe reading".into(), reason: "touch-probe readings are modelled on cartesian and delta machines (probe frame parallel to the machine axes)".into() });
         }
         let u = hit.approach;
-        if !((u.norm() - 1.0).abs() < 1e-9) || !(hit.stylus_radius >= 0.0 && hit.stylus_radius.is_finite()) || !hit.surface.iter().all(|v| v.is_finite()) {
+        let valid = (u.norm() - 1.0).abs() < 1e-9 && hit.stylus_radius >= 0.0 && hit.stylus_radius.is_finite() && hit.surface.iter().all(|v| v.is_finite());
+        if !valid {
             return Err(PhysicsError::InvalidInput { what: "forward model, probe reading".into(), reason: format!("needs a finite surface point, a unit approach direction and a radius ≥ 0; got surface {:?}, |u| = {}, r = {}", hit.surface.as_slice(), u.norm(), hit.stylus_radius) });
         }
         for k in 0..3 {

@@ -5,8 +5,10 @@
 use nalgebra::{Vector2, Vector3};
 use std::collections::BTreeMap;
 use std::fmt;
+use std::sync::Arc;
 
 use crate::error::PhysicsError;
+use crate::temperature_timeline::{LagUnavailable, TemperatureTimeline};
 
 /// A linear machine axis.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
@@ -76,7 +78,8 @@ pub enum SignalKind {
     AxisVelocity(Axis),
     /// Latest reading of a named temperature sensor, °C.
     Temperature(String),
-    /// Time history of a named temperature sensor (for first-order lags), s and °C.
+    /// Time history of a named temperature sensor (for first-order lags), s and °C: the
+    /// sensor's samples in [`Signals::timeline`] up to [`Signals::time`].
     TemperatureHistory(String),
     /// Air temperature at the weather station, °C.
     AirTemperature,
@@ -136,12 +139,6 @@ impl fmt::Display for SignalKind {
     }
 }
 
-/// Samples of one temperature sensor: (time s, temperature °C), strictly increasing in time.
-#[derive(Debug, Clone, PartialEq, Default)]
-pub struct TemperatureHistory {
-    pub samples: Vec<(f64, f64)>,
-}
-
 /// Values of the signals at one instant. Missing values are `None`; a term that needs one
 /// returns [`PhysicsError::MissingSignal`].
 ///
@@ -151,11 +148,17 @@ pub struct TemperatureHistory {
 /// `camera_point` before `camera_scale`).
 #[derive(Debug, Clone, Default)]
 pub struct Signals {
+    /// Time of the instant, s, on the recording's clock (a bag's: seconds since the Unix epoch;
+    /// the twin's: seconds since the start of the shift). The clock of [`Self::timeline`].
+    pub time: Option<f64>,
     pub axis_position: [Option<f64>; 3],
     pub approach_direction: [Option<f64>; 3],
     pub axis_velocity: [Option<f64>; 3],
+    /// Each sensor's reading at this instant, °C.
     pub temperatures: BTreeMap<String, f64>,
-    pub temperature_histories: BTreeMap<String, TemperatureHistory>,
+    /// Every sensor's samples of the recording, shared by all its instants (cheap to clone);
+    /// lagged temperatures read it up to [`Self::time`].
+    pub timeline: Option<Arc<TemperatureTimeline>>,
     pub air_temperature: Option<f64>,
     pub air_pressure: Option<f64>,
     pub air_humidity: Option<f64>,
@@ -207,16 +210,23 @@ impl Signals {
     pub fn temperature(&self, term: &str, sensor: &str) -> Result<f64, PhysicsError> {
         self.temperatures.get(sensor).copied().ok_or_else(|| missing(term, SignalKind::Temperature(sensor.to_string())))
     }
-    pub fn history(&self, term: &str, sensor: &str) -> Result<&TemperatureHistory, PhysicsError> {
-        let h = self.temperature_histories.get(sensor).ok_or_else(|| missing(term, SignalKind::TemperatureHistory(sensor.to_string())))?;
-        if h.samples.is_empty() || h.samples.windows(2).any(|w| w[1].0 <= w[0].0) {
-            return Err(PhysicsError::BadSignal {
+    /// (T_f °C, ∂T_f/∂τ K/s): the first-order lag with time constant `tau` (s) of the sensor's
+    /// samples in the timeline up to [`Self::time`] (all of them when the time is not set).
+    pub fn lagged_temperature(&self, term: &str, sensor: &str, tau: f64) -> Result<(f64, f64), PhysicsError> {
+        let kind = || SignalKind::TemperatureHistory(sensor.to_string());
+        let timeline = self.timeline.as_ref().ok_or_else(|| missing(term, kind()))?;
+        timeline.lagged(sensor, self.time, tau).map_err(|why| match why {
+            LagUnavailable::UnknownSensor => missing(term, kind()),
+            LagUnavailable::NoSampleYet { first } => PhysicsError::BadSignal {
                 term: term.into(),
-                signal: SignalKind::TemperatureHistory(sensor.into()).to_string(),
-                reason: "must be non-empty with strictly increasing times".into(),
-            });
-        }
-        Ok(h)
+                signal: kind().to_string(),
+                reason: match first {
+                    Some(first) => format!("no sample at or before t = {} s (the first is at {first} s)", self.time.unwrap_or(f64::NAN)),
+                    None => "the sensor has no samples".into(),
+                },
+            },
+            LagUnavailable::BadTimeConstant => PhysicsError::InvalidInput { what: format!("term `{term}`: time_constant"), reason: format!("must be > 0 s and finite, got {tau}") },
+        })
     }
     pub fn air(&self, term: &str) -> Result<(f64, f64, f64), PhysicsError> {
         Ok((

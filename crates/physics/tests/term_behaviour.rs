@@ -4,7 +4,7 @@ use metrocell_physics::catalog::{configure, example_config};
 use metrocell_physics::machine_family::{predict_through_kinematics, KinematicParameters};
 use metrocell_physics::thermal::thermal_growth::first_order_lag;
 use metrocell_physics::thermal::thermal_scale::interpolate_temperature;
-use metrocell_physics::{Axis, PhysicsTerm, Signals, TemperatureHistory, TermId};
+use metrocell_physics::{Axis, PhysicsTerm, Signals, TemperatureHistory, TemperatureTimeline, TermId};
 use nalgebra::{Vector2, Vector3};
 
 fn term(id: TermId) -> Box<dyn PhysicsTerm> {
@@ -61,11 +61,15 @@ fn thermal_growth_lag_follows_a_first_order_step_response() {
     assert!((tf - (20.0 + (1.0 - (-601.0f64 / 600.0).exp()))).abs() < 1e-12, "{tf}");
     let t = term(TermId::ThermalGrowth); // lag, direction −z
     let mut s = Signals::default();
-    s.temperature_histories.insert("column".into(), TemperatureHistory { samples: vec![(0.0, 20.0), (1e6, 22.0)] });
+    let settled = TemperatureHistory { samples: vec![(0.0, 20.0), (1e6, 22.0)] };
+    s.timeline = Some(std::sync::Arc::new(TemperatureTimeline::from_histories([("column", &settled)]).unwrap()));
     let d = t.predict(&[10e-6, 1.0], &s).unwrap().value; // τ ≪ Δt: fully settled
     assert!((d[2] + 20e-6).abs() < 1e-15);
-    s.temperature_histories.insert("column".into(), TemperatureHistory { samples: vec![(0.0, 20.0), (0.0, 22.0)] });
-    assert!(t.predict(&[10e-6, 1.0], &s).is_err(), "non-increasing times are rejected");
+    let repeated = TemperatureHistory { samples: vec![(0.0, 20.0), (0.0, 22.0)] };
+    assert!(TemperatureTimeline::from_histories([("column", &repeated)]).is_err(), "non-increasing times are rejected");
+    // at a time before the sensor's first sample there is nothing to lag
+    s.time = Some(-1.0);
+    assert!(t.predict(&[10e-6, 1.0], &s).is_err(), "no sample at or before the instant");
 }
 
 #[test]

@@ -78,7 +78,7 @@ fn shift_log_drives_a_lagged_growth_term() {
     let log = ShiftThermalModel::example_machine_shift().simulate(4.0 * 3600.0, 60.0, 3).unwrap();
     let mut s = Signals::default();
     log.fill_signals(3.0 * 3600.0, &mut s);
-    assert_eq!(s.temperature_histories["column"].samples.len(), 181);
+    assert_eq!(s.timeline.as_ref().unwrap().history("column", s.time).unwrap().samples.len(), 181);
     assert_eq!(s.temperatures["column"], log.at("column", 3.0 * 3600.0).unwrap());
     let t = configure(&example_config(TermId::ThermalGrowth)).unwrap(); // direction −z, g 11.5 µm/K, τ 1800 s
     let d = t.term.predict(&t.params, &s).unwrap().value;

@@ -35,9 +35,11 @@ const AFTER_HELP: &str = "\
 Topics written (only those whose sensor is in the cell):
   /clock                            rosgraph_msgs/Clock (10 per simulated second)
   /machine/joint_states             sensor_msgs/JointState, actual axis positions (m)
-  /machine/commanded_joint_states   sensor_msgs/JointState, commanded axis positions (m)
+  /machine/commanded_joint_states   sensor_msgs/JointState, commanded axis positions (m) and velocities (m/s)
+  /machine/load                     geometry_msgs/WrenchStamped, the load force (N), once, latched
   /temperature/<sensor>             sensor_msgs/Temperature, one per thermocouple (degC)
   /tracker/measurements             metrocell_msgs/TrackerMeasurement (beam breaks flagged, NaN point)
+  /tracker/power_on                 sensor_msgs/TimeReference, when the tracker was powered on, once, latched
   /probe/hits                       metrocell_msgs/ProbeHit
   /camera/camera_info               sensor_msgs/CameraInfo (and the rendered frame on /camera/image_raw)
 
@@ -52,7 +54,10 @@ Examples:
       --start-time 2026-03-02T06:00:00+01:00 -o /tmp/shift_seed7
 
   # then look at it
-  metrocell bag info /tmp/shift_seed7";
+  metrocell bag info /tmp/shift_seed7
+
+  # point measurements only (camera_info without rendered frames: kilobytes, not gigabytes)
+  metrocell sim --cell crates/twin/examples/cells/xfyz_shift.yaml --duration 8h --no-camera-frames -o /tmp/shift_points";
 
 /// Simulate a cell description and record what its sensors would publish as a rosbag2 (MCAP) bag.
 #[derive(Debug, Clone, Args)]
@@ -82,6 +87,9 @@ pub struct SimArgs {
     /// Do not draw a progress bar
     #[arg(long)]
     pub quiet: bool,
+    /// Record camera_info only, without rendering camera frames (a point-measurement bag)
+    #[arg(long)]
+    pub no_camera_frames: bool,
 }
 
 fn parse_duration_arg(s: &str) -> Result<f64, String> {
@@ -115,6 +123,7 @@ pub fn run_sim(args: &SimArgs) -> Result<(), SimError> {
         start_ns,
         compression: args.compression.into(),
         clock_rate: (args.clock_rate > 0.0).then_some(args.clock_rate),
+        frames: if args.no_camera_frames { None } else { BagOptions::default().frames },
         ..BagOptions::default()
     };
     let bar = if args.quiet { indicatif::ProgressBar::hidden() } else { indicatif::ProgressBar::new(1000) };

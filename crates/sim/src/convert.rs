@@ -12,7 +12,13 @@
 //! * Temperature: `frame_id` is the sensor's location (structure node name or `ambient`).
 //! * Joint states: the names of the cell's joint vector as the twin gives them — `x y z` (m) for
 //!   cartesian and delta, `x y z b c` (m, m, m, rad, rad) for five_axis, the arm's joint names
-//!   (rad or m) for serial_arm — `velocity`/`effort` empty, `frame_id` empty.
+//!   (rad or m) for serial_arm — `effort` empty, `frame_id` empty. The commanded state carries
+//!   the program's commanded velocities in `velocity` (m/s or rad/s); the actual state's
+//!   `velocity` is empty (the twin does not differentiate the error terms).
+//! * Power-on: `sensor_msgs/TimeReference` with `time_ref` = when the tracker was powered on
+//!   (it may precede the start of the run), `source = "tracker"`, `frame_id` empty.
+//! * Load: `geometry_msgs/WrenchStamped`, `frame_id = "machine"`, force in N, torque zero (the
+//!   catalog's load terms read the force only).
 //! * Probe: `frame_id = "workpiece"`, `probe_id = "probe"`; the twin records the contact point
 //!   as the machine reads it (nominal kinematics, no radius or pretravel compensation), so
 //!   `stylus_centre = surface_point =` that point, `stylus_radius = pretravel = 0`, and
@@ -20,10 +26,10 @@
 //!   carried by the message.
 
 use metrocell_msgs::builtin_interfaces::msg::Time;
-use metrocell_msgs::geometry_msgs::msg::{Point, Vector3 as RosVector3};
+use metrocell_msgs::geometry_msgs::msg::{Point, Vector3 as RosVector3, Wrench, WrenchStamped};
 use metrocell_msgs::msg::{ProbeHit, TrackerMeasurement};
 use metrocell_msgs::rosgraph_msgs::msg::Clock;
-use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, JointState, Temperature};
+use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, JointState, Temperature, TimeReference};
 use metrocell_msgs::std_msgs::msg::Header;
 use metrocell_twin::{MachineStateSample, ProbeHitSample, TemperatureSample, TrackerSample, TrackerStatus};
 use nalgebra::{Matrix3, Vector3};
@@ -36,6 +42,10 @@ pub const TRACKER_FRAME: &str = "tracker";
 pub const WORKPIECE_FRAME: &str = "workpiece";
 /// `probe_id` of probe hits.
 pub const PROBE_ID: &str = "probe";
+/// `source` of the tracker's power-on time.
+pub const TRACKER_SOURCE: &str = "tracker";
+/// `header.frame_id` of the load.
+pub const MACHINE_FRAME: &str = "machine";
 
 /// 3×3 matrix → row-major `float64[9]`.
 pub fn covariance_row_major(m: &Matrix3<f64>) -> [f64; 9] {
@@ -94,14 +104,24 @@ pub fn temperature(s: &TemperatureSample, stamp: Time, location: &str) -> Temper
 
 /// Machine state → (actual, commanded) `JointState`s.
 pub fn joint_states(s: &MachineStateSample, stamp: Time) -> (JointState, JointState) {
-    let make = |position: &[f64]| JointState {
+    let make = |position: &[f64], velocity: &[f64]| JointState {
         header: header(stamp.clone(), ""),
         name: s.names.to_vec(),
         position: position.to_vec(),
-        velocity: Vec::new(),
+        velocity: velocity.to_vec(),
         effort: Vec::new(),
     };
-    (make(&s.actual), make(&s.commanded))
+    (make(&s.actual, &[]), make(&s.commanded, &s.commanded_velocity))
+}
+
+/// When the tracker was powered on (`powered_on_ns`, ns since the Unix epoch), stamped `stamp`.
+pub fn power_on(powered_on_ns: i64, stamp: Time) -> TimeReference {
+    TimeReference { header: header(stamp, ""), time_ref: Time::from_nanos(powered_on_ns), source: TRACKER_SOURCE.into() }
+}
+
+/// The load force (N, machine frame), stamped `stamp`.
+pub fn load(force: &Vector3<f64>, stamp: Time) -> WrenchStamped {
+    WrenchStamped { header: header(stamp, MACHINE_FRAME), wrench: Wrench { force: RosVector3 { x: force.x, y: force.y, z: force.z }, torque: RosVector3::default() } }
 }
 
 /// Probe hit → `ProbeHit` (`tool_offset`: tool tip relative to the tool body at q = 0, m).
@@ -208,23 +228,36 @@ mod tests {
 
     #[test]
     fn joint_states_split_actual_and_commanded() {
-        let s = MachineStateSample { t: 0.01, names: Arc::from(vec!["x".to_string(), "y".into(), "z".into()]), commanded: vec![0.1, 0.2, 0.3], actual: vec![0.100_008, 0.2, 0.299_999] };
+        let s = MachineStateSample { t: 0.01, names: Arc::from(vec!["x".to_string(), "y".into(), "z".into()]), commanded: vec![0.1, 0.2, 0.3], commanded_velocity: vec![0.05, 0.0, -0.01], actual: vec![0.100_008, 0.2, 0.299_999] };
         let (actual, commanded) = joint_states(&s, stamp());
         assert_eq!(actual.name, ["x", "y", "z"]);
         assert_eq!(actual.position, [0.100_008, 0.2, 0.299_999]);
         assert_eq!(commanded.position, [0.1, 0.2, 0.3]);
-        assert!(actual.velocity.is_empty() && actual.effort.is_empty());
+        assert_eq!(commanded.velocity, [0.05, 0.0, -0.01]);
+        assert!(actual.velocity.is_empty() && actual.effort.is_empty() && commanded.effort.is_empty());
     }
 
     #[test]
     fn joint_states_keep_any_number_of_named_joints() {
         let names: Vec<String> = (1..=6).map(|i| format!("joint_{i}")).collect();
-        let s = MachineStateSample { t: 0.05, names: Arc::from(names.clone()), commanded: vec![0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0], actual: vec![0.0, -1.5706, 1.57065, -1.5708, -1.5708, 0.0] };
+        let s = MachineStateSample { t: 0.05, names: Arc::from(names.clone()), commanded: vec![0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0], commanded_velocity: vec![0.0; 6], actual: vec![0.0, -1.5706, 1.57065, -1.5708, -1.5708, 0.0] };
         let (actual, commanded) = joint_states(&s, stamp());
         assert_eq!(actual.name, names);
         assert_eq!(actual.position.len(), 6);
         assert_eq!(actual.position[1], -1.5706);
         assert_eq!(commanded.position[2], 1.5708);
+    }
+
+    #[test]
+    fn power_on_and_load_carry_their_instants_and_force() {
+        // powered on 20 min before a run starting at 2026-01-05T06:00:00Z
+        let m = power_on(1_767_592_800_000_000_000 - 1_200_000_000_000, stamp());
+        assert_eq!((m.time_ref.sec, m.time_ref.nanosec), (1_767_591_600, 0));
+        assert_eq!((m.header.stamp.sec, m.header.stamp.nanosec), (1_767_592_800, 100_000_000));
+        assert_eq!(m.source, "tracker");
+        let w = load(&Vector3::new(0.0, 0.0, -196.2), stamp());
+        assert_eq!((w.wrench.force.x, w.wrench.force.z, w.wrench.torque.z), (0.0, -196.2, 0.0));
+        assert_eq!(w.header.frame_id, "machine");
     }
 
     #[test]

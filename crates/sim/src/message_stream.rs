@@ -1,10 +1,11 @@
 //! The simulation as a time-ordered stream of ROS messages: the twin's samples converted by
 //! [`MessageConverter`], with `/clock` ticks merged in.
 //!
-//! Order: messages come in the twin's sample order (time order, ties broken by the twin);
-//! a machine-state sample gives the actual joint state, then the commanded one. A `/clock`
-//! tick at time t_k = k·clock_period (k = 0, 1, …, t_k < duration) comes before every
-//! sample with t ≥ t_k. A camera frame request gives its `CameraInfo`, then (when the
+//! Order: the cell's states at t = 0 first (the tracker's power-on time, then the load; see
+//! [`MessageConverter::initial_messages`]), then messages in the twin's sample order (time
+//! order, ties broken by the twin); a machine-state sample gives the actual joint state, then
+//! the commanded one. A `/clock` tick at time t_k = k·clock_period (k = 0, 1, …,
+//! t_k < duration) comes before every sample with t ≥ t_k. A camera frame request gives its `CameraInfo`, then (when the
 //! converter renders frames, see [`MessageConverter::with_frames`]) its mono8 `Image` with the
 //! same stamp.
 //!
@@ -20,7 +21,8 @@ use std::thread::JoinHandle;
 
 use metrocell_msgs::msg::{ProbeHit, TrackerMeasurement};
 use metrocell_msgs::rosgraph_msgs::msg::Clock;
-use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, JointState, Temperature};
+use metrocell_msgs::geometry_msgs::msg::WrenchStamped;
+use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, JointState, Temperature, TimeReference};
 use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_twin::{CameraFrameRequest, Cell, Sample, SampleStream, Simulation};
 use nalgebra::Vector3;
@@ -44,6 +46,8 @@ pub enum TypedMessage {
     Probe(ProbeHit),
     CameraInfo(CameraInfo),
     Image(Image),
+    PowerOn(TimeReference),
+    Load(WrenchStamped),
 }
 
 impl TypedMessage {
@@ -57,6 +61,8 @@ impl TypedMessage {
             TypedMessage::Probe(_) => ProbeHit::ROS_TYPE,
             TypedMessage::CameraInfo(_) => CameraInfo::ROS_TYPE,
             TypedMessage::Image(_) => Image::ROS_TYPE,
+            TypedMessage::PowerOn(_) => TimeReference::ROS_TYPE,
+            TypedMessage::Load(_) => WrenchStamped::ROS_TYPE,
         }
     }
 
@@ -71,6 +77,8 @@ impl TypedMessage {
             TypedMessage::Probe(m) => encode_cdr(m, ty),
             TypedMessage::CameraInfo(m) => encode_cdr(m, ty),
             TypedMessage::Image(m) => encode_cdr(m, ty),
+            TypedMessage::PowerOn(m) => encode_cdr(m, ty),
+            TypedMessage::Load(m) => encode_cdr(m, ty),
         }
     }
 }
@@ -95,6 +103,10 @@ pub struct MessageConverter {
     pub start_ns: u64,
     pub camera: CameraIntrinsics,
     tool_offset: Vector3<f64>,
+    /// The tracker's `powered_on_before_start` (s), if the cell has a tracker.
+    powered_on_before_start: Option<f64>,
+    /// The load force (N, machine frame), if the cell has one.
+    load_force: Option<Vector3<f64>>,
     /// Per thermocouple: (name, topic, location).
     thermocouples: Vec<(String, TopicId, String)>,
     frames: Option<FrameRenderer>,
@@ -112,7 +124,17 @@ impl MessageConverter {
             .map(|(tc, &id)| (tc.name.clone(), id, tc.node.clone().unwrap_or_else(|| "ambient".into())))
             .collect();
         let camera = CameraIntrinsics::for_cell(cell, camera);
-        Ok(MessageConverter { topics, start_ns, camera, plate: cell.camera.as_ref().map(|c| c.plate), tool_offset: cell.machine.tool_offset, thermocouples, frames: None })
+        Ok(MessageConverter {
+            topics,
+            start_ns,
+            camera,
+            plate: cell.camera.as_ref().map(|c| c.plate),
+            tool_offset: cell.machine.tool_offset,
+            powered_on_before_start: cell.tracker.as_ref().map(|t| t.powered_on_before_start),
+            load_force: cell.load_force,
+            thermocouples,
+            frames: None,
+        })
     }
 
     /// Also render an image for every camera frame request (module doc of
@@ -135,6 +157,21 @@ impl MessageConverter {
     pub fn clock(&self, t: f64) -> SimMessage {
         let stamp_ns = stamp_ns(self.start_ns, t);
         SimMessage { t, stamp_ns, topic: self.topics.clock, message: TypedMessage::Clock(convert::clock(ros_time(stamp_ns))) }
+    }
+
+    /// The cell's states, stamped at t = 0 (the start): when the tracker was powered on
+    /// (`start − powered_on_before_start`) and the load. Published once, latched.
+    pub fn initial_messages(&self) -> Vec<SimMessage> {
+        let ns = stamp_ns(self.start_ns, 0.0);
+        let mut out = Vec::new();
+        if let (Some(topic), Some(before)) = (self.topics.power_on, self.powered_on_before_start) {
+            let powered_on = ns as i64 - (before * 1e9).round() as i64;
+            out.push(SimMessage { t: 0.0, stamp_ns: ns, topic, message: TypedMessage::PowerOn(convert::power_on(powered_on, ros_time(ns))) });
+        }
+        if let (Some(topic), Some(force)) = (self.topics.load, self.load_force) {
+            out.push(SimMessage { t: 0.0, stamp_ns: ns, topic, message: TypedMessage::Load(convert::load(&force, ros_time(ns))) });
+        }
+        out
     }
 
     /// The messages of one sample (0, 1 or 2), appended to `out`. A sample whose sensor has
@@ -298,7 +335,7 @@ impl<'a> MessageStream<'a> {
         MessageStream {
             samples: sim.samples(),
             converter,
-            pending: VecDeque::new(),
+            pending: converter.initial_messages().into_iter().map(Slot::Ready).collect(),
             converted: VecDeque::new(),
             pool: None,
             clock_period: clock_period.filter(|p| *p > 0.0 && p.is_finite()),

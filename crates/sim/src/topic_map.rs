@@ -4,22 +4,28 @@
 //! |---|---|---|---|
 //! | `/clock` | `rosgraph_msgs/msg/Clock` | [`QosKind::Clock`] | simulated time, so nodes can run with `use_sim_time` |
 //! | `/machine/joint_states` | `sensor_msgs/msg/JointState` | [`QosKind::SensorData`] | **actual** joint values (commanded + the true error terms), names `x y z` (cartesian, delta; m), `x y z b c` (five_axis; m, rad), the arm's joints (serial_arm; rad or m) |
-//! | `/machine/commanded_joint_states` | `sensor_msgs/msg/JointState` | [`QosKind::SensorData`] | **commanded** joint values (what the controller was told), same names |
+//! | `/machine/commanded_joint_states` | `sensor_msgs/msg/JointState` | [`QosKind::SensorData`] | **commanded** joint values (what the controller was told) and their commanded velocities (`velocity`, m/s or rad/s), same names |
+//! | `/machine/load` | `geometry_msgs/msg/WrenchStamped` | [`QosKind::Latched`] | the load acting on the structure (`environment.load_force`), force in N, machine frame (`frame_id = machine`), torque 0; once at t = 0 |
 //! | `/temperature/<sensor>` | `sensor_msgs/msg/Temperature` | [`QosKind::Reliable`] | one topic per thermocouple, °C, `variance` = noise² + calibration² (K²) |
 //! | `/tracker/measurements` | `metrocell_msgs/msg/TrackerMeasurement` | [`QosKind::Reliable`] | laser-tracker points in the tracker frame, covariance row-major, station air data, applied index; beam breaks as `STATUS_BEAM_BREAK` with NaN point |
+//! | `/tracker/power_on` | `sensor_msgs/msg/TimeReference` | [`QosKind::Latched`] | when the tracker was powered on: `time_ref` = start − `powered_on_before_start`, `source = tracker`, stamped at t = 0 (published once) |
 //! | `/probe/hits` | `metrocell_msgs/msg/ProbeHit` | [`QosKind::Reliable`] | touch-probe triggers (workpiece frame) |
 //! | `/camera/camera_info` | `sensor_msgs/msg/CameraInfo` | [`QosKind::SensorData`] | one per camera frame request |
 //! | `/camera/image_raw` | `sensor_msgs/msg/Image` (mono8) | [`QosKind::SensorData`] | the rendered frame of each request, same stamp as its CameraInfo (see `camera_frame`) |
 //!
 //! Only the topics whose sensor exists in the cell are in a cell's map, in the order above
-//! (thermocouples in file order). Joint states exist when the cell has `machine_state`.
+//! (thermocouples in file order). Joint states exist when the cell has `machine_state`, the
+//! load when it has `environment.load_force`, the power-on time with a tracker. The latched
+//! topics carry a state rather than a stream: a reader keeps the latest message at or before
+//! its time.
 //! Why actual positions on `joint_states`: that topic is what the machine's encoders would
 //! report and what robot_state_publisher consumes; the command is kept apart so the pair shows
 //! the machine's error directly.
 
 use metrocell_msgs::msg::{ProbeHit, TrackerMeasurement};
 use metrocell_msgs::rosgraph_msgs::msg::Clock;
-use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, JointState, Temperature};
+use metrocell_msgs::geometry_msgs::msg::WrenchStamped;
+use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, JointState, Temperature, TimeReference};
 use metrocell_twin::Cell;
 use rosmsg::RosMessage;
 
@@ -28,6 +34,8 @@ use crate::error::SimError;
 pub const CLOCK_TOPIC: &str = "/clock";
 pub const JOINT_STATES_TOPIC: &str = "/machine/joint_states";
 pub const COMMANDED_JOINT_STATES_TOPIC: &str = "/machine/commanded_joint_states";
+pub const LOAD_TOPIC: &str = "/machine/load";
+pub const POWER_ON_TOPIC: &str = "/tracker/power_on";
 /// Prefix of the per-thermocouple topics: `/temperature/<sensor name>`.
 pub const TEMPERATURE_TOPIC_PREFIX: &str = "/temperature/";
 pub const TRACKER_TOPIC: &str = "/tracker/measurements";
@@ -44,6 +52,9 @@ pub enum QosKind {
     SensorData,
     /// rclcpp default: reliable, keep last 10, volatile (measurements a recorder must not miss).
     Reliable,
+    /// Latched (like `/tf_static`): reliable, keep last 1, transient local — a state a late
+    /// subscriber still receives.
+    Latched,
 }
 
 impl QosKind {
@@ -53,6 +64,7 @@ impl QosKind {
             QosKind::Clock => metrocell_bag::QosProfile { keep_last: true, depth: 1, reliable: false, transient_local: false },
             QosKind::SensorData => metrocell_bag::QosProfile::sensor_data(),
             QosKind::Reliable => metrocell_bag::QosProfile::default_publisher(),
+            QosKind::Latched => metrocell_bag::QosProfile { keep_last: true, depth: 1, reliable: true, transient_local: true },
         }
     }
 }
@@ -63,9 +75,13 @@ pub enum TopicRole {
     Clock,
     JointStates,
     CommandedJointStates,
+    /// The load on the structure.
+    Load,
     /// Thermocouple by name.
     Temperature(String),
     Tracker,
+    /// When the tracker was powered on.
+    TrackerPowerOn,
     Probe,
     CameraInfo,
     CameraImage,
@@ -98,9 +114,11 @@ pub struct TopicMap {
     pub topics: Vec<TopicSpec>,
     pub clock: TopicId,
     pub joint_states: Option<(TopicId, TopicId)>,
+    pub load: Option<TopicId>,
     /// Per thermocouple, in the cell's order.
     pub temperatures: Vec<TopicId>,
     pub tracker: Option<TopicId>,
+    pub power_on: Option<TopicId>,
     pub probe: Option<TopicId>,
     pub camera_info: Option<TopicId>,
     pub camera_image: Option<TopicId>,
@@ -129,16 +147,18 @@ impl TopicMap {
                 push(TopicSpec::of::<JointState>(COMMANDED_JOINT_STATES_TOPIC, TopicRole::CommandedJointStates, QosKind::SensorData)),
             )
         });
+        let load = cell.load_force.map(|_| push(TopicSpec::of::<WrenchStamped>(LOAD_TOPIC, TopicRole::Load, QosKind::Latched)));
         let temperatures = cell
             .thermocouples
             .iter()
             .map(|tc| push(TopicSpec::of::<Temperature>(temperature_topic(&tc.name), TopicRole::Temperature(tc.name.clone()), QosKind::Reliable)))
             .collect();
         let tracker = cell.tracker.as_ref().map(|_| push(TopicSpec::of::<TrackerMeasurement>(TRACKER_TOPIC, TopicRole::Tracker, QosKind::Reliable)));
+        let power_on = cell.tracker.as_ref().map(|_| push(TopicSpec::of::<TimeReference>(POWER_ON_TOPIC, TopicRole::TrackerPowerOn, QosKind::Latched)));
         let probe = cell.probe.as_ref().map(|_| push(TopicSpec::of::<ProbeHit>(PROBE_TOPIC, TopicRole::Probe, QosKind::Reliable)));
         let camera_info = cell.camera.as_ref().map(|_| push(TopicSpec::of::<CameraInfo>(CAMERA_INFO_TOPIC, TopicRole::CameraInfo, QosKind::SensorData)));
         let camera_image = cell.camera.as_ref().map(|_| push(TopicSpec::of::<Image>(CAMERA_IMAGE_TOPIC, TopicRole::CameraImage, QosKind::SensorData)));
-        Ok(TopicMap { topics, clock: 0, joint_states, temperatures, tracker, probe, camera_info, camera_image })
+        Ok(TopicMap { topics, clock: 0, joint_states, load, temperatures, tracker, power_on, probe, camera_info, camera_image })
     }
 
     pub fn get(&self, id: TopicId) -> &TopicSpec {

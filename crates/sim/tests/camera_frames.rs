@@ -27,7 +27,7 @@ fn decode<T: serde::de::DeserializeOwned>(data: &[u8]) -> T {
 }
 
 fn noise_free() -> FrameRendering {
-    FrameRendering { settings: RenderSettings { supersampling: 8, blur_sigma_px: 0.8, noise_sigma: 0.0, ..RenderSettings::default() }, ..FrameRendering::default() }
+    FrameRendering { settings: RenderSettings { supersampling: 8, blur_sigma_px: 0.8, noise_sigma: 0.0, ..RenderSettings::default() } }
 }
 
 /// Detects the plate's markers on `gray`: all four must be found; returns the sum of squared
@@ -128,4 +128,46 @@ fn a_fisheye_lens_in_the_cell_is_rendered_and_published() {
     println!("fisheye lens: {n} corners, RMS vs ground truth {rms:.4} px");
     assert!(rms < 0.1, "corner RMS {rms} px");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// The twin's camera reading is the shared model's (crates/model `camera`): the pixels of the
+/// plate's marker corners it predicts for every frame request are the renderer's ground-truth
+/// corners (crates/vision's projection of the request's poses, an independent implementation
+/// of the pinhole + Brown–Conrady lens) to 1e-9 px — for the default lens, a Brown–Conrady lens
+/// with distortion, a turned five-axis table, a delta and an arm.
+#[test]
+fn the_models_predicted_corners_are_the_rendered_ground_truth() {
+    let lens = "    intrinsics: {width: 2048, height: 1536, fx: 2600 px, fy: 2605 px, cx: 1023.5 px, cy: 767.5 px, model: plumb_bob, distortion: [-0.12, 0.05, 0.0007, -0.0004, -0.01]}\n";
+    let demo_text = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../twin/examples/cells/quick_demo.yaml")).unwrap();
+    let arm = std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("../twin/examples/cells/serial_arm_ur5.yaml")).unwrap();
+    let arm = arm.replace("  machine_state: {rate: 20 Hz}", "  camera: {mount: {translation: [30 mm, 0 mm, 20 mm], euler_xyz: [0 deg, 0 deg, 90 deg]}, delay: 1 s}\n  machine_state: {rate: 20 Hz}");
+    let example = |n: &str| Cell::from_path(Path::new(env!("CARGO_MANIFEST_DIR")).join("../twin/examples/cells").join(n)).unwrap();
+    let cells = [
+        ("quick_demo", demo()),
+        ("quick_demo + lens", Cell::from_yaml_str(&demo_text.replace("    delay: 1 s\n", &format!("    delay: 1 s\n{lens}")), "lens.yaml").unwrap()),
+        ("five_axis_table", example("five_axis_table.yaml")),
+        ("delta_printer", example("delta_printer.yaml")),
+        ("ur5 + camera", Cell::from_yaml_str(&arm, "arm_camera.yaml").unwrap()),
+    ];
+    let start = parse_start_time(DEFAULT_START_TIME).unwrap();
+    let mut frames = 0;
+    for (name, cell) in cells {
+        let converter = MessageConverter::new(&cell, start, CameraIntrinsics::default()).unwrap().with_frames(noise_free(), SEED).unwrap();
+        let renderer = converter.frames().unwrap();
+        let sim = Simulation::new(cell, 60.0, SEED).unwrap();
+        for r in sim.samples().filter_map(|s| if let Sample::CameraFrameRequest(r) = s { Some(r) } else { None }).take(4) {
+            let truth = renderer.render(&r, stamp_ns(start, r.t)).unwrap();
+            let corners = r.corners.as_ref().expect("pinhole + Brown–Conrady lenses have predicted corners");
+            let mut worst = 0.0f64;
+            for m in &truth.markers {
+                for (k, c) in m.corners.iter().enumerate() {
+                    worst = worst.max((corners[4 * m.id + k] - c.coords).norm());
+                }
+            }
+            assert_eq!(truth.markers.len(), 4);
+            assert!(worst < 1e-9, "{name} t = {}: predicted corners {worst:e} px from the rendered ones", r.t);
+            frames += 1;
+        }
+    }
+    assert!(frames >= 15, "{frames} frames compared");
 }

@@ -24,6 +24,7 @@ fn topic_map_of_the_demo_cell() {
             "/temperature/x_left",
             "/temperature/x_right",
             "/tracker/measurements",
+            "/tracker/power_on",
             "/probe/hits",
             "/camera/camera_info",
             "/camera/image_raw"
@@ -55,9 +56,16 @@ fn stream_is_time_ordered_with_clock_ticks_first() {
             assert_eq!(msgs[i + 1].t, m.t);
         }
     }
-    // Without ticks the stream is exactly the converted samples.
+    // Without ticks the stream is exactly the cell's states at t = 0 (here the tracker's
+    // power-on time) then the converted samples.
     let plain: Vec<_> = MessageStream::new(&sim, &conv, None).collect();
-    let direct: Vec<_> = sim.samples().flat_map(|s| conv.convert(&s)).collect();
+    let initial = conv.initial_messages();
+    assert_eq!(initial.len(), 1, "the demo cell has a tracker and no load");
+    let TypedMessage::PowerOn(on) = &initial[0].message else { panic!("{:?}", initial[0]) };
+    let before = sim.cell().tracker.as_ref().unwrap().powered_on_before_start;
+    assert_eq!(on.time_ref.nanos(), start as i64 - (before * 1e9).round() as i64);
+    assert_eq!((initial[0].t, initial[0].topic), (0.0, conv.topics.power_on.unwrap()));
+    let direct: Vec<_> = initial.into_iter().chain(sim.samples().flat_map(|s| conv.convert(&s))).collect();
     assert_eq!(plain, direct);
     assert_eq!(plain.len() + 40, msgs.len());
 }

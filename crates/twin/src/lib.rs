@@ -50,4 +50,4 @@ pub use model_writer::{write_model, FittedParameter, ModelUpdate};
 pub use error::CellError;
 pub use fiducial_plate::FiducialPlate;
 pub use sample::{CameraFrameRequest, MachineStateSample, ProbeHitSample, Sample, SampleTruth, TemperatureSample, TrackerSample, TrackerStatus, TrackerTruth, TrueParameter};
-pub use simulation::{GroundTruth, SampleStream, Simulation, TruthStream};
+pub use simulation::{GroundTruth, SampleStream, SignalsStream, Simulation, TruthStream};

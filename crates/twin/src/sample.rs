@@ -60,6 +60,9 @@ pub struct MachineStateSample {
     pub names: Arc<[String]>,
     /// Commanded joint values (m or rad).
     pub commanded: Vec<f64>,
+    /// Commanded joint velocities (m/s or rad/s): the program's, constant along a move, 0 at a
+    /// dwell and while idle.
+    pub commanded_velocity: Vec<f64>,
     /// Actual values: cartesian/delta and five-axis X, Y, Z commanded + the true terms'
     /// displacement (tool relative to workpiece); rotary B, C as commanded; arm joints
     /// commanded + their true zero offsets (`joint_offset`).

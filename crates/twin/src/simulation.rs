@@ -14,8 +14,9 @@
 //! from the physics, as in a real machine — and the weather station's readings), adds noise,
 //! and schedules; nothing else. Terms with a first-order lag read the
 //! true temperature history sampled every [`HISTORY_STEP`] (at most [`HISTORY_CAP`] samples, so
-//! memory stays flat); a term that reads nothing but histories is re-evaluated only when a
-//! history sample is added.
+//! memory stays flat), held in one shared [`TemperatureTimeline`] that the signals of every
+//! instant point to (`Signals::time` is the simulation time t, s since the start of the shift);
+//! a term that reads nothing but histories is re-evaluated only when a history sample is added.
 
 use std::sync::Arc;
 
@@ -24,7 +25,7 @@ use metrocell_model::{DisplacementCache, ForwardModel, KinematicTruth, ProbeTarg
 use metrocell_physics::instrument::edlen::shop_floor_refractivity;
 use metrocell_physics::instrument::turbulence::range_scatter;
 use metrocell_physics::model::TermModel;
-use metrocell_physics::{PhysicsError, SignalKind, Signals, TemperatureHistory, TermId};
+use metrocell_physics::{PhysicsError, SignalKind, Signals, TemperatureTimeline, TermId};
 use nalgebra::{DVector, Matrix3, Vector3};
 
 use crate::cell::Cell;
@@ -129,6 +130,15 @@ impl Simulation {
         TruthStream { engine: Engine::new(self) }
     }
 
+    /// The sample stream with, for every tracker reading, the [`Signals`] the shared model was
+    /// evaluated with for it (time, commanded axis positions, velocities and approach
+    /// directions, the true temperatures at the thermocouples' locations and the timeline of the
+    /// lagged terms, the station's air of the reading, time since power-on, load; `point` and
+    /// `tracker_range` as the model set them). `None` for other samples.
+    pub fn samples_with_signals(&self) -> SignalsStream<'_> {
+        SignalsStream { engine: Engine::new(self) }
+    }
+
     /// True parameters of the cell.
     pub fn ground_truth(&self) -> GroundTruth {
         let names = self.cell.terms.param_specs();
@@ -180,6 +190,26 @@ impl Iterator for TruthStream<'_> {
     type Item = (Sample, SampleTruth);
     fn next(&mut self) -> Option<(Sample, SampleTruth)> {
         self.engine.next_event()
+    }
+}
+
+/// Iterator over (sample, the model's signals of a tracker reading).
+pub struct SignalsStream<'a> {
+    engine: Engine<'a>,
+}
+
+impl SignalsStream<'_> {
+    pub fn error(&self) -> Option<&PhysicsError> {
+        self.engine.error.as_ref()
+    }
+}
+
+impl Iterator for SignalsStream<'_> {
+    type Item = (Sample, Option<Signals>);
+    fn next(&mut self) -> Option<(Sample, Option<Signals>)> {
+        let (sample, _) = self.engine.next_event()?;
+        let signals = matches!(sample, Sample::Tracker(_)).then(|| self.engine.signals.clone());
+        Some((sample, signals))
     }
 }
 
@@ -273,6 +303,8 @@ struct Engine<'a> {
     probe_noise: NoiseStream,
     axis_names: Arc<[String]>,
     signals: Signals,
+    /// The true temperature histories of the lagged terms (shared with `signals`).
+    timeline: Arc<TemperatureTimeline>,
     /// (sensor name, thermal slot) of every history a term reads.
     history_sensors: Vec<(String, usize)>,
     /// Index of the next history sample (at history_k·HISTORY_STEP).
@@ -311,6 +343,8 @@ impl<'a> Engine<'a> {
             signals.temperatures.insert(t.name.clone(), 20.0);
         }
         signals.load_force = cell.load_force;
+        let timeline = Arc::new(TemperatureTimeline::with_capacity(HISTORY_CAP));
+        signals.timeline = Some(timeline.clone());
         let mut history_sensors: Vec<(String, usize)> = Vec::new();
         for t in &cell.terms.terms {
             for s in t.term.signals() {
@@ -318,7 +352,7 @@ impl<'a> Engine<'a> {
                     if !history_sensors.iter().any(|(n, _)| n == &name) {
                         let node = cell.thermocouples.iter().find(|tc| tc.name == name).and_then(|tc| tc.node.as_deref());
                         history_sensors.push((name.clone(), thermal.slot_of_node(node)));
-                        signals.temperature_histories.insert(name, TemperatureHistory::default());
+                        timeline.add_sensor(&name);
                     }
                 }
             }
@@ -344,6 +378,7 @@ impl<'a> Engine<'a> {
             probe_noise: NoiseStream::new(seed, stream::PROBE),
             axis_names: Arc::from(cell.machine.joint_names()),
             signals,
+            timeline,
             history_sensors,
             history_k: 0,
             cache: DisplacementCache::new(&model),
@@ -364,12 +399,8 @@ impl<'a> Engine<'a> {
                 let th = self.history_k as f64 * HISTORY_STEP;
                 for (name, slot) in &self.history_sensors {
                     let v = self.thermal.at(*slot, th);
-                    if let Some(h) = self.signals.temperature_histories.get_mut(name) {
-                        if h.samples.len() == HISTORY_CAP {
-                            h.samples.remove(0);
-                        }
-                        h.samples.push((th, v));
-                    }
+                    // times advance on the grid and the thermal model is finite: cannot fail
+                    let _ = self.timeline.push(name, th, v);
                 }
                 self.history_k += 1;
             }
@@ -377,9 +408,10 @@ impl<'a> Engine<'a> {
         }
     }
 
-    /// Signals at t for the motion state: histories up to t, motion, true temperatures.
+    /// Signals at t for the motion state: time, histories up to t, motion, true temperatures.
     fn set_signals(&mut self, t: f64, ms: &MotionState) {
         self.update_histories(t);
+        self.signals.time = Some(t);
         self.model.set_motion(&mut self.signals, ms.q.as_slice(), ms.velocity.as_slice(), &ms.approach);
         for (i, tc) in self.cell.thermocouples.iter().enumerate() {
             let v = self.thermal.at(self.tc_slots[i], t);
@@ -473,7 +505,7 @@ impl<'a> Engine<'a> {
             KinematicTruth::Arm { joint_offsets, .. } => actual.iter_mut().zip(joint_offsets).for_each(|(a, o)| *a += o),
             _ => (0..3).for_each(|k| actual[k] += d[k]),
         }
-        let s = MachineStateSample { t, names: self.axis_names.clone(), commanded: ms.q.as_slice().to_vec(), actual };
+        let s = MachineStateSample { t, names: self.axis_names.clone(), commanded: ms.q.as_slice().to_vec(), commanded_velocity: ms.velocity.as_slice().to_vec(), actual };
         Ok((Sample::MachineState(s), SampleTruth::MachineState { displacement: d }))
     }
 

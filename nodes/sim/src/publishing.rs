@@ -29,6 +29,8 @@ fn qos_of(kind: QosKind, ros_type: &str) -> QosProfile {
     match kind {
         QosKind::SensorData if ros_type == metrocell_msgs::sensor_msgs::msg::Image::ROS_TYPE => qos::sensor_data(),
         QosKind::Clock | QosKind::SensorData | QosKind::Reliable => qos::reliable().history(History::KeepLast { depth: LIVE_HISTORY }),
+        // a state (power-on time, load): a subscriber that joins late still gets it
+        QosKind::Latched => qos::latched(),
     }
 }
 

@@ -5,7 +5,7 @@
 //!
 //! `IN` ending in `.csv` is a CSV export: it is first imported with `bag import`'s importer
 //! (layout and mapping file: parameter `csv_mapping`) into a scratch bag, whose
-//! `/measured_points` (tracker-frame points), `/commanded_joints`, `/temperature/air`,
+//! `/measured_points` (tracker-frame points), `/machine/commanded_joint_states`, `/temperature/air`,
 //! `/air/pressure` and `/air/humidity` are then replayed. With `air_source:=topics` the
 //! weather-station topics `weather/temperature`, `weather/pressure`, `weather/humidity` are read.
 
@@ -55,7 +55,7 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     let inputs = if csv {
         Inputs {
             readings: "/measured_points".into(),
-            commanded: "/commanded_joints".into(),
+            commanded: metrocell_bagtools::import::COMMANDED_JOINTS_TOPIC.into(),
             reregister: String::new(),
             air: ["/temperature/air".into(), "/air/pressure".into(), "/air/humidity".into()],
             csv: true,

@@ -19,7 +19,7 @@ use std::f64::consts::TAU;
 
 use crate::error::PhysicsError;
 use crate::instrument::edlen::normal;
-use crate::signals::TemperatureHistory;
+use crate::temperature_timeline::{TemperatureHistory, TemperatureTimeline};
 
 /// Ambient temperature cycle.
 #[derive(Debug, Clone, PartialEq)]
@@ -121,19 +121,29 @@ impl TemperatureLog {
         h.samples.retain(|(ts, _)| *ts <= t);
         Some(h)
     }
-    /// Put every sensor's reading at time t (interpolated) and its history up to t into
-    /// `signals`, as the twin sees them at that instant.
+    /// Every sensor's samples as a shared timeline (its clock: this log's times).
+    pub fn timeline(&self) -> std::sync::Arc<TemperatureTimeline> {
+        let timeline = TemperatureTimeline::new();
+        for (name, values) in &self.sensors {
+            timeline.add_sensor(name);
+            for (&t, &v) in self.times.iter().zip(values) {
+                // the log's times increase strictly and its values are finite (simulate's own)
+                let _ = timeline.push(name, t, v);
+            }
+        }
+        std::sync::Arc::new(timeline)
+    }
+
+    /// Put every sensor's reading at time t (interpolated), the time, and the timeline (its
+    /// history up to t is what a lag reads) into `signals`, as the twin sees them at that instant.
     pub fn fill_signals(&self, t: f64, signals: &mut crate::signals::Signals) {
         for name in self.sensors.keys() {
             if let Some(v) = self.at(name, t) {
                 signals.temperatures.insert(name.clone(), v);
             }
-            if let Some(h) = self.history_until(name, t) {
-                if !h.samples.is_empty() {
-                    signals.temperature_histories.insert(name.clone(), h);
-                }
-            }
         }
+        signals.time = Some(t);
+        signals.timeline = Some(self.timeline());
     }
 
     /// Reading of a sensor at time t, linearly interpolated between samples.

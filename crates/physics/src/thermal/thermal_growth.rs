@@ -5,11 +5,12 @@
 //! d = n̂ · g·(T_f − T_ref),   g = L·α (m/K; L and α are not separable from growth alone)
 //!
 //! Without lag, T_f is the sensor's latest reading (signal `temperature[sensor]`). With
-//! `lag: true`, T_f is the sensor history (signal `temperature_history[sensor]`) passed through
-//! the exact discrete first-order filter
+//! `lag: true`, T_f is the sensor history (signal `temperature_history[sensor]`: the samples of
+//! the signals' timeline up to their time) passed through the exact discrete first-order filter
 //! `T_f[0] = T[0],  T_f[k] = T_f[k−1] + (1 − e^(−Δt_k/τ))·(T[k] − T_f[k−1])`
-//! and the prediction is at the last sample; τ is then the second parameter. The Jacobian with
-//! respect to τ is propagated through the recursion analytically.
+//! ([`crate::thermal::first_order_lag`]) and the prediction is at the last sample; τ is then the
+//! second parameter. The Jacobian with respect to τ is propagated through the recursion
+//! analytically. The timeline filters incrementally ([`crate::TemperatureTimeline`]).
 //! Frame: machine, tool relative to workpiece. Options: `sensor`, `direction` (default `[0, 0, 1]`),
 //! `lag` (default false), `reference_temperature` (°C, default 20).
 
@@ -18,24 +19,10 @@ use nalgebra::{DMatrix, Vector3};
 use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
-use crate::signals::{SignalKind, Signals, TemperatureHistory};
+use crate::signals::{SignalKind, Signals};
 use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
 
-/// First-order lag of a temperature history; returns (T_f at the last sample, ∂T_f/∂τ).
-pub fn first_order_lag(history: &TemperatureHistory, tau: f64) -> (f64, f64) {
-    let mut tf = history.samples[0].1;
-    let mut dtf = 0.0;
-    for w in history.samples.windows(2) {
-        let dt = w[1].0 - w[0].0;
-        let e = (-dt / tau).exp();
-        let a = 1.0 - e;
-        let da = -e * dt / (tau * tau);
-        let innov = w[1].1 - tf;
-        dtf = (1.0 - a) * dtf + da * innov;
-        tf += a * innov;
-    }
-    (tf, dtf)
-}
+pub use crate::thermal::first_order_lag::first_order_lag;
 
 #[derive(Debug, Clone)]
 pub struct ThermalGrowth {
@@ -61,7 +48,7 @@ impl ThermalGrowth {
     fn state(&self, p: &[f64], s: &Signals) -> Result<(f64, f64), PhysicsError> {
         let label = self.label();
         if self.lag {
-            let (tf, d) = first_order_lag(s.history(&label, &self.sensor)?, p[1]);
+            let (tf, d) = s.lagged_temperature(&label, &self.sensor, p[1])?;
             Ok((tf - self.reference_temperature, d))
         } else {
             Ok((s.temperature(&label, &self.sensor)? - self.reference_temperature, 0.0))

@@ -2,7 +2,7 @@
 //! finite-difference Jacobian.
 #![allow(dead_code)]
 
-use metrocell_physics::{ParamSpec, PhysicsTerm, Signals, TemperatureHistory};
+use metrocell_physics::{ParamSpec, PhysicsTerm, Signals, TemperatureHistory, TemperatureTimeline};
 use metrocell_solver::numeric_jacobian::{central_difference, Order};
 use nalgebra::{DMatrix, Vector2, Vector3};
 use rand::{Rng, SeedableRng};
@@ -33,7 +33,8 @@ pub fn random_signals(r: &mut ChaCha8Rng) -> Signals {
         t += uni(r, 10.0, 600.0);
         samples.push((t, uni(r, 19.0, 25.0)));
     }
-    s.temperature_histories.insert("column".into(), TemperatureHistory { samples });
+    let history = TemperatureHistory { samples };
+    s.timeline = Some(std::sync::Arc::new(TemperatureTimeline::from_histories([("column", &history)]).unwrap()));
     s.air_temperature = Some(uni(r, 18.0, 24.0));
     s.air_pressure = Some(uni(r, 95_000.0, 103_000.0));
     s.air_humidity = Some(uni(r, 20.0, 80.0));

@@ -1,0 +1,65 @@
+//! `metrocell compensate gcode|table` end to end on files: a zero model leaves a program as it
+//! is but for the header comment, a fitted thermal model needs its temperatures and then moves
+//! X by α·x·ΔT, malformed lines are reported with their line numbers, tables are written.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+fn dir(name: &str) -> PathBuf {
+    let d = std::env::temp_dir().join(format!("metrocell_compensate_{name}_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&d);
+    std::fs::create_dir_all(&d).unwrap();
+    d
+}
+
+fn metrocell(args: &[&str], cwd: &Path) -> (i32, String, String) {
+    let o = Command::new(env!("CARGO_BIN_EXE_metrocell")).args(args).current_dir(cwd).output().unwrap();
+    (o.status.code().unwrap_or(-1), String::from_utf8_lossy(&o.stdout).into(), String::from_utf8_lossy(&o.stderr).into())
+}
+
+const MODEL: &str = "name: fitted\nmachine:\n  family: cartesian\n  stacking: XFYZ\n  travel: {x: [0 mm, 400 mm], y: [0 mm, 300 mm], z: [0 mm, 200 mm]}\nterms:\n  - {id: positioning, options: {axis: x, order: 1, travel: [0 mm, 400 mm]}, params: {c0: 0 um, c1: CCC}}\n  - {id: thermal_scale, options: {axis: x, sensors: [{name: x_left, position: 0 m}, {name: x_right, position: 0.4 m}]}, params: {alpha: 10.2e-6 1/K}}\n";
+const PROGRAM: &str = "%\n(part 7)\nG21 G90 G17\nG0 X0 Y0 Z10\nG1 X100 Y50 F300 ; first cut\nG2 X150 Y100 I50 J0\nG1 X=1\nG91 G1 X10\nM30\n%\n";
+
+#[test]
+fn zero_model_keeps_the_program_and_reports_the_malformed_line() {
+    let d = dir("zero");
+    std::fs::write(d.join("m.yaml"), MODEL.replace("CCC", "0 um")).unwrap();
+    std::fs::write(d.join("in.nc"), PROGRAM).unwrap();
+    // α·x·(T − 20 °C) is zero at 20 °C: a zero model
+    let (code, out, err) = metrocell(&["compensate", "gcode", "--model", "m.yaml", "in.nc", "-o", "out.nc", "--temperature", "x_left=20", "--temperature", "x_right=20"], &d);
+    assert_eq!(code, 1, "exit 1: a malformed line was passed through\n{out}{err}");
+    assert!(out.contains("line 7: malformed"), "{out}");
+    let written = std::fs::read_to_string(d.join("out.nc")).unwrap();
+    let header: Vec<&str> = written.lines().filter(|l| l.starts_with("(metrocell compensate: m.yaml")).collect();
+    assert_eq!(header.len(), 1, "{written}");
+    assert_eq!(written.replacen(&format!("{}\n", header[0]), "", 1), PROGRAM, "byte for byte but the header comment");
+}
+
+#[test]
+fn a_thermal_model_needs_its_temperatures_then_moves_x() {
+    let d = dir("thermal");
+    std::fs::write(d.join("m.yaml"), MODEL.replace("CCC", "0 um")).unwrap();
+    std::fs::write(d.join("in.nc"), "G21 G90\nG0 X0 Y0 Z10\nG1 X400 Y0 F300\n").unwrap();
+    let (code, _, err) = metrocell(&["compensate", "gcode", "--model", "m.yaml", "in.nc", "-o", "out.nc"], &d);
+    assert_eq!(code, 2);
+    assert!(err.contains("x_left") && err.contains("--temperature NAME=°C"), "{err}");
+    let (code, out, err) = metrocell(&["compensate", "gcode", "--model", "m.yaml", "in.nc", "-o", "out.nc", "--temperature", "x_left=22", "--temperature", "x_right=22"], &d);
+    assert_eq!(code, 0, "{out}{err}");
+    // e_x(400 mm) = 10.2e-6 · 0.4 m · 2 K = 8.16 µm; C = T − e(C) ≈ 399.99184 mm
+    let written = std::fs::read_to_string(d.join("out.nc")).unwrap();
+    assert!(written.contains("G1 X399.9918 F300"), "{written}");
+}
+
+#[test]
+fn tables_are_written_per_axis_with_squareness() {
+    let d = dir("table");
+    std::fs::write(d.join("m.yaml"), MODEL.replace("CCC", "10 um")).unwrap();
+    let (code, out, err) = metrocell(&["compensate", "table", "--model", "m.yaml", "-o", "tab", "--step", "100", "--temperature", "x_left=20", "--temperature", "x_right=20"], &d);
+    assert_eq!(code, 0, "{out}{err}");
+    let x = std::fs::read_to_string(d.join("tab/axis_x.csv")).unwrap();
+    assert!(x.contains("position_mm,pitch_um,straightness_y_um,straightness_z_um,reversal_um\n0.000,-10.000,0.000,0.000,0.000\n100.000,-5.000,"), "{x}");
+    assert!(x.contains("\n400.000,10.000,0.000,0.000,0.000\n"), "{x}");
+    assert_eq!(std::fs::read_to_string(d.join("tab/axis_z.csv")).unwrap().lines().filter(|l| !l.starts_with('#')).count(), 4);
+    assert!(std::fs::read_to_string(d.join("tab/squareness.csv")).unwrap().contains("xy,0.000\n"));
+    assert!(out.contains("pitch error span 20.00 µm"), "{out}");
+}

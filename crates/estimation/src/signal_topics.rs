@@ -1,0 +1,135 @@
+//! The recorded topics that carry signals, and how each message feeds the signals builder
+//! ([`metrocell_model::SignalsBuilder`]). One table for every reader of recordings: records from
+//! bags ([`crate::recordings`]) and the online estimator, which receives the same messages live.
+//!
+//! | topic | type | signal |
+//! |---|---|---|
+//! | `/machine/commanded_joint_states` | `sensor_msgs/JointState` | commanded joints (`position`), their velocities when `velocity` is filled (`metrocell sim`, `bag import`'s `velocity.<axis>`; NaN = not recorded) |
+//! | `/machine/approach_directions` | `sensor_msgs/JointState` | recorded approach directions: `name` = axes (`x`, `y`, `z`), `position` = ±1 (`bag import`'s `approach.<axis>`) |
+//! | `/temperature/<sensor>` | `sensor_msgs/Temperature` | temperature of `<sensor>`, °C (its samples also fill the timeline lagged terms read) |
+//! | `/temperature/air`, `/weather/temperature` | `sensor_msgs/Temperature` | station air temperature, °C |
+//! | `/air/pressure`, `/weather/pressure` | `sensor_msgs/FluidPressure` | station air pressure, Pa |
+//! | `/air/humidity`, `/weather/humidity` | `sensor_msgs/RelativeHumidity` | station relative humidity (0..1 on the wire, %RH in `Signals`) |
+//! | `/tracker/power_on` | `sensor_msgs/TimeReference` | when the instrument was powered on (`time_ref`) |
+//! | `/machine/load` | `geometry_msgs/WrenchStamped` | load force, N, machine frame |
+//!
+//! A tracker reading (`metrocell_msgs/TrackerMeasurement`) also carries the station air it
+//! used; see [`crate::recordings`]. Times: a message's `header.stamp`, or its log time when the
+//! stamp is zero (a publisher that leaves it unset).
+
+use metrocell_bagtools::SourcedMessage;
+use metrocell_model::SignalsBuilder;
+use metrocell_msgs::geometry_msgs::msg::WrenchStamped;
+use metrocell_msgs::sensor_msgs::msg::{FluidPressure, JointState, RelativeHumidity, Temperature, TimeReference};
+use metrocell_msgs::builtin_interfaces::msg::Time;
+use metrocell_msgs::RosMessage;
+use nalgebra::Vector3;
+
+pub const COMMANDED_JOINTS_TOPIC: &str = "/machine/commanded_joint_states";
+pub const APPROACH_TOPIC: &str = "/machine/approach_directions";
+pub const TEMPERATURE_PREFIX: &str = "/temperature/";
+/// The temperature sensor whose topic is also the station's air temperature.
+pub const AIR_SENSOR: &str = "air";
+pub const AIR_PRESSURE_TOPICS: [&str; 2] = ["/air/pressure", "/weather/pressure"];
+pub const AIR_HUMIDITY_TOPICS: [&str; 2] = ["/air/humidity", "/weather/humidity"];
+pub const WEATHER_TEMPERATURE_TOPIC: &str = "/weather/temperature";
+pub const POWER_ON_TOPIC: &str = "/tracker/power_on";
+pub const LOAD_TOPIC: &str = "/machine/load";
+
+/// What a recorded topic carries.
+#[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]
+pub enum SignalTopic {
+    CommandedJoints,
+    Approach,
+    /// A temperature sensor (`/temperature/air` is also the air temperature).
+    Temperature(String),
+    AirTemperature,
+    AirPressure,
+    AirHumidity,
+    PowerOn,
+    Load,
+}
+
+impl SignalTopic {
+    /// The signal a topic carries, from its name and type; None for topics that carry none.
+    pub fn of(topic: &str, ros_type: &str) -> Option<SignalTopic> {
+        let is = |t: &str| ros_type == t;
+        Some(match topic {
+            COMMANDED_JOINTS_TOPIC if is(JointState::ROS_TYPE) => SignalTopic::CommandedJoints,
+            APPROACH_TOPIC if is(JointState::ROS_TYPE) => SignalTopic::Approach,
+            WEATHER_TEMPERATURE_TOPIC if is(Temperature::ROS_TYPE) => SignalTopic::AirTemperature,
+            t if AIR_PRESSURE_TOPICS.contains(&t) && is(FluidPressure::ROS_TYPE) => SignalTopic::AirPressure,
+            t if AIR_HUMIDITY_TOPICS.contains(&t) && is(RelativeHumidity::ROS_TYPE) => SignalTopic::AirHumidity,
+            POWER_ON_TOPIC if is(TimeReference::ROS_TYPE) => SignalTopic::PowerOn,
+            LOAD_TOPIC if is(WrenchStamped::ROS_TYPE) => SignalTopic::Load,
+            t => {
+                let sensor = t.strip_prefix(TEMPERATURE_PREFIX).filter(|s| !s.is_empty() && !s.contains('/'))?;
+                if !is(Temperature::ROS_TYPE) {
+                    return None;
+                }
+                SignalTopic::Temperature(sensor.to_string())
+            }
+        })
+    }
+}
+
+/// A message's time: its header stamp, or its log time when the stamp is zero.
+pub fn message_time(stamp: &Time, log_time_ns: u64) -> i64 {
+    match stamp.nanos() {
+        0 => log_time_ns as i64,
+        ns => ns,
+    }
+}
+
+/// Push one recorded message of a signal topic into the builder. Errors (a message that does
+/// not decode, a sample the builder refuses) are returned with the reason; the caller counts
+/// and reports them per topic.
+pub fn feed(builder: &mut SignalsBuilder, which: &SignalTopic, m: &SourcedMessage) -> Result<(), String> {
+    let decode_error = |e: metrocell_bagtools::ToolError| e.to_string();
+    match which {
+        SignalTopic::CommandedJoints => {
+            let js: JointState = m.decode().map_err(decode_error)?;
+            builder.push_joints(message_time(&js.header.stamp, m.log_time_ns), &js.name, &js.position, &js.velocity)
+        }
+        SignalTopic::Approach => {
+            let js: JointState = m.decode().map_err(decode_error)?;
+            let t = message_time(&js.header.stamp, m.log_time_ns);
+            for (name, v) in js.name.iter().zip(&js.position) {
+                let axis = ["x", "y", "z"].iter().position(|a| a == name).ok_or_else(|| format!("approach of `{name}`: only axes x, y, z have one"))?;
+                builder.push_approach(t, axis, *v)?;
+            }
+            Ok(())
+        }
+        SignalTopic::Temperature(sensor) => {
+            let m2: Temperature = m.decode().map_err(decode_error)?;
+            let t = message_time(&m2.header.stamp, m.log_time_ns);
+            builder.push_temperature(t, sensor, m2.temperature)?;
+            if sensor == AIR_SENSOR {
+                builder.push_air_temperature(t, m2.temperature)?;
+            }
+            Ok(())
+        }
+        SignalTopic::AirTemperature => {
+            let m2: Temperature = m.decode().map_err(decode_error)?;
+            builder.push_air_temperature(message_time(&m2.header.stamp, m.log_time_ns), m2.temperature)
+        }
+        SignalTopic::AirPressure => {
+            let m2: FluidPressure = m.decode().map_err(decode_error)?;
+            builder.push_air_pressure(message_time(&m2.header.stamp, m.log_time_ns), m2.fluid_pressure)
+        }
+        SignalTopic::AirHumidity => {
+            let m2: RelativeHumidity = m.decode().map_err(decode_error)?;
+            builder.push_air_humidity(message_time(&m2.header.stamp, m.log_time_ns), 100.0 * m2.relative_humidity)
+        }
+        SignalTopic::PowerOn => {
+            let m2: TimeReference = m.decode().map_err(decode_error)?;
+            builder.push_power_on(message_time(&m2.header.stamp, m.log_time_ns), m2.time_ref.nanos());
+            Ok(())
+        }
+        SignalTopic::Load => {
+            let m2: WrenchStamped = m.decode().map_err(decode_error)?;
+            let f = &m2.wrench.force;
+            builder.push_load(message_time(&m2.header.stamp, m.log_time_ns), Vector3::new(f.x, f.y, f.z))
+        }
+    }
+}

@@ -370,32 +370,3 @@ fn sensor(name: &str, position: f64) -> ConfigValue {
     ConfigValue::Map([("name".to_string(), text(name)), ("position".to_string(), num(position))].into_iter().collect())
 }
 
-/// A chosen term written the way a metrologist states it: a structure's growth coefficient
-/// (g = L·α) is positive and its direction is where the tool moves as the structure warms — a
-/// negative fitted coefficient along +z is the same physics as a positive one along −z. Returns
-/// the variant name to match (`along −z…`).
-pub fn conventional_signs(config: &mut TermConfig, variant: &str) -> String {
-    if config.id != TermId::ThermalGrowth.as_str() {
-        return variant.to_string();
-    }
-    let negative = matches!(config.params.get("coefficient"), Some(ConfigValue::Number(g)) if *g < 0.0);
-    if !negative {
-        return variant.to_string();
-    }
-    if let Some(ConfigValue::Number(g)) = config.params.get_mut("coefficient") {
-        *g = -*g;
-    }
-    if let Some(ConfigValue::List(d)) = config.options.get_mut("direction") {
-        for v in d.iter_mut() {
-            if let ConfigValue::Number(x) = v {
-                *x = -*x;
-            }
-        }
-    }
-    for axis in AXES {
-        if let Some(rest) = variant.strip_prefix(&format!("along {axis}")) {
-            return format!("along −{axis}{rest}");
-        }
-    }
-    variant.to_string()
-}

@@ -28,7 +28,7 @@ use nalgebra::{DMatrix, DVector, Vector3};
 
 use crate::blocked_least_squares::{pseudo_inverse, separable_columns, BaseFit, BlockedRows};
 use crate::candidate_columns::ColumnContext;
-use crate::candidates::{candidate_families, conventional_signs, Declared, NotTried, Placement, TermFamily};
+use crate::candidates::{candidate_families, Declared, NotTried, Placement, TermFamily};
 use crate::empirical::{bump_variants, time_variants, EmpiricalBasis};
 use crate::findings::{self, FoundTerm};
 use crate::folds::{time_blocks, workspace_blocks};
@@ -461,7 +461,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
                 for (name, value, _, _) in &c.parameters {
                     config.params.insert(name.clone(), ConfigValue::Number(*value));
                 }
-                let variant_name = conventional_signs(&mut config, &v.name);
+                let variant_name = v.name.clone();
                 let term = configure(&config)?;
                 let specs = term.term.params();
                 let free_names: Vec<String> = kept[c.variant].iter().map(|&j| specs[j].name.clone()).chain(specs.iter().enumerate().filter(|(j, _)| !v.linear[*j] && v.profiled > 0 && family.id != TermId::Refraction).map(|(_, s)| s.name.clone())).collect();

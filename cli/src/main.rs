@@ -6,6 +6,7 @@ mod bag;
 mod calibrate;
 mod compensate;
 mod demo;
+mod diagnose_command;
 mod launch_command;
 mod topic;
 mod vision;
@@ -45,6 +46,8 @@ enum Command {
     Detect(vision::detect::DetectArgs),
     /// Run the main job on the built-in simulated cell: twin, thermal compensation, recorder
     Demo(demo::DemoArgs),
+    /// Find where a recording and a model disagree, name the missing physics, add it, show the held-out fit improve
+    Diagnose(diagnose_command::DiagnoseArgs),
     /// Start the nodes of a ROS 2 YAML launch file, each as its own process
     Launch(launch_command::LaunchArgs),
     /// Simulate a cell into a bag, faster than real time (the digital twin)
@@ -62,6 +65,7 @@ fn main() {
         Command::Calibrate(args) => calibrate::run(args),
         Command::Compensate(command) => compensate::run(command),
         Command::Demo(args) => demo::run(args),
+        Command::Diagnose(args) => diagnose_command::run(args),
         Command::Detect(args) => vision::detect::run(args),
         Command::Launch(args) => launch_command::run(args),
         Command::Sim(args) => metrocell_simulation::run_sim_command(args),

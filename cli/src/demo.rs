@@ -1,9 +1,9 @@
 //! `metrocell demo`: the main job on the built-in simulated cell.
 //!
-//! Starts `launch-configs/demo.launch.yaml` (the digital twin publishing live, the thermal
-//! compensation node, the recorder), watches the cell over DDS like a shift supervisor would —
+//! Starts `launch-configs/demo.launch.yaml` (the digital twin publishing live, the tracker,
+//! thermal compensation and estimator nodes, the recorder and the dashboard), watches the cell over DDS like a shift supervisor would —
 //! tracker points, beam breaks, the X-scale strain the thermal node computes from its configured α
-//! (a handbook value, not an estimate) — stops everything when the simulated run is over, and
+//! (a handbook value, not an estimate), the error model the estimator fits online — stops everything when the simulated run is over, and
 //! summarises the recorded bag. The twin waits until the recorder subscribes to every topic
 //! before it publishes; at the end the bag's count of each topic is checked against the twin's
 //! own (its `published/<topic>` diagnostics), and the demo fails (exit 1) if any message is
@@ -38,6 +38,9 @@ pub struct DemoArgs {
     /// Bag directory to record into (must not exist)
     #[arg(long, short = 'o')]
     output: Option<PathBuf>,
+    /// TCP port of the live dashboard (web page; the Foxglove WebSocket takes the next one)
+    #[arg(long, default_value_t = 8765)]
+    dashboard_port: u16,
 }
 
 /// The directory holding `launch-configs/`: next to the executable's build tree, or the cwd.
@@ -59,6 +62,8 @@ struct Watch {
     /// The twin's messages published per topic (its latest diagnostics), and whether it said it finished.
     twin_published: BTreeMap<String, u64>,
     twin_finished: bool,
+    /// The estimator's latest error model.
+    estimated: Option<ErrorModel>,
 }
 
 pub fn run(args: DemoArgs) -> i32 {
@@ -89,6 +94,8 @@ fn demo(args: DemoArgs) -> anyhow::Result<i32> {
         ("speed".to_string(), args.speed.to_string()),
         ("seed".to_string(), args.seed.to_string()),
         ("output".to_string(), output.display().to_string()),
+        ("dashboard_port".to_string(), args.dashboard_port.to_string()),
+        ("foxglove_port".to_string(), args.dashboard_port.saturating_add(1).to_string()),
     ];
     if let Some(cell) = &args.cell {
         launch_args.push(("cell".to_string(), std::fs::canonicalize(cell)?.display().to_string()));
@@ -99,6 +106,8 @@ fn demo(args: DemoArgs) -> anyhow::Result<i32> {
         args.speed,
         output.display()
     );
+    let dashboard = format!("http://127.0.0.1:{}", args.dashboard_port);
+    println!("live dashboard while it runs: {dashboard} (Foxglove WebSocket ws://127.0.0.1:{})", args.dashboard_port.saturating_add(1));
 
     let options = metrocell_launch::LaunchOptions { share_dir: Some(share.clone()), ..Default::default() };
     let shutdown = options.shutdown.clone();
@@ -123,6 +132,12 @@ fn demo(args: DemoArgs) -> anyhow::Result<i32> {
             None => String::new(),
         }
     );
+    if let Some(m) = &watch.estimated {
+        println!("{}", describe_estimate(m));
+    } else {
+        println!("estimated online: no error model from the estimator (too few measured points)");
+    }
+    println!("the dashboard was at {dashboard}; the bag is at {}", output.display());
     match metrocell_bag::info(&output) {
         Ok(info) => println!("\nrecorded bag:\n{info}"),
         Err(e) => eprintln!("metrocell demo: the recorded bag cannot be read: {e}"),
@@ -168,8 +183,9 @@ fn watch_cell(
     let clock = node.subscription::<Clock>("/clock", qos::sensor_data())?;
     let tracker = node.subscription::<TrackerMeasurement>("/tracker/measurements", qos::sensor_data())?;
     let model = node.subscription::<ErrorModel>("/thermal/error_model", qos::sensor_data())?;
+    let estimated = node.subscription::<ErrorModel>("/estimator/error_model", qos::latched())?;
     let diagnostics = node.subscription::<DiagnosticArray>("/diagnostics", qos::reliable().history(ros2_client::qos::History::KeepLast { depth: 100 }))?;
-    let mut w = Watch { sim_time_s: 0.0, tracker_points: 0, beam_breaks: 0, last_strain: None, twin_published: BTreeMap::new(), twin_finished: false };
+    let mut w = Watch { sim_time_s: 0.0, tracker_points: 0, beam_breaks: 0, last_strain: None, twin_published: BTreeMap::new(), twin_finished: false, estimated: None };
     let mut start_ns: Option<i64> = None;
     let mut next_print = 0.0;
     // The run is over when the simulated clock, once started, stops advancing.
@@ -204,6 +220,9 @@ fn watch_cell(
         }
         while let Ok(Some((d, _))) = diagnostics.take() {
             take_twin_counts(&d, &mut w);
+        }
+        while let Ok(Some((m, _))) = estimated.take() {
+            w.estimated = Some(m);
         }
         if w.sim_time_s >= next_print {
             next_print += 30.0;
@@ -246,4 +265,25 @@ fn take_twin_counts(d: &DiagnosticArray, w: &mut Watch) {
             }
         }
     }
+}
+
+/// The estimator's model in words: each free parameter (non-zero variance) with its σ, in the
+/// units a metrologist reads (µm, µrad, µm/m/K).
+fn describe_estimate(m: &ErrorModel) -> String {
+    let n = m.values.len();
+    let mut parts = Vec::new();
+    for i in 0..n {
+        let var = m.covariance.get(i * n + i).copied().unwrap_or(0.0);
+        if !(var > 0.0) {
+            continue;
+        }
+        let (scale, unit) = match m.units[i].as_str() {
+            "m" => (1e6, "µm"),
+            "rad" => (1e6, "µrad"),
+            "1/K" => (1e6, "µm/m/K"),
+            other => (1.0, other),
+        };
+        parts.push(format!("{} = {:.2} ± {:.2} {unit}", m.parameter_names[i], m.values[i] * scale, var.sqrt() * scale));
+    }
+    format!("estimated online from {} measured points (innovation rms {:.2} µm): {}", m.observation_count, m.residual_rms * 1e6, parts.join(", "))
 }

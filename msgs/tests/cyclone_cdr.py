@@ -301,6 +301,9 @@ class ErrorModel(IdlStruct, typename="metrocell_msgs::msg::dds_::ErrorModel_"):
     residual_rms: t.float64
     observation_count: t.uint32
     degrees_of_freedom: t.uint32
+    term_labels: t.sequence[str]
+    term_catalog_ids: t.sequence[str]
+    term_options: t.sequence[str]
 
 
 @ros("metrocell_msgs", "MeasuredPoint")

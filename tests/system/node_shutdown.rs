@@ -1,7 +1,8 @@
 //! README: every node "stops cleanly within a second on SIGINT/SIGTERM". Held here for every node
 //! binary and both signals, while the node is working: the digital twin runs throughout (20×
 //! real time, camera frames rendered) so the thermal node, the recorder, the fiducial and probe
-//! nodes have traffic to handle, and the camera node publishes its own frames.
+//! nodes have traffic to handle (the estimator its commanded joints and temperatures), and the
+//! camera node publishes its own frames.
 //!
 //! "Running" means the node's 1 Hz `/diagnostics` heartbeat has arrived (its DDS participant,
 //! subscriptions and loop are up). Then the signal; the process must have exited, with status 0,
@@ -97,6 +98,8 @@ fn every_node_stops_within_a_second_on_sigint_and_sigterm() {
         ("metrocell-camera", s(&["--ros-args", "-p", &format!("path:={}", frames.display()), "-p", "loop:=true", "-p", "rate:=20.0"])),
         ("metrocell-fiducial", s(&["--ros-args", "-r", "image:=/camera/image_raw", "-r", "camera_info:=/camera/camera_info"])),
         ("metrocell-probe", s(&["--ros-args", "-r", "probe/trigger:=/machine/joint_states"])),
+        // reads the twin's commanded joints and thermocouples (no measured points: no tracker node here)
+        ("metrocell-estimator", s(&["--ros-args", "-p", &format!("model:={}", root.join("launch-configs/cells/demo_model.yaml").display())])),
     ];
     let mut load = ChildGuard::spawn(Command::new(bin("metrocell-sim")).args(&sim_args).args(["-r", "__node:=shutdown_load"]).stdout(Stdio::null()).stderr(Stdio::null()));
     let mut worst = Duration::ZERO;

@@ -98,6 +98,11 @@ impl GrowthCompensator {
         self.term.term.label()
     }
 
+    /// The catalog term in use (options, current parameter values).
+    pub fn catalog_term(&self) -> &ConfiguredTerm {
+        &self.term
+    }
+
     /// (name, unit, value) of the parameters in use, catalog order, and their covariance.
     pub fn parameters(&self) -> (Vec<(String, &'static str, f64)>, Matrix2<f64>) {
         let names = self.term.term.params().into_iter().zip(&self.term.params).map(|(s, v)| (s.name, s.unit, *v)).collect();

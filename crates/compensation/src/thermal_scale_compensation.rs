@@ -116,6 +116,11 @@ impl ThermalScaleCompensator {
     }
 
     /// Catalog labels of the configured terms with their axis index, e.g. (0, `thermal_scale[x]`).
+    /// The catalog term of axis k (0, 1, 2 = X, Y, Z), if the axis is covered.
+    pub fn axis_term(&self, k: usize) -> Option<&ConfiguredTerm> {
+        self.terms.iter().find(|(a, _)| *a == k).map(|(_, t)| t)
+    }
+
     pub fn labels(&self) -> Vec<(usize, String)> {
         self.terms.iter().map(|(k, t)| (*k, t.term.label())).collect()
     }

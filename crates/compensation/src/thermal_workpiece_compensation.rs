@@ -50,6 +50,11 @@ impl WorkpieceCompensator {
         self.term.term.label()
     }
 
+    /// The catalog term in use (options, parameter values).
+    pub fn catalog_term(&self) -> &ConfiguredTerm {
+        &self.term
+    }
+
     /// The expansion at `nominal` for the workpiece sensor's reading (its variance is the whole
     /// variance of the reading, calibration included).
     pub fn drift(&self, nominal: &Vector3<f64>, reading: Reading) -> Result<TermDrift, ThermalError> {

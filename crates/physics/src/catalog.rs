@@ -42,6 +42,10 @@ pub fn entries() -> Vec<CatalogEntry> {
 pub struct ConfiguredTerm {
     pub term: Box<dyn PhysicsTerm>,
     pub params: Vec<f64>,
+    /// The structural options it was built from (as a cell file's `options:` holds them), so
+    /// the term can be described to a consumer that rebuilds it ([`build_term`]), e.g. in an
+    /// `ErrorModel` message.
+    pub options: BTreeMap<String, ConfigValue>,
 }
 
 /// Build the structural part of a term (options only).
@@ -75,6 +79,30 @@ pub fn build_term(id: TermId, options: &BTreeMap<String, ConfigValue>) -> Result
     Ok(term)
 }
 
+impl ConfiguredTerm {
+    /// Its options as a JSON object: the `term_options` entry of an `ErrorModel` message, read
+    /// back by [`configure_described`].
+    pub fn options_json(&self) -> String {
+        serde_json::to_string(&self.options).unwrap_or_else(|_| "{}".to_string())
+    }
+}
+
+/// Rebuild a term a message described: its catalog id, its options as a JSON object (as
+/// [`ConfiguredTerm::options_json`] writes them) and its parameter values in catalog order,
+/// canonical units. Errors name the term and what is wrong (unknown id, bad JSON, an option
+/// the term rejects, the wrong number of values).
+pub fn configure_described(id: &str, options_json: &str, params: &[f64]) -> Result<ConfiguredTerm, PhysicsError> {
+    let term_id = lookup(id)?;
+    let options: BTreeMap<String, ConfigValue> = serde_json::from_str(options_json)
+        .map_err(|e| PhysicsError::InvalidInput { what: format!("options of term {id}"), reason: format!("not a JSON object of options ({e}): {options_json}") })?;
+    let term = build_term(term_id, &options)?;
+    let expected = term.params().len();
+    if params.len() != expected {
+        return Err(PhysicsError::InvalidInput { what: format!("parameters of {}", term.label()), reason: format!("{} values given, the term has {expected}", params.len()) });
+    }
+    Ok(ConfiguredTerm { term, params: params.to_vec(), options })
+}
+
 /// Build a term and validate its parameters: unknown id (error lists the allowed ids), unknown
 /// option or parameter, missing parameter (unless `use_defaults`), unit of the wrong dimension
 /// (error names the key and the allowed unit), value outside the plausible range.
@@ -100,7 +128,7 @@ pub fn configure(config: &TermConfig) -> Result<ConfiguredTerm, PhysicsError> {
         }
         params.push(value);
     }
-    Ok(ConfiguredTerm { term, params })
+    Ok(ConfiguredTerm { term, params, options: config.options.clone() })
 }
 
 /// A representative config of each id (used by docs, tests and `metrocell` help output).

@@ -42,7 +42,7 @@ pub mod term_id;
 pub mod thermal;
 pub mod units;
 
-pub use catalog::{configure, entries, lookup, CatalogEntry, ConfiguredTerm};
+pub use catalog::{configure, configure_described, entries, lookup, CatalogEntry, ConfiguredTerm};
 pub use term_id::{Category, TermId};
 pub use config::{ConfigValue, EstimationConfig, PriorConfig, TermConfig};
 pub use error::PhysicsError;

@@ -6,7 +6,8 @@
 //!   metrocell-sim --ros-args -p cell:=crates/twin/examples/cells/xfyz_shift.yaml \
 //!       -p duration:=8h -p speed:=60 -p seed:=7
 //!
-//! With `wait_for_recorder`, the first message waits until a recorder subscribes to every topic.
+//! With `wait_for_recorder`, the first message waits until the node named `recorder_node`
+//! (default `recorder`) subscribes to every topic.
 //! The messages published per topic are in the diagnostics (`published/<topic>`) and the last
 //! log line, so a recording can be checked against them.
 //!
@@ -43,12 +44,13 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     }
     let wait_for_recorder = node.param::<f64>("wait_for_recorder")?;
     if wait_for_recorder > 0.0 {
-        if sim.wait_for_recorder(&node, std::time::Duration::from_secs_f64(wait_for_recorder)) {
-            node.info("a recorder subscribes to every topic: starting");
+        let recorder = node.param::<String>("recorder_node")?;
+        if sim.wait_for_recorder(&node, &recorder, std::time::Duration::from_secs_f64(wait_for_recorder))? {
+            node.info(format!("the recorder '{recorder}' subscribes to every topic: starting"));
         } else if node.shutdown_token().is_triggered() {
             return Ok(());
         } else {
-            node.warn(format!("no participant subscribed to every topic within {wait_for_recorder} s: starting anyway"));
+            node.warn(format!("the recorder '{recorder}' did not subscribe to every topic within {wait_for_recorder} s: starting anyway"));
         }
     }
     let finished = sim.run(&node, &settings)?;

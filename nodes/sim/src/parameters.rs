@@ -17,8 +17,9 @@ pub fn declarations() -> Vec<ParamDecl> {
         ParamDecl::new("camera_images", true, "render an image on /camera/image_raw for every camera frame request (render, encode and write: about 0.05 s of CPU per 5 MP frame in a release build, measured in BENCHMARKS.md)"),
         ParamDecl::new("start_delay", 0.0, "wall-clock seconds to wait before the first message, so recorders and other nodes discover the topics first")
             .with_range(0.0, 3600.0),
-        ParamDecl::new("wait_for_recorder", 0.0, "before the first message, wait up to this many wall-clock seconds until one participant (a recorder: metrocell-recorder, ros2 bag record -a) subscribes to every topic the twin publishes, so the bag gets every message (0: do not wait)")
+        ParamDecl::new("wait_for_recorder", 0.0, "before the first message, wait up to this many wall-clock seconds until the node named by recorder_node subscribes to every topic the twin publishes, so the bag gets every message (0: do not wait)")
             .with_range(0.0, 3600.0),
+        ParamDecl::new("recorder_node", "recorder", "name of the recorder node wait_for_recorder waits for: bare (any namespace) or fully qualified; metrocell-recorder is 'recorder', metrocell bag record 'recorder' too (--node-name), ros2 bag record 'rosbag2_recorder'. Found by name in ROS 2's ros_discovery_info, so another node reading every topic (the dashboard) is not taken for it"),
     ]
 }
 

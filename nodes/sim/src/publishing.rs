@@ -4,7 +4,8 @@
 use std::time::{Duration, Instant};
 
 use metrocell_msgs::RosMessage;
-use metrocell_node::{qos, Diagnostics, MetrocellNode, QosProfile, RawPublisher};
+use metrocell_node::node_directory::guid_prefix;
+use metrocell_node::{qos, Diagnostics, MetrocellNode, NodeDirectory, QosProfile, RawPublisher};
 use metrocell_simulation::{CameraIntrinsics, FrameRendering, MessageConverter, MessageStream, QosKind};
 use metrocell_twin::{Cell, Simulation};
 use ros2_client::qos::History;
@@ -95,31 +96,43 @@ impl LiveSim {
         self.diagnostics.set_value("finished", finished);
     }
 
-    /// Wait until one other participant (a recorder: metrocell-recorder, `metrocell bag record
-    /// -a`, `ros2 bag record -a`) subscribes to every topic this twin publishes and each writer
-    /// has matched it, or `timeout` passes. Returns whether it did; false on timeout or shutdown.
-    pub fn wait_for_recorder(&self, node: &MetrocellNode, timeout: Duration) -> bool {
-        use std::collections::{BTreeMap, BTreeSet};
+    /// Wait until the participant hosting the node called `recorder` (`recorder` for
+    /// metrocell-recorder and `metrocell bag record`, `rosbag2_recorder` for `ros2 bag record`)
+    /// subscribes to every topic this twin publishes and each writer has matched a reader, or
+    /// `timeout` passes. The node is found by its name in ROS 2's `ros_discovery_info`, so
+    /// another participant that reads every topic (the dashboard) does not count. Returns
+    /// whether it did; false on timeout or shutdown.
+    pub fn wait_for_recorder(&self, node: &MetrocellNode, recorder: &str, timeout: Duration) -> Result<bool, metrocell_node::NodeError> {
+        use std::collections::BTreeSet;
         let token = node.shutdown_token();
         let participant = node.context().domain_participant();
-        let own = rustdds::RTPSEntity::guid(&participant).prefix;
+        let mut directory = NodeDirectory::new(&participant)?;
         let wanted: BTreeSet<String> = self.publishers.iter().map(|p| metrocell_node::names::dds_topic_name(p.topic())).collect();
         let deadline = Instant::now() + timeout;
         loop {
-            // Keyed by the participant's GUID prefix (its Debug form: the type is not exported).
-            let mut by_participant: BTreeMap<String, BTreeSet<String>> = BTreeMap::new();
-            for r in participant.discovered_readers() {
-                let prefix = r.reader_proxy.remote_reader_guid.prefix;
-                if prefix != own && wanted.contains(&r.subscription_topic_data.topic_name) {
-                    by_participant.entry(format!("{prefix:?}")).or_default().insert(r.subscription_topic_data.topic_name.clone());
-                }
-            }
-            let recorder = by_participant.values().any(|topics| topics.len() == wanted.len());
-            if recorder && self.publishers.iter().all(|p| p.matched_subscriptions() > 0) {
-                return true;
+            directory.refresh();
+            let recorders = directory.participants_of(recorder);
+            let readers = participant.discovered_readers();
+            let reads_every_topic = recorders.iter().any(|prefix| {
+                let read: BTreeSet<&str> = readers
+                    .iter()
+                    .filter(|r| guid_prefix(r.reader_proxy.remote_reader_guid) == *prefix)
+                    .map(|r| r.subscription_topic_data.topic_name.as_str())
+                    .filter(|t| wanted.contains(*t))
+                    .collect();
+                read.len() == wanted.len()
+            });
+            if reads_every_topic && self.publishers.iter().all(|p| p.matched_subscriptions() > 0) {
+                return Ok(true);
             }
             if Instant::now() >= deadline || token.wait_timeout(Duration::from_millis(20)) {
-                return false;
+                if !token.is_triggered() {
+                    node.warn(format!(
+                        "no node called '{recorder}' subscribed to every topic (nodes seen: {}; parameter recorder_node names the recorder)",
+                        directory.node_names().join(", ")
+                    ));
+                }
+                return Ok(false);
             }
         }
     }

@@ -8,6 +8,7 @@ use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_msgs::geometry_msgs::msg::Point;
 use metrocell_msgs::msg::{ErrorModel, MeasuredPoint};
 use metrocell_msgs::std_msgs::msg::Header;
+use metrocell_physics::ConfiguredTerm;
 use nalgebra::{DMatrix, Vector3};
 
 fn header(now_ns: i64) -> Header {
@@ -21,6 +22,13 @@ struct Builder {
 }
 
 impl Builder {
+    /// Describe a term instance (label, catalog id, options) for consumers that rebuild it.
+    fn describe(&mut self, t: &ConfiguredTerm) {
+        self.m.term_labels.push(t.term.label());
+        self.m.term_catalog_ids.push(t.term.id().as_str().to_string());
+        self.m.term_options.push(t.options_json());
+    }
+
     fn push(&mut self, term: &str, names: Vec<(String, &str, f64)>, cov: DMatrix<f64>) {
         for (name, unit, value) in names {
             self.m.term_ids.push(term.into());
@@ -36,12 +44,16 @@ pub fn error_model(c: &ThermalCompensator, fit: Option<&(GrowthFitResult, bool)>
     let mut b = Builder { m: ErrorModel { header: header(now_ns), machine_id: String::new(), ..Default::default() }, blocks: Vec::new() };
     let s = &c.scale;
     for (k, label) in s.labels() {
+        if let Some(t) = s.axis_term(k) {
+            b.describe(t);
+        }
         let (strain, var) = s.axis_strain(k, reading)?;
         b.push("thermal_scale", vec![(format!("{label}.alpha"), "1/K", s.alpha)], DMatrix::from_element(1, 1, s.alpha_uncertainty.powi(2)));
         b.push("thermal_scale", vec![(format!("{label}.strain"), "m/m", strain)], DMatrix::from_element(1, 1, var));
         b.m.observation_count += s.sensors().iter().filter(|p| p.axis == k).count() as u32;
     }
     for g in &c.growth {
+        b.describe(g.catalog_term());
         let label = g.label();
         let (params, cov) = g.parameters();
         let n = params.len();
@@ -49,6 +61,7 @@ pub fn error_model(c: &ThermalCompensator, fit: Option<&(GrowthFitResult, bool)>
         b.push("thermal_growth", names, DMatrix::from_fn(n, n, |i, j| cov[(i, j)]));
     }
     if let Some(w) = &c.workpiece {
+        b.describe(w.catalog_term());
         b.push("workpiece_expansion", vec![(format!("{}.alpha", w.label()), "1/K", w.alpha)], DMatrix::from_element(1, 1, w.alpha_uncertainty.powi(2)));
     }
     if let Some((r, _)) = fit {

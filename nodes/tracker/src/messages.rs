@@ -119,5 +119,9 @@ pub fn warmup_model(f: &WarmupFit, stamp_ns: i64, nest: &str) -> ErrorModel {
         residual_rms: f.rms,
         observation_count: f.samples as u32,
         degrees_of_freedom: f.samples.saturating_sub(3) as u32,
+        // the catalog's tracker_warmup term has no options
+        term_labels: vec!["tracker_warmup".into()],
+        term_catalog_ids: vec!["tracker_warmup".into()],
+        term_options: vec!["{}".into()],
     }
 }

@@ -1,0 +1,91 @@
+//! The node on a bag (`--bag FILE`): no DDS. Inputs in log-time order; the state orders points
+//! by stamp and waits for their signals exactly as live, so the outputs equal the live node's.
+//! Outputs are stamped with the log time of the input that caused them.
+
+use metrocell_bagtools::{BagSource, ReplayOutput};
+use metrocell_estimator_node::estimator_state::Outputs;
+use metrocell_estimator_node::model_message::alarm_message;
+use metrocell_estimator_node::parameters;
+use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
+use metrocell_msgs::msg::{ErrorModel, MeasuredPoint};
+use metrocell_msgs::sensor_msgs::msg::{JointState, Temperature};
+use metrocell_node::{OfflineNode, ReplayArgs};
+
+pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::error::Error>> {
+    let (mut state, inputs, log) = parameters::estimator(node.parameters())?;
+    for line in log {
+        node.logger().info(line);
+    }
+    let state_file = node.param::<String>("state_file")?;
+    let mut source = BagSource::open(&args.bag)?;
+    let points_topic = node.resolve_topic("measured_points")?;
+    let joints_topic = node.resolve_topic("machine/commanded_joint_states")?;
+    for (topic, ok) in [(&points_topic, source.subscribe::<MeasuredPoint>(&points_topic)?), (&joints_topic, source.subscribe::<JointState>(&joints_topic)?)] {
+        if !ok {
+            node.logger().warn(source.missing_topic_hint(topic));
+        }
+    }
+    let mut sensor_of_topic = Vec::new();
+    for name in &inputs.sensors {
+        let topic = node.resolve_topic(&format!("temperature/{name}"))?;
+        if !source.subscribe::<Temperature>(&topic)? {
+            node.logger().warn(source.missing_topic_hint(&topic));
+        }
+        sensor_of_topic.push((topic, name.clone()));
+    }
+    let model_topic = node.resolve_topic("estimator/error_model")?;
+    let predicted_topic = node.resolve_topic("estimator/predicted_error")?;
+    let diagnostics_topic = node.resolve_topic("/diagnostics")?;
+    let mut output = ReplayOutput::open(args.output.as_deref())?;
+    output.advertise::<ErrorModel>(&model_topic)?;
+    output.advertise::<MeasuredPoint>(&predicted_topic)?;
+    output.advertise::<DiagnosticArray>(&diagnostics_topic)?;
+    let fqn = node.fully_qualified_name();
+
+    let (mut inputs_read, mut malformed) = (0u64, 0u64);
+    let stopped = source.replay::<Box<dyn std::error::Error>>(|| node.interrupted(), |m| {
+        inputs_read += 1;
+        let decoded = if m.topic == points_topic {
+            m.decode::<MeasuredPoint>().map(|p| state.point(p))
+        } else if m.topic == joints_topic {
+            m.decode::<JointState>().map(|js| state.joint_state(&js))
+        } else if let Some((_, sensor)) = sensor_of_topic.iter().find(|(t, _)| *t == m.topic) {
+            m.decode::<Temperature>().map(|t| state.temperature(sensor, &t))
+        } else {
+            Ok(())
+        };
+        if let Err(e) = decoded {
+            node.logger().warn(format!("skipped: {e}"));
+            malformed += 1;
+        }
+        for out in state.process() {
+            let Outputs { model, predicted, alarm, problem } = out;
+            if let Some(problem) = problem {
+                node.logger().debug(problem);
+            }
+            if let Some(a) = &alarm {
+                let message = alarm_message(a, &fqn);
+                node.logger().warn(&message.status[0].message);
+                output.write(&diagnostics_topic, &message, m.log_time_ns)?;
+            }
+            if let Some(model) = model {
+                if !state_file.is_empty() {
+                    state.saved_state(model.header.stamp.nanos()).save(std::path::Path::new(&state_file))?;
+                }
+                output.write(&model_topic, &model, m.log_time_ns)?;
+            }
+            for p in predicted {
+                output.write(&predicted_topic, &p, m.log_time_ns)?;
+            }
+        }
+        Ok(())
+    })?;
+    output.finish()?;
+    node.logger().info(format!(
+        "replayed {inputs_read} messages from {}: {}; {} points still waiting for signals at the end, {malformed} malformed messages skipped",
+        args.bag.display(),
+        state.counters.summary(),
+        state.pending()
+    ));
+    Ok(node.finish_replay(stopped)?)
+}

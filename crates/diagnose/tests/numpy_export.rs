@@ -9,7 +9,7 @@ mod common;
 use std::collections::BTreeMap;
 
 use metrocell_diagnose::DiagnoseOptions;
-use metrocell_estimation::{MeasurementRecord, RecordFrame, RecordSet};
+use metrocell_estimation::{MeasurementRecord, RecordFrame, RecordKind, RecordSet};
 use metrocell_physics::Signals;
 use nalgebra::{Matrix3, Vector3};
 
@@ -37,7 +37,7 @@ fn records(csv: &str) -> RecordSet {
         s.axis_position = [Some(nominal.x), Some(nominal.y), Some(nominal.z)];
         s.approach_direction = [Some(v(dx)), Some(v(dy)), Some(v(dz))];
         s.temperatures = BTreeMap::from([("bed".to_string(), v(bed)), ("air".to_string(), v(air))]);
-        out.push(MeasurementRecord { time: 1_741_073_400.0 + v(t), point_id: f[id].to_string(), channel: "numpy_export".into(), q: nominal.iter().copied().collect(), measured: Vector3::new(v(x), v(y), v(z)) * 1e-3, covariance: Matrix3::identity() * sigma * sigma, signals: s });
+        out.push(MeasurementRecord { time: 1_741_073_400.0 + v(t), point_id: f[id].to_string(), channel: "numpy_export".into(), kind: RecordKind::Point, q: nominal.iter().copied().collect(), measured: Vector3::new(v(x), v(y), v(z)) * 1e-3, covariance: Matrix3::identity() * sigma * sigma, signals: s });
     }
     RecordSet { frame: RecordFrame::Machine, records: out, rejected: vec![], sources: vec![] }
 }

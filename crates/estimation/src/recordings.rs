@@ -303,18 +303,12 @@ fn declared_signals(model: &ForwardModel) -> Vec<(String, SignalKind)> {
             continue;
         }
         for s in t.term.signals() {
-            if !model_computed(&s) {
+            if !s.is_computed_by_model() {
                 out.push((t.term.label(), s));
             }
         }
     }
     out
-}
-
-/// Signals the model computes itself for each reading (ranges, the points of each frame, the
-/// probing direction) rather than reading them from the recording.
-fn model_computed(kind: &SignalKind) -> bool {
-    matches!(kind, SignalKind::TrackerRange | SignalKind::ImagePoint | SignalKind::MachinePoint | SignalKind::WorkpiecePoint | SignalKind::TargetPoint | SignalKind::CameraPoint | SignalKind::ProbeDirection)
 }
 
 /// Whether the instant's signals hold `kind`.
@@ -334,7 +328,7 @@ fn present(s: &Signals, kind: &SignalKind) -> bool {
         SignalKind::TimeSincePowerOn => s.time_since_power_on.is_some(),
         SignalKind::LoadForce => s.load_force.is_some(),
         SignalKind::RotaryPosition(a) => s.rotary_position[a.index()].is_some(),
-        k => model_computed(k),
+        k => k.is_computed_by_model(),
     }
 }
 

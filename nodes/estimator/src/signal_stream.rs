@@ -8,12 +8,13 @@
 //! order (`MachineGeometry::joint_names`), m or rad; velocity = the samples' own velocity field
 //! when present, else the difference quotient of the bracketing samples; approach direction of a
 //! joint = sign of its last non-zero motion at or before the instant (+1 before any motion);
-//! temperatures in °C, linear between bracketing readings; a lagged term gets the sensor's
-//! history up to the instant.
+//! temperatures in °C, linear between bracketing readings; a lagged term reads the sensor's
+//! history up to the instant from one shared `TemperatureTimeline` (no copy per instant).
 
 use std::collections::{BTreeMap, VecDeque};
+use std::sync::Arc;
 
-use metrocell_physics::{Signals, TemperatureHistory};
+use metrocell_physics::{Signals, TemperatureTimeline};
 
 /// Motion smaller than this between two samples is standing still (m or rad): below any
 /// commanded step, above the float noise of a recorded position.
@@ -55,6 +56,8 @@ pub struct SignalStream {
     temperatures: BTreeMap<String, Vec<(f64, f64)>>,
     /// Sensors whose whole history a term needs (lags); others keep only what interpolation needs.
     keep_history: Vec<String>,
+    /// The whole history of the `keep_history` sensors, shared with every instant's signals.
+    timeline: Arc<TemperatureTimeline>,
     power_on_time: Option<f64>,
 }
 
@@ -67,6 +70,7 @@ impl SignalStream {
             joint_count,
             temperatures: sensors.iter().map(|s| (s.clone(), Vec::new())).collect(),
             keep_history: history_sensors.to_vec(),
+            timeline: Arc::new(TemperatureTimeline::new()),
             power_on_time,
         }
     }
@@ -94,6 +98,10 @@ impl SignalStream {
             return false;
         }
         h.push((time, celsius));
+        if self.keep_history.iter().any(|s| s == sensor) {
+            // the stamp was checked to increase just above, so the timeline accepts it
+            self.timeline.push(sensor, time, celsius).expect("increasing, finite sample");
+        }
         true
     }
 
@@ -117,10 +125,10 @@ impl SignalStream {
         for (name, h) in &self.temperatures {
             let t = interpolate(h, time).ok_or_else(|| SignalGap::NoTemperature(name.clone()))?;
             s.temperatures.insert(name.clone(), t);
-            if self.keep_history.contains(name) {
-                let end = h.partition_point(|r| r.0 <= time);
-                s.temperature_histories.insert(name.clone(), TemperatureHistory { samples: h[..end].to_vec() });
-            }
+        }
+        if !self.keep_history.is_empty() {
+            s.timeline = Some(self.timeline.clone());
+            s.time = Some(time);
         }
         s.time_since_power_on = self.power_on_time.map(|t0| time - t0);
         Ok((q, velocity, approach, s))
@@ -144,16 +152,14 @@ impl SignalStream {
     }
 
     /// Forget what no instant at or after `time` needs: joint samples before the one bracketing
-    /// it, and readings of non-history sensors before theirs.
+    /// it, and readings before theirs (a lagged sensor's whole history stays in the timeline).
     pub fn forget_before(&mut self, time: f64) {
         while self.joints.len() > 1 && self.joints[1].time <= time {
             self.joints.pop_front();
         }
-        for (name, h) in &mut self.temperatures {
-            if !self.keep_history.contains(name) {
-                let keep_from = h.partition_point(|r| r.0 <= time).saturating_sub(1);
-                h.drain(..keep_from);
-            }
+        for h in self.temperatures.values_mut() {
+            let keep_from = h.partition_point(|r| r.0 <= time).saturating_sub(1);
+            h.drain(..keep_from);
         }
     }
 }
@@ -205,8 +211,10 @@ mod tests {
         assert_eq!(approach, vec![1.0, 1.0, 1.0]);
         // column: 21 °C at 1000.5, 20 °C at 999.5 → 20.75 at 1000.25
         assert!((sig.temperatures["column"] - 20.75).abs() < 1e-12);
-        assert_eq!(sig.temperature_histories["column"].samples, vec![(999.5, 20.0)]);
-        assert!(!sig.temperature_histories.contains_key("x_left"));
+        let timeline = sig.timeline.as_ref().expect("a lagged sensor gives the timeline");
+        assert_eq!(sig.time, Some(1000.25));
+        assert_eq!(timeline.history("column", sig.time).unwrap().samples, vec![(999.5, 20.0)]);
+        assert!(!timeline.contains("x_left"), "only lagged sensors go to the timeline");
         assert_eq!(sig.time_since_power_on, Some(900.25));
     }
 
@@ -234,6 +242,7 @@ mod tests {
         assert_eq!((q, v, a, sig.temperatures), (q2, v2, a2, sig2.temperatures), "forgetting keeps what later instants need");
         assert_eq!(s.joints.len(), 2);
         assert_eq!(s.temperatures["x_left"].len(), 2);
-        assert_eq!(s.temperatures["column"].len(), 5, "a lagged sensor keeps its history");
+        assert_eq!(s.temperatures["column"].len(), 2);
+        assert_eq!(s.timeline.sample_count("column"), Some(5), "a lagged sensor keeps its history");
     }
 }

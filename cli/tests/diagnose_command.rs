@@ -127,7 +127,7 @@ fn bad_input_is_named() {
     let (code, _, err) = metrocell(&["diagnose", "--model", "model.yaml", "no_such_bag", "--json", "-"], &d);
     assert_eq!(code, 1);
     assert!(err.contains("no_such_bag"), "{err}");
-    std::fs::write(d.join("broken.yaml"), "machine: {family: cartesian}\n").unwrap();
+    std::fs::write(d.join("broken.yaml"), "name: broken\nmachine: {family: cartesian}\n").unwrap();
     let (code, _, err) = metrocell(&["diagnose", "--model", "broken.yaml", "no_such_bag"], &d);
     assert_eq!(code, 1);
     assert!(err.contains("broken.yaml") && err.contains("stacking"), "{err}");

@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Baselines beside `metrocell diagnose` on the concealed-effect suite (issue 13).
 
-    .venv/bin/python bags/baselines.py --residuals-dir DIR --seeds 1 2 3 [--cases ...] --out baselines.json
+    .venv/bin/python bags/baselines.py --residuals-dir DIR --seeds 1 2 3 [--cases ...] --out baselines.json \
+        [--compare "metrocell diagnose=RESULTS.json" "all at once=RESULTS2.json"]
 
 DIR holds the per-record residual CSVs `metrocell diagnose --residuals` wrote for each case and
 seed (`bags/score.py --residuals-dir DIR` writes them as DIR/case_NN_seed_S.csv): per record the
@@ -242,6 +243,8 @@ def main(argv=None):
     ap.add_argument("--seeds", type=int, nargs="+", default=[1])
     ap.add_argument("--cases", nargs="*")
     ap.add_argument("--out", required=True)
+    ap.add_argument("--compare", nargs="*", default=[], metavar="NAME=RESULTS.json",
+                    help="score.py results to put in the side-by-side table (e.g. 'metrocell diagnose=/tmp/m.json')")
     a = ap.parse_args(argv)
     answers = score.load_answers()
     cases = a.cases or sorted(answers)
@@ -259,12 +262,29 @@ def main(argv=None):
     summary = {name: score.aggregate([x["verdict"] for x in runs]) for name, runs in out.items()}
     with open(a.out, "w") as f:
         json.dump({"summary": summary, "runs": out}, f, indent=1)
-    for name, sm in summary.items():
-        rn, rt, _ = sm["right_names"]
-        fc, runs, _ = sm["false_claims"]
-        print(f"{name}: right physics named {rn}/{rt}, false claims {fc} in {runs} runs, "
-              f"first-named right in single-effect runs {sm['single_first'][0]}/{sm['single_first'][1]}")
+    rows = {}
+    for spec in a.compare:
+        name, path = spec.split("=", 1)
+        with open(path) as f:
+            rows[name] = json.load(f)["summary"]
+    rows.update({"PySINDy (STLSQ, same signals)": summary["pysindy"], "fit everything, library OLS at 3σ": summary["library_ols"]})
+    print(side_by_side(rows))
     return 0
+
+
+def side_by_side(rows):
+    """Markdown table of methods: naming rates and false claims (score.aggregate summaries)."""
+    def frac(t):
+        n, total = t[0], t[1]
+        return f"{n}/{total} ({100 * n / total:.0f} %)" if total else "—"
+
+    lines = ["| method | right term first (single) | both found (two) | right physics named (all concealed terms) | null runs clean | out-of-catalog runs clean | false claims (terms not concealed) | runs with a false claim |",
+             "|---|---|---|---|---|---|---|---|"]
+    for name, sm in rows.items():
+        fc, runs = sm["false_claims"][0], sm["false_claims"][1]
+        lines.append(f"| {name} | {frac(sm['single_first'])} | {frac(sm['two_both'])} | {frac(sm['right_names'])} | {frac(sm['null_clean'])} | "
+                     f"{frac(sm['out_of_catalog_clean'])} | {fc} in {runs} runs | {frac(sm['runs_with_false_claims'])} |")
+    return "\n".join(lines)
 
 
 if __name__ == "__main__":

@@ -3,8 +3,10 @@
 //! Thin by design: every subcommand parses its arguments and calls a library crate.
 
 mod bag;
+mod calibrate;
 mod compensate;
 mod demo;
+mod diagnose_command;
 mod launch_command;
 mod topic;
 mod vision;
@@ -35,6 +37,8 @@ enum Command {
     /// Camera tools: calibrate from checkerboard images → ROS camera_info YAML
     #[command(subcommand)]
     Camera(vision::camera_command::CameraCommand),
+    /// Fit a model file's declared error terms to recordings; write the fitted model with uncertainties
+    Calibrate(calibrate::CalibrateArgs),
     /// Turn a fitted model into what the machine runs: compensated G-code, controller tables
     #[command(subcommand)]
     Compensate(compensate::CompensateCommand),
@@ -42,6 +46,8 @@ enum Command {
     Detect(vision::detect::DetectArgs),
     /// Run the main job on the built-in simulated cell: twin, thermal compensation, recorder
     Demo(demo::DemoArgs),
+    /// Find where a recording and a model disagree, name the missing physics, add it, show the held-out fit improve
+    Diagnose(diagnose_command::DiagnoseArgs),
     /// Start the nodes of a ROS 2 YAML launch file, each as its own process
     Launch(launch_command::LaunchArgs),
     /// Simulate a cell into a bag, faster than real time (the digital twin)
@@ -56,8 +62,10 @@ fn main() {
     let code = match cli.command {
         Command::Bag(command) => bag::run(command),
         Command::Camera(command) => vision::camera_command::run(command),
+        Command::Calibrate(args) => calibrate::run(args),
         Command::Compensate(command) => compensate::run(command),
         Command::Demo(args) => demo::run(args),
+        Command::Diagnose(args) => diagnose_command::run(args),
         Command::Detect(args) => vision::detect::run(args),
         Command::Launch(args) => launch_command::run(args),
         Command::Sim(args) => metrocell_simulation::run_sim_command(args),

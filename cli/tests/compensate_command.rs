@@ -2,19 +2,12 @@
 //! is but for the header comment, a fitted thermal model needs its temperatures and then moves
 //! X by α·x·ΔT, malformed lines are reported with their line numbers, tables are written.
 
-use std::path::{Path, PathBuf};
-use std::process::Command;
+mod common;
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("metrocell_compensate_{name}_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use common::metrocell;
 
-fn metrocell(args: &[&str], cwd: &Path) -> (i32, String, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_metrocell")).args(args).current_dir(cwd).output().unwrap();
-    (o.status.code().unwrap_or(-1), String::from_utf8_lossy(&o.stdout).into(), String::from_utf8_lossy(&o.stderr).into())
+fn dir(name: &str) -> std::path::PathBuf {
+    common::scratch("compensate", name)
 }
 
 const MODEL: &str = "name: fitted\nmachine:\n  family: cartesian\n  stacking: XFYZ\n  travel: {x: [0 mm, 400 mm], y: [0 mm, 300 mm], z: [0 mm, 200 mm]}\nterms:\n  - {id: positioning, options: {axis: x, order: 1, travel: [0 mm, 400 mm]}, params: {c0: 0 um, c1: CCC}}\n  - {id: thermal_scale, options: {axis: x, sensors: [{name: x_left, position: 0 m}, {name: x_right, position: 0.4 m}]}, params: {alpha: 10.2e-6 1/K}}\n";

@@ -7,8 +7,10 @@
 //! `nodes/thermal/src/replay.rs`, `tests/py/opencv_render.py`). It must name an existing path relative to the
 //! document's directory, to one of that directory's ancestors (a crate's README citing
 //! `src/lib.rs`, a test citing `tests/isolated`), or to the repository root. Words with
-//! placeholders (`<node>`, `*`, `{`) and paths under `target/` (build outputs) are not
-//! citations; absolute paths are machine-specific and always an error (a reader's checkout is
+//! placeholders (`<node>`, `*`, `{`, a part of one to three capitals such as `DIR/model.yaml` or
+//! `case_NN`) and paths under `target/` (build outputs) are not citations, nor absolute paths
+//! outside a checkout (`/tmp/out.json` in an example); a path into a checkout (`/work/…`,
+//! `/home/…`, `/root/…`) is machine-specific and always an error (a reader's checkout is
 //! somewhere else).
 //!
 //! Run: `cargo test -p metrocell-system-tests --test doc_paths`
@@ -61,7 +63,11 @@ fn citations(line: &str) -> Vec<String> {
         if matches!(before, '<' | '>' | '*' | '{' | '}' | '$' | '@') || matches!(after, '<' | '>' | '*' | '{' | '}' | ':') {
             continue;
         }
-        if !word.contains('/') || word.starts_with("target/") || word.contains("//") {
+        if !word.contains('/') || word.starts_with("target/") || word.contains("//") || is_placeholder(&word) {
+            continue;
+        }
+        // absolute paths: outputs in examples (/tmp/x.json) are not citations; a checkout's path is
+        if word.starts_with('/') && !["/work/", "/home/", "/root/"].iter().any(|p| word.starts_with(p)) {
             continue;
         }
         let ext = word.rsplit_once('.').map(|(stem, ext)| (stem, ext));
@@ -72,6 +78,12 @@ fn citations(line: &str) -> Vec<String> {
         }
     }
     out
+}
+
+/// A path written with a placeholder in it: a part of one to three capitals (`DIR/model.yaml`,
+/// `cases/case_NN/truth.yaml`, `OUT/a.b.csv`), which the reader replaces.
+fn is_placeholder(word: &str) -> bool {
+    word.split(['/', '_', '.', '-']).any(|t| (1..=3).contains(&t.len()) && t.chars().all(|c| c.is_ascii_uppercase()))
 }
 
 /// The lines of `doc` that are documentation: all of a Markdown file, the `//!` and `///`
@@ -131,6 +143,7 @@ fn every_path_a_document_cites_exists() {
 fn the_scanner_finds_citations_and_skips_what_is_not_one() {
     assert_eq!(citations("see `crates/bag/README.md`, and src/replay.rs."), vec!["crates/bag/README.md", "src/replay.rs"]);
     assert_eq!(citations("run /work/main/tests/isolated.sh now"), vec!["/work/main/tests/isolated.sh"]);
+    assert!(citations("-o /tmp/suite_results.json, then DIR/index.html and bags/cases/case_NN/truth.yaml").is_empty());
     // topics, types, placeholders, URLs, globs, build outputs: not citations
     assert!(citations("`tracker/measurements` (`metrocell_msgs/TrackerMeasurement`)").is_empty());
     assert!(citations("nodes/<node>/src/main.rs https://example.org/a/b.html views/*.png target/release/x.json").is_empty());

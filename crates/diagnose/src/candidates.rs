@@ -37,6 +37,9 @@ pub struct TermVariant {
     pub linear: Vec<bool>,
     /// Parameters fixed by the variant (lead, τ), counted by the information criterion.
     pub profiled: usize,
+    /// Effectively different values compared to find the variant's fixed value (see
+    /// [`crate::selection::Variant::search_multiplicity`]); 1 for a value from a fixed list.
+    pub search_multiplicity: f64,
 }
 
 /// A candidate term instance and its variants.
@@ -93,7 +96,7 @@ fn linear_variant(name: impl Into<String>, id: TermId, options: Vec<(&str, Confi
     let names = param_names(&c)?;
     c.params = names.iter().map(|n| (n.clone(), num(0.0))).collect();
     let linear = vec![true; names.len()];
-    Some(TermVariant { name: name.into(), config: c, linear, profiled: 0 })
+    Some(TermVariant { name: name.into(), config: c, linear, profiled: 0, search_multiplicity: 1.0 })
 }
 
 /// A variant with some parameters fixed at given values (the rest linear, at zero).
@@ -157,9 +160,9 @@ fn lever_axes(machine: &MachineGeometry, axis: usize) -> Vec<usize> {
 
 /// Every candidate family for the declared model and the signals the records hold, and the
 /// catalog terms not tried with the reason. `periodogram_leads[k]` adds a lead found in the
-/// residuals of axis k; `points_in_machine_frame`: the records' points are in the machine
+/// residuals of axis k, with the number of independent periods the periodogram compared; `points_in_machine_frame`: the records' points are in the machine
 /// (part) frame rather than an instrument's.
-pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, periodogram_leads: &[Option<f64>; 3], points_in_machine_frame: bool) -> (Vec<TermFamily>, Vec<NotTried>) {
+pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, periodogram_leads: &[Option<(f64, f64)>; 3], points_in_machine_frame: bool) -> (Vec<TermFamily>, Vec<NotTried>) {
     let labels = declared.labels();
     let machine = declared.machine;
     let mut out: Vec<TermFamily> = Vec::new();
@@ -222,13 +225,17 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
             // cyclic screw error: the common leads shorter than a third of the travel, and the
             // residuals' own periodogram peak
             let span = machine.travel[k][1] - machine.travel[k][0];
-            let mut leads: Vec<f64> = COMMON_LEADS_MM.iter().map(|l| l * 1e-3).filter(|l| *l < span / 3.0).collect();
-            if let Some(l) = periodogram_leads[k] {
-                if !leads.iter().any(|x| (x - l).abs() < 1e-3 * l) {
-                    leads.push(l);
-                }
-            }
-            let variants = leads.iter().map(|&l| profiled_variant(format!("lead {} mm", lead_mm(l)), TermId::PitchCyclic, vec![("axis", text(AXES[k])), ("lead", num(l)), ("harmonics", num(1.0))], &[])).map(|v| v.map(|mut v| { v.profiled = 1; v })).collect();
+            let leads: Vec<(f64, f64)> = COMMON_LEADS_MM.iter().map(|l| (l * 1e-3, 1.0)).filter(|(l, _)| *l < span / 3.0).chain(periodogram_leads[k].filter(|(l, _)| !COMMON_LEADS_MM.iter().any(|x| (x * 1e-3 - l).abs() < 1e-3 * l))).collect();
+            let variants = leads
+                .iter()
+                .map(|&(l, searched)| {
+                    profiled_variant(format!("lead {} mm", lead_mm(l)), TermId::PitchCyclic, vec![("axis", text(AXES[k])), ("lead", num(l)), ("harmonics", num(1.0))], &[]).map(|mut v| {
+                        v.profiled = 1;
+                        v.search_multiplicity = searched;
+                        v
+                    })
+                })
+                .collect();
             out.extend(family(variants, TermId::PitchCyclic, Placement::Machine));
             if inventory.approach_both[k] {
                 out.extend(family(vec![linear_variant("", TermId::Backlash, vec![("axis", text(AXES[k]))])], TermId::Backlash, Placement::Machine));
@@ -362,3 +369,4 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
 fn sensor(name: &str, position: f64) -> ConfigValue {
     ConfigValue::Map([("name".to_string(), text(name)), ("position".to_string(), num(position))].into_iter().collect())
 }
+

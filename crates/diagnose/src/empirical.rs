@@ -27,6 +27,9 @@ pub struct EmpiricalBasis {
     /// a spline's constant is the instrument's position — and left out); None: all.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub kept: Option<Vec<usize>>,
+    /// How many centres the bump's was chosen among (1 for a spline).
+    #[serde(skip)]
+    pub centres_tried: usize,
 }
 
 /// The cardinal cubic B-spline on [0, 4].
@@ -67,6 +70,15 @@ impl EmpiricalBasis {
         match self.shape {
             EmpiricalShape::TimeSpline { .. } => 0,
             EmpiricalShape::WorkspaceBump { .. } => 4,
+        }
+    }
+
+    /// Effectively different shapes compared to choose this one: the centres a bump was tried
+    /// at (see [`crate::selection::Variant::search_multiplicity`]); 1 for a spline.
+    pub fn search_multiplicity(&self) -> f64 {
+        match self.shape {
+            EmpiricalShape::TimeSpline { .. } => 1.0,
+            EmpiricalShape::WorkspaceBump { .. } => self.centres_tried as f64,
         }
     }
 
@@ -124,7 +136,7 @@ pub fn time_variants(times: &[f64], axis: usize) -> Vec<EmpiricalBasis> {
     [4usize, 6, 10, 16, 24, 32]
         .into_iter()
         .filter(|k| times.len() >= 8 * k)
-        .map(|knots| EmpiricalBasis { axis, shape: EmpiricalShape::TimeSpline { start: t0, end: t1, knots }, kept: None })
+        .map(|knots| EmpiricalBasis { axis, shape: EmpiricalShape::TimeSpline { start: t0, end: t1, knots }, kept: None, centres_tried: 1 })
         .collect()
 }
 
@@ -165,7 +177,7 @@ pub fn bump_variants(positions: &[Vector3<f64>], residual: &[f64], weight: &[f64
             }
         }
         if let Some((_, c)) = best {
-            out.push(EmpiricalBasis { axis, shape: EmpiricalShape::WorkspaceBump { centre: [c.x, c.y, c.z], width }, kept: None });
+            out.push(EmpiricalBasis { axis, shape: EmpiricalShape::WorkspaceBump { centre: [c.x, c.y, c.z], width }, kept: None, centres_tried: centres.len() });
         }
     }
     out
@@ -177,7 +189,7 @@ mod tests {
 
     #[test]
     fn splines_partition_unity_and_bumps_peak_at_their_centre() {
-        let b = EmpiricalBasis { axis: 2, shape: EmpiricalShape::TimeSpline { start: 10.0, end: 70.0, knots: 7 }, kept: None };
+        let b = EmpiricalBasis { axis: 2, shape: EmpiricalShape::TimeSpline { start: 10.0, end: 70.0, knots: 7 }, kept: None, centres_tried: 1 };
         for t in [10.0, 23.3, 55.0, 70.0] {
             let v = b.values(t, &Vector3::zeros());
             assert_eq!(v.len(), 7);

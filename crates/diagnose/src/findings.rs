@@ -367,11 +367,14 @@ fn statement(f: &FoundTerm, params: &[(String, f64, Option<f64>, String)], c_wp:
             format!("tracker ranges drift {} µm with τ = {} min after power-on", pm(b, sb, 1e6, 1), pm(tau, st, 1.0 / 60.0, 0))
         }
         TermId::ThermalGrowth => {
+            // the term's direction is +axis with a signed coefficient; said the way it moves
+            // the tool as the structure warms: a positive rate along ±axis
             let (_, g, s, _) = get(params, "coefficient").cloned().unwrap_or_default();
             let sensor = text_option(&f.config, "sensor").unwrap_or_default();
-            let dir = f.variant.split(',').next().unwrap_or("").trim().to_string();
+            let axis = f.variant.split(',').next().unwrap_or("").trim().trim_start_matches("along ").to_string();
+            let dir = if g < 0.0 { format!("along −{axis}") } else { format!("along +{axis}") };
             let lag = get(params, "time_constant").map(|(_, t, st, _)| format!(", lagging it by τ = {} min", pm(*t, *st, 1.0 / 60.0, 0))).unwrap_or_default();
-            format!("the structure grows {dir} with the {sensor} temperature: {} µm/K{lag}", pm(g, s, 1e6, 2))
+            format!("the tool moves {dir} as the structure warms with the {sensor} temperature: {} µm/K{lag}", pm(g.abs(), s, 1e6, 2))
         }
         TermId::Positioning => format!("{} positions are off by up to {} µm over the travel ({}; {})", upper(&axis), um(peak), f.variant, list()),
         TermId::Straightness => format!("the {} motion is not straight along {}: up to {} µm over the travel ({})", upper(&axis), text_option(&f.config, "direction").map(|d| upper(&d)).unwrap_or_default(), um(peak), f.variant),

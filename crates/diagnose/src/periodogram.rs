@@ -2,6 +2,12 @@
 //! cosine explain most of the residual. It finds a screw's cyclic error whatever its lead, so the
 //! candidate leads are not limited to a list (nor to what any simulator uses).
 
+/// The number of independent frequencies between 1/max_period and 1/min_period over a span of
+/// positions: (f_max − f_min)·span (frequencies closer than 1/span cannot be told apart).
+pub fn independent_frequencies(span: f64, min_period: f64, max_period: f64) -> f64 {
+    ((1.0 / min_period - 1.0 / max_period) * span).max(1.0)
+}
+
 /// The period (in the unit of `position`) in [min_period, max_period] whose fitted sinusoid
 /// (with a constant) explains the largest share of `residual`'s weighted sum of squares, and
 /// that share; None with fewer than 12 samples or no variation in position.

@@ -35,7 +35,7 @@ use crate::folds::{time_blocks, workspace_blocks};
 use crate::locate::{locate, LocateOptions};
 use crate::noise_tests::noise_report;
 use crate::outliers::{outliers, robust_scale};
-use crate::periodogram::strongest_period;
+use crate::periodogram::{independent_frequencies, strongest_period};
 use crate::record_preparation::prepare;
 use crate::report::*;
 use crate::residual_view::ResidualView;
@@ -339,7 +339,8 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         let w: Vec<f64> = sel_records.iter().map(|r| 1.0 / (sel_view.rotation * r.covariance * sel_view.rotation.transpose())[(k, k)]).collect();
         let span = declared.machine.travel[k][1] - declared.machine.travel[k][0];
         if span.is_finite() {
-            *lead = strongest_period(&q, &res, &w, 1.5e-3, span / 3.0).map(|p| p.0);
+            let covered = q.iter().cloned().fold(f64::NEG_INFINITY, f64::max) - q.iter().cloned().fold(f64::INFINITY, f64::min);
+            *lead = strongest_period(&q, &res, &w, 1.5e-3, span / 3.0).map(|p| (p.0, independent_frequencies(covered, 1.5e-3, span / 3.0)));
         }
     }
     let decl = Declared { machine: declared.machine, machine_terms: declared.machine_terms, instrument_terms: &instruments };
@@ -374,6 +375,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
                 ranges: kept.iter().map(|&j| (specs[j].min, specs[j].max)).collect(),
                 base_values: kept.iter().map(|&j| cols.term.params[j]).collect(),
                 profiled: v.profiled,
+                search_multiplicity: v.search_multiplicity,
             });
             kept_all.push(kept);
         }
@@ -402,7 +404,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
             continue;
         }
         let spec = &t.term.params()[0];
-        let variant = Variant { name: "freed".into(), columns: cols, parameter_names: vec![spec.name.clone()], units: vec![spec.unit.into()], ranges: vec![(spec.min, spec.max)], base_values: vec![x0[k]], profiled: 0 };
+        let variant = Variant { name: "freed".into(), columns: cols, parameter_names: vec![spec.name.clone()], units: vec![spec.unit.into()], ranges: vec![(spec.min, spec.max)], base_values: vec![x0[k]], profiled: 0, search_multiplicity: 1.0 };
         prepared.push(Prepared { family: Family { label: label.clone(), term: TermId::Refraction.as_str().into(), physical: true, variants: vec![variant], judged_by: None }, source: Source::Freed { id: TermId::Refraction, label, names: vec![name] } });
     }
     if options.empirical {
@@ -425,7 +427,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
                     if kept.len() < cols.ncols() {
                         b.kept = Some(kept);
                     }
-                    variants.push(Variant { name: b.variant_name(), columns, parameter_names: (0..b.len()).map(|j| format!("c{j}")).collect(), units: vec!["m".into(); b.len()], ranges: vec![(-1.0, 1.0); b.len()], base_values: vec![0.0; b.len()], profiled: b.searched() });
+                    variants.push(Variant { name: b.variant_name(), columns, parameter_names: (0..b.len()).map(|j| format!("c{j}")).collect(), units: vec!["m".into(); b.len()], ranges: vec![(-1.0, 1.0); b.len()], base_values: vec![0.0; b.len()], profiled: b.searched(), search_multiplicity: b.search_multiplicity() });
                     bases.push(b);
                 }
                 if bases.is_empty() {
@@ -448,7 +450,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     // 6. augmented model and its refit
     let mut machine_aug = declared.machine_terms.clone();
     let mut instruments_aug = instruments.clone();
-    let mut added: Vec<(usize, TermConfig, Placement, Vec<String>)> = Vec::new();
+    let mut added: Vec<(usize, TermConfig, Placement, Vec<String>, String)> = Vec::new();
     let mut freed: Vec<(usize, TermId, String, Vec<(String, f64)>)> = Vec::new();
     let mut empirical_chosen: Vec<(usize, EmpiricalBasis, Vec<f64>)> = Vec::new();
     for c in &selection.chosen {
@@ -459,6 +461,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
                 for (name, value, _, _) in &c.parameters {
                     config.params.insert(name.clone(), ConfigValue::Number(*value));
                 }
+                let variant_name = v.name.clone();
                 let term = configure(&config)?;
                 let specs = term.term.params();
                 let free_names: Vec<String> = kept[c.variant].iter().map(|&j| specs[j].name.clone()).chain(specs.iter().enumerate().filter(|(j, _)| !v.linear[*j] && v.profiled > 0 && family.id != TermId::Refraction).map(|(_, s)| s.name.clone())).collect();
@@ -466,7 +469,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
                     Placement::Machine => machine_aug.push(term)?,
                     Placement::Instrument => instruments_aug.push(term)?,
                 }
-                added.push((c.candidate, config, family.placement, free_names));
+                added.push((c.candidate, config, family.placement, free_names, variant_name));
             }
             Source::Freed { id, label, names } => freed.push((c.candidate, *id, label.clone(), names.iter().cloned().zip(c.parameters.iter().map(|p| p.1)).collect())),
             Source::Empirical(bases) => {
@@ -475,7 +478,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         }
     }
     let model_aug = ForwardModel::new(declared.machine, &machine_aug, &instruments_aug)?;
-    let added_free: Vec<String> = added.iter().flat_map(|(_, config, _, free)| {
+    let added_free: Vec<String> = added.iter().flat_map(|(_, config, _, free, _)| {
         let label = configure(config).map(|t| t.term.label()).unwrap_or_default();
         free.iter().map(move |p| format!("{label}.{p}"))
     }).collect();
@@ -611,11 +614,10 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     step("findings");
     // 9. findings
     let mut found = Vec::new();
-    for (k, (cand, config, placement, _)) in added.iter().enumerate() {
-        let chosen = selection.chosen.iter().find(|c| c.candidate == *cand).expect("added from the chosen");
+    for (k, (cand, config, placement, _, variant)) in added.iter().enumerate() {
         let label = configure(config)?.term.label();
         let Source::Term { family, .. } = &prepared[*cand].source else { unreachable!("terms only") };
-        found.push(FoundTerm { label, id: family.id, variant: family.variants[chosen.variant].name.clone(), placement: *placement, order: k, config: config.clone() });
+        found.push(FoundTerm { label, id: family.id, variant: variant.clone(), placement: *placement, order: k, config: config.clone() });
     }
     for (_, id, label, _) in &freed {
         let config = TermConfig { id: id.as_str().into(), ..Default::default() };
@@ -645,7 +647,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     })?;
     let added_terms: Vec<AddedTerm> = added
         .iter()
-        .map(|(_, config, placement, _)| {
+        .map(|(_, config, placement, _, _)| {
             let label = configure(config).map(|t| t.term.label()).unwrap_or_default();
             let mut c = config.clone();
             let mut sig = BTreeMap::new();

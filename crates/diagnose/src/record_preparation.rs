@@ -59,6 +59,9 @@ pub fn prepare(records: &[MeasurementRecord], average_repeats: bool, max_gap: f6
         }
     }
     good.sort_by(|a, b| a.time.total_cmp(&b.time));
+    let (good, aside) = crate::signal_coverage::require_common_signals(good.into_iter().cloned().collect());
+    out.rejected.extend(aside);
+    let good: Vec<&MeasurementRecord> = good.iter().collect();
     if !average_repeats {
         out.records = good.into_iter().cloned().collect();
         return out;

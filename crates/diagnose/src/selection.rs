@@ -66,6 +66,12 @@ pub struct Variant {
     pub base_values: Vec<f64>,
     /// Parameters fixed by a search over values (counted in the BIC).
     pub profiled: usize,
+    /// How many effectively different values that search compared (the independent
+    /// frequencies of a periodogram, the centres a bump was placed at; 1 for a value from a
+    /// fixed list, whose members are variants of their own): the F test's p-value is multiplied
+    /// by it and the BIC charged 2·ln of it, so the best of many tries is not mistaken for an
+    /// effect.
+    pub search_multiplicity: f64,
 }
 
 /// A candidate family.
@@ -222,7 +228,7 @@ pub fn select(data: &SelectionData, candidates: &[Candidate], options: &Selectio
             label: c.label.clone(),
             term: c.term.clone(),
             physical: c.physical,
-            variants: vec![Variant { name: String::new(), columns: whiten(&c.columns), parameter_names: c.parameter_names.clone(), units: c.units.clone(), ranges: c.ranges.clone(), base_values: c.base_values.clone(), profiled: 0 }],
+            variants: vec![Variant { name: String::new(), columns: whiten(&c.columns), parameter_names: c.parameter_names.clone(), units: c.units.clone(), ranges: c.ranges.clone(), base_values: c.base_values.clone(), profiled: 0, search_multiplicity: 1.0 }],
             judged_by: None,
         })
         .collect();
@@ -316,9 +322,9 @@ pub fn select_families(data: &WhitenedData, families: &[Family], options: &Selec
                 let values: Vec<f64> = (0..k).map(|j| var.base_values[j] + c.values[j]).collect();
                 let sigmas: Vec<f64> = (0..k).map(|j| (c.unscaled_covariance[(j, j)].max(0.0) * sigma2).sqrt()).collect();
                 let p = if c.separable { f_test(c.explained, k, c.ssr, dof) } else { 1.0 };
-                let p_adjusted = (p * tried as f64).min(1.0);
+                let p_adjusted = (p * tried as f64 * var.search_multiplicity.max(1.0)).min(1.0);
                 let plausible = values.iter().zip(&var.ranges).all(|(v, (lo, hi))| *v >= *lo && *v <= *hi);
-                let bic_with = bic(nf, c.ssr, (c.rank + profiled_of(&chosen) + var.profiled) as f64);
+                let bic_with = bic(nf, c.ssr, (c.rank + profiled_of(&chosen) + var.profiled) as f64) + 2.0 * var.search_multiplicity.max(1.0).ln();
                 let delta_bic = bic_with - current_bic;
                 let (cv_with, cv_without) = (judged(&fam.judged_by, &c.heldout_by_scheme), judged(&fam.judged_by, &current_by_scheme));
                 let heldout_gain = if cv_without > 0.0 { 1.0 - cv_with / cv_without } else { 0.0 };

@@ -54,10 +54,10 @@ impl SignalInventory {
             common.into_iter().collect()
         };
         inv.temperatures = names(&|r| r.signals.temperatures.iter().filter(|(_, v)| v.is_finite()).map(|(n, _)| n.clone()).collect());
-        // a lagged temperature needs the sensor's history up to the record's time
-        inv.histories = names(&|r| match (&r.signals.timeline, r.signals.time) {
-            (Some(tl), Some(t)) => tl.sensors().into_iter().filter(|n| tl.time_span(n).is_some_and(|(first, _)| first <= t)).collect(),
-            _ => BTreeSet::new(),
+        // a history is there when the timeline has a sample of the sensor at or before the instant
+        inv.histories = names(&|r| match &r.signals.timeline {
+            Some(tl) => tl.sensors().into_iter().filter(|n| tl.time_span(n).is_some_and(|(first, _)| r.signals.time.is_none_or(|t| first <= t))).collect(),
+            None => BTreeSet::new(),
         });
         inv.air = all(&|r| r.signals.air_temperature.is_some() && r.signals.air_pressure.is_some() && r.signals.air_humidity.is_some());
         if all(&|r| r.signals.time_since_power_on.is_some_and(f64::is_finite)) {

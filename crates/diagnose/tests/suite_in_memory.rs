@@ -23,6 +23,7 @@ fn suite_cases_in_memory() {
     let seeds: Vec<u64> = std::env::var("SUITE_SEEDS").map(|s| s.split(',').map(|x| x.parse().unwrap()).collect()).unwrap_or(vec![1]);
     let mut ok = 0;
     let mut total = 0;
+    let (mut within, mut checked) = (0, 0);
     for case in &cases {
         let answer = &answers[case];
         let truth = std::fs::read_to_string(root().join("cases").join(case).join("truth.yaml")).unwrap();
@@ -58,6 +59,19 @@ fn suite_cases_in_memory() {
             };
             total += 1;
             ok += usize::from(good);
+            // parameters of every concealed term that was found, against the truth
+            for c in answer["concealed"].as_array().into_iter().flatten() {
+                let Some(f) = d.report.findings.iter().find(|f| f.label == c["label"].as_str().unwrap()) else { continue };
+                for (name, truth) in c["checked_parameters"].as_object().unwrap() {
+                    let truth = truth.as_f64().unwrap();
+                    checked += 1;
+                    match f.parameters.get(name) {
+                        Some(v) if v.sigma.is_some_and(|s| (v.value - truth).abs() <= 3.0 * s) => within += 1,
+                        Some(v) => eprintln!("     {case} {}.{name} = {:e} ± {:?}, truth {truth:e} (z = {:.1})", f.label, v.value, v.sigma, (v.value - truth) / v.sigma.unwrap_or(f64::NAN)),
+                        None => eprintln!("     {case} {}.{name} not fitted (parameters: {:?})", f.label, f.parameters.keys().collect::<Vec<_>>()),
+                    }
+                }
+            }
             eprintln!(
                 "{} {case} seed {seed} ({kind}, {} records, {:.1} s): named {named:?} concealed {concealed:?}; unexplained {}; held-out {:.2} → {:.2} µm (floor {:.2})",
                 if good { "ok  " } else { "MISS" },
@@ -73,5 +87,5 @@ fn suite_cases_in_memory() {
             }
         }
     }
-    eprintln!("{ok} of {total} right");
+    eprintln!("{ok} of {total} right; parameters within 3σ: {within} of {checked}");
 }

@@ -28,7 +28,7 @@ use metrocell_solver::{solve, Identifiability, Loss, NullSpace, Options, Prior, 
 use metrocell_laser_tracker::registration::{register, Correspondence};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
-use crate::records::{RecordFrame, RecordSet};
+use crate::records::{RecordFrame, RecordKind, RecordSet};
 use crate::residuals::PointResiduals;
 
 /// Settings of a batch fit.
@@ -150,6 +150,8 @@ pub struct Fit {
     pub declared_identifiability: Identifiability,
     /// Records used (after skipping).
     pub used: Vec<usize>,
+    /// The robust loss's threshold (σ), None for plain least squares.
+    pub options_threshold: Option<f64>,
     pub solution: Solution,
 }
 
@@ -178,10 +180,11 @@ pub fn start_vector(model: &ForwardModel, setup: &ParameterSetup, records: &Reco
         RecordFrame::Instrument(_) if setup.free[pose..pose + 6].iter().any(|f| *f) => {
             let kin = model.kinematic_truth(&x)?;
             let mut pairs = Vec::with_capacity(records.len());
-            for r in &records.records {
+            // the tracker's points (probe hits and camera points are in frames of their own)
+            for r in records.records.iter().filter(|r| r.kind == RecordKind::Point) {
                 let mut s = r.signals.clone();
                 let tool = model.tool_state(&x, &kin, &r.q, &mut s, None)?;
-                pairs.push(Correspondence { tracker: r.measured, tracker_covariance: r.covariance, machine: tool.truth.translation.vector, machine_covariance: Matrix3::identity() * 1e-12 });
+                pairs.push(Correspondence { tracker: r.measured, tracker_covariance: r.covariance, machine: tool.target(), machine_covariance: Matrix3::identity() * 1e-12 });
             }
             let reg = register(&pairs).map_err(|e| FitError::Registration(e.to_string()))?;
             let p = metrocell_model::InstrumentPose::from_rotation(reg.translation, reg.rotation.matrix());
@@ -358,6 +361,7 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
         held,
         declared_identifiability,
         used,
+        options_threshold: threshold,
         solution,
     })
 }

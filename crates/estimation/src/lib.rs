@@ -2,20 +2,30 @@
 //!
 //! Pure functions, no DDS; used by `metrocell calibrate`, the estimator node and `diagnose`.
 //!
-//! * [`records`] — measurement records (a measured point, its covariance, its commanded joints
-//!   and the signals at its time) and the frame they are in.
+//! * [`records`] — measurement records (what was measured — a tracker or machine-frame point, a
+//!   probe hit, a camera point — with its covariance, its commanded joints and the signals at its
+//!   time) and the frame they are in.
 //! * [`recordings`] — [`records_from_bags`]: bags (the nodes', `metrocell sim`'s, `bag import`'s)
 //!   → a [`RecordSet`] for the shared model, signals by the model's `SignalsBuilder`; missing
 //!   signals named with the topics and columns that would provide them.
+//! * [`instrument_readings`] — probe hits and camera marker poses in a recording → what their
+//!   records measure and what the model needs to predict them.
 //! * [`signal_topics`] — the recorded topics that carry signals and how each message feeds the
 //!   signals builder (shared with the online estimator).
 //! * [`residuals`] — measured − predicted on the shared forward model (crates/model), whitened
 //!   by each record's covariance, with the model's analytic Jacobian: a solver problem.
 //! * [`fit`] — batch identification of the declared free parameters: registration of the
 //!   instrument frame, bounded robust Levenberg–Marquardt, scaled covariance, identifiability.
+//! * [`fit_summary`] — a fit in words: values ± σ in µm/µrad, what is not identifiable and
+//!   why, residuals before/after, consistency with the stated noise, outliers and skipped records.
+//! * [`error_functions`] — the fitted error along each axis with its uncertainty band
+//!   (u_e = √diag(J·C·Jᵀ)).
 //! * [`recursive`] — online estimation: an extended Kalman filter with random-walk drift,
 //!   outlier gating and a moving normalised-innovation χ² test that flags when the model stops
 //!   explaining the data.
+//! * [`volumetric_monte_carlo`] — N simulated verifications (noise, tracker placement) fitted
+//!   like a real one: the volumetric error map with its uncertainty and the residual error after
+//!   compensation (seed 001, P3).
 //! * [`uncertainty_budget`] — GUM combination of standard uncertainties and the ISO/TS 15530-3
 //!   expanded uncertainty U = k·√(u_cal² + u_p² + u_b² + u_w²) (seed 001, eq. 3.4), with each
 //!   component's share.
@@ -27,17 +37,21 @@
 //! Units: SI (m) in and out; reports convert to mm and µm.
 
 pub mod design_of_experiments;
+pub mod error_functions;
 pub mod fit;
+pub mod fit_summary;
 pub mod improvement;
+pub mod instrument_readings;
 pub mod records;
 pub mod recordings;
 pub mod recursive;
 pub mod residuals;
 pub mod signal_topics;
 pub mod uncertainty_budget;
+pub mod volumetric_monte_carlo;
 
 pub use fit::{fit, inseparable, rms, start_vector, Fit, FitError, FitOptions, HeldParameter, ParameterEstimate, RecordNote};
-pub use records::{MeasurementRecord, RecordFrame, RecordSet, Rejected};
+pub use records::{MeasurementRecord, RecordFrame, RecordKind, RecordSet, Rejected};
 pub use recordings::{records_from_bags, PointSource, RecordingError, RecordingOptions};
 pub use residuals::PointResiduals;
 pub use recursive::{RecursiveEstimator, RecursiveOptions, Update};

@@ -36,6 +36,11 @@
 //! proceeds. Signal samples the builder refuses (a time going backwards, a NaN) are reported
 //! there too, one entry per topic, with an empty `point_id`.
 //!
+//! Probe hits (`/probe/hits`) and camera marker poses (`/fiducials`) become records too when the
+//! options ask for them ([`RecordingOptions::probe_hits`], [`RecordingOptions::camera_points`]):
+//! [`crate::instrument_readings`] says what they measure and how their nominal is found. They are
+//! in the frame of their reading (workpiece, camera), so they take no part in the set's frame.
+//!
 //! Several bags are concatenated; each is its own recording (its own signals and temperature
 //! timeline: a lag restarts at each bag's first sample), so bags of different runs may overlap
 //! in time.
@@ -45,17 +50,20 @@ use std::path::{Path, PathBuf};
 
 use metrocell_bagtools::{BagSource, SourcedMessage};
 use metrocell_model::{ForwardModel, MachineGeometry, MachineKinematics, SignalsBuilder, SignalsBuilderOptions};
-use metrocell_msgs::msg::{MeasuredPoint, TrackerMeasurement};
+use metrocell_msgs::msg::{FiducialDetectionArray, MeasuredPoint, ProbeHit, TrackerMeasurement};
 use metrocell_msgs::RosMessage;
 use metrocell_physics::{Axis, EffectKind, SignalKind, Signals};
 use nalgebra::{Matrix3, Vector3};
 
-use crate::records::{MeasurementRecord, RecordFrame, RecordSet, Rejected};
+use crate::instrument_readings::{marker_measurements, probe_measurement, record_kind, CameraFeatures, InstrumentMeasurement, InstrumentReading};
+use crate::records::{MeasurementRecord, RecordFrame, RecordKind, RecordSet, Rejected};
 use crate::residuals::whitening;
 use crate::signal_topics::{feed, message_time, SignalTopic, AIR_SENSOR, COMMANDED_JOINTS_TOPIC, LOAD_TOPIC, POWER_ON_TOPIC};
 
 pub const MEASURED_POINTS_TOPIC: &str = "/measured_points";
 pub const TRACKER_TOPIC: &str = "/tracker/measurements";
+pub const PROBE_TOPIC: &str = "/probe/hits";
+pub const CAMERA_TOPIC: &str = "/fiducials";
 
 /// Which messages become records.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -76,11 +84,29 @@ pub struct RecordingOptions {
     pub tracker_topic: String,
     /// How signals are interpolated (its `joint_window` is set here, for bounded memory).
     pub signals: SignalsBuilderOptions,
+    /// Also make records of the probe hits on `probe_topic` (`metrocell_msgs/ProbeHit`).
+    pub probe_hits: bool,
+    pub probe_topic: String,
+    /// Also make records of the marker poses on `camera_topic`
+    /// (`metrocell_msgs/FiducialDetectionArray`), the markers' nominals from `camera_features`.
+    pub camera_points: bool,
+    pub camera_topic: String,
+    pub camera_features: CameraFeatures,
 }
 
 impl Default for RecordingOptions {
     fn default() -> Self {
-        Self { points: PointSource::Auto, measured_points_topic: MEASURED_POINTS_TOPIC.into(), tracker_topic: TRACKER_TOPIC.into(), signals: SignalsBuilderOptions::default() }
+        Self {
+            points: PointSource::Auto,
+            measured_points_topic: MEASURED_POINTS_TOPIC.into(),
+            tracker_topic: TRACKER_TOPIC.into(),
+            signals: SignalsBuilderOptions::default(),
+            probe_hits: false,
+            probe_topic: PROBE_TOPIC.into(),
+            camera_points: false,
+            camera_topic: CAMERA_TOPIC.into(),
+            camera_features: CameraFeatures::default(),
+        }
     }
 }
 
@@ -112,6 +138,7 @@ pub fn records_from_bags<P: AsRef<Path>>(bags: &[P], model: &ForwardModel, optio
             frames.entry(frame_name(&frame)).or_insert((frame, 0)).1 += records.len();
             set.records.extend(records);
         }
+        set.records.extend(part.instrument_records);
         set.rejected.extend(part.rejected);
         for s in part.sources {
             if !set.sources.contains(&s) {
@@ -262,7 +289,7 @@ pub fn providers(kind: &SignalKind) -> String {
         SignalKind::AirHumidity => "record /air/humidity or /weather/humidity (sensor_msgs/RelativeHumidity), or use /tracker/measurements (bag import: column humidity)".into(),
         SignalKind::TimeSincePowerOn => format!("record {POWER_ON_TOPIC} (sensor_msgs/TimeReference, time_ref = when the instrument was switched on; bag import: column instrument_on_time)"),
         SignalKind::LoadForce => format!("record {LOAD_TOPIC} (geometry_msgs/WrenchStamped, force in N, machine frame)"),
-        SignalKind::RotaryPosition(a) => format!("record the rotary axis {} in the commanded joint states (rad)", a.name()),
+        SignalKind::RotaryPosition(a) => format!("record {COMMANDED_JOINTS_TOPIC} with joint `{}` (bag import: column joint.{})", a.name(), a.name()),
         SignalKind::TrackerRange | SignalKind::ImagePoint | SignalKind::MachinePoint | SignalKind::WorkpiecePoint | SignalKind::TargetPoint | SignalKind::CameraPoint | SignalKind::ProbeDirection => "it is computed by the model".into(),
     }
 }
@@ -276,7 +303,7 @@ fn declared_signals(model: &ForwardModel) -> Vec<(String, SignalKind)> {
             continue;
         }
         for s in t.term.signals() {
-            if !matches!(s, SignalKind::TrackerRange | SignalKind::ImagePoint | SignalKind::MachinePoint | SignalKind::WorkpiecePoint | SignalKind::TargetPoint | SignalKind::CameraPoint | SignalKind::ProbeDirection) {
+            if !s.is_computed_by_model() {
                 out.push((t.term.label(), s));
             }
         }
@@ -301,7 +328,7 @@ fn present(s: &Signals, kind: &SignalKind) -> bool {
         SignalKind::TimeSincePowerOn => s.time_since_power_on.is_some(),
         SignalKind::LoadForce => s.load_force.is_some(),
         SignalKind::RotaryPosition(a) => s.rotary_position[a.index()].is_some(),
-        SignalKind::TrackerRange | SignalKind::ImagePoint | SignalKind::MachinePoint | SignalKind::WorkpiecePoint | SignalKind::TargetPoint | SignalKind::CameraPoint | SignalKind::ProbeDirection => true,
+        k => k.is_computed_by_model(),
     }
 }
 
@@ -326,10 +353,14 @@ struct Pending {
     air: Option<(f64, f64, f64)>,
     /// The commanded joints from the nominal ([`JointSource::Nominal`]).
     q: Option<Vec<f64>>,
+    /// A probe hit's or a marker pose's reading (None: a point record).
+    reading: Option<InstrumentReading>,
 }
 
 struct BagRecords {
     by_frame: Vec<(RecordFrame, Vec<MeasurementRecord>)>,
+    /// Probe hits and camera points (in the frames of their readings).
+    instrument_records: Vec<MeasurementRecord>,
     rejected: Vec<Rejected>,
     sources: Vec<(String, String)>,
 }
@@ -380,16 +411,27 @@ fn bag_records(path: &Path, model: &ForwardModel, needs: &[(String, SignalKind)]
     };
     let (points_topic, points_type) = if points_tracker { (&options.tracker_topic, TrackerMeasurement::ROS_TYPE) } else { (&options.measured_points_topic, MeasuredPoint::ROS_TYPE) };
     let found = if points_tracker { bag.source.subscribe::<TrackerMeasurement>(points_topic) } else { bag.source.subscribe::<MeasuredPoint>(points_topic) }.map_err(|e| bag_error(path, e))?;
-    if !found {
+    let probes = options.probe_hits && bag.source.subscribe::<ProbeHit>(&options.probe_topic).map_err(|e| bag_error(path, e))?;
+    let cameras = options.camera_points && bag.source.subscribe::<FiducialDetectionArray>(&options.camera_topic).map_err(|e| bag_error(path, e))?;
+    if !(found || probes || cameras) {
         let held = bag.topics.iter().map(|(n, t)| format!("{n} ({t})")).collect::<Vec<_>>().join(", ");
         return Err(RecordingError::NoPoints { path: path.to_path_buf(), measured: options.measured_points_topic.clone(), tracker: options.tracker_topic.clone(), held: if held.is_empty() { "no topics".into() } else { held } });
     }
-    let mut sources = vec![("points".to_string(), format!("{points_topic} ({points_type})"))];
+    let mut sources = Vec::new();
+    if found {
+        sources.push(("points".to_string(), format!("{points_topic} ({points_type})")));
+    }
+    if probes {
+        sources.push(("probe hits".to_string(), format!("{} ({})", options.probe_topic, ProbeHit::ROS_TYPE)));
+    }
+    if cameras {
+        sources.push(("camera points".to_string(), format!("{} ({})", options.camera_topic, FiducialDetectionArray::ROS_TYPE)));
+    }
     bag.subscribe_signals();
     let carried = |which: &SignalTopic| bag.carries(which);
     let joints = if carried(&SignalTopic::CommandedJoints) {
         JointSource::Commanded
-    } else if !points_tracker && matches!(model.machine.kinematics, MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_)) {
+    } else if found && !points_tracker && matches!(model.machine.kinematics, MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_)) {
         JointSource::Nominal
     } else {
         let names = model.machine.joint_names();
@@ -443,7 +485,8 @@ fn bag_records(path: &Path, model: &ForwardModel, needs: &[(String, SignalKind)]
     let mut builder = SignalsBuilder::for_machine(model.machine, signal_options);
     bag.declare_streams(&mut builder);
     let mut pending: VecDeque<Pending> = VecDeque::new();
-    let mut out = BagRecords { by_frame: Vec::new(), rejected: Vec::new(), sources };
+    let mut out = BagRecords { by_frame: Vec::new(), instrument_records: Vec::new(), rejected: Vec::new(), sources };
+    let mut instrument_index = 0u64;
     let mut feed = SignalFeed::default();
     let mut point_index = 0u64;
     let joint_names = model.machine.joint_names();
@@ -465,16 +508,29 @@ fn bag_records(path: &Path, model: &ForwardModel, needs: &[(String, SignalKind)]
                 }
                 Err(r) => out.rejected.push(r),
             }
+        } else if (probes && m.topic == options.probe_topic) || (cameras && m.topic == options.camera_topic) {
+            let at = format!("{}: {} message {instrument_index} (log time {:.3} s)", path.display(), m.topic, m.log_time_ns as f64 / 1e9);
+            instrument_index += 1;
+            match instrument_pending(&m, at, m.topic == options.probe_topic) {
+                Ok(ps) => {
+                    // a detection array's markers share its time: keep the queue in time order
+                    for p in ps {
+                        let at = pending.partition_point(|q| q.t_ns <= p.t_ns);
+                        pending.insert(at, p);
+                    }
+                }
+                Err(r) => out.rejected.push(r),
+            }
         } else if let Some(which) = bag.signal_topics.get(&m.topic) {
             feed.take(&mut builder, which, &m, path, model.machine)?;
         }
         while pending.front().is_some_and(|p| builder.ready(p.t_ns)) {
             let p = pending.pop_front().expect("checked");
-            resolve(p, &builder, needs, &mut out);
+            resolve(p, &builder, needs, model, &options.camera_features, &mut out);
         }
     }
     while let Some(p) = pending.pop_front() {
-        resolve(p, &builder, needs, &mut out);
+        resolve(p, &builder, needs, model, &options.camera_features, &mut out);
     }
     out.rejected.extend(feed.into_rejected(path));
     Ok(out)
@@ -509,7 +565,7 @@ fn from_tracker(m: &SourcedMessage, at: String) -> Result<Pending, Rejected> {
     check_point(&at, &point_id, &measured, &covariance)?;
     let frame = if r.header.frame_id.is_empty() { RecordFrame::Instrument("tracker".into()) } else { record_frame(&r.header.frame_id) };
     let air = [r.air_temperature, r.air_pressure, r.air_humidity].iter().all(|v| v.is_finite()).then_some((r.air_temperature, r.air_pressure, 100.0 * r.air_humidity));
-    Ok(Pending { t_ns: message_time(&r.header.stamp, m.log_time_ns), at, point_id, channel: "tracker".into(), frame, measured, covariance, air, q: None })
+    Ok(Pending { t_ns: message_time(&r.header.stamp, m.log_time_ns), at, point_id, channel: "tracker".into(), frame, measured, covariance, air, q: None, reading: None })
 }
 
 fn from_measured_point(m: &SourcedMessage, at: String, joints: JointSource, tool_offset: &Vector3<f64>) -> Result<Pending, Rejected> {
@@ -528,11 +584,31 @@ fn from_measured_point(m: &SourcedMessage, at: String, joints: JointSource, tool
             Some(vec![q.x, q.y, q.z])
         }
     };
-    Ok(Pending { t_ns: message_time(&p.header.stamp, m.log_time_ns), at, point_id: p.point_id, channel: p.source, frame: record_frame(&p.header.frame_id), measured, covariance, air: None, q })
+    Ok(Pending { t_ns: message_time(&p.header.stamp, m.log_time_ns), at, point_id: p.point_id, channel: p.source, frame: record_frame(&p.header.frame_id), measured, covariance, air: None, q, reading: None })
+}
+
+/// The measurements of a probe hit (`probe`) or a detection array, checked like points.
+fn instrument_pending(m: &SourcedMessage, at: String, probe: bool) -> Result<Vec<Pending>, Rejected> {
+    let (stamp, frame_id, measurements): (_, String, Vec<InstrumentMeasurement>) = if probe {
+        let hit: ProbeHit = m.decode().map_err(|e| reject(at.clone(), "", e.to_string()))?;
+        let one = probe_measurement(&hit).map_err(|reason| reject(at.clone(), &hit.probe_id, reason))?;
+        (hit.header.stamp, hit.header.frame_id, vec![one])
+    } else {
+        let array: FiducialDetectionArray = m.decode().map_err(|e| reject(at.clone(), "", e.to_string()))?;
+        let all = marker_measurements(&array);
+        (array.header.stamp, array.header.frame_id, all)
+    };
+    let t_ns = message_time(&stamp, m.log_time_ns);
+    let mut out = Vec::new();
+    for x in measurements {
+        check_point(&at, &x.point_id, &x.measured, &x.covariance)?;
+        out.push(Pending { t_ns, at: at.clone(), point_id: x.point_id, channel: x.channel, frame: record_frame(&frame_id), measured: x.measured, covariance: x.covariance, air: None, q: None, reading: Some(x.reading) });
+    }
+    Ok(out)
 }
 
 /// The record of a measurement whose signals are all read, or why it is rejected.
-fn resolve(p: Pending, builder: &SignalsBuilder, needs: &[(String, SignalKind)], out: &mut BagRecords) {
+fn resolve(p: Pending, builder: &SignalsBuilder, needs: &[(String, SignalKind)], model: &ForwardModel, features: &CameraFeatures, out: &mut BagRecords) {
     let q = match p.q {
         Some(q) => q,
         None => match builder.joints_at(p.t_ns) {
@@ -547,7 +623,10 @@ fn resolve(p: Pending, builder: &SignalsBuilder, needs: &[(String, SignalKind)],
     if let Some((t, pa, h)) = p.air {
         (signals.air_temperature, signals.air_pressure, signals.air_humidity) = (Some(t), Some(pa), Some(h));
     }
-    if let Some((term, kind)) = needs.iter().find(|(_, k)| !present(&signals, k)) {
+    // a probe hit or a camera point reads the machine's terms (and its own instrument's, which
+    // read nothing recorded), not a tracker's
+    let reads = |term: &str| p.reading.is_none() || model.machine_terms.terms.iter().any(|t| t.term.label() == term);
+    if let Some((term, kind)) = needs.iter().find(|(term, k)| reads(term) && !present(&signals, k)) {
         let why = match kind {
             SignalKind::ApproachDirection(_) => "the axis has not moved yet in the recording, and its approach is the sign of its last motion (set the signals option initial_approach when the homing direction is known)",
             SignalKind::TimeSincePowerOn => "the instrument's power-on time is after it",
@@ -556,7 +635,21 @@ fn resolve(p: Pending, builder: &SignalsBuilder, needs: &[(String, SignalKind)],
         out.rejected.push(reject(p.at, &p.point_id, format!("term `{term}` needs {kind}, which the recording does not give at {:.3} s: {why}", p.t_ns as f64 / 1e9)));
         return;
     }
-    let record = MeasurementRecord { time: p.t_ns as f64 / 1e9, point_id: p.point_id, channel: p.channel, q, measured: p.measured, covariance: p.covariance, signals };
+    let kind = match &p.reading {
+        None => RecordKind::Point,
+        Some(reading) => match record_kind(model, features, reading, &q) {
+            Ok(kind) => kind,
+            Err(reason) => {
+                out.rejected.push(reject(p.at, &p.point_id, reason));
+                return;
+            }
+        },
+    };
+    let record = MeasurementRecord { time: p.t_ns as f64 / 1e9, point_id: p.point_id, channel: p.channel, q, measured: p.measured, covariance: p.covariance, signals, kind };
+    if p.reading.is_some() {
+        out.instrument_records.push(record);
+        return;
+    }
     match out.by_frame.iter_mut().find(|(f, _)| *f == p.frame) {
         Some((_, v)) => v.push(record),
         None => out.by_frame.push((p.frame, vec![record])),

@@ -1,24 +1,27 @@
-//! Residuals of measured points against the shared forward model, as a least-squares problem.
+//! Residuals of measurement records against the shared forward model, as a least-squares problem.
 //!
-//! Convention: residual = measured − predicted, in the frame of the records (see
-//! [`crate::records`]), over the full stacked parameter vector of the [`ForwardModel`] (machine
+//! Convention: residual = measured − predicted, in the frame of each record (see
+//! [`crate::records`]: a point in the set's frame, a probe hit's stylus-centre reading in the
+//! workpiece frame, a camera point in the camera frame), over the full stacked parameter vector of the [`ForwardModel`] (machine
 //! terms, then instrument terms; which are free is the solver's `fixed` mask). Each record
 //! contributes three rows whitened by its covariance: with Σ = L·Lᵀ (Cholesky), the rows are
 //! L⁻¹·(measured − predicted), so correlated coordinates (a tracker's point is far more
 //! uncertain across the beam than along it) are weighted correctly and a whitened residual of
 //! an honest measurement has unit variance. The Jacobian is the model's analytic one
-//! ([`ForwardModel::tracker_jacobian`], rows of the reported point), negated and whitened.
+//! ([`ForwardModel::tracker_jacobian`] rows of the reported point,
+//! [`ForwardModel::probe_jacobian`], [`ForwardModel::camera_jacobian`] rows of the camera point),
+//! negated and whitened.
 
 use std::cell::RefCell;
 
-use metrocell_model::{ForwardModel, KinematicTruth, Workspace, TRACKER_ROWS};
+use metrocell_model::{ForwardModel, KinematicTruth, Workspace, CAMERA_ROWS, PROBE_ROWS, TRACKER_ROWS};
 use metrocell_physics::{PhysicsError, Signals};
 use metrocell_solver::{NotEvaluable, Problem};
-use nalgebra::{DMatrix, Matrix3, Vector3};
+use nalgebra::{DMatrix, DMatrixView, Matrix3, Vector3};
 
-use crate::records::MeasurementRecord;
+use crate::records::{MeasurementRecord, RecordKind};
 
-/// Measured points against the model.
+/// Measurement records (points, probe hits, camera points) against the model.
 pub struct PointResiduals<'m, 'a> {
     model: &'m ForwardModel<'a>,
     records: &'m [MeasurementRecord],
@@ -29,8 +32,7 @@ pub struct PointResiduals<'m, 'a> {
 
 struct Scratch {
     signals: Vec<Signals>,
-    work: Workspace,
-    jacobian: DMatrix<f64>,
+    buffers: Buffers,
 }
 
 /// A record that cannot be used: its covariance is not positive definite or not finite.
@@ -56,7 +58,7 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
             .enumerate()
             .map(|(index, r)| whitening(&r.covariance).ok_or_else(|| BadCovariance { index, point_id: r.point_id.clone() }))
             .collect::<Result<Vec<_>, _>>()?;
-        let scratch = Scratch { signals: records.iter().map(|r| r.signals.clone()).collect(), work: Workspace::new(model), jacobian: DMatrix::zeros(TRACKER_ROWS, model.param_count()) };
+        let scratch = Scratch { signals: records.iter().map(|r| r.signals.clone()).collect(), buffers: Buffers::new(model) };
         Ok(Self { model, records, whitening, scratch: RefCell::new(scratch) })
     }
 
@@ -73,14 +75,13 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
         &self.whitening[i]
     }
 
-    /// The predicted point of every record at parameters `p` (the records' frame), m.
+    /// The predicted measurement of every record at parameters `p` (each in its record's frame), m.
     pub fn predictions(&self, p: &[f64]) -> Result<Vec<Vector3<f64>>, PhysicsError> {
         let kin = self.model.kinematic_truth(p)?;
         let mut scratch = self.scratch.borrow_mut();
         let mut out = Vec::with_capacity(self.records.len());
         for (r, s) in self.records.iter().zip(scratch.signals.iter_mut()) {
-            let tool = self.model.tool_state(p, &kin, &r.q, s, None)?;
-            out.push(self.model.tracker(p, &tool, s)?.measured_point());
+            out.push(predict(self.model, p, &kin, r, s)?);
         }
         Ok(out)
     }
@@ -90,17 +91,17 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
         Ok(self.predictions(p)?.iter().zip(self.records).map(|(pred, r)| r.measured - pred).collect())
     }
 
-    /// The Jacobian of the predicted points w.r.t. the stacked parameters (3·records × n,
+    /// The Jacobian of the predictions w.r.t. the stacked parameters (3·records × n,
     /// unwhitened, rows x y z of each record in turn) at `p`.
     pub fn prediction_jacobian(&self, p: &[f64]) -> Result<DMatrix<f64>, PhysicsError> {
         let kin = self.model.kinematic_truth(p)?;
         let n = self.model.param_count();
         let mut out = DMatrix::zeros(3 * self.records.len(), n);
         let mut scratch = self.scratch.borrow_mut();
-        let Scratch { signals, work, jacobian } = &mut *scratch;
+        let Scratch { signals, buffers } = &mut *scratch;
         for (i, (r, s)) in self.records.iter().zip(signals.iter_mut()).enumerate() {
-            self.model.tracker_jacobian(p, &kin, &r.q, s, work, jacobian)?;
-            out.rows_mut(3 * i, 3).copy_from(&jacobian.rows(0, 3));
+            let (_, rows) = buffers.predict_with_jacobian(self.model, p, &kin, r, s)?;
+            out.rows_mut(3 * i, 3).copy_from(&rows);
         }
         Ok(out)
     }
@@ -109,21 +110,17 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
         let fail = |i: usize, e: PhysicsError| NotEvaluable(format!("record {i} ({}): {e}", self.records[i].point_id));
         let kin: KinematicTruth = self.model.kinematic_truth(p).map_err(|e| NotEvaluable(e.to_string()))?;
         let mut scratch = self.scratch.borrow_mut();
-        let Scratch { signals, work, jacobian } = &mut *scratch;
+        let Scratch { signals, buffers } = &mut *scratch;
         for (i, (r, s)) in self.records.iter().zip(signals.iter_mut()).enumerate() {
             let w = &self.whitening[i];
             let predicted = match jac.as_deref_mut() {
                 Some(out) => {
-                    let pred = self.model.tracker_jacobian(p, &kin, &r.q, s, work, jacobian).map_err(|e| fail(i, e))?;
+                    let (pred, rows) = buffers.predict_with_jacobian(self.model, p, &kin, r, s).map_err(|e| fail(i, e))?;
                     // ∂r/∂p = −L⁻¹·∂prediction/∂p
-                    let rows = -(w * jacobian.rows(0, 3));
-                    out.rows_mut(3 * i, 3).copy_from(&rows);
-                    pred.measured_point()
+                    out.rows_mut(3 * i, 3).gemm(-1.0, w, &rows, 0.0);
+                    pred
                 }
-                None => {
-                    let tool = self.model.tool_state(p, &kin, &r.q, s, None).map_err(|e| fail(i, e))?;
-                    self.model.tracker(p, &tool, s).map_err(|e| fail(i, e))?.measured_point()
-                }
+                None => predict(self.model, p, &kin, r, s).map_err(|e| fail(i, e))?,
             };
             let z = w * (r.measured - predicted);
             if !z.iter().all(|v| v.is_finite()) {
@@ -132,6 +129,55 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
             residuals[3 * i..3 * i + 3].copy_from_slice(z.as_slice());
         }
         Ok(())
+    }
+}
+
+/// The model's prediction of record `r` at `p` (signals `s`), in the record's frame.
+fn predict(model: &ForwardModel, p: &[f64], kin: &KinematicTruth, r: &MeasurementRecord, s: &mut Signals) -> Result<Vector3<f64>, PhysicsError> {
+    match &r.kind {
+        RecordKind::Point => {
+            let tool = model.tool_state(p, kin, &r.q, s, None)?;
+            Ok(model.tracker(p, &tool, s)?.measured_point())
+        }
+        RecordKind::ProbeHit { target, probe } => Ok(model.probe_hit(probe.as_deref(), p, kin, &r.q, s, target)?.centre),
+        RecordKind::CameraPoint { feature, camera } => {
+            let tool = model.tool_state(p, kin, &r.q, s, None)?;
+            Ok(model.camera(camera.as_deref(), p, &tool, s, feature)?.measured_point)
+        }
+    }
+}
+
+/// The model's Jacobian buffers, one per reading kind (allocated once per problem).
+struct Buffers {
+    work: Workspace,
+    tracker: DMatrix<f64>,
+    probe: DMatrix<f64>,
+    camera: DMatrix<f64>,
+}
+
+impl Buffers {
+    fn new(model: &ForwardModel) -> Self {
+        let n = model.param_count();
+        Self { work: Workspace::new(model), tracker: DMatrix::zeros(TRACKER_ROWS, n), probe: DMatrix::zeros(PROBE_ROWS, n), camera: DMatrix::zeros(CAMERA_ROWS, n) }
+    }
+
+    /// [`predict`] (bit for bit) and the three rows of its Jacobian (a view into the buffers).
+    fn predict_with_jacobian(&mut self, model: &ForwardModel, p: &[f64], kin: &KinematicTruth, r: &MeasurementRecord, s: &mut Signals) -> Result<(Vector3<f64>, DMatrixView<'_, f64>), PhysicsError> {
+        Ok(match &r.kind {
+            RecordKind::Point => {
+                let pred = model.tracker_jacobian(p, kin, &r.q, s, &mut self.work, &mut self.tracker)?;
+                (pred.measured_point(), self.tracker.rows(0, 3))
+            }
+            RecordKind::ProbeHit { target, probe } => {
+                let pred = model.probe_jacobian(probe.as_deref(), p, kin, &r.q, s, target, &mut self.work, &mut self.probe)?;
+                (pred.centre, self.probe.rows(0, 3))
+            }
+            RecordKind::CameraPoint { feature, camera } => {
+                let pred = model.camera_jacobian(camera.as_deref(), p, kin, &r.q, s, feature, &mut self.work, &mut self.camera)?;
+                // rows 2..5: the camera point
+                (pred.measured_point, self.camera.rows(2, 3))
+            }
+        })
     }
 }
 

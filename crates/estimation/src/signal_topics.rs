@@ -101,35 +101,35 @@ pub fn feed(builder: &mut SignalsBuilder, which: &SignalTopic, m: &SourcedMessag
             Ok(())
         }
         SignalTopic::Temperature(sensor) => {
-            let m2: Temperature = m.decode().map_err(decode_error)?;
-            let t = message_time(&m2.header.stamp, m.log_time_ns);
-            builder.push_temperature(t, sensor, m2.temperature)?;
+            let msg: Temperature = m.decode().map_err(decode_error)?;
+            let t = message_time(&msg.header.stamp, m.log_time_ns);
+            builder.push_temperature(t, sensor, msg.temperature)?;
             if sensor == AIR_SENSOR {
-                builder.push_air_temperature(t, m2.temperature)?;
+                builder.push_air_temperature(t, msg.temperature)?;
             }
             Ok(())
         }
         SignalTopic::AirTemperature => {
-            let m2: Temperature = m.decode().map_err(decode_error)?;
-            builder.push_air_temperature(message_time(&m2.header.stamp, m.log_time_ns), m2.temperature)
+            let msg: Temperature = m.decode().map_err(decode_error)?;
+            builder.push_air_temperature(message_time(&msg.header.stamp, m.log_time_ns), msg.temperature)
         }
         SignalTopic::AirPressure => {
-            let m2: FluidPressure = m.decode().map_err(decode_error)?;
-            builder.push_air_pressure(message_time(&m2.header.stamp, m.log_time_ns), m2.fluid_pressure)
+            let msg: FluidPressure = m.decode().map_err(decode_error)?;
+            builder.push_air_pressure(message_time(&msg.header.stamp, m.log_time_ns), msg.fluid_pressure)
         }
         SignalTopic::AirHumidity => {
-            let m2: RelativeHumidity = m.decode().map_err(decode_error)?;
-            builder.push_air_humidity(message_time(&m2.header.stamp, m.log_time_ns), 100.0 * m2.relative_humidity)
+            let msg: RelativeHumidity = m.decode().map_err(decode_error)?;
+            builder.push_air_humidity(message_time(&msg.header.stamp, m.log_time_ns), 100.0 * msg.relative_humidity)
         }
         SignalTopic::PowerOn => {
-            let m2: TimeReference = m.decode().map_err(decode_error)?;
-            builder.push_power_on(message_time(&m2.header.stamp, m.log_time_ns), m2.time_ref.nanos());
+            let msg: TimeReference = m.decode().map_err(decode_error)?;
+            builder.push_power_on(message_time(&msg.header.stamp, m.log_time_ns), msg.time_ref.nanos());
             Ok(())
         }
         SignalTopic::Load => {
-            let m2: WrenchStamped = m.decode().map_err(decode_error)?;
-            let f = &m2.wrench.force;
-            builder.push_load(message_time(&m2.header.stamp, m.log_time_ns), Vector3::new(f.x, f.y, f.z))
+            let msg: WrenchStamped = m.decode().map_err(decode_error)?;
+            let f = &msg.wrench.force;
+            builder.push_load(message_time(&msg.header.stamp, m.log_time_ns), Vector3::new(f.x, f.y, f.z))
         }
     }
 }

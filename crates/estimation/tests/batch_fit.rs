@@ -2,7 +2,7 @@
 //! parameters come back within their stated uncertainty, the residual is at the noise floor,
 //! and the tracker pose is found from any placement.
 
-use metrocell_estimation::{fit, rms, FitOptions, MeasurementRecord, RecordFrame, RecordSet};
+use metrocell_estimation::{fit, rms, FitOptions, MeasurementRecord, RecordFrame, RecordKind, RecordSet};
 use metrocell_model::ParameterSetup;
 use metrocell_physics::Signals;
 use metrocell_twin::Cell;
@@ -66,7 +66,7 @@ fn records(cell: &Cell, sigma: f64, seed: u64) -> RecordSet {
                     let measured = pred.measured_point() + Vector3::from_fn(|_, _| noise.sample(&mut rng));
                     s.target_point = None;
                     s.tracker_range = None;
-                    out.push(MeasurementRecord { time: out.len() as f64, point_id: format!("p{i}{j}{k}"), channel: "tracker".into(), q: q.to_vec(), measured, covariance: Matrix3::identity() * sigma * sigma, signals: s });
+                    out.push(MeasurementRecord { time: out.len() as f64, point_id: format!("p{i}{j}{k}"), channel: "tracker".into(), q: q.to_vec(), measured, covariance: Matrix3::identity() * sigma * sigma, signals: s, kind: RecordKind::Point });
                 }
             }
         }

@@ -135,7 +135,8 @@ fn compare_with_twin(text: &str, name: &str, duration: f64) -> Worst {
             }
         }
         if r.t <= last_thermocouple_sample {
-            assert_eq!(twin.temperatures.len(), b.temperatures.len(), "{at}: sensors");
+            assert_eq!(twin.rotary_position, b.rotary_position, "{at}: rotary axes");
+        assert_eq!(twin.temperatures.len(), b.temperatures.len(), "{at}: sensors");
             for (sensor, v) in &twin.temperatures {
                 w.temperature = w.temperature.max((b.temperatures[sensor] - v).abs());
             }

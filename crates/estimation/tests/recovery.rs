@@ -37,20 +37,7 @@ fn model(text: &str, name: &str) -> CellModel {
 /// straightness of order 3, angular of order 2 with the tool's Abbe lever, squareness), the X
 /// scale's thermal expansion and the tracker's pose and warm-up.
 fn xfyz() -> Case {
-    let mut terms = String::new();
-    let travels = [("x", "[0 mm, 800 mm]"), ("y", "[0 mm, 500 mm]"), ("z", "[0 mm, 400 mm]")];
-    for (a, t) in travels {
-        terms += &format!("  - {{id: positioning, options: {{axis: {a}, order: 3, travel: {t}}}, params: {{c0: 0 um, c1: 0 um, c2: 0 um, c3: 0 um}}}}\n");
-        for d in ["x", "y", "z"].iter().filter(|d| **d != a) {
-            terms += &format!("  - {{id: straightness, options: {{axis: {a}, direction: {d}, order: 3, travel: {t}}}, params: {{c0: 0 um, c1: 0 um, c2: 0 um, c3: 0 um}}}}\n");
-        }
-        for about in ["x", "y", "z"] {
-            terms += &format!("  - {{id: angular, options: {{axis: {a}, about: {about}, lever_axes: [z], abbe_offset: [0 m, 0 m, -0.15 m], order: 2, travel: {t}}}, params: {{c0: 0 urad, c1: 0 urad, c2: 0 urad}}}}\n");
-        }
-    }
-    for pair in ["xy", "xz", "yz"] {
-        terms += &format!("  - {{id: squareness, options: {{pair: {pair}}}, params: {{s: 0 urad}}}}\n");
-    }
+    let mut terms = common::xfyz_geometric_terms("[z]", "[0 m, 0 m, -0.15 m]");
     terms += "  - {id: thermal_scale, options: {axis: x, sensors: [{name: x_left, position: 0 m}, {name: x_right, position: 0.8 m}]}, params: {alpha: 11.5e-6 1/K}}\n";
     let text = format!(
         "name: xfyz_recovery\nmachine:\n  family: cartesian\n  stacking: XFYZ\n  travel: {{x: [0 mm, 800 mm], y: [0 mm, 500 mm], z: [0 mm, 400 mm]}}\n  tool_offset: [0 mm, 0 mm, -150 mm]\nsensors:\n  tracker:\n    pose: {{translation: [-0.95 m, 0.3 m, 0.62 m], euler_xyz: [0 deg, 0 deg, 56 deg]}}\n    warmup: {{offset: 0 um, amplitude: 50 um, time_constant: 60 min}}\nterms:\n{terms}"

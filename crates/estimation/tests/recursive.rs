@@ -2,7 +2,7 @@
 //! step change (an axis shifted by 20 µm after a crash) within 20 measurements, ignores a beam
 //! break's garbage point, and replays bit for bit.
 
-use metrocell_estimation::{MeasurementRecord, RecursiveEstimator, RecursiveOptions};
+use metrocell_estimation::{MeasurementRecord, RecordKind, RecursiveEstimator, RecursiveOptions};
 use metrocell_model::{ParameterSetup, Workspace};
 use metrocell_physics::Signals;
 use metrocell_twin::Cell;
@@ -57,7 +57,7 @@ fn measurement(i: usize, step_at: Option<usize>, rng: &mut ChaCha8Rng) -> (Measu
     }
     let measured = truth + Vector3::from_fn(|_, _| n.sample(rng));
     let s = Signals::default().with_positions(Vector3::new(q[0], q[1], q[2]));
-    (MeasurementRecord { time: t, point_id: format!("p{k}"), channel: "tracker".into(), q: q.to_vec(), measured, covariance: Matrix3::identity() * SIGMA * SIGMA, signals: s }, drift)
+    (MeasurementRecord { time: t, point_id: format!("p{k}"), channel: "tracker".into(), q: q.to_vec(), measured, covariance: Matrix3::identity() * SIGMA * SIGMA, signals: s, kind: RecordKind::Point }, drift)
 }
 
 fn estimator(cell: &Cell, instruments: &metrocell_physics::model::TermModel) -> (RecursiveEstimator, usize) {

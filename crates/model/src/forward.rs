@@ -382,6 +382,16 @@ impl<'a> ForwardModel<'a> {
         Ok(tool)
     }
 
+    /// The nominal tool at joint vector `q` (no terms: `truth` = `nominal`, d = 0), e.g. for a
+    /// nominal camera pose ([`Self::camera_pose`]).
+    pub fn nominal_tool(&self, q: &[f64]) -> Result<ToolState, PhysicsError> {
+        let n = self.machine.joint_names().len();
+        if q.len() != n {
+            return Err(PhysicsError::InvalidInput { what: "forward model, joint vector".into(), reason: format!("has {} values, the machine has {n} joints ({})", q.len(), self.machine.joint_names().join(", ")) });
+        }
+        self.tool_state_with(&KinematicTruth::None, q, |_, _| Ok(Vector3::zeros()))
+    }
+
     /// The family's tool state, with the machine terms' displacement sum `displacement(nominal
     /// point of the frame the terms act in, tool rotation)` (tool-frame terms are turned by the
     /// rotation).

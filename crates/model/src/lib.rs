@@ -12,7 +12,8 @@
 //! * [`instruments`] — the instrument terms grouped by instrument (two trackers or two cameras
 //!   are told apart by instance name), camera geometry.
 //! * [`tracker`], [`probe`], [`camera`] — each instrument's predicted reading and its analytic
-//!   Jacobian w.r.t. every stacked parameter; [`workspace`] — their scratch buffers.
+//!   Jacobian w.r.t. every stacked parameter; [`workspace`] — their scratch buffers;
+//!   [`fiducial_plate`] — the plate of markers a simulated camera sees.
 //! * [`parameters`] — free/fixed mask and priors per parameter ([`ParameterSetup`]), and the
 //!   pairs of parameters parallel by construction ([`ForwardModel::parallel_pairs`]).
 //! * [`signals_builder`] — [`SignalsBuilder`]: recorded streams (commanded joints, temperatures,
@@ -27,6 +28,7 @@
 
 pub mod approach_rule;
 pub mod camera;
+pub mod fiducial_plate;
 pub mod forward;
 pub mod instrument_pose;
 pub mod instruments;
@@ -39,6 +41,7 @@ pub mod tracker;
 pub mod workspace;
 
 pub use camera::{CameraPrediction, CAMERA_ROWS};
+pub use fiducial_plate::{FiducialPlate, PLATE_MARKERS};
 pub use forward::{DisplacementCache, ForwardModel, KinematicTruth, ToolState};
 pub use instruments::{CameraGeometry, Instrument, InstrumentKind};
 pub use probe::{ProbePrediction, ProbeTarget, PROBE_ROWS};

@@ -6,8 +6,8 @@
 //! `Signals::time` is that clock in seconds):
 //! * **commanded joints** (positions, and velocities when recorded), in the machine's joint
 //!   order ([`MachineGeometry::joint_names`]); the axis signals are the first three joints of a
-//!   cartesian, delta or five-axis machine (none on an arm), as [`crate::ForwardModel::set_motion`]
-//!   sets them. Positions: the sample at a sample's time, else the linear interpolation between
+//!   cartesian, delta or five-axis machine (none on an arm), and a five-axis table's `b` and `c`
+//!   its rotary positions, as [`crate::ForwardModel::set_motion`] sets them. Positions: the sample at a sample's time, else the linear interpolation between
 //!   two samples at most `max_joint_gap` apart. Velocity: the recorded one when the message
 //!   carries it (interpolated between samples); else from the trajectory — the slope of the
 //!   interval that starts at the instant (at the newest sample: the one that ends there).
@@ -131,6 +131,8 @@ pub struct SignalsBuilder {
     joint_names: Vec<String>,
     /// The first three joints are the linear axes (not on an arm).
     has_axes: bool,
+    /// The joints that are the rotary axes A, B, C (a five-axis table's `b` and `c`).
+    rotary: [Option<usize>; 3],
     joints: JointStream,
     temperatures: BTreeMap<String, SampledSeries>,
     timeline: Arc<TemperatureTimeline>,
@@ -147,9 +149,14 @@ pub struct SignalsBuilder {
 }
 
 impl SignalsBuilder {
-    /// A builder for a machine: its joint names and whether it has linear axes.
+    /// A builder for a machine: its joint names, whether it has linear axes, and which joints
+    /// are rotary axes (the axis signals as [`crate::ForwardModel::set_motion`] sets them).
     pub fn for_machine(machine: &MachineGeometry, options: SignalsBuilderOptions) -> Self {
-        Self::new(machine.joint_names(), !matches!(machine.kinematics, MachineKinematics::SerialArm(_)), options)
+        let mut b = Self::new(machine.joint_names(), !matches!(machine.kinematics, MachineKinematics::SerialArm(_)), options);
+        if matches!(machine.kinematics, MachineKinematics::FiveAxis(_)) {
+            b.rotary = [None, Some(3), Some(4)];
+        }
+        b
     }
 
     /// A builder for joints named `joint_names` (in the model's order); with `has_axes` the first
@@ -170,6 +177,7 @@ impl SignalsBuilder {
                 trackers: vec![ApproachTracker::new(options.initial_approach); n],
             },
             has_axes: has_axes && n >= 3,
+            rotary: [None; 3],
             joint_names,
             options,
             temperatures: BTreeMap::new(),
@@ -395,14 +403,19 @@ impl SignalsBuilder {
     /// give at that instant is None.
     pub fn signals_at(&self, t_ns: i64) -> Signals {
         let mut s = Signals { time: Some(t_ns as f64 / NS), timeline: Some(self.timeline.clone()), ..Signals::default() };
-        if self.has_axes {
-            if let Some(m) = self.joints_at(t_ns) {
+        if let Some(m) = self.joints_at(t_ns) {
+            for (a, joint) in self.rotary.iter().enumerate() {
+                s.rotary_position[a] = joint.and_then(|j| m.positions.get(j).copied());
+            }
+            if self.has_axes {
                 for a in 0..3 {
                     s.axis_position[a] = Some(m.positions[a]);
                     s.axis_velocity[a] = m.velocities[a];
                     s.approach_direction[a] = m.approach[a];
                 }
             }
+        }
+        if self.has_axes {
             for a in 0..3 {
                 if !self.explicit_approach[a].is_empty() {
                     s.approach_direction[a] = self.explicit_approach[a].at(t_ns);

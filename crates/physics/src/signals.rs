@@ -114,6 +114,14 @@ pub enum SignalKind {
     RotaryPosition(RotaryAxis),
 }
 
+impl SignalKind {
+    /// Signals the forward model computes itself for each reading (ranges, the points of each
+    /// frame, the probing direction) rather than reading them from a recording.
+    pub fn is_computed_by_model(&self) -> bool {
+        matches!(self, SignalKind::TrackerRange | SignalKind::ImagePoint | SignalKind::MachinePoint | SignalKind::WorkpiecePoint | SignalKind::TargetPoint | SignalKind::CameraPoint | SignalKind::ProbeDirection)
+    }
+}
+
 impl fmt::Display for SignalKind {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         match self {

@@ -57,6 +57,12 @@ impl Identifiability {
                 return Err(SolverError::Invalid { what: "rcond".into(), reason: format!("must lie in (0, 1), got {r}") });
             }
         }
+        if n == 0 || m == 0 {
+            // nothing to analyse (no free parameter, or no measurement): every parameter given is
+            // unidentifiable, and an SVD of an empty matrix is not defined
+            let null_directions = (0..n).map(|k| NullDirection { singular_value: 0.0, coefficients: (0..n).map(|i| if i == k { 1.0 } else { 0.0 }).collect(), scaled: (0..n).map(|i| if i == k { 1.0 } else { 0.0 }).collect() }).collect();
+            return Ok(Identifiability { labels: labels.iter().map(|s| s.to_string()).collect(), column_norms: vec![0.0; n], singular_values: vec![0.0; n], tolerance: 0.0, rank: 0, condition_number: if n == 0 { 1.0 } else { f64::INFINITY }, null_directions });
+        }
         let column_norms: Vec<f64> = j.column_iter().map(|c| c.norm()).collect();
         // Zero-padded to at least n rows so that V is complete when m < n.
         let mut scaled = DMatrix::zeros(m.max(n), n);

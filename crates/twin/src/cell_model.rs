@@ -57,7 +57,7 @@ pub struct CellModel {
 }
 
 fn in_file(file: &str, e: CellError) -> CellError {
-    CellError::InFile { file: file.to_string(), source: Box::new(e) }
+    CellError::InFile { file: file.to_string(), error: Box::new(e) }
 }
 
 impl CellModel {

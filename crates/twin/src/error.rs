@@ -33,9 +33,11 @@ pub enum CellError {
     #[error("cell file: `{path}`: {reason}")]
     Invalid { path: String, reason: String },
 
-    /// An error in a named file (the model loader wraps its validation errors in it).
-    #[error("{file}: {source}")]
-    InFile { file: String, source: Box<CellError> },
+    /// An error in a named file (the model loader wraps its validation errors in it). The inner
+    /// error is part of this one's message, not a separate `source` (a chain printer would say
+    /// it twice).
+    #[error("{file}: {error}")]
+    InFile { file: String, error: Box<CellError> },
 
     #[error("simulation: {reason}")]
     Simulation { reason: String },

@@ -50,7 +50,7 @@ pub struct ModelUpdate {
 }
 
 fn bad(model: &CellModel, reason: String) -> CellError {
-    CellError::InFile { file: model.file.clone(), source: Box::new(CellError::Invalid { path: "(writing the fitted model)".into(), reason }) }
+    CellError::InFile { file: model.file.clone(), error: Box::new(CellError::Invalid { path: "(writing the fitted model)".into(), reason }) }
 }
 
 /// The model file's text with `update` applied (see the module docs).
@@ -258,7 +258,7 @@ fn added_terms(model: &CellModel, root: &Node, fitted: &BTreeMap<&str, &FittedPa
     let text = &model.text;
     let mut items = Vec::new();
     for (k, c) in terms.iter().enumerate() {
-        let configured = configure(c).map_err(|e| CellError::InFile { file: model.file.clone(), source: Box::new(CellError::term(format!("added term {k} (id `{}`)", c.id), e)) })?;
+        let configured = configure(c).map_err(|e| CellError::InFile { file: model.file.clone(), error: Box::new(CellError::term(format!("added term {k} (id `{}`)", c.id), e)) })?;
         let label = configured.term.label();
         let mut params = Vec::new();
         for (spec, configured_value) in configured.term.params().iter().zip(&configured.params) {

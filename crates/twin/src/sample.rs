@@ -151,7 +151,8 @@ pub struct TrackerTruth {
     pub joints: Vec<f64>,
     /// True machine displacement (tool relative to workpiece, machine frame): Σ true terms.
     pub displacement: Vector3<f64>,
-    /// True tool (target) point, workpiece frame.
+    /// True tool (target) point, workpiece frame: the tool relative to the true part, what the
+    /// tracker sights (crates/model `ToolState::target`).
     pub tool_point: Vector3<f64>,
     /// True target point in the tracker frame (no instrument error).
     pub point: Vector3<f64>,

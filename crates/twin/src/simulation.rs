@@ -513,7 +513,8 @@ impl<'a> Engine<'a> {
         let spec = self.cell.tracker.as_ref().expect("tracker channel exists only with a tracker");
         let ms = self.cell.program.state_at(t);
         let tool = self.tool_state(t, &ms)?;
-        let (nominal_point, tool_point, d) = (tool.nominal.translation.vector, tool.truth.translation.vector, tool.d);
+        // the tracker sights the tool relative to the part (truth − d_w, crates/model `forward`)
+        let (nominal_point, tool_point, d) = (tool.nominal.translation.vector, tool.target(), tool.d);
         // air: truth on the beam vs the station's reading
         let ambient = self.thermal.ambient(t);
         let air = self.cell.air;
@@ -653,9 +654,7 @@ impl<'a> Engine<'a> {
         }
         let mut marker_points = Vec::with_capacity(PLATE_MARKERS);
         for k in 0..PLATE_MARKERS {
-            let [x, y] = spec.plate.marker_top_left(k);
-            let h = spec.plate.marker_side / 2.0;
-            let f = plate.transform_point(&nalgebra::Point3::new(x + h, y + h, 0.0)).coords;
+            let f = plate.transform_point(&spec.plate.marker_centre(k).into()).coords;
             marker_points.push(self.model.camera(None, &self.params, &tool, &mut self.signals, &f)?.measured_point);
         }
         let s = CameraFrameRequest {

@@ -42,7 +42,16 @@ fn example_with_tracker(name: &str) -> CellFile {
 
 /// The example with every noise source of the tracker and its station removed (biases kept).
 fn noise_free(name: &str) -> Cell {
-    let mut f = example_with_tracker(name);
+    noise_free_file(example_with_tracker(name))
+}
+
+/// The quick demo with the part misaligned and expanding (workpiece-frame terms).
+fn demo_with_workpiece_terms() -> CellFile {
+    let text = common::edited_example("quick_demo.yaml", "  - id: thermal_scale\n", &format!("{WORKPIECE_TERMS}  - id: thermal_scale\n"));
+    serde_yaml::from_str(&text).unwrap()
+}
+
+fn noise_free_file(mut f: CellFile) -> Cell {
     let t = f.sensors.tracker.as_mut().unwrap();
     t.turbulence.clear();
     t.beam_breaks = None;
@@ -78,22 +87,27 @@ fn reading_signals(sim: &Simulation, s: &TrackerSample) -> Signals {
 
 #[test]
 fn noise_free_readings_are_the_models_predictions_bit_for_bit() {
-    for name in CELLS {
-        let sim = Simulation::new(noise_free(name), 20.0, 11).unwrap();
+    let cells = CELLS.iter().map(|n| (n.to_string(), noise_free(n))).chain(std::iter::once(("quick_demo + workpiece terms".to_string(), noise_free_file(demo_with_workpiece_terms()))));
+    for (name, cell) in cells {
+        let sim = Simulation::new(cell, 20.0, 11).unwrap();
         let model = sim.forward_model();
         let p = model.params();
         let kin = model.kinematic_truth(&p).unwrap();
         let readings = tracker_readings(&sim);
         assert!(readings.len() >= 150, "{name}: {} readings", readings.len());
+        let mut part_moved = 0.0f64;
         for (s, tt) in &readings {
             let mut sig = reading_signals(&sim, s);
             let tool = model.tool_state(&p, &kin, &tt.joints, &mut sig, None).unwrap();
             assert_eq!(tool.target(), tt.tool_point, "{name} t = {}: tool point", s.t);
+            part_moved = part_moved.max(tool.workpiece.norm());
             let pred = model.tracker(&p, &tool, &mut sig).unwrap();
             assert_eq!(pred.measured_range().to_bits(), s.range.to_bits(), "{name} t = {}: range {} vs {}", s.t, pred.measured_range(), s.range);
             assert_eq!(pred.measured_point(), s.point, "{name} t = {}: point", s.t);
             assert_eq!((pred.azimuth, pred.elevation), (s.azimuth, s.elevation), "{name} t = {}", s.t);
         }
+        // the workpiece terms really move the sighted point (by tens of µm over the table)
+        assert_eq!(name.contains("workpiece"), part_moved > 5e-6, "{name}: d_w up to {part_moved:e} m");
         // the warm-up is really in the readings (every tracker here has one)
         let (s, tt) = &readings[readings.len() / 2];
         let pred = model.tracker(&p, &sighting(tt.tool_point), &mut reading_signals(&sim, s)).unwrap();

@@ -7,7 +7,7 @@
 
 use std::collections::BTreeMap;
 
-use metrocell_estimation::{MeasurementRecord, RecursiveEstimator, Update};
+use metrocell_estimation::{MeasurementRecord, RecordKind, RecursiveEstimator, Update};
 use metrocell_model::{ForwardModel, Workspace};
 use metrocell_msgs::msg::{ErrorModel, MeasuredPoint};
 use metrocell_msgs::sensor_msgs::msg::{JointState, Temperature};
@@ -202,7 +202,7 @@ impl EstimatorState {
             Err(gap) => return self.not_used("no_signals", format!("point {} at {t:.3} s: {gap}; skipped", p.point_id)),
         };
         self.model.set_motion(&mut signals, &q, &velocity, &approach);
-        let record = MeasurementRecord { time: t, point_id: p.point_id.clone(), channel: p.source.clone(), q, measured, covariance, signals };
+        let record = MeasurementRecord { time: t, point_id: p.point_id.clone(), channel: p.source.clone(), q, measured, covariance, signals, kind: RecordKind::Point };
         let measurement = self.counters.accepted + self.counters.outliers;
         let update: Update = match self.filter.update(&self.model, &record, &mut self.work) {
             Ok(u) => u,

@@ -124,7 +124,8 @@ fn inputs_of(cell: &Cell, path: &str, power_on_known: bool) -> Result<Inputs, St
     for t in &cell.terms.terms {
         for s in t.term.signals() {
             match s {
-                SignalKind::AxisPosition(_) | SignalKind::ApproachDirection(_) | SignalKind::AxisVelocity(_) | SignalKind::RotaryPosition(_) | SignalKind::MachinePoint | SignalKind::WorkpiecePoint => {}
+                SignalKind::AxisPosition(_) | SignalKind::ApproachDirection(_) | SignalKind::AxisVelocity(_) | SignalKind::RotaryPosition(_) => {}
+                k if k.is_computed_by_model() => {}
                 SignalKind::Temperature(name) => sensors.push(name),
                 SignalKind::TemperatureHistory(name) => {
                     sensors.push(name.clone());

@@ -8,9 +8,8 @@
 //! order (`MachineGeometry::joint_names`), m or rad; velocity = the samples' own velocity field
 //! when present, else the difference quotient of the bracketing samples; approach direction of a
 //! joint = sign of its last non-zero motion at or before the instant (+1 before any motion);
-//! temperatures in °C, linear between bracketing readings; a lagged term reads the shared
-//! temperature timeline (crates/physics `temperature_timeline`) at the instant, which a point is
-//! taken only after every reading up to it has arrived.
+//! temperatures in °C, linear between bracketing readings; a lagged term reads the sensor's
+//! history up to the instant from one shared `TemperatureTimeline` (no copy per instant).
 
 use std::collections::{BTreeMap, VecDeque};
 use std::sync::Arc;
@@ -55,9 +54,9 @@ pub struct SignalStream {
     joint_count: usize,
     /// Sensor → readings (stamp s, °C), increasing in time.
     temperatures: BTreeMap<String, Vec<(f64, f64)>>,
-    /// Sensors a term reads through a lag: their samples also go into the timeline.
+    /// Sensors whose whole history a term needs (lags); others keep only what interpolation needs.
     keep_history: Vec<String>,
-    /// The lagged sensors' samples, shared with every instant's signals.
+    /// The whole history of the `keep_history` sensors, shared with every instant's signals.
     timeline: Arc<TemperatureTimeline>,
     power_on_time: Option<f64>,
 }
@@ -99,8 +98,9 @@ impl SignalStream {
             return false;
         }
         h.push((time, celsius));
-        if self.keep_history.iter().any(|k| k == sensor) && self.timeline.push(sensor, time, celsius).is_err() {
-            return false;
+        if self.keep_history.iter().any(|s| s == sensor) {
+            // the stamp was checked to increase just above, so the timeline accepts it
+            self.timeline.push(sensor, time, celsius).expect("increasing, finite sample");
         }
         true
     }
@@ -121,13 +121,14 @@ impl SignalStream {
     /// After the last sample of a stream its last value holds.
     pub fn at(&self, time: f64) -> Result<(Vec<f64>, Vec<f64>, Vec<f64>, Signals), SignalGap> {
         let (q, velocity, approach) = self.joints_at(time).ok_or(SignalGap::NoJoints)?;
-        let mut s = Signals { time: Some(time), ..Default::default() };
+        let mut s = Signals::default();
         for (name, h) in &self.temperatures {
             let t = interpolate(h, time).ok_or_else(|| SignalGap::NoTemperature(name.clone()))?;
             s.temperatures.insert(name.clone(), t);
         }
         if !self.keep_history.is_empty() {
-            s.timeline = Some(Arc::clone(&self.timeline));
+            s.timeline = Some(self.timeline.clone());
+            s.time = Some(time);
         }
         s.time_since_power_on = self.power_on_time.map(|t0| time - t0);
         Ok((q, velocity, approach, s))
@@ -150,8 +151,8 @@ impl SignalStream {
         Some((q, velocity, approach))
     }
 
-    /// Forget what no instant at or after `time` needs for interpolation: joint samples and
-    /// readings before the ones bracketing it (the lagged sensors' history stays in the timeline).
+    /// Forget what no instant at or after `time` needs: joint samples before the one bracketing
+    /// it, and readings before theirs (a lagged sensor's whole history stays in the timeline).
     pub fn forget_before(&mut self, time: f64) {
         while self.joints.len() > 1 && self.joints[1].time <= time {
             self.joints.pop_front();
@@ -210,10 +211,10 @@ mod tests {
         assert_eq!(approach, vec![1.0, 1.0, 1.0]);
         // column: 21 °C at 1000.5, 20 °C at 999.5 → 20.75 at 1000.25
         assert!((sig.temperatures["column"] - 20.75).abs() < 1e-12);
+        let timeline = sig.timeline.as_ref().expect("a lagged sensor gives the timeline");
         assert_eq!(sig.time, Some(1000.25));
-        let timeline = sig.timeline.as_ref().expect("a lagged sensor shares the timeline");
-        assert_eq!(timeline.history("column", Some(1000.25)).unwrap().samples, vec![(999.5, 20.0)]);
-        assert!(!timeline.contains("x_left"), "only lagged sensors go into the timeline");
+        assert_eq!(timeline.history("column", sig.time).unwrap().samples, vec![(999.5, 20.0)]);
+        assert!(!timeline.contains("x_left"), "only lagged sensors go to the timeline");
         assert_eq!(sig.time_since_power_on, Some(900.25));
     }
 
@@ -240,7 +241,8 @@ mod tests {
         let (q2, v2, a2, sig2) = s.at(1002.5).unwrap();
         assert_eq!((q, v, a, sig.temperatures), (q2, v2, a2, sig2.temperatures), "forgetting keeps what later instants need");
         assert_eq!(s.joints.len(), 2);
-        assert_eq!((s.temperatures["x_left"].len(), s.temperatures["column"].len()), (2, 2));
-        assert_eq!(s.timeline.sample_count("column"), Some(5), "the lagged sensor's history stays in the timeline");
+        assert_eq!(s.temperatures["x_left"].len(), 2);
+        assert_eq!(s.temperatures["column"].len(), 2);
+        assert_eq!(s.timeline.sample_count("column"), Some(5), "a lagged sensor keeps its history");
     }
 }

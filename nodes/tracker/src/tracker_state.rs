@@ -398,32 +398,39 @@ mod tests {
         Header { stamp: Time::from_nanos(t_ns), frame_id: String::new() }
     }
 
+    /// The commanded state and the reading at `time` of the i-th reading of the dwell on nominal
+    /// k (at `q`), seen from a tracker at pose (r, t); `scatter` (m) alternates on the range; the
+    /// 5th reading of the 2nd dwell is a beam break.
+    fn inputs_at(time: i64, k: usize, i: usize, q: &Vector3<f64>, r: &Rotation3<f64>, t: &Vector3<f64>, scatter: f64) -> (JointState, TrackerMeasurement) {
+        let (range, azimuth, elevation) = to_spherical(&(r.inverse() * (q - t)));
+        let j = JointState { header: header(time), name: vec!["x".into(), "y".into(), "z".into()], position: vec![q.x, q.y, q.z], velocity: vec![], effort: vec![] };
+        let m = TrackerMeasurement {
+            header: header(time),
+            target_id: format!("p{k}"),
+            point: Point::default(),
+            range: range + if i % 2 == 0 { scatter } else { -scatter },
+            azimuth,
+            elevation,
+            covariance: [0.0; 9],
+            air_temperature: AIR.temperature,
+            air_pressure: AIR.pressure,
+            air_humidity: AIR.humidity,
+            refractive_index: AIR.refractive_index(),
+            status: if k == 1 && i == 4 { TrackerMeasurement::STATUS_BEAM_BREAK } else { 0 },
+        };
+        (j, m)
+    }
+
     /// Dwells of 10 readings at 10 Hz on each nominal, seen from a tracker at pose (r, t); the
     /// commanded joints say where the machine is. `scatter` (m) alternates on the range.
     fn visit(state: &mut TrackerState, t0_ns: i64, r: &Rotation3<f64>, t: &Vector3<f64>, scatter: f64) -> Vec<Output> {
         let mut out = Vec::new();
         let mut time = t0_ns;
         for (k, q) in NOMINALS.iter().enumerate() {
-            let q = Vector3::from(*q);
-            let (range, azimuth, elevation) = to_spherical(&(r.inverse() * (q - t)));
             for i in 0..10 {
                 time += 100_000_000;
-                let j = JointState { header: header(time), name: vec!["x".into(), "y".into(), "z".into()], position: vec![q.x, q.y, q.z], velocity: vec![], effort: vec![] };
+                let (j, m) = inputs_at(time, k, i, &Vector3::from(*q), r, t, scatter);
                 out.extend(state.commanded(&j));
-                let m = TrackerMeasurement {
-                    header: header(time),
-                    target_id: format!("p{k}"),
-                    point: Point::default(),
-                    range: range + if i % 2 == 0 { scatter } else { -scatter },
-                    azimuth,
-                    elevation,
-                    covariance: [0.0; 9],
-                    air_temperature: AIR.temperature,
-                    air_pressure: AIR.pressure,
-                    air_humidity: AIR.humidity,
-                    refractive_index: AIR.refractive_index(),
-                    status: if k == 1 && i == 4 { TrackerMeasurement::STATUS_BEAM_BREAK } else { 0 },
-                };
                 out.extend(state.measurement(&m));
             }
             time += 2_000_000_000;
@@ -504,25 +511,10 @@ mod tests {
         let mut commanded = Vec::new();
         let mut time = 0;
         for (k, q) in NOMINALS.iter().enumerate() {
-            let q = Vector3::from(*q);
-            let (range, azimuth, elevation) = to_spherical(&(r.inverse() * (q - t)));
             for i in 0..10 {
                 time += 100_000_000;
-                commanded.push(JointState { header: header(time), name: vec!["x".into(), "y".into(), "z".into()], position: vec![q.x, q.y, q.z], velocity: vec![], effort: vec![] });
-                let m = TrackerMeasurement {
-                    header: header(time),
-                    target_id: format!("p{k}"),
-                    point: Point::default(),
-                    range,
-                    azimuth,
-                    elevation,
-                    covariance: [0.0; 9],
-                    air_temperature: AIR.temperature,
-                    air_pressure: AIR.pressure,
-                    air_humidity: AIR.humidity,
-                    refractive_index: AIR.refractive_index(),
-                    status: if k == 1 && i == 4 { TrackerMeasurement::STATUS_BEAM_BREAK } else { 0 },
-                };
+                let (j, m) = inputs_at(time, k, i, &Vector3::from(*q), &r, &t, 0.0);
+                commanded.push(j);
                 // one early commanded state, so the node knows the stream exists
                 if k == 0 && i == 0 {
                     let _ = state.commanded(commanded.last().unwrap());

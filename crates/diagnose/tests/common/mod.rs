@@ -7,7 +7,7 @@
 use std::collections::BTreeMap;
 
 use metrocell_diagnose::{diagnose, DeclaredModel, Diagnosis, DiagnoseOptions};
-use metrocell_estimation::{MeasurementRecord, RecordFrame, RecordSet};
+use metrocell_estimation::{MeasurementRecord, RecordFrame, RecordKind, RecordSet};
 use metrocell_physics::{Signals, TemperatureTimeline};
 use metrocell_twin::{Cell, CellModel, Sample, Simulation};
 use nalgebra::{Matrix3, Vector3};
@@ -94,8 +94,8 @@ pub fn twin_records(cell_text: &str, hours: f64, seed: u64, take: Take) -> TwinR
     let sim = Simulation::new(cell, hours * 3600.0, seed).expect("simulation");
     let powered = sim.cell().tracker.as_ref().map(|t| t.powered_on_before_start).unwrap_or(0.0);
     let mut latest: BTreeMap<String, f64> = BTreeMap::new();
-    // one shared timeline, decimated to a sample a minute; each record reads it up to its time
-    let timeline = std::sync::Arc::new(TemperatureTimeline::new());
+    // one timeline shared by every record; each record reads it up to its own time
+    let history = std::sync::Arc::new(TemperatureTimeline::new());
     let mut last_history_t: BTreeMap<String, f64> = BTreeMap::new();
     let model = sim.forward_model();
     let mut out = Vec::new();
@@ -107,7 +107,7 @@ pub fn twin_records(cell_text: &str, hours: f64, seed: u64, take: Take) -> TwinR
                 let last = last_history_t.entry(t.sensor.to_string()).or_insert(f64::NEG_INFINITY);
                 if t.t - *last >= 60.0 {
                     *last = t.t;
-                    timeline.push(&t.sensor.to_string(), t.t, t.value).expect("increasing sample times");
+                    history.push(&t.sensor, t.t, t.value).expect("the twin's samples advance in time");
                 }
             }
             Sample::Tracker(s) => {
@@ -130,7 +130,7 @@ pub fn twin_records(cell_text: &str, hours: f64, seed: u64, take: Take) -> TwinR
                 model.set_motion(&mut sig, ms.q.as_slice(), ms.velocity.as_slice(), &ms.approach);
                 sig.temperatures = latest.clone();
                 if take.histories {
-                    sig.timeline = Some(timeline.clone());
+                    sig.timeline = Some(history.clone());
                     sig.time = Some(s.t);
                 }
                 out.push(MeasurementRecord {
@@ -141,6 +141,7 @@ pub fn twin_records(cell_text: &str, hours: f64, seed: u64, take: Take) -> TwinR
                     measured: s.point,
                     covariance: s.covariance,
                     signals: sig,
+                    kind: RecordKind::Point,
                 });
             }
             _ => {}

@@ -1,0 +1,152 @@
+//! `metrocell calibrate --model CELL.yaml BAG... -o MODEL.yaml [--report DIR] [--json FILE|-]`:
+//! the declared error model fitted to the measurements of recordings (batch identification),
+//! written back as the same cell file with fitted values and their uncertainties.
+
+mod report;
+mod result_json;
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::Context;
+use metrocell_estimation::fit_summary::summary_lines;
+use metrocell_estimation::{fit, records_from_bags, rms, Fit, FitOptions, PointSource, RecordSet, RecordingOptions};
+use metrocell_solver::Loss;
+use metrocell_twin::{write_model, CellModel, FittedParameter, ModelUpdate};
+
+#[derive(clap::Args)]
+#[command(after_help = "What it does:\n\
+  1. reads the model: a cell file (the twin's format; only `machine` and `terms` are needed) whose `terms:` declare\n\
+     the error model to fit; `estimation:` says which parameters are free and gives priors (default: all free);\n\
+  2. builds measurement records from the bags: /measured_points (tracker node, bag import) or /tracker/measurements\n\
+     (metrocell sim, drivers), each with its covariance, commanded joints and the signals at its time (temperatures,\n\
+     air, time since power-on...). A signal a declared term needs that the bag lacks is an error naming the topic;\n\
+  3. fits: registers the tracker if the points are in its frame, then least squares weighted by each point's\n\
+     covariance with a robust loss (--loss; outliers are down-weighted, counted and named), bounded by each\n\
+     parameter's plausible range; parameters the measurements cannot separate are held at their start and said so;\n\
+  4. writes MODEL.yaml: your file with the fitted values in place (your units, comments and order kept), an\n\
+     `uncertainty:` section (standard uncertainties, k = 1) and a `fit:` section; it reads back in `metrocell sim`,\n\
+     `calibrate`, `diagnose` and `compensate`;\n\
+  5. prints a summary in words; --report DIR writes an HTML report (residuals before/after, error functions with\n\
+     uncertainty bands, identifiability, uncertainty budget); --json writes the numbers.\n\n\
+Examples:\n\
+  metrocell sim --cell launch-configs/cells/quick_demo.yaml --duration 30min -o demo_bag\n\
+  metrocell calibrate --model my_model.yaml demo_bag -o fitted.yaml --report calib_report\n\
+  metrocell calibrate --model my_model.yaml run1 run2 -o fitted.yaml --json - --loss cauchy")]
+pub struct CalibrateArgs {
+    /// The model to fit: a cell file whose `terms:` declare the error model
+    #[arg(long)]
+    model: PathBuf,
+    /// Recordings (rosbag2 directories or .mcap files); several are concatenated
+    #[arg(required = true)]
+    bags: Vec<PathBuf>,
+    /// Where to write the fitted model (a cell file)
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Write an HTML report with plots into this directory
+    #[arg(long)]
+    report: Option<PathBuf>,
+    /// Write the result as JSON to this file, or `-` for stdout
+    #[arg(long)]
+    json: Option<String>,
+    /// Loss on the whitened residuals: huber, cauchy or linear (plain least squares)
+    #[arg(long, default_value = "huber")]
+    loss: String,
+    /// Where the robust loss starts, in standard deviations of a measurement
+    #[arg(long, default_value_t = 4.0)]
+    outlier_threshold: f64,
+    /// Which messages are the measurements: auto (measured points if the bag has them), measured, tracker
+    #[arg(long, default_value = "auto")]
+    points: String,
+    /// Topic of the measured points (e.g. /measured_points/thermal_compensated)
+    #[arg(long, default_value = "/measured_points")]
+    measured_points_topic: String,
+}
+
+pub fn run(a: CalibrateArgs) -> i32 {
+    match calibrate(a) {
+        Ok(code) => code,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            2
+        }
+    }
+}
+
+fn calibrate(a: CalibrateArgs) -> anyhow::Result<i32> {
+    let started = Instant::now();
+    let loss = match a.loss.as_str() {
+        "huber" => Loss::Huber(a.outlier_threshold),
+        "cauchy" => Loss::Cauchy(a.outlier_threshold),
+        "linear" => Loss::Linear,
+        other => anyhow::bail!("--loss `{other}`: allowed huber, cauchy, linear"),
+    };
+    if !(a.outlier_threshold > 0.0 && a.outlier_threshold.is_finite()) {
+        anyhow::bail!("--outlier-threshold must be > 0 (standard deviations), got {}", a.outlier_threshold);
+    }
+    let points = match a.points.as_str() {
+        "auto" => PointSource::Auto,
+        "measured" => PointSource::MeasuredPoints,
+        "tracker" => PointSource::TrackerMeasurements,
+        other => anyhow::bail!("--points `{other}`: allowed auto, measured, tracker"),
+    };
+    let model = CellModel::from_path(&a.model)?;
+    let fm = model.forward_model()?;
+    eprintln!("model {}: {} terms, {} parameters ({} free)", a.model.display(), model.machine_terms.terms.len() + model.instrument_terms.terms.len(), fm.param_count(), model.setup.free.iter().filter(|f| **f).count());
+    eprintln!("reading {} recording(s)…", a.bags.len());
+    let options = RecordingOptions { points, measured_points_topic: a.measured_points_topic.clone(), ..RecordingOptions::default() };
+    let records = records_from_bags(&a.bags, &fm, &options)?;
+    eprintln!("{} measurement records ({} rejected) in {:.1} s; fitting…", records.len(), records.rejected.len(), started.elapsed().as_secs_f64());
+    let result = fit(&fm, &model.setup, &records, None, &FitOptions { loss, ..FitOptions::default() }).with_context(|| format!("fitting {} to {} records", a.model.display(), records.len()))?;
+    eprintln!("fitted in {:.1} s ({} iterations, {:?})", started.elapsed().as_secs_f64(), result.solution.iterations, result.solution.termination);
+    let lines = summary_lines(&result, &records);
+    for l in &lines {
+        println!("{l}");
+    }
+    let update = model_update(&result, &records, &a);
+    let text = write_model(&model, &update)?;
+    std::fs::write(&a.output, &text).with_context(|| format!("cannot write `{}`", a.output.display()))?;
+    println!("fitted model written to {}", a.output.display());
+    if let Some(dir) = &a.report {
+        let page = report::write(dir, &a, &model, &fm, &result, &records, &lines)?;
+        println!("report: {}", page.display());
+    }
+    if let Some(target) = &a.json {
+        let json = serde_json::to_string_pretty(&result_json::result(&result, &records, &a.output))?;
+        if target == "-" {
+            println!("{json}");
+        } else {
+            std::fs::write(target, json).with_context(|| format!("cannot write `{target}`"))?;
+        }
+    }
+    Ok(0)
+}
+
+/// Fitted values (the free, identifiable parameters) and the `fit:` section.
+fn model_update(f: &Fit, records: &RecordSet, a: &CalibrateArgs) -> ModelUpdate {
+    let parameters = f.parameters.iter().filter(|p| p.free).map(|p| FittedParameter { name: p.name.clone(), value: p.value, sigma: p.sigma }).collect();
+    let mut fit_section = serde_yaml::Mapping::new();
+    let mut put = |k: &str, v: serde_yaml::Value| {
+        fit_section.insert(k.into(), v);
+    };
+    put("recordings", a.bags.iter().map(|b| serde_yaml::Value::from(b.display().to_string())).collect::<Vec<_>>().into());
+    put("records", (f.used.len() as u64).into());
+    put("residual_rms_um", {
+        let mut m = serde_yaml::Mapping::new();
+        m.insert("before".into(), round(rms(&f.residuals_before) * 1e6, 3).into());
+        m.insert("after".into(), round(rms(&f.residuals_after) * 1e6, 3).into());
+        m.into()
+    });
+    put("chi2_per_dof", round(f.chi2_per_dof, 4).into());
+    put("outliers_downweighted", (f.outliers.len() as u64).into());
+    put("skipped", ((f.skipped.len() + records.rejected.len()) as u64).into());
+    if !f.held.is_empty() {
+        put("not_identifiable", f.held.iter().map(|h| serde_yaml::Value::from(h.combination.clone())).collect::<Vec<_>>().into());
+    }
+    ModelUpdate { parameters, added_terms: vec![], fit: Some(fit_section.into()) }
+}
+
+fn round(v: f64, decimals: i32) -> f64 {
+    let s = 10f64.powi(decimals);
+    (v * s).round() / s
+}

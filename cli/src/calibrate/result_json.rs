@@ -1,0 +1,23 @@
+//! The calibrate result as JSON (`--json`): what the summary says, as numbers (SI units).
+
+use std::path::Path;
+
+use metrocell_estimation::{rms, Fit, RecordSet};
+use serde_json::{json, Value};
+
+pub fn result(f: &Fit, records: &RecordSet, output: &Path) -> Value {
+    json!({
+        "model": output.display().to_string(),
+        "records": f.used.len(),
+        "rejected": records.rejected.iter().map(|r| json!({"at": r.at, "point_id": r.point_id, "reason": r.reason})).chain(f.skipped.iter().map(|s| json!({"at": format!("record {}", s.index), "point_id": s.point_id, "reason": s.reason}))).collect::<Vec<_>>(),
+        "residual_rms_m": {"before": rms(&f.residuals_before), "after": rms(&f.residuals_after)},
+        "chi2_per_dof": f.chi2_per_dof,
+        "degrees_of_freedom": f.solution.degrees_of_freedom,
+        "parameters": f.parameters.iter().filter(|p| p.free).map(|p| json!({"name": p.name, "value": p.value, "sigma": p.sigma, "unit": p.unit})).collect::<Vec<_>>(),
+        "not_identifiable": f.held.iter().map(|h| json!({"name": h.name, "statement": h.combination})).collect::<Vec<_>>(),
+        "outliers": f.outliers.iter().map(|o| json!({"point_id": o.point_id, "time": o.time, "reason": o.reason})).collect::<Vec<_>>(),
+        "downweighted_components": f.downweighted,
+        "rank": f.identifiability.rank,
+        "condition_number": f.identifiability.condition_number,
+    })
+}

@@ -1,0 +1,84 @@
+//! `metrocell calibrate` end to end on a `metrocell sim` recording of the quick demo cell
+//! (issue 15): the cell conceals α = 10.2e-6 1/K on the X scale; the model starts from the
+//! handbook 11.5e-6 the thermal node is configured with. The fit must land on 10.2e-6 within its
+//! stated uncertainty — and far outside it from 11.5e-6 — because it fitted α, not because it
+//! was told. The fitted model reads back (sim, calibrate), the report and the JSON are written.
+
+mod common;
+
+use common::metrocell;
+
+fn dir(name: &str) -> std::path::PathBuf {
+    common::scratch("calibrate", name)
+}
+
+fn cell(name: &str) -> String {
+    format!("{}/../launch-configs/cells/{name}", env!("CARGO_MANIFEST_DIR"))
+}
+
+/// The quick demo as the user's model: the same machine and terms, every value at a start a
+/// user would have (α the handbook 11.5e-6, the others 0), the tracker where it was set up.
+fn quick_demo_model() -> String {
+    let text = std::fs::read_to_string(cell("quick_demo.yaml")).unwrap();
+    let out = text
+        .replace("params: {alpha: 10.2e-6 1/K}   # the real scale: not the handbook 11.5e-6 the thermal node is configured with", "params: {alpha: 11.5e-6 1/K}   # the handbook value for steel")
+        .replace("params: {a1: 3 um, b1: -2 um}", "params: {a1: 0 um, b1: 0 um}")
+        .replace("params: {reversal: 8 um}", "params: {reversal: 0 um}")
+        .replace("warmup: {offset: 0 um, amplitude: 19 um, time_constant: 30 min}", "warmup: {offset: 0 um, amplitude: 10 um, time_constant: 20 min}");
+    assert_ne!(out, text);
+    assert!(out.contains("alpha: 11.5e-6") && !out.contains("10.2e-6"));
+    out
+}
+
+#[test]
+fn quick_demo_alpha_is_fitted_not_configured() {
+    let d = dir("quick_demo");
+    let (code, out, err) = metrocell(&["sim", "--cell", &cell("quick_demo.yaml"), "--duration", "40min", "--no-camera-frames", "--quiet", "-o", "bag"], &d);
+    assert_eq!(code, 0, "{out}{err}");
+    std::fs::write(d.join("model.yaml"), quick_demo_model()).unwrap();
+    let (code, out, err) = metrocell(&["calibrate", "--model", "model.yaml", "bag", "-o", "fitted.yaml", "--report", "report", "--json", "result.json"], &d);
+    assert_eq!(code, 0, "{out}{err}");
+    println!("{out}");
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("result.json")).unwrap()).unwrap();
+    let param = |name: &str| json["parameters"].as_array().unwrap().iter().find(|p| p["name"] == name).unwrap_or_else(|| panic!("{name} not fitted: {json:#}")).clone();
+    let alpha = param("thermal_scale[x].alpha");
+    let (a, u) = (alpha["value"].as_f64().unwrap(), alpha["sigma"].as_f64().expect("α is identifiable"));
+    assert!(((a - 10.2e-6) / u).abs() < 3.0, "α = {a:e} ± {u:e}: not within 3σ of the concealed 10.2e-6");
+    assert!(((a - 11.5e-6) / u).abs() > 4.0, "α = {a:e} ± {u:e} does not tell the real scale from the handbook 11.5e-6");
+    assert!(u < 0.3e-6, "σ(α) = {u:e}: too loose to close the 1.3e-6 gap");
+    let reversal = param("backlash[x].reversal");
+    assert!(((reversal["value"].as_f64().unwrap() - 8e-6) / reversal["sigma"].as_f64().unwrap()).abs() < 4.0, "{reversal}");
+    // what remains is the tracker's noise (χ²/dof near 1), nothing was left out
+    let chi2 = json["chi2_per_dof"].as_f64().unwrap();
+    assert!((0.8..1.25).contains(&chi2), "χ²/dof {chi2}");
+    assert!(out.contains("thermal_scale[x].alpha = ") && out.contains("µm/m/K") && out.contains("Residual RMS per coordinate"), "{out}");
+    // the fitted model: α in place in the user's unit, its σ in `uncertainty:`, readable by sim and calibrate
+    let fitted = std::fs::read_to_string(d.join("fitted.yaml")).unwrap();
+    assert!(fitted.contains("# the handbook value for steel") && fitted.contains("\"thermal_scale[x]\": {alpha: "), "{fitted}");
+    let (code, out, err) = metrocell(&["sim", "--cell", "fitted.yaml", "--duration", "10s", "--no-camera-frames", "--quiet", "-o", "bag_from_fitted"], &d);
+    assert_eq!(code, 0, "the fitted model simulates: {out}{err}");
+    let (code, out, err) = metrocell(&["calibrate", "--model", "fitted.yaml", "bag", "-o", "refitted.yaml"], &d);
+    assert_eq!(code, 0, "the fitted model calibrates again: {out}{err}");
+    let html = std::fs::read_to_string(d.join("report/index.html")).unwrap();
+    for needle in ["Residuals", "Error functions", "Identifiability", "Uncertainty budget", "thermal_scale[x].alpha"] {
+        assert!(html.contains(needle), "report lacks {needle}");
+    }
+    for f in ["residual_histogram", "residual_time", "residual_workspace", "error_x", "error_y", "error_z"] {
+        assert!(d.join(format!("report/figures/{f}.svg")).exists(), "figure {f}");
+    }
+}
+
+#[test]
+fn bad_input_is_named() {
+    let d = dir("bad");
+    std::fs::write(d.join("model.yaml"), quick_demo_model()).unwrap();
+    let (code, _, err) = metrocell(&["calibrate", "--model", "model.yaml", "no_such_bag", "-o", "f.yaml"], &d);
+    assert_eq!(code, 2);
+    assert!(err.contains("no_such_bag"), "{err}");
+    let (code, _, err) = metrocell(&["calibrate", "--model", "missing.yaml", "no_such_bag", "-o", "f.yaml"], &d);
+    assert_eq!(code, 2);
+    assert!(err.contains("missing.yaml"), "{err}");
+    let (code, _, err) = metrocell(&["calibrate", "--model", "model.yaml", "bag", "-o", "f.yaml", "--loss", "square"], &d);
+    assert_eq!(code, 2);
+    assert!(err.contains("huber, cauchy, linear"), "{err}");
+}

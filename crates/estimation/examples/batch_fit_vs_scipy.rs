@@ -1,0 +1,149 @@
+//! Benchmark: batch identification of the full XFYZ model (21 geometric errors of order 2–3,
+//! the tracker's pose and warm-up) from 10 000 tracker readings, through the real records →
+//! residuals path (`metrocell_estimation::fit` on a `RecordSet`), against
+//! `scipy.optimize.least_squares(method="trf")` with the analytic Jacobian, on the identical
+//! problem (the same whitened residuals and Jacobian, evaluated by the shared model and handed
+//! to scipy over a pipe) from the identical start. Prints both wall times, their ratio, the
+//! share of scipy's time spent waiting for our evaluations, and how far apart the solutions are.
+//!
+//! `METROCELL_PYTHON=/path/to/python cargo run --release -p metrocell-estimation --example batch_fit_vs_scipy`
+
+#[path = "../tests/common/mod.rs"]
+mod common;
+
+use std::io::{BufRead, BufReader, Read, Write};
+use std::process::{Command, Stdio};
+use std::time::Instant;
+
+use common::{records, Planned, THESIS_TRACKER};
+use metrocell_estimation::{fit, FitOptions, PointResiduals};
+use metrocell_solver::{Loss, Problem};
+use metrocell_twin::CellModel;
+use nalgebra::DMatrix;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+const READINGS: usize = 10_000;
+
+fn model() -> CellModel {
+    let terms = common::xfyz_geometric_terms("[y, z]", "[0 m, 0.05 m, -0.15 m]");
+    let text = format!("name: bench\nmachine:\n  family: cartesian\n  stacking: XFYZ\n  travel: {{x: [0 mm, 800 mm], y: [0 mm, 500 mm], z: [0 mm, 400 mm]}}\n  tool_offset: [0 mm, 0 mm, -150 mm]\nsensors:\n  tracker:\n    pose: {{translation: [-0.95 m, 0.3 m, 0.62 m], euler_xyz: [0 deg, 0 deg, 56 deg]}}\n    warmup: {{offset: 0 um, amplitude: 50 um, time_constant: 60 min}}\nterms:\n{terms}");
+    CellModel::from_yaml_str_in(&text, "bench.yaml", std::path::Path::new(".")).expect("bench model")
+}
+
+fn main() {
+    let python = std::env::var("METROCELL_PYTHON").unwrap_or_else(|_| "python3".into());
+    let m = model();
+    let fm = m.forward_model().unwrap();
+    let names = fm.param_names();
+    let mut rng = ChaCha8Rng::seed_from_u64(7);
+    let mut truth = fm.params();
+    for (k, n) in names.iter().enumerate() {
+        if n.starts_with("positioning") || n.starts_with("straightness") {
+            truth[k] = rng.random_range(-8e-6..8e-6);
+        } else if n.starts_with("angular") || n.starts_with("squareness") {
+            truth[k] = rng.random_range(-20e-6..20e-6);
+        }
+    }
+    let pose = names.iter().position(|n| n == "tracker_pose.tx").unwrap();
+    truth[pose..pose + 6].copy_from_slice(&[-0.863527, 0.194373, 0.677782, 0.0339f64.to_radians(), 0.0343f64.to_radians(), 59.4652f64.to_radians()]);
+    let w = names.iter().position(|n| n == "tracker_warmup.offset").unwrap();
+    truth[w..w + 3].copy_from_slice(&[2e-6, 75e-6, 5400.0]);
+    let plan: Vec<Planned> = (0..READINGS)
+        .map(|k| {
+            let dir = if rng.random::<bool>() { 1.0 } else { -1.0 };
+            Planned { q: vec![rng.random_range(0.0..0.8), rng.random_range(0.0..0.5), rng.random_range(0.0..0.4)], approach: [dir; 3], temperatures: vec![], time_on: 600.0 + 1.5 * k as f64 }
+        })
+        .collect();
+    let data = records(&fm, &truth, &plan, THESIS_TRACKER, Some(1));
+    // the identical, full-rank problem for both: hold what the design cannot separate first
+    let options = FitOptions { loss: Loss::Linear, ..FitOptions::default() };
+    let probe = fit(&fm, &m.setup, &data, None, &options).expect("fit");
+    let mut setup = m.setup.clone();
+    for h in &probe.held {
+        setup.free[h.index] = false;
+    }
+    let free: Vec<usize> = (0..names.len()).filter(|&k| setup.free[k]).collect();
+    let x0 = metrocell_estimation::start_vector(&fm, &setup, &data).unwrap();
+    println!("{} readings, {} parameters, {} free after holding {} the design cannot separate", READINGS, names.len(), free.len(), probe.held.len());
+
+    // ours: the whole fit (start checks, solve, covariance, identifiability), best of 3
+    let mut ours = f64::INFINITY;
+    let mut result = None;
+    for _ in 0..3 {
+        let t = Instant::now();
+        let f = fit(&fm, &setup, &data, Some(x0.clone()), &options).expect("fit");
+        ours = ours.min(t.elapsed().as_secs_f64());
+        result = Some(f);
+    }
+    let f = result.unwrap();
+    println!("metrocell: {:.3} s ({} iterations, {:?}), residual RMS {:.3} µm", ours, f.solution.iterations, f.solution.termination, metrocell_estimation::rms(&f.residuals_after) * 1e6);
+
+    // scipy on the identical problem
+    let problem = PointResiduals::new(&fm, &data.records).unwrap();
+    let rows = problem.residual_count();
+    let specs: Vec<_> = fm.machine_terms.param_specs().into_iter().chain(fm.instrument_terms.param_specs()).collect();
+    let lower: Vec<f64> = free.iter().map(|&k| specs[k].min.min(x0[k])).collect();
+    let upper: Vec<f64> = free.iter().map(|&k| specs[k].max.max(x0[k])).collect();
+    let script = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/scipy_batch_fit.py");
+    let mut child = Command::new(&python).arg(script).stdin(Stdio::piped()).stdout(Stdio::piped()).spawn().unwrap_or_else(|e| panic!("cannot start {python}: {e} (set METROCELL_PYTHON to a python with scipy)"));
+    let mut to = child.stdin.take().unwrap();
+    let mut from = BufReader::new(child.stdout.take().unwrap());
+    let head = serde_json::json!({"n": free.len(), "m": rows, "x0": free.iter().map(|&k| x0[k]).collect::<Vec<_>>(), "lower": lower, "upper": upper});
+    writeln!(to, "{head}").unwrap();
+    to.flush().unwrap();
+    let mut r = vec![0.0; rows];
+    let mut jac = DMatrix::zeros(rows, names.len());
+    let mut x = x0.clone();
+    let t = Instant::now();
+    let mut ours_eval = 0.0;
+    let done = loop {
+        let mut tag = [0u8; 1];
+        from.read_exact(&mut tag).unwrap();
+        if tag[0] == b'D' {
+            let mut line = String::new();
+            from.read_line(&mut line).unwrap();
+            break serde_json::from_str::<serde_json::Value>(&line).unwrap();
+        }
+        let mut buf = vec![0u8; 8 * free.len()];
+        from.read_exact(&mut buf).unwrap();
+        for (i, &k) in free.iter().enumerate() {
+            x[k] = f64::from_le_bytes(buf[8 * i..8 * i + 8].try_into().unwrap());
+        }
+        let te = Instant::now();
+        problem.residuals_and_jacobian(&x, &mut r, &mut jac).unwrap();
+        ours_eval += te.elapsed().as_secs_f64();
+        let mut bytes = Vec::with_capacity(8 * rows * (1 + free.len()));
+        r.iter().for_each(|v| bytes.extend_from_slice(&v.to_le_bytes()));
+        for i in 0..rows {
+            for &k in &free {
+                bytes.extend_from_slice(&jac[(i, k)].to_le_bytes());
+            }
+        }
+        to.write_all(&bytes).unwrap();
+        to.flush().unwrap();
+    };
+    let wall = t.elapsed().as_secs_f64();
+    child.wait().unwrap();
+    let scipy = done["seconds"].as_f64().unwrap();
+    let waiting = done["evaluation_seconds"].as_f64().unwrap();
+    let xs: Vec<f64> = done["x"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
+    println!("scipy trf: {:.3} s ({} evaluations, status {}), of which {:.3} s waiting for metrocell's residuals and Jacobian over the pipe ({:.3} s evaluating them); wall {:.3} s", scipy, done["evaluations"], done["status"], waiting, ours_eval, wall);
+    println!("ratio scipy / metrocell: {:.1}× (scipy's own work only, waiting subtracted: {:.1}×)", scipy / ours, (scipy - waiting) / ours);
+    // agreement: per parameter relative to its own magnitude (floored at its σ) and in σ
+    let mut worst_rel: f64 = 0.0;
+    let mut worst_sigma: f64 = 0.0;
+    let mut worst_name = String::new();
+    for (i, &k) in free.iter().enumerate() {
+        let d = (f.x[k] - xs[i]).abs();
+        let sigma = f.parameters[k].sigma.unwrap_or(f64::INFINITY);
+        let rel = d / f.x[k].abs().max(sigma);
+        if rel > worst_rel {
+            worst_rel = rel;
+            worst_name = names[k].clone();
+        }
+        worst_sigma = worst_sigma.max(d / sigma);
+    }
+    let inf_rel = free.iter().enumerate().map(|(i, &k)| (f.x[k] - xs[i]).abs()).fold(0.0, f64::max) / free.iter().map(|&k| f.x[k].abs()).fold(0.0, f64::max);
+    println!("solutions: ‖Δx‖∞/‖x‖∞ = {inf_rel:.2e}; worst parameter {worst_name}: {worst_rel:.2e} of max(|x|, σ); largest difference {worst_sigma:.2e} σ");
+}

@@ -7,7 +7,8 @@
 //! summarises the recorded bag. The twin waits until the recorder subscribes to every topic
 //! before it publishes; at the end the bag's count of each topic is checked against the twin's
 //! own (its `published/<topic>` diagnostics), and the demo fails (exit 1) if any message is
-//! missing.
+//! missing. Last, `metrocell diagnose` judges the bag against the demo's declared model and
+//! writes its HTML report next to the bag.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -23,6 +24,9 @@ use metrocell_node::{qos, MetrocellNode};
 #[command(after_help = "Runs inside a private network namespace when started as\n  \
 tests/isolated target/release/metrocell demo\n\nExamples:\n  metrocell demo\n  metrocell demo --duration 300 --speed 50 --output /tmp/demo_bag\n  metrocell demo --quick")]
 pub struct DemoArgs {
+    /// Directory for the diagnosis report written at the end (default: the bag's path + `_report`)
+    #[arg(long, value_name = "DIR")]
+    report: Option<PathBuf>,
     /// Cell description (default: the built-in three-minute XFYZ cell)
     #[arg(long)]
     cell: Option<PathBuf>,
@@ -45,6 +49,10 @@ pub struct DemoArgs {
     #[arg(long, default_value_t = 8765)]
     dashboard_port: u16,
 }
+
+/// The error model the estimator starts from and the end-of-run diagnosis judges the recording
+/// against (relative to the share directory).
+const DEMO_MODEL: &str = "crates/twin/examples/cells/demo_model.yaml";
 
 /// The directory holding `launch-configs/`: next to the executable's build tree, or the cwd.
 fn share_dir() -> Option<PathBuf> {
@@ -149,7 +157,27 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
         Err(e) => eprintln!("metrocell demo: the recorded bag cannot be read: {e}"),
     }
     let complete = check_recording(&output, &watch);
+    diagnose_recording(&share, &output, args.report.clone());
     Ok(if outcome.success() && complete { 0 } else { 1 })
+}
+
+/// `metrocell diagnose` on the recorded bag against the model the estimator started from (the
+/// demo's declared error model), the report written next to the bag. What it finds is printed
+/// in words; a diagnosis that cannot be made (too short a run) is said, not hidden, and does not
+/// fail the demo (the recording is its product).
+fn diagnose_recording(share: &Path, bag: &Path, report: Option<PathBuf>) {
+    let model = share.join(DEMO_MODEL);
+    let report = report.unwrap_or_else(|| PathBuf::from(format!("{}_report", bag.display())));
+    println!("\ndiagnosing the recording against the demo's declared model ({DEMO_MODEL}) …");
+    let outcome = crate::diagnose_command::diagnose_bags(&model, &[bag.to_path_buf()], &metrocell_diagnose::DiagnoseOptions::default())
+        .and_then(|(m, d)| crate::diagnose_command::write_report(&report, &m, &d, "metrocell demo: diagnosis of the recorded shift").map(|index| (d, index)));
+    match outcome {
+        Ok((d, index)) => {
+            print!("{}", crate::diagnose_command::summary_text(&d));
+            println!("report: {} (the model with what was found added: {})", index.display(), report.join("model.yaml").display());
+        }
+        Err(e) => println!("diagnose could not judge this recording: {e:#}"),
+    }
 }
 
 /// The bag's count of each topic against the twin's; prints the verdict, true when complete.

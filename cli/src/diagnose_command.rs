@@ -76,7 +76,7 @@ fn options(a: &DiagnoseArgs) -> DiagnoseOptions {
 }
 
 /// The summary a person reads.
-fn summary_text(d: &Diagnosis) -> String {
+pub fn summary_text(d: &Diagnosis) -> String {
     let r = &d.report;
     let mut s = String::new();
     s.push_str(&format!("{}\n\n", r.summary));
@@ -125,6 +125,28 @@ fn write(path: &Path, text: &str) -> anyhow::Result<()> {
     std::fs::write(path, text).map_err(|e| anyhow::anyhow!("cannot write {}: {e}", path.display()))
 }
 
+/// Read the model and the bags and diagnose them (progress lines on stderr).
+pub fn diagnose_bags(model_path: &Path, bags: &[PathBuf], options: &DiagnoseOptions) -> anyhow::Result<(CellModel, Diagnosis)> {
+    let model = CellModel::from_path(model_path)?;
+    let forward = model.forward_model()?;
+    eprintln!("reading {} bag(s) …", bags.len());
+    let records = records_from_bags(bags, &forward, &RecordingOptions::default())?;
+    eprintln!("{} measured points ({} set aside while reading); diagnosing …", records.records.len(), records.rejected.len());
+    let declared = DeclaredModel { machine: &model.machine, machine_terms: &model.machine_terms, instrument_terms: &model.instrument_terms, setup: &model.setup };
+    let d = diagnose(&declared, &records, options)?;
+    Ok((model, d))
+}
+
+/// Write the report directory: DIR/model.yaml (the augmented model), DIR/diagnosis.json and
+/// DIR/index.html with its figures. Returns the page's path.
+pub fn write_report(dir: &Path, model: &CellModel, d: &Diagnosis, title: &str) -> anyhow::Result<PathBuf> {
+    std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;
+    write(&dir.join("model.yaml"), &augmented_model(model, d)?)?;
+    write(&dir.join("diagnosis.json"), &serde_json::to_string_pretty(&d.report)?)?;
+    let page = html_report(d, title)?;
+    page.write_to(dir).map_err(|e| anyhow::anyhow!("cannot write the report into {}: {e}", dir.display()))
+}
+
 fn run_inner(a: &DiagnoseArgs) -> anyhow::Result<()> {
     let json_to_stdout = a.json.as_deref() == Some("-");
     let say = |s: &str| {
@@ -134,13 +156,7 @@ fn run_inner(a: &DiagnoseArgs) -> anyhow::Result<()> {
             print!("{s}");
         }
     };
-    let model = CellModel::from_path(&a.model)?;
-    let forward = model.forward_model()?;
-    eprintln!("reading {} bag(s) …", a.bags.len());
-    let records = records_from_bags(&a.bags, &forward, &RecordingOptions::default())?;
-    eprintln!("{} measured points ({} set aside while reading); diagnosing …", records.records.len(), records.rejected.len());
-    let declared = DeclaredModel { machine: &model.machine, machine_terms: &model.machine_terms, instrument_terms: &model.instrument_terms, setup: &model.setup };
-    let d = diagnose(&declared, &records, &options(a))?;
+    let (model, d) = diagnose_bags(&a.model, &a.bags, &options(a))?;
     say(&summary_text(&d));
     let json = serde_json::to_string_pretty(&d.report)?;
     match a.json.as_deref() {
@@ -152,11 +168,7 @@ fn run_inner(a: &DiagnoseArgs) -> anyhow::Result<()> {
         write(path, &residuals_csv(&d))?;
     }
     if let Some(dir) = &a.report {
-        std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;
-        write(&dir.join("model.yaml"), &augmented_model(&model, &d)?)?;
-        write(&dir.join("diagnosis.json"), &json)?;
-        let page = html_report(&d, &format!("metrocell diagnose: {}", a.model.display()))?;
-        let index = page.write_to(dir).map_err(|e| anyhow::anyhow!("cannot write the report into {}: {e}", dir.display()))?;
+        let index = write_report(dir, &model, &d, &format!("metrocell diagnose: {}", a.model.display()))?;
         say(&format!("report: {} (augmented model: {})\n", index.display(), dir.join("model.yaml").display()));
     }
     Ok(())

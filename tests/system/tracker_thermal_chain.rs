@@ -252,7 +252,7 @@ fn twin_tracker_thermal_recorder_over_dds_on_an_eight_hour_shift() {
     let started = Instant::now();
     let log = run_launch(&launch);
     eprintln!("launch ran {:.0} s for {} h simulated ({cycles} cycles of {dwells_per_cycle} dwells)", started.elapsed().as_secs_f64(), SHIFT / HOUR);
-    assert!(log.contains("a recorder subscribes to every topic: starting"), "the twin started before the recorder read every topic:\n{log}");
+    assert!(log.contains("'recorder' subscribes to every topic: starting"), "the twin started before the recorder read every topic:\n{log}");
 
     // every dwell exactly once, with its program point as nominal, on both topics
     let measured = points(&bag, "/measured_points");

@@ -273,6 +273,16 @@ fn demo_loses_nothing(name: &str, busy_cores: usize, domain: u32) {
     assert!(published.values().filter(|n| **n > 0).count() >= 6, "twin topics with messages: {published:?}");
     assert!(stdout.contains("recording check: complete"), "the demo's verdict:\n{stdout}\n{stderr}");
     assert!(out.status.success(), "demo exit status {:?}\n{stdout}\n{stderr}", out.status);
+    // the end-of-run diagnosis: either its report next to the bag, or the reason it could not judge
+    assert!(stdout.contains("diagnosing the recording against the demo's declared model"), "no diagnosis at the end:\n{stdout}");
+    let report = PathBuf::from(format!("{}_report", dir.display()));
+    if stdout.contains("diagnose could not judge this recording: ") {
+        assert!(!report.join("index.html").exists(), "a report without a diagnosis");
+    } else {
+        let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(report.join("diagnosis.json")).expect("diagnosis.json next to the bag")).unwrap();
+        assert!(json["findings"].is_array() && json["after"]["heldout_rms_m"].as_f64().is_some_and(|r| r > 0.0), "{json}");
+        assert!(report.join("index.html").exists() && report.join("model.yaml").exists(), "report files in {}", report.display());
+    }
     eprintln!("{name}: {} messages on {} topics, none lost, in {:.1} s", published.values().sum::<u64>(), published.len(), started.elapsed().as_secs_f64());
 }
 

@@ -19,7 +19,11 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::path::Path;
 
-const SEEDS: u64 = 20;
+/// Noisy fits per case: 20 in CI; the benchmark run sets `METROCELL_COVERAGE_SEEDS=200`
+/// (BENCHMARKS.md, "Coverage of the reported uncertainties").
+fn seeds() -> u64 {
+    std::env::var("METROCELL_COVERAGE_SEEDS").ok().and_then(|s| s.parse().ok()).unwrap_or(20)
+}
 
 struct Case {
     name: &'static str,
@@ -161,9 +165,10 @@ fn shuffle<T>(v: &mut [T], seed: u64) {
     }
 }
 
-/// Runs SEEDS noisy fits of a case; checks χ²/dof per fit, returns the z-scores of every
-/// estimated parameter against the identifiable truth, and the held parameters' sentences.
-fn coverage(case: &Case) -> (Vec<f64>, Vec<String>) {
+/// Runs `seeds()` noisy fits of a case; checks χ²/dof per fit, returns the z-scores of every
+/// estimated parameter (with its name) against the identifiable truth, and the held
+/// parameters' sentences.
+fn coverage(case: &Case) -> (Vec<(String, f64)>, Vec<String>) {
     let fm = case.model.forward_model().unwrap();
     let start = fm.params();
     let mut truth = start.clone();
@@ -184,7 +189,7 @@ fn coverage(case: &Case) -> (Vec<f64>, Vec<String>) {
         setup.free[h.index] = false;
     }
     let mut z = vec![];
-    for seed in 0..SEEDS {
+    for seed in 0..seeds() {
         let data = records(&fm, &truth, &case.plan, THESIS_TRACKER, Some(seed));
         let f = fit(&fm, &setup, &data, None, &options).unwrap_or_else(|e| panic!("{} seed {seed}: {e}", case.name));
         assert!(f.held.is_empty(), "{} seed {seed}: with the design's held set fixed, the rest is identifiable; held {:?}", case.name, f.held);
@@ -193,7 +198,7 @@ fn coverage(case: &Case) -> (Vec<f64>, Vec<String>) {
         assert_eq!(f.downweighted, 0, "{} seed {seed}: honest data has no outliers at 4σ... down-weighted {}", case.name, f.downweighted);
         for (k, p) in f.parameters.iter().enumerate() {
             if let (true, Some(u)) = (p.free, p.sigma) {
-                z.push((p.value - reference.x[k]) / u);
+                z.push((p.name.clone(), (p.value - reference.x[k]) / u));
             }
         }
     }
@@ -201,9 +206,21 @@ fn coverage(case: &Case) -> (Vec<f64>, Vec<String>) {
 }
 
 fn check(case: Case) -> Vec<String> {
-    let (z, held) = coverage(&case);
+    let (named, held) = coverage(&case);
+    let z: Vec<f64> = named.iter().map(|(_, z)| *z).collect();
     let (one, two, three) = (within(&z, 1.0), within(&z, 2.0), within(&z, 3.0));
     println!("{}: {} z-scores; within 1σ {:.3}, 2σ {:.3}, 3σ {:.3}; held: {held:#?}", case.name, z.len(), one, two, three);
+    // per parameter: with 20 seeds a single parameter's 1σ share has a binomial spread of ±10 %,
+    // so only the pooled shares are asserted; the per-parameter range is printed for the
+    // 200-seed benchmark
+    let mut per: std::collections::BTreeMap<&str, Vec<f64>> = std::collections::BTreeMap::new();
+    for (name, z) in &named {
+        per.entry(name).or_default().push(*z);
+    }
+    let shares = |k: f64| per.values().map(|z| within(z, k)).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| (lo.min(s), hi.max(s)));
+    let ((lo1, hi1), (lo3, _)) = (shares(1.0), shares(3.0));
+    let in_band = per.values().filter(|z| (0.60..=0.76).contains(&within(z, 1.0))).count();
+    println!("{}: {} parameters × {} seeds; per parameter within 1σ {lo1:.3}–{hi1:.3} ({in_band} of {} in 0.60–0.76), within 3σ ≥ {lo3:.3}", case.name, per.len(), seeds(), per.len());
     assert!((0.60..=0.76).contains(&one), "{}: {one:.3} within 1σ (expected 0.683)", case.name);
     assert!((0.91..=0.99).contains(&two), "{}: {two:.3} within 2σ (expected 0.954)", case.name);
     assert!(three >= 0.95, "{}: {three:.3} within 3σ", case.name);

@@ -130,7 +130,9 @@ pub fn diagnose_bags(model_path: &Path, bags: &[PathBuf], options: &DiagnoseOpti
     let model = CellModel::from_path(model_path)?;
     let forward = model.forward_model()?;
     eprintln!("reading {} bag(s) …", bags.len());
-    let records = records_from_bags(bags, &forward, &RecordingOptions::default())?;
+    // a model that declares a touch probe is judged on the recording's probe hits too
+    let recording = RecordingOptions { probe_hits: model.raw.sensors.probe.is_some(), ..RecordingOptions::default() };
+    let records = records_from_bags(bags, &forward, &recording)?;
     eprintln!("{} measured points ({} set aside while reading); diagnosing …", records.records.len(), records.rejected.len());
     let declared = DeclaredModel { machine: &model.machine, machine_terms: &model.machine_terms, instrument_terms: &model.instrument_terms, setup: &model.setup };
     let d = diagnose(&declared, &records, options)?;

@@ -189,19 +189,27 @@ fn coverage(case: &Case) -> (Vec<(String, f64)>, Vec<String>) {
         setup.free[h.index] = false;
     }
     let mut z = vec![];
+    let (mut downweighted, mut components) = (0usize, 0usize);
     for seed in 0..seeds() {
         let data = records(&fm, &truth, &case.plan, THESIS_TRACKER, Some(seed));
         let f = fit(&fm, &setup, &data, None, &options).unwrap_or_else(|e| panic!("{} seed {seed}: {e}", case.name));
         assert!(f.held.is_empty(), "{} seed {seed}: with the design's held set fixed, the rest is identifiable; held {:?}", case.name, f.held);
         let dof = f.solution.degrees_of_freedom as f64;
         assert!((f.chi2_per_dof - 1.0).abs() < 5.0 * (2.0 / dof).sqrt(), "{} seed {seed}: χ²/dof {:.3} with {dof} dof", case.name, f.chi2_per_dof);
-        assert_eq!(f.downweighted, 0, "{} seed {seed}: honest data has no outliers at 4σ... down-weighted {}", case.name, f.downweighted);
+        downweighted += f.downweighted;
+        components += 3 * data.records.len();
         for (k, p) in f.parameters.iter().enumerate() {
             if let (true, Some(u)) = (p.free, p.sigma) {
                 z.push((p.name.clone(), (p.value - reference.x[k]) / u));
             }
         }
     }
+    // Huber at 4σ down-weights honest Gaussian data only rarely: 6.3e-5 of the whitened
+    // components lie beyond 4σ (two-sided); more than that (+4 standard deviations of the count)
+    // would mean the stated noise is too small or the fit mistakes signal for outliers
+    let expected = 6.3e-5 * components as f64;
+    assert!((downweighted as f64) <= expected + 4.0 * expected.sqrt() + 1.0, "{}: {downweighted} down-weighted readings in {} seeds, {expected:.1} expected of honest data", case.name, seeds());
+    println!("{}: {downweighted} down-weighted in {} seeds ({expected:.2} expected of Gaussian data at 4σ)", case.name, seeds());
     (z, reference.held.iter().map(|h| format!("{}: {}", h.name, h.combination)).collect())
 }
 

@@ -4,9 +4,10 @@
 //!   (frame poses, the plate's corner pixels and marker points) equal the model's predictions at
 //!   the true parameters bit for bit, with the signals the twin used (`Simulation::signals_at`,
 //!   the sample's station air, the tracker's time since power-on);
-//! * statistics — the noisy tracker and probe readings' residuals against the model, divided by
-//!   the stated σ, have mean 0 ± 3/√n and standard deviation 1 ± 0.05 (the twin's camera
-//!   readings carry no noise: it is added where frames are rendered, crates/sim);
+//! * statistics — for every example cell (all families), the noisy tracker readings' residuals, and
+//!   the probe's, against the model, divided by the stated σ, have mean 0 ± 3/√n and standard
+//!   deviation 1 ± 0.05 (the twin's camera readings carry no noise: it is added where frames are
+//!   rendered, crates/sim);
 //! * Jacobians — the model's analytic Jacobian of every instrument's reading w.r.t. every
 //!   parameter (kinematic terms of the delta and the arm, workpiece-frame terms, time offset,
 //!   compliance, probe pretravel, camera scale and lens distortion included) matches 4th-order
@@ -117,7 +118,7 @@ fn noise_free_readings_are_the_models_predictions_bit_for_bit() {
 
 #[test]
 fn noisy_residuals_over_the_stated_sigma_are_standard_normal() {
-    for (seed, name) in ["quick_demo.yaml", "xfyz_shift.yaml", "serial_arm_ur5.yaml"].into_iter().enumerate() {
+    for (seed, name) in CELLS.into_iter().enumerate() {
         let mut f = example_with_tracker(name);
         let t = f.sensors.tracker.as_mut().unwrap();
         // turbulence inflates the scatter above the stated σ on purpose; breaks give no reading

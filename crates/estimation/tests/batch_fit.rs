@@ -119,3 +119,36 @@ fn declared_parameters_come_back_within_their_uncertainty() {
     assert!(checked >= 11 && within >= checked - 1, "{within} of {checked} within 3σ");
     assert_eq!(f.identifiability.rank, checked, "{:?}", f.identifiability.describe());
 }
+
+/// A prior (value, σ) on a parameter enters the fit as one more observation: with a prior as
+/// strong as the data (σ_p = the data's σ), the estimate is the precision-weighted mean of the
+/// data-only estimate and the prior's value, and its σ shrinks by √2 — linear-Gaussian algebra,
+/// checked through `fit` on the squareness of the test cell.
+#[test]
+fn a_prior_combines_with_the_data_by_precision() {
+    let truth = Cell::from_yaml_str(CELL, "fit_test").unwrap();
+    let data = records(&truth, 5e-6, 11);
+    let mut model_cell = Cell::from_yaml_str(CELL, "fit_test").unwrap();
+    for t in &mut model_cell.terms.terms {
+        t.params.iter_mut().for_each(|v| *v = 0.0);
+    }
+    let instruments = model_cell.tracker_terms().unwrap();
+    let model = model_cell.forward_model(&instruments).unwrap();
+    let mut setup = ParameterSetup::all_free(&model);
+    for (k, n) in setup.names.clone().iter().enumerate() {
+        if n.starts_with("refraction") || n == "positioning[x].c0" {
+            setup.free[k] = false;
+        }
+    }
+    let k = setup.names.iter().position(|n| n == "squareness[xy].s").unwrap();
+    let plain = fit(&model, &setup, &data, None, &FitOptions::default()).unwrap();
+    let (s_data, u_data) = (plain.parameters[k].value, plain.parameters[k].sigma.unwrap());
+    // a prior four σ of the data away from the data's estimate, as certain as the data
+    let prior = metrocell_model::Prior { value: s_data + 4.0 * u_data, sigma: u_data };
+    setup.priors[k] = Some(prior);
+    let with = fit(&model, &setup, &data, None, &FitOptions::default()).unwrap();
+    let (s, u) = (with.parameters[k].value, with.parameters[k].sigma.unwrap());
+    let expected = (s_data + prior.value) / 2.0;
+    assert!((s - expected).abs() < 0.1 * u_data, "with the prior: {s:e}, the precision-weighted mean {expected:e} (data {s_data:e} ± {u_data:e})");
+    assert!((u / (u_data / 2f64.sqrt()) - 1.0).abs() < 0.1, "σ with the prior {u:e}, expected {:e}", u_data / 2f64.sqrt());
+}

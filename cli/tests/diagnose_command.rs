@@ -4,19 +4,15 @@
 //! `metrocell bag import`; and bad input (a missing bag, a model file that is not one) answered
 //! with a message that names it.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
-fn dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("metrocell_diagnose_{name}_{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&d);
-    std::fs::create_dir_all(&d).unwrap();
-    d
-}
+use common::metrocell;
 
-fn metrocell(args: &[&str], cwd: &Path) -> (i32, String, String) {
-    let o = Command::new(env!("CARGO_BIN_EXE_metrocell")).args(args).current_dir(cwd).output().unwrap();
-    (o.status.code().unwrap_or(-1), String::from_utf8_lossy(&o.stdout).into(), String::from_utf8_lossy(&o.stderr).into())
+fn dir(name: &str) -> PathBuf {
+    common::scratch("diagnose", name)
 }
 
 fn repo() -> PathBuf {

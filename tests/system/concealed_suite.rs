@@ -62,16 +62,14 @@ fn ci_cases() -> Vec<String> {
     out
 }
 
-/// A parameter of diagnose's JSON in SI (the catalog's units; a few scaled forms accepted).
+/// A parameter of diagnose's JSON: value and σ, in the catalog's SI units the README documents
+/// (a unit that is not one of them fails the test rather than be compared at the wrong scale).
 fn si(p: &Value) -> (f64, f64) {
-    let k = match p["unit"].as_str().unwrap_or("") {
-        "mm" => 1e-3,
-        "um" | "µm" | "um/K" | "µm/K" | "urad" | "µrad" => 1e-6,
-        "ms" => 1e-3,
-        "min" => 60.0,
-        _ => 1.0,
-    };
-    (p["value"].as_f64().unwrap() * k, p["sigma"].as_f64().unwrap() * k)
+    let unit = p["unit"].as_str().unwrap_or("");
+    // every unit the physics catalog's parameters use (crates/physics ParamSpec)
+    const CATALOG_UNITS: [&str; 11] = ["1", "1/(N m^2)", "1/K", "K", "Pa", "m", "m/K", "m/N", "rad", "rad/(N m)", "s"];
+    assert!(CATALOG_UNITS.contains(&unit), "unit `{unit}` of {p} is not one of the catalog's SI units");
+    (p["value"].as_f64().unwrap(), p["sigma"].as_f64().unwrap())
 }
 
 fn generate(out: &Path, cases: &[String], seeds: &[&str]) {

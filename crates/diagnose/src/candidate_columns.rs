@@ -2,9 +2,11 @@
 //! how each record's predicted reading moves per unit of each of the candidate's parameters,
 //! whitened by the record's covariance like its residual.
 //!
-//! Two routes, the same numbers (a test holds them equal):
-//! * the model with the candidate added — [`ForwardModel::tracker_jacobian`] of the augmented
-//!   model, the candidate's columns — for instrument terms (warm-up, refraction), kinematic
+//! Two routes to the same numbers (the second is the first's chain rule; no test compares them
+//! yet):
+//! * the model with the candidate added — the estimator's prediction Jacobian of the augmented
+//!   model (each record kind through its own instrument), the candidate's columns — for
+//!   records that are not all tracker points, instrument terms (warm-up, refraction), kinematic
 //!   terms (delta, arm), workpiece-frame terms (they move the part, not the tool) and every
 //!   term on an arm (whose tool frame turns);
 //! * for machine- and tool-frame displacement terms on cartesian, delta and five-axis machines,
@@ -14,8 +16,8 @@
 //!   piece is computed once per record; each candidate variant then costs one term evaluation
 //!   per record instead of a pass through the whole model.
 
-use metrocell_estimation::MeasurementRecord;
-use metrocell_model::{ForwardModel, MachineKinematics, Workspace, TRACKER_ROWS};
+use metrocell_estimation::{MeasurementRecord, PointResiduals, RecordKind};
+use metrocell_model::{ForwardModel, MachineKinematics};
 use metrocell_physics::model::TermModel;
 use metrocell_physics::{configure, ConfiguredTerm, EffectKind, Frame, PhysicsError, Signals, TermConfig};
 use nalgebra::{DMatrix, Matrix3, Vector3};
@@ -63,7 +65,10 @@ impl<'m, 'a> ColumnContext<'m, 'a> {
         let signals: Vec<Signals> = records.iter().map(|r| r.signals.clone()).collect();
         let machine_points: Vec<Vector3<f64>> = records.iter().map(|r| model.nominal_machine_point(&r.q).unwrap_or_else(Vector3::zeros)).collect();
         let mut ctx = Self { model, x: x.to_vec(), records, whitening, signals, sensitivity: None, machine_points };
-        if !matches!(model.machine.kinematics, MachineKinematics::SerialArm(_)) {
+        // ∂reading/∂d from a tool offset's columns is the tracker's: chaining through it is for
+        // point records only (probe and camera records take the full augmented Jacobian)
+        let points_only = records.iter().all(|r| matches!(r.kind, RecordKind::Point));
+        if points_only && !matches!(model.machine.kinematics, MachineKinematics::SerialArm(_)) {
             // ∂reading/∂d: the columns of a tool offset (declared, or added at zero)
             let names = model.param_names();
             let sens = match names.iter().position(|n| n == "tool_offset.dx") {
@@ -84,17 +89,11 @@ impl<'m, 'a> ColumnContext<'m, 'a> {
     }
 
     /// Unwhitened columns `start..start + len` of `model`'s reading Jacobian at `x`, 3 rows per
-    /// record (the reported point).
+    /// record: the estimator's own prediction Jacobian, so each record kind (tracker point,
+    /// probe hit, camera point) gets its own instrument's derivatives.
     fn jacobian_columns(&mut self, model: &ForwardModel, x: &[f64], start: usize, len: usize) -> Result<DMatrix<f64>, PhysicsError> {
-        let kin = model.kinematic_truth(x)?;
-        let mut work = Workspace::new(model);
-        let mut jac = DMatrix::zeros(TRACKER_ROWS, model.param_count());
-        let mut out = DMatrix::zeros(3 * self.records.len(), len);
-        for (i, r) in self.records.iter().enumerate() {
-            model.tracker_jacobian(x, &kin, &r.q, &mut self.signals[i], &mut work, &mut jac)?;
-            out.view_mut((3 * i, 0), (3, len)).copy_from(&jac.view((0, start), (3, len)));
-        }
-        Ok(out)
+        let problem = PointResiduals::new(model, self.records).map_err(|e| PhysicsError::BadValue { term: "records".into(), key: "covariance".into(), text: e.point_id.clone(), reason: format!("record {} has a covariance that is not finite and positive definite", e.index) })?;
+        Ok(problem.prediction_jacobian(x)?.columns(start, len).into_owned())
     }
 
     /// Unwhitened columns of `term` (at its configured parameters) through the model with it

@@ -9,6 +9,7 @@
 //! then s = 1.4826·MAD(z), a robust scatter that a structure confined to part of the data
 //! hardly moves, so an understated noise level does not pass for structure everywhere.
 
+use crate::outliers::robust_scale;
 use std::collections::BTreeMap;
 
 use statrs::distribution::{ContinuousCDF, Normal};
@@ -176,15 +177,6 @@ fn group_candidates(channel: &str, axis: usize, g: &[&ResidualSample], options: 
 }
 
 /// 1.4826·median |z − median z|.
-fn robust_scale(z: &[f64]) -> f64 {
-    let mut v = z.to_vec();
-    v.sort_by(f64::total_cmp);
-    let med = v[v.len() / 2];
-    let mut dev: Vec<f64> = v.iter().map(|x| (x - med).abs()).collect();
-    dev.sort_by(f64::total_cmp);
-    1.4826 * dev[dev.len() / 2]
-}
-
 /// Index sets of the lower, middle and upper third of `values` with their ranges; empty when the
 /// values do not vary.
 fn terciles(values: &[f64]) -> Vec<(f64, f64, Vec<usize>)> {

@@ -280,9 +280,10 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         let z: Vec<Vector3<f64>> = (0..view.len()).map(|i| view.whitening[i] * view.residual[i]).collect();
         let out = outliers(&z, &view.time, &view.position, options.outlier_threshold);
         if !out.is_empty() {
+            let scatter = robust_scale(&z.iter().flat_map(|v| v.iter().copied()).collect::<Vec<_>>()).max(1e-12);
             for &i in &out {
                 let r = &set.records[i];
-                outlier_notes.push(format!("t = {:.1} s, point `{}` ({}): residual {:.1} µm, {:.0}× the robust scatter", r.time, r.point_id, r.channel, view.residual[i].norm() * 1e6, z[i].amax() / robust_scale(&z.iter().flat_map(|v| v.iter().copied()).collect::<Vec<_>>()).max(1e-12)));
+                outlier_notes.push(format!("t = {:.1} s, point `{}` ({}): residual {:.1} µm, {:.0}× the robust scatter", r.time, r.point_id, r.channel, view.residual[i].norm() * 1e6, z[i].amax() / scatter));
             }
             let keep: Vec<MeasurementRecord> = set.records.iter().enumerate().filter(|(i, _)| !out.contains(i)).map(|(_, r)| r.clone()).collect();
             set.records = keep;

@@ -1,6 +1,6 @@
 //! The recorded topics that carry signals, and how each message feeds the signals builder
-//! ([`metrocell_model::SignalsBuilder`]). One table for every reader of recordings: records from
-//! bags ([`crate::recordings`]) and the online estimator, which receives the same messages live.
+//! ([`metrocell_model::SignalsBuilder`]): the table records from bags ([`crate::recordings`])
+//! read. (The online estimator node does not use it yet: it has its own interpolator.)
 //!
 //! | topic | type | signal |
 //! |---|---|---|

@@ -74,27 +74,39 @@ fn records(cell: &Cell, sigma: f64, seed: u64) -> RecordSet {
     RecordSet { frame: RecordFrame::Instrument("tracker".into()), records: out, rejected: vec![], sources: vec![] }
 }
 
+/// The test cell with its terms at zero: the model a user starts a fit from.
+fn zeroed_model_cell() -> Cell {
+    let mut cell = Cell::from_yaml_str(CELL, "fit_test").unwrap();
+    for t in &mut cell.terms.terms {
+        t.params.iter_mut().for_each(|v| *v = 0.0);
+    }
+    cell
+}
+
+/// Every parameter free but refraction (not estimated here) and positioning's constant (the
+/// tracker's translation).
+fn declared_setup(model: &metrocell_model::ForwardModel) -> ParameterSetup {
+    let mut setup = ParameterSetup::all_free(model);
+    for (k, n) in setup.names.clone().iter().enumerate() {
+        if n.starts_with("refraction") || n == "positioning[x].c0" {
+            setup.free[k] = false;
+        }
+    }
+    setup
+}
+
 #[test]
 fn declared_parameters_come_back_within_their_uncertainty() {
     let truth = Cell::from_yaml_str(CELL, "fit_test").unwrap();
     let sigma = 5e-6;
     let data = records(&truth, sigma, 7);
     // the model: the same terms at zero, the tracker placed roughly (10 cm, 5° off)
-    let mut model_cell = Cell::from_yaml_str(CELL, "fit_test").unwrap();
-    for t in &mut model_cell.terms.terms {
-        t.params.iter_mut().for_each(|v| *v = 0.0);
-    }
+    let mut model_cell = zeroed_model_cell();
     let tr = model_cell.tracker.as_mut().unwrap();
     tr.pose = metrocell_model::InstrumentPose::from_euler_xyz(tr.pose.translation + Vector3::new(0.1, -0.1, 0.05), [0.0, 0.0, 55f64.to_radians()]);
     let instruments = model_cell.tracker_terms().unwrap();
     let model = model_cell.forward_model(&instruments).unwrap();
-    let mut setup = ParameterSetup::all_free(&model);
-    // refraction is not estimated here; positioning's constant is the tracker's translation
-    for (k, n) in setup.names.clone().iter().enumerate() {
-        if n.starts_with("refraction") || n == "positioning[x].c0" {
-            setup.free[k] = false;
-        }
-    }
+    let setup = declared_setup(&model);
     let f = fit(&model, &setup, &data, None, &FitOptions::default()).unwrap();
     let after = rms(&f.residuals_after);
     assert!((after / sigma - 1.0).abs() < 0.1, "residual RMS {after:e} vs noise {sigma:e}");
@@ -128,18 +140,10 @@ fn declared_parameters_come_back_within_their_uncertainty() {
 fn a_prior_combines_with_the_data_by_precision() {
     let truth = Cell::from_yaml_str(CELL, "fit_test").unwrap();
     let data = records(&truth, 5e-6, 11);
-    let mut model_cell = Cell::from_yaml_str(CELL, "fit_test").unwrap();
-    for t in &mut model_cell.terms.terms {
-        t.params.iter_mut().for_each(|v| *v = 0.0);
-    }
+    let model_cell = zeroed_model_cell();
     let instruments = model_cell.tracker_terms().unwrap();
     let model = model_cell.forward_model(&instruments).unwrap();
-    let mut setup = ParameterSetup::all_free(&model);
-    for (k, n) in setup.names.clone().iter().enumerate() {
-        if n.starts_with("refraction") || n == "positioning[x].c0" {
-            setup.free[k] = false;
-        }
-    }
+    let mut setup = declared_setup(&model);
     let k = setup.names.iter().position(|n| n == "squareness[xy].s").unwrap();
     let plain = fit(&model, &setup, &data, None, &FitOptions::default()).unwrap();
     let (s_data, u_data) = (plain.parameters[k].value, plain.parameters[k].sigma.unwrap());

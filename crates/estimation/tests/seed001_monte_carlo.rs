@@ -102,8 +102,8 @@ fn thesis_monte_carlo_shape_and_an_honest_map() {
     let (init_mean, init_sd) = mean_sd(&mc.initial_moduli);
     let (res_mean, res_sd) = mean_sd(&mc.residual_moduli);
     println!("initial volumetric error {:.2} ± {:.2} µm (thesis 77.39 ± 40.91); residual after {:.2} ± {:.2} µm (thesis 12.34 ± 7.06) over {} trials × {} points", init_mean * 1e6, init_sd * 1e6, res_mean * 1e6, res_sd * 1e6, TRIALS, points.len());
-    // the shape: tens of µm before, about 12 ± 7 µm after
-    assert!((40e-6..120e-6).contains(&init_mean), "initial {init_mean:e}");
+    // the shape: about 12 ± 7 µm after (the "before" figure is the chosen truth's error, scaled
+    // to the thesis's size by construction, so it is printed, not asserted)
     assert!((6e-6..20e-6).contains(&res_mean) && (3e-6..12e-6).contains(&res_sd), "residual {res_mean:e} ± {res_sd:e}");
     assert!(res_mean < init_mean / 3.0);
     // the map's uncertainty is honest: the fitted map is unbiased (mean within 4 standard errors

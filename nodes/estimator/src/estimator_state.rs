@@ -48,8 +48,8 @@ impl Counters {
     pub fn summary(&self) -> String {
         let not_used = self.points_not_used.iter().map(|(r, n)| format!("{r}: {n}")).collect::<Vec<_>>().join(", ");
         format!(
-            "{} points received, {} accepted, {} gated as outliers, {} alarms, {} with held signals, not used: [{not_used}], {} models published",
-            self.points_received, self.accepted, self.outliers, self.alarms, self.points_with_held_signals, self.models_published
+            "{} points received, {} accepted, {} gated as outliers, {} alarms, {} with held signals, not used: [{not_used}], {} models published, {} joint states without the machine's joints, {} temperature readings rejected",
+            self.points_received, self.accepted, self.outliers, self.alarms, self.points_with_held_signals, self.models_published, self.joint_states_without_axes, self.rejected_readings
         )
     }
 }
@@ -91,10 +91,6 @@ pub struct EstimatorState {
     pub counters: Counters,
 }
 
-fn stamp_ns(t: &metrocell_msgs::builtin_interfaces::msg::Time) -> i64 {
-    t.sec as i64 * 1_000_000_000 + t.nanosec as i64
-}
-
 impl EstimatorState {
     pub fn new(model: ForwardModel<'static>, filter: RecursiveEstimator, stream: SignalStream, settings: Settings) -> Self {
         let n = model.param_count();
@@ -115,10 +111,6 @@ impl EstimatorState {
 
     pub fn filter(&self) -> &RecursiveEstimator {
         &self.filter
-    }
-
-    pub fn model(&self) -> &ForwardModel<'static> {
-        &self.model
     }
 
     /// The state to restart from (see [`crate::state_file`]).
@@ -150,12 +142,12 @@ impl EstimatorState {
         };
         let q = index.iter().map(|&k| js.position[k]).collect();
         let velocity = (js.velocity.len() == js.name.len()).then(|| index.iter().map(|&k| js.velocity[k]).collect());
-        self.stream.joints(stamp_ns(&js.header.stamp) as f64 * 1e-9, q, velocity);
+        self.stream.joints(js.header.stamp.nanos() as f64 * 1e-9, q, velocity);
     }
 
     /// A temperature reading of `sensor`.
     pub fn temperature(&mut self, sensor: &str, t: &Temperature) {
-        if !self.stream.temperature(sensor, stamp_ns(&t.header.stamp) as f64 * 1e-9, t.temperature) {
+        if !self.stream.temperature(sensor, t.header.stamp.nanos() as f64 * 1e-9, t.temperature) {
             self.counters.rejected_readings += 1;
         }
     }
@@ -164,7 +156,7 @@ impl EstimatorState {
     pub fn point(&mut self, p: MeasuredPoint) {
         self.counters.points_received += 1;
         self.arrivals += 1;
-        self.pending.insert((stamp_ns(&p.header.stamp), self.arrivals), p);
+        self.pending.insert((p.header.stamp.nanos(), self.arrivals), p);
     }
 
     /// Take every queued point whose signals are final (or held), in stamp order.
@@ -217,11 +209,11 @@ impl EstimatorState {
         }
         if update.alarm {
             self.counters.alarms += 1;
-            out.alarm = Some(Alarm { stamp_ns: stamp_ns(&p.header.stamp), point_id: p.point_id.clone(), measurement, nis: update.nis, window_probability: update.window_probability, innovation: update.innovation });
+            out.alarm = Some(Alarm { stamp_ns: p.header.stamp.nanos(), point_id: p.point_id.clone(), measurement, nis: update.nis, window_probability: update.window_probability, innovation: update.innovation });
         }
         if update.alarm || self.since_publish >= self.settings.publish_every {
             self.since_publish = 0;
-            let header_ns = stamp_ns(&p.header.stamp);
+            let header_ns = p.header.stamp.nanos();
             out.model = Some(model_message::error_model(&self.model, &self.filter, &self.settings.machine_id, header_ns));
             out.predicted = self.predictions(&record.signals, header_ns);
             self.counters.models_published += 1;

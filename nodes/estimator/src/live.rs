@@ -9,12 +9,11 @@ use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
 use metrocell_msgs::msg::{ErrorModel, MeasuredPoint};
 use metrocell_msgs::sensor_msgs::msg::{JointState, Temperature};
 use metrocell_node::{qos, MetrocellNode, NodeError};
-use ros2_client::qos::History;
 
 /// Every input is read reliably with a deep queue: a lost joint state or reading would change
 /// the interpolated signals, and the live estimate would no longer equal the replay's.
 fn input_qos() -> metrocell_node::QosProfile {
-    qos::reliable().history(History::KeepLast { depth: 1000 })
+    qos::stream(qos::reliable())
 }
 
 pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
@@ -84,6 +83,8 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
         diagnostics.set_value("alarms", c.alarms);
         diagnostics.set_value("points_waiting_for_signals", state.pending());
         diagnostics.set_value("points_with_held_signals", c.points_with_held_signals);
+        diagnostics.set_value("joint_states_without_axes", c.joint_states_without_axes);
+        diagnostics.set_value("rejected_temperature_readings", c.rejected_readings);
         diagnostics.set_value("innovation_rms_um", format!("{:.3}", state.filter().innovation_rms() * 1e6));
         token.wait_timeout(Duration::from_millis(2));
     }

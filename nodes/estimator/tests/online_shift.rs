@@ -313,8 +313,8 @@ fn replay_from_bag_equals_live_run_over_dds() {
     assert_eq!(replay_alarms.len(), 1, "one alarm in the replay");
 
     let mut listener = MetrocellNode::builder("estimator_test_listener").handle_signals(false).build().unwrap();
-    let models = listener.subscription::<ErrorModel>("/estimator/error_model", qos::reliable().history(ros2_client::qos::History::KeepLast { depth: 1000 })).unwrap();
-    let diagnostics = listener.subscription::<DiagnosticArray>("/diagnostics", qos::reliable().history(ros2_client::qos::History::KeepLast { depth: 1000 })).unwrap();
+    let models = listener.subscription::<ErrorModel>("/estimator/error_model", qos::stream(qos::reliable())).unwrap();
+    let diagnostics = listener.subscription::<DiagnosticArray>("/diagnostics", qos::stream(qos::reliable())).unwrap();
     let _node = Killed(Command::new(env!("CARGO_BIN_EXE_metrocell-estimator")).args(run.args(&[])).stdout(Stdio::null()).spawn().unwrap());
     std::thread::sleep(Duration::from_secs(3)); // discovery between the node, the listener and the player
     let mut play = Killed(Command::new(&cli).args(["bag", "play"]).arg(&input).stdin(Stdio::null()).stdout(Stdio::null()).spawn().unwrap());

@@ -193,9 +193,9 @@ impl TrackerState {
         self.counters.readings += 1;
         self.power_on_ns.get_or_insert(raw.time_ns - self.config.warmup_elapsed_at_first_ns);
         let mut out = Vec::new();
-        if self.awaiting.front().is_some_and(|a| raw.time_ns - a.mid_ns > COMMANDED_WAIT_NS) {
-            self.resolve_awaiting(true, &mut out);
-        }
+        // dwells that waited their full time for the commanded states go without them; newer
+        // ones keep waiting
+        self.resolve_awaiting(raw.time_ns - COMMANDED_WAIT_NS, &mut out);
         // a silence closes the open dwell even when this reading is rejected
         if let Some(d) = self.grouper.close_if_stale(raw.time_ns) {
             out.extend(self.dwell(d));
@@ -222,7 +222,7 @@ impl TrackerState {
         if let Err(e) = self.commanded.push(t, &j.name, &j.position) {
             out.push(Output::Warning(format!("machine/commanded_joint_states: {e}")));
         }
-        self.resolve_awaiting(false, &mut out);
+        self.resolve_awaiting(i64::MIN, &mut out);
         out
     }
 
@@ -232,7 +232,7 @@ impl TrackerState {
             Some(d) => self.dwell(d),
             None => Vec::new(),
         };
-        self.resolve_awaiting(true, &mut out);
+        self.resolve_awaiting(i64::MAX, &mut out);
         out
     }
 
@@ -266,17 +266,19 @@ impl TrackerState {
         let warming_up = self.warmup_step(&d, flagged, &mut out);
         out.push(Output::Dwell(messages::dwell_measurement(&d, &covariance, &self.config.tracker_frame, flagged, warming_up)));
         self.awaiting.push_back(AwaitingNominal { target: d.target.clone(), mid_ns: d.mid_ns(), point: d.point, covariance, flagged });
-        self.resolve_awaiting(false, &mut out);
+        self.resolve_awaiting(i64::MIN, &mut out);
         out
     }
 
     /// Give the waiting dwells, oldest first, their nominal and place them, as long as the
     /// commanded states cover them (a state after the mid time has arrived), there are no
-    /// commanded states at all (the program's timing is the only source), or `force`.
-    fn resolve_awaiting(&mut self, force: bool, out: &mut Vec<Output>) {
+    /// commanded states at all (the program's timing is the only source), or their mid time is
+    /// before `expired_before` (ns; `i64::MIN`: none has expired, `i64::MAX`: all have, at the
+    /// end of the input).
+    fn resolve_awaiting(&mut self, expired_before: i64, out: &mut Vec<Output>) {
         while let Some(a) = self.awaiting.front() {
             let covered = !matches!(self.commanded.latest_ns(), Some(latest) if latest < a.mid_ns);
-            if !covered && !force {
+            if !covered && a.mid_ns >= expired_before {
                 break;
             }
             let a = self.awaiting.pop_front().expect("front exists");

@@ -21,6 +21,17 @@ pub fn require_isolated_network() {
     }
 }
 
+/// A child process (a node under test) killed and reaped when the guard drops, so a failing
+/// test leaves no node running in the namespace.
+pub struct KillOnDrop(pub std::process::Child);
+
+impl Drop for KillOnDrop {
+    fn drop(&mut self) {
+        let _ = self.0.kill();
+        let _ = self.0.wait();
+    }
+}
+
 #[cfg(test)]
 mod tests {
     #[test]

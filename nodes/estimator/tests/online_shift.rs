@@ -27,6 +27,7 @@ use rand::SeedableRng;
 use rand_chacha::ChaCha8Rng;
 use rand_distr::{Distribution, Normal};
 use rosmsg::RosMessage;
+use metrocell_node::testing::KillOnDrop as Killed;
 
 const MODEL: &str = r#"
 name: online_model
@@ -288,13 +289,6 @@ fn write_partial(whole: &Path, out: &Path, from: usize, to: usize) {
     w.finish().unwrap();
 }
 
-struct Killed(std::process::Child);
-impl Drop for Killed {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
 
 fn model_key(m: &ErrorModel) -> (i64, Vec<u64>, Vec<u64>) {
     (m.header.stamp.nanos(), m.values.iter().map(|v| v.to_bits()).collect(), m.covariance.iter().map(|v| v.to_bits()).collect())

@@ -8,7 +8,7 @@
 //!
 //! Run: `tests/isolated cargo test -p metrocell-fiducial-node --test drilled_holes_over_dds -- --nocapture`
 
-use std::process::{Child, Command};
+use std::process::Command;
 use std::time::{Duration, Instant};
 
 use metrocell_msgs::builtin_interfaces::msg::Time;
@@ -19,17 +19,11 @@ use metrocell_node::{qos, MetrocellNode};
 use metrocell_vision::aruco::DetectorParams;
 use metrocell_vision::{detect_targets, render_view, CameraModel, Distortion, PlanarTarget, RenderSettings, TargetFamily, TargetItem};
 use nalgebra::{Isometry3, Point3, Translation3, UnitQuaternion, Vector3};
+use metrocell_node::testing::KillOnDrop as Kill;
 
 const N: usize = 6;
 const SQUARE: f64 = 0.010;
 
-struct Kill(Child);
-impl Drop for Kill {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
 
 #[test]
 fn hole_centres_over_dds_equal_the_library_and_the_truth() {

@@ -5,7 +5,7 @@
 //!
 //! Run: `tests/isolated cargo test -p metrocell-fiducial-node --test fiducial_over_dds -- --nocapture`
 
-use std::process::{Child, Command};
+use std::process::Command;
 use std::time::{Duration, Instant};
 
 use metrocell_msgs::builtin_interfaces::msg::Time;
@@ -17,14 +17,8 @@ use metrocell_node::{qos, MetrocellNode};
 use metrocell_vision::aruco::Dictionary;
 use metrocell_vision::{render_view, CameraModel, Distortion, PlanarTarget, RenderSettings, TargetItem};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
+use metrocell_node::testing::KillOnDrop as Kill;
 
-struct Kill(Child);
-impl Drop for Kill {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
 
 fn header(stamp_ns: i64) -> Header {
     Header { stamp: Time::from_nanos(stamp_ns), frame_id: "cam_optical".into() }

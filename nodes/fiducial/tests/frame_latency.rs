@@ -10,7 +10,7 @@
 //! Run: `tests/isolated cargo test -p metrocell-fiducial-node --test frame_latency -- --ignored --nocapture`
 //! (add `--release` for the release-build latencies BENCHMARKS.md gives).
 
-use std::process::{Child, Command};
+use std::process::Command;
 use std::time::{Duration, Instant};
 
 use metrocell_msgs::builtin_interfaces::msg::Time;
@@ -20,14 +20,8 @@ use metrocell_msgs::std_msgs::msg::Header;
 use metrocell_node::{qos, MetrocellNode};
 use metrocell_vision::aruco::{generate_marker_image, DetectorParams, Dictionary};
 use metrocell_vision::{detect_targets, TargetFamily};
+use metrocell_node::testing::KillOnDrop as Kill;
 
-struct Kill(Child);
-impl Drop for Kill {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
 
 fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);

@@ -22,6 +22,7 @@ use metrocell_vision::aruco::Dictionary;
 use metrocell_vision::{render_view, CameraModel, Distortion, PlanarTarget, RenderSettings, TargetItem};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use rosmsg::RosMessage;
+use metrocell_node::testing::KillOnDrop as Killed;
 
 const T0: u64 = 1_700_000_000_000_000_000;
 const MS: u64 = 1_000_000;
@@ -74,13 +75,6 @@ fn write_input_bag(dir: &Path, info: &CameraInfo, frames: &[Image]) {
     w.finish().unwrap();
 }
 
-struct Killed(std::process::Child);
-impl Drop for Killed {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
 
 const ARGS: [&str; 7] = ["--ros-args", "-r", "__ns:=/replay", "-p", "family:=DICT_4X4_50", "-p", "marker_size:=0.04"];
 

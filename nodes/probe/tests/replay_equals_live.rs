@@ -19,6 +19,7 @@ use metrocell_msgs::sensor_msgs::msg::JointState;
 use metrocell_msgs::std_msgs::msg::Header;
 use metrocell_node::{qos, MetrocellNode};
 use rosmsg::RosMessage;
+use metrocell_node::testing::KillOnDrop as Killed;
 
 const T0: u64 = 1_700_000_000_000_000_000;
 const MS: u64 = 1_000_000;
@@ -69,13 +70,6 @@ fn write_input_bag(dir: &Path, inputs: &[(u64, Input)]) {
     w.finish().unwrap();
 }
 
-struct Killed(std::process::Child);
-impl Drop for Killed {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
 
 const ARGS: [&str; 9] = ["--ros-args", "-r", "__ns:=/replay", "-p", "stylus_radius:=0.002", "-p", "pretravel:=[8e-6, 2e-6, 0.0, 5e-6]", "-p", "probe_id:=ts1"];
 

@@ -20,6 +20,7 @@ use metrocell_msgs::sensor_msgs::msg::Temperature;
 use metrocell_msgs::std_msgs::msg::Header;
 use metrocell_node::{qos, MetrocellNode};
 use rosmsg::RosMessage;
+use metrocell_node::testing::KillOnDrop as Killed;
 
 const T0: u64 = 1_700_000_000_000_000_000;
 const MS: u64 = 1_000_000;
@@ -82,13 +83,6 @@ fn metrocell_cli() -> PathBuf {
     cli
 }
 
-struct Killed(std::process::Child);
-impl Drop for Killed {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
 
 /// Model values as exact bit patterns, so "equal" means the same floating-point numbers.
 fn model_key(m: &ErrorModel) -> Vec<(String, u64)> {

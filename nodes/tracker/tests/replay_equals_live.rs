@@ -20,17 +20,11 @@ use metrocell_node::{qos, MetrocellNode};
 use metrocell_simulation::bag::{write_bag, BagOptions};
 use metrocell_twin::Cell;
 use nalgebra::Vector3;
+use metrocell_node::testing::KillOnDrop as Killed;
 
 const CELL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/cells/tracker_quick.yaml");
 const ARGS: [&str; 5] = ["--ros-args", "-p", "tool_offset:=[0.0, 0.0, -0.1]", "-p", "registration_points:=12"];
 
-struct Killed(std::process::Child);
-impl Drop for Killed {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
 
 enum Input {
     Reading(TrackerMeasurement),

@@ -17,14 +17,8 @@ use metrocell_msgs::sensor_msgs::msg::JointState;
 use metrocell_msgs::std_msgs::msg::Header;
 use metrocell_node::{qos, MetrocellNode};
 use nalgebra::{Rotation3, Vector3};
+use metrocell_node::testing::KillOnDrop as Killed;
 
-struct Killed(std::process::Child);
-impl Drop for Killed {
-    fn drop(&mut self) {
-        let _ = self.0.kill();
-        let _ = self.0.wait();
-    }
-}
 
 const T0: f64 = 1_764_000_000.0;
 const NOMINALS: [[f64; 3]; 4] = [[0.0, 0.0, 0.0], [0.4, 0.0, 0.1], [0.4, 0.3, 0.0], [0.0, 0.3, 0.2]];

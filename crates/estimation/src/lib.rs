@@ -8,6 +8,8 @@
 //! * [`recordings`] — [`records_from_bags`]: bags (the nodes', `metrocell sim`'s, `bag import`'s)
 //!   → a [`RecordSet`] for the shared model, signals by the model's `SignalsBuilder`; missing
 //!   signals named with the topics and columns that would provide them.
+//! * [`record_stream`] — the same, one message at a time ([`RecordStream`]): what a bag
+//!   replay and a live node (the `diagnose` node) feed, records out in time order.
 //! * [`instrument_readings`] — probe hits and camera marker poses in a recording → what their
 //!   records measure and what the model needs to predict them.
 //! * [`signal_topics`] — the recorded topics that carry signals and how each message feeds the
@@ -42,6 +44,7 @@ pub mod fit;
 pub mod fit_summary;
 pub mod improvement;
 pub mod instrument_readings;
+pub mod record_stream;
 pub mod records;
 pub mod recordings;
 pub mod recursive;
@@ -51,6 +54,7 @@ pub mod uncertainty_budget;
 pub mod volumetric_monte_carlo;
 
 pub use fit::{fit, inseparable, rms, start_vector, Fit, FitError, FitOptions, HeldParameter, ParameterEstimate, RecordNote};
+pub use record_stream::{RecordStream, StreamOutput};
 pub use records::{MeasurementRecord, RecordFrame, RecordKind, RecordSet, Rejected};
 pub use recordings::{records_from_bags, PointSource, RecordingError, RecordingOptions};
 pub use residuals::PointResiduals;

@@ -1,0 +1,542 @@
+//! Measurement records from a stream of recorded messages, one message at a time: the engine
+//! behind [`crate::records_from_bags`] (messages read from a bag) and the `diagnose` node
+//! (messages taken from live DDS, the same `SourcedMessage`s the recorder writes). What is read,
+//! which frame a record is in and what is checked are documented on [`crate::recordings`]; this
+//! module only adds the streaming: a measurement is held until the signals around its time have
+//! arrived ([`SignalsBuilder::ready`]), then resolved into a record or a rejection, so the
+//! records come out in time order as the messages go in, with bounded memory.
+//!
+//! Messages go in in log-time order (a bag's order; a live node's receive order). Each stream
+//! (a topic) must go forward in time; streams may interleave as they like.
+
+use std::collections::{BTreeMap, VecDeque};
+use std::path::{Path, PathBuf};
+
+use metrocell_bagtools::SourcedMessage;
+use metrocell_model::{ForwardModel, MachineGeometry, MachineKinematics, SignalsBuilder};
+use metrocell_msgs::msg::{FiducialDetectionArray, MeasuredPoint, ProbeHit, TrackerMeasurement};
+use metrocell_msgs::RosMessage;
+use metrocell_physics::{EffectKind, SignalKind, Signals};
+use nalgebra::{Matrix3, Vector3};
+
+use crate::instrument_readings::{marker_measurements, probe_measurement, record_kind, CameraFeatures, InstrumentMeasurement, InstrumentReading};
+use crate::records::{MeasurementRecord, RecordFrame, RecordKind, Rejected};
+use crate::recordings::{providers, record_frame, PointSource, RecordingError, RecordingOptions};
+use crate::residuals::whitening;
+use crate::signal_topics::{feed, message_time, SignalTopic, AIR_SENSOR, COMMANDED_JOINTS_TOPIC, LOAD_TOPIC, POWER_ON_TOPIC};
+
+/// What a stream has produced: records by frame (points), instrument records (probe hits,
+/// camera points, in the frames of their readings), rejections, and where each input came from.
+#[derive(Debug, Default)]
+pub struct StreamOutput {
+    pub by_frame: Vec<(RecordFrame, Vec<MeasurementRecord>)>,
+    pub instrument_records: Vec<MeasurementRecord>,
+    pub rejected: Vec<Rejected>,
+    /// (what, topic or column) of every input used, e.g. ("points", "/measured_points (…)").
+    pub sources: Vec<(String, String)>,
+}
+
+impl StreamOutput {
+    /// Every record, points first, each group in time order.
+    pub fn records(self) -> impl Iterator<Item = MeasurementRecord> {
+        self.by_frame.into_iter().flat_map(|(_, r)| r).chain(self.instrument_records)
+    }
+}
+
+/// Turns recorded messages into measurement records for one model (module docs).
+pub struct RecordStream<'m, 'a> {
+    model: &'m ForwardModel<'a>,
+    /// Names the recording in every message (a bag's path, or e.g. `live DDS`).
+    source: PathBuf,
+    needs: Vec<(String, SignalKind)>,
+    /// The points' topic, and whether it carries raw tracker readings (else `MeasuredPoint`s).
+    points_topic: Option<String>,
+    points_tracker: bool,
+    probe_topic: Option<String>,
+    camera_topic: Option<String>,
+    camera_features: CameraFeatures,
+    signal_topics: BTreeMap<String, SignalTopic>,
+    joints: JointSource,
+    joint_names: Vec<String>,
+    builder: SignalsBuilder,
+    pending: VecDeque<Pending>,
+    out: StreamOutput,
+    feed: SignalFeed,
+    point_index: u64,
+    instrument_index: u64,
+}
+
+impl<'m, 'a> RecordStream<'m, 'a> {
+    /// A stream over a recording that holds `topics` ((name, ROS type) each: a bag's topic list,
+    /// a live node's subscriptions). Checks, before any message, that the recording has points
+    /// to make records of, commanded joints (or nominals that give them) and every signal a
+    /// declared term needs — each an error naming what to record.
+    pub fn new(source: &Path, topics: &[(String, String)], model: &'m ForwardModel<'a>, options: &RecordingOptions) -> Result<Self, RecordingError> {
+        let has = |name: &str| topics.iter().find(|(n, _)| n == name).map(|(_, t)| t.as_str());
+        let typed = |name: &str, ty: &str| -> Result<bool, RecordingError> {
+            match has(name) {
+                Some(t) if t != ty => Err(RecordingError::Bag { path: source.to_path_buf(), reason: format!("topic {name} is recorded as {t}, but records are read from {ty}") }),
+                Some(_) => Ok(true),
+                None => Ok(false),
+            }
+        };
+        let points_tracker = match options.points {
+            PointSource::MeasuredPoints => false,
+            PointSource::TrackerMeasurements => true,
+            PointSource::Auto => has(&options.measured_points_topic) != Some(MeasuredPoint::ROS_TYPE),
+        };
+        let (points_topic, points_type) = if points_tracker { (&options.tracker_topic, TrackerMeasurement::ROS_TYPE) } else { (&options.measured_points_topic, MeasuredPoint::ROS_TYPE) };
+        let found = typed(points_topic, points_type)?;
+        let probes = options.probe_hits && typed(&options.probe_topic, ProbeHit::ROS_TYPE)?;
+        let cameras = options.camera_points && typed(&options.camera_topic, FiducialDetectionArray::ROS_TYPE)?;
+        if !(found || probes || cameras) {
+            let held = topics.iter().map(|(n, t)| format!("{n} ({t})")).collect::<Vec<_>>().join(", ");
+            return Err(RecordingError::NoPoints { path: source.to_path_buf(), measured: options.measured_points_topic.clone(), tracker: options.tracker_topic.clone(), held: if held.is_empty() { "no topics".into() } else { held } });
+        }
+        let mut sources = Vec::new();
+        if found {
+            sources.push(("points".to_string(), format!("{points_topic} ({points_type})")));
+        }
+        if probes {
+            sources.push(("probe hits".to_string(), format!("{} ({})", options.probe_topic, ProbeHit::ROS_TYPE)));
+        }
+        if cameras {
+            sources.push(("camera points".to_string(), format!("{} ({})", options.camera_topic, FiducialDetectionArray::ROS_TYPE)));
+        }
+        let signal_topics: BTreeMap<String, SignalTopic> = topics.iter().filter_map(|(n, t)| SignalTopic::of(n, t).map(|w| (n.clone(), w))).collect();
+        let carried = |which: &SignalTopic| signal_topics.values().any(|w| w == which);
+        let joints = if carried(&SignalTopic::CommandedJoints) {
+            JointSource::Commanded
+        } else if found && !points_tracker && matches!(model.machine.kinematics, MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_)) {
+            JointSource::Nominal
+        } else {
+            let names = model.machine.joint_names();
+            let provide = if points_tracker {
+                format!("record {COMMANDED_JOINTS_TOPIC} (joints {}) next to {points_topic}", names.join(", "))
+            } else {
+                format!("record {COMMANDED_JOINTS_TOPIC} (joints {}), or import the CSV with columns {} (the nominal point alone gives the joints only on cartesian and delta machines)", names.join(", "), names.iter().map(|n| format!("joint.{n}")).collect::<Vec<_>>().join(", "))
+            };
+            return Err(RecordingError::NoJoints { path: source.to_path_buf(), family: family(model).into(), provide });
+        };
+        sources.push(("commanded joints".into(), match joints {
+            JointSource::Commanded => COMMANDED_JOINTS_TOPIC.into(),
+            JointSource::Nominal => format!("nominal of {points_topic}, minus the tool offset"),
+        }));
+
+        // every declared signal must have a source in this recording
+        let needs = declared_signals(model);
+        for (term, kind) in &needs {
+            let (available, from) = match kind {
+                SignalKind::AxisPosition(_) | SignalKind::AxisVelocity(_) => (true, None),
+                SignalKind::ApproachDirection(_) => (true, carried(&SignalTopic::Approach).then(|| "/machine/approach_directions".to_string())),
+                SignalKind::Temperature(s) | SignalKind::TemperatureHistory(s) => (carried(&SignalTopic::Temperature(s.clone())), Some(format!("/temperature/{s}"))),
+                SignalKind::AirTemperature => (points_tracker || carried(&SignalTopic::AirTemperature) || carried(&SignalTopic::Temperature(AIR_SENSOR.into())), None),
+                SignalKind::AirPressure => (points_tracker || carried(&SignalTopic::AirPressure), None),
+                SignalKind::AirHumidity => (points_tracker || carried(&SignalTopic::AirHumidity), None),
+                SignalKind::TimeSincePowerOn => (carried(&SignalTopic::PowerOn), Some(POWER_ON_TOPIC.to_string())),
+                SignalKind::LoadForce => (carried(&SignalTopic::Load), Some(LOAD_TOPIC.to_string())),
+                _ => (true, None),
+            };
+            if !available {
+                return Err(RecordingError::MissingSignal { path: source.to_path_buf(), term: term.clone(), signal: kind.to_string(), provide: providers(kind) });
+            }
+            if let Some(topic) = from {
+                let entry = (kind.to_string(), topic);
+                if !sources.contains(&entry) {
+                    sources.push(entry);
+                }
+            }
+        }
+        if points_tracker {
+            sources.push(("air".into(), format!("each reading's own station air ({points_topic})")));
+        } else {
+            let air: Vec<&str> = signal_topics.iter().filter(|(_, w)| matches!(w, SignalTopic::AirTemperature | SignalTopic::AirPressure | SignalTopic::AirHumidity) || **w == SignalTopic::Temperature(AIR_SENSOR.into())).map(|(n, _)| n.as_str()).collect();
+            if !air.is_empty() {
+                sources.push(("air".into(), air.join(", ")));
+            }
+        }
+
+        // bounded memory: joints are kept only as long as a held measurement can still ask for them
+        let mut signal_options = options.signals.clone();
+        signal_options.joint_window = Some(options.signals.max_slow_gap + options.signals.max_joint_gap + 60.0);
+        let mut stream = RecordStream {
+            model,
+            source: source.to_path_buf(),
+            needs,
+            points_topic: found.then(|| points_topic.clone()),
+            points_tracker,
+            probe_topic: probes.then(|| options.probe_topic.clone()),
+            camera_topic: cameras.then(|| options.camera_topic.clone()),
+            camera_features: options.camera_features.clone(),
+            signal_topics: BTreeMap::new(),
+            joints,
+            joint_names: model.machine.joint_names(),
+            builder: SignalsBuilder::for_machine(model.machine, signal_options),
+            pending: VecDeque::new(),
+            out: StreamOutput { sources, ..StreamOutput::default() },
+            feed: SignalFeed::default(),
+            point_index: 0,
+            instrument_index: 0,
+        };
+        for (name, which) in signal_topics {
+            stream.add_signal_topic(name, which);
+        }
+        Ok(stream)
+    }
+
+    /// A signal topic that appeared after the stream was made (a live sensor discovered late):
+    /// its messages are read from now on, and measurements wait for its samples.
+    pub fn add_signal_topic(&mut self, name: String, which: SignalTopic) {
+        // tell the builder which sampled streams will be fed, so a measurement waits for the
+        // samples stamped at or after it (see `SignalsBuilder::ready`)
+        match &which {
+            SignalTopic::CommandedJoints => self.builder.expect_joints(),
+            SignalTopic::Temperature(sensor) => {
+                self.builder.expect_temperature(sensor);
+                if sensor == AIR_SENSOR {
+                    self.builder.expect_air(0);
+                }
+            }
+            SignalTopic::AirTemperature => self.builder.expect_air(0),
+            SignalTopic::AirPressure => self.builder.expect_air(1),
+            SignalTopic::AirHumidity => self.builder.expect_air(2),
+            SignalTopic::Approach | SignalTopic::PowerOn | SignalTopic::Load => {}
+        }
+        self.signal_topics.insert(name, which);
+    }
+
+    /// Every topic the stream reads (points, probe hits, camera points, signals).
+    pub fn topics(&self) -> Vec<String> {
+        let mut out: Vec<String> = self.points_topic.iter().chain(&self.probe_topic).chain(&self.camera_topic).cloned().collect();
+        out.extend(self.signal_topics.keys().cloned());
+        out
+    }
+
+    /// Take one message (others' topics are ignored); records whose signals are complete are
+    /// resolved. Errors only when the recording cannot give records at all (a commanded joint
+    /// state without the machine's joints); a bad message is a rejection, counted.
+    pub fn push(&mut self, m: &SourcedMessage) -> Result<(), RecordingError> {
+        self.builder.observe_time(m.log_time_ns as i64);
+        let at = |topic: &str, index: u64| format!("{}: {topic} message {index} (log time {:.3} s)", self.source.display(), m.log_time_ns as f64 / 1e9);
+        if self.points_topic.as_deref() == Some(m.topic.as_str()) {
+            let at = at(&m.topic, self.point_index);
+            self.point_index += 1;
+            let parsed = if self.points_tracker { from_tracker(m, at) } else { from_measured_point(m, at, self.joints, &self.model.machine.tool_offset) };
+            match parsed {
+                Ok(p) => {
+                    if let (JointSource::Nominal, Some(q)) = (self.joints, &p.q) {
+                        // the nominals are the commanded trajectory: they give approach and velocity too
+                        let _ = self.builder.push_joints(p.t_ns, &self.joint_names, q, &[]);
+                    }
+                    self.pending.push_back(p);
+                }
+                Err(r) => self.out.rejected.push(r),
+            }
+        } else if self.probe_topic.as_deref() == Some(m.topic.as_str()) || self.camera_topic.as_deref() == Some(m.topic.as_str()) {
+            let at = at(&m.topic, self.instrument_index);
+            self.instrument_index += 1;
+            match instrument_pending(m, at, self.probe_topic.as_deref() == Some(m.topic.as_str())) {
+                Ok(ps) => {
+                    // a detection array's markers share its time: keep the queue in time order
+                    for p in ps {
+                        let k = self.pending.partition_point(|q| q.t_ns <= p.t_ns);
+                        self.pending.insert(k, p);
+                    }
+                }
+                Err(r) => self.out.rejected.push(r),
+            }
+        } else if let Some(which) = self.signal_topics.get(&m.topic) {
+            self.feed.take(&mut self.builder, which, m, &self.source, self.model.machine)?;
+        }
+        while self.pending.front().is_some_and(|p| self.builder.ready(p.t_ns)) {
+            let p = self.pending.pop_front().expect("checked");
+            resolve(p, &self.builder, &self.needs, self.model, &self.camera_features, &mut self.out);
+        }
+        Ok(())
+    }
+
+    /// Measurements still waiting for the signals around their time.
+    pub fn waiting(&self) -> usize {
+        self.pending.len()
+    }
+
+    /// The records and rejections resolved so far, taken out (an online user's window); the
+    /// signal refusals are reported by [`Self::finish`].
+    pub fn drain(&mut self) -> StreamOutput {
+        StreamOutput {
+            by_frame: std::mem::take(&mut self.out.by_frame),
+            instrument_records: std::mem::take(&mut self.out.instrument_records),
+            rejected: std::mem::take(&mut self.out.rejected),
+            sources: self.out.sources.clone(),
+        }
+    }
+
+    /// The end of the recording: every held measurement is answered as the signals stand, and
+    /// the signal samples refused per topic are reported.
+    pub fn finish(mut self) -> StreamOutput {
+        while let Some(p) = self.pending.pop_front() {
+            resolve(p, &self.builder, &self.needs, self.model, &self.camera_features, &mut self.out);
+        }
+        self.out.rejected.extend(self.feed.into_rejected(&self.source));
+        self.out
+    }
+}
+
+/// Feeds signal messages to a builder, counting what it refuses per topic.
+#[derive(Default)]
+pub(crate) struct SignalFeed {
+    refused: BTreeMap<String, Refused>,
+}
+
+impl SignalFeed {
+    /// Feed one message. A commanded joint state without one of the machine's joints is an
+    /// error (nothing could be interpolated); other refusals are counted.
+    pub(crate) fn take(&mut self, builder: &mut SignalsBuilder, which: &SignalTopic, m: &SourcedMessage, path: &Path, machine: &MachineGeometry) -> Result<(), RecordingError> {
+        if let Err(reason) = feed(builder, which, m) {
+            if *which == SignalTopic::CommandedJoints && reason.starts_with("has no joint") {
+                return Err(RecordingError::JointNames { path: path.to_path_buf(), topic: m.topic.clone(), reason, joints: machine.joint_names().join(", ") });
+            }
+            let r = self.refused.entry(m.topic.clone()).or_default();
+            r.count += 1;
+            r.first.get_or_insert((m.log_time_ns, reason));
+        }
+        Ok(())
+    }
+
+    pub(crate) fn into_rejected(self, path: &Path) -> Vec<Rejected> {
+        self.refused
+            .into_iter()
+            .map(|(topic, r)| {
+                let (t, reason) = r.first.unwrap_or_default();
+                Rejected {
+                    at: format!("{}: {topic} ({} messages, the first at log time {:.3} s)", path.display(), r.count, t as f64 / 1e9),
+                    point_id: String::new(),
+                    reason: format!("signal samples not used: {reason}"),
+                }
+            })
+            .collect()
+    }
+}
+
+
+/// (term label, signal) of every declared term whose prediction reads a recorded signal
+/// (scatter terms never enter a prediction; ranges and points the model computes itself).
+fn declared_signals(model: &ForwardModel) -> Vec<(String, SignalKind)> {
+    let mut out = Vec::new();
+    for t in model.machine_terms.terms.iter().chain(&model.instrument_terms.terms) {
+        if t.term.effect() == EffectKind::RangeScatter {
+            continue;
+        }
+        for s in t.term.signals() {
+            if !s.is_computed_by_model() {
+                out.push((t.term.label(), s));
+            }
+        }
+    }
+    out
+}
+
+/// Whether the instant's signals hold `kind`.
+fn present(s: &Signals, kind: &SignalKind) -> bool {
+    match kind {
+        SignalKind::AxisPosition(a) => s.axis_position[a.index()].is_some(),
+        SignalKind::ApproachDirection(a) => s.approach_direction[a.index()].is_some(),
+        SignalKind::AxisVelocity(a) => s.axis_velocity[a.index()].is_some(),
+        SignalKind::Temperature(n) => s.temperatures.contains_key(n),
+        SignalKind::TemperatureHistory(n) => match (&s.timeline, s.time) {
+            (Some(tl), Some(t)) => tl.time_span(n).is_some_and(|(first, _)| first <= t),
+            _ => false,
+        },
+        SignalKind::AirTemperature => s.air_temperature.is_some(),
+        SignalKind::AirPressure => s.air_pressure.is_some(),
+        SignalKind::AirHumidity => s.air_humidity.is_some(),
+        SignalKind::TimeSincePowerOn => s.time_since_power_on.is_some(),
+        SignalKind::LoadForce => s.load_force.is_some(),
+        SignalKind::RotaryPosition(a) => s.rotary_position[a.index()].is_some(),
+        k => k.is_computed_by_model(),
+    }
+}
+
+/// Where the commanded joints of a bag come from.
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum JointSource {
+    Commanded,
+    /// q = nominal − tool_offset (cartesian and delta).
+    Nominal,
+}
+
+/// A measurement waiting until the signals around its time have been read.
+struct Pending {
+    t_ns: i64,
+    at: String,
+    point_id: String,
+    channel: String,
+    frame: RecordFrame,
+    measured: Vector3<f64>,
+    covariance: Matrix3<f64>,
+    /// The reading's own station air (°C, Pa, %RH), for tracker readings.
+    air: Option<(f64, f64, f64)>,
+    /// The commanded joints from the nominal ([`JointSource::Nominal`]).
+    q: Option<Vec<f64>>,
+    /// A probe hit's or a marker pose's reading (None: a point record).
+    reading: Option<InstrumentReading>,
+}
+
+
+fn covariance_row_major(c: &[f64; 9]) -> Matrix3<f64> {
+    Matrix3::from_row_slice(c)
+}
+
+/// Names of a tracker reading's status flags.
+fn status_flags(status: u8) -> String {
+    let names = [
+        (TrackerMeasurement::STATUS_BEAM_BREAK, "BEAM_BREAK"),
+        (TrackerMeasurement::STATUS_WARMING_UP, "WARMING_UP"),
+        (TrackerMeasurement::STATUS_TURBULENCE, "TURBULENCE"),
+        (TrackerMeasurement::STATUS_OUT_OF_RANGE, "OUT_OF_RANGE"),
+        (TrackerMeasurement::STATUS_REJECTED, "REJECTED"),
+    ];
+    let set: Vec<&str> = names.iter().filter(|(bit, _)| status & bit != 0).map(|(_, n)| *n).collect();
+    if set.is_empty() {
+        format!("status {status}")
+    } else {
+        set.join(" | ")
+    }
+}
+
+fn family(model: &ForwardModel) -> &'static str {
+    match model.machine.kinematics {
+        MachineKinematics::Cartesian(_) => "cartesian",
+        MachineKinematics::Delta(_) => "delta",
+        MachineKinematics::FiveAxis(_) => "five_axis",
+        MachineKinematics::SerialArm(_) => "serial_arm",
+    }
+}
+
+/// Signal samples a topic's messages gave that the builder refused: count and first reason.
+#[derive(Default)]
+struct Refused {
+    count: u64,
+    first: Option<(u64, String)>,
+}
+
+
+fn reject(at: String, point_id: &str, reason: impl Into<String>) -> Rejected {
+    Rejected { at, point_id: point_id.to_string(), reason: reason.into() }
+}
+
+/// Point and covariance checks shared by both sources.
+fn check_point(at: &str, point_id: &str, measured: &Vector3<f64>, covariance: &Matrix3<f64>) -> Result<(), Rejected> {
+    if !measured.iter().all(|v| v.is_finite()) {
+        return Err(reject(at.into(), point_id, format!("measured point ({}, {}, {}) m is not finite", measured.x, measured.y, measured.z)));
+    }
+    if !covariance.iter().all(|v| v.is_finite()) {
+        return Err(reject(at.into(), point_id, "covariance is not finite"));
+    }
+    if whitening(covariance).is_none() {
+        return Err(reject(at.into(), point_id, format!("covariance is not positive definite (diagonal {:.3e}, {:.3e}, {:.3e} m²)", covariance[(0, 0)], covariance[(1, 1)], covariance[(2, 2)])));
+    }
+    Ok(())
+}
+
+fn from_tracker(m: &SourcedMessage, at: String) -> Result<Pending, Rejected> {
+    let r: TrackerMeasurement = m.decode().map_err(|e| reject(at.clone(), "", e.to_string()))?;
+    let point_id = r.target_id.clone();
+    if r.status != TrackerMeasurement::STATUS_OK {
+        return Err(reject(at, &point_id, format!("reading flagged {}", status_flags(r.status))));
+    }
+    let measured = Vector3::new(r.point.x, r.point.y, r.point.z);
+    let covariance = covariance_row_major(&r.covariance);
+    check_point(&at, &point_id, &measured, &covariance)?;
+    let frame = if r.header.frame_id.is_empty() { RecordFrame::Instrument("tracker".into()) } else { record_frame(&r.header.frame_id) };
+    let air = [r.air_temperature, r.air_pressure, r.air_humidity].iter().all(|v| v.is_finite()).then_some((r.air_temperature, r.air_pressure, 100.0 * r.air_humidity));
+    Ok(Pending { t_ns: message_time(&r.header.stamp, m.log_time_ns), at, point_id, channel: "tracker".into(), frame, measured, covariance, air, q: None, reading: None })
+}
+
+fn from_measured_point(m: &SourcedMessage, at: String, joints: JointSource, tool_offset: &Vector3<f64>) -> Result<Pending, Rejected> {
+    let p: MeasuredPoint = m.decode().map_err(|e| reject(at.clone(), "", e.to_string()))?;
+    let measured = Vector3::new(p.measured.x, p.measured.y, p.measured.z);
+    let covariance = covariance_row_major(&p.covariance);
+    check_point(&at, &p.point_id, &measured, &covariance)?;
+    let q = match joints {
+        JointSource::Commanded => None,
+        JointSource::Nominal => {
+            let nominal = Vector3::new(p.nominal.x, p.nominal.y, p.nominal.z);
+            if !nominal.iter().all(|v| v.is_finite()) {
+                return Err(reject(at, &p.point_id, format!("no commanded position: the nominal is not finite and the bag has no {COMMANDED_JOINTS_TOPIC}")));
+            }
+            let q = nominal - tool_offset;
+            Some(vec![q.x, q.y, q.z])
+        }
+    };
+    Ok(Pending { t_ns: message_time(&p.header.stamp, m.log_time_ns), at, point_id: p.point_id, channel: p.source, frame: record_frame(&p.header.frame_id), measured, covariance, air: None, q, reading: None })
+}
+
+/// The measurements of a probe hit (`probe`) or a detection array, checked like points.
+fn instrument_pending(m: &SourcedMessage, at: String, probe: bool) -> Result<Vec<Pending>, Rejected> {
+    let (stamp, frame_id, measurements): (_, String, Vec<InstrumentMeasurement>) = if probe {
+        let hit: ProbeHit = m.decode().map_err(|e| reject(at.clone(), "", e.to_string()))?;
+        let one = probe_measurement(&hit).map_err(|reason| reject(at.clone(), &hit.probe_id, reason))?;
+        (hit.header.stamp, hit.header.frame_id, vec![one])
+    } else {
+        let array: FiducialDetectionArray = m.decode().map_err(|e| reject(at.clone(), "", e.to_string()))?;
+        let all = marker_measurements(&array);
+        (array.header.stamp, array.header.frame_id, all)
+    };
+    let t_ns = message_time(&stamp, m.log_time_ns);
+    let mut out = Vec::new();
+    for x in measurements {
+        check_point(&at, &x.point_id, &x.measured, &x.covariance)?;
+        out.push(Pending { t_ns, at: at.clone(), point_id: x.point_id, channel: x.channel, frame: record_frame(&frame_id), measured: x.measured, covariance: x.covariance, air: None, q: None, reading: Some(x.reading) });
+    }
+    Ok(out)
+}
+
+/// The record of a measurement whose signals are all read, or why it is rejected.
+fn resolve(p: Pending, builder: &SignalsBuilder, needs: &[(String, SignalKind)], model: &ForwardModel, features: &CameraFeatures, out: &mut StreamOutput) {
+    let q = match p.q {
+        Some(q) => q,
+        None => match builder.joints_at(p.t_ns) {
+            Some(m) => m.positions,
+            None => {
+                out.rejected.push(reject(p.at, &p.point_id, format!("no commanded joint state at or around its time {:.3} s (a gap in {COMMANDED_JOINTS_TOPIC}, or outside it)", p.t_ns as f64 / 1e9)));
+                return;
+            }
+        },
+    };
+    let mut signals = builder.signals_at(p.t_ns);
+    if let Some((t, pa, h)) = p.air {
+        (signals.air_temperature, signals.air_pressure, signals.air_humidity) = (Some(t), Some(pa), Some(h));
+    }
+    // a probe hit or a camera point reads the machine's terms (and its own instrument's, which
+    // read nothing recorded), not a tracker's
+    let reads = |term: &str| p.reading.is_none() || model.machine_terms.terms.iter().any(|t| t.term.label() == term);
+    if let Some((term, kind)) = needs.iter().find(|(term, k)| reads(term) && !present(&signals, k)) {
+        let why = match kind {
+            SignalKind::ApproachDirection(_) => "the axis has not moved yet in the recording, and its approach is the sign of its last motion (set the signals option initial_approach when the homing direction is known)",
+            SignalKind::TimeSincePowerOn => "the instrument's power-on time is after it",
+            _ => "before its first sample, after its last, or in a gap",
+        };
+        out.rejected.push(reject(p.at, &p.point_id, format!("term `{term}` needs {kind}, which the recording does not give at {:.3} s: {why}", p.t_ns as f64 / 1e9)));
+        return;
+    }
+    let kind = match &p.reading {
+        None => RecordKind::Point,
+        Some(reading) => match record_kind(model, features, reading, &q) {
+            Ok(kind) => kind,
+            Err(reason) => {
+                out.rejected.push(reject(p.at, &p.point_id, reason));
+                return;
+            }
+        },
+    };
+    let record = MeasurementRecord { time: p.t_ns as f64 / 1e9, point_id: p.point_id, channel: p.channel, q, measured: p.measured, covariance: p.covariance, signals, kind };
+    if p.reading.is_some() {
+        out.instrument_records.push(record);
+        return;
+    }
+    match out.by_frame.iter_mut().find(|(f, _)| *f == p.frame) {
+        Some((_, v)) => v.push(record),
+        None => out.by_frame.push((p.frame, vec![record])),
+    }
+}

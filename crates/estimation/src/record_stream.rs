@@ -271,12 +271,18 @@ impl<'m, 'a> RecordStream<'m, 'a> {
         }
     }
 
-    /// The end of the recording: every held measurement is answered as the signals stand, and
-    /// the signal samples refused per topic are reported.
-    pub fn finish(mut self) -> StreamOutput {
+    /// Answer every held measurement as the signals stand (the end of a recording; a live
+    /// user that stops). The records come out at the next [`Self::drain`].
+    pub fn flush(&mut self) {
         while let Some(p) = self.pending.pop_front() {
             resolve(p, &self.builder, &self.needs, self.model, &self.camera_features, &mut self.out);
         }
+    }
+
+    /// The end of the recording: every held measurement is answered as the signals stand, and
+    /// the signal samples refused per topic are reported.
+    pub fn finish(mut self) -> StreamOutput {
+        self.flush();
         self.out.rejected.extend(self.feed.into_rejected(&self.source));
         self.out
     }

@@ -75,6 +75,8 @@ struct Watch {
     twin_finished: bool,
     /// The estimator's latest error model.
     estimated: Option<ErrorModel>,
+    /// What the live diagnose node found: status name (`diagnose: <term>`) → its sentence.
+    live_findings: BTreeMap<String, String>,
 }
 
 pub fn run(args: DemoArgs) -> i32 {
@@ -151,6 +153,11 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
     } else {
         println!("estimated online: no error model from the estimator (too few measured points)");
     }
+    if !watch.live_findings.is_empty() {
+        println!("the live diagnose node found, while the cell ran: {}", watch.live_findings.values().cloned().collect::<Vec<_>>().join("; "));
+    } else {
+        println!("the live diagnose node found nothing while the cell ran (its first diagnosis comes after diagnose_every of cell time)");
+    }
     println!("the dashboard was at {dashboard}; the bag is at {}", output.display());
     match metrocell_bag::info(&output) {
         Ok(info) => println!("\nrecorded bag:\n{info}"),
@@ -219,7 +226,7 @@ fn watch_cell(
     let model = node.subscription::<ErrorModel>("/thermal/error_model", qos::sensor_data())?;
     let estimated = node.subscription::<ErrorModel>("/estimator/error_model", qos::latched())?;
     let diagnostics = node.subscription::<DiagnosticArray>("/diagnostics", qos::reliable().history(ros2_client::qos::History::KeepLast { depth: 100 }))?;
-    let mut w = Watch { sim_time_s: 0.0, tracker_points: 0, beam_breaks: 0, last_strain: None, twin_published: BTreeMap::new(), twin_finished: false, estimated: None };
+    let mut w = Watch { sim_time_s: 0.0, tracker_points: 0, beam_breaks: 0, last_strain: None, twin_published: BTreeMap::new(), twin_finished: false, estimated: None, live_findings: BTreeMap::new() };
     let mut start_ns: Option<i64> = None;
     let mut next_print = 0.0;
     // The run is over when the simulated clock, once started, stops advancing.
@@ -254,6 +261,9 @@ fn watch_cell(
         }
         while let Ok(Some((d, _))) = diagnostics.take() {
             take_twin_counts(&d, &mut w);
+            for (name, statement) in new_live_findings(&d, &mut w) {
+                println!("  t = {:>5.0} s   the diagnose node found {}: {statement}", w.sim_time_s, name.trim_start_matches("diagnose: "));
+            }
         }
         while let Ok(Some((m, _))) = estimated.take() {
             w.estimated = Some(m);
@@ -284,6 +294,18 @@ fn watch_cell(
         std::thread::sleep(Duration::from_millis(5));
     }
     Ok(w)
+}
+
+/// The diagnose node's findings (statuses named `diagnose: <term>`) not seen before, kept in
+/// the watch.
+fn new_live_findings(d: &DiagnosticArray, w: &mut Watch) -> Vec<(String, String)> {
+    let mut new = Vec::new();
+    for s in d.status.iter().filter(|s| s.name.starts_with("diagnose: ")) {
+        if w.live_findings.insert(s.name.clone(), s.message.clone()).is_none() {
+            new.push((s.name.clone(), s.message.clone()));
+        }
+    }
+    new
 }
 
 /// The twin's `published/<topic>` values and `finished` flag from a diagnostics message.

@@ -100,6 +100,8 @@ fn every_node_stops_within_a_second_on_sigint_and_sigterm() {
         ("metrocell-probe", s(&["--ros-args", "-r", "probe/trigger:=/machine/joint_states"])),
         // reads the twin's commanded joints and thermocouples (no measured points: no tracker node here)
         ("metrocell-estimator", s(&["--ros-args", "-p", &format!("model:={}", root.join("launch-configs/cells/demo_model.yaml").display())])),
+        // the twin's raw readings, diagnosed every 20 s of cell time, so a diagnosis may be running when the signal comes
+        ("metrocell-diagnose", s(&["--ros-args", "-p", &format!("model:={}", root.join("launch-configs/cells/demo_model.yaml").display()), "-p", "points:=/tracker/measurements", "-p", "points_type:=tracker", "-p", "every:=20.0", "-p", "min_records:=10"])),
         // the twin's raw readings (registration from the first 6 targets, as in the demo)
         ("metrocell-tracker", s(&["--ros-args", "-p", "tool_offset:=[0.0, 0.0, -0.1]", "-p", "registration_points:=6"])),
         // its HTTP and Foxglove servers on free ports, so the bound covers closing them too

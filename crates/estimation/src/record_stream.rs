@@ -23,7 +23,9 @@ use crate::instrument_readings::{marker_measurements, probe_measurement, record_
 use crate::records::{MeasurementRecord, RecordFrame, RecordKind, Rejected};
 use crate::recordings::{providers, record_frame, PointSource, RecordingError, RecordingOptions};
 use crate::residuals::whitening;
-use crate::signal_topics::{feed, message_time, SignalTopic, AIR_SENSOR, COMMANDED_JOINTS_TOPIC, LOAD_TOPIC, POWER_ON_TOPIC};
+use crate::signal_topics::{feed, message_time, SignalTopic, AIR_SENSOR, COMMANDED_JOINTS_TOPIC, LOAD_TOPIC, POWER_ON_TOPIC, TEMPERATURE_PREFIX};
+use metrocell_msgs::geometry_msgs::msg::WrenchStamped;
+use metrocell_msgs::sensor_msgs::msg::{JointState, Temperature, TimeReference};
 
 /// What a stream has produced: records by frame (points), instrument records (probe hits,
 /// camera points, in the frames of their readings), rejections, and where each input came from.
@@ -64,6 +66,36 @@ pub struct RecordStream<'m, 'a> {
     feed: SignalFeed,
     point_index: u64,
     instrument_index: u64,
+    /// Whether log times tell the signals builder how far the recording has reached (see
+    /// [`Self::on_stamps_only`]).
+    observe_log_time: bool,
+}
+
+/// The topics (name, ROS type) a live reader of `model`'s records subscribes: the points (as
+/// `options.points` says; `Auto` = measured points), the commanded joints, and the topic of
+/// every signal a declared term reads (temperatures, power-on time, load). Signals a reader
+/// finds later (other sensors) are added with [`RecordStream::add_signal_topic`].
+pub fn declared_topics(model: &ForwardModel, options: &RecordingOptions) -> Vec<(String, String)> {
+    let points = match options.points {
+        PointSource::TrackerMeasurements => (options.tracker_topic.clone(), TrackerMeasurement::ROS_TYPE),
+        PointSource::MeasuredPoints | PointSource::Auto => (options.measured_points_topic.clone(), MeasuredPoint::ROS_TYPE),
+    };
+    let mut topics = vec![(points.0, points.1.to_string()), (COMMANDED_JOINTS_TOPIC.to_string(), JointState::ROS_TYPE.to_string())];
+    if options.probe_hits {
+        topics.push((options.probe_topic.clone(), ProbeHit::ROS_TYPE.to_string()));
+    }
+    for (_, kind) in declared_signals(model) {
+        let (name, ty) = match kind {
+            SignalKind::Temperature(n) | SignalKind::TemperatureHistory(n) => (format!("{TEMPERATURE_PREFIX}{n}"), Temperature::ROS_TYPE),
+            SignalKind::TimeSincePowerOn => (POWER_ON_TOPIC.to_string(), TimeReference::ROS_TYPE),
+            SignalKind::LoadForce => (LOAD_TOPIC.to_string(), WrenchStamped::ROS_TYPE),
+            _ => continue,
+        };
+        if !topics.iter().any(|(n, _)| *n == name) {
+            topics.push((name, ty.to_string()));
+        }
+    }
+    topics
 }
 
 impl<'m, 'a> RecordStream<'m, 'a> {
@@ -177,11 +209,27 @@ impl<'m, 'a> RecordStream<'m, 'a> {
             feed: SignalFeed::default(),
             point_index: 0,
             instrument_index: 0,
+            observe_log_time: true,
         };
         for (name, which) in signal_topics {
             stream.add_signal_topic(name, which);
         }
         Ok(stream)
+    }
+
+    /// Judge the progress of the recording by the messages' header stamps only, not their log
+    /// times: for a live reader, whose receive times are on another clock than the stamps (a
+    /// twin running 100× real time, a replay of last week's bag), and for a replay that must
+    /// give what that live reader gave. A measurement then waits for the bracketing samples
+    /// until some stream's stamps are `max_slow_gap` past it.
+    pub fn on_stamps_only(&mut self) {
+        self.observe_log_time = false;
+    }
+
+    /// Signal samples refused so far (a time going backwards, a NaN, a message that does not
+    /// decode), over every topic.
+    pub fn refused_samples(&self) -> u64 {
+        self.feed.refused.values().map(|r| r.count).sum()
     }
 
     /// A signal topic that appeared after the stream was made (a live sensor discovered late):
@@ -216,7 +264,9 @@ impl<'m, 'a> RecordStream<'m, 'a> {
     /// resolved. Errors only when the recording cannot give records at all (a commanded joint
     /// state without the machine's joints); a bad message is a rejection, counted.
     pub fn push(&mut self, m: &SourcedMessage) -> Result<(), RecordingError> {
-        self.builder.observe_time(m.log_time_ns as i64);
+        if self.observe_log_time {
+            self.builder.observe_time(m.log_time_ns as i64);
+        }
         let at = |topic: &str, index: u64| format!("{}: {topic} message {index} (log time {:.3} s)", self.source.display(), m.log_time_ns as f64 / 1e9);
         if self.points_topic.as_deref() == Some(m.topic.as_str()) {
             let at = at(&m.topic, self.point_index);

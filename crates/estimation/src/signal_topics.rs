@@ -1,6 +1,6 @@
 //! The recorded topics that carry signals, and how each message feeds the signals builder
 //! ([`metrocell_model::SignalsBuilder`]): the table records from bags ([`crate::recordings`])
-//! read. (The online estimator node does not use it yet: it has its own interpolator.)
+//! read, through [`crate::record_stream`] — from a bag, and in the estimator and diagnose nodes.
 //!
 //! | topic | type | signal |
 //! |---|---|---|

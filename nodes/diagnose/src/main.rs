@@ -33,15 +33,10 @@ use metrocell_diagnose::{DiagnoseError, Diagnosis};
 use metrocell_diagnose_node::findings_message::RunInfo;
 use metrocell_diagnose_node::parameters;
 use metrocell_diagnose_node::session::{run_job, Session};
-use metrocell_estimation::signal_topics::{SignalTopic, COMMANDED_JOINTS_TOPIC, LOAD_TOPIC, POWER_ON_TOPIC};
+use metrocell_estimation::signal_topics::{SignalTopic, POWER_ON_TOPIC};
 use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
-use metrocell_msgs::geometry_msgs::msg::WrenchStamped;
-use metrocell_msgs::msg::{MeasuredPoint, TrackerMeasurement};
-use metrocell_msgs::sensor_msgs::msg::{JointState, Temperature, TimeReference};
 use metrocell_msgs::std_msgs::msg::String as StringMessage;
-use metrocell_msgs::RosMessage;
 use metrocell_node::{qos, MetrocellNode, OfflineNode, RawSubscription, ReplayArgs};
-use metrocell_physics::SignalKind;
 
 fn main() -> std::process::ExitCode {
     match run() {
@@ -61,29 +56,6 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     }
 }
 
-/// The topics a live session starts with: the points, the commanded joints and every signal a
-/// declared term reads (more are added as discovery finds them).
-fn declared_topics(setup: &parameters::Setup) -> Vec<(String, String)> {
-    let points_type = if setup.recording.points == metrocell_estimation::PointSource::TrackerMeasurements { TrackerMeasurement::ROS_TYPE } else { MeasuredPoint::ROS_TYPE };
-    let mut topics = vec![(setup.points_topic.clone(), points_type.to_string()), (COMMANDED_JOINTS_TOPIC.to_string(), JointState::ROS_TYPE.to_string())];
-    let f = setup.forward;
-    for t in f.machine_terms.terms.iter().chain(&f.instrument_terms.terms) {
-        for s in t.term.signals() {
-            let topic = match s {
-                SignalKind::Temperature(n) | SignalKind::TemperatureHistory(n) => (format!("/temperature/{n}"), Temperature::ROS_TYPE),
-                SignalKind::TimeSincePowerOn => (POWER_ON_TOPIC.to_string(), TimeReference::ROS_TYPE),
-                SignalKind::LoadForce => (LOAD_TOPIC.to_string(), WrenchStamped::ROS_TYPE),
-                _ => continue,
-            };
-            let topic = (topic.0, topic.1.to_string());
-            if !topics.contains(&topic) {
-                topics.push(topic);
-            }
-        }
-    }
-    topics
-}
-
 fn subscribe(node: &mut MetrocellNode, name: &str, ros_type: &str) -> Result<RawSubscription, metrocell_node::NodeError> {
     // a latched topic (the tracker's power-on time) is read latched, so a late start still gets it
     let profile = if name == POWER_ON_TOPIC { qos::latched() } else { qos::stream(qos::reliable()) };
@@ -97,7 +69,9 @@ fn live(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
     for line in &setup.describe {
         node.info(line);
     }
-    let mut topics = declared_topics(&setup);
+    // the points, the commanded joints and every signal a declared term reads (more are added
+    // as discovery finds them)
+    let mut topics = metrocell_estimation::declared_topics(setup.forward, &setup.recording);
     let mut session = Session::new(setup, Path::new("live DDS"), &topics)?;
     let mut subscriptions = Vec::new();
     for topic in session.stream.topics() {
@@ -131,8 +105,7 @@ fn live(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
         }
         for sub in &subscriptions {
             while let Ok(Some(m)) = sub.take() {
-                let log_time = if node.use_sim_time() { node.now().to_nanos() } else { m.receive_time_ns };
-                let message = SourcedMessage { topic: sub.topic().to_string(), log_time_ns: log_time.max(0) as u64, publish_time_ns: m.source_time_ns.unwrap_or(m.receive_time_ns).max(0) as u64, payload: m.payload };
+                let message = SourcedMessage { topic: sub.topic().to_string(), log_time_ns: m.receive_time_ns.max(0) as u64, publish_time_ns: m.source_time_ns.unwrap_or(m.receive_time_ns).max(0) as u64, payload: m.payload };
                 if let Err(e) = session.push(&message) {
                     node.warn(format!("{e}"));
                     diagnostics.error(e.to_string());

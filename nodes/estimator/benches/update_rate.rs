@@ -108,7 +108,9 @@ fn main() {
         .0
         .build_offline()
         .unwrap();
-    let (mut state, _, log) = parameters::estimator(node.parameters()).unwrap();
+    let model = parameters::model(node.parameters(), "/measured_points").unwrap();
+    let topics = metrocell_estimation::declared_topics(model.forward, &model.recording);
+    let (mut state, log) = parameters::estimator(node.parameters(), &model, &topics).unwrap();
     let free = state.filter().free_indices().len();
     println!("{}", log[0]);
     let messages = inputs();
@@ -125,15 +127,11 @@ fn main() {
     }
     let decode_s = start.elapsed().as_secs_f64();
 
-    // the node's work: decode, stream the signals, update the filter, publish every 1000
+    // the node's work: decode, build the records (signals interpolated), update the filter, publish every 1000
     let start = Instant::now();
     let mut models = 0;
     for m in &messages {
-        if m.topic == "/measured_points" {
-            state.point(m.decode::<MeasuredPoint>().unwrap());
-        } else {
-            state.joint_state(&m.decode::<JointState>().unwrap());
-        }
+        state.message(m).unwrap();
         models += state.process().iter().filter(|o| o.model.is_some()).count();
     }
     let update_s = start.elapsed().as_secs_f64();

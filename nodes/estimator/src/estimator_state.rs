@@ -1,20 +1,20 @@
-//! The node's logic, the same live and on a bag: messages in, outputs out, no clock. A measured
-//! point waits until every signal stream has passed its stamp (so the signals at its time are
-//! final and a replay sees the same numbers as the live run), or until some stream is
-//! `signal_wait` seconds past it (a dead sensor must not stall the estimate: the last value
-//! holds, and the point is counted as `points_with_held_signals`). Points are then taken in
-//! stamp order by the recursive estimator (crates/estimation `recursive`).
+//! The node's logic, the same live and on a bag: messages in, outputs out, no clock. Messages
+//! go into a [`RecordStream`] (crates/estimation: the records `metrocell calibrate` and
+//! `diagnose` build from a bag, here one at a time, judged on header stamps only), which holds a
+//! measured point until every signal stream has a sample stamped at or after it (so the signals
+//! at its time are final and a replay sees the same numbers as the live run), or until some
+//! stream is `max_signal_gap` seconds past it. Records come out in stamp order and are taken by
+//! the recursive estimator (crates/estimation `recursive`).
 
 use std::collections::BTreeMap;
 
-use metrocell_estimation::{MeasurementRecord, RecordKind, RecursiveEstimator, Update};
+use metrocell_bagtools::SourcedMessage;
+use metrocell_estimation::{MeasurementRecord, RecordStream, RecursiveEstimator, Update};
 use metrocell_model::{ForwardModel, Workspace};
 use metrocell_msgs::msg::{ErrorModel, MeasuredPoint};
-use metrocell_msgs::sensor_msgs::msg::{JointState, Temperature};
-use nalgebra::{DMatrix, Matrix3, Vector3};
+use nalgebra::{DMatrix, Vector3};
 
 use crate::model_message;
-use crate::signal_stream::SignalStream;
 use crate::state_file::SavedState;
 
 /// Settings that shape the outputs.
@@ -22,8 +22,6 @@ use crate::state_file::SavedState;
 pub struct Settings {
     /// Publish the model after this many accepted measurements (and on every alarm).
     pub publish_every: u64,
-    /// s of stamp time a point waits for a stream that has stopped.
-    pub signal_wait: f64,
     /// Joint vectors at which the volumetric error is predicted.
     pub predict_joints: Vec<Vec<f64>>,
     pub machine_id: String,
@@ -36,11 +34,12 @@ pub struct Counters {
     pub accepted: u64,
     pub outliers: u64,
     pub alarms: u64,
-    pub points_with_held_signals: u64,
-    /// By reason: not_finite, no_signals, model_error.
+    /// By reason: rejected (not finite, no signals at its time, … — the log says which),
+    /// model_error.
     pub points_not_used: BTreeMap<&'static str, u64>,
-    pub joint_states_without_axes: u64,
-    pub rejected_readings: u64,
+    /// Signal samples refused (no machine joints in a joint state, a time going backwards, a
+    /// NaN, a message that does not decode).
+    pub refused_samples: u64,
     pub models_published: u64,
 }
 
@@ -48,8 +47,8 @@ impl Counters {
     pub fn summary(&self) -> String {
         let not_used = self.points_not_used.iter().map(|(r, n)| format!("{r}: {n}")).collect::<Vec<_>>().join(", ");
         format!(
-            "{} points received, {} accepted, {} gated as outliers, {} alarms, {} with held signals, not used: [{not_used}], {} models published, {} joint states without the machine's joints, {} temperature readings rejected",
-            self.points_received, self.accepted, self.outliers, self.alarms, self.points_with_held_signals, self.models_published, self.joint_states_without_axes, self.rejected_readings
+            "{} points received, {} accepted, {} gated as outliers, {} alarms, not used: [{not_used}], {} models published, {} signal samples refused",
+            self.points_received, self.accepted, self.outliers, self.alarms, self.models_published, self.refused_samples
         )
     }
 }
@@ -77,36 +76,23 @@ pub struct Outputs {
 }
 
 pub struct EstimatorState {
-    model: ForwardModel<'static>,
+    model: &'static ForwardModel<'static>,
     filter: RecursiveEstimator,
     work: Workspace,
     jacobian: DMatrix<f64>,
-    stream: SignalStream,
-    joint_names: Vec<String>,
-    /// Points waiting for their signals, by (stamp ns, arrival) — arrival breaks ties in order.
-    pending: BTreeMap<(i64, u64), MeasuredPoint>,
-    arrivals: u64,
+    stream: RecordStream<'static, 'static>,
+    points_topic: String,
     settings: Settings,
     since_publish: u64,
     pub counters: Counters,
 }
 
 impl EstimatorState {
-    pub fn new(model: ForwardModel<'static>, filter: RecursiveEstimator, stream: SignalStream, settings: Settings) -> Self {
+    /// `stream` reads the points from `points_topic`.
+    pub fn new(model: &'static ForwardModel<'static>, filter: RecursiveEstimator, mut stream: RecordStream<'static, 'static>, points_topic: String, settings: Settings) -> Self {
+        stream.on_stamps_only();
         let n = model.param_count();
-        Self {
-            joint_names: model.machine.joint_names(),
-            work: Workspace::new(&model),
-            jacobian: DMatrix::zeros(3, n),
-            model,
-            filter,
-            stream,
-            pending: BTreeMap::new(),
-            arrivals: 0,
-            settings,
-            since_publish: 0,
-            counters: Counters::default(),
-        }
+        Self { work: Workspace::new(model), jacobian: DMatrix::zeros(3, n), model, filter, stream, points_topic, settings, since_publish: 0, counters: Counters::default() }
     }
 
     pub fn filter(&self) -> &RecursiveEstimator {
@@ -130,50 +116,31 @@ impl EstimatorState {
 
     /// Points still waiting for their signals.
     pub fn pending(&self) -> usize {
-        self.pending.len()
+        self.stream.waiting()
     }
 
-    /// A commanded joint state: the family's joints picked by name.
-    pub fn joint_state(&mut self, js: &JointState) {
-        let index: Option<Vec<usize>> = self.joint_names.iter().map(|n| js.name.iter().position(|m| m == n)).collect();
-        let Some(index) = index.filter(|i| i.iter().all(|&k| k < js.position.len())) else {
-            self.counters.joint_states_without_axes += 1;
-            return;
-        };
-        let q = index.iter().map(|&k| js.position[k]).collect();
-        let velocity = (js.velocity.len() == js.name.len()).then(|| index.iter().map(|&k| js.velocity[k]).collect());
-        self.stream.joints(js.header.stamp.nanos() as f64 * 1e-9, q, velocity);
+    /// The topics the state reads.
+    pub fn topics(&self) -> Vec<String> {
+        self.stream.topics()
     }
 
-    /// A temperature reading of `sensor`.
-    pub fn temperature(&mut self, sensor: &str, t: &Temperature) {
-        if !self.stream.temperature(sensor, t.header.stamp.nanos() as f64 * 1e-9, t.temperature) {
-            self.counters.rejected_readings += 1;
+    /// One input message (a measured point, a commanded joint state, a signal); others are
+    /// ignored. A message the recording cannot use at all is returned as the reason.
+    pub fn message(&mut self, m: &SourcedMessage) -> Result<(), String> {
+        if m.topic == self.points_topic {
+            self.counters.points_received += 1;
         }
+        let pushed = self.stream.push(m).map_err(|e| e.to_string());
+        self.counters.refused_samples = self.stream.refused_samples();
+        pushed
     }
 
-    /// A measured point (machine frame): queued until its signals are final.
-    pub fn point(&mut self, p: MeasuredPoint) {
-        self.counters.points_received += 1;
-        self.arrivals += 1;
-        self.pending.insert((p.header.stamp.nanos(), self.arrivals), p);
-    }
-
-    /// Take every queued point whose signals are final (or held), in stamp order.
+    /// Take every record whose signals are final, in stamp order.
     pub fn process(&mut self) -> Vec<Outputs> {
-        let mut out = Vec::new();
-        while let Some((&(ns, _), _)) = self.pending.first_key_value() {
-            let t = ns as f64 * 1e-9;
-            let held = !self.stream.covers(t);
-            if held && !self.stream.newest().is_some_and(|newest| newest - t > self.settings.signal_wait) {
-                break;
-            }
-            let (_, p) = self.pending.pop_first().expect("looked at above");
-            if held {
-                self.counters.points_with_held_signals += 1;
-            }
-            out.push(self.take(&p, t));
-            self.stream.forget_before(t);
+        let mut resolved = self.stream.drain();
+        let mut out: Vec<Outputs> = std::mem::take(&mut resolved.rejected).into_iter().map(|r| self.not_used("rejected", format!("point {} ({}): {}; skipped", r.point_id, r.at, r.reason))).collect();
+        for record in resolved.records() {
+            out.push(self.take(record));
         }
         out
     }
@@ -183,22 +150,12 @@ impl EstimatorState {
         Outputs { problem: Some(message), ..Default::default() }
     }
 
-    fn take(&mut self, p: &MeasuredPoint, t: f64) -> Outputs {
-        let measured = Vector3::new(p.measured.x, p.measured.y, p.measured.z);
-        let covariance = Matrix3::from_row_slice(&p.covariance);
-        if !(measured.iter().chain(covariance.iter()).all(|v| v.is_finite())) {
-            return self.not_used("not_finite", format!("point {} at {t:.3} s: not finite (measured or covariance); skipped", p.point_id));
-        }
-        let (q, velocity, approach, mut signals) = match self.stream.at(t) {
-            Ok(s) => s,
-            Err(gap) => return self.not_used("no_signals", format!("point {} at {t:.3} s: {gap}; skipped", p.point_id)),
-        };
-        self.model.set_motion(&mut signals, &q, &velocity, &approach);
-        let record = MeasurementRecord { time: t, point_id: p.point_id.clone(), channel: p.source.clone(), q, measured, covariance, signals, kind: RecordKind::Point };
+    fn take(&mut self, record: MeasurementRecord) -> Outputs {
+        let stamp_ns = (record.time * 1e9).round() as i64;
         let measurement = self.counters.accepted + self.counters.outliers;
-        let update: Update = match self.filter.update(&self.model, &record, &mut self.work) {
+        let update: Update = match self.filter.update(self.model, &record, &mut self.work) {
             Ok(u) => u,
-            Err(e) => return self.not_used("model_error", format!("point {} at {t:.3} s: {e}; skipped", p.point_id)),
+            Err(e) => return self.not_used("model_error", format!("point {} at {:.3} s: {e}; skipped", record.point_id, record.time)),
         };
         let mut out = Outputs::default();
         if update.accepted {
@@ -209,13 +166,12 @@ impl EstimatorState {
         }
         if update.alarm {
             self.counters.alarms += 1;
-            out.alarm = Some(Alarm { stamp_ns: p.header.stamp.nanos(), point_id: p.point_id.clone(), measurement, nis: update.nis, window_probability: update.window_probability, innovation: update.innovation });
+            out.alarm = Some(Alarm { stamp_ns, point_id: record.point_id.clone(), measurement, nis: update.nis, window_probability: update.window_probability, innovation: update.innovation });
         }
         if update.alarm || self.since_publish >= self.settings.publish_every {
             self.since_publish = 0;
-            let header_ns = p.header.stamp.nanos();
-            out.model = Some(model_message::error_model(&self.model, &self.filter, &self.settings.machine_id, header_ns));
-            out.predicted = self.predictions(&record.signals, header_ns);
+            out.model = Some(model_message::error_model(self.model, &self.filter, &self.settings.machine_id, stamp_ns));
+            out.predicted = self.predictions(&record.signals, stamp_ns);
             self.counters.models_published += 1;
         }
         out

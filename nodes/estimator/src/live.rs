@@ -1,4 +1,5 @@
-//! The node on live DDS. Inputs are taken as they come; the state orders them by stamp.
+//! The node on live DDS. Inputs are taken as they come (raw, as a recorder would store them);
+//! the state's record stream orders them by stamp.
 
 use std::time::Duration;
 
@@ -6,9 +7,10 @@ use metrocell_estimator_node::estimator_state::Outputs;
 use metrocell_estimator_node::model_message::alarm_message;
 use metrocell_estimator_node::parameters;
 use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
+use metrocell_bagtools::SourcedMessage;
+use metrocell_estimation::signal_topics::POWER_ON_TOPIC;
 use metrocell_msgs::msg::{ErrorModel, MeasuredPoint};
-use metrocell_msgs::sensor_msgs::msg::{JointState, Temperature};
-use metrocell_node::{qos, MetrocellNode, NodeError};
+use metrocell_node::{qos, MetrocellNode};
 
 /// Every input is read reliably with a deep queue: a lost joint state or reading would change
 /// the interpolated signals, and the live estimate would no longer equal the replay's.
@@ -17,18 +19,21 @@ fn input_qos() -> metrocell_node::QosProfile {
 }
 
 pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
-    let (mut state, inputs, log) = parameters::estimator(node.parameters())?;
+    let model = parameters::model(node.parameters(), &node.resolve_topic("measured_points")?)?;
+    // the points, the commanded joints and every signal a term of the model reads
+    let topics = metrocell_estimation::declared_topics(model.forward, &model.recording);
+    let (mut state, log) = parameters::estimator(node.parameters(), &model, &topics)?;
     for line in log {
         node.info(line);
     }
     let state_file = node.param::<String>("state_file")?;
-    let points = node.subscription::<MeasuredPoint>("measured_points", input_qos())?;
-    let joints = node.subscription::<JointState>("machine/commanded_joint_states", input_qos())?;
-    let temperatures = inputs
-        .sensors
-        .iter()
-        .map(|name| Ok((name.clone(), node.subscription::<Temperature>(&format!("temperature/{name}"), input_qos())?)))
-        .collect::<Result<Vec<_>, NodeError>>()?;
+    let mut inputs = Vec::new();
+    for topic in state.topics() {
+        let ty = &topics.iter().find(|(n, _)| *n == topic).expect("the state reads only the topics it was given").1;
+        // the tracker's power-on time is latched: read latched, so a late start still gets it
+        let profile = if topic == POWER_ON_TOPIC { qos::latched() } else { input_qos() };
+        inputs.push(node.raw_subscription(&topic, ty, profile)?);
+    }
     let model_pub = node.publisher::<ErrorModel>("estimator/error_model", qos::latched())?;
     let predicted_pub = node.publisher::<MeasuredPoint>("estimator/predicted_error", qos::reliable())?;
     let alarm_pub = node.publisher::<DiagnosticArray>("/diagnostics", qos::reliable())?;
@@ -38,16 +43,14 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
     diagnostics.ok("waiting for measured points");
     let token = node.shutdown_token();
     while !token.is_triggered() {
-        while let Ok(Some((js, _))) = joints.take() {
-            state.joint_state(&js);
-        }
-        for (name, sub) in &temperatures {
-            while let Ok(Some((t, _))) = sub.take() {
-                state.temperature(name, &t);
+        for sub in &inputs {
+            while let Ok(Some(m)) = sub.take() {
+                let message = SourcedMessage { topic: sub.topic().to_string(), log_time_ns: m.receive_time_ns.max(0) as u64, publish_time_ns: m.source_time_ns.unwrap_or(m.receive_time_ns).max(0) as u64, payload: m.payload };
+                if let Err(e) = state.message(&message) {
+                    node.warn(&e);
+                    diagnostics.warn(&e);
+                }
             }
-        }
-        while let Ok(Some((p, _))) = points.take() {
-            state.point(p);
         }
         for out in state.process() {
             let Outputs { model, predicted, alarm, problem } = out;
@@ -82,9 +85,8 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
         diagnostics.set_value("outliers", c.outliers);
         diagnostics.set_value("alarms", c.alarms);
         diagnostics.set_value("points_waiting_for_signals", state.pending());
-        diagnostics.set_value("points_with_held_signals", c.points_with_held_signals);
-        diagnostics.set_value("joint_states_without_axes", c.joint_states_without_axes);
-        diagnostics.set_value("rejected_temperature_readings", c.rejected_readings);
+        diagnostics.set_value("points_not_used", c.points_not_used.values().sum::<u64>());
+        diagnostics.set_value("signal_samples_refused", c.refused_samples);
         diagnostics.set_value("innovation_rms_um", format!("{:.3}", state.filter().innovation_rms() * 1e6));
         token.wait_timeout(Duration::from_millis(2));
     }

@@ -2,15 +2,14 @@
 
 use std::path::Path;
 
-use metrocell_estimation::{RecursiveEstimator, RecursiveOptions};
-use metrocell_model::ParameterSetup;
+use metrocell_estimation::{PointSource, RecordStream, RecordingOptions, RecursiveEstimator, RecursiveOptions};
+use metrocell_model::{ForwardModel, ParameterSetup, SignalsBuilderOptions};
 use metrocell_node::{ParamDecl, Parameters};
 use metrocell_physics::model::TermModel;
-use metrocell_physics::{configure, SignalKind, TermConfig};
+use metrocell_physics::{configure, TermConfig};
 use metrocell_twin::Cell;
 
 use crate::estimator_state::{EstimatorState, Settings};
-use crate::signal_stream::SignalStream;
 use crate::state_file::SavedState;
 
 pub fn declarations() -> Vec<ParamDecl> {
@@ -18,38 +17,50 @@ pub fn declarations() -> Vec<ParamDecl> {
         ParamDecl::new("model", "", "model cell file (YAML, the twin's format): machine, `terms:` = the error model to estimate (their params are the start values), `estimation:` = free parameters and priors per term label"),
         ParamDecl::new("process_noise", Vec::<String>::new(), "random-walk intensity of drifting parameters, `label.param=q` with q in the parameter's SI unit per √s (e.g. positioning[z].c0=1e-7 for a Z offset that may drift 1 µm in ~3 h); others are constant"),
         ParamDecl::new("publish_every", 1i64, "publish the error model after this many accepted measurements (and on every alarm)").with_range(1.0, 1e9),
-        ParamDecl::new("signal_wait", 5.0, "s of stamp time a measured point waits for a signal stream that has stopped (its last value then holds)").with_range(0.0, 86400.0),
+        ParamDecl::new("max_signal_gap", 600.0, "s of stamp time a measured point waits for a temperature (or other slow) stream to bracket it, and the longest gap between two of its samples that is interpolated; a point inside a longer gap is not used (the log says which signal)").with_range(1.0, 86400.0),
+        ParamDecl::new("max_joint_gap", 1.0, "longest interval [s] between two commanded joint states that is interpolated (a longer one is a gap in the stream: points inside it are not used)").with_range(1e-3, 3600.0),
         ParamDecl::new("predict_points", Vec::<f64>::new(), "joint vectors (machine family order, m/rad) at which the volumetric error is predicted, flattened: x1 y1 z1 x2 y2 z2 … for a cartesian machine"),
         ParamDecl::new("gate_probability", 1e-6, "a single measurement whose χ²(3) tail probability is below this is an outlier (not used)").with_range(1e-15, 0.5),
         ParamDecl::new("window", 10i64, "measurements in the moving normalised-innovation χ² test").with_range(2.0, 1e5),
         ParamDecl::new("alarm_probability", 1e-3, "the moving test alarms (the model stopped explaining the data) below this tail probability").with_range(1e-15, 0.5),
         ParamDecl::new("alarm_inflation", 100.0, "the covariance is multiplied by this on an alarm, so the estimate re-converges to the new state").with_range(1.0, 1e12),
         ParamDecl::new("state_file", "", "JSON file the last published state is kept in; at start the node goes on from it when it fits the model ('' = start from the model file)"),
-        ParamDecl::new("power_on_time", 0.0, "when the instrument was switched on, s since the Unix epoch, for terms reading time_since_power_on (0 = unknown)").with_range(0.0, 1e11),
         ParamDecl::new("machine_id", "", "machine_id of the published ErrorModel"),
     ]
 }
 
-/// What the model reads: temperature sensors, and those read through a lag.
-pub struct Inputs {
-    pub sensors: Vec<String>,
-    pub history_sensors: Vec<String>,
+/// The model and how its records are read, before the input topics are known.
+pub struct Model {
+    pub forward: &'static ForwardModel<'static>,
+    pub recording: RecordingOptions,
+    pub path: String,
+    cell: &'static Cell,
 }
 
-/// The filter over the model file, restored from the state file when it fits; description lines
-/// for the log.
-pub fn estimator(p: &Parameters) -> Result<(EstimatorState, Inputs, Vec<String>), Box<dyn std::error::Error>> {
+/// The model file, and the recording options from the parameters; `points_topic` is the
+/// resolved name of the measured points' topic.
+pub fn model(p: &Parameters, points_topic: &str) -> Result<Model, Box<dyn std::error::Error>> {
     let path = p.get::<String>("model")?;
     if path.trim().is_empty() {
         return Err("parameter model is empty: give a model cell file, e.g. --ros-args -p model:=launch-configs/cells/demo_model.yaml".into());
     }
-    // The node keeps one model for its whole life; leaking it gives the forward model the
-    // 'static borrow it needs without a self-referential struct.
+    // The node keeps one model for its whole life; leaking it gives the forward model and the
+    // record stream the 'static borrow they need without a self-referential struct.
     let cell: &'static Cell = Box::leak(Box::new(Cell::from_path(&path)?));
     let instruments: &'static TermModel = Box::leak(Box::new(identity_tracker_pose()?));
-    let model = cell.forward_model(instruments).map_err(|e| format!("model {path}: {e}"))?;
-    let inputs = inputs_of(cell, &path, p.get::<f64>("power_on_time")? > 0.0)?;
-    let mut setup = ParameterSetup::new(&model, &cell.estimation).map_err(|e| format!("model {path}: {e}"))?;
+    let forward: &'static ForwardModel<'static> = Box::leak(Box::new(cell.forward_model(instruments).map_err(|e| format!("model {path}: {e}"))?));
+    let signals = SignalsBuilderOptions { max_slow_gap: p.get::<f64>("max_signal_gap")?, max_joint_gap: p.get::<f64>("max_joint_gap")?, ..SignalsBuilderOptions::default() };
+    let recording = RecordingOptions { points: PointSource::MeasuredPoints, measured_points_topic: points_topic.to_string(), signals, ..RecordingOptions::default() };
+    Ok(Model { forward, recording, path, cell })
+}
+
+/// The filter over the model file, restored from the state file when it fits, reading a
+/// recording that holds `topics` ((name, type): a bag's, or the live subscriptions); description
+/// lines for the log.
+pub fn estimator(p: &Parameters, m: &Model, topics: &[(String, String)]) -> Result<(EstimatorState, Vec<String>), Box<dyn std::error::Error>> {
+    let (cell, model, path) = (m.cell, m.forward, &m.path);
+    let stream = RecordStream::new(std::path::Path::new("input"), topics, model, &m.recording).map_err(|e| format!("model {path}: {e}"))?;
+    let mut setup = ParameterSetup::new(model, &cell.estimation).map_err(|e| format!("model {path}: {e}"))?;
     let names = model.param_names();
     let pose = model.instrument_param_start(metrocell_physics::TermId::TrackerPose).expect("identity pose added above");
     // measured points come in the machine frame: the instrument pose is the identity, fixed
@@ -72,13 +83,13 @@ pub fn estimator(p: &Parameters) -> Result<(EstimatorState, Inputs, Vec<String>)
             x0[k] = prior.value;
         }
     }
-    let mut p0 = RecursiveEstimator::initial_covariance(&model, &setup);
+    let mut p0 = RecursiveEstimator::initial_covariance(model, &setup);
     let mut log = vec![format!(
-        "model {path}: {} parameters, {} free ({}); temperatures read: {}",
+        "model {path}: {} parameters, {} free ({}); reading {}",
         n,
         setup.free_indices().len(),
         setup.free_indices().iter().map(|&k| names[k].as_str()).collect::<Vec<_>>().join(", "),
-        if inputs.sensors.is_empty() { "none".to_string() } else { inputs.sensors.join(", ") }
+        stream.topics().join(", ")
     )];
     let state_file = p.get::<String>("state_file")?;
     if !state_file.is_empty() {
@@ -93,9 +104,7 @@ pub fn estimator(p: &Parameters) -> Result<(EstimatorState, Inputs, Vec<String>)
             None => log.push(format!("no state file {state_file} yet: starting from the model file")),
         }
     }
-    let filter = RecursiveEstimator::new(&model, &setup, x0, p0, options)?;
-    let power_on = Some(p.get::<f64>("power_on_time")?).filter(|t| *t > 0.0);
-    let stream = SignalStream::new(cell.machine.joint_names().len(), &inputs.sensors, &inputs.history_sensors, power_on);
+    let filter = RecursiveEstimator::new(model, &setup, x0, p0, options)?;
     let predict = p.get::<Vec<f64>>("predict_points")?;
     let joints = cell.machine.joint_names().len();
     if predict.len() % joints != 0 {
@@ -103,11 +112,10 @@ pub fn estimator(p: &Parameters) -> Result<(EstimatorState, Inputs, Vec<String>)
     }
     let settings = Settings {
         publish_every: p.get::<i64>("publish_every")? as u64,
-        signal_wait: p.get::<f64>("signal_wait")?,
         predict_joints: predict.chunks(joints).map(<[f64]>::to_vec).collect(),
         machine_id: p.get::<String>("machine_id")?,
     };
-    Ok((EstimatorState::new(model, filter, stream, settings), inputs, log))
+    Ok((EstimatorState::new(model, filter, stream, m.recording.measured_points_topic.clone(), settings), log))
 }
 
 /// The measured points are in the machine frame: the tracker pose is the identity.
@@ -116,35 +124,4 @@ fn identity_tracker_pose() -> Result<TermModel, metrocell_physics::PhysicsError>
     let params = ["tx", "ty", "tz", "alpha", "beta", "delta"].iter().map(|k| (k.to_string(), metrocell_physics::ConfigValue::Number(0.0))).collect();
     m.push(configure(&TermConfig { id: "tracker_pose".into(), options: Default::default(), params, use_defaults: false })?)?;
     Ok(m)
-}
-
-/// The signals the model's terms read, checked against what the node can provide.
-fn inputs_of(cell: &Cell, path: &str, power_on_known: bool) -> Result<Inputs, String> {
-    let (mut sensors, mut history_sensors) = (Vec::new(), Vec::new());
-    for t in &cell.terms.terms {
-        for s in t.term.signals() {
-            match s {
-                SignalKind::AxisPosition(_) | SignalKind::ApproachDirection(_) | SignalKind::AxisVelocity(_) | SignalKind::RotaryPosition(_) => {}
-                k if k.is_computed_by_model() => {}
-                SignalKind::Temperature(name) => sensors.push(name),
-                SignalKind::TemperatureHistory(name) => {
-                    sensors.push(name.clone());
-                    history_sensors.push(name);
-                }
-                SignalKind::TimeSincePowerOn if power_on_known => {}
-                other => {
-                    return Err(format!(
-                        "model {path}: term {} reads {other}, which the estimator node does not take from its topics (it reads commanded joints and temperature/<sensor>{}); remove the term or give the signal",
-                        t.term.label(),
-                        if other == SignalKind::TimeSincePowerOn { "; set power_on_time" } else { "" }
-                    ))
-                }
-            }
-        }
-    }
-    sensors.sort();
-    sensors.dedup();
-    history_sensors.sort();
-    history_sensors.dedup();
-    Ok(Inputs { sensors, history_sensors })
 }

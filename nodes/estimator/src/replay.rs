@@ -8,30 +8,19 @@ use metrocell_estimator_node::model_message::alarm_message;
 use metrocell_estimator_node::parameters;
 use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
 use metrocell_msgs::msg::{ErrorModel, MeasuredPoint};
-use metrocell_msgs::sensor_msgs::msg::{JointState, Temperature};
 use metrocell_node::{OfflineNode, ReplayArgs};
 
 pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::error::Error>> {
-    let (mut state, inputs, log) = parameters::estimator(node.parameters())?;
+    let model = parameters::model(node.parameters(), &node.resolve_topic("measured_points")?)?;
+    let mut source = BagSource::open(&args.bag)?;
+    let topics: Vec<(String, String)> = source.topics().iter().map(|t| (t.name.clone(), t.type_name.clone())).collect();
+    let (mut state, log) = parameters::estimator(node.parameters(), &model, &topics)?;
     for line in log {
         node.logger().info(line);
     }
     let state_file = node.param::<String>("state_file")?;
-    let mut source = BagSource::open(&args.bag)?;
-    let points_topic = node.resolve_topic("measured_points")?;
-    let joints_topic = node.resolve_topic("machine/commanded_joint_states")?;
-    for (topic, ok) in [(&points_topic, source.subscribe::<MeasuredPoint>(&points_topic)?), (&joints_topic, source.subscribe::<JointState>(&joints_topic)?)] {
-        if !ok {
-            node.logger().warn(source.missing_topic_hint(topic));
-        }
-    }
-    let mut sensor_of_topic = Vec::new();
-    for name in &inputs.sensors {
-        let topic = node.resolve_topic(&format!("temperature/{name}"))?;
-        if !source.subscribe::<Temperature>(&topic)? {
-            node.logger().warn(source.missing_topic_hint(&topic));
-        }
-        sensor_of_topic.push((topic, name.clone()));
+    for topic in state.topics() {
+        source.subscribe_any(&topic);
     }
     let model_topic = node.resolve_topic("estimator/error_model")?;
     let predicted_topic = node.resolve_topic("estimator/predicted_error")?;
@@ -45,16 +34,7 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     let (mut inputs_read, mut malformed) = (0u64, 0u64);
     let stopped = source.replay::<Box<dyn std::error::Error>>(|| node.interrupted(), |m| {
         inputs_read += 1;
-        let decoded = if m.topic == points_topic {
-            m.decode::<MeasuredPoint>().map(|p| state.point(p))
-        } else if m.topic == joints_topic {
-            m.decode::<JointState>().map(|js| state.joint_state(&js))
-        } else if let Some((_, sensor)) = sensor_of_topic.iter().find(|(t, _)| *t == m.topic) {
-            m.decode::<Temperature>().map(|t| state.temperature(sensor, &t))
-        } else {
-            Ok(())
-        };
-        if let Err(e) = decoded {
+        if let Err(e) = state.message(&m) {
             node.logger().warn(format!("skipped: {e}"));
             malformed += 1;
         }

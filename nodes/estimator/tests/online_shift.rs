@@ -100,8 +100,9 @@ fn write_shift(dir: &Path, n: usize, step_at: Option<usize>, seed: u64) -> Vec<f
         let stamp_ns = T0_NS + (t * 1e9) as i64;
         let q = grid(i);
         let header = |ns: i64| Header { stamp: stamp(ns), frame_id: "machine".into() };
-        // the machine stands at the point from 1 s before to 1 s after the measurement
-        for dt in [-1_000_000_000i64, 1_000_000_000] {
+        // the machine stands at the point from 1 s before to 1 s after the measurement (sampled
+        // every second: the joint stream's longest interpolated gap is 1 s)
+        for dt in [-1_000_000_000i64, 0, 1_000_000_000] {
             let js = JointState { header: header(stamp_ns + dt), name: vec!["x".into(), "y".into(), "z".into()], position: q.to_vec(), velocity: vec![0.0; 3], effort: vec![] };
             log_ns += LOG_STEP_NS / 4;
             w.write("/machine/commanded_joint_states", log_ns, log_ns, &encode_cdr(&js).unwrap()).unwrap();
@@ -269,7 +270,7 @@ fn flags_a_20_um_crash_within_20_measurements_and_restarts_from_its_state_file()
     assert!(resumed_s < 0.8 * fresh_s, "a resumed run keeps what the first half learnt: σ {resumed_s:e} vs {fresh_s:e} fresh");
 }
 
-/// Messages of measurements [from, to) of a shift bag (each measurement writes 4 messages).
+/// Messages of measurements [from, to) of a shift bag (each measurement writes 5 messages).
 fn write_partial(whole: &Path, out: &Path, from: usize, to: usize) {
     let mut w = BagWriter::create(out, WriterOptions::default()).unwrap();
     let qos = qos_profiles_yaml(&[QosProfile::default_publisher()]);
@@ -282,7 +283,7 @@ fn write_partial(whole: &Path, out: &Path, from: usize, to: usize) {
     source.subscribe::<Temperature>("/temperature/column").unwrap();
     for (k, m) in source.messages().unwrap().enumerate() {
         let m = m.unwrap();
-        if (from * 4..to * 4).contains(&k) {
+        if (from * 5..to * 5).contains(&k) {
             w.write(&m.topic, m.log_time_ns, m.publish_time_ns, &m.payload).unwrap();
         }
     }

@@ -10,7 +10,7 @@ use system_tests::{bin, piped, run};
 fn every_node_prints_help_and_exits_without_starting() {
     system_tests::require_isolated_network();
     // (binary, parameters its help must list, whether it replays bags)
-    let nodes: [(&str, &[&str], bool); 8] = [
+    let nodes: [(&str, &[&str], bool); 10] = [
         ("metrocell-sim", &["cell", "duration", "seed"], false),
         ("metrocell-thermal", &["sensors", "alpha"], true),
         ("metrocell-recorder", &["output", "topics", "max_bag_size"], false),
@@ -18,7 +18,9 @@ fn every_node_prints_help_and_exits_without_starting() {
         ("metrocell-fiducial", &["family"], true),
         ("metrocell-probe", &["stylus_radius", "pretravel"], true),
         ("metrocell-dashboard", &["port", "foxglove_port", "error_warn_um", "drift_warn_um_per_h"], false),
-        ("metrocell-estimator", &["model", "process_noise", "predict_points", "state_file"], true),
+        ("metrocell-estimator", &["model", "process_noise", "predict_points", "state_file", "max_signal_gap"], true),
+        ("metrocell-diagnose", &["model", "window", "every", "points_type"], true),
+        ("metrocell-tracker", &["backend", "registration_points"], true),
     ];
     for (name, params, replays) in nodes {
         for flag in ["--help", "-h"] {

@@ -335,6 +335,11 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
             None => skip("tracker_warmup", "no time since power-on in the records (the tracker's power-on time: /tracker/power_on, or an instrument_on_time column)".into()),
         }
     }
+    // the touch probe's pretravel: a constant mean, the lobing of a kinematic probe's
+    // three-point seat (n = 3) and the vertical pretravel
+    if inventory.probe_hits && !declared.has(TermId::ProbePretravel) {
+        out.extend(family(vec![linear_variant("3 lobes", TermId::ProbePretravel, vec![("lobes", num(3.0))])], TermId::ProbePretravel, Placement::Instrument));
+    }
     if !declared.has(TermId::Refraction) {
         if inventory.air {
             out.extend(family(vec![profiled_variant("", TermId::Refraction, vec![], &[("path_pressure_offset", 0.0)]).map(|mut v| { v.profiled = 0; v })], TermId::Refraction, Placement::Instrument));

@@ -407,6 +407,17 @@ fn statement(f: &FoundTerm, params: &[(String, f64, Option<f64>, String)], c_wp:
             let significant: Vec<String> = params.iter().filter(|(_, v, s, _)| s.is_some_and(|s| v.abs() > 2.0 * s)).map(|(n, v, s, u)| format!("{n} = {}{}", pm(*v, *s, 1e6, 1), if u == "m" { " µm" } else { " µrad" })).collect();
             format!("the rotary axes are not where the model puts them: {} (up to {} µm at the tool)", if significant.is_empty() { list() } else { significant.join(", ") }, um(peak))
         }
+        TermId::ProbePretravel => {
+            let (_, p0, s0, _) = get(params, "mean").cloned().unwrap_or_default();
+            let a = get(params, "lobe_cos").map(|p| p.1).unwrap_or(0.0);
+            let b = get(params, "lobe_sin").map(|p| p.1).unwrap_or(0.0);
+            let (sa, sb) = (get(params, "lobe_cos").and_then(|p| p.2).unwrap_or(0.0), get(params, "lobe_sin").and_then(|p| p.2).unwrap_or(0.0));
+            let amp = (a * a + b * b).sqrt();
+            let s_amp = if amp > 0.0 { ((a * sa).powi(2) + (b * sb).powi(2)).sqrt() / amp } else { sa.max(sb) };
+            let lobes = f.variant.trim_end_matches(" lobes");
+            let vertical = get(params, "vertical").map(|(_, v, s, _)| format!(", {} µm probing down", pm(*v, *s, 1e6, 1))).unwrap_or_default();
+            format!("the touch probe triggers {} µm late on average, varying by {} µm around its {lobes}-lobed seat{vertical}", pm(p0, s0, 1e6, 1), pm(amp, Some(s_amp), 1e6, 1))
+        }
         _ => format!("{} ({}): {}; up to {} µm", f.label, f.id.summary(), list(), um(peak)),
     }
 }

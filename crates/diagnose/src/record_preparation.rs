@@ -75,8 +75,9 @@ pub fn prepare(records: &[MeasurementRecord], average_repeats: bool, max_gap: f6
             while j < good.len() {
                 let (prev, next) = (good[j - 1], good[j]);
                 // a long stay at one place (a machine idling at home) is cut into pieces of
-                // `MAX_GROUP_SPAN`, so drifts over the stay are kept
-                let same = next.channel == first.channel && next.q.len() == first.q.len() && next.q.iter().zip(&first.q).all(|(a, b)| (a - b).abs() <= 1e-9) && stationary(next) && next.time - prev.time <= max_gap && next.time - first.time <= MAX_GROUP_SPAN;
+                // `MAX_GROUP_SPAN`, so drifts over the stay are kept; only readings of one thing
+                // are averaged (a probe's hits in eight directions from one stand are eight)
+                let same = next.channel == first.channel && next.kind == first.kind && next.q.len() == first.q.len() && next.q.iter().zip(&first.q).all(|(a, b)| (a - b).abs() <= 1e-9) && stationary(next) && next.time - prev.time <= max_gap && next.time - first.time <= MAX_GROUP_SPAN;
                 if !same {
                     break;
                 }

@@ -5,7 +5,7 @@
 
 use std::collections::BTreeSet;
 
-use metrocell_estimation::MeasurementRecord;
+use metrocell_estimation::{MeasurementRecord, RecordKind};
 
 /// Signals present in every record (a term evaluated on a record without its signal would be an
 /// error, so "present" means present everywhere).
@@ -29,6 +29,8 @@ pub struct SignalInventory {
     pub load: bool,
     /// Rotary axis positions (A, B, C) in every record.
     pub rotary: [bool; 3],
+    /// Some records are touch-probe hits (their pretravel is a candidate).
+    pub probe_hits: bool,
 }
 
 impl SignalInventory {
@@ -64,6 +66,7 @@ impl SignalInventory {
             let (lo, hi) = records.iter().filter_map(|r| r.signals.time_since_power_on).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| (a.min(t), b.max(t)));
             inv.power_on = Some((lo, hi));
         }
+        inv.probe_hits = records.iter().any(|r| matches!(r.kind, RecordKind::ProbeHit { .. }));
         inv.load = all(&|r| r.signals.load_force.is_some()) && records.iter().any(|r| r.signals.load_force.is_some_and(|f| f.norm() > 0.0));
         inv
     }

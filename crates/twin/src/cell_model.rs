@@ -28,7 +28,7 @@ use std::path::{Path, PathBuf};
 use metrocell_model::{ForwardModel, InstrumentPose, MachineGeometry, ParameterSetup};
 use metrocell_physics::config::quantity;
 use metrocell_physics::model::TermModel;
-use metrocell_physics::TermId;
+use metrocell_physics::{configure, TermConfig, TermId};
 
 use crate::cell::{machine, pose, terms, tracker_station, tracker_term_model, tracker_warmup, RefractionOffsets};
 use crate::cell_file::CellFile;
@@ -96,6 +96,13 @@ impl CellModel {
             }
             None => (tracker_term_model(&InstrumentPose::from_euler_xyz(nalgebra::Vector3::zeros(), [0.0; 3]), None, None)?, false),
         };
+        // the probe's pretravel, when the file states it (as the twin reads it)
+        let mut instrument_terms = instrument_terms;
+        if let Some(pt) = raw.sensors.probe.as_ref().and_then(|p| p.pretravel.as_ref()) {
+            let path = "sensors.probe.pretravel";
+            let term = configure(&TermConfig { id: "probe_pretravel".into(), options: pt.options.clone(), params: pt.params.clone(), use_defaults: false }).map_err(|e| CellError::term(path, e))?;
+            instrument_terms.push(term).map_err(|e| CellError::term(path, e))?;
+        }
         let model = ForwardModel::new(&machine, &machine_terms, &instrument_terms).map_err(|e| CellError::term("terms", e))?;
         let mut setup = ParameterSetup::new(&model, &raw.estimation).map_err(|e| CellError::term("estimation", e))?;
         if !raw.estimation.contains_key("refraction") {

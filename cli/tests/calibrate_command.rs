@@ -82,3 +82,34 @@ fn bad_input_is_named() {
     assert_eq!(code, 2);
     assert!(err.contains("huber, cauchy, linear"), "{err}");
 }
+
+/// A touch probe's pretravel is fitted from its hits: the suite's probing cell (bags/cases/
+/// case_09: eight directions in XY and one down at 24 points) with the model's pretravel at 0.
+#[test]
+fn probe_pretravel_is_fitted_from_the_probe_hits() {
+    let d = dir("probe_pretravel");
+    // the suite keeps 1 Hz joint states (only what a point needs); a probe's vertical hit comes
+    // as the machine leaves the point, so here they are recorded at 20 Hz
+    let text = std::fs::read_to_string(format!("{}/../bags/cases/case_09/truth.yaml", env!("CARGO_MANIFEST_DIR"))).unwrap().replace("machine_state: {rate: 1 Hz}", "machine_state: {rate: 20 Hz}");
+    std::fs::write(d.join("truth.yaml"), &text).unwrap();
+    let (code, out, err) = metrocell(&["sim", "--cell", "truth.yaml", "--duration", "20min", "--no-camera-frames", "--quiet", "-o", "bag"], &d);
+    assert_eq!(code, 0, "{out}{err}");
+    let model = text.replace("params: {mean: 4 um, lobe_cos: 2 um, lobe_sin: -1.5 um, vertical: 3 um}", "params: {mean: 0 um, lobe_cos: 0 um, lobe_sin: 0 um, vertical: 0 um}");
+    assert_ne!(model, text);
+    std::fs::write(d.join("model.yaml"), model).unwrap();
+    let (code, out, err) = metrocell(&["calibrate", "--model", "model.yaml", "bag", "-o", "fitted.yaml", "--json", "result.json"], &d);
+    assert_eq!(code, 0, "{out}{err}");
+    println!("{out}");
+    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(d.join("result.json")).unwrap()).unwrap();
+    for (name, truth) in [("mean", 4e-6), ("lobe_cos", 2e-6), ("lobe_sin", -1.5e-6), ("vertical", 3e-6)] {
+        let p = json["parameters"].as_array().unwrap().iter().find(|p| p["name"] == format!("probe_pretravel.{name}")).unwrap_or_else(|| panic!("probe_pretravel.{name} not fitted: {json:#}"));
+        let (v, s) = (p["value"].as_f64().unwrap(), p["sigma"].as_f64().expect("identifiable"));
+        assert!(((v - truth) / s).abs() < 3.0, "{name} = {v:e} ± {s:e}, truth {truth:e}");
+    }
+    let chi2 = json["chi2_per_dof"].as_f64().unwrap();
+    assert!((0.8..1.25).contains(&chi2), "χ²/dof {chi2}");
+    // without the hits there is nothing to fit: the model has no other measurement
+    let (code, out, err) = metrocell(&["calibrate", "--model", "model.yaml", "bag", "-o", "none.yaml", "--no-probe-hits"], &d);
+    assert_ne!(code, 0, "{out}{err}");
+    assert!(err.contains("no measurements"), "{err}");
+}

@@ -19,8 +19,9 @@ use metrocell_twin::{write_model, CellModel, FittedParameter, ModelUpdate};
   1. reads the model: a cell file (the twin's format; only `machine` and `terms` are needed) whose `terms:` declare\n\
      the error model to fit; `estimation:` says which parameters are free and gives priors (default: all free);\n\
   2. builds measurement records from the bags: /measured_points (tracker node, bag import) or /tracker/measurements\n\
-     (metrocell sim, drivers), each with its covariance, commanded joints and the signals at its time (temperatures,\n\
-     air, time since power-on...). A signal a declared term needs that the bag lacks is an error naming the topic;\n\
+     (metrocell sim, drivers), and /probe/hits when the model declares sensors.probe (--no-probe-hits: not), each\n\
+     with its covariance, commanded joints and the signals at its time (temperatures, air, time since power-on...).\n\
+     A signal a declared term needs that the bag lacks is an error naming the topic;\n\
   3. fits: registers the tracker if the points are in its frame, then least squares weighted by each point's\n\
      covariance with a robust loss (--loss; outliers are down-weighted, counted and named), bounded by each\n\
      parameter's plausible range; parameters the measurements cannot separate are held at their start and said so;\n\
@@ -61,6 +62,10 @@ pub struct CalibrateArgs {
     /// Topic of the measured points (e.g. /measured_points/thermal_compensated)
     #[arg(long, default_value = "/measured_points")]
     measured_points_topic: String,
+    /// Leave the probe hits (/probe/hits) out; by default a model that declares `sensors.probe`
+    /// is fitted to them too (its pretravel with them)
+    #[arg(long)]
+    no_probe_hits: bool,
 }
 
 pub fn run(a: CalibrateArgs) -> i32 {
@@ -94,7 +99,9 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<i32> {
     let fm = model.forward_model()?;
     eprintln!("model {}: {} terms, {} parameters ({} free)", a.model.display(), model.machine_terms.terms.len() + model.instrument_terms.terms.len(), fm.param_count(), model.setup.free.iter().filter(|f| **f).count());
     eprintln!("reading {} recording(s)…", a.bags.len());
-    let options = RecordingOptions { points, measured_points_topic: a.measured_points_topic.clone(), ..RecordingOptions::default() };
+    // a model that declares a touch probe is fitted to the recording's probe hits too
+    let probe_hits = model.raw.sensors.probe.is_some() && !a.no_probe_hits;
+    let options = RecordingOptions { points, measured_points_topic: a.measured_points_topic.clone(), probe_hits, ..RecordingOptions::default() };
     let records = records_from_bags(&a.bags, &fm, &options)?;
     eprintln!("{} measurement records ({} rejected) in {:.1} s; fitting…", records.len(), records.rejected.len(), started.elapsed().as_secs_f64());
     let result = fit(&fm, &model.setup, &records, None, &FitOptions { loss, ..FitOptions::default() }).with_context(|| format!("fitting {} to {} records", a.model.display(), records.len()))?;

@@ -235,7 +235,11 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
         let kin = model.kinematic_truth(&p)?;
         for (i, r) in kept.records.iter().enumerate() {
             let mut s = r.signals.clone();
-            let checked = model.tool_state(&p, &kin, &r.q, &mut s, None).and_then(|t| model.tracker(&p, &t, &mut s));
+            // a probe hit or a camera point reads the machine's terms, not the tracker's
+            let checked = model.tool_state(&p, &kin, &r.q, &mut s, None).and_then(|t| match r.kind {
+                RecordKind::Point => model.tracker(&p, &t, &mut s).map(|_| ()),
+                _ => Ok(()),
+            });
             if let Err(e) = checked {
                 let hint = missing_signal_hint(&e);
                 return Err(FitError::Record { index: used[i], point_id: r.point_id.clone(), time: r.time, source: e, hint });

@@ -7,7 +7,7 @@
 //! in (`c1: 12 um` becomes `c1: 11.87 um`; a bare number stays a bare SI number). What changes:
 //! * each fitted value of a `terms[i]` parameter, in place (a parameter the file left to its
 //!   default is added to `params`); the tracker's `pose` (`translation`, `euler_xyz`), `warmup`
-//!   parameters, and for `refraction` the station's `temperature_bias` / `pressure_bias`
+//!   parameters, the probe's `pretravel` parameters, and for `refraction` the station's `temperature_bias` / `pressure_bias`
 //!   (path offset = beam offset − station bias, so the file reads back as the same term);
 //! * `uncertainty:` — standard uncertainties (k = 1) by term label and parameter, in the unit
 //!   of the value (merged with an existing section: parameters not refitted keep theirs);
@@ -83,6 +83,7 @@ pub fn write_model(model: &CellModel, update: &ModelUpdate) -> Result<String, Ce
     if model.declares_tracker {
         tracker_edits(model, &root, &fitted, &mut edits, &mut written)?;
     }
+    probe_edits(model, &root, &fitted, &mut edits, &mut written)?;
     if !update.added_terms.is_empty() {
         added_terms(model, &root, &fitted, &update.added_terms, &mut edits, &mut written)?;
     }
@@ -250,6 +251,27 @@ fn tracker_edits(model: &CellModel, root: &Node, fitted: &BTreeMap<&str, &Fitted
             None => add_to_mapping(edits, text, tracker, "station", &format!("{{{key}: {v}}}")),
         }
         written.entry("refraction".into()).or_default().insert(param.into(), u);
+    }
+    Ok(())
+}
+
+/// The probe's pretravel parameters in place (`sensors.probe.pretravel.params`).
+fn probe_edits(model: &CellModel, root: &Node, fitted: &BTreeMap<&str, &FittedParameter>, edits: &mut Edits, written: &mut BTreeMap<String, BTreeMap<String, String>>) -> Result<(), CellError> {
+    let text = &model.text;
+    let Some(pretravel) = root.at("sensors.probe.pretravel") else { return Ok(()) };
+    let Some(t) = model.instrument_terms.terms.iter().find(|t| t.term.id() == TermId::ProbePretravel) else { return Ok(()) };
+    let label = t.term.label();
+    for spec in t.term.params() {
+        let Some(p) = fitted.get(format!("{label}.{}", spec.name).as_str()).filter(|p| p.sigma.is_some()).copied() else { continue };
+        let node = pretravel.get("params").and_then(|ps| ps.get(&spec.name));
+        let unit = node.map(|n| unit_in(text, n)).unwrap_or_default();
+        let (v, u) = value_and_sigma(p.value, p.sigma.unwrap_or(0.0), spec.unit, &unit).map_err(|e| bad(model, e))?;
+        match (node, pretravel.get("params")) {
+            (Some(n), _) => edits.replace(n, v),
+            (None, Some(ps)) => add_to_mapping(edits, text, ps, &spec.name, &v),
+            (None, None) => add_to_mapping(edits, text, pretravel, "params", &format!("{{{}: {v}}}", spec.name)),
+        }
+        written.entry(label.clone()).or_default().insert(spec.name.clone(), u);
     }
     Ok(())
 }

@@ -7,7 +7,13 @@
 //! records come out in time order as the messages go in, with bounded memory.
 //!
 //! Messages go in in log-time order (a bag's order; a live node's receive order). Each stream
-//! (a topic) must go forward in time; streams may interleave as they like.
+//! (a topic) must go forward in time; streams may interleave as they like. How far the recording
+//! has reached is judged on the stamps (the measurements', and the signal samples' as the builder
+//! takes them), the time base of every instant a record is asked about — never on the log time:
+//! in a bag recorded live from a twin running faster than real time, or a node reading one, the
+//! receive clock runs far from the stamps and would declare every measurement ready before the
+//! samples bracketing it were read. A measurement waits until some stream's stamps are
+//! `max_slow_gap` past it.
 
 use std::collections::{BTreeMap, VecDeque};
 use std::path::{Path, PathBuf};
@@ -66,9 +72,6 @@ pub struct RecordStream<'m, 'a> {
     feed: SignalFeed,
     point_index: u64,
     instrument_index: u64,
-    /// Whether log times tell the signals builder how far the recording has reached (see
-    /// [`Self::on_stamps_only`]).
-    observe_log_time: bool,
 }
 
 /// The topics (name, ROS type) a live reader of `model`'s records subscribes: the points (as
@@ -209,21 +212,11 @@ impl<'m, 'a> RecordStream<'m, 'a> {
             feed: SignalFeed::default(),
             point_index: 0,
             instrument_index: 0,
-            observe_log_time: true,
         };
         for (name, which) in signal_topics {
             stream.add_signal_topic(name, which);
         }
         Ok(stream)
-    }
-
-    /// Judge the progress of the recording by the messages' header stamps only, not their log
-    /// times: for a live reader, whose receive times are on another clock than the stamps (a
-    /// twin running 100× real time, a replay of last week's bag), and for a replay that must
-    /// give what that live reader gave. A measurement then waits for the bracketing samples
-    /// until some stream's stamps are `max_slow_gap` past it.
-    pub fn on_stamps_only(&mut self) {
-        self.observe_log_time = false;
     }
 
     /// Signal samples refused so far (a time going backwards, a NaN, a message that does not
@@ -264,9 +257,6 @@ impl<'m, 'a> RecordStream<'m, 'a> {
     /// resolved. Errors only when the recording cannot give records at all (a commanded joint
     /// state without the machine's joints); a bad message is a rejection, counted.
     pub fn push(&mut self, m: &SourcedMessage) -> Result<(), RecordingError> {
-        if self.observe_log_time {
-            self.builder.observe_time(m.log_time_ns as i64);
-        }
         let at = |topic: &str, index: u64| format!("{}: {topic} message {index} (log time {:.3} s)", self.source.display(), m.log_time_ns as f64 / 1e9);
         if self.points_topic.as_deref() == Some(m.topic.as_str()) {
             let at = at(&m.topic, self.point_index);
@@ -274,6 +264,7 @@ impl<'m, 'a> RecordStream<'m, 'a> {
             let parsed = if self.points_tracker { from_tracker(m, at) } else { from_measured_point(m, at, self.joints, &self.model.machine.tool_offset) };
             match parsed {
                 Ok(p) => {
+                    self.builder.observe_time(p.t_ns);
                     if let (JointSource::Nominal, Some(q)) = (self.joints, &p.q) {
                         // the nominals are the commanded trajectory: they give approach and velocity too
                         let _ = self.builder.push_joints(p.t_ns, &self.joint_names, q, &[]);
@@ -289,6 +280,7 @@ impl<'m, 'a> RecordStream<'m, 'a> {
                 Ok(ps) => {
                     // a detection array's markers share its time: keep the queue in time order
                     for p in ps {
+                        self.builder.observe_time(p.t_ns);
                         let k = self.pending.partition_point(|q| q.t_ns <= p.t_ns);
                         self.pending.insert(k, p);
                     }

@@ -42,9 +42,7 @@ impl Session {
     /// `source` names the recording in messages (the bag, or `live DDS`); `topics` are the
     /// (name, type) the session will be fed.
     pub fn new(setup: Setup, source: &Path, topics: &[(String, String)]) -> Result<Self, RecordingError> {
-        let mut stream = RecordStream::new(source, topics, setup.forward, &setup.recording)?;
-        // live, receive times are on another clock than the stamps; a replay judges as live does
-        stream.on_stamps_only();
+        let stream = RecordStream::new(source, topics, setup.forward, &setup.recording)?;
         let window = SlidingWindow::new(setup.window);
         Ok(Self { setup, stream, window, announced: Announced::default(), runs: 0 })
     }

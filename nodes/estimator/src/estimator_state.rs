@@ -89,8 +89,7 @@ pub struct EstimatorState {
 
 impl EstimatorState {
     /// `stream` reads the points from `points_topic`.
-    pub fn new(model: &'static ForwardModel<'static>, filter: RecursiveEstimator, mut stream: RecordStream<'static, 'static>, points_topic: String, settings: Settings) -> Self {
-        stream.on_stamps_only();
+    pub fn new(model: &'static ForwardModel<'static>, filter: RecursiveEstimator, stream: RecordStream<'static, 'static>, points_topic: String, settings: Settings) -> Self {
         let n = model.param_count();
         Self { work: Workspace::new(model), jacobian: DMatrix::zeros(3, n), model, filter, stream, points_topic, settings, since_publish: 0, counters: Counters::default() }
     }

@@ -40,6 +40,7 @@ pub mod residual;
 pub mod residual_table;
 pub mod residual_view;
 pub mod selection;
+pub mod serial_correlation;
 pub mod signal_coverage;
 pub mod signal_inventory;
 

@@ -588,12 +588,19 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     let cov = after_fit.unscaled_covariance();
     let dof1 = (after_fit.rows() as f64 - after_fit.rank() as f64).max(1.0);
     let sigma2 = after_fit.ssr() / dof1;
+    // σ² of each column: the independent-rows figure, widened where the residuals are
+    // correlated in time (crate::serial_correlation)
+    let serial = crate::serial_correlation::sandwich(&a1, &rows.restore_vector(&after_fit.residuals()), cov, &view1.time, after_fit.rank());
+    let variance = |j: usize| -> f64 {
+        let classical = cov[(j, j)].max(0.0) * sigma2;
+        serial.as_ref().map_or(classical, |s| classical.max(s.covariance[(j, j)]))
+    };
     let mut at = free1.len();
     let mut empirical_fitted = Vec::new();
     for (k, (_, basis, previous)) in empirical_chosen.iter().enumerate() {
         let len = emp_cols[k].ncols();
         let coefficients: Vec<f64> = (0..len).map(|j| previous[j] + sol[at + j]).collect();
-        let sigmas: Vec<f64> = (0..len).map(|j| (cov[(at + j, at + j)].max(0.0) * sigma2).sqrt()).collect();
+        let sigmas: Vec<f64> = (0..len).map(|j| variance(at + j).sqrt()).collect();
         empirical_fitted.push((basis.clone(), coefficients, sigmas));
         at += len;
     }
@@ -624,12 +631,38 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         let config = TermConfig { id: id.as_str().into(), ..Default::default() };
         found.push(FoundTerm { label: label.clone(), id: *id, variant: "declared, freed".into(), placement: Placement::Instrument, order: found.len(), config });
     }
+    let mut uncertainty = UncertaintyNote { blocks: serial.as_ref().map_or(0, |s| s.blocks), lag_blocks: serial.as_ref().map_or(0, |s| s.lag_blocks), ..Default::default() };
+    let found_labels: Vec<String> = found.iter().map(|f| format!("{}.", f.label)).collect();
+    if let Some(s) = &serial {
+        for (j, &k) in free1.iter().enumerate() {
+            let classical = cov[(j, j)].max(0.0) * sigma2;
+            if classical > 0.0 && s.covariance[(j, j)] > classical && found_labels.iter().any(|l| names_aug[k].starts_with(l.as_str())) {
+                uncertainty.widened.insert(names_aug[k].clone(), (s.covariance[(j, j)] / classical).sqrt());
+            }
+        }
+    }
+    uncertainty.statement = match &serial {
+        None => "σ from the final fit's covariance with independent rows (too few records to measure their correlation in time)".into(),
+        Some(s) => {
+            let most = uncertainty.widened.iter().max_by(|a, b| a.1.total_cmp(b.1));
+            format!(
+                "σ from the final fit's covariance, widened where the residuals are correlated in time (scores summed over {} blocks of time, Newey–West over {} neighbouring blocks){}",
+                s.blocks,
+                s.lag_blocks,
+                match most {
+                    Some((name, f)) => format!("; the correlation widens {} found parameters' σ, most {name} by {f:.2}×", uncertainty.widened.len()),
+                    None => "; the correlation widens no found parameter's σ".into(),
+                }
+            )
+        }
+    };
+    step(&uncertainty.statement);
     let sigmas1 = {
         // σ from the joint linear fit at the solution (pseudo-inverse: valid on the identifiable
         // directions even when a declared combination is not)
         let mut m = vec![None; names_aug.len()];
         for (j, &k) in free1.iter().enumerate() {
-            m[k] = Some((cov[(j, j)].max(0.0) * sigma2).sqrt());
+            m[k] = Some(variance(j).sqrt());
         }
         m
     };
@@ -692,6 +725,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         selection: steps,
         not_tried,
         messages,
+        uncertainty,
     };
     let mut temperatures: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     for r in &set.records {

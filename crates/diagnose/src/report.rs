@@ -192,4 +192,22 @@ pub struct Report {
     pub not_tried: Vec<NotTried>,
     /// Advice: what to measure next, what could not be told apart.
     pub messages: Vec<String>,
+    /// How the found terms' σ were made.
+    pub uncertainty: UncertaintyNote,
+}
+
+/// How the σ of the found terms (and of the augmented model's parameters) were made: the
+/// independent-rows covariance of the final joint fit, widened to the time-blocked sandwich
+/// where the residuals are correlated in time (crate::serial_correlation).
+#[derive(Debug, Clone, Serialize, PartialEq, Default)]
+pub struct UncertaintyNote {
+    /// Consecutive blocks of time the scores were summed over (0: too few records, the
+    /// independent-rows σ are reported).
+    pub blocks: usize,
+    /// Neighbouring blocks the sandwich counted (Bartlett lag window).
+    pub lag_blocks: usize,
+    /// Each found parameter (`label.param`) whose σ the correlation widened, by the factor
+    /// σ(sandwich) / σ(independent rows).
+    pub widened: BTreeMap<String, f64>,
+    pub statement: String,
 }

@@ -591,9 +591,12 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     // σ² of each column: the independent-rows figure, widened where the residuals are
     // correlated in time (crate::serial_correlation)
     let serial = crate::serial_correlation::sandwich(&a1, &rows.restore_vector(&after_fit.residuals()), cov, &view1.time, after_fit.rank());
+    let place = crate::serial_correlation::by_place(&a1, &rows.restore_vector(&after_fit.residuals()), cov, &view1.position, after_fit.rank());
     let variance = |j: usize| -> f64 {
         let classical = cov[(j, j)].max(0.0) * sigma2;
-        serial.as_ref().map_or(classical, |s| classical.max(s.covariance[(j, j)]))
+        let in_time = serial.as_ref().map_or(0.0, |s| s.covariance[(j, j)]);
+        let in_place = place.as_ref().map_or(0.0, |s| s[(j, j)]);
+        classical.max(in_time).max(in_place)
     };
     let mut at = free1.len();
     let mut empirical_fitted = Vec::new();
@@ -631,31 +634,32 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         let config = TermConfig { id: id.as_str().into(), ..Default::default() };
         found.push(FoundTerm { label: label.clone(), id: *id, variant: "declared, freed".into(), placement: Placement::Instrument, order: found.len(), config });
     }
-    let mut uncertainty = UncertaintyNote { blocks: serial.as_ref().map_or(0, |s| s.blocks), lag_blocks: serial.as_ref().map_or(0, |s| s.lag_blocks), ..Default::default() };
+    let mut uncertainty = UncertaintyNote { blocks: serial.as_ref().map_or(0, |s| s.blocks), lag_blocks: serial.as_ref().map_or(0, |s| s.lag_blocks), place_clusters: place.is_some(), ..Default::default() };
     let found_labels: Vec<String> = found.iter().map(|f| format!("{}.", f.label)).collect();
-    if let Some(s) = &serial {
-        for (j, &k) in free1.iter().enumerate() {
-            let classical = cov[(j, j)].max(0.0) * sigma2;
-            if classical > 0.0 && s.covariance[(j, j)] > classical && found_labels.iter().any(|l| names_aug[k].starts_with(l.as_str())) {
-                uncertainty.widened.insert(names_aug[k].clone(), (s.covariance[(j, j)] / classical).sqrt());
-            }
+    for (j, &k) in free1.iter().enumerate() {
+        let classical = cov[(j, j)].max(0.0) * sigma2;
+        if classical > 0.0 && variance(j) > classical && found_labels.iter().any(|l| names_aug[k].starts_with(l.as_str())) {
+            uncertainty.widened.insert(names_aug[k].clone(), (variance(j) / classical).sqrt());
         }
     }
-    uncertainty.statement = match &serial {
-        None => "σ from the final fit's covariance with independent rows (too few records to measure their correlation in time)".into(),
-        Some(s) => {
-            let most = uncertainty.widened.iter().max_by(|a, b| a.1.total_cmp(b.1));
-            format!(
-                "σ from the final fit's covariance, widened where the residuals are correlated in time (scores summed over {} blocks of time, Newey–West over {} neighbouring blocks){}",
-                s.blocks,
-                s.lag_blocks,
-                match most {
-                    Some((name, f)) => format!("; the correlation widens {} found parameters' σ, most {name} by {f:.2}×", uncertainty.widened.len()),
-                    None => "; the correlation widens no found parameter's σ".into(),
-                }
-            )
-        }
+    let how = match (&serial, &place) {
+        (None, None) => "with independent rows (too few records to measure their correlation)".to_string(),
+        (Some(s), _) => format!(
+            "widened where the residuals are correlated in time (scores summed over {} blocks of time, Newey–West over {} neighbouring blocks){}",
+            s.blocks,
+            s.lag_blocks,
+            if place.is_some() { format!(" or at one place (scores clustered on a {0}×{0}×{0} grid over the workspace)", crate::serial_correlation::PLACE_CELLS) } else { String::new() }
+        ),
+        (None, Some(_)) => format!("widened where the residuals are correlated at one place (scores clustered on a {0}×{0}×{0} grid over the workspace)", crate::serial_correlation::PLACE_CELLS),
     };
+    let most = uncertainty.widened.iter().max_by(|a, b| a.1.total_cmp(b.1));
+    uncertainty.statement = format!(
+        "σ from the final fit's covariance, {how}{}",
+        match most {
+            Some((name, f)) => format!("; the correlation widens {} found parameters' σ, most {name} by {f:.2}×", uncertainty.widened.len()),
+            None => "; the correlation widens no found parameter's σ".into(),
+        }
+    );
     step(&uncertainty.statement);
     let sigmas1 = {
         // σ from the joint linear fit at the solution (pseudo-inverse: valid on the identifiable

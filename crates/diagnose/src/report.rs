@@ -197,8 +197,8 @@ pub struct Report {
 }
 
 /// How the σ of the found terms (and of the augmented model's parameters) were made: the
-/// independent-rows covariance of the final joint fit, widened to the time-blocked sandwich
-/// where the residuals are correlated in time (crate::serial_correlation).
+/// independent-rows covariance of the final joint fit, widened to the sandwich covariance where
+/// the residuals are correlated in time or at one place (crate::serial_correlation).
 #[derive(Debug, Clone, Serialize, PartialEq, Default)]
 pub struct UncertaintyNote {
     /// Consecutive blocks of time the scores were summed over (0: too few records, the
@@ -206,6 +206,8 @@ pub struct UncertaintyNote {
     pub blocks: usize,
     /// Neighbouring blocks the sandwich counted (Bartlett lag window).
     pub lag_blocks: usize,
+    /// Whether the scores were also clustered by place (a grid over the workspace).
+    pub place_clusters: bool,
     /// Each found parameter (`label.param`) whose σ the correlation widened, by the factor
     /// σ(sandwich) / σ(independent rows).
     pub widened: BTreeMap<String, f64>,

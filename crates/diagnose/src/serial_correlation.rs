@@ -50,19 +50,7 @@ pub fn sandwich(a: &DMatrix<f64>, e: &DVector<f64>, bread: &DMatrix<f64>, times:
     let blocks = BLOCKS.min(n);
     let fold = time_blocks(times, blocks);
     // block sums of the scores, projected by the bread: U_b = P Σ_{i∈b} Aᵢᵀeᵢ (p × blocks)
-    let mut g = DMatrix::zeros(p, blocks);
-    for i in 0..n {
-        let b = fold[i];
-        for r in 3 * i..3 * i + 3 {
-            let er = e[r];
-            if er != 0.0 {
-                for j in 0..p {
-                    g[(j, b)] += a[(r, j)] * er;
-                }
-            }
-        }
-    }
-    let u = bread * g;
+    let u = bread * score_sums(a, e, &fold, blocks);
     let lag_blocks = andrews_bartlett_lag(&u);
     let mut s = &u * u.transpose();
     for l in 1..=lag_blocks {
@@ -75,6 +63,57 @@ pub fn sandwich(a: &DMatrix<f64>, e: &DVector<f64>, bread: &DMatrix<f64>, times:
     let rows = 3 * n;
     let dof = rows.saturating_sub(rank).max(1);
     Some(SerialCovariance { covariance: s * (rows as f64 / dof as f64), blocks, lag_blocks })
+}
+
+/// Cells per axis of the workspace grid the scores are clustered on by [`by_place`].
+pub const PLACE_CELLS: usize = 16;
+
+/// The sandwich with the scores clustered by place instead of time: records whose positions
+/// fall in one cell of a [`PLACE_CELLS`]³ grid over the workspace form a cluster, clusters
+/// independent (S = G/(G−1) Σ_c U_c U_cᵀ). A static error the model lacks (a sensor's offset
+/// seen through a thermal term, sub-µm structure left unexplained) repeats at a place every
+/// time the program returns there, so it correlates residuals across the whole recording, not
+/// within a stretch of time: the clusters by place see it where blocks of time cannot. None with
+/// fewer than 8 occupied cells.
+pub fn by_place(a: &DMatrix<f64>, e: &DVector<f64>, bread: &DMatrix<f64>, positions: &[nalgebra::Vector3<f64>], rank: usize) -> Option<DMatrix<f64>> {
+    let n = positions.len();
+    let p = a.ncols();
+    if n < 8 || a.nrows() != 3 * n || e.len() != 3 * n || p == 0 {
+        return None;
+    }
+    let (lo, hi) = positions.iter().fold((nalgebra::Vector3::repeat(f64::INFINITY), nalgebra::Vector3::repeat(f64::NEG_INFINITY)), |(l, h), q| (l.inf(q), h.sup(q)));
+    let size = (hi - lo).max() / PLACE_CELLS as f64;
+    let key = |q: &nalgebra::Vector3<f64>| -> [i64; 3] {
+        let c = |k: usize| if size > 0.0 { (((q[k] - lo[k]) / size).floor() as i64).min(PLACE_CELLS as i64 - 1) } else { 0 };
+        [c(0), c(1), c(2)]
+    };
+    let mut cells: std::collections::BTreeMap<[i64; 3], usize> = std::collections::BTreeMap::new();
+    let cluster: Vec<usize> = positions.iter().map(|q| { let next = cells.len(); *cells.entry(key(q)).or_insert(next) }).collect();
+    let g_count = cells.len();
+    if g_count < 8 {
+        return None;
+    }
+    let u = bread * score_sums(a, e, &cluster, g_count);
+    let rows = 3 * n;
+    let dof = rows.saturating_sub(rank).max(1);
+    Some(&u * u.transpose() * (g_count as f64 / (g_count - 1) as f64) * (rows as f64 / dof as f64))
+}
+
+/// Σ over the records of each group of Aᵢᵀeᵢ (p × groups).
+fn score_sums(a: &DMatrix<f64>, e: &DVector<f64>, group: &[usize], groups: usize) -> DMatrix<f64> {
+    let p = a.ncols();
+    let mut g = DMatrix::zeros(p, groups);
+    for (i, &b) in group.iter().enumerate() {
+        for r in 3 * i..3 * i + 3 {
+            let er = e[r];
+            if er != 0.0 {
+                for j in 0..p {
+                    g[(j, b)] += a[(r, j)] * er;
+                }
+            }
+        }
+    }
+    g
 }
 
 /// Andrews (1991) automatic lag window for Bartlett weights, from AR(1) fits to each

@@ -211,5 +211,9 @@ pub struct UncertaintyNote {
     /// Each found parameter (`label.param`) whose σ the correlation widened, by the factor
     /// σ(sandwich) / σ(independent rows).
     pub widened: BTreeMap<String, f64>,
+    /// Candidates the data support (significant, lower BIC) that the last selection step
+    /// declined for their small held-out gain, with how far each would move the found
+    /// parameters: that shift is counted in their σ (the largest per parameter, in quadrature).
+    pub alternatives: Vec<String>,
     pub statement: String,
 }

@@ -16,8 +16,12 @@
 //! Andrews' AR(1) plug-in rule asks for (more when the scores stay correlated from block to
 //! block). Each parameter's σ is the larger of the sandwich and the independent-rows figure:
 //! the sandwich's own estimate scatters (and Bartlett weights understate long correlation), so
-//! it only ever widens an uncertainty. Cost: O(records · parameters²), well under the
-//! selection's.
+//! it only ever widens an uncertainty. The same sandwich with the scores clustered by place
+//! ([`by_place`]) sees static structure the model lacks, which repeats wherever the program
+//! returns. Cost: O(records · parameters²), well under the selection's.
+//!
+//! A bias no covariance shows — a term the data support that the selection declined, part of
+//! whose effect a found term absorbs — is counted by the pipeline from [`shift_if_added`].
 
 use nalgebra::{DMatrix, DVector};
 
@@ -97,6 +101,24 @@ pub fn by_place(a: &DMatrix<f64>, e: &DVector<f64>, bread: &DMatrix<f64>, positi
     let rows = 3 * n;
     let dof = rows.saturating_sub(rank).max(1);
     Some(&u * u.transpose() * (g_count as f64 / (g_count - 1) as f64) * (rows as f64 / dof as f64))
+}
+
+/// How far the least-squares solution with columns `a` (residuals `e`, `bread` = (AᵀA)⁺) moves
+/// when the columns `c` are added to the fit (block elimination: δ = (CᵀMC)⁺Cᵀe for the new
+/// coefficients, −P·AᵀC·δ for the old ones, M = I − A·P·Aᵀ). None when `c` adds nothing.
+pub fn shift_if_added(a: &DMatrix<f64>, e: &DVector<f64>, bread: &DMatrix<f64>, c: &DMatrix<f64>) -> Option<DVector<f64>> {
+    if c.ncols() == 0 || c.nrows() != a.nrows() {
+        return None;
+    }
+    let atc = a.tr_mul(c);
+    let pc = bread * &atc;
+    let schur = c.tr_mul(c) - atc.transpose() * &pc;
+    let (inv, rank) = crate::blocked_least_squares::pseudo_inverse(&schur);
+    if rank == 0 {
+        return None;
+    }
+    let delta = inv * c.tr_mul(e);
+    Some(-(pc * delta))
 }
 
 /// Σ over the records of each group of Aᵢᵀeᵢ (p × groups).

@@ -14,6 +14,7 @@
 //! * [`signal_inventory`], [`candidates`], [`candidate_columns`], [`periodogram`], [`empirical`] —
 //!   what can be tried and its Jacobian columns;
 //! * [`folds`], [`blocked_least_squares`], [`selection`] — held-out blocks and the selection;
+//! * [`serial_correlation`] — the found terms' σ with residuals correlated in time or by place;
 //! * [`pipeline`], [`findings`], [`report`], [`html_report`], [`residual_table`] — the whole run
 //!   and its outputs.
 //!

@@ -7,7 +7,7 @@ set -euo pipefail
 cd "$(dirname "$0")/../../.."
 duration="${1:-8h}"
 work="${WORK:-$(mktemp -d)}"
-cargo build --release -p metrocell-cli -p metrocell-diagnose --example shift_bench >&2
+cargo build --release -p metrocell-cli --bin metrocell -p metrocell-diagnose --example shift_bench >&2
 # the cell without its camera (no frames in the bag), and the model: the same cell without the backlash term
 python3 - "$work" <<'PY'
 import re, sys

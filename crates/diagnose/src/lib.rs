@@ -14,6 +14,7 @@
 //! * [`signal_inventory`], [`candidates`], [`candidate_columns`], [`periodogram`], [`empirical`] —
 //!   what can be tried and its Jacobian columns;
 //! * [`folds`], [`blocked_least_squares`], [`selection`] — held-out blocks and the selection;
+//! * [`serial_correlation`] — the found terms' σ with residuals correlated in time or by place;
 //! * [`pipeline`], [`findings`], [`report`], [`html_report`], [`residual_table`] — the whole run
 //!   and its outputs.
 //!
@@ -40,6 +41,7 @@ pub mod residual;
 pub mod residual_table;
 pub mod residual_view;
 pub mod selection;
+pub mod serial_correlation;
 pub mod signal_coverage;
 pub mod signal_inventory;
 

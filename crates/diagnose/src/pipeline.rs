@@ -588,12 +588,50 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     let cov = after_fit.unscaled_covariance();
     let dof1 = (after_fit.rows() as f64 - after_fit.rank() as f64).max(1.0);
     let sigma2 = after_fit.ssr() / dof1;
+    // σ² of each column: the independent-rows figure, widened where the residuals are
+    // correlated in time (crate::serial_correlation)
+    let serial = crate::serial_correlation::sandwich(&a1, &rows.restore_vector(&after_fit.residuals()), cov, &view1.time, after_fit.rank());
+    let place = crate::serial_correlation::by_place(&a1, &rows.restore_vector(&after_fit.residuals()), cov, &view1.position, after_fit.rank());
+    // the choice of model: a candidate the data support (significant after correction, lower
+    // BIC) that the last step declined only for its small held-out gain may still belong, and
+    // whatever the found terms absorb of it is a bias no covariance shows. Each such
+    // candidate's shift of the parameters (were it added to the final fit) counts in their σ
+    // (the largest shift per parameter, added in quadrature)
+    let e1 = rows.restore_vector(&after_fit.residuals());
+    let mut shift2 = vec![0.0f64; a1.ncols()];
+    let mut alternatives: Vec<(String, DVector<f64>)> = Vec::new();
+    if let Some(last) = selection.steps.last().filter(|s| s.chosen.is_none()) {
+        for sc in last.scores.iter().filter(|c| !c.accepted && c.separable && c.plausible && c.wald_p_adjusted <= options.selection.alpha && c.delta_bic < 0.0) {
+            let Some(f) = families.iter().position(|f| f.label == sc.label) else { continue };
+            let Some(vi) = families[f].variants.iter().position(|v| v.name == sc.variant) else { continue };
+            let columns = match &prepared[f].source {
+                Source::Term { family, kept } => match ctx_all.columns(&family.variants[vi].config, family.placement) {
+                    Ok(c) => c.columns.select_columns(&kept[vi]),
+                    Err(_) => continue,
+                },
+                Source::Empirical(bases) => empirical_columns(&view1, &bases[vi]),
+                Source::Freed { .. } => continue,
+            };
+            let Some(d) = crate::serial_correlation::shift_if_added(&a1, &e1, cov, &columns) else { continue };
+            for (j, v) in d.iter().enumerate() {
+                shift2[j] = shift2[j].max(v * v);
+            }
+            let name = if sc.variant.is_empty() { sc.label.clone() } else { format!("{} ({})", sc.label, sc.variant) };
+            alternatives.push((format!("{name}: p = {:.1e} after correction, ΔBIC {:.0}, held-out gain {:.3}", sc.wald_p_adjusted, sc.delta_bic, sc.heldout_gain), d));
+        }
+    }
+    let variance = |j: usize| -> f64 {
+        let classical = cov[(j, j)].max(0.0) * sigma2;
+        let in_time = serial.as_ref().map_or(0.0, |s| s.covariance[(j, j)]);
+        let in_place = place.as_ref().map_or(0.0, |s| s[(j, j)]);
+        classical.max(in_time).max(in_place) + shift2[j]
+    };
     let mut at = free1.len();
     let mut empirical_fitted = Vec::new();
     for (k, (_, basis, previous)) in empirical_chosen.iter().enumerate() {
         let len = emp_cols[k].ncols();
         let coefficients: Vec<f64> = (0..len).map(|j| previous[j] + sol[at + j]).collect();
-        let sigmas: Vec<f64> = (0..len).map(|j| (cov[(at + j, at + j)].max(0.0) * sigma2).sqrt()).collect();
+        let sigmas: Vec<f64> = (0..len).map(|j| variance(at + j).sqrt()).collect();
         empirical_fitted.push((basis.clone(), coefficients, sigmas));
         at += len;
     }
@@ -624,12 +662,50 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         let config = TermConfig { id: id.as_str().into(), ..Default::default() };
         found.push(FoundTerm { label: label.clone(), id: *id, variant: "declared, freed".into(), placement: Placement::Instrument, order: found.len(), config });
     }
+    let mut uncertainty = UncertaintyNote { blocks: serial.as_ref().map_or(0, |s| s.blocks), lag_blocks: serial.as_ref().map_or(0, |s| s.lag_blocks), place_clusters: place.is_some(), ..Default::default() };
+    let found_labels: Vec<String> = found.iter().map(|f| format!("{}.", f.label)).collect();
+    for (j, &k) in free1.iter().enumerate() {
+        let classical = cov[(j, j)].max(0.0) * sigma2;
+        if classical > 0.0 && variance(j) > classical && found_labels.iter().any(|l| names_aug[k].starts_with(l.as_str())) {
+            uncertainty.widened.insert(names_aug[k].clone(), (variance(j) / classical).sqrt());
+        }
+    }
+    let how = match (&serial, &place) {
+        (None, None) => "with independent rows (too few records to measure their correlation)".to_string(),
+        (Some(s), _) => format!(
+            "widened where the residuals are correlated in time (scores summed over {} blocks of time, Newey–West over {} neighbouring blocks){}",
+            s.blocks,
+            s.lag_blocks,
+            if place.is_some() { format!(" or at one place (scores clustered on a {0}×{0}×{0} grid over the workspace)", crate::serial_correlation::PLACE_CELLS) } else { String::new() }
+        ),
+        (None, Some(_)) => format!("widened where the residuals are correlated at one place (scores clustered on a {0}×{0}×{0} grid over the workspace)", crate::serial_correlation::PLACE_CELLS),
+    };
+    for (what, d) in &alternatives {
+        let moved: Vec<String> = free1
+            .iter()
+            .enumerate()
+            .filter(|(j, &k)| found_labels.iter().any(|l| names_aug[k].starts_with(l.as_str())) && d[*j] * d[*j] > 0.1 * cov[(*j, *j)].max(0.0) * sigma2)
+            .map(|(j, &k)| format!("{} by {:+.3e}", names_aug[k], d[j]))
+            .collect();
+        if !moved.is_empty() {
+            uncertainty.alternatives.push(format!("{what} — the data support it but the held-out test declined it; with it {}: counted in the σ", moved.join(", ")));
+        }
+    }
+    let most = uncertainty.widened.iter().max_by(|a, b| a.1.total_cmp(b.1));
+    uncertainty.statement = format!(
+        "σ from the final fit's covariance, {how}{}",
+        match most {
+            Some((name, f)) => format!("; the correlation and the candidates the data support but the selection declined widen {} found parameters' σ, most {name} by {f:.2}×", uncertainty.widened.len()),
+            None => "; nothing widens a found parameter's σ".into(),
+        }
+    );
+    step(&uncertainty.statement);
     let sigmas1 = {
         // σ from the joint linear fit at the solution (pseudo-inverse: valid on the identifiable
         // directions even when a declared combination is not)
         let mut m = vec![None; names_aug.len()];
         for (j, &k) in free1.iter().enumerate() {
-            m[k] = Some((cov[(j, j)].max(0.0) * sigma2).sqrt());
+            m[k] = Some(variance(j).sqrt());
         }
         m
     };
@@ -692,6 +768,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
         selection: steps,
         not_tried,
         messages,
+        uncertainty,
     };
     let mut temperatures: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     for r in &set.records {

@@ -192,4 +192,28 @@ pub struct Report {
     pub not_tried: Vec<NotTried>,
     /// Advice: what to measure next, what could not be told apart.
     pub messages: Vec<String>,
+    /// How the found terms' σ were made.
+    pub uncertainty: UncertaintyNote,
+}
+
+/// How the σ of the found terms (and of the augmented model's parameters) were made: the
+/// independent-rows covariance of the final joint fit, widened to the sandwich covariance where
+/// the residuals are correlated in time or at one place (crate::serial_correlation).
+#[derive(Debug, Clone, Serialize, PartialEq, Default)]
+pub struct UncertaintyNote {
+    /// Consecutive blocks of time the scores were summed over (0: too few records, the
+    /// independent-rows σ are reported).
+    pub blocks: usize,
+    /// Neighbouring blocks the sandwich counted (Bartlett lag window).
+    pub lag_blocks: usize,
+    /// Whether the scores were also clustered by place (a grid over the workspace).
+    pub place_clusters: bool,
+    /// Each found parameter (`label.param`) whose σ the correlation widened, by the factor
+    /// σ(sandwich) / σ(independent rows).
+    pub widened: BTreeMap<String, f64>,
+    /// Candidates the data support (significant, lower BIC) that the last selection step
+    /// declined for their small held-out gain, with how far each would move the found
+    /// parameters: that shift is counted in their σ (the largest per parameter, in quadrature).
+    pub alternatives: Vec<String>,
+    pub statement: String,
 }

@@ -2,8 +2,8 @@
 //!
 //! Starts `launch-configs/demo.launch.yaml` (the digital twin publishing live, the tracker,
 //! thermal compensation and estimator nodes, the recorder and the dashboard) on the demo cell
-//! (`demo_shift.yaml`: a compressed shift, by default 5 h of cell time at 75× real time, about
-//! four minutes; the time is the twin's `/clock`), watches the cell over DDS like a shift
+//! (`demo_shift.yaml`: a compressed shift, by default 5 h of cell time at 60× real time, five
+//! minutes; the time is the twin's `/clock`), watches the cell over DDS like a shift
 //! supervisor would — tracker readings, beam breaks, the X-scale strain the thermal node computes
 //! from its configured α (a handbook value, not an estimate), the error model the estimator fits
 //! online — stops everything when the simulated run is over, and summarises the recorded bag. The
@@ -37,8 +37,8 @@ pub struct DemoArgs {
     /// Simulated seconds (default: a 5-hour shift)
     #[arg(long, default_value_t = 18000.0)]
     duration: f64,
-    /// Simulated seconds per wall-clock second (default: 5 h of the cell in 4 minutes)
-    #[arg(long, default_value_t = 75.0)]
+    /// Simulated seconds per wall-clock second (default: 5 h of the cell in 5 minutes)
+    #[arg(long, default_value_t = 60.0)]
     speed: f64,
     /// Random seed of the twin
     #[arg(long, default_value_t = 1)]

@@ -493,13 +493,18 @@ fn bag_records(path: &Path, model: &ForwardModel, needs: &[(String, SignalKind)]
     let tool_offset = model.machine.tool_offset;
     for m in bag.source.messages().map_err(|e| bag_error(path, e))? {
         let m: SourcedMessage = m.map_err(|e| bag_error(path, e))?;
-        builder.observe_time(m.log_time_ns as i64);
+        // The time the recording has reached is taken from the stamps (the points' below, the
+        // signal samples' as the builder takes them), the time base of every instant it is asked
+        // about, not from the log time: in a bag recorded live from a twin running faster than
+        // real time, log time (the wall clock) runs years ahead of the stamps (simulated time),
+        // and would declare every measurement ready before the samples bracketing it were read.
         if &m.topic == points_topic {
             let at = format!("{}: {} message {point_index} (log time {:.3} s)", path.display(), m.topic, m.log_time_ns as f64 / 1e9);
             point_index += 1;
             let parsed = if points_tracker { from_tracker(&m, at.clone()) } else { from_measured_point(&m, at.clone(), joints, &tool_offset) };
             match parsed {
                 Ok(p) => {
+                    builder.observe_time(p.t_ns);
                     if let (JointSource::Nominal, Some(q)) = (joints, &p.q) {
                         // the nominals are the commanded trajectory: they give approach and velocity too
                         let _ = builder.push_joints(p.t_ns, &joint_names, q, &[]);

@@ -26,7 +26,7 @@ use metrocell_node::{qos, MetrocellNode};
 
 #[derive(clap::Args)]
 #[command(after_help = "Runs inside a private network namespace when started as\n  \
-tests/isolated target/release/metrocell demo\n\nExamples:\n  metrocell demo\n  metrocell demo --duration 28800 --speed 120 --output /tmp/demo_bag\n  metrocell demo --quick")]
+tests/isolated target/release/metrocell demo\n\nExamples:\n  metrocell demo\n  metrocell demo --duration 10800 --speed 30 --output /tmp/demo_bag\n  metrocell demo --quick")]
 pub struct DemoArgs {
     /// Directory for the diagnosis report written at the end (default: the bag's path + `_report`)
     #[arg(long, value_name = "DIR")]

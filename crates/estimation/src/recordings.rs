@@ -496,8 +496,9 @@ fn bag_records(path: &Path, model: &ForwardModel, needs: &[(String, SignalKind)]
         // The time the recording has reached is taken from the stamps (the points' below, the
         // signal samples' as the builder takes them), the time base of every instant it is asked
         // about, not from the log time: in a bag recorded live from a twin running faster than
-        // real time, log time (the wall clock) runs years ahead of the stamps (simulated time),
-        // and would declare every measurement ready before the samples bracketing it were read.
+        // real time, log time (the wall clock) is far from the stamps (simulated time, from a set day),
+        // and, ahead of them, would declare every measurement ready before the samples bracketing
+        // it were read.
         if &m.topic == points_topic {
             let at = format!("{}: {} message {point_index} (log time {:.3} s)", path.display(), m.topic, m.log_time_ns as f64 / 1e9);
             point_index += 1;

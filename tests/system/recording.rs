@@ -283,8 +283,8 @@ fn demo_loses_nothing(name: &str, busy_cores: usize, domain: u32) {
         assert!(!gaps.iter().any(|l| l.contains(&format!(" {topic}: "))), "the recorder counted {topic} messages missing:\n{}", gaps.join("\n"));
     }
     assert!(out.status.success(), "demo exit status {:?}\n{stdout}\n{stderr}", out.status);
-    // the end-of-run diagnosis: either its report next to the bag, or the reason it could not judge
-    assert!(stdout.contains("diagnosing the recording (the tracker.s readings) against the demo.s declared model"), "no diagnosis at the end:\n{stdout}");
+    // the end-of-run diagnosis: its report next to the bag
+    assert!(stdout.contains("diagnosing the recording (the tracker's readings) against the demo's declared model"), "no diagnosis at the end:\n{stdout}");
     let report = PathBuf::from(format!("{}_report", dir.display()));
     assert!(!stdout.contains("diagnose could not judge this recording: "), "the quick run is long enough to diagnose:\n{stdout}");
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(report.join("diagnosis.json")).expect("diagnosis.json next to the bag")).unwrap();

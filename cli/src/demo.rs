@@ -1,14 +1,18 @@
 //! `metrocell demo`: the main job on the built-in simulated cell.
 //!
 //! Starts `launch-configs/demo.launch.yaml` (the digital twin publishing live, the tracker,
-//! thermal compensation and estimator nodes, the recorder and the dashboard), watches the cell over DDS like a shift supervisor would —
-//! tracker points, beam breaks, the X-scale strain the thermal node computes from its configured α
-//! (a handbook value, not an estimate), the error model the estimator fits online — stops everything when the simulated run is over, and
-//! summarises the recorded bag. The twin waits until the recorder subscribes to every topic
-//! before it publishes; at the end the bag's count of each topic is checked against the twin's
-//! own (its `published/<topic>` diagnostics), and the demo fails (exit 1) if any message is
-//! missing. Last, `metrocell diagnose` judges the bag against the demo's declared model and
-//! writes its HTML report next to the bag.
+//! thermal compensation and estimator nodes, the recorder and the dashboard) on the demo cell
+//! (`demo_shift.yaml`: a compressed shift, by default 5 h of cell time at 60× real time, five
+//! minutes; the time is the twin's `/clock`), watches the cell over DDS like a shift
+//! supervisor would — tracker readings, beam breaks, the X-scale strain the thermal node computes
+//! from its configured α (a handbook value, not an estimate), the error model the estimator fits
+//! online — stops everything when the simulated run is over, and summarises the recorded bag. The
+//! twin waits until the recorder subscribes to every topic before it publishes; at the end the
+//! bag's count of each topic is checked against the twin's own (its `published/<topic>`
+//! diagnostics), and the demo fails (exit 1) if any message is missing. Last, `metrocell
+//! diagnose` judges the bag's tracker readings against the demo's declared model, writes its HTML
+//! report next to the bag, and the demo says which of the effects the cell conceals from that
+//! model it named.
 
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
@@ -22,19 +26,19 @@ use metrocell_node::{qos, MetrocellNode};
 
 #[derive(clap::Args)]
 #[command(after_help = "Runs inside a private network namespace when started as\n  \
-tests/isolated target/release/metrocell demo\n\nExamples:\n  metrocell demo\n  metrocell demo --duration 300 --speed 50 --output /tmp/demo_bag\n  metrocell demo --quick")]
+tests/isolated target/release/metrocell demo\n\nExamples:\n  metrocell demo\n  metrocell demo --duration 10800 --speed 30 --output /tmp/demo_bag\n  metrocell demo --quick")]
 pub struct DemoArgs {
     /// Directory for the diagnosis report written at the end (default: the bag's path + `_report`)
     #[arg(long, value_name = "DIR")]
     report: Option<PathBuf>,
-    /// Cell description (default: the built-in three-minute XFYZ cell)
+    /// Cell description (default: the built-in compressed-shift XFYZ cell, crates/twin/examples/cells/demo_shift.yaml)
     #[arg(long)]
     cell: Option<PathBuf>,
-    /// Simulated seconds
-    #[arg(long, default_value_t = 180.0)]
+    /// Simulated seconds (default: a 5-hour shift)
+    #[arg(long, default_value_t = 18000.0)]
     duration: f64,
-    /// Simulated seconds per wall-clock second
-    #[arg(long, default_value_t = 20.0)]
+    /// Simulated seconds per wall-clock second (default: 5 h of the cell in 5 minutes)
+    #[arg(long, default_value_t = 60.0)]
     speed: f64,
     /// Random seed of the twin
     #[arg(long, default_value_t = 1)]
@@ -42,7 +46,8 @@ pub struct DemoArgs {
     /// Bag directory to record into (must not exist)
     #[arg(long, short = 'o')]
     output: Option<PathBuf>,
-    /// A short run for CI: 60 simulated seconds at 30× real time (overrides --duration and --speed)
+    /// A short run for CI: the first hour of the shift at 60× real time, one minute (overrides
+    /// --duration and --speed); long enough to find the column growth and the tracker warm-up
     #[arg(long)]
     quick: bool,
     /// TCP port of the live dashboard (web page; the Foxglove WebSocket takes the next one)
@@ -53,6 +58,9 @@ pub struct DemoArgs {
 /// The error model the estimator starts from and the end-of-run diagnosis judges the recording
 /// against (relative to the share directory).
 const DEMO_MODEL: &str = "crates/twin/examples/cells/demo_model.yaml";
+
+/// The cell the twin simulates unless `--cell` is given (the launch file's default too).
+const DEMO_CELL: &str = "crates/twin/examples/cells/demo_shift.yaml";
 
 /// The directory holding `launch-configs/`: next to the executable's build tree, or the cwd.
 fn share_dir() -> Option<PathBuf> {
@@ -67,7 +75,9 @@ fn share_dir() -> Option<PathBuf> {
 
 struct Watch {
     sim_time_s: f64,
-    tracker_points: u64,
+    /// Wall-clock seconds from the first /clock message to the last seen.
+    wall_s: f64,
+    tracker_readings: u64,
     beam_breaks: u64,
     last_strain: Option<(f64, f64)>,
     /// The twin's messages published per topic (its latest diagnostics), and whether it said it finished.
@@ -91,7 +101,7 @@ pub fn run(args: DemoArgs) -> i32 {
 
 fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
     if args.quick {
-        (args.duration, args.speed) = (60.0, 30.0);
+        (args.duration, args.speed) = (3600.0, 60.0);
     }
     if !(args.speed > 0.0 && args.duration > 0.0) {
         anyhow::bail!("--speed and --duration must be positive");
@@ -112,14 +122,20 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
         ("output".to_string(), output.display().to_string()),
         ("dashboard_port".to_string(), args.dashboard_port.to_string()),
         ("foxglove_port".to_string(), args.dashboard_port.saturating_add(1).to_string()),
+        // the live diagnose node: about five diagnoses over the run, each of what it has seen so far
+        ("diagnose_every".to_string(), (args.duration / 5.0).max(600.0).to_string()),
     ];
-    if let Some(cell) = &args.cell {
-        launch_args.push(("cell".to_string(), std::fs::canonicalize(cell)?.display().to_string()));
-    }
+    let cell = match &args.cell {
+        Some(cell) => std::fs::canonicalize(cell)?,
+        None => share.join(DEMO_CELL),
+    };
+    launch_args.push(("cell".to_string(), cell.display().to_string()));
     println!(
-        "metrocell demo: simulating {:.0} s of the cell at {}× real time; recording to {}",
-        args.duration,
+        "metrocell demo: simulating {} of the cell ({}) at {}× real time, about {} of wall time; recording to {}",
+        duration_text(args.duration),
+        cell.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned()),
         args.speed,
+        duration_text(args.duration / args.speed),
         output.display()
     );
     let dashboard = format!("http://127.0.0.1:{}", args.dashboard_port);
@@ -139,9 +155,10 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
 
     println!();
     println!(
-        "watched: {:.0} s simulated, {} tracker points, {} beam breaks{}",
-        watch.sim_time_s,
-        watch.tracker_points,
+        "watched: {} simulated in {} of wall time, {} tracker readings, {} beam breaks{}",
+        duration_text(watch.sim_time_s),
+        duration_text(watch.wall_s),
+        watch.tracker_readings,
         watch.beam_breaks,
         match watch.last_strain {
             Some((e, var)) => format!(", X-scale strain (configured α) {:+.2} ± {:.2} µm/m", e * 1e6, var.sqrt() * 1e6),
@@ -164,26 +181,88 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
         Err(e) => eprintln!("metrocell demo: the recorded bag cannot be read: {e}"),
     }
     let complete = check_recording(&output, &watch);
-    diagnose_recording(&share, &output, args.report.clone());
+    diagnose_recording(&share, &cell, &output, args.report.clone());
     Ok(if outcome.success() && complete { 0 } else { 1 })
 }
 
 /// `metrocell diagnose` on the recorded bag against the model the estimator started from (the
 /// demo's declared error model), the report written next to the bag. What it finds is printed
-/// in words; a diagnosis that cannot be made (too short a run) is said, not hidden, and does not
-/// fail the demo (the recording is its product).
-fn diagnose_recording(share: &Path, bag: &Path, report: Option<PathBuf>) {
+/// in words, then set against what the cell conceals from that model; a diagnosis that cannot be
+/// made (too short a run) is said, not hidden, and does not fail the demo (the recording is its
+/// product).
+///
+/// The records are the tracker's raw readings (`/tracker/measurements`, in the tracker's frame,
+/// its pose fitted with the model), not the tracker node's registered `/measured_points`: in
+/// the machine frame the tracker's position is gone, and with it the line of sight along which
+/// its warm-up moves the readings.
+fn diagnose_recording(share: &Path, cell: &Path, bag: &Path, report: Option<PathBuf>) {
     let model = share.join(DEMO_MODEL);
     let report = report.unwrap_or_else(|| PathBuf::from(format!("{}_report", bag.display())));
-    println!("\ndiagnosing the recording against the demo's declared model ({DEMO_MODEL}) …");
-    let outcome = crate::diagnose_command::diagnose_bags(&model, &[bag.to_path_buf()], &metrocell_diagnose::DiagnoseOptions::default())
+    println!("\ndiagnosing the recording (the tracker's readings) against the demo's declared model ({DEMO_MODEL}) …");
+    let outcome = crate::diagnose_command::diagnose_bags_from(&model, &[bag.to_path_buf()], &metrocell_diagnose::DiagnoseOptions::default(), metrocell_estimation::PointSource::TrackerMeasurements)
         .and_then(|(m, d)| crate::diagnose_command::write_report(&report, &m, &d, "metrocell demo: diagnosis of the recorded shift").map(|index| (d, index)));
     match outcome {
         Ok((d, index)) => {
             print!("{}", crate::diagnose_command::summary_text(&d));
             println!("report: {} (the model with what was found added: {})", index.display(), report.join("model.yaml").display());
+            let found: Vec<String> = d.report.findings.iter().map(|f| f.term.clone()).collect();
+            match concealed_effects(cell, &model) {
+                Ok(concealed) => println!("{}", compare_findings(&concealed, &found)),
+                Err(e) => println!("(cannot say what the cell conceals: {e:#})"),
+            }
         }
         Err(e) => println!("diagnose could not judge this recording: {e:#}"),
+    }
+}
+
+/// The catalog ids of what the cell puts in its readings and the model does not declare: its
+/// `terms:` ids the model lacks, and `tracker_warmup` when the cell's tracker warms up and the
+/// model gives it no warm-up. (Instrument noise and biases beyond these are not counted.)
+pub fn concealed_effects(cell: &Path, model: &Path) -> anyhow::Result<Vec<String>> {
+    let read = |p: &Path| -> anyhow::Result<serde_yaml::Value> {
+        let text = std::fs::read_to_string(p).map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
+        serde_yaml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))
+    };
+    let (cell, model) = (read(cell)?, read(model)?);
+    let ids = |v: &serde_yaml::Value| -> Vec<String> { v["terms"].as_sequence().map_or(Vec::new(), |t| t.iter().filter_map(|t| t["id"].as_str().map(str::to_string)).collect()) };
+    let declared = ids(&model);
+    let mut concealed: Vec<String> = ids(&cell).into_iter().filter(|id| !declared.contains(id)).collect();
+    if !cell["sensors"]["tracker"]["warmup"].is_null() && model["sensors"]["tracker"]["warmup"].is_null() {
+        concealed.push("tracker_warmup".into());
+    }
+    concealed.sort();
+    concealed.dedup();
+    Ok(concealed)
+}
+
+/// What the diagnosis named against what the cell concealed, in words.
+fn compare_findings(concealed: &[String], found: &[String]) -> String {
+    let named: Vec<&String> = concealed.iter().filter(|c| found.contains(c)).collect();
+    let missed: Vec<&String> = concealed.iter().filter(|c| !found.contains(c)).collect();
+    let extra: Vec<&String> = found.iter().filter(|f| !concealed.contains(f)).collect();
+    let list = |v: &[&String]| v.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(", ");
+    let mut s = format!("the cell concealed {} effect(s) from the declared model ({}): ", concealed.len(), concealed.join(", "));
+    if missed.is_empty() {
+        s.push_str(&format!("diagnose named {}", if named.len() == 1 { "it".to_string() } else { format!("all {}", named.len()) }));
+    } else {
+        s.push_str(&format!("diagnose named {} of them ({}) and missed {}", named.len(), list(&named), list(&missed)));
+    }
+    if !extra.is_empty() {
+        s.push_str(&format!("; it also named {}, which the cell does not conceal", list(&extra)));
+    }
+    s
+}
+
+/// Seconds as a person reads a duration: `45 s`, `12 min 30 s`, `5 h`, `1 h 30 min`.
+fn duration_text(s: f64) -> String {
+    let s = s.max(0.0).round() as u64;
+    let (h, m, sec) = (s / 3600, (s % 3600) / 60, s % 60);
+    match (h, m, sec) {
+        (0, 0, sec) => format!("{sec} s"),
+        (0, m, 0) => format!("{m} min"),
+        (0, m, sec) => format!("{m} min {sec} s"),
+        (h, 0, _) => format!("{h} h"),
+        (h, m, _) => format!("{h} h {m} min"),
     }
 }
 
@@ -226,7 +305,10 @@ fn watch_cell(
     let model = node.subscription::<ErrorModel>("/thermal/error_model", qos::sensor_data())?;
     let estimated = node.subscription::<ErrorModel>("/estimator/error_model", qos::latched())?;
     let diagnostics = node.subscription::<DiagnosticArray>("/diagnostics", qos::reliable().history(ros2_client::qos::History::KeepLast { depth: 100 }))?;
-    let mut w = Watch { sim_time_s: 0.0, tracker_points: 0, beam_breaks: 0, last_strain: None, twin_published: BTreeMap::new(), twin_finished: false, estimated: None, live_findings: BTreeMap::new() };
+    let mut w = Watch { sim_time_s: 0.0, wall_s: 0.0, tracker_readings: 0, beam_breaks: 0, last_strain: None, twin_published: BTreeMap::new(), twin_finished: false, estimated: None, live_findings: BTreeMap::new() };
+    // about twenty progress lines over the run, at whole minutes of cell time
+    let print_every = if args.duration <= 600.0 { 30.0 } else { ((args.duration / 20.0) / 60.0).round().max(1.0) * 60.0 };
+    let mut first_clock: Option<Instant> = None;
     let mut start_ns: Option<i64> = None;
     let mut next_print = 0.0;
     // The run is over when the simulated clock, once started, stops advancing.
@@ -238,19 +320,21 @@ fn watch_cell(
             let ns = c.clock.nanos();
             let s = *start_ns.get_or_insert_with(|| {
                 last_advance = Instant::now();
+                first_clock = Some(last_advance);
                 ns
             });
             let t = (ns - s) as f64 * 1e-9;
             if t > w.sim_time_s {
                 w.sim_time_s = t;
                 last_advance = Instant::now();
+                w.wall_s = first_clock.map_or(0.0, |t0| t0.elapsed().as_secs_f64());
             }
         }
         while let Ok(Some((m, _))) = tracker.take() {
             if m.status & TrackerMeasurement::STATUS_BEAM_BREAK != 0 {
                 w.beam_breaks += 1;
             } else {
-                w.tracker_points += 1;
+                w.tracker_readings += 1;
             }
         }
         while let Ok(Some((m, _))) = model.take() {
@@ -269,17 +353,17 @@ fn watch_cell(
             w.estimated = Some(m);
         }
         if w.sim_time_s >= next_print {
-            next_print += 30.0;
+            next_print += print_every;
+            let t = w.sim_time_s.round() as u64;
             println!(
-                "  t = {:>5.0} s   tracker points {:>5}   beam breaks {:>3}   X-scale strain (configured α) {}",
-                w.sim_time_s,
-                w.tracker_points,
+                "  cell time {}:{:02}:{:02}   tracker readings {:>6}   beam breaks {:>3}   X-scale strain (configured α) {}{}",
+                t / 3600,
+                (t % 3600) / 60,
+                t % 60,
+                w.tracker_readings,
                 w.beam_breaks,
-                w.last_strain.map_or("(waiting for thermocouples)".to_string(), |(e, v)| format!(
-                    "{:+.2} ± {:.2} µm/m",
-                    e * 1e6,
-                    v.sqrt() * 1e6
-                ))
+                w.last_strain.map_or("(waiting for thermocouples)".to_string(), |(e, v)| format!("{:+.2} ± {:.2} µm/m", e * 1e6, v.sqrt() * 1e6)),
+                w.estimated.as_ref().and_then(|m| estimated_value(m, "positioning[z].c0")).map_or(String::new(), |(v, sd)| format!("   Z offset (estimator) {:+.1} ± {:.1} µm", v * 1e6, sd * 1e6))
             );
         }
         let clock_done = w.sim_time_s >= args.duration - 0.5 || (start_ns.is_some() && last_advance.elapsed() > Duration::from_secs(2));
@@ -321,6 +405,13 @@ fn take_twin_counts(d: &DiagnosticArray, w: &mut Watch) {
             }
         }
     }
+}
+
+/// One parameter of the estimator's model: value and σ.
+fn estimated_value(m: &ErrorModel, name: &str) -> Option<(f64, f64)> {
+    let n = m.values.len();
+    let i = m.parameter_names.iter().position(|p| p == name)?;
+    Some((m.values[i], m.covariance.get(i * n + i).copied().unwrap_or(f64::NAN).max(0.0).sqrt()))
 }
 
 /// The estimator's model in words: each free parameter (non-zero variance) with its σ, in the

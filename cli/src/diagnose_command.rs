@@ -7,7 +7,7 @@ use clap::{Args, ValueEnum};
 use metrocell_diagnose::html_report::html_report;
 use metrocell_diagnose::residual_table::residuals_csv;
 use metrocell_diagnose::{diagnose, DeclaredModel, Diagnosis, DiagnoseOptions, Strategy};
-use metrocell_estimation::{records_from_bags, RecordingOptions};
+use metrocell_estimation::{records_from_bags, PointSource, RecordingOptions};
 use metrocell_twin::{write_model, CellModel, FittedParameter, ModelUpdate};
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
@@ -127,11 +127,17 @@ fn write(path: &Path, text: &str) -> anyhow::Result<()> {
 
 /// Read the model and the bags and diagnose them (progress lines on stderr).
 pub fn diagnose_bags(model_path: &Path, bags: &[PathBuf], options: &DiagnoseOptions) -> anyhow::Result<(CellModel, Diagnosis)> {
+    diagnose_bags_from(model_path, bags, options, PointSource::Auto)
+}
+
+/// [`diagnose_bags`] with the points taken from `points` (`Auto`: `/measured_points` when the
+/// bag has it, else the raw `/tracker/measurements`).
+pub fn diagnose_bags_from(model_path: &Path, bags: &[PathBuf], options: &DiagnoseOptions, points: PointSource) -> anyhow::Result<(CellModel, Diagnosis)> {
     let model = CellModel::from_path(model_path)?;
     let forward = model.forward_model()?;
     eprintln!("reading {} bag(s) …", bags.len());
     // a model that declares a touch probe is judged on the recording's probe hits too
-    let recording = RecordingOptions { probe_hits: model.raw.sensors.probe.is_some(), ..RecordingOptions::default() };
+    let recording = RecordingOptions { points, probe_hits: model.raw.sensors.probe.is_some(), ..RecordingOptions::default() };
     let records = records_from_bags(bags, &forward, &recording)?;
     eprintln!("{} measured points ({} set aside while reading); diagnosing …", records.records.len(), records.rejected.len());
     let declared = DeclaredModel { machine: &model.machine, machine_terms: &model.machine_terms, instrument_terms: &model.instrument_terms, setup: &model.setup };

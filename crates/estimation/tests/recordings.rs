@@ -515,3 +515,43 @@ terms:
         let _ = std::fs::remove_dir_all(d);
     }
 }
+
+/// A bag recorded live from a twin running faster than real time: log times are the wall clock
+/// (here years after the stamps), the stamps simulated time. The records are those of the same
+/// messages logged at their stamps: readiness is judged on the stamps, so no reading is resolved
+/// before the thermocouple samples that bracket it were read (the log time would declare every
+/// reading ready at once and set most aside "after the last temperature sample").
+#[test]
+fn records_of_a_live_bag_whose_log_times_run_ahead_of_the_stamps_equal_the_offline_ones() {
+    let text = exact_thermocouples(&example("demo_shift.yaml"));
+    let offline = sim_bag(&text, "live_log_times_offline", 600.0, 3);
+    let live = scratch("live_log_times_live");
+    {
+        let reader = metrocell_bag::BagReader::open(&offline).unwrap();
+        let mut w = BagWriter::create(&live, WriterOptions::default()).unwrap();
+        for t in reader.topics() {
+            w.add_topic(&t.name, &t.type_name, &t.definition, &t.offered_qos_profiles).unwrap();
+        }
+        // the wall clock of a run at 60×, starting ~10 months after the simulated start
+        let (wall0, sim0) = (1_795_654_543_000_000_000u64, parse_start_time(DEFAULT_START_TIME).unwrap() as u64);
+        for m in reader.read_all(&metrocell_bag::MessageFilter::default()).unwrap() {
+            let wall = wall0 + (m.log_time - sim0) / 60;
+            w.write(&m.topic, wall, wall, &m.data).unwrap();
+        }
+        w.finish().unwrap();
+    }
+    let c = cell(&text, "demo_shift");
+    let instruments = c.tracker_terms().unwrap();
+    let model = c.forward_model(&instruments).unwrap();
+    let options = RecordingOptions { points: PointSource::TrackerMeasurements, ..Default::default() };
+    let a = records_from_bags(&[&offline], &model, &options).unwrap();
+    let b = records_from_bags(&[&live], &model, &options).unwrap();
+    assert!(a.records.len() > 2000, "{} records offline, {} set aside", a.records.len(), a.rejected.len());
+    assert_eq!((b.records.len(), b.rejected.len()), (a.records.len(), a.rejected.len()), "live: {:?}", b.rejected.iter().take(3).collect::<Vec<_>>());
+    for (x, y) in a.records.iter().zip(&b.records) {
+        assert_eq!((x.time, x.measured, &x.q), (y.time, y.measured, &y.q));
+        assert_eq!(format!("{:?}", x.signals.temperatures), format!("{:?}", y.signals.temperatures));
+    }
+    let _ = std::fs::remove_dir_all(&offline);
+    let _ = std::fs::remove_dir_all(&live);
+}

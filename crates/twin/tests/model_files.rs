@@ -28,7 +28,7 @@ terms:
 
 #[test]
 fn every_example_cell_reads_as_a_model_with_the_twins_terms() {
-    for f in ["quick_demo.yaml", "xfyz_shift.yaml", "delta_printer.yaml", "five_axis_table.yaml", "serial_arm_ur5.yaml"] {
+    for f in ["quick_demo.yaml", "demo_shift.yaml", "xfyz_shift.yaml", "delta_printer.yaml", "five_axis_table.yaml", "serial_arm_ur5.yaml"] {
         let m = CellModel::from_path(cell_path(f)).unwrap_or_else(|e| panic!("{f}: {e}"));
         let cell = Cell::from_path(cell_path(f)).unwrap();
         let twin_instruments = cell.instrument_terms().unwrap();

@@ -144,6 +144,32 @@ impl ThermalScaleCompensator {
         Ok((strain, var))
     }
 
+    /// The lever of α on axis k at `nominal`: ∂(displacement along the axis)/∂α =
+    /// q_k·(T(q_k) − T_ref) in m·K, from the catalog term (what the online fit of α regresses
+    /// the axis error on, [`crate::ScaleFit`]).
+    pub fn axis_lever(&self, k: usize, nominal: &Vector3<f64>, reading: &dyn Fn(&str) -> Option<Reading>) -> Result<f64, ThermalError> {
+        let (_, term) = self.terms.iter().find(|(a, _)| *a == k).ok_or_else(|| ThermalError::BadParameter {
+            name: "alpha fit".into(),
+            reason: format!("axis {} has no scale sensor", AXIS_NAMES.get(k).copied().unwrap_or("?")),
+        })?;
+        let mut temps = Vec::new();
+        for s in self.sensors.iter().filter(|s| s.axis == k) {
+            let (t, _) = reading(&s.name).ok_or_else(|| ThermalError::NoReading(s.name.clone(), AXIS_NAMES[k]))?;
+            if !t.is_finite() {
+                return Err(ThermalError::NotFinite { what: format!("reading of sensor '{}'", s.name) });
+            }
+            temps.push((s.name.as_str(), t));
+        }
+        let j = term.term.jacobian(&term.params, &thermal_signals(nominal, &temps, &[]))?;
+        Ok(j[(k, 0)])
+    }
+
+    /// Use `alpha` ± `alpha_uncertainty` from now on (an online fit), validated as at start-up.
+    pub fn use_alpha(&mut self, alpha: f64, alpha_uncertainty: f64) -> Result<(), ThermalError> {
+        *self = Self::new(alpha, alpha_uncertainty, self.reference_temperature, self.sensors.clone())?;
+        Ok(())
+    }
+
     /// The displacement the catalog terms predict at `nominal` (commanded axis coordinates, m),
     /// one [`TermDrift`] per covered axis.
     pub fn drift(&self, nominal: &Vector3<f64>, reading: &dyn Fn(&str) -> Option<Reading>) -> Result<Vec<TermDrift>, ThermalError> {
@@ -251,6 +277,24 @@ mod tests {
         let expect = 1e-12 + (11.5e-6f64).powi(2) * 0.01 + (4.0 * 0.5e-6f64).powi(2);
         assert!((cov[(0, 0)] - expect).abs() < 1e-24);
         assert_eq!(cov[(1, 1)], 1e-12, "y has no sensor and is untouched");
+    }
+
+    #[test]
+    fn axis_lever_is_the_derivative_of_the_drift_in_alpha() {
+        let mut c = two_sensor_x();
+        let nominal = Vector3::new(0.75, 0.2, 0.1);
+        // T(0.75) = 22 + 0.75·2 = 23.5 °C: lever 0.75 m · 3.5 K
+        let lever = c.axis_lever(0, &nominal, &readings).unwrap();
+        assert!((lever - 0.75 * 3.5).abs() < 1e-12, "{lever}");
+        let (d, _) = total_drift(&c.drift(&nominal, &readings).unwrap());
+        assert!((d.x - c.alpha * lever).abs() < 1e-18);
+        assert!(c.axis_lever(1, &nominal, &readings).unwrap_err().to_string().contains("axis y has no scale sensor"));
+        c.use_alpha(16e-6, 0.2e-6).unwrap();
+        let (d, cov) = total_drift(&c.drift(&nominal, &readings).unwrap());
+        assert!((d.x - 16e-6 * lever).abs() < 1e-18, "the new alpha is used");
+        assert!(cov[(0, 0)] >= (lever * 0.2e-6).powi(2) * (1.0 - 1e-12), "and its uncertainty");
+        assert!(matches!(c.use_alpha(1e-3, 0.0), Err(ThermalError::BadAlpha(_))));
+        assert_eq!(c.alpha, 16e-6, "a refused alpha leaves the compensator as it was");
     }
 
     #[test]

@@ -99,6 +99,20 @@ impl MetrocellNode {
         }
     }
 
+    /// Start watching a declared parameter for changes made at run time (`ros2 param set`, a
+    /// `set_parameters` service call, [`Self::set_param`]): poll it with
+    /// `watch.poll(|n| node.param(n))`, which gives the new value once per change.
+    pub fn watch_param<T: ParamKind + PartialEq + Clone>(&self, name: &str) -> Result<crate::params::ParamWatch<T>, ParamError> {
+        Ok(crate::params::ParamWatch::new(name, self.param(name)?))
+    }
+
+    /// Set a declared parameter from inside the node, as a remote `set_parameters` call would:
+    /// checked against its declaration, announced on `/parameter_events`. `Err` says why it was
+    /// refused.
+    pub fn set_param(&self, name: &str, value: impl Into<ParamValue>) -> Result<(), String> {
+        self.parts.ros_node.set_parameter(name, value.into().to_ros())
+    }
+
     /// The parameters as resolved at start-up, with where each value came from.
     pub fn parameters(&self) -> &Parameters {
         &self.parts.parameters

@@ -32,6 +32,51 @@ impl Drop for KillOnDrop {
     }
 }
 
+/// Set parameter `name` of the node `target` (fully qualified, e.g. `/tracker`) through that
+/// node's `rcl_interfaces/srv/SetParameters` service, from `client_node` (another participant),
+/// as `ros2 param set` does. Resends until the service answers or `timeout` passes (a request
+/// written before discovery matched the service is lost). `Err`: the node refused (its reason) or
+/// did not answer.
+pub fn set_remote_parameter(
+    client_node: &mut crate::MetrocellNode,
+    target: &str,
+    name: &str,
+    value: crate::ParamValue,
+    timeout: std::time::Duration,
+) -> Result<(), String> {
+    use ros2_client::parameters::raw;
+    use ros2_client::rcl_interfaces::{SetParametersRequest, SetParametersResponse};
+    let service = ros2_client::Name::new(target, "set_parameters").map_err(|e| format!("service name {target}/set_parameters: {e:?}"))?;
+    let qos = crate::qos::reliable();
+    let client = client_node
+        .ros_node()
+        .create_client::<SetParametersRequest, SetParametersResponse>(
+            ros2_client::ServiceMapping::Enhanced,
+            &service,
+            &ros2_client::ServiceTypeName::new("rcl_interfaces", "SetParameters"),
+            qos.clone(),
+            qos,
+        )
+        .map_err(|e| format!("client of {target}/set_parameters: {e:?}"))?;
+    let request = SetParametersRequest { parameter: vec![raw::Parameter { name: name.to_string(), value: raw::ParameterValue::from(value.to_ros()) }] };
+    let deadline = std::time::Instant::now() + timeout;
+    while std::time::Instant::now() < deadline {
+        let id = client.send_request(request.clone()).map_err(|e| format!("request to {target}/set_parameters: {e:?}"))?;
+        let resend_at = std::time::Instant::now() + std::time::Duration::from_millis(500);
+        while std::time::Instant::now() < resend_at {
+            match client.receive_response() {
+                Ok(Some((rid, response))) if rid == id => {
+                    let r = response.results.first().ok_or("an empty SetParameters response")?;
+                    return if r.successful { Ok(()) } else { Err(r.reason.clone()) };
+                }
+                Ok(_) => std::thread::sleep(std::time::Duration::from_millis(10)),
+                Err(e) => return Err(format!("response from {target}/set_parameters: {e:?}")),
+            }
+        }
+    }
+    Err(format!("no answer from {target}/set_parameters within {timeout:?}"))
+}
+
 #[cfg(test)]
 mod tests {
     #[test]

@@ -146,10 +146,17 @@ fn parameters_from_command_line_and_clean_shutdown() {
     assert!(!n.param::<bool>("use_sim_time").unwrap());
     // Remote-style sets go through the declarations: out of range is refused, in range is seen.
     let mut n = n;
+    let mut watch = n.watch_param::<f64>("rate_hz").unwrap();
+    assert_eq!(watch.poll(|name| n.param(name)).unwrap(), None, "no change yet");
     let e = n.ros_node().set_parameter("rate_hz", metrocell_node::ParamValue::Double(500.0).to_ros()).unwrap_err();
     assert!(e.contains("rate_hz") && e.contains("[0.1, 100]") && e.contains("set_parameters"), "{e}");
     n.ros_node().set_parameter("rate_hz", metrocell_node::ParamValue::Double(50.0).to_ros()).unwrap();
     assert_eq!(n.param::<f64>("rate_hz").unwrap(), 50.0);
+    assert_eq!(watch.poll(|name| n.param(name)).unwrap(), Some(50.0), "the watch sees the change once");
+    assert_eq!(watch.poll(|name| n.param(name)).unwrap(), None);
+    assert!(n.set_param("rate_hz", 0.01).unwrap_err().contains("[0.1, 100]"), "set_param is checked too");
+    n.set_param("rate_hz", 60.0).unwrap();
+    assert_eq!(watch.poll(|name| n.param(name)).unwrap(), Some(60.0));
     assert_eq!(n.parameters().get::<f64>("rate_hz").unwrap(), 25.0, "start-up resolution is kept");
     let token = n.shutdown_token();
     let t0 = Instant::now();
@@ -227,4 +234,18 @@ fn log_messages_reach_rosout() {
     // rcl_interfaces/Log: stamp (8 bytes), level (byte) = WARN (30), then name = rcl logger name.
     assert_eq!(got.payload[4 + 8], 30);
     assert!(got.payload.windows(20).any(|w| w == b"metrocell_test.logge"));
+}
+
+#[test]
+fn a_parameter_set_through_the_set_parameters_service_is_seen_by_a_watch() {
+    require_isolated_network();
+    let decls = vec![ParamDecl::new("flag", false, "a trigger"), ParamDecl::new("rate_hz", 10.0, "rate").with_range(0.1, 100.0)];
+    let target = MetrocellNode::builder("remote_param_target").handle_signals(false).diagnostics_period(None).params(decls).build().unwrap();
+    let mut flag = target.watch_param::<bool>("flag").unwrap();
+    let mut client = node("remote_param_client", &[]);
+    metrocell_node::testing::set_remote_parameter(&mut client, "/remote_param_target", "flag", true.into(), Duration::from_secs(20)).unwrap();
+    assert_eq!(flag.poll(|n| target.param(n)).unwrap(), Some(true));
+    let e = metrocell_node::testing::set_remote_parameter(&mut client, "/remote_param_target", "rate_hz", 500.0.into(), Duration::from_secs(20)).unwrap_err();
+    assert!(e.contains("rate_hz") && e.contains("[0.1, 100]"), "refused with the declaration's reason: {e}");
+    assert_eq!(target.param::<f64>("rate_hz").unwrap(), 10.0);
 }

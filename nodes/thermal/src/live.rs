@@ -6,7 +6,6 @@ use metrocell_msgs::msg::{ErrorModel, MeasuredPoint};
 use metrocell_msgs::sensor_msgs::msg::Temperature;
 use metrocell_node::{qos, MetrocellNode, NodeError};
 
-use crate::thermal_state::FitEvent;
 
 pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
     let mut state = crate::start(node.parameters(), &|line| node.info(line))?;
@@ -43,12 +42,7 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
                 }
                 Err(e) => diagnostics.warn(e.to_string()),
             }
-            match state.reference_measurement(&p) {
-                Some(FitEvent::Used(r)) => node.info(crate::describe_fit(&state, &r, true)),
-                Some(FitEvent::Fitted(r)) => node.info(crate::describe_fit(&state, &r, false)),
-                Some(FitEvent::NotYet(why)) => node.logger().debug(format!("online fit: {why}")),
-                None => {}
-            }
+            crate::log_fits(&mut state, &p, &|l| node.info(l), &|l| node.logger().debug(l));
         }
         let now = node.now().to_nanos();
         if let Some((model, drift)) = state.model_if_due(now) {

@@ -9,9 +9,14 @@
 //! (metrocell_msgs/ErrorModel: the parameters in use named `label.param` as the catalog names
 //! them, and each scale axis's current strain) and `thermal/predicted_drift` (MeasuredPoint: the
 //! drift point and where the terms predict it now). The strains are computed from configured
-//! coefficients, not estimated; only a growth term's g and τ can be fitted online, from
-//! repeated measurements of a reference point (`fit_reference_point`), and the node logs when the
-//! fitted values replace the configured ones.
+//! coefficients unless fitted online: a growth term's g and τ from repeated measurements of a
+//! reference point (`fit_reference_point`), and the axis scales' α from repeated measurements of
+//! reference points on an axis (`fit_alpha_points`, `fit_alpha_axis`: their error along the axis,
+//! less every other term's drift, regressed on q·(T(q) − T_ref) by weighted least squares with
+//! one static offset per point, see `metrocell_compensation::thermal_scale_fit`). Once enough
+//! measurements are in (`fit_min_observations`, `fit_alpha_min_observations`) the fitted values
+//! replace the configured ones, the node logs it, and their uncertainty (u(α) from the fit)
+//! enters every compensated point's covariance and `thermal/error_model`.
 //!
 //!   metrocell-thermal --ros-args -p sensors:="[x_left, x_right]" -p sensor_axes:="[x, x]" \
 //!       -p sensor_positions:="[0.0, 0.8]" -p alpha:=11.5e-6 \
@@ -38,7 +43,8 @@ use crate::thermal_state::{Settings, ThermalState};
 /// The state from the parameters, its configuration logged through `log` (live and replay alike).
 fn start(p: &Parameters, log: &dyn Fn(String)) -> Result<ThermalState, Box<dyn std::error::Error>> {
     let (compensator, fit) = parameters::compensator(p)?;
-    for line in parameters::describe(&compensator, fit.as_ref()) {
+    let alpha_fit = parameters::alpha_fit(p, &compensator)?;
+    for line in parameters::describe(&compensator, fit.as_ref(), alpha_fit.as_ref()) {
         log(line);
     }
     let limits = p.get::<Vec<f64>>("temperature_limits")?;
@@ -50,7 +56,37 @@ fn start(p: &Parameters, log: &dyn Fn(String)) -> Result<ThermalState, Box<dyn s
         limits: (limits[0], limits[1]),
         drift_point: Vector3::new(d[0], d[1], d[2]),
     };
-    Ok(ThermalState::new(compensator, fit, settings))
+    Ok(ThermalState::new(compensator, fit, settings).with_alpha_fit(alpha_fit))
+}
+
+/// One log line on a fit of α.
+fn describe_alpha_fit(state: &ThermalState, r: &metrocell_compensation::ScaleFitResult, used: bool) -> String {
+    let (axis, points, min) = state.alpha_fit.as_ref().map(|a| (["x", "y", "z"][a.axis], a.points.len(), a.min_observations)).unwrap_or(("?", 0, 0));
+    format!(
+        "thermal_scale: fitted alpha = {:.4e} ± {:.2e} 1/K from {} measurements of {points} reference point(s) along {axis} (χ²/dof {:.2}){}",
+        r.alpha,
+        r.alpha_uncertainty,
+        r.observations,
+        r.chi2_per_dof(),
+        if used { "; using the fitted alpha".to_string() } else { format!("; configured alpha kept until {min} measurements") }
+    )
+}
+
+/// Log the outcome of a measured point for both online fits.
+fn log_fits(state: &mut ThermalState, p: &metrocell_msgs::msg::MeasuredPoint, info: &dyn Fn(String), debug: &dyn Fn(String)) {
+    use crate::thermal_state::{AlphaFitEvent, FitEvent};
+    match state.reference_measurement(p) {
+        Some(FitEvent::Used(r)) => info(describe_fit(state, &r, true)),
+        Some(FitEvent::Fitted(r)) => info(describe_fit(state, &r, false)),
+        Some(FitEvent::NotYet(why)) => debug(format!("online fit: {why}")),
+        None => {}
+    }
+    match state.alpha_reference_measurement(p) {
+        Some(AlphaFitEvent::Used(r)) => info(describe_alpha_fit(state, &r, true)),
+        Some(AlphaFitEvent::Fitted(r)) => info(describe_alpha_fit(state, &r, false)),
+        Some(AlphaFitEvent::NotYet(why)) => debug(format!("alpha fit: {why}")),
+        None => {}
+    }
 }
 
 /// One log line on a fit of the reference point.

@@ -1,6 +1,6 @@
 //! The node's parameters and the compensator they configure.
 
-use metrocell_compensation::{AxisSensorPlacement, GrowthCompensator, GrowthFit, GrowthSpec, ThermalCompensator, ThermalScaleCompensator, WorkpieceCompensator};
+use metrocell_compensation::{AxisSensorPlacement, GrowthCompensator, GrowthFit, GrowthSpec, ScaleFit, ThermalCompensator, ThermalScaleCompensator, WorkpieceCompensator};
 use metrocell_node::{ParamDecl, Parameters};
 use nalgebra::Vector3;
 
@@ -9,7 +9,7 @@ pub fn declarations() -> Vec<ParamDecl> {
         ParamDecl::new("sensors", Vec::<String>::new(), "axis-scale sensor names; each is read from temperature/<name>"),
         ParamDecl::new("sensor_axes", Vec::<String>::new(), "axis (x, y or z) each scale sensor sits on, same order as sensors"),
         ParamDecl::new("sensor_positions", Vec::<f64>::new(), "axis coordinate of each scale sensor [m], same order as sensors"),
-        ParamDecl::new("alpha", 11.5e-6, "configured (not estimated) expansion coefficient of the axis scales [1/K] (steel 11.5e-6; catalog range -2e-6..3e-5)").with_range(-2e-6, 3e-5),
+        ParamDecl::new("alpha", 11.5e-6, "configured expansion coefficient of the axis scales [1/K] (steel 11.5e-6; catalog range -2e-6..3e-5); replaced by the online fit when fit_alpha_points is set and enough measurements fit").with_range(-2e-6, 3e-5),
         ParamDecl::new("alpha_uncertainty", 1.0e-6, "standard uncertainty of alpha [1/K] (ISO/TR 230-9 rule for steel: 5.77e-7)").with_range(0.0, 5e-5),
         ParamDecl::new("reference_temperature", 20.0, "temperature at which the scales are true [°C] (ISO 1: 20)")
             .with_range(-10.0, 60.0),
@@ -29,12 +29,66 @@ pub fn declarations() -> Vec<ParamDecl> {
         ParamDecl::new("workpiece_alpha_uncertainty", 5.77e-7, "u(α) of the workpiece [1/K] (ISO/TR 230-9: 0.0006 µm/(mm·K))").with_range(0.0, 5e-5),
         ParamDecl::new("drift_point", vec![0.0, 0.0, 0.0], "point [m] whose predicted thermal drift is published on thermal/predicted_drift"),
         ParamDecl::new("fit_reference_point", Vec::<f64>::new(), "nominal [m] of a reference point measured repeatedly; its measurements fit g and τ of a growth term (empty = no fit)"),
-        ParamDecl::new("fit_reference_tolerance", 1e-4, "a measured point whose nominal is within this distance [m] of fit_reference_point is the reference").with_range(1e-9, 1.0),
+        ParamDecl::new("fit_reference_tolerance", 1e-4, "a measured point whose nominal is within this distance [m] of fit_reference_point (or of a fit_alpha_points point) is that reference").with_range(1e-9, 1.0),
         ParamDecl::new("fit_growth_sensor", String::new(), "growth term whose g and τ are fitted (its sensor; empty = the only growth term)"),
         ParamDecl::new("fit_min_observations", 8i64, "reference measurements needed before the fitted values replace the configured ones").with_range(4.0, 1e6),
         ParamDecl::new("fit_time_constant_range", vec![60.0, 1e5], "[min, max] s searched for τ"),
-        ParamDecl::new("fit_interval", 60.0, "least time [s, message stamps] between refits; every reference measurement enters the next fit (a refit re-runs the lag over the whole window)").with_range(0.0, 86400.0),
+        ParamDecl::new("fit_interval", 60.0, "least time [s, message stamps] between refits of g and τ, and between log lines of the alpha fit; every reference measurement enters the next fit (a refit re-runs the lag over the whole window)").with_range(0.0, 86400.0),
+        ParamDecl::new("fit_alpha_points", Vec::<f64>::new(), "nominals of reference points on the fitted axis, measured repeatedly, x y z per point [m] (flat list; far from the axis origin is best: the lever is q·(T(q) − T_ref)); their errors along fit_alpha_axis fit the scales' alpha by weighted least squares, with one static offset per point (empty = no alpha fit)"),
+        ParamDecl::new("fit_alpha_axis", "x".to_string(), "axis (x, y or z, with scale sensors) whose error at the fit_alpha_points is regressed on q·(T(q) − T_ref); the fitted alpha is then used for every axis (the node has one alpha)").with_allowed(["x", "y", "z"]),
+        ParamDecl::new("fit_alpha_min_observations", 20i64, "measurements of the fit_alpha_points needed before the fitted alpha (and its uncertainty, which then enters every point's covariance) replaces alpha and alpha_uncertainty").with_range(3.0, 1e9),
     ]
+}
+
+/// The online fit of the scales' α as configured.
+pub struct AlphaFitConfig {
+    pub fit: ScaleFit,
+    /// 0, 1, 2 = x, y, z
+    pub axis: usize,
+    /// nominals of the reference points, m
+    pub points: Vec<Vector3<f64>>,
+    pub tolerance: f64,
+    pub min_observations: usize,
+    /// s between log lines
+    pub interval: f64,
+}
+
+impl AlphaFitConfig {
+    /// Index of the reference point whose nominal is within the tolerance of `nominal` (the nearest).
+    pub fn point_index(&self, nominal: &Vector3<f64>) -> Option<usize> {
+        self.points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (i, (p - nominal).norm()))
+            .filter(|(_, d)| *d <= self.tolerance)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .map(|(i, _)| i)
+    }
+}
+
+/// The α fit from the start-up parameters, if `fit_alpha_points` is set.
+pub fn alpha_fit(node: &Parameters, c: &ThermalCompensator) -> Result<Option<AlphaFitConfig>, Box<dyn std::error::Error>> {
+    let flat = node.get::<Vec<f64>>("fit_alpha_points")?;
+    if flat.is_empty() {
+        return Ok(None);
+    }
+    if flat.len() % 3 != 0 || flat.iter().any(|v| !v.is_finite()) {
+        return Err(err("fit_alpha_points", format!("needs finite x y z triples in m, got {} values", flat.len())));
+    }
+    let axis_name = node.get::<String>("fit_alpha_axis")?;
+    let axis = ["x", "y", "z"].iter().position(|a| *a == axis_name).ok_or_else(|| err("fit_alpha_axis", format!("'{axis_name}'; allowed: x, y, z")))?;
+    if !c.scale.covers(axis) {
+        return Err(err("fit_alpha_axis", format!("axis {axis_name} has no scale sensor (sensors / sensor_axes): there is no thermal_scale term to fit")));
+    }
+    let points: Vec<Vector3<f64>> = flat.chunks(3).map(|v| Vector3::new(v[0], v[1], v[2])).collect();
+    Ok(Some(AlphaFitConfig {
+        fit: ScaleFit::new(points.len()).map_err(|e| err("fit_alpha_points", e))?,
+        axis,
+        points,
+        tolerance: node.get::<f64>("fit_reference_tolerance")?,
+        min_observations: node.get::<i64>("fit_alpha_min_observations")? as usize,
+        interval: node.get::<f64>("fit_interval")?,
+    }))
 }
 
 /// The reference-point fit as configured.
@@ -188,15 +242,16 @@ pub fn compensator(node: &Parameters) -> Result<(ThermalCompensator, Option<FitC
 }
 
 /// Log lines describing the configuration: which values are configured and which are fitted.
-pub fn describe(c: &ThermalCompensator, fit: Option<&FitConfig>) -> Vec<String> {
+pub fn describe(c: &ThermalCompensator, fit: Option<&FitConfig>, alpha_fit: Option<&AlphaFitConfig>) -> Vec<String> {
     let s = &c.scale;
     let mut lines = vec![if s.sensors().is_empty() {
         "thermal_scale: no axis-scale sensors configured".to_string()
     } else {
         format!(
-        "thermal_scale: strain computed from the configured alpha={:e} 1/K ± {:e} (not estimated), T_ref={} °C, sensors: {}",
+        "thermal_scale: strain computed from the configured alpha={:e} 1/K ± {:e} ({}), T_ref={} °C, sensors: {}",
         s.alpha,
         s.alpha_uncertainty,
+        if alpha_fit.is_some() { "fitted online, see below" } else { "not estimated" },
         s.reference_temperature,
         s.sensors().iter().map(|p| format!("{}@{}{:+.3}m", p.name, ["x", "y", "z"][p.axis], p.position)).collect::<Vec<_>>().join(", ")
     )
@@ -224,6 +279,15 @@ pub fn describe(c: &ThermalCompensator, fit: Option<&FitConfig>) -> Vec<String> 
             f.point.y,
             f.point.z,
             f.min_observations
+        ));
+    }
+    if let Some(a) = alpha_fit {
+        lines.push(format!(
+            "online fit: alpha of the axis scales from the {} error of {} reference point(s) [{}] m against q·(T(q) − T_ref); the fitted alpha replaces the configured one after {} measurements",
+            ["x", "y", "z"][a.axis],
+            a.points.len(),
+            a.points.iter().map(|p| format!("({}, {}, {})", p.x, p.y, p.z)).collect::<Vec<_>>().join(", "),
+            a.min_observations
         ));
     }
     lines

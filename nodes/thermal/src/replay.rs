@@ -8,7 +8,6 @@ use metrocell_msgs::msg::{ErrorModel, MeasuredPoint};
 use metrocell_msgs::sensor_msgs::msg::Temperature;
 use metrocell_node::{OfflineNode, ReplayArgs};
 
-use crate::thermal_state::FitEvent;
 
 pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::error::Error>> {
     let mut state = crate::start(node.parameters(), &|line| node.logger().info(line))?;
@@ -54,12 +53,7 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
                 Ok(out) => output.write(&compensated_topic, &out, m.log_time_ns)?,
                 Err(e) => node.logger().warn(format!("{} at log time {} ns: {e}", m.topic, m.log_time_ns)),
             }
-            match state.reference_measurement(&point) {
-                Some(FitEvent::Used(r)) => node.logger().info(crate::describe_fit(&state, &r, true)),
-                Some(FitEvent::Fitted(r)) => node.logger().info(crate::describe_fit(&state, &r, false)),
-                Some(FitEvent::NotYet(why)) => node.logger().debug(format!("online fit: {why}")),
-                None => {}
-            }
+            crate::log_fits(&mut state, &point, &|l| node.logger().info(l), &|l| node.logger().debug(l));
         } else if let Some((_, sensor)) = sensor_of_topic.iter().find(|(t, _)| *t == m.topic) {
             match m.decode::<Temperature>() {
                 Ok(t) => {

@@ -5,12 +5,12 @@
 
 use std::collections::BTreeMap;
 
-use metrocell_compensation::{GrowthFitResult, Reading, ThermalCompensator, ThermalError};
+use metrocell_compensation::{GrowthFitResult, Reading, ScaleFitResult, ThermalCompensator, ThermalError};
 use metrocell_msgs::msg::{ErrorModel, MeasuredPoint};
 use metrocell_msgs::sensor_msgs::msg::Temperature;
 use nalgebra::{Matrix2, Matrix3, Vector3};
 
-use crate::parameters::FitConfig;
+use crate::parameters::{AlphaFitConfig, FitConfig};
 
 /// What the node counts (diagnostics, and the replay's summary).
 #[derive(Debug, Default, Clone, PartialEq)]
@@ -38,6 +38,11 @@ pub struct ThermalState {
     pub fit_result: Option<(GrowthFitResult, bool)>,
     /// Stamp (s) of the measurement that triggered the last refit.
     last_fit_time: Option<f64>,
+    pub alpha_fit: Option<AlphaFitConfig>,
+    /// Latest fit of α, and whether it is in use.
+    pub alpha_fit_result: Option<(ScaleFitResult, bool)>,
+    /// Stamp (s) of the last α-fit event reported.
+    last_alpha_report: Option<f64>,
     pub counters: Counters,
     drift_point: Vector3<f64>,
     calibration_variance: f64,
@@ -47,6 +52,15 @@ pub struct ThermalState {
     /// sensor → (temperature °C, variance K², receive time ns, stamp s)
     latest: BTreeMap<String, (f64, f64, i64, f64)>,
     next_model_ns: Option<i64>,
+}
+
+/// Outcome of a measurement of an α reference point (for the node to log).
+pub enum AlphaFitEvent {
+    /// fitted, configured α kept (not enough measurements yet)
+    Fitted(ScaleFitResult),
+    /// the fitted α is in use
+    Used(ScaleFitResult),
+    NotYet(String),
 }
 
 /// Outcome of a reference-point measurement for the fit (for the node to log).
@@ -75,6 +89,9 @@ impl ThermalState {
             fit,
             fit_result: None,
             last_fit_time: None,
+            alpha_fit: None,
+            alpha_fit_result: None,
+            last_alpha_report: None,
             counters: Counters::default(),
             drift_point: s.drift_point,
             calibration_variance: s.calibration_uncertainty.powi(2),
@@ -84,6 +101,66 @@ impl ThermalState {
             latest: BTreeMap::new(),
             next_model_ns: None,
         }
+    }
+
+    /// With the online fit of α.
+    pub fn with_alpha_fit(mut self, alpha_fit: Option<AlphaFitConfig>) -> Self {
+        self.alpha_fit = alpha_fit;
+        self
+    }
+
+    /// If `p` is one of the α fit's reference points, add its error along the fitted axis
+    /// (measured − nominal, less the drift of every other term) against the lever
+    /// q·(T(q) − T_ref) and refit; once `min_observations` measurements are in, the fitted α and
+    /// its uncertainty replace the configured ones (and keep following the fit). Events are
+    /// reported at most every `interval` s (message stamps), and always when the fitted α is
+    /// first used.
+    pub fn alpha_reference_measurement(&mut self, p: &MeasuredPoint) -> Option<AlphaFitEvent> {
+        let a = self.alpha_fit.as_ref()?;
+        let nominal = Vector3::new(p.nominal.x, p.nominal.y, p.nominal.z);
+        let j = a.point_index(&nominal)?;
+        let k = a.axis;
+        let reading = |n: &str| self.reading(n);
+        let lever = match self.compensator.scale.axis_lever(k, &nominal, &reading) {
+            Ok(l) => l,
+            Err(e) => return Some(AlphaFitEvent::NotYet(format!("alpha reference point not used: {e}"))),
+        };
+        let all = match self.compensator.drift(&nominal, &reading) {
+            Ok((d, _)) => d,
+            Err(e) => return Some(AlphaFitEvent::NotYet(format!("alpha reference point not used: {e}"))),
+        };
+        // the error along the axis less every other term's drift (this axis's scale term is α·lever)
+        let error = [p.measured.x, p.measured.y, p.measured.z][k] - nominal[k] - (all[k] - self.compensator.scale.alpha * lever);
+        let variance = Matrix3::from_row_slice(&p.covariance)[(k, k)];
+        let time = stamp_seconds(&p.header.stamp);
+        let a = self.alpha_fit.as_mut()?;
+        if let Err(e) = a.fit.add_observation(j, lever, error, variance) {
+            return Some(AlphaFitEvent::NotYet(e.to_string()));
+        }
+        let r = match a.fit.fit() {
+            Ok(r) => r,
+            Err(e) => return Some(AlphaFitEvent::NotYet(e.to_string())),
+        };
+        let was_used = self.alpha_fit_result.as_ref().is_some_and(|(_, used)| *used);
+        let mut used = false;
+        let mut refused = None;
+        if r.observations >= a.min_observations {
+            match self.compensator.scale.use_alpha(r.alpha, r.alpha_uncertainty) {
+                Ok(()) => used = true,
+                Err(e) => refused = Some(format!("fitted alpha {:e} ± {:e} 1/K not used: {e}", r.alpha, r.alpha_uncertainty)),
+            }
+        }
+        self.alpha_fit_result = Some((r.clone(), used));
+        let due = self.last_alpha_report.is_none_or(|t| time - t >= a.interval) || (used && !was_used);
+        if !due {
+            return None;
+        }
+        self.last_alpha_report = Some(time);
+        Some(match (refused, used) {
+            (Some(why), _) => AlphaFitEvent::NotYet(why),
+            (None, true) => AlphaFitEvent::Used(r),
+            (None, false) => AlphaFitEvent::Fitted(r),
+        })
     }
 
     /// Store a reading; `Err` names why it was rejected (and counts it).
@@ -414,5 +491,62 @@ mod tests {
         (p.nominal.y, p.nominal.z, p.measured.y, p.measured.z) = (0.1, 0.1, 0.1, 0.1 - g_true * (tf - 20.0));
         let out = st.compensate(&p, 6 * 3600 * S).unwrap();
         assert!((out.measured.z - 0.1).abs() < 1.5e-6, "left {:.2} µm", (out.measured.z - 0.1) * 1e6);
+    }
+
+    #[test]
+    fn online_fit_of_alpha_replaces_the_configured_one() {
+        // Truth α = 16e-6 1/K (configured 11.5e-6). The X scale warms from 19 to 23 °C (x_left
+        // and x_right 0.5 K apart); reference points at x = 0.8 and 0.4 m with static X errors of
+        // 6 and −4 µm are measured every 2 min, ±1 µm deterministic "noise".
+        let mut st = state_with(&["fit_alpha_points:=[0.8, 0.0, 0.2, 0.4, 0.0, 0.2]", "fit_alpha_min_observations:=30", "fit_interval:=0.0", "stale_after:=1000.0"]);
+        let alpha_true = 16e-6;
+        let (mut used_at, mut events) = (None, 0);
+        for k in 0..60 {
+            let t_ns = k as i64 * 120 * S;
+            let warm = 19.0 + 4.0 * k as f64 / 59.0;
+            for (n, v) in [("x_left", warm), ("x_right", warm + 0.5), ("column", 20.0)] {
+                st.temperature(n, &temp(v, t_ns), t_ns).unwrap();
+            }
+            for (q, c) in [(0.8, 6e-6), (0.4, -4e-6)] {
+                let t_q = warm + 0.5 * q / 0.8;
+                let mut p = point(q);
+                p.header.stamp = Time::from_nanos(t_ns);
+                p.measured.x = q + c + alpha_true * q * (t_q - 20.0) + 1e-6 * ((k as f64) * 1.3 + q).sin();
+                match st.alpha_reference_measurement(&p) {
+                    Some(AlphaFitEvent::Used(_)) => {
+                        used_at.get_or_insert(2 * k + (q < 0.5) as i64);
+                        events += 1;
+                    }
+                    Some(_) => events += 1,
+                    None => {}
+                }
+            }
+        }
+        assert_eq!(used_at, Some(29), "used from the 30th measurement on");
+        assert!(events >= 100, "fit_interval 0: an event per measurement once it fits ({events})");
+        let (r, used) = st.alpha_fit_result.clone().unwrap();
+        assert!(used);
+        assert!((r.alpha - alpha_true).abs() < 3.0 * r.alpha_uncertainty && r.alpha_uncertainty < 0.5e-6, "α {} ± {}", r.alpha, r.alpha_uncertainty);
+        assert_eq!((st.compensator.scale.alpha, st.compensator.scale.alpha_uncertainty), (r.alpha, r.alpha_uncertainty));
+        // the error model carries the fitted α and u(α)²
+        let (model, _) = st.model_if_due(59 * 120 * S).unwrap();
+        let model = model.unwrap();
+        let i = model.parameter_names.iter().position(|n| n == "thermal_scale[x].alpha").unwrap();
+        assert_eq!(model.values[i], r.alpha);
+        assert_eq!(model.covariance[i * model.values.len() + i], r.alpha_uncertainty.powi(2));
+        // a point at x = 0.6 m, 23.375 °C there, is corrected with the fitted α: its thermal error (9 µm with the configured α) is gone to < 0.5 µm
+        let mut p = point(0.6);
+        p.measured.x = 0.6 + alpha_true * 0.6 * (23.0 + 0.375 - 20.0);
+        let out = st.compensate(&p, 59 * 120 * S).unwrap();
+        assert!((out.measured.x - 0.6).abs() < 0.5e-6, "left {:.3} µm", (out.measured.x - 0.6) * 1e6);
+    }
+
+    #[test]
+    fn alpha_fit_needs_a_covered_axis() {
+        let args = ["metrocell-thermal", "--ros-args", "-p", "sensors:=[x_left]", "-p", "sensor_axes:=[x]", "-p", "sensor_positions:=[0.0]", "-p", "fit_alpha_points:=[0.0, 0.5, 0.0]", "-p", "fit_alpha_axis:=y"];
+        let cl = metrocell_node::parse_command_line(args).unwrap();
+        let p = metrocell_node::Parameters::resolve(&crate::parameters::declarations(), &cl.ros, "/thermal", "thermal").unwrap();
+        let e = crate::start(&p, &|_| {}).err().unwrap().to_string();
+        assert!(e.contains("fit_alpha_axis") && e.contains("no scale sensor"), "{e}");
     }
 }

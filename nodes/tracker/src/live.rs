@@ -10,7 +10,7 @@ use metrocell_msgs::tf2_msgs::msg::TFMessage;
 use metrocell_node::{qos, MetrocellNode};
 use metrocell_laser_tracker::tcp_client::{DriverEvent, TcpClientConfig, TcpTrackerClient};
 use metrocell_tracker_node::messages;
-use metrocell_tracker_node::parameters::TrackerConfig;
+use metrocell_tracker_node::parameters::{self, TrackerConfig};
 use metrocell_tracker_node::tracker_state::{Output, TrackerState};
 
 pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
@@ -48,6 +48,7 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
     let (machine_frame, tracker_frame) = (state.config().machine_frame.clone(), state.config().tracker_frame.clone());
 
     let diagnostics = node.diagnostics();
+    let mut reregister_param = node.watch_param::<bool>(parameters::REREGISTER)?;
     let token = node.shutdown_token();
     let mut outputs = Vec::new();
     while !token.is_triggered() {
@@ -90,8 +91,23 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
             }
         }
         while let Ok(Some((why, _))) = reregister.take() {
-            node.info(format!("re-registering the tracker pose: {}", why.data));
+            node.info(format!("re-registering the tracker pose (tracker/reregister): {}", why.data));
             state.reregister();
+            diagnostics.add_count("reregistrations", 1);
+        }
+        // `ros2 param set /tracker reregister true`: the same, then the parameter is reset
+        match reregister_param.poll(|n| node.param(n)) {
+            Ok(Some(true)) => {
+                node.info(format!("re-registering the tracker pose (parameter {} set true); collecting {} targets", parameters::REREGISTER, state.config().registration_points));
+                state.reregister();
+                diagnostics.add_count("reregistrations", 1);
+                if let Err(e) = node.set_param(parameters::REREGISTER, false) {
+                    node.warn(format!("could not reset parameter {} to false: {e}", parameters::REREGISTER));
+                }
+                reregister_param.update(false);
+            }
+            Ok(_) => {}
+            Err(e) => node.warn(format!("parameter {}: {e}", parameters::REREGISTER)),
         }
         for o in outputs.drain(..) {
             match o {

@@ -20,8 +20,12 @@
 //! (TrackerMeasurement: averaged, STATUS_TURBULENCE / STATUS_WARMING_UP set), `tracker/warmup`
 //! (ErrorModel: A, B, τ with covariance), `/tf_static` (machine → tracker) and `tracker/pose`
 //! (PoseWithCovarianceStamped), both transient local; `/diagnostics` counters and warm-up state.
-//! A message on `tracker/reregister` (std_msgs/String, any text) re-registers the pose (the
-//! tracker was moved).
+//! When the tracker was moved, re-register its pose (fitted again from the next
+//! `registration_points` targets, then published again on `/tf_static` and `tracker/pose`):
+//! `ros2 param set /tracker reregister true` (the node resets the parameter to false once it has
+//! acted; any client of the node's `set_parameters` service can do it), or a message on
+//! `tracker/reregister` (std_msgs/String, any text, logged as the reason). `/diagnostics` counts
+//! `reregistrations`.
 //!
 //!   metrocell-tracker --ros-args -p warmup_target:=nest -p tool_offset:="[0.0, 0.0, -0.15]"
 //!   metrocell-tracker --ros-args -p backend:=tcp -p tcp_address:=192.168.0.20:5000

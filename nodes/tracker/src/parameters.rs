@@ -6,6 +6,9 @@ use metrocell_node::{ParamDecl, Parameters};
 use metrocell_laser_tracker::{AirSource, EdlenForm, ProgramSchedule, ReadingProcessor, TurbulenceTest};
 use nalgebra::Vector3;
 
+/// The run-time trigger of a re-registration (live node).
+pub const REREGISTER: &str = "reregister";
+
 pub fn declarations() -> Vec<ParamDecl> {
     let s = |v: &str| v.to_string();
     vec![
@@ -38,7 +41,8 @@ pub fn declarations() -> Vec<ParamDecl> {
         ParamDecl::new("program_feed", 0.05, "feed rate F between program points [m/s]").with_range(1e-6, 10.0),
         ParamDecl::new("program_stop_time", 3.0, "stop time T_s at each program point [s]").with_range(0.0, 3600.0),
         ParamDecl::new("program_start_time", 0.0, "ROS time the program left home [s since epoch]; 0 = no program timing").with_range(0.0, 1e10),
-        ParamDecl::new("registration_points", 12i64, "dwells (distinct targets) collected before the tracker pose is fitted; re-collected on tracker/reregister").with_range(3.0, 1e5),
+        ParamDecl::new("registration_points", 12i64, "dwells (distinct targets) collected before the tracker pose is fitted; re-collected on a re-registration (parameter reregister, or topic tracker/reregister)").with_range(3.0, 1e5),
+        ParamDecl::new(REREGISTER, false, "set true at run time (ros2 param set /tracker reregister true) when the tracker was moved: the pose is fitted again from the next registration_points targets; the node sets it back to false once done (live only; a message on tracker/reregister does the same)"),
         ParamDecl::new("machine_frame", s("machine"), "frame of nominal and measured points, parent of the tracker in /tf_static"),
         ParamDecl::new("tracker_frame", s("tracker"), "frame of the tracker's readings"),
     ]

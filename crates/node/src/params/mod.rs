@@ -4,9 +4,11 @@ mod declaration;
 mod file;
 mod resolve;
 mod value;
+mod watch;
 
 pub use declaration::{ParamDecl, ValueProblem};
 pub use file::{parse_params_file, pattern_matches_node, read_params_file, ParamsFileError, ParamsFileSection};
 pub(crate) use resolve::problem_error;
 pub use resolve::{ParamError, ParamSource, Parameters, ResolvedParam, USE_SIM_TIME};
 pub use value::{ParamKind, ParamType, ParamValue};
+pub use watch::ParamWatch;

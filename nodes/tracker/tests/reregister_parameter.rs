@@ -1,0 +1,154 @@
+//! Re-registration requested through the node's parameter service, over DDS: the twin's readings
+//! and commanded states are fed to a live `metrocell-tracker` (as in `replay_equals_live`); once
+//! the pose is registered from the first 4 targets, another participant sets `reregister` to
+//! true through the real `rcl_interfaces/srv/SetParameters` service (what `ros2 param set
+//! /tracker reregister true` sends). The node must fit the pose again from the next 4 targets:
+//! a second pose on `tracker/pose` and `/tf_static`, `reregistrations` = 1 on `/diagnostics`,
+//! the log line, and the parameter back at false (a second set to true is again a change).
+//!
+//! Run: `tests/isolated cargo test -p metrocell-tracker-node --test reregister_parameter`
+
+use std::io::{BufRead, BufReader};
+use std::path::Path;
+use std::process::{Command, Stdio};
+use std::sync::{Arc, Mutex};
+use std::time::{Duration, Instant};
+
+use metrocell_bagtools::BagSource;
+use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
+use metrocell_msgs::geometry_msgs::msg::PoseWithCovarianceStamped;
+use metrocell_msgs::msg::TrackerMeasurement;
+use metrocell_msgs::sensor_msgs::msg::JointState;
+use metrocell_msgs::tf2_msgs::msg::TFMessage;
+use metrocell_node::testing::{set_remote_parameter, KillOnDrop};
+use metrocell_node::{qos, MetrocellNode};
+use metrocell_simulation::bag::{write_bag, BagOptions};
+use metrocell_twin::Cell;
+
+const CELL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/cells/tracker_quick.yaml");
+const ARGS: [&str; 5] = ["--ros-args", "-p", "tool_offset:=[0.0, 0.0, -0.1]", "-p", "registration_points:=4"];
+
+enum Input {
+    Reading(TrackerMeasurement),
+    Commanded(JointState),
+}
+
+fn inputs(bag: &Path) -> Vec<Input> {
+    let mut s = BagSource::open(bag).unwrap();
+    s.subscribe::<TrackerMeasurement>("/tracker/measurements").unwrap();
+    s.subscribe::<JointState>("/machine/commanded_joint_states").unwrap();
+    s.messages()
+        .unwrap()
+        .map(|m| {
+            let m = m.unwrap();
+            if m.topic == "/tracker/measurements" {
+                Input::Reading(m.decode().unwrap())
+            } else {
+                Input::Commanded(m.decode().unwrap())
+            }
+        })
+        .collect()
+}
+
+/// The tracker node's `reregistrations` counter in a /diagnostics message, if it is there.
+fn reregistrations(d: &DiagnosticArray) -> Option<String> {
+    d.status.iter().filter(|s| s.name.contains("tracker")).flat_map(|s| &s.values).find(|kv| kv.key == "reregistrations").map(|kv| kv.value.clone())
+}
+
+#[test]
+fn setting_the_reregister_parameter_through_the_service_fits_the_pose_again() {
+    metrocell_node::testing::require_isolated_network();
+    let tmp = std::env::temp_dir().join(format!("metrocell-tracker-reregister-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&tmp);
+    std::fs::create_dir_all(&tmp).unwrap();
+    let cell = Cell::from_yaml_str(&std::fs::read_to_string(CELL).unwrap(), CELL).unwrap();
+    let program = cell.program.clone();
+    let last_dwell_end = program.segments.iter().filter(|s| s.dwell_point.is_some()).map(|s| s.end).fold(0.0, f64::max);
+    let input = tmp.join("input");
+    let options = BagOptions { frames: None, clock_rate: None, ..BagOptions::default() };
+    write_bag(cell, program.start + last_dwell_end + 5.0, 3, &input, &options, |_| {}).unwrap();
+    let inputs = inputs(&input);
+
+    let mut child = Command::new(env!("CARGO_BIN_EXE_metrocell-tracker")).args(ARGS).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    let log = Arc::new(Mutex::new(String::new()));
+    let stderr = child.stderr.take().unwrap();
+    let log_writer = Arc::clone(&log);
+    std::thread::spawn(move || {
+        for line in BufReader::new(stderr).lines().map_while(Result::ok) {
+            let mut l = log_writer.lock().unwrap();
+            l.push_str(&line);
+            l.push('\n');
+        }
+    });
+    let _node = KillOnDrop(child);
+
+    let mut peer = MetrocellNode::builder("tracker_test_peer").diagnostics_period(None).handle_signals(false).build().unwrap();
+    let readings = peer.publisher::<TrackerMeasurement>("/tracker/measurements", qos::reliable()).unwrap();
+    let commanded = peer.publisher::<JointState>("/machine/commanded_joint_states", qos::sensor_data()).unwrap();
+    let pose_sub = peer.subscription::<PoseWithCovarianceStamped>("/tracker/pose", qos::latched()).unwrap();
+    let tf_sub = peer.subscription::<TFMessage>("/tf_static", qos::latched()).unwrap();
+    let diag_sub = peer.subscription::<DiagnosticArray>("/diagnostics", qos::reliable()).unwrap();
+    let deadline = Instant::now() + Duration::from_secs(20);
+    while !peer.discovered_topics().iter().any(|t| t.name.ends_with("tracker/dwells")) {
+        assert!(Instant::now() < deadline, "tracker node not discovered");
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    std::thread::sleep(Duration::from_secs(1));
+
+    let (mut poses, mut tfs, mut counter) = (Vec::new(), 0usize, None);
+    let collect = |poses: &mut Vec<PoseWithCovarianceStamped>, tfs: &mut usize, counter: &mut Option<String>| {
+        while let Ok(Some((p, _))) = pose_sub.take() {
+            poses.push(p);
+        }
+        while let Ok(Some(_)) = tf_sub.take() {
+            *tfs += 1;
+        }
+        while let Ok(Some((d, _))) = diag_sub.take() {
+            if let Some(c) = reregistrations(&d) {
+                *counter = Some(c);
+            }
+        }
+    };
+    let mut set_at = None;
+    for (k, i) in inputs.iter().enumerate() {
+        match i {
+            Input::Reading(m) => {
+                let _ = readings.publish(m.clone());
+            }
+            Input::Commanded(j) => {
+                let _ = commanded.publish(j.clone());
+            }
+        }
+        std::thread::sleep(Duration::from_millis(3));
+        collect(&mut poses, &mut tfs, &mut counter);
+        if set_at.is_none() && !poses.is_empty() {
+            // registered from the first 4 targets: the tracker "was moved"
+            set_remote_parameter(&mut peer, "/tracker", "reregister", true.into(), Duration::from_secs(20)).expect("set reregister through the service");
+            set_at = Some(k);
+        }
+    }
+    let set_at = set_at.expect("no pose registered from the first targets");
+    eprintln!("first pose after input {set_at} of {}; reregister set through the service", inputs.len());
+    let deadline = Instant::now() + Duration::from_secs(10);
+    while (poses.len() < 2 || counter.as_deref() != Some("1")) && Instant::now() < deadline {
+        collect(&mut poses, &mut tfs, &mut counter);
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    let log_text = log.lock().unwrap().clone();
+    assert_eq!(poses.len(), 2, "a second pose after the re-registration; log:\n{log_text}");
+    assert_eq!(tfs, 2, "and a second /tf_static");
+    assert!(poses[1].header.stamp.nanos() > poses[0].header.stamp.nanos());
+    let (a, b) = (&poses[0].pose.pose.position, &poses[1].pose.pose.position);
+    assert!(((a.x - b.x).powi(2) + (a.y - b.y).powi(2) + (a.z - b.z).powi(2)).sqrt() < 1e-3, "the tracker did not move: the same pose again");
+    assert_eq!(counter.as_deref(), Some("1"), "/diagnostics reregistrations");
+    assert!(log_text.contains("re-registering the tracker pose (parameter reregister set true)"), "{log_text}");
+    // the node reset the parameter: setting it true again is a change, and is acted on again
+    let deadline = Instant::now() + Duration::from_secs(10);
+    set_remote_parameter(&mut peer, "/tracker", "reregister", true.into(), Duration::from_secs(20)).unwrap();
+    while counter.as_deref() != Some("2") && Instant::now() < deadline {
+        collect(&mut poses, &mut tfs, &mut counter);
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    assert_eq!(counter.as_deref(), Some("2"), "a second request after the reset is acted on");
+    let _ = std::fs::remove_dir_all(&tmp);
+}

@@ -173,7 +173,7 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
     if !watch.live_findings.is_empty() {
         println!("the live diagnose node found, while the cell ran: {}", watch.live_findings.values().cloned().collect::<Vec<_>>().join("; "));
     } else {
-        println!("the live diagnose node found nothing while the cell ran (its first diagnosis comes after diagnose_every of cell time)");
+        println!("the live diagnose node found nothing while the cell ran (it diagnoses every fifth of the run)");
     }
     println!("the dashboard was at {dashboard}; the bag is at {}", output.display());
     match metrocell_bag::info(&output) {
@@ -346,7 +346,8 @@ fn watch_cell(
         while let Ok(Some((d, _))) = diagnostics.take() {
             take_twin_counts(&d, &mut w);
             for (name, statement) in new_live_findings(&d, &mut w) {
-                println!("  t = {:>5.0} s   the diagnose node found {}: {statement}", w.sim_time_s, name.trim_start_matches("diagnose: "));
+                let t = w.sim_time_s.max(0.0) as u64;
+                println!("  cell time {}:{:02}:{:02}   the diagnose node found {}: {statement}", t / 3600, t / 60 % 60, t % 60, name.trim_start_matches("diagnose: "));
             }
         }
         while let Ok(Some((m, _))) = estimated.take() {

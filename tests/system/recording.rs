@@ -241,6 +241,12 @@ print(json.dumps(out))
 /// The two demo runs take turns (one lock) and each has its own ROS_DOMAIN_ID: the tests of this
 /// binary run in parallel in one network namespace, and a demo's recorder records every topic it
 /// sees, so otherwise each would record the other's twin (and the idle run would not be idle).
+/// The text of a CDR-encoded std_msgs/String (header, u32 length with the NUL, bytes).
+fn cdr_string(payload: &[u8]) -> String {
+    let n = u32::from_le_bytes(payload[4..8].try_into().unwrap()) as usize;
+    String::from_utf8_lossy(&payload[8..8 + n - 1]).into_owned()
+}
+
 fn demo_loses_nothing(name: &str, busy_cores: usize, domain: u32) {
     static ONE_DEMO_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
     let _turn = ONE_DEMO_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
@@ -296,6 +302,16 @@ fn demo_loses_nothing(name: &str, busy_cores: usize, domain: u32) {
     found.sort();
     assert_eq!(found, ["backlash", "thermal_growth", "tracker_warmup"], "the diagnosis of the demo's recording:\n{stdout}");
     assert!(stdout.contains("diagnose named all 3"), "the demo's comparison with what the cell conceals:\n{stdout}");
+    // the live diagnose node judged the window as the cell ran (every 12 min of cell time in the
+    // quick run): its results are in the bag, each the JSON of `metrocell diagnose --json` or the
+    // reason the window could not be diagnosed yet, the later ones naming what it found
+    let (ty, results) = bag.get("/diagnose/result").unwrap_or_else(|| panic!("no /diagnose/result in the bag; topics: {:?}", bag.keys().collect::<Vec<_>>()));
+    assert_eq!(ty, "std_msgs/msg/String");
+    assert!(results.len() >= 3, "{} live diagnoses in an hour of cell time (one every 12 min expected)", results.len());
+    let last: serde_json::Value = serde_json::from_str(&cdr_string(results.last().unwrap())).expect("the live result is JSON");
+    let live: Vec<&str> = last["findings"].as_array().unwrap_or_else(|| panic!("the last live diagnosis has no findings: {last}")).iter().map(|f| f["term"].as_str().unwrap()).collect();
+    assert!(!live.is_empty() && live.iter().all(|t| ["backlash", "thermal_growth", "tracker_warmup"].contains(t)), "the live diagnose node named {live:?}");
+    assert!(stdout.contains("the diagnose node found"), "the demo prints the live findings as they come:\n{stdout}");
     eprintln!("{name}: {} messages on {} topics, none lost, in {:.1} s", published.values().sum::<u64>(), published.len(), started.elapsed().as_secs_f64());
 }
 

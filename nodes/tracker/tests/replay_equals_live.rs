@@ -17,36 +17,15 @@ use metrocell_msgs::sensor_msgs::msg::JointState;
 use metrocell_msgs::tf2_msgs::msg::TFMessage;
 use metrocell_msgs::RosMessage;
 use metrocell_node::{qos, MetrocellNode};
-use metrocell_simulation::bag::{write_bag, BagOptions};
-use metrocell_twin::Cell;
+
+mod common;
+use common::{inputs, record_twin, wait_for_tracker, Input};
 use nalgebra::Vector3;
 use metrocell_node::testing::KillOnDrop as Killed;
 
-const CELL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/cells/tracker_quick.yaml");
 const ARGS: [&str; 5] = ["--ros-args", "-p", "tool_offset:=[0.0, 0.0, -0.1]", "-p", "registration_points:=12"];
 
 
-enum Input {
-    Reading(TrackerMeasurement),
-    Commanded(JointState),
-}
-
-fn inputs(bag: &Path) -> Vec<Input> {
-    let mut s = BagSource::open(bag).unwrap();
-    s.subscribe::<TrackerMeasurement>("/tracker/measurements").unwrap();
-    s.subscribe::<JointState>("/machine/commanded_joint_states").unwrap();
-    s.messages()
-        .unwrap()
-        .map(|m| {
-            let m = m.unwrap();
-            if m.topic == "/tracker/measurements" {
-                Input::Reading(m.decode().unwrap())
-            } else {
-                Input::Commanded(m.decode().unwrap())
-            }
-        })
-        .collect()
-}
 
 fn read<T: RosMessage>(bag: &Path, topic: &str) -> Vec<T> {
     let mut s = BagSource::open(bag).unwrap();
@@ -60,15 +39,12 @@ fn twin_to_tracker_over_dds_equals_replay_and_measures_every_dwell_once() {
     let tmp = std::env::temp_dir().join(format!("metrocell-tracker-live-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&tmp);
     std::fs::create_dir_all(&tmp).unwrap();
-    let cell = Cell::from_yaml_str(&std::fs::read_to_string(CELL).unwrap(), CELL).unwrap();
+    let input = tmp.join("input");
+    let cell = record_twin(&input);
+    let inputs = inputs(&input);
     let program = cell.program.clone();
     let nominal = |i: usize| cell.machine.nominal_tool_point(&Vector3::new(program.points[i][0], program.points[i][1], program.points[i][2]));
     let expected: Vec<(usize, Vector3<f64>)> = program.segments.iter().filter_map(|s| s.dwell_point).map(|i| (i, nominal(i))).collect();
-    let last_dwell_end = program.segments.iter().filter(|s| s.dwell_point.is_some()).map(|s| s.end).fold(0.0, f64::max);
-    let input = tmp.join("input");
-    let options = BagOptions { frames: None, clock_rate: None, ..BagOptions::default() };
-    write_bag(cell, program.start + last_dwell_end + 5.0, 3, &input, &options, |_| {}).unwrap();
-    let inputs = inputs(&input);
 
     // --- live
     let _node = Killed(Command::new(env!("CARGO_BIN_EXE_metrocell-tracker")).args(ARGS).stderr(Stdio::null()).spawn().unwrap());
@@ -78,12 +54,7 @@ fn twin_to_tracker_over_dds_equals_replay_and_measures_every_dwell_once() {
     let points_sub = machine.subscription::<MeasuredPoint>("/measured_points", qos::reliable()).unwrap();
     let dwells_sub = machine.subscription::<TrackerMeasurement>("/tracker/dwells", qos::reliable()).unwrap();
     let tf_sub = machine.subscription::<TFMessage>("/tf_static", qos::latched()).unwrap();
-    let deadline = Instant::now() + Duration::from_secs(20);
-    while !machine.discovered_topics().iter().any(|t| t.name.ends_with("tracker/dwells")) {
-        assert!(Instant::now() < deadline, "tracker node not discovered");
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    std::thread::sleep(Duration::from_secs(1));
+    wait_for_tracker(&machine);
     let (mut live_points, mut live_dwells, mut live_tf) = (BTreeMap::new(), BTreeMap::new(), Vec::new());
     let collect = |points: &mut BTreeMap<i64, MeasuredPoint>, dwells: &mut BTreeMap<i64, TrackerMeasurement>, tf: &mut Vec<TFMessage>| {
         while let Ok(Some((p, _))) = points_sub.take() {

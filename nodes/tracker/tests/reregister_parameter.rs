@@ -9,12 +9,10 @@
 //! Run: `tests/isolated cargo test -p metrocell-tracker-node --test reregister_parameter`
 
 use std::io::{BufRead, BufReader};
-use std::path::Path;
 use std::process::{Command, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
-use metrocell_bagtools::BagSource;
 use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
 use metrocell_msgs::geometry_msgs::msg::PoseWithCovarianceStamped;
 use metrocell_msgs::msg::TrackerMeasurement;
@@ -22,33 +20,12 @@ use metrocell_msgs::sensor_msgs::msg::JointState;
 use metrocell_msgs::tf2_msgs::msg::TFMessage;
 use metrocell_node::testing::{set_remote_parameter, KillOnDrop};
 use metrocell_node::{qos, MetrocellNode};
-use metrocell_simulation::bag::{write_bag, BagOptions};
-use metrocell_twin::Cell;
 
-const CELL: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/cells/tracker_quick.yaml");
+mod common;
+use common::{inputs, record_twin, wait_for_tracker, Input};
+
 const ARGS: [&str; 5] = ["--ros-args", "-p", "tool_offset:=[0.0, 0.0, -0.1]", "-p", "registration_points:=4"];
 
-enum Input {
-    Reading(TrackerMeasurement),
-    Commanded(JointState),
-}
-
-fn inputs(bag: &Path) -> Vec<Input> {
-    let mut s = BagSource::open(bag).unwrap();
-    s.subscribe::<TrackerMeasurement>("/tracker/measurements").unwrap();
-    s.subscribe::<JointState>("/machine/commanded_joint_states").unwrap();
-    s.messages()
-        .unwrap()
-        .map(|m| {
-            let m = m.unwrap();
-            if m.topic == "/tracker/measurements" {
-                Input::Reading(m.decode().unwrap())
-            } else {
-                Input::Commanded(m.decode().unwrap())
-            }
-        })
-        .collect()
-}
 
 /// The tracker node's `reregistrations` counter in a /diagnostics message, if it is there.
 fn reregistrations(d: &DiagnosticArray) -> Option<String> {
@@ -61,12 +38,8 @@ fn setting_the_reregister_parameter_through_the_service_fits_the_pose_again() {
     let tmp = std::env::temp_dir().join(format!("metrocell-tracker-reregister-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&tmp);
     std::fs::create_dir_all(&tmp).unwrap();
-    let cell = Cell::from_yaml_str(&std::fs::read_to_string(CELL).unwrap(), CELL).unwrap();
-    let program = cell.program.clone();
-    let last_dwell_end = program.segments.iter().filter(|s| s.dwell_point.is_some()).map(|s| s.end).fold(0.0, f64::max);
     let input = tmp.join("input");
-    let options = BagOptions { frames: None, clock_rate: None, ..BagOptions::default() };
-    write_bag(cell, program.start + last_dwell_end + 5.0, 3, &input, &options, |_| {}).unwrap();
+    record_twin(&input);
     let inputs = inputs(&input);
 
     let mut child = Command::new(env!("CARGO_BIN_EXE_metrocell-tracker")).args(ARGS).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
@@ -88,12 +61,7 @@ fn setting_the_reregister_parameter_through_the_service_fits_the_pose_again() {
     let pose_sub = peer.subscription::<PoseWithCovarianceStamped>("/tracker/pose", qos::latched()).unwrap();
     let tf_sub = peer.subscription::<TFMessage>("/tf_static", qos::latched()).unwrap();
     let diag_sub = peer.subscription::<DiagnosticArray>("/diagnostics", qos::reliable()).unwrap();
-    let deadline = Instant::now() + Duration::from_secs(20);
-    while !peer.discovered_topics().iter().any(|t| t.name.ends_with("tracker/dwells")) {
-        assert!(Instant::now() < deadline, "tracker node not discovered");
-        std::thread::sleep(Duration::from_millis(50));
-    }
-    std::thread::sleep(Duration::from_secs(1));
+    wait_for_tracker(&peer);
 
     let (mut poses, mut tfs, mut counter) = (Vec::new(), 0usize, None);
     let collect = |poses: &mut Vec<PoseWithCovarianceStamped>, tfs: &mut usize, counter: &mut Option<String>| {

@@ -590,14 +590,14 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     let sigma2 = after_fit.ssr() / dof1;
     // σ² of each column: the independent-rows figure, widened where the residuals are
     // correlated in time (crate::serial_correlation)
-    let serial = crate::serial_correlation::sandwich(&a1, &rows.restore_vector(&after_fit.residuals()), cov, &view1.time, after_fit.rank());
-    let place = crate::serial_correlation::by_place(&a1, &rows.restore_vector(&after_fit.residuals()), cov, &view1.position, after_fit.rank());
+    let e1 = rows.restore_vector(&after_fit.residuals());
+    let serial = crate::serial_correlation::sandwich(&a1, &e1, cov, &view1.time, after_fit.rank());
+    let place = crate::serial_correlation::by_place(&a1, &e1, cov, &view1.position, after_fit.rank());
     // the choice of model: a candidate the data support (significant after correction, lower
     // BIC) that the last step declined only for its small held-out gain may still belong, and
     // whatever the found terms absorb of it is a bias no covariance shows. Each such
     // candidate's shift of the parameters (were it added to the final fit) counts in their σ
     // (the largest shift per parameter, added in quadrature)
-    let e1 = rows.restore_vector(&after_fit.residuals());
     let mut shift2 = vec![0.0f64; a1.ncols()];
     let mut alternatives: Vec<(String, DVector<f64>)> = Vec::new();
     if let Some(last) = selection.steps.last().filter(|s| s.chosen.is_none()) {

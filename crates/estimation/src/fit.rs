@@ -235,11 +235,8 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
         let kin = model.kinematic_truth(&p)?;
         for (i, r) in kept.records.iter().enumerate() {
             let mut s = r.signals.clone();
-            // a probe hit or a camera point reads the machine's terms, not the tracker's
-            let checked = model.tool_state(&p, &kin, &r.q, &mut s, None).and_then(|t| match r.kind {
-                RecordKind::Point => model.tracker(&p, &t, &mut s).map(|_| ()),
-                _ => Ok(()),
-            });
+            // each record through its own instrument (a probe hit does not read the tracker's air)
+            let checked = crate::residuals::predict(model, &p, &kin, r, &mut s);
             if let Err(e) = checked {
                 let hint = missing_signal_hint(&e);
                 return Err(FitError::Record { index: used[i], point_id: r.point_id.clone(), time: r.time, source: e, hint });

@@ -132,8 +132,9 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
     }
 }
 
-/// The model's prediction of record `r` at `p` (signals `s`), in the record's frame.
-fn predict(model: &ForwardModel, p: &[f64], kin: &KinematicTruth, r: &MeasurementRecord, s: &mut Signals) -> Result<Vector3<f64>, PhysicsError> {
+/// The model's prediction of record `r` at `p` (signals `s`), in the record's frame: a point
+/// through the tracker, a probe hit through its probe, a camera point through its camera.
+pub fn predict(model: &ForwardModel, p: &[f64], kin: &KinematicTruth, r: &MeasurementRecord, s: &mut Signals) -> Result<Vector3<f64>, PhysicsError> {
     match &r.kind {
         RecordKind::Point => {
             let tool = model.tool_state(p, kin, &r.q, s, None)?;

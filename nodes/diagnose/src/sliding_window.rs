@@ -82,11 +82,6 @@ impl SlidingWindow {
         self.records.is_empty()
     }
 
-    /// Cell time of the newest record [s since the epoch].
-    pub fn newest(&self) -> Option<f64> {
-        self.newest.is_finite().then_some(self.newest)
-    }
-
     /// Whether records came in since the last run (or there was none yet).
     pub fn has_new_records(&self) -> bool {
         !self.records.is_empty() && self.last_run.is_none_or(|t| self.newest > t)

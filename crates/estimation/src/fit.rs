@@ -24,12 +24,12 @@
 
 use metrocell_model::{ForwardModel, ParameterSetup};
 use metrocell_physics::{PhysicsError, TermId};
-use metrocell_solver::{solve, Identifiability, Loss, NullSpace, Options, Prior, Problem, Solution, SolverError};
+use metrocell_solver::{solve, solve_from, Evaluated, Identifiability, Loss, NullSpace, Options, Prior, Problem, Solution, SolverError};
 use metrocell_laser_tracker::registration::{register, Correspondence};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
 use crate::records::{RecordFrame, RecordKind, RecordSet};
-use crate::residuals::PointResiduals;
+use crate::residuals::{EvaluationFailure, PointResiduals};
 
 /// Settings of a batch fit.
 #[derive(Debug, Clone, PartialEq)]
@@ -228,26 +228,22 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
     if 3 * kept.len() + n_priors < n_free {
         return Err(FitError::TooFew { needed: n_free, available: 3 * kept.len(), points: n_free.div_ceil(3) });
     }
+    let problem = PointResiduals::new(model, &kept.records).map_err(|b| FitError::BadCovariance { index: used[b.index], point_id: b.point_id })?;
     // every record must be predictable from the model at its configured values: name the first
-    // that is not (a missing signal, an unreachable joint vector) before any solving
-    {
-        let p = model.params();
-        let kin = model.kinematic_truth(&p)?;
-        for (i, r) in kept.records.iter().enumerate() {
-            let mut s = r.signals.clone();
-            // each record through its own instrument (a probe hit does not read the tracker's air)
-            let checked = crate::residuals::predict(model, &p, &kin, r, &mut s);
-            if let Err(e) = checked {
-                let hint = missing_signal_hint(&e);
-                return Err(FitError::Record { index: used[i], point_id: r.point_id.clone(), time: r.time, source: e, hint });
-            }
+    // that is not (a missing signal, an unreachable joint vector) before any solving; each record
+    // goes through its own instrument (a probe hit does not read the tracker's air)
+    match problem.predictions_of_records(&model.params()) {
+        Ok(_) => {}
+        Err(EvaluationFailure::Model(e)) => return Err(e.into()),
+        Err(EvaluationFailure::Record { index, error }) => {
+            let (hint, r) = (missing_signal_hint(&error), &kept.records[index]);
+            return Err(FitError::Record { index: used[index], point_id: r.point_id.clone(), time: r.time, source: error, hint });
         }
     }
     let x0 = match start {
         Some(x) => x,
         None => start_vector(model, setup, &kept)?,
     };
-    let problem = PointResiduals::new(model, &kept.records).map_err(|b| FitError::BadCovariance { index: used[b.index], point_id: b.point_id })?;
     let specs: Vec<_> = model.machine_terms.param_specs().into_iter().chain(model.instrument_terms.param_specs()).collect();
     let names = model.param_names();
     let labels: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
@@ -261,28 +257,35 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
         fixed: free.iter().map(|f| !f).collect(),
         priors: priors.clone(),
         max_iterations: options.max_iterations,
-        ftol: 1e-14,
-        xtol: 1e-14,
+        // stop when an accepted step lowers the cost by under 1e-12 of it, or moves the scaled
+        // parameters by under 1e-12 of their norm: the cost of ~10⁴ readings is only computed to
+        // ~1e-13 of itself, so tighter tolerances chase round-off (the last iterations then
+        // report ρ of 10³–10⁸, a predicted reduction below the noise of the actual one)
+        ftol: 1e-12,
+        xtol: 1e-12,
         gtol: 1e-12,
         null_space: NullSpace::Truncated { rcond: options.rcond },
         ..Options::default()
     };
-    let residuals_before = problem.raw_residuals(&x0)?;
+    // (r, J) at the start, evaluated once: they judge what the design identifies, give the
+    // residuals before, and are the solver's first linearisation (each solve below starts at x0)
+    let mut r0 = vec![0.0; problem.residual_count()];
+    let mut j0 = DMatrix::zeros(problem.residual_count(), problem.parameter_count());
+    problem.residuals_and_jacobian(&x0, &mut r0, &mut j0).map_err(|e| FitError::Registration(format!("the model cannot be evaluated at the start: {}", e.0)))?;
+    let residuals_before = problem.unwhitened(&r0);
     // a robust loss from a far start calls every residual an outlier and crawls: reach the
     // basin with plain least squares first, then let the robust loss judge the residuals
     let two_stage = |free: &[bool]| -> Result<Solution, FitError> {
+        let at_start = Some(Evaluated { residuals: &r0, jacobian: &j0 });
+        let near = solve_from(&problem, &x0, at_start, &solver_options(free, Loss::Linear))?;
         if options.loss == Loss::Linear {
-            return Ok(solve(&problem, &x0, &solver_options(free, Loss::Linear))?);
+            return Ok(near);
         }
-        let near = solve(&problem, &x0, &solver_options(free, Loss::Linear))?;
         Ok(solve(&problem, &near.x, &solver_options(free, options.loss))?)
     };
     // what the design can identify, judged at the start: a parameter whose effect is nil or a
     // combination of others there (e.g. a joint offset about the axis the target sits on) is
     // held before the solver can wander along it
-    let mut r0 = vec![0.0; problem.residual_count()];
-    let mut j0 = DMatrix::zeros(problem.residual_count(), problem.parameter_count());
-    problem.residuals_and_jacobian(&x0, &mut r0, &mut j0).map_err(|e| FitError::Registration(format!("the model cannot be evaluated at the start: {}", e.0)))?;
     let free_idx: Vec<usize> = (0..free.len()).filter(|&k| free[k]).collect();
     let free_labels: Vec<&str> = free_idx.iter().map(|&k| labels[k]).collect();
     let declared_identifiability = Identifiability::analyze(&j0.select_columns(&free_idx), &free_labels, Some(options.rcond))?;
@@ -317,7 +320,7 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
         solution = two_stage(&free)?;
         identifiability = solution.identifiability(&labels, Some(options.rcond))?;
     }
-    let residuals_after = problem.raw_residuals(&solution.x)?;
+    let residuals_after = problem.unwhitened(&solution.residuals);
     let covariance = solution.covariance();
     let sigmas = solution.standard_uncertainties();
     let chi2: f64 = solution.residuals.iter().map(|r| r * r).sum();

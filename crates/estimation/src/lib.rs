@@ -47,6 +47,7 @@ pub mod instrument_readings;
 pub mod record_stream;
 pub mod records;
 pub mod recordings;
+mod record_chunks;
 pub mod recursive;
 pub mod residuals;
 pub mod signal_topics;

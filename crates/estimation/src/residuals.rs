@@ -10,15 +10,17 @@
 //! an honest measurement has unit variance. The Jacobian is the model's analytic one
 //! ([`ForwardModel::tracker_jacobian`] rows of the reported point,
 //! [`ForwardModel::probe_jacobian`], [`ForwardModel::camera_jacobian`] rows of the camera point),
-//! negated and whitened.
+//! negated and whitened. Records are evaluated in parallel chunks (crate `record_chunks`), with
+//! results identical bit for bit to a sequential pass.
 
-use std::cell::RefCell;
+use std::sync::Mutex;
 
 use metrocell_model::{ForwardModel, KinematicTruth, Workspace, CAMERA_ROWS, PROBE_ROWS, TRACKER_ROWS};
 use metrocell_physics::{PhysicsError, Signals};
 use metrocell_solver::{NotEvaluable, Problem};
 use nalgebra::{DMatrix, DMatrixView, Matrix3, Vector3};
 
+use crate::record_chunks::{self, Chunk, DisjointRows};
 use crate::records::{MeasurementRecord, RecordKind};
 
 /// Measurement records (points, probe hits, camera points) against the model.
@@ -27,12 +29,35 @@ pub struct PointResiduals<'m, 'a> {
     records: &'m [MeasurementRecord],
     /// L⁻¹ of each record's covariance.
     whitening: Vec<Matrix3<f64>>,
-    scratch: RefCell<Scratch>,
+    /// L of each record's covariance (Σ = L·Lᵀ), to turn whitened residuals back into metres.
+    colouring: Vec<Matrix3<f64>>,
+    /// The records' chunks, each with its own scratch: one per worker thread.
+    chunks: Vec<Mutex<Chunk<Scratch>>>,
 }
 
+/// What evaluating a chunk's records writes into: the signals the model fills per record, and
+/// the Jacobian buffers.
 struct Scratch {
     signals: Vec<Signals>,
     buffers: Buffers,
+    /// −L⁻¹·∂prediction/∂p of the record at hand (3 × n).
+    whitened: DMatrix<f64>,
+}
+
+/// Why a model evaluation over the records failed: the model itself (e.g. its kinematics at
+/// these parameters), or one record (its index and the error).
+#[derive(Debug)]
+pub enum EvaluationFailure {
+    Model(PhysicsError),
+    Record { index: usize, error: PhysicsError },
+}
+
+impl From<EvaluationFailure> for PhysicsError {
+    fn from(f: EvaluationFailure) -> Self {
+        match f {
+            EvaluationFailure::Model(e) | EvaluationFailure::Record { error: e, .. } => e,
+        }
+    }
 }
 
 /// A record that cannot be used: its covariance is not positive definite or not finite.
@@ -58,8 +83,9 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
             .enumerate()
             .map(|(index, r)| whitening(&r.covariance).ok_or_else(|| BadCovariance { index, point_id: r.point_id.clone() }))
             .collect::<Result<Vec<_>, _>>()?;
-        let scratch = Scratch { signals: records.iter().map(|r| r.signals.clone()).collect(), buffers: Buffers::new(model) };
-        Ok(Self { model, records, whitening, scratch: RefCell::new(scratch) })
+        let chunks = record_chunks::split(records.len(), |start, len| Scratch { signals: records[start..start + len].iter().map(|r| r.signals.clone()).collect(), buffers: Buffers::new(model), whitened: DMatrix::zeros(3, model.param_count()) });
+        let colouring = records.iter().map(|r| r.covariance.cholesky().map(|c| c.l()).unwrap_or_else(Matrix3::identity)).collect();
+        Ok(Self { model, records, whitening, colouring, chunks })
     }
 
     pub fn model(&self) -> &ForwardModel<'a> {
@@ -77,12 +103,21 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
 
     /// The predicted measurement of every record at parameters `p` (each in its record's frame), m.
     pub fn predictions(&self, p: &[f64]) -> Result<Vec<Vector3<f64>>, PhysicsError> {
-        let kin = self.model.kinematic_truth(p)?;
-        let mut scratch = self.scratch.borrow_mut();
-        let mut out = Vec::with_capacity(self.records.len());
-        for (r, s) in self.records.iter().zip(scratch.signals.iter_mut()) {
-            out.push(predict(self.model, p, &kin, r, s)?);
-        }
+        Ok(self.predictions_of_records(p)?)
+    }
+
+    /// [`Self::predictions`], naming the first record that cannot be predicted by its index.
+    pub fn predictions_of_records(&self, p: &[f64]) -> Result<Vec<Vector3<f64>>, EvaluationFailure> {
+        let kin = self.model.kinematic_truth(p).map_err(EvaluationFailure::Model)?;
+        let mut out = vec![Vector3::zeros(); self.records.len()];
+        let outs = record_chunks::shares(&self.chunks, &mut out, 1);
+        record_chunks::for_each(&self.chunks, outs, |c, out: &mut [Vector3<f64>]| {
+            for (k, (o, s)) in out.iter_mut().zip(c.scratch.signals.iter_mut()).enumerate() {
+                let i = c.start + k;
+                *o = predict(self.model, p, &kin, &self.records[i], s).map_err(|error| EvaluationFailure::Record { index: i, error })?;
+            }
+            Ok(())
+        })?;
         Ok(out)
     }
 
@@ -91,42 +126,75 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
         Ok(self.predictions(p)?.iter().zip(self.records).map(|(pred, r)| r.measured - pred).collect())
     }
 
+    /// Whitened residuals (3 per record, as [`Problem::residuals`] writes them) back in metres:
+    /// measured − predicted of each record, L·z.
+    pub fn unwhitened(&self, z: &[f64]) -> Vec<Vector3<f64>> {
+        assert_eq!(z.len(), 3 * self.records.len(), "3 whitened residuals per record");
+        self.colouring.iter().zip(z.chunks_exact(3)).map(|(l, z)| l * Vector3::new(z[0], z[1], z[2])).collect()
+    }
+
     /// The Jacobian of the predictions w.r.t. the stacked parameters (3·records × n,
     /// unwhitened, rows x y z of each record in turn) at `p`.
     pub fn prediction_jacobian(&self, p: &[f64]) -> Result<DMatrix<f64>, PhysicsError> {
-        let kin = self.model.kinematic_truth(p)?;
-        let n = self.model.param_count();
-        let mut out = DMatrix::zeros(3 * self.records.len(), n);
-        let mut scratch = self.scratch.borrow_mut();
-        let Scratch { signals, buffers } = &mut *scratch;
-        for (i, (r, s)) in self.records.iter().zip(signals.iter_mut()).enumerate() {
-            let (_, rows) = buffers.predict_with_jacobian(self.model, p, &kin, r, s)?;
-            out.rows_mut(3 * i, 3).copy_from(&rows);
-        }
+        let mut out = DMatrix::zeros(3 * self.records.len(), self.model.param_count());
+        self.evaluate_rows(p, None, &mut out)?;
         Ok(out)
     }
 
-    fn evaluate(&self, p: &[f64], residuals: &mut [f64], mut jac: Option<&mut DMatrix<f64>>) -> Result<(), NotEvaluable> {
-        let fail = |i: usize, e: PhysicsError| NotEvaluable(format!("record {i} ({}): {e}", self.records[i].point_id));
-        let kin: KinematicTruth = self.model.kinematic_truth(p).map_err(|e| NotEvaluable(e.to_string()))?;
-        let mut scratch = self.scratch.borrow_mut();
-        let Scratch { signals, buffers } = &mut *scratch;
-        for (i, (r, s)) in self.records.iter().zip(signals.iter_mut()).enumerate() {
-            let w = &self.whitening[i];
-            let predicted = match jac.as_deref_mut() {
-                Some(out) => {
-                    let (pred, rows) = buffers.predict_with_jacobian(self.model, p, &kin, r, s).map_err(|e| fail(i, e))?;
-                    // ∂r/∂p = −L⁻¹·∂prediction/∂p
-                    out.rows_mut(3 * i, 3).gemm(-1.0, w, &rows, 0.0);
-                    pred
+    /// For every record i, rows 3i..3i+3 of `jac`: without `residuals`, the prediction's
+    /// Jacobian; with them, the residuals' −L⁻¹·∂prediction/∂p, and L⁻¹·(measured − predicted)
+    /// into entries 3i..3i+3 of `residuals`.
+    fn evaluate_rows(&self, p: &[f64], residuals: Option<&mut [f64]>, jac: &mut DMatrix<f64>) -> Result<(), EvaluationFailure> {
+        let whiten = residuals.is_some();
+        let kin = self.model.kinematic_truth(p).map_err(EvaluationFailure::Model)?;
+        let n = self.model.param_count();
+        assert_eq!(jac.shape(), (3 * self.records.len(), n), "Jacobian shape");
+        let target = DisjointRows::new(jac);
+        let outs: Vec<Option<&mut [f64]>> = match residuals {
+            Some(r) => record_chunks::shares(&self.chunks, r, 3).into_iter().map(Some).collect(),
+            None => self.chunks.iter().map(|_| None).collect(),
+        };
+        record_chunks::for_each(&self.chunks, outs, |c, mut out: Option<&mut [f64]>| {
+            let Scratch { signals, buffers, whitened } = &mut c.scratch;
+            for (k, s) in signals.iter_mut().enumerate() {
+                let i = c.start + k;
+                let r = &self.records[i];
+                let (pred, rows) = buffers.predict_with_jacobian(self.model, p, &kin, r, s).map_err(|error| EvaluationFailure::Record { index: i, error })?;
+                let block = if whiten {
+                    whitened.gemm(-1.0, &self.whitening[i], &rows, 0.0);
+                    whitened.as_view()
+                } else {
+                    rows
+                };
+                // SAFETY: rows 3i..3i+3 belong to record i, which only this chunk evaluates
+                unsafe { target.set_rows(3 * i, &block) };
+                if let Some(out) = out.as_deref_mut() {
+                    let z = self.whitening[i] * (r.measured - pred);
+                    out[3 * k..3 * k + 3].copy_from_slice(z.as_slice());
                 }
-                None => predict(self.model, p, &kin, r, s).map_err(|e| fail(i, e))?,
-            };
-            let z = w * (r.measured - predicted);
-            if !z.iter().all(|v| v.is_finite()) {
-                return Err(NotEvaluable(format!("record {i} ({}): residual not finite", r.point_id)));
             }
-            residuals[3 * i..3 * i + 3].copy_from_slice(z.as_slice());
+            Ok(())
+        })
+    }
+
+    fn evaluate(&self, p: &[f64], residuals: &mut [f64], jac: Option<&mut DMatrix<f64>>) -> Result<(), NotEvaluable> {
+        let fail = |f: EvaluationFailure| match f {
+            EvaluationFailure::Model(e) => NotEvaluable(e.to_string()),
+            EvaluationFailure::Record { index, error } => NotEvaluable(format!("record {index} ({}): {error}", self.records[index].point_id)),
+        };
+        match jac {
+            // ∂r/∂p = −L⁻¹·∂prediction/∂p
+            Some(j) => self.evaluate_rows(p, Some(&mut *residuals), j).map_err(fail)?,
+            None => {
+                let predicted = self.predictions_of_records(p).map_err(fail)?;
+                for (i, (r, pred)) in self.records.iter().zip(&predicted).enumerate() {
+                    let z = self.whitening[i] * (r.measured - pred);
+                    residuals[3 * i..3 * i + 3].copy_from_slice(z.as_slice());
+                }
+            }
+        }
+        if let Some(i) = residuals.iter().position(|v| !v.is_finite()) {
+            return Err(NotEvaluable(format!("record {} ({}): residual not finite", i / 3, self.records[i / 3].point_id)));
         }
         Ok(())
     }

@@ -146,28 +146,13 @@ pub trait PhysicsTerm: TermClone + std::fmt::Debug + Send + Sync {
     }
 }
 
-/// Check the parameter count (used by every term at the top of predict/jacobian).
-pub(crate) fn check_len(label: &str, p: &[f64], expected: usize) -> Result<(), PhysicsError> {
+/// Check the parameter count (used by every term at the top of predict/jacobian); the term's
+/// label is formatted only on error.
+pub(crate) fn check_len(term: &(impl crate::signals::TermLabel + ?Sized), p: &[f64], expected: usize) -> Result<(), PhysicsError> {
     if p.len() != expected {
-        return Err(PhysicsError::ParameterCount { term: label.to_string(), expected, got: p.len() });
+        return Err(PhysicsError::ParameterCount { term: term.term_label(), expected, got: p.len() });
     }
     Ok(())
-}
-
-/// [`check_len`] that builds the label only on error (hot paths).
-pub(crate) fn check_len_with(label: impl Fn() -> String, p: &[f64], expected: usize) -> Result<(), PhysicsError> {
-    if p.len() != expected {
-        return check_len(&label(), p, expected);
-    }
-    Ok(())
-}
-
-/// The commanded position of axis `a`, building the label only on error (hot paths).
-pub(crate) fn position_with(s: &Signals, label: impl Fn() -> String, a: crate::signals::Axis) -> Result<f64, PhysicsError> {
-    match s.axis_position[a.index()] {
-        Some(q) => Ok(q),
-        None => s.position(&label(), a),
-    }
 }
 
 /// Shorthand: a displacement prediction.

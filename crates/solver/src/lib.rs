@@ -38,7 +38,7 @@ mod solution;
 
 pub use error::{NotEvaluable, SolverError};
 pub use identifiability::{Identifiability, NullDirection};
-pub use levenberg_marquardt::solve;
+pub use levenberg_marquardt::{solve, solve_from, Evaluated};
 pub use loss::Loss;
 pub use monte_carlo::{monte_carlo, MonteCarlo, Noise};
 pub use options::{NullSpace, Options, Prior};

@@ -20,7 +20,7 @@ use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{Axis, SignalKind, Signals};
-use crate::term::{check_len, check_len_with, displacement, position_with, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
 
 #[derive(Debug, Clone)]
 pub struct Angular {
@@ -43,10 +43,10 @@ impl Angular {
     }
 
     fn lever(&self, s: &Signals) -> Result<(f64, Vector3<f64>), PhysicsError> {
-        let q = position_with(s, || self.label(), self.axis)?;
+        let q = s.position(self, self.axis)?;
         let mut l = self.abbe_offset;
         for a in &self.lever_axes {
-            l += a.unit() * position_with(s, || self.label(), *a)?;
+            l += a.unit() * s.position(self, *a)?;
         }
         Ok((q, self.about.unit().cross(&l)))
     }
@@ -75,12 +75,12 @@ impl PhysicsTerm for Angular {
         v
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
-        check_len(&self.label(), p, self.series.len())?;
+        check_len(self, p, self.series.len())?;
         let (q, arm) = self.lever(s)?;
         Ok(displacement(Frame::Machine, arm * self.series.eval(p, q)))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        check_len(&self.label(), p, self.series.len())?;
+        check_len(self, p, self.series.len())?;
         let (q, arm) = self.lever(s)?;
         let mut j = DMatrix::zeros(3, p.len());
         for (i, b) in self.series.basis_values(q).into_iter().enumerate() {
@@ -89,7 +89,7 @@ impl PhysicsTerm for Angular {
         Ok(j)
     }
     fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
-        check_len_with(|| self.label(), p, self.series.len())?;
+        check_len(self, p, self.series.len())?;
         let (q, arm) = self.lever(s)?;
         let v = arm * self.series.eval(p, q);
         value[..3].copy_from_slice(v.as_slice());

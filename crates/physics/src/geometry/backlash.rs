@@ -43,13 +43,13 @@ impl PhysicsTerm for Backlash {
         vec![SignalKind::ApproachDirection(self.axis)]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
-        check_len(&self.label(), p, 1)?;
-        let dir = s.approach(&self.label(), self.axis)?;
+        check_len(self, p, 1)?;
+        let dir = s.approach(self, self.axis)?;
         Ok(displacement(Frame::Machine, self.axis.unit() * (-0.5 * p[0] * dir)))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        check_len(&self.label(), p, 1)?;
-        let dir = s.approach(&self.label(), self.axis)?;
+        check_len(self, p, 1)?;
+        let dir = s.approach(self, self.axis)?;
         let mut j = DMatrix::zeros(3, 1);
         j[(self.axis.index(), 0)] = -0.5 * dir;
         Ok(j)

@@ -45,14 +45,14 @@ impl PhysicsTerm for FrameMisalignment {
         vec![SignalKind::WorkpiecePoint]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
-        check_len(&self.label(), p, 6)?;
-        let r = s.workpiece(&self.label())? - self.origin;
+        check_len(self, p, 6)?;
+        let r = s.workpiece(self)? - self.origin;
         let w = Vector3::new(p[0], p[1], p[2]);
         Ok(displacement(Frame::Workpiece, w.cross(&r) + Vector3::new(p[3], p[4], p[5])))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        check_len(&self.label(), p, 6)?;
-        let r = s.workpiece(&self.label())? - self.origin;
+        check_len(self, p, 6)?;
+        let r = s.workpiece(self)? - self.origin;
         let mut j = DMatrix::zeros(3, 6);
         // ∂(ω × r)/∂ω = −[r]×
         let neg_skew = -r.cross_matrix();

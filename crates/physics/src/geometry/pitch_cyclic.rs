@@ -66,14 +66,14 @@ impl PhysicsTerm for PitchCyclic {
         vec![SignalKind::AxisPosition(self.axis)]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
-        check_len(&self.label(), p, 2 * self.harmonics)?;
-        let q = s.position(&self.label(), self.axis)?;
+        check_len(self, p, 2 * self.harmonics)?;
+        let q = s.position(self, self.axis)?;
         let v: f64 = self.row(q).iter().zip(p).map(|(a, b)| a * b).sum();
         Ok(displacement(Frame::Machine, self.axis.unit() * v))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        check_len(&self.label(), p, 2 * self.harmonics)?;
-        let q = s.position(&self.label(), self.axis)?;
+        check_len(self, p, 2 * self.harmonics)?;
+        let q = s.position(self, self.axis)?;
         let mut j = DMatrix::zeros(3, p.len());
         for (i, r) in self.row(q).into_iter().enumerate() {
             j[(self.axis.index(), i)] = r;

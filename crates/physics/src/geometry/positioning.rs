@@ -12,7 +12,7 @@ use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{Axis, SignalKind, Signals};
-use crate::term::{check_len, check_len_with, displacement, position_with, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
 
 #[derive(Debug, Clone)]
 pub struct Positioning {
@@ -59,13 +59,13 @@ impl PhysicsTerm for Positioning {
         vec![SignalKind::AxisPosition(self.axis)]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
-        check_len(&self.label(), p, self.series.len())?;
-        let q = s.position(&self.label(), self.axis)?;
+        check_len(self, p, self.series.len())?;
+        let q = s.position(self, self.axis)?;
         Ok(displacement(Frame::Machine, self.axis.unit() * self.series.eval(p, q)))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        check_len(&self.label(), p, self.series.len())?;
-        let q = s.position(&self.label(), self.axis)?;
+        check_len(self, p, self.series.len())?;
+        let q = s.position(self, self.axis)?;
         let mut j = DMatrix::zeros(3, p.len());
         for (i, b) in self.series.basis_values(q).into_iter().enumerate() {
             j[(self.axis.index(), i)] = b;
@@ -73,8 +73,8 @@ impl PhysicsTerm for Positioning {
         Ok(j)
     }
     fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
-        check_len_with(|| self.label(), p, self.series.len())?;
-        let q = position_with(s, || self.label(), self.axis)?;
+        check_len(self, p, self.series.len())?;
+        let q = s.position(self, self.axis)?;
         series_along_into(&self.series, self.axis, p, q, value, jac);
         Ok(())
     }

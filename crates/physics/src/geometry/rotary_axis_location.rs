@@ -75,10 +75,9 @@ impl RotaryAxisLocation {
 
     /// The columns −∂(δW·p)/∂θ (3 × 10) at the instant `s`.
     fn columns(&self, s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        let label = self.label();
-        let t = s.machine(&label)?;
-        let b = s.rotary(&label, RotaryAxis::B)?;
-        let c = s.rotary(&label, RotaryAxis::C)?;
+        let t = s.machine(self)?;
+        let b = s.rotary(self, RotaryAxis::B)?;
+        let c = s.rotary(self, RotaryAxis::C)?;
         let (ry, rz) = (rot_y(b), rot_z(c));
         // nominal workpiece point p = W⁻¹t, and the points each rotary factor acts on
         let q_c = rz.transpose() * (ry.transpose() * (t - self.b_pivot) - self.c_offset);
@@ -121,13 +120,13 @@ impl PhysicsTerm for RotaryAxisLocation {
         vec![SignalKind::MachinePoint, SignalKind::RotaryPosition(RotaryAxis::B), SignalKind::RotaryPosition(RotaryAxis::C)]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
-        check_len(&self.label(), p, 10)?;
+        check_len(self, p, 10)?;
         let j = self.columns(s)?;
         let d = &j * nalgebra::DVector::from_column_slice(p);
         Ok(displacement(Frame::Machine, Vector3::new(d[0], d[1], d[2])))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        check_len(&self.label(), p, 10)?;
+        check_len(self, p, 10)?;
         self.columns(s)
     }
 }

@@ -12,7 +12,7 @@ use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{Axis, SignalKind, Signals};
-use crate::term::{check_len, check_len_with, displacement, position_with, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
 
 #[derive(Debug, Clone)]
 pub struct Squareness {
@@ -34,7 +34,7 @@ impl Squareness {
         Ok(Self { affected, driver })
     }
     fn arm(&self, s: &Signals) -> Result<Vector3<f64>, PhysicsError> {
-        Ok(-self.affected.unit() * position_with(s, || self.label(), self.driver)?)
+        Ok(-self.affected.unit() * s.position(self, self.driver)?)
     }
 }
 
@@ -55,15 +55,15 @@ impl PhysicsTerm for Squareness {
         vec![SignalKind::AxisPosition(self.driver)]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
-        check_len(&self.label(), p, 1)?;
+        check_len(self, p, 1)?;
         Ok(displacement(Frame::Machine, self.arm(s)? * p[0]))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        check_len(&self.label(), p, 1)?;
+        check_len(self, p, 1)?;
         Ok(DMatrix::from_column_slice(3, 1, self.arm(s)?.as_slice()))
     }
     fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
-        check_len_with(|| self.label(), p, 1)?;
+        check_len(self, p, 1)?;
         let arm = self.arm(s)?;
         value[..3].copy_from_slice((arm * p[0]).as_slice());
         jac.column_mut(0).copy_from(&arm);

@@ -43,11 +43,11 @@ impl PhysicsTerm for CameraScale {
         vec![SignalKind::CameraPoint]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
-        check_len(&self.label(), p, 1)?;
-        Ok(displacement(Frame::Camera, s.camera(&self.label())? * p[0]))
+        check_len(self, p, 1)?;
+        Ok(displacement(Frame::Camera, s.camera(self)? * p[0]))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        check_len(&self.label(), p, 1)?;
-        Ok(DMatrix::from_column_slice(3, 1, s.camera(&self.label())?.as_slice()))
+        check_len(self, p, 1)?;
+        Ok(DMatrix::from_column_slice(3, 1, s.camera(self)?.as_slice()))
     }
 }

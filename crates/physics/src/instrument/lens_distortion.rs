@@ -41,7 +41,7 @@ impl LensDistortion {
         Ok(Self { instrument: super::instance(o)? })
     }
     fn jac(&self, s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        let q = s.image(&self.label())?;
+        let q = s.image(self)?;
         let (x, y) = (q.x, q.y);
         let r2 = x * x + y * y;
         // columns: k1, k2, k3, p1, p2
@@ -78,12 +78,12 @@ impl PhysicsTerm for LensDistortion {
         vec![SignalKind::ImagePoint]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
-        check_len(&self.label(), p, 5)?;
+        check_len(self, p, 5)?;
         let v = self.jac(s)? * DVector::from_column_slice(p);
         Ok(Prediction { kind: self.effect(), value: v })
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        check_len(&self.label(), p, 5)?;
+        check_len(self, p, 5)?;
         self.jac(s)
     }
 }

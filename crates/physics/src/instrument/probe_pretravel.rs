@@ -37,7 +37,7 @@ impl ProbePretravel {
     }
     /// ∂pt/∂(p0, a, b, pz) and the direction.
     fn row(&self, s: &Signals) -> Result<([f64; 4], Vector3<f64>), PhysicsError> {
-        let u = s.probe_dir(&self.label())?;
+        let u = s.probe_dir(self)?;
         let phi = u.y.atan2(u.x);
         let h = 1.0 - u.z * u.z;
         let n = self.lobes as f64;
@@ -70,13 +70,13 @@ impl PhysicsTerm for ProbePretravel {
         vec![SignalKind::ProbeDirection]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
-        check_len(&self.label(), p, 4)?;
+        check_len(self, p, 4)?;
         let (r, u) = self.row(s)?;
         let pt: f64 = r.iter().zip(p).map(|(a, b)| a * b).sum();
         Ok(displacement(Frame::Probe, u * pt))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        check_len(&self.label(), p, 4)?;
+        check_len(self, p, 4)?;
         let (r, u) = self.row(s)?;
         let mut j = DMatrix::zeros(3, 4);
         for (k, v) in r.iter().enumerate() {

@@ -15,7 +15,7 @@ use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
-use crate::term::{check_len, check_len_with, EffectKind, ParamSpec, PhysicsTerm, Prediction};
+use crate::term::{check_len, EffectKind, ParamSpec, PhysicsTerm, Prediction};
 
 /// Range change and its derivatives w.r.t. (ΔT, Δp) at range ρ and station air (t, p, h).
 fn range_change(rho: f64, t: f64, pa: f64, h: f64, dh: f64, p: &[f64]) -> (f64, [f64; 2]) {
@@ -68,24 +68,24 @@ impl PhysicsTerm for Refraction {
         vec![SignalKind::TrackerRange, SignalKind::AirTemperature, SignalKind::AirPressure, SignalKind::AirHumidity]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
-        check_len(&self.label(), p, 2)?;
-        let rho = s.range(&self.label())?;
-        let (t, pa, h) = s.air(&self.label())?;
+        check_len(self, p, 2)?;
+        let rho = s.range(self)?;
+        let (t, pa, h) = s.air(self)?;
         Ok(Prediction { kind: self.effect(), value: DVector::from_element(1, range_change(rho, t, pa, h, self.path_humidity_offset, p).0) })
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        check_len(&self.label(), p, 2)?;
-        let rho = s.range(&self.label())?;
-        let (t, pa, h) = s.air(&self.label())?;
+        check_len(self, p, 2)?;
+        let rho = s.range(self)?;
+        let (t, pa, h) = s.air(self)?;
         Ok(DMatrix::from_row_slice(1, 2, &range_change(rho, t, pa, h, self.path_humidity_offset, p).1))
     }
     fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
-        check_len_with(|| self.label(), p, 2)?;
+        check_len(self, p, 2)?;
         let (rho, t, pa, h) = match (s.tracker_range, s.air_temperature, s.air_pressure, s.air_humidity) {
             (Some(rho), Some(t), Some(pa), Some(h)) => (rho, t, pa, h),
             _ => {
-                let (t, pa, h) = s.air(&self.label())?;
-                (s.range(&self.label())?, t, pa, h)
+                let (t, pa, h) = s.air(self)?;
+                (s.range(self)?, t, pa, h)
             }
         };
         let (v, j) = range_change(rho, t, pa, h, self.path_humidity_offset, p);

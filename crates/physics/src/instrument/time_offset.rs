@@ -37,11 +37,11 @@ impl PhysicsTerm for TimeOffset {
         Axis::ALL.iter().map(|a| SignalKind::AxisVelocity(*a)).collect()
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
-        check_len(&self.label(), p, 1)?;
-        Ok(displacement(Frame::Machine, -s.velocity(&self.label())? * p[0]))
+        check_len(self, p, 1)?;
+        Ok(displacement(Frame::Machine, -s.velocity(self)? * p[0]))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        check_len(&self.label(), p, 1)?;
-        Ok(DMatrix::from_column_slice(3, 1, (-s.velocity(&self.label())?).as_slice()))
+        check_len(self, p, 1)?;
+        Ok(DMatrix::from_column_slice(3, 1, (-s.velocity(self)?).as_slice()))
     }
 }

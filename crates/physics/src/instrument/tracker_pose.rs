@@ -14,7 +14,7 @@ use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
-use crate::term::{check_len, check_len_with, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term::{check_len, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
 
 fn rx(a: f64) -> Matrix3<f64> {
     Matrix3::new(1.0, 0.0, 0.0, 0.0, a.cos(), -a.sin(), 0.0, a.sin(), a.cos())
@@ -80,14 +80,14 @@ impl PhysicsTerm for TrackerPose {
         vec![SignalKind::TargetPoint]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
-        check_len(&self.label(), p, 6)?;
-        let d = s.target(&self.label())? - Vector3::new(p[0], p[1], p[2]);
+        check_len(self, p, 6)?;
+        let d = s.target(self)? - Vector3::new(p[0], p[1], p[2]);
         let x = euler_xyz(p[3], p[4], p[5]).transpose() * d;
         Ok(Prediction { kind: self.effect(), value: DVector::from_column_slice(x.as_slice()) })
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        check_len(&self.label(), p, 6)?;
-        let d = s.target(&self.label())? - Vector3::new(p[0], p[1], p[2]);
+        check_len(self, p, 6)?;
+        let d = s.target(self)? - Vector3::new(p[0], p[1], p[2]);
         let (a, b, c) = (p[3], p[4], p[5]);
         let r = euler_xyz(a, b, c);
         let mut j = DMatrix::zeros(3, 6);
@@ -99,10 +99,10 @@ impl PhysicsTerm for TrackerPose {
         Ok(j)
     }
     fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
-        check_len_with(|| self.label(), p, 6)?;
+        check_len(self, p, 6)?;
         let point = match s.target_point {
             Some(v) => v,
-            None => s.target(&self.label())?,
+            None => s.target(self)?,
         };
         let d = point - Vector3::new(p[0], p[1], p[2]);
         let (a, b, c) = (p[3], p[4], p[5]);

@@ -13,7 +13,7 @@ use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
-use crate::term::{check_len, check_len_with, EffectKind, ParamSpec, PhysicsTerm, Prediction};
+use crate::term::{check_len, EffectKind, ParamSpec, PhysicsTerm, Prediction};
 
 /// A + B·(1 − e^(−t/τ)).
 pub fn warmup_drift(a: f64, b: f64, tau: f64, t: f64) -> f64 {
@@ -62,21 +62,21 @@ impl PhysicsTerm for TrackerWarmup {
         vec![SignalKind::TimeSincePowerOn]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
-        check_len(&self.label(), p, 3)?;
-        let t = s.time_on(&self.label())?;
+        check_len(self, p, 3)?;
+        let t = s.time_on(self)?;
         Ok(Prediction { kind: self.effect(), value: DVector::from_element(1, warmup_drift(p[0], p[1], p[2], t)) })
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        check_len(&self.label(), p, 3)?;
-        let t = s.time_on(&self.label())?;
+        check_len(self, p, 3)?;
+        let t = s.time_on(self)?;
         let e = (-t / p[2]).exp();
         Ok(DMatrix::from_row_slice(1, 3, &[1.0, 1.0 - e, -p[1] * t / (p[2] * p[2]) * e]))
     }
     fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
-        check_len_with(|| self.label(), p, 3)?;
+        check_len(self, p, 3)?;
         let t = match s.time_since_power_on {
             Some(t) => t,
-            None => s.time_on(&self.label())?,
+            None => s.time_on(self)?,
         };
         value[0] = warmup_drift(p[0], p[1], p[2], t);
         let e = (-t / p[2]).exp();

@@ -69,13 +69,13 @@ impl PhysicsTerm for Turbulence {
         vec![SignalKind::TrackerRange]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
-        check_len(&self.label(), p, 3)?;
-        let rho = s.range(&self.label())?;
+        check_len(self, p, 3)?;
+        let rho = s.range(self)?;
         Ok(Prediction { kind: self.effect(), value: DVector::from_element(1, range_scatter(p[0], p[1], p[2], rho)) })
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        check_len(&self.label(), p, 3)?;
-        let rho = s.range(&self.label())?;
+        check_len(self, p, 3)?;
+        let rho = s.range(self)?;
         let sig = range_scatter(p[0], p[1], p[2], rho);
         if !(sig > 0.0) {
             return Err(PhysicsError::InvalidInput { what: self.label(), reason: "σ = 0: Jacobian undefined (give base_sigma > 0)".into() });

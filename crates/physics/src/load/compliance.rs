@@ -27,9 +27,8 @@ impl Compliance {
         Ok(Self { extension_axis: o.axis("extension_axis", None)?, extension_origin: o.quantity("extension_origin", "m", Some(0.0))? })
     }
     fn row(&self, s: &Signals) -> Result<([f64; 3], nalgebra::Vector3<f64>), PhysicsError> {
-        let label = self.label();
-        let e = s.position(&label, self.extension_axis)? - self.extension_origin;
-        Ok(([1.0, e * e, e * e * e], s.load(&label)?))
+        let e = s.position(self, self.extension_axis)? - self.extension_origin;
+        Ok(([1.0, e * e, e * e * e], s.load(self)?))
     }
 }
 
@@ -54,12 +53,12 @@ impl PhysicsTerm for Compliance {
         vec![SignalKind::AxisPosition(self.extension_axis), SignalKind::LoadForce]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
-        check_len(&self.label(), p, 3)?;
+        check_len(self, p, 3)?;
         let (r, f) = self.row(s)?;
         Ok(displacement(Frame::Machine, f * (r[0] * p[0] + r[1] * p[1] + r[2] * p[2])))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        check_len(&self.label(), p, 3)?;
+        check_len(self, p, 3)?;
         let (r, f) = self.row(s)?;
         let mut j = DMatrix::zeros(3, 3);
         for (k, rk) in r.iter().enumerate() {

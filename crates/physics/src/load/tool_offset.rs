@@ -40,11 +40,11 @@ impl PhysicsTerm for ToolOffset {
         vec![]
     }
     fn predict(&self, p: &[f64], _s: &Signals) -> Result<Prediction, PhysicsError> {
-        check_len(&self.label(), p, 3)?;
+        check_len(self, p, 3)?;
         Ok(displacement(Frame::Tool, Vector3::new(p[0], p[1], p[2])))
     }
     fn jacobian(&self, p: &[f64], _s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        check_len(&self.label(), p, 3)?;
+        check_len(self, p, 3)?;
         Ok(DMatrix::identity(3, 3))
     }
 }

@@ -46,12 +46,11 @@ impl ThermalGrowth {
     }
     /// (T_f − T_ref, ∂T_f/∂τ)
     fn state(&self, p: &[f64], s: &Signals) -> Result<(f64, f64), PhysicsError> {
-        let label = self.label();
         if self.lag {
-            let (tf, d) = s.lagged_temperature(&label, &self.sensor, p[1])?;
+            let (tf, d) = s.lagged_temperature(self, &self.sensor, p[1])?;
             Ok((tf - self.reference_temperature, d))
         } else {
-            Ok((s.temperature(&label, &self.sensor)? - self.reference_temperature, 0.0))
+            Ok((s.temperature(self, &self.sensor)? - self.reference_temperature, 0.0))
         }
     }
 }
@@ -81,12 +80,12 @@ impl PhysicsTerm for ThermalGrowth {
         }
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
-        check_len(&self.label(), p, self.n_params())?;
+        check_len(self, p, self.n_params())?;
         let (dt, _) = self.state(p, s)?;
         Ok(displacement(Frame::Machine, self.direction * (p[0] * dt)))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        check_len(&self.label(), p, self.n_params())?;
+        check_len(self, p, self.n_params())?;
         let (dt, dtau) = self.state(p, s)?;
         let mut j = DMatrix::zeros(3, self.n_params());
         j.set_column(0, &(self.direction * dt));

@@ -84,9 +84,8 @@ impl ThermalScale {
     }
     /// α-free part: q·(T(q) − T_ref).
     fn lever(&self, s: &Signals) -> Result<f64, PhysicsError> {
-        let label = self.label();
-        let q = s.position(&label, self.axis)?;
-        let temps = self.sensors.iter().map(|x| Ok((x.position, s.temperature(&label, &x.name)?))).collect::<Result<Vec<_>, PhysicsError>>()?;
+        let q = s.position(self, self.axis)?;
+        let temps = self.sensors.iter().map(|x| Ok((x.position, s.temperature(self, &x.name)?))).collect::<Result<Vec<_>, PhysicsError>>()?;
         Ok(q * (interpolate_temperature(&temps, q) - self.reference_temperature))
     }
 }
@@ -110,11 +109,11 @@ impl PhysicsTerm for ThermalScale {
         v
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
-        check_len(&self.label(), p, 1)?;
+        check_len(self, p, 1)?;
         Ok(displacement(Frame::Machine, self.axis.unit() * (p[0] * self.lever(s)?)))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        check_len(&self.label(), p, 1)?;
+        check_len(self, p, 1)?;
         Ok(DMatrix::from_column_slice(3, 1, (self.axis.unit() * self.lever(s)?).as_slice()))
     }
 }

@@ -38,8 +38,7 @@ impl WorkpieceExpansion {
         })
     }
     fn lever(&self, s: &Signals) -> Result<Vector3<f64>, PhysicsError> {
-        let label = self.label();
-        Ok((s.workpiece(&label)? - self.clamp) * (s.temperature(&label, &self.sensor)? - self.reference_temperature))
+        Ok((s.workpiece(self)? - self.clamp) * (s.temperature(self, &self.sensor)? - self.reference_temperature))
     }
 }
 
@@ -60,11 +59,11 @@ impl PhysicsTerm for WorkpieceExpansion {
         vec![SignalKind::WorkpiecePoint, SignalKind::Temperature(self.sensor.clone())]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
-        check_len(&self.label(), p, 1)?;
+        check_len(self, p, 1)?;
         Ok(displacement(Frame::Workpiece, self.lever(s)? * p[0]))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
-        check_len(&self.label(), p, 1)?;
+        check_len(self, p, 1)?;
         Ok(DMatrix::from_column_slice(3, 1, self.lever(s)?.as_slice()))
     }
 }

@@ -8,6 +8,8 @@
 
 use std::sync::Mutex;
 
+use nalgebra::Vector3;
+
 /// Fewest records worth a thread of their own (spawning one costs ~20 µs, a record ~3 µs).
 const MIN_RECORDS_PER_WORKER: usize = 1000;
 
@@ -94,17 +96,21 @@ impl DisjointRows {
         DisjointRows { ptr: m.as_mut_ptr(), rows: m.nrows(), cols: m.ncols() }
     }
 
-    /// Writes the r × n `block` into rows `row0..row0 + r`.
+    /// Writes `map(column)` of each column of the 3 × n `block` into rows `row0..row0 + 3`.
     ///
     /// # Safety
     /// No other thread reads or writes those rows while the matrix is shared this way.
-    pub unsafe fn set_rows(&self, row0: usize, block: &nalgebra::DMatrixView<'_, f64>) {
-        let (r, n) = block.shape();
-        assert!(row0 + r <= self.rows && n == self.cols, "{r} × {n} block at row {row0} outside {} × {}", self.rows, self.cols);
+    pub unsafe fn set_rows_mapped(&self, row0: usize, block: &nalgebra::DMatrixView<'_, f64>, map: impl Fn(Vector3<f64>) -> Vector3<f64>) {
+        let n = block.ncols();
+        assert!(block.nrows() == 3 && row0 + 3 <= self.rows && n == self.cols, "3 × {n} block at row {row0} outside {} × {}", self.rows, self.cols);
         for col in 0..n {
-            for k in 0..r {
-                // SAFETY: in bounds (checked above); the rows are this caller's alone (the contract)
-                unsafe { *self.ptr.add(row0 + k + col * self.rows) = block[(k, col)] };
+            let v = map(Vector3::new(block[(0, col)], block[(1, col)], block[(2, col)]));
+            // SAFETY: in bounds (checked above); the rows are this caller's alone (the contract)
+            unsafe {
+                let at = self.ptr.add(row0 + col * self.rows);
+                *at = v.x;
+                *at.add(1) = v.y;
+                *at.add(2) = v.z;
             }
         }
     }

@@ -40,8 +40,6 @@ pub struct PointResiduals<'m, 'a> {
 struct Scratch {
     signals: Vec<Signals>,
     buffers: Buffers,
-    /// −L⁻¹·∂prediction/∂p of the record at hand (3 × n).
-    whitened: DMatrix<f64>,
 }
 
 /// Why a model evaluation over the records failed: the model itself (e.g. its kinematics at
@@ -83,7 +81,7 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
             .enumerate()
             .map(|(index, r)| whitening(&r.covariance).ok_or_else(|| BadCovariance { index, point_id: r.point_id.clone() }))
             .collect::<Result<Vec<_>, _>>()?;
-        let chunks = record_chunks::split(records.len(), |start, len| Scratch { signals: records[start..start + len].iter().map(|r| r.signals.clone()).collect(), buffers: Buffers::new(model), whitened: DMatrix::zeros(3, model.param_count()) });
+        let chunks = record_chunks::split(records.len(), |start, len| Scratch { signals: records[start..start + len].iter().map(|r| r.signals.clone()).collect(), buffers: Buffers::new(model) });
         let colouring = records.iter().map(|r| r.covariance.cholesky().map(|c| c.l()).unwrap_or_else(Matrix3::identity)).collect();
         Ok(Self { model, records, whitening, colouring, chunks })
     }
@@ -155,19 +153,16 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
             None => self.chunks.iter().map(|_| None).collect(),
         };
         record_chunks::for_each(&self.chunks, outs, |c, mut out: Option<&mut [f64]>| {
-            let Scratch { signals, buffers, whitened } = &mut c.scratch;
+            let Scratch { signals, buffers } = &mut c.scratch;
             for (k, s) in signals.iter_mut().enumerate() {
                 let i = c.start + k;
                 let r = &self.records[i];
                 let (pred, rows) = buffers.predict_with_jacobian(self.model, p, &kin, r, s).map_err(|error| EvaluationFailure::Record { index: i, error })?;
-                let block = if whiten {
-                    whitened.gemm(-1.0, &self.whitening[i], &rows, 0.0);
-                    whitened.as_view()
-                } else {
-                    rows
-                };
+                // ∂r/∂p = −L⁻¹·∂prediction/∂p, column by column in fixed-size arithmetic,
+                // straight into the rows of record i (the identity when not whitening)
+                let w = if whiten { -self.whitening[i] } else { Matrix3::identity() };
                 // SAFETY: rows 3i..3i+3 belong to record i, which only this chunk evaluates
-                unsafe { target.set_rows(3 * i, &block) };
+                unsafe { target.set_rows_mapped(3 * i, &rows, |column| w * column) };
                 if let Some(out) = out.as_deref_mut() {
                     let z = self.whitening[i] * (r.measured - pred);
                     out[3 * k..3 * k + 3].copy_from_slice(z.as_slice());

@@ -7,9 +7,10 @@
 //! squares, projected box bounds, Moré's column scaling, a fixed-parameter mask, Gaussian priors
 //! as extra residuals, and a truncated-SVD step that stays on the identifiable subspace
 //! ([`NullSpace::Truncated`]). The normal equations JᵀWJ are formed from the column-major
-//! Jacobian by contiguous dot products (no Jᵀ copy, no m × m weight matrix); at 70 parameters the
-//! n × n solve is negligible next to forming them, which is why a dense method is used rather than
-//! a QR or SVD of the full Jacobian per iteration (scipy's "trf").
+//! Jacobian by a blocked matrix product read in place (`matrixmultiply`; no Jᵀ copy, no m × m
+//! weight matrix); at 70 parameters the n × n solve is negligible next to forming them, which is
+//! why a dense method is used rather than a QR or SVD of the full Jacobian per iteration (scipy's
+//! "trf"). [`solve_from`] starts from residuals and a Jacobian the caller has already evaluated.
 //!
 //! **Why not a crate.** `levenberg-marquardt` (nalgebra-based, a MINPACK port) has scaling and
 //! termination reasons but no weights, robust losses, bounds, priors, fixed parameters or

@@ -5,7 +5,7 @@
 //! Frame convention (stated once): a [`RecordKind::Point`]'s `measured` is in the frame of the
 //! [`RecordSet`]. When that is the instrument's own frame (a tracker frame), the instrument pose
 //! is a nuisance parameter of the fit (`tracker_pose.*`, the workpiece → instrument transform of
-//! crates/model `instrument_pose`). When the points are already in the machine (workpiece) frame,
+//! crates/kinematics `instrument_pose`). When the points are already in the machine (workpiece) frame,
 //! the pose is the identity and fixed. The other kinds are in the frame their reading is in,
 //! whatever the set's frame: a probe hit's stylus-centre reading in the workpiece (machine) frame,
 //! a camera point in its camera's optical frame.

@@ -11,7 +11,8 @@
 //! `XFYZ` case gives exactly `X = (−x + δx(x), δy(x), δz(x))`, `Y = (δx(y) − y s_xy, y + δy(y), δz(y))`,
 //! `Z = (δx(z) − z s_xz, δy(z) − z s_yz, z + δz(z))`). Rotation errors: `R_k = I + [ε(k)]×` (P5 eq. 6), inverted
 //! exactly. Thermal scale (P5 eq. 7 `x·α_x·(T − 20)`) enters the caller's positioning value `δk(k)`.
-//! Tracker pose: `p_wp = R_LT · p_LT + T_LT` (tracker frame → workpiece/table frame).
+//! Tracker pose: `p_wp = R_LT · p_LT + T_LT` (tracker frame → workpiece/table frame), the project's one
+//! [`InstrumentPose`].
 //!
 //! **Version A** (thesis Ch. 2 eqs 2.1–2.7, `XFYZ`, workpiece frame):
 //! `W = R(X)(−X + Y) + R(X)R⁻¹(Y) Z + R(X)R⁻¹(Y)R⁻¹(Z) T`, `X = (x + xTx, xTy, xTz)`,
@@ -23,7 +24,8 @@
 
 use crate::cartesian::{LinearAxis, StackingOrder};
 use crate::error::{check_finite, KinematicsError};
-use crate::transform::{euler_xyz_intrinsic, rodrigues, skew};
+use crate::instrument_pose::InstrumentPose;
+use crate::transform::skew;
 use metrocell_solver::numeric_jacobian::{central_difference, Order};
 use nalgebra::{Matrix3, Vector3};
 
@@ -50,36 +52,6 @@ pub struct MachineErrors {
     /// Indexed by [`LinearAxis::index`].
     pub axes: [AxisErrors; 3],
     pub squareness: Squareness,
-}
-
-/// Pose of the laser tracker frame in the workpiece (table) frame: `p_wp = rotation · p_LT + translation`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct TrackerPose {
-    pub rotation: Matrix3<f64>,
-    pub translation: Vector3<f64>,
-}
-
-impl TrackerPose {
-    /// From an Olinde–Rodrigues axis/angle (thesis P4 eq. 10) and translation `T_LT`.
-    pub fn from_rodrigues(axis: Vector3<f64>, angle: f64, translation: Vector3<f64>) -> Self {
-        Self {
-            rotation: rodrigues(&axis, angle),
-            translation,
-        }
-    }
-    /// From X-Y-Z Euler angles (thesis P3), taken as intrinsic `R = Rx(a)·Ry(b)·Rz(c)`, and translation.
-    pub fn from_euler_xyz(a: f64, b: f64, c: f64, translation: Vector3<f64>) -> Self {
-        Self {
-            rotation: euler_xyz_intrinsic(a, b, c),
-            translation,
-        }
-    }
-    pub fn identity() -> Self {
-        Self {
-            rotation: Matrix3::identity(),
-            translation: Vector3::zeros(),
-        }
-    }
 }
 
 /// Small-angle rotation error matrix of P5 eq. 6: `I + [ε]×`.
@@ -158,7 +130,7 @@ pub fn tracker_point(
     q: &Vector3<f64>,
     tool: &Vector3<f64>,
     errors: &MachineErrors,
-    tracker: &TrackerPose,
+    tracker: &InstrumentPose,
 ) -> Result<Vector3<f64>, KinematicsError> {
     let p = workpiece_point(order, q, tool, errors)?;
     Ok(invert(&tracker.rotation, "tracker rotation")? * (p - tracker.translation))
@@ -273,7 +245,7 @@ pub fn error_jacobian(
     q: &Vector3<f64>,
     tool: &Vector3<f64>,
     errors: &MachineErrors,
-    tracker: &TrackerPose,
+    tracker: &InstrumentPose,
 ) -> Result<nalgebra::SMatrix<f64, 3, 21>, KinematicsError> {
     let base = errors.to_vector();
     let mut failure = None;

@@ -20,9 +20,11 @@ pub mod dh;
 pub mod error;
 pub mod five_axis;
 pub mod frame_alignment;
+pub mod instrument_pose;
 pub mod serial;
 pub mod serial_ik;
 pub mod transform;
 pub mod urdf_chain;
 
 pub use error::KinematicsError;
+pub use instrument_pose::InstrumentPose;

@@ -5,7 +5,7 @@
 //! `t_a_b` map coordinates expressed in frame `b` into frame `a` (`p_a = t_a_b * p_b`).
 //! Roll–pitch–yaw follows URDF: `R = Rz(yaw) · Ry(pitch) · Rx(roll)` (fixed axes X, then Y, then Z).
 
-use nalgebra::{Isometry3, Matrix3, Rotation3, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Matrix3, Translation3, UnitQuaternion, Vector3};
 
 /// Rotation about the x axis by `angle` radians.
 pub fn rot_x(angle: f64) -> Isometry3<f64> {
@@ -51,12 +51,35 @@ pub fn rodrigues(axis: &Vector3<f64>, angle: f64) -> Matrix3<f64> {
         + (u * u.transpose()) * (1.0 - angle.cos())
         + skew(&u) * angle.sin()
 }
-/// Rotation from intrinsic X-Y-Z Euler angles: `R = Rx(a) · Ry(b) · Rz(c)`.
-pub fn euler_xyz_intrinsic(a: f64, b: f64, c: f64) -> Matrix3<f64> {
-    (Rotation3::from_axis_angle(&Vector3::x_axis(), a)
-        * Rotation3::from_axis_angle(&Vector3::y_axis(), b)
-        * Rotation3::from_axis_angle(&Vector3::z_axis(), c))
-    .into_inner()
+/// Rotation about x by `a` (rad).
+pub fn rx(a: f64) -> Matrix3<f64> {
+    Matrix3::new(1.0, 0.0, 0.0, 0.0, a.cos(), -a.sin(), 0.0, a.sin(), a.cos())
+}
+/// Rotation about y by `a` (rad).
+pub fn ry(a: f64) -> Matrix3<f64> {
+    Matrix3::new(a.cos(), 0.0, a.sin(), 0.0, 1.0, 0.0, -a.sin(), 0.0, a.cos())
+}
+/// Rotation about z by `a` (rad).
+pub fn rz(a: f64) -> Matrix3<f64> {
+    Matrix3::new(a.cos(), -a.sin(), 0.0, a.sin(), a.cos(), 0.0, 0.0, 0.0, 1.0)
+}
+/// d[`rx`]/da.
+pub fn drx(a: f64) -> Matrix3<f64> {
+    Matrix3::new(0.0, 0.0, 0.0, 0.0, -a.sin(), -a.cos(), 0.0, a.cos(), -a.sin())
+}
+/// d[`ry`]/da.
+pub fn dry(a: f64) -> Matrix3<f64> {
+    Matrix3::new(-a.sin(), 0.0, a.cos(), 0.0, 0.0, 0.0, -a.cos(), 0.0, -a.sin())
+}
+/// d[`rz`]/da.
+pub fn drz(a: f64) -> Matrix3<f64> {
+    Matrix3::new(-a.sin(), -a.cos(), 0.0, a.cos(), -a.sin(), 0.0, 0.0, 0.0, 0.0)
+}
+/// The project's one Euler-angle convention: intrinsic X-Y-Z, `R = Rx(α)·Ry(β)·Rz(δ)` (thesis P5
+/// eq. 22). Every instrument pose, the `tracker_pose` term and the exact error chain build their
+/// rotation here, so that they agree bit for bit.
+pub fn euler_xyz(alpha: f64, beta: f64, delta: f64) -> Matrix3<f64> {
+    rx(alpha) * ry(beta) * rz(delta)
 }
 
 #[cfg(test)]
@@ -68,7 +91,7 @@ mod tests {
     fn rodrigues_matches_nalgebra_axis_angle() {
         let axis = Vector3::new(0.3, -0.5, 0.8);
         let r = rodrigues(&axis, 0.7);
-        let n = Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(axis), 0.7).into_inner();
+        let n = nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(axis), 0.7).into_inner();
         assert!((r - n).amax() < 1e-15);
     }
 

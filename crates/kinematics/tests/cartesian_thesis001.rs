@@ -3,18 +3,17 @@
 
 use metrocell_kinematics::cartesian::{CartesianMachine, LinearAxis, StackingOrder};
 use metrocell_kinematics::cartesian_error_chain::*;
+use metrocell_kinematics::InstrumentPose;
 use metrocell_kinematics::KinematicsError;
 use nalgebra::Vector3;
 
 const MM: f64 = 1e-3;
 
-fn p3_tracker() -> TrackerPose {
+fn p3_tracker() -> InstrumentPose {
     // Thesis P3 tracker pose: (−863.527, 194.373, 677.782) mm, Euler XYZ (0.0339°, 0.0343°, 59.4652°).
-    TrackerPose::from_euler_xyz(
-        0.0339f64.to_radians(),
-        0.0343f64.to_radians(),
-        59.4652f64.to_radians(),
+    InstrumentPose::from_euler_xyz(
         Vector3::new(-863.527, 194.373, 677.782) * MM,
+        [0.0339f64.to_radians(), 0.0343f64.to_radians(), 59.4652f64.to_radians()],
     )
 }
 
@@ -187,7 +186,7 @@ fn error_jacobian_matches_hand_derived_first_order_terms_xfyz() {
         &q,
         &tool,
         &MachineErrors::default(),
-        &TrackerPose::identity(),
+        &InstrumentPose::identity(),
     )
     .unwrap();
     let col = |name: &str| {
@@ -228,7 +227,7 @@ fn stacking_order_changes_the_abbe_lever_of_an_angular_error() {
             &q,
             &tool,
             &MachineErrors::default(),
-            &TrackerPose::identity(),
+            &InstrumentPose::identity(),
         )
         .unwrap()
         .column(idx)

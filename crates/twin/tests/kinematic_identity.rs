@@ -4,7 +4,7 @@
 
 mod common;
 
-use metrocell_kinematics::cartesian_error_chain::{tracker_point, MachineErrors, TrackerPose};
+use metrocell_kinematics::cartesian_error_chain::{tracker_point, MachineErrors};
 use metrocell_twin::{Sample, SampleTruth, Simulation, TrackerStatus};
 
 #[test]
@@ -19,8 +19,8 @@ fn zero_errors_and_noise_give_the_nominal_point_in_the_tracker_frame() {
     t.angular_noise = Some(0.0.into());
     let cell = common::validate(&f);
     let tr = cell.tracker.clone().unwrap();
-    let e = tr.pose.euler_xyz;
-    let pose = TrackerPose::from_euler_xyz(e[0], e[1], e[2], tr.pose.translation);
+    // the twin's own pose value: the exact chain and the twin share the one pose type
+    let pose = tr.pose;
     let order = cell.machine.stacking().unwrap().clone();
     let tool = cell.machine.tool_offset;
     let sim = Simulation::new(cell, 1800.0, 5).unwrap();

@@ -1,6 +1,6 @@
 //! `tracker_pose` — 6-dof pose of a laser tracker (or any instrument) in the frame tool points
 //! are reported in (the workpiece frame; an arm's cell frame — the convention is stated once, in
-//! crates/model `instrument_pose`).
+//! crates/kinematics `instrument_pose`).
 //!
 //! X_LT = R_LTᵀ·(p − T_LT),  R_LT = Rx(α)·Ry(β)·Rz(δ)   (thesis P5 eqs 2, 21–22; Euler XYZ)
 //!
@@ -8,7 +8,7 @@
 //! (α, β, δ) the Euler angles. R_LT is orthonormal, so R_LT⁻¹ = R_LTᵀ. Effect: the point in the
 //! tracker frame, m.
 
-use nalgebra::{DMatrix, DMatrixViewMut, DVector, Matrix3, Vector3};
+use nalgebra::{DMatrix, DMatrixViewMut, DVector, Vector3};
 
 use crate::term_id::TermId;
 use crate::config::Options;
@@ -16,29 +16,10 @@ use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
 use crate::term::{check_len, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
 
-fn rx(a: f64) -> Matrix3<f64> {
-    Matrix3::new(1.0, 0.0, 0.0, 0.0, a.cos(), -a.sin(), 0.0, a.sin(), a.cos())
-}
-fn ry(a: f64) -> Matrix3<f64> {
-    Matrix3::new(a.cos(), 0.0, a.sin(), 0.0, 1.0, 0.0, -a.sin(), 0.0, a.cos())
-}
-fn rz(a: f64) -> Matrix3<f64> {
-    Matrix3::new(a.cos(), -a.sin(), 0.0, a.sin(), a.cos(), 0.0, 0.0, 0.0, 1.0)
-}
-fn drx(a: f64) -> Matrix3<f64> {
-    Matrix3::new(0.0, 0.0, 0.0, 0.0, -a.sin(), -a.cos(), 0.0, a.cos(), -a.sin())
-}
-fn dry(a: f64) -> Matrix3<f64> {
-    Matrix3::new(-a.sin(), 0.0, a.cos(), 0.0, 0.0, 0.0, -a.cos(), 0.0, -a.sin())
-}
-fn drz(a: f64) -> Matrix3<f64> {
-    Matrix3::new(-a.sin(), -a.cos(), 0.0, a.cos(), -a.sin(), 0.0, 0.0, 0.0, 0.0)
-}
-
-/// R_LT = Rx(α)·Ry(β)·Rz(δ) (thesis P5 eq. 22).
-pub fn euler_xyz(alpha: f64, beta: f64, delta: f64) -> Matrix3<f64> {
-    rx(alpha) * ry(beta) * rz(delta)
-}
+// The rotation convention is kinematics' (the one Euler XYZ of the project), re-exported here
+// for the callers that know it as the tracker pose's.
+pub use metrocell_kinematics::transform::euler_xyz;
+use metrocell_kinematics::transform::{drx, dry, drz, rx, ry, rz};
 
 #[derive(Debug, Clone, Default)]
 pub struct TrackerPose {

@@ -5,13 +5,15 @@
 //! - `metrocell_msgs::msg::TrackerMeasurement`, ... : metrocell's own types;
 //! - `metrocell_msgs::<pkg>::msg::<Type>` for the standard packages, e.g.
 //!   [`std_msgs::msg::Header`], [`sensor_msgs::msg::Temperature`];
-//! - [`registry()`]: every type's parsed spec (dynamic CDR, YAML/JSON, full definitions).
+//! - [`registry()`]: every type's parsed spec (dynamic CDR, YAML/JSON, full definitions);
+//! - [`topics`]: the topic names a cell publishes and a recording holds.
 
 use std::sync::OnceLock;
 
 include!(concat!(env!("OUT_DIR"), "/metrocell_msgs.rs"));
 
 mod time;
+pub mod topics;
 
 pub use rosmsg::RosMessage;
 

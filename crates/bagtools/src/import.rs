@@ -261,12 +261,8 @@ fn frac_ns(frac: &str) -> std::result::Result<u64, String> {
     Ok(digits.parse().expect("nine digits"))
 }
 
-/// Topic of the commanded joints (the one `metrocell sim` and the nodes use).
-pub const COMMANDED_JOINTS_TOPIC: &str = "/machine/commanded_joint_states";
-/// Topic of recorded approach directions.
-pub const APPROACH_TOPIC: &str = "/machine/approach_directions";
-/// Topic of the instrument's power-on time.
-pub const POWER_ON_TOPIC: &str = "/tracker/power_on";
+/// The topics an import writes signals to: the ones `metrocell sim` publishes (crates/msgs `topics`).
+pub use metrocell_msgs::topics::{APPROACH as APPROACH_TOPIC, COMMANDED_JOINTS as COMMANDED_JOINTS_TOPIC, POWER_ON as POWER_ON_TOPIC};
 
 /// The commanded joint state of a row: the joint columns' names, then velocity-only names;
 /// positions and velocities aligned with the names, NaN where one of the pair is missing,

@@ -58,8 +58,7 @@ use crate::records::{RecordFrame, RecordSet, Rejected};
 use crate::signal_topics::{SignalTopic, COMMANDED_JOINTS_TOPIC, LOAD_TOPIC, POWER_ON_TOPIC};
 
 pub const MEASURED_POINTS_TOPIC: &str = "/measured_points";
-pub const TRACKER_TOPIC: &str = "/tracker/measurements";
-pub const PROBE_TOPIC: &str = "/probe/hits";
+pub use metrocell_msgs::topics::{PROBE_HITS as PROBE_TOPIC, TRACKER_MEASUREMENTS as TRACKER_TOPIC};
 pub const CAMERA_TOPIC: &str = "/fiducials";
 
 /// Which messages become records.

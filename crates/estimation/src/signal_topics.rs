@@ -25,16 +25,13 @@ use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_msgs::RosMessage;
 use nalgebra::Vector3;
 
-pub const COMMANDED_JOINTS_TOPIC: &str = "/machine/commanded_joint_states";
-pub const APPROACH_TOPIC: &str = "/machine/approach_directions";
-pub const TEMPERATURE_PREFIX: &str = "/temperature/";
+// the names a cell publishes (crates/msgs `topics`), plus the weather station's aliases below
+pub use metrocell_msgs::topics::{APPROACH as APPROACH_TOPIC, COMMANDED_JOINTS as COMMANDED_JOINTS_TOPIC, LOAD as LOAD_TOPIC, POWER_ON as POWER_ON_TOPIC, TEMPERATURE_PREFIX};
 /// The temperature sensor whose topic is also the station's air temperature.
 pub const AIR_SENSOR: &str = "air";
 pub const AIR_PRESSURE_TOPICS: [&str; 2] = ["/air/pressure", "/weather/pressure"];
 pub const AIR_HUMIDITY_TOPICS: [&str; 2] = ["/air/humidity", "/weather/humidity"];
 pub const WEATHER_TEMPERATURE_TOPIC: &str = "/weather/temperature";
-pub const POWER_ON_TOPIC: &str = "/tracker/power_on";
-pub const LOAD_TOPIC: &str = "/machine/load";
 
 /// What a recorded topic carries.
 #[derive(Debug, Clone, PartialEq, Eq, PartialOrd, Ord)]

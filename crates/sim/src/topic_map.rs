@@ -31,17 +31,12 @@ use rosmsg::RosMessage;
 
 use crate::error::SimError;
 
-pub const CLOCK_TOPIC: &str = "/clock";
-pub const JOINT_STATES_TOPIC: &str = "/machine/joint_states";
-pub const COMMANDED_JOINT_STATES_TOPIC: &str = "/machine/commanded_joint_states";
-pub const LOAD_TOPIC: &str = "/machine/load";
-pub const POWER_ON_TOPIC: &str = "/tracker/power_on";
-/// Prefix of the per-thermocouple topics: `/temperature/<sensor name>`.
-pub const TEMPERATURE_TOPIC_PREFIX: &str = "/temperature/";
-pub const TRACKER_TOPIC: &str = "/tracker/measurements";
-pub const PROBE_TOPIC: &str = "/probe/hits";
-pub const CAMERA_INFO_TOPIC: &str = "/camera/camera_info";
-pub const CAMERA_IMAGE_TOPIC: &str = "/camera/image_raw";
+// The names themselves are crates/msgs `topics`, shared with `bag import` and the records builder.
+pub use metrocell_msgs::topics::{
+    CAMERA_IMAGE as CAMERA_IMAGE_TOPIC, CAMERA_INFO as CAMERA_INFO_TOPIC, CLOCK as CLOCK_TOPIC, COMMANDED_JOINTS as COMMANDED_JOINT_STATES_TOPIC,
+    JOINT_STATES as JOINT_STATES_TOPIC, LOAD as LOAD_TOPIC, POWER_ON as POWER_ON_TOPIC, PROBE_HITS as PROBE_TOPIC,
+    TEMPERATURE_PREFIX as TEMPERATURE_TOPIC_PREFIX, TRACKER_MEASUREMENTS as TRACKER_TOPIC,
+};
 
 /// QoS of a simulated stream, matching rclcpp's named profiles.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

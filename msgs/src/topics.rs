@@ -1,0 +1,23 @@
+//! The topic names of a metrocell cell: one list for the twin that publishes them, `bag import`
+//! that writes them from CSV, and the records builder that reads them. A node may remap any of
+//! them (`--ros-args -r`), but these are the names a recording has unless someone chose others.
+
+pub const CLOCK: &str = "/clock";
+/// Actual axis positions (what the encoders report).
+pub const JOINT_STATES: &str = "/machine/joint_states";
+/// Commanded axis positions and velocities (`sensor_msgs/JointState`).
+pub const COMMANDED_JOINTS: &str = "/machine/commanded_joint_states";
+/// Recorded approach directions: `name` = axes, `position` = ±1 (`sensor_msgs/JointState`).
+pub const APPROACH: &str = "/machine/approach_directions";
+/// Load force on the machine (`geometry_msgs/WrenchStamped`, machine frame).
+pub const LOAD: &str = "/machine/load";
+/// When the instrument was powered on (`sensor_msgs/TimeReference`, `time_ref`).
+pub const POWER_ON: &str = "/tracker/power_on";
+/// Per-sensor temperatures: `/temperature/<sensor name>` (`sensor_msgs/Temperature`).
+pub const TEMPERATURE_PREFIX: &str = "/temperature/";
+/// Raw tracker readings (`metrocell_msgs/TrackerMeasurement`).
+pub const TRACKER_MEASUREMENTS: &str = "/tracker/measurements";
+/// Touch-probe hits (`metrocell_msgs/ProbeHit`).
+pub const PROBE_HITS: &str = "/probe/hits";
+pub const CAMERA_INFO: &str = "/camera/camera_info";
+pub const CAMERA_IMAGE: &str = "/camera/image_raw";

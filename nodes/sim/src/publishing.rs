@@ -21,14 +21,22 @@ const LAG_WARNING: f64 = 1.0;
 /// speed is 20), so a reliable reader that stalls that long still gets every sample.
 const LIVE_HISTORY: usize = 1000;
 
-/// Live, every stream but camera frames is published reliably, whatever its nominal kind (the
-/// bag `metrocell sim` writes keeps the nominal profiles): a reliable writer also matches
-/// best-effort readers (ClockQoS, SensorDataQoS subscribers), and a recorder, which reads
+/// Bytes of camera frames a live writer keeps for retransmission (RustDDS holds a writer's
+/// whole keep-last history in memory): 32 MiB, i.e. 6 frames of the twin's default 5 MP camera,
+/// 109 of a 640 × 480 one.
+const FRAME_HISTORY_BYTES: usize = 32 << 20;
+
+/// Live, every stream is published reliably, whatever its nominal kind (the bag `metrocell sim`
+/// writes keeps the nominal profiles): a reliable writer also matches best-effort readers
+/// (ClockQoS, SensorDataQoS subscribers such as the fiducial node), and a recorder, which reads
 /// reliably when every publisher is reliable, then gets every message even on a busy machine.
-/// Frames stay best effort: megabytes each, a deep reliable history would hold them all.
-fn qos_of(kind: QosKind, ros_type: &str) -> QosProfile {
+/// Camera frames (`frame_bytes` each) keep a history bounded in bytes rather than in messages,
+/// at least 2 frames: a history of 1000 of them would hold gigabytes.
+fn qos_of(kind: QosKind, ros_type: &str, frame_bytes: usize) -> QosProfile {
     match kind {
-        QosKind::SensorData if ros_type == metrocell_msgs::sensor_msgs::msg::Image::ROS_TYPE => qos::sensor_data(),
+        QosKind::SensorData if ros_type == metrocell_msgs::sensor_msgs::msg::Image::ROS_TYPE => {
+            qos::reliable().history(History::KeepLast { depth: (FRAME_HISTORY_BYTES / frame_bytes.max(1)).clamp(2, LIVE_HISTORY) })
+        }
         QosKind::Clock | QosKind::SensorData | QosKind::Reliable => qos::reliable().history(History::KeepLast { depth: LIVE_HISTORY }),
         // a state (power-on time, load): a subscriber that joins late still gets it
         QosKind::Latched => qos::latched(),
@@ -57,11 +65,13 @@ impl LiveSim {
         if s.camera_images {
             converter = converter.with_frames(FrameRendering::default(), s.seed)?;
         }
+        // mono8: a byte per pixel
+        let frame_bytes = converter.camera.lens.width as usize * converter.camera.lens.height as usize;
         let publishers = converter
             .topics
             .topics
             .iter()
-            .map(|t| node.raw_publisher(&t.name, t.ros_type, qos_of(t.qos, t.ros_type)))
+            .map(|t| node.raw_publisher(&t.name, t.ros_type, qos_of(t.qos, t.ros_type, frame_bytes)))
             .collect::<Result<Vec<_>, _>>()?;
         let now = Instant::now();
         Ok(LiveSim {

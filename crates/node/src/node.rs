@@ -162,7 +162,18 @@ impl MetrocellNode {
     /// (`pkg/msg/Type`). Raw endpoints are plain DDS writers: they are not listed in the
     /// node's ROS graph entry (`ros2 node info`), but match any peer on the topic.
     pub fn raw_publisher(&mut self, topic: &str, ros_type: &str, qos: QosProfile) -> Result<RawPublisher, NodeError> {
-        let (resolved, t) = self.raw_topic(topic, ros_type, &qos)?;
+        self.create_raw_publisher(topic, ros_type, rustdds::QosPolicies::from(&qos), &qos)
+    }
+
+    /// [`Self::raw_publisher`] whose history never holds more than its keep-last depth, for
+    /// bulky messages (camera frames) sent reliably to readers some of which may be best effort:
+    /// see [`crate::qos::bounded_writer_qos`].
+    pub fn bounded_raw_publisher(&mut self, topic: &str, ros_type: &str, qos: QosProfile) -> Result<RawPublisher, NodeError> {
+        self.create_raw_publisher(topic, ros_type, crate::qos::bounded_writer_qos(&qos), &qos)
+    }
+
+    fn create_raw_publisher(&mut self, topic: &str, ros_type: &str, writer_qos: rustdds::QosPolicies, qos: &QosProfile) -> Result<RawPublisher, NodeError> {
+        let (resolved, t) = self.raw_topic(topic, ros_type, qos)?;
         if self.raw_publisher.is_none() {
             let p = self
                 .parts
@@ -176,7 +187,7 @@ impl MetrocellNode {
             .raw_publisher
             .as_ref()
             .expect("created above")
-            .create_datawriter_no_key(&t, Some(rustdds::QosPolicies::from(&qos)))
+            .create_datawriter_no_key(&t, Some(writer_qos))
             .map_err(|e| create_error(format!("raw writer on '{resolved}' ({ros_type})"), e))?;
         Ok(RawPublisher { writer, topic: resolved, ros_type: ros_type.to_string(), matched: Default::default() })
     }

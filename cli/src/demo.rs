@@ -2,9 +2,8 @@
 //!
 //! Starts `launch-configs/demo.launch.yaml` (the digital twin publishing live, the tracker,
 //! fiducial, thermal compensation, estimator and diagnose nodes, the recorder and the dashboard)
-//! on the demo cell
-//! (`demo_shift.yaml`: a compressed shift, by default 5 h of cell time at 60× real time, five
-//! minutes; the time is the twin's `/clock`), watches the cell over DDS like a shift
+//! on the demo cell (`demo_shift.yaml`: a compressed shift, by default 5 h of cell time at 60×
+//! real time, five minutes; the time is the twin's `/clock`), watches the cell over DDS like a shift
 //! supervisor would — tracker readings, beam breaks, the X-scale strain the thermal node computes
 //! from its configured α (a handbook value, not an estimate), the error model the estimator fits
 //! online — stops everything when the simulated run is over, and summarises the recorded bag. The

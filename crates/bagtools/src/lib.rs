@@ -14,12 +14,14 @@
 //!   QoS the recorder requests; stored profiles → the QoS `bag play` offers.
 //! * [`qos_overrides`]: the `--qos-profile-overrides-path` file of `ros2 bag record/play`.
 //! * [`playback`]: the timing of `bag play` (rate, pause, step) as a pure schedule.
+//! * [`is_bulk_type`]: message types of megabytes (images), which readers queue briefly.
 //! * [`BagSource`]: offline replay — a node reads typed messages from a bag instead of DDS.
 //! * [`BagSink`]: offline replay — the node writes its outputs to a bag at bag time.
 //! * [`ReplayOutput`]: a replaying node's outputs, to a bag or as JSON lines on stdout.
 
 mod bag_sink;
 mod bag_source;
+mod bulk_types;
 mod completeness;
 mod copy;
 mod error;
@@ -34,6 +36,7 @@ mod topic_selection;
 
 pub use bag_sink::{encode_cdr, BagSink};
 pub use bag_source::{BagSource, SourcedMessage};
+pub use bulk_types::is_bulk_type;
 pub use completeness::{compare_counts, CountMismatch};
 pub use copy::{filter_bag, merge_bags, CopyReport};
 pub use error::{io, Result, ToolError};

@@ -147,13 +147,17 @@ impl MetrocellNode {
             .map_err(|e| create_error(format!("subscription on '{resolved}' ({})", T::ROS_TYPE), e))
     }
 
-    fn raw_topic(&self, topic: &str, ros_type: &str, qos: &QosProfile) -> Result<(String, rustdds::Topic), NodeError> {
+    /// The DDS topic of a raw endpoint, created with the endpoint's own DDS QoS (as ros2-client's
+    /// `Context::create_topic` does from a profile), so that a bound stated there
+    /// ([`crate::qos::bounded_qos`]) also holds for RustDDS's topic cache.
+    fn raw_topic(&self, topic: &str, ros_type: &str, qos: &rustdds::QosPolicies) -> Result<(String, rustdds::Topic), NodeError> {
         let (pkg, ty) = split_ros_type(ros_type)?;
         let resolved = self.resolve_topic(topic)?;
         let t = self
             .parts
             .context
-            .create_topic(dds_topic_name(&resolved), MessageTypeName::new(&pkg, &ty), qos)
+            .domain_participant()
+            .create_topic(dds_topic_name(&resolved), MessageTypeName::new(&pkg, &ty).dds_msg_type(), qos, rustdds::TopicKind::NoKey)
             .map_err(|e| create_error(format!("topic '{resolved}'"), e))?;
         Ok((resolved, t))
     }
@@ -162,6 +166,17 @@ impl MetrocellNode {
     /// (`pkg/msg/Type`). Raw endpoints are plain DDS writers: they are not listed in the
     /// node's ROS graph entry (`ros2 node info`), but match any peer on the topic.
     pub fn raw_publisher(&mut self, topic: &str, ros_type: &str, qos: QosProfile) -> Result<RawPublisher, NodeError> {
+        self.create_raw_publisher(topic, ros_type, rustdds::QosPolicies::from(&qos))
+    }
+
+    /// [`Self::raw_publisher`] whose history never holds more than its keep-last depth, for
+    /// bulky messages (camera frames) sent reliably to readers some of which may be best effort:
+    /// see [`crate::qos::bounded_qos`].
+    pub fn bounded_raw_publisher(&mut self, topic: &str, ros_type: &str, qos: QosProfile) -> Result<RawPublisher, NodeError> {
+        self.create_raw_publisher(topic, ros_type, crate::qos::bounded_qos(&qos))
+    }
+
+    fn create_raw_publisher(&mut self, topic: &str, ros_type: &str, qos: rustdds::QosPolicies) -> Result<RawPublisher, NodeError> {
         let (resolved, t) = self.raw_topic(topic, ros_type, &qos)?;
         if self.raw_publisher.is_none() {
             let p = self
@@ -176,13 +191,24 @@ impl MetrocellNode {
             .raw_publisher
             .as_ref()
             .expect("created above")
-            .create_datawriter_no_key(&t, Some(rustdds::QosPolicies::from(&qos)))
+            .create_datawriter_no_key(&t, Some(qos))
             .map_err(|e| create_error(format!("raw writer on '{resolved}' ({ros_type})"), e))?;
         Ok(RawPublisher { writer, topic: resolved, ros_type: ros_type.to_string(), matched: Default::default() })
     }
 
     /// Subscription that yields payload bytes, source timestamp and publisher GID, for any type.
     pub fn raw_subscription(&mut self, topic: &str, ros_type: &str, qos: QosProfile) -> Result<RawSubscription, NodeError> {
+        self.create_raw_subscription(topic, ros_type, rustdds::QosPolicies::from(&qos))
+    }
+
+    /// [`Self::raw_subscription`] that keeps no more than its keep-last depth of samples: for
+    /// bulky messages (camera frames) a node reads only in passing. RustDDS's topic cache
+    /// otherwise keeps a reader's last max(64, depth) samples ([`crate::qos::bounded_qos`]).
+    pub fn bounded_raw_subscription(&mut self, topic: &str, ros_type: &str, qos: QosProfile) -> Result<RawSubscription, NodeError> {
+        self.create_raw_subscription(topic, ros_type, crate::qos::bounded_qos(&qos))
+    }
+
+    fn create_raw_subscription(&mut self, topic: &str, ros_type: &str, qos: rustdds::QosPolicies) -> Result<RawSubscription, NodeError> {
         let (resolved, t) = self.raw_topic(topic, ros_type, &qos)?;
         if self.raw_subscriber.is_none() {
             let s = self
@@ -197,7 +223,7 @@ impl MetrocellNode {
             .raw_subscriber
             .as_ref()
             .expect("created above")
-            .create_simple_datareader_no_key(&t, Some(rustdds::QosPolicies::from(&qos)))
+            .create_simple_datareader_no_key(&t, Some(qos))
             .map_err(|e| create_error(format!("raw reader on '{resolved}' ({ros_type})"), e))?;
         Ok(RawSubscription { reader, topic: resolved, ros_type: ros_type.to_string() })
     }

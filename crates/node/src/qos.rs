@@ -40,6 +40,30 @@ pub fn stream(profile: QosProfile) -> QosProfile {
     profile.history(History::KeepLast { depth: STREAM_DEPTH })
 }
 
+/// The DDS QoS of an endpoint that holds no more than the profile's keep-last depth of samples:
+/// the depth is also stated as its `ResourceLimits.max_samples`, which RustDDS (0.15) otherwise
+/// fills in itself. A writer: RustDDS keeps a reliable writer's samples until every matched reader
+/// has acknowledged them, best-effort readers included, which never acknowledge; so with one of
+/// those matched (any SensorDataQoS subscriber: the fiducial node and the dashboard on the twin's
+/// frames) it evicts nothing before `max_samples`, by default 8192 — 2.5 GB of 640 × 480 frames.
+/// With the bound, a reliable reader that falls more than `depth` samples behind loses the
+/// oldest, as DDS's keep-last means (it counts a sequence gap). Ordinary writers keep RustDDS's
+/// default, which lets a lagging reliable reader (the recorder on a busy machine) still be
+/// repaired from up to 8192 samples back. A reader (and its topic): RustDDS's topic cache keeps
+/// max(`max_samples`, depth) samples, with `max_samples` 64 when unstated — 64 frames for a
+/// reader that wanted 5.
+pub fn bounded_qos(qos: &QosProfile) -> rustdds::QosPolicies {
+    let dds = rustdds::QosPolicies::from(qos);
+    match qos.history {
+        History::KeepLast { depth } => {
+            let depth = i32::try_from(depth).unwrap_or(i32::MAX);
+            let limits = rustdds::policy::ResourceLimits { max_samples: depth, max_instances: 1, max_samples_per_instance: depth };
+            rustdds::QosPolicyBuilder::new().resource_limits(limits).build().modify_by(&dds)
+        }
+        History::KeepAll => dds,
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -63,5 +87,16 @@ mod tests {
         let r = stream(reliable());
         assert!(matches!(r.reliability, Reliability::Reliable { .. }));
         assert_eq!(r.history, History::KeepLast { depth: STREAM_DEPTH });
+    }
+
+    #[test]
+    fn a_bounded_endpoint_states_its_depth_as_its_resource_limit_and_keeps_the_rest() {
+        let q = bounded_qos(&reliable().history(History::KeepLast { depth: 109 }));
+        assert_eq!(q.resource_limits().map(|r| r.max_samples), Some(109));
+        assert_eq!(q.history(), Some(rustdds::policy::History::KeepLast { depth: 109 }));
+        assert!(matches!(q.reliability(), Some(rustdds::policy::Reliability::Reliable { .. })));
+        assert_eq!(q.durability(), Some(rustdds::policy::Durability::Volatile));
+        // keep-all has no depth to bound by: RustDDS's own backstop stays
+        assert_eq!(bounded_qos(&reliable().history(History::KeepAll)).resource_limits(), None);
     }
 }

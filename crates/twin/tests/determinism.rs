@@ -55,3 +55,25 @@ fn stream_is_time_ordered_and_restartable() {
     assert_eq!(count[3], 6 * 6 * 4);
     assert_eq!(count[4], 6 * 6);
 }
+
+/// The demo's camera (crates/twin/examples/cells/demo_shift.yaml) only adds frame requests: every
+/// other sample — the tracker's readings the demo's diagnosis judges, the temperatures, the
+/// machine states — is the same with and without it, so adding the camera cannot change what
+/// the demo finds (frame requests draw nothing from the noise streams).
+#[test]
+fn a_camera_adds_frames_and_changes_no_other_sample() {
+    let with_camera = Cell::from_path(common::cell_path("demo_shift.yaml")).unwrap();
+    assert!(with_camera.camera.is_some(), "demo_shift.yaml has a tool camera");
+    let mut without = Cell::from_path(common::cell_path("demo_shift.yaml")).unwrap();
+    without.camera = None;
+    // 30 min: five 6-min cycles of 24 dwells
+    let run = |cell: Cell| Simulation::new(cell, 1800.0, 1).unwrap().samples().collect::<Vec<Sample>>();
+    let (a, b) = (run(with_camera), run(without));
+    let frames = a.iter().filter(|s| matches!(s, Sample::CameraFrameRequest(_))).count();
+    assert_eq!(frames, 5 * 24, "a frame per dwell");
+    let others: Vec<String> = a.iter().filter(|s| !matches!(s, Sample::CameraFrameRequest(_))).map(|s| format!("{s:?}")).collect();
+    let b: Vec<String> = b.iter().map(|s| format!("{s:?}")).collect();
+    // tracker 4 Hz, machine state 4 Hz, three thermocouples 1 Hz
+    assert_eq!(b.len(), 1800 * (4 + 4 + 3));
+    assert_eq!(others, b);
+}

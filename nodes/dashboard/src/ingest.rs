@@ -1,6 +1,6 @@
 //! DDS side: every published topic is read raw (best effort, so reliable and best-effort
-//! publishers both match), forwarded as CDR to the Foxglove server and, when it has a role,
-//! decoded into the dashboard state. Discovery is rescanned every second, so sensors that
+//! publishers both match; a queue of 200, of 5 for bulk types such as images), forwarded as CDR
+//! to the Foxglove server and, when it has a role, decoded into the dashboard state. Discovery is rescanned every second, so sensors that
 //! appear late (a new `temperature/<sensor>`) show up too.
 
 use std::collections::BTreeSet;
@@ -18,6 +18,9 @@ use metrocell_node::{qos, MetrocellNode, RawMessage, RawSubscription};
 
 use crate::foxglove_bridge::FoxgloveBridge;
 use crate::routes::{Role, Routes};
+
+/// Queue of a bulk topic (images): the newest few frames, for the Foxglove bridge.
+const BULK_DEPTH: usize = 5;
 
 pub struct Ingest {
     routes: Routes,
@@ -46,8 +49,13 @@ impl Ingest {
                 node.info(format!("not showing {}: metrocell does not know its type {}", t.name, t.type_name));
                 continue;
             };
-            let qos = qos::sensor_data().history(ros2_client::qos::History::KeepLast { depth: 200 });
-            let sub = node.raw_subscription(&t.name, &t.type_name, qos)?;
+            // camera frames are only forwarded (to Foxglove): a few, not 200 of them (≈ 1 GB of
+            // 5 MP frames; RustDDS keeps a reader's whole queue), and no more than those
+            let sub = if metrocell_bagtools::is_bulk_type(&t.type_name) {
+                node.bounded_raw_subscription(&t.name, &t.type_name, qos::sensor_data().history(ros2_client::qos::History::KeepLast { depth: BULK_DEPTH }))?
+            } else {
+                node.raw_subscription(&t.name, &t.type_name, qos::sensor_data().history(ros2_client::qos::History::KeepLast { depth: 200 }))?
+            };
             if let Some(b) = bridge.as_deref_mut() {
                 if let Err(e) = b.advertise(&t.name, &t.type_name, definition) {
                     node.warn(format!("Foxglove channel for {}: {e}", t.name));

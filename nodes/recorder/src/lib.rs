@@ -230,7 +230,7 @@ fn scan(
             known_writers.insert(format!("{:?}", p.key));
         }
         let definition = recording.add_topic(&t.name, &t.type_name, &offered_qos_yaml(&offered)).map_err(|e| e.to_string())?;
-        let depth = if parameters::is_bulk_type(&t.type_name) { settings.bulk_queue_depth } else { settings.queue_depth };
+        let depth = if metrocell_bagtools::is_bulk_type(&t.type_name) { settings.bulk_queue_depth } else { settings.queue_depth };
         let adapted = recording_qos(&offered);
         let over = settings.qos_overrides.get(&t.name);
         let qos = reader_qos::reader_qos(adapted, depth, over);

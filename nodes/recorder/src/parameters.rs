@@ -95,15 +95,3 @@ pub fn default_output() -> String {
     let stamp = metrocell_bag::format_utc(now_ns);
     format!("bag_{}", stamp[..19].replace('-', "_").replace(' ', "-").replace(':', "_"))
 }
-
-/// A "bulk" type carries a variable-length byte array at top level (sensor_msgs/Image data,
-/// CompressedImage, PointCloud2): megabytes per message, so the recorder gives it a short queue.
-pub fn is_bulk_type(ros_type: &str) -> bool {
-    use rosmsg::{ArrayKind, BaseType, Primitive};
-    metrocell_msgs::registry().get(ros_type).is_some_and(|spec| {
-        spec.fields.iter().any(|f| {
-            matches!(f.ty.base, BaseType::Primitive(Primitive::UInt8 | Primitive::Byte | Primitive::Int8))
-                && matches!(f.ty.array, ArrayKind::Unbounded | ArrayKind::Bounded(_))
-        })
-    })
-}

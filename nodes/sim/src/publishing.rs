@@ -5,8 +5,8 @@ use std::time::{Duration, Instant};
 
 use metrocell_msgs::RosMessage;
 use metrocell_node::node_directory::guid_prefix;
-use metrocell_node::{qos, Diagnostics, MetrocellNode, NodeDirectory, QosProfile, RawPublisher};
-use metrocell_simulation::{CameraIntrinsics, FrameRendering, MessageConverter, MessageStream, QosKind};
+use metrocell_node::{qos, Diagnostics, MetrocellNode, NodeDirectory, RawPublisher};
+use metrocell_simulation::{CameraIntrinsics, FrameRendering, MessageConverter, MessageStream, QosKind, TopicSpec};
 use metrocell_twin::{Cell, Simulation};
 use ros2_client::qos::History;
 
@@ -21,17 +21,27 @@ const LAG_WARNING: f64 = 1.0;
 /// speed is 20), so a reliable reader that stalls that long still gets every sample.
 const LIVE_HISTORY: usize = 1000;
 
-/// Live, every stream but camera frames is published reliably, whatever its nominal kind (the
-/// bag `metrocell sim` writes keeps the nominal profiles): a reliable writer also matches
-/// best-effort readers (ClockQoS, SensorDataQoS subscribers), and a recorder, which reads
+/// Bytes of camera frames a live writer keeps for retransmission: 32 MiB, i.e. 6 frames of the
+/// twin's default 5 MP camera, 109 of a 640 × 480 one.
+const FRAME_HISTORY_BYTES: usize = 32 << 20;
+
+/// Live, every stream is published reliably, whatever its nominal kind (the bag `metrocell sim`
+/// writes keeps the nominal profiles): a reliable writer also matches best-effort readers
+/// (ClockQoS, SensorDataQoS subscribers such as the fiducial node), and a recorder, which reads
 /// reliably when every publisher is reliable, then gets every message even on a busy machine.
-/// Frames stay best effort: megabytes each, a deep reliable history would hold them all.
-fn qos_of(kind: QosKind, ros_type: &str) -> QosProfile {
-    match kind {
-        QosKind::SensorData if ros_type == metrocell_msgs::sensor_msgs::msg::Image::ROS_TYPE => qos::sensor_data(),
-        QosKind::Clock | QosKind::SensorData | QosKind::Reliable => qos::reliable().history(History::KeepLast { depth: LIVE_HISTORY }),
+/// Camera frames (`frame_bytes` each, mono8) keep a history bounded in bytes, at least 2 frames,
+/// and held to it (`bounded_raw_publisher`): a history of 1000 frames, or RustDDS's default
+/// backstop of 8192 while a best-effort reader is matched, would hold gigabytes.
+fn publisher_of(node: &mut MetrocellNode, t: &TopicSpec, frame_bytes: usize) -> Result<RawPublisher, metrocell_node::NodeError> {
+    let stream = qos::reliable().history(History::KeepLast { depth: LIVE_HISTORY });
+    match t.qos {
+        QosKind::SensorData if t.ros_type == metrocell_msgs::sensor_msgs::msg::Image::ROS_TYPE => {
+            let frames = (FRAME_HISTORY_BYTES / frame_bytes.max(1)).clamp(2, LIVE_HISTORY);
+            node.bounded_raw_publisher(&t.name, t.ros_type, qos::reliable().history(History::KeepLast { depth: frames }))
+        }
+        QosKind::Clock | QosKind::SensorData | QosKind::Reliable => node.raw_publisher(&t.name, t.ros_type, stream),
         // a state (power-on time, load): a subscriber that joins late still gets it
-        QosKind::Latched => qos::latched(),
+        QosKind::Latched => node.raw_publisher(&t.name, t.ros_type, qos::latched()),
     }
 }
 
@@ -57,11 +67,13 @@ impl LiveSim {
         if s.camera_images {
             converter = converter.with_frames(FrameRendering::default(), s.seed)?;
         }
+        // mono8: a byte per pixel
+        let frame_bytes = converter.camera.lens.width as usize * converter.camera.lens.height as usize;
         let publishers = converter
             .topics
             .topics
             .iter()
-            .map(|t| node.raw_publisher(&t.name, t.ros_type, qos_of(t.qos, t.ros_type)))
+            .map(|t| publisher_of(node, t, frame_bytes))
             .collect::<Result<Vec<_>, _>>()?;
         let now = Instant::now();
         Ok(LiveSim {

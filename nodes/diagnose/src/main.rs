@@ -118,8 +118,7 @@ fn live(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
                 diagnostics.set_value("runs", job.info.run);
                 let (declared, options, tx) = (session.setup.declared(), session.setup.options.clone(), tx.clone());
                 std::thread::spawn(move || {
-                    let result = run_job(&declared, &options, &job);
-                    let _ = tx.send((job.info, result));
+                    let _ = tx.send(run_job(&declared, &options, job));
                 });
             }
         }
@@ -164,8 +163,8 @@ fn replay(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::error
     let fqn = node.fully_qualified_name();
     let run_and_write = |session: &mut Session, log_time_ns: u64, output: &mut ReplayOutput| -> Result<(), Box<dyn std::error::Error>> {
         let job = session.job();
-        let result = run_job(&session.setup.declared(), &session.setup.options, &job);
-        let out = session.outcome(&job.info, &result, (job.info.to * 1e9) as i64, &fqn);
+        let (info, result) = run_job(&session.setup.declared(), &session.setup.options, job);
+        let out = session.outcome(&info, &result, (info.to * 1e9) as i64, &fqn);
         node.logger().info(&out.summary);
         for f in &out.new_findings {
             node.logger().warn(format!("new effect found: {f}"));

@@ -17,7 +17,9 @@ use metrocell_model::PLATE_MARKERS;
 use metrocell_msgs::msg::FiducialDetectionArray;
 use metrocell_msgs::sensor_msgs::msg::Image;
 
-pub const IMAGE_TOPIC: &str = "/camera/image_raw";
+/// The twin's frames (the shared topic list) and the fiducial node's detections of them (its
+/// default output; the demo's launch file does not remap it).
+pub use metrocell_msgs::topics::CAMERA_IMAGE as IMAGE_TOPIC;
 pub const DETECTIONS_TOPIC: &str = "/fiducials";
 
 /// Frames and detections of one recording.

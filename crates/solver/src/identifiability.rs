@@ -12,9 +12,10 @@
 //! the m × n matrix resolves them. With `rcond` ≥ [`GRAM_RCOND`] the eigen-decomposition of the
 //! column-scaled Gram matrix JᵀJ (n × n, formed by a blocked product) is used instead: its
 //! eigenvalues λ = σ² carry an absolute error of order n·ε·λ_max, so σ is resolved down to
-//! √(n·ε)·σ_max ≈ 1e-7·σ_max for n = 75, ten times below a tolerance of 1e-6, the one `fit`
+//! √(n·ε)·σ_max ≈ 1e-7·σ_max for n = 75, about eight times below a tolerance of 1e-6, the one `fit`
 //! uses and the one below which the covariance (crates/solver `free_inverse`) calls the normal
-//! matrix singular. On a 30 000 × 46 Jacobian that is 3 ms instead of 300 ms. Singular values
+//! matrix singular. On the 30 000 × 46 Jacobian of BENCHMARKS.md's batch fit the SVD was a quarter
+//! of the whole fit's time; the Gram route no longer shows in its profile. Singular values
 //! below that resolution are reported as 0 (exact null directions as far as this computation can
 //! tell), so the condition number is then ∞ as it is for an exactly rank-deficient SVD.
 

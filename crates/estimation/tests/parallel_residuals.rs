@@ -1,0 +1,59 @@
+//! The residuals and Jacobian of many records, evaluated in parallel chunks (one per core), are
+//! bit for bit those of each record evaluated on its own, and a failing record is named by its
+//! index as a sequential pass would name it.
+
+#[path = "common/mod.rs"]
+mod common;
+
+use common::{records, Planned, THESIS_TRACKER};
+use metrocell_estimation::PointResiduals;
+use metrocell_solver::Problem;
+use metrocell_twin::CellModel;
+use nalgebra::DMatrix;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+
+/// More records than one chunk holds (1000), so a machine with two or more cores splits them.
+const READINGS: usize = 2500;
+
+#[test]
+fn chunked_evaluation_equals_record_by_record() {
+    let terms = common::xfyz_geometric_terms("[y, z]", "[0 m, 0.05 m, -0.15 m]");
+    let text = format!("name: chunks\nmachine:\n  family: cartesian\n  stacking: XFYZ\n  travel: {{x: [0 mm, 800 mm], y: [0 mm, 500 mm], z: [0 mm, 400 mm]}}\n  tool_offset: [0 mm, 0 mm, -150 mm]\nsensors:\n  tracker:\n    pose: {{translation: [-0.95 m, 0.3 m, 0.62 m], euler_xyz: [0 deg, 0 deg, 56 deg]}}\n    warmup: {{offset: 0 um, amplitude: 50 um, time_constant: 60 min}}\nterms:\n{terms}");
+    let model = CellModel::from_yaml_str_in(&text, "chunks.yaml", std::path::Path::new(".")).unwrap();
+    let fm = model.forward_model().unwrap();
+    let mut rng = ChaCha8Rng::seed_from_u64(3);
+    let mut p = fm.params();
+    for (k, name) in fm.param_names().iter().enumerate() {
+        if name.starts_with("positioning") || name.starts_with("angular") {
+            p[k] = rng.random_range(-1e-5..1e-5);
+        }
+    }
+    let plan: Vec<Planned> = (0..READINGS)
+        .map(|k| Planned { q: vec![rng.random_range(0.0..0.8), rng.random_range(0.0..0.5), rng.random_range(0.0..0.4)], approach: [1.0; 3], temperatures: vec![], time_on: 600.0 + k as f64 })
+        .collect();
+    let set = records(&fm, &p, &plan, THESIS_TRACKER, Some(5));
+    let all = PointResiduals::new(&fm, &set.records).unwrap();
+    let (m, n) = (all.residual_count(), all.parameter_count());
+    let (mut r, mut j) = (vec![0.0; m], DMatrix::zeros(m, n));
+    all.residuals_and_jacobian(&p, &mut r, &mut j).unwrap();
+    let mut r_only = vec![0.0; m];
+    all.residuals(&p, &mut r_only).unwrap();
+    let (mut r1, mut j1) = (vec![0.0; 3], DMatrix::zeros(3, n));
+    for i in 0..READINGS {
+        let one = PointResiduals::new(&fm, &set.records[i..i + 1]).unwrap();
+        one.residuals_and_jacobian(&p, &mut r1, &mut j1).unwrap();
+        assert_eq!(&r[3 * i..3 * i + 3], &r1[..], "record {i}: residuals");
+        assert_eq!(&r_only[3 * i..3 * i + 3], &r1[..], "record {i}: residuals without the Jacobian");
+        assert!(j.rows(3 * i, 3) == j1, "record {i}: Jacobian rows");
+    }
+
+    // a record the model cannot predict (its commanded joints missing) is named by its index
+    let mut broken = set.records.clone();
+    for i in [1800, 2400] {
+        broken[i].signals.axis_position = [None; 3];
+    }
+    let bad = PointResiduals::new(&fm, &broken).unwrap();
+    let e = bad.residuals_and_jacobian(&p, &mut r, &mut j).unwrap_err();
+    assert!(e.0.starts_with("record 1800 (p1800)"), "{}", e.0);
+}

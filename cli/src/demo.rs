@@ -86,6 +86,8 @@ struct Watch {
     /// The twin's messages published per topic (its latest diagnostics), and whether it said it finished.
     twin_published: BTreeMap<String, u64>,
     twin_finished: bool,
+    /// The recorder's messages recorded per topic (its latest diagnostics).
+    recorded: BTreeMap<String, u64>,
     /// The estimator's latest error model.
     estimated: Option<ErrorModel>,
     /// What the live diagnose node found: status name (`diagnose: <term>`) → its sentence.
@@ -152,8 +154,9 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
     let launcher = std::thread::spawn(move || metrocell_launch::run_launch(&launch_file, &launch_args, &options));
 
     let watch = watch_cell(&args, &shutdown, &launcher)?;
-    // The twin lingers 1.5 s after its last message (final diagnostics, reliable acks); the
-    // recorder takes what it holds when stopped. Then stop every node.
+    // The twin's counts come once the recorder has acknowledged every message, and the watch
+    // has waited until the recorder's own counts reach them. The twin lingers 1.5 s more (final
+    // diagnostics). Then stop every node.
     std::thread::sleep(Duration::from_millis(800));
     shutdown.request();
     let outcome = launcher.join().map_err(|_| anyhow::anyhow!("launcher thread panicked"))??;
@@ -322,7 +325,7 @@ fn watch_cell(
     let model = node.subscription::<ErrorModel>("/thermal/error_model", qos::sensor_data())?;
     let estimated = node.subscription::<ErrorModel>("/estimator/error_model", qos::latched())?;
     let diagnostics = node.subscription::<DiagnosticArray>("/diagnostics", qos::reliable().history(ros2_client::qos::History::KeepLast { depth: 100 }))?;
-    let mut w = Watch { sim_time_s: 0.0, wall_s: 0.0, tracker_readings: 0, beam_breaks: 0, last_strain: None, twin_published: BTreeMap::new(), twin_finished: false, estimated: None, live_findings: BTreeMap::new(), fiducial: Default::default() };
+    let mut w = Watch { sim_time_s: 0.0, wall_s: 0.0, tracker_readings: 0, beam_breaks: 0, last_strain: None, twin_published: BTreeMap::new(), twin_finished: false, recorded: BTreeMap::new(), estimated: None, live_findings: BTreeMap::new(), fiducial: Default::default() };
     // about twenty progress lines over the run, at whole minutes of cell time
     let print_every = if args.duration <= 600.0 { 30.0 } else { ((args.duration / 20.0) / 60.0).round().max(1.0) * 60.0 };
     let mut first_clock: Option<Instant> = None;
@@ -362,6 +365,7 @@ fn watch_cell(
         }
         while let Ok(Some((d, _))) = diagnostics.take() {
             take_twin_counts(&d, &mut w);
+            take_recorder_counts(&d, &mut w);
             for status in d.status.iter().filter(|s| s.name == "/fiducial") {
                 w.fiducial.update(status.values.iter().map(|kv| (kv.key.as_str(), kv.value.as_str())));
             }
@@ -388,8 +392,10 @@ fn watch_cell(
             );
         }
         let clock_done = w.sim_time_s >= args.duration - 0.5 || (start_ns.is_some() && last_advance.elapsed() > Duration::from_secs(2));
-        // Wait for the twin's final counts too (it publishes them within ~1 s of its end).
-        if clock_done && (w.twin_finished || last_advance.elapsed() > Duration::from_secs(5)) {
+        // Wait for the twin's final counts too: it publishes them once every reliable reader
+        // (the recorder) has acknowledged its last message, within ~1 s of its end on an idle
+        // machine, at most 30 s later on a loaded one.
+        if clock_done && (w.twin_finished || last_advance.elapsed() > Duration::from_secs(40)) {
             break;
         }
         if Instant::now() > deadline {
@@ -398,8 +404,18 @@ fn watch_cell(
         }
         std::thread::sleep(Duration::from_millis(5));
     }
+    if w.twin_finished {
+        let behind = wait_for_recorder(&diagnostics, &mut w, RECORDER_CATCH_UP);
+        if behind > 0 {
+            eprintln!("metrocell demo: after {} s the recorder was still {behind} messages behind the twin; stopping it anyway", RECORDER_CATCH_UP.as_secs());
+        }
+    }
     Ok(w)
 }
+
+/// How long the demo waits, once the twin has finished, for the recorder's counts to reach the
+/// twin's before it stops the nodes. The recorder refreshes its counts once a second.
+const RECORDER_CATCH_UP: Duration = Duration::from_secs(30);
 
 /// The diagnose node's findings (statuses named `diagnose: <term>`) not seen before, kept in
 /// the watch.
@@ -411,6 +427,45 @@ fn new_live_findings(d: &DiagnosticArray, w: &mut Watch) -> Vec<(String, String)
         }
     }
     new
+}
+
+/// The recorder's `<topic>/messages` values from a diagnostics message.
+fn take_recorder_counts(d: &DiagnosticArray, w: &mut Watch) {
+    for status in d.status.iter().filter(|s| s.name == "/recorder") {
+        for kv in &status.values {
+            if let (Some(topic), Ok(n)) = (kv.key.strip_suffix("/messages"), kv.value.parse::<u64>()) {
+                w.recorded.insert(topic.to_string(), n);
+            }
+        }
+    }
+}
+
+/// Messages the twin published that the recorder has not recorded yet, over all topics.
+fn recorder_behind(w: &Watch) -> u64 {
+    w.twin_published.iter().map(|(t, n)| n.saturating_sub(w.recorded.get(t).copied().unwrap_or(0))).sum()
+}
+
+/// After the twin finished: wait (at most `timeout`) until the recorder's counts reach the twin's,
+/// so the recorder is not stopped while a busy machine still has it catching up. Returns how many
+/// messages it was still behind.
+fn wait_for_recorder(diagnostics: &metrocell_node::Subscription<DiagnosticArray>, w: &mut Watch, timeout: Duration) -> u64 {
+    let deadline = Instant::now() + timeout;
+    let mut told = false;
+    loop {
+        while let Ok(Some((d, _))) = diagnostics.take() {
+            take_twin_counts(&d, w);
+            take_recorder_counts(&d, w);
+        }
+        let behind = recorder_behind(w);
+        if behind == 0 || Instant::now() >= deadline {
+            return behind;
+        }
+        if !told && deadline.saturating_duration_since(Instant::now()) < timeout - Duration::from_secs(3) {
+            println!("  waiting for the recorder to catch up ({behind} messages behind the twin)");
+            told = true;
+        }
+        std::thread::sleep(Duration::from_millis(50));
+    }
 }
 
 /// The twin's `published/<topic>` values and `finished` flag from a diagnostics message.

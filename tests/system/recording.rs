@@ -315,9 +315,10 @@ fn demo_loses_nothing(name: &str, busy_cores: usize, max_missed_frames: u64, dom
         })
         .collect();
     let bag = bag_contents(&dir);
+    let node_lines: Vec<&str> = stderr.lines().filter(|l| l.starts_with("[recorder]") || l.starts_with("[sim]") || l.starts_with("[launch]")).collect();
     for (topic, n) in &published {
         let got = bag.get(topic).map_or(0, |(_, m)| m.len() as u64);
-        assert_eq!(got, *n, "{topic}: bag holds {got} of the {n} the twin published ({busy_cores} busy cores)\n{stdout}");
+        assert_eq!(got, *n, "{topic}: bag holds {got} of the {n} the twin published ({busy_cores} busy cores)\n{stdout}\n{}", node_lines.join("\n"));
     }
     assert!(published.values().filter(|n| **n > 0).count() >= 8, "twin topics with messages: {published:?}");
     // the tool camera: a 640×480 frame per dwell, 24 per 6-min cycle, all in the bag (the loop above)

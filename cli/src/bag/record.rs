@@ -54,9 +54,12 @@ pub struct RecordArgs {
     /// Seconds between flushes to disk: after a crash `metrocell bag recover` keeps everything older than about twice this
     #[arg(long, default_value_t = 1.0)]
     flush_interval: f64,
-    /// Reader queue (keep-last depth) of ordinary topics: absorbs recorder stalls of depth ÷ rate
+    /// Reader queue (keep-last depth) of ordinary topics: absorbs stalls of the recorder's taker thread of depth ÷ rate
     #[arg(long, default_value_t = 1000)]
     queue_depth: u32,
+    /// Bytes of samples taken from DDS but not yet written that the recorder holds while the disk catches up (as ros2 bag record's --max-cache-size)
+    #[arg(long, default_value_t = 256 << 20)]
+    max_cache_size: u64,
     /// Name of the recorder node
     #[arg(long, default_value = "recorder")]
     node_name: String,
@@ -105,6 +108,7 @@ pub fn run(args: RecordArgs) -> anyhow::Result<i32> {
     set(&mut decls, "max_bag_size", i64::try_from(args.max_bag_size).unwrap_or(i64::MAX));
     set(&mut decls, "max_bag_duration", args.max_bag_duration);
     set(&mut decls, "queue_depth", i64::from(args.queue_depth.max(1)));
+    set(&mut decls, "max_cache_size", i64::try_from(args.max_cache_size.max(1)).unwrap_or(i64::MAX));
     if let Some(p) = &args.qos_profile_overrides_path {
         set(&mut decls, "qos_profile_overrides_path", p.display().to_string());
     }

@@ -143,6 +143,13 @@ impl RawPublisher {
         }
         self.matched.get()
     }
+
+    /// Wait until every matched reliable reader has acknowledged every sample written so far, or
+    /// `max_wait` passes; true if they did (or none is matched). A writer that goes away with
+    /// samples unacknowledged cannot repair them, so a publisher calls this before it exits.
+    pub fn wait_for_acknowledgments(&self, max_wait: std::time::Duration) -> bool {
+        self.writer.wait_for_acknowledgments(max_wait).unwrap_or(false)
+    }
 }
 
 /// One received raw message.

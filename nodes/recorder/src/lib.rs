@@ -16,6 +16,10 @@
 //! `qos_profile_overrides_path` file replaces these per topic. A publisher that appears later
 //! offering best effort on a topic read reliably does not match: a warning names it.
 //!
+//! A taker thread ([`taker`]) moves samples from the readers into a cache bounded by
+//! `max_cache_size` as they arrive, and the recording loop writes them, so a flush or a busy
+//! moment of the loop does not leave the readers' queues to overflow.
+//!
 //! Losses are accounted by cause (`metrocell_bagtools::TopicCounts`): sequence gaps between
 //! received samples (`dropped`), samples sent before the recorder's first one from that
 //! publisher (`before_subscription`), samples that could not be taken (`unreadable`); each in
@@ -26,6 +30,7 @@
 
 pub mod parameters;
 mod reader_qos;
+mod taker;
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::hash::{Hash, Hasher};
@@ -35,7 +40,8 @@ use metrocell_bag::offered_qos_yaml;
 use metrocell_bagtools::recorded_qos::{offered_qos_of_topic, recording_qos};
 use metrocell_bagtools::{Recording, TopicCounts, TopicDefinition};
 use metrocell_node::names::dds_topic_name;
-use metrocell_node::{MetrocellNode, RawSubscription};
+use metrocell_node::MetrocellNode;
+use taker::{Taken, Taker};
 
 pub use parameters::RecorderSettings;
 
@@ -115,24 +121,25 @@ pub fn record(node: &mut MetrocellNode, settings: &RecorderSettings) -> Result<R
     node.info(format!("recording into {}", settings.output));
     let diagnostics = node.diagnostics();
     let token = node.shutdown_token();
-    let mut subscriptions: Vec<RawSubscription> = Vec::new();
+    let taker = Taker::start(settings.max_cache_bytes).map_err(|e| failed(format!("cannot start the taker thread: {e}")))?;
+    // The recorded topics in the order the taker knows them (its `topic` index).
+    let mut topics: Vec<String> = Vec::new();
     let mut readers: BTreeMap<String, (bool, usize)> = BTreeMap::new();
     // Writers (by GUID) already seen on recorded topics, so a late best-effort one is reported once.
     let mut known_writers: BTreeSet<String> = BTreeSet::new();
     let mut next_scan = Instant::now();
     let mut failure = None;
-    let mut draining = false;
+    let mut stopping = false;
     loop {
-        if token.is_triggered() {
-            // One last pass takes what the readers already hold, so the tail is not lost.
-            if draining {
-                break;
-            }
-            draining = true;
+        if token.is_triggered() && !stopping {
+            // The taker goes on taking what is still arriving (samples in flight or being
+            // repaired), then ends; everything it took is recorded below.
+            taker.stop();
+            stopping = true;
         }
-        if !draining && Instant::now() >= next_scan {
+        if !stopping && Instant::now() >= next_scan {
             next_scan += settings.scan_interval;
-            if let Err(e) = scan(node, settings, &mut recording, &mut subscriptions, &mut readers, &mut known_writers) {
+            if let Err(e) = scan(node, settings, &mut recording, &taker, &mut topics, &mut readers, &mut known_writers) {
                 failure = Some(e);
                 break;
             }
@@ -145,25 +152,36 @@ pub fn record(node: &mut MetrocellNode, settings: &RecorderSettings) -> Result<R
             diagnostics.set_value("messages", recording.total_messages());
             diagnostics.set_value("dropped", recording.total_dropped());
             diagnostics.set_value("missing", recording.total_missing());
+            diagnostics.set_value("cache_bytes", taker.cached_bytes());
+            if taker.take_cache_full() {
+                node.warn(format!(
+                    "the recorder's cache ({} bytes) is full: writing does not keep up, so samples wait in the DDS readers' queues (parameters max_cache_size, queue_depth)",
+                    settings.max_cache_bytes
+                ));
+            }
         }
-        let mut received = 0usize;
-        'take: for sub in &subscriptions {
-            loop {
-                let m = match sub.take() {
-                    Ok(Some(m)) => m,
-                    Ok(None) => break,
-                    Err(e) => {
-                        recording.count_unreadable(sub.topic());
-                        node.warn(format!("{}: a sample could not be taken: {e}", sub.topic()));
+        // Record what the taker has handed over, for at most RECORD_SLICE so discovery is
+        // still scanned and the bag flushed on time.
+        let slice_end = Instant::now() + RECORD_SLICE;
+        let mut ended = false;
+        while Instant::now() < slice_end {
+            match taker.next(Duration::from_millis(1)) {
+                Ok(Taken::Message { topic, message: m }) => {
+                    let log = m.receive_time_ns.max(0) as u64;
+                    let publish = m.source_time_ns.map_or(log, |t| t.max(0) as u64);
+                    if let Err(e) = recording.record(&topics[topic], log, publish, &m.payload, publisher_key(&m.publisher_gid), m.sequence_number) {
+                        failure = Some(e.to_string());
                         break;
                     }
-                };
-                received += 1;
-                let log = m.receive_time_ns.max(0) as u64;
-                let publish = m.source_time_ns.map_or(log, |t| t.max(0) as u64);
-                if let Err(e) = recording.record(sub.topic(), log, publish, &m.payload, publisher_key(&m.publisher_gid), m.sequence_number) {
-                    failure = Some(e.to_string());
-                    break 'take;
+                }
+                Ok(Taken::Unreadable { topic, error }) => {
+                    recording.count_unreadable(&topics[topic]);
+                    node.warn(format!("{}: a sample could not be taken: {error}", topics[topic]));
+                }
+                Err(false) => break,
+                Err(true) => {
+                    ended = true;
+                    break;
                 }
             }
         }
@@ -174,10 +192,11 @@ pub fn record(node: &mut MetrocellNode, settings: &RecorderSettings) -> Result<R
             failure = Some(e.to_string());
             break;
         }
-        if received == 0 && !draining {
-            token.wait_timeout(Duration::from_millis(1));
+        if ended {
+            break;
         }
     }
+    drop(taker);
     let summary = RecordingSummary { output: settings.output.clone(), counts: recording.counts().clone(), readers };
     if let Some(e) = failure {
         let file = recording.current_file().map(|p| p.display().to_string()).unwrap_or_else(|| settings.output.clone());
@@ -190,12 +209,17 @@ pub fn record(node: &mut MetrocellNode, settings: &RecorderSettings) -> Result<R
     Ok(summary)
 }
 
+/// The longest the recording loop spends writing what the taker handed over before it looks at
+/// discovery and the flush timer again.
+const RECORD_SLICE: Duration = Duration::from_millis(100);
+
 /// Subscribe the selected topics discovery shows that are not recorded yet.
 fn scan(
     node: &mut MetrocellNode,
     settings: &RecorderSettings,
     recording: &mut Recording,
-    subscriptions: &mut Vec<RawSubscription>,
+    taker: &Taker,
+    topics: &mut Vec<String>,
     readers: &mut BTreeMap<String, (bool, usize)>,
     known_writers: &mut BTreeSet<String>,
 ) -> Result<(), String> {
@@ -238,7 +262,8 @@ fn scan(
             node.warn(format!("{}: QoS override keys {} do not apply to a recorder's reader; ignored", t.name, o.ignored.join(", ")));
         }
         let sub = node.raw_subscription(&t.name, &t.type_name, qos.clone()).map_err(|e| e.to_string())?;
-        subscriptions.push(sub);
+        taker.add(sub);
+        topics.push(t.name.clone());
         let reliable = matches!(qos.reliability, ros2_client::qos::Reliability::Reliable { .. });
         let kept = match qos.history {
             ros2_client::qos::History::KeepLast { depth } => depth,

@@ -18,6 +18,9 @@ pub struct RecorderSettings {
     pub bulk_queue_depth: usize,
     pub qos_overrides: BTreeMap<String, QosOverride>,
     pub scan_interval: Duration,
+    /// Bytes of samples taken from the readers and not yet written that the recorder holds
+    /// before it stops taking (rosbag2's `--max-cache-size`).
+    pub max_cache_bytes: usize,
 }
 
 impl RecorderSettings {
@@ -37,6 +40,7 @@ impl RecorderSettings {
             bulk_queue_depth: depth("bulk_queue_depth")?,
             qos_overrides,
             scan_interval: Duration::from_secs_f64(node.param::<f64>("scan_interval")?),
+            max_cache_bytes: node.param::<i64>("max_cache_size")?.max(1) as usize,
         })
     }
 }
@@ -51,7 +55,8 @@ pub fn declarations() -> Vec<ParamDecl> {
         ParamDecl::new("flush_interval", 1.0, "seconds between flushes to disk: a kill loses at most ~2x this").with_range(0.1, 60.0),
         ParamDecl::new("max_bag_size", 0i64, "split into a new .mcap file after this many bytes (0: never)"),
         ParamDecl::new("max_bag_duration", 0.0, "split into a new .mcap file after this many seconds (0: never)").with_range(0.0, 1e9),
-        ParamDecl::new("queue_depth", 1000i64, "DDS reader history (keep-last depth) of ordinary topics: covers recorder stalls (disk flushes) of depth / rate seconds").with_range(1.0, 1e6),
+        ParamDecl::new("queue_depth", 1000i64, "DDS reader history (keep-last depth) of ordinary topics: covers stalls of the taker thread of depth / rate seconds").with_range(1.0, 1e6),
+        ParamDecl::new("max_cache_size", 256i64 << 20, "bytes of samples taken from the DDS readers but not yet written that the recorder holds (a slow disk); when full it stops taking and samples wait in the readers' queues").with_range(1.0, 1e12),
         ParamDecl::new("fail_after_bytes", 0i64, "testing only: simulate a full disk after this many bytes per file (0: off)"),
         ParamDecl::new("qos_profile_overrides_path", String::new(), "YAML file of per-topic reader QoS (rosbag2's format: /topic: {reliability: reliable, durability: transient_local, history: keep_last, depth: 100})"),
         ParamDecl::new("scan_interval", 1.0, "seconds between looks at discovery for new topics").with_range(0.05, 60.0),

@@ -139,6 +139,39 @@ print(counts.get('/rec_test/a', 0), counts.get('/rec_test/b', 0), repr(total))
     assert!((f[2].parse::<f64>().unwrap() - expected).abs() < 1e-9, "rosbags sum of temperatures {text} vs {expected}");
 }
 
+/// The taker thread's cache bounds memory by holding back, never by dropping: with room for
+/// less than one message, the taker hands samples over one by one, says the cache is full, and
+/// every reliable message still reaches the bag in order, byte for byte.
+#[test]
+fn a_full_cache_holds_samples_back_and_loses_none() {
+    metrocell_node::testing::require_isolated_network();
+    let dir = scratch("cache");
+    let mut node = MetrocellNode::builder("recorder_cache_pub").diagnostics_period(None).handle_signals(false).build().unwrap();
+    let a = node.raw_publisher("/rec_cache/a", TYPE, qos::reliable()).unwrap();
+    let mut command = recorder_command(&dir, "/rec_cache/.*");
+    command.args(["-p", "max_cache_size:=1"]).stderr(std::process::Stdio::piped());
+    let recorder = command.spawn().unwrap();
+    wait_matched(&[&a]);
+    let n = 500;
+    for i in 0..n {
+        a.publish(&payload(i)).unwrap();
+        std::thread::sleep(Duration::from_millis(2));
+    }
+    std::thread::sleep(Duration::from_millis(1500));
+    signal(&recorder, "-INT");
+    let out = recorder.wait_with_output().unwrap();
+    let log = String::from_utf8_lossy(&out.stderr).to_string();
+    assert!(out.status.success(), "recorder exits 0 on SIGINT:\n{log}");
+    let reader = BagReader::open(&dir).unwrap();
+    let recorded = reader.read_all(&MessageFilter { topics: Some(vec!["/rec_cache/a".into()]), ..Default::default() }).unwrap();
+    assert_eq!(recorded.len(), n, "every message of the reliable topic:\n{log}");
+    for (i, m) in recorded.iter().enumerate() {
+        assert_eq!(m.data, payload(i), "message {i} bytes");
+    }
+    assert!(log.contains("the recorder's cache (1 bytes) is full"), "the full cache is reported:\n{log}");
+    assert!(!log.contains("/rec_cache/a:"), "no loss in the recorder's own count:\n{log}");
+}
+
 #[test]
 fn kill_9_then_recover_keeps_everything_up_to_the_last_flush() {
     metrocell_node::testing::require_isolated_network();

@@ -98,6 +98,19 @@ impl LiveSim {
         self.publishers.iter().zip(&self.published_per_topic).map(|(p, n)| (p.topic(), *n)).collect()
     }
 
+    /// Wait until every reliable reader (the recorder among them) has acknowledged every message
+    /// this twin published, at most `timeout` in all, so that the last seconds of a run are not
+    /// lost when the twin exits with samples still unrepaired (a busy reader lags behind).
+    /// Returns the topics still unacknowledged at the deadline.
+    pub fn wait_for_acknowledgments(&self, timeout: Duration) -> Vec<&str> {
+        let deadline = Instant::now() + timeout;
+        self.publishers
+            .iter()
+            .filter(|p| !p.wait_for_acknowledgments(deadline.saturating_duration_since(Instant::now())))
+            .map(|p| p.topic())
+            .collect()
+    }
+
     /// Put the per-topic counts in the diagnostics (`published/<topic>`), which is how the demo
     /// checks that the bag holds every message the twin sent.
     pub fn report_counts(&self, finished: bool) {

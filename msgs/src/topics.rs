@@ -21,3 +21,6 @@ pub const TRACKER_MEASUREMENTS: &str = "/tracker/measurements";
 pub const PROBE_HITS: &str = "/probe/hits";
 pub const CAMERA_INFO: &str = "/camera/camera_info";
 pub const CAMERA_IMAGE: &str = "/camera/image_raw";
+/// The fiducial node's detections of each frame (`metrocell_msgs/FiducialDetectionArray`); it
+/// publishes them on `fiducials` in its namespace, this name at the root.
+pub const FIDUCIALS: &str = "/fiducials";

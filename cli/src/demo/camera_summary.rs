@@ -19,8 +19,7 @@ use metrocell_msgs::sensor_msgs::msg::Image;
 
 /// The twin's frames (the shared topic list) and the fiducial node's detections of them (its
 /// default output; the demo's launch file does not remap it).
-pub use metrocell_msgs::topics::CAMERA_IMAGE as IMAGE_TOPIC;
-pub const DETECTIONS_TOPIC: &str = "/fiducials";
+pub use metrocell_msgs::topics::{CAMERA_IMAGE as IMAGE_TOPIC, FIDUCIALS as DETECTIONS_TOPIC};
 
 /// Frames and detections of one recording.
 #[derive(Debug, Clone, Default, PartialEq)]

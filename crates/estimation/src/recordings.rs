@@ -58,8 +58,7 @@ use crate::records::{RecordFrame, RecordSet, Rejected};
 use crate::signal_topics::{SignalTopic, COMMANDED_JOINTS_TOPIC, LOAD_TOPIC, POWER_ON_TOPIC};
 
 pub const MEASURED_POINTS_TOPIC: &str = "/measured_points";
-pub use metrocell_msgs::topics::{PROBE_HITS as PROBE_TOPIC, TRACKER_MEASUREMENTS as TRACKER_TOPIC};
-pub const CAMERA_TOPIC: &str = "/fiducials";
+pub use metrocell_msgs::topics::{FIDUCIALS as CAMERA_TOPIC, PROBE_HITS as PROBE_TOPIC, TRACKER_MEASUREMENTS as TRACKER_TOPIC};
 
 /// Which messages become records.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

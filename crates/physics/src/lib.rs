@@ -12,7 +12,8 @@
 //!   [`model::TermModel`] — several terms with stacked parameters, summed displacement and
 //!   Jacobian (a declared model, or declared + a `diagnose` candidate).
 //! * [`geometry`] — the 21 ISO 230-1 errors as series over the travel, squareness, pitch-cyclic,
-//!   backlash, frame misalignment, and the XFYZ volumetric synthesis ([`geometry::volumetric`]).
+//!   backlash and frame misalignment (their sum is the XFYZ volumetric error; the exact chain is
+//!   `metrocell_kinematics::cartesian_error_chain`).
 //! * [`thermal`] — axis scale, structure growth (with first-order lag), workpiece expansion, and
 //!   the lumped shift model ([`thermal::shift_model`]), CTE uncertainty (ISO/TR 230-9).
 //! * [`instrument`] — Edlén (shop-floor, Birch & Downs, Bönsch & Potulski), refraction,

@@ -3,6 +3,9 @@
 //! catalog terms, and the squareness figure.
 
 mod common;
+/// P5's first-order synthesis, the oracle these tests hold the library to.
+#[path = "support/xfyz_first_order.rs"]
+mod xfyz_first_order;
 
 use metrocell_physics::geometry::angular::Angular;
 use metrocell_physics::geometry::error_series::{ErrorSeries, SeriesBasis};
@@ -10,7 +13,7 @@ use metrocell_physics::geometry::positioning::Positioning;
 use metrocell_physics::geometry::squareness::Squareness;
 use metrocell_physics::geometry::straightness::Straightness;
 use metrocell_kinematics::cartesian_error_chain::{workpiece_point, AxisErrors, MachineErrors, Squareness as ChainSquareness};
-use metrocell_physics::geometry::volumetric::*;
+use xfyz_first_order::*;
 use metrocell_physics::{Axis, PhysicsTerm, Signals};
 use nalgebra::Vector3;
 use rand::Rng;

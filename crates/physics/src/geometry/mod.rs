@@ -8,4 +8,3 @@ pub mod positioning;
 pub mod rotary_axis_location;
 pub mod squareness;
 pub mod straightness;
-pub mod volumetric;

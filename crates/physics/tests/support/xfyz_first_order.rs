@@ -14,8 +14,9 @@
 //! P is the tool point T (tool offset, m) expressed in the workpiece (table) frame; with all
 //! errors zero P₀ = T + (x, y, z). The volumetric error is E = P − P₀. The exact chain (any
 //! stacking order, R(k) inverted exactly) is crates/kinematics `cartesian_error_chain`, the
-//! project's one copy; this module holds the first-order synthesis the catalog terms sum to, and
-//! the crate tests hold the two together to second order.
+//! project's one copy of the chain; this file is the test oracle only: P5's first-order
+//! synthesis written out as the paper gives it, which the catalog terms must sum to and which
+//! the exact chain must match to second order (tests/volumetric.rs).
 //!
 //! Sign conventions (exactly P5's): δ(k) and ε(k) are the error motions of axis k's carriage.
 //! X is on the workpiece side, so its errors enter the tool-relative-to-workpiece error with a
@@ -33,9 +34,8 @@
 
 use nalgebra::Vector3;
 
-use super::error_series::ErrorSeries;
-use crate::error::PhysicsError;
-use crate::signals::Axis;
+use metrocell_physics::geometry::error_series::ErrorSeries;
+use metrocell_physics::{Axis, PhysicsError};
 
 /// Values of the six error motions of one axis at one position.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]

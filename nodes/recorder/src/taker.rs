@@ -15,10 +15,14 @@ use std::time::{Duration, Instant};
 
 use metrocell_node::{RawMessage, RawSubscription};
 
-/// After `stop`: how long the readers must stay empty before the taker ends.
-const DRAIN_QUIET: Duration = Duration::from_millis(200);
-/// After `stop`: the longest the taker goes on taking samples.
-const DRAIN_LIMIT: Duration = Duration::from_millis(1200);
+/// After `stop`: how long the readers must stay empty before the taker ends (samples in
+/// flight, or being repaired, arrive meanwhile).
+const DRAIN_QUIET: Duration = Duration::from_millis(100);
+/// After `stop`: the longest the taker goes on taking samples. A publisher that keeps sending
+/// would otherwise hold the recorder up; a node is expected to stop within a second of SIGINT
+/// (tests/system/node_shutdown.rs), and a caller that must have every message waits for the
+/// recorder's counts before it stops it, as `metrocell demo` does.
+const DRAIN_LIMIT: Duration = Duration::from_millis(300);
 
 /// What the taker hands over, in the order it took it; `topic` is the index of the subscription
 /// in the order they were added.
@@ -83,7 +87,7 @@ impl Taker {
         self.cache_was_full.swap(false, Ordering::Relaxed)
     }
 
-    /// Take what is still arriving (until the readers stay empty for 200 ms, at most 1.2 s),
+    /// Take what is still arriving (until the readers stay empty for 100 ms, at most 300 ms),
     /// then end; `next` hands over the rest.
     pub fn stop(&self) {
         self.stop.store(true, Ordering::Relaxed);

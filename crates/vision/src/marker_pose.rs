@@ -7,14 +7,16 @@
 //! The returned isometry maps marker → camera coordinates (metres).
 //!
 //! Method: homography of the undistorted corners → initial R, t (Zhang's decomposition), then
-//! Gauss–Newton on the distorted reprojection error weighted by the corner covariances. The
-//! pose covariance is (JᵀWJ)⁻¹ over (rotation vector increment [rad], translation [m]).
+//! the workspace's Levenberg–Marquardt (metrocell_solver) on the distorted reprojection error
+//! weighted by the corner covariances, with the camera model's analytic pose Jacobian. The pose
+//! covariance is (JᵀWJ)⁻¹ over (rotation vector increment [rad], translation [m]).
 
-use crate::camera::{pixel_to_normalized, project, CameraModel};
+use crate::camera::{pixel_to_normalized, pose_from_isometry, project, CameraModel};
 use crate::error::{invalid, Result, VisionError};
 use crate::homography::homography_4pt;
+use metrocell_solver::{solve, NotEvaluable, Options, Problem, SolverError};
 use nalgebra::{
-    Isometry3, Matrix2, Matrix3, Point2, Point3, Rotation3, SMatrix, SVector, Translation3,
+    DMatrix, Isometry3, Matrix2, Matrix3, Point2, Point3, Rotation3, SMatrix, Translation3,
     UnitQuaternion, Vector3,
 };
 
@@ -108,80 +110,42 @@ pub fn estimate_marker_pose(
     if rot.determinant() < 0.0 {
         rot = -rot;
     }
-    let mut r = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(rot));
-    let mut t = h3 * lambda;
+    let start = UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(rot));
+    let t = h3 * lambda;
 
-    // Whitening of each corner's residual: W_k = L_kᵀ L_k with L_k = chol(Σ_k)⁻¹.
-    let whiten: Vec<Matrix2<f64>> = corner_covariance
-        .iter()
-        .map(|c| {
+    let problem = CornerReprojection {
+        camera,
+        object: obj,
+        corners,
+        whiten: std::array::from_fn(|k| {
+            let c = &corner_covariance[k];
             let ok = c.iter().all(|v| v.is_finite());
             ok.then(|| c.cholesky().and_then(|ch| ch.l().try_inverse()))
                 .flatten()
                 .unwrap_or_else(|| Matrix2::identity() / fallback_sigma_px)
-        })
-        .collect();
-    let residuals = |r: &UnitQuaternion<f64>, t: &Vector3<f64>| -> Option<SVector<f64, 8>> {
-        let pose = Isometry3::from_parts(Translation3::from(*t), *r);
-        let mut out = SVector::<f64, 8>::zeros();
-        for k in 0..4 {
-            let p = project(camera, &pose, &obj[k])?;
-            let e = whiten[k] * (p - corners[k]);
-            out[2 * k] = e.x;
-            out[2 * k + 1] = e.y;
-        }
-        Some(out)
+        }),
+        start,
     };
-    let perturb = |r: &UnitQuaternion<f64>, t: &Vector3<f64>, d: &SVector<f64, 6>| {
-        (
-            UnitQuaternion::from_scaled_axis(Vector3::new(d[0], d[1], d[2])) * r,
-            t + Vector3::new(d[3], d[4], d[5]),
-        )
+    // Relative tolerances 1e-12: on 2000 simulated markers the pose then agrees with a solve to
+    // round-off (1e-14) within 1 nm and 3e-8 rad, at half the evaluations. 50 iterations: the
+    // slowest of them (43 px, seen 4.5° off face-on, where the two planar poses merge into a
+    // shallow valley) stops there within 2e-11 of its minimum χ².
+    let options = Options {
+        max_iterations: 50,
+        ftol: 1e-12,
+        xtol: 1e-12,
+        gtol: 1e-12,
+        ..Options::default()
     };
-    let jacobian = |r: &UnitQuaternion<f64>, t: &Vector3<f64>| -> Option<SMatrix<f64, 8, 6>> {
-        let mut j = SMatrix::<f64, 8, 6>::zeros();
-        for i in 0..6 {
-            let step = if i < 3 {
-                1e-7
-            } else {
-                1e-7 * t.norm().max(1e-3)
-            };
-            let mut d = SVector::<f64, 6>::zeros();
-            d[i] = step;
-            let (rp, tp) = perturb(r, t, &d);
-            d[i] = -step;
-            let (rm, tm) = perturb(r, t, &d);
-            j.set_column(
-                i,
-                &((residuals(&rp, &tp)? - residuals(&rm, &tm)?) / (2.0 * step)),
-            );
-        }
-        Some(j)
-    };
-    let mut res = residuals(&r, &t).ok_or_else(|| no_solution("marker behind the camera"))?;
-    for _ in 0..50 {
-        let j = jacobian(&r, &t).ok_or_else(|| no_solution("marker behind the camera"))?;
-        let step = (j.transpose() * j)
-            .cholesky()
-            .ok_or_else(|| no_solution("singular normal equations"))?
-            .solve(&(-j.transpose() * res));
-        let (rn, tn) = perturb(&r, &t, &step);
-        let Some(resn) = residuals(&rn, &tn) else {
-            break;
-        };
-        if resn.norm_squared() > res.norm_squared() {
-            break;
-        }
-        (r, t, res) = (rn, tn, resn);
-        if step.norm() < 1e-12 {
-            break;
-        }
-    }
-    let j = jacobian(&r, &t).ok_or_else(|| no_solution("marker behind the camera"))?;
-    let covariance = (j.transpose() * j)
-        .try_inverse()
+    let fit = solve(&problem, &[0.0, 0.0, 0.0, t.x, t.y, t.z], &options).map_err(|e| match e {
+        SolverError::StartNotEvaluable(_) => no_solution("marker behind the camera"),
+        e => no_solution(&e.to_string()),
+    })?;
+    let covariance = fit
+        .covariance_unscaled
+        .map(|c| SMatrix::<f64, 6, 6>::from_iterator(c.iter().copied()))
         .ok_or_else(|| no_solution("pose not observable"))?;
-    let pose = Isometry3::from_parts(Translation3::from(t), r);
+    let pose = problem.pose(&fit.x);
     let sq: f64 = (0..4)
         .map(|k| {
             project(camera, &pose, &obj[k])
@@ -193,4 +157,83 @@ pub fn estimate_marker_pose(
         covariance,
         reprojection_rms_px: (sq / 4.0).sqrt(),
     })
+}
+
+/// The four corners' whitened reprojection errors Lₖ⁻¹·(project(pose, cornerₖ) − measuredₖ),
+/// Σₖ = LₖLₖᵀ, so that the solver's plain least squares is the covariance-weighted one.
+///
+/// State x = (θ, t): θ the rotation vector of R·R₀⁻¹ relative to the homography's start R₀
+/// (small, so never near the rotation vector's singularity at π, where markers facing the camera
+/// sit), t in m. A step δ = (δθ, δt) is the perturbation of [`MarkerPose::covariance`], so the
+/// solver's (J̃ᵀJ̃)⁻¹ is that covariance as it stands.
+struct CornerReprojection<'a> {
+    camera: &'a CameraModel,
+    object: [Point3<f64>; 4],
+    corners: &'a [Point2<f64>; 4],
+    whiten: [Matrix2<f64>; 4],
+    start: UnitQuaternion<f64>,
+}
+
+impl CornerReprojection<'_> {
+    fn rotation(&self, x: &[f64]) -> UnitQuaternion<f64> {
+        UnitQuaternion::from_scaled_axis(Vector3::new(x[0], x[1], x[2])) * self.start
+    }
+
+    fn pose(&self, x: &[f64]) -> Isometry3<f64> {
+        Isometry3::from_parts(Translation3::new(x[3], x[4], x[5]), self.rotation(x))
+    }
+}
+
+fn not_evaluable(e: metrocell_camera_model::CameraError) -> NotEvaluable {
+    NotEvaluable(e.to_string())
+}
+
+impl Problem for CornerReprojection<'_> {
+    fn residual_count(&self) -> usize {
+        8
+    }
+    fn parameter_count(&self) -> usize {
+        6
+    }
+    fn residuals(&self, x: &[f64], r: &mut [f64]) -> std::result::Result<(), NotEvaluable> {
+        let pose = pose_from_isometry(&self.pose(x));
+        for k in 0..4 {
+            let [u, v] = self.camera.project(&pose, &self.object[k].coords).map_err(not_evaluable)?;
+            let e = self.whiten[k] * (Point2::new(u, v) - self.corners[k]);
+            r[2 * k] = e.x;
+            r[2 * k + 1] = e.y;
+        }
+        Ok(())
+    }
+    fn residuals_and_jacobian(
+        &self,
+        x: &[f64],
+        r: &mut [f64],
+        j: &mut DMatrix<f64>,
+    ) -> std::result::Result<(), NotEvaluable> {
+        let pose = pose_from_isometry(&self.pose(x));
+        for k in 0..4 {
+            let p = self
+                .camera
+                .project_with_jacobians(&pose, &self.object[k].coords)
+                .map_err(not_evaluable)?;
+            let e = self.whiten[k] * (Point2::new(p.u, p.v) - self.corners[k]);
+            r[2 * k] = e.x;
+            r[2 * k + 1] = e.y;
+            // the camera model's columns are (δt, δθ); ours (δθ, δt)
+            let d = self.whiten[k] * p.d_pose;
+            j.view_mut((2 * k, 0), (2, 3)).copy_from(&d.fixed_columns::<3>(3));
+            j.view_mut((2 * k, 3), (2, 3)).copy_from(&d.fixed_columns::<3>(0));
+        }
+        Ok(())
+    }
+    fn retract(&self, x: &[f64], delta: &[f64], out: &mut [f64]) {
+        let q = UnitQuaternion::from_scaled_axis(Vector3::new(delta[0], delta[1], delta[2]))
+            * self.rotation(x);
+        let theta = (q * self.start.inverse()).scaled_axis();
+        out[..3].copy_from_slice(theta.as_slice());
+        for k in 3..6 {
+            out[k] = x[k] + delta[k];
+        }
+    }
 }

@@ -7,7 +7,9 @@
 //! Image formation: each pixel integrates the target's reflectance over its unit square (box
 //! filter, the pixel convention of the crate doc). The target's boundaries are traced through
 //! the camera into an edge mask ([`edges`]): pixels an edge may cross are supersampled on an
-//! s×s grid, and each row's runs of unmarked pixels, which see one reflectance, are sampled once.
+//! s×s grid — or, where a single boundary crosses the pixel, shaded with its exact area split
+//! ([`coverage`]) — and each row's runs of unmarked pixels, which see one reflectance, are
+//! sampled once.
 //! (When the whole image does not see the target plane — horizon or lens limit in view — or the
 //! tracing budget runs out, every pixel is supersampled instead: s² samples per pixel, 16–64×
 //! slower, but no edge can slip between samples of a flatness test.)
@@ -22,6 +24,7 @@ use image::GrayImage;
 use nalgebra::{Isometry3, Point2, Point3, Vector3};
 use rand::{RngCore, SeedableRng};
 
+mod coverage;
 mod edge_blur;
 mod edges;
 mod normal_table;
@@ -273,7 +276,12 @@ impl<'a> ViewGeometry<'a> {
 
     /// Mean reflectance over pixel (i, j) from s×s samples; unseen samples count as `bg`
     /// (the background level as a reflectance); NaN if no sample sees the plane.
+    /// A pixel one boundary crosses gets its exact area split instead ([`coverage`]): the
+    /// grid alone rounds a boundary parallel to its columns to 1/s px.
     fn supersample(&self, i: usize, j: usize, s: usize, bg: f64) -> f64 {
+        if let Some(mean) = coverage::one_boundary_mean(&|u, v| self.sample(u, v), i as f64, j as f64, s) {
+            return mean;
+        }
         let mut acc = 0.0;
         let mut n_nan = 0usize;
         for b in 0..s {

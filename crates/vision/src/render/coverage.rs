@@ -160,6 +160,18 @@ pub(super) fn one_boundary_mean(sample: &impl Fn(f64, f64) -> f64, cx: f64, cy: 
 mod tests {
     use super::*;
 
+    /// The reference: the mean of `f` over the pixel centred at the origin, on a 4000 × 4000 grid.
+    fn grid_mean(f: &impl Fn(f64, f64) -> f64) -> f64 {
+        let m = 4000;
+        let mut acc = 0.0;
+        for j in 0..m {
+            for i in 0..m {
+                acc += f(-0.5 + (i as f64 + 0.5) / m as f64, -0.5 + (j as f64 + 0.5) / m as f64);
+            }
+        }
+        acc / (m * m) as f64
+    }
+
     /// A straight boundary at any angle and offset: the exact area of the half-plane's share.
     #[test]
     fn a_straight_boundary_gives_the_exact_area() {
@@ -168,15 +180,7 @@ mod tests {
             // white (1) where c·x + sn·y > offset, pixel centred at the origin
             let f = |x: f64, y: f64| if c * x + sn * y > offset { 1.0 } else { 0.0 };
             let got = one_boundary_mean(&f, 0.0, 0.0, 4).unwrap_or_else(|| panic!("angle {angle} offset {offset}: no split"));
-            // reference: a 4000 × 4000 grid of the same half-plane
-            let m = 4000;
-            let mut acc = 0.0;
-            for j in 0..m {
-                for i in 0..m {
-                    acc += f(-0.5 + (i as f64 + 0.5) / m as f64, -0.5 + (j as f64 + 0.5) / m as f64);
-                }
-            }
-            let want = acc / (m * m) as f64;
+            let want = grid_mean(&f);
             assert!((got - want).abs() < 2e-4, "angle {angle} offset {offset}: {got} vs {want}");
         }
     }
@@ -188,14 +192,7 @@ mod tests {
         let (r, cx) = (5.0, 5.3); // circle of 5 px radius centred 5.3 px to the right
         let f = |x: f64, y: f64| if (x - cx).powi(2) + y * y < r * r { 0.0 } else { 1.0 };
         let got = one_boundary_mean(&f, 0.0, 0.0, 4).expect("one boundary");
-        let m = 4000;
-        let mut acc = 0.0;
-        for j in 0..m {
-            for i in 0..m {
-                acc += f(-0.5 + (i as f64 + 0.5) / m as f64, -0.5 + (j as f64 + 0.5) / m as f64);
-            }
-        }
-        let want = acc / (m * m) as f64;
+        let want = grid_mean(&f);
         assert!((got - want).abs() < 1e-3, "{got} vs {want}");
     }
 

@@ -1,5 +1,9 @@
-//! DDS side: every published topic is read raw (best effort, so reliable and best-effort
-//! publishers both match; a queue of 200, of 5 for bulk types such as images), forwarded as CDR
+//! DDS side: every published topic is read raw (a queue of 200, of 5 for bulk types such as
+//! images), reliably when every publisher discovered offers reliable, best effort otherwise (as
+//! the recorder adapts, `recording_qos`): RustDDS (0.15) never counts a best-effort reader's
+//! samples as acknowledged, so a reliable writer matched by one keeps its last 8192 samples, and
+//! a dashboard reading everything best effort made every node's writers grow to that. Bulk
+//! topics stay best effort (their writers bound their history themselves). Forwarded as CDR
 //! to the Foxglove server and, when it has a role, decoded into the dashboard state. Discovery is rescanned every second, so sensors that
 //! appear late (a new `temperature/<sensor>`) show up too.
 
@@ -7,6 +11,7 @@ use std::collections::BTreeSet;
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+use metrocell_bagtools::recorded_qos::{offered_qos_of_topic, recording_qos};
 use metrocell_bagtools::SourcedMessage;
 use metrocell_dashboard_state::DashboardState;
 use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
@@ -14,6 +19,7 @@ use metrocell_msgs::msg::{ErrorModel, MeasuredPoint, TrackerMeasurement};
 use metrocell_msgs::rosgraph_msgs::msg::Clock;
 use metrocell_msgs::sensor_msgs::msg::Temperature;
 use metrocell_msgs::RosMessage;
+use metrocell_node::names::dds_topic_name;
 use metrocell_node::{qos, MetrocellNode, RawMessage, RawSubscription};
 
 use crate::foxglove_bridge::FoxgloveBridge;
@@ -54,7 +60,10 @@ impl Ingest {
             let sub = if metrocell_bagtools::is_bulk_type(&t.type_name) {
                 node.bounded_raw_subscription(&t.name, &t.type_name, qos::sensor_data().history(ros2_client::qos::History::KeepLast { depth: BULK_DEPTH }))?
             } else {
-                node.raw_subscription(&t.name, &t.type_name, qos::sensor_data().history(ros2_client::qos::History::KeepLast { depth: 200 }))?
+                let writers = node.context().domain_participant().discovered_writers();
+                let offered = offered_qos_of_topic(writers.iter().map(|w| &w.publication_topic_data), &dds_topic_name(&t.name));
+                let profile = if recording_qos(&offered).reliable { qos::reliable() } else { qos::sensor_data() };
+                node.raw_subscription(&t.name, &t.type_name, profile.history(ros2_client::qos::History::KeepLast { depth: 200 }))?
             };
             if let Some(b) = bridge.as_deref_mut() {
                 if let Err(e) = b.advertise(&t.name, &t.type_name, definition) {

@@ -60,21 +60,40 @@ pub fn set_remote_parameter(
         .map_err(|e| format!("client of {target}/set_parameters: {e:?}"))?;
     let request = SetParametersRequest { parameter: vec![raw::Parameter { name: name.to_string(), value: raw::ParameterValue::from(value.to_ros()) }] };
     let deadline = std::time::Instant::now() + timeout;
+    // The request is sent once, when the service is matched (reliable from then on). Resending
+    // on a slow answer would set the parameter twice, and a node that acts on each set (then
+    // resets it, like the tracker's `reregister`) would act twice.
+    if block_on_within(client.wait_for_service(client_node.ros_node()), timeout).is_none() {
+        return Err(format!("no {target}/set_parameters service matched within {timeout:?}"));
+    }
+    let id = client.send_request(request).map_err(|e| format!("request to {target}/set_parameters: {e:?}"))?;
     while std::time::Instant::now() < deadline {
-        let id = client.send_request(request.clone()).map_err(|e| format!("request to {target}/set_parameters: {e:?}"))?;
-        let resend_at = std::time::Instant::now() + std::time::Duration::from_millis(500);
-        while std::time::Instant::now() < resend_at {
-            match client.receive_response() {
-                Ok(Some((rid, response))) if rid == id => {
-                    let r = response.results.first().ok_or("an empty SetParameters response")?;
-                    return if r.successful { Ok(()) } else { Err(r.reason.clone()) };
-                }
-                Ok(_) => std::thread::sleep(std::time::Duration::from_millis(10)),
-                Err(e) => return Err(format!("response from {target}/set_parameters: {e:?}")),
+        match client.receive_response() {
+            Ok(Some((rid, response))) if rid == id => {
+                let r = response.results.first().ok_or("an empty SetParameters response")?;
+                return if r.successful { Ok(()) } else { Err(r.reason.clone()) };
             }
+            Ok(_) => std::thread::sleep(std::time::Duration::from_millis(10)),
+            Err(e) => return Err(format!("response from {target}/set_parameters: {e:?}")),
         }
     }
     Err(format!("no answer from {target}/set_parameters within {timeout:?}"))
+}
+
+/// Run `f` to completion on this thread, or give up after `timeout` (None).
+fn block_on_within<F: std::future::Future>(f: F, timeout: std::time::Duration) -> Option<F::Output> {
+    let (expire, expired) = futures::channel::oneshot::channel::<()>();
+    std::thread::spawn(move || {
+        std::thread::sleep(timeout);
+        let _ = expire.send(());
+    });
+    futures::executor::block_on(async move {
+        futures::pin_mut!(f);
+        match futures::future::select(f, expired).await {
+            futures::future::Either::Left((output, _)) => Some(output),
+            futures::future::Either::Right(_) => None,
+        }
+    })
 }
 
 #[cfg(test)]

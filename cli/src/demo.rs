@@ -154,9 +154,9 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
     let launcher = std::thread::spawn(move || metrocell_launch::run_launch(&launch_file, &launch_args, &options));
 
     let watch = watch_cell(&args, &shutdown, &launcher)?;
-    // The twin's counts come once the recorder has acknowledged every message, and the watch
-    // has waited until the recorder's own counts reach them. The twin lingers 1.5 s more (final
-    // diagnostics). Then stop every node.
+    // The watch has waited until the recorder holds every message of the twin. A moment more lets
+    // the other nodes' last outputs, computed from the twin's last messages, reach the bag too;
+    // then stop every node.
     std::thread::sleep(Duration::from_millis(800));
     shutdown.request();
     let outcome = launcher.join().map_err(|_| anyhow::anyhow!("launcher thread panicked"))??;
@@ -449,7 +449,7 @@ fn recorder_behind(w: &Watch) -> u64 {
 /// so the recorder is not stopped while a busy machine still has it catching up. Returns how many
 /// messages it was still behind.
 fn wait_for_recorder(diagnostics: &metrocell_node::Subscription<DiagnosticArray>, w: &mut Watch, timeout: Duration) -> u64 {
-    let deadline = Instant::now() + timeout;
+    let started = Instant::now();
     let mut told = false;
     loop {
         while let Ok(Some((d, _))) = diagnostics.take() {
@@ -457,10 +457,10 @@ fn wait_for_recorder(diagnostics: &metrocell_node::Subscription<DiagnosticArray>
             take_recorder_counts(&d, w);
         }
         let behind = recorder_behind(w);
-        if behind == 0 || Instant::now() >= deadline {
+        if behind == 0 || started.elapsed() >= timeout {
             return behind;
         }
-        if !told && deadline.saturating_duration_since(Instant::now()) < timeout - Duration::from_secs(3) {
+        if !told && started.elapsed() > Duration::from_secs(3) {
             println!("  waiting for the recorder to catch up ({behind} messages behind the twin)");
             told = true;
         }

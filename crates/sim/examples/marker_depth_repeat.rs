@@ -3,13 +3,14 @@
 //! the twin's frames (`FrameRendering::default()`), without DDS:
 //!
 //!   cargo run --release -p metrocell-simulation --example marker_depth_repeat -- \
-//!       [cell.yaml] [noise seeds per dwell] [cycles] [dwell filter, e.g. 3,7]
+//!       [cell.yaml] [noise seeds per frame] [cell seconds] [target filter, e.g. 3,7]
 //!
-//! Each dwell of the first `cycles` program cycles is rendered with `seeds` different noise
-//! seeds (the per-frame stamp seed, as the twin draws it, offset by 1 ns per seed); per dwell
-//! and marker it prints the depth (z of the marker pose, camera frame) of every frame, the
-//! spread over the frames and the σ the pose covariance states, and the corners' offsets from
-//! the renderer's ground truth. The default cell is the demo's (`demo_shift.yaml`).
+//! Every frame the twin takes in the first `cell seconds` (default 3600) is rendered with
+//! `seeds` different noise seeds (the per-frame stamp seed, as the twin draws it, offset by 1 ns
+//! per seed). Per dwell (the program target the frame was taken at) and marker it prints the
+//! depth (z of the marker pose, camera frame) of every frame, the spread over the frames and the
+//! σ the pose covariance states, and the corners' offsets from the renderer's ground truth. The
+//! default cell is the demo's (`demo_shift.yaml`, a 6-min cycle of 24 dwells).
 
 use std::collections::BTreeMap;
 use std::path::PathBuf;
@@ -26,22 +27,21 @@ fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
     let cell_path = args.first().map(PathBuf::from).unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../twin/examples/cells/demo_shift.yaml"));
     let seeds: u64 = args.get(1).map_or(8, |s| s.parse().expect("seeds"));
-    let cycles: f64 = args.get(2).map_or(1.0, |s| s.parse().expect("cycles"));
-    let only: Option<Vec<usize>> = args.get(3).map(|s| s.split(',').map(|v| v.parse().expect("dwell index")).collect());
+    let duration: f64 = args.get(2).map_or(3600.0, |s| s.parse().expect("cell seconds"));
+    let only: Option<Vec<u32>> = args.get(3).map(|s| s.split(',').map(|v| v.parse().expect("target id")).collect());
     let cell = Cell::from_path(&cell_path).expect("cell");
-    let cycle_s = 360.0;
     let start = parse_start_time(DEFAULT_START_TIME).unwrap();
     let converter = MessageConverter::new(&cell, start, CameraIntrinsics::default()).unwrap().with_frames(FrameRendering::default(), 1).unwrap();
     let renderer = converter.frames().expect("the cell has a camera");
     let camera = renderer.camera;
     let family = TargetFamily::parse("DICT_4X4_50", None, None).unwrap();
     let params = DetectorParams { threads: 1, ..Default::default() };
-    let sim = Simulation::new(cell, cycles * cycle_s, 1).unwrap();
+    let sim = Simulation::new(cell, duration, 1).unwrap();
     let requests: Vec<_> = sim.samples().filter_map(|s| if let Sample::CameraFrameRequest(r) = s { Some(r) } else { None }).collect();
     // per (dwell index in the cycle, marker): depths and stated σ
-    let mut table: BTreeMap<(usize, i64), (Vec<f64>, Vec<f64>)> = BTreeMap::new();
+    let mut table: BTreeMap<(u32, i64), (Vec<f64>, Vec<f64>)> = BTreeMap::new();
     for (k, req) in requests.iter().enumerate() {
-        let dwell = k % 24;
+        let dwell = req.target_id;
         if only.as_ref().is_some_and(|o| !o.contains(&dwell)) {
             continue;
         }

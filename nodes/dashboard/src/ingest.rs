@@ -47,6 +47,8 @@ impl Ingest {
         }
         self.next_scan = Instant::now() + Duration::from_secs(1);
         let mut bridge = bridge;
+        // The writers' offered QoS, copied from discovery once per scan that finds a new topic.
+        let mut writers = None;
         for t in node.discovered_publications() {
             if !self.known.insert(t.name.clone()) {
                 continue;
@@ -60,7 +62,7 @@ impl Ingest {
             let sub = if metrocell_bagtools::is_bulk_type(&t.type_name) {
                 node.bounded_raw_subscription(&t.name, &t.type_name, qos::sensor_data().history(ros2_client::qos::History::KeepLast { depth: BULK_DEPTH }))?
             } else {
-                let writers = node.context().domain_participant().discovered_writers();
+                let writers = writers.get_or_insert_with(|| node.context().domain_participant().discovered_writers());
                 let offered = offered_qos_of_topic(writers.iter().map(|w| &w.publication_topic_data), &dds_topic_name(&t.name));
                 let profile = if recording_qos(&offered).reliable { qos::reliable() } else { qos::sensor_data() };
                 node.raw_subscription(&t.name, &t.type_name, profile.history(ros2_client::qos::History::KeepLast { depth: 200 }))?

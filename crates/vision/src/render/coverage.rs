@@ -60,16 +60,7 @@ pub(super) fn one_boundary_mean(sample: &impl Fn(f64, f64) -> f64, cx: f64, cy: 
     // Crossing in the perimeter interval [k, k + 1]·step, between values `before` and after.
     let crossing = |k: usize| -> f64 {
         let before = ring[k];
-        let (mut lo, mut hi) = (k as f64 * step, (k + 1) as f64 * step);
-        for _ in 0..BISECTIONS {
-            let mid = 0.5 * (lo + hi);
-            if value(at(mid)) == before {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        0.5 * (lo + hi)
+        bisect(k as f64 * step, (k + 1) as f64 * step, |t| value(at(t)) == before)
     };
     let (ta, tb) = (crossing(ka), crossing(kb));
     let (a, b) = (at(ta), at(tb));
@@ -117,18 +108,10 @@ pub(super) fn one_boundary_mean(sample: &impl Fn(f64, f64) -> f64, cx: f64, cy: 
     if v_lo != outside || v_hi != inside {
         return None;
     }
-    for _ in 0..BISECTIONS {
-        let mid = 0.5 * (lo + hi);
-        if value(along(mid)) == outside {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
     // Bow > 0: the boundary lies on the arc's side, so the arc's region is smaller. A bow of
     // more than MAX_BOW of the chord is no gentle curve (a corner inside the pixel, a rim of a
     // few pixels' radius): sampled instead.
-    let bow = 0.5 * (lo + hi);
+    let bow = bisect(lo, hi, |h| value(along(h)) == outside);
     if bow.abs() > MAX_BOW * length {
         return None;
     }
@@ -154,6 +137,20 @@ pub(super) fn one_boundary_mean(sample: &impl Fn(f64, f64) -> f64, cx: f64, cy: 
         }
     }
     Some(inside * area_inside + outside * (1.0 - area_inside))
+}
+
+/// Where `on_lo_side` turns false between `lo` (true) and `hi` (false): the midpoint after
+/// [`BISECTIONS`] halvings.
+fn bisect(mut lo: f64, mut hi: f64, on_lo_side: impl Fn(f64) -> bool) -> f64 {
+    for _ in 0..BISECTIONS {
+        let mid = 0.5 * (lo + hi);
+        if on_lo_side(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
 }
 
 #[cfg(test)]

@@ -9,6 +9,7 @@
 //! the solutions are.
 //!
 //! `METROCELL_PYTHON=/path/to/python cargo run --release -p metrocell-estimation --example batch_fit_vs_scipy`
+//! (`-- --fit-only N` runs only metrocell's fit N more times, for a profiler)
 
 #[path = "../tests/common/mod.rs"]
 mod common;
@@ -79,7 +80,27 @@ fn main() {
         result = Some(f);
     }
     let f = result.unwrap();
-    println!("metrocell: {:.3} s ({} iterations, {:?}), residual RMS {:.3} µm", ours, f.solution.iterations, f.solution.termination, metrocell_estimation::rms(&f.residuals_after) * 1e6);
+    println!("metrocell: {:.3} s ({} iterations, {:?}), residual RMS {:.3} µm, {} more held: {:?}", ours, f.solution.iterations, f.solution.termination, metrocell_estimation::rms(&f.residuals_after) * 1e6, f.held.len(), f.held.iter().map(|h| &h.combination).collect::<Vec<_>>());
+    // `--fit-only N`: only metrocell's fit, N more times, for a profiler (no scipy)
+    let args: Vec<String> = std::env::args().collect();
+    if let Some(k) = args.iter().position(|a| a == "--fit-only") {
+        let n: usize = args.get(k + 1).and_then(|v| v.parse().ok()).expect("--fit-only N");
+        let t = Instant::now();
+        for _ in 0..n {
+            fit(&fm, &setup, &data, Some(x0.clone()), &options).expect("fit");
+        }
+        println!("{n} more fits: {:.3} s each", t.elapsed().as_secs_f64() / n as f64);
+        // and the model evaluation alone (residuals + Jacobian of all records), as the fit calls it
+        let problem = PointResiduals::new(&fm, &data.records).unwrap();
+        let mut r = vec![0.0; problem.residual_count()];
+        let mut jac = DMatrix::zeros(problem.residual_count(), names.len());
+        let t = Instant::now();
+        for _ in 0..n {
+            problem.residuals_and_jacobian(&x0, &mut r, &mut jac).unwrap();
+        }
+        println!("residuals + Jacobian: {:.2} ms each", 1e3 * t.elapsed().as_secs_f64() / n as f64);
+        return;
+    }
 
     // scipy on the identical problem
     let problem = PointResiduals::new(&fm, &data.records).unwrap();

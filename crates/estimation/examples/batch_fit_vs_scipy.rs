@@ -80,7 +80,7 @@ fn main() {
         result = Some(f);
     }
     let f = result.unwrap();
-    println!("metrocell: {:.3} s ({} iterations, {:?}), residual RMS {:.3} µm, {} more held: {:?}", ours, f.solution.iterations, f.solution.termination, metrocell_estimation::rms(&f.residuals_after) * 1e6, f.held.len(), f.held.iter().map(|h| &h.combination).collect::<Vec<_>>());
+    println!("metrocell: {:.3} s ({} iterations, {} evaluations, {:?}), residual RMS {:.3} µm, {} more held: {:?}", ours, f.solution.iterations, f.solution.evaluations, f.solution.termination, metrocell_estimation::rms(&f.residuals_after) * 1e6, f.held.len(), f.held.iter().map(|h| &h.combination).collect::<Vec<_>>());
     // `--fit-only N`: only metrocell's fit, N more times, for a profiler (no scipy)
     let args: Vec<String> = std::env::args().collect();
     if let Some(k) = args.iter().position(|a| a == "--fit-only") {

@@ -265,6 +265,12 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
         xtol: 1e-12,
         gtol: 1e-12,
         null_space: NullSpace::Truncated { rcond: options.rcond },
+        // Marquardt's λ₀ = 1e-3 (relative to the unit-diagonal scaled normal matrix) damps the
+        // weakly determined directions of a calibration (eigenvalues down to rcond² of the
+        // largest) for several iterations while λ walks down; a calibration from its start is
+        // nearly linear, and a step that overshoots is rejected and damped at the price of one
+        // evaluation. On the XFYZ benchmark fit: 5 iterations → 4.
+        initial_damping: 1e-6,
         ..Options::default()
     };
     // (r, J) at the start, evaluated once: they judge what the design identifies, give the

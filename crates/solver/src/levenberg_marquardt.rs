@@ -11,7 +11,7 @@
 //! and the trial point is projected onto the box.
 
 use crate::error::{check_finite, check_len, NotEvaluable, SolverError};
-use crate::normal_equations::{accumulate, cholesky_solve_in_place, free_inverse, scale_rows, scaled_free_block};
+use crate::normal_equations::{accumulate_free, cholesky_solve_in_place, first_non_finite, free_inverse, scaled_free_block};
 use crate::options::{NullSpace, Options};
 use crate::problem::Problem;
 use crate::solution::{Solution, Termination};
@@ -25,7 +25,11 @@ struct Workspace {
     raw: Vec<f64>,
     /// The same whitened and robust-weighted: √ρ'ᵢ·rᵢ/σᵢ.
     r: Vec<f64>,
+    /// The Jacobian at the current point as the problem returned it (m × n; the columns of fixed
+    /// parameters are never read).
     j: DMatrix<f64>,
+    /// The parameters that are not fixed, in order: the columns the normal equations are built from.
+    free: Vec<usize>,
     /// The trial point's Jacobian, when trials are evaluated with it (swapped in on acceptance).
     trial_j: DMatrix<f64>,
     inv_sigma: Vec<f64>,
@@ -51,45 +55,53 @@ fn cost(r: &[f64], inv_sigma: &[f64], x: &[f64], options: &Options) -> Option<f6
     c.is_finite().then_some(c)
 }
 
-/// r(x) and J(x) into the buffers, with non-finite values reported as not evaluable.
-fn evaluate<P: Problem + ?Sized>(problem: &P, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>) -> Result<(), NotEvaluable> {
+/// r(x) and J(x) into the buffers, with non-finite values (in the free columns) reported as not
+/// evaluable.
+fn evaluate<P: Problem + ?Sized>(problem: &P, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>, free: &[usize]) -> Result<(), NotEvaluable> {
     problem.residuals_and_jacobian(x, r, j)?;
-    check_evaluated(r, j)
+    check_evaluated(r, j, free)
 }
 
-/// Every residual and Jacobian entry finite, or the first that is not.
-fn check_evaluated(r: &[f64], j: &DMatrix<f64>) -> Result<(), NotEvaluable> {
+/// Every residual and every Jacobian entry of the free columns finite, or the first that is not.
+fn check_evaluated(r: &[f64], j: &DMatrix<f64>, free: &[usize]) -> Result<(), NotEvaluable> {
     if let Some(i) = r.iter().position(|v| !v.is_finite()) {
         return Err(NotEvaluable(format!("residual {i} is {}", r[i])));
     }
-    if let Some(i) = j.iter().position(|v| !v.is_finite()) {
-        let m = j.nrows().max(1);
-        return Err(NotEvaluable(format!("Jacobian entry ({}, {}) is not finite", i % m, i / m)));
+    match first_non_finite(j, free) {
+        Some((i, k)) => Err(NotEvaluable(format!("Jacobian entry ({i}, {k}) is not finite"))),
+        None => Ok(()),
     }
-    Ok(())
 }
 
 impl Workspace {
     /// Evaluates r and J at x, then linearises (see [`Workspace::weigh`]).
     fn linearise<P: Problem + ?Sized>(&mut self, problem: &P, x: &[f64], options: &Options) -> Result<f64, NotEvaluable> {
-        evaluate(problem, x, &mut self.r, &mut self.j)?;
-        self.weigh(x, options)
+        evaluate(problem, x, &mut self.r, &mut self.j, &self.free)?;
+        self.weigh_own(x, options)
     }
 
-    /// With r and J evaluated at x: whitens and robust-weights them in place and forms A, g.
-    /// Returns the cost at x.
-    fn weigh(&mut self, x: &[f64], options: &Options) -> Result<f64, NotEvaluable> {
-        if let Some(i) = self.r.iter().position(|v| !v.is_finite()) {
-            return Err(NotEvaluable(format!("residual {i} is {}", self.r[i])));
-        }
+    /// [`Workspace::weigh`] of the workspace's own Jacobian `j`.
+    fn weigh_own(&mut self, x: &[f64], options: &Options) -> Result<f64, NotEvaluable> {
+        let j = std::mem::replace(&mut self.j, DMatrix::zeros(0, 0));
+        let f = self.weigh(&j, x, options);
+        self.j = j;
+        f
+    }
+
+    /// With r (in `self.r`) and the Jacobian `j` evaluated at x, both checked finite: whitens
+    /// and robust-weights r in place, and forms A, g from the weighted free columns of J (zero
+    /// in the rows and columns of fixed parameters). Returns the cost at x.
+    fn weigh(&mut self, j: &DMatrix<f64>, x: &[f64], options: &Options) -> Result<f64, NotEvaluable> {
         self.raw.copy_from_slice(&self.r);
         let f = cost(&self.raw, &self.inv_sigma, x, options).ok_or_else(|| NotEvaluable("cost is not finite".into()))?;
         for ((q, ri), si) in self.row_scale.iter_mut().zip(&self.r).zip(&self.inv_sigma) {
             let z = ri * si;
             *q = si * options.loss.evaluate(z * z).1.sqrt();
         }
-        scale_rows(&mut self.j, &mut self.r, &self.row_scale);
-        accumulate(&self.j, &self.r, &mut self.a, &mut self.g);
+        for (v, s) in self.r.iter_mut().zip(&self.row_scale) {
+            *v *= s;
+        }
+        accumulate_free(j, &self.free, &self.row_scale, &self.r, &mut self.a, &mut self.g);
         for p in &options.priors {
             let k = p.index;
             self.a[(k, k)] += 1.0 / (p.sigma * p.sigma);
@@ -134,10 +146,12 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
         Some(s) => s.iter().map(|v| 1.0 / v).collect(),
         None => vec![1.0; m],
     };
+    let free: Vec<usize> = (0..n).filter(|&k| !options.is_fixed(k)).collect();
     let mut ws = Workspace {
         raw: vec![0.0; m],
         r: vec![0.0; m],
         j: DMatrix::zeros(m, n),
+        free,
         trial_j: if options.jacobian_on_trials { DMatrix::zeros(m, n) } else { DMatrix::zeros(0, 0) },
         inv_sigma,
         row_scale: vec![1.0; m],
@@ -158,8 +172,7 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
     let mut f = match given {
         Some(e) => {
             ws.r.copy_from_slice(e.residuals);
-            ws.j.copy_from(e.jacobian);
-            check_evaluated(&ws.r, &ws.j).and_then(|()| ws.weigh(&x, options))
+            check_evaluated(&ws.r, e.jacobian, &ws.free).and_then(|()| ws.weigh(e.jacobian, &x, options))
         }
         None => ws.linearise(problem, &x, options),
     }
@@ -186,6 +199,17 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
             .fold(0.0, f64::max);
         if f == 0.0 || gmax <= options.gtol {
             break Termination::Gradient;
+        }
+        // the most any step can lower the cost here, by the quadratic model: the undamped
+        // (Gauss–Newton) step's predicted reduction ½·gᵀA⁻¹g. When it is under ftol of the cost,
+        // the point is the minimum to the tolerance and a trial would only confirm it at the
+        // price of an evaluation (on the XFYZ fit, one of seven). Not taken when A is singular
+        // on the free parameters with undamped steps (the step is then not defined).
+        if damped_step(&mut ws, &d, &active, 0.0, options.null_space, &mut delta) {
+            let predicted = predicted_reduction(&ws, &delta, &mut ad);
+            if (0.0..=options.ftol * f).contains(&predicted) {
+                break Termination::Cost;
+            }
         }
         if iterations >= options.max_iterations {
             break Termination::MaxIterations;
@@ -214,14 +238,10 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
                 x_norm += (d[k] * x[k]).powi(2);
             }
             let small_step = step_norm.sqrt() <= options.xtol * (options.xtol + x_norm.sqrt());
-            // Predicted reduction of the quadratic model: −gᵀδ − ½δᵀAδ.
-            for (i, adi) in ad.iter_mut().enumerate() {
-                *adi = (0..n).map(|k| ws.a[(i, k)] * delta[k]).sum();
-            }
-            let predicted: f64 = (0..n).map(|k| -ws.g[k] * delta[k] - 0.5 * delta[k] * ad[k]).sum();
+            let predicted = predicted_reduction(&ws, &delta, &mut ad);
             evaluations += 1;
             let evaluated = if options.jacobian_on_trials {
-                evaluate(problem, &x_trial, &mut r_trial, &mut ws.trial_j)
+                evaluate(problem, &x_trial, &mut r_trial, &mut ws.trial_j, &ws.free)
             } else {
                 problem.residuals(&x_trial, &mut r_trial)
             };
@@ -273,7 +293,7 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
         f = if options.jacobian_on_trials {
             std::mem::swap(&mut ws.r, &mut r_trial);
             std::mem::swap(&mut ws.j, &mut ws.trial_j);
-            ws.weigh(&x, options)
+            ws.weigh_own(&x, options)
         } else {
             ws.linearise(problem, &x, options)
         }
@@ -286,6 +306,15 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
         }
     };
     finish(ws, x, f, iterations, evaluations, termination, lambda, options)
+}
+
+/// The quadratic model's reduction of the cost by the step δ: −gᵀδ − ½δᵀAδ (`ad`: scratch for Aδ).
+fn predicted_reduction(ws: &Workspace, delta: &[f64], ad: &mut [f64]) -> f64 {
+    let n = delta.len();
+    for (i, adi) in ad.iter_mut().enumerate() {
+        *adi = (0..n).map(|k| ws.a[(i, k)] * delta[k]).sum();
+    }
+    (0..n).map(|k| -ws.g[k] * delta[k] - 0.5 * delta[k] * ad[k]).sum()
 }
 
 /// (A + λ·D²)·δ = −g with the active parameters held (δₖ = 0), into `delta`. False if the
@@ -347,6 +376,13 @@ fn finish(
 ) -> Result<Solution, SolverError> {
     let (m, n) = ws.j.shape();
     let free: Vec<bool> = (0..n).map(|k| !options.is_fixed(k)).collect();
+    // √W·J at x for the identifiability analysis, the columns of fixed parameters zero
+    let mut weighted_jacobian = DMatrix::zeros(m, n);
+    for &k in &ws.free {
+        for ((w, v), s) in weighted_jacobian.column_mut(k).iter_mut().zip(ws.j.column(k).iter()).zip(&ws.row_scale) {
+            *w = v * s;
+        }
+    }
     let n_free = free.iter().filter(|f| **f).count();
     // σ̂₀² from the whitened residuals the loss keeps quadratic (all of them for the linear
     // loss): the down-weighted ones are the outliers the robust fit set aside, and counting them
@@ -382,7 +418,7 @@ fn finish(
         residual_rms,
         degrees_of_freedom: dof,
         downweighted,
-        weighted_jacobian: ws.j,
+        weighted_jacobian,
         free,
     })
 }

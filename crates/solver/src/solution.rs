@@ -58,7 +58,8 @@ pub struct Solution {
     /// Residuals beyond the robust loss's scale (|r̃ᵢ| > c) at the solution: the measurements it
     /// down-weighted. 0 for the linear loss.
     pub downweighted: usize,
-    /// √W·J at the solution (m × n), for the identifiability analysis.
+    /// √W·J at the solution (m × n; the columns of fixed parameters zero), for the
+    /// identifiability analysis.
     pub weighted_jacobian: DMatrix<f64>,
     /// Parameters that were estimated (not fixed).
     pub free: Vec<bool>,

@@ -27,6 +27,8 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 
 const READINGS: usize = 10_000;
+/// Each side's solve is timed this many times and the fastest counts (the machine is shared).
+const RUNS: usize = 3;
 
 fn model() -> CellModel {
     let terms = common::xfyz_geometric_terms("[y, z]", "[0 m, 0.05 m, -0.15 m]");
@@ -70,10 +72,10 @@ fn main() {
     let x0 = metrocell_estimation::start_vector(&fm, &setup, &data).unwrap();
     println!("{} readings, {} parameters, {} free after holding {} the design cannot separate", READINGS, names.len(), free.len(), probe.held.len());
 
-    // ours: the whole fit (start checks, solve, covariance, identifiability), best of 3
+    // ours: the whole fit (start checks, solve, covariance, identifiability), best of RUNS
     let mut ours = f64::INFINITY;
     let mut result = None;
-    for _ in 0..3 {
+    for _ in 0..RUNS {
         let t = Instant::now();
         let f = fit(&fm, &setup, &data, Some(x0.clone()), &options).expect("fit");
         ours = ours.min(t.elapsed().as_secs_f64());
@@ -112,7 +114,7 @@ fn main() {
     let mut child = Command::new(&python).arg(script).stdin(Stdio::piped()).stdout(Stdio::piped()).spawn().unwrap_or_else(|e| panic!("cannot start {python}: {e} (set METROCELL_PYTHON to a python with scipy)"));
     let mut to = child.stdin.take().unwrap();
     let mut from = BufReader::new(child.stdout.take().unwrap());
-    let head = serde_json::json!({"n": free.len(), "m": rows, "x0": free.iter().map(|&k| x0[k]).collect::<Vec<_>>(), "lower": lower, "upper": upper});
+    let head = serde_json::json!({"n": free.len(), "m": rows, "x0": free.iter().map(|&k| x0[k]).collect::<Vec<_>>(), "lower": lower, "upper": upper, "runs": RUNS});
     writeln!(to, "{head}").unwrap();
     to.flush().unwrap();
     let mut r = vec![0.0; rows];
@@ -148,10 +150,14 @@ fn main() {
     };
     let wall = t.elapsed().as_secs_f64();
     child.wait().unwrap();
-    let scipy = done["seconds"].as_f64().unwrap();
-    let waiting = done["evaluation_seconds"].as_f64().unwrap();
+    // scipy's fastest run, and metrocell's evaluation time per run (the runs ask for the same points)
+    let seconds = |key: &str| -> Vec<f64> { done[key].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect() };
+    let (runs, waits) = (seconds("seconds"), seconds("evaluation_seconds"));
+    let best = (0..RUNS).min_by(|&a, &b| (runs[a] - waits[a]).total_cmp(&(runs[b] - waits[b]))).unwrap();
+    let (scipy, waiting) = (runs[best], waits[best]);
+    let ours_eval = ours_eval / RUNS as f64;
     let xs: Vec<f64> = done["x"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
-    println!("scipy trf: {:.3} s ({} evaluations, status {}), of which {:.3} s waiting for metrocell's residuals and Jacobian over the pipe ({:.3} s evaluating them); wall {:.3} s", scipy, done["evaluations"], done["status"], waiting, ours_eval, wall);
+    println!("scipy trf (fastest own work of {RUNS}): {:.3} s ({} evaluations, status {}), of which {:.3} s waiting for metrocell's residuals and Jacobian over the pipe ({:.3} s evaluating them); wall of all runs {:.3} s", scipy, done["evaluations"], done["status"], waiting, ours_eval, wall);
     // the like-for-like job: scipy's own work plus the model evaluations it asked for (as
     // metrocell's fit evaluates the model too), without the pipe's copying of 11 MB Jacobians
     let job = scipy - waiting + ours_eval;

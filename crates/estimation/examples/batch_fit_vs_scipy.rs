@@ -63,14 +63,16 @@ fn main() {
     let data = records(&fm, &truth, &plan, THESIS_TRACKER, Some(1));
     // the identical, full-rank problem for both: hold what the design cannot separate first
     let options = FitOptions { loss: Loss::Linear, ..FitOptions::default() };
+    let t = Instant::now();
     let probe = fit(&fm, &m.setup, &data, None, &options).expect("fit");
+    let probe_seconds = t.elapsed().as_secs_f64();
     let mut setup = m.setup.clone();
     for h in &probe.held {
         setup.free[h.index] = false;
     }
     let free: Vec<usize> = (0..names.len()).filter(|&k| setup.free[k]).collect();
     let x0 = metrocell_estimation::start_vector(&fm, &setup, &data).unwrap();
-    println!("{} readings, {} parameters, {} free after holding {} the design cannot separate", READINGS, names.len(), free.len(), probe.held.len());
+    println!("{} readings, {} parameters, {} free after holding {} the design cannot separate (found by a fit of all 75 in {:.3} s)", READINGS, names.len(), free.len(), probe.held.len(), probe_seconds);
 
     // ours: the whole fit (start checks, solve, covariance, identifiability), best of RUNS
     let mut ours = f64::INFINITY;

@@ -405,7 +405,13 @@ fn dependent_parameters(jw: &DMatrix<f64>, free: &[bool], machine_params: usize,
 /// to unit norm; a nil column (below 1e-9 of the largest) is "not identifiable".
 pub fn inseparable(jw: &DMatrix<f64>, order: &[usize], names: &[String]) -> Vec<(usize, String)> {
     let largest = order.iter().map(|&k| jw.column(k).norm()).fold(0.0f64, f64::max);
-    let m = jw.nrows();
+    // the Gram matrix of the columns in `order` (position in `order` → row/column), for the
+    // combinations below: their least squares on the kept columns is a small solve on it, where
+    // an SVD of the m × kept columns per dependent column took seconds (29 dependent columns of
+    // a 30 000-row XFYZ Jacobian: 4.8 s of a 5 s fit)
+    let selected = jw.select_columns(order);
+    let gram = selected.tr_mul(&selected);
+    let position = |k: usize| order.iter().position(|&o| o == k).expect("a column of `order`");
     // orthonormal basis of the kept columns (modified Gram–Schmidt), and each kept column's norm
     let mut basis: Vec<nalgebra::DVector<f64>> = Vec::new();
     let mut kept: Vec<(usize, f64)> = Vec::new();
@@ -432,10 +438,14 @@ pub fn inseparable(jw: &DMatrix<f64>, order: &[usize], names: &[String]) -> Vec<
             kept.push((k, norm));
             continue;
         }
-        // express the column by the kept ones (least squares on the unit columns)
-        let a = DMatrix::from_fn(m, kept.len(), |i, j| jw[(i, kept[j].0)] / kept[j].1);
-        let target = jw.column(k) / norm;
-        let coef = a.clone().svd(true, true).solve(&target, 1e-12).unwrap_or_else(|_| nalgebra::DVector::zeros(kept.len()));
+        // express the column by the kept ones: least squares on the unit columns, by its normal
+        // equations (the kept columns are independent to DEPENDENT, so squaring their
+        // conditioning still leaves the three digits the sentence prints)
+        let at = kept.iter().map(|&(j, nj)| (position(j), nj)).collect::<Vec<_>>();
+        let pk = position(k);
+        let a = DMatrix::from_fn(at.len(), at.len(), |i, j| gram[(at[i].0, at[j].0)] / (at[i].1 * at[j].1));
+        let b = nalgebra::DVector::from_fn(at.len(), |i, _| gram[(at[i].0, pk)] / (at[i].1 * norm));
+        let coef = a.svd(true, true).solve(&b, 1e-12).unwrap_or_else(|_| nalgebra::DVector::zeros(kept.len()));
         let max = coef.iter().fold(0.0f64, |x, c| x.max(c.abs()));
         let mut parts = Vec::new();
         for (j, c) in coef.iter().enumerate() {

@@ -24,7 +24,8 @@
 
 use metrocell_model::{ForwardModel, ParameterSetup};
 use metrocell_physics::{PhysicsError, TermId};
-use metrocell_solver::{solve, solve_from, Evaluated, Identifiability, Loss, NullSpace, Options, Prior, Problem, Solution, SolverError};
+use metrocell_solver::identifiability::GRAM_RCOND;
+use metrocell_solver::{normal_matrix, solve, solve_from, Evaluated, Identifiability, Loss, NullSpace, Options, Prior, Problem, Solution, SolverError};
 use metrocell_laser_tracker::registration::{register, Correspondence};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
@@ -294,7 +295,11 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
     // held before the solver can wander along it
     let free_idx: Vec<usize> = (0..free.len()).filter(|&k| free[k]).collect();
     let free_labels: Vec<&str> = free_idx.iter().map(|&k| labels[k]).collect();
-    let declared_identifiability = Identifiability::analyze(&j0.select_columns(&free_idx), &free_labels, Some(options.rcond))?;
+    let declared_identifiability = if options.rcond >= GRAM_RCOND {
+        Identifiability::from_normal_matrix(&normal_matrix(&j0, &free_idx), j0.nrows(), &free_labels, options.rcond)?
+    } else {
+        Identifiability::analyze(&j0.select_columns(&free_idx), &free_labels, Some(options.rcond))?
+    };
     let machine_params = model.machine_terms.param_specs().len();
     let mut held = Vec::new();
     if !declared_identifiability.null_directions.is_empty() {

@@ -72,14 +72,51 @@ impl Identifiability {
             }
         }
         if n == 0 || m == 0 {
-            // nothing to analyse (no free parameter, or no measurement): every parameter given is
-            // unidentifiable, and an SVD of an empty matrix is not defined
-            let null_directions = (0..n).map(|k| NullDirection { singular_value: 0.0, coefficients: (0..n).map(|i| if i == k { 1.0 } else { 0.0 }).collect(), scaled: (0..n).map(|i| if i == k { 1.0 } else { 0.0 }).collect() }).collect();
-            return Ok(Identifiability { labels: labels.iter().map(|s| s.to_string()).collect(), column_norms: vec![0.0; n], singular_values: vec![0.0; n], tolerance: 0.0, rank: 0, condition_number: if n == 0 { 1.0 } else { f64::INFINITY }, null_directions });
+            return Ok(Self::nothing_determined(labels));
         }
         let column_norms: Vec<f64> = j.column_iter().map(|c| c.norm()).collect();
+        let pairs = if rcond.is_some_and(|r| r >= GRAM_RCOND) {
+            let mut gram = DMatrix::zeros(n, n);
+            crate::normal_equations::gram(j, &mut gram);
+            gram_pairs(&gram, &column_norms)
+        } else {
+            svd_pairs(j, &column_norms)?
+        };
+        Ok(Self::from_pairs(pairs, column_norms, labels, m, rcond))
+    }
+
+    /// [`Identifiability::analyze`] from the normal matrix JᵀJ (n × n) of the weighted Jacobian
+    /// instead of J, for a caller that has formed it already (the solver, every iteration): the
+    /// Gram route, so `rcond` must be at least [`GRAM_RCOND`]. `m` is J's row count (0: no
+    /// measurement).
+    pub fn from_normal_matrix(normal: &DMatrix<f64>, m: usize, labels: &[&str], rcond: f64) -> Result<Self, SolverError> {
+        let n = normal.nrows();
+        check_len("parameter labels", n, labels.len())?;
+        check_finite("normal matrix", normal.as_slice())?;
+        if !(rcond >= GRAM_RCOND && rcond < 1.0) {
+            return Err(SolverError::Invalid { what: "rcond".into(), reason: format!("the normal matrix resolves singular values down to ~1e-7 of the largest: rcond must lie in [{GRAM_RCOND}, 1), got {rcond} (use Identifiability::analyze on the Jacobian)") });
+        }
+        if n == 0 || m == 0 {
+            return Ok(Self::nothing_determined(labels));
+        }
+        let column_norms: Vec<f64> = (0..n).map(|k| normal[(k, k)].max(0.0).sqrt()).collect();
+        Ok(Self::from_pairs(gram_pairs(normal, &column_norms), column_norms, labels, m, Some(rcond)))
+    }
+
+    /// Every parameter unidentifiable: no free parameter or no measurement (an SVD of an empty
+    /// matrix is not defined).
+    fn nothing_determined(labels: &[&str]) -> Self {
+        let n = labels.len();
+        let unit = |k: usize| (0..n).map(|i| if i == k { 1.0 } else { 0.0 }).collect::<Vec<f64>>();
+        let null_directions = (0..n).map(|k| NullDirection { singular_value: 0.0, coefficients: unit(k), scaled: unit(k) }).collect();
+        Identifiability { labels: labels.iter().map(|s| s.to_string()).collect(), column_norms: vec![0.0; n], singular_values: vec![0.0; n], tolerance: 0.0, rank: 0, condition_number: if n == 0 { 1.0 } else { f64::INFINITY }, null_directions }
+    }
+
+    /// The analysis from the (singular value, right singular vector) pairs of the column-scaled
+    /// m × n Jacobian.
+    fn from_pairs(pairs: Vec<(f64, Vec<f64>)>, column_norms: Vec<f64>, labels: &[&str], m: usize, rcond: Option<f64>) -> Self {
+        let n = pairs.len();
         let scale = |k: usize| unit_scale(&column_norms, k);
-        let pairs = if rcond.is_some_and(|r| r >= GRAM_RCOND) { gram_pairs(j, &column_norms) } else { svd_pairs(j, &column_norms)? };
         let mut order: Vec<usize> = (0..n).collect();
         order.sort_by(|&a, &b| pairs[b].0.total_cmp(&pairs[a].0));
         let singular_values: Vec<f64> = order.iter().map(|&i| pairs[i].0).collect();
@@ -102,7 +139,7 @@ impl Identifiability {
                 NullDirection { singular_value, coefficients, scaled }
             })
             .collect();
-        Ok(Identifiability {
+        Identifiability {
             labels: labels.iter().map(|s| s.to_string()).collect(),
             column_norms,
             singular_values,
@@ -110,7 +147,7 @@ impl Identifiability {
             rank,
             condition_number,
             null_directions,
-        })
+        }
     }
 
     /// One sentence per null direction, e.g. "a and b are not separable: a − 0.71·b" (moving the
@@ -241,12 +278,10 @@ fn svd_pairs(j: &DMatrix<f64>, column_norms: &[f64]) -> Result<Vec<(f64, Vec<f64
     Ok((0..n).map(|i| (svd.singular_values[i], v_t.row(i).iter().copied().collect())).collect())
 }
 
-/// The same pairs from the eigen-decomposition of the column-scaled Gram matrix, singular values
-/// below its resolution √(n·ε)·σ_max set to 0 (see the module docs).
-fn gram_pairs(j: &DMatrix<f64>, column_norms: &[f64]) -> Vec<(f64, Vec<f64>)> {
-    let n = j.ncols();
-    let mut gram = DMatrix::zeros(n, n);
-    crate::normal_equations::gram(j, &mut gram);
+/// The same pairs from the eigen-decomposition of the column-scaled Gram matrix JᵀJ (`gram`),
+/// singular values below its resolution √(n·ε)·σ_max set to 0 (see the module docs).
+fn gram_pairs(gram: &DMatrix<f64>, column_norms: &[f64]) -> Vec<(f64, Vec<f64>)> {
+    let n = gram.ncols();
     let scaled = DMatrix::from_fn(n, n, |a, b| gram[(a, b)] / (unit_scale(column_norms, a) * unit_scale(column_norms, b)));
     let eig = scaled.symmetric_eigen();
     let resolution = ((n as f64) * f64::EPSILON).sqrt() * eig.eigenvalues.max().max(0.0).sqrt();
@@ -293,7 +328,7 @@ mod tests {
             p.sort_by(|a, b| b.0.total_cmp(&a.0));
             p
         };
-        let (svd, gram) = (sorted(svd_pairs(&j, &norms).unwrap()), sorted(gram_pairs(&j, &norms)));
+        let (svd, gram) = (sorted(svd_pairs(&j, &norms).unwrap()), sorted(gram_pairs(&(j.transpose() * &j), &norms)));
         let s_max = svd[0].0;
         for (a, b) in svd.iter().zip(&gram) {
             if a.0 > 1e-6 * s_max {
@@ -308,6 +343,10 @@ mod tests {
         let by_gram = Identifiability::analyze(&j, &labels, Some(GRAM_RCOND)).unwrap();
         assert_eq!((by_svd.rank, by_gram.rank), (7, 7));
         assert_eq!(by_gram.describe(), by_svd.describe());
+        // the same from the normal matrix the solver forms
+        let from_normal = Identifiability::from_normal_matrix(&crate::normal_matrix(&j, &(0..n).collect::<Vec<_>>()), m, &labels, GRAM_RCOND).unwrap();
+        assert_eq!((from_normal.rank, from_normal.describe()), (by_gram.rank, by_gram.describe()));
+        assert!(Identifiability::from_normal_matrix(&(j.transpose() * &j), m, &labels, 0.5 * GRAM_RCOND).is_err(), "below the Gram route's resolution");
         let c = &by_gram.null_directions[0].coefficients;
         // the direction δh = 1, δb = −2, δd = 0.5 leaves every residual unchanged
         assert!((c[7] - 1.0).abs() < 1e-9 && (c[1] + 2.0).abs() < 1e-9 && (c[3] - 0.5).abs() < 1e-9, "{c:?}");

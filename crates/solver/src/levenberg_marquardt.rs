@@ -34,7 +34,10 @@ struct Workspace {
     trial_j: DMatrix<f64>,
     inv_sigma: Vec<f64>,
     row_scale: Vec<f64>,
+    /// J̃ᵀJ̃ + the priors' information: the normal matrix of the steps.
     a: DMatrix<f64>,
+    /// J̃ᵀJ̃ alone.
+    normal: DMatrix<f64>,
     g: DVector<f64>,
     m: DMatrix<f64>,
     rhs: Vec<f64>,
@@ -102,6 +105,8 @@ impl Workspace {
             *v *= s;
         }
         accumulate_free(j, &self.free, &self.row_scale, &self.r, &mut self.a, &mut self.g);
+        // J̃ᵀJ̃ as the measurements alone give it, for the identifiability analysis
+        self.normal.copy_from(&self.a);
         for p in &options.priors {
             let k = p.index;
             self.a[(k, k)] += 1.0 / (p.sigma * p.sigma);
@@ -156,6 +161,7 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
         inv_sigma,
         row_scale: vec![1.0; m],
         a: DMatrix::zeros(n, n),
+        normal: DMatrix::zeros(n, n),
         g: DVector::zeros(n),
         m: DMatrix::zeros(n, n),
         rhs: vec![0.0; n],
@@ -419,6 +425,7 @@ fn finish(
         degrees_of_freedom: dof,
         downweighted,
         weighted_jacobian,
+        normal_matrix: ws.normal,
         free,
     })
 }

@@ -42,6 +42,7 @@ pub use identifiability::{Identifiability, NullDirection};
 pub use levenberg_marquardt::{solve, solve_from, Evaluated};
 pub use loss::Loss;
 pub use monte_carlo::{monte_carlo, MonteCarlo, Noise};
+pub use normal_equations::normal_matrix;
 pub use options::{NullSpace, Options, Prior};
 pub use problem::Problem;
 pub use solution::{Solution, Termination};

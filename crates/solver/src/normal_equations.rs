@@ -48,6 +48,16 @@ pub(crate) fn accumulate_free(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64
     }
 }
 
+/// JᵀJ of the columns `columns` of `j` (|columns| × |columns|), formed as the solver forms its
+/// normal matrix (see [`accumulate_free`]), for an identifiability analysis of a Jacobian the
+/// caller holds ([`crate::Identifiability::from_normal_matrix`]).
+pub fn normal_matrix(j: &DMatrix<f64>, columns: &[usize]) -> DMatrix<f64> {
+    let (m, n) = j.shape();
+    let (mut a, mut g) = (DMatrix::zeros(n, n), DVector::zeros(n));
+    accumulate_free(j, columns, &vec![1.0; m], &vec![0.0; m], &mut a, &mut g);
+    a.select_rows(columns).select_columns(columns)
+}
+
 /// Rows per block of [`accumulate_free`]: 256 rows of 46 free columns are 94 KB, within L2.
 const BLOCK_ROWS: usize = 256;
 

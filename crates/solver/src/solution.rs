@@ -61,6 +61,9 @@ pub struct Solution {
     /// √W·J at the solution (m × n; the columns of fixed parameters zero), for the
     /// identifiability analysis.
     pub weighted_jacobian: DMatrix<f64>,
+    /// (√W·J)ᵀ(√W·J) at the solution (n × n; zero in the rows and columns of fixed parameters;
+    /// priors not included).
+    pub normal_matrix: DMatrix<f64>,
     /// Parameters that were estimated (not fixed).
     pub free: Vec<bool>,
 }
@@ -95,12 +98,18 @@ impl Solution {
 
     /// SVD of the weighted, column-scaled Jacobian of the free parameters (priors not included:
     /// what the measurements alone determine). `labels` name all n parameters; `rcond` as in
-    /// [`Identifiability::analyze`].
+    /// [`Identifiability::analyze`] (from `rcond` ≥ [`crate::identifiability::GRAM_RCOND`] on,
+    /// from the normal matrix the solver formed, with no pass over the Jacobian).
     pub fn identifiability(&self, labels: &[&str], rcond: Option<f64>) -> Result<Identifiability, SolverError> {
         crate::error::check_len("parameter labels", self.free.len(), labels.len())?;
         let idx: Vec<usize> = (0..self.free.len()).filter(|&k| self.free[k]).collect();
-        let j = self.weighted_jacobian.select_columns(&idx);
         let names: Vec<&str> = idx.iter().map(|&k| labels[k]).collect();
-        Identifiability::analyze(&j, &names, rcond)
+        match rcond {
+            Some(r) if r >= crate::identifiability::GRAM_RCOND => {
+                let normal = self.normal_matrix.select_rows(&idx).select_columns(&idx);
+                Identifiability::from_normal_matrix(&normal, self.weighted_jacobian.nrows(), &names, r)
+            }
+            _ => Identifiability::analyze(&self.weighted_jacobian.select_columns(&idx), &names, rcond),
+        }
     }
 }

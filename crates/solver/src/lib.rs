@@ -7,10 +7,12 @@
 //! squares, projected box bounds, Moré's column scaling, a fixed-parameter mask, Gaussian priors
 //! as extra residuals, and a truncated-SVD step that stays on the identifiable subspace
 //! ([`NullSpace::Truncated`]). The normal equations JᵀWJ are formed from the column-major
-//! Jacobian by a blocked matrix product read in place (`matrixmultiply`; no Jᵀ copy, no m × m
-//! weight matrix); at 70 parameters the n × n solve is negligible next to forming them, which is
-//! why a dense method is used rather than a QR or SVD of the full Jacobian per iteration (scipy's
-//! "trf"). [`solve_from`] starts from residuals and a Jacobian the caller has already evaluated.
+//! Jacobian's free columns, weighted a cache-sized block of rows at a time and multiplied there
+//! (`matrixmultiply`; no Jᵀ copy, no m × m weight matrix, J read from memory once); at 70
+//! parameters the n × n solve is negligible next to forming them, which is why a dense method is
+//! used rather than a QR or SVD of the full Jacobian per iteration (scipy's "trf"). The
+//! iteration stops without a confirming trial once the Gauss–Newton step's predicted reduction
+//! is below `ftol` of the cost. [`solve_from`] starts from residuals and a Jacobian the caller has already evaluated.
 //!
 //! **Why not a crate.** `levenberg-marquardt` (nalgebra-based, a MINPACK port) has scaling and
 //! termination reasons but no weights, robust losses, bounds, priors, fixed parameters or

@@ -12,7 +12,8 @@
 //! parameters the n × n solve is negligible next to forming them, which is why a dense method is
 //! used rather than a QR or SVD of the full Jacobian per iteration (scipy's "trf"). The
 //! iteration stops without a confirming trial once the Gauss–Newton step's predicted reduction
-//! is below `ftol` of the cost. [`solve_from`] starts from residuals and a Jacobian the caller has already evaluated.
+//! is below `ftol` of the cost. [`solve_from`] starts from residuals and a Jacobian the caller
+//! has already evaluated.
 //!
 //! **Why not a crate.** `levenberg-marquardt` (nalgebra-based, a MINPACK port) has scaling and
 //! termination reasons but no weights, robust losses, bounds, priors, fixed parameters or

@@ -9,9 +9,9 @@
 
 use metrocell_physics::instrument::spherical::to_spherical;
 use metrocell_physics::{PhysicsError, Signals};
-use nalgebra::{DMatrix, Matrix3, Vector3};
+use nalgebra::{DMatrix, Matrix3, RowVector3, Vector3};
 
-use crate::forward::{v3, ForwardModel, KinematicTruth, ToolState};
+use crate::forward::{v3, ForwardModel, KinematicTruth, Slot, ToolState};
 use crate::instruments::{Instrument, InstrumentKind};
 use crate::workspace::Workspace;
 
@@ -90,7 +90,6 @@ impl ForwardModel<'_> {
     /// intermediate Jacobians.
     #[allow(clippy::too_many_arguments)]
     pub fn tracker_jacobian_of(&self, instrument: Option<&str>, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, work: &mut Workspace, out: &mut DMatrix<f64>) -> Result<TrackerPrediction, PhysicsError> {
-        let n = self.n_params;
         self.check_buffer("tracker Jacobian", out, TRACKER_ROWS)?;
         work.check(self)?;
         let inst = self.require(InstrumentKind::Tracker, instrument)?;
@@ -106,14 +105,12 @@ impl ForwardModel<'_> {
         s.tracker_range = Some(rho);
         // ∂x/∂P = Rᵀ = −∂x/∂T
         let rt: Matrix3<f64> = -work.pose.fixed_view::<3, 3>(0, 0).into_owned();
-        work.point.gemm(1.0, &rt, &work.tool, 0.0);
-        work.point.columns_mut(ps.start, ps.len).copy_from(&work.pose.columns(0, ps.len));
         if rho == 0.0 && inst.warmup.is_none() && inst.refraction.is_none() {
             // points given in the machine frame (pose = identity) can sit at the origin: with no
             // range terms the reported point is x itself, whose Jacobian needs no direction
-            out.rows_mut(0, 3).copy_from(&work.point);
-            out.row_mut(3).fill(0.0);
-            return Ok(TrackerPrediction { point: x, range: rho, azimuth: az, elevation: el, warmup: 0.0, refraction: 0.0 });
+            let pred = TrackerPrediction { point: x, range: rho, azimuth: az, elevation: el, warmup: 0.0, refraction: 0.0 };
+            write_chain(out, &work.tool, &work.pose, ps, &Matrix3::identity(), &RowVector3::zeros(), &rt);
+            return Ok(pred);
         }
         if !(rho > 0.0) {
             return Err(PhysicsError::InvalidInput { what: "forward model, tracker reading".into(), reason: "the target is at the tracker origin (range 0): no direction for the range terms".into() });
@@ -129,28 +126,49 @@ impl ForwardModel<'_> {
         }
         let pred = TrackerPrediction { point: x, range: rho, azimuth: az, elevation: el, warmup: range_changes[0], refraction: range_changes[1] };
         let u = x / rho;
-        // Δρ_refraction is proportional to ρ: ∂ρ_m/∂x = (1 + Δρ_refraction/ρ)·uᵀ
+        // Δρ_refraction is proportional to ρ: ∂ρ_m/∂x = g·uᵀ with g = 1 + Δρ_refraction/ρ;
+        // the reported point y = ρ_m·u: ∂y/∂x = (ρ_m/ρ)(I − u uᵀ) + u·∂ρ_m/∂x
         let g = 1.0 + pred.refraction / rho;
-        let measured = pred.measured_range();
-        let f = measured / rho;
-        for c in 0..n {
-            let dx = work.point.fixed_view::<3, 1>(0, c).into_owned();
-            out[(3, c)] = g * u.dot(&dx);
-        }
+        let f = pred.measured_range() / rho;
+        let range_from_x = u.transpose() * g;
+        let point_from_x = (Matrix3::identity() - u * u.transpose()) * f + u * range_from_x;
+        write_chain(out, &work.tool, &work.pose, ps, &point_from_x, &range_from_x, &rt);
+        // the range terms move the reported point along u
         for (row, i) in [inst.warmup, inst.refraction].into_iter().enumerate() {
             if let Some(i) = i {
                 let sl = self.slots[i];
                 for k in 0..sl.len {
-                    out[(3, sl.start + k)] += work.range_terms[(row, k)];
+                    let dr = work.range_terms[(row, k)];
+                    out.fixed_view_mut::<3, 1>(0, sl.start + k).copy_from(&(u * dr));
+                    out[(3, sl.start + k)] = dr;
                 }
             }
         }
-        // reported point y = ρ_m·u: ∂y = (ρ_m/ρ)(I − u uᵀ)∂x + u ∂ρ_m
-        for c in 0..n {
-            let dx = work.point.fixed_view::<3, 1>(0, c).into_owned();
-            let dy = (dx - u * u.dot(&dx)) * f + u * out[(3, c)];
-            out.fixed_view_mut::<3, 1>(0, c).copy_from(&dy);
-        }
         Ok(pred)
+    }
+}
+
+/// Rows of the tracker Jacobian `out` (reported point, then measured range) from the chain
+/// x → (y, ρ_m): the machine terms' columns through the sighted point (∂x/∂P = `rt` times
+/// `tool`, ∂P/∂p), the pose's columns from ∂x/∂pose (`pose`, its columns at `slot`). One fused
+/// pass over the columns, in fixed-size arithmetic: this runs for every reading of a fit. The
+/// range terms' columns are left zero (the tool Jacobian is zero there) for the caller.
+fn write_chain(out: &mut DMatrix<f64>, tool: &DMatrix<f64>, pose: &DMatrix<f64>, slot: Slot, point_from_x: &Matrix3<f64>, range_from_x: &RowVector3<f64>, rt: &Matrix3<f64>) {
+    let rows = |from_x: Matrix3<f64>, range: RowVector3<f64>, dx: Vector3<f64>| {
+        let y = from_x * dx;
+        [y.x, y.y, y.z, range.dot(&dx.transpose())]
+    };
+    let point_from_target = point_from_x * rt;
+    let range_from_target = range_from_x * rt;
+    let out_columns = out.as_mut_slice().chunks_exact_mut(TRACKER_ROWS);
+    for (c, (o, t)) in out_columns.zip(tool.as_slice().chunks_exact(3)).enumerate() {
+        let in_pose = c >= slot.start && c < slot.start + slot.len;
+        let column = if in_pose {
+            let k = c - slot.start;
+            rows(*point_from_x, *range_from_x, Vector3::new(pose[(0, k)], pose[(1, k)], pose[(2, k)]))
+        } else {
+            rows(point_from_target, range_from_target, Vector3::new(t[0], t[1], t[2]))
+        };
+        o.copy_from_slice(&column);
     }
 }

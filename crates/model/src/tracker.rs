@@ -99,7 +99,11 @@ impl ForwardModel<'_> {
         s.target_point = Some(target);
         let mut xv = [0.0; 3];
         let ps = self.slots[pose];
-        self.term(pose).term.evaluate_into(self.part(pose, p), s, &mut xv, work.pose.columns_mut(0, ps.len))?;
+        // the pose term is a `tracker_pose` (see `group_instruments`): its evaluation, with the
+        // rotation's trigonometry done once for all readings at this pose
+        let pp = self.part(pose, p);
+        let rotation = work.pose_rotation([pp[3], pp[4], pp[5]]);
+        rotation.evaluate_into(Vector3::new(pp[0], pp[1], pp[2]), target, &mut xv, work.pose.columns_mut(0, ps.len));
         let x = Vector3::new(xv[0], xv[1], xv[2]);
         let (rho, az, el) = to_spherical(&x);
         s.tracker_range = Some(rho);

@@ -96,14 +96,16 @@ impl DisjointRows {
         DisjointRows { ptr: m.as_mut_ptr(), rows: m.nrows(), cols: m.ncols() }
     }
 
-    /// Writes `map(column)` of each column of the 3 × n `block` into rows `row0..row0 + 3`.
+    /// Writes `map(column)` of the given `columns` of the 3 × n `block` into rows
+    /// `row0..row0 + 3` (the other columns are left as they are).
     ///
     /// # Safety
     /// No other thread reads or writes those rows while the matrix is shared this way.
-    pub unsafe fn set_rows_mapped(&self, row0: usize, block: &nalgebra::DMatrixView<'_, f64>, map: impl Fn(Vector3<f64>) -> Vector3<f64>) {
+    pub unsafe fn set_rows_mapped(&self, row0: usize, block: &nalgebra::DMatrixView<'_, f64>, columns: &[usize], map: impl Fn(Vector3<f64>) -> Vector3<f64>) {
         let n = block.ncols();
         assert!(block.nrows() == 3 && row0 + 3 <= self.rows && n == self.cols, "3 × {n} block at row {row0} outside {} × {}", self.rows, self.cols);
-        for col in 0..n {
+        for &col in columns {
+            assert!(col < n, "column {col} of a 3 × {n} block");
             let v = map(Vector3::new(block[(0, col)], block[(1, col)], block[(2, col)]));
             // SAFETY: in bounds (checked above); the rows are this caller's alone (the contract)
             unsafe {

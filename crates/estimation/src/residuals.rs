@@ -134,15 +134,17 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
     /// The Jacobian of the predictions w.r.t. the stacked parameters (3·records × n,
     /// unwhitened, rows x y z of each record in turn) at `p`.
     pub fn prediction_jacobian(&self, p: &[f64]) -> Result<DMatrix<f64>, PhysicsError> {
-        let mut out = DMatrix::zeros(3 * self.records.len(), self.model.param_count());
-        self.evaluate_rows(p, None, &mut out)?;
+        let n = self.model.param_count();
+        let mut out = DMatrix::zeros(3 * self.records.len(), n);
+        self.evaluate_rows(p, None, &mut out, &(0..n).collect::<Vec<_>>())?;
         Ok(out)
     }
 
-    /// For every record i, rows 3i..3i+3 of `jac`: without `residuals`, the prediction's
-    /// Jacobian; with them, the residuals' −L⁻¹·∂prediction/∂p, and L⁻¹·(measured − predicted)
-    /// into entries 3i..3i+3 of `residuals`.
-    fn evaluate_rows(&self, p: &[f64], residuals: Option<&mut [f64]>, jac: &mut DMatrix<f64>) -> Result<(), EvaluationFailure> {
+    /// For every record i, rows 3i..3i+3 of `jac` in the given `columns` (the others are left
+    /// as they are): without `residuals`, the prediction's Jacobian; with them, the residuals'
+    /// −L⁻¹·∂prediction/∂p, and L⁻¹·(measured − predicted) into entries 3i..3i+3 of
+    /// `residuals`.
+    fn evaluate_rows(&self, p: &[f64], residuals: Option<&mut [f64]>, jac: &mut DMatrix<f64>, columns: &[usize]) -> Result<(), EvaluationFailure> {
         let whiten = residuals.is_some();
         let kin = self.model.kinematic_truth(p).map_err(EvaluationFailure::Model)?;
         let n = self.model.param_count();
@@ -162,7 +164,7 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
                 // straight into the rows of record i (the identity when not whitening)
                 let w = if whiten { -self.whitening[i] } else { Matrix3::identity() };
                 // SAFETY: rows 3i..3i+3 belong to record i, which only this chunk evaluates
-                unsafe { target.set_rows_mapped(3 * i, &rows, |column| w * column) };
+                unsafe { target.set_rows_mapped(3 * i, &rows, columns, |column| w * column) };
                 if let Some(out) = out.as_deref_mut() {
                     let z = self.whitening[i] * (r.measured - pred);
                     out[3 * k..3 * k + 3].copy_from_slice(z.as_slice());
@@ -172,14 +174,19 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
         })
     }
 
-    fn evaluate(&self, p: &[f64], residuals: &mut [f64], jac: Option<&mut DMatrix<f64>>) -> Result<(), NotEvaluable> {
+    /// Residuals at `p` into `residuals` and, with `jac`, the Jacobian's columns k with
+    /// `wanted[k]` (every column without `wanted`).
+    fn evaluate(&self, p: &[f64], residuals: &mut [f64], jac: Option<&mut DMatrix<f64>>, wanted: Option<&[bool]>) -> Result<(), NotEvaluable> {
         let fail = |f: EvaluationFailure| match f {
             EvaluationFailure::Model(e) => NotEvaluable(e.to_string()),
             EvaluationFailure::Record { index, error } => NotEvaluable(format!("record {index} ({}): {error}", self.records[index].point_id)),
         };
         match jac {
             // ∂r/∂p = −L⁻¹·∂prediction/∂p
-            Some(j) => self.evaluate_rows(p, Some(&mut *residuals), j).map_err(fail)?,
+            Some(j) => {
+                let columns: Vec<usize> = (0..j.ncols()).filter(|&k| wanted.is_none_or(|w| w[k])).collect();
+                self.evaluate_rows(p, Some(&mut *residuals), j, &columns).map_err(fail)?
+            }
             None => {
                 let predicted = self.predictions_of_records(p).map_err(fail)?;
                 for (i, (r, pred)) in self.records.iter().zip(&predicted).enumerate() {
@@ -253,9 +260,15 @@ impl Problem for PointResiduals<'_, '_> {
         self.model.param_count()
     }
     fn residuals(&self, x: &[f64], residuals: &mut [f64]) -> Result<(), NotEvaluable> {
-        self.evaluate(x, residuals, None)
+        self.evaluate(x, residuals, None, None)
     }
     fn residuals_and_jacobian(&self, x: &[f64], residuals: &mut [f64], jacobian: &mut DMatrix<f64>) -> Result<(), NotEvaluable> {
-        self.evaluate(x, residuals, Some(jacobian))
+        self.evaluate(x, residuals, Some(jacobian), None)
+    }
+    /// The unwanted columns are not written: with many records, storing the Jacobian is a
+    /// memory-bound share of an evaluation.
+    fn residuals_and_jacobian_of(&self, x: &[f64], residuals: &mut [f64], jacobian: &mut DMatrix<f64>, wanted: &[bool]) -> Result<(), NotEvaluable> {
+        assert_eq!(wanted.len(), jacobian.ncols(), "one wanted flag per parameter");
+        self.evaluate(x, residuals, Some(jacobian), Some(wanted))
     }
 }

@@ -91,6 +91,33 @@ impl ForwardModel<'_> {
     #[allow(clippy::too_many_arguments)]
     pub fn tracker_jacobian_of(&self, instrument: Option<&str>, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, work: &mut Workspace, out: &mut DMatrix<f64>) -> Result<TrackerPrediction, PhysicsError> {
         self.check_buffer("tracker Jacobian", out, TRACKER_ROWS)?;
+        let (pred, chain) = self.tracker_chain(instrument, p, kin, q, s, work)?;
+        for (c, o) in out.as_mut_slice().chunks_exact_mut(TRACKER_ROWS).enumerate() {
+            let (y, range) = chain.column(work, c);
+            o.copy_from_slice(&[y.x, y.y, y.z, range]);
+        }
+        Ok(pred)
+    }
+
+    /// The reported point's rows of [`Self::tracker_jacobian_of`] in the given `columns`, each
+    /// multiplied by `map` (3 × 3, e.g. a whitening) and handed to `write(column, map·∂y/∂p)`:
+    /// for a caller that stores them elsewhere (an estimator's m × n Jacobian) without a buffer
+    /// in between. The prediction is `tracker_jacobian_of`'s bit for bit, the columns to
+    /// round-off (`map` is applied to the chain once, not to every column).
+    #[allow(clippy::too_many_arguments)]
+    pub fn tracker_point_jacobian_mapped(&self, instrument: Option<&str>, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, work: &mut Workspace, map: &Matrix3<f64>, columns: &[usize], mut write: impl FnMut(usize, Vector3<f64>)) -> Result<TrackerPrediction, PhysicsError> {
+        let (pred, chain) = self.tracker_chain(instrument, p, kin, q, s, work)?;
+        let chain = chain.mapped(map);
+        for &c in columns {
+            assert!(c < self.n_params, "column {c} of {} parameters", self.n_params);
+            write(c, chain.column(work, c).0);
+        }
+        Ok(pred)
+    }
+
+    /// The reading and its Jacobian as a [`TrackerChain`] over the intermediate Jacobians it
+    /// leaves in `work`.
+    fn tracker_chain(&self, instrument: Option<&str>, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, work: &mut Workspace) -> Result<(TrackerPrediction, TrackerChain), PhysicsError> {
         work.check(self)?;
         let inst = self.require(InstrumentKind::Tracker, instrument)?;
         let pose = pose_of(inst)?;
@@ -109,12 +136,12 @@ impl ForwardModel<'_> {
         s.tracker_range = Some(rho);
         // ∂x/∂P = Rᵀ = −∂x/∂T
         let rt: Matrix3<f64> = -work.pose.fixed_view::<3, 3>(0, 0).into_owned();
+        let range_slots = [inst.warmup, inst.refraction].map(|i| i.map(|i| self.slots[i]));
         if rho == 0.0 && inst.warmup.is_none() && inst.refraction.is_none() {
             // points given in the machine frame (pose = identity) can sit at the origin: with no
             // range terms the reported point is x itself, whose Jacobian needs no direction
             let pred = TrackerPrediction { point: x, range: rho, azimuth: az, elevation: el, warmup: 0.0, refraction: 0.0 };
-            write_chain(out, &work.tool, &work.pose, ps, &Matrix3::identity(), &RowVector3::zeros(), &rt);
-            return Ok(pred);
+            return Ok((pred, TrackerChain::new(ps, range_slots, Vector3::zeros(), Matrix3::identity(), RowVector3::zeros(), &rt)));
         }
         if !(rho > 0.0) {
             return Err(PhysicsError::InvalidInput { what: "forward model, tracker reading".into(), reason: "the target is at the tracker origin (range 0): no direction for the range terms".into() });
@@ -136,43 +163,57 @@ impl ForwardModel<'_> {
         let f = pred.measured_range() / rho;
         let range_from_x = u.transpose() * g;
         let point_from_x = (Matrix3::identity() - u * u.transpose()) * f + u * range_from_x;
-        write_chain(out, &work.tool, &work.pose, ps, &point_from_x, &range_from_x, &rt);
-        // the range terms move the reported point along u
-        for (row, i) in [inst.warmup, inst.refraction].into_iter().enumerate() {
-            if let Some(i) = i {
-                let sl = self.slots[i];
-                for k in 0..sl.len {
-                    let dr = work.range_terms[(row, k)];
-                    out.fixed_view_mut::<3, 1>(0, sl.start + k).copy_from(&(u * dr));
-                    out[(3, sl.start + k)] = dr;
-                }
-            }
-        }
-        Ok(pred)
+        Ok((pred, TrackerChain::new(ps, range_slots, u, point_from_x, range_from_x, &rt)))
     }
 }
 
-/// Rows of the tracker Jacobian `out` (reported point, then measured range) from the chain
-/// x → (y, ρ_m): the machine terms' columns through the sighted point (∂x/∂P = `rt` times
-/// `tool`, ∂P/∂p), the pose's columns from ∂x/∂pose (`pose`, its columns at `slot`). One fused
-/// pass over the columns, in fixed-size arithmetic: this runs for every reading of a fit. The
-/// range terms' columns are left zero (the tool Jacobian is zero there) for the caller.
-fn write_chain(out: &mut DMatrix<f64>, tool: &DMatrix<f64>, pose: &DMatrix<f64>, slot: Slot, point_from_x: &Matrix3<f64>, range_from_x: &RowVector3<f64>, rt: &Matrix3<f64>) {
-    let rows = |from_x: Matrix3<f64>, range: RowVector3<f64>, dx: Vector3<f64>| {
-        let y = from_x * dx;
-        [y.x, y.y, y.z, range.dot(&dx.transpose())]
-    };
-    let point_from_target = point_from_x * rt;
-    let range_from_target = range_from_x * rt;
-    let out_columns = out.as_mut_slice().chunks_exact_mut(TRACKER_ROWS);
-    for (c, (o, t)) in out_columns.zip(tool.as_slice().chunks_exact(3)).enumerate() {
-        let in_pose = c >= slot.start && c < slot.start + slot.len;
-        let column = if in_pose {
-            let k = c - slot.start;
-            rows(*point_from_x, *range_from_x, Vector3::new(pose[(0, k)], pose[(1, k)], pose[(2, k)]))
-        } else {
-            rows(point_from_target, range_from_target, Vector3::new(t[0], t[1], t[2]))
+/// The tracker Jacobian as the chain it is, x → (y, ρ_m), column by column from the
+/// intermediate Jacobians in a [`Workspace`]: the machine terms' columns through the sighted
+/// point (∂x/∂P = Rᵀ times ∂P/∂p), the pose's from ∂x/∂pose, the range terms' along u. Fixed-size
+/// arithmetic per column, no pass over a buffer in between: this runs for every reading of a fit.
+#[derive(Clone, Copy)]
+struct TrackerChain {
+    pose: Slot,
+    /// The warm-up's and the refraction's columns (rows 0 and 1 of the range-term Jacobian).
+    range_terms: [Option<Slot>; 2],
+    /// The direction of x.
+    u: Vector3<f64>,
+    point_from_x: Matrix3<f64>,
+    range_from_x: RowVector3<f64>,
+    point_from_target: Matrix3<f64>,
+    range_from_target: RowVector3<f64>,
+}
+
+impl TrackerChain {
+    fn new(pose: Slot, range_terms: [Option<Slot>; 2], u: Vector3<f64>, point_from_x: Matrix3<f64>, range_from_x: RowVector3<f64>, rt: &Matrix3<f64>) -> Self {
+        Self { pose, range_terms, u, point_from_x, range_from_x, point_from_target: point_from_x * rt, range_from_target: range_from_x * rt }
+    }
+
+    /// The chain of `map`·y (e.g. the whitened point): the point's factors premultiplied once.
+    fn mapped(&self, map: &Matrix3<f64>) -> Self {
+        Self { u: map * self.u, point_from_x: map * self.point_from_x, point_from_target: map * self.point_from_target, ..*self }
+    }
+
+    /// Column `c` of ∂(reported point)/∂p and of ∂(measured range)/∂p. (Inline: the callers
+    /// are generic over their writer, so they are compiled in the caller's crate.)
+    #[inline]
+    fn column(&self, work: &Workspace, c: usize) -> (Vector3<f64>, f64) {
+        let within = |s: Slot| c >= s.start && c < s.start + s.len;
+        let through = |from_x: &Matrix3<f64>, range: &RowVector3<f64>, d: &[f64]| {
+            let dx = Vector3::new(d[0], d[1], d[2]);
+            (from_x * dx, range.dot(&dx.transpose()))
         };
-        o.copy_from_slice(&column);
+        if within(self.pose) {
+            let k = c - self.pose.start;
+            return through(&self.point_from_x, &self.range_from_x, &work.pose.as_slice()[3 * k..3 * k + 3]);
+        }
+        for (row, slot) in self.range_terms.iter().enumerate() {
+            if let Some(slot) = slot.filter(|s| within(*s)) {
+                // the range terms move the reported point along u
+                let dr = work.range_terms[(row, c - slot.start)];
+                return (self.u * dr, dr);
+            }
+        }
+        through(&self.point_from_target, &self.range_from_target, &work.tool.as_slice()[3 * c..3 * c + 3])
     }
 }

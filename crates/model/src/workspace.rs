@@ -1,5 +1,6 @@
 //! Scratch Jacobians of the model's `*_jacobian` methods, allocated once per model so that an
-//! estimator's inner loop does not allocate.
+//! estimator's inner loop does not allocate, and what the readings of one parameter vector
+//! share (the tracker pose's rotation), so that it is computed once, not per reading.
 
 use metrocell_physics::instrument::tracker_pose::PoseRotation;
 use metrocell_physics::PhysicsError;

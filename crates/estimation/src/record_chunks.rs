@@ -86,7 +86,7 @@ pub(crate) struct DisjointRows {
     cols: usize,
 }
 
-// SAFETY: the pointer is only written through `set`, whose callers (the chunks) own disjoint row
+// SAFETY: the pointer is only written through `set_column`, whose callers (the chunks) own disjoint row
 // ranges; the matrix it points into outlives the scoped threads that write it.
 unsafe impl Send for DisjointRows {}
 unsafe impl Sync for DisjointRows {}
@@ -96,22 +96,19 @@ impl DisjointRows {
         DisjointRows { ptr: m.as_mut_ptr(), rows: m.nrows(), cols: m.ncols() }
     }
 
-    /// Writes `map(column)` of each column of the 3 × n `block` into rows `row0..row0 + 3`.
+    /// Writes `column` into rows `row0..row0 + 3` of column `col`.
     ///
     /// # Safety
     /// No other thread reads or writes those rows while the matrix is shared this way.
-    pub unsafe fn set_rows_mapped(&self, row0: usize, block: &nalgebra::DMatrixView<'_, f64>, map: impl Fn(Vector3<f64>) -> Vector3<f64>) {
-        let n = block.ncols();
-        assert!(block.nrows() == 3 && row0 + 3 <= self.rows && n == self.cols, "3 × {n} block at row {row0} outside {} × {}", self.rows, self.cols);
-        for col in 0..n {
-            let v = map(Vector3::new(block[(0, col)], block[(1, col)], block[(2, col)]));
-            // SAFETY: in bounds (checked above); the rows are this caller's alone (the contract)
-            unsafe {
-                let at = self.ptr.add(row0 + col * self.rows);
-                *at = v.x;
-                *at.add(1) = v.y;
-                *at.add(2) = v.z;
-            }
+    #[inline]
+    pub unsafe fn set_column(&self, row0: usize, col: usize, column: Vector3<f64>) {
+        assert!(row0 + 3 <= self.rows && col < self.cols, "rows {row0}..{} of column {col} outside {} × {}", row0 + 3, self.rows, self.cols);
+        // SAFETY: in bounds (checked above); the rows are this caller's alone (the contract)
+        unsafe {
+            let at = self.ptr.add(row0 + col * self.rows);
+            *at = column.x;
+            *at.add(1) = column.y;
+            *at.add(2) = column.z;
         }
     }
 }

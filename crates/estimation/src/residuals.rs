@@ -8,17 +8,17 @@
 //! L⁻¹·(measured − predicted), so correlated coordinates (a tracker's point is far more
 //! uncertain across the beam than along it) are weighted correctly and a whitened residual of
 //! an honest measurement has unit variance. The Jacobian is the model's analytic one
-//! ([`ForwardModel::tracker_jacobian`] rows of the reported point,
+//! ([`ForwardModel::tracker_point_jacobian_mapped`]: the reported point's rows,
 //! [`ForwardModel::probe_jacobian`], [`ForwardModel::camera_jacobian`] rows of the camera point),
 //! negated and whitened. Records are evaluated in parallel chunks (crate `record_chunks`), with
 //! results identical bit for bit to a sequential pass.
 
 use std::sync::Mutex;
 
-use metrocell_model::{ForwardModel, KinematicTruth, Workspace, CAMERA_ROWS, PROBE_ROWS, TRACKER_ROWS};
+use metrocell_model::{ForwardModel, KinematicTruth, Workspace, CAMERA_ROWS, PROBE_ROWS};
 use metrocell_physics::{PhysicsError, Signals};
 use metrocell_solver::{NotEvaluable, Problem};
-use nalgebra::{DMatrix, DMatrixView, Matrix3, Vector3};
+use nalgebra::{DMatrix, Matrix3, Vector3};
 
 use crate::record_chunks::{self, Chunk, DisjointRows};
 use crate::records::{MeasurementRecord, RecordKind};
@@ -134,15 +134,17 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
     /// The Jacobian of the predictions w.r.t. the stacked parameters (3·records × n,
     /// unwhitened, rows x y z of each record in turn) at `p`.
     pub fn prediction_jacobian(&self, p: &[f64]) -> Result<DMatrix<f64>, PhysicsError> {
-        let mut out = DMatrix::zeros(3 * self.records.len(), self.model.param_count());
-        self.evaluate_rows(p, None, &mut out)?;
+        let n = self.model.param_count();
+        let mut out = DMatrix::zeros(3 * self.records.len(), n);
+        self.evaluate_rows(p, None, &mut out, &(0..n).collect::<Vec<_>>())?;
         Ok(out)
     }
 
-    /// For every record i, rows 3i..3i+3 of `jac`: without `residuals`, the prediction's
-    /// Jacobian; with them, the residuals' −L⁻¹·∂prediction/∂p, and L⁻¹·(measured − predicted)
-    /// into entries 3i..3i+3 of `residuals`.
-    fn evaluate_rows(&self, p: &[f64], residuals: Option<&mut [f64]>, jac: &mut DMatrix<f64>) -> Result<(), EvaluationFailure> {
+    /// For every record i, rows 3i..3i+3 of `jac` in the given `columns` (the others are left
+    /// as they are): without `residuals`, the prediction's Jacobian; with them, the residuals'
+    /// −L⁻¹·∂prediction/∂p, and L⁻¹·(measured − predicted) into entries 3i..3i+3 of
+    /// `residuals`.
+    fn evaluate_rows(&self, p: &[f64], residuals: Option<&mut [f64]>, jac: &mut DMatrix<f64>, columns: &[usize]) -> Result<(), EvaluationFailure> {
         let whiten = residuals.is_some();
         let kin = self.model.kinematic_truth(p).map_err(EvaluationFailure::Model)?;
         let n = self.model.param_count();
@@ -157,12 +159,12 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
             for (k, s) in signals.iter_mut().enumerate() {
                 let i = c.start + k;
                 let r = &self.records[i];
-                let (pred, rows) = buffers.predict_with_jacobian(self.model, p, &kin, r, s).map_err(|error| EvaluationFailure::Record { index: i, error })?;
                 // ∂r/∂p = −L⁻¹·∂prediction/∂p, column by column in fixed-size arithmetic,
                 // straight into the rows of record i (the identity when not whitening)
                 let w = if whiten { -self.whitening[i] } else { Matrix3::identity() };
                 // SAFETY: rows 3i..3i+3 belong to record i, which only this chunk evaluates
-                unsafe { target.set_rows_mapped(3 * i, &rows, |column| w * column) };
+                let write = |c, column| unsafe { target.set_column(3 * i, c, column) };
+                let pred = buffers.predict_with_jacobian(self.model, p, &kin, r, s, &w, columns, write).map_err(|error| EvaluationFailure::Record { index: i, error })?;
                 if let Some(out) = out.as_deref_mut() {
                     let z = self.whitening[i] * (r.measured - pred);
                     out[3 * k..3 * k + 3].copy_from_slice(z.as_slice());
@@ -172,14 +174,19 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
         })
     }
 
-    fn evaluate(&self, p: &[f64], residuals: &mut [f64], jac: Option<&mut DMatrix<f64>>) -> Result<(), NotEvaluable> {
+    /// Residuals at `p` into `residuals` and, with `jac`, the Jacobian's columns k with
+    /// `wanted[k]` (every column without `wanted`).
+    fn evaluate(&self, p: &[f64], residuals: &mut [f64], jac: Option<&mut DMatrix<f64>>, wanted: Option<&[bool]>) -> Result<(), NotEvaluable> {
         let fail = |f: EvaluationFailure| match f {
             EvaluationFailure::Model(e) => NotEvaluable(e.to_string()),
             EvaluationFailure::Record { index, error } => NotEvaluable(format!("record {index} ({}): {error}", self.records[index].point_id)),
         };
         match jac {
             // ∂r/∂p = −L⁻¹·∂prediction/∂p
-            Some(j) => self.evaluate_rows(p, Some(&mut *residuals), j).map_err(fail)?,
+            Some(j) => {
+                let columns: Vec<usize> = (0..j.ncols()).filter(|&k| wanted.is_none_or(|w| w[k])).collect();
+                self.evaluate_rows(p, Some(&mut *residuals), j, &columns).map_err(fail)?
+            }
             None => {
                 let predicted = self.predictions_of_records(p).map_err(fail)?;
                 for (i, (r, pred)) in self.records.iter().zip(&predicted).enumerate() {
@@ -211,10 +218,10 @@ pub fn predict(model: &ForwardModel, p: &[f64], kin: &KinematicTruth, r: &Measur
     }
 }
 
-/// The model's Jacobian buffers, one per reading kind (allocated once per problem).
+/// The model's Jacobian buffers: its workspace, and one for each reading kind that is not a
+/// tracker's (allocated once per problem).
 struct Buffers {
     work: Workspace,
-    tracker: DMatrix<f64>,
     probe: DMatrix<f64>,
     camera: DMatrix<f64>,
 }
@@ -222,16 +229,16 @@ struct Buffers {
 impl Buffers {
     fn new(model: &ForwardModel) -> Self {
         let n = model.param_count();
-        Self { work: Workspace::new(model), tracker: DMatrix::zeros(TRACKER_ROWS, n), probe: DMatrix::zeros(PROBE_ROWS, n), camera: DMatrix::zeros(CAMERA_ROWS, n) }
+        Self { work: Workspace::new(model), probe: DMatrix::zeros(PROBE_ROWS, n), camera: DMatrix::zeros(CAMERA_ROWS, n) }
     }
 
-    /// [`predict`] (bit for bit) and the three rows of its Jacobian (a view into the buffers).
-    fn predict_with_jacobian(&mut self, model: &ForwardModel, p: &[f64], kin: &KinematicTruth, r: &MeasurementRecord, s: &mut Signals) -> Result<(Vector3<f64>, DMatrixView<'_, f64>), PhysicsError> {
-        Ok(match &r.kind {
-            RecordKind::Point => {
-                let pred = model.tracker_jacobian(p, kin, &r.q, s, &mut self.work, &mut self.tracker)?;
-                (pred.measured_point(), self.tracker.rows(0, 3))
-            }
+    /// [`predict`] (bit for bit), and `write(c, map·column c of its Jacobian)` for each of
+    /// `columns`. A tracker's point goes straight from the model's chain to `write`; the other
+    /// kinds through their buffer.
+    #[allow(clippy::too_many_arguments)]
+    fn predict_with_jacobian(&mut self, model: &ForwardModel, p: &[f64], kin: &KinematicTruth, r: &MeasurementRecord, s: &mut Signals, map: &Matrix3<f64>, columns: &[usize], mut write: impl FnMut(usize, Vector3<f64>)) -> Result<Vector3<f64>, PhysicsError> {
+        let (pred, rows) = match &r.kind {
+            RecordKind::Point => return Ok(model.tracker_point_jacobian_mapped(None, p, kin, &r.q, s, &mut self.work, map, columns, write)?.measured_point()),
             RecordKind::ProbeHit { target, probe } => {
                 let pred = model.probe_jacobian(probe.as_deref(), p, kin, &r.q, s, target, &mut self.work, &mut self.probe)?;
                 (pred.centre, self.probe.rows(0, 3))
@@ -241,7 +248,11 @@ impl Buffers {
                 // rows 2..5: the camera point
                 (pred.measured_point, self.camera.rows(2, 3))
             }
-        })
+        };
+        for &c in columns {
+            write(c, map * rows.fixed_view::<3, 1>(0, c));
+        }
+        Ok(pred)
     }
 }
 
@@ -253,9 +264,15 @@ impl Problem for PointResiduals<'_, '_> {
         self.model.param_count()
     }
     fn residuals(&self, x: &[f64], residuals: &mut [f64]) -> Result<(), NotEvaluable> {
-        self.evaluate(x, residuals, None)
+        self.evaluate(x, residuals, None, None)
     }
     fn residuals_and_jacobian(&self, x: &[f64], residuals: &mut [f64], jacobian: &mut DMatrix<f64>) -> Result<(), NotEvaluable> {
-        self.evaluate(x, residuals, Some(jacobian))
+        self.evaluate(x, residuals, Some(jacobian), None)
+    }
+    /// The unwanted columns are not written: with many records, storing the Jacobian is a
+    /// memory-bound share of an evaluation.
+    fn residuals_and_jacobian_of(&self, x: &[f64], residuals: &mut [f64], jacobian: &mut DMatrix<f64>, wanted: &[bool]) -> Result<(), NotEvaluable> {
+        assert_eq!(wanted.len(), jacobian.ncols(), "one wanted flag per parameter");
+        self.evaluate(x, residuals, Some(jacobian), Some(wanted))
     }
 }

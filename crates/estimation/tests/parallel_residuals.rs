@@ -1,6 +1,7 @@
 //! The residuals and Jacobian of many records, evaluated in parallel chunks (one per core), are
 //! bit for bit those of each record evaluated on its own, and a failing record is named by its
-//! index as a sequential pass would name it.
+//! index as a sequential pass would name it. Asked for only some columns, the evaluation writes
+//! those columns, bit for bit the same, and leaves the others alone.
 
 #[path = "common/mod.rs"]
 mod common;
@@ -46,6 +47,19 @@ fn chunked_evaluation_equals_record_by_record() {
         assert_eq!(&r[3 * i..3 * i + 3], &r1[..], "record {i}: residuals");
         assert_eq!(&r_only[3 * i..3 * i + 3], &r1[..], "record {i}: residuals without the Jacobian");
         assert!(j.rows(3 * i, 3) == j1, "record {i}: Jacobian rows");
+    }
+
+    // only the wanted columns: the same values, the others untouched
+    let wanted: Vec<bool> = (0..n).map(|k| k % 3 != 1).collect();
+    let (mut r_of, mut j_of) = (vec![0.0; m], DMatrix::from_element(m, n, f64::NAN));
+    all.residuals_and_jacobian_of(&p, &mut r_of, &mut j_of, &wanted).unwrap();
+    assert_eq!(r_of, r, "residuals of the wanted columns' evaluation");
+    for k in 0..n {
+        if wanted[k] {
+            assert!(j_of.column(k) == j.column(k), "wanted column {k}");
+        } else {
+            assert!(j_of.column(k).iter().all(|v| v.is_nan()), "unwanted column {k} written");
+        }
     }
 
     // a record the model cannot predict (its commanded joints missing) is named by its index

@@ -456,7 +456,8 @@ impl<'a> ForwardModel<'a> {
     pub(crate) fn tool_jacobian(&self, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, lin: &mut DMatrix<f64>, mut ang: Option<&mut DMatrix<f64>>) -> Result<ToolState, PhysicsError> {
         self.check(p)?;
         self.check_buffer("tool-point Jacobian", lin, 3)?;
-        lin.fill(0.0);
+        // through the slice: a memset, where nalgebra's fill walks the elements one by one
+        lin.as_mut_slice().fill(0.0);
         if let Some(a) = ang.as_deref_mut() {
             self.check_buffer("tool-rotation Jacobian", a, 3)?;
             a.fill(0.0);

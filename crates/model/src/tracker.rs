@@ -9,9 +9,9 @@
 
 use metrocell_physics::instrument::spherical::to_spherical;
 use metrocell_physics::{PhysicsError, Signals};
-use nalgebra::{DMatrix, Matrix3, Vector3};
+use nalgebra::{DMatrix, Matrix3, RowVector3, Vector3};
 
-use crate::forward::{v3, ForwardModel, KinematicTruth, ToolState};
+use crate::forward::{v3, ForwardModel, KinematicTruth, Slot, ToolState};
 use crate::instruments::{Instrument, InstrumentKind};
 use crate::workspace::Workspace;
 
@@ -90,8 +90,34 @@ impl ForwardModel<'_> {
     /// intermediate Jacobians.
     #[allow(clippy::too_many_arguments)]
     pub fn tracker_jacobian_of(&self, instrument: Option<&str>, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, work: &mut Workspace, out: &mut DMatrix<f64>) -> Result<TrackerPrediction, PhysicsError> {
-        let n = self.n_params;
         self.check_buffer("tracker Jacobian", out, TRACKER_ROWS)?;
+        let (pred, chain) = self.tracker_chain(instrument, p, kin, q, s, work)?;
+        for (c, o) in out.as_mut_slice().chunks_exact_mut(TRACKER_ROWS).enumerate() {
+            let (y, range) = chain.column(work, c);
+            o.copy_from_slice(&[y.x, y.y, y.z, range]);
+        }
+        Ok(pred)
+    }
+
+    /// The reported point's rows of [`Self::tracker_jacobian_of`] in the given `columns`, each
+    /// multiplied by `map` (3 × 3, e.g. a whitening) and handed to `write(column, map·∂y/∂p)`:
+    /// for a caller that stores them elsewhere (an estimator's m × n Jacobian) without a buffer
+    /// in between. The prediction is `tracker_jacobian_of`'s bit for bit, the columns to
+    /// round-off (`map` is applied to the chain once, not to every column).
+    #[allow(clippy::too_many_arguments)]
+    pub fn tracker_point_jacobian_mapped(&self, instrument: Option<&str>, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, work: &mut Workspace, map: &Matrix3<f64>, columns: &[usize], mut write: impl FnMut(usize, Vector3<f64>)) -> Result<TrackerPrediction, PhysicsError> {
+        let (pred, chain) = self.tracker_chain(instrument, p, kin, q, s, work)?;
+        let chain = chain.mapped(map);
+        for &c in columns {
+            assert!(c < self.n_params, "column {c} of {} parameters", self.n_params);
+            write(c, chain.column(work, c).0);
+        }
+        Ok(pred)
+    }
+
+    /// The reading and its Jacobian as a [`TrackerChain`] over the intermediate Jacobians it
+    /// leaves in `work`.
+    fn tracker_chain(&self, instrument: Option<&str>, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, work: &mut Workspace) -> Result<(TrackerPrediction, TrackerChain), PhysicsError> {
         work.check(self)?;
         let inst = self.require(InstrumentKind::Tracker, instrument)?;
         let pose = pose_of(inst)?;
@@ -100,20 +126,22 @@ impl ForwardModel<'_> {
         s.target_point = Some(target);
         let mut xv = [0.0; 3];
         let ps = self.slots[pose];
-        self.term(pose).term.evaluate_into(self.part(pose, p), s, &mut xv, work.pose.columns_mut(0, ps.len))?;
+        // the pose term is a `tracker_pose` (see `group_instruments`): its evaluation, with the
+        // rotation's trigonometry done once for all readings at this pose
+        let pp = self.part(pose, p);
+        let rotation = work.pose_rotation([pp[3], pp[4], pp[5]]);
+        rotation.evaluate_into(Vector3::new(pp[0], pp[1], pp[2]), target, &mut xv, work.pose.columns_mut(0, ps.len));
         let x = Vector3::new(xv[0], xv[1], xv[2]);
         let (rho, az, el) = to_spherical(&x);
         s.tracker_range = Some(rho);
         // ∂x/∂P = Rᵀ = −∂x/∂T
         let rt: Matrix3<f64> = -work.pose.fixed_view::<3, 3>(0, 0).into_owned();
-        work.point.gemm(1.0, &rt, &work.tool, 0.0);
-        work.point.columns_mut(ps.start, ps.len).copy_from(&work.pose.columns(0, ps.len));
+        let range_slots = [inst.warmup, inst.refraction].map(|i| i.map(|i| self.slots[i]));
         if rho == 0.0 && inst.warmup.is_none() && inst.refraction.is_none() {
             // points given in the machine frame (pose = identity) can sit at the origin: with no
             // range terms the reported point is x itself, whose Jacobian needs no direction
-            out.rows_mut(0, 3).copy_from(&work.point);
-            out.row_mut(3).fill(0.0);
-            return Ok(TrackerPrediction { point: x, range: rho, azimuth: az, elevation: el, warmup: 0.0, refraction: 0.0 });
+            let pred = TrackerPrediction { point: x, range: rho, azimuth: az, elevation: el, warmup: 0.0, refraction: 0.0 };
+            return Ok((pred, TrackerChain::new(ps, range_slots, Vector3::zeros(), Matrix3::identity(), RowVector3::zeros(), &rt)));
         }
         if !(rho > 0.0) {
             return Err(PhysicsError::InvalidInput { what: "forward model, tracker reading".into(), reason: "the target is at the tracker origin (range 0): no direction for the range terms".into() });
@@ -129,28 +157,63 @@ impl ForwardModel<'_> {
         }
         let pred = TrackerPrediction { point: x, range: rho, azimuth: az, elevation: el, warmup: range_changes[0], refraction: range_changes[1] };
         let u = x / rho;
-        // Δρ_refraction is proportional to ρ: ∂ρ_m/∂x = (1 + Δρ_refraction/ρ)·uᵀ
+        // Δρ_refraction is proportional to ρ: ∂ρ_m/∂x = g·uᵀ with g = 1 + Δρ_refraction/ρ;
+        // the reported point y = ρ_m·u: ∂y/∂x = (ρ_m/ρ)(I − u uᵀ) + u·∂ρ_m/∂x
         let g = 1.0 + pred.refraction / rho;
-        let measured = pred.measured_range();
-        let f = measured / rho;
-        for c in 0..n {
-            let dx = work.point.fixed_view::<3, 1>(0, c).into_owned();
-            out[(3, c)] = g * u.dot(&dx);
+        let f = pred.measured_range() / rho;
+        let range_from_x = u.transpose() * g;
+        let point_from_x = (Matrix3::identity() - u * u.transpose()) * f + u * range_from_x;
+        Ok((pred, TrackerChain::new(ps, range_slots, u, point_from_x, range_from_x, &rt)))
+    }
+}
+
+/// The tracker Jacobian as the chain it is, x → (y, ρ_m), column by column from the
+/// intermediate Jacobians in a [`Workspace`]: the machine terms' columns through the sighted
+/// point (∂x/∂P = Rᵀ times ∂P/∂p), the pose's from ∂x/∂pose, the range terms' along u. Fixed-size
+/// arithmetic per column, no pass over a buffer in between: this runs for every reading of a fit.
+#[derive(Clone, Copy)]
+struct TrackerChain {
+    pose: Slot,
+    /// The warm-up's and the refraction's columns (rows 0 and 1 of the range-term Jacobian).
+    range_terms: [Option<Slot>; 2],
+    /// The direction of x.
+    u: Vector3<f64>,
+    point_from_x: Matrix3<f64>,
+    range_from_x: RowVector3<f64>,
+    point_from_target: Matrix3<f64>,
+    range_from_target: RowVector3<f64>,
+}
+
+impl TrackerChain {
+    fn new(pose: Slot, range_terms: [Option<Slot>; 2], u: Vector3<f64>, point_from_x: Matrix3<f64>, range_from_x: RowVector3<f64>, rt: &Matrix3<f64>) -> Self {
+        Self { pose, range_terms, u, point_from_x, range_from_x, point_from_target: point_from_x * rt, range_from_target: range_from_x * rt }
+    }
+
+    /// The chain of `map`·y (e.g. the whitened point): the point's factors premultiplied once.
+    fn mapped(&self, map: &Matrix3<f64>) -> Self {
+        Self { u: map * self.u, point_from_x: map * self.point_from_x, point_from_target: map * self.point_from_target, ..*self }
+    }
+
+    /// Column `c` of ∂(reported point)/∂p and of ∂(measured range)/∂p. (Inline: the callers
+    /// are generic over their writer, so they are compiled in the caller's crate.)
+    #[inline]
+    fn column(&self, work: &Workspace, c: usize) -> (Vector3<f64>, f64) {
+        let within = |s: Slot| c >= s.start && c < s.start + s.len;
+        let through = |from_x: &Matrix3<f64>, range: &RowVector3<f64>, d: &[f64]| {
+            let dx = Vector3::new(d[0], d[1], d[2]);
+            (from_x * dx, range.dot(&dx.transpose()))
+        };
+        if within(self.pose) {
+            let k = c - self.pose.start;
+            return through(&self.point_from_x, &self.range_from_x, &work.pose.as_slice()[3 * k..3 * k + 3]);
         }
-        for (row, i) in [inst.warmup, inst.refraction].into_iter().enumerate() {
-            if let Some(i) = i {
-                let sl = self.slots[i];
-                for k in 0..sl.len {
-                    out[(3, sl.start + k)] += work.range_terms[(row, k)];
-                }
+        for (row, slot) in self.range_terms.iter().enumerate() {
+            if let Some(slot) = slot.filter(|s| within(*s)) {
+                // the range terms move the reported point along u
+                let dr = work.range_terms[(row, c - slot.start)];
+                return (self.u * dr, dr);
             }
         }
-        // reported point y = ρ_m·u: ∂y = (ρ_m/ρ)(I − u uᵀ)∂x + u ∂ρ_m
-        for c in 0..n {
-            let dx = work.point.fixed_view::<3, 1>(0, c).into_owned();
-            let dy = (dx - u * u.dot(&dx)) * f + u * out[(3, c)];
-            out.fixed_view_mut::<3, 1>(0, c).copy_from(&dy);
-        }
-        Ok(pred)
+        through(&self.point_from_target, &self.range_from_target, &work.tool.as_slice()[3 * c..3 * c + 3])
     }
 }

@@ -1,6 +1,8 @@
 //! Scratch Jacobians of the model's `*_jacobian` methods, allocated once per model so that an
-//! estimator's inner loop does not allocate.
+//! estimator's inner loop does not allocate, and what the readings of one parameter vector
+//! share (the tracker pose's rotation), so that it is computed once, not per reading.
 
+use metrocell_physics::instrument::tracker_pose::PoseRotation;
 use metrocell_physics::PhysicsError;
 use nalgebra::DMatrix;
 
@@ -26,6 +28,9 @@ pub struct Workspace {
     pub(crate) range_terms: DMatrix<f64>,
     /// ∂(an instrument term)/∂(its parameters), up to 3 × 6.
     pub(crate) term: DMatrix<f64>,
+    /// The tracker pose's rotation at the last pose evaluated: the readings of one parameter
+    /// vector share it (see [`Self::pose_rotation`]).
+    pose_rotation: Option<PoseRotation>,
 }
 
 impl Workspace {
@@ -39,6 +44,17 @@ impl Workspace {
             pose: DMatrix::zeros(3, 6),
             range_terms: DMatrix::zeros(2, 3),
             term: DMatrix::zeros(3, TERM_COLUMNS),
+            pose_rotation: None,
+        }
+    }
+
+    /// The tracker pose's rotation at Euler angles `angles`: the one of the last call when the
+    /// angles are the same bit for bit, else computed anew.
+    pub(crate) fn pose_rotation(&mut self, angles: [f64; 3]) -> PoseRotation {
+        let same = |r: &PoseRotation| r.angles().iter().zip(&angles).all(|(a, b)| a.to_bits() == b.to_bits());
+        match self.pose_rotation {
+            Some(r) if same(&r) => r,
+            _ => *self.pose_rotation.insert(PoseRotation::new(angles[0], angles[1], angles[2])),
         }
     }
 

@@ -24,11 +24,16 @@ impl Axis {
     pub fn index(self) -> usize {
         self as usize
     }
-    /// Unit vector of the axis in the machine frame.
+    /// Unit vector of the axis in the machine frame. (Each a constant: the geometric terms
+    /// build these for every reading, and a vector written element by element on the stack and
+    /// read back whole stalled the model's inner loop.)
+    #[inline]
     pub fn unit(self) -> Vector3<f64> {
-        let mut v = Vector3::zeros();
-        v[self.index()] = 1.0;
-        v
+        match self {
+            Axis::X => Vector3::x(),
+            Axis::Y => Vector3::y(),
+            Axis::Z => Vector3::z(),
+        }
     }
     pub fn name(self) -> &'static str {
         ["x", "y", "z"][self.index()]
@@ -223,6 +228,7 @@ impl Signals {
         self.axis_position = [Some(p.x), Some(p.y), Some(p.z)];
         self
     }
+    #[inline]
     pub fn position(&self, term: &(impl TermLabel + ?Sized), a: Axis) -> Result<f64, PhysicsError> {
         self.axis_position[a.index()].ok_or_else(|| missing(term, SignalKind::AxisPosition(a)))
     }

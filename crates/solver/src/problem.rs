@@ -24,6 +24,20 @@ pub trait Problem {
         residuals: &mut [f64],
         jacobian: &mut DMatrix<f64>,
     ) -> Result<(), NotEvaluable>;
+    /// [`Self::residuals_and_jacobian`], except that columns k with `!wanted[k]` may be left
+    /// unwritten (the solver passes its free mask: it never reads a fixed parameter's column).
+    /// Writing m × n entries is a fair part of evaluating a large problem; a problem that can
+    /// skip columns overrides this. The default writes every column.
+    fn residuals_and_jacobian_of(
+        &self,
+        x: &[f64],
+        residuals: &mut [f64],
+        jacobian: &mut DMatrix<f64>,
+        wanted: &[bool],
+    ) -> Result<(), NotEvaluable> {
+        let _ = wanted;
+        self.residuals_and_jacobian(x, residuals, jacobian)
+    }
     /// x ⊕ δ into `out`; the default is x + δ.
     fn retract(&self, x: &[f64], delta: &[f64], out: &mut [f64]) {
         for ((o, a), d) in out.iter_mut().zip(x).zip(delta) {

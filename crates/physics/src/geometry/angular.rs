@@ -91,9 +91,10 @@ impl PhysicsTerm for Angular {
     fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
         check_len(self, p, self.series.len())?;
         let (q, arm) = self.lever(s)?;
-        let v = arm * self.series.eval(p, q);
+        let basis = self.series.basis_array(q);
+        let v = arm * self.series.combine(&basis, p);
         value[..3].copy_from_slice(v.as_slice());
-        for (i, b) in self.series.basis_array(q)[..p.len()].iter().enumerate() {
+        for (i, b) in basis[..p.len()].iter().enumerate() {
             jac.set_column(i, &(arm * *b));
         }
         Ok(())

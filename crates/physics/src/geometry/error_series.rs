@@ -93,7 +93,14 @@ impl ErrorSeries {
 
     /// Value of the series with coefficients `c` at q.
     pub fn eval(&self, c: &[f64], q: f64) -> f64 {
-        self.basis_array(q)[..self.len()].iter().zip(c).map(|(b, c)| b * c).sum()
+        self.combine(&self.basis_array(q), c)
+    }
+
+    /// Value of the series with coefficients `c` from its basis values at q
+    /// ([`Self::basis_array`]): [`Self::eval`] bit for bit, for a caller that needs the basis
+    /// (the Jacobian row) too and computes it once.
+    pub fn combine(&self, basis: &[f64; MAX_ORDER + 1], c: &[f64]) -> f64 {
+        basis[..self.len()].iter().zip(c).map(|(b, c)| b * c).sum()
     }
 }
 

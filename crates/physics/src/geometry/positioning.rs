@@ -34,10 +34,11 @@ pub(crate) fn series_params(series: &ErrorSeries, unit: &'static str, bound: f64
 /// Value and Jacobian of a series error along `direction` (d = e_dir·δ(q)), into buffers; the
 /// value's arithmetic is `predict`'s.
 pub(crate) fn series_along_into(series: &ErrorSeries, direction: Axis, p: &[f64], q: f64, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) {
-    let v = direction.unit() * series.eval(p, q);
+    let basis = series.basis_array(q);
+    let v = direction.unit() * series.combine(&basis, p);
     value[..3].copy_from_slice(v.as_slice());
     jac.fill(0.0);
-    for (i, b) in series.basis_array(q)[..p.len()].iter().enumerate() {
+    for (i, b) in basis[..p.len()].iter().enumerate() {
         jac[(direction.index(), i)] = *b;
     }
 }

@@ -8,7 +8,7 @@
 //! (α, β, δ) the Euler angles. R_LT is orthonormal, so R_LT⁻¹ = R_LTᵀ. Effect: the point in the
 //! tracker frame, m.
 
-use nalgebra::{DMatrix, DMatrixViewMut, DVector, Vector3};
+use nalgebra::{DMatrix, DMatrixViewMut, DVector, Matrix3, Vector3};
 
 use crate::term_id::TermId;
 use crate::config::Options;
@@ -79,21 +79,47 @@ impl PhysicsTerm for TrackerPose {
         }
         Ok(j)
     }
-    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
+    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
         check_len(self, p, 6)?;
         let point = match s.target_point {
             Some(v) => v,
             None => s.target(self)?,
         };
-        let d = point - Vector3::new(p[0], p[1], p[2]);
-        let (a, b, c) = (p[3], p[4], p[5]);
-        let r = euler_xyz(a, b, c);
-        value[..3].copy_from_slice((r.transpose() * d).as_slice());
-        jac.fixed_view_mut::<3, 3>(0, 0).copy_from(&(-r.transpose()));
-        let dr = [drx(a) * ry(b) * rz(c), rx(a) * dry(b) * rz(c), rx(a) * ry(b) * drz(c)];
-        for (k, m) in dr.iter().enumerate() {
+        PoseRotation::new(p[3], p[4], p[5]).evaluate_into(Vector3::new(p[0], p[1], p[2]), point, value, jac);
+        Ok(())
+    }
+}
+
+/// R_LT and its derivatives by the three Euler angles: what every reading at one pose shares,
+/// so that a caller evaluating many readings at one parameter vector (a fit) computes the
+/// trigonometry once ([`Self::angles`] tells which pose it is for).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PoseRotation {
+    angles: [f64; 3],
+    r: Matrix3<f64>,
+    /// ∂R_LT/∂α, ∂R_LT/∂β, ∂R_LT/∂δ.
+    dr: [Matrix3<f64>; 3],
+}
+
+impl PoseRotation {
+    pub fn new(alpha: f64, beta: f64, delta: f64) -> Self {
+        let (a, b, c) = (alpha, beta, delta);
+        Self { angles: [a, b, c], r: euler_xyz(a, b, c), dr: [drx(a) * ry(b) * rz(c), rx(a) * dry(b) * rz(c), rx(a) * ry(b) * drz(c)] }
+    }
+
+    /// The Euler angles (α, β, δ) this rotation is of.
+    pub fn angles(&self) -> [f64; 3] {
+        self.angles
+    }
+
+    /// [`TrackerPose`]'s `evaluate_into` at this rotation (bit for bit): x = R_LTᵀ(point −
+    /// origin) into `value[..3]`, ∂x/∂(tx, ty, tz, α, β, δ) into `jac` (3 × 6).
+    pub fn evaluate_into(&self, origin: Vector3<f64>, point: Vector3<f64>, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) {
+        let d = point - origin;
+        value[..3].copy_from_slice((self.r.transpose() * d).as_slice());
+        jac.fixed_view_mut::<3, 3>(0, 0).copy_from(&(-self.r.transpose()));
+        for (k, m) in self.dr.iter().enumerate() {
             jac.column_mut(3 + k).copy_from(&(m.transpose() * d));
         }
-        Ok(())
     }
 }

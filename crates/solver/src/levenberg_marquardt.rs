@@ -30,6 +30,8 @@ struct Workspace {
     j: DMatrix<f64>,
     /// The parameters that are not fixed, in order: the columns the normal equations are built from.
     free: Vec<usize>,
+    /// The same as a mask over all n parameters (the columns asked of the problem).
+    wanted: Vec<bool>,
     /// The trial point's Jacobian, when trials are evaluated with it (swapped in on acceptance).
     trial_j: DMatrix<f64>,
     inv_sigma: Vec<f64>,
@@ -58,10 +60,10 @@ fn cost(r: &[f64], inv_sigma: &[f64], x: &[f64], options: &Options) -> Option<f6
     c.is_finite().then_some(c)
 }
 
-/// r(x) and J(x) into the buffers, with non-finite values (in the free columns) reported as not
-/// evaluable.
-fn evaluate<P: Problem + ?Sized>(problem: &P, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>, free: &[usize]) -> Result<(), NotEvaluable> {
-    problem.residuals_and_jacobian(x, r, j)?;
+/// r(x) and the free columns of J(x) into the buffers (`wanted`: the free mask), with
+/// non-finite values reported as not evaluable.
+fn evaluate<P: Problem + ?Sized>(problem: &P, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>, free: &[usize], wanted: &[bool]) -> Result<(), NotEvaluable> {
+    problem.residuals_and_jacobian_of(x, r, j, wanted)?;
     check_evaluated(r, j, free)
 }
 
@@ -79,7 +81,7 @@ fn check_evaluated(r: &[f64], j: &DMatrix<f64>, free: &[usize]) -> Result<(), No
 impl Workspace {
     /// Evaluates r and J at x, then linearises (see [`Workspace::weigh`]).
     fn linearise<P: Problem + ?Sized>(&mut self, problem: &P, x: &[f64], options: &Options) -> Result<f64, NotEvaluable> {
-        evaluate(problem, x, &mut self.r, &mut self.j, &self.free)?;
+        evaluate(problem, x, &mut self.r, &mut self.j, &self.free, &self.wanted)?;
         self.weigh_own(x, options)
     }
 
@@ -156,6 +158,7 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
         raw: vec![0.0; m],
         r: vec![0.0; m],
         j: DMatrix::zeros(m, n),
+        wanted: (0..n).map(|k| !options.is_fixed(k)).collect(),
         free,
         trial_j: if options.jacobian_on_trials { DMatrix::zeros(m, n) } else { DMatrix::zeros(0, 0) },
         inv_sigma,
@@ -247,7 +250,7 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
             let predicted = predicted_reduction(&ws, &delta, &mut ad);
             evaluations += 1;
             let evaluated = if options.jacobian_on_trials {
-                evaluate(problem, &x_trial, &mut r_trial, &mut ws.trial_j, &ws.free)
+                evaluate(problem, &x_trial, &mut r_trial, &mut ws.trial_j, &ws.free, &ws.wanted)
             } else {
                 problem.residuals(&x_trial, &mut r_trial)
             };
@@ -382,11 +385,15 @@ fn finish(
 ) -> Result<Solution, SolverError> {
     let (m, n) = ws.j.shape();
     let free: Vec<bool> = (0..n).map(|k| !options.is_fixed(k)).collect();
-    // √W·J at x for the identifiability analysis, the columns of fixed parameters zero
-    let mut weighted_jacobian = DMatrix::zeros(m, n);
-    for &k in &ws.free {
-        for ((w, v), s) in weighted_jacobian.column_mut(k).iter_mut().zip(ws.j.column(k).iter()).zip(&ws.row_scale) {
-            *w = v * s;
+    // √W·J at x for the identifiability analysis, the columns of fixed parameters zero: J is
+    // weighted in place (a new m × n buffer is one more allocation, zeroing and pass)
+    let mut weighted_jacobian = ws.j;
+    for k in 0..n {
+        let mut column = weighted_jacobian.column_mut(k);
+        if free[k] {
+            column.iter_mut().zip(&ws.row_scale).for_each(|(v, s)| *v *= s);
+        } else {
+            column.fill(0.0);
         }
     }
     let n_free = free.iter().filter(|f| **f).count();

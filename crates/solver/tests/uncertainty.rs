@@ -3,37 +3,10 @@
 
 mod common;
 
-use common::{normal, rng, Decay};
-use metrocell_solver::{monte_carlo, solve, Loss, NotEvaluable, Noise, NullSpace, Options, Prior, Problem, SolverError, Termination};
+use common::{normal, rng, Decay, Linear};
+use metrocell_solver::{monte_carlo, solve, Loss, Noise, NullSpace, Options, Prior, SolverError, Termination};
 use nalgebra::{DMatrix, DVector};
 use rand::Rng;
-
-/// y = A·x + noise: a linear problem with design matrix `a`.
-struct Linear {
-    a: DMatrix<f64>,
-    y: Vec<f64>,
-}
-
-impl Problem for Linear {
-    fn residual_count(&self) -> usize {
-        self.a.nrows()
-    }
-    fn parameter_count(&self) -> usize {
-        self.a.ncols()
-    }
-    fn residuals(&self, x: &[f64], r: &mut [f64]) -> Result<(), NotEvaluable> {
-        let ax = &self.a * DVector::from_column_slice(x);
-        for i in 0..r.len() {
-            r[i] = ax[i] - self.y[i];
-        }
-        Ok(())
-    }
-    fn residuals_and_jacobian(&self, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>) -> Result<(), NotEvaluable> {
-        self.residuals(x, r)?;
-        j.copy_from(&self.a);
-        Ok(())
-    }
-}
 
 /// Fraction of (trial, parameter) pairs with |x̂ − x| ≤ kσ̂, for k = 1 and 3.
 fn coverage(hits: &[(f64, f64)]) -> (f64, f64) {
@@ -52,7 +25,7 @@ fn reported_covariance_covers_the_truth_linear_gaussian() {
         let sigma = 0.05;
         let ax = &a * DVector::from_column_slice(&truth);
         let y = ax.iter().map(|v| v + sigma * normal(&mut r)).collect();
-        let s = solve(&Linear { a, y }, &[0.0; 4], &Options::default()).unwrap();
+        let s = solve(&Linear::new(a, y), &[0.0; 4], &Options::default()).unwrap();
         let u = s.standard_uncertainties().unwrap();
         hits.extend((0..4).map(|k| (s.x[k] - truth[k], u[k])));
     }
@@ -160,7 +133,7 @@ fn rank_deficiency_is_found_and_named() {
         _ => 0.0,
     });
     let y: Vec<f64> = t.iter().map(|t| 0.9 * t - 0.3 * t * t).collect();
-    let problem = Linear { a, y };
+    let problem = Linear::new(a, y);
     let s = solve(&problem, &[0.0; 4], &Options::default()).unwrap();
     assert!(s.covariance_unscaled.is_none(), "no covariance for unidentifiable parameters");
     let id = s.identifiability(&["a", "b", "c", "d"], None).unwrap();

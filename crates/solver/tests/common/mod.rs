@@ -19,6 +19,55 @@ pub fn normal(r: &mut ChaCha8Rng) -> f64 {
 }
 
 /// Rosenbrock as least squares: r = (10(x₁ − x₀²), 1 − x₀), minimum 0 at (1, 1).
+/// r = A·x − y: a linear problem with design matrix `a`. The Jacobian columns the solver does not
+/// ask for are filled with `unwanted` (0 unless a test sets it), and `nan_at` puts a NaN into one
+/// entry of the Jacobian.
+pub struct Linear {
+    pub a: DMatrix<f64>,
+    pub y: Vec<f64>,
+    pub unwanted: f64,
+    pub nan_at: Option<(usize, usize)>,
+}
+
+impl Linear {
+    pub fn new(a: DMatrix<f64>, y: Vec<f64>) -> Self {
+        Linear { a, y, unwanted: 0.0, nan_at: None }
+    }
+}
+
+impl Problem for Linear {
+    fn residual_count(&self) -> usize {
+        self.a.nrows()
+    }
+    fn parameter_count(&self) -> usize {
+        self.a.ncols()
+    }
+    fn residuals(&self, x: &[f64], r: &mut [f64]) -> Result<(), NotEvaluable> {
+        let ax = &self.a * nalgebra::DVector::from_column_slice(x);
+        for (ri, (axi, yi)) in r.iter_mut().zip(ax.iter().zip(&self.y)) {
+            *ri = axi - yi;
+        }
+        Ok(())
+    }
+    fn residuals_and_jacobian(&self, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>) -> Result<(), NotEvaluable> {
+        self.residuals_and_jacobian_of(x, r, j, &vec![true; self.a.ncols()])
+    }
+    fn residuals_and_jacobian_of(&self, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>, wanted: &[bool]) -> Result<(), NotEvaluable> {
+        self.residuals(x, r)?;
+        for k in 0..self.a.ncols() {
+            if wanted[k] {
+                j.column_mut(k).copy_from(&self.a.column(k));
+            } else {
+                j.column_mut(k).fill(self.unwanted);
+            }
+        }
+        if let Some(entry) = self.nan_at {
+            j[entry] = f64::NAN;
+        }
+        Ok(())
+    }
+}
+
 pub struct Rosenbrock;
 
 impl Problem for Rosenbrock {

@@ -178,6 +178,9 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
     let mut ad = vec![0.0; n];
 
     let given = at_start.filter(|e| x.as_slice() == x0 && e.residuals.len() == m && e.jacobian.shape() == (m, n));
+    // the given start's Jacobian is weighed where it is, not copied into ws.j: ws.j holds an
+    // evaluation only from the first accepted step on (or from the start when none is given)
+    let start_jacobian = given.as_ref().map(|e| e.jacobian);
     let mut f = match given {
         Some(e) => {
             ws.r.copy_from_slice(e.residuals);
@@ -314,6 +317,10 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
             break Termination::Step;
         }
     };
+    if let (Some(j0), true) = (start_jacobian, x.as_slice() == x0) {
+        // no step was accepted: the solution is the start, and its Jacobian the one given
+        ws.j.copy_from(j0);
+    }
     finish(ws, x, f, iterations, evaluations, termination, lambda, options)
 }
 

@@ -2,7 +2,7 @@
 //! evaluation, the columns of fixed parameters are never read (a problem may leave them
 //! unwritten), and a non-finite Jacobian entry in a free column is named.
 
-use metrocell_solver::{solve, Options, SolverError, Termination};
+use metrocell_solver::{solve, solve_from, Evaluated, Options, Problem, SolverError, Termination};
 use nalgebra::{DMatrix, DVector};
 
 mod common;
@@ -61,4 +61,22 @@ fn a_non_finite_entry_of_a_free_column_is_named() {
         Err(SolverError::StartNotEvaluable(why)) => assert!(why.contains("Jacobian entry (17, 3)"), "{why}"),
         other => panic!("expected the start to be not evaluable, got {other:?}"),
     }
+}
+
+#[test]
+fn a_solve_that_starts_at_its_minimum_reports_the_given_jacobian() {
+    let problem = linear(40, 5);
+    let options = Options { fixed: vec![false, false, true, false, false], ..Options::default() };
+    let x_min = solve(&problem, &[0.0; 5], &options).unwrap().x;
+    let (mut r, mut j) = (vec![0.0; 40], DMatrix::zeros(40, 5));
+    problem.residuals_and_jacobian(&x_min, &mut r, &mut j).unwrap();
+    // given r and J at the minimum, no step is taken: the solution's weighted Jacobian must be
+    // the given one (unit weights here), not the solver's unfilled buffer
+    let s = solve_from(&problem, &x_min, Some(Evaluated { residuals: &r, jacobian: &j }), &options).unwrap();
+    assert_eq!((s.iterations, s.evaluations), (0, 1), "{:?}", s.termination);
+    for k in [0, 1, 3, 4] {
+        assert_eq!(s.weighted_jacobian.column(k), j.column(k), "column {k}");
+    }
+    assert!(s.weighted_jacobian.column(2).iter().all(|v| *v == 0.0), "the fixed column is zero");
+    assert_eq!(s.identifiability(&["a", "b", "c", "d", "e"], None).unwrap().rank, 4);
 }

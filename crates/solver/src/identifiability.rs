@@ -76,9 +76,8 @@ impl Identifiability {
         }
         let column_norms: Vec<f64> = j.column_iter().map(|c| c.norm()).collect();
         let pairs = if rcond.is_some_and(|r| r >= GRAM_RCOND) {
-            let mut gram = DMatrix::zeros(n, n);
-            crate::normal_equations::gram(j, &mut gram);
-            gram_pairs(&gram, &column_norms)
+            let all: Vec<usize> = (0..n).collect();
+            gram_pairs(&crate::normal_matrix(j, &all), &column_norms)
         } else {
             svd_pairs(j, &column_norms)?
         };

@@ -106,7 +106,7 @@ impl Workspace {
         for (v, s) in self.r.iter_mut().zip(&self.row_scale) {
             *v *= s;
         }
-        accumulate_free(j, &self.free, &self.row_scale, &self.r, &mut self.a, &mut self.g);
+        accumulate_free(j, &self.free, &self.row_scale, Some(&self.r), &mut self.a, &mut self.g);
         // J̃ᵀJ̃ as the measurements alone give it, for the identifiability analysis
         self.normal.copy_from(&self.a);
         for p in &options.priors {

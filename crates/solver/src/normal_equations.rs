@@ -18,9 +18,9 @@ use nalgebra::{DMatrix, DVector};
 /// are neither weighted nor multiplied. A tall J is summed over its two halves of rows on two
 /// threads; the halves and the blocks are fixed, so the rounding, and so the result, is the same
 /// on every machine.
-pub(crate) fn accumulate_free(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64], r: &[f64], a: &mut DMatrix<f64>, g: &mut DVector<f64>) {
+pub(crate) fn accumulate_free(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64], r: Option<&[f64]>, a: &mut DMatrix<f64>, g: &mut DVector<f64>) {
     let (m, n) = j.shape();
-    assert!(row_scale.len() == m && r.len() == m && a.shape() == (n, n) && g.len() == n, "accumulate_free: shapes disagree");
+    assert!(row_scale.len() == m && r.is_none_or(|r| r.len() == m) && a.shape() == (n, n) && g.len() == n, "accumulate_free: shapes disagree");
     let nf = free.len();
     let (mut af, mut gf) = (DMatrix::zeros(nf, nf), DVector::zeros(nf));
     if m < SPLIT_ROWS {
@@ -54,15 +54,16 @@ pub(crate) fn accumulate_free(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64
 pub fn normal_matrix(j: &DMatrix<f64>, columns: &[usize]) -> DMatrix<f64> {
     let (m, n) = j.shape();
     let (mut a, mut g) = (DMatrix::zeros(n, n), DVector::zeros(n));
-    accumulate_free(j, columns, &vec![1.0; m], &vec![0.0; m], &mut a, &mut g);
+    accumulate_free(j, columns, &vec![1.0; m], None, &mut a, &mut g);
     a.select_rows(columns).select_columns(columns)
 }
 
 /// Rows per block of [`accumulate_free`]: 256 rows of 46 free columns are 94 KB, within L2.
 const BLOCK_ROWS: usize = 256;
 
-/// `af` = J̃ᵀJ̃ and `gf` = J̃ᵀr̃ over `rows`, block by block (see [`accumulate_free`]).
-fn weighted_gram_of_rows(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64], r: &[f64], rows: std::ops::Range<usize>, af: &mut DMatrix<f64>, gf: &mut DVector<f64>) {
+/// `af` = J̃ᵀJ̃ and `gf` = J̃ᵀr̃ (0 without r̃) over `rows`, block by block (see
+/// [`accumulate_free`]).
+fn weighted_gram_of_rows(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64], r: Option<&[f64]>, rows: std::ops::Range<usize>, af: &mut DMatrix<f64>, gf: &mut DVector<f64>) {
     let nf = free.len();
     af.fill(0.0);
     gf.fill(0.0);
@@ -86,7 +87,9 @@ fn weighted_gram_of_rows(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64], r:
         unsafe {
             let bp = block.as_ptr();
             matrixmultiply::dgemm(nf, kb, nf, 1.0, bp, kb as isize, 1, bp, 1, kb as isize, 1.0, af.as_mut_slice().as_mut_ptr(), 1, nf as isize);
-            matrixmultiply::dgemm(nf, kb, 1, 1.0, bp, kb as isize, 1, r[b0..].as_ptr(), 1, kb as isize, 1.0, gf.as_mut_slice().as_mut_ptr(), 1, nf as isize);
+            if let Some(r) = r {
+                matrixmultiply::dgemm(nf, kb, 1, 1.0, bp, kb as isize, 1, r[b0..].as_ptr(), 1, kb as isize, 1.0, gf.as_mut_slice().as_mut_ptr(), 1, nf as isize);
+            }
         }
         b0 += kb;
     }
@@ -118,67 +121,9 @@ pub(crate) fn first_non_finite(j: &DMatrix<f64>, free: &[usize]) -> Option<(usiz
     None
 }
 
-/// A = JᵀJ (both triangles, exactly symmetric) from a column-major J into the n × n `a`.
-///
-/// The product goes through `matrixmultiply`'s cache-blocked, SIMD kernel (the one behind
-/// nalgebra's and ndarray's `gemm`), reading J in place through its strides: Jᵀ is J with rows
-/// and columns swapped, no copy. A column-by-column dot product streams each pair of columns
-/// from memory once per entry of A (n²/2 passes over J), which for a 30 000 × 75 Jacobian was a
-/// quarter of a whole fit; the blocked product reads J a few times in all.
-///
-/// A tall J (at least [`SPLIT_ROWS`] rows) is summed as J₁ᵀJ₁ + J₂ᵀJ₂ over its two halves of
-/// rows, on two threads. The split is fixed (always two halves, whatever the number of cores),
-/// so the rounding, and so the result, is the same on every machine.
-pub(crate) fn gram(j: &DMatrix<f64>, a: &mut DMatrix<f64>) {
-    let (m, n) = j.shape();
-    assert!(a.shape() == (n, n), "gram: A must be {n} × {n}");
-    if n == 0 {
-        return;
-    }
-    if m < SPLIT_ROWS {
-        // SAFETY: rows 0..m of J, into A
-        unsafe { gram_of_rows(j, 0, m, a) };
-    } else {
-        let half = m / 2;
-        let mut second = DMatrix::zeros(n, n);
-        std::thread::scope(|scope| {
-            // SAFETY: rows half..m of J, into `second`, which only this thread touches
-            let worker = scope.spawn(|| unsafe { gram_of_rows(j, half, m - half, &mut second) });
-            // SAFETY: rows 0..half of J, into A
-            unsafe { gram_of_rows(j, 0, half, a) };
-            worker.join().unwrap_or_else(|p| std::panic::resume_unwind(p));
-        });
-        *a += second;
-    }
-    // the kernel computes the two triangles in different tiles: make them one number each, so
-    // the factorisations that read one triangle and the checks that read the other agree
-    for b in 0..n {
-        for a_ in 0..b {
-            a[(b, a_)] = a[(a_, b)];
-        }
-    }
-}
-
-/// Rows from which [`gram`] splits the product over two threads (below, a thread costs more
-/// than it saves).
+/// Rows from which [`accumulate_free`] splits the product over two threads (below, a thread
+/// costs more than it saves).
 const SPLIT_ROWS: usize = 4096;
-
-/// A = J[r0..r0+k, :]ᵀ·J[r0..r0+k, :].
-///
-/// # Safety
-/// `r0 + k ≤ J's rows`, and `a` is n × n (n = J's columns) and does not alias J.
-unsafe fn gram_of_rows(j: &DMatrix<f64>, r0: usize, k: usize, a: &mut DMatrix<f64>) {
-    let (m, n) = j.shape();
-    debug_assert!(r0 + k <= m && a.shape() == (n, n));
-    if k == 0 {
-        a.fill(0.0);
-        return;
-    }
-    // J is column-major (row stride 1, column stride m); its rows r0.. start r0 entries in;
-    // Jᵀ is the same memory with the strides swapped; A is n × n column-major
-    let jp = unsafe { j.as_slice().as_ptr().add(r0) };
-    unsafe { matrixmultiply::dgemm(n, k, n, 1.0, jp, m as isize, 1, jp, 1, m as isize, 0.0, a.as_mut_slice().as_mut_ptr(), 1, n as isize) };
-}
 
 /// Solves M x = b for symmetric positive definite M by Cholesky, overwriting M's lower triangle
 /// with the factor and b with x. False if M is not (numerically) positive definite.
@@ -265,7 +210,7 @@ mod tests {
         let j = DMatrix::from_fn(37, 5, |i, k| ((i * 7 + k * 3) % 11) as f64 - 5.0 + 0.1 * k as f64);
         let r: Vec<f64> = (0..37).map(|i| (i as f64).sin()).collect();
         let (mut a, mut g) = (DMatrix::zeros(5, 5), DVector::zeros(5));
-        accumulate_free(&j, &[0, 1, 2, 3, 4], &[1.0; 37], &r, &mut a, &mut g);
+        accumulate_free(&j, &[0, 1, 2, 3, 4], &[1.0; 37], Some(&r), &mut a, &mut g);
         let a_ref = j.transpose() * &j;
         let g_ref = j.transpose() * DVector::from_column_slice(&r);
         assert!((&a - &a_ref).amax() < 1e-12 * a_ref.amax());

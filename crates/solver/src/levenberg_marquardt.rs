@@ -215,7 +215,7 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
         // the most any step can lower the cost here, by the quadratic model: the undamped
         // (Gauss–Newton) step's predicted reduction ½·gᵀA⁻¹g. When it is under ftol of the cost,
         // the point is the minimum to the tolerance and a trial would only confirm it at the
-        // price of an evaluation (on the XFYZ fit, one of seven). Not taken when A is singular
+        // price of an evaluation. Not taken when A is singular
         // on the free parameters with undamped steps (the step is then not defined).
         if damped_step(&mut ws, &d, &active, 0.0, options.null_space, &mut delta) {
             let predicted = predicted_reduction(&ws, &delta, &mut ad);

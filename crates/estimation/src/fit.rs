@@ -25,7 +25,7 @@
 use metrocell_model::{ForwardModel, ParameterSetup};
 use metrocell_physics::{PhysicsError, TermId};
 use metrocell_solver::identifiability::GRAM_RCOND;
-use metrocell_solver::{normal_matrix, solve, solve_from, Evaluated, Identifiability, Loss, NullSpace, Options, Prior, Problem, Solution, SolverError};
+use metrocell_solver::{normal_matrix, solve, solve_from, Evaluated, Identifiability, Loss, NullSpace, Options, Prior, Problem, Solution, SolverError, zeroed_matrix};
 use metrocell_laser_tracker::registration::{register, Correspondence};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
@@ -230,20 +230,23 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
         return Err(FitError::TooFew { needed: n_free, available: 3 * kept.len(), points: n_free.div_ceil(3) });
     }
     let problem = PointResiduals::new(model, &kept.records).map_err(|b| FitError::BadCovariance { index: used[b.index], point_id: b.point_id })?;
-    // every record must be predictable from the model at its configured values: name the first
-    // that is not (a missing signal, an unreachable joint vector) before any solving; each record
-    // goes through its own instrument (a probe hit does not read the tracker's air)
-    match problem.predictions_of_records(&model.params()) {
-        Ok(_) => {}
-        Err(EvaluationFailure::Model(e)) => return Err(e.into()),
-        Err(EvaluationFailure::Record { index, error }) => {
-            let (hint, r) = (missing_signal_hint(&error), &kept.records[index]);
-            return Err(FitError::Record { index: used[index], point_id: r.point_id.clone(), time: r.time, source: error, hint });
+    // a record the model cannot predict (a missing signal, an unreachable joint vector) is named
+    // with its index and what would provide the signal; each record goes through its own
+    // instrument (a probe hit does not read the tracker's air). Looked for only once the start
+    // or its evaluation has failed: a search of its own costs a pass over every record.
+    let unpredictable = || -> Option<FitError> {
+        match problem.predictions_of_records(&model.params()) {
+            Ok(_) => None,
+            Err(EvaluationFailure::Model(e)) => Some(e.into()),
+            Err(EvaluationFailure::Record { index, error }) => {
+                let (hint, r) = (missing_signal_hint(&error), &kept.records[index]);
+                Some(FitError::Record { index: used[index], point_id: r.point_id.clone(), time: r.time, source: error, hint })
+            }
         }
-    }
+    };
     let x0 = match start {
         Some(x) => x,
-        None => start_vector(model, setup, &kept)?,
+        None => start_vector(model, setup, &kept).map_err(|e| unpredictable().unwrap_or(e))?,
     };
     let specs: Vec<_> = model.machine_terms.param_specs().into_iter().chain(model.instrument_terms.param_specs()).collect();
     let names = model.param_names();
@@ -275,15 +278,18 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
         ..Options::default()
     };
     // (r, J) at the start, evaluated once: they judge what the design identifies, give the
-    // residuals before, and are the solver's first linearisation (each solve below starts at x0)
+    // residuals before, and are the first solve's first linearisation (a later solve, after
+    // more parameters are held, starts at x0 again and evaluates it itself). Only the free
+    // columns: the fixed ones are never read, and their pages of the zeroed buffer never touched.
     let mut r0 = vec![0.0; problem.residual_count()];
-    let mut j0 = DMatrix::zeros(problem.residual_count(), problem.parameter_count());
-    problem.residuals_and_jacobian(&x0, &mut r0, &mut j0).map_err(|e| FitError::Registration(format!("the model cannot be evaluated at the start: {}", e.0)))?;
+    let mut j0 = zeroed_matrix(problem.residual_count(), problem.parameter_count());
+    problem
+        .residuals_and_jacobian_of(&x0, &mut r0, &mut j0, &free)
+        .map_err(|e| unpredictable().unwrap_or_else(|| FitError::Registration(format!("the model cannot be evaluated at the start: {}", e.0))))?;
     let residuals_before = problem.unwhitened(&r0);
     // a robust loss from a far start calls every residual an outlier and crawls: reach the
     // basin with plain least squares first, then let the robust loss judge the residuals
-    let two_stage = |free: &[bool]| -> Result<Solution, FitError> {
-        let at_start = Some(Evaluated { residuals: &r0, jacobian: &j0 });
+    let two_stage = |free: &[bool], at_start: Option<Evaluated>| -> Result<Solution, FitError> {
         let near = solve_from(&problem, &x0, at_start, &solver_options(free, Loss::Linear))?;
         if options.loss == Loss::Linear {
             return Ok(near);
@@ -295,10 +301,12 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
     // held before the solver can wander along it
     let free_idx: Vec<usize> = (0..free.len()).filter(|&k| free[k]).collect();
     let free_labels: Vec<&str> = free_idx.iter().map(|&k| labels[k]).collect();
-    let declared_identifiability = if options.rcond >= GRAM_RCOND {
-        Identifiability::from_normal_matrix(&normal_matrix(&j0, &free_idx), j0.nrows(), &free_labels, options.rcond)?
+    // (the Gram route's normal matrix is the first solve's too, when no parameter is held here)
+    let (declared_identifiability, start_normal) = if options.rcond >= GRAM_RCOND {
+        let normal = normal_matrix(&j0, &free_idx);
+        (Identifiability::from_normal_matrix(&normal, j0.nrows(), &free_labels, options.rcond)?, Some(normal))
     } else {
-        Identifiability::analyze(&j0.select_columns(&free_idx), &free_labels, Some(options.rcond))?
+        (Identifiability::analyze(&j0.select_columns(&free_idx), &free_labels, Some(options.rcond))?, None)
     };
     let machine_params = model.machine_terms.param_specs().len();
     let mut held = Vec::new();
@@ -308,7 +316,9 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
             held.push(HeldParameter { index: k, name: names[k].clone(), combination: sentence });
         }
     }
-    let mut solution = two_stage(&free)?;
+    // the start's r and J go to the first solve, which works in them
+    let start_normal = start_normal.filter(|_| held.is_empty());
+    let mut solution = two_stage(&free, Some(Evaluated { residuals: r0, jacobian: j0, normal_matrix: start_normal }))?;
     let mut identifiability = solution.identifiability(&labels, Some(options.rcond))?;
     // at the solution: hold what became inseparable there too (from the start again, so the
     // held ones keep their start values exactly) until the rest is identifiable
@@ -328,7 +338,7 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
             free[k] = false;
             held.push(HeldParameter { index: k, name: names[k].clone(), combination: identifiability.describe()[0].clone() });
         }
-        solution = two_stage(&free)?;
+        solution = two_stage(&free, None)?;
         identifiability = solution.identifiability(&labels, Some(options.rcond))?;
     }
     let residuals_after = problem.unwhitened(&solution.residuals);

@@ -11,10 +11,11 @@
 //! and the trial point is projected onto the box.
 
 use crate::error::{check_finite, check_len, NotEvaluable, SolverError};
-use crate::normal_equations::{accumulate_free, cholesky_solve_in_place, first_non_finite, free_inverse, scaled_free_block};
+use crate::normal_equations::{accumulate_free, cholesky_solve_in_place, first_non_finite, free_inverse, gradient_free, scaled_free_block, scatter_free};
 use crate::options::{NullSpace, Options};
 use crate::problem::Problem;
 use crate::solution::{Solution, Termination};
+use crate::zeroed::{clear_column, zeroed_matrix};
 use nalgebra::{DMatrix, DVector};
 
 /// Largest damping (relative to the unit-diagonal scaled A) tried before giving up on a step.
@@ -87,16 +88,24 @@ impl Workspace {
 
     /// [`Workspace::weigh`] of the workspace's own Jacobian `j`.
     fn weigh_own(&mut self, x: &[f64], options: &Options) -> Result<f64, NotEvaluable> {
+        self.weigh_own_knowing(x, options, None)
+    }
+
+    /// [`Workspace::weigh_own`], with the free columns' JᵀJ already formed (`known_normal`, see
+    /// [`Evaluated::normal_matrix`]).
+    fn weigh_own_knowing(&mut self, x: &[f64], options: &Options, known_normal: Option<&DMatrix<f64>>) -> Result<f64, NotEvaluable> {
         let j = std::mem::replace(&mut self.j, DMatrix::zeros(0, 0));
-        let f = self.weigh(&j, x, options);
+        let f = self.weigh(&j, x, options, known_normal);
         self.j = j;
         f
     }
 
     /// With r (in `self.r`) and the Jacobian `j` evaluated at x, both checked finite: whitens
     /// and robust-weights r in place, and forms A, g from the weighted free columns of J (zero
-    /// in the rows and columns of fixed parameters). Returns the cost at x.
-    fn weigh(&mut self, j: &DMatrix<f64>, x: &[f64], options: &Options) -> Result<f64, NotEvaluable> {
+    /// in the rows and columns of fixed parameters). Returns the cost at x. A `known_normal`
+    /// (the unweighted free columns' JᵀJ) stands in for A's product when every row's weight is
+    /// exactly 1, the case it was formed for; otherwise it is ignored.
+    fn weigh(&mut self, j: &DMatrix<f64>, x: &[f64], options: &Options, known_normal: Option<&DMatrix<f64>>) -> Result<f64, NotEvaluable> {
         self.raw.copy_from_slice(&self.r);
         let f = cost(&self.raw, &self.inv_sigma, x, options).ok_or_else(|| NotEvaluable("cost is not finite".into()))?;
         for ((q, ri), si) in self.row_scale.iter_mut().zip(&self.r).zip(&self.inv_sigma) {
@@ -106,7 +115,14 @@ impl Workspace {
         for (v, s) in self.r.iter_mut().zip(&self.row_scale) {
             *v *= s;
         }
-        accumulate_free(j, &self.free, &self.row_scale, Some(&self.r), &mut self.a, &mut self.g);
+        let nf = self.free.len();
+        match known_normal.filter(|a| a.shape() == (nf, nf) && self.row_scale.iter().all(|s| *s == 1.0)) {
+            Some(known) => {
+                scatter_free(known, &self.free, &mut self.a);
+                gradient_free(j, &self.free, &self.r, &mut self.g);
+            }
+            None => accumulate_free(j, &self.free, &self.row_scale, Some(&self.r), &mut self.a, &mut self.g),
+        }
         // J̃ᵀJ̃ as the measurements alone give it, for the identifiability analysis
         self.normal.copy_from(&self.a);
         for p in &options.priors {
@@ -133,14 +149,23 @@ pub fn solve<P: Problem + ?Sized>(problem: &P, x0: &[f64], options: &Options) ->
 
 /// The residuals r(x0) and Jacobian J(x0) a caller already has (e.g. from checking what the
 /// design identifies before solving), so that [`solve_from`] need not evaluate them again.
-pub struct Evaluated<'e> {
-    pub residuals: &'e [f64],
-    pub jacobian: &'e DMatrix<f64>,
+/// Handed over rather than lent: the solver works in the given buffers, so a solve from a given
+/// start allocates (and the kernel faults in) one m × n Jacobian fewer. Only the columns of
+/// free parameters are read.
+pub struct Evaluated {
+    pub residuals: Vec<f64>,
+    pub jacobian: DMatrix<f64>,
+    /// JᵀJ of the Jacobian's free columns as [`crate::normal_matrix`] forms it (unit weights,
+    /// the columns the options leave free, in order), when the caller has formed it already
+    /// (to judge what the design identifies): the solver's first normal matrix is then not
+    /// formed twice. Used only when every residual's weight is exactly 1 (no σ given, and a
+    /// linear loss or none of the residuals beyond a robust loss's threshold).
+    pub normal_matrix: Option<DMatrix<f64>>,
 }
 
 /// [`solve`], starting from r and J already evaluated at `x0` (used as given when `x0` lies
-/// within the bounds; otherwise the clamped start is evaluated afresh).
-pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option<Evaluated<'_>>, options: &Options) -> Result<Solution, SolverError> {
+/// within the bounds and the shapes fit; otherwise the clamped start is evaluated afresh).
+pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option<Evaluated>, options: &Options) -> Result<Solution, SolverError> {
     let (m, n) = (problem.residual_count(), problem.parameter_count());
     check_len("start x0", n, x0.len())?;
     check_finite("start x0", x0)?;
@@ -154,13 +179,19 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
         None => vec![1.0; m],
     };
     let free: Vec<usize> = (0..n).filter(|&k| !options.is_fixed(k)).collect();
+    let mut x: Vec<f64> = (0..n).map(|k| x0[k].clamp(lower[k], upper[k])).collect();
+    let given = at_start.filter(|e| x.as_slice() == x0 && e.residuals.len() == m && e.jacobian.shape() == (m, n));
+    let (r, j, known_normal, evaluate_start) = match given {
+        Some(e) => (e.residuals, e.jacobian, e.normal_matrix, false),
+        None => (vec![0.0; m], zeroed_matrix(m, n), None, true),
+    };
     let mut ws = Workspace {
         raw: vec![0.0; m],
-        r: vec![0.0; m],
-        j: DMatrix::zeros(m, n),
+        r,
+        j,
         wanted: (0..n).map(|k| !options.is_fixed(k)).collect(),
         free,
-        trial_j: if options.jacobian_on_trials { DMatrix::zeros(m, n) } else { DMatrix::zeros(0, 0) },
+        trial_j: if options.jacobian_on_trials { zeroed_matrix(m, n) } else { DMatrix::zeros(0, 0) },
         inv_sigma,
         row_scale: vec![1.0; m],
         a: DMatrix::zeros(n, n),
@@ -169,7 +200,6 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
         m: DMatrix::zeros(n, n),
         rhs: vec![0.0; n],
     };
-    let mut x: Vec<f64> = (0..n).map(|k| x0[k].clamp(lower[k], upper[k])).collect();
     let mut x_trial = vec![0.0; n];
     let mut r_trial = vec![0.0; m];
     let mut delta = vec![0.0; n];
@@ -177,16 +207,10 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
     let mut d = vec![0.0f64; n];
     let mut ad = vec![0.0; n];
 
-    let given = at_start.filter(|e| x.as_slice() == x0 && e.residuals.len() == m && e.jacobian.shape() == (m, n));
-    // the given start's Jacobian is weighed where it is, not copied into ws.j: ws.j holds an
-    // evaluation only from the first accepted step on (or from the start when none is given)
-    let start_jacobian = given.as_ref().map(|e| e.jacobian);
-    let mut f = match given {
-        Some(e) => {
-            ws.r.copy_from_slice(e.residuals);
-            check_evaluated(&ws.r, e.jacobian, &ws.free).and_then(|()| ws.weigh(e.jacobian, &x, options))
-        }
-        None => ws.linearise(problem, &x, options),
+    let mut f = if evaluate_start {
+        ws.linearise(problem, &x, options)
+    } else {
+        check_evaluated(&ws.r, &ws.j, &ws.free).and_then(|()| ws.weigh_own_knowing(&x, options, known_normal.as_ref()))
     }
     .map_err(|e| SolverError::StartNotEvaluable(e.0))?;
     let mut lambda = options.initial_damping;
@@ -317,10 +341,6 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
             break Termination::Step;
         }
     };
-    if let (Some(j0), true) = (start_jacobian, x.as_slice() == x0) {
-        // no step was accepted: the solution is the start, and its Jacobian the one given
-        ws.j.copy_from(j0);
-    }
     finish(ws, x, f, iterations, evaluations, termination, lambda, options)
 }
 
@@ -396,11 +416,10 @@ fn finish(
     // weighted in place (a new m × n buffer is one more allocation, zeroing and pass)
     let mut weighted_jacobian = ws.j;
     for k in 0..n {
-        let mut column = weighted_jacobian.column_mut(k);
         if free[k] {
-            column.iter_mut().zip(&ws.row_scale).for_each(|(v, s)| *v *= s);
+            weighted_jacobian.column_mut(k).iter_mut().zip(&ws.row_scale).for_each(|(v, s)| *v *= s);
         } else {
-            column.fill(0.0);
+            clear_column(&mut weighted_jacobian, k);
         }
     }
     let n_free = free.iter().filter(|f| **f).count();

@@ -13,7 +13,9 @@
 //! used rather than a QR or SVD of the full Jacobian per iteration (scipy's "trf"). The
 //! iteration stops without a confirming trial once the Gauss–Newton step's predicted reduction
 //! is below `ftol` of the cost. [`solve_from`] starts from residuals and a Jacobian the caller
-//! has already evaluated.
+//! has already evaluated (and their normal matrix, if formed), working in the caller's buffers.
+//! Jacobian-sized buffers are allocated zeroed by the OS ([`zeroed_matrix`]; on Linux backed by
+//! huge pages where the kernel allows), not written with zeros.
 //!
 //! **Why not a crate.** `levenberg-marquardt` (nalgebra-based, a MINPACK port) has scaling and
 //! termination reasons but no weights, robust losses, bounds, priors, fixed parameters or
@@ -39,6 +41,7 @@ pub mod numeric_jacobian;
 mod options;
 mod problem;
 mod solution;
+mod zeroed;
 
 pub use error::{NotEvaluable, SolverError};
 pub use identifiability::{Identifiability, NullDirection};
@@ -49,3 +52,4 @@ pub use normal_equations::normal_matrix;
 pub use options::{NullSpace, Options, Prior};
 pub use problem::Problem;
 pub use solution::{Solution, Termination};
+pub use zeroed::zeroed_matrix;

@@ -48,6 +48,25 @@ pub(crate) fn accumulate_free(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64
     }
 }
 
+/// The n × n `a` with the |free| × |free| `known` in the rows and columns `free`, zero elsewhere.
+pub(crate) fn scatter_free(known: &DMatrix<f64>, free: &[usize], a: &mut DMatrix<f64>) {
+    a.fill(0.0);
+    for (c, &k) in free.iter().enumerate() {
+        for (d, &l) in free.iter().enumerate() {
+            a[(k, l)] = known[(c, d)];
+        }
+    }
+}
+
+/// g = Jᵀr on the columns `free` (unit weights), zero elsewhere: the gradient alone, for when
+/// the normal matrix is already known ([`scatter_free`]).
+pub(crate) fn gradient_free(j: &DMatrix<f64>, free: &[usize], r: &[f64], g: &mut DVector<f64>) {
+    g.fill(0.0);
+    for &k in free {
+        g[k] = j.column(k).iter().zip(r).map(|(v, ri)| v * ri).sum();
+    }
+}
+
 /// JᵀJ of the columns `columns` of `j` (|columns| × |columns|), formed as the solver forms its
 /// normal matrix (see [`accumulate_free`]), for an identifiability analysis of a Jacobian the
 /// caller holds ([`crate::Identifiability::from_normal_matrix`]).

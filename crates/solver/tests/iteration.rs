@@ -71,12 +71,41 @@ fn a_solve_that_starts_at_its_minimum_reports_the_given_jacobian() {
     let (mut r, mut j) = (vec![0.0; 40], DMatrix::zeros(40, 5));
     problem.residuals_and_jacobian(&x_min, &mut r, &mut j).unwrap();
     // given r and J at the minimum, no step is taken: the solution's weighted Jacobian must be
-    // the given one (unit weights here), not the solver's unfilled buffer
-    let s = solve_from(&problem, &x_min, Some(Evaluated { residuals: &r, jacobian: &j }), &options).unwrap();
+    // the given one (unit weights here)
+    let s = solve_from(&problem, &x_min, Some(Evaluated { residuals: r, jacobian: j.clone(), normal_matrix: None }), &options).unwrap();
     assert_eq!((s.iterations, s.evaluations), (0, 1), "{:?}", s.termination);
     for k in [0, 1, 3, 4] {
         assert_eq!(s.weighted_jacobian.column(k), j.column(k), "column {k}");
     }
     assert!(s.weighted_jacobian.column(2).iter().all(|v| *v == 0.0), "the fixed column is zero");
     assert_eq!(s.identifiability(&["a", "b", "c", "d", "e"], None).unwrap().rank, 4);
+}
+
+#[test]
+fn a_given_normal_matrix_stands_in_for_the_first_product_only_under_unit_weights() {
+    let problem = linear(40, 5);
+    let fixed = vec![false, false, true, false, false];
+    let free = [0, 1, 3, 4];
+    let x0 = [0.0; 5];
+    let (mut r, mut j) = (vec![0.0; 40], DMatrix::zeros(40, 5));
+    problem.residuals_and_jacobian(&x0, &mut r, &mut j).unwrap();
+    let normal = metrocell_solver::normal_matrix(&j, &free);
+    let given = |normal: Option<DMatrix<f64>>| Some(Evaluated { residuals: r.clone(), jacobian: j.clone(), normal_matrix: normal });
+    // one undamped step from x0: its length is set by the first normal matrix
+    let one_step = Options { fixed: fixed.clone(), max_iterations: 1, initial_damping: 0.0, ..Options::default() };
+    let plain = solve(&problem, &x0, &one_step).unwrap();
+    let known = solve_from(&problem, &x0, given(Some(normal.clone())), &one_step).unwrap();
+    for k in 0..5 {
+        assert!((known.x[k] - plain.x[k]).abs() <= 1e-12 * plain.x.iter().fold(0.0f64, |a, v| a.max(v.abs())), "x[{k}]: {} against {}", known.x[k], plain.x[k]);
+    }
+    // the matrix given is the one used: twice JᵀJ halves the first step
+    let doubled = solve_from(&problem, &x0, given(Some(&normal * 2.0)), &one_step).unwrap();
+    for &k in &free {
+        assert!((doubled.x[k] - 0.5 * plain.x[k]).abs() <= 1e-9 * plain.x[k].abs().max(1e-12), "x[{k}]: {} against half of {}", doubled.x[k], plain.x[k]);
+    }
+    // with weights other than 1 (σ given) it was not formed for these rows, and is ignored
+    let weighted = Options { sigmas: Some(vec![0.5; 40]), ..one_step.clone() };
+    let plain = solve(&problem, &x0, &weighted).unwrap();
+    let ignored = solve_from(&problem, &x0, given(Some(&normal * 2.0)), &weighted).unwrap();
+    assert_eq!(ignored.x, plain.x);
 }

@@ -8,7 +8,8 @@
 //! as extra residuals, and a truncated-SVD step that stays on the identifiable subspace
 //! ([`NullSpace::Truncated`]). The normal equations JᵀWJ are formed from the column-major
 //! Jacobian's free columns, weighted a cache-sized block of rows at a time and multiplied there
-//! (`matrixmultiply`; no Jᵀ copy, no m × m weight matrix, J read from memory once); at 70
+//! (a register-tiled kernel that forms one triangle, AVX2/FMA chosen at run time; no Jᵀ copy,
+//! no m × m weight matrix, J read from memory once); at 70
 //! parameters the n × n solve is negligible next to forming them, which is why a dense method is
 //! used rather than a QR or SVD of the full Jacobian per iteration (scipy's "trf"). The
 //! iteration stops without a confirming trial once the Gauss–Newton step's predicted reduction
@@ -32,6 +33,7 @@
 //! likes (the solver only squares them); σᵢ in the residuals' units; parameters in SI units.
 
 mod error;
+mod gram_kernel;
 pub mod identifiability;
 mod levenberg_marquardt;
 mod loss;

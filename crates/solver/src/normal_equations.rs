@@ -5,19 +5,19 @@
 //! copy, no m × m weight matrix: a 10 000 × 70 problem touches only its 5.6 MB Jacobian, a
 //! block buffer and a 70 × 70 matrix).
 
+use crate::gram_kernel::weighted_gram_of_rows;
 use nalgebra::{DMatrix, DVector};
 
 /// The weighted normal equations on the free columns: with `row_scale` = √Wᵢ/σᵢ and `r` the
 /// already weighted residuals, A = J̃ᵀJ̃ and g = J̃ᵀr̃ with J̃ = diag(row_scale)·J[:, free], into
 /// the n × n `a` and the n-vector `g`, zero in the rows and columns of the parameters not in `free`.
 ///
-/// Fused and blocked: [`BLOCK_ROWS`] rows of J's free columns at a time are weighted into a
-/// buffer that stays in cache and multiplied from there, so J is read from memory once (scaling
-/// J in place, then multiplying it, read it three times: once to scale, twice as the product's
-/// two packed operands), and the columns of fixed parameters (a third of the XFYZ model's 75)
-/// are neither weighted nor multiplied. A tall J is summed over its two halves of rows on two
-/// threads; the halves and the blocks are fixed, so the rounding, and so the result, is the same
-/// on every machine.
+/// Fused and blocked ([`crate::gram_kernel`]): a block of rows of J's free columns at a time is
+/// weighted into a buffer that stays in cache and multiplied from there, so J is read from
+/// memory once (scaling J in place, then multiplying it, read it three times), and the columns
+/// of fixed parameters (a third of the XFYZ model's 75) are neither weighted nor multiplied. A
+/// tall J is summed over its two halves of rows on two threads; the halves and the blocks are
+/// fixed, so the rounding, and so the result, does not depend on the thread count.
 pub(crate) fn accumulate_free(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64], r: Option<&[f64]>, a: &mut DMatrix<f64>, g: &mut DVector<f64>) {
     let (m, n) = j.shape();
     assert!(row_scale.len() == m && r.is_none_or(|r| r.len() == m) && a.shape() == (n, n) && g.len() == n, "accumulate_free: shapes disagree");
@@ -40,10 +40,9 @@ pub(crate) fn accumulate_free(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64
     g.fill(0.0);
     for (c, &k) in free.iter().enumerate() {
         g[k] = gf[c];
-        // the kernel computes the two triangles in different tiles: take one, so that A is
-        // exactly symmetric (the factorisations read one triangle, the checks the other)
+        // exactly symmetric (the kernel forms one triangle and mirrors it)
         for (d, &l) in free.iter().enumerate() {
-            a[(k, l)] = if c <= d { af[(c, d)] } else { af[(d, c)] };
+            a[(k, l)] = af[(c, d)];
         }
     }
 }
@@ -75,43 +74,6 @@ pub fn normal_matrix(j: &DMatrix<f64>, columns: &[usize]) -> DMatrix<f64> {
     let (mut a, mut g) = (DMatrix::zeros(n, n), DVector::zeros(n));
     accumulate_free(j, columns, &vec![1.0; m], None, &mut a, &mut g);
     a.select_rows(columns).select_columns(columns)
-}
-
-/// Rows per block of [`accumulate_free`]: 256 rows of 46 free columns are 94 KB, within L2.
-const BLOCK_ROWS: usize = 256;
-
-/// `af` = J̃ᵀJ̃ and `gf` = J̃ᵀr̃ (0 without r̃) over `rows`, block by block (see
-/// [`accumulate_free`]).
-fn weighted_gram_of_rows(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64], r: Option<&[f64]>, rows: std::ops::Range<usize>, af: &mut DMatrix<f64>, gf: &mut DVector<f64>) {
-    let nf = free.len();
-    af.fill(0.0);
-    gf.fill(0.0);
-    if nf == 0 || rows.is_empty() {
-        return;
-    }
-    let mut block = vec![0.0; BLOCK_ROWS * nf];
-    let mut b0 = rows.start;
-    while b0 < rows.end {
-        let kb = BLOCK_ROWS.min(rows.end - b0);
-        // the block, column-major kb × nf: J̃[b0.., c] = row_scale · J[b0.., free[c]]
-        for (c, &k) in free.iter().enumerate() {
-            let src = &j.as_slice()[k * j.nrows() + b0..k * j.nrows() + b0 + kb];
-            for ((w, v), s) in block[c * kb..(c + 1) * kb].iter_mut().zip(src).zip(&row_scale[b0..b0 + kb]) {
-                *w = v * s;
-            }
-        }
-        // SAFETY: `block` holds kb × nf (column stride kb), read as J̃ᵀ (nf × kb: row stride kb,
-        // column stride 1) and J̃ (kb × nf); `af` is nf × nf column-major and `gf` nf × 1, both
-        // owned here and aliasing neither; r[b0..b0 + kb] is kb × 1
-        unsafe {
-            let bp = block.as_ptr();
-            matrixmultiply::dgemm(nf, kb, nf, 1.0, bp, kb as isize, 1, bp, 1, kb as isize, 1.0, af.as_mut_slice().as_mut_ptr(), 1, nf as isize);
-            if let Some(r) = r {
-                matrixmultiply::dgemm(nf, kb, 1, 1.0, bp, kb as isize, 1, r[b0..].as_ptr(), 1, kb as isize, 1.0, gf.as_mut_slice().as_mut_ptr(), 1, nf as isize);
-            }
-        }
-        b0 += kb;
-    }
 }
 
 /// The first non-finite entry (row, column) of `j` in the columns `free`, or None.

@@ -7,9 +7,10 @@
 //! formed, each as TI × TJ accumulators held in registers across the block's rows (an outer
 //! product per row: TI broadcasts, one TJ-wide load, TI·TJ multiply-adds). At the XFYZ fit's
 //! 46 free columns that is 64 % of the full product's multiply-adds (with J̃ᵀr̃ riding along as
-//! one more column). Measured on 30 000 × 46 (AMD EPYC, AVX2 path, one core): 4.2–4.3 ms, where
-//! dgemm on the same blocks took 5.4–5.7 ms. About half of what is left is reading J from
-//! memory into the blocks, which no kernel avoids.
+//! one more column). On 30 000 × 46, one core (`solver_benchmark`, its last line): 2.6–2.8 ms,
+//! against 4.6–4.7 ms for nalgebra's Jᵀ·J (`matrixmultiply`'s dgemm) on the same columns
+//! copied out beforehand, 1.7–1.8×. About half of the kernel's time is reading J from memory
+//! into the blocks, which no kernel avoids.
 //!
 //! The default x86-64 target stops at SSE2; the same loops compiled for AVX2 with fused
 //! multiply-adds run four lanes wide, chosen at run time so that the binary stays portable. The

@@ -21,6 +21,18 @@ use nalgebra::{DMatrix, DVector};
 pub(crate) fn accumulate_free(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64], r: Option<&[f64]>, a: &mut DMatrix<f64>, g: &mut DVector<f64>) {
     let (m, n) = j.shape();
     assert!(row_scale.len() == m && r.is_none_or(|r| r.len() == m) && a.shape() == (n, n) && g.len() == n, "accumulate_free: shapes disagree");
+    let (af, gf) = free_gram(j, free, row_scale, r);
+    scatter_free(&af, free, a);
+    g.fill(0.0);
+    for (c, &k) in free.iter().enumerate() {
+        g[k] = gf[c];
+    }
+}
+
+/// J̃ᵀJ̃ (|free| × |free|, exactly symmetric: the kernel forms one triangle and mirrors it) and
+/// J̃ᵀr̃ (zero without r) of [`accumulate_free`], in the free columns' order.
+fn free_gram(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64], r: Option<&[f64]>) -> (DMatrix<f64>, DVector<f64>) {
+    let m = j.nrows();
     let nf = free.len();
     let (mut af, mut gf) = (DMatrix::zeros(nf, nf), DVector::zeros(nf));
     if m < SPLIT_ROWS {
@@ -36,15 +48,7 @@ pub(crate) fn accumulate_free(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64
         af += af2;
         gf += gf2;
     }
-    a.fill(0.0);
-    g.fill(0.0);
-    for (c, &k) in free.iter().enumerate() {
-        g[k] = gf[c];
-        // exactly symmetric (the kernel forms one triangle and mirrors it)
-        for (d, &l) in free.iter().enumerate() {
-            a[(k, l)] = af[(c, d)];
-        }
-    }
+    (af, gf)
 }
 
 /// The n × n `a` with the |free| × |free| `known` in the rows and columns `free`, zero elsewhere.
@@ -70,10 +74,7 @@ pub(crate) fn gradient_free(j: &DMatrix<f64>, free: &[usize], r: &[f64], g: &mut
 /// normal matrix (see [`accumulate_free`]), for an identifiability analysis of a Jacobian the
 /// caller holds ([`crate::Identifiability::from_normal_matrix`]).
 pub fn normal_matrix(j: &DMatrix<f64>, columns: &[usize]) -> DMatrix<f64> {
-    let (m, n) = j.shape();
-    let (mut a, mut g) = (DMatrix::zeros(n, n), DVector::zeros(n));
-    accumulate_free(j, columns, &vec![1.0; m], None, &mut a, &mut g);
-    a.select_rows(columns).select_columns(columns)
+    free_gram(j, columns, &vec![1.0; j.nrows()], None).0
 }
 
 /// The first non-finite entry (row, column) of `j` in the columns `free`, or None.

@@ -96,20 +96,15 @@ impl DisjointRows {
         DisjointRows { ptr: m.as_mut_ptr(), rows: m.nrows(), cols: m.ncols() }
     }
 
-    /// Writes `column` into rows `row0..row0 + 3` of column `col`.
+    /// Writes `values` into rows `row0..row0 + values.len()` of column `col`.
     ///
     /// # Safety
     /// No other thread reads or writes those rows while the matrix is shared this way.
     #[inline]
-    pub unsafe fn set_column(&self, row0: usize, col: usize, column: Vector3<f64>) {
-        assert!(row0 + 3 <= self.rows && col < self.cols, "rows {row0}..{} of column {col} outside {} × {}", row0 + 3, self.rows, self.cols);
+    pub unsafe fn set_rows(&self, row0: usize, col: usize, values: &[f64]) {
+        assert!(row0 + values.len() <= self.rows && col < self.cols, "rows {row0}..{} of column {col} outside {} × {}", row0 + values.len(), self.rows, self.cols);
         // SAFETY: in bounds (checked above); the rows are this caller's alone (the contract)
-        unsafe {
-            let at = self.ptr.add(row0 + col * self.rows);
-            *at = column.x;
-            *at.add(1) = column.y;
-            *at.add(2) = column.z;
-        }
+        unsafe { std::ptr::copy_nonoverlapping(values.as_ptr(), self.ptr.add(row0 + col * self.rows), values.len()) }
     }
 }
 

@@ -11,13 +11,17 @@
 //! ([`ForwardModel::tracker_point_jacobian_mapped`]: the reported point's rows,
 //! [`ForwardModel::probe_jacobian`], [`ForwardModel::camera_jacobian`] rows of the camera point),
 //! negated and whitened. Records are evaluated in parallel chunks (crate `record_chunks`), with
-//! results identical bit for bit to a sequential pass.
+//! results identical bit for bit to a sequential pass. Where the model's sighted point is linear
+//! in its parameters (every machine term a geometric series or squareness on a cartesian or
+//! five-axis machine: `metrocell_model::linear_target`), each tracker point's P₀ and
+//! A = ∂P/∂p are formed at the first evaluation and kept, so every later one is a product
+//! instead of the terms' series and levers (equal to the full evaluation to round-off; test).
 
 use std::sync::Mutex;
 
-use metrocell_model::{ForwardModel, KinematicTruth, Workspace, CAMERA_ROWS, PROBE_ROWS};
+use metrocell_model::{ForwardModel, KeptLayout, KinematicTruth, Workspace, CAMERA_ROWS, PROBE_ROWS};
 use metrocell_physics::{PhysicsError, Signals};
-use metrocell_solver::{NotEvaluable, Problem};
+use metrocell_solver::{zeroed_matrix, NotEvaluable, Problem};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
 use crate::record_chunks::{self, Chunk, DisjointRows};
@@ -36,10 +40,71 @@ pub struct PointResiduals<'m, 'a> {
 }
 
 /// What evaluating a chunk's records writes into: the signals the model fills per record, and
-/// the Jacobian buffers.
+/// the Jacobian buffers; and, where the model's sighted point is linear in its parameters
+/// (`metrocell_model::linear_target`), each tracker point's P₀ and A, kept from the first
+/// evaluation on (the records and the model do not change).
 struct Scratch {
     signals: Vec<Signals>,
     buffers: Buffers,
+    kept: Option<Kept>,
+    /// The Jacobian rows of [`BLOCK_RECORDS`] records, column-major ([`BLOCK_ROWS`] per
+    /// column), before they go to the m × n Jacobian.
+    block: Vec<f64>,
+}
+
+/// Records whose Jacobian rows are gathered before they are written out: a record's own three
+/// rows, written to the n columns of an m × n column-major matrix one record at a time, touch n
+/// cache lines apiece, more streams than the hardware prefetches (the stores waited on memory);
+/// 8 records make three whole lines per column.
+const BLOCK_RECORDS: usize = 8;
+const BLOCK_ROWS: usize = 3 * BLOCK_RECORDS;
+
+/// The chunk's tracker points' P₀ and A packed by `layout`: the chunk's k-th record in column k
+/// of `values` (zero for a record that is not a tracker point).
+struct Kept {
+    layout: KeptLayout,
+    values: DMatrix<f64>,
+}
+
+impl Kept {
+    fn of(&self, k: usize) -> &[f64] {
+        let len = self.layout.len();
+        &self.values.as_slice()[len * k..len * (k + 1)]
+    }
+}
+
+impl Scratch {
+    /// Form the kept targets of the chunk's records (`records`, the first of which is record
+    /// `start`) on first use, where the model's target is linear (tracker points only; the
+    /// other kinds are evaluated in full). The layout holds the rows any reading of the chunk
+    /// needs: it starts from the first reading's and, should a later reading need a row more
+    /// (a lever that was zero), is widened and the chunk packed again.
+    fn keep_targets(&mut self, model: &ForwardModel, records: &[MeasurementRecord], start: usize) -> Result<(), EvaluationFailure> {
+        let (Some(columns), Some(len), None) = (model.linear_target_columns(), model.linear_target_len(), &self.kept) else { return Ok(()) };
+        let mut full = vec![0.0; len];
+        let mut layout = KeptLayout::empty(columns);
+        // a column for every record, so that any record's slice exists (only points use theirs)
+        let mut values = zeroed_matrix(layout.len(), records.len());
+        'pack: loop {
+            for (k, (r, s)) in records.iter().zip(&mut self.signals).enumerate() {
+                if r.kind != RecordKind::Point {
+                    continue;
+                }
+                model.linear_target(&r.q, s, &mut self.buffers.work, &mut full).map_err(|error| EvaluationFailure::Record { index: start + k, error })?;
+                if !layout.covers(&full) {
+                    layout = layout.widened(&full);
+                    values = zeroed_matrix(layout.len(), records.len());
+                    if k > 0 {
+                        continue 'pack;
+                    }
+                }
+                layout.pack(&full, values.column_mut(k).as_mut_slice());
+            }
+            break;
+        }
+        self.kept = Some(Kept { layout, values });
+        Ok(())
+    }
 }
 
 /// Why a model evaluation over the records failed: the model itself (e.g. its kinematics at
@@ -81,7 +146,7 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
             .enumerate()
             .map(|(index, r)| whitening(&r.covariance).ok_or_else(|| BadCovariance { index, point_id: r.point_id.clone() }))
             .collect::<Result<Vec<_>, _>>()?;
-        let chunks = record_chunks::split(records.len(), |start, len| Scratch { signals: records[start..start + len].iter().map(|r| r.signals.clone()).collect(), buffers: Buffers::new(model) });
+        let chunks = record_chunks::split(records.len(), |start, len| Scratch { signals: records[start..start + len].iter().map(|r| r.signals.clone()).collect(), buffers: Buffers::new(model), kept: None, block: vec![0.0; BLOCK_ROWS * model.param_count()] });
         let colouring = records.iter().map(|r| r.covariance.cholesky().map(|c| c.l()).unwrap_or_else(Matrix3::identity)).collect();
         Ok(Self { model, records, whitening, colouring, chunks })
     }
@@ -110,9 +175,17 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
         let mut out = vec![Vector3::zeros(); self.records.len()];
         let outs = record_chunks::shares(&self.chunks, &mut out, 1);
         record_chunks::for_each(&self.chunks, outs, |c, out: &mut [Vector3<f64>]| {
-            for (k, (o, s)) in out.iter_mut().zip(c.scratch.signals.iter_mut()).enumerate() {
+            let records = &self.records[c.start..c.start + c.len];
+            c.scratch.keep_targets(self.model, records, c.start)?;
+            let Scratch { signals, buffers, kept, .. } = &mut c.scratch;
+            for (k, (o, s)) in out.iter_mut().zip(signals.iter_mut()).enumerate() {
                 let i = c.start + k;
-                *o = predict(self.model, p, &kin, &self.records[i], s).map_err(|error| EvaluationFailure::Record { index: i, error })?;
+                let r = &records[k];
+                *o = match (kept.as_ref(), &r.kind) {
+                    (Some(kept), RecordKind::Point) => self.model.tracker_linear(None, p, &kept.layout, kept.of(k), s, &mut buffers.work).map(|t| t.measured_point()),
+                    _ => predict(self.model, p, &kin, r, s),
+                }
+                .map_err(|error| EvaluationFailure::Record { index: i, error })?;
             }
             Ok(())
         })?;
@@ -155,19 +228,30 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
             None => self.chunks.iter().map(|_| None).collect(),
         };
         record_chunks::for_each(&self.chunks, outs, |c, mut out: Option<&mut [f64]>| {
-            let Scratch { signals, buffers } = &mut c.scratch;
+            c.scratch.keep_targets(self.model, &self.records[c.start..c.start + c.len], c.start)?;
+            let Scratch { signals, buffers, kept, block } = &mut c.scratch;
+            let chunk_rows = 3 * c.len;
             for (k, s) in signals.iter_mut().enumerate() {
                 let i = c.start + k;
                 let r = &self.records[i];
                 // ∂r/∂p = −L⁻¹·∂prediction/∂p, column by column in fixed-size arithmetic,
-                // straight into the rows of record i (the identity when not whitening)
+                // into the block's rows of record i (the identity when not whitening)
                 let w = if whiten { -self.whitening[i] } else { Matrix3::identity() };
-                // SAFETY: rows 3i..3i+3 belong to record i, which only this chunk evaluates
-                let write = |c, column| unsafe { target.set_column(3 * i, c, column) };
-                let pred = buffers.predict_with_jacobian(self.model, p, &kin, r, s, &w, columns, write).map_err(|error| EvaluationFailure::Record { index: i, error })?;
+                let b = k % BLOCK_RECORDS;
+                let write = |c: usize, column: Vector3<f64>| block[c * BLOCK_ROWS + 3 * b..c * BLOCK_ROWS + 3 * b + 3].copy_from_slice(column.as_slice());
+                let kept = kept.as_ref().map(|kept| (&kept.layout, kept.of(k)));
+                let pred = buffers.predict_with_jacobian(self.model, p, &kin, r, s, kept, &w, columns, write).map_err(|error| EvaluationFailure::Record { index: i, error })?;
                 if let Some(out) = out.as_deref_mut() {
                     let z = self.whitening[i] * (r.measured - pred);
                     out[3 * k..3 * k + 3].copy_from_slice(z.as_slice());
+                }
+                if b + 1 == BLOCK_RECORDS || 3 * (k + 1) == chunk_rows {
+                    // the block's records into J, each column's rows in one contiguous write
+                    let first = k - b;
+                    for &col in columns {
+                        // SAFETY: rows 3·first..3(k+1) belong to this chunk's records
+                        unsafe { target.set_rows(3 * (c.start + first), col, &block[col * BLOCK_ROWS..col * BLOCK_ROWS + 3 * (b + 1)]) };
+                    }
                 }
             }
             Ok(())
@@ -232,13 +316,20 @@ impl Buffers {
         Self { work: Workspace::new(model), probe: DMatrix::zeros(PROBE_ROWS, n), camera: DMatrix::zeros(CAMERA_ROWS, n) }
     }
 
-    /// [`predict`] (bit for bit), and `write(c, map·column c of its Jacobian)` for each of
-    /// `columns`. A tracker's point goes straight from the model's chain to `write`; the other
-    /// kinds through their buffer.
+    /// [`predict`] (bit for bit; with a tracker point's `kept` target, as the model's
+    /// `tracker_linear`), and `write(c, map·column c of its Jacobian)` for each of `columns`. A
+    /// tracker's point goes straight from the model's chain to `write`; the other kinds through
+    /// their buffer.
     #[allow(clippy::too_many_arguments)]
-    fn predict_with_jacobian(&mut self, model: &ForwardModel, p: &[f64], kin: &KinematicTruth, r: &MeasurementRecord, s: &mut Signals, map: &Matrix3<f64>, columns: &[usize], mut write: impl FnMut(usize, Vector3<f64>)) -> Result<Vector3<f64>, PhysicsError> {
+    fn predict_with_jacobian(&mut self, model: &ForwardModel, p: &[f64], kin: &KinematicTruth, r: &MeasurementRecord, s: &mut Signals, kept: Option<(&KeptLayout, &[f64])>, map: &Matrix3<f64>, columns: &[usize], mut write: impl FnMut(usize, Vector3<f64>)) -> Result<Vector3<f64>, PhysicsError> {
         let (pred, rows) = match &r.kind {
-            RecordKind::Point => return Ok(model.tracker_point_jacobian_mapped(None, p, kin, &r.q, s, &mut self.work, map, columns, write)?.measured_point()),
+            RecordKind::Point => {
+                let reading = match kept {
+                    Some((layout, kept)) => model.tracker_point_jacobian_mapped_linear(None, p, layout, kept, s, &mut self.work, map, columns, write)?,
+                    None => model.tracker_point_jacobian_mapped(None, p, kin, &r.q, s, &mut self.work, map, columns, write)?,
+                };
+                return Ok(reading.measured_point());
+            }
             RecordKind::ProbeHit { target, probe } => {
                 let pred = model.probe_jacobian(probe.as_deref(), p, kin, &r.q, s, target, &mut self.work, &mut self.probe)?;
                 (pred.centre, self.probe.rows(0, 3))

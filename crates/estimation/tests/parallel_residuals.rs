@@ -1,7 +1,8 @@
 //! The residuals and Jacobian of many records, evaluated in parallel chunks (one per core), are
 //! bit for bit those of each record evaluated on its own, and a failing record is named by its
 //! index as a sequential pass would name it. Asked for only some columns, the evaluation writes
-//! those columns, bit for bit the same, and leaves the others alone.
+//! those columns, bit for bit the same, and leaves the others alone. The model's sighted points,
+//! kept per record, predict what the model's full evaluation does.
 
 #[path = "common/mod.rs"]
 mod common;
@@ -47,6 +48,18 @@ fn chunked_evaluation_equals_record_by_record() {
         assert_eq!(&r[3 * i..3 * i + 3], &r1[..], "record {i}: residuals");
         assert_eq!(&r_only[3 * i..3 * i + 3], &r1[..], "record {i}: residuals without the Jacobian");
         assert!(j.rows(3 * i, 3) == j1, "record {i}: Jacobian rows");
+    }
+
+    // the model's sighted points are linear in its parameters, so the evaluation kept them
+    // (P₀ and A per record, crates/model `linear_target`): its predictions are the model's full
+    // evaluation of each record to round-off (whitened, ~1e-10 of the stated noise)
+    let kin = fm.kinematic_truth(&p).unwrap();
+    assert!(fm.linear_target_columns().is_some());
+    for (i, rec) in set.records.iter().enumerate() {
+        let full = metrocell_estimation::residuals::predict(&fm, &p, &kin, rec, &mut rec.signals.clone()).unwrap();
+        let z = all.whitening_of(i) * (rec.measured - full);
+        let worst = (0..3).map(|k| (z[k] - r[3 * i + k]).abs()).fold(0.0, f64::max);
+        assert!(worst < 1e-8, "record {i}: kept prediction differs from the model's by {worst:e} σ");
     }
 
     // only the wanted columns: the same values, the others untouched

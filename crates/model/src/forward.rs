@@ -117,6 +117,8 @@ pub struct ForwardModel<'a> {
     pub(crate) n_params: usize,
     /// The instruments, their terms grouped by instance name.
     pub(crate) instruments: Vec<Instrument>,
+    /// [`Self::linear_target_columns`], found once.
+    pub(crate) linear_columns: Option<usize>,
 }
 
 pub(crate) fn kin_error(what: &str, q: &[f64], e: KinematicsError) -> PhysicsError {
@@ -179,7 +181,9 @@ impl<'a> ForwardModel<'a> {
             at += len;
         }
         let instruments = group_instruments(machine_terms.terms.len(), &instrument_terms.terms)?;
-        Ok(Self { machine, machine_terms, instrument_terms, slots, n_params: at, instruments })
+        let mut model = Self { machine, machine_terms, instrument_terms, slots, n_params: at, instruments, linear_columns: None };
+        model.linear_columns = model.find_linear_target_columns();
+        Ok(model)
     }
 
     /// Length of the stacked parameter vector.

@@ -13,6 +13,8 @@
 //!   are told apart by instance name), camera geometry.
 //! * [`tracker`], [`probe`], [`camera`] — each instrument's predicted reading and its analytic
 //!   Jacobian w.r.t. every stacked parameter; [`workspace`] — their scratch buffers;
+//!   [`linear_target`] — the sighted point kept per reading where the machine is linear in its
+//!   parameters (a batch fit's evaluations become products);
 //!   [`fiducial_plate`] — the plate of markers a simulated camera sees.
 //! * [`parameters`] — free/fixed mask and priors per parameter ([`ParameterSetup`]), and the
 //!   pairs of parameters parallel by construction ([`ForwardModel::parallel_pairs`]).
@@ -32,6 +34,7 @@ pub mod fiducial_plate;
 pub mod forward;
 pub mod instrument_pose;
 pub mod instruments;
+pub mod linear_target;
 pub mod machine;
 pub mod parameters;
 pub mod probe;
@@ -45,6 +48,7 @@ pub use fiducial_plate::{FiducialPlate, PLATE_MARKERS};
 pub use forward::{DisplacementCache, ForwardModel, KinematicTruth, ToolState};
 pub use instruments::{CameraGeometry, Instrument, InstrumentKind};
 pub use probe::{ProbePrediction, ProbeTarget, PROBE_ROWS};
+pub use linear_target::KeptLayout;
 pub use tracker::{TrackerPrediction, TRACKER_ROWS};
 pub use workspace::Workspace;
 pub use instrument_pose::InstrumentPose;

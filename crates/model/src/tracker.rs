@@ -13,6 +13,7 @@ use nalgebra::{DMatrix, Matrix3, RowVector3, Vector3};
 
 use crate::forward::{v3, ForwardModel, KinematicTruth, Slot, ToolState};
 use crate::instruments::{Instrument, InstrumentKind};
+use crate::linear_target::KeptLayout;
 use crate::workspace::Workspace;
 
 /// The predicted reading of a laser tracker.
@@ -93,7 +94,7 @@ impl ForwardModel<'_> {
         self.check_buffer("tracker Jacobian", out, TRACKER_ROWS)?;
         let (pred, chain) = self.tracker_chain(instrument, p, kin, q, s, work)?;
         for (c, o) in out.as_mut_slice().chunks_exact_mut(TRACKER_ROWS).enumerate() {
-            let (y, range) = chain.column(work, c);
+            let (y, range) = chain.column(work, work.tool.as_slice(), c);
             o.copy_from_slice(&[y.x, y.y, y.z, range]);
         }
         Ok(pred)
@@ -110,18 +111,52 @@ impl ForwardModel<'_> {
         let chain = chain.mapped(map);
         for &c in columns {
             assert!(c < self.n_params, "column {c} of {} parameters", self.n_params);
-            write(c, chain.column(work, c).0);
+            write(c, chain.column(work, work.tool.as_slice(), c).0);
         }
         Ok(pred)
+    }
+
+    /// [`Self::tracker_point_jacobian_mapped`] of a reading whose sighted point was kept
+    /// (`kept`: [`Self::linear_target`]'s values packed by `layout`; the model's target must be
+    /// linear, see [`crate::linear_target`]): the machine terms are not evaluated, the point is
+    /// P₀ + A·p and its Jacobian A. Equal to the unkept evaluation to round-off.
+    #[allow(clippy::too_many_arguments)]
+    pub fn tracker_point_jacobian_mapped_linear(&self, instrument: Option<&str>, p: &[f64], layout: &KeptLayout, kept: &[f64], s: &mut Signals, work: &mut Workspace, map: &Matrix3<f64>, columns: &[usize], mut write: impl FnMut(usize, Vector3<f64>)) -> Result<TrackerPrediction, PhysicsError> {
+        self.check(p)?;
+        work.check(self)?;
+        let machine = layout.columns();
+        let (pred, chain) = self.tracker_chain_at(instrument, p, layout.target_at(p, kept), s, work)?;
+        let chain = chain.mapped(map);
+        for &c in columns {
+            assert!(c < self.n_params, "column {c} of {} parameters", self.n_params);
+            // a machine column moves only the sighted point; the instrument's through the chain
+            let column = if c < machine { chain.point_from_target * layout.column(kept, c) } else { chain.column(work, &[], c).0 };
+            write(c, column);
+        }
+        Ok(pred)
+    }
+
+    /// The tracker's reading of a kept reading (as [`Self::tracker_point_jacobian_mapped_linear`]
+    /// predicts it, bit for bit), without its Jacobian.
+    pub fn tracker_linear(&self, instrument: Option<&str>, p: &[f64], layout: &KeptLayout, kept: &[f64], s: &mut Signals, work: &mut Workspace) -> Result<TrackerPrediction, PhysicsError> {
+        self.check(p)?;
+        work.check(self)?;
+        Ok(self.tracker_chain_at(instrument, p, layout.target_at(p, kept), s, work)?.0)
     }
 
     /// The reading and its Jacobian as a [`TrackerChain`] over the intermediate Jacobians it
     /// leaves in `work`.
     fn tracker_chain(&self, instrument: Option<&str>, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, work: &mut Workspace) -> Result<(TrackerPrediction, TrackerChain), PhysicsError> {
         work.check(self)?;
+        let target = self.tool_point_jacobian(p, kin, q, s, &mut work.tool)?;
+        self.tracker_chain_at(instrument, p, target, s, work)
+    }
+
+    /// [`Self::tracker_chain`] from the sighted point `target`, whose Jacobian the caller holds
+    /// (`work.tool`, or a kept reading's A).
+    fn tracker_chain_at(&self, instrument: Option<&str>, p: &[f64], target: Vector3<f64>, s: &mut Signals, work: &mut Workspace) -> Result<(TrackerPrediction, TrackerChain), PhysicsError> {
         let inst = self.require(InstrumentKind::Tracker, instrument)?;
         let pose = pose_of(inst)?;
-        let target = self.tool_point_jacobian(p, kin, q, s, &mut work.tool)?;
         // x = Rᵀ(P − T) and ∂x/∂pose
         s.target_point = Some(target);
         let mut xv = [0.0; 3];
@@ -194,10 +229,12 @@ impl TrackerChain {
         Self { u: map * self.u, point_from_x: map * self.point_from_x, point_from_target: map * self.point_from_target, ..*self }
     }
 
-    /// Column `c` of ∂(reported point)/∂p and of ∂(measured range)/∂p. (Inline: the callers
-    /// are generic over their writer, so they are compiled in the caller's crate.)
+    /// Column `c` of ∂(reported point)/∂p and of ∂(measured range)/∂p, with `tool` the sighted
+    /// point's Jacobian (3 values per column, column-major; columns past its end are zero:
+    /// a kept reading holds the machine's only). (Inline: the callers are generic over their
+    /// writer, so they are compiled in the caller's crate.)
     #[inline]
-    fn column(&self, work: &Workspace, c: usize) -> (Vector3<f64>, f64) {
+    fn column(&self, work: &Workspace, tool: &[f64], c: usize) -> (Vector3<f64>, f64) {
         let within = |s: Slot| c >= s.start && c < s.start + s.len;
         let through = |from_x: &Matrix3<f64>, range: &RowVector3<f64>, d: &[f64]| {
             let dx = Vector3::new(d[0], d[1], d[2]);
@@ -214,6 +251,9 @@ impl TrackerChain {
                 return (self.u * dr, dr);
             }
         }
-        through(&self.point_from_target, &self.range_from_target, &work.tool.as_slice()[3 * c..3 * c + 3])
+        match tool.get(3 * c..3 * c + 3) {
+            Some(d) => through(&self.point_from_target, &self.range_from_target, d),
+            None => (Vector3::zeros(), 0.0),
+        }
     }
 }

@@ -31,6 +31,8 @@ pub struct Workspace {
     /// The tracker pose's rotation at the last pose evaluated: the readings of one parameter
     /// vector share it (see [`Self::pose_rotation`]).
     pose_rotation: Option<PoseRotation>,
+    /// All parameters zero (a linear target's P₀ is the target there).
+    pub(crate) zero_params: Vec<f64>,
 }
 
 impl Workspace {
@@ -45,6 +47,7 @@ impl Workspace {
             range_terms: DMatrix::zeros(2, 3),
             term: DMatrix::zeros(3, TERM_COLUMNS),
             pose_rotation: None,
+            zero_params: vec![0.0; n],
         }
     }
 

@@ -140,6 +140,16 @@ pub trait PhysicsTerm: TermClone + std::fmt::Debug + Send + Sync {
         Ok(())
     }
 
+    /// Whether the prediction is linear in the parameters with a Jacobian that reads only the
+    /// signals: prediction = [`Self::jacobian`]·p for every p, the Jacobian the same for every p
+    /// at one instant (the geometric error series; not a time constant, a phase or a
+    /// kinematic trim). A caller that evaluates the same instants at many parameter vectors (a
+    /// batch fit) may then keep each instant's Jacobian and predict by a product. Only a term
+    /// that states it is taken to be linear: the default is false.
+    fn linear_in_params(&self) -> bool {
+        false
+    }
+
     /// Default parameter vector.
     fn defaults(&self) -> Vec<f64> {
         self.params().iter().map(|p| p.default).collect()

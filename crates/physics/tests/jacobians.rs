@@ -119,6 +119,34 @@ fn predictions_have_the_declared_dimension_and_are_linear_where_documented() {
     }
 }
 
+/// A term that says it is `linear_in_params` is, in the stronger sense a cache relies on:
+/// prediction = J·p with no intercept, and J the same at any two parameter vectors of an
+/// instant. The geometric series terms say so; the terms with a nonlinear parameter must not.
+#[test]
+fn terms_that_say_they_are_linear_predict_by_their_jacobian() {
+    let mut r = common::rng(11);
+    let mut linear = std::collections::BTreeSet::new();
+    for &id in TermId::ALL {
+        let built = configure(&example_config(id)).unwrap();
+        let term = built.term.as_ref();
+        if !term.linear_in_params() {
+            continue;
+        }
+        assert!(nonlinear_params(id.as_str()).is_empty(), "{id} says it is linear but has a nonlinear parameter");
+        linear.insert(id.as_str());
+        for _ in 0..10 {
+            let (p, far) = (common::random_params(&mut r, &term.params()), common::random_params(&mut r, &term.params()));
+            let s = common::random_signals(&mut r);
+            let j = term.jacobian(&p, &s).unwrap();
+            assert_eq!(j, term.jacobian(&far, &s).unwrap(), "{id}: Jacobian depends on the parameters");
+            let value = term.predict(&p, &s).unwrap().value;
+            let product = &j * nalgebra::DVector::from_column_slice(&p);
+            assert!((&value - &product).norm() <= 1e-12 * value.norm() + 1e-300, "{id}: prediction {:?} is not J·p {:?}", value.as_slice(), product.as_slice());
+        }
+    }
+    assert_eq!(linear.into_iter().collect::<Vec<_>>(), ["angular", "positioning", "squareness", "straightness"]);
+}
+
 /// `evaluate_into` (the allocation-free path estimators use) gives `predict`'s value and
 /// `jacobian`'s matrix bit for bit, for every term, whether it overrides the method or not.
 #[test]

@@ -465,3 +465,80 @@ fn probe_and_camera_jacobians_match_central_differences() {
         }
     }
 }
+
+/// Only linear machine terms (the geometric series, squareness): what a kept target needs.
+const LINEAR_XFYZ_TERMS: &str = "  - {id: squareness, options: {pair: xy}, params: {s: 20 urad}}\n  - {id: positioning, options: {axis: y, order: 2, travel: [0 mm, 500 mm]}, params: {c0: 1 um, c1: 6 um, c2: -2 um}}\n  - {id: straightness, options: {axis: x, direction: z, order: 3, travel: [0 mm, 800 mm]}, params: {c0: 0 um, c1: 2 um, c2: -3 um, c3: 1 um}}\n  - {id: angular, options: {axis: x, about: z, lever_axes: [y, z], abbe_offset: [0 m, 0.05 m, -0.15 m], order: 2, travel: [0 mm, 800 mm]}, params: {c0: 5 urad, c1: -8 urad, c2: 3 urad}}\n  - {id: angular, options: {axis: z, about: x, order: 1, travel: [0 mm, 400 mm]}, params: {c0: 0 urad, c1: 4 urad}}\n";
+const LINEAR_FIVE_AXIS_TERMS: &str = "  - {id: squareness, options: {pair: xy}, params: {s: 60 urad}}\n  - {id: positioning, options: {axis: y, order: 1, travel: [0 mm, 1150 mm]}, params: {c0: 0 um, c1: 20 um}}\n  - {id: straightness, options: {axis: x, direction: y, order: 2}, params: {c0: 1 um, c1: 3 um, c2: -2 um}}\n";
+
+/// Example cell `file` with its `terms:` (the file's last section) replaced by `terms`.
+fn with_terms(file: &str, terms: &str) -> Cell {
+    let text = std::fs::read_to_string(common::cell_path(file)).unwrap();
+    let t0 = text.find("\nterms:").unwrap();
+    Cell::from_yaml_str(&format!("{}\nterms:\n{terms}", &text[..t0]), file).unwrap_or_else(|e| panic!("{file}: {e}"))
+}
+
+/// A tracker reading from a kept target (crates/model `linear_target`: P₀ and A formed once,
+/// packed to the rows that are not zero) is the model's full evaluation to round-off, at
+/// parameters far from those it was kept at, on a cartesian and a five-axis machine; the
+/// prediction without the Jacobian is the one with it, bit for bit. A model with a term that is
+/// not linear (thermal, a delta's or an arm's kinematics) keeps nothing and says why.
+#[test]
+fn kept_linear_targets_give_the_models_readings_and_jacobians() {
+    use metrocell_model::KeptLayout;
+    use nalgebra::Matrix3;
+    use rand::{Rng, SeedableRng};
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(12);
+    for (name, cell) in [("xfyz", with_terms("xfyz_shift.yaml", LINEAR_XFYZ_TERMS)), ("five-axis", with_terms("five_axis_table.yaml", LINEAR_FIVE_AXIS_TERMS))] {
+        let sim = Simulation::new(cell, 12.0, 3).unwrap();
+        let model = sim.forward_model();
+        let n = model.param_count();
+        let machine = model.machine_terms.param_specs().len();
+        assert_eq!(model.linear_target_columns(), Some(machine), "{name}");
+        let full_len = model.linear_target_len().unwrap();
+        let names = model.param_names();
+        let mut checked = 0;
+        for (s, tt) in tracker_readings(&sim).iter().step_by(29) {
+            let sig = reading_signals(&sim, s);
+            let mut work = Workspace::new(&model);
+            let mut full = vec![0.0; full_len];
+            model.linear_target(&tt.joints, &mut sig.clone(), &mut work, &mut full).unwrap();
+            let layout = KeptLayout::empty(machine).widened(&full);
+            assert!(layout.covers(&full) && layout.len() < full_len, "{name}: {} of {full_len} values kept", layout.len());
+            let mut kept = vec![0.0; layout.len()];
+            layout.pack(&full, &mut kept);
+            // far from where A was formed: every machine parameter ±30 µm or µrad, the pose moved
+            let mut p = model.params();
+            for (k, v) in p.iter_mut().enumerate() {
+                if k < machine {
+                    *v = rng.random_range(-30e-6..30e-6);
+                } else if names[k].starts_with("tracker_pose.t") {
+                    *v += rng.random_range(-1e-3..1e-3);
+                }
+            }
+            let kin = model.kinematic_truth(&p).unwrap();
+            let mut reference = DMatrix::zeros(TRACKER_ROWS, n);
+            let want = model.tracker_jacobian(&p, &kin, &tt.joints, &mut sig.clone(), &mut work, &mut reference).unwrap().measured_point();
+            let mut jac = DMatrix::from_element(3, n, f64::NAN);
+            let columns: Vec<usize> = (0..n).collect();
+            let got = model.tracker_point_jacobian_mapped_linear(None, &p, &layout, &kept, &mut sig.clone(), &mut work, &Matrix3::identity(), &columns, |c, v| jac.set_column(c, &v)).unwrap().measured_point();
+            assert!((got - want).norm() <= 1e-12, "{name} t = {}: kept {got:?} vs model {want:?}", s.t);
+            for c in 0..n {
+                let (a, b) = (jac.column(c), reference.fixed_view::<3, 1>(0, c));
+                assert!((a - b).norm() <= 1e-12 * b.norm() + 1e-15, "{name} t = {}, {}: kept {:?} vs model {:?}", s.t, names[c], a.as_slice(), b.iter().collect::<Vec<_>>());
+            }
+            let alone = model.tracker_linear(None, &p, &layout, &kept, &mut sig.clone(), &mut work).unwrap().measured_point();
+            assert_eq!(alone, got, "{name}: the prediction without the Jacobian");
+            checked += 1;
+        }
+        assert!(checked >= 3, "{name}: {checked} readings checked");
+    }
+    for name in ["xfyz_shift.yaml", "serial_arm_ur5.yaml", "delta_printer.yaml"] {
+        let sim = Simulation::new(common::validate(&example_with_tracker(name)), 12.0, 3).unwrap();
+        let model = sim.forward_model();
+        assert_eq!(model.linear_target_columns(), None, "{name}");
+        let (s, tt) = &tracker_readings(&sim)[0];
+        let mut out = vec![0.0; 3];
+        let e = model.linear_target(&tt.joints, &mut reading_signals(&sim, s), &mut Workspace::new(&model), &mut out).unwrap_err();
+        assert!(e.to_string().contains("not linear"), "{name}: {e}");
+    }
+}

@@ -88,6 +88,10 @@ impl PhysicsTerm for Angular {
         }
         Ok(j)
     }
+    /// Linear: ε(q)·(e_a × L), L from the axis positions.
+    fn linear_in_params(&self) -> bool {
+        true
+    }
     fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
         check_len(self, p, self.series.len())?;
         let (q, arm) = self.lever(s)?;

@@ -73,6 +73,10 @@ impl PhysicsTerm for Positioning {
         }
         Ok(j)
     }
+    /// Linear: the series' value Σ cₖ·bₖ(q) along a fixed direction.
+    fn linear_in_params(&self) -> bool {
+        true
+    }
     fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
         check_len(self, p, self.series.len())?;
         let q = s.position(self, self.axis)?;

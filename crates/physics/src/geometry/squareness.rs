@@ -62,6 +62,10 @@ impl PhysicsTerm for Squareness {
         check_len(self, p, 1)?;
         Ok(DMatrix::from_column_slice(3, 1, self.arm(s)?.as_slice()))
     }
+    /// Linear: s·arm, the arm from the driver's position.
+    fn linear_in_params(&self) -> bool {
+        true
+    }
     fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
         check_len(self, p, 1)?;
         let arm = self.arm(s)?;

@@ -8,7 +8,6 @@
 
 use std::sync::Mutex;
 
-
 /// Fewest records worth a thread of their own (spawning one costs ~20 µs, a record ~3 µs).
 const MIN_RECORDS_PER_WORKER: usize = 1000;
 

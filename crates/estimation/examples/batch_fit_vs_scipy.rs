@@ -9,7 +9,8 @@
 //! the solutions are.
 //!
 //! `METROCELL_PYTHON=/path/to/python cargo run --release -p metrocell-estimation --example batch_fit_vs_scipy`
-//! (`-- --fit-only N` runs only metrocell's fit N more times, for a profiler)
+//! (`-- --fit-only N` runs only metrocell's fit N more times, then times N model evaluations, for a
+//! profiler; `--no-evaluations` leaves those out)
 
 #[path = "../tests/common/mod.rs"]
 mod common;
@@ -94,6 +95,9 @@ fn main() {
             fit(&fm, &setup, &data, Some(x0.clone()), &options).expect("fit");
         }
         println!("{n} more fits: {:.3} s each", t.elapsed().as_secs_f64() / n as f64);
+        if args.iter().any(|a| a == "--no-evaluations") {
+            return;
+        }
         // and the model evaluation alone (residuals + Jacobian of all records), as the fit calls it
         let problem = PointResiduals::new(&fm, &data.records).unwrap();
         let mut r = vec![0.0; problem.residual_count()];
@@ -118,24 +122,86 @@ fn main() {
         return;
     }
 
-    // scipy on the identical problem
+    // scipy on the identical problem, with numpy's BLAS as the environment sets it and with one
+    // thread (on a shared 2-core machine OpenBLAS's second thread has made scipy's own work 2–3×
+    // slower, not faster): the faster of the two is the peer
     let problem = PointResiduals::new(&fm, &data.records).unwrap();
-    let rows = problem.residual_count();
     let specs: Vec<_> = fm.machine_terms.param_specs().into_iter().chain(fm.instrument_terms.param_specs()).collect();
+    let session = |threads: Option<&str>| scipy_session(&python, threads, &problem, &x0, &free, &specs);
+    let one_thread_already = std::env::var("OPENBLAS_NUM_THREADS").is_ok_and(|v| v == "1");
+    let mut sessions = vec![("BLAS threads as set", session(None))];
+    if !one_thread_already {
+        sessions.push(("one BLAS thread", session(Some("1"))));
+    }
+    for (what, s) in &sessions {
+        println!("scipy trf, {what} (fastest own work of {RUNS}): {:.3} s ({} evaluations, status {}), of which {:.3} s waiting for metrocell's residuals and Jacobian over the pipe ({:.3} s evaluating them); + its evaluations back to back {:.3} s = whole job {:.3} s", s.seconds, s.evaluations, s.status, s.waiting, s.evaluating, s.tight, s.job());
+    }
+    let (what, best) = sessions.iter().min_by(|a, b| a.1.job().total_cmp(&b.1.job())).unwrap();
+    // the like-for-like job: scipy's own work plus the model evaluations it asked for (as
+    // metrocell's fit evaluates the model too), without the pipe's copying of 11 MB Jacobians
+    println!("ratio scipy / metrocell: {:.1}× on the whole job (scipy at its faster setting, {what}: own work + its {} model evaluations, {:.3} s back to back = {:.3} s; pipe transfer excluded); {:.1}× on scipy's wall time including the pipe; {:.1}× on scipy's own work alone", best.job() / ours, best.evaluations, best.tight, best.job(), best.seconds / ours, (best.seconds - best.waiting) / ours);
+    let xs = &best.x;
+    // agreement: per parameter relative to its own magnitude (floored at its σ) and in σ
+    let mut worst_rel: f64 = 0.0;
+    let mut worst_sigma: f64 = 0.0;
+    let mut worst_name = String::new();
+    for (i, &k) in free.iter().enumerate() {
+        let d = (f.x[k] - xs[i]).abs();
+        let sigma = f.parameters[k].sigma.unwrap_or(f64::INFINITY);
+        let rel = d / f.x[k].abs().max(sigma);
+        if rel > worst_rel {
+            worst_rel = rel;
+            worst_name = names[k].clone();
+        }
+        worst_sigma = worst_sigma.max(d / sigma);
+    }
+    let inf_rel = free.iter().enumerate().map(|(i, &k)| (f.x[k] - xs[i]).abs()).fold(0.0, f64::max) / free.iter().map(|&k| f.x[k].abs()).fold(0.0, f64::max);
+    println!("solutions: ‖Δx‖∞/‖x‖∞ = {inf_rel:.2e}; worst parameter {worst_name}: {worst_rel:.2e} of max(|x|, σ); largest difference {worst_sigma:.2e} σ");
+}
+
+/// One scipy process's solves of the problem and what they cost.
+struct ScipySession {
+    /// The fastest run's wall time, of which `waiting` for metrocell's evaluations over the pipe.
+    seconds: f64,
+    waiting: f64,
+    /// metrocell's time evaluating per run, as served over the pipe.
+    evaluating: f64,
+    evaluations: usize,
+    status: serde_json::Value,
+    /// The evaluations scipy asked for, timed back to back (fastest of 3 passes).
+    tight: f64,
+    x: Vec<f64>,
+}
+
+impl ScipySession {
+    /// scipy's own work plus the model evaluations it asked for.
+    fn job(&self) -> f64 {
+        self.seconds - self.waiting + self.tight
+    }
+}
+
+/// `scipy_batch_fit.py` on the free parameters of `problem` from `x0`, RUNS times, with
+/// `OPENBLAS_NUM_THREADS` (and OpenMP's) set to `threads` when given.
+fn scipy_session(python: &str, threads: Option<&str>, problem: &PointResiduals, x0: &[f64], free: &[usize], specs: &[metrocell_physics::ParamSpec]) -> ScipySession {
+    let rows = problem.residual_count();
     let lower: Vec<f64> = free.iter().map(|&k| specs[k].min.min(x0[k])).collect();
     let upper: Vec<f64> = free.iter().map(|&k| specs[k].max.max(x0[k])).collect();
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/scipy_batch_fit.py");
-    let mut child = Command::new(&python).arg(script).stdin(Stdio::piped()).stdout(Stdio::piped()).spawn().unwrap_or_else(|e| panic!("cannot start {python}: {e} (set METROCELL_PYTHON to a python with scipy)"));
+    let mut command = Command::new(python);
+    if let Some(t) = threads {
+        command.env("OPENBLAS_NUM_THREADS", t).env("OMP_NUM_THREADS", t);
+    }
+    let mut child = command.arg(script).stdin(Stdio::piped()).stdout(Stdio::piped()).spawn().unwrap_or_else(|e| panic!("cannot start {python}: {e} (set METROCELL_PYTHON to a python with scipy)"));
     let mut to = child.stdin.take().unwrap();
     let mut from = BufReader::new(child.stdout.take().unwrap());
     let head = serde_json::json!({"n": free.len(), "m": rows, "x0": free.iter().map(|&k| x0[k]).collect::<Vec<_>>(), "lower": lower, "upper": upper, "runs": RUNS});
     writeln!(to, "{head}").unwrap();
     to.flush().unwrap();
+    let n = problem.parameter_count();
     let mut r = vec![0.0; rows];
-    let mut jac = DMatrix::zeros(rows, names.len());
-    let mut x = x0.clone();
-    let wanted: Vec<bool> = (0..names.len()).map(|k| setup.free[k]).collect();
-    let t = Instant::now();
+    let mut jac = DMatrix::zeros(rows, n);
+    let mut x = x0.to_vec();
+    let wanted: Vec<bool> = (0..n).map(|k| free.contains(&k)).collect();
     let mut ours_eval = 0.0;
     let done = loop {
         let mut tag = [0u8; 1];
@@ -157,21 +223,18 @@ fn main() {
         let mut bytes = Vec::with_capacity(8 * rows * (1 + free.len()));
         r.iter().for_each(|v| bytes.extend_from_slice(&v.to_le_bytes()));
         for i in 0..rows {
-            for &k in &free {
+            for &k in free {
                 bytes.extend_from_slice(&jac[(i, k)].to_le_bytes());
             }
         }
         to.write_all(&bytes).unwrap();
         to.flush().unwrap();
     };
-    let wall = t.elapsed().as_secs_f64();
     child.wait().unwrap();
     // scipy's fastest run, and metrocell's evaluation time per run (the runs ask for the same points)
     let seconds = |key: &str| -> Vec<f64> { done[key].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect() };
     let (runs, waits) = (seconds("seconds"), seconds("evaluation_seconds"));
     let best = (0..RUNS).min_by(|&a, &b| (runs[a] - waits[a]).total_cmp(&(runs[b] - waits[b]))).unwrap();
-    let (scipy, waiting) = (runs[best], waits[best]);
-    let ours_eval = ours_eval / RUNS as f64;
     // the evaluations charged to scipy are timed back to back, as the fit makes them: between
     // the pipe's 11 MB copies the same evaluation runs slower (caches cold), which would
     // flatter metrocell; the fastest of 3 passes of as many evaluations as scipy made
@@ -180,31 +243,18 @@ fn main() {
         .map(|_| {
             let t = Instant::now();
             for _ in 0..evaluations {
-                problem.residuals_and_jacobian_of(&x0, &mut r, &mut jac, &wanted).unwrap();
+                problem.residuals_and_jacobian_of(x0, &mut r, &mut jac, &wanted).unwrap();
             }
             t.elapsed().as_secs_f64()
         })
         .fold(f64::INFINITY, f64::min);
-    let xs: Vec<f64> = done["x"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect();
-    println!("scipy trf (fastest own work of {RUNS}): {:.3} s ({} evaluations, status {}), of which {:.3} s waiting for metrocell's residuals and Jacobian over the pipe ({:.3} s evaluating them); wall of all runs {:.3} s", scipy, done["evaluations"], done["status"], waiting, ours_eval, wall);
-    // the like-for-like job: scipy's own work plus the model evaluations it asked for (as
-    // metrocell's fit evaluates the model too), without the pipe's copying of 11 MB Jacobians
-    let job = scipy - waiting + tight;
-    println!("ratio scipy / metrocell: {:.1}× on the whole job (scipy's own work + its {evaluations} model evaluations, {:.3} s back to back = {:.3} s; pipe transfer excluded); {:.1}× on scipy's wall time including the pipe; {:.1}× on scipy's own work alone", job / ours, tight, job, scipy / ours, (scipy - waiting) / ours);
-    // agreement: per parameter relative to its own magnitude (floored at its σ) and in σ
-    let mut worst_rel: f64 = 0.0;
-    let mut worst_sigma: f64 = 0.0;
-    let mut worst_name = String::new();
-    for (i, &k) in free.iter().enumerate() {
-        let d = (f.x[k] - xs[i]).abs();
-        let sigma = f.parameters[k].sigma.unwrap_or(f64::INFINITY);
-        let rel = d / f.x[k].abs().max(sigma);
-        if rel > worst_rel {
-            worst_rel = rel;
-            worst_name = names[k].clone();
-        }
-        worst_sigma = worst_sigma.max(d / sigma);
+    ScipySession {
+        seconds: runs[best],
+        waiting: waits[best],
+        evaluating: ours_eval / RUNS as f64,
+        evaluations,
+        status: done["status"].clone(),
+        tight,
+        x: done["x"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect(),
     }
-    let inf_rel = free.iter().enumerate().map(|(i, &k)| (f.x[k] - xs[i]).abs()).fold(0.0, f64::max) / free.iter().map(|&k| f.x[k].abs()).fold(0.0, f64::max);
-    println!("solutions: ‖Δx‖∞/‖x‖∞ = {inf_rel:.2e}; worst parameter {worst_name}: {worst_rel:.2e} of max(|x|, σ); largest difference {worst_sigma:.2e} σ");
 }

@@ -415,9 +415,13 @@ fn finish(
     // √W·J at x for the identifiability analysis, the columns of fixed parameters zero: J is
     // weighted in place (a new m × n buffer is one more allocation, zeroing and pass)
     let mut weighted_jacobian = ws.j;
+    // (unit weights, the linear loss without σ, leave J as it is: no pass over it)
+    let weighted = ws.row_scale.iter().any(|s| *s != 1.0);
     for k in 0..n {
         if free[k] {
-            weighted_jacobian.column_mut(k).iter_mut().zip(&ws.row_scale).for_each(|(v, s)| *v *= s);
+            if weighted {
+                weighted_jacobian.column_mut(k).iter_mut().zip(&ws.row_scale).for_each(|(v, s)| *v *= s);
+            }
         } else {
             clear_column(&mut weighted_jacobian, k);
         }

@@ -36,7 +36,7 @@ impl ForwardModel<'_> {
     pub(crate) fn find_linear_target_columns(&self) -> Option<usize> {
         let family = matches!(self.machine.kinematics, MachineKinematics::Cartesian(_) | MachineKinematics::FiveAxis(_));
         let linear = self.machine_terms.terms.iter().all(|t| t.term.linear_in_params());
-        (family && linear).then(|| self.machine_terms.terms.len()).map(|n| if n == 0 { 0 } else { self.slots[n - 1].start + self.slots[n - 1].len })
+        (family && linear).then(|| self.machine_terms.terms.iter().map(|t| t.params.len()).sum())
     }
 
     /// Values one reading keeps (P₀ and A), for a model with [`Self::linear_target_columns`].
@@ -57,7 +57,6 @@ impl ForwardModel<'_> {
         out[3..].copy_from_slice(&work.tool.as_slice()[..len - 3]);
         Ok(())
     }
-
 }
 
 /// Which rows of each column of A a kept reading holds (see the module doc), and where.
@@ -105,8 +104,9 @@ impl KeptLayout {
         self.len
     }
 
+    /// Whether the layout holds P₀ alone (no value of A: every column zero).
     pub fn is_empty(&self) -> bool {
-        self.len == 0
+        self.entries.is_empty()
     }
 
     fn nonzero_rows(a: &[f64]) -> u8 {

@@ -9,7 +9,8 @@
 //! the solutions are.
 //!
 //! `METROCELL_PYTHON=/path/to/python cargo run --release -p metrocell-estimation --example batch_fit_vs_scipy`
-//! (`-- --fit-only N` runs only metrocell's fit N more times, then times N model evaluations, for a
+//! (`-- --fit-only N` runs only metrocell's fit N more times, then times N model evaluations of
+//! each kind — the first of a new problem, with J's free or all columns, r alone — for a
 //! profiler; `--no-evaluations` leaves those out)
 
 #[path = "../tests/common/mod.rs"]
@@ -119,6 +120,11 @@ fn main() {
             problem.residuals_and_jacobian(&x0, &mut r, &mut jac).unwrap();
         }
         println!("residuals + Jacobian (all columns): {:.2} ms each", 1e3 * t.elapsed().as_secs_f64() / n as f64);
+        let t = Instant::now();
+        for _ in 0..n {
+            problem.residuals(&x0, &mut r).unwrap();
+        }
+        println!("residuals alone: {:.2} ms each", 1e3 * t.elapsed().as_secs_f64() / n as f64);
         return;
     }
 

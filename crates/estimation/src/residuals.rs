@@ -69,7 +69,7 @@ struct Kept {
 
 impl Kept {
     fn of(&self, k: usize) -> &[f64] {
-        let len = self.layout.len();
+        let len = self.layout.values_per_reading();
         &self.values.as_slice()[len * k..len * (k + 1)]
     }
 }
@@ -85,7 +85,7 @@ impl Scratch {
         let mut full = vec![0.0; len];
         let mut layout = KeptLayout::empty(columns);
         // a column for every record, so that any record's slice exists (only points use theirs)
-        let mut values = zeroed_matrix(layout.len(), records.len());
+        let mut values = zeroed_matrix(layout.values_per_reading(), records.len());
         'pack: loop {
             for (k, (r, s)) in records.iter().zip(&mut self.signals).enumerate() {
                 if r.kind != RecordKind::Point {
@@ -94,7 +94,7 @@ impl Scratch {
                 model.linear_target(&r.q, s, &mut self.buffers.work, &mut full).map_err(|error| EvaluationFailure::Record { index: start + k, error })?;
                 if !layout.covers(&full) {
                     layout = layout.widened(&full);
-                    values = zeroed_matrix(layout.len(), records.len());
+                    values = zeroed_matrix(layout.values_per_reading(), records.len());
                     if k > 0 {
                         continue 'pack;
                     }

@@ -99,14 +99,9 @@ impl KeptLayout {
         Self::with_rows(vec![0; columns])
     }
 
-    /// Values per kept reading.
-    pub fn len(&self) -> usize {
+    /// Values per kept reading (P₀ and the held values of A).
+    pub fn values_per_reading(&self) -> usize {
         self.len
-    }
-
-    /// Whether the layout holds P₀ alone (no value of A: every column zero).
-    pub fn is_empty(&self) -> bool {
-        self.entries.is_empty()
     }
 
     fn nonzero_rows(a: &[f64]) -> u8 {
@@ -175,14 +170,14 @@ mod tests {
         assert!(!layout.covers(&first));
         let layout = layout.widened(&first);
         assert!(layout.covers(&first));
-        assert_eq!(layout.len(), 4, "P₀ and one value");
+        assert_eq!(layout.values_per_reading(), 4, "P₀ and one value");
         // a later reading whose lever is not zero where the first one's was
         let second = full([0.0, 1.0, 0.0], [[0.25, 0.0, 0.0], [0.0, -2.0, 7.0]]);
         assert!(!layout.covers(&second));
         let layout = layout.widened(&second);
-        assert!(layout.covers(&first) && layout.covers(&second) && layout.len() == 6);
+        assert!(layout.covers(&first) && layout.covers(&second) && layout.values_per_reading() == 6);
         for f in [&first, &second] {
-            let mut kept = vec![f64::NAN; layout.len()];
+            let mut kept = vec![f64::NAN; layout.values_per_reading()];
             layout.pack(f, &mut kept);
             for c in 0..2 {
                 assert_eq!(layout.column(&kept, c).as_slice(), &f[3 + 3 * c..6 + 3 * c]);

@@ -503,8 +503,8 @@ fn kept_linear_targets_give_the_models_readings_and_jacobians() {
             let mut full = vec![0.0; full_len];
             model.linear_target(&tt.joints, &mut sig.clone(), &mut work, &mut full).unwrap();
             let layout = KeptLayout::empty(machine).widened(&full);
-            assert!(layout.covers(&full) && layout.len() < full_len, "{name}: {} of {full_len} values kept", layout.len());
-            let mut kept = vec![0.0; layout.len()];
+            assert!(layout.covers(&full) && layout.values_per_reading() < full_len, "{name}: {} of {full_len} values kept", layout.values_per_reading());
+            let mut kept = vec![0.0; layout.values_per_reading()];
             layout.pack(&full, &mut kept);
             // far from where A was formed: every machine parameter ±30 µm or µrad, the pose moved
             let mut p = model.params();

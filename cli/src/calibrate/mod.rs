@@ -23,8 +23,10 @@ use metrocell_twin::{write_model, CellModel, FittedParameter, ModelUpdate};
      with its covariance, commanded joints and the signals at its time (temperatures, air, time since power-on...).\n\
      A signal a declared term needs that the bag lacks is an error naming the topic;\n\
   3. fits: registers the tracker if the points are in its frame, then least squares weighted by each point's\n\
-     covariance with a robust loss (--loss; outliers are down-weighted, counted and named), bounded by each\n\
-     parameter's plausible range; parameters the measurements cannot separate are held at their start and said so;\n\
+     covariance with a robust loss (--loss; outliers are down-weighted, counted and named), bounded only where a\n\
+     value is physically impossible (a negative time constant; sign-free quantities such as a reversal, a\n\
+     squareness or a scale have no bound); a parameter that ends on a bound is said to (text, JSON `at_bound`),\n\
+     with no interior σ; parameters the measurements cannot separate are held at their start and said so;\n\
   4. writes MODEL.yaml: your file with the fitted values in place (your units, comments and order kept), an\n\
      `uncertainty:` section (standard uncertainties, k = 1) and a `fit:` section; it reads back in `metrocell sim`,\n\
      `calibrate`, `diagnose` and `compensate`;\n\

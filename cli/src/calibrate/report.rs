@@ -82,7 +82,11 @@ pub fn write(dir: &Path, a: &CalibrateArgs, model: &CellModel, fm: &ForwardModel
     // parameters and identifiability
     let mut t = Table::new(&["parameter", "value ± u (k = 1)", "status"]);
     for p in &f.parameters {
-        let status = if p.free {
+        let status = if let Some(side) = p.at_bound {
+            format!("fitted, ended on the {} bound of its possible range: the data want a value beyond it (no interior uncertainty)", side.name())
+        } else if p.free && !(p.value >= p.usual.0 && p.value <= p.usual.1) {
+            format!("fitted, outside the usual range {} … {}", value_with_sigma(p.usual.0, None, p.unit), value_with_sigma(p.usual.1, None, p.unit))
+        } else if p.free {
             "fitted".to_string()
         } else if let Some(h) = f.held.iter().find(|h| h.name == p.name) {
             format!("held at its start: {}", h.combination)

@@ -63,6 +63,9 @@ pub struct NotTried {
 /// metric ones (the periodogram of the residuals adds its own peak).
 pub const COMMON_LEADS_MM: [f64; 14] = [2.0, 2.5, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 16.0, 20.0, 25.0, 32.0, 40.0, 50.0];
 
+/// Shortest time span of the readings over which an instrument's drift is tried (s).
+pub const MIN_DRIFT_SPAN_S: f64 = 600.0;
+
 /// Time constants tried for a structure's lag behind its sensor and for a tracker's warm-up (s).
 pub const LAG_GRID_S: [f64; 8] = [120.0, 300.0, 600.0, 1200.0, 2400.0, 4800.0, 9600.0, 19200.0];
 pub const WARMUP_GRID_S: [f64; 9] = [300.0, 600.0, 1200.0, 1800.0, 2700.0, 3600.0, 5400.0, 7200.0, 10800.0];
@@ -333,6 +336,21 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
                 out.extend(family(variants, TermId::TrackerWarmup, Placement::Instrument));
             }
             None => skip("tracker_warmup", "no time since power-on in the records (the tracker's power-on time: /tracker/power_on, or an instrument_on_time column)".into()),
+        }
+    }
+    // the instrument's pose drifting in time (a stand sinking, a head turning): low orders only,
+    // so a drift that cycles stays for the empirical corrections to show
+    if !declared.has(TermId::InstrumentDrift) && inventory.point_readings {
+        match inventory.time_span {
+            Some((lo, hi)) if hi - lo >= MIN_DRIFT_SPAN_S => {
+                let span = list(vec![num(lo), num(hi)]);
+                let variants = [(1, false, "linear, translation"), (1, true, "linear, translation and rotation"), (2, false, "quadratic, translation"), (2, true, "quadratic, translation and rotation")]
+                    .into_iter()
+                    .map(|(order, rotation, name)| linear_variant(name, TermId::InstrumentDrift, vec![("order", num(order as f64)), ("span", span.clone()), ("rotation", ConfigValue::Bool(rotation))]))
+                    .collect();
+                out.extend(family(variants, TermId::InstrumentDrift, Placement::Instrument));
+            }
+            _ => skip("instrument_drift", format!("the readings span less than {:.0} min (or carry no time): a drift of the instrument needs readings spread over time", MIN_DRIFT_SPAN_S / 60.0)),
         }
     }
     // the touch probe's pretravel: a constant mean, the lobing of a kinematic probe's

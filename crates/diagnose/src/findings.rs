@@ -43,6 +43,10 @@ pub struct Inputs<'a> {
     pub found: &'a [FoundTerm],
     pub located_before: &'a [Located],
     pub samples_before: &'a [ResidualSample],
+    /// Each added term's (label, significance of its main parameters in σ).
+    pub significance: &'a [(String, f64)],
+    /// The alternatives the selection could not tell from each chosen label.
+    pub alternatives: &'a BTreeMap<String, Vec<Alternative>>,
 }
 
 pub struct Built {
@@ -94,7 +98,7 @@ fn without(inputs: &Inputs, label: &str) -> Vec<f64> {
     let specs: Vec<_> = inputs.model.machine_terms.param_specs().into_iter().chain(inputs.model.instrument_terms.param_specs()).collect();
     let mut x = inputs.x.to_vec();
     for (k, n) in inputs.names.iter().enumerate() {
-        if n.starts_with(&format!("{label}.")) && specs[k].min <= 0.0 && specs[k].max >= 0.0 {
+        if n.starts_with(&format!("{label}.")) && specs[k].usual.contains(0.0) && specs[k].possible.contains(0.0) {
             x[k] = 0.0;
         }
     }
@@ -264,8 +268,21 @@ pub fn build(inputs: &Inputs) -> Result<Built, PhysicsError> {
             axis_name(main)
         );
         let location = Where { channels: channels.into_iter().collect(), axis: axis_name(main).into(), description, located: accounted(inputs.located_before, inputs.samples_before, &c_wp) };
-        let statement = statement(f, &params, &c_wp, main);
-        let finding = Finding { term: f.id.as_str().into(), label: f.label.clone(), variant: f.variant.clone(), parameters, location, evidence, statement, effect_rms_m: effect_rms };
+        let unusual = unusual_values(inputs, &f.label);
+        let alternatives: Vec<Alternative> = inputs.alternatives.get(&f.label).cloned().unwrap_or_default().into_iter().filter(|a| !inputs.found.iter().any(|g| g.label == a.label)).collect();
+        let mut statement = statement(f, &params, &c_wp, main);
+        if !unusual.is_empty() {
+            statement.push_str(&format!(" — unusual: {}", unusual.join("; ")));
+        }
+        if !alternatives.is_empty() {
+            statement.push_str(&format!(
+                " — this recording cannot tell it from {} ({})",
+                alternatives.iter().map(|a| a.label.as_str()).collect::<Vec<_>>().join(", "),
+                alternatives.iter().map(|a| a.separated_by.as_str()).collect::<BTreeSet<_>>().into_iter().collect::<Vec<_>>().join("; ")
+            ));
+        }
+        let significance_sigma = inputs.significance.iter().find(|(l, _)| *l == f.label).map(|s| s.1).unwrap_or(f64::NAN);
+        let finding = Finding { term: f.id.as_str().into(), label: f.label.clone(), variant: f.variant.clone(), parameters, location, evidence, statement, effect_rms_m: effect_rms, significance_sigma, unusual, alternatives };
         out.push((effect_rms, finding, (signal, residual, fitted)));
     }
     out.sort_by(|a, b| b.0.total_cmp(&a.0));
@@ -402,6 +419,7 @@ fn statement(f: &FoundTerm, params: &[(String, f64, Option<f64>, String)], c_wp:
             format!("the measurements {} the machine positions by {} ms: the error grows with feed rate ({} µm at 100 mm/s)", if dt >= 0.0 { "lag" } else { "lead" }, pm(dt.abs(), s, 1e3, 1), um(dt.abs() * 0.1))
         }
         TermId::ToolOffset => format!("the tool offset is off by ({})", list()),
+        TermId::InstrumentDrift => drift_statement(params, c_wp, &f.variant),
         TermId::Compliance => format!("the structure deflects under load as {} extends: up to {} µm ({})", upper(&axis), um(peak), list()),
         TermId::RotaryAxisLocation => {
             let significant: Vec<String> = params.iter().filter(|(_, v, s, _)| s.is_some_and(|s| v.abs() > 2.0 * s)).map(|(n, v, s, u)| format!("{n} = {}{}", pm(*v, *s, 1e6, 1), if u == "m" { " µm" } else { " µrad" })).collect();
@@ -422,18 +440,50 @@ fn statement(f: &FoundTerm, params: &[(String, f64, Option<f64>, String)], c_wp:
     }
 }
 
+/// The instrument's drift in words: how far its origin moved from the recording's start to its
+/// end (a Legendre series changes by 2·c over the span for odd orders, 0 for even), and the
+/// largest effect on the points.
+fn drift_statement(params: &[(String, f64, Option<f64>, String)], c_wp: &[Vector3<f64>], variant: &str) -> String {
+    let total = |axis: &str| -> (f64, f64) {
+        let (mut v, mut s2) = (0.0, 0.0);
+        for (n, x, s, _) in params {
+            if let Some(order) = n.strip_prefix(axis).and_then(|o| o.parse::<usize>().ok()) {
+                if order % 2 == 1 {
+                    v += 2.0 * x;
+                    s2 += (2.0 * s.unwrap_or(0.0)).powi(2);
+                }
+            }
+        }
+        (v, s2.sqrt())
+    };
+    let moves: Vec<String> = ["dx", "dy", "dz"].iter().map(|a| {
+        let (v, s) = total(a);
+        format!("{} {} µm", &a[1..], pm(v, Some(s).filter(|s| *s > 0.0), 1e6, 1))
+    }).collect();
+    let turns: Vec<String> = ["rx", "ry", "rz"].iter().filter(|a| params.iter().any(|p| p.0.starts_with(*a))).map(|a| {
+        let (v, s) = total(a);
+        format!("{} {} µrad", &a[1..], pm(v, Some(s).filter(|s| *s > 0.0), 1e6, 1))
+    }).collect();
+    let peak = c_wp.iter().map(|c| c.norm()).fold(0.0, f64::max);
+    format!(
+        "the instrument moved during the recording ({variant}): its origin by {} from start to end{}; up to {} µm on the measured points",
+        moves.join(", "),
+        if turns.is_empty() { String::new() } else { format!(", turning by {}", turns.join(", ")) },
+        um(peak)
+    )
+}
+
 /// Structures no catalog term explains: the empirical corrections chosen, and localisation
 /// findings left in the final residuals.
-pub fn unexplained(empirical: &[(EmpiricalBasis, Vec<f64>, Vec<f64>)], view: &crate::residual_view::ResidualView, after: &[Vector3<f64>], located_after: &[Located], records: &[MeasurementRecord]) -> Vec<Unexplained> {
+/// `empirical`: each correction's basis, coefficients, their σ, and its net effect on each record
+/// along its axis (what the model's own parameters take of it projected out: the size a user
+/// sees on the recorded points, never a coefficient).
+pub fn unexplained(empirical: &[(EmpiricalBasis, Vec<f64>, Vec<f64>, Vec<f64>)], view: &crate::residual_view::ResidualView, located_after: &[Located], records: &[MeasurementRecord]) -> Vec<Unexplained> {
     let n = view.len();
     let t0 = view.time.iter().cloned().fold(f64::INFINITY, f64::min);
     let mut out = Vec::new();
-    for (basis, coefficients, sigmas) in empirical {
-        // the correction's varying part: its mean is a constant shift the instrument's position
-        // takes as well, so only the variation about it is a structure
-        let raw: Vec<f64> = (0..n).map(|i| basis.value(coefficients, view.time[i], &view.position[i])).collect();
-        let mean = raw.iter().sum::<f64>() / n.max(1) as f64;
-        let values: Vec<f64> = raw.iter().map(|v| v - mean).collect();
+    for (basis, coefficients, sigmas, net) in empirical {
+        let values: Vec<f64> = net.clone();
         let peak = values.iter().map(|v| v.abs()).fold(0.0, f64::max);
         let rms = (values.iter().map(|v| v * v).sum::<f64>() / (3 * n).max(1) as f64).sqrt();
         let axis = axis_name(basis.axis);
@@ -460,7 +510,6 @@ pub fn unexplained(empirical: &[(EmpiricalBasis, Vec<f64>, Vec<f64>)], view: &cr
         out.push(Unexplained { location: Where { channels: channels.into_iter().collect(), axis: axis.into(), description, located: Vec::new() }, correction: Some(correction), statement });
     }
     for f in located_after.iter().take(5) {
-        let _ = after;
         out.push(Unexplained {
             location: Where { channels: vec![f.channel.clone()], axis: axis_name(f.axis).into(), description: f.describe(), located: vec![f.describe()] },
             correction: None,
@@ -533,4 +582,81 @@ pub fn summary(findings: &[Finding], unexplained: &[Unexplained], before: &FitFi
         if explained { "what remains is consistent with noise." } else { "what remains is not all explained by catalog physics." }
     ));
     s
+}
+
+/// The parameters of `label` outside their usual range, each with what that most likely means.
+fn unusual_values(inputs: &Inputs, label: &str) -> Vec<String> {
+    let specs: Vec<_> = inputs.model.machine_terms.param_specs().into_iter().chain(inputs.model.instrument_terms.param_specs()).collect();
+    let mut out = Vec::new();
+    for (k, name) in inputs.names.iter().enumerate() {
+        let Some(param) = name.strip_prefix(&format!("{label}.")) else { continue };
+        if !inputs.free[k] {
+            continue;
+        }
+        let spec = &specs[k];
+        let v = inputs.x[k];
+        if spec.usual.contains(v) {
+            continue;
+        }
+        let (shown, unit) = display(spec.unit, v);
+        let (lo, _) = display(spec.unit, spec.usual.lo);
+        let (hi, _) = display(spec.unit, spec.usual.hi);
+        let meaning = if spec.unusual_means.is_empty() { String::new() } else { format!(": {}", spec.unusual_means) };
+        out.push(format!("{param} = {shown:.3} {unit} is outside the usual {lo:.3} … {hi:.3} {unit}{meaning}"));
+    }
+    out
+}
+
+/// A value in the unit metrologists read it in.
+fn display(unit: &str, v: f64) -> (f64, &'static str) {
+    match unit {
+        "m" => (v * 1e6, "µm"),
+        "rad" => (v * 1e6, "µrad"),
+        "1/K" => (v * 1e6, "µm/m/K"),
+        "m/K" => (v * 1e6, "µm/K"),
+        "s" => (v / 60.0, "min"),
+        "K" => (v, "K"),
+        "Pa" => (v / 100.0, "hPa"),
+        _ => (v, ""),
+    }
+}
+
+/// What measurement would tell two confounded terms apart.
+pub fn separated_by(a: &str, b: &str) -> String {
+    let pair = |x: &str, y: &str| (a == x && b == y) || (a == y && b == x);
+    let either = |x: &str| a == x || b == x;
+    if either("instrument_drift") {
+        "re-measure a fixed reference nest (on the floor, or a point the machine does not move) every 30 min through the shift: the instrument's drift moves the nest, the machine's physics does not".into()
+    } else if pair("tracker_warmup", "refraction") || either("refraction") {
+        "measure the same points from a second instrument position, or log the air along the beam: refraction scales every range, a warm-up adds the same length to each".into()
+    } else if either("tracker_warmup") {
+        "let the tracker warm up (or record its power-on time and measure a reference nest through the first hours): its drift follows the time since power-on, the machine's physics does not".into()
+    } else if either("thermal_growth") || either("thermal_scale") {
+        "repeat the measurement at another temperature, or with the temperatures changing differently in time: a thermal term follows its sensor".into()
+    } else if either("backlash") || either("pitch_cyclic") || either("positioning") || either("straightness") || either("squareness") || either("angular") {
+        "measure more positions along the axis, from both directions (an ISO 230-2 bidirectional run over irregular positions)".into()
+    } else {
+        "a measurement where their effects differ (other positions, times or conditions)".into()
+    }
+}
+
+/// The alternatives each chosen family was not told apart from, per label.
+pub fn alternatives_of(selection: &FamilySelection, families: &[Family]) -> BTreeMap<String, Vec<Alternative>> {
+    let mut out: BTreeMap<String, Vec<Alternative>> = BTreeMap::new();
+    for step in &selection.steps {
+        let Some(c) = step.chosen else { continue };
+        let chosen = &families[c];
+        for a in &step.alternatives {
+            let f = &families[a.family];
+            out.entry(chosen.label.clone()).or_default().push(Alternative {
+                term: f.term.clone(),
+                label: f.label.clone(),
+                variant: f.variants.get(a.variant).map(|v| v.name.clone()).unwrap_or_default(),
+                delta_bic: a.delta_bic,
+                correlation: a.correlation,
+                separated_by: separated_by(&chosen.term, &f.term),
+            });
+        }
+    }
+    out
 }

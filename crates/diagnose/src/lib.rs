@@ -15,20 +15,26 @@
 //!   what can be tried and its Jacobian columns;
 //! * [`folds`], [`blocked_least_squares`], [`selection`] — held-out blocks and the selection;
 //! * [`serial_correlation`] — the found terms' σ with residuals correlated in time or by place;
-//! * [`pipeline`], [`findings`], [`report`], [`html_report`], [`residual_table`] — the whole run
-//!   and its outputs.
+//! * [`pipeline`] and its stages (`declared_stage`, `candidate_stage`, `augmented_stage`,
+//!   `judgement`), [`all_at_once`] (the baseline), [`findings`], [`report`], [`html_report`],
+//!   [`residual_table`] — the whole run and its outputs.
 //!
 //! Conventions: residual = measured − predicted (m), in the records' frame for fits and rotated
 //! into the workpiece frame for localisation and reports; σ is the measurement's stated standard
 //! uncertainty. SI throughout; reports show µm, mm and minutes.
 
+pub mod all_at_once;
+mod augmented_stage;
 pub mod blocked_least_squares;
 pub mod candidate_columns;
+mod candidate_stage;
 pub mod candidates;
+mod declared_stage;
 pub mod empirical;
 pub mod findings;
 pub mod folds;
 pub mod html_report;
+mod judgement;
 pub mod locate;
 pub mod multiple_testing;
 pub mod noise_tests;

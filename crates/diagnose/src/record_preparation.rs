@@ -64,6 +64,7 @@ pub fn prepare(records: &[MeasurementRecord], average_repeats: bool, max_gap: f6
     let good: Vec<&MeasurementRecord> = good.iter().collect();
     if !average_repeats {
         out.records = good.into_iter().cloned().collect();
+        with_times(&mut out.records);
         return out;
     }
     let (mut chi2, mut dof) = (0.0, 0usize);
@@ -108,5 +109,16 @@ pub fn prepare(records: &[MeasurementRecord], average_repeats: bool, max_gap: f6
     if dof >= 3 {
         out.repeatability_scale = Some(((chi2 / dof as f64).sqrt(), dof));
     }
+    with_times(&mut out.records);
     out
+}
+
+/// Every record's signals carry its time (terms that drift in time read it; a record built by
+/// hand may give it only in `MeasurementRecord::time`).
+fn with_times(records: &mut [MeasurementRecord]) {
+    for r in records {
+        if r.signals.time.is_none() {
+            r.signals.time = Some(r.time);
+        }
+    }
 }

@@ -93,6 +93,29 @@ pub struct Finding {
     pub statement: String,
     /// RMS of its effect on the records, m.
     pub effect_rms_m: f64,
+    /// Its main parameters' joint distance from zero after the final fit, σ (≥ 3 for a finding).
+    pub significance_sigma: f64,
+    /// Parameters outside their usual range, each with what that most likely means in practice
+    /// (empty: every value usual). Unusual values compete like any other; they are only said.
+    pub unusual: Vec<String>,
+    /// Other catalog terms this recording cannot tell from this one (BIC within 2, or fitted
+    /// effects correlated beyond 0.95), with what measurement would separate them.
+    pub alternatives: Vec<Alternative>,
+}
+
+/// A candidate the recording cannot tell from a finding.
+#[derive(Debug, Clone, Serialize, PartialEq)]
+pub struct Alternative {
+    /// Catalog id and instance label.
+    pub term: String,
+    pub label: String,
+    pub variant: String,
+    /// Its BIC minus the finding's, when both were tried in the same step.
+    pub delta_bic: f64,
+    /// Correlation of its fitted effect with the finding's.
+    pub correlation: f64,
+    /// What would tell them apart.
+    pub separated_by: String,
 }
 
 /// A structure no catalog term explains.
@@ -138,7 +161,14 @@ pub struct StepScore {
     pub heldout_gain: f64,
     pub p_adjusted: f64,
     pub delta_bic: f64,
+    /// Every parameter inside its possible range (physics allows the values).
     pub plausible: bool,
+    /// Every parameter inside its usual range (for the words only; never decides).
+    pub usual: bool,
+    /// The main parameters' distance from zero, σ (joint Wald, as a normal score).
+    pub significance_sigma: f64,
+    /// The data support it (held-out gain, F test, BIC, ≥ 3σ), whatever its values.
+    pub supported: bool,
     pub separable: bool,
     pub accepted: bool,
 }

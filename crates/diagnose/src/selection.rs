@@ -18,9 +18,17 @@
 //! * its parameters are significant: an F test of the SSR it explains against the residual
 //!   variance the data show (so stated uncertainties that are off by a factor neither invent nor
 //!   hide effects), Bonferroni-corrected over every variant tried in the step;
-//! * every parameter lies in the term's documented plausible range;
+//! * its main parameters (the effect's, not a nuisance such as a warm-up's constant offset) are
+//!   at least 3σ from zero (jointly, as the equivalent normal score of their Wald χ²);
+//! * every parameter lies in the term's *possible* range (physics: no negative time constant);
+//!   a value outside the *usual* range competes like any other and is only said so in words;
 //! * the Bayesian information criterion n·ln(SSR/n) + k·ln n falls, with k counting the
 //!   parameters a variant fixed by search (a lag τ, a screw lead) as well as the linear ones.
+//!
+//! A candidate the data support (held-out gain, F test, BIC, significance) but whose values are
+//! impossible is *refused*; when a refused candidate is better (lower BIC by more than
+//! [`TIE_BIC`]) than the best acceptable one, nothing is named in its place: the step stops and
+//! the refusal is reported, so a worse physical name never stands in for a better impossible one.
 //!
 //! Among the acceptable, each family keeps its variant of lowest BIC and the family of lowest BIC
 //! wins, physical terms first: an empirical correction wins only when its BIC is lower than the
@@ -47,11 +55,15 @@ pub struct Candidate {
     pub columns: DMatrix<f64>,
     pub parameter_names: Vec<String>,
     pub units: Vec<String>,
-    /// Plausible range of each parameter (the term's documented range), SI.
+    /// Possible range of each parameter (the term's documented physical limits), SI.
     pub ranges: Vec<(f64, f64)>,
     /// Parameter values the columns were taken at (0 for a term the model lacks).
     pub base_values: Vec<f64>,
 }
+
+/// The parameters of a variant that carry its effect: `main` (indices into its columns; empty
+/// = all) jointly at least [`MIN_SIGNIFICANCE_SIGMA`] from zero.
+pub const MIN_SIGNIFICANCE_SIGMA: f64 = 3.0;
 
 /// One variant of a family: its whitened columns and what they mean.
 #[derive(Debug, Clone)]
@@ -62,7 +74,13 @@ pub struct Variant {
     pub columns: DMatrix<f64>,
     pub parameter_names: Vec<String>,
     pub units: Vec<String>,
+    /// Possible range of each parameter (outside it a value is impossible), SI.
     pub ranges: Vec<(f64, f64)>,
+    /// Usual range of each parameter (for the words only), SI.
+    pub usual: Vec<(f64, f64)>,
+    /// The columns whose parameters carry the effect (a warm-up's B, not its constant offset A);
+    /// empty: all. Their joint significance decides whether the variant can be named.
+    pub main: Vec<usize>,
     pub base_values: Vec<f64>,
     /// Parameters fixed by a search over values (counted in the BIC).
     pub profiled: usize,
@@ -91,7 +109,7 @@ pub struct Family {
 /// apart (BIC within [`TIE_BIC`]), the conventional, simpler name — a linear x error along z is
 /// reported as squareness, not as a first-order straightness or an angular error.
 pub fn preference(term: &str) -> usize {
-    const ORDER: [&str; 17] = ["squareness", "positioning", "backlash", "pitch_cyclic", "thermal_scale", "thermal_growth", "tracker_warmup", "refraction", "time_offset", "tool_offset", "straightness", "compliance", "workpiece_expansion", "frame_misalignment", "rotary_axis_location", "angular", "probe_pretravel"];
+    const ORDER: [&str; 18] = ["squareness", "positioning", "backlash", "pitch_cyclic", "thermal_scale", "thermal_growth", "tracker_warmup", "refraction", "instrument_drift", "time_offset", "tool_offset", "straightness", "compliance", "workpiece_expansion", "frame_misalignment", "rotary_axis_location", "angular", "probe_pretravel"];
     ORDER.iter().position(|t| *t == term).unwrap_or(ORDER.len())
 }
 
@@ -145,7 +163,15 @@ pub struct CandidateScore {
     /// Relative fall of the held-out error on the schemes that judge it.
     pub heldout_gain: f64,
     pub wald_p_adjusted: f64,
+    /// Every parameter inside its possible range (named `plausible` in the JSON contract).
     pub plausible: bool,
+    /// Every parameter inside its usual range.
+    pub usual: bool,
+    /// The main parameters' distance from zero in σ (the equivalent normal score of their joint
+    /// Wald χ²).
+    pub significance_sigma: f64,
+    /// The data support it (held-out gain, F test, BIC, significance), whatever its values.
+    pub supported: bool,
     pub separable: bool,
     pub delta_bic: f64,
     pub values: Vec<f64>,
@@ -161,7 +187,30 @@ pub struct SelectionStep {
     pub scores: Vec<CandidateScore>,
     /// Index into the families (candidates) of the term added, if any.
     pub chosen: Option<usize>,
+    /// A family the data support better than anything acceptable but whose values are
+    /// impossible: the step named nothing in its place (index into the families).
+    pub refused: Option<usize>,
+    /// Other acceptable candidates this recording cannot tell from the one chosen.
+    pub alternatives: Vec<StepAlternative>,
 }
+
+/// A candidate the recording cannot tell from the one a step chose: its BIC within
+/// [`TIE_BIC`] of the chosen's, or its fitted effect correlated with the chosen's beyond
+/// [`CONFOUNDED_CORRELATION`].
+#[derive(Debug, Clone, PartialEq)]
+pub struct StepAlternative {
+    /// Index into the families, and of its variant.
+    pub family: usize,
+    pub variant: usize,
+    /// Its BIC minus the chosen's (≥ 0 up to the tie rule).
+    pub delta_bic: f64,
+    /// Correlation of its fitted effect with the chosen's over the residual rows.
+    pub correlation: f64,
+}
+
+/// Correlation of two candidates' fitted effects above which the recording cannot tell them
+/// apart, whatever their BIC difference says about this particular noise draw.
+pub const CONFOUNDED_CORRELATION: f64 = 0.95;
 
 /// A chosen term with its fitted parameters.
 #[derive(Debug, Clone, PartialEq)]
@@ -228,7 +277,7 @@ pub fn select(data: &SelectionData, candidates: &[Candidate], options: &Selectio
             label: c.label.clone(),
             term: c.term.clone(),
             physical: c.physical,
-            variants: vec![Variant { name: String::new(), columns: whiten(&c.columns), parameter_names: c.parameter_names.clone(), units: c.units.clone(), ranges: c.ranges.clone(), base_values: c.base_values.clone(), profiled: 0, search_multiplicity: 1.0 }],
+            variants: vec![Variant { name: String::new(), columns: whiten(&c.columns), parameter_names: c.parameter_names.clone(), units: c.units.clone(), ranges: c.ranges.clone(), usual: c.ranges.clone(), main: Vec::new(), base_values: c.base_values.clone(), profiled: 0, search_multiplicity: 1.0 }],
             judged_by: None,
         })
         .collect();
@@ -257,6 +306,27 @@ struct Scored {
     variant: usize,
     bic: f64,
     score: CandidateScore,
+    /// The candidate's fitted effect over the (arranged) whitened rows.
+    effect: DVector<f64>,
+}
+
+fn correlation(a: &DVector<f64>, b: &DVector<f64>) -> f64 {
+    let n = a.len() as f64;
+    if n < 2.0 || a.len() != b.len() {
+        return 0.0;
+    }
+    let (ma, mb) = (a.mean(), b.mean());
+    let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
+    for (x, y) in a.iter().zip(b.iter()) {
+        sab += (x - ma) * (y - mb);
+        saa += (x - ma) * (x - ma);
+        sbb += (y - mb) * (y - mb);
+    }
+    if saa > 0.0 && sbb > 0.0 {
+        sab / (saa * sbb).sqrt()
+    } else {
+        0.0
+    }
 }
 
 /// F test of the SSR a block of k columns explains, against the residual variance with it.
@@ -266,6 +336,31 @@ fn f_test(explained: f64, k: usize, ssr: f64, dof: f64) -> f64 {
     }
     let f = (explained / k as f64) / (ssr / dof);
     FisherSnedecor::new(k as f64, dof).map(|d| d.sf(f)).unwrap_or(1.0)
+}
+
+/// The joint distance from zero of the parameters `main` (indices into `values`; empty: all), in
+/// σ: the normal score with the same tail probability as their Wald χ² (|v|/σ for one).
+pub fn significance_sigma(values: &[f64], covariance: &DMatrix<f64>, main: &[usize]) -> f64 {
+    let idx: Vec<usize> = if main.is_empty() { (0..values.len()).collect() } else { main.to_vec() };
+    if idx.is_empty() {
+        return 0.0;
+    }
+    let v = DVector::from_iterator(idx.len(), idx.iter().map(|&i| values[i]));
+    let c = DMatrix::from_fn(idx.len(), idx.len(), |a, b| covariance[(idx[a], idx[b])]);
+    let (inv, rank) = crate::blocked_least_squares::pseudo_inverse(&c);
+    if rank == 0 {
+        return 0.0;
+    }
+    let chi2 = (v.transpose() * inv * &v)[0].max(0.0);
+    if rank == 1 {
+        return chi2.sqrt();
+    }
+    use statrs::distribution::{ChiSquared, Normal};
+    let p = ChiSquared::new(rank as f64).map(|d| d.sf(chi2)).unwrap_or(1.0);
+    if p <= 0.0 {
+        return chi2.sqrt();
+    }
+    Normal::new(0.0, 1.0).map(|n| n.inverse_cdf(1.0 - p / 2.0)).unwrap_or(0.0).max(0.0)
 }
 
 fn bic(n: f64, ssr: f64, k: f64) -> f64 {
@@ -324,18 +419,25 @@ pub fn select_families(data: &WhitenedData, families: &[Family], options: &Selec
                 let p = if c.separable { f_test(c.explained, k, c.ssr, dof) } else { 1.0 };
                 let p_adjusted = (p * tried as f64 * var.search_multiplicity.max(1.0)).min(1.0);
                 let plausible = values.iter().zip(&var.ranges).all(|(v, (lo, hi))| *v >= *lo && *v <= *hi);
+                let usual = values.iter().zip(&var.usual).all(|(v, (lo, hi))| *v >= *lo && *v <= *hi);
+                let significance = significance_sigma(&c.values.iter().copied().collect::<Vec<_>>(), &(&c.unscaled_covariance * sigma2), &var.main);
                 let bic_with = bic(nf, c.ssr, (c.rank + profiled_of(&chosen) + var.profiled) as f64) + 2.0 * var.search_multiplicity.max(1.0).ln();
                 let delta_bic = bic_with - current_bic;
                 let (cv_with, cv_without) = (judged(&fam.judged_by, &c.heldout_by_scheme), judged(&fam.judged_by, &current_by_scheme));
                 let heldout_gain = if cv_without > 0.0 { 1.0 - cv_with / cv_without } else { 0.0 };
-                let accepted = c.separable && plausible && p_adjusted <= options.alpha && delta_bic < 0.0 && heldout_gain >= options.min_cv_gain;
-                let score = CandidateScore { label: fam.label.clone(), variant: var.name.clone(), heldout_ssr: c.heldout_ssr, heldout_gain, wald_p_adjusted: p_adjusted, plausible, separable: c.separable, delta_bic, values, sigmas, accepted };
+                let supported = c.separable && p_adjusted <= options.alpha && delta_bic < 0.0 && heldout_gain >= options.min_cv_gain && significance >= MIN_SIGNIFICANCE_SIGMA;
+                let accepted = supported && plausible;
+                let score = CandidateScore { label: fam.label.clone(), variant: var.name.clone(), heldout_ssr: c.heldout_ssr, heldout_gain, wald_p_adjusted: p_adjusted, plausible, usual, significance_sigma: significance, supported, separable: c.separable, delta_bic, values, sigmas, accepted };
+                // a family's representative: its acceptable variant of lowest BIC, else its
+                // supported (refused) one, else its lowest BIC
+                let rank = |s: &CandidateScore| (s.accepted, s.supported);
                 let better = match &best {
                     None => true,
-                    Some(b) => (accepted && !b.score.accepted) || (accepted == b.score.accepted && bic_with < b.bic),
+                    Some(b) => rank(&score) > rank(&b.score) || (rank(&score) == rank(&b.score) && bic_with < b.bic),
                 };
                 if better {
-                    best = Some(Scored { family: fi, variant: vi, bic: bic_with, score });
+                    let effect = &arranged[fi][vi] * DVector::from_iterator(k, (0..k).map(|j| c.values[j]));
+                    best = Some(Scored { family: fi, variant: vi, bic: bic_with, score, effect });
                 }
             }
             if let Some(b) = best {
@@ -355,9 +457,30 @@ pub fn select_families(data: &WhitenedData, families: &[Family], options: &Selec
             (Some(p), None) => Some(p),
             (None, Some(e)) => Some(e),
             (None, None) => None,
-        }
-        .map(|s| (s.family, s.variant));
-        steps.push(SelectionStep { heldout_ssr_before: current_cv, scores: per_family.into_iter().map(|s| s.score).collect(), chosen: pick.map(|p| p.0) });
+        };
+        // a physical candidate the data support better than the pick, refused for impossible
+        // values: nothing is named in its place
+        let refused = per_family
+            .iter()
+            .filter(|s| s.score.supported && !s.score.accepted && families[s.family].physical)
+            .min_by(|a, b| a.bic.total_cmp(&b.bic))
+            .filter(|r| pick.is_none_or(|p| r.bic < p.bic - TIE_BIC));
+        let refused_family = refused.map(|r| r.family);
+        let pick = if refused.is_some() { None } else { pick };
+        let alternatives: Vec<StepAlternative> = match pick {
+            None => Vec::new(),
+            Some(p) => per_family
+                .iter()
+                .filter(|s| s.family != p.family && s.score.accepted && families[s.family].physical == families[p.family].physical)
+                .filter_map(|s| {
+                    let correlation = correlation(&s.effect, &p.effect);
+                    let delta_bic = s.bic - p.bic;
+                    (delta_bic < TIE_BIC || correlation.abs() > CONFOUNDED_CORRELATION).then_some(StepAlternative { family: s.family, variant: s.variant, delta_bic, correlation })
+                })
+                .collect(),
+        };
+        let pick = pick.map(|s| (s.family, s.variant));
+        steps.push(SelectionStep { heldout_ssr_before: current_cv, scores: per_family.into_iter().map(|s| s.score).collect(), chosen: pick.map(|p| p.0), refused: refused_family, alternatives });
         match pick {
             Some(p) => {
                 chosen.push(p);

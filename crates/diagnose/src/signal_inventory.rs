@@ -31,6 +31,10 @@ pub struct SignalInventory {
     pub rotary: [bool; 3],
     /// Some records are touch-probe hits (their pretravel is a candidate).
     pub probe_hits: bool,
+    /// Every record has a time, and they span this interval (s, the recording's clock).
+    pub time_span: Option<(f64, f64)>,
+    /// Some records are instrument readings of points (a tracker's): an instrument that can drift.
+    pub point_readings: bool,
 }
 
 impl SignalInventory {
@@ -67,6 +71,13 @@ impl SignalInventory {
             inv.power_on = Some((lo, hi));
         }
         inv.probe_hits = records.iter().any(|r| matches!(r.kind, RecordKind::ProbeHit { .. }));
+        inv.point_readings = records.iter().any(|r| matches!(r.kind, RecordKind::Point));
+        if all(&|r| r.signals.time.is_some_and(f64::is_finite)) {
+            let (lo, hi) = records.iter().filter_map(|r| r.signals.time).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| (a.min(t), b.max(t)));
+            if hi > lo {
+                inv.time_span = Some((lo, hi));
+            }
+        }
         inv.load = all(&|r| r.signals.load_force.is_some()) && records.iter().any(|r| r.signals.load_force.is_some_and(|f| f.norm() > 0.0));
         inv
     }

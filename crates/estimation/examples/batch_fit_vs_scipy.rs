@@ -190,8 +190,9 @@ impl ScipySession {
 /// `OPENBLAS_NUM_THREADS` (and OpenMP's) set to `threads` when given.
 fn scipy_session(python: &str, threads: Option<&str>, problem: &PointResiduals, x0: &[f64], free: &[usize], specs: &[metrocell_physics::ParamSpec]) -> ScipySession {
     let rows = problem.residual_count();
-    let lower: Vec<f64> = free.iter().map(|&k| specs[k].min.min(x0[k])).collect();
-    let upper: Vec<f64> = free.iter().map(|&k| specs[k].max.max(x0[k])).collect();
+    // the possible range (JSON has no infinity: an unbounded side goes as null)
+    let lower: Vec<Option<f64>> = free.iter().map(|&k| Some(specs[k].possible.lo.min(x0[k])).filter(|v| v.is_finite())).collect();
+    let upper: Vec<Option<f64>> = free.iter().map(|&k| Some(specs[k].possible.hi.max(x0[k])).filter(|v| v.is_finite())).collect();
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/scipy_batch_fit.py");
     let mut command = Command::new(python);
     if let Some(t) = threads {

@@ -19,7 +19,9 @@ out = sys.stdout.buffer
 head = json.loads(inp.readline())
 n, m = head["n"], head["m"]
 x0 = np.array(head["x0"])
-lower, upper = np.array(head["lower"]), np.array(head["upper"])
+# null: that side of the parameter's possible range is unbounded
+lower = np.array([-np.inf if v is None else v for v in head["lower"]])
+upper = np.array([np.inf if v is None else v for v in head["upper"]])
 cache = {"x": None, "r": None, "j": None}
 wait = [0.0, 0]
 

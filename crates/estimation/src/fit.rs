@@ -120,8 +120,46 @@ pub struct ParameterEstimate {
     pub sigma: Option<f64>,
     pub unit: &'static str,
     pub free: bool,
-    /// Documented plausible range.
+    /// The physically possible range (the fit's bounds; ±∞ where the quantity has none).
     pub range: (f64, f64),
+    /// The usual range (what real machines show): for the words, never a limit.
+    pub usual: (f64, f64),
+    /// Set when the fit ended on a bound of the possible range: the data want a value beyond
+    /// it, and `sigma` is then no interior uncertainty (it describes the bounded solution).
+    pub at_bound: Option<BoundSide>,
+}
+
+/// Which bound of its possible range a parameter ended on.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum BoundSide {
+    Lower,
+    Upper,
+}
+
+impl BoundSide {
+    pub fn name(self) -> &'static str {
+        match self {
+            BoundSide::Lower => "lower",
+            BoundSide::Upper => "upper",
+        }
+    }
+}
+
+impl ParameterEstimate {
+    /// "`name` = v ± σ unit", or for a parameter at a bound "`name` = v unit (at its lower bound
+    /// of the possible range: the data want a smaller value; no interior σ)".
+    pub fn describe(&self) -> String {
+        match self.at_bound {
+            None => format!("{} = {}", self.name, crate::fit_summary::value_with_sigma(self.value, self.sigma, self.unit)),
+            Some(side) => format!(
+                "{} = {} — at the {} bound of its possible range: the data want a {} value, and no interior σ can be given",
+                self.name,
+                crate::fit_summary::value_with_sigma(self.value, None, self.unit),
+                side.name(),
+                if side == BoundSide::Lower { "smaller" } else { "larger" }
+            ),
+        }
+    }
 }
 
 /// The result of [`fit`].
@@ -159,6 +197,18 @@ pub struct Fit {
 impl Fit {
     pub fn parameter(&self, name: &str) -> Option<&ParameterEstimate> {
         self.parameters.iter().find(|p| p.name == name)
+    }
+}
+
+/// The bound a value sits on (within 1e-9 of the parameter's typical size), if any.
+fn bound_reached(value: f64, lower: f64, upper: f64, typical: f64) -> Option<BoundSide> {
+    let tol = 1e-9 * typical.max(value.abs());
+    if lower.is_finite() && value - lower <= tol {
+        Some(BoundSide::Lower)
+    } else if upper.is_finite() && upper - value <= tol {
+        Some(BoundSide::Upper)
+    } else {
+        None
     }
 }
 
@@ -259,9 +309,10 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
     let specs: Vec<_> = model.machine_terms.param_specs().into_iter().chain(model.instrument_terms.param_specs()).collect();
     let names = model.param_names();
     let labels: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
-    // bounds: the documented range, widened to include the start so a start outside it is legal
-    let lower: Vec<f64> = specs.iter().zip(&x0).map(|(s, v)| s.min.min(*v)).collect();
-    let upper: Vec<f64> = specs.iter().zip(&x0).map(|(s, v)| s.max.max(*v)).collect();
+    // bounds: the possible range (none for sign-free quantities), widened to include the start
+    // so a start outside it is legal
+    let lower: Vec<f64> = specs.iter().zip(&x0).map(|(s, v)| s.possible.lo.min(*v)).collect();
+    let upper: Vec<f64> = specs.iter().zip(&x0).map(|(s, v)| s.possible.hi.max(*v)).collect();
     let priors: Vec<Prior> = setup.priors.iter().enumerate().filter_map(|(index, p)| p.map(|p| Prior { index, value: p.value, sigma: p.sigma })).collect();
     let solver_options = |free: &[bool], loss: Loss| Options {
         loss,
@@ -363,7 +414,9 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
             sigma: if free[k] { sigmas.as_ref().map(|u| u[k]) } else { None },
             unit: s.unit,
             free: free[k],
-            range: (s.min, s.max),
+            range: (s.possible.lo, s.possible.hi),
+            usual: (s.usual.lo, s.usual.hi),
+            at_bound: if free[k] { bound_reached(solution.x[k], lower[k], upper[k], s.typical_scale()) } else { None },
         })
         .collect();
     let threshold = match options.loss {

@@ -65,14 +65,25 @@ pub fn summary_lines(fit: &Fit, records: &RecordSet) -> Vec<String> {
         fit.chi2_per_dof
     ));
     for p in &free {
-        lines.push(format!("  {} = {}", p.name, value_with_sigma(p.value, p.sigma, p.unit)));
+        lines.push(format!("  {}", p.describe()));
     }
-    if fit.held.is_empty() {
+    let bounded: Vec<&str> = free.iter().filter(|p| p.at_bound.is_some()).map(|p| p.name.as_str()).collect();
+    if fit.held.is_empty() && bounded.is_empty() {
         lines.push(format!("Every declared parameter is identifiable from these measurements (condition number {:.3e}).", fit.identifiability.condition_number));
+    } else if fit.held.is_empty() {
+        lines.push(format!(
+            "Every declared parameter is identifiable from these measurements (condition number {:.3e}), but {} ended on a bound of its possible range ({}): the data want a value the model calls impossible — check the term's sign convention and the recording, or free the bound if the physics allows it.",
+            fit.identifiability.condition_number,
+            if bounded.len() == 1 { "one" } else { "some" },
+            bounded.join(", ")
+        ));
     } else {
         lines.push(format!("{} declared parameters cannot be identified from these measurements and were held at their start values:", fit.held.len()));
         for h in &fit.held {
             lines.push(format!("  {}", h.combination));
+        }
+        if !bounded.is_empty() {
+            lines.push(format!("At a bound of the possible range (no interior σ): {}.", bounded.join(", ")));
         }
     }
     let t0 = records.records.iter().map(|r| r.time).fold(f64::INFINITY, f64::min);

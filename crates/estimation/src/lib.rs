@@ -54,7 +54,7 @@ pub mod signal_topics;
 pub mod uncertainty_budget;
 pub mod volumetric_monte_carlo;
 
-pub use fit::{fit, inseparable, rms, start_vector, Fit, FitError, FitOptions, HeldParameter, ParameterEstimate, RecordNote};
+pub use fit::{fit, inseparable, rms, start_vector, BoundSide, Fit, FitError, FitOptions, HeldParameter, ParameterEstimate, RecordNote};
 pub use record_stream::{declared_topics, RecordStream, StreamOutput};
 pub use records::{MeasurementRecord, RecordFrame, RecordKind, RecordSet, Rejected};
 pub use recordings::{records_from_bags, PointSource, RecordingError, RecordingOptions};

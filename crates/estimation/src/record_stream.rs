@@ -401,6 +401,7 @@ fn present(s: &Signals, kind: &SignalKind) -> bool {
         SignalKind::TimeSincePowerOn => s.time_since_power_on.is_some(),
         SignalKind::LoadForce => s.load_force.is_some(),
         SignalKind::RotaryPosition(a) => s.rotary_position[a.index()].is_some(),
+        SignalKind::Time => s.time.is_some(),
         k => k.is_computed_by_model(),
     }
 }

@@ -223,6 +223,7 @@ pub fn providers(kind: &SignalKind) -> String {
         SignalKind::TimeSincePowerOn => format!("record {POWER_ON_TOPIC} (sensor_msgs/TimeReference, time_ref = when the instrument was switched on; bag import: column instrument_on_time)"),
         SignalKind::LoadForce => format!("record {LOAD_TOPIC} (geometry_msgs/WrenchStamped, force in N, machine frame)"),
         SignalKind::RotaryPosition(a) => format!("record {COMMANDED_JOINTS_TOPIC} with joint `{}` (bag import: column joint.{})", a.name(), a.name()),
+        SignalKind::Time => "every record carries its time stamp".into(),
         SignalKind::TrackerRange | SignalKind::ImagePoint | SignalKind::MachinePoint | SignalKind::WorkpiecePoint | SignalKind::TargetPoint | SignalKind::CameraPoint | SignalKind::ProbeDirection => "it is computed by the model".into(),
     }
 }

@@ -124,7 +124,7 @@ impl RecursiveEstimator {
             match setup.priors[k] {
                 Some(p) => p.sigma * p.sigma,
                 None => {
-                    let half = 0.5 * (specs[k].max - specs[k].min);
+                    let half = 0.5 * specs[k].typical_scale();
                     half * half
                 }
             }

@@ -28,7 +28,7 @@ impl InstrumentKind {
     /// The kind an instrument term belongs to (None for machine terms).
     pub fn of(id: TermId) -> Option<Self> {
         match id {
-            TermId::TrackerPose | TermId::TrackerWarmup | TermId::Refraction | TermId::Turbulence => Some(Self::Tracker),
+            TermId::TrackerPose | TermId::TrackerWarmup | TermId::Refraction | TermId::Turbulence | TermId::InstrumentDrift => Some(Self::Tracker),
             TermId::ProbePretravel => Some(Self::Probe),
             TermId::CameraScale | TermId::LensDistortion => Some(Self::Camera),
             _ => None,
@@ -66,6 +66,8 @@ pub struct Instrument {
     pub(crate) pose: Option<usize>,
     pub(crate) warmup: Option<usize>,
     pub(crate) refraction: Option<usize>,
+    /// `instrument_drift`: the pose's change in time.
+    pub(crate) drift: Option<usize>,
     pub(crate) pretravel: Option<usize>,
     pub(crate) scale: Option<usize>,
     pub(crate) distortion: Option<usize>,
@@ -74,7 +76,7 @@ pub struct Instrument {
 
 impl Instrument {
     fn new(kind: InstrumentKind, name: Option<String>) -> Self {
-        Self { kind, name, pose: None, warmup: None, refraction: None, pretravel: None, scale: None, distortion: None, camera: None }
+        Self { kind, name, pose: None, warmup: None, refraction: None, drift: None, pretravel: None, scale: None, distortion: None, camera: None }
     }
     /// `tracker`, `tracker lt1`, … for messages.
     pub fn describe(&self) -> String {
@@ -97,7 +99,7 @@ pub(crate) fn group_instruments(first: usize, terms: &[ConfiguredTerm]) -> Resul
         let label = t.term.label();
         let kind = InstrumentKind::of(id).ok_or_else(|| PhysicsError::InvalidInput {
             what: format!("forward model, term `{label}`"),
-            reason: "is not an instrument term (tracker: tracker_pose, tracker_warmup, refraction, turbulence; probe: probe_pretravel; camera: camera_scale, lens_distortion)".into(),
+            reason: "is not an instrument term (tracker: tracker_pose, tracker_warmup, refraction, turbulence, instrument_drift; probe: probe_pretravel; camera: camera_scale, lens_distortion)".into(),
         })?;
         let name = t.term.instrument().map(str::to_string);
         let at = match out.iter().position(|i| i.kind == kind && i.name == name) {
@@ -112,6 +114,7 @@ pub(crate) fn group_instruments(first: usize, terms: &[ConfiguredTerm]) -> Resul
             TermId::TrackerPose => &mut inst.pose,
             TermId::TrackerWarmup => &mut inst.warmup,
             TermId::Refraction => &mut inst.refraction,
+            TermId::InstrumentDrift => &mut inst.drift,
             TermId::ProbePretravel => &mut inst.pretravel,
             TermId::CameraScale => &mut inst.scale,
             TermId::LensDistortion => &mut inst.distortion,

@@ -64,7 +64,15 @@ impl ForwardModel<'_> {
         let inst = self.require(InstrumentKind::Tracker, instrument)?;
         let pose = pose_of(inst)?;
         s.target_point = Some(tool.target());
-        let x = v3(&self.term(pose).term.predict(self.part(pose, p), s)?.value);
+        let x = match inst.drift {
+            None => v3(&self.term(pose).term.predict(self.part(pose, p), s)?.value),
+            Some(d) => {
+                // the pose at this instant: the fitted pose plus the drift's change
+                let change = self.term(d).term.predict(self.part(d, p), s)?.value;
+                let at: Vec<f64> = self.part(pose, p).iter().zip(change.iter()).map(|(a, b)| a + b).collect();
+                v3(&self.term(pose).term.predict(&at, s)?.value)
+            }
+        };
         let (rho, az, el) = to_spherical(&x);
         s.tracker_range = Some(rho);
         let range_change = |i: Option<usize>, s: &Signals| -> Result<f64, PhysicsError> {
@@ -163,9 +171,25 @@ impl ForwardModel<'_> {
         let ps = self.slots[pose];
         // the pose term is a `tracker_pose` (see `group_instruments`): its evaluation, with the
         // rotation's trigonometry done once for all readings at this pose
-        let pp = self.part(pose, p);
+        let mut pp = [0.0; 6];
+        pp.copy_from_slice(self.part(pose, p));
+        let drift = inst.drift.map(|d| (d, self.slots[d]));
+        if let Some((d, ds)) = drift {
+            // the pose at this instant: the fitted pose plus the drift's change (its Jacobian
+            // w.r.t. the drift's parameters kept for the chain)
+            let mut change = [0.0; 6];
+            self.term(d).term.evaluate_into(self.part(d, p), s, &mut change, work.drift_pose.columns_mut(0, ds.len))?;
+            for (a, b) in pp.iter_mut().zip(change) {
+                *a += b;
+            }
+        }
         let rotation = work.pose_rotation([pp[3], pp[4], pp[5]]);
         rotation.evaluate_into(Vector3::new(pp[0], pp[1], pp[2]), target, &mut xv, work.pose.columns_mut(0, ps.len));
+        if let Some((_, ds)) = drift {
+            let dx = &work.pose * work.drift_pose.columns(0, ds.len);
+            work.drift.columns_mut(0, ds.len).copy_from(&dx);
+        }
+        let drift_slot = drift.map(|(_, ds)| ds);
         let x = Vector3::new(xv[0], xv[1], xv[2]);
         let (rho, az, el) = to_spherical(&x);
         s.tracker_range = Some(rho);
@@ -176,7 +200,7 @@ impl ForwardModel<'_> {
             // points given in the machine frame (pose = identity) can sit at the origin: with no
             // range terms the reported point is x itself, whose Jacobian needs no direction
             let pred = TrackerPrediction { point: x, range: rho, azimuth: az, elevation: el, warmup: 0.0, refraction: 0.0 };
-            return Ok((pred, TrackerChain::new(ps, range_slots, Vector3::zeros(), Matrix3::identity(), RowVector3::zeros(), &rt)));
+            return Ok((pred, TrackerChain::new(ps, drift_slot, range_slots, Vector3::zeros(), Matrix3::identity(), RowVector3::zeros(), &rt)));
         }
         if !(rho > 0.0) {
             return Err(PhysicsError::InvalidInput { what: "forward model, tracker reading".into(), reason: "the target is at the tracker origin (range 0): no direction for the range terms".into() });
@@ -198,7 +222,7 @@ impl ForwardModel<'_> {
         let f = pred.measured_range() / rho;
         let range_from_x = u.transpose() * g;
         let point_from_x = (Matrix3::identity() - u * u.transpose()) * f + u * range_from_x;
-        Ok((pred, TrackerChain::new(ps, range_slots, u, point_from_x, range_from_x, &rt)))
+        Ok((pred, TrackerChain::new(ps, drift_slot, range_slots, u, point_from_x, range_from_x, &rt)))
     }
 }
 
@@ -209,6 +233,8 @@ impl ForwardModel<'_> {
 #[derive(Clone, Copy)]
 struct TrackerChain {
     pose: Slot,
+    /// The `instrument_drift`'s columns, through the pose (`work.drift`: ∂x/∂drift).
+    drift: Option<Slot>,
     /// The warm-up's and the refraction's columns (rows 0 and 1 of the range-term Jacobian).
     range_terms: [Option<Slot>; 2],
     /// The direction of x.
@@ -220,8 +246,9 @@ struct TrackerChain {
 }
 
 impl TrackerChain {
-    fn new(pose: Slot, range_terms: [Option<Slot>; 2], u: Vector3<f64>, point_from_x: Matrix3<f64>, range_from_x: RowVector3<f64>, rt: &Matrix3<f64>) -> Self {
-        Self { pose, range_terms, u, point_from_x, range_from_x, point_from_target: point_from_x * rt, range_from_target: range_from_x * rt }
+    #[allow(clippy::too_many_arguments)]
+    fn new(pose: Slot, drift: Option<Slot>, range_terms: [Option<Slot>; 2], u: Vector3<f64>, point_from_x: Matrix3<f64>, range_from_x: RowVector3<f64>, rt: &Matrix3<f64>) -> Self {
+        Self { pose, drift, range_terms, u, point_from_x, range_from_x, point_from_target: point_from_x * rt, range_from_target: range_from_x * rt }
     }
 
     /// The chain of `map`·y (e.g. the whitened point): the point's factors premultiplied once.
@@ -243,6 +270,10 @@ impl TrackerChain {
         if within(self.pose) {
             let k = c - self.pose.start;
             return through(&self.point_from_x, &self.range_from_x, &work.pose.as_slice()[3 * k..3 * k + 3]);
+        }
+        if let Some(slot) = self.drift.filter(|s| within(*s)) {
+            let k = c - slot.start;
+            return through(&self.point_from_x, &self.range_from_x, &work.drift.as_slice()[3 * k..3 * k + 3]);
         }
         for (row, slot) in self.range_terms.iter().enumerate() {
             if let Some(slot) = slot.filter(|s| within(*s)) {

@@ -24,6 +24,10 @@ pub struct Workspace {
     pub(crate) feature: DMatrix<f64>,
     /// ∂x/∂(tracker pose), 3 × 6.
     pub(crate) pose: DMatrix<f64>,
+    /// ∂(pose change)/∂(drift parameters), 6 × parameters, and ∂x/∂(drift parameters) = ∂x/∂pose
+    /// times it, 3 × parameters (`instrument_drift`).
+    pub(crate) drift_pose: DMatrix<f64>,
+    pub(crate) drift: DMatrix<f64>,
     /// ∂Δρ/∂(own parameters): row 0 warm-up, row 1 refraction.
     pub(crate) range_terms: DMatrix<f64>,
     /// ∂(an instrument term)/∂(its parameters), up to 3 × 6.
@@ -44,6 +48,8 @@ impl Workspace {
             point: DMatrix::zeros(3, n),
             feature: DMatrix::zeros(3, n),
             pose: DMatrix::zeros(3, 6),
+            drift_pose: DMatrix::zeros(6, n),
+            drift: DMatrix::zeros(3, n),
             range_terms: DMatrix::zeros(2, 3),
             term: DMatrix::zeros(3, TERM_COLUMNS),
             pose_rotation: None,

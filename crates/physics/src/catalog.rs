@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use crate::config::{quantity, ConfigValue, Options, TermConfig};
 use crate::error::PhysicsError;
 use crate::geometry::{angular::Angular, backlash::Backlash, frame_misalignment::FrameMisalignment, pitch_cyclic::PitchCyclic, positioning::Positioning, rotary_axis_location::RotaryAxisLocation, squareness::Squareness, straightness::Straightness};
-use crate::instrument::{camera_scale::CameraScale, lens_distortion::LensDistortion, probe_pretravel::ProbePretravel, refraction::Refraction, time_offset::TimeOffset, tracker_pose::TrackerPose, tracker_warmup::TrackerWarmup, turbulence::Turbulence};
+use crate::instrument::{camera_scale::CameraScale, instrument_drift::InstrumentDrift, lens_distortion::LensDistortion, probe_pretravel::ProbePretravel, refraction::Refraction, time_offset::TimeOffset, tracker_pose::TrackerPose, tracker_warmup::TrackerWarmup, turbulence::Turbulence};
 use crate::load::{compliance::Compliance, tool_offset::ToolOffset};
 use crate::machine_family::KinematicParameters;
 use crate::term::PhysicsTerm;
@@ -63,6 +63,7 @@ pub fn build_term(id: TermId, options: &BTreeMap<String, ConfigValue>) -> Result
         TermId::ThermalGrowth => Box::new(ThermalGrowth::from_options(&o)?),
         TermId::WorkpieceExpansion => Box::new(WorkpieceExpansion::from_options(&o)?),
         TermId::TrackerWarmup => Box::new(TrackerWarmup::from_options(&o)?),
+        TermId::InstrumentDrift => Box::new(InstrumentDrift::from_options(&o)?),
         TermId::Refraction => Box::new(Refraction::from_options(&o)?),
         TermId::Turbulence => Box::new(Turbulence::from_options(&o)?),
         TermId::TrackerPose => Box::new(TrackerPose::from_options(&o)?),
@@ -123,8 +124,8 @@ pub fn configure(config: &TermConfig) -> Result<ConfiguredTerm, PhysicsError> {
             None if config.use_defaults => spec.default,
             None => return Err(PhysicsError::MissingParameter { term: label, param: spec.name.clone(), unit: spec.unit.into() }),
         };
-        if !(value >= spec.min && value <= spec.max) {
-            return Err(PhysicsError::OutOfRange { term: label, param: spec.name.clone(), value, unit: spec.unit.into(), min: spec.min, max: spec.max });
+        if !spec.possible.contains(value) {
+            return Err(PhysicsError::OutOfRange { term: label, param: spec.name.clone(), value, unit: spec.unit.into(), min: spec.possible.lo, max: spec.possible.hi });
         }
         params.push(value);
     }
@@ -159,6 +160,7 @@ pub fn example_config(id: TermId) -> TermConfig {
         TermId::Compliance => vec![("extension_axis", t("z"))],
         TermId::JointOffset => vec![("joints", n(6.0))],
         TermId::LinkLength => vec![("links", n(6.0))],
+        TermId::InstrumentDrift => vec![("order", n(1.0)), ("span", l(vec![n(0.0), t("5 h")]))],
         _ => vec![],
     };
     TermConfig { id: id.as_str().into(), options: opts.into_iter().map(|(k, v)| (k.to_string(), v)).collect(), params: BTreeMap::new(), use_defaults: true }

@@ -184,6 +184,14 @@ impl<'a> Options<'a> {
             (None, None) => Err(self.bad(key, format!("is required (3 values in {unit})"))),
         }
     }
+    /// An optional list (its items unread).
+    pub fn get_list(&self, key: &str) -> Result<Option<&'a Vec<ConfigValue>>, PhysicsError> {
+        match self.get(key) {
+            None => Ok(None),
+            Some(ConfigValue::List(items)) => Ok(Some(items)),
+            Some(o) => Err(self.bad(key, format!("expected a list, got {}", o.describe()))),
+        }
+    }
     /// Optional `[min, max]` pair of lengths in m.
     pub fn length_range(&self, key: &str) -> Result<Option<(f64, f64)>, PhysicsError> {
         match self.get(key) {

@@ -15,7 +15,7 @@ pub enum PhysicsError {
     #[error("term `{term}`: unknown parameter `{param}`; allowed parameters: {allowed}")]
     UnknownParameter { term: String, param: String, allowed: String },
 
-    #[error("term `{term}`: parameter `{param}` = {value} {unit} is outside the plausible range [{min}, {max}] {unit}")]
+    #[error("term `{term}`: parameter `{param}` = {value} {unit} is physically impossible (possible range [{min}, {max}] {unit})")]
     OutOfRange { term: String, param: String, value: f64, unit: String, min: f64, max: f64 },
 
     #[error("term `{term}`: `{key}` is given in `{given}`, which is not a unit of {dimension}; use `{allowed}` (or a scaled form of it)")]

@@ -49,4 +49,4 @@ pub use config::{ConfigValue, EstimationConfig, PriorConfig, TermConfig};
 pub use error::PhysicsError;
 pub use signals::{Axis, RotaryAxis, SignalKind, Signals};
 pub use temperature_timeline::{TemperatureHistory, TemperatureTimeline};
-pub use term::{EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+pub use term::{EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction, Range};

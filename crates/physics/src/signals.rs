@@ -117,6 +117,8 @@ pub enum SignalKind {
     ProbeDirection,
     /// Commanded angle of a rotary axis, rad.
     RotaryPosition(RotaryAxis),
+    /// The instant's time on the recording's clock, s.
+    Time,
 }
 
 impl SignalKind {
@@ -148,6 +150,7 @@ impl fmt::Display for SignalKind {
             SignalKind::CameraPoint => write!(f, "camera_point (m, camera frame)"),
             SignalKind::ProbeDirection => write!(f, "probe_direction (unit vector)"),
             SignalKind::RotaryPosition(a) => write!(f, "rotary_position[{}] (rad)", a.name()),
+            SignalKind::Time => write!(f, "time (s, the recording's clock)"),
         }
     }
 }

@@ -12,22 +12,69 @@ use crate::term_id::TermId;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
 
-/// Description of one parameter.
+/// An inclusive range of parameter values (SI); ±∞ where a side has no limit.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Range {
+    pub lo: f64,
+    pub hi: f64,
+}
+
+impl Range {
+    pub const UNBOUNDED: Range = Range { lo: f64::NEG_INFINITY, hi: f64::INFINITY };
+    pub const fn new(lo: f64, hi: f64) -> Self {
+        Self { lo, hi }
+    }
+    pub fn contains(&self, v: f64) -> bool {
+        v >= self.lo && v <= self.hi
+    }
+    pub fn is_bounded(&self) -> bool {
+        self.lo.is_finite() || self.hi.is_finite()
+    }
+}
+
+/// Description of one parameter, with its two ranges:
+/// * **usual** — what real machines and instruments show; it shapes the words a finding uses
+///   ("a reversal of −9 µm, outside the usual 0 … 100 µm: …") and never decides a choice;
+/// * **possible** — outside it a value is physically impossible (a negative time constant,
+///   |α| above 100 µm/m/K): config validation refuses such values, fits bound parameters by
+///   it, and diagnose refuses a candidate that needs one. Sign-free quantities (reversal,
+///   squareness, scales, offsets) have no possible bound: their possible range is ±∞.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ParamSpec {
     pub name: String,
     /// Canonical unit string, parseable by [`crate::units::parse_unit`] (e.g. `m`, `rad`, `1/K`, `s`).
     pub unit: &'static str,
-    /// Plausible range (inclusive). Values outside are rejected by config validation.
-    pub min: f64,
-    pub max: f64,
+    pub usual: Range,
+    pub possible: Range,
     pub default: f64,
     pub doc: String,
+    /// What a value outside the usual range most likely means in practice (e.g. a negative
+    /// reversal: the controller's backlash compensation set too high); "" when nothing
+    /// particular.
+    pub unusual_means: &'static str,
 }
 
 impl ParamSpec {
-    pub fn new(name: impl Into<String>, unit: &'static str, min: f64, max: f64, default: f64, doc: impl Into<String>) -> Self {
-        Self { name: name.into(), unit, min, max, default, doc: doc.into() }
+    /// A parameter whose usual range is `[usual_min, usual_max]` and whose possible range is
+    /// unbounded (set it with [`Self::possible`]).
+    pub fn new(name: impl Into<String>, unit: &'static str, usual_min: f64, usual_max: f64, default: f64, doc: impl Into<String>) -> Self {
+        Self { name: name.into(), unit, usual: Range::new(usual_min, usual_max), possible: Range::UNBOUNDED, default, doc: doc.into(), unusual_means: "" }
+    }
+    /// The physically possible range (values outside are impossible).
+    pub fn possible(mut self, lo: f64, hi: f64) -> Self {
+        self.possible = Range::new(lo, hi);
+        self
+    }
+    /// What a value outside the usual range most likely means in practice.
+    pub fn unusual_means(mut self, text: &'static str) -> Self {
+        self.unusual_means = text;
+        self
+    }
+    /// A representative size of the parameter (the usual range's width): for step sizes and
+    /// scaling, never a limit.
+    pub fn typical_scale(&self) -> f64 {
+        let w = self.usual.hi - self.usual.lo;
+        if w.is_finite() && w > 0.0 { w } else { self.usual.hi.abs().max(self.usual.lo.abs()).max(f64::MIN_POSITIVE) }
     }
 }
 
@@ -67,6 +114,9 @@ pub enum EffectKind {
     PointInFrame(Frame),
     /// The term changes parameters of a kinematic chain; crates/kinematics evaluates it.
     Kinematic,
+    /// 6-vector change of an instrument's pose: translation (m) and pose-angle increments (rad),
+    /// added to the instrument's `tracker_pose` by the forward model.
+    PoseChange,
 }
 
 impl EffectKind {
@@ -77,6 +127,7 @@ impl EffectKind {
             EffectKind::RangeChange | EffectKind::RangeScatter => 1,
             EffectKind::ImageShift => 2,
             EffectKind::Kinematic => 0,
+            EffectKind::PoseChange => 6,
         }
     }
 }

@@ -44,6 +44,7 @@ term_ids! {
     ProbePretravel => "probe_pretravel", Instrument, "direction-dependent touch-probe pretravel (n-lobe)", "d = [(1−u_z²)(p₀ + a cos nφ + b sin nφ) + u_z² p_z]·u";
     LensDistortion => "lens_distortion", Instrument, "Brown–Conrady radial/tangential lens distortion", "Δx = x(k1r²+k2r⁴+k3r⁶) + 2p1xy + p2(r²+2x²); Δy = y(…) + p1(r²+2y²) + 2p2xy";
     CameraScale => "camera_scale", Instrument, "metric scale error of a camera measurement", "d = s·p (camera frame)";
+    InstrumentDrift => "instrument_drift", Instrument, "the instrument's pose moving slowly in time (a stand sinking, a head turning)", "pose(t) = pose + Σ_j P_j(u)·(dx_j, dy_j, dz_j, rx_j, ry_j, rz_j), u = 2(t − t_start)/(t_end − t_start) − 1";
     TimeOffset => "time_offset", Instrument, "latency between streams", "d = −Δt·v";
     Compliance => "compliance", Load, "deflection under load, growing with moment and extension", "d = F·(c₀ + c_θ e² + c_b e³), e = q_k − e₀";
     ToolOffset => "tool_offset", Load, "error of the tool/probe offset vector", "d = (dx, dy, dz)";

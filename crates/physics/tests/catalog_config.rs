@@ -4,11 +4,12 @@ use metrocell_physics::catalog::{allowed_ids, configure, entries, example_config
 use metrocell_physics::{PhysicsError, TermConfig, TermId};
 
 /// The ids of DESIGN.md "The physics vocabulary", verbatim, and `rotary_axis_location` (issue 13:
-/// the catalog grows with the physics real machines need; its line goes into DESIGN.md's list).
-const DESIGN_IDS: [&str; 27] = [
+/// the catalog grows with the physics real machines need; its line goes into DESIGN.md's list),
+/// `instrument_drift` (issue 26).
+const DESIGN_IDS: [&str; 28] = [
     "positioning", "straightness", "angular", "squareness", "pitch_cyclic", "backlash", "thermal_scale", "thermal_growth", "workpiece_expansion", "tracker_warmup", "refraction", "turbulence",
     "tracker_pose", "probe_pretravel", "lens_distortion", "camera_scale", "time_offset", "compliance", "tool_offset", "delta_rod_length", "delta_radius", "delta_tower_angle", "delta_endstop",
-    "joint_offset", "link_length", "frame_misalignment", "rotary_axis_location",
+    "joint_offset", "link_length", "frame_misalignment", "rotary_axis_location", "instrument_drift",
 ];
 
 #[test]
@@ -20,11 +21,14 @@ fn catalog_lists_every_design_id_with_docs() {
         let t = lookup(id).unwrap();
         assert_eq!(t.as_str(), id);
         assert!(!t.summary().is_empty() && !t.equation().is_empty());
-        // every example config builds, and every parameter has a unit, a range and a default inside it
+        // every example config builds, and every parameter has a unit, a usual range inside its
+        // possible range, and a default inside both
         let built = configure(&example_config(t)).unwrap_or_else(|e| panic!("{id}: {e}"));
         assert_eq!(built.term.id(), t);
         for p in built.term.params() {
-            assert!(p.min < p.max && p.default >= p.min && p.default <= p.max, "{id}.{}", p.name);
+            assert!(p.usual.lo < p.usual.hi && p.usual.lo.is_finite() && p.usual.hi.is_finite(), "{id}.{}: usual range {:?}", p.name, p.usual);
+            assert!(p.possible.lo <= p.usual.lo && p.possible.hi >= p.usual.hi, "{id}.{}: usual {:?} outside possible {:?}", p.name, p.usual, p.possible);
+            assert!(p.usual.contains(p.default), "{id}.{}: default {} outside the usual range", p.name, p.default);
             metrocell_physics::units::parse_unit(p.unit).unwrap_or_else(|e| panic!("{id}.{}: {e}", p.name));
         }
     }
@@ -72,12 +76,16 @@ fn missing_parameter_is_named() {
 }
 
 #[test]
-fn out_of_range_parameter_is_rejected() {
-    let e = configure(&yaml("id: backlash\noptions: {axis: z}\nparams: {reversal: 5 mm}\n")).unwrap_err();
+fn impossible_parameter_is_rejected_and_unusual_accepted() {
+    // a sign-free quantity has no possible bound: an over-compensated backlash and a worn one
+    for v in ["-9 um", "5 mm"] {
+        configure(&yaml(&format!("id: backlash\noptions: {{axis: z}}\nparams: {{reversal: {v}}}\n"))).unwrap_or_else(|e| panic!("{v}: {e}"));
+    }
+    let e = configure(&yaml("id: thermal_scale\noptions: {axis: x, sensors: [{name: t, position: 0 m}]}\nparams: {alpha: 500e-6 1/K}\n")).unwrap_err();
     match e {
         PhysicsError::OutOfRange { term, param, value, min, max, .. } => {
-            assert_eq!((term.as_str(), param.as_str()), ("backlash[z]", "reversal"));
-            assert!((value - 5e-3).abs() < 1e-15 && min == 0.0 && max == 1e-3);
+            assert_eq!((term.as_str(), param.as_str()), ("thermal_scale[x]", "alpha"));
+            assert!((value - 500e-6).abs() < 1e-15 && min == -100e-6 && max == 100e-6);
         }
         other => panic!("{other:?}"),
     }

@@ -31,9 +31,19 @@ fn missing_parameter_is_named_with_its_unit() {
 }
 
 #[test]
-fn out_of_range_parameter_gives_the_plausible_range() {
-    let msg = error_of(&edited("params: {reversal: 8 um}", "params: {reversal: 5 mm}"));
-    assert_mentions(&msg, &["terms[2]", "reversal", "outside the plausible range", "[0, 0.001] m"]);
+fn impossible_parameter_gives_the_possible_range() {
+    let msg = error_of(&edited("    params: {alpha: 10.2e-6 1/K}", "    params: {alpha: 500e-6 1/K}"));
+    assert_mentions(&msg, &["terms[0]", "alpha", "physically impossible", "[-0.0001, 0.0001] 1/K"]);
+}
+
+#[test]
+fn unusual_but_possible_values_are_accepted() {
+    // an over-compensated backlash (negative reversal) and a 5 mm reversal are unusual, not
+    // impossible: a sign-free quantity has no possible bound
+    for v in ["-9 um", "5 mm"] {
+        let text = edited("params: {reversal: 8 um}", &format!("params: {{reversal: {v}}}"));
+        Cell::from_yaml_str(&text, "unusual.yaml").unwrap_or_else(|e| panic!("reversal {v}: {e}"));
+    }
 }
 
 #[test]

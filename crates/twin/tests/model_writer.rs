@@ -26,10 +26,10 @@ fn fitted(model: &CellModel) -> Vec<FittedParameter> {
         // a model without a tracker gets the pose of a recording only in its `fit` summary
         .filter(|(k, ((name, _), _))| model.setup.free[*k] && (model.declares_tracker || !name.starts_with("tracker_pose")))
         .map(|(k, ((name, v), spec))| {
-            // a move of 1 % of the plausible range, different per parameter
-            // (towards the middle of the range, so the value stays plausible)
-            let toward = if v > 0.5 * (spec.max + spec.min) { -1.0 } else { 1.0 };
-            let step = toward * 0.01 * (spec.max - spec.min).min(1.0) * (1.0 + k as f64 / 10.0);
+            // a move of 1 % of the usual range, different per parameter
+            // (towards the middle of the range, so the value stays possible)
+            let toward = if v > 0.5 * (spec.usual.hi + spec.usual.lo) { -1.0 } else { 1.0 };
+            let step = toward * 0.01 * spec.typical_scale().min(1.0) * (1.0 + k as f64 / 10.0);
             FittedParameter { name, value: v + step, sigma: Some(step.abs() / 20.0) }
         })
         .collect()

@@ -22,7 +22,7 @@ fn each_bad_parameter_is_named() {
         (vec!["alpha:=1.0"], &["alpha"]),
         (vec!["growth_sensors:=[column]", "growth_directions:=[0.0, 1.0]", "growth_coefficients:=[4e-6]"], &["growth_directions", "3 numbers per growth sensor"]),
         (vec!["growth_sensors:=[column]", "growth_directions:=[0.0, 0.0, 1.0]"], &["growth_coefficients", "one per growth sensor"]),
-        (with_growth(&["growth_coefficients:=[1.0]"]).into_iter().filter(|p| *p != "growth_coefficients:=[4e-6]").collect(), &["thermal_growth[column]", "coefficient", "outside the plausible range"]),
+        (with_growth(&["growth_coefficients:=[1.0]"]).into_iter().filter(|p| *p != "growth_coefficients:=[4e-6]").collect(), &["thermal_growth[column]", "coefficient", "physically impossible"]),
         (with_growth(&["growth_time_constants:=[-5.0]"]).into_iter().filter(|p| *p != "growth_time_constants:=[1200.0]").collect(), &["growth_time_constants", "≥ 0"]),
         (vec!["temperature_limits:=[50.0, 10.0]"], &["temperature_limits", "min < max"]),
         (vec!["workpiece_sensor:=plate", "workpiece_clamp:=[0.1]"], &["workpiece_clamp", "3 finite numbers"]),

@@ -37,7 +37,8 @@ impl PhysicsTerm for Backlash {
         EffectKind::Displacement(Frame::Machine)
     }
     fn params(&self) -> Vec<ParamSpec> {
-        vec![ParamSpec::new("reversal", "m", 0.0, 1e-3, 0.0, "reversal value β (lost motion between the two approach directions)")]
+        vec![ParamSpec::new("reversal", "m", 0.0, 100e-6, 0.0, "reversal value β (lost motion between the two approach directions; negative: the axis overshoots in the direction of travel)")
+            .unusual_means("a negative reversal is an overshoot: the controller's backlash compensation set higher than the axis's lost motion (over-compensated); a reversal above 100 µm is worn or loose drive parts")]
     }
     fn signals(&self) -> Vec<SignalKind> {
         vec![SignalKind::ApproachDirection(self.axis)]

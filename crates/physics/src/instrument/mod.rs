@@ -2,6 +2,7 @@
 //! camera, and stream timing.
 pub mod camera_scale;
 pub mod edlen;
+pub mod instrument_drift;
 pub mod lens_distortion;
 pub mod probe_pretravel;
 pub mod refraction;

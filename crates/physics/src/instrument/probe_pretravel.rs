@@ -60,7 +60,7 @@ impl PhysicsTerm for ProbePretravel {
     }
     fn params(&self) -> Vec<ParamSpec> {
         vec![
-            ParamSpec::new("mean", "m", -20e-6, 100e-6, 0.0, "p₀: mean lateral pretravel"),
+            ParamSpec::new("mean", "m", -20e-6, 100e-6, 0.0, "p₀: mean lateral pretravel").unusual_means("a negative mean pretravel: the stylus radius or probe qualification over-corrects"),
             ParamSpec::new("lobe_cos", "m", -50e-6, 50e-6, 0.0, "a: lobing amplitude, cosine part"),
             ParamSpec::new("lobe_sin", "m", -50e-6, 50e-6, 0.0, "b: lobing amplitude, sine part"),
             ParamSpec::new("vertical", "m", -20e-6, 100e-6, 0.0, "p_z: pretravel along the stylus axis"),

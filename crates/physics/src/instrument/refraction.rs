@@ -60,8 +60,12 @@ impl PhysicsTerm for Refraction {
     }
     fn params(&self) -> Vec<ParamSpec> {
         vec![
-            ParamSpec::new("path_temperature_offset", "K", -10.0, 10.0, 0.0, "mean air temperature on the beam minus the station reading"),
-            ParamSpec::new("path_pressure_offset", "Pa", -500.0, 500.0, 0.0, "mean air pressure on the beam minus the station reading"),
+            ParamSpec::new("path_temperature_offset", "K", -3.0, 3.0, 0.0, "mean air temperature on the beam minus the station reading")
+                .possible(-150.0, 150.0)
+                .unusual_means("a beam-air offset of more than 3 K (about 3 ppm of range per kelvin) is not a station misplaced in a shop: the instrument did not use the station's air data, or its altitude/pressure settings are wrong"),
+            ParamSpec::new("path_pressure_offset", "Pa", -500.0, 500.0, 0.0, "mean air pressure on the beam minus the station reading")
+                .possible(-60_000.0, 60_000.0)
+                .unusual_means("a pressure offset above 5 hPa is not a shop's pressure gradient: the instrument did not use the station's pressure, or its altitude setting is wrong (about 12 hPa per 100 m)"),
         ]
     }
     fn signals(&self) -> Vec<SignalKind> {

@@ -31,7 +31,7 @@ impl PhysicsTerm for TimeOffset {
         EffectKind::Displacement(Frame::Machine)
     }
     fn params(&self) -> Vec<ParamSpec> {
-        vec![ParamSpec::new("latency", "s", -0.5, 0.5, 0.0, "Δt: how late the stream's samples are")]
+        vec![ParamSpec::new("latency", "s", -0.05, 0.05, 0.0, "Δt: how late the stream's samples are").unusual_means("a latency of more than 50 ms is not a fieldbus delay: the streams' clocks are not synchronised")]
     }
     fn signals(&self) -> Vec<SignalKind> {
         Axis::ALL.iter().map(|a| SignalKind::AxisVelocity(*a)).collect()

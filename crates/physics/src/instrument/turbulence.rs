@@ -60,9 +60,9 @@ impl PhysicsTerm for Turbulence {
     }
     fn params(&self) -> Vec<ParamSpec> {
         vec![
-            ParamSpec::new("base_sigma", "m", 1e-7, 1e-4, 4e-6, "σ₀: range noise independent of distance"),
-            ParamSpec::new("proportional_sigma", "1", 0.0, 1e-5, 0.8e-6, "s: range noise per metre of range"),
-            ParamSpec::new("turbulence", "1", 0.0, 1e-3, 0.0, "c: turbulence scatter per metre of beam"),
+            ParamSpec::new("base_sigma", "m", 1e-7, 1e-4, 4e-6, "σ₀: range noise independent of distance").possible(0.0, f64::INFINITY),
+            ParamSpec::new("proportional_sigma", "1", 0.0, 1e-5, 0.8e-6, "s: range noise per metre of range").possible(0.0, f64::INFINITY),
+            ParamSpec::new("turbulence", "1", 0.0, 1e-3, 0.0, "c: turbulence scatter per metre of beam").possible(0.0, f64::INFINITY),
         ]
     }
     fn signals(&self) -> Vec<SignalKind> {

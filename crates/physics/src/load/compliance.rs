@@ -44,9 +44,9 @@ impl PhysicsTerm for Compliance {
     }
     fn params(&self) -> Vec<ParamSpec> {
         vec![
-            ParamSpec::new("translational", "m/N", 0.0, 1e-5, 0.0, "c₀: support compliance"),
-            ParamSpec::new("rotational", "rad/(N m)", 0.0, 1e-5, 0.0, "c_θ: joint compliance (tilt per moment)"),
-            ParamSpec::new("bending", "1/(N m^2)", 0.0, 1e-4, 0.0, "c_b = 1/(3EI): beam bending"),
+            ParamSpec::new("translational", "m/N", 0.0, 1e-5, 0.0, "c₀: support compliance").unusual_means("a negative compliance moves against the load: a counterbalance or preload acting, or the load's sign recorded reversed"),
+            ParamSpec::new("rotational", "rad/(N m)", 0.0, 1e-5, 0.0, "c_θ: joint compliance (tilt per moment)").unusual_means("a negative compliance moves against the load: a counterbalance or preload acting, or the load's sign recorded reversed"),
+            ParamSpec::new("bending", "1/(N m^2)", 0.0, 1e-4, 0.0, "c_b = 1/(3EI): beam bending").unusual_means("a negative compliance moves against the load: a counterbalance or preload acting, or the load's sign recorded reversed"),
         ]
     }
     fn signals(&self) -> Vec<SignalKind> {

@@ -83,7 +83,7 @@ pub fn predict_through_kinematics(term: &dyn PhysicsTerm, p: &[f64], forward: &d
     }
     let zero = vec![0.0; p.len()];
     let d = forward(p) - forward(&zero);
-    let typical: Vec<f64> = specs.iter().map(|s| (s.max - s.min).abs() * 1e-3).collect();
+    let typical: Vec<f64> = specs.iter().map(|s| s.typical_scale() * 1e-3).collect();
     let f = |q: &[f64]| Some(DVector::from_column_slice(forward(q).as_slice()));
     let j = central_difference(f, p, &relative_steps(p, 1e-4, &typical), Order::Second)
         .ok_or_else(|| PhysicsError::InvalidInput { what: format!("term `{}`", term.label()), reason: "central-difference Jacobian of the forward kinematics failed".into() })?;

@@ -101,7 +101,9 @@ impl PhysicsTerm for ThermalScale {
         EffectKind::Displacement(Frame::Machine)
     }
     fn params(&self) -> Vec<ParamSpec> {
-        vec![ParamSpec::new("alpha", "1/K", -2e-6, 30e-6, 11.5e-6, "α: expansion coefficient of the axis scale")]
+        vec![ParamSpec::new("alpha", "1/K", -2e-6, 30e-6, 11.5e-6, "α: expansion coefficient of the axis scale")
+            .possible(-100e-6, 100e-6)
+            .unusual_means("an α below −2 µm/m/K means the axis shrinks as the sensor warms: the controller's thermal compensation over-corrects, or the sensor sits where the temperature runs opposite to the scale's; above 30 µm/m/K more than aluminium: the sensor lags or under-reads the scale's temperature")]
     }
     fn signals(&self) -> Vec<SignalKind> {
         let mut v = vec![SignalKind::AxisPosition(self.axis)];

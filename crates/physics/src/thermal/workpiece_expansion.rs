@@ -53,7 +53,9 @@ impl PhysicsTerm for WorkpieceExpansion {
         EffectKind::Displacement(Frame::Workpiece)
     }
     fn params(&self) -> Vec<ParamSpec> {
-        vec![ParamSpec::new("alpha", "1/K", -2e-6, 30e-6, 11.5e-6, "α: expansion coefficient of the workpiece material")]
+        vec![ParamSpec::new("alpha", "1/K", -2e-6, 30e-6, 11.5e-6, "α: expansion coefficient of the workpiece material")
+            .possible(-100e-6, 100e-6)
+            .unusual_means("outside −2 … 30 µm/m/K the part is not at the temperature its sensor reads, or the material is not a metal (polymers reach 50–200 µm/m/K)")]
     }
     fn signals(&self) -> Vec<SignalKind> {
         vec![SignalKind::WorkpiecePoint, SignalKind::Temperature(self.sensor.clone())]

@@ -34,6 +34,8 @@ pub fn random_signals(r: &mut ChaCha8Rng) -> Signals {
         samples.push((t, uni(r, 19.0, 25.0)));
     }
     let history = TemperatureHistory { samples };
+    // the instant: the history's last sample (a lagged term sees the whole history)
+    s.time = Some(t);
     s.timeline = Some(std::sync::Arc::new(TemperatureTimeline::from_histories([("column", &history)]).unwrap()));
     s.air_temperature = Some(uni(r, 18.0, 24.0));
     s.air_pressure = Some(uni(r, 95_000.0, 103_000.0));
@@ -53,13 +55,13 @@ pub fn random_signals(r: &mut ChaCha8Rng) -> Signals {
     s
 }
 
-/// Random parameters inside the plausible ranges.
+/// Random parameters inside the usual ranges.
 pub fn random_params(r: &mut ChaCha8Rng, specs: &[ParamSpec]) -> Vec<f64> {
-    specs.iter().map(|p| uni(r, p.min, p.max)).collect()
+    specs.iter().map(|p| uni(r, p.usual.lo, p.usual.hi)).collect()
 }
 
-/// 4th-order central differences, step h_i = 1e-4·(|p_i| + 1e-3·(max_i − min_i)).
+/// 4th-order central differences, step h_i = 1e-4·(|p_i| + 1e-3·(width of the usual range)).
 pub fn finite_difference_jacobian(term: &dyn PhysicsTerm, p: &[f64], s: &Signals) -> DMatrix<f64> {
-    let steps: Vec<f64> = term.params().iter().zip(p).map(|(spec, v)| 1e-4 * (v.abs() + 1e-3 * (spec.max - spec.min))).collect();
+    let steps: Vec<f64> = term.params().iter().zip(p).map(|(spec, v)| 1e-4 * (v.abs() + 1e-3 * spec.typical_scale())).collect();
     central_difference(|q: &[f64]| Some(term.predict(q, s).unwrap().value), p, &steps, Order::Fourth).unwrap()
 }

@@ -366,7 +366,21 @@ def main():
     print(f"\n{len(results)} recordings in {wall:.0f} s with {workers} workers; {len(misses)} with a miss")
     for m in misses:
         print(f"MISS {m['case']} seed {m['seed']} {m['key']} ({m['category']}): {m.get('why', m.get('error'))}; "
-              f"findings {m.get('findings')}; findings[0] {json.dumps((m.get('findings0') or {}).get('label'))}")
+              f"findings {m.get('findings')}; unexplained {len(m.get('unexplained') or [])}")
+        print(f"     truth: {[t['expected'] for t in m.get('truth', [])]}")
+        f0 = m.get("findings0")
+        if f0:
+            params = {k: f"{v.get('value'):.4g} ± {v.get('sigma'):.2g}" for k, v in (f0.get("parameters") or {}).items()}
+            print(f"     findings[0]: {f0.get('label')} ({f0.get('variant')}) {params}; alternatives {f0.get('alternatives')}")
+        bad = [p for p in m.get("params", []) if p.get("judged") and not p.get("ok")]
+        for p in bad:
+            print(f"     parameter {p['term']}.{p['name']} = {p['value']:.4g} ± {p['sigma']:.2g}, truth {p['truth']:.4g} (z = {p['z']:+.1f})")
+        if m.get("rms_ok") is False:
+            print(f"     held-out RMS after / noise = {m.get('rms_ratio'):.2f}")
+        for k, step in enumerate((m.get("selection") or [])[:2]):
+            tops = ", ".join(f"{c['label']} [{c.get('variant')}] gain {c.get('heldout_gain') or 0:.2f} dBIC {c.get('delta_bic') or 0:.0f}"
+                             f" plausible={c.get('plausible')} accepted={c.get('accepted')}" for c in (step.get("top") or [])[:3])
+            print(f"     selection step {k + 1} chose {step.get('chosen')}: {tops}")
     if a.out:
         with open(a.out, "w") as f:
             json.dump({"table": table, "parameters": {"ok": p_ok, "judged": p_n, "rate": param_rate},

@@ -72,6 +72,13 @@ pub struct RecordStream<'m, 'a> {
     feed: SignalFeed,
     point_index: u64,
     instrument_index: u64,
+    /// Joints from points' nominals, pushed to the builder once every message of their time
+    /// has been read (a velocity-only joint state of the same row may follow the point).
+    deferred_joints: VecDeque<(i64, Vec<f64>)>,
+    /// Velocities of joint states that carry no positions, by time.
+    velocity_only: BTreeMap<i64, (Vec<String>, Vec<f64>)>,
+    /// A commanded joint state with the machine's positions was read (they then give the axes).
+    commanded_positions: bool,
 }
 
 /// The topics (name, ROS type) a live reader of `model`'s records subscribes: the points (as
@@ -140,9 +147,13 @@ impl<'m, 'a> RecordStream<'m, 'a> {
         }
         let signal_topics: BTreeMap<String, SignalTopic> = topics.iter().filter_map(|(n, t)| SignalTopic::of(n, t).map(|w| (n.clone(), w))).collect();
         let carried = |which: &SignalTopic| signal_topics.values().any(|w| w == which);
-        let joints = if carried(&SignalTopic::CommandedJoints) {
+        let nominals_give_axes = found && !points_tracker && matches!(model.machine.kinematics, MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_));
+        let joints = if carried(&SignalTopic::CommandedJoints) && nominals_give_axes {
+            // an export may give velocities without positions: the nominals then give the axes
+            JointSource::CommandedOrNominal
+        } else if carried(&SignalTopic::CommandedJoints) {
             JointSource::Commanded
-        } else if found && !points_tracker && matches!(model.machine.kinematics, MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_)) {
+        } else if nominals_give_axes {
             JointSource::Nominal
         } else {
             let names = model.machine.joint_names();
@@ -156,6 +167,7 @@ impl<'m, 'a> RecordStream<'m, 'a> {
         sources.push(("commanded joints".into(), match joints {
             JointSource::Commanded => COMMANDED_JOINTS_TOPIC.into(),
             JointSource::Nominal => format!("nominal of {points_topic}, minus the tool offset"),
+            JointSource::CommandedOrNominal => format!("{COMMANDED_JOINTS_TOPIC} where it gives positions, else the nominal of {points_topic} minus the tool offset (with the joint states' velocities)"),
         }));
 
         // every declared signal must have a source in this recording
@@ -212,6 +224,9 @@ impl<'m, 'a> RecordStream<'m, 'a> {
             feed: SignalFeed::default(),
             point_index: 0,
             instrument_index: 0,
+            deferred_joints: VecDeque::new(),
+            velocity_only: BTreeMap::new(),
+            commanded_positions: false,
         };
         for (name, which) in signal_topics {
             stream.add_signal_topic(name, which);
@@ -257,22 +272,30 @@ impl<'m, 'a> RecordStream<'m, 'a> {
     /// resolved. Errors only when the recording cannot give records at all (a commanded joint
     /// state without the machine's joints); a bad message is a rejection, counted.
     pub fn push(&mut self, m: &SourcedMessage) -> Result<(), RecordingError> {
-        let at = |topic: &str, index: u64| format!("{}: {topic} message {index} (log time {:.3} s)", self.source.display(), m.log_time_ns as f64 / 1e9);
+        self.push_deferred_joints(Some(m.log_time_ns as i64));
+        let velocity_only = self.joints == JointSource::CommandedOrNominal && self.signal_topics.get(&m.topic) == Some(&SignalTopic::CommandedJoints) && !self.take_positions(m);
+        let source = self.source.display().to_string();
+        let at = |topic: &str, index: u64| format!("{source}: {topic} message {index} (log time {:.3} s)", m.log_time_ns as f64 / 1e9);
         if self.points_topic.as_deref() == Some(m.topic.as_str()) {
             let at = at(&m.topic, self.point_index);
             self.point_index += 1;
-            let parsed = if self.points_tracker { from_tracker(m, at) } else { from_measured_point(m, at, self.joints, &self.model.machine.tool_offset) };
+            let parsed = if self.points_tracker { from_tracker(m, at) } else { from_measured_point(m, at, self.joints, &self.model.machine.tool_offset, self.commanded_positions) };
             match parsed {
                 Ok(p) => {
                     self.builder.observe_time(p.t_ns);
-                    if let (JointSource::Nominal, Some(q)) = (self.joints, &p.q) {
-                        // the nominals are the commanded trajectory: they give approach and velocity too
-                        let _ = self.builder.push_joints(p.t_ns, &self.joint_names, q, &[]);
+                    if let Some(q) = p.q.as_ref().filter(|_| !self.commanded_positions) {
+                        // the nominals are the commanded trajectory: they give approach and
+                        // velocity too (pushed once the row's other messages are read)
+                        if self.deferred_joints.back().is_none_or(|(t, _)| *t < p.t_ns) {
+                            self.deferred_joints.push_back((p.t_ns, q.clone()));
+                        }
                     }
                     self.pending.push_back(p);
                 }
                 Err(r) => self.out.rejected.push(r),
             }
+        } else if velocity_only {
+            // a joint state without the machine's positions: its velocities go with the nominals
         } else if self.probe_topic.as_deref() == Some(m.topic.as_str()) || self.camera_topic.as_deref() == Some(m.topic.as_str()) {
             let at = at(&m.topic, self.instrument_index);
             self.instrument_index += 1;
@@ -292,9 +315,40 @@ impl<'m, 'a> RecordStream<'m, 'a> {
         }
         while self.pending.front().is_some_and(|p| self.builder.ready(p.t_ns)) {
             let p = self.pending.pop_front().expect("checked");
-            resolve(p, &self.builder, &self.needs, self.model, &self.camera_features, &mut self.out);
+            resolve(p, &self.builder, &self.needs, self.model, &self.camera_features, self.commanded_positions && self.joints == JointSource::CommandedOrNominal, &mut self.out);
         }
         Ok(())
+    }
+
+    /// Whether a commanded joint state (in [`JointSource::CommandedOrNominal`]) gives the
+    /// machine's positions, to be fed as usual; if not, its velocities are kept for the
+    /// nominals of its time.
+    fn take_positions(&mut self, m: &SourcedMessage) -> bool {
+        let Ok(js) = m.decode::<JointState>() else { return true };
+        let finite = |name: &String| js.name.iter().position(|n| n == name).and_then(|i| js.position.get(i)).is_some_and(|v| v.is_finite());
+        if self.joint_names.iter().all(finite) {
+            self.commanded_positions = true;
+            return true;
+        }
+        if js.velocity.len() == js.name.len() {
+            self.velocity_only.insert(message_time(&js.header.stamp, m.log_time_ns), (js.name, js.velocity));
+        }
+        false
+    }
+
+    /// Push the joints from nominals stamped before `before` (all with None) to the builder,
+    /// with the velocities a velocity-only joint state of their time gave.
+    fn push_deferred_joints(&mut self, before: Option<i64>) {
+        while self.deferred_joints.front().is_some_and(|(t, _)| before.is_none_or(|b| *t < b)) {
+            let (t, q) = self.deferred_joints.pop_front().expect("checked");
+            let velocities: Vec<f64> = match self.velocity_only.remove(&t) {
+                Some((names, v)) => self.joint_names.iter().map(|j| names.iter().position(|n| n == j).map_or(f64::NAN, |i| v[i])).collect(),
+                None => Vec::new(),
+            };
+            let _ = self.builder.push_joints(t, &self.joint_names, &q, &velocities);
+            // velocities of earlier times no nominal took are not needed any more
+            self.velocity_only = self.velocity_only.split_off(&t);
+        }
     }
 
     /// Measurements still waiting for the signals around their time.
@@ -316,8 +370,9 @@ impl<'m, 'a> RecordStream<'m, 'a> {
     /// Answer every held measurement as the signals stand (the end of a recording; a live
     /// user that stops). The records come out at the next [`Self::drain`].
     pub fn flush(&mut self) {
+        self.push_deferred_joints(None);
         while let Some(p) = self.pending.pop_front() {
-            resolve(p, &self.builder, &self.needs, self.model, &self.camera_features, &mut self.out);
+            resolve(p, &self.builder, &self.needs, self.model, &self.camera_features, self.commanded_positions && self.joints == JointSource::CommandedOrNominal, &mut self.out);
         }
     }
 
@@ -412,6 +467,9 @@ enum JointSource {
     Commanded,
     /// q = nominal − tool_offset (cartesian and delta).
     Nominal,
+    /// Commanded joint states where they give the machine's positions, else the nominals (an
+    /// export with velocity columns but no joint columns), with the joint states' velocities.
+    CommandedOrNominal,
 }
 
 /// A measurement waiting until the signals around its time have been read.
@@ -502,17 +560,25 @@ fn from_tracker(m: &SourcedMessage, at: String) -> Result<Pending, Rejected> {
     Ok(Pending { t_ns: message_time(&r.header.stamp, m.log_time_ns), at, point_id, channel: "tracker".into(), frame, measured, covariance, air, q: None, reading: None })
 }
 
-fn from_measured_point(m: &SourcedMessage, at: String, joints: JointSource, tool_offset: &Vector3<f64>) -> Result<Pending, Rejected> {
+/// `commanded_positions`: the recording's joint states have given the machine's positions (in
+/// [`JointSource::CommandedOrNominal`], the nominal then gives none).
+fn from_measured_point(m: &SourcedMessage, at: String, joints: JointSource, tool_offset: &Vector3<f64>, commanded_positions: bool) -> Result<Pending, Rejected> {
     let p: MeasuredPoint = m.decode().map_err(|e| reject(at.clone(), "", e.to_string()))?;
     let measured = Vector3::new(p.measured.x, p.measured.y, p.measured.z);
     let covariance = covariance_row_major(&p.covariance);
     check_point(&at, &p.point_id, &measured, &covariance)?;
+    let nominal = Vector3::new(p.nominal.x, p.nominal.y, p.nominal.z);
     let q = match joints {
         JointSource::Commanded => None,
-        JointSource::Nominal => {
-            let nominal = Vector3::new(p.nominal.x, p.nominal.y, p.nominal.z);
+        // a row whose joint state gives positions is read from it (it may come after the point)
+        JointSource::CommandedOrNominal if commanded_positions || !nominal.iter().all(|v| v.is_finite()) => None,
+        JointSource::Nominal | JointSource::CommandedOrNominal => {
             if !nominal.iter().all(|v| v.is_finite()) {
-                return Err(reject(at, &p.point_id, format!("no commanded position: the nominal is not finite and the bag has no {COMMANDED_JOINTS_TOPIC}")));
+                return Err(reject(
+                    at,
+                    &p.point_id,
+                    format!("no commanded position: the point's nominal is not finite and {COMMANDED_JOINTS_TOPIC} gives no axis positions (bag import: columns nominal_x, nominal_y, nominal_z, or joint.x, joint.y, joint.z)"),
+                ));
             }
             let q = nominal - tool_offset;
             Some(vec![q.x, q.y, q.z])
@@ -542,13 +608,25 @@ fn instrument_pending(m: &SourcedMessage, at: String, probe: bool) -> Result<Vec
 }
 
 /// The record of a measurement whose signals are all read, or why it is rejected.
-fn resolve(p: Pending, builder: &SignalsBuilder, needs: &[(String, SignalKind)], model: &ForwardModel, features: &CameraFeatures, out: &mut StreamOutput) {
-    let q = match p.q {
+/// `commanded`: the recording's joint states give the machine's positions, which then take
+/// precedence over a point's nominal.
+fn resolve(p: Pending, builder: &SignalsBuilder, needs: &[(String, SignalKind)], model: &ForwardModel, features: &CameraFeatures, commanded: bool, out: &mut StreamOutput) {
+    let q = match p.q.filter(|_| !commanded) {
         Some(q) => q,
         None => match builder.joints_at(p.t_ns) {
             Some(m) => m.positions,
             None => {
-                out.rejected.push(reject(p.at, &p.point_id, format!("no commanded joint state at or around its time {:.3} s (a gap in {COMMANDED_JOINTS_TOPIC}, or outside it)", p.t_ns as f64 / 1e9)));
+                let joints = model.machine.joint_names();
+                out.rejected.push(reject(
+                    p.at,
+                    &p.point_id,
+                    format!(
+                        "no commanded position of {} at or around its time {:.3} s: {COMMANDED_JOINTS_TOPIC} has no sample with those joints' positions there (bag import: columns {})",
+                        joints.join(", "),
+                        p.t_ns as f64 / 1e9,
+                        joints.iter().map(|j| format!("joint.{j}")).collect::<Vec<_>>().join(", ")
+                    ),
+                ));
                 return;
             }
         },

@@ -400,6 +400,37 @@ fn signals_of_an_imported_export_equal_its_values() {
     let _ = std::fs::remove_dir_all(&bag);
 }
 
+/// An export with nominals and velocities but no joint columns (issue 26): on a cartesian machine
+/// the nominals give the commanded axes (nominal − tool offset) and the velocity columns the
+/// axis velocities; nothing is set aside.
+#[test]
+fn nominals_give_the_axes_when_an_export_has_velocities_but_no_joints() {
+    let dir = scratch("csv_nominal_velocity");
+    std::fs::create_dir_all(&dir).unwrap();
+    let mapping_text = std::fs::read_to_string(fixture("recordings_mapping.yaml")).unwrap().replace("  joint.x:", "  nominal_x:").replace("  joint.y:", "  nominal_y:").replace("  joint.z:", "  nominal_z:");
+    std::fs::write(dir.join("mapping.yaml"), mapping_text).unwrap();
+    let bag = dir.join("bag");
+    let report = import_csv(&fixture("recordings_export.csv"), &bag, Some(&Mapping::load(&dir.join("mapping.yaml")).unwrap()), WriterOptions::default()).unwrap();
+    assert!(report.errors.is_empty(), "{:?}", report.errors);
+    let c = cell(CSV_MODEL, "csv_model");
+    let instruments = c.tracker_terms().unwrap();
+    let model = c.forward_model(&instruments).unwrap();
+    let set = records_from_bags(&[&bag], &model, &RecordingOptions::default()).unwrap();
+    let rows = csv_rows();
+    assert!(set.rejected.is_empty(), "{:?}", set.rejected);
+    assert_eq!(set.records.len(), rows.len());
+    for (rec, row) in set.records.iter().zip(&rows) {
+        // the tool offset is (0, 0, −150 mm): the axes are the nominal minus it
+        let q = [row.joints[0], row.joints[1], row.joints[2] + 0.150];
+        for k in 0..3 {
+            assert!((rec.q[k] - q[k]).abs() < 1e-12, "{}: q {:?} vs {q:?}", row.point, rec.q);
+            assert!((rec.signals.axis_position[k].unwrap() - q[k]).abs() < 1e-12);
+        }
+        assert_eq!(rec.signals.axis_velocity, row.velocity.map(Some), "{}", row.point);
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn a_lagged_growth_on_a_missing_sensor_names_term_signal_topic_and_column() {
     let text = exact_thermocouples(&example("quick_demo.yaml"));

@@ -139,15 +139,24 @@ impl Augmented {
 
     /// The nonlinear refit from `start`, the empirical corrections (at their selection values)
     /// taken off the measurements; on failure the start is kept and the reason returned.
-    pub fn refit(&self, machine: &MachineGeometry, set: &RecordSet, view0: &ResidualView, start: Vec<f64>, options: &DiagnoseOptions) -> Result<(Vec<f64>, Option<String>), PhysicsError> {
+    pub fn refit(&self, machine: &MachineGeometry, set: &RecordSet, view0: &ResidualView, start: Vec<f64>, options: &DiagnoseOptions) -> Result<Refit, PhysicsError> {
         let model = self.model(machine)?;
         let mut refit_set = set.clone();
         for (i, r) in refit_set.records.iter_mut().enumerate() {
             r.measured -= self.empirical_at(view0, i);
         }
         Ok(match fit(&model, &self.setup, &refit_set, Some(start.clone()), &options.fit) {
-            Ok(f) => (f.x, None),
-            Err(e) => (start, Some(format!("the nonlinear refit of the augmented model failed ({e}); the selection's linearised values are reported"))),
+            Ok(f) => Refit { at_bound: f.parameters.iter().filter_map(|p| p.at_bound.map(|b| (p.name.clone(), b.name().to_string()))).collect(), x: f.x, failure: None },
+            Err(e) => Refit { x: start, failure: Some(format!("the nonlinear refit of the augmented model failed ({e}); the selection's linearised values are reported")), at_bound: Vec::new() },
         })
     }
+}
+
+/// The refit's result.
+pub(crate) struct Refit {
+    pub x: Vec<f64>,
+    /// Why the refit failed (the start is then kept).
+    pub failure: Option<String>,
+    /// Parameters (`label.param`) that ended on a bound of their possible range, and which.
+    pub at_bound: Vec<(String, String)>,
 }

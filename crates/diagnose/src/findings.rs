@@ -47,6 +47,9 @@ pub struct Inputs<'a> {
     pub significance: &'a [(String, f64)],
     /// The alternatives the selection could not tell from each chosen label.
     pub alternatives: &'a BTreeMap<String, Vec<Alternative>>,
+    /// Parameters (`label.param`) the final refit left on a bound of their possible range, and
+    /// which (`lower`, `upper`).
+    pub at_bound: &'a [(String, String)],
 }
 
 pub struct Built {
@@ -253,7 +256,13 @@ pub fn build(inputs: &Inputs) -> Result<Built, PhysicsError> {
         let sigma: Vec<f64> = (0..n).map(|i| inputs.view.workpiece_sigma(&inputs.records[i].covariance)[main]).collect();
         let evidence = Evidence { signal: signal_name, unit, along, bins: bins(&signal, &residual, &fitted, &sigma), correlation: correlation(&residual, &fitted) };
         let params = params_of(inputs, &f.label);
-        let parameters: BTreeMap<String, ParameterValue> = params.iter().map(|(n, v, s, u)| (n.clone(), ParameterValue { value: *v, sigma: *s, unit: u.clone() })).collect();
+        let parameters: BTreeMap<String, ParameterValue> = params
+            .iter()
+            .map(|(n, v, s, u)| {
+                let at_bound = inputs.at_bound.iter().find(|(name, _)| *name == format!("{}.{n}", f.label)).map(|(_, side)| side.clone());
+                (n.clone(), ParameterValue { value: *v, sigma: if at_bound.is_some() { None } else { *s }, unit: u.clone(), at_bound })
+            })
+            .collect();
         let largest = (0..n).max_by(|&a, &b| c_wp[a].norm().total_cmp(&c_wp[b].norm())).unwrap_or(0);
         let channels: BTreeSet<String> = (0..n).filter(|&i| c_wp[i].norm() > 0.2 * c_wp[largest].norm()).map(|i| inputs.records[i].channel.clone()).collect();
         let p = inputs.view.position[largest];
@@ -595,6 +604,11 @@ fn unusual_values(inputs: &Inputs, label: &str) -> Vec<String> {
         }
         let spec = &specs[k];
         let v = inputs.x[k];
+        if let Some((_, side)) = inputs.at_bound.iter().find(|(n, _)| n == name) {
+            let (shown, unit) = display(spec.unit, v);
+            out.push(format!("{param} = {shown:.3} {unit} is on the {side} bound of its possible range: the data want a value beyond it, which the physics does not allow, and no interior σ can be given"));
+            continue;
+        }
         if spec.usual.contains(v) {
             continue;
         }

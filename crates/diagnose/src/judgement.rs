@@ -54,6 +54,9 @@ pub(crate) struct Judged {
     pub significance: Vec<(String, f64)>,
     pub uncertainty: UncertaintyNote,
     pub messages: Vec<String>,
+    /// Parameters (`label.param`) the refit left on a bound of their possible range (set by the
+    /// caller from the refit).
+    pub at_bound: Vec<(String, String)>,
 }
 
 /// Inputs of the judgement that do not change when a term is dropped and the rest refitted.
@@ -135,7 +138,7 @@ pub(crate) fn judge(inp: &JudgeInputs, aug: &Augmented, x1: &[f64]) -> Result<Ju
         .collect();
     let uncertainty = uncertainty_note(aug, &names, &free1, &cov, sigma2, &variance, &serial, place.is_some(), &alternatives);
     let whitened_after: Vec<f64> = e1.iter().copied().collect();
-    Ok(Judged { view1, before, after, before_res, after_res, held_before, held_after, names, sigmas, empirical, whitened_after, significance, uncertainty, messages })
+    Ok(Judged { view1, before, after, before_res, after_res, held_before, held_after, names, sigmas, empirical, whitened_after, significance, uncertainty, messages, at_bound: Vec::new() })
 }
 
 fn hstack(first: &DMatrix<f64>, rest: &[DMatrix<f64>]) -> DMatrix<f64> {

@@ -230,9 +230,11 @@ fn refit_and_judge<'a>(declared: &DeclaredModel, inputs: &JudgeInputs, selection
     loop {
         let aug = Augmented::new(declared.machine, declared.machine_terms, &inputs.stage.instruments, &inputs.stage.setup, &chosen, prepared)?;
         let start = aug.start(declared.machine, inputs.declared_model, inputs.x0)?;
-        let (x1, failure) = aug.refit(declared.machine, &inputs.stage.set, inputs.view0, start, options)?;
+        let refit = aug.refit(declared.machine, &inputs.stage.set, inputs.view0, start, options)?;
+        let x1 = refit.x;
         progress.say("refitted; held-out before and after");
-        let judged = judge(inputs, &aug, &x1)?;
+        let mut judged = judge(inputs, &aug, &x1)?;
+        judged.at_bound = refit.at_bound;
         let weakest = judged.significance.iter().filter(|(_, z)| *z < MIN_SIGNIFICANCE_SIGMA).min_by(|a, b| a.1.total_cmp(&b.1)).cloned();
         match weakest {
             Some((label, z)) if options.strategy == Strategy::Select => {
@@ -242,7 +244,7 @@ fn refit_and_judge<'a>(declared: &DeclaredModel, inputs: &JudgeInputs, selection
                 chosen.retain(|c| c.label != label);
             }
             _ => {
-                messages.extend(failure);
+                messages.extend(refit.failure);
                 messages.extend(judged.messages.iter().cloned());
                 return Ok((aug, x1, judged));
             }
@@ -328,11 +330,12 @@ fn report(declared: &DeclaredModel, stage: &DeclaredStage, aug: &Augmented, x1: 
         samples_before: ctx.samples0,
         significance: &judged.significance,
         alternatives: &findings::alternatives_of(ctx.selection, ctx.families),
+        at_bound: &judged.at_bound,
     })?;
     let added_terms = added_terms(aug, x1, &judged);
     let unexplained = findings::unexplained(&judged.empirical, &judged.view1, &ctx.located1, &set.records);
     let explained = unexplained.is_empty() && ctx.remaining.is_empty();
-    let declared_params = stage.fit.parameters.iter().filter(|p| p.free && !p.name.starts_with("tracker_pose.")).map(|p| (p.name.clone(), ParameterValue { value: p.value, sigma: p.sigma, unit: p.unit.into() })).collect();
+    let declared_params = stage.fit.parameters.iter().filter(|p| p.free && !p.name.starts_with("tracker_pose.")).map(|p| (p.name.clone(), ParameterValue { value: p.value, sigma: p.sigma, unit: p.unit.into(), at_bound: p.at_bound.map(|b| b.name().to_string()) })).collect();
     messages.extend(findings::advice(ctx.selection, ctx.families, &set.records, declared.machine));
     let mut rejected = stage.rejected.clone();
     rejected.truncate(50);

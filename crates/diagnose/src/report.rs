@@ -37,6 +37,10 @@ pub struct ParameterValue {
     /// Standard uncertainty (k = 1); null when not identifiable.
     pub sigma: Option<f64>,
     pub unit: String,
+    /// `lower`/`upper` when the fit ended on that bound of the parameter's possible range: the
+    /// data want a value beyond it, and `sigma` is no interior uncertainty; absent otherwise.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub at_bound: Option<String>,
 }
 
 /// Where a structure lives.

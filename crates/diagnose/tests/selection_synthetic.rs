@@ -126,4 +126,24 @@ fn implausible_values_are_refused() {
     assert!(s.chosen.iter().all(|c| c.label != "thermal_scale[x]"), "{:?}", s.chosen);
     let score = s.steps[0].scores.iter().find(|c| c.label == "thermal_scale[x]").unwrap();
     assert!(!score.plausible && score.values[0] > 5e-6);
+    // the data support it best: nothing is named in its place, and the refusal is recorded
+    assert!(score.supported, "{score:?}");
+    assert!(s.chosen.is_empty(), "named {:?} in place of a refused better term", s.chosen.iter().map(|c| &c.label).collect::<Vec<_>>());
+    let refused = s.steps[0].refused.expect("the refusal is recorded");
+    assert_eq!(refused, 1, "family 1 is thermal_scale[x]");
+}
+
+/// A reversal of the sign an over-compensated controller gives (the axis overshoots): with the
+/// catalog's possible range (a sign-free quantity, unbounded) it is named with its sign, and
+/// said to be outside the usual range.
+#[test]
+fn a_negative_reversal_is_named_with_its_sign() {
+    let beta = -9e-6;
+    let (d, rows) = data(5, |r| -0.5 * beta * r.approach);
+    let mut candidates = catalog(&rows, (0.0, 30e-6));
+    candidates[0].ranges = vec![(f64::NEG_INFINITY, f64::INFINITY)];
+    let s = select(&d, &candidates, &SelectionOptions::default());
+    assert_eq!(s.chosen.iter().map(|c| c.label.as_str()).collect::<Vec<_>>(), ["backlash[x]"]);
+    let (_, v, sigma, _) = &s.chosen[0].parameters[0];
+    assert!(*v < 0.0 && (v - beta).abs() < 3.0 * sigma, "β = {v} ± {sigma}");
 }

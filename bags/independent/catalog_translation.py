@@ -21,10 +21,19 @@ Translations (documented catalog equation ← our ISO/physical definition):
   thermal_growth[sensor]  d = n̂·g·(T_f − 20 °C): g along our direction; given here as the value
                    along +z (coefficient_along_z), the scorer turns it to the finding's direction.
   tracker_warmup   Δρ = A + B(1 − e^(−t/τ)): as is (t since power-on).
-  refraction       Δρ = ρ·(n(t+ΔT, p+Δp, h+Δh)/n(t, p, h) − 1), (t, p, h) the station's readings:
-                   only the scale n_beam/n_used − 1 is identifiable (ΔT and Δp act alike); we give
-                   the ΔT alone and the Δp alone that reproduce our mean scale at the station's
-                   mean readings (our Edlén).
+  refraction       Δρ = ρ·(n(t+ΔT, p+Δp, h+Δh)/n(t, p, h) − 1), (t, p, h) the station's readings,
+                   n "shop-floor Edlén": only the scale n_beam/n_used − 1 is identifiable (ΔT and Δp
+                   act alike); we give the ΔT alone and the Δp alone that reproduce our mean scale
+                   (computed with Birch & Downs in the generator) at the station's mean readings,
+                   solved with the shop-floor Edlén equation as NIST publishes it (the README names
+                   the formula, not its constants: at the tens of kelvin a standard-air error needs,
+                   the ΔT depends on the formula's water term, ~15 % between B&D and shop-floor).
+  instrument_drift pose(t) = pose + Σ_j P_j(u)·(dx_j, dy_j, dz_j, rx_j, ry_j, rz_j),
+                   u = 2(t − t_start)/(t_end − t_start) − 1 over the recording: the Legendre
+                   coefficients (j ≥ 1) of our pose drift; a stand sinking at r gives
+                   dz1 = −r·(t_end − t_start)/2; a head turning about its own standing axis by δ(t)
+                   gives rz_j (taken as the increment of the pose's last Euler angle, a turn about
+                   the tracker's own z — the README does not say which axes r turns about).
   time_offset      d = −Δt·v: Δt = our latency L (tracker stamps later than the instant).
   tool_offset      d = (dx, dy, dz): our error of the SMR offset in the flange frame (assumed
                    to be the catalog's frame for an arm; the README does not say).
@@ -33,8 +42,7 @@ Translations (documented catalog equation ← our ISO/physical definition):
 
 import numpy as np
 
-from iso_generator.air import refractive_index
-from iso_generator.geometric_errors import PositioningError, StraightnessError, PeriodicScrewError  # noqa: F401
+from iso_generator.geometric_errors import PositioningError, StraightnessError
 
 
 def _param(value, unit, identifiable=True, note=None, aliases=()):
@@ -59,10 +67,17 @@ def _series(fn, travel):
             for i in range(4)}
 
 
+def shop_floor_index(temperature_c, pressure_pa, humidity_rh):
+    """The shop-floor Edlén equation (NIST Engineering Metrology Toolbox):
+    n = 1 + 7.86e-4·p/(273 + t) − 1.5e-11·RH·(t² + 160), p in kPa, RH in %."""
+    t = np.asarray(temperature_c, dtype=float)
+    return 1.0 + 7.86e-4 * (pressure_pa / 1000.0) / (273.0 + t) - 1.5e-11 * (100.0 * humidity_rh) * (t * t + 160.0)
+
+
 def _refraction_equivalents(k_mean, station):
-    """ΔT alone and Δp alone giving the scale k at the station's mean readings."""
+    """ΔT alone and Δp alone giving the scale k at the station's mean readings (shop-floor Edlén)."""
     t, p, h = station["temperature_c"], station["pressure_pa"], station["humidity_rh"]
-    n0 = refractive_index(t, p, h)
+    n0 = shop_floor_index(t, p, h)
 
     def solve(f, lo, hi):
         for _ in range(80):
@@ -73,8 +88,8 @@ def _refraction_equivalents(k_mean, station):
                 hi = mid
         return 0.5 * (lo + hi)
 
-    dT = solve(lambda d: refractive_index(t + d, p, h) / n0 - 1.0, -200.0, 200.0)
-    dp = solve(lambda d: refractive_index(t, p + d, h) / n0 - 1.0, -60000.0, 60000.0)
+    dT = solve(lambda d: shop_floor_index(t + d, p, h) / n0 - 1.0, -200.0, 200.0)
+    dp = solve(lambda d: shop_floor_index(t, p + d, h) / n0 - 1.0, -60000.0, 60000.0)
     return dT, dp
 
 
@@ -123,21 +138,33 @@ def translate(effect_id, truth, context):
         dT, dp = _refraction_equivalents(k, context["station_mean"])
         if effect_id == "refraction_station_bias":
             dT, dp = -truth["station_minus_beam_k"], None
-        params = {"delta_t": _param(dT, "K", aliases=["temperature_offset", "dt", "delta_temperature", "temperature"],
+        params = {"delta_t": _param(dT, "K", aliases=["path_temperature_offset", "temperature_offset", "dt", "delta_temperature"],
                                     note="identifiable only as the range scale together with delta_p")}
         if dp is not None:
-            params["delta_p"] = _param(dp, "Pa", aliases=["pressure_offset", "dp", "delta_pressure", "pressure"],
+            params["delta_p"] = _param(dp, "Pa", aliases=["path_pressure_offset", "pressure_offset", "dp", "delta_pressure"],
                                        note="alternative to delta_t: the same range scale")
         else:
-            params["delta_p"] = _param(0.0, "Pa", aliases=["pressure_offset", "dp", "delta_pressure", "pressure"])
+            params["delta_p"] = _param(0.0, "Pa", aliases=["path_pressure_offset", "pressure_offset", "dp", "delta_pressure"])
         return [{"term": "refraction", "label": "refraction", "range_scale_ppm": k * 1e6, "parameters": params,
                  "degenerate": ["delta_t", "delta_p"]}]
     if effect_id == "latency":
         return [{"term": "time_offset", "label": "time_offset",
                  "parameters": {"dt": _param(truth["latency_s"], "s", aliases=["delta_t", "offset", "time_offset", "latency"])}}]
     if effect_id in ("tracker_stand_sinking", "tracker_turning"):
-        return [{"term": "instrument_drift", "label": "instrument_drift", "parameters": {},
-                 "physical": truth, "unexplained_is_correct": True}]
+        t0, t1 = context["time_span_s"]
+        params = {}
+        if effect_id == "tracker_stand_sinking":
+            drift = {"dz": lambda t: -truth["sink_rate_m_per_s"] * t}
+        else:
+            rate, tc = truth["initial_yaw_rate_rad_per_s"], truth["time_constant_s"]
+            drift = {"rz": lambda t: rate * tc * (1.0 - np.exp(-t / tc))}
+        for comp in ("dx", "dy", "dz", "rx", "ry", "rz"):
+            fn = drift.get(comp, lambda t: 0.0 * t)
+            c = legendre_coefficients(fn, (t0, t1))
+            for j in (1, 2, 3):
+                params[f"{comp}{j}"] = _param(c[j], "rad" if comp[0] == "r" else "m")
+        return [{"term": "instrument_drift", "label": "instrument_drift", "parameters": params,
+                 "physical": truth, "time_span_s": [t0, t1], "unexplained_is_correct": True}]
     if effect_id == "arm_tool_offset":
         e = truth["error_flange_m"]
         return [{"term": "tool_offset", "label": "tool_offset",

@@ -28,7 +28,6 @@ from iso_generator import arm_recording, delta_recording, models  # noqa: E402
 from iso_generator import xfyz_recording as xr  # noqa: E402
 from iso_generator.cases import CASES, SAMPLE  # noqa: E402
 from iso_generator.export import write_csv, write_mapping  # noqa: E402
-from iso_generator.recipes import Concealed  # noqa: E402
 
 MAPPING_COMMENT = """Mapping of the independent tracker export (bags/independent/generate_suite.py) onto
 metrocell's point CSV layout: mm -> m, U95 (k = 2) in mm, hPa -> Pa, %RH -> 0..1, feeds in
@@ -63,7 +62,7 @@ def _needs_probe(spec):
     return [recipe(np.random.default_rng(0), scratch, f) for recipe, f in spec.parts]
 
 
-def build_xfyz(spec, seed, rng, epoch):
+def build_xfyz(spec, seed, rng, epoch, no_role=False):
     family, needs = family_of(spec, _needs_probe(spec))
     setting = xr.Setting(rng, family, steady="steady" in needs)
     concealed = [recipe(rng, setting, f) for recipe, f in spec.parts]
@@ -73,14 +72,17 @@ def build_xfyz(spec, seed, rng, epoch):
     station_mean = {"temperature_c": float(np.mean(station["temperature_c"])),
                     "pressure_pa": float(np.mean(station["pressure_hpa"]) * 100.0),
                     "humidity_rh": float(np.mean(station["humidity_pct"]) / 100.0)}
-    context = {"travel": setting.travel, "station_mean": station_mean}
+    # the recording's time span as exported (without the role column the nests are left out)
+    exported = ~sim["is_nest"] if no_role else np.ones(len(t), bool)
+    context = {"travel": setting.travel, "station_mean": station_mean,
+               "time_span_s": (float(t[exported].min()), float(t[exported].max()))}
     effects = []
     for c in concealed:
         if c.refraction is not None:
             context["refraction_scale_mean"] = float(np.mean(c.refraction.scale(t)))
             c.truth = {**c.truth, **c.refraction.truth(t)}
         effects.append({"effect": c.effect_id, "truth": c.truth, "expected": translate(c.effect_id, c.truth, context)})
-    model = models.xfyz_model(spec.key and "shop_machine", setting.travel, setting.tool_offset)
+    model = models.xfyz_model("shop_machine", setting.travel, setting.tool_offset)
     meta = {"family": family, "machine": "XFYZ", "travel_m": setting.travel, "tool_offset_m": setting.tool_offset.tolist(),
             "duration_s": float(t.max()), "rows": int(len(t)), "reference_rows": int(sim["is_nest"].sum()),
             "moving_rows": int(readings["moving"].sum()), "tracker": tracker.truth(),
@@ -137,7 +139,7 @@ def main():
             if spec.parts and spec.parts[0][0] in ("arm", "delta"):
                 cols, model, effects, size, meta = build_arm_or_delta(spec, spec.parts[0][0], spec.parts[0][1], rng, epoch)
             else:
-                cols, model, effects, size, meta, _ = build_xfyz(spec, seed, rng, epoch)
+                cols, model, effects, size, meta, _ = build_xfyz(spec, seed, rng, epoch, a.no_role)
             if a.no_role:
                 # without the role column a reference nest's reading would pass for a tool point:
                 # leave the nests out too

@@ -245,7 +245,10 @@ def calibrate_check(metrocell, rec_dir, bag, truth_reversal, timeout):
     with open(out_json) as f:
         j = json.load(f)
     hits = _find_parameter(j, "backlash[y]", "reversal")
-    res["at_bound"] = [{"path": pth, "value": v} for pth, v in _find_key(j, "at_bound")]
+    bounds = _find_key(j, "at_bound")
+    res["at_bound_field_present"] = bool(bounds)
+    # what is reported at a bound: every non-empty at_bound (per parameter or a list)
+    res["at_bound"] = [{"path": pth, "value": v} for pth, v in bounds if v not in (None, [], False)]
     if not hits:
         res["error"] = "backlash[y].reversal not found in calibrate's JSON"
         res["json_keys"] = list(j)[:30]
@@ -362,7 +365,8 @@ def main():
         ok = c.get("negative") and c.get("within_3sigma")
         all_ok &= bool(ok)
         print(f"calibrate {case} seed {seed}: reversal {c.get('value')} ± {c.get('sigma')} m (truth {truth:.3e}): "
-              f"{'negative, within 3 sigma' if ok else 'MISS ' + str(c.get('error', ''))}; at_bound: {c.get('at_bound')}")
+              f"{'negative, within 3 sigma' if ok else 'MISS ' + str(c.get('error', ''))}; "
+              f"at_bound {'field present' if c.get('at_bound_field_present') else 'field ABSENT'}, at a bound: {c.get('at_bound')}")
     print(f"\n{len(results)} recordings in {wall:.0f} s with {workers} workers; {len(misses)} with a miss")
     for m in misses:
         print(f"MISS {m['case']} seed {m['seed']} {m['key']} ({m['category']}): {m.get('why', m.get('error'))}; "

@@ -60,7 +60,7 @@ CASES = [
     _single("positioning_y_3x", r.positioning("y", "progressive"), 3, "range_3x"),
     _single("squareness_EC0X_3x", r.squareness("EC0X"), 3, "range_3x"),
     _single("periodic_x_3x", r.screw_periodic("x"), 3, "range_3x"),
-    _single("scale_expansion_x_3x", r.scale_expansion("x"), 3, "range_3x", "aluminium-bodied scale"),
+    _single("scale_expansion_x_3x", r.scale_expansion("x"), 3, "range_3x", "3x steel: beyond the usual range"),
     _single("column_growth_3x", r.column_growth(), 3, "range_3x"),
     _single("tracker_warmup_3x", r.tracker_warmup(), 3, "range_3x"),
     _single("refraction_high_plant", r.refraction_standard_air(), 3, "range_3x", "plant at ~1800 m"),

@@ -21,9 +21,13 @@
 //! | `pressure` | air pressure [Pa] | no |
 //! | `humidity` | relative humidity, 0..1 | no |
 //! | `aux.<name>` | any other channel (accelerometer, ...), in its SI unit | no |
+//! | `role` | what the row's point is for: `fit` (a point of the machine's program, the default), `reference` (a fixed reference nest re-measured through the shift, on the floor or on the table the instrument stands on: the machine does not move it; its nominal, when given, is the nest's position) | no |
 //!
 //! # Topics written (log time = publish time = the row's timestamp)
 //! * `/measured_points` `metrocell_msgs/msg/MeasuredPoint` (covariance diagonal σ², off-diagonal 0)
+//! * `/reference_points` `metrocell_msgs/msg/MeasuredPoint`: the rows whose `role` is
+//!   `reference` (no joint state or approach is written for them: the machine did not put them
+//!   there)
 //! * `/machine/commanded_joint_states` `sensor_msgs/msg/JointState` (the topic `metrocell sim`
 //!   and the nodes use): `name` = the `joint.<name>` columns then any `velocity.<name>` without
 //!   a joint column, `position` from `joint.*` and `velocity` from `velocity.*` (NaN where a
@@ -137,7 +141,18 @@ enum Field {
     Pressure,
     Humidity,
     Aux(String),
+    Role,
 }
+
+/// What a row's point is for (`role` column).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Role {
+    Fit,
+    Reference,
+}
+
+/// The topic reference nests' readings are written to (and read from).
+pub const REFERENCE_POINTS_TOPIC: &str = "/reference_points";
 
 fn parse_field(name: &str) -> Option<Field> {
     let axis = |s: &str| ["x", "y", "z"].iter().position(|a| *a == s);
@@ -149,6 +164,7 @@ fn parse_field(name: &str) -> Option<Field> {
         "pressure" => Field::Pressure,
         "humidity" => Field::Humidity,
         "instrument_on_time" => Field::InstrumentOnTime,
+        "role" => Field::Role,
         _ => {
             if let Some(a) = name.strip_prefix("measured_").and_then(axis) {
                 Field::Measured(a)
@@ -407,6 +423,7 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
         let mut temps = Vec::new();
         let mut aux = Vec::new();
         let (mut pressure, mut humidity) = (None, None);
+        let mut role = Role::Fit;
         for b in &bound {
             let cell = record.get(b.index).unwrap_or("");
             let number = || -> std::result::Result<f64, String> {
@@ -478,6 +495,11 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
                     Ok(v) => aux.push((n.clone(), v)),
                     Err(e) => err(b, e),
                 },
+                Field::Role => match cell.trim().to_ascii_lowercase().as_str() {
+                    "" | "fit" => role = Role::Fit,
+                    "reference" | "ref" => role = Role::Reference,
+                    other => err(b, format!("role '{other}' is not one of: fit (a point of the machine's program), reference (a fixed reference nest)")),
+                },
             }
         }
         if !row_errors.is_empty() {
@@ -499,12 +521,19 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
             measured: Point { x: measured[0], y: measured[1], z: measured[2] },
             covariance: cov,
         };
-        out.push(("/measured_points".into(), MeasuredPoint::ROS_TYPE, MeasuredPoint::DEFINITION, encode_cdr(&p)?));
-        if !joints.is_empty() || !velocities.is_empty() {
+        if role == Role::Reference {
+            // a nest the machine did not put there: its point alone, and the row's signals
+            out.push((REFERENCE_POINTS_TOPIC.into(), MeasuredPoint::ROS_TYPE, MeasuredPoint::DEFINITION, encode_cdr(&p)?));
+        } else {
+            out.push(("/measured_points".into(), MeasuredPoint::ROS_TYPE, MeasuredPoint::DEFINITION, encode_cdr(&p)?));
+        }
+        // the machine's motion belongs to its own points, not to a nest's reading
+        let machine_row = role == Role::Fit;
+        if machine_row && (!joints.is_empty() || !velocities.is_empty()) {
             let js = commanded_joint_state(header.clone(), &joints, &velocities);
             out.push((COMMANDED_JOINTS_TOPIC.into(), JointState::ROS_TYPE, JointState::DEFINITION, encode_cdr(&js)?));
         }
-        if !approach.is_empty() {
+        if machine_row && !approach.is_empty() {
             let js = JointState { header: header.clone(), name: approach.iter().map(|a| a.0.clone()).collect(), position: approach.iter().map(|a| a.1).collect(), ..Default::default() };
             out.push((APPROACH_TOPIC.into(), JointState::ROS_TYPE, JointState::DEFINITION, encode_cdr(&js)?));
         }

@@ -223,7 +223,8 @@ mod tests {
         s.coefficient = 1.0;
         let e = GrowthCompensator::new(s).unwrap_err().to_string();
         assert!(e.contains("coefficient") && e.contains("thermal_growth[column]"), "{e}");
-        let mut s = column(Some(0.1));
+        // a negative lag is impossible (a lag of 0.1 s is merely short)
+        let mut s = column(Some(-5.0));
         s.time_constant_uncertainty = 1.0;
         let e = GrowthCompensator::new(s).unwrap_err().to_string();
         assert!(e.contains("time_constant"), "{e}");

@@ -2,7 +2,7 @@
 //! its nonlinear refit with the shared solver (lags, warm-up τ and leads refined), the empirical
 //! corrections taken off the measurements meanwhile.
 
-use metrocell_estimation::{fit, RecordSet};
+use metrocell_estimation::{estimate_nests, fit, is_reference, RecordSet};
 use metrocell_model::{ForwardModel, MachineGeometry, ParameterSetup};
 use metrocell_physics::model::TermModel;
 use metrocell_physics::{configure, ConfigValue, PhysicsError, TermConfig, TermId};
@@ -145,7 +145,18 @@ impl Augmented {
         for (i, r) in refit_set.records.iter_mut().enumerate() {
             r.measured -= self.empirical_at(view0, i);
         }
-        Ok(match fit(&model, &self.setup, &refit_set, Some(start.clone()), &options.fit) {
+        // reference nests were placed at the declared fit: with the instrument's terms fitted
+        // they are placed again and the fit repeated (a nest's mean reading holds the drift's
+        // mean over its readings' times)
+        let mut result = fit(&model, &self.setup, &refit_set, Some(start.clone()), &options.fit);
+        if let Ok(f) = &result {
+            if refit_set.records.iter().any(is_reference) {
+                estimate_nests(&model, &f.x, &mut refit_set.records, &set.frame, true)?;
+                let x = f.x.clone();
+                result = fit(&model, &self.setup, &refit_set, Some(x), &options.fit);
+            }
+        }
+        Ok(match result {
             Ok(f) => Refit { at_bound: f.parameters.iter().filter_map(|p| p.at_bound.map(|b| (p.name.clone(), b.name().to_string()))).collect(), x: f.x, failure: None },
             Err(e) => Refit { x: start, failure: Some(format!("the nonlinear refit of the augmented model failed ({e}); the selection's linearised values are reported")), at_bound: Vec::new() },
         })

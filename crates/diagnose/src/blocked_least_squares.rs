@@ -298,6 +298,12 @@ impl BaseFit {
         out
     }
 
+    /// `v` (arranged rows) with its least-squares fit by the base columns taken out: what of it
+    /// the base cannot explain.
+    pub fn project_out(&self, v: &DVector<f64>) -> DVector<f64> {
+        v - &self.a * (&self.full.p * self.a.tr_mul(v))
+    }
+
     /// Full-data residual of every (arranged) row.
     pub fn residuals(&self) -> DVector<f64> {
         &self.b - &self.a * &self.full.x

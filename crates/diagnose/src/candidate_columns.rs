@@ -63,11 +63,12 @@ impl<'m, 'a> ColumnContext<'m, 'a> {
     /// `x` is the declared fit (the model's stacked order), `whitening` L⁻¹ of each record.
     pub fn new(model: &'m ForwardModel<'a>, x: &[f64], records: &'m [MeasurementRecord], whitening: &'m [Matrix3<f64>]) -> Result<Self, PhysicsError> {
         let signals: Vec<Signals> = records.iter().map(|r| r.signals.clone()).collect();
-        let machine_points: Vec<Vector3<f64>> = records.iter().map(|r| model.nominal_machine_point(&r.q).unwrap_or_else(Vector3::zeros)).collect();
+        // (a reference nest has no joints, and no machine term acts on it)
+        let machine_points: Vec<Vector3<f64>> = records.iter().map(|r| if r.q.len() >= 3 { model.nominal_machine_point(&r.q).unwrap_or_else(Vector3::zeros) } else { Vector3::zeros() }).collect();
         let mut ctx = Self { model, x: x.to_vec(), records, whitening, signals, sensitivity: None, machine_points };
         // ∂reading/∂d from a tool offset's columns is the tracker's: chaining through it is for
         // point records only (probe and camera records take the full augmented Jacobian)
-        let points_only = records.iter().all(|r| matches!(r.kind, RecordKind::Point));
+        let points_only = records.iter().all(|r| matches!(r.kind, RecordKind::Point | RecordKind::Reference { .. }));
         if points_only && !matches!(model.machine.kinematics, MachineKinematics::SerialArm(_)) {
             // ∂reading/∂d: the columns of a tool offset (declared, or added at zero)
             let names = model.param_names();
@@ -142,6 +143,10 @@ impl<'m, 'a> ColumnContext<'m, 'a> {
         let mut jac = DMatrix::zeros(3, k);
         let reads_point = term.term.signals().contains(&metrocell_physics::SignalKind::MachinePoint);
         for i in 0..self.records.len() {
+            if matches!(self.records[i].kind, RecordKind::Reference { .. }) {
+                // the machine does not move a reference nest: its rows stay zero
+                continue;
+            }
             let s = &mut self.signals[i];
             if reads_point {
                 s.machine_point = Some(self.machine_points[i]);

@@ -8,7 +8,7 @@
 //!   explain set aside), a declared term held fixed that the data may contradict (freed), and
 //!   the empirical corrections that never get a physical name.
 
-use metrocell_estimation::{MeasurementRecord, RecordFrame};
+use metrocell_estimation::{is_reference, MeasurementRecord, RecordFrame};
 use metrocell_model::ForwardModel;
 use metrocell_physics::{PhysicsError, TermId};
 use nalgebra::{DMatrix, DVector, Vector3};
@@ -17,6 +17,7 @@ use crate::blocked_least_squares::{pseudo_inverse, separable_columns};
 use crate::candidate_columns::ColumnContext;
 use crate::candidates::{candidate_families, Declared, NotTried, TermFamily};
 use crate::declared_stage::DeclaredStage;
+use crate::reference_columns::{nest_columns, with_columns};
 use crate::empirical::{bump_variants, time_variants, EmpiricalBasis};
 use crate::folds::{time_blocks, workspace_blocks};
 use crate::periodogram::{independent_frequencies, strongest_period};
@@ -71,7 +72,8 @@ impl SelectionFrame {
         let idx: Vec<usize> = by_time.iter().step_by(stride).copied().collect();
         let records: Vec<MeasurementRecord> = idx.iter().map(|&i| stage.set.records[i].clone()).collect();
         let view = ResidualView::new(model, x0, &records, &stage.set.frame)?;
-        let declared_cols = ColumnContext::new(model, x0, &records, &view.whitening)?.declared_columns(free0)?;
+        // the declared free parameters, and each reference nest's position (a nuisance)
+        let declared_cols = with_columns(ColumnContext::new(model, x0, &records, &view.whitening)?.declared_columns(free0)?, &nest_columns(&records, &view));
         let b = view.whitened();
         let folds = vec![expand_folds(&idx.iter().map(|&i| folds_time[i]).collect::<Vec<_>>()), expand_folds(&idx.iter().map(|&i| folds_space[i]).collect::<Vec<_>>())];
         Ok(Self { folds_time, folds_space, records, view, b, declared_cols, folds })
@@ -118,11 +120,16 @@ fn periodogram_leads(declared: &DeclaredModel, frame: &SelectionFrame, inventory
         if !inventory.positions[k] {
             continue;
         }
-        let q: Vec<f64> = frame.records.iter().map(|r| r.signals.axis_position[k].unwrap_or(0.0)).collect();
+        // the machine's points only: a reference nest has no axis position
+        let machine: Vec<usize> = (0..frame.records.len()).filter(|&i| !is_reference(&frame.records[i])).collect();
+        let q: Vec<f64> = machine.iter().map(|&i| frame.records[i].signals.axis_position[k].unwrap_or(0.0)).collect();
+        let (res, w) = (frame.residual_along(k), frame.weights(k));
+        let res: Vec<f64> = machine.iter().map(|&i| res[i]).collect();
+        let w: Vec<f64> = machine.iter().map(|&i| w[i]).collect();
         let span = declared.machine.travel[k][1] - declared.machine.travel[k][0];
-        if span.is_finite() {
+        if span.is_finite() && !q.is_empty() {
             let covered = q.iter().cloned().fold(f64::NEG_INFINITY, f64::max) - q.iter().cloned().fold(f64::INFINITY, f64::min);
-            *lead = strongest_period(&q, &frame.residual_along(k), &frame.weights(k), 1.5e-3, span / 3.0).map(|p| (p.0, independent_frequencies(covered, 1.5e-3, span / 3.0)));
+            *lead = strongest_period(&q, &res, &w, 1.5e-3, span / 3.0).map(|p| (p.0, independent_frequencies(covered, 1.5e-3, span / 3.0)));
         }
     }
     leads
@@ -130,7 +137,9 @@ fn periodogram_leads(declared: &DeclaredModel, frame: &SelectionFrame, inventory
 
 /// Every candidate the selection chooses among, and the catalog terms not tried with why.
 pub(crate) fn candidates(declared: &DeclaredModel, model: &ForwardModel, stage: &DeclaredStage, x0: &[f64], frame: &SelectionFrame, options: &DiagnoseOptions) -> Result<(Vec<Prepared>, Vec<NotTried>), PhysicsError> {
-    let inventory = SignalInventory::of(&frame.records);
+    // what the machine's points can inform (a reference nest carries no axis positions)
+    let machine_records: Vec<MeasurementRecord> = frame.records.iter().filter(|r| !is_reference(r)).cloned().collect();
+    let inventory = SignalInventory::of(&machine_records);
     let leads = periodogram_leads(declared, frame, &inventory);
     let decl = Declared { machine: declared.machine, machine_terms: declared.machine_terms, instrument_terms: &stage.instruments };
     let (term_families, mut not_tried) = candidate_families(&decl, &inventory, &leads, stage.set.frame == RecordFrame::Machine);

@@ -67,7 +67,10 @@ pub const COMMON_LEADS_MM: [f64; 14] = [2.0, 2.5, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0
 pub const MIN_DRIFT_SPAN_S: f64 = 600.0;
 
 /// Time constants tried for a structure's lag behind its sensor and for a tracker's warm-up (s).
-pub const LAG_GRID_S: [f64; 8] = [120.0, 300.0, 600.0, 1200.0, 2400.0, 4800.0, 9600.0, 19200.0];
+/// The lag grid steps by √2: at a large effect a coarser grid leaves a misfit of the lag's shape
+/// that a smooth empirical correction would then fit better than the physics (the refit refines
+/// τ anyway; the grid decides which term is named).
+pub const LAG_GRID_S: [f64; 15] = [120.0, 170.0, 240.0, 340.0, 480.0, 680.0, 960.0, 1360.0, 1920.0, 2720.0, 3840.0, 5430.0, 7680.0, 10860.0, 15360.0];
 pub const WARMUP_GRID_S: [f64; 9] = [300.0, 600.0, 1200.0, 1800.0, 2700.0, 3600.0, 5400.0, 7200.0, 10800.0];
 
 fn text(s: &str) -> ConfigValue {
@@ -228,7 +231,15 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
             // cyclic screw error: the common leads shorter than a third of the travel, and the
             // residuals' own periodogram peak
             let span = machine.travel[k][1] - machine.travel[k][0];
-            let leads: Vec<(f64, f64)> = COMMON_LEADS_MM.iter().map(|l| (l * 1e-3, 1.0)).filter(|(l, _)| *l < span / 3.0).chain(periodogram_leads[k].filter(|(l, _)| !COMMON_LEADS_MM.iter().any(|x| (x * 1e-3 - l).abs() < 1e-3 * l))).collect();
+            // the periodogram's own peak, unless a common lead lies within its resolution
+            // (lead² / span: over 800 mm a 16 mm lead is resolved to 0.3 mm) — a screw's lead is
+            // a catalog value, and a peak a little off it only fits the noise
+            let leads: Vec<(f64, f64)> = COMMON_LEADS_MM
+                .iter()
+                .map(|l| (l * 1e-3, 1.0))
+                .filter(|(l, _)| *l < span / 3.0)
+                .chain(periodogram_leads[k].filter(|(l, _)| !COMMON_LEADS_MM.iter().any(|x| (x * 1e-3 - l).abs() < l * l / span.max(*l))))
+                .collect();
             let variants = leads
                 .iter()
                 .map(|&(l, searched)| {

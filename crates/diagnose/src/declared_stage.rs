@@ -6,7 +6,7 @@
 //! declared parameter is not taken for missing physics); gross outliers are set aside and the fit
 //! repeated; a model that leaves millimetres after its own fit is refused with what to check.
 
-use metrocell_estimation::{fit, Fit, MeasurementRecord, RecordSet};
+use metrocell_estimation::{estimate_nests, fit, is_reference, Fit, MeasurementRecord, RecordSet};
 use metrocell_model::{ForwardModel, ParameterSetup};
 use metrocell_physics::model::TermModel;
 use metrocell_physics::{configure, PhysicsError, TermConfig, TermId};
@@ -74,15 +74,22 @@ pub(crate) fn declared_stage(declared: &DeclaredModel, records: &RecordSet, opti
     if prep.records.is_empty() {
         return Err(DiagnoseError::NoRecords(if rejected.is_empty() { "the recording holds no measured points".into() } else { format!("every record was set aside: {}", rejected.iter().take(5).cloned().collect::<Vec<_>>().join("; ")) }));
     }
-    check_records(declared, &setup, &prep.records)?;
-    let mut set = RecordSet { frame: records.frame.clone(), records: prep.records.clone(), rejected: vec![], sources: records.sources.clone() };
-    progress.say(&format!("{} readings → {} records ({} groups of repeats averaged); fitting the declared model", prep.readings, prep.records.len(), prep.groups));
+    // reference nests only inform the instrument's terms: the declared model is fitted to the
+    // machine's points, the nests placed from their own readings at that fit
+    let (mut references, points): (Vec<MeasurementRecord>, Vec<MeasurementRecord>) = prep.records.iter().cloned().partition(is_reference);
+    check_records(declared, &setup, &points)?;
+    let mut set = RecordSet { frame: records.frame.clone(), records: points, rejected: vec![], sources: records.sources.clone() };
+    progress.say(&format!("{} readings → {} records ({} groups of repeats averaged, {} readings of reference nests); fitting the declared model", prep.readings, prep.records.len(), prep.groups, references.len()));
     let mut declared_fit = fit(&model, &setup, &set, None, &options.fit).map_err(DiagnoseError::DeclaredFit)?;
     let outlier_notes = set_outliers_aside(&model, &declared_fit, &mut set, options.outlier_threshold)?;
     if !outlier_notes.is_empty() {
         declared_fit = fit(&model, &setup, &set, None, &options.fit).map_err(DiagnoseError::DeclaredFit)?;
     }
     check_mismatch(&declared_fit, &set)?;
+    if !references.is_empty() {
+        estimate_nests(&model, &declared_fit.x, &mut references, &set.frame, true)?;
+        set.records.extend(references);
+    }
     Ok(DeclaredStage { instruments, setup, set, readings: prep.readings, groups: prep.groups, repeatability: prep.repeatability_scale, rejected, outlier_notes, fit: declared_fit })
 }
 

@@ -531,6 +531,8 @@ pub fn unexplained(empirical: &[(EmpiricalBasis, Vec<f64>, Vec<f64>, Vec<f64>)],
 /// What to measure next, and what these records could not tell apart.
 pub fn advice(selection: &FamilySelection, families: &[Family], records: &[MeasurementRecord], machine: &metrocell_model::MachineGeometry) -> Vec<String> {
     let mut out = Vec::new();
+    // the machine's points (a reference nest has no axis position)
+    let records: Vec<&MeasurementRecord> = records.iter().filter(|r| !metrocell_estimation::is_reference(r)).collect();
     for k in 0..3 {
         let values: Vec<f64> = records.iter().filter_map(|r| r.signals.axis_position[k]).collect();
         if values.len() != records.len() || values.is_empty() {

@@ -27,6 +27,7 @@ use crate::candidate_columns::ColumnContext;
 use crate::candidate_stage::{empirical_columns, expand_folds, Prepared, Source};
 use crate::declared_stage::DeclaredStage;
 use crate::empirical::EmpiricalBasis;
+use crate::reference_columns::{nest_columns, with_columns};
 use crate::report::{FitFigures, UncertaintyNote};
 use crate::residual_view::ResidualView;
 use crate::selection::{significance_sigma, Family, FamilySelection};
@@ -86,13 +87,16 @@ pub(crate) fn judge(inp: &JudgeInputs, aug: &Augmented, x1: &[f64]) -> Result<Ju
     // an instrument frame) and the empirical corrections' columns
     let free1: Vec<usize> = aug.setup.free.iter().enumerate().filter(|(k, f)| **f && !(set.frame == RecordFrame::Machine && names[*k].starts_with("tracker_pose."))).map(|(k, _)| k).collect();
     let mut ctx_all = ColumnContext::new(&model_aug, x1, &set.records, &view1.whitening)?;
-    let free_cols = ctx_all.declared_columns(&free1)?;
+    // the free parameters and each reference nest's position (a nuisance; after them in the
+    // columns, before the empirical corrections)
+    let nests = nest_columns(&set.records, &view1);
+    let free_cols = with_columns(ctx_all.declared_columns(&free1)?, &nests);
     let emp_cols: Vec<DMatrix<f64>> = aug.empirical.iter().map(|e| empirical_columns(&view1, &e.basis)).collect();
     let a1 = hstack(&free_cols, &emp_cols);
     let row_folds = vec![expand_folds(inp.folds_time), expand_folds(inp.folds_space)];
     let rows = BlockedRows::new(&row_folds, 3 * n);
     let after_fit = BaseFit::new(&rows, rows.arrange(&a1), rows.arrange_vector(&view1.whitened()));
-    let before_cols = ColumnContext::new(inp.declared_model, inp.x0, &set.records, &inp.view0.whitening)?.declared_columns(inp.free0)?;
+    let before_cols = with_columns(ColumnContext::new(inp.declared_model, inp.x0, &set.records, &inp.view0.whitening)?.declared_columns(inp.free0)?, &nest_columns(&set.records, inp.view0));
     let before_fit = BaseFit::new(&rows, rows.arrange(&before_cols), rows.arrange_vector(&inp.view0.whitened()));
     let mut messages = Vec::new();
     let schemes = judging_schemes(inp, aug, &mut messages);
@@ -114,7 +118,7 @@ pub(crate) fn judge(inp: &JudgeInputs, aug: &Augmented, x1: &[f64]) -> Result<Ju
         classical.max(in_time).max(in_place) + shift2[j]
     };
     let sol = after_fit.solution().clone();
-    let empirical = empirical_fitted(aug, &view1, &free_cols, &emp_cols, &sol, free1.len(), &variance);
+    let empirical = empirical_fitted(aug, &view1, &free_cols, &emp_cols, &sol, free1.len() + nests.ncols(), &variance);
     let mut sigmas = vec![None; names.len()];
     for (j, &k) in free1.iter().enumerate() {
         sigmas[k] = Some(variance(j).sqrt());

@@ -30,6 +30,7 @@ pub mod candidate_columns;
 mod candidate_stage;
 pub mod candidates;
 mod declared_stage;
+mod reference_columns;
 pub mod empirical;
 pub mod findings;
 pub mod folds;

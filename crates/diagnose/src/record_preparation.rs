@@ -34,7 +34,8 @@ fn usable(r: &MeasurementRecord) -> Result<(), String> {
     if !r.time.is_finite() {
         return Err("time stamp is not finite".into());
     }
-    if r.q.is_empty() || !r.q.iter().all(|v| v.is_finite()) {
+    // a reference nest is not where the machine is: it has no joints
+    if !matches!(r.kind, metrocell_estimation::RecordKind::Reference { .. }) && (r.q.is_empty() || !r.q.iter().all(|v| v.is_finite())) {
         return Err("commanded joint vector is missing or not finite".into());
     }
     if whitening(&r.covariance).is_none() {
@@ -78,7 +79,16 @@ pub fn prepare(records: &[MeasurementRecord], average_repeats: bool, max_gap: f6
                 // a long stay at one place (a machine idling at home) is cut into pieces of
                 // `MAX_GROUP_SPAN`, so drifts over the stay are kept; only readings of one thing
                 // are averaged (a probe's hits in eight directions from one stand are eight)
-                let same = next.channel == first.channel && next.kind == first.kind && next.q.len() == first.q.len() && next.q.iter().zip(&first.q).all(|(a, b)| (a - b).abs() <= 1e-9) && stationary(next) && next.time - prev.time <= max_gap && next.time - first.time <= MAX_GROUP_SPAN;
+                // (a point approached from the other side is another measurement: the turn of a
+                // bidirectional run reads one target twice, a reversal error apart)
+                let same = next.channel == first.channel
+                    && next.kind == first.kind
+                    && next.q.len() == first.q.len()
+                    && next.q.iter().zip(&first.q).all(|(a, b)| (a - b).abs() <= 1e-9)
+                    && next.signals.approach_direction == first.signals.approach_direction
+                    && stationary(next)
+                    && next.time - prev.time <= max_gap
+                    && next.time - first.time <= MAX_GROUP_SPAN;
                 if !same {
                     break;
                 }

@@ -43,6 +43,10 @@ pub fn records_rotation(model: &ForwardModel, x: &[f64], frame: &RecordFrame) ->
 /// Where a record was taken: its commanded axis positions if it has all three, else the
 /// machine-frame nominal point of its joints, else the measured point.
 pub fn record_position(model: &ForwardModel, r: &MeasurementRecord) -> Vector3<f64> {
+    if let metrocell_estimation::RecordKind::Reference { nest } = r.kind {
+        // a reference nest sits where it is, whatever the machine does
+        return nest;
+    }
     match r.signals.axis_position {
         [Some(x), Some(y), Some(z)] => Vector3::new(x, y, z),
         _ => model.nominal_machine_point(&r.q).unwrap_or(r.measured),

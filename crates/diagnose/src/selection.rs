@@ -32,7 +32,8 @@
 //!
 //! Among the acceptable, each family keeps its variant of lowest BIC and the family of lowest BIC
 //! wins, physical terms first: an empirical correction wins only when its BIC is lower than the
-//! best physical term's by more than `empirical_margin` (strong evidence that no catalog term
+//! best physical term's by more than `empirical_margin` (or 2 % of the physical term's own |ΔBIC|,
+//! whichever is larger) (strong evidence that no catalog term
 //! explains the structure as well). The loop stops when nothing is acceptable or `max_terms` were
 //! added; then every chosen term is tested again given all the others (backward elimination), so
 //! a term that only stood in for a later one is dropped.
@@ -117,6 +118,12 @@ pub fn preference(term: &str) -> usize {
 /// "not worth more than a bare mention").
 pub const TIE_BIC: f64 = 2.0;
 
+/// BIC difference below which two candidates whose effects are confounded (correlated beyond
+/// [`CONFOUNDED_CORRELATION`]) count as equally supported (Kass & Raftery: below "strong"): the
+/// same effect at slightly different shapes (a positioning error and a scale with a sensor that
+/// barely moves) is named by convention, the other kept as an alternative.
+pub const CONFOUNDED_BIC: f64 = 6.0;
+
 /// The data: residuals after the declared fit, their σ, the declared free parameters' Jacobian,
 /// and fold assignments (one vector per blocking scheme, fold ids 0..k).
 #[derive(Debug, Clone)]
@@ -144,11 +151,16 @@ pub struct SelectionOptions {
     /// How much lower (BIC units) an empirical correction's BIC must be than the best physical
     /// term's to be preferred to it.
     pub empirical_margin: f64,
+    /// The margin grows with the physical term's own support: an empirical correction must also
+    /// beat it by this fraction of its |ΔBIC| (a physical term that explains 99 % of a large
+    /// effect and misses the rest by its model's imperfection — a lag's exact shape — is still
+    /// the physics; what it misses is judged in the next step).
+    pub empirical_margin_relative: f64,
 }
 
 impl Default for SelectionOptions {
     fn default() -> Self {
-        Self { alpha: 0.01, min_cv_gain: 0.02, max_terms: 3, empirical_margin: 10.0 }
+        Self { alpha: 0.01, min_cv_gain: 0.02, max_terms: 3, empirical_margin: 10.0, empirical_margin_relative: 0.02 }
     }
 }
 
@@ -306,27 +318,20 @@ struct Scored {
     variant: usize,
     bic: f64,
     score: CandidateScore,
-    /// The candidate's fitted effect over the (arranged) whitened rows.
+    /// The candidate's fitted effect over the (arranged) whitened rows, with what the declared
+    /// parameters and the terms chosen so far explain of it taken out (an instrument's pose takes
+    /// any constant, so two drifts that differ by one are the same here).
     effect: DVector<f64>,
 }
 
+/// Correlation of two effects that the base's columns have been projected out of: the cosine of
+/// the angle between them (they share the base's span, so no mean is taken separately).
 fn correlation(a: &DVector<f64>, b: &DVector<f64>) -> f64 {
-    let n = a.len() as f64;
-    if n < 2.0 || a.len() != b.len() {
+    let (na, nb) = (a.norm(), b.norm());
+    if a.len() != b.len() || !(na > 0.0 && nb > 0.0) {
         return 0.0;
     }
-    let (ma, mb) = (a.mean(), b.mean());
-    let (mut sab, mut saa, mut sbb) = (0.0, 0.0, 0.0);
-    for (x, y) in a.iter().zip(b.iter()) {
-        sab += (x - ma) * (y - mb);
-        saa += (x - ma) * (x - ma);
-        sbb += (y - mb) * (y - mb);
-    }
-    if saa > 0.0 && sbb > 0.0 {
-        sab / (saa * sbb).sqrt()
-    } else {
-        0.0
-    }
+    a.dot(b) / (na * nb)
 }
 
 /// F test of the SSR a block of k columns explains, against the residual variance with it.
@@ -436,7 +441,7 @@ pub fn select_families(data: &WhitenedData, families: &[Family], options: &Selec
                     Some(b) => rank(&score) > rank(&b.score) || (rank(&score) == rank(&b.score) && bic_with < b.bic),
                 };
                 if better {
-                    let effect = &arranged[fi][vi] * DVector::from_iterator(k, (0..k).map(|j| c.values[j]));
+                    let effect = base.project_out(&(&arranged[fi][vi] * DVector::from_iterator(k, (0..k).map(|j| c.values[j]))));
                     best = Some(Scored { family: fi, variant: vi, bic: bic_with, score, effect });
                 }
             }
@@ -446,25 +451,28 @@ pub fn select_families(data: &WhitenedData, families: &[Family], options: &Selec
         }
         let best_of = |physical: bool| {
             let accepted: Vec<&Scored> = per_family.iter().filter(|s| s.score.accepted && families[s.family].physical == physical).collect();
-            let lowest = accepted.iter().map(|s| s.bic).fold(f64::INFINITY, f64::min);
+            let lowest = *accepted.iter().min_by(|a, b| a.bic.total_cmp(&b.bic))?;
             let size = |s: &Scored| families[s.family].variants[s.variant].columns.ncols() + families[s.family].variants[s.variant].profiled;
-            accepted.into_iter().filter(|s| s.bic <= lowest + TIE_BIC).min_by(|a, b| {
+            let tied = |s: &Scored| s.bic <= lowest.bic + TIE_BIC || (s.bic <= lowest.bic + CONFOUNDED_BIC && correlation(&s.effect, &lowest.effect).abs() > CONFOUNDED_CORRELATION);
+            accepted.into_iter().filter(|s| tied(s)).min_by(|a, b| {
                 preference(&families[a.family].term).cmp(&preference(&families[b.family].term)).then(size(a).cmp(&size(b))).then(a.bic.total_cmp(&b.bic))
             })
         };
         let pick = match (best_of(true), best_of(false)) {
-            (Some(p), Some(e)) => Some(if e.bic < p.bic - options.empirical_margin { e } else { p }),
+            (Some(p), Some(e)) => Some(if e.bic < p.bic - options.empirical_margin.max(options.empirical_margin_relative * p.score.delta_bic.abs()) { e } else { p }),
             (Some(p), None) => Some(p),
             (None, Some(e)) => Some(e),
             (None, None) => None,
         };
         // a physical candidate the data support better than the pick, refused for impossible
         // values: nothing is named in its place
+        // (one whose effect the pick shares — correlated beyond CONFOUNDED_CORRELATION — is the
+        // pick's effect at an impossible value: the pick, possible, explains it as well)
         let refused = per_family
             .iter()
             .filter(|s| s.score.supported && !s.score.accepted && families[s.family].physical)
             .min_by(|a, b| a.bic.total_cmp(&b.bic))
-            .filter(|r| pick.is_none_or(|p| r.bic < p.bic - TIE_BIC));
+            .filter(|r| pick.is_none_or(|p| r.bic < p.bic - TIE_BIC && correlation(&r.effect, &p.effect).abs() <= CONFOUNDED_CORRELATION));
         let refused_family = refused.map(|r| r.family);
         let pick = if refused.is_some() { None } else { pick };
         let alternatives: Vec<StepAlternative> = match pick {

@@ -6,7 +6,7 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use metrocell_estimation::{MeasurementRecord, Rejected};
+use metrocell_estimation::{MeasurementRecord, RecordKind, Rejected};
 
 /// A signal carried by at least this share of the records is required of all of them.
 pub const REQUIRED_SHARE: f64 = 0.9;
@@ -51,17 +51,27 @@ fn carried(r: &MeasurementRecord) -> BTreeSet<String> {
 /// carry, and the rest, each set aside naming the signals it lacks.
 pub fn require_common_signals(records: Vec<MeasurementRecord>) -> (Vec<MeasurementRecord>, Vec<Rejected>) {
     let sets: Vec<BTreeSet<String>> = records.iter().map(carried).collect();
+    // the shares are the machine's points' (a reference nest is read with the machine anywhere,
+    // and carries no axis signal: only the other signals are required of it)
+    let reference = |r: &MeasurementRecord| matches!(r.kind, RecordKind::Reference { .. });
     let mut count: BTreeMap<&str, usize> = BTreeMap::new();
-    for s in &sets {
+    let mut points = 0usize;
+    for (r, s) in records.iter().zip(&sets) {
+        if reference(r) {
+            continue;
+        }
+        points += 1;
         for name in s {
             *count.entry(name).or_default() += 1;
         }
     }
-    let need = (REQUIRED_SHARE * records.len() as f64).ceil() as usize;
+    let need = (REQUIRED_SHARE * points as f64).ceil() as usize;
     let required: Vec<String> = count.into_iter().filter(|&(_, n)| n >= need).map(|(name, _)| name.to_string()).collect();
+    let axis_signal = |n: &str| ["position of ", "approach direction of ", "velocity of ", "rotary position "].iter().any(|p| n.starts_with(p));
     let (mut kept, mut aside) = (Vec::with_capacity(records.len()), Vec::new());
     for (r, s) in records.into_iter().zip(&sets) {
-        let missing: Vec<&str> = required.iter().filter(|n| !s.contains(*n)).map(String::as_str).collect();
+        let is_reference = reference(&r);
+        let missing: Vec<&str> = required.iter().filter(|n| !s.contains(*n) && !(is_reference && axis_signal(n))).map(String::as_str).collect();
         if missing.is_empty() {
             kept.push(r);
         } else {

@@ -49,6 +49,7 @@ pub mod records;
 pub mod recordings;
 mod record_chunks;
 pub mod recursive;
+pub mod reference_nests;
 pub mod residuals;
 pub mod signal_topics;
 pub mod uncertainty_budget;
@@ -58,5 +59,6 @@ pub use fit::{fit, inseparable, rms, start_vector, BoundSide, Fit, FitError, Fit
 pub use record_stream::{declared_topics, RecordStream, StreamOutput};
 pub use records::{MeasurementRecord, RecordFrame, RecordKind, RecordSet, Rejected};
 pub use recordings::{records_from_bags, PointSource, RecordingError, RecordingOptions};
+pub use reference_nests::{estimate_nests, is_reference};
 pub use residuals::PointResiduals;
 pub use recursive::{RecursiveEstimator, RecursiveOptions, Update};

@@ -18,6 +18,7 @@
 use std::collections::{BTreeMap, VecDeque};
 use std::path::{Path, PathBuf};
 
+use metrocell_bagtools::import::REFERENCE_POINTS_TOPIC;
 use metrocell_bagtools::SourcedMessage;
 use metrocell_model::{ForwardModel, MachineGeometry, MachineKinematics, SignalsBuilder};
 use metrocell_msgs::msg::{FiducialDetectionArray, MeasuredPoint, ProbeHit, TrackerMeasurement};
@@ -62,6 +63,9 @@ pub struct RecordStream<'m, 'a> {
     points_tracker: bool,
     probe_topic: Option<String>,
     camera_topic: Option<String>,
+    /// Readings of reference nests (`MeasuredPoint`s the machine did not place), if recorded.
+    reference_topic: Option<String>,
+    reference_index: u64,
     camera_features: CameraFeatures,
     signal_topics: BTreeMap<String, SignalTopic>,
     joints: JointSource,
@@ -130,6 +134,7 @@ impl<'m, 'a> RecordStream<'m, 'a> {
         let (points_topic, points_type) = if points_tracker { (&options.tracker_topic, TrackerMeasurement::ROS_TYPE) } else { (&options.measured_points_topic, MeasuredPoint::ROS_TYPE) };
         let found = typed(points_topic, points_type)?;
         let probes = options.probe_hits && typed(&options.probe_topic, ProbeHit::ROS_TYPE)?;
+        let references = typed(REFERENCE_POINTS_TOPIC, MeasuredPoint::ROS_TYPE)?;
         let cameras = options.camera_points && typed(&options.camera_topic, FiducialDetectionArray::ROS_TYPE)?;
         if !(found || probes || cameras) {
             let held = topics.iter().map(|(n, t)| format!("{n} ({t})")).collect::<Vec<_>>().join(", ");
@@ -141,6 +146,9 @@ impl<'m, 'a> RecordStream<'m, 'a> {
         }
         if probes {
             sources.push(("probe hits".to_string(), format!("{} ({})", options.probe_topic, ProbeHit::ROS_TYPE)));
+        }
+        if references {
+            sources.push(("reference nests".to_string(), format!("{REFERENCE_POINTS_TOPIC} ({})", MeasuredPoint::ROS_TYPE)));
         }
         if cameras {
             sources.push(("camera points".to_string(), format!("{} ({})", options.camera_topic, FiducialDetectionArray::ROS_TYPE)));
@@ -214,6 +222,8 @@ impl<'m, 'a> RecordStream<'m, 'a> {
             points_tracker,
             probe_topic: probes.then(|| options.probe_topic.clone()),
             camera_topic: cameras.then(|| options.camera_topic.clone()),
+            reference_topic: references.then(|| REFERENCE_POINTS_TOPIC.to_string()),
+            reference_index: 0,
             camera_features: options.camera_features.clone(),
             signal_topics: BTreeMap::new(),
             joints,
@@ -263,7 +273,7 @@ impl<'m, 'a> RecordStream<'m, 'a> {
 
     /// Every topic the stream reads (points, probe hits, camera points, signals).
     pub fn topics(&self) -> Vec<String> {
-        let mut out: Vec<String> = self.points_topic.iter().chain(&self.probe_topic).chain(&self.camera_topic).cloned().collect();
+        let mut out: Vec<String> = self.points_topic.iter().chain(&self.probe_topic).chain(&self.camera_topic).chain(&self.reference_topic).cloned().collect();
         out.extend(self.signal_topics.keys().cloned());
         out
     }
@@ -291,6 +301,17 @@ impl<'m, 'a> RecordStream<'m, 'a> {
                         }
                     }
                     self.pending.push_back(p);
+                }
+                Err(r) => self.out.rejected.push(r),
+            }
+        } else if self.reference_topic.as_deref() == Some(m.topic.as_str()) {
+            let at = at(&m.topic, self.reference_index);
+            self.reference_index += 1;
+            match from_reference_point(m, at) {
+                Ok(p) => {
+                    self.builder.observe_time(p.t_ns);
+                    let k = self.pending.partition_point(|q| q.t_ns <= p.t_ns);
+                    self.pending.insert(k, p);
                 }
                 Err(r) => self.out.rejected.push(r),
             }
@@ -487,6 +508,8 @@ struct Pending {
     q: Option<Vec<f64>>,
     /// A probe hit's or a marker pose's reading (None: a point record).
     reading: Option<InstrumentReading>,
+    /// A reference nest's reading: the nest's position (NaN where not given).
+    nest: Option<Vector3<f64>>,
 }
 
 
@@ -557,7 +580,7 @@ fn from_tracker(m: &SourcedMessage, at: String) -> Result<Pending, Rejected> {
     check_point(&at, &point_id, &measured, &covariance)?;
     let frame = if r.header.frame_id.is_empty() { RecordFrame::Instrument("tracker".into()) } else { record_frame(&r.header.frame_id) };
     let air = [r.air_temperature, r.air_pressure, r.air_humidity].iter().all(|v| v.is_finite()).then_some((r.air_temperature, r.air_pressure, 100.0 * r.air_humidity));
-    Ok(Pending { t_ns: message_time(&r.header.stamp, m.log_time_ns), at, point_id, channel: "tracker".into(), frame, measured, covariance, air, q: None, reading: None })
+    Ok(Pending { t_ns: message_time(&r.header.stamp, m.log_time_ns), at, point_id, channel: "tracker".into(), frame, measured, covariance, air, q: None, reading: None, nest: None })
 }
 
 /// `commanded_positions`: the recording's joint states have given the machine's positions (in
@@ -584,7 +607,17 @@ fn from_measured_point(m: &SourcedMessage, at: String, joints: JointSource, tool
             Some(vec![q.x, q.y, q.z])
         }
     };
-    Ok(Pending { t_ns: message_time(&p.header.stamp, m.log_time_ns), at, point_id: p.point_id, channel: p.source, frame: record_frame(&p.header.frame_id), measured, covariance, air: None, q, reading: None })
+    Ok(Pending { t_ns: message_time(&p.header.stamp, m.log_time_ns), at, point_id: p.point_id, channel: p.source, frame: record_frame(&p.header.frame_id), measured, covariance, air: None, q, reading: None, nest: None })
+}
+
+/// A reference nest's reading (`/reference_points`): its point, no joints.
+fn from_reference_point(m: &SourcedMessage, at: String) -> Result<Pending, Rejected> {
+    let p: MeasuredPoint = m.decode().map_err(|e| reject(at.clone(), "", e.to_string()))?;
+    let measured = Vector3::new(p.measured.x, p.measured.y, p.measured.z);
+    let covariance = covariance_row_major(&p.covariance);
+    check_point(&at, &p.point_id, &measured, &covariance)?;
+    let nest = Vector3::new(p.nominal.x, p.nominal.y, p.nominal.z);
+    Ok(Pending { t_ns: message_time(&p.header.stamp, m.log_time_ns), at, point_id: p.point_id, channel: p.source, frame: record_frame(&p.header.frame_id), measured, covariance, air: None, q: Some(Vec::new()), reading: None, nest: Some(nest) })
 }
 
 /// The measurements of a probe hit (`probe`) or a detection array, checked like points.
@@ -602,7 +635,7 @@ fn instrument_pending(m: &SourcedMessage, at: String, probe: bool) -> Result<Vec
     let mut out = Vec::new();
     for x in measurements {
         check_point(&at, &x.point_id, &x.measured, &x.covariance)?;
-        out.push(Pending { t_ns, at: at.clone(), point_id: x.point_id, channel: x.channel, frame: record_frame(&frame_id), measured: x.measured, covariance: x.covariance, air: None, q: None, reading: Some(x.reading) });
+        out.push(Pending { t_ns, at: at.clone(), point_id: x.point_id, channel: x.channel, frame: record_frame(&frame_id), measured: x.measured, covariance: x.covariance, air: None, q: None, reading: Some(x.reading), nest: None });
     }
     Ok(out)
 }
@@ -611,7 +644,8 @@ fn instrument_pending(m: &SourcedMessage, at: String, probe: bool) -> Result<Vec
 /// `commanded`: the recording's joint states give the machine's positions, which then take
 /// precedence over a point's nominal.
 fn resolve(p: Pending, builder: &SignalsBuilder, needs: &[(String, SignalKind)], model: &ForwardModel, features: &CameraFeatures, commanded: bool, out: &mut StreamOutput) {
-    let q = match p.q.filter(|_| !commanded) {
+    // a reference nest has no joints (its q is empty), whatever the joint source
+    let q = match p.q.filter(|q| !commanded || p.nest.is_some() && q.is_empty()) {
         Some(q) => q,
         None => match builder.joints_at(p.t_ns) {
             Some(m) => m.positions,
@@ -637,7 +671,12 @@ fn resolve(p: Pending, builder: &SignalsBuilder, needs: &[(String, SignalKind)],
     }
     // a probe hit or a camera point reads the machine's terms (and its own instrument's, which
     // read nothing recorded), not a tracker's
-    let reads = |term: &str| p.reading.is_none() || model.machine_terms.terms.iter().any(|t| t.term.label() == term);
+    let reads = |term: &str| match (&p.reading, p.nest) {
+        // a reference nest: only the instrument's terms act on its reading
+        (_, Some(_)) => model.instrument_terms.terms.iter().any(|t| t.term.label() == term),
+        (None, None) => true,
+        (Some(_), None) => model.machine_terms.terms.iter().any(|t| t.term.label() == term),
+    };
     if let Some((term, kind)) = needs.iter().find(|(term, k)| reads(term) && !present(&signals, k)) {
         let why = match kind {
             SignalKind::ApproachDirection(_) => "the axis has not moved yet in the recording, and its approach is the sign of its last motion (set the signals option initial_approach when the homing direction is known)",
@@ -648,6 +687,7 @@ fn resolve(p: Pending, builder: &SignalsBuilder, needs: &[(String, SignalKind)],
         return;
     }
     let kind = match &p.reading {
+        None if p.nest.is_some() => RecordKind::Reference { nest: p.nest.expect("checked") },
         None => RecordKind::Point,
         Some(reading) => match record_kind(model, features, reading, &q) {
             Ok(kind) => kind,

@@ -31,6 +31,12 @@ pub enum RecordKind {
     /// the camera's optical frame, predicted by the model's camera point of the feature whose
     /// nominal position (workpiece frame) is `feature`, seen by camera `camera` (None: the only one).
     CameraPoint { feature: Vector3<f64>, camera: Option<String> },
+    /// A reference nest the tracker re-measures: a point fixed in the frame instrument poses are
+    /// given in (on the floor, or on the table the instrument stands on), which the machine does
+    /// not move — only the instrument's own terms act on its reading (its pose, drift, warm-up,
+    /// refraction). `nest` is its position there, NaN until known (a diagnosis estimates it from
+    /// its readings). Predicted by the tracker's reading of `nest`.
+    Reference { nest: Vector3<f64> },
 }
 
 /// One measurement (a point, a probe hit, a camera point: [`RecordKind`]).

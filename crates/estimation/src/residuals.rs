@@ -303,6 +303,16 @@ pub fn predict(model: &ForwardModel, p: &[f64], kin: &KinematicTruth, r: &Measur
             let tool = model.tool_state(p, kin, &r.q, s, None)?;
             Ok(model.camera(camera.as_deref(), p, &tool, s, feature)?.measured_point)
         }
+        RecordKind::Reference { nest } => Ok(model.tracker_of_fixed_point(None, p, known_nest(r, nest)?, s)?.measured_point()),
+    }
+}
+
+/// A reference record's nest, or an error saying it must be estimated first.
+fn known_nest(r: &MeasurementRecord, nest: &Vector3<f64>) -> Result<Vector3<f64>, PhysicsError> {
+    if nest.iter().all(|v| v.is_finite()) {
+        Ok(*nest)
+    } else {
+        Err(PhysicsError::InvalidInput { what: format!("reference record `{}`", r.point_id), reason: "its nest's position is not known yet (estimate it from its readings first: estimation `estimate_nests`)".into() })
     }
 }
 
@@ -342,6 +352,9 @@ impl Buffers {
                 let pred = model.camera_jacobian(camera.as_deref(), p, kin, &r.q, s, feature, &mut self.work, &mut self.camera)?;
                 // rows 2..5: the camera point
                 (pred.measured_point, self.camera.rows(2, 3))
+            }
+            RecordKind::Reference { nest } => {
+                return Ok(model.tracker_point_jacobian_of_fixed_point_mapped(None, p, known_nest(r, nest)?, s, &mut self.work, map, columns, write)?.measured_point());
             }
         };
         for &c in columns {

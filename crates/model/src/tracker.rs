@@ -152,6 +152,28 @@ impl ForwardModel<'_> {
         Ok(self.tracker_chain_at(instrument, p, layout.target_at(p, kept), s, work)?.0)
     }
 
+    /// The reading of tracker `instrument` of a point fixed in the frame its pose is given in
+    /// (a reference nest: the machine does not move it, only the instrument's own terms act).
+    pub fn tracker_of_fixed_point(&self, instrument: Option<&str>, p: &[f64], point: Vector3<f64>, s: &mut Signals) -> Result<TrackerPrediction, PhysicsError> {
+        let tool = ToolState { nominal: nalgebra::Isometry3::identity(), truth: nalgebra::Isometry3::translation(point.x, point.y, point.z), d: Vector3::zeros(), workpiece: Vector3::zeros() };
+        self.tracker_of(instrument, p, &tool, s)
+    }
+
+    /// [`Self::tracker_point_jacobian_mapped`] of a fixed point ([`Self::tracker_of_fixed_point`]):
+    /// the machine's columns are zero, the instrument's through the chain.
+    #[allow(clippy::too_many_arguments)]
+    pub fn tracker_point_jacobian_of_fixed_point_mapped(&self, instrument: Option<&str>, p: &[f64], point: Vector3<f64>, s: &mut Signals, work: &mut Workspace, map: &Matrix3<f64>, columns: &[usize], mut write: impl FnMut(usize, Vector3<f64>)) -> Result<TrackerPrediction, PhysicsError> {
+        self.check(p)?;
+        work.check(self)?;
+        let (pred, chain) = self.tracker_chain_at(instrument, p, point, s, work)?;
+        let chain = chain.mapped(map);
+        for &c in columns {
+            assert!(c < self.n_params, "column {c} of {} parameters", self.n_params);
+            write(c, chain.column(work, &[], c).0);
+        }
+        Ok(pred)
+    }
+
     /// The reading and its Jacobian as a [`TrackerChain`] over the intermediate Jacobians it
     /// leaves in `work`.
     fn tracker_chain(&self, instrument: Option<&str>, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, work: &mut Workspace) -> Result<(TrackerPrediction, TrackerChain), PhysicsError> {

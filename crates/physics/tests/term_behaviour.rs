@@ -53,18 +53,21 @@ fn thermal_scale_interpolates_between_sensors() {
 
 #[test]
 fn thermal_growth_lag_follows_a_first_order_step_response() {
-    // sensor steps 20 → 21 °C at t = 0 and stays; after τ the structure has 1 − e⁻¹ of the step
+    // sensor rises 20 → 21 °C over the second before t = 0 (readings 1 s apart: the lag sees
+    // the ramp between them) and stays; τ later the structure has 1 − e⁻¹ of the rest
     let tau = 600.0;
     let mut samples = vec![(-1.0, 20.0)];
     samples.extend((0..=600).map(|k| (k as f64, 21.0)));
     let (tf, _) = first_order_lag(&TemperatureHistory { samples }, tau);
-    assert!((tf - (20.0 + (1.0 - (-601.0f64 / 600.0).exp()))).abs() < 1e-12, "{tf}");
+    let after_ramp = 21.0 - tau + tau * (-1.0f64 / tau).exp();
+    assert!((tf - (21.0 - (21.0 - after_ramp) * (-1.0f64).exp())).abs() < 1e-12, "{tf}");
     let t = term(TermId::ThermalGrowth); // lag, direction −z
     let mut s = Signals::default();
     let settled = TemperatureHistory { samples: vec![(0.0, 20.0), (1e6, 22.0)] };
     s.timeline = Some(std::sync::Arc::new(TemperatureTimeline::from_histories([("column", &settled)]).unwrap()));
-    let d = t.predict(&[10e-6, 1.0], &s).unwrap().value; // τ ≪ Δt: fully settled
-    assert!((d[2] + 20e-6).abs() < 1e-15);
+    // τ ≪ Δt: settled on the ramp between the readings, behind it by τ·slope
+    let d = t.predict(&[10e-6, 1.0], &s).unwrap().value;
+    assert!((d[2] + 10e-6 * (2.0 - 1.0 * 2.0 / 1e6)).abs() < 1e-15, "{}", d[2]);
     let repeated = TemperatureHistory { samples: vec![(0.0, 20.0), (0.0, 22.0)] };
     assert!(TemperatureTimeline::from_histories([("column", &repeated)]).is_err(), "non-increasing times are rejected");
     // at a time before the sensor's first sample there is nothing to lag

@@ -242,7 +242,10 @@ fn empirical_fitted(aug: &Augmented, view1: &ResidualView, free_cols: &DMatrix<f
     let mut out = Vec::new();
     for (k, e) in aug.empirical.iter().enumerate() {
         let len = emp_cols[k].ncols();
-        let coefficients: Vec<f64> = (0..len).map(|j| e.coefficients[j] + sol[at + j]).collect();
+        // the judged residuals are the records' own (the refit took the corrections off, the
+        // view does not): the joint fit's coefficients are the whole correction, not an
+        // increment on the selection's (adding those counted the structure twice)
+        let coefficients: Vec<f64> = (0..len).map(|j| sol[at + j]).collect();
         let sigmas: Vec<f64> = (0..len).map(|j| variance(at + j).sqrt()).collect();
         let whitened = &emp_cols[k] * DVector::from_column_slice(&coefficients);
         let net = &whitened - free_cols * (&pinv * free_cols.tr_mul(&whitened));

@@ -142,6 +142,12 @@ fn local_bump_is_unexplained() {
     show(&d);
     assert!(d.report.findings.is_empty(), "{:?}", d.report.findings.iter().map(|f| &f.label).collect::<Vec<_>>());
     assert!(!d.report.unexplained.is_empty());
+    // a correction's size is its largest effect on the recorded points (issue 26: never a
+    // coefficient): at most the bump's 12 µm peak, give or take the noise
+    for u in d.report.unexplained.iter().filter(|u| u.correction.is_some()) {
+        let peak: f64 = u.statement.split(" error of ").nth(1).and_then(|r| r.split(' ').next()).and_then(|v| v.parse().ok()).unwrap_or_else(|| panic!("no size in: {}", u.statement));
+        assert!(peak > 4.0 && peak < 18.0, "the correction's size {peak} µm is not the bump's (12 µm): {}", u.statement);
+    }
 }
 
 #[test]

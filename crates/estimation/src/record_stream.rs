@@ -94,7 +94,7 @@ pub fn declared_topics(model: &ForwardModel, options: &RecordingOptions) -> Vec<
         PointSource::TrackerMeasurements => (options.tracker_topic.clone(), TrackerMeasurement::ROS_TYPE),
         PointSource::MeasuredPoints | PointSource::Auto => (options.measured_points_topic.clone(), MeasuredPoint::ROS_TYPE),
     };
-    let mut topics = vec![(points.0, points.1.to_string()), (COMMANDED_JOINTS_TOPIC.to_string(), JointState::ROS_TYPE.to_string())];
+    let mut topics = vec![(points.0, points.1.to_string()), (COMMANDED_JOINTS_TOPIC.to_string(), JointState::ROS_TYPE.to_string()), (REFERENCE_POINTS_TOPIC.to_string(), MeasuredPoint::ROS_TYPE.to_string())];
     if options.probe_hits {
         topics.push((options.probe_topic.clone(), ProbeHit::ROS_TYPE.to_string()));
     }

@@ -117,14 +117,7 @@ impl DhTable {
                         rot_z(r.theta) * trans(0.0, 0.0, r.d),
                     ),
                 };
-                Joint {
-                    name: format!("joint_{}", i + 1),
-                    kind: r.kind,
-                    pre,
-                    axis: Vector3::z_axis(),
-                    post,
-                    offset: 0.0,
-                }
+                Joint::new(format!("joint_{}", i + 1), r.kind, pre, Vector3::z_axis(), post)
             })
             .collect();
         SerialChain::new(joints)

@@ -4,7 +4,10 @@
 //! Frame of a joint: `pre` carries the parent link frame to the joint frame, in which the unit `axis` is
 //! expressed (URDF: `pre` = `<origin>`, `post` = identity; DH: see [`crate::dh`]). A revolute joint rotates
 //! by `q + offset` about `axis`, a prismatic one translates by `q + offset` along it, a fixed joint takes no
-//! variable. The geometric Jacobian is 6×n: rows 0–2 the linear velocity of the tool point in the base frame,
+//! variable. A *mimic* joint (URDF `<mimic>`: a telescoping column's second segment driven with the first)
+//! takes no variable of its own either: its value is `multiplier·q_master + offset`, so the chain's
+//! variables (`dof`, `variable_names`) are the independent joints only, and the Jacobian's column of a
+//! master holds its mimics' motion too. The geometric Jacobian is 6×n: rows 0–2 the linear velocity of the tool point in the base frame,
 //! rows 3–5 the angular velocity in the base frame.
 
 use crate::error::{check_finite, KinematicsError};
@@ -34,9 +37,41 @@ pub struct Joint {
     pub post: Isometry3<f64>,
     /// Constant added to the joint variable (the `joint_offset` physics term) (rad or m).
     pub offset: f64,
+    /// Set when the joint follows another one of the chain (URDF `<mimic>`).
+    pub mimic: Option<Mimic>,
+    /// `[lower, upper]` of its value (rad or m), when the description gives them.
+    pub limits: Option<[f64; 2]>,
+    /// Mass and centre of mass of its child link (URDF `<inertial>`), when given.
+    pub inertial: Option<LinkInertial>,
+}
+
+/// A joint whose value follows another's: `multiplier·q_master + offset` (URDF `<mimic>`).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Mimic {
+    /// Index of the master joint in the chain's `joints`.
+    pub master: usize,
+    pub multiplier: f64,
+    pub offset: f64,
+}
+
+/// A link's mass (kg) and the position of its centre of mass in its own frame (m).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct LinkInertial {
+    pub mass: f64,
+    pub centre_of_mass: Vector3<f64>,
 }
 
 impl Joint {
+    /// A joint with no offset, mimic, limits or inertial.
+    pub fn new(name: impl Into<String>, kind: JointKind, pre: Isometry3<f64>, axis: Unit<Vector3<f64>>, post: Isometry3<f64>) -> Self {
+        Self { name: name.into(), kind, pre, axis, post, offset: 0.0, mimic: None, limits: None, inertial: None }
+    }
+
+    /// Whether the joint has a variable of its own (movable, not a mimic).
+    pub fn is_variable(&self) -> bool {
+        self.kind != JointKind::Fixed && self.mimic.is_none()
+    }
+
     /// Transform parent link → child link for joint value `q` (ignored for fixed joints).
     pub fn transform(&self, q: f64) -> Isometry3<f64> {
         self.pre * self.motion(q) * self.post
@@ -134,21 +169,52 @@ impl SerialChain {
         }
     }
 
-    /// Number of joint variables (non-fixed joints).
+    /// Number of joint variables (movable joints that are not mimics).
     pub fn dof(&self) -> usize {
-        self.joints
-            .iter()
-            .filter(|j| j.kind != JointKind::Fixed)
-            .count()
+        self.joints.iter().filter(|j| j.is_variable()).count()
     }
 
-    /// Names of the movable joints, in variable order.
+    /// Names of the joint variables (movable joints that are not mimics), in variable order.
     pub fn variable_names(&self) -> Vec<String> {
+        self.joints.iter().filter(|j| j.is_variable()).map(|j| j.name.clone()).collect()
+    }
+
+    /// The variable index of each joint (None for fixed joints and mimics).
+    pub fn variable_indices(&self) -> Vec<Option<usize>> {
+        let mut k = 0;
         self.joints
             .iter()
-            .filter(|j| j.kind != JointKind::Fixed)
-            .map(|j| j.name.clone())
+            .map(|j| {
+                j.is_variable().then(|| {
+                    k += 1;
+                    k - 1
+                })
+            })
             .collect()
+    }
+
+    /// Each joint's value for the variables `q` (0 for fixed joints, `multiplier·q_master +
+    /// offset` for mimics), and each joint's variable and the factor its motion takes of it
+    /// (for the Jacobian): (values, per joint `Option<(variable, factor)>`).
+    fn joint_values(&self, q: &[f64]) -> (Vec<f64>, Vec<Option<(usize, f64)>>) {
+        let vars = self.variable_indices();
+        let mut values = vec![0.0; self.joints.len()];
+        let mut driven = vec![None; self.joints.len()];
+        for (i, var) in vars.iter().enumerate() {
+            if let Some(k) = *var {
+                values[i] = q[k];
+                driven[i] = Some((k, 1.0));
+            }
+        }
+        for (i, j) in self.joints.iter().enumerate() {
+            if let (Some(m), true) = (j.mimic, j.kind != JointKind::Fixed) {
+                if let Some(k) = vars.get(m.master).copied().flatten() {
+                    values[i] = m.multiplier * q[k] + m.offset;
+                    driven[i] = Some((k, m.multiplier));
+                }
+            }
+        }
+        (values, driven)
     }
 
     pub(crate) fn check_q(&self, q: &[f64]) -> Result<(), KinematicsError> {
@@ -168,16 +234,10 @@ impl SerialChain {
     /// Forward kinematics of all links and the tool.
     pub fn forward(&self, q: &[f64]) -> Result<ChainPose, KinematicsError> {
         self.check_q(q)?;
+        let (values, _) = self.joint_values(q);
         let mut t = self.base;
         let mut links = Vec::with_capacity(self.joints.len());
-        let mut k = 0;
-        for j in &self.joints {
-            let v = if j.kind == JointKind::Fixed {
-                0.0
-            } else {
-                k += 1;
-                q[k - 1]
-            };
+        for (j, v) in self.joints.iter().zip(values) {
             t *= j.transform(v);
             links.push(t);
         }
@@ -198,28 +258,27 @@ impl SerialChain {
         let tool = self.tool_pose(q)?;
         let p = tool.translation.vector;
         let mut jac = DMatrix::zeros(6, self.dof());
+        let (values, driven) = self.joint_values(q);
         let mut t = self.base;
-        let mut k = 0;
-        for j in &self.joints {
+        for ((j, v), d) in self.joints.iter().zip(values).zip(driven) {
             let joint_frame = t * j.pre;
             let z = joint_frame.rotation * j.axis.into_inner();
             let o = joint_frame.translation.vector;
-            let v = match j.kind {
-                JointKind::Fixed => 0.0,
-                _ => q[k],
-            };
-            match j.kind {
-                JointKind::Revolute => {
-                    jac.fixed_view_mut::<3, 1>(0, k)
-                        .copy_from(&z.cross(&(p - o)));
-                    jac.fixed_view_mut::<3, 1>(3, k).copy_from(&z);
-                    k += 1;
+            // a mimic's motion goes to its master's column, times its multiplier
+            if let Some((k, factor)) = d {
+                match j.kind {
+                    JointKind::Revolute => {
+                        let lin = jac.fixed_view::<3, 1>(0, k) + z.cross(&(p - o)) * factor;
+                        let ang = jac.fixed_view::<3, 1>(3, k) + z * factor;
+                        jac.fixed_view_mut::<3, 1>(0, k).copy_from(&lin);
+                        jac.fixed_view_mut::<3, 1>(3, k).copy_from(&ang);
+                    }
+                    JointKind::Prismatic => {
+                        let lin = jac.fixed_view::<3, 1>(0, k) + z * factor;
+                        jac.fixed_view_mut::<3, 1>(0, k).copy_from(&lin);
+                    }
+                    JointKind::Fixed => {}
                 }
-                JointKind::Prismatic => {
-                    jac.fixed_view_mut::<3, 1>(0, k).copy_from(&z);
-                    k += 1;
-                }
-                JointKind::Fixed => {}
             }
             t *= j.transform(v);
         }
@@ -239,19 +298,13 @@ impl SerialChain {
     pub fn origin_translation_jacobian(&self, q: &[f64]) -> Result<DMatrix<f64>, KinematicsError> {
         self.check_q(q)?;
         let mut jac = DMatrix::zeros(6, 3 * self.joints.len());
+        let (values, _) = self.joint_values(q);
         let mut t = self.base;
-        let mut k = 0;
-        for (i, j) in self.joints.iter().enumerate() {
+        for (i, (j, v)) in self.joints.iter().zip(values).enumerate() {
             for a in 0..3 {
                 jac.fixed_view_mut::<3, 1>(0, 3 * i + a)
                     .copy_from(&(t.rotation * Vector3::ith(a, 1.0)));
             }
-            let v = if j.kind == JointKind::Fixed {
-                0.0
-            } else {
-                k += 1;
-                q[k - 1]
-            };
             t *= j.transform(v);
         }
         Ok(jac)

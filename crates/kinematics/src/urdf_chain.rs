@@ -2,9 +2,15 @@
 //! Supported joint types: revolute, continuous (as revolute), prismatic, fixed. `<origin xyz rpy>` becomes the
 //! joint's `pre` transform (URDF rpy: `Rz(yaw)·Ry(pitch)·Rx(roll)`), `<axis xyz>` its (normalised) axis
 //! (URDF default `1 0 0`). Units are the URDF's own: metres and radians.
+//!
+//! Read into the chain as well: `<mimic joint multiplier offset>` (the joint follows another joint of the
+//! path, `multiplier·q + offset`; it is then no variable of its own), `<limit lower upper>` of revolute and
+//! prismatic joints, and each link's `<inertial>` mass and centre of mass (its `<origin xyz>`, in the link's
+//! frame) — what gravity torques need. Refused with the joint's name, never ignored: a joint type that moves in
+//! more than one degree of freedom (floating, planar) and a mimic of a joint that is not on the path.
 
 use crate::error::KinematicsError;
-use crate::serial::{Joint, JointKind, SerialChain};
+use crate::serial::{Joint, JointKind, LinkInertial, Mimic, SerialChain};
 use crate::transform::from_xyz_rpy;
 use nalgebra::{Isometry3, Unit, Vector3};
 
@@ -66,6 +72,13 @@ pub fn chain_from_robot(
         link = joint.parent.link.clone();
     }
     path.reverse();
+    let names: Vec<String> = path.iter().map(|j| j.name.clone()).collect();
+    let inertial_of = |link: &str| {
+        robot.links.iter().find(|l| l.name == link).and_then(|l| {
+            let mass = l.inertial.mass.value;
+            (mass > 0.0 && mass.is_finite()).then(|| LinkInertial { mass, centre_of_mass: Vector3::from(l.inertial.origin.xyz.0) })
+        })
+    };
     let joints = path
         .into_iter()
         .map(|j| {
@@ -96,14 +109,29 @@ pub fn chain_from_robot(
                     });
                 }
             }
-            Ok(Joint {
-                name: j.name.clone(),
-                kind,
-                pre: from_xyz_rpy(j.origin.xyz.0, j.origin.rpy.0),
-                axis,
-                post: Isometry3::identity(),
-                offset: 0.0,
-            })
+            let mimic = match &j.mimic {
+                None => None,
+                Some(m) => {
+                    let master = names.iter().position(|n| *n == m.joint).ok_or_else(|| KinematicsError::Urdf {
+                        reason: format!("joint `{}` mimics `{}`, which is not on the chain from `{root_link}` to `{tip_link}`: a mimic needs its master on the same path", j.name, m.joint),
+                    })?;
+                    let (multiplier, offset) = (m.multiplier.unwrap_or(1.0), m.offset.unwrap_or(0.0));
+                    if !(multiplier.is_finite() && offset.is_finite()) {
+                        return Err(KinematicsError::Urdf { reason: format!("joint `{}`: non-finite mimic multiplier or offset", j.name) });
+                    }
+                    Some(Mimic { master, multiplier, offset })
+                }
+            };
+            let limits = match kind {
+                JointKind::Revolute if j.joint_type == urdf_rs::JointType::Continuous => None,
+                JointKind::Revolute | JointKind::Prismatic if j.limit.upper > j.limit.lower => Some([j.limit.lower, j.limit.upper]),
+                _ => None,
+            };
+            let mut joint = Joint::new(j.name.clone(), kind, from_xyz_rpy(j.origin.xyz.0, j.origin.rpy.0), axis, Isometry3::identity());
+            joint.mimic = mimic;
+            joint.limits = limits;
+            joint.inertial = inertial_of(&j.child.link);
+            Ok(joint)
         })
         .collect::<Result<Vec<_>, _>>()?;
     Ok(SerialChain::new(joints))

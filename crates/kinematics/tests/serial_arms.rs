@@ -282,3 +282,51 @@ fn urdf_origin_and_joint_offset_jacobians_match_central_differences() {
     let lin: DMatrix<f64> = an.rows(0, 3).into_owned();
     assert!(max_relative_difference(&lin, &fd) < 1e-6);
 }
+
+/// A lifting column of two telescoping segments driven by one motor (the second a `<mimic>` of
+/// the first), a revolute arm joint on top, inertials on the links.
+const COLUMN_URDF: &str = r#"<robot name="column">
+  <link name="base"><inertial><origin xyz="0 0 0.1"/><mass value="80"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="seg1"><inertial><origin xyz="0 0 0.3"/><mass value="12"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="seg2"><inertial><origin xyz="0 0 0.25"/><mass value="8"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="arm"><inertial><origin xyz="0.2 0 0"/><mass value="5"/><inertia ixx="1" iyy="1" izz="1" ixy="0" ixz="0" iyz="0"/></inertial></link>
+  <link name="tip"/>
+  <joint name="lower" type="prismatic"><parent link="base"/><child link="seg1"/><origin xyz="0 0 0.5"/><axis xyz="0 0 1"/><limit lower="0" upper="0.6" effort="1" velocity="1"/></joint>
+  <joint name="upper" type="prismatic"><parent link="seg1"/><child link="seg2"/><origin xyz="0 0 0.1"/><axis xyz="0 0 1"/><limit lower="0" upper="0.6" effort="1" velocity="1"/><mimic joint="lower" multiplier="1.0" offset="0.01"/></joint>
+  <joint name="shoulder" type="revolute"><parent link="seg2"/><child link="arm"/><origin xyz="0 0 0.2"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
+  <joint name="flange" type="fixed"><parent link="arm"/><child link="tip"/><origin xyz="0.5 0 0"/></joint>
+</robot>"#;
+
+#[test]
+fn a_mimic_joint_follows_its_master_and_is_no_variable() {
+    let chain = chain_from_urdf_str(COLUMN_URDF, "base", "tip").unwrap();
+    assert_eq!(chain.dof(), 2, "the mimic takes no variable");
+    assert_eq!(chain.variable_names(), vec!["lower", "shoulder"]);
+    let (e, a) = (0.3, 0.7);
+    let p = chain.tool_pose(&[e, a]).unwrap().translation.vector;
+    // both segments extend by e (the upper one by 1·e + 0.01 m)
+    let expected = Vector3::new(0.5 * a.cos(), 0.5 * a.sin(), 0.5 + e + 0.1 + (e + 0.01) + 0.2);
+    assert!((p - expected).norm() < 1e-12, "{p:?} vs {expected:?}");
+    // the master's Jacobian column carries both segments: ∂z/∂e = 2
+    let jac = chain.jacobian(&[e, a]).unwrap();
+    let f = |q: &[f64]| chain.tool_pose(q).ok().map(|t| DVector::from_row_slice(t.translation.vector.as_slice()));
+    let fd = central_difference(f, &[e, a], &steps_with_unit_floor(&[e, a], 1e-6), Order::Second).unwrap();
+    assert!(max_relative_difference(&jac.rows(0, 3).into_owned(), &fd) < 1e-6);
+    assert!((jac[(2, 0)] - 2.0).abs() < 1e-12);
+    // limits and inertials are read
+    let upper = &chain.joints[1];
+    assert_eq!(upper.limits, Some([0.0, 0.6]));
+    let inertial = upper.inertial.expect("seg2's inertial");
+    assert_eq!((inertial.mass, inertial.centre_of_mass), (8.0, Vector3::new(0.0, 0.0, 0.25)));
+    assert!(chain.joints[3].inertial.is_none(), "the tip has no inertial");
+}
+
+#[test]
+fn a_mimic_of_a_joint_off_the_path_and_a_planar_joint_are_refused_by_name() {
+    let off_path = COLUMN_URDF.replace(r#"<mimic joint="lower""#, r#"<mimic joint="gripper""#);
+    let e = chain_from_urdf_str(&off_path, "base", "tip").unwrap_err().to_string();
+    assert!(e.contains("upper") && e.contains("gripper") && e.contains("mimic"), "{e}");
+    let planar = COLUMN_URDF.replace(r#"name="shoulder" type="revolute""#, r#"name="shoulder" type="planar""#);
+    let e = chain_from_urdf_str(&planar, "base", "tip").unwrap_err().to_string();
+    assert!(e.contains("shoulder") && e.contains("not supported"), "{e}");
+}

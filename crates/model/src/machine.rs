@@ -168,9 +168,10 @@ impl SerialArm {
                 c
             }
         };
+        // one offset per joint variable (a mimic follows its master's, offset included)
         let mut k = 0;
         for j in chain.joints.iter_mut() {
-            if j.kind != JointKind::Fixed {
+            if j.is_variable() {
                 j.offset += joint_offsets.get(k).copied().unwrap_or(0.0);
                 k += 1;
             }

@@ -6,10 +6,10 @@ setups' poses refitted from that recording's fit points, the check points predic
 It shows what the data allow (not how metrocell must do it): if this reaches the noise floor,
 the recordings hold what is needed; if not, the floor is not reachable from these fit points.
 
-Unknowns (with weak priors, σ in brackets, to keep unidentifiable ones finite):
-  k_j of the six arm joints [1e-4 rad/(N·m)], backlash b_j of shoulder_lift, elbow, wrist_1
-  [2 mrad], the column's foot and two overlap compliances and 1/EI [1e-4, 1e-4 rad/(N·m) at
-  full overlap… as 1/k_pad; 1e-5 1/(N·m²)], the prism offset error [20 mm], the base
+Unknowns (each with a weak zero-mean prior, its σ in brackets, to keep unidentifiable ones finite):
+  k_j of the six arm joints [1e-4 rad/(N·m)]; backlash b_j of shoulder_lift, elbow, wrist_1
+  [2 mrad]; the column's foot compliance [1e-4 rad/(N·m)], the two overlaps' pad compliances
+  1/k_pad [1e-6 m/N] and 1/EI [1e-5 1/(N·m²)]; the prism offset error [20 mm]; the base
   accelerometer's alignment as a tilt offset (roll, pitch) [20 mrad];
   per setup: yaw, translation, the instrument's tilt [prior 5e-5 rad].
 Known: the URDF, α from the handbook (aluminium 23e-6, steel 11.5e-6 /K — not the truth), the
@@ -18,7 +18,6 @@ ground's tilt from the base accelerometer's mean reading over the recording.
 
 import numpy as np
 
-from gravity import G
 from least_squares import levenberg_marquardt
 from pose_fit import levelled_pose, levelled_prediction
 from robot_description import ALPHA, ARM_JOINTS

@@ -132,7 +132,7 @@ def box_inertia(mass, size):
 
 
 def _fmt(v):
-    return " ".join(f"{x:.6g}" if abs(x) > 1e-12 else "0" for x in v)
+    return " ".join(f"{x:.12g}" if abs(x) > 1e-12 else "0" for x in v)
 
 
 def urdf_text(name="tracked_mobile_manipulator"):

@@ -8,7 +8,7 @@ user would run (issue 27):
 Per seed:
  1. `metrocell bag import export.csv --mapping mapping.yaml -o BAG` for every ground;
  2. `metrocell diagnose --model model.yaml FLAT_BAG --json -`: which catalog terms it names,
-    against the concealed ones (required where the effect is ≥ 1σ RMS after each setup's pose
+    against the concealed ones (required where the effect is ≥ 0.5σ RMS after each setup's pose
     is fitted, answers.json effect_sizes; other concealed ones optional; anything else a false claim);
  3. `metrocell calibrate --model <calibrate model> FLAT_BAG -o fitted.yaml --json fit.json`
     (physics fitted on the flat floor, one pose per setup); its `check` is the flat row;
@@ -41,7 +41,7 @@ from truth_matching import match  # noqa: E402
 CATALOG_ID = {"joint_compliance": "joint_compliance", "column_bending": "column_bending", "joint_backlash": "joint_backlash",
               "prism_offset": "tool_offset", "thermal": "link_thermal_expansion"}
 NUISANCE_IDS = {"accelerometer_alignment"}
-REQUIRED_SIGMA = 1.0
+REQUIRED_SIGMA = 0.5
 
 
 class WorkflowError(Exception):

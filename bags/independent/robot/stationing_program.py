@@ -55,6 +55,18 @@ def _valid(urdf, q):
     return ok
 
 
+def _valid_waypoints(rng, urdf, branch, pan_centre, column_lower, need):
+    """`need` valid arm configurations of one solution space (drawn until enough are valid)."""
+    got = {j: np.empty(0) for j in ARM_JOINTS}
+    while len(got["elbow"]) < need:
+        cand = _sample_branch(rng, 4 * need, branch, pan_centre)
+        cand["column_lower"] = np.full(4 * need, column_lower)
+        ok = _valid(urdf, cand)
+        for j in ARM_JOINTS:
+            got[j] = np.concatenate([got[j], cand[j][ok]])
+    return {j: got[j][:need] for j in ARM_JOINTS}
+
+
 def _farthest_points(points, k, rng):
     chosen = [int(rng.integers(len(points)))]
     d = np.linalg.norm(points - points[chosen[0]], axis=1)
@@ -85,14 +97,7 @@ def make_program(rng, urdf, target_waypoints=450, n_groups=None):
         q_parts, b_parts = [], []
         for bi, b in enumerate(pair):
             need = size // 2 + (size % 2 if bi == 0 else 0)
-            got = {j: np.empty(0) for j in ARM_JOINTS}
-            while len(got["elbow"]) < need:
-                cand = _sample_branch(rng, 4 * need, BRANCHES[b], pan_centre)
-                cand["column_lower"] = np.full(4 * need, levels[level_seq[g]])
-                ok = _valid(urdf, cand)
-                for j in ARM_JOINTS:
-                    got[j] = np.concatenate([got[j], cand[j][ok]])
-            q_parts.append({j: got[j][:need] for j in ARM_JOINTS})
+            q_parts.append(_valid_waypoints(rng, urdf, BRANCHES[b], pan_centre, levels[level_seq[g]], need))
             b_parts.append(np.full(need, b))
         q = {j: np.concatenate([p[j] for p in q_parts]) for j in ARM_JOINTS}
         br = np.concatenate(b_parts)
@@ -112,8 +117,9 @@ def make_program(rng, urdf, target_waypoints=450, n_groups=None):
         role += list(r[order])
         branch_of += list(br[order])
         level_of += [level_seq[g]] * len(br)
-        groups.append({"index": g, "column_lower_m": float(levels[level_seq[g]]), "branches": [BRANCHES[b][0] + ("_wrist+" if BRANCHES[b][1] > 0 else "_wrist-") for b in pair],
-                       "pan_centre_rad": float(pan_centre), "waypoints": int(len(br))})
+        groups.append({"index": g, "column_lower_m": float(levels[level_seq[g]]),
+                       "branches": [BRANCHES[b][0] + ("_wrist+" if BRANCHES[b][1] > 0 else "_wrist-") for b in pair],
+                       "pan_centre_rad": float(pan_centre), "waypoints": int(len(br)), "setup": f"S{setup_of_group[g] + 1}"})
     q = {j: np.concatenate(v) for j, v in rows.items()}
     return {"q": q, "group": np.array(group), "role": np.array(role), "branch": np.array(branch_of),
             "level": np.array(level_of), "levels_m": levels.tolist(), "groups": groups, "n_groups": n_groups,

@@ -108,6 +108,17 @@ class Physics(unittest.TestCase):
         r = readings(np.eye(3)[None], gravity_in_base(0, 0.01), truth, None)
         self.assertLess(r[0, 0], -0.09)
 
+    def test_tip_accelerometer_turned_90_degrees(self):
+        """The tip sensor is mounted turned +90° about z: its x reads the base's y."""
+        q = poses(self.rng, 3)
+        truth = {"misalignment_rotvec_rad": [0, 0, 0], "bias_m_per_s2": [0, 0, 0], "noise_m_per_s2": 0.0}
+        robot_truth = draw_robot_truth(np.random.default_rng(2))
+        s = true_state(self.urdf, q, np.full(3, 20.0), (0.004, 0.01), robot_truth, effects=set())
+        r = readings(s["frames"]["column_tip_imu"][:, :3, :3], s["g_base"], truth, None)
+        f_base = -s["g_base"]
+        np.testing.assert_allclose(r[:, 0], f_base[1], atol=1e-9)
+        np.testing.assert_allclose(r[:, 1], -f_base[0], atol=1e-9)
+
     def test_total_station_coordinates(self):
         s = Setup("S", [5.0, 1.0, 1.5], 0.7, [3e-5, -2e-5])
         p = np.array([[0.3, 0.2, 1.8], [-0.5, 0.9, 0.4]])

@@ -54,6 +54,7 @@ pub fn all_at_once(data: &WhitenedData, families: &[Family], alpha: f64) -> Fami
         chosen: claimed.into_iter().map(|c| c.1).collect(),
         steps: Vec::new(),
         dropped: Vec::new(),
+        swapped: Vec::new(),
         heldout_before: restore(before.heldout_residuals(&rows)),
         heldout_after: restore(everything.heldout_residuals(&rows)),
         residual_after: rows.restore_vector(&everything.residuals()),

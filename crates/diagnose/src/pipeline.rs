@@ -208,6 +208,7 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     };
     progress.say(&format!("selected {:?}; refitting the augmented model", selection.chosen.iter().map(|c| c.label.as_str()).collect::<Vec<_>>()));
     let mut messages = refusals(&selection, &families);
+    messages.extend(selection.swapped.iter().map(|(out, into)| format!("{out}, chosen early, was replaced by {into}: with the other terms in the model {into} explains the residuals better (lower BIC)")));
     // 6–7. the augmented model refitted and judged; a term not significant after the refit is
     // dropped and the rest refitted
     let inputs = JudgeInputs { machine: declared.machine, declared_model: &model, stage: &stage, x0: &x0, free0: &free0, view0: &view0, folds_time: &frame.folds_time, folds_space: &frame.folds_space, selection: &selection, families: &families, prepared: &prepared, alpha: options.selection.alpha };

@@ -244,6 +244,8 @@ pub struct FamilySelection {
     pub steps: Vec<SelectionStep>,
     /// Labels dropped by the backward pass.
     pub dropped: Vec<String>,
+    /// (replaced, replacement) labels of the swaps after the forward steps.
+    pub swapped: Vec<(String, String)>,
     /// Held-out whitened residual of every row, one vector per scheme, before and after.
     pub heldout_before: Vec<DVector<f64>>,
     pub heldout_after: Vec<DVector<f64>>,
@@ -372,114 +374,175 @@ fn bic(n: f64, ssr: f64, k: f64) -> f64 {
     n * (ssr.max(f64::MIN_POSITIVE) / n).ln() + k * n.ln()
 }
 
-/// Run the forward selection over candidate families on whitened data.
+/// Run the forward selection over candidate families on whitened data: forward steps, then
+/// backward elimination, then swaps (each chosen term replaced by a candidate that explains the
+/// data better given the others — a flexible term chosen early that stood in for two effects,
+/// an instrument drifting along x and z where a warm-up and a structure's growth were, gives way
+/// once one of them is in), then backward elimination again.
 pub fn select_families(data: &WhitenedData, families: &[Family], options: &SelectionOptions) -> FamilySelection {
-    let n = data.b.len();
-    let nf = n as f64;
-    let rows = BlockedRows::new(&data.folds, n);
-    let b = rows.arrange_vector(&data.b);
-    let arranged: Vec<Vec<DMatrix<f64>>> = families.iter().map(|f| f.variants.iter().map(|v| rows.arrange(&v.columns)).collect()).collect();
-    let arranged_declared = rows.arrange(&data.declared);
-    let base_of = |chosen: &[(usize, usize)]| {
-        let extra: Vec<&DMatrix<f64>> = chosen.iter().map(|&(f, v)| &arranged[f][v]).collect();
-        let p = arranged_declared.ncols() + extra.iter().map(|c| c.ncols()).sum::<usize>();
-        let mut all = DMatrix::zeros(n, p);
-        all.columns_mut(0, arranged_declared.ncols()).copy_from(&arranged_declared);
-        let mut at = arranged_declared.ncols();
+    let sel = Selector::new(data, families, options);
+    let mut chosen: Vec<(usize, usize)> = Vec::new();
+    let mut base = sel.base_of(&chosen);
+    let before_fit = base.clone();
+    let mut steps = Vec::new();
+    while chosen.len() < options.max_terms {
+        let step = sel.forward_step(&base, &chosen);
+        let pick = step.chosen.map(|f| (f, step.chosen_variant));
+        steps.push(step.step);
+        match pick {
+            Some(p) => {
+                chosen.push(p);
+                base = sel.base_of(&chosen);
+            }
+            None => break,
+        }
+    }
+    let mut dropped = sel.backward(&mut chosen);
+    let swapped = sel.swaps(&mut chosen);
+    if !swapped.is_empty() {
+        dropped.extend(sel.backward(&mut chosen));
+    }
+    base = sel.base_of(&chosen);
+    sel.outcome(data, chosen, steps, dropped, swapped, &before_fit, &base)
+}
+
+/// What one forward step found: its record, and the variant of the family it chose.
+struct ForwardStep {
+    step: SelectionStep,
+    chosen: Option<usize>,
+    chosen_variant: usize,
+}
+
+/// The selection's data, arranged by blocks once, and the scoring of candidates against a base.
+struct Selector<'a> {
+    families: &'a [Family],
+    options: &'a SelectionOptions,
+    rows: BlockedRows,
+    b: DVector<f64>,
+    arranged: Vec<Vec<DMatrix<f64>>>,
+    arranged_declared: DMatrix<f64>,
+    n: f64,
+    /// Variants tried in all (the Bonferroni factor).
+    tried: usize,
+}
+
+impl<'a> Selector<'a> {
+    fn new(data: &WhitenedData, families: &'a [Family], options: &'a SelectionOptions) -> Self {
+        let n = data.b.len();
+        let rows = BlockedRows::new(&data.folds, n);
+        let b = rows.arrange_vector(&data.b);
+        let arranged = families.iter().map(|f| f.variants.iter().map(|v| rows.arrange(&v.columns)).collect()).collect();
+        let arranged_declared = rows.arrange(&data.declared);
+        let tried = families.iter().map(|f| f.variants.len()).sum();
+        Self { families, options, rows, b, arranged, arranged_declared, n: n as f64, tried }
+    }
+
+    /// The declared columns and the chosen variants' columns, fitted.
+    fn base_of(&self, chosen: &[(usize, usize)]) -> BaseFit {
+        let extra: Vec<&DMatrix<f64>> = chosen.iter().map(|&(f, v)| &self.arranged[f][v]).collect();
+        let p = self.arranged_declared.ncols() + extra.iter().map(|c| c.ncols()).sum::<usize>();
+        let mut all = DMatrix::zeros(self.b.len(), p);
+        all.columns_mut(0, self.arranged_declared.ncols()).copy_from(&self.arranged_declared);
+        let mut at = self.arranged_declared.ncols();
         for c in extra {
             all.columns_mut(at, c.ncols()).copy_from(c);
             at += c.ncols();
         }
-        BaseFit::new(&rows, all, b.clone())
-    };
-    let profiled_of = |chosen: &[(usize, usize)]| chosen.iter().map(|&(f, v)| families[f].variants[v].profiled).sum::<usize>();
-    let mut chosen: Vec<(usize, usize)> = Vec::new();
-    let mut base = base_of(&chosen);
-    let before_fit = base.clone();
-    let mut steps = Vec::new();
-    let tried: usize = families.iter().map(|f| f.variants.len()).sum();
-    let judged = |by: &Option<Vec<usize>>, per_scheme: &[f64]| -> f64 {
+        BaseFit::new(&self.rows, all, self.b.clone())
+    }
+
+    fn profiled_of(&self, chosen: &[(usize, usize)]) -> usize {
+        chosen.iter().map(|&(f, v)| self.families[f].variants[v].profiled).sum()
+    }
+
+    fn bic_of(&self, base: &BaseFit, chosen: &[(usize, usize)]) -> f64 {
+        bic(self.n, base.ssr(), (base.rank() + self.profiled_of(chosen)) as f64)
+    }
+
+    /// The held-out error on the blocking schemes that judge a family.
+    fn judged(by: &Option<Vec<usize>>, per_scheme: &[f64]) -> f64 {
         match by {
             None => per_scheme.iter().sum(),
             Some(list) => list.iter().filter_map(|&s| per_scheme.get(s)).sum(),
         }
-    };
-    while chosen.len() < options.max_terms {
-        let current_cv = base.heldout_ssr();
-        let current_by_scheme = base.heldout_by_scheme();
-        let current_bic = bic(nf, base.ssr(), (base.rank() + profiled_of(&chosen)) as f64);
-        let mut per_family: Vec<Scored> = Vec::new();
-        for (fi, fam) in families.iter().enumerate() {
+    }
+
+    /// Variant `vi` of family `fi` added to `base` (which holds `chosen`): its fit, tests and
+    /// effect.
+    fn score(&self, base: &BaseFit, chosen: &[(usize, usize)], fi: usize, vi: usize) -> Scored {
+        let (fam, var) = (&self.families[fi], &self.families[fi].variants[vi]);
+        let nf = self.n;
+        let c: CandidateFit = base.candidate(&self.rows, &self.arranged[fi][vi]);
+        let k = var.columns.ncols();
+        let dof = nf - c.rank as f64;
+        let sigma2 = if dof > 0.0 { c.ssr / dof } else { f64::INFINITY };
+        let values: Vec<f64> = (0..k).map(|j| var.base_values[j] + c.values[j]).collect();
+        let sigmas: Vec<f64> = (0..k).map(|j| (c.unscaled_covariance[(j, j)].max(0.0) * sigma2).sqrt()).collect();
+        let p = if c.separable { f_test(c.explained, k, c.ssr, dof) } else { 1.0 };
+        let p_adjusted = (p * self.tried as f64 * var.search_multiplicity.max(1.0)).min(1.0);
+        let plausible = values.iter().zip(&var.ranges).all(|(v, (lo, hi))| *v >= *lo && *v <= *hi);
+        let usual = values.iter().zip(&var.usual).all(|(v, (lo, hi))| *v >= *lo && *v <= *hi);
+        let significance = significance_sigma(&c.values.iter().copied().collect::<Vec<_>>(), &(&c.unscaled_covariance * sigma2), &var.main);
+        let bic_with = bic(nf, c.ssr, (c.rank + self.profiled_of(chosen) + var.profiled) as f64) + 2.0 * var.search_multiplicity.max(1.0).ln();
+        let delta_bic = bic_with - self.bic_of(base, chosen);
+        let (cv_with, cv_without) = (Self::judged(&fam.judged_by, &c.heldout_by_scheme), Self::judged(&fam.judged_by, &base.heldout_by_scheme()));
+        let heldout_gain = if cv_without > 0.0 { 1.0 - cv_with / cv_without } else { 0.0 };
+        let supported = c.separable && p_adjusted <= self.options.alpha && delta_bic < 0.0 && heldout_gain >= self.options.min_cv_gain && significance >= MIN_SIGNIFICANCE_SIGMA;
+        let accepted = supported && plausible;
+        let score = CandidateScore { label: fam.label.clone(), variant: var.name.clone(), heldout_ssr: c.heldout_ssr, heldout_gain, wald_p_adjusted: p_adjusted, plausible, usual, significance_sigma: significance, supported, separable: c.separable, delta_bic, values, sigmas, accepted };
+        let effect = base.project_out(&(&self.arranged[fi][vi] * DVector::from_iterator(k, (0..k).map(|j| c.values[j]))));
+        Scored { family: fi, variant: vi, bic: bic_with, score, effect }
+    }
+
+    /// Every family not chosen, by its representative variant: its acceptable variant of lowest
+    /// BIC, else its supported (refused) one, else its lowest BIC.
+    fn per_family(&self, base: &BaseFit, chosen: &[(usize, usize)]) -> Vec<Scored> {
+        let mut out = Vec::new();
+        for (fi, fam) in self.families.iter().enumerate() {
             if chosen.iter().any(|&(f, _)| f == fi) {
                 continue;
             }
-            let mut best: Option<Scored> = None;
-            for (vi, var) in fam.variants.iter().enumerate() {
-                let c: CandidateFit = base.candidate(&rows, &arranged[fi][vi]);
-                let k = var.columns.ncols();
-                let dof = nf - c.rank as f64;
-                let sigma2 = if dof > 0.0 { c.ssr / dof } else { f64::INFINITY };
-                let values: Vec<f64> = (0..k).map(|j| var.base_values[j] + c.values[j]).collect();
-                let sigmas: Vec<f64> = (0..k).map(|j| (c.unscaled_covariance[(j, j)].max(0.0) * sigma2).sqrt()).collect();
-                let p = if c.separable { f_test(c.explained, k, c.ssr, dof) } else { 1.0 };
-                let p_adjusted = (p * tried as f64 * var.search_multiplicity.max(1.0)).min(1.0);
-                let plausible = values.iter().zip(&var.ranges).all(|(v, (lo, hi))| *v >= *lo && *v <= *hi);
-                let usual = values.iter().zip(&var.usual).all(|(v, (lo, hi))| *v >= *lo && *v <= *hi);
-                let significance = significance_sigma(&c.values.iter().copied().collect::<Vec<_>>(), &(&c.unscaled_covariance * sigma2), &var.main);
-                let bic_with = bic(nf, c.ssr, (c.rank + profiled_of(&chosen) + var.profiled) as f64) + 2.0 * var.search_multiplicity.max(1.0).ln();
-                let delta_bic = bic_with - current_bic;
-                let (cv_with, cv_without) = (judged(&fam.judged_by, &c.heldout_by_scheme), judged(&fam.judged_by, &current_by_scheme));
-                let heldout_gain = if cv_without > 0.0 { 1.0 - cv_with / cv_without } else { 0.0 };
-                let supported = c.separable && p_adjusted <= options.alpha && delta_bic < 0.0 && heldout_gain >= options.min_cv_gain && significance >= MIN_SIGNIFICANCE_SIGMA;
-                let accepted = supported && plausible;
-                let score = CandidateScore { label: fam.label.clone(), variant: var.name.clone(), heldout_ssr: c.heldout_ssr, heldout_gain, wald_p_adjusted: p_adjusted, plausible, usual, significance_sigma: significance, supported, separable: c.separable, delta_bic, values, sigmas, accepted };
-                // a family's representative: its acceptable variant of lowest BIC, else its
-                // supported (refused) one, else its lowest BIC
-                let rank = |s: &CandidateScore| (s.accepted, s.supported);
-                let better = match &best {
-                    None => true,
-                    Some(b) => rank(&score) > rank(&b.score) || (rank(&score) == rank(&b.score) && bic_with < b.bic),
-                };
-                if better {
-                    let effect = base.project_out(&(&arranged[fi][vi] * DVector::from_iterator(k, (0..k).map(|j| c.values[j]))));
-                    best = Some(Scored { family: fi, variant: vi, bic: bic_with, score, effect });
-                }
-            }
-            if let Some(b) = best {
-                per_family.push(b);
-            }
+            let rank = |s: &CandidateScore| (s.accepted, s.supported);
+            let best = (0..fam.variants.len()).map(|vi| self.score(base, chosen, fi, vi)).reduce(|b, s| if rank(&s.score) > rank(&b.score) || (rank(&s.score) == rank(&b.score) && s.bic < b.bic) { s } else { b });
+            out.extend(best);
         }
-        let best_of = |physical: bool| {
-            let accepted: Vec<&Scored> = per_family.iter().filter(|s| s.score.accepted && families[s.family].physical == physical).collect();
-            let lowest = *accepted.iter().min_by(|a, b| a.bic.total_cmp(&b.bic))?;
-            let size = |s: &Scored| families[s.family].variants[s.variant].columns.ncols() + families[s.family].variants[s.variant].profiled;
-            let tied = |s: &Scored| s.bic <= lowest.bic + TIE_BIC || (s.bic <= lowest.bic + CONFOUNDED_BIC && correlation(&s.effect, &lowest.effect).abs() > CONFOUNDED_CORRELATION);
-            accepted.into_iter().filter(|s| tied(s)).min_by(|a, b| {
-                preference(&families[a.family].term).cmp(&preference(&families[b.family].term)).then(size(a).cmp(&size(b))).then(a.bic.total_cmp(&b.bic))
-            })
-        };
-        let pick = match (best_of(true), best_of(false)) {
+        out
+    }
+
+    /// The acceptable family of lowest BIC among the physical (or the empirical) ones, ties —
+    /// within [`TIE_BIC`], or confounded within [`CONFOUNDED_BIC`] — resolved by convention.
+    fn best_of<'s>(&self, per_family: &'s [Scored], physical: bool) -> Option<&'s Scored> {
+        let families = self.families;
+        let accepted: Vec<&Scored> = per_family.iter().filter(|s| s.score.accepted && families[s.family].physical == physical).collect();
+        let lowest = *accepted.iter().min_by(|a, b| a.bic.total_cmp(&b.bic))?;
+        let size = |s: &Scored| families[s.family].variants[s.variant].columns.ncols() + families[s.family].variants[s.variant].profiled;
+        let tied = |s: &Scored| s.bic <= lowest.bic + TIE_BIC || (s.bic <= lowest.bic + CONFOUNDED_BIC && correlation(&s.effect, &lowest.effect).abs() > CONFOUNDED_CORRELATION);
+        accepted.into_iter().filter(|s| tied(s)).min_by(|a, b| preference(&families[a.family].term).cmp(&preference(&families[b.family].term)).then(size(a).cmp(&size(b))).then(a.bic.total_cmp(&b.bic)))
+    }
+
+    /// One forward step from `base` (holding `chosen`).
+    fn forward_step(&self, base: &BaseFit, chosen: &[(usize, usize)]) -> ForwardStep {
+        let per_family = self.per_family(base, chosen);
+        let options = self.options;
+        let pick = match (self.best_of(&per_family, true), self.best_of(&per_family, false)) {
             (Some(p), Some(e)) => Some(if e.bic < p.bic - options.empirical_margin.max(options.empirical_margin_relative * p.score.delta_bic.abs()) { e } else { p }),
-            (Some(p), None) => Some(p),
-            (None, Some(e)) => Some(e),
-            (None, None) => None,
+            (p, e) => p.or(e),
         };
         // a physical candidate the data support better than the pick, refused for impossible
-        // values: nothing is named in its place
-        // (one whose effect the pick shares — correlated beyond CONFOUNDED_CORRELATION — is the
-        // pick's effect at an impossible value: the pick, possible, explains it as well)
+        // values: nothing is named in its place (one whose effect the pick shares — correlated
+        // beyond CONFOUNDED_CORRELATION — is the pick's effect at an impossible value: the pick,
+        // possible, explains it as well)
         let refused = per_family
             .iter()
-            .filter(|s| s.score.supported && !s.score.accepted && families[s.family].physical)
+            .filter(|s| s.score.supported && !s.score.accepted && self.families[s.family].physical)
             .min_by(|a, b| a.bic.total_cmp(&b.bic))
             .filter(|r| pick.is_none_or(|p| r.bic < p.bic - TIE_BIC && correlation(&r.effect, &p.effect).abs() <= CONFOUNDED_CORRELATION));
-        let refused_family = refused.map(|r| r.family);
         let pick = if refused.is_some() { None } else { pick };
         let alternatives: Vec<StepAlternative> = match pick {
             None => Vec::new(),
             Some(p) => per_family
                 .iter()
-                .filter(|s| s.family != p.family && s.score.accepted && families[s.family].physical == families[p.family].physical)
+                .filter(|s| s.family != p.family && s.score.accepted && self.families[s.family].physical == self.families[p.family].physical)
                 .filter_map(|s| {
                     let correlation = correlation(&s.effect, &p.effect);
                     let delta_bic = s.bic - p.bic;
@@ -487,71 +550,100 @@ pub fn select_families(data: &WhitenedData, families: &[Family], options: &Selec
                 })
                 .collect(),
         };
-        let pick = pick.map(|s| (s.family, s.variant));
-        steps.push(SelectionStep { heldout_ssr_before: current_cv, scores: per_family.into_iter().map(|s| s.score).collect(), chosen: pick.map(|p| p.0), refused: refused_family, alternatives });
-        match pick {
-            Some(p) => {
-                chosen.push(p);
-                base = base_of(&chosen);
-            }
-            None => break,
-        }
+        let (chosen_family, chosen_variant) = (pick.map(|p| p.family), pick.map_or(0, |p| p.variant));
+        let refused = refused.map(|r| r.family);
+        let step = SelectionStep { heldout_ssr_before: base.heldout_ssr(), scores: per_family.into_iter().map(|s| s.score).collect(), chosen: chosen_family, refused, alternatives };
+        ForwardStep { step, chosen: chosen_family, chosen_variant }
     }
-    // backward elimination: each chosen term given all the others
-    let mut dropped = Vec::new();
-    loop {
-        if chosen.is_empty() {
-            break;
-        }
-        let mut worst: Option<(usize, f64)> = None;
-        for i in 0..chosen.len() {
-            let others: Vec<(usize, usize)> = chosen.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, c)| *c).collect();
-            let without = base_of(&others);
-            let (f, v) = chosen[i];
-            let c = without.candidate(&rows, &arranged[f][v]);
-            let dof = nf - c.rank as f64;
-            let p = if c.separable { (f_test(c.explained, arranged[f][v].ncols(), c.ssr, dof) * chosen.len() as f64).min(1.0) } else { 1.0 };
-            let by = &families[f].judged_by;
-            let cv_ok = judged(by, &c.heldout_by_scheme) <= judged(by, &without.heldout_by_scheme()) * (1.0 - options.min_cv_gain);
-            let p = if cv_ok { p } else { 1.0 };
-            if p > options.alpha && worst.is_none_or(|(_, wp)| p > wp) {
-                worst = Some((i, p));
+
+    /// Backward elimination: each chosen term tested given all the others (F test, Bonferroni
+    /// over the chosen, held-out gain); the least significant dropped while one fails. Returns
+    /// the labels dropped.
+    fn backward(&self, chosen: &mut Vec<(usize, usize)>) -> Vec<String> {
+        let mut dropped = Vec::new();
+        while !chosen.is_empty() {
+            let mut worst: Option<(usize, f64)> = None;
+            for i in 0..chosen.len() {
+                let others: Vec<(usize, usize)> = chosen.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, c)| *c).collect();
+                let without = self.base_of(&others);
+                let (f, v) = chosen[i];
+                let c = without.candidate(&self.rows, &self.arranged[f][v]);
+                let dof = self.n - c.rank as f64;
+                let p = if c.separable { (f_test(c.explained, self.arranged[f][v].ncols(), c.ssr, dof) * chosen.len() as f64).min(1.0) } else { 1.0 };
+                let by = &self.families[f].judged_by;
+                let cv_ok = Self::judged(by, &c.heldout_by_scheme) <= Self::judged(by, &without.heldout_by_scheme()) * (1.0 - self.options.min_cv_gain);
+                let p = if cv_ok { p } else { 1.0 };
+                if p > self.options.alpha && worst.is_none_or(|(_, wp)| p > wp) {
+                    worst = Some((i, p));
+                }
+            }
+            match worst {
+                Some((i, _)) => dropped.push(self.families[chosen.remove(i).0].label.clone()),
+                None => break,
             }
         }
-        match worst {
-            Some((i, _)) => {
-                let (f, _) = chosen.remove(i);
-                dropped.push(families[f].label.clone());
-                base = base_of(&chosen);
+        dropped
+    }
+
+    /// Swaps: each chosen term in turn is taken out, and the acceptable candidate (of the same
+    /// kind: physical for physical) that lowers the BIC of the rest most — by more than
+    /// [`TIE_BIC`] below the model with the term — replaces it; repeated while one does (at most
+    /// twice per chosen term). Returns (replaced, replacement) labels.
+    fn swaps(&self, chosen: &mut [(usize, usize)]) -> Vec<(String, String)> {
+        let mut out = Vec::new();
+        for _round in 0..2 * chosen.len() {
+            let current = self.bic_of(&self.base_of(chosen), chosen);
+            let mut best: Option<(usize, Scored)> = None;
+            for i in 0..chosen.len() {
+                let others: Vec<(usize, usize)> = chosen.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, c)| *c).collect();
+                let base = self.base_of(&others);
+                let physical = self.families[chosen[i].0].physical;
+                for s in self.per_family(&base, chosen) {
+                    if !s.score.accepted || self.families[s.family].physical != physical || s.bic >= current - TIE_BIC {
+                        continue;
+                    }
+                    if best.as_ref().is_none_or(|(_, b)| s.bic < b.bic) {
+                        best = Some((i, s));
+                    }
+                }
             }
-            None => break,
+            let Some((i, s)) = best else { break };
+            out.push((self.families[chosen[i].0].label.clone(), self.families[s.family].label.clone()));
+            chosen[i] = (s.family, s.variant);
         }
+        out
     }
-    // final parameters from the full-data fit of everything chosen
-    let x = base.solution();
-    let dof = (nf - base.rank() as f64).max(1.0);
-    let sigma2 = base.ssr() / dof;
-    let cov = base.unscaled_covariance();
-    let mut col = data.declared.ncols();
-    let mut chosen_terms = Vec::new();
-    for &(f, v) in &chosen {
-        let fam = &families[f];
-        let var = &fam.variants[v];
-        let k = var.columns.ncols();
-        let parameters = (0..k).map(|j| (var.parameter_names[j].clone(), var.base_values[j] + x[col + j], (cov[(col + j, col + j)].max(0.0) * sigma2).sqrt(), var.units[j].clone())).collect();
-        chosen_terms.push(ChosenTerm { candidate: f, variant: v, label: fam.label.clone(), term: fam.term.clone(), physical: fam.physical, parameters });
-        col += k;
-    }
-    let restore = |v: Vec<DVector<f64>>| v.iter().map(|e| rows.restore_vector(e)).collect::<Vec<_>>();
-    FamilySelection {
-        chosen: chosen_terms,
-        steps,
-        dropped,
-        heldout_before: restore(before_fit.heldout_residuals(&rows)),
-        heldout_after: restore(base.heldout_residuals(&rows)),
-        residual_after: rows.restore_vector(&base.residuals()),
-        chi2_per_dof_before: before_fit.ssr() / (nf - before_fit.rank() as f64).max(1.0),
-        chi2_per_dof_after: base.ssr() / dof,
-        declared_increment: x.rows(0, data.declared.ncols()).into_owned(),
+
+    /// The selection's outcome: the chosen terms' parameters from the full-data fit of
+    /// everything chosen, and the held-out figures before and after.
+    #[allow(clippy::too_many_arguments)]
+    fn outcome(&self, data: &WhitenedData, chosen: Vec<(usize, usize)>, steps: Vec<SelectionStep>, dropped: Vec<String>, swapped: Vec<(String, String)>, before_fit: &BaseFit, base: &BaseFit) -> FamilySelection {
+        let x = base.solution();
+        let dof = (self.n - base.rank() as f64).max(1.0);
+        let sigma2 = base.ssr() / dof;
+        let cov = base.unscaled_covariance();
+        let mut col = data.declared.ncols();
+        let mut chosen_terms = Vec::new();
+        for &(f, v) in &chosen {
+            let fam = &self.families[f];
+            let var = &fam.variants[v];
+            let k = var.columns.ncols();
+            let parameters = (0..k).map(|j| (var.parameter_names[j].clone(), var.base_values[j] + x[col + j], (cov[(col + j, col + j)].max(0.0) * sigma2).sqrt(), var.units[j].clone())).collect();
+            chosen_terms.push(ChosenTerm { candidate: f, variant: v, label: fam.label.clone(), term: fam.term.clone(), physical: fam.physical, parameters });
+            col += k;
+        }
+        let restore = |v: Vec<DVector<f64>>| v.iter().map(|e| self.rows.restore_vector(e)).collect::<Vec<_>>();
+        FamilySelection {
+            chosen: chosen_terms,
+            steps,
+            dropped,
+            swapped,
+            heldout_before: restore(before_fit.heldout_residuals(&self.rows)),
+            heldout_after: restore(base.heldout_residuals(&self.rows)),
+            residual_after: self.rows.restore_vector(&base.residuals()),
+            chi2_per_dof_before: before_fit.ssr() / (self.n - before_fit.rank() as f64).max(1.0),
+            chi2_per_dof_after: base.ssr() / dof,
+            declared_increment: x.rows(0, data.declared.ncols()).into_owned(),
+        }
     }
 }

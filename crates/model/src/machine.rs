@@ -24,7 +24,7 @@ use metrocell_kinematics::cartesian::StackingOrder;
 use metrocell_kinematics::delta::DeltaGeometry;
 use metrocell_kinematics::dh::DhTable;
 use metrocell_kinematics::five_axis::FiveAxisGeometry;
-use metrocell_kinematics::serial::{JointKind, SerialChain};
+use metrocell_kinematics::serial::SerialChain;
 use nalgebra::Vector3;
 
 /// The kinematic chain of the machine (crates/kinematics).

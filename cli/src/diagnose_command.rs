@@ -117,8 +117,30 @@ fn augmented_model(model: &CellModel, d: &Diagnosis) -> anyhow::Result<String> {
     }
     fit.insert("heldout_rms_um".into(), serde_yaml::Value::Sequence(vec![((r.before.heldout_rms_m * 1e8).round() / 100.0).into(), ((r.after.heldout_rms_m * 1e8).round() / 100.0).into()]));
     fit.insert("chi2_per_dof".into(), ((r.after.chi2_per_dof * 100.0).round() / 100.0).into());
-    let update = ModelUpdate { parameters, added_terms: d.added_terms.iter().map(|t| t.config.clone()).collect(), fit: Some(serde_yaml::Value::Mapping(fit)) };
+    let update = ModelUpdate { parameters, added_terms: d.added_terms.iter().map(|t| t.config.clone()).collect(), fit: Some(serde_yaml::Value::Mapping(fit)), notes: left_out(d) };
     Ok(write_model(model, &update)?)
+}
+
+/// What the diagnosis found that the model file does not hold as found, for its comments.
+fn left_out(d: &Diagnosis) -> Vec<String> {
+    let r = &d.report;
+    let mut notes = Vec::new();
+    for u in &r.unexplained {
+        notes.push(match &u.correction {
+            Some(c) => format!(
+                "left out: the empirical correction `{}` metrocell diagnose fitted ({}). No catalog term describes it, so no model file can hold it: its coefficients are in the report's diagnosis.json (unexplained[].correction); find the cause, or model it by a term when one fits.",
+                c.label, u.statement
+            ),
+            None => format!("not explained by any catalog term, and not in this model: {}", u.statement),
+        });
+    }
+    for f in r.findings.iter().filter(|f| f.variant.contains("freed")) {
+        notes.push(format!(
+            "{}: this model held it fixed; metrocell diagnose freed and fitted it, and its value is written in place. It stays fixed when this file is fitted again unless `estimation:` frees it.",
+            f.label
+        ));
+    }
+    notes
 }
 
 fn write(path: &Path, text: &str) -> anyhow::Result<()> {

@@ -33,8 +33,10 @@ held-out blocks of time and of workspace, is significant and plausible, and lowe
 reports the held-out RMS before and after, in a metrologist's words, or says that no catalog term explains a structure and\n\
 where it lives.\n\n\
 Output: a summary on stdout (stderr when --json -), `--json` (fields documented in the README: noise_rms_m, before, after,\n\
-findings, unexplained, explained, …), `--report DIR` (DIR/model.yaml: the model file with the found terms added and fitted;\n\
-DIR/index.html with plots; DIR/diagnosis.json), `--residuals FILE.csv` (per record: time, channel, position, residual after the\n\
+findings, unexplained, explained, …), `--report DIR` (DIR/model.yaml: the model file with the found terms added and fitted —\n\
+machine terms under terms:, a tracker's warm-up and refraction in sensors.tracker, a probe's pretravel in sensors.probe,\n\
+what no model file can hold (an empirical correction) in comments; calibrate, diagnose, compensate, sim and the estimator\n\
+node read it; DIR/index.html with plots; DIR/diagnosis.json), `--residuals FILE.csv` (per record: time, channel, position, residual after the\n\
 declared fit with its σ, and the signals).",
     after_help = "Examples:\n  metrocell diagnose --model cell.yaml shift_bag --report diag/\n  metrocell diagnose --model bags/cases/case_12/model.yaml rec/case_12/seed_1 --json -\n  metrocell bag import export.csv -o points --mapping map.yaml && metrocell diagnose --model model.yaml points --json result.json\n  metrocell diagnose --model cell.yaml run1 run2 --strategy all-at-once --residuals residuals.csv"
 )]

@@ -54,7 +54,8 @@ pub struct CellModel {
     /// Free/fixed and priors of the stacked parameter vector (machine terms, then instrument
     /// terms, see [`ForwardModel`]).
     pub setup: ParameterSetup,
-    /// True when the file has `sensors.tracker`; false when the loader added an identity pose.
+    /// True when the file has `sensors.tracker` (with or without `pose`: without one the
+    /// loader starts the pose at the identity, as it does for a file without a tracker).
     pub declares_tracker: bool,
 }
 

@@ -161,3 +161,23 @@ fn the_demos_augmented_model_is_a_model_every_command_takes() {
     assert_ne!(code, 0);
     assert!(err.contains("`sensors.tracker.pose`: is required to simulate the tracker"), "{err}");
 }
+
+/// Issue 32 item 1: an empirical correction has no catalog term, so no model file can hold it;
+/// the augmented model says, as a comment, what was left out and why, and stays a model.
+#[test]
+fn an_empirical_correction_is_said_in_the_augmented_model_not_written_as_a_term() {
+    let d = dir("empirical");
+    let case = repo().join("bags/cases/case_20");
+    let (code, out, err) = metrocell(&["sim", "--cell", case.join("truth.yaml").to_str().unwrap(), "--duration", "2h", "--no-camera-frames", "--seed", "1", "-o", "bag", "--quiet"], &d);
+    assert_eq!(code, 0, "sim: {out}{err}");
+    let (code, out, err) = metrocell(&["diagnose", "--model", case.join("model.yaml").to_str().unwrap(), "bag", "--report", "d"], &d);
+    assert_eq!(code, 0, "diagnose: {out}{err}");
+    assert!(out.contains("an empirical time correction"), "the case's z drift in time is corrected empirically:\n{out}");
+    let written = std::fs::read_to_string(d.join("d/model.yaml")).unwrap();
+    // the comments, unwrapped
+    let said: String = written.lines().filter_map(|l| l.strip_prefix("# -").or_else(|| l.strip_prefix("#  "))).collect::<Vec<_>>().join(" ").split_whitespace().collect::<Vec<_>>().join(" ");
+    assert!(said.contains("left out: the empirical correction `empirical_time[z]`") && said.contains("No catalog term describes it, so no model file can hold it"), "{written}");
+    assert!(!written.contains("id: empirical"), "{written}");
+    let (code, out, err) = metrocell(&["calibrate", "--model", "d/model.yaml", "bag", "-o", "c.yaml"], &d);
+    assert_eq!(code, 0, "calibrate of the augmented model: {out}{err}");
+}

@@ -88,7 +88,10 @@ pub fn write_model(model: &CellModel, update: &ModelUpdate) -> Result<String, Ce
     }
     probe_edits(model, &root, &fitted, &mut edits, &mut written)?;
     let mut notes = update.notes.clone();
-    let (instrument, machine): (Vec<TermConfig>, Vec<TermConfig>) = update.added_terms.iter().cloned().partition(|c| crate::cell::home_of(&c.id).is_some());
+    // a term goes under `terms:` only if the loader takes it there; the others (an instrument's)
+    // go where a model file keeps them, or are left out and said
+    let (machine, instrument): (Vec<TermConfig>, Vec<TermConfig>) =
+        update.added_terms.iter().cloned().partition(|c| crate::cell::home_of(&c.id).is_none() && crate::cell::terms(std::slice::from_ref(c), None, None, &model.machine).is_ok());
     if !machine.is_empty() {
         added_terms(model, &root, &fitted, &machine, &mut edits, &mut written)?;
     }

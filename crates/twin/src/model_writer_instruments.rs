@@ -7,9 +7,10 @@
 //! * `probe_pretravel` → `sensors.probe.pretravel {options, params}`.
 //!
 //! A model without `sensors.tracker` gets one without `pose` (the pose is unknown: registered
-//! from each recording, as it was for the file the terms were found with). Any other instrument
-//! term is left out, and the returned notes say so and why; they are written into the file as
-//! comments.
+//! from each recording, as it was for the file the terms were found with). Any other term the
+//! loader does not take under `terms:` is left out — `instrument_drift`, the instrument moving
+//! during one recording, belongs to that recording as its pose does — and the returned notes say
+//! so and why; they are written into the file as comments.
 
 use std::collections::BTreeMap;
 
@@ -77,10 +78,16 @@ pub(crate) fn added_instrument_terms(
                 probe.push(("pretravel".into(), entry));
                 notes.push(format!("{label}, found by metrocell diagnose, is in sensors.probe.pretravel."));
             }
-            _ => {
-                let home = crate::cell::home_of(&c.id).unwrap_or("its sensor's section");
-                notes.push(format!("{label} was found but is left out of this file: a model keeps it in {home}, which metrocell does not write; add it there by hand (values in the report's diagnosis.json)."));
-            }
+            TermId::InstrumentDrift => notes.push(format!(
+                "{label}, found by metrocell diagnose (the instrument moved during the recording), is left out of this file: like the tracker's pose it belongs to one recording (its span is on that recording's clock), not to the machine; diagnose looks for it in each recording it judges (values in the report's diagnosis.json)."
+            )),
+            _ => notes.push(match crate::cell::home_of(&c.id) {
+                Some(home) => format!("{label} was found but is left out of this file: a model keeps it in {home}, which metrocell does not write; add it there by hand (values in the report's diagnosis.json)."),
+                None => {
+                    let why = crate::cell::terms(std::slice::from_ref(c), None, None, &model.machine).err().map(|e| e.to_string()).unwrap_or_default();
+                    format!("{label} was found but is left out of this file, which cannot hold it ({why}); values in the report's diagnosis.json.")
+                }
+            }),
         }
     }
     if !tracker.is_empty() {

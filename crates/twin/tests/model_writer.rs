@@ -158,6 +158,12 @@ fn added_terms_are_appended_and_read_back() {
     assert_eq!(back.forward_model().unwrap().param_names()[0], "backlash[y].reversal", "{out}");
 }
 
+/// The notes the writer added as comments, unwrapped.
+fn said(text: &str) -> String {
+    let lines: Vec<&str> = text.lines().filter_map(|l| l.strip_prefix("# -").or_else(|| l.strip_prefix("#  "))).collect();
+    lines.join(" ").split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
 fn number(v: f64) -> ConfigValue {
     ConfigValue::Number(v)
 }
@@ -196,12 +202,15 @@ fn found_instrument_terms_go_where_a_model_file_keeps_them() {
                 term("tracker_warmup", &[], &[("offset", 0.0), ("amplitude", 2e-5), ("time_constant", 1800.0)]),
                 term("refraction", &[], &[("path_temperature_offset", 0.0), ("path_pressure_offset", 0.0)]),
                 term("backlash", &[("axis", ConfigValue::Text("x".into()))], &[("reversal", 0.0)]),
+                // the instrument moving during the recording: the recording's, not the model's
+                term("instrument_drift", &[("order", number(1.0)), ("rotation", ConfigValue::Bool(false)), ("span", ConfigValue::List(vec![number(0.0), number(3600.0)]))], &[("dx1", 0.0), ("dy1", 0.0), ("dz1", 3e-6)]),
             ],
             fit: None,
             notes: vec!["left out: the empirical correction `empirical[z]` (no catalog term describes it)".into()],
         };
         let out = write_model(&model, &update).unwrap();
-        assert!(!out.contains("id: tracker_warmup") && !out.contains("id: refraction"), "{style}: instrument terms are not machine terms:\n{out}");
+        assert!(!out.contains("id: tracker_warmup") && !out.contains("id: refraction") && !out.contains("id: instrument_drift"), "{style}: instrument terms are not machine terms:\n{out}");
+        assert!(said(&out).contains("instrument_drift, found by metrocell diagnose (the instrument moved during the recording), is left out of this file"), "{style}:\n{out}");
         assert!(out.contains("id: backlash"), "{style}:\n{out}");
         let back = read(&out);
         let v = values(&back);

@@ -33,8 +33,10 @@ held-out blocks of time and of workspace, is significant and plausible, and lowe
 reports the held-out RMS before and after, in a metrologist's words, or says that no catalog term explains a structure and\n\
 where it lives.\n\n\
 Output: a summary on stdout (stderr when --json -), `--json` (fields documented in the README: noise_rms_m, before, after,\n\
-findings, unexplained, explained, …), `--report DIR` (DIR/model.yaml: the model file with the found terms added and fitted;\n\
-DIR/index.html with plots; DIR/diagnosis.json), `--residuals FILE.csv` (per record: time, channel, position, residual after the\n\
+findings, unexplained, explained, …), `--report DIR` (DIR/model.yaml: the model file with the found terms added and fitted —\n\
+machine terms under terms:, a tracker's warm-up and refraction in sensors.tracker, a probe's pretravel in sensors.probe,\n\
+what no model file can hold (an empirical correction) in comments; calibrate, diagnose, compensate, sim and the estimator\n\
+node read it; DIR/index.html with plots; DIR/diagnosis.json), `--residuals FILE.csv` (per record: time, channel, position, residual after the\n\
 declared fit with its σ, and the signals).",
     after_help = "Examples:\n  metrocell diagnose --model cell.yaml shift_bag --report diag/\n  metrocell diagnose --model bags/cases/case_12/model.yaml rec/case_12/seed_1 --json -\n  metrocell bag import export.csv -o points --mapping map.yaml && metrocell diagnose --model model.yaml points --json result.json\n  metrocell diagnose --model cell.yaml run1 run2 --strategy all-at-once --residuals residuals.csv"
 )]
@@ -117,8 +119,30 @@ fn augmented_model(model: &CellModel, d: &Diagnosis) -> anyhow::Result<String> {
     }
     fit.insert("heldout_rms_um".into(), serde_yaml::Value::Sequence(vec![((r.before.heldout_rms_m * 1e8).round() / 100.0).into(), ((r.after.heldout_rms_m * 1e8).round() / 100.0).into()]));
     fit.insert("chi2_per_dof".into(), ((r.after.chi2_per_dof * 100.0).round() / 100.0).into());
-    let update = ModelUpdate { parameters, added_terms: d.added_terms.iter().map(|t| t.config.clone()).collect(), fit: Some(serde_yaml::Value::Mapping(fit)) };
+    let update = ModelUpdate { parameters, added_terms: d.added_terms.iter().map(|t| t.config.clone()).collect(), fit: Some(serde_yaml::Value::Mapping(fit)), notes: left_out(d) };
     Ok(write_model(model, &update)?)
+}
+
+/// What the diagnosis found that the model file does not hold as found, for its comments.
+fn left_out(d: &Diagnosis) -> Vec<String> {
+    let r = &d.report;
+    let mut notes = Vec::new();
+    for u in &r.unexplained {
+        notes.push(match &u.correction {
+            Some(c) => format!(
+                "left out: the empirical correction `{}` metrocell diagnose fitted ({}). No catalog term describes it, so no model file can hold it: its coefficients are in the report's diagnosis.json (unexplained[].correction); find the cause, or model it by a term when one fits.",
+                c.label, u.statement
+            ),
+            None => format!("not explained by any catalog term, and not in this model: {}", u.statement),
+        });
+    }
+    for f in r.findings.iter().filter(|f| f.variant.contains("freed")) {
+        notes.push(format!(
+            "{}: this model held it fixed; metrocell diagnose freed and fitted it, and its value is written in place. It stays fixed when this file is fitted again unless `estimation:` frees it.",
+            f.label
+        ));
+    }
+    notes
 }
 
 fn write(path: &Path, text: &str) -> anyhow::Result<()> {

@@ -113,3 +113,27 @@ fn probe_pretravel_is_fitted_from_the_probe_hits() {
     assert_ne!(code, 0, "{out}{err}");
     assert!(err.contains("no measurements"), "{err}");
 }
+
+/// Issue 32 item 2: a model in block style (Python's `yaml.safe_dump(…, default_flow_style=False)`
+/// of quick_demo.yaml) came back from `calibrate -o` with its tracker translation as
+/// `translation:` / `- [-1.2 m, 0.2 m, 0.6 m]`, a list in a list every reader refused. The fitted
+/// values go where the items stand, and the output reads back in calibrate and sim.
+#[test]
+fn a_block_style_model_keeps_its_style() {
+    let d = dir("block_style");
+    let block = std::fs::read_to_string(std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../crates/twin/tests/data/quick_demo_safe_dump.yaml")).unwrap();
+    std::fs::write(d.join("model.yaml"), &block).unwrap();
+    let (code, out, err) = metrocell(&["sim", "--cell", "model.yaml", "--duration", "3min", "--no-camera-frames", "-o", "bag", "--quiet"], &d);
+    assert_eq!(code, 0, "{out}{err}");
+    let (code, out, err) = metrocell(&["calibrate", "--model", "model.yaml", "bag", "-o", "fitted.yaml"], &d);
+    assert_eq!(code, 0, "{out}{err}");
+    let fitted = std::fs::read_to_string(d.join("fitted.yaml")).unwrap();
+    let at = fitted.find("\n  tracker:\n").and_then(|t| fitted[t..].find("      translation:\n").map(|k| t + k)).unwrap_or_else(|| panic!("{fitted}"));
+    let items: Vec<&str> = fitted[at..].lines().skip(1).take(3).collect();
+    assert!(items.iter().all(|l| l.starts_with("      - ") && l.ends_with(" m") && !l.contains('[')), "{items:?}");
+    assert!(fitted.lines().filter(|l| l.trim_start().starts_with("- [")).count() == 0, "no list in a list:\n{fitted}");
+    for args in [vec!["calibrate", "--model", "fitted.yaml", "bag", "-o", "again.yaml"], vec!["sim", "--cell", "fitted.yaml", "--duration", "1min", "--no-camera-frames", "-o", "again_bag", "--quiet"]] {
+        let (code, out, err) = metrocell(&args, &d);
+        assert_eq!(code, 0, "{args:?}: {out}{err}");
+    }
+}

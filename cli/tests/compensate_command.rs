@@ -56,3 +56,57 @@ fn tables_are_written_per_axis_with_squareness() {
     assert!(std::fs::read_to_string(d.join("tab/squareness.csv")).unwrap().contains("xy,0.000\n"));
     assert!(out.contains("pitch error span 20.00 µm"), "{out}");
 }
+
+/// A model with a lagged column growth (as `diagnose` writes it): 4 µm/K along +z, 20 min behind
+/// the `column` sensor.
+const LAGGED: &str = "name: lagged\nmachine:\n  family: cartesian\n  stacking: XFYZ\n  travel: {x: [0 mm, 400 mm], y: [0 mm, 300 mm], z: [0 mm, 200 mm]}\nterms:\n  - id: thermal_growth\n    options: {direction: [0, 0, 1], lag: true, sensor: column}\n    params: {coefficient: 4 um/K, time_constant: 20 min}\n";
+
+/// A recording whose `column` sensor ramps 2 K/h from 20 °C, without noise.
+const RAMP: &str = "name: ramp\nmachine:\n  family: cartesian\n  stacking: XFYZ\n  travel: {x: [0 mm, 400 mm], y: [0 mm, 300 mm], z: [0 mm, 200 mm]}\nsensors:\n  thermocouples:\n    - {name: column, location: ambient, noise: 0 K, rate: 1 Hz}\nenvironment:\n  ambient: {mean: 20 degC, drift: 2 K/h}\n  air: {pressure: 101.3 kPa, humidity: 45}\nprogram:\n  points: [[100 mm, 100 mm, 100 mm]]\n  feed_rate: 100 mm/s\n  dwell: 10 s\n";
+
+fn pitch_at_first_row(csv: &str) -> f64 {
+    let row = csv.lines().find(|l| l.starts_with(|c: char| c.is_ascii_digit())).unwrap();
+    row.split(',').nth(1).unwrap().parse().unwrap()
+}
+
+/// Issue 32 item 3: `compensate` asked a lagged `thermal_growth` for `temperature_history[column]`
+/// and offered no way to give it.
+#[test]
+fn a_lagged_growth_takes_a_recorded_history_or_a_stated_steady_state() {
+    let d = dir("lagged");
+    std::fs::write(d.join("m.yaml"), LAGGED).unwrap();
+    // no temperature at all: the error says both ways
+    let (code, _, err) = metrocell(&["compensate", "table", "--model", "m.yaml", "-o", "t0"], &d);
+    assert_eq!(code, 2);
+    assert!(err.contains("lags temperature sensor `column`") && err.contains("--temperatures-from BAG") && err.contains("--temperature column=°C"), "{err}");
+    // a steady state at 22 °C: the structure has settled there, 4 µm/K · 2 K = 8 µm along z; said
+    let (code, out, err) = metrocell(&["compensate", "table", "--model", "m.yaml", "-o", "t1", "--step", "50", "--temperature", "column=22"], &d);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("steady state assumed: thermal_growth[column] lags sensor `column` by τ = 20.0 min"), "{out}");
+    let z = std::fs::read_to_string(d.join("t1/axis_z.csv")).unwrap();
+    assert!(z.starts_with("# steady state assumed"), "the table says it too:\n{z}");
+    assert!((pitch_at_first_row(&z) - 8.0).abs() < 1e-3, "{z}");
+    // from a recording: a 2 K/h ramp seen through a 20 min lag at 1 h is
+    // 22 − (2 K/h · 20 min)(1 − e^(−3)) = 21.3665 °C, so 5.466 µm
+    std::fs::write(d.join("ramp.yaml"), RAMP).unwrap();
+    let (code, out, err) = metrocell(&["sim", "--cell", "ramp.yaml", "--duration", "90min", "-o", "ramp_bag", "--quiet"], &d);
+    assert_eq!(code, 0, "{out}{err}");
+    let (code, out, err) = metrocell(&["compensate", "table", "--model", "m.yaml", "-o", "t2", "--step", "50", "--temperatures-from", "ramp_bag", "--at-time", "1h"], &d);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(out.contains("temperatures from ramp_bag at 3600 s after its first temperature sample (1.00 h): column 22.00 °C"), "{out}");
+    assert!(out.contains("its structure is at 21.37 °C") && !out.contains("steady state"), "{out}");
+    let z = std::fs::read_to_string(d.join("t2/axis_z.csv")).unwrap();
+    assert!((pitch_at_first_row(&z) - 5.466).abs() < 0.005, "{z}");
+    // the G-code command takes the same options
+    std::fs::write(d.join("in.nc"), "G21 G90\nG1 X100 Y100 Z100 F300\n").unwrap();
+    let (code, out, err) = metrocell(&["compensate", "gcode", "--model", "m.yaml", "in.nc", "-o", "out.nc", "--temperatures-from", "ramp_bag", "--at-time", "1h"], &d);
+    assert_eq!(code, 0, "{out}{err}");
+    assert!(std::fs::read_to_string(d.join("out.nc")).unwrap().contains("Z99.9945"), "C = T − e: 100 mm − 5.466 µm");
+    // a time outside the recording, or without one, is named
+    let (code, _, err) = metrocell(&["compensate", "table", "--model", "m.yaml", "-o", "t3", "--temperatures-from", "ramp_bag", "--at-time", "3h"], &d);
+    assert_eq!(code, 2);
+    assert!(err.contains("--at-time `3h`") && err.contains("give a time in it"), "{err}");
+    let (code, _, err) = metrocell(&["compensate", "table", "--model", "m.yaml", "-o", "t4", "--temperature", "column=22", "--at-time", "1h"], &d);
+    assert_eq!(code, 2);
+    assert!(err.contains("--at-time") && err.contains("--temperatures-from BAG"), "{err}");
+}

@@ -128,3 +128,56 @@ fn bad_input_is_named() {
     assert_eq!(code, 1);
     assert!(err.contains("broken.yaml") && err.contains("stacking"), "{err}");
 }
+
+/// Issue 32 item 1: the demo's diagnosis wrote the tracker warm-up it found as `- id:
+/// tracker_warmup` under `terms:`, and calibrate, diagnose, compensate and sim refused the file.
+/// The augmented model keeps it in `sensors.tracker.warmup` (a tracker without a pose: unknown,
+/// registered from each recording) and every command that reads a model takes it.
+#[test]
+fn the_demos_augmented_model_is_a_model_every_command_takes() {
+    let d = dir("demo_augmented");
+    let cells = repo().join("launch-configs/cells");
+    let (shift, model) = (cells.join("demo_shift.yaml"), cells.join("demo_model.yaml"));
+    let (code, out, err) = metrocell(&["sim", "--cell", shift.to_str().unwrap(), "--duration", "20min", "--no-camera-frames", "--seed", "1", "-o", "bag", "--quiet"], &d);
+    assert_eq!(code, 0, "sim: {out}{err}");
+    let (code, out, err) = metrocell(&["diagnose", "--model", model.to_str().unwrap(), "bag", "--report", "d"], &d);
+    assert_eq!(code, 0, "diagnose: {out}{err}");
+    assert!(out.contains("1. tracker_warmup"), "the 20 min recording shows the warm-up:\n{out}");
+    let written = std::fs::read_to_string(d.join("d/model.yaml")).unwrap();
+    assert!(!written.contains("id: tracker_warmup") && written.contains("  tracker: {warmup: {offset: "), "{written}");
+    assert!(written.contains("# - sensors.tracker has no pose"), "{written}");
+    for (what, args) in [
+        ("calibrate", vec!["calibrate", "--model", "d/model.yaml", "bag", "-o", "c.yaml"]),
+        ("diagnose", vec!["diagnose", "--model", "d/model.yaml", "bag", "--json", "again.json"]),
+        ("compensate table", vec!["compensate", "table", "--model", "d/model.yaml", "-o", "tables", "--temperatures-from", "bag"]),
+    ] {
+        let (code, out, err) = metrocell(&args, &d);
+        assert_eq!(code, 0, "{what} of the augmented model: {out}{err}");
+    }
+    let back = metrocell_twin::CellModel::from_path(d.join("c.yaml")).expect("calibrate's output reads back");
+    assert!(back.instrument_terms.terms.iter().any(|t| t.term.label() == "tracker_warmup"));
+    // the simulator needs the pose the model leaves out, and says so
+    let (code, _, err) = metrocell(&["sim", "--cell", "d/model.yaml", "--duration", "1min", "-o", "s", "--quiet"], &d);
+    assert_ne!(code, 0);
+    assert!(err.contains("`sensors.tracker.pose`: is required to simulate the tracker"), "{err}");
+}
+
+/// Issue 32 item 1: an empirical correction has no catalog term, so no model file can hold it;
+/// the augmented model says, as a comment, what was left out and why, and stays a model.
+#[test]
+fn an_empirical_correction_is_said_in_the_augmented_model_not_written_as_a_term() {
+    let d = dir("empirical");
+    let case = repo().join("bags/cases/case_20");
+    let (code, out, err) = metrocell(&["sim", "--cell", case.join("truth.yaml").to_str().unwrap(), "--duration", "2h", "--no-camera-frames", "--seed", "1", "-o", "bag", "--quiet"], &d);
+    assert_eq!(code, 0, "sim: {out}{err}");
+    let (code, out, err) = metrocell(&["diagnose", "--model", case.join("model.yaml").to_str().unwrap(), "bag", "--report", "d"], &d);
+    assert_eq!(code, 0, "diagnose: {out}{err}");
+    assert!(out.contains("an empirical time correction"), "the case's z drift in time is corrected empirically:\n{out}");
+    let written = std::fs::read_to_string(d.join("d/model.yaml")).unwrap();
+    // the comments, unwrapped
+    let said: String = written.lines().filter_map(|l| l.strip_prefix("# -").or_else(|| l.strip_prefix("#  "))).collect::<Vec<_>>().join(" ").split_whitespace().collect::<Vec<_>>().join(" ");
+    assert!(said.contains("left out: the empirical correction `empirical_time[z]`") && said.contains("No catalog term describes it, so no model file can hold it"), "{written}");
+    assert!(!written.contains("id: empirical"), "{written}");
+    let (code, out, err) = metrocell(&["calibrate", "--model", "d/model.yaml", "bag", "-o", "c.yaml"], &d);
+    assert_eq!(code, 0, "calibrate of the augmented model: {out}{err}");
+}

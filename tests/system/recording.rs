@@ -343,6 +343,10 @@ fn demo_loses_nothing(name: &str, busy_cores: usize, max_missed_frames: u64, dom
     let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(report.join("diagnosis.json")).expect("diagnosis.json next to the bag")).unwrap();
     assert!(json["after"]["heldout_rms_m"].as_f64().is_some_and(|r| r > 0.0), "{json}");
     assert!(report.join("index.html").exists() && report.join("model.yaml").exists(), "report files in {}", report.display());
+    // the augmented model is a model (issue 32: its tracker warm-up was written under `terms:`,
+    // which every command refused): the warm-up in sensors.tracker, the machine terms in terms
+    let augmented = metrocell_twin::CellModel::from_path(report.join("model.yaml")).unwrap_or_else(|e| panic!("the demo's augmented model does not read back: {e}"));
+    assert!(augmented.instrument_terms.terms.iter().any(|t| t.term.label() == "tracker_warmup"), "{}", std::fs::read_to_string(report.join("model.yaml")).unwrap());
     // what crates/twin/examples/cells/demo_shift.yaml conceals from demo_model.yaml: the column's
     // lagged growth, the tracker's warm-up, the reversal error on X — named, and nothing else
     let mut found: Vec<&str> = json["findings"].as_array().expect("findings").iter().map(|f| f["term"].as_str().unwrap()).collect();

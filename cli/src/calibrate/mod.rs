@@ -152,7 +152,7 @@ fn model_update(f: &Fit, records: &RecordSet, a: &CalibrateArgs) -> ModelUpdate 
     if !f.held.is_empty() {
         put("not_identifiable", f.held.iter().map(|h| serde_yaml::Value::from(h.combination.clone())).collect::<Vec<_>>().into());
     }
-    ModelUpdate { parameters, added_terms: vec![], fit: Some(fit_section.into()) }
+    ModelUpdate { parameters, fit: Some(fit_section.into()), ..ModelUpdate::default() }
 }
 
 fn round(v: f64, decimals: i32) -> f64 {

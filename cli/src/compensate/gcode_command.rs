@@ -6,7 +6,7 @@ use anyhow::Context;
 use metrocell_gcode::{compensate_program, CompensationOptions, InverseMethod, ModelErrorField};
 use metrocell_twin::CellModel;
 
-use super::conditions::{point_mm, sensors_read, signals};
+use super::conditions::{conditions, point_mm, sensors_read, ConditionOptions};
 
 #[derive(clap::Args)]
 #[command(after_help = "What it does: every programmed point T of G0/G1/G2/G3 is replaced by the commanded point C with \
@@ -16,9 +16,12 @@ within --chord-tolerance; straight moves are split where the error bends them; a
 move. G20/G21, G90/G91, comments, F/S/M words and modal state are kept; lines that do not change are written byte for \
 byte, so a zero model changes only the one header comment. Malformed lines are reported with their line numbers and \
 passed through untouched; points outside the model's travel are reported (extrapolation).\n\
-Thermal terms need the temperatures the part will be cut at (--temperature, one per sensor the model reads).\n\n\
+Thermal terms need the temperatures the part will be cut at (--temperature, one per sensor the model reads); a \
+lagged one (thermal_growth with lag, as diagnose writes it) needs the sensor's history: --temperatures-from BAG \
+(at --at-time), or, without it, a steady state at --temperature is assumed and said.\n\n\
 Examples:\n  metrocell compensate gcode --model fitted.yaml part.nc -o part_comp.nc\n  \
-metrocell compensate gcode --model fitted.yaml part.nc -o part_comp.nc --temperature x_left=21.4 --temperature x_right=21.9")]
+metrocell compensate gcode --model fitted.yaml part.nc -o part_comp.nc --temperature x_left=21.4 --temperature x_right=21.9\n  \
+metrocell compensate gcode --model diag/model.yaml part.nc -o part_comp.nc --temperatures-from shift_bag --at-time 2h")]
 pub struct GcodeArgs {
     /// Fitted model file (a cell file, e.g. written by `metrocell calibrate -o`)
     #[arg(long)]
@@ -34,6 +37,13 @@ pub struct GcodeArgs {
     /// Load force for compliance terms, FX,FY,FZ in N
     #[arg(long, value_name = "FX,FY,FZ")]
     load: Option<String>,
+    /// A recording whose temperature topics (/temperature/<sensor>) give the temperatures and the
+    /// history a lagged thermal term reads; without it a lagged term assumes a steady state at --temperature
+    #[arg(long, value_name = "BAG")]
+    temperatures_from: Option<PathBuf>,
+    /// The instant of --temperatures-from: time after its first temperature sample (e.g. 2h, 90min, 5400; default its end)
+    #[arg(long, value_name = "TIME")]
+    at_time: Option<String>,
     /// Largest distance between a chord and the path it replaces, mm
     #[arg(long, default_value_t = 0.001)]
     chord_tolerance: f64,
@@ -48,8 +58,11 @@ pub struct GcodeArgs {
 pub fn run(a: GcodeArgs) -> anyhow::Result<i32> {
     let model = CellModel::from_path(&a.model)?;
     let fm = model.forward_model()?;
-    let conditions = signals(&a.temperatures, a.load.as_deref())?;
-    let field = ModelErrorField::new(&fm, fm.params(), conditions).map_err(|e| {
+    let c = conditions(&model, &ConditionOptions { temperatures: &a.temperatures, load: a.load.as_deref(), history: a.temperatures_from.as_deref(), at_time: a.at_time.as_deref() }).with_context(|| format!("model `{}`", a.model.display()))?;
+    for line in &c.statements {
+        println!("{line}");
+    }
+    let field = ModelErrorField::new(&fm, fm.params(), c.signals).map_err(|e| {
         let sensors = sensors_read(&model);
         let hint = if sensors.is_empty() { String::new() } else { format!(" (the model's terms read temperatures {}: give each with --temperature NAME=°C)", sensors.join(", ")) };
         anyhow::anyhow!("model `{}`: {e}{hint}", a.model.display())

@@ -7,7 +7,7 @@ use metrocell_gcode::controller_table::{axis_csv, axis_tables, squareness, squar
 use metrocell_gcode::{ErrorField, ModelErrorField};
 use metrocell_twin::CellModel;
 
-use super::conditions::{point_mm, sensors_read, signals};
+use super::conditions::{conditions, point_mm, sensors_read, ConditionOptions};
 
 #[derive(clap::Args)]
 #[command(after_help = "Writes DIR/axis_x.csv, axis_y.csv, axis_z.csv and DIR/squareness.csv. Each axis table samples \
@@ -17,7 +17,8 @@ pitch = the error along the axis, straightness = the errors across it (approachi
 approaching in − minus approaching in + (backlash). Values are errors, reached − commanded; a controller \
 compensates by commanding position − error (most controllers' \"compensation value\" is −error). \
 squareness.csv: pair,squareness_urad from the straightness lines (catalog sign: xy means d = (−y·s, 0, 0)). \
-Lines starting with # are comments naming the model and the reference position.\n\n\
+Lines starting with # are comments naming the model, the reference position and the conditions (where the \
+temperatures came from; for a lagged thermal term without --temperatures-from BAG, the steady state assumed).\n\n\
 Example:\n  metrocell compensate table --model fitted.yaml -o comp_tables --step 25 --temperature x_left=20 --temperature x_right=20")]
 pub struct TableArgs {
     /// Fitted model file (a cell file, e.g. written by `metrocell calibrate -o`)
@@ -38,12 +39,24 @@ pub struct TableArgs {
     /// Load force for compliance terms, FX,FY,FZ in N
     #[arg(long, value_name = "FX,FY,FZ")]
     load: Option<String>,
+    /// A recording whose temperature topics (/temperature/<sensor>) give the temperatures and the
+    /// history a lagged thermal term reads; without it a lagged term assumes a steady state at --temperature
+    #[arg(long, value_name = "BAG")]
+    temperatures_from: Option<PathBuf>,
+    /// The instant of --temperatures-from: time after its first temperature sample (e.g. 2h, 90min, 5400; default its end)
+    #[arg(long, value_name = "TIME")]
+    at_time: Option<String>,
 }
 
 pub fn run(a: TableArgs) -> anyhow::Result<i32> {
     let model = CellModel::from_path(&a.model)?;
     let fm = model.forward_model()?;
-    let field = ModelErrorField::new(&fm, fm.params(), signals(&a.temperatures, a.load.as_deref())?).map_err(|e| {
+    let c = conditions(&model, &ConditionOptions { temperatures: &a.temperatures, load: a.load.as_deref(), history: a.temperatures_from.as_deref(), at_time: a.at_time.as_deref() }).with_context(|| format!("model `{}`", a.model.display()))?;
+    for line in &c.statements {
+        println!("{line}");
+    }
+    let stated: String = c.statements.iter().map(|l| format!("# {l}\n")).collect();
+    let field = ModelErrorField::new(&fm, fm.params(), c.signals).map_err(|e| {
         let sensors = sensors_read(&model);
         let hint = if sensors.is_empty() { String::new() } else { format!(" (the model's terms read temperatures {}: give each with --temperature NAME=°C)", sensors.join(", ")) };
         anyhow::anyhow!("model `{}`: {e}{hint}", a.model.display())
@@ -58,7 +71,7 @@ pub fn run(a: TableArgs) -> anyhow::Result<i32> {
     let title = a.model.display().to_string();
     for t in &tables {
         let path = a.output.join(format!("axis_{}.csv", ["x", "y", "z"][t.axis]));
-        std::fs::write(&path, axis_csv(t, &title)).with_context(|| format!("cannot write `{}`", path.display()))?;
+        std::fs::write(&path, format!("{stated}{}", axis_csv(t, &title))).with_context(|| format!("cannot write `{}`", path.display()))?;
         let pitch: Vec<f64> = t.errors.iter().map(|e| e[t.axis]).collect();
         let span = pitch.iter().fold(f64::NEG_INFINITY, |m, v| m.max(*v)) - pitch.iter().fold(f64::INFINITY, |m, v| m.min(*v));
         let rev = t.reversal.iter().fold(0.0f64, |m, v| m.max(v.abs()));
@@ -66,7 +79,7 @@ pub fn run(a: TableArgs) -> anyhow::Result<i32> {
     }
     let sq = squareness(&tables);
     let path = a.output.join("squareness.csv");
-    std::fs::write(&path, squareness_csv(&sq, &title)).with_context(|| format!("cannot write `{}`", path.display()))?;
+    std::fs::write(&path, format!("{stated}{}", squareness_csv(&sq, &title))).with_context(|| format!("cannot write `{}`", path.display()))?;
     println!("{}: {}", path.display(), sq.iter().map(|(p, v)| format!("{p} {:.2} µrad", (v * 1e8).round() / 1e2 + 0.0)).collect::<Vec<_>>().join(", "));
     Ok(0)
 }

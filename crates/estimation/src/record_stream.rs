@@ -138,7 +138,11 @@ impl<'m, 'a> RecordStream<'m, 'a> {
         let cameras = options.camera_points && typed(&options.camera_topic, FiducialDetectionArray::ROS_TYPE)?;
         if !(found || probes || cameras) {
             let held = topics.iter().map(|(n, t)| format!("{n} ({t})")).collect::<Vec<_>>().join(", ");
-            return Err(RecordingError::NoPoints { path: source.to_path_buf(), measured: options.measured_points_topic.clone(), tracker: options.tracker_topic.clone(), held: if held.is_empty() { "no topics".into() } else { held } });
+            let held = if held.is_empty() { "no topics".into() } else { held };
+            if options.points == PointSource::MeasuredPoints {
+                return Err(RecordingError::NoMeasuredPoints { path: source.to_path_buf(), topic: options.measured_points_topic.clone(), held });
+            }
+            return Err(RecordingError::NoPoints { path: source.to_path_buf(), measured: options.measured_points_topic.clone(), tracker: options.tracker_topic.clone(), held });
         }
         let mut sources = Vec::new();
         if found {

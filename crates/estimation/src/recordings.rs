@@ -112,6 +112,8 @@ pub enum RecordingError {
     Bag { path: PathBuf, reason: String },
     #[error("{}: no measurements to build records from: the bag has neither {measured} (metrocell_msgs/MeasuredPoint) nor {tracker} (metrocell_msgs/TrackerMeasurement); it holds: {held}", path.display())]
     NoPoints { path: PathBuf, measured: String, tracker: String, held: String },
+    #[error("{}: no measured points: the records are read from {topic} (metrocell_msgs/MeasuredPoint: points in the machine frame, as the tracker node publishes them), which it does not hold; it holds: {held}. The tracker node makes them from a bag's /tracker/measurements (`metrocell-tracker --bag IN --output POINTS`, Cartesian and delta machines), `metrocell bag merge` joins them to the signals", path.display())]
+    NoMeasuredPoints { path: PathBuf, topic: String, held: String },
     #[error("term `{term}` needs the signal {signal}, which {} does not hold: {provide}", path.display())]
     MissingSignal { path: PathBuf, term: String, signal: String, provide: String },
     #[error("{}: the records need the commanded joints of this {family} machine, and the bag has none: {provide}", path.display())]

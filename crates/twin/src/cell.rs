@@ -483,6 +483,12 @@ pub(crate) fn tracker_station(t: &TrackerSection) -> Result<StationSpec, CellErr
 
 fn tracker(t: &TrackerSection) -> Result<TrackerSpec, CellError> {
     let p = "sensors.tracker";
+    let pose_section = t.pose.as_ref().ok_or_else(|| {
+        CellError::invalid(
+            format!("{p}.pose"),
+            "is required to simulate the tracker: give where it stands in the workpiece frame, {translation: [x, y, z], euler_xyz: [a, b, c]}, and its noise model (rate, range_noise, angular_noise) (a model file may leave the pose out: it is then unknown and registered from each recording, which is how `metrocell diagnose` writes a tracker whose warm-up or refraction it found)",
+        )
+    })?;
     let warmup = tracker_warmup(t)?;
     let station = tracker_station(t)?;
     let needed = |what: &str| CellError::invalid(format!("{p}.{what}"), "is required to simulate the tracker (only a model file for `metrocell calibrate` may leave the noise model out)");
@@ -513,7 +519,7 @@ fn tracker(t: &TrackerSection) -> Result<TrackerSpec, CellError> {
         }
     };
     Ok(TrackerSpec {
-        pose: pose(&t.pose, &format!("{p}.pose"))?,
+        pose: pose(pose_section, &format!("{p}.pose"))?,
         rate: rate.positive(&format!("{p}.rate"), "1/s")?,
         range_noise_constant: range_noise.constant.non_negative(&format!("{p}.range_noise.constant"), "m")?,
         range_noise_per_metre: range_noise.per_metre.non_negative(&format!("{p}.range_noise.per_metre"), "1")?,
@@ -654,7 +660,7 @@ fn thermal_model(env: &EnvironmentSection, tcs: &[ThermocoupleSection]) -> Resul
 }
 
 /// Instrument and camera terms live with their sensor; say where.
-fn home_of(id: &str) -> Option<&'static str> {
+pub(crate) fn home_of(id: &str) -> Option<&'static str> {
     match id {
         "tracker_warmup" => Some("sensors.tracker.warmup"),
         "refraction" => Some("sensors.tracker.station and environment.air.beam_temperature_offset"),

@@ -225,7 +225,11 @@ pub struct PoseSection {
 #[derive(Debug, Clone, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub struct TrackerSection {
-    pub pose: PoseSection,
+    /// Where the tracker stands. Required to simulate; a model file may leave it out when the
+    /// pose is unknown (points in the tracker's frame: the pose is registered from each
+    /// recording), e.g. a tracker whose warm-up `diagnose` found.
+    #[serde(default)]
+    pub pose: Option<PoseSection>,
     /// Sample rate (Hz). Required to simulate; a model file may leave the noise model out.
     #[serde(default)]
     pub rate: Option<Quantity>,

@@ -7,7 +7,9 @@
 //!   load a term reads are not checked against `sensors.thermocouples` / `environment`: the
 //!   recording provides them, and building records names a missing one.
 //! * `sensors.tracker` — optional, and its noise model (`rate`, `range_noise`,
-//!   `angular_noise`) may be left out. Instrument terms, stacked after the machine terms:
+//!   `angular_noise`) may be left out, and so may its `pose` (unknown: the identity start,
+//!   registered from each recording's points, as without a tracker). Instrument terms, stacked
+//!   after the machine terms:
 //!   `tracker_pose` from `pose` (the start of the nuisance pose); `tracker_warmup` if `warmup` is
 //!   given; `refraction` only if the file gives a weather-station bias (`station`) or
 //!   `environment.air.beam_temperature_offset` (the path air minus the station reading).
@@ -52,7 +54,8 @@ pub struct CellModel {
     /// Free/fixed and priors of the stacked parameter vector (machine terms, then instrument
     /// terms, see [`ForwardModel`]).
     pub setup: ParameterSetup,
-    /// True when the file has `sensors.tracker`; false when the loader added an identity pose.
+    /// True when the file has `sensors.tracker` (with or without `pose`: without one the
+    /// loader starts the pose at the identity, as it does for a file without a tracker).
     pub declares_tracker: bool,
 }
 
@@ -80,7 +83,12 @@ impl CellModel {
         let machine_terms = terms(&raw.terms, None, None, &machine)?;
         let (instrument_terms, declares_tracker) = match &raw.sensors.tracker {
             Some(t) => {
-                let start = pose(&t.pose, "sensors.tracker.pose")?;
+                // no pose: unknown, registered from each recording (the start is the identity,
+                // as for a file without a tracker)
+                let start = match &t.pose {
+                    Some(p) => pose(p, "sensors.tracker.pose")?,
+                    None => InstrumentPose::from_euler_xyz(nalgebra::Vector3::zeros(), [0.0; 3]),
+                };
                 let warmup = tracker_warmup(t)?;
                 let beam = match &raw.environment {
                     Some(env) => env.air.beam_temperature_offset.as_ref().map(|q| q.to_si("environment.air.beam_temperature_offset", "K")).transpose()?,

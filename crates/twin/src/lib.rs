@@ -31,6 +31,7 @@ pub mod cell;
 pub mod cell_file;
 pub mod cell_model;
 pub mod model_writer;
+mod model_writer_instruments;
 pub mod disturbance;
 pub mod error;
 pub mod families;

@@ -47,9 +47,12 @@ pub struct ModelUpdate {
     pub added_terms: Vec<TermConfig>,
     /// The `fit:` section (replaces an existing one).
     pub fit: Option<serde_yaml::Value>,
+    /// Sentences written as comments above the appended sections: what the writer of the file
+    /// (e.g. `diagnose`) found but could not put in a model file, and why.
+    pub notes: Vec<String>,
 }
 
-fn bad(model: &CellModel, reason: String) -> CellError {
+pub(crate) fn bad(model: &CellModel, reason: String) -> CellError {
     CellError::InFile { file: model.file.clone(), error: Box::new(CellError::Invalid { path: "(writing the fitted model)".into(), reason }) }
 }
 
@@ -84,19 +87,31 @@ pub fn write_model(model: &CellModel, update: &ModelUpdate) -> Result<String, Ce
         tracker_edits(model, &root, &fitted, &mut edits, &mut written)?;
     }
     probe_edits(model, &root, &fitted, &mut edits, &mut written)?;
-    if !update.added_terms.is_empty() {
-        added_terms(model, &root, &fitted, &update.added_terms, &mut edits, &mut written)?;
+    let mut notes = update.notes.clone();
+    // a term goes under `terms:` only if the loader takes it there; the others (an instrument's)
+    // go where a model file keeps them, or are left out and said
+    let (machine, instrument): (Vec<TermConfig>, Vec<TermConfig>) =
+        update.added_terms.iter().cloned().partition(|c| crate::cell::home_of(&c.id).is_none() && crate::cell::terms(std::slice::from_ref(c), None, None, &model.machine).is_ok());
+    if !machine.is_empty() {
+        added_terms(model, &root, &fitted, &machine, &mut edits, &mut written)?;
+    }
+    if !instrument.is_empty() {
+        notes.extend(crate::model_writer_instruments::added_instrument_terms(model, &root, &fitted, &instrument, &mut edits, &mut written)?);
     }
 
     // uncertainty: merged with what the file had, rewritten as a whole at the end
     let mut sections = String::new();
+    if !notes.is_empty() {
+        sections.push_str(&note_lines(&notes));
+    }
     let mut merged: BTreeMap<String, BTreeMap<String, String>> = BTreeMap::new();
     if let Some(old) = root.get("uncertainty") {
         if let yaml_edit::Content::Mapping(entries) = &old.content {
             for (label, _, params) in entries {
                 if let yaml_edit::Content::Mapping(ps) = &params.content {
                     for (name, _, v) in ps {
-                        merged.entry(label.clone()).or_default().insert(name.clone(), text[v.start..v.end].to_string());
+                        let value = v.scalar().map(|s| flow(&ConfigValue::Text(s.to_string()))).unwrap_or_else(|| text[v.start..v.end].to_string());
+                        merged.entry(label.clone()).or_default().insert(name.clone(), value);
                     }
                 }
             }
@@ -140,12 +155,35 @@ pub fn write_model(model: &CellModel, update: &ModelUpdate) -> Result<String, Ce
 
 /// The unit a value node was written in (empty: a bare number in the canonical unit).
 fn unit_in(text: &str, node: &Node) -> String {
-    let raw = text[node.start..node.end].trim_matches(|c| c == '"' || c == '\'');
+    let raw = match node.scalar() {
+        Some(s) => s,
+        None => text[node.start..node.end].trim_matches(|c| c == '"' || c == '\''),
+    };
     split_quantity(raw).1.to_string()
 }
 
+/// Notes as comment lines, each wrapped at about 100 characters.
+fn note_lines(notes: &[String]) -> String {
+    let mut out = String::new();
+    for n in notes {
+        let mut line = String::from("# -");
+        for word in n.split_whitespace() {
+            if line.len() + word.len() > 100 {
+                out.push_str(&line);
+                out.push('\n');
+                line = String::from("#  ");
+            }
+            line.push(' ');
+            line.push_str(word);
+        }
+        out.push_str(&line);
+        out.push('\n');
+    }
+    out
+}
+
 /// `value` (canonical unit) in `unit` ("" = canonical), and the uncertainty in the same unit.
-fn value_and_sigma(value: f64, sigma: f64, canonical: &str, unit: &str) -> Result<(String, String), String> {
+pub(crate) fn value_and_sigma(value: f64, sigma: f64, canonical: &str, unit: &str) -> Result<(String, String), String> {
     let (v, s) = to_unit(value, canonical, unit)?;
     let scale = if unit.is_empty() { 1.0 } else { parse_quantity(&format!("1 {unit}"), canonical).map_err(|e| format!("{e:?}"))? - parse_quantity(&format!("0 {unit}"), canonical).map_err(|e| format!("{e:?}"))? };
     let su = sigma / scale;
@@ -214,10 +252,9 @@ fn tracker_edits(model: &CellModel, root: &Node, fitted: &BTreeMap<&str, &Fitted
                 };
                 items.push(item);
             }
-            let list = format!("[{}]", items.join(", "));
             match node {
-                Some(n) => edits.replace(n, list),
-                None => add_to_mapping(edits, text, pose, key, &list),
+                Some(n) => yaml_edit::replace_sequence(edits, n, &items).map_err(|e| bad(model, format!("sensors.tracker.pose.{key}: {e}")))?,
+                None => add_to_mapping(edits, text, pose, key, &format!("[{}]", items.join(", "))),
             }
         }
     }
@@ -237,7 +274,11 @@ fn tracker_edits(model: &CellModel, root: &Node, fitted: &BTreeMap<&str, &Fitted
             }
         }
     }
-    // refraction: path offset = beam offset − station bias
+    // refraction: path offset = beam offset − station bias (a refraction the file did not
+    // declare is an added term: `model_writer_instruments` writes it)
+    if !model.instrument_terms.terms.iter().any(|t| t.term.id() == TermId::Refraction) {
+        return Ok(());
+    }
     let beam = model.raw.environment.as_ref().and_then(|e| e.air.beam_temperature_offset.as_ref()).map(|q| q.to_si("environment.air.beam_temperature_offset", "K")).transpose()?.unwrap_or(0.0);
     for (param, key, unit, offset) in [("path_temperature_offset", "temperature_bias", "K", beam), ("path_pressure_offset", "pressure_bias", "Pa", 0.0)] {
         let Some(p) = get(&format!("refraction.{param}")) else { continue };
@@ -333,13 +374,13 @@ fn added_terms(model: &CellModel, root: &Node, fitted: &BTreeMap<&str, &FittedPa
     Ok(())
 }
 
-fn with_unit(value: f64, canonical: &str, unit: &str) -> Result<String, String> {
+pub(crate) fn with_unit(value: f64, canonical: &str, unit: &str) -> Result<String, String> {
     let (v, _) = to_unit(value, canonical, unit)?;
     Ok(if unit.is_empty() { number(v, None) } else { format!("{} {unit}", number(v, None)) })
 }
 
 /// A config value as flow YAML.
-fn flow(v: &ConfigValue) -> String {
+pub(crate) fn flow(v: &ConfigValue) -> String {
     match v {
         ConfigValue::Bool(b) => b.to_string(),
         ConfigValue::Number(n) => number(*n, None),

@@ -218,6 +218,14 @@ impl Node {
     pub fn is_flow(&self) -> bool {
         matches!(self.style, Style::FlowMapping | Style::FlowSequence)
     }
+    /// The value of a scalar as the YAML parser reads it (quotes and escapes resolved), not
+    /// as written.
+    pub fn scalar(&self) -> Option<&str> {
+        match &self.content {
+            Content::Scalar(s) => Some(s),
+            _ => None,
+        }
+    }
     /// The node at a dotted path of keys and `[i]` indices, e.g. `terms[2].params`.
     pub fn at(&self, path: &str) -> Option<&Node> {
         let mut n = self;
@@ -272,6 +280,33 @@ impl Edits {
             out.replace_range(s..e, &r);
         }
         Ok(out)
+    }
+}
+
+/// Replace the items of a sequence by `items` (each rendered for one line, e.g. `12.5 mm`) in
+/// the sequence's own style: a flow sequence is rewritten as `[a, b, c]`, a block sequence of
+/// as many items has each item replaced where it stands (so `translation:` followed by `- 1 m`
+/// lines stays a block list). A block sequence of another length is an error: it cannot be
+/// rewritten in place without guessing its layout.
+pub fn replace_sequence(edits: &mut Edits, seq: &Node, items: &[String]) -> Result<(), EditError> {
+    match (&seq.style, &seq.content) {
+        (Style::BlockSequence, Content::Sequence(old)) => {
+            if old.len() != items.len() {
+                return Err(EditError(format!("a block list of {} items cannot take {} in place", old.len(), items.len())));
+            }
+            for (node, item) in old.iter().zip(items) {
+                if node.style != Style::Scalar {
+                    return Err(EditError("a block list whose items are lists or mappings cannot take scalar items in place".into()));
+                }
+                edits.replace(node, item.clone());
+            }
+            Ok(())
+        }
+        (Style::FlowSequence, _) => {
+            edits.replace(seq, format!("[{}]", items.join(", ")));
+            Ok(())
+        }
+        _ => Err(EditError("not a list".into())),
     }
 }
 

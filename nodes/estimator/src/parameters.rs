@@ -7,7 +7,7 @@ use metrocell_model::{ForwardModel, ParameterSetup, SignalsBuilderOptions};
 use metrocell_node::{ParamDecl, Parameters};
 use metrocell_physics::model::TermModel;
 use metrocell_physics::{configure, TermConfig};
-use metrocell_twin::Cell;
+use metrocell_twin::CellModel;
 
 use crate::estimator_state::{EstimatorState, Settings};
 use crate::state_file::SavedState;
@@ -34,7 +34,12 @@ pub struct Model {
     pub forward: &'static ForwardModel<'static>,
     pub recording: RecordingOptions,
     pub path: String,
-    cell: &'static Cell,
+    file: &'static CellModel,
+    /// The file's `estimation:` settings of the terms this node estimates (its instrument
+    /// terms' settings are set aside, see [`model`]).
+    estimation: std::collections::BTreeMap<String, metrocell_physics::EstimationConfig>,
+    /// What of the model file the node does not use, for the log.
+    pub set_aside: Vec<String>,
 }
 
 /// The model file, and the recording options from the parameters; `points_topic` is the
@@ -46,21 +51,36 @@ pub fn model(p: &Parameters, points_topic: &str) -> Result<Model, Box<dyn std::e
     }
     // The node keeps one model for its whole life; leaking it gives the forward model and the
     // record stream the 'static borrow they need without a self-referential struct.
-    let cell: &'static Cell = Box::leak(Box::new(Cell::from_path(&path)?));
+    // the model-file loader calibrate and diagnose use: a model file need not be a cell the
+    // twin simulates (no environment, program or tracker pose needed)
+    let file: &'static CellModel = Box::leak(Box::new(CellModel::from_path(&path)?));
     let instruments: &'static TermModel = Box::leak(Box::new(identity_tracker_pose()?));
-    let forward: &'static ForwardModel<'static> = Box::leak(Box::new(cell.forward_model(instruments).map_err(|e| format!("model {path}: {e}"))?));
+    let forward: &'static ForwardModel<'static> = Box::leak(Box::new(ForwardModel::new(&file.machine, &file.machine_terms, instruments).map_err(|e| format!("model {path}: {e}"))?));
     let signals = SignalsBuilderOptions { max_slow_gap: p.get::<f64>("max_signal_gap")?, max_joint_gap: p.get::<f64>("max_joint_gap")?, ..SignalsBuilderOptions::default() };
     let recording = RecordingOptions { points: PointSource::MeasuredPoints, measured_points_topic: points_topic.to_string(), signals, ..RecordingOptions::default() };
-    Ok(Model { forward, recording, path, cell })
+    // the instrument terms (a tracker's warm-up or refraction, a probe's pretravel) act on the
+    // instruments' raw readings; the measured points this node reads are registered into the
+    // machine frame already, so it estimates the machine terms only, and says so
+    let labels: Vec<String> = file.machine_terms.terms.iter().map(|t| t.term.label()).collect();
+    let instrument_labels: Vec<String> = file.instrument_terms.terms.iter().map(|t| t.term.label()).filter(|l| l != "tracker_pose").collect();
+    let estimation = file.raw.estimation.iter().filter(|(label, _)| labels.contains(label)).map(|(k, v)| (k.clone(), v.clone())).collect();
+    let mut set_aside = Vec::new();
+    if !instrument_labels.is_empty() {
+        set_aside.push(format!(
+            "the model's instrument terms ({}) are not estimated here: they act on the instruments' raw readings, and the measured points this node reads are in the machine frame",
+            instrument_labels.join(", ")
+        ));
+    }
+    Ok(Model { forward, recording, path, file, estimation, set_aside })
 }
 
 /// The filter over the model file, restored from the state file when it fits, reading a
 /// recording that holds `topics` ((name, type): a bag's, or the live subscriptions); description
 /// lines for the log.
 pub fn estimator(p: &Parameters, m: &Model, topics: &[(String, String)]) -> Result<(EstimatorState, Vec<String>), Box<dyn std::error::Error>> {
-    let (cell, model, path) = (m.cell, m.forward, &m.path);
+    let (file, model, path) = (m.file, m.forward, &m.path);
     let stream = RecordStream::new(std::path::Path::new("input"), topics, model, &m.recording).map_err(|e| format!("model {path}: {e}"))?;
-    let mut setup = ParameterSetup::new(model, &cell.estimation).map_err(|e| format!("model {path}: {e}"))?;
+    let mut setup = ParameterSetup::new(model, &m.estimation).map_err(|e| format!("model {path}: {e}"))?;
     let names = model.param_names();
     let pose = model.instrument_param_start(metrocell_physics::TermId::TrackerPose).expect("identity pose added above");
     // measured points come in the machine frame: the instrument pose is the identity, fixed
@@ -91,6 +111,7 @@ pub fn estimator(p: &Parameters, m: &Model, topics: &[(String, String)]) -> Resu
         setup.free_indices().iter().map(|&k| names[k].as_str()).collect::<Vec<_>>().join(", "),
         stream.topics().join(", ")
     )];
+    log.extend(m.set_aside.iter().cloned());
     let state_file = p.get::<String>("state_file")?;
     if !state_file.is_empty() {
         match SavedState::load(Path::new(&state_file))? {
@@ -106,7 +127,7 @@ pub fn estimator(p: &Parameters, m: &Model, topics: &[(String, String)]) -> Resu
     }
     let filter = RecursiveEstimator::new(model, &setup, x0, p0, options)?;
     let predict = p.get::<Vec<f64>>("predict_points")?;
-    let joints = cell.machine.joint_names().len();
+    let joints = file.machine.joint_names().len();
     if predict.len() % joints != 0 {
         return Err(format!("predict_points has {} numbers, not a multiple of the machine's {joints} joints", predict.len()).into());
     }

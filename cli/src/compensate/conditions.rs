@@ -52,3 +52,28 @@ pub fn sensors_read(model: &CellModel) -> Vec<String> {
     names.dedup();
     names
 }
+
+/// `--temperature NAME=…` names only sensors the model's terms read: a misspelt or foreign
+/// sensor would otherwise be ignored and the compensation made at another temperature than
+/// the user meant. (Whether every sensor the terms read is given is the error field's check.)
+pub fn check_sensor_names(conditions: &Signals, model: &CellModel) -> anyhow::Result<()> {
+    let read = sensors_read(model);
+    for name in conditions.temperatures.keys() {
+        if !read.contains(name) {
+            if read.is_empty() {
+                bail!("--temperature {name}=…: the model's terms read no temperature; leave --temperature out");
+            }
+            bail!("--temperature {name}=…: the model's terms read no sensor `{name}`; they read {}", read.join(", "));
+        }
+    }
+    Ok(())
+}
+
+/// Why a machine family gets no X Y Z compensation (`None`: cartesian and delta machines do).
+pub fn not_xyz_family(model: &CellModel) -> Option<&'static str> {
+    match model.machine.kinematics {
+        metrocell_model::MachineKinematics::Cartesian(_) | metrocell_model::MachineKinematics::Delta(_) => None,
+        metrocell_model::MachineKinematics::FiveAxis(_) => Some("five_axis"),
+        metrocell_model::MachineKinematics::SerialArm(_) => Some("serial_arm"),
+    }
+}

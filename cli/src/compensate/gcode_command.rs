@@ -6,7 +6,7 @@ use anyhow::Context;
 use metrocell_gcode::{compensate_program, CompensationOptions, InverseMethod, ModelErrorField};
 use metrocell_twin::CellModel;
 
-use super::conditions::{point_mm, sensors_read, signals};
+use super::conditions::{check_sensor_names, not_xyz_family, point_mm, sensors_read, signals};
 
 #[derive(clap::Args)]
 #[command(after_help = "What it does: every programmed point T of G0/G1/G2/G3 is replaced by the commanded point C with \
@@ -47,8 +47,12 @@ pub struct GcodeArgs {
 
 pub fn run(a: GcodeArgs) -> anyhow::Result<i32> {
     let model = CellModel::from_path(&a.model)?;
+    if let Some(family) = not_xyz_family(&model) {
+        anyhow::bail!("model `{}`: G-code compensation rewrites X Y Z coordinates (machine families cartesian and delta); a {family} machine's programs are joint or pose programs", a.model.display());
+    }
     let fm = model.forward_model()?;
     let conditions = signals(&a.temperatures, a.load.as_deref())?;
+    check_sensor_names(&conditions, &model)?;
     let field = ModelErrorField::new(&fm, fm.params(), conditions).map_err(|e| {
         let sensors = sensors_read(&model);
         let hint = if sensors.is_empty() { String::new() } else { format!(" (the model's terms read temperatures {}: give each with --temperature NAME=°C)", sensors.join(", ")) };

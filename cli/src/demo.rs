@@ -524,3 +524,18 @@ fn describe_estimate(m: &ErrorModel) -> String {
     }
     format!("estimated online from {} measured points (innovation rms {:.2} µm): {}", m.observation_count, m.residual_rms * 1e6, parts.join(", "))
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 32: `--dashboard-port 0` gives two real, different ports (not 0 and 1); a port gives
+    /// itself and the next; the last port has no next.
+    #[test]
+    fn dashboard_port_zero_picks_two_free_ports() {
+        let (web, ws) = dashboard_ports(0).unwrap();
+        assert!(web > 1 && ws > 1 && web != ws, "{web} {ws}");
+        assert_eq!(dashboard_ports(8765).unwrap(), (8765, 8766));
+        assert!(dashboard_ports(65535).unwrap_err().to_string().contains("at most 65534"));
+    }
+}

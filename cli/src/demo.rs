@@ -53,7 +53,7 @@ pub struct DemoArgs {
     /// --duration and --speed); long enough to find the column growth and the tracker warm-up
     #[arg(long)]
     quick: bool,
-    /// TCP port of the live dashboard (web page; the Foxglove WebSocket takes the next one)
+    /// TCP port of the live dashboard (web page; the Foxglove WebSocket takes the next one); 0 picks two free ports
     #[arg(long, default_value_t = 8765)]
     dashboard_port: u16,
 }
@@ -122,13 +122,14 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
     if output.exists() {
         anyhow::bail!("{} exists; give a new --output directory", output.display());
     }
+    let (dashboard_port, foxglove_port) = dashboard_ports(args.dashboard_port)?;
     let mut launch_args = vec![
         ("duration".to_string(), args.duration.to_string()),
         ("speed".to_string(), args.speed.to_string()),
         ("seed".to_string(), args.seed.to_string()),
         ("output".to_string(), output.display().to_string()),
-        ("dashboard_port".to_string(), args.dashboard_port.to_string()),
-        ("foxglove_port".to_string(), args.dashboard_port.saturating_add(1).to_string()),
+        ("dashboard_port".to_string(), dashboard_port.to_string()),
+        ("foxglove_port".to_string(), foxglove_port.to_string()),
         // the live diagnose node: about five diagnoses over the run, each of what it has seen so far
         ("diagnose_every".to_string(), (args.duration / 5.0).max(600.0).to_string()),
     ];
@@ -137,7 +138,7 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
         None => share.join(DEMO_CELL),
     };
     launch_args.push(("cell".to_string(), cell.display().to_string()));
-    println!(
+    sayln!(
         "metrocell demo: simulating {} of the cell ({}) at {}× real time, about {} of wall time; recording to {}",
         duration_text(args.duration),
         cell.file_name().map_or(String::new(), |n| n.to_string_lossy().into_owned()),
@@ -145,8 +146,8 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
         duration_text(args.duration / args.speed),
         output.display()
     );
-    let dashboard = format!("http://127.0.0.1:{}", args.dashboard_port);
-    println!("live dashboard while it runs: {dashboard} (Foxglove WebSocket ws://127.0.0.1:{})", args.dashboard_port.saturating_add(1));
+    let dashboard = format!("http://127.0.0.1:{dashboard_port}");
+    sayln!("live dashboard while it runs: {dashboard} (Foxglove WebSocket ws://127.0.0.1:{foxglove_port})");
 
     let options = metrocell_launch::LaunchOptions { share_dir: Some(share.clone()), ..Default::default() };
     let shutdown = options.shutdown.clone();
@@ -161,8 +162,8 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
     shutdown.request();
     let outcome = launcher.join().map_err(|_| anyhow::anyhow!("launcher thread panicked"))??;
 
-    println!();
-    println!(
+    sayln!();
+    sayln!(
         "watched: {} simulated in {} of wall time, {} tracker readings, {} beam breaks{}",
         duration_text(watch.sim_time_s),
         duration_text(watch.wall_s),
@@ -174,27 +175,40 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
         }
     );
     if let Some(m) = &watch.estimated {
-        println!("{}", describe_estimate(m));
+        sayln!("{}", describe_estimate(m));
     } else {
-        println!("estimated online: no error model from the estimator (too few measured points)");
+        sayln!("estimated online: no error model from the estimator (too few measured points)");
     }
     if !watch.live_findings.is_empty() {
-        println!("the live diagnose node found, while the cell ran: {}", watch.live_findings.values().cloned().collect::<Vec<_>>().join("; "));
+        sayln!("the live diagnose node found, while the cell ran: {}", watch.live_findings.values().cloned().collect::<Vec<_>>().join("; "));
     } else {
-        println!("the live diagnose node found nothing while the cell ran (it diagnoses every fifth of the run)");
+        sayln!("the live diagnose node found nothing while the cell ran (it diagnoses every fifth of the run)");
     }
-    println!("the dashboard was at {dashboard}; the bag is at {}", output.display());
+    sayln!("the dashboard was at {dashboard}; the bag is at {}", output.display());
     match metrocell_bag::info(&output) {
-        Ok(info) => println!("\nrecorded bag:\n{info}"),
+        Ok(info) => sayln!("\nrecorded bag:\n{info}"),
         Err(e) => eprintln!("metrocell demo: the recorded bag cannot be read: {e}"),
     }
     let complete = check_recording(&output, &watch);
     match camera_summary::summarise(&output) {
-        Ok(s) => println!("{}", camera_summary::describe(&s, watch.twin_published.get(camera_summary::IMAGE_TOPIC).copied(), &watch.fiducial)),
-        Err(e) => println!("camera: the frames and detections in the bag cannot be read: {e:#}"),
+        Ok(s) => sayln!("{}", camera_summary::describe(&s, watch.twin_published.get(camera_summary::IMAGE_TOPIC).copied(), &watch.fiducial)),
+        Err(e) => sayln!("camera: the frames and detections in the bag cannot be read: {e:#}"),
     }
     diagnose_recording(&share, &cell, &output, args.report.clone());
     Ok(if outcome.success() && complete { 0 } else { 1 })
+}
+
+/// The dashboard's web and Foxglove WebSocket ports: `requested` and the next one, or for 0 two
+/// free ports picked here — bound together so they differ, then released for the dashboard
+/// node to bind a moment later — so that the addresses the demo prints are the real ones.
+fn dashboard_ports(requested: u16) -> anyhow::Result<(u16, u16)> {
+    if requested != 0 {
+        let next = requested.checked_add(1).ok_or_else(|| anyhow::anyhow!("--dashboard-port {requested}: the Foxglove WebSocket takes the next port; give at most 65534 (0: any free ports)"))?;
+        return Ok((requested, next));
+    }
+    let web = std::net::TcpListener::bind(("127.0.0.1", 0))?;
+    let ws = std::net::TcpListener::bind(("127.0.0.1", 0))?;
+    Ok((web.local_addr()?.port(), ws.local_addr()?.port()))
 }
 
 /// `metrocell diagnose` on the recorded bag against the model the estimator started from (the
@@ -218,20 +232,20 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
 fn diagnose_recording(share: &Path, cell: &Path, bag: &Path, report: Option<PathBuf>) {
     let model = share.join(DEMO_MODEL);
     let report = report.unwrap_or_else(|| PathBuf::from(format!("{}_report", bag.display())));
-    println!("\ndiagnosing the recording (the tracker's readings) against the demo's declared model ({DEMO_MODEL}) …");
+    sayln!("\ndiagnosing the recording (the tracker's readings) against the demo's declared model ({DEMO_MODEL}) …");
     let outcome = crate::diagnose_command::diagnose_bags_from(&model, &[bag.to_path_buf()], &metrocell_diagnose::DiagnoseOptions::default(), metrocell_estimation::PointSource::TrackerMeasurements)
         .and_then(|(m, d)| crate::diagnose_command::write_report(&report, &m, &d, "metrocell demo: diagnosis of the recorded shift").map(|index| (d, index)));
     match outcome {
         Ok((d, index)) => {
-            print!("{}", crate::diagnose_command::summary_text(&d));
-            println!("report: {} (the model with what was found added: {})", index.display(), report.join("model.yaml").display());
+            say!("{}", crate::diagnose_command::summary_text(&d));
+            sayln!("report: {} (the model with what was found added: {})", index.display(), report.join("model.yaml").display());
             let found: Vec<String> = d.report.findings.iter().map(|f| f.term.clone()).collect();
             match concealed_effects(cell, &model) {
-                Ok(concealed) => println!("{}", compare_findings(&concealed, &found)),
-                Err(e) => println!("(cannot say what the cell conceals: {e:#})"),
+                Ok(concealed) => sayln!("{}", compare_findings(&concealed, &found)),
+                Err(e) => sayln!("(cannot say what the cell conceals: {e:#})"),
             }
         }
-        Err(e) => println!("diagnose could not judge this recording: {e:#}"),
+        Err(e) => sayln!("diagnose could not judge this recording: {e:#}"),
     }
 }
 
@@ -289,25 +303,25 @@ fn duration_text(s: f64) -> String {
 /// The bag's count of each topic against the twin's; prints the verdict, true when complete.
 fn check_recording(output: &Path, watch: &Watch) -> bool {
     if watch.twin_published.is_empty() || !watch.twin_finished {
-        println!("recording check: the twin's final counts never arrived (no diagnostics from /sim); cannot say whether the bag is complete");
+        sayln!("recording check: the twin's final counts never arrived (no diagnostics from /sim); cannot say whether the bag is complete");
         return false;
     }
     let recorded: BTreeMap<String, u64> = match metrocell_bag::BagReader::open(output) {
         Ok(r) => r.topics().iter().map(|t| (t.name.clone(), t.message_count)).collect(),
         Err(e) => {
-            println!("recording check: the bag cannot be read: {e}");
+            sayln!("recording check: the bag cannot be read: {e}");
             return false;
         }
     };
     let published: u64 = watch.twin_published.values().sum();
     let mismatches = metrocell_bagtools::compare_counts(&watch.twin_published, &recorded);
     if mismatches.is_empty() {
-        println!("recording check: complete — the bag holds every message the twin published ({published} on {} topics, 0 missing)", watch.twin_published.len());
+        sayln!("recording check: complete — the bag holds every message the twin published ({published} on {} topics, 0 missing)", watch.twin_published.len());
         true
     } else {
-        println!("recording check: INCOMPLETE — {} of {} topics differ from the twin's count (the recorder's last log line gives the causes):", mismatches.len(), watch.twin_published.len());
+        sayln!("recording check: INCOMPLETE — {} of {} topics differ from the twin's count (the recorder's last log line gives the causes):", mismatches.len(), watch.twin_published.len());
         for m in &mismatches {
-            println!("  {m}");
+            sayln!("  {m}");
         }
         false
     }
@@ -371,7 +385,7 @@ fn watch_cell(
             }
             for (name, statement) in new_live_findings(&d, &mut w) {
                 let t = w.sim_time_s.max(0.0) as u64;
-                println!("  cell time {}:{:02}:{:02}   the diagnose node found {}: {statement}", t / 3600, t / 60 % 60, t % 60, name.trim_start_matches("diagnose: "));
+                sayln!("  cell time {}:{:02}:{:02}   the diagnose node found {}: {statement}", t / 3600, t / 60 % 60, t % 60, name.trim_start_matches("diagnose: "));
             }
         }
         while let Ok(Some((m, _))) = estimated.take() {
@@ -380,7 +394,7 @@ fn watch_cell(
         if w.sim_time_s >= next_print {
             next_print += print_every;
             let t = w.sim_time_s.round() as u64;
-            println!(
+            sayln!(
                 "  cell time {}:{:02}:{:02}   tracker readings {:>6}   beam breaks {:>3}   X-scale strain (configured α) {}{}",
                 t / 3600,
                 (t % 3600) / 60,
@@ -461,7 +475,7 @@ fn wait_for_recorder(diagnostics: &metrocell_node::Subscription<DiagnosticArray>
             return behind;
         }
         if !told && started.elapsed() > Duration::from_secs(3) {
-            println!("  waiting for the recorder to catch up ({behind} messages behind the twin)");
+            sayln!("  waiting for the recorder to catch up ({behind} messages behind the twin)");
             told = true;
         }
         std::thread::sleep(Duration::from_millis(50));
@@ -509,4 +523,19 @@ fn describe_estimate(m: &ErrorModel) -> String {
         parts.push(format!("{} = {:.2} ± {:.2} {unit}", m.parameter_names[i], m.values[i] * scale, var.sqrt() * scale));
     }
     format!("estimated online from {} measured points (innovation rms {:.2} µm): {}", m.observation_count, m.residual_rms * 1e6, parts.join(", "))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 32: `--dashboard-port 0` gives two real, different ports (not 0 and 1); a port gives
+    /// itself and the next; the last port has no next.
+    #[test]
+    fn dashboard_port_zero_picks_two_free_ports() {
+        let (web, ws) = dashboard_ports(0).unwrap();
+        assert!(web > 1 && ws > 1 && web != ws, "{web} {ws}");
+        assert_eq!(dashboard_ports(8765).unwrap(), (8765, 8766));
+        assert!(dashboard_ports(65535).unwrap_err().to_string().contains("at most 65534"));
+    }
 }

@@ -189,19 +189,24 @@ fn run_inner(a: &DiagnoseArgs) -> anyhow::Result<()> {
         }
     };
     let (model, d) = diagnose_bags(&a.model, &a.bags, &options(a))?;
-    say(&summary_text(&d));
+    // Files first, words last: a reader that closes stdout early must not cost the report.
     let json = serde_json::to_string_pretty(&d.report)?;
-    match a.json.as_deref() {
-        Some("-") => println!("{json}"),
-        Some(file) => write(Path::new(file), &json)?,
-        None => {}
+    if let Some(file) = a.json.as_deref().filter(|f| *f != "-") {
+        write(Path::new(file), &json)?;
     }
     if let Some(path) = &a.residuals {
         write(path, &residuals_csv(&d))?;
     }
-    if let Some(dir) = &a.report {
-        let index = write_report(dir, &model, &d, &format!("metrocell diagnose: {}", a.model.display()))?;
+    let index = match &a.report {
+        Some(dir) => Some(write_report(dir, &model, &d, &format!("metrocell diagnose: {}", a.model.display()))?),
+        None => None,
+    };
+    say(&summary_text(&d));
+    if let (Some(index), Some(dir)) = (index, &a.report) {
         say(&format!("report: {} (augmented model: {})\n", index.display(), dir.join("model.yaml").display()));
+    }
+    if json_to_stdout {
+        println!("{json}");
     }
     Ok(())
 }

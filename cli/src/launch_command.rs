@@ -6,7 +6,7 @@ use std::path::PathBuf;
 #[command(after_help = "Launch files use the ROS 2 YAML launch format (node, arg, let, include, group, executable;\n\
 substitutions $(var), $(env), $(optenv), $(find-pkg-share), $(dirname)). Node executables are looked up next to\n\
 the metrocell binary, then on PATH. Ctrl-C sends SIGINT to every node and SIGKILL after the grace period.\n\n\
-Example:\n  metrocell launch launch-configs/cell.launch.yaml speed:=10")]
+Example:\n  metrocell launch launch-configs/demo.launch.yaml speed:=10 output:=/tmp/cell_bag")]
 pub struct LaunchArgs {
     /// The launch file (ROS 2 YAML launch format)
     file: PathBuf,
@@ -18,6 +18,13 @@ pub struct LaunchArgs {
     /// Print the command line of every process and exit without starting anything
     #[arg(long)]
     dry_run: bool,
+}
+
+impl LaunchArgs {
+    /// Whether this run only prints the plan (starts no process).
+    pub fn dry_run(&self) -> bool {
+        self.dry_run
+    }
 }
 
 pub fn run(args: LaunchArgs) -> i32 {

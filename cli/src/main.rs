@@ -2,6 +2,28 @@
 //!
 //! Thin by design: every subcommand parses its arguments and calls a library crate.
 
+/// `println!` for the commands that must outlive their stdout (`demo`, which supervises node
+/// processes): a closed stdout drops the line instead of panicking, and the command goes on to
+/// stop its nodes and write its bag and report. See `restore_sigpipe` for the other commands.
+macro_rules! sayln {
+    () => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout());
+    }};
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout(), $($arg)*);
+    }};
+}
+
+/// `print!` that drops its text when stdout is closed; see `sayln!`.
+macro_rules! say {
+    ($($arg:tt)*) => {{
+        use std::io::Write as _;
+        let _ = write!(std::io::stdout(), $($arg)*);
+    }};
+}
+
 mod bag;
 mod calibrate;
 mod compensate;
@@ -22,7 +44,7 @@ use clap::{Parser, Subcommand};
 Nodes talk over DDS with ROS 2 names and types, so `ros2` tools can join; these commands let you start\n\
 and inspect a cell without a ROS install. DDS honours ROS_DOMAIN_ID and\n\
 ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST (or ROS_LOCALHOST_ONLY=1) to keep traffic on this machine.",
-    after_help = "Examples:\n  metrocell launch launch-configs/cell.launch.yaml\n  metrocell topic list\n  metrocell topic echo /tracker/measurements --count 3"
+    after_help = "Examples:\n  metrocell launch launch-configs/demo.launch.yaml duration:=600 output:=/tmp/cell_bag\n  metrocell topic list\n  metrocell topic echo /tracker/measurements --count 3"
 )]
 struct Cli {
     #[command(subcommand)]
@@ -57,8 +79,30 @@ enum Command {
     Topic(topic::TopicCommand),
 }
 
+/// What a closed stdout does to this process. Rust starts every program with SIGPIPE ignored,
+/// so a write to a closed pipe returns EPIPE and `println!` panics on it ("failed printing to
+/// stdout", exit status 101, the rest of the command's work undone). A command-line tool in a
+/// pipeline (`metrocell bag info run | head -3`, `... | true`) should instead end quietly the
+/// Unix way, as `cat` or `grep` do: the default action of SIGPIPE, which each command reaches
+/// only after it has written its files (they print last). `launch` and `demo` keep SIGPIPE
+/// ignored: they supervise node processes and must stop them and finish the recording however
+/// their output is read; they never panic on a closed stdout (launch drops the lines, demo
+/// writes through `sayln!`).
+fn restore_sigpipe(command: &Command) {
+    let supervises = match command {
+        Command::Launch(a) => !a.dry_run(),
+        Command::Demo(_) => true,
+        _ => false,
+    };
+    if !supervises {
+        // SAFETY: setting a signal's disposition to its default installs no handler code.
+        let _ = unsafe { nix::sys::signal::signal(nix::sys::signal::Signal::SIGPIPE, nix::sys::signal::SigHandler::SigDfl) };
+    }
+}
+
 fn main() {
     let cli = Cli::parse();
+    restore_sigpipe(&cli.command);
     let code = match cli.command {
         Command::Bag(command) => bag::run(command),
         Command::Camera(command) => vision::camera_command::run(command),

@@ -110,3 +110,35 @@ fn a_lagged_growth_takes_a_recorded_history_or_a_stated_steady_state() {
     assert_eq!(code, 2);
     assert!(err.contains("--at-time") && err.contains("--temperatures-from BAG"), "{err}");
 }
+
+/// Issue 32: a sensor the model does not read, a reference outside the travel and a zero step
+/// are refused in the user's units, and an arm's tables are refused without speaking of G-code.
+#[test]
+fn conditions_the_model_cannot_use_are_refused() {
+    let d = dir("refused");
+    std::fs::write(d.join("m.yaml"), MODEL.replace("CCC", "10 um")).unwrap();
+    let temps = ["--temperature", "x_left=20", "--temperature", "x_right=20"];
+    let run = |extra: &[&str]| {
+        let mut args = vec!["compensate", "table", "--model", "m.yaml", "-o", "tab"];
+        args.extend_from_slice(&temps);
+        args.extend_from_slice(extra);
+        metrocell(&args, &d)
+    };
+    let (code, _, err) = run(&["--temperature", "bogus=99"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("no sensor `bogus`") && err.contains("x_left, x_right"), "{err}");
+    let (code, _, err) = run(&["--at", "5000,0,0"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--at 5000,0,0: outside the machine's travel") && err.contains("X 0.000…400.000 mm"), "{err}");
+    let (code, _, err) = run(&["--step", "0"]);
+    assert_eq!(code, 2);
+    assert!(err.contains("--step must be > 0 mm, got 0 mm") && !err.contains(" m\n"), "{err}");
+    std::fs::write(d.join("in.nc"), "G21 G90\nG1 X10 F100\n").unwrap();
+    let (code, _, err) = metrocell(&["compensate", "gcode", "--model", "m.yaml", "in.nc", "-o", "out.nc", "--temperature", "x_left=20", "--temperature", "x_right=20", "--temperature", "bogus=99"], &d);
+    assert!(code == 2 && err.contains("no sensor `bogus`"), "{err}");
+
+    let arm = format!("{}/../launch-configs/cells/serial_arm_ur5.yaml", env!("CARGO_MANIFEST_DIR"));
+    let (code, _, err) = metrocell(&["compensate", "table", "--model", &arm, "-o", "arm_tab"], &d);
+    assert_eq!(code, 2);
+    assert!(err.contains("compensation tables are per linear axis") && err.contains("serial_arm") && !err.contains("G-code") && !err.contains("--temperature"), "{err}");
+}

@@ -10,7 +10,9 @@ enum Format {
 
 #[derive(clap::Args)]
 #[command(after_help = "One file per topic (/a/b → a.b.csv or a.b.parquet); columns log_time_ns, publish_time_ns, then \
-one per leaf field with dotted names; fixed arrays expand to name.0, name.1, ...\n\
+one per leaf field with dotted names (a topic without messages: the header alone); fixed arrays expand to name.0, name.1, ...\n\
+DIR/export.yaml names each file's topic, type and QoS: `metrocell bag import DIR -o BAG` rebuilds the bag from either \
+format, every message with its fields and its log and publish times.\n\
 CSV: variable arrays are JSON text in one column.\n\
 Parquet: typed columns (int/uint of the field's width, float32/float64, UTF-8 strings); variable arrays of \
 numbers or strings are LIST columns (pandas: one numpy array per cell); arrays of messages are JSON text.\n\n\

@@ -3,6 +3,8 @@
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
+#[command(after_help = "Exit status: 0 for a healthy bag; 1 when it is damaged (the problems are listed with the \
+next step, `metrocell bag recover`); 2 when there is no bag to read.")]
 pub struct InfoArgs {
     /// Bag directory (or one .mcap file)
     bag: PathBuf,
@@ -17,8 +19,9 @@ pub struct RecoverArgs {
 }
 
 pub fn run_info(args: InfoArgs) -> anyhow::Result<i32> {
-    print!("{}", metrocell_bag::info(&args.bag)?);
-    Ok(0)
+    let info = metrocell_bag::info(&args.bag)?;
+    print!("{info}");
+    Ok(if info.problems.is_empty() { 0 } else { 1 })
 }
 
 pub fn run_recover(args: RecoverArgs) -> anyhow::Result<i32> {

@@ -26,9 +26,9 @@ pub enum BagCommand {
     Filter(reshape::FilterArgs),
     /// Merge bags into a new bag, interleaved by log time
     Merge(reshape::MergeArgs),
-    /// Export topics to CSV, one file per topic and one column per field
+    /// Export topics to CSV or Parquet, one file per topic and one column per field
     Export(export::ExportArgs),
-    /// Import a point-measurement CSV (or a mapped tracker-software export) into a new bag
+    /// Rebuild a bag from `bag export`'s files, or import a point-measurement CSV (or a mapped tracker-software export)
     Import(import::ImportArgs),
 }
 

@@ -30,8 +30,9 @@ use metrocell_twin::{write_model, CellModel, FittedParameter, ModelUpdate};
   4. writes MODEL.yaml: your file with the fitted values in place (your units, comments and order kept), an\n\
      `uncertainty:` section (standard uncertainties, k = 1) and a `fit:` section; it reads back in `metrocell sim`,\n\
      `calibrate`, `diagnose` and `compensate`;\n\
-  5. prints a summary in words; --report DIR writes an HTML report (residuals before/after, error functions with\n\
-     uncertainty bands, identifiability, uncertainty budget); --json writes the numbers.\n\n\
+  5. prints a summary in words (on stderr with --json -, so stdout holds the JSON alone); --report DIR writes an\n\
+     HTML report (residuals before/after, error functions with uncertainty bands, identifiability, uncertainty\n\
+     budget); --json writes the numbers. Files are written before anything is printed.\n\n\
 Examples:\n\
   metrocell sim --cell launch-configs/cells/quick_demo.yaml --duration 30min -o demo_bag\n\
   metrocell calibrate --model my_model.yaml demo_bag -o fitted.yaml --report calib_report\n\
@@ -107,26 +108,40 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<i32> {
     let records = records_from_bags(&a.bags, &fm, &options)?;
     eprintln!("{} measurement records ({} rejected) in {:.1} s; fitting…", records.len(), records.rejected.len(), started.elapsed().as_secs_f64());
     let result = fit(&fm, &model.setup, &records, None, &FitOptions { loss, ..FitOptions::default() }).with_context(|| format!("fitting {} to {} records", a.model.display(), records.len()))?;
-    eprintln!("fitted in {:.1} s ({} iterations, {:?})", started.elapsed().as_secs_f64(), result.solution.iterations, result.solution.termination);
-    let lines = summary_lines(&result, &records);
-    for l in &lines {
-        println!("{l}");
-    }
+    let iterations = result.solution.iterations;
+    eprintln!("fitted in {:.1} s ({iterations} iteration{}; {})", started.elapsed().as_secs_f64(), if iterations == 1 { "" } else { "s" }, result.solution.termination.in_words());
+    let mut lines = summary_lines(&result, &records);
+    // Files first, words last: a reader that closes stdout early (`| head`, `| true`) must not
+    // cost the user the fitted model (see `restore_sigpipe` in main.rs).
     let update = model_update(&result, &records, &a);
     let text = write_model(&model, &update)?;
     std::fs::write(&a.output, &text).with_context(|| format!("cannot write `{}`", a.output.display()))?;
-    println!("fitted model written to {}", a.output.display());
-    if let Some(dir) = &a.report {
-        let page = report::write(dir, &a, &model, &fm, &result, &records, &lines)?;
-        println!("report: {}", page.display());
+    let page = match &a.report {
+        Some(dir) => Some(report::write(dir, &a, &model, &fm, &result, &records, &lines)?),
+        None => None,
+    };
+    let json = match &a.json {
+        Some(_) => Some(serde_json::to_string_pretty(&result_json::result(&result, &records, &a.output))?),
+        None => None,
+    };
+    let json_to_stdout = a.json.as_deref() == Some("-");
+    if let (Some(target), Some(json)) = (a.json.as_deref().filter(|t| *t != "-"), &json) {
+        std::fs::write(target, json).with_context(|| format!("cannot write `{target}`"))?;
     }
-    if let Some(target) = &a.json {
-        let json = serde_json::to_string_pretty(&result_json::result(&result, &records, &a.output))?;
-        if target == "-" {
-            println!("{json}");
+    lines.push(format!("fitted model written to {}", a.output.display()));
+    if let Some(page) = page {
+        lines.push(format!("report: {}", page.display()));
+    }
+    // With `--json -` stdout carries the JSON alone (for `jq` and friends); the words go to stderr.
+    for l in &lines {
+        if json_to_stdout {
+            eprintln!("{l}");
         } else {
-            std::fs::write(target, json).with_context(|| format!("cannot write `{target}`"))?;
+            println!("{l}");
         }
+    }
+    if let (true, Some(json)) = (json_to_stdout, json) {
+        println!("{json}");
     }
     Ok(0)
 }

@@ -49,6 +49,8 @@ fn lagged_terms(model: &CellModel) -> Vec<(String, String, f64)> {
 /// The conditions of `model`'s compensation (module docs).
 pub fn conditions(model: &CellModel, o: &ConditionOptions) -> anyhow::Result<Conditions> {
     let mut s = signals(o.temperatures, o.load)?;
+    // the names given by hand must be sensors the model reads (a recording's may hold others)
+    check_sensor_names(&s, model)?;
     let mut statements = Vec::new();
     let lagged = lagged_terms(model);
     if o.at_time.is_some() && o.history.is_none() {
@@ -180,4 +182,29 @@ pub fn sensors_read(model: &CellModel) -> Vec<String> {
     names.sort();
     names.dedup();
     names
+}
+
+/// `--temperature NAME=…` names only sensors the model's terms read: a misspelt or foreign
+/// sensor would otherwise be ignored and the compensation made at another temperature than
+/// the user meant. (Whether every sensor the terms read is given is the error field's check.)
+pub fn check_sensor_names(conditions: &Signals, model: &CellModel) -> anyhow::Result<()> {
+    let read = sensors_read(model);
+    for name in conditions.temperatures.keys() {
+        if !read.contains(name) {
+            if read.is_empty() {
+                bail!("--temperature {name}=…: the model's terms read no temperature; leave --temperature out");
+            }
+            bail!("--temperature {name}=…: the model's terms read no sensor `{name}`; they read {}", read.join(", "));
+        }
+    }
+    Ok(())
+}
+
+/// Why a machine family gets no X Y Z compensation (`None`: cartesian and delta machines do).
+pub fn not_xyz_family(model: &CellModel) -> Option<&'static str> {
+    match model.machine.kinematics {
+        metrocell_model::MachineKinematics::Cartesian(_) | metrocell_model::MachineKinematics::Delta(_) => None,
+        metrocell_model::MachineKinematics::FiveAxis(_) => Some("five_axis"),
+        metrocell_model::MachineKinematics::SerialArm(_) => Some("serial_arm"),
+    }
 }

@@ -6,7 +6,7 @@ use anyhow::Context;
 use metrocell_gcode::{compensate_program, CompensationOptions, InverseMethod, ModelErrorField};
 use metrocell_twin::CellModel;
 
-use super::conditions::{conditions, point_mm, sensors_read, ConditionOptions};
+use super::conditions::{conditions, not_xyz_family, point_mm, sensors_read, ConditionOptions};
 
 #[derive(clap::Args)]
 #[command(after_help = "What it does: every programmed point T of G0/G1/G2/G3 is replaced by the commanded point C with \
@@ -57,6 +57,9 @@ pub struct GcodeArgs {
 
 pub fn run(a: GcodeArgs) -> anyhow::Result<i32> {
     let model = CellModel::from_path(&a.model)?;
+    if let Some(family) = not_xyz_family(&model) {
+        anyhow::bail!("model `{}`: G-code compensation rewrites X Y Z coordinates (machine families cartesian and delta); a {family} machine's programs are joint or pose programs", a.model.display());
+    }
     let fm = model.forward_model()?;
     let c = conditions(&model, &ConditionOptions { temperatures: &a.temperatures, load: a.load.as_deref(), history: a.temperatures_from.as_deref(), at_time: a.at_time.as_deref() }).with_context(|| format!("model `{}`", a.model.display()))?;
     for line in &c.statements {

@@ -7,7 +7,7 @@ use metrocell_gcode::controller_table::{axis_csv, axis_tables, squareness, squar
 use metrocell_gcode::{ErrorField, ModelErrorField};
 use metrocell_twin::CellModel;
 
-use super::conditions::{conditions, point_mm, sensors_read, ConditionOptions};
+use super::conditions::{conditions, not_xyz_family, point_mm, sensors_read, ConditionOptions};
 
 #[derive(clap::Args)]
 #[command(after_help = "Writes DIR/axis_x.csv, axis_y.csv, axis_z.csv and DIR/squareness.csv. Each axis table samples \
@@ -49,7 +49,18 @@ pub struct TableArgs {
 }
 
 pub fn run(a: TableArgs) -> anyhow::Result<i32> {
+    if !(a.step > 0.0 && a.step.is_finite()) {
+        anyhow::bail!("--step must be > 0 mm, got {} mm", a.step);
+    }
     let model = CellModel::from_path(&a.model)?;
+    if let Some(family) = not_xyz_family(&model) {
+        anyhow::bail!(
+            "model `{}`: compensation tables are per linear axis X, Y, Z (machine families cartesian and delta); a {family} machine \
+             is commanded in joints, so its fitted model is applied through the controller's own kinematic parameters (the fitted \
+             values in the model file), not through axis tables",
+            a.model.display()
+        );
+    }
     let fm = model.forward_model()?;
     let c = conditions(&model, &ConditionOptions { temperatures: &a.temperatures, load: a.load.as_deref(), history: a.temperatures_from.as_deref(), at_time: a.at_time.as_deref() }).with_context(|| format!("model `{}`", a.model.display()))?;
     for line in &c.statements {
@@ -63,7 +74,14 @@ pub fn run(a: TableArgs) -> anyhow::Result<i32> {
     })?;
     let region = field.calibrated_region().context("the model has no travel to tabulate")?;
     let reference = match &a.at {
-        Some(t) => point_mm(t, "--at")?,
+        Some(t) => {
+            let at = point_mm(t, "--at")?;
+            if !region.contains(&at) {
+                let travel: Vec<String> = (0..3).map(|k| format!("{} {:.3}…{:.3} mm", ["X", "Y", "Z"][k], region.min[k] * 1e3, region.max[k] * 1e3)).collect();
+                anyhow::bail!("--at {t}: outside the machine's travel ({}); the tables hold the other axes inside it", travel.join(", "));
+            }
+            at
+        }
         None => (region.min + region.max) / 2.0,
     };
     let tables = axis_tables(&field, &region, &reference, a.step * 1e-3).map_err(|e| anyhow::anyhow!("{e}"))?;

@@ -58,17 +58,19 @@ fn calibrate_command(a: CalibrateArgs) -> anyhow::Result<i32> {
     let mut views = Vec::new();
     let mut view_files = Vec::new();
     let mut size = None;
+    // what is said, printed after the camera_info is written (a closed stdout must not cost it)
+    let mut out: Vec<String> = Vec::new();
     for f in &files {
         let img = match load_gray(f) {
             Ok(i) => i,
             Err(e) => {
-                println!("rejected {}: {e:#}", f.display());
+                out.push(format!("rejected {}: {e:#}", f.display()));
                 continue;
             }
         };
         let s = (img.width(), img.height());
         if *size.get_or_insert(s) != s {
-            println!("rejected {}: size {}x{} differs from the first image's {}x{}", f.display(), s.0, s.1, size.unwrap().0, size.unwrap().1);
+            out.push(format!("rejected {}: size {}x{} differs from the first image's {}x{}", f.display(), s.0, s.1, size.unwrap().0, size.unwrap().1));
             continue;
         }
         match detect_checkerboard(&img, cols, rows) {
@@ -76,33 +78,47 @@ fn calibrate_command(a: CalibrateArgs) -> anyhow::Result<i32> {
                 views.push(View { object_points: object.clone(), image_points: b.corners.iter().map(|c| [c.position.x, c.position.y]).collect() });
                 view_files.push(f.clone());
             }
-            Err(e) => println!("rejected {}: checkerboard {cols}x{rows} not found ({e})", f.display()),
+            Err(e) => out.push(format!("rejected {}: checkerboard {cols}x{rows} not found ({e})", f.display())),
         }
     }
-    let size = size.ok_or_else(|| anyhow::anyhow!("{}: no readable image", a.images))?;
+    let say = |out: &[String]| out.iter().for_each(|l| println!("{l}"));
+    let Some(size) = size else {
+        say(&out);
+        anyhow::bail!("{}: no readable image", a.images);
+    };
     let model = if a.fisheye { LensModel::Fisheye } else { LensModel::BrownConrady };
     // A view is an outlier only if its RMS is both 3× the median and above 0.1 px: on clean
     // images every view sits at ~0.002 px and a 3× ratio alone would throw good views away.
     let flags = CalibrationFlags { outlier_view_min_rms_px: 0.1, ..Default::default() };
-    let cal = calibrate(&views, size, model, &flags)?;
+    let cal = match calibrate(&views, size, model, &flags) {
+        Ok(cal) => cal,
+        Err(e) => {
+            say(&out);
+            return Err(e.into());
+        }
+    };
     for r in &cal.rejected {
-        println!("rejected {}: {:?}", view_files[r.index].display(), r.reason);
+        out.push(format!("rejected {}: {:?}", view_files[r.index].display(), r.reason));
     }
     for v in &cal.views {
-        println!("view {}: RMS {:.4} px over {} corners", view_files[v.index].display(), v.rms_px, v.n_points);
+        out.push(format!("view {}: RMS {:.4} px over {} corners", view_files[v.index].display(), v.rms_px, v.n_points));
     }
     let names: &[&str] = if a.fisheye { &["fx", "fy", "cx", "cy", "k1", "k2", "k3", "k4"] } else { &["fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3"] };
-    println!("overall RMS {:.4} px ({} views, {} corners; σ per coordinate {:.4} px)", cal.rms_px, cal.views.len(), cal.n_points, cal.sigma_px);
+    out.push(format!("overall RMS {:.4} px ({} views, {} corners; σ per coordinate {:.4} px)", cal.rms_px, cal.views.len(), cal.n_points, cal.sigma_px));
     for ((n, v), s) in names.iter().zip(cal.camera.params()).zip(&cal.param_std) {
-        println!("  {n:>2} = {v:>14.6} ± {s:.6}");
+        out.push(format!("  {n:>2} = {v:>14.6} ± {s:.6}"));
     }
     let info = CameraInfo::from_model(&a.camera_name, &cal.camera);
     match &a.output {
         Some(p) => {
             info.save(p)?;
-            println!("wrote {}", p.display());
+            out.push(format!("wrote {}", p.display()));
+            say(&out);
         }
-        None => print!("{}", info.to_yaml()),
+        None => {
+            say(&out);
+            print!("{}", info.to_yaml());
+        }
     }
     Ok(0)
 }

@@ -48,6 +48,19 @@ pub enum BagError {
         reason: String,
     },
 
+    /// A strict reader met damage ([`BagError::Corrupt`]: a crash, a cut or overwritten file)
+    /// in the bag it was asked to read: the damage, and the user's next step.
+    #[error(
+        "{damage}\n  the bag is damaged (cut short by a crash or a full disk?): run `metrocell bag recover {}`, which \
+         rebuilds it from every chunk that reached the disk intact, then read it again",
+        bag.display()
+    )]
+    Damaged {
+        /// The bag as the reader was given it (directory or .mcap file): what to recover.
+        bag: PathBuf,
+        damage: Box<BagError>,
+    },
+
     /// metadata.yaml is missing a field, has the wrong type, or does not parse.
     #[error("{}: invalid rosbag2 metadata: {reason}", path.display())]
     Metadata { path: PathBuf, reason: String },
@@ -67,6 +80,25 @@ pub enum BagError {
     /// The writer already stopped after an earlier failure or `finish()`.
     #[error("bag writer for {} is closed: {reason}", path.display())]
     Closed { path: PathBuf, reason: String },
+}
+
+impl BagError {
+    /// The damage itself for [`BagError::Damaged`], the error otherwise.
+    pub fn damage(&self) -> &BagError {
+        match self {
+            BagError::Damaged { damage, .. } => damage,
+            other => other,
+        }
+    }
+
+    /// Corrupt input met while reading `bag` strictly becomes [`BagError::Damaged`], which tells
+    /// the user to recover it; other errors (a missing file, bad metadata) stay as they are.
+    pub(crate) fn in_bag(self, bag: &std::path::Path) -> BagError {
+        match self {
+            BagError::Corrupt { .. } => BagError::Damaged { bag: bag.to_path_buf(), damage: Box::new(self) },
+            other => other,
+        }
+    }
 }
 
 pub type Result<T, E = BagError> = std::result::Result<T, E>;

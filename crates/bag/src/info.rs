@@ -191,7 +191,7 @@ impl fmt::Display for BagInfo {
         for (i, file) in self.files.iter().enumerate() {
             let label = if i == 0 { "Files:" } else { "" };
             let name = file.path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-            let flag = if file.complete { "" } else { "  (incomplete: run recover)" };
+            let flag = if file.complete { "" } else { "  (incomplete: run `metrocell bag recover`)" };
             writeln!(f, "{label:<W$}{name}{flag}")?;
         }
         writeln!(f, "{:<W$}{}", "Bag size:", human_size(self.size_bytes))?;
@@ -221,6 +221,15 @@ impl fmt::Display for BagInfo {
         }
         for p in &self.problems {
             writeln!(f, "{:<W$}{p}", "Problem:")?;
+        }
+        if !self.problems.is_empty() {
+            writeln!(
+                f,
+                "{:<W$}the counts above are what is readable; strict readers (calibrate, diagnose, bag export, ...) refuse this bag: \
+                 run `metrocell bag recover {}`, which rebuilds it from every chunk that reached the disk intact",
+                "Next step:",
+                self.path.display()
+            )?;
         }
         Ok(())
     }

@@ -87,6 +87,10 @@ pub struct BagReader {
 /// The .mcap files of a bag path: the files listed in metadata.yaml for a directory that has
 /// one, else the directory's `*.mcap` files in name order, else the path itself.
 pub(crate) fn bag_files(path: &Path) -> Result<(Vec<PathBuf>, Option<BagMetadata>)> {
+    if !path.exists() {
+        // even a tolerant reader has nothing to report on: no bag is there at all
+        return Err(BagError::InvalidArgument(format!("no bag at {}: no such file or directory (a bag is a rosbag2 directory or an .mcap file)", path.display())));
+    }
     if path.is_dir() {
         if path.join(METADATA_FILE).exists() {
             let m = BagMetadata::read_dir(path)?;
@@ -125,9 +129,10 @@ fn split_index(p: &Path) -> (u64, String) {
 }
 
 impl BagReader {
-    /// Open strictly (any damage is an error).
+    /// Open strictly (any damage is an error, [`BagError::Damaged`], which names the damage and
+    /// tells the user to run `metrocell bag recover`).
     pub fn open(path: impl AsRef<Path>) -> Result<Self> {
-        Self::open_with(path, ReadMode::Strict)
+        Self::open_with(path.as_ref(), ReadMode::Strict).map_err(|e| e.in_bag(path.as_ref()))
     }
 
     pub fn open_with(path: impl AsRef<Path>, mode: ReadMode) -> Result<Self> {
@@ -400,7 +405,7 @@ impl Iterator for MessageIter<'_> {
                 if let Err(e) = self.load(fi, ui) {
                     self.next_unit = self.units.len();
                     self.heap.clear();
-                    return Some(Err(e));
+                    return Some(Err(e.in_bag(&self.reader.path)));
                 }
                 continue;
             }

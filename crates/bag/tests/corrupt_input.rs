@@ -32,7 +32,9 @@ fn good_file(name: &str) -> (PathBuf, Vec<u8>) {
 }
 
 fn corrupt_parts(e: &BagError) -> (&Path, u64, &'static str, &str) {
-    match e {
+    // a strict reader wraps the damage with the next step (`metrocell bag recover`)
+    assert!(matches!(e, BagError::Damaged { .. }) && e.to_string().contains("run `metrocell bag recover "), "{e}");
+    match e.damage() {
         BagError::Corrupt { path, offset, record, reason } => (path.as_path(), *offset, record, reason.as_str()),
         other => panic!("expected Corrupt, got {other:?}"),
     }

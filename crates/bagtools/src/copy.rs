@@ -44,16 +44,42 @@ pub fn filter_bag(
     options: WriterOptions,
 ) -> Result<CopyReport> {
     let reader = input;
+    let known = || reader.topics().iter().map(|t| t.name.as_str()).collect::<Vec<_>>().join(", ");
+    if let Some(missing) = selection.topics.iter().find(|t| reader.topic(t).is_none()) {
+        return Err(ToolError::Topic { topic: missing.clone(), reason: format!("not in {} (topics: {})", reader.path().display(), known()) });
+    }
     let topics: Vec<&TopicInfo> = reader.topics().iter().filter(|t| selection.matches(&t.name)).collect();
-    let mut writer = BagWriter::create(output, options)?;
-    for t in &topics {
-        add_topic(&mut writer, t)?;
+    if topics.is_empty() {
+        return Err(ToolError::Invalid(format!(
+            "no topic of {} matches {}; its topics: {} (a regex must match the whole name, e.g. '/temperature/.*')",
+            reader.path().display(),
+            selection.describe(),
+            known()
+        )));
     }
     let filter = MessageFilter {
         topics: Some(topics.iter().map(|t| t.name.clone()).collect()),
         start_ns,
         end_ns,
     };
+    // An empty result is a mistake in the window, not a bag to write: say so before creating it.
+    if reader.messages(&filter)?.next().transpose()?.is_none() {
+        let info = reader.info();
+        let start = info.start_ns.unwrap_or(0);
+        let after_start = |t: u64| format!("{:.3} s", t.saturating_sub(start) as f64 * 1e-9);
+        return Err(ToolError::Invalid(format!(
+            "no message of {} lies in the window from {} to {} after the start of {}, which spans 0 s to {}",
+            selection.describe(),
+            start_ns.map_or("its start".to_string(), after_start),
+            end_ns.map_or("its end".to_string(), after_start),
+            reader.path().display(),
+            after_start(info.end_ns.unwrap_or(start))
+        )));
+    }
+    let mut writer = BagWriter::create(output, options)?;
+    for t in &topics {
+        add_topic(&mut writer, t)?;
+    }
     let mut report = CopyReport::default();
     for m in reader.messages(&filter)? {
         let m = m?;

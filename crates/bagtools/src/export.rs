@@ -9,6 +9,10 @@
 //! the topic without the leading `/` and with `/` replaced by `.` (`/tracker/points` →
 //! `tracker.points.csv`).
 //!
+//! The header is written from the type, so a topic without messages exports as a header row.
+//! Next to the files, `export.yaml` ([`crate::export_manifest`]) names each file's topic, type,
+//! definition and QoS: `bag import DIR` rebuilds the bag from them ([`crate::reimport`]).
+//!
 //! The same columns, typed, as Parquet: `metrocell_parquet_export` (a crate of its own, so the nodes do not link Parquet).
 
 use std::collections::BTreeMap;
@@ -18,27 +22,32 @@ use metrocell_bag::{BagReader, MessageFilter, TopicInfo};
 use rosmsg::{ArrayKind, Registry, Value};
 
 use crate::error::{io, Result, ToolError};
+use crate::export_manifest::{ExportManifest, ManifestTopic};
 
 /// A registry able to decode `topic`: metrocell's own if it knows the type, otherwise one
 /// parsed from the definition stored in the bag (so bags from other ROS systems export too).
 pub fn registry_for(topic: &TopicInfo) -> Result<std::borrow::Cow<'static, Registry>> {
+    registry_for_type(&topic.type_name, &topic.definition).map_err(|reason| ToolError::Topic { topic: topic.name.clone(), reason })
+}
+
+/// A registry able to decode `type_name`: metrocell's own if it knows the type, otherwise one
+/// parsed from `definition` (a rosbag2 schema: the type's text, then its dependencies).
+pub fn registry_for_type(type_name: &str, definition: &str) -> std::result::Result<std::borrow::Cow<'static, Registry>, String> {
     let own = metrocell_msgs::registry();
-    if own.get(&topic.type_name).is_some() {
+    if own.get(type_name).is_some() {
         return Ok(std::borrow::Cow::Borrowed(own));
     }
-    let bad = |reason: String| ToolError::Topic { topic: topic.name.clone(), reason };
-    let main = rosmsg::TypeName::parse(&topic.type_name).ok_or_else(|| bad(format!("type name {} does not parse", topic.type_name)))?;
+    let main = rosmsg::TypeName::parse(type_name).ok_or_else(|| format!("type name {type_name} does not parse"))?;
     let mut reg = Registry::new();
-    let mut blocks = topic.definition.split(rosmsg::DEFINITION_SEPARATOR);
-    reg.add_msg(&main.package, &main.name, blocks.next().unwrap_or_default())
-        .map_err(|e| bad(format!("definition of {}: {e}", topic.type_name)))?;
+    let mut blocks = definition.split(rosmsg::DEFINITION_SEPARATOR);
+    reg.add_msg(&main.package, &main.name, blocks.next().unwrap_or_default()).map_err(|e| format!("definition of {type_name}: {e}"))?;
     for block in blocks {
         let block = block.trim_start_matches('\n');
         let (first, text) = block.split_once('\n').unwrap_or((block, ""));
-        let name = first.trim().strip_prefix("MSG:").ok_or_else(|| bad(format!("dependency block starts with '{first}', not 'MSG: pkg/Type'")))?;
-        let t = rosmsg::TypeName::parse(name.trim()).ok_or_else(|| bad(format!("dependency name '{name}' does not parse")))?;
+        let name = first.trim().strip_prefix("MSG:").ok_or_else(|| format!("dependency block starts with '{first}', not 'MSG: pkg/Type'"))?;
+        let t = rosmsg::TypeName::parse(name.trim()).ok_or_else(|| format!("dependency name '{name}' does not parse"))?;
         if reg.get(&t.to_string()).is_none() {
-            reg.add_msg(&t.package, &t.name, text).map_err(|e| bad(format!("definition of {t}: {e}")))?;
+            reg.add_msg(&t.package, &t.name, text).map_err(|e| format!("definition of {t}: {e}"))?;
         }
     }
     Ok(std::borrow::Cow::Owned(reg))
@@ -110,19 +119,43 @@ pub fn chosen_topics<'a>(reader: &'a BagReader, bag: &Path, topics: &[String]) -
     Ok(reader.topics().iter().filter(|t| topics.is_empty() || topics.contains(&t.name)).collect())
 }
 
-/// Export `topics` (all when empty) of `bag` to CSV files in `out_dir` (created if missing).
+/// The columns of a topic's export: `log_time_ns`, `publish_time_ns`, then the type's leaf
+/// fields — from the type, not from a message, so a topic without messages has them too.
+pub fn export_columns(registry: &Registry, type_name: &str) -> std::result::Result<Vec<String>, String> {
+    let empty = rosmsg::default_value(registry, type_name).map_err(|e| e.to_string())?;
+    let mut columns = vec!["log_time_ns".to_string(), "publish_time_ns".to_string()];
+    columns.extend(flatten(registry, &empty).into_iter().map(|c| c.0));
+    Ok(columns)
+}
+
+/// The manifest entry of an exported topic (see [`crate::export_manifest`]).
+pub fn manifest_entry(t: &TopicInfo, path: &Path, rows: u64) -> ManifestTopic {
+    ManifestTopic {
+        topic: t.name.clone(),
+        type_name: t.type_name.clone(),
+        file: path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
+        messages: rows,
+        offered_qos_profiles: t.offered_qos_profiles.clone(),
+        definition: t.definition.clone(),
+    }
+}
+
+/// Export `topics` (all when empty) of `bag` to CSV files in `out_dir` (created if missing),
+/// with the manifest `export.yaml` that lets `bag import` rebuild the bag from them.
 pub fn export_csv(bag: &Path, topics: &[String], out_dir: &Path) -> Result<BTreeMap<String, ExportedTopic>> {
     let reader = BagReader::open(bag)?;
     let chosen = chosen_topics(&reader, bag, topics)?;
     std::fs::create_dir_all(out_dir).map_err(io(out_dir))?;
     let mut result = BTreeMap::new();
+    let mut manifest = ExportManifest { bag: bag.display().to_string(), format: "csv".into(), topics: Vec::new() };
     for t in chosen {
         let registry = registry_for(t)?;
         let path = out_dir.join(csv_file_name(&t.name));
         let file = std::fs::File::create(&path).map_err(io(&path))?;
         let mut w = csv::Writer::from_writer(std::io::BufWriter::new(file));
         let csv_err = |e: csv::Error| ToolError::Io { path: path.clone(), source: std::io::Error::other(e.to_string()) };
-        let mut header: Option<Vec<String>> = None;
+        let header = export_columns(&registry, &t.type_name).map_err(|reason| ToolError::Topic { topic: t.name.clone(), reason })?;
+        w.write_record(&header).map_err(csv_err)?;
         let mut rows = 0u64;
         let filter = MessageFilter { topics: Some(vec![t.name.clone()]), ..Default::default() };
         for m in reader.messages(&filter)? {
@@ -132,11 +165,8 @@ pub fn export_csv(bag: &Path, topics: &[String], out_dir: &Path) -> Result<BTree
                 reason: format!("message at log time {} ns does not decode: {e}", m.log_time),
             })?;
             let cells = flatten(&registry, &value);
-            if header.is_none() {
-                let mut h = vec!["log_time_ns".to_string(), "publish_time_ns".to_string()];
-                h.extend(cells.iter().map(|c| c.0.clone()));
-                w.write_record(&h).map_err(csv_err)?;
-                header = Some(h);
+            if cells.len() + 2 != header.len() {
+                return Err(ToolError::Topic { topic: t.name.clone(), reason: format!("message at log time {} ns has {} fields, its type {}", m.log_time, cells.len(), header.len() - 2) });
             }
             let mut row = vec![m.log_time.to_string(), m.publish_time.to_string()];
             row.extend(cells.into_iter().map(|c| c.1));
@@ -144,8 +174,10 @@ pub fn export_csv(bag: &Path, topics: &[String], out_dir: &Path) -> Result<BTree
             rows += 1;
         }
         w.flush().map_err(io(&path))?;
-        result.insert(t.name.clone(), ExportedTopic { path, rows, columns: header.map_or(0, |h| h.len()) });
+        manifest.topics.push(manifest_entry(t, &path, rows));
+        result.insert(t.name.clone(), ExportedTopic { path, rows, columns: header.len() });
     }
+    manifest.write(out_dir)?;
     Ok(result)
 }
 

@@ -9,7 +9,9 @@
 //! * [`export`]: one CSV file per topic, one column per leaf field.
 //! * Parquet export (the same columns, typed) lives in `metrocell-parquet-export`, so that the
 //!   nodes, which link this crate for offline replay, do not link Parquet.
+//! * [`export_manifest`]: `export.yaml`, each exported file's topic, type, definition and QoS.
 //! * [`import`]: point-measurement CSV (own layout or a mapped tracker export) → bag.
+//! * [`reimport`]: `bag export`'s files back into a bag, every message as it was recorded.
 //! * [`recorded_qos`]: offered QoS of discovered publishers → `offered_qos_profiles` and the
 //!   QoS the recorder requests; stored profiles → the QoS `bag play` offers.
 //! * [`qos_overrides`]: the `--qos-profile-overrides-path` file of `ros2 bag record/play`.
@@ -26,10 +28,12 @@ mod completeness;
 mod copy;
 mod error;
 pub mod export;
+pub mod export_manifest;
 pub mod import;
 pub mod playback;
 pub mod qos_overrides;
 pub mod recorded_qos;
+pub mod reimport;
 mod recording;
 mod replay_output;
 mod topic_selection;

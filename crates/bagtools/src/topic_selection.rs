@@ -12,6 +12,8 @@ pub struct TopicSelection {
     pub topics: Vec<String>,
     include: Option<Regex>,
     exclude: Option<Regex>,
+    /// The patterns as the user gave them, for messages.
+    patterns: (String, String),
 }
 
 fn anchored(pattern: &str) -> Result<Option<Regex>> {
@@ -26,7 +28,23 @@ fn anchored(pattern: &str) -> Result<Option<Regex>> {
 impl TopicSelection {
     /// `topics`: explicit names (empty = all); `include`/`exclude`: regexes ("" = none).
     pub fn new(topics: Vec<String>, include: &str, exclude: &str) -> Result<Self> {
-        Ok(Self { topics, include: anchored(include)?, exclude: anchored(exclude)? })
+        Ok(Self { topics, include: anchored(include)?, exclude: anchored(exclude)?, patterns: (include.to_string(), exclude.to_string()) })
+    }
+
+    /// The selection in words, for messages: "topics /a, /b and regex '/camera/.*', excluding '/camera/debug.*'".
+    pub fn describe(&self) -> String {
+        let mut parts = Vec::new();
+        if !self.topics.is_empty() {
+            parts.push(format!("topics {}", self.topics.join(", ")));
+        }
+        if !self.patterns.0.is_empty() {
+            parts.push(format!("regex '{}'", self.patterns.0));
+        }
+        let mut s = if parts.is_empty() { "every topic".to_string() } else { parts.join(" and ") };
+        if !self.patterns.1.is_empty() {
+            s.push_str(&format!(", excluding '{}'", self.patterns.1));
+        }
+        s
     }
 
     /// Everything.
@@ -62,5 +80,7 @@ mod tests {
         assert!(l.matches("/a") && !l.matches("/b"));
         assert!(TopicSelection::all().matches("/anything"));
         assert!(matches!(TopicSelection::new(vec![], "(", ""), Err(ToolError::Regex { .. })));
+        assert_eq!(s.describe(), "regex '/camera/.*|/tracker', excluding '/camera/debug.*'");
+        assert_eq!(l.describe(), "topics /a");
     }
 }

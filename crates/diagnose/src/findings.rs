@@ -267,11 +267,12 @@ pub fn build(inputs: &Inputs) -> Result<Built, PhysicsError> {
         let channels: BTreeSet<String> = (0..n).filter(|&i| c_wp[i].norm() > 0.2 * c_wp[largest].norm()).map(|i| inputs.records[i].channel.clone()).collect();
         let p = inputs.view.position[largest];
         let description = format!(
-            "largest ({} µm) at x {:.0} mm, y {:.0} mm, z {:.0} mm, t = {:.2} h into the recording; {:.0} % of the effect is along {}",
+            "largest ({} µm) at x {:.0} mm, y {:.0} mm, z {:.0} mm ({}), t = {:.2} h into the recording; {:.0} % of the effect is along {}",
             um(c_wp[largest].norm()),
             p.x * 1e3,
             p.y * 1e3,
             p.z * 1e3,
+            inputs.view.position_frame,
             (inputs.view.time[largest] - inputs.view.time.iter().cloned().fold(f64::INFINITY, f64::min)) / 3600.0,
             if total > 0.0 { 100.0 * per_axis[main] / total } else { 0.0 },
             axis_name(main)

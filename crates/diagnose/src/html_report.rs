@@ -4,8 +4,10 @@
 //! temperatures, before/after histograms, what is left unexplained, and how the selection went.
 //! Plots show mm, µm and hours, as metrologists read them.
 
+use metrocell_estimation::fit_summary::value_with_sigma;
 use metrocell_report::{HistogramPlot, PlotError, Report, ScatterPlot, Series, SeriesPlot, Table};
 
+use crate::locate::p_value_text;
 use crate::pipeline::Diagnosis;
 use crate::report::{FitFigures, ParameterValue};
 
@@ -17,9 +19,20 @@ fn figures_row(name: &str, f: &FitFigures) -> Vec<String> {
     vec![name.into(), um(f.heldout_rms_m), um(f.heldout_max_m), format!("{:.2}", f.chi2_per_dof), um(f.rms_m)]
 }
 
-fn parameter_text(p: &ParameterValue) -> (String, String) {
-    let sigma = p.sigma.map(|s| format!("{s:.3e}")).unwrap_or_else(|| "not identifiable".into());
-    (format!("{:.4e}", p.value), sigma)
+/// A parameter as a metrologist reads it: µm or mm, µrad, µm/m/K, s, min or h, with its σ in the
+/// same unit (the calibrate summary's formatting), never raw SI exponents.
+fn parameter_text(p: &ParameterValue) -> String {
+    match p.sigma {
+        Some(_) => value_with_sigma(p.value, p.sigma, &p.unit),
+        None => format!("{} (not identifiable)", value_with_sigma(p.value, None, &p.unit)),
+    }
+}
+
+/// A p-value in a table cell: three decimals down to 0.001, then a mantissa and exponent, and
+/// below f64's reach (an F statistic so large the tail underflows to 0) a floor, not "0.0e0".
+fn p_text(p: f64) -> String {
+    let text = p_value_text(p);
+    text.strip_prefix("= ").map(str::to_string).unwrap_or(text)
 }
 
 /// The page for a diagnosis.
@@ -43,10 +56,9 @@ pub fn html_report(d: &Diagnosis, title: &str) -> Result<Report, PlotError> {
         if !f.location.located.is_empty() {
             s.paragraph(&format!("It accounts for: {}.", f.location.located.join("; ")));
         }
-        let mut t = Table::new(&["parameter", "value", "σ (k = 1)", "unit"]).caption(&format!("catalog term `{}`, variant {}", f.term, if f.variant.is_empty() { "—" } else { &f.variant }));
+        let mut t = Table::new(&["parameter", "value ± σ (k = 1)"]).caption(&format!("catalog term `{}`, variant {}", f.term, if f.variant.is_empty() { "—" } else { &f.variant }));
         for (name, v) in &f.parameters {
-            let (value, sigma) = parameter_text(v);
-            t.push(vec![name.clone(), value, sigma, v.unit.clone()]);
+            t.push(vec![name.clone(), parameter_text(v)]);
         }
         s.table(t);
         if let Some((signal, residual, fitted)) = p.evidence.get(k) {
@@ -123,7 +135,7 @@ pub fn html_report(d: &Diagnosis, title: &str) -> Result<Report, PlotError> {
     for (k, step) in r.selection.iter().enumerate() {
         let mut t = Table::new(&["candidate", "variant", "held-out gain", "p (adjusted)", "ΔBIC", "plausible", "separable", "accepted"]).caption(&format!("step {}: {}", k + 1, step.chosen.clone().unwrap_or_else(|| "nothing accepted".into())));
         for c in &step.top {
-            t.push(vec![c.label.clone(), c.variant.clone(), format!("{:.3}", c.heldout_gain), format!("{:.1e}", c.p_adjusted), format!("{:.1}", c.delta_bic), c.plausible.to_string(), c.separable.to_string(), c.accepted.to_string()]);
+            t.push(vec![c.label.clone(), c.variant.clone(), format!("{:.3}", c.heldout_gain), p_text(c.p_adjusted), format!("{:.1}", c.delta_bic), c.plausible.to_string(), c.separable.to_string(), c.accepted.to_string()]);
         }
         s.table(t);
     }
@@ -142,4 +154,21 @@ pub fn html_report(d: &Diagnosis, title: &str) -> Result<Report, PlotError> {
         }
     }
     Ok(page)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 32: the report's tables read in µm, µm/m/K, minutes, and p-values with a floor.
+    #[test]
+    fn parameters_and_p_values_read_as_a_metrologist_reads_them() {
+        let v = |value: f64, sigma: Option<f64>, unit: &str| ParameterValue { value, sigma, unit: unit.into() };
+        assert_eq!(parameter_text(&v(1.985e-5, Some(1.6e-7), "m")), "19.85 ± 0.16 µm");
+        assert_eq!(parameter_text(&v(1800.0, Some(420.0), "s")), "30.0 ± 7.0 min");
+        assert_eq!(parameter_text(&v(11.5e-6, None, "1/K")), "11.5000 µm/m/K (not identifiable)");
+        assert_eq!(p_text(0.0), "< 1e-300");
+        assert_eq!(p_text(3.2e-5), "3.2e-5");
+        assert_eq!(p_text(0.0421), "0.042");
+    }
 }

@@ -58,7 +58,19 @@ impl Finding {
             Place::ConditionRange { name, from, to } => format!("when {name} is {from:.3}–{to:.3}"),
             Place::Correlation { name } => format!("per standard deviation of {name}"),
         };
-        format!("{what} {place} (n = {}, p = {:.1e} after correction for the tests made)", self.count, self.p_adjusted)
+        format!("{what} {place} (n = {}, p {} after correction for the tests made)", self.count, p_value_text(self.p_adjusted))
+    }
+}
+
+/// A p-value as a person reads it: "= 0.042", "= 3.2e-5", and "< 1e-300" where the tail of the
+/// test's distribution underflows (p computed as 0), never "0.0e0".
+pub fn p_value_text(p: f64) -> String {
+    if !(p > 1e-300) {
+        "< 1e-300".into()
+    } else if p < 1e-3 {
+        format!("= {p:.1e}")
+    } else {
+        format!("= {p:.3}")
     }
 }
 

@@ -26,6 +26,9 @@ pub struct ResidualView {
     /// Where each record was taken: the commanded axis positions (or the nominal tool point on
     /// machines whose joints are not positions), m.
     pub position: Vec<Vector3<f64>>,
+    /// The frame of `position`, in words for a report ("machine axes"; "tracker frame" on a serial
+    /// arm, whose records keep the measured point there).
+    pub position_frame: String,
     pub time: Vec<f64>,
     /// Unit line of sight from the instrument to the point, records frame (range terms are read
     /// along it).
@@ -37,6 +40,21 @@ pub fn records_rotation(model: &ForwardModel, x: &[f64], frame: &RecordFrame) ->
     match (frame, model.instrument_param_start(TermId::TrackerPose)) {
         (RecordFrame::Instrument(_), Some(i)) => InstrumentPose::from_euler_xyz(Vector3::new(x[i], x[i + 1], x[i + 2]), [x[i + 3], x[i + 4], x[i + 5]]).rotation,
         _ => Matrix3::identity(),
+    }
+}
+
+/// The frame [`record_position`] gives the records' positions in, in words.
+pub fn position_frame(model: &ForwardModel, records: &[MeasurementRecord], frame: &RecordFrame) -> String {
+    let axes = |r: &MeasurementRecord| r.signals.axis_position.iter().all(Option::is_some);
+    if records.iter().all(axes) {
+        "machine axes".into()
+    } else if records.iter().all(|r| axes(r) || model.nominal_machine_point(&r.q).is_some()) {
+        "machine frame".into()
+    } else {
+        match frame {
+            RecordFrame::Instrument(name) => format!("{name} frame"),
+            RecordFrame::Machine => "machine frame".into(),
+        }
     }
 }
 
@@ -67,7 +85,7 @@ impl ResidualView {
         let rotation = records_rotation(model, x, frame);
         let predicted = problem.predictions(x)?;
         let line_of_sight = predicted.iter().map(|p| if p.norm() > 0.0 { p.normalize() } else { Vector3::z() }).collect();
-        Ok(Self { residual, whitening: whitening_v, colouring, rotation, position: records.iter().map(|r| record_position(model, r)).collect(), time: records.iter().map(|r| r.time).collect(), line_of_sight })
+        Ok(Self { residual, whitening: whitening_v, colouring, rotation, position: records.iter().map(|r| record_position(model, r)).collect(), position_frame: position_frame(model, records, frame), time: records.iter().map(|r| r.time).collect(), line_of_sight })
     }
 
     pub fn len(&self) -> usize {

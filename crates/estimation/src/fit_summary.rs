@@ -7,9 +7,13 @@ use crate::fit::{rms, Fit};
 use crate::records::RecordSet;
 
 /// A parameter's value and σ in display units: lengths µm (mm from 1 cm), angles µrad (degrees
-/// from 10 mrad), 1/K as µm/m/K, others as they are. Returns (value, σ, unit text).
+/// from 10 mrad), 1/K as µm/m/K, times s (min from 2 min, h from 2 h), others as they are.
+/// Returns (value, σ, unit text).
 pub fn display(value: f64, sigma: Option<f64>, unit: &str) -> (f64, Option<f64>, String) {
     let (scale, shown) = match unit {
+        // a time constant of half an hour reads in minutes, a drift over a shift in hours
+        "s" if value.abs() >= 7200.0 => (1.0 / 3600.0, "h".to_string()),
+        "s" if value.abs() >= 120.0 => (1.0 / 60.0, "min".to_string()),
         // an instrument's position (metres away) reads in mm, its orientation in degrees
         "m" if value.abs() >= 0.01 => (1e3, "mm".to_string()),
         "rad" if value.abs() >= 0.01 => (180.0 / std::f64::consts::PI, "°".to_string()),
@@ -107,4 +111,22 @@ pub fn summary_lines(fit: &Fit, records: &RecordSet) -> Vec<String> {
         lines.push(format!("{n} measurements were left out, the first: {first}{more}."));
     }
     lines
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Issue 32: parameters read as a metrologist reads them, never as raw SI exponents.
+    #[test]
+    fn values_read_in_the_units_metrologists_use() {
+        assert_eq!(value_with_sigma(1.985e-5, Some(1.2e-7), "m"), "19.85 ± 0.12 µm");
+        assert_eq!(value_with_sigma(-1.19999999, Some(3.4e-7), "m"), "-1199.99999 ± 0.00034 mm");
+        assert_eq!(value_with_sigma(2.5e-6, Some(3.1e-7), "rad"), "2.50 ± 0.31 µrad");
+        assert_eq!(value_with_sigma(10.23e-6, Some(8.8e-8), "1/K"), "10.230 ± 0.088 µm/m/K");
+        assert_eq!(value_with_sigma(1801.0, Some(19.0), "s"), "30.02 ± 0.32 min");
+        assert_eq!(value_with_sigma(9000.0, Some(900.0), "s"), "2.50 ± 0.25 h");
+        assert_eq!(value_with_sigma(45.0, Some(2.0), "s"), "45.0 ± 2.0 s");
+        assert_eq!(value_with_sigma(4e-6, None, "m/K"), "4.0000 µm/K");
+    }
 }

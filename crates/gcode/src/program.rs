@@ -288,12 +288,13 @@ impl State<'_> {
             }
             previous = *p;
         }
-        let commanded = if motion == Motion::Linear { self.split_bent_line(path[0], commanded[0]) } else { commanded };
+        let (take_up, commanded) = if motion == Motion::Linear { self.split_bent_line(path[0], commanded[0]) } else { (None, commanded) };
         if outside {
             self.report.outside_region.push(LineIssue { line: number, message: "outside the calibrated region: the model is extrapolated".into() });
         }
         let decimals = if self.unit_mm == 1.0 { 4 } else { 5 };
-        let unchanged = commanded.len() == path.len()
+        let unchanged = take_up.is_none()
+            && commanded.len() == path.len()
             && commanded.iter().zip(&path).all(|(c, p)| same(c, p, decimals))
             && (self.absolute || same(&self.commanded, &self.programmed, decimals))
             && (explicit_motion.is_some() || self.controller_motion == Some(motion));
@@ -305,14 +306,22 @@ impl State<'_> {
             return None;
         }
         self.report.changed_lines += 1;
-        self.report.added_lines += commanded.len() - 1;
+        self.report.added_lines += commanded.len() - 1 + usize::from(take_up.is_some());
         let emitted_motion = if motion == Motion::Rapid { Motion::Rapid } else { Motion::Linear };
-        let mut lines = Vec::with_capacity(commanded.len());
+        let mut lines = Vec::with_capacity(commanded.len() + 1);
         let mut from = before;
+        let mut controller_motion = self.controller_motion;
+        if let Some(start) = take_up {
+            // a line of its own before the programmed one, which keeps its N number, its comment
+            // and its other words; the feed the move will run at, so the take-up does not rush
+            lines.push(take_up_line(&self.axis_words(&from, &start, decimals), block.word('F')));
+            from = start;
+            controller_motion = Some(Motion::Linear);
+        }
         for (i, c) in commanded.iter().enumerate() {
             let words = self.axis_words(&from, c, decimals);
             if i == 0 {
-                lines.push(rebuild_first_line(text, block, &words, motion, emitted_motion, explicit_motion.is_some(), self.controller_motion));
+                lines.push(rebuild_first_line(text, block, &words, motion, emitted_motion, explicit_motion.is_some(), controller_motion));
             } else {
                 let mut l = String::from("G1");
                 for (a, v) in &words {
@@ -374,9 +383,10 @@ impl State<'_> {
 
     /// Split a straight move from the current position to programmed `p1` (commanded `c1`) where
     /// the compensated path bends away from the chord: halve until the commanded midpoint is
-    /// within the chord tolerance of the chord's midpoint. The commanded points, `c1` last (if a
+    /// within the chord tolerance of the chord's midpoint. Returns the take-up move's end point
+    /// when the move starts with a reversal, and the move's commanded points, `c1` last (if a
     /// point on the way cannot be compensated, the move is left whole).
-    fn split_bent_line(&mut self, p1: Vector3<f64>, c1: Vector3<f64>) -> Vec<Vector3<f64>> {
+    fn split_bent_line(&mut self, p1: Vector3<f64>, c1: Vector3<f64>) -> (Option<Vector3<f64>>, Vec<Vector3<f64>>) {
         let (p0, mut c0) = (self.programmed, self.commanded);
         let tol = self.options.chord_tolerance_mm / self.unit_mm;
         let approach = self.approach;
@@ -384,18 +394,19 @@ impl State<'_> {
         // a reversal: the start point, compensated for this move's approach directions, is not
         // where the controller is (backlash): take it up with a move of its own first, rather
         // than bending the whole move towards a jump at its start
+        let mut take_up = None;
         if let Ok((start, _)) = self.compensate(p0 - (p1 - p0), p0) {
             if (start - c0).norm() > tol {
-                out.push(start);
+                take_up = Some(start);
                 c0 = start;
             }
         }
         if !self.bisect(p0, c0, p1, c1, tol, 0, &mut out) {
-            out.truncate(usize::from(c0 != self.commanded));
+            out.clear();
         }
         self.approach = approach;
         out.push(c1);
-        out
+        (take_up, out)
     }
 
     #[allow(clippy::too_many_arguments)]
@@ -436,6 +447,19 @@ impl State<'_> {
         }
         words
     }
+}
+
+/// The take-up move of a reversal: `G1`, the axis words, and the programmed line's feed word
+/// when it has one (no N number, no comment: those stay on the programmed line).
+fn take_up_line(words: &[(char, String)], feed: Option<&crate::block::Word>) -> String {
+    let mut l = String::from("G1");
+    for (a, v) in words {
+        l += &format!(" {a}{v}");
+    }
+    if let Some(f) = feed {
+        l += &format!(" F{}", f.number_text);
+    }
+    l
 }
 
 /// The two points are written the same at `decimals` places.

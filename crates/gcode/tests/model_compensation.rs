@@ -103,3 +103,21 @@ fn controller_tables_tabulate_the_model() {
     assert_eq!(csv.lines().filter(|l| !l.starts_with('#')).count(), 18);
     assert!(squareness_csv(&sq, "fitted.yaml").contains("xy,20.000\n"));
 }
+
+/// Issue 32: the take-up move of a reversal is a line of its own, without the programmed line's
+/// N number or comment; the programmed line keeps both (and its feed is the take-up's too).
+#[test]
+fn a_take_up_move_leaves_the_line_its_number_and_comment() {
+    let m = model("  - {id: backlash, options: {axis: x}, params: {reversal: 9 um}}\n");
+    let fm = m.forward_model().unwrap();
+    let field = ModelErrorField::new(&fm, fm.params(), Signals::default()).unwrap();
+    let (out, report) = compensate_program("G21 G90\nG0 X0 Y0 Z50\nN10 G1 X100 Y200 F500 (out)\nN20 G1 X50 F250 ; back along X\n", &field, &CompensationOptions::default());
+    assert_eq!(report.added_lines, 1, "one take-up move\n{out}");
+    let lines: Vec<&str> = out.lines().collect();
+    let n20 = lines.iter().position(|l| l.starts_with("N20")).unwrap_or_else(|| panic!("N20 kept at the start of its line\n{out}"));
+    assert!(lines[n20].starts_with("N20 G1 X") && lines[n20].ends_with("F250 ; back along X"), "{}", lines[n20]);
+    let take_up = lines[n20 - 1];
+    assert!(take_up.starts_with("G1 X") && take_up.ends_with(" F250"), "the take-up: G1, its X, the line's feed: {take_up}");
+    assert!(!take_up.contains('N') && !take_up.contains(';') && !take_up.contains('('), "{take_up}");
+    assert_eq!(out.lines().filter(|l| l.contains("N20")).count(), 1, "{out}");
+}

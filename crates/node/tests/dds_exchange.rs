@@ -182,6 +182,23 @@ fn sim_time_follows_clock_topic() {
     assert_eq!(got, Some(1_000_000_000_500));
 }
 
+/// Issue 32: every node reads `/clock` (ros2-client's Spinner keeps a sim-time reader, and
+/// `use_sim_time` adds the node's own) as `rosgraph_msgs/msg/Clock`, the one type ROS 2 tools
+/// expect there — never `builtin_interfaces/msg/Time`, which made `topic list -t` show two types.
+#[test]
+fn clock_is_advertised_as_rosgraph_clock_only() {
+    let _plain = node("clock_reader_plain", &[]);
+    let _sim = node("clock_reader_sim", &["--ros-args", "-p", "use_sim_time:=true"]);
+    let observer = node("clock_observer", &[]);
+    let start = Instant::now();
+    let clock_types = |topics: Vec<TopicInfo>| topics.into_iter().filter(|t| t.name == "/clock").map(|t| t.type_name).collect::<Vec<_>>();
+    while start.elapsed() < Duration::from_secs(10) && clock_types(observer.discovered_topics()).is_empty() {
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let types = clock_types(observer.discovered_topics_settled(Duration::from_millis(1000), Duration::from_secs(5)));
+    assert_eq!(types, ["rosgraph_msgs/msg/Clock"], "the types other participants read /clock as");
+}
+
 /// The example talker exits cleanly within a second of SIGINT and of SIGTERM.
 #[test]
 fn example_talker_stops_on_signals_within_one_second() {

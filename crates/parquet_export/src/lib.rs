@@ -37,7 +37,11 @@ use parquet::file::writer::SerializedFileWriter;
 use parquet::schema::types::{Type, TypePtr};
 use rosmsg::{ArrayKind, BaseType, Primitive, Registry, Value};
 
-use metrocell_bagtools::export::{chosen_topics, registry_for, ExportedTopic};
+mod read_back;
+pub use read_back::parquet_rows;
+
+use metrocell_bagtools::export::{chosen_topics, manifest_entry, registry_for, ExportedTopic};
+use metrocell_bagtools::export_manifest::ExportManifest;
 use metrocell_bagtools::{io, Result, ToolError};
 
 /// A row group is written when it holds this many rows or [`VALUES_PER_GROUP`] buffered
@@ -297,12 +301,15 @@ pub fn parquet_file_name(topic: &str) -> String {
     format!("{}.parquet", topic.trim_start_matches('/').replace('/', "."))
 }
 
-/// Export `topics` (all when empty) of `bag` to Parquet files in `out_dir` (created if missing).
+/// Export `topics` (all when empty) of `bag` to Parquet files in `out_dir` (created if missing),
+/// with the manifest `export.yaml` that lets `bag import` rebuild the bag from them
+/// ([`parquet_rows`] reads them back).
 pub fn export_parquet(bag: &Path, topics: &[String], out_dir: &Path) -> Result<BTreeMap<String, ExportedTopic>> {
     let reader = BagReader::open(bag)?;
     let chosen = chosen_topics(&reader, bag, topics)?;
     std::fs::create_dir_all(out_dir).map_err(io(out_dir))?;
     let mut result = BTreeMap::new();
+    let mut manifest = ExportManifest { bag: bag.display().to_string(), format: "parquet".into(), topics: Vec::new() };
     for t in chosen {
         let registry = registry_for(t)?;
         let bad = |reason: String| ToolError::Topic { topic: t.name.clone(), reason };
@@ -342,8 +349,10 @@ pub fn export_parquet(bag: &Path, topics: &[String], out_dir: &Path) -> Result<B
             write_group(&mut writer, &mut columns).map_err(pq_err)?;
         }
         writer.close().map_err(pq_err)?;
+        manifest.topics.push(manifest_entry(t, &path, rows));
         result.insert(t.name.clone(), ExportedTopic { path, rows, columns: columns.len() });
     }
+    manifest.write(out_dir)?;
     Ok(result)
 }
 

@@ -25,6 +25,17 @@ impl Termination {
     pub fn converged(&self) -> bool {
         matches!(self, Termination::Gradient | Termination::Cost | Termination::Step)
     }
+
+    /// Why the iteration stopped, in words a person reads after "fitted in 0.9 s (3 iterations; …)".
+    pub fn in_words(&self) -> &'static str {
+        match self {
+            Termination::Gradient => "converged: no direction lowers the cost further",
+            Termination::Cost => "converged: the last step lowered the cost by a negligible fraction",
+            Termination::Step => "converged: the last step was negligible",
+            Termination::MaxIterations => "stopped at the iteration limit: the estimate may not be converged",
+            Termination::NoDescent => "stopped: no step lowered the cost (a minimum to round-off)",
+        }
+    }
 }
 
 /// The result of [`crate::solve`]. Residual-space quantities (cost, weights) are those of the

@@ -21,13 +21,20 @@
 //! | `pressure` | air pressure [Pa] | no |
 //! | `humidity` | relative humidity, 0..1 | no |
 //! | `aux.<name>` | any other channel (accelerometer, ...), in its SI unit | no |
-//! | `role` | what the row's point is for: `fit` (a point of the machine's program, the default), `reference` (a fixed reference nest re-measured through the shift, on the floor or on the table the instrument stands on: the machine does not move it; its nominal, when given, is the nest's position) | no |
+//! | `role` | what the row's point is for: `fit` (a point of the machine's program that fits the model, the default), `check` (a point of the program kept out of every fit, to judge the model's predictions), `reference` (a fixed reference nest re-measured through the shift, on the floor or on the table the instrument stands on: the machine does not move it; its nominal, when given, is the nest's position) | no |
+//! | `setup` | the instrument's placement the row was measured from (`S1`, `north`, …): each distinct value is one placement, with its own pose — a nuisance of every fit | no |
+//! | `accel.<sensor>.x`, `.y`, `.z` | an accelerometer's reading [m/s², its own frame]: the specific force, +9.81 m/s² along its up axis at rest | all three, per sensor |
 //!
 //! # Topics written (log time = publish time = the row's timestamp)
 //! * `/measured_points` `metrocell_msgs/msg/MeasuredPoint` (covariance diagonal σ², off-diagonal 0)
 //! * `/reference_points` `metrocell_msgs/msg/MeasuredPoint`: the rows whose `role` is
 //!   `reference` (no joint state or approach is written for them: the machine did not put them
-//!   there)
+//!   there); `/check_points` the rows whose `role` is `check`
+//! * with a `setup` column, each point's `header.frame_id` is `<frame_id>@<setup>` (the frame of
+//!   the instrument at that placement)
+//! * `/imu/<sensor>` `sensor_msgs/msg/Imu`: the `accel.<sensor>.*` cells as `linear_acceleration`
+//!   (orientation and angular velocity not given: their covariances' first element −1, as ROS
+//!   defines), `header.frame_id` the mapping's `imu_frames.<sensor>` (default `<sensor>`)
 //! * `/machine/commanded_joint_states` `sensor_msgs/msg/JointState` (the topic `metrocell sim`
 //!   and the nodes use): `name` = the `joint.<name>` columns then any `velocity.<name>` without
 //!   a joint column, `position` from `joint.*` and `velocity` from `velocity.*` (NaN where a
@@ -58,6 +65,7 @@
 //!   temperature.air: {column: "Temperature"}
 //!   pressure: {column: "Pressure", scale: 100.0}   # hPa → Pa
 //! ignore: ["Comment"]       # source columns to skip
+//! imu_frames: {base: base_imu}   # the frame (a link of the robot's URDF) each accelerometer reads in
 //! ```
 //! Without a mapping the header names are the layout's names and every scale is 1.
 //!
@@ -71,7 +79,8 @@ use metrocell_bag::{qos_profiles_yaml, BagWriter, QosProfile, WriterOptions};
 use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_msgs::geometry_msgs::msg::Point;
 use metrocell_msgs::msg::MeasuredPoint;
-use metrocell_msgs::sensor_msgs::msg::{FluidPressure, JointState, RelativeHumidity, Temperature, TimeReference};
+use metrocell_msgs::geometry_msgs::msg::Vector3;
+use metrocell_msgs::sensor_msgs::msg::{FluidPressure, Imu, JointState, RelativeHumidity, Temperature, TimeReference};
 use metrocell_msgs::std_msgs::msg::Header;
 use rosmsg::RosMessage;
 use serde::Deserialize;
@@ -110,6 +119,9 @@ pub struct Mapping {
     pub columns: BTreeMap<String, ColumnMap>,
     #[serde(default)]
     pub ignore: Vec<String>,
+    /// The frame each accelerometer (`accel.<sensor>.*` columns) reads in: `sensor → frame id`.
+    #[serde(default)]
+    pub imu_frames: BTreeMap<String, String>,
     /// The file it was read from (for messages); None when built in code.
     #[serde(skip)]
     pub path: Option<PathBuf>,
@@ -142,17 +154,27 @@ enum Field {
     Humidity,
     Aux(String),
     Role,
+    Setup,
+    /// An accelerometer's reading: sensor, axis (0, 1, 2).
+    Accel(String, usize),
 }
 
 /// What a row's point is for (`role` column).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 enum Role {
     Fit,
+    Check,
     Reference,
 }
 
 /// The topic reference nests' readings are written to (and read from).
 pub const REFERENCE_POINTS_TOPIC: &str = "/reference_points";
+
+/// The topic check points (kept out of every fit, to judge predictions) are written to.
+pub const CHECK_POINTS_TOPIC: &str = "/check_points";
+
+/// The separator of an instrument frame and its setup in a point's `header.frame_id`.
+pub const SETUP_SEPARATOR: char = '@';
 
 fn parse_field(name: &str) -> Option<Field> {
     let axis = |s: &str| ["x", "y", "z"].iter().position(|a| *a == s);
@@ -165,6 +187,7 @@ fn parse_field(name: &str) -> Option<Field> {
         "humidity" => Field::Humidity,
         "instrument_on_time" => Field::InstrumentOnTime,
         "role" => Field::Role,
+        "setup" => Field::Setup,
         _ => {
             if let Some(a) = name.strip_prefix("measured_").and_then(axis) {
                 Field::Measured(a)
@@ -182,6 +205,8 @@ fn parse_field(name: &str) -> Option<Field> {
                 Field::Temperature(n.to_string())
             } else if let Some(n) = named("aux.") {
                 Field::Aux(n.to_string())
+            } else if let Some((sensor, a)) = name.strip_prefix("accel.").and_then(|r| r.rsplit_once('.')).filter(|(s, _)| !s.is_empty() && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')) {
+                Field::Accel(sensor.to_string(), axis(a)?)
             } else {
                 return None;
             }
@@ -375,6 +400,17 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
             )));
         }
     }
+    // an accelerometer is read on all three of its axes
+    let mut sensors: BTreeMap<&str, [bool; 3]> = BTreeMap::new();
+    for b in &bound {
+        if let Field::Accel(sensor, a) = &b.field {
+            sensors.entry(sensor.as_str()).or_default()[*a] = true;
+        }
+    }
+    if let Some((sensor, axes)) = sensors.iter().find(|(_, axes)| !axes.iter().all(|a| *a)) {
+        let missing: Vec<&str> = (0..3).filter(|&a| !axes[a]).map(|a| ["x", "y", "z"][a]).collect();
+        return Err(header_err(format!("accelerometer `{sensor}` has no column for accel.{sensor}.{}: an accelerometer is read on its three axes", missing.join(format!(", accel.{sensor}.").as_str()))));
+    }
     let frame_id = mapping.frame_id.clone().unwrap_or_else(|| "import".into());
     let source = mapping.source.clone().unwrap_or_else(|| "import".into());
 
@@ -424,6 +460,8 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
         let mut aux = Vec::new();
         let (mut pressure, mut humidity) = (None, None);
         let mut role = Role::Fit;
+        let mut setup: Option<String> = None;
+        let mut accel: BTreeMap<String, [f64; 3]> = BTreeMap::new();
         for b in &bound {
             let cell = record.get(b.index).unwrap_or("");
             let number = || -> std::result::Result<f64, String> {
@@ -497,8 +535,19 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
                 },
                 Field::Role => match cell.trim().to_ascii_lowercase().as_str() {
                     "" | "fit" => role = Role::Fit,
+                    "check" => role = Role::Check,
                     "reference" | "ref" => role = Role::Reference,
-                    other => err(b, format!("role '{other}' is not one of: fit (a point of the machine's program), reference (a fixed reference nest)")),
+                    other => err(b, format!("role '{other}' is not one of: fit (a point of the machine's program), check (kept out of the fits, to judge predictions), reference (a fixed reference nest)")),
+                },
+                Field::Setup if cell.trim().is_empty() => {}
+                Field::Setup => match cell.trim() {
+                    c if c.chars().all(|ch| ch.is_ascii_alphanumeric() || ch == '_' || ch == '-') => setup = Some(c.to_string()),
+                    c => err(b, format!("setup '{c}' is not a placement name: use letters, digits, `_` or `-`")),
+                },
+                Field::Accel(..) if cell.is_empty() => {}
+                Field::Accel(sensor, a) => match number() {
+                    Ok(v) => accel.entry(sensor.clone()).or_insert([f64::NAN; 3])[*a] = v,
+                    Err(e) => err(b, e),
                 },
             }
         }
@@ -507,7 +556,12 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
             continue;
         }
         let t = t_ns.expect("required column bound and parsed");
-        let header = Header { stamp: stamp(t), frame_id: frame_id.clone() };
+        // a point's frame: the instrument's, at its placement when the row names one
+        let point_frame = match &setup {
+            Some(s) => format!("{frame_id}{SETUP_SEPARATOR}{s}"),
+            None => frame_id.clone(),
+        };
+        let header = Header { stamp: stamp(t), frame_id: point_frame };
         let mut out: Vec<(String, &str, &str, Vec<u8>)> = Vec::new();
         let mut cov = [0.0; 9];
         for a in 0..3 {
@@ -521,14 +575,26 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
             measured: Point { x: measured[0], y: measured[1], z: measured[2] },
             covariance: cov,
         };
-        if role == Role::Reference {
+        let points_topic = match role {
             // a nest the machine did not put there: its point alone, and the row's signals
-            out.push((REFERENCE_POINTS_TOPIC.into(), MeasuredPoint::ROS_TYPE, MeasuredPoint::DEFINITION, encode_cdr(&p)?));
-        } else {
-            out.push(("/measured_points".into(), MeasuredPoint::ROS_TYPE, MeasuredPoint::DEFINITION, encode_cdr(&p)?));
-        }
+            Role::Reference => REFERENCE_POINTS_TOPIC,
+            Role::Check => CHECK_POINTS_TOPIC,
+            Role::Fit => "/measured_points",
+        };
+        out.push((points_topic.into(), MeasuredPoint::ROS_TYPE, MeasuredPoint::DEFINITION, encode_cdr(&p)?));
         // the machine's motion belongs to its own points, not to a nest's reading
-        let machine_row = role == Role::Fit;
+        let machine_row = role != Role::Reference;
+        for (sensor, a) in &accel {
+            if a.iter().any(|v| !v.is_finite()) {
+                continue;
+            }
+            let frame = mapping.imu_frames.get(sensor).cloned().unwrap_or_else(|| sensor.clone());
+            let mut imu = Imu { header: Header { stamp: stamp(t), frame_id: frame }, linear_acceleration: Vector3 { x: a[0], y: a[1], z: a[2] }, ..Default::default() };
+            // orientation and angular velocity are not given (ROS: −1 in the first element)
+            imu.orientation_covariance[0] = -1.0;
+            imu.angular_velocity_covariance[0] = -1.0;
+            out.push((format!("/imu/{sensor}"), Imu::ROS_TYPE, Imu::DEFINITION, encode_cdr(&imu)?));
+        }
         if machine_row && (!joints.is_empty() || !velocities.is_empty()) {
             let js = commanded_joint_state(header.clone(), &joints, &velocities);
             out.push((COMMANDED_JOINTS_TOPIC.into(), JointState::ROS_TYPE, JointState::DEFINITION, encode_cdr(&js)?));

@@ -163,7 +163,7 @@ mod tests {
     /// Issue 32: the report's tables read in µm, µm/m/K, minutes, and p-values with a floor.
     #[test]
     fn parameters_and_p_values_read_as_a_metrologist_reads_them() {
-        let v = |value: f64, sigma: Option<f64>, unit: &str| ParameterValue { value, sigma, unit: unit.into() };
+        let v = |value: f64, sigma: Option<f64>, unit: &str| ParameterValue { value, sigma, unit: unit.into(), at_bound: None };
         assert_eq!(parameter_text(&v(1.985e-5, Some(1.6e-7), "m")), "19.85 ± 0.16 µm");
         assert_eq!(parameter_text(&v(1800.0, Some(420.0), "s")), "30.0 ± 7.0 min");
         assert_eq!(parameter_text(&v(11.5e-6, None, "1/K")), "11.5000 µm/m/K (not identifiable)");

@@ -9,7 +9,7 @@ fn shipped() -> Registry {
     let own = r.add_package_dir("metrocell_msgs", &msgs.join("msg")).unwrap();
     assert_eq!(own, 6);
     let std = r.add_tree(&msgs.join("interfaces")).unwrap();
-    assert_eq!(std, 69, "standard interfaces shipped in msgs/interfaces (66 + Wrench, WrenchStamped, TimeReference)");
+    assert_eq!(std, 70, "standard interfaces shipped in msgs/interfaces (66 + Wrench, WrenchStamped, TimeReference, Imu)");
     r.check().unwrap();
     r
 }

@@ -77,7 +77,7 @@ impl FiducialProcessor {
             .camera
             .as_ref()
             .filter(|c| c.width == gray.width() && c.height == gray.height())
-            .map(|c| PoseInputs { camera: c, marker_side: self.marker_size, fallback_sigma_px: self.sigma });
+            .map(|c| PoseInputs { camera: c, marker_side: self.marker_size, fallback_sigma_px: self.sigma, intrinsics_covariance: None });
         let targets = detect_targets(&gray, &self.family, &self.params, pose_inputs).map_err(|e| format!("{}: {e}", name()))?;
         Ok(FrameOutputs {
             detections: detection_msgs::detection_array(&img.header, img.width, img.height, &self.family_name, &targets),

@@ -142,7 +142,7 @@ pub fn detect_checkerboard(
 fn not_found_reason(candidates: usize, largest: (usize, usize, usize), cols: usize, rows: usize) -> String {
     let needed = cols * rows;
     let (a, b, n) = largest;
-    let lattice = if n >= 4 { format!("; the largest lattice of them is {a}×{b} ({n} points)") } else { String::new() };
+    let lattice = if n >= 4 { format!("; the largest lattice of them spans {a}×{b} ({n} points)") } else { String::new() };
     if candidates < needed {
         return format!(
             "only {candidates} points look like inner corners (X-junctions of four squares), a {cols}×{rows} board has {needed}{lattice}: is the whole board in the frame, in focus and evenly lit, with squares of at least ~8 px? (--board counts inner corners: squares − 1 along each side)"

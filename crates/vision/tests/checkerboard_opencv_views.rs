@@ -71,7 +71,7 @@ fn boards_opencv_finds_are_found_and_a_missing_one_says_why() {
         detect_targets_explained(&img, &wrong, &DetectorParams::default(), None).unwrap().not_found.unwrap()
     };
     let (larger, smaller) = (why(10, 6), why(8, 6));
-    assert!(larger.starts_with("only 54 points") && larger.contains("a 10×6 board has 60; the largest lattice of them is 9×6 (54 points)"), "{larger}");
-    assert!(smaller.contains("no 8×6 lattice") && smaller.contains("the largest lattice of them is 9×6 (54 points)") && smaller.contains("check --board"), "{smaller}");
+    assert!(larger.starts_with("only 54 points") && larger.contains("a 10×6 board has 60; the largest lattice of them spans 9×6 (54 points)"), "{larger}");
+    assert!(smaller.contains("no 8×6 lattice") && smaller.contains("the largest lattice of them spans 9×6 (54 points)") && smaller.contains("check --board"), "{smaller}");
     let _ = std::fs::remove_dir_all(&dir);
 }

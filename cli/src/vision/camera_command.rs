@@ -108,7 +108,8 @@ fn calibrate_command(a: CalibrateArgs) -> anyhow::Result<i32> {
     for ((n, v), s) in names.iter().zip(cal.camera.params()).zip(&cal.param_std) {
         out.push(format!("  {n:>2} = {v:>14.6} ± {s:.6}"));
     }
-    let info = CameraInfo::from_model(&a.camera_name, &cal.camera);
+    // the covariance goes into the file too, so poses measured with this camera can carry it
+    let info = CameraInfo::from_model(&a.camera_name, &cal.camera).with_intrinsics_covariance(&cal.param_covariance);
     match &a.output {
         Some(p) => {
             info.save(p)?;

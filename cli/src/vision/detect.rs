@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 
 use metrocell_vision::aruco::DetectorParams;
-use metrocell_vision::{detect_targets, PoseInputs, Target, TargetFamily};
+use metrocell_vision::{detect_targets_explained, PoseInputs, Target, TargetFamily};
 
 use super::image_input::{load_gray, parse_board, parse_length};
 
@@ -25,7 +25,8 @@ pub struct DetectArgs {
     /// Marker side (e.g. 20mm), for marker poses
     #[arg(long, value_parser = parse_length)]
     pub marker_size: Option<f64>,
-    /// ROS camera_info YAML; with it, poses with covariance are reported
+    /// ROS camera_info YAML; with it, poses with covariance are reported (including the
+    /// calibration's own uncertainty when the file states it, as `camera calibrate` writes it)
     #[arg(long)]
     pub camera_info: Option<PathBuf>,
     /// One JSON object per image instead of text (SI units: px, m, rad)
@@ -55,10 +56,15 @@ pub fn run(args: DetectArgs) -> i32 {
             return 2;
         }
     };
-    let camera = match &args.camera_info {
-        None => None,
-        Some(p) => match metrocell_camera_model::CameraInfo::load(p).and_then(|c| c.to_model()) {
-            Ok(c) => Some(c),
+    let (camera, intrinsics_covariance) = match &args.camera_info {
+        None => (None, None),
+        Some(p) => match metrocell_camera_model::CameraInfo::load(p).and_then(|c| Ok((c.to_model()?, c.intrinsics_covariance()?))) {
+            Ok((c, cov)) => {
+                if cov.is_none() {
+                    eprintln!("{}: states no intrinsics_covariance; pose σ count the corner noise only (write the file with `metrocell camera calibrate` to include the calibration's uncertainty)", p.display());
+                }
+                (Some(c), cov)
+            }
             Err(e) => {
                 eprintln!("metrocell detect: --camera-info: {e}");
                 return 2;
@@ -70,21 +76,25 @@ pub fn run(args: DetectArgs) -> i32 {
     let mut failed = 0;
     for path in &args.images {
         let result = load_gray(path).and_then(|img| {
-            let pose = camera.as_ref().filter(|c| c.width == img.width() && c.height == img.height()).map(|c| PoseInputs { camera: c, marker_side: args.marker_size, fallback_sigma_px: 0.1 });
+            let pose = camera.as_ref().filter(|c| c.width == img.width() && c.height == img.height()).map(|c| PoseInputs { camera: c, marker_side: args.marker_size, fallback_sigma_px: 0.1, intrinsics_covariance: intrinsics_covariance.as_ref() });
             if camera.is_some() && pose.is_none() {
                 eprintln!("{}: image size {}x{} differs from camera_info; no poses", path.display(), img.width(), img.height());
             }
-            Ok((img.width(), img.height(), detect_targets(&img, &family, &params, pose)?))
+            Ok((img.width(), img.height(), detect_targets_explained(&img, &family, &params, pose)?))
         });
         match result {
-            Ok((w, h, targets)) => {
+            Ok((w, h, detection)) => {
+                let targets = &detection.targets;
                 if args.json {
                     let v = serde_json::json!({"image": path.display().to_string(), "width": w, "height": h, "family": name,
-                        "detections": targets.iter().map(target_json).collect::<Vec<_>>()});
+                        "detections": targets.iter().map(target_json).collect::<Vec<_>>(), "not_found": detection.not_found});
                     println!("{v}");
                 } else {
-                    println!("{}: {} {name} target(s)", path.display(), targets.len());
-                    for t in &targets {
+                    match &detection.not_found {
+                        Some(why) => println!("{}: {} {name} target(s): {why}", path.display(), targets.len()),
+                        None => println!("{}: {} {name} target(s)", path.display(), targets.len()),
+                    }
+                    for t in targets {
                         let c: Vec<String> = t.corners.iter().take(4).map(|c| format!("({:.3}, {:.3})", c.x, c.y)).collect();
                         let more = if t.corners.len() > 4 { format!(" … {} corners", t.corners.len()) } else { String::new() };
                         print!("  id {:>4}: {}{more}", t.id, c.join(" "));

@@ -17,6 +17,11 @@
 //! rectification_matrix: {rows: 3, cols: 3, data: [...]}   # written in block style
 //! projection_matrix:    {rows: 3, cols: 4, data: [...]}
 //! ```
+//! One key of our own, which ROS readers ignore: `intrinsics_covariance` (rows, cols, data as the
+//! matrices above), the calibration's covariance of (fx, fy, cx, cy, distortion coefficients…)
+//! as `metrocell camera calibrate` estimated it, so a pose measured with this camera can carry
+//! the calibration's uncertainty (crate::intrinsics_uncertainty).
+//!
 //! Reading follows the parser: a missing `camera_name` reads as "unknown", a missing
 //! `distortion_model` as plumb_bob. Numbers are written in their shortest round-trip form, always with a '.' and a signed
 //! exponent so that YAML 1.1 readers (PyYAML) also see floats.
@@ -39,6 +44,8 @@ pub struct CameraInfo {
     pub rectification_matrix: [f64; 9],
     /// P, row-major 3×4.
     pub projection_matrix: [f64; 12],
+    /// Covariance of (fx, fy, cx, cy, coefficients…), row-major, when the calibration stated it.
+    pub intrinsics_covariance: Option<Vec<f64>>,
 }
 
 impl CameraInfo {
@@ -56,7 +63,31 @@ impl CameraInfo {
             projection_matrix: [
                 cam.fx, 0.0, cam.cx, 0.0, 0.0, cam.fy, cam.cy, 0.0, 0.0, 0.0, 1.0, 0.0,
             ],
+            intrinsics_covariance: None,
         }
+    }
+
+    /// With the calibration's covariance of (fx, fy, cx, cy, coefficients…).
+    pub fn with_intrinsics_covariance(mut self, covariance: &nalgebra::DMatrix<f64>) -> Self {
+        self.intrinsics_covariance = Some(covariance.transpose().as_slice().to_vec());
+        self
+    }
+
+    /// The calibration's covariance of the model's parameters ((fx, fy, cx, cy, coefficients…),
+    /// [`CameraModel::params`]), None when the file states none; an error names a matrix of the
+    /// wrong size, a negative variance or a non-finite value.
+    pub fn intrinsics_covariance(&self) -> Result<Option<nalgebra::DMatrix<f64>>> {
+        let Some(data) = &self.intrinsics_covariance else { return Ok(None) };
+        let n = 4 + self.distortion_coefficients.len();
+        let err = |reason: String| CameraError::CameraInfo { source_name: self.camera_name.clone(), field: "intrinsics_covariance".into(), reason };
+        if data.len() != n * n {
+            return Err(err(format!("has {} numbers; fx, fy, cx, cy and {} coefficients need {n}×{n} = {}", data.len(), n - 4, n * n)));
+        }
+        let m = nalgebra::DMatrix::from_row_slice(n, n, data);
+        if let Some(i) = (0..n).find(|&i| !(m[(i, i)] >= 0.0)) {
+            return Err(err(format!("variance {i} is {} (must be ≥ 0)", m[(i, i)])));
+        }
+        Ok(Some(m))
     }
 
     /// The camera model (K and distortion; R and P are rectification data, not part of it).
@@ -141,6 +172,11 @@ impl CameraInfo {
         );
         s += &mat("rectification_matrix", 3, 3, &self.rectification_matrix);
         s += &mat("projection_matrix", 3, 4, &self.projection_matrix);
+        if let Some(c) = &self.intrinsics_covariance {
+            let n = (c.len() as f64).sqrt().round() as usize;
+            s += "# metrocell: the calibration's covariance of (fx, fy, cx, cy, distortion coefficients)\n";
+            s += &mat("intrinsics_covariance", n, n, c);
+        }
         s
     }
 
@@ -217,6 +253,13 @@ impl CameraInfo {
         let d = matrix("distortion_coefficients", None, None)?;
         let r = matrix("rectification_matrix", Some(3), Some(3))?;
         let p = matrix("projection_matrix", Some(3), Some(4))?;
+        let intrinsics_covariance = match doc.get("intrinsics_covariance") {
+            None | Some(Value::Null) => None,
+            Some(_) => {
+                let n = 4 + d.len();
+                Some(matrix("intrinsics_covariance", Some(n), Some(n))?)
+            }
+        };
         Ok(CameraInfo {
             camera_name,
             image_width: uint("image_width")?,
@@ -226,6 +269,7 @@ impl CameraInfo {
             distortion_coefficients: d,
             rectification_matrix: r.try_into().expect("checked 3×3"),
             projection_matrix: p.try_into().expect("checked 3×4"),
+            intrinsics_covariance,
         })
     }
 
@@ -358,5 +402,20 @@ projection_matrix:
             .unwrap_err()
             .to_string();
         assert!(e.contains("camera_matrix") && e.contains("missing"), "{e}");
+    }
+
+    #[test]
+    fn the_intrinsics_covariance_round_trips_and_a_wrong_size_is_named() {
+        let cam = CameraModel::new(800, 600, 700.0, 705.0, 405.3, 296.8, Distortion::BrownConrady([-0.12, 0.05, 0.0, 0.0, 0.0])).unwrap();
+        let cov = nalgebra::DMatrix::from_fn(9, 9, |i, j| if i == j { 0.01 * (i + 1) as f64 } else { 1e-4 * (i + j) as f64 });
+        let ci = CameraInfo::from_model("cam", &cam).with_intrinsics_covariance(&cov);
+        let text = ci.to_yaml();
+        assert!(text.contains("intrinsics_covariance:\n  rows: 9\n  cols: 9\n"), "{text}");
+        let back = CameraInfo::from_yaml(&text, "cov.yaml").unwrap();
+        assert_eq!(back.intrinsics_covariance().unwrap().unwrap(), cov);
+        assert_eq!(CameraInfo::from_yaml(ROS_SAMPLE, "ros").unwrap().intrinsics_covariance().unwrap(), None);
+        let bad = text.replace("  rows: 9\n  cols: 9\n", "  rows: 3\n  cols: 3\n");
+        let e = CameraInfo::from_yaml(&bad, "cov.yaml").unwrap_err().to_string();
+        assert!(e.contains("cov.yaml") && e.contains("intrinsics_covariance") && e.contains("expected 9×9"), "{e}");
     }
 }

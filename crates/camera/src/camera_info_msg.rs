@@ -35,6 +35,8 @@ impl CameraInfo {
             distortion_coefficients: msg.d.clone(),
             rectification_matrix: msg.r,
             projection_matrix: msg.p,
+            // sensor_msgs/CameraInfo has no place for it
+            intrinsics_covariance: None,
         }
     }
 }

@@ -12,6 +12,7 @@
 //! | [`zhang`] | closed-form intrinsics and per-view extrinsics from homographies |
 //! | [`mod@calibrate`] | Zhang + Levenberg–Marquardt calibration with covariance and view rejection |
 //! | [`pose_estimation`] | IPPE, DLT, LM refinement, 6×6 pose covariance (ROS PoseWithCovariance) |
+//! | [`intrinsics_uncertainty`] | what the calibration's covariance adds to a pose's |
 //! | [`camera_info`] | ROS camera_info YAML load/save |
 //! | [`scale`] | object-plane mm/px scale from a known length (seed 002 eq. 4) |
 //! | [`v4l2`] | V4L2 streaming capture (raw ioctls, mmap) and GREY/YUYV → mono8/rgb8 |
@@ -34,6 +35,7 @@ pub mod camera_info_msg;
 pub mod distortion;
 pub mod error;
 pub mod homography;
+pub mod intrinsics_uncertainty;
 pub(crate) mod solver_bridge;
 pub mod model;
 pub mod pose;
@@ -51,6 +53,7 @@ pub use camera_info::CameraInfo;
 pub use camera_info_msg::camera_model_from_msg;
 pub use distortion::Distortion;
 pub use error::{CameraError, Result};
+pub use intrinsics_uncertainty::pose_covariance_from_intrinsics;
 pub use model::{CameraModel, Projection};
 pub use pose::Pose;
 pub use pose_estimation::{

@@ -48,7 +48,7 @@ fn main() {
         for seed in 0..seeds {
             let stamp = stamp_ns(start, req.t) + seed;
             let view = renderer.render(req, stamp).unwrap();
-            let targets = detect_targets(&view.image, &family, &params, Some(PoseInputs { camera: &camera, marker_side: Some(MARKER_SIDE), fallback_sigma_px: 0.1 })).unwrap();
+            let targets = detect_targets(&view.image, &family, &params, Some(PoseInputs { camera: &camera, marker_side: Some(MARKER_SIDE), fallback_sigma_px: 0.1, intrinsics_covariance: None })).unwrap();
             for t in &targets {
                 let Some(pose) = &t.pose else { continue };
                 let truth = view.markers.iter().find(|m| m.id as i64 == t.id).unwrap();

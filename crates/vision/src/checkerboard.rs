@@ -119,56 +119,62 @@ pub fn detect_checkerboard(
     cands.sort_by(|a, b| b.1.total_cmp(&a.1));
     let pts: Vec<Point2<f64>> = cands.iter().map(|c| c.0).collect();
     let seeds = pts.len().min(30);
+    // the largest lattice seen (columns, rows of its bounding box, points), for the reason
+    let mut largest = (0usize, 0usize, 0usize);
     for seed in 0..seeds {
-        let Some(grid) = grow_grid(&pts, seed) else {
+        let Some(grid) = grow_grid(&pts, seed).map(unshear) else {
             continue;
         };
+        let span = |f: fn(&(i32, i32)) -> i32| grid.keys().map(f).max().zip(grid.keys().map(f).min()).map_or(0, |(hi, lo)| (hi - lo + 1) as usize);
+        if grid.len() > largest.2 {
+            let (a, b) = (span(|k| k.0), span(|k| k.1));
+            largest = (a.max(b), a.min(b), grid.len());
+        }
         let Some(ordered) = orient(&grid, cols, rows) else {
             continue;
         };
-        // Refine each corner with its local grid directions.
-        let mut corners = Vec::with_capacity(cols * rows);
-        for r in 0..rows {
-            for c in 0..cols {
-                let p = ordered[r * cols + c];
-                let nb = |dc: isize, dr: isize| -> Option<Point2<f64>> {
-                    let (cc, rr) = (c as isize + dc, r as isize + dr);
-                    (cc >= 0 && rr >= 0 && (cc as usize) < cols && (rr as usize) < rows)
-                        .then(|| ordered[rr as usize * cols + cc as usize])
-                };
-                let du = nb(1, 0)
-                    .map(|q| q - p)
-                    .or_else(|| nb(-1, 0).map(|q| p - q))
-                    .unwrap();
-                let dv = nb(0, 1)
-                    .map(|q| q - p)
-                    .or_else(|| nb(0, -1).map(|q| p - q))
-                    .unwrap();
-                let radius = 0.4 * du.norm().min(dv.norm());
-                let refined = refine_saddle(img, p, [du.x, du.y], [dv.x, dv.y], radius)
-                    .ok_or_else(|| VisionError::NoSolution {
-                        what: "checkerboard corner refinement",
-                        reason: format!(
-                            "corner (col {c}, row {r}) near ({:.1}, {:.1}) did not converge",
-                            p.x, p.y
-                        ),
-                    })?;
-                corners.push(refined);
-            }
-        }
-        return Ok(CheckerboardCorners {
-            cols,
-            rows,
-            corners,
-        });
+        return Ok(CheckerboardCorners { cols, rows, corners: refine_board(img, &ordered, cols, rows)? });
     }
-    Err(VisionError::NoSolution {
-        what: "detect_checkerboard",
-        reason: format!(
-            "no {cols}×{rows} grid among {} saddle candidates",
-            pts.len()
-        ),
-    })
+    Err(VisionError::NoSolution { what: "detect_checkerboard", reason: not_found_reason(pts.len(), largest, cols, rows) })
+}
+
+/// Why no cols × rows board was found, with what to check.
+fn not_found_reason(candidates: usize, largest: (usize, usize, usize), cols: usize, rows: usize) -> String {
+    let needed = cols * rows;
+    let (a, b, n) = largest;
+    let lattice = if n >= 4 { format!("; the largest lattice of them spans {a}×{b} ({n} points)") } else { String::new() };
+    if candidates < needed {
+        return format!(
+            "only {candidates} points look like inner corners (X-junctions of four squares), a {cols}×{rows} board has {needed}{lattice}: is the whole board in the frame, in focus and evenly lit, with squares of at least ~8 px? (--board counts inner corners: squares − 1 along each side)"
+        );
+    }
+    format!("{candidates} points look like inner corners but no {cols}×{rows} lattice of them was found{lattice}: check --board (inner corners: squares − 1 along each side), or the board is seen too obliquely or partly hidden")
+}
+
+/// Sub-pixel refinement of every corner of an ordered board with its local grid directions.
+fn refine_board(img: &GrayImage, ordered: &[Point2<f64>], cols: usize, rows: usize) -> Result<Vec<SaddleCorner>> {
+    let mut corners = Vec::with_capacity(cols * rows);
+    for r in 0..rows {
+        for c in 0..cols {
+            let p = ordered[r * cols + c];
+            let nb = |dc: isize, dr: isize| -> Option<Point2<f64>> {
+                let (cc, rr) = (c as isize + dc, r as isize + dr);
+                (cc >= 0 && rr >= 0 && (cc as usize) < cols && (rr as usize) < rows).then(|| ordered[rr as usize * cols + cc as usize])
+            };
+            let du = nb(1, 0).map(|q| q - p).or_else(|| nb(-1, 0).map(|q| p - q)).unwrap();
+            let dv = nb(0, 1).map(|q| q - p).or_else(|| nb(0, -1).map(|q| p - q)).unwrap();
+            let radius = 0.4 * du.norm().min(dv.norm());
+            let refined = refine_saddle(img, p, [du.x, du.y], [dv.x, dv.y], radius).ok_or_else(|| VisionError::NoSolution {
+                what: "checkerboard corner refinement",
+                reason: format!(
+                    "corner (col {c}, row {r}) near ({:.1}, {:.1}): the fit of two crossing edges within {radius:.1} px did not settle (glare, a smudge or strong blur there, or squares under ~8 px)",
+                    p.x, p.y
+                ),
+            })?;
+            corners.push(refined);
+        }
+    }
+    Ok(corners)
 }
 
 /// Grow an integer grid (i, j) → point from candidate `seed` by linear extrapolation.
@@ -234,6 +240,29 @@ fn grow_grid(pts: &[Point2<f64>], seed: usize) -> Option<HashMap<(i32, i32), Poi
         }
     }
     Some(grid)
+}
+
+/// The grid in rectangular lattice coordinates. Under strong perspective the seed's nearest
+/// non-parallel neighbour can be a diagonal one: the grid then grows right but in sheared
+/// coordinates (a 9 × 6 board spans 14 × 6 keys). A shear (i, j) → (i − k·j, j) or
+/// (i, j − k·i), |k| ≤ 3, whose keys fill their bounding box is taken; else the grid as it is.
+fn unshear(grid: HashMap<(i32, i32), Point2<f64>>) -> HashMap<(i32, i32), Point2<f64>> {
+    let fills = |g: &HashMap<(i32, i32), Point2<f64>>| {
+        let span = |f: fn(&(i32, i32)) -> i32| g.keys().map(f).max().zip(g.keys().map(f).min()).map_or(0, |(hi, lo)| (hi - lo + 1) as usize);
+        span(|k| k.0) * span(|k| k.1) == g.len()
+    };
+    if fills(&grid) {
+        return grid;
+    }
+    for k in [1, -1, 2, -2, 3, -3] {
+        for along_i in [true, false] {
+            let sheared: HashMap<(i32, i32), Point2<f64>> = grid.iter().map(|(&(i, j), &p)| (if along_i { (i - k * j, j) } else { (i, j - k * i) }, p)).collect();
+            if fills(&sheared) {
+                return sheared;
+            }
+        }
+    }
+    grid
 }
 
 /// Order the grid row-major as documented, if it is exactly cols × rows (or rows × cols).

@@ -12,6 +12,14 @@ use image::GrayImage;
 use metrocell_solver::{solve, NotEvaluable, Options, Problem, Solution};
 use nalgebra::{DMatrix, Matrix2, Point2};
 
+/// ln of the smallest edge spread the fit allows (px): a pixel integrates the image over its
+/// area, which spreads a perfectly sharp edge like a 1-px box along its normal, whatever the
+/// edge's angle (σ = 1/√12 ≈ 0.29 px); below that the model's point samples of a blurred step
+/// no longer describe a pixel. Let lower, a sharp edge along a pixel row leaves one column of
+/// intermediate pixels, which any σ ≪ 1 fits with the edge anywhere inside it: the fit wandered
+/// (0.16 px off) and its covariance was singular ("did not converge").
+const MIN_LN_SIGMA: f64 = -1.2425; // ln(1/√12) − 0.001
+
 /// A refined checkerboard corner.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SaddleCorner {
@@ -62,10 +70,11 @@ pub fn refine_saddle(
     let hi = vals.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
     // x = (cx, cy, θ1, θ2, a, b, ln σ); try both contrast signs, keep the better fit.
     let problem = Saddle { samples: &samples };
-    // Blur between e⁻⁴ and e^2.5 px: outside, σ stops being observable.
+    // Blur between a pixel's own spread (MIN_LN_SIGMA) and e^2.5 px: outside, σ stops being
+    // observable.
     let (inf, ninf) = (f64::INFINITY, f64::NEG_INFINITY);
     let options = Options {
-        bounds: Some((vec![ninf, ninf, ninf, ninf, ninf, ninf, -4.0], vec![inf, inf, inf, inf, inf, inf, 2.5])),
+        bounds: Some((vec![ninf, ninf, ninf, ninf, ninf, ninf, MIN_LN_SIGMA], vec![inf, inf, inf, inf, inf, inf, 2.5])),
         max_iterations: 60,
         // Converged when a step changes the cost by < 1e-9 of itself: parameters then move by
         // well under 1 % of their standard uncertainty.
@@ -76,7 +85,7 @@ pub fn refine_saddle(
     };
     let mut best: Option<Solution> = None;
     for (a0, b0) in [(lo, hi - lo), (hi, lo - hi)] {
-        let x0 = [guess.x, guess.y, th1, th2, a0, b0, 0.8f64.ln()];
+        let x0 = [guess.x, guess.y, th1, th2, a0, b0, 0.8f64.ln().max(MIN_LN_SIGMA)];
         if let Ok(fit) = solve(&problem, &x0, &options) {
             if best.as_ref().map_or(true, |b| fit.cost < b.cost) {
                 best = Some(fit);

@@ -18,7 +18,8 @@ use crate::hole_grid::detect_hole_grid;
 use crate::holes::HoleSearch;
 use crate::marker_pose::estimate_marker_pose;
 use image::GrayImage;
-use nalgebra::{Matrix2, Point2, UnitQuaternion};
+use crate::camera::pose_from_isometry;
+use nalgebra::{DMatrix, Matrix2, Point2, UnitQuaternion};
 
 /// What to look for.
 #[derive(Debug, Clone)]
@@ -126,6 +127,18 @@ pub struct PoseInputs<'a> {
     pub marker_side: Option<f64>,
     /// Corner σ [px] used where a corner has no covariance.
     pub fallback_sigma_px: f64,
+    /// The calibration's covariance of the camera's parameters ((fx, fy, cx, cy, coefficients…),
+    /// as its camera_info YAML states it); when given, each pose's covariance includes what it
+    /// adds (crates/camera `intrinsics_uncertainty`), else the intrinsics count as exact.
+    pub intrinsics_covariance: Option<&'a DMatrix<f64>>,
+}
+
+/// What [`detect_targets_explained`] found, and why a board was not found.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Detection {
+    pub targets: Vec<Target>,
+    /// Why no target of a single-target family (checkerboard, drilled holes) was found.
+    pub not_found: Option<String>,
 }
 
 /// Detect `family` in `img`. An image without targets gives an empty list, not an error.
@@ -136,10 +149,22 @@ pub fn detect_targets(
     params: &DetectorParams,
     pose_inputs: Option<PoseInputs<'_>>,
 ) -> Result<Vec<Target>> {
-    match family {
+    Ok(detect_targets_explained(img, family, params, pose_inputs)?.targets)
+}
+
+/// [`detect_targets`], with the reason a checkerboard or hole plate was not found (what to
+/// tell a user who sees none).
+pub fn detect_targets_explained(
+    img: &GrayImage,
+    family: &TargetFamily,
+    params: &DetectorParams,
+    pose_inputs: Option<PoseInputs<'_>>,
+) -> Result<Detection> {
+    let found = |targets: Vec<Target>| Detection { targets, not_found: None };
+    Ok(match family {
         TargetFamily::Markers(dict) => {
             let markers = detect_markers(img, dict, params)?;
-            Ok(markers
+            found(markers
                 .into_iter()
                 .map(|m| {
                     let pose = pose_inputs.and_then(|pi| {
@@ -152,7 +177,10 @@ pub fn detect_targets(
                             pi.fallback_sigma_px,
                         )
                         .ok()?;
-                        Some(to_ros_pose(&p.camera_from_marker, &p.covariance, p.reprojection_rms_px))
+                        let mut pose = to_ros_pose(&p.camera_from_marker, &p.covariance, p.reprojection_rms_px);
+                        let object: Vec<[f64; 3]> = crate::marker_pose::marker_object_points(side).iter().map(|q| [q.x, q.y, q.z]).collect();
+                        add_intrinsics_covariance(&mut pose, &pi, &pose_from_isometry(&p.camera_from_marker), &object)?;
+                        Some(pose)
                     });
                     Target {
                         id: m.id as i64,
@@ -167,13 +195,15 @@ pub fn detect_targets(
         TargetFamily::Checkerboard { cols, rows, square } => {
             let board = match detect_checkerboard(img, *cols, *rows) {
                 Ok(b) => b,
-                Err(VisionError::NoSolution { .. }) => return Ok(Vec::new()),
+                Err(VisionError::NoSolution { reason, .. }) => {
+                    return Ok(Detection { targets: Vec::new(), not_found: Some(reason) });
+                }
                 Err(e) => return Err(e),
             };
             let corners: Vec<Point2<f64>> = board.corners.iter().map(|c| c.position).collect();
             let cov: Vec<Matrix2<f64>> = board.corners.iter().map(|c| c.covariance).collect();
             let pose = pose_inputs.and_then(|pi| board_pose(pi, &corners, &cov, *cols, *square));
-            Ok(vec![Target {
+            found(vec![Target {
                 id: -1,
                 corners,
                 corner_covariance: cov,
@@ -183,9 +213,9 @@ pub fn detect_targets(
         }
         TargetFamily::DrilledHoles { cols, rows } => {
             let Some(holes) = detect_hole_grid(img, cols + 1, rows + 1, &HoleSearch { window_half_px: 0, ..Default::default() })? else {
-                return Ok(Vec::new());
+                return Ok(Detection { targets: Vec::new(), not_found: Some(format!("no {}×{} grid of squares with holes found", cols + 1, rows + 1)) });
             };
-            Ok(holes
+            found(holes
                 .into_iter()
                 .filter_map(|h| {
                     let m = h.result.ok()?;
@@ -200,7 +230,21 @@ pub fn detect_targets(
                 })
                 .collect())
         }
+    })
+}
+
+/// Add what the calibration's uncertainty adds to `pose`'s covariance (ROS order (t, rot), the
+/// convention of crates/camera's pose perturbation), when `pi` states it. None when it cannot
+/// be computed (the pose is then not reported rather than reported too sure).
+fn add_intrinsics_covariance(pose: &mut TargetPose, pi: &PoseInputs<'_>, fitted: &metrocell_camera_model::Pose, object: &[[f64; 3]]) -> Option<()> {
+    let Some(sigma_k) = pi.intrinsics_covariance else { return Some(()) };
+    let extra = metrocell_camera_model::pose_covariance_from_intrinsics(pi.camera, fitted, object, sigma_k).ok()?;
+    for i in 0..6 {
+        for j in 0..6 {
+            pose.covariance[6 * i + j] += extra[(i, j)];
+        }
     }
+    Some(())
 }
 
 fn board_pose(
@@ -226,12 +270,14 @@ fn board_pose(
     };
     let est = metrocell_camera_model::estimate_planar_pose(pi.camera, &object, &image, sigma).ok()?;
     let ros = est.to_ros();
-    Some(TargetPose {
+    let mut pose = TargetPose {
         position: ros.position,
         orientation: ros.orientation,
         covariance: ros.covariance,
         reprojection_rms_px: est.rms_px,
-    })
+    };
+    add_intrinsics_covariance(&mut pose, &pi, &est.pose, &object)?;
+    Some(pose)
 }
 
 /// marker_pose's (rot, t) covariance → ROS (t, rot) order; both use left-applied rotations in the

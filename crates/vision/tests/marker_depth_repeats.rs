@@ -38,7 +38,7 @@ fn depth_repeats_within_the_stated_sigma_as_the_marker_crosses_the_sample_grid()
         for seed in 1..=3 {
             let settings = RenderSettings { supersampling: 4, blur_sigma_px: 0.8, noise_sigma: 1.0, seed, ..RenderSettings::default() };
             let view = render_view(&camera, &pose, &target, &settings).unwrap();
-            let found = detect_targets(&view.image, &family, &params, Some(PoseInputs { camera: &camera, marker_side: Some(SIDE), fallback_sigma_px: 0.1 })).unwrap();
+            let found = detect_targets(&view.image, &family, &params, Some(PoseInputs { camera: &camera, marker_side: Some(SIDE), fallback_sigma_px: 0.1, intrinsics_covariance: None })).unwrap();
             let marker = found.iter().find(|t| t.id == 0).expect("the marker is found");
             let p = marker.pose.as_ref().expect("the marker has a pose");
             depths.push(p.position[2]);

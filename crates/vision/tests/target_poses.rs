@@ -27,7 +27,7 @@ fn marker_and_board_poses_match_the_truth() {
     let pose = common::look_at_target([0.05, 0.05], 0.45, [0.3, -0.2, 0.4], [0.01, -0.01]);
     let view = render_view(&cam, &pose, &common::four_marker_target(), &settings).unwrap();
     let family = TargetFamily::parse("DICT_4X4_50", None, None).unwrap();
-    let pi = PoseInputs { camera: &cam, marker_side: Some(0.04), fallback_sigma_px: 0.1 };
+    let pi = PoseInputs { camera: &cam, marker_side: Some(0.04), fallback_sigma_px: 0.1, intrinsics_covariance: None };
     let found = detect_targets(&view.image, &family, &params, Some(pi)).unwrap();
     assert_eq!(found.len(), 4);
     for t in &found {

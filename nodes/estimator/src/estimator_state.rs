@@ -15,6 +15,7 @@ use metrocell_msgs::msg::{ErrorModel, MeasuredPoint};
 use nalgebra::{DMatrix, Vector3};
 
 use crate::model_message;
+use crate::observability_watch::{ObservabilityNote, ObservabilityWatch};
 use crate::state_file::SavedState;
 
 /// Settings that shape the outputs.
@@ -25,6 +26,9 @@ pub struct Settings {
     /// Joint vectors at which the volumetric error is predicted.
     pub predict_joints: Vec<Vec<f64>>,
     pub machine_id: String,
+    /// Accepted measurements before a change in what the estimator holds is said (the end of a
+    /// run says it regardless).
+    pub quiet_until: u64,
 }
 
 /// What the node counts (diagnostics and the replay's summary).
@@ -73,6 +77,8 @@ pub struct Outputs {
     pub alarm: Option<Alarm>,
     /// A point that could not be used, and why (for the log).
     pub problem: Option<String>,
+    /// What the estimator holds (unobservable, at a bound) changed.
+    pub observability: Option<ObservabilityNote>,
 }
 
 pub struct EstimatorState {
@@ -84,6 +90,7 @@ pub struct EstimatorState {
     points_topic: String,
     settings: Settings,
     since_publish: u64,
+    observability: ObservabilityWatch,
     pub counters: Counters,
 }
 
@@ -91,11 +98,17 @@ impl EstimatorState {
     /// `stream` reads the points from `points_topic`.
     pub fn new(model: &'static ForwardModel<'static>, filter: RecursiveEstimator, stream: RecordStream<'static, 'static>, points_topic: String, settings: Settings) -> Self {
         let n = model.param_count();
-        Self { work: Workspace::new(model), jacobian: DMatrix::zeros(3, n), model, filter, stream, points_topic, settings, since_publish: 0, counters: Counters::default() }
+        let observability = ObservabilityWatch::new(model.param_names(), settings.quiet_until);
+        Self { work: Workspace::new(model), jacobian: DMatrix::zeros(3, n), model, filter, stream, points_topic, settings, since_publish: 0, observability, counters: Counters::default() }
     }
 
     pub fn filter(&self) -> &RecursiveEstimator {
         &self.filter
+    }
+
+    /// What the estimator holds at the end of a run (or now), analysed afresh.
+    pub fn observability_now(&mut self, stamp_ns: i64) -> ObservabilityNote {
+        self.observability.final_note(&self.filter, stamp_ns)
     }
 
     /// The state to restart from (see [`crate::state_file`]).
@@ -167,9 +180,12 @@ impl EstimatorState {
             self.counters.alarms += 1;
             out.alarm = Some(Alarm { stamp_ns, point_id: record.point_id.clone(), measurement, nis: update.nis, window_probability: update.window_probability, innovation: update.innovation });
         }
+        if update.accepted || update.alarm {
+            out.observability = self.observability.after_update(&self.filter, update.alarm, stamp_ns);
+        }
         if update.alarm || self.since_publish >= self.settings.publish_every {
             self.since_publish = 0;
-            out.model = Some(model_message::error_model(self.model, &self.filter, &self.settings.machine_id, stamp_ns));
+            out.model = Some(model_message::error_model(self.model, &self.filter, &self.settings.machine_id, stamp_ns, self.observability.unobserved_directions()));
             out.predicted = self.predictions(&record.signals, stamp_ns);
             self.counters.models_published += 1;
         }

@@ -4,5 +4,6 @@
 
 pub mod estimator_state;
 pub mod model_message;
+pub mod observability_watch;
 pub mod parameters;
 pub mod state_file;

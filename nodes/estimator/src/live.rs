@@ -4,7 +4,7 @@
 use std::time::Duration;
 
 use metrocell_estimator_node::estimator_state::Outputs;
-use metrocell_estimator_node::model_message::alarm_message;
+use metrocell_estimator_node::model_message::{alarm_message, observability_message};
 use metrocell_estimator_node::parameters;
 use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
 use metrocell_bagtools::SourcedMessage;
@@ -41,6 +41,8 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
 
     let diagnostics = node.diagnostics();
     diagnostics.ok("waiting for measured points");
+    // what the estimator holds, as last said (the heartbeat keeps saying it)
+    let mut held: Option<String> = None;
     let token = node.shutdown_token();
     while !token.is_triggered() {
         for sub in &inputs {
@@ -53,10 +55,22 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
             }
         }
         for out in state.process() {
-            let Outputs { model, predicted, alarm, problem } = out;
+            let Outputs { model, predicted, alarm, problem, observability } = out;
             if let Some(problem) = problem {
                 diagnostics.warn(&problem);
                 node.logger().debug(problem);
+            }
+            if let Some(note) = &observability {
+                let message = observability_message(note, &fqn);
+                let text = &message.status[0].message;
+                match &note.text {
+                    Some(_) => node.warn(text),
+                    None => node.info(text),
+                }
+                held = note.text.clone().map(|_| text.clone());
+                diagnostics.set_value("unobservable", note.unobservable.join(", "));
+                diagnostics.set_value("at_bound", note.at_bound.join(", "));
+                let _ = alarm_pub.publish(message);
             }
             if let Some(a) = &alarm {
                 let message = alarm_message(a, &fqn);
@@ -72,7 +86,10 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
                 }
                 let _ = model_pub.publish(m);
                 if alarm.is_none() && diagnostics.level() != metrocell_node::DiagnosticLevel::Error {
-                    diagnostics.ok("estimating");
+                    match &held {
+                        Some(text) => diagnostics.warn(format!("estimating; {text}")),
+                        None => diagnostics.ok("estimating"),
+                    }
                 }
             }
             for p in predicted {
@@ -89,6 +106,9 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
         diagnostics.set_value("signal_samples_refused", c.refused_samples);
         diagnostics.set_value("innovation_rms_um", format!("{:.3}", state.filter().innovation_rms() * 1e6));
         token.wait_timeout(Duration::from_millis(2));
+    }
+    if let Some(text) = state.observability_now(0).text {
+        node.warn(format!("at the end: {text}"));
     }
     node.info(format!("stopping: {}", state.counters.summary()));
     Ok(())

@@ -13,14 +13,16 @@ use metrocell_msgs::std_msgs::msg::Header;
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
 use crate::estimator_state::Alarm;
+use crate::observability_watch::ObservabilityNote;
 
 fn header(ns: i64) -> Header {
     Header { stamp: Time::from_nanos(ns), frame_id: "machine".into() }
 }
 
 /// The machine terms' part of the filter's state (instrument terms are nuisance parameters of
-/// the measured points' frame and are not published).
-pub fn error_model(model: &ForwardModel, filter: &RecursiveEstimator, machine_id: &str, stamp_ns: i64) -> ErrorModel {
+/// the measured points' frame and are not published). `unobserved` directions of the free
+/// parameters are not counted as estimated in the degrees of freedom.
+pub fn error_model(model: &ForwardModel, filter: &RecursiveEstimator, machine_id: &str, stamp_ns: i64, unobserved: usize) -> ErrorModel {
     let terms = &model.machine_terms.terms;
     let specs = model.machine_terms.param_specs();
     let n = specs.len();
@@ -48,7 +50,7 @@ pub fn error_model(model: &ForwardModel, filter: &RecursiveEstimator, machine_id
         covariance,
         residual_rms: filter.innovation_rms(),
         observation_count: accepted as u32,
-        degrees_of_freedom: (3 * accepted).saturating_sub(free.len() as u64) as u32,
+        degrees_of_freedom: (3 * accepted).saturating_sub(free.len().saturating_sub(unobserved) as u64) as u32,
         term_labels: terms.iter().map(|t| t.term.label()).collect(),
         term_catalog_ids: terms.iter().map(|t| t.term.id().as_str().to_string()).collect(),
         term_options: terms.iter().map(|t| t.options_json()).collect(),
@@ -88,7 +90,7 @@ pub fn alarm_message(a: &Alarm, node_fqn: &str) -> DiagnosticArray {
             level: DiagnosticStatus::ERROR,
             name: node_fqn.to_string(),
             message: format!(
-                "the model stopped explaining the data at point {} (measurement {}): moving χ² tail probability {:.1e}, innovation [{:.1}, {:.1}, {:.1}] µm; covariance inflated to re-converge",
+                "the model stopped explaining the data at point {} (measurement {}): moving χ² tail probability {:.1e}, innovation [{:.1}, {:.1}, {:.1}] µm; the covariance re-opened along what the data inform (at most to the prior) to re-converge",
                 a.point_id,
                 a.measurement,
                 a.window_probability,
@@ -104,6 +106,27 @@ pub fn alarm_message(a: &Alarm, node_fqn: &str) -> DiagnosticArray {
                 kv("alarm_window_probability", format!("{:.3e}", a.window_probability)),
                 kv("alarm_innovation_um", format!("[{:.2}, {:.2}, {:.2}]", a.innovation.x * 1e6, a.innovation.y * 1e6, a.innovation.z * 1e6)),
             ],
+        }],
+    }
+}
+
+/// What the estimator holds as a `/diagnostics` message: WARN naming the parameters the data do
+/// not observe (held at their start values) and those held at an edge of their possible range;
+/// OK once every free parameter is observed again.
+pub fn observability_message(note: &ObservabilityNote, node_fqn: &str) -> DiagnosticArray {
+    let kv = |key: &str, value: &[String]| KeyValue { key: key.into(), value: value.join(", ") };
+    let (level, message) = match &note.text {
+        Some(text) => (DiagnosticStatus::WARN, format!("{text}; give them priors or fix them in the model's estimation: section, or measure where they show")),
+        None => (DiagnosticStatus::OK, "every free parameter is observed by the measurements".to_string()),
+    };
+    DiagnosticArray {
+        header: header(note.stamp_ns),
+        status: vec![DiagnosticStatus {
+            level,
+            name: node_fqn.to_string(),
+            message,
+            hardware_id: String::new(),
+            values: vec![kv("unobservable", &note.unobservable), kv("at_bound", &note.at_bound)],
         }],
     }
 }

@@ -23,7 +23,7 @@ pub fn declarations() -> Vec<ParamDecl> {
         ParamDecl::new("gate_probability", 1e-6, "a single measurement whose χ²(3) tail probability is below this is an outlier (not used)").with_range(1e-15, 0.5),
         ParamDecl::new("window", 10i64, "measurements in the moving normalised-innovation χ² test").with_range(2.0, 1e5),
         ParamDecl::new("alarm_probability", 1e-3, "the moving test alarms (the model stopped explaining the data) below this tail probability").with_range(1e-15, 0.5),
-        ParamDecl::new("alarm_inflation", 100.0, "the covariance is multiplied by this on an alarm, so the estimate re-converges to the new state").with_range(1.0, 1e12),
+        ParamDecl::new("alarm_inflation", 100.0, "on an alarm the data's information is divided by this, so the estimate re-converges to the new state: a well-measured parameter's variance grows by about this factor, none beyond its prior (the model's prior σ, else half its range) and no parameter the data do not inform").with_range(1.0, 1e12),
         ParamDecl::new("state_file", "", "JSON file the last published state is kept in; at start the node goes on from it when it fits the model ('' = start from the model file)"),
         ParamDecl::new("machine_id", "", "machine_id of the published ErrorModel"),
     ]
@@ -89,6 +89,7 @@ pub fn estimator(p: &Parameters, m: &Model, topics: &[(String, String)]) -> Resu
     let mut options = RecursiveOptions::constant(n);
     options.gate_probability = p.get::<f64>("gate_probability")?;
     options.window = p.get::<i64>("window")? as usize;
+    let options_window = options.window;
     options.alarm_probability = p.get::<f64>("alarm_probability")?;
     options.alarm_inflation = p.get::<f64>("alarm_inflation")?;
     for entry in p.get::<Vec<String>>("process_noise")? {
@@ -125,6 +126,7 @@ pub fn estimator(p: &Parameters, m: &Model, topics: &[(String, String)]) -> Resu
             None => log.push(format!("no state file {state_file} yet: starting from the model file")),
         }
     }
+    let free_count = setup.free_indices().len();
     let filter = RecursiveEstimator::new(model, &setup, x0, p0, options)?;
     let predict = p.get::<Vec<f64>>("predict_points")?;
     let joints = file.machine.joint_names().len();
@@ -135,6 +137,8 @@ pub fn estimator(p: &Parameters, m: &Model, topics: &[(String, String)]) -> Resu
         publish_every: p.get::<i64>("publish_every")? as u64,
         predict_joints: predict.chunks(joints).map(<[f64]>::to_vec).collect(),
         machine_id: p.get::<String>("machine_id")?,
+        // before that the program's first points may not have reached every direction yet
+        quiet_until: options_window.max(3 * free_count) as u64,
     };
     Ok((EstimatorState::new(model, filter, stream, m.recording.measured_points_topic.clone(), settings), log))
 }

@@ -4,7 +4,7 @@
 
 use metrocell_bagtools::{BagSource, ReplayOutput};
 use metrocell_estimator_node::estimator_state::Outputs;
-use metrocell_estimator_node::model_message::alarm_message;
+use metrocell_estimator_node::model_message::{alarm_message, observability_message};
 use metrocell_estimator_node::parameters;
 use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
 use metrocell_msgs::msg::{ErrorModel, MeasuredPoint};
@@ -39,9 +39,17 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
             malformed += 1;
         }
         for out in state.process() {
-            let Outputs { model, predicted, alarm, problem } = out;
+            let Outputs { model, predicted, alarm, problem, observability } = out;
             if let Some(problem) = problem {
                 node.logger().debug(problem);
+            }
+            if let Some(note) = &observability {
+                let message = observability_message(note, &fqn);
+                match &note.text {
+                    Some(_) => node.logger().warn(&message.status[0].message),
+                    None => node.logger().info(&message.status[0].message),
+                }
+                output.write(&diagnostics_topic, &message, m.log_time_ns)?;
             }
             if let Some(a) = &alarm {
                 let message = alarm_message(a, &fqn);
@@ -61,6 +69,9 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
         Ok(())
     })?;
     output.finish()?;
+    if let Some(text) = state.observability_now(0).text {
+        node.logger().warn(format!("at the end: {text}"));
+    }
     node.logger().info(format!(
         "replayed {inputs_read} messages from {}: {}; {} points still waiting for signals at the end, {malformed} malformed messages skipped",
         args.bag.display(),

@@ -24,9 +24,13 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
     let mut processed = 0u64;
     while !token.is_triggered() {
         while let Ok(Some((info, _))) = infos.take() {
-            if let Err(e) = processor.camera_info(&info) {
-                diagnostics.add_count("bad_camera_info", 1);
-                node.warn(format!("camera_info ignored: {e}"));
+            match processor.camera_info(&info) {
+                Ok(Some(warning)) => node.warn(warning),
+                Ok(None) => {}
+                Err(e) => {
+                    diagnostics.add_count("bad_camera_info", 1);
+                    node.warn(format!("camera_info ignored: {e}"));
+                }
             }
         }
         let mut newest = None;

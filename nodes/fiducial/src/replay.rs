@@ -33,8 +33,10 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
         if m.topic == info_topic {
             match m.decode::<CameraInfo>() {
                 Ok(info) => {
-                    if let Err(e) = processor.camera_info(&info) {
-                        node.logger().warn(format!("{} at log time {} ns ignored: {e}", m.topic, m.log_time_ns));
+                    match processor.camera_info(&info) {
+                        Ok(Some(warning)) => node.logger().warn(warning),
+                        Ok(None) => {}
+                        Err(e) => node.logger().warn(format!("{} at log time {} ns ignored: {e}", m.topic, m.log_time_ns)),
                     }
                 }
                 Err(e) => node.logger().warn(format!("ignored: {e}")),

@@ -122,10 +122,14 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
                 }
                 Output::Pose(reg, stamp) => {
                     node.info(format!("tracker registered: rms {:.1} µm, χ²/dof {:.2}", reg.rms * 1e6, reg.chi2 / reg.dof.max(1) as f64));
+                    diagnostics.ok("tracker registered");
                     let _ = tf_static.publish(messages::tf_static(&reg, stamp, &machine_frame, &tracker_frame));
                     let _ = pose.publish(messages::pose_with_covariance(&reg, stamp, &machine_frame));
                 }
-                Output::Warning(w) => node.warn(w),
+                Output::Warning(w) => {
+                    diagnostics.warn(&w);
+                    node.warn(w);
+                }
             }
         }
         for (k, v) in state.diagnostics() {
@@ -142,6 +146,7 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
             Output::Dwell(d) => {
                 let _ = dwells.publish(d);
             }
+            Output::Warning(w) => node.warn(w),
             _ => {}
         }
     }

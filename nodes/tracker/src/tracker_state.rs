@@ -89,6 +89,11 @@ pub struct TrackerState {
     power_on_ns: Option<i64>,
     pose: Option<Registration>,
     collected: BTreeMap<String, Correspondence>,
+    /// Dwells per target while the pose is not registered (how many cycles the program ran).
+    visits: BTreeMap<String, u64>,
+    /// The program came back to a target before `registration_points` distinct ones were
+    /// collected, and the node said so.
+    registration_stalled: bool,
     pending: Vec<PendingPoint>,
     /// Dwells whose nominal waits for the commanded states (in dwell order).
     awaiting: std::collections::VecDeque<AwaitingNominal>,
@@ -112,6 +117,8 @@ impl TrackerState {
             power_on_ns: config.power_on_ns,
             pose: None,
             collected: BTreeMap::new(),
+            visits: BTreeMap::new(),
+            registration_stalled: false,
             pending: Vec::new(),
             awaiting: std::collections::VecDeque::new(),
             last_warmup: None,
@@ -233,7 +240,32 @@ impl TrackerState {
             None => Vec::new(),
         };
         self.resolve_awaiting(i64::MAX, &mut out);
+        if self.pose.is_none() && !self.pending.is_empty() {
+            out.push(Output::Warning(format!(
+                "{} dwells were not written as measured points: the tracker pose was never registered ({}{})",
+                self.pending.len(),
+                self.registration_shortfall(),
+                if self.registration_stalled { "" } else { "; the input ended before the program came back to a target" }
+            )));
+        }
         out
+    }
+
+    /// Why the registration has not happened and what to set.
+    fn registration_shortfall(&self) -> String {
+        let (needed, got) = (self.config.registration_points, self.collected.len());
+        // cycles the program completed: every target it shows visited that often
+        let cycles = self.visits.values().copied().min().unwrap_or(0);
+        let advice = if got >= 3 {
+            format!("set registration_points:={got} (3 distinct targets or more register the pose; more average it better)")
+        } else {
+            "a registration needs at least 3 distinct, unflagged targets: run a program that visits more".to_string()
+        };
+        format!(
+            "registration needs {needed} distinct targets, the program has visited {got} ({}) after {cycles} cycle{}: {advice}, or give a program with at least {needed} targets",
+            self.collected.keys().cloned().collect::<Vec<_>>().join(", "),
+            if cycles == 1 { "" } else { "s" }
+        )
     }
 
     /// Forget the pose and register again from the next `registration_points` targets (the
@@ -241,6 +273,8 @@ impl TrackerState {
     pub fn reregister(&mut self) {
         self.pose = None;
         self.collected.clear();
+        self.visits.clear();
+        self.registration_stalled = false;
         self.pending.clear();
     }
 
@@ -308,12 +342,19 @@ impl TrackerState {
                 out.push(Output::Point(p));
             }
             None => {
+                let visits = self.visits.entry(target.clone()).or_default();
+                *visits += 1;
+                let repeated = *visits > 1;
                 if !flagged && !self.collected.contains_key(&target) {
                     self.collected.insert(target, Correspondence { tracker: point, tracker_covariance: covariance, machine: nominal, machine_covariance: Matrix3::zeros() });
                 }
                 self.pending.push(pending);
                 if self.collected.len() >= self.config.registration_points {
                     out.extend(self.try_register(mid_ns));
+                } else if repeated && !self.registration_stalled {
+                    // the program came back to a target: it may never show enough distinct ones
+                    self.registration_stalled = true;
+                    out.push(Output::Warning(format!("no measured points yet: {}", self.registration_shortfall())));
                 }
             }
         }
@@ -348,6 +389,8 @@ impl TrackerState {
                     self.counters.points += 1;
                 }
                 self.pose = Some(pose);
+                self.visits.clear();
+                self.registration_stalled = false;
                 out
             }
             Err(e) => vec![Output::Warning(format!("registration from {} targets failed: {e}; collecting more", points.len()))],
@@ -377,8 +420,10 @@ impl TrackerState {
             v.push(("warmup_stable".into(), stable.to_string()));
             v.push(("warmup_samples".into(), n.to_string()));
         }
-        if let Some(pose) = &self.pose {
-            v.push(("registration_rms".into(), format!("{:.1} µm", pose.rms * 1e6)));
+        match &self.pose {
+            Some(pose) => v.push(("registration_rms".into(), format!("{:.1} µm", pose.rms * 1e6))),
+            None if self.registration_stalled => v.push(("registration".into(), self.registration_shortfall())),
+            None => v.push(("registration".into(), format!("collecting: {} of {} distinct targets", self.collected.len(), self.config.registration_points))),
         }
         v
     }
@@ -475,6 +520,43 @@ mod tests {
         again.extend(state.finish());
         assert!((poses(&again)[0].translation - tb).norm() < 1e-9);
         assert_eq!(points(&again).len(), 4);
+    }
+
+    fn warnings(out: &[Output]) -> Vec<&str> {
+        out.iter().filter_map(|o| if let Output::Warning(w) = o { Some(w.as_str()) } else { None }).collect()
+    }
+
+    /// Issue 32, item 12: the default 12 registration targets on a program of 4 never register;
+    /// the node says so, with what to set, once the program comes back to a target, and again
+    /// at the end with how many dwells went unwritten.
+    #[test]
+    fn a_program_with_fewer_targets_than_registration_points_says_what_to_set() {
+        let mut state = TrackerState::new(TrackerConfig { registration_points: 12, ..TrackerConfig::defaults() });
+        let (r, t) = (Rotation3::from_euler_angles(0.0, 0.0, 0.5), Vector3::new(-1.2, 0.2, 0.6));
+        let mut out = Vec::new();
+        for cycle in 0..3 {
+            out.extend(visit(&mut state, cycle * 60_000_000_000, &r, &t, 0.0));
+        }
+        out.extend(state.finish());
+        assert!(points(&out).is_empty() && poses(&out).is_empty());
+        let w = warnings(&out);
+        assert_eq!(w.len(), 2, "once when the program repeats, once at the end: {w:?}");
+        assert!(
+            w[0].starts_with("no measured points yet: registration needs 12 distinct targets, the program has visited 4 (p0, p1, p2, p3) after 1 cycle: set registration_points:=4"),
+            "{}",
+            w[0]
+        );
+        assert!(w[1].starts_with("12 dwells were not written as measured points: the tracker pose was never registered (registration needs 12 distinct targets, the program has visited 4"), "{}", w[1]);
+        assert!(w[1].contains("after 3 cycles"), "{}", w[1]);
+        let diag: BTreeMap<String, String> = state.diagnostics().into_iter().collect();
+        assert!(diag["registration"].contains("set registration_points:=4"), "{diag:?}");
+        // as told: 4 registers on the first cycle, and nothing is said
+        let mut state = TrackerState::new(TrackerConfig { registration_points: 4, ..TrackerConfig::defaults() });
+        let mut out = visit(&mut state, 0, &r, &t, 0.0);
+        out.extend(visit(&mut state, 60_000_000_000, &r, &t, 0.0));
+        out.extend(state.finish());
+        assert!(warnings(&out).is_empty(), "{:?}", warnings(&out));
+        assert_eq!(points(&out).len(), 8);
     }
 
     #[test]

@@ -55,7 +55,7 @@ impl PhysicsTerm for TrackerWarmup {
         vec![
             ParamSpec::new("offset", "m", -1e-3, 1e-3, 0.0, "A: constant range offset"),
             ParamSpec::new("amplitude", "m", -100e-6, 100e-6, 0.0, "B: total warm-up drift").unusual_means("a warm-up drift above 100 µm is more than trackers show: the range drifts for another reason (refraction, the stand)"),
-            ParamSpec::new("time_constant", "s", 300.0, 10_800.0, 5400.0, "τ: warm-up time constant").possible(0.0, f64::INFINITY).unusual_means("a warm-up longer than 3 h or shorter than 5 min is not a tracker's warm-up: a slow drift of another cause"),
+            ParamSpec::new("time_constant", "s", 300.0, 10_800.0, 5400.0, "τ: warm-up time constant").possible(1.0, f64::INFINITY).unusual_means("a warm-up longer than 3 h or shorter than 5 min is not a tracker's warm-up: a slow drift of another cause"),
         ]
     }
     fn signals(&self) -> Vec<SignalKind> {

@@ -70,7 +70,7 @@ impl PhysicsTerm for ThermalGrowth {
             .possible(-1e-3, 1e-3)
             .unusual_means("more than 50 µm/K is more than a 4 m steel structure grows: the sensor sees only part of the structure's temperature change")];
         if self.lag {
-            v.push(ParamSpec::new("time_constant", "s", 60.0, 4e4, 1800.0, "τ: lag of the structure behind the sensor").possible(0.0, f64::INFINITY).unusual_means("a lag of more than 11 h is longer than a structure's thermal time constant: the sensor is far from the growing part"));
+            v.push(ParamSpec::new("time_constant", "s", 60.0, 4e4, 1800.0, "τ: lag of the structure behind the sensor").possible(1.0, f64::INFINITY).unusual_means("a lag of more than 11 h is longer than a structure's thermal time constant: the sensor is far from the growing part"));
         }
         v
     }

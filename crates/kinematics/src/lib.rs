@@ -20,6 +20,7 @@ pub mod dh;
 pub mod error;
 pub mod five_axis;
 pub mod frame_alignment;
+pub mod gravity;
 pub mod instrument_pose;
 pub mod serial;
 pub mod serial_ik;

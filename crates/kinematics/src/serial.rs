@@ -193,28 +193,52 @@ impl SerialChain {
             .collect()
     }
 
-    /// Each joint's value for the variables `q` (0 for fixed joints, `multiplier·q_master +
-    /// offset` for mimics), and each joint's variable and the factor its motion takes of it
-    /// (for the Jacobian): (values, per joint `Option<(variable, factor)>`).
-    fn joint_values(&self, q: &[f64]) -> (Vec<f64>, Vec<Option<(usize, f64)>>) {
+    /// Each joint's variable and the factor its motion takes of it: `Some((k, 1))` for a joint
+    /// with its own variable k, `Some((k, multiplier))` for a mimic of variable k's joint, None
+    /// for a fixed joint.
+    pub fn drives(&self) -> Vec<Option<(usize, f64)>> {
         let vars = self.variable_indices();
-        let mut values = vec![0.0; self.joints.len()];
-        let mut driven = vec![None; self.joints.len()];
-        for (i, var) in vars.iter().enumerate() {
-            if let Some(k) = *var {
-                values[i] = q[k];
-                driven[i] = Some((k, 1.0));
-            }
-        }
-        for (i, j) in self.joints.iter().enumerate() {
-            if let (Some(m), true) = (j.mimic, j.kind != JointKind::Fixed) {
-                if let Some(k) = vars.get(m.master).copied().flatten() {
-                    values[i] = m.multiplier * q[k] + m.offset;
-                    driven[i] = Some((k, m.multiplier));
-                }
-            }
-        }
+        self.joints
+            .iter()
+            .enumerate()
+            .map(|(i, j)| match (vars[i], j.mimic) {
+                (Some(k), _) => Some((k, 1.0)),
+                (None, Some(m)) if j.kind != JointKind::Fixed => vars.get(m.master).copied().flatten().map(|k| (k, m.multiplier)),
+                _ => None,
+            })
+            .collect()
+    }
+
+    /// Each joint's value for the variables `q` (0 for fixed joints, `multiplier·q_master +
+    /// offset` for mimics), and [`Self::drives`] (for the Jacobian).
+    fn joint_values(&self, q: &[f64]) -> (Vec<f64>, Vec<Option<(usize, f64)>>) {
+        let driven = self.drives();
+        let values = self
+            .joints
+            .iter()
+            .zip(&driven)
+            .map(|(j, d)| match (d, j.mimic) {
+                (Some((k, _)), Some(m)) => m.multiplier * q[*k] + m.offset,
+                (Some((k, _)), None) => q[*k],
+                (None, _) => 0.0,
+            })
+            .collect();
         (values, driven)
+    }
+
+    /// The frame of every joint before its motion (parent link × `pre`: its axis and origin in the
+    /// base frame) and after it (the child link), at `q`.
+    pub fn joint_frames(&self, q: &[f64]) -> Result<Vec<(Isometry3<f64>, Isometry3<f64>)>, KinematicsError> {
+        self.check_q(q)?;
+        let (values, _) = self.joint_values(q);
+        let mut t = self.base;
+        let mut out = Vec::with_capacity(self.joints.len());
+        for (j, v) in self.joints.iter().zip(values) {
+            let before = t * j.pre;
+            t *= j.transform(v);
+            out.push((before, t));
+        }
+        Ok(out)
     }
 
     pub(crate) fn check_q(&self, q: &[f64]) -> Result<(), KinematicsError> {

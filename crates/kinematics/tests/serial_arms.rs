@@ -330,3 +330,34 @@ fn a_mimic_of_a_joint_off_the_path_and_a_planar_joint_are_refused_by_name() {
     let e = chain_from_urdf_str(&planar, "base", "tip").unwrap_err().to_string();
     assert!(e.contains("shoulder") && e.contains("not supported"), "{e}");
 }
+
+/// The gravity torque on each variable is −∂V/∂q of the chain's potential energy
+/// V = −Σ m_i·gᵀ·c_i (central differences), on the mimic column with a revolute joint on top and
+/// the base tilted; the carried moment about the column's top is the lever of what it carries.
+#[test]
+fn gravity_torques_are_minus_the_potential_energys_gradient() {
+    use metrocell_kinematics::gravity::{carried_moment, gravity_torques, placed_masses};
+    let chain = chain_from_urdf_str(COLUMN_URDF, "base", "tip").unwrap();
+    let g = Vector3::new(0.3, -0.2, -9.79);
+    let potential = |q: &[f64]| -> f64 { -placed_masses(&chain, q).unwrap().iter().map(|m| m.mass * g.dot(&m.centre)).sum::<f64>() };
+    for q in [[0.1, 0.3], [0.45, -1.2], [0.0, 2.5]] {
+        let tau = gravity_torques(&chain, &q, &g).unwrap();
+        for k in 0..2 {
+            let h = 1e-6;
+            let (mut up, mut down) = (q, q);
+            up[k] += h;
+            down[k] -= h;
+            let numeric = -(potential(&up) - potential(&down)) / (2.0 * h);
+            assert!((tau[k] - numeric).abs() < 1e-5 * numeric.abs().max(1.0), "q {q:?} variable {k}: {} vs {numeric}", tau[k]);
+        }
+        // the column lifts 12 + 8 + 5 kg through both segments (the mimic doubles it)
+        assert!((tau[0] - 2.0 * (8.0 + 5.0) * g.z - 12.0 * g.z).abs() < 1e-9, "{tau:?}");
+    }
+    // what the upper segment carries: the arm's 5 kg, 0.2 m out along its own x at angle 0
+    let q = [0.2, 0.0];
+    let frames = chain.joint_frames(&q).unwrap();
+    let top = frames[1].1.translation.vector;
+    let m = carried_moment(&chain, &q, &g, 1, &top).unwrap();
+    let lever = Vector3::new(0.2, 0.0, 0.2);
+    assert!((m - lever.cross(&(g * 5.0))).norm() < 1e-9, "{m}");
+}

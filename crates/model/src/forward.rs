@@ -35,6 +35,7 @@ use metrocell_physics::model::TermModel;
 use metrocell_physics::{ConfiguredTerm, EffectKind, Frame, PhysicsError, SignalKind, Signals, TermId};
 use nalgebra::{DMatrix, Isometry3, Matrix3, Vector3};
 
+use crate::arm_gravity::ArmGravity;
 use crate::instruments::{group_instruments, Instrument};
 use crate::machine::{MachineGeometry, MachineKinematics};
 
@@ -163,7 +164,7 @@ impl<'a> ForwardModel<'a> {
                 EffectKind::Displacement(Frame::Machine | Frame::Tool | Frame::Workpiece) => true,
                 EffectKind::Kinematic => match &machine.kinematics {
                     MachineKinematics::Delta(_) => matches!(id, TermId::DeltaRodLength | TermId::DeltaRadius | TermId::DeltaTowerAngle | TermId::DeltaEndstop),
-                    MachineKinematics::SerialArm(_) => matches!(id, TermId::JointOffset | TermId::LinkLength),
+                    MachineKinematics::SerialArm(_) => matches!(id, TermId::JointOffset | TermId::LinkLength | TermId::JointCompliance | TermId::JointBacklash | TermId::ColumnBending | TermId::LinkThermalExpansion),
                     _ => false,
                 },
                 _ => false,
@@ -379,7 +380,8 @@ impl<'a> ForwardModel<'a> {
     pub fn tool_state(&self, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, cache: Option<&mut DisplacementCache>) -> Result<ToolState, PhysicsError> {
         self.check(p)?;
         let mut cache = cache;
-        let mut tool = self.tool_state_with(kin, q, |point, rotation| self.displacement(p, s, point, rotation, cache.as_deref_mut()))?;
+        let gravity = self.gravity_of(p, q, s)?;
+        let mut tool = self.tool_state_with(kin, q, gravity.as_ref().map(|g| (g, p)), |point, rotation| self.displacement(p, s, point, rotation, cache.as_deref_mut()))?;
         if self.has_workpiece_terms() {
             tool.workpiece = self.workpiece_displacement(p, s, tool.nominal.translation.vector, None, 1.0)?;
         }
@@ -393,13 +395,13 @@ impl<'a> ForwardModel<'a> {
         if q.len() != n {
             return Err(PhysicsError::InvalidInput { what: "forward model, joint vector".into(), reason: format!("has {} values, the machine has {n} joints ({})", q.len(), self.machine.joint_names().join(", ")) });
         }
-        self.tool_state_with(&KinematicTruth::None, q, |_, _| Ok(Vector3::zeros()))
+        self.tool_state_with(&KinematicTruth::None, q, None, |_, _| Ok(Vector3::zeros()))
     }
 
     /// The family's tool state, with the machine terms' displacement sum `displacement(nominal
     /// point of the frame the terms act in, tool rotation)` (tool-frame terms are turned by the
     /// rotation).
-    fn tool_state_with(&self, kin: &KinematicTruth, q: &[f64], mut displacement: impl FnMut(Vector3<f64>, &Matrix3<f64>) -> Result<Vector3<f64>, PhysicsError>) -> Result<ToolState, PhysicsError> {
+    fn tool_state_with(&self, kin: &KinematicTruth, q: &[f64], gravity: Option<(&ArmGravity, &[f64])>, mut displacement: impl FnMut(Vector3<f64>, &Matrix3<f64>) -> Result<Vector3<f64>, PhysicsError>) -> Result<ToolState, PhysicsError> {
         let identity = Matrix3::identity();
         let zero = Vector3::zeros();
         Ok(match &self.machine.kinematics {
@@ -428,13 +430,18 @@ impl<'a> ForwardModel<'a> {
             }
             MachineKinematics::SerialArm(a) => {
                 let nominal = a.chain.tool_pose(q).map_err(|e| kin_error("arm forward kinematics", q, e))?;
+                // the joints where gravity puts them (compliance, backlash)
+                let deflected = gravity.map(|(g, _)| g.deflected(q));
+                let q_true = deflected.as_deref().unwrap_or(q);
                 let true_pose = match kin {
-                    KinematicTruth::Arm { chain, .. } => chain.tool_pose(q).map_err(|e| kin_error("true arm forward kinematics", q, e))?,
+                    KinematicTruth::Arm { chain, .. } => chain.tool_pose(q_true).map_err(|e| kin_error("true arm forward kinematics", q, e))?,
                     _ => nominal,
                 };
                 let n = nominal.translation.vector;
                 let tool_rotation = true_pose.rotation.to_rotation_matrix().into_inner();
-                let d = true_pose.translation.vector - n + displacement(n, &tool_rotation)?;
+                // the column's tilt and the links' expansion move the tool point further
+                let bent = gravity.map_or(Vector3::zeros(), |(g, params)| g.displacement(self, params, &true_pose.translation.vector));
+                let d = true_pose.translation.vector - n + bent + displacement(n, &tool_rotation)?;
                 ToolState { nominal, truth: Isometry3::from_parts((n + d).into(), true_pose.rotation), d, workpiece: zero }
             }
         })
@@ -472,7 +479,8 @@ impl<'a> ForwardModel<'a> {
         // tool rotation the terms were turned by
         let mut tool_frame_sum = Vector3::zeros();
         let mut tool_rotation = Matrix3::identity();
-        let tool = self.tool_state_with(kin, q, |point, rotation| {
+        let gravity = self.gravity_of(p, q, s)?;
+        let tool = self.tool_state_with(kin, q, gravity.as_ref().map(|g| (g, p)), |point, rotation| {
             tool_rotation = *rotation;
             s.machine_point = Some(point);
             let mut d = Vector3::zeros();
@@ -527,8 +535,12 @@ impl<'a> ForwardModel<'a> {
                 }
             }
             KinematicTruth::Arm { chain, joint_offsets, dh } => {
-                let geometric = chain.joint_offset_jacobian(q).map_err(|e| kin_error("arm Jacobian", q, e))?;
+                let deflected = gravity.as_ref().map(|g| g.deflected(q));
+                let geometric = chain.joint_offset_jacobian(deflected.as_deref().unwrap_or(q)).map_err(|e| kin_error("arm Jacobian", q, e))?;
                 let turned = tool_rotation * tool_frame_sum;
+                if let Some(g) = &gravity {
+                    self.gravity_columns(g, &geometric, &turned, &tool.truth.translation.vector, out, ang_out.as_deref_mut());
+                }
                 let MachineKinematics::SerialArm(arm) = &self.machine.kinematics else {
                     return Err(PhysicsError::InvalidInput { what: "forward model".into(), reason: "an arm's kinematic truth given for a machine that is not an arm".into() });
                 };
@@ -581,6 +593,49 @@ impl<'a> ForwardModel<'a> {
 }
 
 impl ForwardModel<'_> {
+    /// The gravity terms' state of an arm at reading `q` (None on other machines, or an arm
+    /// without them).
+    fn gravity_of(&self, p: &[f64], q: &[f64], s: &Signals) -> Result<Option<ArmGravity>, PhysicsError> {
+        match &self.machine.kinematics {
+            MachineKinematics::SerialArm(arm) => self.arm_gravity(arm, p, q, s),
+            _ => Ok(None),
+        }
+    }
+
+    /// The gravity terms' Jacobian columns: a compliance's joint column times its torque, a
+    /// backlash's times half the torque's sign (each joint column turning the tool-frame terms
+    /// with it, `turned`), a column's compliances their unit tilts at the true tool point
+    /// `point`, the links' expansion its direction times T − 20 °C.
+    fn gravity_columns(&self, g: &ArmGravity, geometric: &DMatrix<f64>, turned: &Vector3<f64>, point: &Vector3<f64>, out: &mut DMatrix<f64>, mut ang: Option<&mut DMatrix<f64>>) {
+        let mut joint_columns = |term: usize, vars: &[usize], factor: &dyn Fn(f64) -> f64| {
+            let start = self.slots[term].start;
+            for (c, &v) in vars.iter().enumerate() {
+                let f = factor(g.torques[v]);
+                let lin = geometric.fixed_view::<3, 1>(0, v).into_owned();
+                let a = geometric.fixed_view::<3, 1>(3, v).into_owned();
+                out.fixed_view_mut::<3, 1>(0, start + c).copy_from(&((lin + a.cross(turned)) * f));
+                if let Some(ang) = ang.as_deref_mut() {
+                    ang.fixed_view_mut::<3, 1>(0, start + c).copy_from(&(a * f));
+                }
+            }
+        };
+        for (term, vars) in &g.compliance {
+            joint_columns(*term, vars, &|tau| tau);
+        }
+        for (term, vars) in &g.backlash {
+            joint_columns(*term, vars, &|tau| 0.5 * tau.signum());
+        }
+        if let Some(c) = &g.column {
+            let start = self.slots[c.term].start;
+            for (k, u) in c.unit_effects(point).iter().enumerate() {
+                out.fixed_view_mut::<3, 1>(0, start + k).copy_from(u);
+            }
+        }
+        if let Some((term, dt, direction)) = g.thermal {
+            out.fixed_view_mut::<3, 1>(0, self.slots[term].start).copy_from(&(direction * dt));
+        }
+    }
+
     /// The nominal tool point in the machine (axis) frame at joint vector `q` — the point
     /// `Signals::machine_point` carries to the machine terms — without running the model (None
     /// for an arm: its nominal tool point needs forward kinematics; use [`Self::tool_state`]).

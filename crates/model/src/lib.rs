@@ -28,6 +28,7 @@
 // `!(x > 0.0)` is used on purpose: unlike `x <= 0.0` it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
+mod arm_gravity;
 pub mod approach_rule;
 pub mod camera;
 pub mod fiducial_plate;

@@ -7,6 +7,7 @@ use crate::config::{quantity, ConfigValue, Options, TermConfig};
 use crate::error::PhysicsError;
 use crate::geometry::{angular::Angular, backlash::Backlash, frame_misalignment::FrameMisalignment, pitch_cyclic::PitchCyclic, positioning::Positioning, rotary_axis_location::RotaryAxisLocation, squareness::Squareness, straightness::Straightness};
 use crate::instrument::{camera_scale::CameraScale, instrument_drift::InstrumentDrift, lens_distortion::LensDistortion, probe_pretravel::ProbePretravel, refraction::Refraction, time_offset::TimeOffset, tracker_pose::TrackerPose, tracker_warmup::TrackerWarmup, turbulence::Turbulence};
+use crate::gravity::{column_bending::ColumnBending, joint_backlash::JointBacklash, joint_compliance::JointCompliance, link_thermal_expansion::LinkThermalExpansion};
 use crate::load::{compliance::Compliance, tool_offset::ToolOffset};
 use crate::machine_family::KinematicParameters;
 use crate::term::PhysicsTerm;
@@ -74,6 +75,10 @@ pub fn build_term(id: TermId, options: &BTreeMap<String, ConfigValue>) -> Result
         TermId::Compliance => Box::new(Compliance::from_options(&o)?),
         TermId::ToolOffset => Box::new(ToolOffset::from_options(&o)?),
         TermId::FrameMisalignment => Box::new(FrameMisalignment::from_options(&o)?),
+        TermId::JointCompliance => Box::new(JointCompliance::from_options(&o)?),
+        TermId::JointBacklash => Box::new(JointBacklash::from_options(&o)?),
+        TermId::ColumnBending => Box::new(ColumnBending::from_options(&o)?),
+        TermId::LinkThermalExpansion => Box::new(LinkThermalExpansion::from_options(&o)?),
         TermId::DeltaRodLength | TermId::DeltaRadius | TermId::DeltaTowerAngle | TermId::DeltaEndstop | TermId::JointOffset | TermId::LinkLength => Box::new(KinematicParameters::from_options(id, &o)?),
     };
     o.finish()?;
@@ -161,6 +166,9 @@ pub fn example_config(id: TermId) -> TermConfig {
         TermId::JointOffset => vec![("joints", n(6.0))],
         TermId::LinkLength => vec![("links", n(6.0))],
         TermId::InstrumentDrift => vec![("order", n(1.0)), ("span", l(vec![n(0.0), t("5 h")]))],
+        TermId::JointCompliance | TermId::JointBacklash => vec![("joints", l(vec![t("shoulder_lift"), t("elbow")]))],
+        TermId::ColumnBending => vec![("joint", t("column_lower")), ("overlaps", l(vec![t("800 mm"), t("900 mm")])), ("length", t("950 mm"))],
+        TermId::LinkThermalExpansion => vec![("sensor", t("ambient"))],
         _ => vec![],
     };
     TermConfig { id: id.as_str().into(), options: opts.into_iter().map(|(k, v)| (k.to_string(), v)).collect(), params: BTreeMap::new(), use_defaults: true }

@@ -19,6 +19,8 @@
 //! * [`instrument`] — Edlén (shop-floor, Birch & Downs, Bönsch & Potulski), refraction,
 //!   tracker warm-up, turbulence, tracker pose, probe pretravel, lens distortion, camera scale,
 //!   time offset, tracker range uncertainty budget.
+//! * [`gravity`] — a serial robot under its own weight: joint compliance, joint backlash, a
+//!   telescoping column's bending, its links' thermal expansion (kinematic terms).
 //! * [`load`] — compliance, tool offset. [`machine_family`] — kinematic terms (delta, serial
 //!   arms) evaluated through a forward-kinematics closure from crates/kinematics.
 //!
@@ -33,6 +35,7 @@ pub mod model;
 pub mod config;
 pub mod error;
 pub mod geometry;
+pub mod gravity;
 pub mod instrument;
 pub mod load;
 pub mod machine_family;

@@ -119,6 +119,9 @@ pub enum SignalKind {
     RotaryPosition(RotaryAxis),
     /// The instant's time on the recording's clock, s.
     Time,
+    /// Gravity in the robot's base frame, m/s² (from its base accelerometer; straight down the
+    /// base's −z when the recording gives none).
+    Gravity,
 }
 
 impl SignalKind {
@@ -151,6 +154,7 @@ impl fmt::Display for SignalKind {
             SignalKind::ProbeDirection => write!(f, "probe_direction (unit vector)"),
             SignalKind::RotaryPosition(a) => write!(f, "rotary_position[{}] (rad)", a.name()),
             SignalKind::Time => write!(f, "time (s, the recording's clock)"),
+            SignalKind::Gravity => write!(f, "gravity (m/s², robot base frame)"),
         }
     }
 }
@@ -193,6 +197,12 @@ pub struct Signals {
     pub probe_direction: Option<Vector3<f64>>,
     /// Commanded angles of the rotary axes A, B, C (rad), where the machine has them.
     pub rotary_position: [Option<f64>; 3],
+    /// Gravity in the robot's base frame, m/s², pointing down ([`SignalKind::Gravity`]): from the
+    /// base's accelerometer; None means the base stands level.
+    pub gravity: Option<Vector3<f64>>,
+    /// Each accelerometer's reading (specific force, its own frame, m/s²: +9.81 along its up axis
+    /// at rest), by sensor name.
+    pub accelerations: BTreeMap<String, Vector3<f64>>,
 }
 
 /// Who asks for a signal, named in the error when it is missing. A term passes itself, so its

@@ -54,6 +54,10 @@ term_ids! {
     DeltaEndstop => "delta_endstop", MachineFamily, "delta endstop offsets (kinematic term)", "carriage height h_T + Δh_T; effect via crates/kinematics";
     JointOffset => "joint_offset", MachineFamily, "serial-arm joint zero offsets (kinematic term)", "θ_i + Δθ_i; effect via crates/kinematics";
     LinkLength => "link_length", MachineFamily, "serial-arm link length errors (kinematic term)", "l_i + Δl_i; effect via crates/kinematics";
+    JointCompliance => "joint_compliance", MachineFamily, "a robot joint yielding to the gravity torque about it (URDF inertials, the measured gravity)", "Δθ_j = k_j·τ_j, τ_j = Σ_links m_i·gᵀ·∂c_i/∂q_j";
+    JointBacklash => "joint_backlash", MachineFamily, "a robot joint's play taken up to the side gravity pushes it", "Δθ_j = (b_j/2)·sign(τ_j)";
+    ColumnBending => "column_bending", MachineFamily, "a telescoping lifting column tilting under the moment of what it carries", "θ = M⊥·[c_foot + c_pads·Σ_i 1/o_i(e)² + c_flex·L(e)], each part about its pivot; Δp = Σ θ_k × (p − pivot_k)";
+    LinkThermalExpansion => "link_thermal_expansion", MachineFamily, "a robot's links lengthening with their temperature", "Δl_j = α·(T − 20 °C)·l_j";
     FrameMisalignment => "frame_misalignment", Frame, "small rigid misalignment between two frames", "d = ω × (p − o) + t";
 }
 

@@ -270,7 +270,7 @@ impl<'m, 'a> RecordStream<'m, 'a> {
             SignalTopic::AirTemperature => self.builder.expect_air(0),
             SignalTopic::AirPressure => self.builder.expect_air(1),
             SignalTopic::AirHumidity => self.builder.expect_air(2),
-            SignalTopic::Approach | SignalTopic::PowerOn | SignalTopic::Load => {}
+            SignalTopic::Approach | SignalTopic::PowerOn | SignalTopic::Load | SignalTopic::Accelerometer(_) => {}
         }
         self.signal_topics.insert(name, which);
     }
@@ -482,6 +482,8 @@ fn present(s: &Signals, kind: &SignalKind) -> bool {
         SignalKind::LoadForce => s.load_force.is_some(),
         SignalKind::RotaryPosition(a) => s.rotary_position[a.index()].is_some(),
         SignalKind::Time => s.time.is_some(),
+        // without a base accelerometer the base is taken as level (said by the model's loader)
+        SignalKind::Gravity => true,
         k => k.is_computed_by_model(),
     }
 }
@@ -670,6 +672,10 @@ fn resolve(p: Pending, builder: &SignalsBuilder, needs: &[(String, SignalKind)],
         },
     };
     let mut signals = builder.signals_at(p.t_ns);
+    // a robot's gravity from its base's accelerometer (the ground's tilt)
+    if let metrocell_model::MachineKinematics::SerialArm(arm) = &model.machine.kinematics {
+        signals.gravity = arm.gravity_from(&signals.accelerations);
+    }
     if let Some((t, pa, h)) = p.air {
         (signals.air_temperature, signals.air_pressure, signals.air_humidity) = (Some(t), Some(pa), Some(h));
     }

@@ -226,6 +226,7 @@ pub fn providers(kind: &SignalKind) -> String {
         SignalKind::LoadForce => format!("record {LOAD_TOPIC} (geometry_msgs/WrenchStamped, force in N, machine frame)"),
         SignalKind::RotaryPosition(a) => format!("record {COMMANDED_JOINTS_TOPIC} with joint `{}` (bag import: column joint.{})", a.name(), a.name()),
         SignalKind::Time => "every record carries its time stamp".into(),
+        SignalKind::Gravity => "record /imu/<sensor> (sensor_msgs/Imu) of an accelerometer on the robot's base, named with its link in the model's sensors.accelerometers (bag import: columns accel.<sensor>.x|y|z); without one the base is taken as level".into(),
         SignalKind::TrackerRange | SignalKind::ImagePoint | SignalKind::MachinePoint | SignalKind::WorkpiecePoint | SignalKind::TargetPoint | SignalKind::CameraPoint | SignalKind::ProbeDirection => "it is computed by the model".into(),
     }
 }

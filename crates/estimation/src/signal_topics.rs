@@ -20,7 +20,10 @@
 use metrocell_bagtools::SourcedMessage;
 use metrocell_model::SignalsBuilder;
 use metrocell_msgs::geometry_msgs::msg::WrenchStamped;
-use metrocell_msgs::sensor_msgs::msg::{FluidPressure, JointState, RelativeHumidity, Temperature, TimeReference};
+use metrocell_msgs::sensor_msgs::msg::{FluidPressure, Imu, JointState, RelativeHumidity, Temperature, TimeReference};
+
+/// Accelerometers are read from `/imu/<sensor>` (`sensor_msgs/Imu`, its linear acceleration).
+pub const IMU_PREFIX: &str = "/imu/";
 use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_msgs::RosMessage;
 use nalgebra::Vector3;
@@ -45,6 +48,8 @@ pub enum SignalTopic {
     AirHumidity,
     PowerOn,
     Load,
+    /// An accelerometer (`/imu/<sensor>`, `sensor_msgs/Imu`: its linear acceleration).
+    Accelerometer(String),
 }
 
 impl SignalTopic {
@@ -59,6 +64,10 @@ impl SignalTopic {
             t if AIR_HUMIDITY_TOPICS.contains(&t) && is(RelativeHumidity::ROS_TYPE) => SignalTopic::AirHumidity,
             POWER_ON_TOPIC if is(TimeReference::ROS_TYPE) => SignalTopic::PowerOn,
             LOAD_TOPIC if is(WrenchStamped::ROS_TYPE) => SignalTopic::Load,
+            t if t.starts_with(IMU_PREFIX) && is(Imu::ROS_TYPE) => {
+                let sensor = t.strip_prefix(IMU_PREFIX).filter(|s| !s.is_empty() && !s.contains('/'))?;
+                SignalTopic::Accelerometer(sensor.to_string())
+            }
             t => {
                 let sensor = t.strip_prefix(TEMPERATURE_PREFIX).filter(|s| !s.is_empty() && !s.contains('/'))?;
                 if !is(Temperature::ROS_TYPE) {
@@ -127,6 +136,11 @@ pub fn feed(builder: &mut SignalsBuilder, which: &SignalTopic, m: &SourcedMessag
             let msg: WrenchStamped = m.decode().map_err(decode_error)?;
             let f = &msg.wrench.force;
             builder.push_load(message_time(&msg.header.stamp, m.log_time_ns), Vector3::new(f.x, f.y, f.z))
+        }
+        SignalTopic::Accelerometer(sensor) => {
+            let msg: Imu = m.decode().map_err(decode_error)?;
+            let a = &msg.linear_acceleration;
+            builder.push_acceleration(message_time(&msg.header.stamp, m.log_time_ns), sensor, Vector3::new(a.x, a.y, a.z))
         }
     }
 }

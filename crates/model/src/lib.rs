@@ -55,4 +55,4 @@ pub use workspace::Workspace;
 pub use instrument_pose::InstrumentPose;
 pub use parameters::{ParallelPair, ParameterSetup, Prior};
 pub use signals_builder::{JointMotion, SignalsBuilder, SignalsBuilderOptions};
-pub use machine::{FiveAxisMachine, MachineGeometry, MachineKinematics, SerialArm, FIVE_AXIS_JOINTS};
+pub use machine::{ArmAccelerometer, FiveAxisMachine, MachineGeometry, MachineKinematics, SerialArm, FIVE_AXIS_JOINTS};

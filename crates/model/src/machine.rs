@@ -130,6 +130,32 @@ pub struct SerialArm {
     pub joint_limits: Option<Vec<[f64; 2]>>,
     /// Movable joints are revolute (true) or prismatic (false), in variable order.
     pub revolute: Vec<bool>,
+    /// The accelerometers on the robot (the model file's `sensors.accelerometers`).
+    pub accelerometers: Vec<ArmAccelerometer>,
+}
+
+/// An accelerometer on a robot: its name (`/imu/<name>`), the link it sits on, and — when that
+/// link is fixed to the base (no joint variable between them) — the rotation of its frame in the
+/// base frame, which turns its reading into the gravity of the base (the ground's tilt).
+#[derive(Debug, Clone, PartialEq)]
+pub struct ArmAccelerometer {
+    pub name: String,
+    pub link: String,
+    pub base_from_sensor: Option<nalgebra::Matrix3<f64>>,
+}
+
+impl SerialArm {
+    /// Gravity in the base frame from a reading of the base's accelerometer (specific force,
+    /// its frame): straight down opposite the specific force, of standard magnitude; None
+    /// without an accelerometer fixed to the base or its reading.
+    pub fn gravity_from(&self, accelerations: &std::collections::BTreeMap<String, nalgebra::Vector3<f64>>) -> Option<nalgebra::Vector3<f64>> {
+        self.accelerometers.iter().find_map(|a| {
+            let r = a.base_from_sensor?;
+            let f = accelerations.get(&a.name)?;
+            let up = r * f;
+            (up.norm() > 0.0).then(|| -up.normalize() * metrocell_physics::gravity::STANDARD_GRAVITY)
+        })
+    }
 }
 
 impl SerialArm {

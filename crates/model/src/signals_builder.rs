@@ -141,6 +141,8 @@ pub struct SignalsBuilder {
     air_expected: [bool; 3],
     power_on: StateSeries<i64>,
     load: StateSeries<Vector3<f64>>,
+    /// Each accelerometer's latest reading (specific force, its own frame, m/s²).
+    accelerations: BTreeMap<String, StateSeries<Vector3<f64>>>,
     explicit_approach: [StateSeries<f64>; 3],
     /// The newest time the recording has reached (any stream, or [`Self::observe_time`]).
     newest_ns: Option<i64>,
@@ -186,6 +188,7 @@ impl SignalsBuilder {
             air_expected: [false; 3],
             power_on: StateSeries::default(),
             load: StateSeries::default(),
+            accelerations: BTreeMap::new(),
             explicit_approach: Default::default(),
             newest_ns: None,
             joints_expected: false,
@@ -318,6 +321,16 @@ impl SignalsBuilder {
         Ok(())
     }
 
+    /// An accelerometer's reading (specific force in its own frame, m/s²) from `t_ns` on.
+    pub fn push_acceleration(&mut self, t_ns: i64, sensor: &str, specific_force: Vector3<f64>) -> Result<(), String> {
+        if !specific_force.iter().all(|v| v.is_finite()) {
+            return Err(format!("accelerometer `{sensor}` reading {specific_force:?} is not finite"));
+        }
+        self.accelerations.entry(sensor.to_string()).or_default().push(t_ns, specific_force);
+        self.observe_time(t_ns);
+        Ok(())
+    }
+
     /// A recorded approach direction of linear axis `axis` (0 = x, 1 = y, 2 = z): +1 or −1 from
     /// `t_ns` on. It replaces the rule for that axis.
     pub fn push_approach(&mut self, t_ns: i64, axis: usize, direction: f64) -> Result<(), String> {
@@ -433,6 +446,11 @@ impl SignalsBuilder {
         s.air_humidity = self.air[2].at(t_ns, slow_gap);
         s.time_since_power_on = self.power_on.at(t_ns).filter(|&on| on <= t_ns).map(|on| (t_ns - on) as f64 / NS);
         s.load_force = self.load.at(t_ns);
+        for (name, series) in &self.accelerations {
+            if let Some(a) = series.at(t_ns) {
+                s.accelerations.insert(name.clone(), a);
+            }
+        }
         s
     }
 

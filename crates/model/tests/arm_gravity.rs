@@ -31,7 +31,7 @@ fn term(yaml: &str) -> metrocell_physics::ConfiguredTerm {
 fn machine() -> MachineGeometry {
     let chain = chain_from_urdf_str(ROBOT, "base", "prism").unwrap();
     let revolute = vec![false, true, true];
-    MachineGeometry { kinematics: MachineKinematics::SerialArm(SerialArm { chain, dh: None, joint_limits: None, revolute }), travel: [[f64::NEG_INFINITY, f64::INFINITY]; 3], tool_offset: Vector3::zeros() }
+    MachineGeometry { kinematics: MachineKinematics::SerialArm(SerialArm { chain, dh: None, joint_limits: None, revolute, accelerometers: Vec::new() }), travel: [[f64::NEG_INFINITY, f64::INFINITY]; 3], tool_offset: Vector3::zeros() }
 }
 
 fn gravity_terms() -> TermModel {

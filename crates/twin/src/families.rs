@@ -99,5 +99,5 @@ pub fn serial_arm(s: &SerialArmSection, base_dir: &Path, pose: impl Fn(&crate::c
         }
         Some(v)
     };
-    Ok(SerialArm { chain, dh, joint_limits, revolute })
+    Ok(SerialArm { chain, dh, joint_limits, revolute, accelerometers: Vec::new() })
 }

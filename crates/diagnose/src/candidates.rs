@@ -316,6 +316,7 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
         MachineKinematics::SerialArm(arm) => {
             out.extend(family(vec![linear_variant("", TermId::JointOffset, vec![("joints", num(arm.chain.dof() as f64))])], TermId::JointOffset, Placement::Machine));
             out.extend(family(vec![linear_variant("", TermId::LinkLength, vec![("links", num(arm.link_count() as f64))])], TermId::LinkLength, Placement::Machine));
+            out.extend(gravity_families(arm, inventory));
         }
         MachineKinematics::FiveAxis(f) => {
             if inventory.rotary[1] && inventory.rotary[2] {
@@ -398,6 +399,30 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
     }
     out.retain(|f| !labels.contains(&f.label) && !(f.id == TermId::ToolOffset && declared.has(TermId::ToolOffset)));
     (out, not_tried)
+}
+
+/// The gravity terms of a robot whose URDF gives its masses: each revolute joint's compliance
+/// and backlash (one family each, every revolute joint its parameter), a lifting column's bending
+/// (each prismatic joint: it carries the arm), the links' expansion with each temperature sensor.
+fn gravity_families(arm: &metrocell_model::SerialArm, inventory: &SignalInventory) -> Vec<TermFamily> {
+    let mut out = Vec::new();
+    if !arm.chain.joints.iter().any(|j| j.inertial.is_some()) {
+        return out;
+    }
+    let names = arm.chain.variable_names();
+    let revolute: Vec<ConfigValue> = names.iter().zip(&arm.revolute).filter(|(_, r)| **r).map(|(n, _)| text(n)).collect();
+    if !revolute.is_empty() {
+        for id in [TermId::JointCompliance, TermId::JointBacklash] {
+            out.extend(family(vec![linear_variant("revolute joints", id, vec![("joints", list(revolute.clone()))])], id, Placement::Machine));
+        }
+    }
+    for (name, _) in names.iter().zip(&arm.revolute).filter(|(_, r)| !**r) {
+        out.extend(family(vec![linear_variant("", TermId::ColumnBending, vec![("joint", text(name))])], TermId::ColumnBending, Placement::Machine));
+    }
+    for s in &inventory.temperatures {
+        out.extend(family(vec![linear_variant("", TermId::LinkThermalExpansion, vec![("sensor", text(s))])], TermId::LinkThermalExpansion, Placement::Machine));
+    }
+    out
 }
 
 fn sensor(name: &str, position: f64) -> ConfigValue {

@@ -430,6 +430,17 @@ fn statement(f: &FoundTerm, params: &[(String, f64, Option<f64>, String)], c_wp:
         }
         TermId::ToolOffset => format!("the tool offset is off by ({})", list()),
         TermId::InstrumentDrift => drift_statement(params, c_wp, &f.variant),
+        TermId::JointCompliance | TermId::JointBacklash => {
+            let (what, unit, scale) = if f.id == TermId::JointCompliance { ("yield to the gravity torque", "µrad/(N·m)", 1e6) } else { ("have play taken up to the side gravity pushes", "µrad", 1e6) };
+            let joints: Vec<String> = params.iter().filter(|(_, v, s, _)| s.is_some_and(|s| v.abs() > 2.0 * s)).map(|(n, v, s, _)| format!("{} {}", &n[2..], pm(*v, *s, scale, 1))).collect();
+            format!("the robot's joints {what}: {} {unit}; up to {} µm at the tool", if joints.is_empty() { list() } else { joints.join(", ") }, um(c_wp.iter().map(|c| c.norm()).fold(0.0, f64::max)))
+        }
+        TermId::ColumnBending => format!("the lifting column leans under the moment of what it carries: {}; up to {} µm at the tool", list(), um(c_wp.iter().map(|c| c.norm()).fold(0.0, f64::max))),
+        TermId::LinkThermalExpansion => {
+            let (_, a, s, _) = get(params, "alpha").cloned().unwrap_or_default();
+            let sensor = text_option(&f.config, "sensor").unwrap_or_default();
+            format!("the robot's links expand with the {sensor} temperature: α = {} µm/m/K, up to {} µm at the tool", pm(a, s, 1e6, 1), um(c_wp.iter().map(|c| c.norm()).fold(0.0, f64::max)))
+        }
         TermId::Compliance => format!("the structure deflects under load as {} extends: up to {} µm ({})", upper(&axis), um(peak), list()),
         TermId::RotaryAxisLocation => {
             let significant: Vec<String> = params.iter().filter(|(_, v, s, _)| s.is_some_and(|s| v.abs() > 2.0 * s)).map(|(n, v, s, u)| format!("{n} = {}{}", pm(*v, *s, 1e6, 1), if u == "m" { " µm" } else { " µrad" })).collect();

@@ -110,7 +110,10 @@ pub struct Family {
 /// apart (BIC within [`TIE_BIC`]), the conventional, simpler name — a linear x error along z is
 /// reported as squareness, not as a first-order straightness or an angular error.
 pub fn preference(term: &str) -> usize {
-    const ORDER: [&str; 18] = ["squareness", "positioning", "backlash", "pitch_cyclic", "thermal_scale", "thermal_growth", "tracker_warmup", "refraction", "instrument_drift", "time_offset", "tool_offset", "straightness", "compliance", "workpiece_expansion", "frame_misalignment", "rotary_axis_location", "angular", "probe_pretravel"];
+    const ORDER: [&str; 22] = [
+        "squareness", "positioning", "backlash", "pitch_cyclic", "thermal_scale", "thermal_growth", "tracker_warmup", "refraction", "instrument_drift", "time_offset", "tool_offset", "column_bending", "joint_compliance", "joint_backlash",
+        "link_thermal_expansion", "straightness", "compliance", "workpiece_expansion", "frame_misalignment", "rotary_axis_location", "angular", "probe_pretravel",
+    ];
     ORDER.iter().position(|t| *t == term).unwrap_or(ORDER.len())
 }
 

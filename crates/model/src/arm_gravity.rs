@@ -165,7 +165,11 @@ impl ForwardModel<'_> {
             }
             pads.push((frames[joint].0.translation.vector, 1.0 / (o * o)));
         }
-        let length = c.length + segments.iter().map(|(_, share)| share * e).sum::<f64>();
+        // the tube's length: given at zero extension, or the chain's own at this reading
+        let length = match c.length {
+            Some(l0) => l0 + segments.iter().map(|(_, share)| share * e).sum::<f64>(),
+            None => (top - foot).dot(&axis).abs(),
+        };
         Ok(ColumnTilt { term, moment, foot, pads, middle: foot + axis * (0.5 * length), length })
     }
 }

@@ -16,7 +16,8 @@
 //!   M·L/(EI), about the middle of its length L(e) = L(0) + Σ m_i·e.
 //!
 //! The tool point p moves by Σ θ_k × (p − pivot_k). Options: `joint` (the column's independent joint),
-//! `overlaps` (o_i(0) of its segments in order, m), `length` (L(0), foot to top, m). Effect:
+//! `overlaps` (o_i(0) of its segments in order, m; none: no overlap term), `length` (L(0), foot to
+//! top, m; default: the chain's, from its first segment's joint to its last segment's frame). Effect:
 //! kinematic (crates/model computes M⊥, the pivots and the overlaps from the chain at the reading).
 
 use nalgebra::DMatrix;
@@ -33,8 +34,9 @@ pub struct ColumnBending {
     pub joint: String,
     /// Overlap of each sliding segment at zero extension, m (as many as segments; may be empty).
     pub overlaps: Vec<f64>,
-    /// The column's length from its foot to its top at zero extension, m.
-    pub length: f64,
+    /// The column's length from its foot to its top at zero extension, m (None: the chain's own,
+    /// from its first segment's joint to its last segment's child frame).
+    pub length: Option<f64>,
 }
 
 impl ColumnBending {
@@ -47,8 +49,8 @@ impl ColumnBending {
         if overlaps.iter().any(|v| !(*v > 0.0)) {
             return Err(o.bad("overlaps", "each overlap is a positive length"));
         }
-        let length = o.quantity("length", "m", Some(1.0))?;
-        if !(length > 0.0) {
+        let length = if o.has("length") { Some(o.quantity("length", "m", None)?) } else { None };
+        if length.is_some_and(|l| !(l > 0.0)) {
             return Err(o.bad("length", "must be positive"));
         }
         Ok(Self { joint, overlaps, length })

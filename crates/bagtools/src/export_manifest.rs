@@ -55,7 +55,7 @@ pub struct ExportManifest {
 }
 
 impl ExportManifest {
-    /// Write `dir/export.yaml`.
+    /// Write the manifest (`export.yaml`) into `dir`.
     pub fn write(&self, dir: &Path) -> Result<PathBuf> {
         let path = dir.join(MANIFEST_FILE);
         let body = serde_yaml::to_string(self).map_err(|e| ToolError::Invalid(format!("{}: {e}", path.display())))?;
@@ -64,7 +64,7 @@ impl ExportManifest {
         Ok(path)
     }
 
-    /// Read `dir/export.yaml`; `None` when the directory has none.
+    /// Read the manifest (`export.yaml`) in `dir`; `None` when the directory has none.
     pub fn read(dir: &Path) -> Result<Option<ExportManifest>> {
         let path = dir.join(MANIFEST_FILE);
         if !path.exists() {

@@ -212,6 +212,21 @@ impl<'a> ForwardModel<'a> {
         Some(self.slots[n + k].start)
     }
 
+    /// Every `tracker_pose` of the model: its setup (None: the pose of every reading) and where
+    /// its six parameters start in the stacked vector, in the model's order.
+    pub fn pose_param_starts(&self) -> Vec<(Option<String>, usize)> {
+        let n = self.machine_terms.terms.len();
+        self.instrument_terms.terms.iter().enumerate().filter(|(_, t)| t.term.id() == TermId::TrackerPose).map(|(k, t)| (t.term.setup().map(str::to_string), self.slots[n + k].start)).collect()
+    }
+
+    /// Where the parameters of the pose that reads `signals` start: its setup's pose
+    /// (`tracker_pose[<setup>]`) when the model has one, else the pose of every reading.
+    pub fn pose_param_start_for(&self, signals: &Signals) -> Option<usize> {
+        let poses = self.pose_param_starts();
+        let setup = signals.setup.as_deref();
+        poses.iter().find(|(s, _)| s.is_some() && s.as_deref() == setup).or_else(|| poses.iter().find(|(s, _)| s.is_none())).map(|(_, k)| *k)
+    }
+
     /// Column range (start, length) of term `label` in the stacked vector.
     pub fn term_columns(&self, label: &str) -> Option<(usize, usize)> {
         let i = self.machine_terms.terms.iter().chain(&self.instrument_terms.terms).position(|t| t.term.label() == label)?;

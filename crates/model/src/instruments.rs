@@ -28,7 +28,7 @@ impl InstrumentKind {
     /// The kind an instrument term belongs to (None for machine terms).
     pub fn of(id: TermId) -> Option<Self> {
         match id {
-            TermId::TrackerPose | TermId::TrackerWarmup | TermId::Refraction | TermId::Turbulence | TermId::InstrumentDrift => Some(Self::Tracker),
+            TermId::TrackerPose | TermId::BaseTilt | TermId::TrackerWarmup | TermId::Refraction | TermId::Turbulence | TermId::InstrumentDrift => Some(Self::Tracker),
             TermId::ProbePretravel => Some(Self::Probe),
             TermId::CameraScale | TermId::LensDistortion => Some(Self::Camera),
             _ => None,
@@ -63,7 +63,12 @@ pub struct Instrument {
     pub kind: InstrumentKind,
     /// The terms' `instrument` option (None: unnamed).
     pub name: Option<String>,
+    /// The pose for every reading (a `tracker_pose` without option `setup`).
     pub(crate) pose: Option<usize>,
+    /// The poses of the instrument's placements (`tracker_pose` with option `setup`), by setup.
+    pub(crate) setup_poses: Vec<(String, usize)>,
+    /// `base_tilt`: the base's tilt from level, for a levelled instrument.
+    pub(crate) tilt: Option<usize>,
     pub(crate) warmup: Option<usize>,
     pub(crate) refraction: Option<usize>,
     /// `instrument_drift`: the pose's change in time.
@@ -76,7 +81,7 @@ pub struct Instrument {
 
 impl Instrument {
     fn new(kind: InstrumentKind, name: Option<String>) -> Self {
-        Self { kind, name, pose: None, warmup: None, refraction: None, drift: None, pretravel: None, scale: None, distortion: None, camera: None }
+        Self { kind, name, pose: None, setup_poses: Vec::new(), tilt: None, warmup: None, refraction: None, drift: None, pretravel: None, scale: None, distortion: None, camera: None }
     }
     /// `tracker`, `tracker lt1`, … for messages.
     pub fn describe(&self) -> String {
@@ -84,6 +89,10 @@ impl Instrument {
             Some(n) => format!("{} `{n}`", self.kind.name()),
             None => self.kind.name().to_string(),
         }
+    }
+    /// The setups (placements) the instrument has a pose for, in the model's order.
+    pub fn setups(&self) -> impl Iterator<Item = &str> {
+        self.setup_poses.iter().map(|(s, _)| s.as_str())
     }
     /// The camera geometry, if this is a camera that has one.
     pub fn camera_geometry(&self) -> Option<&CameraGeometry> {
@@ -99,7 +108,7 @@ pub(crate) fn group_instruments(first: usize, terms: &[ConfiguredTerm]) -> Resul
         let label = t.term.label();
         let kind = InstrumentKind::of(id).ok_or_else(|| PhysicsError::InvalidInput {
             what: format!("forward model, term `{label}`"),
-            reason: "is not an instrument term (tracker: tracker_pose, tracker_warmup, refraction, turbulence, instrument_drift; probe: probe_pretravel; camera: camera_scale, lens_distortion)".into(),
+            reason: "is not an instrument term (tracker: tracker_pose, base_tilt, tracker_warmup, refraction, turbulence, instrument_drift; probe: probe_pretravel; camera: camera_scale, lens_distortion)".into(),
         })?;
         let name = t.term.instrument().map(str::to_string);
         let at = match out.iter().position(|i| i.kind == kind && i.name == name) {
@@ -110,8 +119,16 @@ pub(crate) fn group_instruments(first: usize, terms: &[ConfiguredTerm]) -> Resul
             }
         };
         let inst = &mut out[at];
+        if let (TermId::TrackerPose, Some(setup)) = (id, t.term.setup()) {
+            if inst.setup_poses.iter().any(|(s, _)| s == setup) {
+                return Err(PhysicsError::InvalidInput { what: format!("forward model, term `{label}`"), reason: format!("is given twice for setup `{setup}` of the {}", inst.describe()) });
+            }
+            inst.setup_poses.push((setup.to_string(), first + k));
+            continue;
+        }
         let slot = match id {
             TermId::TrackerPose => &mut inst.pose,
+            TermId::BaseTilt => &mut inst.tilt,
             TermId::TrackerWarmup => &mut inst.warmup,
             TermId::Refraction => &mut inst.refraction,
             TermId::InstrumentDrift => &mut inst.drift,

@@ -45,8 +45,22 @@ impl TrackerPrediction {
 /// Rows of [`ForwardModel::tracker_jacobian`]: the reported point (x, y, z), then the measured range.
 pub const TRACKER_ROWS: usize = 4;
 
-fn pose_of(inst: &Instrument) -> Result<usize, PhysicsError> {
-    inst.pose.ok_or_else(|| PhysicsError::InvalidInput { what: "forward model".into(), reason: format!("a reading of the {} needs its `tracker_pose` term", inst.describe()) })
+/// The pose term that reads `s`: its setup's (`tracker_pose[<setup>]`) when the instrument has
+/// one, else the pose of every reading.
+fn pose_of(inst: &Instrument, s: &Signals) -> Result<usize, PhysicsError> {
+    if let Some(setup) = s.setup.as_deref() {
+        if let Some((_, k)) = inst.setup_poses.iter().find(|(name, _)| name == setup) {
+            return Ok(*k);
+        }
+    }
+    inst.pose.ok_or_else(|| {
+        let reason = match (s.setup.as_deref(), inst.setup_poses.is_empty()) {
+            (Some(setup), false) => format!("a reading of setup `{setup}` needs `tracker_pose[{setup}]`; the {} has poses for setups {}", inst.describe(), inst.setups().collect::<Vec<_>>().join(", ")),
+            (None, false) => format!("a reading that names no setup needs a `tracker_pose` without one; the {} has poses for setups {} only", inst.describe(), inst.setups().collect::<Vec<_>>().join(", ")),
+            _ => format!("a reading of the {} needs its `tracker_pose` term", inst.describe()),
+        };
+        PhysicsError::InvalidInput { what: "forward model".into(), reason }
+    })
 }
 
 impl ForwardModel<'_> {
@@ -62,8 +76,12 @@ impl ForwardModel<'_> {
     pub fn tracker_of(&self, instrument: Option<&str>, p: &[f64], tool: &ToolState, s: &mut Signals) -> Result<TrackerPrediction, PhysicsError> {
         self.check(p)?;
         let inst = self.require(InstrumentKind::Tracker, instrument)?;
-        let pose = pose_of(inst)?;
-        s.target_point = Some(tool.target());
+        let pose = pose_of(inst, s)?;
+        // a levelled instrument reads the point in the levelled frame: the base's tilt first
+        s.target_point = Some(match inst.tilt {
+            Some(t) => v3(&self.term(t).term.predict(self.part(t, p), &Signals { target_point: Some(tool.target()), ..Signals::default() })?.value),
+            None => tool.target(),
+        });
         let x = match inst.drift {
             None => v3(&self.term(pose).term.predict(self.part(pose, p), s)?.value),
             Some(d) => {
@@ -186,7 +204,17 @@ impl ForwardModel<'_> {
     /// (`work.tool`, or a kept reading's A).
     fn tracker_chain_at(&self, instrument: Option<&str>, p: &[f64], target: Vector3<f64>, s: &mut Signals, work: &mut Workspace) -> Result<(TrackerPrediction, TrackerChain), PhysicsError> {
         let inst = self.require(InstrumentKind::Tracker, instrument)?;
-        let pose = pose_of(inst)?;
+        let pose = pose_of(inst, s)?;
+        // a levelled instrument: P_level = R_tilt·P (base_tilt), its Jacobian kept for the chain
+        let tilt = inst.tilt.map(|t| {
+            let q = self.part(t, p);
+            let (r, d) = metrocell_physics::instrument::base_tilt::levelling(q[0], q[1]);
+            (self.slots[t], r, [d[0] * target, d[1] * target])
+        });
+        let target = match &tilt {
+            Some((_, r, _)) => r * target,
+            None => target,
+        };
         // x = Rᵀ(P − T) and ∂x/∂pose
         s.target_point = Some(target);
         let mut xv = [0.0; 3];
@@ -215,14 +243,18 @@ impl ForwardModel<'_> {
         let x = Vector3::new(xv[0], xv[1], xv[2]);
         let (rho, az, el) = to_spherical(&x);
         s.tracker_range = Some(rho);
-        // ∂x/∂P = Rᵀ = −∂x/∂T
-        let rt: Matrix3<f64> = -work.pose.fixed_view::<3, 3>(0, 0).into_owned();
+        // ∂x/∂P_level = Rᵀ = −∂x/∂T; ∂x/∂P = Rᵀ·R_tilt; ∂x/∂tilt = Rᵀ·∂R_tilt·P
+        let r_t: Matrix3<f64> = -work.pose.fixed_view::<3, 3>(0, 0).into_owned();
+        let (rt, tilt) = match tilt {
+            Some((slot, r, d)) => (r_t * r, Some((slot, [r_t * d[0], r_t * d[1]]))),
+            None => (r_t, None),
+        };
         let range_slots = [inst.warmup, inst.refraction].map(|i| i.map(|i| self.slots[i]));
         if rho == 0.0 && inst.warmup.is_none() && inst.refraction.is_none() {
             // points given in the machine frame (pose = identity) can sit at the origin: with no
             // range terms the reported point is x itself, whose Jacobian needs no direction
             let pred = TrackerPrediction { point: x, range: rho, azimuth: az, elevation: el, warmup: 0.0, refraction: 0.0 };
-            return Ok((pred, TrackerChain::new(ps, drift_slot, range_slots, Vector3::zeros(), Matrix3::identity(), RowVector3::zeros(), &rt)));
+            return Ok((pred, TrackerChain::new(ps, drift_slot, tilt, range_slots, Vector3::zeros(), Matrix3::identity(), RowVector3::zeros(), &rt)));
         }
         if !(rho > 0.0) {
             return Err(PhysicsError::InvalidInput { what: "forward model, tracker reading".into(), reason: "the target is at the tracker origin (range 0): no direction for the range terms".into() });
@@ -244,7 +276,7 @@ impl ForwardModel<'_> {
         let f = pred.measured_range() / rho;
         let range_from_x = u.transpose() * g;
         let point_from_x = (Matrix3::identity() - u * u.transpose()) * f + u * range_from_x;
-        Ok((pred, TrackerChain::new(ps, drift_slot, range_slots, u, point_from_x, range_from_x, &rt)))
+        Ok((pred, TrackerChain::new(ps, drift_slot, tilt, range_slots, u, point_from_x, range_from_x, &rt)))
     }
 }
 
@@ -257,6 +289,8 @@ struct TrackerChain {
     pose: Slot,
     /// The `instrument_drift`'s columns, through the pose (`work.drift`: ∂x/∂drift).
     drift: Option<Slot>,
+    /// The `base_tilt`'s columns: ∂x/∂roll, ∂x/∂pitch.
+    tilt: Option<(Slot, [Vector3<f64>; 2])>,
     /// The warm-up's and the refraction's columns (rows 0 and 1 of the range-term Jacobian).
     range_terms: [Option<Slot>; 2],
     /// The direction of x.
@@ -269,8 +303,8 @@ struct TrackerChain {
 
 impl TrackerChain {
     #[allow(clippy::too_many_arguments)]
-    fn new(pose: Slot, drift: Option<Slot>, range_terms: [Option<Slot>; 2], u: Vector3<f64>, point_from_x: Matrix3<f64>, range_from_x: RowVector3<f64>, rt: &Matrix3<f64>) -> Self {
-        Self { pose, drift, range_terms, u, point_from_x, range_from_x, point_from_target: point_from_x * rt, range_from_target: range_from_x * rt }
+    fn new(pose: Slot, drift: Option<Slot>, tilt: Option<(Slot, [Vector3<f64>; 2])>, range_terms: [Option<Slot>; 2], u: Vector3<f64>, point_from_x: Matrix3<f64>, range_from_x: RowVector3<f64>, rt: &Matrix3<f64>) -> Self {
+        Self { pose, drift, tilt, range_terms, u, point_from_x, range_from_x, point_from_target: point_from_x * rt, range_from_target: range_from_x * rt }
     }
 
     /// The chain of `map`·y (e.g. the whitened point): the point's factors premultiplied once.
@@ -296,6 +330,10 @@ impl TrackerChain {
         if let Some(slot) = self.drift.filter(|s| within(*s)) {
             let k = c - slot.start;
             return through(&self.point_from_x, &self.range_from_x, &work.drift.as_slice()[3 * k..3 * k + 3]);
+        }
+        if let Some((slot, d)) = self.tilt.filter(|(s, _)| within(*s)) {
+            let dx = d[c - slot.start];
+            return (self.point_from_x * dx, self.range_from_x.dot(&dx.transpose()));
         }
         for (row, slot) in self.range_terms.iter().enumerate() {
             if let Some(slot) = slot.filter(|s| within(*s)) {

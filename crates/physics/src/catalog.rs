@@ -6,7 +6,7 @@ use std::collections::BTreeMap;
 use crate::config::{quantity, ConfigValue, Options, TermConfig};
 use crate::error::PhysicsError;
 use crate::geometry::{angular::Angular, backlash::Backlash, frame_misalignment::FrameMisalignment, pitch_cyclic::PitchCyclic, positioning::Positioning, rotary_axis_location::RotaryAxisLocation, squareness::Squareness, straightness::Straightness};
-use crate::instrument::{camera_scale::CameraScale, instrument_drift::InstrumentDrift, lens_distortion::LensDistortion, probe_pretravel::ProbePretravel, refraction::Refraction, time_offset::TimeOffset, tracker_pose::TrackerPose, tracker_warmup::TrackerWarmup, turbulence::Turbulence};
+use crate::instrument::{camera_scale::CameraScale, base_tilt::BaseTilt, instrument_drift::InstrumentDrift, lens_distortion::LensDistortion, probe_pretravel::ProbePretravel, refraction::Refraction, time_offset::TimeOffset, tracker_pose::TrackerPose, tracker_warmup::TrackerWarmup, turbulence::Turbulence};
 use crate::gravity::{column_bending::ColumnBending, joint_backlash::JointBacklash, joint_compliance::JointCompliance, link_thermal_expansion::LinkThermalExpansion};
 use crate::load::{compliance::Compliance, tool_offset::ToolOffset};
 use crate::machine_family::KinematicParameters;
@@ -68,6 +68,7 @@ pub fn build_term(id: TermId, options: &BTreeMap<String, ConfigValue>) -> Result
         TermId::Refraction => Box::new(Refraction::from_options(&o)?),
         TermId::Turbulence => Box::new(Turbulence::from_options(&o)?),
         TermId::TrackerPose => Box::new(TrackerPose::from_options(&o)?),
+        TermId::BaseTilt => Box::new(BaseTilt::from_options(&o)?),
         TermId::ProbePretravel => Box::new(ProbePretravel::from_options(&o)?),
         TermId::LensDistortion => Box::new(LensDistortion::from_options(&o)?),
         TermId::CameraScale => Box::new(CameraScale::from_options(&o)?),

@@ -203,6 +203,10 @@ pub struct Signals {
     /// Each accelerometer's reading (specific force, its own frame, m/s²: +9.81 along its up axis
     /// at rest), by sensor name.
     pub accelerations: BTreeMap<String, Vector3<f64>>,
+    /// The placement of the instrument that took this reading (a recording's `setup` column):
+    /// the forward model reads it with that placement's pose (`tracker_pose[<setup>]`). None:
+    /// the instrument's only pose.
+    pub setup: Option<std::sync::Arc<str>>,
 }
 
 /// Who asks for a signal, named in the error when it is missing. A term passes itself, so its

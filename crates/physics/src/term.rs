@@ -168,6 +168,12 @@ pub trait PhysicsTerm: TermClone + std::fmt::Debug + Send + Sync {
     fn instrument(&self) -> Option<&str> {
         None
     }
+    /// The placement of its instrument a pose term is of (`tracker_pose` option `setup`: a
+    /// recording's `setup` column), `None` for a pose that holds for every reading and for
+    /// every other term.
+    fn setup(&self) -> Option<&str> {
+        None
+    }
     /// What the prediction is.
     fn effect(&self) -> EffectKind;
     /// Parameter descriptors, in the order of the parameter vector.

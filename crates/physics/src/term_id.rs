@@ -40,7 +40,8 @@ term_ids! {
     TrackerWarmup => "tracker_warmup", Instrument, "laser-tracker range drift during warm-up", "Δρ = A + B·(1 − e^(−t/τ))";
     Refraction => "refraction", Instrument, "range error from air on the beam differing from the weather station (Edlén)", "Δρ = ρ·(n(t+ΔT, p+Δp, h+Δh)/n(t, p, h) − 1), n = shop-floor Edlén, Δh a fixed option";
     Turbulence => "turbulence", Instrument, "range scatter inflated by turbulence (flagged, not fitted as bias)", "σ = √((σ₀ + s·ρ)² + (c·ρ)²)";
-    TrackerPose => "tracker_pose", Instrument, "6-dof pose of the tracker in the frame tool points are reported in (workpiece; an arm's cell frame)", "X_LT = (Rx(α)Ry(β)Rz(δ))ᵀ·(p − T_LT)";
+    TrackerPose => "tracker_pose", Instrument, "6-dof pose of the tracker in the frame tool points are reported in (workpiece; an arm's cell frame); one per placement (option `setup`)", "X_LT = (Rx(α)Ry(β)Rz(δ))ᵀ·(p − T_LT)";
+    BaseTilt => "base_tilt", Instrument, "the measured base's tilt from level, shared by every placement of a levelled instrument", "P_level = Rx(roll)·Ry(pitch)·P";
     ProbePretravel => "probe_pretravel", Instrument, "direction-dependent touch-probe pretravel (n-lobe)", "d = [(1−u_z²)(p₀ + a cos nφ + b sin nφ) + u_z² p_z]·u";
     LensDistortion => "lens_distortion", Instrument, "Brown–Conrady radial/tangential lens distortion", "Δx = x(k1r²+k2r⁴+k3r⁶) + 2p1xy + p2(r²+2x²); Δy = y(…) + p1(r²+2y²) + 2p2xy";
     CameraScale => "camera_scale", Instrument, "metric scale error of a camera measurement", "d = s·p (camera frame)";

@@ -5,12 +5,13 @@ use metrocell_physics::{PhysicsError, TermConfig, TermId};
 
 /// The ids of DESIGN.md "The physics vocabulary", verbatim, and `rotary_axis_location` (issue 13:
 /// the catalog grows with the physics real machines need; its line goes into DESIGN.md's list),
-/// `instrument_drift` (issue 26), the gravity terms of arms and columns (issue 27).
-const DESIGN_IDS: [&str; 32] = [
+/// `instrument_drift` (issue 26), the gravity terms of arms and columns and the levelled
+/// instrument's `base_tilt` (issue 27).
+const DESIGN_IDS: [&str; 33] = [
     "positioning", "straightness", "angular", "squareness", "pitch_cyclic", "backlash", "thermal_scale", "thermal_growth", "workpiece_expansion", "tracker_warmup", "refraction", "turbulence",
     "tracker_pose", "probe_pretravel", "lens_distortion", "camera_scale", "time_offset", "compliance", "tool_offset", "delta_rod_length", "delta_radius", "delta_tower_angle", "delta_endstop",
     "joint_offset", "link_length", "frame_misalignment", "rotary_axis_location", "instrument_drift", "joint_compliance", "joint_backlash", "column_bending",
-    "link_thermal_expansion",
+    "link_thermal_expansion", "base_tilt",
 ];
 
 #[test]

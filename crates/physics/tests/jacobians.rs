@@ -37,8 +37,8 @@ fn analytic_jacobians_match_finite_differences() {
             checked += 1;
         }
     }
-    // 22 non-kinematic ids × 25 states
-    assert_eq!(checked, 22 * 25);
+    // 23 non-kinematic ids × 25 states
+    assert_eq!(checked, 23 * 25);
 }
 
 /// Parameters in which a term's documented equation (crates/physics/README.md) is NOT linear:
@@ -49,6 +49,7 @@ fn nonlinear_params(id: &str) -> &'static [&'static str] {
     match id {
         "tracker_warmup" | "thermal_growth" => &["time_constant"],
         "tracker_pose" => &["alpha", "beta", "delta"],
+        "base_tilt" => &["roll", "pitch"],
         "refraction" => &["path_pressure_offset", "path_temperature_offset"],
         "turbulence" => &["base_sigma", "proportional_sigma", "turbulence"],
         _ => &[],
@@ -114,7 +115,7 @@ fn predictions_have_the_declared_dimension_and_are_linear_where_documented() {
         }
     }
     assert!(linear_checked > 200, "only {linear_checked} linear parameter moves checked");
-    for must in ["tracker_warmup.time_constant", "thermal_growth.time_constant", "tracker_pose.alpha", "tracker_pose.beta", "tracker_pose.delta"] {
+    for must in ["tracker_warmup.time_constant", "thermal_growth.time_constant", "tracker_pose.alpha", "tracker_pose.beta", "tracker_pose.delta", "base_tilt.roll", "base_tilt.pitch"] {
         assert!(nonlinear_seen.contains(must), "{must} behaved linearly: the documented nonlinearity is missing");
     }
 }

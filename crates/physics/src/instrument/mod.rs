@@ -1,5 +1,6 @@
 //! Instrument physics: laser tracker (refraction, warm-up, turbulence, pose), touch probe,
 //! camera, and stream timing.
+pub mod base_tilt;
 pub mod camera_scale;
 pub mod edlen;
 pub mod instrument_drift;

@@ -25,11 +25,24 @@ use metrocell_kinematics::transform::{drx, dry, drz, rx, ry, rz};
 pub struct TrackerPose {
     /// Instance name (option `instrument`), see [`super::instance`].
     pub instrument: Option<String>,
+    /// The placement this pose is of (option `setup`): an instrument moved between groups of
+    /// readings (a total station re-stationed, a tracker leap-frogged) has one pose per
+    /// placement, each reading naming its own (signal `setup`). None: one pose for all.
+    pub setup: Option<String>,
 }
 
 impl TrackerPose {
     pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
-        Ok(Self { instrument: super::instance(o)? })
+        let setup = if o.has("setup") {
+            let name = o.text("setup", None)?;
+            if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.')) {
+                return Err(o.bad("setup", format!("`{name}` is not a setup name; use letters, digits, `_`, `-` or `.` (e.g. S1, station_3)")));
+            }
+            Some(name)
+        } else {
+            None
+        };
+        Ok(Self { instrument: super::instance(o)?, setup })
     }
 }
 
@@ -38,10 +51,18 @@ impl PhysicsTerm for TrackerPose {
         TermId::TrackerPose
     }
     fn label(&self) -> String {
-        super::instance_label("tracker_pose", &self.instrument)
+        // `tracker_pose`, `tracker_pose[lt1]`, `tracker_pose[S1]`, `tracker_pose[lt1@S1]`
+        let instance = match (&self.instrument, &self.setup) {
+            (Some(i), Some(s)) => Some(format!("{i}@{s}")),
+            (i, s) => i.clone().or_else(|| s.clone()),
+        };
+        super::instance_label("tracker_pose", &instance)
     }
     fn instrument(&self) -> Option<&str> {
         self.instrument.as_deref()
+    }
+    fn setup(&self) -> Option<&str> {
+        self.setup.as_deref()
     }
     fn effect(&self) -> EffectKind {
         EffectKind::PointInFrame(Frame::Tracker)

@@ -115,25 +115,22 @@ program:
 GRAVITY_TERMS = """
 terms:
   - id: joint_compliance             # Δθ_j = k_j·τ_j, τ_j the gravity torque from the URDF inertials [rad/(N·m)]
-    options: {joints: [shoulder_pan, shoulder_lift, elbow, wrist_1, wrist_2, wrist_3], accelerometer: base}
-    params: {shoulder_pan: 0, shoulder_lift: 0, elbow: 0, wrist_1: 0, wrist_2: 0, wrist_3: 0}
-  - id: column_bending               # the telescoping column's tilt and shift under the carried moment
-    options: {joints: [column_lower, column_upper], accelerometer: base}
-    params: {foot_compliance: 0, overlap_compliance: 0, inverse_flexural_rigidity: 0}
-  - id: joint_backlash               # lost motion, its sign the gravity torque's
-    options: {joints: [shoulder_lift, elbow, wrist_1], sign: gravity_torque}
-    params: {shoulder_lift: 0, elbow: 0, wrist_1: 0}
-  - id: tool_offset                  # the prism's offset error in the flange frame
+    options: {joints: [shoulder_pan, shoulder_lift, elbow, wrist_1, wrist_2, wrist_3]}
+    params: {k_shoulder_pan: 0, k_shoulder_lift: 0, k_elbow: 0, k_wrist_1: 0, k_wrist_2: 0, k_wrist_3: 0}
+  - id: column_bending               # the telescoping column's tilt under the carried moment: foot, guide pads, tube
+    options: {joint: column_lower, overlaps: [800 mm, 900 mm]}
+    params: {foot: 0, pads: 0, flexure: 0}
+  - id: joint_backlash               # the full play b, taken up to the side of the gravity torque
+    options: {joints: [shoulder_lift, elbow, wrist_1]}
+    params: {b_shoulder_lift: 0, b_elbow: 0, b_wrist_1: 0}
+  - id: tool_offset                  # the prism's offset error in the tool (flange) frame
     params: {dx: 0 mm, dy: 0 mm, dz: 0 mm}
-  - id: accelerometer_alignment      # mounting misalignment and bias (a nuisance)
-    options: {sensor: base}
-    params: {rx: 0 rad, ry: 0 rad}
   - id: link_thermal_expansion       # handbook α, not fitted (the flat recording is at one temperature)
     options: {sensor: ambient}
     params: {alpha: 23e-6 1/K}
 
 estimation:
-  link_thermal_expansion: {fixed: [alpha]}
+  link_thermal_expansion[ambient]: {free: []}
 """
 
 

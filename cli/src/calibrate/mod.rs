@@ -2,6 +2,7 @@
 //! the declared error model fitted to the measurements of recordings (batch identification),
 //! written back as the same cell file with fitted values and their uncertainties.
 
+mod placements;
 mod report;
 mod result_json;
 
@@ -69,6 +70,11 @@ pub struct CalibrateArgs {
     /// is fitted to them too (its pretravel with them)
     #[arg(long)]
     no_probe_hits: bool,
+    /// Refit only these and keep the rest of the model: `poses` — the instrument's placements
+    /// (one pose per setup, the base's tilt), the stationing step at a new site with the
+    /// physics a previous calibration fitted
+    #[arg(long, value_parser = ["poses"])]
+    refit: Option<String>,
 }
 
 pub fn run(a: CalibrateArgs) -> i32 {
@@ -98,22 +104,42 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<i32> {
         "tracker" => PointSource::TrackerMeasurements,
         other => anyhow::bail!("--points `{other}`: allowed auto, measured, tracker"),
     };
-    let model = CellModel::from_path(&a.model)?;
-    let fm = model.forward_model()?;
-    eprintln!("model {}: {} terms, {} parameters ({} free)", a.model.display(), model.machine_terms.terms.len() + model.instrument_terms.terms.len(), fm.param_count(), model.setup.free.iter().filter(|f| **f).count());
+    let file_model = CellModel::from_path(&a.model)?;
     eprintln!("reading {} recording(s)…", a.bags.len());
     // a model that declares a touch probe is fitted to the recording's probe hits too
-    let probe_hits = model.raw.sensors.probe.is_some() && !a.no_probe_hits;
+    let probe_hits = file_model.raw.sensors.probe.is_some() && !a.no_probe_hits;
     let options = RecordingOptions { points, measured_points_topic: a.measured_points_topic.clone(), probe_hits, ..RecordingOptions::default() };
-    let records = records_from_bags(&a.bags, &fm, &options)?;
-    eprintln!("{} measurement records ({} rejected) in {:.1} s; fitting…", records.len(), records.rejected.len(), started.elapsed().as_secs_f64());
-    let result = fit(&fm, &model.setup, &records, None, &FitOptions { loss, ..FitOptions::default() }).with_context(|| format!("fitting {} to {} records", a.model.display(), records.len()))?;
+    let mut records = records_from_bags(&a.bags, &file_model.forward_model()?, &options)?;
+    // one pose per placement of the instrument (the recordings' `setup`), the base's tilt for a
+    // levelled one; placements with too few fit points set aside, named
+    let (setups, short) = placements::usable_setups(&mut records, placements::fit_points_needed(&file_model));
+    let model = file_model.with_setups(&setups)?;
+    let fm = model.forward_model()?;
+    let setup = match a.refit.as_deref() {
+        Some(_) => placements::poses_only(&model.setup),
+        None => model.setup.clone(),
+    };
+    eprintln!("model {}: {} terms, {} parameters ({} free){}", a.model.display(), model.machine_terms.terms.len() + model.instrument_terms.terms.len(), fm.param_count(), setup.free.iter().filter(|f| **f).count(), if setups.is_empty() { String::new() } else { format!(", a pose for each of {} setups ({})", setups.len(), setups.join(", ")) });
+    for note in &short {
+        eprintln!("warning: {note}");
+    }
+    eprintln!("{} measurement records, {} check points ({} rejected) in {:.1} s; fitting…", records.len(), records.check.len(), records.rejected.len(), started.elapsed().as_secs_f64());
+    let fit_options = FitOptions { loss, ..FitOptions::default() };
+    let result = fit(&fm, &setup, &records, None, &fit_options).with_context(|| format!("fitting {} to {} records", a.model.display(), records.len()))?;
+    let check = if records.check.is_empty() { None } else { Some(placements::compare_on_check_points(&fm, &setup, &records, &result, &fit_options).context("predicting the check points")?) };
     let iterations = result.solution.iterations;
     eprintln!("fitted in {:.1} s ({iterations} iteration{}; {})", started.elapsed().as_secs_f64(), if iterations == 1 { "" } else { "s" }, result.solution.termination.in_words());
     let mut lines = summary_lines(&result, &records);
+    lines.extend(short.iter().cloned());
+    if let Some(c) = &check {
+        lines.extend(placements::check_lines(c));
+    }
     // Files first, words last: a reader that closes stdout early (`| head`, `| true`) must not
     // cost the user the fitted model (see `restore_sigpipe` in main.rs).
     let update = model_update(&result, &records, &a);
+    // the fitted file is the file's model: placements are per recording, not written into it
+    let per_recording = |name: &str| placements::is_placement_parameter(name) && (!setups.is_empty() || name.starts_with("base_tilt"));
+    let update = ModelUpdate { parameters: update.parameters.into_iter().filter(|p| !per_recording(&p.name)).collect(), ..update };
     let text = write_model(&model, &update)?;
     std::fs::write(&a.output, &text).with_context(|| format!("cannot write `{}`", a.output.display()))?;
     let page = match &a.report {
@@ -121,7 +147,7 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<i32> {
         None => None,
     };
     let json = match &a.json {
-        Some(_) => Some(serde_json::to_string_pretty(&result_json::result(&result, &records, &a.output))?),
+        Some(_) => Some(serde_json::to_string_pretty(&result_json::result(&result, &records, &a.output, check.as_ref()))?),
         None => None,
     };
     let json_to_stdout = a.json.as_deref() == Some("-");

@@ -5,8 +5,9 @@ use std::path::Path;
 use metrocell_estimation::{rms, Fit, RecordSet};
 use serde_json::{json, Value};
 
-pub fn result(f: &Fit, records: &RecordSet, output: &Path) -> Value {
+pub fn result(f: &Fit, records: &RecordSet, output: &Path, check: Option<&super::placements::CheckComparison>) -> Value {
     json!({
+        "check": check.map(super::placements::check_json),
         "model": output.display().to_string(),
         "records": f.used.len(),
         "rejected": records.rejected.iter().map(|r| json!({"at": r.at, "point_id": r.point_id, "reason": r.reason})).chain(f.skipped.iter().map(|s| json!({"at": format!("record {}", s.index), "point_id": s.point_id, "reason": s.reason}))).collect::<Vec<_>>(),

@@ -78,7 +78,7 @@ pub(crate) fn declared_stage(declared: &DeclaredModel, records: &RecordSet, opti
     // machine's points, the nests placed from their own readings at that fit
     let (mut references, points): (Vec<MeasurementRecord>, Vec<MeasurementRecord>) = prep.records.iter().cloned().partition(is_reference);
     check_records(declared, &setup, &points)?;
-    let mut set = RecordSet { frame: records.frame.clone(), records: points, rejected: vec![], sources: records.sources.clone() };
+    let mut set = RecordSet { check: records.check.clone(), frame: records.frame.clone(), records: points, rejected: vec![], sources: records.sources.clone() };
     progress.say(&format!("{} readings → {} records ({} groups of repeats averaged, {} readings of reference nests); fitting the declared model", prep.readings, prep.records.len(), prep.groups, references.len()));
     let mut declared_fit = fit(&model, &setup, &set, None, &options.fit).map_err(DiagnoseError::DeclaredFit)?;
     let outlier_notes = set_outliers_aside(&model, &declared_fit, &mut set, options.outlier_threshold)?;

@@ -39,7 +39,7 @@ fn records(csv: &str) -> RecordSet {
         s.temperatures = BTreeMap::from([("bed".to_string(), v(bed)), ("air".to_string(), v(air))]);
         out.push(MeasurementRecord { time: 1_741_073_400.0 + v(t), point_id: f[id].to_string(), channel: "numpy_export".into(), kind: RecordKind::Point, q: nominal.iter().copied().collect(), measured: Vector3::new(v(x), v(y), v(z)) * 1e-3, covariance: Matrix3::identity() * sigma * sigma, signals: s });
     }
-    RecordSet { frame: RecordFrame::Machine, records: out, rejected: vec![], sources: vec![] }
+    RecordSet { check: Vec::new(), frame: RecordFrame::Machine, records: out, rejected: vec![], sources: vec![] }
 }
 
 #[test]

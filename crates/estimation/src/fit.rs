@@ -23,7 +23,7 @@
 //! ([`Fit::skipped`]); records the robust loss down-weighted are named too ([`Fit::outliers`]).
 
 use metrocell_model::{ForwardModel, ParameterSetup};
-use metrocell_physics::{PhysicsError, TermId};
+use metrocell_physics::PhysicsError;
 use metrocell_solver::identifiability::GRAM_RCOND;
 use metrocell_solver::{normal_matrix, solve, solve_from, Evaluated, Identifiability, Loss, NullSpace, Options, Prior, Problem, Solution, SolverError, zeroed_matrix};
 use metrocell_laser_tracker::registration::{register, Correspondence};
@@ -225,23 +225,36 @@ pub fn rms(residuals: &[Vector3<f64>]) -> f64 {
 /// unless the setup fixes it).
 pub fn start_vector(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet) -> Result<Vec<f64>, FitError> {
     let mut x = model.params();
-    let Some(pose) = model.instrument_param_start(TermId::TrackerPose) else { return Ok(x) };
-    match &records.frame {
-        RecordFrame::Machine => x[pose..pose + 6].iter_mut().for_each(|v| *v = 0.0),
-        RecordFrame::Instrument(_) if setup.free[pose..pose + 6].iter().any(|f| *f) => {
-            let kin = model.kinematic_truth(&x)?;
-            let mut pairs = Vec::with_capacity(records.len());
-            // the tracker's points (probe hits and camera points are in frames of their own)
-            for r in records.records.iter().filter(|r| r.kind == RecordKind::Point) {
-                let mut s = r.signals.clone();
-                let tool = model.tool_state(&x, &kin, &r.q, &mut s, None)?;
-                pairs.push(Correspondence { tracker: r.measured, tracker_covariance: r.covariance, machine: tool.target(), machine_covariance: Matrix3::identity() * 1e-12 });
+    // every pose: the instrument's only one, or one per placement (`tracker_pose[<setup>]`)
+    let poses = model.pose_param_starts();
+    let several = poses.iter().any(|(s, _)| s.is_some());
+    for (placement, pose) in poses {
+        match &records.frame {
+            RecordFrame::Machine => x[pose..pose + 6].iter_mut().for_each(|v| *v = 0.0),
+            RecordFrame::Instrument(_) if setup.free[pose..pose + 6].iter().any(|f| *f) => {
+                let kin = model.kinematic_truth(&x)?;
+                let mut pairs = Vec::with_capacity(records.len());
+                // the tracker's points of this placement (probe hits and camera points are in
+                // frames of their own)
+                let mine = |r: &&crate::records::MeasurementRecord| !several || r.signals.setup.as_deref() == placement.as_deref();
+                for r in records.records.iter().filter(|r| r.kind == RecordKind::Point).filter(mine) {
+                    let mut s = r.signals.clone();
+                    let tool = model.tool_state(&x, &kin, &r.q, &mut s, None)?;
+                    pairs.push(Correspondence { tracker: r.measured, tracker_covariance: r.covariance, machine: tool.target(), machine_covariance: Matrix3::identity() * 1e-12 });
+                }
+                if several && pairs.len() < 3 {
+                    // a placement without three points keeps its start (the caller names it)
+                    continue;
+                }
+                let reg = register(&pairs).map_err(|e| FitError::Registration(match &placement {
+                    Some(s) => format!("setup `{s}`: {e}"),
+                    None => e.to_string(),
+                }))?;
+                let p = metrocell_model::InstrumentPose::from_rotation(reg.translation, reg.rotation.matrix());
+                x[pose..pose + 6].copy_from_slice(&p.term_params());
             }
-            let reg = register(&pairs).map_err(|e| FitError::Registration(e.to_string()))?;
-            let p = metrocell_model::InstrumentPose::from_rotation(reg.translation, reg.rotation.matrix());
-            x[pose..pose + 6].copy_from_slice(&p.term_params());
+            RecordFrame::Instrument(_) => {}
         }
-        RecordFrame::Instrument(_) => {}
     }
     Ok(x)
 }
@@ -272,15 +285,17 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
     let kept: &RecordSet = if skipped.is_empty() {
         records
     } else {
-        subset = RecordSet { frame: records.frame.clone(), records: used.iter().map(|&i| records.records[i].clone()).collect(), rejected: vec![], sources: vec![] };
+        subset = RecordSet { check: Vec::new(), frame: records.frame.clone(), records: used.iter().map(|&i| records.records[i].clone()).collect(), rejected: vec![], sources: vec![] };
         &subset
     };
     if kept.is_empty() {
         return Err(FitError::NoRecords);
     }
     let mut free = setup.free.clone();
-    if let (RecordFrame::Machine, Some(pose)) = (&kept.frame, model.instrument_param_start(TermId::TrackerPose)) {
-        free[pose..pose + 6].iter_mut().for_each(|f| *f = false);
+    if kept.frame == RecordFrame::Machine {
+        for (_, pose) in model.pose_param_starts() {
+            free[pose..pose + 6].iter_mut().for_each(|f| *f = false);
+        }
     }
     let n_free = free.iter().filter(|f| **f).count();
     let n_priors = setup.priors.iter().zip(&free).filter(|(p, f)| p.is_some() && **f).count();
@@ -363,14 +378,17 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
     // (the Gram route's normal matrix is the first solve's too, when no parameter is held here)
     let (declared_identifiability, start_normal) = if options.rcond >= GRAM_RCOND {
         let normal = normal_matrix(&j0, &free_idx);
-        (Identifiability::from_normal_matrix(&normal, j0.nrows(), &free_labels, options.rcond)?, Some(normal))
-    } else {
+        let judged = if priors.is_empty() { Identifiability::from_normal_matrix(&normal, j0.nrows(), &free_labels, options.rcond)? } else { identifiability_with_priors(&j0, &priors, &free, &labels, options.rcond)? };
+        (judged, Some(normal))
+    } else if priors.is_empty() {
         (Identifiability::analyze(&j0.select_columns(&free_idx), &free_labels, Some(options.rcond))?, None)
+    } else {
+        (identifiability_with_priors(&j0, &priors, &free, &labels, options.rcond)?, None)
     };
     let machine_params = model.machine_terms.param_specs().len();
     let mut held = Vec::new();
     if !declared_identifiability.null_directions.is_empty() {
-        for (k, sentence) in dependent_parameters(&j0, &free, machine_params, &names) {
+        for (k, sentence) in dependent_parameters(&with_prior_rows(&j0, &priors), &free, machine_params, &names) {
             free[k] = false;
             held.push(HeldParameter { index: k, name: names[k].clone(), combination: sentence });
         }
@@ -378,12 +396,15 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
     // the start's r and J go to the first solve, which works in them
     let start_normal = start_normal.filter(|_| held.is_empty());
     let mut solution = two_stage(&free, Some(Evaluated { residuals: r0, jacobian: j0, normal_matrix: start_normal }))?;
-    let mut identifiability = solution.identifiability(&labels, Some(options.rcond))?;
+    let judge = |solution: &Solution| -> Result<Identifiability, FitError> {
+        Ok(if priors.is_empty() { solution.identifiability(&labels, Some(options.rcond))? } else { identifiability_with_priors(&solution.weighted_jacobian, &priors, &solution.free, &labels, options.rcond)? })
+    };
+    let mut identifiability = judge(&solution)?;
     // at the solution: hold what became inseparable there too (from the start again, so the
     // held ones keep their start values exactly) until the rest is identifiable
     while !identifiability.null_directions.is_empty() && held.len() < n_free {
         let before = held.len();
-        for (k, sentence) in dependent_parameters(&solution.weighted_jacobian, &free, machine_params, &names) {
+        for (k, sentence) in dependent_parameters(&with_prior_rows(&solution.weighted_jacobian, &priors), &free, machine_params, &names) {
             free[k] = false;
             held.push(HeldParameter { index: k, name: names[k].clone(), combination: sentence });
         }
@@ -398,7 +419,7 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
             held.push(HeldParameter { index: k, name: names[k].clone(), combination: identifiability.describe()[0].clone() });
         }
         solution = two_stage(&free, None)?;
-        identifiability = solution.identifiability(&labels, Some(options.rcond))?;
+        identifiability = judge(&solution)?;
     }
     let residuals_after = problem.unwhitened(&solution.residuals);
     let covariance = solution.covariance();
@@ -450,6 +471,32 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
         options_threshold: threshold,
         solution,
     })
+}
+
+/// √W·J with one row per prior (1/σ in its parameter's column): a prior is information too —
+/// a levelled instrument's compensator is what separates its placements' tilts from the base's.
+/// `j` itself (a copy) without priors.
+fn with_prior_rows(j: &DMatrix<f64>, priors: &[Prior]) -> DMatrix<f64> {
+    if priors.is_empty() {
+        return j.clone();
+    }
+    let mut out = j.clone().resize_vertically(j.nrows() + priors.len(), 0.0);
+    for (i, p) in priors.iter().enumerate() {
+        out[(j.nrows() + i, p.index)] = 1.0 / p.sigma;
+    }
+    out
+}
+
+/// What the measurements and the priors identify together, over the `free` parameters.
+fn identifiability_with_priors(jw: &DMatrix<f64>, priors: &[Prior], free: &[bool], labels: &[&str], rcond: f64) -> Result<Identifiability, SolverError> {
+    let idx: Vec<usize> = (0..free.len()).filter(|&k| free[k]).collect();
+    let names: Vec<&str> = idx.iter().map(|&k| labels[k]).collect();
+    let all = with_prior_rows(jw, priors);
+    if rcond >= GRAM_RCOND {
+        Identifiability::from_normal_matrix(&normal_matrix(&all, &idx), all.nrows(), &names, rcond)
+    } else {
+        Identifiability::analyze(&all.select_columns(&idx), &names, Some(rcond))
+    }
 }
 
 /// Relative size (of a unit column) below which a column is taken as a combination of the

@@ -38,6 +38,7 @@
 //!
 //! Units: SI (m) in and out; reports convert to mm and µm.
 
+pub mod check_points;
 pub mod design_of_experiments;
 pub mod error_functions;
 pub mod fit;
@@ -55,6 +56,7 @@ pub mod signal_topics;
 pub mod uncertainty_budget;
 pub mod volumetric_monte_carlo;
 
+pub use check_points::{check_report, check_statistics, setups_of, CheckReport, CheckStatistics};
 pub use fit::{fit, inseparable, rms, start_vector, BoundSide, Fit, FitError, FitOptions, HeldParameter, ParameterEstimate, RecordNote};
 pub use record_stream::{declared_topics, RecordStream, StreamOutput};
 pub use records::{MeasurementRecord, RecordFrame, RecordKind, RecordSet, Rejected};

@@ -18,7 +18,7 @@
 use std::collections::{BTreeMap, VecDeque};
 use std::path::{Path, PathBuf};
 
-use metrocell_bagtools::import::REFERENCE_POINTS_TOPIC;
+use metrocell_bagtools::import::{CHECK_POINTS_TOPIC, REFERENCE_POINTS_TOPIC};
 use metrocell_bagtools::SourcedMessage;
 use metrocell_model::{ForwardModel, MachineGeometry, MachineKinematics, SignalsBuilder};
 use metrocell_msgs::msg::{FiducialDetectionArray, MeasuredPoint, ProbeHit, TrackerMeasurement};
@@ -28,7 +28,7 @@ use nalgebra::{Matrix3, Vector3};
 
 use crate::instrument_readings::{marker_measurements, probe_measurement, record_kind, CameraFeatures, InstrumentMeasurement, InstrumentReading};
 use crate::records::{MeasurementRecord, RecordFrame, RecordKind, Rejected};
-use crate::recordings::{providers, record_frame, PointSource, RecordingError, RecordingOptions};
+use crate::recordings::{frame_setup, providers, record_frame, PointSource, RecordingError, RecordingOptions};
 use crate::residuals::whitening;
 use crate::signal_topics::{feed, message_time, SignalTopic, AIR_SENSOR, COMMANDED_JOINTS_TOPIC, LOAD_TOPIC, POWER_ON_TOPIC, TEMPERATURE_PREFIX};
 use metrocell_msgs::geometry_msgs::msg::WrenchStamped;
@@ -40,6 +40,8 @@ use metrocell_msgs::sensor_msgs::msg::{JointState, Temperature, TimeReference};
 pub struct StreamOutput {
     pub by_frame: Vec<(RecordFrame, Vec<MeasurementRecord>)>,
     pub instrument_records: Vec<MeasurementRecord>,
+    /// Points whose role is `check` (`/check_points`): kept out of fits (see [`RecordSet::check`]).
+    pub check: Vec<MeasurementRecord>,
     pub rejected: Vec<Rejected>,
     /// (what, topic or column) of every input used, e.g. ("points", "/measured_points (…)").
     pub sources: Vec<(String, String)>,
@@ -65,6 +67,9 @@ pub struct RecordStream<'m, 'a> {
     camera_topic: Option<String>,
     /// Readings of reference nests (`MeasuredPoint`s the machine did not place), if recorded.
     reference_topic: Option<String>,
+    /// `/check_points` when the recording has them, and the index of the next.
+    check_topic: Option<String>,
+    check_index: u64,
     reference_index: u64,
     camera_features: CameraFeatures,
     signal_topics: BTreeMap<String, SignalTopic>,
@@ -94,7 +99,7 @@ pub fn declared_topics(model: &ForwardModel, options: &RecordingOptions) -> Vec<
         PointSource::TrackerMeasurements => (options.tracker_topic.clone(), TrackerMeasurement::ROS_TYPE),
         PointSource::MeasuredPoints | PointSource::Auto => (options.measured_points_topic.clone(), MeasuredPoint::ROS_TYPE),
     };
-    let mut topics = vec![(points.0, points.1.to_string()), (COMMANDED_JOINTS_TOPIC.to_string(), JointState::ROS_TYPE.to_string()), (REFERENCE_POINTS_TOPIC.to_string(), MeasuredPoint::ROS_TYPE.to_string())];
+    let mut topics = vec![(points.0, points.1.to_string()), (COMMANDED_JOINTS_TOPIC.to_string(), JointState::ROS_TYPE.to_string()), (REFERENCE_POINTS_TOPIC.to_string(), MeasuredPoint::ROS_TYPE.to_string()), (CHECK_POINTS_TOPIC.to_string(), MeasuredPoint::ROS_TYPE.to_string())];
     if options.probe_hits {
         topics.push((options.probe_topic.clone(), ProbeHit::ROS_TYPE.to_string()));
     }
@@ -135,6 +140,8 @@ impl<'m, 'a> RecordStream<'m, 'a> {
         let found = typed(points_topic, points_type)?;
         let probes = options.probe_hits && typed(&options.probe_topic, ProbeHit::ROS_TYPE)?;
         let references = typed(REFERENCE_POINTS_TOPIC, MeasuredPoint::ROS_TYPE)?;
+        // check points are points of the program: read where the points are measured points
+        let checks = !points_tracker && typed(CHECK_POINTS_TOPIC, MeasuredPoint::ROS_TYPE)?;
         let cameras = options.camera_points && typed(&options.camera_topic, FiducialDetectionArray::ROS_TYPE)?;
         if !(found || probes || cameras) {
             let held = topics.iter().map(|(n, t)| format!("{n} ({t})")).collect::<Vec<_>>().join(", ");
@@ -150,6 +157,9 @@ impl<'m, 'a> RecordStream<'m, 'a> {
         }
         if probes {
             sources.push(("probe hits".to_string(), format!("{} ({})", options.probe_topic, ProbeHit::ROS_TYPE)));
+        }
+        if checks {
+            sources.push(("check points".to_string(), format!("{CHECK_POINTS_TOPIC} ({}), kept out of fits", MeasuredPoint::ROS_TYPE)));
         }
         if references {
             sources.push(("reference nests".to_string(), format!("{REFERENCE_POINTS_TOPIC} ({})", MeasuredPoint::ROS_TYPE)));
@@ -228,6 +238,8 @@ impl<'m, 'a> RecordStream<'m, 'a> {
             camera_topic: cameras.then(|| options.camera_topic.clone()),
             reference_topic: references.then(|| REFERENCE_POINTS_TOPIC.to_string()),
             reference_index: 0,
+            check_topic: checks.then(|| CHECK_POINTS_TOPIC.to_string()),
+            check_index: 0,
             camera_features: options.camera_features.clone(),
             signal_topics: BTreeMap::new(),
             joints,
@@ -277,7 +289,7 @@ impl<'m, 'a> RecordStream<'m, 'a> {
 
     /// Every topic the stream reads (points, probe hits, camera points, signals).
     pub fn topics(&self) -> Vec<String> {
-        let mut out: Vec<String> = self.points_topic.iter().chain(&self.probe_topic).chain(&self.camera_topic).chain(&self.reference_topic).cloned().collect();
+        let mut out: Vec<String> = self.points_topic.iter().chain(&self.probe_topic).chain(&self.camera_topic).chain(&self.reference_topic).chain(&self.check_topic).cloned().collect();
         out.extend(self.signal_topics.keys().cloned());
         out
     }
@@ -305,6 +317,18 @@ impl<'m, 'a> RecordStream<'m, 'a> {
                         }
                     }
                     self.pending.push_back(p);
+                }
+                Err(r) => self.out.rejected.push(r),
+            }
+        } else if self.check_topic.as_deref() == Some(m.topic.as_str()) {
+            let at = at(&m.topic, self.check_index);
+            self.check_index += 1;
+            match from_measured_point(m, at, self.joints, &self.model.machine.tool_offset, self.commanded_positions) {
+                Ok(mut p) => {
+                    p.check = true;
+                    self.builder.observe_time(p.t_ns);
+                    let k = self.pending.partition_point(|q| q.t_ns <= p.t_ns);
+                    self.pending.insert(k, p);
                 }
                 Err(r) => self.out.rejected.push(r),
             }
@@ -387,6 +411,7 @@ impl<'m, 'a> RecordStream<'m, 'a> {
         StreamOutput {
             by_frame: std::mem::take(&mut self.out.by_frame),
             instrument_records: std::mem::take(&mut self.out.instrument_records),
+            check: std::mem::take(&mut self.out.check),
             rejected: std::mem::take(&mut self.out.rejected),
             sources: self.out.sources.clone(),
         }
@@ -516,6 +541,10 @@ struct Pending {
     reading: Option<InstrumentReading>,
     /// A reference nest's reading: the nest's position (NaN where not given).
     nest: Option<Vector3<f64>>,
+    /// The instrument's placement that read it (`<frame>@<setup>`).
+    setup: Option<std::sync::Arc<str>>,
+    /// A check point (`/check_points`): kept out of fits.
+    check: bool,
 }
 
 
@@ -586,7 +615,7 @@ fn from_tracker(m: &SourcedMessage, at: String) -> Result<Pending, Rejected> {
     check_point(&at, &point_id, &measured, &covariance)?;
     let frame = if r.header.frame_id.is_empty() { RecordFrame::Instrument("tracker".into()) } else { record_frame(&r.header.frame_id) };
     let air = [r.air_temperature, r.air_pressure, r.air_humidity].iter().all(|v| v.is_finite()).then_some((r.air_temperature, r.air_pressure, 100.0 * r.air_humidity));
-    Ok(Pending { t_ns: message_time(&r.header.stamp, m.log_time_ns), at, point_id, channel: "tracker".into(), frame, measured, covariance, air, q: None, reading: None, nest: None })
+    Ok(Pending { t_ns: message_time(&r.header.stamp, m.log_time_ns), at, point_id, channel: "tracker".into(), frame, measured, covariance, air, q: None, reading: None, nest: None, setup: frame_setup(&r.header.frame_id), check: false })
 }
 
 /// `commanded_positions`: the recording's joint states have given the machine's positions (in
@@ -613,7 +642,7 @@ fn from_measured_point(m: &SourcedMessage, at: String, joints: JointSource, tool
             Some(vec![q.x, q.y, q.z])
         }
     };
-    Ok(Pending { t_ns: message_time(&p.header.stamp, m.log_time_ns), at, point_id: p.point_id, channel: p.source, frame: record_frame(&p.header.frame_id), measured, covariance, air: None, q, reading: None, nest: None })
+    Ok(Pending { t_ns: message_time(&p.header.stamp, m.log_time_ns), at, point_id: p.point_id, channel: p.source, frame: record_frame(&p.header.frame_id), measured, covariance, air: None, q, reading: None, nest: None, setup: frame_setup(&p.header.frame_id), check: false })
 }
 
 /// A reference nest's reading (`/reference_points`): its point, no joints.
@@ -623,7 +652,7 @@ fn from_reference_point(m: &SourcedMessage, at: String) -> Result<Pending, Rejec
     let covariance = covariance_row_major(&p.covariance);
     check_point(&at, &p.point_id, &measured, &covariance)?;
     let nest = Vector3::new(p.nominal.x, p.nominal.y, p.nominal.z);
-    Ok(Pending { t_ns: message_time(&p.header.stamp, m.log_time_ns), at, point_id: p.point_id, channel: p.source, frame: record_frame(&p.header.frame_id), measured, covariance, air: None, q: Some(Vec::new()), reading: None, nest: Some(nest) })
+    Ok(Pending { t_ns: message_time(&p.header.stamp, m.log_time_ns), at, point_id: p.point_id, channel: p.source, frame: record_frame(&p.header.frame_id), measured, covariance, air: None, q: Some(Vec::new()), reading: None, nest: Some(nest), setup: frame_setup(&p.header.frame_id), check: false })
 }
 
 /// The measurements of a probe hit (`probe`) or a detection array, checked like points.
@@ -641,7 +670,7 @@ fn instrument_pending(m: &SourcedMessage, at: String, probe: bool) -> Result<Vec
     let mut out = Vec::new();
     for x in measurements {
         check_point(&at, &x.point_id, &x.measured, &x.covariance)?;
-        out.push(Pending { t_ns, at: at.clone(), point_id: x.point_id, channel: x.channel, frame: record_frame(&frame_id), measured: x.measured, covariance: x.covariance, air: None, q: None, reading: Some(x.reading), nest: None });
+        out.push(Pending { t_ns, at: at.clone(), point_id: x.point_id, channel: x.channel, frame: record_frame(&frame_id), measured: x.measured, covariance: x.covariance, air: None, q: None, reading: Some(x.reading), nest: None, setup: frame_setup(&frame_id), check: false });
     }
     Ok(out)
 }
@@ -672,6 +701,7 @@ fn resolve(p: Pending, builder: &SignalsBuilder, needs: &[(String, SignalKind)],
         },
     };
     let mut signals = builder.signals_at(p.t_ns);
+    signals.setup = p.setup.clone();
     // a robot's gravity from its base's accelerometer (the ground's tilt)
     if let metrocell_model::MachineKinematics::SerialArm(arm) = &model.machine.kinematics {
         signals.gravity = arm.gravity_from(&signals.accelerations);
@@ -710,6 +740,10 @@ fn resolve(p: Pending, builder: &SignalsBuilder, needs: &[(String, SignalKind)],
     let record = MeasurementRecord { time: p.t_ns as f64 / 1e9, point_id: p.point_id, channel: p.channel, q, measured: p.measured, covariance: p.covariance, signals, kind };
     if p.reading.is_some() {
         out.instrument_records.push(record);
+        return;
+    }
+    if p.check {
+        out.check.push(record);
         return;
     }
     match out.by_frame.iter_mut().find(|(f, _)| *f == p.frame) {

@@ -126,7 +126,7 @@ pub enum RecordingError {
 
 /// The records of `bags` for `model` (module docs: sources, frames, checks).
 pub fn records_from_bags<P: AsRef<Path>>(bags: &[P], model: &ForwardModel, options: &RecordingOptions) -> Result<RecordSet, RecordingError> {
-    let mut set = RecordSet { frame: RecordFrame::Machine, records: Vec::new(), rejected: Vec::new(), sources: Vec::new() };
+    let mut set = RecordSet { check: Vec::new(), frame: RecordFrame::Machine, records: Vec::new(), rejected: Vec::new(), sources: Vec::new() };
     let mut frames: BTreeMap<String, (RecordFrame, usize)> = BTreeMap::new();
     for bag in bags {
         let part = bag_records(bag.as_ref(), model, options)?;
@@ -135,6 +135,7 @@ pub fn records_from_bags<P: AsRef<Path>>(bags: &[P], model: &ForwardModel, optio
             set.records.extend(records);
         }
         set.records.extend(part.instrument_records);
+        set.check.extend(part.check);
         set.rejected.extend(part.rejected);
         for s in part.sources {
             if !set.sources.contains(&s) {
@@ -196,12 +197,20 @@ impl OpenedBag {
     }
 }
 
-/// The frame a `header.frame_id` names (module docs).
+/// The frame a `header.frame_id` names (module docs); `<frame>@<setup>` is `<frame>` (see
+/// [`frame_setup`]).
 pub fn record_frame(frame_id: &str) -> RecordFrame {
+    let frame_id = frame_id.split_once(metrocell_bagtools::import::SETUP_SEPARATOR).map_or(frame_id, |(f, _)| f);
     match frame_id {
         "" | "machine" | "workpiece" => RecordFrame::Machine,
         other => RecordFrame::Instrument(other.to_string()),
     }
+}
+
+/// The placement of the instrument a `header.frame_id` names: `<setup>` of `<frame>@<setup>`
+/// (bag import's `setup` column), None without one.
+pub fn frame_setup(frame_id: &str) -> Option<std::sync::Arc<str>> {
+    frame_id.split_once(metrocell_bagtools::import::SETUP_SEPARATOR).map(|(_, s)| std::sync::Arc::from(s)).filter(|s: &std::sync::Arc<str>| !s.is_empty())
 }
 
 fn frame_name(f: &RecordFrame) -> String {

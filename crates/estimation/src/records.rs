@@ -69,7 +69,9 @@ pub struct MeasurementRecord {
 pub enum RecordFrame {
     /// The machine's (workpiece) frame: instrument pose = identity, fixed.
     Machine,
-    /// An instrument frame (`header.frame_id`): the pose is estimated with the model.
+    /// An instrument frame (`header.frame_id`): the pose is estimated with the model. A frame id
+    /// `<frame>@<setup>` (bag import's `setup` column) is this frame, read from the placement
+    /// `<setup>` of the instrument: the record's `signals.setup`, a pose of its own.
     Instrument(String),
 }
 
@@ -88,6 +90,9 @@ pub struct RecordSet {
     /// The frame of the [`RecordKind::Point`] records.
     pub frame: RecordFrame,
     pub records: Vec<MeasurementRecord>,
+    /// Points whose `role` is `check` (bag import: `/check_points`): kept out of every fit, to
+    /// judge the model's predictions; same frame, same signals as [`Self::records`].
+    pub check: Vec<MeasurementRecord>,
     /// Measurements dropped, with where and why; entries with an empty `point_id` are signal
     /// samples a topic gave that could not be used (one entry per topic, with the count).
     pub rejected: Vec<Rejected>,

@@ -71,7 +71,7 @@ fn records(cell: &Cell, sigma: f64, seed: u64) -> RecordSet {
             }
         }
     }
-    RecordSet { frame: RecordFrame::Instrument("tracker".into()), records: out, rejected: vec![], sources: vec![] }
+    RecordSet { check: Vec::new(), frame: RecordFrame::Instrument("tracker".into()), records: out, rejected: vec![], sources: vec![] }
 }
 
 /// The test cell with its terms at zero: the model a user starts a fit from.

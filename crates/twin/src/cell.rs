@@ -674,7 +674,7 @@ pub(crate) fn home_of(id: &str) -> Option<&'static str> {
 }
 
 /// Displacement terms that read no axis signal: the ones a serial arm takes.
-const ARM_DISPLACEMENT_TERMS: &str = "thermal_growth, tool_offset, frame_misalignment, workpiece_expansion";
+const ARM_DISPLACEMENT_TERMS: &str = "joint_compliance, joint_backlash, column_bending, link_thermal_expansion, thermal_growth, tool_offset, frame_misalignment, workpiece_expansion";
 
 /// Validate the `terms` list against the machine. `sensors` (the thermocouple names) and
 /// `has_load` are checked when known (a cell to simulate); a model file leaves them to the
@@ -695,6 +695,14 @@ pub(crate) fn terms(configs: &[TermConfig], sensors: Option<&BTreeSet<String>>, 
         let is_delta_term = matches!(t.term.id(), TermId::DeltaRodLength | TermId::DeltaRadius | TermId::DeltaTowerAngle | TermId::DeltaEndstop);
         if is_delta_term && !is_delta {
             return Err(CellError::invalid(path, "is a delta term; it needs machine.family: delta"));
+        }
+        // an arm's gravity physics: joint and URDF names are checked by the forward model
+        if matches!(t.term.id(), TermId::JointCompliance | TermId::JointBacklash | TermId::ColumnBending | TermId::LinkThermalExpansion) {
+            if arm.is_none() {
+                return Err(CellError::invalid(path, "is a serial-arm gravity term; it needs machine.family: serial_arm (a URDF with <inertial> masses)"));
+            }
+            model.push(t).map_err(|e| CellError::term(format!("terms[{i}]"), e))?;
+            continue;
         }
         let is_arm_term = matches!(t.term.id(), TermId::JointOffset | TermId::LinkLength);
         if is_arm_term {
@@ -728,7 +736,7 @@ pub(crate) fn terms(configs: &[TermConfig], sensors: Option<&BTreeSet<String>>, 
         if !matches!(t.term.effect(), EffectKind::Displacement(Frame::Machine | Frame::Tool | Frame::Workpiece)) && !is_delta_term {
             return Err(CellError::invalid(
                 path,
-                format!("has effect {:?}; the twin's `terms` take machine-frame displacement terms (geometry, thermal_scale, thermal_growth, compliance, tool_offset, time_offset), workpiece-frame terms (frame_misalignment, workpiece_expansion), for a delta delta_rod_length, delta_radius, delta_tower_angle, delta_endstop, and for a serial_arm joint_offset, link_length", t.term.effect()),
+                format!("has effect {:?}; the twin's `terms` take machine-frame displacement terms (geometry, thermal_scale, thermal_growth, compliance, tool_offset, time_offset), workpiece-frame terms (frame_misalignment, workpiece_expansion), for a delta delta_rod_length, delta_radius, delta_tower_angle, delta_endstop, and for a serial_arm joint_offset, link_length, joint_compliance, joint_backlash, column_bending, link_thermal_expansion", t.term.effect()),
             ));
         }
         for s in t.term.signals() {

@@ -255,6 +255,16 @@ pub struct TrackerSection {
     /// Beam breaks (dropped samples).
     #[serde(default)]
     pub beam_breaks: Option<BeamBreakSection>,
+    /// The instrument levels itself (a total station's compensator, a tracker's level): its z
+    /// is straight up to `tilt_sigma`. A model file with it fits each placement's tilt with a
+    /// prior of that σ about level and the base's tilt from level once for all placements
+    /// (`base_tilt`); without it every placement's pose is six free numbers.
+    #[serde(default)]
+    pub levelled: bool,
+    /// σ of a levelled instrument's residual tilt about each horizontal axis (rad; default
+    /// 50 µrad, a tracker's level: a total station's compensator does better, give yours).
+    #[serde(default)]
+    pub tilt_sigma: Option<Quantity>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]

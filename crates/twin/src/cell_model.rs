@@ -30,6 +30,7 @@ use std::path::{Path, PathBuf};
 use metrocell_model::{ForwardModel, InstrumentPose, MachineGeometry, ParameterSetup};
 use metrocell_physics::config::quantity;
 use metrocell_physics::model::TermModel;
+use metrocell_physics::config::ConfigValue;
 use metrocell_physics::{configure, TermConfig, TermId};
 
 use crate::cell::{machine, pose, terms, tracker_station, tracker_term_model, tracker_warmup, RefractionOffsets};
@@ -147,6 +148,94 @@ impl CellModel {
                 out.insert(name, u);
             }
         }
+        Ok(out)
+    }
+}
+
+/// The σ of a levelled instrument's residual tilt when the file gives none (a tracker's level).
+pub const DEFAULT_TILT_SIGMA: f64 = 50e-6;
+
+impl CellModel {
+    /// The model for records read from several placements of the instrument (a recording's
+    /// `setup` column): the file's `tracker_pose` becomes one `tracker_pose[<setup>]` per setup,
+    /// each starting where the file's starts, each a nuisance of the fit; the `estimation`
+    /// settings of `tracker_pose` hold for each. A levelled instrument (`sensors.tracker.levelled`)
+    /// gets the base's tilt (`base_tilt`, free) and, on every pose, a prior of `tilt_sigma` on
+    /// its tilt about level (α and β: the tilt of R = Rx(α)·Ry(β)·Rz(δ)'s z axis is theirs
+    /// alone). No setups and not levelled: the model as it is.
+    pub fn with_setups(&self, setups: &[String]) -> Result<CellModel, CellError> {
+        let levelled = self.raw.sensors.tracker.as_ref().is_some_and(|t| t.levelled);
+        if setups.is_empty() && !levelled {
+            return Ok(self.clone());
+        }
+        let tilt_sigma = match self.raw.sensors.tracker.as_ref().and_then(|t| t.tilt_sigma.as_ref()) {
+            Some(q) => q.to_si("sensors.tracker.tilt_sigma", "rad").map_err(|e| in_file(&self.file, e))?,
+            None => DEFAULT_TILT_SIGMA,
+        };
+        if !(tilt_sigma > 0.0 && tilt_sigma.is_finite()) {
+            return Err(in_file(&self.file, CellError::invalid("sensors.tracker.tilt_sigma", format!("must be > 0, got {tilt_sigma} rad"))));
+        }
+        let model = self.forward_model()?;
+        let values = model.params();
+        let mut instruments = TermModel::default();
+        let mut offset = model.param_count() - self.instrument_terms.terms.iter().map(|t| t.params.len()).sum::<usize>();
+        for t in &self.instrument_terms.terms {
+            let n = t.params.len();
+            let own = &values[offset..offset + n];
+            offset += n;
+            let is_pose = t.term.id() == TermId::TrackerPose && t.term.setup().is_none();
+            if !is_pose || setups.is_empty() {
+                instruments.push(t.clone()).map_err(|e| in_file(&self.file, CellError::term("sensors.tracker", e)))?;
+                continue;
+            }
+            for setup in setups {
+                let mut options = BTreeMap::new();
+                options.insert("setup".to_string(), ConfigValue::Text(setup.clone()));
+                if let Some(i) = t.term.instrument() {
+                    options.insert("instrument".to_string(), ConfigValue::Text(i.to_string()));
+                }
+                let params = t.term.params().iter().zip(own).map(|(s, v)| (s.name.clone(), ConfigValue::Number(*v))).collect();
+                let term = configure(&TermConfig { id: "tracker_pose".into(), options, params, use_defaults: false }).map_err(|e| in_file(&self.file, CellError::term(format!("setup `{setup}`"), e)))?;
+                instruments.push(term).map_err(|e| in_file(&self.file, CellError::term(format!("setup `{setup}`"), e)))?;
+            }
+        }
+        if levelled && !instruments.terms.iter().any(|t| t.term.id() == TermId::BaseTilt) {
+            let term = configure(&TermConfig { id: "base_tilt".into(), use_defaults: true, ..Default::default() }).map_err(|e| in_file(&self.file, CellError::term("sensors.tracker.levelled", e)))?;
+            instruments.push(term).map_err(|e| in_file(&self.file, CellError::term("sensors.tracker.levelled", e)))?;
+        }
+        // the file's settings, those of `tracker_pose` for every setup's pose
+        let mut estimation = BTreeMap::new();
+        for (label, cfg) in &self.raw.estimation {
+            match (label.as_str(), setups.is_empty()) {
+                ("tracker_pose", false) => {
+                    for s in setups {
+                        estimation.insert(format!("tracker_pose[{s}]"), cfg.clone());
+                    }
+                }
+                _ => {
+                    estimation.insert(label.clone(), cfg.clone());
+                }
+            }
+        }
+        let mut out = CellModel { instrument_terms: instruments, ..self.clone() };
+        let fm = out.forward_model()?;
+        let mut setup = ParameterSetup::new(&fm, &estimation).map_err(|e| in_file(&self.file, CellError::term("estimation", e)))?;
+        // what the file held fixed stays fixed (refraction unless freed)
+        for (k, name) in setup.names.iter().enumerate() {
+            if let Some(j) = self.setup.names.iter().position(|n| n == name) {
+                setup.free[k] = self.setup.free[j];
+                setup.priors[k] = setup.priors[k].or(self.setup.priors[j]);
+            }
+        }
+        if levelled {
+            for (_, start) in fm.pose_param_starts() {
+                for k in [start + 3, start + 4] {
+                    setup.priors[k] = Some(metrocell_model::Prior { value: 0.0, sigma: tilt_sigma });
+                }
+            }
+        }
+        drop(fm);
+        out.setup = setup;
         Ok(out)
     }
 }

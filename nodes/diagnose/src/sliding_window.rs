@@ -99,7 +99,7 @@ impl SlidingWindow {
         self.last_run = Some(self.newest);
         let mut records: Vec<MeasurementRecord> = self.records.iter().cloned().collect();
         records.sort_by(|a, b| a.time.total_cmp(&b.time));
-        RecordSet { frame: self.frame.clone().unwrap_or(RecordFrame::Machine), records, rejected: std::mem::take(&mut self.rejected), sources: self.sources.clone() }
+        RecordSet { check: Vec::new(), frame: self.frame.clone().unwrap_or(RecordFrame::Machine), records, rejected: std::mem::take(&mut self.rejected), sources: self.sources.clone() }
     }
 }
 

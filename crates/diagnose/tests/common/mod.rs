@@ -147,7 +147,7 @@ pub fn twin_records(cell_text: &str, hours: f64, seed: u64, take: Take) -> TwinR
             _ => {}
         }
     }
-    TwinRecords { records: RecordSet { frame: RecordFrame::Instrument("tracker".into()), records: out, rejected: vec![], sources: vec![] }, cell: truth_for_records }
+    TwinRecords { records: RecordSet { check: Vec::new(), frame: RecordFrame::Instrument("tracker".into()), records: out, rejected: vec![], sources: vec![] }, cell: truth_for_records }
 }
 
 /// Diagnose `records` against the model file `model_text` (read as `metrocell diagnose` reads

@@ -62,7 +62,7 @@ pub fn records(model: &ForwardModel, p: &[f64], plan: &[Planned], noise: Tracker
             }
         })
         .collect();
-    RecordSet { frame: RecordFrame::Instrument("tracker".into()), records: out, rejected: vec![], sources: vec![] }
+    RecordSet { check: Vec::new(), frame: RecordFrame::Instrument("tracker".into()), records: out, rejected: vec![], sources: vec![] }
 }
 
 /// The signals of a planned measurement (what a recording gives at its time).

@@ -157,13 +157,18 @@ pub fn diagnose_bags(model_path: &Path, bags: &[PathBuf], options: &DiagnoseOpti
 /// [`diagnose_bags`] with the points taken from `points` (`Auto`: `/measured_points` when the
 /// bag has it, else the raw `/tracker/measurements`).
 pub fn diagnose_bags_from(model_path: &Path, bags: &[PathBuf], options: &DiagnoseOptions, points: PointSource) -> anyhow::Result<(CellModel, Diagnosis)> {
-    let model = CellModel::from_path(model_path)?;
-    let forward = model.forward_model()?;
+    let file_model = CellModel::from_path(model_path)?;
     eprintln!("reading {} bag(s) …", bags.len());
     // a model that declares a touch probe is judged on the recording's probe hits too
-    let recording = RecordingOptions { points, probe_hits: model.raw.sensors.probe.is_some(), ..RecordingOptions::default() };
-    let records = records_from_bags(bags, &forward, &recording)?;
-    eprintln!("{} measured points ({} set aside while reading); diagnosing …", records.records.len(), records.rejected.len());
+    let recording = RecordingOptions { points, probe_hits: file_model.raw.sensors.probe.is_some(), ..RecordingOptions::default() };
+    let mut records = records_from_bags(bags, &file_model.forward_model()?, &recording)?;
+    // one pose per placement of the instrument (the recordings' `setup`)
+    let (setups, short) = metrocell_estimation::check_points::usable_setups(&mut records, file_model.placement_fit_points());
+    for note in &short {
+        eprintln!("warning: {note}");
+    }
+    let model = file_model.with_setups(&setups)?;
+    eprintln!("{} measured points{} ({} set aside while reading); diagnosing …", records.records.len(), if setups.is_empty() { String::new() } else { format!(" from {} setups ({}), {} check points kept out", setups.len(), setups.join(", "), records.check.len()) }, records.rejected.len());
     let declared = DeclaredModel { machine: &model.machine, machine_terms: &model.machine_terms, instrument_terms: &model.instrument_terms, setup: &model.setup };
     let d = diagnose(&declared, &records, options)?;
     Ok((model, d))

@@ -112,7 +112,7 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<i32> {
     let mut records = records_from_bags(&a.bags, &file_model.forward_model()?, &options)?;
     // one pose per placement of the instrument (the recordings' `setup`), the base's tilt for a
     // levelled one; placements with too few fit points set aside, named
-    let (setups, short) = placements::usable_setups(&mut records, placements::fit_points_needed(&file_model));
+    let (setups, short) = metrocell_estimation::check_points::usable_setups(&mut records, file_model.placement_fit_points());
     let model = file_model.with_setups(&setups)?;
     let fm = model.forward_model()?;
     let setup = match a.refit.as_deref() {
@@ -138,7 +138,7 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<i32> {
     // cost the user the fitted model (see `restore_sigpipe` in main.rs).
     let update = model_update(&result, &records, &a);
     // the fitted file is the file's model: placements are per recording, not written into it
-    let per_recording = |name: &str| placements::is_placement_parameter(name) && (!setups.is_empty() || name.starts_with("base_tilt"));
+    let per_recording = |name: &str| metrocell_estimation::check_points::is_placement_parameter(name) && (!setups.is_empty() || name.starts_with("base_tilt"));
     let update = ModelUpdate { parameters: update.parameters.into_iter().filter(|p| !per_recording(&p.name)).collect(), ..update };
     let text = write_model(&model, &update)?;
     std::fs::write(&a.output, &text).with_context(|| format!("cannot write `{}`", a.output.display()))?;

@@ -4,41 +4,9 @@
 //! before and after.
 
 use metrocell_estimation::check_points::check_report_of;
-use metrocell_estimation::{fit, setups_of, CheckReport, Fit, FitOptions, RecordSet};
+use metrocell_estimation::check_points::is_placement_parameter;
+use metrocell_estimation::{fit, CheckReport, Fit, FitOptions, RecordSet};
 use metrocell_model::{ForwardModel, ParameterSetup};
-use metrocell_twin::CellModel;
-
-/// Fit points a placement's pose needs: three for six free numbers, two for a levelled
-/// instrument's four (yaw and translation; its tilt held by the compensator's prior).
-pub fn fit_points_needed(model: &CellModel) -> usize {
-    if model.raw.sensors.tracker.as_ref().is_some_and(|t| t.levelled) {
-        2
-    } else {
-        3
-    }
-}
-
-/// The setups with enough fit points for a pose, and the words for those without: their fit
-/// points are taken out of `records` (nothing could place them), their check points stay (they
-/// are reported unpredicted).
-pub fn usable_setups(records: &mut RecordSet, needed: usize) -> (Vec<String>, Vec<String>) {
-    let mut usable = Vec::new();
-    let mut notes = Vec::new();
-    for (name, fit_points, check_points) in setups_of(records) {
-        if fit_points >= needed {
-            usable.push(name);
-        } else {
-            notes.push(format!("setup `{name}` has {fit_points} fit point(s), fewer than the {needed} its pose needs: left out of the fit, its {check_points} check point(s) unpredicted (measure at least {needed} fit points from every placement)"));
-            records.records.retain(|r| r.signals.setup.as_deref() != Some(name.as_str()));
-        }
-    }
-    (usable, notes)
-}
-
-/// Whether stacked parameter `name` is a placement's: a pose or the base's tilt.
-pub fn is_placement_parameter(name: &str) -> bool {
-    name.starts_with("tracker_pose.") || name.starts_with("tracker_pose[") || name.starts_with("base_tilt")
-}
 
 /// `setup` with only the placements' parameters free (the poses, the base's tilt).
 pub fn poses_only(setup: &ParameterSetup) -> ParameterSetup {

@@ -134,7 +134,7 @@ impl Augmented {
         for e in &self.empirical {
             d[e.basis.axis] += e.basis.value(&e.coefficients, view.time[i], &view.position[i]);
         }
-        view.rotation.transpose() * d
+        view.rotation(i).transpose() * d
     }
 
     /// The nonlinear refit from `start`, the empirical corrections (at their selection values)

@@ -81,7 +81,7 @@ impl SelectionFrame {
 
     /// Weight 1/σ² of each selection record along workpiece axis `k`.
     fn weights(&self, k: usize) -> Vec<f64> {
-        self.records.iter().map(|r| 1.0 / (self.view.rotation * r.covariance * self.view.rotation.transpose())[(k, k)]).collect()
+        self.records.iter().enumerate().map(|(i, r)| 1.0 / (self.view.rotation(i) * r.covariance * self.view.rotation(i).transpose())[(k, k)]).collect()
     }
 
     /// The residual of each selection record along workpiece axis `k`.
@@ -96,9 +96,8 @@ pub(crate) fn empirical_columns(view: &ResidualView, basis: &EmpiricalBasis) -> 
     let mut out = DMatrix::zeros(3 * view.len(), k);
     let mut axis = Vector3::zeros();
     axis[basis.axis] = 1.0;
-    let dir = view.rotation.transpose() * axis;
     for i in 0..view.len() {
-        let w = view.whitening[i] * dir;
+        let w = view.whitening[i] * (view.rotation(i).transpose() * axis);
         for (j, v) in basis.values(view.time[i], &view.position[i]).iter().enumerate() {
             out.fixed_view_mut::<3, 1>(3 * i, j).copy_from(&(w * *v));
         }

@@ -233,12 +233,12 @@ pub fn build(inputs: &Inputs) -> Result<Built, PhysicsError> {
     let problem = PointResiduals::new(inputs.model, inputs.records).map_err(|b| PhysicsError::InvalidInput { what: format!("record {}", b.index), reason: "covariance".into() })?;
     let full = problem.predictions(inputs.x)?;
     let n = inputs.records.len();
-    let rot = inputs.view.rotation;
+    let rot = |i: usize| inputs.view.rotation(i);
     let mut out: Vec<(f64, Finding, (Vec<f64>, Vec<f64>, Vec<f64>))> = Vec::new();
     for f in inputs.found {
         let bare = problem.predictions(&without(inputs, &f.label))?;
         let c_rec: Vec<Vector3<f64>> = full.iter().zip(&bare).map(|(a, b)| a - b).collect();
-        let c_wp: Vec<Vector3<f64>> = c_rec.iter().map(|c| rot * c).collect();
+        let c_wp: Vec<Vector3<f64>> = c_rec.iter().enumerate().map(|(i, c)| rot(i) * c).collect();
         let effect_rms = (c_wp.iter().map(|c| c.norm_squared()).sum::<f64>() / (3 * n).max(1) as f64).sqrt();
         let per_axis: Vec<f64> = (0..3).map(|k| c_wp.iter().map(|c| c[k] * c[k]).sum::<f64>()).collect();
         let total: f64 = per_axis.iter().sum();
@@ -248,12 +248,12 @@ pub fn build(inputs: &Inputs) -> Result<Built, PhysicsError> {
         // the line of sight)
         let (along, fitted, residual): (String, Vec<f64>, Vec<f64>) = if range_term {
             let los = &inputs.view.line_of_sight;
-            ("line of sight".into(), (0..n).map(|i| c_rec[i].dot(&los[i])).collect(), (0..n).map(|i| (rot.transpose() * inputs.after[i] + c_rec[i]).dot(&los[i])).collect())
+            ("line of sight".into(), (0..n).map(|i| c_rec[i].dot(&los[i])).collect(), (0..n).map(|i| (rot(i).transpose() * inputs.after[i] + c_rec[i]).dot(&los[i])).collect())
         } else {
             (axis_name(main).into(), c_wp.iter().map(|c| c[main]).collect(), (0..n).map(|i| inputs.after[i][main] + c_wp[i][main]).collect())
         };
         let (signal_name, unit, signal) = signal_of(f, inputs, &fitted);
-        let sigma: Vec<f64> = (0..n).map(|i| inputs.view.workpiece_sigma(&inputs.records[i].covariance)[main]).collect();
+        let sigma: Vec<f64> = (0..n).map(|i| inputs.view.workpiece_sigma(i, &inputs.records[i].covariance)[main]).collect();
         let evidence = Evidence { signal: signal_name, unit, along, bins: bins(&signal, &residual, &fitted, &sigma), correlation: correlation(&residual, &fitted) };
         let params = params_of(inputs, &f.label);
         let parameters: BTreeMap<String, ParameterValue> = params
@@ -376,7 +376,16 @@ fn get<'a>(params: &'a [(String, f64, Option<f64>, String)], name: &str) -> Opti
 fn statement(f: &FoundTerm, params: &[(String, f64, Option<f64>, String)], c_wp: &[Vector3<f64>], main: usize) -> String {
     let axis = text_option(&f.config, "axis").unwrap_or_else(|| axis_name(main).into());
     let peak = c_wp.iter().map(|c| c[main].abs()).fold(0.0, f64::max);
-    let list = || params.iter().map(|(n, v, s, u)| format!("{n} = {}", pm(*v, *s, if u == "m" { 1e6 } else if u == "rad" { 1e6 } else { 1.0 }, 2) + if u == "m" { " µm" } else if u == "rad" { " µrad" } else { "" })).collect::<Vec<_>>().join(", ");
+    let list = || {
+        params
+            .iter()
+            .map(|(n, v, s, u)| {
+                let (scale, shown) = display(u, 1.0);
+                format!("{n} = {}{}", pm(*v, *s, scale, 2), if shown.is_empty() { String::new() } else { format!(" {shown}") })
+            })
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
     match f.id {
         TermId::ThermalScale => {
             let (_, a, s, _) = get(params, "alpha").cloned().unwrap_or_default();
@@ -630,9 +639,18 @@ fn unusual_values(inputs: &Inputs, label: &str) -> Vec<String> {
         let (lo, _) = display(spec.unit, spec.usual.lo);
         let (hi, _) = display(spec.unit, spec.usual.hi);
         let meaning = if spec.unusual_means.is_empty() { String::new() } else { format!(": {}", spec.unusual_means) };
-        out.push(format!("{param} = {shown:.3} {unit} is outside the usual {lo:.3} … {hi:.3} {unit}{meaning}"));
+        out.push(format!("{param} = {} {unit} is outside the usual {} … {} {unit}{meaning}", significant(shown), significant(lo), significant(hi)));
     }
     out
+}
+
+/// Three significant digits, however small or large (no "0.000" for a compliance in SI).
+fn significant(v: f64) -> String {
+    if v == 0.0 || !v.is_finite() {
+        return format!("{v}");
+    }
+    let decimals = (2 - v.abs().log10().floor() as i32).clamp(0, 12) as usize;
+    format!("{v:.decimals$}")
 }
 
 /// A value in the unit metrologists read it in.
@@ -645,6 +663,10 @@ fn display(unit: &str, v: f64) -> (f64, &'static str) {
         "s" => (v / 60.0, "min"),
         "K" => (v, "K"),
         "Pa" => (v / 100.0, "hPa"),
+        // the gravity terms: compliances of joints and columns
+        "rad/(N m)" => (v * 1e6, "µrad/(N·m)"),
+        "rad m^2/(N m)" => (v * 1e6, "µrad·m²/(N·m)"),
+        "1/(N m^2)" => (v * 1e6, "1/(MN·m²)"),
         _ => (v, ""),
     }
 }

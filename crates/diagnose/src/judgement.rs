@@ -85,7 +85,7 @@ pub(crate) fn judge(inp: &JudgeInputs, aug: &Augmented, x1: &[f64]) -> Result<Ju
     let view1 = ResidualView::new(&model_aug, x1, &set.records, &set.frame)?;
     // the free columns of the augmented model (an instrument pose only where the records are in
     // an instrument frame) and the empirical corrections' columns
-    let free1: Vec<usize> = aug.setup.free.iter().enumerate().filter(|(k, f)| **f && !(set.frame == RecordFrame::Machine && names[*k].starts_with("tracker_pose."))).map(|(k, _)| k).collect();
+    let free1: Vec<usize> = aug.setup.free.iter().enumerate().filter(|(k, f)| **f && !(set.frame == RecordFrame::Machine && metrocell_estimation::check_points::is_placement_parameter(&names[*k]))).map(|(k, _)| k).collect();
     let mut ctx_all = ColumnContext::new(&model_aug, x1, &set.records, &view1.whitening)?;
     // the free parameters and each reference nest's position (a nuisance; after them in the
     // columns, before the empirical corrections)

@@ -336,7 +336,7 @@ fn report(declared: &DeclaredModel, stage: &DeclaredStage, aug: &Augmented, x1: 
     let added_terms = added_terms(aug, x1, &judged);
     let unexplained = findings::unexplained(&judged.empirical, &judged.view1, &ctx.located1, &set.records);
     let explained = unexplained.is_empty() && ctx.remaining.is_empty();
-    let declared_params = stage.fit.parameters.iter().filter(|p| p.free && !p.name.starts_with("tracker_pose.")).map(|p| (p.name.clone(), ParameterValue { value: p.value, sigma: p.sigma, unit: p.unit.into(), at_bound: p.at_bound.map(|b| b.name().to_string()) })).collect();
+    let declared_params = stage.fit.parameters.iter().filter(|p| p.free && !metrocell_estimation::check_points::is_placement_parameter(&p.name)).map(|p| (p.name.clone(), ParameterValue { value: p.value, sigma: p.sigma, unit: p.unit.into(), at_bound: p.at_bound.map(|b| b.name().to_string()) })).collect();
     messages.extend(findings::advice(ctx.selection, ctx.families, &set.records, declared.machine));
     let mut rejected = stage.rejected.clone();
     rejected.truncate(50);
@@ -381,7 +381,7 @@ fn report(declared: &DeclaredModel, stage: &DeclaredStage, aug: &Augmented, x1: 
     temperatures.retain(|_, v| v.len() == n);
     let plots = PlotData { time: judged.view1.time.clone(), position: judged.view1.position.clone(), before: judged.before_res, after: judged.after_res, heldout_before: judged.held_before, heldout_after: judged.held_after, temperatures, evidence: built.evidence };
     progress.say("done");
-    let sigma_workpiece = set.records.iter().map(|r| ctx.view0.workpiece_sigma(&r.covariance)).collect();
+    let sigma_workpiece = set.records.iter().enumerate().map(|(i, r)| ctx.view0.workpiece_sigma(i, &r.covariance)).collect();
     let fitted = judged.names.iter().enumerate().map(|(k, name)| (name.clone(), x1[k], if aug.setup.free[k] { judged.sigmas[k] } else { None })).collect();
     Ok(Diagnosis { report, added_terms, plots, records: set.records.clone(), sigma_workpiece, fitted })
 }

@@ -22,7 +22,9 @@ pub struct ResidualView {
     /// L of each record's covariance (whitened → metres).
     pub colouring: Vec<Matrix3<f64>>,
     /// Records frame → workpiece frame.
-    pub rotation: Matrix3<f64>,
+    /// Per record: the rotation of the records' frame into the workpiece frame (each record's
+    /// own placement of the instrument, after a levelled instrument's base tilt).
+    pub rotations: Vec<Matrix3<f64>>,
     /// Where each record was taken: the commanded axis positions (or the nominal tool point on
     /// machines whose joints are not positions), m.
     pub position: Vec<Vector3<f64>>,
@@ -35,10 +37,17 @@ pub struct ResidualView {
     pub line_of_sight: Vec<Vector3<f64>>,
 }
 
-/// Rotation records frame → workpiece frame at parameters x.
-pub fn records_rotation(model: &ForwardModel, x: &[f64], frame: &RecordFrame) -> Matrix3<f64> {
-    match (frame, model.instrument_param_start(TermId::TrackerPose)) {
-        (RecordFrame::Instrument(_), Some(i)) => InstrumentPose::from_euler_xyz(Vector3::new(x[i], x[i + 1], x[i + 2]), [x[i + 3], x[i + 4], x[i + 5]]).rotation,
+/// Rotation records frame → workpiece frame at parameters x, for a record read with `signals`
+/// (its setup's pose; a levelled instrument's base tilt undone).
+pub fn records_rotation(model: &ForwardModel, x: &[f64], frame: &RecordFrame, signals: &metrocell_physics::Signals) -> Matrix3<f64> {
+    match (frame, model.pose_param_start_for(signals)) {
+        (RecordFrame::Instrument(_), Some(i)) => {
+            let pose = InstrumentPose::from_euler_xyz(Vector3::new(x[i], x[i + 1], x[i + 2]), [x[i + 3], x[i + 4], x[i + 5]]).rotation;
+            match model.instrument_param_start(TermId::BaseTilt) {
+                Some(t) => metrocell_physics::instrument::base_tilt::levelling(x[t], x[t + 1]).0.transpose() * pose,
+                None => pose,
+            }
+        }
         _ => Matrix3::identity(),
     }
 }
@@ -82,10 +91,10 @@ impl ResidualView {
             colouring.push(l);
             whitening_v.push(whitening(&r.covariance).unwrap_or_else(Matrix3::identity));
         }
-        let rotation = records_rotation(model, x, frame);
+        let rotations = records.iter().map(|r| records_rotation(model, x, frame, &r.signals)).collect();
         let predicted = problem.predictions(x)?;
         let line_of_sight = predicted.iter().map(|p| if p.norm() > 0.0 { p.normalize() } else { Vector3::z() }).collect();
-        Ok(Self { residual, whitening: whitening_v, colouring, rotation, position: records.iter().map(|r| record_position(model, r)).collect(), position_frame: position_frame(model, records, frame), time: records.iter().map(|r| r.time).collect(), line_of_sight })
+        Ok(Self { residual, whitening: whitening_v, colouring, rotations, position: records.iter().map(|r| record_position(model, r)).collect(), position_frame: position_frame(model, records, frame), time: records.iter().map(|r| r.time).collect(), line_of_sight })
     }
 
     pub fn len(&self) -> usize {
@@ -107,17 +116,22 @@ impl ResidualView {
 
     /// Residual of record i in the workpiece frame, m.
     pub fn workpiece(&self, i: usize) -> Vector3<f64> {
-        self.rotation * self.residual[i]
+        self.rotations[i] * self.residual[i]
     }
 
     /// Whitened rows (3 per record, records frame) back to workpiece-frame metres.
     pub fn to_workpiece_metres(&self, z: &DVector<f64>) -> Vec<Vector3<f64>> {
-        (0..self.len()).map(|i| self.rotation * (self.colouring[i] * z.fixed_rows::<3>(3 * i))).collect()
+        (0..self.len()).map(|i| self.rotations[i] * (self.colouring[i] * z.fixed_rows::<3>(3 * i))).collect()
     }
 
-    /// Stated σ of record i along each workpiece axis, m.
-    pub fn workpiece_sigma(&self, covariance: &Matrix3<f64>) -> Vector3<f64> {
-        let c = self.rotation * covariance * self.rotation.transpose();
+    /// Rotation of record i's frame into the workpiece frame.
+    pub fn rotation(&self, i: usize) -> &Matrix3<f64> {
+        &self.rotations[i]
+    }
+
+    /// Stated σ of record i (covariance `covariance`) along each workpiece axis, m.
+    pub fn workpiece_sigma(&self, i: usize, covariance: &Matrix3<f64>) -> Vector3<f64> {
+        let c = self.rotations[i] * covariance * self.rotations[i].transpose();
         Vector3::new(c[(0, 0)].sqrt(), c[(1, 1)].sqrt(), c[(2, 2)].sqrt())
     }
 
@@ -127,7 +141,7 @@ impl ResidualView {
     pub fn samples(&self, records: &[MeasurementRecord], residual: &[Vector3<f64>]) -> Vec<ResidualSample> {
         let mut out = Vec::with_capacity(3 * records.len());
         for (i, r) in records.iter().enumerate() {
-            let sigma = self.workpiece_sigma(&r.covariance);
+            let sigma = self.workpiece_sigma(i, &r.covariance);
             let s = &r.signals;
             let mut conditions: Vec<(String, f64)> = s.temperatures.iter().map(|(n, v)| (format!("temperature.{n}"), *v)).collect();
             if let Some(t) = s.air_temperature {

@@ -121,6 +121,29 @@ pub fn setups_of(records: &RecordSet) -> Vec<(String, usize, usize)> {
     out
 }
 
+/// The setups with at least `needed` fit points (a pose's worth), and the words for those
+/// without: their fit points are taken out of `records` (nothing could place them), their check
+/// points stay (they are reported unpredicted).
+pub fn usable_setups(records: &mut RecordSet, needed: usize) -> (Vec<String>, Vec<String>) {
+    let mut usable = Vec::new();
+    let mut notes = Vec::new();
+    for (name, fit_points, check_points) in setups_of(records) {
+        if fit_points >= needed {
+            usable.push(name);
+        } else {
+            notes.push(format!("setup `{name}` has {fit_points} fit point(s), fewer than the {needed} its pose needs: left out of the fit, its {check_points} check point(s) unpredicted (measure at least {needed} fit points from every placement)"));
+            records.records.retain(|r| r.signals.setup.as_deref() != Some(name.as_str()));
+        }
+    }
+    (usable, notes)
+}
+
+/// Whether stacked parameter `name` is a placement's (a nuisance of every fit, per recording):
+/// an instrument pose (`tracker_pose.*`, `tracker_pose[…].*`) or the base's tilt (`base_tilt*`).
+pub fn is_placement_parameter(name: &str) -> bool {
+    name.starts_with("tracker_pose.") || name.starts_with("tracker_pose[") || name.starts_with("base_tilt")
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -156,6 +156,16 @@ impl CellModel {
 pub const DEFAULT_TILT_SIGMA: f64 = 50e-6;
 
 impl CellModel {
+    /// Fit points a placement's pose needs: three for six free numbers, two for a levelled
+    /// instrument's four (yaw and translation; its tilt held by the compensator's prior).
+    pub fn placement_fit_points(&self) -> usize {
+        if self.raw.sensors.tracker.as_ref().is_some_and(|t| t.levelled) {
+            2
+        } else {
+            3
+        }
+    }
+
     /// The model for records read from several placements of the instrument (a recording's
     /// `setup` column): the file's `tracker_pose` becomes one `tracker_pose[<setup>]` per setup,
     /// each starting where the file's starts, each a nuisance of the fit; the `estimation`

@@ -68,7 +68,7 @@ impl PhysicsTerm for ColumnBending {
         EffectKind::Kinematic
     }
     fn params(&self) -> Vec<ParamSpec> {
-        let soft = "a negative compliance leans the column away from its load: a counterweight or a preload acting, or the load's masses in the URDF wrong";
+        let soft = "a negative compliance leans the column away from its load (a counterweight or a preload acting, or the load's masses in the URDF wrong); a larger one than usual is a column softer than a steel column of its size (worn guide pads, a loose foot) or a load heavier than the URDF says";
         vec![
             ParamSpec::new("foot", "rad/(N m)", 0.0, 1e-4, 0.0, "tilt of the column's foot per N·m of carried moment").unusual_means(soft),
             ParamSpec::new("pads", "rad m^2/(N m)", 0.0, 1e-5, 0.0, "c_pads = 2/k of the guide pads: an overlap o tilts by c_pads·M/o²").unusual_means(soft),

@@ -43,7 +43,7 @@ impl PhysicsTerm for JointCompliance {
             .iter()
             .map(|j| {
                 ParamSpec::new(format!("k_{j}"), "rad/(N m)", 0.0, 5e-5, 0.0, format!("angular compliance of joint {j}: its deflection per N·m of gravity torque"))
-                    .unusual_means("a negative compliance turns the joint against the torque: a counterbalance spring or a gravity compensation in the controller acting, or the joint's axis sense in the URDF reversed")
+                    .unusual_means("a negative compliance turns the joint against the torque (a counterbalance spring or a gravity compensation in the controller acting, or the joint's axis sense in the URDF reversed); a larger one than usual is a worn gearbox or a tool heavier than the URDF says")
             })
             .collect()
     }

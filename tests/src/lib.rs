@@ -60,21 +60,36 @@ impl ChildGuard {
 
     /// Waits for the process to exit, at most `timeout`; returns its output or panics.
     pub fn wait_output(mut self, timeout: Duration) -> Output {
+        // the pipes are read while the process runs: a child that writes more than a pipe holds
+        // (64 KB: a diagnosis as JSON) would otherwise block on its write and never finish
+        fn drain<R: std::io::Read + Send + 'static>(r: Option<R>) -> std::thread::JoinHandle<Vec<u8>> {
+            std::thread::spawn(move || {
+                let mut buf = Vec::new();
+                if let Some(mut r) = r {
+                    let _ = r.read_to_end(&mut buf);
+                }
+                buf
+            })
+        }
+        let stdout = drain(self.child().stdout.take());
+        let stderr = drain(self.child().stderr.take());
         let deadline = Instant::now() + timeout;
-        loop {
+        let status = loop {
             match self.child().try_wait().expect("try_wait") {
-                Some(_) => return self.0.take().unwrap().wait_with_output().expect("wait_with_output"),
+                Some(status) => break Some(status),
                 None if Instant::now() >= deadline => {
                     let _ = self.child().kill();
-                    let out = self.0.take().unwrap().wait_with_output().expect("wait_with_output");
-                    panic!(
-                        "process did not finish within {timeout:?}\nstdout:\n{}\nstderr:\n{}",
-                        String::from_utf8_lossy(&out.stdout),
-                        String::from_utf8_lossy(&out.stderr)
-                    );
+                    let _ = self.child().wait();
+                    break None;
                 }
                 None => std::thread::sleep(Duration::from_millis(20)),
             }
+        };
+        let out = (stdout.join().unwrap_or_default(), stderr.join().unwrap_or_default());
+        self.0.take();
+        match status {
+            Some(status) => Output { status, stdout: out.0, stderr: out.1 },
+            None => panic!("process did not finish within {timeout:?}\nstdout:\n{}\nstderr:\n{}", String::from_utf8_lossy(&out.0), String::from_utf8_lossy(&out.1)),
         }
     }
 }

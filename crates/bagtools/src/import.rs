@@ -23,7 +23,7 @@
 //! | `aux.<name>` | any other channel (accelerometer, ...), in its SI unit | no |
 //! | `role` | what the row's point is for: `fit` (a point of the machine's program that fits the model, the default), `check` (a point of the program kept out of every fit, to judge the model's predictions), `reference` (a fixed reference nest re-measured through the shift, on the floor or on the table the instrument stands on: the machine does not move it; its nominal, when given, is the nest's position) | no |
 //! | `setup` | the instrument's placement the row was measured from (`S1`, `north`, …): each distinct value is one placement, with its own pose — a nuisance of every fit | no |
-//! | `accel.<sensor>.x`, `.y`, `.z` | an accelerometer's reading [m/s², its own frame]: the specific force, +9.81 m/s² along its up axis at rest | all three, per sensor |
+//! | `accel.<sensor>.x`, `.y`, `.z` | an accelerometer's reading [m/s², its own frame]: the specific force, +9.81 m/s² along its up axis at rest; the model file's `sensors.accelerometers: [{name: <sensor>, link: <URDF link>}]` says where it sits | all three, per sensor |
 //!
 //! # Topics written (log time = publish time = the row's timestamp)
 //! * `/measured_points` `metrocell_msgs/msg/MeasuredPoint` (covariance diagonal σ², off-diagonal 0)

@@ -26,6 +26,7 @@ pub mod serial;
 pub mod serial_ik;
 pub mod transform;
 pub mod urdf_chain;
+pub mod urdf_link_placement;
 
 pub use error::KinematicsError;
 pub use instrument_pose::InstrumentPose;

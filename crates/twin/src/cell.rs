@@ -189,7 +189,7 @@ impl Cell {
 
     /// Validate a parsed file; relative paths in it (a URDF) are relative to `base_dir`.
     pub fn from_file_in(f: &CellFile, base_dir: &Path) -> Result<Cell, CellError> {
-        let machine = machine(&f.machine, base_dir)?;
+        let machine = machine(&f.machine, &f.sensors.accelerometers, base_dir)?;
         let thermocouples = f
             .sensors
             .thermocouples
@@ -374,8 +374,11 @@ fn opt(q: &Option<Quantity>, path: &str, unit: &str) -> Result<f64, CellError> {
     q.as_ref().map(|q| q.to_si(path, unit)).transpose().map(|v| v.unwrap_or(0.0))
 }
 
-pub(crate) fn machine(m: &MachineSection, base_dir: &Path) -> Result<MachineGeometry, CellError> {
+pub(crate) fn machine(m: &MachineSection, accelerometers: &[AccelerometerSection], base_dir: &Path) -> Result<MachineGeometry, CellError> {
     check_family_sections(m)?;
+    if !accelerometers.is_empty() && m.family != MachineFamily::SerialArm {
+        return Err(CellError::invalid("sensors.accelerometers", format!("is for a serial arm's accelerometers (each on a link of its URDF); this machine is {}", family_name(m.family))));
+    }
     let kinematics = match m.family {
         MachineFamily::Cartesian => {
             let stacking = m.stacking.as_deref().ok_or_else(|| CellError::invalid("machine.stacking", "is required for a cartesian machine (e.g. XFYZ, FXYZ, XYFZ)"))?;
@@ -393,7 +396,7 @@ pub(crate) fn machine(m: &MachineSection, base_dir: &Path) -> Result<MachineGeom
         }
         MachineFamily::SerialArm => {
             let s = m.serial_arm.as_ref().ok_or_else(|| CellError::invalid("machine.serial_arm", format!("is required for a serial_arm machine: {}", SERIAL_ARM_KEYS)))?;
-            let arm = crate::families::serial_arm(s, base_dir, pose)?;
+            let arm = crate::families::serial_arm(s, accelerometers, base_dir, pose)?;
             let inf = [f64::NEG_INFINITY, f64::INFINITY];
             return Ok(MachineGeometry { kinematics: MachineKinematics::SerialArm(arm), travel: [inf; 3], tool_offset: Vector3::zeros() });
         }

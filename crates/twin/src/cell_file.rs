@@ -210,6 +210,19 @@ pub struct SensorsSection {
     pub probe: Option<ProbeSection>,
     #[serde(default)]
     pub camera: Option<CameraSection>,
+    /// 3-axis accelerometers on a serial arm (URDF): each one's `/imu/<name>` readings and the
+    /// link it sits on.
+    #[serde(default)]
+    pub accelerometers: Vec<AccelerometerSection>,
+}
+
+/// An accelerometer on a serial arm: `name` as in `/imu/<name>` (the import layout's
+/// `accel.<name>.x|y|z`), `link` a link of the arm's URDF whose frame is the sensor's.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct AccelerometerSection {
+    pub name: String,
+    pub link: String,
 }
 
 /// Pose of an instrument frame in the workpiece (table) frame: `p_wp = R·p_inst + t`,

@@ -80,7 +80,7 @@ impl CellModel {
     }
 
     fn from_parts(text: &str, raw: CellFile, file: &str, base_dir: &Path) -> Result<CellModel, CellError> {
-        let machine = machine(&raw.machine, base_dir)?;
+        let machine = machine(&raw.machine, &raw.sensors.accelerometers, base_dir)?;
         let machine_terms = terms(&raw.terms, None, None, &machine)?;
         let (instrument_terms, declares_tracker) = match &raw.sensors.tracker {
             Some(t) => {

@@ -8,11 +8,12 @@ use metrocell_kinematics::dh::{DhConvention, DhRow, DhTable};
 use metrocell_kinematics::five_axis::FiveAxisGeometry;
 use metrocell_kinematics::serial::JointKind;
 use metrocell_kinematics::urdf_chain::chain_from_urdf_file;
-use nalgebra::Vector3;
+use metrocell_kinematics::urdf_link_placement::{link_placement, read_urdf_file, LinkPlacement};
+use nalgebra::{Isometry3, Vector3};
 
 pub use metrocell_model::{FiveAxisMachine, SerialArm, FIVE_AXIS_JOINTS};
-use metrocell_model::InstrumentPose;
-use crate::cell_file::{DhConventionName, FiveAxisSection, JointKindName, SerialArmSection};
+use metrocell_model::{ArmAccelerometer, InstrumentPose};
+use crate::cell_file::{AccelerometerSection, DhConventionName, FiveAxisSection, JointKindName, SerialArmSection, UrdfSection};
 use crate::error::CellError;
 use crate::quantity::{vector3, Quantity};
 
@@ -44,8 +45,9 @@ pub fn five_axis(s: &FiveAxisSection) -> Result<FiveAxisMachine, CellError> {
     Ok(FiveAxisMachine { geometry: g, c_limits })
 }
 
-/// Validated serial arm from `machine.serial_arm`; a URDF `path` is relative to `base_dir`.
-pub fn serial_arm(s: &SerialArmSection, base_dir: &Path, pose: impl Fn(&crate::cell_file::PoseSection, &str) -> Result<InstrumentPose, CellError>) -> Result<SerialArm, CellError> {
+/// Validated serial arm from `machine.serial_arm` and its `sensors.accelerometers`; a URDF
+/// `path` is relative to `base_dir`.
+pub fn serial_arm(s: &SerialArmSection, accelerometers: &[AccelerometerSection], base_dir: &Path, pose: impl Fn(&crate::cell_file::PoseSection, &str) -> Result<InstrumentPose, CellError>) -> Result<SerialArm, CellError> {
     let p = "machine.serial_arm";
     let (mut chain, dh) = match (&s.dh, &s.urdf) {
         (Some(_), Some(_)) | (None, None) => return Err(CellError::invalid(p, "needs exactly one of `dh` (a DH table: {convention: standard | modified, rows}) and `urdf` ({path, root_link, tip_link})")),
@@ -99,5 +101,36 @@ pub fn serial_arm(s: &SerialArmSection, base_dir: &Path, pose: impl Fn(&crate::c
         }
         Some(v)
     };
-    Ok(SerialArm { chain, dh, joint_limits, revolute, accelerometers: Vec::new() })
+    let accelerometers = arm_accelerometers(accelerometers, s.urdf.as_ref(), base_dir, &chain.base)?;
+    Ok(SerialArm { chain, dh, joint_limits, revolute, accelerometers })
+}
+
+/// The arm's accelerometers from `sensors.accelerometers`: each link looked up in the arm's
+/// URDF. A sensor on a link fixed to the chain's root (fixed joints only, on any branch) gets
+/// its rotation in the arm's base frame — the frame the chain's positions and its gravity are in,
+/// `machine.serial_arm.base` included — and gives the ground's tilt; one behind a movable joint
+/// (an IMU on a column's top) is kept by name without it.
+fn arm_accelerometers(sensors: &[AccelerometerSection], urdf: Option<&UrdfSection>, base_dir: &Path, base: &Isometry3<f64>) -> Result<Vec<ArmAccelerometer>, CellError> {
+    if sensors.is_empty() {
+        return Ok(Vec::new());
+    }
+    let Some(u) = urdf else {
+        return Err(CellError::invalid("sensors.accelerometers", "needs an arm from a URDF (`machine.serial_arm.urdf`): each accelerometer names the URDF link it sits on; a DH table has no links to name"));
+    };
+    let path = base_dir.join(&u.path);
+    let robot = read_urdf_file(&path).map_err(|e| CellError::invalid("machine.serial_arm.urdf", e.to_string()))?;
+    let mut out: Vec<ArmAccelerometer> = Vec::new();
+    for (i, a) in sensors.iter().enumerate() {
+        let p = format!("sensors.accelerometers[{i}]");
+        if a.name.is_empty() || out.iter().any(|o| o.name == a.name) {
+            return Err(CellError::invalid(format!("{p}.name"), format!("`{}` must be a non-empty name no other accelerometer has (the `accel.<name>` columns and `/imu/<name>`)", a.name)));
+        }
+        let placement = link_placement(&robot, &u.root_link, &a.link).map_err(|e| CellError::invalid(format!("{p}.link"), format!("{e} (URDF {})", path.display())))?;
+        let base_from_sensor = match placement {
+            LinkPlacement::Fixed(t) => Some((base.rotation * t.rotation).to_rotation_matrix().into_inner()),
+            LinkPlacement::Moves { .. } => None,
+        };
+        out.push(ArmAccelerometer { name: a.name.clone(), link: a.link.clone(), base_from_sensor });
+    }
+    Ok(out)
 }

@@ -108,7 +108,7 @@ pub fn summary_text(d: &Diagnosis) -> String {
 }
 
 /// The augmented model file: the user's file with every fitted value, the found terms appended.
-fn augmented_model(model: &CellModel, d: &Diagnosis) -> anyhow::Result<String> {
+fn augmented_model(model: &CellModel, d: &Diagnosis, dir: &Path) -> anyhow::Result<String> {
     let parameters = d.fitted.iter().map(|(name, value, sigma)| FittedParameter { name: name.clone(), value: *value, sigma: *sigma }).collect();
     let r = &d.report;
     let mut fit = serde_yaml::Mapping::new();
@@ -119,7 +119,7 @@ fn augmented_model(model: &CellModel, d: &Diagnosis) -> anyhow::Result<String> {
     }
     fit.insert("heldout_rms_um".into(), serde_yaml::Value::Sequence(vec![((r.before.heldout_rms_m * 1e8).round() / 100.0).into(), ((r.after.heldout_rms_m * 1e8).round() / 100.0).into()]));
     fit.insert("chi2_per_dof".into(), ((r.after.chi2_per_dof * 100.0).round() / 100.0).into());
-    let update = ModelUpdate { parameters, added_terms: d.added_terms.iter().map(|t| t.config.clone()).collect(), fit: Some(serde_yaml::Value::Mapping(fit)), notes: left_out(d) };
+    let update = ModelUpdate { parameters, added_terms: d.added_terms.iter().map(|t| t.config.clone()).collect(), fit: Some(serde_yaml::Value::Mapping(fit)), notes: left_out(d), output_dir: Some(dir.to_path_buf()) };
     Ok(write_model(model, &update)?)
 }
 
@@ -178,7 +178,7 @@ pub fn diagnose_bags_from(model_path: &Path, bags: &[PathBuf], options: &Diagnos
 /// DIR/index.html with its figures. Returns the page's path.
 pub fn write_report(dir: &Path, model: &CellModel, d: &Diagnosis, title: &str) -> anyhow::Result<PathBuf> {
     std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;
-    write(&dir.join("model.yaml"), &augmented_model(model, d)?)?;
+    write(&dir.join("model.yaml"), &augmented_model(model, d, dir)?)?;
     write(&dir.join("diagnosis.json"), &serde_json::to_string_pretty(&d.report)?)?;
     let page = html_report(d, title)?;
     page.write_to(dir).map_err(|e| anyhow::anyhow!("cannot write the report into {}: {e}", dir.display()))

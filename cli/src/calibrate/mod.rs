@@ -139,7 +139,7 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<i32> {
     let update = model_update(&result, &records, &a);
     // the fitted file is the file's model: placements are per recording, not written into it
     let per_recording = |name: &str| metrocell_estimation::check_points::is_placement_parameter(name) && (!setups.is_empty() || name.starts_with("base_tilt"));
-    let update = ModelUpdate { parameters: update.parameters.into_iter().filter(|p| !per_recording(&p.name)).collect(), ..update };
+    let update = ModelUpdate { parameters: update.parameters.into_iter().filter(|p| !per_recording(&p.name)).collect(), output_dir: a.output.parent().map(std::path::Path::to_path_buf), ..update };
     let text = write_model(&model, &update)?;
     std::fs::write(&a.output, &text).with_context(|| format!("cannot write `{}`", a.output.display()))?;
     let page = match &a.report {

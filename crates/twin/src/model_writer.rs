@@ -50,10 +50,31 @@ pub struct ModelUpdate {
     /// Sentences written as comments above the appended sections: what the writer of the file
     /// (e.g. `diagnose`) found but could not put in a model file, and why.
     pub notes: Vec<String>,
+    /// The directory the written file goes to: a relative path the file gives (its URDF) is
+    /// rewritten to hold from there (made absolute) when that is not the file's own directory.
+    pub output_dir: Option<std::path::PathBuf>,
 }
 
 pub(crate) fn bad(model: &CellModel, reason: String) -> CellError {
     CellError::InFile { file: model.file.clone(), error: Box::new(CellError::Invalid { path: "(writing the fitted model)".into(), reason }) }
+}
+
+/// A relative path of the file (`node`) as it must read from `dir`: absolute, unless `dir` is
+/// the file's own directory (then as written).
+fn relocated_path(model: &CellModel, dir: &std::path::Path, node: &yaml_edit::Node, edits: &mut Edits) {
+    let Some(path) = node.scalar() else { return };
+    let path = path.trim_matches(|c| c == '"' || c == '\'');
+    if std::path::Path::new(path).is_absolute() {
+        return;
+    }
+    let canon = |p: &std::path::Path| std::fs::canonicalize(p).ok();
+    let here = if dir.as_os_str().is_empty() { std::path::Path::new(".") } else { dir };
+    if canon(here).is_some() && canon(here) == canon(&model.base_dir) {
+        return;
+    }
+    if let Some(absolute) = canon(&model.base_dir.join(path)) {
+        edits.replace(node, format!("{:?}", absolute.display().to_string()));
+    }
 }
 
 /// The model file's text with `update` applied (see the module docs).
@@ -85,6 +106,9 @@ pub fn write_model(model: &CellModel, update: &ModelUpdate) -> Result<String, Ce
     }
     if model.declares_tracker {
         tracker_edits(model, &root, &fitted, &mut edits, &mut written)?;
+    }
+    if let (Some(dir), Some(node)) = (&update.output_dir, root.at("machine.serial_arm.urdf.path")) {
+        relocated_path(model, dir, node, &mut edits);
     }
     probe_edits(model, &root, &fitted, &mut edits, &mut written)?;
     let mut notes = update.notes.clone();

@@ -19,7 +19,7 @@ use crate::candidates::{candidate_families, Declared, NotTried, TermFamily};
 use crate::declared_stage::DeclaredStage;
 use crate::reference_columns::{nest_columns, with_columns};
 use crate::empirical::{bump_variants, time_variants, EmpiricalBasis};
-use crate::folds::{time_blocks, workspace_blocks};
+use crate::folds::{time_blocks, within_groups, workspace_blocks};
 use crate::periodogram::{independent_frequencies, strongest_period};
 use crate::pipeline::{DeclaredModel, DiagnoseOptions};
 use crate::residual_view::ResidualView;
@@ -64,8 +64,10 @@ pub(crate) fn expand_folds(per_record: &[usize]) -> Vec<usize> {
 impl SelectionFrame {
     pub fn new(model: &ForwardModel, x0: &[f64], free0: &[usize], stage: &DeclaredStage, view0: &ResidualView, options: &DiagnoseOptions) -> Result<Self, PhysicsError> {
         let n = stage.set.records.len();
-        let folds_time = time_blocks(&view0.time, options.time_blocks);
-        let folds_space = workspace_blocks(&view0.position, options.workspace_blocks);
+        // with one pose per placement of the instrument, blocks are cut within each placement
+        let placements: Vec<Option<&str>> = stage.set.records.iter().map(|r| r.signals.setup.as_deref()).collect();
+        let folds_time = within_groups(&placements, |m| time_blocks(&m.iter().map(|&i| view0.time[i]).collect::<Vec<_>>(), options.time_blocks));
+        let folds_space = within_groups(&placements, |m| workspace_blocks(&m.iter().map(|&i| view0.position[i]).collect::<Vec<_>>(), options.workspace_blocks));
         let stride = n.div_ceil(options.max_selection_records.max(1));
         let mut by_time: Vec<usize> = (0..n).collect();
         by_time.sort_by(|&a, &b| view0.time[a].total_cmp(&view0.time[b]));
@@ -138,7 +140,10 @@ fn periodogram_leads(declared: &DeclaredModel, frame: &SelectionFrame, inventory
 pub(crate) fn candidates(declared: &DeclaredModel, model: &ForwardModel, stage: &DeclaredStage, x0: &[f64], frame: &SelectionFrame, options: &DiagnoseOptions) -> Result<(Vec<Prepared>, Vec<NotTried>), PhysicsError> {
     // what the machine's points can inform (a reference nest carries no axis positions)
     let machine_records: Vec<MeasurementRecord> = frame.records.iter().filter(|r| !is_reference(r)).cloned().collect();
-    let inventory = SignalInventory::of(&machine_records);
+    let mut inventory = SignalInventory::of(&machine_records);
+    if let metrocell_model::MachineKinematics::SerialArm(arm) = &declared.machine.kinematics {
+        inventory.gravity_torque_rms = crate::signal_inventory::gravity_torque_rms(arm, &machine_records);
+    }
     let leads = periodogram_leads(declared, frame, &inventory);
     let decl = Declared { machine: declared.machine, machine_terms: declared.machine_terms, instrument_terms: &stage.instruments };
     let (term_families, mut not_tried) = candidate_families(&decl, &inventory, &leads, stage.set.frame == RecordFrame::Machine);

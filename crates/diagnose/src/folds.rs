@@ -29,6 +29,28 @@ pub fn workspace_blocks(positions: &[Vector3<f64>], k: usize) -> Vec<usize> {
     time_blocks(&coordinate, k)
 }
 
+/// `blocks` applied within each group of samples (an instrument's placement: `groups[i]` of
+/// sample i), fold k of every group together. With one pose per placement, a fold that held
+/// out a whole placement would leave its pose unfitted and judge every candidate on an
+/// unplaced instrument; cut within each placement, every fold keeps each pose in training and
+/// still holds out a contiguous block of it.
+pub fn within_groups<G: PartialEq + Clone>(groups: &[G], blocks: impl Fn(&[usize]) -> Vec<usize>) -> Vec<usize> {
+    let mut fold = vec![0; groups.len()];
+    let mut seen: Vec<G> = Vec::new();
+    for g in groups {
+        if !seen.contains(g) {
+            seen.push(g.clone());
+        }
+    }
+    for g in &seen {
+        let members: Vec<usize> = (0..groups.len()).filter(|&i| groups[i] == *g).collect();
+        for (m, f) in members.iter().zip(blocks(&members)) {
+            fold[*m] = f;
+        }
+    }
+    fold
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -40,5 +62,14 @@ mod tests {
         assert_eq!(f, vec![4, 4, 3, 3, 2, 2, 1, 1, 0, 0]);
         let p: Vec<Vector3<f64>> = (0..6).map(|i| Vector3::new(0.0, i as f64, 0.1 * (i % 2) as f64)).collect();
         assert_eq!(workspace_blocks(&p, 3), vec![0, 0, 1, 1, 2, 2]);
+    }
+
+    #[test]
+    fn folds_within_placements_keep_every_placement_in_training() {
+        // two placements, one after the other in time: each fold holds out part of both
+        let groups = ["S1", "S1", "S1", "S1", "S2", "S2", "S2", "S2"];
+        let t: Vec<f64> = (0..8).map(|i| i as f64).collect();
+        let f = within_groups(&groups, |m| time_blocks(&m.iter().map(|&i| t[i]).collect::<Vec<_>>(), 2));
+        assert_eq!(f, vec![0, 0, 1, 1, 0, 0, 1, 1]);
     }
 }

@@ -35,6 +35,32 @@ pub struct SignalInventory {
     pub time_span: Option<(f64, f64)>,
     /// Some records are instrument readings of points (a tracker's): an instrument that can drift.
     pub point_readings: bool,
+    /// An arm's gravity torque about each of its joint variables, RMS over the records (N·m;
+    /// empty for other machines or an arm without masses): which joints gravity loads.
+    pub gravity_torque_rms: Vec<f64>,
+}
+
+/// The RMS over `records` of the gravity torque about each joint variable of `arm` (URDF
+/// inertials, each record's gravity or level); empty when the arm has no masses.
+pub fn gravity_torque_rms(arm: &metrocell_model::SerialArm, records: &[MeasurementRecord]) -> Vec<f64> {
+    if !arm.chain.joints.iter().any(|j| j.inertial.is_some()) || records.is_empty() {
+        return Vec::new();
+    }
+    let level = nalgebra::Vector3::new(0.0, 0.0, -metrocell_physics::gravity::STANDARD_GRAVITY);
+    let mut sum = vec![0.0; arm.chain.dof()];
+    let mut n = 0usize;
+    for r in records {
+        if let Ok(tau) = metrocell_kinematics::gravity::gravity_torques(&arm.chain, &r.q, &r.signals.gravity.unwrap_or(level)) {
+            for (s, t) in sum.iter_mut().zip(tau) {
+                *s += t * t;
+            }
+            n += 1;
+        }
+    }
+    if n == 0 {
+        return Vec::new();
+    }
+    sum.iter().map(|s| (s / n as f64).sqrt()).collect()
 }
 
 impl SignalInventory {

@@ -88,7 +88,7 @@ pub fn serial_arm(s: &SerialArmSection, accelerometers: &[AccelerometerSection],
     if let Some(t) = &s.tool {
         chain.tool = pose(t, &format!("{p}.tool"))?.isometry();
     }
-    let revolute: Vec<bool> = chain.joints.iter().filter(|j| j.kind != JointKind::Fixed).map(|j| j.kind == JointKind::Revolute).collect();
+    let revolute: Vec<bool> = chain.joints.iter().filter(|j| j.is_variable()).map(|j| j.kind == JointKind::Revolute).collect();
     let joint_limits = if s.joint_limits.is_empty() {
         None
     } else {

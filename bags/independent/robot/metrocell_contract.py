@@ -4,7 +4,7 @@ field is missing.
 
 `calibrate --json`: a top-level `check` section, per model and per setup and over all,
     check.<declared|fitted>.<overall|setups.<name>> = {n, rms_m, p50_xy_m, p95_xy_m, p95_z_m, max_m}
-Accepted spellings (first found wins): model `declared`/`rigid`, `fitted`/`calibrated`; over
+Accepted spellings (first found wins): model `nominal`/`rigid`/`declared` (metrocell: `nominal` is the kinematics alone, `declared` the model file's values), `fitted`/`calibrated`; over
 all `overall`/`all`/`total`; per setup `setups`/`per_setup`/`by_setup` (a dict by name or a
 list of entries with `setup`/`name`).
 `diagnose --json`: `findings[*].term` (crates/diagnose/README.md).
@@ -14,7 +14,7 @@ import math
 
 STAT_FIELDS = ("n", "rms_m", "p50_xy_m", "p95_xy_m", "p95_z_m", "max_m")
 REQUIRED = ("n", "p50_xy_m", "p95_xy_m", "p95_z_m")
-MODEL_KEYS = {"declared": ("declared", "rigid"), "fitted": ("fitted", "calibrated")}
+MODEL_KEYS = {"declared": ("nominal", "rigid", "declared"), "fitted": ("fitted", "calibrated")}
 OVERALL_KEYS = ("overall", "all", "total")
 SETUP_KEYS = ("setups", "per_setup", "by_setup")
 

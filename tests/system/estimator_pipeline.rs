@@ -23,13 +23,14 @@ fn ok(out: &std::process::Output, what: &str) -> String {
 }
 
 /// The possible range of each parameter of quick_demo.yaml's terms (crates/physics catalog).
+/// A parameter's possible range, from the catalog (what the estimator must never publish
+/// outside): the term's spec, found by the parameter's name.
 fn possible_range(name: &str) -> (f64, f64) {
-    match name {
-        "thermal_scale[x].alpha" => (-2e-6, 30e-6),
-        "pitch_cyclic[x].a1" | "pitch_cyclic[x].b1" => (-50e-6, 50e-6),
-        "backlash[x].reversal" => (0.0, 1e-3),
-        other => panic!("{other}: not a parameter of quick_demo.yaml"),
-    }
+    let (label, param) = name.rsplit_once('.').unwrap_or_else(|| panic!("{name}: not label.param"));
+    let cell = metrocell_twin::CellModel::from_path(workspace_root().join("crates/twin/examples/cells/quick_demo.yaml")).unwrap();
+    let spec = cell.machine_terms.terms.iter().chain(&cell.instrument_terms.terms).find(|t| t.term.label() == label).and_then(|t| t.term.params().into_iter().find(|s| s.name == param));
+    let spec = spec.unwrap_or_else(|| panic!("{name}: not a parameter of quick_demo.yaml"));
+    (spec.possible.lo, spec.possible.hi)
 }
 
 #[test]

@@ -386,9 +386,11 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
         (identifiability_with_priors(&j0, &priors, &free, &labels, options.rcond)?, None)
     };
     let machine_params = model.machine_terms.param_specs().len();
+    // each parameter's typical change, for the nil-column test (units differ by 10⁹)
+    let scales: Vec<f64> = model.machine_terms.param_specs().iter().chain(model.instrument_terms.param_specs().iter()).map(|s| s.typical_scale()).collect();
     let mut held = Vec::new();
     if !declared_identifiability.null_directions.is_empty() {
-        for (k, sentence) in dependent_parameters(&with_prior_rows(&j0, &priors), &free, machine_params, &names) {
+        for (k, sentence) in dependent_parameters(&with_prior_rows(&j0, &priors), &free, machine_params, &names, &scales) {
             free[k] = false;
             held.push(HeldParameter { index: k, name: names[k].clone(), combination: sentence });
         }
@@ -404,7 +406,7 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
     // held ones keep their start values exactly) until the rest is identifiable
     while !identifiability.null_directions.is_empty() && held.len() < n_free {
         let before = held.len();
-        for (k, sentence) in dependent_parameters(&with_prior_rows(&solution.weighted_jacobian, &priors), &free, machine_params, &names) {
+        for (k, sentence) in dependent_parameters(&with_prior_rows(&solution.weighted_jacobian, &priors), &free, machine_params, &names, &scales) {
             free[k] = false;
             held.push(HeldParameter { index: k, name: names[k].clone(), combination: sentence });
         }
@@ -512,14 +514,14 @@ const DEPENDENT: f64 = 1e-5;
 /// ≥ 1, then the constants `c0` (a constant offset is the conventional one to hold) — with a
 /// sentence naming the parameters it cannot be told from. Deterministic for a design: the
 /// noise moves the columns far less than the threshold.
-fn dependent_parameters(jw: &DMatrix<f64>, free: &[bool], machine_params: usize, names: &[String]) -> Vec<(usize, String)> {
+fn dependent_parameters(jw: &DMatrix<f64>, free: &[bool], machine_params: usize, names: &[String], scales: &[f64]) -> Vec<(usize, String)> {
     let mut order: Vec<usize> = (machine_params..free.len()).filter(|&k| free[k]).collect();
     // squareness before the series: ISO 230-1 refers straightness to its reference line, so a
     // linear straightness term is what gives way to the squareness it aliases
     order.extend((0..machine_params).filter(|&k| free[k] && names[k].starts_with("squareness")));
     order.extend((0..machine_params).filter(|&k| free[k] && !names[k].starts_with("squareness") && !names[k].ends_with(".c0")));
     order.extend((0..machine_params).filter(|&k| free[k] && names[k].ends_with(".c0")));
-    inseparable(jw, &order, names)
+    inseparable_at_scales(jw, &order, names, Some(scales))
 }
 
 /// The columns of `jw` (parameters `names`) among `order` that are combinations of columns
@@ -527,7 +529,17 @@ fn dependent_parameters(jw: &DMatrix<f64>, free: &[bool], machine_params: usize,
 /// from and the combination that leaves every residual unchanged. Columns are compared scaled
 /// to unit norm; a nil column (below 1e-9 of the largest) is "not identifiable".
 pub fn inseparable(jw: &DMatrix<f64>, order: &[usize], names: &[String]) -> Vec<(usize, String)> {
-    let largest = order.iter().map(|&k| jw.column(k).norm()).fold(0.0f64, f64::max);
+    inseparable_at_scales(jw, order, names, None)
+}
+
+/// [`inseparable`] with each parameter's typical size (`scales[k]`, its unit's worth of a
+/// usual change: a time constant's hours, a pretravel's µm): a column is nil when its effect
+/// over a typical change is below 1e-9 of the largest such effect, whatever the units — per
+/// unit parameter a time constant in seconds moves a reading 10⁻⁹ as much as a pretravel in
+/// metres and would be called nil beside it.
+pub fn inseparable_at_scales(jw: &DMatrix<f64>, order: &[usize], names: &[String], scales: Option<&[f64]>) -> Vec<(usize, String)> {
+    let scale = |k: usize| scales.map_or(1.0, |s| s[k]);
+    let largest = order.iter().map(|&k| jw.column(k).norm() * scale(k)).fold(0.0f64, f64::max);
     // the Gram matrix of the columns in `order` (position in `order` → row/column), for the
     // combinations below: their least squares on the kept columns is a small solve on it, where
     // an SVD of the m × kept columns per dependent column took seconds (29 dependent columns of
@@ -542,7 +554,7 @@ pub fn inseparable(jw: &DMatrix<f64>, order: &[usize], names: &[String]) -> Vec<
     for &k in order {
         let col = jw.column(k).into_owned();
         let norm = col.norm();
-        if !(norm > 1e-9 * largest) {
+        if !(norm * scale(k) > 1e-9 * largest) {
             out.push((k, format!("{} is not identifiable: no measurement depends on it; held at its start value", names[k])));
             continue;
         }

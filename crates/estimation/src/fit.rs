@@ -368,7 +368,11 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
         if options.loss == Loss::Linear {
             return Ok(near);
         }
-        Ok(solve(&problem, &near.x, &solver_options(free, options.loss))?)
+        // the iterations and evaluations of both stages are the fit's
+        let mut robust = solve(&problem, &near.x, &solver_options(free, options.loss))?;
+        robust.iterations += near.iterations;
+        robust.evaluations += near.evaluations;
+        Ok(robust)
     };
     // what the design can identify, judged at the start: a parameter whose effect is nil or a
     // combination of others there (e.g. a joint offset about the axis the target sits on) is

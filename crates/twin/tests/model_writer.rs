@@ -142,6 +142,7 @@ fn added_terms_are_appended_and_read_back() {
         added_terms: vec![added],
         fit: None,
         notes: vec![],
+        output_dir: None,
     };
     let out = write_model(&model, &update).unwrap();
     assert!(out.contains("  - id: positioning   # first\n    options: {axis: x, order: 1}\n    params: {c0: 0 um, c1: 2.500 um}\n  - id: backlash\n    options: {axis: y}\n    params: {reversal: 9.040 um}\n"), "{out}");
@@ -207,6 +208,7 @@ fn found_instrument_terms_go_where_a_model_file_keeps_them() {
             ],
             fit: None,
             notes: vec!["left out: the empirical correction `empirical[z]` (no catalog term describes it)".into()],
+            output_dir: None,
         };
         let out = write_model(&model, &update).unwrap();
         assert!(!out.contains("id: tracker_warmup") && !out.contains("id: refraction") && !out.contains("id: instrument_drift"), "{style}: instrument terms are not machine terms:\n{out}");

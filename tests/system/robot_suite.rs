@@ -164,5 +164,9 @@ fn diagnose_names_the_column_and_the_prism_offset_on_the_rigid_model() {
     }
     let allowed = ["column_bending", "tool_offset", "joint_compliance", "joint_backlash", "link_thermal_expansion"];
     assert!(named.iter().all(|n| allowed.contains(&n.as_str())), "diagnose named physics the truth does not have: {named:?}");
+    // it scores itself on the check points it kept out
+    let (before, after) = (d["check"]["declared"]["p95_xy_m"].as_f64().unwrap(), d["check"]["augmented"]["p95_xy_m"].as_f64().unwrap());
+    println!("diagnose on the check points: p95 xy {:.2} → {:.2} mm", before * 1e3, after * 1e3);
+    assert!(after < before / 3.0 && d["check"]["augmented"]["n"].as_u64().unwrap() > 100, "{}", d["check"]);
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -307,6 +307,20 @@ struct Context<'a> {
     view0: &'a ResidualView,
 }
 
+/// The check points (kept out of every fit) predicted by the declared model at its fit and by the
+/// augmented model at its refit, each with the placements its fit points gave; None without
+/// check points.
+fn check_scores(declared: &DeclaredModel, stage: &DeclaredStage, aug: &Augmented, x1: &[f64]) -> Result<Option<crate::report::CheckScores>, DiagnoseError> {
+    if stage.set.check.is_empty() {
+        return Ok(None);
+    }
+    let before_model = ForwardModel::new(declared.machine, declared.machine_terms, &stage.instruments)?;
+    let before = metrocell_estimation::check_points::check_report_of(&before_model, &stage.fit.x, &stage.set.check);
+    let after_model = aug.model(declared.machine)?;
+    let after = metrocell_estimation::check_points::check_report_of(&after_model, x1, &stage.set.check);
+    Ok(Some(crate::report::CheckScores { declared: before.overall.into(), augmented: after.overall.into(), unpredicted: after.unpredicted.len() }))
+}
+
 /// The findings, the augmented model's terms, the report and the plots.
 #[allow(clippy::too_many_arguments)]
 fn report(declared: &DeclaredModel, stage: &DeclaredStage, aug: &Augmented, x1: &[f64], judged: Judged, ctx: Context, mut messages: Vec<String>, progress: &Progress) -> Result<Diagnosis, DiagnoseError> {
@@ -340,7 +354,18 @@ fn report(declared: &DeclaredModel, stage: &DeclaredStage, aug: &Augmented, x1: 
     messages.extend(findings::advice(ctx.selection, ctx.families, &set.records, declared.machine));
     let mut rejected = stage.rejected.clone();
     rejected.truncate(50);
-    let summary = findings::summary(&built.findings, &unexplained, &judged.before, &judged.after, ctx.noise_rms, explained);
+    let mut summary = findings::summary(&built.findings, &unexplained, &judged.before, &judged.after, ctx.noise_rms, explained);
+    let check = check_scores(declared, stage, aug, x1)?;
+    if let Some(c) = &check {
+        summary.push_str(&format!(
+            " On the {} check points kept out of the fit: p95 horizontal {:.2} mm with the declared model, {:.2} mm with the found terms (p95 vertical {:.2} → {:.2} mm).",
+            c.augmented.n,
+            c.declared.p95_xy_m * 1e3,
+            c.augmented.p95_xy_m * 1e3,
+            c.declared.p95_z_m * 1e3,
+            c.augmented.p95_z_m * 1e3
+        ));
+    }
     let n = set.records.len();
     let report = Report {
         noise_rms_m: ctx.noise_rms,
@@ -371,6 +396,7 @@ fn report(declared: &DeclaredModel, stage: &DeclaredStage, aug: &Augmented, x1: 
         not_tried: ctx.not_tried,
         messages,
         uncertainty: judged.uncertainty.clone(),
+        check,
     };
     let mut temperatures: BTreeMap<String, Vec<f64>> = BTreeMap::new();
     for r in &set.records {

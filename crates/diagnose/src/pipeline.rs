@@ -318,7 +318,7 @@ fn check_scores(declared: &DeclaredModel, stage: &DeclaredStage, aug: &Augmented
     let before = metrocell_estimation::check_points::check_report_of(&before_model, &stage.fit.x, &stage.set.check);
     let after_model = aug.model(declared.machine)?;
     let after = metrocell_estimation::check_points::check_report_of(&after_model, x1, &stage.set.check);
-    Ok(Some(crate::report::CheckScores { declared: before.overall.into(), augmented: after.overall.into(), unpredicted: after.unpredicted.len() }))
+    Ok(Some(crate::report::CheckScores { declared: before.overall, augmented: after.overall, unpredicted: after.unpredicted.len() }))
 }
 
 /// The findings, the augmented model's terms, the report and the plots.

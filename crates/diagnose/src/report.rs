@@ -5,6 +5,7 @@
 
 use std::collections::BTreeMap;
 
+use metrocell_estimation::CheckStatistics;
 use serde::Serialize;
 
 use crate::candidates::NotTried;
@@ -237,28 +238,12 @@ pub struct Report {
 /// `check_points` for the statistics) before and after the found terms.
 #[derive(Debug, Clone, Serialize, PartialEq)]
 pub struct CheckScores {
-    pub declared: CheckFigures,
-    pub augmented: CheckFigures,
+    pub declared: CheckStatistics,
+    pub augmented: CheckStatistics,
     /// Check points neither model could predict (their setup has no pose…).
     pub unpredicted: usize,
 }
 
-/// `{n, rms_m, p50_xy_m, p95_xy_m, p95_z_m, max_m}` of check-point errors.
-#[derive(Debug, Clone, Copy, Serialize, PartialEq)]
-pub struct CheckFigures {
-    pub n: usize,
-    pub rms_m: f64,
-    pub p50_xy_m: f64,
-    pub p95_xy_m: f64,
-    pub p95_z_m: f64,
-    pub max_m: f64,
-}
-
-impl From<metrocell_estimation::CheckStatistics> for CheckFigures {
-    fn from(s: metrocell_estimation::CheckStatistics) -> Self {
-        Self { n: s.n, rms_m: s.rms_m, p50_xy_m: s.p50_xy_m, p95_xy_m: s.p95_xy_m, p95_z_m: s.p95_z_m, max_m: s.max_m }
-    }
-}
 
 /// How the σ of the found terms (and of the augmented model's parameters) were made: the
 /// independent-rows covariance of the final joint fit, widened to the sandwich covariance where

@@ -16,8 +16,9 @@ use nalgebra::Vector3;
 use crate::records::{MeasurementRecord, RecordSet};
 use crate::residuals::predict;
 
-/// How well check points are predicted.
-#[derive(Debug, Clone, Copy, PartialEq)]
+/// How well check points are predicted (serialised as `{n, rms_m, p50_xy_m, p95_xy_m, p95_z_m,
+/// max_m}`, NaN as null).
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize)]
 pub struct CheckStatistics {
     pub n: usize,
     pub rms_m: f64,

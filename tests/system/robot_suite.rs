@@ -10,7 +10,8 @@
 //! the instrument's noise alone gives (the answer key's target) on both grounds; the prism
 //! offset, the shoulder's compliance and the column foot's within 3σ of the truth; a setup with
 //! too few fit points named and its check points reported unpredicted; `diagnose` of the rigid
-//! model names the column's bending and the prism offset.
+//! model names the column's bending and the prism offset, and scores itself on the check points;
+//! without the base accelerometer's readings the gravity terms are listed as not tried, with why.
 //! Run: `METROCELL_PYTHON=.venv/bin/python cargo test -p metrocell-system-tests --test robot_suite`
 //! (needs `cargo build -p metrocell-cli`).
 
@@ -47,9 +48,12 @@ fn metrocell(args: &[&OsStr]) -> (Value, String) {
 }
 
 fn import(seed: &Path, ground: &str, csv: Option<&Path>) -> PathBuf {
-    let bag = seed.join(format!("bag_{ground}_{}", if csv.is_some() { "edited" } else { "as_exported" }));
+    import_with(seed, ground, csv, &seed.join(ground).join("mapping.yaml"))
+}
+
+fn import_with(seed: &Path, ground: &str, csv: Option<&Path>, mapping: &Path) -> PathBuf {
+    let bag = seed.join(format!("bag_{ground}_{}_{}", if csv.is_some() { "edited" } else { "as_exported" }, mapping.file_stem().unwrap().to_string_lossy()));
     let csv = csv.map(Path::to_path_buf).unwrap_or_else(|| seed.join(ground).join("export.csv"));
-    let mapping = seed.join(ground).join("mapping.yaml");
     metrocell(&["bag".as_ref(), "import".as_ref(), csv.as_os_str(), "--mapping".as_ref(), mapping.as_os_str(), "-o".as_ref(), bag.as_os_str()]);
     bag
 }
@@ -168,5 +172,29 @@ fn diagnose_names_the_column_and_the_prism_offset_on_the_rigid_model() {
     let (before, after) = (d["check"]["declared"]["p95_xy_m"].as_f64().unwrap(), d["check"]["augmented"]["p95_xy_m"].as_f64().unwrap());
     println!("diagnose on the check points: p95 xy {:.2} → {:.2} mm", before * 1e3, after * 1e3);
     assert!(after < before / 3.0 && d["check"]["augmented"]["n"].as_u64().unwrap() > 100, "{}", d["check"]);
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn without_the_base_accelerometer_the_gravity_terms_are_not_tried_and_say_why() {
+    let dir = temp_dir("no_accelerometer");
+    let (seed, _) = sample(&dir);
+    // the export's base accelerometer columns ignored by the mapping
+    let text = std::fs::read_to_string(seed.join("flat_floor").join("mapping.yaml")).unwrap();
+    let mut mapping: Vec<String> = text.lines().filter(|l| !l.trim_start().starts_with("accel.base.")).map(str::to_string).collect();
+    let ignore = mapping.iter().position(|l| l.starts_with("ignore:")).unwrap();
+    mapping[ignore] = mapping[ignore].replace("[\"Group\"", "[\"acc_base_x [m/s2]\", \"acc_base_y [m/s2]\", \"acc_base_z [m/s2]\", \"Group\"");
+    let path = dir.join("no_base_accelerometer.yaml");
+    std::fs::write(&path, mapping.join("\n") + "\n").unwrap();
+    let bag = import_with(&seed, "flat_floor", None, &path);
+    let (d, _) = metrocell(&["diagnose".as_ref(), "--model".as_ref(), seed.join("model.yaml").as_os_str(), bag.as_os_str(), "--json".as_ref(), "-".as_ref()]);
+    let not_tried = d["not_tried"].as_array().unwrap();
+    for term in ["joint_compliance", "joint_backlash", "column_bending"] {
+        let entry = not_tried.iter().find(|n| n["term"] == term).unwrap_or_else(|| panic!("{term} not in not_tried: {not_tried:?}"));
+        let reason = entry["reason"].as_str().unwrap();
+        assert!(reason.contains("base accelerometer `base`") && reason.contains("accel.base.x|y|z"), "{reason}");
+    }
+    let named: Vec<&str> = d["findings"].as_array().unwrap().iter().map(|f| f["term"].as_str().unwrap()).collect();
+    assert!(!named.contains(&"joint_compliance") && !named.contains(&"column_bending"), "{named:?}");
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -316,7 +316,14 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
         MachineKinematics::SerialArm(arm) => {
             out.extend(family(vec![linear_variant("", TermId::JointOffset, vec![("joints", num(arm.chain.dof() as f64))])], TermId::JointOffset, Placement::Machine));
             out.extend(family(vec![linear_variant("", TermId::LinkLength, vec![("links", num(arm.link_count() as f64))])], TermId::LinkLength, Placement::Machine));
-            out.extend(gravity_families(arm, inventory));
+            match gravity_families(arm, inventory) {
+                Ok(families) => out.extend(families),
+                Err(reason) => {
+                    for term in ["joint_compliance", "joint_backlash", "column_bending"] {
+                        skip(term, reason.clone());
+                    }
+                }
+            }
         }
         MachineKinematics::FiveAxis(f) => {
             if inventory.rotary[1] && inventory.rotary[2] {
@@ -404,10 +411,18 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
 /// The gravity terms of a robot whose URDF gives its masses: each revolute joint's compliance
 /// and backlash (one family each, every revolute joint its parameter), a lifting column's bending
 /// (each prismatic joint: it carries the arm), the links' expansion with each temperature sensor.
-fn gravity_families(arm: &metrocell_model::SerialArm, inventory: &SignalInventory) -> Vec<TermFamily> {
+/// Err with the reason when the model names an accelerometer on the base whose readings the
+/// recording lacks: the terms need the gravity it measures (tilted ground).
+fn gravity_families(arm: &metrocell_model::SerialArm, inventory: &SignalInventory) -> Result<Vec<TermFamily>, String> {
     let mut out = Vec::new();
     if !arm.chain.joints.iter().any(|j| j.inertial.is_some()) {
-        return out;
+        return Ok(out);
+    }
+    if let Some(a) = arm.accelerometers.iter().find(|a| a.base_from_sensor.is_some()).filter(|_| !inventory.gravity_measured) {
+        return Err(format!(
+            "the model's base accelerometer `{}` (link {}) has no reading at every record: the gravity torques need the base's tilt it measures (record /imu/{}, or import columns accel.{}.x|y|z; without sensors.accelerometers the base is taken as level)",
+            a.name, a.link, a.name, a.name
+        ));
     }
     let names = arm.chain.variable_names();
     let revolute: Vec<ConfigValue> = names.iter().zip(&arm.revolute).filter(|(_, r)| **r).map(|(n, _)| text(n)).collect();
@@ -432,7 +447,7 @@ fn gravity_families(arm: &metrocell_model::SerialArm, inventory: &SignalInventor
     for s in &inventory.temperatures {
         out.extend(family(vec![linear_variant("", TermId::LinkThermalExpansion, vec![("sensor", text(s))])], TermId::LinkThermalExpansion, Placement::Machine));
     }
-    out
+    Ok(out)
 }
 
 fn sensor(name: &str, position: f64) -> ConfigValue {

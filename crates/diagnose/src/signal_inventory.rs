@@ -38,6 +38,8 @@ pub struct SignalInventory {
     /// An arm's gravity torque about each of its joint variables, RMS over the records (N·m;
     /// empty for other machines or an arm without masses): which joints gravity loads.
     pub gravity_torque_rms: Vec<f64>,
+    /// Every record carries the base's measured gravity (an accelerometer fixed to the base).
+    pub gravity_measured: bool,
 }
 
 /// The RMS over `records` of the gravity torque about each joint variable of `arm` (URDF
@@ -76,6 +78,7 @@ impl SignalInventory {
             inv.approach_both[k] = all(&|r| r.signals.approach_direction[k].is_some()) && has(1.0) && has(-1.0);
             inv.rotary[k] = all(&|r| r.signals.rotary_position[k].is_some_and(f64::is_finite));
         }
+        inv.gravity_measured = all(&|r| r.signals.gravity.is_some());
         inv.moving = all(&|r| r.signals.axis_velocity.iter().all(|v| v.is_some_and(f64::is_finite))) && records.iter().any(|r| r.signals.axis_velocity.iter().any(|v| v.is_some_and(|v| v.abs() > 1e-6)));
         let names = |f: &dyn Fn(&MeasurementRecord) -> BTreeSet<String>| -> Vec<String> {
             let mut common = f(&records[0]);

@@ -121,6 +121,10 @@ pub fn preference(term: &str) -> usize {
 /// "not worth more than a bare mention").
 pub const TIE_BIC: f64 = 2.0;
 
+/// ΔBIC that counts as decisive evidence (Kass & Raftery: "very strong" beyond 10): what a swap
+/// from a term at usual values to one at unusual values must gain.
+const DECISIVE_BIC: f64 = 10.0;
+
 /// BIC difference below which two candidates whose effects are confounded (correlated beyond
 /// [`CONFOUNDED_CORRELATION`]) count as equally supported (Kass & Raftery: below "strong"): the
 /// same effect at slightly different shapes (a positioning error and a scale with a sensor that
@@ -601,8 +605,13 @@ impl<'a> Selector<'a> {
                 let others: Vec<(usize, usize)> = chosen.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, c)| *c).collect();
                 let base = self.base_of(&others);
                 let physical = self.families[chosen[i].0].physical;
+                // a term at usual values gives way to one at unusual values only on decisive
+                // evidence: a linear positioning error at a near-constant temperature is also a
+                // scale expanding with that temperature's small drift, at an α no machine has
+                let incumbent_usual = self.score(&base, &others, chosen[i].0, chosen[i].1).score.usual;
                 for s in self.per_family(&base, chosen) {
-                    if !s.score.accepted || self.families[s.family].physical != physical || s.bic >= current - TIE_BIC {
+                    let margin = if incumbent_usual && !s.score.usual { DECISIVE_BIC } else { TIE_BIC };
+                    if !s.score.accepted || self.families[s.family].physical != physical || s.bic >= current - margin {
                         continue;
                     }
                     if best.as_ref().is_none_or(|(_, b)| s.bic < b.bic) {

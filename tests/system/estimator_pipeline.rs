@@ -23,14 +23,12 @@ fn ok(out: &std::process::Output, what: &str) -> String {
 }
 
 /// The possible range of each parameter of quick_demo.yaml's terms (crates/physics catalog).
-/// A parameter's possible range, from the catalog (what the estimator must never publish
-/// outside): the term's spec, found by the parameter's name.
-fn possible_range(name: &str) -> (f64, f64) {
-    let (label, param) = name.rsplit_once('.').unwrap_or_else(|| panic!("{name}: not label.param"));
+/// Each parameter's possible range, from the catalog (what the estimator must never publish
+/// outside), by `label.param` of quick_demo.yaml's model.
+fn possible_ranges() -> std::collections::BTreeMap<String, (f64, f64)> {
     let cell = metrocell_twin::CellModel::from_path(workspace_root().join("crates/twin/examples/cells/quick_demo.yaml")).unwrap();
-    let spec = cell.machine_terms.terms.iter().chain(&cell.instrument_terms.terms).find(|t| t.term.label() == label).and_then(|t| t.term.params().into_iter().find(|s| s.name == param));
-    let spec = spec.unwrap_or_else(|| panic!("{name}: not a parameter of quick_demo.yaml"));
-    (spec.possible.lo, spec.possible.hi)
+    let terms = cell.machine_terms.terms.iter().chain(&cell.instrument_terms.terms);
+    terms.flat_map(|t| t.term.params().into_iter().map(move |s| (format!("{}.{}", t.term.label(), s.name), (s.possible.lo, s.possible.hi)))).collect()
 }
 
 #[test]
@@ -64,6 +62,7 @@ fn quick_demo_shift_through_tracker_and_estimator_nodes() {
     let mut estimator = piped(bin("metrocell-estimator"));
     estimator.arg("--bag").arg(&merged).args(["--ros-args", "-p"]).arg(format!("model:={}", cell.display())).stdout(std::fs::File::create(&lines).unwrap());
     let log = ok(&run(&mut estimator, long), "metrocell-estimator --bag");
+    let ranges = possible_ranges();
     let mut models = 0;
     let mut held_named = false;
     for line in std::fs::read_to_string(&lines).unwrap().lines() {
@@ -75,7 +74,7 @@ fn quick_demo_shift_through_tracker_and_estimator_nodes() {
                 let names = m["parameter_names"].as_array().unwrap();
                 for (name, value) in names.iter().zip(m["values"].as_array().unwrap()) {
                     let (name, value) = (name.as_str().unwrap(), value.as_f64().unwrap());
-                    let (lo, hi) = possible_range(name);
+                    let (lo, hi) = *ranges.get(name).unwrap_or_else(|| panic!("{name}: not a parameter of quick_demo.yaml"));
                     assert!(value >= lo && value <= hi, "published {name} = {value:e} outside [{lo:e}, {hi:e}]");
                     if name == "pitch_cyclic[x].b1" {
                         assert_eq!(value, -2e-6, "b1 is held at its start value");

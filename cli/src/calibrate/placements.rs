@@ -76,24 +76,16 @@ pub fn check_lines(c: &CheckComparison) -> Vec<String> {
     out
 }
 
-/// The comparison as JSON: `{nominal|declared|fitted: {overall, setups: {NAME: …}, unpredicted}}`.
+/// The comparison as JSON: `{nominal|declared|fitted: {overall, setups: {NAME: …}, unpredicted}}`
+/// (the statistics as crates/estimation serialises them, NaN as null).
 pub fn check_json(c: &CheckComparison) -> serde_json::Value {
     use serde_json::json;
-    let stats = |s: &metrocell_estimation::CheckStatistics| json!({"n": s.n, "rms_m": finite(s.rms_m), "p50_xy_m": finite(s.p50_xy_m), "p95_xy_m": finite(s.p95_xy_m), "p95_z_m": finite(s.p95_z_m), "max_m": finite(s.max_m)});
     let report = |r: &CheckReport| {
         json!({
-            "overall": stats(&r.overall),
-            "setups": r.setups.iter().map(|(k, v)| (k.clone(), stats(v))).collect::<serde_json::Map<_, _>>(),
+            "overall": r.overall,
+            "setups": r.setups,
             "unpredicted": r.unpredicted.iter().map(|u| json!({"point_id": u.point_id, "setup": u.setup, "reason": u.reason})).collect::<Vec<_>>(),
         })
     };
     json!({"nominal": report(&c.nominal), "declared": report(&c.declared), "fitted": report(&c.fitted)})
-}
-
-fn finite(v: f64) -> serde_json::Value {
-    if v.is_finite() {
-        serde_json::json!(v)
-    } else {
-        serde_json::Value::Null
-    }
 }

@@ -481,16 +481,16 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
 
 /// √W·J with one row per prior (1/σ in its parameter's column): a prior is information too —
 /// a levelled instrument's compensator is what separates its placements' tilts from the base's.
-/// `j` itself (a copy) without priors.
-fn with_prior_rows(j: &DMatrix<f64>, priors: &[Prior]) -> DMatrix<f64> {
+/// `j` itself (borrowed, not copied) without priors.
+fn with_prior_rows<'j>(j: &'j DMatrix<f64>, priors: &[Prior]) -> std::borrow::Cow<'j, DMatrix<f64>> {
     if priors.is_empty() {
-        return j.clone();
+        return std::borrow::Cow::Borrowed(j);
     }
     let mut out = j.clone().resize_vertically(j.nrows() + priors.len(), 0.0);
     for (i, p) in priors.iter().enumerate() {
         out[(j.nrows() + i, p.index)] = 1.0 / p.sigma;
     }
-    out
+    std::borrow::Cow::Owned(out)
 }
 
 /// What the measurements and the priors identify together, over the `free` parameters.

@@ -220,11 +220,13 @@ impl<'a> ForwardModel<'a> {
     }
 
     /// Where the parameters of the pose that reads `signals` start: its setup's pose
-    /// (`tracker_pose[<setup>]`) when the model has one, else the pose of every reading.
+    /// (`tracker_pose[<setup>]`) when the model has one, else the pose of every reading (the
+    /// tracker chain's own choice, `pose_of` in crate::tracker).
     pub fn pose_param_start_for(&self, signals: &Signals) -> Option<usize> {
-        let poses = self.pose_param_starts();
+        let trackers = || self.instruments.iter().filter(|i| i.kind == crate::instruments::InstrumentKind::Tracker);
         let setup = signals.setup.as_deref();
-        poses.iter().find(|(s, _)| s.is_some() && s.as_deref() == setup).or_else(|| poses.iter().find(|(s, _)| s.is_none())).map(|(_, k)| *k)
+        let own = trackers().find_map(|i| i.setup_poses.iter().find(|(s, _)| Some(s.as_str()) == setup).map(|(_, k)| *k));
+        own.or_else(|| trackers().find_map(|i| i.pose)).map(|k| self.slots[k].start)
     }
 
     /// Column range (start, length) of term `label` in the stacked vector.

@@ -106,6 +106,7 @@ fn calibrated_on_the_flat_floor_and_restationed_on_the_seesaw_the_check_points_m
     }
     within_3_sigma(&fit, "joint_compliance.k_shoulder_lift", robot["joint_compliance_rad_per_Nm"]["shoulder_lift"].as_f64().unwrap());
     within_3_sigma(&fit, "column_bending[column_lower].foot", robot["column"]["foot_compliance_rad_per_Nm"].as_f64().unwrap());
+    base_accelerometer_alignment_matches_its_truth(&fit, robot, "flat_floor");
     // the placements are per recording: not written into the fitted model
     let text = std::fs::read_to_string(&fitted).unwrap();
     assert!(!text.contains("tracker_pose[") && !text.contains("base_tilt"), "the fitted model holds per-recording poses:\n{text}");
@@ -118,7 +119,31 @@ fn calibrated_on_the_flat_floor_and_restationed_on_the_seesaw_the_check_points_m
     let tilt = truth["conditions"]["seesaw_forward"]["tilt_rad"].clone();
     println!("seesaw: base_tilt.pitch {pitch:.5} ± {sigma:.5} rad; the ground's tilt {tilt}");
     assert!(pitch.abs() > 0.010 && pitch.abs() < 0.025, "the seesaw's 15 mrad pitch not found: {pitch}");
+    // (on the seesaw the estimate is printed in calibrate's words; its pitch came 2.8σ off the
+    // truth on this seed — the instrument's tilt there absorbs ~0.5 mrad of model error — so it
+    // is not asserted)
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The base accelerometer's alignment (its reading's tilt minus the levelled instrument's)
+/// against the generator's truth: the sensor reads Mᵀ·f + b (M its mounting misalignment, a
+/// rotation vector r; b its bias; bags/independent/robot/accelerometer.py), so to first order its
+/// "up" is off by (−r_y + b_x/g, r_x + b_y/g): δroll = r_x + b_y/g, δpitch = r_y − b_x/g.
+fn base_accelerometer_alignment_matches_its_truth(json: &Value, robot: &Value, ground: &str) {
+    let a = &json["accelerometer_alignment"];
+    let base = &robot["accelerometers"]["base"];
+    let (r, b) = (&base["misalignment_rotvec_rad"], &base["bias_m_per_s2"]);
+    let g = 9.80665;
+    let f = |v: &Value, i: usize| v[i].as_f64().unwrap();
+    let expected = [f(r, 0) + f(b, 1) / g, f(r, 1) - f(b, 0) / g];
+    for (k, name) in ["roll", "pitch"].iter().enumerate() {
+        let (v, s) = (a[format!("{name}_rad")].as_f64().unwrap(), a[format!("sigma_{name}_rad")].as_f64().unwrap());
+        println!("{ground}: accelerometer_alignment[base].{name} {:+.3} ± {:.3} mrad (truth {:+.3} mrad)", v * 1e3, s * 1e3, expected[k] * 1e3);
+        // 3σ plus the second-order terms of the first-order truth (~δ², µrad)
+        assert!((v - expected[k]).abs() <= 3.0 * s + 2e-5, "{ground}: {name} {v} ± {s} rad, truth {}: {a}", expected[k]);
+    }
+    assert_eq!(a["sensor"], "base");
+    assert!(a["prediction_effect_max_m"].as_f64().unwrap() < 1e-3, "{a}");
 }
 
 #[test]
@@ -196,5 +221,36 @@ fn without_the_base_accelerometer_the_gravity_terms_are_not_tried_and_say_why() 
     }
     let named: Vec<&str> = d["findings"].as_array().unwrap().iter().map(|f| f["term"].as_str().unwrap()).collect();
     assert!(!named.contains(&"joint_compliance") && !named.contains(&"column_bending"), "{named:?}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The stated σ of the robot's physics cover the truth at their stated rate: ten independent
+/// robots (seeds 3–12, each its own truth and recording), calibrated on the flat floor; the
+/// fraction of judged parameters (compliance and backlash per joint, the prism offset per axis)
+/// within 2σ and 3σ of the truth must have a 95 % binomial interval holding 95.4 % and 99.7 %
+/// (`coverage_robot_parameters.py`, which also prints each family).
+#[test]
+fn the_stated_uncertainties_cover_the_truth_at_their_stated_rate_over_ten_robots() {
+    let dir = temp_dir("coverage");
+    let suite = dir.join("suite");
+    let mut gen = piped(python());
+    gen.arg("bags/independent/robot/generate_robot_suite.py").arg("--out").arg(&suite).args(["--no-reference-calibration", "--floor-reps", "2", "--seeds"]);
+    gen.args((3..=12).map(|s| s.to_string())).current_dir(workspace_root());
+    let out = run(&mut gen, Duration::from_secs(600));
+    assert!(out.status.success(), "generate_robot_suite.py failed: {}", String::from_utf8_lossy(&out.stderr));
+    let json = dir.join("coverage.json");
+    let mut cov = piped(python());
+    cov.arg("bags/independent/robot/coverage_robot_parameters.py").arg("--metrocell").arg(bin("metrocell")).arg("--suite").arg(&suite).arg("--out").arg(&json);
+    let out = run(cov.current_dir(workspace_root()), Duration::from_secs(600));
+    println!("{}", String::from_utf8_lossy(&out.stdout));
+    let c: Value = serde_json::from_str(&std::fs::read_to_string(&json).unwrap()).unwrap();
+    let all = &c["coverage"]["all"];
+    assert!(all["1"]["n"].as_u64().unwrap() >= 120, "too few judged parameters: {all}");
+    for (k, rate) in [("2", 0.9545), ("3", 0.9973)] {
+        let lo = all[k]["interval95"][0].as_f64().unwrap();
+        let hi = all[k]["interval95"][1].as_f64().unwrap();
+        assert!(lo <= rate && rate <= hi, "the fraction within {k}σ, interval [{lo:.3}, {hi:.3}], excludes the stated {rate}: {all}");
+    }
+    assert!(out.status.success() && c["stated_rates_covered"] == true, "{}", String::from_utf8_lossy(&out.stderr));
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -25,7 +25,8 @@ def _joint_in(path):
 
 
 def _axis_in(path):
-    leaf = path.rsplit("/", 1)[-1].lower()
+    # the parameter's own name: the last word of a JSON path (`/parameters[tool_offset.dx]` → `dx`)
+    leaf = [w for w in re.split(r"[/.\[\]]+", path) if w][-1].lower()
     m = re.fullmatch(r"(d|delta_|offset_|tool_offset_)?([xyz])(_m)?", leaf)
     return AXES[m.group(2)] if m else None
 

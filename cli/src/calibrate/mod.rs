@@ -2,6 +2,7 @@
 //! the declared error model fitted to the measurements of recordings (batch identification),
 //! written back as the same cell file with fitted values and their uncertainties.
 
+mod accelerometer;
 mod placements;
 mod report;
 mod result_json;
@@ -126,6 +127,8 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<i32> {
     eprintln!("{} measurement records, {} check points ({} rejected) in {:.1} s; fitting…", records.len(), records.check.len(), records.rejected.len(), started.elapsed().as_secs_f64());
     let fit_options = FitOptions { loss, ..FitOptions::default() };
     let result = fit(&fm, &setup, &records, None, &fit_options).with_context(|| format!("fitting {} to {} records", a.model.display(), records.len()))?;
+    // the base accelerometer's alignment against the levelled instrument (a nuisance, reported)
+    let alignment = accelerometer::find(&fm, &result, &records);
     let check = if records.check.is_empty() { None } else { Some(placements::compare_on_check_points(&fm, &setup, &records, &result, &fit_options).context("predicting the check points")?) };
     let iterations = result.solution.iterations;
     eprintln!("fitted in {:.1} s ({iterations} iteration{}; {})", started.elapsed().as_secs_f64(), if iterations == 1 { "" } else { "s" }, result.solution.termination.in_words());
@@ -133,6 +136,9 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<i32> {
     lines.extend(short.iter().cloned());
     if let Some(c) = &check {
         lines.extend(placements::check_lines(c));
+    }
+    if let Some(al) = &alignment {
+        lines.extend(accelerometer::lines(al));
     }
     // Files first, words last: a reader that closes stdout early (`| head`, `| true`) must not
     // cost the user the fitted model (see `restore_sigpipe` in main.rs).
@@ -147,7 +153,7 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<i32> {
         None => None,
     };
     let json = match &a.json {
-        Some(_) => Some(serde_json::to_string_pretty(&result_json::result(&result, &records, &a.output, check.as_ref()))?),
+        Some(_) => Some(serde_json::to_string_pretty(&result_json::result(&result, &records, &a.output, check.as_ref(), alignment.as_ref()))?),
         None => None,
     };
     let json_to_stdout = a.json.as_deref() == Some("-");

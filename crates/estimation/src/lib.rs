@@ -38,6 +38,7 @@
 //!
 //! Units: SI (m) in and out; reports convert to mm and µm.
 
+pub mod accelerometer_alignment;
 pub mod check_points;
 pub mod design_of_experiments;
 pub mod error_functions;

@@ -24,4 +24,10 @@ fn shift_in_memory() {
     let d = run(&model, &data.records, &DiagnoseOptions { progress: true, ..Default::default() });
     eprintln!("diagnosed in {:.1} s", t1.elapsed().as_secs_f64());
     show(&d);
+    // the one concealed term (the 8 µm X reversal) is what it names first, within 3σ
+    let first = d.report.findings.first().expect("nothing named: the concealed backlash[x] was missed");
+    assert_eq!(first.label, "backlash[x]", "{:?}", d.report.findings.iter().map(|f| &f.label).collect::<Vec<_>>());
+    let v = &first.parameters["reversal"];
+    let s = v.sigma.expect("σ of the reversal");
+    assert!((v.value - 8e-6).abs() <= 3.0 * s, "backlash[x].reversal = {:e} ± {s:e}, truth 8e-6", v.value);
 }

@@ -88,4 +88,8 @@ fn suite_cases_in_memory() {
         }
     }
     eprintln!("{ok} of {total} right; parameters within 3σ: {within} of {checked}");
+    // the suite's own judge (bags/score.py on the recorded bags) asks the same: every case named
+    // right, every checked parameter of a found term within 3σ
+    assert_eq!(ok, total, "cases named wrong (MISS/ERR lines above)");
+    assert_eq!(within, checked, "parameters beyond 3σ of the truth (lines above)");
 }

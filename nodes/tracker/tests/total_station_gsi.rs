@@ -72,7 +72,7 @@ fn gsi_blocks_over_tcp_come_out_as_tracker_measurements() {
         }
     });
 
-    let peer = MetrocellNode::builder("total_station_test").diagnostics_period(None).handle_signals(false).build().unwrap();
+    let mut peer = MetrocellNode::builder("total_station_test").diagnostics_period(None).handle_signals(false).build().unwrap();
     let readings = peer.subscription::<TrackerMeasurement>("/tracker/measurements", qos::stream(qos::reliable())).unwrap();
     let deadline = Instant::now() + Duration::from_secs(20);
     while !peer.discovered_topics().iter().any(|t| t.name.ends_with("tracker/measurements")) {

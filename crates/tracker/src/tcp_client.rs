@@ -201,7 +201,6 @@ fn connect(address: &str) -> Result<(TcpStream, SocketAddr), String> {
     Err(last)
 }
 
-/// Reads until EOF (Ok(whether any line arrived)), an error, or stop.
 /// Lines → events, in the client's format; the state that outlives a connection.
 struct LineParser {
     format: LineFormat,
@@ -236,6 +235,7 @@ impl LineParser {
     }
 }
 
+/// Reads until EOF (Ok(whether any line arrived)), an error, or stop.
 fn read_lines(mut stream: TcpStream, stop: &AtomicBool, tx: &Sender<DriverEvent>, framer: &mut LineFramer, parser: &mut LineParser) -> Result<bool, String> {
     let mut buf = [0u8; 4096];
     let mut delivered = false;

@@ -9,6 +9,8 @@
 //! * [`registration`]: weighted Kabsch fit of the tracker pose in the machine frame, 6×6 covariance.
 //! * [`time_alignment`]: commanded machine position at a measurement's time; the thesis's T_v.
 //! * [`line_protocol`] and [`tcp_client`]: the ASCII line driver for trackers that stream readings.
+//! * [`total_station_gsi`]: Leica GSI-8/GSI-16 blocks from a total station → point and covariance
+//!   in the levelled instrument frame (the TCP client reads them with `LineFormat::LeicaGsi`).
 //!
 //! Units are SI throughout (m, rad, s, Pa, °C; relative humidity as a 0..1 fraction).
 
@@ -18,6 +20,7 @@ pub mod reading;
 pub mod registration;
 pub mod tcp_client;
 pub mod time_alignment;
+pub mod total_station_gsi;
 pub mod turbulence;
 pub mod warmup;
 

@@ -21,6 +21,7 @@
 use metrocell_compensation::AirData;
 
 use crate::reading::{RawReading, STATUS_BEAM_BREAK};
+use crate::total_station_gsi::GsiError;
 
 pub const MAX_LINE_BYTES: usize = 1024;
 
@@ -65,6 +66,9 @@ pub enum LineError {
     NotANumber { field: &'static str, text: String },
     #[error("time stamp {0} is not finite")]
     BadTime(f64),
+    /// A total station's line that is not a GSI block (the line, cut to 120 characters).
+    #[error("line '{line}': {error}")]
+    Gsi { line: String, error: GsiError },
 }
 
 /// Parse one line (without its terminator). `Ok(None)` for blank and comment lines.

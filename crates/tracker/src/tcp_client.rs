@@ -6,6 +6,12 @@
 //! `max_backoff`; reset once a connection has delivered a line). Readings whose time stamp is
 //! not after the last accepted one are dropped as repeats, across reconnects, so no reading
 //! is accepted twice.
+//!
+//! [`LineFormat::LeicaGsi`]: the lines are Leica GSI blocks from a total station
+//! ([`crate::total_station_gsi`]), one measurement per line. GSI blocks carry no time stamp of
+//! the measurement: each is stamped with the wall clock (Unix time) when its line arrived, kept
+//! strictly increasing, and none is dropped as a repeat (a buffer resent after a reconnect comes
+//! through again; total stations send a block once per measurement).
 
 use std::io::Read;
 use std::net::{SocketAddr, TcpStream, ToSocketAddrs};
@@ -16,6 +22,17 @@ use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
 
 use crate::line_protocol::{parse_line, LineError, LineFramer, LineReading};
+use crate::total_station_gsi::{parse_gsi_line, GsiBlock};
+
+/// What the instrument's lines are.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum LineFormat {
+    /// a laser tracker's `t_s,target,range_m,azimuth_rad,elevation_rad[,…]` ([`crate::line_protocol`])
+    #[default]
+    TrackerCsv,
+    /// a total station's Leica GSI-8 / GSI-16 measurement blocks ([`crate::total_station_gsi`])
+    LeicaGsi,
+}
 
 #[derive(Debug, Clone, PartialEq)]
 pub struct TcpClientConfig {
@@ -32,6 +49,9 @@ pub enum DriverEvent {
     /// connection lost or refused, with the reason; a retry follows after `retry_in`
     Disconnected { reason: String, retry_in: Duration },
     Reading(LineReading),
+    /// a total station's measurement block ([`LineFormat::LeicaGsi`]), stamped when its line
+    /// arrived (ns since the Unix epoch)
+    TotalStation { received_ns: i64, block: GsiBlock },
     /// a line that is not a reading
     Garbage(LineError),
     /// a reading at time `t` (s) not after the last accepted one
@@ -87,13 +107,19 @@ pub struct TcpTrackerClient {
 }
 
 impl TcpTrackerClient {
+    /// A laser tracker streaming [`crate::line_protocol`] lines.
     pub fn start(config: TcpClientConfig) -> Self {
+        Self::start_with(config, LineFormat::TrackerCsv)
+    }
+
+    /// An instrument streaming lines of `format`.
+    pub fn start_with(config: TcpClientConfig, format: LineFormat) -> Self {
         let stop = Arc::new(AtomicBool::new(false));
         let (tx, events) = channel();
         let s = stop.clone();
         let handle = std::thread::Builder::new()
             .name("tracker-tcp".into())
-            .spawn(move || run(config, s, tx))
+            .spawn(move || run(config, format, s, tx))
             .ok();
         Self { stop, handle, events }
     }
@@ -123,9 +149,9 @@ impl Drop for TcpTrackerClient {
 
 const POLL: Duration = Duration::from_millis(50);
 
-fn run(config: TcpClientConfig, stop: Arc<AtomicBool>, tx: Sender<DriverEvent>) {
+fn run(config: TcpClientConfig, format: LineFormat, stop: Arc<AtomicBool>, tx: Sender<DriverEvent>) {
     let mut backoff = Backoff::new(config.initial_backoff, config.max_backoff);
-    let mut dedup = Deduplicator::default();
+    let mut parser = LineParser { format, dedup: Deduplicator::default(), last_received_ns: i64::MIN };
     let mut framer = LineFramer::new();
     while !stop.load(Ordering::Relaxed) {
         let reason = match connect(&config.address) {
@@ -134,7 +160,7 @@ fn run(config: TcpClientConfig, stop: Arc<AtomicBool>, tx: Sender<DriverEvent>) 
                     return;
                 }
                 framer.reset();
-                match read_lines(stream, &stop, &tx, &mut framer, &mut dedup) {
+                match read_lines(stream, &stop, &tx, &mut framer, &mut parser) {
                     Ok(delivered) => {
                         if delivered {
                             backoff.reset();
@@ -175,8 +201,42 @@ fn connect(address: &str) -> Result<(TcpStream, SocketAddr), String> {
     Err(last)
 }
 
+/// Lines → events, in the client's format; the state that outlives a connection.
+struct LineParser {
+    format: LineFormat,
+    dedup: Deduplicator,
+    last_received_ns: i64,
+}
+
+impl LineParser {
+    /// The event of one framed line; None for blank and comment lines.
+    fn event(&mut self, line: Result<String, LineError>) -> Option<DriverEvent> {
+        let line = match line {
+            Ok(l) => l,
+            Err(e) => return Some(DriverEvent::Garbage(e)),
+        };
+        match self.format {
+            LineFormat::TrackerCsv => match parse_line(&line) {
+                Ok(None) => None,
+                Ok(Some(r)) if self.dedup.accept(r.t) => Some(DriverEvent::Reading(r)),
+                Ok(Some(r)) => Some(DriverEvent::Repeat(r.t)),
+                Err(e) => Some(DriverEvent::Garbage(e)),
+            },
+            LineFormat::LeicaGsi => match parse_gsi_line(&line) {
+                Ok(None) => None,
+                Ok(Some(block)) => {
+                    let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_nanos() as i64).unwrap_or(0);
+                    self.last_received_ns = now.max(self.last_received_ns.saturating_add(1));
+                    Some(DriverEvent::TotalStation { received_ns: self.last_received_ns, block })
+                }
+                Err(error) => Some(DriverEvent::Garbage(LineError::Gsi { line: line.trim_end().chars().take(120).collect(), error })),
+            },
+        }
+    }
+}
+
 /// Reads until EOF (Ok(whether any line arrived)), an error, or stop.
-fn read_lines(mut stream: TcpStream, stop: &AtomicBool, tx: &Sender<DriverEvent>, framer: &mut LineFramer, dedup: &mut Deduplicator) -> Result<bool, String> {
+fn read_lines(mut stream: TcpStream, stop: &AtomicBool, tx: &Sender<DriverEvent>, framer: &mut LineFramer, parser: &mut LineParser) -> Result<bool, String> {
     let mut buf = [0u8; 4096];
     let mut delivered = false;
     while !stop.load(Ordering::Relaxed) {
@@ -188,12 +248,7 @@ fn read_lines(mut stream: TcpStream, stop: &AtomicBool, tx: &Sender<DriverEvent>
         };
         for line in framer.feed(&buf[..n]) {
             delivered = true;
-            let event = match line.and_then(|l| parse_line(&l)) {
-                Ok(None) => continue,
-                Ok(Some(r)) if dedup.accept(r.t) => DriverEvent::Reading(r),
-                Ok(Some(r)) => DriverEvent::Repeat(r.t),
-                Err(e) => DriverEvent::Garbage(e),
-            };
+            let Some(event) = parser.event(line) else { continue };
             if tx.send(event).is_err() {
                 return Ok(delivered);
             }
@@ -213,6 +268,20 @@ mod tests {
         assert_eq!(d, vec![100, 200, 400, 500, 500]);
         b.reset();
         assert_eq!(b.next_delay().as_millis(), 100);
+    }
+
+    #[test]
+    fn gsi_lines_become_stamped_blocks_and_named_garbage() {
+        let mut p = LineParser { format: LineFormat::LeicaGsi, dedup: Deduplicator::default(), last_received_ns: i64::MIN };
+        let line = "*110001+0000000000000001 21.022+0000000010000000 22.022+0000000010000000 31..00+0000000000002000 ";
+        let (a, b) = (p.event(Ok(line.into())), p.event(Ok(line.into())));
+        let (Some(DriverEvent::TotalStation { received_ns: ta, block }), Some(DriverEvent::TotalStation { received_ns: tb, .. })) = (a, b) else { panic!("two blocks") };
+        assert_eq!(block.slope_distance, Some(2.0));
+        assert!(tb > ta, "stamps strictly increase: {ta} {tb}");
+        assert_eq!(p.event(Ok("410001+00130027".into())), None);
+        let Some(DriverEvent::Garbage(LineError::Gsi { line, error })) = p.event(Ok("21.022+1000000x 22.022+10000000 31..00+00002000\r".into())) else { panic!("garbage") };
+        assert_eq!(line, "21.022+1000000x 22.022+10000000 31..00+00002000");
+        assert!(error.to_string().starts_with("GSI word 1 at column 1"), "{error}");
     }
 
     #[test]

@@ -78,6 +78,7 @@ fn instrument_misbehaviour_is_reported_and_survived() {
             },
             Some(DriverEvent::Garbage(e)) => garbage.push(e),
             Some(DriverEvent::Repeat(t)) => repeats.push(t),
+            Some(DriverEvent::TotalStation { block, .. }) => panic!("a GSI block from a tracker's line stream: {block:?}"),
             None => {}
         }
     }

@@ -8,7 +8,8 @@ use metrocell_msgs::sensor_msgs::msg::{FluidPressure, JointState, RelativeHumidi
 use metrocell_msgs::std_msgs::msg::String as RosString;
 use metrocell_msgs::tf2_msgs::msg::TFMessage;
 use metrocell_node::{qos, MetrocellNode};
-use metrocell_laser_tracker::tcp_client::{DriverEvent, TcpClientConfig, TcpTrackerClient};
+use metrocell_laser_tracker::tcp_client::{DriverEvent, LineFormat, TcpClientConfig, TcpTrackerClient};
+use metrocell_laser_tracker::total_station_gsi::{block_to_point, GsiBlock};
 use metrocell_tracker_node::messages;
 use metrocell_tracker_node::parameters::{self, TrackerConfig};
 use metrocell_tracker_node::tracker_state::{Output, TrackerState};
@@ -16,14 +17,27 @@ use metrocell_tracker_node::tracker_state::{Output, TrackerState};
 pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
     let config = TrackerConfig::from_parameters(node.parameters())?;
     node.info(config.describe());
+    let backend = node.param::<String>("backend")?;
+    if config.total_station.is_some() && backend != "tcp" {
+        return Err(format!("parameter {}:={}: a total station streams GSI blocks over TCP; set -p backend:=tcp -p tcp_address:=HOST:PORT (the topic backend reads tracker/measurements, which this instrument publishes)", parameters::INSTRUMENT, parameters::TOTAL_STATION_GSI).into());
+    }
+    let format = if config.total_station.is_some() { LineFormat::LeicaGsi } else { LineFormat::TrackerCsv };
     let mut state = TrackerState::new(config);
-    let tcp = match node.param::<String>("backend")?.as_str() {
-        "tcp" => Some(TcpTrackerClient::start(TcpClientConfig {
-            address: node.param("tcp_address")?,
-            initial_backoff: Duration::from_secs_f64(node.param("tcp_initial_backoff")?),
-            max_backoff: Duration::from_secs_f64(node.param("tcp_max_backoff")?),
-        })),
+    let tcp = match backend.as_str() {
+        "tcp" => Some(TcpTrackerClient::start_with(
+            TcpClientConfig {
+                address: node.param("tcp_address")?,
+                initial_backoff: Duration::from_secs_f64(node.param("tcp_initial_backoff")?),
+                max_backoff: Duration::from_secs_f64(node.param("tcp_max_backoff")?),
+            },
+            format,
+        )),
         _ => None,
+    };
+    // a total station is a driver: its readings go out on tracker/measurements as they come
+    let readings_out = match format {
+        LineFormat::LeicaGsi => Some(node.publisher::<TrackerMeasurement>("tracker/measurements", qos::stream(qos::reliable()))?),
+        LineFormat::TrackerCsv => None,
     };
     let measurements = match tcp {
         None => Some(node.subscription::<TrackerMeasurement>("tracker/measurements", qos::stream(qos::reliable()))?),
@@ -75,14 +89,26 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
             while let Some(event) = client.try_next() {
                 match event {
                     DriverEvent::Reading(l) => outputs.extend(state.line(&l)),
-                    DriverEvent::Connected(a) => node.info(format!("connected to the tracker at {a}")),
+                    DriverEvent::TotalStation { received_ns, block } => match total_station_reading(&state, received_ns, &block) {
+                        Ok(m) => {
+                            diagnostics.add_count("total_station_readings", 1);
+                            if let Some(p) = &readings_out {
+                                let _ = p.publish(m);
+                            }
+                        }
+                        Err(e) => {
+                            diagnostics.add_count("total_station_rejected", 1);
+                            node.warn(format!("total station: block of point '{}' rejected: {e}", block.point_id.as_deref().unwrap_or("")));
+                        }
+                    },
+                    DriverEvent::Connected(a) => node.info(format!("connected to the {} at {a}", if readings_out.is_some() { "total station" } else { "tracker" })),
                     DriverEvent::Disconnected { reason, retry_in } => {
                         diagnostics.add_count("tcp_disconnects", 1);
                         diagnostics.warn(format!("tracker link: {reason}; retrying in {retry_in:?}"));
                     }
                     DriverEvent::Garbage(e) => {
                         diagnostics.add_count("tcp_garbage_lines", 1);
-                        node.warn(format!("tracker link: {e}"));
+                        node.warn(format!("{} link: {e}", if readings_out.is_some() { "total station" } else { "tracker" }));
                     }
                     DriverEvent::Repeat(_) => {
                         diagnostics.add_count("tcp_repeated_readings", 1);
@@ -151,4 +177,12 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     Ok(())
+}
+
+/// A total station's block as the reading it publishes (stamped when its line arrived).
+fn total_station_reading(state: &TrackerState, received_ns: i64, block: &GsiBlock) -> Result<TrackerMeasurement, String> {
+    let config = state.config();
+    let noise = config.total_station.as_ref().ok_or("no total-station noise configured (parameter instrument)")?;
+    let (id, p) = block_to_point(block, noise).map_err(|e| e.to_string())?;
+    Ok(messages::total_station_measurement(&id, received_ns, &p, &config.tracker_frame))
 }

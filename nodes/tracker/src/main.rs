@@ -5,6 +5,8 @@
 //!     other driver publish);
 //!   * `tcp`: an instrument streaming ASCII lines `t_s,target,range_m,azimuth_rad,elevation_rad[,T_degC,p_Pa,RH_0_1]`
 //!     at `tcp_address` (reconnects with back-off; repeats, garbage and bad values counted);
+//!     with `instrument:=total_station_gsi`, a total station's Leica GSI blocks instead, each
+//!     published at once on `tracker/measurements` (azimuth = −Hz, elevation = 100 gon − V);
 //!   * `--bag IN`: a recorded bag, or a CSV export (`IN` ending in `.csv`) imported through the
 //!     `bag import` layout and the mapping file in parameter `csv_mapping`.
 //! Each reading is re-corrected for the air (Edlén; the reading's station air, the

@@ -7,6 +7,7 @@ use metrocell_msgs::std_msgs::msg::Header;
 use metrocell_msgs::tf2_msgs::msg::TFMessage;
 use metrocell_laser_tracker::dwell::DwellAverage;
 use metrocell_laser_tracker::registration::Registration;
+use metrocell_laser_tracker::total_station_gsi::InstrumentPoint;
 use metrocell_laser_tracker::warmup::WarmupFit;
 use nalgebra::{Matrix3, UnitQuaternion, Vector3};
 
@@ -48,6 +49,28 @@ pub fn dwell_measurement(d: &DwellAverage, covariance: &Matrix3<f64>, frame: &st
         air_humidity: d.air.humidity,
         refractive_index: d.refractive_index,
         status,
+    }
+}
+
+/// One total-station observation as a `tracker/measurements` reading: the point in the levelled
+/// instrument frame (x toward Hz = 0, y toward Hz = 300 gon, z up), `range` = slope distance,
+/// `azimuth` = −Hz and `elevation` = 100 gon − V (face I), the covariance of the angle and
+/// distance noise, `target_id` = the GSI point id. The slope distance is the instrument's, its
+/// own ppm applied: `refractive_index` 0 and the air NaN (the block carries no air).
+pub fn total_station_measurement(point_id: &str, stamp_ns: i64, p: &InstrumentPoint, frame: &str) -> TrackerMeasurement {
+    TrackerMeasurement {
+        header: header(stamp_ns, frame),
+        target_id: point_id.to_string(),
+        point: point(&p.point),
+        range: p.range,
+        azimuth: p.azimuth,
+        elevation: p.elevation,
+        covariance: row_major(&p.covariance),
+        air_temperature: f64::NAN,
+        air_pressure: f64::NAN,
+        air_humidity: f64::NAN,
+        refractive_index: 0.0,
+        status: TrackerMeasurement::STATUS_OK,
     }
 }
 

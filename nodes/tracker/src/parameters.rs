@@ -3,17 +3,26 @@
 
 use metrocell_compensation::{AirData, SphericalNoise};
 use metrocell_node::{ParamDecl, Parameters};
+use metrocell_laser_tracker::total_station_gsi::TotalStationNoise;
 use metrocell_laser_tracker::{AirSource, EdlenForm, ProgramSchedule, ReadingProcessor, TurbulenceTest};
 use nalgebra::Vector3;
 
 /// The run-time trigger of a re-registration (live node).
 pub const REREGISTER: &str = "reregister";
+/// What streams on the TCP backend, and its values.
+pub const INSTRUMENT: &str = "instrument";
+pub const LASER_TRACKER: &str = "laser_tracker";
+pub const TOTAL_STATION_GSI: &str = "total_station_gsi";
 
 pub fn declarations() -> Vec<ParamDecl> {
     let s = |v: &str| v.to_string();
     vec![
         ParamDecl::new("backend", s("topic"), "where readings come from: topic (tracker/measurements, what the twin and other drivers publish) or tcp (an instrument streaming ASCII lines, see tcp_address)").with_allowed(["topic", "tcp"]),
-        ParamDecl::new("tcp_address", s("127.0.0.1:5000"), "host:port of the instrument's line stream (backend tcp); framing: t_s,target,range_m,azimuth_rad,elevation_rad[,T_degC,p_Pa,RH_0_1]"),
+        ParamDecl::new("tcp_address", s("127.0.0.1:5000"), "host:port of the instrument's line stream (backend tcp); framing: t_s,target,range_m,azimuth_rad,elevation_rad[,T_degC,p_Pa,RH_0_1] (instrument laser_tracker) or one Leica GSI-8/GSI-16 block per line (instrument total_station_gsi)"),
+        ParamDecl::new(INSTRUMENT, s("laser_tracker"), "what streams on tcp_address (backend tcp): laser_tracker (ASCII readings → dwells, registration, measured_points) or total_station_gsi (Leica GSI blocks, words 11 point id, 21 Hz, 22 V, 31 slope distance: each block published as one reading on tracker/measurements, instrument frame x toward Hz = 0, y toward Hz = 300 gon, z up; azimuth = −Hz, elevation = 100 gon − V, face II mapped to face I)").with_allowed([LASER_TRACKER, TOTAL_STATION_GSI]),
+        ParamDecl::new("total_station_angle_sigma", 0.5, "instrument total_station_gsi: standard deviation of Hz and of V [arc-seconds] (1″ = 0.309 mgon = 4.85 µrad; ISO 17123-3 figure of the instrument)").with_range(0.0, 600.0),
+        ParamDecl::new("total_station_distance_sigma", 0.6e-3, "instrument total_station_gsi: a of the slope-distance σ = a + b·SD [m]").with_range(0.0, 0.1),
+        ParamDecl::new("total_station_distance_ppm", 1.0, "instrument total_station_gsi: b of the slope-distance σ = a + b·SD [ppm = mm/km]").with_range(0.0, 1000.0),
         ParamDecl::new("tcp_initial_backoff", 0.1, "first wait before reconnecting to the instrument [s]; doubles per failed attempt").with_range(0.01, 60.0),
         ParamDecl::new("tcp_max_backoff", 5.0, "longest wait between reconnection attempts [s]").with_range(0.01, 600.0),
         ParamDecl::new("instrument_refractive_index", 0.0, "index the instrument divided TCP/CSV ranges by [1]; 0 = none (vacuum distance). Topic readings carry their own").with_range(0.0, 1.001),
@@ -70,6 +79,8 @@ pub struct TrackerConfig {
     pub schedule: Option<ProgramSchedule>,
     pub machine_frame: String,
     pub tracker_frame: String,
+    /// Some when parameter instrument is total_station_gsi: the noise of its observations
+    pub total_station: Option<TotalStationNoise>,
 }
 
 fn ns(s: f64) -> i64 {
@@ -125,6 +136,15 @@ impl TrackerConfig {
             schedule,
             machine_frame: p.get("machine_frame")?,
             tracker_frame: p.get("tracker_frame")?,
+            total_station: (p.get::<String>(INSTRUMENT)? == TOTAL_STATION_GSI)
+                .then(|| -> Result<_, Box<dyn std::error::Error>> {
+                    Ok(TotalStationNoise {
+                        angle: (p.get::<f64>("total_station_angle_sigma")? / 3600.0).to_radians(),
+                        distance_constant: p.get("total_station_distance_sigma")?,
+                        distance_ppm: p.get("total_station_distance_ppm")?,
+                    })
+                })
+                .transpose()?,
         })
     }
 
@@ -136,6 +156,15 @@ impl TrackerConfig {
 
     /// One log line describing the configuration.
     pub fn describe(&self) -> String {
+        if let Some(t) = &self.total_station {
+            return format!(
+                "total station (Leica GSI): σ Hz = σ V = {:.2}″, σ SD = {:.2} mm + {:.1} ppm; each block → tracker/measurements in frame '{}'",
+                t.angle.to_degrees() * 3600.0,
+                t.distance_constant * 1e3,
+                t.distance_ppm,
+                self.tracker_frame
+            );
+        }
         let n = &self.processor.noise;
         format!(
             "noise σr = {:.1} µm + {:.2} µm/m, σ angle = {:.1} µrad; air {:?}; {:?}; dwell gap {} ms, ≥ {} readings; turbulence α = {}; warm-up nest '{}'; registration after {} targets",

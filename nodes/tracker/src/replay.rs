@@ -36,6 +36,9 @@ struct Inputs {
 
 pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::error::Error>> {
     let config = TrackerConfig::from_parameters(node.parameters())?;
+    if config.total_station.is_some() {
+        return Err("parameter instrument:=total_station_gsi drives a live total station (backend tcp); a recorded total station's tracker/measurements already are its points: read the bag with `metrocell calibrate` or `metrocell diagnose` (points_type tracker) instead of replaying it here".into());
+    }
     node.logger().info(config.describe());
     let mut state = TrackerState::new(config);
     let (machine_frame, tracker_frame) = (state.config().machine_frame.clone(), state.config().tracker_frame.clone());

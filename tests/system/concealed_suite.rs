@@ -130,8 +130,9 @@ fn diagnose_meets_issue_13_targets_on_the_ci_subset() {
     let cases = ci_cases();
     generate(&dir, &cases, &CI_SEEDS);
     let results = dir.join("results.json");
+    let residuals = dir.join("residuals");
     let metrocell = bin("metrocell");
-    let mut args: Vec<&std::ffi::OsStr> = vec![os("bags/score.py"), os("--metrocell"), metrocell.as_os_str(), os("--recordings"), dir.as_os_str(), os("--out"), results.as_os_str(), os("--seeds")];
+    let mut args: Vec<&std::ffi::OsStr> = vec![os("bags/score.py"), os("--metrocell"), metrocell.as_os_str(), os("--recordings"), dir.as_os_str(), os("--out"), results.as_os_str(), os("--residuals-dir"), residuals.as_os_str(), os("--seeds")];
     args.extend(CI_SEEDS.iter().map(|s| os(s)));
     args.push(os("--cases"));
     args.extend(cases.iter().map(|c| os(c)));
@@ -151,7 +152,32 @@ fn diagnose_meets_issue_13_targets_on_the_ci_subset() {
     }
     let misses: Vec<String> = runs.iter().filter(|x| x["verdict"]["ok"] == false).map(|x| format!("{} seed {} ({}): named {}", x["case"], x["seed"], x["verdict"]["kind"], x["verdict"]["named"])).collect();
     assert!(missed.is_empty() && o.status.success(), "issue 13 targets missed: {}\nruns that missed:\n{}", missed.join("; "), misses.join("\n"));
+    baselines_do_no_better(&dir, &residuals, &cases, &r["summary"]);
     let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The baselines (bags/baselines.py: PySINDy and a fit-everything OLS on the same residual tables
+/// diagnose wrote) run on the same recordings, and diagnose names at least as much of the right
+/// physics with no more false claims than either.
+fn baselines_do_no_better(dir: &Path, residuals: &Path, cases: &[String], diagnose: &Value) {
+    let out = dir.join("baselines.json");
+    let mut args: Vec<&std::ffi::OsStr> = vec![os("bags/baselines.py"), os("--residuals-dir"), residuals.as_os_str(), os("--out"), out.as_os_str(), os("--seeds")];
+    args.extend(CI_SEEDS.iter().map(|s| os(s)));
+    args.push(os("--cases"));
+    args.extend(cases.iter().map(|c| os(c)));
+    let o = py(&args, Duration::from_secs(900));
+    assert!(o.status.success(), "bags/baselines.py failed: {}", String::from_utf8_lossy(&o.stderr));
+    let b: Value = serde_json::from_str(&std::fs::read_to_string(&out).expect("baselines.py wrote its results")).unwrap();
+    let count = |s: &Value, k: &str| (s[k][0].as_u64().unwrap(), s[k][1].as_u64().unwrap());
+    let (right, concealed) = count(diagnose, "right_names");
+    let (false_claims, _) = count(diagnose, "false_claims");
+    for name in ["pysindy", "library_ols"] {
+        let s = &b["summary"][name];
+        let ((br, bn), (bf, runs)) = (count(s, "right_names"), count(s, "false_claims"));
+        println!("{name}: right physics {br}/{bn}, false claims {bf} in {runs} runs; diagnose {right}/{concealed}, {false_claims}");
+        assert_eq!(bn, concealed, "{name} judged other runs than diagnose");
+        assert!(right >= br && false_claims <= bf, "{name} did better than diagnose: right {br} vs {right}, false claims {bf} vs {false_claims}");
+    }
 }
 
 #[test]

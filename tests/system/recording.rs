@@ -352,6 +352,15 @@ fn demo_loses_nothing(name: &str, busy_cores: usize, max_missed_frames: u64, dom
     let mut found: Vec<&str> = json["findings"].as_array().expect("findings").iter().map(|f| f["term"].as_str().unwrap()).collect();
     found.sort();
     assert_eq!(found, ["backlash", "thermal_growth", "tracker_warmup"], "the diagnosis of the demo's recording:\n{stdout}");
+    // each within 3σ of what the cell conceals (the column's growth is concealed along −z at
+    // 4 µm/K; diagnose writes its candidate along +z, so the same growth is −4 µm/K there)
+    let truths = [("tracker_warmup", "amplitude", 20e-6), ("tracker_warmup", "time_constant", 1800.0), ("thermal_growth[column]", "coefficient", -4e-6), ("thermal_growth[column]", "time_constant", 1200.0), ("backlash[x]", "reversal", 8e-6)];
+    for (label, param, truth) in truths {
+        let f = json["findings"].as_array().unwrap().iter().find(|f| f["label"] == label).unwrap_or_else(|| panic!("no finding {label}: {}", json["findings"]));
+        let p = &f["parameters"][param];
+        let (v, s) = (p["value"].as_f64().unwrap(), p["sigma"].as_f64().unwrap_or_else(|| panic!("{label}.{param} without σ: {p}")));
+        assert!((v - truth).abs() <= 3.0 * s, "{label}.{param} = {v:e} ± {s:e}, truth {truth:e}: more than 3σ off");
+    }
     assert!(stdout.contains("diagnose named all 3"), "the demo's comparison with what the cell conceals:\n{stdout}");
     // the live diagnose node judged the window as the cell ran (every 12 min of cell time in the
     // quick run): its results are in the bag, each the JSON of `metrocell diagnose --json` or the

@@ -296,7 +296,9 @@ impl Cell {
     /// Every instrument's effects as catalog terms with their true parameters: the tracker's
     /// ([`Cell::tracker_terms`]), the probe's `probe_pretravel` (`sensors.probe.pretravel`), and
     /// the camera's `lens_distortion` when `sensors.camera.intrinsics` states a Brown–Conrady
-    /// lens (OpenCV k1 k2 p1 p2 k3 → the term's k1 k2 k3 p1 p2).
+    /// lens (OpenCV k1 k2 p1 p2 k3 → the term's k1 k2 k3 p1 p2). A stationing program's
+    /// instrument is not among them: its setups' tilts are drawn per seed
+    /// ([`crate::stationing::Stationing::instrument_terms`], the truth of [`crate::Simulation`]).
     pub fn instrument_terms(&self) -> Result<TermModel, CellError> {
         let mut m = self.tracker_terms()?;
         if let Some(pt) = self.probe.as_ref().and_then(|p| p.pretravel.clone()) {

@@ -24,3 +24,14 @@ pub const CAMERA_IMAGE: &str = "/camera/image_raw";
 /// The fiducial node's detections of each frame (`metrocell_msgs/FiducialDetectionArray`); it
 /// publishes them on `fiducials` in its namespace, this name at the root.
 pub const FIDUCIALS: &str = "/fiducials";
+/// Measured points (`metrocell_msgs/MeasuredPoint`) that fit a model.
+pub const MEASURED_POINTS: &str = "/measured_points";
+/// Check points (`metrocell_msgs/MeasuredPoint`): kept out of every fit, to judge predictions.
+pub const CHECK_POINTS: &str = "/check_points";
+/// Reference nests' readings (`metrocell_msgs/MeasuredPoint`): points the machine does not move.
+pub const REFERENCE_POINTS: &str = "/reference_points";
+/// Accelerometers: `/imu/<sensor>` (`sensor_msgs/Imu`, the specific force in the sensor's frame).
+pub const IMU_PREFIX: &str = "/imu/";
+/// Separates an instrument's frame and its setup (placement) in a point's `header.frame_id`:
+/// `total_station@S1`.
+pub const SETUP_SEPARATOR: char = '@';

@@ -16,12 +16,18 @@
 //!   (its diagnosis adds a tracker warm-up, a lagged growth and backlash: the augmented model
 //!   of issue 32 item 1);
 //! * `delta_printer.yaml`, measured by a camera only (nothing a sim bag holds for calibrate
-//!   without rendered frames): recorded by the same delta with a tracker added.
+//!   without rendered frames): recorded by the same delta with a tracker added;
+//! * `mobile_manipulator_model.yaml`, the declared model of `mobile_manipulator.yaml` (a
+//!   stationing program, recorded over its one pass; its URDF copied beside every file).
+//!
+//! A stationing cell simulates without a tracker pose (its instrument's setups are its own); a
+//! model file without `environment` and `program` is refused by `sim`, naming them.
 //!
 //! What each family can do: G-code and controller tables are for X Y Z programs (cartesian,
 //! delta); a five-axis or arm model is refused with a message saying so. The tracker node makes
-//! measured points for cartesian and delta machines; the estimator node on a five-axis or arm
-//! recording accepts the model and names the missing /measured_points.
+//! measured points for cartesian and delta machines, a stationing program records its own; the
+//! estimator node on another five-axis or arm recording accepts the model and names the missing
+//! /measured_points.
 //! A model whose output gained a tracker without a pose (diagnose found a warm-up the model
 //! had no tracker for) is refused by `sim`, naming `sensors.tracker.pose`; every other output
 //! simulates.
@@ -93,6 +99,8 @@ fn rows() -> Vec<Row> {
             "demo_model.yaml" => (sibling("demo_shift.yaml"), "20min"),
             "delta_printer.yaml" => (delta_with_tracker(&text), "3min"),
             "demo_shift.yaml" => (text.clone(), "5min"),
+            "mobile_manipulator_model.yaml" => (sibling("mobile_manipulator.yaml"), "1h"),
+            "mobile_manipulator.yaml" => (text.clone(), "1h"),
             _ => (text.clone(), "3min"),
         };
         rows.push(Row { name, model: text, recorded_cell, duration });
@@ -147,7 +155,8 @@ fn has_lag(model: &CellModel) -> bool {
 }
 
 /// Everything a written model is put through (module docs). `bag`: the recording; `points`:
-/// the recording with the tracker node's measured points (cartesian and delta).
+/// the recording with measured points (the tracker node's, for cartesian and delta machines; a
+/// stationing program's own).
 fn read_back(dir: &Path, what: &str, output: &str, bag: &str, points: Option<&str>, temperatures: &[String]) {
     let path = dir.join(output);
     let model = CellModel::from_path(&path).unwrap_or_else(|e| panic!("{what}: {output} does not read as a model: {e}"));
@@ -157,7 +166,7 @@ fn read_back(dir: &Path, what: &str, output: &str, bag: &str, points: Option<&st
     // (without empirical corrections, half of diagnose's time: they have no part in a model file)
     ok(dir, what, "metrocell", &["diagnose", "--model", output, bag, "--json", &format!("{stem}.json"), "--no-empirical"]);
     // compensation: from the recording's temperatures, and at given ones (a steady state)
-    let xyz = points.is_some();
+    let xyz = matches!(model.raw.machine.family, metrocell_twin::cell_file::MachineFamily::Cartesian | metrocell_twin::cell_file::MachineFamily::Delta);
     let program = if xyz { part_program(&model.machine.travel) } else { "G21 G90\nG1 X0 Y0 Z0\n".to_string() };
     std::fs::write(dir.join("part.nc"), program).unwrap();
     let gcode = ["compensate", "gcode", "--model", output, "part.nc", "-o", &format!("{stem}.nc"), "--temperatures-from", bag];
@@ -181,8 +190,12 @@ fn read_back(dir: &Path, what: &str, output: &str, bag: &str, points: Option<&st
     }
     // the simulator takes it, or names the pose it needs
     let (code, out, err) = run(dir, "metrocell", &["sim", "--cell", output, "--duration", "1min", "--no-camera-frames", "--quiet", "-o", &format!("{stem}.sim")]);
-    let tracker_without_pose = model.raw.sensors.tracker.as_ref().is_some_and(|t| t.pose.is_none());
-    if tracker_without_pose {
+    let stationing = model.raw.program.as_ref().is_some_and(|p| p.stationing.is_some());
+    let tracker_without_pose = model.raw.sensors.tracker.as_ref().is_some_and(|t| t.pose.is_none()) && !stationing;
+    if model.raw.environment.is_none() || model.raw.program.is_none() {
+        assert_ne!(code, 0, "{what}: sim of {output}");
+        assert!(err.contains("required to simulate") && (err.contains("environment") || err.contains("program")), "{what}: {err}");
+    } else if tracker_without_pose {
         assert_ne!(code, 0, "{what}: sim of {output}");
         assert!(err.contains("sensors.tracker.pose") && err.contains("required to simulate"), "{what}: {err}");
     } else {
@@ -206,9 +219,21 @@ fn read_back(dir: &Path, what: &str, output: &str, bag: &str, points: Option<&st
     }
 }
 
+/// The example cells' URDFs into `dir`, where a copied model file looks for them.
+fn copy_urdfs(dir: &Path) {
+    let cells = workspace_root().join("crates/twin/examples/cells");
+    for e in std::fs::read_dir(&cells).unwrap() {
+        let p = e.unwrap().path();
+        if p.extension().is_some_and(|x| x == "urdf") {
+            std::fs::copy(&p, dir.join(p.file_name().unwrap())).unwrap();
+        }
+    }
+}
+
 fn one_row(base: &Path, row: &Row) {
     let dir = base.join(row.name.replace('/', "_"));
     std::fs::create_dir_all(&dir).unwrap();
+    copy_urdfs(&dir);
     std::fs::write(dir.join("recorded_cell.yaml"), &row.recorded_cell).unwrap();
     ok(&dir, &row.name, "metrocell", &["sim", "--cell", "recorded_cell.yaml", "--duration", row.duration, "--seed", "1", "--no-camera-frames", "--quiet", "-o", "bag"]);
     let recorded = CellModel::from_path(dir.join("recorded_cell.yaml")).unwrap();
@@ -220,6 +245,9 @@ fn one_row(base: &Path, row: &Row) {
         ok(&dir, &row.name, "metrocell-tracker", &["--bag", "bag", "--output", "tracked", "--ros-args", "-p", &offset, "-p", "registration_points:=4"]);
         ok(&dir, &row.name, "metrocell", &["bag", "merge", "points", "bag", "tracked"]);
         Some("points")
+    } else if recorded.raw.program.as_ref().is_some_and(|p| p.stationing.is_some()) {
+        // a stationing program records its points itself
+        Some("bag")
     } else {
         None
     };
@@ -232,6 +260,7 @@ fn one_row(base: &Path, row: &Row) {
                 std::os::unix::fs::symlink(dir.join(link), sub.join(link)).unwrap();
             }
         }
+        copy_urdfs(&sub);
         std::fs::write(sub.join("model.yaml"), &text).unwrap();
         ok(&sub, &what, "metrocell", &["calibrate", "--model", "model.yaml", "bag", "-o", "calibrated.yaml"]);
         ok(&sub, &what, "metrocell", &["diagnose", "--model", "model.yaml", "bag", "--report", "diagnosis"]);

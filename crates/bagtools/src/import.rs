@@ -168,13 +168,13 @@ enum Role {
 }
 
 /// The topic reference nests' readings are written to (and read from).
-pub const REFERENCE_POINTS_TOPIC: &str = "/reference_points";
+pub const REFERENCE_POINTS_TOPIC: &str = metrocell_msgs::topics::REFERENCE_POINTS;
 
 /// The topic check points (kept out of every fit, to judge predictions) are written to.
-pub const CHECK_POINTS_TOPIC: &str = "/check_points";
+pub const CHECK_POINTS_TOPIC: &str = metrocell_msgs::topics::CHECK_POINTS;
 
 /// The separator of an instrument frame and its setup in a point's `header.frame_id`.
-pub const SETUP_SEPARATOR: char = '@';
+pub const SETUP_SEPARATOR: char = metrocell_msgs::topics::SETUP_SEPARATOR;
 
 fn parse_field(name: &str) -> Option<Field> {
     let axis = |s: &str| ["x", "y", "z"].iter().position(|a| *a == s);

@@ -27,6 +27,41 @@ pub fn read_urdf_file(path: &std::path::Path) -> Result<urdf_rs::Robot, Kinemati
 /// The placement of `link` in the frame of `reference` (see the module doc). An unknown link, or
 /// two links in unconnected trees, is an error naming the robot's links.
 pub fn link_placement(robot: &urdf_rs::Robot, reference: &str, link: &str) -> Result<LinkPlacement, KinematicsError> {
+    let (up_from_reference, up_from_link) = path_between(robot, reference, link)?;
+    if let Some(j) = up_from_reference.iter().chain(&up_from_link).find(|j| j.joint_type != urdf_rs::JointType::Fixed) {
+        return Ok(LinkPlacement::Moves { joint: j.name.clone() });
+    }
+    // common ancestor → each link, composed from the ancestor down
+    let down = |path: &[&urdf_rs::Joint]| path.iter().rev().fold(Isometry3::identity(), |t, j| t * from_xyz_rpy(j.origin.xyz.0, j.origin.rpy.0));
+    Ok(LinkPlacement::Fixed(down(&up_from_reference).inverse() * down(&up_from_link)))
+}
+
+/// How a link is turned relative to a reference link.
+#[derive(Debug, Clone, PartialEq)]
+pub enum LinkRotation {
+    /// By a constant rotation, `r_reference_link`: every joint between is fixed or prismatic (a
+    /// prismatic joint slides its child along its axis without turning it — a sensor on top of
+    /// a lifting column keeps its orientation as the column extends).
+    Fixed(nalgebra::Matrix3<f64>),
+    /// Through a joint that turns (revolute, continuous, floating, planar, …): named.
+    Turns { joint: String },
+}
+
+/// The rotation of `link`'s frame in `reference`'s (see [`LinkRotation`]); errors as
+/// [`link_placement`]'s.
+pub fn link_rotation(robot: &urdf_rs::Robot, reference: &str, link: &str) -> Result<LinkRotation, KinematicsError> {
+    let (up_from_reference, up_from_link) = path_between(robot, reference, link)?;
+    let turns = |j: &&&urdf_rs::Joint| !matches!(j.joint_type, urdf_rs::JointType::Fixed | urdf_rs::JointType::Prismatic);
+    if let Some(j) = up_from_reference.iter().chain(&up_from_link).find(turns) {
+        return Ok(LinkRotation::Turns { joint: j.name.clone() });
+    }
+    let down = |path: &[&urdf_rs::Joint]| path.iter().rev().fold(nalgebra::Matrix3::<f64>::identity(), |r, j| r * from_xyz_rpy([0.0; 3], j.origin.rpy.0).rotation.to_rotation_matrix().into_inner());
+    Ok(LinkRotation::Fixed(down(&up_from_reference).transpose() * down(&up_from_link)))
+}
+
+/// The joints from each of `reference` and `link` up to their nearest common ancestor, each
+/// list starting at its link's own parent joint.
+fn path_between<'a>(robot: &'a urdf_rs::Robot, reference: &str, link: &str) -> Result<(Vec<&'a urdf_rs::Joint>, Vec<&'a urdf_rs::Joint>), KinematicsError> {
     let known = || robot.links.iter().map(|l| l.name.as_str()).collect::<Vec<_>>().join(", ");
     for name in [reference, link] {
         if !robot.links.iter().any(|l| l.name == name) {
@@ -47,12 +82,7 @@ pub fn link_placement(robot: &urdf_rs::Robot, reference: &str, link: &str) -> Re
     if top(&up_from_reference, reference) != top(&up_from_link, link) {
         return Err(KinematicsError::Urdf { reason: format!("links `{reference}` and `{link}` of robot `{}` are in unconnected trees; its links: {}", robot.name, known()) });
     }
-    if let Some(j) = up_from_reference.iter().chain(&up_from_link).find(|j| j.joint_type != urdf_rs::JointType::Fixed) {
-        return Ok(LinkPlacement::Moves { joint: j.name.clone() });
-    }
-    // common ancestor → each link, composed from the ancestor down
-    let down = |path: &[&urdf_rs::Joint]| path.iter().rev().fold(Isometry3::identity(), |t, j| t * from_xyz_rpy(j.origin.xyz.0, j.origin.rpy.0));
-    Ok(LinkPlacement::Fixed(down(&up_from_reference).inverse() * down(&up_from_link)))
+    Ok((up_from_reference, up_from_link))
 }
 
 /// The joints from `link` up to the tree's root, the link's own parent joint first.
@@ -120,6 +150,25 @@ mod tests {
         assert_eq!(link_placement(&robot(), "base_link", "top_imu").unwrap(), LinkPlacement::Moves { joint: "lift".into() });
         // also when the reference is the link below the joint
         assert_eq!(link_placement(&robot(), "top_imu", "base_imu").unwrap(), LinkPlacement::Moves { joint: "lift".into() });
+    }
+
+    #[test]
+    fn a_link_behind_a_prismatic_joint_keeps_its_rotation_a_revolute_one_is_named() {
+        let r = match link_rotation(&robot(), "base_link", "top_imu").unwrap() {
+            LinkRotation::Fixed(r) => r,
+            other => panic!("{other:?}"),
+        };
+        assert!((r - nalgebra::Matrix3::identity()).norm() < 1e-12, "{r}");
+        // base_imu seen from top_imu: turned +90° about z
+        let r = match link_rotation(&robot(), "top_imu", "base_imu").unwrap() {
+            LinkRotation::Fixed(r) => r,
+            other => panic!("{other:?}"),
+        };
+        let rz90 = Rotation3::from_axis_angle(&Vector3::z_axis(), std::f64::consts::FRAC_PI_2);
+        assert!((r - rz90.matrix()).norm() < 1e-12, "{r}");
+        let turning = URDF.replace(r#"type="prismatic""#, r#"type="revolute""#);
+        let robot = urdf_rs::read_from_string(&turning).unwrap();
+        assert_eq!(link_rotation(&robot, "base_link", "top_imu").unwrap(), LinkRotation::Turns { joint: "lift".into() });
     }
 
     #[test]

@@ -6,9 +6,9 @@ use std::time::Instant;
 
 use clap::{Args, ValueEnum};
 use metrocell_bag::ChunkCompression;
-use metrocell_twin::Cell;
 
 use crate::bag::{write_bag, BagOptions, DEFAULT_BAG_CLOCK_RATE};
+use crate::cell_options::{load_cell, parse_ground_tilt, run_duration};
 use crate::duration_text::parse_duration;
 use crate::error::SimError;
 use crate::sim_time::{parse_start_time, DEFAULT_START_TIME};
@@ -42,8 +42,15 @@ Topics written (only those whose sensor is in the cell):
   /tracker/power_on                 sensor_msgs/TimeReference, when the tracker was powered on, once, latched
   /probe/hits                       metrocell_msgs/ProbeHit
   /camera/camera_info               sensor_msgs/CameraInfo (and the rendered frame on /camera/image_raw)
+A stationing program (program.stationing: an arm measured by a levelled instrument from several
+setups) writes `metrocell bag import`'s layout instead, one row per waypoint, so `calibrate` and
+`diagnose` read it as they read an imported recording:
+  /measured_points                  metrocell_msgs/MeasuredPoint, the fit points (frame_id total_station@<setup>)
+  /check_points                     metrocell_msgs/MeasuredPoint, the check points (kept out of every fit)
+  /imu/<sensor>                     sensor_msgs/Imu, each accelerometer's specific force in its frame (m/s^2)
+  /machine/commanded_joint_states   and /machine/joint_states, /temperature/<sensor>, at each waypoint
 
-The same cell, duration, seed and start time always give byte-identical bags.
+The same cell, duration, seed, ground tilt and start time always give byte-identical bags.
 
 Examples:
   # a three-minute demo bag
@@ -57,7 +64,12 @@ Examples:
   metrocell bag info /tmp/shift_seed7
 
   # point measurements only (camera_info without rendered frames: kilobytes, not gigabytes)
-  metrocell sim --cell crates/twin/examples/cells/xfyz_shift.yaml --duration 8h --no-camera-frames -o /tmp/shift_points";
+  metrocell sim --cell crates/twin/examples/cells/xfyz_shift.yaml --duration 8h --no-camera-frames -o /tmp/shift_points
+
+  # a stationing recording of the mobile manipulator on flat ground, then on a seesaw (15 mrad nose
+  # down: pitch about the base's y), another noise seed; the program's one pass is the duration
+  metrocell sim --cell launch-configs/cells/mobile_manipulator.yaml -o /tmp/flat
+  metrocell sim --cell launch-configs/cells/mobile_manipulator.yaml --ground-tilt 0,15mrad --seed 2 -o /tmp/seesaw";
 
 /// Simulate a cell description and record what its sensors would publish as a rosbag2 (MCAP) bag.
 #[derive(Debug, Clone, Args)]
@@ -66,9 +78,15 @@ pub struct SimArgs {
     /// Cell description file (YAML), e.g. crates/twin/examples/cells/xfyz_shift.yaml
     #[arg(long, value_name = "FILE")]
     pub cell: PathBuf,
-    /// Simulated duration: 8h, 90min, 30s, 1h30min, or seconds
+    /// Simulated duration: 8h, 90min, 30s, 1h30min, or seconds (required, except for a
+    /// stationing program: its one pass by default)
     #[arg(long, value_name = "D", value_parser = parse_duration_arg)]
-    pub duration: f64,
+    pub duration: Option<f64>,
+    /// The ground's tilt under a stationing program's robot, ROLL,PITCH (rad, or with a unit:
+    /// 0,15mrad; 2mrad,-1mrad): the base turned by Rx(roll)·Ry(pitch) from level. Replaces the
+    /// cell's environment.ground_tilt for this recording
+    #[arg(long, value_name = "ROLL,PITCH", allow_hyphen_values = true)]
+    pub ground_tilt: Option<String>,
     /// Seed of every noise source (same seed, same bag)
     #[arg(long, value_name = "N", default_value_t = 1)]
     pub seed: u64,
@@ -118,7 +136,9 @@ pub fn run_sim(args: &SimArgs) -> Result<(), SimError> {
     if !(args.clock_rate >= 0.0 && args.clock_rate.is_finite()) {
         return Err(SimError::invalid("--clock-rate", format!("must be >= 0 and finite, got {}", args.clock_rate)));
     }
-    let cell = Cell::from_path(&args.cell)?;
+    let tilt = args.ground_tilt.as_deref().map(parse_ground_tilt).transpose()?;
+    let cell = load_cell(&args.cell, tilt)?;
+    let duration = run_duration(&cell, args.duration, &args.cell)?;
     let options = BagOptions {
         start_ns,
         compression: args.compression.into(),
@@ -132,7 +152,7 @@ pub fn run_sim(args: &SimArgs) -> Result<(), SimError> {
             .expect("the progress template is valid"),
     );
     let wall = Instant::now();
-    let summary = write_bag(cell, args.duration, args.seed, &args.output, &options, |p| {
+    let summary = write_bag(cell, duration, args.seed, &args.output, &options, |p| {
         bar.set_position((1000.0 * p.t / p.duration).round() as u64);
         bar.set_message(format!("{:.0}/{:.0} s simulated, {} messages", p.t, p.duration, p.messages));
     })?;

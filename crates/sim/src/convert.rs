@@ -19,6 +19,13 @@
 //!   (it may precede the start of the run), `source = "tracker"`, `frame_id` empty.
 //! * Load: `geometry_msgs/WrenchStamped`, `frame_id = "machine"`, force in N, torque zero (the
 //!   catalog's load terms read the force only).
+//! * Stationing point: `metrocell_msgs/MeasuredPoint`, `frame_id` = `total_station@<setup>` (the
+//!   instrument's frame at that placement, as `bag import` writes a `setup` column),
+//!   `source = total_station`, `point_id` the waypoint's (`G03.017`), `nominal` the commanded tool
+//!   point (the arm's base frame), covariance row-major.
+//! * Accelerometer: `sensor_msgs/Imu`, `frame_id` the sensor's URDF link, `linear_acceleration`
+//!   the specific force (m/s²) with its variance on the covariance's diagonal; orientation and
+//!   angular velocity not measured (their covariances' first element −1, as ROS defines).
 //! * Probe: `frame_id = "workpiece"`, `probe_id = "probe"`; the twin records the contact point
 //!   as the machine reads it (nominal kinematics, no radius or pretravel compensation), so
 //!   `stylus_centre = surface_point =` that point, `stylus_radius = pretravel = 0`, and
@@ -27,11 +34,11 @@
 
 use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_msgs::geometry_msgs::msg::{Point, Vector3 as RosVector3, Wrench, WrenchStamped};
-use metrocell_msgs::msg::{ProbeHit, TrackerMeasurement};
+use metrocell_msgs::msg::{MeasuredPoint, ProbeHit, TrackerMeasurement};
 use metrocell_msgs::rosgraph_msgs::msg::Clock;
-use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, JointState, Temperature, TimeReference};
+use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, Imu, JointState, Temperature, TimeReference};
 use metrocell_msgs::std_msgs::msg::Header;
-use metrocell_twin::{MachineStateSample, ProbeHitSample, TemperatureSample, TrackerSample, TrackerStatus};
+use metrocell_twin::{AccelerationSample, MachineStateSample, ProbeHitSample, StationPointSample, TemperatureSample, TrackerSample, TrackerStatus, STATION_FRAME};
 use nalgebra::{Matrix3, Vector3};
 
 use crate::camera_intrinsics::CameraIntrinsics;
@@ -122,6 +129,28 @@ pub fn power_on(powered_on_ns: i64, stamp: Time) -> TimeReference {
 /// The load force (N, machine frame), stamped `stamp`.
 pub fn load(force: &Vector3<f64>, stamp: Time) -> WrenchStamped {
     WrenchStamped { header: header(stamp, MACHINE_FRAME), wrench: Wrench { force: RosVector3 { x: force.x, y: force.y, z: force.z }, torque: RosVector3::default() } }
+}
+
+/// A stationing program's point → `MeasuredPoint` (the topic follows its role).
+pub fn station_point(s: &StationPointSample, stamp: Time) -> MeasuredPoint {
+    MeasuredPoint {
+        header: header(stamp, &format!("{STATION_FRAME}{}{}", metrocell_msgs::topics::SETUP_SEPARATOR, s.setup)),
+        point_id: s.point_id.clone(),
+        source: STATION_FRAME.into(),
+        nominal: point(&s.nominal),
+        measured: point(&s.measured),
+        covariance: covariance_row_major(&s.covariance),
+    }
+}
+
+/// An accelerometer's reading → `Imu` (linear acceleration only).
+pub fn imu(s: &AccelerationSample, stamp: Time) -> Imu {
+    let f = &s.specific_force;
+    let mut m = Imu { header: header(stamp, &s.link), linear_acceleration: RosVector3 { x: f.x, y: f.y, z: f.z }, ..Default::default() };
+    m.linear_acceleration_covariance = covariance_row_major(&(Matrix3::identity() * s.variance));
+    m.orientation_covariance[0] = -1.0;
+    m.angular_velocity_covariance[0] = -1.0;
+    m
 }
 
 /// Probe hit → `ProbeHit` (`tool_offset`: tool tip relative to the tool body at q = 0, m).
@@ -279,6 +308,27 @@ mod tests {
         assert_eq!((m.surface_point.x, m.stylus_centre.y), (0.200_01, 0.299_98));
         assert_eq!((m.approach_direction.x, m.approach_direction.y), (0.0, 1.0));
         assert_eq!((m.covariance[0], m.covariance[1], m.covariance[4]), (2.5e-13, 0.0, 2.5e-13));
+    }
+
+    #[test]
+    fn station_points_name_their_setup_and_imu_readings_their_link() {
+        let s = StationPointSample {
+            t: 3.0,
+            point_id: "G02.007".into(),
+            role: metrocell_twin::PointRole::Check,
+            setup: Arc::from("S2"),
+            measured: Vector3::new(-5.1, 0.4, 0.9),
+            covariance: Matrix3::identity() * 5.625e-7,
+            nominal: Vector3::new(1.0, 0.2, 1.8),
+        };
+        let m = station_point(&s, stamp());
+        assert_eq!((m.header.frame_id.as_str(), m.point_id.as_str(), m.source.as_str()), ("total_station@S2", "G02.007", "total_station"));
+        assert_eq!((m.measured.x, m.nominal.z, m.covariance[0], m.covariance[1], m.covariance[8]), (-5.1, 1.8, 5.625e-7, 0.0, 5.625e-7));
+        let a = AccelerationSample { t: 3.0, sensor: Arc::from("base"), link: Arc::from("base_imu"), specific_force: Vector3::new(0.01, -0.14, 9.806), variance: 2.5e-5 };
+        let m = imu(&a, stamp());
+        assert_eq!(m.header.frame_id, "base_imu");
+        assert_eq!((m.linear_acceleration.y, m.linear_acceleration_covariance[4], m.linear_acceleration_covariance[1]), (-0.14, 2.5e-5, 0.0));
+        assert_eq!((m.orientation_covariance[0], m.angular_velocity_covariance[0]), (-1.0, -1.0));
     }
 
     #[test]

@@ -14,6 +14,7 @@
 //! | [`pacing`] | simulated time vs wall clock for the live node |
 //! | [`camera_frame`] | rendering a camera frame request as an image (plate, pose, seed) |
 //! | [`cdr`] | CDR bytes with the encapsulation header |
+//! | [`cell_options`] | a run's ground tilt (`--ground-tilt`) and default duration |
 //! | [`bag`] | [`write_bag`]: a deterministic bag of a simulation |
 //! | [`cli`] | [`SimArgs`] and [`run_sim_command`] for `metrocell sim` |
 //!
@@ -24,6 +25,7 @@ pub mod bag;
 pub mod camera_frame;
 pub mod camera_intrinsics;
 pub mod cdr;
+pub mod cell_options;
 pub mod cli;
 pub mod convert;
 pub mod duration_text;

@@ -19,12 +19,12 @@ use std::collections::VecDeque;
 use std::sync::{mpsc, Arc, Mutex};
 use std::thread::JoinHandle;
 
-use metrocell_msgs::msg::{ProbeHit, TrackerMeasurement};
+use metrocell_msgs::msg::{MeasuredPoint, ProbeHit, TrackerMeasurement};
 use metrocell_msgs::rosgraph_msgs::msg::Clock;
 use metrocell_msgs::geometry_msgs::msg::WrenchStamped;
-use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, JointState, Temperature, TimeReference};
+use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, Imu, JointState, Temperature, TimeReference};
 use metrocell_msgs::builtin_interfaces::msg::Time;
-use metrocell_twin::{CameraFrameRequest, Cell, Sample, SampleStream, Simulation};
+use metrocell_twin::{CameraFrameRequest, Cell, PointRole, Sample, SampleStream, Simulation};
 use nalgebra::Vector3;
 use rosmsg::RosMessage;
 
@@ -48,6 +48,8 @@ pub enum TypedMessage {
     Image(Image),
     PowerOn(TimeReference),
     Load(WrenchStamped),
+    Point(MeasuredPoint),
+    Imu(Imu),
 }
 
 impl TypedMessage {
@@ -63,6 +65,8 @@ impl TypedMessage {
             TypedMessage::Image(_) => Image::ROS_TYPE,
             TypedMessage::PowerOn(_) => TimeReference::ROS_TYPE,
             TypedMessage::Load(_) => WrenchStamped::ROS_TYPE,
+            TypedMessage::Point(_) => MeasuredPoint::ROS_TYPE,
+            TypedMessage::Imu(_) => Imu::ROS_TYPE,
         }
     }
 
@@ -79,6 +83,8 @@ impl TypedMessage {
             TypedMessage::Image(m) => encode_cdr(m, ty),
             TypedMessage::PowerOn(m) => encode_cdr(m, ty),
             TypedMessage::Load(m) => encode_cdr(m, ty),
+            TypedMessage::Point(m) => encode_cdr(m, ty),
+            TypedMessage::Imu(m) => encode_cdr(m, ty),
         }
     }
 }
@@ -220,6 +226,20 @@ impl MessageConverter {
             Sample::ProbeHit(s) => {
                 if let Some(id) = self.topics.probe {
                     push(id, TypedMessage::Probe(convert::probe_hit(s, stamp, &self.tool_offset)));
+                }
+            }
+            Sample::StationPoint(p) => {
+                let topic = match p.role {
+                    PointRole::Fit => self.topics.measured_points,
+                    PointRole::Check => self.topics.check_points,
+                };
+                if let Some(id) = topic {
+                    push(id, TypedMessage::Point(convert::station_point(p, stamp)));
+                }
+            }
+            Sample::Acceleration(a) => {
+                if let Some(id) = self.topics.imu(&a.sensor) {
+                    push(id, TypedMessage::Imu(convert::imu(a, stamp)));
                 }
             }
             Sample::CameraFrameRequest(r) => {

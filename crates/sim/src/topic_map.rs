@@ -9,12 +9,18 @@
 //! | `/temperature/<sensor>` | `sensor_msgs/msg/Temperature` | [`QosKind::Reliable`] | one topic per thermocouple, °C, `variance` = noise² + calibration² (K²) |
 //! | `/tracker/measurements` | `metrocell_msgs/msg/TrackerMeasurement` | [`QosKind::Reliable`] | laser-tracker points in the tracker frame, covariance row-major, station air data, applied index; beam breaks as `STATUS_BEAM_BREAK` with NaN point |
 //! | `/tracker/power_on` | `sensor_msgs/msg/TimeReference` | [`QosKind::Latched`] | when the tracker was powered on: `time_ref` = start − `powered_on_before_start`, `source = tracker`, stamped at t = 0 (published once) |
+//! | `/measured_points` | `metrocell_msgs/msg/MeasuredPoint` | [`QosKind::Reliable`] | a stationing program's fit points: the levelled instrument's reading of the tool point, in its frame at the waypoint's setup (`frame_id` `total_station@<setup>`), covariance diagonal σ², `nominal` the commanded tool point (the arm's base frame), `source = total_station` |
+//! | `/check_points` | `metrocell_msgs/msg/MeasuredPoint` | [`QosKind::Reliable`] | its check points, the same way (kept out of every fit by `calibrate` and `diagnose`) |
+//! | `/imu/<sensor>` | `sensor_msgs/msg/Imu` | [`QosKind::Reliable`] | one topic per accelerometer of a stationing program: `linear_acceleration` the specific force in the sensor's frame (m/s², +9.81 up at rest), `frame_id` its URDF link, orientation and angular velocity not given (covariance[0] = −1) |
 //! | `/probe/hits` | `metrocell_msgs/msg/ProbeHit` | [`QosKind::Reliable`] | touch-probe triggers (workpiece frame) |
 //! | `/camera/camera_info` | `sensor_msgs/msg/CameraInfo` | [`QosKind::SensorData`] | one per camera frame request |
 //! | `/camera/image_raw` | `sensor_msgs/msg/Image` (mono8) | [`QosKind::SensorData`] | the rendered frame of each request, same stamp as its CameraInfo (see `camera_frame`) |
 //!
 //! Only the topics whose sensor exists in the cell are in a cell's map, in the order above
-//! (thermocouples in file order). Joint states exist when the cell has `machine_state`, the
+//! (thermocouples in file order). A stationing program writes `bag import`'s layout (one row of
+//! messages per waypoint, one stamp: commanded and actual joints, the point, the accelerometers,
+//! the thermocouples), so `calibrate` and `diagnose` read the twin's recordings and imported
+//! ones alike. Joint states exist when the cell has `machine_state` or a stationing program, the
 //! load when it has `environment.load_force`, the power-on time with a tracker. The latched
 //! topics carry a state rather than a stream: a reader keeps the latest message at or before
 //! its time.
@@ -22,10 +28,10 @@
 //! report and what robot_state_publisher consumes; the command is kept apart so the pair shows
 //! the machine's error directly.
 
-use metrocell_msgs::msg::{ProbeHit, TrackerMeasurement};
+use metrocell_msgs::msg::{MeasuredPoint, ProbeHit, TrackerMeasurement};
 use metrocell_msgs::rosgraph_msgs::msg::Clock;
 use metrocell_msgs::geometry_msgs::msg::WrenchStamped;
-use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, JointState, Temperature, TimeReference};
+use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, Imu, JointState, Temperature, TimeReference};
 use metrocell_twin::Cell;
 use rosmsg::RosMessage;
 
@@ -35,7 +41,7 @@ use crate::error::SimError;
 pub use metrocell_msgs::topics::{
     CAMERA_IMAGE as CAMERA_IMAGE_TOPIC, CAMERA_INFO as CAMERA_INFO_TOPIC, CLOCK as CLOCK_TOPIC, COMMANDED_JOINTS as COMMANDED_JOINT_STATES_TOPIC,
     JOINT_STATES as JOINT_STATES_TOPIC, LOAD as LOAD_TOPIC, POWER_ON as POWER_ON_TOPIC, PROBE_HITS as PROBE_TOPIC,
-    TEMPERATURE_PREFIX as TEMPERATURE_TOPIC_PREFIX, TRACKER_MEASUREMENTS as TRACKER_TOPIC,
+    TEMPERATURE_PREFIX as TEMPERATURE_TOPIC_PREFIX, TRACKER_MEASUREMENTS as TRACKER_TOPIC, MEASURED_POINTS as MEASURED_POINTS_TOPIC, CHECK_POINTS as CHECK_POINTS_TOPIC, IMU_PREFIX as IMU_TOPIC_PREFIX,
 };
 
 /// QoS of a simulated stream, matching rclcpp's named profiles.
@@ -75,6 +81,11 @@ pub enum TopicRole {
     /// Thermocouple by name.
     Temperature(String),
     Tracker,
+    /// A stationing program's fit points and its check points.
+    MeasuredPoints,
+    CheckPoints,
+    /// An accelerometer by name.
+    Imu(String),
     /// When the tracker was powered on.
     TrackerPowerOn,
     Probe,
@@ -113,6 +124,10 @@ pub struct TopicMap {
     /// Per thermocouple, in the cell's order.
     pub temperatures: Vec<TopicId>,
     pub tracker: Option<TopicId>,
+    /// A stationing program's fit points, check points and accelerometers (in the cell's order).
+    pub measured_points: Option<TopicId>,
+    pub check_points: Option<TopicId>,
+    pub imu: Vec<TopicId>,
     pub power_on: Option<TopicId>,
     pub probe: Option<TopicId>,
     pub camera_info: Option<TopicId>,
@@ -131,12 +146,19 @@ impl TopicMap {
                 ));
             }
         }
+        let stationing = cell.stationing.as_ref();
+        let accelerometers: Vec<&str> = stationing.map(|s| s.accelerometers.iter().map(|a| a.name.as_str()).collect()).unwrap_or_default();
+        for (i, name) in accelerometers.iter().enumerate() {
+            if !is_name_token(name) {
+                return Err(SimError::invalid(format!("sensors.accelerometers[{i}].name {name:?}"), "must be a ROS name token ([A-Za-z_][A-Za-z0-9_]*) because it names the topic /imu/<name>"));
+            }
+        }
         let mut topics = vec![TopicSpec::of::<Clock>(CLOCK_TOPIC, TopicRole::Clock, QosKind::Clock)];
         let mut push = |t: TopicSpec| {
             topics.push(t);
             topics.len() - 1
         };
-        let joint_states = cell.machine_state_rate.map(|_| {
+        let joint_states = (cell.machine_state_rate.is_some() || stationing.is_some()).then(|| {
             (
                 push(TopicSpec::of::<JointState>(JOINT_STATES_TOPIC, TopicRole::JointStates, QosKind::SensorData)),
                 push(TopicSpec::of::<JointState>(COMMANDED_JOINT_STATES_TOPIC, TopicRole::CommandedJointStates, QosKind::SensorData)),
@@ -150,14 +172,22 @@ impl TopicMap {
             .collect();
         let tracker = cell.tracker.as_ref().map(|_| push(TopicSpec::of::<TrackerMeasurement>(TRACKER_TOPIC, TopicRole::Tracker, QosKind::Reliable)));
         let power_on = cell.tracker.as_ref().map(|_| push(TopicSpec::of::<TimeReference>(POWER_ON_TOPIC, TopicRole::TrackerPowerOn, QosKind::Latched)));
+        let measured_points = stationing.map(|_| push(TopicSpec::of::<MeasuredPoint>(MEASURED_POINTS_TOPIC, TopicRole::MeasuredPoints, QosKind::Reliable)));
+        let check_points = stationing.map(|_| push(TopicSpec::of::<MeasuredPoint>(CHECK_POINTS_TOPIC, TopicRole::CheckPoints, QosKind::Reliable)));
+        let imu = accelerometers.iter().map(|a| push(TopicSpec::of::<Imu>(format!("{IMU_TOPIC_PREFIX}{a}"), TopicRole::Imu(a.to_string()), QosKind::Reliable))).collect();
         let probe = cell.probe.as_ref().map(|_| push(TopicSpec::of::<ProbeHit>(PROBE_TOPIC, TopicRole::Probe, QosKind::Reliable)));
         let camera_info = cell.camera.as_ref().map(|_| push(TopicSpec::of::<CameraInfo>(CAMERA_INFO_TOPIC, TopicRole::CameraInfo, QosKind::SensorData)));
         let camera_image = cell.camera.as_ref().map(|_| push(TopicSpec::of::<Image>(CAMERA_IMAGE_TOPIC, TopicRole::CameraImage, QosKind::SensorData)));
-        Ok(TopicMap { topics, clock: 0, joint_states, load, temperatures, tracker, power_on, probe, camera_info, camera_image })
+        Ok(TopicMap { topics, clock: 0, joint_states, load, temperatures, tracker, measured_points, check_points, imu, power_on, probe, camera_info, camera_image })
     }
 
     pub fn get(&self, id: TopicId) -> &TopicSpec {
         &self.topics[id]
+    }
+
+    /// Topic id of an accelerometer by name.
+    pub fn imu(&self, sensor: &str) -> Option<TopicId> {
+        self.imu.iter().copied().find(|&i| self.topics[i].role == TopicRole::Imu(sensor.to_string()))
     }
 
     /// Topic id of a thermocouple by name.

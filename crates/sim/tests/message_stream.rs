@@ -99,6 +99,7 @@ fn each_sample_kind_maps_to_its_topic_and_type() {
                 seen[4] = true;
                 assert!(matches!(&out[..], [m] if m.message.ros_type() == "sensor_msgs/msg/CameraInfo"));
             }
+            Sample::StationPoint(_) | Sample::Acceleration(_) => panic!("the demo cell has no stationing program"),
         }
         for m in &out {
             let bytes = m.message.encode().unwrap();
@@ -134,4 +135,47 @@ fn beam_breaks_are_flagged_with_nan_points_and_keep_air_data() {
     }
     assert_eq!(ok + broken, 1800);
     assert!(broken > 0 && broken < 600, "{broken} of 1800 samples beam-broken");
+}
+
+fn mobile_manipulator(tilt: Option<[f64; 2]>) -> Cell {
+    metrocell_simulation::cell_options::load_cell(&Path::new(env!("CARGO_MANIFEST_DIR")).join("../twin/examples/cells/mobile_manipulator.yaml"), tilt).unwrap()
+}
+
+/// A stationing program writes `bag import`'s layout: per waypoint the joint states, the point on
+/// /measured_points (fit) or /check_points (check) in `total_station@<setup>`, /imu/<sensor> in
+/// the sensor's link, the temperature — one stamp.
+#[test]
+fn a_stationing_program_writes_the_import_layout() {
+    let cell = mobile_manipulator(Some([0.0, 0.015]));
+    let conv = MessageConverter::new(&cell, 0, CameraIntrinsics::default()).unwrap();
+    let names: Vec<&str> = conv.topics.topics.iter().map(|t| t.name.as_str()).collect();
+    assert_eq!(names, ["/clock", "/machine/joint_states", "/machine/commanded_joint_states", "/temperature/ambient", "/measured_points", "/check_points", "/imu/base", "/imu/tip"]);
+    assert_eq!(conv.topics.get(conv.topics.imu("tip").unwrap()).role, TopicRole::Imu("tip".into()));
+    let duration = cell.natural_duration().unwrap();
+    let sim = Simulation::new(cell, duration, 3).unwrap();
+    let msgs: Vec<_> = MessageStream::new(&sim, &conv, None).collect();
+    let on = |topic: &str| msgs.iter().filter(|m| conv.topics.get(m.topic).name == topic).collect::<Vec<_>>();
+    let (fit, check) = (on("/measured_points"), on("/check_points"));
+    assert_eq!((fit.len(), check.len()), (12 * 8, 12 * 30));
+    for m in fit.iter().chain(&check) {
+        let TypedMessage::Point(p) = &m.message else { panic!("{m:?}") };
+        assert!(["total_station@S1", "total_station@S2", "total_station@S3"].contains(&p.header.frame_id.as_str()), "{}", p.header.frame_id);
+        assert!(p.point_id.starts_with('G') && p.covariance[0] > 0.0);
+        // its row: the commanded joints and both accelerometers at the same stamp
+        let row: Vec<&str> = msgs.iter().filter(|o| o.stamp_ns == m.stamp_ns).map(|o| conv.topics.get(o.topic).name.as_str()).collect();
+        assert_eq!(row.len(), 6, "{row:?}");
+        assert!(row.contains(&"/machine/commanded_joint_states") && row.contains(&"/imu/base") && row.contains(&"/imu/tip"), "{row:?}");
+    }
+    let TypedMessage::Imu(base) = &on("/imu/base")[0].message else { panic!() };
+    assert_eq!((base.header.frame_id.as_str(), base.orientation_covariance[0]), ("base_imu", -1.0));
+    // 15 mrad nose down: the specific force leans to −x in the base (the sensor is not turned)
+    assert!((base.linear_acceleration.x + 9.80665 * 0.015).abs() < 0.06, "{:?}", base.linear_acceleration);
+    // another ground, the same plan: the same joints, other points
+    let flat = mobile_manipulator(None);
+    let sim_flat = Simulation::new(flat, duration, 3).unwrap();
+    let flat_msgs: Vec<_> = MessageStream::new(&sim_flat, &conv, None).collect();
+    assert_eq!(flat_msgs.len(), msgs.len());
+    let joints = |v: &[metrocell_simulation::SimMessage]| v.iter().filter_map(|m| if let TypedMessage::JointState(j) = &m.message { Some(j.position.clone()) } else { None }).collect::<Vec<_>>();
+    assert_eq!(joints(&flat_msgs), joints(&msgs));
+    assert_ne!(flat_msgs, msgs);
 }

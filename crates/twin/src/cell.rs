@@ -155,6 +155,9 @@ pub struct Cell {
     pub program: Program,
     /// The machine's true error terms (machine-frame displacements).
     pub terms: TermModel,
+    /// A stationing recording's instrument, accelerometers, ground tilt and waypoints
+    /// (`program.stationing`, [`crate::stationing`]); its samples replace the periodic channels'.
+    pub stationing: Option<crate::stationing::Stationing>,
     /// The term configs as written (for reports and for deriving nominal models).
     pub term_configs: Vec<TermConfig>,
     /// The file's `estimation` settings (free parameters, priors), checked against the terms.
@@ -200,7 +203,12 @@ impl Cell {
         let env = f.environment.as_ref().ok_or_else(|| CellError::invalid("environment", "is required to simulate a cell: {ambient, air, ...} (only a model file for `metrocell calibrate` may leave it out)"))?;
         let program_section = f.program.as_ref().ok_or_else(|| CellError::invalid("program", "is required to simulate a cell: {grid | points | joints | poses, feed_rate, dwell, ...} (only a model file for `metrocell calibrate` may leave it out)"))?;
         let thermal = thermal_model(env, &f.sensors.thermocouples)?;
-        let tracker = f.sensors.tracker.as_ref().map(tracker).transpose()?;
+        // a stationing program's instrument is its own (setups, point noise), not a tracker
+        let stationing = crate::stationing::Stationing::from_file(f, &machine, base_dir)?;
+        let tracker = match stationing {
+            Some(_) => None,
+            None => f.sensors.tracker.as_ref().map(tracker).transpose()?,
+        };
         let machine_state_rate = f.sensors.machine_state.as_ref().map(|m| m.rate.positive("sensors.machine_state.rate", "1/s")).transpose()?;
         let probe = f.sensors.probe.as_ref().map(probe).transpose()?;
         if probe.is_some() && machine.is_jointed() {
@@ -221,7 +229,11 @@ impl Cell {
             beam_temperature_offset: opt(&env.air.beam_temperature_offset, "environment.air.beam_temperature_offset", "K")?,
         };
         let load_force = env.load_force.as_ref().map(|v| vector3(v, "environment.load_force", "N")).transpose()?;
-        let program = Program::from_section(program_section, &machine)?;
+        let program = match &stationing {
+            // one pass over the waypoints
+            Some(st) => Program { cycles: Some(1), ..Program::from_section_with(program_section, &machine, st.waypoints.iter().map(|w| w.q.clone()).collect())? },
+            None => Program::from_section(program_section, &machine)?,
+        };
         let sensor_names: BTreeSet<String> = thermocouples.iter().map(|t| t.name.clone()).collect();
         let terms = terms(&f.terms, Some(&sensor_names), Some(load_force.is_some()), &machine)?;
         if let MachineKinematics::Delta(g) = &machine.kinematics {
@@ -248,6 +260,7 @@ impl Cell {
             load_force,
             program,
             terms,
+            stationing,
             term_configs: f.terms.clone(),
             estimation: f.estimation.clone(),
             disturbances,
@@ -260,6 +273,12 @@ impl Cell {
 }
 
 impl Cell {
+    /// How long a run of the cell lasts when nobody says: a stationing program's one pass
+    /// (None for a cell whose program repeats through a shift: its duration is the caller's).
+    pub fn natural_duration(&self) -> Option<f64> {
+        self.stationing.as_ref().map(|_| crate::stationing_run::stationing_length(&self.program))
+    }
+
     /// The shared forward model of this cell's machine and terms, with `instruments` as its
     /// instrument terms (e.g. [`Cell::tracker_terms`], [`Cell::instrument_terms`]) and, if the
     /// cell has a camera, its geometry (mount and the lens's pinhole intrinsics).
@@ -277,7 +296,9 @@ impl Cell {
     /// Every instrument's effects as catalog terms with their true parameters: the tracker's
     /// ([`Cell::tracker_terms`]), the probe's `probe_pretravel` (`sensors.probe.pretravel`), and
     /// the camera's `lens_distortion` when `sensors.camera.intrinsics` states a Brown–Conrady
-    /// lens (OpenCV k1 k2 p1 p2 k3 → the term's k1 k2 k3 p1 p2).
+    /// lens (OpenCV k1 k2 p1 p2 k3 → the term's k1 k2 k3 p1 p2). A stationing program's
+    /// instrument is not among them: its setups' tilts are drawn per seed
+    /// ([`crate::stationing::Stationing::instrument_terms`], the truth of [`crate::Simulation`]).
     pub fn instrument_terms(&self) -> Result<TermModel, CellError> {
         let mut m = self.tracker_terms()?;
         if let Some(pt) = self.probe.as_ref().and_then(|p| p.pretravel.clone()) {

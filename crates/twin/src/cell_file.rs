@@ -1,6 +1,19 @@
 //! The cell description file as written (YAML, serde, every section `deny_unknown_fields`).
 //! Values are [`Quantity`]s (number in the documented SI unit, or text with a unit). The
 //! validated, SI form is [`crate::cell::Cell`]; see `examples/cells/*.yaml` for commented files.
+//!
+//! A **stationing program** (a serial arm measured by a levelled instrument from several setups,
+//! [`crate::stationing`]; `examples/cells/mobile_manipulator.yaml`) adds these keys, each
+//! refused in a cell without `program.stationing`:
+//! * `program.stationing: {levels, configurations: [{name, joints}], spread, fit_points,
+//!   check_points, groups_per_setup, min_tool_height, seed}` ([`StationingSection`]) — instead
+//!   of `joints`/`poses`; `feed_rate`, `rotary_rate` and `dwell` time it, one pass;
+//! * `sensors.tracker.setups: [{name, translation, yaw}]` and `point_noise` — the instrument's
+//!   placements in the base's levelled frame and its σ per axis (`levelled: true`, `tilt_sigma`
+//!   as a model file reads them; no pose, rate or noise model of a tracker);
+//! * `environment.ground_tilt: {roll, pitch}` — the base's tilt from level;
+//! * `sensors.accelerometers[i].noise`, `bias`, `misalignment` — the sensor's truth (a model
+//!   file may carry them; the loader reads only `name` and `link`).
 
 use std::collections::BTreeMap;
 
@@ -223,6 +236,17 @@ pub struct SensorsSection {
 pub struct AccelerometerSection {
     pub name: String,
     pub link: String,
+    /// Simulation only (a model file may give them; the loader ignores them): σ of each axis's
+    /// white noise (m/s²), …
+    #[serde(default)]
+    pub noise: Option<Quantity>,
+    /// … the sensor's constant bias per axis, its own frame (m/s²), …
+    #[serde(default)]
+    pub bias: Option<[Quantity; 3]>,
+    /// … and its mounting misalignment: the true sensor frame is the link's turned by this
+    /// rotation vector (rad, the link's axes).
+    #[serde(default)]
+    pub misalignment: Option<[Quantity; 3]>,
 }
 
 /// Pose of an instrument frame in the workpiece (table) frame: `p_wp = R·p_inst + t`,
@@ -278,6 +302,26 @@ pub struct TrackerSection {
     /// 50 µrad, a tracker's level: a total station's compensator does better, give yours).
     #[serde(default)]
     pub tilt_sigma: Option<Quantity>,
+    /// A stationing program's instrument (`program.stationing`, simulation only): where it is
+    /// set up, each placement in the base's levelled frame (`crate::stationing`) …
+    #[serde(default)]
+    pub setups: Vec<SetupSection>,
+    /// … and the σ of its point noise on each axis of its frame (m), centring and EDM and
+    /// angles together (a total station with a 360° prism: about 0.75 mm).
+    #[serde(default)]
+    pub point_noise: Option<Quantity>,
+}
+
+/// One placement of a stationing program's instrument: its origin in the base's levelled
+/// frame (x the base's x turned by the ground's tilt only, z straight up) and its yaw about z;
+/// its residual tilt is drawn per recording within `tilt_sigma`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct SetupSection {
+    pub name: String,
+    pub translation: [Quantity; 3],
+    #[serde(default)]
+    pub yaw: Option<Quantity>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]
@@ -422,6 +466,22 @@ pub struct EnvironmentSection {
     /// Constant load force for `compliance` terms (N, machine frame).
     #[serde(default)]
     pub load_force: Option<[Quantity; 3]>,
+    /// A serial arm's base tilted from level (a robot on a pallet, a seesaw, a ramp):
+    /// R = Rx(roll)·Ry(pitch) turns the base into the level frame, so gravity in the base is
+    /// Rᵀ·(0, 0, −g) (`Signals::gravity`) and the truth's `base_tilt` is (roll, pitch).
+    /// `metrocell sim --ground-tilt` overrides it. Absent: level.
+    #[serde(default)]
+    pub ground_tilt: Option<GroundTiltSection>,
+}
+
+/// Tilt of the ground under the robot's base (rad): roll about x first, pitch about y.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GroundTiltSection {
+    #[serde(default)]
+    pub roll: Option<Quantity>,
+    #[serde(default)]
+    pub pitch: Option<Quantity>,
 }
 
 /// Physics `AmbientCycle`: T = mean + amplitude·sin(2πt/period + phase) + drift·t + walk.
@@ -531,6 +591,46 @@ pub struct ProgramSection {
     /// Home as joint values (five_axis, serial_arm; default the first target).
     #[serde(default)]
     pub home_joints: Option<Vec<Quantity>>,
+    /// … or a stationing program of a serial arm measured by a levelled instrument from
+    /// several setups (`crate::stationing_program`): groups of fit and check waypoints.
+    #[serde(default)]
+    pub stationing: Option<StationingSection>,
+}
+
+/// A stationing program: one group per (column level, arm configuration), level-major; each
+/// group's waypoints are the configuration's joints perturbed with a seeded RNG, the first
+/// joint variable (the column) at the level; `fit_points` of them chosen far apart are `fit`,
+/// the others `check`; `groups_per_setup` consecutive groups are measured from each setup of
+/// `sensors.tracker.setups` in turn.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct StationingSection {
+    /// Values of the arm's first joint variable (the lifting column), m or rad.
+    pub levels: Vec<Quantity>,
+    /// The other joint variables of each configuration (a solution space: elbow up/down, …).
+    pub configurations: Vec<ConfigurationSection>,
+    /// Half-width of the uniform perturbation of each of those joints (rad or m).
+    pub spread: Vec<Quantity>,
+    pub fit_points: u32,
+    pub check_points: u32,
+    /// Consecutive groups measured from one setup (default 1).
+    #[serde(default)]
+    pub groups_per_setup: Option<u32>,
+    /// Waypoints whose nominal tool point is lower than this in the base frame are drawn
+    /// again (m; default: no limit).
+    #[serde(default)]
+    pub min_tool_height: Option<Quantity>,
+    /// Seed of the plan (the same waypoints whatever the simulation's noise seed; default 1).
+    #[serde(default)]
+    pub seed: Option<u64>,
+}
+
+/// An arm configuration of a stationing program.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ConfigurationSection {
+    pub name: String,
+    pub joints: Vec<Quantity>,
 }
 
 /// A tool pose target. Five-axis: tool tip `position` and tool `axis` (tip → spindle) in the

@@ -23,6 +23,9 @@
 //!   `p_wp = R·p_LT + T`, `R = Rx(a)·Ry(b)·Rz(c)`; it reads `X_LT = Rᵀ(p_wp − T)` (thesis eq. 3.5).
 //!   Spherical coordinates: see [`tracker_model`].
 //! * Noise: every source has its own ChaCha8 stream derived from the seed ([`noise`]).
+//! * A stationing program ([`stationing`]: an arm measured by a levelled instrument from
+//!   several setups, fit and check waypoints, accelerometers, the ground tilted) streams one row
+//!   of samples per waypoint instead of the periodic channels.
 
 // `!(x > 0.0)` is used on purpose: unlike `x <= 0.0` it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
@@ -41,6 +44,9 @@ pub mod program;
 pub mod quantity;
 pub mod sample;
 pub mod simulation;
+pub mod stationing;
+pub mod stationing_program;
+mod stationing_run;
 pub mod thermal_stepper;
 pub mod tracker_model;
 pub mod yaml_edit;
@@ -50,5 +56,6 @@ pub use cell_model::CellModel;
 pub use model_writer::{write_model, FittedParameter, ModelUpdate};
 pub use error::CellError;
 pub use fiducial_plate::FiducialPlate;
-pub use sample::{CameraFrameRequest, MachineStateSample, ProbeHitSample, Sample, SampleTruth, TemperatureSample, TrackerSample, TrackerStatus, TrackerTruth, TrueParameter};
+pub use sample::{AccelerationSample, CameraFrameRequest, MachineStateSample, PointRole, ProbeHitSample, Sample, SampleTruth, StationPointSample, TemperatureSample, TrackerSample, TrackerStatus, TrackerTruth, TrueParameter};
+pub use stationing::{Stationing, STATION_FRAME};
 pub use simulation::{GroundTruth, SampleStream, SignalsStream, Simulation, TruthStream};

@@ -12,6 +12,13 @@ pub mod stream {
     pub const STATION: u64 = 3;
     pub const BEAM_BREAKS: u64 = 4;
     pub const PROBE: u64 = 5;
+    /// A stationing program's setups' residual tilts, its plan (seeded by the program's own
+    /// seed), the instrument's point noise.
+    pub const SETUP_TILT: u64 = 6;
+    pub const STATIONING_PLAN: u64 = 7;
+    pub const STATION_POINT: u64 = 8;
+    /// Accelerometer i uses ACCELEROMETER_BASE + i.
+    pub const ACCELEROMETER_BASE: u64 = 2000;
     /// Thermocouple i uses THERMOCOUPLE_BASE + i.
     pub const THERMOCOUPLE_BASE: u64 = 1000;
 }

@@ -66,7 +66,16 @@ pub struct Program {
 
 impl Program {
     pub fn from_section(s: &ProgramSection, m: &MachineGeometry) -> Result<Program, CellError> {
-        let mut points = Vec::new();
+        Program::from_section_with(s, m, Vec::new())
+    }
+
+    /// As [`Program::from_section`], visiting `generated` joint targets (a stationing program's
+    /// waypoints, [`crate::stationing_program`]) instead of `joints` or `poses`.
+    pub fn from_section_with(s: &ProgramSection, m: &MachineGeometry, generated: Vec<DVector<f64>>) -> Result<Program, CellError> {
+        if s.stationing.is_some() && (!s.joints.is_empty() || !s.poses.is_empty()) {
+            return Err(CellError::invalid("program.stationing", "generates the program's waypoints; give it without `joints` or `poses`"));
+        }
+        let mut points = generated;
         let jointed = m.is_jointed();
         if jointed {
             if s.grid.is_some() || !s.points.is_empty() || s.home.is_some() {

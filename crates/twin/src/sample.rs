@@ -118,6 +118,46 @@ pub struct CameraFrameRequest {
     pub marker_points: Vec<Vector3<f64>>,
 }
 
+/// What a stationing program's point is for (the import layout's `role`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum PointRole {
+    /// Fits the model (`/measured_points`).
+    Fit,
+    /// Kept out of every fit, to judge predictions (`/check_points`).
+    Check,
+}
+
+/// A stationing program's reading of the tool point by the levelled instrument
+/// ([`crate::stationing`]): one per waypoint, taken in the middle of its dwell.
+#[derive(Debug, Clone, PartialEq)]
+pub struct StationPointSample {
+    pub t: f64,
+    /// `G<group>.<index>` (1-based, e.g. `G03.017`).
+    pub point_id: String,
+    pub role: PointRole,
+    /// The instrument's placement the point was measured from (`sensors.tracker.setups`).
+    pub setup: Arc<str>,
+    /// The point in the instrument's frame at that placement (m).
+    pub measured: Vector3<f64>,
+    /// Stated covariance of `measured` (m²): the point noise's σ² on the diagonal.
+    pub covariance: Matrix3<f64>,
+    /// The commanded tool point, nominal kinematics, in the arm's base frame (m).
+    pub nominal: Vector3<f64>,
+}
+
+/// A 3-axis accelerometer's reading at a waypoint (the arm at rest).
+#[derive(Debug, Clone, PartialEq)]
+pub struct AccelerationSample {
+    pub t: f64,
+    pub sensor: Arc<str>,
+    /// The URDF link whose frame the sensor reads in.
+    pub link: Arc<str>,
+    /// Specific force in the sensor's frame (m/s²): +9.81 along its up axis at rest, level.
+    pub specific_force: Vector3<f64>,
+    /// Stated variance of each axis (m²/s⁴): the noise's σ².
+    pub variance: f64,
+}
+
 /// Everything a simulation streams, in time order.
 #[derive(Debug, Clone, PartialEq)]
 pub enum Sample {
@@ -126,6 +166,8 @@ pub enum Sample {
     MachineState(MachineStateSample),
     ProbeHit(ProbeHitSample),
     CameraFrameRequest(CameraFrameRequest),
+    StationPoint(StationPointSample),
+    Acceleration(AccelerationSample),
 }
 
 impl Sample {
@@ -137,6 +179,8 @@ impl Sample {
             Sample::MachineState(s) => s.t,
             Sample::ProbeHit(s) => s.t,
             Sample::CameraFrameRequest(s) => s.t,
+            Sample::StationPoint(s) => s.t,
+            Sample::Acceleration(s) => s.t,
         }
     }
 }
@@ -180,6 +224,11 @@ pub enum SampleTruth {
     /// of the dwell (the family's, see [`crate::families`]) and the true displacement d (as in
     /// [`TrackerTruth::displacement`]).
     CameraFrameRequest { tool_point: Vector3<f64>, joints: Vec<f64>, displacement: Vector3<f64> },
+    /// The true tool point in the arm's base frame and in the levelled frame (the ground's tilt
+    /// applied), the true point in the instrument's frame (no noise), the commanded joints.
+    StationPoint { tool_point: Vector3<f64>, levelled: Vector3<f64>, point: Vector3<f64>, joints: Vec<f64> },
+    /// The noise-free reading (misalignment and bias included) and the gravity in the base.
+    Acceleration { specific_force: Vector3<f64>, gravity: Vector3<f64> },
 }
 
 /// True value of one term parameter.

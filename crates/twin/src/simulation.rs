@@ -34,6 +34,7 @@ use crate::fiducial_plate::PLATE_MARKERS;
 use crate::noise::{stream, NoiseStream};
 use crate::program::MotionState;
 use crate::sample::*;
+use crate::stationing_run::StationingStream;
 use crate::thermal_stepper::ThermalStepper;
 use crate::tracker_model::{from_spherical, point_covariance, stated_range_sigma, BeamBreakProcess};
 
@@ -80,12 +81,24 @@ impl Simulation {
         if !(duration > 0.0 && duration.is_finite()) {
             return Err(CellError::Simulation { reason: format!("duration must be > 0 s and finite, got {duration}") });
         }
-        let instruments = cell.instrument_terms()?;
+        // a stationing recording's instrument: a pose per setup (its tilt drawn with the seed)
+        // and the ground's tilt
+        let instruments = match &cell.stationing {
+            Some(st) => st.instrument_terms(seed)?,
+            None => cell.instrument_terms()?,
+        };
         cell.forward_model(&instruments).map_err(|err| CellError::Simulation { reason: format!("the forward model cannot be built: {err}") })?;
         let sim = Simulation { cell, instruments, duration, seed };
         let mut e = Engine::new(&sim);
         let ms = sim.cell.program.state_at(0.0);
         e.tool_state(0.0, &ms).map_err(|err| CellError::Simulation { reason: format!("true terms cannot be evaluated: {err}") })?;
+        if let Some(st) = &sim.cell.stationing {
+            let mut first = StationingStream::new(&sim, st);
+            first.next_event();
+            if let Some(err) = first.error {
+                return Err(CellError::Simulation { reason: format!("the first waypoint cannot be simulated: {err}") });
+            }
+        }
         Ok(sim)
     }
 
@@ -122,21 +135,22 @@ impl Simulation {
 
     /// The sample stream (restarts from t = 0 on every call; deterministic in the seed).
     pub fn samples(&self) -> SampleStream<'_> {
-        SampleStream { engine: Engine::new(self) }
+        SampleStream { source: Source::new(self) }
     }
 
     /// The sample stream with the ground truth of each sample.
     pub fn samples_with_truth(&self) -> TruthStream<'_> {
-        TruthStream { engine: Engine::new(self) }
+        TruthStream { source: Source::new(self) }
     }
 
-    /// The sample stream with, for every tracker reading, the [`Signals`] the shared model was
-    /// evaluated with for it (time, commanded axis positions, velocities and approach
-    /// directions, the true temperatures at the thermocouples' locations and the timeline of the
-    /// lagged terms, the station's air of the reading, time since power-on, load; `point` and
-    /// `tracker_range` as the model set them). `None` for other samples.
+    /// The sample stream with, for every tracker reading and every stationing point, the
+    /// [`Signals`] the shared model was evaluated with for it (time, commanded axis positions,
+    /// velocities and approach directions, the true temperatures at the thermocouples' locations
+    /// and the timeline of the lagged terms, the station's air of the reading, time since
+    /// power-on, load; a stationing point's gravity and setup; `point` and `tracker_range` as the
+    /// model set them). `None` for other samples.
     pub fn samples_with_signals(&self) -> SignalsStream<'_> {
-        SignalsStream { engine: Engine::new(self) }
+        SignalsStream { source: Source::new(self) }
     }
 
     /// True parameters of the cell.
@@ -156,60 +170,93 @@ impl Simulation {
     }
 }
 
+/// Where a stream's samples come from: the periodic channels and dwells of a program, or a
+/// stationing program's waypoints ([`crate::stationing_run`]).
+enum Source<'a> {
+    Engine(Box<Engine<'a>>),
+    Stationing(Box<StationingStream<'a>>),
+}
+
+impl<'a> Source<'a> {
+    fn new(sim: &'a Simulation) -> Self {
+        match &sim.cell.stationing {
+            Some(st) => Source::Stationing(Box::new(StationingStream::new(sim, st))),
+            None => Source::Engine(Box::new(Engine::new(sim))),
+        }
+    }
+
+    /// The next sample, its truth and (when `signals`) the model's signals of a reading.
+    fn next(&mut self, signals: bool) -> Option<(Sample, SampleTruth, Option<Signals>)> {
+        match self {
+            Source::Engine(e) => {
+                let (sample, truth) = e.next_event()?;
+                let s = (signals && matches!(sample, Sample::Tracker(_))).then(|| e.signals.clone());
+                Some((sample, truth, s))
+            }
+            Source::Stationing(st) => st.next_event(),
+        }
+    }
+
+    fn error(&self) -> Option<&PhysicsError> {
+        match self {
+            Source::Engine(e) => e.error.as_ref(),
+            Source::Stationing(st) => st.error.as_ref(),
+        }
+    }
+}
+
 /// Iterator over samples (truth dropped). If a term fails mid-stream (not expected after
 /// [`Simulation::new`]'s check) the stream ends and [`SampleStream::error`] says why.
 pub struct SampleStream<'a> {
-    engine: Engine<'a>,
+    source: Source<'a>,
 }
 
 impl SampleStream<'_> {
     pub fn error(&self) -> Option<&PhysicsError> {
-        self.engine.error.as_ref()
+        self.source.error()
     }
 }
 
 impl Iterator for SampleStream<'_> {
     type Item = Sample;
     fn next(&mut self) -> Option<Sample> {
-        self.engine.next_event().map(|(s, _)| s)
+        self.source.next(false).map(|(s, _, _)| s)
     }
 }
 
 /// Iterator over (sample, truth).
 pub struct TruthStream<'a> {
-    engine: Engine<'a>,
+    source: Source<'a>,
 }
 
 impl TruthStream<'_> {
     pub fn error(&self) -> Option<&PhysicsError> {
-        self.engine.error.as_ref()
+        self.source.error()
     }
 }
 
 impl Iterator for TruthStream<'_> {
     type Item = (Sample, SampleTruth);
     fn next(&mut self) -> Option<(Sample, SampleTruth)> {
-        self.engine.next_event()
+        self.source.next(false).map(|(s, t, _)| (s, t))
     }
 }
 
-/// Iterator over (sample, the model's signals of a tracker reading).
+/// Iterator over (sample, the model's signals of a tracker reading or a stationing point).
 pub struct SignalsStream<'a> {
-    engine: Engine<'a>,
+    source: Source<'a>,
 }
 
 impl SignalsStream<'_> {
     pub fn error(&self) -> Option<&PhysicsError> {
-        self.engine.error.as_ref()
+        self.source.error()
     }
 }
 
 impl Iterator for SignalsStream<'_> {
     type Item = (Sample, Option<Signals>);
     fn next(&mut self) -> Option<(Sample, Option<Signals>)> {
-        let (sample, _) = self.engine.next_event()?;
-        let signals = matches!(sample, Sample::Tracker(_)).then(|| self.engine.signals.clone());
-        Some((sample, signals))
+        self.source.next(true).map(|(s, _, signals)| (s, signals))
     }
 }
 

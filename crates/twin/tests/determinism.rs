@@ -42,6 +42,7 @@ fn stream_is_time_ordered_and_restartable() {
         Sample::MachineState(_) => 2,
         Sample::ProbeHit(_) => 3,
         Sample::CameraFrameRequest(_) => 4,
+        Sample::StationPoint(_) | Sample::Acceleration(_) => panic!("no stationing program in this cell"),
     };
     let mut count = [0usize; 5];
     for s in sim.samples() {

@@ -45,6 +45,7 @@ fn examples_simulate_every_configured_stream_deterministically() {
                     frames += 1;
                 }
                 Sample::ProbeHit(_) => panic!("{f}: no probe configured"),
+                Sample::StationPoint(_) | Sample::Acceleration(_) => panic!("{f}: no stationing program"),
             }
         }
         assert_eq!((tracker, temps, states), (900, 180, 1800), "{f}");

@@ -7,7 +7,8 @@ use metrocell_msgs::RosMessage;
 use metrocell_node::node_directory::guid_prefix;
 use metrocell_node::{qos, Diagnostics, MetrocellNode, NodeDirectory, RawPublisher};
 use metrocell_simulation::{CameraIntrinsics, FrameRendering, MessageConverter, MessageStream, QosKind, TopicSpec};
-use metrocell_twin::{Cell, Simulation};
+use metrocell_simulation::cell_options::load_cell;
+use metrocell_twin::Simulation;
 use ros2_client::qos::History;
 
 use crate::parameters::Settings;
@@ -61,7 +62,7 @@ pub struct LiveSim {
 
 impl LiveSim {
     pub fn new(node: &mut MetrocellNode, s: &Settings) -> Result<LiveSim, Box<dyn std::error::Error>> {
-        let cell = Cell::from_path(&s.cell)?;
+        let cell = load_cell(std::path::Path::new(&s.cell), s.ground_tilt)?;
         // Camera frame requests are rendered as images on /camera/image_raw, like the bag writer.
         let mut converter = MessageConverter::new(&cell, s.start_ns, CameraIntrinsics::default())?;
         if s.camera_images {
@@ -173,7 +174,7 @@ impl LiveSim {
             let offset = run as f64 * s.duration;
             let mut converter = self.converter.clone();
             converter.start_ns = metrocell_simulation::sim_time::stamp_ns(s.start_ns, offset);
-            let sim = Simulation::new(Cell::from_path(&s.cell)?, s.duration, s.seed)?;
+            let sim = Simulation::new(load_cell(std::path::Path::new(&s.cell), s.ground_tilt)?, s.duration, s.seed)?;
             let mut stream = MessageStream::new(&sim, &converter, None);
             for m in stream.by_ref() {
                 if !self.wait_until(node, s, offset + m.t)? {

@@ -1,16 +1,18 @@
 //! The live node over DDS: run `metrocell-sim` on the quick demo cell at 15x real time and
 //! check, with typed subscriptions in this process, that temperatures and tracker
 //! measurements arrive with plausible values, that /clock advances in simulated time from the
-//! configured epoch, and that the node exits cleanly at the end of the run and on SIGTERM.
+//! configured epoch, and that the node exits cleanly at the end of the run and on SIGTERM; and a
+//! stationing program (the mobile manipulator) live on the import layout's topics, its ground
+//! tilted by the node's `ground_tilt` parameter, its duration its one pass (`duration:=auto`).
 //! Must run in a private network namespace: `tests/isolated cargo test -p metrocell-sim-node`.
 
 use std::path::PathBuf;
 use std::process::{Child, Command, Stdio};
 use std::time::{Duration, Instant};
 
-use metrocell_msgs::msg::TrackerMeasurement;
+use metrocell_msgs::msg::{MeasuredPoint, TrackerMeasurement};
 use metrocell_msgs::rosgraph_msgs::msg::Clock;
-use metrocell_msgs::sensor_msgs::msg::Temperature;
+use metrocell_msgs::sensor_msgs::msg::{Imu, Temperature};
 use metrocell_node::{qos, testing::require_isolated_network, DdsEnvironment, MetrocellNode};
 
 /// 2026-01-05T06:00:00Z, the default start of simulated time.
@@ -43,10 +45,15 @@ fn wait_exit(child: &mut Child, timeout: Duration) -> Option<std::process::ExitS
 }
 
 fn listener(name: &str) -> MetrocellNode {
+    listener_on(name, 0)
+}
+
+/// A listening node on `domain`, whatever the environment says, to meet the node started with
+/// that ROS_DOMAIN_ID.
+fn listener_on(name: &str, domain: u32) -> MetrocellNode {
     require_isolated_network();
-    // Domain 0, whatever the environment says, to meet the node started with ROS_DOMAIN_ID=0.
     let (b, _) = MetrocellNode::builder(name).handle_signals(false).args(["test"]).unwrap();
-    let env = DdsEnvironment::from_lookup(|k| if k == "ROS_DOMAIN_ID" { Some("0".into()) } else { std::env::var(k).ok() }).unwrap();
+    let env = DdsEnvironment::from_lookup(|k| if k == "ROS_DOMAIN_ID" { Some(domain.to_string()) } else { std::env::var(k).ok() }).unwrap();
     b.environment(env).build().unwrap()
 }
 
@@ -146,4 +153,38 @@ fn missing_cell_is_a_clear_error() {
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("/nonexistent/cell.yaml"), "{err}");
+}
+
+#[test]
+fn a_stationing_program_publishes_check_points_and_accelerometers_on_its_tilted_ground() {
+    let mut node = listener_on("sim_station_listener", 42);
+    let check = node.subscription::<MeasuredPoint>("/check_points", qos::reliable()).unwrap();
+    let imu = node.subscription::<Imu>("/imu/base", qos::reliable()).unwrap();
+    let cell = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../crates/twin/examples/cells/mobile_manipulator.yaml").display().to_string();
+    // the program's pass (~42 min) at 1000x, after 2 s for discovery
+    let mut child = spawn(42, &[&format!("cell:={cell}"), "duration:=auto", "ground_tilt:=0,15mrad", "speed:=1000", "start_delay:=2.0"]);
+    let (mut points, mut forces) = (Vec::new(), Vec::new());
+    let started = Instant::now();
+    let mut status = None;
+    while started.elapsed() < Duration::from_secs(60) && status.is_none() {
+        while let Ok(Some((p, _))) = check.take() {
+            points.push(p);
+        }
+        while let Ok(Some((m, _))) = imu.take() {
+            forces.push(m.linear_acceleration);
+        }
+        status = child.try_wait().unwrap();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    std::thread::sleep(Duration::from_millis(200));
+    while let Ok(Some((p, _))) = check.take() {
+        points.push(p);
+    }
+    let status = status.or_else(|| wait_exit(&mut child, Duration::from_secs(1)));
+    assert!(status.is_some_and(|s| s.success()), "node did not finish its pass cleanly: {status:?}");
+    eprintln!("received {} check points, {} base accelerometer readings", points.len(), forces.len());
+    assert!(points.len() >= 300 && points.len() <= 360, "{} of the 360 check points", points.len());
+    assert!(points.iter().all(|p| p.header.frame_id.starts_with("total_station@S") && p.point_id.starts_with('G')));
+    // 15 mrad nose down: the base sensor's specific force leans to −x by g·sin(15 mrad)
+    assert!(!forces.is_empty() && forces.iter().all(|f| (f.x + 9.80665 * 0.015).abs() < 0.06), "{:?}", forces.first());
 }

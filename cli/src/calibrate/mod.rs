@@ -133,6 +133,11 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<i32> {
     let iterations = result.solution.iterations;
     eprintln!("fitted in {:.1} s ({iterations} iteration{}; {})", started.elapsed().as_secs_f64(), if iterations == 1 { "" } else { "s" }, result.solution.termination.in_words());
     let mut lines = summary_lines(&result, &records);
+    if a.refit.is_some() {
+        // the kept physics is taken as exact here: its own σ (the fitted file's `uncertainty:`)
+        // would widen the placements' and the predictions' uncertainty, and is not propagated
+        lines.push("note: the placements' σ above treat the kept physics as exact (its own uncertainty, in the model file's `uncertainty:` section, is not propagated into them)".to_string());
+    }
     lines.extend(short.iter().cloned());
     if let Some(c) = &check {
         lines.extend(placements::check_lines(c));

@@ -32,11 +32,67 @@ impl Drop for KillOnDrop {
     }
 }
 
-/// Set parameter `name` of the node `target` (fully qualified, e.g. `/tracker`) through that
-/// node's `rcl_interfaces/srv/SetParameters` service, from `client_node` (another participant),
-/// as `ros2 param set` does. Resends until the service answers or `timeout` passes (a request
-/// written before discovery matched the service is lost). `Err`: the node refused (its reason) or
-/// did not answer.
+/// A client of one node's `rcl_interfaces/srv/SetParameters` service (as `ros2 param set` uses),
+/// kept for several requests: a ROS 2 service answers on a topic of its own, and an answer written
+/// before the server has discovered the client's reader of it is lost. The first answer proves
+/// both directions matched; a new client per request would race discovery again each time (seen
+/// under load: the second of two requests from fresh clients unanswered for 20 s).
+pub struct RemoteParameterClient {
+    target: String,
+    client: ros2_client::Client<ros2_client::rcl_interfaces::SetParametersRequest, ros2_client::rcl_interfaces::SetParametersResponse>,
+}
+
+impl RemoteParameterClient {
+    /// A client, on `client_node` (another participant), of the node `target` (fully qualified,
+    /// e.g. `/tracker`).
+    pub fn new(client_node: &mut crate::MetrocellNode, target: &str) -> Result<Self, String> {
+        use ros2_client::rcl_interfaces::{SetParametersRequest, SetParametersResponse};
+        let service = ros2_client::Name::new(target, "set_parameters").map_err(|e| format!("service name {target}/set_parameters: {e:?}"))?;
+        let qos = crate::qos::reliable();
+        let client = client_node
+            .ros_node()
+            .create_client::<SetParametersRequest, SetParametersResponse>(
+                ros2_client::ServiceMapping::Enhanced,
+                &service,
+                &ros2_client::ServiceTypeName::new("rcl_interfaces", "SetParameters"),
+                qos.clone(),
+                qos,
+            )
+            .map_err(|e| format!("client of {target}/set_parameters: {e:?}"))?;
+        Ok(Self { target: target.to_string(), client })
+    }
+
+    /// Set parameter `name` to `value`. `Err`: the node refused (its reason) or did not answer
+    /// within `timeout`.
+    pub fn set(&mut self, client_node: &mut crate::MetrocellNode, name: &str, value: crate::ParamValue, timeout: std::time::Duration) -> Result<(), String> {
+        use ros2_client::parameters::raw;
+        use ros2_client::rcl_interfaces::SetParametersRequest;
+        let target = &self.target;
+        let request = SetParametersRequest { parameter: vec![raw::Parameter { name: name.to_string(), value: raw::ParameterValue::from(value.to_ros()) }] };
+        let deadline = std::time::Instant::now() + timeout;
+        // The request is sent once, when the service is matched (reliable from then on). Resending
+        // on a slow answer would set the parameter twice, and a node that acts on each set (then
+        // resets it, like the tracker's `reregister`) would act twice.
+        if block_on_within(self.client.wait_for_service(client_node.ros_node()), timeout).is_none() {
+            return Err(format!("no {target}/set_parameters service matched within {timeout:?}"));
+        }
+        let id = self.client.send_request(request).map_err(|e| format!("request to {target}/set_parameters: {e:?}"))?;
+        while std::time::Instant::now() < deadline {
+            match self.client.receive_response() {
+                Ok(Some((rid, response))) if rid == id => {
+                    let r = response.results.first().ok_or("an empty SetParameters response")?;
+                    return if r.successful { Ok(()) } else { Err(r.reason.clone()) };
+                }
+                Ok(_) => std::thread::sleep(std::time::Duration::from_millis(10)),
+                Err(e) => return Err(format!("response from {target}/set_parameters: {e:?}")),
+            }
+        }
+        Err(format!("no answer from {target}/set_parameters within {timeout:?}"))
+    }
+}
+
+/// Set parameter `name` of the node `target` once, through a [`RemoteParameterClient`] made for
+/// it (several requests: keep one client). `Err`: the node refused (its reason) or did not answer.
 pub fn set_remote_parameter(
     client_node: &mut crate::MetrocellNode,
     target: &str,
@@ -44,40 +100,7 @@ pub fn set_remote_parameter(
     value: crate::ParamValue,
     timeout: std::time::Duration,
 ) -> Result<(), String> {
-    use ros2_client::parameters::raw;
-    use ros2_client::rcl_interfaces::{SetParametersRequest, SetParametersResponse};
-    let service = ros2_client::Name::new(target, "set_parameters").map_err(|e| format!("service name {target}/set_parameters: {e:?}"))?;
-    let qos = crate::qos::reliable();
-    let client = client_node
-        .ros_node()
-        .create_client::<SetParametersRequest, SetParametersResponse>(
-            ros2_client::ServiceMapping::Enhanced,
-            &service,
-            &ros2_client::ServiceTypeName::new("rcl_interfaces", "SetParameters"),
-            qos.clone(),
-            qos,
-        )
-        .map_err(|e| format!("client of {target}/set_parameters: {e:?}"))?;
-    let request = SetParametersRequest { parameter: vec![raw::Parameter { name: name.to_string(), value: raw::ParameterValue::from(value.to_ros()) }] };
-    let deadline = std::time::Instant::now() + timeout;
-    // The request is sent once, when the service is matched (reliable from then on). Resending
-    // on a slow answer would set the parameter twice, and a node that acts on each set (then
-    // resets it, like the tracker's `reregister`) would act twice.
-    if block_on_within(client.wait_for_service(client_node.ros_node()), timeout).is_none() {
-        return Err(format!("no {target}/set_parameters service matched within {timeout:?}"));
-    }
-    let id = client.send_request(request).map_err(|e| format!("request to {target}/set_parameters: {e:?}"))?;
-    while std::time::Instant::now() < deadline {
-        match client.receive_response() {
-            Ok(Some((rid, response))) if rid == id => {
-                let r = response.results.first().ok_or("an empty SetParameters response")?;
-                return if r.successful { Ok(()) } else { Err(r.reason.clone()) };
-            }
-            Ok(_) => std::thread::sleep(std::time::Duration::from_millis(10)),
-            Err(e) => return Err(format!("response from {target}/set_parameters: {e:?}")),
-        }
-    }
-    Err(format!("no answer from {target}/set_parameters within {timeout:?}"))
+    RemoteParameterClient::new(client_node, target)?.set(client_node, name, value, timeout)
 }
 
 /// Run `f` to completion on this thread, or give up after `timeout` (None).

@@ -18,7 +18,7 @@ use metrocell_msgs::geometry_msgs::msg::PoseWithCovarianceStamped;
 use metrocell_msgs::msg::TrackerMeasurement;
 use metrocell_msgs::sensor_msgs::msg::JointState;
 use metrocell_msgs::tf2_msgs::msg::TFMessage;
-use metrocell_node::testing::{set_remote_parameter, KillOnDrop};
+use metrocell_node::testing::{KillOnDrop, RemoteParameterClient};
 use metrocell_node::{qos, MetrocellNode};
 
 mod common;
@@ -77,6 +77,9 @@ fn setting_the_reregister_parameter_through_the_service_fits_the_pose_again() {
             }
         }
     };
+    // one client for both requests (crates/node testing.rs: a fresh client per request races
+    // the service's discovery of its answer reader)
+    let mut parameters = RemoteParameterClient::new(&mut peer, "/tracker").expect("a client of /tracker/set_parameters");
     let mut set_at = None;
     for (k, i) in inputs.iter().enumerate() {
         match i {
@@ -91,7 +94,7 @@ fn setting_the_reregister_parameter_through_the_service_fits_the_pose_again() {
         collect(&mut poses, &mut tfs, &mut counter);
         if set_at.is_none() && !poses.is_empty() {
             // registered from the first 4 targets: the tracker "was moved"
-            set_remote_parameter(&mut peer, "/tracker", "reregister", true.into(), Duration::from_secs(20)).expect("set reregister through the service");
+            parameters.set(&mut peer, "reregister", true.into(), Duration::from_secs(20)).expect("set reregister through the service");
             set_at = Some(k);
         }
     }
@@ -112,7 +115,7 @@ fn setting_the_reregister_parameter_through_the_service_fits_the_pose_again() {
     assert!(log_text.contains("re-registering the tracker pose (parameter reregister set true)"), "{log_text}");
     // the node reset the parameter: setting it true again is a change, and is acted on again
     let deadline = Instant::now() + Duration::from_secs(10);
-    set_remote_parameter(&mut peer, "/tracker", "reregister", true.into(), Duration::from_secs(20)).unwrap();
+    parameters.set(&mut peer, "reregister", true.into(), Duration::from_secs(20)).unwrap();
     while counter.as_deref() != Some("2") && Instant::now() < deadline {
         collect(&mut poses, &mut tfs, &mut counter);
         std::thread::sleep(Duration::from_millis(20));

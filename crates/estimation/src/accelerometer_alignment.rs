@@ -33,7 +33,7 @@
 
 use metrocell_model::machine::SerialArm;
 use metrocell_model::ForwardModel;
-use metrocell_physics::gravity::STANDARD_GRAVITY;
+use metrocell_physics::gravity::{gravity_in_tilted_base, tilt_of_up};
 use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
 
 use crate::records::MeasurementRecord;
@@ -64,20 +64,7 @@ impl AccelerometerAlignment {
 /// The tilt (roll, pitch) a specific force `f` implies, its sensor turned into the base by
 /// `base_from_sensor` (module doc); None for a zero or non-finite reading.
 pub fn tilt_from_specific_force(base_from_sensor: &Matrix3<f64>, f: &Vector3<f64>) -> Option<Vector2<f64>> {
-    let up = base_from_sensor * f;
-    let n = up.norm();
-    if !(n > 0.0 && n.is_finite()) {
-        return None;
-    }
-    let u = up / n;
-    Some(Vector2::new(u.y.clamp(-1.0, 1.0).asin(), (-u.x).atan2(u.z)))
-}
-
-/// Gravity in the base frame for a base tilted by (roll, pitch): (Rx(roll)·Ry(pitch))ᵀ·(0, 0, −g).
-pub fn gravity_of_tilt(tilt: &Vector2<f64>) -> Vector3<f64> {
-    let (sr, cr) = tilt.x.sin_cos();
-    let (sp, cp) = tilt.y.sin_cos();
-    -STANDARD_GRAVITY * Vector3::new(-sp * cr, sr, cp * cr)
+    tilt_of_up(&(base_from_sensor * f)).map(|(r, p)| Vector2::new(r, p))
 }
 
 /// The alignment of the arm's base accelerometer from the records' readings and the instrument's
@@ -103,7 +90,7 @@ pub fn prediction_effect(model: &ForwardModel, params: &[f64], records: &[Measur
         .map(|r| {
             let mut r = r.clone();
             if r.signals.gravity.is_some() {
-                r.signals.gravity = Some(gravity_of_tilt(&tilt));
+                r.signals.gravity = Some(gravity_in_tilted_base(tilt.x, tilt.y));
             }
             r
         })
@@ -123,10 +110,10 @@ mod tests {
         for (r, p) in [(0.0, 0.0), (0.012, -0.004), (-0.03, 0.02)] {
             let level_from_base = rx(r) * ry(p);
             // specific force = −gravity, in the base frame, of a sensor aligned with the base
-            let f = -(level_from_base.transpose() * Vector3::new(0.0, 0.0, -STANDARD_GRAVITY));
+            let f = -(level_from_base.transpose() * Vector3::new(0.0, 0.0, -metrocell_physics::gravity::STANDARD_GRAVITY));
             let t = tilt_from_specific_force(&Matrix3::identity(), &f).unwrap();
             assert!((t.x - r).abs() < 1e-12 && (t.y - p).abs() < 1e-12, "{t:?} vs ({r}, {p})");
-            assert!((gravity_of_tilt(&Vector2::new(r, p)) + f).norm() < 1e-12);
+            assert!((gravity_in_tilted_base(r, p) + f).norm() < 1e-12);
         }
     }
 
@@ -134,7 +121,7 @@ mod tests {
     fn a_sensor_turned_on_its_mount_reads_through_its_placement() {
         // mounted turned +90° about z: its x is the base's y
         let base_from_sensor = metrocell_kinematics::transform::rz(std::f64::consts::FRAC_PI_2);
-        let f_base = -gravity_of_tilt(&Vector2::new(0.01, -0.02));
+        let f_base = -gravity_in_tilted_base(0.01, -0.02);
         let f_sensor = base_from_sensor.transpose() * f_base;
         let t = tilt_from_specific_force(&base_from_sensor, &f_sensor).unwrap();
         assert!((t - Vector2::new(0.01, -0.02)).norm() < 1e-12);

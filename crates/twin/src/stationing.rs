@@ -32,7 +32,7 @@ use std::path::Path;
 use metrocell_kinematics::urdf_link_placement::{link_rotation, read_urdf_file, LinkRotation};
 use metrocell_model::{InstrumentPose, MachineGeometry, MachineKinematics};
 use metrocell_physics::config::ConfigValue;
-use metrocell_physics::gravity::STANDARD_GRAVITY;
+use metrocell_physics::gravity::gravity_in_tilted_base;
 use metrocell_physics::model::TermModel;
 use metrocell_physics::{configure, TermConfig};
 use metrocell_kinematics::transform::{rx, ry};
@@ -130,7 +130,7 @@ impl Stationing {
 
     /// Gravity in the base frame, g_B = R_tiltᵀ·(0, 0, −g) (m/s²).
     pub fn gravity(&self) -> Vector3<f64> {
-        self.levelling().transpose() * Vector3::new(0.0, 0.0, -STANDARD_GRAVITY)
+        gravity_in_tilted_base(self.ground_tilt[0], self.ground_tilt[1])
     }
 
     /// Each placement's true pose in the levelled frame: its translation and yaw, and a residual

@@ -31,6 +31,26 @@ use crate::error::PhysicsError;
 /// Standard gravity, m/s² (the magnitude used when only a direction is known).
 pub const STANDARD_GRAVITY: f64 = 9.80665;
 
+/// Gravity in the frame of a base tilted by (roll, pitch) from level, in `base_tilt`'s convention
+/// (P_level = Rx(roll)·Ry(pitch)·P): g_B = (Rx·Ry)ᵀ·(0, 0, −g) = −g·(−sin p·cos r, sin r, cos p·cos r).
+pub fn gravity_in_tilted_base(roll: f64, pitch: f64) -> nalgebra::Vector3<f64> {
+    let (sr, cr) = roll.sin_cos();
+    let (sp, cp) = pitch.sin_cos();
+    -STANDARD_GRAVITY * nalgebra::Vector3::new(-sp * cr, sr, cp * cr)
+}
+
+/// The inverse of [`gravity_in_tilted_base`]: the (roll, pitch) whose "up" in the base is the
+/// direction `up` (any length > 0): roll = asin u_y, pitch = atan2(−u_x, u_z). None for a zero or
+/// non-finite vector.
+pub fn tilt_of_up(up: &nalgebra::Vector3<f64>) -> Option<(f64, f64)> {
+    let n = up.norm();
+    if !(n > 0.0 && n.is_finite()) {
+        return None;
+    }
+    let u = up / n;
+    Some((u.y.clamp(-1.0, 1.0).asin(), (-u.x).atan2(u.z)))
+}
+
 /// The joints a term acts on (option `joints`: a list of the chain's joint names).
 pub(crate) fn joint_names(o: &Options) -> Result<Vec<String>, PhysicsError> {
     let items = o.get_list("joints")?.ok_or_else(|| o.bad("joints", "is required: the names of the joints it acts on, as the robot's URDF names them (e.g. [shoulder_lift, elbow])"))?;

@@ -18,6 +18,7 @@ fn main() {
         Ok(code) => code,
         Err(e) => panic!("metrocell_msgs: {e}"),
     };
-    let out = Path::new(&std::env::var("OUT_DIR").expect("OUT_DIR set by cargo")).join("metrocell_msgs.rs");
+    let out = Path::new(&std::env::var("OUT_DIR").expect("OUT_DIR set by cargo"))
+        .join("metrocell_msgs.rs");
     std::fs::write(&out, code).unwrap_or_else(|e| panic!("writing {}: {e}", out.display()));
 }

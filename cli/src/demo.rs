@@ -28,8 +28,10 @@ use metrocell_node::{qos, MetrocellNode};
 mod camera_summary;
 
 #[derive(clap::Args)]
-#[command(after_help = "Runs inside a private network namespace when started as\n  \
-tests/isolated target/release/metrocell demo\n\nExamples:\n  metrocell demo\n  metrocell demo --duration 10800 --speed 30 --output /tmp/demo_bag\n  metrocell demo --quick")]
+#[command(
+    after_help = "Runs inside a private network namespace when started as\n  \
+tests/isolated target/release/metrocell demo\n\nExamples:\n  metrocell demo\n  metrocell demo --duration 10800 --speed 30 --output /tmp/demo_bag\n  metrocell demo --quick"
+)]
 pub struct DemoArgs {
     /// Directory for the diagnosis report written at the end (default: the bag's path + `_report`)
     #[arg(long, value_name = "DIR")]
@@ -73,7 +75,9 @@ fn share_dir() -> Option<PathBuf> {
     let exe = std::env::current_exe().ok()?;
     let mut candidates: Vec<PathBuf> = exe.ancestors().map(Path::to_path_buf).collect();
     candidates.extend(std::env::current_dir().ok());
-    candidates.into_iter().find(|d| d.join("launch-configs/demo.launch.yaml").exists())
+    candidates
+        .into_iter()
+        .find(|d| d.join("launch-configs/demo.launch.yaml").exists())
 }
 
 struct Watch {
@@ -131,7 +135,10 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
         ("dashboard_port".to_string(), dashboard_port.to_string()),
         ("foxglove_port".to_string(), foxglove_port.to_string()),
         // the live diagnose node: about five diagnoses over the run, each of what it has seen so far
-        ("diagnose_every".to_string(), (args.duration / 5.0).max(600.0).to_string()),
+        (
+            "diagnose_every".to_string(),
+            (args.duration / 5.0).max(600.0).to_string(),
+        ),
     ];
     let cell = match &args.cell {
         Some(cell) => std::fs::canonicalize(cell)?,
@@ -149,10 +156,15 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
     let dashboard = format!("http://127.0.0.1:{dashboard_port}");
     sayln!("live dashboard while it runs: {dashboard} (Foxglove WebSocket ws://127.0.0.1:{foxglove_port})");
 
-    let options = metrocell_launch::LaunchOptions { share_dir: Some(share.clone()), ..Default::default() };
+    let options = metrocell_launch::LaunchOptions {
+        share_dir: Some(share.clone()),
+        ..Default::default()
+    };
     let shutdown = options.shutdown.clone();
     let launch_file = share.join("launch-configs/demo.launch.yaml");
-    let launcher = std::thread::spawn(move || metrocell_launch::run_launch(&launch_file, &launch_args, &options));
+    let launcher = std::thread::spawn(move || {
+        metrocell_launch::run_launch(&launch_file, &launch_args, &options)
+    });
 
     let watch = watch_cell(&args, &shutdown, &launcher)?;
     // The watch has waited until the recorder holds every message of the twin. A moment more lets
@@ -160,7 +172,9 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
     // then stop every node.
     std::thread::sleep(Duration::from_millis(800));
     shutdown.request();
-    let outcome = launcher.join().map_err(|_| anyhow::anyhow!("launcher thread panicked"))??;
+    let outcome = launcher
+        .join()
+        .map_err(|_| anyhow::anyhow!("launcher thread panicked"))??;
 
     sayln!();
     sayln!(
@@ -170,7 +184,11 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
         watch.tracker_readings,
         watch.beam_breaks,
         match watch.last_strain {
-            Some((e, var)) => format!(", X-scale strain (configured α) {:+.2} ± {:.2} µm/m", e * 1e6, var.sqrt() * 1e6),
+            Some((e, var)) => format!(
+                ", X-scale strain (configured α) {:+.2} ± {:.2} µm/m",
+                e * 1e6,
+                var.sqrt() * 1e6
+            ),
             None => String::new(),
         }
     );
@@ -180,18 +198,39 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
         sayln!("estimated online: no error model from the estimator (too few measured points)");
     }
     if !watch.live_findings.is_empty() {
-        sayln!("the live diagnose node found, while the cell ran: {}", watch.live_findings.values().cloned().collect::<Vec<_>>().join("; "));
+        sayln!(
+            "the live diagnose node found, while the cell ran: {}",
+            watch
+                .live_findings
+                .values()
+                .cloned()
+                .collect::<Vec<_>>()
+                .join("; ")
+        );
     } else {
         sayln!("the live diagnose node found nothing while the cell ran (it diagnoses every fifth of the run)");
     }
-    sayln!("the dashboard was at {dashboard}; the bag is at {}", output.display());
+    sayln!(
+        "the dashboard was at {dashboard}; the bag is at {}",
+        output.display()
+    );
     match metrocell_bag::info(&output) {
         Ok(info) => sayln!("\nrecorded bag:\n{info}"),
         Err(e) => eprintln!("metrocell demo: the recorded bag cannot be read: {e}"),
     }
     let complete = check_recording(&output, &watch);
     match camera_summary::summarise(&output) {
-        Ok(s) => sayln!("{}", camera_summary::describe(&s, watch.twin_published.get(camera_summary::IMAGE_TOPIC).copied(), &watch.fiducial)),
+        Ok(s) => sayln!(
+            "{}",
+            camera_summary::describe(
+                &s,
+                watch
+                    .twin_published
+                    .get(camera_summary::IMAGE_TOPIC)
+                    .copied(),
+                &watch.fiducial
+            )
+        ),
         Err(e) => sayln!("camera: the frames and detections in the bag cannot be read: {e:#}"),
     }
     diagnose_recording(&share, &cell, &output, args.report.clone());
@@ -233,12 +272,29 @@ fn diagnose_recording(share: &Path, cell: &Path, bag: &Path, report: Option<Path
     let model = share.join(DEMO_MODEL);
     let report = report.unwrap_or_else(|| PathBuf::from(format!("{}_report", bag.display())));
     sayln!("\ndiagnosing the recording (the tracker's readings) against the demo's declared model ({DEMO_MODEL}) …");
-    let outcome = crate::diagnose_command::diagnose_bags_from(&model, &[bag.to_path_buf()], &metrocell_diagnose::DiagnoseOptions::default(), metrocell_estimation::PointSource::TrackerMeasurements)
-        .and_then(|(m, d)| crate::diagnose_command::write_report(&report, &m, &d, "metrocell demo: diagnosis of the recorded shift").map(|index| (d, index)));
+    let outcome = crate::diagnose_command::diagnose_bags_from(
+        &model,
+        &[bag.to_path_buf()],
+        &metrocell_diagnose::DiagnoseOptions::default(),
+        metrocell_estimation::PointSource::TrackerMeasurements,
+    )
+    .and_then(|(m, d)| {
+        crate::diagnose_command::write_report(
+            &report,
+            &m,
+            &d,
+            "metrocell demo: diagnosis of the recorded shift",
+        )
+        .map(|index| (d, index))
+    });
     match outcome {
         Ok((d, index)) => {
             say!("{}", crate::diagnose_command::summary_text(&d));
-            sayln!("report: {} (the model with what was found added: {})", index.display(), report.join("model.yaml").display());
+            sayln!(
+                "report: {} (the model with what was found added: {})",
+                index.display(),
+                report.join("model.yaml").display()
+            );
             let found: Vec<String> = d.report.findings.iter().map(|f| f.term.clone()).collect();
             match concealed_effects(cell, &model) {
                 Ok(concealed) => sayln!("{}", compare_findings(&concealed, &found)),
@@ -254,14 +310,26 @@ fn diagnose_recording(share: &Path, cell: &Path, bag: &Path, report: Option<Path
 /// model gives it no warm-up. (Instrument noise and biases beyond these are not counted.)
 pub fn concealed_effects(cell: &Path, model: &Path) -> anyhow::Result<Vec<String>> {
     let read = |p: &Path| -> anyhow::Result<serde_yaml::Value> {
-        let text = std::fs::read_to_string(p).map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
+        let text =
+            std::fs::read_to_string(p).map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))?;
         serde_yaml::from_str(&text).map_err(|e| anyhow::anyhow!("{}: {e}", p.display()))
     };
     let (cell, model) = (read(cell)?, read(model)?);
-    let ids = |v: &serde_yaml::Value| -> Vec<String> { v["terms"].as_sequence().map_or(Vec::new(), |t| t.iter().filter_map(|t| t["id"].as_str().map(str::to_string)).collect()) };
+    let ids = |v: &serde_yaml::Value| -> Vec<String> {
+        v["terms"].as_sequence().map_or(Vec::new(), |t| {
+            t.iter()
+                .filter_map(|t| t["id"].as_str().map(str::to_string))
+                .collect()
+        })
+    };
     let declared = ids(&model);
-    let mut concealed: Vec<String> = ids(&cell).into_iter().filter(|id| !declared.contains(id)).collect();
-    if !cell["sensors"]["tracker"]["warmup"].is_null() && model["sensors"]["tracker"]["warmup"].is_null() {
+    let mut concealed: Vec<String> = ids(&cell)
+        .into_iter()
+        .filter(|id| !declared.contains(id))
+        .collect();
+    if !cell["sensors"]["tracker"]["warmup"].is_null()
+        && model["sensors"]["tracker"]["warmup"].is_null()
+    {
         concealed.push("tracker_warmup".into());
     }
     concealed.sort();
@@ -275,14 +343,33 @@ fn compare_findings(concealed: &[String], found: &[String]) -> String {
     let missed: Vec<&String> = concealed.iter().filter(|c| !found.contains(c)).collect();
     let extra: Vec<&String> = found.iter().filter(|f| !concealed.contains(f)).collect();
     let list = |v: &[&String]| v.iter().map(|s| s.as_str()).collect::<Vec<_>>().join(", ");
-    let mut s = format!("the cell concealed {} effect(s) from the declared model ({}): ", concealed.len(), concealed.join(", "));
+    let mut s = format!(
+        "the cell concealed {} effect(s) from the declared model ({}): ",
+        concealed.len(),
+        concealed.join(", ")
+    );
     if missed.is_empty() {
-        s.push_str(&format!("diagnose named {}", if named.len() == 1 { "it".to_string() } else { format!("all {}", named.len()) }));
+        s.push_str(&format!(
+            "diagnose named {}",
+            if named.len() == 1 {
+                "it".to_string()
+            } else {
+                format!("all {}", named.len())
+            }
+        ));
     } else {
-        s.push_str(&format!("diagnose named {} of them ({}) and missed {}", named.len(), list(&named), list(&missed)));
+        s.push_str(&format!(
+            "diagnose named {} of them ({}) and missed {}",
+            named.len(),
+            list(&named),
+            list(&missed)
+        ));
     }
     if !extra.is_empty() {
-        s.push_str(&format!("; it also named {}, which the cell does not conceal", list(&extra)));
+        s.push_str(&format!(
+            "; it also named {}, which the cell does not conceal",
+            list(&extra)
+        ));
     }
     s
 }
@@ -307,7 +394,11 @@ fn check_recording(output: &Path, watch: &Watch) -> bool {
         return false;
     }
     let recorded: BTreeMap<String, u64> = match metrocell_bag::BagReader::open(output) {
-        Ok(r) => r.topics().iter().map(|t| (t.name.clone(), t.message_count)).collect(),
+        Ok(r) => r
+            .topics()
+            .iter()
+            .map(|t| (t.name.clone(), t.message_count))
+            .collect(),
         Err(e) => {
             sayln!("recording check: the bag cannot be read: {e}");
             return false;
@@ -331,24 +422,50 @@ fn check_recording(output: &Path, watch: &Watch) -> bool {
 fn watch_cell(
     args: &DemoArgs,
     shutdown: &metrocell_launch::ShutdownHandle,
-    launcher: &std::thread::JoinHandle<Result<metrocell_launch::LaunchOutcome, metrocell_launch::LaunchError>>,
+    launcher: &std::thread::JoinHandle<
+        Result<metrocell_launch::LaunchOutcome, metrocell_launch::LaunchError>,
+    >,
 ) -> anyhow::Result<Watch> {
-    let mut node = MetrocellNode::builder("demo_watch").diagnostics_period(None).handle_signals(false).build()?;
+    let mut node = MetrocellNode::builder("demo_watch")
+        .diagnostics_period(None)
+        .handle_signals(false)
+        .build()?;
     let clock = node.subscription::<Clock>("/clock", qos::sensor_data())?;
-    let tracker = node.subscription::<TrackerMeasurement>("/tracker/measurements", qos::sensor_data())?;
+    let tracker =
+        node.subscription::<TrackerMeasurement>("/tracker/measurements", qos::sensor_data())?;
     let model = node.subscription::<ErrorModel>("/thermal/error_model", qos::sensor_data())?;
     let estimated = node.subscription::<ErrorModel>("/estimator/error_model", qos::latched())?;
-    let diagnostics = node.subscription::<DiagnosticArray>("/diagnostics", qos::reliable().history(ros2_client::qos::History::KeepLast { depth: 100 }))?;
-    let mut w = Watch { sim_time_s: 0.0, wall_s: 0.0, tracker_readings: 0, beam_breaks: 0, last_strain: None, twin_published: BTreeMap::new(), twin_finished: false, recorded: BTreeMap::new(), estimated: None, live_findings: BTreeMap::new(), fiducial: Default::default() };
+    let diagnostics = node.subscription::<DiagnosticArray>(
+        "/diagnostics",
+        qos::reliable().history(ros2_client::qos::History::KeepLast { depth: 100 }),
+    )?;
+    let mut w = Watch {
+        sim_time_s: 0.0,
+        wall_s: 0.0,
+        tracker_readings: 0,
+        beam_breaks: 0,
+        last_strain: None,
+        twin_published: BTreeMap::new(),
+        twin_finished: false,
+        recorded: BTreeMap::new(),
+        estimated: None,
+        live_findings: BTreeMap::new(),
+        fiducial: Default::default(),
+    };
     // about twenty progress lines over the run, at whole minutes of cell time
-    let print_every = if args.duration <= 600.0 { 30.0 } else { ((args.duration / 20.0) / 60.0).round().max(1.0) * 60.0 };
+    let print_every = if args.duration <= 600.0 {
+        30.0
+    } else {
+        ((args.duration / 20.0) / 60.0).round().max(1.0) * 60.0
+    };
     let mut first_clock: Option<Instant> = None;
     let mut start_ns: Option<i64> = None;
     let mut next_print = 0.0;
     // The run is over when the simulated clock, once started, stops advancing.
     let mut last_advance = Instant::now();
     // Wall-clock budget: the run at speed, plus start-up, plus slack for a loaded machine.
-    let deadline = Instant::now() + Duration::from_secs_f64(args.duration / args.speed * 3.0 + 30.0);
+    let deadline =
+        Instant::now() + Duration::from_secs_f64(args.duration / args.speed * 3.0 + 30.0);
     while !shutdown.is_requested() && !launcher.is_finished() {
         while let Ok(Some((c, _))) = clock.take() {
             let ns = c.clock.nanos();
@@ -372,20 +489,38 @@ fn watch_cell(
             }
         }
         while let Ok(Some((m, _))) = model.take() {
-            if let Some(i) = m.parameter_names.iter().position(|p| p == "thermal_scale[x].strain") {
+            if let Some(i) = m
+                .parameter_names
+                .iter()
+                .position(|p| p == "thermal_scale[x].strain")
+            {
                 let n = m.values.len();
-                w.last_strain = m.values.get(i).map(|&v| (v, m.covariance.get(i * n + i).copied().unwrap_or(f64::NAN)));
+                w.last_strain = m
+                    .values
+                    .get(i)
+                    .map(|&v| (v, m.covariance.get(i * n + i).copied().unwrap_or(f64::NAN)));
             }
         }
         while let Ok(Some((d, _))) = diagnostics.take() {
             take_twin_counts(&d, &mut w);
             take_recorder_counts(&d, &mut w);
             for status in d.status.iter().filter(|s| s.name == "/fiducial") {
-                w.fiducial.update(status.values.iter().map(|kv| (kv.key.as_str(), kv.value.as_str())));
+                w.fiducial.update(
+                    status
+                        .values
+                        .iter()
+                        .map(|kv| (kv.key.as_str(), kv.value.as_str())),
+                );
             }
             for (name, statement) in new_live_findings(&d, &mut w) {
                 let t = w.sim_time_s.max(0.0) as u64;
-                sayln!("  cell time {}:{:02}:{:02}   the diagnose node found {}: {statement}", t / 3600, t / 60 % 60, t % 60, name.trim_start_matches("diagnose: "));
+                sayln!(
+                    "  cell time {}:{:02}:{:02}   the diagnose node found {}: {statement}",
+                    t / 3600,
+                    t / 60 % 60,
+                    t % 60,
+                    name.trim_start_matches("diagnose: ")
+                );
             }
         }
         while let Ok(Some((m, _))) = estimated.take() {
@@ -405,7 +540,8 @@ fn watch_cell(
                 w.estimated.as_ref().and_then(|m| estimated_value(m, "positioning[z].c0")).map_or(String::new(), |(v, sd)| format!("   Z offset (estimator) {:+.1} ± {:.1} µm", v * 1e6, sd * 1e6))
             );
         }
-        let clock_done = w.sim_time_s >= args.duration - 0.5 || (start_ns.is_some() && last_advance.elapsed() > Duration::from_secs(2));
+        let clock_done = w.sim_time_s >= args.duration - 0.5
+            || (start_ns.is_some() && last_advance.elapsed() > Duration::from_secs(2));
         // Wait for the twin's final counts too: it publishes them once every reliable reader
         // (the recorder) has acknowledged its last message, within ~1 s of its end on an idle
         // machine, at most 30 s later on a loaded one.
@@ -413,7 +549,10 @@ fn watch_cell(
             break;
         }
         if Instant::now() > deadline {
-            eprintln!("metrocell demo: the simulated clock stopped at {:.1} s; stopping", w.sim_time_s);
+            eprintln!(
+                "metrocell demo: the simulated clock stopped at {:.1} s; stopping",
+                w.sim_time_s
+            );
             break;
         }
         std::thread::sleep(Duration::from_millis(5));
@@ -436,7 +575,10 @@ const RECORDER_CATCH_UP: Duration = Duration::from_secs(30);
 fn new_live_findings(d: &DiagnosticArray, w: &mut Watch) -> Vec<(String, String)> {
     let mut new = Vec::new();
     for s in d.status.iter().filter(|s| s.name.starts_with("diagnose: ")) {
-        if w.live_findings.insert(s.name.clone(), s.message.clone()).is_none() {
+        if w.live_findings
+            .insert(s.name.clone(), s.message.clone())
+            .is_none()
+        {
             new.push((s.name.clone(), s.message.clone()));
         }
     }
@@ -447,7 +589,9 @@ fn new_live_findings(d: &DiagnosticArray, w: &mut Watch) -> Vec<(String, String)
 fn take_recorder_counts(d: &DiagnosticArray, w: &mut Watch) {
     for status in d.status.iter().filter(|s| s.name == "/recorder") {
         for kv in &status.values {
-            if let (Some(topic), Ok(n)) = (kv.key.strip_suffix("/messages"), kv.value.parse::<u64>()) {
+            if let (Some(topic), Ok(n)) =
+                (kv.key.strip_suffix("/messages"), kv.value.parse::<u64>())
+            {
                 w.recorded.insert(topic.to_string(), n);
             }
         }
@@ -456,13 +600,20 @@ fn take_recorder_counts(d: &DiagnosticArray, w: &mut Watch) {
 
 /// Messages the twin published that the recorder has not recorded yet, over all topics.
 fn recorder_behind(w: &Watch) -> u64 {
-    w.twin_published.iter().map(|(t, n)| n.saturating_sub(w.recorded.get(t).copied().unwrap_or(0))).sum()
+    w.twin_published
+        .iter()
+        .map(|(t, n)| n.saturating_sub(w.recorded.get(t).copied().unwrap_or(0)))
+        .sum()
 }
 
 /// After the twin finished: wait (at most `timeout`) until the recorder's counts reach the twin's,
 /// so the recorder is not stopped while a busy machine still has it catching up. Returns how many
 /// messages it was still behind.
-fn wait_for_recorder(diagnostics: &metrocell_node::Subscription<DiagnosticArray>, w: &mut Watch, timeout: Duration) -> u64 {
+fn wait_for_recorder(
+    diagnostics: &metrocell_node::Subscription<DiagnosticArray>,
+    w: &mut Watch,
+    timeout: Duration,
+) -> u64 {
     let started = Instant::now();
     let mut told = false;
     loop {
@@ -501,7 +652,15 @@ fn take_twin_counts(d: &DiagnosticArray, w: &mut Watch) {
 fn estimated_value(m: &ErrorModel, name: &str) -> Option<(f64, f64)> {
     let n = m.values.len();
     let i = m.parameter_names.iter().position(|p| p == name)?;
-    Some((m.values[i], m.covariance.get(i * n + i).copied().unwrap_or(f64::NAN).max(0.0).sqrt()))
+    Some((
+        m.values[i],
+        m.covariance
+            .get(i * n + i)
+            .copied()
+            .unwrap_or(f64::NAN)
+            .max(0.0)
+            .sqrt(),
+    ))
 }
 
 /// The estimator's model in words: each free parameter (non-zero variance) with its σ, in the
@@ -520,9 +679,19 @@ fn describe_estimate(m: &ErrorModel) -> String {
             "1/K" => (1e6, "µm/m/K"),
             other => (1.0, other),
         };
-        parts.push(format!("{} = {:.2} ± {:.2} {unit}", m.parameter_names[i], m.values[i] * scale, var.sqrt() * scale));
+        parts.push(format!(
+            "{} = {:.2} ± {:.2} {unit}",
+            m.parameter_names[i],
+            m.values[i] * scale,
+            var.sqrt() * scale
+        ));
     }
-    format!("estimated online from {} measured points (innovation rms {:.2} µm): {}", m.observation_count, m.residual_rms * 1e6, parts.join(", "))
+    format!(
+        "estimated online from {} measured points (innovation rms {:.2} µm): {}",
+        m.observation_count,
+        m.residual_rms * 1e6,
+        parts.join(", ")
+    )
 }
 
 #[cfg(test)]
@@ -536,6 +705,9 @@ mod tests {
         let (web, ws) = dashboard_ports(0).unwrap();
         assert!(web > 1 && ws > 1 && web != ws, "{web} {ws}");
         assert_eq!(dashboard_ports(8765).unwrap(), (8765, 8766));
-        assert!(dashboard_ports(65535).unwrap_err().to_string().contains("at most 65534"));
+        assert!(dashboard_ports(65535)
+            .unwrap_err()
+            .to_string()
+            .contains("at most 65534"));
     }
 }

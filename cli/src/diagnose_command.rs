@@ -6,7 +6,7 @@ use std::path::{Path, PathBuf};
 use clap::{Args, ValueEnum};
 use metrocell_diagnose::html_report::html_report;
 use metrocell_diagnose::residual_table::residuals_csv;
-use metrocell_diagnose::{diagnose, DeclaredModel, Diagnosis, DiagnoseOptions, Strategy};
+use metrocell_diagnose::{diagnose, DeclaredModel, DiagnoseOptions, Diagnosis, Strategy};
 use metrocell_estimation::{records_from_bags, PointSource, RecordingOptions};
 use metrocell_twin::{write_model, CellModel, FittedParameter, ModelUpdate};
 
@@ -71,7 +71,14 @@ pub struct DiagnoseArgs {
 }
 
 fn options(a: &DiagnoseArgs) -> DiagnoseOptions {
-    let mut o = DiagnoseOptions { strategy: match a.strategy { StrategyArg::Select => Strategy::Select, StrategyArg::AllAtOnce => Strategy::AllAtOnce }, empirical: !a.no_empirical, ..Default::default() };
+    let mut o = DiagnoseOptions {
+        strategy: match a.strategy {
+            StrategyArg::Select => Strategy::Select,
+            StrategyArg::AllAtOnce => Strategy::AllAtOnce,
+        },
+        empirical: !a.no_empirical,
+        ..Default::default()
+    };
     o.selection.max_terms = a.max_terms;
     o.selection.alpha = a.alpha;
     o
@@ -83,10 +90,19 @@ pub fn summary_text(d: &Diagnosis) -> String {
     let mut s = String::new();
     s.push_str(&format!("{}\n\n", r.summary));
     for (k, f) in r.findings.iter().enumerate() {
-        s.push_str(&format!("{}. {} — {}\n   where: {}\n", k + 1, f.label, f.statement, f.location.description));
+        s.push_str(&format!(
+            "{}. {} — {}\n   where: {}\n",
+            k + 1,
+            f.label,
+            f.statement,
+            f.location.description
+        ));
     }
     for u in &r.unexplained {
-        s.push_str(&format!("unexplained: {}\n   where: {}\n", u.statement, u.location.description));
+        s.push_str(&format!(
+            "unexplained: {}\n   where: {}\n",
+            u.statement, u.location.description
+        ));
     }
     s.push_str(&format!(
         "\nheld-out RMS {:.2} µm → {:.2} µm, max {:.2} µm → {:.2} µm, χ²/dof {:.2} → {:.2} (noise floor {:.2} µm; blocks of {})\n{}\n",
@@ -100,7 +116,14 @@ pub fn summary_text(d: &Diagnosis) -> String {
         r.after.heldout_blocks.join(" and "),
         r.noise.statement
     ));
-    s.push_str(&format!("records: {} readings, {} used ({} averaged groups), {} set aside, {} outliers\n", r.records.readings, r.records.used, r.records.averaged_groups, r.records.rejected.len(), r.records.outliers.len()));
+    s.push_str(&format!(
+        "records: {} readings, {} used ({} averaged groups), {} set aside, {} outliers\n",
+        r.records.readings,
+        r.records.used,
+        r.records.averaged_groups,
+        r.records.rejected.len(),
+        r.records.outliers.len()
+    ));
     for m in &r.messages {
         s.push_str(&format!("note: {m}\n"));
     }
@@ -109,17 +132,56 @@ pub fn summary_text(d: &Diagnosis) -> String {
 
 /// The augmented model file: the user's file with every fitted value, the found terms appended.
 fn augmented_model(model: &CellModel, d: &Diagnosis, dir: &Path) -> anyhow::Result<String> {
-    let parameters = d.fitted.iter().map(|(name, value, sigma)| FittedParameter { name: name.clone(), value: *value, sigma: *sigma }).collect();
+    let parameters = d
+        .fitted
+        .iter()
+        .map(|(name, value, sigma)| FittedParameter {
+            name: name.clone(),
+            value: *value,
+            sigma: *sigma,
+        })
+        .collect();
     let r = &d.report;
     let mut fit = serde_yaml::Mapping::new();
     fit.insert("by".into(), "metrocell diagnose".into());
-    fit.insert("found".into(), serde_yaml::Value::Sequence(r.findings.iter().map(|f| f.statement.clone().into()).collect()));
+    fit.insert(
+        "found".into(),
+        serde_yaml::Value::Sequence(
+            r.findings
+                .iter()
+                .map(|f| f.statement.clone().into())
+                .collect(),
+        ),
+    );
     if !r.unexplained.is_empty() {
-        fit.insert("not_explained".into(), serde_yaml::Value::Sequence(r.unexplained.iter().map(|u| format!("{} (empirical, not in this model)", u.statement).into()).collect()));
+        fit.insert(
+            "not_explained".into(),
+            serde_yaml::Value::Sequence(
+                r.unexplained
+                    .iter()
+                    .map(|u| format!("{} (empirical, not in this model)", u.statement).into())
+                    .collect(),
+            ),
+        );
     }
-    fit.insert("heldout_rms_um".into(), serde_yaml::Value::Sequence(vec![((r.before.heldout_rms_m * 1e8).round() / 100.0).into(), ((r.after.heldout_rms_m * 1e8).round() / 100.0).into()]));
-    fit.insert("chi2_per_dof".into(), ((r.after.chi2_per_dof * 100.0).round() / 100.0).into());
-    let update = ModelUpdate { parameters, added_terms: d.added_terms.iter().map(|t| t.config.clone()).collect(), fit: Some(serde_yaml::Value::Mapping(fit)), notes: left_out(d), output_dir: Some(dir.to_path_buf()) };
+    fit.insert(
+        "heldout_rms_um".into(),
+        serde_yaml::Value::Sequence(vec![
+            ((r.before.heldout_rms_m * 1e8).round() / 100.0).into(),
+            ((r.after.heldout_rms_m * 1e8).round() / 100.0).into(),
+        ]),
+    );
+    fit.insert(
+        "chi2_per_dof".into(),
+        ((r.after.chi2_per_dof * 100.0).round() / 100.0).into(),
+    );
+    let update = ModelUpdate {
+        parameters,
+        added_terms: d.added_terms.iter().map(|t| t.config.clone()).collect(),
+        fit: Some(serde_yaml::Value::Mapping(fit)),
+        notes: left_out(d),
+        output_dir: Some(dir.to_path_buf()),
+    };
     Ok(write_model(model, &update)?)
 }
 
@@ -150,38 +212,83 @@ fn write(path: &Path, text: &str) -> anyhow::Result<()> {
 }
 
 /// Read the model and the bags and diagnose them (progress lines on stderr).
-pub fn diagnose_bags(model_path: &Path, bags: &[PathBuf], options: &DiagnoseOptions) -> anyhow::Result<(CellModel, Diagnosis)> {
+pub fn diagnose_bags(
+    model_path: &Path,
+    bags: &[PathBuf],
+    options: &DiagnoseOptions,
+) -> anyhow::Result<(CellModel, Diagnosis)> {
     diagnose_bags_from(model_path, bags, options, PointSource::Auto)
 }
 
 /// [`diagnose_bags`] with the points taken from `points` (`Auto`: `/measured_points` when the
 /// bag has it, else the raw `/tracker/measurements`).
-pub fn diagnose_bags_from(model_path: &Path, bags: &[PathBuf], options: &DiagnoseOptions, points: PointSource) -> anyhow::Result<(CellModel, Diagnosis)> {
+pub fn diagnose_bags_from(
+    model_path: &Path,
+    bags: &[PathBuf],
+    options: &DiagnoseOptions,
+    points: PointSource,
+) -> anyhow::Result<(CellModel, Diagnosis)> {
     let file_model = CellModel::from_path(model_path)?;
     eprintln!("reading {} bag(s) …", bags.len());
     // a model that declares a touch probe is judged on the recording's probe hits too
-    let recording = RecordingOptions { points, probe_hits: file_model.raw.sensors.probe.is_some(), ..RecordingOptions::default() };
+    let recording = RecordingOptions {
+        points,
+        probe_hits: file_model.raw.sensors.probe.is_some(),
+        ..RecordingOptions::default()
+    };
     let mut records = records_from_bags(bags, &file_model.forward_model()?, &recording)?;
     // one pose per placement of the instrument (the recordings' `setup`)
-    let (setups, short) = metrocell_estimation::check_points::usable_setups(&mut records, file_model.placement_fit_points());
+    let (setups, short) = metrocell_estimation::check_points::usable_setups(
+        &mut records,
+        file_model.placement_fit_points(),
+    );
     for note in &short {
         eprintln!("warning: {note}");
     }
     let model = file_model.with_setups(&setups)?;
-    eprintln!("{} measured points{} ({} set aside while reading); diagnosing …", records.records.len(), if setups.is_empty() { String::new() } else { format!(" from {} setups ({}), {} check points kept out", setups.len(), setups.join(", "), records.check.len()) }, records.rejected.len());
-    let declared = DeclaredModel { machine: &model.machine, machine_terms: &model.machine_terms, instrument_terms: &model.instrument_terms, setup: &model.setup };
+    eprintln!(
+        "{} measured points{} ({} set aside while reading); diagnosing …",
+        records.records.len(),
+        if setups.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " from {} setups ({}), {} check points kept out",
+                setups.len(),
+                setups.join(", "),
+                records.check.len()
+            )
+        },
+        records.rejected.len()
+    );
+    let declared = DeclaredModel {
+        machine: &model.machine,
+        machine_terms: &model.machine_terms,
+        instrument_terms: &model.instrument_terms,
+        setup: &model.setup,
+    };
     let d = diagnose(&declared, &records, options)?;
     Ok((model, d))
 }
 
 /// Write the report directory: DIR/model.yaml (the augmented model), DIR/diagnosis.json and
 /// DIR/index.html with its figures. Returns the page's path.
-pub fn write_report(dir: &Path, model: &CellModel, d: &Diagnosis, title: &str) -> anyhow::Result<PathBuf> {
-    std::fs::create_dir_all(dir).map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;
+pub fn write_report(
+    dir: &Path,
+    model: &CellModel,
+    d: &Diagnosis,
+    title: &str,
+) -> anyhow::Result<PathBuf> {
+    std::fs::create_dir_all(dir)
+        .map_err(|e| anyhow::anyhow!("cannot create {}: {e}", dir.display()))?;
     write(&dir.join("model.yaml"), &augmented_model(model, d, dir)?)?;
-    write(&dir.join("diagnosis.json"), &serde_json::to_string_pretty(&d.report)?)?;
+    write(
+        &dir.join("diagnosis.json"),
+        &serde_json::to_string_pretty(&d.report)?,
+    )?;
     let page = html_report(d, title)?;
-    page.write_to(dir).map_err(|e| anyhow::anyhow!("cannot write the report into {}: {e}", dir.display()))
+    page.write_to(dir)
+        .map_err(|e| anyhow::anyhow!("cannot write the report into {}: {e}", dir.display()))
 }
 
 fn run_inner(a: &DiagnoseArgs) -> anyhow::Result<()> {
@@ -203,12 +310,21 @@ fn run_inner(a: &DiagnoseArgs) -> anyhow::Result<()> {
         write(path, &residuals_csv(&d))?;
     }
     let index = match &a.report {
-        Some(dir) => Some(write_report(dir, &model, &d, &format!("metrocell diagnose: {}", a.model.display()))?),
+        Some(dir) => Some(write_report(
+            dir,
+            &model,
+            &d,
+            &format!("metrocell diagnose: {}", a.model.display()),
+        )?),
         None => None,
     };
     say(&summary_text(&d));
     if let (Some(index), Some(dir)) = (index, &a.report) {
-        say(&format!("report: {} (augmented model: {})\n", index.display(), dir.join("model.yaml").display()));
+        say(&format!(
+            "report: {} (augmented model: {})\n",
+            index.display(),
+            dir.join("model.yaml").display()
+        ));
     }
     if json_to_stdout {
         println!("{json}");

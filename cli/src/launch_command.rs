@@ -3,10 +3,12 @@
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
-#[command(after_help = "Launch files use the ROS 2 YAML launch format (node, arg, let, include, group, executable;\n\
+#[command(
+    after_help = "Launch files use the ROS 2 YAML launch format (node, arg, let, include, group, executable;\n\
 substitutions $(var), $(env), $(optenv), $(find-pkg-share), $(dirname)). Node executables are looked up next to\n\
 the metrocell binary, then on PATH. Ctrl-C sends SIGINT to every node and SIGKILL after the grace period.\n\n\
-Example:\n  metrocell launch launch-configs/demo.launch.yaml speed:=10 output:=/tmp/cell_bag")]
+Example:\n  metrocell launch launch-configs/demo.launch.yaml speed:=10 output:=/tmp/cell_bag"
+)]
 pub struct LaunchArgs {
     /// The launch file (ROS 2 YAML launch format)
     file: PathBuf,
@@ -66,7 +68,10 @@ pub fn run(args: LaunchArgs) -> i32 {
 fn shell_words(argv: &[String]) -> String {
     argv.iter()
         .map(|w| {
-            if !w.is_empty() && w.chars().all(|c| c.is_ascii_alphanumeric() || "-_./:=@%+,".contains(c)) {
+            if !w.is_empty()
+                && w.chars()
+                    .all(|c| c.is_ascii_alphanumeric() || "-_./:=@%+,".contains(c))
+            {
                 w.clone()
             } else {
                 format!("'{}'", w.replace('\'', r"'\''"))

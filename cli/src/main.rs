@@ -96,7 +96,12 @@ fn restore_sigpipe(command: &Command) {
     };
     if !supervises {
         // SAFETY: setting a signal's disposition to its default installs no handler code.
-        let _ = unsafe { nix::sys::signal::signal(nix::sys::signal::Signal::SIGPIPE, nix::sys::signal::SigHandler::SigDfl) };
+        let _ = unsafe {
+            nix::sys::signal::signal(
+                nix::sys::signal::Signal::SIGPIPE,
+                nix::sys::signal::SigHandler::SigDfl,
+            )
+        };
     }
 }
 

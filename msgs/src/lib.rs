@@ -24,9 +24,11 @@ pub fn registry() -> &'static rosmsg::Registry {
     REGISTRY.get_or_init(|| {
         let mut r = rosmsg::Registry::new();
         for (pkg, name, text) in MSG_SOURCES {
-            r.add_msg(pkg, name, text).expect("embedded .msg text was parsed by build.rs");
+            r.add_msg(pkg, name, text)
+                .expect("embedded .msg text was parsed by build.rs");
         }
-        r.check().expect("embedded .msg set was checked by build.rs");
+        r.check()
+            .expect("embedded .msg set was checked by build.rs");
         r
     })
 }

@@ -21,14 +21,23 @@ fn cyclone_dds_serializes_every_type_to_the_same_bytes() {
         for seed in [7u64, 1000 + i as u64] {
             let value = rosmsg::sample_value(registry, ty, seed).unwrap();
             items.push(serde_json::json!({"type": ty, "value": rosmsg::to_json(&value)}));
-            expected.push((ty.clone(), hex(&rosmsg::encode(registry, ty, &value).unwrap())));
+            expected.push((
+                ty.clone(),
+                hex(&rosmsg::encode(registry, ty, &value).unwrap()),
+            ));
         }
     }
     // Defaults too (empty strings and sequences, quaternion w = 1).
-    for ty in ["metrocell_msgs/msg/FiducialDetectionArray", "geometry_msgs/msg/PoseWithCovarianceStamped"] {
+    for ty in [
+        "metrocell_msgs/msg/FiducialDetectionArray",
+        "geometry_msgs/msg/PoseWithCovarianceStamped",
+    ] {
         let value = rosmsg::default_value(registry, ty).unwrap();
         items.push(serde_json::json!({"type": ty, "value": rosmsg::to_json(&value)}));
-        expected.push((ty.to_string(), hex(&rosmsg::encode(registry, ty, &value).unwrap())));
+        expected.push((
+            ty.to_string(),
+            hex(&rosmsg::encode(registry, ty, &value).unwrap()),
+        ));
     }
 
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/tests/cyclone_cdr.py");
@@ -39,9 +48,18 @@ fn cyclone_dds_serializes_every_type_to_the_same_bytes() {
         .stderr(Stdio::piped())
         .spawn()
         .expect("start the reference Python");
-    child.stdin.take().unwrap().write_all(serde_json::Value::Array(items).to_string().as_bytes()).unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(serde_json::Value::Array(items).to_string().as_bytes())
+        .unwrap();
     let out = child.wait_with_output().unwrap();
-    assert!(out.status.success(), "cyclone_cdr.py failed: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "cyclone_cdr.py failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let lines: Vec<&str> = std::str::from_utf8(&out.stdout).unwrap().lines().collect();
     assert_eq!(lines.len(), expected.len());
     for ((ty, ours), theirs) in expected.iter().zip(&lines) {
@@ -54,6 +72,9 @@ fn cyclone_dds_serializes_every_type_to_the_same_bytes() {
         "metrocell_msgs/msg/ErrorModel",
         "geometry_msgs/msg/PoseWithCovarianceStamped",
     ] {
-        assert!(expected.iter().any(|(t, _)| t == required), "{required} not compared");
+        assert!(
+            expected.iter().any(|(t, _)| t == required),
+            "{required} not compared"
+        );
     }
 }

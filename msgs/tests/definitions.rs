@@ -13,8 +13,14 @@ fn every_definition_matches_the_msg_files() {
         ($t:ty) => {{
             let expected = files.full_definition(<$t>::ROS_TYPE).unwrap();
             assert_eq!(<$t>::DEFINITION, expected, "{}", <$t>::ROS_TYPE);
-            assert_eq!(<$t>::ROS_TYPE, format!("{}/msg/{}", <$t>::PACKAGE, <$t>::NAME));
-            assert_eq!(<$t>::DDS_TYPE, format!("{}::msg::dds_::{}_", <$t>::PACKAGE, <$t>::NAME));
+            assert_eq!(
+                <$t>::ROS_TYPE,
+                format!("{}/msg/{}", <$t>::PACKAGE, <$t>::NAME)
+            );
+            assert_eq!(
+                <$t>::DDS_TYPE,
+                format!("{}::msg::dds_::{}_", <$t>::PACKAGE, <$t>::NAME)
+            );
             checked.push(<$t>::ROS_TYPE.to_string());
         }};
     }
@@ -63,13 +69,24 @@ fn every_definition_matches_the_msg_files() {
 #[test]
 fn tracker_measurement_definition_layout() {
     use metrocell_msgs::msg::TrackerMeasurement;
-    let own = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/msg/TrackerMeasurement.msg")).unwrap();
+    let own = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/msg/TrackerMeasurement.msg"
+    ))
+    .unwrap();
     let def = TrackerMeasurement::DEFINITION;
     assert!(def.starts_with(&own));
     let sep = "=".repeat(80);
     let blocks: Vec<&str> = def.lines().filter(|l| l.starts_with("MSG: ")).collect();
     // rosbag2 order: direct dependencies sorted by name, each followed by its own.
-    assert_eq!(blocks, ["MSG: geometry_msgs/Point", "MSG: std_msgs/Header", "MSG: builtin_interfaces/Time"]);
+    assert_eq!(
+        blocks,
+        [
+            "MSG: geometry_msgs/Point",
+            "MSG: std_msgs/Header",
+            "MSG: builtin_interfaces/Time"
+        ]
+    );
     assert_eq!(def.matches(&format!("\n{sep}\nMSG: ")).count(), 3);
     assert!(def.ends_with("uint32 nanosec\n"));
 }
@@ -79,13 +96,28 @@ fn defaults_and_constants_follow_the_msg() {
     use metrocell_msgs::geometry_msgs::msg::{PoseWithCovariance, Quaternion};
     use metrocell_msgs::msg::{MeasuredPoint, TrackerMeasurement};
     // geometry_msgs/Quaternion declares `float64 w 1`.
-    assert_eq!(Quaternion::default(), Quaternion { x: 0.0, y: 0.0, z: 0.0, w: 1.0 });
+    assert_eq!(
+        Quaternion::default(),
+        Quaternion {
+            x: 0.0,
+            y: 0.0,
+            z: 0.0,
+            w: 1.0
+        }
+    );
     assert_eq!(PoseWithCovariance::default().pose.orientation.w, 1.0);
     assert_eq!(PoseWithCovariance::default().covariance, [0.0; 36]);
     assert_eq!(TrackerMeasurement::STATUS_REJECTED, 16u8);
     assert_eq!(MeasuredPoint::SOURCE_TRACKER, "tracker");
-    assert_eq!(metrocell_msgs::diagnostic_msgs::msg::DiagnosticStatus::STALE, 3u8);
+    assert_eq!(
+        metrocell_msgs::diagnostic_msgs::msg::DiagnosticStatus::STALE,
+        3u8
+    );
     // The dynamic default agrees with the typed default.
-    let dynamic = rosmsg::default_value(metrocell_msgs::registry(), "geometry_msgs/Quaternion").unwrap();
-    assert_eq!(rosmsg::to_json(&dynamic), serde_json::to_value(Quaternion::default()).unwrap());
+    let dynamic =
+        rosmsg::default_value(metrocell_msgs::registry(), "geometry_msgs/Quaternion").unwrap();
+    assert_eq!(
+        rosmsg::to_json(&dynamic),
+        serde_json::to_value(Quaternion::default()).unwrap()
+    );
 }

@@ -30,13 +30,25 @@ fn mcap_ros2_decodes_our_cdr_with_our_definitions() {
         .stderr(Stdio::piped())
         .spawn()
         .expect("start the reference Python");
-    child.stdin.take().unwrap().write_all(serde_json::Value::Array(items).to_string().as_bytes()).unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(serde_json::Value::Array(items).to_string().as_bytes())
+        .unwrap();
     let out = child.wait_with_output().unwrap();
-    assert!(out.status.success(), "mcap_decode.py failed: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "mcap_decode.py failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let lines: Vec<&str> = std::str::from_utf8(&out.stdout).unwrap().lines().collect();
     assert_eq!(lines.len(), expected.len());
     for ((ty, ours), line) in expected.iter().zip(lines) {
         let theirs: serde_json::Value = serde_json::from_str(line).unwrap();
-        assert_eq!(&theirs, ours, "{ty}: mcap-ros2-support decoded something else");
+        assert_eq!(
+            &theirs, ours,
+            "{ty}: mcap-ros2-support decoded something else"
+        );
     }
 }

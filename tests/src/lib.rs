@@ -7,7 +7,10 @@ use std::time::{Duration, Instant};
 
 /// The repository root.
 pub fn workspace_root() -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).parent().expect("tests/ has a parent").to_path_buf()
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .parent()
+        .expect("tests/ has a parent")
+        .to_path_buf()
 }
 
 /// A binary of the workspace (metrocell, metrocell-thermal, ...), from the same target directory
@@ -15,7 +18,10 @@ pub fn workspace_root() -> PathBuf {
 pub fn bin(name: &str) -> PathBuf {
     let exe = std::env::current_exe().expect("current_exe");
     // target/<profile>/deps/<test>-<hash>
-    let dir = exe.parent().and_then(Path::parent).expect("test binary lives in target/<profile>/deps");
+    let dir = exe
+        .parent()
+        .and_then(Path::parent)
+        .expect("test binary lives in target/<profile>/deps");
     let path = dir.join(name);
     assert!(
         path.exists(),
@@ -31,7 +37,10 @@ pub fn python() -> PathBuf {
         return PathBuf::from(p);
     }
     let venv = workspace_root().join(".venv/bin/python");
-    assert!(venv.exists(), "no Python peers: run tests/run, which creates .venv with cyclonedds, rosbags and mcap");
+    assert!(
+        venv.exists(),
+        "no Python peers: run tests/run, which creates .venv with cyclonedds, rosbags and mcap"
+    );
     venv
 }
 
@@ -47,7 +56,10 @@ pub struct ChildGuard(pub Option<Child>);
 
 impl ChildGuard {
     pub fn spawn(cmd: &mut Command) -> ChildGuard {
-        ChildGuard(Some(cmd.spawn().unwrap_or_else(|e| panic!("cannot start {cmd:?}: {e}"))))
+        ChildGuard(Some(
+            cmd.spawn()
+                .unwrap_or_else(|e| panic!("cannot start {cmd:?}: {e}")),
+        ))
     }
 
     pub fn child(&mut self) -> &mut Child {
@@ -62,7 +74,9 @@ impl ChildGuard {
     pub fn wait_output(mut self, timeout: Duration) -> Output {
         // the pipes are read while the process runs: a child that writes more than a pipe holds
         // (64 KB: a diagnosis as JSON) would otherwise block on its write and never finish
-        fn drain<R: std::io::Read + Send + 'static>(r: Option<R>) -> std::thread::JoinHandle<Vec<u8>> {
+        fn drain<R: std::io::Read + Send + 'static>(
+            r: Option<R>,
+        ) -> std::thread::JoinHandle<Vec<u8>> {
             std::thread::spawn(move || {
                 let mut buf = Vec::new();
                 if let Some(mut r) = r {
@@ -85,11 +99,22 @@ impl ChildGuard {
                 None => std::thread::sleep(Duration::from_millis(20)),
             }
         };
-        let out = (stdout.join().unwrap_or_default(), stderr.join().unwrap_or_default());
+        let out = (
+            stdout.join().unwrap_or_default(),
+            stderr.join().unwrap_or_default(),
+        );
         self.0.take();
         match status {
-            Some(status) => Output { status, stdout: out.0, stderr: out.1 },
-            None => panic!("process did not finish within {timeout:?}\nstdout:\n{}\nstderr:\n{}", String::from_utf8_lossy(&out.0), String::from_utf8_lossy(&out.1)),
+            Some(status) => Output {
+                status,
+                stdout: out.0,
+                stderr: out.1,
+            },
+            None => panic!(
+                "process did not finish within {timeout:?}\nstdout:\n{}\nstderr:\n{}",
+                String::from_utf8_lossy(&out.0),
+                String::from_utf8_lossy(&out.1)
+            ),
         }
     }
 }
@@ -106,7 +131,9 @@ impl Drop for ChildGuard {
 /// A command with piped stdout/stderr and no stdin.
 pub fn piped(program: impl AsRef<std::ffi::OsStr>) -> Command {
     let mut c = Command::new(program);
-    c.stdin(Stdio::null()).stdout(Stdio::piped()).stderr(Stdio::piped());
+    c.stdin(Stdio::null())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped());
     c
 }
 
@@ -132,7 +159,10 @@ pub fn json_close(a: &serde_json::Value, b: &serde_json::Value, path: &str) -> R
             if x.len() != y.len() {
                 return Err(format!("{path}: length {} != {}", x.len(), y.len()));
             }
-            x.iter().zip(y).enumerate().try_for_each(|(i, (u, v))| json_close(u, v, &format!("{path}.{i}")))
+            x.iter()
+                .zip(y)
+                .enumerate()
+                .try_for_each(|(i, (u, v))| json_close(u, v, &format!("{path}.{i}")))
         }
         (J::Object(x), J::Object(y)) => {
             let mut kx: Vec<_> = x.keys().collect();
@@ -142,7 +172,8 @@ pub fn json_close(a: &serde_json::Value, b: &serde_json::Value, path: &str) -> R
             if kx != ky {
                 return Err(format!("{path}: fields {kx:?} != {ky:?}"));
             }
-            x.iter().try_for_each(|(k, v)| json_close(v, &y[k], &format!("{path}.{k}")))
+            x.iter()
+                .try_for_each(|(k, v)| json_close(v, &y[k], &format!("{path}.{k}")))
         }
         _ if a == b => Ok(()),
         _ => Err(format!("{path}: {a} != {b}")),
@@ -151,7 +182,11 @@ pub fn json_close(a: &serde_json::Value, b: &serde_json::Value, path: &str) -> R
 
 /// Sends SIGINT to a process.
 pub fn interrupt(pid: i32) {
-    nix::sys::signal::kill(nix::unistd::Pid::from_raw(pid), nix::sys::signal::Signal::SIGINT).expect("kill -INT");
+    nix::sys::signal::kill(
+        nix::unistd::Pid::from_raw(pid),
+        nix::sys::signal::Signal::SIGINT,
+    )
+    .expect("kill -INT");
 }
 
 /// Whether a process (not a zombie) with this pid exists.
@@ -159,7 +194,10 @@ pub fn alive(pid: i32) -> bool {
     match std::fs::read_to_string(format!("/proc/{pid}/stat")) {
         Ok(stat) => {
             // state is the field after the parenthesised command name
-            let state = stat.rsplit(')').next().and_then(|s| s.split_whitespace().next());
+            let state = stat
+                .rsplit(')')
+                .next()
+                .and_then(|s| s.split_whitespace().next());
             state != Some("Z")
         }
         Err(_) => false,

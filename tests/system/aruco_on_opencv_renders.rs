@@ -16,7 +16,11 @@ use serde_json::{json, Value};
 use system_tests::{piped, python, run, workspace_root};
 
 fn corners(v: &Value) -> Vec<[f64; 2]> {
-    v.as_array().unwrap().iter().map(|c| [c[0].as_f64().unwrap(), c[1].as_f64().unwrap()]).collect()
+    v.as_array()
+        .unwrap()
+        .iter()
+        .map(|c| [c[0].as_f64().unwrap(), c[1].as_f64().unwrap()])
+        .collect()
 }
 
 fn rms(sq: &[f64]) -> f64 {
@@ -32,9 +36,17 @@ fn corner_accuracy_on_opencv_made_images() {
     let centre = Vector3::new(side / 2.0, side / 2.0, 0.0);
     let mut views = Vec::new();
     for k in 0..8 {
-        let axis = Vector3::new(0.5 * ((k as f64) * 1.9).sin(), 0.5 * ((k as f64) * 0.8).cos(), 0.6 * (k as f64 - 3.5) / 3.5);
+        let axis = Vector3::new(
+            0.5 * ((k as f64) * 1.9).sin(),
+            0.5 * ((k as f64) * 0.8).cos(),
+            0.6 * (k as f64 - 3.5) / 3.5,
+        );
         let r = Rotation3::from_scaled_axis(axis);
-        let at = Vector3::new(-0.08 + 0.05 * (k % 4) as f64, -0.04 + 0.08 * (k / 4) as f64, 0.30 + 0.02 * k as f64);
+        let at = Vector3::new(
+            -0.08 + 0.05 * (k % 4) as f64,
+            -0.04 + 0.08 * (k / 4) as f64,
+            0.30 + 0.02 * k as f64,
+        );
         let t = at - r * centre;
         views.push(json!({"rvec": [axis.x, axis.y, axis.z], "tvec": [t.x, t.y, t.z], "blur": 0.8, "noise": 2.0, "seed": 100 + k}));
     }
@@ -42,8 +54,17 @@ fn corner_accuracy_on_opencv_made_images() {
     let request = json!({"target": "aruco", "dictionary": "DICT_6X6_250", "id": 23, "side": side, "out_dir": tmp, "supersample": 4, "camera": camera, "views": views});
     let req_path = tmp.join("request.json");
     std::fs::write(&req_path, request.to_string()).unwrap();
-    let out = run(piped(python()).arg(workspace_root().join("tests/py/opencv_render.py")).arg(&req_path), Duration::from_secs(600));
-    assert!(out.status.success(), "opencv_render.py: {}", String::from_utf8_lossy(&out.stderr));
+    let out = run(
+        piped(python())
+            .arg(workspace_root().join("tests/py/opencv_render.py"))
+            .arg(&req_path),
+        Duration::from_secs(600),
+    );
+    assert!(
+        out.status.success(),
+        "opencv_render.py: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let rendered: Vec<Value> = serde_json::from_slice(&out.stdout).unwrap();
 
     let dict = Dictionary::predefined("DICT_6X6_250").unwrap();
@@ -53,7 +74,11 @@ fn corner_accuracy_on_opencv_made_images() {
         let truth = corners(&v["corners"]);
         let img = image::open(path).unwrap().to_luma8();
         let found = detect_markers(&img, &dict, &DetectorParams::default()).unwrap();
-        assert_eq!(found.iter().map(|m| m.id).collect::<Vec<_>>(), [23], "{path}: metrocell found");
+        assert_eq!(
+            found.iter().map(|m| m.id).collect::<Vec<_>>(),
+            [23],
+            "{path}: metrocell found"
+        );
         for (c, t) in found[0].corners.iter().zip(&truth) {
             ours_sq.push((c.x - t[0]).powi(2) + (c.y - t[1]).powi(2));
         }
@@ -68,7 +93,13 @@ fn corner_accuracy_on_opencv_made_images() {
     println!("OpenCV-made renders, 8 views × 4 corners: metrocell corner RMS {ours:.4} px (worst {worst:.4} px), OpenCV CORNER_REFINE_SUBPIX {cv:.4} px");
     // The detector's edge model is not this renderer's: it must still beat OpenCV's refinement and
     // stay below 0.1 px (the noise alone, 2 grey levels on a ~190-level edge, allows ~0.02 px).
-    assert!(ours <= cv, "metrocell {ours:.4} px worse than OpenCV {cv:.4} px on OpenCV-made images");
-    assert!(ours < 0.1, "metrocell corner RMS {ours:.4} px on OpenCV-made images");
+    assert!(
+        ours <= cv,
+        "metrocell {ours:.4} px worse than OpenCV {cv:.4} px on OpenCV-made images"
+    );
+    assert!(
+        ours < 0.1,
+        "metrocell corner RMS {ours:.4} px on OpenCV-made images"
+    );
     let _ = std::fs::remove_dir_all(&tmp);
 }

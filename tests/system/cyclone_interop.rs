@@ -8,10 +8,16 @@ use std::time::{Duration, Instant};
 
 use metrocell_msgs::RosMessage;
 use metrocell_node::{qos, MetrocellNode};
-use system_tests::{bin, json_close, piped, python, require_isolated_network, ros2_peer, run, ChildGuard};
+use system_tests::{
+    bin, json_close, piped, python, require_isolated_network, ros2_peer, run, ChildGuard,
+};
 
 fn node(name: &str) -> MetrocellNode {
-    MetrocellNode::builder(name).diagnostics_period(None).handle_signals(false).build().unwrap()
+    MetrocellNode::builder(name)
+        .diagnostics_period(None)
+        .handle_signals(false)
+        .build()
+        .unwrap()
 }
 
 fn sample_json<T: RosMessage>(seed: u64) -> serde_json::Value {
@@ -22,9 +28,17 @@ fn sample_json<T: RosMessage>(seed: u64) -> serde_json::Value {
 fn metrocell_to_cyclone<T: RosMessage>(topic: &str) {
     let expected = sample_json::<T>(3);
     let msg: T = serde_json::from_value(expected.clone()).unwrap();
-    let mut listener = ChildGuard::spawn(
-        piped(python()).arg(ros2_peer()).args(["listen", "--topic", topic, "--type", T::ROS_TYPE, "--count", "1", "--timeout", "30"]),
-    );
+    let mut listener = ChildGuard::spawn(piped(python()).arg(ros2_peer()).args([
+        "listen",
+        "--topic",
+        topic,
+        "--type",
+        T::ROS_TYPE,
+        "--count",
+        "1",
+        "--timeout",
+        "30",
+    ]));
     let mut n = node("to_cyclone");
     let publisher = n.publisher::<T>(topic, qos::reliable()).unwrap();
     let stdout = listener.child().stdout.take().unwrap();
@@ -40,9 +54,13 @@ fn metrocell_to_cyclone<T: RosMessage>(topic: &str) {
         if let Ok(line) = rx.recv_timeout(Duration::from_millis(250)) {
             break line;
         }
-        assert!(Instant::now() < deadline, "Cyclone received nothing on {topic}");
+        assert!(
+            Instant::now() < deadline,
+            "Cyclone received nothing on {topic}"
+        );
     };
-    let got: serde_json::Value = serde_json::from_str(&line).unwrap_or_else(|e| panic!("Cyclone printed {line:?}: {e}"));
+    let got: serde_json::Value =
+        serde_json::from_str(&line).unwrap_or_else(|e| panic!("Cyclone printed {line:?}: {e}"));
     json_close(&got, &expected, T::ROS_TYPE).unwrap();
 }
 
@@ -53,7 +71,9 @@ fn cyclone_decodes_what_metrocell_publishes() {
     metrocell_to_cyclone::<metrocell_msgs::msg::TrackerMeasurement>("/interop/tracker");
     metrocell_to_cyclone::<metrocell_msgs::msg::FiducialDetectionArray>("/interop/fiducials");
     metrocell_to_cyclone::<metrocell_msgs::msg::ErrorModel>("/interop/error_model");
-    metrocell_to_cyclone::<metrocell_msgs::geometry_msgs::msg::PoseWithCovarianceStamped>("/interop/pose");
+    metrocell_to_cyclone::<metrocell_msgs::geometry_msgs::msg::PoseWithCovarianceStamped>(
+        "/interop/pose",
+    );
 }
 
 /// Cyclone publishes the JSON sample; metrocell's typed subscription must decode it equal.
@@ -83,7 +103,11 @@ fn cyclone_to_metrocell<T: RosMessage>(topic: &str) {
             assert_eq!(got, expected, "{}: decoded differently", T::ROS_TYPE);
             return;
         }
-        assert!(Instant::now() < deadline, "{}: nothing from Cyclone within 30 s", T::ROS_TYPE);
+        assert!(
+            Instant::now() < deadline,
+            "{}: nothing from Cyclone within 30 s",
+            T::ROS_TYPE
+        );
         std::thread::sleep(Duration::from_millis(5));
     }
 }
@@ -91,8 +115,12 @@ fn cyclone_to_metrocell<T: RosMessage>(topic: &str) {
 #[test]
 fn metrocell_decodes_what_cyclone_publishes() {
     require_isolated_network();
-    cyclone_to_metrocell::<metrocell_msgs::sensor_msgs::msg::Temperature>("/interop/from_cyclone/temperature");
-    cyclone_to_metrocell::<metrocell_msgs::msg::TrackerMeasurement>("/interop/from_cyclone/tracker");
+    cyclone_to_metrocell::<metrocell_msgs::sensor_msgs::msg::Temperature>(
+        "/interop/from_cyclone/temperature",
+    );
+    cyclone_to_metrocell::<metrocell_msgs::msg::TrackerMeasurement>(
+        "/interop/from_cyclone/tracker",
+    );
     cyclone_to_metrocell::<metrocell_msgs::msg::MeasuredPoint>("/interop/from_cyclone/point");
 }
 
@@ -117,11 +145,25 @@ fn topic_echo_prints_what_cyclone_publishes() {
     ]));
     // No --type: echo discovers the type from Cyclone's publication.
     let out = run(
-        piped(bin("metrocell")).args(["topic", "echo", "/interop/echo", "--json", "--count", "1", "--discovery-timeout", "20"]),
+        piped(bin("metrocell")).args([
+            "topic",
+            "echo",
+            "/interop/echo",
+            "--json",
+            "--count",
+            "1",
+            "--discovery-timeout",
+            "20",
+        ]),
         Duration::from_secs(40),
     );
-    assert!(out.status.success(), "echo failed: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "echo failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let line = String::from_utf8(out.stdout).unwrap();
-    let got: serde_json::Value = serde_json::from_str(line.lines().next().expect("one line")).unwrap();
+    let got: serde_json::Value =
+        serde_json::from_str(line.lines().next().expect("one line")).unwrap();
     json_close(&got, &json, "echo").unwrap();
 }

@@ -25,27 +25,39 @@ fn sample<T: RosMessage>(seed: u64) -> T {
             return typed;
         }
     }
-    panic!("{}: no sample in 16 seeds differs from the default", T::ROS_TYPE);
+    panic!(
+        "{}: no sample in 16 seeds differs from the default",
+        T::ROS_TYPE
+    );
 }
 
 fn roundtrip<T: RosMessage>(node: &mut MetrocellNode, seed: u64) -> Result<(), String> {
     let s = T::ROS_TYPE.replace("/msg/", "/");
-    let publisher = node.publisher::<T>(&format!("/roundtrip/in/{s}"), qos::reliable()).unwrap();
-    let sub = node.subscription::<T>(&format!("/roundtrip/out/{s}"), qos::reliable()).unwrap();
+    let publisher = node
+        .publisher::<T>(&format!("/roundtrip/in/{s}"), qos::reliable())
+        .unwrap();
+    let sub = node
+        .subscription::<T>(&format!("/roundtrip/out/{s}"), qos::reliable())
+        .unwrap();
     let sent = sample::<T>(seed);
     let deadline = Instant::now() + Duration::from_secs(30);
     let mut next_send = Instant::now();
     while Instant::now() < deadline {
         // Resend until the peer's reader has matched ours; duplicates are identical anyway.
         if Instant::now() >= next_send {
-            publisher.publish(sent.clone()).map_err(|e| format!("{}: publish: {e:?}", T::ROS_TYPE))?;
+            publisher
+                .publish(sent.clone())
+                .map_err(|e| format!("{}: publish: {e:?}", T::ROS_TYPE))?;
             next_send += Duration::from_millis(250);
         }
         if let Ok(Some((back, _))) = sub.take() {
             return if back == sent {
                 Ok(())
             } else {
-                Err(format!("{}: came back different:\nsent {sent:?}\ngot  {back:?}", T::ROS_TYPE))
+                Err(format!(
+                    "{}: came back different:\nsent {sent:?}\ngot  {back:?}",
+                    T::ROS_TYPE
+                ))
             };
         }
         std::thread::sleep(Duration::from_millis(2));
@@ -57,7 +69,11 @@ fn roundtrip<T: RosMessage>(node: &mut MetrocellNode, seed: u64) -> Result<(), S
 fn every_message_type_survives_a_round_trip_through_another_node_process() {
     require_isolated_network();
     let _peer = ChildGuard::spawn(&mut Command::new(bin("roundtrip_peer")));
-    let mut node = MetrocellNode::builder("roundtrip_test").diagnostics_period(None).handle_signals(false).build().unwrap();
+    let mut node = MetrocellNode::builder("roundtrip_test")
+        .diagnostics_period(None)
+        .handle_signals(false)
+        .build()
+        .unwrap();
     let mut failures = Vec::new();
     let mut checked = 0;
     macro_rules! each {
@@ -70,5 +86,10 @@ fn every_message_type_survives_a_round_trip_through_another_node_process() {
     }
     metrocell_msgs::for_each_message!(each);
     assert!(checked >= 31, "only {checked} types checked");
-    assert!(failures.is_empty(), "{} of {checked} types failed:\n{}", failures.len(), failures.join("\n"));
+    assert!(
+        failures.is_empty(),
+        "{} of {checked} types failed:\n{}",
+        failures.len(),
+        failures.join("\n")
+    );
 }

@@ -19,12 +19,18 @@ use std::path::{Path, PathBuf};
 
 use system_tests::workspace_root;
 
-const EXTENSIONS: &[&str] = &["rs", "md", "py", "yaml", "yml", "toml", "msg", "json", "sh", "txt", "js", "csv", "html", "xml", "lock", "png"];
+const EXTENSIONS: &[&str] = &[
+    "rs", "md", "py", "yaml", "yml", "toml", "msg", "json", "sh", "txt", "js", "csv", "html",
+    "xml", "lock", "png",
+];
 // `third_party/` holds vendored upstream sources whose documents cite their own repositories.
 const SKIPPED_DIRS: &[&str] = &["target", ".venv", "node_modules", ".git", "third_party"];
 
 fn documents(dir: &Path, out: &mut Vec<PathBuf>) {
-    let mut entries: Vec<_> = std::fs::read_dir(dir).unwrap_or_else(|e| panic!("{}: {e}", dir.display())).map(|e| e.unwrap().path()).collect();
+    let mut entries: Vec<_> = std::fs::read_dir(dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .map(|e| e.unwrap().path())
+        .collect();
     entries.sort();
     for p in entries {
         let name = p.file_name().unwrap().to_string_lossy().to_string();
@@ -61,14 +67,24 @@ fn citations(line: &str) -> Vec<String> {
         let word: String = chars[start..i].iter().collect();
         let word = word.trim_end_matches(['.', '/']).to_string();
         // placeholders, URLs (`https://host/x.html`), globs and Rust paths are not citations
-        if matches!(before, '<' | '>' | '*' | '{' | '}' | '$' | '@') || matches!(after, '<' | '>' | '*' | '{' | '}' | ':') {
+        if matches!(before, '<' | '>' | '*' | '{' | '}' | '$' | '@')
+            || matches!(after, '<' | '>' | '*' | '{' | '}' | ':')
+        {
             continue;
         }
-        if !word.contains('/') || word.starts_with("target/") || word.contains("//") || is_placeholder(&word) {
+        if !word.contains('/')
+            || word.starts_with("target/")
+            || word.contains("//")
+            || is_placeholder(&word)
+        {
             continue;
         }
         // absolute paths: outputs in examples (/tmp/x.json) are not citations; a checkout's path is
-        if word.starts_with('/') && !["/work/", "/home/", "/root/"].iter().any(|p| word.starts_with(p)) {
+        if word.starts_with('/')
+            && !["/work/", "/home/", "/root/"]
+                .iter()
+                .any(|p| word.starts_with(p))
+        {
             continue;
         }
         let ext = word.rsplit_once('.').map(|(stem, ext)| (stem, ext));
@@ -84,7 +100,8 @@ fn citations(line: &str) -> Vec<String> {
 /// A path written with a placeholder in it: a part of one to three capitals (`DIR/model.yaml`,
 /// `cases/case_NN/truth.yaml`, `OUT/a.b.csv`), which the reader replaces.
 fn is_placeholder(word: &str) -> bool {
-    word.split(['/', '_', '.', '-']).any(|t| (1..=3).contains(&t.len()) && t.chars().all(|c| c.is_ascii_uppercase()))
+    word.split(['/', '_', '.', '-'])
+        .any(|t| (1..=3).contains(&t.len()) && t.chars().all(|c| c.is_ascii_uppercase()))
 }
 
 /// The lines of `doc` that are documentation: all of a Markdown file, the `//!` and `///`
@@ -94,7 +111,9 @@ fn doc_lines(doc: &Path) -> Vec<(usize, String)> {
     let markdown = doc.extension().is_some_and(|e| e == "md");
     text.lines()
         .enumerate()
-        .filter(|(_, l)| markdown || l.trim_start().starts_with("//!") || l.trim_start().starts_with("///"))
+        .filter(|(_, l)| {
+            markdown || l.trim_start().starts_with("//!") || l.trim_start().starts_with("///")
+        })
         .map(|(n, l)| (n + 1, l.to_string()))
         .collect()
 }
@@ -118,7 +137,11 @@ fn every_path_a_document_cites_exists() {
     let root = workspace_root();
     let mut docs = Vec::new();
     documents(&root, &mut docs);
-    assert!(docs.iter().any(|d| d.ends_with("README.md")), "no documents found under {}", root.display());
+    assert!(
+        docs.iter().any(|d| d.ends_with("README.md")),
+        "no documents found under {}",
+        root.display()
+    );
     let mut missing = Vec::new();
     let mut checked = 0;
     for doc in &docs {
@@ -128,7 +151,9 @@ fn every_path_a_document_cites_exists() {
                 let rel = doc.strip_prefix(&root).unwrap().display().to_string();
                 if cited.starts_with('/') {
                     // absolute: "/work/x/tests/isolated" → machine-specific
-                    missing.push(format!("{rel}:{n}: {cited} (an absolute path: cite it from the repository root)"));
+                    missing.push(format!(
+                        "{rel}:{n}: {cited} (an absolute path: cite it from the repository root)"
+                    ));
                 } else if !resolves(&root, doc, &cited) {
                     missing.push(format!("{rel}:{n}: {cited}"));
                 }
@@ -136,22 +161,58 @@ fn every_path_a_document_cites_exists() {
         }
     }
     eprintln!("{checked} citations in {} documents", docs.len());
-    assert!(checked > 100, "only {checked} citations found: the scanner is broken");
-    assert!(missing.is_empty(), "documents cite paths that do not exist:\n{}", missing.join("\n"));
+    assert!(
+        checked > 100,
+        "only {checked} citations found: the scanner is broken"
+    );
+    assert!(
+        missing.is_empty(),
+        "documents cite paths that do not exist:\n{}",
+        missing.join("\n")
+    );
 }
 
 #[test]
 fn the_scanner_finds_citations_and_skips_what_is_not_one() {
-    assert_eq!(citations("see `crates/bag/README.md`, and src/replay.rs."), vec!["crates/bag/README.md", "src/replay.rs"]);
-    assert_eq!(citations("run /work/main/tests/isolated.sh now"), vec!["/work/main/tests/isolated.sh"]);
-    assert!(citations("-o /tmp/suite_results.json, then DIR/index.html and bags/cases/case_NN/truth.yaml").is_empty());
+    assert_eq!(
+        citations("see `crates/bag/README.md`, and src/replay.rs."),
+        vec!["crates/bag/README.md", "src/replay.rs"]
+    );
+    assert_eq!(
+        citations("run /work/main/tests/isolated.sh now"),
+        vec!["/work/main/tests/isolated.sh"]
+    );
+    assert!(citations(
+        "-o /tmp/suite_results.json, then DIR/index.html and bags/cases/case_NN/truth.yaml"
+    )
+    .is_empty());
     // topics, types, placeholders, URLs, globs, build outputs: not citations
     assert!(citations("`tracker/measurements` (`metrocell_msgs/TrackerMeasurement`)").is_empty());
-    assert!(citations("nodes/<node>/src/main.rs https://example.org/a/b.html views/*.png target/release/x.json").is_empty());
+    assert!(citations(
+        "nodes/<node>/src/main.rs https://example.org/a/b.html views/*.png target/release/x.json"
+    )
+    .is_empty());
     let root = workspace_root();
-    assert!(resolves(&root, &root.join("crates/bagtools/README.md"), "src/lib.rs"), "relative to the document's directory");
-    assert!(resolves(&root, &root.join("nodes/tracker/tests/tcp_backend.rs"), "tests/isolated"), "relative to the repository root");
-    assert!(!resolves(&root, &root.join("README.md"), "launch-configs/cell.launch.yaml"), "a file that is not there");
+    assert!(
+        resolves(&root, &root.join("crates/bagtools/README.md"), "src/lib.rs"),
+        "relative to the document's directory"
+    );
+    assert!(
+        resolves(
+            &root,
+            &root.join("nodes/tracker/tests/tcp_backend.rs"),
+            "tests/isolated"
+        ),
+        "relative to the repository root"
+    );
+    assert!(
+        !resolves(
+            &root,
+            &root.join("README.md"),
+            "launch-configs/cell.launch.yaml"
+        ),
+        "a file that is not there"
+    );
 }
 
 /// The directories holding a package of the workspace (a `Cargo.toml` with `[package]`).
@@ -178,12 +239,20 @@ fn every_package_has_a_readme_and_every_crate_is_in_the_layout_table() {
     for dir in packages(&root) {
         let rel = dir.strip_prefix(&root).unwrap().display().to_string();
         if !dir.join("README.md").exists() {
-            problems.push(format!("{rel} has no README.md (what it is, its modules, how to test it)"));
+            problems.push(format!(
+                "{rel} has no README.md (what it is, its modules, how to test it)"
+            ));
         }
         if rel.starts_with("crates/") && !readme.contains(&format!("| `{rel}` |")) {
-            problems.push(format!("{rel} is missing from the layout table of README.md"));
+            problems.push(format!(
+                "{rel} is missing from the layout table of README.md"
+            ));
         }
     }
-    assert!(packages(&root).len() >= 20, "the package scan is broken: {:?}", packages(&root));
+    assert!(
+        packages(&root).len() >= 20,
+        "the package scan is broken: {:?}",
+        packages(&root)
+    );
     assert!(problems.is_empty(), "{}", problems.join("\n"));
 }

@@ -25,7 +25,12 @@ use system_tests::{python, workspace_root};
 const TOL: f64 = 1e-9;
 
 fn cell_text(name: &str) -> String {
-    std::fs::read_to_string(workspace_root().join("crates/twin/examples/cells").join(name)).unwrap()
+    std::fs::read_to_string(
+        workspace_root()
+            .join("crates/twin/examples/cells")
+            .join(name),
+    )
+    .unwrap()
 }
 
 /// The cell file as JSON for the reference script (quantities stay text with units).
@@ -42,20 +47,36 @@ fn reference(request: &Value) -> Value {
         .stderr(Stdio::piped())
         .spawn()
         .expect("start the Python reference");
-    child.stdin.take().unwrap().write_all(request.to_string().as_bytes()).unwrap();
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(request.to_string().as_bytes())
+        .unwrap();
     let out = child.wait_with_output().unwrap();
-    assert!(out.status.success(), "independent_fk.py failed: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "independent_fk.py failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     serde_json::from_slice(&out.stdout).unwrap()
 }
 
 fn v3(v: &Value) -> Vector3<f64> {
     let a = v.as_array().unwrap();
-    Vector3::new(a[0].as_f64().unwrap(), a[1].as_f64().unwrap(), a[2].as_f64().unwrap())
+    Vector3::new(
+        a[0].as_f64().unwrap(),
+        a[1].as_f64().unwrap(),
+        a[2].as_f64().unwrap(),
+    )
 }
 
 fn close(what: &str, ours: &Vector3<f64>, theirs: &Vector3<f64>, tol: f64) {
     let e = (ours - theirs).norm();
-    assert!(e <= tol, "{what}: ours {ours:?}, independent {theirs:?}, |difference| {e:e} m");
+    assert!(
+        e <= tol,
+        "{what}: ours {ours:?}, independent {theirs:?}, |difference| {e:e} m"
+    );
 }
 
 /// (commanded joints, nominal tool point) of every tracker sample, first minutes of the program.
@@ -73,17 +94,40 @@ fn tracker_nominals(cell: Cell, seconds: f64) -> Vec<(Vec<f64>, Vector3<f64>)> {
 fn five_axis_at_b_and_c_off_zero() {
     let text = cell_text("five_axis_table.yaml");
     let cell = Cell::from_yaml_str(&text, "five_axis_table.yaml").unwrap();
-    let MachineKinematics::FiveAxis(m) = cell.machine.kinematics.clone() else { panic!("not five-axis") };
+    let MachineKinematics::FiveAxis(m) = cell.machine.kinematics.clone() else {
+        panic!("not five-axis")
+    };
     let mut cases = tracker_nominals(cell, 120.0);
     let twin_count = cases.len();
-    let tilted = cases.iter().filter(|(q, _)| q[3].abs() > 0.1 && q[4].abs() > 0.1).count();
-    assert!(tilted >= 50, "the program should reach B, C ≠ 0: {tilted} of {twin_count} samples");
+    let tilted = cases
+        .iter()
+        .filter(|(q, _)| q[3].abs() > 0.1 && q[4].abs() > 0.1)
+        .count();
+    assert!(
+        tilted >= 50,
+        "the program should reach B, C ≠ 0: {tilted} of {twin_count} samples"
+    );
     // and random joints over the whole B and C ranges through crates/kinematics directly
     let mut r = rand_chacha::ChaCha8Rng::seed_from_u64(4);
     let mut axes = Vec::new();
     for _ in 0..200 {
-        let q = vec![r.random_range(0.0..1.15), r.random_range(0.0..1.15), r.random_range(-0.4..0.0), r.random_range(m.geometry.b_limits.0..m.geometry.b_limits.1), r.random_range(-6.3..6.3)];
-        let pose = m.geometry.forward(&metrocell_kinematics::five_axis::FiveAxisJoints { d1: q[1], d2: q[0], d3: -q[2], b: q[3], c: q[4] }).unwrap();
+        let q = vec![
+            r.random_range(0.0..1.15),
+            r.random_range(0.0..1.15),
+            r.random_range(-0.4..0.0),
+            r.random_range(m.geometry.b_limits.0..m.geometry.b_limits.1),
+            r.random_range(-6.3..6.3),
+        ];
+        let pose = m
+            .geometry
+            .forward(&metrocell_kinematics::five_axis::FiveAxisJoints {
+                d1: q[1],
+                d2: q[0],
+                d3: -q[2],
+                b: q[3],
+                c: q[4],
+            })
+            .unwrap();
         cases.push((q, pose.tip));
         axes.push(pose.axis);
     }
@@ -94,10 +138,20 @@ fn five_axis_at_b_and_c_off_zero() {
     let mut worst = 0.0f64;
     for (k, ((q, tip), g)) in cases.iter().zip(got).enumerate() {
         let source = if k < twin_count { "twin" } else { "kinematics" };
-        close(&format!("{source} tool tip at {q:?}"), tip, &v3(&g["tip"]), TOL);
+        close(
+            &format!("{source} tool tip at {q:?}"),
+            tip,
+            &v3(&g["tip"]),
+            TOL,
+        );
         worst = worst.max((tip - v3(&g["tip"])).norm());
         if k >= twin_count {
-            close(&format!("tool axis at {q:?}"), &axes[k - twin_count], &v3(&g["axis"]), 1e-12);
+            close(
+                &format!("tool axis at {q:?}"),
+                &axes[k - twin_count],
+                &v3(&g["axis"]),
+                1e-12,
+            );
         }
     }
     println!("five-axis: {} twin samples ({tilted} with B, C ≠ 0) and 200 random joints agree to {worst:.1e} m", twin_count);
@@ -107,7 +161,9 @@ fn five_axis_at_b_and_c_off_zero() {
 fn delta_true_tool_point_with_trims() {
     let text = cell_text("delta_printer.yaml");
     let cell = Cell::from_yaml_str(&text, "delta_printer.yaml").unwrap();
-    let MachineKinematics::Delta(nominal) = cell.machine.kinematics else { panic!("not delta") };
+    let MachineKinematics::Delta(nominal) = cell.machine.kinematics else {
+        panic!("not delta")
+    };
     let truth = cell.true_delta_geometry().unwrap();
     assert!(truth != nominal, "the example delta has trims");
     let tool = cell.machine.tool_offset;
@@ -115,15 +171,24 @@ fn delta_true_tool_point_with_trims() {
     let mut cases: Vec<(Vector3<f64>, Vector3<f64>)> = sim
         .samples_with_truth()
         .filter_map(|(_, t)| match t {
-            SampleTruth::CameraFrameRequest { tool_point, joints, .. } => Some((Vector3::new(joints[0], joints[1], joints[2]), tool_point)),
+            SampleTruth::CameraFrameRequest {
+                tool_point, joints, ..
+            } => Some((Vector3::new(joints[0], joints[1], joints[2]), tool_point)),
             _ => None,
         })
         .collect();
     let twin_count = cases.len();
-    assert!(twin_count >= 10, "only {twin_count} camera frame requests in 60 s");
+    assert!(
+        twin_count >= 10,
+        "only {twin_count} camera frame requests in 60 s"
+    );
     let mut r = rand_chacha::ChaCha8Rng::seed_from_u64(2);
     for _ in 0..200 {
-        let p = Vector3::new(r.random_range(-0.08..0.08), r.random_range(-0.08..0.08), r.random_range(0.0..0.12));
+        let p = Vector3::new(
+            r.random_range(-0.08..0.08),
+            r.random_range(-0.08..0.08),
+            r.random_range(0.0..0.12),
+        );
         let carriages = nominal.inverse(&p).unwrap();
         cases.push((p, truth.forward(&carriages).unwrap() + tool));
     }
@@ -133,19 +198,31 @@ fn delta_true_tool_point_with_trims() {
     let mut worst = 0.0f64;
     for (k, ((p, tip), g)) in cases.iter().zip(got).enumerate() {
         let source = if k < twin_count { "twin" } else { "kinematics" };
-        close(&format!("{source} delta tool point for effector command {p:?}"), tip, &v3(g), TOL);
+        close(
+            &format!("{source} delta tool point for effector command {p:?}"),
+            tip,
+            &v3(g),
+            TOL,
+        );
         worst = worst.max((tip - v3(g)).norm());
         // the trims matter at this scale: the true point is not the commanded one
-        assert!((tip - (p + tool)).norm() > 1e-5, "trims had no effect at {p:?}");
+        assert!(
+            (tip - (p + tool)).norm() > 1e-5,
+            "trims had no effect at {p:?}"
+        );
     }
-    println!("delta: {twin_count} twin frame requests and 200 random points agree to {worst:.1e} m");
+    println!(
+        "delta: {twin_count} twin frame requests and 200 random points agree to {worst:.1e} m"
+    );
 }
 
 #[test]
 fn ur5_against_its_published_dh() {
     let text = cell_text("serial_arm_ur5.yaml");
     let cell = Cell::from_yaml_str(&text, "serial_arm_ur5.yaml").unwrap();
-    let MachineKinematics::SerialArm(arm) = cell.machine.kinematics.clone() else { panic!("not an arm") };
+    let MachineKinematics::SerialArm(arm) = cell.machine.kinematics.clone() else {
+        panic!("not an arm")
+    };
     let mut cases = tracker_nominals(cell, 120.0);
     let twin_count = cases.len();
     assert!(twin_count >= 100, "only {twin_count} tracker samples");
@@ -161,7 +238,12 @@ fn ur5_against_its_published_dh() {
     let mut worst = 0.0f64;
     for (k, ((q, tip), g)) in cases.iter().zip(got).enumerate() {
         let source = if k < twin_count { "twin" } else { "kinematics" };
-        close(&format!("{source} UR5 tool point at {q:?}"), tip, &v3(g), TOL);
+        close(
+            &format!("{source} UR5 tool point at {q:?}"),
+            tip,
+            &v3(g),
+            TOL,
+        );
         worst = worst.max((tip - v3(g)).norm());
     }
     println!("UR5: {twin_count} twin samples and 200 random joints agree with the published DH to {worst:.1e} m");

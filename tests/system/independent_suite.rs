@@ -24,14 +24,20 @@ fn os(s: &str) -> &OsStr {
 }
 
 fn temp_dir(name: &str) -> PathBuf {
-    let d = std::env::temp_dir().join(format!("metrocell_independent_{name}_{}", std::process::id()));
+    let d = std::env::temp_dir().join(format!(
+        "metrocell_independent_{name}_{}",
+        std::process::id()
+    ));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();
     d
 }
 
 fn py(args: &[&OsStr], timeout: Duration) -> std::process::Output {
-    let out = run(piped(python()).args(args).current_dir(workspace_root()), timeout);
+    let out = run(
+        piped(python()).args(args).current_dir(workspace_root()),
+        timeout,
+    );
     println!("{}", String::from_utf8_lossy(&out.stdout));
     eprintln!("{}", String::from_utf8_lossy(&out.stderr));
     out
@@ -41,16 +47,41 @@ fn py(args: &[&OsStr], timeout: Duration) -> std::process::Output {
 fn diagnose_meets_issue_26_targets_on_the_independent_sample() {
     let dir = temp_dir("sample");
     let suite = dir.join("suite");
-    let o = py(&[os("bags/independent/generate_suite.py"), os("--out"), suite.as_os_str(), os("--seeds"), os("1"), os("--sample")], Duration::from_secs(300));
+    let o = py(
+        &[
+            os("bags/independent/generate_suite.py"),
+            os("--out"),
+            suite.as_os_str(),
+            os("--seeds"),
+            os("1"),
+            os("--sample"),
+        ],
+        Duration::from_secs(300),
+    );
     assert!(o.status.success(), "generate_suite.py failed");
     let results = dir.join("results.json");
     let metrocell = bin("metrocell");
     let o = py(
-        &[os("bags/independent/score_suite.py"), os("--metrocell"), metrocell.as_os_str(), os("--suite"), suite.as_os_str(), os("--out"), results.as_os_str(), os("--require-targets")],
+        &[
+            os("bags/independent/score_suite.py"),
+            os("--metrocell"),
+            metrocell.as_os_str(),
+            os("--suite"),
+            suite.as_os_str(),
+            os("--out"),
+            results.as_os_str(),
+            os("--require-targets"),
+        ],
         Duration::from_secs(1800),
     );
     let text = String::from_utf8_lossy(&o.stdout);
-    assert!(text.contains("category") && results.exists(), "score_suite.py printed no table: {text}");
-    assert!(o.status.success(), "issue 26 targets missed on the independent sample (table above)");
+    assert!(
+        text.contains("category") && results.exists(),
+        "score_suite.py printed no table: {text}"
+    );
+    assert!(
+        o.status.success(),
+        "issue 26 targets missed on the independent sample (table above)"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -34,22 +34,39 @@ fn wait_running(diagnostics: &Subscription<DiagnosticArray>, fqn: &str, child: &
         if let Some(status) = child.child().try_wait().unwrap() {
             panic!("{fqn} exited before its first heartbeat: {status}");
         }
-        assert!(Instant::now() < deadline, "no /diagnostics heartbeat from {fqn} within 30 s");
+        assert!(
+            Instant::now() < deadline,
+            "no /diagnostics heartbeat from {fqn} within 30 s"
+        );
         std::thread::sleep(Duration::from_millis(10));
     }
 }
 
 /// Starts `exe` with `args`, waits until it runs, sends `signal` and returns how long it took to
 /// exit; panics if it is still running after the bound or exits non-zero.
-fn stop_time(diagnostics: &Subscription<DiagnosticArray>, exe: &Path, name: &str, args: &[String], signal: Signal) -> Duration {
+fn stop_time(
+    diagnostics: &Subscription<DiagnosticArray>,
+    exe: &Path,
+    name: &str,
+    args: &[String],
+    signal: Signal,
+) -> Duration {
     while let Ok(Some(_)) = diagnostics.take() {}
     let mut child = ChildGuard::spawn(
-        Command::new(exe).args(args).args(["-r", &format!("__node:={name}")]).stdin(Stdio::null()).stdout(Stdio::null()).stderr(Stdio::piped()),
+        Command::new(exe)
+            .args(args)
+            .args(["-r", &format!("__node:={name}")])
+            .stdin(Stdio::null())
+            .stdout(Stdio::null())
+            .stderr(Stdio::piped()),
     );
     wait_running(diagnostics, &format!("/{name}"), &mut child);
     // Let it work for a moment (subscriptions matched, messages flowing) before the signal.
     std::thread::sleep(Duration::from_millis(700));
-    assert!(child.child().try_wait().unwrap().is_none(), "{name} exited on its own");
+    assert!(
+        child.child().try_wait().unwrap().is_none(),
+        "{name} exited on its own"
+    );
     let t0 = Instant::now();
     nix::sys::signal::kill(nix::unistd::Pid::from_raw(child.pid()), signal).unwrap();
     let status = loop {
@@ -61,13 +78,21 @@ fn stop_time(diagnostics: &Subscription<DiagnosticArray>, exe: &Path, name: &str
                 let _ = c.kill();
                 c.wait_with_output().unwrap()
             });
-            panic!("{name} still running {STOP_BOUND:?} after {signal}; stderr:\n{}", out.map(|o| String::from_utf8_lossy(&o.stderr).into_owned()).unwrap_or_default());
+            panic!(
+                "{name} still running {STOP_BOUND:?} after {signal}; stderr:\n{}",
+                out.map(|o| String::from_utf8_lossy(&o.stderr).into_owned())
+                    .unwrap_or_default()
+            );
         }
         std::thread::sleep(Duration::from_millis(2));
     };
     let took = t0.elapsed();
     let out = child.0.take().unwrap().wait_with_output().unwrap();
-    assert!(status.success(), "{name} after {signal}: exit {status}; stderr:\n{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        status.success(),
+        "{name} after {signal}: exit {status}; stderr:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     took
 }
 
@@ -81,51 +106,180 @@ fn every_node_stops_within_a_second_on_sigint_and_sigterm() {
     // One frame for the camera node.
     let frames = tmp.join("frames");
     std::fs::create_dir_all(&frames).unwrap();
-    image::GrayImage::from_fn(640, 480, |x, y| image::Luma([((x / 40 + y / 40) % 2 * 200 + 20) as u8])).save(frames.join("f0.png")).unwrap();
+    image::GrayImage::from_fn(640, 480, |x, y| {
+        image::Luma([((x / 40 + y / 40) % 2 * 200 + 20) as u8])
+    })
+    .save(frames.join("f0.png"))
+    .unwrap();
 
-    let mut observer = MetrocellNode::builder("shutdown_observer").diagnostics_period(None).handle_signals(false).build().unwrap();
-    let diagnostics = observer.subscription::<DiagnosticArray>("/diagnostics", qos::reliable()).unwrap();
+    let mut observer = MetrocellNode::builder("shutdown_observer")
+        .diagnostics_period(None)
+        .handle_signals(false)
+        .build()
+        .unwrap();
+    let diagnostics = observer
+        .subscription::<DiagnosticArray>("/diagnostics", qos::reliable())
+        .unwrap();
 
     // The twin as the traffic source for the others (and the first node held to the bound).
     let cell = root.join("crates/twin/examples/cells/quick_demo.yaml");
-    let sim_args: Vec<String> = ["--ros-args", "-p", &format!("cell:={}", cell.display()), "-p", "speed:=20", "-p", "loop:=true"].iter().map(|s| s.to_string()).collect();
+    let sim_args: Vec<String> = [
+        "--ros-args",
+        "-p",
+        &format!("cell:={}", cell.display()),
+        "-p",
+        "speed:=20",
+        "-p",
+        "loop:=true",
+    ]
+    .iter()
+    .map(|s| s.to_string())
+    .collect();
     let s = |v: &[&str]| v.iter().map(|s| s.to_string()).collect::<Vec<String>>();
     let nodes: Vec<(&str, Vec<String>)> = vec![
         ("metrocell-sim", sim_args.clone()),
         // launch-configs/thermal.params.yaml's sensors, given with -p (its section is keyed by the node name `thermal`)
-        ("metrocell-thermal", s(&["--ros-args", "-p", "sensors:=[x_left, x_right]", "-p", "sensor_axes:=[x, x]", "-p", "sensor_positions:=[0.0, 0.4]"])),
-        ("metrocell-recorder", s(&["--ros-args", "-p", &format!("output:={}", tmp.join("bag").display())])),
-        ("metrocell-camera", s(&["--ros-args", "-p", &format!("path:={}", frames.display()), "-p", "loop:=true", "-p", "rate:=20.0"])),
-        ("metrocell-fiducial", s(&["--ros-args", "-r", "image:=/camera/image_raw", "-r", "camera_info:=/camera/camera_info"])),
-        ("metrocell-probe", s(&["--ros-args", "-r", "probe/trigger:=/machine/joint_states"])),
+        (
+            "metrocell-thermal",
+            s(&[
+                "--ros-args",
+                "-p",
+                "sensors:=[x_left, x_right]",
+                "-p",
+                "sensor_axes:=[x, x]",
+                "-p",
+                "sensor_positions:=[0.0, 0.4]",
+            ]),
+        ),
+        (
+            "metrocell-recorder",
+            s(&[
+                "--ros-args",
+                "-p",
+                &format!("output:={}", tmp.join("bag").display()),
+            ]),
+        ),
+        (
+            "metrocell-camera",
+            s(&[
+                "--ros-args",
+                "-p",
+                &format!("path:={}", frames.display()),
+                "-p",
+                "loop:=true",
+                "-p",
+                "rate:=20.0",
+            ]),
+        ),
+        (
+            "metrocell-fiducial",
+            s(&[
+                "--ros-args",
+                "-r",
+                "image:=/camera/image_raw",
+                "-r",
+                "camera_info:=/camera/camera_info",
+            ]),
+        ),
+        (
+            "metrocell-probe",
+            s(&["--ros-args", "-r", "probe/trigger:=/machine/joint_states"]),
+        ),
         // reads the twin's commanded joints and thermocouples (no measured points: no tracker node here)
-        ("metrocell-estimator", s(&["--ros-args", "-p", &format!("model:={}", root.join("launch-configs/cells/demo_model.yaml").display())])),
+        (
+            "metrocell-estimator",
+            s(&[
+                "--ros-args",
+                "-p",
+                &format!(
+                    "model:={}",
+                    root.join("launch-configs/cells/demo_model.yaml").display()
+                ),
+            ]),
+        ),
         // the twin's raw readings, diagnosed every 20 s of cell time, so a diagnosis may be running when the signal comes
-        ("metrocell-diagnose", s(&["--ros-args", "-p", &format!("model:={}", root.join("launch-configs/cells/demo_model.yaml").display()), "-p", "points:=/tracker/measurements", "-p", "points_type:=tracker", "-p", "every:=20.0", "-p", "min_records:=10"])),
+        (
+            "metrocell-diagnose",
+            s(&[
+                "--ros-args",
+                "-p",
+                &format!(
+                    "model:={}",
+                    root.join("launch-configs/cells/demo_model.yaml").display()
+                ),
+                "-p",
+                "points:=/tracker/measurements",
+                "-p",
+                "points_type:=tracker",
+                "-p",
+                "every:=20.0",
+                "-p",
+                "min_records:=10",
+            ]),
+        ),
         // the twin's raw readings (registration from the first 6 targets, as in the demo)
-        ("metrocell-tracker", s(&["--ros-args", "-p", "tool_offset:=[0.0, 0.0, -0.1]", "-p", "registration_points:=6"])),
+        (
+            "metrocell-tracker",
+            s(&[
+                "--ros-args",
+                "-p",
+                "tool_offset:=[0.0, 0.0, -0.1]",
+                "-p",
+                "registration_points:=6",
+            ]),
+        ),
         // its HTTP and Foxglove servers on free ports, so the bound covers closing them too
-        ("metrocell-dashboard", s(&["--ros-args", "-p", "port:=0", "-p", "foxglove_port:=0"])),
+        (
+            "metrocell-dashboard",
+            s(&["--ros-args", "-p", "port:=0", "-p", "foxglove_port:=0"]),
+        ),
     ];
-    let mut load = ChildGuard::spawn(Command::new(bin("metrocell-sim")).args(&sim_args).args(["-r", "__node:=shutdown_load"]).stdout(Stdio::null()).stderr(Stdio::null()));
+    let mut load = ChildGuard::spawn(
+        Command::new(bin("metrocell-sim"))
+            .args(&sim_args)
+            .args(["-r", "__node:=shutdown_load"])
+            .stdout(Stdio::null())
+            .stderr(Stdio::null()),
+    );
     let mut worst = Duration::ZERO;
     for (k, (exe, args)) in nodes.iter().enumerate() {
         for (j, signal) in [Signal::SIGINT, Signal::SIGTERM].into_iter().enumerate() {
             // A distinct node name per run, so a heartbeat of an earlier run cannot count.
             let name = format!("shutdown_{k}_{j}");
             // The recorder refuses an existing output directory: a new one per run.
-            let args: Vec<String> = args.iter().map(|a| a.replace(&tmp.join("bag").display().to_string(), &tmp.join(format!("bag{j}")).display().to_string())).collect();
+            let args: Vec<String> = args
+                .iter()
+                .map(|a| {
+                    a.replace(
+                        &tmp.join("bag").display().to_string(),
+                        &tmp.join(format!("bag{j}")).display().to_string(),
+                    )
+                })
+                .collect();
             let took = stop_time(&diagnostics, &bin(exe), &name, &args, signal);
-            println!("{exe:>20} {signal}: exited {:.0} ms after the signal", took.as_secs_f64() * 1e3);
+            println!(
+                "{exe:>20} {signal}: exited {:.0} ms after the signal",
+                took.as_secs_f64() * 1e3
+            );
             worst = worst.max(took);
         }
     }
-    assert!(load.child().try_wait().unwrap().is_none(), "the load twin stopped during the test");
-    println!("slowest stop: {:.0} ms (bound {STOP_BOUND:?})", worst.as_secs_f64() * 1e3);
+    assert!(
+        load.child().try_wait().unwrap().is_none(),
+        "the load twin stopped during the test"
+    );
+    println!(
+        "slowest stop: {:.0} ms (bound {STOP_BOUND:?})",
+        worst.as_secs_f64() * 1e3
+    );
     // Both recordings were finished on the signal: a readable bag each.
     for j in 0..2 {
         let bag = tmp.join(format!("bag{j}"));
-        assert!(metrocell_bag::BagReader::open(&bag).is_ok(), "recorder bag {} not finished", bag.display());
+        assert!(
+            metrocell_bag::BagReader::open(&bag).is_ok(),
+            "recorder bag {} not finished",
+            bag.display()
+        );
     }
     let _ = std::fs::remove_dir_all(&tmp);
 }

@@ -17,7 +17,10 @@ use std::time::{Duration, Instant};
 use metrocell_bag::{BagReader, MessageFilter};
 use metrocell_bagtools::BagSource;
 use metrocell_node::{qos, MetrocellNode, RawPublisher};
-use system_tests::{bin, interrupt, piped, python, require_isolated_network, ros2_peer, run, workspace_root, ChildGuard};
+use system_tests::{
+    bin, interrupt, piped, python, require_isolated_network, ros2_peer, run, workspace_root,
+    ChildGuard,
+};
 
 fn scratch(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("recording_it_{}_{name}", std::process::id()));
@@ -80,7 +83,10 @@ fn stop(mut guard: ChildGuard) {
             assert!(status.success(), "recorder exits 0 on SIGINT, got {status}");
             return;
         }
-        assert!(Instant::now() < deadline, "recorder did not stop within 10 s of SIGINT");
+        assert!(
+            Instant::now() < deadline,
+            "recorder did not stop within 10 s of SIGINT"
+        );
         std::thread::sleep(Duration::from_millis(20));
     }
 }
@@ -88,7 +94,11 @@ fn stop(mut guard: ChildGuard) {
 fn wait_matched(p: &RawPublisher, n: usize) {
     let deadline = Instant::now() + Duration::from_secs(20);
     while p.matched_subscriptions() < n {
-        assert!(Instant::now() < deadline, "{}: {n} subscribers did not match within 20 s", p.topic());
+        assert!(
+            Instant::now() < deadline,
+            "{}: {n} subscribers did not match within 20 s",
+            p.topic()
+        );
         std::thread::sleep(Duration::from_millis(20));
     }
 }
@@ -97,48 +107,122 @@ fn wait_matched(p: &RawPublisher, n: usize) {
 fn bag_record_and_the_recorder_node_give_the_same_bag() {
     require_isolated_network();
     let (cli_dir, node_dir) = (scratch("same_cli"), scratch("same_node"));
-    let mut node = MetrocellNode::builder("same_bag_pub").diagnostics_period(None).handle_signals(false).build().unwrap();
-    let temps = node.raw_publisher("/same_test/temperature", "sensor_msgs/msg/Temperature", qos::reliable()).unwrap();
-    let text = node.raw_publisher("/same_test/status", "std_msgs/msg/String", qos::reliable()).unwrap();
-    let fast = node.raw_publisher("/same_test/fast", "sensor_msgs/msg/Temperature", qos::sensor_data()).unwrap();
-    let (cli, _cli_log) = spawn_with_log(Command::new(bin("metrocell")).args(["bag", "record", "-e", "/same_test/.*", "-x", "/same_test/fast", "-o"]).arg(&cli_dir));
+    let mut node = MetrocellNode::builder("same_bag_pub")
+        .diagnostics_period(None)
+        .handle_signals(false)
+        .build()
+        .unwrap();
+    let temps = node
+        .raw_publisher(
+            "/same_test/temperature",
+            "sensor_msgs/msg/Temperature",
+            qos::reliable(),
+        )
+        .unwrap();
+    let text = node
+        .raw_publisher("/same_test/status", "std_msgs/msg/String", qos::reliable())
+        .unwrap();
+    let fast = node
+        .raw_publisher(
+            "/same_test/fast",
+            "sensor_msgs/msg/Temperature",
+            qos::sensor_data(),
+        )
+        .unwrap();
+    let (cli, _cli_log) = spawn_with_log(
+        Command::new(bin("metrocell"))
+            .args([
+                "bag",
+                "record",
+                "-e",
+                "/same_test/.*",
+                "-x",
+                "/same_test/fast",
+                "-o",
+            ])
+            .arg(&cli_dir),
+    );
     let (rec, _rec_log) = spawn_with_log(
-        Command::new(bin("metrocell-recorder")).args(["--ros-args", "-p"]).arg(format!("output:={}", node_dir.display())).args(["-p", "regex:=/same_test/.*", "-p", "exclude:=/same_test/fast"]),
+        Command::new(bin("metrocell-recorder"))
+            .args(["--ros-args", "-p"])
+            .arg(format!("output:={}", node_dir.display()))
+            .args([
+                "-p",
+                "regex:=/same_test/.*",
+                "-p",
+                "exclude:=/same_test/fast",
+            ]),
     );
     wait_matched(&temps, 2);
     wait_matched(&text, 2);
     let n = 400;
     for i in 0..n {
-        temps.publish(&encode("sensor_msgs/msg/Temperature", serde_json::json!({"temperature": 20.0 + i as f64 * 1e-3, "variance": 1e-4}))).unwrap();
+        temps
+            .publish(&encode(
+                "sensor_msgs/msg/Temperature",
+                serde_json::json!({"temperature": 20.0 + i as f64 * 1e-3, "variance": 1e-4}),
+            ))
+            .unwrap();
         if i % 4 == 0 {
-            text.publish(&encode("std_msgs/msg/String", serde_json::json!({"data": format!("status {i}")}))).unwrap();
+            text.publish(&encode(
+                "std_msgs/msg/String",
+                serde_json::json!({"data": format!("status {i}")}),
+            ))
+            .unwrap();
         }
-        fast.publish(&encode("sensor_msgs/msg/Temperature", serde_json::json!({"temperature": 1.0}))).unwrap();
+        fast.publish(&encode(
+            "sensor_msgs/msg/Temperature",
+            serde_json::json!({"temperature": 1.0}),
+        ))
+        .unwrap();
         std::thread::sleep(Duration::from_millis(2));
     }
     std::thread::sleep(Duration::from_millis(500));
     stop(cli);
     stop(rec);
     let (a, b) = (bag_contents(&cli_dir), bag_contents(&node_dir));
-    let ours = |m: &BTreeMap<String, (String, Vec<Vec<u8>>)>| -> BTreeMap<String, (String, Vec<Vec<u8>>)> {
-        m.iter().filter(|(t, _)| t.starts_with("/same_test/")).map(|(t, v)| (t.clone(), v.clone())).collect()
-    };
+    let ours =
+        |m: &BTreeMap<String, (String, Vec<Vec<u8>>)>| -> BTreeMap<String, (String, Vec<Vec<u8>>)> {
+            m.iter()
+                .filter(|(t, _)| t.starts_with("/same_test/"))
+                .map(|(t, v)| (t.clone(), v.clone()))
+                .collect()
+        };
     let (a, b) = (ours(&a), ours(&b));
-    assert_eq!(a.keys().collect::<Vec<_>>(), ["/same_test/status", "/same_test/temperature"], "bag record: topics (fast excluded)");
+    assert_eq!(
+        a.keys().collect::<Vec<_>>(),
+        ["/same_test/status", "/same_test/temperature"],
+        "bag record: topics (fast excluded)"
+    );
     assert_eq!(a["/same_test/temperature"].1.len(), n);
     assert_eq!(a["/same_test/status"].1.len(), n / 4);
-    assert_eq!(a, b, "bag record and the recorder node: same topics, types, counts and payload bytes");
+    assert_eq!(
+        a, b,
+        "bag record and the recorder node: same topics, types, counts and payload bytes"
+    );
 }
 
 #[test]
 fn rosout_is_recorded_and_rosbags_decodes_it() {
     require_isolated_network();
     let dir = scratch("rosout");
-    let (rec, log) = spawn_with_log(Command::new(bin("metrocell")).args(["bag", "record", "/rosout", "/parameter_events", "-o"]).arg(&dir));
+    let (rec, log) = spawn_with_log(
+        Command::new(bin("metrocell"))
+            .args(["bag", "record", "/rosout", "/parameter_events", "-o"])
+            .arg(&dir),
+    );
     wait_for_line(&log, "recording into", Duration::from_secs(20));
-    let node = MetrocellNode::builder("rosout_probe").diagnostics_period(None).handle_signals(false).build().unwrap();
+    let node = MetrocellNode::builder("rosout_probe")
+        .diagnostics_period(None)
+        .handle_signals(false)
+        .build()
+        .unwrap();
     // The recorder subscribes /rosout once it discovers a publisher of it (within a scan).
-    wait_for_line(&log, "recording /rosout (rcl_interfaces/msg/Log", Duration::from_secs(20));
+    wait_for_line(
+        &log,
+        "recording /rosout (rcl_interfaces/msg/Log",
+        Duration::from_secs(20),
+    );
     std::thread::sleep(Duration::from_millis(500));
     for i in 0..5 {
         node.warn(format!("rosout probe line {i}"));
@@ -148,7 +232,11 @@ fn rosout_is_recorded_and_rosbags_decodes_it() {
     stop(rec);
     drop(node);
     let meta = metrocell_bag::BagMetadata::read_dir(&dir).unwrap();
-    let rosout = meta.topics_with_message_count.iter().find(|t| t.topic_metadata.name == "/rosout").expect("/rosout in the bag");
+    let rosout = meta
+        .topics_with_message_count
+        .iter()
+        .find(|t| t.topic_metadata.name == "/rosout")
+        .expect("/rosout in the bag");
     assert_eq!(rosout.topic_metadata.type_name, "rcl_interfaces/msg/Log");
     let script = r#"
 import json, sys
@@ -164,12 +252,30 @@ with Reader(Path(sys.argv[1])) as r:
         out.append({'level': m.level, 'name': m.name, 'msg': m.msg})
 print(json.dumps(out))
 "#;
-    let out = run(Command::new(python()).args(["-c", script]).arg(&dir).stdout(Stdio::piped()).stderr(Stdio::piped()), Duration::from_secs(60));
-    assert!(out.status.success(), "rosbags failed: {}", String::from_utf8_lossy(&out.stderr));
+    let out = run(
+        Command::new(python())
+            .args(["-c", script])
+            .arg(&dir)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped()),
+        Duration::from_secs(60),
+    );
+    assert!(
+        out.status.success(),
+        "rosbags failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let logs: Vec<serde_json::Value> = serde_json::from_slice(&out.stdout).unwrap();
-    let probe: Vec<&serde_json::Value> = logs.iter().filter(|l| l["name"] == "rosout_probe").collect();
+    let probe: Vec<&serde_json::Value> = logs
+        .iter()
+        .filter(|l| l["name"] == "rosout_probe")
+        .collect();
     let expected: Vec<serde_json::Value> = (0..5).map(|i| serde_json::json!({"level": 30, "name": "rosout_probe", "msg": format!("rosout probe line {i}")})).collect();
-    assert_eq!(probe.into_iter().cloned().collect::<Vec<_>>(), expected, "rosbags decodes the probe's five WARN lines (level 30) from /rosout");
+    assert_eq!(
+        probe.into_iter().cloned().collect::<Vec<_>>(),
+        expected,
+        "rosbags decodes the probe's five WARN lines (level 30) from /rosout"
+    );
 }
 
 #[test]
@@ -177,35 +283,95 @@ fn a_type_unknown_to_metrocell_published_by_cyclone_is_recorded_raw_byte_exact()
     require_isolated_network();
     let dir = scratch("unknown_type");
     let ty = "cell_vendor_msgs/msg/SpindleState";
-    assert!(metrocell_msgs::registry().get(ty).is_none(), "the test type must be unknown to metrocell");
+    assert!(
+        metrocell_msgs::registry().get(ty).is_none(),
+        "the test type must be unknown to metrocell"
+    );
     let msg_dir = workspace_root().join("tests/py/msgs_unknown_to_metrocell");
     let sample = serde_json::json!({"spindle_id": "S1", "mode": 1, "speed_rad_s": 1047.25, "bearing_temperatures": [31.5, 33.25, 35.0], "cycle_count": -42});
     let enc = run(
-        piped(python()).arg(ros2_peer()).args(["encode", "--type", ty, "--json", &sample.to_string(), "--msg-dir"]).arg(&msg_dir),
+        piped(python())
+            .arg(ros2_peer())
+            .args([
+                "encode",
+                "--type",
+                ty,
+                "--json",
+                &sample.to_string(),
+                "--msg-dir",
+            ])
+            .arg(&msg_dir),
         Duration::from_secs(60),
     );
-    assert!(enc.status.success(), "encode: {}", String::from_utf8_lossy(&enc.stderr));
+    assert!(
+        enc.status.success(),
+        "encode: {}",
+        String::from_utf8_lossy(&enc.stderr)
+    );
     let hex = String::from_utf8(enc.stdout).unwrap();
-    let expected: Vec<u8> = (0..hex.trim().len()).step_by(2).map(|i| u8::from_str_radix(&hex.trim()[i..i + 2], 16).unwrap()).collect();
+    let expected: Vec<u8> = (0..hex.trim().len())
+        .step_by(2)
+        .map(|i| u8::from_str_radix(&hex.trim()[i..i + 2], 16).unwrap())
+        .collect();
 
-    let (rec, log) = spawn_with_log(Command::new(bin("metrocell")).args(["bag", "record", "/vendor/spindle", "-o"]).arg(&dir));
+    let (rec, log) = spawn_with_log(
+        Command::new(bin("metrocell"))
+            .args(["bag", "record", "/vendor/spindle", "-o"])
+            .arg(&dir),
+    );
     wait_for_line(&log, "recording into", Duration::from_secs(20));
     let n = 20;
     let peer = run(
-        piped(python()).arg(ros2_peer()).args(["publish", "--topic", "/vendor/spindle", "--type", ty, "--json", &sample.to_string(), "--count", &n.to_string(), "--rate", "50", "--msg-dir"]).arg(&msg_dir),
+        piped(python())
+            .arg(ros2_peer())
+            .args([
+                "publish",
+                "--topic",
+                "/vendor/spindle",
+                "--type",
+                ty,
+                "--json",
+                &sample.to_string(),
+                "--count",
+                &n.to_string(),
+                "--rate",
+                "50",
+                "--msg-dir",
+            ])
+            .arg(&msg_dir),
         Duration::from_secs(60),
     );
-    assert!(peer.status.success(), "cyclone peer: {}", String::from_utf8_lossy(&peer.stderr));
+    assert!(
+        peer.status.success(),
+        "cyclone peer: {}",
+        String::from_utf8_lossy(&peer.stderr)
+    );
     std::thread::sleep(Duration::from_millis(300));
     stop(rec);
 
     let reader = BagReader::open(&dir).unwrap();
-    let topic = reader.topics().iter().find(|t| t.name == "/vendor/spindle").expect("unknown type recorded, not skipped").clone();
-    assert_eq!((topic.type_name.as_str(), topic.schema_encoding.as_str(), topic.definition.as_str()), (ty, "", ""), "raw: no definition");
+    let topic = reader
+        .topics()
+        .iter()
+        .find(|t| t.name == "/vendor/spindle")
+        .expect("unknown type recorded, not skipped")
+        .clone();
+    assert_eq!(
+        (
+            topic.type_name.as_str(),
+            topic.schema_encoding.as_str(),
+            topic.definition.as_str()
+        ),
+        (ty, "", ""),
+        "raw: no definition"
+    );
     let msgs = reader.read_all(&MessageFilter::default()).unwrap();
     assert_eq!(msgs.len(), n, "every sample the peer sent");
     for (i, m) in msgs.iter().enumerate() {
-        assert_eq!(m.data, expected, "message {i}: the bytes Cyclone serialised");
+        assert_eq!(
+            m.data, expected,
+            "message {i}: the bytes Cyclone serialised"
+        );
     }
     // rosbags reads the bag (definition format NONE) and, given the type from elsewhere, decodes it.
     let script = r#"
@@ -223,13 +389,31 @@ with Reader(Path(sys.argv[1])) as r:
 print(json.dumps(out))
 "#;
     let out = run(
-        Command::new(python()).args(["-c", script]).arg(&dir).arg(msg_dir.join("cell_vendor_msgs/msg/SpindleState.msg")).stdout(Stdio::piped()).stderr(Stdio::piped()),
+        Command::new(python())
+            .args(["-c", script])
+            .arg(&dir)
+            .arg(msg_dir.join("cell_vendor_msgs/msg/SpindleState.msg"))
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped()),
         Duration::from_secs(60),
     );
-    assert!(out.status.success(), "rosbags failed: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "rosbags failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let rows: Vec<serde_json::Value> = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(rows.len(), n);
-    let expected_row = serde_json::json!([ty, "NONE", hex.trim(), "S1", 1, 1047.25, [31.5, 33.25, 35.0], -42]);
+    let expected_row = serde_json::json!([
+        ty,
+        "NONE",
+        hex.trim(),
+        "S1",
+        1,
+        1047.25,
+        [31.5, 33.25, 35.0],
+        -42
+    ]);
     for r in &rows {
         assert_eq!(r, &expected_row, "rosbags: raw bytes and decoded fields");
     }
@@ -257,35 +441,82 @@ fn fiducial_node_measured_every_frame(dir: &Path, camera_line: &str) -> u64 {
     use metrocell_msgs::msg::FiducialDetectionArray;
     use metrocell_msgs::sensor_msgs::msg::Image;
     let mut source = BagSource::open(dir).unwrap();
-    assert!(source.subscribe::<Image>("/camera/image_raw").unwrap() && source.subscribe::<FiducialDetectionArray>("/fiducials").unwrap(), "frames and detections recorded");
+    assert!(
+        source.subscribe::<Image>("/camera/image_raw").unwrap()
+            && source
+                .subscribe::<FiducialDetectionArray>("/fiducials")
+                .unwrap(),
+        "frames and detections recorded"
+    );
     let (mut frames, mut detected) = (BTreeSet::new(), BTreeSet::new());
     for m in source.messages().unwrap() {
         let m = m.unwrap();
         if m.topic == "/camera/image_raw" {
             let image: Image = m.decode().unwrap();
-            assert_eq!((image.width, image.height, image.encoding.as_str()), (640, 480, "mono8"), "the demo cell's small lens");
+            assert_eq!(
+                (image.width, image.height, image.encoding.as_str()),
+                (640, 480, "mono8"),
+                "the demo cell's small lens"
+            );
             frames.insert((image.header.stamp.sec, image.header.stamp.nanosec));
             continue;
         }
         let d: FiducialDetectionArray = m.decode().unwrap();
         let stamp = (d.header.stamp.sec, d.header.stamp.nanosec);
         let ids: BTreeSet<i32> = d.detections.iter().map(|t| t.id).collect();
-        assert_eq!(ids, BTreeSet::from([0, 1, 2, 3]), "markers found in the frame of {stamp:?}");
+        assert_eq!(
+            ids,
+            BTreeSet::from([0, 1, 2, 3]),
+            "markers found in the frame of {stamp:?}"
+        );
         for t in &d.detections {
             let c = &t.pose.covariance;
-            assert!(t.has_pose && c.iter().all(|v| v.is_finite()) && [c[0], c[7], c[14]].iter().all(|v| *v > 0.0), "marker {} of {stamp:?}: pose {} covariance {c:?}", t.id, t.has_pose);
+            assert!(
+                t.has_pose
+                    && c.iter().all(|v| v.is_finite())
+                    && [c[0], c[7], c[14]].iter().all(|v| *v > 0.0),
+                "marker {} of {stamp:?}: pose {} covariance {c:?}",
+                t.id,
+                t.has_pose
+            );
             // the plate is 150 mm in front of the camera, the marker centres 15 mm off its axis
             let p = &t.pose.pose.position;
-            assert!((p.z - 0.150).abs() < 1e-3 && (p.x.abs() - 0.015).abs() < 1e-3 && (p.y.abs() - 0.015).abs() < 1e-3, "marker {} at {p:?}", t.id);
+            assert!(
+                (p.z - 0.150).abs() < 1e-3
+                    && (p.x.abs() - 0.015).abs() < 1e-3
+                    && (p.y.abs() - 0.015).abs() < 1e-3,
+                "marker {} at {p:?}",
+                t.id
+            );
         }
         detected.insert(stamp);
     }
-    assert!(detected.is_subset(&frames), "a detection for a frame the bag does not hold");
+    assert!(
+        detected.is_subset(&frames),
+        "a detection for a frame the bag does not hold"
+    );
     let missed = (frames.len() - detected.len()) as u64;
     let said = format!("the fiducial node measured {} of them", detected.len());
-    assert!(camera_line.contains(&format!("the twin rendered {} frames (640×480), all in the bag", frames.len())) && camera_line.contains(&said), "{camera_line}");
-    assert_eq!(camera_line.contains(&format!("; missed {missed}: ")), missed > 0, "{camera_line}");
-    assert!(camera_line.contains(&format!("{} with all 4 plate markers ({} marker poses, each with a finite covariance)", detected.len(), 4 * detected.len())), "{camera_line}");
+    assert!(
+        camera_line.contains(&format!(
+            "the twin rendered {} frames (640×480), all in the bag",
+            frames.len()
+        )) && camera_line.contains(&said),
+        "{camera_line}"
+    );
+    assert_eq!(
+        camera_line.contains(&format!("; missed {missed}: ")),
+        missed > 0,
+        "{camera_line}"
+    );
+    assert!(
+        camera_line.contains(&format!(
+            "{} with all 4 plate markers ({} marker poses, each with a finite covariance)",
+            detected.len(),
+            4 * detected.len()
+        )),
+        "{camera_line}"
+    );
     missed
 }
 
@@ -295,14 +526,27 @@ fn demo_loses_nothing(name: &str, busy_cores: usize, max_missed_frames: u64, dom
     require_isolated_network();
     let dir = scratch(name);
     // Busy loops on both cores for the whole run: they stop with the test (ChildGuard).
-    let _busy: Vec<ChildGuard> = (0..busy_cores).map(|_| ChildGuard::spawn(Command::new("sh").args(["-c", "while :; do :; done"]))).collect();
+    let _busy: Vec<ChildGuard> = (0..busy_cores)
+        .map(|_| ChildGuard::spawn(Command::new("sh").args(["-c", "while :; do :; done"])))
+        .collect();
     let started = Instant::now();
     let out = ChildGuard::spawn(
-        piped(bin("metrocell")).args(["demo", "--quick", "-o"]).arg(&dir).env("METROCELL_SHARE", workspace_root()).env("ROS_DOMAIN_ID", domain.to_string()),
+        piped(bin("metrocell"))
+            .args(["demo", "--quick", "-o"])
+            .arg(&dir)
+            .env("METROCELL_SHARE", workspace_root())
+            .env("ROS_DOMAIN_ID", domain.to_string()),
     )
     .wait_output(Duration::from_secs(300));
-    let (stdout, stderr) = (String::from_utf8_lossy(&out.stdout), String::from_utf8_lossy(&out.stderr));
-    let twin_line = stderr.lines().chain(stdout.lines()).find(|l| l.contains("per topic, /clock included:")).unwrap_or_else(|| panic!("the twin's final counts:\n{stdout}\n{stderr}"));
+    let (stdout, stderr) = (
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr),
+    );
+    let twin_line = stderr
+        .lines()
+        .chain(stdout.lines())
+        .find(|l| l.contains("per topic, /clock included:"))
+        .unwrap_or_else(|| panic!("the twin's final counts:\n{stdout}\n{stderr}"));
     let published: BTreeMap<String, u64> = twin_line
         .split("per topic, /clock included: ")
         .nth(1)
@@ -315,69 +559,203 @@ fn demo_loses_nothing(name: &str, busy_cores: usize, max_missed_frames: u64, dom
         })
         .collect();
     let bag = bag_contents(&dir);
-    let node_lines: Vec<&str> = stderr.lines().filter(|l| l.starts_with("[recorder]") || l.starts_with("[sim]") || l.starts_with("[launch]")).collect();
+    let node_lines: Vec<&str> = stderr
+        .lines()
+        .filter(|l| {
+            l.starts_with("[recorder]") || l.starts_with("[sim]") || l.starts_with("[launch]")
+        })
+        .collect();
     for (topic, n) in &published {
         let got = bag.get(topic).map_or(0, |(_, m)| m.len() as u64);
         assert_eq!(got, *n, "{topic}: bag holds {got} of the {n} the twin published ({busy_cores} busy cores)\n{stdout}\n{}", node_lines.join("\n"));
     }
-    assert!(published.values().filter(|n| **n > 0).count() >= 8, "twin topics with messages: {published:?}");
+    assert!(
+        published.values().filter(|n| **n > 0).count() >= 8,
+        "twin topics with messages: {published:?}"
+    );
     // the tool camera: a 640×480 frame per dwell, 24 per 6-min cycle, all in the bag (the loop above)
-    assert_eq!(published.get("/camera/image_raw"), Some(&240), "frames in an hour of cell time");
-    let camera_line = stdout.lines().find(|l| l.starts_with("camera: ")).unwrap_or_else(|| panic!("no camera line in the demo's summary:\n{stdout}"));
+    assert_eq!(
+        published.get("/camera/image_raw"),
+        Some(&240),
+        "frames in an hour of cell time"
+    );
+    let camera_line = stdout
+        .lines()
+        .find(|l| l.starts_with("camera: "))
+        .unwrap_or_else(|| panic!("no camera line in the demo's summary:\n{stdout}"));
     let missed = fiducial_node_measured_every_frame(&dir, camera_line);
-    assert!(missed <= max_missed_frames, "the fiducial node missed {missed} frames ({busy_cores} busy cores): {camera_line}");
-    assert!(stdout.contains("recording check: complete"), "the demo's verdict:\n{stdout}\n{stderr}");
+    assert!(
+        missed <= max_missed_frames,
+        "the fiducial node missed {missed} frames ({busy_cores} busy cores): {camera_line}"
+    );
+    assert!(
+        stdout.contains("recording check: complete"),
+        "the demo's verdict:\n{stdout}\n{stderr}"
+    );
     // the recorder's own account ("bag … finished: N messages recorded on M topics, K missing",
     // then a line per topic with a gap): no gap on a topic of the twin (other nodes' first
     // /diagnostics may precede the recorder's subscription)
-    assert!(stderr.contains("messages recorded on"), "the recorder's final line:\n{stderr}");
-    let gaps: Vec<&str> = stderr.lines().filter(|l| l.starts_with("[recorder]   /")).collect();
+    assert!(
+        stderr.contains("messages recorded on"),
+        "the recorder's final line:\n{stderr}"
+    );
+    let gaps: Vec<&str> = stderr
+        .lines()
+        .filter(|l| l.starts_with("[recorder]   /"))
+        .collect();
     for topic in published.keys() {
-        assert!(!gaps.iter().any(|l| l.contains(&format!(" {topic}: "))), "the recorder counted {topic} messages missing:\n{}", gaps.join("\n"));
+        assert!(
+            !gaps.iter().any(|l| l.contains(&format!(" {topic}: "))),
+            "the recorder counted {topic} messages missing:\n{}",
+            gaps.join("\n")
+        );
     }
-    assert!(out.status.success(), "demo exit status {:?}\n{stdout}\n{stderr}", out.status);
+    assert!(
+        out.status.success(),
+        "demo exit status {:?}\n{stdout}\n{stderr}",
+        out.status
+    );
     // the end-of-run diagnosis: its report next to the bag
-    assert!(stdout.contains("diagnosing the recording (the tracker's readings) against the demo's declared model"), "no diagnosis at the end:\n{stdout}");
+    assert!(
+        stdout.contains(
+            "diagnosing the recording (the tracker's readings) against the demo's declared model"
+        ),
+        "no diagnosis at the end:\n{stdout}"
+    );
     let report = PathBuf::from(format!("{}_report", dir.display()));
-    assert!(!stdout.contains("diagnose could not judge this recording: "), "the quick run is long enough to diagnose:\n{stdout}");
-    let json: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(report.join("diagnosis.json")).expect("diagnosis.json next to the bag")).unwrap();
-    assert!(json["after"]["heldout_rms_m"].as_f64().is_some_and(|r| r > 0.0), "{json}");
-    assert!(report.join("index.html").exists() && report.join("model.yaml").exists(), "report files in {}", report.display());
+    assert!(
+        !stdout.contains("diagnose could not judge this recording: "),
+        "the quick run is long enough to diagnose:\n{stdout}"
+    );
+    let json: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(report.join("diagnosis.json"))
+            .expect("diagnosis.json next to the bag"),
+    )
+    .unwrap();
+    assert!(
+        json["after"]["heldout_rms_m"]
+            .as_f64()
+            .is_some_and(|r| r > 0.0),
+        "{json}"
+    );
+    assert!(
+        report.join("index.html").exists() && report.join("model.yaml").exists(),
+        "report files in {}",
+        report.display()
+    );
     // the augmented model is a model (issue 32: its tracker warm-up was written under `terms:`,
     // which every command refused): the warm-up in sensors.tracker, the machine terms in terms
-    let augmented = metrocell_twin::CellModel::from_path(report.join("model.yaml")).unwrap_or_else(|e| panic!("the demo's augmented model does not read back: {e}"));
-    assert!(augmented.instrument_terms.terms.iter().any(|t| t.term.label() == "tracker_warmup"), "{}", std::fs::read_to_string(report.join("model.yaml")).unwrap());
+    let augmented = metrocell_twin::CellModel::from_path(report.join("model.yaml"))
+        .unwrap_or_else(|e| panic!("the demo's augmented model does not read back: {e}"));
+    assert!(
+        augmented
+            .instrument_terms
+            .terms
+            .iter()
+            .any(|t| t.term.label() == "tracker_warmup"),
+        "{}",
+        std::fs::read_to_string(report.join("model.yaml")).unwrap()
+    );
     // what crates/twin/examples/cells/demo_shift.yaml conceals from demo_model.yaml: the column's
     // lagged growth, the tracker's warm-up, the reversal error on X — named, and nothing else
-    let mut found: Vec<&str> = json["findings"].as_array().expect("findings").iter().map(|f| f["term"].as_str().unwrap()).collect();
+    let mut found: Vec<&str> = json["findings"]
+        .as_array()
+        .expect("findings")
+        .iter()
+        .map(|f| f["term"].as_str().unwrap())
+        .collect();
     found.sort();
-    assert_eq!(found, ["backlash", "thermal_growth", "tracker_warmup"], "the diagnosis of the demo's recording:\n{stdout}");
+    assert_eq!(
+        found,
+        ["backlash", "thermal_growth", "tracker_warmup"],
+        "the diagnosis of the demo's recording:\n{stdout}"
+    );
     // each within 3σ of what the cell conceals (the column's growth is concealed along −z at
     // 4 µm/K; diagnose writes its candidate along +z, so the same growth is −4 µm/K there)
-    let truths = [("tracker_warmup", "amplitude", 20e-6), ("tracker_warmup", "time_constant", 1800.0), ("thermal_growth[column]", "coefficient", -4e-6), ("thermal_growth[column]", "time_constant", 1200.0), ("backlash[x]", "reversal", 8e-6)];
+    let truths = [
+        ("tracker_warmup", "amplitude", 20e-6),
+        ("tracker_warmup", "time_constant", 1800.0),
+        ("thermal_growth[column]", "coefficient", -4e-6),
+        ("thermal_growth[column]", "time_constant", 1200.0),
+        ("backlash[x]", "reversal", 8e-6),
+    ];
     for (label, param, truth) in truths {
-        let f = json["findings"].as_array().unwrap().iter().find(|f| f["label"] == label).unwrap_or_else(|| panic!("no finding {label}: {}", json["findings"]));
+        let f = json["findings"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .find(|f| f["label"] == label)
+            .unwrap_or_else(|| panic!("no finding {label}: {}", json["findings"]));
         let p = &f["parameters"][param];
-        let (v, s) = (p["value"].as_f64().unwrap(), p["sigma"].as_f64().unwrap_or_else(|| panic!("{label}.{param} without σ: {p}")));
-        assert!((v - truth).abs() <= 3.0 * s, "{label}.{param} = {v:e} ± {s:e}, truth {truth:e}: more than 3σ off");
+        let (v, s) = (
+            p["value"].as_f64().unwrap(),
+            p["sigma"]
+                .as_f64()
+                .unwrap_or_else(|| panic!("{label}.{param} without σ: {p}")),
+        );
+        assert!(
+            (v - truth).abs() <= 3.0 * s,
+            "{label}.{param} = {v:e} ± {s:e}, truth {truth:e}: more than 3σ off"
+        );
     }
-    assert!(stdout.contains("diagnose named all 3"), "the demo's comparison with what the cell conceals:\n{stdout}");
+    assert!(
+        stdout.contains("diagnose named all 3"),
+        "the demo's comparison with what the cell conceals:\n{stdout}"
+    );
     // the live diagnose node judged the window as the cell ran (every 12 min of cell time in the
     // quick run): its results are in the bag, each the JSON of `metrocell diagnose --json` or the
     // reason the window could not be diagnosed yet, the later ones naming what it found
-    let (ty, results) = bag.get("/diagnose/result").unwrap_or_else(|| panic!("no /diagnose/result in the bag; topics: {:?}", bag.keys().collect::<Vec<_>>()));
+    let (ty, results) = bag.get("/diagnose/result").unwrap_or_else(|| {
+        panic!(
+            "no /diagnose/result in the bag; topics: {:?}",
+            bag.keys().collect::<Vec<_>>()
+        )
+    });
     assert_eq!(ty, "std_msgs/msg/String");
-    assert!(results.len() >= 3, "{} live diagnoses in an hour of cell time (one every 12 min expected)", results.len());
-    let last: serde_json::Value = serde_json::from_str(&cdr_string(results.last().unwrap())).expect("the live result is JSON");
-    let live: Vec<&str> = last["findings"].as_array().unwrap_or_else(|| panic!("the last live diagnosis has no findings: {last}")).iter().map(|f| f["term"].as_str().unwrap()).collect();
-    assert!(!live.is_empty() && live.iter().all(|t| ["backlash", "thermal_growth", "tracker_warmup"].contains(t)), "the live diagnose node named {live:?}");
-    assert!(stdout.contains("the diagnose node found"), "the demo prints the live findings as they come:\n{stdout}");
+    assert!(
+        results.len() >= 3,
+        "{} live diagnoses in an hour of cell time (one every 12 min expected)",
+        results.len()
+    );
+    let last: serde_json::Value = serde_json::from_str(&cdr_string(results.last().unwrap()))
+        .expect("the live result is JSON");
+    let live: Vec<&str> = last["findings"]
+        .as_array()
+        .unwrap_or_else(|| panic!("the last live diagnosis has no findings: {last}"))
+        .iter()
+        .map(|f| f["term"].as_str().unwrap())
+        .collect();
+    assert!(
+        !live.is_empty()
+            && live
+                .iter()
+                .all(|t| ["backlash", "thermal_growth", "tracker_warmup"].contains(t)),
+        "the live diagnose node named {live:?}"
+    );
+    assert!(
+        stdout.contains("the diagnose node found"),
+        "the demo prints the live findings as they come:\n{stdout}"
+    );
     // issue 32: the tracker node's warm-up estimate, from the program's first point revisited
     // every 6-min cycle (launch-configs/demo.launch.yaml: warmup_target), is on tracker/warmup
-    let (ty, warmups) = bag.get("/tracker/warmup").unwrap_or_else(|| panic!("no /tracker/warmup in the bag; topics: {:?}", bag.keys().collect::<Vec<_>>()));
+    let (ty, warmups) = bag.get("/tracker/warmup").unwrap_or_else(|| {
+        panic!(
+            "no /tracker/warmup in the bag; topics: {:?}",
+            bag.keys().collect::<Vec<_>>()
+        )
+    });
     assert_eq!(ty, "metrocell_msgs/msg/ErrorModel");
-    assert!(warmups.len() >= 3, "{} warm-up estimates in an hour of cell time (10 visits of the nest)", warmups.len());
-    eprintln!("{name}: {} messages on {} topics, none lost, in {:.1} s", published.values().sum::<u64>(), published.len(), started.elapsed().as_secs_f64());
+    assert!(
+        warmups.len() >= 3,
+        "{} warm-up estimates in an hour of cell time (10 visits of the nest)",
+        warmups.len()
+    );
+    eprintln!(
+        "{name}: {} messages on {} topics, none lost, in {:.1} s",
+        published.values().sum::<u64>(),
+        published.len(),
+        started.elapsed().as_secs_f64()
+    );
 }
 
 #[test]

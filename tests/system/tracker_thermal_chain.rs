@@ -67,25 +67,55 @@ fn cell_text() -> String {
             continue;
         }
         in_turbulence = trimmed.starts_with("turbulence:");
-        if in_turbulence || ["beam_breaks:", "camera:", "mount:", "delay:"].iter().any(|k| trimmed.starts_with(k)) {
+        if in_turbulence
+            || ["beam_breaks:", "camera:", "mount:", "delay:"]
+                .iter()
+                .any(|k| trimmed.starts_with(k))
+        {
             continue;
         }
         let line = line
             .replace("amplitude: 75 um", "amplitude: 0 um")
-            .replace("machine_state: {rate: 100 Hz}", "machine_state: {rate: 2 Hz}")
+            .replace(
+                "machine_state: {rate: 100 Hz}",
+                "machine_state: {rate: 2 Hz}",
+            )
             .replace("rate: 1 Hz,", "rate: 0.2 Hz,");
         out.push_str(&line);
         out.push('\n');
     }
-    for (gone, what) in [("turbulence:", "the turbulence window"), ("beam_breaks:", "beam breaks"), ("camera:", "the camera"), ("amplitude: 75 um", "the warm-up"), ("rate: 100 Hz", "100 Hz machine state"), ("rate: 1 Hz,", "1 Hz thermocouples")] {
-        assert!(!out.contains(gone), "xfyz_shift.yaml changed: {what} is still in the test's cell; update this test");
+    for (gone, what) in [
+        ("turbulence:", "the turbulence window"),
+        ("beam_breaks:", "beam breaks"),
+        ("camera:", "the camera"),
+        ("amplitude: 75 um", "the warm-up"),
+        ("rate: 100 Hz", "100 Hz machine state"),
+        ("rate: 1 Hz,", "1 Hz thermocouples"),
+    ] {
+        assert!(
+            !out.contains(gone),
+            "xfyz_shift.yaml changed: {what} is still in the test's cell; update this test"
+        );
     }
-    let growth = format!("params: {{coefficient: {} um/K, time_constant: {} min}}", GROWTH * 1e6, LAG / 60.0);
-    assert!(out.contains(&growth), "xfyz_shift.yaml's column growth is no longer {growth}; update GROWTH and LAG");
+    let growth = format!(
+        "params: {{coefficient: {} um/K, time_constant: {} min}}",
+        GROWTH * 1e6,
+        LAG / 60.0
+    );
+    assert!(
+        out.contains(&growth),
+        "xfyz_shift.yaml's column growth is no longer {growth}; update GROWTH and LAG"
+    );
     out
 }
 
-fn launch_file(dir: &Path, cell: &Path, bag: &Path, tool_offset_z: f64, registration_points: usize) -> PathBuf {
+fn launch_file(
+    dir: &Path,
+    cell: &Path,
+    bag: &Path,
+    tool_offset_z: f64,
+    registration_points: usize,
+) -> PathBuf {
     let text = format!(
         r#"launch:
 - node:
@@ -144,7 +174,10 @@ struct Point {
 
 fn points(bag: &Path, topic: &str) -> Vec<Point> {
     let mut source = BagSource::open(bag).unwrap_or_else(|e| panic!("{}: {e}", bag.display()));
-    assert!(source.subscribe::<MeasuredPoint>(topic).unwrap(), "the bag has no {topic}");
+    assert!(
+        source.subscribe::<MeasuredPoint>(topic).unwrap(),
+        "the bag has no {topic}"
+    );
     source
         .messages()
         .unwrap()
@@ -164,11 +197,17 @@ fn points(bag: &Path, topic: &str) -> Vec<Point> {
 /// finishes the bag). Returns the launch's output.
 fn run_launch(launch: &Path) -> String {
     let mut cmd = piped(bin("metrocell"));
-    cmd.arg("launch").arg(launch).env("ROS_DOMAIN_ID", "31").stdin(Stdio::null());
+    cmd.arg("launch")
+        .arg(launch)
+        .env("ROS_DOMAIN_ID", "31")
+        .stdin(Stdio::null());
     let mut launcher = ChildGuard::spawn(&mut cmd);
     // output drained by threads, so a full pipe cannot stall the nodes
     let (tx, rx) = mpsc::channel::<String>();
-    let pipes: [Box<dyn std::io::Read + Send>; 2] = [Box::new(launcher.child().stdout.take().unwrap()), Box::new(launcher.child().stderr.take().unwrap())];
+    let pipes: [Box<dyn std::io::Read + Send>; 2] = [
+        Box::new(launcher.child().stdout.take().unwrap()),
+        Box::new(launcher.child().stderr.take().unwrap()),
+    ];
     let readers: Vec<_> = pipes
         .into_iter()
         .map(|pipe| {
@@ -213,7 +252,9 @@ fn run_launch(launch: &Path) -> String {
 fn z_errors(points: &[Point], t0: f64) -> BTreeMap<String, Vec<(f64, f64)>> {
     let mut out: BTreeMap<String, Vec<(f64, f64)>> = BTreeMap::new();
     for p in points {
-        out.entry(p.id.clone()).or_default().push(((p.t - t0) / HOUR, p.measured.z - p.nominal.z));
+        out.entry(p.id.clone())
+            .or_default()
+            .push(((p.t - t0) / HOUR, p.measured.z - p.nominal.z));
     }
     out
 }
@@ -223,10 +264,23 @@ fn z_errors(points: &[Point], t0: f64) -> BTreeMap<String, Vec<(f64, f64)>> {
 fn held_out_drift(errors: &BTreeMap<String, Vec<(f64, f64)>>) -> Vec<(String, f64, f64)> {
     let mut out = Vec::new();
     for (id, dwells) in errors {
-        let reference: Vec<f64> = dwells.iter().filter(|d| d.0 < REFERENCE_HOURS).map(|d| d.1).collect();
-        assert!(reference.len() >= 6, "{id}: {} dwells in hours 0–{REFERENCE_HOURS}", reference.len());
+        let reference: Vec<f64> = dwells
+            .iter()
+            .filter(|d| d.0 < REFERENCE_HOURS)
+            .map(|d| d.1)
+            .collect();
+        assert!(
+            reference.len() >= 6,
+            "{id}: {} dwells in hours 0–{REFERENCE_HOURS}",
+            reference.len()
+        );
         let mean = reference.iter().sum::<f64>() / reference.len() as f64;
-        out.extend(dwells.iter().filter(|d| d.0 >= REFERENCE_HOURS).map(|&(h, z)| (id.clone(), h, z - mean)));
+        out.extend(
+            dwells
+                .iter()
+                .filter(|d| d.0 >= REFERENCE_HOURS)
+                .map(|&(h, z)| (id.clone(), h, z - mean)),
+        );
     }
     out
 }
@@ -241,33 +295,78 @@ fn twin_tracker_thermal_recorder_over_dds_on_an_eight_hour_shift() {
     // What the twin will do: every dwell of every cycle that ends within the shift.
     let cell = Cell::from_yaml_str(&text, &cell_path.display().to_string()).unwrap();
     let program = &cell.program;
-    let cycles = (0..).take_while(|&c| program.cycle_start(c).is_some_and(|s| s + program.cycle_length() <= SHIFT)).count();
-    let dwells_per_cycle = program.segments.iter().filter(|s| s.dwell_point.is_some()).count();
-    assert_eq!(dwells_per_cycle, program.points.len(), "one dwell per program point");
-    let nominal = |i: usize| cell.machine.nominal_tool_point(&Vector3::new(program.points[i][0], program.points[i][1], program.points[i][2]));
+    let cycles = (0..)
+        .take_while(|&c| {
+            program
+                .cycle_start(c)
+                .is_some_and(|s| s + program.cycle_length() <= SHIFT)
+        })
+        .count();
+    let dwells_per_cycle = program
+        .segments
+        .iter()
+        .filter(|s| s.dwell_point.is_some())
+        .count();
+    assert_eq!(
+        dwells_per_cycle,
+        program.points.len(),
+        "one dwell per program point"
+    );
+    let nominal = |i: usize| {
+        cell.machine.nominal_tool_point(&Vector3::new(
+            program.points[i][0],
+            program.points[i][1],
+            program.points[i][2],
+        ))
+    };
     let tool_offset_z = cell.machine.tool_offset.z;
 
     let bag = dir.join("bag");
     let launch = launch_file(&dir, &cell_path, &bag, tool_offset_z, dwells_per_cycle);
     let started = Instant::now();
     let log = run_launch(&launch);
-    eprintln!("launch ran {:.0} s for {} h simulated ({cycles} cycles of {dwells_per_cycle} dwells)", started.elapsed().as_secs_f64(), SHIFT / HOUR);
-    assert!(log.contains("'recorder' subscribes to every topic: starting"), "the twin started before the recorder read every topic:\n{log}");
+    eprintln!(
+        "launch ran {:.0} s for {} h simulated ({cycles} cycles of {dwells_per_cycle} dwells)",
+        started.elapsed().as_secs_f64(),
+        SHIFT / HOUR
+    );
+    assert!(
+        log.contains("'recorder' subscribes to every topic: starting"),
+        "the twin started before the recorder read every topic:\n{log}"
+    );
 
     // every dwell exactly once, with its program point as nominal, on both topics
     let measured = points(&bag, "/measured_points");
     let compensated = points(&bag, "/measured_points/thermal_compensated");
     let mut per_point: BTreeMap<usize, usize> = BTreeMap::new();
     for p in &measured {
-        let i: usize = p.id.strip_prefix("point_").and_then(|s| s.parse().ok()).unwrap_or_else(|| panic!("point id {:?}", p.id));
+        let i: usize =
+            p.id.strip_prefix("point_")
+                .and_then(|s| s.parse().ok())
+                .unwrap_or_else(|| panic!("point id {:?}", p.id));
         assert!(i < program.points.len(), "{}: not a program point", p.id);
-        assert!((p.nominal - nominal(i)).norm() < 1e-12, "{}: nominal {:?}, program point + tool offset {:?}", p.id, p.nominal, nominal(i));
+        assert!(
+            (p.nominal - nominal(i)).norm() < 1e-12,
+            "{}: nominal {:?}, program point + tool offset {:?}",
+            p.id,
+            p.nominal,
+            nominal(i)
+        );
         *per_point.entry(i).or_default() += 1;
     }
-    let wrong: Vec<_> = (0..program.points.len()).filter(|i| per_point.get(i).copied().unwrap_or(0) != cycles).map(|i| (i, per_point.get(&i).copied().unwrap_or(0))).collect();
-    assert!(wrong.is_empty(), "points not seen exactly once per cycle ({cycles}): {wrong:?} (point, times)\n{log}");
+    let wrong: Vec<_> = (0..program.points.len())
+        .filter(|i| per_point.get(i).copied().unwrap_or(0) != cycles)
+        .map(|i| (i, per_point.get(&i).copied().unwrap_or(0)))
+        .collect();
+    assert!(
+        wrong.is_empty(),
+        "points not seen exactly once per cycle ({cycles}): {wrong:?} (point, times)\n{log}"
+    );
     assert_eq!(measured.len(), cycles * dwells_per_cycle);
-    let mut stamps: Vec<(i64, &str)> = measured.iter().map(|p| ((p.t * 1e9).round() as i64, p.id.as_str())).collect();
+    let mut stamps: Vec<(i64, &str)> = measured
+        .iter()
+        .map(|p| ((p.t * 1e9).round() as i64, p.id.as_str()))
+        .collect();
     stamps.sort();
     stamps.dedup();
     assert_eq!(stamps.len(), measured.len(), "a dwell published twice");
@@ -276,16 +375,25 @@ fn twin_tracker_thermal_recorder_over_dds_on_an_eight_hour_shift() {
     let mut measured_keys: Vec<_> = measured.iter().map(key).collect();
     compensated_keys.sort();
     measured_keys.sort();
-    assert_eq!(compensated_keys, measured_keys, "the thermal node compensates every point once");
+    assert_eq!(
+        compensated_keys, measured_keys,
+        "the thermal node compensates every point once"
+    );
 
     // the column growth: uncorrected drift visible, corrected drift within ±5 µm on hours 4–8
     let t0 = measured.iter().map(|p| p.t).fold(f64::INFINITY, f64::min);
     let raw = held_out_drift(&z_errors(&measured, t0));
     let fixed = held_out_drift(&z_errors(&compensated, t0));
     assert_eq!(raw.len(), fixed.len());
-    assert!(fixed.len() >= (cycles / 2 - 1) * dwells_per_cycle, "{} held-out dwells", fixed.len());
+    assert!(
+        fixed.len() >= (cycles / 2 - 1) * dwells_per_cycle,
+        "{} held-out dwells",
+        fixed.len()
+    );
     let worst = |v: &[(String, f64, f64)]| v.iter().map(|d| d.2.abs()).fold(0.0, f64::max);
-    let rms = |v: &[(String, f64, f64)]| (v.iter().map(|d| d.2 * d.2).sum::<f64>() / v.len() as f64).sqrt();
+    let rms = |v: &[(String, f64, f64)]| {
+        (v.iter().map(|d| d.2 * d.2).sum::<f64>() / v.len() as f64).sqrt()
+    };
     // per cycle, for the record: mean drift uncorrected and corrected
     let mut by_cycle: BTreeMap<i64, (f64, f64, usize)> = BTreeMap::new();
     for (r, f) in raw.iter().zip(&fixed) {
@@ -293,7 +401,12 @@ fn twin_tracker_thermal_recorder_over_dds_on_an_eight_hour_shift() {
         (e.0, e.1, e.2) = (e.0 + r.2, e.1 + f.2, e.2 + 1);
     }
     for (half_hour, (r, f, n)) in by_cycle {
-        eprintln!("  {:.1} h: mean Z drift uncorrected {:+.2} µm, corrected {:+.2} µm ({n} dwells)", half_hour as f64 / 2.0, r / n as f64 * 1e6, f / n as f64 * 1e6);
+        eprintln!(
+            "  {:.1} h: mean Z drift uncorrected {:+.2} µm, corrected {:+.2} µm ({n} dwells)",
+            half_hour as f64 / 2.0,
+            r / n as f64 * 1e6,
+            f / n as f64 * 1e6
+        );
     }
     eprintln!(
         "held-out hours {REFERENCE_HOURS}–8, {} dwells: Z drift uncorrected worst {:.2} µm (rms {:.2}), corrected worst {:.2} µm (rms {:.2})",
@@ -304,7 +417,14 @@ fn twin_tracker_thermal_recorder_over_dds_on_an_eight_hour_shift() {
         rms(&fixed) * 1e6
     );
     assert!(worst(&raw) > 5e-6, "the column growth must show uncorrected on the held-out hours (else this test proves nothing): worst {:.2} µm", worst(&raw) * 1e6);
-    let (id, h, z) = fixed.iter().max_by(|a, b| a.2.abs().total_cmp(&b.2.abs())).unwrap();
-    assert!(z.abs() <= 5e-6, "held-out: {id} at {h:.2} h drifts {:.2} µm after thermal correction", z * 1e6);
+    let (id, h, z) = fixed
+        .iter()
+        .max_by(|a, b| a.2.abs().total_cmp(&b.2.abs()))
+        .unwrap();
+    assert!(
+        z.abs() <= 5e-6,
+        "held-out: {id} at {h:.2} h drifts {:.2} µm after thermal correction",
+        z * 1e6
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

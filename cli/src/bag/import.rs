@@ -6,7 +6,9 @@ use anyhow::Context;
 use metrocell_bag::WriterOptions;
 use metrocell_bagtools::export_manifest::ExportManifest;
 use metrocell_bagtools::import::{import_csv, ImportReport, Mapping};
-use metrocell_bagtools::reimport::{csv_rows, inferred_topic, is_export_header, rebuild_bag, ExportedFile, RowSource};
+use metrocell_bagtools::reimport::{
+    csv_rows, inferred_topic, is_export_header, rebuild_bag, ExportedFile, RowSource,
+};
 
 #[derive(clap::Args)]
 #[command(after_help = "Two kinds of input:\n\
@@ -41,11 +43,24 @@ pub struct ImportArgs {
 
 pub fn run(a: ImportArgs) -> anyhow::Result<i32> {
     let report = match a.mapping.as_deref() {
-        None if a.input.is_dir() => rebuild_bag(export_directory(&a.input)?, &a.output, WriterOptions::default())?,
-        None if is_exported_file(&a.input)? => rebuild_bag(vec![exported_file(&a.input)?], &a.output, WriterOptions::default())?,
+        None if a.input.is_dir() => rebuild_bag(
+            export_directory(&a.input)?,
+            &a.output,
+            WriterOptions::default(),
+        )?,
+        None if is_exported_file(&a.input)? => rebuild_bag(
+            vec![exported_file(&a.input)?],
+            &a.output,
+            WriterOptions::default(),
+        )?,
         mapping => {
             let mapping = mapping.map(Mapping::load).transpose()?;
-            import_csv(&a.input, &a.output, mapping.as_ref(), WriterOptions::default())?
+            import_csv(
+                &a.input,
+                &a.output,
+                mapping.as_ref(),
+                WriterOptions::default(),
+            )?
         }
     };
     print_report(&report, &a.output);
@@ -56,7 +71,13 @@ fn print_report(report: &ImportReport, output: &Path) {
     for e in &report.errors {
         eprintln!("skipped: {e}");
     }
-    println!("{} rows read, {} imported, {} skipped -> {}", report.rows_read, report.rows_imported, report.rows_rejected(), output.display());
+    println!(
+        "{} rows read, {} imported, {} skipped -> {}",
+        report.rows_read,
+        report.rows_imported,
+        report.rows_rejected(),
+        output.display()
+    );
     for (t, n) in &report.messages_per_topic {
         println!("  {t}: {n}");
     }
@@ -73,7 +94,12 @@ fn export_directory(dir: &Path) -> anyhow::Result<Vec<ExportedFile>> {
         .map(|t| {
             let path = dir.join(&t.file);
             let (header, rows) = rows_of(&path)?;
-            Ok(ExportedFile { path, topic: t.clone(), header, rows })
+            Ok(ExportedFile {
+                path,
+                topic: t.clone(),
+                header,
+                rows,
+            })
         })
         .collect()
 }
@@ -81,7 +107,10 @@ fn export_directory(dir: &Path) -> anyhow::Result<Vec<ExportedFile>> {
 /// One file of an export: its topic from the manifest beside it, or inferred.
 fn exported_file(path: &Path) -> anyhow::Result<ExportedFile> {
     let (header, rows) = rows_of(path)?;
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let name = path
+        .file_name()
+        .map(|n| n.to_string_lossy().into_owned())
+        .unwrap_or_default();
     let listed = match path.parent() {
         Some(dir) => ExportManifest::read(dir)?.and_then(|m| m.entry(&name).cloned()),
         None => None,
@@ -90,15 +119,25 @@ fn exported_file(path: &Path) -> anyhow::Result<ExportedFile> {
         Some(t) => t,
         None => inferred_topic(path, &header)?,
     };
-    Ok(ExportedFile { path: path.to_path_buf(), topic, header, rows })
+    Ok(ExportedFile {
+        path: path.to_path_buf(),
+        topic,
+        header,
+        rows,
+    })
 }
 
 fn is_parquet(path: &Path) -> bool {
-    path.extension().is_some_and(|e| e.eq_ignore_ascii_case("parquet"))
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("parquet"))
 }
 
 fn rows_of(path: &Path) -> anyhow::Result<(Vec<String>, RowSource)> {
-    Ok(if is_parquet(path) { metrocell_parquet_export::parquet_rows(path)? } else { csv_rows(path)? })
+    Ok(if is_parquet(path) {
+        metrocell_parquet_export::parquet_rows(path)?
+    } else {
+        csv_rows(path)?
+    })
 }
 
 /// A Parquet file, or a CSV whose header is `bag export`'s (log_time_ns, publish_time_ns, …).

@@ -3,16 +3,20 @@
 use std::path::PathBuf;
 
 #[derive(clap::Args)]
-#[command(after_help = "Exit status: 0 for a healthy bag; 1 when it is damaged (the problems are listed with the \
-next step, `metrocell bag recover`); 2 when there is no bag to read.")]
+#[command(
+    after_help = "Exit status: 0 for a healthy bag; 1 when it is damaged (the problems are listed with the \
+next step, `metrocell bag recover`); 2 when there is no bag to read."
+)]
 pub struct InfoArgs {
     /// Bag directory (or one .mcap file)
     bag: PathBuf,
 }
 
 #[derive(clap::Args)]
-#[command(after_help = "Keeps every message whose chunk reached the disk intact; at most the messages of the \
-last flush interval (recorder parameter flush_interval, default 1 s) are lost.")]
+#[command(
+    after_help = "Keeps every message whose chunk reached the disk intact; at most the messages of the \
+last flush interval (recorder parameter flush_interval, default 1 s) are lost."
+)]
 pub struct RecoverArgs {
     /// Bag directory (or one .mcap file)
     bag: PathBuf,

@@ -22,7 +22,8 @@ impl Keyboard {
         }
         let saved = tcgetattr(stdin.as_fd()).ok()?;
         let mut raw = saved.clone();
-        raw.local_flags.remove(LocalFlags::ICANON | LocalFlags::ECHO);
+        raw.local_flags
+            .remove(LocalFlags::ICANON | LocalFlags::ECHO);
         tcsetattr(stdin.as_fd(), SetArg::TCSANOW, &raw).ok()?;
         let (tx, keys) = channel();
         std::thread::spawn(move || {

@@ -16,9 +16,11 @@ use ros2_client::qos::{Durability, Reliability, WhenFull};
 use super::keyboard::Keyboard;
 
 #[derive(clap::Args)]
-#[command(after_help = "Keys (when stdin is a terminal): space pauses/resumes, s publishes the next message while paused.\n\n\
+#[command(
+    after_help = "Keys (when stdin is a terminal): space pauses/resumes, s publishes the next message while paused.\n\n\
 Examples:\n  metrocell bag play run42 --rate 2 --topics /tracker/measurements\n  \
-metrocell bag play run42 --start 30 --duration 10 --loop --remap /tracker/measurements:=/replay/points --clock 100")]
+metrocell bag play run42 --start 30 --duration 10 --loop --remap /tracker/measurements:=/replay/points --clock 100"
+)]
 pub struct PlayArgs {
     /// Bag directory (or .mcap file)
     bag: PathBuf,
@@ -61,7 +63,11 @@ pub fn run(a: PlayArgs) -> anyhow::Result<i32> {
             anyhow::bail!("topic {t} is not in {}", a.bag.display());
         }
     }
-    let topics: Vec<_> = reader.topics().iter().filter(|t| a.topics.is_empty() || a.topics.contains(&t.name)).collect();
+    let topics: Vec<_> = reader
+        .topics()
+        .iter()
+        .filter(|t| a.topics.is_empty() || a.topics.contains(&t.name))
+        .collect();
     let bag_start = reader.info().start_ns.unwrap_or(0);
     let start_ns = super::offset_ns(bag_start, a.start)?;
     let end_ns = match a.duration {
@@ -76,20 +82,40 @@ pub fn run(a: PlayArgs) -> anyhow::Result<i32> {
         .build()?;
     let mut publishers: HashMap<String, RawPublisher> = HashMap::new();
     for t in &topics {
-        let name = remaps.get(&t.name).cloned().unwrap_or_else(|| t.name.clone());
+        let name = remaps
+            .get(&t.name)
+            .cloned()
+            .unwrap_or_else(|| t.name.clone());
         // Offer what the recorded publishers offered (rosbag2's rule, see recorded_qos).
         // A profile text that does not parse is reported and the topic played with the
         // default publisher QoS, as for a bag without profiles.
-        let recorded = metrocell_bag::parse_offered_qos(&t.name, &t.offered_qos_profiles).unwrap_or_else(|e| {
-            eprintln!("warning: {e}; playing {} with the default QoS (reliable, volatile)", t.name);
-            Vec::new()
-        });
+        let recorded = metrocell_bag::parse_offered_qos(&t.name, &t.offered_qos_profiles)
+            .unwrap_or_else(|e| {
+                eprintln!(
+                    "warning: {e}; playing {} with the default QoS (reliable, volatile)",
+                    t.name
+                );
+                Vec::new()
+            });
         let r = replay_qos(&recorded);
         // keep-last 10, rosbag2's replay history, comes with qos::reliable()
         let offered = qos::reliable()
-            .reliability(if r.reliable { Reliability::Reliable { when_full: WhenFull::DEFAULT } } else { Reliability::BestEffort })
-            .durability(if r.transient_local { Durability::TransientLocal } else { Durability::Volatile });
-        publishers.insert(t.name.clone(), node.raw_publisher(&name, &t.type_name, offered)?);
+            .reliability(if r.reliable {
+                Reliability::Reliable {
+                    when_full: WhenFull::DEFAULT,
+                }
+            } else {
+                Reliability::BestEffort
+            })
+            .durability(if r.transient_local {
+                Durability::TransientLocal
+            } else {
+                Durability::Volatile
+            });
+        publishers.insert(
+            t.name.clone(),
+            node.raw_publisher(&name, &t.type_name, offered)?,
+        );
     }
     let clock_pub = match a.clock {
         Some(_) => Some(node.publisher::<Clock>("/clock", qos::reliable())?),
@@ -101,12 +127,19 @@ pub fn run(a: PlayArgs) -> anyhow::Result<i32> {
     }
     let keyboard = Keyboard::open();
     if keyboard.is_some() {
-        eprintln!("playing {} (space: pause/resume, s: step while paused)", a.bag.display());
+        eprintln!(
+            "playing {} (space: pause/resume, s: step while paused)",
+            a.bag.display()
+        );
     }
     let clock_period = a.clock.map(|hz| Duration::from_secs_f64(1.0 / hz));
     let mut next_clock = Instant::now();
     let mut clock = PlaybackClock::new(a.rate);
-    let filter = MessageFilter { topics: Some(topics.iter().map(|t| t.name.clone()).collect()), start_ns, end_ns };
+    let filter = MessageFilter {
+        topics: Some(topics.iter().map(|t| t.name.clone()).collect()),
+        start_ns,
+        end_ns,
+    };
     let mut published = 0u64;
     'play: loop {
         for m in reader.messages(&filter)? {
@@ -122,7 +155,14 @@ pub fn run(a: PlayArgs) -> anyhow::Result<i32> {
                         match key {
                             b' ' => {
                                 clock.toggle_pause(Instant::now());
-                                eprintln!("{}", if clock.is_paused() { "paused" } else { "resumed" });
+                                eprintln!(
+                                    "{}",
+                                    if clock.is_paused() {
+                                        "paused"
+                                    } else {
+                                        "resumed"
+                                    }
+                                );
                             }
                             b's' if clock.is_paused() => step = true,
                             _ => {}
@@ -133,7 +173,9 @@ pub fn run(a: PlayArgs) -> anyhow::Result<i32> {
                 if let (Some(p), Some(period)) = (&clock_pub, clock_period) {
                     if now >= next_clock {
                         if let Some(t) = clock.bag_time_at(now) {
-                            let _ = p.publish(Clock { clock: Time::from_nanos(t as i64) });
+                            let _ = p.publish(Clock {
+                                clock: Time::from_nanos(t as i64),
+                            });
                         }
                         next_clock = now + period;
                     }

@@ -71,7 +71,10 @@ pub struct RecordArgs {
 /// Set the default of the declared parameter `name` (the value the node has unless
 /// `--ros-args` overrides it).
 fn set(decls: &mut [ParamDecl], name: &str, value: impl Into<ParamValue>) {
-    let d = decls.iter_mut().find(|d| d.name == name).expect("the recorder declares this parameter");
+    let d = decls
+        .iter_mut()
+        .find(|d| d.name == name)
+        .expect("the recorder declares this parameter");
     d.default = value.into();
 }
 
@@ -86,10 +89,16 @@ pub fn run(args: RecordArgs) -> anyhow::Result<i32> {
         anyhow::bail!("topic {t:?}: give the full name, starting with '/'");
     }
     if !(args.max_bag_duration.is_finite() && args.max_bag_duration >= 0.0) {
-        anyhow::bail!("--max-bag-duration {}: must be a non-negative number of seconds", args.max_bag_duration);
+        anyhow::bail!(
+            "--max-bag-duration {}: must be a non-negative number of seconds",
+            args.max_bag_duration
+        );
     }
     if !(0.1..=60.0).contains(&args.flush_interval) {
-        anyhow::bail!("--flush-interval {}: must be between 0.1 and 60 seconds", args.flush_interval);
+        anyhow::bail!(
+            "--flush-interval {}: must be between 0.1 and 60 seconds",
+            args.flush_interval
+        );
     }
     if let Some(o) = &args.output {
         if o.exists() {
@@ -102,21 +111,47 @@ pub fn run(args: RecordArgs) -> anyhow::Result<i32> {
     }
     set(&mut decls, "topics", args.topics.clone());
     set(&mut decls, "regex", args.regex.clone().unwrap_or_default());
-    set(&mut decls, "exclude", args.exclude.clone().unwrap_or_default());
+    set(
+        &mut decls,
+        "exclude",
+        args.exclude.clone().unwrap_or_default(),
+    );
     set(&mut decls, "compression", args.compression_format.clone());
     set(&mut decls, "flush_interval", args.flush_interval);
-    set(&mut decls, "max_bag_size", i64::try_from(args.max_bag_size).unwrap_or(i64::MAX));
+    set(
+        &mut decls,
+        "max_bag_size",
+        i64::try_from(args.max_bag_size).unwrap_or(i64::MAX),
+    );
     set(&mut decls, "max_bag_duration", args.max_bag_duration);
-    set(&mut decls, "queue_depth", i64::from(args.queue_depth.max(1)));
-    set(&mut decls, "max_cache_size", i64::try_from(args.max_cache_size.max(1)).unwrap_or(i64::MAX));
+    set(
+        &mut decls,
+        "queue_depth",
+        i64::from(args.queue_depth.max(1)),
+    );
+    set(
+        &mut decls,
+        "max_cache_size",
+        i64::try_from(args.max_cache_size.max(1)).unwrap_or(i64::MAX),
+    );
     if let Some(p) = &args.qos_profile_overrides_path {
-        set(&mut decls, "qos_profile_overrides_path", p.display().to_string());
+        set(
+            &mut decls,
+            "qos_profile_overrides_path",
+            p.display().to_string(),
+        );
     }
-    let argv = std::iter::once("metrocell bag record".to_string()).chain(args.ros_args.iter().cloned());
-    let (builder, _) = MetrocellNode::builder(&args.node_name).params(decls).args(argv)?;
+    let argv =
+        std::iter::once("metrocell bag record".to_string()).chain(args.ros_args.iter().cloned());
+    let (builder, _) = MetrocellNode::builder(&args.node_name)
+        .params(decls)
+        .args(argv)?;
     let mut node = builder.build()?;
     let settings = RecorderSettings::from_node(&node).map_err(|e| anyhow::anyhow!("{e}"))?;
-    eprintln!("metrocell bag record: recording into {} (Ctrl-C to finish)", settings.output);
+    eprintln!(
+        "metrocell bag record: recording into {} (Ctrl-C to finish)",
+        settings.output
+    );
     match record(&mut node, &settings) {
         Ok(summary) => {
             println!("{}: {}", summary.output, summary.describe());

@@ -6,7 +6,9 @@ use metrocell_bag::WriterOptions;
 use metrocell_bagtools::{filter_bag, merge_bags, CopyReport, TopicSelection};
 
 #[derive(clap::Args)]
-#[command(after_help = "Example:\n  metrocell bag filter run42 run42_tracker --topics /tracker/measurements --start 10 --end 70")]
+#[command(
+    after_help = "Example:\n  metrocell bag filter run42 run42_tracker --topics /tracker/measurements --start 10 --end 70"
+)]
 pub struct FilterArgs {
     /// Input bag
     input: PathBuf,

@@ -1,7 +1,9 @@
 //! The base accelerometer's alignment against the levelled instrument, beside a fit that has the
 //! base's tilt (crates/estimation `accelerometer_alignment`): said in words and in the JSON.
 
-use metrocell_estimation::accelerometer_alignment::{base_accelerometer_alignment, prediction_effect, AccelerometerAlignment};
+use metrocell_estimation::accelerometer_alignment::{
+    base_accelerometer_alignment, prediction_effect, AccelerometerAlignment,
+};
 use metrocell_estimation::{Fit, RecordSet};
 use metrocell_model::machine::MachineKinematics;
 use metrocell_model::ForwardModel;
@@ -24,7 +26,9 @@ impl AlignmentFinding {
 /// None unless the model is an arm with a base accelerometer, the fit has the base's tilt
 /// (a levelled instrument) with its covariance, and the records hold the sensor's readings.
 pub fn find(fm: &ForwardModel, f: &Fit, records: &RecordSet) -> Option<AlignmentFinding> {
-    let MachineKinematics::SerialArm(arm) = &fm.machine.kinematics else { return None };
+    let MachineKinematics::SerialArm(arm) = &fm.machine.kinematics else {
+        return None;
+    };
     let names = fm.param_names();
     let at = |n: &str| names.iter().position(|p| p == n);
     let (r, p) = (at("base_tilt.roll")?, at("base_tilt.pitch")?);
@@ -37,13 +41,22 @@ pub fn find(fm: &ForwardModel, f: &Fit, records: &RecordSet) -> Option<Alignment
     let used: Vec<_> = f.used.iter().map(|&i| records.records[i].clone()).collect();
     let alignment = base_accelerometer_alignment(arm, &used, tilt, tilt_cov)?;
     let effect_max_m = prediction_effect(fm, &f.x, &used, tilt);
-    Some(AlignmentFinding { alignment, effect_max_m })
+    Some(AlignmentFinding {
+        alignment,
+        effect_max_m,
+    })
 }
 
 pub fn lines(a: &AlignmentFinding) -> Vec<String> {
     let al = &a.alignment;
     let z = al.significance();
-    let sig = |z: f64| if z.abs() >= 3.0 { "significant" } else { "not significant (< 3σ)" };
+    let sig = |z: f64| {
+        if z.abs() >= 3.0 {
+            "significant"
+        } else {
+            "not significant (< 3σ)"
+        }
+    };
     let mut out = vec![format!(
         "accelerometer_alignment[{}]: the base accelerometer reads roll {:+.3} ± {:.3} mrad ({}), pitch {:+.3} ± {:.3} mrad ({}) off the levelled instrument's level, over {} readings (its mounting misalignment and bias/g together)",
         al.sensor,

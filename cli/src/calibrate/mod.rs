@@ -12,7 +12,9 @@ use std::time::Instant;
 
 use anyhow::Context;
 use metrocell_estimation::fit_summary::summary_lines;
-use metrocell_estimation::{fit, records_from_bags, rms, Fit, FitOptions, PointSource, RecordSet, RecordingOptions};
+use metrocell_estimation::{
+    fit, records_from_bags, rms, Fit, FitOptions, PointSource, RecordSet, RecordingOptions,
+};
 use metrocell_solver::Loss;
 use metrocell_twin::{write_model, CellModel, FittedParameter, ModelUpdate};
 
@@ -97,7 +99,10 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<i32> {
         other => anyhow::bail!("--loss `{other}`: allowed huber, cauchy, linear"),
     };
     if !(a.outlier_threshold > 0.0 && a.outlier_threshold.is_finite()) {
-        anyhow::bail!("--outlier-threshold must be > 0 (standard deviations), got {}", a.outlier_threshold);
+        anyhow::bail!(
+            "--outlier-threshold must be > 0 (standard deviations), got {}",
+            a.outlier_threshold
+        );
     }
     let points = match a.points.as_str() {
         "auto" => PointSource::Auto,
@@ -109,29 +114,74 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<i32> {
     eprintln!("reading {} recording(s)…", a.bags.len());
     // a model that declares a touch probe is fitted to the recording's probe hits too
     let probe_hits = file_model.raw.sensors.probe.is_some() && !a.no_probe_hits;
-    let options = RecordingOptions { points, measured_points_topic: a.measured_points_topic.clone(), probe_hits, ..RecordingOptions::default() };
+    let options = RecordingOptions {
+        points,
+        measured_points_topic: a.measured_points_topic.clone(),
+        probe_hits,
+        ..RecordingOptions::default()
+    };
     let mut records = records_from_bags(&a.bags, &file_model.forward_model()?, &options)?;
     // one pose per placement of the instrument (the recordings' `setup`), the base's tilt for a
     // levelled one; placements with too few fit points set aside, named
-    let (setups, short) = metrocell_estimation::check_points::usable_setups(&mut records, file_model.placement_fit_points());
+    let (setups, short) = metrocell_estimation::check_points::usable_setups(
+        &mut records,
+        file_model.placement_fit_points(),
+    );
     let model = file_model.with_setups(&setups)?;
     let fm = model.forward_model()?;
     let setup = match a.refit.as_deref() {
         Some(_) => placements::poses_only(&model.setup),
         None => model.setup.clone(),
     };
-    eprintln!("model {}: {} terms, {} parameters ({} free){}", a.model.display(), model.machine_terms.terms.len() + model.instrument_terms.terms.len(), fm.param_count(), setup.free.iter().filter(|f| **f).count(), if setups.is_empty() { String::new() } else { format!(", a pose for each of {} setups ({})", setups.len(), setups.join(", ")) });
+    eprintln!(
+        "model {}: {} terms, {} parameters ({} free){}",
+        a.model.display(),
+        model.machine_terms.terms.len() + model.instrument_terms.terms.len(),
+        fm.param_count(),
+        setup.free.iter().filter(|f| **f).count(),
+        if setups.is_empty() {
+            String::new()
+        } else {
+            format!(
+                ", a pose for each of {} setups ({})",
+                setups.len(),
+                setups.join(", ")
+            )
+        }
+    );
     for note in &short {
         eprintln!("warning: {note}");
     }
-    eprintln!("{} measurement records, {} check points ({} rejected) in {:.1} s; fitting…", records.len(), records.check.len(), records.rejected.len(), started.elapsed().as_secs_f64());
-    let fit_options = FitOptions { loss, ..FitOptions::default() };
-    let result = fit(&fm, &setup, &records, None, &fit_options).with_context(|| format!("fitting {} to {} records", a.model.display(), records.len()))?;
+    eprintln!(
+        "{} measurement records, {} check points ({} rejected) in {:.1} s; fitting…",
+        records.len(),
+        records.check.len(),
+        records.rejected.len(),
+        started.elapsed().as_secs_f64()
+    );
+    let fit_options = FitOptions {
+        loss,
+        ..FitOptions::default()
+    };
+    let result = fit(&fm, &setup, &records, None, &fit_options)
+        .with_context(|| format!("fitting {} to {} records", a.model.display(), records.len()))?;
     // the base accelerometer's alignment against the levelled instrument (a nuisance, reported)
     let alignment = accelerometer::find(&fm, &result, &records);
-    let check = if records.check.is_empty() { None } else { Some(placements::compare_on_check_points(&fm, &setup, &records, &result, &fit_options).context("predicting the check points")?) };
+    let check = if records.check.is_empty() {
+        None
+    } else {
+        Some(
+            placements::compare_on_check_points(&fm, &setup, &records, &result, &fit_options)
+                .context("predicting the check points")?,
+        )
+    };
     let iterations = result.solution.iterations;
-    eprintln!("fitted in {:.1} s ({iterations} iteration{}; {})", started.elapsed().as_secs_f64(), if iterations == 1 { "" } else { "s" }, result.solution.termination.in_words());
+    eprintln!(
+        "fitted in {:.1} s ({iterations} iteration{}; {})",
+        started.elapsed().as_secs_f64(),
+        if iterations == 1 { "" } else { "s" },
+        result.solution.termination.in_words()
+    );
     let mut lines = summary_lines(&result, &records);
     if a.refit.is_some() {
         // the kept physics is taken as exact here: its own σ (the fitted file's `uncertainty:`)
@@ -149,16 +199,36 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<i32> {
     // cost the user the fitted model (see `restore_sigpipe` in main.rs).
     let update = model_update(&result, &records, &a);
     // the fitted file is the file's model: placements are per recording, not written into it
-    let per_recording = |name: &str| metrocell_estimation::check_points::is_placement_parameter(name) && (!setups.is_empty() || name.starts_with("base_tilt"));
-    let update = ModelUpdate { parameters: update.parameters.into_iter().filter(|p| !per_recording(&p.name)).collect(), output_dir: a.output.parent().map(std::path::Path::to_path_buf), ..update };
+    let per_recording = |name: &str| {
+        metrocell_estimation::check_points::is_placement_parameter(name)
+            && (!setups.is_empty() || name.starts_with("base_tilt"))
+    };
+    let update = ModelUpdate {
+        parameters: update
+            .parameters
+            .into_iter()
+            .filter(|p| !per_recording(&p.name))
+            .collect(),
+        output_dir: a.output.parent().map(std::path::Path::to_path_buf),
+        ..update
+    };
     let text = write_model(&model, &update)?;
-    std::fs::write(&a.output, &text).with_context(|| format!("cannot write `{}`", a.output.display()))?;
+    std::fs::write(&a.output, &text)
+        .with_context(|| format!("cannot write `{}`", a.output.display()))?;
     let page = match &a.report {
-        Some(dir) => Some(report::write(dir, &a, &model, &fm, &result, &records, &lines)?),
+        Some(dir) => Some(report::write(
+            dir, &a, &model, &fm, &result, &records, &lines,
+        )?),
         None => None,
     };
     let json = match &a.json {
-        Some(_) => Some(serde_json::to_string_pretty(&result_json::result(&result, &records, &a.output, check.as_ref(), alignment.as_ref()))?),
+        Some(_) => Some(serde_json::to_string_pretty(&result_json::result(
+            &result,
+            &records,
+            &a.output,
+            check.as_ref(),
+            alignment.as_ref(),
+        ))?),
         None => None,
     };
     let json_to_stdout = a.json.as_deref() == Some("-");
@@ -185,26 +255,62 @@ fn calibrate(a: CalibrateArgs) -> anyhow::Result<i32> {
 
 /// Fitted values (the free, identifiable parameters) and the `fit:` section.
 fn model_update(f: &Fit, records: &RecordSet, a: &CalibrateArgs) -> ModelUpdate {
-    let parameters = f.parameters.iter().filter(|p| p.free).map(|p| FittedParameter { name: p.name.clone(), value: p.value, sigma: p.sigma }).collect();
+    let parameters = f
+        .parameters
+        .iter()
+        .filter(|p| p.free)
+        .map(|p| FittedParameter {
+            name: p.name.clone(),
+            value: p.value,
+            sigma: p.sigma,
+        })
+        .collect();
     let mut fit_section = serde_yaml::Mapping::new();
     let mut put = |k: &str, v: serde_yaml::Value| {
         fit_section.insert(k.into(), v);
     };
-    put("recordings", a.bags.iter().map(|b| serde_yaml::Value::from(b.display().to_string())).collect::<Vec<_>>().into());
+    put(
+        "recordings",
+        a.bags
+            .iter()
+            .map(|b| serde_yaml::Value::from(b.display().to_string()))
+            .collect::<Vec<_>>()
+            .into(),
+    );
     put("records", (f.used.len() as u64).into());
     put("residual_rms_um", {
         let mut m = serde_yaml::Mapping::new();
-        m.insert("before".into(), round(rms(&f.residuals_before) * 1e6, 3).into());
-        m.insert("after".into(), round(rms(&f.residuals_after) * 1e6, 3).into());
+        m.insert(
+            "before".into(),
+            round(rms(&f.residuals_before) * 1e6, 3).into(),
+        );
+        m.insert(
+            "after".into(),
+            round(rms(&f.residuals_after) * 1e6, 3).into(),
+        );
         m.into()
     });
     put("chi2_per_dof", round(f.chi2_per_dof, 4).into());
     put("outliers_downweighted", (f.outliers.len() as u64).into());
-    put("skipped", ((f.skipped.len() + records.rejected.len()) as u64).into());
+    put(
+        "skipped",
+        ((f.skipped.len() + records.rejected.len()) as u64).into(),
+    );
     if !f.held.is_empty() {
-        put("not_identifiable", f.held.iter().map(|h| serde_yaml::Value::from(h.combination.clone())).collect::<Vec<_>>().into());
+        put(
+            "not_identifiable",
+            f.held
+                .iter()
+                .map(|h| serde_yaml::Value::from(h.combination.clone()))
+                .collect::<Vec<_>>()
+                .into(),
+        );
     }
-    ModelUpdate { parameters, fit: Some(fit_section.into()), ..ModelUpdate::default() }
+    ModelUpdate {
+        parameters,
+        fit: Some(fit_section.into()),
+        ..ModelUpdate::default()
+    }
 }
 
 fn round(v: f64, decimals: i32) -> f64 {

@@ -27,7 +27,13 @@ pub struct CheckComparison {
 }
 
 /// Predict the check points of `records` (module doc). `fitted` is the calibration's fit.
-pub fn compare_on_check_points(fm: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, fitted: &Fit, options: &FitOptions) -> anyhow::Result<CheckComparison> {
+pub fn compare_on_check_points(
+    fm: &ForwardModel,
+    setup: &ParameterSetup,
+    records: &RecordSet,
+    fitted: &Fit,
+    options: &FitOptions,
+) -> anyhow::Result<CheckComparison> {
     let stationed = |start: Vec<f64>| -> anyhow::Result<CheckReport> {
         let only = poses_only(setup);
         let mut x = metrocell_estimation::start_vector(fm, &only, records)?;
@@ -42,7 +48,11 @@ pub fn compare_on_check_points(fm: &ForwardModel, setup: &ParameterSetup, record
     };
     let declared = stationed(fm.params())?;
     let nominal = stationed(nominal_values(fm))?;
-    Ok(CheckComparison { nominal, declared, fitted: check_report_of(fm, &fitted.x, &records.check) })
+    Ok(CheckComparison {
+        nominal,
+        declared,
+        fitted: check_report_of(fm, &fitted.x, &records.check),
+    })
 }
 
 /// Every machine term's parameters at their catalog defaults (the instrument's as declared).
@@ -61,17 +71,35 @@ fn nominal_values(fm: &ForwardModel) -> Vec<f64> {
 /// The comparison in words, mm.
 pub fn check_lines(c: &CheckComparison) -> Vec<String> {
     let mm = |v: f64| v * 1e3;
-    let row = |what: &str, r: &CheckReport| format!("  {what:<9} p50 xy {:.2} mm, p95 xy {:.2} mm, p95 z {:.2} mm, max {:.2} mm", mm(r.overall.p50_xy_m), mm(r.overall.p95_xy_m), mm(r.overall.p95_z_m), mm(r.overall.max_m));
+    let row = |what: &str, r: &CheckReport| {
+        format!(
+            "  {what:<9} p50 xy {:.2} mm, p95 xy {:.2} mm, p95 z {:.2} mm, max {:.2} mm",
+            mm(r.overall.p50_xy_m),
+            mm(r.overall.p95_xy_m),
+            mm(r.overall.p95_z_m),
+            mm(r.overall.max_m)
+        )
+    };
     let mut out = vec![format!("check points ({} predicted, kept out of the fit; each model with its placements fitted to the fit points; xy horizontal in the instrument's frame):", c.fitted.overall.n)];
     out.push(row("nominal", &c.nominal));
     out.push(row("declared", &c.declared));
     out.push(row("fitted", &c.fitted));
     for (name, s) in &c.fitted.setups {
-        out.push(format!("    setup {name}: {} points, fitted p95 xy {:.2} mm, p95 z {:.2} mm", s.n, mm(s.p95_xy_m), mm(s.p95_z_m)));
+        out.push(format!(
+            "    setup {name}: {} points, fitted p95 xy {:.2} mm, p95 z {:.2} mm",
+            s.n,
+            mm(s.p95_xy_m),
+            mm(s.p95_z_m)
+        ));
     }
     if !c.fitted.unpredicted.is_empty() {
         let first = &c.fitted.unpredicted[0];
-        out.push(format!("  {} check point(s) unpredicted, e.g. {}: {}", c.fitted.unpredicted.len(), first.point_id, first.reason));
+        out.push(format!(
+            "  {} check point(s) unpredicted, e.g. {}: {}",
+            c.fitted.unpredicted.len(),
+            first.point_id,
+            first.reason
+        ));
     }
     out
 }

@@ -17,21 +17,57 @@ use super::CalibrateArgs;
 
 const AXES: [&str; 3] = ["x", "y", "z"];
 
-pub fn write(dir: &Path, a: &CalibrateArgs, model: &CellModel, fm: &ForwardModel, f: &Fit, records: &RecordSet, summary: &[String]) -> anyhow::Result<PathBuf> {
+pub fn write(
+    dir: &Path,
+    a: &CalibrateArgs,
+    model: &CellModel,
+    fm: &ForwardModel,
+    f: &Fit,
+    records: &RecordSet,
+    summary: &[String],
+) -> anyhow::Result<PathBuf> {
     let mut r = Report::new(&format!("Calibration of {}", model.raw.name));
-    let command = format!("metrocell calibrate --model {} {} -o {}", a.model.display(), a.bags.iter().map(|b| b.display().to_string()).collect::<Vec<_>>().join(" "), a.output.display());
-    r.section("Summary").preformatted(&command).preformatted(&summary.join("\n"));
+    let command = format!(
+        "metrocell calibrate --model {} {} -o {}",
+        a.model.display(),
+        a.bags
+            .iter()
+            .map(|b| b.display().to_string())
+            .collect::<Vec<_>>()
+            .join(" "),
+        a.output.display()
+    );
+    r.section("Summary")
+        .preformatted(&command)
+        .preformatted(&summary.join("\n"));
 
     // residuals
-    let used: Vec<&metrocell_estimation::MeasurementRecord> = f.used.iter().map(|&i| &records.records[i]).collect();
-    let comps = |v: &[nalgebra::Vector3<f64>]| v.iter().flat_map(|r| r.iter().map(|c| c * 1e6).collect::<Vec<_>>()).collect::<Vec<f64>>();
-    let hist = HistogramPlot::new("Residual components, measured − model", "residual [µm]", 40).sample("before the fit", comps(&f.residuals_before)).sample("after the fit", comps(&f.residuals_after)).svg()?;
-    let t0 = used.first().map(|r| r.time).unwrap_or(0.0);
-    let over_time = |v: &[nalgebra::Vector3<f64>]| used.iter().zip(v).map(|(rec, e)| ((rec.time - t0) / 60.0, e.norm() * 1e6)).collect::<Vec<_>>();
-    let time = SeriesPlot::new("Residual length over time", "time since the first record [min]", "|residual| [µm]")
-        .series(Series::new("before", over_time(&f.residuals_before)).markers())
-        .series(Series::new("after", over_time(&f.residuals_after)).markers())
+    let used: Vec<&metrocell_estimation::MeasurementRecord> =
+        f.used.iter().map(|&i| &records.records[i]).collect();
+    let comps = |v: &[nalgebra::Vector3<f64>]| {
+        v.iter()
+            .flat_map(|r| r.iter().map(|c| c * 1e6).collect::<Vec<_>>())
+            .collect::<Vec<f64>>()
+    };
+    let hist = HistogramPlot::new("Residual components, measured − model", "residual [µm]", 40)
+        .sample("before the fit", comps(&f.residuals_before))
+        .sample("after the fit", comps(&f.residuals_after))
         .svg()?;
+    let t0 = used.first().map(|r| r.time).unwrap_or(0.0);
+    let over_time = |v: &[nalgebra::Vector3<f64>]| {
+        used.iter()
+            .zip(v)
+            .map(|(rec, e)| ((rec.time - t0) / 60.0, e.norm() * 1e6))
+            .collect::<Vec<_>>()
+    };
+    let time = SeriesPlot::new(
+        "Residual length over time",
+        "time since the first record [min]",
+        "|residual| [µm]",
+    )
+    .series(Series::new("before", over_time(&f.residuals_before)).markers())
+    .series(Series::new("after", over_time(&f.residuals_after)).markers())
+    .svg()?;
     let kin = fm.kinematic_truth(&f.x)?;
     let mut workspace = vec![];
     for (rec, e) in used.iter().zip(&f.residuals_after) {
@@ -49,9 +85,25 @@ pub fn write(dir: &Path, a: &CalibrateArgs, model: &CellModel, fm: &ForwardModel
         used.len(),
         f.chi2_per_dof
     ));
-    sec.figure("residual_histogram", "Residual components before and after the fit", hist).figure("residual_time", "Residual length over time", time);
+    sec.figure(
+        "residual_histogram",
+        "Residual components before and after the fit",
+        hist,
+    )
+    .figure("residual_time", "Residual length over time", time);
     if !workspace.is_empty() {
-        sec.figure("residual_workspace", "Residual length after the fit over the workspace (commanded tool point, top view)", ScatterPlot::new("Residual after the fit over the workspace", "x [mm]", "y [mm]", "|residual| [µm]", workspace).svg()?);
+        sec.figure(
+            "residual_workspace",
+            "Residual length after the fit over the workspace (commanded tool point, top view)",
+            ScatterPlot::new(
+                "Residual after the fit over the workspace",
+                "x [mm]",
+                "y [mm]",
+                "|residual| [µm]",
+                workspace,
+            )
+            .svg()?,
+        );
     }
 
     // error functions ± 2u
@@ -66,17 +118,35 @@ pub fn write(dir: &Path, a: &CalibrateArgs, model: &CellModel, fm: &ForwardModel
     let mut u_sq = 0.0;
     let mut n_u = 0;
     for func in &functions {
-        let mut plot = SeriesPlot::new(&format!("Error along {}", AXES[func.axis]), &format!("{} [mm]", AXES[func.axis]), "error [µm]");
+        let mut plot = SeriesPlot::new(
+            &format!("Error along {}", AXES[func.axis]),
+            &format!("{} [mm]", AXES[func.axis]),
+            "error [µm]",
+        );
         for c in 0..3 {
-            let pts: Vec<(f64, f64)> = func.positions.iter().zip(&func.errors).map(|(q, e)| (q * 1e3, e[c] * 1e6)).collect();
-            let band: Vec<(f64, f64)> = func.errors.iter().zip(&func.sigmas).map(|(e, u)| ((e[c] - 2.0 * u[c]) * 1e6, (e[c] + 2.0 * u[c]) * 1e6)).collect();
+            let pts: Vec<(f64, f64)> = func
+                .positions
+                .iter()
+                .zip(&func.errors)
+                .map(|(q, e)| (q * 1e3, e[c] * 1e6))
+                .collect();
+            let band: Vec<(f64, f64)> = func
+                .errors
+                .iter()
+                .zip(&func.sigmas)
+                .map(|(e, u)| ((e[c] - 2.0 * u[c]) * 1e6, (e[c] + 2.0 * u[c]) * 1e6))
+                .collect();
             plot = plot.series(Series::new(&format!("e_{}", AXES[c]), pts).band(band));
         }
         for u in &func.sigmas {
             u_sq += u.norm_squared() / 3.0;
             n_u += 1;
         }
-        sec.figure(&format!("error_{}", AXES[func.axis]), &format!("Error functions along {} with ± 2u", AXES[func.axis]), plot.svg()?);
+        sec.figure(
+            &format!("error_{}", AXES[func.axis]),
+            &format!("Error functions along {} with ± 2u", AXES[func.axis]),
+            plot.svg()?,
+        );
     }
 
     // parameters and identifiability
@@ -85,7 +155,11 @@ pub fn write(dir: &Path, a: &CalibrateArgs, model: &CellModel, fm: &ForwardModel
         let status = if let Some(side) = p.at_bound {
             format!("fitted, ended on the {} bound of its possible range: the data want a value beyond it (no interior uncertainty)", side.name())
         } else if p.free && !(p.value >= p.usual.0 && p.value <= p.usual.1) {
-            format!("fitted, outside the usual range {} … {}", value_with_sigma(p.usual.0, None, p.unit), value_with_sigma(p.usual.1, None, p.unit))
+            format!(
+                "fitted, outside the usual range {} … {}",
+                value_with_sigma(p.usual.0, None, p.unit),
+                value_with_sigma(p.usual.1, None, p.unit)
+            )
         } else if p.free {
             "fitted".to_string()
         } else if let Some(h) = f.held.iter().find(|h| h.name == p.name) {
@@ -93,14 +167,30 @@ pub fn write(dir: &Path, a: &CalibrateArgs, model: &CellModel, fm: &ForwardModel
         } else {
             "fixed by the model file".to_string()
         };
-        t.push(vec![p.name.clone(), value_with_sigma(p.value, p.sigma, p.unit), status]);
+        t.push(vec![
+            p.name.clone(),
+            value_with_sigma(p.value, p.sigma, p.unit),
+            status,
+        ]);
     }
     r.section("Parameters").table(t.caption("Every parameter of the model; uncertainties are standard (k = 1), scaled by the a-posteriori variance factor"));
     let mut id = Table::new(&["quantity", "value"]);
-    id.push(vec!["parameters declared free".into(), (f.parameters.iter().filter(|p| p.free).count() + f.held.len()).to_string()]);
-    id.push(vec!["rank of the declared model at the start".into(), f.declared_identifiability.rank.to_string()]);
-    id.push(vec!["held (not identifiable from these measurements)".into(), f.held.len().to_string()]);
-    id.push(vec!["condition number of the fitted set (column-scaled)".into(), format!("{:.3e}", f.identifiability.condition_number)]);
+    id.push(vec![
+        "parameters declared free".into(),
+        (f.parameters.iter().filter(|p| p.free).count() + f.held.len()).to_string(),
+    ]);
+    id.push(vec![
+        "rank of the declared model at the start".into(),
+        f.declared_identifiability.rank.to_string(),
+    ]);
+    id.push(vec![
+        "held (not identifiable from these measurements)".into(),
+        f.held.len().to_string(),
+    ]);
+    id.push(vec![
+        "condition number of the fitted set (column-scaled)".into(),
+        format!("{:.3e}", f.identifiability.condition_number),
+    ]);
     let sec = r.section("Identifiability");
     sec.table(id);
     for h in &f.held {
@@ -108,15 +198,39 @@ pub fn write(dir: &Path, a: &CalibrateArgs, model: &CellModel, fm: &ForwardModel
     }
 
     // budget
-    let u_model = if n_u > 0 { (u_sq / n_u as f64).sqrt() } else { 0.0 };
+    let u_model = if n_u > 0 {
+        (u_sq / n_u as f64).sqrt()
+    } else {
+        0.0
+    };
     let u_residual = rms(&f.residuals_after);
-    let budget = Budget::new(2.0).with("fitted model (RMS of u_e over the error functions)", u_model).with("residual the model leaves (RMS per coordinate after the fit)", u_residual);
+    let budget = Budget::new(2.0)
+        .with(
+            "fitted model (RMS of u_e over the error functions)",
+            u_model,
+        )
+        .with(
+            "residual the model leaves (RMS per coordinate after the fit)",
+            u_residual,
+        );
     let mut bt = Table::new(&["contribution", "u [µm]", "share of u²"]);
     for ((c, share), contribution) in budget.shares().iter().zip(&budget.contributions) {
-        bt.push(vec![c.clone(), format!("{:.2}", contribution.standard_uncertainty * 1e6), format!("{:.1} %", share * 100.0)]);
+        bt.push(vec![
+            c.clone(),
+            format!("{:.2}", contribution.standard_uncertainty * 1e6),
+            format!("{:.1} %", share * 100.0),
+        ]);
     }
-    bt.push(vec!["combined u_c".into(), format!("{:.2}", budget.combined() * 1e6), String::new()]);
-    bt.push(vec!["expanded U (k = 2)".into(), format!("{:.2}", budget.expanded() * 1e6), String::new()]);
+    bt.push(vec![
+        "combined u_c".into(),
+        format!("{:.2}", budget.combined() * 1e6),
+        String::new(),
+    ]);
+    bt.push(vec![
+        "expanded U (k = 2)".into(),
+        format!("{:.2}", budget.expanded() * 1e6),
+        String::new(),
+    ]);
     r.section("Uncertainty budget").paragraph("Uncertainty of the compensated machine's error per coordinate, GUM root-sum-of-squares: the fitted model's own uncertainty and what it leaves unexplained (noise and misfit).").table(bt);
     Ok(r.write_to(dir)?)
 }

@@ -5,7 +5,13 @@ use std::path::Path;
 use metrocell_estimation::{rms, Fit, RecordSet};
 use serde_json::{json, Value};
 
-pub fn result(f: &Fit, records: &RecordSet, output: &Path, check: Option<&super::placements::CheckComparison>, alignment: Option<&super::accelerometer::AlignmentFinding>) -> Value {
+pub fn result(
+    f: &Fit,
+    records: &RecordSet,
+    output: &Path,
+    check: Option<&super::placements::CheckComparison>,
+    alignment: Option<&super::accelerometer::AlignmentFinding>,
+) -> Value {
     json!({
         "accelerometer_alignment": alignment.map(super::accelerometer::to_json),
         "check": check.map(super::placements::check_json),

@@ -38,7 +38,14 @@ fn lagged_terms(model: &CellModel) -> Vec<(String, String, f64)> {
     for t in &model.machine_terms.terms {
         for s in t.term.signals() {
             if let SignalKind::TemperatureHistory(sensor) = s {
-                let tau = t.term.params().iter().zip(&t.params).find(|(p, _)| p.name == "time_constant").map(|(_, v)| *v).unwrap_or(f64::NAN);
+                let tau = t
+                    .term
+                    .params()
+                    .iter()
+                    .zip(&t.params)
+                    .find(|(p, _)| p.name == "time_constant")
+                    .map(|(_, v)| *v)
+                    .unwrap_or(f64::NAN);
                 out.push((t.term.label(), sensor, tau));
             }
         }
@@ -58,10 +65,16 @@ pub fn conditions(model: &CellModel, o: &ConditionOptions) -> anyhow::Result<Con
     }
     if let Some(bag) = o.history {
         statements.extend(from_recording(model, bag, o, &lagged, &mut s)?);
-        return Ok(Conditions { signals: s, statements });
+        return Ok(Conditions {
+            signals: s,
+            statements,
+        });
     }
     if lagged.is_empty() {
-        return Ok(Conditions { signals: s, statements });
+        return Ok(Conditions {
+            signals: s,
+            statements,
+        });
     }
     // steady state: each lagged sensor's history is its one given temperature
     let timeline = TemperatureTimeline::new();
@@ -82,15 +95,29 @@ pub fn conditions(model: &CellModel, o: &ConditionOptions) -> anyhow::Result<Con
     }
     s.timeline = Some(Arc::new(timeline));
     s.time = Some(0.0);
-    Ok(Conditions { signals: s, statements })
+    Ok(Conditions {
+        signals: s,
+        statements,
+    })
 }
 
 /// Temperatures, their history and the load from a recording at `--at-time` (seconds after its
 /// first temperature sample; default its last); values given on the command line win.
-fn from_recording(model: &CellModel, bag: &Path, o: &ConditionOptions, lagged: &[(String, String, f64)], s: &mut Signals) -> anyhow::Result<Vec<String>> {
-    let (builder, _) = signals_from_bag(bag, &model.machine, &SignalsBuilderOptions::default()).with_context(|| format!("--temperatures-from {}", bag.display()))?;
+fn from_recording(
+    model: &CellModel,
+    bag: &Path,
+    o: &ConditionOptions,
+    lagged: &[(String, String, f64)],
+    s: &mut Signals,
+) -> anyhow::Result<Vec<String>> {
+    let (builder, _) = signals_from_bag(bag, &model.machine, &SignalsBuilderOptions::default())
+        .with_context(|| format!("--temperatures-from {}", bag.display()))?;
     let timeline = builder.timeline().clone();
-    let spans: Vec<(f64, f64)> = timeline.sensors().iter().filter_map(|n| timeline.time_span(n)).collect();
+    let spans: Vec<(f64, f64)> = timeline
+        .sensors()
+        .iter()
+        .filter_map(|n| timeline.time_span(n))
+        .collect();
     if spans.is_empty() {
         bail!("--temperatures-from {}: the recording has no temperature topics (/temperature/<sensor>, sensor_msgs/Temperature)", bag.display());
     }
@@ -128,7 +155,13 @@ fn from_recording(model: &CellModel, bag: &Path, o: &ConditionOptions, lagged: &
     }
     s.time = recorded.time;
     s.timeline = recorded.timeline.clone();
-    let mut out = vec![format!("temperatures from {} at {:.0} s after its first temperature sample ({:.2} h): {}", bag.display(), after, after / 3600.0, given.join(", "))];
+    let mut out = vec![format!(
+        "temperatures from {} at {:.0} s after its first temperature sample ({:.2} h): {}",
+        bag.display(),
+        after,
+        after / 3600.0,
+        given.join(", ")
+    )];
     for (label, sensor, tau) in lagged {
         if let Ok((tf, _)) = s.lagged_temperature(label.as_str(), sensor, *tau) {
             out.push(format!("{label} lags sensor `{sensor}` by τ = {:.1} min: its structure is at {tf:.2} °C (the recorded history filtered)", tau / 60.0));
@@ -141,15 +174,26 @@ fn from_recording(model: &CellModel, bag: &Path, o: &ConditionOptions, lagged: &
 pub fn signals(temperatures: &[String], load: Option<&str>) -> anyhow::Result<Signals> {
     let mut s = Signals::default();
     for t in temperatures {
-        let (name, value) = t.split_once('=').with_context(|| format!("--temperature `{t}`: expected NAME=°C, e.g. x_left=21.4"))?;
-        let v: f64 = value.trim().trim_end_matches("degC").trim().parse().with_context(|| format!("--temperature `{t}`: `{value}` is not a number of °C"))?;
+        let (name, value) = t
+            .split_once('=')
+            .with_context(|| format!("--temperature `{t}`: expected NAME=°C, e.g. x_left=21.4"))?;
+        let v: f64 = value
+            .trim()
+            .trim_end_matches("degC")
+            .trim()
+            .parse()
+            .with_context(|| format!("--temperature `{t}`: `{value}` is not a number of °C"))?;
         if !v.is_finite() {
             bail!("--temperature `{t}`: not finite");
         }
         s.temperatures.insert(name.trim().to_string(), v);
     }
     if let Some(l) = load {
-        let v: Vec<f64> = l.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().with_context(|| format!("--load `{l}`: expected FX,FY,FZ in N"))?;
+        let v: Vec<f64> = l
+            .split(',')
+            .map(|x| x.trim().parse::<f64>())
+            .collect::<Result<_, _>>()
+            .with_context(|| format!("--load `{l}`: expected FX,FY,FZ in N"))?;
         if v.len() != 3 {
             bail!("--load `{l}`: expected three numbers FX,FY,FZ in N");
         }
@@ -160,7 +204,11 @@ pub fn signals(temperatures: &[String], load: Option<&str>) -> anyhow::Result<Si
 
 /// `X,Y,Z` in mm → m.
 pub fn point_mm(text: &str, what: &str) -> anyhow::Result<Vector3<f64>> {
-    let v: Vec<f64> = text.split(',').map(|x| x.trim().parse::<f64>()).collect::<Result<_, _>>().with_context(|| format!("{what} `{text}`: expected X,Y,Z in mm"))?;
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|x| x.trim().parse::<f64>())
+        .collect::<Result<_, _>>()
+        .with_context(|| format!("{what} `{text}`: expected X,Y,Z in mm"))?;
     if v.len() != 3 || !v.iter().all(|x| x.is_finite()) {
         bail!("{what} `{text}`: expected three finite numbers X,Y,Z in mm");
     }
@@ -175,7 +223,8 @@ pub fn sensors_read(model: &CellModel) -> Vec<String> {
         .iter()
         .flat_map(|t| t.term.signals())
         .filter_map(|s| match s {
-            metrocell_physics::SignalKind::Temperature(n) | metrocell_physics::SignalKind::TemperatureHistory(n) => Some(n),
+            metrocell_physics::SignalKind::Temperature(n)
+            | metrocell_physics::SignalKind::TemperatureHistory(n) => Some(n),
             _ => None,
         })
         .collect();
@@ -194,7 +243,10 @@ pub fn check_sensor_names(conditions: &Signals, model: &CellModel) -> anyhow::Re
             if read.is_empty() {
                 bail!("--temperature {name}=…: the model's terms read no temperature; leave --temperature out");
             }
-            bail!("--temperature {name}=…: the model's terms read no sensor `{name}`; they read {}", read.join(", "));
+            bail!(
+                "--temperature {name}=…: the model's terms read no sensor `{name}`; they read {}",
+                read.join(", ")
+            );
         }
     }
     Ok(())
@@ -203,7 +255,8 @@ pub fn check_sensor_names(conditions: &Signals, model: &CellModel) -> anyhow::Re
 /// Why a machine family gets no X Y Z compensation (`None`: cartesian and delta machines do).
 pub fn not_xyz_family(model: &CellModel) -> Option<&'static str> {
     match model.machine.kinematics {
-        metrocell_model::MachineKinematics::Cartesian(_) | metrocell_model::MachineKinematics::Delta(_) => None,
+        metrocell_model::MachineKinematics::Cartesian(_)
+        | metrocell_model::MachineKinematics::Delta(_) => None,
         metrocell_model::MachineKinematics::FiveAxis(_) => Some("five_axis"),
         metrocell_model::MachineKinematics::SerialArm(_) => Some("serial_arm"),
     }

@@ -9,7 +9,8 @@ use metrocell_twin::CellModel;
 use super::conditions::{conditions, not_xyz_family, point_mm, sensors_read, ConditionOptions};
 
 #[derive(clap::Args)]
-#[command(after_help = "What it does: every programmed point T of G0/G1/G2/G3 is replaced by the commanded point C with \
+#[command(
+    after_help = "What it does: every programmed point T of G0/G1/G2/G3 is replaced by the commanded point C with \
 C + e(C) = T, e the model's machine error (its terms' fitted values) at C for the direction each axis approaches it \
 (fixed-point iteration, exact to 1e-12 m; --first-order gives seed 000's one step C = T − e(T)). Arcs become chords \
 within --chord-tolerance; straight moves are split where the error bends them; a reversal (backlash) gets a take-up \
@@ -21,7 +22,8 @@ lagged one (thermal_growth with lag, as diagnose writes it) needs the sensor's h
 (at --at-time), or, without it, a steady state at --temperature is assumed and said.\n\n\
 Examples:\n  metrocell compensate gcode --model fitted.yaml part.nc -o part_comp.nc\n  \
 metrocell compensate gcode --model fitted.yaml part.nc -o part_comp.nc --temperature x_left=21.4 --temperature x_right=21.9\n  \
-metrocell compensate gcode --model diag/model.yaml part.nc -o part_comp.nc --temperatures-from shift_bag --at-time 2h")]
+metrocell compensate gcode --model diag/model.yaml part.nc -o part_comp.nc --temperatures-from shift_bag --at-time 2h"
+)]
 pub struct GcodeArgs {
     /// Fitted model file (a cell file, e.g. written by `metrocell calibrate -o`)
     #[arg(long)]
@@ -61,27 +63,56 @@ pub fn run(a: GcodeArgs) -> anyhow::Result<i32> {
         anyhow::bail!("model `{}`: G-code compensation rewrites X Y Z coordinates (machine families cartesian and delta); a {family} machine's programs are joint or pose programs", a.model.display());
     }
     let fm = model.forward_model()?;
-    let c = conditions(&model, &ConditionOptions { temperatures: &a.temperatures, load: a.load.as_deref(), history: a.temperatures_from.as_deref(), at_time: a.at_time.as_deref() }).with_context(|| format!("model `{}`", a.model.display()))?;
+    let c = conditions(
+        &model,
+        &ConditionOptions {
+            temperatures: &a.temperatures,
+            load: a.load.as_deref(),
+            history: a.temperatures_from.as_deref(),
+            at_time: a.at_time.as_deref(),
+        },
+    )
+    .with_context(|| format!("model `{}`", a.model.display()))?;
     for line in &c.statements {
         println!("{line}");
     }
     let field = ModelErrorField::new(&fm, fm.params(), c.signals).map_err(|e| {
         let sensors = sensors_read(&model);
-        let hint = if sensors.is_empty() { String::new() } else { format!(" (the model's terms read temperatures {}: give each with --temperature NAME=°C)", sensors.join(", ")) };
+        let hint = if sensors.is_empty() {
+            String::new()
+        } else {
+            format!(
+                " (the model's terms read temperatures {}: give each with --temperature NAME=°C)",
+                sensors.join(", ")
+            )
+        };
         anyhow::anyhow!("model `{}`: {e}{hint}", a.model.display())
     })?;
-    let program = std::fs::read_to_string(&a.input).with_context(|| format!("cannot read the program `{}`", a.input.display()))?;
+    let program = std::fs::read_to_string(&a.input)
+        .with_context(|| format!("cannot read the program `{}`", a.input.display()))?;
     if !(a.chord_tolerance > 0.0 && a.chord_tolerance.is_finite()) {
-        anyhow::bail!("--chord-tolerance must be > 0 mm, got {}", a.chord_tolerance);
+        anyhow::bail!(
+            "--chord-tolerance must be > 0 mm, got {}",
+            a.chord_tolerance
+        );
     }
     let options = CompensationOptions {
-        method: if a.first_order { InverseMethod::FirstOrder } else { InverseMethod::FixedPoint },
+        method: if a.first_order {
+            InverseMethod::FirstOrder
+        } else {
+            InverseMethod::FixedPoint
+        },
         chord_tolerance_mm: a.chord_tolerance,
         start: point_mm(&a.start, "--start")? * 1e3,
-        model_name: a.model.file_name().map(|n| n.to_string_lossy().to_string()).unwrap_or_else(|| "model".into()),
+        model_name: a
+            .model
+            .file_name()
+            .map(|n| n.to_string_lossy().to_string())
+            .unwrap_or_else(|| "model".into()),
     };
     let (out, report) = compensate_program(&program, &field, &options);
-    std::fs::write(&a.output, out).with_context(|| format!("cannot write `{}`", a.output.display()))?;
+    std::fs::write(&a.output, out)
+        .with_context(|| format!("cannot write `{}`", a.output.display()))?;
     println!("{}", report.summary());
     println!("written: {}", a.output.display());
     Ok(if report.malformed.is_empty() { 0 } else { 1 })

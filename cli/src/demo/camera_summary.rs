@@ -64,7 +64,11 @@ pub fn summarise(bag: &Path) -> anyhow::Result<CameraSummary> {
             detections.insert((d.header.stamp.sec, d.header.stamp.nanosec), d);
         }
     }
-    let mut s = CameraSummary { frames: frames.len() as u64, frame_size, ..Default::default() };
+    let mut s = CameraSummary {
+        frames: frames.len() as u64,
+        frame_size,
+        ..Default::default()
+    };
     let mut positions: BTreeMap<i32, Vec<[f64; 3]>> = BTreeMap::new();
     let mut sigmas: [Vec<f64>; 3] = Default::default();
     for (stamp, d) in &detections {
@@ -73,7 +77,12 @@ pub fn summarise(bag: &Path) -> anyhow::Result<CameraSummary> {
             continue;
         }
         s.measured += 1;
-        let posed: BTreeSet<i32> = d.detections.iter().filter(|t| t.has_pose).map(|t| t.id).collect();
+        let posed: BTreeSet<i32> = d
+            .detections
+            .iter()
+            .filter(|t| t.has_pose)
+            .map(|t| t.id)
+            .collect();
         if (0..PLATE_MARKERS as i32).all(|id| posed.contains(&id)) {
             s.whole_plate += 1;
         }
@@ -93,7 +102,11 @@ pub fn summarise(bag: &Path) -> anyhow::Result<CameraSummary> {
         }
     }
     s.repeatability = pooled_spread(positions.values());
-    s.stated_sigma = sigmas.iter().map(|v| median(v)).collect::<Option<Vec<f64>>>().map(|v| [v[0], v[1], v[2]]);
+    s.stated_sigma = sigmas
+        .iter()
+        .map(|v| median(v))
+        .collect::<Option<Vec<f64>>>()
+        .map(|v| [v[0], v[1], v[2]]);
     Ok(s)
 }
 
@@ -105,7 +118,8 @@ fn pooled_spread<'a>(groups: impl Iterator<Item = &'a Vec<[f64; 3]>>) -> Option<
     for g in groups.filter(|g| g.len() >= 2) {
         for (axis, total) in sum.iter_mut().enumerate() {
             let mean = g.iter().map(|p| p[axis]).sum::<f64>() / g.len() as f64;
-            *total += g.iter().map(|p| (p[axis] - mean).powi(2)).sum::<f64>() / (g.len() - 1) as f64;
+            *total +=
+                g.iter().map(|p| (p[axis] - mean).powi(2)).sum::<f64>() / (g.len() - 1) as f64;
         }
         n += 1;
     }
@@ -146,13 +160,20 @@ impl FiducialNodeCounts {
 
 /// The summary in words, against the `published` frames of the twin (its own count).
 pub fn describe(s: &CameraSummary, published: Option<u64>, node: &FiducialNodeCounts) -> String {
-    let size = s.frame_size.map_or(String::new(), |(w, h)| format!(" ({w}×{h})"));
+    let size = s
+        .frame_size
+        .map_or(String::new(), |(w, h)| format!(" ({w}×{h})"));
     if published.is_none() && s.frames == 0 {
         return "camera: the cell has none (or its frames were not rendered)".to_string();
     }
     let mut text = match published {
-        Some(n) if n == s.frames => format!("camera: the twin rendered {n} frames{size}, all in the bag"),
-        Some(n) => format!("camera: the twin rendered {n} frames{size}, {} in the bag", s.frames),
+        Some(n) if n == s.frames => {
+            format!("camera: the twin rendered {n} frames{size}, all in the bag")
+        }
+        Some(n) => format!(
+            "camera: the twin rendered {n} frames{size}, {} in the bag",
+            s.frames
+        ),
         None => format!("camera: {} frames{size} in the bag", s.frames),
     };
     if s.frames == 0 {
@@ -181,16 +202,32 @@ pub fn describe(s: &CameraSummary, published: Option<u64>, node: &FiducialNodeCo
         }
         let unexplained = missed.saturating_sub(dropped + rejected);
         if unexplained > 0 {
-            why.push(format!("{unexplained} never reached it (it reads frames best effort, keeping the last 5)"));
+            why.push(format!(
+                "{unexplained} never reached it (it reads frames best effort, keeping the last 5)"
+            ));
         }
         text.push_str(&format!("; missed {missed}: {}", why.join(", ")));
     }
     if s.unmatched_detections > 0 {
-        text.push_str(&format!("; {} detections match no recorded frame", s.unmatched_detections));
+        text.push_str(&format!(
+            "; {} detections match no recorded frame",
+            s.unmatched_detections
+        ));
     }
     if let (Some(r), Some(sigma)) = (s.repeatability, s.stated_sigma) {
-        let um = |v: [f64; 3]| format!("x {:.1}, y {:.1}, z {:.1} µm", v[0] * 1e6, v[1] * 1e6, v[2] * 1e6);
-        text.push_str(&format!("; a marker's position repeats to {} (1σ over the run; the node states σ {})", um(r), um(sigma)));
+        let um = |v: [f64; 3]| {
+            format!(
+                "x {:.1}, y {:.1}, z {:.1} µm",
+                v[0] * 1e6,
+                v[1] * 1e6,
+                v[2] * 1e6
+            )
+        };
+        text.push_str(&format!(
+            "; a marker's position repeats to {} (1σ over the run; the node states σ {})",
+            um(r),
+            um(sigma)
+        ));
     }
     text
 }
@@ -206,18 +243,46 @@ mod tests {
         let b = vec![[5.0, 1.0, 0.0], [5.0, 1.0, 0.0]];
         let single = vec![[100.0, 100.0, 100.0]];
         let r = pooled_spread([&a, &b, &single].into_iter()).unwrap();
-        assert!((r[0] - 1.0).abs() < 1e-12 && r[1] == 0.0 && r[2] == 0.0, "{r:?}");
+        assert!(
+            (r[0] - 1.0).abs() < 1e-12 && r[1] == 0.0 && r[2] == 0.0,
+            "{r:?}"
+        );
         assert_eq!(pooled_spread([&single].into_iter()), None);
     }
 
     #[test]
     fn missed_frames_are_counted_and_explained() {
-        let s = CameraSummary { frames: 10, frame_size: Some((640, 480)), measured: 8, whole_plate: 8, poses: 32, ..Default::default() };
-        let node = FiducialNodeCounts { processed: Some(8), dropped: Some(2), rejected: Some(0), mean_latency_ms: Some(5.0) };
+        let s = CameraSummary {
+            frames: 10,
+            frame_size: Some((640, 480)),
+            measured: 8,
+            whole_plate: 8,
+            poses: 32,
+            ..Default::default()
+        };
+        let node = FiducialNodeCounts {
+            processed: Some(8),
+            dropped: Some(2),
+            rejected: Some(0),
+            mean_latency_ms: Some(5.0),
+        };
         let text = describe(&s, Some(10), &node);
         assert!(text.starts_with("camera: the twin rendered 10 frames (640×480), all in the bag; the fiducial node measured 8 of them in 5.0 ms each"), "{text}");
-        assert!(text.contains("missed 2: the node skipped 2 queued behind a newer frame"), "{text}");
-        let text = describe(&CameraSummary { measured: 10, ..s.clone() }, Some(12), &node);
-        assert!(text.contains("12 frames (640×480), 10 in the bag") && !text.contains("missed"), "{text}");
+        assert!(
+            text.contains("missed 2: the node skipped 2 queued behind a newer frame"),
+            "{text}"
+        );
+        let text = describe(
+            &CameraSummary {
+                measured: 10,
+                ..s.clone()
+            },
+            Some(12),
+            &node,
+        );
+        assert!(
+            text.contains("12 frames (640×480), 10 in the bag") && !text.contains("missed"),
+            "{text}"
+        );
     }
 }

@@ -5,7 +5,9 @@ use std::time::Duration;
 use super::QosChoice;
 
 #[derive(clap::Args)]
-#[command(after_help = "Examples:\n  metrocell topic echo /tracker/measurements --count 1\n  metrocell topic echo /temperature/x_scale --json | jq .temperature")]
+#[command(
+    after_help = "Examples:\n  metrocell topic echo /tracker/measurements --count 1\n  metrocell topic echo /temperature/x_scale --json | jq .temperature"
+)]
 pub struct EchoArgs {
     /// Topic name, e.g. /tracker/measurements
     topic: String,
@@ -30,7 +32,11 @@ pub fn run(args: EchoArgs) -> anyhow::Result<i32> {
     let mut node = super::cli_node("topic_echo")?;
     let type_name = match &args.type_name {
         Some(t) => super::known_type(t)?,
-        None => super::known_type(&super::discover_type(&node, &args.topic, Duration::from_secs_f64(args.discovery_timeout))?)?,
+        None => super::known_type(&super::discover_type(
+            &node,
+            &args.topic,
+            Duration::from_secs_f64(args.discovery_timeout),
+        )?)?,
     };
     let sub = node.raw_subscription(&args.topic, &type_name, args.qos.profile())?;
     let registry = metrocell_msgs::registry();
@@ -51,7 +57,12 @@ pub fn run(args: EchoArgs) -> anyhow::Result<i32> {
                 printed += 1;
             }
             // A malformed message is reported and skipped; the next one may be fine.
-            Err(e) => eprintln!("metrocell topic echo: {}: message {} from {:?}: {e}", sub.topic(), msg.sequence_number, msg.publisher_gid),
+            Err(e) => eprintln!(
+                "metrocell topic echo: {}: message {} from {:?}: {e}",
+                sub.topic(),
+                msg.sequence_number,
+                msg.publisher_gid
+            ),
         }
     }
     Ok(0)

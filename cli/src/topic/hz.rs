@@ -45,7 +45,10 @@ pub struct RateStats {
 
 impl RateWindow {
     pub fn new(capacity: usize) -> Self {
-        RateWindow { capacity: capacity.max(1), ..Default::default() }
+        RateWindow {
+            capacity: capacity.max(1),
+            ..Default::default()
+        }
     }
 
     pub fn arrival(&mut self, at: Instant) {
@@ -53,7 +56,8 @@ impl RateWindow {
             if self.intervals.len() == self.capacity {
                 self.intervals.pop_front();
             }
-            self.intervals.push_back(at.duration_since(last).as_secs_f64());
+            self.intervals
+                .push_back(at.duration_since(last).as_secs_f64());
         }
         self.last = Some(at);
     }
@@ -64,9 +68,18 @@ impl RateWindow {
             return None;
         }
         let mean = self.intervals.iter().sum::<f64>() / n as f64;
-        let var = self.intervals.iter().map(|d| (d - mean).powi(2)).sum::<f64>() / n as f64;
+        let var = self
+            .intervals
+            .iter()
+            .map(|d| (d - mean).powi(2))
+            .sum::<f64>()
+            / n as f64;
         Some(RateStats {
-            rate_hz: if mean > 0.0 { 1.0 / mean } else { f64::INFINITY },
+            rate_hz: if mean > 0.0 {
+                1.0 / mean
+            } else {
+                f64::INFINITY
+            },
             min_s: self.intervals.iter().cloned().fold(f64::INFINITY, f64::min),
             max_s: self.intervals.iter().cloned().fold(0.0, f64::max),
             std_dev_s: var.sqrt(),
@@ -79,7 +92,11 @@ pub fn run(args: HzArgs) -> anyhow::Result<i32> {
     let mut node = super::cli_node("topic_hz")?;
     let type_name = match &args.type_name {
         Some(t) => super::known_type(t)?,
-        None => super::known_type(&super::discover_type(&node, &args.topic, Duration::from_secs_f64(args.discovery_timeout))?)?,
+        None => super::known_type(&super::discover_type(
+            &node,
+            &args.topic,
+            Duration::from_secs_f64(args.discovery_timeout),
+        )?)?,
     };
     let sub = node.raw_subscription(&args.topic, &type_name, args.qos.profile())?;
     let token = node.shutdown_token();
@@ -132,7 +149,10 @@ mod tests {
             w.arrival(t0 + Duration::from_millis(ms));
         }
         let s = w.stats().unwrap();
-        assert!((s.rate_hz - 10.0).abs() < 1e-9, "the 1 s gap must have left the window: {s:?}");
+        assert!(
+            (s.rate_hz - 10.0).abs() < 1e-9,
+            "the 1 s gap must have left the window: {s:?}"
+        );
         assert!((s.max_s - 0.1).abs() < 1e-9);
     }
 

@@ -14,7 +14,10 @@ pub struct ListArgs {
 
 pub fn run(args: ListArgs) -> anyhow::Result<i32> {
     let node = super::cli_node("topic_list")?;
-    let mut topics = node.discovered_topics_settled(Duration::from_millis(500), Duration::from_secs_f64(args.wait.max(0.1)));
+    let mut topics = node.discovered_topics_settled(
+        Duration::from_millis(500),
+        Duration::from_secs_f64(args.wait.max(0.1)),
+    );
     topics.sort_by(|a, b| a.name.cmp(&b.name));
     topics.dedup_by(|a, b| a.name == b.name && a.type_name == b.type_name);
     for t in topics {

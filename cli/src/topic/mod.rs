@@ -58,7 +58,10 @@ fn discover_type(node: &MetrocellNode, topic: &str, wait: Duration) -> anyhow::R
     let token = node.shutdown_token();
     loop {
         // The publishers' type is what arrives; a reader may declare another.
-        let mut known = node.discovered_publications().into_iter().chain(node.discovered_topics());
+        let mut known = node
+            .discovered_publications()
+            .into_iter()
+            .chain(node.discovered_topics());
         if let Some(t) = known.find(|t| t.name == topic) {
             return Ok(t.type_name);
         }

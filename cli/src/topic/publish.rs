@@ -5,9 +5,11 @@ use std::time::{Duration, Instant};
 use super::QosChoice;
 
 #[derive(clap::Args)]
-#[command(after_help = "VALUES is YAML (JSON is YAML too); missing fields take their .msg defaults.\n\n\
+#[command(
+    after_help = "VALUES is YAML (JSON is YAML too); missing fields take their .msg defaults.\n\n\
 Examples:\n  metrocell topic pub /temperature/x sensor_msgs/msg/Temperature '{temperature: 21.5, variance: 0.0025}' --count 1\n  \
-metrocell topic pub /cell/status std_msgs/msg/String '{data: running}' --rate 2")]
+metrocell topic pub /cell/status std_msgs/msg/String '{data: running}' --rate 2"
+)]
 pub struct PubArgs {
     /// Topic name, e.g. /temperature/x
     topic: String,
@@ -51,7 +53,9 @@ pub fn run(args: PubArgs) -> anyhow::Result<i32> {
     let mut node = super::cli_node("topic_pub")?;
     let publisher = node.raw_publisher(&args.topic, &type_name, args.qos.profile())?;
     let token = node.shutdown_token();
-    let want = args.wait_matching_subscriptions.unwrap_or(if count.is_some() { 1 } else { 0 });
+    let want = args
+        .wait_matching_subscriptions
+        .unwrap_or(if count.is_some() { 1 } else { 0 });
     let deadline = Instant::now() + Duration::from_secs_f64(args.wait_timeout);
     while publisher.matched_subscriptions() < want {
         if Instant::now() >= deadline {

@@ -13,7 +13,9 @@ use super::image_input::{load_gray, parse_board, parse_length};
 #[derive(clap::Subcommand)]
 pub enum CameraCommand {
     /// Calibrate a camera from checkerboard images and write ROS camera_info YAML
-    #[command(after_help = "Example:\n  metrocell camera calibrate --images 'views/*.png' --board 9x6 --square 10mm -o camera_info.yaml")]
+    #[command(
+        after_help = "Example:\n  metrocell camera calibrate --images 'views/*.png' --board 9x6 --square 10mm -o camera_info.yaml"
+    )]
     Calibrate(CalibrateArgs),
 }
 
@@ -54,7 +56,15 @@ pub fn run(command: CameraCommand) -> i32 {
 fn calibrate_command(a: CalibrateArgs) -> anyhow::Result<i32> {
     let files = list_image_files(&a.images)?;
     let (cols, rows) = a.board;
-    let object: Vec<[f64; 3]> = (0..cols * rows).map(|k| [(k % cols) as f64 * a.square, (k / cols) as f64 * a.square, 0.0]).collect();
+    let object: Vec<[f64; 3]> = (0..cols * rows)
+        .map(|k| {
+            [
+                (k % cols) as f64 * a.square,
+                (k / cols) as f64 * a.square,
+                0.0,
+            ]
+        })
+        .collect();
     let mut views = Vec::new();
     let mut view_files = Vec::new();
     let mut size = None;
@@ -70,15 +80,32 @@ fn calibrate_command(a: CalibrateArgs) -> anyhow::Result<i32> {
         };
         let s = (img.width(), img.height());
         if *size.get_or_insert(s) != s {
-            out.push(format!("rejected {}: size {}x{} differs from the first image's {}x{}", f.display(), s.0, s.1, size.unwrap().0, size.unwrap().1));
+            out.push(format!(
+                "rejected {}: size {}x{} differs from the first image's {}x{}",
+                f.display(),
+                s.0,
+                s.1,
+                size.unwrap().0,
+                size.unwrap().1
+            ));
             continue;
         }
         match detect_checkerboard(&img, cols, rows) {
             Ok(b) => {
-                views.push(View { object_points: object.clone(), image_points: b.corners.iter().map(|c| [c.position.x, c.position.y]).collect() });
+                views.push(View {
+                    object_points: object.clone(),
+                    image_points: b
+                        .corners
+                        .iter()
+                        .map(|c| [c.position.x, c.position.y])
+                        .collect(),
+                });
                 view_files.push(f.clone());
             }
-            Err(e) => out.push(format!("rejected {}: checkerboard {cols}x{rows} not found ({e})", f.display())),
+            Err(e) => out.push(format!(
+                "rejected {}: checkerboard {cols}x{rows} not found ({e})",
+                f.display()
+            )),
         }
     }
     let say = |out: &[String]| out.iter().for_each(|l| println!("{l}"));
@@ -86,10 +113,17 @@ fn calibrate_command(a: CalibrateArgs) -> anyhow::Result<i32> {
         say(&out);
         anyhow::bail!("{}: no readable image", a.images);
     };
-    let model = if a.fisheye { LensModel::Fisheye } else { LensModel::BrownConrady };
+    let model = if a.fisheye {
+        LensModel::Fisheye
+    } else {
+        LensModel::BrownConrady
+    };
     // A view is an outlier only if its RMS is both 3× the median and above 0.1 px: on clean
     // images every view sits at ~0.002 px and a 3× ratio alone would throw good views away.
-    let flags = CalibrationFlags { outlier_view_min_rms_px: 0.1, ..Default::default() };
+    let flags = CalibrationFlags {
+        outlier_view_min_rms_px: 0.1,
+        ..Default::default()
+    };
     let cal = match calibrate(&views, size, model, &flags) {
         Ok(cal) => cal,
         Err(e) => {
@@ -98,18 +132,38 @@ fn calibrate_command(a: CalibrateArgs) -> anyhow::Result<i32> {
         }
     };
     for r in &cal.rejected {
-        out.push(format!("rejected {}: {:?}", view_files[r.index].display(), r.reason));
+        out.push(format!(
+            "rejected {}: {:?}",
+            view_files[r.index].display(),
+            r.reason
+        ));
     }
     for v in &cal.views {
-        out.push(format!("view {}: RMS {:.4} px over {} corners", view_files[v.index].display(), v.rms_px, v.n_points));
+        out.push(format!(
+            "view {}: RMS {:.4} px over {} corners",
+            view_files[v.index].display(),
+            v.rms_px,
+            v.n_points
+        ));
     }
-    let names: &[&str] = if a.fisheye { &["fx", "fy", "cx", "cy", "k1", "k2", "k3", "k4"] } else { &["fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3"] };
-    out.push(format!("overall RMS {:.4} px ({} views, {} corners; σ per coordinate {:.4} px)", cal.rms_px, cal.views.len(), cal.n_points, cal.sigma_px));
+    let names: &[&str] = if a.fisheye {
+        &["fx", "fy", "cx", "cy", "k1", "k2", "k3", "k4"]
+    } else {
+        &["fx", "fy", "cx", "cy", "k1", "k2", "p1", "p2", "k3"]
+    };
+    out.push(format!(
+        "overall RMS {:.4} px ({} views, {} corners; σ per coordinate {:.4} px)",
+        cal.rms_px,
+        cal.views.len(),
+        cal.n_points,
+        cal.sigma_px
+    ));
     for ((n, v), s) in names.iter().zip(cal.camera.params()).zip(&cal.param_std) {
         out.push(format!("  {n:>2} = {v:>14.6} ± {s:.6}"));
     }
     // the covariance goes into the file too, so poses measured with this camera can carry it
-    let info = CameraInfo::from_model(&a.camera_name, &cal.camera).with_intrinsics_covariance(&cal.param_covariance);
+    let info = CameraInfo::from_model(&a.camera_name, &cal.camera)
+        .with_intrinsics_covariance(&cal.param_covariance);
     match &a.output {
         Some(p) => {
             info.save(p)?;

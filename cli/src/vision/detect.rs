@@ -8,7 +8,9 @@ use metrocell_vision::{detect_targets_explained, PoseInputs, Target, TargetFamil
 use super::image_input::{load_gray, parse_board, parse_length};
 
 #[derive(clap::Args)]
-#[command(after_help = "Examples:\n  metrocell detect frame.png --family DICT_4X4_50\n  metrocell detect views/*.png --family checkerboard --board 9x6 --square 10mm --json\n  metrocell detect frame.png --family DICT_6X6_250 --camera-info camera_info.yaml --marker-size 20mm")]
+#[command(
+    after_help = "Examples:\n  metrocell detect frame.png --family DICT_4X4_50\n  metrocell detect views/*.png --family checkerboard --board 9x6 --square 10mm --json\n  metrocell detect frame.png --family DICT_6X6_250 --camera-info camera_info.yaml --marker-size 20mm"
+)]
 pub struct DetectArgs {
     /// Image files (PNG, JPEG, TIFF; 8/16-bit)
     #[arg(required = true)]
@@ -58,7 +60,9 @@ pub fn run(args: DetectArgs) -> i32 {
     };
     let (camera, intrinsics_covariance) = match &args.camera_info {
         None => (None, None),
-        Some(p) => match metrocell_camera_model::CameraInfo::load(p).and_then(|c| Ok((c.to_model()?, c.intrinsics_covariance()?))) {
+        Some(p) => match metrocell_camera_model::CameraInfo::load(p)
+            .and_then(|c| Ok((c.to_model()?, c.intrinsics_covariance()?)))
+        {
             Ok((c, cov)) => {
                 if cov.is_none() {
                     eprintln!("{}: states no intrinsics_covariance; pose σ count the corner noise only (write the file with `metrocell camera calibrate` to include the calibration's uncertainty)", p.display());
@@ -76,11 +80,28 @@ pub fn run(args: DetectArgs) -> i32 {
     let mut failed = 0;
     for path in &args.images {
         let result = load_gray(path).and_then(|img| {
-            let pose = camera.as_ref().filter(|c| c.width == img.width() && c.height == img.height()).map(|c| PoseInputs { camera: c, marker_side: args.marker_size, fallback_sigma_px: 0.1, intrinsics_covariance: intrinsics_covariance.as_ref() });
+            let pose = camera
+                .as_ref()
+                .filter(|c| c.width == img.width() && c.height == img.height())
+                .map(|c| PoseInputs {
+                    camera: c,
+                    marker_side: args.marker_size,
+                    fallback_sigma_px: 0.1,
+                    intrinsics_covariance: intrinsics_covariance.as_ref(),
+                });
             if camera.is_some() && pose.is_none() {
-                eprintln!("{}: image size {}x{} differs from camera_info; no poses", path.display(), img.width(), img.height());
+                eprintln!(
+                    "{}: image size {}x{} differs from camera_info; no poses",
+                    path.display(),
+                    img.width(),
+                    img.height()
+                );
             }
-            Ok((img.width(), img.height(), detect_targets_explained(&img, &family, &params, pose)?))
+            Ok((
+                img.width(),
+                img.height(),
+                detect_targets_explained(&img, &family, &params, pose)?,
+            ))
         });
         match result {
             Ok((w, h, detection)) => {
@@ -91,16 +112,37 @@ pub fn run(args: DetectArgs) -> i32 {
                     println!("{v}");
                 } else {
                     match &detection.not_found {
-                        Some(why) => println!("{}: {} {name} target(s): {why}", path.display(), targets.len()),
+                        Some(why) => println!(
+                            "{}: {} {name} target(s): {why}",
+                            path.display(),
+                            targets.len()
+                        ),
                         None => println!("{}: {} {name} target(s)", path.display(), targets.len()),
                     }
                     for t in targets {
-                        let c: Vec<String> = t.corners.iter().take(4).map(|c| format!("({:.3}, {:.3})", c.x, c.y)).collect();
-                        let more = if t.corners.len() > 4 { format!(" … {} corners", t.corners.len()) } else { String::new() };
+                        let c: Vec<String> = t
+                            .corners
+                            .iter()
+                            .take(4)
+                            .map(|c| format!("({:.3}, {:.3})", c.x, c.y))
+                            .collect();
+                        let more = if t.corners.len() > 4 {
+                            format!(" … {} corners", t.corners.len())
+                        } else {
+                            String::new()
+                        };
                         print!("  id {:>4}: {}{more}", t.id, c.join(" "));
                         if let Some(p) = &t.pose {
                             let s = |i: usize| p.covariance[7 * i].sqrt() * 1e6;
-                            print!("  t = ({:.3}, {:.3}, {:.3}) mm ± ({:.1}, {:.1}, {:.1}) µm", p.position[0] * 1e3, p.position[1] * 1e3, p.position[2] * 1e3, s(0), s(1), s(2));
+                            print!(
+                                "  t = ({:.3}, {:.3}, {:.3}) mm ± ({:.1}, {:.1}, {:.1}) µm",
+                                p.position[0] * 1e3,
+                                p.position[1] * 1e3,
+                                p.position[2] * 1e3,
+                                s(0),
+                                s(1),
+                                s(2)
+                            );
                         }
                         println!();
                     }

@@ -11,11 +11,18 @@ pub fn load_gray(path: &Path) -> anyhow::Result<image::GrayImage> {
         .map_err(|e| anyhow::anyhow!("{}: cannot read ({e})", path.display()))?
         .decode()
         .map_err(|e| anyhow::anyhow!("{}: cannot decode ({e})", path.display()))?;
-    let is16 = matches!(img.color().bytes_per_pixel() / img.color().channel_count(), 2);
+    let is16 = matches!(
+        img.color().bytes_per_pixel() / img.color().channel_count(),
+        2
+    );
     if is16 {
         let g = img.to_luma16();
         let max = g.as_raw().iter().copied().max().unwrap_or(0).max(1) as f64;
-        let raw = g.as_raw().iter().map(|&v| (v as f64 * 255.0 / max).round() as u8).collect();
+        let raw = g
+            .as_raw()
+            .iter()
+            .map(|&v| (v as f64 * 255.0 / max).round() as u8)
+            .collect();
         return Ok(image::GrayImage::from_raw(g.width(), g.height(), raw).expect("same size"));
     }
     Ok(img.to_luma8())
@@ -35,7 +42,10 @@ pub fn parse_length(s: &str) -> Result<f64, String> {
     } else {
         (t, 1e-3)
     };
-    let v: f64 = num.trim().parse().map_err(|_| format!("`{s}` is not a length (e.g. 10mm, 0.01m)"))?;
+    let v: f64 = num
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a length (e.g. 10mm, 0.01m)"))?;
     if !(v.is_finite() && v > 0.0) {
         return Err(format!("`{s}` must be a positive length"));
     }
@@ -44,8 +54,17 @@ pub fn parse_length(s: &str) -> Result<f64, String> {
 
 /// "9x6" → (9, 6).
 pub fn parse_board(s: &str) -> Result<(usize, usize), String> {
-    let (a, b) = s.to_ascii_lowercase().split_once('x').map(|(a, b)| (a.trim().to_string(), b.trim().to_string())).ok_or_else(|| format!("`{s}`: expected COLSxROWS inner corners, e.g. 9x6"))?;
-    let (c, r) = (a.parse::<usize>().map_err(|_| format!("`{s}`: bad column count"))?, b.parse::<usize>().map_err(|_| format!("`{s}`: bad row count"))?);
+    let (a, b) = s
+        .to_ascii_lowercase()
+        .split_once('x')
+        .map(|(a, b)| (a.trim().to_string(), b.trim().to_string()))
+        .ok_or_else(|| format!("`{s}`: expected COLSxROWS inner corners, e.g. 9x6"))?;
+    let (c, r) = (
+        a.parse::<usize>()
+            .map_err(|_| format!("`{s}`: bad column count"))?,
+        b.parse::<usize>()
+            .map_err(|_| format!("`{s}`: bad row count"))?,
+    );
     if c < 2 || r < 2 {
         return Err(format!("`{s}`: need at least 2x2 inner corners"));
     }

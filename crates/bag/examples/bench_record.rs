@@ -19,7 +19,8 @@ use std::time::Instant;
 
 use metrocell_bag::{qos_profiles_yaml, BagWriter, ChunkCompression, QosProfile, WriterOptions};
 
-const HEADER_DEFS: &str = "================================================================================\n\
+const HEADER_DEFS: &str =
+    "================================================================================\n\
 MSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n\
 ================================================================================\n\
 MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n";
@@ -115,12 +116,23 @@ fn frame(seed: u64) -> Vec<u8> {
 }
 
 /// Time-ordered messages of one simulated second `s`: (topic index, log time, CDR).
-fn second_of_load(s: u64, t0: u64, frames: &[Vec<u8>], rng: &mut Rng) -> Vec<(usize, u64, Vec<u8>)> {
+fn second_of_load(
+    s: u64,
+    t0: u64,
+    frames: &[Vec<u8>],
+    rng: &mut Rng,
+) -> Vec<(usize, u64, Vec<u8>)> {
     slice_of_load(s, 0..1000, t0, frames, rng)
 }
 
 /// Messages of milliseconds `ms` of simulated second `s`.
-fn slice_of_load(s: u64, ms: std::ops::Range<u64>, t0: u64, frames: &[Vec<u8>], rng: &mut Rng) -> Vec<(usize, u64, Vec<u8>)> {
+fn slice_of_load(
+    s: u64,
+    ms: std::ops::Range<u64>,
+    t0: u64,
+    frames: &[Vec<u8>],
+    rng: &mut Rng,
+) -> Vec<(usize, u64, Vec<u8>)> {
     let mut out = Vec::new();
     let base = t0 + s * 1_000_000_000;
     for k in ms {
@@ -186,22 +198,42 @@ fn python() -> PathBuf {
         return p.into();
     }
     let venv = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../.venv/bin/python");
-    assert!(venv.exists(), "set METROCELL_PYTHON or run tests/run to create .venv");
+    assert!(
+        venv.exists(),
+        "set METROCELL_PYTHON or run tests/run to create .venv"
+    );
     venv
 }
 
 fn dir_bytes(d: &Path) -> u64 {
-    std::fs::read_dir(d).map(|it| it.filter_map(|e| e.ok()?.metadata().ok()).map(|m| m.len()).sum()).unwrap_or(0)
+    std::fs::read_dir(d)
+        .map(|it| {
+            it.filter_map(|e| e.ok()?.metadata().ok())
+                .map(|m| m.len())
+                .sum()
+        })
+        .unwrap_or(0)
 }
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let arg = |name: &str, default: &str| -> String {
-        args.iter().position(|a| a == name).and_then(|i| args.get(i + 1)).cloned().unwrap_or_else(|| default.to_string())
+        args.iter()
+            .position(|a| a == name)
+            .and_then(|i| args.get(i + 1))
+            .cloned()
+            .unwrap_or_else(|| default.to_string())
     };
     let seconds: u64 = arg("--seconds", "3").parse().expect("--seconds N");
-    let load_seconds: u64 = arg("--load-seconds", "20").parse().expect("--load-seconds N");
-    let root = PathBuf::from(arg("--dir", &std::env::temp_dir().join("metrocell-bag-bench").to_string_lossy()));
+    let load_seconds: u64 = arg("--load-seconds", "20")
+        .parse()
+        .expect("--load-seconds N");
+    let root = PathBuf::from(arg(
+        "--dir",
+        &std::env::temp_dir()
+            .join("metrocell-bag-bench")
+            .to_string_lossy(),
+    ));
     let _ = std::fs::remove_dir_all(&root);
     std::fs::create_dir_all(&root).unwrap();
     let t0 = 1_700_000_000_000_000_000u64;
@@ -211,7 +243,9 @@ fn main() {
 
     // ---- Part A: throughput against python mcap and dd -----------------------------------
     let mut rng = Rng(0x5EED);
-    let msgs: Vec<(usize, u64, Vec<u8>)> = (0..seconds).flat_map(|s| second_of_load(s, t0, &frames, &mut rng)).collect();
+    let msgs: Vec<(usize, u64, Vec<u8>)> = (0..seconds)
+        .flat_map(|s| second_of_load(s, t0, &frames, &mut rng))
+        .collect();
     let bytes_in: u64 = msgs.iter().map(|m| m.2.len() as u64).sum();
     let n = msgs.len() as u64;
     let bin = root.join("messages.bin");
@@ -233,40 +267,55 @@ fn main() {
             f.write_all(d).unwrap();
         }
     }
-    println!("Part A: {n} messages, {:.1} MB of CDR ({seconds} s of cell load), dir {}", bytes_in as f64 / 1e6, root.display());
+    println!(
+        "Part A: {n} messages, {:.1} MB of CDR ({seconds} s of cell load), dir {}",
+        bytes_in as f64 / 1e6,
+        root.display()
+    );
 
     let dd_out = root.join("dd.bin");
     let dd_run = || -> f64 {
-    let dd = Command::new("dd")
-        .arg("if=/dev/zero")
-        .arg(format!("of={}", dd_out.display()))
-        .arg("bs=1M")
-        .arg(format!("count={}", bytes_in.div_ceil(1 << 20)))
-        .arg("conv=fdatasync")
-        .output()
-        .expect("run dd");
-    let dd_text = String::from_utf8_lossy(&dd.stderr).to_string();
-    let dd_secs: f64 = dd_text
-        .lines()
-        .last()
-        .and_then(|l| l.split(", ").nth(2))
-        .and_then(|s| s.split_whitespace().next())
-        .and_then(|s| s.parse().ok())
-        .expect("dd reports seconds");
-    let _ = std::fs::remove_file(&dd_out);
-    (bytes_in.div_ceil(1 << 20) * (1 << 20)) as f64 / 1e6 / dd_secs
+        let dd = Command::new("dd")
+            .arg("if=/dev/zero")
+            .arg(format!("of={}", dd_out.display()))
+            .arg("bs=1M")
+            .arg(format!("count={}", bytes_in.div_ceil(1 << 20)))
+            .arg("conv=fdatasync")
+            .output()
+            .expect("run dd");
+        let dd_text = String::from_utf8_lossy(&dd.stderr).to_string();
+        let dd_secs: f64 = dd_text
+            .lines()
+            .last()
+            .and_then(|l| l.split(", ").nth(2))
+            .and_then(|s| s.split_whitespace().next())
+            .and_then(|s| s.parse().ok())
+            .expect("dd reports seconds");
+        let _ = std::fs::remove_file(&dd_out);
+        (bytes_in.div_ceil(1 << 20) * (1 << 20)) as f64 / 1e6 / dd_secs
     };
     // The virtual disk's speed varies run to run: take the median of three dd runs.
     let mut dds = [dd_run(), dd_run(), dd_run()];
     dds.sort_by(|a, b| a.total_cmp(b));
     let dd_mbs = dds[1];
-    println!("  dd conv=fdatasync          {dd_mbs:8.1} MB/s (median of {:.1}, {:.1}, {:.1})", dds[0], dds[1], dds[2]);
+    println!(
+        "  dd conv=fdatasync          {dd_mbs:8.1} MB/s (median of {:.1}, {:.1}, {:.1})",
+        dds[0], dds[1], dds[2]
+    );
 
-    for (label, comp) in [("none", ChunkCompression::None), ("zstd", ChunkCompression::Zstd), ("lz4", ChunkCompression::Lz4)] {
+    for (label, comp) in [
+        ("none", ChunkCompression::None),
+        ("zstd", ChunkCompression::Zstd),
+        ("lz4", ChunkCompression::Lz4),
+    ] {
         let dir = root.join(format!("rust_{label}"));
         let start = Instant::now();
         // zstd at level 3, the level python-mcap (zstandard's default) uses.
-        let opts = WriterOptions { compression: comp, compression_level: 3, ..Default::default() }; // level: zstd only
+        let opts = WriterOptions {
+            compression: comp,
+            compression_level: 3,
+            ..Default::default()
+        }; // level: zstd only
         let mut w = BagWriter::create(&dir, opts).unwrap();
         for (name, ty, def) in &defs {
             w.add_topic(name, ty, def, &qos).unwrap();
@@ -287,11 +336,23 @@ fn main() {
             .arg((1u64 << 20).to_string())
             .output()
             .expect("run python");
-        assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+        assert!(
+            out.status.success(),
+            "{}",
+            String::from_utf8_lossy(&out.stderr)
+        );
         let v = String::from_utf8_lossy(&out.stdout).to_string();
-        let py_s: f64 = v.split("\"seconds\": ").nth(1).and_then(|s| s.split(',').next()).and_then(|s| s.parse().ok()).unwrap();
-        let py_file: u64 =
-            v.split("\"file_bytes\": ").nth(1).and_then(|s| s.trim_end_matches(['}', '\n']).trim().parse().ok()).unwrap();
+        let py_s: f64 = v
+            .split("\"seconds\": ")
+            .nth(1)
+            .and_then(|s| s.split(',').next())
+            .and_then(|s| s.parse().ok())
+            .unwrap();
+        let py_file: u64 = v
+            .split("\"file_bytes\": ")
+            .nth(1)
+            .and_then(|s| s.trim_end_matches(['}', '\n']).trim().parse().ok())
+            .unwrap();
         let (rm, pm) = (bytes_in as f64 / 1e6 / rust_s, bytes_in as f64 / 1e6 / py_s);
         println!(
             "  {label:4}: BagWriter {rm:8.1} MB/s {:9.0} msg/s (file {:.1} MB) | python mcap {pm:8.1} MB/s {:9.0} msg/s (file {:.1} MB) | BagWriter/python = {:.2}x, BagWriter/dd = {:.2}",
@@ -308,7 +369,11 @@ fn main() {
     {
         let dir = root.join("rust_zstd1");
         let start = Instant::now();
-        let opts = WriterOptions { compression: ChunkCompression::Zstd, compression_level: 1, ..Default::default() };
+        let opts = WriterOptions {
+            compression: ChunkCompression::Zstd,
+            compression_level: 1,
+            ..Default::default()
+        };
         let mut w = BagWriter::create(&dir, opts).unwrap();
         for (name, ty, def) in &defs {
             w.add_topic(name, ty, def, &qos).unwrap();
@@ -379,7 +444,10 @@ fn main() {
     let r = metrocell_bag::BagReader::open(&dir).unwrap();
     let mut read_bytes = 0u64;
     let mut read_n = 0u64;
-    for m in r.messages(&metrocell_bag::MessageFilter::default()).unwrap() {
+    for m in r
+        .messages(&metrocell_bag::MessageFilter::default())
+        .unwrap()
+    {
         read_bytes += m.unwrap().data.len() as u64;
         read_n += 1;
     }

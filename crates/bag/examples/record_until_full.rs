@@ -7,10 +7,16 @@
 use metrocell_bag::{info, BagReader, BagWriter, MessageFilter, WriterOptions};
 
 fn main() {
-    let dir = std::env::args().nth(1).expect("usage: record_until_full <bag dir>");
-    let opts = WriterOptions { chunk_size: 16 * 1024, ..Default::default() };
+    let dir = std::env::args()
+        .nth(1)
+        .expect("usage: record_until_full <bag dir>");
+    let opts = WriterOptions {
+        chunk_size: 16 * 1024,
+        ..Default::default()
+    };
     let mut w = BagWriter::create(&dir, opts).expect("create bag");
-    w.add_topic("/blob", "std_msgs/msg/UInt8MultiArray", BLOB_DEF, "").expect("topic");
+    w.add_topic("/blob", "std_msgs/msg/UInt8MultiArray", BLOB_DEF, "")
+        .expect("topic");
     let mut n = 0u64;
     let err = loop {
         // Incompressible payload so the disk fills quickly despite zstd.
@@ -35,7 +41,10 @@ fn main() {
     println!("wrote {n} messages, then: {err}");
     drop(w);
     let r = BagReader::open(&dir).expect("sealed bag opens strictly");
-    println!("bag holds {} messages", r.read_all(&MessageFilter::default()).unwrap().len());
+    println!(
+        "bag holds {} messages",
+        r.read_all(&MessageFilter::default()).unwrap().len()
+    );
     print!("{}", info(&dir).unwrap());
 }
 

@@ -95,7 +95,10 @@ impl BagError {
     /// the user to recover it; other errors (a missing file, bad metadata) stay as they are.
     pub(crate) fn in_bag(self, bag: &std::path::Path) -> BagError {
         match self {
-            BagError::Corrupt { .. } => BagError::Damaged { bag: bag.to_path_buf(), damage: Box::new(self) },
+            BagError::Corrupt { .. } => BagError::Damaged {
+                bag: bag.to_path_buf(),
+                damage: Box::new(self),
+            },
             other => other,
         }
     }
@@ -104,7 +107,10 @@ impl BagError {
 pub type Result<T, E = BagError> = std::result::Result<T, E>;
 
 /// Attach a path and an operation name to an `io::Error`.
-pub(crate) fn io_err<'a>(op: &'static str, path: &'a std::path::Path) -> impl FnOnce(std::io::Error) -> BagError + 'a {
+pub(crate) fn io_err<'a>(
+    op: &'static str,
+    path: &'a std::path::Path,
+) -> impl FnOnce(std::io::Error) -> BagError + 'a {
     move |source| BagError::Io {
         op,
         path: path.to_path_buf(),

@@ -4,7 +4,10 @@ use std::fmt;
 use std::path::{Path, PathBuf};
 
 use crate::error::Result;
-use crate::metadata::{BagMetadata, FileInformation, Nanoseconds, NanosecondsSinceEpoch, TopicMetadata, TopicWithMessageCount};
+use crate::metadata::{
+    BagMetadata, FileInformation, Nanoseconds, NanosecondsSinceEpoch, TopicMetadata,
+    TopicWithMessageCount,
+};
 use crate::reader::{BagReader, ReadMode};
 
 #[derive(Debug, Clone, PartialEq)]
@@ -57,7 +60,12 @@ pub(crate) fn info_from_reader(r: &BagReader) -> BagInfo {
     let mut compression: Vec<String> = Vec::new();
     for s in r.scans() {
         let count = s.units.iter().map(|u| u.counts.values().sum::<u64>()).sum();
-        files.push(FileSummary { path: s.path.clone(), size_bytes: s.size, message_count: count, complete: s.complete });
+        files.push(FileSummary {
+            path: s.path.clone(),
+            size_bytes: s.size,
+            message_count: count,
+            complete: s.complete,
+        });
         for u in s.units.iter().filter(|u| u.is_chunk) {
             if !compression.contains(&u.compression) {
                 compression.push(u.compression.clone());
@@ -105,7 +113,11 @@ pub(crate) fn info_from_reader(r: &BagReader) -> BagInfo {
 pub(crate) fn metadata_from_reader(r: &BagReader) -> BagMetadata {
     let mut m = BagMetadata::empty();
     for s in r.scans() {
-        let name = s.path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+        let name = s
+            .path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
         let mut count = 0;
         let mut start = u64::MAX;
         let mut end = 0;
@@ -120,8 +132,12 @@ pub(crate) fn metadata_from_reader(r: &BagReader) -> BagMetadata {
         m.relative_file_paths.push(name.clone());
         m.files.push(FileInformation {
             path: name,
-            starting_time: NanosecondsSinceEpoch { nanoseconds_since_epoch: start },
-            duration: Nanoseconds { nanoseconds: end.saturating_sub(start) },
+            starting_time: NanosecondsSinceEpoch {
+                nanoseconds_since_epoch: start,
+            },
+            duration: Nanoseconds {
+                nanoseconds: end.saturating_sub(start),
+            },
             message_count: count,
         });
     }
@@ -190,8 +206,16 @@ impl fmt::Display for BagInfo {
         const W: usize = 19;
         for (i, file) in self.files.iter().enumerate() {
             let label = if i == 0 { "Files:" } else { "" };
-            let name = file.path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-            let flag = if file.complete { "" } else { "  (incomplete: run `metrocell bag recover`)" };
+            let name = file
+                .path
+                .file_name()
+                .map(|n| n.to_string_lossy().into_owned())
+                .unwrap_or_default();
+            let flag = if file.complete {
+                ""
+            } else {
+                "  (incomplete: run `metrocell bag recover`)"
+            };
             writeln!(f, "{label:<W$}{name}{flag}")?;
         }
         writeln!(f, "{:<W$}{}", "Bag size:", human_size(self.size_bytes))?;
@@ -199,20 +223,52 @@ impl fmt::Display for BagInfo {
         let comp = if self.compression.is_empty() {
             "none".to_string()
         } else {
-            self.compression.iter().map(|c| if c.is_empty() { "none" } else { c.as_str() }).collect::<Vec<_>>().join(", ")
+            self.compression
+                .iter()
+                .map(|c| if c.is_empty() { "none" } else { c.as_str() })
+                .collect::<Vec<_>>()
+                .join(", ")
         };
         writeln!(f, "{:<W$}{comp} (chunk)", "Compression:")?;
-        writeln!(f, "{:<W$}{}.{:09}s", "Duration:", self.duration_ns / 1_000_000_000, self.duration_ns % 1_000_000_000)?;
+        writeln!(
+            f,
+            "{:<W$}{}.{:09}s",
+            "Duration:",
+            self.duration_ns / 1_000_000_000,
+            self.duration_ns % 1_000_000_000
+        )?;
         if let (Some(s), Some(e)) = (self.start_ns, self.end_ns) {
-            writeln!(f, "{:<W$}{} UTC ({}.{:09})", "Start:", format_utc(s), s / 1_000_000_000, s % 1_000_000_000)?;
-            writeln!(f, "{:<W$}{} UTC ({}.{:09})", "End:", format_utc(e), e / 1_000_000_000, e % 1_000_000_000)?;
+            writeln!(
+                f,
+                "{:<W$}{} UTC ({}.{:09})",
+                "Start:",
+                format_utc(s),
+                s / 1_000_000_000,
+                s % 1_000_000_000
+            )?;
+            writeln!(
+                f,
+                "{:<W$}{} UTC ({}.{:09})",
+                "End:",
+                format_utc(e),
+                e / 1_000_000_000,
+                e % 1_000_000_000
+            )?;
         }
         writeln!(f, "{:<W$}{}", "Messages:", self.message_count)?;
         let name_w = self.topics.iter().map(|t| t.name.len()).max().unwrap_or(0);
-        let type_w = self.topics.iter().map(|t| t.type_name.len()).max().unwrap_or(0);
+        let type_w = self
+            .topics
+            .iter()
+            .map(|t| t.type_name.len())
+            .max()
+            .unwrap_or(0);
         for (i, t) in self.topics.iter().enumerate() {
             let label = if i == 0 { "Topic information:" } else { "" };
-            let rate = t.rate_hz.map(|r| format!("{r:.3} Hz")).unwrap_or_else(|| "-".into());
+            let rate = t
+                .rate_hz
+                .map(|r| format!("{r:.3} Hz"))
+                .unwrap_or_else(|| "-".into());
             writeln!(
                 f,
                 "{label:<W$}Topic: {:<name_w$} | Type: {:<type_w$} | Count: {} | Rate: {rate} | Serialization Format: {}",
@@ -243,7 +299,13 @@ mod tests {
     fn utc_formatting_matches_known_dates() {
         assert_eq!(format_utc(0), "1970-01-01 00:00:00.000000000");
         // 2000-02-29 12:34:56.789 UTC = 951827696.789 s
-        assert_eq!(format_utc(951_827_696_789_000_000), "2000-02-29 12:34:56.789000000");
-        assert_eq!(format_utc(1_763_767_681_000_000_001), "2025-11-21 23:28:01.000000001");
+        assert_eq!(
+            format_utc(951_827_696_789_000_000),
+            "2000-02-29 12:34:56.789000000"
+        );
+        assert_eq!(
+            format_utc(1_763_767_681_000_000_001),
+            "2025-11-21 23:28:01.000000001"
+        );
     }
 }

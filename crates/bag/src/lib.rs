@@ -26,14 +26,15 @@ mod writer;
 pub use error::{BagError, Result};
 pub use info::{format_utc, info, BagInfo, FileSummary, TopicSummary};
 pub use metadata::{
-    BagMetadata, FileInformation, Nanoseconds, NanosecondsSinceEpoch, TopicMetadata, TopicWithMessageCount,
-    METADATA_FILE,
+    BagMetadata, FileInformation, Nanoseconds, NanosecondsSinceEpoch, TopicMetadata,
+    TopicWithMessageCount, METADATA_FILE,
 };
 pub use options::{ChunkCompression, SplitPolicy, WriterOptions, MIN_FLUSH_INTERVAL};
 pub use qos::{
-    offered_qos_yaml, parse_offered_qos, qos_profiles_yaml, validate_qos_yaml, OfferedQos, QosProfile, RmwDuration,
-    DURABILITY_TRANSIENT_LOCAL, DURABILITY_VOLATILE, HISTORY_KEEP_ALL, HISTORY_KEEP_LAST, HISTORY_UNKNOWN,
-    LIVELINESS_AUTOMATIC, LIVELINESS_MANUAL_BY_TOPIC, RELIABILITY_BEST_EFFORT, RELIABILITY_RELIABLE,
+    offered_qos_yaml, parse_offered_qos, qos_profiles_yaml, validate_qos_yaml, OfferedQos,
+    QosProfile, RmwDuration, DURABILITY_TRANSIENT_LOCAL, DURABILITY_VOLATILE, HISTORY_KEEP_ALL,
+    HISTORY_KEEP_LAST, HISTORY_UNKNOWN, LIVELINESS_AUTOMATIC, LIVELINESS_MANUAL_BY_TOPIC,
+    RELIABILITY_BEST_EFFORT, RELIABILITY_RELIABLE,
 };
 pub use reader::{BagMessage, BagReader, MessageFilter, MessageIter, ReadMode, TopicInfo};
 pub use recover::{recover, recover_with, FileRecovery, RecoverOptions, RecoveryReport};

@@ -84,7 +84,10 @@ fn string_or_yaml<'de, D: serde::Deserializer<'de>>(d: D) -> Result<String, D::E
     Ok(match v {
         serde_yaml::Value::Null => String::new(),
         serde_yaml::Value::String(s) => s,
-        other => serde_yaml::to_string(&other).map_err(serde::de::Error::custom)?.trim_end().to_string(),
+        other => serde_yaml::to_string(&other)
+            .map_err(serde::de::Error::custom)?
+            .trim_end()
+            .to_string(),
     })
 }
 
@@ -118,7 +121,9 @@ impl BagMetadata {
     }
 
     pub fn to_yaml(&self) -> String {
-        let doc = MetadataDocument { rosbag2_bagfile_information: self.clone() };
+        let doc = MetadataDocument {
+            rosbag2_bagfile_information: self.clone(),
+        };
         serde_yaml::to_string(&doc).expect("BagMetadata serialises: plain strings and integers")
     }
 
@@ -129,8 +134,10 @@ impl BagMetadata {
     }
 
     pub fn from_yaml(path: &Path, text: &str) -> Result<Self> {
-        let doc: MetadataDocument = serde_yaml::from_str(text)
-            .map_err(|e| BagError::Metadata { path: path.to_path_buf(), reason: e.to_string() })?;
+        let doc: MetadataDocument = serde_yaml::from_str(text).map_err(|e| BagError::Metadata {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
         let m = doc.rosbag2_bagfile_information;
         if m.version == 0 || m.version > 9 {
             return Err(BagError::Metadata {
@@ -156,7 +163,8 @@ impl BagMetadata {
         {
             use std::io::Write;
             let mut f = std::fs::File::create(&tmp).map_err(io_err("create", &tmp))?;
-            f.write_all(self.to_yaml().as_bytes()).map_err(io_err("write", &tmp))?;
+            f.write_all(self.to_yaml().as_bytes())
+                .map_err(io_err("write", &tmp))?;
             if sync {
                 f.sync_all().map_err(io_err("fsync", &tmp))?;
             }
@@ -196,7 +204,10 @@ mod tests {
                   message_count: 1\n  relative_file_paths: [a.mcap]\n  custom_data: null\n";
         let m9 = BagMetadata::from_yaml(Path::new("m.yaml"), v9).unwrap();
         assert_eq!(m9.version, 9);
-        assert!(m9.topics_with_message_count[0].topic_metadata.offered_qos_profiles.contains("keep_last"));
+        assert!(m9.topics_with_message_count[0]
+            .topic_metadata
+            .offered_qos_profiles
+            .contains("keep_last"));
     }
 
     #[test]
@@ -204,7 +215,12 @@ mod tests {
         let y = "rosbag2_bagfile_information:\n  version: 10\n  storage_identifier: mcap\n  \
                  duration: {nanoseconds: 0}\n  starting_time: {nanoseconds_since_epoch: 0}\n  \
                  message_count: 0\n  topics_with_message_count: []\n  relative_file_paths: []\n";
-        let e = BagMetadata::from_yaml(Path::new("/x/metadata.yaml"), y).unwrap_err().to_string();
-        assert!(e.contains("/x/metadata.yaml") && e.contains("version 10"), "{e}");
+        let e = BagMetadata::from_yaml(Path::new("/x/metadata.yaml"), y)
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("/x/metadata.yaml") && e.contains("version 10"),
+            "{e}"
+        );
     }
 }

@@ -59,7 +59,11 @@ fn is_ident(s: &str) -> bool {
 }
 
 fn err(type_name: &str, line: usize, reason: impl Into<String>) -> BagError {
-    BagError::Schema { type_name: type_name.to_string(), line, reason: reason.into() }
+    BagError::Schema {
+        type_name: type_name.to_string(),
+        line,
+        reason: reason.into(),
+    }
 }
 
 /// Parse `text`, the `ros2msg` definition of `type_name` (`pkg/msg/Type`).
@@ -76,8 +80,15 @@ pub fn parse_definition(type_name: &str, text: &str) -> Result<MessageDefinition
         let lineno = i + 1;
         let line = raw.trim();
         if line.len() >= 3 && line.chars().all(|c| c == '=') {
-            if types.insert(current.clone(), std::mem::take(&mut fields)).is_some() {
-                return Err(err(type_name, lineno, format!("type {current} defined twice")));
+            if types
+                .insert(current.clone(), std::mem::take(&mut fields))
+                .is_some()
+            {
+                return Err(err(
+                    type_name,
+                    lineno,
+                    format!("type {current} defined twice"),
+                ));
             }
             expect_msg_line = true;
             continue;
@@ -87,11 +98,19 @@ pub fn parse_definition(type_name: &str, text: &str) -> Result<MessageDefinition
                 continue;
             }
             let Some(dep) = line.strip_prefix("MSG:") else {
-                return Err(err(type_name, lineno, "expected 'MSG: pkg/Type' after separator line"));
+                return Err(err(
+                    type_name,
+                    lineno,
+                    "expected 'MSG: pkg/Type' after separator line",
+                ));
             };
             let dep = dep.trim();
             if dep.split('/').count() < 2 || dep.split('/').any(|p| !is_ident(p)) {
-                return Err(err(type_name, lineno, format!("bad dependency name {dep:?}")));
+                return Err(err(
+                    type_name,
+                    lineno,
+                    format!("bad dependency name {dep:?}"),
+                ));
             }
             current = short_name(dep);
             expect_msg_line = false;
@@ -102,10 +121,18 @@ pub fn parse_definition(type_name: &str, text: &str) -> Result<MessageDefinition
         }
     }
     if expect_msg_line {
-        return Err(err(type_name, text.lines().count(), "separator line without a following MSG: line"));
+        return Err(err(
+            type_name,
+            text.lines().count(),
+            "separator line without a following MSG: line",
+        ));
     }
     if types.insert(current.clone(), fields).is_some() {
-        return Err(err(type_name, text.lines().count(), format!("type {current} defined twice")));
+        return Err(err(
+            type_name,
+            text.lines().count(),
+            format!("type {current} defined twice"),
+        ));
     }
     // Every complex field type must be defined in the text.
     for (owner, fs) in &types {
@@ -114,7 +141,10 @@ pub fn parse_definition(type_name: &str, text: &str) -> Result<MessageDefinition
                 return Err(err(
                     type_name,
                     0,
-                    format!("field {owner}.{} uses type {} which the definition does not include", f.name, f.base_type),
+                    format!(
+                        "field {owner}.{} uses type {} which the definition does not include",
+                        f.name, f.base_type
+                    ),
                 ));
             }
         }
@@ -132,14 +162,21 @@ fn parse_line(type_name: &str, owner: &str, lineno: usize, raw: &str) -> Result<
     let ty = parts.next().unwrap_or("");
     let rest = parts.next().unwrap_or("").trim();
     if rest.is_empty() {
-        return Err(err(type_name, lineno, format!("field line {code:?} has a type but no name")));
+        return Err(err(
+            type_name,
+            lineno,
+            format!("field line {code:?} has a type but no name"),
+        ));
     }
     // Constant: NAME=value (value may contain '#' for strings; re-take it from the raw line).
     let (name, constant) = if let Some(eq) = rest.find('=') {
         let name = rest[..eq].trim();
         let raw_rest = raw.trim_start();
         let raw_eq = raw_rest.find('=').expect("found in prefix");
-        (name.to_string(), Some(raw_rest[raw_eq + 1..].trim().to_string()))
+        (
+            name.to_string(),
+            Some(raw_rest[raw_eq + 1..].trim().to_string()),
+        )
     } else {
         let name = rest.split_whitespace().next().unwrap_or("");
         (name.to_string(), None)
@@ -148,27 +185,47 @@ fn parse_line(type_name: &str, owner: &str, lineno: usize, raw: &str) -> Result<
         return Err(err(type_name, lineno, format!("bad field name {name:?}")));
     }
     // Array suffix.
-    let (base, array) = match ty.find('[') {
-        Some(b) => {
-            let inner = ty[b + 1..]
-                .strip_suffix(']')
-                .ok_or_else(|| err(type_name, lineno, format!("unclosed array bracket in {ty:?}")))?;
-            let kind = if inner.is_empty() {
-                ArrayKind::Unbounded
-            } else if let Some(n) = inner.strip_prefix("<=") {
-                ArrayKind::Bounded(n.parse().map_err(|_| err(type_name, lineno, format!("bad array bound {inner:?}")))?)
-            } else {
-                ArrayKind::Fixed(inner.parse().map_err(|_| err(type_name, lineno, format!("bad array size {inner:?}")))?)
-            };
-            (&ty[..b], Some(kind))
-        }
-        None => (ty, None),
-    };
+    let (base, array) =
+        match ty.find('[') {
+            Some(b) => {
+                let inner = ty[b + 1..].strip_suffix(']').ok_or_else(|| {
+                    err(
+                        type_name,
+                        lineno,
+                        format!("unclosed array bracket in {ty:?}"),
+                    )
+                })?;
+                let kind =
+                    if inner.is_empty() {
+                        ArrayKind::Unbounded
+                    } else if let Some(n) = inner.strip_prefix("<=") {
+                        ArrayKind::Bounded(n.parse().map_err(|_| {
+                            err(type_name, lineno, format!("bad array bound {inner:?}"))
+                        })?)
+                    } else {
+                        ArrayKind::Fixed(inner.parse().map_err(|_| {
+                            err(type_name, lineno, format!("bad array size {inner:?}"))
+                        })?)
+                    };
+                (&ty[..b], Some(kind))
+            }
+            None => (ty, None),
+        };
     let (base, string_bound) = match base.split_once("<=") {
-        Some((s, n)) if s == "string" || s == "wstring" => {
-            (s, Some(n.parse().map_err(|_| err(type_name, lineno, format!("bad string bound in {ty:?}")))?))
+        Some((s, n)) if s == "string" || s == "wstring" => (
+            s,
+            Some(
+                n.parse()
+                    .map_err(|_| err(type_name, lineno, format!("bad string bound in {ty:?}")))?,
+            ),
+        ),
+        Some(_) => {
+            return Err(err(
+                type_name,
+                lineno,
+                format!("bound on non-string type {ty:?}"),
+            ))
         }
-        Some(_) => return Err(err(type_name, lineno, format!("bound on non-string type {ty:?}"))),
         None => (base, None),
     };
     let base_type = if BUILTIN_TYPES.contains(&base) {
@@ -195,9 +252,19 @@ fn parse_line(type_name: &str, owner: &str, lineno: usize, raw: &str) -> Result<
         other => other,
     };
     if constant.is_some() && (array.is_some() || !BUILTIN_TYPES.contains(&base_type.as_str())) {
-        return Err(err(type_name, lineno, "constants must have a builtin non-array type"));
+        return Err(err(
+            type_name,
+            lineno,
+            "constants must have a builtin non-array type",
+        ));
     }
-    Ok(Some(Field { name, base_type, string_bound, array, constant }))
+    Ok(Some(Field {
+        name,
+        base_type,
+        string_bound,
+        array,
+        constant,
+    }))
 }
 
 #[cfg(test)]
@@ -233,11 +300,17 @@ MSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n";
 
     #[test]
     fn missing_dependency_and_garbage_are_errors_with_line() {
-        let e = parse_definition("p/msg/T", "geometry_msgs/Point p\n").unwrap_err().to_string();
+        let e = parse_definition("p/msg/T", "geometry_msgs/Point p\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("geometry_msgs/Point"), "{e}");
-        let e = parse_definition("p/msg/T", "float64 x\nfloat64[ y\n").unwrap_err().to_string();
+        let e = parse_definition("p/msg/T", "float64 x\nfloat64[ y\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("line 2"), "{e}");
-        let e = parse_definition("p/msg/T", "float64\n").unwrap_err().to_string();
+        let e = parse_definition("p/msg/T", "float64\n")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("line 1"), "{e}");
     }
 }

@@ -30,20 +30,42 @@ pub struct QosProfile {
 impl QosProfile {
     /// ROS 2 default publisher QoS: keep_last 10, reliable, volatile, automatic liveliness.
     pub const fn default_publisher() -> Self {
-        Self { keep_last: true, depth: 10, reliable: true, transient_local: false }
+        Self {
+            keep_last: true,
+            depth: 10,
+            reliable: true,
+            transient_local: false,
+        }
     }
     /// ROS 2 sensor-data QoS: keep_last 5, best effort, volatile.
     pub const fn sensor_data() -> Self {
-        Self { keep_last: true, depth: 5, reliable: false, transient_local: false }
+        Self {
+            keep_last: true,
+            depth: 5,
+            reliable: false,
+            transient_local: false,
+        }
     }
 
     /// The full profile: these four policies, infinite durations, automatic liveliness.
     pub fn offered(self) -> OfferedQos {
         OfferedQos {
-            history: if self.keep_last { HISTORY_KEEP_LAST } else { HISTORY_KEEP_ALL },
+            history: if self.keep_last {
+                HISTORY_KEEP_LAST
+            } else {
+                HISTORY_KEEP_ALL
+            },
             depth: self.depth,
-            reliability: if self.reliable { RELIABILITY_RELIABLE } else { RELIABILITY_BEST_EFFORT },
-            durability: if self.transient_local { DURABILITY_TRANSIENT_LOCAL } else { DURABILITY_VOLATILE },
+            reliability: if self.reliable {
+                RELIABILITY_RELIABLE
+            } else {
+                RELIABILITY_BEST_EFFORT
+            },
+            durability: if self.transient_local {
+                DURABILITY_TRANSIENT_LOCAL
+            } else {
+                DURABILITY_VOLATILE
+            },
             ..OfferedQos::default()
         }
     }
@@ -72,9 +94,15 @@ pub struct RmwDuration {
 }
 
 impl RmwDuration {
-    pub const INFINITE: Self = Self { sec: DURATION_INFINITE_SEC, nsec: DURATION_INFINITE_NSEC };
+    pub const INFINITE: Self = Self {
+        sec: DURATION_INFINITE_SEC,
+        nsec: DURATION_INFINITE_NSEC,
+    };
     pub fn from_nanos(ns: u64) -> Self {
-        Self { sec: ns / 1_000_000_000, nsec: ns % 1_000_000_000 }
+        Self {
+            sec: ns / 1_000_000_000,
+            nsec: ns % 1_000_000_000,
+        }
     }
 }
 
@@ -145,13 +173,21 @@ pub fn parse_offered_qos(topic: &str, yaml: &str) -> Result<Vec<OfferedQos>> {
     if yaml.trim().is_empty() {
         return Ok(Vec::new());
     }
-    let bad = |why: String| BagError::InvalidArgument(format!("offered_qos_profiles of topic {topic}: {why}"));
-    let value: serde_yaml::Value = serde_yaml::from_str(yaml).map_err(|e| bad(format!("not YAML: {e}")))?;
-    let serde_yaml::Value::Sequence(items) = value else { return Err(bad("not a YAML sequence".into())) };
+    let bad = |why: String| {
+        BagError::InvalidArgument(format!("offered_qos_profiles of topic {topic}: {why}"))
+    };
+    let value: serde_yaml::Value =
+        serde_yaml::from_str(yaml).map_err(|e| bad(format!("not YAML: {e}")))?;
+    let serde_yaml::Value::Sequence(items) = value else {
+        return Err(bad("not a YAML sequence".into()));
+    };
     let policy = |item: &serde_yaml::Value, key: &str, names: &[(&str, u8)], default: u8| -> u8 {
         match &item[key] {
             serde_yaml::Value::Number(n) => n.as_u64().map_or(default, |v| v as u8),
-            serde_yaml::Value::String(s) => names.iter().find(|(n, _)| n.eq_ignore_ascii_case(s)).map_or(default, |(_, v)| *v),
+            serde_yaml::Value::String(s) => names
+                .iter()
+                .find(|(n, _)| n.eq_ignore_ascii_case(s))
+                .map_or(default, |(_, v)| *v),
             _ => default,
         }
     };
@@ -169,15 +205,61 @@ pub fn parse_offered_qos(topic: &str, yaml: &str) -> Result<Vec<OfferedQos>> {
         }
         let d = OfferedQos::default();
         out.push(OfferedQos {
-            history: policy(item, "history", &[("system_default", 0), ("keep_last", 1), ("keep_all", 2), ("unknown", 3)], d.history),
+            history: policy(
+                item,
+                "history",
+                &[
+                    ("system_default", 0),
+                    ("keep_last", 1),
+                    ("keep_all", 2),
+                    ("unknown", 3),
+                ],
+                d.history,
+            ),
             depth: item["depth"].as_u64().map_or(d.depth, |v| v as u32),
-            reliability: policy(item, "reliability", &[("system_default", 0), ("reliable", 1), ("best_effort", 2), ("unknown", 3), ("best_available", 4)], d.reliability),
-            durability: policy(item, "durability", &[("system_default", 0), ("transient_local", 1), ("volatile", 2), ("unknown", 3), ("best_available", 4)], d.durability),
+            reliability: policy(
+                item,
+                "reliability",
+                &[
+                    ("system_default", 0),
+                    ("reliable", 1),
+                    ("best_effort", 2),
+                    ("unknown", 3),
+                    ("best_available", 4),
+                ],
+                d.reliability,
+            ),
+            durability: policy(
+                item,
+                "durability",
+                &[
+                    ("system_default", 0),
+                    ("transient_local", 1),
+                    ("volatile", 2),
+                    ("unknown", 3),
+                    ("best_available", 4),
+                ],
+                d.durability,
+            ),
             deadline: duration(item, "deadline"),
             lifespan: duration(item, "lifespan"),
-            liveliness: policy(item, "liveliness", &[("system_default", 0), ("automatic", 1), ("manual_by_node", 2), ("manual_by_topic", 3), ("unknown", 4), ("best_available", 5)], d.liveliness),
+            liveliness: policy(
+                item,
+                "liveliness",
+                &[
+                    ("system_default", 0),
+                    ("automatic", 1),
+                    ("manual_by_node", 2),
+                    ("manual_by_topic", 3),
+                    ("unknown", 4),
+                    ("best_available", 5),
+                ],
+                d.liveliness,
+            ),
             liveliness_lease_duration: duration(item, "liveliness_lease_duration"),
-            avoid_ros_namespace_conventions: item["avoid_ros_namespace_conventions"].as_bool().unwrap_or(false),
+            avoid_ros_namespace_conventions: item["avoid_ros_namespace_conventions"]
+                .as_bool()
+                .unwrap_or(false),
         });
     }
     Ok(out)
@@ -203,23 +285,49 @@ mod tests {
         assert_eq!(item["depth"].as_u64(), Some(10));
         assert_eq!(item["reliability"].as_u64(), Some(1));
         assert_eq!(item["durability"].as_u64(), Some(2));
-        assert_eq!(item["deadline"]["nsec"].as_u64(), Some(DURATION_INFINITE_NSEC));
+        assert_eq!(
+            item["deadline"]["nsec"].as_u64(),
+            Some(DURATION_INFINITE_NSEC)
+        );
     }
 
     #[test]
     fn offered_qos_round_trips_and_reads_rosbags_names() {
-        let p = OfferedQos { durability: DURABILITY_TRANSIENT_LOCAL, deadline: RmwDuration::from_nanos(1_500_000_000), ..OfferedQos::default() };
-        let q = OfferedQos { reliability: RELIABILITY_BEST_EFFORT, history: HISTORY_KEEP_LAST, depth: 5, ..OfferedQos::default() };
+        let p = OfferedQos {
+            durability: DURABILITY_TRANSIENT_LOCAL,
+            deadline: RmwDuration::from_nanos(1_500_000_000),
+            ..OfferedQos::default()
+        };
+        let q = OfferedQos {
+            reliability: RELIABILITY_BEST_EFFORT,
+            history: HISTORY_KEEP_LAST,
+            depth: 5,
+            ..OfferedQos::default()
+        };
         let y = offered_qos_yaml(&[p, q]);
         assert!(y.starts_with("- history: 3\n  depth: 0\n  reliability: 1\n  durability: 1\n  deadline:\n    sec: 1\n    nsec: 500000000"), "{y}");
         assert_eq!(parse_offered_qos("/t", &y).unwrap(), vec![p, q]);
         let v9 = "- history: keep_last\n  depth: 1\n  reliability: best_effort\n  durability: transient_local\n  \
                   deadline: {sec: 0, nsec: 0}\n  liveliness: automatic";
         let got = parse_offered_qos("/t", v9).unwrap();
-        assert_eq!((got[0].history, got[0].depth, got[0].reliability, got[0].durability), (1, 1, 2, 1));
-        assert_eq!((got[0].deadline, got[0].lifespan), (RmwDuration { sec: 0, nsec: 0 }, RmwDuration::INFINITE));
+        assert_eq!(
+            (
+                got[0].history,
+                got[0].depth,
+                got[0].reliability,
+                got[0].durability
+            ),
+            (1, 1, 2, 1)
+        );
+        assert_eq!(
+            (got[0].deadline, got[0].lifespan),
+            (RmwDuration { sec: 0, nsec: 0 }, RmwDuration::INFINITE)
+        );
         assert!(parse_offered_qos("/t", "").unwrap().is_empty());
-        assert!(parse_offered_qos("/t", "{a: 1}").unwrap_err().to_string().contains("/t"));
+        assert!(parse_offered_qos("/t", "{a: 1}")
+            .unwrap_err()
+            .to_string()
+            .contains("/t"));
     }
 
     #[test]

@@ -14,7 +14,9 @@ use mcap::records::Record;
 
 use crate::error::{io_err, BagError, Result};
 use crate::metadata::{BagMetadata, METADATA_FILE};
-use crate::scan::{chunk_messages, decompress_chunk, read_record_at, scan_file, FileScan, RawMessage};
+use crate::scan::{
+    chunk_messages, decompress_chunk, read_record_at, scan_file, FileScan, RawMessage,
+};
 
 /// How to treat damaged input.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
@@ -97,7 +99,10 @@ pub(crate) fn bag_files(path: &Path) -> Result<(Vec<PathBuf>, Option<BagMetadata
             if m.storage_identifier != "mcap" {
                 return Err(BagError::Metadata {
                     path: path.join(METADATA_FILE),
-                    reason: format!("storage_identifier is {:?}, only \"mcap\" is supported", m.storage_identifier),
+                    reason: format!(
+                        "storage_identifier is {:?}, only \"mcap\" is supported",
+                        m.storage_identifier
+                    ),
                 });
             }
             let files = m
@@ -114,7 +119,10 @@ pub(crate) fn bag_files(path: &Path) -> Result<(Vec<PathBuf>, Option<BagMetadata
             .collect();
         files.sort_by_key(|p| split_index(p));
         if files.is_empty() {
-            return Err(BagError::InvalidArgument(format!("{} holds no metadata.yaml and no .mcap file", path.display())));
+            return Err(BagError::InvalidArgument(format!(
+                "{} holds no metadata.yaml and no .mcap file",
+                path.display()
+            )));
         }
         return Ok((files, None));
     }
@@ -123,8 +131,16 @@ pub(crate) fn bag_files(path: &Path) -> Result<(Vec<PathBuf>, Option<BagMetadata
 
 /// Sort key for `<name>_<N>.mcap`: (N, name).
 fn split_index(p: &Path) -> (u64, String) {
-    let stem = p.file_stem().and_then(|s| s.to_str()).unwrap_or("").to_string();
-    let n = stem.rsplit('_').next().and_then(|n| n.parse().ok()).unwrap_or(0);
+    let stem = p
+        .file_stem()
+        .and_then(|s| s.to_str())
+        .unwrap_or("")
+        .to_string();
+    let n = stem
+        .rsplit('_')
+        .next()
+        .and_then(|n| n.parse().ok())
+        .unwrap_or(0);
     (n, stem)
 }
 
@@ -154,11 +170,20 @@ impl BagReader {
                 if let Some(e) = scan.problems.into_iter().next() {
                     return Err(e);
                 }
-                files.push(OpenedFile { scan: FileScan { problems: Vec::new(), ..scan }, channel_topic: HashMap::new() });
+                files.push(OpenedFile {
+                    scan: FileScan {
+                        problems: Vec::new(),
+                        ..scan
+                    },
+                    channel_topic: HashMap::new(),
+                });
             } else {
                 let mut scan = scan;
                 problems.append(&mut scan.problems);
-                files.push(OpenedFile { scan, channel_topic: HashMap::new() });
+                files.push(OpenedFile {
+                    scan,
+                    channel_topic: HashMap::new(),
+                });
             }
         }
         let mut topics: Vec<TopicInfo> = Vec::new();
@@ -171,10 +196,20 @@ impl BagReader {
                         name: ch.topic.clone(),
                         type_name: schema.map(|s| s.name.clone()).unwrap_or_default(),
                         schema_encoding: schema.map(|s| s.encoding.clone()).unwrap_or_default(),
-                        definition: schema.map(|s| String::from_utf8_lossy(&s.data).into_owned()).unwrap_or_default(),
+                        definition: schema
+                            .map(|s| String::from_utf8_lossy(&s.data).into_owned())
+                            .unwrap_or_default(),
                         message_encoding: ch.message_encoding.clone(),
-                        offered_qos_profiles: ch.metadata.get("offered_qos_profiles").cloned().unwrap_or_default(),
-                        type_description_hash: ch.metadata.get("topic_type_hash").cloned().unwrap_or_default(),
+                        offered_qos_profiles: ch
+                            .metadata
+                            .get("offered_qos_profiles")
+                            .cloned()
+                            .unwrap_or_default(),
+                        type_description_hash: ch
+                            .metadata
+                            .get("topic_type_hash")
+                            .cloned()
+                            .unwrap_or_default(),
                         message_count: 0,
                         first_time: None,
                         last_time: None,
@@ -190,7 +225,9 @@ impl BagReader {
                             path: f.scan.path.clone(),
                             offset: u.offset,
                             record: if u.is_chunk { "Chunk" } else { "Message" },
-                            reason: format!("{n} message(s) on channel {cid}, which no Channel record defines"),
+                            reason: format!(
+                                "{n} message(s) on channel {cid}, which no Channel record defines"
+                            ),
                         };
                         if mode == ReadMode::Strict {
                             return Err(e);
@@ -226,7 +263,13 @@ impl BagReader {
                 }
             }
         }
-        Ok(Self { path, metadata, files, topics, problems })
+        Ok(Self {
+            path,
+            metadata,
+            files,
+            topics,
+            problems,
+        })
     }
 
     pub fn path(&self) -> &Path {
@@ -278,7 +321,12 @@ impl BagReader {
                 for n in names {
                     match self.topics.iter().position(|t| &t.name == n) {
                         Some(i) => v.push(i),
-                        None => return Err(BagError::InvalidArgument(format!("topic {n} is not in bag {}", self.path.display()))),
+                        None => {
+                            return Err(BagError::InvalidArgument(format!(
+                                "topic {n} is not in bag {}",
+                                self.path.display()
+                            )))
+                        }
                     }
                 }
                 Some(v)
@@ -293,7 +341,9 @@ impl BagReader {
                     continue;
                 }
                 let relevant = u.counts.keys().any(|cid| {
-                    f.channel_topic.get(cid).is_some_and(|ti| wanted.as_ref().map_or(true, |w| w.contains(ti)))
+                    f.channel_topic
+                        .get(cid)
+                        .is_some_and(|ti| wanted.as_ref().map_or(true, |w| w.contains(ti)))
                 });
                 if relevant {
                     units.push((u.min_time, fi, ui));
@@ -306,7 +356,17 @@ impl BagReader {
             .iter()
             .map(|f| File::open(&f.scan.path).map_err(io_err("open", &f.scan.path)))
             .collect::<Result<Vec<_>>>()?;
-        Ok(MessageIter { reader: self, wanted, start, end, units, next_unit: 0, heap: BinaryHeap::new(), counter: 0, handles })
+        Ok(MessageIter {
+            reader: self,
+            wanted,
+            start,
+            end,
+            units,
+            next_unit: 0,
+            heap: BinaryHeap::new(),
+            counter: 0,
+            handles,
+        })
     }
 
     /// All messages, log-time order, collected (convenience for small bags and tests).
@@ -381,12 +441,18 @@ impl MessageIter<'_> {
             if m.log_time < self.start || m.log_time >= self.end {
                 continue;
             }
-            let Some(&ti) = f.channel_topic.get(&m.channel_id) else { continue };
+            let Some(&ti) = f.channel_topic.get(&m.channel_id) else {
+                continue;
+            };
             if self.wanted.as_ref().is_some_and(|w| !w.contains(&ti)) {
                 continue;
             }
             self.counter += 1;
-            self.heap.push(Reverse(Pending { key: (m.log_time, self.counter), topic_index: ti, msg: m }));
+            self.heap.push(Reverse(Pending {
+                key: (m.log_time, self.counter),
+                topic_index: ti,
+                msg: m,
+            }));
         }
         Ok(())
     }
@@ -398,7 +464,10 @@ impl Iterator for MessageIter<'_> {
     fn next(&mut self) -> Option<Self::Item> {
         loop {
             let load_next = self.next_unit < self.units.len()
-                && self.heap.peek().map_or(true, |Reverse(p)| self.units[self.next_unit].0 <= p.key.0);
+                && self
+                    .heap
+                    .peek()
+                    .map_or(true, |Reverse(p)| self.units[self.next_unit].0 <= p.key.0);
             if load_next {
                 let (_, fi, ui) = self.units[self.next_unit];
                 self.next_unit += 1;

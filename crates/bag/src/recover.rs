@@ -31,7 +31,9 @@ pub struct RecoverOptions {
 
 impl Default for RecoverOptions {
     fn default() -> Self {
-        Self { keep_original: true }
+        Self {
+            keep_original: true,
+        }
     }
 }
 
@@ -74,7 +76,12 @@ impl std::fmt::Display for RecoveryReport {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         for r in &self.files {
             if r.untouched {
-                writeln!(f, "{}: intact, {} messages", r.path.display(), r.kept_messages)?;
+                writeln!(
+                    f,
+                    "{}: intact, {} messages",
+                    r.path.display(),
+                    r.kept_messages
+                )?;
             } else {
                 writeln!(
                     f,
@@ -119,14 +126,27 @@ pub fn recover_with(path: impl AsRef<Path>, options: &RecoverOptions) -> Result<
             }
         }
         set.sort_by_key(|p| {
-            let stem = p.file_stem().and_then(|s| s.to_str()).unwrap_or("").to_string();
-            (stem.rsplit('_').next().and_then(|n| n.parse::<u64>().ok()).unwrap_or(0), stem)
+            let stem = p
+                .file_stem()
+                .and_then(|s| s.to_str())
+                .unwrap_or("")
+                .to_string();
+            (
+                stem.rsplit('_')
+                    .next()
+                    .and_then(|n| n.parse::<u64>().ok())
+                    .unwrap_or(0),
+                stem,
+            )
         });
         set
     } else {
         vec![path.to_path_buf()]
     };
-    let mut report = RecoveryReport { files: Vec::new(), metadata_path: None };
+    let mut report = RecoveryReport {
+        files: Vec::new(),
+        metadata_path: None,
+    };
     for f in &files {
         report.files.push(recover_file(f, options)?);
     }
@@ -134,7 +154,8 @@ pub fn recover_with(path: impl AsRef<Path>, options: &RecoverOptions) -> Result<
         let meta = path.join(METADATA_FILE);
         if meta.exists() {
             if options.keep_original {
-                std::fs::rename(&meta, path.join("metadata.yaml.orig")).map_err(io_err("rename", &meta))?;
+                std::fs::rename(&meta, path.join("metadata.yaml.orig"))
+                    .map_err(io_err("rename", &meta))?;
             } else {
                 std::fs::remove_file(&meta).map_err(io_err("remove", &meta))?;
             }
@@ -159,7 +180,11 @@ fn recover_file(path: &Path, options: &RecoverOptions) -> Result<FileRecovery> {
         dropped_bytes: scan.size.saturating_sub(scan.good_until),
         reasons: scan.problems.iter().map(|p| p.to_string()).collect(),
     };
-    let total: u64 = scan.units.iter().map(|u| u.counts.values().sum::<u64>()).sum();
+    let total: u64 = scan
+        .units
+        .iter()
+        .map(|u| u.counts.values().sum::<u64>())
+        .sum();
     if scan.complete && scan.problems.is_empty() {
         rep.untouched = true;
         rep.kept_messages = total;
@@ -168,7 +193,8 @@ fn recover_file(path: &Path, options: &RecoverOptions) -> Result<FileRecovery> {
     }
     if scan.profile.is_empty() && scan.units.is_empty() && scan.schemas.is_empty() {
         // Not even a Header: write an empty but valid file so the bag opens.
-        rep.reasons.push("no intact records; the rewritten file holds no messages".into());
+        rep.reasons
+            .push("no intact records; the rewritten file holds no messages".into());
     }
     let tmp = path.with_extension("mcap.recovering");
     let out = OpenOptions::new()
@@ -184,7 +210,11 @@ fn recover_file(path: &Path, options: &RecoverOptions) -> Result<FileRecovery> {
         .map(|u| u.compression.clone())
         .unwrap_or_else(|| "zstd".into());
     let mut w = mcap::WriteOptions::new()
-        .profile(if scan.profile.is_empty() { "ros2".to_string() } else { scan.profile.clone() })
+        .profile(if scan.profile.is_empty() {
+            "ros2".to_string()
+        } else {
+            scan.profile.clone()
+        })
         .library(format!("{} (recovered)", crate::writer::LIBRARY))
         .compression(match compression.as_str() {
             "lz4" => Some(mcap::Compression::Lz4),
@@ -193,16 +223,30 @@ fn recover_file(path: &Path, options: &RecoverOptions) -> Result<FileRecovery> {
         })
         .compression_threads(0)
         .create(BufWriter::new(out))
-        .map_err(|e| BagError::Mcap { path: tmp.clone(), source: e })?;
-    let mcap_err = |e| BagError::Mcap { path: tmp.clone(), source: e };
+        .map_err(|e| BagError::Mcap {
+            path: tmp.clone(),
+            source: e,
+        })?;
+    let mcap_err = |e| BagError::Mcap {
+        path: tmp.clone(),
+        source: e,
+    };
     let mut schema_map: HashMap<u16, u16> = HashMap::new();
     for (&id, s) in &scan.schemas {
-        schema_map.insert(id, w.add_schema(&s.name, &s.encoding, &s.data).map_err(mcap_err)?);
+        schema_map.insert(
+            id,
+            w.add_schema(&s.name, &s.encoding, &s.data)
+                .map_err(mcap_err)?,
+        );
     }
     let mut channel_map: BTreeMap<u16, u16> = BTreeMap::new();
     for (&id, c) in &scan.channels {
         let sid = schema_map.get(&c.schema_id).copied().unwrap_or(0);
-        channel_map.insert(id, w.add_channel(sid, &c.topic, &c.message_encoding, &c.metadata).map_err(mcap_err)?);
+        channel_map.insert(
+            id,
+            w.add_channel(sid, &c.topic, &c.message_encoding, &c.metadata)
+                .map_err(mcap_err)?,
+        );
     }
     let mut file = std::fs::File::open(path).map_err(io_err("open", path))?;
     for u in &scan.units {
@@ -237,11 +281,18 @@ fn recover_file(path: &Path, options: &RecoverOptions) -> Result<FileRecovery> {
         }
     }
     if rep.dropped_messages > 0 {
-        rep.reasons.push(format!("{} message(s) referenced channels with no Channel record", rep.dropped_messages));
+        rep.reasons.push(format!(
+            "{} message(s) referenced channels with no Channel record",
+            rep.dropped_messages
+        ));
     }
     w.finish().map_err(mcap_err)?;
     let inner = w.into_inner();
-    let file_out = inner.into_inner().map_err(|e| BagError::Io { op: "flush", path: tmp.clone(), source: e.into_error() })?;
+    let file_out = inner.into_inner().map_err(|e| BagError::Io {
+        op: "flush",
+        path: tmp.clone(),
+        source: e.into_error(),
+    })?;
     file_out.sync_all().map_err(io_err("fsync", &tmp))?;
     drop(file_out);
     if options.keep_original {

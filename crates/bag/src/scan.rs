@@ -102,34 +102,75 @@ pub struct FileScan {
 }
 
 fn corrupt(path: &Path, offset: u64, record: &'static str, reason: impl Into<String>) -> BagError {
-    BagError::Corrupt { path: path.to_path_buf(), offset, record, reason: reason.into() }
+    BagError::Corrupt {
+        path: path.to_path_buf(),
+        offset,
+        record,
+        reason: reason.into(),
+    }
 }
 
 /// Decompress and verify a chunk body; `offset` is the chunk record's offset (for errors).
-pub fn decompress_chunk(path: &Path, offset: u64, header: &mcap::records::ChunkHeader, data: &[u8]) -> Result<Vec<u8>> {
+pub fn decompress_chunk(
+    path: &Path,
+    offset: u64,
+    header: &mcap::records::ChunkHeader,
+    data: &[u8],
+) -> Result<Vec<u8>> {
     if header.uncompressed_size > MAX_UNCOMPRESSED_CHUNK {
-        return Err(corrupt(path, offset, "Chunk", format!("uncompressed size {} is implausible", header.uncompressed_size)));
+        return Err(corrupt(
+            path,
+            offset,
+            "Chunk",
+            format!(
+                "uncompressed size {} is implausible",
+                header.uncompressed_size
+            ),
+        ));
     }
     let out = match header.compression.as_str() {
         "" => data.to_vec(),
-        "zstd" => zstd::bulk::decompress(data, header.uncompressed_size as usize)
-            .map_err(|e| corrupt(path, offset, "Chunk", format!("zstd decompression failed: {e}")))?,
+        "zstd" => zstd::bulk::decompress(data, header.uncompressed_size as usize).map_err(|e| {
+            corrupt(
+                path,
+                offset,
+                "Chunk",
+                format!("zstd decompression failed: {e}"),
+            )
+        })?,
         "lz4" => {
             let mut dec = lz4::Decoder::new(data)
                 .map_err(|e| corrupt(path, offset, "Chunk", format!("lz4 stream invalid: {e}")))?;
             let mut v = Vec::with_capacity(header.uncompressed_size as usize);
-            dec.read_to_end(&mut v)
-                .map_err(|e| corrupt(path, offset, "Chunk", format!("lz4 decompression failed: {e}")))?;
+            dec.read_to_end(&mut v).map_err(|e| {
+                corrupt(
+                    path,
+                    offset,
+                    "Chunk",
+                    format!("lz4 decompression failed: {e}"),
+                )
+            })?;
             v
         }
-        other => return Err(corrupt(path, offset, "Chunk", format!("unsupported compression {other:?}"))),
+        other => {
+            return Err(corrupt(
+                path,
+                offset,
+                "Chunk",
+                format!("unsupported compression {other:?}"),
+            ))
+        }
     };
     if out.len() as u64 != header.uncompressed_size {
         return Err(corrupt(
             path,
             offset,
             "Chunk",
-            format!("decompressed to {} bytes, header says {}", out.len(), header.uncompressed_size),
+            format!(
+                "decompressed to {} bytes, header says {}",
+                out.len(),
+                header.uncompressed_size
+            ),
         ));
     }
     if header.uncompressed_crc != 0 {
@@ -139,7 +180,10 @@ pub fn decompress_chunk(path: &Path, offset: u64, header: &mcap::records::ChunkH
                 path,
                 offset,
                 "Chunk",
-                format!("CRC mismatch: stored {:08x}, computed {crc:08x}", header.uncompressed_crc),
+                format!(
+                    "CRC mismatch: stored {:08x}, computed {crc:08x}",
+                    header.uncompressed_crc
+                ),
             ));
         }
     }
@@ -147,12 +191,21 @@ pub fn decompress_chunk(path: &Path, offset: u64, header: &mcap::records::ChunkH
 }
 
 /// Records inside a decompressed chunk, as (offset in chunk, record).
-pub fn parse_chunk_records<'a>(path: &Path, chunk_offset: u64, buf: &'a [u8]) -> Result<Vec<(u64, Record<'a>)>> {
+pub fn parse_chunk_records<'a>(
+    path: &Path,
+    chunk_offset: u64,
+    buf: &'a [u8],
+) -> Result<Vec<(u64, Record<'a>)>> {
     let mut out = Vec::new();
     let mut pos = 0usize;
     while pos < buf.len() {
         if buf.len() - pos < 9 {
-            return Err(corrupt(path, chunk_offset, "Chunk", format!("inner record header cut at chunk byte {pos}")));
+            return Err(corrupt(
+                path,
+                chunk_offset,
+                "Chunk",
+                format!("inner record header cut at chunk byte {pos}"),
+            ));
         }
         let opcode = buf[pos];
         let len = u64::from_le_bytes(buf[pos + 1..pos + 9].try_into().expect("8 bytes"));
@@ -162,12 +215,24 @@ pub fn parse_chunk_records<'a>(path: &Path, chunk_offset: u64, buf: &'a [u8]) ->
                 path,
                 chunk_offset,
                 "Chunk",
-                format!("inner {} record at chunk byte {pos} claims {len} bytes, {} remain", record_kind(opcode), buf.len() - start),
+                format!(
+                    "inner {} record at chunk byte {pos} claims {len} bytes, {} remain",
+                    record_kind(opcode),
+                    buf.len() - start
+                ),
             ));
         }
         let body = &buf[start..start + len as usize];
         let rec = mcap::parse_record(opcode, body).map_err(|e| {
-            corrupt(path, chunk_offset, "Chunk", format!("inner {} record at chunk byte {pos} does not parse: {e}", record_kind(opcode)))
+            corrupt(
+                path,
+                chunk_offset,
+                "Chunk",
+                format!(
+                    "inner {} record at chunk byte {pos} does not parse: {e}",
+                    record_kind(opcode)
+                ),
+            )
         })?;
         out.push((pos as u64, rec));
         pos = start + len as usize;
@@ -193,15 +258,34 @@ pub fn chunk_messages(path: &Path, chunk_offset: u64, buf: &[u8]) -> Result<Vec<
 }
 
 /// Read one top-level record (opcode, body) at `offset`, checking it lies within the file.
-pub fn read_record_at(file: &mut File, path: &Path, offset: u64, file_len: u64) -> Result<(u8, Vec<u8>)> {
+pub fn read_record_at(
+    file: &mut File,
+    path: &Path,
+    offset: u64,
+    file_len: u64,
+) -> Result<(u8, Vec<u8>)> {
     let mut r = BufReader::new(&mut *file);
-    r.seek(SeekFrom::Start(offset)).map_err(io_err("seek", path))?;
+    r.seek(SeekFrom::Start(offset))
+        .map_err(io_err("seek", path))?;
     read_record(&mut r, path, offset, file_len)
 }
 
-fn read_record<R: Read>(r: &mut R, path: &Path, offset: u64, file_len: u64) -> Result<(u8, Vec<u8>)> {
+fn read_record<R: Read>(
+    r: &mut R,
+    path: &Path,
+    offset: u64,
+    file_len: u64,
+) -> Result<(u8, Vec<u8>)> {
     if file_len.saturating_sub(offset) < 9 {
-        return Err(corrupt(path, offset, "record", format!("file ends {} bytes into a record header", file_len.saturating_sub(offset))));
+        return Err(corrupt(
+            path,
+            offset,
+            "record",
+            format!(
+                "file ends {} bytes into a record header",
+                file_len.saturating_sub(offset)
+            ),
+        ));
     }
     let mut h = [0u8; 9];
     r.read_exact(&mut h).map_err(io_err("read", path))?;
@@ -226,17 +310,31 @@ fn read_record<R: Read>(r: &mut R, path: &Path, offset: u64, file_len: u64) -> R
 pub fn scan_file(path: &Path, stop_at_first: bool) -> Result<FileScan> {
     let mut file = File::open(path).map_err(io_err("open", path))?;
     let size = file.metadata().map_err(io_err("stat", path))?.len();
-    let mut s = FileScan { path: path.to_path_buf(), size, ..Default::default() };
+    let mut s = FileScan {
+        path: path.to_path_buf(),
+        size,
+        ..Default::default()
+    };
     let mut r = BufReader::with_capacity(1 << 20, &mut file);
 
     let mut magic = [0u8; 8];
     if size < 8 {
-        s.problems.push(corrupt(path, 0, "magic", format!("file is {size} bytes, too short for the MCAP magic")));
+        s.problems.push(corrupt(
+            path,
+            0,
+            "magic",
+            format!("file is {size} bytes, too short for the MCAP magic"),
+        ));
         return Ok(s);
     }
     r.read_exact(&mut magic).map_err(io_err("read", path))?;
     if magic != mcap::MAGIC {
-        s.problems.push(corrupt(path, 0, "magic", format!("not an MCAP file: starts with {magic:02x?}")));
+        s.problems.push(corrupt(
+            path,
+            0,
+            "magic",
+            format!("not an MCAP file: starts with {magic:02x?}"),
+        ));
         return Ok(s);
     }
     let mut offset = 8u64;
@@ -277,7 +375,8 @@ pub fn scan_file(path: &Path, stop_at_first: bool) -> Result<FileScan> {
         let rec = match parsed {
             Ok(rec) => rec,
             Err(e) => {
-                s.problems.push(corrupt(path, offset, kind, format!("does not parse: {e}")));
+                s.problems
+                    .push(corrupt(path, offset, kind, format!("does not parse: {e}")));
                 // Framing (opcode + length) was plausible; keep going unless strict.
                 if stop_at_first || opcode == op::HEADER {
                     return Ok(s);
@@ -293,7 +392,8 @@ pub fn scan_file(path: &Path, stop_at_first: bool) -> Result<FileScan> {
                     s.library = h.library.clone();
                 }
                 _ => {
-                    s.problems.push(corrupt(path, offset, kind, "first record is not a Header"));
+                    s.problems
+                        .push(corrupt(path, offset, kind, "first record is not a Header"));
                     return Ok(s);
                 }
             }
@@ -304,7 +404,16 @@ pub fn scan_file(path: &Path, stop_at_first: bool) -> Result<FileScan> {
         }
         match rec {
             Record::Schema { header, data } => {
-                add_schema(&mut s, path, offset, None, header.id, header.name, header.encoding, data.into_owned());
+                add_schema(
+                    &mut s,
+                    path,
+                    offset,
+                    None,
+                    header.id,
+                    header.name,
+                    header.encoding,
+                    data.into_owned(),
+                );
             }
             Record::Channel(c) => add_channel(&mut s, c),
             Record::Message { header, .. } => {
@@ -318,7 +427,8 @@ pub fn scan_file(path: &Path, stop_at_first: bool) -> Result<FileScan> {
                     compression: String::new(),
                 };
                 u.counts.insert(header.channel_id, 1);
-                u.times.insert(header.channel_id, (header.log_time, header.log_time));
+                u.times
+                    .insert(header.channel_id, (header.log_time, header.log_time));
                 s.units.push(u);
             }
             Record::Chunk { header, data } => {
@@ -338,7 +448,8 @@ pub fn scan_file(path: &Path, stop_at_first: bool) -> Result<FileScan> {
                 break;
             }
             Record::Footer(_) => {
-                s.problems.push(corrupt(path, offset, kind, "Footer before DataEnd"));
+                s.problems
+                    .push(corrupt(path, offset, kind, "Footer before DataEnd"));
                 return Ok(s);
             }
             _ => {}
@@ -350,7 +461,12 @@ pub fn scan_file(path: &Path, stop_at_first: bool) -> Result<FileScan> {
         }
     }
     if first {
-        s.problems.push(corrupt(path, 8, "Header", "file ends before the Header record"));
+        s.problems.push(corrupt(
+            path,
+            8,
+            "Header",
+            "file ends before the Header record",
+        ));
         return Ok(s);
     }
     if !saw_data_end {
@@ -365,16 +481,28 @@ pub fn scan_file(path: &Path, stop_at_first: bool) -> Result<FileScan> {
     // Footer: the 29-byte record right before the end magic.
     let mut tail = [0u8; 37];
     if size < s.good_until + 37 {
-        s.problems.push(corrupt(path, s.good_until, "Footer", "file ends before Footer and end magic"));
+        s.problems.push(corrupt(
+            path,
+            s.good_until,
+            "Footer",
+            "file ends before Footer and end magic",
+        ));
         return Ok(s);
     }
     drop(r);
-    file.seek(SeekFrom::Start(size - 37)).map_err(io_err("seek", path))?;
+    file.seek(SeekFrom::Start(size - 37))
+        .map_err(io_err("seek", path))?;
     file.read_exact(&mut tail).map_err(io_err("read", path))?;
     if &tail[29..] != mcap::MAGIC {
-        s.problems.push(corrupt(path, size - 8, "magic", "end magic missing"));
+        s.problems
+            .push(corrupt(path, size - 8, "magic", "end magic missing"));
     } else if tail[0] != op::FOOTER || u64::from_le_bytes(tail[1..9].try_into().expect("8")) != 20 {
-        s.problems.push(corrupt(path, size - 37, "Footer", "Footer record not found before end magic"));
+        s.problems.push(corrupt(
+            path,
+            size - 37,
+            "Footer",
+            "Footer record not found before end magic",
+        ));
     } else {
         s.complete = true;
     }
@@ -382,16 +510,36 @@ pub fn scan_file(path: &Path, stop_at_first: bool) -> Result<FileScan> {
 }
 
 #[allow(clippy::too_many_arguments)]
-fn add_schema(s: &mut FileScan, path: &Path, offset: u64, inner: Option<u64>, id: u16, name: String, encoding: String, data: Vec<u8>) {
+fn add_schema(
+    s: &mut FileScan,
+    path: &Path,
+    offset: u64,
+    inner: Option<u64>,
+    id: u16,
+    name: String,
+    encoding: String,
+    data: Vec<u8>,
+) {
     if encoding == "ros2msg" {
         let text = String::from_utf8_lossy(&data);
         if let Err(e) = crate::msgdef::parse_definition(&name, &text) {
-            let where_ = inner.map(|p| format!(" (inside Chunk, chunk byte {p})")).unwrap_or_default();
+            let where_ = inner
+                .map(|p| format!(" (inside Chunk, chunk byte {p})"))
+                .unwrap_or_default();
             let kind = if inner.is_some() { "Chunk" } else { "Schema" };
-            s.problems.push(corrupt(path, offset, kind, format!("Schema {id} ({name}){where_} does not parse: {e}")));
+            s.problems.push(corrupt(
+                path,
+                offset,
+                kind,
+                format!("Schema {id} ({name}){where_} does not parse: {e}"),
+            ));
         }
     }
-    s.schemas.entry(id).or_insert(SchemaRec { name, encoding, data });
+    s.schemas.entry(id).or_insert(SchemaRec {
+        name,
+        encoding,
+        data,
+    });
 }
 
 fn add_channel(s: &mut FileScan, c: mcap::records::Channel) {
@@ -403,7 +551,13 @@ fn add_channel(s: &mut FileScan, c: mcap::records::Channel) {
     });
 }
 
-fn scan_chunk(s: &mut FileScan, path: &Path, offset: u64, header: &mcap::records::ChunkHeader, buf: &[u8]) -> Result<()> {
+fn scan_chunk(
+    s: &mut FileScan,
+    path: &Path,
+    offset: u64,
+    header: &mcap::records::ChunkHeader,
+    buf: &[u8],
+) -> Result<()> {
     let recs = parse_chunk_records(path, offset, buf)?;
     let mut u = Unit {
         offset,
@@ -422,7 +576,10 @@ fn scan_chunk(s: &mut FileScan, path: &Path, offset: u64, header: &mcap::records
             Record::Channel(c) => channels.push(c),
             Record::Message { header, .. } => {
                 *u.counts.entry(header.channel_id).or_insert(0) += 1;
-                let t = u.times.entry(header.channel_id).or_insert((header.log_time, header.log_time));
+                let t = u
+                    .times
+                    .entry(header.channel_id)
+                    .or_insert((header.log_time, header.log_time));
                 t.0 = t.0.min(header.log_time);
                 t.1 = t.1.max(header.log_time);
                 u.min_time = u.min_time.min(header.log_time);
@@ -446,15 +603,22 @@ fn scan_chunk(s: &mut FileScan, path: &Path, offset: u64, header: &mcap::records
 /// After lost framing, find the first offset `>= from` holding a Chunk record that is
 /// self-consistent (record length = header + compressed size, known compression, nonzero CRC)
 /// and whose data decompresses to a matching CRC. Chunks without CRC are not trusted here.
-fn find_next_chunk<R: Read + Seek>(r: &mut R, path: &Path, from: u64, size: u64) -> Result<Option<u64>> {
+fn find_next_chunk<R: Read + Seek>(
+    r: &mut R,
+    path: &Path,
+    from: u64,
+    size: u64,
+) -> Result<Option<u64>> {
     const WINDOW: usize = 1 << 20;
     const HEAD: usize = 9 + 8 + 8 + 8 + 4 + 4 + 4 + 8; // up to compressed_size with "zstd"
     let mut base = from;
     let mut buf = vec![0u8; WINDOW + HEAD];
     while base < size {
         let want = ((size - base) as usize).min(buf.len());
-        r.seek(SeekFrom::Start(base)).map_err(io_err("seek", path))?;
-        r.read_exact(&mut buf[..want]).map_err(io_err("read", path))?;
+        r.seek(SeekFrom::Start(base))
+            .map_err(io_err("seek", path))?;
+        r.read_exact(&mut buf[..want])
+            .map_err(io_err("read", path))?;
         let scan_to = want.min(WINDOW);
         for i in 0..scan_to {
             if buf[i] != op::CHUNK || want - i < HEAD - 4 {
@@ -483,7 +647,9 @@ fn find_next_chunk<R: Read + Seek>(r: &mut R, path: &Path, from: u64, size: u64)
             }
             // Candidate: read and verify it fully.
             r.seek(SeekFrom::Start(p)).map_err(io_err("seek", path))?;
-            let Ok((opcode, body)) = read_record(r, path, p, size) else { continue };
+            let Ok((opcode, body)) = read_record(r, path, p, size) else {
+                continue;
+            };
             if let Ok(Record::Chunk { header, data }) = mcap::parse_record(opcode, &body) {
                 if decompress_chunk(path, p, &header, &data).is_ok() {
                     return Ok(Some(p));

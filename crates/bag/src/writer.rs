@@ -45,7 +45,11 @@ use crate::options::{ChunkCompression, WriterOptions, MIN_FLUSH_INTERVAL};
 use crate::qos::validate_qos_yaml;
 
 /// MCAP header `library` string of files written here.
-pub const LIBRARY: &str = concat!("metrocell-bag/", env!("CARGO_PKG_VERSION"), "; mcap-rust/0.26");
+pub const LIBRARY: &str = concat!(
+    "metrocell-bag/",
+    env!("CARGO_PKG_VERSION"),
+    "; mcap-rust/0.26"
+);
 
 /// Message / time statistics of one file, or of the part of it that is on disk.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
@@ -139,7 +143,10 @@ impl BagWriter {
             .and_then(|n| n.to_str())
             .filter(|n| !n.is_empty())
             .ok_or_else(|| {
-                BagError::InvalidArgument(format!("bag directory {} has no usable name", dir.display()))
+                BagError::InvalidArgument(format!(
+                    "bag directory {} has no usable name",
+                    dir.display()
+                ))
             })?
             .to_string();
         if dir.join(METADATA_FILE).exists() {
@@ -179,7 +186,13 @@ impl BagWriter {
     /// (the type's .msg followed by each dependency after a line of 80 `=` and `MSG: pkg/Type`),
     /// `qos_yaml` the `offered_qos_profiles` YAML (see [`crate::qos_profiles_yaml`]).
     /// Declaring the same topic again with the same type is a no-op.
-    pub fn add_topic(&mut self, name: &str, ros_type: &str, definition: &str, qos_yaml: &str) -> Result<()> {
+    pub fn add_topic(
+        &mut self,
+        name: &str,
+        ros_type: &str,
+        definition: &str,
+        qos_yaml: &str,
+    ) -> Result<()> {
         self.add_topic_with_hash(name, ros_type, definition, qos_yaml, "")
     }
 
@@ -188,7 +201,12 @@ impl BagWriter {
     /// specification prescribes for "no definition" and what `rosbags` reads as a message
     /// definition of format NONE. (rosbag2 writes encoding `unknown` in this case, which
     /// rosbags rejects.)
-    pub fn add_topic_without_definition(&mut self, name: &str, ros_type: &str, qos_yaml: &str) -> Result<()> {
+    pub fn add_topic_without_definition(
+        &mut self,
+        name: &str,
+        ros_type: &str,
+        qos_yaml: &str,
+    ) -> Result<()> {
         self.declare_topic(name, ros_type, None, qos_yaml, "")
     }
 
@@ -205,10 +223,19 @@ impl BagWriter {
     }
 
     /// `definition`: the full ros2msg text, or `None` when the type's definition is unknown.
-    fn declare_topic(&mut self, name: &str, ros_type: &str, definition: Option<&str>, qos_yaml: &str, type_hash: &str) -> Result<()> {
+    fn declare_topic(
+        &mut self,
+        name: &str,
+        ros_type: &str,
+        definition: Option<&str>,
+        qos_yaml: &str,
+        type_hash: &str,
+    ) -> Result<()> {
         self.check_open()?;
         if !name.starts_with('/') {
-            return Err(BagError::InvalidArgument(format!("topic name {name:?} must start with '/'")));
+            return Err(BagError::InvalidArgument(format!(
+                "topic name {name:?} must start with '/'"
+            )));
         }
         let parts: Vec<&str> = ros_type.split('/').collect();
         if parts.len() != 3 || parts.iter().any(|p| p.is_empty()) {
@@ -259,12 +286,17 @@ impl BagWriter {
     /// Record one message. `cdr` must start with the 4-byte CDR encapsulation header
     /// (`00 01 00 00` for little-endian). Times are nanoseconds since the Unix epoch; the log
     /// time is the receive time and orders replay.
-    pub fn write(&mut self, topic: &str, log_time_ns: u64, publish_time_ns: u64, cdr: &[u8]) -> Result<()> {
+    pub fn write(
+        &mut self,
+        topic: &str,
+        log_time_ns: u64,
+        publish_time_ns: u64,
+        cdr: &[u8],
+    ) -> Result<()> {
         self.check_open()?;
-        let idx = *self
-            .topic_index
-            .get(topic)
-            .ok_or_else(|| BagError::InvalidArgument(format!("topic {topic} was not added with add_topic")))?;
+        let idx = *self.topic_index.get(topic).ok_or_else(|| {
+            BagError::InvalidArgument(format!("topic {topic} was not added with add_topic"))
+        })?;
         if cdr.len() < 4 || cdr[0] != 0 || cdr[1] > 0x0b {
             return Err(BagError::InvalidArgument(format!(
                 "message on {topic} does not start with a CDR encapsulation header (got {:02x?})",
@@ -342,7 +374,10 @@ impl BagWriter {
 
     fn check_open(&self) -> Result<()> {
         match &self.closed {
-            Some(reason) => Err(BagError::Closed { path: self.dir.clone(), reason: reason.clone() }),
+            Some(reason) => Err(BagError::Closed {
+                path: self.dir.clone(),
+                reason: reason.clone(),
+            }),
             None => Ok(()),
         }
     }
@@ -370,7 +405,11 @@ impl BagWriter {
             .create_new(true)
             .open(&path)
             .map_err(io_err("create", &path))?;
-        let sink = DurableFile::new(file, self.options.sync_on_flush, self.options.fail_after_bytes);
+        let sink = DurableFile::new(
+            file,
+            self.options.sync_on_flush,
+            self.options.fail_after_bytes,
+        );
         let state = sink.state.clone();
         let mcap = match self.mcap_options().create(sink) {
             Ok(m) => m,
@@ -401,11 +440,21 @@ impl BagWriter {
         let t = &self.topics[idx];
         let schema_id = f
             .mcap
-            .add_schema(&t.meta.type_name, t.schema_encoding, t.definition.as_bytes())
+            .add_schema(
+                &t.meta.type_name,
+                t.schema_encoding,
+                t.definition.as_bytes(),
+            )
             .map_err(|e| mcap_to_bag(&f.path, &f.sink, e))?;
         let mut md = BTreeMap::new();
-        md.insert("offered_qos_profiles".to_string(), t.meta.offered_qos_profiles.clone());
-        md.insert("topic_type_hash".to_string(), t.meta.type_description_hash.clone());
+        md.insert(
+            "offered_qos_profiles".to_string(),
+            t.meta.offered_qos_profiles.clone(),
+        );
+        md.insert(
+            "topic_type_hash".to_string(),
+            t.meta.type_description_hash.clone(),
+        );
         let ch = f
             .mcap
             .add_channel(schema_id, &t.meta.name, "cdr", &md)
@@ -419,7 +468,9 @@ impl BagWriter {
     /// counts, and (if `metadata`) rewrite metadata.yaml.
     fn flush_now(&mut self, metadata: bool) -> Result<()> {
         let f = self.current.as_mut().expect("a file is open");
-        f.mcap.flush().map_err(|e| mcap_to_bag(&f.path, &f.sink, e))?;
+        f.mcap
+            .flush()
+            .map_err(|e| mcap_to_bag(&f.path, &f.sink, e))?;
         f.sealed_len = lock_state(&f.sink).position;
         let changed = f.durable != f.written;
         f.durable = f.written;
@@ -461,9 +512,14 @@ impl BagWriter {
             let mut md = BTreeMap::new();
             md.insert("serialized_metadata".to_string(), doc);
             f.mcap
-                .write_metadata(&mcap::records::Metadata { name: "rosbag2".into(), metadata: md })
+                .write_metadata(&mcap::records::Metadata {
+                    name: "rosbag2".into(),
+                    metadata: md,
+                })
                 .map_err(|e| mcap_to_bag(&f.path, &f.sink, e))?;
-            f.mcap.finish().map_err(|e| mcap_to_bag(&f.path, &f.sink, e))?;
+            f.mcap
+                .finish()
+                .map_err(|e| mcap_to_bag(&f.path, &f.sink, e))?;
             Ok(())
         })();
         if let Err(e) = res {
@@ -477,8 +533,12 @@ impl BagWriter {
         }
         self.finished_files.push(FileInformation {
             path: f.name.clone(),
-            starting_time: NanosecondsSinceEpoch { nanoseconds_since_epoch: f.written.start },
-            duration: Nanoseconds { nanoseconds: f.written.end - f.written.start },
+            starting_time: NanosecondsSinceEpoch {
+                nanoseconds_since_epoch: f.written.start,
+            },
+            duration: Nanoseconds {
+                nanoseconds: f.written.end - f.written.start,
+            },
             message_count: f.written.count,
         });
         Ok(())
@@ -491,7 +551,16 @@ impl BagWriter {
             self.closed = Some(e.to_string());
             return e;
         };
-        let OpenFile { path, mcap, sink, written, durable, sealed_len, name, .. } = f;
+        let OpenFile {
+            path,
+            mcap,
+            sink,
+            written,
+            durable,
+            sealed_len,
+            name,
+            ..
+        } = f;
         {
             let mut st = lock_state(&sink);
             if st.failure.is_none() {
@@ -513,8 +582,12 @@ impl BagWriter {
         if sealed_len > 0 {
             self.finished_files.push(FileInformation {
                 path: name,
-                starting_time: NanosecondsSinceEpoch { nanoseconds_since_epoch: durable.start },
-                duration: Nanoseconds { nanoseconds: durable.end - durable.start },
+                starting_time: NanosecondsSinceEpoch {
+                    nanoseconds_since_epoch: durable.start,
+                },
+                duration: Nanoseconds {
+                    nanoseconds: durable.end - durable.start,
+                },
                 message_count: durable.count,
             });
         }
@@ -532,7 +605,9 @@ impl BagWriter {
         };
         let mut reason = err.to_string();
         if let Err(se) = seal_result {
-            reason.push_str(&format!("; sealing failed too ({se}); run recover on the bag"));
+            reason.push_str(&format!(
+                "; sealing failed too ({se}); run recover on the bag"
+            ));
         }
         if let Err(me) = meta_result {
             reason.push_str(&format!("; metadata.yaml not rewritten ({me})"));
@@ -554,8 +629,12 @@ impl BagWriter {
             let s = if all_written { f.written } else { f.durable };
             files.push(FileInformation {
                 path: f.name.clone(),
-                starting_time: NanosecondsSinceEpoch { nanoseconds_since_epoch: s.start },
-                duration: Nanoseconds { nanoseconds: s.end - s.start },
+                starting_time: NanosecondsSinceEpoch {
+                    nanoseconds_since_epoch: s.start,
+                },
+                duration: Nanoseconds {
+                    nanoseconds: s.end - s.start,
+                },
                 message_count: s.count,
             });
         }
@@ -584,7 +663,8 @@ impl BagWriter {
     }
 
     fn write_metadata(&self, sync: bool) -> Result<()> {
-        self.metadata_snapshot().write_dir(&self.dir, sync && self.options.sync_on_flush)?;
+        self.metadata_snapshot()
+            .write_dir(&self.dir, sync && self.options.sync_on_flush)?;
         Ok(())
     }
 }
@@ -605,22 +685,38 @@ fn mcap_to_bag(path: &Path, sink: &Mutex<SinkState>, e: mcap::McapError) -> BagE
     let mut st = lock_state(sink);
     if let Some(io) = st.failure.take() {
         st.failure = Some(std::io::Error::new(io.kind(), io.to_string()));
-        return BagError::Io { op: "write", path: path.to_path_buf(), source: io };
+        return BagError::Io {
+            op: "write",
+            path: path.to_path_buf(),
+            source: io,
+        };
     }
     match e {
-        mcap::McapError::Io(source) => BagError::Io { op: "write", path: path.to_path_buf(), source },
-        other => BagError::Mcap { path: path.to_path_buf(), source: other },
+        mcap::McapError::Io(source) => BagError::Io {
+            op: "write",
+            path: path.to_path_buf(),
+            source,
+        },
+        other => BagError::Mcap {
+            path: path.to_path_buf(),
+            source: other,
+        },
     }
 }
 
 /// Cut `path` back to `len` bytes (a record boundary after a flush) and append
 /// DataEnd + Footer (no summary) + magic, making it a complete MCAP file.
 pub(crate) fn seal_at(path: &Path, len: u64, sync: bool) -> Result<()> {
-    let mut f = OpenOptions::new().write(true).open(path).map_err(io_err("open for sealing", path))?;
+    let mut f = OpenOptions::new()
+        .write(true)
+        .open(path)
+        .map_err(io_err("open for sealing", path))?;
     f.set_len(len).map_err(io_err("truncate", path))?;
     use std::io::Seek;
-    f.seek(std::io::SeekFrom::Start(len)).map_err(io_err("seek", path))?;
-    f.write_all(&crate::mcap_tail::summaryless_tail()).map_err(io_err("write seal", path))?;
+    f.seek(std::io::SeekFrom::Start(len))
+        .map_err(io_err("seek", path))?;
+    f.write_all(&crate::mcap_tail::summaryless_tail())
+        .map_err(io_err("write seal", path))?;
     if sync {
         f.sync_all().map_err(io_err("fsync", path))?;
     }

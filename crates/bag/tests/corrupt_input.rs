@@ -7,8 +7,8 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 use metrocell_bag::{
-    info, qos_profiles_yaml, BagError, BagReader, BagWriter, ChunkCompression, MessageFilter, QosProfile, ReadMode,
-    WriterOptions,
+    info, qos_profiles_yaml, BagError, BagReader, BagWriter, ChunkCompression, MessageFilter,
+    QosProfile, ReadMode, WriterOptions,
 };
 use support::*;
 
@@ -18,12 +18,28 @@ const N: u64 = 500;
 /// A finished single-file bag of N temperatures in small uncompressed chunks.
 fn good_file(name: &str) -> (PathBuf, Vec<u8>) {
     let dir = scratch(name).join("b");
-    let opts = WriterOptions { compression: ChunkCompression::None, chunk_size: 1024, ..Default::default() };
+    let opts = WriterOptions {
+        compression: ChunkCompression::None,
+        chunk_size: 1024,
+        ..Default::default()
+    };
     let mut w = BagWriter::create(&dir, opts).unwrap();
     let qos = qos_profiles_yaml(&[QosProfile::default_publisher()]);
-    w.add_topic("/temperature", "sensor_msgs/msg/Temperature", TEMPERATURE_DEF, &qos).unwrap();
+    w.add_topic(
+        "/temperature",
+        "sensor_msgs/msg/Temperature",
+        TEMPERATURE_DEF,
+        &qos,
+    )
+    .unwrap();
     for i in 0..N {
-        w.write("/temperature", T0 + i, T0 + i, &Temperature::nth(i).encode()).unwrap();
+        w.write(
+            "/temperature",
+            T0 + i,
+            T0 + i,
+            &Temperature::nth(i).encode(),
+        )
+        .unwrap();
     }
     w.finish().unwrap();
     let f = dir.join("b_0.mcap");
@@ -33,9 +49,18 @@ fn good_file(name: &str) -> (PathBuf, Vec<u8>) {
 
 fn corrupt_parts(e: &BagError) -> (&Path, u64, &'static str, &str) {
     // a strict reader wraps the damage with the next step (`metrocell bag recover`)
-    assert!(matches!(e, BagError::Damaged { .. }) && e.to_string().contains("run `metrocell bag recover "), "{e}");
+    assert!(
+        matches!(e, BagError::Damaged { .. })
+            && e.to_string().contains("run `metrocell bag recover "),
+        "{e}"
+    );
     match e.damage() {
-        BagError::Corrupt { path, offset, record, reason } => (path.as_path(), *offset, record, reason.as_str()),
+        BagError::Corrupt {
+            path,
+            offset,
+            record,
+            reason,
+        } => (path.as_path(), *offset, record, reason.as_str()),
         other => panic!("expected Corrupt, got {other:?}"),
     }
 }
@@ -45,7 +70,13 @@ fn chunks(bytes: &[u8]) -> Vec<(u64, u64, u64)> {
     let s = mcap::Summary::read(bytes).unwrap().unwrap();
     s.chunk_indexes
         .iter()
-        .map(|c| (c.chunk_start_offset, c.chunk_length, s.stream_chunk(bytes, c).unwrap().count() as u64))
+        .map(|c| {
+            (
+                c.chunk_start_offset,
+                c.chunk_length,
+                s.stream_chunk(bytes, c).unwrap().count() as u64,
+            )
+        })
         .filter(|c| c.2 > 0)
         .collect()
 }
@@ -59,7 +90,10 @@ fn garbage_and_wrong_magic_name_offset_zero() {
     let (p, off, kind, reason) = corrupt_parts(&e);
     assert_eq!((p, off, kind), (g.as_path(), 0, "magic"));
     assert!(reason.contains("not an MCAP"), "{reason}");
-    assert!(e.to_string().contains("garbage.mcap") && e.to_string().contains("offset 0"), "{e}");
+    assert!(
+        e.to_string().contains("garbage.mcap") && e.to_string().contains("offset 0"),
+        "{e}"
+    );
 
     let (_, mut bytes) = good_file("wrong-magic");
     bytes[3] = b'X';
@@ -92,7 +126,11 @@ fn bad_chunk_crc_is_named_and_skipped_in_tolerant_mode() {
     assert_eq!(msgs.len() as u64, N - lost);
     for m in &msgs {
         let i = m.log_time - T0;
-        assert_eq!(m.data, Temperature::nth(i).encode(), "no altered message survives");
+        assert_eq!(
+            m.data,
+            Temperature::nth(i).encode(),
+            "no altered message survives"
+        );
     }
     let inf = info(&f).unwrap();
     assert_eq!(inf.message_count, N - lost);
@@ -116,7 +154,10 @@ fn truncated_file_names_the_cut_chunk_and_keeps_the_rest() {
 
     let r = BagReader::open_with(&f, ReadMode::Tolerant).unwrap();
     let before: u64 = cs[..k].iter().map(|c| c.2).sum();
-    assert_eq!(r.read_all(&MessageFilter::default()).unwrap().len() as u64, before);
+    assert_eq!(
+        r.read_all(&MessageFilter::default()).unwrap().len() as u64,
+        before
+    );
 }
 
 #[test]
@@ -129,10 +170,18 @@ fn schema_that_does_not_parse_is_named_with_its_offset() {
         .use_chunks(false)
         .create(std::io::BufWriter::new(std::fs::File::create(&f).unwrap()))
         .unwrap();
-    let sid = w.add_schema("p/msg/Bad", "ros2msg", b"float64 x\nfloat64[ y\n").unwrap();
+    let sid = w
+        .add_schema("p/msg/Bad", "ros2msg", b"float64 x\nfloat64[ y\n")
+        .unwrap();
     let cid = w.add_channel(sid, "/bad", "cdr", &BTreeMap::new()).unwrap();
-    let h = mcap::records::MessageHeader { channel_id: cid, sequence: 1, log_time: 5, publish_time: 5 };
-    w.write_to_known_channel(&h, &[0, 1, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8]).unwrap();
+    let h = mcap::records::MessageHeader {
+        channel_id: cid,
+        sequence: 1,
+        log_time: 5,
+        publish_time: 5,
+    };
+    w.write_to_known_channel(&h, &[0, 1, 0, 0, 1, 2, 3, 4, 5, 6, 7, 8])
+        .unwrap();
     w.finish().unwrap();
     drop(w);
     // Magic (8) + Header record (1 + 8 + (4 + 4) + (4 + 4)) precede the Schema record.
@@ -140,7 +189,10 @@ fn schema_that_does_not_parse_is_named_with_its_offset() {
     let e = BagReader::open(&f).err().unwrap();
     let (_, off, kind, reason) = corrupt_parts(&e);
     assert_eq!((off, kind), (schema_offset, "Schema"));
-    assert!(reason.contains("line 2") && reason.contains("p/msg/Bad"), "{reason}");
+    assert!(
+        reason.contains("line 2") && reason.contains("p/msg/Bad"),
+        "{reason}"
+    );
     // Tolerant: the message bytes are still readable.
     let r = BagReader::open_with(&f, ReadMode::Tolerant).unwrap();
     assert_eq!(r.read_all(&MessageFilter::default()).unwrap().len(), 1);
@@ -150,7 +202,11 @@ fn schema_that_does_not_parse_is_named_with_its_offset() {
 fn invalid_metadata_yaml_names_the_file() {
     let (f, _) = good_file("badmeta");
     let dir = f.parent().unwrap();
-    std::fs::write(dir.join("metadata.yaml"), "rosbag2_bagfile_information:\n  version: [oops\n").unwrap();
+    std::fs::write(
+        dir.join("metadata.yaml"),
+        "rosbag2_bagfile_information:\n  version: [oops\n",
+    )
+    .unwrap();
     let e = BagReader::open(dir).err().unwrap();
     assert!(matches!(e, BagError::Metadata { .. }), "{e:?}");
     assert!(e.to_string().contains("metadata.yaml"), "{e}");
@@ -173,7 +229,9 @@ fn broken_framing_mid_file_resynchronises_on_the_next_chunk() {
     let r = BagReader::open_with(&f, ReadMode::Tolerant).unwrap();
     let msgs = r.read_all(&MessageFilter::default()).unwrap();
     assert_eq!(msgs.len() as u64, N - lost);
-    assert!(msgs.iter().all(|m| m.data == Temperature::nth(m.log_time - T0).encode()));
+    assert!(msgs
+        .iter()
+        .all(|m| m.data == Temperature::nth(m.log_time - T0).encode()));
 
     let rep = metrocell_bag::recover(&f).unwrap();
     assert_eq!(rep.kept_messages(), N - lost);

@@ -6,7 +6,8 @@ mod support;
 use std::path::Path;
 
 use metrocell_bag::{
-    qos_profiles_yaml, BagReader, BagWriter, ChunkCompression, MessageFilter, QosProfile, SplitPolicy, WriterOptions,
+    qos_profiles_yaml, BagReader, BagWriter, ChunkCompression, MessageFilter, QosProfile,
+    SplitPolicy, WriterOptions,
 };
 use support::*;
 
@@ -18,25 +19,45 @@ fn write_bag(dir: &Path, compression: ChunkCompression) -> metrocell_bag::BagMet
     let opts = WriterOptions {
         compression,
         chunk_size: 4096,
-        split: SplitPolicy { max_file_bytes: Some(24 * 1024), max_file_duration: None },
+        split: SplitPolicy {
+            max_file_bytes: Some(24 * 1024),
+            max_file_duration: None,
+        },
         ..Default::default()
     };
     let mut w = BagWriter::create(dir, opts).unwrap();
     let qos = qos_profiles_yaml(&[QosProfile::default_publisher()]);
-    w.add_topic("/temperature", "sensor_msgs/msg/Temperature", TEMPERATURE_DEF, &qos).unwrap();
-    w.add_topic("/note", "std_msgs/msg/String", STRING_DEF, &qos).unwrap();
+    w.add_topic(
+        "/temperature",
+        "sensor_msgs/msg/Temperature",
+        TEMPERATURE_DEF,
+        &qos,
+    )
+    .unwrap();
+    w.add_topic("/note", "std_msgs/msg/String", STRING_DEF, &qos)
+        .unwrap();
     for i in 0..N {
         let t = T0 + i * 1_000_000;
-        w.write("/temperature", t, t - 10, &Temperature::nth(i).encode()).unwrap();
-        w.write("/note", t + 500, t, &encode_string(&format!("note {i}"))).unwrap();
+        w.write("/temperature", t, t - 10, &Temperature::nth(i).encode())
+            .unwrap();
+        w.write("/note", t + 500, t, &encode_string(&format!("note {i}")))
+            .unwrap();
     }
     w.finish().unwrap()
 }
 
 fn check_python_output(v: &serde_json::Value) {
-    assert_eq!(v["topics"]["/temperature"]["count"].as_u64(), Some(N), "{}", v["topics"]);
+    assert_eq!(
+        v["topics"]["/temperature"]["count"].as_u64(),
+        Some(N),
+        "{}",
+        v["topics"]
+    );
     assert_eq!(v["topics"]["/note"]["count"].as_u64(), Some(N));
-    assert_eq!(v["topics"]["/temperature"]["type"].as_str(), Some("sensor_msgs/msg/Temperature"));
+    assert_eq!(
+        v["topics"]["/temperature"]["type"].as_str(),
+        Some("sensor_msgs/msg/Temperature")
+    );
     let msgs = v["messages"].as_array().unwrap();
     assert_eq!(msgs.len() as u64, 2 * N);
     let (mut it, mut in_) = (0u64, 0u64);
@@ -59,10 +80,18 @@ fn check_python_output(v: &serde_json::Value) {
 
 #[test]
 fn bagwriter_bags_read_by_rosbags_and_mcap_ros2() {
-    for (name, c) in [("zstd", ChunkCompression::Zstd), ("lz4", ChunkCompression::Lz4), ("none", ChunkCompression::None)] {
+    for (name, c) in [
+        ("zstd", ChunkCompression::Zstd),
+        ("lz4", ChunkCompression::Lz4),
+        ("none", ChunkCompression::None),
+    ] {
         let dir = scratch(&format!("interop-{name}")).join("rec");
         let meta = write_bag(&dir, c);
-        assert!(meta.relative_file_paths.len() >= 2, "split by size made {:?}", meta.relative_file_paths);
+        assert!(
+            meta.relative_file_paths.len() >= 2,
+            "split by size made {:?}",
+            meta.relative_file_paths
+        );
         assert_eq!(meta.message_count, 2 * N);
         assert_eq!(meta.relative_file_paths[0], "rec_0.mcap");
 
@@ -70,10 +99,18 @@ fn bagwriter_bags_read_by_rosbags_and_mcap_ros2() {
         check_python_output(&run_py("read_with_rosbags.py", &[&dir]));
 
         // mcap + mcap-ros2-support, file by file.
-        let files: Vec<_> = meta.relative_file_paths.iter().map(|p| dir.join(p)).collect();
+        let files: Vec<_> = meta
+            .relative_file_paths
+            .iter()
+            .map(|p| dir.join(p))
+            .collect();
         let refs: Vec<&Path> = files.iter().map(|p| p.as_path()).collect();
         let v = run_py("read_with_mcap.py", &refs);
-        assert!(v["profiles"].as_array().unwrap().iter().all(|p| p == "ros2"));
+        assert!(v["profiles"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .all(|p| p == "ros2"));
         check_python_output(&v);
 
         // Our reader: same bytes back, in log-time order.
@@ -102,7 +139,11 @@ fn rosbags_written_bag_reads_with_equal_fields() {
         .arg("250")
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
 
     let r = BagReader::open(&dir).unwrap();
     assert_eq!(r.metadata().unwrap().version, 9);
@@ -113,7 +154,10 @@ fn rosbags_written_bag_reads_with_equal_fields() {
     assert_eq!(r.topic("/note").unwrap().message_count, 250);
 
     let temps = r
-        .read_all(&MessageFilter { topics: Some(vec!["/temperature".into()]), ..Default::default() })
+        .read_all(&MessageFilter {
+            topics: Some(vec!["/temperature".into()]),
+            ..Default::default()
+        })
         .unwrap();
     assert_eq!(temps.len(), 250);
     for (i, m) in temps.iter().enumerate() {

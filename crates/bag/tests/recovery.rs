@@ -11,7 +11,8 @@ use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
 use metrocell_bag::{
-    qos_profiles_yaml, recover_with, BagReader, BagWriter, MessageFilter, QosProfile, RecoverOptions, WriterOptions,
+    qos_profiles_yaml, recover_with, BagReader, BagWriter, MessageFilter, QosProfile,
+    RecoverOptions, WriterOptions,
 };
 use rand::{Rng, SeedableRng};
 use support::*;
@@ -20,7 +21,13 @@ const T0: u64 = 1_700_000_000_000_000_000;
 
 fn add_temperature(w: &mut BagWriter) {
     let qos = qos_profiles_yaml(&[QosProfile::sensor_data()]);
-    w.add_topic("/temperature", "sensor_msgs/msg/Temperature", TEMPERATURE_DEF, &qos).unwrap();
+    w.add_topic(
+        "/temperature",
+        "sensor_msgs/msg/Temperature",
+        TEMPERATURE_DEF,
+        &qos,
+    )
+    .unwrap();
 }
 
 /// Every message of the reader must be Temperature::nth(k) for k = 0, 1, 2, ... in order;
@@ -28,8 +35,16 @@ fn add_temperature(w: &mut BagWriter) {
 fn assert_prefix_of_sequence(r: &BagReader) -> u64 {
     let msgs = r.read_all(&MessageFilter::default()).unwrap();
     for (k, m) in msgs.iter().enumerate() {
-        assert_eq!(m.log_time, T0 + k as u64 * 1_000_000, "message {k} log time");
-        assert_eq!(m.data, Temperature::nth(k as u64).encode(), "message {k} payload altered");
+        assert_eq!(
+            m.log_time,
+            T0 + k as u64 * 1_000_000,
+            "message {k} log time"
+        );
+        assert_eq!(
+            m.data,
+            Temperature::nth(k as u64).encode(),
+            "message {k} payload altered"
+        );
     }
     msgs.len() as u64
 }
@@ -50,13 +65,17 @@ fn messages_in_complete_chunks(bytes: &[u8], cut: u64) -> u64 {
 #[test]
 fn truncation_at_random_offsets_always_recovers_the_complete_chunks() {
     let dir = scratch("truncate").join("src");
-    let opts = WriterOptions { chunk_size: 2048, ..Default::default() };
+    let opts = WriterOptions {
+        chunk_size: 2048,
+        ..Default::default()
+    };
     let mut w = BagWriter::create(&dir, opts).unwrap();
     add_temperature(&mut w);
     const N: u64 = 4000;
     for i in 0..N {
         let t = T0 + i * 1_000_000;
-        w.write("/temperature", t, t, &Temperature::nth(i).encode()).unwrap();
+        w.write("/temperature", t, t, &Temperature::nth(i).encode())
+            .unwrap();
         if i % 97 == 0 {
             w.flush().unwrap();
         }
@@ -66,7 +85,11 @@ fn truncation_at_random_offsets_always_recovers_the_complete_chunks() {
     let bytes = std::fs::read(&file).unwrap();
     let len = bytes.len() as u64;
     let summary = mcap::Summary::read(&bytes).unwrap().unwrap();
-    assert!(summary.chunk_indexes.len() > 100, "{} chunks", summary.chunk_indexes.len());
+    assert!(
+        summary.chunk_indexes.len() > 100,
+        "{} chunks",
+        summary.chunk_indexes.len()
+    );
 
     let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(0xBA6);
     let mut cuts: Vec<u64> = (0..300).map(|_| rng.random_range(0..len)).collect();
@@ -81,16 +104,30 @@ fn truncation_at_random_offsets_always_recovers_the_complete_chunks() {
     for (k, &cut) in cuts.iter().enumerate() {
         let copy = work.join(format!("cut_{k}.mcap"));
         std::fs::write(&copy, &bytes[..cut as usize]).unwrap();
-        let report = recover_with(&copy, &RecoverOptions { keep_original: false }).unwrap();
-        let r = BagReader::open(&copy).unwrap_or_else(|e| panic!("cut {cut}: recovered file unreadable: {e}"));
+        let report = recover_with(
+            &copy,
+            &RecoverOptions {
+                keep_original: false,
+            },
+        )
+        .unwrap();
+        let r = BagReader::open(&copy)
+            .unwrap_or_else(|e| panic!("cut {cut}: recovered file unreadable: {e}"));
         let got = assert_prefix_of_sequence(&r);
         let expect = messages_in_complete_chunks(&bytes, cut);
         // The summary section (after DataEnd) is not needed: a cut there keeps everything.
-        assert_eq!(got, expect, "cut at {cut} of {len}: kept {got}, complete chunks hold {expect}\n{report}");
+        assert_eq!(
+            got, expect,
+            "cut at {cut} of {len}: kept {got}, complete chunks hold {expect}\n{report}"
+        );
         assert_eq!(report.kept_messages(), got);
         if k % 40 == 0 {
             let v = run_py("read_with_mcap.py", &[&copy]);
-            assert_eq!(v["messages"].as_array().unwrap().len() as u64, got, "python mcap on cut {cut}");
+            assert_eq!(
+                v["messages"].as_array().unwrap().len() as u64,
+                got,
+                "python mcap on cut {cut}"
+            );
             python_checked += 1;
         }
         std::fs::remove_file(&copy).unwrap();
@@ -106,8 +143,12 @@ const CHILD_FLUSH_INTERVAL: Duration = Duration::from_millis(100);
 #[test]
 #[ignore = "child process of the SIGKILL test"]
 fn child_writer_process() {
-    let dir = PathBuf::from(std::env::var("METROCELL_BAG_CHILD_DIR").expect("run by the SIGKILL test"));
-    let opts = WriterOptions { flush_interval: CHILD_FLUSH_INTERVAL, ..Default::default() };
+    let dir =
+        PathBuf::from(std::env::var("METROCELL_BAG_CHILD_DIR").expect("run by the SIGKILL test"));
+    let opts = WriterOptions {
+        flush_interval: CHILD_FLUSH_INTERVAL,
+        ..Default::default()
+    };
     let mut w = BagWriter::create(&dir, opts).unwrap();
     add_temperature(&mut w);
     println!("READY");
@@ -115,9 +156,13 @@ fn child_writer_process() {
     let started = Instant::now();
     for i in 0.. {
         // Never outlive a parent that died: stop after 60 s.
-        assert!(started.elapsed() < Duration::from_secs(60), "parent never killed this writer");
+        assert!(
+            started.elapsed() < Duration::from_secs(60),
+            "parent never killed this writer"
+        );
         let t = T0 + i * 1_000_000;
-        w.write("/temperature", t, t, &Temperature::nth(i).encode()).unwrap();
+        w.write("/temperature", t, t, &Temperature::nth(i).encode())
+            .unwrap();
         let d = w.durable_message_count();
         if d != last {
             last = d;
@@ -145,7 +190,13 @@ fn sigkill_at_random_times_loses_at_most_the_unflushed_tail() {
     for round in 0..8 {
         let dir = work.join(format!("run{round}"));
         let mut child = Command::new(&exe)
-            .args(["--ignored", "--exact", "child_writer_process", "--nocapture", "--test-threads=1"])
+            .args([
+                "--ignored",
+                "--exact",
+                "child_writer_process",
+                "--nocapture",
+                "--test-threads=1",
+            ])
             .env("METROCELL_BAG_CHILD_DIR", &dir)
             .stdout(Stdio::piped())
             .stderr(Stdio::null())
@@ -161,7 +212,9 @@ fn sigkill_at_random_times_loses_at_most_the_unflushed_tail() {
         });
         // Wait for READY, then kill at a random moment 150..900 ms later.
         loop {
-            let (_, l) = rx.recv_timeout(Duration::from_secs(30)).expect("child starts");
+            let (_, l) = rx
+                .recv_timeout(Duration::from_secs(30))
+                .expect("child starts");
             // libtest may print "test child_writer_process ... " on the same line.
             if l.ends_with("READY") {
                 break;
@@ -180,17 +233,28 @@ fn sigkill_at_random_times_loses_at_most_the_unflushed_tail() {
                 last_flush_seen = Some(at);
             }
         }
-        assert!(durable > 0, "round {round}: no flush reported before the kill");
+        assert!(
+            durable > 0,
+            "round {round}: no flush reported before the kill"
+        );
         worst_gap = worst_gap.max(killed_at - last_flush_seen.unwrap());
 
         // A killed recorder leaves a file without summary: strict reading names the problem.
-        let e = BagReader::open(&dir).err().expect("unrecovered bag is incomplete");
-        assert!(e.to_string().contains(&format!("run{round}_0.mcap")), "the error names the file: {e}");
+        let e = BagReader::open(&dir)
+            .err()
+            .expect("unrecovered bag is incomplete");
+        assert!(
+            e.to_string().contains(&format!("run{round}_0.mcap")),
+            "the error names the file: {e}"
+        );
 
         let report = recover_with(&dir, &RecoverOptions::default()).unwrap();
         let r = BagReader::open(&dir).unwrap();
         let kept = assert_prefix_of_sequence(&r);
-        assert!(kept >= durable, "round {round}: kept {kept} < {durable} flushed before the kill\n{report}");
+        assert!(
+            kept >= durable,
+            "round {round}: kept {kept} < {durable} flushed before the kill\n{report}"
+        );
         assert_eq!(r.metadata().unwrap().message_count, kept);
         let file: PathBuf = dir.join(format!("run{round}_0.mcap"));
         let v = run_py("read_with_mcap.py", &[Path::new(&file)]);
@@ -202,5 +266,9 @@ fn sigkill_at_random_times_loses_at_most_the_unflushed_tail() {
     eprintln!("largest gap between last reported flush and SIGKILL: {worst_gap:?}");
     // crates/bag/README.md: a writer called at least every flush_interval loses at most
     // 2 × flush_interval; the child writes every ~30 µs with a 100 ms interval.
-    assert!(worst_gap <= 2 * CHILD_FLUSH_INTERVAL, "last flush {worst_gap:?} before the kill, documented bound {:?}", 2 * CHILD_FLUSH_INTERVAL);
+    assert!(
+        worst_gap <= 2 * CHILD_FLUSH_INTERVAL,
+        "last flush {worst_gap:?} before the kill, documented bound {:?}",
+        2 * CHILD_FLUSH_INTERVAL
+    );
 }

@@ -23,8 +23,11 @@ use crate::error::{Result, ToolError};
 /// bytes a ROS 2 publisher puts on the wire and a rosbag2 recorder stores.
 pub fn encode_cdr<T: RosMessage>(m: &T) -> Result<Vec<u8>> {
     let mut v = vec![0, 1, 0, 0];
-    let body = rustdds::serialization::to_vec::<T, LittleEndian>(m)
-        .map_err(|e| ToolError::Topic { topic: T::ROS_TYPE.into(), reason: format!("cannot serialise: {e}") })?;
+    let body =
+        rustdds::serialization::to_vec::<T, LittleEndian>(m).map_err(|e| ToolError::Topic {
+            topic: T::ROS_TYPE.into(),
+            reason: format!("cannot serialise: {e}"),
+        })?;
     v.extend(body);
     Ok(v)
 }
@@ -37,14 +40,18 @@ pub struct BagSink {
 
 impl BagSink {
     pub fn create(dir: impl AsRef<Path>, options: WriterOptions) -> Result<Self> {
-        Ok(Self { writer: BagWriter::create(dir, options)?, topics: BTreeSet::new() })
+        Ok(Self {
+            writer: BagWriter::create(dir, options)?,
+            topics: BTreeSet::new(),
+        })
     }
 
     /// Declare output `topic` (resolved name) of type `T`, with its full definition as schema.
     pub fn advertise<T: RosMessage>(&mut self, topic: &str) -> Result<()> {
         if self.topics.insert(topic.to_string()) {
             let qos = qos_profiles_yaml(&[QosProfile::default_publisher()]);
-            self.writer.add_topic(topic, T::ROS_TYPE, T::DEFINITION, &qos)?;
+            self.writer
+                .add_topic(topic, T::ROS_TYPE, T::DEFINITION, &qos)?;
         }
         Ok(())
     }
@@ -52,7 +59,10 @@ impl BagSink {
     /// Write `msg` on an advertised `topic` at bag time `time_ns` (log and publish time).
     pub fn write<T: RosMessage>(&mut self, topic: &str, msg: &T, time_ns: u64) -> Result<()> {
         if !self.topics.contains(topic) {
-            return Err(ToolError::Topic { topic: topic.into(), reason: "written before advertise".into() });
+            return Err(ToolError::Topic {
+                topic: topic.into(),
+                reason: "written before advertise".into(),
+            });
         }
         let cdr = encode_cdr(msg)?;
         self.writer.write(topic, time_ns, time_ns, &cdr)?;

@@ -43,9 +43,15 @@ impl SourcedMessage {
     /// Decode the payload as `T` with RustDDS's CDR deserializer (the same code that decodes
     /// live DDS samples), honouring the encapsulation header's byte order.
     pub fn decode<T: RosMessage>(&self) -> Result<T> {
-        let bad = |reason: String| ToolError::Topic { topic: self.topic.clone(), reason };
+        let bad = |reason: String| ToolError::Topic {
+            topic: self.topic.clone(),
+            reason,
+        };
         if self.payload.len() < 4 {
-            return Err(bad(format!("payload at log time {} ns is shorter than the CDR header", self.log_time_ns)));
+            return Err(bad(format!(
+                "payload at log time {} ns is shorter than the CDR header",
+                self.log_time_ns
+            )));
         }
         let body = &self.payload[4..];
         let decoded = match self.payload[1] {
@@ -53,9 +59,13 @@ impl SourcedMessage {
             0x00 => rustdds::serialization::from_bytes::<T, BigEndian>(body),
             other => return Err(bad(format!("message at log time {} ns has encapsulation kind {other:#04x}, which is not plain CDR", self.log_time_ns))),
         };
-        decoded
-            .map(|(v, _)| v)
-            .map_err(|e| bad(format!("message at log time {} ns is not a valid {}: {e}", self.log_time_ns, T::ROS_TYPE)))
+        decoded.map(|(v, _)| v).map_err(|e| {
+            bad(format!(
+                "message at log time {} ns is not a valid {}: {e}",
+                self.log_time_ns,
+                T::ROS_TYPE
+            ))
+        })
     }
 }
 
@@ -67,7 +77,10 @@ pub struct BagSource {
 
 impl BagSource {
     pub fn open(path: impl AsRef<Path>) -> Result<Self> {
-        Ok(Self { reader: BagReader::open(path)?, topics: Vec::new() })
+        Ok(Self {
+            reader: BagReader::open(path)?,
+            topics: Vec::new(),
+        })
     }
 
     /// Read `topic` (a fully resolved name such as `/temperature/x_left`) as `T`. The bag must
@@ -79,7 +92,12 @@ impl BagSource {
             Some(t) if t.type_name != T::ROS_TYPE => {
                 return Err(ToolError::Topic {
                     topic: topic.to_string(),
-                    reason: format!("recorded as {} in {}, but the node reads {}", t.type_name, self.reader.path().display(), T::ROS_TYPE),
+                    reason: format!(
+                        "recorded as {} in {}, but the node reads {}",
+                        t.type_name,
+                        self.reader.path().display(),
+                        T::ROS_TYPE
+                    ),
                 });
             }
             Some(_) => true,
@@ -114,7 +132,12 @@ impl BagSource {
 
     /// What to tell a user whose bag lacks `topic`: the bag's path and the topics it does hold.
     pub fn missing_topic_hint(&self, topic: &str) -> String {
-        let held: Vec<&str> = self.reader.topics().iter().map(|t| t.name.as_str()).collect();
+        let held: Vec<&str> = self
+            .reader
+            .topics()
+            .iter()
+            .map(|t| t.name.as_str())
+            .collect();
         format!(
             "{} has no topic {topic}, so this replay has nothing to read from it; the bag holds: {} (remap the node's input with --ros-args -r, or record that topic)",
             self.reader.path().display(),
@@ -124,10 +147,18 @@ impl BagSource {
 
     /// The subscribed topics' messages in log-time order.
     pub fn messages(&self) -> Result<impl Iterator<Item = Result<SourcedMessage>> + '_> {
-        let filter = MessageFilter { topics: Some(self.topics.clone()), ..Default::default() };
+        let filter = MessageFilter {
+            topics: Some(self.topics.clone()),
+            ..Default::default()
+        };
         Ok(self.reader.messages(&filter)?.map(|m| {
             let m = m?;
-            Ok(SourcedMessage { topic: m.topic, log_time_ns: m.log_time, publish_time_ns: m.publish_time, payload: m.data })
+            Ok(SourcedMessage {
+                topic: m.topic,
+                log_time_ns: m.log_time,
+                publish_time_ns: m.publish_time,
+                payload: m.data,
+            })
         }))
     }
 
@@ -135,7 +166,11 @@ impl BagSource {
     /// a replay told to stop (SIGINT) ends between messages, so the caller can still finish its
     /// output whole. Returns the log time of the message it stopped before, or None at the end
     /// of the bag. An error from `each` or from reading the bag ends the replay with that error.
-    pub fn replay<E: From<ToolError>>(&self, stop: impl Fn() -> bool, mut each: impl FnMut(SourcedMessage) -> std::result::Result<(), E>) -> std::result::Result<Option<u64>, E> {
+    pub fn replay<E: From<ToolError>>(
+        &self,
+        stop: impl Fn() -> bool,
+        mut each: impl FnMut(SourcedMessage) -> std::result::Result<(), E>,
+    ) -> std::result::Result<Option<u64>, E> {
         for m in self.messages()? {
             let m = m?;
             if stop() {
@@ -158,19 +193,38 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("bagtools_replay_stop_{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         let mut w = BagWriter::create(&dir, WriterOptions::default()).unwrap();
-        w.add_topic("/t", Temperature::ROS_TYPE, Temperature::DEFINITION, "").unwrap();
+        w.add_topic("/t", Temperature::ROS_TYPE, Temperature::DEFINITION, "")
+            .unwrap();
         for k in 1..=5u64 {
-            w.write("/t", k * 10, k * 10, &crate::encode_cdr(&Temperature { temperature: k as f64, ..Default::default() }).unwrap()).unwrap();
+            w.write(
+                "/t",
+                k * 10,
+                k * 10,
+                &crate::encode_cdr(&Temperature {
+                    temperature: k as f64,
+                    ..Default::default()
+                })
+                .unwrap(),
+            )
+            .unwrap();
         }
         w.finish().unwrap();
         let mut source = BagSource::open(&dir).unwrap();
         assert!(source.subscribe::<Temperature>("/t").unwrap());
         let seen = std::cell::RefCell::new(Vec::new());
-        let stopped = source.replay::<ToolError>(|| seen.borrow().len() == 2, |m| {
-            seen.borrow_mut().push(m.decode::<Temperature>()?.temperature);
-            Ok(())
-        });
-        assert_eq!(stopped.unwrap(), Some(30), "stopped before the third message");
+        let stopped = source.replay::<ToolError>(
+            || seen.borrow().len() == 2,
+            |m| {
+                seen.borrow_mut()
+                    .push(m.decode::<Temperature>()?.temperature);
+                Ok(())
+            },
+        );
+        assert_eq!(
+            stopped.unwrap(),
+            Some(30),
+            "stopped before the third message"
+        );
         assert_eq!(*seen.borrow(), [1.0, 2.0]);
         let all = source.replay::<ToolError>(|| false, |_| Ok(())).unwrap();
         assert_eq!(all, None, "an unstopped replay runs to the end");

@@ -27,7 +27,12 @@ fn add_topic(writer: &mut BagWriter, t: &TopicInfo) -> Result<()> {
     if t.schema_encoding.is_empty() {
         writer.add_topic_without_definition(&t.name, &t.type_name, &t.offered_qos_profiles)?;
     } else {
-        writer.add_topic(&t.name, &t.type_name, &t.definition, &t.offered_qos_profiles)?;
+        writer.add_topic(
+            &t.name,
+            &t.type_name,
+            &t.definition,
+            &t.offered_qos_profiles,
+        )?;
     }
     Ok(())
 }
@@ -44,11 +49,25 @@ pub fn filter_bag(
     options: WriterOptions,
 ) -> Result<CopyReport> {
     let reader = input;
-    let known = || reader.topics().iter().map(|t| t.name.as_str()).collect::<Vec<_>>().join(", ");
+    let known = || {
+        reader
+            .topics()
+            .iter()
+            .map(|t| t.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
     if let Some(missing) = selection.topics.iter().find(|t| reader.topic(t).is_none()) {
-        return Err(ToolError::Topic { topic: missing.clone(), reason: format!("not in {} (topics: {})", reader.path().display(), known()) });
+        return Err(ToolError::Topic {
+            topic: missing.clone(),
+            reason: format!("not in {} (topics: {})", reader.path().display(), known()),
+        });
     }
-    let topics: Vec<&TopicInfo> = reader.topics().iter().filter(|t| selection.matches(&t.name)).collect();
+    let topics: Vec<&TopicInfo> = reader
+        .topics()
+        .iter()
+        .filter(|t| selection.matches(&t.name))
+        .collect();
     if topics.is_empty() {
         return Err(ToolError::Invalid(format!(
             "no topic of {} matches {}; its topics: {} (a regex must match the whole name, e.g. '/temperature/.*')",
@@ -93,7 +112,10 @@ pub fn filter_bag(
 /// Merge `inputs` into the new bag `output`, interleaved by log time. A topic present in
 /// several inputs must have the same type in each.
 pub fn merge_bags(output: &Path, inputs: &[&Path], options: WriterOptions) -> Result<CopyReport> {
-    let readers = inputs.iter().map(BagReader::open).collect::<std::result::Result<Vec<_>, _>>()?;
+    let readers = inputs
+        .iter()
+        .map(BagReader::open)
+        .collect::<std::result::Result<Vec<_>, _>>()?;
     let mut writer = BagWriter::create(output, options)?;
     let mut types: BTreeMap<String, (String, &Path)> = BTreeMap::new();
     for (r, path) in readers.iter().zip(inputs) {
@@ -102,7 +124,13 @@ pub fn merge_bags(output: &Path, inputs: &[&Path], options: WriterOptions) -> Re
                 Some((ty, first)) if ty != &t.type_name => {
                     return Err(ToolError::Topic {
                         topic: t.name.clone(),
-                        reason: format!("type {} in {} but {} in {}", ty, first.display(), t.type_name, path.display()),
+                        reason: format!(
+                            "type {} in {} but {} in {}",
+                            ty,
+                            first.display(),
+                            t.type_name,
+                            path.display()
+                        ),
                     })
                 }
                 Some(_) => {}
@@ -114,14 +142,20 @@ pub fn merge_bags(output: &Path, inputs: &[&Path], options: WriterOptions) -> Re
         }
     }
     let all = MessageFilter::default();
-    let mut iters = readers.iter().map(|r| r.messages(&all)).collect::<std::result::Result<Vec<_>, _>>()?;
+    let mut iters = readers
+        .iter()
+        .map(|r| r.messages(&all))
+        .collect::<std::result::Result<Vec<_>, _>>()?;
     let mut heads: Vec<Option<BagMessage>> = Vec::with_capacity(iters.len());
     for it in iters.iter_mut() {
         heads.push(it.next().transpose()?);
     }
     let mut report = CopyReport::default();
     // k-way merge by log time; ties keep input order.
-    while let Some(i) = (0..heads.len()).filter(|&i| heads[i].is_some()).min_by_key(|&i| heads[i].as_ref().map(|m| m.log_time)) {
+    while let Some(i) = (0..heads.len())
+        .filter(|&i| heads[i].is_some())
+        .min_by_key(|&i| heads[i].as_ref().map(|m| m.log_time))
+    {
         let m = heads[i].take().expect("filtered on is_some");
         writer.write(&m.topic, m.log_time, m.publish_time, &m.data)?;
         *report.per_topic.entry(m.topic).or_default() += 1;

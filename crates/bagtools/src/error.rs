@@ -17,7 +17,12 @@ pub enum ToolError {
     #[error("{}: {reason}", path.display())]
     Mapping { path: PathBuf, reason: String },
     #[error("{}: line {line}, column {column}: {reason}", path.display())]
-    Row { path: PathBuf, line: u64, column: String, reason: String },
+    Row {
+        path: PathBuf,
+        line: u64,
+        column: String,
+        reason: String,
+    },
     #[error("topic {topic}: {reason}")]
     Topic { topic: String, reason: String },
     #[error("{0}")]

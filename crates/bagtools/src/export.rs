@@ -27,27 +27,39 @@ use crate::export_manifest::{ExportManifest, ManifestTopic};
 /// A registry able to decode `topic`: metrocell's own if it knows the type, otherwise one
 /// parsed from the definition stored in the bag (so bags from other ROS systems export too).
 pub fn registry_for(topic: &TopicInfo) -> Result<std::borrow::Cow<'static, Registry>> {
-    registry_for_type(&topic.type_name, &topic.definition).map_err(|reason| ToolError::Topic { topic: topic.name.clone(), reason })
+    registry_for_type(&topic.type_name, &topic.definition).map_err(|reason| ToolError::Topic {
+        topic: topic.name.clone(),
+        reason,
+    })
 }
 
 /// A registry able to decode `type_name`: metrocell's own if it knows the type, otherwise one
 /// parsed from `definition` (a rosbag2 schema: the type's text, then its dependencies).
-pub fn registry_for_type(type_name: &str, definition: &str) -> std::result::Result<std::borrow::Cow<'static, Registry>, String> {
+pub fn registry_for_type(
+    type_name: &str,
+    definition: &str,
+) -> std::result::Result<std::borrow::Cow<'static, Registry>, String> {
     let own = metrocell_msgs::registry();
     if own.get(type_name).is_some() {
         return Ok(std::borrow::Cow::Borrowed(own));
     }
-    let main = rosmsg::TypeName::parse(type_name).ok_or_else(|| format!("type name {type_name} does not parse"))?;
+    let main = rosmsg::TypeName::parse(type_name)
+        .ok_or_else(|| format!("type name {type_name} does not parse"))?;
     let mut reg = Registry::new();
     let mut blocks = definition.split(rosmsg::DEFINITION_SEPARATOR);
-    reg.add_msg(&main.package, &main.name, blocks.next().unwrap_or_default()).map_err(|e| format!("definition of {type_name}: {e}"))?;
+    reg.add_msg(&main.package, &main.name, blocks.next().unwrap_or_default())
+        .map_err(|e| format!("definition of {type_name}: {e}"))?;
     for block in blocks {
         let block = block.trim_start_matches('\n');
         let (first, text) = block.split_once('\n').unwrap_or((block, ""));
-        let name = first.trim().strip_prefix("MSG:").ok_or_else(|| format!("dependency block starts with '{first}', not 'MSG: pkg/Type'"))?;
-        let t = rosmsg::TypeName::parse(name.trim()).ok_or_else(|| format!("dependency name '{name}' does not parse"))?;
+        let name = first.trim().strip_prefix("MSG:").ok_or_else(|| {
+            format!("dependency block starts with '{first}', not 'MSG: pkg/Type'")
+        })?;
+        let t = rosmsg::TypeName::parse(name.trim())
+            .ok_or_else(|| format!("dependency name '{name}' does not parse"))?;
         if reg.get(&t.to_string()).is_none() {
-            reg.add_msg(&t.package, &t.name, text).map_err(|e| format!("definition of {t}: {e}"))?;
+            reg.add_msg(&t.package, &t.name, text)
+                .map_err(|e| format!("definition of {t}: {e}"))?;
         }
     }
     Ok(std::borrow::Cow::Owned(reg))
@@ -65,14 +77,23 @@ fn scalar_text(v: &Value) -> String {
 }
 
 fn flatten_into(registry: &Registry, prefix: &str, value: &Value, out: &mut Vec<(String, String)>) {
-    let join = |name: &str| if prefix.is_empty() { name.to_string() } else { format!("{prefix}.{name}") };
+    let join = |name: &str| {
+        if prefix.is_empty() {
+            name.to_string()
+        } else {
+            format!("{prefix}.{name}")
+        }
+    };
     let Value::Struct(s) = value else {
         out.push((prefix.to_string(), scalar_text(value)));
         return;
     };
     let spec = registry.get(&s.type_name);
     for (i, (name, v)) in s.fields.iter().enumerate() {
-        let kind = spec.and_then(|sp| sp.fields.get(i)).map(|f| f.ty.array).unwrap_or(ArrayKind::Single);
+        let kind = spec
+            .and_then(|sp| sp.fields.get(i))
+            .map(|f| f.ty.array)
+            .unwrap_or(ArrayKind::Single);
         let col = join(name);
         match (kind, v) {
             (ArrayKind::Fixed(_), Value::Array(items)) => {
@@ -109,19 +130,33 @@ pub struct ExportedTopic {
 
 /// The topics of `bag` to export: `topics` in the bag's order (all when empty); a name the bag
 /// does not hold is an error listing the topics it does hold.
-pub fn chosen_topics<'a>(reader: &'a BagReader, bag: &Path, topics: &[String]) -> Result<Vec<&'a TopicInfo>> {
+pub fn chosen_topics<'a>(
+    reader: &'a BagReader,
+    bag: &Path,
+    topics: &[String],
+) -> Result<Vec<&'a TopicInfo>> {
     for t in topics {
         if reader.topic(t).is_none() {
             let known: Vec<&str> = reader.topics().iter().map(|t| t.name.as_str()).collect();
-            return Err(ToolError::Topic { topic: t.clone(), reason: format!("not in {} (topics: {})", bag.display(), known.join(", ")) });
+            return Err(ToolError::Topic {
+                topic: t.clone(),
+                reason: format!("not in {} (topics: {})", bag.display(), known.join(", ")),
+            });
         }
     }
-    Ok(reader.topics().iter().filter(|t| topics.is_empty() || topics.contains(&t.name)).collect())
+    Ok(reader
+        .topics()
+        .iter()
+        .filter(|t| topics.is_empty() || topics.contains(&t.name))
+        .collect())
 }
 
 /// The columns of a topic's export: `log_time_ns`, `publish_time_ns`, then the type's leaf
 /// fields — from the type, not from a message, so a topic without messages has them too.
-pub fn export_columns(registry: &Registry, type_name: &str) -> std::result::Result<Vec<String>, String> {
+pub fn export_columns(
+    registry: &Registry,
+    type_name: &str,
+) -> std::result::Result<Vec<String>, String> {
     let empty = rosmsg::default_value(registry, type_name).map_err(|e| e.to_string())?;
     let mut columns = vec!["log_time_ns".to_string(), "publish_time_ns".to_string()];
     columns.extend(flatten(registry, &empty).into_iter().map(|c| c.0));
@@ -133,7 +168,10 @@ pub fn manifest_entry(t: &TopicInfo, path: &Path, rows: u64) -> ManifestTopic {
     ManifestTopic {
         topic: t.name.clone(),
         type_name: t.type_name.clone(),
-        file: path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(),
+        file: path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default(),
         messages: rows,
         offered_qos_profiles: t.offered_qos_profiles.clone(),
         definition: t.definition.clone(),
@@ -142,31 +180,58 @@ pub fn manifest_entry(t: &TopicInfo, path: &Path, rows: u64) -> ManifestTopic {
 
 /// Export `topics` (all when empty) of `bag` to CSV files in `out_dir` (created if missing),
 /// with the manifest `export.yaml` that lets `bag import` rebuild the bag from them.
-pub fn export_csv(bag: &Path, topics: &[String], out_dir: &Path) -> Result<BTreeMap<String, ExportedTopic>> {
+pub fn export_csv(
+    bag: &Path,
+    topics: &[String],
+    out_dir: &Path,
+) -> Result<BTreeMap<String, ExportedTopic>> {
     let reader = BagReader::open(bag)?;
     let chosen = chosen_topics(&reader, bag, topics)?;
     std::fs::create_dir_all(out_dir).map_err(io(out_dir))?;
     let mut result = BTreeMap::new();
-    let mut manifest = ExportManifest { bag: bag.display().to_string(), format: "csv".into(), topics: Vec::new() };
+    let mut manifest = ExportManifest {
+        bag: bag.display().to_string(),
+        format: "csv".into(),
+        topics: Vec::new(),
+    };
     for t in chosen {
         let registry = registry_for(t)?;
         let path = out_dir.join(csv_file_name(&t.name));
         let file = std::fs::File::create(&path).map_err(io(&path))?;
         let mut w = csv::Writer::from_writer(std::io::BufWriter::new(file));
-        let csv_err = |e: csv::Error| ToolError::Io { path: path.clone(), source: std::io::Error::other(e.to_string()) };
-        let header = export_columns(&registry, &t.type_name).map_err(|reason| ToolError::Topic { topic: t.name.clone(), reason })?;
+        let csv_err = |e: csv::Error| ToolError::Io {
+            path: path.clone(),
+            source: std::io::Error::other(e.to_string()),
+        };
+        let header =
+            export_columns(&registry, &t.type_name).map_err(|reason| ToolError::Topic {
+                topic: t.name.clone(),
+                reason,
+            })?;
         w.write_record(&header).map_err(csv_err)?;
         let mut rows = 0u64;
-        let filter = MessageFilter { topics: Some(vec![t.name.clone()]), ..Default::default() };
+        let filter = MessageFilter {
+            topics: Some(vec![t.name.clone()]),
+            ..Default::default()
+        };
         for m in reader.messages(&filter)? {
             let m = m?;
-            let value = rosmsg::decode(&registry, &t.type_name, &m.data).map_err(|e| ToolError::Topic {
-                topic: t.name.clone(),
-                reason: format!("message at log time {} ns does not decode: {e}", m.log_time),
-            })?;
+            let value =
+                rosmsg::decode(&registry, &t.type_name, &m.data).map_err(|e| ToolError::Topic {
+                    topic: t.name.clone(),
+                    reason: format!("message at log time {} ns does not decode: {e}", m.log_time),
+                })?;
             let cells = flatten(&registry, &value);
             if cells.len() + 2 != header.len() {
-                return Err(ToolError::Topic { topic: t.name.clone(), reason: format!("message at log time {} ns has {} fields, its type {}", m.log_time, cells.len(), header.len() - 2) });
+                return Err(ToolError::Topic {
+                    topic: t.name.clone(),
+                    reason: format!(
+                        "message at log time {} ns has {} fields, its type {}",
+                        m.log_time,
+                        cells.len(),
+                        header.len() - 2
+                    ),
+                });
             }
             let mut row = vec![m.log_time.to_string(), m.publish_time.to_string()];
             row.extend(cells.into_iter().map(|c| c.1));
@@ -175,7 +240,14 @@ pub fn export_csv(bag: &Path, topics: &[String], out_dir: &Path) -> Result<BTree
         }
         w.flush().map_err(io(&path))?;
         manifest.topics.push(manifest_entry(t, &path, rows));
-        result.insert(t.name.clone(), ExportedTopic { path, rows, columns: header.len() });
+        result.insert(
+            t.name.clone(),
+            ExportedTopic {
+                path,
+                rows,
+                columns: header.len(),
+            },
+        );
     }
     manifest.write(out_dir)?;
     Ok(result)
@@ -196,17 +268,38 @@ mod tests {
         }
         let cells = flatten(reg, &v);
         let names: Vec<&str> = cells.iter().map(|c| c.0.as_str()).collect();
-        assert_eq!(&names[..4], &["header.stamp.sec", "header.stamp.nanosec", "header.frame_id", "point_id"]);
-        assert!(names.contains(&"measured.x") && names.contains(&"covariance.0") && names.contains(&"covariance.8"));
+        assert_eq!(
+            &names[..4],
+            &[
+                "header.stamp.sec",
+                "header.stamp.nanosec",
+                "header.frame_id",
+                "point_id"
+            ]
+        );
+        assert!(
+            names.contains(&"measured.x")
+                && names.contains(&"covariance.0")
+                && names.contains(&"covariance.8")
+        );
         assert!(!names.contains(&"covariance.9") && !names.contains(&"covariance"));
         let x = &cells.iter().find(|c| c.0 == "measured.x").unwrap().1;
-        assert_eq!(x.parse::<f64>().unwrap(), 0.1 + 0.2, "round-trip float text");
+        assert_eq!(
+            x.parse::<f64>().unwrap(),
+            0.1 + 0.2,
+            "round-trip float text"
+        );
     }
 
     #[test]
     fn variable_arrays_are_one_json_column() {
         let reg = metrocell_msgs::registry();
-        let v = rosmsg::from_json(reg, "sensor_msgs/msg/JointState", &serde_json::json!({"name": ["a", "b"], "position": [1.5, 2.0]})).unwrap();
+        let v = rosmsg::from_json(
+            reg,
+            "sensor_msgs/msg/JointState",
+            &serde_json::json!({"name": ["a", "b"], "position": [1.5, 2.0]}),
+        )
+        .unwrap();
         let cells = flatten(reg, &v);
         let get = |n: &str| cells.iter().find(|c| c.0 == n).map(|c| c.1.clone());
         assert_eq!(get("name").as_deref(), Some(r#"["a","b"]"#));

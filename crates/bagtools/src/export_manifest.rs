@@ -58,7 +58,8 @@ impl ExportManifest {
     /// Write the manifest (`export.yaml`) into `dir`.
     pub fn write(&self, dir: &Path) -> Result<PathBuf> {
         let path = dir.join(MANIFEST_FILE);
-        let body = serde_yaml::to_string(self).map_err(|e| ToolError::Invalid(format!("{}: {e}", path.display())))?;
+        let body = serde_yaml::to_string(self)
+            .map_err(|e| ToolError::Invalid(format!("{}: {e}", path.display())))?;
         let text = format!("# metrocell bag export of {} ({}): `metrocell bag import <this directory> -o BAG` rebuilds it\n{body}", self.bag, self.format);
         std::fs::write(&path, text).map_err(io(&path))?;
         Ok(path)
@@ -71,7 +72,12 @@ impl ExportManifest {
             return Ok(None);
         }
         let text = std::fs::read_to_string(&path).map_err(io(&path))?;
-        serde_yaml::from_str(&text).map(Some).map_err(|e| ToolError::Mapping { path, reason: format!("not a `bag export` manifest: {e}") })
+        serde_yaml::from_str(&text)
+            .map(Some)
+            .map_err(|e| ToolError::Mapping {
+                path,
+                reason: format!("not a `bag export` manifest: {e}"),
+            })
     }
 
     /// The entry of the file called `file_name`, if the manifest lists it.
@@ -93,9 +99,18 @@ mod tests {
 
     #[test]
     fn file_names_give_back_their_topics() {
-        assert_eq!(topic_of_file(Path::new("d/tracker.power_on.csv")).as_deref(), Some("/tracker/power_on"));
-        assert_eq!(topic_of_file(Path::new("clock.parquet")).as_deref(), Some("/clock"));
-        assert_eq!(topic_of_file(Path::new(crate::export::csv_file_name("/a/b_c/d").as_str())).as_deref(), Some("/a/b_c/d"));
+        assert_eq!(
+            topic_of_file(Path::new("d/tracker.power_on.csv")).as_deref(),
+            Some("/tracker/power_on")
+        );
+        assert_eq!(
+            topic_of_file(Path::new("clock.parquet")).as_deref(),
+            Some("/clock")
+        );
+        assert_eq!(
+            topic_of_file(Path::new(crate::export::csv_file_name("/a/b_c/d").as_str())).as_deref(),
+            Some("/a/b_c/d")
+        );
     }
 
     #[test]
@@ -105,12 +120,25 @@ mod tests {
         let m = ExportManifest {
             bag: "run42".into(),
             format: "csv".into(),
-            topics: vec![ManifestTopic { topic: "/clock".into(), type_name: "rosgraph_msgs/msg/Clock".into(), file: "clock.csv".into(), messages: 3, offered_qos_profiles: "- depth: 1\n".into(), definition: "builtin_interfaces/Time clock\n".into() }],
+            topics: vec![ManifestTopic {
+                topic: "/clock".into(),
+                type_name: "rosgraph_msgs/msg/Clock".into(),
+                file: "clock.csv".into(),
+                messages: 3,
+                offered_qos_profiles: "- depth: 1\n".into(),
+                definition: "builtin_interfaces/Time clock\n".into(),
+            }],
         };
         m.write(&dir).unwrap();
         assert_eq!(ExportManifest::read(&dir).unwrap(), Some(m.clone()));
-        assert_eq!(m.entry("clock.csv").map(|t| t.topic.as_str()), Some("/clock"));
-        assert_eq!(ExportManifest::read(&dir.join("nothing_here")).unwrap(), None);
+        assert_eq!(
+            m.entry("clock.csv").map(|t| t.topic.as_str()),
+            Some("/clock")
+        );
+        assert_eq!(
+            ExportManifest::read(&dir.join("nothing_here")).unwrap(),
+            None
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -78,9 +78,11 @@ use std::path::{Path, PathBuf};
 use metrocell_bag::{qos_profiles_yaml, BagWriter, QosProfile, WriterOptions};
 use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_msgs::geometry_msgs::msg::Point;
-use metrocell_msgs::msg::MeasuredPoint;
 use metrocell_msgs::geometry_msgs::msg::Vector3;
-use metrocell_msgs::sensor_msgs::msg::{FluidPressure, Imu, JointState, RelativeHumidity, Temperature, TimeReference};
+use metrocell_msgs::msg::MeasuredPoint;
+use metrocell_msgs::sensor_msgs::msg::{
+    FluidPressure, Imu, JointState, RelativeHumidity, Temperature, TimeReference,
+};
 use metrocell_msgs::std_msgs::msg::Header;
 use rosmsg::RosMessage;
 use serde::Deserialize;
@@ -130,7 +132,10 @@ pub struct Mapping {
 impl Mapping {
     pub fn load(path: &Path) -> Result<Self> {
         let text = std::fs::read_to_string(path).map_err(io(path))?;
-        let mut m: Mapping = serde_yaml::from_str(&text).map_err(|e| ToolError::Mapping { path: path.to_path_buf(), reason: e.to_string() })?;
+        let mut m: Mapping = serde_yaml::from_str(&text).map_err(|e| ToolError::Mapping {
+            path: path.to_path_buf(),
+            reason: e.to_string(),
+        })?;
         m.path = Some(path.to_path_buf());
         Ok(m)
     }
@@ -178,7 +183,10 @@ pub const SETUP_SEPARATOR: char = metrocell_msgs::topics::SETUP_SEPARATOR;
 
 fn parse_field(name: &str) -> Option<Field> {
     let axis = |s: &str| ["x", "y", "z"].iter().position(|a| *a == s);
-    let named = |prefix: &str| name.strip_prefix(prefix).filter(|n| !n.is_empty() && n.chars().all(|c| c.is_ascii_alphanumeric() || c == '_'));
+    let named = |prefix: &str| {
+        name.strip_prefix(prefix)
+            .filter(|n| !n.is_empty() && n.chars().all(|c| c.is_ascii_alphanumeric() || c == '_'))
+    };
     Some(match name {
         "timestamp" => Field::Timestamp,
         "point_id" => Field::PointId,
@@ -205,7 +213,13 @@ fn parse_field(name: &str) -> Option<Field> {
                 Field::Temperature(n.to_string())
             } else if let Some(n) = named("aux.") {
                 Field::Aux(n.to_string())
-            } else if let Some((sensor, a)) = name.strip_prefix("accel.").and_then(|r| r.rsplit_once('.')).filter(|(s, _)| !s.is_empty() && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')) {
+            } else if let Some((sensor, a)) = name
+                .strip_prefix("accel.")
+                .and_then(|r| r.rsplit_once('.'))
+                .filter(|(s, _)| {
+                    !s.is_empty() && s.chars().all(|c| c.is_ascii_alphanumeric() || c == '_')
+                })
+            {
                 Field::Accel(sensor.to_string(), axis(a)?)
             } else {
                 return None;
@@ -221,12 +235,15 @@ pub fn parse_timestamp(s: &str) -> std::result::Result<u64, String> {
         if secs.is_finite() && secs >= 0.0 {
             // split to keep ns precision for values like 1714557600.125
             let (int, frac) = s.split_once('.').unwrap_or((s, ""));
-            let whole: u64 = int.parse().map_err(|_| format!("timestamp '{s}' is not a number of seconds"))?;
+            let whole: u64 = int
+                .parse()
+                .map_err(|_| format!("timestamp '{s}' is not a number of seconds"))?;
             return Ok(whole * 1_000_000_000 + frac_ns(frac)?);
         }
         return Err(format!("timestamp '{s}' is negative or not finite"));
     }
-    let bad = || format!("timestamp '{s}' is neither epoch seconds nor YYYY-MM-DD HH:MM:SS[.fff][Z]");
+    let bad =
+        || format!("timestamp '{s}' is neither epoch seconds nor YYYY-MM-DD HH:MM:SS[.fff][Z]");
     let s2 = s.strip_suffix('Z').unwrap_or(s);
     let (date, time) = s2.split_once(['T', ' ']).ok_or_else(bad)?;
     let d: Vec<&str> = date.split('-').collect();
@@ -236,8 +253,21 @@ pub fn parse_timestamp(s: &str) -> std::result::Result<u64, String> {
         return Err(bad());
     }
     let num = |x: &str| x.parse::<i64>().map_err(|_| bad());
-    let (y, mo, da, h, mi, se) = (num(d[0])?, num(d[1])?, num(d[2])?, num(t[0])?, num(t[1])?, num(t[2])?);
-    if !(1..=12).contains(&mo) || !(1..=31).contains(&da) || h > 23 || mi > 59 || se > 60 || y < 1970 {
+    let (y, mo, da, h, mi, se) = (
+        num(d[0])?,
+        num(d[1])?,
+        num(d[2])?,
+        num(t[0])?,
+        num(t[1])?,
+        num(t[2])?,
+    );
+    if !(1..=12).contains(&mo)
+        || !(1..=31).contains(&da)
+        || h > 23
+        || mi > 59
+        || se > 60
+        || y < 1970
+    {
         return Err(bad());
     }
     // days from civil (Howard Hinnant's algorithm), proleptic Gregorian, UTC.
@@ -303,18 +333,46 @@ fn frac_ns(frac: &str) -> std::result::Result<u64, String> {
 }
 
 /// The topics an import writes signals to: the ones `metrocell sim` publishes (crates/msgs `topics`).
-pub use metrocell_msgs::topics::{APPROACH as APPROACH_TOPIC, COMMANDED_JOINTS as COMMANDED_JOINTS_TOPIC, POWER_ON as POWER_ON_TOPIC};
+pub use metrocell_msgs::topics::{
+    APPROACH as APPROACH_TOPIC, COMMANDED_JOINTS as COMMANDED_JOINTS_TOPIC,
+    POWER_ON as POWER_ON_TOPIC,
+};
 
 /// The commanded joint state of a row: the joint columns' names, then velocity-only names;
 /// positions and velocities aligned with the names, NaN where one of the pair is missing,
 /// an array left empty when no column feeds it (as ROS allows).
-fn commanded_joint_state(header: Header, joints: &[(String, f64)], velocities: &[(String, f64)]) -> JointState {
+fn commanded_joint_state(
+    header: Header,
+    joints: &[(String, f64)],
+    velocities: &[(String, f64)],
+) -> JointState {
     let mut name: Vec<String> = joints.iter().map(|j| j.0.clone()).collect();
-    name.extend(velocities.iter().filter(|v| !joints.iter().any(|j| j.0 == v.0)).map(|v| v.0.clone()));
-    let value = |list: &[(String, f64)], n: &String| list.iter().find(|x| &x.0 == n).map_or(f64::NAN, |x| x.1);
-    let position = if joints.is_empty() { Vec::new() } else { name.iter().map(|n| value(joints, n)).collect() };
-    let velocity = if velocities.is_empty() { Vec::new() } else { name.iter().map(|n| value(velocities, n)).collect() };
-    JointState { header, name, position, velocity, effort: Vec::new() }
+    name.extend(
+        velocities
+            .iter()
+            .filter(|v| !joints.iter().any(|j| j.0 == v.0))
+            .map(|v| v.0.clone()),
+    );
+    let value = |list: &[(String, f64)], n: &String| {
+        list.iter().find(|x| &x.0 == n).map_or(f64::NAN, |x| x.1)
+    };
+    let position = if joints.is_empty() {
+        Vec::new()
+    } else {
+        name.iter().map(|n| value(joints, n)).collect()
+    };
+    let velocity = if velocities.is_empty() {
+        Vec::new()
+    } else {
+        name.iter().map(|n| value(velocities, n)).collect()
+    };
+    JointState {
+        header,
+        name,
+        position,
+        velocity,
+        effort: Vec::new(),
+    }
 }
 
 /// Counts of an import.
@@ -347,7 +405,12 @@ fn stamp(ns: u64) -> Time {
 
 /// Import `csv_path` into the new bag `bag_dir` using `mapping` (None: the file uses the
 /// layout's own column names).
-pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, options: WriterOptions) -> Result<ImportReport> {
+pub fn import_csv(
+    csv_path: &Path,
+    bag_dir: &Path,
+    mapping: Option<&Mapping>,
+    options: WriterOptions,
+) -> Result<ImportReport> {
     let default_mapping = Mapping::default();
     let mapping = mapping.unwrap_or(&default_mapping);
     let file = std::fs::File::open(csv_path).map_err(io(csv_path))?;
@@ -356,8 +419,16 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
         .flexible(true)
         .trim(csv::Trim::All)
         .from_reader(std::io::BufReader::new(file));
-    let header_err = |reason: String| ToolError::Row { path: csv_path.to_path_buf(), line: 1, column: "header".into(), reason };
-    let headers = rdr.headers().map_err(|e| header_err(e.to_string()))?.clone();
+    let header_err = |reason: String| ToolError::Row {
+        path: csv_path.to_path_buf(),
+        line: 1,
+        column: "header".into(),
+        reason,
+    };
+    let headers = rdr
+        .headers()
+        .map_err(|e| header_err(e.to_string()))?
+        .clone();
     let find = |name: &str| headers.iter().position(|h| h == name);
 
     // Bind every layout field to a source column.
@@ -368,30 +439,57 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
                 continue;
             }
             let field = parse_field(h).ok_or_else(|| header_err(format!("column '{h}' is not part of the point CSV layout (see `metrocell bag import --help`)")))?;
-            bound.push(Bound { index: i, source_name: h.to_string(), field, scale: 1.0, offset: 0.0 });
+            bound.push(Bound {
+                index: i,
+                source_name: h.to_string(),
+                field,
+                scale: 1.0,
+                offset: 0.0,
+            });
         }
     } else {
         for (target, cm) in &mapping.columns {
             let field = parse_field(target).ok_or_else(|| ToolError::Mapping { path: mapping.path.clone().unwrap_or_else(|| PathBuf::from("column mapping")), reason: format!("columns.{target}: '{target}' is not a field of the point CSV layout (see `metrocell bag import --help`)") })?;
-            let index = find(&cm.column).ok_or_else(|| header_err(format!("mapped column '{}' (for {target}) is not in the header", cm.column)))?;
-            bound.push(Bound { index, source_name: cm.column.clone(), field, scale: cm.scale, offset: cm.offset });
+            let index = find(&cm.column).ok_or_else(|| {
+                header_err(format!(
+                    "mapped column '{}' (for {target}) is not in the header",
+                    cm.column
+                ))
+            })?;
+            bound.push(Bound {
+                index,
+                source_name: cm.column.clone(),
+                field,
+                scale: cm.scale,
+                offset: cm.offset,
+            });
         }
     }
     let has = |f: &dyn Fn(&Field) -> bool| bound.iter().any(|b| f(&b.field));
     for (need, what) in [
-        (&(|f: &Field| *f == Field::Timestamp) as &dyn Fn(&Field) -> bool, "timestamp"),
+        (
+            &(|f: &Field| *f == Field::Timestamp) as &dyn Fn(&Field) -> bool,
+            "timestamp",
+        ),
         (&|f: &Field| *f == Field::PointId, "point_id"),
         (&|f: &Field| *f == Field::Measured(0), "measured_x"),
         (&|f: &Field| *f == Field::Measured(1), "measured_y"),
         (&|f: &Field| *f == Field::Measured(2), "measured_z"),
     ] {
         if !has(need) {
-            return Err(header_err(format!("no column for the required field {what}")));
+            return Err(header_err(format!(
+                "no column for the required field {what}"
+            )));
         }
     }
     // Every axis needs an uncertainty: from u95, its own u_<axis> column, or the mapping's default.
     if !has(&|f| matches!(f, Field::U95)) && mapping.default_uncertainty.is_none() {
-        let missing: Vec<&str> = ["u_x", "u_y", "u_z"].into_iter().enumerate().filter(|&(a, _)| !has(&|f| matches!(f, Field::U(b) if *b == a))).map(|(_, n)| n).collect();
+        let missing: Vec<&str> = ["u_x", "u_y", "u_z"]
+            .into_iter()
+            .enumerate()
+            .filter(|&(a, _)| !has(&|f| matches!(f, Field::U(b) if *b == a)))
+            .map(|(_, n)| n)
+            .collect();
         if !missing.is_empty() {
             return Err(header_err(format!(
                 "no uncertainty column for {} (give u_x, u_y and u_z, or u95, or a default_uncertainty in a mapping): \
@@ -408,7 +506,10 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
         }
     }
     if let Some((sensor, axes)) = sensors.iter().find(|(_, axes)| !axes.iter().all(|a| *a)) {
-        let missing: Vec<&str> = (0..3).filter(|&a| !axes[a]).map(|a| ["x", "y", "z"][a]).collect();
+        let missing: Vec<&str> = (0..3)
+            .filter(|&a| !axes[a])
+            .map(|a| ["x", "y", "z"][a])
+            .collect();
         return Err(header_err(format!("accelerometer `{sensor}` has no column for accel.{sensor}.{}: an accelerometer is read on its three axes", missing.join(format!(", accel.{sensor}.").as_str()))));
     }
     let frame_id = mapping.frame_id.clone().unwrap_or_else(|| "import".into());
@@ -416,11 +517,25 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
 
     let mut writer = BagWriter::create(bag_dir, options)?;
     let qos = qos_profiles_yaml(&[QosProfile::default_publisher()]);
-    let latched = qos_profiles_yaml(&[QosProfile { keep_last: true, depth: 1, reliable: true, transient_local: true }]);
+    let latched = qos_profiles_yaml(&[QosProfile {
+        keep_last: true,
+        depth: 1,
+        reliable: true,
+        transient_local: true,
+    }]);
     let mut added: BTreeMap<String, ()> = BTreeMap::new();
     let mut add = |w: &mut BagWriter, topic: &str, ty: &str, def: &str| -> Result<()> {
         if added.insert(topic.to_string(), ()).is_none() {
-            w.add_topic(topic, ty, def, if topic == POWER_ON_TOPIC { &latched } else { &qos })?;
+            w.add_topic(
+                topic,
+                ty,
+                def,
+                if topic == POWER_ON_TOPIC {
+                    &latched
+                } else {
+                    &qos
+                },
+            )?;
         }
         Ok(())
     };
@@ -434,7 +549,12 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
             Ok(true) => {}
             Err(e) => {
                 report.rows_read += 1;
-                report.errors.push(ToolError::Row { path: csv_path.to_path_buf(), line: line.max(2), column: "-".into(), reason: e.to_string() });
+                report.errors.push(ToolError::Row {
+                    path: csv_path.to_path_buf(),
+                    line: line.max(2),
+                    column: "-".into(),
+                    reason: e.to_string(),
+                });
                 continue;
             }
         }
@@ -445,7 +565,12 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
         report.rows_read += 1;
         let mut row_errors = Vec::new();
         let mut err = |b: &Bound, reason: String| {
-            row_errors.push(ToolError::Row { path: csv_path.to_path_buf(), line, column: b.source_name.clone(), reason })
+            row_errors.push(ToolError::Row {
+                path: csv_path.to_path_buf(),
+                line,
+                column: b.source_name.clone(),
+                reason,
+            })
         };
         let mut t_ns = None;
         let mut point_id = None;
@@ -465,7 +590,9 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
         for b in &bound {
             let cell = record.get(b.index).unwrap_or("");
             let number = || -> std::result::Result<f64, String> {
-                let v: f64 = cell.parse().map_err(|_| format!("'{cell}' is not a number"))?;
+                let v: f64 = cell
+                    .parse()
+                    .map_err(|_| format!("'{cell}' is not a number"))?;
                 if !v.is_finite() {
                     return Err(format!("'{cell}' is not finite"));
                 }
@@ -561,7 +688,10 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
             Some(s) => format!("{frame_id}{SETUP_SEPARATOR}{s}"),
             None => frame_id.clone(),
         };
-        let header = Header { stamp: stamp(t), frame_id: point_frame };
+        let header = Header {
+            stamp: stamp(t),
+            frame_id: point_frame,
+        };
         let mut out: Vec<(String, &str, &str, Vec<u8>)> = Vec::new();
         let mut cov = [0.0; 9];
         for a in 0..3 {
@@ -571,8 +701,16 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
             header: header.clone(),
             point_id: point_id.expect("required"),
             source: source.clone(),
-            nominal: Point { x: nominal[0], y: nominal[1], z: nominal[2] },
-            measured: Point { x: measured[0], y: measured[1], z: measured[2] },
+            nominal: Point {
+                x: nominal[0],
+                y: nominal[1],
+                z: nominal[2],
+            },
+            measured: Point {
+                x: measured[0],
+                y: measured[1],
+                z: measured[2],
+            },
             covariance: cov,
         };
         let points_topic = match role {
@@ -581,48 +719,137 @@ pub fn import_csv(csv_path: &Path, bag_dir: &Path, mapping: Option<&Mapping>, op
             Role::Check => CHECK_POINTS_TOPIC,
             Role::Fit => "/measured_points",
         };
-        out.push((points_topic.into(), MeasuredPoint::ROS_TYPE, MeasuredPoint::DEFINITION, encode_cdr(&p)?));
+        out.push((
+            points_topic.into(),
+            MeasuredPoint::ROS_TYPE,
+            MeasuredPoint::DEFINITION,
+            encode_cdr(&p)?,
+        ));
         // the machine's motion belongs to its own points, not to a nest's reading
         let machine_row = role != Role::Reference;
         for (sensor, a) in &accel {
             if a.iter().any(|v| !v.is_finite()) {
                 continue;
             }
-            let frame = mapping.imu_frames.get(sensor).cloned().unwrap_or_else(|| sensor.clone());
-            let mut imu = Imu { header: Header { stamp: stamp(t), frame_id: frame }, linear_acceleration: Vector3 { x: a[0], y: a[1], z: a[2] }, ..Default::default() };
+            let frame = mapping
+                .imu_frames
+                .get(sensor)
+                .cloned()
+                .unwrap_or_else(|| sensor.clone());
+            let mut imu = Imu {
+                header: Header {
+                    stamp: stamp(t),
+                    frame_id: frame,
+                },
+                linear_acceleration: Vector3 {
+                    x: a[0],
+                    y: a[1],
+                    z: a[2],
+                },
+                ..Default::default()
+            };
             // orientation and angular velocity are not given (ROS: −1 in the first element)
             imu.orientation_covariance[0] = -1.0;
             imu.angular_velocity_covariance[0] = -1.0;
-            out.push((format!("/imu/{sensor}"), Imu::ROS_TYPE, Imu::DEFINITION, encode_cdr(&imu)?));
+            out.push((
+                format!("/imu/{sensor}"),
+                Imu::ROS_TYPE,
+                Imu::DEFINITION,
+                encode_cdr(&imu)?,
+            ));
         }
         if machine_row && (!joints.is_empty() || !velocities.is_empty()) {
             let js = commanded_joint_state(header.clone(), &joints, &velocities);
-            out.push((COMMANDED_JOINTS_TOPIC.into(), JointState::ROS_TYPE, JointState::DEFINITION, encode_cdr(&js)?));
+            out.push((
+                COMMANDED_JOINTS_TOPIC.into(),
+                JointState::ROS_TYPE,
+                JointState::DEFINITION,
+                encode_cdr(&js)?,
+            ));
         }
         if machine_row && !approach.is_empty() {
-            let js = JointState { header: header.clone(), name: approach.iter().map(|a| a.0.clone()).collect(), position: approach.iter().map(|a| a.1).collect(), ..Default::default() };
-            out.push((APPROACH_TOPIC.into(), JointState::ROS_TYPE, JointState::DEFINITION, encode_cdr(&js)?));
+            let js = JointState {
+                header: header.clone(),
+                name: approach.iter().map(|a| a.0.clone()).collect(),
+                position: approach.iter().map(|a| a.1).collect(),
+                ..Default::default()
+            };
+            out.push((
+                APPROACH_TOPIC.into(),
+                JointState::ROS_TYPE,
+                JointState::DEFINITION,
+                encode_cdr(&js)?,
+            ));
         }
         if let Some(on) = on_time.filter(|on| last_on_time != Some(*on)) {
             last_on_time = Some(on);
-            let m = TimeReference { header: header.clone(), time_ref: stamp(on), source: source.clone() };
-            out.push((POWER_ON_TOPIC.into(), TimeReference::ROS_TYPE, TimeReference::DEFINITION, encode_cdr(&m)?));
+            let m = TimeReference {
+                header: header.clone(),
+                time_ref: stamp(on),
+                source: source.clone(),
+            };
+            out.push((
+                POWER_ON_TOPIC.into(),
+                TimeReference::ROS_TYPE,
+                TimeReference::DEFINITION,
+                encode_cdr(&m)?,
+            ));
         }
         for (n, v) in temps {
-            let m = Temperature { header: Header { stamp: stamp(t), frame_id: n.clone() }, temperature: v, variance: 0.0 };
-            out.push((format!("/temperature/{n}"), Temperature::ROS_TYPE, Temperature::DEFINITION, encode_cdr(&m)?));
+            let m = Temperature {
+                header: Header {
+                    stamp: stamp(t),
+                    frame_id: n.clone(),
+                },
+                temperature: v,
+                variance: 0.0,
+            };
+            out.push((
+                format!("/temperature/{n}"),
+                Temperature::ROS_TYPE,
+                Temperature::DEFINITION,
+                encode_cdr(&m)?,
+            ));
         }
         if let Some(v) = pressure {
-            let m = FluidPressure { header: header.clone(), fluid_pressure: v, variance: 0.0 };
-            out.push(("/air/pressure".into(), FluidPressure::ROS_TYPE, FluidPressure::DEFINITION, encode_cdr(&m)?));
+            let m = FluidPressure {
+                header: header.clone(),
+                fluid_pressure: v,
+                variance: 0.0,
+            };
+            out.push((
+                "/air/pressure".into(),
+                FluidPressure::ROS_TYPE,
+                FluidPressure::DEFINITION,
+                encode_cdr(&m)?,
+            ));
         }
         if let Some(v) = humidity {
-            let m = RelativeHumidity { header: header.clone(), relative_humidity: v, variance: 0.0 };
-            out.push(("/air/humidity".into(), RelativeHumidity::ROS_TYPE, RelativeHumidity::DEFINITION, encode_cdr(&m)?));
+            let m = RelativeHumidity {
+                header: header.clone(),
+                relative_humidity: v,
+                variance: 0.0,
+            };
+            out.push((
+                "/air/humidity".into(),
+                RelativeHumidity::ROS_TYPE,
+                RelativeHumidity::DEFINITION,
+                encode_cdr(&m)?,
+            ));
         }
         if !aux.is_empty() {
-            let m = JointState { header: header.clone(), name: aux.iter().map(|j| j.0.clone()).collect(), position: aux.iter().map(|j| j.1).collect(), ..Default::default() };
-            out.push(("/aux_channels".into(), JointState::ROS_TYPE, JointState::DEFINITION, encode_cdr(&m)?));
+            let m = JointState {
+                header: header.clone(),
+                name: aux.iter().map(|j| j.0.clone()).collect(),
+                position: aux.iter().map(|j| j.1).collect(),
+                ..Default::default()
+            };
+            out.push((
+                "/aux_channels".into(),
+                JointState::ROS_TYPE,
+                JointState::DEFINITION,
+                encode_cdr(&m)?,
+            ));
         }
         for (topic, ty, def, bytes) in out {
             add(&mut writer, &topic, ty, def)?;
@@ -641,9 +868,18 @@ mod tests {
 
     #[test]
     fn timestamps_parse_to_utc_nanoseconds() {
-        assert_eq!(parse_timestamp("1714557600.125").unwrap(), 1_714_557_600_125_000_000);
-        assert_eq!(parse_timestamp("2024-05-01T10:00:00.125Z").unwrap(), 1_714_557_600_125_000_000);
-        assert_eq!(parse_timestamp("2024-05-01 10:00:00").unwrap(), 1_714_557_600_000_000_000);
+        assert_eq!(
+            parse_timestamp("1714557600.125").unwrap(),
+            1_714_557_600_125_000_000
+        );
+        assert_eq!(
+            parse_timestamp("2024-05-01T10:00:00.125Z").unwrap(),
+            1_714_557_600_125_000_000
+        );
+        assert_eq!(
+            parse_timestamp("2024-05-01 10:00:00").unwrap(),
+            1_714_557_600_000_000_000
+        );
         assert_eq!(parse_timestamp("1970-01-01 00:00:00").unwrap(), 0);
         assert!(parse_timestamp("01/05/2024 10:00").is_err());
         assert!(parse_timestamp("2024-13-01 10:00:00").is_err());
@@ -653,18 +889,39 @@ mod tests {
     #[test]
     fn timestamp_mapping_scales_and_offsets() {
         // seconds since the start of a job + the job's epoch start
-        assert_eq!(mapped_timestamp("12.5", 1.0, 1_767_225_600.0).unwrap(), 1_767_225_612_500_000_000);
+        assert_eq!(
+            mapped_timestamp("12.5", 1.0, 1_767_225_600.0).unwrap(),
+            1_767_225_612_500_000_000
+        );
         // milliseconds since the start
-        assert_eq!(mapped_timestamp("12500", 0.001, 1_767_225_600.0).unwrap(), 1_767_225_612_500_000_000);
+        assert_eq!(
+            mapped_timestamp("12500", 0.001, 1_767_225_600.0).unwrap(),
+            1_767_225_612_500_000_000
+        );
         // a local date-time one hour ahead of UTC
-        assert_eq!(mapped_timestamp("2024-05-01 11:00:00.125", 1.0, -3600.0).unwrap(), 1_714_557_600_125_000_000);
-        assert_eq!(mapped_timestamp("1714557600.125", 1.0, 0.0).unwrap(), 1_714_557_600_125_000_000);
-        assert!(mapped_timestamp("2024-05-01 11:00:00", 0.001, 0.0).unwrap_err().contains("date-time"));
-        assert!(mapped_timestamp("5", 1.0, -10.0).unwrap_err().contains("before 1970"));
+        assert_eq!(
+            mapped_timestamp("2024-05-01 11:00:00.125", 1.0, -3600.0).unwrap(),
+            1_714_557_600_125_000_000
+        );
+        assert_eq!(
+            mapped_timestamp("1714557600.125", 1.0, 0.0).unwrap(),
+            1_714_557_600_125_000_000
+        );
+        assert!(mapped_timestamp("2024-05-01 11:00:00", 0.001, 0.0)
+            .unwrap_err()
+            .contains("date-time"));
+        assert!(mapped_timestamp("5", 1.0, -10.0)
+            .unwrap_err()
+            .contains("before 1970"));
         // an instrument switched on 20 min before the job started
-        assert_eq!(mapped_timestamp("-1200", 1.0, 1_767_225_600.0).unwrap(), 1_767_224_400_000_000_000);
+        assert_eq!(
+            mapped_timestamp("-1200", 1.0, 1_767_225_600.0).unwrap(),
+            1_767_224_400_000_000_000
+        );
         assert_eq!(mapped_timestamp("-0.5", 1.0, 10.0).unwrap(), 9_500_000_000);
-        assert!(mapped_timestamp("-5", 1.0, 0.0).unwrap_err().contains("before 1970"));
+        assert!(mapped_timestamp("-5", 1.0, 0.0)
+            .unwrap_err()
+            .contains("before 1970"));
     }
 
     #[test]
@@ -678,7 +935,11 @@ mod tests {
     #[test]
     fn commanded_joints_pair_positions_and_velocities_by_name() {
         let h = Header::default();
-        let js = commanded_joint_state(h.clone(), &[("x".into(), 0.1), ("y".into(), 0.2)], &[("y".into(), -0.05), ("z".into(), 0.01)]);
+        let js = commanded_joint_state(
+            h.clone(),
+            &[("x".into(), 0.1), ("y".into(), 0.2)],
+            &[("y".into(), -0.05), ("z".into(), 0.01)],
+        );
         assert_eq!(js.name, ["x", "y", "z"]);
         assert!(js.position[..2] == [0.1, 0.2] && js.position[2].is_nan());
         assert!(js.velocity[0].is_nan() && js.velocity[1..] == [-0.05, 0.01]);
@@ -691,9 +952,15 @@ mod tests {
         assert_eq!(parse_field("velocity.x"), Some(Field::Velocity("x".into())));
         assert_eq!(parse_field("approach.z"), Some(Field::Approach("z".into())));
         assert_eq!(parse_field("approach.b"), None);
-        assert_eq!(parse_field("instrument_on_time"), Some(Field::InstrumentOnTime));
+        assert_eq!(
+            parse_field("instrument_on_time"),
+            Some(Field::InstrumentOnTime)
+        );
         assert_eq!(parse_field("measured_y"), Some(Field::Measured(1)));
-        assert_eq!(parse_field("temperature.air"), Some(Field::Temperature("air".into())));
+        assert_eq!(
+            parse_field("temperature.air"),
+            Some(Field::Temperature("air".into()))
+        );
         assert_eq!(parse_field("temperature."), None);
         assert_eq!(parse_field("X"), None);
     }

@@ -33,8 +33,8 @@ pub mod import;
 pub mod playback;
 pub mod qos_overrides;
 pub mod recorded_qos;
-pub mod reimport;
 mod recording;
+pub mod reimport;
 mod replay_output;
 mod topic_selection;
 

@@ -19,8 +19,15 @@ pub struct PlaybackClock {
 impl PlaybackClock {
     /// `rate` > 0: 2.0 plays twice as fast as recorded.
     pub fn new(rate: f64) -> Self {
-        assert!(rate > 0.0 && rate.is_finite(), "rate must be positive (checked by the caller)");
-        Self { rate, anchor: None, paused: false }
+        assert!(
+            rate > 0.0 && rate.is_finite(),
+            "rate must be positive (checked by the caller)"
+        );
+        Self {
+            rate,
+            anchor: None,
+            paused: false,
+        }
     }
 
     pub fn rate(&self) -> f64 {
@@ -106,8 +113,14 @@ mod tests {
         let mut c = PlaybackClock::new(2.0);
         assert_eq!(c.wait_for(1_000_000_000, t0), Some(Duration::ZERO));
         assert_eq!(c.wait_for(3_000_000_000, t0), Some(Duration::from_secs(1)));
-        assert_eq!(c.wait_for(3_000_000_000, t0 + Duration::from_millis(400)), Some(Duration::from_millis(600)));
-        assert_eq!(c.bag_time_at(t0 + Duration::from_millis(500)), Some(2_000_000_000));
+        assert_eq!(
+            c.wait_for(3_000_000_000, t0 + Duration::from_millis(400)),
+            Some(Duration::from_millis(600))
+        );
+        assert_eq!(
+            c.bag_time_at(t0 + Duration::from_millis(500)),
+            Some(2_000_000_000)
+        );
     }
 
     #[test]
@@ -122,7 +135,10 @@ mod tests {
         c.resume(t1);
         // after resume bag time goes on from the stepped message (1 s): the one at 2 s waits 1 s
         assert_eq!(c.wait_for(2_000_000_000, t1), Some(Duration::from_secs(1)));
-        assert_eq!(c.wait_for(2_500_000_000, t1), Some(Duration::from_millis(1500)));
+        assert_eq!(
+            c.wait_for(2_500_000_000, t1),
+            Some(Duration::from_millis(1500))
+        );
     }
 
     #[test]

@@ -38,17 +38,29 @@ pub struct QosOverride {
     pub ignored: Vec<String>,
 }
 
-const IGNORED_KEYS: [&str; 5] = ["deadline", "lifespan", "liveliness", "liveliness_lease_duration", "avoid_ros_namespace_conventions"];
+const IGNORED_KEYS: [&str; 5] = [
+    "deadline",
+    "lifespan",
+    "liveliness",
+    "liveliness_lease_duration",
+    "avoid_ros_namespace_conventions",
+];
 
 /// Read the overrides file at `path`: topic name → override.
 pub fn read_qos_overrides(path: &Path) -> Result<BTreeMap<String, QosOverride>> {
     let text = std::fs::read_to_string(path).map_err(io(path))?;
-    parse_qos_overrides(&text).map_err(|reason| ToolError::Mapping { path: path.to_path_buf(), reason })
+    parse_qos_overrides(&text).map_err(|reason| ToolError::Mapping {
+        path: path.to_path_buf(),
+        reason,
+    })
 }
 
 /// Parse the overrides YAML; the error names the topic and key at fault.
-pub fn parse_qos_overrides(text: &str) -> std::result::Result<BTreeMap<String, QosOverride>, String> {
-    let doc: serde_yaml::Value = serde_yaml::from_str(text).map_err(|e| format!("not YAML: {e}"))?;
+pub fn parse_qos_overrides(
+    text: &str,
+) -> std::result::Result<BTreeMap<String, QosOverride>, String> {
+    let doc: serde_yaml::Value =
+        serde_yaml::from_str(text).map_err(|e| format!("not YAML: {e}"))?;
     let map = match doc {
         serde_yaml::Value::Null => return Ok(BTreeMap::new()),
         serde_yaml::Value::Mapping(m) => m,
@@ -56,9 +68,14 @@ pub fn parse_qos_overrides(text: &str) -> std::result::Result<BTreeMap<String, Q
     };
     let mut out = BTreeMap::new();
     for (topic, profile) in map {
-        let topic = topic.as_str().ok_or("topic names must be strings")?.to_string();
+        let topic = topic
+            .as_str()
+            .ok_or("topic names must be strings")?
+            .to_string();
         if !topic.starts_with('/') {
-            return Err(format!("topic {topic:?}: give the full name, starting with '/'"));
+            return Err(format!(
+                "topic {topic:?}: give the full name, starting with '/'"
+            ));
         }
         let serde_yaml::Value::Mapping(profile) = profile else {
             return Err(format!("{topic}: expected a map of QoS policies"));
@@ -67,8 +84,15 @@ pub fn parse_qos_overrides(text: &str) -> std::result::Result<BTreeMap<String, Q
         let mut keep_all = false;
         let mut depth = None;
         for (key, value) in profile {
-            let key = key.as_str().ok_or_else(|| format!("{topic}: policy names must be strings"))?;
-            let word = || value.as_str().map(str::to_ascii_lowercase).ok_or_else(|| format!("{topic}: {key} must be a word, got {value:?}"));
+            let key = key
+                .as_str()
+                .ok_or_else(|| format!("{topic}: policy names must be strings"))?;
+            let word = || {
+                value
+                    .as_str()
+                    .map(str::to_ascii_lowercase)
+                    .ok_or_else(|| format!("{topic}: {key} must be a word, got {value:?}"))
+            };
             match key {
                 "history" => match word()?.as_str() {
                     "keep_last" => keep_all = false,
@@ -119,8 +143,24 @@ mod tests {
         let text = "/a:\n  history: keep_last\n  depth: 500\n  reliability: best_effort\n  durability: transient_local\n\
 /b:\n  history: keep_all\n  reliability: system_default\n  deadline: {sec: 1, nsec: 0}\n";
         let o = parse_qos_overrides(text).unwrap();
-        assert_eq!(o["/a"], QosOverride { history: Some(HistoryOverride::KeepLast(500)), reliable: Some(false), transient_local: Some(true), ignored: vec![] });
-        assert_eq!(o["/b"], QosOverride { history: Some(HistoryOverride::KeepAll), reliable: None, transient_local: None, ignored: vec!["deadline".into()] });
+        assert_eq!(
+            o["/a"],
+            QosOverride {
+                history: Some(HistoryOverride::KeepLast(500)),
+                reliable: Some(false),
+                transient_local: Some(true),
+                ignored: vec![]
+            }
+        );
+        assert_eq!(
+            o["/b"],
+            QosOverride {
+                history: Some(HistoryOverride::KeepAll),
+                reliable: None,
+                transient_local: None,
+                ignored: vec!["deadline".into()]
+            }
+        );
         assert!(parse_qos_overrides("").unwrap().is_empty());
         let e = parse_qos_overrides("/a:\n  reliability: sometimes\n").unwrap_err();
         assert!(e.contains("/a") && e.contains("sometimes"), "{e}");
@@ -128,6 +168,8 @@ mod tests {
         assert!(e.contains("/a") && e.contains("depth"), "{e}");
         let e = parse_qos_overrides("/a:\n  colour: red\n").unwrap_err();
         assert!(e.contains("colour"), "{e}");
-        assert!(parse_qos_overrides("a:\n  depth: 3\n").unwrap_err().contains("'/'"));
+        assert!(parse_qos_overrides("a:\n  depth: 3\n")
+            .unwrap_err()
+            .contains("'/'"));
     }
 }

@@ -37,7 +37,9 @@ pub fn offered_qos_from_dds(p: &PublicationBuiltinTopicData) -> OfferedQos {
     };
     q.durability = match p.durability {
         // transient and persistent also deliver history to late joiners; rmw has no such kinds.
-        Some(Durability::TransientLocal | Durability::Transient | Durability::Persistent) => DURABILITY_TRANSIENT_LOCAL,
+        Some(Durability::TransientLocal | Durability::Transient | Durability::Persistent) => {
+            DURABILITY_TRANSIENT_LOCAL
+        }
         _ => DURABILITY_VOLATILE,
     };
     if let Some(d) = p.deadline {
@@ -50,8 +52,12 @@ pub fn offered_qos_from_dds(p: &PublicationBuiltinTopicData) -> OfferedQos {
         let (kind, lease) = match l {
             Liveliness::Automatic { lease_duration } => (LIVELINESS_AUTOMATIC, lease_duration),
             // rmw dropped manual_by_node; DDS manual-by-participant maps to automatic in rmw.
-            Liveliness::ManualByParticipant { lease_duration } => (LIVELINESS_AUTOMATIC, lease_duration),
-            Liveliness::ManualByTopic { lease_duration } => (LIVELINESS_MANUAL_BY_TOPIC, lease_duration),
+            Liveliness::ManualByParticipant { lease_duration } => {
+                (LIVELINESS_AUTOMATIC, lease_duration)
+            }
+            Liveliness::ManualByTopic { lease_duration } => {
+                (LIVELINESS_MANUAL_BY_TOPIC, lease_duration)
+            }
         };
         q.liveliness = kind;
         q.liveliness_lease_duration = rmw_duration(lease);
@@ -61,8 +67,15 @@ pub fn offered_qos_from_dds(p: &PublicationBuiltinTopicData) -> OfferedQos {
 
 /// The offered QoS of every discovered publisher of DDS topic `dds_topic` (the ROS name mapped
 /// by `metrocell_node::names::dds_topic_name`, e.g. `rt/scan`).
-pub fn offered_qos_of_topic<'a>(publications: impl IntoIterator<Item = &'a PublicationBuiltinTopicData>, dds_topic: &str) -> Vec<OfferedQos> {
-    publications.into_iter().filter(|p| p.topic_name == dds_topic).map(offered_qos_from_dds).collect()
+pub fn offered_qos_of_topic<'a>(
+    publications: impl IntoIterator<Item = &'a PublicationBuiltinTopicData>,
+    dds_topic: &str,
+) -> Vec<OfferedQos> {
+    publications
+        .into_iter()
+        .filter(|p| p.topic_name == dds_topic)
+        .map(offered_qos_from_dds)
+        .collect()
 }
 
 /// What the recorder's reader of a topic requests.
@@ -78,8 +91,13 @@ pub struct RecordingQos {
 /// before the recorder came are recorded), else volatile. No publisher: reliable, volatile.
 pub fn recording_qos(offers: &[OfferedQos]) -> RecordingQos {
     RecordingQos {
-        reliable: offers.iter().all(|q| q.reliability != RELIABILITY_BEST_EFFORT),
-        transient_local: !offers.is_empty() && offers.iter().all(|q| q.durability == DURABILITY_TRANSIENT_LOCAL),
+        reliable: offers
+            .iter()
+            .all(|q| q.reliability != RELIABILITY_BEST_EFFORT),
+        transient_local: !offers.is_empty()
+            && offers
+                .iter()
+                .all(|q| q.durability == DURABILITY_TRANSIENT_LOCAL),
     }
 }
 
@@ -92,9 +110,16 @@ pub struct ReplayQos {
 
 /// rosbag2's adaptation of the recorded offers (see the module doc).
 pub fn replay_qos(recorded: &[OfferedQos]) -> ReplayQos {
-    let default = ReplayQos { reliable: true, transient_local: false };
-    let Some(first) = recorded.first() else { return default };
-    let agree = recorded.iter().all(|q| q.reliability == first.reliability && q.durability == first.durability);
+    let default = ReplayQos {
+        reliable: true,
+        transient_local: false,
+    };
+    let Some(first) = recorded.first() else {
+        return default;
+    };
+    let agree = recorded
+        .iter()
+        .all(|q| q.reliability == first.reliability && q.durability == first.durability);
     if !agree {
         return default;
     }
@@ -110,7 +135,13 @@ mod tests {
     use rustdds::policy::{Deadline, Lifespan};
 
     fn publication(topic: &str) -> PublicationBuiltinTopicData {
-        PublicationBuiltinTopicData::new(rustdds::GUID::GUID_UNKNOWN, None, topic.into(), "x::msg::dds_::Y_".into(), None)
+        PublicationBuiltinTopicData::new(
+            rustdds::GUID::GUID_UNKNOWN,
+            None,
+            topic.into(),
+            "x::msg::dds_::Y_".into(),
+            None,
+        )
     }
 
     #[test]
@@ -118,44 +149,132 @@ mod tests {
         let mut latched = publication("rt/robot_description");
         latched.durability = Some(Durability::TransientLocal);
         latched.deadline = Some(Deadline(rustdds::Duration::from_millis(250)));
-        latched.lifespan = Some(Lifespan { duration: rustdds::Duration::INFINITE });
+        latched.lifespan = Some(Lifespan {
+            duration: rustdds::Duration::INFINITE,
+        });
         let mut sensor = publication("rt/scan");
         sensor.reliability = Some(Reliability::BestEffort);
-        sensor.liveliness = Some(Liveliness::ManualByTopic { lease_duration: rustdds::Duration::from_secs(2) });
+        sensor.liveliness = Some(Liveliness::ManualByTopic {
+            lease_duration: rustdds::Duration::from_secs(2),
+        });
         let all = [latched, sensor, publication("rt/other")];
 
         let l = offered_qos_of_topic(&all, "rt/robot_description");
         assert_eq!(l.len(), 1);
-        assert_eq!((l[0].reliability, l[0].durability), (RELIABILITY_RELIABLE, DURABILITY_TRANSIENT_LOCAL));
-        assert_eq!(l[0].deadline, RmwDuration { sec: 0, nsec: 250_000_000 });
-        assert_eq!((l[0].lifespan, l[0].history, l[0].depth), (RmwDuration::INFINITE, metrocell_bag::HISTORY_UNKNOWN, 0));
+        assert_eq!(
+            (l[0].reliability, l[0].durability),
+            (RELIABILITY_RELIABLE, DURABILITY_TRANSIENT_LOCAL)
+        );
+        assert_eq!(
+            l[0].deadline,
+            RmwDuration {
+                sec: 0,
+                nsec: 250_000_000
+            }
+        );
+        assert_eq!(
+            (l[0].lifespan, l[0].history, l[0].depth),
+            (RmwDuration::INFINITE, metrocell_bag::HISTORY_UNKNOWN, 0)
+        );
 
         let s = offered_qos_of_topic(&all, "rt/scan");
-        assert_eq!((s[0].reliability, s[0].durability, s[0].liveliness), (RELIABILITY_BEST_EFFORT, DURABILITY_VOLATILE, LIVELINESS_MANUAL_BY_TOPIC));
-        assert_eq!(s[0].liveliness_lease_duration, RmwDuration { sec: 2, nsec: 0 });
+        assert_eq!(
+            (s[0].reliability, s[0].durability, s[0].liveliness),
+            (
+                RELIABILITY_BEST_EFFORT,
+                DURABILITY_VOLATILE,
+                LIVELINESS_MANUAL_BY_TOPIC
+            )
+        );
+        assert_eq!(
+            s[0].liveliness_lease_duration,
+            RmwDuration { sec: 2, nsec: 0 }
+        );
         assert!(offered_qos_of_topic(&all, "rt/absent").is_empty());
     }
 
     #[test]
     fn recorder_requests_what_every_publisher_offers() {
-        let latched = OfferedQos { durability: DURABILITY_TRANSIENT_LOCAL, ..OfferedQos::default() };
-        let best_effort = OfferedQos { reliability: RELIABILITY_BEST_EFFORT, ..OfferedQos::default() };
+        let latched = OfferedQos {
+            durability: DURABILITY_TRANSIENT_LOCAL,
+            ..OfferedQos::default()
+        };
+        let best_effort = OfferedQos {
+            reliability: RELIABILITY_BEST_EFFORT,
+            ..OfferedQos::default()
+        };
         let plain = OfferedQos::default();
-        assert_eq!(recording_qos(&[plain, plain]), RecordingQos { reliable: true, transient_local: false });
-        assert_eq!(recording_qos(&[latched]), RecordingQos { reliable: true, transient_local: true });
-        assert_eq!(recording_qos(&[latched, plain]), RecordingQos { reliable: true, transient_local: false });
-        assert_eq!(recording_qos(&[plain, best_effort]), RecordingQos { reliable: false, transient_local: false }, "one best-effort publisher");
-        assert_eq!(recording_qos(&[]), RecordingQos { reliable: true, transient_local: false });
+        assert_eq!(
+            recording_qos(&[plain, plain]),
+            RecordingQos {
+                reliable: true,
+                transient_local: false
+            }
+        );
+        assert_eq!(
+            recording_qos(&[latched]),
+            RecordingQos {
+                reliable: true,
+                transient_local: true
+            }
+        );
+        assert_eq!(
+            recording_qos(&[latched, plain]),
+            RecordingQos {
+                reliable: true,
+                transient_local: false
+            }
+        );
+        assert_eq!(
+            recording_qos(&[plain, best_effort]),
+            RecordingQos {
+                reliable: false,
+                transient_local: false
+            },
+            "one best-effort publisher"
+        );
+        assert_eq!(
+            recording_qos(&[]),
+            RecordingQos {
+                reliable: true,
+                transient_local: false
+            }
+        );
     }
 
     #[test]
     fn replay_uses_agreeing_offers_else_the_default() {
-        let latched = OfferedQos { durability: DURABILITY_TRANSIENT_LOCAL, ..OfferedQos::default() };
-        let best_effort = OfferedQos { reliability: RELIABILITY_BEST_EFFORT, ..OfferedQos::default() };
-        assert_eq!(replay_qos(&[latched, latched]), ReplayQos { reliable: true, transient_local: true });
-        assert_eq!(replay_qos(&[best_effort]), ReplayQos { reliable: false, transient_local: false });
-        let default = ReplayQos { reliable: true, transient_local: false };
-        assert_eq!(replay_qos(&[latched, best_effort]), default, "disagreeing publishers");
+        let latched = OfferedQos {
+            durability: DURABILITY_TRANSIENT_LOCAL,
+            ..OfferedQos::default()
+        };
+        let best_effort = OfferedQos {
+            reliability: RELIABILITY_BEST_EFFORT,
+            ..OfferedQos::default()
+        };
+        assert_eq!(
+            replay_qos(&[latched, latched]),
+            ReplayQos {
+                reliable: true,
+                transient_local: true
+            }
+        );
+        assert_eq!(
+            replay_qos(&[best_effort]),
+            ReplayQos {
+                reliable: false,
+                transient_local: false
+            }
+        );
+        let default = ReplayQos {
+            reliable: true,
+            transient_local: false,
+        };
+        assert_eq!(
+            replay_qos(&[latched, best_effort]),
+            default,
+            "disagreeing publishers"
+        );
         assert_eq!(replay_qos(&[]), default);
     }
 }

@@ -59,7 +59,11 @@ pub struct Recording {
 
 impl Recording {
     pub fn create(dir: impl AsRef<Path>, options: WriterOptions) -> Result<Self> {
-        Ok(Self { writer: BagWriter::create(dir, options)?, topics: BTreeMap::new(), last_sequence: HashMap::new() })
+        Ok(Self {
+            writer: BagWriter::create(dir, options)?,
+            topics: BTreeMap::new(),
+            last_sequence: HashMap::new(),
+        })
     }
 
     pub fn dir(&self) -> &Path {
@@ -78,37 +82,64 @@ impl Recording {
     /// Add `topic` with the full definition of `ros_type` from metrocell's registry, or, when
     /// metrocell does not know the type, without a definition (the payloads are still recorded
     /// byte for byte, as rosbag2 does for a type it has no definition of).
-    pub fn add_topic(&mut self, topic: &str, ros_type: &str, qos_yaml: &str) -> Result<TopicDefinition> {
+    pub fn add_topic(
+        &mut self,
+        topic: &str,
+        ros_type: &str,
+        qos_yaml: &str,
+    ) -> Result<TopicDefinition> {
         if let Some(c) = self.topics.get(topic) {
-            return Ok(if c.without_definition { TopicDefinition::Unknown } else { TopicDefinition::Known });
+            return Ok(if c.without_definition {
+                TopicDefinition::Unknown
+            } else {
+                TopicDefinition::Known
+            });
         }
         let kind = match metrocell_msgs::registry().full_definition(ros_type) {
             Ok(definition) => {
-                self.writer.add_topic(topic, ros_type, &definition, qos_yaml)?;
+                self.writer
+                    .add_topic(topic, ros_type, &definition, qos_yaml)?;
                 TopicDefinition::Known
             }
             Err(_) => {
-                self.writer.add_topic_without_definition(topic, ros_type, qos_yaml)?;
+                self.writer
+                    .add_topic_without_definition(topic, ros_type, qos_yaml)?;
                 TopicDefinition::Unknown
             }
         };
-        let counts = TopicCounts { ros_type: ros_type.to_string(), without_definition: kind == TopicDefinition::Unknown, ..Default::default() };
+        let counts = TopicCounts {
+            ros_type: ros_type.to_string(),
+            without_definition: kind == TopicDefinition::Unknown,
+            ..Default::default()
+        };
         self.topics.insert(topic.to_string(), counts);
         Ok(kind)
     }
 
     /// Record one message. `publisher` identifies the DDS writer (e.g. a hash of its GID) and
     /// `sequence` is its sequence number (≤ 0 = unknown, no loss accounting).
-    pub fn record(&mut self, topic: &str, log_ns: u64, publish_ns: u64, payload: &[u8], publisher: u64, sequence: i64) -> Result<()> {
+    pub fn record(
+        &mut self,
+        topic: &str,
+        log_ns: u64,
+        publish_ns: u64,
+        payload: &[u8],
+        publisher: u64,
+        sequence: i64,
+    ) -> Result<()> {
         self.writer.write(topic, log_ns, publish_ns, payload)?;
-        let counts = self.topics.get_mut(topic).expect("write succeeded, so the topic was added");
+        let counts = self
+            .topics
+            .get_mut(topic)
+            .expect("write succeeded, so the topic was added");
         counts.messages += 1;
         counts.bytes += payload.len() as u64;
         if sequence > 0 {
             match self.last_sequence.get_mut(&(topic.to_string(), publisher)) {
                 None => {
                     counts.before_subscription += (sequence - 1) as u64;
-                    self.last_sequence.insert((topic.to_string(), publisher), sequence);
+                    self.last_sequence
+                        .insert((topic.to_string(), publisher), sequence);
                 }
                 Some(last) => {
                     if sequence > *last + 1 {
@@ -164,20 +195,35 @@ mod tests {
         let dir = std::env::temp_dir().join(format!("bagtools_recording_{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         let mut r = Recording::create(&dir, WriterOptions::default()).unwrap();
-        assert_eq!(r.add_topic("/t", "sensor_msgs/msg/Temperature", "").unwrap(), TopicDefinition::Known);
+        assert_eq!(
+            r.add_topic("/t", "sensor_msgs/msg/Temperature", "")
+                .unwrap(),
+            TopicDefinition::Known
+        );
         let payload = rosmsg::encode(
             metrocell_msgs::registry(),
             "sensor_msgs/msg/Temperature",
-            &rosmsg::default_value(metrocell_msgs::registry(), "sensor_msgs/msg/Temperature").unwrap(),
+            &rosmsg::default_value(metrocell_msgs::registry(), "sensor_msgs/msg/Temperature")
+                .unwrap(),
         )
         .unwrap();
         for seq in [1, 2, 5, 6] {
-            r.record("/t", seq as u64 * 10, seq as u64, &payload, 7, seq).unwrap();
+            r.record("/t", seq as u64 * 10, seq as u64, &payload, 7, seq)
+                .unwrap();
         }
         r.record("/t", 100, 100, &payload, 8, 3).unwrap(); // another publisher, starting late
         r.count_unreadable("/t");
         let c = r.counts()["/t"].clone();
-        assert_eq!((c.messages, c.bytes, c.dropped, c.before_subscription, c.unreadable), (5, 5 * payload.len() as u64, 2, 2, 1));
+        assert_eq!(
+            (
+                c.messages,
+                c.bytes,
+                c.dropped,
+                c.before_subscription,
+                c.unreadable
+            ),
+            (5, 5 * payload.len() as u64, 2, 2, 1)
+        );
         assert_eq!((r.total_dropped(), r.total_missing()), (2, 5));
         let meta = r.finish().unwrap();
         assert_eq!(meta.message_count, 5);
@@ -186,18 +232,36 @@ mod tests {
 
     #[test]
     fn a_type_metrocell_does_not_know_is_recorded_raw_without_a_definition() {
-        let dir = std::env::temp_dir().join(format!("bagtools_recording_raw_{}", std::process::id()));
+        let dir =
+            std::env::temp_dir().join(format!("bagtools_recording_raw_{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         let mut r = Recording::create(&dir, WriterOptions::default()).unwrap();
-        assert_eq!(r.add_topic("/u", "unknown_pkg/msg/Nope", "").unwrap(), TopicDefinition::Unknown);
+        assert_eq!(
+            r.add_topic("/u", "unknown_pkg/msg/Nope", "").unwrap(),
+            TopicDefinition::Unknown
+        );
         let raw = [0u8, 1, 0, 0, 0xde, 0xad, 0xbe, 0xef, 7];
         r.record("/u", 10, 10, &raw, 1, 1).unwrap();
         assert!(r.counts()["/u"].without_definition);
         r.finish().unwrap();
         let reader = metrocell_bag::BagReader::open(&dir).unwrap();
-        let t = reader.topics().iter().find(|t| t.name == "/u").expect("topic in the bag").clone();
-        assert_eq!((t.type_name.as_str(), t.schema_encoding.as_str(), t.definition.as_str()), ("unknown_pkg/msg/Nope", "", ""));
-        let msgs = reader.read_all(&metrocell_bag::MessageFilter::default()).unwrap();
+        let t = reader
+            .topics()
+            .iter()
+            .find(|t| t.name == "/u")
+            .expect("topic in the bag")
+            .clone();
+        assert_eq!(
+            (
+                t.type_name.as_str(),
+                t.schema_encoding.as_str(),
+                t.definition.as_str()
+            ),
+            ("unknown_pkg/msg/Nope", "", "")
+        );
+        let msgs = reader
+            .read_all(&metrocell_bag::MessageFilter::default())
+            .unwrap();
         assert_eq!(msgs.len(), 1);
         assert_eq!(msgs[0].data, raw, "payload stored byte for byte");
         let _ = std::fs::remove_dir_all(&dir);

@@ -46,13 +46,33 @@ pub fn is_export_header(header: &[String]) -> bool {
 /// A CSV file's header and rows.
 pub fn csv_rows(path: &Path) -> Result<(Vec<String>, RowSource)> {
     let file = std::fs::File::open(path).map_err(io(path))?;
-    let mut reader = csv::ReaderBuilder::new().has_headers(true).from_reader(std::io::BufReader::new(file));
-    let bad = |e: csv::Error| ToolError::Row { path: path.to_path_buf(), line: e.position().map_or(1, |p| p.line()), column: "-".into(), reason: e.to_string() };
-    let header = reader.headers().map_err(bad)?.iter().map(str::to_string).collect();
+    let mut reader = csv::ReaderBuilder::new()
+        .has_headers(true)
+        .from_reader(std::io::BufReader::new(file));
+    let bad = |e: csv::Error| ToolError::Row {
+        path: path.to_path_buf(),
+        line: e.position().map_or(1, |p| p.line()),
+        column: "-".into(),
+        reason: e.to_string(),
+    };
+    let header = reader
+        .headers()
+        .map_err(bad)?
+        .iter()
+        .map(str::to_string)
+        .collect();
     let owned = path.to_path_buf();
     let rows = reader.into_records().map(move |r| match r {
-        Ok(record) => Ok((record.position().map_or(0, |p| p.line()), record.iter().map(str::to_string).collect())),
-        Err(e) => Err(ToolError::Row { path: owned.clone(), line: e.position().map_or(0, |p| p.line()), column: "-".into(), reason: e.to_string() }),
+        Ok(record) => Ok((
+            record.position().map_or(0, |p| p.line()),
+            record.iter().map(str::to_string).collect(),
+        )),
+        Err(e) => Err(ToolError::Row {
+            path: owned.clone(),
+            line: e.position().map_or(0, |p| p.line()),
+            column: "-".into(),
+            reason: e.to_string(),
+        }),
     });
     Ok((header, Box::new(rows)))
 }
@@ -61,7 +81,11 @@ pub fn csv_rows(path: &Path) -> Result<(Vec<String>, RowSource)> {
 /// the type the one metrocell message type whose export columns are `header`.
 pub fn inferred_topic(path: &Path, header: &[String]) -> Result<ManifestTopic> {
     let registry = metrocell_msgs::registry();
-    let matching: Vec<String> = registry.ros_type_names().into_iter().filter(|t| export_columns(registry, t).is_ok_and(|c| c == header)).collect();
+    let matching: Vec<String> = registry
+        .ros_type_names()
+        .into_iter()
+        .filter(|t| export_columns(registry, t).is_ok_and(|c| c == header))
+        .collect();
     let bad = |reason: String| ToolError::Invalid(format!("{}: {reason}", path.display()));
     let type_name = match matching.as_slice() {
         [one] => one.clone(),
@@ -70,7 +94,17 @@ pub fn inferred_topic(path: &Path, header: &[String]) -> Result<ManifestTopic> {
     };
     let topic = topic_of_file(path).ok_or_else(|| bad("the file name gives no topic".into()))?;
     let definition = registry.full_definition(&type_name).unwrap_or_default();
-    Ok(ManifestTopic { topic, type_name, file: path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default(), messages: 0, offered_qos_profiles: String::new(), definition })
+    Ok(ManifestTopic {
+        topic,
+        type_name,
+        file: path
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default(),
+        messages: 0,
+        offered_qos_profiles: String::new(),
+        definition,
+    })
 }
 
 /// How a column's text becomes its field's value.
@@ -97,7 +131,8 @@ struct MessageLayout {
 impl MessageLayout {
     fn new(topic: &ManifestTopic, header: &[String]) -> std::result::Result<Self, String> {
         let registry = registry_for_type(&topic.type_name, &topic.definition)?;
-        let empty = rosmsg::default_value(&registry, &topic.type_name).map_err(|e| e.to_string())?;
+        let empty =
+            rosmsg::default_value(&registry, &topic.type_name).map_err(|e| e.to_string())?;
         let mut columns = Vec::new();
         for name in &header[2..] {
             let leaf = match empty.at_path(name) {
@@ -107,24 +142,42 @@ impl MessageLayout {
                 Some(Value::Bool(_)) => Leaf::Bool,
                 Some(Value::String(_)) => Leaf::Text,
                 Some(Value::Array(_)) => Leaf::Json,
-                _ => return Err(format!("column `{name}` is not a field of {}", topic.type_name)),
+                _ => {
+                    return Err(format!(
+                        "column `{name}` is not a field of {}",
+                        topic.type_name
+                    ))
+                }
             };
             columns.push((format!("/{}", name.replace('.', "/")), leaf));
         }
-        Ok(Self { template: rosmsg::to_json(&empty), registry, type_name: topic.type_name.clone(), columns })
+        Ok(Self {
+            template: rosmsg::to_json(&empty),
+            registry,
+            type_name: topic.type_name.clone(),
+            columns,
+        })
     }
 
     /// The CDR bytes of the message a row's cells (after the two times) describe; an error names
     /// the column.
-    fn encode(&self, header: &[String], cells: &[String]) -> std::result::Result<Vec<u8>, (String, String)> {
+    fn encode(
+        &self,
+        header: &[String],
+        cells: &[String],
+    ) -> std::result::Result<Vec<u8>, (String, String)> {
         let mut json = self.template.clone();
         for (k, ((pointer, leaf), text)) in self.columns.iter().zip(cells).enumerate() {
             let column = || header[k + 2].clone();
             let value = cell_json(*leaf, text).map_err(|reason| (column(), reason))?;
-            *json.pointer_mut(pointer).ok_or_else(|| (column(), "no such field".to_string()))? = value;
+            *json
+                .pointer_mut(pointer)
+                .ok_or_else(|| (column(), "no such field".to_string()))? = value;
         }
-        let value = rosmsg::from_json(&self.registry, &self.type_name, &json).map_err(|e| ("-".to_string(), e.to_string()))?;
-        rosmsg::encode(&self.registry, &self.type_name, &value).map_err(|e| ("-".to_string(), e.to_string()))
+        let value = rosmsg::from_json(&self.registry, &self.type_name, &json)
+            .map_err(|e| ("-".to_string(), e.to_string()))?;
+        rosmsg::encode(&self.registry, &self.type_name, &value)
+            .map_err(|e| ("-".to_string(), e.to_string()))
     }
 }
 
@@ -140,11 +193,25 @@ fn cell_json(leaf: Leaf, text: &str) -> std::result::Result<serde_json::Value, S
                 None => "-inf".into(),
             }
         }
-        Leaf::Int => text.trim().parse::<i64>().map_err(|_| not("an integer"))?.into(),
-        Leaf::UInt => text.trim().parse::<u64>().map_err(|_| not("a non-negative integer"))?.into(),
-        Leaf::Bool => text.trim().parse::<bool>().map_err(|_| not("true or false"))?.into(),
+        Leaf::Int => text
+            .trim()
+            .parse::<i64>()
+            .map_err(|_| not("an integer"))?
+            .into(),
+        Leaf::UInt => text
+            .trim()
+            .parse::<u64>()
+            .map_err(|_| not("a non-negative integer"))?
+            .into(),
+        Leaf::Bool => text
+            .trim()
+            .parse::<bool>()
+            .map_err(|_| not("true or false"))?
+            .into(),
         Leaf::Text => text.into(),
-        Leaf::Json => serde_json::from_str(text).map_err(|e| format!("'{text}' is not a JSON array: {e}"))?,
+        Leaf::Json => {
+            serde_json::from_str(text).map_err(|e| format!("'{text}' is not a JSON array: {e}"))?
+        }
     })
 }
 
@@ -175,35 +242,65 @@ impl Pending {
                     self.next = Some((log, publish, line, cells));
                     return;
                 }
-                (Some(_), Some(_)) => report.errors.push(self.row_error(line, "-", format!("{} cells, the header has {}", cells.len(), self.file.header.len()))),
-                _ => report.errors.push(self.row_error(line, "log_time_ns", "log_time_ns and publish_time_ns must be integers (ns since the epoch)".into())),
+                (Some(_), Some(_)) => report.errors.push(self.row_error(
+                    line,
+                    "-",
+                    format!(
+                        "{} cells, the header has {}",
+                        cells.len(),
+                        self.file.header.len()
+                    ),
+                )),
+                _ => report.errors.push(self.row_error(
+                    line,
+                    "log_time_ns",
+                    "log_time_ns and publish_time_ns must be integers (ns since the epoch)".into(),
+                )),
             }
         }
     }
 
     fn row_error(&self, line: u64, column: &str, reason: String) -> ToolError {
-        ToolError::Row { path: self.file.path.clone(), line, column: column.into(), reason }
+        ToolError::Row {
+            path: self.file.path.clone(),
+            line,
+            column: column.into(),
+            reason,
+        }
     }
 }
 
 /// Rebuild the bag `output` (must not exist yet) from exported files: every row a message at
 /// its recorded log and publish time. Bad rows are reported (file, line, column) and skipped.
-pub fn rebuild_bag(files: Vec<ExportedFile>, output: &Path, options: WriterOptions) -> Result<ImportReport> {
+pub fn rebuild_bag(
+    files: Vec<ExportedFile>,
+    output: &Path,
+    options: WriterOptions,
+) -> Result<ImportReport> {
     let mut report = ImportReport::default();
     let mut pending = Vec::new();
     for file in files {
         if !is_export_header(&file.header) {
             return Err(ToolError::Invalid(format!("{}: not a `bag export` file (its header does not start with log_time_ns,publish_time_ns)", file.path.display())));
         }
-        let layout = MessageLayout::new(&file.topic, &file.header).map_err(|e| ToolError::Invalid(format!("{}: {e}", file.path.display())))?;
-        pending.push(Pending { file, layout, next: None });
+        let layout = MessageLayout::new(&file.topic, &file.header)
+            .map_err(|e| ToolError::Invalid(format!("{}: {e}", file.path.display())))?;
+        pending.push(Pending {
+            file,
+            layout,
+            next: None,
+        });
     }
     let mut writer = BagWriter::create(output, options)?;
     let default_qos = qos_profiles_yaml(&[QosProfile::default_publisher()]);
     let mut counts: BTreeMap<String, u64> = BTreeMap::new();
     for p in pending.iter_mut() {
         let t = &p.file.topic;
-        let qos = if t.offered_qos_profiles.is_empty() { &default_qos } else { &t.offered_qos_profiles };
+        let qos = if t.offered_qos_profiles.is_empty() {
+            &default_qos
+        } else {
+            &t.offered_qos_profiles
+        };
         if t.definition.is_empty() {
             writer.add_topic_without_definition(&t.topic, &t.type_name, qos)?;
         } else {
@@ -213,7 +310,10 @@ pub fn rebuild_bag(files: Vec<ExportedFile>, output: &Path, options: WriterOptio
         p.advance(&mut report);
     }
     // k-way merge by log time; ties keep the files' order
-    while let Some(i) = (0..pending.len()).filter(|&i| pending[i].next.is_some()).min_by_key(|&i| pending[i].next.as_ref().map(|n| n.0)) {
+    while let Some(i) = (0..pending.len())
+        .filter(|&i| pending[i].next.is_some())
+        .min_by_key(|&i| pending[i].next.as_ref().map(|n| n.0))
+    {
         let (log, publish, line, cells) = pending[i].next.take().expect("filtered on is_some");
         let p = &pending[i];
         match p.layout.encode(&p.file.header, &cells[2..]) {

@@ -47,7 +47,9 @@ impl ReplayOutput {
     pub fn finish(self) -> Result<()> {
         match self {
             ReplayOutput::Bag(sink) => sink.finish().map(|_| ()),
-            ReplayOutput::JsonLines(mut out) => out.flush().map_err(|e| ToolError::Invalid(format!("stdout: {e}"))),
+            ReplayOutput::JsonLines(mut out) => out
+                .flush()
+                .map_err(|e| ToolError::Invalid(format!("stdout: {e}"))),
         }
     }
 }
@@ -60,19 +62,30 @@ mod tests {
 
     #[test]
     fn bag_output_reads_back_and_unadvertised_topics_are_refused() {
-        let dir = std::env::temp_dir().join(format!("metrocell-replay-output-{}", std::process::id()));
+        let dir =
+            std::env::temp_dir().join(format!("metrocell-replay-output-{}", std::process::id()));
         let _ = std::fs::remove_dir_all(&dir);
         let mut out = ReplayOutput::open(Some(&dir)).unwrap();
         out.advertise::<Header>("/out").unwrap();
-        let h = Header { frame_id: "f".into(), ..Default::default() };
+        let h = Header {
+            frame_id: "f".into(),
+            ..Default::default()
+        };
         out.write("/out", &h, 42).unwrap();
-        assert!(out.write("/other", &h, 43).unwrap_err().to_string().contains("/other"));
+        assert!(out
+            .write("/other", &h, 43)
+            .unwrap_err()
+            .to_string()
+            .contains("/other"));
         out.finish().unwrap();
         let mut src = BagSource::open(&dir).unwrap();
         src.subscribe::<Header>("/out").unwrap();
         let got: Vec<_> = src.messages().unwrap().map(|m| m.unwrap()).collect();
         assert_eq!(got.len(), 1);
-        assert_eq!((got[0].log_time_ns, got[0].decode::<Header>().unwrap()), (42, h));
+        assert_eq!(
+            (got[0].log_time_ns, got[0].decode::<Header>().unwrap()),
+            (42, h)
+        );
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -22,13 +22,21 @@ fn anchored(pattern: &str) -> Result<Option<Regex>> {
     }
     Regex::new(&format!("^(?:{pattern})$"))
         .map(Some)
-        .map_err(|e| ToolError::Regex { pattern: pattern.to_string(), reason: e.to_string() })
+        .map_err(|e| ToolError::Regex {
+            pattern: pattern.to_string(),
+            reason: e.to_string(),
+        })
 }
 
 impl TopicSelection {
     /// `topics`: explicit names (empty = all); `include`/`exclude`: regexes ("" = none).
     pub fn new(topics: Vec<String>, include: &str, exclude: &str) -> Result<Self> {
-        Ok(Self { topics, include: anchored(include)?, exclude: anchored(exclude)?, patterns: (include.to_string(), exclude.to_string()) })
+        Ok(Self {
+            topics,
+            include: anchored(include)?,
+            exclude: anchored(exclude)?,
+            patterns: (include.to_string(), exclude.to_string()),
+        })
     }
 
     /// The selection in words, for messages: "topics /a, /b and regex '/camera/.*', excluding '/camera/debug.*'".
@@ -40,7 +48,11 @@ impl TopicSelection {
         if !self.patterns.0.is_empty() {
             parts.push(format!("regex '{}'", self.patterns.0));
         }
-        let mut s = if parts.is_empty() { "every topic".to_string() } else { parts.join(" and ") };
+        let mut s = if parts.is_empty() {
+            "every topic".to_string()
+        } else {
+            parts.join(" and ")
+        };
         if !self.patterns.1.is_empty() {
             s.push_str(&format!(", excluding '{}'", self.patterns.1));
         }
@@ -79,8 +91,14 @@ mod tests {
         let l = TopicSelection::new(vec!["/a".into()], "", "").unwrap();
         assert!(l.matches("/a") && !l.matches("/b"));
         assert!(TopicSelection::all().matches("/anything"));
-        assert!(matches!(TopicSelection::new(vec![], "(", ""), Err(ToolError::Regex { .. })));
-        assert_eq!(s.describe(), "regex '/camera/.*|/tracker', excluding '/camera/debug.*'");
+        assert!(matches!(
+            TopicSelection::new(vec![], "(", ""),
+            Err(ToolError::Regex { .. })
+        ));
+        assert_eq!(
+            s.describe(),
+            "regex '/camera/.*|/tracker', excluding '/camera/debug.*'"
+        );
         assert_eq!(l.describe(), "topics /a");
     }
 }

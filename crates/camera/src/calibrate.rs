@@ -11,12 +11,12 @@
 use crate::distortion::Distortion;
 use crate::error::{invalid, CameraError, Result};
 use crate::homography::homography_dlt;
-use crate::solver_bridge::{not_evaluable, solve_pixels};
-use metrocell_solver::{NotEvaluable, Problem};
 use crate::model::CameraModel;
 use crate::pose::Pose;
 use crate::pose_estimation::refine_pose;
+use crate::solver_bridge::{not_evaluable, solve_pixels};
 use crate::zhang::{focal_from_homographies, intrinsics_from_homographies, pose_from_homography};
+use metrocell_solver::{NotEvaluable, Problem};
 use nalgebra::{DMatrix, DVector, Matrix3, Vector3};
 
 /// One image of the target: corresponding target points (z = 0) and pixels.
@@ -212,7 +212,9 @@ impl Problem for CalibrationProblem<'_> {
         for (v, (obj, img)) in self.views.iter().enumerate() {
             let pose = self.pose(x, v);
             for (o, m) in obj.iter().zip(img.iter()) {
-                let [u, w] = cam.project(&pose, &Vector3::from(*o)).map_err(not_evaluable)?;
+                let [u, w] = cam
+                    .project(&pose, &Vector3::from(*o))
+                    .map_err(not_evaluable)?;
                 r[row] = u - m[0];
                 r[row + 1] = w - m[1];
                 row += 2;
@@ -220,7 +222,12 @@ impl Problem for CalibrationProblem<'_> {
         }
         Ok(())
     }
-    fn residuals_and_jacobian(&self, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>) -> std::result::Result<(), NotEvaluable> {
+    fn residuals_and_jacobian(
+        &self,
+        x: &[f64],
+        r: &mut [f64],
+        j: &mut DMatrix<f64>,
+    ) -> std::result::Result<(), NotEvaluable> {
         let cam = self.camera(x);
         let ni = self.t.ncols();
         let nfull = self.t.nrows();
@@ -230,11 +237,14 @@ impl Problem for CalibrationProblem<'_> {
         for (v, (obj, img)) in self.views.iter().enumerate() {
             let pose = self.pose(x, v);
             for (o, m) in obj.iter().zip(img.iter()) {
-                let pr = cam.project_with_jacobians(&pose, &Vector3::from(*o)).map_err(not_evaluable)?;
+                let pr = cam
+                    .project_with_jacobians(&pose, &Vector3::from(*o))
+                    .map_err(not_evaluable)?;
                 r[row] = pr.u - m[0];
                 r[row + 1] = pr.v - m[1];
                 full.view_mut((0, 0), (2, 4)).copy_from(&pr.d_intrinsics);
-                full.view_mut((0, 4), (2, nfull - 4)).copy_from(&pr.d_distortion);
+                full.view_mut((0, 4), (2, nfull - 4))
+                    .copy_from(&pr.d_distortion);
                 j.view_mut((row, 0), (2, ni)).copy_from(&(&full * &self.t));
                 j.view_mut((row, ni + 6 * v), (2, 6)).copy_from(&pr.d_pose);
                 row += 2;
@@ -249,7 +259,8 @@ impl Problem for CalibrationProblem<'_> {
         }
         for v in 0..self.views.len() {
             let at = ni + 6 * v;
-            out[at..at + 6].copy_from_slice(&self.pose(x, v).perturbed(&delta[at..at + 6]).to_state());
+            out[at..at + 6]
+                .copy_from_slice(&self.pose(x, v).perturbed(&delta[at..at + 6]).to_state());
         }
     }
 }

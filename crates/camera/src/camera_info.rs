@@ -77,11 +77,22 @@ impl CameraInfo {
     /// [`CameraModel::params`]), None when the file states none; an error names a matrix of the
     /// wrong size, a negative variance or a non-finite value.
     pub fn intrinsics_covariance(&self) -> Result<Option<nalgebra::DMatrix<f64>>> {
-        let Some(data) = &self.intrinsics_covariance else { return Ok(None) };
+        let Some(data) = &self.intrinsics_covariance else {
+            return Ok(None);
+        };
         let n = 4 + self.distortion_coefficients.len();
-        let err = |reason: String| CameraError::CameraInfo { source_name: self.camera_name.clone(), field: "intrinsics_covariance".into(), reason };
+        let err = |reason: String| CameraError::CameraInfo {
+            source_name: self.camera_name.clone(),
+            field: "intrinsics_covariance".into(),
+            reason,
+        };
         if data.len() != n * n {
-            return Err(err(format!("has {} numbers; fx, fy, cx, cy and {} coefficients need {n}×{n} = {}", data.len(), n - 4, n * n)));
+            return Err(err(format!(
+                "has {} numbers; fx, fy, cx, cy and {} coefficients need {n}×{n} = {}",
+                data.len(),
+                n - 4,
+                n * n
+            )));
         }
         let m = nalgebra::DMatrix::from_row_slice(n, n, data);
         if let Some(i) = (0..n).find(|&i| !(m[(i, i)] >= 0.0)) {
@@ -406,16 +417,47 @@ projection_matrix:
 
     #[test]
     fn the_intrinsics_covariance_round_trips_and_a_wrong_size_is_named() {
-        let cam = CameraModel::new(800, 600, 700.0, 705.0, 405.3, 296.8, Distortion::BrownConrady([-0.12, 0.05, 0.0, 0.0, 0.0])).unwrap();
-        let cov = nalgebra::DMatrix::from_fn(9, 9, |i, j| if i == j { 0.01 * (i + 1) as f64 } else { 1e-4 * (i + j) as f64 });
+        let cam = CameraModel::new(
+            800,
+            600,
+            700.0,
+            705.0,
+            405.3,
+            296.8,
+            Distortion::BrownConrady([-0.12, 0.05, 0.0, 0.0, 0.0]),
+        )
+        .unwrap();
+        let cov = nalgebra::DMatrix::from_fn(9, 9, |i, j| {
+            if i == j {
+                0.01 * (i + 1) as f64
+            } else {
+                1e-4 * (i + j) as f64
+            }
+        });
         let ci = CameraInfo::from_model("cam", &cam).with_intrinsics_covariance(&cov);
         let text = ci.to_yaml();
-        assert!(text.contains("intrinsics_covariance:\n  rows: 9\n  cols: 9\n"), "{text}");
+        assert!(
+            text.contains("intrinsics_covariance:\n  rows: 9\n  cols: 9\n"),
+            "{text}"
+        );
         let back = CameraInfo::from_yaml(&text, "cov.yaml").unwrap();
         assert_eq!(back.intrinsics_covariance().unwrap().unwrap(), cov);
-        assert_eq!(CameraInfo::from_yaml(ROS_SAMPLE, "ros").unwrap().intrinsics_covariance().unwrap(), None);
+        assert_eq!(
+            CameraInfo::from_yaml(ROS_SAMPLE, "ros")
+                .unwrap()
+                .intrinsics_covariance()
+                .unwrap(),
+            None
+        );
         let bad = text.replace("  rows: 9\n  cols: 9\n", "  rows: 3\n  cols: 3\n");
-        let e = CameraInfo::from_yaml(&bad, "cov.yaml").unwrap_err().to_string();
-        assert!(e.contains("cov.yaml") && e.contains("intrinsics_covariance") && e.contains("expected 9×9"), "{e}");
+        let e = CameraInfo::from_yaml(&bad, "cov.yaml")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("cov.yaml")
+                && e.contains("intrinsics_covariance")
+                && e.contains("expected 9×9"),
+            "{e}"
+        );
     }
 }

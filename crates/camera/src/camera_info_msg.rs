@@ -54,8 +54,32 @@ mod tests {
     #[test]
     fn both_lens_models_round_trip_through_the_message() {
         for (cam, name) in [
-            (CameraModel::new(640, 480, 500.0, 501.0, 320.5, 240.5, Distortion::BrownConrady([-0.1, 0.02, 1e-3, -1e-3, 0.0])).unwrap(), "plumb_bob"),
-            (CameraModel::new(640, 480, 500.0, 501.0, 320.5, 240.5, Distortion::Fisheye([0.01, -0.002, 0.0, 0.0])).unwrap(), "equidistant"),
+            (
+                CameraModel::new(
+                    640,
+                    480,
+                    500.0,
+                    501.0,
+                    320.5,
+                    240.5,
+                    Distortion::BrownConrady([-0.1, 0.02, 1e-3, -1e-3, 0.0]),
+                )
+                .unwrap(),
+                "plumb_bob",
+            ),
+            (
+                CameraModel::new(
+                    640,
+                    480,
+                    500.0,
+                    501.0,
+                    320.5,
+                    240.5,
+                    Distortion::Fisheye([0.01, -0.002, 0.0, 0.0]),
+                )
+                .unwrap(),
+                "equidistant",
+            ),
         ] {
             let msg = CameraInfo::from_model("cam", &cam).to_msg();
             assert_eq!(msg.distortion_model, name);
@@ -65,7 +89,8 @@ mod tests {
 
     #[test]
     fn an_unsupported_distortion_model_is_named() {
-        let cam = CameraModel::new(640, 480, 500.0, 501.0, 320.5, 240.5, Distortion::none()).unwrap();
+        let cam =
+            CameraModel::new(640, 480, 500.0, 501.0, 320.5, 240.5, Distortion::none()).unwrap();
         let mut msg = CameraInfo::from_model("cam", &cam).to_msg();
         msg.distortion_model = "rational_polynomial".into();
         let e = camera_model_from_msg(&msg).unwrap_err();

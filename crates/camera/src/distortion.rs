@@ -142,7 +142,8 @@ impl Distortion {
                 let mut theta = rd.min(1.5);
                 for _ in 0..50 {
                     let t2 = theta * theta;
-                    let f = theta * (1.0 + t2 * (k[0] + t2 * (k[1] + t2 * (k[2] + t2 * k[3])))) - rd;
+                    let f =
+                        theta * (1.0 + t2 * (k[0] + t2 * (k[1] + t2 * (k[2] + t2 * k[3])))) - rd;
                     if f.abs() < 1e-13 {
                         if !(0.0..std::f64::consts::FRAC_PI_2).contains(&theta) {
                             return None;
@@ -151,7 +152,8 @@ impl Distortion {
                         return Some((xd * s, yd * s));
                     }
                     let df = 1.0
-                        + t2 * (3.0 * k[0] + t2 * (5.0 * k[1] + t2 * (7.0 * k[2] + t2 * 9.0 * k[3])));
+                        + t2 * (3.0 * k[0]
+                            + t2 * (5.0 * k[1] + t2 * (7.0 * k[2] + t2 * 9.0 * k[3])));
                     if !(df.abs() > 1e-15) {
                         return None;
                     }

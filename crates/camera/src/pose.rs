@@ -55,7 +55,14 @@ impl Pose {
     /// The pose as the solver's flat state (t, rvec): translation (m), then rotation vector (rad).
     pub(crate) fn to_state(self) -> [f64; 6] {
         let r = self.rvec();
-        [self.translation.x, self.translation.y, self.translation.z, r[0], r[1], r[2]]
+        [
+            self.translation.x,
+            self.translation.y,
+            self.translation.z,
+            r[0],
+            r[1],
+            r[2],
+        ]
     }
 
     /// Inverse of [`Self::to_state`] (the first six values of `x`).

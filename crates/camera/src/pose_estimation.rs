@@ -10,11 +10,11 @@
 
 use crate::error::{CameraError, Result};
 use crate::homography::homography_dlt;
-use crate::solver_bridge::{not_evaluable, solve_pixels};
-use metrocell_solver::{NotEvaluable, Problem};
 use crate::model::CameraModel;
 use crate::pose::Pose;
+use crate::solver_bridge::{not_evaluable, solve_pixels};
 use crate::undistort::{undistort_to_normalized, UndistortCriteria};
+use metrocell_solver::{NotEvaluable, Problem};
 use nalgebra::{DMatrix, Matrix3, Matrix6, Rotation3, Vector3};
 
 /// A refined pose with its uncertainty.
@@ -265,10 +265,18 @@ impl Problem for PoseProblem<'_> {
         }
         Ok(())
     }
-    fn residuals_and_jacobian(&self, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>) -> std::result::Result<(), NotEvaluable> {
+    fn residuals_and_jacobian(
+        &self,
+        x: &[f64],
+        r: &mut [f64],
+        j: &mut DMatrix<f64>,
+    ) -> std::result::Result<(), NotEvaluable> {
         let pose = Pose::from_state(x);
         for (i, (p, m)) in self.object.iter().zip(self.image).enumerate() {
-            let pr = self.cam.project_with_jacobians(&pose, p).map_err(not_evaluable)?;
+            let pr = self
+                .cam
+                .project_with_jacobians(&pose, p)
+                .map_err(not_evaluable)?;
             r[2 * i] = pr.u - m[0];
             r[2 * i + 1] = pr.v - m[1];
             j.view_mut((2 * i, 0), (2, 6)).copy_from(&pr.d_pose);
@@ -296,11 +304,17 @@ pub fn refine_pose(
     };
     let out = solve_pixels(&problem, &initial.to_state(), 100, "pose refinement")?;
     let rms = (out.residuals.iter().map(|v| v * v).sum::<f64>() / object.len() as f64).sqrt();
-    let inv = out.covariance_unscaled.ok_or_else(|| CameraError::Degenerate {
-        what: "pose refinement".into(),
-        reason: "pose not observable (JᵀJ singular)".into(),
-    })?;
-    Ok((Pose::from_state(&out.x), rms, Matrix6::from_iterator(inv.iter().copied())))
+    let inv = out
+        .covariance_unscaled
+        .ok_or_else(|| CameraError::Degenerate {
+            what: "pose refinement".into(),
+            reason: "pose not observable (JᵀJ singular)".into(),
+        })?;
+    Ok((
+        Pose::from_state(&out.x),
+        rms,
+        Matrix6::from_iterator(inv.iter().copied()),
+    ))
 }
 
 fn check_sigma(sigma_px: f64) -> Result<()> {

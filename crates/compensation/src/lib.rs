@@ -25,13 +25,13 @@ pub mod thermal_signals;
 pub mod thermal_workpiece_compensation;
 pub mod tracker_correction;
 
+/// The one first-order lag filter of the workspace (crates/physics).
+pub use metrocell_physics::thermal::first_order_lag::FirstOrderLag;
 pub use spherical::{spherical_to_cartesian, to_spherical, SphericalNoise};
 pub use thermal_compensator::ThermalCompensator;
 pub use thermal_error::{Reading, ThermalError};
 pub use thermal_growth_compensation::{GrowthCompensator, GrowthSpec};
 pub use thermal_growth_fit::{GrowthFit, GrowthFitResult};
-/// The one first-order lag filter of the workspace (crates/physics).
-pub use metrocell_physics::thermal::first_order_lag::FirstOrderLag;
 pub use thermal_scale_compensation::{AxisSensorPlacement, ThermalScaleCompensator};
 pub use thermal_scale_fit::{ScaleFit, ScaleFitResult};
 pub use thermal_workpiece_compensation::WorkpieceCompensator;

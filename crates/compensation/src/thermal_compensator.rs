@@ -23,7 +23,12 @@ impl ThermalCompensator {
     /// Every sensor any term reads, each once, sorted. A correction needs a fresh reading of each
     /// (the lagged growth terms carry their own state, but their sensor must still be reporting).
     pub fn sensor_names(&self) -> Vec<String> {
-        let mut s: BTreeSet<String> = self.scale.sensors().iter().map(|p| p.name.clone()).collect();
+        let mut s: BTreeSet<String> = self
+            .scale
+            .sensors()
+            .iter()
+            .map(|p| p.name.clone())
+            .collect();
         s.extend(self.growth.iter().map(|g| g.spec.sensor.clone()));
         s.extend(self.workpiece.iter().map(|w| w.sensor.clone()));
         s.into_iter().collect()
@@ -37,25 +42,40 @@ impl ThermalCompensator {
     }
 
     /// The drift at `nominal` (see [`crate::thermal_drift`] for the convention) and its covariance.
-    pub fn drift(&self, nominal: &Vector3<f64>, reading: &dyn Fn(&str) -> Option<Reading>) -> Result<(Vector3<f64>, Matrix3<f64>), ThermalError> {
+    pub fn drift(
+        &self,
+        nominal: &Vector3<f64>,
+        reading: &dyn Fn(&str) -> Option<Reading>,
+    ) -> Result<(Vector3<f64>, Matrix3<f64>), ThermalError> {
         if !nominal.iter().all(|v| v.is_finite()) {
-            return Err(ThermalError::NotFinite { what: "nominal point".into() });
+            return Err(ThermalError::NotFinite {
+                what: "nominal point".into(),
+            });
         }
         let mut terms: Vec<TermDrift> = self.scale.drift(nominal, reading)?;
         for g in &self.growth {
             terms.push(g.drift(nominal)?);
         }
         if let Some(w) = &self.workpiece {
-            let r = reading(&w.sensor).ok_or_else(|| ThermalError::NoReading(w.sensor.clone(), "workpiece_expansion"))?;
+            let r = reading(&w.sensor)
+                .ok_or_else(|| ThermalError::NoReading(w.sensor.clone(), "workpiece_expansion"))?;
             terms.push(w.drift(nominal, r)?);
         }
         Ok(total_drift(&terms))
     }
 
     /// `measured` with the drift at `nominal` removed, covariance enlarged by the drift's.
-    pub fn compensate(&self, nominal: &Vector3<f64>, measured: &Vector3<f64>, cov: &Matrix3<f64>, reading: &dyn Fn(&str) -> Option<Reading>) -> Result<(Vector3<f64>, Matrix3<f64>), ThermalError> {
+    pub fn compensate(
+        &self,
+        nominal: &Vector3<f64>,
+        measured: &Vector3<f64>,
+        cov: &Matrix3<f64>,
+        reading: &dyn Fn(&str) -> Option<Reading>,
+    ) -> Result<(Vector3<f64>, Matrix3<f64>), ThermalError> {
         if !measured.iter().all(|v| v.is_finite()) || !cov.iter().all(|v| v.is_finite()) {
-            return Err(ThermalError::NotFinite { what: "measured point or its covariance".into() });
+            return Err(ThermalError::NotFinite {
+                what: "measured point or its covariance".into(),
+            });
         }
         let (d, d_cov) = self.drift(nominal, reading)?;
         Ok((measured - d, cov + d_cov))
@@ -70,10 +90,23 @@ mod tests {
     use metrocell_physics::thermal::cte_uncertainty::cte_standard_uncertainty;
 
     fn compensator(u_alpha: f64) -> ThermalCompensator {
-        let scale = ThermalScaleCompensator::new(11.5e-6, u_alpha, 20.0, vec![
-            AxisSensorPlacement { name: "x_left".into(), axis: 0, position: 0.0 },
-            AxisSensorPlacement { name: "x_right".into(), axis: 0, position: 0.8 },
-        ])
+        let scale = ThermalScaleCompensator::new(
+            11.5e-6,
+            u_alpha,
+            20.0,
+            vec![
+                AxisSensorPlacement {
+                    name: "x_left".into(),
+                    axis: 0,
+                    position: 0.0,
+                },
+                AxisSensorPlacement {
+                    name: "x_right".into(),
+                    axis: 0,
+                    position: 0.8,
+                },
+            ],
+        )
         .unwrap();
         let growth = GrowthCompensator::new(GrowthSpec {
             sensor: "column".into(),
@@ -86,7 +119,11 @@ mod tests {
             calibration_uncertainty: 0.0,
         })
         .unwrap();
-        ThermalCompensator { scale, growth: vec![growth], workpiece: None }
+        ThermalCompensator {
+            scale,
+            growth: vec![growth],
+            workpiece: None,
+        }
     }
 
     fn readings(n: &str) -> Option<Reading> {
@@ -123,10 +160,24 @@ mod tests {
     #[test]
     fn missing_and_bad_inputs_are_named() {
         let c = compensator(0.0);
-        assert_eq!(c.drift(&Vector3::zeros(), &readings).unwrap_err(), ThermalError::NoReading("column".into(), "thermal_growth"));
-        let e = c.compensate(&Vector3::zeros(), &Vector3::new(f64::NAN, 0.0, 0.0), &Matrix3::zeros(), &readings).unwrap_err();
+        assert_eq!(
+            c.drift(&Vector3::zeros(), &readings).unwrap_err(),
+            ThermalError::NoReading("column".into(), "thermal_growth")
+        );
+        let e = c
+            .compensate(
+                &Vector3::zeros(),
+                &Vector3::new(f64::NAN, 0.0, 0.0),
+                &Matrix3::zeros(),
+                &readings,
+            )
+            .unwrap_err();
         assert_eq!(e.reason(), "not_finite");
-        let e = c.drift(&Vector3::new(0.1, 0.0, 0.0), &|n| (n != "x_right").then_some((21.0, 0.0))).unwrap_err();
+        let e = c
+            .drift(&Vector3::new(0.1, 0.0, 0.0), &|n| {
+                (n != "x_right").then_some((21.0, 0.0))
+            })
+            .unwrap_err();
         assert_eq!(e, ThermalError::NoReading("x_right".into(), "x"));
     }
 }

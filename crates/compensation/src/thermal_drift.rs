@@ -38,7 +38,9 @@ pub fn total_drift(terms: &[TermDrift]) -> (Vector3<f64>, Matrix3<f64>) {
         d += t.displacement;
         cov += t.parameter_covariance;
         for s in &t.temperatures {
-            let e = by_input.entry(s.input.as_str()).or_insert((Vector3::zeros(), s.variance));
+            let e = by_input
+                .entry(s.input.as_str())
+                .or_insert((Vector3::zeros(), s.variance));
             e.0 += s.d_drift_d_temperature;
         }
     }
@@ -54,9 +56,21 @@ mod tests {
 
     #[test]
     fn a_shared_sensor_adds_its_sensitivities_before_squaring() {
-        let s = |v: f64| TemperatureSensitivity { input: "t".into(), d_drift_d_temperature: Vector3::new(v, 0.0, 0.0), variance: 4.0 };
-        let a = TermDrift { displacement: Vector3::new(1.0, 0.0, 0.0), temperatures: vec![s(1.0)], parameter_covariance: Matrix3::identity() };
-        let b = TermDrift { displacement: Vector3::new(0.0, 2.0, 0.0), temperatures: vec![s(2.0)], parameter_covariance: Matrix3::zeros() };
+        let s = |v: f64| TemperatureSensitivity {
+            input: "t".into(),
+            d_drift_d_temperature: Vector3::new(v, 0.0, 0.0),
+            variance: 4.0,
+        };
+        let a = TermDrift {
+            displacement: Vector3::new(1.0, 0.0, 0.0),
+            temperatures: vec![s(1.0)],
+            parameter_covariance: Matrix3::identity(),
+        };
+        let b = TermDrift {
+            displacement: Vector3::new(0.0, 2.0, 0.0),
+            temperatures: vec![s(2.0)],
+            parameter_covariance: Matrix3::zeros(),
+        };
         let (d, cov) = total_drift(&[a, b]);
         assert_eq!(d, Vector3::new(1.0, 2.0, 0.0));
         // (1 + 2)²·4 + 1, not (1² + 2²)·4 + 1

@@ -12,8 +12,14 @@ pub enum ThermalError {
     /// (sensor, what needs it: an axis name or a term id)
     #[error("no reading yet from sensor '{0}' (needed for {1}); compensation waits for it")]
     NoReading(String, &'static str),
-    #[error("sensor '{sensor}' is stale: its last reading is {age_s:.1} s old (limit {limit_s} s)")]
-    StaleReading { sensor: String, age_s: f64, limit_s: f64 },
+    #[error(
+        "sensor '{sensor}' is stale: its last reading is {age_s:.1} s old (limit {limit_s} s)"
+    )]
+    StaleReading {
+        sensor: String,
+        age_s: f64,
+        limit_s: f64,
+    },
     #[error("alpha {0} 1/K is outside the catalog's plausible range of thermal_scale.alpha [-2e-6, 3e-5] 1/K")]
     BadAlpha(f64),
     #[error("parameter {name}: {reason}")]

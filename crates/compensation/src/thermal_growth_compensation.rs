@@ -14,8 +14,8 @@ use nalgebra::{Matrix2, Vector3};
 
 use crate::thermal_drift::{TemperatureSensitivity, TermDrift};
 use crate::thermal_error::ThermalError;
-use metrocell_physics::thermal::first_order_lag::FirstOrderLag;
 use crate::thermal_signals::thermal_signals;
+use metrocell_physics::thermal::first_order_lag::FirstOrderLag;
 
 /// One growth term as configured.
 #[derive(Debug, Clone, PartialEq)]
@@ -49,10 +49,17 @@ pub struct GrowthCompensator {
 }
 
 fn bad(name: &str, reason: String) -> ThermalError {
-    ThermalError::BadParameter { name: name.into(), reason }
+    ThermalError::BadParameter {
+        name: name.into(),
+        reason,
+    }
 }
 
-fn catalog_term(spec: &GrowthSpec, coefficient: f64, time_constant: Option<f64>) -> Result<ConfiguredTerm, PhysicsError> {
+fn catalog_term(
+    spec: &GrowthSpec,
+    coefficient: f64,
+    time_constant: Option<f64>,
+) -> Result<ConfiguredTerm, PhysicsError> {
     let d = spec.direction;
     let mut params = vec![("coefficient".to_string(), ConfigValue::Number(coefficient))];
     if let Some(tau) = time_constant {
@@ -62,9 +69,22 @@ fn catalog_term(spec: &GrowthSpec, coefficient: f64, time_constant: Option<f64>)
         id: "thermal_growth".into(),
         options: [
             ("sensor".to_string(), ConfigValue::Text(spec.sensor.clone())),
-            ("direction".to_string(), ConfigValue::List(vec![ConfigValue::Number(d.x), ConfigValue::Number(d.y), ConfigValue::Number(d.z)])),
-            ("lag".to_string(), ConfigValue::Bool(time_constant.is_some())),
-            ("reference_temperature".to_string(), ConfigValue::Number(spec.reference_temperature)),
+            (
+                "direction".to_string(),
+                ConfigValue::List(vec![
+                    ConfigValue::Number(d.x),
+                    ConfigValue::Number(d.y),
+                    ConfigValue::Number(d.z),
+                ]),
+            ),
+            (
+                "lag".to_string(),
+                ConfigValue::Bool(time_constant.is_some()),
+            ),
+            (
+                "reference_temperature".to_string(),
+                ConfigValue::Number(spec.reference_temperature),
+            ),
         ]
         .into_iter()
         .collect(),
@@ -81,16 +101,34 @@ impl GrowthCompensator {
             ("calibration_uncertainty", spec.calibration_uncertainty),
         ] {
             if !(v >= 0.0 && v.is_finite()) {
-                return Err(bad(&format!("{}: {name}", spec.sensor), format!("must be ≥ 0 and finite, got {v}")));
+                return Err(bad(
+                    &format!("{}: {name}", spec.sensor),
+                    format!("must be ≥ 0 and finite, got {v}"),
+                ));
             }
         }
         let term = catalog_term(&spec, spec.coefficient, spec.time_constant)?;
-        let u_tau = if spec.time_constant.is_some() { spec.time_constant_uncertainty } else { 0.0 };
-        let parameter_covariance = Matrix2::new(spec.coefficient_uncertainty.powi(2), 0.0, 0.0, u_tau * u_tau);
+        let u_tau = if spec.time_constant.is_some() {
+            spec.time_constant_uncertainty
+        } else {
+            0.0
+        };
+        let parameter_covariance = Matrix2::new(
+            spec.coefficient_uncertainty.powi(2),
+            0.0,
+            0.0,
+            u_tau * u_tau,
+        );
         // Without lag the filter passes readings through (τ → 0 would divide by zero, so it is
         // simply not advanced past the latest reading: see `observe`).
         let lag = FirstOrderLag::new(spec.time_constant.unwrap_or(f64::MIN_POSITIVE));
-        Ok(Self { spec, term, parameter_covariance, lag, fitted: false })
+        Ok(Self {
+            spec,
+            term,
+            parameter_covariance,
+            lag,
+            fitted: false,
+        })
     }
 
     /// Catalog label, e.g. `thermal_growth[column]`.
@@ -105,7 +143,14 @@ impl GrowthCompensator {
 
     /// (name, unit, value) of the parameters in use, catalog order, and their covariance.
     pub fn parameters(&self) -> (Vec<(String, &'static str, f64)>, Matrix2<f64>) {
-        let names = self.term.term.params().into_iter().zip(&self.term.params).map(|(s, v)| (s.name, s.unit, *v)).collect();
+        let names = self
+            .term
+            .term
+            .params()
+            .into_iter()
+            .zip(&self.term.params)
+            .map(|(s, v)| (s.name, s.unit, *v))
+            .collect();
         (names, self.parameter_covariance)
     }
 
@@ -124,9 +169,18 @@ impl GrowthCompensator {
 
     /// Use fitted g and τ (from [`crate::thermal_growth_fit`]) with their covariance, and a lag
     /// state recomputed with the new τ over the same readings.
-    pub fn use_fitted(&mut self, coefficient: f64, time_constant: f64, covariance: Matrix2<f64>, lag: FirstOrderLag) -> Result<(), ThermalError> {
+    pub fn use_fitted(
+        &mut self,
+        coefficient: f64,
+        time_constant: f64,
+        covariance: Matrix2<f64>,
+        lag: FirstOrderLag,
+    ) -> Result<(), ThermalError> {
         if self.spec.time_constant.is_none() {
-            return Err(bad(&format!("{}: time_constant", self.spec.sensor), "the online fit needs a lagged growth term".into()));
+            return Err(bad(
+                &format!("{}: time_constant", self.spec.sensor),
+                "the online fit needs a lagged growth term".into(),
+            ));
         }
         self.term = catalog_term(&self.spec, coefficient, Some(time_constant))?;
         self.parameter_covariance = covariance;
@@ -137,16 +191,26 @@ impl GrowthCompensator {
 
     /// The current T_f − T_ref (K), or why there is none.
     pub fn lagged_excess(&self) -> Result<f64, ThermalError> {
-        let (_, tf, _, _) = self.lag.output().ok_or_else(|| ThermalError::NoReading(self.spec.sensor.clone(), "thermal_growth"))?;
+        let (_, tf, _, _) = self
+            .lag
+            .output()
+            .ok_or_else(|| ThermalError::NoReading(self.spec.sensor.clone(), "thermal_growth"))?;
         Ok(tf - self.spec.reference_temperature)
     }
 
     /// The displacement the catalog term predicts with the current lag state (independent of
     /// the point: a growing column moves every point alike).
     pub fn drift(&self, nominal: &Vector3<f64>) -> Result<TermDrift, ThermalError> {
-        let (time, tf, dtf_dtau, var_f) = self.lag.output().ok_or_else(|| ThermalError::NoReading(self.spec.sensor.clone(), "thermal_growth"))?;
+        let (time, tf, dtf_dtau, var_f) = self
+            .lag
+            .output()
+            .ok_or_else(|| ThermalError::NoReading(self.spec.sensor.clone(), "thermal_growth"))?;
         let sensor = self.spec.sensor.as_str();
-        let s = if self.spec.time_constant.is_some() { thermal_signals(nominal, &[], &[(sensor, time, tf)]) } else { thermal_signals(nominal, &[(sensor, tf)], &[]) };
+        let s = if self.spec.time_constant.is_some() {
+            thermal_signals(nominal, &[], &[(sensor, time, tf)])
+        } else {
+            thermal_signals(nominal, &[(sensor, tf)], &[])
+        };
         let p = &self.term.params;
         let d = self.term.term.predict(p, &s)?.value;
         let j = self.term.term.jacobian(p, &s)?;
@@ -155,10 +219,18 @@ impl GrowthCompensator {
         let d_dtf = self.spec.direction.normalize() * p[0];
         let d_dtau = d_dtf * dtf_dtau;
         let jp = nalgebra::Matrix3x2::from_columns(&[d_dg, d_dtau]);
-        let key = if self.spec.time_constant.is_some() { format!("{sensor}~lag") } else { sensor.to_string() };
+        let key = if self.spec.time_constant.is_some() {
+            format!("{sensor}~lag")
+        } else {
+            sensor.to_string()
+        };
         Ok(TermDrift {
             displacement: Vector3::new(d[0], d[1], d[2]),
-            temperatures: vec![TemperatureSensitivity { input: key, d_drift_d_temperature: d_dtf, variance: var_f + self.spec.calibration_uncertainty.powi(2) }],
+            temperatures: vec![TemperatureSensitivity {
+                input: key,
+                d_drift_d_temperature: d_dtf,
+                variance: var_f + self.spec.calibration_uncertainty.powi(2),
+            }],
             parameter_covariance: jp * self.parameter_covariance * jp.transpose(),
         })
     }
@@ -185,7 +257,14 @@ mod tests {
     #[test]
     fn equals_the_catalog_term_on_the_whole_history() {
         // The incremental lag + catalog term on T_f equals the catalog term given the whole history.
-        let history: Vec<(f64, f64)> = (0..2000).map(|k| (k as f64 * 5.0, 20.0 + 3.0 * (1.0 - (-(k as f64) / 400.0).exp()))).collect();
+        let history: Vec<(f64, f64)> = (0..2000)
+            .map(|k| {
+                (
+                    k as f64 * 5.0,
+                    20.0 + 3.0 * (1.0 - (-(k as f64) / 400.0).exp()),
+                )
+            })
+            .collect();
         let mut g = GrowthCompensator::new(column(Some(1200.0))).unwrap();
         for (t, v) in &history {
             g.observe(*t, *v, 0.0);
@@ -193,14 +272,40 @@ mod tests {
         let d = g.drift(&Vector3::zeros()).unwrap();
         let cfg = catalog_term(&column(Some(1200.0)), 4e-6, Some(1200.0)).unwrap();
         let mut s = metrocell_physics::Signals::default();
-        s.timeline = Some(std::sync::Arc::new(TemperatureTimeline::from_histories([("column", &TemperatureHistory { samples: history.clone() })]).unwrap()));
+        s.timeline = Some(std::sync::Arc::new(
+            TemperatureTimeline::from_histories([(
+                "column",
+                &TemperatureHistory {
+                    samples: history.clone(),
+                },
+            )])
+            .unwrap(),
+        ));
         let whole = cfg.term.predict(&cfg.params, &s).unwrap().value;
-        assert!((d.displacement.z - whole[2]).abs() < 1e-15, "{} vs {}", d.displacement.z, whole[2]);
-        assert!(d.displacement.z < -10e-6, "a 3 K rise pushes the spindle down by ~12 µm: {}", d.displacement.z);
+        assert!(
+            (d.displacement.z - whole[2]).abs() < 1e-15,
+            "{} vs {}",
+            d.displacement.z,
+            whole[2]
+        );
+        assert!(
+            d.displacement.z < -10e-6,
+            "a 3 K rise pushes the spindle down by ~12 µm: {}",
+            d.displacement.z
+        );
         // parameter covariance: u(g)·(T_f − T_ref) and u(τ)·g·∂T_f/∂τ along z, ∂T_f/∂τ from the catalog
-        let (tf, dtf_dtau) = metrocell_physics::thermal::thermal_growth::first_order_lag(&TemperatureHistory { samples: history.clone() }, 1200.0);
+        let (tf, dtf_dtau) = metrocell_physics::thermal::thermal_growth::first_order_lag(
+            &TemperatureHistory {
+                samples: history.clone(),
+            },
+            1200.0,
+        );
         let expect = (0.2e-6 * (tf - 20.0)).powi(2) + (60.0 * 4e-6 * dtf_dtau).powi(2);
-        assert!((d.parameter_covariance[(2, 2)] - expect).abs() < 1e-9 * expect, "{} vs {expect}", d.parameter_covariance[(2, 2)]);
+        assert!(
+            (d.parameter_covariance[(2, 2)] - expect).abs() < 1e-9 * expect,
+            "{} vs {expect}",
+            d.parameter_covariance[(2, 2)]
+        );
         // the reading input: calibration uncertainty (0.05 K) added unfiltered to T_f's variance
         assert_eq!(d.temperatures[0].input, "column~lag");
         assert!((d.temperatures[0].variance - 0.0025).abs() < 1e-15);
@@ -222,7 +327,10 @@ mod tests {
         let mut s = column(Some(1200.0));
         s.coefficient = 1.0;
         let e = GrowthCompensator::new(s).unwrap_err().to_string();
-        assert!(e.contains("coefficient") && e.contains("thermal_growth[column]"), "{e}");
+        assert!(
+            e.contains("coefficient") && e.contains("thermal_growth[column]"),
+            "{e}"
+        );
         // a negative lag is impossible (a lag of 0.1 s is merely short)
         let mut s = column(Some(-5.0));
         s.time_constant_uncertainty = 1.0;
@@ -230,7 +338,16 @@ mod tests {
         assert!(e.contains("time_constant"), "{e}");
         let mut s = column(None);
         s.calibration_uncertainty = f64::NAN;
-        assert!(GrowthCompensator::new(s).unwrap_err().to_string().contains("column: calibration_uncertainty"));
-        assert_eq!(GrowthCompensator::new(column(None)).unwrap().drift(&Vector3::zeros()).unwrap_err(), ThermalError::NoReading("column".into(), "thermal_growth"));
+        assert!(GrowthCompensator::new(s)
+            .unwrap_err()
+            .to_string()
+            .contains("column: calibration_uncertainty"));
+        assert_eq!(
+            GrowthCompensator::new(column(None))
+                .unwrap()
+                .drift(&Vector3::zeros())
+                .unwrap_err(),
+            ThermalError::NoReading("column".into(), "thermal_growth")
+        );
     }
 }

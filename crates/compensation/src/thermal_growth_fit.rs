@@ -53,23 +53,49 @@ const SCAN_POINTS: usize = 48;
 const GOLDEN_STEPS: usize = 60;
 
 impl GrowthFit {
-    pub fn new(direction: Vector3<f64>, reference_temperature: f64, tau_range: (f64, f64), max_readings: usize) -> Result<Self, ThermalError> {
+    pub fn new(
+        direction: Vector3<f64>,
+        reference_temperature: f64,
+        tau_range: (f64, f64),
+        max_readings: usize,
+    ) -> Result<Self, ThermalError> {
         let n = direction.norm();
         if !(n > 0.0 && n.is_finite()) {
-            return Err(ThermalError::BadParameter { name: "fit direction".into(), reason: format!("must be a non-zero finite vector, got {direction:?}") });
+            return Err(ThermalError::BadParameter {
+                name: "fit direction".into(),
+                reason: format!("must be a non-zero finite vector, got {direction:?}"),
+            });
         }
         if !(tau_range.0 > 0.0 && tau_range.1 > tau_range.0 && tau_range.1.is_finite()) {
-            return Err(ThermalError::BadParameter { name: "fit_time_constant_range".into(), reason: format!("needs 0 < min < max, got [{}, {}] s", tau_range.0, tau_range.1) });
+            return Err(ThermalError::BadParameter {
+                name: "fit_time_constant_range".into(),
+                reason: format!(
+                    "needs 0 < min < max, got [{}, {}] s",
+                    tau_range.0, tau_range.1
+                ),
+            });
         }
         if max_readings < 2 {
-            return Err(ThermalError::BadParameter { name: "fit_max_readings".into(), reason: format!("needs at least 2, got {max_readings}") });
+            return Err(ThermalError::BadParameter {
+                name: "fit_max_readings".into(),
+                reason: format!("needs at least 2, got {max_readings}"),
+            });
         }
-        Ok(Self { direction: direction / n, reference_temperature, tau_range, max_readings, readings: Vec::new(), observations: Vec::new() })
+        Ok(Self {
+            direction: direction / n,
+            reference_temperature,
+            tau_range,
+            max_readings,
+            readings: Vec::new(),
+            observations: Vec::new(),
+        })
     }
 
     /// Add a sensor reading; one not later than the previous is ignored (false).
     pub fn add_reading(&mut self, time: f64, temperature: f64, variance: f64) -> bool {
-        if self.readings.last().is_some_and(|r| time <= r.0) || !(temperature.is_finite() && variance.is_finite()) {
+        if self.readings.last().is_some_and(|r| time <= r.0)
+            || !(temperature.is_finite() && variance.is_finite())
+        {
             return false;
         }
         self.readings.push((time, temperature, variance));
@@ -84,9 +110,17 @@ impl GrowthFit {
 
     /// Add a measurement of the reference point: `error` = measured − nominal (m) with its
     /// covariance (m²); its component along the growth direction enters the fit.
-    pub fn add_observation(&mut self, time: f64, error: &Vector3<f64>, covariance: &Matrix3<f64>) -> Result<(), ThermalError> {
+    pub fn add_observation(
+        &mut self,
+        time: f64,
+        error: &Vector3<f64>,
+        covariance: &Matrix3<f64>,
+    ) -> Result<(), ThermalError> {
         if self.observations.last().is_some_and(|o| time < o.0) {
-            return Err(ThermalError::BadParameter { name: "reference point".into(), reason: format!("measurement at {time} s is older than the previous one") });
+            return Err(ThermalError::BadParameter {
+                name: "reference point".into(),
+                reason: format!("measurement at {time} s is older than the previous one"),
+            });
         }
         let y = self.direction.dot(error);
         let var = (self.direction.transpose() * covariance * self.direction)[0];
@@ -139,7 +173,10 @@ impl GrowthFit {
             b += j * (w * y);
         }
         let sol = n.try_inverse()? * b;
-        let chi2 = rows.iter().map(|&(x, _, y, var)| (y - sol[0] - sol[1] * x).powi(2) / var).sum();
+        let chi2 = rows
+            .iter()
+            .map(|&(x, _, y, var)| (y - sol[0] - sol[1] * x).powi(2) / var)
+            .sum();
         Some((sol[0], sol[1], chi2))
     }
 
@@ -148,20 +185,34 @@ impl GrowthFit {
     }
 
     pub fn fit(&self) -> Result<GrowthFitResult, ThermalError> {
-        let not_yet = |reason: String| ThermalError::BadParameter { name: "online fit".into(), reason };
+        let not_yet = |reason: String| ThermalError::BadParameter {
+            name: "online fit".into(),
+            reason,
+        };
         let usable = self.design(self.tau_range.0).len();
         if usable < 4 {
-            return Err(not_yet(format!("needs at least 4 reference measurements after the first reading, has {usable}")));
+            return Err(not_yet(format!(
+                "needs at least 4 reference measurements after the first reading, has {usable}"
+            )));
         }
         let (lo, hi) = (self.tau_range.0.ln(), self.tau_range.1.ln());
-        let grid: Vec<f64> = (0..SCAN_POINTS).map(|i| lo + (hi - lo) * i as f64 / (SCAN_POINTS - 1) as f64).collect();
+        let grid: Vec<f64> = (0..SCAN_POINTS)
+            .map(|i| lo + (hi - lo) * i as f64 / (SCAN_POINTS - 1) as f64)
+            .collect();
         let values: Vec<f64> = grid.iter().map(|&g| self.profile(g)).collect();
-        let best = (0..SCAN_POINTS).min_by(|&a, &b| values[a].total_cmp(&values[b])).unwrap_or(0);
+        let best = (0..SCAN_POINTS)
+            .min_by(|&a, &b| values[a].total_cmp(&values[b]))
+            .unwrap_or(0);
         if !values[best].is_finite() {
-            return Err(not_yet("the temperatures did not vary: g cannot be separated from the offset".into()));
+            return Err(not_yet(
+                "the temperatures did not vary: g cannot be separated from the offset".into(),
+            ));
         }
         // golden-section search on [grid[best−1], grid[best+1]]
-        let (mut a, mut b) = (grid[best.saturating_sub(1)], grid[(best + 1).min(SCAN_POINTS - 1)]);
+        let (mut a, mut b) = (
+            grid[best.saturating_sub(1)],
+            grid[(best + 1).min(SCAN_POINTS - 1)],
+        );
         let r = (5f64.sqrt() - 1.0) / 2.0;
         let (mut x1, mut x2) = (b - r * (b - a), a + r * (b - a));
         let (mut f1, mut f2) = (self.profile(x1), self.profile(x2));
@@ -177,10 +228,15 @@ impl GrowthFit {
             }
         }
         let ln_tau = if f1 < f2 { x1 } else { x2 };
-        let ln_tau = if values[best] < f1.min(f2) { grid[best] } else { ln_tau };
+        let ln_tau = if values[best] < f1.min(f2) {
+            grid[best]
+        } else {
+            ln_tau
+        };
         let tau = ln_tau.exp();
         let rows = self.design(tau);
-        let (c, g, chi2) = Self::linear(&rows).ok_or_else(|| not_yet("the temperatures did not vary".into()))?;
+        let (c, g, chi2) =
+            Self::linear(&rows).ok_or_else(|| not_yet("the temperatures did not vary".into()))?;
         let mut normal = Matrix3::zeros();
         for &(x, dx, _, var) in &rows {
             let j = Vector3::new(1.0, x, g * dx);
@@ -188,8 +244,15 @@ impl GrowthFit {
         }
         let dof = rows.len() as f64 - 3.0;
         let scale = if dof > 0.0 { chi2 / dof } else { 1.0 };
-        let covariance = normal.try_inverse().ok_or_else(|| not_yet("τ cannot be determined (the lagged temperature does not depend on it)".into()))? * scale;
-        let rms = (rows.iter().map(|&(x, _, y, _)| (y - c - g * x).powi(2)).sum::<f64>() / rows.len() as f64).sqrt();
+        let covariance = normal.try_inverse().ok_or_else(|| {
+            not_yet("τ cannot be determined (the lagged temperature does not depend on it)".into())
+        })? * scale;
+        let rms = (rows
+            .iter()
+            .map(|&(x, _, y, _)| (y - c - g * x).powi(2))
+            .sum::<f64>()
+            / rows.len() as f64)
+            .sqrt();
         Ok(GrowthFitResult {
             offset: c,
             coefficient: g,
@@ -205,9 +268,9 @@ impl GrowthFit {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use rand::Rng;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
-    use rand::Rng;
 
     fn gauss(rng: &mut ChaCha8Rng) -> f64 {
         // Box–Muller
@@ -220,7 +283,8 @@ mod tests {
     fn synthetic(seed: u64) -> (GrowthFit, f64, f64) {
         let (g_true, tau_true, c_true) = (4e-6, 1200.0, 3e-6);
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let mut fit = GrowthFit::new(Vector3::new(0.0, 0.0, -1.0), 20.0, (60.0, 1e5), 100_000).unwrap();
+        let mut fit =
+            GrowthFit::new(Vector3::new(0.0, 0.0, -1.0), 20.0, (60.0, 1e5), 100_000).unwrap();
         let mut truth_lag = FirstOrderLag::new(tau_true);
         let mut column = 20.0;
         for k in 0..(8 * 360) {
@@ -232,7 +296,12 @@ mod tests {
             if k % 30 == 29 {
                 let (_, tf, _, _) = truth_lag.output().unwrap();
                 let y = c_true + g_true * (tf - 20.0) + 1e-6 * gauss(&mut rng);
-                fit.add_observation(t, &Vector3::new(0.0, 0.0, -y), &(Matrix3::identity() * 1e-12)).unwrap();
+                fit.add_observation(
+                    t,
+                    &Vector3::new(0.0, 0.0, -y),
+                    &(Matrix3::identity() * 1e-12),
+                )
+                .unwrap();
             }
         }
         (fit, g_true, tau_true)
@@ -245,13 +314,35 @@ mod tests {
             let (fit, g_true, tau_true) = synthetic(seed);
             let r = fit.fit().unwrap();
             let (ug, utau) = (r.covariance[(1, 1)].sqrt(), r.covariance[(2, 2)].sqrt());
-            eprintln!("seed {seed}: g = {:.4} ± {:.4} µm/K, τ = {:.1} ± {:.1} s, rms {:.3} µm", r.coefficient * 1e6, ug * 1e6, r.time_constant, utau, r.rms * 1e6);
-            assert!((r.coefficient - g_true).abs() < 3.0 * ug, "g {} ± {ug}", r.coefficient);
-            assert!((r.time_constant - tau_true).abs() < 3.0 * utau, "τ {} ± {utau}", r.time_constant);
+            eprintln!(
+                "seed {seed}: g = {:.4} ± {:.4} µm/K, τ = {:.1} ± {:.1} s, rms {:.3} µm",
+                r.coefficient * 1e6,
+                ug * 1e6,
+                r.time_constant,
+                utau,
+                r.rms * 1e6
+            );
+            assert!(
+                (r.coefficient - g_true).abs() < 3.0 * ug,
+                "g {} ± {ug}",
+                r.coefficient
+            );
+            assert!(
+                (r.time_constant - tau_true).abs() < 3.0 * utau,
+                "τ {} ± {utau}",
+                r.time_constant
+            );
             // and the uncertainty is informative, not a wide net: g to better than 10 %, τ to 15 %
-            assert!(ug < 0.1 * g_true && utau < 0.15 * tau_true, "u(g) {ug}, u(τ) {utau}");
+            assert!(
+                ug < 0.1 * g_true && utau < 0.15 * tau_true,
+                "u(g) {ug}, u(τ) {utau}"
+            );
             assert!(!r.at_bound);
-            assert!((r.rms - 1e-6).abs() < 0.3e-6, "residual rms {} matches the 1 µm noise", r.rms);
+            assert!(
+                (r.rms - 1e-6).abs() < 0.3e-6,
+                "residual rms {} matches the 1 µm noise",
+                r.rms
+            );
         }
     }
 
@@ -262,14 +353,32 @@ mod tests {
             fit.add_reading(k as f64, 21.0, 0.0);
         }
         for k in 0..3 {
-            fit.add_observation(10.0 * k as f64, &Vector3::zeros(), &Matrix3::identity()).unwrap();
+            fit.add_observation(10.0 * k as f64, &Vector3::zeros(), &Matrix3::identity())
+                .unwrap();
         }
         assert!(fit.fit().unwrap_err().to_string().contains("at least 4"));
-        fit.add_observation(40.0, &Vector3::zeros(), &Matrix3::identity()).unwrap();
+        fit.add_observation(40.0, &Vector3::zeros(), &Matrix3::identity())
+            .unwrap();
         assert!(fit.fit().unwrap_err().to_string().contains("did not vary"));
-        assert!(fit.add_observation(5.0, &Vector3::zeros(), &Matrix3::identity()).is_err(), "out of order");
-        assert!(fit.add_observation(50.0, &Vector3::new(f64::NAN, 0.0, 0.0), &Matrix3::identity()).is_err());
-        assert!(GrowthFit::new(Vector3::zeros(), 20.0, (60.0, 1e5), 10).unwrap_err().to_string().contains("direction"));
-        assert!(GrowthFit::new(Vector3::z(), 20.0, (600.0, 60.0), 10).unwrap_err().to_string().contains("fit_time_constant_range"));
+        assert!(
+            fit.add_observation(5.0, &Vector3::zeros(), &Matrix3::identity())
+                .is_err(),
+            "out of order"
+        );
+        assert!(fit
+            .add_observation(
+                50.0,
+                &Vector3::new(f64::NAN, 0.0, 0.0),
+                &Matrix3::identity()
+            )
+            .is_err());
+        assert!(GrowthFit::new(Vector3::zeros(), 20.0, (60.0, 1e5), 10)
+            .unwrap_err()
+            .to_string()
+            .contains("direction"));
+        assert!(GrowthFit::new(Vector3::z(), 20.0, (600.0, 60.0), 10)
+            .unwrap_err()
+            .to_string()
+            .contains("fit_time_constant_range"));
     }
 }

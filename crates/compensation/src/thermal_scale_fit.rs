@@ -62,7 +62,13 @@ impl PointSums {
     /// Centred sums (S_xx, S_xy, S_yy) and the weighted means (x̄, ȳ).
     fn centred(&self) -> (f64, f64, f64, f64, f64) {
         let (mx, my) = (self.wx / self.w, self.wy / self.w);
-        (self.wxx - self.wx * mx, self.wxy - self.wx * my, self.wyy - self.wy * my, self.x0 + mx, self.y0 + my)
+        (
+            self.wxx - self.wx * mx,
+            self.wxy - self.wx * my,
+            self.wyy - self.wy * my,
+            self.x0 + mx,
+            self.y0 + my,
+        )
     }
 }
 
@@ -75,9 +81,14 @@ impl ScaleFit {
     /// A fit over `points` reference points (indices 0..points).
     pub fn new(points: usize) -> Result<Self, ThermalError> {
         if points == 0 {
-            return Err(ThermalError::BadParameter { name: "alpha fit".into(), reason: "needs at least one reference point".into() });
+            return Err(ThermalError::BadParameter {
+                name: "alpha fit".into(),
+                reason: "needs at least one reference point".into(),
+            });
         }
-        Ok(Self { points: vec![PointSums::default(); points] })
+        Ok(Self {
+            points: vec![PointSums::default(); points],
+        })
     }
 
     pub fn points(&self) -> usize {
@@ -86,9 +97,21 @@ impl ScaleFit {
 
     /// A measurement of reference point `point`: `lever` = q·(T(q) − T_ref) (m·K) at its time,
     /// `error` its error along the axis (m), `variance` that error's (m²).
-    pub fn add_observation(&mut self, point: usize, lever: f64, error: f64, variance: f64) -> Result<(), ThermalError> {
+    pub fn add_observation(
+        &mut self,
+        point: usize,
+        lever: f64,
+        error: f64,
+        variance: f64,
+    ) -> Result<(), ThermalError> {
         let count = self.points.len();
-        let s = self.points.get_mut(point).ok_or_else(|| ThermalError::BadParameter { name: "alpha fit".into(), reason: format!("reference point {point} of {count}") })?;
+        let s = self
+            .points
+            .get_mut(point)
+            .ok_or_else(|| ThermalError::BadParameter {
+                name: "alpha fit".into(),
+                reason: format!("reference point {point} of {count}"),
+            })?;
         if !(lever.is_finite() && error.is_finite() && variance > 0.0 && variance.is_finite()) {
             return Err(ThermalError::NotFinite { what: format!("alpha-fit observation (lever {lever} m·K, error {error} m, variance {variance} m²; a zero variance cannot be weighted)") });
         }
@@ -111,11 +134,18 @@ impl ScaleFit {
     }
 
     pub fn fit(&self) -> Result<ScaleFitResult, ThermalError> {
-        let not_yet = |reason: String| ThermalError::BadParameter { name: "alpha fit".into(), reason };
+        let not_yet = |reason: String| ThermalError::BadParameter {
+            name: "alpha fit".into(),
+            reason,
+        };
         let used: Vec<&PointSums> = self.points.iter().filter(|s| s.n > 0).collect();
         let n = self.observation_count();
         if n < used.len() + 2 {
-            return Err(not_yet(format!("needs at least {} measurements of {} reference points, has {n}", used.len() + 2, used.len())));
+            return Err(not_yet(format!(
+                "needs at least {} measurements of {} reference points, has {n}",
+                used.len() + 2,
+                used.len()
+            )));
         }
         let (mut sxx, mut sxy, mut syy, mut spread) = (0.0, 0.0, 0.0, 0.0);
         for s in &used {
@@ -143,7 +173,14 @@ impl ScaleFit {
                 my - alpha * mx
             })
             .collect();
-        Ok(ScaleFitResult { alpha, alpha_uncertainty: (chi2 / dof as f64 / sxx).sqrt(), offsets, chi2, observations: n, degrees_of_freedom: dof })
+        Ok(ScaleFitResult {
+            alpha,
+            alpha_uncertainty: (chi2 / dof as f64 / sxx).sqrt(),
+            offsets,
+            chi2,
+            observations: n,
+            degrees_of_freedom: dof,
+        })
     }
 }
 
@@ -168,7 +205,8 @@ mod tests {
         let (q, c) = ([0.2, 0.5, 0.8], [5e-6, -3e-6, 8e-6]);
         for k in 0..48 {
             let t = k as f64 * 600.0;
-            let temperature = 19.0 + 0.35 * t / 3600.0 + if (t / 3600.0) % 2.5 < 1.5 { 0.6 } else { 0.0 };
+            let temperature =
+                19.0 + 0.35 * t / 3600.0 + if (t / 3600.0) % 2.5 < 1.5 { 0.6 } else { 0.0 };
             for j in 0..3 {
                 let lever = q[j] * (temperature - 20.0);
                 let y = c[j] + alpha * lever + noise * gauss(&mut rng);
@@ -184,9 +222,25 @@ mod tests {
             let (f, a) = synthetic(7, 2e-6);
             (f.fit().unwrap(), a)
         };
-        eprintln!("α = {:.3} ± {:.3} µm/(m·K) (truth {:.3}), χ²/dof {:.2}, offsets {:?} µm", r.alpha * 1e6, r.alpha_uncertainty * 1e6, alpha * 1e6, r.chi2_per_dof(), r.offsets.iter().map(|c| c * 1e6).collect::<Vec<_>>());
-        assert!((r.alpha - alpha).abs() < 3.0 * r.alpha_uncertainty, "α {} ± {}", r.alpha, r.alpha_uncertainty);
-        assert!(r.alpha_uncertainty < 0.05 * alpha, "informative: u(α) {}", r.alpha_uncertainty);
+        eprintln!(
+            "α = {:.3} ± {:.3} µm/(m·K) (truth {:.3}), χ²/dof {:.2}, offsets {:?} µm",
+            r.alpha * 1e6,
+            r.alpha_uncertainty * 1e6,
+            alpha * 1e6,
+            r.chi2_per_dof(),
+            r.offsets.iter().map(|c| c * 1e6).collect::<Vec<_>>()
+        );
+        assert!(
+            (r.alpha - alpha).abs() < 3.0 * r.alpha_uncertainty,
+            "α {} ± {}",
+            r.alpha,
+            r.alpha_uncertainty
+        );
+        assert!(
+            r.alpha_uncertainty < 0.05 * alpha,
+            "informative: u(α) {}",
+            r.alpha_uncertainty
+        );
         assert_eq!((r.observations, r.degrees_of_freedom), (144, 140));
         for (c, want) in r.offsets.iter().zip([5e-6, -3e-6, 8e-6]) {
             assert!((c - want).abs() < 2e-6, "offset {c} vs {want}");
@@ -205,7 +259,11 @@ mod tests {
             within2 += (z < 2.0) as u32;
         }
         let (c1, c2) = (within1 as f64 / n as f64, within2 as f64 / n as f64);
-        eprintln!("coverage: {:.1} % within 1σ, {:.1} % within 2σ", c1 * 100.0, c2 * 100.0);
+        eprintln!(
+            "coverage: {:.1} % within 1σ, {:.1} % within 2σ",
+            c1 * 100.0,
+            c2 * 100.0
+        );
         assert!((0.60..=0.76).contains(&c1), "1σ coverage {c1}");
         assert!((0.91..=0.99).contains(&c2), "2σ coverage {c2}");
     }
@@ -214,7 +272,11 @@ mod tests {
     fn exact_data_give_alpha_exactly() {
         let (f, alpha) = synthetic(1, 1e-15);
         let r = f.fit().unwrap();
-        assert!((r.alpha - alpha).abs() < 1e-12 * alpha.abs().max(1e-6) + 1e-15, "{}", r.alpha);
+        assert!(
+            (r.alpha - alpha).abs() < 1e-12 * alpha.abs().max(1e-6) + 1e-15,
+            "{}",
+            r.alpha
+        );
     }
 
     #[test]
@@ -226,9 +288,15 @@ mod tests {
         assert!(f.fit().unwrap_err().to_string().contains("at least 4"));
         f.add_observation(1, 0.8, 2.5e-6, 1e-12).unwrap();
         assert!(f.fit().unwrap_err().to_string().contains("did not vary"));
-        assert!(f.add_observation(2, 0.8, 0.0, 1e-12).is_err(), "no such point");
+        assert!(
+            f.add_observation(2, 0.8, 0.0, 1e-12).is_err(),
+            "no such point"
+        );
         assert!(f.add_observation(0, f64::NAN, 0.0, 1e-12).is_err());
-        assert!(f.add_observation(0, 0.1, 0.0, 0.0).is_err(), "zero variance");
+        assert!(
+            f.add_observation(0, 0.1, 0.0, 0.0).is_err(),
+            "zero variance"
+        );
         assert!(ScaleFit::new(0).is_err());
     }
 }

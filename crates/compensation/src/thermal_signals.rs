@@ -11,7 +11,11 @@ use metrocell_physics::{Signals, TemperatureTimeline};
 use nalgebra::Vector3;
 
 /// `temperatures`: (sensor, °C); `lagged`: (sensor, time s, lagged temperature °C).
-pub fn thermal_signals(nominal: &Vector3<f64>, temperatures: &[(&str, f64)], lagged: &[(&str, f64, f64)]) -> Signals {
+pub fn thermal_signals(
+    nominal: &Vector3<f64>,
+    temperatures: &[(&str, f64)],
+    lagged: &[(&str, f64, f64)],
+) -> Signals {
     let mut s = Signals::default().with_positions(*nominal);
     s.workpiece_point = Some(*nominal);
     for (name, t) in temperatures {

@@ -26,20 +26,34 @@ impl AirData {
     /// Refractive index of this air by the full (Birch & Downs modified) Edlén equation at the
     /// vacuum wavelength `wavelength` (m), e.g. 633e-9 for a HeNe interferometer.
     pub fn refractive_index_full(&self, wavelength: f64) -> f64 {
-        birch_downs_index(wavelength, self.pressure, self.temperature, self.humidity * 100.0)
+        birch_downs_index(
+            wavelength,
+            self.pressure,
+            self.temperature,
+            self.humidity * 100.0,
+        )
     }
 
     /// Whether every field is finite and physically possible; a station glitch must not
     /// silently rescale every distance.
     pub fn check(&self) -> Result<(), String> {
         if !(self.temperature.is_finite() && (-40.0..=80.0).contains(&self.temperature)) {
-            return Err(format!("air temperature {} °C is outside -40..80 °C", self.temperature));
+            return Err(format!(
+                "air temperature {} °C is outside -40..80 °C",
+                self.temperature
+            ));
         }
         if !(self.pressure.is_finite() && (50e3..=120e3).contains(&self.pressure)) {
-            return Err(format!("air pressure {} Pa is outside 50..120 kPa (is it in hPa or kPa?)", self.pressure));
+            return Err(format!(
+                "air pressure {} Pa is outside 50..120 kPa (is it in hPa or kPa?)",
+                self.pressure
+            ));
         }
         if !(self.humidity.is_finite() && (0.0..=1.0).contains(&self.humidity)) {
-            return Err(format!("relative humidity {} is outside 0..1 (is it in percent?)", self.humidity));
+            return Err(format!(
+                "relative humidity {} is outside 0..1 (is it in percent?)",
+                self.humidity
+            ));
         }
         Ok(())
     }
@@ -73,15 +87,26 @@ mod tests {
 
     #[test]
     fn thesis_air_gives_thesis_index() {
-        let air = AirData { temperature: 20.0, pressure: 99_000.0, humidity: 0.5 };
+        let air = AirData {
+            temperature: 20.0,
+            pressure: 99_000.0,
+            humidity: 0.5,
+        };
         assert!((air.refractive_index() - 1.000265156791).abs() < 1e-11);
     }
 
     #[test]
     fn one_kelvin_error_is_about_one_ppm() {
         // The instrument assumed 20 °C but the air is 21 °C: the range shrinks by ~0.94 ppm.
-        let assumed = AirData { temperature: 20.0, pressure: 101_325.0, humidity: 0.5 };
-        let actual = AirData { temperature: 21.0, ..assumed };
+        let assumed = AirData {
+            temperature: 20.0,
+            pressure: 101_325.0,
+            humidity: 0.5,
+        };
+        let actual = AirData {
+            temperature: 21.0,
+            ..assumed
+        };
         let r = refraction_corrected_range(5.0, assumed.refractive_index(), &actual);
         let ppm = (r - 5.0) / 5.0 * 1e6;
         assert!((ppm - 0.95).abs() < 0.05, "{ppm} ppm");
@@ -89,7 +114,11 @@ mod tests {
 
     #[test]
     fn no_index_applied_means_vacuum() {
-        let air = AirData { temperature: 20.0, pressure: 101_325.0, humidity: 0.5 };
+        let air = AirData {
+            temperature: 20.0,
+            pressure: 101_325.0,
+            humidity: 0.5,
+        };
         let r = refraction_corrected_range(2.0, 0.0, &air);
         assert!((r - 2.0 / air.refractive_index()).abs() < 1e-15);
     }
@@ -97,18 +126,34 @@ mod tests {
     #[test]
     fn full_form_agrees_with_shop_floor_form_to_a_tenth_of_a_ppm() {
         // The shop-floor form is the full form simplified for ~633 nm and shop-floor air.
-        let air = AirData { temperature: 20.0, pressure: 99_000.0, humidity: 0.5 };
+        let air = AirData {
+            temperature: 20.0,
+            pressure: 99_000.0,
+            humidity: 0.5,
+        };
         let d = air.refractive_index_full(633e-9) - air.refractive_index();
         assert!(d.abs() < 1e-7, "full − shop floor = {d:e}");
     }
 
     #[test]
     fn implausible_air_is_named() {
-        let hpa = AirData { temperature: 20.0, pressure: 1013.25, humidity: 0.5 };
+        let hpa = AirData {
+            temperature: 20.0,
+            pressure: 1013.25,
+            humidity: 0.5,
+        };
         assert!(hpa.check().unwrap_err().contains("hPa"));
-        let percent = AirData { temperature: 20.0, pressure: 101_325.0, humidity: 50.0 };
+        let percent = AirData {
+            temperature: 20.0,
+            pressure: 101_325.0,
+            humidity: 50.0,
+        };
         assert!(percent.check().unwrap_err().contains("percent"));
-        let nan = AirData { temperature: f64::NAN, pressure: 101_325.0, humidity: 0.5 };
+        let nan = AirData {
+            temperature: f64::NAN,
+            pressure: 101_325.0,
+            humidity: 0.5,
+        };
         assert!(nan.check().is_err());
     }
 

@@ -30,7 +30,14 @@ pub struct AlertThresholds {
 
 impl AlertThresholds {
     /// From µm and µm/h (the node's parameters `error_warn_um`, `drift_warn_um_per_h`, ...).
-    pub fn from_um(error_warn_um: f64, error_error_um: f64, drift_warn_um_per_h: f64, drift_error_um_per_h: f64, coverage_k: f64, min_drift_span: f64) -> Result<Self, String> {
+    pub fn from_um(
+        error_warn_um: f64,
+        error_error_um: f64,
+        drift_warn_um_per_h: f64,
+        drift_error_um_per_h: f64,
+        coverage_k: f64,
+        min_drift_span: f64,
+    ) -> Result<Self, String> {
         for (name, v) in [
             ("error_warn_um", error_warn_um),
             ("error_error_um", error_error_um),
@@ -40,7 +47,9 @@ impl AlertThresholds {
             ("min_drift_span", min_drift_span),
         ] {
             if !(v.is_finite() && v >= 0.0) {
-                return Err(format!("alert threshold {name} = {v} must be finite and ≥ 0"));
+                return Err(format!(
+                    "alert threshold {name} = {v} must be finite and ≥ 0"
+                ));
             }
         }
         if error_error_um < error_warn_um || drift_error_um_per_h < drift_warn_um_per_h {
@@ -112,7 +121,13 @@ fn level_of(value: f64, sigma: f64, warn: f64, error: f64, k: f64) -> Level {
 /// The alerts of one stream (`topic`): its predicted error magnitude and, once the window is
 /// long enough, its worst axis drift.
 pub fn evaluate(topic: &str, s: &VolumetricSummary, th: &AlertThresholds) -> Vec<Alert> {
-    let level = level_of(s.magnitude, s.magnitude_sigma, th.error_warn, th.error_error, th.coverage_k);
+    let level = level_of(
+        s.magnitude,
+        s.magnitude_sigma,
+        th.error_warn,
+        th.error_error,
+        th.coverage_k,
+    );
     let mut out = vec![Alert {
         name: format!("volumetric_error {topic}"),
         level,
@@ -159,13 +174,21 @@ pub fn to_statuses(node_fqn: &str, alerts: &[Alert]) -> Vec<DiagnosticStatus> {
     alerts
         .iter()
         .map(|a| {
-            let kv = |key: &str, v: f64| KeyValue { key: format!("{key} [{}]", a.unit), value: format!("{v:e}") };
+            let kv = |key: &str, v: f64| KeyValue {
+                key: format!("{key} [{}]", a.unit),
+                value: format!("{v:e}"),
+            };
             DiagnosticStatus {
                 level: a.level.as_byte(),
                 name: format!("{node_fqn}: {}", a.name),
                 message: a.message.clone(),
                 hardware_id: String::new(),
-                values: vec![kv("value", a.value), kv("sigma", a.sigma), kv("warn", a.warn), kv("error", a.error)],
+                values: vec![
+                    kv("value", a.value),
+                    kv("sigma", a.sigma),
+                    kv("warn", a.warn),
+                    kv("error", a.error),
+                ],
             }
         })
         .collect()
@@ -185,7 +208,12 @@ mod tests {
         let mut v = VolumetricError::new(7200.0, 10_000);
         for k in 0..=minutes {
             let h = k as f64 / 60.0;
-            v.push(&point(1.0e9 + 60.0 * k as f64, [0.0; 3], [rate_um_per_h * 1e-6 * h, 0.0, 0.0])).unwrap();
+            v.push(&point(
+                1.0e9 + 60.0 * k as f64,
+                [0.0; 3],
+                [rate_um_per_h * 1e-6 * h, 0.0, 0.0],
+            ))
+            .unwrap();
         }
         v.summary(10).unwrap()
     }
@@ -193,9 +221,15 @@ mod tests {
     #[test]
     fn units_convert_to_si() {
         let t = thresholds();
-        assert!((t.error_warn - 20e-6).abs() < 1e-18 && (t.drift_error - 30e-6 / 3600.0).abs() < 1e-20);
-        assert!(AlertThresholds::from_um(20.0, 10.0, 1.0, 2.0, 2.0, 0.0).unwrap_err().contains("must not be below"));
-        assert!(AlertThresholds::from_um(f64::NAN, 10.0, 1.0, 2.0, 2.0, 0.0).unwrap_err().contains("error_warn_um"));
+        assert!(
+            (t.error_warn - 20e-6).abs() < 1e-18 && (t.drift_error - 30e-6 / 3600.0).abs() < 1e-20
+        );
+        assert!(AlertThresholds::from_um(20.0, 10.0, 1.0, 2.0, 2.0, 0.0)
+            .unwrap_err()
+            .contains("must not be below"));
+        assert!(AlertThresholds::from_um(f64::NAN, 10.0, 1.0, 2.0, 2.0, 0.0)
+            .unwrap_err()
+            .contains("error_warn_um"));
     }
 
     #[test]
@@ -204,7 +238,12 @@ mod tests {
         // 12 µm/h for an hour: drift above 10 µm/h → WARN; error 12 µm < 20 → OK
         let a = evaluate("/measured_points", &ramp(12.0, 60), &th);
         assert_eq!((a[0].level, a[1].level), (Level::Ok, Level::Warn), "{a:?}");
-        assert!(a[1].message.starts_with("x drifts +12.0 ± 0.0 µm/h over 3600 s"), "{}", a[1].message);
+        assert!(
+            a[1].message
+                .starts_with("x drifts +12.0 ± 0.0 µm/h over 3600 s"),
+            "{}",
+            a[1].message
+        );
         // 40 µm/h for an hour: drift → ERROR, error 40 µm → WARN
         let a = evaluate("/measured_points", &ramp(40.0, 60), &th);
         assert_eq!((a[0].level, a[1].level), (Level::Warn, Level::Error));
@@ -227,7 +266,10 @@ mod tests {
     fn statuses_carry_level_name_and_si_values() {
         let a = evaluate("/measured_points", &ramp(40.0, 60), &thresholds());
         let s = to_statuses("/dashboard", &a);
-        assert_eq!((s[1].name.as_str(), s[1].level), ("/dashboard: drift_rate /measured_points", 2));
+        assert_eq!(
+            (s[1].name.as_str(), s[1].level),
+            ("/dashboard: drift_rate /measured_points", 2)
+        );
         assert_eq!(s[0].values[0].key, "value [m]");
         let v: f64 = s[0].values[0].value.parse().unwrap();
         assert!((v - 40e-6).abs() < 1e-12);

@@ -35,7 +35,14 @@ pub struct Findings {
 impl Findings {
     /// Names are matched without a leading `/` (a node's status is named `/diagnose`).
     pub fn new(prefixes: Vec<String>, max_items: usize) -> Findings {
-        Findings { prefixes: prefixes.into_iter().map(|p| p.trim_start_matches('/').to_string()).collect(), items: Vec::new(), max_items }
+        Findings {
+            prefixes: prefixes
+                .into_iter()
+                .map(|p| p.trim_start_matches('/').to_string())
+                .collect(),
+            items: Vec::new(),
+            max_items,
+        }
     }
 
     /// Returns how many statuses matched.
@@ -52,7 +59,11 @@ impl Findings {
                 name: s.name.clone(),
                 level: level_name(s.level),
                 message: s.message.clone(),
-                values: s.values.iter().map(|kv| (kv.key.clone(), kv.value.clone())).collect(),
+                values: s
+                    .values
+                    .iter()
+                    .map(|kv| (kv.key.clone(), kv.value.clone()))
+                    .collect(),
                 stamp,
             };
             if let Some(existing) = self.items.iter_mut().find(|i| i.name == f.name) {
@@ -82,7 +93,10 @@ mod tests {
                     name: n.to_string(),
                     level: *l,
                     message: m.to_string(),
-                    values: vec![KeyValue { key: "axis".into(), value: "x".into() }],
+                    values: vec![KeyValue {
+                        key: "axis".into(),
+                        value: "x".into(),
+                    }],
                     ..Default::default()
                 })
                 .collect(),
@@ -93,12 +107,25 @@ mod tests {
     #[test]
     fn only_prefixed_statuses_newest_per_name() {
         let mut f = Findings::new(vec!["diagnose".into()], 10);
-        assert_eq!(f.push(&array(&[("/thermal", 0, "running"), ("/diagnose", 1, "thermal_growth suspected")])), 1);
+        assert_eq!(
+            f.push(&array(&[
+                ("/thermal", 0, "running"),
+                ("/diagnose", 1, "thermal_growth suspected")
+            ])),
+            1
+        );
         f.push(&array(&[("diagnose: backlash", 2, "backlash 12 µm on X")]));
         f.push(&array(&[("/diagnose", 2, "thermal_growth fitted")]));
         let items = f.items();
         assert_eq!(items.len(), 2);
-        assert_eq!((items[0].name.as_str(), items[0].level, items[0].message.as_str()), ("/diagnose", "ERROR", "thermal_growth fitted"));
+        assert_eq!(
+            (
+                items[0].name.as_str(),
+                items[0].level,
+                items[0].message.as_str()
+            ),
+            ("/diagnose", "ERROR", "thermal_growth fitted")
+        );
         assert_eq!(items[1].values, vec![("axis".to_string(), "x".to_string())]);
     }
 }

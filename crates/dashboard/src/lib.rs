@@ -31,7 +31,10 @@ pub struct InputError {
 
 impl InputError {
     pub fn new(field: &str, reason: impl Into<String>) -> InputError {
-        InputError { field: field.to_string(), reason: reason.into() }
+        InputError {
+            field: field.to_string(),
+            reason: reason.into(),
+        }
     }
 }
 

@@ -27,7 +27,11 @@ pub struct PlotData {
 
 impl Series {
     pub fn new(window: f64, max_samples: usize) -> Series {
-        Series { window, max_samples: max_samples.max(3), samples: VecDeque::new() }
+        Series {
+            window,
+            max_samples: max_samples.max(3),
+            samples: VecDeque::new(),
+        }
     }
 
     /// Add a sample. A sample older than the newest one is kept in time order; one older than
@@ -44,7 +48,12 @@ impl Series {
             _ => self.samples.push_back((t, v)),
         }
         let newest = self.samples.back().map_or(t, |s| s.0);
-        while self.samples.front().is_some_and(|&(s, _)| s < newest - self.window) || self.samples.len() > self.max_samples {
+        while self
+            .samples
+            .front()
+            .is_some_and(|&(s, _)| s < newest - self.window)
+            || self.samples.len() > self.max_samples
+        {
             self.samples.pop_front();
         }
     }

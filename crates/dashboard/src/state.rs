@@ -106,7 +106,10 @@ impl DashboardState {
 
     fn checked(&mut self, topic: &str, r: Result<(), InputError>) -> Result<(), InputError> {
         if let Err(e) = &r {
-            let entry = self.rejected.entry(topic.to_string()).or_insert((0, String::new()));
+            let entry = self
+                .rejected
+                .entry(topic.to_string())
+                .or_insert((0, String::new()));
             entry.0 += 1;
             entry.1 = e.to_string();
         }
@@ -115,7 +118,10 @@ impl DashboardState {
 
     /// A message of `topic` that could not be decoded at all.
     pub fn undecodable(&mut self, topic: &str, error: &str) {
-        let entry = self.rejected.entry(topic.to_string()).or_insert((0, String::new()));
+        let entry = self
+            .rejected
+            .entry(topic.to_string())
+            .or_insert((0, String::new()));
         entry.0 += 1;
         entry.1 = error.to_string();
     }
@@ -128,11 +134,20 @@ impl DashboardState {
     pub fn measured_point(&mut self, topic: &str, p: &MeasuredPoint) -> Result<(), InputError> {
         self.seen(topic, stamp_seconds(&p.header.stamp));
         let (window, max) = (self.config.window, self.config.max_samples);
-        let r = self.volumetric.entry(topic.to_string()).or_insert_with(|| VolumetricError::new(window, max)).push(p);
+        let r = self
+            .volumetric
+            .entry(topic.to_string())
+            .or_insert_with(|| VolumetricError::new(window, max))
+            .push(p);
         self.checked(topic, r)
     }
 
-    pub fn temperature(&mut self, topic: &str, sensor: &str, t: &Temperature) -> Result<(), InputError> {
+    pub fn temperature(
+        &mut self,
+        topic: &str,
+        sensor: &str,
+        t: &Temperature,
+    ) -> Result<(), InputError> {
         self.seen(topic, stamp_seconds(&t.header.stamp));
         let r = self.temperatures.push(sensor, t);
         self.checked(topic, r)
@@ -177,7 +192,12 @@ impl DashboardState {
             volumetric: self
                 .volumetric
                 .iter()
-                .filter_map(|(topic, v)| Some(StreamSummary { topic: topic.clone(), summary: v.summary(n)? }))
+                .filter_map(|(topic, v)| {
+                    Some(StreamSummary {
+                        topic: topic.clone(),
+                        summary: v.summary(n)?,
+                    })
+                })
                 .collect(),
             temperatures: self.temperatures.summary(n),
             tracker: self.tracker.summary(),
@@ -187,7 +207,15 @@ impl DashboardState {
             thresholds: self.config.thresholds,
             window: self.config.window,
             messages: self.messages.clone(),
-            rejected: self.rejected.iter().map(|(t, (c, e))| Rejected { topic: t.clone(), count: *c, last_error: e.clone() }).collect(),
+            rejected: self
+                .rejected
+                .iter()
+                .map(|(t, (c, e))| Rejected {
+                    topic: t.clone(),
+                    count: *c,
+                    last_error: e.clone(),
+                })
+                .collect(),
         }
     }
 }
@@ -216,21 +244,39 @@ mod tests {
         for k in 0..=120 {
             let t = 1.0e9 + 30.0 * k as f64;
             let h = 30.0 * k as f64 / 3600.0;
-            s.measured_point("/measured_points", &point(t, [0.5, 0.0, 0.0], [40e-6 * h, 0.0, 0.0])).unwrap();
-            s.measured_point("/measured_points/thermal_compensated", &point(t, [0.5, 0.0, 0.0], [1e-6, 0.0, 0.0])).unwrap();
+            s.measured_point(
+                "/measured_points",
+                &point(t, [0.5, 0.0, 0.0], [40e-6 * h, 0.0, 0.0]),
+            )
+            .unwrap();
+            s.measured_point(
+                "/measured_points/thermal_compensated",
+                &point(t, [0.5, 0.0, 0.0], [1e-6, 0.0, 0.0]),
+            )
+            .unwrap();
         }
         let snap = s.snapshot();
         assert_eq!(snap.cell_time, Some(1.0e9 + 3600.0));
         assert!(!snap.sim_clock);
         assert_eq!(snap.volumetric.len(), 2);
-        let levels: Vec<(String, Level)> = snap.alerts.iter().map(|a| (a.name.clone(), a.level)).collect();
+        let levels: Vec<(String, Level)> = snap
+            .alerts
+            .iter()
+            .map(|a| (a.name.clone(), a.level))
+            .collect();
         assert_eq!(
             levels,
             vec![
                 ("volumetric_error /measured_points".to_string(), Level::Warn),
                 ("drift_rate /measured_points".to_string(), Level::Error),
-                ("volumetric_error /measured_points/thermal_compensated".to_string(), Level::Ok),
-                ("drift_rate /measured_points/thermal_compensated".to_string(), Level::Ok),
+                (
+                    "volumetric_error /measured_points/thermal_compensated".to_string(),
+                    Level::Ok
+                ),
+                (
+                    "drift_rate /measured_points/thermal_compensated".to_string(),
+                    Level::Ok
+                ),
             ]
         );
         s.clock("/clock", 1_000_005_000_000_000_000);
@@ -251,7 +297,10 @@ mod tests {
         s.undecodable("/temperature/x_left", "truncated");
         let r = s.snapshot().rejected;
         assert_eq!(r.len(), 2);
-        assert_eq!((r[0].topic.as_str(), r[0].count, r[0].last_error.as_str()), ("/measured_points", 1, "nominal.z is inf"));
+        assert_eq!(
+            (r[0].topic.as_str(), r[0].count, r[0].last_error.as_str()),
+            ("/measured_points", 1, "nominal.z is inf")
+        );
         assert!(s.snapshot().volumetric.is_empty());
     }
 }

@@ -53,9 +53,17 @@ impl TrackerStatus {
             stamp,
             target_id: target,
             status_bits: bits,
-            active: FLAGS.iter().filter(|(_, b)| bits & b != 0).map(|(n, _)| *n).collect(),
+            active: FLAGS
+                .iter()
+                .filter(|(_, b)| bits & b != 0)
+                .map(|(n, _)| *n)
+                .collect(),
             measurements: self.count,
-            flag_counts: FLAGS.iter().zip(self.flag_counts).map(|((n, _), c)| (*n, c)).collect(),
+            flag_counts: FLAGS
+                .iter()
+                .zip(self.flag_counts)
+                .map(|((n, _), c)| (*n, c))
+                .collect(),
         })
     }
 }
@@ -68,18 +76,42 @@ mod tests {
     fn newest_flags_in_words_and_session_counts() {
         let mut s = TrackerStatus::default();
         for (k, bits) in [2u8, 2, 2 | 4, 1, 0].iter().enumerate() {
-            let mut m = TrackerMeasurement { status: *bits, target_id: "smr1".into(), ..Default::default() };
+            let mut m = TrackerMeasurement {
+                status: *bits,
+                target_id: "smr1".into(),
+                ..Default::default()
+            };
             m.header.stamp.sec = k as i32;
             s.push(&m);
         }
-        let mut late = TrackerMeasurement { status: 1, ..Default::default() };
+        let mut late = TrackerMeasurement {
+            status: 1,
+            ..Default::default()
+        };
         late.header.stamp.sec = 1; // an old message arriving late does not replace the newest
         s.push(&late);
         let sum = s.summary().unwrap();
-        assert_eq!((sum.stamp, sum.status_bits, sum.active.len(), sum.measurements), (4.0, 0, 0, 6));
-        assert_eq!(&sum.flag_counts[..3], &[("beam_break", 2), ("warming_up", 3), ("turbulence", 1)]);
+        assert_eq!(
+            (
+                sum.stamp,
+                sum.status_bits,
+                sum.active.len(),
+                sum.measurements
+            ),
+            (4.0, 0, 0, 6)
+        );
+        assert_eq!(
+            &sum.flag_counts[..3],
+            &[("beam_break", 2), ("warming_up", 3), ("turbulence", 1)]
+        );
         let mut w = TrackerStatus::default();
-        w.push(&TrackerMeasurement { status: 2 | 4, ..Default::default() });
-        assert_eq!(w.summary().unwrap().active, vec!["warming_up", "turbulence"]);
+        w.push(&TrackerMeasurement {
+            status: 2 | 4,
+            ..Default::default()
+        });
+        assert_eq!(
+            w.summary().unwrap().active,
+            vec!["warming_up", "turbulence"]
+        );
     }
 }

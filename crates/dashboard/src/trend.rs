@@ -50,7 +50,10 @@ pub fn fit_line<'a>(samples: impl IntoIterator<Item = &'a (f64, f64)> + Clone) -
         return None;
     }
     let rate = stv / stt;
-    let ssr: f64 = samples.into_iter().map(|&(t, v)| (v - v_mean - rate * (t - t_mean)).powi(2)).sum();
+    let ssr: f64 = samples
+        .into_iter()
+        .map(|&(t, v)| (v - v_mean - rate * (t - t_mean)).powi(2))
+        .sum();
     let s = (ssr / (n - 2) as f64).sqrt();
     let dt = t_max - t_mean;
     Some(Trend {
@@ -71,9 +74,20 @@ mod tests {
     fn exact_ramp_gives_its_slope_and_end_value_with_zero_uncertainty() {
         // 5 µm + 120 µm/h, sampled every 10 s for an hour, at epoch-sized times
         let t0 = 1.7e9;
-        let s: Vec<(f64, f64)> = (0..=360).map(|k| (t0 + 10.0 * k as f64, 5e-6 + 120e-6 / 3600.0 * 10.0 * k as f64)).collect();
+        let s: Vec<(f64, f64)> = (0..=360)
+            .map(|k| {
+                (
+                    t0 + 10.0 * k as f64,
+                    5e-6 + 120e-6 / 3600.0 * 10.0 * k as f64,
+                )
+            })
+            .collect();
         let f = fit_line(&s).unwrap();
-        assert!((f.rate * 3600.0 - 120e-6).abs() < 1e-12, "rate {} m/h", f.rate * 3600.0);
+        assert!(
+            (f.rate * 3600.0 - 120e-6).abs() < 1e-12,
+            "rate {} m/h",
+            f.rate * 3600.0
+        );
         assert!((f.value - 125e-6).abs() < 1e-12, "end value {}", f.value);
         assert!(f.rate_sigma < 1e-15 && f.value_sigma < 1e-12);
         assert_eq!((f.samples, f.span), (361, 3600.0));
@@ -82,11 +96,21 @@ mod tests {
     #[test]
     fn noisy_ramp_slope_within_its_uncertainty_and_sigma_matches_theory() {
         // alternating ±1 µm noise on a 60 µm/h ramp: residual s ≈ 1 µm, σ(slope) = s/√Stt
-        let s: Vec<(f64, f64)> =
-            (0..100).map(|k| (k as f64, 60e-6 / 3600.0 * k as f64 + if k % 2 == 0 { 1e-6 } else { -1e-6 })).collect();
+        let s: Vec<(f64, f64)> = (0..100)
+            .map(|k| {
+                (
+                    k as f64,
+                    60e-6 / 3600.0 * k as f64 + if k % 2 == 0 { 1e-6 } else { -1e-6 },
+                )
+            })
+            .collect();
         let f = fit_line(&s).unwrap();
         let stt: f64 = (0..100).map(|k| (k as f64 - 49.5).powi(2)).sum();
-        assert!((f.rate_sigma - 1e-6 / stt.sqrt()).abs() < 0.02 * f.rate_sigma, "σ {}", f.rate_sigma);
+        assert!(
+            (f.rate_sigma - 1e-6 / stt.sqrt()).abs() < 0.02 * f.rate_sigma,
+            "σ {}",
+            f.rate_sigma
+        );
         assert!((f.rate - 60e-6 / 3600.0).abs() < 2.0 * f.rate_sigma);
     }
 

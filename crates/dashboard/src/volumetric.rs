@@ -66,23 +66,42 @@ fn finite(field: &str, v: f64) -> Result<f64, InputError> {
 impl VolumetricError {
     pub fn new(window: f64, max_samples: usize) -> VolumetricError {
         let s = Series::new(window, max_samples);
-        VolumetricError { axes: [s.clone(), s.clone(), s], latest: None, count: 0 }
+        VolumetricError {
+            axes: [s.clone(), s.clone(), s],
+            latest: None,
+            count: 0,
+        }
     }
 
     /// Add a point; a NaN/inf coordinate or a negative variance is rejected naming the field.
     pub fn push(&mut self, p: &MeasuredPoint) -> Result<(), InputError> {
         let t = crate::stamp_seconds(&p.header.stamp);
-        let nominal = [finite("nominal.x", p.nominal.x)?, finite("nominal.y", p.nominal.y)?, finite("nominal.z", p.nominal.z)?];
-        let measured = [finite("measured.x", p.measured.x)?, finite("measured.y", p.measured.y)?, finite("measured.z", p.measured.z)?];
+        let nominal = [
+            finite("nominal.x", p.nominal.x)?,
+            finite("nominal.y", p.nominal.y)?,
+            finite("nominal.z", p.nominal.z)?,
+        ];
+        let measured = [
+            finite("measured.x", p.measured.x)?,
+            finite("measured.y", p.measured.y)?,
+            finite("measured.z", p.measured.z)?,
+        ];
         let mut sigma = [0.0; 3];
         for (k, s) in sigma.iter_mut().enumerate() {
             let var = finite(&format!("covariance[{}]", 4 * k), p.covariance[4 * k])?;
             if var < 0.0 {
-                return Err(InputError::new(&format!("covariance[{}]", 4 * k), format!("is a negative variance {var}")));
+                return Err(InputError::new(
+                    &format!("covariance[{}]", 4 * k),
+                    format!("is a negative variance {var}"),
+                ));
             }
             *s = var.sqrt();
         }
-        let e = [measured[0] - nominal[0], measured[1] - nominal[1], measured[2] - nominal[2]];
+        let e = [
+            measured[0] - nominal[0],
+            measured[1] - nominal[1],
+            measured[2] - nominal[2],
+        ];
         for (k, series) in self.axes.iter_mut().enumerate() {
             series.push(t, e[k]);
         }
@@ -105,7 +124,11 @@ impl VolumetricError {
             let trend: Option<Trend> = s.trend();
             span = span.max(trend.map_or(0.0, |t| t.span));
             let (predicted, predicted_sigma) = match trend {
-                Some(t) => (t.value, t.value_sigma.max(latest_sigma[k] / (t.samples as f64).sqrt())),
+                Some(t) => (
+                    t.value,
+                    t.value_sigma
+                        .max(latest_sigma[k] / (t.samples as f64).sqrt()),
+                ),
                 None => (latest[k], latest_sigma[k]),
             };
             axes.push(AxisSummary {
@@ -119,10 +142,17 @@ impl VolumetricError {
                 plot: s.plot(stamp, max_plot_points),
             });
         }
-        let magnitude = axes.iter().map(|a| a.predicted * a.predicted).sum::<f64>().sqrt();
+        let magnitude = axes
+            .iter()
+            .map(|a| a.predicted * a.predicted)
+            .sum::<f64>()
+            .sqrt();
         // first-order propagation of the axis σ through |e|; at |e| = 0 the largest axis σ
         let magnitude_sigma = if magnitude > 0.0 {
-            axes.iter().map(|a| (a.predicted / magnitude * a.predicted_sigma).powi(2)).sum::<f64>().sqrt()
+            axes.iter()
+                .map(|a| (a.predicted / magnitude * a.predicted_sigma).powi(2))
+                .sum::<f64>()
+                .sqrt()
         } else {
             axes.iter().map(|a| a.predicted_sigma).fold(0.0, f64::max)
         };
@@ -130,7 +160,15 @@ impl VolumetricError {
             .iter()
             .filter_map(|a| Some((a.drift?, a.drift_sigma?, a.axis)))
             .max_by(|a, b| a.0.abs().total_cmp(&b.0.abs()));
-        Some(VolumetricSummary { count: self.count, stamp, axes, magnitude, magnitude_sigma, max_drift, window_span: span })
+        Some(VolumetricSummary {
+            count: self.count,
+            stamp,
+            axes,
+            magnitude,
+            magnitude_sigma,
+            max_drift,
+            window_span: span,
+        })
     }
 }
 
@@ -143,7 +181,11 @@ pub(crate) mod tests {
         let mut p = MeasuredPoint::default();
         p.header.stamp = Time::from_nanos((t * 1e9).round() as i64);
         (p.nominal.x, p.nominal.y, p.nominal.z) = (nominal[0], nominal[1], nominal[2]);
-        (p.measured.x, p.measured.y, p.measured.z) = (nominal[0] + error[0], nominal[1] + error[1], nominal[2] + error[2]);
+        (p.measured.x, p.measured.y, p.measured.z) = (
+            nominal[0] + error[0],
+            nominal[1] + error[1],
+            nominal[2] + error[2],
+        );
         p.covariance = [1e-12, 0.0, 0.0, 0.0, 1e-12, 0.0, 0.0, 0.0, 4e-12];
         p
     }
@@ -155,14 +197,32 @@ pub(crate) mod tests {
         let t0 = 1_750_000_000.0;
         for k in 0..=60 {
             let h = k as f64 / 60.0;
-            v.push(&point(t0 + 60.0 * k as f64, [0.1 * k as f64, 0.2, 0.3], [2e-6 + 36e-6 * h, -3e-6, -18e-6 * h])).unwrap();
+            v.push(&point(
+                t0 + 60.0 * k as f64,
+                [0.1 * k as f64, 0.2, 0.3],
+                [2e-6 + 36e-6 * h, -3e-6, -18e-6 * h],
+            ))
+            .unwrap();
         }
         let s = v.summary(50).unwrap();
-        let per_hour: Vec<f64> = s.axes.iter().map(|a| a.drift.unwrap() * 3600.0 * 1e6).collect();
-        assert!((per_hour[0] - 36.0).abs() < 1e-6 && per_hour[1].abs() < 1e-6 && (per_hour[2] + 18.0).abs() < 1e-6, "{per_hour:?} µm/h");
+        let per_hour: Vec<f64> = s
+            .axes
+            .iter()
+            .map(|a| a.drift.unwrap() * 3600.0 * 1e6)
+            .collect();
+        assert!(
+            (per_hour[0] - 36.0).abs() < 1e-6
+                && per_hour[1].abs() < 1e-6
+                && (per_hour[2] + 18.0).abs() < 1e-6,
+            "{per_hour:?} µm/h"
+        );
         // at the end: (38, −3, −18) µm → |e| = √(38² + 3² + 18²) µm
         let expected = (38f64.powi(2) + 9.0 + 18f64.powi(2)).sqrt() * 1e-6;
-        assert!((s.magnitude - expected).abs() < 1e-12, "{} vs {expected}", s.magnitude);
+        assert!(
+            (s.magnitude - expected).abs() < 1e-12,
+            "{} vs {expected}",
+            s.magnitude
+        );
         let (d, _, axis) = s.max_drift.unwrap();
         assert_eq!(axis, "x");
         assert!((d * 3600.0 - 36e-6).abs() < 1e-12);
@@ -186,7 +246,11 @@ pub(crate) mod tests {
         assert_eq!(v.push(&bad).unwrap_err().to_string(), "measured.y is NaN");
         let mut neg = point(11.0, [0.0; 3], [0.0; 3]);
         neg.covariance[8] = -1.0;
-        assert!(v.push(&neg).unwrap_err().to_string().starts_with("covariance[8] is a negative variance"));
+        assert!(v
+            .push(&neg)
+            .unwrap_err()
+            .to_string()
+            .starts_with("covariance[8] is a negative variance"));
         assert_eq!(v.count(), 1);
     }
 }

@@ -23,17 +23,49 @@ fn main() {
     let forward = model.forward_model().unwrap_or_else(|e| panic!("{e}"));
     let bags: Vec<&String> = args[1..].iter().collect();
     let t = Instant::now();
-    let records = records_from_bags(&bags, &forward, &RecordingOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    let records = records_from_bags(&bags, &forward, &RecordingOptions::default())
+        .unwrap_or_else(|e| panic!("{e}"));
     let read = t.elapsed().as_secs_f64();
-    println!("records from the bag: {} measurements ({} set aside) in {read:.2} s", records.records.len(), records.rejected.len());
+    println!(
+        "records from the bag: {} measurements ({} set aside) in {read:.2} s",
+        records.records.len(),
+        records.rejected.len()
+    );
     let t = Instant::now();
-    let declared_fit = fit(&forward, &model.setup, &records, None, &FitOptions::default()).unwrap_or_else(|e| panic!("{e}"));
+    let declared_fit = fit(
+        &forward,
+        &model.setup,
+        &records,
+        None,
+        &FitOptions::default(),
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
     let fit_s = t.elapsed().as_secs_f64();
-    println!("declared fit alone: {fit_s:.2} s (χ²/dof {:.2}, {} records)", declared_fit.chi2_per_dof, records.records.len());
-    let declared = DeclaredModel { machine: &model.machine, machine_terms: &model.machine_terms, instrument_terms: &model.instrument_terms, setup: &model.setup };
+    println!(
+        "declared fit alone: {fit_s:.2} s (χ²/dof {:.2}, {} records)",
+        declared_fit.chi2_per_dof,
+        records.records.len()
+    );
+    let declared = DeclaredModel {
+        machine: &model.machine,
+        machine_terms: &model.machine_terms,
+        instrument_terms: &model.instrument_terms,
+        setup: &model.setup,
+    };
     let t = Instant::now();
-    let d = diagnose(&declared, &records, &DiagnoseOptions { progress: true, ..Default::default() }).unwrap_or_else(|e| panic!("{e}"));
+    let d = diagnose(
+        &declared,
+        &records,
+        &DiagnoseOptions {
+            progress: true,
+            ..Default::default()
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
     let diag = t.elapsed().as_secs_f64();
-    println!("diagnose: {diag:.2} s ({} records used, {} in the selection): {}", d.report.records.used, d.report.records.selection_records, d.report.summary);
+    println!(
+        "diagnose: {diag:.2} s ({} records used, {} in the selection): {}",
+        d.report.records.used, d.report.records.selection_records, d.report.summary
+    );
     println!("bag to diagnosis: {:.2} s (target < 60 s); diagnose / records = {:.1}×, diagnose / declared fit = {:.1}×", read + diag, diag / read, diag / fit_s);
 }

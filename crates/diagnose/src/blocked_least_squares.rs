@@ -60,8 +60,16 @@ impl BlockedRows {
             }
             start = end;
         }
-        let fold_counts = row_folds.iter().map(|f| f.iter().copied().max().map(|m| m + 1).unwrap_or(0)).collect();
-        Self { order, cells, fold_of_cell, fold_counts }
+        let fold_counts = row_folds
+            .iter()
+            .map(|f| f.iter().copied().max().map(|m| m + 1).unwrap_or(0))
+            .collect();
+        Self {
+            order,
+            cells,
+            fold_of_cell,
+            fold_counts,
+        }
     }
 
     pub fn rows(&self) -> usize {
@@ -91,7 +99,9 @@ impl BlockedRows {
         let mut out = Vec::new();
         for (s, &k) in self.fold_counts.iter().enumerate() {
             for f in 0..k {
-                let cells: Vec<usize> = (0..self.cells.len()).filter(|&c| self.fold_of_cell[s][c] == f).collect();
+                let cells: Vec<usize> = (0..self.cells.len())
+                    .filter(|&c| self.fold_of_cell[s][c] == f)
+                    .collect();
                 if !cells.is_empty() {
                     out.push((s, cells));
                 }
@@ -116,12 +126,24 @@ enum Keep {
 
 /// Pseudo-inverse of the symmetric matrix `m`, scaled by the diagonal of `scale` (columns to
 /// unit norm) before its eigen-decomposition, and its rank.
-fn scaled_pseudo_inverse(m: &DMatrix<f64>, scale: &DMatrix<f64>, keep: Keep) -> (DMatrix<f64>, usize) {
+fn scaled_pseudo_inverse(
+    m: &DMatrix<f64>,
+    scale: &DMatrix<f64>,
+    keep: Keep,
+) -> (DMatrix<f64>, usize) {
     let p = m.nrows();
     if p == 0 {
         return (DMatrix::zeros(0, 0), 0);
     }
-    let d: Vec<f64> = (0..p).map(|i| if scale[(i, i)] > 0.0 { 1.0 / scale[(i, i)].sqrt() } else { 0.0 }).collect();
+    let d: Vec<f64> = (0..p)
+        .map(|i| {
+            if scale[(i, i)] > 0.0 {
+                1.0 / scale[(i, i)].sqrt()
+            } else {
+                0.0
+            }
+        })
+        .collect();
     let scaled = DMatrix::from_fn(p, p, |i, j| m[(i, j)] * d[i] * d[j]);
     let eig = scaled.symmetric_eigen();
     let floor = match keep {
@@ -160,7 +182,11 @@ struct CellSums {
 }
 
 fn cell_sums(rows: &BlockedRows, a: &DMatrix<f64>, b: &DVector<f64>) -> CellSums {
-    let mut out = CellSums { g: Vec::new(), h: Vec::new(), s: Vec::new() };
+    let mut out = CellSums {
+        g: Vec::new(),
+        h: Vec::new(),
+        s: Vec::new(),
+    };
     for r in &rows.cells {
         let ac = a.rows(r.start, r.len());
         let bc = b.rows(r.start, r.len());
@@ -205,7 +231,13 @@ fn solve(g: &DMatrix<f64>, h: &DVector<f64>, s: f64) -> Solved {
     let (p, rank) = pseudo_inverse(g);
     let x = &p * h;
     let ssr = (s - h.dot(&x)).max(0.0);
-    Solved { p, h: h.clone(), x, ssr, rank }
+    Solved {
+        p,
+        h: h.clone(),
+        x,
+        ssr,
+        rank,
+    }
 }
 
 /// How one candidate column block does against a base fit.
@@ -240,11 +272,26 @@ impl BaseFit {
         let full = solve(&total_g, &total_h, total_s);
         let mut folds = Vec::new();
         for (scheme, cells) in rows.folds() {
-            let test_g = cells.iter().fold(DMatrix::zeros(p, p), |acc, &c| acc + &sums.g[c]);
-            let test_h = cells.iter().fold(DVector::zeros(p), |acc, &c| acc + &sums.h[c]);
+            let test_g = cells
+                .iter()
+                .fold(DMatrix::zeros(p, p), |acc, &c| acc + &sums.g[c]);
+            let test_h = cells
+                .iter()
+                .fold(DVector::zeros(p), |acc, &c| acc + &sums.h[c]);
             let test_s: f64 = cells.iter().map(|&c| sums.s[c]).sum();
-            let train = solve(&(&total_g - &test_g), &(&total_h - &test_h), total_s - test_s);
-            folds.push(FoldFit { scheme, cells, train, test_g, test_h, test_s });
+            let train = solve(
+                &(&total_g - &test_g),
+                &(&total_h - &test_h),
+                total_s - test_s,
+            );
+            folds.push(FoldFit {
+                scheme,
+                cells,
+                train,
+                test_g,
+                test_h,
+                test_s,
+            });
         }
         Self { b, a, full, folds }
     }
@@ -280,7 +327,8 @@ impl BaseFit {
         let schemes = self.folds.iter().map(|f| f.scheme + 1).max().unwrap_or(0);
         let mut out = vec![0.0; schemes];
         for f in &self.folds {
-            out[f.scheme] += f.test_s - 2.0 * f.train.x.dot(&f.test_h) + f.train.x.dot(&(&f.test_g * &f.train.x));
+            out[f.scheme] += f.test_s - 2.0 * f.train.x.dot(&f.test_h)
+                + f.train.x.dot(&(&f.test_g * &f.train.x));
         }
         out
     }
@@ -292,7 +340,9 @@ impl BaseFit {
             for &c in &f.cells {
                 let r = &rows.cells[c];
                 let pred = self.a.rows(r.start, r.len()) * &f.train.x;
-                out[f.scheme].rows_mut(r.start, r.len()).copy_from(&(self.b.rows(r.start, r.len()) - pred));
+                out[f.scheme]
+                    .rows_mut(r.start, r.len())
+                    .copy_from(&(self.b.rows(r.start, r.len()) - pred));
             }
         }
         out
@@ -323,7 +373,10 @@ impl BaseFit {
             cc.push(candc.tr_mul(&candc));
             cb.push(candc.tr_mul(&self.b.rows(r.start, r.len())));
         }
-        let sum_m = |v: &[DMatrix<f64>], cells: &mut dyn Iterator<Item = usize>, r: usize, c: usize| cells.fold(DMatrix::zeros(r, c), |acc, i| acc + &v[i]);
+        let sum_m =
+            |v: &[DMatrix<f64>], cells: &mut dyn Iterator<Item = usize>, r: usize, c: usize| {
+                cells.fold(DMatrix::zeros(r, c), |acc, i| acc + &v[i])
+            };
         let all = || 0..rows.cells.len();
         let x_all = sum_m(&cross, &mut all(), p, k);
         let cc_all = sum_m(&cc, &mut all(), k, k);
@@ -336,20 +389,43 @@ impl BaseFit {
         for f in &self.folds {
             let xt = sum_m(&cross, &mut f.cells.iter().copied(), p, k);
             let cct = sum_m(&cc, &mut f.cells.iter().copied(), k, k);
-            let cbt = f.cells.iter().fold(DVector::zeros(k), |acc, &i| acc + &cb[i]);
-            let (yf, _, _, _) = schur(&f.train, &(&x_all - &xt), &(&cc_all - &cct), &(&cb_all - &cbt));
+            let cbt = f
+                .cells
+                .iter()
+                .fold(DVector::zeros(k), |acc, &i| acc + &cb[i]);
+            let (yf, _, _, _) = schur(
+                &f.train,
+                &(&x_all - &xt),
+                &(&cc_all - &cct),
+                &(&cb_all - &cbt),
+            );
             // base coefficients of the training fit with the candidate: x = P(h − X y)
             let xf = &f.train.p * (&f.train.h - (&x_all - &xt) * &yf);
-            let quad = xf.dot(&(&f.test_g * &xf)) + 2.0 * xf.dot(&(&xt * &yf)) + yf.dot(&(&cct * &yf));
+            let quad =
+                xf.dot(&(&f.test_g * &xf)) + 2.0 * xf.dot(&(&xt * &yf)) + yf.dot(&(&cct * &yf));
             by_scheme[f.scheme] += f.test_s - 2.0 * (xf.dot(&f.test_h) + yf.dot(&cbt)) + quad;
         }
-        CandidateFit { values: y, unscaled_covariance: s_inv, ssr, rank: self.full.rank + sep_rank, separable: sep_rank == k, heldout_ssr: by_scheme.iter().sum(), heldout_by_scheme: by_scheme, explained }
+        CandidateFit {
+            values: y,
+            unscaled_covariance: s_inv,
+            ssr,
+            rank: self.full.rank + sep_rank,
+            separable: sep_rank == k,
+            heldout_ssr: by_scheme.iter().sum(),
+            heldout_by_scheme: by_scheme,
+            explained,
+        }
     }
 }
 
 /// Block elimination of extra columns against a solved base: S = CᵀC − XᵀPX, rhs = Cᵀb − XᵀPh;
 /// returns (S⁺·rhs, S⁺, rhsᵀS⁺rhs, rank of S).
-fn schur(base: &Solved, x: &DMatrix<f64>, cc: &DMatrix<f64>, cb: &DVector<f64>) -> (DVector<f64>, DMatrix<f64>, f64, usize) {
+fn schur(
+    base: &Solved,
+    x: &DMatrix<f64>,
+    cc: &DMatrix<f64>,
+    cb: &DVector<f64>,
+) -> (DVector<f64>, DMatrix<f64>, f64, usize) {
     let px = &base.p * x;
     let s = cc - x.tr_mul(&px);
     let s = (&s + s.transpose()) * 0.5;
@@ -400,7 +476,9 @@ mod tests {
         let n = 60;
         let a = DMatrix::from_fn(n, 2, |i, j| if j == 0 { 1.0 } else { i as f64 / n as f64 });
         let c = DMatrix::from_fn(n, 1, |i, _| ((i * 7) % 11) as f64 / 11.0);
-        let b = DVector::from_fn(n, |i, _| 0.3 + 0.5 * i as f64 / n as f64 + 0.2 * c[(i, 0)] + ((i * 13) % 5) as f64 * 0.01);
+        let b = DVector::from_fn(n, |i, _| {
+            0.3 + 0.5 * i as f64 / n as f64 + 0.2 * c[(i, 0)] + ((i * 13) % 5) as f64 * 0.01
+        });
         let time_folds: Vec<usize> = (0..n).map(|i| i * 3 / n).collect();
         let other: Vec<usize> = (0..n).map(|i| i % 2).collect();
         let rows = BlockedRows::new(&[time_folds.clone(), other.clone()], n);
@@ -409,7 +487,12 @@ mod tests {
         // direct: full design [a c]
         let full = DMatrix::from_fn(n, 3, |i, j| if j < 2 { a[(i, j)] } else { c[(i, 0)] });
         let direct = full.clone().svd(true, true).solve(&b, 1e-14).unwrap();
-        assert!((cand.values[0] - direct[2]).abs() < 1e-9, "{} vs {}", cand.values[0], direct[2]);
+        assert!(
+            (cand.values[0] - direct[2]).abs() < 1e-9,
+            "{} vs {}",
+            cand.values[0],
+            direct[2]
+        );
         let ssr = (&b - &full * &direct).norm_squared();
         assert!((cand.ssr - ssr).abs() < 1e-9 * (1.0 + ssr));
         // held out, by hand
@@ -421,11 +504,19 @@ mod tests {
                 if test.is_empty() {
                     continue;
                 }
-                let x = full.select_rows(&train).svd(true, true).solve(&b.select_rows(&train), 1e-14).unwrap();
+                let x = full
+                    .select_rows(&train)
+                    .svd(true, true)
+                    .solve(&b.select_rows(&train), 1e-14)
+                    .unwrap();
                 heldout += (b.select_rows(&test) - full.select_rows(&test) * x).norm_squared();
             }
         }
-        assert!((cand.heldout_ssr - heldout).abs() < 1e-9 * (1.0 + heldout), "{} vs {heldout}", cand.heldout_ssr);
+        assert!(
+            (cand.heldout_ssr - heldout).abs() < 1e-9 * (1.0 + heldout),
+            "{} vs {heldout}",
+            cand.heldout_ssr
+        );
         assert!(cand.separable && cand.rank == 3);
         // a column the base already spans is recognised
         let spanned = DMatrix::from_fn(n, 1, |i, _| 2.0 - a[(i, 1)]);

@@ -19,7 +19,9 @@
 use metrocell_estimation::{MeasurementRecord, PointResiduals, RecordKind};
 use metrocell_model::{ForwardModel, MachineKinematics};
 use metrocell_physics::model::TermModel;
-use metrocell_physics::{configure, ConfiguredTerm, EffectKind, Frame, PhysicsError, Signals, TermConfig};
+use metrocell_physics::{
+    configure, ConfiguredTerm, EffectKind, Frame, PhysicsError, Signals, TermConfig,
+};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
 use crate::candidates::Placement;
@@ -47,7 +49,12 @@ pub struct ColumnContext<'m, 'a> {
 }
 
 fn tool_offset_term() -> ConfiguredTerm {
-    configure(&TermConfig { id: "tool_offset".into(), use_defaults: true, ..Default::default() }).expect("tool_offset builds with defaults")
+    configure(&TermConfig {
+        id: "tool_offset".into(),
+        use_defaults: true,
+        ..Default::default()
+    })
+    .expect("tool_offset builds with defaults")
 }
 
 /// The stacked vector of a model with `extra` inserted at `at`.
@@ -61,14 +68,40 @@ fn with_inserted(x: &[f64], at: usize, extra: &[f64]) -> Vec<f64> {
 
 impl<'m, 'a> ColumnContext<'m, 'a> {
     /// `x` is the declared fit (the model's stacked order), `whitening` L⁻¹ of each record.
-    pub fn new(model: &'m ForwardModel<'a>, x: &[f64], records: &'m [MeasurementRecord], whitening: &'m [Matrix3<f64>]) -> Result<Self, PhysicsError> {
+    pub fn new(
+        model: &'m ForwardModel<'a>,
+        x: &[f64],
+        records: &'m [MeasurementRecord],
+        whitening: &'m [Matrix3<f64>],
+    ) -> Result<Self, PhysicsError> {
         let signals: Vec<Signals> = records.iter().map(|r| r.signals.clone()).collect();
         // (a reference nest has no joints, and no machine term acts on it)
-        let machine_points: Vec<Vector3<f64>> = records.iter().map(|r| if r.q.len() >= 3 { model.nominal_machine_point(&r.q).unwrap_or_else(Vector3::zeros) } else { Vector3::zeros() }).collect();
-        let mut ctx = Self { model, x: x.to_vec(), records, whitening, signals, sensitivity: None, machine_points };
+        let machine_points: Vec<Vector3<f64>> = records
+            .iter()
+            .map(|r| {
+                if r.q.len() >= 3 {
+                    model
+                        .nominal_machine_point(&r.q)
+                        .unwrap_or_else(Vector3::zeros)
+                } else {
+                    Vector3::zeros()
+                }
+            })
+            .collect();
+        let mut ctx = Self {
+            model,
+            x: x.to_vec(),
+            records,
+            whitening,
+            signals,
+            sensitivity: None,
+            machine_points,
+        };
         // ∂reading/∂d from a tool offset's columns is the tracker's: chaining through it is for
         // point records only (probe and camera records take the full augmented Jacobian)
-        let points_only = records.iter().all(|r| matches!(r.kind, RecordKind::Point | RecordKind::Reference { .. }));
+        let points_only = records
+            .iter()
+            .all(|r| matches!(r.kind, RecordKind::Point | RecordKind::Reference { .. }));
         if points_only && !matches!(model.machine.kinematics, MachineKinematics::SerialArm(_)) {
             // ∂reading/∂d: the columns of a tool offset (declared, or added at zero)
             let names = model.param_names();
@@ -80,7 +113,11 @@ impl<'m, 'a> ColumnContext<'m, 'a> {
                     cols
                 }
             };
-            ctx.sensitivity = Some((0..records.len()).map(|i| sens.fixed_view::<3, 3>(3 * i, 0).into_owned()).collect());
+            ctx.sensitivity = Some(
+                (0..records.len())
+                    .map(|i| sens.fixed_view::<3, 3>(3 * i, 0).into_owned())
+                    .collect(),
+            );
         }
         Ok(ctx)
     }
@@ -92,14 +129,36 @@ impl<'m, 'a> ColumnContext<'m, 'a> {
     /// Unwhitened columns `start..start + len` of `model`'s reading Jacobian at `x`, 3 rows per
     /// record: the estimator's own prediction Jacobian, so each record kind (tracker point,
     /// probe hit, camera point) gets its own instrument's derivatives.
-    fn jacobian_columns(&mut self, model: &ForwardModel, x: &[f64], start: usize, len: usize) -> Result<DMatrix<f64>, PhysicsError> {
-        let problem = PointResiduals::new(model, self.records).map_err(|e| PhysicsError::BadValue { term: "records".into(), key: "covariance".into(), text: e.point_id.clone(), reason: format!("record {} has a covariance that is not finite and positive definite", e.index) })?;
-        Ok(problem.prediction_jacobian(x)?.columns(start, len).into_owned())
+    fn jacobian_columns(
+        &mut self,
+        model: &ForwardModel,
+        x: &[f64],
+        start: usize,
+        len: usize,
+    ) -> Result<DMatrix<f64>, PhysicsError> {
+        let problem =
+            PointResiduals::new(model, self.records).map_err(|e| PhysicsError::BadValue {
+                term: "records".into(),
+                key: "covariance".into(),
+                text: e.point_id.clone(),
+                reason: format!(
+                    "record {} has a covariance that is not finite and positive definite",
+                    e.index
+                ),
+            })?;
+        Ok(problem
+            .prediction_jacobian(x)?
+            .columns(start, len)
+            .into_owned())
     }
 
     /// Unwhitened columns of `term` (at its configured parameters) through the model with it
     /// added.
-    fn augmented_columns(&mut self, term: &ConfiguredTerm, placement: Placement) -> Result<DMatrix<f64>, PhysicsError> {
+    fn augmented_columns(
+        &mut self,
+        term: &ConfiguredTerm,
+        placement: Placement,
+    ) -> Result<DMatrix<f64>, PhysicsError> {
         let mut machine: TermModel = self.model.machine_terms.clone();
         let mut instruments: TermModel = self.model.instrument_terms.clone();
         let n_machine = machine.params().len();
@@ -121,10 +180,23 @@ impl<'m, 'a> ColumnContext<'m, 'a> {
 
     /// The whitened columns of a candidate term given by its config (parameters at the
     /// config's values).
-    pub fn columns(&mut self, config: &TermConfig, placement: Placement) -> Result<TermColumns, PhysicsError> {
+    pub fn columns(
+        &mut self,
+        config: &TermConfig,
+        placement: Placement,
+    ) -> Result<TermColumns, PhysicsError> {
         let term = configure(config)?;
-        let chain = placement == Placement::Machine && matches!(term.term.effect(), EffectKind::Displacement(Frame::Machine | Frame::Tool)) && self.sensitivity.is_some();
-        let raw = if chain { self.chained_columns(&term)? } else { self.augmented_columns(&term, placement)? };
+        let chain = placement == Placement::Machine
+            && matches!(
+                term.term.effect(),
+                EffectKind::Displacement(Frame::Machine | Frame::Tool)
+            )
+            && self.sensitivity.is_some();
+        let raw = if chain {
+            self.chained_columns(&term)?
+        } else {
+            self.augmented_columns(&term, placement)?
+        };
         let mut columns = raw;
         for i in 0..self.records.len() {
             let w = self.whitening[i];
@@ -141,7 +213,10 @@ impl<'m, 'a> ColumnContext<'m, 'a> {
         let mut out = DMatrix::zeros(3 * self.records.len(), k);
         let mut value = [0.0; 3];
         let mut jac = DMatrix::zeros(3, k);
-        let reads_point = term.term.signals().contains(&metrocell_physics::SignalKind::MachinePoint);
+        let reads_point = term
+            .term
+            .signals()
+            .contains(&metrocell_physics::SignalKind::MachinePoint);
         for i in 0..self.records.len() {
             if matches!(self.records[i].kind, RecordKind::Reference { .. }) {
                 // the machine does not move a reference nest: its rows stay zero
@@ -151,8 +226,10 @@ impl<'m, 'a> ColumnContext<'m, 'a> {
             if reads_point {
                 s.machine_point = Some(self.machine_points[i]);
             }
-            term.term.evaluate_into(&term.params, s, &mut value, jac.columns_mut(0, k))?;
-            out.view_mut((3 * i, 0), (3, k)).copy_from(&(sens[i] * &jac));
+            term.term
+                .evaluate_into(&term.params, s, &mut value, jac.columns_mut(0, k))?;
+            out.view_mut((3 * i, 0), (3, k))
+                .copy_from(&(sens[i] * &jac));
         }
         Ok(out)
     }

@@ -61,7 +61,9 @@ pub struct NotTried {
 
 /// Ball-screw leads tried for a cyclic error (m): the ISO 3408 preferred leads and the common
 /// metric ones (the periodogram of the residuals adds its own peak).
-pub const COMMON_LEADS_MM: [f64; 14] = [2.0, 2.5, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 16.0, 20.0, 25.0, 32.0, 40.0, 50.0];
+pub const COMMON_LEADS_MM: [f64; 14] = [
+    2.0, 2.5, 4.0, 5.0, 6.0, 8.0, 10.0, 12.0, 16.0, 20.0, 25.0, 32.0, 40.0, 50.0,
+];
 
 /// Shortest time span of the readings over which an instrument's drift is tried (s).
 pub const MIN_DRIFT_SPAN_S: f64 = 600.0;
@@ -70,8 +72,13 @@ pub const MIN_DRIFT_SPAN_S: f64 = 600.0;
 /// The lag grid steps by √2: at a large effect a coarser grid leaves a misfit of the lag's shape
 /// that a smooth empirical correction would then fit better than the physics (the refit refines
 /// τ anyway; the grid decides which term is named).
-pub const LAG_GRID_S: [f64; 15] = [120.0, 170.0, 240.0, 340.0, 480.0, 680.0, 960.0, 1360.0, 1920.0, 2720.0, 3840.0, 5430.0, 7680.0, 10860.0, 15360.0];
-pub const WARMUP_GRID_S: [f64; 9] = [300.0, 600.0, 1200.0, 1800.0, 2700.0, 3600.0, 5400.0, 7200.0, 10800.0];
+pub const LAG_GRID_S: [f64; 15] = [
+    120.0, 170.0, 240.0, 340.0, 480.0, 680.0, 960.0, 1360.0, 1920.0, 2720.0, 3840.0, 5430.0,
+    7680.0, 10860.0, 15360.0,
+];
+pub const WARMUP_GRID_S: [f64; 9] = [
+    300.0, 600.0, 1200.0, 1800.0, 2700.0, 3600.0, 5400.0, 7200.0, 10800.0,
+];
 
 fn text(s: &str) -> ConfigValue {
     ConfigValue::Text(s.into())
@@ -85,7 +92,18 @@ fn list(v: Vec<ConfigValue>) -> ConfigValue {
 const AXES: [&str; 3] = ["x", "y", "z"];
 
 fn config(id: TermId, options: Vec<(&str, ConfigValue)>, params: Vec<(String, f64)>) -> TermConfig {
-    TermConfig { id: id.as_str().into(), options: options.into_iter().map(|(k, v)| (k.to_string(), v)).collect(), params: params.into_iter().map(|(k, v)| (k, num(v))).collect::<BTreeMap<_, _>>(), use_defaults: false }
+    TermConfig {
+        id: id.as_str().into(),
+        options: options
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), v))
+            .collect(),
+        params: params
+            .into_iter()
+            .map(|(k, v)| (k, num(v)))
+            .collect::<BTreeMap<_, _>>(),
+        use_defaults: false,
+    }
 }
 
 /// The configured parameter names of a term config (in the term's order).
@@ -93,20 +111,37 @@ fn param_names(c: &TermConfig) -> Option<Vec<String>> {
     let mut probe = c.clone();
     probe.use_defaults = true;
     probe.params.clear();
-    configure(&probe).ok().map(|t| t.term.params().into_iter().map(|p| p.name).collect())
+    configure(&probe)
+        .ok()
+        .map(|t| t.term.params().into_iter().map(|p| p.name).collect())
 }
 
 /// A variant whose parameters are all linear and start at zero.
-fn linear_variant(name: impl Into<String>, id: TermId, options: Vec<(&str, ConfigValue)>) -> Option<TermVariant> {
+fn linear_variant(
+    name: impl Into<String>,
+    id: TermId,
+    options: Vec<(&str, ConfigValue)>,
+) -> Option<TermVariant> {
     let mut c = config(id, options, vec![]);
     let names = param_names(&c)?;
     c.params = names.iter().map(|n| (n.clone(), num(0.0))).collect();
     let linear = vec![true; names.len()];
-    Some(TermVariant { name: name.into(), config: c, linear, profiled: 0, search_multiplicity: 1.0 })
+    Some(TermVariant {
+        name: name.into(),
+        config: c,
+        linear,
+        profiled: 0,
+        search_multiplicity: 1.0,
+    })
 }
 
 /// A variant with some parameters fixed at given values (the rest linear, at zero).
-fn profiled_variant(name: impl Into<String>, id: TermId, options: Vec<(&str, ConfigValue)>, fixed: &[(&str, f64)]) -> Option<TermVariant> {
+fn profiled_variant(
+    name: impl Into<String>,
+    id: TermId,
+    options: Vec<(&str, ConfigValue)>,
+    fixed: &[(&str, f64)],
+) -> Option<TermVariant> {
     let mut v = linear_variant(name, id, options)?;
     let names = param_names(&v.config)?;
     for (n, value) in fixed {
@@ -118,11 +153,20 @@ fn profiled_variant(name: impl Into<String>, id: TermId, options: Vec<(&str, Con
     Some(v)
 }
 
-fn family(variants: Vec<Option<TermVariant>>, id: TermId, placement: Placement) -> Option<TermFamily> {
+fn family(
+    variants: Vec<Option<TermVariant>>,
+    id: TermId,
+    placement: Placement,
+) -> Option<TermFamily> {
     let variants: Vec<TermVariant> = variants.into_iter().flatten().collect();
     let first = variants.first()?;
     let label = configure(&first.config).ok()?.term.label();
-    Some(TermFamily { label, id, placement, variants })
+    Some(TermFamily {
+        label,
+        id,
+        placement,
+        variants,
+    })
 }
 
 /// What the candidates need to know about the declared model.
@@ -134,10 +178,19 @@ pub struct Declared<'a> {
 
 impl Declared<'_> {
     fn labels(&self) -> BTreeSet<String> {
-        self.machine_terms.terms.iter().chain(&self.instrument_terms.terms).map(|t| t.term.label()).collect()
+        self.machine_terms
+            .terms
+            .iter()
+            .chain(&self.instrument_terms.terms)
+            .map(|t| t.term.label())
+            .collect()
     }
     fn has(&self, id: TermId) -> bool {
-        self.machine_terms.terms.iter().chain(&self.instrument_terms.terms).any(|t| t.term.id() == id)
+        self.machine_terms
+            .terms
+            .iter()
+            .chain(&self.instrument_terms.terms)
+            .any(|t| t.term.id() == id)
     }
 }
 
@@ -168,22 +221,46 @@ fn lever_axes(machine: &MachineGeometry, axis: usize) -> Vec<usize> {
 /// catalog terms not tried with the reason. `periodogram_leads[k]` adds a lead found in the
 /// residuals of axis k, with the number of independent periods the periodogram compared; `points_in_machine_frame`: the records' points are in the machine
 /// (part) frame rather than an instrument's.
-pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, periodogram_leads: &[Option<(f64, f64)>; 3], points_in_machine_frame: bool) -> (Vec<TermFamily>, Vec<NotTried>) {
+pub fn candidate_families(
+    declared: &Declared,
+    inventory: &SignalInventory,
+    periodogram_leads: &[Option<(f64, f64)>; 3],
+    points_in_machine_frame: bool,
+) -> (Vec<TermFamily>, Vec<NotTried>) {
     let labels = declared.labels();
     let machine = declared.machine;
     let mut out: Vec<TermFamily> = Vec::new();
     let mut not_tried = Vec::new();
-    let mut skip = |term: &str, reason: String| not_tried.push(NotTried { term: term.into(), reason });
-    let axis_family = matches!(machine.kinematics, MachineKinematics::Cartesian(_) | MachineKinematics::FiveAxis(_));
+    let mut skip = |term: &str, reason: String| {
+        not_tried.push(NotTried {
+            term: term.into(),
+            reason,
+        })
+    };
+    let axis_family = matches!(
+        machine.kinematics,
+        MachineKinematics::Cartesian(_) | MachineKinematics::FiveAxis(_)
+    );
     let travel = |k: usize| list(vec![num(machine.travel[k][0]), num(machine.travel[k][1])]);
-    let lead_mm = |l: f64| format!("{:.4}", l * 1e3).trim_end_matches('0').trim_end_matches('.').to_string();
+    let lead_mm = |l: f64| {
+        format!("{:.4}", l * 1e3)
+            .trim_end_matches('0')
+            .trim_end_matches('.')
+            .to_string()
+    };
     if axis_family {
         for k in 0..3 {
             if !inventory.positions[k] {
-                skip(&format!("geometry of axis {}", AXES[k]), format!("no commanded {} position in the records", AXES[k]));
+                skip(
+                    &format!("geometry of axis {}", AXES[k]),
+                    format!("no commanded {} position in the records", AXES[k]),
+                );
                 continue;
             }
-            let orders = |id: TermId, extra: Vec<(&'static str, ConfigValue)>, from: usize| -> Vec<Option<TermVariant>> {
+            let orders = |id: TermId,
+                          extra: Vec<(&'static str, ConfigValue)>,
+                          from: usize|
+             -> Vec<Option<TermVariant>> {
                 (from..=3)
                     .map(|o| {
                         let mut opts = extra.clone();
@@ -193,11 +270,23 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
                     })
                     .collect()
             };
-            out.extend(family(orders(TermId::Positioning, vec![("axis", text(AXES[k]))], 1), TermId::Positioning, Placement::Machine));
+            out.extend(family(
+                orders(TermId::Positioning, vec![("axis", text(AXES[k]))], 1),
+                TermId::Positioning,
+                Placement::Machine,
+            ));
         }
         for (pair, driver) in [("xy", 1), ("xz", 2), ("yz", 2)] {
             if inventory.positions[driver] {
-                out.extend(family(vec![linear_variant("", TermId::Squareness, vec![("pair", text(pair))])], TermId::Squareness, Placement::Machine));
+                out.extend(family(
+                    vec![linear_variant(
+                        "",
+                        TermId::Squareness,
+                        vec![("pair", text(pair))],
+                    )],
+                    TermId::Squareness,
+                    Placement::Machine,
+                ));
             }
         }
         for k in 0..3 {
@@ -208,7 +297,20 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
                 if j == k {
                     continue;
                 }
-                let variants = (1..=3).map(|o| linear_variant(format!("order {o}"), TermId::Straightness, vec![("axis", text(AXES[k])), ("direction", text(AXES[j])), ("order", num(o as f64)), ("travel", travel(k))])).collect();
+                let variants = (1..=3)
+                    .map(|o| {
+                        linear_variant(
+                            format!("order {o}"),
+                            TermId::Straightness,
+                            vec![
+                                ("axis", text(AXES[k])),
+                                ("direction", text(AXES[j])),
+                                ("order", num(o as f64)),
+                                ("travel", travel(k)),
+                            ],
+                        )
+                    })
+                    .collect();
                 out.extend(family(variants, TermId::Straightness, Placement::Machine));
             }
             for a in 0..3 {
@@ -222,7 +324,17 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
                         linear_variant(
                             format!("order {o}"),
                             TermId::Angular,
-                            vec![("axis", text(AXES[k])), ("about", text(AXES[a])), ("lever_axes", list(lever.iter().map(|l| text(AXES[*l])).collect())), ("abbe_offset", abbe.clone()), ("order", num(o as f64)), ("travel", travel(k))],
+                            vec![
+                                ("axis", text(AXES[k])),
+                                ("about", text(AXES[a])),
+                                (
+                                    "lever_axes",
+                                    list(lever.iter().map(|l| text(AXES[*l])).collect()),
+                                ),
+                                ("abbe_offset", abbe.clone()),
+                                ("order", num(o as f64)),
+                                ("travel", travel(k)),
+                            ],
                         )
                     })
                     .collect();
@@ -238,12 +350,26 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
                 .iter()
                 .map(|l| (l * 1e-3, 1.0))
                 .filter(|(l, _)| *l < span / 3.0)
-                .chain(periodogram_leads[k].filter(|(l, _)| !COMMON_LEADS_MM.iter().any(|x| (x * 1e-3 - l).abs() < l * l / span.max(*l))))
+                .chain(periodogram_leads[k].filter(|(l, _)| {
+                    !COMMON_LEADS_MM
+                        .iter()
+                        .any(|x| (x * 1e-3 - l).abs() < l * l / span.max(*l))
+                }))
                 .collect();
             let variants = leads
                 .iter()
                 .map(|&(l, searched)| {
-                    profiled_variant(format!("lead {} mm", lead_mm(l)), TermId::PitchCyclic, vec![("axis", text(AXES[k])), ("lead", num(l)), ("harmonics", num(1.0))], &[]).map(|mut v| {
+                    profiled_variant(
+                        format!("lead {} mm", lead_mm(l)),
+                        TermId::PitchCyclic,
+                        vec![
+                            ("axis", text(AXES[k])),
+                            ("lead", num(l)),
+                            ("harmonics", num(1.0)),
+                        ],
+                        &[],
+                    )
+                    .map(|mut v| {
                         v.profiled = 1;
                         v.search_multiplicity = searched;
                         v
@@ -252,7 +378,15 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
                 .collect();
             out.extend(family(variants, TermId::PitchCyclic, Placement::Machine));
             if inventory.approach_both[k] {
-                out.extend(family(vec![linear_variant("", TermId::Backlash, vec![("axis", text(AXES[k]))])], TermId::Backlash, Placement::Machine));
+                out.extend(family(
+                    vec![linear_variant(
+                        "",
+                        TermId::Backlash,
+                        vec![("axis", text(AXES[k]))],
+                    )],
+                    TermId::Backlash,
+                    Placement::Machine,
+                ));
             } else {
                 skip(&format!("backlash[{}]", AXES[k]), format!("needs both directions of approach on {} (approach.{} columns, or commanded joint states the approach can be derived from)", AXES[k], AXES[k]));
             }
@@ -260,12 +394,32 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
             let t = &inventory.temperatures;
             let mut variants = Vec::new();
             for s in t {
-                variants.push(linear_variant(format!("sensor {s}"), TermId::ThermalScale, vec![("axis", text(AXES[k])), ("sensors", list(vec![sensor(s, machine.travel[k][0])]))]));
+                variants.push(linear_variant(
+                    format!("sensor {s}"),
+                    TermId::ThermalScale,
+                    vec![
+                        ("axis", text(AXES[k])),
+                        ("sensors", list(vec![sensor(s, machine.travel[k][0])])),
+                    ],
+                ));
             }
             for a in t {
                 for b in t {
                     if a != b {
-                        variants.push(linear_variant(format!("sensors {a} → {b}"), TermId::ThermalScale, vec![("axis", text(AXES[k])), ("sensors", list(vec![sensor(a, machine.travel[k][0]), sensor(b, machine.travel[k][1])]))]));
+                        variants.push(linear_variant(
+                            format!("sensors {a} → {b}"),
+                            TermId::ThermalScale,
+                            vec![
+                                ("axis", text(AXES[k])),
+                                (
+                                    "sensors",
+                                    list(vec![
+                                        sensor(a, machine.travel[k][0]),
+                                        sensor(b, machine.travel[k][1]),
+                                    ]),
+                                ),
+                            ],
+                        ));
                     }
                 }
             }
@@ -277,45 +431,106 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
     }
     // structure growth: each sensor, along each axis, without lag or lagging by τ on a grid
     if inventory.temperatures.is_empty() {
-        skip("thermal_growth", "no temperature sensor in the records".into());
+        skip(
+            "thermal_growth",
+            "no temperature sensor in the records".into(),
+        );
     }
     for s in &inventory.temperatures {
         let mut variants = Vec::new();
         for (k, dir) in AXES.iter().enumerate() {
-            let direction = list((0..3).map(|i| num(if i == k { 1.0 } else { 0.0 })).collect());
-            variants.push(linear_variant(format!("along {dir}"), TermId::ThermalGrowth, vec![("sensor", text(s)), ("direction", direction.clone())]));
+            let direction = list(
+                (0..3)
+                    .map(|i| num(if i == k { 1.0 } else { 0.0 }))
+                    .collect(),
+            );
+            variants.push(linear_variant(
+                format!("along {dir}"),
+                TermId::ThermalGrowth,
+                vec![("sensor", text(s)), ("direction", direction.clone())],
+            ));
             if inventory.histories.contains(s) {
                 for tau in LAG_GRID_S {
-                    variants.push(profiled_variant(format!("along {dir}, lag τ = {:.0} min", tau / 60.0), TermId::ThermalGrowth, vec![("sensor", text(s)), ("direction", direction.clone()), ("lag", ConfigValue::Bool(true))], &[("time_constant", tau)]));
+                    variants.push(profiled_variant(
+                        format!("along {dir}, lag τ = {:.0} min", tau / 60.0),
+                        TermId::ThermalGrowth,
+                        vec![
+                            ("sensor", text(s)),
+                            ("direction", direction.clone()),
+                            ("lag", ConfigValue::Bool(true)),
+                        ],
+                        &[("time_constant", tau)],
+                    ));
                 }
             }
         }
         out.extend(family(variants, TermId::ThermalGrowth, Placement::Machine));
     }
     if inventory.moving {
-        out.extend(family(vec![linear_variant("", TermId::TimeOffset, vec![])], TermId::TimeOffset, Placement::Machine));
+        out.extend(family(
+            vec![linear_variant("", TermId::TimeOffset, vec![])],
+            TermId::TimeOffset,
+            Placement::Machine,
+        ));
     } else {
         skip("time_offset", "no record was taken while an axis moved (needs axis velocities: velocity.<axis> columns or joint-state velocities)".into());
     }
     if inventory.load && axis_family {
         for k in 0..3 {
             if inventory.positions[k] {
-                out.extend(family(vec![linear_variant("", TermId::Compliance, vec![("extension_axis", text(AXES[k]))])], TermId::Compliance, Placement::Machine));
+                out.extend(family(
+                    vec![linear_variant(
+                        "",
+                        TermId::Compliance,
+                        vec![("extension_axis", text(AXES[k]))],
+                    )],
+                    TermId::Compliance,
+                    Placement::Machine,
+                ));
             }
         }
     } else if axis_family {
         skip("compliance", "no load force in the records".into());
     }
-    out.extend(family(vec![linear_variant("", TermId::ToolOffset, vec![])], TermId::ToolOffset, Placement::Machine));
+    out.extend(family(
+        vec![linear_variant("", TermId::ToolOffset, vec![])],
+        TermId::ToolOffset,
+        Placement::Machine,
+    ));
     match &machine.kinematics {
         MachineKinematics::Delta(_) => {
-            for id in [TermId::DeltaRodLength, TermId::DeltaRadius, TermId::DeltaTowerAngle, TermId::DeltaEndstop] {
-                out.extend(family(vec![linear_variant("", id, vec![])], id, Placement::Machine));
+            for id in [
+                TermId::DeltaRodLength,
+                TermId::DeltaRadius,
+                TermId::DeltaTowerAngle,
+                TermId::DeltaEndstop,
+            ] {
+                out.extend(family(
+                    vec![linear_variant("", id, vec![])],
+                    id,
+                    Placement::Machine,
+                ));
             }
         }
         MachineKinematics::SerialArm(arm) => {
-            out.extend(family(vec![linear_variant("", TermId::JointOffset, vec![("joints", num(arm.chain.dof() as f64))])], TermId::JointOffset, Placement::Machine));
-            out.extend(family(vec![linear_variant("", TermId::LinkLength, vec![("links", num(arm.link_count() as f64))])], TermId::LinkLength, Placement::Machine));
+            out.extend(family(
+                vec![linear_variant(
+                    "",
+                    TermId::JointOffset,
+                    vec![("joints", num(arm.chain.dof() as f64))],
+                )],
+                TermId::JointOffset,
+                Placement::Machine,
+            ));
+            out.extend(family(
+                vec![linear_variant(
+                    "",
+                    TermId::LinkLength,
+                    vec![("links", num(arm.link_count() as f64))],
+                )],
+                TermId::LinkLength,
+                Placement::Machine,
+            ));
             match gravity_families(arm, inventory) {
                 Ok(families) => out.extend(families),
                 Err(reason) => {
@@ -328,10 +543,21 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
         MachineKinematics::FiveAxis(f) => {
             if inventory.rotary[1] && inventory.rotary[2] {
                 let v3 = |v: &nalgebra::Vector3<f64>| list(v.iter().map(|x| num(*x)).collect());
-                let opts = vec![("b_pivot", v3(&f.geometry.b_pivot)), ("c_offset", v3(&f.geometry.c_offset)), ("workpiece_offset", v3(&f.geometry.workpiece_offset))];
-                out.extend(family(vec![linear_variant("", TermId::RotaryAxisLocation, opts)], TermId::RotaryAxisLocation, Placement::Machine));
+                let opts = vec![
+                    ("b_pivot", v3(&f.geometry.b_pivot)),
+                    ("c_offset", v3(&f.geometry.c_offset)),
+                    ("workpiece_offset", v3(&f.geometry.workpiece_offset)),
+                ];
+                out.extend(family(
+                    vec![linear_variant("", TermId::RotaryAxisLocation, opts)],
+                    TermId::RotaryAxisLocation,
+                    Placement::Machine,
+                ));
             } else {
-                skip("rotary_axis_location", "no B and C angles in the records".into());
+                skip(
+                    "rotary_axis_location",
+                    "no B and C angles in the records".into(),
+                );
             }
         }
         MachineKinematics::Cartesian(_) => {}
@@ -375,13 +601,37 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
     // the touch probe's pretravel: a constant mean, the lobing of a kinematic probe's
     // three-point seat (n = 3) and the vertical pretravel
     if inventory.probe_hits && !declared.has(TermId::ProbePretravel) {
-        out.extend(family(vec![linear_variant("3 lobes", TermId::ProbePretravel, vec![("lobes", num(3.0))])], TermId::ProbePretravel, Placement::Instrument));
+        out.extend(family(
+            vec![linear_variant(
+                "3 lobes",
+                TermId::ProbePretravel,
+                vec![("lobes", num(3.0))],
+            )],
+            TermId::ProbePretravel,
+            Placement::Instrument,
+        ));
     }
     if !declared.has(TermId::Refraction) {
         if inventory.air {
-            out.extend(family(vec![profiled_variant("", TermId::Refraction, vec![], &[("path_pressure_offset", 0.0)]).map(|mut v| { v.profiled = 0; v })], TermId::Refraction, Placement::Instrument));
+            out.extend(family(
+                vec![profiled_variant(
+                    "",
+                    TermId::Refraction,
+                    vec![],
+                    &[("path_pressure_offset", 0.0)],
+                )
+                .map(|mut v| {
+                    v.profiled = 0;
+                    v
+                })],
+                TermId::Refraction,
+                Placement::Instrument,
+            ));
         } else {
-            skip("refraction", "no station air (temperature, pressure, humidity) in the records".into());
+            skip(
+                "refraction",
+                "no station air (temperature, pressure, humidity) in the records".into(),
+            );
         }
     }
     // the part: its expansion about the workpiece origin with each temperature (the clamp
@@ -398,13 +648,28 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
         }
     } else if !declared.has(TermId::WorkpieceExpansion) {
         for s in &inventory.temperatures {
-            out.extend(family(vec![linear_variant("", TermId::WorkpieceExpansion, vec![("sensor", text(s))])], TermId::WorkpieceExpansion, Placement::Machine));
+            out.extend(family(
+                vec![linear_variant(
+                    "",
+                    TermId::WorkpieceExpansion,
+                    vec![("sensor", text(s))],
+                )],
+                TermId::WorkpieceExpansion,
+                Placement::Machine,
+            ));
         }
     }
     if points_in_machine_frame && !declared.has(TermId::FrameMisalignment) {
-        out.extend(family(vec![linear_variant("", TermId::FrameMisalignment, vec![])], TermId::FrameMisalignment, Placement::Machine));
+        out.extend(family(
+            vec![linear_variant("", TermId::FrameMisalignment, vec![])],
+            TermId::FrameMisalignment,
+            Placement::Machine,
+        ));
     }
-    out.retain(|f| !labels.contains(&f.label) && !(f.id == TermId::ToolOffset && declared.has(TermId::ToolOffset)));
+    out.retain(|f| {
+        !labels.contains(&f.label)
+            && !(f.id == TermId::ToolOffset && declared.has(TermId::ToolOffset))
+    });
     (out, not_tried)
 }
 
@@ -413,44 +678,103 @@ pub fn candidate_families(declared: &Declared, inventory: &SignalInventory, peri
 /// (each prismatic joint: it carries the arm), the links' expansion with each temperature sensor.
 /// Err with the reason when the model names an accelerometer on the base whose readings the
 /// recording lacks: the terms need the gravity it measures (tilted ground).
-fn gravity_families(arm: &metrocell_model::SerialArm, inventory: &SignalInventory) -> Result<Vec<TermFamily>, String> {
+fn gravity_families(
+    arm: &metrocell_model::SerialArm,
+    inventory: &SignalInventory,
+) -> Result<Vec<TermFamily>, String> {
     let mut out = Vec::new();
     if !arm.chain.joints.iter().any(|j| j.inertial.is_some()) {
         return Ok(out);
     }
-    if let Some(a) = arm.accelerometers.iter().find(|a| a.base_from_sensor.is_some()).filter(|_| !inventory.gravity_measured) {
+    if let Some(a) = arm
+        .accelerometers
+        .iter()
+        .find(|a| a.base_from_sensor.is_some())
+        .filter(|_| !inventory.gravity_measured)
+    {
         return Err(format!(
             "the model's base accelerometer `{}` (link {}) has no reading at every record: the gravity torques need the base's tilt it measures (record /imu/{}, or import columns accel.{}.x|y|z; without sensors.accelerometers the base is taken as level)",
             a.name, a.link, a.name, a.name
         ));
     }
     let names = arm.chain.variable_names();
-    let revolute: Vec<ConfigValue> = names.iter().zip(&arm.revolute).filter(|(_, r)| **r).map(|(n, _)| text(n)).collect();
+    let revolute: Vec<ConfigValue> = names
+        .iter()
+        .zip(&arm.revolute)
+        .filter(|(_, r)| **r)
+        .map(|(n, _)| text(n))
+        .collect();
     // the joints gravity loads most (RMS torque over the records at least a quarter of the
     // largest): a joint that carries little cannot show its compliance, and six free
     // compliances where two matter fit the noise and fail on held-out blocks
     let tau = &inventory.gravity_torque_rms;
-    let largest = names.iter().enumerate().filter(|(k, _)| arm.revolute[*k]).filter_map(|(k, _)| tau.get(k)).cloned().fold(0.0, f64::max);
-    let loaded: Vec<ConfigValue> = names.iter().enumerate().filter(|(k, _)| arm.revolute[*k] && tau.get(*k).is_some_and(|t| largest > 0.0 && *t >= 0.25 * largest)).map(|(_, n)| text(n)).collect();
+    let largest = names
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| arm.revolute[*k])
+        .filter_map(|(k, _)| tau.get(k))
+        .cloned()
+        .fold(0.0, f64::max);
+    let loaded: Vec<ConfigValue> = names
+        .iter()
+        .enumerate()
+        .filter(|(k, _)| {
+            arm.revolute[*k]
+                && tau
+                    .get(*k)
+                    .is_some_and(|t| largest > 0.0 && *t >= 0.25 * largest)
+        })
+        .map(|(_, n)| text(n))
+        .collect();
     if !revolute.is_empty() {
         for id in [TermId::JointCompliance, TermId::JointBacklash] {
-            let mut variants = vec![linear_variant("revolute joints", id, vec![("joints", list(revolute.clone()))])];
+            let mut variants = vec![linear_variant(
+                "revolute joints",
+                id,
+                vec![("joints", list(revolute.clone()))],
+            )];
             if !loaded.is_empty() && loaded.len() < revolute.len() {
-                variants.push(linear_variant("the joints gravity loads most", id, vec![("joints", list(loaded.clone()))]));
+                variants.push(linear_variant(
+                    "the joints gravity loads most",
+                    id,
+                    vec![("joints", list(loaded.clone()))],
+                ));
             }
             out.extend(family(variants, id, Placement::Machine));
         }
     }
     for (name, _) in names.iter().zip(&arm.revolute).filter(|(_, r)| !**r) {
-        out.extend(family(vec![linear_variant("", TermId::ColumnBending, vec![("joint", text(name))])], TermId::ColumnBending, Placement::Machine));
+        out.extend(family(
+            vec![linear_variant(
+                "",
+                TermId::ColumnBending,
+                vec![("joint", text(name))],
+            )],
+            TermId::ColumnBending,
+            Placement::Machine,
+        ));
     }
     for s in &inventory.temperatures {
-        out.extend(family(vec![linear_variant("", TermId::LinkThermalExpansion, vec![("sensor", text(s))])], TermId::LinkThermalExpansion, Placement::Machine));
+        out.extend(family(
+            vec![linear_variant(
+                "",
+                TermId::LinkThermalExpansion,
+                vec![("sensor", text(s))],
+            )],
+            TermId::LinkThermalExpansion,
+            Placement::Machine,
+        ));
     }
     Ok(out)
 }
 
 fn sensor(name: &str, position: f64) -> ConfigValue {
-    ConfigValue::Map([("name".to_string(), text(name)), ("position".to_string(), num(position))].into_iter().collect())
+    ConfigValue::Map(
+        [
+            ("name".to_string(), text(name)),
+            ("position".to_string(), num(position)),
+        ]
+        .into_iter()
+        .collect(),
+    )
 }
-

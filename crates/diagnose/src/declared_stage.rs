@@ -35,11 +35,21 @@ pub(crate) struct DeclaredStage {
 
 /// The declared model with a tracker pose (the model's reading needs one: free if the records
 /// are in an instrument frame, the identity otherwise), and its setup.
-pub(crate) fn with_tracker_pose(declared: &DeclaredModel) -> Result<(TermModel, ParameterSetup), PhysicsError> {
-    let has_pose = declared.instrument_terms.terms.iter().any(|t| t.term.id() == TermId::TrackerPose);
+pub(crate) fn with_tracker_pose(
+    declared: &DeclaredModel,
+) -> Result<(TermModel, ParameterSetup), PhysicsError> {
+    let has_pose = declared
+        .instrument_terms
+        .terms
+        .iter()
+        .any(|t| t.term.id() == TermId::TrackerPose);
     let mut instruments = TermModel::default();
     if !has_pose {
-        instruments.push(configure(&TermConfig { id: "tracker_pose".into(), use_defaults: true, ..Default::default() })?)?;
+        instruments.push(configure(&TermConfig {
+            id: "tracker_pose".into(),
+            use_defaults: true,
+            ..Default::default()
+        })?)?;
     }
     for t in &declared.instrument_terms.terms {
         instruments.push(t.clone())?;
@@ -51,7 +61,11 @@ pub(crate) fn with_tracker_pose(declared: &DeclaredModel) -> Result<(TermModel, 
 
 /// A setup for `model` taking free/fixed and priors from `old` by name; parameters `old` does
 /// not know are free when `new_free(name)`.
-pub(crate) fn setup_by_name(model: &ForwardModel, old: &ParameterSetup, new_free: &dyn Fn(&str) -> bool) -> ParameterSetup {
+pub(crate) fn setup_by_name(
+    model: &ForwardModel,
+    old: &ParameterSetup,
+    new_free: &dyn Fn(&str) -> bool,
+) -> ParameterSetup {
     let mut setup = ParameterSetup::all_free(model);
     for (k, name) in setup.names.clone().iter().enumerate() {
         match old.names.iter().position(|n| n == name) {
@@ -66,35 +80,85 @@ pub(crate) fn setup_by_name(model: &ForwardModel, old: &ParameterSetup, new_free
 }
 
 /// Records made ready and the declared model fitted (stages 1 and 2).
-pub(crate) fn declared_stage(declared: &DeclaredModel, records: &RecordSet, options: &DiagnoseOptions, progress: &Progress) -> Result<DeclaredStage, DiagnoseError> {
+pub(crate) fn declared_stage(
+    declared: &DeclaredModel,
+    records: &RecordSet,
+    options: &DiagnoseOptions,
+    progress: &Progress,
+) -> Result<DeclaredStage, DiagnoseError> {
     let (instruments, setup) = with_tracker_pose(declared)?;
     let model = ForwardModel::new(declared.machine, declared.machine_terms, &instruments)?;
-    let prep = prepare(&records.records, options.average_repeats, options.repeat_gap_s);
-    let rejected: Vec<String> = records.rejected.iter().chain(&prep.rejected).map(|r| format!("{} ({}): {}", r.at, r.point_id, r.reason)).collect();
+    let prep = prepare(
+        &records.records,
+        options.average_repeats,
+        options.repeat_gap_s,
+    );
+    let rejected: Vec<String> = records
+        .rejected
+        .iter()
+        .chain(&prep.rejected)
+        .map(|r| format!("{} ({}): {}", r.at, r.point_id, r.reason))
+        .collect();
     if prep.records.is_empty() {
-        return Err(DiagnoseError::NoRecords(if rejected.is_empty() { "the recording holds no measured points".into() } else { format!("every record was set aside: {}", rejected.iter().take(5).cloned().collect::<Vec<_>>().join("; ")) }));
+        return Err(DiagnoseError::NoRecords(if rejected.is_empty() {
+            "the recording holds no measured points".into()
+        } else {
+            format!(
+                "every record was set aside: {}",
+                rejected
+                    .iter()
+                    .take(5)
+                    .cloned()
+                    .collect::<Vec<_>>()
+                    .join("; ")
+            )
+        }));
     }
     // reference nests only inform the instrument's terms: the declared model is fitted to the
     // machine's points, the nests placed from their own readings at that fit
-    let (mut references, points): (Vec<MeasurementRecord>, Vec<MeasurementRecord>) = prep.records.iter().cloned().partition(is_reference);
+    let (mut references, points): (Vec<MeasurementRecord>, Vec<MeasurementRecord>) =
+        prep.records.iter().cloned().partition(is_reference);
     check_records(declared, &setup, &points)?;
-    let mut set = RecordSet { check: records.check.clone(), frame: records.frame.clone(), records: points, rejected: vec![], sources: records.sources.clone() };
+    let mut set = RecordSet {
+        check: records.check.clone(),
+        frame: records.frame.clone(),
+        records: points,
+        rejected: vec![],
+        sources: records.sources.clone(),
+    };
     progress.say(&format!("{} readings → {} records ({} groups of repeats averaged, {} readings of reference nests); fitting the declared model", prep.readings, prep.records.len(), prep.groups, references.len()));
-    let mut declared_fit = fit(&model, &setup, &set, None, &options.fit).map_err(DiagnoseError::DeclaredFit)?;
-    let outlier_notes = set_outliers_aside(&model, &declared_fit, &mut set, options.outlier_threshold)?;
+    let mut declared_fit =
+        fit(&model, &setup, &set, None, &options.fit).map_err(DiagnoseError::DeclaredFit)?;
+    let outlier_notes =
+        set_outliers_aside(&model, &declared_fit, &mut set, options.outlier_threshold)?;
     if !outlier_notes.is_empty() {
-        declared_fit = fit(&model, &setup, &set, None, &options.fit).map_err(DiagnoseError::DeclaredFit)?;
+        declared_fit =
+            fit(&model, &setup, &set, None, &options.fit).map_err(DiagnoseError::DeclaredFit)?;
     }
     check_mismatch(&declared_fit, &set)?;
     if !references.is_empty() {
         estimate_nests(&model, &declared_fit.x, &mut references, &set.frame, true)?;
         set.records.extend(references);
     }
-    Ok(DeclaredStage { instruments, setup, set, readings: prep.readings, groups: prep.groups, repeatability: prep.repeatability_scale, rejected, outlier_notes, fit: declared_fit })
+    Ok(DeclaredStage {
+        instruments,
+        setup,
+        set,
+        readings: prep.readings,
+        groups: prep.groups,
+        repeatability: prep.repeatability_scale,
+        rejected,
+        outlier_notes,
+        fit: declared_fit,
+    })
 }
 
 /// Enough records for the free parameters, and of this machine (its joint count).
-fn check_records(declared: &DeclaredModel, setup: &ParameterSetup, records: &[MeasurementRecord]) -> Result<(), DiagnoseError> {
+fn check_records(
+    declared: &DeclaredModel,
+    setup: &ParameterSetup,
+    records: &[MeasurementRecord],
+) -> Result<(), DiagnoseError> {
     let n_free = setup.free.iter().filter(|f| **f).count();
     let needed = (n_free + 10).div_ceil(3).max(12);
     if records.len() < needed {
@@ -121,22 +185,43 @@ fn check_records(declared: &DeclaredModel, setup: &ParameterSetup, records: &[Me
 
 /// Gross outliers of the declared fit (far outside the robust scatter and unlike their
 /// neighbours in time and in the workspace) taken out of `set`, each said in words.
-fn set_outliers_aside(model: &ForwardModel, declared_fit: &Fit, set: &mut RecordSet, threshold: f64) -> Result<Vec<String>, DiagnoseError> {
+fn set_outliers_aside(
+    model: &ForwardModel,
+    declared_fit: &Fit,
+    set: &mut RecordSet,
+    threshold: f64,
+) -> Result<Vec<String>, DiagnoseError> {
     let view = ResidualView::new(model, &declared_fit.x, &set.records, &set.frame)?;
-    let z: Vec<Vector3<f64>> = (0..view.len()).map(|i| view.whitening[i] * view.residual[i]).collect();
+    let z: Vec<Vector3<f64>> = (0..view.len())
+        .map(|i| view.whitening[i] * view.residual[i])
+        .collect();
     let out = outliers(&z, &view.time, &view.position, threshold);
     if out.is_empty() {
         return Ok(Vec::new());
     }
-    let scatter = robust_scale(&z.iter().flat_map(|v| v.iter().copied()).collect::<Vec<_>>()).max(1e-12);
+    let scatter =
+        robust_scale(&z.iter().flat_map(|v| v.iter().copied()).collect::<Vec<_>>()).max(1e-12);
     let notes = out
         .iter()
         .map(|&i| {
             let r = &set.records[i];
-            format!("t = {:.1} s, point `{}` ({}): residual {:.1} µm, {:.0}× the robust scatter", r.time, r.point_id, r.channel, view.residual[i].norm() * 1e6, z[i].amax() / scatter)
+            format!(
+                "t = {:.1} s, point `{}` ({}): residual {:.1} µm, {:.0}× the robust scatter",
+                r.time,
+                r.point_id,
+                r.channel,
+                view.residual[i].norm() * 1e6,
+                z[i].amax() / scatter
+            )
         })
         .collect();
-    set.records = set.records.iter().enumerate().filter(|(i, _)| !out.contains(i)).map(|(_, r)| r.clone()).collect();
+    set.records = set
+        .records
+        .iter()
+        .enumerate()
+        .filter(|(i, _)| !out.contains(i))
+        .map(|(_, r)| r.clone())
+        .collect();
     Ok(notes)
 }
 
@@ -144,7 +229,13 @@ fn set_outliers_aside(model: &ForwardModel, declared_fit: &Fit, set: &mut Record
 fn check_mismatch(declared_fit: &Fit, set: &RecordSet) -> Result<(), DiagnoseError> {
     let n = set.records.len();
     let rms = metrocell_estimation::rms(&declared_fit.residuals_after);
-    let noise = (set.records.iter().map(|r| r.covariance.trace()).sum::<f64>() / (3 * n) as f64).sqrt();
+    let noise = (set
+        .records
+        .iter()
+        .map(|r| r.covariance.trace())
+        .sum::<f64>()
+        / (3 * n) as f64)
+        .sqrt();
     if rms > 5e-4 && rms > 100.0 * noise {
         return Err(DiagnoseError::Mismatch(format!(
             "after fitting its own parameters the model still misses the measured points by {:.2} mm RMS ({:.0}× the stated noise of {:.1} µm): check the machine family and geometry, the tool offset, the instrument frame of the points, and the units of the recording",

@@ -58,7 +58,10 @@ impl EmpiricalBasis {
 
     /// Number of coefficients (basis functions in use).
     pub fn len(&self) -> usize {
-        self.kept.as_ref().map(|k| k.len()).unwrap_or_else(|| self.full_len())
+        self.kept
+            .as_ref()
+            .map(|k| k.len())
+            .unwrap_or_else(|| self.full_len())
     }
 
     pub fn is_empty(&self) -> bool {
@@ -122,33 +125,63 @@ impl EmpiricalBasis {
     pub fn variant_name(&self) -> String {
         match self.shape {
             EmpiricalShape::TimeSpline { knots, .. } => format!("{knots} knots"),
-            EmpiricalShape::WorkspaceBump { centre, width } => format!("centre ({:.0}, {:.0}, {:.0}) mm, width {:.0} mm", centre[0] * 1e3, centre[1] * 1e3, centre[2] * 1e3, width * 1e3),
+            EmpiricalShape::WorkspaceBump { centre, width } => format!(
+                "centre ({:.0}, {:.0}, {:.0}) mm, width {:.0} mm",
+                centre[0] * 1e3,
+                centre[1] * 1e3,
+                centre[2] * 1e3,
+                width * 1e3
+            ),
         }
     }
 }
 
 /// Time-spline variants for each axis: knot counts that leave at least 8 records per knot.
 pub fn time_variants(times: &[f64], axis: usize) -> Vec<EmpiricalBasis> {
-    let (t0, t1) = times.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &t| (a.min(t), b.max(t)));
+    let (t0, t1) = times
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &t| {
+            (a.min(t), b.max(t))
+        });
     if !(t1 > t0) {
         return Vec::new();
     }
     [4usize, 6, 10, 16, 24, 32]
         .into_iter()
         .filter(|k| times.len() >= 8 * k)
-        .map(|knots| EmpiricalBasis { axis, shape: EmpiricalShape::TimeSpline { start: t0, end: t1, knots }, kept: None, centres_tried: 1 })
+        .map(|knots| EmpiricalBasis {
+            axis,
+            shape: EmpiricalShape::TimeSpline {
+                start: t0,
+                end: t1,
+                knots,
+            },
+            kept: None,
+            centres_tried: 1,
+        })
         .collect()
 }
 
 /// Bump variants for each axis: for widths of 5, 8, 12, 18 and 25 % of the workspace diagonal, the
 /// centre where the kernel-smoothed residual along the axis stands out most (smoothed mean ×
 /// √(kernel weight), so a lone point does not win).
-pub fn bump_variants(positions: &[Vector3<f64>], residual: &[f64], weight: &[f64], axis: usize) -> Vec<EmpiricalBasis> {
+pub fn bump_variants(
+    positions: &[Vector3<f64>],
+    residual: &[f64],
+    weight: &[f64],
+    axis: usize,
+) -> Vec<EmpiricalBasis> {
     let n = positions.len();
     if n < 12 {
         return Vec::new();
     }
-    let (lo, hi) = positions.iter().fold((Vector3::repeat(f64::INFINITY), Vector3::repeat(f64::NEG_INFINITY)), |(a, b), p| (a.inf(p), b.sup(p)));
+    let (lo, hi) = positions.iter().fold(
+        (
+            Vector3::repeat(f64::INFINITY),
+            Vector3::repeat(f64::NEG_INFINITY),
+        ),
+        |(a, b), p| (a.inf(p), b.sup(p)),
+    );
     let diagonal = (hi - lo).norm();
     if !(diagonal > 0.0) {
         return Vec::new();
@@ -162,7 +195,8 @@ pub fn bump_variants(positions: &[Vector3<f64>], residual: &[f64], weight: &[f64
         for c in &centres {
             let (mut sw, mut swr, mut sw2) = (0.0, 0.0, 0.0);
             for i in 0..n {
-                let k = (-(positions[i] - c).norm_squared() / (2.0 * width * width)).exp() * weight[i];
+                let k =
+                    (-(positions[i] - c).norm_squared() / (2.0 * width * width)).exp() * weight[i];
                 sw += k;
                 swr += k * residual[i];
                 sw2 += k * k / weight[i].max(f64::MIN_POSITIVE);
@@ -177,7 +211,15 @@ pub fn bump_variants(positions: &[Vector3<f64>], residual: &[f64], weight: &[f64
             }
         }
         if let Some((_, c)) = best {
-            out.push(EmpiricalBasis { axis, shape: EmpiricalShape::WorkspaceBump { centre: [c.x, c.y, c.z], width }, kept: None, centres_tried: centres.len() });
+            out.push(EmpiricalBasis {
+                axis,
+                shape: EmpiricalShape::WorkspaceBump {
+                    centre: [c.x, c.y, c.z],
+                    width,
+                },
+                kept: None,
+                centres_tried: centres.len(),
+            });
         }
     }
     out
@@ -189,17 +231,38 @@ mod tests {
 
     #[test]
     fn splines_partition_unity_and_bumps_peak_at_their_centre() {
-        let b = EmpiricalBasis { axis: 2, shape: EmpiricalShape::TimeSpline { start: 10.0, end: 70.0, knots: 7 }, kept: None, centres_tried: 1 };
+        let b = EmpiricalBasis {
+            axis: 2,
+            shape: EmpiricalShape::TimeSpline {
+                start: 10.0,
+                end: 70.0,
+                knots: 7,
+            },
+            kept: None,
+            centres_tried: 1,
+        };
         for t in [10.0, 23.3, 55.0, 70.0] {
             let v = b.values(t, &Vector3::zeros());
             assert_eq!(v.len(), 7);
             assert!((v.iter().sum::<f64>() - 1.0).abs() < 1e-12, "{t}: {v:?}");
         }
-        let positions: Vec<Vector3<f64>> = (0..400).map(|i| Vector3::new((i % 20) as f64 * 0.04, (i / 20) as f64 * 0.03, 0.1)).collect();
+        let positions: Vec<Vector3<f64>> = (0..400)
+            .map(|i| Vector3::new((i % 20) as f64 * 0.04, (i / 20) as f64 * 0.03, 0.1))
+            .collect();
         let centre = Vector3::new(0.52, 0.33, 0.1);
-        let residual: Vec<f64> = positions.iter().enumerate().map(|(i, p)| 10.0 * (-(p - centre).norm_squared() / (2.0 * 0.06f64.powi(2))).exp() + ((i * 13) % 7) as f64 / 7.0 - 0.5).collect();
+        let residual: Vec<f64> = positions
+            .iter()
+            .enumerate()
+            .map(|(i, p)| {
+                10.0 * (-(p - centre).norm_squared() / (2.0 * 0.06f64.powi(2))).exp()
+                    + ((i * 13) % 7) as f64 / 7.0
+                    - 0.5
+            })
+            .collect();
         let v = bump_variants(&positions, &residual, &vec![1.0; 400], 0);
-        let EmpiricalShape::WorkspaceBump { centre: c, .. } = v[0].shape else { panic!() };
+        let EmpiricalShape::WorkspaceBump { centre: c, .. } = v[0].shape else {
+            panic!()
+        };
         assert!((Vector3::from(c) - centre).norm() < 0.05, "{c:?}");
     }
 }

@@ -85,23 +85,47 @@ fn upper(a: &str) -> String {
 
 /// The parameters of a label in the augmented model: (param name, value, σ, unit).
 fn params_of(inputs: &Inputs, label: &str) -> Vec<(String, f64, Option<f64>, String)> {
-    let specs: Vec<_> = inputs.model.machine_terms.param_specs().into_iter().chain(inputs.model.instrument_terms.param_specs()).collect();
+    let specs: Vec<_> = inputs
+        .model
+        .machine_terms
+        .param_specs()
+        .into_iter()
+        .chain(inputs.model.instrument_terms.param_specs())
+        .collect();
     inputs
         .names
         .iter()
         .enumerate()
         .filter(|(k, _)| inputs.free[*k])
-        .filter_map(|(k, n)| n.strip_prefix(&format!("{label}.")).map(|p| (p.to_string(), inputs.x[k], inputs.sigmas[k], specs[k].unit.to_string())))
+        .filter_map(|(k, n)| {
+            n.strip_prefix(&format!("{label}.")).map(|p| {
+                (
+                    p.to_string(),
+                    inputs.x[k],
+                    inputs.sigmas[k],
+                    specs[k].unit.to_string(),
+                )
+            })
+        })
         .collect()
 }
 
 /// The stacked vector with the term's amplitudes at zero (parameters whose range holds 0), so
 /// the difference of predictions is the term's effect.
 fn without(inputs: &Inputs, label: &str) -> Vec<f64> {
-    let specs: Vec<_> = inputs.model.machine_terms.param_specs().into_iter().chain(inputs.model.instrument_terms.param_specs()).collect();
+    let specs: Vec<_> = inputs
+        .model
+        .machine_terms
+        .param_specs()
+        .into_iter()
+        .chain(inputs.model.instrument_terms.param_specs())
+        .collect();
     let mut x = inputs.x.to_vec();
     for (k, n) in inputs.names.iter().enumerate() {
-        if n.starts_with(&format!("{label}.")) && specs[k].usual.contains(0.0) && specs[k].possible.contains(0.0) {
+        if n.starts_with(&format!("{label}."))
+            && specs[k].usual.contains(0.0)
+            && specs[k].possible.contains(0.0)
+        {
             x[k] = 0.0;
         }
     }
@@ -114,7 +138,9 @@ fn in_place(place: &Place, s: &ResidualSample) -> Option<bool> {
         Place::Region { axis, from, to } => s.position[*axis] >= *from && s.position[*axis] <= *to,
         Place::TimeWindow { from, to } => s.time >= *from && s.time <= *to,
         Place::Direction { axis, sign } => s.approach[*axis] == Some(*sign),
-        Place::ConditionRange { name, from, to } => s.condition(name).is_some_and(|v| v >= *from && v <= *to),
+        Place::ConditionRange { name, from, to } => {
+            s.condition(name).is_some_and(|v| v >= *from && v <= *to)
+        }
         Place::Correlation { .. } => return None,
     })
 }
@@ -152,7 +178,10 @@ fn accounted(located: &[Located], samples: &[ResidualSample], c: &[Vector3<f64>]
                 continue;
             }
             let m = pairs.len() as f64;
-            let (mv, mc) = (pairs.iter().map(|p| p.0).sum::<f64>() / m, pairs.iter().map(|p| p.1).sum::<f64>() / m);
+            let (mv, mc) = (
+                pairs.iter().map(|p| p.0).sum::<f64>() / m,
+                pairs.iter().map(|p| p.1).sum::<f64>() / m,
+            );
             let var = pairs.iter().map(|p| (p.0 - mv).powi(2)).sum::<f64>() / m;
             let cov = pairs.iter().map(|p| (p.0 - mv) * (p.1 - mc)).sum::<f64>() / m;
             if var > 0.0 {
@@ -204,12 +233,28 @@ fn bins(signal: &[f64], residual: &[f64], fitted: &[f64], sigma: &[f64]) -> Vec<
     out
 }
 
-fn bin(idx: &[usize], signal: &[f64], residual: &[f64], fitted: &[f64], sigma: &[f64]) -> EvidenceBin {
+fn bin(
+    idx: &[usize],
+    signal: &[f64],
+    residual: &[f64],
+    fitted: &[f64],
+    sigma: &[f64],
+) -> EvidenceBin {
     let m = idx.len() as f64;
     let mean = |v: &[f64]| idx.iter().map(|&i| v[i]).sum::<f64>() / m;
     let r = mean(residual);
-    let spread = if idx.len() > 1 { (idx.iter().map(|&i| (residual[i] - r).powi(2)).sum::<f64>() / (m - 1.0)).sqrt() } else { sigma[idx[0]] };
-    EvidenceBin { signal: mean(signal), residual_m: r, residual_sigma_m: spread / m.sqrt(), fitted_m: mean(fitted), count: idx.len() }
+    let spread = if idx.len() > 1 {
+        (idx.iter().map(|&i| (residual[i] - r).powi(2)).sum::<f64>() / (m - 1.0)).sqrt()
+    } else {
+        sigma[idx[0]]
+    };
+    EvidenceBin {
+        signal: mean(signal),
+        residual_m: r,
+        residual_sigma_m: spread / m.sqrt(),
+        fitted_m: mean(fitted),
+        count: idx.len(),
+    }
 }
 
 fn correlation(a: &[f64], b: &[f64]) -> f64 {
@@ -230,7 +275,12 @@ fn correlation(a: &[f64], b: &[f64]) -> f64 {
 
 /// The found terms as findings, largest effect first.
 pub fn build(inputs: &Inputs) -> Result<Built, PhysicsError> {
-    let problem = PointResiduals::new(inputs.model, inputs.records).map_err(|b| PhysicsError::InvalidInput { what: format!("record {}", b.index), reason: "covariance".into() })?;
+    let problem = PointResiduals::new(inputs.model, inputs.records).map_err(|b| {
+        PhysicsError::InvalidInput {
+            what: format!("record {}", b.index),
+            reason: "covariance".into(),
+        }
+    })?;
     let full = problem.predictions(inputs.x)?;
     let n = inputs.records.len();
     let rot = |i: usize| inputs.view.rotation(i);
@@ -239,32 +289,78 @@ pub fn build(inputs: &Inputs) -> Result<Built, PhysicsError> {
         let bare = problem.predictions(&without(inputs, &f.label))?;
         let c_rec: Vec<Vector3<f64>> = full.iter().zip(&bare).map(|(a, b)| a - b).collect();
         let c_wp: Vec<Vector3<f64>> = c_rec.iter().enumerate().map(|(i, c)| rot(i) * c).collect();
-        let effect_rms = (c_wp.iter().map(|c| c.norm_squared()).sum::<f64>() / (3 * n).max(1) as f64).sqrt();
-        let per_axis: Vec<f64> = (0..3).map(|k| c_wp.iter().map(|c| c[k] * c[k]).sum::<f64>()).collect();
+        let effect_rms =
+            (c_wp.iter().map(|c| c.norm_squared()).sum::<f64>() / (3 * n).max(1) as f64).sqrt();
+        let per_axis: Vec<f64> = (0..3)
+            .map(|k| c_wp.iter().map(|c| c[k] * c[k]).sum::<f64>())
+            .collect();
         let total: f64 = per_axis.iter().sum();
-        let main = (0..3).max_by(|&a, &b| per_axis[a].total_cmp(&per_axis[b])).unwrap_or(0);
+        let main = (0..3)
+            .max_by(|&a, &b| per_axis[a].total_cmp(&per_axis[b]))
+            .unwrap_or(0);
         let range_term = f.placement == Placement::Instrument;
         // evidence: residual with the effect put back, along the main axis (range terms: along
         // the line of sight)
         let (along, fitted, residual): (String, Vec<f64>, Vec<f64>) = if range_term {
             let los = &inputs.view.line_of_sight;
-            ("line of sight".into(), (0..n).map(|i| c_rec[i].dot(&los[i])).collect(), (0..n).map(|i| (rot(i).transpose() * inputs.after[i] + c_rec[i]).dot(&los[i])).collect())
+            (
+                "line of sight".into(),
+                (0..n).map(|i| c_rec[i].dot(&los[i])).collect(),
+                (0..n)
+                    .map(|i| (rot(i).transpose() * inputs.after[i] + c_rec[i]).dot(&los[i]))
+                    .collect(),
+            )
         } else {
-            (axis_name(main).into(), c_wp.iter().map(|c| c[main]).collect(), (0..n).map(|i| inputs.after[i][main] + c_wp[i][main]).collect())
+            (
+                axis_name(main).into(),
+                c_wp.iter().map(|c| c[main]).collect(),
+                (0..n)
+                    .map(|i| inputs.after[i][main] + c_wp[i][main])
+                    .collect(),
+            )
         };
         let (signal_name, unit, signal) = signal_of(f, inputs, &fitted);
-        let sigma: Vec<f64> = (0..n).map(|i| inputs.view.workpiece_sigma(i, &inputs.records[i].covariance)[main]).collect();
-        let evidence = Evidence { signal: signal_name, unit, along, bins: bins(&signal, &residual, &fitted, &sigma), correlation: correlation(&residual, &fitted) };
+        let sigma: Vec<f64> = (0..n)
+            .map(|i| {
+                inputs
+                    .view
+                    .workpiece_sigma(i, &inputs.records[i].covariance)[main]
+            })
+            .collect();
+        let evidence = Evidence {
+            signal: signal_name,
+            unit,
+            along,
+            bins: bins(&signal, &residual, &fitted, &sigma),
+            correlation: correlation(&residual, &fitted),
+        };
         let params = params_of(inputs, &f.label);
         let parameters: BTreeMap<String, ParameterValue> = params
             .iter()
             .map(|(n, v, s, u)| {
-                let at_bound = inputs.at_bound.iter().find(|(name, _)| *name == format!("{}.{n}", f.label)).map(|(_, side)| side.clone());
-                (n.clone(), ParameterValue { value: *v, sigma: if at_bound.is_some() { None } else { *s }, unit: u.clone(), at_bound })
+                let at_bound = inputs
+                    .at_bound
+                    .iter()
+                    .find(|(name, _)| *name == format!("{}.{n}", f.label))
+                    .map(|(_, side)| side.clone());
+                (
+                    n.clone(),
+                    ParameterValue {
+                        value: *v,
+                        sigma: if at_bound.is_some() { None } else { *s },
+                        unit: u.clone(),
+                        at_bound,
+                    },
+                )
             })
             .collect();
-        let largest = (0..n).max_by(|&a, &b| c_wp[a].norm().total_cmp(&c_wp[b].norm())).unwrap_or(0);
-        let channels: BTreeSet<String> = (0..n).filter(|&i| c_wp[i].norm() > 0.2 * c_wp[largest].norm()).map(|i| inputs.records[i].channel.clone()).collect();
+        let largest = (0..n)
+            .max_by(|&a, &b| c_wp[a].norm().total_cmp(&c_wp[b].norm()))
+            .unwrap_or(0);
+        let channels: BTreeSet<String> = (0..n)
+            .filter(|&i| c_wp[i].norm() > 0.2 * c_wp[largest].norm())
+            .map(|i| inputs.records[i].channel.clone())
+            .collect();
         let p = inputs.view.position[largest];
         let description = format!(
             "largest ({} µm) at x {:.0} mm, y {:.0} mm, z {:.0} mm ({}), t = {:.2} h into the recording; {:.0} % of the effect is along {}",
@@ -277,9 +373,21 @@ pub fn build(inputs: &Inputs) -> Result<Built, PhysicsError> {
             if total > 0.0 { 100.0 * per_axis[main] / total } else { 0.0 },
             axis_name(main)
         );
-        let location = Where { channels: channels.into_iter().collect(), axis: axis_name(main).into(), description, located: accounted(inputs.located_before, inputs.samples_before, &c_wp) };
+        let location = Where {
+            channels: channels.into_iter().collect(),
+            axis: axis_name(main).into(),
+            description,
+            located: accounted(inputs.located_before, inputs.samples_before, &c_wp),
+        };
         let unusual = unusual_values(inputs, &f.label);
-        let alternatives: Vec<Alternative> = inputs.alternatives.get(&f.label).cloned().unwrap_or_default().into_iter().filter(|a| !inputs.found.iter().any(|g| g.label == a.label)).collect();
+        let alternatives: Vec<Alternative> = inputs
+            .alternatives
+            .get(&f.label)
+            .cloned()
+            .unwrap_or_default()
+            .into_iter()
+            .filter(|a| !inputs.found.iter().any(|g| g.label == a.label))
+            .collect();
         let mut statement = statement(f, &params, &c_wp, main);
         if !unusual.is_empty() {
             statement.push_str(&format!(" — unusual: {}", unusual.join("; ")));
@@ -287,12 +395,39 @@ pub fn build(inputs: &Inputs) -> Result<Built, PhysicsError> {
         if !alternatives.is_empty() {
             statement.push_str(&format!(
                 " — this recording cannot tell it from {} ({})",
-                alternatives.iter().map(|a| a.label.as_str()).collect::<Vec<_>>().join(", "),
-                alternatives.iter().map(|a| a.separated_by.as_str()).collect::<BTreeSet<_>>().into_iter().collect::<Vec<_>>().join("; ")
+                alternatives
+                    .iter()
+                    .map(|a| a.label.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", "),
+                alternatives
+                    .iter()
+                    .map(|a| a.separated_by.as_str())
+                    .collect::<BTreeSet<_>>()
+                    .into_iter()
+                    .collect::<Vec<_>>()
+                    .join("; ")
             ));
         }
-        let significance_sigma = inputs.significance.iter().find(|(l, _)| *l == f.label).map(|s| s.1).unwrap_or(f64::NAN);
-        let finding = Finding { term: f.id.as_str().into(), label: f.label.clone(), variant: f.variant.clone(), parameters, location, evidence, statement, effect_rms_m: effect_rms, significance_sigma, unusual, alternatives };
+        let significance_sigma = inputs
+            .significance
+            .iter()
+            .find(|(l, _)| *l == f.label)
+            .map(|s| s.1)
+            .unwrap_or(f64::NAN);
+        let finding = Finding {
+            term: f.id.as_str().into(),
+            label: f.label.clone(),
+            variant: f.variant.clone(),
+            parameters,
+            location,
+            evidence,
+            statement,
+            effect_rms_m: effect_rms,
+            significance_sigma,
+            unusual,
+            alternatives,
+        };
         out.push((effect_rms, finding, (signal, residual, fitted)));
     }
     out.sort_by(|a, b| b.0.total_cmp(&a.0));
@@ -304,40 +439,119 @@ pub fn build(inputs: &Inputs) -> Result<Built, PhysicsError> {
 fn signal_of(f: &FoundTerm, inputs: &Inputs, fitted: &[f64]) -> (String, String, Vec<f64>) {
     let records = inputs.records;
     let axis = text_option(&f.config, "axis").or_else(|| text_option(&f.config, "extension_axis"));
-    let position = |k: usize| records.iter().map(|r| r.signals.axis_position[k].unwrap_or(f64::NAN)).collect::<Vec<f64>>();
+    let position = |k: usize| {
+        records
+            .iter()
+            .map(|r| r.signals.axis_position[k].unwrap_or(f64::NAN))
+            .collect::<Vec<f64>>()
+    };
     match f.id {
-        TermId::Positioning | TermId::Straightness | TermId::PitchCyclic | TermId::Angular | TermId::Compliance => {
+        TermId::Positioning
+        | TermId::Straightness
+        | TermId::PitchCyclic
+        | TermId::Angular
+        | TermId::Compliance => {
             let k = axis.as_deref().and_then(axis_index).unwrap_or(0);
-            (format!("{} position", axis_name(k)), "m".into(), position(k))
+            (
+                format!("{} position", axis_name(k)),
+                "m".into(),
+                position(k),
+            )
         }
         TermId::Squareness => {
             let pair = text_option(&f.config, "pair").unwrap_or_default();
             let k = pair.get(1..2).and_then(axis_index).unwrap_or(1);
-            (format!("{} position", axis_name(k)), "m".into(), position(k))
+            (
+                format!("{} position", axis_name(k)),
+                "m".into(),
+                position(k),
+            )
         }
         TermId::Backlash => {
             let k = axis.as_deref().and_then(axis_index).unwrap_or(0);
-            (format!("direction of approach of {} (+1 moving +, −1 moving −)", axis_name(k)), "1".into(), records.iter().map(|r| r.signals.approach_direction[k].unwrap_or(0.0)).collect())
+            (
+                format!(
+                    "direction of approach of {} (+1 moving +, −1 moving −)",
+                    axis_name(k)
+                ),
+                "1".into(),
+                records
+                    .iter()
+                    .map(|r| r.signals.approach_direction[k].unwrap_or(0.0))
+                    .collect(),
+            )
         }
-        TermId::TrackerWarmup => ("time since the tracker was powered on".into(), "s".into(), records.iter().map(|r| r.signals.time_since_power_on.unwrap_or(f64::NAN)).collect()),
-        TermId::Refraction => ("measured range".into(), "m".into(), inputs.view.line_of_sight.iter().zip(records).map(|(_, r)| r.measured.norm()).collect()),
-        TermId::TimeOffset => ("speed".into(), "m/s".into(), records.iter().map(|r| r.signals.axis_velocity.iter().map(|v| v.unwrap_or(0.0).powi(2)).sum::<f64>().sqrt()).collect()),
+        TermId::TrackerWarmup => (
+            "time since the tracker was powered on".into(),
+            "s".into(),
+            records
+                .iter()
+                .map(|r| r.signals.time_since_power_on.unwrap_or(f64::NAN))
+                .collect(),
+        ),
+        TermId::Refraction => (
+            "measured range".into(),
+            "m".into(),
+            inputs
+                .view
+                .line_of_sight
+                .iter()
+                .zip(records)
+                .map(|(_, r)| r.measured.norm())
+                .collect(),
+        ),
+        TermId::TimeOffset => (
+            "speed".into(),
+            "m/s".into(),
+            records
+                .iter()
+                .map(|r| {
+                    r.signals
+                        .axis_velocity
+                        .iter()
+                        .map(|v| v.unwrap_or(0.0).powi(2))
+                        .sum::<f64>()
+                        .sqrt()
+                })
+                .collect(),
+        ),
         TermId::ThermalScale | TermId::ThermalGrowth => {
             // the term's own signal: its prediction at unit coefficient, along its direction
             let mut unit_config = f.config.clone();
-            let first = if f.id == TermId::ThermalScale { "alpha" } else { "coefficient" };
-            unit_config.params.insert(first.into(), ConfigValue::Number(1.0));
+            let first = if f.id == TermId::ThermalScale {
+                "alpha"
+            } else {
+                "coefficient"
+            };
+            unit_config
+                .params
+                .insert(first.into(), ConfigValue::Number(1.0));
             let values = configure(&unit_config).ok().map(|t| {
                 records
                     .iter()
                     .map(|r| {
                         // one-axis directions: the signed component is the sum
-                        t.term.predict(&t.params, &r.signals).map(|p| p.value.iter().sum::<f64>()).unwrap_or(f64::NAN)
+                        t.term
+                            .predict(&t.params, &r.signals)
+                            .map(|p| p.value.iter().sum::<f64>())
+                            .unwrap_or(f64::NAN)
                     })
                     .collect()
             });
-            let name = if f.id == TermId::ThermalScale { "axis position × (temperature − reference)" } else { "temperature − reference (lagged where the term lags)" };
-            (name.into(), if f.id == TermId::ThermalScale { "m·K".into() } else { "K".into() }, values.unwrap_or_else(|| fitted.to_vec()))
+            let name = if f.id == TermId::ThermalScale {
+                "axis position × (temperature − reference)"
+            } else {
+                "temperature − reference (lagged where the term lags)"
+            };
+            (
+                name.into(),
+                if f.id == TermId::ThermalScale {
+                    "m·K".into()
+                } else {
+                    "K".into()
+                },
+                values.unwrap_or_else(|| fitted.to_vec()),
+            )
         }
         _ => ("fitted effect".into(), "m".into(), fitted.to_vec()),
     }
@@ -346,8 +560,19 @@ fn signal_of(f: &FoundTerm, inputs: &Inputs, fitted: &[f64]) -> (String, String,
 /// Material whose expansion coefficient range the fitted α (±2σ) overlaps, naming the one that
 /// holds the value.
 fn material(alpha: f64, sigma: f64) -> Option<&'static str> {
-    const MATERIALS: [(f64, f64, &str); 5] = [(-0.5e-6, 2.0e-6, "a low-expansion (Invar, Zerodur) scale"), (5.5e-6, 9.5e-6, "a glass scale"), (9.5e-6, 13.5e-6, "steel"), (15.0e-6, 18.5e-6, "brass or stainless steel"), (21.0e-6, 25.5e-6, "aluminium")];
-    MATERIALS.iter().find(|(lo, hi, _)| alpha + 2.0 * sigma >= *lo && alpha - 2.0 * sigma <= *hi && alpha >= lo - 2.0 * sigma).map(|m| m.2)
+    const MATERIALS: [(f64, f64, &str); 5] = [
+        (-0.5e-6, 2.0e-6, "a low-expansion (Invar, Zerodur) scale"),
+        (5.5e-6, 9.5e-6, "a glass scale"),
+        (9.5e-6, 13.5e-6, "steel"),
+        (15.0e-6, 18.5e-6, "brass or stainless steel"),
+        (21.0e-6, 25.5e-6, "aluminium"),
+    ];
+    MATERIALS
+        .iter()
+        .find(|(lo, hi, _)| {
+            alpha + 2.0 * sigma >= *lo && alpha - 2.0 * sigma <= *hi && alpha >= lo - 2.0 * sigma
+        })
+        .map(|m| m.2)
 }
 
 /// Value ± σ in a display unit (`scale` from SI), σ to one significant digit (two below 2) and
@@ -368,12 +593,20 @@ fn pm(v: f64, s: Option<f64>, scale: f64, _digits: usize) -> String {
     }
 }
 
-fn get<'a>(params: &'a [(String, f64, Option<f64>, String)], name: &str) -> Option<&'a (String, f64, Option<f64>, String)> {
+fn get<'a>(
+    params: &'a [(String, f64, Option<f64>, String)],
+    name: &str,
+) -> Option<&'a (String, f64, Option<f64>, String)> {
     params.iter().find(|p| p.0 == name)
 }
 
 /// The sentence a metrologist would write.
-fn statement(f: &FoundTerm, params: &[(String, f64, Option<f64>, String)], c_wp: &[Vector3<f64>], main: usize) -> String {
+fn statement(
+    f: &FoundTerm,
+    params: &[(String, f64, Option<f64>, String)],
+    c_wp: &[Vector3<f64>],
+    main: usize,
+) -> String {
     let axis = text_option(&f.config, "axis").unwrap_or_else(|| axis_name(main).into());
     let peak = c_wp.iter().map(|c| c[main].abs()).fold(0.0, f64::max);
     let list = || {
@@ -381,7 +614,15 @@ fn statement(f: &FoundTerm, params: &[(String, f64, Option<f64>, String)], c_wp:
             .iter()
             .map(|(n, v, s, u)| {
                 let (scale, shown) = display(u, 1.0);
-                format!("{n} = {}{}", pm(*v, *s, scale, 2), if shown.is_empty() { String::new() } else { format!(" {shown}") })
+                format!(
+                    "{n} = {}{}",
+                    pm(*v, *s, scale, 2),
+                    if shown.is_empty() {
+                        String::new()
+                    } else {
+                        format!(" {shown}")
+                    }
+                )
             })
             .collect::<Vec<_>>()
             .join(", ")
@@ -473,7 +714,11 @@ fn statement(f: &FoundTerm, params: &[(String, f64, Option<f64>, String)], c_wp:
 /// The instrument's drift in words: how far its origin moved from the recording's start to its
 /// end (a Legendre series changes by 2·c over the span for odd orders, 0 for even), and the
 /// largest effect on the points.
-fn drift_statement(params: &[(String, f64, Option<f64>, String)], c_wp: &[Vector3<f64>], variant: &str) -> String {
+fn drift_statement(
+    params: &[(String, f64, Option<f64>, String)],
+    c_wp: &[Vector3<f64>],
+    variant: &str,
+) -> String {
     let total = |axis: &str| -> (f64, f64) {
         let (mut v, mut s2) = (0.0, 0.0);
         for (n, x, s, _) in params {
@@ -486,14 +731,29 @@ fn drift_statement(params: &[(String, f64, Option<f64>, String)], c_wp: &[Vector
         }
         (v, s2.sqrt())
     };
-    let moves: Vec<String> = ["dx", "dy", "dz"].iter().map(|a| {
-        let (v, s) = total(a);
-        format!("{} {} µm", &a[1..], pm(v, Some(s).filter(|s| *s > 0.0), 1e6, 1))
-    }).collect();
-    let turns: Vec<String> = ["rx", "ry", "rz"].iter().filter(|a| params.iter().any(|p| p.0.starts_with(*a))).map(|a| {
-        let (v, s) = total(a);
-        format!("{} {} µrad", &a[1..], pm(v, Some(s).filter(|s| *s > 0.0), 1e6, 1))
-    }).collect();
+    let moves: Vec<String> = ["dx", "dy", "dz"]
+        .iter()
+        .map(|a| {
+            let (v, s) = total(a);
+            format!(
+                "{} {} µm",
+                &a[1..],
+                pm(v, Some(s).filter(|s| *s > 0.0), 1e6, 1)
+            )
+        })
+        .collect();
+    let turns: Vec<String> = ["rx", "ry", "rz"]
+        .iter()
+        .filter(|a| params.iter().any(|p| p.0.starts_with(*a)))
+        .map(|a| {
+            let (v, s) = total(a);
+            format!(
+                "{} {} µrad",
+                &a[1..],
+                pm(v, Some(s).filter(|s| *s > 0.0), 1e6, 1)
+            )
+        })
+        .collect();
     let peak = c_wp.iter().map(|c| c.norm()).fold(0.0, f64::max);
     format!(
         "the instrument moved during the recording ({variant}): its origin by {} from start to end{}; up to {} µm on the measured points",
@@ -508,7 +768,12 @@ fn drift_statement(params: &[(String, f64, Option<f64>, String)], c_wp: &[Vector
 /// `empirical`: each correction's basis, coefficients, their σ, and its net effect on each record
 /// along its axis (what the model's own parameters take of it projected out: the size a user
 /// sees on the recorded points, never a coefficient).
-pub fn unexplained(empirical: &[(EmpiricalBasis, Vec<f64>, Vec<f64>, Vec<f64>)], view: &crate::residual_view::ResidualView, located_after: &[Located], records: &[MeasurementRecord]) -> Vec<Unexplained> {
+pub fn unexplained(
+    empirical: &[(EmpiricalBasis, Vec<f64>, Vec<f64>, Vec<f64>)],
+    view: &crate::residual_view::ResidualView,
+    located_after: &[Located],
+    records: &[MeasurementRecord],
+) -> Vec<Unexplained> {
     let n = view.len();
     let t0 = view.time.iter().cloned().fold(f64::INFINITY, f64::min);
     let mut out = Vec::new();
@@ -536,8 +801,24 @@ pub fn unexplained(empirical: &[(EmpiricalBasis, Vec<f64>, Vec<f64>, Vec<f64>)],
                 format!("a local {axis} error of {} µm around ({:.0}, {:.0}, {:.0}) mm, {:.0} mm wide, that no catalog term explains; an empirical bump correction (labelled empirical, not physics) takes it out", um(peak), centre[0] * 1e3, centre[1] * 1e3, centre[2] * 1e3, width * 2e3),
             ),
         };
-        let correction = EmpiricalCorrection { label: basis.label(), basis: basis.clone(), coefficients_m: coefficients.clone(), coefficient_sigmas_m: sigmas.clone(), effect_rms_m: rms, empirical: true };
-        out.push(Unexplained { location: Where { channels: channels.into_iter().collect(), axis: axis.into(), description, located: Vec::new() }, correction: Some(correction), statement });
+        let correction = EmpiricalCorrection {
+            label: basis.label(),
+            basis: basis.clone(),
+            coefficients_m: coefficients.clone(),
+            coefficient_sigmas_m: sigmas.clone(),
+            effect_rms_m: rms,
+            empirical: true,
+        };
+        out.push(Unexplained {
+            location: Where {
+                channels: channels.into_iter().collect(),
+                axis: axis.into(),
+                description,
+                located: Vec::new(),
+            },
+            correction: Some(correction),
+            statement,
+        });
     }
     for f in located_after.iter().take(5) {
         out.push(Unexplained {
@@ -550,16 +831,31 @@ pub fn unexplained(empirical: &[(EmpiricalBasis, Vec<f64>, Vec<f64>, Vec<f64>)],
 }
 
 /// What to measure next, and what these records could not tell apart.
-pub fn advice(selection: &FamilySelection, families: &[Family], records: &[MeasurementRecord], machine: &metrocell_model::MachineGeometry) -> Vec<String> {
+pub fn advice(
+    selection: &FamilySelection,
+    families: &[Family],
+    records: &[MeasurementRecord],
+    machine: &metrocell_model::MachineGeometry,
+) -> Vec<String> {
     let mut out = Vec::new();
     // the machine's points (a reference nest has no axis position)
-    let records: Vec<&MeasurementRecord> = records.iter().filter(|r| !metrocell_estimation::is_reference(r)).collect();
+    let records: Vec<&MeasurementRecord> = records
+        .iter()
+        .filter(|r| !metrocell_estimation::is_reference(r))
+        .collect();
     for k in 0..3 {
-        let values: Vec<f64> = records.iter().filter_map(|r| r.signals.axis_position[k]).collect();
+        let values: Vec<f64> = records
+            .iter()
+            .filter_map(|r| r.signals.axis_position[k])
+            .collect();
         if values.len() != records.len() || values.is_empty() {
             continue;
         }
-        let (lo, hi) = values.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| (a.min(v), b.max(v)));
+        let (lo, hi) = values
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &v| {
+                (a.min(v), b.max(v))
+            });
         let travel = machine.travel[k][1] - machine.travel[k][0];
         let distinct: BTreeSet<i64> = values.iter().map(|v| (v * 1e6).round() as i64).collect();
         let name = upper(axis_name(k));
@@ -568,14 +864,21 @@ pub fn advice(selection: &FamilySelection, families: &[Family], records: &[Measu
         } else if distinct.len() < 3 {
             out.push(format!("only {} distinct {name} positions: needs at least 3 (better 10) points spanning the {name} travel to tell a curved positioning error from a scale error, and both from a reversal error", distinct.len()));
         }
-        let approaches: BTreeSet<i64> = records.iter().filter_map(|r| r.signals.approach_direction[k]).map(|v| v as i64).collect();
+        let approaches: BTreeSet<i64> = records
+            .iter()
+            .filter_map(|r| r.signals.approach_direction[k])
+            .map(|v| v as i64)
+            .collect();
         if distinct.len() >= 2 && approaches.len() < 2 {
             out.push(format!("every {name} point was approached from the same side: a reversal (backlash) error on {name} cannot be told from a positioning offset; measure each point from both sides (a bidirectional ISO 230-2 run) — at least 5 points each way spanning the {name} travel"));
         }
     }
     if let Some(step) = selection.steps.first() {
         for s in &step.scores {
-            if !s.separable && s.wald_p_adjusted >= 1.0 && families.iter().any(|f| f.label == s.label && f.physical) {
+            if !s.separable
+                && s.wald_p_adjusted >= 1.0
+                && families.iter().any(|f| f.label == s.label && f.physical)
+            {
                 // not separable from the declared terms after pruning: only said for terms whose
                 // held-out gain would have been large
                 let gain = s.heldout_gain;
@@ -589,14 +892,38 @@ pub fn advice(selection: &FamilySelection, families: &[Family], records: &[Measu
 }
 
 /// The answer in one paragraph.
-pub fn summary(findings: &[Finding], unexplained: &[Unexplained], before: &FitFigures, after: &FitFigures, noise: f64, explained: bool) -> String {
+pub fn summary(
+    findings: &[Finding],
+    unexplained: &[Unexplained],
+    before: &FitFigures,
+    after: &FitFigures,
+    noise: f64,
+    explained: bool,
+) -> String {
     let mut s = String::new();
     if findings.is_empty() {
         s.push_str("No catalog term is missing from the model");
-        s.push_str(if unexplained.is_empty() { "." } else { " that these records can show." });
+        s.push_str(if unexplained.is_empty() {
+            "."
+        } else {
+            " that these records can show."
+        });
     } else {
-        s.push_str(&format!("The model lacked {}: ", if findings.len() == 1 { "one effect".to_string() } else { format!("{} effects", findings.len()) }));
-        s.push_str(&findings.iter().map(|f| f.statement.clone()).collect::<Vec<_>>().join("; "));
+        s.push_str(&format!(
+            "The model lacked {}: ",
+            if findings.len() == 1 {
+                "one effect".to_string()
+            } else {
+                format!("{} effects", findings.len())
+            }
+        ));
+        s.push_str(
+            &findings
+                .iter()
+                .map(|f| f.statement.clone())
+                .collect::<Vec<_>>()
+                .join("; "),
+        );
         s.push('.');
     }
     for u in unexplained {
@@ -611,17 +938,29 @@ pub fn summary(findings: &[Finding], unexplained: &[Unexplained], before: &FitFi
         um(noise),
         before.chi2_per_dof,
         after.chi2_per_dof,
-        if explained { "what remains is consistent with noise." } else { "what remains is not all explained by catalog physics." }
+        if explained {
+            "what remains is consistent with noise."
+        } else {
+            "what remains is not all explained by catalog physics."
+        }
     ));
     s
 }
 
 /// The parameters of `label` outside their usual range, each with what that most likely means.
 fn unusual_values(inputs: &Inputs, label: &str) -> Vec<String> {
-    let specs: Vec<_> = inputs.model.machine_terms.param_specs().into_iter().chain(inputs.model.instrument_terms.param_specs()).collect();
+    let specs: Vec<_> = inputs
+        .model
+        .machine_terms
+        .param_specs()
+        .into_iter()
+        .chain(inputs.model.instrument_terms.param_specs())
+        .collect();
     let mut out = Vec::new();
     for (k, name) in inputs.names.iter().enumerate() {
-        let Some(param) = name.strip_prefix(&format!("{label}.")) else { continue };
+        let Some(param) = name.strip_prefix(&format!("{label}.")) else {
+            continue;
+        };
         if !inputs.free[k] {
             continue;
         }
@@ -638,8 +977,17 @@ fn unusual_values(inputs: &Inputs, label: &str) -> Vec<String> {
         let (shown, unit) = display(spec.unit, v);
         let (lo, _) = display(spec.unit, spec.usual.lo);
         let (hi, _) = display(spec.unit, spec.usual.hi);
-        let meaning = if spec.unusual_means.is_empty() { String::new() } else { format!(": {}", spec.unusual_means) };
-        out.push(format!("{param} = {} {unit} is outside the usual {} … {} {unit}{meaning}", significant(shown), significant(lo), significant(hi)));
+        let meaning = if spec.unusual_means.is_empty() {
+            String::new()
+        } else {
+            format!(": {}", spec.unusual_means)
+        };
+        out.push(format!(
+            "{param} = {} {unit} is outside the usual {} … {} {unit}{meaning}",
+            significant(shown),
+            significant(lo),
+            significant(hi)
+        ));
     }
     out
 }
@@ -683,7 +1031,13 @@ pub fn separated_by(a: &str, b: &str) -> String {
         "let the tracker warm up (or record its power-on time and measure a reference nest through the first hours): its drift follows the time since power-on, the machine's physics does not".into()
     } else if either("thermal_growth") || either("thermal_scale") {
         "repeat the measurement at another temperature, or with the temperatures changing differently in time: a thermal term follows its sensor".into()
-    } else if either("backlash") || either("pitch_cyclic") || either("positioning") || either("straightness") || either("squareness") || either("angular") {
+    } else if either("backlash")
+        || either("pitch_cyclic")
+        || either("positioning")
+        || either("straightness")
+        || either("squareness")
+        || either("angular")
+    {
         "measure more positions along the axis, from both directions (an ISO 230-2 bidirectional run over irregular positions)".into()
     } else {
         "a measurement where their effects differ (other positions, times or conditions)".into()
@@ -691,21 +1045,30 @@ pub fn separated_by(a: &str, b: &str) -> String {
 }
 
 /// The alternatives each chosen family was not told apart from, per label.
-pub fn alternatives_of(selection: &FamilySelection, families: &[Family]) -> BTreeMap<String, Vec<Alternative>> {
+pub fn alternatives_of(
+    selection: &FamilySelection,
+    families: &[Family],
+) -> BTreeMap<String, Vec<Alternative>> {
     let mut out: BTreeMap<String, Vec<Alternative>> = BTreeMap::new();
     for step in &selection.steps {
         let Some(c) = step.chosen else { continue };
         let chosen = &families[c];
         for a in &step.alternatives {
             let f = &families[a.family];
-            out.entry(chosen.label.clone()).or_default().push(Alternative {
-                term: f.term.clone(),
-                label: f.label.clone(),
-                variant: f.variants.get(a.variant).map(|v| v.name.clone()).unwrap_or_default(),
-                delta_bic: a.delta_bic,
-                correlation: a.correlation,
-                separated_by: separated_by(&chosen.term, &f.term),
-            });
+            out.entry(chosen.label.clone())
+                .or_default()
+                .push(Alternative {
+                    term: f.term.clone(),
+                    label: f.label.clone(),
+                    variant: f
+                        .variants
+                        .get(a.variant)
+                        .map(|v| v.name.clone())
+                        .unwrap_or_default(),
+                    delta_bic: a.delta_bic,
+                    correlation: a.correlation,
+                    separated_by: separated_by(&chosen.term, &f.term),
+                });
         }
     }
     out

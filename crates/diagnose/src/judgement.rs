@@ -77,7 +77,11 @@ pub(crate) struct JudgeInputs<'a> {
 }
 
 /// Judge the augmented model at the refit `x1`.
-pub(crate) fn judge(inp: &JudgeInputs, aug: &Augmented, x1: &[f64]) -> Result<Judged, PhysicsError> {
+pub(crate) fn judge(
+    inp: &JudgeInputs,
+    aug: &Augmented,
+    x1: &[f64],
+) -> Result<Judged, PhysicsError> {
     let set = &inp.stage.set;
     let n = set.records.len();
     let model_aug = aug.model(inp.machine)?;
@@ -85,19 +89,50 @@ pub(crate) fn judge(inp: &JudgeInputs, aug: &Augmented, x1: &[f64]) -> Result<Ju
     let view1 = ResidualView::new(&model_aug, x1, &set.records, &set.frame)?;
     // the free columns of the augmented model (an instrument pose only where the records are in
     // an instrument frame) and the empirical corrections' columns
-    let free1: Vec<usize> = aug.setup.free.iter().enumerate().filter(|(k, f)| **f && !(set.frame == RecordFrame::Machine && metrocell_estimation::check_points::is_placement_parameter(&names[*k]))).map(|(k, _)| k).collect();
+    let free1: Vec<usize> = aug
+        .setup
+        .free
+        .iter()
+        .enumerate()
+        .filter(|(k, f)| {
+            **f && !(set.frame == RecordFrame::Machine
+                && metrocell_estimation::check_points::is_placement_parameter(&names[*k]))
+        })
+        .map(|(k, _)| k)
+        .collect();
     let mut ctx_all = ColumnContext::new(&model_aug, x1, &set.records, &view1.whitening)?;
     // the free parameters and each reference nest's position (a nuisance; after them in the
     // columns, before the empirical corrections)
     let nests = nest_columns(&set.records, &view1);
     let free_cols = with_columns(ctx_all.declared_columns(&free1)?, &nests);
-    let emp_cols: Vec<DMatrix<f64>> = aug.empirical.iter().map(|e| empirical_columns(&view1, &e.basis)).collect();
+    let emp_cols: Vec<DMatrix<f64>> = aug
+        .empirical
+        .iter()
+        .map(|e| empirical_columns(&view1, &e.basis))
+        .collect();
     let a1 = hstack(&free_cols, &emp_cols);
     let row_folds = vec![expand_folds(inp.folds_time), expand_folds(inp.folds_space)];
     let rows = BlockedRows::new(&row_folds, 3 * n);
-    let after_fit = BaseFit::new(&rows, rows.arrange(&a1), rows.arrange_vector(&view1.whitened()));
-    let before_cols = with_columns(ColumnContext::new(inp.declared_model, inp.x0, &set.records, &inp.view0.whitening)?.declared_columns(inp.free0)?, &nest_columns(&set.records, inp.view0));
-    let before_fit = BaseFit::new(&rows, rows.arrange(&before_cols), rows.arrange_vector(&inp.view0.whitened()));
+    let after_fit = BaseFit::new(
+        &rows,
+        rows.arrange(&a1),
+        rows.arrange_vector(&view1.whitened()),
+    );
+    let before_cols = with_columns(
+        ColumnContext::new(
+            inp.declared_model,
+            inp.x0,
+            &set.records,
+            &inp.view0.whitening,
+        )?
+        .declared_columns(inp.free0)?,
+        &nest_columns(&set.records, inp.view0),
+    );
+    let before_fit = BaseFit::new(
+        &rows,
+        rows.arrange(&before_cols),
+        rows.arrange_vector(&inp.view0.whitened()),
+    );
     let mut messages = Vec::new();
     let schemes = judging_schemes(inp, aug, &mut messages);
     let (before, before_res, held_before) = figures(&before_fit, inp.view0, &rows, &schemes);
@@ -109,7 +144,8 @@ pub(crate) fn judge(inp: &JudgeInputs, aug: &Augmented, x1: &[f64]) -> Result<Ju
     let sigma2 = after_fit.ssr() / dof1;
     let e1 = rows.restore_vector(&after_fit.residuals());
     let serial = crate::serial_correlation::sandwich(&a1, &e1, &cov, &view1.time, after_fit.rank());
-    let place = crate::serial_correlation::by_place(&a1, &e1, &cov, &view1.position, after_fit.rank());
+    let place =
+        crate::serial_correlation::by_place(&a1, &e1, &cov, &view1.position, after_fit.rank());
     let (shift2, alternatives) = declined_shifts(inp, aug, &mut ctx_all, &view1, &a1, &e1, &cov);
     let variance = |j: usize| -> f64 {
         let classical = cov[(j, j)].max(0.0) * sigma2;
@@ -118,7 +154,15 @@ pub(crate) fn judge(inp: &JudgeInputs, aug: &Augmented, x1: &[f64]) -> Result<Ju
         classical.max(in_time).max(in_place) + shift2[j]
     };
     let sol = after_fit.solution().clone();
-    let empirical = empirical_fitted(aug, &view1, &free_cols, &emp_cols, &sol, free1.len() + nests.ncols(), &variance);
+    let empirical = empirical_fitted(
+        aug,
+        &view1,
+        &free_cols,
+        &emp_cols,
+        &sol,
+        free1.len() + nests.ncols(),
+        &variance,
+    );
     let mut sigmas = vec![None; names.len()];
     for (j, &k) in free1.iter().enumerate() {
         sigmas[k] = Some(variance(j).sqrt());
@@ -129,20 +173,55 @@ pub(crate) fn judge(inp: &JudgeInputs, aug: &Augmented, x1: &[f64]) -> Result<Ju
         .added
         .iter()
         .map(|a| {
-            let idx: Vec<usize> = a.main.iter().filter_map(|p| free1.iter().position(|&k| names[k] == format!("{}.{p}", a.label))).collect();
+            let idx: Vec<usize> = a
+                .main
+                .iter()
+                .filter_map(|p| {
+                    free1
+                        .iter()
+                        .position(|&k| names[k] == format!("{}.{p}", a.label))
+                })
+                .collect();
             let values: Vec<f64> = idx.iter().map(|&j| x1[free1[j]]).collect();
             // the classical correlations with the widened variances on the diagonal
             let c = DMatrix::from_fn(idx.len(), idx.len(), |r, s| {
                 let (i, j) = (idx[r], idx[s]);
-                let correlation = cov[(i, j)] / (cov[(i, i)] * cov[(j, j)]).max(f64::MIN_POSITIVE).sqrt();
+                let correlation =
+                    cov[(i, j)] / (cov[(i, i)] * cov[(j, j)]).max(f64::MIN_POSITIVE).sqrt();
                 correlation * (variance(i) * variance(j)).sqrt()
             });
             (a.label.clone(), significance_sigma(&values, &c, &[]))
         })
         .collect();
-    let uncertainty = uncertainty_note(aug, &names, &free1, &cov, sigma2, &variance, &serial, place.is_some(), &alternatives);
+    let uncertainty = uncertainty_note(
+        aug,
+        &names,
+        &free1,
+        &cov,
+        sigma2,
+        &variance,
+        &serial,
+        place.is_some(),
+        &alternatives,
+    );
     let whitened_after: Vec<f64> = e1.iter().copied().collect();
-    Ok(Judged { view1, before, after, before_res, after_res, held_before, held_after, names, sigmas, empirical, whitened_after, significance, uncertainty, messages, at_bound: Vec::new() })
+    Ok(Judged {
+        view1,
+        before,
+        after,
+        before_res,
+        after_res,
+        held_before,
+        held_after,
+        names,
+        sigmas,
+        empirical,
+        whitened_after,
+        significance,
+        uncertainty,
+        messages,
+        at_bound: Vec::new(),
+    })
 }
 
 fn hstack(first: &DMatrix<f64>, rest: &[DMatrix<f64>]) -> DMatrix<f64> {
@@ -161,7 +240,13 @@ fn hstack(first: &DMatrix<f64>, rest: &[DMatrix<f64>]) -> DMatrix<f64> {
 /// predict a held-out block of time).
 fn judging_schemes(inp: &JudgeInputs, aug: &Augmented, messages: &mut Vec<String>) -> Vec<usize> {
     let mut schemes: Vec<usize> = vec![0, 1];
-    let chosen: Vec<usize> = aug.added.iter().map(|a| a.candidate).chain(aug.freed.iter().map(|f| f.candidate)).chain(aug.empirical.iter().map(|e| e.candidate)).collect();
+    let chosen: Vec<usize> = aug
+        .added
+        .iter()
+        .map(|a| a.candidate)
+        .chain(aug.freed.iter().map(|f| f.candidate))
+        .chain(aug.empirical.iter().map(|e| e.candidate))
+        .collect();
     for c in chosen {
         if let Some(by) = &inp.families[c].judged_by {
             schemes.retain(|s| by.contains(s));
@@ -176,7 +261,12 @@ fn judging_schemes(inp: &JudgeInputs, aug: &Augmented, messages: &mut Vec<String
 
 /// Held-out and full-data figures of a linear fit over the blocks, with the workpiece-frame
 /// residuals of the full-data fit and the held-out residual norm of each record (first scheme).
-fn figures(fitb: &BaseFit, view: &ResidualView, rows: &BlockedRows, schemes: &[usize]) -> (FitFigures, Vec<Vector3<f64>>, Vec<f64>) {
+fn figures(
+    fitb: &BaseFit,
+    view: &ResidualView,
+    rows: &BlockedRows,
+    schemes: &[usize],
+) -> (FitFigures, Vec<Vector3<f64>>, Vec<f64>) {
     let held = fitb.heldout_residuals(rows);
     let (mut ss, mut count, mut max) = (0.0, 0usize, 0.0f64);
     let mut first = vec![0.0; view.len()];
@@ -197,8 +287,27 @@ fn figures(fitb: &BaseFit, view: &ResidualView, rows: &BlockedRows, schemes: &[u
     let full = view.to_workpiece_metres(&rows.restore_vector(&fitb.residuals()));
     let rms = (full.iter().map(|v| v.norm_squared()).sum::<f64>() / (3 * view.len()) as f64).sqrt();
     let dof = (fitb.rows() as f64 - fitb.rank() as f64).max(1.0);
-    let names = schemes.iter().map(|&s| if s == 0 { "time".to_string() } else { "workspace".to_string() }).collect();
-    (FitFigures { heldout_rms_m: (ss / count.max(1) as f64).sqrt(), heldout_max_m: max, chi2_per_dof: fitb.ssr() / dof, rms_m: rms, heldout_blocks: names }, full, first)
+    let names = schemes
+        .iter()
+        .map(|&s| {
+            if s == 0 {
+                "time".to_string()
+            } else {
+                "workspace".to_string()
+            }
+        })
+        .collect();
+    (
+        FitFigures {
+            heldout_rms_m: (ss / count.max(1) as f64).sqrt(),
+            heldout_max_m: max,
+            chi2_per_dof: fitb.ssr() / dof,
+            rms_m: rms,
+            heldout_blocks: names,
+        },
+        full,
+        first,
+    )
 }
 
 /// The choice of model: a candidate the data support (significant after correction, lower BIC)
@@ -208,27 +317,65 @@ fn figures(fitb: &BaseFit, view: &ResidualView, rows: &BlockedRows, schemes: &[u
 /// parameter, in quadrature). Returns the squared shifts per column and each candidate's
 /// description with its shift vector.
 #[allow(clippy::too_many_arguments)]
-fn declined_shifts(inp: &JudgeInputs, _aug: &Augmented, ctx_all: &mut ColumnContext, view1: &ResidualView, a1: &DMatrix<f64>, e1: &DVector<f64>, cov: &DMatrix<f64>) -> (Vec<f64>, Vec<(String, DVector<f64>)>) {
+fn declined_shifts(
+    inp: &JudgeInputs,
+    _aug: &Augmented,
+    ctx_all: &mut ColumnContext,
+    view1: &ResidualView,
+    a1: &DMatrix<f64>,
+    e1: &DVector<f64>,
+    cov: &DMatrix<f64>,
+) -> (Vec<f64>, Vec<(String, DVector<f64>)>) {
     let mut shift2 = vec![0.0f64; a1.ncols()];
     let mut alternatives = Vec::new();
-    let Some(last) = inp.selection.steps.last().filter(|s| s.chosen.is_none()) else { return (shift2, alternatives) };
-    for sc in last.scores.iter().filter(|c| !c.accepted && c.separable && c.plausible && c.wald_p_adjusted <= inp.alpha && c.delta_bic < 0.0) {
-        let Some(f) = inp.families.iter().position(|f| f.label == sc.label) else { continue };
-        let Some(vi) = inp.families[f].variants.iter().position(|v| v.name == sc.variant) else { continue };
+    let Some(last) = inp.selection.steps.last().filter(|s| s.chosen.is_none()) else {
+        return (shift2, alternatives);
+    };
+    for sc in last.scores.iter().filter(|c| {
+        !c.accepted
+            && c.separable
+            && c.plausible
+            && c.wald_p_adjusted <= inp.alpha
+            && c.delta_bic < 0.0
+    }) {
+        let Some(f) = inp.families.iter().position(|f| f.label == sc.label) else {
+            continue;
+        };
+        let Some(vi) = inp.families[f]
+            .variants
+            .iter()
+            .position(|v| v.name == sc.variant)
+        else {
+            continue;
+        };
         let columns = match &inp.prepared[f].source {
-            Source::Term { family, kept } => match ctx_all.columns(&family.variants[vi].config, family.placement) {
-                Ok(c) => c.columns.select_columns(&kept[vi]),
-                Err(_) => continue,
-            },
+            Source::Term { family, kept } => {
+                match ctx_all.columns(&family.variants[vi].config, family.placement) {
+                    Ok(c) => c.columns.select_columns(&kept[vi]),
+                    Err(_) => continue,
+                }
+            }
             Source::Empirical(bases) => empirical_columns(view1, &bases[vi]),
             Source::Freed { .. } => continue,
         };
-        let Some(d) = crate::serial_correlation::shift_if_added(a1, e1, cov, &columns) else { continue };
+        let Some(d) = crate::serial_correlation::shift_if_added(a1, e1, cov, &columns) else {
+            continue;
+        };
         for (j, v) in d.iter().enumerate() {
             shift2[j] = shift2[j].max(v * v);
         }
-        let name = if sc.variant.is_empty() { sc.label.clone() } else { format!("{} ({})", sc.label, sc.variant) };
-        alternatives.push((format!("{name}: p = {:.1e} after correction, ΔBIC {:.0}, held-out gain {:.3}", sc.wald_p_adjusted, sc.delta_bic, sc.heldout_gain), d));
+        let name = if sc.variant.is_empty() {
+            sc.label.clone()
+        } else {
+            format!("{} ({})", sc.label, sc.variant)
+        };
+        alternatives.push((
+            format!(
+                "{name}: p = {:.1e} after correction, ΔBIC {:.0}, held-out gain {:.3}",
+                sc.wald_p_adjusted, sc.delta_bic, sc.heldout_gain
+            ),
+            d,
+        ));
     }
     (shift2, alternatives)
 }
@@ -236,7 +383,15 @@ fn declined_shifts(inp: &JudgeInputs, _aug: &Augmented, ctx_all: &mut ColumnCont
 /// The empirical corrections' coefficients and σ from the joint fit, and each one's net effect
 /// on the records: its values with what the free parameters take of it projected out, along its
 /// workpiece axis (m).
-fn empirical_fitted(aug: &Augmented, view1: &ResidualView, free_cols: &DMatrix<f64>, emp_cols: &[DMatrix<f64>], sol: &DVector<f64>, start: usize, variance: &dyn Fn(usize) -> f64) -> Vec<(EmpiricalBasis, Vec<f64>, Vec<f64>, Vec<f64>)> {
+fn empirical_fitted(
+    aug: &Augmented,
+    view1: &ResidualView,
+    free_cols: &DMatrix<f64>,
+    emp_cols: &[DMatrix<f64>],
+    sol: &DVector<f64>,
+    start: usize,
+    variance: &dyn Fn(usize) -> f64,
+) -> Vec<(EmpiricalBasis, Vec<f64>, Vec<f64>, Vec<f64>)> {
     let (pinv, _) = pseudo_inverse(&free_cols.tr_mul(free_cols));
     let mut at = start;
     let mut out = Vec::new();
@@ -249,7 +404,11 @@ fn empirical_fitted(aug: &Augmented, view1: &ResidualView, free_cols: &DMatrix<f
         let sigmas: Vec<f64> = (0..len).map(|j| variance(at + j).sqrt()).collect();
         let whitened = &emp_cols[k] * DVector::from_column_slice(&coefficients);
         let net = &whitened - free_cols * (&pinv * free_cols.tr_mul(&whitened));
-        let along: Vec<f64> = view1.to_workpiece_metres(&net).iter().map(|v| v[e.basis.axis]).collect();
+        let along: Vec<f64> = view1
+            .to_workpiece_metres(&net)
+            .iter()
+            .map(|v| v[e.basis.axis])
+            .collect();
         out.push((e.basis.clone(), coefficients, sigmas, along));
         at += len;
     }
@@ -258,9 +417,29 @@ fn empirical_fitted(aug: &Augmented, view1: &ResidualView, free_cols: &DMatrix<f
 
 /// How the σ were made, in words, with each found parameter's widening factor.
 #[allow(clippy::too_many_arguments)]
-fn uncertainty_note(aug: &Augmented, names: &[String], free1: &[usize], cov: &DMatrix<f64>, sigma2: f64, variance: &dyn Fn(usize) -> f64, serial: &Option<crate::serial_correlation::SerialCovariance>, place: bool, alternatives: &[(String, DVector<f64>)]) -> UncertaintyNote {
-    let mut note = UncertaintyNote { blocks: serial.as_ref().map_or(0, |s| s.blocks), lag_blocks: serial.as_ref().map_or(0, |s| s.lag_blocks), place_clusters: place, ..Default::default() };
-    let found: Vec<String> = aug.added.iter().map(|a| format!("{}.", a.label)).chain(aug.freed.iter().map(|f| format!("{}.", f.label))).collect();
+fn uncertainty_note(
+    aug: &Augmented,
+    names: &[String],
+    free1: &[usize],
+    cov: &DMatrix<f64>,
+    sigma2: f64,
+    variance: &dyn Fn(usize) -> f64,
+    serial: &Option<crate::serial_correlation::SerialCovariance>,
+    place: bool,
+    alternatives: &[(String, DVector<f64>)],
+) -> UncertaintyNote {
+    let mut note = UncertaintyNote {
+        blocks: serial.as_ref().map_or(0, |s| s.blocks),
+        lag_blocks: serial.as_ref().map_or(0, |s| s.lag_blocks),
+        place_clusters: place,
+        ..Default::default()
+    };
+    let found: Vec<String> = aug
+        .added
+        .iter()
+        .map(|a| format!("{}.", a.label))
+        .chain(aug.freed.iter().map(|f| format!("{}.", f.label)))
+        .collect();
     let is_found = |k: usize| found.iter().any(|l| names[k].starts_with(l.as_str()));
     let mut widened = BTreeMap::new();
     for (j, &k) in free1.iter().enumerate() {
@@ -281,7 +460,12 @@ fn uncertainty_note(aug: &Augmented, names: &[String], free1: &[usize], cov: &DM
         (None, true) => format!("widened where the residuals are correlated at one place (scores clustered on a {0}×{0}×{0} grid over the workspace)", crate::serial_correlation::PLACE_CELLS),
     };
     for (what, d) in alternatives {
-        let moved: Vec<String> = free1.iter().enumerate().filter(|(j, &k)| is_found(k) && d[*j] * d[*j] > 0.1 * cov[(*j, *j)].max(0.0) * sigma2).map(|(j, &k)| format!("{} by {:+.3e}", names[k], d[j])).collect();
+        let moved: Vec<String> = free1
+            .iter()
+            .enumerate()
+            .filter(|(j, &k)| is_found(k) && d[*j] * d[*j] > 0.1 * cov[(*j, *j)].max(0.0) * sigma2)
+            .map(|(j, &k)| format!("{} by {:+.3e}", names[k], d[j]))
+            .collect();
         if !moved.is_empty() {
             note.alternatives.push(format!("{what} — the data support it but the held-out test declined it; with it {}: counted in the σ", moved.join(", ")));
         }

@@ -30,7 +30,6 @@ pub mod candidate_columns;
 mod candidate_stage;
 pub mod candidates;
 mod declared_stage;
-mod reference_columns;
 pub mod empirical;
 pub mod findings;
 pub mod folds;
@@ -43,6 +42,7 @@ pub mod outliers;
 pub mod periodogram;
 pub mod pipeline;
 pub mod record_preparation;
+mod reference_columns;
 pub mod report;
 pub mod residual;
 pub mod residual_table;
@@ -52,5 +52,7 @@ pub mod serial_correlation;
 pub mod signal_coverage;
 pub mod signal_inventory;
 
-pub use pipeline::{diagnose, AddedTerm, DeclaredModel, Diagnosis, DiagnoseError, DiagnoseOptions, Strategy};
+pub use pipeline::{
+    diagnose, AddedTerm, DeclaredModel, DiagnoseError, DiagnoseOptions, Diagnosis, Strategy,
+};
 pub use report::Report;

@@ -50,15 +50,38 @@ pub struct Finding {
 impl Finding {
     /// One sentence in µm and mm.
     pub fn describe(&self) -> String {
-        let what = format!("{} {} residual {:+.1} ± {:.1} µm", self.channel, axis_name(self.axis), self.effect_m * 1e6, self.effect_sigma_m * 1e6);
+        let what = format!(
+            "{} {} residual {:+.1} ± {:.1} µm",
+            self.channel,
+            axis_name(self.axis),
+            self.effect_m * 1e6,
+            self.effect_sigma_m * 1e6
+        );
         let place = match &self.place {
-            Place::Region { axis, from, to } => format!("where {} is {:.0}–{:.0} mm", axis_name(*axis), from * 1e3, to * 1e3),
+            Place::Region { axis, from, to } => format!(
+                "where {} is {:.0}–{:.0} mm",
+                axis_name(*axis),
+                from * 1e3,
+                to * 1e3
+            ),
             Place::TimeWindow { from, to } => format!("between t = {:.0} s and {:.0} s", from, to),
-            Place::Direction { axis, sign } => format!("when {} approaches from {}", axis_name(*axis), if *sign > 0.0 { "below (moving +)" } else { "above (moving −)" }),
+            Place::Direction { axis, sign } => format!(
+                "when {} approaches from {}",
+                axis_name(*axis),
+                if *sign > 0.0 {
+                    "below (moving +)"
+                } else {
+                    "above (moving −)"
+                }
+            ),
             Place::ConditionRange { name, from, to } => format!("when {name} is {from:.3}–{to:.3}"),
             Place::Correlation { name } => format!("per standard deviation of {name}"),
         };
-        format!("{what} {place} (n = {}, p {} after correction for the tests made)", self.count, p_value_text(self.p_adjusted))
+        format!(
+            "{what} {place} (n = {}, p {} after correction for the tests made)",
+            self.count,
+            p_value_text(self.p_adjusted)
+        )
     }
 }
 
@@ -87,7 +110,11 @@ pub struct LocateOptions {
 
 impl Default for LocateOptions {
     fn default() -> Self {
-        Self { alpha: 0.01, time_windows: 8, min_subset: 8 }
+        Self {
+            alpha: 0.01,
+            time_windows: 8,
+            min_subset: 8,
+        }
     }
 }
 
@@ -104,8 +131,14 @@ struct Candidate {
 /// Significant structures, strongest (smallest corrected p, then largest effect) first.
 pub fn locate(samples: &[ResidualSample], options: &LocateOptions) -> Vec<Finding> {
     let mut groups: BTreeMap<(String, usize), Vec<&ResidualSample>> = BTreeMap::new();
-    for s in samples.iter().filter(|s| s.residual.is_finite() && s.sigma > 0.0 && s.time.is_finite()) {
-        groups.entry((s.channel.clone(), s.axis)).or_default().push(s);
+    for s in samples
+        .iter()
+        .filter(|s| s.residual.is_finite() && s.sigma > 0.0 && s.time.is_finite())
+    {
+        groups
+            .entry((s.channel.clone(), s.axis))
+            .or_default()
+            .push(s);
     }
     let mut candidates = Vec::new();
     for ((channel, axis), g) in &groups {
@@ -116,13 +149,31 @@ pub fn locate(samples: &[ResidualSample], options: &LocateOptions) -> Vec<Findin
         .into_iter()
         .zip(adjusted)
         .filter(|(_, p)| *p <= options.alpha)
-        .map(|(c, p_adjusted)| Finding { channel: c.channel, axis: c.axis, place: c.place, count: c.count, effect_m: c.effect_m, effect_sigma_m: c.effect_sigma_m, p_value: c.p_value, p_adjusted })
+        .map(|(c, p_adjusted)| Finding {
+            channel: c.channel,
+            axis: c.axis,
+            place: c.place,
+            count: c.count,
+            effect_m: c.effect_m,
+            effect_sigma_m: c.effect_sigma_m,
+            p_value: c.p_value,
+            p_adjusted,
+        })
         .collect();
-    findings.sort_by(|a, b| a.p_adjusted.total_cmp(&b.p_adjusted).then(b.effect_m.abs().total_cmp(&a.effect_m.abs())));
+    findings.sort_by(|a, b| {
+        a.p_adjusted
+            .total_cmp(&b.p_adjusted)
+            .then(b.effect_m.abs().total_cmp(&a.effect_m.abs()))
+    });
     findings
 }
 
-fn group_candidates(channel: &str, axis: usize, g: &[&ResidualSample], options: &LocateOptions) -> Vec<Candidate> {
+fn group_candidates(
+    channel: &str,
+    axis: usize,
+    g: &[&ResidualSample],
+    options: &LocateOptions,
+) -> Vec<Candidate> {
     let z: Vec<f64> = g.iter().map(|s| s.z()).collect();
     let scale = robust_scale(&z).max(1.0);
     let mean_sigma = g.iter().map(|s| s.sigma).sum::<f64>() / g.len() as f64;
@@ -136,7 +187,15 @@ fn group_candidates(channel: &str, axis: usize, g: &[&ResidualSample], options: 
         let zbar = idx.iter().map(|&i| z[i]).sum::<f64>() / n;
         let stat = zbar * n.sqrt() / scale;
         let effect = idx.iter().map(|&i| g[i].residual).sum::<f64>() / n;
-        out.push(Candidate { channel: channel.into(), axis, place, count: idx.len(), effect_m: effect, effect_sigma_m: scale * mean_sigma / n.sqrt(), p_value: 2.0 * normal.sf(stat.abs()) });
+        out.push(Candidate {
+            channel: channel.into(),
+            axis,
+            place,
+            count: idx.len(),
+            effect_m: effect,
+            effect_sigma_m: scale * mean_sigma / n.sqrt(),
+            p_value: 2.0 * normal.sf(stat.abs()),
+        });
     };
     // workspace regions: terciles of each machine axis's position
     for k in 0..3 {
@@ -146,20 +205,43 @@ fn group_candidates(channel: &str, axis: usize, g: &[&ResidualSample], options: 
         }
     }
     // time windows
-    let (t0, t1) = g.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), s| (a.min(s.time), b.max(s.time)));
+    let (t0, t1) = g
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), s| {
+            (a.min(s.time), b.max(s.time))
+        });
     if t1 > t0 && options.time_windows > 1 {
         let w = (t1 - t0) / options.time_windows as f64;
         for k in 0..options.time_windows {
-            let (from, to) = (t0 + w * k as f64, if k + 1 == options.time_windows { t1 + 1e-9 } else { t0 + w * (k + 1) as f64 });
-            let idx: Vec<usize> = (0..g.len()).filter(|&i| g[i].time >= from && g[i].time < to).collect();
-            test_subset(Place::TimeWindow { from, to: to.min(t1) }, &idx);
+            let (from, to) = (
+                t0 + w * k as f64,
+                if k + 1 == options.time_windows {
+                    t1 + 1e-9
+                } else {
+                    t0 + w * (k + 1) as f64
+                },
+            );
+            let idx: Vec<usize> = (0..g.len())
+                .filter(|&i| g[i].time >= from && g[i].time < to)
+                .collect();
+            test_subset(
+                Place::TimeWindow {
+                    from,
+                    to: to.min(t1),
+                },
+                &idx,
+            );
         }
     }
     // directions of approach
     for k in 0..3 {
         for sign in [1.0, -1.0] {
-            let idx: Vec<usize> = (0..g.len()).filter(|&i| g[i].approach[k] == Some(sign)).collect();
-            let other = (0..g.len()).filter(|&i| g[i].approach[k] == Some(-sign)).count();
+            let idx: Vec<usize> = (0..g.len())
+                .filter(|&i| g[i].approach[k] == Some(sign))
+                .collect();
+            let other = (0..g.len())
+                .filter(|&i| g[i].approach[k] == Some(-sign))
+                .count();
             if other >= options.min_subset {
                 test_subset(Place::Direction { axis: k, sign }, &idx);
             }
@@ -167,21 +249,47 @@ fn group_candidates(channel: &str, axis: usize, g: &[&ResidualSample], options: 
     }
     // conditions: terciles and correlation
     let mut correlations = Vec::new();
-    let mut names: Vec<&str> = g.iter().flat_map(|s| s.conditions.iter().map(|(n, _)| n.as_str())).collect();
+    let mut names: Vec<&str> = g
+        .iter()
+        .flat_map(|s| s.conditions.iter().map(|(n, _)| n.as_str()))
+        .collect();
     names.sort_unstable();
     names.dedup();
     for name in names {
-        let present: Vec<(usize, f64)> = (0..g.len()).filter_map(|i| g[i].condition(name).filter(|v| v.is_finite()).map(|v| (i, v))).collect();
+        let present: Vec<(usize, f64)> = (0..g.len())
+            .filter_map(|i| {
+                g[i].condition(name)
+                    .filter(|v| v.is_finite())
+                    .map(|v| (i, v))
+            })
+            .collect();
         if present.len() < 3 * options.min_subset {
             continue;
         }
         let values: Vec<f64> = present.iter().map(|p| p.1).collect();
         for (from, to, sub) in terciles(&values) {
             let idx: Vec<usize> = sub.iter().map(|&j| present[j].0).collect();
-            test_subset(Place::ConditionRange { name: name.to_string(), from, to }, &idx);
+            test_subset(
+                Place::ConditionRange {
+                    name: name.to_string(),
+                    from,
+                    to,
+                },
+                &idx,
+            );
         }
         if let Some((effect, se, p)) = correlation(&present, &z, scale, mean_sigma) {
-            correlations.push(Candidate { channel: channel.into(), axis, place: Place::Correlation { name: name.to_string() }, count: present.len(), effect_m: effect, effect_sigma_m: se, p_value: p });
+            correlations.push(Candidate {
+                channel: channel.into(),
+                axis,
+                place: Place::Correlation {
+                    name: name.to_string(),
+                },
+                count: present.len(),
+                effect_m: effect,
+                effect_sigma_m: se,
+                p_value: p,
+            });
         }
     }
     out.extend(correlations);
@@ -203,7 +311,9 @@ fn terciles(values: &[f64]) -> Vec<(f64, f64, Vec<usize>)> {
     let mut out = Vec::new();
     for (from, to) in [(lo, c1), (c1, c2), (c2, hi)] {
         let last = to == hi;
-        let idx: Vec<usize> = (0..values.len()).filter(|&i| values[i] >= from && (values[i] < to || (last && values[i] <= to))).collect();
+        let idx: Vec<usize> = (0..values.len())
+            .filter(|&i| values[i] >= from && (values[i] < to || (last && values[i] <= to)))
+            .collect();
         if !idx.is_empty() && idx.len() < values.len() {
             out.push((from, to, idx));
         }
@@ -213,7 +323,12 @@ fn terciles(values: &[f64]) -> Vec<(f64, f64, Vec<usize>)> {
 
 /// Slope of z on the condition, as the residual change (m) across one standard deviation of the
 /// condition, its standard error, and the two-sided p-value.
-fn correlation(present: &[(usize, f64)], z: &[f64], scale: f64, mean_sigma: f64) -> Option<(f64, f64, f64)> {
+fn correlation(
+    present: &[(usize, f64)],
+    z: &[f64],
+    scale: f64,
+    mean_sigma: f64,
+) -> Option<(f64, f64, f64)> {
     let n = present.len() as f64;
     let mx = present.iter().map(|p| p.1).sum::<f64>() / n;
     let sxx: f64 = present.iter().map(|p| (p.1 - mx).powi(2)).sum();
@@ -225,5 +340,9 @@ fn correlation(present: &[(usize, f64)], z: &[f64], scale: f64, mean_sigma: f64)
     let se = scale / sxx.sqrt();
     let spread = (sxx / n).sqrt();
     let normal = Normal::new(0.0, 1.0).expect("unit normal");
-    Some((slope * spread * mean_sigma, se * spread * mean_sigma, 2.0 * normal.sf((slope / se).abs())))
+    Some((
+        slope * spread * mean_sigma,
+        se * spread * mean_sigma,
+        2.0 * normal.sf((slope / se).abs()),
+    ))
 }

@@ -79,7 +79,12 @@ pub fn ljung_box(z: &[f64], lags: usize) -> (f64, f64) {
         q += rho * rho / (n - k) as f64;
     }
     q *= n as f64 * (n as f64 + 2.0);
-    (q, ChiSquared::new(lags as f64).map(|d| d.sf(q)).unwrap_or(f64::NAN))
+    (
+        q,
+        ChiSquared::new(lags as f64)
+            .map(|d| d.sf(q))
+            .unwrap_or(f64::NAN),
+    )
 }
 
 /// Wald–Wolfowitz runs test on the signs of z (zeros dropped): z-score of the run count and its
@@ -103,8 +108,14 @@ pub fn runs_test(z: &[f64]) -> (f64, f64) {
 /// corrected together (Holm).
 pub fn noise_report(samples: &[ResidualSample], min_count: usize) -> Vec<ChannelNoise> {
     let mut groups: BTreeMap<(String, usize), Vec<&ResidualSample>> = BTreeMap::new();
-    for s in samples.iter().filter(|s| s.residual.is_finite() && s.sigma > 0.0 && s.time.is_finite()) {
-        groups.entry((s.channel.clone(), s.axis)).or_default().push(s);
+    for s in samples
+        .iter()
+        .filter(|s| s.residual.is_finite() && s.sigma > 0.0 && s.time.is_finite())
+    {
+        groups
+            .entry((s.channel.clone(), s.axis))
+            .or_default()
+            .push(s);
     }
     let mut out = Vec::new();
     for ((channel, axis), mut g) in groups {
@@ -129,14 +140,37 @@ pub fn noise_report(samples: &[ResidualSample], min_count: usize) -> Vec<Channel
             noise_rms_m: noise,
             chi2_per_dof: chi2 / n as f64,
             tests: vec![
-                NoiseTest { name: "chi_square", statistic: chi2, p_value: p_chi2, p_adjusted: f64::NAN },
-                NoiseTest { name: "mean_shift", statistic: shift, p_value: p_shift, p_adjusted: f64::NAN },
-                NoiseTest { name: "ljung_box", statistic: q, p_value: p_q, p_adjusted: f64::NAN },
-                NoiseTest { name: "runs", statistic: runs, p_value: p_runs, p_adjusted: f64::NAN },
+                NoiseTest {
+                    name: "chi_square",
+                    statistic: chi2,
+                    p_value: p_chi2,
+                    p_adjusted: f64::NAN,
+                },
+                NoiseTest {
+                    name: "mean_shift",
+                    statistic: shift,
+                    p_value: p_shift,
+                    p_adjusted: f64::NAN,
+                },
+                NoiseTest {
+                    name: "ljung_box",
+                    statistic: q,
+                    p_value: p_q,
+                    p_adjusted: f64::NAN,
+                },
+                NoiseTest {
+                    name: "runs",
+                    statistic: runs,
+                    p_value: p_runs,
+                    p_adjusted: f64::NAN,
+                },
             ],
         });
     }
-    let all: Vec<f64> = out.iter().flat_map(|c| c.tests.iter().map(|t| t.p_value)).collect();
+    let all: Vec<f64> = out
+        .iter()
+        .flat_map(|c| c.tests.iter().map(|t| t.p_value))
+        .collect();
     let adjusted = holm(&all);
     let mut k = 0;
     for c in &mut out {
@@ -160,9 +194,14 @@ mod tests {
         assert_eq!(s, 6.25);
         assert!((p - (-3.125f64).exp() * 4.125).abs() < 1e-12, "{p}");
         let (t, p) = mean_shift(&z);
-        assert!((t - 1.25).abs() < 1e-12 && (p - 0.21130).abs() < 1e-5, "{t} {p}");
+        assert!(
+            (t - 1.25).abs() < 1e-12 && (p - 0.21130).abs() < 1e-5,
+            "{t} {p}"
+        );
         // alternating signs: as many runs as samples → far too many runs for chance
-        let alt: Vec<f64> = (0..40).map(|i| if i % 2 == 0 { 1.0 } else { -1.0 }).collect();
+        let alt: Vec<f64> = (0..40)
+            .map(|i| if i % 2 == 0 { 1.0 } else { -1.0 })
+            .collect();
         let (score, p) = runs_test(&alt);
         assert!(score > 5.0 && p < 1e-6);
         // a slow sine is strongly autocorrelated

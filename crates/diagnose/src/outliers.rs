@@ -28,7 +28,12 @@ fn median(mut v: Vec<f64>) -> f64 {
 
 /// Indices of outlying records. `z[i]` is record i's whitened residual (3 components), `times`
 /// and `positions` its time and commanded position; `threshold` in robust scale units.
-pub fn outliers(z: &[Vector3<f64>], times: &[f64], positions: &[Vector3<f64>], threshold: f64) -> Vec<usize> {
+pub fn outliers(
+    z: &[Vector3<f64>],
+    times: &[f64],
+    positions: &[Vector3<f64>],
+    threshold: f64,
+) -> Vec<usize> {
     let n = z.len();
     if n < 8 {
         return Vec::new();
@@ -41,16 +46,28 @@ pub fn outliers(z: &[Vector3<f64>], times: &[f64], positions: &[Vector3<f64>], t
     for (k, &i) in by_time.iter().enumerate() {
         rank[i] = k;
     }
-    let candidates: Vec<usize> = (0..n).filter(|&i| z[i].amax() > threshold * scale).collect();
+    let candidates: Vec<usize> = (0..n)
+        .filter(|&i| z[i].amax() > threshold * scale)
+        .collect();
     let mut out = Vec::new();
     for i in candidates {
         // two neighbours either side in time, four nearest in the workspace
         let k = rank[i];
-        let time_nb: Vec<usize> = (k.saturating_sub(2)..(k + 3).min(n)).filter(|&m| m != k).map(|m| by_time[m]).collect();
-        let mut near: Vec<(f64, usize)> = (0..n).filter(|&j| j != i).map(|j| ((positions[j] - positions[i]).norm_squared(), j)).collect();
+        let time_nb: Vec<usize> = (k.saturating_sub(2)..(k + 3).min(n))
+            .filter(|&m| m != k)
+            .map(|m| by_time[m])
+            .collect();
+        let mut near: Vec<(f64, usize)> = (0..n)
+            .filter(|&j| j != i)
+            .map(|j| ((positions[j] - positions[i]).norm_squared(), j))
+            .collect();
         near.sort_by(|a, b| a.0.total_cmp(&b.0));
         let space_nb: Vec<usize> = near.iter().take(4).map(|p| p.1).collect();
-        let isolated = |nb: &[usize]| (0..3).any(|c| (z[i][c] - median(nb.iter().map(|&j| z[j][c]).collect())).abs() > threshold * scale);
+        let isolated = |nb: &[usize]| {
+            (0..3).any(|c| {
+                (z[i][c] - median(nb.iter().map(|&j| z[j][c]).collect())).abs() > threshold * scale
+            })
+        };
         if isolated(&time_nb) && isolated(&space_nb) {
             out.push(i);
         }
@@ -66,8 +83,18 @@ mod tests {
     fn isolated_spikes_are_outliers_shared_bumps_are_not() {
         let n = 100;
         let times: Vec<f64> = (0..n).map(|i| i as f64).collect();
-        let positions: Vec<Vector3<f64>> = (0..n).map(|i| Vector3::new((i % 10) as f64 * 0.1, (i / 10) as f64 * 0.1, 0.0)).collect();
-        let mut z: Vec<Vector3<f64>> = (0..n).map(|i| Vector3::new(((i * 37) % 17) as f64 / 8.5 - 1.0, ((i * 11) % 13) as f64 / 6.5 - 1.0, 0.0)).collect();
+        let positions: Vec<Vector3<f64>> = (0..n)
+            .map(|i| Vector3::new((i % 10) as f64 * 0.1, (i / 10) as f64 * 0.1, 0.0))
+            .collect();
+        let mut z: Vec<Vector3<f64>> = (0..n)
+            .map(|i| {
+                Vector3::new(
+                    ((i * 37) % 17) as f64 / 8.5 - 1.0,
+                    ((i * 11) % 13) as f64 / 6.5 - 1.0,
+                    0.0,
+                )
+            })
+            .collect();
         z[42].x += 40.0;
         // a bump over a 3 × 3 patch of neighbours
         for i in [66, 67, 68, 76, 77, 78, 86, 87, 88] {

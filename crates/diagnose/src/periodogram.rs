@@ -11,18 +11,38 @@ pub fn independent_frequencies(span: f64, min_period: f64, max_period: f64) -> f
 /// The period (in the unit of `position`) in [min_period, max_period] whose fitted sinusoid
 /// (with a constant) explains the largest share of `residual`'s weighted sum of squares, and
 /// that share; None with fewer than 12 samples or no variation in position.
-pub fn strongest_period(position: &[f64], residual: &[f64], weight: &[f64], min_period: f64, max_period: f64) -> Option<(f64, f64)> {
+pub fn strongest_period(
+    position: &[f64],
+    residual: &[f64],
+    weight: &[f64],
+    min_period: f64,
+    max_period: f64,
+) -> Option<(f64, f64)> {
     let n = position.len();
     if n < 12 || !(max_period > min_period && min_period > 0.0) {
         return None;
     }
-    let (lo, hi) = position.iter().fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &q| (a.min(q), b.max(q)));
+    let (lo, hi) = position
+        .iter()
+        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), &q| {
+            (a.min(q), b.max(q))
+        });
     if !(hi - lo > min_period) {
         return None;
     }
     let wsum: f64 = weight.iter().sum();
-    let mean = position.iter().zip(residual).zip(weight).map(|((_, r), w)| r * w).sum::<f64>() / wsum;
-    let total: f64 = residual.iter().zip(weight).map(|(r, w)| w * (r - mean).powi(2)).sum();
+    let mean = position
+        .iter()
+        .zip(residual)
+        .zip(weight)
+        .map(|((_, r), w)| r * w)
+        .sum::<f64>()
+        / wsum;
+    let total: f64 = residual
+        .iter()
+        .zip(weight)
+        .map(|(r, w)| w * (r - mean).powi(2))
+        .sum();
     if !(total > 0.0) {
         return None;
     }
@@ -62,8 +82,17 @@ mod tests {
     fn finds_an_odd_lead_among_noise() {
         let n = 400;
         // irregular positions (a regular grid has aliases the data cannot tell from the truth)
-        let q: Vec<f64> = (0..n).map(|i| 0.8 * (i as f64 * 0.618_033_988_75).fract()).collect();
-        let r: Vec<f64> = q.iter().enumerate().map(|(i, x)| 3e-6 * (std::f64::consts::TAU * x / 0.0137).cos() + 2e-6 * (((i * 31) % 17) as f64 / 8.0 - 1.0)).collect();
+        let q: Vec<f64> = (0..n)
+            .map(|i| 0.8 * (i as f64 * 0.618_033_988_75).fract())
+            .collect();
+        let r: Vec<f64> = q
+            .iter()
+            .enumerate()
+            .map(|(i, x)| {
+                3e-6 * (std::f64::consts::TAU * x / 0.0137).cos()
+                    + 2e-6 * (((i * 31) % 17) as f64 / 8.0 - 1.0)
+            })
+            .collect();
         let (p, share) = strongest_period(&q, &r, &vec![1.0; n], 0.002, 0.2).unwrap();
         assert!((p - 0.0137).abs() < 2e-5, "{p}");
         assert!(share > 0.5);

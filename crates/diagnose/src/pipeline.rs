@@ -35,7 +35,10 @@ use crate::noise_tests::noise_report;
 use crate::outliers::robust_scale;
 use crate::report::*;
 use crate::residual_view::ResidualView;
-use crate::selection::{select_families, Family, FamilySelection, SelectionOptions, WhitenedData, MIN_SIGNIFICANCE_SIGMA};
+use crate::selection::{
+    select_families, Family, FamilySelection, SelectionOptions, WhitenedData,
+    MIN_SIGNIFICANCE_SIGMA,
+};
 
 /// The model the user declared.
 pub struct DeclaredModel<'a> {
@@ -171,23 +174,40 @@ pub(crate) struct Progress {
 
 impl Progress {
     fn new(on: bool) -> Self {
-        Self { on, clock: std::time::Instant::now() }
+        Self {
+            on,
+            clock: std::time::Instant::now(),
+        }
     }
     pub(crate) fn say(&self, what: &str) {
         if self.on {
-            eprintln!("diagnose: {:7.2} s  {what}", self.clock.elapsed().as_secs_f64());
+            eprintln!(
+                "diagnose: {:7.2} s  {what}",
+                self.clock.elapsed().as_secs_f64()
+            );
         }
     }
 }
 
 /// Run the diagnosis.
-pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &DiagnoseOptions) -> Result<Diagnosis, DiagnoseError> {
+pub fn diagnose(
+    declared: &DeclaredModel,
+    records: &RecordSet,
+    options: &DiagnoseOptions,
+) -> Result<Diagnosis, DiagnoseError> {
     let progress = Progress::new(options.progress);
     // 1–2. records and the declared fit
     let stage = declared_stage(declared, records, options, &progress)?;
     let model = ForwardModel::new(declared.machine, declared.machine_terms, &stage.instruments)?;
     let x0 = stage.fit.x.clone();
-    let free0: Vec<usize> = stage.fit.parameters.iter().enumerate().filter(|(_, p)| p.free).map(|(k, _)| k).collect();
+    let free0: Vec<usize> = stage
+        .fit
+        .parameters
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| p.free)
+        .map(|(k, _)| k)
+        .collect();
     let view0 = ResidualView::new(&model, &x0, &stage.set.records, &stage.set.frame)?;
     progress.say("declared model fitted; testing and locating its residuals");
     // 3. where the declared model's residuals disagree with noise
@@ -196,47 +216,148 @@ pub fn diagnose(declared: &DeclaredModel, records: &RecordSet, options: &Diagnos
     let located0 = locate(&samples0, &options.locate);
     // 4. what the selection runs on and chooses among
     let frame = SelectionFrame::new(&model, &x0, &free0, &stage, &view0, options)?;
-    progress.say(&format!("candidate columns on {} records", frame.records.len()));
+    progress.say(&format!(
+        "candidate columns on {} records",
+        frame.records.len()
+    ));
     let (prepared, not_tried) = candidates(declared, &model, &stage, &x0, &frame, options)?;
-    progress.say(&format!("{} candidate families, {} variants; selecting", prepared.len(), prepared.iter().map(|p| p.family.variants.len()).sum::<usize>()));
+    progress.say(&format!(
+        "{} candidate families, {} variants; selecting",
+        prepared.len(),
+        prepared
+            .iter()
+            .map(|p| p.family.variants.len())
+            .sum::<usize>()
+    ));
     // 5. selection
     let families: Vec<Family> = prepared.iter().map(|p| p.family.clone()).collect();
-    let data = WhitenedData { b: frame.b.clone(), declared: frame.declared_cols.clone(), folds: frame.folds.clone() };
+    let data = WhitenedData {
+        b: frame.b.clone(),
+        declared: frame.declared_cols.clone(),
+        folds: frame.folds.clone(),
+    };
     let selection = match options.strategy {
         Strategy::Select => select_families(&data, &families, &options.selection),
         Strategy::AllAtOnce => all_at_once(&data, &families, options.selection.alpha),
     };
-    progress.say(&format!("selected {:?}; refitting the augmented model", selection.chosen.iter().map(|c| c.label.as_str()).collect::<Vec<_>>()));
+    progress.say(&format!(
+        "selected {:?}; refitting the augmented model",
+        selection
+            .chosen
+            .iter()
+            .map(|c| c.label.as_str())
+            .collect::<Vec<_>>()
+    ));
     let mut messages = refusals(&selection, &families);
     messages.extend(selection.swapped.iter().map(|(out, into)| format!("{out}, chosen early, was replaced by {into}: with the other terms in the model {into} explains the residuals better (lower BIC)")));
     // 6–7. the augmented model refitted and judged; a term not significant after the refit is
     // dropped and the rest refitted
-    let inputs = JudgeInputs { machine: declared.machine, declared_model: &model, stage: &stage, x0: &x0, free0: &free0, view0: &view0, folds_time: &frame.folds_time, folds_space: &frame.folds_space, selection: &selection, families: &families, prepared: &prepared, alpha: options.selection.alpha };
-    let (aug, x1, judged) = refit_and_judge(declared, &inputs, &selection, &prepared, options, &mut messages, &progress)?;
+    let inputs = JudgeInputs {
+        machine: declared.machine,
+        declared_model: &model,
+        stage: &stage,
+        x0: &x0,
+        free0: &free0,
+        view0: &view0,
+        folds_time: &frame.folds_time,
+        folds_space: &frame.folds_space,
+        selection: &selection,
+        families: &families,
+        prepared: &prepared,
+        alpha: options.selection.alpha,
+    };
+    let (aug, x1, judged) = refit_and_judge(
+        declared,
+        &inputs,
+        &selection,
+        &prepared,
+        options,
+        &mut messages,
+        &progress,
+    )?;
     progress.say(&judged.uncertainty.statement);
     // 8. the noise the verdicts rely on, and what remains
-    let noise_rms = (stage.set.records.iter().map(|r| r.covariance.trace()).sum::<f64>() / (3 * stage.set.records.len()) as f64).sqrt();
-    let noise = assess_noise(stage.repeatability, robust_scale(&judged.whitened_after), judged.whitened_after.len());
+    let noise_rms = (stage
+        .set
+        .records
+        .iter()
+        .map(|r| r.covariance.trace())
+        .sum::<f64>()
+        / (3 * stage.set.records.len()) as f64)
+        .sqrt();
+    let noise = assess_noise(
+        stage.repeatability,
+        robust_scale(&judged.whitened_after),
+        judged.whitened_after.len(),
+    );
     let (remaining, located1) = what_remains(&stage, &judged, &noise, options);
     // 9. findings and the report
     progress.say("findings");
-    report(declared, &stage, &aug, &x1, judged, Context { located0: &located0, samples0: &samples0, selection: &selection, families: &families, not_tried, remaining, located1, noise_rms, noise, selection_records: frame.records.len(), options, view0: &view0 }, messages, &progress)
+    report(
+        declared,
+        &stage,
+        &aug,
+        &x1,
+        judged,
+        Context {
+            located0: &located0,
+            samples0: &samples0,
+            selection: &selection,
+            families: &families,
+            not_tried,
+            remaining,
+            located1,
+            noise_rms,
+            noise,
+            selection_records: frame.records.len(),
+            options,
+            view0: &view0,
+        },
+        messages,
+        &progress,
+    )
 }
 
 /// The augmented model refitted and judged; while an added term's main parameters are less than
 /// [`MIN_SIGNIFICANCE_SIGMA`] from zero after the refit (σ widened for correlated residuals),
 /// the weakest is dropped, said, and the rest refitted.
-fn refit_and_judge<'a>(declared: &DeclaredModel, inputs: &JudgeInputs, selection: &FamilySelection, prepared: &[Prepared], options: &DiagnoseOptions, messages: &mut Vec<String>, progress: &Progress) -> Result<(Augmented, Vec<f64>, Judged), DiagnoseError> {
+fn refit_and_judge<'a>(
+    declared: &DeclaredModel,
+    inputs: &JudgeInputs,
+    selection: &FamilySelection,
+    prepared: &[Prepared],
+    options: &DiagnoseOptions,
+    messages: &mut Vec<String>,
+    progress: &Progress,
+) -> Result<(Augmented, Vec<f64>, Judged), DiagnoseError> {
     let mut chosen = selection.chosen.clone();
     loop {
-        let aug = Augmented::new(declared.machine, declared.machine_terms, &inputs.stage.instruments, &inputs.stage.setup, &chosen, prepared)?;
+        let aug = Augmented::new(
+            declared.machine,
+            declared.machine_terms,
+            &inputs.stage.instruments,
+            &inputs.stage.setup,
+            &chosen,
+            prepared,
+        )?;
         let start = aug.start(declared.machine, inputs.declared_model, inputs.x0)?;
-        let refit = aug.refit(declared.machine, &inputs.stage.set, inputs.view0, start, options)?;
+        let refit = aug.refit(
+            declared.machine,
+            &inputs.stage.set,
+            inputs.view0,
+            start,
+            options,
+        )?;
         let x1 = refit.x;
         progress.say("refitted; held-out before and after");
         let mut judged = judge(inputs, &aug, &x1)?;
         judged.at_bound = refit.at_bound;
-        let weakest = judged.significance.iter().filter(|(_, z)| *z < MIN_SIGNIFICANCE_SIGMA).min_by(|a, b| a.1.total_cmp(&b.1)).cloned();
+        let weakest = judged
+            .significance
+            .iter()
+            .filter(|(_, z)| *z < MIN_SIGNIFICANCE_SIGMA)
+            .min_by(|a, b| a.1.total_cmp(&b.1))
+            .cloned();
         match weakest {
             Some((label, z)) if options.strategy == Strategy::Select => {
                 messages.push(format!(
@@ -259,11 +380,22 @@ fn refusals(selection: &FamilySelection, families: &[Family]) -> Vec<String> {
     let mut out = Vec::new();
     for step in &selection.steps {
         let Some(f) = step.refused else { continue };
-        let Some(score) = step.scores.iter().find(|s| s.label == families[f].label) else { continue };
+        let Some(score) = step.scores.iter().find(|s| s.label == families[f].label) else {
+            continue;
+        };
         let family = &families[f];
         let variant = family.variants.iter().find(|v| v.name == score.variant);
         let values: Vec<String> = variant
-            .map(|v| v.parameter_names.iter().zip(&score.values).zip(&v.ranges).map(|((n, x), (lo, hi))| format!("{n} = {x:.4e} (possible {lo:.3e} … {hi:.3e})")).collect())
+            .map(|v| {
+                v.parameter_names
+                    .iter()
+                    .zip(&score.values)
+                    .zip(&v.ranges)
+                    .map(|((n, x), (lo, hi))| {
+                        format!("{n} = {x:.4e} (possible {lo:.3e} … {hi:.3e})")
+                    })
+                    .collect()
+            })
             .unwrap_or_default();
         out.push(format!(
             "{} would explain the residuals best (held-out gain {:.0} %, ΔBIC {:.0}) but needs {}, which is physically impossible; nothing is named in its place — check the recording's units, signs and time stamps, and the term's convention",
@@ -278,16 +410,50 @@ fn refusals(selection: &FamilySelection, families: &[Family]) -> Vec<String> {
 
 /// Noise tests and localisation of the final residuals (against the stated σ, or the data's own
 /// scale when that disagrees with it).
-fn what_remains(stage: &DeclaredStage, judged: &Judged, noise: &NoiseAssessment, options: &DiagnoseOptions) -> (Vec<String>, Vec<crate::locate::Finding>) {
+fn what_remains(
+    stage: &DeclaredStage,
+    judged: &Judged,
+    noise: &NoiseAssessment,
+    options: &DiagnoseOptions,
+) -> (Vec<String>, Vec<crate::locate::Finding>) {
     let samples1 = judged.view1.samples(&stage.set.records, &judged.after_res);
-    let rescaled: Vec<_> = if noise.basis == "stated" { samples1 } else { samples1.into_iter().map(|s| crate::residual::ResidualSample { sigma: s.sigma * noise.scale, ..s }).collect() };
+    let rescaled: Vec<_> = if noise.basis == "stated" {
+        samples1
+    } else {
+        samples1
+            .into_iter()
+            .map(|s| crate::residual::ResidualSample {
+                sigma: s.sigma * noise.scale,
+                ..s
+            })
+            .collect()
+    };
     let report1 = noise_report(&rescaled, 8);
     let mut remaining: Vec<String> = report1
         .iter()
-        .flat_map(|c| c.tests.iter().filter(|t| t.p_adjusted <= options.selection.alpha).map(move |t| format!("{} {}: {} test rejects (p = {:.1e} after correction), χ²/dof {:.2}", c.channel, crate::residual::axis_name(c.axis), t.name, t.p_adjusted, c.chi2_per_dof)))
+        .flat_map(|c| {
+            c.tests
+                .iter()
+                .filter(|t| t.p_adjusted <= options.selection.alpha)
+                .map(move |t| {
+                    format!(
+                        "{} {}: {} test rejects (p = {:.1e} after correction), χ²/dof {:.2}",
+                        c.channel,
+                        crate::residual::axis_name(c.axis),
+                        t.name,
+                        t.p_adjusted,
+                        c.chi2_per_dof
+                    )
+                })
+        })
         .collect();
     let located1 = locate(&rescaled, &options.locate);
-    remaining.extend(located1.iter().take(10).map(|f| format!("structure left: {}", f.describe())));
+    remaining.extend(
+        located1
+            .iter()
+            .take(10)
+            .map(|f| format!("structure left: {}", f.describe())),
+    );
     (remaining, located1)
 }
 
@@ -310,25 +476,71 @@ struct Context<'a> {
 /// The check points (kept out of every fit) predicted by the declared model at its fit and by the
 /// augmented model at its refit, each with the placements its fit points gave; None without
 /// check points.
-fn check_scores(declared: &DeclaredModel, stage: &DeclaredStage, aug: &Augmented, x1: &[f64]) -> Result<Option<crate::report::CheckScores>, DiagnoseError> {
+fn check_scores(
+    declared: &DeclaredModel,
+    stage: &DeclaredStage,
+    aug: &Augmented,
+    x1: &[f64],
+) -> Result<Option<crate::report::CheckScores>, DiagnoseError> {
     if stage.set.check.is_empty() {
         return Ok(None);
     }
-    let before_model = ForwardModel::new(declared.machine, declared.machine_terms, &stage.instruments)?;
-    let before = metrocell_estimation::check_points::check_report_of(&before_model, &stage.fit.x, &stage.set.check);
+    let before_model =
+        ForwardModel::new(declared.machine, declared.machine_terms, &stage.instruments)?;
+    let before = metrocell_estimation::check_points::check_report_of(
+        &before_model,
+        &stage.fit.x,
+        &stage.set.check,
+    );
     let after_model = aug.model(declared.machine)?;
-    let after = metrocell_estimation::check_points::check_report_of(&after_model, x1, &stage.set.check);
-    Ok(Some(crate::report::CheckScores { declared: before.overall, augmented: after.overall, unpredicted: after.unpredicted.len() }))
+    let after =
+        metrocell_estimation::check_points::check_report_of(&after_model, x1, &stage.set.check);
+    Ok(Some(crate::report::CheckScores {
+        declared: before.overall,
+        augmented: after.overall,
+        unpredicted: after.unpredicted.len(),
+    }))
 }
 
 /// The findings, the augmented model's terms, the report and the plots.
 #[allow(clippy::too_many_arguments)]
-fn report(declared: &DeclaredModel, stage: &DeclaredStage, aug: &Augmented, x1: &[f64], judged: Judged, ctx: Context, mut messages: Vec<String>, progress: &Progress) -> Result<Diagnosis, DiagnoseError> {
+fn report(
+    declared: &DeclaredModel,
+    stage: &DeclaredStage,
+    aug: &Augmented,
+    x1: &[f64],
+    judged: Judged,
+    ctx: Context,
+    mut messages: Vec<String>,
+    progress: &Progress,
+) -> Result<Diagnosis, DiagnoseError> {
     let model_aug = aug.model(declared.machine)?;
-    let mut found: Vec<FoundTerm> = aug.added.iter().enumerate().map(|(k, a)| FoundTerm { label: a.label.clone(), id: a.id, variant: a.variant.clone(), placement: a.placement, order: k, config: a.config.clone() }).collect();
+    let mut found: Vec<FoundTerm> = aug
+        .added
+        .iter()
+        .enumerate()
+        .map(|(k, a)| FoundTerm {
+            label: a.label.clone(),
+            id: a.id,
+            variant: a.variant.clone(),
+            placement: a.placement,
+            order: k,
+            config: a.config.clone(),
+        })
+        .collect();
     for f in &aug.freed {
-        let config = TermConfig { id: f.id.as_str().into(), ..Default::default() };
-        found.push(FoundTerm { label: f.label.clone(), id: f.id, variant: "declared, freed".into(), placement: Placement::Instrument, order: found.len(), config });
+        let config = TermConfig {
+            id: f.id.as_str().into(),
+            ..Default::default()
+        };
+        found.push(FoundTerm {
+            label: f.label.clone(),
+            id: f.id,
+            variant: "declared, freed".into(),
+            placement: Placement::Instrument,
+            order: found.len(),
+            config,
+        });
     }
     let set = &stage.set;
     let built = findings::build(&findings::Inputs {
@@ -348,13 +560,46 @@ fn report(declared: &DeclaredModel, stage: &DeclaredStage, aug: &Augmented, x1: 
         at_bound: &judged.at_bound,
     })?;
     let added_terms = added_terms(aug, x1, &judged);
-    let unexplained = findings::unexplained(&judged.empirical, &judged.view1, &ctx.located1, &set.records);
+    let unexplained = findings::unexplained(
+        &judged.empirical,
+        &judged.view1,
+        &ctx.located1,
+        &set.records,
+    );
     let explained = unexplained.is_empty() && ctx.remaining.is_empty();
-    let declared_params = stage.fit.parameters.iter().filter(|p| p.free && !metrocell_estimation::check_points::is_placement_parameter(&p.name)).map(|p| (p.name.clone(), ParameterValue { value: p.value, sigma: p.sigma, unit: p.unit.into(), at_bound: p.at_bound.map(|b| b.name().to_string()) })).collect();
-    messages.extend(findings::advice(ctx.selection, ctx.families, &set.records, declared.machine));
+    let declared_params = stage
+        .fit
+        .parameters
+        .iter()
+        .filter(|p| p.free && !metrocell_estimation::check_points::is_placement_parameter(&p.name))
+        .map(|p| {
+            (
+                p.name.clone(),
+                ParameterValue {
+                    value: p.value,
+                    sigma: p.sigma,
+                    unit: p.unit.into(),
+                    at_bound: p.at_bound.map(|b| b.name().to_string()),
+                },
+            )
+        })
+        .collect();
+    messages.extend(findings::advice(
+        ctx.selection,
+        ctx.families,
+        &set.records,
+        declared.machine,
+    ));
     let mut rejected = stage.rejected.clone();
     rejected.truncate(50);
-    let mut summary = findings::summary(&built.findings, &unexplained, &judged.before, &judged.after, ctx.noise_rms, explained);
+    let mut summary = findings::summary(
+        &built.findings,
+        &unexplained,
+        &judged.before,
+        &judged.after,
+        ctx.noise_rms,
+        explained,
+    );
     let check = check_scores(declared, stage, aug, x1)?;
     if let Some(c) = &check {
         summary.push_str(&format!(
@@ -405,11 +650,47 @@ fn report(declared: &DeclaredModel, stage: &DeclaredStage, aug: &Augmented, x1: 
         }
     }
     temperatures.retain(|_, v| v.len() == n);
-    let plots = PlotData { time: judged.view1.time.clone(), position: judged.view1.position.clone(), before: judged.before_res, after: judged.after_res, heldout_before: judged.held_before, heldout_after: judged.held_after, temperatures, evidence: built.evidence };
+    let plots = PlotData {
+        time: judged.view1.time.clone(),
+        position: judged.view1.position.clone(),
+        before: judged.before_res,
+        after: judged.after_res,
+        heldout_before: judged.held_before,
+        heldout_after: judged.held_after,
+        temperatures,
+        evidence: built.evidence,
+    };
     progress.say("done");
-    let sigma_workpiece = set.records.iter().enumerate().map(|(i, r)| ctx.view0.workpiece_sigma(i, &r.covariance)).collect();
-    let fitted = judged.names.iter().enumerate().map(|(k, name)| (name.clone(), x1[k], if aug.setup.free[k] { judged.sigmas[k] } else { None })).collect();
-    Ok(Diagnosis { report, added_terms, plots, records: set.records.clone(), sigma_workpiece, fitted })
+    let sigma_workpiece = set
+        .records
+        .iter()
+        .enumerate()
+        .map(|(i, r)| ctx.view0.workpiece_sigma(i, &r.covariance))
+        .collect();
+    let fitted = judged
+        .names
+        .iter()
+        .enumerate()
+        .map(|(k, name)| {
+            (
+                name.clone(),
+                x1[k],
+                if aug.setup.free[k] {
+                    judged.sigmas[k]
+                } else {
+                    None
+                },
+            )
+        })
+        .collect();
+    Ok(Diagnosis {
+        report,
+        added_terms,
+        plots,
+        records: set.records.clone(),
+        sigma_workpiece,
+        fitted,
+    })
 }
 
 /// The terms added to the model file: their configs with the fitted values, and the σ of the
@@ -418,7 +699,9 @@ fn added_terms(aug: &Augmented, x1: &[f64], judged: &Judged) -> Vec<AddedTerm> {
     aug.added
         .iter()
         .map(|a| {
-            let label = configure(&a.config).map(|t| t.term.label()).unwrap_or_default();
+            let label = configure(&a.config)
+                .map(|t| t.term.label())
+                .unwrap_or_default();
             let mut c = a.config.clone();
             let mut sig = BTreeMap::new();
             for (k, name) in judged.names.iter().enumerate() {
@@ -429,14 +712,22 @@ fn added_terms(aug: &Augmented, x1: &[f64], judged: &Judged) -> Vec<AddedTerm> {
                     }
                 }
             }
-            AddedTerm { config: c, sigmas: sig, placement: a.placement }
+            AddedTerm {
+                config: c,
+                sigmas: sig,
+                placement: a.placement,
+            }
         })
         .collect()
 }
 
 /// Which noise level the verdicts rely on: the stated one when the data's own measure agrees
 /// with it within 25 % (or the data have none), else the data's.
-fn assess_noise(repeatability: Option<(f64, usize)>, residual_scale: f64, residual_rows: usize) -> NoiseAssessment {
+fn assess_noise(
+    repeatability: Option<(f64, usize)>,
+    residual_scale: f64,
+    residual_rows: usize,
+) -> NoiseAssessment {
     match repeatability {
         Some((s, dof)) if dof >= 30 => {
             if (0.8..=1.25).contains(&s) {
@@ -465,12 +756,26 @@ fn step_summaries(selection: &FamilySelection, families: &[Family]) -> Vec<Step>
             let mut top: Vec<StepScore> = s
                 .scores
                 .iter()
-                .map(|c| StepScore { label: c.label.clone(), variant: c.variant.clone(), heldout_gain: c.heldout_gain, p_adjusted: c.wald_p_adjusted, delta_bic: c.delta_bic, plausible: c.plausible, usual: c.usual, significance_sigma: c.significance_sigma, supported: c.supported, separable: c.separable, accepted: c.accepted })
+                .map(|c| StepScore {
+                    label: c.label.clone(),
+                    variant: c.variant.clone(),
+                    heldout_gain: c.heldout_gain,
+                    p_adjusted: c.wald_p_adjusted,
+                    delta_bic: c.delta_bic,
+                    plausible: c.plausible,
+                    usual: c.usual,
+                    significance_sigma: c.significance_sigma,
+                    supported: c.supported,
+                    separable: c.separable,
+                    accepted: c.accepted,
+                })
                 .collect();
             top.sort_by(|a, b| b.heldout_gain.total_cmp(&a.heldout_gain));
             top.truncate(10);
-            Step { chosen: s.chosen.map(|i| families[i].label.clone()), top }
+            Step {
+                chosen: s.chosen.map(|i| families[i].label.clone()),
+                top,
+            }
         })
         .collect()
 }
-

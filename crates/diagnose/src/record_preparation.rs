@@ -35,7 +35,9 @@ fn usable(r: &MeasurementRecord) -> Result<(), String> {
         return Err("time stamp is not finite".into());
     }
     // a reference nest is not where the machine is: it has no joints
-    if !matches!(r.kind, metrocell_estimation::RecordKind::Reference { .. }) && (r.q.is_empty() || !r.q.iter().all(|v| v.is_finite())) {
+    if !matches!(r.kind, metrocell_estimation::RecordKind::Reference { .. })
+        && (r.q.is_empty() || !r.q.iter().all(|v| v.is_finite()))
+    {
         return Err("commanded joint vector is missing or not finite".into());
     }
     if whitening(&r.covariance).is_none() {
@@ -45,22 +47,33 @@ fn usable(r: &MeasurementRecord) -> Result<(), String> {
 }
 
 fn stationary(r: &MeasurementRecord) -> bool {
-    r.signals.axis_velocity.iter().all(|v| v.is_none_or(|v| v.abs() < 1e-9))
+    r.signals
+        .axis_velocity
+        .iter()
+        .all(|v| v.is_none_or(|v| v.abs() < 1e-9))
 }
 
 /// Set aside unusable records, and (if `average_repeats`) average runs of consecutive readings
 /// of one channel at one stationary commanded position no more than `max_gap` s apart.
 pub fn prepare(records: &[MeasurementRecord], average_repeats: bool, max_gap: f64) -> Prepared {
-    let mut out = Prepared { readings: records.len(), ..Default::default() };
+    let mut out = Prepared {
+        readings: records.len(),
+        ..Default::default()
+    };
     let mut good: Vec<&MeasurementRecord> = Vec::with_capacity(records.len());
     for (i, r) in records.iter().enumerate() {
         match usable(r) {
             Ok(()) => good.push(r),
-            Err(reason) => out.rejected.push(Rejected { at: format!("record {i} (t = {:.3} s, channel {})", r.time, r.channel), point_id: r.point_id.clone(), reason }),
+            Err(reason) => out.rejected.push(Rejected {
+                at: format!("record {i} (t = {:.3} s, channel {})", r.time, r.channel),
+                point_id: r.point_id.clone(),
+                reason,
+            }),
         }
     }
     good.sort_by(|a, b| a.time.total_cmp(&b.time));
-    let (good, aside) = crate::signal_coverage::require_common_signals(good.into_iter().cloned().collect());
+    let (good, aside) =
+        crate::signal_coverage::require_common_signals(good.into_iter().cloned().collect());
     out.rejected.extend(aside);
     let good: Vec<&MeasurementRecord> = good.iter().collect();
     if !average_repeats {
@@ -84,7 +97,11 @@ pub fn prepare(records: &[MeasurementRecord], average_repeats: bool, max_gap: f6
                 let same = next.channel == first.channel
                     && next.kind == first.kind
                     && next.q.len() == first.q.len()
-                    && next.q.iter().zip(&first.q).all(|(a, b)| (a - b).abs() <= 1e-9)
+                    && next
+                        .q
+                        .iter()
+                        .zip(&first.q)
+                        .all(|(a, b)| (a - b).abs() <= 1e-9)
                     && next.signals.approach_direction == first.signals.approach_direction
                     && stationary(next)
                     && next.time - prev.time <= max_gap
@@ -101,7 +118,8 @@ pub fn prepare(records: &[MeasurementRecord], average_repeats: bool, max_gap: f6
         } else {
             let n = group.len() as f64;
             let mean: Vector3<f64> = group.iter().map(|r| r.measured).sum::<Vector3<f64>>() / n;
-            let mean_cov: Matrix3<f64> = group.iter().map(|r| r.covariance).sum::<Matrix3<f64>>() / n;
+            let mean_cov: Matrix3<f64> =
+                group.iter().map(|r| r.covariance).sum::<Matrix3<f64>>() / n;
             for r in group {
                 let w = whitening(&r.covariance).expect("checked usable");
                 chi2 += (w * (r.measured - mean)).norm_squared();

@@ -23,8 +23,10 @@ pub(crate) fn nest_columns(records: &[MeasurementRecord], view: &ResidualView) -
     }
     let mut out = DMatrix::zeros(3 * records.len(), 3 * nests.len());
     for (i, r) in records.iter().enumerate() {
-        if let (RecordKind::Reference { .. }, Some(&k)) = (&r.kind, nests.get(r.point_id.as_str())) {
-            out.view_mut((3 * i, 3 * k), (3, 3)).copy_from(&(view.whitening[i] * view.rotation(i).transpose()));
+        if let (RecordKind::Reference { .. }, Some(&k)) = (&r.kind, nests.get(r.point_id.as_str()))
+        {
+            out.view_mut((3 * i, 3 * k), (3, 3))
+                .copy_from(&(view.whitening[i] * view.rotation(i).transpose()));
         }
     }
     out

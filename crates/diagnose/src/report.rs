@@ -244,7 +244,6 @@ pub struct CheckScores {
     pub unpredicted: usize,
 }
 
-
 /// How the σ of the found terms (and of the augmented model's parameters) were made: the
 /// independent-rows covariance of the final joint fit, widened to the sandwich covariance where
 /// the residuals are correlated in time or at one place (crate::serial_correlation).

@@ -31,7 +31,10 @@ impl ResidualSample {
     }
 
     pub fn condition(&self, name: &str) -> Option<f64> {
-        self.conditions.iter().find(|(n, _)| n == name).map(|(_, v)| *v)
+        self.conditions
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| *v)
     }
 }
 

@@ -39,12 +39,26 @@ pub struct ResidualView {
 
 /// Rotation records frame → workpiece frame at parameters x, for a record read with `signals`
 /// (its setup's pose; a levelled instrument's base tilt undone).
-pub fn records_rotation(model: &ForwardModel, x: &[f64], frame: &RecordFrame, signals: &metrocell_physics::Signals) -> Matrix3<f64> {
+pub fn records_rotation(
+    model: &ForwardModel,
+    x: &[f64],
+    frame: &RecordFrame,
+    signals: &metrocell_physics::Signals,
+) -> Matrix3<f64> {
     match (frame, model.pose_param_start_for(signals)) {
         (RecordFrame::Instrument(_), Some(i)) => {
-            let pose = InstrumentPose::from_euler_xyz(Vector3::new(x[i], x[i + 1], x[i + 2]), [x[i + 3], x[i + 4], x[i + 5]]).rotation;
+            let pose = InstrumentPose::from_euler_xyz(
+                Vector3::new(x[i], x[i + 1], x[i + 2]),
+                [x[i + 3], x[i + 4], x[i + 5]],
+            )
+            .rotation;
             match model.instrument_param_start(TermId::BaseTilt) {
-                Some(t) => metrocell_physics::instrument::base_tilt::levelling(x[t], x[t + 1]).0.transpose() * pose,
+                Some(t) => {
+                    metrocell_physics::instrument::base_tilt::levelling(x[t], x[t + 1])
+                        .0
+                        .transpose()
+                        * pose
+                }
                 None => pose,
             }
         }
@@ -53,11 +67,18 @@ pub fn records_rotation(model: &ForwardModel, x: &[f64], frame: &RecordFrame, si
 }
 
 /// The frame [`record_position`] gives the records' positions in, in words.
-pub fn position_frame(model: &ForwardModel, records: &[MeasurementRecord], frame: &RecordFrame) -> String {
+pub fn position_frame(
+    model: &ForwardModel,
+    records: &[MeasurementRecord],
+    frame: &RecordFrame,
+) -> String {
     let axes = |r: &MeasurementRecord| r.signals.axis_position.iter().all(Option::is_some);
     if records.iter().all(axes) {
         "machine axes".into()
-    } else if records.iter().all(|r| axes(r) || model.nominal_machine_point(&r.q).is_some()) {
+    } else if records
+        .iter()
+        .all(|r| axes(r) || model.nominal_machine_point(&r.q).is_some())
+    {
         "machine frame".into()
     } else {
         match frame {
@@ -81,20 +102,54 @@ pub fn record_position(model: &ForwardModel, r: &MeasurementRecord) -> Vector3<f
 }
 
 impl ResidualView {
-    pub fn new(model: &ForwardModel, x: &[f64], records: &[MeasurementRecord], frame: &RecordFrame) -> Result<Self, PhysicsError> {
-        let problem = PointResiduals::new(model, records).map_err(|b| PhysicsError::InvalidInput { what: format!("record {} ({})", b.index, b.point_id), reason: "covariance is not positive definite".into() })?;
+    pub fn new(
+        model: &ForwardModel,
+        x: &[f64],
+        records: &[MeasurementRecord],
+        frame: &RecordFrame,
+    ) -> Result<Self, PhysicsError> {
+        let problem =
+            PointResiduals::new(model, records).map_err(|b| PhysicsError::InvalidInput {
+                what: format!("record {} ({})", b.index, b.point_id),
+                reason: "covariance is not positive definite".into(),
+            })?;
         let residual = problem.raw_residuals(x)?;
         let mut whitening_v = Vec::with_capacity(records.len());
         let mut colouring = Vec::with_capacity(records.len());
         for r in records {
-            let l = r.covariance.cholesky().map(|c| c.l()).unwrap_or_else(Matrix3::identity);
+            let l = r
+                .covariance
+                .cholesky()
+                .map(|c| c.l())
+                .unwrap_or_else(Matrix3::identity);
             colouring.push(l);
             whitening_v.push(whitening(&r.covariance).unwrap_or_else(Matrix3::identity));
         }
-        let rotations = records.iter().map(|r| records_rotation(model, x, frame, &r.signals)).collect();
+        let rotations = records
+            .iter()
+            .map(|r| records_rotation(model, x, frame, &r.signals))
+            .collect();
         let predicted = problem.predictions(x)?;
-        let line_of_sight = predicted.iter().map(|p| if p.norm() > 0.0 { p.normalize() } else { Vector3::z() }).collect();
-        Ok(Self { residual, whitening: whitening_v, colouring, rotations, position: records.iter().map(|r| record_position(model, r)).collect(), position_frame: position_frame(model, records, frame), time: records.iter().map(|r| r.time).collect(), line_of_sight })
+        let line_of_sight = predicted
+            .iter()
+            .map(|p| {
+                if p.norm() > 0.0 {
+                    p.normalize()
+                } else {
+                    Vector3::z()
+                }
+            })
+            .collect();
+        Ok(Self {
+            residual,
+            whitening: whitening_v,
+            colouring,
+            rotations,
+            position: records.iter().map(|r| record_position(model, r)).collect(),
+            position_frame: position_frame(model, records, frame),
+            time: records.iter().map(|r| r.time).collect(),
+            line_of_sight,
+        })
     }
 
     pub fn len(&self) -> usize {
@@ -109,7 +164,8 @@ impl ResidualView {
     pub fn whitened(&self) -> DVector<f64> {
         let mut b = DVector::zeros(3 * self.len());
         for i in 0..self.len() {
-            b.fixed_rows_mut::<3>(3 * i).copy_from(&(self.whitening[i] * self.residual[i]));
+            b.fixed_rows_mut::<3>(3 * i)
+                .copy_from(&(self.whitening[i] * self.residual[i]));
         }
         b
     }
@@ -121,7 +177,9 @@ impl ResidualView {
 
     /// Whitened rows (3 per record, records frame) back to workpiece-frame metres.
     pub fn to_workpiece_metres(&self, z: &DVector<f64>) -> Vec<Vector3<f64>> {
-        (0..self.len()).map(|i| self.rotations[i] * (self.colouring[i] * z.fixed_rows::<3>(3 * i))).collect()
+        (0..self.len())
+            .map(|i| self.rotations[i] * (self.colouring[i] * z.fixed_rows::<3>(3 * i)))
+            .collect()
     }
 
     /// Rotation of record i's frame into the workpiece frame.
@@ -138,12 +196,20 @@ impl ResidualView {
     /// Residual samples along the workpiece axes for noise tests and localisation, with the
     /// records' conditions (temperatures, air, time since power-on, speed, load). `residual`
     /// gives each record's workpiece-frame residual (m).
-    pub fn samples(&self, records: &[MeasurementRecord], residual: &[Vector3<f64>]) -> Vec<ResidualSample> {
+    pub fn samples(
+        &self,
+        records: &[MeasurementRecord],
+        residual: &[Vector3<f64>],
+    ) -> Vec<ResidualSample> {
         let mut out = Vec::with_capacity(3 * records.len());
         for (i, r) in records.iter().enumerate() {
             let sigma = self.workpiece_sigma(i, &r.covariance);
             let s = &r.signals;
-            let mut conditions: Vec<(String, f64)> = s.temperatures.iter().map(|(n, v)| (format!("temperature.{n}"), *v)).collect();
+            let mut conditions: Vec<(String, f64)> = s
+                .temperatures
+                .iter()
+                .map(|(n, v)| (format!("temperature.{n}"), *v))
+                .collect();
             if let Some(t) = s.air_temperature {
                 conditions.push(("air_temperature".into(), t));
             }
@@ -151,7 +217,14 @@ impl ResidualView {
                 conditions.push(("time_since_power_on".into(), t));
             }
             if s.axis_velocity.iter().all(|v| v.is_some()) {
-                conditions.push(("speed".into(), s.axis_velocity.iter().map(|v| v.unwrap_or(0.0).powi(2)).sum::<f64>().sqrt()));
+                conditions.push((
+                    "speed".into(),
+                    s.axis_velocity
+                        .iter()
+                        .map(|v| v.unwrap_or(0.0).powi(2))
+                        .sum::<f64>()
+                        .sqrt(),
+                ));
             }
             if let Some(f) = s.load_force {
                 conditions.push(("load".into(), f.norm()));

@@ -111,8 +111,28 @@ pub struct Family {
 /// reported as squareness, not as a first-order straightness or an angular error.
 pub fn preference(term: &str) -> usize {
     const ORDER: [&str; 22] = [
-        "squareness", "positioning", "backlash", "pitch_cyclic", "thermal_scale", "thermal_growth", "tracker_warmup", "refraction", "instrument_drift", "time_offset", "tool_offset", "column_bending", "joint_compliance", "joint_backlash",
-        "link_thermal_expansion", "straightness", "compliance", "workpiece_expansion", "frame_misalignment", "rotary_axis_location", "angular", "probe_pretravel",
+        "squareness",
+        "positioning",
+        "backlash",
+        "pitch_cyclic",
+        "thermal_scale",
+        "thermal_growth",
+        "tracker_warmup",
+        "refraction",
+        "instrument_drift",
+        "time_offset",
+        "tool_offset",
+        "column_bending",
+        "joint_compliance",
+        "joint_backlash",
+        "link_thermal_expansion",
+        "straightness",
+        "compliance",
+        "workpiece_expansion",
+        "frame_misalignment",
+        "rotary_axis_location",
+        "angular",
+        "probe_pretravel",
     ];
     ORDER.iter().position(|t| *t == term).unwrap_or(ORDER.len())
 }
@@ -167,7 +187,13 @@ pub struct SelectionOptions {
 
 impl Default for SelectionOptions {
     fn default() -> Self {
-        Self { alpha: 0.01, min_cv_gain: 0.02, max_terms: 3, empirical_margin: 10.0, empirical_margin_relative: 0.02 }
+        Self {
+            alpha: 0.01,
+            min_cv_gain: 0.02,
+            max_terms: 3,
+            empirical_margin: 10.0,
+            empirical_margin_relative: 0.02,
+        }
     }
 }
 
@@ -283,7 +309,11 @@ pub struct Selection {
 }
 
 /// Run the forward selection on single-variant candidates with per-row σ (whitening is r/σ).
-pub fn select(data: &SelectionData, candidates: &[Candidate], options: &SelectionOptions) -> Selection {
+pub fn select(
+    data: &SelectionData,
+    candidates: &[Candidate],
+    options: &SelectionOptions,
+) -> Selection {
     let whiten = |m: &DMatrix<f64>| {
         let mut w = m.clone();
         for (i, mut row) in w.row_iter_mut().enumerate() {
@@ -291,14 +321,29 @@ pub fn select(data: &SelectionData, candidates: &[Candidate], options: &Selectio
         }
         w
     };
-    let whitened = WhitenedData { b: data.residual.component_div(&data.sigma), declared: whiten(&data.declared), folds: data.folds.clone() };
+    let whitened = WhitenedData {
+        b: data.residual.component_div(&data.sigma),
+        declared: whiten(&data.declared),
+        folds: data.folds.clone(),
+    };
     let families: Vec<Family> = candidates
         .iter()
         .map(|c| Family {
             label: c.label.clone(),
             term: c.term.clone(),
             physical: c.physical,
-            variants: vec![Variant { name: String::new(), columns: whiten(&c.columns), parameter_names: c.parameter_names.clone(), units: c.units.clone(), ranges: c.ranges.clone(), usual: c.ranges.clone(), main: Vec::new(), base_values: c.base_values.clone(), profiled: 0, search_multiplicity: 1.0 }],
+            variants: vec![Variant {
+                name: String::new(),
+                columns: whiten(&c.columns),
+                parameter_names: c.parameter_names.clone(),
+                units: c.units.clone(),
+                ranges: c.ranges.clone(),
+                usual: c.ranges.clone(),
+                main: Vec::new(),
+                base_values: c.base_values.clone(),
+                profiled: 0,
+                search_multiplicity: 1.0,
+            }],
             judged_by: None,
         })
         .collect();
@@ -319,7 +364,17 @@ pub fn select(data: &SelectionData, candidates: &[Candidate], options: &Selectio
     };
     let (z0, m0, max0) = stats(&s.heldout_before);
     let (z1, m1, max1) = stats(&s.heldout_after);
-    Selection { chosen: s.chosen, steps: s.steps, heldout_rms_z_before: z0, heldout_rms_z_after: z1, heldout_rms_m_before: m0, heldout_rms_m_after: m1, heldout_max_m_before: max0, heldout_max_m_after: max1, chi2_per_dof_after: s.chi2_per_dof_after }
+    Selection {
+        chosen: s.chosen,
+        steps: s.steps,
+        heldout_rms_z_before: z0,
+        heldout_rms_z_after: z1,
+        heldout_rms_m_before: m0,
+        heldout_rms_m_after: m1,
+        heldout_max_m_before: max0,
+        heldout_max_m_after: max1,
+        chi2_per_dof_after: s.chi2_per_dof_after,
+    }
 }
 
 struct Scored {
@@ -349,13 +404,19 @@ fn f_test(explained: f64, k: usize, ssr: f64, dof: f64) -> f64 {
         return 1.0;
     }
     let f = (explained / k as f64) / (ssr / dof);
-    FisherSnedecor::new(k as f64, dof).map(|d| d.sf(f)).unwrap_or(1.0)
+    FisherSnedecor::new(k as f64, dof)
+        .map(|d| d.sf(f))
+        .unwrap_or(1.0)
 }
 
 /// The joint distance from zero of the parameters `main` (indices into `values`; empty: all), in
 /// σ: the normal score with the same tail probability as their Wald χ² (|v|/σ for one).
 pub fn significance_sigma(values: &[f64], covariance: &DMatrix<f64>, main: &[usize]) -> f64 {
-    let idx: Vec<usize> = if main.is_empty() { (0..values.len()).collect() } else { main.to_vec() };
+    let idx: Vec<usize> = if main.is_empty() {
+        (0..values.len()).collect()
+    } else {
+        main.to_vec()
+    };
     if idx.is_empty() {
         return 0.0;
     }
@@ -370,11 +431,16 @@ pub fn significance_sigma(values: &[f64], covariance: &DMatrix<f64>, main: &[usi
         return chi2.sqrt();
     }
     use statrs::distribution::{ChiSquared, Normal};
-    let p = ChiSquared::new(rank as f64).map(|d| d.sf(chi2)).unwrap_or(1.0);
+    let p = ChiSquared::new(rank as f64)
+        .map(|d| d.sf(chi2))
+        .unwrap_or(1.0);
     if p <= 0.0 {
         return chi2.sqrt();
     }
-    Normal::new(0.0, 1.0).map(|n| n.inverse_cdf(1.0 - p / 2.0)).unwrap_or(0.0).max(0.0)
+    Normal::new(0.0, 1.0)
+        .map(|n| n.inverse_cdf(1.0 - p / 2.0))
+        .unwrap_or(0.0)
+        .max(0.0)
 }
 
 fn bic(n: f64, ssr: f64, k: f64) -> f64 {
@@ -386,7 +452,11 @@ fn bic(n: f64, ssr: f64, k: f64) -> f64 {
 /// data better given the others — a flexible term chosen early that stood in for two effects,
 /// an instrument drifting along x and z where a warm-up and a structure's growth were, gives way
 /// once one of them is in), then backward elimination again.
-pub fn select_families(data: &WhitenedData, families: &[Family], options: &SelectionOptions) -> FamilySelection {
+pub fn select_families(
+    data: &WhitenedData,
+    families: &[Family],
+    options: &SelectionOptions,
+) -> FamilySelection {
     let sel = Selector::new(data, families, options);
     let mut chosen: Vec<(usize, usize)> = Vec::new();
     let mut base = sel.base_of(&chosen);
@@ -438,10 +508,27 @@ impl<'a> Selector<'a> {
         let n = data.b.len();
         let rows = BlockedRows::new(&data.folds, n);
         let b = rows.arrange_vector(&data.b);
-        let arranged = families.iter().map(|f| f.variants.iter().map(|v| rows.arrange(&v.columns)).collect()).collect();
+        let arranged = families
+            .iter()
+            .map(|f| {
+                f.variants
+                    .iter()
+                    .map(|v| rows.arrange(&v.columns))
+                    .collect()
+            })
+            .collect();
         let arranged_declared = rows.arrange(&data.declared);
         let tried = families.iter().map(|f| f.variants.len()).sum();
-        Self { families, options, rows, b, arranged, arranged_declared, n: n as f64, tried }
+        Self {
+            families,
+            options,
+            rows,
+            b,
+            arranged,
+            arranged_declared,
+            n: n as f64,
+            tried,
+        }
     }
 
     /// The declared columns and the chosen variants' columns, fitted.
@@ -449,7 +536,8 @@ impl<'a> Selector<'a> {
         let extra: Vec<&DMatrix<f64>> = chosen.iter().map(|&(f, v)| &self.arranged[f][v]).collect();
         let p = self.arranged_declared.ncols() + extra.iter().map(|c| c.ncols()).sum::<usize>();
         let mut all = DMatrix::zeros(self.b.len(), p);
-        all.columns_mut(0, self.arranged_declared.ncols()).copy_from(&self.arranged_declared);
+        all.columns_mut(0, self.arranged_declared.ncols())
+            .copy_from(&self.arranged_declared);
         let mut at = self.arranged_declared.ncols();
         for c in extra {
             all.columns_mut(at, c.ncols()).copy_from(c);
@@ -459,11 +547,18 @@ impl<'a> Selector<'a> {
     }
 
     fn profiled_of(&self, chosen: &[(usize, usize)]) -> usize {
-        chosen.iter().map(|&(f, v)| self.families[f].variants[v].profiled).sum()
+        chosen
+            .iter()
+            .map(|&(f, v)| self.families[f].variants[v].profiled)
+            .sum()
     }
 
     fn bic_of(&self, base: &BaseFit, chosen: &[(usize, usize)]) -> f64 {
-        bic(self.n, base.ssr(), (base.rank() + self.profiled_of(chosen)) as f64)
+        bic(
+            self.n,
+            base.ssr(),
+            (base.rank() + self.profiled_of(chosen)) as f64,
+        )
     }
 
     /// The held-out error on the blocking schemes that judge a family.
@@ -482,23 +577,81 @@ impl<'a> Selector<'a> {
         let c: CandidateFit = base.candidate(&self.rows, &self.arranged[fi][vi]);
         let k = var.columns.ncols();
         let dof = nf - c.rank as f64;
-        let sigma2 = if dof > 0.0 { c.ssr / dof } else { f64::INFINITY };
+        let sigma2 = if dof > 0.0 {
+            c.ssr / dof
+        } else {
+            f64::INFINITY
+        };
         let values: Vec<f64> = (0..k).map(|j| var.base_values[j] + c.values[j]).collect();
-        let sigmas: Vec<f64> = (0..k).map(|j| (c.unscaled_covariance[(j, j)].max(0.0) * sigma2).sqrt()).collect();
-        let p = if c.separable { f_test(c.explained, k, c.ssr, dof) } else { 1.0 };
+        let sigmas: Vec<f64> = (0..k)
+            .map(|j| (c.unscaled_covariance[(j, j)].max(0.0) * sigma2).sqrt())
+            .collect();
+        let p = if c.separable {
+            f_test(c.explained, k, c.ssr, dof)
+        } else {
+            1.0
+        };
         let p_adjusted = (p * self.tried as f64 * var.search_multiplicity.max(1.0)).min(1.0);
-        let plausible = values.iter().zip(&var.ranges).all(|(v, (lo, hi))| *v >= *lo && *v <= *hi);
-        let usual = values.iter().zip(&var.usual).all(|(v, (lo, hi))| *v >= *lo && *v <= *hi);
-        let significance = significance_sigma(&c.values.iter().copied().collect::<Vec<_>>(), &(&c.unscaled_covariance * sigma2), &var.main);
-        let bic_with = bic(nf, c.ssr, (c.rank + self.profiled_of(chosen) + var.profiled) as f64) + 2.0 * var.search_multiplicity.max(1.0).ln();
+        let plausible = values
+            .iter()
+            .zip(&var.ranges)
+            .all(|(v, (lo, hi))| *v >= *lo && *v <= *hi);
+        let usual = values
+            .iter()
+            .zip(&var.usual)
+            .all(|(v, (lo, hi))| *v >= *lo && *v <= *hi);
+        let significance = significance_sigma(
+            &c.values.iter().copied().collect::<Vec<_>>(),
+            &(&c.unscaled_covariance * sigma2),
+            &var.main,
+        );
+        let bic_with = bic(
+            nf,
+            c.ssr,
+            (c.rank + self.profiled_of(chosen) + var.profiled) as f64,
+        ) + 2.0 * var.search_multiplicity.max(1.0).ln();
         let delta_bic = bic_with - self.bic_of(base, chosen);
-        let (cv_with, cv_without) = (Self::judged(&fam.judged_by, &c.heldout_by_scheme), Self::judged(&fam.judged_by, &base.heldout_by_scheme()));
-        let heldout_gain = if cv_without > 0.0 { 1.0 - cv_with / cv_without } else { 0.0 };
-        let supported = c.separable && p_adjusted <= self.options.alpha && delta_bic < 0.0 && heldout_gain >= self.options.min_cv_gain && significance >= MIN_SIGNIFICANCE_SIGMA;
+        let (cv_with, cv_without) = (
+            Self::judged(&fam.judged_by, &c.heldout_by_scheme),
+            Self::judged(&fam.judged_by, &base.heldout_by_scheme()),
+        );
+        let heldout_gain = if cv_without > 0.0 {
+            1.0 - cv_with / cv_without
+        } else {
+            0.0
+        };
+        let supported = c.separable
+            && p_adjusted <= self.options.alpha
+            && delta_bic < 0.0
+            && heldout_gain >= self.options.min_cv_gain
+            && significance >= MIN_SIGNIFICANCE_SIGMA;
         let accepted = supported && plausible;
-        let score = CandidateScore { label: fam.label.clone(), variant: var.name.clone(), heldout_ssr: c.heldout_ssr, heldout_gain, wald_p_adjusted: p_adjusted, plausible, usual, significance_sigma: significance, supported, separable: c.separable, delta_bic, values, sigmas, accepted };
-        let effect = base.project_out(&(&self.arranged[fi][vi] * DVector::from_iterator(k, (0..k).map(|j| c.values[j]))));
-        Scored { family: fi, variant: vi, bic: bic_with, score, effect }
+        let score = CandidateScore {
+            label: fam.label.clone(),
+            variant: var.name.clone(),
+            heldout_ssr: c.heldout_ssr,
+            heldout_gain,
+            wald_p_adjusted: p_adjusted,
+            plausible,
+            usual,
+            significance_sigma: significance,
+            supported,
+            separable: c.separable,
+            delta_bic,
+            values,
+            sigmas,
+            accepted,
+        };
+        let effect = base.project_out(
+            &(&self.arranged[fi][vi] * DVector::from_iterator(k, (0..k).map(|j| c.values[j]))),
+        );
+        Scored {
+            family: fi,
+            variant: vi,
+            bic: bic_with,
+            score,
+            effect,
+        }
     }
 
     /// Every family not chosen, by its representative variant: its acceptable variant of lowest
@@ -510,7 +663,17 @@ impl<'a> Selector<'a> {
                 continue;
             }
             let rank = |s: &CandidateScore| (s.accepted, s.supported);
-            let best = (0..fam.variants.len()).map(|vi| self.score(base, chosen, fi, vi)).reduce(|b, s| if rank(&s.score) > rank(&b.score) || (rank(&s.score) == rank(&b.score) && s.bic < b.bic) { s } else { b });
+            let best = (0..fam.variants.len())
+                .map(|vi| self.score(base, chosen, fi, vi))
+                .reduce(|b, s| {
+                    if rank(&s.score) > rank(&b.score)
+                        || (rank(&s.score) == rank(&b.score) && s.bic < b.bic)
+                    {
+                        s
+                    } else {
+                        b
+                    }
+                });
             out.extend(best);
         }
         out
@@ -520,19 +683,48 @@ impl<'a> Selector<'a> {
     /// within [`TIE_BIC`], or confounded within [`CONFOUNDED_BIC`] — resolved by convention.
     fn best_of<'s>(&self, per_family: &'s [Scored], physical: bool) -> Option<&'s Scored> {
         let families = self.families;
-        let accepted: Vec<&Scored> = per_family.iter().filter(|s| s.score.accepted && families[s.family].physical == physical).collect();
+        let accepted: Vec<&Scored> = per_family
+            .iter()
+            .filter(|s| s.score.accepted && families[s.family].physical == physical)
+            .collect();
         let lowest = *accepted.iter().min_by(|a, b| a.bic.total_cmp(&b.bic))?;
-        let size = |s: &Scored| families[s.family].variants[s.variant].columns.ncols() + families[s.family].variants[s.variant].profiled;
-        let tied = |s: &Scored| s.bic <= lowest.bic + TIE_BIC || (s.bic <= lowest.bic + CONFOUNDED_BIC && correlation(&s.effect, &lowest.effect).abs() > CONFOUNDED_CORRELATION);
-        accepted.into_iter().filter(|s| tied(s)).min_by(|a, b| preference(&families[a.family].term).cmp(&preference(&families[b.family].term)).then(size(a).cmp(&size(b))).then(a.bic.total_cmp(&b.bic)))
+        let size = |s: &Scored| {
+            families[s.family].variants[s.variant].columns.ncols()
+                + families[s.family].variants[s.variant].profiled
+        };
+        let tied = |s: &Scored| {
+            s.bic <= lowest.bic + TIE_BIC
+                || (s.bic <= lowest.bic + CONFOUNDED_BIC
+                    && correlation(&s.effect, &lowest.effect).abs() > CONFOUNDED_CORRELATION)
+        };
+        accepted.into_iter().filter(|s| tied(s)).min_by(|a, b| {
+            preference(&families[a.family].term)
+                .cmp(&preference(&families[b.family].term))
+                .then(size(a).cmp(&size(b)))
+                .then(a.bic.total_cmp(&b.bic))
+        })
     }
 
     /// One forward step from `base` (holding `chosen`).
     fn forward_step(&self, base: &BaseFit, chosen: &[(usize, usize)]) -> ForwardStep {
         let per_family = self.per_family(base, chosen);
         let options = self.options;
-        let pick = match (self.best_of(&per_family, true), self.best_of(&per_family, false)) {
-            (Some(p), Some(e)) => Some(if e.bic < p.bic - options.empirical_margin.max(options.empirical_margin_relative * p.score.delta_bic.abs()) { e } else { p }),
+        let pick = match (
+            self.best_of(&per_family, true),
+            self.best_of(&per_family, false),
+        ) {
+            (Some(p), Some(e)) => Some(
+                if e.bic
+                    < p.bic
+                        - options
+                            .empirical_margin
+                            .max(options.empirical_margin_relative * p.score.delta_bic.abs())
+                {
+                    e
+                } else {
+                    p
+                },
+            ),
             (p, e) => p.or(e),
         };
         // a physical candidate the data support better than the pick, refused for impossible
@@ -543,24 +735,51 @@ impl<'a> Selector<'a> {
             .iter()
             .filter(|s| s.score.supported && !s.score.accepted && self.families[s.family].physical)
             .min_by(|a, b| a.bic.total_cmp(&b.bic))
-            .filter(|r| pick.is_none_or(|p| r.bic < p.bic - TIE_BIC && correlation(&r.effect, &p.effect).abs() <= CONFOUNDED_CORRELATION));
+            .filter(|r| {
+                pick.is_none_or(|p| {
+                    r.bic < p.bic - TIE_BIC
+                        && correlation(&r.effect, &p.effect).abs() <= CONFOUNDED_CORRELATION
+                })
+            });
         let pick = if refused.is_some() { None } else { pick };
         let alternatives: Vec<StepAlternative> = match pick {
             None => Vec::new(),
             Some(p) => per_family
                 .iter()
-                .filter(|s| s.family != p.family && s.score.accepted && self.families[s.family].physical == self.families[p.family].physical)
+                .filter(|s| {
+                    s.family != p.family
+                        && s.score.accepted
+                        && self.families[s.family].physical == self.families[p.family].physical
+                })
                 .filter_map(|s| {
                     let correlation = correlation(&s.effect, &p.effect);
                     let delta_bic = s.bic - p.bic;
-                    (delta_bic < TIE_BIC || correlation.abs() > CONFOUNDED_CORRELATION).then_some(StepAlternative { family: s.family, variant: s.variant, delta_bic, correlation })
+                    (delta_bic < TIE_BIC || correlation.abs() > CONFOUNDED_CORRELATION).then_some(
+                        StepAlternative {
+                            family: s.family,
+                            variant: s.variant,
+                            delta_bic,
+                            correlation,
+                        },
+                    )
                 })
                 .collect(),
         };
-        let (chosen_family, chosen_variant) = (pick.map(|p| p.family), pick.map_or(0, |p| p.variant));
+        let (chosen_family, chosen_variant) =
+            (pick.map(|p| p.family), pick.map_or(0, |p| p.variant));
         let refused = refused.map(|r| r.family);
-        let step = SelectionStep { heldout_ssr_before: base.heldout_ssr(), scores: per_family.into_iter().map(|s| s.score).collect(), chosen: chosen_family, refused, alternatives };
-        ForwardStep { step, chosen: chosen_family, chosen_variant }
+        let step = SelectionStep {
+            heldout_ssr_before: base.heldout_ssr(),
+            scores: per_family.into_iter().map(|s| s.score).collect(),
+            chosen: chosen_family,
+            refused,
+            alternatives,
+        };
+        ForwardStep {
+            step,
+            chosen: chosen_family,
+            chosen_variant,
+        }
     }
 
     /// Backward elimination: each chosen term tested given all the others (F test, Bonferroni
@@ -571,14 +790,27 @@ impl<'a> Selector<'a> {
         while !chosen.is_empty() {
             let mut worst: Option<(usize, f64)> = None;
             for i in 0..chosen.len() {
-                let others: Vec<(usize, usize)> = chosen.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, c)| *c).collect();
+                let others: Vec<(usize, usize)> = chosen
+                    .iter()
+                    .enumerate()
+                    .filter(|(j, _)| *j != i)
+                    .map(|(_, c)| *c)
+                    .collect();
                 let without = self.base_of(&others);
                 let (f, v) = chosen[i];
                 let c = without.candidate(&self.rows, &self.arranged[f][v]);
                 let dof = self.n - c.rank as f64;
-                let p = if c.separable { (f_test(c.explained, self.arranged[f][v].ncols(), c.ssr, dof) * chosen.len() as f64).min(1.0) } else { 1.0 };
+                let p = if c.separable {
+                    (f_test(c.explained, self.arranged[f][v].ncols(), c.ssr, dof)
+                        * chosen.len() as f64)
+                        .min(1.0)
+                } else {
+                    1.0
+                };
                 let by = &self.families[f].judged_by;
-                let cv_ok = Self::judged(by, &c.heldout_by_scheme) <= Self::judged(by, &without.heldout_by_scheme()) * (1.0 - self.options.min_cv_gain);
+                let cv_ok = Self::judged(by, &c.heldout_by_scheme)
+                    <= Self::judged(by, &without.heldout_by_scheme())
+                        * (1.0 - self.options.min_cv_gain);
                 let p = if cv_ok { p } else { 1.0 };
                 if p > self.options.alpha && worst.is_none_or(|(_, wp)| p > wp) {
                     worst = Some((i, p));
@@ -602,16 +834,31 @@ impl<'a> Selector<'a> {
             let current = self.bic_of(&self.base_of(chosen), chosen);
             let mut best: Option<(usize, Scored)> = None;
             for i in 0..chosen.len() {
-                let others: Vec<(usize, usize)> = chosen.iter().enumerate().filter(|(j, _)| *j != i).map(|(_, c)| *c).collect();
+                let others: Vec<(usize, usize)> = chosen
+                    .iter()
+                    .enumerate()
+                    .filter(|(j, _)| *j != i)
+                    .map(|(_, c)| *c)
+                    .collect();
                 let base = self.base_of(&others);
                 let physical = self.families[chosen[i].0].physical;
                 // a term at usual values gives way to one at unusual values only on decisive
                 // evidence: a linear positioning error at a near-constant temperature is also a
                 // scale expanding with that temperature's small drift, at an α no machine has
-                let incumbent_usual = self.score(&base, &others, chosen[i].0, chosen[i].1).score.usual;
+                let incumbent_usual = self
+                    .score(&base, &others, chosen[i].0, chosen[i].1)
+                    .score
+                    .usual;
                 for s in self.per_family(&base, chosen) {
-                    let margin = if incumbent_usual && !s.score.usual { DECISIVE_BIC } else { TIE_BIC };
-                    if !s.score.accepted || self.families[s.family].physical != physical || s.bic >= current - margin {
+                    let margin = if incumbent_usual && !s.score.usual {
+                        DECISIVE_BIC
+                    } else {
+                        TIE_BIC
+                    };
+                    if !s.score.accepted
+                        || self.families[s.family].physical != physical
+                        || s.bic >= current - margin
+                    {
                         continue;
                     }
                     if best.as_ref().is_none_or(|(_, b)| s.bic < b.bic) {
@@ -620,7 +867,10 @@ impl<'a> Selector<'a> {
                 }
             }
             let Some((i, s)) = best else { break };
-            out.push((self.families[chosen[i].0].label.clone(), self.families[s.family].label.clone()));
+            out.push((
+                self.families[chosen[i].0].label.clone(),
+                self.families[s.family].label.clone(),
+            ));
             chosen[i] = (s.family, s.variant);
         }
         out
@@ -629,7 +879,16 @@ impl<'a> Selector<'a> {
     /// The selection's outcome: the chosen terms' parameters from the full-data fit of
     /// everything chosen, and the held-out figures before and after.
     #[allow(clippy::too_many_arguments)]
-    fn outcome(&self, data: &WhitenedData, chosen: Vec<(usize, usize)>, steps: Vec<SelectionStep>, dropped: Vec<String>, swapped: Vec<(String, String)>, before_fit: &BaseFit, base: &BaseFit) -> FamilySelection {
+    fn outcome(
+        &self,
+        data: &WhitenedData,
+        chosen: Vec<(usize, usize)>,
+        steps: Vec<SelectionStep>,
+        dropped: Vec<String>,
+        swapped: Vec<(String, String)>,
+        before_fit: &BaseFit,
+        base: &BaseFit,
+    ) -> FamilySelection {
         let x = base.solution();
         let dof = (self.n - base.rank() as f64).max(1.0);
         let sigma2 = base.ssr() / dof;
@@ -640,11 +899,31 @@ impl<'a> Selector<'a> {
             let fam = &self.families[f];
             let var = &fam.variants[v];
             let k = var.columns.ncols();
-            let parameters = (0..k).map(|j| (var.parameter_names[j].clone(), var.base_values[j] + x[col + j], (cov[(col + j, col + j)].max(0.0) * sigma2).sqrt(), var.units[j].clone())).collect();
-            chosen_terms.push(ChosenTerm { candidate: f, variant: v, label: fam.label.clone(), term: fam.term.clone(), physical: fam.physical, parameters });
+            let parameters = (0..k)
+                .map(|j| {
+                    (
+                        var.parameter_names[j].clone(),
+                        var.base_values[j] + x[col + j],
+                        (cov[(col + j, col + j)].max(0.0) * sigma2).sqrt(),
+                        var.units[j].clone(),
+                    )
+                })
+                .collect();
+            chosen_terms.push(ChosenTerm {
+                candidate: f,
+                variant: v,
+                label: fam.label.clone(),
+                term: fam.term.clone(),
+                physical: fam.physical,
+                parameters,
+            });
             col += k;
         }
-        let restore = |v: Vec<DVector<f64>>| v.iter().map(|e| self.rows.restore_vector(e)).collect::<Vec<_>>();
+        let restore = |v: Vec<DVector<f64>>| {
+            v.iter()
+                .map(|e| self.rows.restore_vector(e))
+                .collect::<Vec<_>>()
+        };
         FamilySelection {
             chosen: chosen_terms,
             steps,

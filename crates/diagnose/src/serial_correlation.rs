@@ -45,7 +45,13 @@ pub struct SerialCovariance {
 /// The sandwich covariance of the least-squares solution with whitened columns `a` (3 rows per
 /// record, records in any order), whitened residuals `e` at the solution, `bread` = (AᵀA)⁺ and
 /// `times` one per record; `rank` of the fit. None with fewer than 8 records.
-pub fn sandwich(a: &DMatrix<f64>, e: &DVector<f64>, bread: &DMatrix<f64>, times: &[f64], rank: usize) -> Option<SerialCovariance> {
+pub fn sandwich(
+    a: &DMatrix<f64>,
+    e: &DVector<f64>,
+    bread: &DMatrix<f64>,
+    times: &[f64],
+    rank: usize,
+) -> Option<SerialCovariance> {
     let n = times.len();
     let p = a.ncols();
     if n < 8 || a.nrows() != 3 * n || e.len() != 3 * n || p == 0 {
@@ -66,7 +72,11 @@ pub fn sandwich(a: &DMatrix<f64>, e: &DVector<f64>, bread: &DMatrix<f64>, times:
     }
     let rows = 3 * n;
     let dof = rows.saturating_sub(rank).max(1);
-    Some(SerialCovariance { covariance: s * (rows as f64 / dof as f64), blocks, lag_blocks })
+    Some(SerialCovariance {
+        covariance: s * (rows as f64 / dof as f64),
+        blocks,
+        lag_blocks,
+    })
 }
 
 /// Cells per axis of the workspace grid the scores are clustered on by [`by_place`].
@@ -79,20 +89,44 @@ pub const PLACE_CELLS: usize = 16;
 /// time the program returns there, so it correlates residuals across the whole recording, not
 /// within a stretch of time: the clusters by place see it where blocks of time cannot. None with
 /// fewer than 8 occupied cells.
-pub fn by_place(a: &DMatrix<f64>, e: &DVector<f64>, bread: &DMatrix<f64>, positions: &[nalgebra::Vector3<f64>], rank: usize) -> Option<DMatrix<f64>> {
+pub fn by_place(
+    a: &DMatrix<f64>,
+    e: &DVector<f64>,
+    bread: &DMatrix<f64>,
+    positions: &[nalgebra::Vector3<f64>],
+    rank: usize,
+) -> Option<DMatrix<f64>> {
     let n = positions.len();
     let p = a.ncols();
     if n < 8 || a.nrows() != 3 * n || e.len() != 3 * n || p == 0 {
         return None;
     }
-    let (lo, hi) = positions.iter().fold((nalgebra::Vector3::repeat(f64::INFINITY), nalgebra::Vector3::repeat(f64::NEG_INFINITY)), |(l, h), q| (l.inf(q), h.sup(q)));
+    let (lo, hi) = positions.iter().fold(
+        (
+            nalgebra::Vector3::repeat(f64::INFINITY),
+            nalgebra::Vector3::repeat(f64::NEG_INFINITY),
+        ),
+        |(l, h), q| (l.inf(q), h.sup(q)),
+    );
     let size = (hi - lo).max() / PLACE_CELLS as f64;
     let key = |q: &nalgebra::Vector3<f64>| -> [i64; 3] {
-        let c = |k: usize| if size > 0.0 { (((q[k] - lo[k]) / size).floor() as i64).min(PLACE_CELLS as i64 - 1) } else { 0 };
+        let c = |k: usize| {
+            if size > 0.0 {
+                (((q[k] - lo[k]) / size).floor() as i64).min(PLACE_CELLS as i64 - 1)
+            } else {
+                0
+            }
+        };
         [c(0), c(1), c(2)]
     };
     let mut cells: std::collections::BTreeMap<[i64; 3], usize> = std::collections::BTreeMap::new();
-    let cluster: Vec<usize> = positions.iter().map(|q| { let next = cells.len(); *cells.entry(key(q)).or_insert(next) }).collect();
+    let cluster: Vec<usize> = positions
+        .iter()
+        .map(|q| {
+            let next = cells.len();
+            *cells.entry(key(q)).or_insert(next)
+        })
+        .collect();
     let g_count = cells.len();
     if g_count < 8 {
         return None;
@@ -106,7 +140,12 @@ pub fn by_place(a: &DMatrix<f64>, e: &DVector<f64>, bread: &DMatrix<f64>, positi
 /// How far the least-squares solution with columns `a` (residuals `e`, `bread` = (AᵀA)⁺) moves
 /// when the columns `c` are added to the fit (block elimination: δ = (CᵀMC)⁺Cᵀe for the new
 /// coefficients, −P·AᵀC·δ for the old ones, M = I − A·P·Aᵀ). None when `c` adds nothing.
-pub fn shift_if_added(a: &DMatrix<f64>, e: &DVector<f64>, bread: &DMatrix<f64>, c: &DMatrix<f64>) -> Option<DVector<f64>> {
+pub fn shift_if_added(
+    a: &DMatrix<f64>,
+    e: &DVector<f64>,
+    bread: &DMatrix<f64>,
+    c: &DMatrix<f64>,
+) -> Option<DVector<f64>> {
     if c.ncols() == 0 || c.nrows() != a.nrows() {
         return None;
     }
@@ -215,13 +254,22 @@ mod tests {
             (x[0], classical, s.covariance[(0, 0)].sqrt(), s.lag_blocks)
         };
         let (_, c, h, lag) = run(0.0, 1);
-        assert!((h / c - 1.0).abs() < 0.2, "white: sandwich {h} vs classical {c} (lag {lag})");
+        assert!(
+            (h / c - 1.0).abs() < 0.2,
+            "white: sandwich {h} vs classical {c} (lag {lag})"
+        );
         let phi = (-1.0f64 / 10.0).exp();
         let runs: Vec<_> = (0..60).map(|s| run(phi, 100 + s)).collect();
         let spread = (runs.iter().map(|r| r.0 * r.0).sum::<f64>() / runs.len() as f64).sqrt();
         let hac = (runs.iter().map(|r| r.2 * r.2).sum::<f64>() / runs.len() as f64).sqrt();
         let classical = (runs.iter().map(|r| r.1 * r.1).sum::<f64>() / runs.len() as f64).sqrt();
-        assert!(classical < 0.5 * spread, "AR(1): classical {classical} vs spread {spread}");
-        assert!(hac > 0.75 * spread && hac < 1.3 * spread, "AR(1): sandwich {hac} vs spread {spread}");
+        assert!(
+            classical < 0.5 * spread,
+            "AR(1): classical {classical} vs spread {spread}"
+        );
+        assert!(
+            hac > 0.75 * spread && hac < 1.3 * spread,
+            "AR(1): sandwich {hac} vs spread {spread}"
+        );
     }
 }

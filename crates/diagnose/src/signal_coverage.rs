@@ -21,7 +21,10 @@ fn carried(r: &MeasurementRecord) -> BTreeSet<String> {
             out.insert(format!("position of {}", axes[k]));
         }
         if s.approach_direction[k].is_some() {
-            out.insert(format!("approach direction of {} (known once the axis has moved)", axes[k]));
+            out.insert(format!(
+                "approach direction of {} (known once the axis has moved)",
+                axes[k]
+            ));
         }
         if s.axis_velocity[k].is_some_and(f64::is_finite) {
             out.insert(format!("velocity of {}", axes[k]));
@@ -49,7 +52,9 @@ fn carried(r: &MeasurementRecord) -> BTreeSet<String> {
 
 /// Split `records` into those carrying every signal that at least [`REQUIRED_SHARE`] of them
 /// carry, and the rest, each set aside naming the signals it lacks.
-pub fn require_common_signals(records: Vec<MeasurementRecord>) -> (Vec<MeasurementRecord>, Vec<Rejected>) {
+pub fn require_common_signals(
+    records: Vec<MeasurementRecord>,
+) -> (Vec<MeasurementRecord>, Vec<Rejected>) {
     let sets: Vec<BTreeSet<String>> = records.iter().map(carried).collect();
     // the shares are the machine's points' (a reference nest is read with the machine anywhere,
     // and carries no axis signal: only the other signals are required of it)
@@ -66,12 +71,29 @@ pub fn require_common_signals(records: Vec<MeasurementRecord>) -> (Vec<Measureme
         }
     }
     let need = (REQUIRED_SHARE * points as f64).ceil() as usize;
-    let required: Vec<String> = count.into_iter().filter(|&(_, n)| n >= need).map(|(name, _)| name.to_string()).collect();
-    let axis_signal = |n: &str| ["position of ", "approach direction of ", "velocity of ", "rotary position "].iter().any(|p| n.starts_with(p));
+    let required: Vec<String> = count
+        .into_iter()
+        .filter(|&(_, n)| n >= need)
+        .map(|(name, _)| name.to_string())
+        .collect();
+    let axis_signal = |n: &str| {
+        [
+            "position of ",
+            "approach direction of ",
+            "velocity of ",
+            "rotary position ",
+        ]
+        .iter()
+        .any(|p| n.starts_with(p))
+    };
     let (mut kept, mut aside) = (Vec::with_capacity(records.len()), Vec::new());
     for (r, s) in records.into_iter().zip(&sets) {
         let is_reference = reference(&r);
-        let missing: Vec<&str> = required.iter().filter(|n| !s.contains(*n) && !(is_reference && axis_signal(n))).map(String::as_str).collect();
+        let missing: Vec<&str> = required
+            .iter()
+            .filter(|n| !s.contains(*n) && !(is_reference && axis_signal(n)))
+            .map(String::as_str)
+            .collect();
         if missing.is_empty() {
             kept.push(r);
         } else {
@@ -101,18 +123,38 @@ mod tests {
         if temperature {
             signals.temperatures.insert("x_left".into(), 20.0);
         }
-        MeasurementRecord { time: i as f64, point_id: format!("p{i}"), channel: "tracker".into(), q: vec![0.0; 3], measured: Vector3::zeros(), covariance: Matrix3::identity(), signals, kind: RecordKind::Point }
+        MeasurementRecord {
+            time: i as f64,
+            point_id: format!("p{i}"),
+            channel: "tracker".into(),
+            q: vec![0.0; 3],
+            measured: Vector3::zeros(),
+            covariance: Matrix3::identity(),
+            signals,
+            kind: RecordKind::Point,
+        }
     }
 
     #[test]
     fn the_few_records_before_a_signal_starts_are_set_aside_naming_it() {
         // 2 before the first temperature, 1 before the first motion, 97 with both
-        let records: Vec<_> = (0..100).map(|i| record(i, i >= 2, i != 0 && i != 2)).collect();
+        let records: Vec<_> = (0..100)
+            .map(|i| record(i, i >= 2, i != 0 && i != 2))
+            .collect();
         let (kept, aside) = require_common_signals(records);
         assert_eq!(kept.len(), 97);
         assert_eq!(aside.len(), 3);
-        assert!(aside[0].reason.contains("approach direction of x") && aside[0].reason.contains("temperature/x_left"), "{}", aside[0].reason);
-        assert!(aside[1].reason.contains("temperature/x_left") && !aside[1].reason.contains("approach"), "{}", aside[1].reason);
+        assert!(
+            aside[0].reason.contains("approach direction of x")
+                && aside[0].reason.contains("temperature/x_left"),
+            "{}",
+            aside[0].reason
+        );
+        assert!(
+            aside[1].reason.contains("temperature/x_left") && !aside[1].reason.contains("approach"),
+            "{}",
+            aside[1].reason
+        );
     }
 
     #[test]

@@ -44,7 +44,10 @@ pub struct SignalInventory {
 
 /// The RMS over `records` of the gravity torque about each joint variable of `arm` (URDF
 /// inertials, each record's gravity or level); empty when the arm has no masses.
-pub fn gravity_torque_rms(arm: &metrocell_model::SerialArm, records: &[MeasurementRecord]) -> Vec<f64> {
+pub fn gravity_torque_rms(
+    arm: &metrocell_model::SerialArm,
+    records: &[MeasurementRecord],
+) -> Vec<f64> {
     if !arm.chain.joints.iter().any(|j| j.inertial.is_some()) || records.is_empty() {
         return Vec::new();
     }
@@ -52,7 +55,11 @@ pub fn gravity_torque_rms(arm: &metrocell_model::SerialArm, records: &[Measureme
     let mut sum = vec![0.0; arm.chain.dof()];
     let mut n = 0usize;
     for r in records {
-        if let Ok(tau) = metrocell_kinematics::gravity::gravity_torques(&arm.chain, &r.q, &r.signals.gravity.unwrap_or(level)) {
+        if let Ok(tau) = metrocell_kinematics::gravity::gravity_torques(
+            &arm.chain,
+            &r.q,
+            &r.signals.gravity.unwrap_or(level),
+        ) {
             for (s, t) in sum.iter_mut().zip(tau) {
                 *s += t * t;
             }
@@ -74,12 +81,27 @@ impl SignalInventory {
         let all = |f: &dyn Fn(&MeasurementRecord) -> bool| records.iter().all(f);
         for k in 0..3 {
             inv.positions[k] = all(&|r| r.signals.axis_position[k].is_some_and(f64::is_finite));
-            let has = |sign: f64| records.iter().any(|r| r.signals.approach_direction[k] == Some(sign));
-            inv.approach_both[k] = all(&|r| r.signals.approach_direction[k].is_some()) && has(1.0) && has(-1.0);
+            let has = |sign: f64| {
+                records
+                    .iter()
+                    .any(|r| r.signals.approach_direction[k] == Some(sign))
+            };
+            inv.approach_both[k] =
+                all(&|r| r.signals.approach_direction[k].is_some()) && has(1.0) && has(-1.0);
             inv.rotary[k] = all(&|r| r.signals.rotary_position[k].is_some_and(f64::is_finite));
         }
         inv.gravity_measured = all(&|r| r.signals.gravity.is_some());
-        inv.moving = all(&|r| r.signals.axis_velocity.iter().all(|v| v.is_some_and(f64::is_finite))) && records.iter().any(|r| r.signals.axis_velocity.iter().any(|v| v.is_some_and(|v| v.abs() > 1e-6)));
+        inv.moving = all(&|r| {
+            r.signals
+                .axis_velocity
+                .iter()
+                .all(|v| v.is_some_and(f64::is_finite))
+        }) && records.iter().any(|r| {
+            r.signals
+                .axis_velocity
+                .iter()
+                .any(|v| v.is_some_and(|v| v.abs() > 1e-6))
+        });
         let names = |f: &dyn Fn(&MeasurementRecord) -> BTreeSet<String>| -> Vec<String> {
             let mut common = f(&records[0]);
             for r in &records[1..] {
@@ -88,26 +110,59 @@ impl SignalInventory {
             }
             common.into_iter().collect()
         };
-        inv.temperatures = names(&|r| r.signals.temperatures.iter().filter(|(_, v)| v.is_finite()).map(|(n, _)| n.clone()).collect());
+        inv.temperatures = names(&|r| {
+            r.signals
+                .temperatures
+                .iter()
+                .filter(|(_, v)| v.is_finite())
+                .map(|(n, _)| n.clone())
+                .collect()
+        });
         // a history is there when the timeline has a sample of the sensor at or before the instant
         inv.histories = names(&|r| match &r.signals.timeline {
-            Some(tl) => tl.sensors().into_iter().filter(|n| tl.time_span(n).is_some_and(|(first, _)| r.signals.time.is_none_or(|t| first <= t))).collect(),
+            Some(tl) => tl
+                .sensors()
+                .into_iter()
+                .filter(|n| {
+                    tl.time_span(n)
+                        .is_some_and(|(first, _)| r.signals.time.is_none_or(|t| first <= t))
+                })
+                .collect(),
             None => BTreeSet::new(),
         });
-        inv.air = all(&|r| r.signals.air_temperature.is_some() && r.signals.air_pressure.is_some() && r.signals.air_humidity.is_some());
+        inv.air = all(&|r| {
+            r.signals.air_temperature.is_some()
+                && r.signals.air_pressure.is_some()
+                && r.signals.air_humidity.is_some()
+        });
         if all(&|r| r.signals.time_since_power_on.is_some_and(f64::is_finite)) {
-            let (lo, hi) = records.iter().filter_map(|r| r.signals.time_since_power_on).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| (a.min(t), b.max(t)));
+            let (lo, hi) = records
+                .iter()
+                .filter_map(|r| r.signals.time_since_power_on)
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
+                    (a.min(t), b.max(t))
+                });
             inv.power_on = Some((lo, hi));
         }
-        inv.probe_hits = records.iter().any(|r| matches!(r.kind, RecordKind::ProbeHit { .. }));
+        inv.probe_hits = records
+            .iter()
+            .any(|r| matches!(r.kind, RecordKind::ProbeHit { .. }));
         inv.point_readings = records.iter().any(|r| matches!(r.kind, RecordKind::Point));
         if all(&|r| r.signals.time.is_some_and(f64::is_finite)) {
-            let (lo, hi) = records.iter().filter_map(|r| r.signals.time).fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| (a.min(t), b.max(t)));
+            let (lo, hi) = records
+                .iter()
+                .filter_map(|r| r.signals.time)
+                .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), t| {
+                    (a.min(t), b.max(t))
+                });
             if hi > lo {
                 inv.time_span = Some((lo, hi));
             }
         }
-        inv.load = all(&|r| r.signals.load_force.is_some()) && records.iter().any(|r| r.signals.load_force.is_some_and(|f| f.norm() > 0.0));
+        inv.load = all(&|r| r.signals.load_force.is_some())
+            && records
+                .iter()
+                .any(|r| r.signals.load_force.is_some_and(|f| f.norm() > 0.0));
         inv
     }
 }

@@ -27,14 +27,20 @@ const DRIFT_TAU: f64 = 60.0;
 const DRIFT_SIGMA: f64 = 1.0e-6;
 
 fn seeds() -> u64 {
-    std::env::var("METROCELL_COVERAGE_SEEDS").ok().and_then(|s| s.parse().ok()).unwrap_or(24)
+    std::env::var("METROCELL_COVERAGE_SEEDS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(24)
 }
 
 /// An AR(1) drift per workpiece axis sampled at `times` (sorted), stationary from the start.
 fn drift(times: &[f64], seed: u64) -> Vec<Vector3<f64>> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed ^ 0x5eed_d41f);
     // Box–Muller
-    let mut normal = || -> f64 { (-2.0 * (1.0 - rng.random::<f64>()).ln()).sqrt() * (std::f64::consts::TAU * rng.random::<f64>()).cos() };
+    let mut normal = || -> f64 {
+        (-2.0 * (1.0 - rng.random::<f64>()).ln()).sqrt()
+            * (std::f64::consts::TAU * rng.random::<f64>()).cos()
+    };
     let mut z = Vector3::new(normal(), normal(), normal()) * DRIFT_SIGMA;
     let mut last = times.first().copied().unwrap_or(0.0);
     times
@@ -60,7 +66,15 @@ fn found_sigma_covers_the_truth_with_correlated_residuals() {
     let mut z_scores = Vec::new();
     let started = std::time::Instant::now();
     for seed in 0..n {
-        let mut data = twin_records(&truth_text, hours, 1000 + seed, Take { every: 3, ..Take::default() });
+        let mut data = twin_records(
+            &truth_text,
+            hours,
+            1000 + seed,
+            Take {
+                every: 3,
+                ..Take::default()
+            },
+        );
         let times: Vec<f64> = data.records.records.iter().map(|r| r.time).collect();
         let d = drift(&times, seed);
         let rotation = data.cell.tracker.as_ref().unwrap().pose.rotation;
@@ -69,7 +83,10 @@ fn found_sigma_covers_the_truth_with_correlated_residuals() {
         }
         let diagnosis = run(&model_text, &data.records, &DiagnoseOptions::default());
         let Some(f) = diagnosis.report.findings.iter().find(|f| f.label == LABEL) else {
-            eprintln!("seed {seed}: {LABEL} not found: {}", diagnosis.report.summary);
+            eprintln!(
+                "seed {seed}: {LABEL} not found: {}",
+                diagnosis.report.summary
+            );
             continue;
         };
         found += 1;
@@ -79,19 +96,49 @@ fn found_sigma_covers_the_truth_with_correlated_residuals() {
         z_scores.push(z);
         within1 += (z.abs() <= 1.0) as usize;
         within2 += (z.abs() <= 2.0) as usize;
-        let widened = diagnosis.report.uncertainty.widened.get(&format!("{LABEL}.{PARAM}")).copied().unwrap_or(1.0);
+        let widened = diagnosis
+            .report
+            .uncertainty
+            .widened
+            .get(&format!("{LABEL}.{PARAM}"))
+            .copied()
+            .unwrap_or(1.0);
         classical1 += (z.abs() * widened <= 1.0) as usize;
         classical2 += (z.abs() * widened <= 2.0) as usize;
-        eprintln!("seed {seed}: {PARAM} {:.4e} ± {:.2e} (z {z:+.2}, independent rows z {:+.2}); {:?}", p.value, p.sigma.unwrap(), z * widened, diagnosis.report.findings.iter().map(|f| &f.label).collect::<Vec<_>>());
+        eprintln!(
+            "seed {seed}: {PARAM} {:.4e} ± {:.2e} (z {z:+.2}, independent rows z {:+.2}); {:?}",
+            p.value,
+            p.sigma.unwrap(),
+            z * widened,
+            diagnosis
+                .report
+                .findings
+                .iter()
+                .map(|f| &f.label)
+                .collect::<Vec<_>>()
+        );
     }
-    let (r1, r2) = (within1 as f64 / found.max(1) as f64, within2 as f64 / found.max(1) as f64);
+    let (r1, r2) = (
+        within1 as f64 / found.max(1) as f64,
+        within2 as f64 / found.max(1) as f64,
+    );
     let rms_z = (z_scores.iter().map(|z| z * z).sum::<f64>() / z_scores.len().max(1) as f64).sqrt();
-    eprintln!("independent rows: within 1σ {:.3}, 2σ {:.3}", classical1 as f64 / found.max(1) as f64, classical2 as f64 / found.max(1) as f64);
+    eprintln!(
+        "independent rows: within 1σ {:.3}, 2σ {:.3}",
+        classical1 as f64 / found.max(1) as f64,
+        classical2 as f64 / found.max(1) as f64
+    );
     eprintln!("{found} of {n} runs found {LABEL}; within 1σ {r1:.3}, within 2σ {r2:.3}, RMS z {rms_z:.2} ({:.0} s)", started.elapsed().as_secs_f64());
     // the drift hides the reversal from the selection in about a quarter of the runs (a
     // selection matter, not this test's): coverage is judged on the runs that report it
-    assert!(found as f64 >= 0.6 * n as f64, "{LABEL} was found in only {found} of {n} runs");
+    assert!(
+        found as f64 >= 0.6 * n as f64,
+        "{LABEL} was found in only {found} of {n} runs"
+    );
     assert!(r1 >= 0.55, "within 1σ: {r1:.3} (expected ≈ 0.68)");
     assert!(r2 >= 0.88, "within 2σ: {r2:.3} (expected ≈ 0.95)");
-    assert!(r1 <= 0.9, "within 1σ: {r1:.3}: the σ are grossly over-conservative");
+    assert!(
+        r1 <= 0.9,
+        "within 1σ: {r1:.3}: the σ are grossly over-conservative"
+    );
 }

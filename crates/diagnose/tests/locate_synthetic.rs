@@ -13,7 +13,11 @@ const SIGMA: f64 = 5e-6;
 
 /// A serpentine grid over 400 × 300 × 200 mm visited over two hours, x residuals only, with the
 /// x approach direction alternating by row.
-fn samples(seed: u64, noise_scale: f64, effect: impl Fn(&Vector3<f64>, f64, f64) -> f64) -> Vec<ResidualSample> {
+fn samples(
+    seed: u64,
+    noise_scale: f64,
+    effect: impl Fn(&Vector3<f64>, f64, f64) -> f64,
+) -> Vec<ResidualSample> {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut out = Vec::new();
     let mut t = 0.0;
@@ -21,7 +25,11 @@ fn samples(seed: u64, noise_scale: f64, effect: impl Fn(&Vector3<f64>, f64, f64)
         for j in 0..10 {
             for i in 0..10 {
                 let (ii, dir) = if j % 2 == 0 { (i, 1.0) } else { (9 - i, -1.0) };
-                let p = Vector3::new(0.4 * ii as f64 / 9.0, 0.3 * j as f64 / 9.0, 0.2 * k as f64 / 3.0);
+                let p = Vector3::new(
+                    0.4 * ii as f64 / 9.0,
+                    0.3 * j as f64 / 9.0,
+                    0.2 * k as f64 / 3.0,
+                );
                 let noise: f64 = rng.sample::<f64, _>(rand_distr_normal()) * SIGMA * noise_scale;
                 out.push(ResidualSample {
                     channel: "tracker".into(),
@@ -64,23 +72,43 @@ fn null_data_stays_quiet_at_the_stated_rate() {
         if !locate(&s, &options).is_empty() {
             false_structure += 1;
         }
-        if !noise_report(&s, 10).iter().all(|c| c.consistent_with_noise(0.01)) {
+        if !noise_report(&s, 10)
+            .iter()
+            .all(|c| c.consistent_with_noise(0.01))
+        {
             noise_rejections += 1;
         }
     }
     // family-wise α = 0.01 per run: ≤ 5 of 200 allows for chance (binomial 99.5th percentile ≈ 6)
-    assert!(false_structure <= 6, "{false_structure} of {runs} null runs claimed structure");
-    assert!(noise_rejections <= 6, "{noise_rejections} of {runs} null runs rejected the noise model");
+    assert!(
+        false_structure <= 6,
+        "{false_structure} of {runs} null runs claimed structure"
+    );
+    assert!(
+        noise_rejections <= 6,
+        "{noise_rejections} of {runs} null runs rejected the noise model"
+    );
 }
 
 #[test]
 fn understated_noise_is_flagged_by_chi_square_not_taken_for_structure() {
     let s = samples(3, 1.6, |_, _, _| 0.0);
     let report = noise_report(&s, 10);
-    let chi = report[0].tests.iter().find(|t| t.name == "chi_square").unwrap();
-    assert!(chi.p_adjusted < 1e-6 && (report[0].chi2_per_dof - 2.56).abs() < 0.5, "{report:?}");
+    let chi = report[0]
+        .tests
+        .iter()
+        .find(|t| t.name == "chi_square")
+        .unwrap();
+    assert!(
+        chi.p_adjusted < 1e-6 && (report[0].chi2_per_dof - 2.56).abs() < 0.5,
+        "{report:?}"
+    );
     let found = locate(&s, &LocateOptions::default());
-    assert!(found.is_empty(), "{:?}", found.iter().map(|f| f.describe()).collect::<Vec<_>>());
+    assert!(
+        found.is_empty(),
+        "{:?}",
+        found.iter().map(|f| f.describe()).collect::<Vec<_>>()
+    );
 }
 
 #[test]
@@ -90,19 +118,38 @@ fn reversal_error_is_located_by_direction() {
     let s = samples(11, 1.0, |_, dir, _| dir * beta / 2.0);
     let found = locate(&s, &LocateOptions::default());
     let first = found.first().expect("structure found");
-    assert!(matches!(first.place, Place::Direction { axis: 0, .. }), "{}", first.describe());
-    assert!((first.effect_m.abs() - beta / 2.0).abs() < 3.0 * first.effect_sigma_m + 1e-12, "{}", first.describe());
+    assert!(
+        matches!(first.place, Place::Direction { axis: 0, .. }),
+        "{}",
+        first.describe()
+    );
+    assert!(
+        (first.effect_m.abs() - beta / 2.0).abs() < 3.0 * first.effect_sigma_m + 1e-12,
+        "{}",
+        first.describe()
+    );
     assert!(!noise_report(&s, 10)[0].consistent_with_noise(0.01));
 }
 
 #[test]
 fn local_bump_is_located_in_its_region() {
     // a 12 µm bump where x > 0.3 m and y < 0.1 m (a local defect no catalog term has)
-    let s = samples(5, 1.0, |p, _, _| if p.x > 0.3 && p.y < 0.1 { 12e-6 } else { 0.0 });
+    let s = samples(
+        5,
+        1.0,
+        |p, _, _| if p.x > 0.3 && p.y < 0.1 { 12e-6 } else { 0.0 },
+    );
     let found = locate(&s, &LocateOptions::default());
-    let region = found.iter().find(|f| matches!(f.place, Place::Region { .. })).expect("a region");
+    let region = found
+        .iter()
+        .find(|f| matches!(f.place, Place::Region { .. }))
+        .expect("a region");
     match region.place {
-        Place::Region { axis, from, to } => assert!((axis == 0 && from >= 0.25) || (axis == 1 && to <= 0.11), "{}", region.describe()),
+        Place::Region { axis, from, to } => assert!(
+            (axis == 0 && from >= 0.25) || (axis == 1 && to <= 0.11),
+            "{}",
+            region.describe()
+        ),
         _ => unreachable!(),
     }
 }
@@ -112,8 +159,17 @@ fn thermal_drift_is_located_in_time_and_by_temperature() {
     // 4 µm per K of the scale temperature, which rises 2 K over the run: a drift in time
     let s = samples(8, 1.0, |_, _, t| 4e-6 * 2.0 * (t / 7200.0));
     let found = locate(&s, &LocateOptions::default());
-    assert!(found.iter().any(|f| matches!(f.place, Place::TimeWindow { .. })));
-    let corr = found.iter().find(|f| matches!(&f.place, Place::Correlation { name } if name == "temperature.x_scale")).expect("correlated with temperature");
+    assert!(found
+        .iter()
+        .any(|f| matches!(f.place, Place::TimeWindow { .. })));
+    let corr = found
+        .iter()
+        .find(|f| matches!(&f.place, Place::Correlation { name } if name == "temperature.x_scale"))
+        .expect("correlated with temperature");
     // effect across one standard deviation of T (2 K span uniform → σ_T ≈ 0.577 K): ≈ 2.3 µm
-    assert!((corr.effect_m - 4e-6 * 2.0 / 12f64.sqrt()).abs() < 3.0 * corr.effect_sigma_m, "{}", corr.describe());
+    assert!(
+        (corr.effect_m - 4e-6 * 2.0 / 12f64.sqrt()).abs() < 3.0 * corr.effect_sigma_m,
+        "{}",
+        corr.describe()
+    );
 }

@@ -25,8 +25,28 @@ fn bags() -> std::path::PathBuf {
 fn records(csv: &str) -> RecordSet {
     let mut lines = csv.lines();
     let header: Vec<&str> = lines.next().unwrap().split(',').collect();
-    let col = |name: &str| header.iter().position(|h| *h == name).unwrap_or_else(|| panic!("{name} not in {header:?}"));
-    let (t, xn, yn, zn, x, y, z, u95, bed, air, dx, dy, dz, id) = (col("Time [s]"), col("Xnom [mm]"), col("Ynom [mm]"), col("Znom [mm]"), col("X [mm]"), col("Y [mm]"), col("Z [mm]"), col("U95 [mm]"), col("T_bed [C]"), col("T_air [C]"), col("Dir X"), col("Dir Y"), col("Dir Z"), col("PointID"));
+    let col = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .unwrap_or_else(|| panic!("{name} not in {header:?}"))
+    };
+    let (t, xn, yn, zn, x, y, z, u95, bed, air, dx, dy, dz, id) = (
+        col("Time [s]"),
+        col("Xnom [mm]"),
+        col("Ynom [mm]"),
+        col("Znom [mm]"),
+        col("X [mm]"),
+        col("Y [mm]"),
+        col("Z [mm]"),
+        col("U95 [mm]"),
+        col("T_bed [C]"),
+        col("T_air [C]"),
+        col("Dir X"),
+        col("Dir Y"),
+        col("Dir Z"),
+        col("PointID"),
+    );
     let mut out = Vec::new();
     for line in lines {
         let f: Vec<&str> = line.split(',').collect();
@@ -37,18 +57,41 @@ fn records(csv: &str) -> RecordSet {
         s.axis_position = [Some(nominal.x), Some(nominal.y), Some(nominal.z)];
         s.approach_direction = [Some(v(dx)), Some(v(dy)), Some(v(dz))];
         s.temperatures = BTreeMap::from([("bed".to_string(), v(bed)), ("air".to_string(), v(air))]);
-        out.push(MeasurementRecord { time: 1_741_073_400.0 + v(t), point_id: f[id].to_string(), channel: "numpy_export".into(), kind: RecordKind::Point, q: nominal.iter().copied().collect(), measured: Vector3::new(v(x), v(y), v(z)) * 1e-3, covariance: Matrix3::identity() * sigma * sigma, signals: s });
+        out.push(MeasurementRecord {
+            time: 1_741_073_400.0 + v(t),
+            point_id: f[id].to_string(),
+            channel: "numpy_export".into(),
+            kind: RecordKind::Point,
+            q: nominal.iter().copied().collect(),
+            measured: Vector3::new(v(x), v(y), v(z)) * 1e-3,
+            covariance: Matrix3::identity() * sigma * sigma,
+            signals: s,
+        });
     }
-    RecordSet { check: Vec::new(), frame: RecordFrame::Machine, records: out, rejected: vec![], sources: vec![] }
+    RecordSet {
+        check: Vec::new(),
+        frame: RecordFrame::Machine,
+        records: out,
+        rejected: vec![],
+        sources: vec![],
+    }
 }
 
 #[test]
 fn numpy_exports_are_diagnosed() {
     let dir = std::env::temp_dir().join(format!("metrocell_numpy_exports_{}", std::process::id()));
-    let status = std::process::Command::new(python()).arg(bags().join("make_exports.py")).arg("--out").arg(&dir).arg("--seed").arg("3").status().expect("run the generator");
+    let status = std::process::Command::new(python())
+        .arg(bags().join("make_exports.py"))
+        .arg("--out")
+        .arg(&dir)
+        .arg("--seed")
+        .arg("3")
+        .status()
+        .expect("run the generator");
     assert!(status.success());
     let model = std::fs::read_to_string(bags().join("model.yaml")).unwrap();
-    let truth: serde_json::Value = serde_json::from_str(&std::fs::read_to_string(dir.join("truth.json")).unwrap()).unwrap();
+    let truth: serde_json::Value =
+        serde_json::from_str(&std::fs::read_to_string(dir.join("truth.json")).unwrap()).unwrap();
     for variant in ["scale", "reversal", "null", "null_t"] {
         let data = records(&std::fs::read_to_string(dir.join(format!("{variant}.csv"))).unwrap());
         let d = common::run(&model, &data, &DiagnoseOptions::default());
@@ -60,17 +103,52 @@ fn numpy_exports_are_diagnosed() {
                 assert!(!d.report.findings.is_empty(), "{variant}: nothing found");
                 let f = &d.report.findings[0];
                 assert_eq!(f.label, label, "{variant}");
-                assert_eq!(d.report.findings.len(), 1, "{variant}: also claimed {:?}", d.report.findings.iter().map(|f| &f.label).collect::<Vec<_>>());
+                assert_eq!(
+                    d.report.findings.len(),
+                    1,
+                    "{variant}: also claimed {:?}",
+                    d.report
+                        .findings
+                        .iter()
+                        .map(|f| &f.label)
+                        .collect::<Vec<_>>()
+                );
                 for (name, value) in t["parameters"].as_object().unwrap() {
                     let p = &f.parameters[name];
                     let want = value.as_f64().unwrap();
-                    assert!((p.value - want).abs() < 3.0 * p.sigma.unwrap(), "{variant}: {name} = {} ± {:?}, truth {want}", p.value, p.sigma);
+                    assert!(
+                        (p.value - want).abs() < 3.0 * p.sigma.unwrap(),
+                        "{variant}: {name} = {} ± {:?}, truth {want}",
+                        p.value,
+                        p.sigma
+                    );
                 }
-                assert!(d.report.after.heldout_rms_m < 1.2 * d.report.noise_rms_m, "{variant}: after {:e} vs floor {:e}", d.report.after.heldout_rms_m, d.report.noise_rms_m);
+                assert!(
+                    d.report.after.heldout_rms_m < 1.2 * d.report.noise_rms_m,
+                    "{variant}: after {:e} vs floor {:e}",
+                    d.report.after.heldout_rms_m,
+                    d.report.noise_rms_m
+                );
             }
             None => {
-                assert!(d.report.findings.is_empty(), "{variant}: claimed {:?}", d.report.findings.iter().map(|f| &f.label).collect::<Vec<_>>());
-                assert!(d.report.unexplained.is_empty(), "{variant}: {:?}", d.report.unexplained.iter().map(|u| &u.statement).collect::<Vec<_>>());
+                assert!(
+                    d.report.findings.is_empty(),
+                    "{variant}: claimed {:?}",
+                    d.report
+                        .findings
+                        .iter()
+                        .map(|f| &f.label)
+                        .collect::<Vec<_>>()
+                );
+                assert!(
+                    d.report.unexplained.is_empty(),
+                    "{variant}: {:?}",
+                    d.report
+                        .unexplained
+                        .iter()
+                        .map(|u| &u.statement)
+                        .collect::<Vec<_>>()
+                );
             }
         }
     }
@@ -83,23 +161,47 @@ fn numpy_exports_are_diagnosed() {
 #[test]
 fn stated_uncertainties_off_by_a_factor_change_no_verdict() {
     let dir = std::env::temp_dir().join(format!("metrocell_numpy_factor_{}", std::process::id()));
-    let status = std::process::Command::new(python()).arg(bags().join("make_exports.py")).arg("--out").arg(&dir).arg("--seed").arg("5").arg("--variants").arg("scale").arg("null").status().expect("run the generator");
+    let status = std::process::Command::new(python())
+        .arg(bags().join("make_exports.py"))
+        .arg("--out")
+        .arg(&dir)
+        .arg("--seed")
+        .arg("5")
+        .arg("--variants")
+        .arg("scale")
+        .arg("null")
+        .status()
+        .expect("run the generator");
     assert!(status.success());
     let model = std::fs::read_to_string(bags().join("model.yaml")).unwrap();
     for factor in [2.0, 0.5] {
         for variant in ["scale", "null"] {
-            let mut data = records(&std::fs::read_to_string(dir.join(format!("{variant}.csv"))).unwrap());
-            data.records.iter_mut().for_each(|r| r.covariance *= factor * factor);
+            let mut data =
+                records(&std::fs::read_to_string(dir.join(format!("{variant}.csv"))).unwrap());
+            data.records
+                .iter_mut()
+                .for_each(|r| r.covariance *= factor * factor);
             let d = common::run(&model, &data, &DiagnoseOptions::default());
             eprintln!("--- {variant}, stated σ × {factor}");
             common::show(&d);
             let labels: Vec<&str> = d.report.findings.iter().map(|f| f.label.as_str()).collect();
             match variant {
                 "scale" => assert_eq!(labels, vec!["thermal_scale[x]"], "σ × {factor}"),
-                _ => assert!(labels.is_empty() && d.report.unexplained.is_empty(), "σ × {factor}: {labels:?}"),
+                _ => assert!(
+                    labels.is_empty() && d.report.unexplained.is_empty(),
+                    "σ × {factor}: {labels:?}"
+                ),
             }
-            assert_eq!(d.report.noise.basis, "residual_scatter", "σ × {factor}: {}", d.report.noise.statement);
-            assert!((d.report.noise.scale * factor - 1.0).abs() < 0.15, "σ × {factor}: scale {}", d.report.noise.scale);
+            assert_eq!(
+                d.report.noise.basis, "residual_scatter",
+                "σ × {factor}: {}",
+                d.report.noise.statement
+            );
+            assert!(
+                (d.report.noise.scale * factor - 1.0).abs() < 0.15,
+                "σ × {factor}: scale {}",
+                d.report.noise.scale
+            );
             assert!(d.report.explained, "σ × {factor}: {:?}", d.report.remaining);
         }
     }

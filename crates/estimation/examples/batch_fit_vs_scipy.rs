@@ -35,7 +35,8 @@ const RUNS: usize = 3;
 fn model() -> CellModel {
     let terms = common::xfyz_geometric_terms("[y, z]", "[0 m, 0.05 m, -0.15 m]");
     let text = format!("name: bench\nmachine:\n  family: cartesian\n  stacking: XFYZ\n  travel: {{x: [0 mm, 800 mm], y: [0 mm, 500 mm], z: [0 mm, 400 mm]}}\n  tool_offset: [0 mm, 0 mm, -150 mm]\nsensors:\n  tracker:\n    pose: {{translation: [-0.95 m, 0.3 m, 0.62 m], euler_xyz: [0 deg, 0 deg, 56 deg]}}\n    warmup: {{offset: 0 um, amplitude: 50 um, time_constant: 60 min}}\nterms:\n{terms}");
-    CellModel::from_yaml_str_in(&text, "bench.yaml", std::path::Path::new(".")).expect("bench model")
+    CellModel::from_yaml_str_in(&text, "bench.yaml", std::path::Path::new("."))
+        .expect("bench model")
 }
 
 fn main() {
@@ -53,18 +54,40 @@ fn main() {
         }
     }
     let pose = names.iter().position(|n| n == "tracker_pose.tx").unwrap();
-    truth[pose..pose + 6].copy_from_slice(&[-0.863527, 0.194373, 0.677782, 0.0339f64.to_radians(), 0.0343f64.to_radians(), 59.4652f64.to_radians()]);
-    let w = names.iter().position(|n| n == "tracker_warmup.offset").unwrap();
+    truth[pose..pose + 6].copy_from_slice(&[
+        -0.863527,
+        0.194373,
+        0.677782,
+        0.0339f64.to_radians(),
+        0.0343f64.to_radians(),
+        59.4652f64.to_radians(),
+    ]);
+    let w = names
+        .iter()
+        .position(|n| n == "tracker_warmup.offset")
+        .unwrap();
     truth[w..w + 3].copy_from_slice(&[2e-6, 75e-6, 5400.0]);
     let plan: Vec<Planned> = (0..READINGS)
         .map(|k| {
             let dir = if rng.random::<bool>() { 1.0 } else { -1.0 };
-            Planned { q: vec![rng.random_range(0.0..0.8), rng.random_range(0.0..0.5), rng.random_range(0.0..0.4)], approach: [dir; 3], temperatures: vec![], time_on: 600.0 + 1.5 * k as f64 }
+            Planned {
+                q: vec![
+                    rng.random_range(0.0..0.8),
+                    rng.random_range(0.0..0.5),
+                    rng.random_range(0.0..0.4),
+                ],
+                approach: [dir; 3],
+                temperatures: vec![],
+                time_on: 600.0 + 1.5 * k as f64,
+            }
         })
         .collect();
     let data = records(&fm, &truth, &plan, THESIS_TRACKER, Some(1));
     // the identical, full-rank problem for both: hold what the design cannot separate first
-    let options = FitOptions { loss: Loss::Linear, ..FitOptions::default() };
+    let options = FitOptions {
+        loss: Loss::Linear,
+        ..FitOptions::default()
+    };
     let t = Instant::now();
     let probe = fit(&fm, &m.setup, &data, None, &options).expect("fit");
     let probe_seconds = t.elapsed().as_secs_f64();
@@ -90,12 +113,18 @@ fn main() {
     // `--fit-only N`: only metrocell's fit, N more times, for a profiler (no scipy)
     let args: Vec<String> = std::env::args().collect();
     if let Some(k) = args.iter().position(|a| a == "--fit-only") {
-        let n: usize = args.get(k + 1).and_then(|v| v.parse().ok()).expect("--fit-only N");
+        let n: usize = args
+            .get(k + 1)
+            .and_then(|v| v.parse().ok())
+            .expect("--fit-only N");
         let t = Instant::now();
         for _ in 0..n {
             fit(&fm, &setup, &data, Some(x0.clone()), &options).expect("fit");
         }
-        println!("{n} more fits: {:.3} s each", t.elapsed().as_secs_f64() / n as f64);
+        println!(
+            "{n} more fits: {:.3} s each",
+            t.elapsed().as_secs_f64() / n as f64
+        );
         if args.iter().any(|a| a == "--no-evaluations") {
             return;
         }
@@ -107,24 +136,42 @@ fn main() {
         let t = Instant::now();
         for _ in 0..n {
             let problem = PointResiduals::new(&fm, &data.records).unwrap();
-            problem.residuals_and_jacobian_of(&x0, &mut r, &mut jac, &wanted).unwrap();
+            problem
+                .residuals_and_jacobian_of(&x0, &mut r, &mut jac, &wanted)
+                .unwrap();
         }
-        println!("first residuals + Jacobian (free columns) of a new problem: {:.2} ms", 1e3 * t.elapsed().as_secs_f64() / n as f64);
+        println!(
+            "first residuals + Jacobian (free columns) of a new problem: {:.2} ms",
+            1e3 * t.elapsed().as_secs_f64() / n as f64
+        );
         let t = Instant::now();
         for _ in 0..n {
-            problem.residuals_and_jacobian_of(&x0, &mut r, &mut jac, &wanted).unwrap();
+            problem
+                .residuals_and_jacobian_of(&x0, &mut r, &mut jac, &wanted)
+                .unwrap();
         }
-        println!("residuals + Jacobian (free columns): {:.2} ms each", 1e3 * t.elapsed().as_secs_f64() / n as f64);
+        println!(
+            "residuals + Jacobian (free columns): {:.2} ms each",
+            1e3 * t.elapsed().as_secs_f64() / n as f64
+        );
         let t = Instant::now();
         for _ in 0..n {
-            problem.residuals_and_jacobian(&x0, &mut r, &mut jac).unwrap();
+            problem
+                .residuals_and_jacobian(&x0, &mut r, &mut jac)
+                .unwrap();
         }
-        println!("residuals + Jacobian (all columns): {:.2} ms each", 1e3 * t.elapsed().as_secs_f64() / n as f64);
+        println!(
+            "residuals + Jacobian (all columns): {:.2} ms each",
+            1e3 * t.elapsed().as_secs_f64() / n as f64
+        );
         let t = Instant::now();
         for _ in 0..n {
             problem.residuals(&x0, &mut r).unwrap();
         }
-        println!("residuals alone: {:.2} ms each", 1e3 * t.elapsed().as_secs_f64() / n as f64);
+        println!(
+            "residuals alone: {:.2} ms each",
+            1e3 * t.elapsed().as_secs_f64() / n as f64
+        );
         return;
     }
 
@@ -132,8 +179,14 @@ fn main() {
     // thread (on a shared 2-core machine OpenBLAS's second thread has made scipy's own work 2–3×
     // slower, not faster): the faster of the two is the peer
     let problem = PointResiduals::new(&fm, &data.records).unwrap();
-    let specs: Vec<_> = fm.machine_terms.param_specs().into_iter().chain(fm.instrument_terms.param_specs()).collect();
-    let session = |threads: Option<&str>| scipy_session(&python, threads, &problem, &x0, &free, &specs);
+    let specs: Vec<_> = fm
+        .machine_terms
+        .param_specs()
+        .into_iter()
+        .chain(fm.instrument_terms.param_specs())
+        .collect();
+    let session =
+        |threads: Option<&str>| scipy_session(&python, threads, &problem, &x0, &free, &specs);
     let one_thread_already = std::env::var("OPENBLAS_NUM_THREADS").is_ok_and(|v| v == "1");
     let mut sessions = vec![("BLAS threads as set", session(None))];
     if !one_thread_already {
@@ -142,7 +195,10 @@ fn main() {
     for (what, s) in &sessions {
         println!("scipy trf, {what} (fastest own work of {RUNS}): {:.3} s ({} evaluations, status {}), of which {:.3} s waiting for metrocell's residuals and Jacobian over the pipe ({:.3} s evaluating them); + its evaluations back to back {:.3} s = whole job {:.3} s", s.seconds, s.evaluations, s.status, s.waiting, s.evaluating, s.tight, s.job());
     }
-    let (what, best) = sessions.iter().min_by(|a, b| a.1.job().total_cmp(&b.1.job())).unwrap();
+    let (what, best) = sessions
+        .iter()
+        .min_by(|a, b| a.1.job().total_cmp(&b.1.job()))
+        .unwrap();
     // the like-for-like job: scipy's own work plus the model evaluations it asked for (as
     // metrocell's fit evaluates the model too), without the pipe's copying of 11 MB Jacobians
     println!("ratio scipy / metrocell: {:.1}× on the whole job (scipy at its faster setting, {what}: own work + its {} model evaluations, {:.3} s back to back = {:.3} s; pipe transfer excluded); {:.1}× on scipy's wall time including the pipe; {:.1}× on scipy's own work alone", best.job() / ours, best.evaluations, best.tight, best.job(), best.seconds / ours, (best.seconds - best.waiting) / ours);
@@ -161,7 +217,12 @@ fn main() {
         }
         worst_sigma = worst_sigma.max(d / sigma);
     }
-    let inf_rel = free.iter().enumerate().map(|(i, &k)| (f.x[k] - xs[i]).abs()).fold(0.0, f64::max) / free.iter().map(|&k| f.x[k].abs()).fold(0.0, f64::max);
+    let inf_rel = free
+        .iter()
+        .enumerate()
+        .map(|(i, &k)| (f.x[k] - xs[i]).abs())
+        .fold(0.0, f64::max)
+        / free.iter().map(|&k| f.x[k].abs()).fold(0.0, f64::max);
     println!("solutions: ‖Δx‖∞/‖x‖∞ = {inf_rel:.2e}; worst parameter {worst_name}: {worst_rel:.2e} of max(|x|, σ); largest difference {worst_sigma:.2e} σ");
 }
 
@@ -188,17 +249,39 @@ impl ScipySession {
 
 /// `scipy_batch_fit.py` on the free parameters of `problem` from `x0`, RUNS times, with
 /// `OPENBLAS_NUM_THREADS` (and OpenMP's) set to `threads` when given.
-fn scipy_session(python: &str, threads: Option<&str>, problem: &PointResiduals, x0: &[f64], free: &[usize], specs: &[metrocell_physics::ParamSpec]) -> ScipySession {
+fn scipy_session(
+    python: &str,
+    threads: Option<&str>,
+    problem: &PointResiduals,
+    x0: &[f64],
+    free: &[usize],
+    specs: &[metrocell_physics::ParamSpec],
+) -> ScipySession {
     let rows = problem.residual_count();
     // the possible range (JSON has no infinity: an unbounded side goes as null)
-    let lower: Vec<Option<f64>> = free.iter().map(|&k| Some(specs[k].possible.lo.min(x0[k])).filter(|v| v.is_finite())).collect();
-    let upper: Vec<Option<f64>> = free.iter().map(|&k| Some(specs[k].possible.hi.max(x0[k])).filter(|v| v.is_finite())).collect();
+    let lower: Vec<Option<f64>> = free
+        .iter()
+        .map(|&k| Some(specs[k].possible.lo.min(x0[k])).filter(|v| v.is_finite()))
+        .collect();
+    let upper: Vec<Option<f64>> = free
+        .iter()
+        .map(|&k| Some(specs[k].possible.hi.max(x0[k])).filter(|v| v.is_finite()))
+        .collect();
     let script = concat!(env!("CARGO_MANIFEST_DIR"), "/examples/scipy_batch_fit.py");
     let mut command = Command::new(python);
     if let Some(t) = threads {
-        command.env("OPENBLAS_NUM_THREADS", t).env("OMP_NUM_THREADS", t);
+        command
+            .env("OPENBLAS_NUM_THREADS", t)
+            .env("OMP_NUM_THREADS", t);
     }
-    let mut child = command.arg(script).stdin(Stdio::piped()).stdout(Stdio::piped()).spawn().unwrap_or_else(|e| panic!("cannot start {python}: {e} (set METROCELL_PYTHON to a python with scipy)"));
+    let mut child = command
+        .arg(script)
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .spawn()
+        .unwrap_or_else(|e| {
+            panic!("cannot start {python}: {e} (set METROCELL_PYTHON to a python with scipy)")
+        });
     let mut to = child.stdin.take().unwrap();
     let mut from = BufReader::new(child.stdout.take().unwrap());
     let head = serde_json::json!({"n": free.len(), "m": rows, "x0": free.iter().map(|&k| x0[k]).collect::<Vec<_>>(), "lower": lower, "upper": upper, "runs": RUNS});
@@ -225,10 +308,13 @@ fn scipy_session(python: &str, threads: Option<&str>, problem: &PointResiduals, 
         }
         let te = Instant::now();
         // the free columns only, as metrocell's fit asks for them (scipy is sent only those)
-        problem.residuals_and_jacobian_of(&x, &mut r, &mut jac, &wanted).unwrap();
+        problem
+            .residuals_and_jacobian_of(&x, &mut r, &mut jac, &wanted)
+            .unwrap();
         ours_eval += te.elapsed().as_secs_f64();
         let mut bytes = Vec::with_capacity(8 * rows * (1 + free.len()));
-        r.iter().for_each(|v| bytes.extend_from_slice(&v.to_le_bytes()));
+        r.iter()
+            .for_each(|v| bytes.extend_from_slice(&v.to_le_bytes()));
         for i in 0..rows {
             for &k in free {
                 bytes.extend_from_slice(&jac[(i, k)].to_le_bytes());
@@ -239,9 +325,18 @@ fn scipy_session(python: &str, threads: Option<&str>, problem: &PointResiduals, 
     };
     child.wait().unwrap();
     // scipy's fastest run, and metrocell's evaluation time per run (the runs ask for the same points)
-    let seconds = |key: &str| -> Vec<f64> { done[key].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect() };
+    let seconds = |key: &str| -> Vec<f64> {
+        done[key]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect()
+    };
     let (runs, waits) = (seconds("seconds"), seconds("evaluation_seconds"));
-    let best = (0..RUNS).min_by(|&a, &b| (runs[a] - waits[a]).total_cmp(&(runs[b] - waits[b]))).unwrap();
+    let best = (0..RUNS)
+        .min_by(|&a, &b| (runs[a] - waits[a]).total_cmp(&(runs[b] - waits[b])))
+        .unwrap();
     // the evaluations charged to scipy are timed back to back, as the fit makes them: between
     // the pipe's 11 MB copies the same evaluation runs slower (caches cold), which would
     // flatter metrocell; the fastest of 3 passes of as many evaluations as scipy made
@@ -250,7 +345,9 @@ fn scipy_session(python: &str, threads: Option<&str>, problem: &PointResiduals, 
         .map(|_| {
             let t = Instant::now();
             for _ in 0..evaluations {
-                problem.residuals_and_jacobian_of(x0, &mut r, &mut jac, &wanted).unwrap();
+                problem
+                    .residuals_and_jacobian_of(x0, &mut r, &mut jac, &wanted)
+                    .unwrap();
             }
             t.elapsed().as_secs_f64()
         })
@@ -262,6 +359,11 @@ fn scipy_session(python: &str, threads: Option<&str>, problem: &PointResiduals, 
         evaluations,
         status: done["status"].clone(),
         tight,
-        x: done["x"].as_array().unwrap().iter().map(|v| v.as_f64().unwrap()).collect(),
+        x: done["x"]
+            .as_array()
+            .unwrap()
+            .iter()
+            .map(|v| v.as_f64().unwrap())
+            .collect(),
     }
 }

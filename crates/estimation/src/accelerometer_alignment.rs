@@ -57,34 +57,68 @@ pub struct AccelerometerAlignment {
 impl AccelerometerAlignment {
     /// δ / σ of each component (the finding's significance).
     pub fn significance(&self) -> Vector2<f64> {
-        Vector2::new(self.alignment.x / self.covariance[(0, 0)].sqrt(), self.alignment.y / self.covariance[(1, 1)].sqrt())
+        Vector2::new(
+            self.alignment.x / self.covariance[(0, 0)].sqrt(),
+            self.alignment.y / self.covariance[(1, 1)].sqrt(),
+        )
     }
 }
 
 /// The tilt (roll, pitch) a specific force `f` implies, its sensor turned into the base by
 /// `base_from_sensor` (module doc); None for a zero or non-finite reading.
-pub fn tilt_from_specific_force(base_from_sensor: &Matrix3<f64>, f: &Vector3<f64>) -> Option<Vector2<f64>> {
+pub fn tilt_from_specific_force(
+    base_from_sensor: &Matrix3<f64>,
+    f: &Vector3<f64>,
+) -> Option<Vector2<f64>> {
     tilt_of_up(&(base_from_sensor * f)).map(|(r, p)| Vector2::new(r, p))
 }
 
 /// The alignment of the arm's base accelerometer from the records' readings and the instrument's
 /// fitted tilt (`tilt`, its covariance `tilt_covariance`). None without a base accelerometer or
 /// with fewer than two of its readings.
-pub fn base_accelerometer_alignment(arm: &SerialArm, records: &[MeasurementRecord], tilt: Vector2<f64>, tilt_covariance: Matrix2<f64>) -> Option<AccelerometerAlignment> {
-    let (sensor, base_from_sensor) = arm.accelerometers.iter().find_map(|a| Some((a.name.clone(), a.base_from_sensor?)))?;
-    let tilts: Vec<Vector2<f64>> = records.iter().filter_map(|r| tilt_from_specific_force(&base_from_sensor, r.signals.accelerations.get(&sensor)?)).collect();
+pub fn base_accelerometer_alignment(
+    arm: &SerialArm,
+    records: &[MeasurementRecord],
+    tilt: Vector2<f64>,
+    tilt_covariance: Matrix2<f64>,
+) -> Option<AccelerometerAlignment> {
+    let (sensor, base_from_sensor) = arm
+        .accelerometers
+        .iter()
+        .find_map(|a| Some((a.name.clone(), a.base_from_sensor?)))?;
+    let tilts: Vec<Vector2<f64>> = records
+        .iter()
+        .filter_map(|r| {
+            tilt_from_specific_force(&base_from_sensor, r.signals.accelerations.get(&sensor)?)
+        })
+        .collect();
     let n = tilts.len();
     if n < 2 {
         return None;
     }
     let mean = tilts.iter().sum::<Vector2<f64>>() / n as f64;
-    let scatter = tilts.iter().map(|t| (t - mean) * (t - mean).transpose()).sum::<Matrix2<f64>>() / (n - 1) as f64;
-    Some(AccelerometerAlignment { sensor, alignment: mean - tilt, covariance: scatter / n as f64 + tilt_covariance, accelerometer_tilt: mean, readings: n })
+    let scatter = tilts
+        .iter()
+        .map(|t| (t - mean) * (t - mean).transpose())
+        .sum::<Matrix2<f64>>()
+        / (n - 1) as f64;
+    Some(AccelerometerAlignment {
+        sensor,
+        alignment: mean - tilt,
+        covariance: scatter / n as f64 + tilt_covariance,
+        accelerometer_tilt: mean,
+        readings: n,
+    })
 }
 
 /// The largest change of a record's prediction (m) when its gravity is the instrument's level
 /// (`tilt`) instead of the accelerometer's — what the alignment does to the fitted model.
-pub fn prediction_effect(model: &ForwardModel, params: &[f64], records: &[MeasurementRecord], tilt: Vector2<f64>) -> Option<f64> {
+pub fn prediction_effect(
+    model: &ForwardModel,
+    params: &[f64],
+    records: &[MeasurementRecord],
+    tilt: Vector2<f64>,
+) -> Option<f64> {
     let levelled: Vec<MeasurementRecord> = records
         .iter()
         .map(|r| {
@@ -95,9 +129,19 @@ pub fn prediction_effect(model: &ForwardModel, params: &[f64], records: &[Measur
             r
         })
         .collect();
-    let as_read = PointResiduals::new(model, records).ok()?.predictions(params).ok()?;
-    let corrected = PointResiduals::new(model, &levelled).ok()?.predictions(params).ok()?;
-    as_read.iter().zip(&corrected).map(|(a, b)| (a - b).norm()).fold(None, |m, d| Some(m.map_or(d, |m: f64| m.max(d))))
+    let as_read = PointResiduals::new(model, records)
+        .ok()?
+        .predictions(params)
+        .ok()?;
+    let corrected = PointResiduals::new(model, &levelled)
+        .ok()?
+        .predictions(params)
+        .ok()?;
+    as_read
+        .iter()
+        .zip(&corrected)
+        .map(|(a, b)| (a - b).norm())
+        .fold(None, |m, d| Some(m.map_or(d, |m: f64| m.max(d))))
 }
 
 #[cfg(test)]
@@ -110,9 +154,13 @@ mod tests {
         for (r, p) in [(0.0, 0.0), (0.012, -0.004), (-0.03, 0.02)] {
             let level_from_base = rx(r) * ry(p);
             // specific force = −gravity, in the base frame, of a sensor aligned with the base
-            let f = -(level_from_base.transpose() * Vector3::new(0.0, 0.0, -metrocell_physics::gravity::STANDARD_GRAVITY));
+            let f = -(level_from_base.transpose()
+                * Vector3::new(0.0, 0.0, -metrocell_physics::gravity::STANDARD_GRAVITY));
             let t = tilt_from_specific_force(&Matrix3::identity(), &f).unwrap();
-            assert!((t.x - r).abs() < 1e-12 && (t.y - p).abs() < 1e-12, "{t:?} vs ({r}, {p})");
+            assert!(
+                (t.x - r).abs() < 1e-12 && (t.y - p).abs() < 1e-12,
+                "{t:?} vs ({r}, {p})"
+            );
             assert!((gravity_in_tilted_base(r, p) + f).norm() < 1e-12);
         }
     }

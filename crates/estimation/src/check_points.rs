@@ -45,8 +45,19 @@ pub fn check_statistics(errors: &[Vector3<f64>]) -> CheckStatistics {
     let xy: Vec<f64> = errors.iter().map(|e| e.x.hypot(e.y)).collect();
     let z: Vec<f64> = errors.iter().map(|e| e.z.abs()).collect();
     let norms: Vec<f64> = errors.iter().map(|e| e.norm()).collect();
-    let rms = if errors.is_empty() { f64::NAN } else { (norms.iter().map(|n| n * n).sum::<f64>() / norms.len() as f64).sqrt() };
-    CheckStatistics { n: errors.len(), rms_m: rms, p50_xy_m: quantile(&xy, 0.5), p95_xy_m: quantile(&xy, 0.95), p95_z_m: quantile(&z, 0.95), max_m: norms.iter().cloned().fold(f64::NAN, f64::max) }
+    let rms = if errors.is_empty() {
+        f64::NAN
+    } else {
+        (norms.iter().map(|n| n * n).sum::<f64>() / norms.len() as f64).sqrt()
+    };
+    CheckStatistics {
+        n: errors.len(),
+        rms_m: rms,
+        p50_xy_m: quantile(&xy, 0.5),
+        p95_xy_m: quantile(&xy, 0.95),
+        p95_z_m: quantile(&z, 0.95),
+        max_m: norms.iter().cloned().fold(f64::NAN, f64::max),
+    }
 }
 
 /// A check point the model could not predict, and why (its setup has no fitted pose, a signal
@@ -72,15 +83,30 @@ pub fn check_report(model: &ForwardModel, x: &[f64], records: &RecordSet) -> Che
 }
 
 /// [`check_report`] of the records `check`.
-pub fn check_report_of(model: &ForwardModel, x: &[f64], check: &[MeasurementRecord]) -> CheckReport {
+pub fn check_report_of(
+    model: &ForwardModel,
+    x: &[f64],
+    check: &[MeasurementRecord],
+) -> CheckReport {
     let mut all = Vec::new();
     let mut by_setup: BTreeMap<String, Vec<Vector3<f64>>> = BTreeMap::new();
     let mut unpredicted = Vec::new();
     let kin = match model.kinematic_truth(x) {
         Ok(k) => k,
         Err(e) => {
-            let unpredicted = check.iter().map(|r| Unpredicted { point_id: r.point_id.clone(), setup: r.signals.setup.as_deref().map(str::to_string), reason: e.to_string() }).collect();
-            return CheckReport { overall: check_statistics(&[]), setups: BTreeMap::new(), unpredicted };
+            let unpredicted = check
+                .iter()
+                .map(|r| Unpredicted {
+                    point_id: r.point_id.clone(),
+                    setup: r.signals.setup.as_deref().map(str::to_string),
+                    reason: e.to_string(),
+                })
+                .collect();
+            return CheckReport {
+                overall: check_statistics(&[]),
+                setups: BTreeMap::new(),
+                unpredicted,
+            };
         }
     };
     for r in check {
@@ -94,18 +120,36 @@ pub fn check_report_of(model: &ForwardModel, x: &[f64], check: &[MeasurementReco
                     by_setup.entry(name).or_default().push(e);
                 }
             }
-            Err(e) => unpredicted.push(Unpredicted { point_id: r.point_id.clone(), setup, reason: e.to_string() }),
+            Err(e) => unpredicted.push(Unpredicted {
+                point_id: r.point_id.clone(),
+                setup,
+                reason: e.to_string(),
+            }),
         }
     }
-    CheckReport { overall: check_statistics(&all), setups: by_setup.iter().map(|(k, v)| (k.clone(), check_statistics(v))).collect(), unpredicted }
+    CheckReport {
+        overall: check_statistics(&all),
+        setups: by_setup
+            .iter()
+            .map(|(k, v)| (k.clone(), check_statistics(v)))
+            .collect(),
+        unpredicted,
+    }
 }
 
 /// The placements of the instrument the records name (`signals.setup`), in order of first
 /// appearance, with their numbers of fit and check points.
 pub fn setups_of(records: &RecordSet) -> Vec<(String, usize, usize)> {
     let mut out: Vec<(String, usize, usize)> = Vec::new();
-    for (r, check) in records.records.iter().map(|r| (r, false)).chain(records.check.iter().map(|r| (r, true))) {
-        let Some(s) = r.signals.setup.as_deref() else { continue };
+    for (r, check) in records
+        .records
+        .iter()
+        .map(|r| (r, false))
+        .chain(records.check.iter().map(|r| (r, true)))
+    {
+        let Some(s) = r.signals.setup.as_deref() else {
+            continue;
+        };
         let k = match out.iter().position(|(n, _, _)| n == s) {
             Some(k) => k,
             None => {
@@ -133,7 +177,9 @@ pub fn usable_setups(records: &mut RecordSet, needed: usize) -> (Vec<String>, Ve
             usable.push(name);
         } else {
             notes.push(format!("setup `{name}` has {fit_points} fit point(s), fewer than the {needed} its pose needs: left out of the fit, its {check_points} check point(s) unpredicted (measure at least {needed} fit points from every placement)"));
-            records.records.retain(|r| r.signals.setup.as_deref() != Some(name.as_str()));
+            records
+                .records
+                .retain(|r| r.signals.setup.as_deref() != Some(name.as_str()));
         }
     }
     (usable, notes)
@@ -142,7 +188,9 @@ pub fn usable_setups(records: &mut RecordSet, needed: usize) -> (Vec<String>, Ve
 /// Whether stacked parameter `name` is a placement's (a nuisance of every fit, per recording):
 /// an instrument pose (`tracker_pose.*`, `tracker_pose[…].*`) or the base's tilt (`base_tilt*`).
 pub fn is_placement_parameter(name: &str) -> bool {
-    name.starts_with("tracker_pose.") || name.starts_with("tracker_pose[") || name.starts_with("base_tilt")
+    name.starts_with("tracker_pose.")
+        || name.starts_with("tracker_pose[")
+        || name.starts_with("base_tilt")
 }
 
 #[cfg(test)]

@@ -70,10 +70,18 @@ pub fn ridge_for(candidates: &DMatrix<f64>) -> f64 {
 
 /// Choose `rows` rows of `candidates` (N × p) maximising det(XᵀX), with `restarts` seeded random
 /// restarts besides the greedy start.
-pub fn d_optimal(candidates: &DMatrix<f64>, rows: usize, restarts: usize, seed: u64) -> Result<Design, DesignError> {
+pub fn d_optimal(
+    candidates: &DMatrix<f64>,
+    rows: usize,
+    restarts: usize,
+    seed: u64,
+) -> Result<Design, DesignError> {
     let n = candidates.nrows();
     if rows > n || rows == 0 {
-        return Err(DesignError::TooFewCandidates { wanted: rows, available: n });
+        return Err(DesignError::TooFewCandidates {
+            wanted: rows,
+            available: n,
+        });
     }
     if let Some(row) = (0..n).find(|&i| candidates.row(i).iter().any(|x| !x.is_finite())) {
         return Err(DesignError::NotFinite { row });
@@ -85,15 +93,26 @@ pub fn d_optimal(candidates: &DMatrix<f64>, rows: usize, restarts: usize, seed: 
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let mut best: Option<Design> = None;
     for start in 0..=restarts {
-        let initial = if start == 0 { greedy(candidates, rows, ridge) } else { sample(&mut rng, n, rows).into_vec() };
+        let initial = if start == 0 {
+            greedy(candidates, rows, ridge)
+        } else {
+            sample(&mut rng, n, rows).into_vec()
+        };
         let (chosen, exchanges) = exchange(candidates, initial, ridge);
         let ld = log_det(candidates, &chosen, ridge);
         if best.as_ref().is_none_or(|b| ld > b.log_det + 1e-12) {
             let mut sorted = chosen;
             sorted.sort_unstable();
             // singular values of XᵀX below the ridge are what the ridge alone holds up
-            let rank = information(candidates, &sorted, 0.0).svd(false, false).rank(ridge);
-            best = Some(Design { rows: sorted, log_det: ld, rank, exchanges });
+            let rank = information(candidates, &sorted, 0.0)
+                .svd(false, false)
+                .rank(ridge);
+            best = Some(Design {
+                rows: sorted,
+                log_det: ld,
+                rank,
+                exchanges,
+            });
         }
     }
     Ok(best.expect("at least the greedy start runs"))
@@ -103,7 +122,9 @@ pub fn d_optimal(candidates: &DMatrix<f64>, rows: usize, restarts: usize, seed: 
 fn greedy(candidates: &DMatrix<f64>, rows: usize, ridge: f64) -> Vec<usize> {
     let mut chosen: Vec<usize> = Vec::with_capacity(rows);
     while chosen.len() < rows {
-        let minv = information(candidates, &chosen, ridge).try_inverse().expect("ridge makes the information invertible");
+        let minv = information(candidates, &chosen, ridge)
+            .try_inverse()
+            .expect("ridge makes the information invertible");
         let next = (0..candidates.nrows())
             .filter(|i| !chosen.contains(i))
             .map(|i| {
@@ -124,7 +145,9 @@ fn exchange(candidates: &DMatrix<f64>, mut chosen: Vec<usize>, ridge: f64) -> (V
     let max_exchanges = 100 * chosen.len().max(1);
     let mut exchanges = 0;
     while exchanges < max_exchanges {
-        let minv = information(candidates, &chosen, ridge).try_inverse().expect("ridge makes the information invertible");
+        let minv = information(candidates, &chosen, ridge)
+            .try_inverse()
+            .expect("ridge makes the information invertible");
         // V = X_cand·M⁻¹: d(a, b) = V_a · x_b
         let v = candidates * &minv;
         let d = |a: usize, b: usize| v.row(a).dot(&candidates.row(b));
@@ -155,8 +178,13 @@ mod tests {
     use super::*;
 
     fn polynomial_candidates(order: usize, grid: usize) -> (DMatrix<f64>, Vec<f64>) {
-        let xs: Vec<f64> = (0..grid).map(|i| -1.0 + 2.0 * i as f64 / (grid - 1) as f64).collect();
-        (DMatrix::from_fn(grid, order + 1, |i, k| xs[i].powi(k as i32)), xs)
+        let xs: Vec<f64> = (0..grid)
+            .map(|i| -1.0 + 2.0 * i as f64 / (grid - 1) as f64)
+            .collect();
+        (
+            DMatrix::from_fn(grid, order + 1, |i, k| xs[i].powi(k as i32)),
+            xs,
+        )
     }
 
     /// Known D-optimal designs on [−1, 1]: a line at the two ends, a parabola at −1, 0, 1.
@@ -164,20 +192,35 @@ mod tests {
     fn textbook_designs() {
         let (c, xs) = polynomial_candidates(1, 21);
         let d = d_optimal(&c, 2, 3, 1).unwrap();
-        assert_eq!(d.rows.iter().map(|&i| xs[i]).collect::<Vec<_>>(), vec![-1.0, 1.0]);
+        assert_eq!(
+            d.rows.iter().map(|&i| xs[i]).collect::<Vec<_>>(),
+            vec![-1.0, 1.0]
+        );
         let (c, xs) = polynomial_candidates(2, 21);
         let d = d_optimal(&c, 3, 3, 1).unwrap();
-        assert_eq!(d.rows.iter().map(|&i| xs[i]).collect::<Vec<_>>(), vec![-1.0, 0.0, 1.0]);
+        assert_eq!(
+            d.rows.iter().map(|&i| xs[i]).collect::<Vec<_>>(),
+            vec![-1.0, 0.0, 1.0]
+        );
         assert_eq!(d.rank, 3);
     }
 
     #[test]
     fn bad_candidates_are_errors() {
         let (c, _) = polynomial_candidates(1, 5);
-        assert!(matches!(d_optimal(&c, 6, 0, 1), Err(DesignError::TooFewCandidates { .. })));
+        assert!(matches!(
+            d_optimal(&c, 6, 0, 1),
+            Err(DesignError::TooFewCandidates { .. })
+        ));
         let mut bad = c.clone();
         bad[(3, 1)] = f64::NAN;
-        assert_eq!(d_optimal(&bad, 2, 0, 1), Err(DesignError::NotFinite { row: 3 }));
-        assert_eq!(d_optimal(&DMatrix::zeros(4, 2), 2, 0, 1), Err(DesignError::Empty));
+        assert_eq!(
+            d_optimal(&bad, 2, 0, 1),
+            Err(DesignError::NotFinite { row: 3 })
+        );
+        assert_eq!(
+            d_optimal(&DMatrix::zeros(4, 2), 2, 0, 1),
+            Err(DesignError::Empty)
+        );
     }
 }

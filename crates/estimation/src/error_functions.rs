@@ -25,18 +25,37 @@ pub struct AxisErrorFunction {
 /// travel, the other axes at the travel's middle; `conditions` carries the signals besides the
 /// axes (temperatures, time, load: e.g. a record's). `covariance`: of the stacked parameters
 /// (None: zero uncertainty). Other families: empty (their errors are not per-axis functions).
-pub fn axis_error_functions(model: &ForwardModel, p: &[f64], covariance: Option<&DMatrix<f64>>, conditions: &Signals, samples: usize) -> Result<Vec<AxisErrorFunction>, PhysicsError> {
-    if !matches!(model.machine.kinematics, MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_)) {
+pub fn axis_error_functions(
+    model: &ForwardModel,
+    p: &[f64],
+    covariance: Option<&DMatrix<f64>>,
+    conditions: &Signals,
+    samples: usize,
+) -> Result<Vec<AxisErrorFunction>, PhysicsError> {
+    if !matches!(
+        model.machine.kinematics,
+        MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_)
+    ) {
         return Ok(vec![]);
     }
     let kin = model.kinematic_truth(p)?;
     let t = model.machine.travel;
-    let reference = Vector3::new((t[0][0] + t[0][1]) / 2.0, (t[1][0] + t[1][1]) / 2.0, (t[2][0] + t[2][1]) / 2.0);
+    let reference = Vector3::new(
+        (t[0][0] + t[0][1]) / 2.0,
+        (t[1][0] + t[1][1]) / 2.0,
+        (t[2][0] + t[2][1]) / 2.0,
+    );
     let mut jac = DMatrix::zeros(3, model.param_count());
     let samples = samples.max(2);
     let mut out = vec![];
     for a in 0..3 {
-        let mut f = AxisErrorFunction { axis: a, positions: vec![], errors: vec![], sigmas: vec![], reference };
+        let mut f = AxisErrorFunction {
+            axis: a,
+            positions: vec![],
+            errors: vec![],
+            sigmas: vec![],
+            reference,
+        };
         for k in 0..samples {
             let mut q = reference;
             q[a] = t[a][0] + (t[a][1] - t[a][0]) * k as f64 / (samples - 1) as f64;

@@ -22,11 +22,14 @@
 //! Records whose measured point, joints or covariance are not finite are left out and named
 //! ([`Fit::skipped`]); records the robust loss down-weighted are named too ([`Fit::outliers`]).
 
+use metrocell_laser_tracker::registration::{register, Correspondence};
 use metrocell_model::{ForwardModel, ParameterSetup};
 use metrocell_physics::PhysicsError;
 use metrocell_solver::identifiability::GRAM_RCOND;
-use metrocell_solver::{normal_matrix, solve, solve_from, Evaluated, Identifiability, Loss, NullSpace, Options, Prior, Problem, Solution, SolverError, zeroed_matrix};
-use metrocell_laser_tracker::registration::{register, Correspondence};
+use metrocell_solver::{
+    normal_matrix, solve, solve_from, zeroed_matrix, Evaluated, Identifiability, Loss, NullSpace,
+    Options, Prior, Problem, Solution, SolverError,
+};
 use nalgebra::{DMatrix, Matrix3, Vector3};
 
 use crate::records::{RecordFrame, RecordKind, RecordSet};
@@ -47,7 +50,11 @@ pub struct FitOptions {
 
 impl Default for FitOptions {
     fn default() -> Self {
-        Self { loss: Loss::Huber(4.0), max_iterations: 100, rcond: 1e-6 }
+        Self {
+            loss: Loss::Huber(4.0),
+            max_iterations: 100,
+            rcond: 1e-6,
+        }
     }
 }
 
@@ -56,7 +63,9 @@ impl Default for FitOptions {
 pub enum FitError {
     #[error("no usable measurements (every record was rejected or the recording has none)")]
     NoRecords,
-    #[error("record {index} (point `{point_id}`): its covariance is not finite and positive definite")]
+    #[error(
+        "record {index} (point `{point_id}`): its covariance is not finite and positive definite"
+    )]
     BadCovariance { index: usize, point_id: String },
     #[error("{0}")]
     Model(#[from] PhysicsError),
@@ -65,16 +74,28 @@ pub enum FitError {
     #[error("{0}")]
     Solver(#[from] SolverError),
     #[error("{needed} parameters are free but only {available} residuals: measure at least {points} points")]
-    TooFew { needed: usize, available: usize, points: usize },
+    TooFew {
+        needed: usize,
+        available: usize,
+        points: usize,
+    },
     /// A record the model cannot predict (a signal a term needs is missing, a joint vector
     /// the kinematics cannot reach, …).
     #[error("record {index} (point `{point_id}`, t = {time} s): {source}{hint}")]
-    Record { index: usize, point_id: String, time: f64, source: PhysicsError, hint: String },
+    Record {
+        index: usize,
+        point_id: String,
+        time: f64,
+        source: PhysicsError,
+        hint: String,
+    },
 }
 
 /// What to do about a missing signal, by the kind of signal.
 fn missing_signal_hint(e: &PhysicsError) -> String {
-    let PhysicsError::MissingSignal { signal, .. } = e else { return String::new() };
+    let PhysicsError::MissingSignal { signal, .. } = e else {
+        return String::new();
+    };
     let s = signal.to_lowercase();
     let source = if s.contains("temperature") && !s.contains("air") {
         "a `sensor_msgs/Temperature` topic `/temperature/<sensor>` for the sensor the term names (or a `temperature.<sensor>` column in a CSV import)"
@@ -223,7 +244,11 @@ pub fn rms(residuals: &[Vector3<f64>]) -> f64 {
 /// The start vector: the model's configured parameters, with the instrument pose set for the
 /// frame of the records (identity in the machine frame, registered in an instrument frame
 /// unless the setup fixes it).
-pub fn start_vector(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet) -> Result<Vec<f64>, FitError> {
+pub fn start_vector(
+    model: &ForwardModel,
+    setup: &ParameterSetup,
+    records: &RecordSet,
+) -> Result<Vec<f64>, FitError> {
     let mut x = model.params();
     // every pose: the instrument's only one, or one per placement (`tracker_pose[<setup>]`)
     let poses = model.pose_param_starts();
@@ -236,21 +261,38 @@ pub fn start_vector(model: &ForwardModel, setup: &ParameterSetup, records: &Reco
                 let mut pairs = Vec::with_capacity(records.len());
                 // the tracker's points of this placement (probe hits and camera points are in
                 // frames of their own)
-                let mine = |r: &&crate::records::MeasurementRecord| !several || r.signals.setup.as_deref() == placement.as_deref();
-                for r in records.records.iter().filter(|r| r.kind == RecordKind::Point).filter(mine) {
+                let mine = |r: &&crate::records::MeasurementRecord| {
+                    !several || r.signals.setup.as_deref() == placement.as_deref()
+                };
+                for r in records
+                    .records
+                    .iter()
+                    .filter(|r| r.kind == RecordKind::Point)
+                    .filter(mine)
+                {
                     let mut s = r.signals.clone();
                     let tool = model.tool_state(&x, &kin, &r.q, &mut s, None)?;
-                    pairs.push(Correspondence { tracker: r.measured, tracker_covariance: r.covariance, machine: tool.target(), machine_covariance: Matrix3::identity() * 1e-12 });
+                    pairs.push(Correspondence {
+                        tracker: r.measured,
+                        tracker_covariance: r.covariance,
+                        machine: tool.target(),
+                        machine_covariance: Matrix3::identity() * 1e-12,
+                    });
                 }
                 if several && pairs.len() < 3 {
                     // a placement without three points keeps its start (the caller names it)
                     continue;
                 }
-                let reg = register(&pairs).map_err(|e| FitError::Registration(match &placement {
-                    Some(s) => format!("setup `{s}`: {e}"),
-                    None => e.to_string(),
-                }))?;
-                let p = metrocell_model::InstrumentPose::from_rotation(reg.translation, reg.rotation.matrix());
+                let reg = register(&pairs).map_err(|e| {
+                    FitError::Registration(match &placement {
+                        Some(s) => format!("setup `{s}`: {e}"),
+                        None => e.to_string(),
+                    })
+                })?;
+                let p = metrocell_model::InstrumentPose::from_rotation(
+                    reg.translation,
+                    reg.rotation.matrix(),
+                );
                 x[pose..pose + 6].copy_from_slice(&p.term_params());
             }
             RecordFrame::Instrument(_) => {}
@@ -260,7 +302,13 @@ pub fn start_vector(model: &ForwardModel, setup: &ParameterSetup, records: &Reco
 }
 
 /// Fit the free parameters of `setup` to `records` from `start` (None: [`start_vector`]).
-pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, start: Option<Vec<f64>>, options: &FitOptions) -> Result<Fit, FitError> {
+pub fn fit(
+    model: &ForwardModel,
+    setup: &ParameterSetup,
+    records: &RecordSet,
+    start: Option<Vec<f64>>,
+    options: &FitOptions,
+) -> Result<Fit, FitError> {
     // records with a non-finite value are named and left out
     let mut skipped = Vec::new();
     let mut used = Vec::new();
@@ -275,7 +323,12 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
             None
         };
         match bad {
-            Some(reason) => skipped.push(RecordNote { index: i, point_id: r.point_id.clone(), time: r.time, reason: reason.into() }),
+            Some(reason) => skipped.push(RecordNote {
+                index: i,
+                point_id: r.point_id.clone(),
+                time: r.time,
+                reason: reason.into(),
+            }),
             None => used.push(i),
         }
     }
@@ -285,7 +338,13 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
     let kept: &RecordSet = if skipped.is_empty() {
         records
     } else {
-        subset = RecordSet { check: Vec::new(), frame: records.frame.clone(), records: used.iter().map(|&i| records.records[i].clone()).collect(), rejected: vec![], sources: vec![] };
+        subset = RecordSet {
+            check: Vec::new(),
+            frame: records.frame.clone(),
+            records: used.iter().map(|&i| records.records[i].clone()).collect(),
+            rejected: vec![],
+            sources: vec![],
+        };
         &subset
     };
     if kept.is_empty() {
@@ -298,11 +357,24 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
         }
     }
     let n_free = free.iter().filter(|f| **f).count();
-    let n_priors = setup.priors.iter().zip(&free).filter(|(p, f)| p.is_some() && **f).count();
+    let n_priors = setup
+        .priors
+        .iter()
+        .zip(&free)
+        .filter(|(p, f)| p.is_some() && **f)
+        .count();
     if 3 * kept.len() + n_priors < n_free {
-        return Err(FitError::TooFew { needed: n_free, available: 3 * kept.len(), points: n_free.div_ceil(3) });
+        return Err(FitError::TooFew {
+            needed: n_free,
+            available: 3 * kept.len(),
+            points: n_free.div_ceil(3),
+        });
     }
-    let problem = PointResiduals::new(model, &kept.records).map_err(|b| FitError::BadCovariance { index: used[b.index], point_id: b.point_id })?;
+    let problem =
+        PointResiduals::new(model, &kept.records).map_err(|b| FitError::BadCovariance {
+            index: used[b.index],
+            point_id: b.point_id,
+        })?;
     // a record the model cannot predict (a missing signal, an unreachable joint vector) is named
     // with its index and what would provide the signal; each record goes through its own
     // instrument (a probe hit does not read the tracker's air). Looked for only once the start
@@ -313,7 +385,13 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
             Err(EvaluationFailure::Model(e)) => Some(e.into()),
             Err(EvaluationFailure::Record { index, error }) => {
                 let (hint, r) = (missing_signal_hint(&error), &kept.records[index]);
-                Some(FitError::Record { index: used[index], point_id: r.point_id.clone(), time: r.time, source: error, hint })
+                Some(FitError::Record {
+                    index: used[index],
+                    point_id: r.point_id.clone(),
+                    time: r.time,
+                    source: error,
+                    hint,
+                })
             }
         }
     };
@@ -321,14 +399,38 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
         Some(x) => x,
         None => start_vector(model, setup, kept).map_err(|e| unpredictable().unwrap_or(e))?,
     };
-    let specs: Vec<_> = model.machine_terms.param_specs().into_iter().chain(model.instrument_terms.param_specs()).collect();
+    let specs: Vec<_> = model
+        .machine_terms
+        .param_specs()
+        .into_iter()
+        .chain(model.instrument_terms.param_specs())
+        .collect();
     let names = model.param_names();
     let labels: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
     // bounds: the possible range (none for sign-free quantities), widened to include the start
     // so a start outside it is legal
-    let lower: Vec<f64> = specs.iter().zip(&x0).map(|(s, v)| s.possible.lo.min(*v)).collect();
-    let upper: Vec<f64> = specs.iter().zip(&x0).map(|(s, v)| s.possible.hi.max(*v)).collect();
-    let priors: Vec<Prior> = setup.priors.iter().enumerate().filter_map(|(index, p)| p.map(|p| Prior { index, value: p.value, sigma: p.sigma })).collect();
+    let lower: Vec<f64> = specs
+        .iter()
+        .zip(&x0)
+        .map(|(s, v)| s.possible.lo.min(*v))
+        .collect();
+    let upper: Vec<f64> = specs
+        .iter()
+        .zip(&x0)
+        .map(|(s, v)| s.possible.hi.max(*v))
+        .collect();
+    let priors: Vec<Prior> = setup
+        .priors
+        .iter()
+        .enumerate()
+        .filter_map(|(index, p)| {
+            p.map(|p| Prior {
+                index,
+                value: p.value,
+                sigma: p.sigma,
+            })
+        })
+        .collect();
     let solver_options = |free: &[bool], loss: Loss| Options {
         loss,
         bounds: Some((lower.clone(), upper.clone())),
@@ -342,7 +444,9 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
         ftol: 1e-12,
         xtol: 1e-12,
         gtol: 1e-12,
-        null_space: NullSpace::Truncated { rcond: options.rcond },
+        null_space: NullSpace::Truncated {
+            rcond: options.rcond,
+        },
         // Marquardt's λ₀ = 1e-3 (relative to the unit-diagonal scaled normal matrix) damps the
         // weakly determined directions of a calibration (eigenvalues down to rcond² of the
         // largest) for several iterations while λ walks down; a calibration from its start is
@@ -359,7 +463,14 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
     let mut j0 = zeroed_matrix(problem.residual_count(), problem.parameter_count());
     problem
         .residuals_and_jacobian_of(&x0, &mut r0, &mut j0, &free)
-        .map_err(|e| unpredictable().unwrap_or_else(|| FitError::Registration(format!("the model cannot be evaluated at the start: {}", e.0))))?;
+        .map_err(|e| {
+            unpredictable().unwrap_or_else(|| {
+                FitError::Registration(format!(
+                    "the model cannot be evaluated at the start: {}",
+                    e.0
+                ))
+            })
+        })?;
     let residuals_before = problem.unwhitened(&r0);
     // a robust loss from a far start calls every residual an outlier and crawls: reach the
     // basin with plain least squares first, then let the robust loss judge the residuals
@@ -382,47 +493,114 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
     // (the Gram route's normal matrix is the first solve's too, when no parameter is held here)
     let (declared_identifiability, start_normal) = if options.rcond >= GRAM_RCOND {
         let normal = normal_matrix(&j0, &free_idx);
-        let judged = if priors.is_empty() { Identifiability::from_normal_matrix(&normal, j0.nrows(), &free_labels, options.rcond)? } else { identifiability_with_priors(&j0, &priors, &free, &labels, options.rcond)? };
+        let judged = if priors.is_empty() {
+            Identifiability::from_normal_matrix(&normal, j0.nrows(), &free_labels, options.rcond)?
+        } else {
+            identifiability_with_priors(&j0, &priors, &free, &labels, options.rcond)?
+        };
         (judged, Some(normal))
     } else if priors.is_empty() {
-        (Identifiability::analyze(&j0.select_columns(&free_idx), &free_labels, Some(options.rcond))?, None)
+        (
+            Identifiability::analyze(
+                &j0.select_columns(&free_idx),
+                &free_labels,
+                Some(options.rcond),
+            )?,
+            None,
+        )
     } else {
-        (identifiability_with_priors(&j0, &priors, &free, &labels, options.rcond)?, None)
+        (
+            identifiability_with_priors(&j0, &priors, &free, &labels, options.rcond)?,
+            None,
+        )
     };
     let machine_params = model.machine_terms.param_specs().len();
     // each parameter's typical change, for the nil-column test (units differ by 10⁹)
-    let scales: Vec<f64> = model.machine_terms.param_specs().iter().chain(model.instrument_terms.param_specs().iter()).map(|s| s.typical_scale()).collect();
+    let scales: Vec<f64> = model
+        .machine_terms
+        .param_specs()
+        .iter()
+        .chain(model.instrument_terms.param_specs().iter())
+        .map(|s| s.typical_scale())
+        .collect();
     let mut held = Vec::new();
     if !declared_identifiability.null_directions.is_empty() {
-        for (k, sentence) in dependent_parameters(&with_prior_rows(&j0, &priors), &free, machine_params, &names, &scales) {
+        for (k, sentence) in dependent_parameters(
+            &with_prior_rows(&j0, &priors),
+            &free,
+            machine_params,
+            &names,
+            &scales,
+        ) {
             free[k] = false;
-            held.push(HeldParameter { index: k, name: names[k].clone(), combination: sentence });
+            held.push(HeldParameter {
+                index: k,
+                name: names[k].clone(),
+                combination: sentence,
+            });
         }
     }
     // the start's r and J go to the first solve, which works in them
     let start_normal = start_normal.filter(|_| held.is_empty());
-    let mut solution = two_stage(&free, Some(Evaluated { residuals: r0, jacobian: j0, normal_matrix: start_normal }))?;
+    let mut solution = two_stage(
+        &free,
+        Some(Evaluated {
+            residuals: r0,
+            jacobian: j0,
+            normal_matrix: start_normal,
+        }),
+    )?;
     let judge = |solution: &Solution| -> Result<Identifiability, FitError> {
-        Ok(if priors.is_empty() { solution.identifiability(&labels, Some(options.rcond))? } else { identifiability_with_priors(&solution.weighted_jacobian, &priors, &solution.free, &labels, options.rcond)? })
+        Ok(if priors.is_empty() {
+            solution.identifiability(&labels, Some(options.rcond))?
+        } else {
+            identifiability_with_priors(
+                &solution.weighted_jacobian,
+                &priors,
+                &solution.free,
+                &labels,
+                options.rcond,
+            )?
+        })
     };
     let mut identifiability = judge(&solution)?;
     // at the solution: hold what became inseparable there too (from the start again, so the
     // held ones keep their start values exactly) until the rest is identifiable
     while !identifiability.null_directions.is_empty() && held.len() < n_free {
         let before = held.len();
-        for (k, sentence) in dependent_parameters(&with_prior_rows(&solution.weighted_jacobian, &priors), &free, machine_params, &names, &scales) {
+        for (k, sentence) in dependent_parameters(
+            &with_prior_rows(&solution.weighted_jacobian, &priors),
+            &free,
+            machine_params,
+            &names,
+            &scales,
+        ) {
             free[k] = false;
-            held.push(HeldParameter { index: k, name: names[k].clone(), combination: sentence });
+            held.push(HeldParameter {
+                index: k,
+                name: names[k].clone(),
+                combination: sentence,
+            });
         }
         if held.len() == before {
             // numerically weak directions the column test does not call dependent: hold the
             // weakest direction's leading parameter
             let d = &identifiability.null_directions[0];
             let free_idx: Vec<usize> = (0..free.len()).filter(|&k| free[k]).collect();
-            let j = (0..d.scaled.len()).fold(0, |b, j| if d.scaled[j].abs() > d.scaled[b].abs() { j } else { b });
+            let j = (0..d.scaled.len()).fold(0, |b, j| {
+                if d.scaled[j].abs() > d.scaled[b].abs() {
+                    j
+                } else {
+                    b
+                }
+            });
             let k = free_idx[j];
             free[k] = false;
-            held.push(HeldParameter { index: k, name: names[k].clone(), combination: identifiability.describe()[0].clone() });
+            held.push(HeldParameter {
+                index: k,
+                name: names[k].clone(),
+                combination: identifiability.describe()[0].clone(),
+            });
         }
         solution = two_stage(&free, None)?;
         identifiability = judge(&solution)?;
@@ -438,12 +616,20 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
         .map(|(k, s)| ParameterEstimate {
             name: names[k].clone(),
             value: solution.x[k],
-            sigma: if free[k] { sigmas.as_ref().map(|u| u[k]) } else { None },
+            sigma: if free[k] {
+                sigmas.as_ref().map(|u| u[k])
+            } else {
+                None
+            },
             unit: s.unit,
             free: free[k],
             range: (s.possible.lo, s.possible.hi),
             usual: (s.usual.lo, s.usual.hi),
-            at_bound: if free[k] { bound_reached(solution.x[k], lower[k], upper[k], s.typical_scale()) } else { None },
+            at_bound: if free[k] {
+                bound_reached(solution.x[k], lower[k], upper[k], s.typical_scale())
+            } else {
+                None
+            },
         })
         .collect();
     let threshold = match options.loss {
@@ -455,7 +641,12 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
             .filter_map(|i| {
                 let z = &solution.residuals[3 * i..3 * i + 3];
                 let worst = z.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-                (worst > c).then(|| RecordNote { index: used[i], point_id: kept.records[i].point_id.clone(), time: kept.records[i].time, reason: format!("{worst:.1}σ from the model") })
+                (worst > c).then(|| RecordNote {
+                    index: used[i],
+                    point_id: kept.records[i].point_id.clone(),
+                    time: kept.records[i].time,
+                    reason: format!("{worst:.1}σ from the model"),
+                })
             })
             .collect(),
         None => vec![],
@@ -482,7 +673,10 @@ pub fn fit(model: &ForwardModel, setup: &ParameterSetup, records: &RecordSet, st
 /// √W·J with one row per prior (1/σ in its parameter's column): a prior is information too —
 /// a levelled instrument's compensator is what separates its placements' tilts from the base's.
 /// `j` itself (borrowed, not copied) without priors.
-fn with_prior_rows<'j>(j: &'j DMatrix<f64>, priors: &[Prior]) -> std::borrow::Cow<'j, DMatrix<f64>> {
+fn with_prior_rows<'j>(
+    j: &'j DMatrix<f64>,
+    priors: &[Prior],
+) -> std::borrow::Cow<'j, DMatrix<f64>> {
     if priors.is_empty() {
         return std::borrow::Cow::Borrowed(j);
     }
@@ -494,7 +688,13 @@ fn with_prior_rows<'j>(j: &'j DMatrix<f64>, priors: &[Prior]) -> std::borrow::Co
 }
 
 /// What the measurements and the priors identify together, over the `free` parameters.
-fn identifiability_with_priors(jw: &DMatrix<f64>, priors: &[Prior], free: &[bool], labels: &[&str], rcond: f64) -> Result<Identifiability, SolverError> {
+fn identifiability_with_priors(
+    jw: &DMatrix<f64>,
+    priors: &[Prior],
+    free: &[bool],
+    labels: &[&str],
+    rcond: f64,
+) -> Result<Identifiability, SolverError> {
     let idx: Vec<usize> = (0..free.len()).filter(|&k| free[k]).collect();
     let names: Vec<&str> = idx.iter().map(|&k| labels[k]).collect();
     let all = with_prior_rows(jw, priors);
@@ -518,12 +718,22 @@ const DEPENDENT: f64 = 1e-5;
 /// ≥ 1, then the constants `c0` (a constant offset is the conventional one to hold) — with a
 /// sentence naming the parameters it cannot be told from. Deterministic for a design: the
 /// noise moves the columns far less than the threshold.
-fn dependent_parameters(jw: &DMatrix<f64>, free: &[bool], machine_params: usize, names: &[String], scales: &[f64]) -> Vec<(usize, String)> {
+fn dependent_parameters(
+    jw: &DMatrix<f64>,
+    free: &[bool],
+    machine_params: usize,
+    names: &[String],
+    scales: &[f64],
+) -> Vec<(usize, String)> {
     let mut order: Vec<usize> = (machine_params..free.len()).filter(|&k| free[k]).collect();
     // squareness before the series: ISO 230-1 refers straightness to its reference line, so a
     // linear straightness term is what gives way to the squareness it aliases
     order.extend((0..machine_params).filter(|&k| free[k] && names[k].starts_with("squareness")));
-    order.extend((0..machine_params).filter(|&k| free[k] && !names[k].starts_with("squareness") && !names[k].ends_with(".c0")));
+    order.extend(
+        (0..machine_params).filter(|&k| {
+            free[k] && !names[k].starts_with("squareness") && !names[k].ends_with(".c0")
+        }),
+    );
     order.extend((0..machine_params).filter(|&k| free[k] && names[k].ends_with(".c0")));
     inseparable_at_scales(jw, &order, names, Some(scales))
 }
@@ -541,16 +751,29 @@ pub fn inseparable(jw: &DMatrix<f64>, order: &[usize], names: &[String]) -> Vec<
 /// over a typical change is below 1e-9 of the largest such effect, whatever the units — per
 /// unit parameter a time constant in seconds moves a reading 10⁻⁹ as much as a pretravel in
 /// metres and would be called nil beside it.
-pub fn inseparable_at_scales(jw: &DMatrix<f64>, order: &[usize], names: &[String], scales: Option<&[f64]>) -> Vec<(usize, String)> {
+pub fn inseparable_at_scales(
+    jw: &DMatrix<f64>,
+    order: &[usize],
+    names: &[String],
+    scales: Option<&[f64]>,
+) -> Vec<(usize, String)> {
     let scale = |k: usize| scales.map_or(1.0, |s| s[k]);
-    let largest = order.iter().map(|&k| jw.column(k).norm() * scale(k)).fold(0.0f64, f64::max);
+    let largest = order
+        .iter()
+        .map(|&k| jw.column(k).norm() * scale(k))
+        .fold(0.0f64, f64::max);
     // the Gram matrix of the columns in `order` (position in `order` → row/column), for the
     // combinations below: their least squares on the kept columns is a small solve on it, where
     // an SVD of the m × kept columns per dependent column took seconds (29 dependent columns of
     // a 30 000-row XFYZ Jacobian: 4.8 s of a 5 s fit)
     let selected = jw.select_columns(order);
     let gram = selected.tr_mul(&selected);
-    let position = |k: usize| order.iter().position(|&o| o == k).expect("a column of `order`");
+    let position = |k: usize| {
+        order
+            .iter()
+            .position(|&o| o == k)
+            .expect("a column of `order`")
+    };
     // orthonormal basis of the kept columns (modified Gram–Schmidt), and each kept column's norm
     let mut basis: Vec<nalgebra::DVector<f64>> = Vec::new();
     let mut kept: Vec<(usize, f64)> = Vec::new();
@@ -559,7 +782,13 @@ pub fn inseparable_at_scales(jw: &DMatrix<f64>, order: &[usize], names: &[String
         let col = jw.column(k).into_owned();
         let norm = col.norm();
         if !(norm * scale(k) > 1e-9 * largest) {
-            out.push((k, format!("{} is not identifiable: no measurement depends on it; held at its start value", names[k])));
+            out.push((
+                k,
+                format!(
+                    "{} is not identifiable: no measurement depends on it; held at its start value",
+                    names[k]
+                ),
+            ));
             continue;
         }
         let mut r = col / norm;
@@ -580,11 +809,19 @@ pub fn inseparable_at_scales(jw: &DMatrix<f64>, order: &[usize], names: &[String
         // express the column by the kept ones: least squares on the unit columns, by its normal
         // equations (the kept columns are independent to DEPENDENT, so squaring their
         // conditioning still leaves the three digits the sentence prints)
-        let at = kept.iter().map(|&(j, nj)| (position(j), nj)).collect::<Vec<_>>();
+        let at = kept
+            .iter()
+            .map(|&(j, nj)| (position(j), nj))
+            .collect::<Vec<_>>();
         let pk = position(k);
-        let a = DMatrix::from_fn(at.len(), at.len(), |i, j| gram[(at[i].0, at[j].0)] / (at[i].1 * at[j].1));
+        let a = DMatrix::from_fn(at.len(), at.len(), |i, j| {
+            gram[(at[i].0, at[j].0)] / (at[i].1 * at[j].1)
+        });
         let b = nalgebra::DVector::from_fn(at.len(), |i, _| gram[(at[i].0, pk)] / (at[i].1 * norm));
-        let coef = a.svd(true, true).solve(&b, 1e-12).unwrap_or_else(|_| nalgebra::DVector::zeros(kept.len()));
+        let coef = a
+            .svd(true, true)
+            .solve(&b, 1e-12)
+            .unwrap_or_else(|_| nalgebra::DVector::zeros(kept.len()));
         let max = coef.iter().fold(0.0f64, |x, c| x.max(c.abs()));
         let mut parts = Vec::new();
         for (j, c) in coef.iter().enumerate() {
@@ -595,7 +832,16 @@ pub fn inseparable_at_scales(jw: &DMatrix<f64>, order: &[usize], names: &[String
             }
         }
         let with: Vec<String> = parts.iter().map(|(n, _)| n.clone()).collect();
-        let how: Vec<String> = parts.iter().map(|(n, d)| format!("{} {}·{n}", if *d < 0.0 { "−" } else { "+" }, significant(d.abs()))).collect();
+        let how: Vec<String> = parts
+            .iter()
+            .map(|(n, d)| {
+                format!(
+                    "{} {}·{n}",
+                    if *d < 0.0 { "−" } else { "+" },
+                    significant(d.abs())
+                )
+            })
+            .collect();
         out.push((k, format!("{} is not separable from {}: moving it by δ and the others by {} δ leaves every residual unchanged; held at its start value", names[k], with.join(", "), how.join(" "))));
     }
     out

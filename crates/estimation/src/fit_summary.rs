@@ -51,9 +51,15 @@ pub fn summary_lines(fit: &Fit, records: &RecordSet) -> Vec<String> {
     let free: Vec<_> = fit.parameters.iter().filter(|p| p.free).collect();
     let frame = match &records.frame {
         crate::records::RecordFrame::Machine => "the machine frame".to_string(),
-        crate::records::RecordFrame::Instrument(f) => format!("the instrument frame `{f}` (its pose fitted with the model)"),
+        crate::records::RecordFrame::Instrument(f) => {
+            format!("the instrument frame `{f}` (its pose fitted with the model)")
+        }
     };
-    lines.push(format!("Fitted {} parameters to {} measured points in {frame}.", free.len(), fit.used.len()));
+    lines.push(format!(
+        "Fitted {} parameters to {} measured points in {frame}.",
+        free.len(),
+        fit.used.len()
+    ));
     let dof = fit.solution.degrees_of_freedom;
     let verdict = if consistent_with_noise(fit.chi2_per_dof, dof) {
         "consistent with the stated measurement noise: the model explains the data".to_string()
@@ -71,7 +77,11 @@ pub fn summary_lines(fit: &Fit, records: &RecordSet) -> Vec<String> {
     for p in &free {
         lines.push(format!("  {}", p.describe()));
     }
-    let bounded: Vec<&str> = free.iter().filter(|p| p.at_bound.is_some()).map(|p| p.name.as_str()).collect();
+    let bounded: Vec<&str> = free
+        .iter()
+        .filter(|p| p.at_bound.is_some())
+        .map(|p| p.name.as_str())
+        .collect();
     if fit.held.is_empty() && bounded.is_empty() {
         lines.push(format!("Every declared parameter is identifiable from these measurements (condition number {:.3e}).", fit.identifiability.condition_number));
     } else if fit.held.is_empty() {
@@ -87,28 +97,93 @@ pub fn summary_lines(fit: &Fit, records: &RecordSet) -> Vec<String> {
             lines.push(format!("  {}", h.combination));
         }
         if !bounded.is_empty() {
-            lines.push(format!("At a bound of the possible range (no interior σ): {}.", bounded.join(", ")));
+            lines.push(format!(
+                "At a bound of the possible range (no interior σ): {}.",
+                bounded.join(", ")
+            ));
         }
     }
-    let t0 = records.records.iter().map(|r| r.time).fold(f64::INFINITY, f64::min);
-    let who = |id: &str, index: usize| if id.is_empty() { format!("record {index}") } else { format!("`{id}` (record {index})") };
+    let t0 = records
+        .records
+        .iter()
+        .map(|r| r.time)
+        .fold(f64::INFINITY, f64::min);
+    let who = |id: &str, index: usize| {
+        if id.is_empty() {
+            format!("record {index}")
+        } else {
+            format!("`{id}` (record {index})")
+        }
+    };
     if fit.outliers.is_empty() {
         lines.push("No measurement was down-weighted as an outlier.".into());
     } else {
-        let list: Vec<String> = fit.outliers.iter().take(10).map(|o| format!("{} at {:.1} s ({})", who(&o.point_id, o.index), o.time - t0, o.reason)).collect();
-        let more = if fit.outliers.len() > 10 { format!(", and {} more", fit.outliers.len() - 10) } else { String::new() };
+        let list: Vec<String> = fit
+            .outliers
+            .iter()
+            .take(10)
+            .map(|o| {
+                format!(
+                    "{} at {:.1} s ({})",
+                    who(&o.point_id, o.index),
+                    o.time - t0,
+                    o.reason
+                )
+            })
+            .collect();
+        let more = if fit.outliers.len() > 10 {
+            format!(", and {} more", fit.outliers.len() - 10)
+        } else {
+            String::new()
+        };
         // how many an honest Gaussian sample puts beyond the threshold anyway
         let expected = match fit.options_threshold {
-            Some(c) => format!("; Gaussian noise alone puts about {:.1} of {} components beyond {c}σ", 3.0 * fit.used.len() as f64 * statrs::function::erf::erfc(c / std::f64::consts::SQRT_2), 3 * fit.used.len()),
+            Some(c) => format!(
+                "; Gaussian noise alone puts about {:.1} of {} components beyond {c}σ",
+                3.0 * fit.used.len() as f64
+                    * statrs::function::erf::erfc(c / std::f64::consts::SQRT_2),
+                3 * fit.used.len()
+            ),
             None => String::new(),
         };
         lines.push(format!("{} measurements were down-weighted as outliers by the robust loss ({} residual components{expected}; times from the first record): {}{more}.", fit.outliers.len(), fit.downweighted, list.join(", ")));
     }
     if !fit.skipped.is_empty() || !records.rejected.is_empty() {
         let n = fit.skipped.len() + records.rejected.len();
-        let first = records.rejected.first().map(|r| format!("{} ({}): {}", if r.point_id.is_empty() { "a measurement" } else { &r.point_id }, r.at, r.reason)).or_else(|| fit.skipped.first().map(|s| format!("{} at {:.1} s: {}", who(&s.point_id, s.index), s.time - t0, s.reason))).unwrap_or_default();
-        let more = if n > 1 { format!(" — and {} more (all listed in --json)", n - 1) } else { String::new() };
-        lines.push(format!("{n} measurements were left out, the first: {first}{more}."));
+        let first = records
+            .rejected
+            .first()
+            .map(|r| {
+                format!(
+                    "{} ({}): {}",
+                    if r.point_id.is_empty() {
+                        "a measurement"
+                    } else {
+                        &r.point_id
+                    },
+                    r.at,
+                    r.reason
+                )
+            })
+            .or_else(|| {
+                fit.skipped.first().map(|s| {
+                    format!(
+                        "{} at {:.1} s: {}",
+                        who(&s.point_id, s.index),
+                        s.time - t0,
+                        s.reason
+                    )
+                })
+            })
+            .unwrap_or_default();
+        let more = if n > 1 {
+            format!(" — and {} more (all listed in --json)", n - 1)
+        } else {
+            String::new()
+        };
+        lines.push(format!(
+            "{n} measurements were left out, the first: {first}{more}."
+        ));
     }
     lines
 }
@@ -120,11 +195,26 @@ mod tests {
     /// Issue 32: parameters read as a metrologist reads them, never as raw SI exponents.
     #[test]
     fn values_read_in_the_units_metrologists_use() {
-        assert_eq!(value_with_sigma(1.985e-5, Some(1.2e-7), "m"), "19.85 ± 0.12 µm");
-        assert_eq!(value_with_sigma(-1.19999999, Some(3.4e-7), "m"), "-1199.99999 ± 0.00034 mm");
-        assert_eq!(value_with_sigma(2.5e-6, Some(3.1e-7), "rad"), "2.50 ± 0.31 µrad");
-        assert_eq!(value_with_sigma(10.23e-6, Some(8.8e-8), "1/K"), "10.230 ± 0.088 µm/m/K");
-        assert_eq!(value_with_sigma(1801.0, Some(19.0), "s"), "30.02 ± 0.32 min");
+        assert_eq!(
+            value_with_sigma(1.985e-5, Some(1.2e-7), "m"),
+            "19.85 ± 0.12 µm"
+        );
+        assert_eq!(
+            value_with_sigma(-1.19999999, Some(3.4e-7), "m"),
+            "-1199.99999 ± 0.00034 mm"
+        );
+        assert_eq!(
+            value_with_sigma(2.5e-6, Some(3.1e-7), "rad"),
+            "2.50 ± 0.31 µrad"
+        );
+        assert_eq!(
+            value_with_sigma(10.23e-6, Some(8.8e-8), "1/K"),
+            "10.230 ± 0.088 µm/m/K"
+        );
+        assert_eq!(
+            value_with_sigma(1801.0, Some(19.0), "s"),
+            "30.02 ± 0.32 min"
+        );
         assert_eq!(value_with_sigma(9000.0, Some(900.0), "s"), "2.50 ± 0.25 h");
         assert_eq!(value_with_sigma(45.0, Some(2.0), "s"), "45.0 ± 2.0 s");
         assert_eq!(value_with_sigma(4e-6, None, "m/K"), "4.0000 µm/K");

@@ -29,12 +29,28 @@ impl ErrorStatistics {
         let n = v.len() as f64;
         let mean = v.iter().sum::<f64>() / n;
         let sd = (v.iter().map(|x| (x - mean).powi(2)).sum::<f64>() / (n - 1.0)).sqrt();
-        Some(Self { max: v[v.len() - 1], q3: quantile(&v, 0.75), median: quantile(&v, 0.5), q1: quantile(&v, 0.25), min: v[0], mean, sd })
+        Some(Self {
+            max: v[v.len() - 1],
+            q3: quantile(&v, 0.75),
+            median: quantile(&v, 0.5),
+            q1: quantile(&v, 0.25),
+            min: v[0],
+            mean,
+            sd,
+        })
     }
 
     /// The statistics in Table 3's order, with their names.
     pub fn named(&self) -> [(&'static str, f64); 7] {
-        [("max", self.max), ("q3", self.q3), ("median", self.median), ("q1", self.q1), ("min", self.min), ("mean", self.mean), ("sd", self.sd)]
+        [
+            ("max", self.max),
+            ("q3", self.q3),
+            ("median", self.median),
+            ("q1", self.q1),
+            ("min", self.min),
+            ("mean", self.mean),
+            ("sd", self.sd),
+        ]
     }
 }
 
@@ -51,7 +67,10 @@ pub fn percent_improvement(before: f64, after: f64) -> f64 {
 }
 
 /// Percent improvement of every statistic, and their average (Table 3's last row).
-pub fn improvement(before: &ErrorStatistics, after: &ErrorStatistics) -> ([(&'static str, f64); 7], f64) {
+pub fn improvement(
+    before: &ErrorStatistics,
+    after: &ErrorStatistics,
+) -> ([(&'static str, f64); 7], f64) {
     let b = before.named();
     let a = after.named();
     let mut out = b;
@@ -67,7 +86,15 @@ mod tests {
     use super::*;
 
     fn table(v: [f64; 7]) -> ErrorStatistics {
-        ErrorStatistics { max: v[0], q3: v[1], median: v[2], q1: v[3], min: v[4], mean: v[5], sd: v[6] }
+        ErrorStatistics {
+            max: v[0],
+            q3: v[1],
+            median: v[2],
+            q1: v[3],
+            min: v[4],
+            mean: v[5],
+            sd: v[6],
+        }
     }
 
     /// Seed 000 Table 3 (digest test case T1): every improvement to 0.01 %.
@@ -93,7 +120,10 @@ mod tests {
     #[test]
     fn statistics_of_values() {
         let s = ErrorStatistics::of(&[4.0, 1.0, 3.0, 2.0, f64::NAN]).unwrap();
-        assert_eq!((s.min, s.max, s.median, s.q1, s.q3, s.mean), (1.0, 4.0, 2.5, 1.75, 3.25, 2.5));
+        assert_eq!(
+            (s.min, s.max, s.median, s.q1, s.q3, s.mean),
+            (1.0, 4.0, 2.5, 1.75, 3.25, 2.5)
+        );
         assert!((s.sd - (5.0f64 / 3.0).sqrt()).abs() < 1e-15);
         assert!(ErrorStatistics::of(&[1.0]).is_none());
     }

@@ -48,7 +48,10 @@ impl Default for CameraFeatures {
 #[derive(Debug, Clone, PartialEq)]
 pub enum InstrumentReading {
     /// A probe trigger: approach direction (unit) and ball radius.
-    ProbeHit { approach: Vector3<f64>, stylus_radius: f64 },
+    ProbeHit {
+        approach: Vector3<f64>,
+        stylus_radius: f64,
+    },
     /// A camera's marker pose: the marker id.
     Marker { id: i32 },
 }
@@ -65,20 +68,41 @@ pub struct InstrumentMeasurement {
 
 /// The measurement of a probe hit, or why it cannot be one.
 pub fn probe_measurement(hit: &ProbeHit) -> Result<InstrumentMeasurement, String> {
-    let u = Vector3::new(hit.approach_direction.x, hit.approach_direction.y, hit.approach_direction.z);
+    let u = Vector3::new(
+        hit.approach_direction.x,
+        hit.approach_direction.y,
+        hit.approach_direction.z,
+    );
     let norm = u.norm();
     if !(norm.is_finite() && norm > 1e-9) {
-        return Err(format!("approach direction ({}, {}, {}) has no direction", u.x, u.y, u.z));
+        return Err(format!(
+            "approach direction ({}, {}, {}) has no direction",
+            u.x, u.y, u.z
+        ));
     }
     if !(hit.stylus_radius >= 0.0 && hit.stylus_radius.is_finite()) {
-        return Err(format!("stylus radius {} m is not a radius", hit.stylus_radius));
+        return Err(format!(
+            "stylus radius {} m is not a radius",
+            hit.stylus_radius
+        ));
     }
     Ok(InstrumentMeasurement {
         point_id: hit.probe_id.clone(),
-        channel: if hit.probe_id.is_empty() { "probe".into() } else { hit.probe_id.clone() },
-        measured: Vector3::new(hit.stylus_centre.x, hit.stylus_centre.y, hit.stylus_centre.z),
+        channel: if hit.probe_id.is_empty() {
+            "probe".into()
+        } else {
+            hit.probe_id.clone()
+        },
+        measured: Vector3::new(
+            hit.stylus_centre.x,
+            hit.stylus_centre.y,
+            hit.stylus_centre.z,
+        ),
         covariance: Matrix3::from_row_slice(&hit.covariance),
-        reading: InstrumentReading::ProbeHit { approach: u / norm, stylus_radius: hit.stylus_radius },
+        reading: InstrumentReading::ProbeHit {
+            approach: u / norm,
+            stylus_radius: hit.stylus_radius,
+        },
     })
 }
 
@@ -93,20 +117,44 @@ pub fn marker_measurements(array: &FiducialDetectionArray) -> Vec<InstrumentMeas
             let c = &d.pose.covariance;
             // row-major 6 × 6 over (x, y, z, rot_x, rot_y, rot_z): the translation block
             let covariance = Matrix3::from_fn(|r, k| c[6 * r + k]);
-            InstrumentMeasurement { point_id: format!("marker_{}", d.id), channel: "camera".into(), measured: Vector3::new(p.x, p.y, p.z), covariance, reading: InstrumentReading::Marker { id: d.id } }
+            InstrumentMeasurement {
+                point_id: format!("marker_{}", d.id),
+                channel: "camera".into(),
+                measured: Vector3::new(p.x, p.y, p.z),
+                covariance,
+                reading: InstrumentReading::Marker { id: d.id },
+            }
         })
         .collect()
 }
 
 /// What the model needs to predict `reading` at commanded joints `q`: the record kind.
-pub fn record_kind(model: &ForwardModel, features: &CameraFeatures, reading: &InstrumentReading, q: &[f64]) -> Result<RecordKind, String> {
+pub fn record_kind(
+    model: &ForwardModel,
+    features: &CameraFeatures,
+    reading: &InstrumentReading,
+    q: &[f64],
+) -> Result<RecordKind, String> {
     match reading {
-        InstrumentReading::ProbeHit { approach, stylus_radius } => {
+        InstrumentReading::ProbeHit {
+            approach,
+            stylus_radius,
+        } => {
             if q.len() < 3 {
                 return Err("a probe hit needs the three linear axes".into());
             }
-            let surface = model.machine.nominal_tool_point(&Vector3::new(q[0], q[1], q[2])) + approach * *stylus_radius;
-            Ok(RecordKind::ProbeHit { target: ProbeTarget { surface, approach: *approach, stylus_radius: *stylus_radius }, probe: None })
+            let surface = model
+                .machine
+                .nominal_tool_point(&Vector3::new(q[0], q[1], q[2]))
+                + approach * *stylus_radius;
+            Ok(RecordKind::ProbeHit {
+                target: ProbeTarget {
+                    surface,
+                    approach: *approach,
+                    stylus_radius: *stylus_radius,
+                },
+                probe: None,
+            })
         }
         InstrumentReading::Marker { id } => {
             let feature = match features {
@@ -118,7 +166,10 @@ pub fn record_kind(model: &ForwardModel, features: &CameraFeatures, reading: &In
                 }
                 CameraFeatures::Fixed(map) => *map.get(id).ok_or_else(|| format!("marker {id} has no nominal position (CameraFeatures::Fixed knows ids {:?})", map.keys().collect::<Vec<_>>()))?,
             };
-            Ok(RecordKind::CameraPoint { feature, camera: None })
+            Ok(RecordKind::CameraPoint {
+                feature,
+                camera: None,
+            })
         }
     }
 }

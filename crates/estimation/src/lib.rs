@@ -46,10 +46,10 @@ pub mod fit;
 pub mod fit_summary;
 pub mod improvement;
 pub mod instrument_readings;
-pub mod record_stream;
-pub mod records;
-pub mod recordings;
 mod record_chunks;
+pub mod record_stream;
+pub mod recordings;
+pub mod records;
 pub mod recursive;
 pub mod reference_nests;
 pub mod residuals;
@@ -58,10 +58,13 @@ pub mod uncertainty_budget;
 pub mod volumetric_monte_carlo;
 
 pub use check_points::{check_report, check_statistics, setups_of, CheckReport, CheckStatistics};
-pub use fit::{fit, inseparable, rms, start_vector, BoundSide, Fit, FitError, FitOptions, HeldParameter, ParameterEstimate, RecordNote};
+pub use fit::{
+    fit, inseparable, rms, start_vector, BoundSide, Fit, FitError, FitOptions, HeldParameter,
+    ParameterEstimate, RecordNote,
+};
 pub use record_stream::{declared_topics, RecordStream, StreamOutput};
-pub use records::{MeasurementRecord, RecordFrame, RecordKind, RecordSet, Rejected};
 pub use recordings::{records_from_bags, PointSource, RecordingError, RecordingOptions};
+pub use records::{MeasurementRecord, RecordFrame, RecordKind, RecordSet, Rejected};
+pub use recursive::{RecursiveEstimator, RecursiveOptions, Update};
 pub use reference_nests::{estimate_nests, is_reference};
 pub use residuals::PointResiduals;
-pub use recursive::{RecursiveEstimator, RecursiveOptions, Update};

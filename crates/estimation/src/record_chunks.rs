@@ -20,7 +20,10 @@ pub(crate) struct Chunk<S> {
 
 /// `count` records split into as many chunks as there are cores (at most one per
 /// [`MIN_RECORDS_PER_WORKER`] records), each with scratch `make(start, len)`.
-pub(crate) fn split<S>(count: usize, mut make: impl FnMut(usize, usize) -> S) -> Vec<Mutex<Chunk<S>>> {
+pub(crate) fn split<S>(
+    count: usize,
+    mut make: impl FnMut(usize, usize) -> S,
+) -> Vec<Mutex<Chunk<S>>> {
     let cores = std::thread::available_parallelism().map_or(1, |n| n.get());
     let workers = cores.min(count / MIN_RECORDS_PER_WORKER).max(1);
     let base = count / workers;
@@ -29,7 +32,11 @@ pub(crate) fn split<S>(count: usize, mut make: impl FnMut(usize, usize) -> S) ->
     (0..workers)
         .map(|w| {
             let len = base + usize::from(w < extra);
-            let chunk = Chunk { start, len, scratch: make(start, len) };
+            let chunk = Chunk {
+                start,
+                len,
+                scratch: make(start, len),
+            };
             start += len;
             Mutex::new(chunk)
         })
@@ -49,7 +56,9 @@ pub(crate) fn for_each<S: Send, O: Send, E: Send>(
     // record's own signals by the next evaluation, so it is safe to go on using it
     let run = |c: &Mutex<Chunk<S>>, o: O| work(&mut c.lock().unwrap_or_else(|p| p.into_inner()), o);
     let mut pairs = chunks.iter().zip(outputs);
-    let Some((first, first_out)) = pairs.next() else { return Ok(()) };
+    let Some((first, first_out)) = pairs.next() else {
+        return Ok(());
+    };
     if chunks.len() == 1 {
         return run(first, first_out);
     }
@@ -57,13 +66,20 @@ pub(crate) fn for_each<S: Send, O: Send, E: Send>(
         let run = &run;
         let handles: Vec<_> = pairs.map(|(c, o)| scope.spawn(move || run(c, o))).collect();
         let first = run(first, first_out);
-        let rest: Vec<Result<(), E>> = handles.into_iter().map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p))).collect();
+        let rest: Vec<Result<(), E>> = handles
+            .into_iter()
+            .map(|h| h.join().unwrap_or_else(|p| std::panic::resume_unwind(p)))
+            .collect();
         first.and_then(|()| rest.into_iter().collect())
     })
 }
 
 /// Splits `out` (`per_record` values per record) into the chunks' shares.
-pub(crate) fn shares<'o, S, T>(chunks: &[Mutex<Chunk<S>>], out: &'o mut [T], per_record: usize) -> Vec<&'o mut [T]> {
+pub(crate) fn shares<'o, S, T>(
+    chunks: &[Mutex<Chunk<S>>],
+    out: &'o mut [T],
+    per_record: usize,
+) -> Vec<&'o mut [T]> {
     let mut rest = out;
     chunks
         .iter()
@@ -91,7 +107,11 @@ unsafe impl Sync for DisjointRows {}
 
 impl DisjointRows {
     pub fn new(m: &mut nalgebra::DMatrix<f64>) -> Self {
-        DisjointRows { ptr: m.as_mut_ptr(), rows: m.nrows(), cols: m.ncols() }
+        DisjointRows {
+            ptr: m.as_mut_ptr(),
+            rows: m.nrows(),
+            cols: m.ncols(),
+        }
     }
 
     /// Writes `values` into rows `row0..row0 + values.len()` of column `col`.
@@ -100,9 +120,21 @@ impl DisjointRows {
     /// No other thread reads or writes those rows while the matrix is shared this way.
     #[inline]
     pub unsafe fn set_rows(&self, row0: usize, col: usize, values: &[f64]) {
-        assert!(row0 + values.len() <= self.rows && col < self.cols, "rows {row0}..{} of column {col} outside {} × {}", row0 + values.len(), self.rows, self.cols);
+        assert!(
+            row0 + values.len() <= self.rows && col < self.cols,
+            "rows {row0}..{} of column {col} outside {} × {}",
+            row0 + values.len(),
+            self.rows,
+            self.cols
+        );
         // SAFETY: in bounds (checked above); the rows are this caller's alone (the contract)
-        unsafe { std::ptr::copy_nonoverlapping(values.as_ptr(), self.ptr.add(row0 + col * self.rows), values.len()) }
+        unsafe {
+            std::ptr::copy_nonoverlapping(
+                values.as_ptr(),
+                self.ptr.add(row0 + col * self.rows),
+                values.len(),
+            )
+        }
     }
 }
 

@@ -26,11 +26,19 @@ use metrocell_msgs::RosMessage;
 use metrocell_physics::{EffectKind, SignalKind, Signals};
 use nalgebra::{Matrix3, Vector3};
 
-use crate::instrument_readings::{marker_measurements, probe_measurement, record_kind, CameraFeatures, InstrumentMeasurement, InstrumentReading};
+use crate::instrument_readings::{
+    marker_measurements, probe_measurement, record_kind, CameraFeatures, InstrumentMeasurement,
+    InstrumentReading,
+};
+use crate::recordings::{
+    frame_setup, providers, record_frame, PointSource, RecordingError, RecordingOptions,
+};
 use crate::records::{MeasurementRecord, RecordFrame, RecordKind, Rejected};
-use crate::recordings::{frame_setup, providers, record_frame, PointSource, RecordingError, RecordingOptions};
 use crate::residuals::whitening;
-use crate::signal_topics::{feed, message_time, SignalTopic, AIR_SENSOR, COMMANDED_JOINTS_TOPIC, LOAD_TOPIC, POWER_ON_TOPIC, TEMPERATURE_PREFIX};
+use crate::signal_topics::{
+    feed, message_time, SignalTopic, AIR_SENSOR, COMMANDED_JOINTS_TOPIC, LOAD_TOPIC,
+    POWER_ON_TOPIC, TEMPERATURE_PREFIX,
+};
 use metrocell_msgs::geometry_msgs::msg::WrenchStamped;
 use metrocell_msgs::sensor_msgs::msg::{JointState, Temperature, TimeReference};
 
@@ -50,7 +58,10 @@ pub struct StreamOutput {
 impl StreamOutput {
     /// Every record, points first, each group in time order.
     pub fn records(self) -> impl Iterator<Item = MeasurementRecord> {
-        self.by_frame.into_iter().flat_map(|(_, r)| r).chain(self.instrument_records)
+        self.by_frame
+            .into_iter()
+            .flat_map(|(_, r)| r)
+            .chain(self.instrument_records)
     }
 }
 
@@ -96,16 +107,37 @@ pub struct RecordStream<'m, 'a> {
 /// finds later (other sensors) are added with [`RecordStream::add_signal_topic`].
 pub fn declared_topics(model: &ForwardModel, options: &RecordingOptions) -> Vec<(String, String)> {
     let points = match options.points {
-        PointSource::TrackerMeasurements => (options.tracker_topic.clone(), TrackerMeasurement::ROS_TYPE),
-        PointSource::MeasuredPoints | PointSource::Auto => (options.measured_points_topic.clone(), MeasuredPoint::ROS_TYPE),
+        PointSource::TrackerMeasurements => {
+            (options.tracker_topic.clone(), TrackerMeasurement::ROS_TYPE)
+        }
+        PointSource::MeasuredPoints | PointSource::Auto => (
+            options.measured_points_topic.clone(),
+            MeasuredPoint::ROS_TYPE,
+        ),
     };
-    let mut topics = vec![(points.0, points.1.to_string()), (COMMANDED_JOINTS_TOPIC.to_string(), JointState::ROS_TYPE.to_string()), (REFERENCE_POINTS_TOPIC.to_string(), MeasuredPoint::ROS_TYPE.to_string()), (CHECK_POINTS_TOPIC.to_string(), MeasuredPoint::ROS_TYPE.to_string())];
+    let mut topics = vec![
+        (points.0, points.1.to_string()),
+        (
+            COMMANDED_JOINTS_TOPIC.to_string(),
+            JointState::ROS_TYPE.to_string(),
+        ),
+        (
+            REFERENCE_POINTS_TOPIC.to_string(),
+            MeasuredPoint::ROS_TYPE.to_string(),
+        ),
+        (
+            CHECK_POINTS_TOPIC.to_string(),
+            MeasuredPoint::ROS_TYPE.to_string(),
+        ),
+    ];
     if options.probe_hits {
         topics.push((options.probe_topic.clone(), ProbeHit::ROS_TYPE.to_string()));
     }
     for (_, kind) in declared_signals(model) {
         let (name, ty) = match kind {
-            SignalKind::Temperature(n) | SignalKind::TemperatureHistory(n) => (format!("{TEMPERATURE_PREFIX}{n}"), Temperature::ROS_TYPE),
+            SignalKind::Temperature(n) | SignalKind::TemperatureHistory(n) => {
+                (format!("{TEMPERATURE_PREFIX}{n}"), Temperature::ROS_TYPE)
+            }
             SignalKind::TimeSincePowerOn => (POWER_ON_TOPIC.to_string(), TimeReference::ROS_TYPE),
             SignalKind::LoadForce => (LOAD_TOPIC.to_string(), WrenchStamped::ROS_TYPE),
             _ => continue,
@@ -122,11 +154,26 @@ impl<'m, 'a> RecordStream<'m, 'a> {
     /// a live node's subscriptions). Checks, before any message, that the recording has points
     /// to make records of, commanded joints (or nominals that give them) and every signal a
     /// declared term needs — each an error naming what to record.
-    pub fn new(source: &Path, topics: &[(String, String)], model: &'m ForwardModel<'a>, options: &RecordingOptions) -> Result<Self, RecordingError> {
-        let has = |name: &str| topics.iter().find(|(n, _)| n == name).map(|(_, t)| t.as_str());
+    pub fn new(
+        source: &Path,
+        topics: &[(String, String)],
+        model: &'m ForwardModel<'a>,
+        options: &RecordingOptions,
+    ) -> Result<Self, RecordingError> {
+        let has = |name: &str| {
+            topics
+                .iter()
+                .find(|(n, _)| n == name)
+                .map(|(_, t)| t.as_str())
+        };
         let typed = |name: &str, ty: &str| -> Result<bool, RecordingError> {
             match has(name) {
-                Some(t) if t != ty => Err(RecordingError::Bag { path: source.to_path_buf(), reason: format!("topic {name} is recorded as {t}, but records are read from {ty}") }),
+                Some(t) if t != ty => Err(RecordingError::Bag {
+                    path: source.to_path_buf(),
+                    reason: format!(
+                        "topic {name} is recorded as {t}, but records are read from {ty}"
+                    ),
+                }),
                 Some(_) => Ok(true),
                 None => Ok(false),
             }
@@ -134,42 +181,96 @@ impl<'m, 'a> RecordStream<'m, 'a> {
         let points_tracker = match options.points {
             PointSource::MeasuredPoints => false,
             PointSource::TrackerMeasurements => true,
-            PointSource::Auto => has(&options.measured_points_topic) != Some(MeasuredPoint::ROS_TYPE),
+            PointSource::Auto => {
+                has(&options.measured_points_topic) != Some(MeasuredPoint::ROS_TYPE)
+            }
         };
-        let (points_topic, points_type) = if points_tracker { (&options.tracker_topic, TrackerMeasurement::ROS_TYPE) } else { (&options.measured_points_topic, MeasuredPoint::ROS_TYPE) };
+        let (points_topic, points_type) = if points_tracker {
+            (&options.tracker_topic, TrackerMeasurement::ROS_TYPE)
+        } else {
+            (&options.measured_points_topic, MeasuredPoint::ROS_TYPE)
+        };
         let found = typed(points_topic, points_type)?;
         let probes = options.probe_hits && typed(&options.probe_topic, ProbeHit::ROS_TYPE)?;
         let references = typed(REFERENCE_POINTS_TOPIC, MeasuredPoint::ROS_TYPE)?;
         // check points are points of the program: read where the points are measured points
         let checks = !points_tracker && typed(CHECK_POINTS_TOPIC, MeasuredPoint::ROS_TYPE)?;
-        let cameras = options.camera_points && typed(&options.camera_topic, FiducialDetectionArray::ROS_TYPE)?;
+        let cameras = options.camera_points
+            && typed(&options.camera_topic, FiducialDetectionArray::ROS_TYPE)?;
         if !(found || probes || cameras) {
-            let held = topics.iter().map(|(n, t)| format!("{n} ({t})")).collect::<Vec<_>>().join(", ");
-            let held = if held.is_empty() { "no topics".into() } else { held };
+            let held = topics
+                .iter()
+                .map(|(n, t)| format!("{n} ({t})"))
+                .collect::<Vec<_>>()
+                .join(", ");
+            let held = if held.is_empty() {
+                "no topics".into()
+            } else {
+                held
+            };
             if options.points == PointSource::MeasuredPoints {
-                return Err(RecordingError::NoMeasuredPoints { path: source.to_path_buf(), topic: options.measured_points_topic.clone(), held });
+                return Err(RecordingError::NoMeasuredPoints {
+                    path: source.to_path_buf(),
+                    topic: options.measured_points_topic.clone(),
+                    held,
+                });
             }
-            return Err(RecordingError::NoPoints { path: source.to_path_buf(), measured: options.measured_points_topic.clone(), tracker: options.tracker_topic.clone(), held });
+            return Err(RecordingError::NoPoints {
+                path: source.to_path_buf(),
+                measured: options.measured_points_topic.clone(),
+                tracker: options.tracker_topic.clone(),
+                held,
+            });
         }
         let mut sources = Vec::new();
         if found {
-            sources.push(("points".to_string(), format!("{points_topic} ({points_type})")));
+            sources.push((
+                "points".to_string(),
+                format!("{points_topic} ({points_type})"),
+            ));
         }
         if probes {
-            sources.push(("probe hits".to_string(), format!("{} ({})", options.probe_topic, ProbeHit::ROS_TYPE)));
+            sources.push((
+                "probe hits".to_string(),
+                format!("{} ({})", options.probe_topic, ProbeHit::ROS_TYPE),
+            ));
         }
         if checks {
-            sources.push(("check points".to_string(), format!("{CHECK_POINTS_TOPIC} ({}), kept out of fits", MeasuredPoint::ROS_TYPE)));
+            sources.push((
+                "check points".to_string(),
+                format!(
+                    "{CHECK_POINTS_TOPIC} ({}), kept out of fits",
+                    MeasuredPoint::ROS_TYPE
+                ),
+            ));
         }
         if references {
-            sources.push(("reference nests".to_string(), format!("{REFERENCE_POINTS_TOPIC} ({})", MeasuredPoint::ROS_TYPE)));
+            sources.push((
+                "reference nests".to_string(),
+                format!("{REFERENCE_POINTS_TOPIC} ({})", MeasuredPoint::ROS_TYPE),
+            ));
         }
         if cameras {
-            sources.push(("camera points".to_string(), format!("{} ({})", options.camera_topic, FiducialDetectionArray::ROS_TYPE)));
+            sources.push((
+                "camera points".to_string(),
+                format!(
+                    "{} ({})",
+                    options.camera_topic,
+                    FiducialDetectionArray::ROS_TYPE
+                ),
+            ));
         }
-        let signal_topics: BTreeMap<String, SignalTopic> = topics.iter().filter_map(|(n, t)| SignalTopic::of(n, t).map(|w| (n.clone(), w))).collect();
+        let signal_topics: BTreeMap<String, SignalTopic> = topics
+            .iter()
+            .filter_map(|(n, t)| SignalTopic::of(n, t).map(|w| (n.clone(), w)))
+            .collect();
         let carried = |which: &SignalTopic| signal_topics.values().any(|w| w == which);
-        let nominals_give_axes = found && !points_tracker && matches!(model.machine.kinematics, MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_));
+        let nominals_give_axes = found
+            && !points_tracker
+            && matches!(
+                model.machine.kinematics,
+                MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_)
+            );
         let joints = if carried(&SignalTopic::CommandedJoints) && nominals_give_axes {
             // an export may give velocities without positions: the nominals then give the axes
             JointSource::CommandedOrNominal
@@ -180,11 +281,18 @@ impl<'m, 'a> RecordStream<'m, 'a> {
         } else {
             let names = model.machine.joint_names();
             let provide = if points_tracker {
-                format!("record {COMMANDED_JOINTS_TOPIC} (joints {}) next to {points_topic}", names.join(", "))
+                format!(
+                    "record {COMMANDED_JOINTS_TOPIC} (joints {}) next to {points_topic}",
+                    names.join(", ")
+                )
             } else {
                 format!("record {COMMANDED_JOINTS_TOPIC} (joints {}), or import the CSV with columns {} (the nominal point alone gives the joints only on cartesian and delta machines)", names.join(", "), names.iter().map(|n| format!("joint.{n}")).collect::<Vec<_>>().join(", "))
             };
-            return Err(RecordingError::NoJoints { path: source.to_path_buf(), family: family(model).into(), provide });
+            return Err(RecordingError::NoJoints {
+                path: source.to_path_buf(),
+                family: family(model).into(),
+                provide,
+            });
         };
         sources.push(("commanded joints".into(), match joints {
             JointSource::Commanded => COMMANDED_JOINTS_TOPIC.into(),
@@ -197,17 +305,43 @@ impl<'m, 'a> RecordStream<'m, 'a> {
         for (term, kind) in &needs {
             let (available, from) = match kind {
                 SignalKind::AxisPosition(_) | SignalKind::AxisVelocity(_) => (true, None),
-                SignalKind::ApproachDirection(_) => (true, carried(&SignalTopic::Approach).then(|| "/machine/approach_directions".to_string())),
-                SignalKind::Temperature(s) | SignalKind::TemperatureHistory(s) => (carried(&SignalTopic::Temperature(s.clone())), Some(format!("/temperature/{s}"))),
-                SignalKind::AirTemperature => (points_tracker || carried(&SignalTopic::AirTemperature) || carried(&SignalTopic::Temperature(AIR_SENSOR.into())), None),
-                SignalKind::AirPressure => (points_tracker || carried(&SignalTopic::AirPressure), None),
-                SignalKind::AirHumidity => (points_tracker || carried(&SignalTopic::AirHumidity), None),
-                SignalKind::TimeSincePowerOn => (carried(&SignalTopic::PowerOn), Some(POWER_ON_TOPIC.to_string())),
-                SignalKind::LoadForce => (carried(&SignalTopic::Load), Some(LOAD_TOPIC.to_string())),
+                SignalKind::ApproachDirection(_) => (
+                    true,
+                    carried(&SignalTopic::Approach)
+                        .then(|| "/machine/approach_directions".to_string()),
+                ),
+                SignalKind::Temperature(s) | SignalKind::TemperatureHistory(s) => (
+                    carried(&SignalTopic::Temperature(s.clone())),
+                    Some(format!("/temperature/{s}")),
+                ),
+                SignalKind::AirTemperature => (
+                    points_tracker
+                        || carried(&SignalTopic::AirTemperature)
+                        || carried(&SignalTopic::Temperature(AIR_SENSOR.into())),
+                    None,
+                ),
+                SignalKind::AirPressure => {
+                    (points_tracker || carried(&SignalTopic::AirPressure), None)
+                }
+                SignalKind::AirHumidity => {
+                    (points_tracker || carried(&SignalTopic::AirHumidity), None)
+                }
+                SignalKind::TimeSincePowerOn => (
+                    carried(&SignalTopic::PowerOn),
+                    Some(POWER_ON_TOPIC.to_string()),
+                ),
+                SignalKind::LoadForce => {
+                    (carried(&SignalTopic::Load), Some(LOAD_TOPIC.to_string()))
+                }
                 _ => (true, None),
             };
             if !available {
-                return Err(RecordingError::MissingSignal { path: source.to_path_buf(), term: term.clone(), signal: kind.to_string(), provide: providers(kind) });
+                return Err(RecordingError::MissingSignal {
+                    path: source.to_path_buf(),
+                    term: term.clone(),
+                    signal: kind.to_string(),
+                    provide: providers(kind),
+                });
             }
             if let Some(topic) = from {
                 let entry = (kind.to_string(), topic);
@@ -217,9 +351,23 @@ impl<'m, 'a> RecordStream<'m, 'a> {
             }
         }
         if points_tracker {
-            sources.push(("air".into(), format!("each reading's own station air ({points_topic})")));
+            sources.push((
+                "air".into(),
+                format!("each reading's own station air ({points_topic})"),
+            ));
         } else {
-            let air: Vec<&str> = signal_topics.iter().filter(|(_, w)| matches!(w, SignalTopic::AirTemperature | SignalTopic::AirPressure | SignalTopic::AirHumidity) || **w == SignalTopic::Temperature(AIR_SENSOR.into())).map(|(n, _)| n.as_str()).collect();
+            let air: Vec<&str> = signal_topics
+                .iter()
+                .filter(|(_, w)| {
+                    matches!(
+                        w,
+                        SignalTopic::AirTemperature
+                            | SignalTopic::AirPressure
+                            | SignalTopic::AirHumidity
+                    ) || **w == SignalTopic::Temperature(AIR_SENSOR.into())
+                })
+                .map(|(n, _)| n.as_str())
+                .collect();
             if !air.is_empty() {
                 sources.push(("air".into(), air.join(", ")));
             }
@@ -227,7 +375,8 @@ impl<'m, 'a> RecordStream<'m, 'a> {
 
         // bounded memory: joints are kept only as long as a held measurement can still ask for them
         let mut signal_options = options.signals.clone();
-        signal_options.joint_window = Some(options.signals.max_slow_gap + options.signals.max_joint_gap + 60.0);
+        signal_options.joint_window =
+            Some(options.signals.max_slow_gap + options.signals.max_joint_gap + 60.0);
         let mut stream = RecordStream {
             model,
             source: source.to_path_buf(),
@@ -246,7 +395,10 @@ impl<'m, 'a> RecordStream<'m, 'a> {
             joint_names: model.machine.joint_names(),
             builder: SignalsBuilder::for_machine(model.machine, signal_options),
             pending: VecDeque::new(),
-            out: StreamOutput { sources, ..StreamOutput::default() },
+            out: StreamOutput {
+                sources,
+                ..StreamOutput::default()
+            },
             feed: SignalFeed::default(),
             point_index: 0,
             instrument_index: 0,
@@ -282,14 +434,25 @@ impl<'m, 'a> RecordStream<'m, 'a> {
             SignalTopic::AirTemperature => self.builder.expect_air(0),
             SignalTopic::AirPressure => self.builder.expect_air(1),
             SignalTopic::AirHumidity => self.builder.expect_air(2),
-            SignalTopic::Approach | SignalTopic::PowerOn | SignalTopic::Load | SignalTopic::Accelerometer(_) => {}
+            SignalTopic::Approach
+            | SignalTopic::PowerOn
+            | SignalTopic::Load
+            | SignalTopic::Accelerometer(_) => {}
         }
         self.signal_topics.insert(name, which);
     }
 
     /// Every topic the stream reads (points, probe hits, camera points, signals).
     pub fn topics(&self) -> Vec<String> {
-        let mut out: Vec<String> = self.points_topic.iter().chain(&self.probe_topic).chain(&self.camera_topic).chain(&self.reference_topic).chain(&self.check_topic).cloned().collect();
+        let mut out: Vec<String> = self
+            .points_topic
+            .iter()
+            .chain(&self.probe_topic)
+            .chain(&self.camera_topic)
+            .chain(&self.reference_topic)
+            .chain(&self.check_topic)
+            .cloned()
+            .collect();
         out.extend(self.signal_topics.keys().cloned());
         out
     }
@@ -299,13 +462,30 @@ impl<'m, 'a> RecordStream<'m, 'a> {
     /// state without the machine's joints); a bad message is a rejection, counted.
     pub fn push(&mut self, m: &SourcedMessage) -> Result<(), RecordingError> {
         self.push_deferred_joints(Some(m.log_time_ns as i64));
-        let velocity_only = self.joints == JointSource::CommandedOrNominal && self.signal_topics.get(&m.topic) == Some(&SignalTopic::CommandedJoints) && !self.take_positions(m);
+        let velocity_only = self.joints == JointSource::CommandedOrNominal
+            && self.signal_topics.get(&m.topic) == Some(&SignalTopic::CommandedJoints)
+            && !self.take_positions(m);
         let source = self.source.display().to_string();
-        let at = |topic: &str, index: u64| format!("{source}: {topic} message {index} (log time {:.3} s)", m.log_time_ns as f64 / 1e9);
+        let at = |topic: &str, index: u64| {
+            format!(
+                "{source}: {topic} message {index} (log time {:.3} s)",
+                m.log_time_ns as f64 / 1e9
+            )
+        };
         if self.points_topic.as_deref() == Some(m.topic.as_str()) {
             let at = at(&m.topic, self.point_index);
             self.point_index += 1;
-            let parsed = if self.points_tracker { from_tracker(m, at) } else { from_measured_point(m, at, self.joints, &self.model.machine.tool_offset, self.commanded_positions) };
+            let parsed = if self.points_tracker {
+                from_tracker(m, at)
+            } else {
+                from_measured_point(
+                    m,
+                    at,
+                    self.joints,
+                    &self.model.machine.tool_offset,
+                    self.commanded_positions,
+                )
+            };
             match parsed {
                 Ok(p) => {
                     self.builder.observe_time(p.t_ns);
@@ -323,7 +503,13 @@ impl<'m, 'a> RecordStream<'m, 'a> {
         } else if self.check_topic.as_deref() == Some(m.topic.as_str()) {
             let at = at(&m.topic, self.check_index);
             self.check_index += 1;
-            match from_measured_point(m, at, self.joints, &self.model.machine.tool_offset, self.commanded_positions) {
+            match from_measured_point(
+                m,
+                at,
+                self.joints,
+                &self.model.machine.tool_offset,
+                self.commanded_positions,
+            ) {
                 Ok(mut p) => {
                     p.check = true;
                     self.builder.observe_time(p.t_ns);
@@ -345,7 +531,9 @@ impl<'m, 'a> RecordStream<'m, 'a> {
             }
         } else if velocity_only {
             // a joint state without the machine's positions: its velocities go with the nominals
-        } else if self.probe_topic.as_deref() == Some(m.topic.as_str()) || self.camera_topic.as_deref() == Some(m.topic.as_str()) {
+        } else if self.probe_topic.as_deref() == Some(m.topic.as_str())
+            || self.camera_topic.as_deref() == Some(m.topic.as_str())
+        {
             let at = at(&m.topic, self.instrument_index);
             self.instrument_index += 1;
             match instrument_pending(m, at, self.probe_topic.as_deref() == Some(m.topic.as_str())) {
@@ -360,11 +548,29 @@ impl<'m, 'a> RecordStream<'m, 'a> {
                 Err(r) => self.out.rejected.push(r),
             }
         } else if let Some(which) = self.signal_topics.get(&m.topic) {
-            self.feed.take(&mut self.builder, which, m, &self.source, self.model.machine)?;
+            self.feed.take(
+                &mut self.builder,
+                which,
+                m,
+                &self.source,
+                self.model.machine,
+            )?;
         }
-        while self.pending.front().is_some_and(|p| self.builder.ready(p.t_ns)) {
+        while self
+            .pending
+            .front()
+            .is_some_and(|p| self.builder.ready(p.t_ns))
+        {
             let p = self.pending.pop_front().expect("checked");
-            resolve(p, &self.builder, &self.needs, self.model, &self.camera_features, self.commanded_positions && self.joints == JointSource::CommandedOrNominal, &mut self.out);
+            resolve(
+                p,
+                &self.builder,
+                &self.needs,
+                self.model,
+                &self.camera_features,
+                self.commanded_positions && self.joints == JointSource::CommandedOrNominal,
+                &mut self.out,
+            );
         }
         Ok(())
     }
@@ -373,14 +579,25 @@ impl<'m, 'a> RecordStream<'m, 'a> {
     /// machine's positions, to be fed as usual; if not, its velocities are kept for the
     /// nominals of its time.
     fn take_positions(&mut self, m: &SourcedMessage) -> bool {
-        let Ok(js) = m.decode::<JointState>() else { return true };
-        let finite = |name: &String| js.name.iter().position(|n| n == name).and_then(|i| js.position.get(i)).is_some_and(|v| v.is_finite());
+        let Ok(js) = m.decode::<JointState>() else {
+            return true;
+        };
+        let finite = |name: &String| {
+            js.name
+                .iter()
+                .position(|n| n == name)
+                .and_then(|i| js.position.get(i))
+                .is_some_and(|v| v.is_finite())
+        };
         if self.joint_names.iter().all(finite) {
             self.commanded_positions = true;
             return true;
         }
         if js.velocity.len() == js.name.len() {
-            self.velocity_only.insert(message_time(&js.header.stamp, m.log_time_ns), (js.name, js.velocity));
+            self.velocity_only.insert(
+                message_time(&js.header.stamp, m.log_time_ns),
+                (js.name, js.velocity),
+            );
         }
         false
     }
@@ -388,13 +605,23 @@ impl<'m, 'a> RecordStream<'m, 'a> {
     /// Push the joints from nominals stamped before `before` (all with None) to the builder,
     /// with the velocities a velocity-only joint state of their time gave.
     fn push_deferred_joints(&mut self, before: Option<i64>) {
-        while self.deferred_joints.front().is_some_and(|(t, _)| before.is_none_or(|b| *t < b)) {
+        while self
+            .deferred_joints
+            .front()
+            .is_some_and(|(t, _)| before.is_none_or(|b| *t < b))
+        {
             let (t, q) = self.deferred_joints.pop_front().expect("checked");
             let velocities: Vec<f64> = match self.velocity_only.remove(&t) {
-                Some((names, v)) => self.joint_names.iter().map(|j| names.iter().position(|n| n == j).map_or(f64::NAN, |i| v[i])).collect(),
+                Some((names, v)) => self
+                    .joint_names
+                    .iter()
+                    .map(|j| names.iter().position(|n| n == j).map_or(f64::NAN, |i| v[i]))
+                    .collect(),
                 None => Vec::new(),
             };
-            let _ = self.builder.push_joints(t, &self.joint_names, &q, &velocities);
+            let _ = self
+                .builder
+                .push_joints(t, &self.joint_names, &q, &velocities);
             // velocities of earlier times no nominal took are not needed any more
             self.velocity_only = self.velocity_only.split_off(&t);
         }
@@ -422,7 +649,15 @@ impl<'m, 'a> RecordStream<'m, 'a> {
     pub fn flush(&mut self) {
         self.push_deferred_joints(None);
         while let Some(p) = self.pending.pop_front() {
-            resolve(p, &self.builder, &self.needs, self.model, &self.camera_features, self.commanded_positions && self.joints == JointSource::CommandedOrNominal, &mut self.out);
+            resolve(
+                p,
+                &self.builder,
+                &self.needs,
+                self.model,
+                &self.camera_features,
+                self.commanded_positions && self.joints == JointSource::CommandedOrNominal,
+                &mut self.out,
+            );
         }
     }
 
@@ -430,7 +665,9 @@ impl<'m, 'a> RecordStream<'m, 'a> {
     /// the signal samples refused per topic are reported.
     pub fn finish(mut self) -> StreamOutput {
         self.flush();
-        self.out.rejected.extend(self.feed.into_rejected(&self.source));
+        self.out
+            .rejected
+            .extend(self.feed.into_rejected(&self.source));
         self.out
     }
 }
@@ -444,10 +681,22 @@ pub(crate) struct SignalFeed {
 impl SignalFeed {
     /// Feed one message. A commanded joint state without one of the machine's joints is an
     /// error (nothing could be interpolated); other refusals are counted.
-    pub(crate) fn take(&mut self, builder: &mut SignalsBuilder, which: &SignalTopic, m: &SourcedMessage, path: &Path, machine: &MachineGeometry) -> Result<(), RecordingError> {
+    pub(crate) fn take(
+        &mut self,
+        builder: &mut SignalsBuilder,
+        which: &SignalTopic,
+        m: &SourcedMessage,
+        path: &Path,
+        machine: &MachineGeometry,
+    ) -> Result<(), RecordingError> {
         if let Err(reason) = feed(builder, which, m) {
             if *which == SignalTopic::CommandedJoints && reason.starts_with("has no joint") {
-                return Err(RecordingError::JointNames { path: path.to_path_buf(), topic: m.topic.clone(), reason, joints: machine.joint_names().join(", ") });
+                return Err(RecordingError::JointNames {
+                    path: path.to_path_buf(),
+                    topic: m.topic.clone(),
+                    reason,
+                    joints: machine.joint_names().join(", "),
+                });
             }
             let r = self.refused.entry(m.topic.clone()).or_default();
             r.count += 1;
@@ -462,7 +711,12 @@ impl SignalFeed {
             .map(|(topic, r)| {
                 let (t, reason) = r.first.unwrap_or_default();
                 Rejected {
-                    at: format!("{}: {topic} ({} messages, the first at log time {:.3} s)", path.display(), r.count, t as f64 / 1e9),
+                    at: format!(
+                        "{}: {topic} ({} messages, the first at log time {:.3} s)",
+                        path.display(),
+                        r.count,
+                        t as f64 / 1e9
+                    ),
                     point_id: String::new(),
                     reason: format!("signal samples not used: {reason}"),
                 }
@@ -471,12 +725,16 @@ impl SignalFeed {
     }
 }
 
-
 /// (term label, signal) of every declared term whose prediction reads a recorded signal
 /// (scatter terms never enter a prediction; ranges and points the model computes itself).
 fn declared_signals(model: &ForwardModel) -> Vec<(String, SignalKind)> {
     let mut out = Vec::new();
-    for t in model.machine_terms.terms.iter().chain(&model.instrument_terms.terms) {
+    for t in model
+        .machine_terms
+        .terms
+        .iter()
+        .chain(&model.instrument_terms.terms)
+    {
         if t.term.effect() == EffectKind::RangeScatter {
             continue;
         }
@@ -547,7 +805,6 @@ struct Pending {
     check: bool,
 }
 
-
 fn covariance_row_major(c: &[f64; 9]) -> Matrix3<f64> {
     Matrix3::from_row_slice(c)
 }
@@ -561,7 +818,11 @@ fn status_flags(status: u8) -> String {
         (TrackerMeasurement::STATUS_OUT_OF_RANGE, "OUT_OF_RANGE"),
         (TrackerMeasurement::STATUS_REJECTED, "REJECTED"),
     ];
-    let set: Vec<&str> = names.iter().filter(|(bit, _)| status & bit != 0).map(|(_, n)| *n).collect();
+    let set: Vec<&str> = names
+        .iter()
+        .filter(|(bit, _)| status & bit != 0)
+        .map(|(_, n)| *n)
+        .collect();
     if set.is_empty() {
         format!("status {status}")
     } else {
@@ -585,43 +846,102 @@ struct Refused {
     first: Option<(u64, String)>,
 }
 
-
 fn reject(at: String, point_id: &str, reason: impl Into<String>) -> Rejected {
-    Rejected { at, point_id: point_id.to_string(), reason: reason.into() }
+    Rejected {
+        at,
+        point_id: point_id.to_string(),
+        reason: reason.into(),
+    }
 }
 
 /// Point and covariance checks shared by both sources.
-fn check_point(at: &str, point_id: &str, measured: &Vector3<f64>, covariance: &Matrix3<f64>) -> Result<(), Rejected> {
+fn check_point(
+    at: &str,
+    point_id: &str,
+    measured: &Vector3<f64>,
+    covariance: &Matrix3<f64>,
+) -> Result<(), Rejected> {
     if !measured.iter().all(|v| v.is_finite()) {
-        return Err(reject(at.into(), point_id, format!("measured point ({}, {}, {}) m is not finite", measured.x, measured.y, measured.z)));
+        return Err(reject(
+            at.into(),
+            point_id,
+            format!(
+                "measured point ({}, {}, {}) m is not finite",
+                measured.x, measured.y, measured.z
+            ),
+        ));
     }
     if !covariance.iter().all(|v| v.is_finite()) {
         return Err(reject(at.into(), point_id, "covariance is not finite"));
     }
     if whitening(covariance).is_none() {
-        return Err(reject(at.into(), point_id, format!("covariance is not positive definite (diagonal {:.3e}, {:.3e}, {:.3e} m²)", covariance[(0, 0)], covariance[(1, 1)], covariance[(2, 2)])));
+        return Err(reject(
+            at.into(),
+            point_id,
+            format!(
+                "covariance is not positive definite (diagonal {:.3e}, {:.3e}, {:.3e} m²)",
+                covariance[(0, 0)],
+                covariance[(1, 1)],
+                covariance[(2, 2)]
+            ),
+        ));
     }
     Ok(())
 }
 
 fn from_tracker(m: &SourcedMessage, at: String) -> Result<Pending, Rejected> {
-    let r: TrackerMeasurement = m.decode().map_err(|e| reject(at.clone(), "", e.to_string()))?;
+    let r: TrackerMeasurement = m
+        .decode()
+        .map_err(|e| reject(at.clone(), "", e.to_string()))?;
     let point_id = r.target_id.clone();
     if r.status != TrackerMeasurement::STATUS_OK {
-        return Err(reject(at, &point_id, format!("reading flagged {}", status_flags(r.status))));
+        return Err(reject(
+            at,
+            &point_id,
+            format!("reading flagged {}", status_flags(r.status)),
+        ));
     }
     let measured = Vector3::new(r.point.x, r.point.y, r.point.z);
     let covariance = covariance_row_major(&r.covariance);
     check_point(&at, &point_id, &measured, &covariance)?;
-    let frame = if r.header.frame_id.is_empty() { RecordFrame::Instrument("tracker".into()) } else { record_frame(&r.header.frame_id) };
-    let air = [r.air_temperature, r.air_pressure, r.air_humidity].iter().all(|v| v.is_finite()).then_some((r.air_temperature, r.air_pressure, 100.0 * r.air_humidity));
-    Ok(Pending { t_ns: message_time(&r.header.stamp, m.log_time_ns), at, point_id, channel: "tracker".into(), frame, measured, covariance, air, q: None, reading: None, nest: None, setup: frame_setup(&r.header.frame_id), check: false })
+    let frame = if r.header.frame_id.is_empty() {
+        RecordFrame::Instrument("tracker".into())
+    } else {
+        record_frame(&r.header.frame_id)
+    };
+    let air = [r.air_temperature, r.air_pressure, r.air_humidity]
+        .iter()
+        .all(|v| v.is_finite())
+        .then_some((r.air_temperature, r.air_pressure, 100.0 * r.air_humidity));
+    Ok(Pending {
+        t_ns: message_time(&r.header.stamp, m.log_time_ns),
+        at,
+        point_id,
+        channel: "tracker".into(),
+        frame,
+        measured,
+        covariance,
+        air,
+        q: None,
+        reading: None,
+        nest: None,
+        setup: frame_setup(&r.header.frame_id),
+        check: false,
+    })
 }
 
 /// `commanded_positions`: the recording's joint states have given the machine's positions (in
 /// [`JointSource::CommandedOrNominal`], the nominal then gives none).
-fn from_measured_point(m: &SourcedMessage, at: String, joints: JointSource, tool_offset: &Vector3<f64>, commanded_positions: bool) -> Result<Pending, Rejected> {
-    let p: MeasuredPoint = m.decode().map_err(|e| reject(at.clone(), "", e.to_string()))?;
+fn from_measured_point(
+    m: &SourcedMessage,
+    at: String,
+    joints: JointSource,
+    tool_offset: &Vector3<f64>,
+    commanded_positions: bool,
+) -> Result<Pending, Rejected> {
+    let p: MeasuredPoint = m
+        .decode()
+        .map_err(|e| reject(at.clone(), "", e.to_string()))?;
     let measured = Vector3::new(p.measured.x, p.measured.y, p.measured.z);
     let covariance = covariance_row_major(&p.covariance);
     check_point(&at, &p.point_id, &measured, &covariance)?;
@@ -629,7 +949,11 @@ fn from_measured_point(m: &SourcedMessage, at: String, joints: JointSource, tool
     let q = match joints {
         JointSource::Commanded => None,
         // a row whose joint state gives positions is read from it (it may come after the point)
-        JointSource::CommandedOrNominal if commanded_positions || !nominal.iter().all(|v| v.is_finite()) => None,
+        JointSource::CommandedOrNominal
+            if commanded_positions || !nominal.iter().all(|v| v.is_finite()) =>
+        {
+            None
+        }
         JointSource::Nominal | JointSource::CommandedOrNominal => {
             if !nominal.iter().all(|v| v.is_finite()) {
                 return Err(reject(
@@ -642,27 +966,66 @@ fn from_measured_point(m: &SourcedMessage, at: String, joints: JointSource, tool
             Some(vec![q.x, q.y, q.z])
         }
     };
-    Ok(Pending { t_ns: message_time(&p.header.stamp, m.log_time_ns), at, point_id: p.point_id, channel: p.source, frame: record_frame(&p.header.frame_id), measured, covariance, air: None, q, reading: None, nest: None, setup: frame_setup(&p.header.frame_id), check: false })
+    Ok(Pending {
+        t_ns: message_time(&p.header.stamp, m.log_time_ns),
+        at,
+        point_id: p.point_id,
+        channel: p.source,
+        frame: record_frame(&p.header.frame_id),
+        measured,
+        covariance,
+        air: None,
+        q,
+        reading: None,
+        nest: None,
+        setup: frame_setup(&p.header.frame_id),
+        check: false,
+    })
 }
 
 /// A reference nest's reading (`/reference_points`): its point, no joints.
 fn from_reference_point(m: &SourcedMessage, at: String) -> Result<Pending, Rejected> {
-    let p: MeasuredPoint = m.decode().map_err(|e| reject(at.clone(), "", e.to_string()))?;
+    let p: MeasuredPoint = m
+        .decode()
+        .map_err(|e| reject(at.clone(), "", e.to_string()))?;
     let measured = Vector3::new(p.measured.x, p.measured.y, p.measured.z);
     let covariance = covariance_row_major(&p.covariance);
     check_point(&at, &p.point_id, &measured, &covariance)?;
     let nest = Vector3::new(p.nominal.x, p.nominal.y, p.nominal.z);
-    Ok(Pending { t_ns: message_time(&p.header.stamp, m.log_time_ns), at, point_id: p.point_id, channel: p.source, frame: record_frame(&p.header.frame_id), measured, covariance, air: None, q: Some(Vec::new()), reading: None, nest: Some(nest), setup: frame_setup(&p.header.frame_id), check: false })
+    Ok(Pending {
+        t_ns: message_time(&p.header.stamp, m.log_time_ns),
+        at,
+        point_id: p.point_id,
+        channel: p.source,
+        frame: record_frame(&p.header.frame_id),
+        measured,
+        covariance,
+        air: None,
+        q: Some(Vec::new()),
+        reading: None,
+        nest: Some(nest),
+        setup: frame_setup(&p.header.frame_id),
+        check: false,
+    })
 }
 
 /// The measurements of a probe hit (`probe`) or a detection array, checked like points.
-fn instrument_pending(m: &SourcedMessage, at: String, probe: bool) -> Result<Vec<Pending>, Rejected> {
+fn instrument_pending(
+    m: &SourcedMessage,
+    at: String,
+    probe: bool,
+) -> Result<Vec<Pending>, Rejected> {
     let (stamp, frame_id, measurements): (_, String, Vec<InstrumentMeasurement>) = if probe {
-        let hit: ProbeHit = m.decode().map_err(|e| reject(at.clone(), "", e.to_string()))?;
-        let one = probe_measurement(&hit).map_err(|reason| reject(at.clone(), &hit.probe_id, reason))?;
+        let hit: ProbeHit = m
+            .decode()
+            .map_err(|e| reject(at.clone(), "", e.to_string()))?;
+        let one =
+            probe_measurement(&hit).map_err(|reason| reject(at.clone(), &hit.probe_id, reason))?;
         (hit.header.stamp, hit.header.frame_id, vec![one])
     } else {
-        let array: FiducialDetectionArray = m.decode().map_err(|e| reject(at.clone(), "", e.to_string()))?;
+        let array: FiducialDetectionArray = m
+            .decode()
+            .map_err(|e| reject(at.clone(), "", e.to_string()))?;
         let all = marker_measurements(&array);
         (array.header.stamp, array.header.frame_id, all)
     };
@@ -670,7 +1033,21 @@ fn instrument_pending(m: &SourcedMessage, at: String, probe: bool) -> Result<Vec
     let mut out = Vec::new();
     for x in measurements {
         check_point(&at, &x.point_id, &x.measured, &x.covariance)?;
-        out.push(Pending { t_ns, at: at.clone(), point_id: x.point_id, channel: x.channel, frame: record_frame(&frame_id), measured: x.measured, covariance: x.covariance, air: None, q: None, reading: Some(x.reading), nest: None, setup: frame_setup(&frame_id), check: false });
+        out.push(Pending {
+            t_ns,
+            at: at.clone(),
+            point_id: x.point_id,
+            channel: x.channel,
+            frame: record_frame(&frame_id),
+            measured: x.measured,
+            covariance: x.covariance,
+            air: None,
+            q: None,
+            reading: Some(x.reading),
+            nest: None,
+            setup: frame_setup(&frame_id),
+            check: false,
+        });
     }
     Ok(out)
 }
@@ -678,9 +1055,20 @@ fn instrument_pending(m: &SourcedMessage, at: String, probe: bool) -> Result<Vec
 /// The record of a measurement whose signals are all read, or why it is rejected.
 /// `commanded`: the recording's joint states give the machine's positions, which then take
 /// precedence over a point's nominal.
-fn resolve(p: Pending, builder: &SignalsBuilder, needs: &[(String, SignalKind)], model: &ForwardModel, features: &CameraFeatures, commanded: bool, out: &mut StreamOutput) {
+fn resolve(
+    p: Pending,
+    builder: &SignalsBuilder,
+    needs: &[(String, SignalKind)],
+    model: &ForwardModel,
+    features: &CameraFeatures,
+    commanded: bool,
+    out: &mut StreamOutput,
+) {
     // a reference nest has no joints (its q is empty), whatever the joint source
-    let q = match p.q.filter(|q| !commanded || p.nest.is_some() && q.is_empty()) {
+    let q = match p
+        .q
+        .filter(|q| !commanded || p.nest.is_some() && q.is_empty())
+    {
         Some(q) => q,
         None => match builder.joints_at(p.t_ns) {
             Some(m) => m.positions,
@@ -707,27 +1095,51 @@ fn resolve(p: Pending, builder: &SignalsBuilder, needs: &[(String, SignalKind)],
         signals.gravity = arm.gravity_from(&signals.accelerations);
     }
     if let Some((t, pa, h)) = p.air {
-        (signals.air_temperature, signals.air_pressure, signals.air_humidity) = (Some(t), Some(pa), Some(h));
+        (
+            signals.air_temperature,
+            signals.air_pressure,
+            signals.air_humidity,
+        ) = (Some(t), Some(pa), Some(h));
     }
     // a probe hit or a camera point reads the machine's terms (and its own instrument's, which
     // read nothing recorded), not a tracker's
     let reads = |term: &str| match (&p.reading, p.nest) {
         // a reference nest: only the instrument's terms act on its reading
-        (_, Some(_)) => model.instrument_terms.terms.iter().any(|t| t.term.label() == term),
+        (_, Some(_)) => model
+            .instrument_terms
+            .terms
+            .iter()
+            .any(|t| t.term.label() == term),
         (None, None) => true,
-        (Some(_), None) => model.machine_terms.terms.iter().any(|t| t.term.label() == term),
+        (Some(_), None) => model
+            .machine_terms
+            .terms
+            .iter()
+            .any(|t| t.term.label() == term),
     };
-    if let Some((term, kind)) = needs.iter().find(|(term, k)| reads(term) && !present(&signals, k)) {
+    if let Some((term, kind)) = needs
+        .iter()
+        .find(|(term, k)| reads(term) && !present(&signals, k))
+    {
         let why = match kind {
             SignalKind::ApproachDirection(_) => "the axis has not moved yet in the recording, and its approach is the sign of its last motion (set the signals option initial_approach when the homing direction is known)",
             SignalKind::TimeSincePowerOn => "the instrument's power-on time is after it",
             _ => "before its first sample, after its last, or in a gap",
         };
-        out.rejected.push(reject(p.at, &p.point_id, format!("term `{term}` needs {kind}, which the recording does not give at {:.3} s: {why}", p.t_ns as f64 / 1e9)));
+        out.rejected.push(reject(
+            p.at,
+            &p.point_id,
+            format!(
+                "term `{term}` needs {kind}, which the recording does not give at {:.3} s: {why}",
+                p.t_ns as f64 / 1e9
+            ),
+        ));
         return;
     }
     let kind = match &p.reading {
-        None if p.nest.is_some() => RecordKind::Reference { nest: p.nest.expect("checked") },
+        None if p.nest.is_some() => RecordKind::Reference {
+            nest: p.nest.expect("checked"),
+        },
         None => RecordKind::Point,
         Some(reading) => match record_kind(model, features, reading, &q) {
             Ok(kind) => kind,
@@ -737,7 +1149,16 @@ fn resolve(p: Pending, builder: &SignalsBuilder, needs: &[(String, SignalKind)],
             }
         },
     };
-    let record = MeasurementRecord { time: p.t_ns as f64 / 1e9, point_id: p.point_id, channel: p.channel, q, measured: p.measured, covariance: p.covariance, signals, kind };
+    let record = MeasurementRecord {
+        time: p.t_ns as f64 / 1e9,
+        point_id: p.point_id,
+        channel: p.channel,
+        q,
+        measured: p.measured,
+        covariance: p.covariance,
+        signals,
+        kind,
+    };
     if p.reading.is_some() {
         out.instrument_records.push(record);
         return;

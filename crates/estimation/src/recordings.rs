@@ -58,7 +58,9 @@ use crate::records::{RecordFrame, RecordSet, Rejected};
 use crate::signal_topics::{SignalTopic, COMMANDED_JOINTS_TOPIC, LOAD_TOPIC, POWER_ON_TOPIC};
 
 pub const MEASURED_POINTS_TOPIC: &str = "/measured_points";
-pub use metrocell_msgs::topics::{FIDUCIALS as CAMERA_TOPIC, PROBE_HITS as PROBE_TOPIC, TRACKER_MEASUREMENTS as TRACKER_TOPIC};
+pub use metrocell_msgs::topics::{
+    FIDUCIALS as CAMERA_TOPIC, PROBE_HITS as PROBE_TOPIC, TRACKER_MEASUREMENTS as TRACKER_TOPIC,
+};
 
 /// Which messages become records.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -111,22 +113,55 @@ pub enum RecordingError {
     #[error("{}: {reason}", path.display())]
     Bag { path: PathBuf, reason: String },
     #[error("{}: no measurements to build records from: the bag has neither {measured} (metrocell_msgs/MeasuredPoint) nor {tracker} (metrocell_msgs/TrackerMeasurement); it holds: {held}", path.display())]
-    NoPoints { path: PathBuf, measured: String, tracker: String, held: String },
+    NoPoints {
+        path: PathBuf,
+        measured: String,
+        tracker: String,
+        held: String,
+    },
     #[error("{}: no measured points: the records are read from {topic} (metrocell_msgs/MeasuredPoint: points in the machine frame, as the tracker node publishes them), which it does not hold; it holds: {held}. The tracker node makes them from a bag's /tracker/measurements (`metrocell-tracker --bag IN --output POINTS`, Cartesian and delta machines), `metrocell bag merge` joins them to the signals", path.display())]
-    NoMeasuredPoints { path: PathBuf, topic: String, held: String },
+    NoMeasuredPoints {
+        path: PathBuf,
+        topic: String,
+        held: String,
+    },
     #[error("term `{term}` needs the signal {signal}, which {} does not hold: {provide}", path.display())]
-    MissingSignal { path: PathBuf, term: String, signal: String, provide: String },
+    MissingSignal {
+        path: PathBuf,
+        term: String,
+        signal: String,
+        provide: String,
+    },
     #[error("{}: the records need the commanded joints of this {family} machine, and the bag has none: {provide}", path.display())]
-    NoJoints { path: PathBuf, family: String, provide: String },
+    NoJoints {
+        path: PathBuf,
+        family: String,
+        provide: String,
+    },
     #[error("{}: {topic} {reason}, but the model's machine has joints {joints}: record the commanded joints under the machine's names (bag import: columns joint.<name>)", path.display())]
-    JointNames { path: PathBuf, topic: String, reason: String, joints: String },
+    JointNames {
+        path: PathBuf,
+        topic: String,
+        reason: String,
+        joints: String,
+    },
     #[error("the measurements are in different frames ({frames}); a record set holds one frame: build one set per frame")]
     MixedFrames { frames: String },
 }
 
 /// The records of `bags` for `model` (module docs: sources, frames, checks).
-pub fn records_from_bags<P: AsRef<Path>>(bags: &[P], model: &ForwardModel, options: &RecordingOptions) -> Result<RecordSet, RecordingError> {
-    let mut set = RecordSet { check: Vec::new(), frame: RecordFrame::Machine, records: Vec::new(), rejected: Vec::new(), sources: Vec::new() };
+pub fn records_from_bags<P: AsRef<Path>>(
+    bags: &[P],
+    model: &ForwardModel,
+    options: &RecordingOptions,
+) -> Result<RecordSet, RecordingError> {
+    let mut set = RecordSet {
+        check: Vec::new(),
+        frame: RecordFrame::Machine,
+        records: Vec::new(),
+        rejected: Vec::new(),
+        sources: Vec::new(),
+    };
     let mut frames: BTreeMap<String, (RecordFrame, usize)> = BTreeMap::new();
     for bag in bags {
         let part = bag_records(bag.as_ref(), model, options)?;
@@ -144,7 +179,11 @@ pub fn records_from_bags<P: AsRef<Path>>(bags: &[P], model: &ForwardModel, optio
         }
     }
     if frames.len() > 1 {
-        let frames = frames.iter().map(|(name, (_, n))| format!("{n} in `{name}`")).collect::<Vec<_>>().join(", ");
+        let frames = frames
+            .iter()
+            .map(|(name, (_, n))| format!("{n} in `{name}`"))
+            .collect::<Vec<_>>()
+            .join(", ");
         return Err(RecordingError::MixedFrames { frames });
     }
     if let Some((_, (frame, _))) = frames.into_iter().next() {
@@ -156,10 +195,20 @@ pub fn records_from_bags<P: AsRef<Path>>(bags: &[P], model: &ForwardModel, optio
 /// Every signal a bag holds, read whole into a builder (no window): for tools and tests that
 /// look at the signals at any instant. Signal samples the builder refused are returned as
 /// [`Rejected`] entries, one per topic. [`records_from_bags`] streams instead.
-pub fn signals_from_bag(path: &Path, machine: &MachineGeometry, options: &SignalsBuilderOptions) -> Result<(SignalsBuilder, Vec<Rejected>), RecordingError> {
+pub fn signals_from_bag(
+    path: &Path,
+    machine: &MachineGeometry,
+    options: &SignalsBuilderOptions,
+) -> Result<(SignalsBuilder, Vec<Rejected>), RecordingError> {
     let mut bag = OpenedBag::open(path)?;
     bag.subscribe_signals();
-    let mut builder = SignalsBuilder::for_machine(machine, SignalsBuilderOptions { joint_window: None, ..options.clone() });
+    let mut builder = SignalsBuilder::for_machine(
+        machine,
+        SignalsBuilderOptions {
+            joint_window: None,
+            ..options.clone()
+        },
+    );
     let mut feed = SignalFeed::default();
     for m in bag.source.messages().map_err(|e| bag_error(path, e))? {
         let m = m.map_err(|e| bag_error(path, e))?;
@@ -172,7 +221,10 @@ pub fn signals_from_bag(path: &Path, machine: &MachineGeometry, options: &Signal
 }
 
 fn bag_error(path: &Path, e: metrocell_bagtools::ToolError) -> RecordingError {
-    RecordingError::Bag { path: path.to_path_buf(), reason: e.to_string() }
+    RecordingError::Bag {
+        path: path.to_path_buf(),
+        reason: e.to_string(),
+    }
 }
 
 /// A bag opened for records: its topics and the ones that carry signals.
@@ -186,9 +238,20 @@ struct OpenedBag {
 impl OpenedBag {
     fn open(path: &Path) -> Result<Self, RecordingError> {
         let source = BagSource::open(path).map_err(|e| bag_error(path, e))?;
-        let topics: Vec<(String, String)> = source.topics().iter().map(|t| (t.name.clone(), t.type_name.clone())).collect();
-        let signal_topics = topics.iter().filter_map(|(n, t)| SignalTopic::of(n, t).map(|w| (n.clone(), w))).collect();
-        Ok(Self { source, topics, signal_topics })
+        let topics: Vec<(String, String)> = source
+            .topics()
+            .iter()
+            .map(|t| (t.name.clone(), t.type_name.clone()))
+            .collect();
+        let signal_topics = topics
+            .iter()
+            .filter_map(|(n, t)| SignalTopic::of(n, t).map(|w| (n.clone(), w)))
+            .collect();
+        Ok(Self {
+            source,
+            topics,
+            signal_topics,
+        })
     }
     fn subscribe_signals(&mut self) {
         for name in self.signal_topics.keys() {
@@ -200,7 +263,9 @@ impl OpenedBag {
 /// The frame a `header.frame_id` names (module docs); `<frame>@<setup>` is `<frame>` (see
 /// [`frame_setup`]).
 pub fn record_frame(frame_id: &str) -> RecordFrame {
-    let frame_id = frame_id.split_once(metrocell_bagtools::import::SETUP_SEPARATOR).map_or(frame_id, |(f, _)| f);
+    let frame_id = frame_id
+        .split_once(metrocell_bagtools::import::SETUP_SEPARATOR)
+        .map_or(frame_id, |(f, _)| f);
     match frame_id {
         "" | "machine" | "workpiece" => RecordFrame::Machine,
         other => RecordFrame::Instrument(other.to_string()),
@@ -210,7 +275,10 @@ pub fn record_frame(frame_id: &str) -> RecordFrame {
 /// The placement of the instrument a `header.frame_id` names: `<setup>` of `<frame>@<setup>`
 /// (bag import's `setup` column), None without one.
 pub fn frame_setup(frame_id: &str) -> Option<std::sync::Arc<str>> {
-    frame_id.split_once(metrocell_bagtools::import::SETUP_SEPARATOR).map(|(_, s)| std::sync::Arc::from(s)).filter(|s: &std::sync::Arc<str>| !s.is_empty())
+    frame_id
+        .split_once(metrocell_bagtools::import::SETUP_SEPARATOR)
+        .map(|(_, s)| std::sync::Arc::from(s))
+        .filter(|s: &std::sync::Arc<str>| !s.is_empty())
 }
 
 fn frame_name(f: &RecordFrame) -> String {
@@ -222,7 +290,9 @@ fn frame_name(f: &RecordFrame) -> String {
 
 /// The topics and `bag import` columns that provide a signal (for error messages).
 pub fn providers(kind: &SignalKind) -> String {
-    let axis = |a: &Axis| format!("{COMMANDED_JOINTS_TOPIC} with joint `{a}`, or on cartesian and delta machines the measured points' nominals (bag import: column joint.{a} or nominal_{a})");
+    let axis = |a: &Axis| {
+        format!("{COMMANDED_JOINTS_TOPIC} with joint `{a}`, or on cartesian and delta machines the measured points' nominals (bag import: column joint.{a} or nominal_{a})")
+    };
     match kind {
         SignalKind::AxisPosition(a) => format!("record {}", axis(a)),
         SignalKind::ApproachDirection(a) => format!("record {} (the approach is the sign of the last motion), or /machine/approach_directions (bag import: column approach.{a})", axis(a)),
@@ -240,7 +310,11 @@ pub fn providers(kind: &SignalKind) -> String {
     }
 }
 
-fn bag_records(path: &Path, model: &ForwardModel, options: &RecordingOptions) -> Result<StreamOutput, RecordingError> {
+fn bag_records(
+    path: &Path,
+    model: &ForwardModel,
+    options: &RecordingOptions,
+) -> Result<StreamOutput, RecordingError> {
     let mut bag = OpenedBag::open(path)?;
     let mut stream = RecordStream::new(path, &bag.topics, model, options)?;
     for topic in stream.topics() {

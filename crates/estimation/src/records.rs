@@ -26,11 +26,17 @@ pub enum RecordKind {
     /// A touch-probe trigger: `measured` is the stylus-centre reading (axes + stylus offset, no
     /// radius or pretravel compensation), predicted by the model's probe reading of `target`
     /// (crates/model `probe`) with the probe `probe` (None: the model's only probe).
-    ProbeHit { target: ProbeTarget, probe: Option<String> },
+    ProbeHit {
+        target: ProbeTarget,
+        probe: Option<String>,
+    },
     /// A camera's metric reading of a part feature (a marker pose's translation): `measured` in
     /// the camera's optical frame, predicted by the model's camera point of the feature whose
     /// nominal position (workpiece frame) is `feature`, seen by camera `camera` (None: the only one).
-    CameraPoint { feature: Vector3<f64>, camera: Option<String> },
+    CameraPoint {
+        feature: Vector3<f64>,
+        camera: Option<String>,
+    },
     /// A reference nest the tracker re-measures: a point fixed in the frame instrument poses are
     /// given in (on the floor, or on the table the instrument stands on), which the machine does
     /// not move — only the instrument's own terms act on its reading (its pose, drift, warm-up,

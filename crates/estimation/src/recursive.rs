@@ -68,7 +68,13 @@ pub struct RecursiveOptions {
 impl RecursiveOptions {
     /// Constant parameters, 1e-6 outlier gate, a 10-measurement window alarming at 1e-3.
     pub fn constant(n: usize) -> Self {
-        Self { process_noise: vec![0.0; n], gate_probability: 1e-6, window: 10, alarm_probability: 1e-3, alarm_inflation: 100.0 }
+        Self {
+            process_noise: vec![0.0; n],
+            gate_probability: 1e-6,
+            window: 10,
+            alarm_probability: 1e-3,
+            alarm_inflation: 100.0,
+        }
     }
 }
 
@@ -127,30 +133,76 @@ pub struct RecursiveEstimator {
 impl RecursiveEstimator {
     /// Start at `x0` (stacked) with covariance `p0` over the free parameters of `setup` (in
     /// stacked order).
-    pub fn new(model: &ForwardModel, setup: &ParameterSetup, x0: Vec<f64>, p0: DMatrix<f64>, options: RecursiveOptions) -> Result<Self, RecursiveError> {
+    pub fn new(
+        model: &ForwardModel,
+        setup: &ParameterSetup,
+        x0: Vec<f64>,
+        p0: DMatrix<f64>,
+        options: RecursiveOptions,
+    ) -> Result<Self, RecursiveError> {
         let n = model.param_count();
         if options.process_noise.len() != n {
-            return Err(RecursiveError::ProcessNoise { got: options.process_noise.len(), n });
+            return Err(RecursiveError::ProcessNoise {
+                got: options.process_noise.len(),
+                n,
+            });
         }
         let free = setup.free_indices();
         let k = free.len();
-        if p0.shape() != (k, k) || !p0.iter().all(|v| v.is_finite()) || (0..k).any(|i| p0[(i, i)] < 0.0) {
+        if p0.shape() != (k, k)
+            || !p0.iter().all(|v| v.is_finite())
+            || (0..k).any(|i| p0[(i, i)] < 0.0)
+        {
             return Err(RecursiveError::BadCovariance { n: k });
         }
-        let gate = ChiSquared::new(3.0).map(|d| d.inverse_cdf(1.0 - options.gate_probability)).unwrap_or(f64::INFINITY);
+        let gate = ChiSquared::new(3.0)
+            .map(|d| d.inverse_cdf(1.0 - options.gate_probability))
+            .unwrap_or(f64::INFINITY);
         let specs = Self::specs(model);
         let start = Self::initial_covariance(model, setup);
         // the prior: the setup's (or a wider start's), never wider than half the possible range
-        let prior_sigma: Vec<f64> = free.iter().enumerate().map(|(i, &s)| start[(i, i)].max(p0[(i, i)]).sqrt().min(ranges::possible_half_width(&specs[s]))).collect();
+        let prior_sigma: Vec<f64> = free
+            .iter()
+            .enumerate()
+            .map(|(i, &s)| {
+                start[(i, i)]
+                    .max(p0[(i, i)])
+                    .sqrt()
+                    .min(ranges::possible_half_width(&specs[s]))
+            })
+            .collect();
         let range: Vec<(f64, f64)> = free.iter().map(|&s| possible_range(&specs[s])).collect();
         let information = Self::information_of_start(&p0, &prior_sigma);
-        let mut filter = Self { x: x0, free, p: p0, options, last_time: None, nis_window: VecDeque::new(), gate, accepted: 0, rejected: 0, consecutive_rejects: 0, alarms: 0, sum_squared_innovation: 0.0, jacobian: DMatrix::zeros(TRACKER_ROWS, n), prior_sigma, range, information, at_bound: vec![false; k] };
+        let mut filter = Self {
+            x: x0,
+            free,
+            p: p0,
+            options,
+            last_time: None,
+            nis_window: VecDeque::new(),
+            gate,
+            accepted: 0,
+            rejected: 0,
+            consecutive_rejects: 0,
+            alarms: 0,
+            sum_squared_innovation: 0.0,
+            jacobian: DMatrix::zeros(TRACKER_ROWS, n),
+            prior_sigma,
+            range,
+            information,
+            at_bound: vec![false; k],
+        };
         filter.clamp_to_ranges(None);
         Ok(filter)
     }
 
     fn specs(model: &ForwardModel) -> Vec<metrocell_physics::ParamSpec> {
-        model.machine_terms.param_specs().into_iter().chain(model.instrument_terms.param_specs()).collect()
+        model
+            .machine_terms
+            .param_specs()
+            .into_iter()
+            .chain(model.instrument_terms.param_specs())
+            .collect()
     }
 
     /// What a start covariance already knows beyond the prior (a state saved by an earlier
@@ -162,7 +214,13 @@ impl RecursiveEstimator {
         match white.clone().cholesky() {
             Some(c) if white != DMatrix::identity(k, k) => {
                 let info = c.inverse() - DMatrix::identity(k, k);
-                DMatrix::from_fn(k, k, |i, j| if sigma[i] > 0.0 && sigma[j] > 0.0 { 0.5 * (info[(i, j)] + info[(j, i)]) } else { 0.0 })
+                DMatrix::from_fn(k, k, |i, j| {
+                    if sigma[i] > 0.0 && sigma[j] > 0.0 {
+                        0.5 * (info[(i, j)] + info[(j, i)])
+                    } else {
+                        0.0
+                    }
+                })
             }
             _ => DMatrix::zeros(k, k),
         }
@@ -229,11 +287,23 @@ impl RecursiveEstimator {
     }
 
     /// Take one measured point. `work` is [`Workspace::new`] of the same model.
-    pub fn update(&mut self, model: &ForwardModel, record: &MeasurementRecord, work: &mut Workspace) -> Result<Update, RecursiveError> {
+    pub fn update(
+        &mut self,
+        model: &ForwardModel,
+        record: &MeasurementRecord,
+        work: &mut Workspace,
+    ) -> Result<Update, RecursiveError> {
         self.predict_to(record.time);
         let kin = model.kinematic_truth(&self.x)?;
         let mut signals = record.signals.clone();
-        let pred = model.tracker_jacobian(&self.x, &kin, &record.q, &mut signals, work, &mut self.jacobian)?;
+        let pred = model.tracker_jacobian(
+            &self.x,
+            &kin,
+            &record.q,
+            &mut signals,
+            work,
+            &mut self.jacobian,
+        )?;
         let nu = record.measured - pred.measured_point();
         let k = self.free.len();
         let mut h = DMatrix::from_fn(3, k, |r, c| self.jacobian[(r, self.free[c])]);
@@ -241,15 +311,24 @@ impl RecursiveEstimator {
         // data have not informed yet is held: the update treats it as not measured
         let information = self.record_information(&h, &record.covariance);
         for c in 0..k {
-            if self.information[(c, c)] + information.as_ref().map_or(0.0, |m| m[(c, c)]) < observability::MIN_INFORMATION {
+            if self.information[(c, c)] + information.as_ref().map_or(0.0, |m| m[(c, c)])
+                < observability::MIN_INFORMATION
+            {
                 h.column_mut(c).fill(0.0);
             }
         }
         let ph = &self.p * h.transpose(); // k × 3
-        let s = Matrix3::from_fn(|r, c| (0..k).map(|i| h[(r, i)] * ph[(i, c)]).sum::<f64>()) + record.covariance;
+        let s = Matrix3::from_fn(|r, c| (0..k).map(|i| h[(r, i)] * ph[(i, c)]).sum::<f64>())
+            + record.covariance;
         let Some(s_inv) = s.try_inverse().filter(|m| m.iter().all(|v| v.is_finite())) else {
             self.rejected += 1;
-            return Ok(Update { innovation: nu, nis: f64::NAN, accepted: false, window_probability: 1.0, alarm: false });
+            return Ok(Update {
+                innovation: nu,
+                nis: f64::NAN,
+                accepted: false,
+                window_probability: 1.0,
+                alarm: false,
+            });
         };
         let nis = (nu.transpose() * s_inv * nu)[(0, 0)];
         if !(nis <= self.gate) {
@@ -259,7 +338,13 @@ impl RecursiveEstimator {
             if alarm {
                 self.raise_alarm();
             }
-            return Ok(Update { innovation: nu, nis, accepted: false, window_probability: self.window_probability(), alarm });
+            return Ok(Update {
+                innovation: nu,
+                nis,
+                accepted: false,
+                window_probability: self.window_probability(),
+                alarm,
+            });
         }
         self.consecutive_rejects = 0;
         // K = P Hᵀ S⁻¹; x += K ν; P -= K S Kᵀ = P Hᵀ S⁻¹ H P
@@ -286,12 +371,24 @@ impl RecursiveEstimator {
         if alarm {
             self.raise_alarm();
         }
-        Ok(Update { innovation: nu, nis, accepted: true, window_probability, alarm })
+        Ok(Update {
+            innovation: nu,
+            nis,
+            accepted: true,
+            window_probability,
+            alarm,
+        })
     }
 
     /// Dᵀ·Hᵀ·R⁻¹·H·D for one record (D = diag of the prior σ); None when R is not invertible.
-    fn record_information(&self, h: &DMatrix<f64>, covariance: &Matrix3<f64>) -> Option<DMatrix<f64>> {
-        let r_inv = covariance.try_inverse().filter(|m| m.iter().all(|v| v.is_finite()))?;
+    fn record_information(
+        &self,
+        h: &DMatrix<f64>,
+        covariance: &Matrix3<f64>,
+    ) -> Option<DMatrix<f64>> {
+        let r_inv = covariance
+            .try_inverse()
+            .filter(|m| m.iter().all(|v| v.is_finite()))?;
         let k = self.free.len();
         let hw = DMatrix::from_fn(3, k, |r, c| h[(r, c)] * self.prior_sigma[c]);
         let r_inv = DMatrix::from_fn(3, 3, |r, c| r_inv[(r, c)]);
@@ -328,12 +425,20 @@ impl RecursiveEstimator {
     /// The free parameters (stacked indices) no measurement so far has informed: cheap, for
     /// every update (the combinations the data cannot separate need [`Self::observability`]).
     pub fn held(&self) -> Vec<usize> {
-        (0..self.free.len()).filter(|&i| self.information[(i, i)] < observability::MIN_INFORMATION).map(|i| self.free[i]).collect()
+        (0..self.free.len())
+            .filter(|&i| self.information[(i, i)] < observability::MIN_INFORMATION)
+            .map(|i| self.free[i])
+            .collect()
     }
 
     /// The free parameters (stacked indices) held at an edge of their possible range: cheap.
     pub fn at_bound(&self) -> Vec<usize> {
-        self.free.iter().zip(&self.at_bound).filter(|(_, &b)| b).map(|(&s, _)| s).collect()
+        self.free
+            .iter()
+            .zip(&self.at_bound)
+            .filter(|(_, &b)| b)
+            .map(|(&s, _)| s)
+            .collect()
     }
 
     /// The data's information about the free parameters, prior-whitened (free order; see
@@ -351,7 +456,8 @@ impl RecursiveEstimator {
         self.alarms += 1;
         // the covariance forgets; the information does not: it says what the program has
         // measured at all, which an alarm does not change
-        self.p = ranges::fade_toward_prior(&self.p, &self.prior_sigma, self.options.alarm_inflation);
+        self.p =
+            ranges::fade_toward_prior(&self.p, &self.prior_sigma, self.options.alarm_inflation);
         self.nis_window.clear();
         self.consecutive_rejects = 0;
     }
@@ -361,6 +467,8 @@ impl RecursiveEstimator {
             return 1.0;
         }
         let sum: f64 = self.nis_window.iter().sum();
-        ChiSquared::new(3.0 * self.nis_window.len() as f64).map(|d| 1.0 - d.cdf(sum)).unwrap_or(1.0)
+        ChiSquared::new(3.0 * self.nis_window.len() as f64)
+            .map(|d| 1.0 - d.cdf(sum))
+            .unwrap_or(1.0)
     }
 }

@@ -23,7 +23,10 @@ use crate::residuals::PointResiduals;
 fn pose_at(model: &ForwardModel, x: &[f64], frame: &RecordFrame) -> (Matrix3<f64>, Vector3<f64>) {
     match (frame, model.instrument_param_start(TermId::TrackerPose)) {
         (RecordFrame::Instrument(_), Some(i)) => {
-            let pose = metrocell_model::InstrumentPose::from_euler_xyz(Vector3::new(x[i], x[i + 1], x[i + 2]), [x[i + 3], x[i + 4], x[i + 5]]);
+            let pose = metrocell_model::InstrumentPose::from_euler_xyz(
+                Vector3::new(x[i], x[i + 1], x[i + 2]),
+                [x[i + 3], x[i + 4], x[i + 5]],
+            );
             (pose.rotation, pose.translation)
         }
         _ => (Matrix3::identity(), Vector3::zeros()),
@@ -40,7 +43,13 @@ pub fn is_reference(r: &MeasurementRecord) -> bool {
 /// the instrument's pose, then refined twice by the mean residual (the instrument's range terms
 /// and drift move a reading by µm, so two steps leave nothing of it). A nest whose position was
 /// given (finite) is kept unless `all`.
-pub fn estimate_nests(model: &ForwardModel, x: &[f64], records: &mut [MeasurementRecord], frame: &RecordFrame, all: bool) -> Result<usize, PhysicsError> {
+pub fn estimate_nests(
+    model: &ForwardModel,
+    x: &[f64],
+    records: &mut [MeasurementRecord],
+    frame: &RecordFrame,
+    all: bool,
+) -> Result<usize, PhysicsError> {
     let (rotation, translation) = pose_at(model, x, frame);
     let mut readings: BTreeMap<String, Vec<usize>> = BTreeMap::new();
     for (i, r) in records.iter().enumerate() {
@@ -51,7 +60,11 @@ pub fn estimate_nests(model: &ForwardModel, x: &[f64], records: &mut [Measuremen
         }
     }
     for idx in readings.values() {
-        let mean = idx.iter().map(|&i| rotation * records[i].measured + translation).sum::<Vector3<f64>>() / idx.len() as f64;
+        let mean = idx
+            .iter()
+            .map(|&i| rotation * records[i].measured + translation)
+            .sum::<Vector3<f64>>()
+            / idx.len() as f64;
         for &i in idx {
             records[i].kind = RecordKind::Reference { nest: mean };
         }
@@ -62,10 +75,20 @@ pub fn estimate_nests(model: &ForwardModel, x: &[f64], records: &mut [Measuremen
             break;
         }
         let refs: Vec<MeasurementRecord> = subset.iter().map(|&i| records[i].clone()).collect();
-        let problem = PointResiduals::new(model, &refs).map_err(|b| PhysicsError::InvalidInput { what: format!("reference record `{}`", b.point_id), reason: "covariance is not positive definite".into() })?;
+        let problem =
+            PointResiduals::new(model, &refs).map_err(|b| PhysicsError::InvalidInput {
+                what: format!("reference record `{}`", b.point_id),
+                reason: "covariance is not positive definite".into(),
+            })?;
         let residuals = problem.raw_residuals(x)?;
         for idx in readings.values() {
-            let shift = idx.iter().map(|i| rotation * residuals[subset.iter().position(|s| s == i).expect("in the subset")]).sum::<Vector3<f64>>() / idx.len() as f64;
+            let shift = idx
+                .iter()
+                .map(|i| {
+                    rotation * residuals[subset.iter().position(|s| s == i).expect("in the subset")]
+                })
+                .sum::<Vector3<f64>>()
+                / idx.len() as f64;
             for &i in idx {
                 if let RecordKind::Reference { nest } = &mut records[i].kind {
                     *nest += shift;

@@ -19,7 +19,9 @@
 
 use std::sync::Mutex;
 
-use metrocell_model::{ForwardModel, KeptLayout, KinematicTruth, Workspace, CAMERA_ROWS, PROBE_ROWS};
+use metrocell_model::{
+    ForwardModel, KeptLayout, KinematicTruth, Workspace, CAMERA_ROWS, PROBE_ROWS,
+};
 use metrocell_physics::{PhysicsError, Signals};
 use metrocell_solver::{zeroed_matrix, NotEvaluable, Problem};
 use nalgebra::{DMatrix, Matrix3, Vector3};
@@ -80,8 +82,19 @@ impl Scratch {
     /// other kinds are evaluated in full). The layout holds the rows any reading of the chunk
     /// needs: it starts from the first reading's and, should a later reading need a row more
     /// (a lever that was zero), is widened and the chunk packed again.
-    fn keep_targets(&mut self, model: &ForwardModel, records: &[MeasurementRecord], start: usize) -> Result<(), EvaluationFailure> {
-        let (Some(columns), Some(len), None) = (model.linear_target_columns(), model.linear_target_len(), &self.kept) else { return Ok(()) };
+    fn keep_targets(
+        &mut self,
+        model: &ForwardModel,
+        records: &[MeasurementRecord],
+        start: usize,
+    ) -> Result<(), EvaluationFailure> {
+        let (Some(columns), Some(len), None) = (
+            model.linear_target_columns(),
+            model.linear_target_len(),
+            &self.kept,
+        ) else {
+            return Ok(());
+        };
         let mut full = vec![0.0; len];
         let mut layout = KeptLayout::empty(columns);
         // a column for every record, so that any record's slice exists (only points use theirs)
@@ -91,7 +104,12 @@ impl Scratch {
                 if r.kind != RecordKind::Point {
                     continue;
                 }
-                model.linear_target(&r.q, s, &mut self.buffers.work, &mut full).map_err(|error| EvaluationFailure::Record { index: start + k, error })?;
+                model
+                    .linear_target(&r.q, s, &mut self.buffers.work, &mut full)
+                    .map_err(|error| EvaluationFailure::Record {
+                        index: start + k,
+                        error,
+                    })?;
                 if !layout.covers(&full) {
                     layout = layout.widened(&full);
                     values = zeroed_matrix(layout.values_per_reading(), records.len());
@@ -146,14 +164,36 @@ fn cholesky_factors(covariance: &Matrix3<f64>) -> Option<(Matrix3<f64>, Matrix3<
 }
 
 impl<'m, 'a> PointResiduals<'m, 'a> {
-    pub fn new(model: &'m ForwardModel<'a>, records: &'m [MeasurementRecord]) -> Result<Self, BadCovariance> {
+    pub fn new(
+        model: &'m ForwardModel<'a>,
+        records: &'m [MeasurementRecord],
+    ) -> Result<Self, BadCovariance> {
         let (colouring, whitening) = records
             .iter()
             .enumerate()
-            .map(|(index, r)| cholesky_factors(&r.covariance).ok_or_else(|| BadCovariance { index, point_id: r.point_id.clone() }))
+            .map(|(index, r)| {
+                cholesky_factors(&r.covariance).ok_or_else(|| BadCovariance {
+                    index,
+                    point_id: r.point_id.clone(),
+                })
+            })
             .collect::<Result<(Vec<_>, Vec<_>), _>>()?;
-        let chunks = record_chunks::split(records.len(), |start, len| Scratch { signals: records[start..start + len].iter().map(|r| r.signals.clone()).collect(), buffers: Buffers::new(model), kept: None, block: vec![0.0; BLOCK_ROWS * model.param_count()] });
-        Ok(Self { model, records, whitening, colouring, chunks })
+        let chunks = record_chunks::split(records.len(), |start, len| Scratch {
+            signals: records[start..start + len]
+                .iter()
+                .map(|r| r.signals.clone())
+                .collect(),
+            buffers: Buffers::new(model),
+            kept: None,
+            block: vec![0.0; BLOCK_ROWS * model.param_count()],
+        });
+        Ok(Self {
+            model,
+            records,
+            whitening,
+            colouring,
+            chunks,
+        })
     }
 
     pub fn model(&self) -> &ForwardModel<'a> {
@@ -175,19 +215,33 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
     }
 
     /// [`Self::predictions`], naming the first record that cannot be predicted by its index.
-    pub fn predictions_of_records(&self, p: &[f64]) -> Result<Vec<Vector3<f64>>, EvaluationFailure> {
-        let kin = self.model.kinematic_truth(p).map_err(EvaluationFailure::Model)?;
+    pub fn predictions_of_records(
+        &self,
+        p: &[f64],
+    ) -> Result<Vec<Vector3<f64>>, EvaluationFailure> {
+        let kin = self
+            .model
+            .kinematic_truth(p)
+            .map_err(EvaluationFailure::Model)?;
         let mut out = vec![Vector3::zeros(); self.records.len()];
         let outs = record_chunks::shares(&self.chunks, &mut out, 1);
         record_chunks::for_each(&self.chunks, outs, |c, out: &mut [Vector3<f64>]| {
             let records = &self.records[c.start..c.start + c.len];
             c.scratch.keep_targets(self.model, records, c.start)?;
-            let Scratch { signals, buffers, kept, .. } = &mut c.scratch;
+            let Scratch {
+                signals,
+                buffers,
+                kept,
+                ..
+            } = &mut c.scratch;
             for (k, (o, s)) in out.iter_mut().zip(signals.iter_mut()).enumerate() {
                 let i = c.start + k;
                 let r = &records[k];
                 *o = match (kept.as_ref(), &r.kind) {
-                    (Some(kept), RecordKind::Point) => self.model.tracker_linear(None, p, &kept.layout, kept.of(k), s, &mut buffers.work).map(|t| t.measured_point()),
+                    (Some(kept), RecordKind::Point) => self
+                        .model
+                        .tracker_linear(None, p, &kept.layout, kept.of(k), s, &mut buffers.work)
+                        .map(|t| t.measured_point()),
                     _ => predict(self.model, p, &kin, r, s),
                 }
                 .map_err(|error| EvaluationFailure::Record { index: i, error })?;
@@ -199,14 +253,27 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
 
     /// measured − predicted of every record at `p`, m (unwhitened).
     pub fn raw_residuals(&self, p: &[f64]) -> Result<Vec<Vector3<f64>>, PhysicsError> {
-        Ok(self.predictions(p)?.iter().zip(self.records).map(|(pred, r)| r.measured - pred).collect())
+        Ok(self
+            .predictions(p)?
+            .iter()
+            .zip(self.records)
+            .map(|(pred, r)| r.measured - pred)
+            .collect())
     }
 
     /// Whitened residuals (3 per record, as [`Problem::residuals`] writes them) back in metres:
     /// measured − predicted of each record, L·z.
     pub fn unwhitened(&self, z: &[f64]) -> Vec<Vector3<f64>> {
-        assert_eq!(z.len(), 3 * self.records.len(), "3 whitened residuals per record");
-        self.colouring.iter().zip(z.chunks_exact(3)).map(|(l, z)| l * Vector3::new(z[0], z[1], z[2])).collect()
+        assert_eq!(
+            z.len(),
+            3 * self.records.len(),
+            "3 whitened residuals per record"
+        );
+        self.colouring
+            .iter()
+            .zip(z.chunks_exact(3))
+            .map(|(l, z)| l * Vector3::new(z[0], z[1], z[2]))
+            .collect()
     }
 
     /// The Jacobian of the predictions w.r.t. the stacked parameters (3·records × n,
@@ -222,29 +289,56 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
     /// as they are): without `residuals`, the prediction's Jacobian; with them, the residuals'
     /// −L⁻¹·∂prediction/∂p, and L⁻¹·(measured − predicted) into entries 3i..3i+3 of
     /// `residuals`.
-    fn evaluate_rows(&self, p: &[f64], residuals: Option<&mut [f64]>, jac: &mut DMatrix<f64>, columns: &[usize]) -> Result<(), EvaluationFailure> {
+    fn evaluate_rows(
+        &self,
+        p: &[f64],
+        residuals: Option<&mut [f64]>,
+        jac: &mut DMatrix<f64>,
+        columns: &[usize],
+    ) -> Result<(), EvaluationFailure> {
         let whiten = residuals.is_some();
-        let kin = self.model.kinematic_truth(p).map_err(EvaluationFailure::Model)?;
+        let kin = self
+            .model
+            .kinematic_truth(p)
+            .map_err(EvaluationFailure::Model)?;
         let n = self.model.param_count();
         assert_eq!(jac.shape(), (3 * self.records.len(), n), "Jacobian shape");
         let target = DisjointRows::new(jac);
         let outs: Vec<Option<&mut [f64]>> = match residuals {
-            Some(r) => record_chunks::shares(&self.chunks, r, 3).into_iter().map(Some).collect(),
+            Some(r) => record_chunks::shares(&self.chunks, r, 3)
+                .into_iter()
+                .map(Some)
+                .collect(),
             None => self.chunks.iter().map(|_| None).collect(),
         };
         record_chunks::for_each(&self.chunks, outs, |c, mut out: Option<&mut [f64]>| {
-            c.scratch.keep_targets(self.model, &self.records[c.start..c.start + c.len], c.start)?;
-            let Scratch { signals, buffers, kept, block } = &mut c.scratch;
+            c.scratch
+                .keep_targets(self.model, &self.records[c.start..c.start + c.len], c.start)?;
+            let Scratch {
+                signals,
+                buffers,
+                kept,
+                block,
+            } = &mut c.scratch;
             for (k, s) in signals.iter_mut().enumerate() {
                 let i = c.start + k;
                 let r = &self.records[i];
                 // ∂r/∂p = −L⁻¹·∂prediction/∂p, column by column in fixed-size arithmetic,
                 // into the block's rows of record i (the identity when not whitening)
-                let w = if whiten { -self.whitening[i] } else { Matrix3::identity() };
+                let w = if whiten {
+                    -self.whitening[i]
+                } else {
+                    Matrix3::identity()
+                };
                 let b = k % BLOCK_RECORDS;
-                let write = |c: usize, column: Vector3<f64>| block[c * BLOCK_ROWS + 3 * b..c * BLOCK_ROWS + 3 * b + 3].copy_from_slice(column.as_slice());
+                let write = |c: usize, column: Vector3<f64>| {
+                    block[c * BLOCK_ROWS + 3 * b..c * BLOCK_ROWS + 3 * b + 3]
+                        .copy_from_slice(column.as_slice())
+                };
                 let kept = kept.as_ref().map(|kept| (&kept.layout, kept.of(k)));
-                let pred = buffers.predict_with_jacobian(self.model, p, &kin, r, s, kept, &w, columns, write).map_err(|error| EvaluationFailure::Record { index: i, error })?;
+                let pred = buffers
+                    .predict_with_jacobian(self.model, p, &kin, r, s, kept, &w, columns, write)
+                    .map_err(|error| EvaluationFailure::Record { index: i, error })?;
                 if let Some(out) = out.as_deref_mut() {
                     let z = self.whitening[i] * (r.measured - pred);
                     out[3 * k..3 * k + 3].copy_from_slice(z.as_slice());
@@ -254,7 +348,13 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
                     let first = k - b;
                     for &col in columns {
                         // SAFETY: rows 3·first..3(k+1) belong to this chunk's records
-                        unsafe { target.set_rows(3 * (c.start + first), col, &block[col * BLOCK_ROWS..col * BLOCK_ROWS + 3 * (b + 1)]) };
+                        unsafe {
+                            target.set_rows(
+                                3 * (c.start + first),
+                                col,
+                                &block[col * BLOCK_ROWS..col * BLOCK_ROWS + 3 * (b + 1)],
+                            )
+                        };
                     }
                 }
             }
@@ -264,16 +364,28 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
 
     /// Residuals at `p` into `residuals` and, with `jac`, the Jacobian's columns k with
     /// `wanted[k]` (every column without `wanted`).
-    fn evaluate(&self, p: &[f64], residuals: &mut [f64], jac: Option<&mut DMatrix<f64>>, wanted: Option<&[bool]>) -> Result<(), NotEvaluable> {
+    fn evaluate(
+        &self,
+        p: &[f64],
+        residuals: &mut [f64],
+        jac: Option<&mut DMatrix<f64>>,
+        wanted: Option<&[bool]>,
+    ) -> Result<(), NotEvaluable> {
         let fail = |f: EvaluationFailure| match f {
             EvaluationFailure::Model(e) => NotEvaluable(e.to_string()),
-            EvaluationFailure::Record { index, error } => NotEvaluable(format!("record {index} ({}): {error}", self.records[index].point_id)),
+            EvaluationFailure::Record { index, error } => NotEvaluable(format!(
+                "record {index} ({}): {error}",
+                self.records[index].point_id
+            )),
         };
         match jac {
             // ∂r/∂p = −L⁻¹·∂prediction/∂p
             Some(j) => {
-                let columns: Vec<usize> = (0..j.ncols()).filter(|&k| wanted.is_none_or(|w| w[k])).collect();
-                self.evaluate_rows(p, Some(&mut *residuals), j, &columns).map_err(fail)?
+                let columns: Vec<usize> = (0..j.ncols())
+                    .filter(|&k| wanted.is_none_or(|w| w[k]))
+                    .collect();
+                self.evaluate_rows(p, Some(&mut *residuals), j, &columns)
+                    .map_err(fail)?
             }
             None => {
                 let predicted = self.predictions_of_records(p).map_err(fail)?;
@@ -284,7 +396,11 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
             }
         }
         if let Some(i) = residuals.iter().position(|v| !v.is_finite()) {
-            return Err(NotEvaluable(format!("record {} ({}): residual not finite", i / 3, self.records[i / 3].point_id)));
+            return Err(NotEvaluable(format!(
+                "record {} ({}): residual not finite",
+                i / 3,
+                self.records[i / 3].point_id
+            )));
         }
         Ok(())
     }
@@ -292,18 +408,30 @@ impl<'m, 'a> PointResiduals<'m, 'a> {
 
 /// The model's prediction of record `r` at `p` (signals `s`), in the record's frame: a point
 /// through the tracker, a probe hit through its probe, a camera point through its camera.
-pub fn predict(model: &ForwardModel, p: &[f64], kin: &KinematicTruth, r: &MeasurementRecord, s: &mut Signals) -> Result<Vector3<f64>, PhysicsError> {
+pub fn predict(
+    model: &ForwardModel,
+    p: &[f64],
+    kin: &KinematicTruth,
+    r: &MeasurementRecord,
+    s: &mut Signals,
+) -> Result<Vector3<f64>, PhysicsError> {
     match &r.kind {
         RecordKind::Point => {
             let tool = model.tool_state(p, kin, &r.q, s, None)?;
             Ok(model.tracker(p, &tool, s)?.measured_point())
         }
-        RecordKind::ProbeHit { target, probe } => Ok(model.probe_hit(probe.as_deref(), p, kin, &r.q, s, target)?.centre),
+        RecordKind::ProbeHit { target, probe } => Ok(model
+            .probe_hit(probe.as_deref(), p, kin, &r.q, s, target)?
+            .centre),
         RecordKind::CameraPoint { feature, camera } => {
             let tool = model.tool_state(p, kin, &r.q, s, None)?;
-            Ok(model.camera(camera.as_deref(), p, &tool, s, feature)?.measured_point)
+            Ok(model
+                .camera(camera.as_deref(), p, &tool, s, feature)?
+                .measured_point)
         }
-        RecordKind::Reference { nest } => Ok(model.tracker_of_fixed_point(None, p, known_nest(r, nest)?, s)?.measured_point()),
+        RecordKind::Reference { nest } => Ok(model
+            .tracker_of_fixed_point(None, p, known_nest(r, nest)?, s)?
+            .measured_point()),
     }
 }
 
@@ -327,7 +455,11 @@ struct Buffers {
 impl Buffers {
     fn new(model: &ForwardModel) -> Self {
         let n = model.param_count();
-        Self { work: Workspace::new(model), probe: DMatrix::zeros(PROBE_ROWS, n), camera: DMatrix::zeros(CAMERA_ROWS, n) }
+        Self {
+            work: Workspace::new(model),
+            probe: DMatrix::zeros(PROBE_ROWS, n),
+            camera: DMatrix::zeros(CAMERA_ROWS, n),
+        }
     }
 
     /// [`predict`] (bit for bit; with a tracker point's `kept` target, as the model's
@@ -335,26 +467,86 @@ impl Buffers {
     /// tracker's point goes straight from the model's chain to `write`; the other kinds through
     /// their buffer.
     #[allow(clippy::too_many_arguments)]
-    fn predict_with_jacobian(&mut self, model: &ForwardModel, p: &[f64], kin: &KinematicTruth, r: &MeasurementRecord, s: &mut Signals, kept: Option<(&KeptLayout, &[f64])>, map: &Matrix3<f64>, columns: &[usize], mut write: impl FnMut(usize, Vector3<f64>)) -> Result<Vector3<f64>, PhysicsError> {
+    fn predict_with_jacobian(
+        &mut self,
+        model: &ForwardModel,
+        p: &[f64],
+        kin: &KinematicTruth,
+        r: &MeasurementRecord,
+        s: &mut Signals,
+        kept: Option<(&KeptLayout, &[f64])>,
+        map: &Matrix3<f64>,
+        columns: &[usize],
+        mut write: impl FnMut(usize, Vector3<f64>),
+    ) -> Result<Vector3<f64>, PhysicsError> {
         let (pred, rows) = match &r.kind {
             RecordKind::Point => {
                 let reading = match kept {
-                    Some((layout, kept)) => model.tracker_point_jacobian_mapped_linear(None, p, layout, kept, s, &mut self.work, map, columns, write)?,
-                    None => model.tracker_point_jacobian_mapped(None, p, kin, &r.q, s, &mut self.work, map, columns, write)?,
+                    Some((layout, kept)) => model.tracker_point_jacobian_mapped_linear(
+                        None,
+                        p,
+                        layout,
+                        kept,
+                        s,
+                        &mut self.work,
+                        map,
+                        columns,
+                        write,
+                    )?,
+                    None => model.tracker_point_jacobian_mapped(
+                        None,
+                        p,
+                        kin,
+                        &r.q,
+                        s,
+                        &mut self.work,
+                        map,
+                        columns,
+                        write,
+                    )?,
                 };
                 return Ok(reading.measured_point());
             }
             RecordKind::ProbeHit { target, probe } => {
-                let pred = model.probe_jacobian(probe.as_deref(), p, kin, &r.q, s, target, &mut self.work, &mut self.probe)?;
+                let pred = model.probe_jacobian(
+                    probe.as_deref(),
+                    p,
+                    kin,
+                    &r.q,
+                    s,
+                    target,
+                    &mut self.work,
+                    &mut self.probe,
+                )?;
                 (pred.centre, self.probe.rows(0, 3))
             }
             RecordKind::CameraPoint { feature, camera } => {
-                let pred = model.camera_jacobian(camera.as_deref(), p, kin, &r.q, s, feature, &mut self.work, &mut self.camera)?;
+                let pred = model.camera_jacobian(
+                    camera.as_deref(),
+                    p,
+                    kin,
+                    &r.q,
+                    s,
+                    feature,
+                    &mut self.work,
+                    &mut self.camera,
+                )?;
                 // rows 2..5: the camera point
                 (pred.measured_point, self.camera.rows(2, 3))
             }
             RecordKind::Reference { nest } => {
-                return Ok(model.tracker_point_jacobian_of_fixed_point_mapped(None, p, known_nest(r, nest)?, s, &mut self.work, map, columns, write)?.measured_point());
+                return Ok(model
+                    .tracker_point_jacobian_of_fixed_point_mapped(
+                        None,
+                        p,
+                        known_nest(r, nest)?,
+                        s,
+                        &mut self.work,
+                        map,
+                        columns,
+                        write,
+                    )?
+                    .measured_point());
             }
         };
         for &c in columns {
@@ -374,13 +566,28 @@ impl Problem for PointResiduals<'_, '_> {
     fn residuals(&self, x: &[f64], residuals: &mut [f64]) -> Result<(), NotEvaluable> {
         self.evaluate(x, residuals, None, None)
     }
-    fn residuals_and_jacobian(&self, x: &[f64], residuals: &mut [f64], jacobian: &mut DMatrix<f64>) -> Result<(), NotEvaluable> {
+    fn residuals_and_jacobian(
+        &self,
+        x: &[f64],
+        residuals: &mut [f64],
+        jacobian: &mut DMatrix<f64>,
+    ) -> Result<(), NotEvaluable> {
         self.evaluate(x, residuals, Some(jacobian), None)
     }
     /// The unwanted columns are not written: with many records, storing the Jacobian is a
     /// memory-bound share of an evaluation.
-    fn residuals_and_jacobian_of(&self, x: &[f64], residuals: &mut [f64], jacobian: &mut DMatrix<f64>, wanted: &[bool]) -> Result<(), NotEvaluable> {
-        assert_eq!(wanted.len(), jacobian.ncols(), "one wanted flag per parameter");
+    fn residuals_and_jacobian_of(
+        &self,
+        x: &[f64],
+        residuals: &mut [f64],
+        jacobian: &mut DMatrix<f64>,
+        wanted: &[bool],
+    ) -> Result<(), NotEvaluable> {
+        assert_eq!(
+            wanted.len(),
+            jacobian.ncols(),
+            "one wanted flag per parameter"
+        );
         self.evaluate(x, residuals, Some(jacobian), Some(wanted))
     }
 }

@@ -20,7 +20,9 @@
 use metrocell_bagtools::SourcedMessage;
 use metrocell_model::SignalsBuilder;
 use metrocell_msgs::geometry_msgs::msg::WrenchStamped;
-use metrocell_msgs::sensor_msgs::msg::{FluidPressure, Imu, JointState, RelativeHumidity, Temperature, TimeReference};
+use metrocell_msgs::sensor_msgs::msg::{
+    FluidPressure, Imu, JointState, RelativeHumidity, Temperature, TimeReference,
+};
 
 /// Accelerometers are read from `/imu/<sensor>` (`sensor_msgs/Imu`, its linear acceleration).
 pub const IMU_PREFIX: &str = "/imu/";
@@ -29,7 +31,10 @@ use metrocell_msgs::RosMessage;
 use nalgebra::Vector3;
 
 // the names a cell publishes (crates/msgs `topics`), plus the weather station's aliases below
-pub use metrocell_msgs::topics::{APPROACH as APPROACH_TOPIC, COMMANDED_JOINTS as COMMANDED_JOINTS_TOPIC, LOAD as LOAD_TOPIC, POWER_ON as POWER_ON_TOPIC, TEMPERATURE_PREFIX};
+pub use metrocell_msgs::topics::{
+    APPROACH as APPROACH_TOPIC, COMMANDED_JOINTS as COMMANDED_JOINTS_TOPIC, LOAD as LOAD_TOPIC,
+    POWER_ON as POWER_ON_TOPIC, TEMPERATURE_PREFIX,
+};
 /// The temperature sensor whose topic is also the station's air temperature.
 pub const AIR_SENSOR: &str = "air";
 pub const AIR_PRESSURE_TOPICS: [&str; 2] = ["/air/pressure", "/weather/pressure"];
@@ -60,16 +65,24 @@ impl SignalTopic {
             COMMANDED_JOINTS_TOPIC if is(JointState::ROS_TYPE) => SignalTopic::CommandedJoints,
             APPROACH_TOPIC if is(JointState::ROS_TYPE) => SignalTopic::Approach,
             WEATHER_TEMPERATURE_TOPIC if is(Temperature::ROS_TYPE) => SignalTopic::AirTemperature,
-            t if AIR_PRESSURE_TOPICS.contains(&t) && is(FluidPressure::ROS_TYPE) => SignalTopic::AirPressure,
-            t if AIR_HUMIDITY_TOPICS.contains(&t) && is(RelativeHumidity::ROS_TYPE) => SignalTopic::AirHumidity,
+            t if AIR_PRESSURE_TOPICS.contains(&t) && is(FluidPressure::ROS_TYPE) => {
+                SignalTopic::AirPressure
+            }
+            t if AIR_HUMIDITY_TOPICS.contains(&t) && is(RelativeHumidity::ROS_TYPE) => {
+                SignalTopic::AirHumidity
+            }
             POWER_ON_TOPIC if is(TimeReference::ROS_TYPE) => SignalTopic::PowerOn,
             LOAD_TOPIC if is(WrenchStamped::ROS_TYPE) => SignalTopic::Load,
             t if t.starts_with(IMU_PREFIX) && is(Imu::ROS_TYPE) => {
-                let sensor = t.strip_prefix(IMU_PREFIX).filter(|s| !s.is_empty() && !s.contains('/'))?;
+                let sensor = t
+                    .strip_prefix(IMU_PREFIX)
+                    .filter(|s| !s.is_empty() && !s.contains('/'))?;
                 SignalTopic::Accelerometer(sensor.to_string())
             }
             t => {
-                let sensor = t.strip_prefix(TEMPERATURE_PREFIX).filter(|s| !s.is_empty() && !s.contains('/'))?;
+                let sensor = t
+                    .strip_prefix(TEMPERATURE_PREFIX)
+                    .filter(|s| !s.is_empty() && !s.contains('/'))?;
                 if !is(Temperature::ROS_TYPE) {
                     return None;
                 }
@@ -90,18 +103,30 @@ pub fn message_time(stamp: &Time, log_time_ns: u64) -> i64 {
 /// Push one recorded message of a signal topic into the builder. Errors (a message that does
 /// not decode, a sample the builder refuses) are returned with the reason; the caller counts
 /// and reports them per topic.
-pub fn feed(builder: &mut SignalsBuilder, which: &SignalTopic, m: &SourcedMessage) -> Result<(), String> {
+pub fn feed(
+    builder: &mut SignalsBuilder,
+    which: &SignalTopic,
+    m: &SourcedMessage,
+) -> Result<(), String> {
     let decode_error = |e: metrocell_bagtools::ToolError| e.to_string();
     match which {
         SignalTopic::CommandedJoints => {
             let js: JointState = m.decode().map_err(decode_error)?;
-            builder.push_joints(message_time(&js.header.stamp, m.log_time_ns), &js.name, &js.position, &js.velocity)
+            builder.push_joints(
+                message_time(&js.header.stamp, m.log_time_ns),
+                &js.name,
+                &js.position,
+                &js.velocity,
+            )
         }
         SignalTopic::Approach => {
             let js: JointState = m.decode().map_err(decode_error)?;
             let t = message_time(&js.header.stamp, m.log_time_ns);
             for (name, v) in js.name.iter().zip(&js.position) {
-                let axis = ["x", "y", "z"].iter().position(|a| a == name).ok_or_else(|| format!("approach of `{name}`: only axes x, y, z have one"))?;
+                let axis = ["x", "y", "z"]
+                    .iter()
+                    .position(|a| a == name)
+                    .ok_or_else(|| format!("approach of `{name}`: only axes x, y, z have one"))?;
                 builder.push_approach(t, axis, *v)?;
             }
             Ok(())
@@ -117,30 +142,49 @@ pub fn feed(builder: &mut SignalsBuilder, which: &SignalTopic, m: &SourcedMessag
         }
         SignalTopic::AirTemperature => {
             let msg: Temperature = m.decode().map_err(decode_error)?;
-            builder.push_air_temperature(message_time(&msg.header.stamp, m.log_time_ns), msg.temperature)
+            builder.push_air_temperature(
+                message_time(&msg.header.stamp, m.log_time_ns),
+                msg.temperature,
+            )
         }
         SignalTopic::AirPressure => {
             let msg: FluidPressure = m.decode().map_err(decode_error)?;
-            builder.push_air_pressure(message_time(&msg.header.stamp, m.log_time_ns), msg.fluid_pressure)
+            builder.push_air_pressure(
+                message_time(&msg.header.stamp, m.log_time_ns),
+                msg.fluid_pressure,
+            )
         }
         SignalTopic::AirHumidity => {
             let msg: RelativeHumidity = m.decode().map_err(decode_error)?;
-            builder.push_air_humidity(message_time(&msg.header.stamp, m.log_time_ns), 100.0 * msg.relative_humidity)
+            builder.push_air_humidity(
+                message_time(&msg.header.stamp, m.log_time_ns),
+                100.0 * msg.relative_humidity,
+            )
         }
         SignalTopic::PowerOn => {
             let msg: TimeReference = m.decode().map_err(decode_error)?;
-            builder.push_power_on(message_time(&msg.header.stamp, m.log_time_ns), msg.time_ref.nanos());
+            builder.push_power_on(
+                message_time(&msg.header.stamp, m.log_time_ns),
+                msg.time_ref.nanos(),
+            );
             Ok(())
         }
         SignalTopic::Load => {
             let msg: WrenchStamped = m.decode().map_err(decode_error)?;
             let f = &msg.wrench.force;
-            builder.push_load(message_time(&msg.header.stamp, m.log_time_ns), Vector3::new(f.x, f.y, f.z))
+            builder.push_load(
+                message_time(&msg.header.stamp, m.log_time_ns),
+                Vector3::new(f.x, f.y, f.z),
+            )
         }
         SignalTopic::Accelerometer(sensor) => {
             let msg: Imu = m.decode().map_err(decode_error)?;
             let a = &msg.linear_acceleration;
-            builder.push_acceleration(message_time(&msg.header.stamp, m.log_time_ns), sensor, Vector3::new(a.x, a.y, a.z))
+            builder.push_acceleration(
+                message_time(&msg.header.stamp, m.log_time_ns),
+                sensor,
+                Vector3::new(a.x, a.y, a.z),
+            )
         }
     }
 }

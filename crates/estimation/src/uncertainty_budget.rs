@@ -23,17 +23,27 @@ pub struct Budget {
 
 impl Budget {
     pub fn new(coverage_factor: f64) -> Self {
-        Self { contributions: Vec::new(), coverage_factor }
+        Self {
+            contributions: Vec::new(),
+            coverage_factor,
+        }
     }
 
     pub fn with(mut self, name: &str, standard_uncertainty: f64) -> Self {
-        self.contributions.push(Contribution { name: name.into(), standard_uncertainty });
+        self.contributions.push(Contribution {
+            name: name.into(),
+            standard_uncertainty,
+        });
         self
     }
 
     /// u_c = √(Σ u_i²).
     pub fn combined(&self) -> f64 {
-        self.contributions.iter().map(|c| c.standard_uncertainty * c.standard_uncertainty).sum::<f64>().sqrt()
+        self.contributions
+            .iter()
+            .map(|c| c.standard_uncertainty * c.standard_uncertainty)
+            .sum::<f64>()
+            .sqrt()
     }
 
     /// U = k·u_c.
@@ -43,13 +53,33 @@ impl Budget {
 
     /// Each contribution's share of u_c² (0..1), in order.
     pub fn shares(&self) -> Vec<(String, f64)> {
-        let total: f64 = self.contributions.iter().map(|c| c.standard_uncertainty.powi(2)).sum();
-        self.contributions.iter().map(|c| (c.name.clone(), if total > 0.0 { c.standard_uncertainty.powi(2) / total } else { 0.0 })).collect()
+        let total: f64 = self
+            .contributions
+            .iter()
+            .map(|c| c.standard_uncertainty.powi(2))
+            .sum();
+        self.contributions
+            .iter()
+            .map(|c| {
+                (
+                    c.name.clone(),
+                    if total > 0.0 {
+                        c.standard_uncertainty.powi(2) / total
+                    } else {
+                        0.0
+                    },
+                )
+            })
+            .collect()
     }
 
     /// The ISO/TS 15530-3 budget of seed 001 eq. 3.4.
     pub fn iso_15530_3(u_cal: f64, u_p: f64, u_b: f64, u_w: f64, coverage_factor: f64) -> Self {
-        Budget::new(coverage_factor).with("u_cal (artefact calibration)", u_cal).with("u_p (measurement procedure)", u_p).with("u_b (systematic error)", u_b).with("u_w (material and manufacturing)", u_w)
+        Budget::new(coverage_factor)
+            .with("u_cal (artefact calibration)", u_cal)
+            .with("u_p (measurement procedure)", u_p)
+            .with("u_b (systematic error)", u_b)
+            .with("u_w (material and manufacturing)", u_w)
     }
 }
 
@@ -84,10 +114,18 @@ mod tests {
     /// Seed 000 Table 4 (camera measurement, µm) and its Type B helpers (digest T2).
     #[test]
     fn seed000_gum_table() {
-        let x = Budget::new(2.0).with("experimental", 15.9).with("reference", 0.8).with("resolution", 2.9).with("accuracy", 17.3);
+        let x = Budget::new(2.0)
+            .with("experimental", 15.9)
+            .with("reference", 0.8)
+            .with("resolution", 2.9)
+            .with("accuracy", 17.3);
         assert!((x.combined() - 23.69).abs() < 0.005, "{}", x.combined());
         assert!((x.expanded() - 47.38).abs() < 0.01);
-        let y = Budget::new(2.0).with("experimental", 8.5).with("reference", 0.8).with("resolution", 2.9).with("accuracy", 17.3);
+        let y = Budget::new(2.0)
+            .with("experimental", 8.5)
+            .with("reference", 0.8)
+            .with("resolution", 2.9)
+            .with("accuracy", 17.3);
         assert!((y.combined() - 19.51).abs() < 0.005 && (y.expanded() - 39.02).abs() < 0.01);
         assert!((resolution(10.0) - 2.887).abs() < 0.0005);
         assert!((rectangular(30.0) - 17.32).abs() < 0.005);

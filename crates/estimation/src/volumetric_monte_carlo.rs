@@ -42,7 +42,10 @@ pub struct VolumetricMonteCarlo {
 pub fn mean_sd(v: &[f64]) -> (f64, f64) {
     let n = v.len().max(1) as f64;
     let m = v.iter().sum::<f64>() / n;
-    (m, (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0).max(1.0)).sqrt())
+    (
+        m,
+        (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0).max(1.0)).sqrt(),
+    )
 }
 
 /// The conditions with the axes at `q`, at rest, approached in +.
@@ -55,7 +58,12 @@ fn signals_at(model: &ForwardModel, q: &[f64], conditions: &Signals) -> Signals 
 }
 
 /// The error map of `model` at parameters `p` at the joint vectors `points`.
-pub fn error_map(model: &ForwardModel, p: &[f64], points: &[Vec<f64>], conditions: &Signals) -> Result<Vec<Vector3<f64>>, FitError> {
+pub fn error_map(
+    model: &ForwardModel,
+    p: &[f64],
+    points: &[Vec<f64>],
+    conditions: &Signals,
+) -> Result<Vec<Vector3<f64>>, FitError> {
     let kin = model.kinematic_truth(p)?;
     points
         .iter()
@@ -108,13 +116,37 @@ pub fn volumetric_monte_carlo(
     }
     let m = ok.max(1) as f64;
     let mean_fitted: Vec<Vector3<f64>> = sum.iter().map(|s| s / m).collect();
-    let sd_fitted = sum_sq.iter().zip(&mean_fitted).map(|(sq, mu)| ((sq / m - mu.component_mul(mu)) * m / (m - 1.0).max(1.0)).map(|v| v.max(0.0).sqrt())).collect();
-    Ok(VolumetricMonteCarlo { points: points.to_vec(), initial_moduli: true_errors.iter().map(|e| e.norm()).collect(), true_errors, mean_fitted, sd_fitted, residual_moduli, linearised_sd, trials, failed })
+    let sd_fitted = sum_sq
+        .iter()
+        .zip(&mean_fitted)
+        .map(|(sq, mu)| {
+            ((sq / m - mu.component_mul(mu)) * m / (m - 1.0).max(1.0)).map(|v| v.max(0.0).sqrt())
+        })
+        .collect();
+    Ok(VolumetricMonteCarlo {
+        points: points.to_vec(),
+        initial_moduli: true_errors.iter().map(|e| e.norm()).collect(),
+        true_errors,
+        mean_fitted,
+        sd_fitted,
+        residual_moduli,
+        linearised_sd,
+        trials,
+        failed,
+    })
 }
 
 /// √diag(J·C·Jᵀ) of the error map at `points` (zero without a covariance).
-fn linearised(model: &ForwardModel, p: &[f64], covariance: Option<&nalgebra::DMatrix<f64>>, points: &[Vec<f64>], conditions: &Signals) -> Result<Vec<Vector3<f64>>, FitError> {
-    let Some(c) = covariance else { return Ok(vec![Vector3::zeros(); points.len()]) };
+fn linearised(
+    model: &ForwardModel,
+    p: &[f64],
+    covariance: Option<&nalgebra::DMatrix<f64>>,
+    points: &[Vec<f64>],
+    conditions: &Signals,
+) -> Result<Vec<Vector3<f64>>, FitError> {
+    let Some(c) = covariance else {
+        return Ok(vec![Vector3::zeros(); points.len()]);
+    };
     let kin = model.kinematic_truth(p)?;
     let mut j = nalgebra::DMatrix::zeros(3, model.param_count());
     points
@@ -123,7 +155,9 @@ fn linearised(model: &ForwardModel, p: &[f64], covariance: Option<&nalgebra::DMa
             let mut s = signals_at(model, q, conditions);
             model.tool_point_jacobian(p, &kin, q, &mut s, &mut j)?;
             let jc = &j * c;
-            Ok(Vector3::from_fn(|i, _| jc.row(i).dot(&j.row(i)).max(0.0).sqrt()))
+            Ok(Vector3::from_fn(|i, _| {
+                jc.row(i).dot(&j.row(i)).max(0.0).sqrt()
+            }))
         })
         .collect()
 }

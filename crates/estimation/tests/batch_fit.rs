@@ -2,7 +2,9 @@
 //! parameters come back within their stated uncertainty, the residual is at the noise floor,
 //! and the tracker pose is found from any placement.
 
-use metrocell_estimation::{fit, rms, FitOptions, MeasurementRecord, RecordFrame, RecordKind, RecordSet};
+use metrocell_estimation::{
+    fit, rms, FitOptions, MeasurementRecord, RecordFrame, RecordKind, RecordSet,
+};
 use metrocell_model::ParameterSetup;
 use metrocell_physics::Signals;
 use metrocell_twin::Cell;
@@ -57,21 +59,46 @@ fn records(cell: &Cell, sigma: f64, seed: u64) -> RecordSet {
     for i in 0..6 {
         for j in 0..5 {
             for k in 0..3 {
-                let q = [0.8 * i as f64 / 5.0, 0.5 * j as f64 / 4.0, 0.4 * k as f64 / 2.0];
+                let q = [
+                    0.8 * i as f64 / 5.0,
+                    0.5 * j as f64 / 4.0,
+                    0.4 * k as f64 / 2.0,
+                ];
                 for approach in [1.0, -1.0] {
-                    let mut s = Signals { air_temperature: Some(20.0), air_pressure: Some(101_300.0), air_humidity: Some(45.0), ..Signals::default() };
+                    let mut s = Signals {
+                        air_temperature: Some(20.0),
+                        air_pressure: Some(101_300.0),
+                        air_humidity: Some(45.0),
+                        ..Signals::default()
+                    };
                     model.set_motion(&mut s, &q, &[0.0; 3], &[approach; 3]);
                     let tool = model.tool_state(&p, &kin, &q, &mut s, None).unwrap();
                     let pred = model.tracker(&p, &tool, &mut s).unwrap();
-                    let measured = pred.measured_point() + Vector3::from_fn(|_, _| noise.sample(&mut rng));
+                    let measured =
+                        pred.measured_point() + Vector3::from_fn(|_, _| noise.sample(&mut rng));
                     s.target_point = None;
                     s.tracker_range = None;
-                    out.push(MeasurementRecord { time: out.len() as f64, point_id: format!("p{i}{j}{k}"), channel: "tracker".into(), q: q.to_vec(), measured, covariance: Matrix3::identity() * sigma * sigma, signals: s, kind: RecordKind::Point });
+                    out.push(MeasurementRecord {
+                        time: out.len() as f64,
+                        point_id: format!("p{i}{j}{k}"),
+                        channel: "tracker".into(),
+                        q: q.to_vec(),
+                        measured,
+                        covariance: Matrix3::identity() * sigma * sigma,
+                        signals: s,
+                        kind: RecordKind::Point,
+                    });
                 }
             }
         }
     }
-    RecordSet { check: Vec::new(), frame: RecordFrame::Instrument("tracker".into()), records: out, rejected: vec![], sources: vec![] }
+    RecordSet {
+        check: Vec::new(),
+        frame: RecordFrame::Instrument("tracker".into()),
+        records: out,
+        rejected: vec![],
+        sources: vec![],
+    }
 }
 
 /// The test cell with its terms at zero: the model a user starts a fit from.
@@ -103,14 +130,24 @@ fn declared_parameters_come_back_within_their_uncertainty() {
     // the model: the same terms at zero, the tracker placed roughly (10 cm, 5° off)
     let mut model_cell = zeroed_model_cell();
     let tr = model_cell.tracker.as_mut().unwrap();
-    tr.pose = metrocell_model::InstrumentPose::from_euler_xyz(tr.pose.translation + Vector3::new(0.1, -0.1, 0.05), [0.0, 0.0, 55f64.to_radians()]);
+    tr.pose = metrocell_model::InstrumentPose::from_euler_xyz(
+        tr.pose.translation + Vector3::new(0.1, -0.1, 0.05),
+        [0.0, 0.0, 55f64.to_radians()],
+    );
     let instruments = model_cell.tracker_terms().unwrap();
     let model = model_cell.forward_model(&instruments).unwrap();
     let setup = declared_setup(&model);
     let f = fit(&model, &setup, &data, None, &FitOptions::default()).unwrap();
     let after = rms(&f.residuals_after);
-    assert!((after / sigma - 1.0).abs() < 0.1, "residual RMS {after:e} vs noise {sigma:e}");
-    assert!(rms(&f.residuals_before) > 1.5 * sigma, "before {:e}", rms(&f.residuals_before));
+    assert!(
+        (after / sigma - 1.0).abs() < 0.1,
+        "residual RMS {after:e} vs noise {sigma:e}"
+    );
+    assert!(
+        rms(&f.residuals_before) > 1.5 * sigma,
+        "before {:e}",
+        rms(&f.residuals_before)
+    );
     let truth_instruments = truth.tracker_terms().unwrap();
     let truth_model = truth.forward_model(&truth_instruments).unwrap();
     let true_values = truth_model.params();
@@ -122,14 +159,29 @@ fn declared_parameters_come_back_within_their_uncertainty() {
         }
         let u = p.sigma.expect("identifiable");
         let z = (p.value - true_values[k]) / u;
-        assert!(z.abs() < 4.0, "{} = {:e} ± {:e}, truth {:e}", p.name, p.value, u, true_values[k]);
+        assert!(
+            z.abs() < 4.0,
+            "{} = {:e} ± {:e}, truth {:e}",
+            p.name,
+            p.value,
+            u,
+            true_values[k]
+        );
         checked += 1;
         if z.abs() < 3.0 {
             within += 1;
         }
     }
-    assert!(checked >= 11 && within >= checked - 1, "{within} of {checked} within 3σ");
-    assert_eq!(f.identifiability.rank, checked, "{:?}", f.identifiability.describe());
+    assert!(
+        checked >= 11 && within >= checked - 1,
+        "{within} of {checked} within 3σ"
+    );
+    assert_eq!(
+        f.identifiability.rank,
+        checked,
+        "{:?}",
+        f.identifiability.describe()
+    );
 }
 
 /// A prior (value, σ) on a parameter enters the fit as one more observation: with a prior as
@@ -144,15 +196,29 @@ fn a_prior_combines_with_the_data_by_precision() {
     let instruments = model_cell.tracker_terms().unwrap();
     let model = model_cell.forward_model(&instruments).unwrap();
     let mut setup = declared_setup(&model);
-    let k = setup.names.iter().position(|n| n == "squareness[xy].s").unwrap();
+    let k = setup
+        .names
+        .iter()
+        .position(|n| n == "squareness[xy].s")
+        .unwrap();
     let plain = fit(&model, &setup, &data, None, &FitOptions::default()).unwrap();
-    let (s_data, u_data) = (plain.parameters[k].value, plain.parameters[k].sigma.unwrap());
+    let (s_data, u_data) = (
+        plain.parameters[k].value,
+        plain.parameters[k].sigma.unwrap(),
+    );
     // a prior four σ of the data away from the data's estimate, as certain as the data
-    let prior = metrocell_model::Prior { value: s_data + 4.0 * u_data, sigma: u_data };
+    let prior = metrocell_model::Prior {
+        value: s_data + 4.0 * u_data,
+        sigma: u_data,
+    };
     setup.priors[k] = Some(prior);
     let with = fit(&model, &setup, &data, None, &FitOptions::default()).unwrap();
     let (s, u) = (with.parameters[k].value, with.parameters[k].sigma.unwrap());
     let expected = (s_data + prior.value) / 2.0;
     assert!((s - expected).abs() < 0.1 * u_data, "with the prior: {s:e}, the precision-weighted mean {expected:e} (data {s_data:e} ± {u_data:e})");
-    assert!((u / (u_data / 2f64.sqrt()) - 1.0).abs() < 0.1, "σ with the prior {u:e}, expected {:e}", u_data / 2f64.sqrt());
+    assert!(
+        (u / (u_data / 2f64.sqrt()) - 1.0).abs() < 0.1,
+        "σ with the prior {u:e}, expected {:e}",
+        u_data / 2f64.sqrt()
+    );
 }

@@ -22,7 +22,10 @@ use std::path::Path;
 /// Noisy fits per case: 20 in CI; the benchmark run sets `METROCELL_COVERAGE_SEEDS=200`
 /// (BENCHMARKS.md, "Coverage of the reported uncertainties").
 fn seeds() -> u64 {
-    std::env::var("METROCELL_COVERAGE_SEEDS").ok().and_then(|s| s.parse().ok()).unwrap_or(20)
+    std::env::var("METROCELL_COVERAGE_SEEDS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(20)
 }
 
 struct Case {
@@ -80,7 +83,12 @@ fn xfyz() -> Case {
         for j in 0..5 {
             for k in 0..4 {
                 for dir in [1.0, -1.0] {
-                    plan.push(vec![0.8 * i as f64 / 5.0, 0.5 * j as f64 / 4.0, 0.4 * k as f64 / 3.0, dir]);
+                    plan.push(vec![
+                        0.8 * i as f64 / 5.0,
+                        0.5 * j as f64 / 4.0,
+                        0.4 * k as f64 / 3.0,
+                        dir,
+                    ]);
                 }
             }
         }
@@ -93,10 +101,20 @@ fn xfyz() -> Case {
         .map(|(i, v)| {
             let phase = i as f64 / n;
             let t_left = 21.0 + 1.5 * (2.0 * std::f64::consts::PI * 1.5 * phase).sin();
-            Planned { q: v[..3].to_vec(), approach: [v[3]; 3], temperatures: vec![("x_left".into(), t_left), ("x_right".into(), t_left + 0.4)], time_on: 600.0 + 4.0 * 3600.0 * phase }
+            Planned {
+                q: v[..3].to_vec(),
+                approach: [v[3]; 3],
+                temperatures: vec![("x_left".into(), t_left), ("x_right".into(), t_left + 0.4)],
+                time_on: 600.0 + 4.0 * 3600.0 * phase,
+            }
         })
         .collect();
-    Case { name: "xfyz", model, truth, plan }
+    Case {
+        name: "xfyz",
+        model,
+        truth,
+        plan,
+    }
 }
 
 /// UR5 (published DH) on a pedestal, tracker 2.5 m away: joint offsets, DH link lengths and the
@@ -124,9 +142,21 @@ fn ur5() -> Case {
     ];
     let mut rng = ChaCha8Rng::seed_from_u64(5);
     let plan = (0..150)
-        .map(|_| Planned { q: (0..6).map(|j| rng.random_range(-1.0..1.0) * if j == 0 { 1.2 } else { 1.8 }).collect(), approach: [1.0; 3], temperatures: vec![], time_on: 7200.0 })
+        .map(|_| Planned {
+            q: (0..6)
+                .map(|j| rng.random_range(-1.0..1.0) * if j == 0 { 1.2 } else { 1.8 })
+                .collect(),
+            approach: [1.0; 3],
+            temperatures: vec![],
+            time_on: 7200.0,
+        })
         .collect();
-    Case { name: "ur5", model, truth, plan }
+    Case {
+        name: "ur5",
+        model,
+        truth,
+        plan,
+    }
 }
 
 /// A linear delta (250 mm rods, 124 mm radius), tracker beside it: rod lengths, radii, tower
@@ -151,11 +181,25 @@ fn delta() -> Case {
     for i in 0..5 {
         for j in 0..5 {
             for k in 0..4 {
-                plan.push(Planned { q: vec![-0.08 + 0.04 * i as f64, -0.08 + 0.04 * j as f64, 0.04 * k as f64], approach: [1.0; 3], temperatures: vec![], time_on: 7200.0 });
+                plan.push(Planned {
+                    q: vec![
+                        -0.08 + 0.04 * i as f64,
+                        -0.08 + 0.04 * j as f64,
+                        0.04 * k as f64,
+                    ],
+                    approach: [1.0; 3],
+                    temperatures: vec![],
+                    time_on: 7200.0,
+                });
             }
         }
     }
-    Case { name: "delta", model, truth, plan }
+    Case {
+        name: "delta",
+        model,
+        truth,
+        plan,
+    }
 }
 
 fn shuffle<T>(v: &mut [T], seed: u64) {
@@ -178,9 +222,14 @@ fn coverage(case: &Case) -> (Vec<(String, f64)>, Vec<String>) {
     let options = FitOptions::default();
     // the identifiable truth: a noise-free fit from the same start
     let clean = records(&fm, &truth, &case.plan, THESIS_TRACKER, None);
-    let reference = fit(&fm, &case.model.setup, &clean, None, &options).unwrap_or_else(|e| panic!("{}: {e}", case.name));
+    let reference = fit(&fm, &case.model.setup, &clean, None, &options)
+        .unwrap_or_else(|e| panic!("{}: {e}", case.name));
     let rms_clean = metrocell_estimation::rms(&reference.residuals_after);
-    assert!(rms_clean < 1e-9, "{}: the noise-free fit must reproduce the truth's predictions, RMS {rms_clean:e} m", case.name);
+    assert!(
+        rms_clean < 1e-9,
+        "{}: the noise-free fit must reproduce the truth's predictions, RMS {rms_clean:e} m",
+        case.name
+    );
     // the noisy fits estimate what the design identifies: the reference's held parameters are
     // fixed for them (a weak direction found at a noisy solution would otherwise be resolved
     // by holding a different parameter, and compare against another representative)
@@ -192,10 +241,21 @@ fn coverage(case: &Case) -> (Vec<(String, f64)>, Vec<String>) {
     let (mut downweighted, mut components) = (0usize, 0usize);
     for seed in 0..seeds() {
         let data = records(&fm, &truth, &case.plan, THESIS_TRACKER, Some(seed));
-        let f = fit(&fm, &setup, &data, None, &options).unwrap_or_else(|e| panic!("{} seed {seed}: {e}", case.name));
-        assert!(f.held.is_empty(), "{} seed {seed}: with the design's held set fixed, the rest is identifiable; held {:?}", case.name, f.held);
+        let f = fit(&fm, &setup, &data, None, &options)
+            .unwrap_or_else(|e| panic!("{} seed {seed}: {e}", case.name));
+        assert!(
+            f.held.is_empty(),
+            "{} seed {seed}: with the design's held set fixed, the rest is identifiable; held {:?}",
+            case.name,
+            f.held
+        );
         let dof = f.solution.degrees_of_freedom as f64;
-        assert!((f.chi2_per_dof - 1.0).abs() < 5.0 * (2.0 / dof).sqrt(), "{} seed {seed}: χ²/dof {:.3} with {dof} dof", case.name, f.chi2_per_dof);
+        assert!(
+            (f.chi2_per_dof - 1.0).abs() < 5.0 * (2.0 / dof).sqrt(),
+            "{} seed {seed}: χ²/dof {:.3} with {dof} dof",
+            case.name,
+            f.chi2_per_dof
+        );
         downweighted += f.downweighted;
         components += 3 * data.records.len();
         for (k, p) in f.parameters.iter().enumerate() {
@@ -210,14 +270,28 @@ fn coverage(case: &Case) -> (Vec<(String, f64)>, Vec<String>) {
     let expected = 6.3e-5 * components as f64;
     assert!((downweighted as f64) <= expected + 4.0 * expected.sqrt() + 1.0, "{}: {downweighted} down-weighted readings in {} seeds, {expected:.1} expected of honest data", case.name, seeds());
     println!("{}: {downweighted} down-weighted in {} seeds ({expected:.2} expected of Gaussian data at 4σ)", case.name, seeds());
-    (z, reference.held.iter().map(|h| format!("{}: {}", h.name, h.combination)).collect())
+    (
+        z,
+        reference
+            .held
+            .iter()
+            .map(|h| format!("{}: {}", h.name, h.combination))
+            .collect(),
+    )
 }
 
 fn check(case: Case) -> Vec<String> {
     let (named, held) = coverage(&case);
     let z: Vec<f64> = named.iter().map(|(_, z)| *z).collect();
     let (one, two, three) = (within(&z, 1.0), within(&z, 2.0), within(&z, 3.0));
-    println!("{}: {} z-scores; within 1σ {:.3}, 2σ {:.3}, 3σ {:.3}; held: {held:#?}", case.name, z.len(), one, two, three);
+    println!(
+        "{}: {} z-scores; within 1σ {:.3}, 2σ {:.3}, 3σ {:.3}; held: {held:#?}",
+        case.name,
+        z.len(),
+        one,
+        two,
+        three
+    );
     // per parameter: with 20 seeds a single parameter's 1σ share has a binomial spread of ±10 %,
     // so only the pooled shares are asserted; the per-parameter range is printed for the
     // 200-seed benchmark
@@ -225,15 +299,36 @@ fn check(case: Case) -> Vec<String> {
     for (name, z) in &named {
         per.entry(name).or_default().push(*z);
     }
-    let shares = |k: f64| per.values().map(|z| within(z, k)).fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| (lo.min(s), hi.max(s)));
+    let shares = |k: f64| {
+        per.values()
+            .map(|z| within(z, k))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(lo, hi), s| {
+                (lo.min(s), hi.max(s))
+            })
+    };
     let ((lo1, hi1), (lo3, _)) = (shares(1.0), shares(3.0));
-    let in_band = per.values().filter(|z| (0.60..=0.76).contains(&within(z, 1.0))).count();
+    let in_band = per
+        .values()
+        .filter(|z| (0.60..=0.76).contains(&within(z, 1.0)))
+        .count();
     println!("{}: {} parameters × {} seeds; per parameter within 1σ {lo1:.3}–{hi1:.3} ({in_band} of {} in 0.60–0.76), within 3σ ≥ {lo3:.3}", case.name, per.len(), seeds(), per.len());
-    assert!((0.60..=0.76).contains(&one), "{}: {one:.3} within 1σ (expected 0.683)", case.name);
-    assert!((0.91..=0.99).contains(&two), "{}: {two:.3} within 2σ (expected 0.954)", case.name);
+    assert!(
+        (0.60..=0.76).contains(&one),
+        "{}: {one:.3} within 1σ (expected 0.683)",
+        case.name
+    );
+    assert!(
+        (0.91..=0.99).contains(&two),
+        "{}: {two:.3} within 2σ (expected 0.954)",
+        case.name
+    );
     assert!(three >= 0.95, "{}: {three:.3} within 3σ", case.name);
     for h in &held {
-        assert!(h.contains("not separable") || h.contains("not identifiable"), "{}: {h}", case.name);
+        assert!(
+            h.contains("not separable") || h.contains("not identifiable"),
+            "{}: {h}",
+            case.name
+        );
     }
     held
 }
@@ -244,7 +339,12 @@ fn xfyz_full_model_recovered_with_honest_uncertainty() {
     // a constant shift of the tool point is the tracker's translation: positioning constants are
     // named with it, not estimated
     for axis in ["x", "y", "z"] {
-        assert!(held.iter().any(|h| h.contains(&format!("positioning[{axis}].c0")) && h.contains(&format!("tracker_pose.t{axis}"))), "positioning[{axis}].c0 named with the tracker: {held:#?}");
+        assert!(
+            held.iter()
+                .any(|h| h.contains(&format!("positioning[{axis}].c0"))
+                    && h.contains(&format!("tracker_pose.t{axis}"))),
+            "positioning[{axis}].c0 named with the tracker: {held:#?}"
+        );
     }
 }
 
@@ -252,15 +352,21 @@ fn xfyz_full_model_recovered_with_honest_uncertainty() {
 fn ur5_arm_recovered_with_honest_uncertainty() {
     let held = check(ur5());
     // turning joint 1 turns the whole arm about the base z axis: the tracker's yaw absorbs it
-    assert!(held.iter().any(|h| h.contains("joint_offset.q1") && h.contains("tracker_pose")), "{held:#?}");
+    assert!(
+        held.iter()
+            .any(|h| h.contains("joint_offset.q1") && h.contains("tracker_pose")),
+        "{held:#?}"
+    );
 }
 
 #[test]
 fn delta_recovered_with_honest_uncertainty() {
     let held = check(delta());
-    assert!(!held.is_empty(), "a tracker of free pose cannot see the delta's absolute height or rotation");
+    assert!(
+        !held.is_empty(),
+        "a tracker of free pose cannot see the delta's absolute height or rotation"
+    );
 }
-
 
 /// The residuals' analytic Jacobian (what `fit` and the online estimator use: the shared model's
 /// analytic derivatives, whitened per record) equals 4th-order central differences of the same
@@ -279,7 +385,9 @@ fn jacobian_matches_central_differences(case: Case) {
     let m = problem.residual_count();
     let mut r = vec![0.0; m];
     let mut analytic = nalgebra::DMatrix::zeros(m, problem.parameter_count());
-    problem.residuals_and_jacobian(&x, &mut r, &mut analytic).unwrap();
+    problem
+        .residuals_and_jacobian(&x, &mut r, &mut analytic)
+        .unwrap();
     // steps of 1e-4 relative (floor 1e-4 m or rad): the 4th-order formula's sweet spot
     let numeric = central_difference(
         |q| {
@@ -306,8 +414,17 @@ fn jacobian_matches_central_differences(case: Case) {
     }
     // a few parameters are invisible to a tracker here (e.g. the roll of an axis without an Abbe
     // lever in the plan); the rest must have been compared
-    println!("{}: {compared} of {} Jacobian columns compared", case.name, x.len());
-    assert!(5 * compared >= 4 * x.len(), "{}: only {compared} of {} columns are non-zero", case.name, x.len());
+    println!(
+        "{}: {compared} of {} Jacobian columns compared",
+        case.name,
+        x.len()
+    );
+    assert!(
+        5 * compared >= 4 * x.len(),
+        "{}: only {compared} of {} columns are non-zero",
+        case.name,
+        x.len()
+    );
 }
 
 #[test]

@@ -48,7 +48,11 @@ const SIGMA: f64 = 3e-6;
 fn measurement(i: usize, step_at: Option<usize>, rng: &mut ChaCha8Rng) -> (MeasurementRecord, f64) {
     let n = Normal::new(0.0, SIGMA).unwrap();
     let k = i % 32;
-    let q = [0.8 * (k % 4) as f64 / 3.0, 0.5 * ((k / 4) % 4) as f64 / 3.0, 0.4 * (k / 16) as f64];
+    let q = [
+        0.8 * (k % 4) as f64 / 3.0,
+        0.5 * ((k / 4) % 4) as f64 / 3.0,
+        0.4 * (k / 16) as f64,
+    ];
     let t = 10.0 * i as f64;
     let drift = 30e-6 * t / 4000.0;
     let mut truth = Vector3::new(q[0] + drift + 15e-6 * q[0] - 10e-6 * q[1], q[1], q[2]);
@@ -57,10 +61,25 @@ fn measurement(i: usize, step_at: Option<usize>, rng: &mut ChaCha8Rng) -> (Measu
     }
     let measured = truth + Vector3::from_fn(|_, _| n.sample(rng));
     let s = Signals::default().with_positions(Vector3::new(q[0], q[1], q[2]));
-    (MeasurementRecord { time: t, point_id: format!("p{k}"), channel: "tracker".into(), q: q.to_vec(), measured, covariance: Matrix3::identity() * SIGMA * SIGMA, signals: s, kind: RecordKind::Point }, drift)
+    (
+        MeasurementRecord {
+            time: t,
+            point_id: format!("p{k}"),
+            channel: "tracker".into(),
+            q: q.to_vec(),
+            measured,
+            covariance: Matrix3::identity() * SIGMA * SIGMA,
+            signals: s,
+            kind: RecordKind::Point,
+        },
+        drift,
+    )
 }
 
-fn estimator(cell: &Cell, instruments: &metrocell_physics::model::TermModel) -> (RecursiveEstimator, usize) {
+fn estimator(
+    cell: &Cell,
+    instruments: &metrocell_physics::model::TermModel,
+) -> (RecursiveEstimator, usize) {
     let model = cell.forward_model(instruments).unwrap();
     let mut setup = ParameterSetup::all_free(&model);
     let names = model.param_names();
@@ -75,7 +94,10 @@ fn estimator(cell: &Cell, instruments: &metrocell_physics::model::TermModel) -> 
     let p0 = RecursiveEstimator::initial_covariance(&model, &setup);
     let mut x0 = model.params();
     x0[pose..pose + 6].iter_mut().for_each(|v| *v = 0.0);
-    (RecursiveEstimator::new(&model, &setup, x0, p0, options).unwrap(), c0)
+    (
+        RecursiveEstimator::new(&model, &setup, x0, p0, options).unwrap(),
+        c0,
+    )
 }
 
 fn identity_tracker() -> metrocell_physics::model::TermModel {
@@ -100,7 +122,11 @@ fn tracks_a_drifting_offset_within_its_uncertainty_and_replays_bit_for_bit() {
         for i in 0..400 {
             let (r, drift) = measurement(i, None, &mut rng);
             let u = f.update(&model, &r, &mut work).unwrap();
-            assert!(!u.alarm, "false alarm at {i}: window p = {}", u.window_probability);
+            assert!(
+                !u.alarm,
+                "false alarm at {i}: window p = {}",
+                u.window_probability
+            );
             let ci = f.free_indices().iter().position(|&k| k == c0).unwrap();
             if i >= 100 {
                 // positioning's series is in u = 2x/travel − 1: the 15 µm/m scale puts 6 µm in c0
@@ -116,7 +142,11 @@ fn tracks_a_drifting_offset_within_its_uncertainty_and_replays_bit_for_bit() {
     assert_eq!(counts.1, 0, "no honest measurement is an outlier");
     let within_2 = z.iter().filter(|v| v.abs() < 2.0).count() as f64 / z.len() as f64;
     let max = z.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-    assert!(within_2 > 0.8 && max < 4.5, "drift tracked: {:.0} % within 2σ, max |z| {max:.2}", 100.0 * within_2);
+    assert!(
+        within_2 > 0.8 && max < 4.5,
+        "drift tracked: {:.0} % within 2σ, max |z| {max:.2}",
+        100.0 * within_2
+    );
     let _ = &mut work;
 }
 
@@ -136,7 +166,10 @@ fn flags_a_20_um_step_within_20_measurements_and_gates_a_beam_break() {
             // a beam break that slipped through: the point is 2 mm off
             r.measured.x += 2e-3;
             let u = f.update(&model, &r, &mut work).unwrap();
-            assert!(!u.accepted && !u.alarm, "the garbage point is gated, not alarmed: {u:?}");
+            assert!(
+                !u.accepted && !u.alarm,
+                "the garbage point is gated, not alarmed: {u:?}"
+            );
             continue;
         }
         let u = f.update(&model, &r, &mut work).unwrap();

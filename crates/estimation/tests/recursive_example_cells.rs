@@ -41,7 +41,11 @@ fn identity_tracker() -> TermModel {
 /// recording gives them (commanded motion, thermocouple readings and their history, time since
 /// power-on).
 fn shift_points(sim: &Simulation, model: &ForwardModel) -> Vec<MeasurementRecord> {
-    let tracker = sim.cell().tracker.as_ref().expect("every example cell has a tracker");
+    let tracker = sim
+        .cell()
+        .tracker
+        .as_ref()
+        .expect("every example cell has a tracker");
     let (rot, trans) = (tracker.pose.rotation, tracker.pose.translation);
     let powered = tracker.powered_on_before_start;
     let history = Arc::new(TemperatureTimeline::new());
@@ -49,7 +53,10 @@ fn shift_points(sim: &Simulation, model: &ForwardModel) -> Vec<MeasurementRecord
     let mut dwell: Vec<(f64, Vector3<f64>, Matrix3<f64>)> = Vec::new();
     let mut dwell_target: Option<(u32, Option<u32>)> = None;
     let mut out = Vec::new();
-    let close = |dwell: &mut Vec<(f64, Vector3<f64>, Matrix3<f64>)>, target: u32, latest: &BTreeMap<String, f64>, out: &mut Vec<MeasurementRecord>| {
+    let close = |dwell: &mut Vec<(f64, Vector3<f64>, Matrix3<f64>)>,
+                 target: u32,
+                 latest: &BTreeMap<String, f64>,
+                 out: &mut Vec<MeasurementRecord>| {
         if dwell.len() < 3 {
             dwell.clear();
             return;
@@ -59,8 +66,18 @@ fn shift_points(sim: &Simulation, model: &ForwardModel) -> Vec<MeasurementRecord
         let mean = dwell.iter().map(|d| d.1).sum::<Vector3<f64>>() / n;
         let cov = dwell.iter().map(|d| d.2).sum::<Matrix3<f64>>() / (n * n);
         let ms = sim.cell().program.state_at(t);
-        let mut signals = Signals { time_since_power_on: Some(t + powered), time: Some(t), timeline: Some(history.clone()), ..Default::default() };
-        model.set_motion(&mut signals, ms.q.as_slice(), &vec![0.0; ms.q.len()], &ms.approach);
+        let mut signals = Signals {
+            time_since_power_on: Some(t + powered),
+            time: Some(t),
+            timeline: Some(history.clone()),
+            ..Default::default()
+        };
+        model.set_motion(
+            &mut signals,
+            ms.q.as_slice(),
+            &vec![0.0; ms.q.len()],
+            &ms.approach,
+        );
         signals.temperatures = latest.clone();
         out.push(MeasurementRecord {
             time: t,
@@ -78,7 +95,9 @@ fn shift_points(sim: &Simulation, model: &ForwardModel) -> Vec<MeasurementRecord
         match sample {
             Sample::Temperature(s) => {
                 latest.insert(s.sensor.to_string(), s.value);
-                history.push(&s.sensor, s.t, s.value).expect("the twin's samples advance in time");
+                history
+                    .push(&s.sensor, s.t, s.value)
+                    .expect("the twin's samples advance in time");
             }
             Sample::Tracker(s) => {
                 let key = s.target_id.map(|id| (id, s.cycle));
@@ -89,7 +108,11 @@ fn shift_points(sim: &Simulation, model: &ForwardModel) -> Vec<MeasurementRecord
                     dwell.clear();
                     dwell_target = key;
                 }
-                if key.is_some() && s.status == TrackerStatus::Ok && s.point.iter().all(|v| v.is_finite()) && latest.len() == sim.cell().thermocouples.len() {
+                if key.is_some()
+                    && s.status == TrackerStatus::Ok
+                    && s.point.iter().all(|v| v.is_finite())
+                    && latest.len() == sim.cell().thermocouples.len()
+                {
                     dwell.push((s.t, s.point, s.covariance));
                 }
             }
@@ -126,7 +149,9 @@ fn run(cell_file: &str, model_file: &str, shift_s: f64) -> Outcome {
     let mut setup = ParameterSetup::new(&model, &model_cell.estimation).unwrap();
     let names = model.param_names();
     let pose = names.iter().position(|n| n == "tracker_pose.tx").unwrap();
-    setup.free[pose..pose + 6].iter_mut().for_each(|f| *f = false);
+    setup.free[pose..pose + 6]
+        .iter_mut()
+        .for_each(|f| *f = false);
     let mut x0 = model.params();
     for (k, prior) in setup.priors.iter().enumerate() {
         if let Some(p) = prior {
@@ -134,33 +159,87 @@ fn run(cell_file: &str, model_file: &str, shift_s: f64) -> Outcome {
         }
     }
     let p0 = RecursiveEstimator::initial_covariance(&model, &setup);
-    let mut filter = RecursiveEstimator::new(&model, &setup, x0.clone(), p0, RecursiveOptions::constant(model.param_count())).unwrap();
-    let specs: Vec<_> = model.machine_terms.param_specs().into_iter().chain(model.instrument_terms.param_specs()).collect();
+    let mut filter = RecursiveEstimator::new(
+        &model,
+        &setup,
+        x0.clone(),
+        p0,
+        RecursiveOptions::constant(model.param_count()),
+    )
+    .unwrap();
+    let specs: Vec<_> = model
+        .machine_terms
+        .param_specs()
+        .into_iter()
+        .chain(model.instrument_terms.param_specs())
+        .collect();
     let prior: Vec<f64> = filter.prior_sigma().to_vec();
     let points = shift_points(&sim, &model);
-    assert!(points.len() >= 12, "{cell_file}: only {} measured points in {shift_s} s", points.len());
+    assert!(
+        points.len() >= 12,
+        "{cell_file}: only {} measured points in {shift_s} s",
+        points.len()
+    );
     let mut work = Workspace::new(&model);
     for (i, record) in points.iter().enumerate() {
-        filter.update(&model, record, &mut work).unwrap_or_else(|e| panic!("{cell_file} point {i}: {e}"));
+        filter
+            .update(&model, record, &mut work)
+            .unwrap_or_else(|e| panic!("{cell_file} point {i}: {e}"));
         for (k, v) in filter.state().iter().enumerate() {
             let (lo, hi) = possible_range(&specs[k]);
             assert!(v.is_finite() && *v >= lo && *v <= hi, "{cell_file} after point {i}: {} = {v:e} outside its possible range [{lo:e}, {hi:e}]", names[k]);
         }
         for (c, &k) in filter.free_indices().iter().enumerate() {
             let var = filter.covariance()[(c, c)];
-            assert!(var <= prior[c] * prior[c] * (1.0 + 1e-9), "{cell_file} after point {i}: σ of {} = {:e} beyond its prior {:e}", names[k], var.sqrt(), prior[c]);
+            assert!(
+                var <= prior[c] * prior[c] * (1.0 + 1e-9),
+                "{cell_file} after point {i}: σ of {} = {:e} beyond its prior {:e}",
+                names[k],
+                var.sqrt(),
+                prior[c]
+            );
         }
     }
     let o = filter.observability();
-    let sigma = filter.free_indices().iter().enumerate().map(|(c, &k)| (k, filter.covariance()[(c, c)].sqrt())).collect();
-    let alone = o.unobserved.iter().filter(|u| u.parameters.len() == 1).map(|u| u.parameters[0]).collect();
-    Outcome { description: o.describe(&names), unobserved: o.unobserved_parameters(), alone, names, start: x0, end: filter.state().to_vec(), sigma, alarms: filter.counts().2, points: points.len() }
+    let sigma = filter
+        .free_indices()
+        .iter()
+        .enumerate()
+        .map(|(c, &k)| (k, filter.covariance()[(c, c)].sqrt()))
+        .collect();
+    let alone = o
+        .unobserved
+        .iter()
+        .filter(|u| u.parameters.len() == 1)
+        .map(|u| u.parameters[0])
+        .collect();
+    Outcome {
+        description: o.describe(&names),
+        unobserved: o.unobserved_parameters(),
+        alone,
+        names,
+        start: x0,
+        end: filter.state().to_vec(),
+        sigma,
+        alarms: filter.counts().2,
+        points: points.len(),
+    }
 }
 
 fn show(cell: &str, o: &Outcome) {
-    eprintln!("{cell}: {} points, {} alarms; {}", o.points, o.alarms, o.description.as_deref().unwrap_or("every free parameter observed"));
+    eprintln!(
+        "{cell}: {} points, {} alarms; {}",
+        o.points,
+        o.alarms,
+        o.description
+            .as_deref()
+            .unwrap_or("every free parameter observed")
+    );
     for &(k, s) in &o.sigma {
-        eprintln!("  {:<32} {:>14.6e} ± {:.3e}   (start {:.6e})", o.names[k], o.end[k], s, o.start[k]);
+        eprintln!(
+            "  {:<32} {:>14.6e} ± {:.3e}   (start {:.6e})",
+            o.names[k], o.end[k], s, o.start[k]
+        );
     }
 }
 
@@ -168,14 +247,26 @@ fn show(cell: &str, o: &Outcome) {
 /// one); every one named is a free parameter of the model.
 fn assert_unobserved_held(cell: &str, o: &Outcome) {
     for &k in &o.unobserved {
-        assert!(o.sigma.iter().any(|&(f, _)| f == k), "{cell}: {} named but not free", o.names[k]);
+        assert!(
+            o.sigma.iter().any(|&(f, _)| f == k),
+            "{cell}: {} named but not free",
+            o.names[k]
+        );
     }
     for &k in &o.alone {
-        assert_eq!(o.end[k], o.start[k], "{cell}: {} is unobserved alone but moved", o.names[k]);
+        assert_eq!(
+            o.end[k], o.start[k],
+            "{cell}: {} is unobserved alone but moved",
+            o.names[k]
+        );
     }
     let text = o.description.clone().unwrap_or_default();
     for &k in &o.unobserved {
-        assert!(text.contains(&o.names[k]), "{cell}: {} not in the description {text:?}", o.names[k]);
+        assert!(
+            text.contains(&o.names[k]),
+            "{cell}: {} not in the description {text:?}",
+            o.names[k]
+        );
     }
 }
 
@@ -190,15 +281,28 @@ fn quick_demo_holds_the_unobservable_sine_and_keeps_alpha_honest() {
         show(&format!("quick_demo, {shift} s"), &o);
         let k = |name: &str| o.names.iter().position(|n| n == name).unwrap();
         let b1 = k("pitch_cyclic[x].b1");
-        assert_eq!(o.unobserved, vec![b1], "only b1 is unobservable here: {:?}", o.description);
+        assert_eq!(
+            o.unobserved,
+            vec![b1],
+            "only b1 is unobservable here: {:?}",
+            o.description
+        );
         assert_eq!(o.end[b1], o.start[b1], "b1 held at its start value");
         assert_eq!(o.description.as_deref(), Some("not observable by the measurements so far, held at their start values: pitch_cyclic[x].b1"));
         let alpha = k("thermal_scale[x].alpha");
         let s = o.sigma.iter().find(|(f, _)| *f == alpha).unwrap().1;
-        assert!((o.end[alpha] - 10.2e-6).abs() <= 3.0 * s && s <= max_sigma_alpha, "{shift} s: α = {:e} ± {s:e}, truth 10.2e-6", o.end[alpha]);
+        assert!(
+            (o.end[alpha] - 10.2e-6).abs() <= 3.0 * s && s <= max_sigma_alpha,
+            "{shift} s: α = {:e} ± {s:e}, truth 10.2e-6",
+            o.end[alpha]
+        );
         assert_unobserved_held("quick_demo", &o);
         if shift > 3600.0 {
-            assert!(o.alarms >= 10, "the long run must alarm to test anything: {} alarms", o.alarms);
+            assert!(
+                o.alarms >= 10,
+                "the long run must alarm to test anything: {} alarms",
+                o.alarms
+            );
         }
     }
 }

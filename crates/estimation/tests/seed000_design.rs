@@ -26,14 +26,31 @@ fn eq7_candidates() -> DMatrix<f64> {
 #[test]
 fn twelve_row_design_beats_random_designs() {
     let c = eq7_candidates();
-    assert_eq!(c.nrows(), 72, "36 points × 2 directions (seed 000's B72 rows)");
+    assert_eq!(
+        c.nrows(),
+        72,
+        "36 points × 2 directions (seed 000's B72 rows)"
+    );
     let design = d_optimal(&c, 12, 5, 2026).unwrap();
     assert_eq!(design.rows.len(), 12);
-    assert_eq!(design.rank, 9, "eq. 7 has nine coefficients, all identifiable from 12 good rows");
+    assert_eq!(
+        design.rank, 9,
+        "eq. 7 has nine coefficients, all identifiable from 12 good rows"
+    );
     let ridge = ridge_for(&c);
     let mut rng = ChaCha8Rng::seed_from_u64(7);
-    let best_random = (0..1000).map(|_| log_det(&c, &sample(&mut rng, 72, 12).into_vec(), ridge)).fold(f64::NEG_INFINITY, f64::max);
-    assert!(design.log_det >= best_random, "design ln det {} < best of 1000 random {best_random}", design.log_det);
+    let best_random = (0..1000)
+        .map(|_| log_det(&c, &sample(&mut rng, 72, 12).into_vec(), ridge))
+        .fold(f64::NEG_INFINITY, f64::max);
+    assert!(
+        design.log_det >= best_random,
+        "design ln det {} < best of 1000 random {best_random}",
+        design.log_det
+    );
     // and by a clear margin: the random designs are far from optimal
-    assert!(design.log_det - best_random > 0.5, "margin {}", design.log_det - best_random);
+    assert!(
+        design.log_det - best_random > 0.5,
+        "margin {}",
+        design.log_det - best_random
+    );
 }

@@ -16,7 +16,20 @@ use metrocell_estimation::inseparable;
 use metrocell_solver::{solve, Identifiability, NotEvaluable, NullSpace, Options, Problem};
 use nalgebra::{DMatrix, DVector};
 
-const NAMES: [&str; 12] = ["ρ11", "ρ21", "Δα2 − C2·γ11", "Δα4", "Δβ2 + b2·γ11", "Δβ4", "Δγ4", "α11", "β11", "α21", "β21", "γ21"];
+const NAMES: [&str; 12] = [
+    "ρ11",
+    "ρ21",
+    "Δα2 − C2·γ11",
+    "Δα4",
+    "Δβ2 + b2·γ11",
+    "Δβ4",
+    "Δγ4",
+    "α11",
+    "β11",
+    "α21",
+    "β21",
+    "γ21",
+];
 
 /// The 36 grid points of the digest's hypothesised grid (62.5 … 137.5 mm, 15 mm pitch), X3 = 1.
 fn grid() -> Vec<(f64, f64)> {
@@ -70,7 +83,12 @@ impl Problem for Linear {
         r.copy_from_slice(v.as_slice());
         Ok(())
     }
-    fn residuals_and_jacobian(&self, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>) -> Result<(), NotEvaluable> {
+    fn residuals_and_jacobian(
+        &self,
+        x: &[f64],
+        r: &mut [f64],
+        j: &mut DMatrix<f64>,
+    ) -> Result<(), NotEvaluable> {
         self.residuals(x, r)?;
         j.copy_from(&self.u);
         Ok(())
@@ -90,31 +108,66 @@ fn t6_rank_and_null_space_in_words_and_the_minimum_norm_field() {
     let held = inseparable(&u, &(0..12).collect::<Vec<_>>(), &names);
     let sentences: Vec<&str> = held.iter().map(|(_, s)| s.as_str()).collect();
     println!("{sentences:#?}");
-    assert_eq!(held.iter().map(|(k, _)| NAMES[*k]).collect::<Vec<_>>(), ["Δβ4", "β11", "β21", "γ21"]);
-    assert!(sentences[0].contains("Δβ4 is not separable from Δβ2 + b2·γ11"), "{}", sentences[0]);
+    assert_eq!(
+        held.iter().map(|(k, _)| NAMES[*k]).collect::<Vec<_>>(),
+        ["Δβ4", "β11", "β21", "γ21"]
+    );
+    assert!(
+        sentences[0].contains("Δβ4 is not separable from Δβ2 + b2·γ11"),
+        "{}",
+        sentences[0]
+    );
     assert!(sentences[1].contains("β11 is not separable from ρ11"));
     assert!(sentences[2].contains("β21 is not separable from Δα4"));
     assert!(sentences[3].contains("γ21 is not separable from ρ21"));
     // the B72 field (Table 2 with A = −H/2 as this chain requires) measured at the 36 points;
     // the minimum-norm solution reproduces it exactly and splits each inseparable pair evenly
-    let (b, c, d, e, f, g, h, i) = (5.20e-3, -7.10e-3, 4.85e-3, 1.11e-2, 1.03e-2, -1.12e-5, -2.01e-5, -1.55e-5);
+    let (b, c, d, e, f, g, h, i) = (
+        5.20e-3, -7.10e-3, 4.85e-3, 1.11e-2, 1.03e-2, -1.12e-5, -2.01e-5, -1.55e-5,
+    );
     let a = -h / 2.0;
     let mut meas = DVector::zeros(72);
     for (k, (x1, x2)) in grid().iter().enumerate() {
         meas[2 * k] = a * x2 * x2 + b * x2 + c * x1 + d;
         meas[2 * k + 1] = e * x1 + f * x2 + g + h * x1 * x2 + i * x1 * x1;
     }
-    let problem = Linear { u: u.clone(), e: meas.clone() };
-    let sol = solve(&problem, &[0.0; 12], &Options { null_space: NullSpace::Truncated { rcond: 1e-10 }, ..Options::default() }).unwrap();
+    let problem = Linear {
+        u: u.clone(),
+        e: meas.clone(),
+    };
+    let sol = solve(
+        &problem,
+        &[0.0; 12],
+        &Options {
+            null_space: NullSpace::Truncated { rcond: 1e-10 },
+            ..Options::default()
+        },
+    )
+    .unwrap();
     let fitted = &u * DVector::from_column_slice(&sol.x);
     assert!((fitted - &meas).amax() < 1e-12, "the field is reproduced");
     let x = &sol.x;
     // C is shared by ρ11 and β11 in proportion to their columns (X1 and X1·X3, equal at X3 = 1)
-    assert!((x[0] - c / 2.0).abs() < 1e-12 && (x[8] - c / 2.0).abs() < 1e-12, "ρ11 {} β11 {}", x[0], x[8]);
+    assert!(
+        (x[0] - c / 2.0).abs() < 1e-12 && (x[8] - c / 2.0).abs() < 1e-12,
+        "ρ11 {} β11 {}",
+        x[0],
+        x[8]
+    );
     // Δβ4 = −(Δβ2 + b2·γ11): the ± pair of Table 1
-    assert!((x[5] + x[4]).abs() < 1e-12 && (x[5] - d / 2.0).abs() < 1e-12, "Δβ4 {} Δβ2' {}", x[5], x[4]);
+    assert!(
+        (x[5] + x[4]).abs() < 1e-12 && (x[5] - d / 2.0).abs() < 1e-12,
+        "Δβ4 {} Δβ2' {}",
+        x[5],
+        x[4]
+    );
     // the identified ones come back whole
-    assert!((x[9] - h).abs() < 1e-12 && (x[7] - 2.0 * i).abs() < 1e-12 && (x[2] - e).abs() < 1e-12 && (x[6] - g).abs() < 1e-12);
+    assert!(
+        (x[9] - h).abs() < 1e-12
+            && (x[7] - 2.0 * i).abs() < 1e-12
+            && (x[2] - e).abs() < 1e-12
+            && (x[6] - g).abs() < 1e-12
+    );
     // the solver says the covariance does not exist rather than inventing one
     assert!(sol.covariance_unscaled.is_none());
 }

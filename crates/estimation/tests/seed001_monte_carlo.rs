@@ -23,7 +23,11 @@ use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use std::path::Path;
 
-const P3_NOISE: TrackerNoise = TrackerNoise { constant: 4e-6, per_metre: 0.8e-6, angular: 24e-6 };
+const P3_NOISE: TrackerNoise = TrackerNoise {
+    constant: 4e-6,
+    per_metre: 0.8e-6,
+    angular: 24e-6,
+};
 const TRIALS: usize = 200;
 
 fn model() -> CellModel {
@@ -70,7 +74,12 @@ fn thesis_monte_carlo_shape_and_an_honest_map() {
     let mut plan = vec![];
     for i in 0..9 {
         for j in 0..9 {
-            plan.push(Planned { q: vec![0.05 * i as f64, 0.05 * j as f64, 0.0], approach: [1.0; 3], temperatures: vec![], time_on: 3.0 * 3600.0 });
+            plan.push(Planned {
+                q: vec![0.05 * i as f64, 0.05 * j as f64, 0.0],
+                approach: [1.0; 3],
+                temperatures: vec![],
+                time_on: 3.0 * 3600.0,
+            });
         }
     }
     let points: Vec<Vec<f64>> = plan.iter().map(|p| p.q.clone()).collect();
@@ -104,21 +113,38 @@ fn thesis_monte_carlo_shape_and_an_honest_map() {
     println!("initial volumetric error {:.2} ± {:.2} µm (thesis 77.39 ± 40.91); residual after {:.2} ± {:.2} µm (thesis 12.34 ± 7.06) over {} trials × {} points", init_mean * 1e6, init_sd * 1e6, res_mean * 1e6, res_sd * 1e6, TRIALS, points.len());
     // the shape: about 12 ± 7 µm after (the "before" figure is the chosen truth's error, scaled
     // to the thesis's size by construction, so it is printed, not asserted)
-    assert!((6e-6..20e-6).contains(&res_mean) && (3e-6..12e-6).contains(&res_sd), "residual {res_mean:e} ± {res_sd:e}");
+    assert!(
+        (6e-6..20e-6).contains(&res_mean) && (3e-6..12e-6).contains(&res_sd),
+        "residual {res_mean:e} ± {res_sd:e}"
+    );
     assert!(res_mean < init_mean / 3.0);
     // the map's uncertainty is honest: the fitted map is unbiased (mean within 4 standard errors
     // of the truth) and its spread over the trials matches the fit's own linearised σ
     let mut ratios = vec![];
     for i in 0..points.len() {
         for c in 0..3 {
-            let (mu, sd, lin, t) = (mc.mean_fitted[i][c], mc.sd_fitted[i][c], mc.linearised_sd[i][c], mc.true_errors[i][c]);
-            assert!((mu - t).abs() < 4.0 * sd / (TRIALS as f64).sqrt() + 1e-9, "point {i} axis {c}: mean {mu:e} vs truth {t:e} (sd {sd:e})");
+            let (mu, sd, lin, t) = (
+                mc.mean_fitted[i][c],
+                mc.sd_fitted[i][c],
+                mc.linearised_sd[i][c],
+                mc.true_errors[i][c],
+            );
+            assert!(
+                (mu - t).abs() < 4.0 * sd / (TRIALS as f64).sqrt() + 1e-9,
+                "point {i} axis {c}: mean {mu:e} vs truth {t:e} (sd {sd:e})"
+            );
             if lin > 1e-7 {
                 ratios.push(sd / lin);
             }
         }
     }
     let (r_mean, _) = mean_sd(&ratios);
-    println!("Monte Carlo σ / linearised σ over the map: mean {r_mean:.3} over {} components", ratios.len());
-    assert!((0.85..1.15).contains(&r_mean), "Monte Carlo spread vs the fit's σ: {r_mean:.3}");
+    println!(
+        "Monte Carlo σ / linearised σ over the map: mean {r_mean:.3} over {} components",
+        ratios.len()
+    );
+    assert!(
+        (0.85..1.15).contains(&r_mean),
+        "Monte Carlo spread vs the fit's σ: {r_mean:.3}"
+    );
 }

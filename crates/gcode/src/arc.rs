@@ -30,7 +30,15 @@ pub enum ArcCentre {
 /// Points along the arc from `start` to `end` (both in program units), the start excluded and
 /// the end included exactly, spaced so each chord stays within `chord_tolerance` of the arc.
 /// `radius_tolerance` is how far start and end may disagree on the radius (program units).
-pub fn arc_points(start: &Vector3<f64>, end: &Vector3<f64>, centre: ArcCentre, clockwise: bool, plane: ArcPlane, chord_tolerance: f64, radius_tolerance: f64) -> Result<Vec<Vector3<f64>>, String> {
+pub fn arc_points(
+    start: &Vector3<f64>,
+    end: &Vector3<f64>,
+    centre: ArcCentre,
+    clockwise: bool,
+    plane: ArcPlane,
+    chord_tolerance: f64,
+    radius_tolerance: f64,
+) -> Result<Vec<Vector3<f64>>, String> {
     let [a, b, n] = plane.0;
     let s = Vector2::new(start[a], start[b]);
     let e = Vector2::new(end[a], end[b]);
@@ -57,11 +65,14 @@ pub fn arc_points(start: &Vector3<f64>, end: &Vector3<f64>, centre: ArcCentre, c
         return Err("the arc's centre is its start point".into());
     }
     if (r_start - r_end).abs() > radius_tolerance {
-        return Err(format!("the arc's end is not on its circle: radius {r_start} at the start, {r_end} at the end"));
+        return Err(format!(
+            "the arc's end is not on its circle: radius {r_start} at the start, {r_end} at the end"
+        ));
     }
     let angle = |p: Vector2<f64>| (p.y - c.y).atan2(p.x - c.x);
     let (ts, te) = (angle(s), angle(e));
-    let full_circle = (e - s).norm() < radius_tolerance * 1e-3 && matches!(centre, ArcCentre::Offset(_));
+    let full_circle =
+        (e - s).norm() < radius_tolerance * 1e-3 && matches!(centre, ArcCentre::Offset(_));
     let ccw_sweep = |from: f64, to: f64| {
         let mut d = (to - from).rem_euclid(2.0 * PI);
         if d == 0.0 && full_circle {
@@ -69,8 +80,16 @@ pub fn arc_points(start: &Vector3<f64>, end: &Vector3<f64>, centre: ArcCentre, c
         }
         d
     };
-    let sweep = if clockwise { -ccw_sweep(te, ts) } else { ccw_sweep(ts, te) };
-    let max_step = if chord_tolerance < r_start { 2.0 * (1.0 - chord_tolerance / r_start).acos() } else { PI / 2.0 };
+    let sweep = if clockwise {
+        -ccw_sweep(te, ts)
+    } else {
+        ccw_sweep(ts, te)
+    };
+    let max_step = if chord_tolerance < r_start {
+        2.0 * (1.0 - chord_tolerance / r_start).acos()
+    } else {
+        PI / 2.0
+    };
     let count = ((sweep.abs() / max_step).ceil() as usize).max(1);
     let mut points = Vec::with_capacity(count);
     for k in 1..count {
@@ -90,7 +109,12 @@ pub fn arc_points(start: &Vector3<f64>, end: &Vector3<f64>, centre: ArcCentre, c
 mod tests {
     use super::*;
 
-    fn max_sagitta(start: Vector3<f64>, points: &[Vector3<f64>], centre: Vector2<f64>, r: f64) -> f64 {
+    fn max_sagitta(
+        start: Vector3<f64>,
+        points: &[Vector3<f64>],
+        centre: Vector2<f64>,
+        r: f64,
+    ) -> f64 {
         let mut prev = start;
         let mut worst: f64 = 0.0;
         for p in points {
@@ -105,13 +129,34 @@ mod tests {
     fn quarter_circle_clockwise_within_tolerance() {
         // G17 G2 from (10, 0) to (0, -10) around the origin: a clockwise quarter
         let (s, e) = (Vector3::new(10.0, 0.0, 0.0), Vector3::new(0.0, -10.0, 0.0));
-        let pts = arc_points(&s, &e, ArcCentre::Offset(Vector3::new(-10.0, 0.0, 0.0)), true, ArcPlane::XY, 0.001, 1e-4).unwrap();
+        let pts = arc_points(
+            &s,
+            &e,
+            ArcCentre::Offset(Vector3::new(-10.0, 0.0, 0.0)),
+            true,
+            ArcPlane::XY,
+            0.001,
+            1e-4,
+        )
+        .unwrap();
         assert_eq!(*pts.last().unwrap(), e);
-        assert!(pts.iter().all(|p| p.x >= -1e-12 && p.y <= 1e-12), "stays in the fourth quadrant");
+        assert!(
+            pts.iter().all(|p| p.x >= -1e-12 && p.y <= 1e-12),
+            "stays in the fourth quadrant"
+        );
         let sag = max_sagitta(s, &pts, Vector2::zeros(), 10.0);
         assert!(sag <= 0.001 + 1e-12 && sag > 0.0005, "sagitta {sag}");
         // the same arc with R takes the same centre
-        let by_r = arc_points(&s, &e, ArcCentre::Radius(10.0), true, ArcPlane::XY, 0.001, 1e-4).unwrap();
+        let by_r = arc_points(
+            &s,
+            &e,
+            ArcCentre::Radius(10.0),
+            true,
+            ArcPlane::XY,
+            0.001,
+            1e-4,
+        )
+        .unwrap();
         assert_eq!(pts.len(), by_r.len());
         assert!(pts.iter().zip(&by_r).all(|(p, q)| (p - q).norm() < 1e-9));
     }
@@ -120,7 +165,16 @@ mod tests {
     fn full_circle_and_helix() {
         let s = Vector3::new(5.0, 0.0, 0.0);
         let e = Vector3::new(5.0, 0.0, -2.0);
-        let pts = arc_points(&s, &e, ArcCentre::Offset(Vector3::new(-5.0, 0.0, 0.0)), false, ArcPlane::XY, 0.01, 1e-4).unwrap();
+        let pts = arc_points(
+            &s,
+            &e,
+            ArcCentre::Offset(Vector3::new(-5.0, 0.0, 0.0)),
+            false,
+            ArcPlane::XY,
+            0.01,
+            1e-4,
+        )
+        .unwrap();
         assert!(pts.len() > 10);
         // halfway round the circle, halfway down
         let mid = pts[pts.len() / 2 - 1];
@@ -130,8 +184,37 @@ mod tests {
     #[test]
     fn bad_arcs_are_errors() {
         let s = Vector3::new(10.0, 0.0, 0.0);
-        assert!(arc_points(&s, &Vector3::new(0.0, 12.0, 0.0), ArcCentre::Offset(Vector3::new(-10.0, 0.0, 0.0)), false, ArcPlane::XY, 0.001, 1e-3).unwrap_err().contains("not on its circle"));
-        assert!(arc_points(&s, &s, ArcCentre::Radius(5.0), false, ArcPlane::XY, 0.001, 1e-3).is_err());
-        assert!(arc_points(&s, &Vector3::new(-10.0, 0.0, 0.0), ArcCentre::Radius(2.0), false, ArcPlane::XY, 0.001, 1e-3).unwrap_err().contains("too small"));
+        assert!(arc_points(
+            &s,
+            &Vector3::new(0.0, 12.0, 0.0),
+            ArcCentre::Offset(Vector3::new(-10.0, 0.0, 0.0)),
+            false,
+            ArcPlane::XY,
+            0.001,
+            1e-3
+        )
+        .unwrap_err()
+        .contains("not on its circle"));
+        assert!(arc_points(
+            &s,
+            &s,
+            ArcCentre::Radius(5.0),
+            false,
+            ArcPlane::XY,
+            0.001,
+            1e-3
+        )
+        .is_err());
+        assert!(arc_points(
+            &s,
+            &Vector3::new(-10.0, 0.0, 0.0),
+            ArcCentre::Radius(2.0),
+            false,
+            ArcPlane::XY,
+            0.001,
+            1e-3
+        )
+        .unwrap_err()
+        .contains("too small"));
     }
 }

@@ -40,7 +40,10 @@ impl Block {
 
     /// Every G code on the line (e.g. 1.0, 90.0, 38.2).
     pub fn g_codes(&self) -> impl Iterator<Item = f64> + '_ {
-        self.words.iter().filter(|w| w.letter == 'G').map(|w| w.value)
+        self.words
+            .iter()
+            .filter(|w| w.letter == 'G')
+            .map(|w| w.value)
     }
 }
 
@@ -91,13 +94,26 @@ pub fn parse_block(line: &str) -> Result<Block, String> {
             let text = &line[number_start..i];
             let digits = &line[digits_start..i];
             if digits.is_empty() || digits == "." || digits.matches('.').count() > 1 {
-                return Err(format!("column {}: word `{letter}` has no valid number after it", start + 1));
+                return Err(format!(
+                    "column {}: word `{letter}` has no valid number after it",
+                    start + 1
+                ));
             }
-            let value: f64 = text.parse().map_err(|_| format!("column {}: `{letter}{text}` is not a number", start + 1))?;
+            let value: f64 = text
+                .parse()
+                .map_err(|_| format!("column {}: `{letter}{text}` is not a number", start + 1))?;
             if letter != 'G' && letter != 'M' && block.words.iter().any(|w| w.letter == letter) {
-                return Err(format!("column {}: word `{letter}` appears twice on the line", start + 1));
+                return Err(format!(
+                    "column {}: word `{letter}` appears twice on the line",
+                    start + 1
+                ));
             }
-            block.words.push(Word { letter, value, number_text: text.to_string(), span: start..i });
+            block.words.push(Word {
+                letter,
+                value,
+                number_text: text.to_string(),
+                span: start..i,
+            });
         } else {
             return Err(format!("column {}: unexpected character `{}` (parameters and expressions are not supported)", i + 1, line[i..].chars().next().unwrap_or('?')));
         }
@@ -127,7 +143,9 @@ mod tests {
         assert!(parse_block("G1 X").unwrap_err().contains("column 4"));
         assert!(parse_block("G1 X1 X2").unwrap_err().contains("twice"));
         assert!(parse_block("G1 X#1").unwrap_err().contains("column 4"));
-        assert!(parse_block("G1 (open").unwrap_err().contains("never closed"));
+        assert!(parse_block("G1 (open")
+            .unwrap_err()
+            .contains("never closed"));
         assert!(parse_block("G1 X1..2").unwrap_err().contains("column 4"));
         assert_eq!(parse_block("%").unwrap().words.len(), 0);
         assert_eq!(parse_block("/G0 X1").unwrap().value('X'), Some(1.0));

@@ -42,7 +42,12 @@ pub struct AxisTable {
 
 /// Sample every axis across `region` at `step` (m; the last point is the travel's end), the
 /// other axes at `reference`.
-pub fn axis_tables(field: &dyn ErrorField, region: &Region, reference: &Vector3<f64>, step: f64) -> Result<Vec<AxisTable>, FieldError> {
+pub fn axis_tables(
+    field: &dyn ErrorField,
+    region: &Region,
+    reference: &Vector3<f64>,
+    step: f64,
+) -> Result<Vec<AxisTable>, FieldError> {
     if !(step > 0.0 && step.is_finite()) {
         return Err(FieldError(format!("table step must be > 0, got {step} m")));
     }
@@ -50,7 +55,10 @@ pub fn axis_tables(field: &dyn ErrorField, region: &Region, reference: &Vector3<
     for a in 0..3 {
         let (lo, hi) = (region.min[a], region.max[a]);
         if !(lo.is_finite() && hi.is_finite() && hi > lo) {
-            return Err(FieldError(format!("axis {} has no finite travel to tabulate ([{lo}, {hi}] m)", AXES[a])));
+            return Err(FieldError(format!(
+                "axis {} has no finite travel to tabulate ([{lo}, {hi}] m)",
+                AXES[a]
+            )));
         }
         let n = ((hi - lo) / step).ceil() as usize;
         let positions: Vec<f64> = (0..=n).map(|k| (lo + k as f64 * step).min(hi)).collect();
@@ -66,7 +74,13 @@ pub fn axis_tables(field: &dyn ErrorField, region: &Region, reference: &Vector3<
             errors.push(forward);
             reversal.push(back[a] - forward[a]);
         }
-        out.push(AxisTable { axis: a, positions, errors, reversal, reference: *reference });
+        out.push(AxisTable {
+            axis: a,
+            positions,
+            errors,
+            reversal,
+            reference: *reference,
+        });
     }
     Ok(out)
 }
@@ -82,7 +96,11 @@ fn slope(x: &[f64], y: &[f64]) -> f64 {
     let (mx, my) = (x.iter().sum::<f64>() / n, y.iter().sum::<f64>() / n);
     let sxy: f64 = x.iter().zip(y).map(|(a, b)| (a - mx) * (b - my)).sum();
     let sxx: f64 = x.iter().map(|a| (a - mx) * (a - mx)).sum();
-    if sxx > 0.0 { sxy / sxx } else { 0.0 }
+    if sxx > 0.0 {
+        sxy / sxx
+    } else {
+        0.0
+    }
 }
 
 /// Squareness of xy, xz, yz (rad, catalog sign) from the tables' straightness lines.
@@ -92,8 +110,14 @@ pub fn squareness(tables: &[AxisTable]) -> Vec<(String, f64)> {
     for (a, b) in [(0, 1), (0, 2), (1, 2)] {
         if let (Some(ta), Some(tb)) = (by(a), by(b)) {
             // a's error as b moves, and b's error as a moves
-            let m_b_to_a = slope(&tb.positions, &tb.errors.iter().map(|e| e[a]).collect::<Vec<_>>());
-            let m_a_to_b = slope(&ta.positions, &ta.errors.iter().map(|e| e[b]).collect::<Vec<_>>());
+            let m_b_to_a = slope(
+                &tb.positions,
+                &tb.errors.iter().map(|e| e[a]).collect::<Vec<_>>(),
+            );
+            let m_a_to_b = slope(
+                &ta.positions,
+                &ta.errors.iter().map(|e| e[b]).collect::<Vec<_>>(),
+            );
             out.push((format!("{}{}", AXES[a], AXES[b]), -(m_b_to_a + m_a_to_b)));
         }
     }
@@ -107,9 +131,19 @@ pub fn axis_csv(t: &AxisTable, title: &str) -> String {
         "# metrocell compensation table: axis {} of {title}, other axes at {} = {:.3} mm, {} = {:.3} mm\n# values are errors, reached − commanded (µm) at the commanded position; a controller\n# compensates by commanding position − error (most controllers' \"compensation value\" = −error)\n",
         AXES[t.axis], AXES[others[0]], t.reference[others[0]] * 1e3, AXES[others[1]], t.reference[others[1]] * 1e3
     );
-    s += &format!("position_mm,pitch_um,straightness_{}_um,straightness_{}_um,reversal_um\n", AXES[others[0]], AXES[others[1]]);
+    s += &format!(
+        "position_mm,pitch_um,straightness_{}_um,straightness_{}_um,reversal_um\n",
+        AXES[others[0]], AXES[others[1]]
+    );
     for ((p, e), r) in t.positions.iter().zip(&t.errors).zip(&t.reversal) {
-        s += &format!("{},{},{},{},{}\n", fixed3(p * 1e3), fixed3(e[t.axis] * 1e6), fixed3(e[others[0]] * 1e6), fixed3(e[others[1]] * 1e6), fixed3(r * 1e6));
+        s += &format!(
+            "{},{},{},{},{}\n",
+            fixed3(p * 1e3),
+            fixed3(e[t.axis] * 1e6),
+            fixed3(e[others[0]] * 1e6),
+            fixed3(e[others[1]] * 1e6),
+            fixed3(r * 1e6)
+        );
     }
     s
 }

@@ -25,7 +25,11 @@ impl Region {
 /// The error field of a machine: e(C) = reached − commanded at the commanded position C (m,
 /// machine axes), for the direction each axis approached C from (+1 or −1, as backlash needs).
 pub trait ErrorField {
-    fn error(&self, commanded: &Vector3<f64>, approach: &[f64; 3]) -> Result<Vector3<f64>, FieldError>;
+    fn error(
+        &self,
+        commanded: &Vector3<f64>,
+        approach: &[f64; 3],
+    ) -> Result<Vector3<f64>, FieldError>;
 
     /// Where the model was calibrated, if known.
     fn calibrated_region(&self) -> Option<Region> {

@@ -19,7 +19,12 @@ const MAX_ITERATIONS: usize = 100;
 const TOLERANCE_M: f64 = 1e-12;
 
 /// The commanded position (m) for target `target` (m).
-pub fn compensate_point(field: &dyn ErrorField, target: &Vector3<f64>, approach: &[f64; 3], method: InverseMethod) -> Result<Vector3<f64>, FieldError> {
+pub fn compensate_point(
+    field: &dyn ErrorField,
+    target: &Vector3<f64>,
+    approach: &[f64; 3],
+    method: InverseMethod,
+) -> Result<Vector3<f64>, FieldError> {
     let mut c = target - field.error(target, approach)?;
     if method == InverseMethod::FirstOrder {
         return Ok(c);

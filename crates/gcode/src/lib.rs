@@ -38,7 +38,7 @@ pub mod planar_quadratic;
 pub mod program;
 
 pub use error_field::{ErrorField, FieldError, Region, ZeroField};
-pub use inverse::{InverseMethod, compensate_point};
+pub use inverse::{compensate_point, InverseMethod};
 pub use model_field::{ModelErrorField, ModelFieldError};
 pub use planar_quadratic::PlanarQuadraticField;
 pub use program::{compensate_program, CompensationOptions, CompensationReport, LineIssue};

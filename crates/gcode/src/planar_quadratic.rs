@@ -27,14 +27,23 @@ pub struct PlanarQuadraticField {
 impl PlanarQuadraticField {
     /// Seed 000, Table 2, the 72-row calibration (B72×12), with X3 = 1.
     pub fn seed000_b72() -> Self {
-        Self { coefficients: [1.01e-5, 5.20e-3, -7.10e-3, 4.85e-3, 1.11e-2, 1.03e-2, -1.12e-5, -2.01e-5, -1.55e-5], x3: 1.0, region: None }
+        Self {
+            coefficients: [
+                1.01e-5, 5.20e-3, -7.10e-3, 4.85e-3, 1.11e-2, 1.03e-2, -1.12e-5, -2.01e-5, -1.55e-5,
+            ],
+            x3: 1.0,
+            region: None,
+        }
     }
 
     /// e (mm) at the commanded position (mm).
     pub fn error_mm(&self, x1: f64, x2: f64) -> (f64, f64) {
         let [a, b, c, d, e, f, g, h, i] = self.coefficients;
         let x3 = self.x3;
-        (a * x2 * x2 + b * x2 + c * x1 + d * x3, e * x1 + f * x2 + g * x3 + h * x1 * x2 + i * x1 * x1)
+        (
+            a * x2 * x2 + b * x2 + c * x1 + d * x3,
+            e * x1 + f * x2 + g * x3 + h * x1 * x2 + i * x1 * x1,
+        )
     }
 }
 

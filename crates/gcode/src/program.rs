@@ -36,7 +36,12 @@ pub struct CompensationOptions {
 
 impl Default for CompensationOptions {
     fn default() -> Self {
-        Self { method: InverseMethod::FixedPoint, chord_tolerance_mm: 0.001, start: Vector3::zeros(), model_name: "model".into() }
+        Self {
+            method: InverseMethod::FixedPoint,
+            chord_tolerance_mm: 0.001,
+            start: Vector3::zeros(),
+            model_name: "model".into(),
+        }
     }
 }
 
@@ -72,7 +77,11 @@ impl CompensationReport {
             self.lines, self.motion_lines, self.changed_lines, self.added_lines, self.points, self.max_correction_m * 1e6, self.rms_correction_m * 1e6
         );
         if !self.outside_region.is_empty() {
-            s += &format!("\n{} lines go outside the calibrated region (extrapolated), first at line {}", self.outside_region.len(), self.outside_region[0].line);
+            s += &format!(
+                "\n{} lines go outside the calibrated region (extrapolated), first at line {}",
+                self.outside_region.len(),
+                self.outside_region[0].line
+            );
         }
         for issue in self.malformed.iter().chain(&self.warnings) {
             s += &format!("\nline {}: {}", issue.line, issue.message);
@@ -101,7 +110,10 @@ impl Motion {
 }
 
 /// G codes that change nothing the compensation depends on (or that it tracks itself).
-const HARMLESS_G: &[f64] = &[4.0, 17.0, 18.0, 19.0, 20.0, 21.0, 40.0, 49.0, 54.0, 55.0, 56.0, 57.0, 58.0, 59.0, 61.0, 64.0, 80.0, 90.0, 91.0, 94.0];
+const HARMLESS_G: &[f64] = &[
+    4.0, 17.0, 18.0, 19.0, 20.0, 21.0, 40.0, 49.0, 54.0, 55.0, 56.0, 57.0, 58.0, 59.0, 61.0, 64.0,
+    80.0, 90.0, 91.0, 94.0,
+];
 const AXES: [char; 3] = ['X', 'Y', 'Z'];
 
 struct State<'f> {
@@ -124,7 +136,11 @@ struct State<'f> {
 
 /// Compensate `program` for `field`. Returns the new program (with one header comment) and a
 /// report; never fails: what cannot be compensated is passed through and reported.
-pub fn compensate_program(program: &str, field: &dyn ErrorField, options: &CompensationOptions) -> (String, CompensationReport) {
+pub fn compensate_program(
+    program: &str,
+    field: &dyn ErrorField,
+    options: &CompensationOptions,
+) -> (String, CompensationReport) {
     let mut st = State {
         field,
         options,
@@ -150,7 +166,10 @@ pub fn compensate_program(program: &str, field: &dyn ErrorField, options: &Compe
         }
         match parse_block(text) {
             Err(e) => {
-                st.report.malformed.push(LineIssue { line: number, message: format!("malformed, passed through untouched: {e}") });
+                st.report.malformed.push(LineIssue {
+                    line: number,
+                    message: format!("malformed, passed through untouched: {e}"),
+                });
                 body.push_str(raw);
             }
             Ok(block) => match st.line(number, text, &block) {
@@ -158,7 +177,11 @@ pub fn compensate_program(program: &str, field: &dyn ErrorField, options: &Compe
                 Some(lines) => {
                     for l in lines {
                         body.push_str(&l);
-                        body.push_str(if terminator.is_empty() { "\n" } else { terminator });
+                        body.push_str(if terminator.is_empty() {
+                            "\n"
+                        } else {
+                            terminator
+                        });
                     }
                     if terminator.is_empty() {
                         body.pop();
@@ -170,7 +193,11 @@ pub fn compensate_program(program: &str, field: &dyn ErrorField, options: &Compe
     if st.report.points > 0 {
         st.report.rms_correction_m = (st.sum_sq / st.report.points as f64).sqrt();
     }
-    let newline = if program.contains("\r\n") { "\r\n" } else { "\n" };
+    let newline = if program.contains("\r\n") {
+        "\r\n"
+    } else {
+        "\n"
+    };
     let header = format!(
         "(metrocell compensate: {}, {} inverse, chord tolerance {} mm, {} of {} motion lines changed){newline}",
         options.model_name.replace(['(', ')'], ""),
@@ -250,7 +277,11 @@ impl State<'_> {
             return None;
         }
         let Some(motion) = self.motion else {
-            self.warn(number, "coordinates without a motion mode (G0/G1/G2/G3) before them; written as they are".into());
+            self.warn(
+                number,
+                "coordinates without a motion mode (G0/G1/G2/G3) before them; written as they are"
+                    .into(),
+            );
             self.take_axes_as_programmed(block);
             return None;
         };
@@ -288,14 +319,24 @@ impl State<'_> {
             }
             previous = *p;
         }
-        let (take_up, commanded) = if motion == Motion::Linear { self.split_bent_line(path[0], commanded[0]) } else { (None, commanded) };
+        let (take_up, commanded) = if motion == Motion::Linear {
+            self.split_bent_line(path[0], commanded[0])
+        } else {
+            (None, commanded)
+        };
         if outside {
-            self.report.outside_region.push(LineIssue { line: number, message: "outside the calibrated region: the model is extrapolated".into() });
+            self.report.outside_region.push(LineIssue {
+                line: number,
+                message: "outside the calibrated region: the model is extrapolated".into(),
+            });
         }
         let decimals = if self.unit_mm == 1.0 { 4 } else { 5 };
         let unchanged = take_up.is_none()
             && commanded.len() == path.len()
-            && commanded.iter().zip(&path).all(|(c, p)| same(c, p, decimals))
+            && commanded
+                .iter()
+                .zip(&path)
+                .all(|(c, p)| same(c, p, decimals))
             && (self.absolute || same(&self.commanded, &self.programmed, decimals))
             && (explicit_motion.is_some() || self.controller_motion == Some(motion));
         let before = self.commanded;
@@ -307,21 +348,36 @@ impl State<'_> {
         }
         self.report.changed_lines += 1;
         self.report.added_lines += commanded.len() - 1 + usize::from(take_up.is_some());
-        let emitted_motion = if motion == Motion::Rapid { Motion::Rapid } else { Motion::Linear };
+        let emitted_motion = if motion == Motion::Rapid {
+            Motion::Rapid
+        } else {
+            Motion::Linear
+        };
         let mut lines = Vec::with_capacity(commanded.len() + 1);
         let mut from = before;
         let mut controller_motion = self.controller_motion;
         if let Some(start) = take_up {
             // a line of its own before the programmed one, which keeps its N number, its comment
             // and its other words; the feed the move will run at, so the take-up does not rush
-            lines.push(take_up_line(&self.axis_words(&from, &start, decimals), block.word('F')));
+            lines.push(take_up_line(
+                &self.axis_words(&from, &start, decimals),
+                block.word('F'),
+            ));
             from = start;
             controller_motion = Some(Motion::Linear);
         }
         for (i, c) in commanded.iter().enumerate() {
             let words = self.axis_words(&from, c, decimals);
             if i == 0 {
-                lines.push(rebuild_first_line(text, block, &words, motion, emitted_motion, explicit_motion.is_some(), controller_motion));
+                lines.push(rebuild_first_line(
+                    text,
+                    block,
+                    &words,
+                    motion,
+                    emitted_motion,
+                    explicit_motion.is_some(),
+                    controller_motion,
+                ));
             } else {
                 let mut l = String::from("G1");
                 for (a, v) in &words {
@@ -339,7 +395,11 @@ impl State<'_> {
     fn take_axes_as_programmed(&mut self, block: &Block) {
         for (k, &a) in AXES.iter().enumerate() {
             if let Some(v) = block.value(a) {
-                let target = if self.absolute { v } else { self.programmed[k] + v };
+                let target = if self.absolute {
+                    v
+                } else {
+                    self.programmed[k] + v
+                };
                 self.commanded[k] += target - self.programmed[k];
                 self.programmed[k] = target;
             }
@@ -347,23 +407,44 @@ impl State<'_> {
     }
 
     /// Programmed points the move passes through, its end included (program units).
-    fn path(&self, motion: Motion, block: &Block, target: &Vector3<f64>) -> Result<Vec<Vector3<f64>>, String> {
+    fn path(
+        &self,
+        motion: Motion,
+        block: &Block,
+        target: &Vector3<f64>,
+    ) -> Result<Vec<Vector3<f64>>, String> {
         match motion {
             Motion::Rapid | Motion::Linear => Ok(vec![*target]),
             Motion::Clockwise | Motion::CounterClockwise => {
                 let centre = match block.value('R') {
                     Some(r) => ArcCentre::Radius(r),
-                    None => ArcCentre::Offset(Vector3::new(block.value('I').unwrap_or(0.0), block.value('J').unwrap_or(0.0), block.value('K').unwrap_or(0.0))),
+                    None => ArcCentre::Offset(Vector3::new(
+                        block.value('I').unwrap_or(0.0),
+                        block.value('J').unwrap_or(0.0),
+                        block.value('K').unwrap_or(0.0),
+                    )),
                 };
                 let tol = self.options.chord_tolerance_mm / self.unit_mm;
-                arc_points(&self.programmed, target, centre, motion == Motion::Clockwise, self.plane, tol, (0.002 / self.unit_mm).max(tol))
+                arc_points(
+                    &self.programmed,
+                    target,
+                    centre,
+                    motion == Motion::Clockwise,
+                    self.plane,
+                    tol,
+                    (0.002 / self.unit_mm).max(tol),
+                )
             }
         }
     }
 
     /// Commanded point for programmed point `p` reached from `previous`; also whether `p` is
     /// inside the calibrated region.
-    fn compensate(&mut self, previous: Vector3<f64>, p: Vector3<f64>) -> Result<(Vector3<f64>, bool), String> {
+    fn compensate(
+        &mut self,
+        previous: Vector3<f64>,
+        p: Vector3<f64>,
+    ) -> Result<(Vector3<f64>, bool), String> {
         for k in 0..3 {
             let d = p[k] - previous[k];
             if d != 0.0 {
@@ -372,12 +453,16 @@ impl State<'_> {
         }
         let to_m = self.unit_mm * 1e-3;
         let target_m = p * to_m;
-        let c_m = compensate_point(self.field, &target_m, &self.approach, self.options.method).map_err(|e| e.0)?;
+        let c_m = compensate_point(self.field, &target_m, &self.approach, self.options.method)
+            .map_err(|e| e.0)?;
         let correction = (c_m - target_m).norm();
         self.report.points += 1;
         self.report.max_correction_m = self.report.max_correction_m.max(correction);
         self.sum_sq += correction * correction;
-        let inside = self.field.calibrated_region().is_none_or(|r| r.contains(&target_m));
+        let inside = self
+            .field
+            .calibrated_region()
+            .is_none_or(|r| r.contains(&target_m));
         Ok((c_m / to_m, inside))
     }
 
@@ -386,7 +471,11 @@ impl State<'_> {
     /// within the chord tolerance of the chord's midpoint. Returns the take-up move's end point
     /// when the move starts with a reversal, and the move's commanded points, `c1` last (if a
     /// point on the way cannot be compensated, the move is left whole).
-    fn split_bent_line(&mut self, p1: Vector3<f64>, c1: Vector3<f64>) -> (Option<Vector3<f64>>, Vec<Vector3<f64>>) {
+    fn split_bent_line(
+        &mut self,
+        p1: Vector3<f64>,
+        c1: Vector3<f64>,
+    ) -> (Option<Vector3<f64>>, Vec<Vector3<f64>>) {
         let (p0, mut c0) = (self.programmed, self.commanded);
         let tol = self.options.chord_tolerance_mm / self.unit_mm;
         let approach = self.approach;
@@ -410,13 +499,24 @@ impl State<'_> {
     }
 
     #[allow(clippy::too_many_arguments)]
-    fn bisect(&mut self, p0: Vector3<f64>, c0: Vector3<f64>, p1: Vector3<f64>, c1: Vector3<f64>, tol: f64, depth: u32, out: &mut Vec<Vector3<f64>>) -> bool {
+    fn bisect(
+        &mut self,
+        p0: Vector3<f64>,
+        c0: Vector3<f64>,
+        p1: Vector3<f64>,
+        c1: Vector3<f64>,
+        tol: f64,
+        depth: u32,
+        out: &mut Vec<Vector3<f64>>,
+    ) -> bool {
         const MAX_DEPTH: u32 = 10;
         if depth >= MAX_DEPTH {
             return true;
         }
         let pm = (p0 + p1) / 2.0;
-        let Ok((cm, _)) = self.compensate(p0, pm) else { return false };
+        let Ok((cm, _)) = self.compensate(p0, pm) else {
+            return false;
+        };
         if (cm - (c0 + c1) / 2.0).norm() <= tol {
             return true;
         }
@@ -427,10 +527,14 @@ impl State<'_> {
         self.bisect(pm, cm, p1, c1, tol, depth + 1, out)
     }
 
-
     /// Axis words moving the controller from commanded `from` to `to`: every axis whose written
     /// value changes (absolute), or whose increment is not zero (incremental).
-    fn axis_words(&self, from: &Vector3<f64>, to: &Vector3<f64>, decimals: usize) -> Vec<(char, String)> {
+    fn axis_words(
+        &self,
+        from: &Vector3<f64>,
+        to: &Vector3<f64>,
+        decimals: usize,
+    ) -> Vec<(char, String)> {
         let mut words = Vec::new();
         for (k, &a) in AXES.iter().enumerate() {
             if self.absolute {
@@ -471,12 +575,24 @@ fn same(a: &Vector3<f64>, b: &Vector3<f64>, decimals: usize) -> bool {
 /// it lacked added before its comment, axes no longer moving dropped), arc words (I J K R)
 /// removed and G2/G3 turned into G1 when the arc is linearised, and the motion code written out
 /// when the controller's modal motion differs from the program's.
-fn rebuild_first_line(text: &str, block: &Block, words: &[(char, String)], motion: Motion, emitted: Motion, explicit: bool, controller: Option<Motion>) -> String {
+fn rebuild_first_line(
+    text: &str,
+    block: &Block,
+    words: &[(char, String)],
+    motion: Motion,
+    emitted: Motion,
+    explicit: bool,
+    controller: Option<Motion>,
+) -> String {
     let mut edits: Vec<(std::ops::Range<usize>, String)> = Vec::new();
     let arc = matches!(motion, Motion::Clockwise | Motion::CounterClockwise);
     for w in &block.words {
         if AXES.contains(&w.letter) {
-            let new = words.iter().find(|(a, _)| *a == w.letter).map(|(a, v)| format!("{a}{v}")).unwrap_or_default();
+            let new = words
+                .iter()
+                .find(|(a, _)| *a == w.letter)
+                .map(|(a, v)| format!("{a}{v}"))
+                .unwrap_or_default();
             edits.push((w.span.clone(), new));
         } else if arc && matches!(w.letter, 'I' | 'J' | 'K' | 'R') {
             edits.push((w.span.clone(), String::new()));
@@ -484,13 +600,22 @@ fn rebuild_first_line(text: &str, block: &Block, words: &[(char, String)], motio
             edits.push((w.span.clone(), "G1".into()));
         }
     }
-    let missing: Vec<String> = words.iter().filter(|(a, _)| block.word(*a).is_none()).map(|(a, v)| format!("{a}{v}")).collect();
+    let missing: Vec<String> = words
+        .iter()
+        .filter(|(a, _)| block.word(*a).is_none())
+        .map(|(a, v)| format!("{a}{v}"))
+        .collect();
     let insert_at = block.comment_start.unwrap_or(text.trim_end().len());
     let mut out = String::with_capacity(text.len() + 16);
     let mut at = 0;
     if !explicit && controller != Some(emitted) {
         // the program relied on a modal motion our earlier output changed: say it again
-        let after_n = block.words.iter().find(|w| w.letter == 'N').map(|w| w.span.end).unwrap_or(0);
+        let after_n = block
+            .words
+            .iter()
+            .find(|w| w.letter == 'N')
+            .map(|w| w.span.end)
+            .unwrap_or(0);
         out.push_str(&text[..after_n]);
         out.push_str(if after_n == 0 { "" } else { " " });
         out.push_str(emitted.code());
@@ -536,7 +661,11 @@ fn push_words(out: &mut String, before: &str, words: &[String]) {
 }
 
 fn collapse_spaces(line: &str, has_comment: bool) -> String {
-    let code_end = if has_comment { line.find(['(', ';']).unwrap_or(line.len()) } else { line.len() };
+    let code_end = if has_comment {
+        line.find(['(', ';']).unwrap_or(line.len())
+    } else {
+        line.len()
+    };
     let (code, rest) = line.split_at(code_end);
     let mut out = String::with_capacity(line.len());
     let mut last_space = false;

@@ -2,7 +2,10 @@
 //! (Table T4 of the digest) and the compensation example, plus the G-code invariants of its
 //! test case T9.
 
-use metrocell_gcode::{compensate_point, compensate_program, CompensationOptions, ErrorField, InverseMethod, PlanarQuadraticField, Region, ZeroField};
+use metrocell_gcode::{
+    compensate_point, compensate_program, CompensationOptions, ErrorField, InverseMethod,
+    PlanarQuadraticField, Region, ZeroField,
+};
 use nalgebra::Vector3;
 
 fn mm(x: f64, y: f64, z: f64) -> Vector3<f64> {
@@ -23,7 +26,10 @@ fn eq7_b72_reproduces_table_t4() {
     ];
     for ((x1, x2), (ex, ey), tol) in table {
         let (gx, gy) = f.error_mm(x1, x2);
-        assert!((gx - ex).abs() <= tol + 1e-12 && (gy - ey).abs() <= tol + 1e-12, "({x1}, {x2}): got ({gx}, {gy}), table ({ex}, {ey})");
+        assert!(
+            (gx - ex).abs() <= tol + 1e-12 && (gy - ey).abs() <= tol + 1e-12,
+            "({x1}, {x2}): got ({gx}, {gy}), table ({ex}, {ey})"
+        );
     }
 }
 
@@ -32,14 +38,23 @@ fn compensating_100_100_gives_the_papers_point_first_order_and_exact_fixed_point
     let f = PlanarQuadraticField::seed000_b72();
     let t = mm(100.0, 100.0, 0.0);
     let c = compensate_point(&f, &t, &[1.0; 3], InverseMethod::FirstOrder).unwrap() * 1e3;
-    assert!((c.x - 100.0842).abs() <= 0.5e-4 + 1e-9 && (c.y - 98.2160).abs() <= 0.5e-4 + 1e-9, "{c:?}");
+    assert!(
+        (c.x - 100.0842).abs() <= 0.5e-4 + 1e-9 && (c.y - 98.2160).abs() <= 0.5e-4 + 1e-9,
+        "{c:?}"
+    );
     // the fixed point makes the machine reach the target; the paper's one step does not quite
     let cf = compensate_point(&f, &t, &[1.0; 3], InverseMethod::FixedPoint).unwrap();
     let reached = cf + f.error(&cf, &[1.0; 3]).unwrap();
-    assert!((reached - t).norm() < 1e-12, "fixed point reaches {reached:?}");
+    assert!(
+        (reached - t).norm() < 1e-12,
+        "fixed point reaches {reached:?}"
+    );
     let c1 = c * 1e-3;
     let miss = (c1 + f.error(&c1, &[1.0; 3]).unwrap() - t).norm();
-    assert!(miss > 5e-6 && miss < 50e-6, "first order misses by {miss} m (the digest estimates ≈ |∇e|·|e| ≈ 15 µm)");
+    assert!(
+        miss > 5e-6 && miss < 50e-6,
+        "first order misses by {miss} m (the digest estimates ≈ |∇e|·|e| ≈ 15 µm)"
+    );
 }
 
 #[test]
@@ -52,19 +67,43 @@ fn zero_model_changes_nothing_but_the_header() {
     let rest: Vec<&str> = lines.collect();
     let original: Vec<&str> = program.lines().skip(1).collect();
     assert_eq!(rest, original);
-    assert_eq!(out.len(), program.len() + out.lines().nth(1).unwrap().len() + 1);
-    assert_eq!((report.changed_lines, report.added_lines, report.motion_lines), (0, 0, 6));
-    assert!(report.malformed.is_empty() && report.warnings.is_empty(), "{report:?}");
+    assert_eq!(
+        out.len(),
+        program.len() + out.lines().nth(1).unwrap().len() + 1
+    );
+    assert_eq!(
+        (
+            report.changed_lines,
+            report.added_lines,
+            report.motion_lines
+        ),
+        (0, 0, 6)
+    );
+    assert!(
+        report.malformed.is_empty() && report.warnings.is_empty(),
+        "{report:?}"
+    );
 }
 
 /// A pure offset field (only D and G): every XY shifts by (−D, −G); Z, F, S unchanged (T9).
 #[test]
 fn constant_offset_shifts_xy_only() {
-    let f = PlanarQuadraticField { coefficients: [0.0, 0.0, 0.0, 0.25, 0.0, 0.0, -0.5, 0.0, 0.0], x3: 1.0, region: None };
+    let f = PlanarQuadraticField {
+        coefficients: [0.0, 0.0, 0.0, 0.25, 0.0, 0.0, -0.5, 0.0, 0.0],
+        x3: 1.0,
+        region: None,
+    };
     let program = "G21 G90\nG0 X10 Y20 Z5 S12000 M3\nG1 X30 Z-2 F450\n";
     let (out, report) = compensate_program(program, &f, &CompensationOptions::default());
     let lines: Vec<&str> = out.lines().skip(1).collect();
-    assert_eq!(lines, vec!["G21 G90", "G0 X9.75 Y20.5 Z5 S12000 M3", "G1 X29.75 Z-2 F450"]);
+    assert_eq!(
+        lines,
+        vec![
+            "G21 G90",
+            "G0 X9.75 Y20.5 Z5 S12000 M3",
+            "G1 X29.75 Z-2 F450"
+        ]
+    );
     assert_eq!((report.changed_lines, report.added_lines), (2, 0));
     assert!((report.max_correction_m - (0.25f64.hypot(0.5)) * 1e-3).abs() < 1e-12);
 }
@@ -75,15 +114,32 @@ fn constant_offset_shifts_xy_only() {
 fn incremental_moves_keep_their_sum() {
     let f = PlanarQuadraticField::seed000_b72();
     let program = "G21 G91\nG1 X50 F1000\nY50\nX50\nY50\n";
-    let opts = CompensationOptions { chord_tolerance_mm: 1.0, ..Default::default() };
+    let opts = CompensationOptions {
+        chord_tolerance_mm: 1.0,
+        ..Default::default()
+    };
     let (out, _) = compensate_program(program, &f, &opts);
     let mut sum = Vector3::zeros();
     for l in out.lines().skip(2) {
         let b = metrocell_gcode::block::parse_block(l).unwrap();
-        sum += Vector3::new(b.value('X').unwrap_or(0.0), b.value('Y').unwrap_or(0.0), b.value('Z').unwrap_or(0.0));
+        sum += Vector3::new(
+            b.value('X').unwrap_or(0.0),
+            b.value('Y').unwrap_or(0.0),
+            b.value('Z').unwrap_or(0.0),
+        );
     }
-    let expected = compensate_point(&f, &mm(100.0, 100.0, 0.0), &[1.0; 3], InverseMethod::FixedPoint).unwrap() * 1e3;
-    assert!((sum - expected).norm() < 2e-4, "written increments sum to {sum:?}, commanded end {expected:?}");
+    let expected = compensate_point(
+        &f,
+        &mm(100.0, 100.0, 0.0),
+        &[1.0; 3],
+        InverseMethod::FixedPoint,
+    )
+    .unwrap()
+        * 1e3;
+    assert!(
+        (sum - expected).norm() < 2e-4,
+        "written increments sum to {sum:?}, commanded end {expected:?}"
+    );
 }
 
 /// A long straight move across a curved field is split so every commanded chord stays within
@@ -93,7 +149,10 @@ fn bent_lines_are_split_to_the_chord_tolerance() {
     let f = PlanarQuadraticField::seed000_b72();
     let program = "G21 G90 G0 X0 Y150\nG1 X150 Y0 F1000\n";
     let tol = 0.002;
-    let opts = CompensationOptions { chord_tolerance_mm: tol, ..Default::default() };
+    let opts = CompensationOptions {
+        chord_tolerance_mm: tol,
+        ..Default::default()
+    };
     let (out, report) = compensate_program(program, &f, &opts);
     assert!(report.added_lines > 2, "{}", report.summary());
     // walk the commanded polyline; at every chord midpoint the machine's reached point must be
@@ -118,22 +177,46 @@ fn bent_lines_are_split_to_the_chord_tolerance() {
             worst = worst.max(((reached.x + reached.y - 150.0) / 2f64.sqrt()).abs());
         }
     }
-    assert!(worst < 2.0 * tol, "the machine leaves the programmed line by {worst} mm:\n{out}");
+    assert!(
+        worst < 2.0 * tol,
+        "the machine leaves the programmed line by {worst} mm:\n{out}"
+    );
 }
 
 #[test]
 fn malformed_lines_pass_through_with_their_numbers_and_region_warns() {
     let mut f = PlanarQuadraticField::seed000_b72();
-    f.region = Some(Region { min: mm(0.0, 0.0, f64::NEG_INFINITY), max: mm(150.0, 150.0, f64::INFINITY) });
+    f.region = Some(Region {
+        min: mm(0.0, 0.0, f64::NEG_INFINITY),
+        max: mm(150.0, 150.0, f64::INFINITY),
+    });
     let program = "G21 G90 G1 X10 Y10\nG1 X#5 Y2\nG1 X(unclosed\nG1 X200 Y10\nG28 X0 Y0\n";
-    let opts = CompensationOptions { chord_tolerance_mm: 10.0, ..Default::default() };
+    let opts = CompensationOptions {
+        chord_tolerance_mm: 10.0,
+        ..Default::default()
+    };
     let (out, report) = compensate_program(program, &f, &opts);
     let body: Vec<&str> = out.lines().skip(1).collect();
     assert_eq!(body[1], "G1 X#5 Y2");
     assert_eq!(body[2], "G1 X(unclosed");
-    assert_eq!(report.malformed.iter().map(|i| i.line).collect::<Vec<_>>(), vec![2, 3]);
-    assert_eq!(report.outside_region.iter().map(|i| i.line).collect::<Vec<_>>(), vec![4]);
-    assert_eq!(report.warnings.iter().map(|i| i.line).collect::<Vec<_>>(), vec![5], "G28 is reported: {:?}", report.warnings);
+    assert_eq!(
+        report.malformed.iter().map(|i| i.line).collect::<Vec<_>>(),
+        vec![2, 3]
+    );
+    assert_eq!(
+        report
+            .outside_region
+            .iter()
+            .map(|i| i.line)
+            .collect::<Vec<_>>(),
+        vec![4]
+    );
+    assert_eq!(
+        report.warnings.iter().map(|i| i.line).collect::<Vec<_>>(),
+        vec![5],
+        "G28 is reported: {:?}",
+        report.warnings
+    );
     assert_eq!(body[4], "G28 X0 Y0");
 }
 
@@ -142,9 +225,20 @@ fn arcs_become_chords_that_the_machine_turns_back_into_the_arc() {
     let f = PlanarQuadraticField::seed000_b72();
     let program = "G21 G90 G17 G0 X100 Y50\nG3 X50 Y100 I-50 J0 F800\nG1 X60\n";
     let tol = 0.001;
-    let (out, report) = compensate_program(program, &f, &CompensationOptions { chord_tolerance_mm: tol, ..Default::default() });
+    let (out, report) = compensate_program(
+        program,
+        &f,
+        &CompensationOptions {
+            chord_tolerance_mm: tol,
+            ..Default::default()
+        },
+    );
     let body: Vec<&str> = out.lines().skip(1).collect();
-    assert!(body[1].starts_with("G1 X") && !body[1].contains('I') && body[1].contains("F800"), "{}", body[1]);
+    assert!(
+        body[1].starts_with("G1 X") && !body[1].contains('I') && body[1].contains("F800"),
+        "{}",
+        body[1]
+    );
     assert!(report.added_lines >= 10);
     // every commanded chord end, once the machine's error is added, lies on the programmed
     // circle of radius 50 about (50, 50)

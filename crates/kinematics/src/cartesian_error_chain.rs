@@ -262,8 +262,14 @@ pub fn error_jacobian(
     let jac = central_difference(point, base.as_slice(), &[1e-7; 21], Order::Second);
     match (jac, failure) {
         (_, Some(err)) => Err(err),
-        (Some(j), None) => Ok(nalgebra::SMatrix::<f64, 3, 21>::from_column_slice(j.as_slice())),
+        (Some(j), None) => Ok(nalgebra::SMatrix::<f64, 3, 21>::from_column_slice(
+            j.as_slice(),
+        )),
         // The closure fails only through tracker_point, whose error is kept above.
-        (None, None) => Err(KinematicsError::InvalidValue { field: "error_jacobian".into(), value: f64::NAN, reason: "central difference failed".into() }),
+        (None, None) => Err(KinematicsError::InvalidValue {
+            field: "error_jacobian".into(),
+            value: f64::NAN,
+            reason: "central difference failed".into(),
+        }),
     }
 }

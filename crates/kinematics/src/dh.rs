@@ -117,7 +117,13 @@ impl DhTable {
                         rot_z(r.theta) * trans(0.0, 0.0, r.d),
                     ),
                 };
-                Joint::new(format!("joint_{}", i + 1), r.kind, pre, Vector3::z_axis(), post)
+                Joint::new(
+                    format!("joint_{}", i + 1),
+                    r.kind,
+                    pre,
+                    Vector3::z_axis(),
+                    post,
+                )
             })
             .collect();
         SerialChain::new(joints)

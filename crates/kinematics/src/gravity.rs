@@ -30,18 +30,32 @@ pub fn placed_masses(chain: &SerialChain, q: &[f64]) -> Result<Vec<PlacedMass>, 
         .iter()
         .zip(&frames)
         .enumerate()
-        .filter_map(|(i, (j, (_, child)))| j.inertial.map(|m| PlacedMass { joint: i, mass: m.mass, centre: child.transform_point(&nalgebra::Point3::from(m.centre_of_mass)).coords }))
+        .filter_map(|(i, (j, (_, child)))| {
+            j.inertial.map(|m| PlacedMass {
+                joint: i,
+                mass: m.mass,
+                centre: child
+                    .transform_point(&nalgebra::Point3::from(m.centre_of_mass))
+                    .coords,
+            })
+        })
         .collect())
 }
 
 /// τ_k of every joint variable (see the module docs) at `q` under gravity `g`.
-pub fn gravity_torques(chain: &SerialChain, q: &[f64], g: &Vector3<f64>) -> Result<Vec<f64>, KinematicsError> {
+pub fn gravity_torques(
+    chain: &SerialChain,
+    q: &[f64],
+    g: &Vector3<f64>,
+) -> Result<Vec<f64>, KinematicsError> {
     let frames = chain.joint_frames(q)?;
     let drives = chain.drives();
     let masses = placed_masses(chain, q)?;
     let mut tau = vec![0.0; chain.dof()];
     for (j, (joint, (before, _))) in chain.joints.iter().zip(&frames).enumerate() {
-        let Some((k, factor)) = drives[j] else { continue };
+        let Some((k, factor)) = drives[j] else {
+            continue;
+        };
         let axis = before.rotation * joint.axis.into_inner();
         let origin = before.translation.vector;
         // every mass outboard of joint j moves with it
@@ -60,6 +74,16 @@ pub fn gravity_torques(chain: &SerialChain, q: &[f64], g: &Vector3<f64>) -> Resu
 
 /// The moment about `pivot` (base frame) of the weight of every link after joint `after` (the
 /// child of joint `after` excluded: what that joint carries), N·m, base frame.
-pub fn carried_moment(chain: &SerialChain, q: &[f64], g: &Vector3<f64>, after: usize, pivot: &Vector3<f64>) -> Result<Vector3<f64>, KinematicsError> {
-    Ok(placed_masses(chain, q)?.iter().filter(|m| m.joint > after).map(|m| (m.centre - pivot).cross(&(g * m.mass))).sum())
+pub fn carried_moment(
+    chain: &SerialChain,
+    q: &[f64],
+    g: &Vector3<f64>,
+    after: usize,
+    pivot: &Vector3<f64>,
+) -> Result<Vector3<f64>, KinematicsError> {
+    Ok(placed_masses(chain, q)?
+        .iter()
+        .filter(|m| m.joint > after)
+        .map(|m| (m.centre - pivot).cross(&(g * m.mass)))
+        .sum())
 }

@@ -28,7 +28,11 @@ impl InstrumentPose {
     }
 
     pub fn from_euler_xyz(translation: Vector3<f64>, e: [f64; 3]) -> Self {
-        Self { rotation: euler_xyz(e[0], e[1], e[2]), translation, euler_xyz: e }
+        Self {
+            rotation: euler_xyz(e[0], e[1], e[2]),
+            translation,
+            euler_xyz: e,
+        }
     }
     /// The pose of a rotation matrix (proper, orthonormal) and translation, its Euler XYZ angles
     /// recovered from R = Rx(α)·Ry(β)·Rz(δ): β = asin R₀₂, α = atan2(−R₁₂, R₂₂),
@@ -54,7 +58,10 @@ impl InstrumentPose {
     /// The pose as an isometry (`rotation` is a proper rotation, built from Euler angles).
     pub fn isometry(&self) -> nalgebra::Isometry3<f64> {
         let r = nalgebra::Rotation3::from_matrix_unchecked(self.rotation);
-        nalgebra::Isometry3::from_parts(self.translation.into(), nalgebra::UnitQuaternion::from_rotation_matrix(&r))
+        nalgebra::Isometry3::from_parts(
+            self.translation.into(),
+            nalgebra::UnitQuaternion::from_rotation_matrix(&r),
+        )
     }
 }
 
@@ -67,9 +74,17 @@ mod tests {
         for e in [[0.1, -0.4, 2.5], [-3.0, 1.2, -0.3], [0.0, 0.0, 0.0]] {
             let p = InstrumentPose::from_euler_xyz(Vector3::new(1.0, 2.0, 3.0), e);
             let q = InstrumentPose::from_rotation(p.translation, &p.rotation);
-            assert!((q.rotation - p.rotation).abs().max() < 1e-14, "{e:?} -> {:?}", q.euler_xyz);
+            assert!(
+                (q.rotation - p.rotation).abs().max() < 1e-14,
+                "{e:?} -> {:?}",
+                q.euler_xyz
+            );
             for k in 0..3 {
-                assert!((q.euler_xyz[k] - e[k]).abs() < 1e-12, "{e:?} -> {:?}", q.euler_xyz);
+                assert!(
+                    (q.euler_xyz[k] - e[k]).abs() < 1e-12,
+                    "{e:?} -> {:?}",
+                    q.euler_xyz
+                );
             }
         }
     }

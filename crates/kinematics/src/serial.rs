@@ -63,8 +63,24 @@ pub struct LinkInertial {
 
 impl Joint {
     /// A joint with no offset, mimic, limits or inertial.
-    pub fn new(name: impl Into<String>, kind: JointKind, pre: Isometry3<f64>, axis: Unit<Vector3<f64>>, post: Isometry3<f64>) -> Self {
-        Self { name: name.into(), kind, pre, axis, post, offset: 0.0, mimic: None, limits: None, inertial: None }
+    pub fn new(
+        name: impl Into<String>,
+        kind: JointKind,
+        pre: Isometry3<f64>,
+        axis: Unit<Vector3<f64>>,
+        post: Isometry3<f64>,
+    ) -> Self {
+        Self {
+            name: name.into(),
+            kind,
+            pre,
+            axis,
+            post,
+            offset: 0.0,
+            mimic: None,
+            limits: None,
+            inertial: None,
+        }
     }
 
     /// Whether the joint has a variable of its own (movable, not a mimic).
@@ -176,7 +192,11 @@ impl SerialChain {
 
     /// Names of the joint variables (movable joints that are not mimics), in variable order.
     pub fn variable_names(&self) -> Vec<String> {
-        self.joints.iter().filter(|j| j.is_variable()).map(|j| j.name.clone()).collect()
+        self.joints
+            .iter()
+            .filter(|j| j.is_variable())
+            .map(|j| j.name.clone())
+            .collect()
     }
 
     /// The variable index of each joint (None for fixed joints and mimics).
@@ -203,7 +223,11 @@ impl SerialChain {
             .enumerate()
             .map(|(i, j)| match (vars[i], j.mimic) {
                 (Some(k), _) => Some((k, 1.0)),
-                (None, Some(m)) if j.kind != JointKind::Fixed => vars.get(m.master).copied().flatten().map(|k| (k, m.multiplier)),
+                (None, Some(m)) if j.kind != JointKind::Fixed => vars
+                    .get(m.master)
+                    .copied()
+                    .flatten()
+                    .map(|k| (k, m.multiplier)),
                 _ => None,
             })
             .collect()
@@ -228,7 +252,10 @@ impl SerialChain {
 
     /// The frame of every joint before its motion (parent link × `pre`: its axis and origin in the
     /// base frame) and after it (the child link), at `q`.
-    pub fn joint_frames(&self, q: &[f64]) -> Result<Vec<(Isometry3<f64>, Isometry3<f64>)>, KinematicsError> {
+    pub fn joint_frames(
+        &self,
+        q: &[f64],
+    ) -> Result<Vec<(Isometry3<f64>, Isometry3<f64>)>, KinematicsError> {
         self.check_q(q)?;
         let (values, _) = self.joint_values(q);
         let mut t = self.base;

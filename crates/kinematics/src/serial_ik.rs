@@ -26,7 +26,11 @@ fn inverse_left_jacobian(phi: &Vector3<f64>) -> Matrix3<f64> {
     let theta = phi.norm();
     let k = phi.cross_matrix();
     // 1/θ² − cot(θ/2)/(2θ) → 1/12 + θ²/720 as θ → 0
-    let c = if theta < 1e-4 { 1.0 / 12.0 + theta * theta / 720.0 } else { 1.0 / (theta * theta) - 1.0 / (2.0 * theta * (theta / 2.0).tan()) };
+    let c = if theta < 1e-4 {
+        1.0 / 12.0 + theta * theta / 720.0
+    } else {
+        1.0 / (theta * theta) - 1.0 / (2.0 * theta * (theta / 2.0).tan())
+    };
     Matrix3::identity() - k * 0.5 + k * k * c
 }
 
@@ -42,7 +46,10 @@ impl IkProblem<'_> {
         let pose = self.chain.tool_pose(q)?;
         Ok(match self.target {
             IkTarget::Position(p) => (pose.translation.vector - p, Vector3::zeros()),
-            IkTarget::Pose(t) => (pose.translation.vector - t.translation.vector, (pose.rotation * t.rotation.inverse()).scaled_axis()),
+            IkTarget::Pose(t) => (
+                pose.translation.vector - t.translation.vector,
+                (pose.rotation * t.rotation.inverse()).scaled_axis(),
+            ),
         })
     }
 
@@ -69,13 +76,23 @@ impl Problem for IkProblem<'_> {
     fn residuals(&self, x: &[f64], residuals: &mut [f64]) -> Result<(), NotEvaluable> {
         self.fill(x, residuals).map(|_| ())
     }
-    fn residuals_and_jacobian(&self, x: &[f64], residuals: &mut [f64], jacobian: &mut DMatrix<f64>) -> Result<(), NotEvaluable> {
+    fn residuals_and_jacobian(
+        &self,
+        x: &[f64],
+        residuals: &mut [f64],
+        jacobian: &mut DMatrix<f64>,
+    ) -> Result<(), NotEvaluable> {
         let phi = self.fill(x, residuals)?;
-        let geometric = self.chain.jacobian(x).map_err(|e| NotEvaluable(e.to_string()))?;
+        let geometric = self
+            .chain
+            .jacobian(x)
+            .map_err(|e| NotEvaluable(e.to_string()))?;
         jacobian.rows_mut(0, 3).copy_from(&geometric.rows(0, 3));
         if residuals.len() == 6 {
             let turn = inverse_left_jacobian(&phi) * self.weight;
-            jacobian.rows_mut(3, 3).copy_from(&(turn * geometric.rows(3, 3)));
+            jacobian
+                .rows_mut(3, 3)
+                .copy_from(&(turn * geometric.rows(3, 3)));
         }
         // a joint whose column is round-off (a wrist turning the tool point about itself, for a
         // position target) does not move the residual: an exact zero column keeps the solver's
@@ -93,11 +110,23 @@ impl Problem for IkProblem<'_> {
 impl SerialChain {
     /// Inverse kinematics from the initial guess `q0` (module doc): Levenberg–Marquardt on the
     /// shared solver, restarted from turned starts when the first solve does not converge.
-    pub fn inverse(&self, target: &IkTarget, q0: &[f64], settings: &IkSettings) -> Result<IkReport, KinematicsError> {
+    pub fn inverse(
+        &self,
+        target: &IkTarget,
+        q0: &[f64],
+        settings: &IkSettings,
+    ) -> Result<IkReport, KinematicsError> {
         self.check_q(q0)?;
-        let problem = IkProblem { chain: self, target, weight: settings.orientation_weight };
+        let problem = IkProblem {
+            chain: self,
+            target,
+            weight: settings.orientation_weight,
+        };
         let with_orientation = matches!(target, IkTarget::Pose(_));
-        let done = |pe: f64, oe: f64| pe <= settings.position_tolerance && (!with_orientation || oe <= settings.orientation_tolerance);
+        let done = |pe: f64, oe: f64| {
+            pe <= settings.position_tolerance
+                && (!with_orientation || oe <= settings.orientation_tolerance)
+        };
         // converged means the tolerances are met, so the solver's own tests are set to round-off;
         // a redundant chain (a position target of a 6-axis arm, a wrist joint that only turns the
         // tool about its point) has directions the residuals do not see: truncated-SVD steps leave
@@ -112,7 +141,12 @@ impl SerialChain {
             ..Options::default()
         };
         let mut starts = vec![q0.to_vec()];
-        for (k, j) in self.joints.iter().filter(|j| j.kind != JointKind::Fixed).enumerate() {
+        for (k, j) in self
+            .joints
+            .iter()
+            .filter(|j| j.kind != JointKind::Fixed)
+            .enumerate()
+        {
             if j.kind == JointKind::Revolute {
                 for turn in [std::f64::consts::FRAC_PI_2, -std::f64::consts::FRAC_PI_2] {
                     let mut q = q0.to_vec();
@@ -124,19 +158,37 @@ impl SerialChain {
         let mut best: Option<IkReport> = None;
         let mut iterations = 0;
         for start in starts {
-            let solution = solve(&problem, &start, &options).map_err(|e| KinematicsError::InvalidValue { field: "inverse kinematics".into(), value: f64::NAN, reason: e.to_string() })?;
+            let solution =
+                solve(&problem, &start, &options).map_err(|e| KinematicsError::InvalidValue {
+                    field: "inverse kinematics".into(),
+                    value: f64::NAN,
+                    reason: e.to_string(),
+                })?;
             iterations += solution.iterations;
             // a revolute joint turned by 2π gives the same pose: return the turn nearest q0
             let mut x = solution.x;
-            for (k, j) in self.joints.iter().filter(|j| j.kind != JointKind::Fixed).enumerate() {
+            for (k, j) in self
+                .joints
+                .iter()
+                .filter(|j| j.kind != JointKind::Fixed)
+                .enumerate()
+            {
                 if j.kind == JointKind::Revolute {
                     let turns = ((x[k] - q0[k]) / std::f64::consts::TAU).round();
                     x[k] -= turns * std::f64::consts::TAU;
                 }
             }
             let (dp, phi) = problem.errors(&x)?;
-            let report = IkReport { converged: done(dp.norm(), phi.norm()), q: DVector::from_vec(x), iterations, position_error: dp.norm(), orientation_error: phi.norm(), damping: solution.damping };
-            let score = |r: &IkReport| r.position_error + settings.orientation_weight * r.orientation_error;
+            let report = IkReport {
+                converged: done(dp.norm(), phi.norm()),
+                q: DVector::from_vec(x),
+                iterations,
+                position_error: dp.norm(),
+                orientation_error: phi.norm(),
+                damping: solution.damping,
+            };
+            let score =
+                |r: &IkReport| r.position_error + settings.orientation_weight * r.orientation_error;
             if report.converged {
                 return Ok(report);
             }
@@ -158,10 +210,17 @@ mod tests {
     /// left Jacobian), up to θ = π.
     #[test]
     fn inverse_left_jacobian_inverts_the_left_jacobian() {
-        for phi in [Vector3::new(1e-6, 2e-6, -1e-6), Vector3::new(0.3, -0.2, 0.5), Vector3::new(0.0, 0.0, 3.0), Vector3::new(1.0, 2.0, 2.0).normalize() * std::f64::consts::PI] {
+        for phi in [
+            Vector3::new(1e-6, 2e-6, -1e-6),
+            Vector3::new(0.3, -0.2, 0.5),
+            Vector3::new(0.0, 0.0, 3.0),
+            Vector3::new(1.0, 2.0, 2.0).normalize() * std::f64::consts::PI,
+        ] {
             let t = phi.norm();
             let k = phi.cross_matrix();
-            let jl = Matrix3::identity() + k * ((1.0 - t.cos()) / (t * t)) + k * k * ((t - t.sin()) / (t * t * t));
+            let jl = Matrix3::identity()
+                + k * ((1.0 - t.cos()) / (t * t))
+                + k * k * ((t - t.sin()) / (t * t * t));
             let err = (inverse_left_jacobian(&phi) * jl - Matrix3::identity()).amax();
             assert!(err < 1e-9, "φ = {phi:?}: {err:e}");
         }

@@ -65,15 +65,45 @@ pub fn rz(a: f64) -> Matrix3<f64> {
 }
 /// d[`rx`]/da.
 pub fn drx(a: f64) -> Matrix3<f64> {
-    Matrix3::new(0.0, 0.0, 0.0, 0.0, -a.sin(), -a.cos(), 0.0, a.cos(), -a.sin())
+    Matrix3::new(
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+        -a.sin(),
+        -a.cos(),
+        0.0,
+        a.cos(),
+        -a.sin(),
+    )
 }
 /// d[`ry`]/da.
 pub fn dry(a: f64) -> Matrix3<f64> {
-    Matrix3::new(-a.sin(), 0.0, a.cos(), 0.0, 0.0, 0.0, -a.cos(), 0.0, -a.sin())
+    Matrix3::new(
+        -a.sin(),
+        0.0,
+        a.cos(),
+        0.0,
+        0.0,
+        0.0,
+        -a.cos(),
+        0.0,
+        -a.sin(),
+    )
 }
 /// d[`rz`]/da.
 pub fn drz(a: f64) -> Matrix3<f64> {
-    Matrix3::new(-a.sin(), -a.cos(), 0.0, a.cos(), -a.sin(), 0.0, 0.0, 0.0, 0.0)
+    Matrix3::new(
+        -a.sin(),
+        -a.cos(),
+        0.0,
+        a.cos(),
+        -a.sin(),
+        0.0,
+        0.0,
+        0.0,
+        0.0,
+    )
 }
 /// The project's one Euler-angle convention: intrinsic X-Y-Z, `R = Rx(α)·Ry(β)·Rz(δ)` (thesis P5
 /// eq. 22). Every instrument pose, the `tracker_pose` term and the exact error chain build their
@@ -91,7 +121,8 @@ mod tests {
     fn rodrigues_matches_nalgebra_axis_angle() {
         let axis = Vector3::new(0.3, -0.5, 0.8);
         let r = rodrigues(&axis, 0.7);
-        let n = nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(axis), 0.7).into_inner();
+        let n = nalgebra::Rotation3::from_axis_angle(&nalgebra::Unit::new_normalize(axis), 0.7)
+            .into_inner();
         assert!((r - n).amax() < 1e-15);
     }
 

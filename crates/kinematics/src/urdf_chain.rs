@@ -76,7 +76,10 @@ pub fn chain_from_robot(
     let inertial_of = |link: &str| {
         robot.links.iter().find(|l| l.name == link).and_then(|l| {
             let mass = l.inertial.mass.value;
-            (mass > 0.0 && mass.is_finite()).then(|| LinkInertial { mass, centre_of_mass: Vector3::from(l.inertial.origin.xyz.0) })
+            (mass > 0.0 && mass.is_finite()).then(|| LinkInertial {
+                mass,
+                centre_of_mass: Vector3::from(l.inertial.origin.xyz.0),
+            })
         })
     };
     let joints = path

@@ -21,19 +21,37 @@ pub enum LinkPlacement {
 
 /// Reads a URDF file (for [`link_placement`] and [`crate::urdf_chain::chain_from_robot`]).
 pub fn read_urdf_file(path: &std::path::Path) -> Result<urdf_rs::Robot, KinematicsError> {
-    urdf_rs::read_file(path).map_err(|e| KinematicsError::Urdf { reason: format!("{}: {e}", path.display()) })
+    urdf_rs::read_file(path).map_err(|e| KinematicsError::Urdf {
+        reason: format!("{}: {e}", path.display()),
+    })
 }
 
 /// The placement of `link` in the frame of `reference` (see the module doc). An unknown link, or
 /// two links in unconnected trees, is an error naming the robot's links.
-pub fn link_placement(robot: &urdf_rs::Robot, reference: &str, link: &str) -> Result<LinkPlacement, KinematicsError> {
+pub fn link_placement(
+    robot: &urdf_rs::Robot,
+    reference: &str,
+    link: &str,
+) -> Result<LinkPlacement, KinematicsError> {
     let (up_from_reference, up_from_link) = path_between(robot, reference, link)?;
-    if let Some(j) = up_from_reference.iter().chain(&up_from_link).find(|j| j.joint_type != urdf_rs::JointType::Fixed) {
-        return Ok(LinkPlacement::Moves { joint: j.name.clone() });
+    if let Some(j) = up_from_reference
+        .iter()
+        .chain(&up_from_link)
+        .find(|j| j.joint_type != urdf_rs::JointType::Fixed)
+    {
+        return Ok(LinkPlacement::Moves {
+            joint: j.name.clone(),
+        });
     }
     // common ancestor → each link, composed from the ancestor down
-    let down = |path: &[&urdf_rs::Joint]| path.iter().rev().fold(Isometry3::identity(), |t, j| t * from_xyz_rpy(j.origin.xyz.0, j.origin.rpy.0));
-    Ok(LinkPlacement::Fixed(down(&up_from_reference).inverse() * down(&up_from_link)))
+    let down = |path: &[&urdf_rs::Joint]| {
+        path.iter().rev().fold(Isometry3::identity(), |t, j| {
+            t * from_xyz_rpy(j.origin.xyz.0, j.origin.rpy.0)
+        })
+    };
+    Ok(LinkPlacement::Fixed(
+        down(&up_from_reference).inverse() * down(&up_from_link),
+    ))
 }
 
 /// How a link is turned relative to a reference link.
@@ -49,23 +67,62 @@ pub enum LinkRotation {
 
 /// The rotation of `link`'s frame in `reference`'s (see [`LinkRotation`]); errors as
 /// [`link_placement`]'s.
-pub fn link_rotation(robot: &urdf_rs::Robot, reference: &str, link: &str) -> Result<LinkRotation, KinematicsError> {
+pub fn link_rotation(
+    robot: &urdf_rs::Robot,
+    reference: &str,
+    link: &str,
+) -> Result<LinkRotation, KinematicsError> {
     let (up_from_reference, up_from_link) = path_between(robot, reference, link)?;
-    let turns = |j: &&&urdf_rs::Joint| !matches!(j.joint_type, urdf_rs::JointType::Fixed | urdf_rs::JointType::Prismatic);
+    let turns = |j: &&&urdf_rs::Joint| {
+        !matches!(
+            j.joint_type,
+            urdf_rs::JointType::Fixed | urdf_rs::JointType::Prismatic
+        )
+    };
     if let Some(j) = up_from_reference.iter().chain(&up_from_link).find(turns) {
-        return Ok(LinkRotation::Turns { joint: j.name.clone() });
+        return Ok(LinkRotation::Turns {
+            joint: j.name.clone(),
+        });
     }
-    let down = |path: &[&urdf_rs::Joint]| path.iter().rev().fold(nalgebra::Matrix3::<f64>::identity(), |r, j| r * from_xyz_rpy([0.0; 3], j.origin.rpy.0).rotation.to_rotation_matrix().into_inner());
-    Ok(LinkRotation::Fixed(down(&up_from_reference).transpose() * down(&up_from_link)))
+    let down = |path: &[&urdf_rs::Joint]| {
+        path.iter()
+            .rev()
+            .fold(nalgebra::Matrix3::<f64>::identity(), |r, j| {
+                r * from_xyz_rpy([0.0; 3], j.origin.rpy.0)
+                    .rotation
+                    .to_rotation_matrix()
+                    .into_inner()
+            })
+    };
+    Ok(LinkRotation::Fixed(
+        down(&up_from_reference).transpose() * down(&up_from_link),
+    ))
 }
 
 /// The joints from each of `reference` and `link` up to their nearest common ancestor, each
 /// list starting at its link's own parent joint.
-fn path_between<'a>(robot: &'a urdf_rs::Robot, reference: &str, link: &str) -> Result<(Vec<&'a urdf_rs::Joint>, Vec<&'a urdf_rs::Joint>), KinematicsError> {
-    let known = || robot.links.iter().map(|l| l.name.as_str()).collect::<Vec<_>>().join(", ");
+fn path_between<'a>(
+    robot: &'a urdf_rs::Robot,
+    reference: &str,
+    link: &str,
+) -> Result<(Vec<&'a urdf_rs::Joint>, Vec<&'a urdf_rs::Joint>), KinematicsError> {
+    let known = || {
+        robot
+            .links
+            .iter()
+            .map(|l| l.name.as_str())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
     for name in [reference, link] {
         if !robot.links.iter().any(|l| l.name == name) {
-            return Err(KinematicsError::Urdf { reason: format!("robot `{}` has no link `{name}`; its links: {}", robot.name, known()) });
+            return Err(KinematicsError::Urdf {
+                reason: format!(
+                    "robot `{}` has no link `{name}`; its links: {}",
+                    robot.name,
+                    known()
+                ),
+            });
         }
     }
     let mut up_from_reference = joints_to_root(robot, reference)?;
@@ -78,7 +135,11 @@ fn path_between<'a>(robot: &'a urdf_rs::Robot, reference: &str, link: &str) -> R
         up_from_reference.pop();
         up_from_link.pop();
     }
-    let top = |path: &[&urdf_rs::Joint], start: &str| path.last().map(|j| j.parent.link.clone()).unwrap_or_else(|| start.to_string());
+    let top = |path: &[&urdf_rs::Joint], start: &str| {
+        path.last()
+            .map(|j| j.parent.link.clone())
+            .unwrap_or_else(|| start.to_string())
+    };
     if top(&up_from_reference, reference) != top(&up_from_link, link) {
         return Err(KinematicsError::Urdf { reason: format!("links `{reference}` and `{link}` of robot `{}` are in unconnected trees; its links: {}", robot.name, known()) });
     }
@@ -86,13 +147,21 @@ fn path_between<'a>(robot: &'a urdf_rs::Robot, reference: &str, link: &str) -> R
 }
 
 /// The joints from `link` up to the tree's root, the link's own parent joint first.
-fn joints_to_root<'a>(robot: &'a urdf_rs::Robot, link: &str) -> Result<Vec<&'a urdf_rs::Joint>, KinematicsError> {
+fn joints_to_root<'a>(
+    robot: &'a urdf_rs::Robot,
+    link: &str,
+) -> Result<Vec<&'a urdf_rs::Joint>, KinematicsError> {
     let mut path = Vec::new();
     let mut current = link.to_string();
     while let Some(j) = robot.joints.iter().find(|j| j.child.link == current) {
         path.push(j);
         if path.len() > robot.joints.len() {
-            return Err(KinematicsError::Urdf { reason: format!("robot `{}`: the joint graph has a cycle through link `{link}`", robot.name) });
+            return Err(KinematicsError::Urdf {
+                reason: format!(
+                    "robot `{}`: the joint graph has a cycle through link `{link}`",
+                    robot.name
+                ),
+            });
         }
         current = j.parent.link.clone();
     }
@@ -142,14 +211,27 @@ mod tests {
         // and the reverse is its inverse
         let back = fixed(link_placement(&robot(), "base_imu", "column").unwrap());
         assert!(((t * back).translation.vector).norm() < 1e-12);
-        assert_eq!(fixed(link_placement(&robot(), "top", "top").unwrap()), Isometry3::identity());
+        assert_eq!(
+            fixed(link_placement(&robot(), "top", "top").unwrap()),
+            Isometry3::identity()
+        );
     }
 
     #[test]
     fn a_movable_joint_between_is_named() {
-        assert_eq!(link_placement(&robot(), "base_link", "top_imu").unwrap(), LinkPlacement::Moves { joint: "lift".into() });
+        assert_eq!(
+            link_placement(&robot(), "base_link", "top_imu").unwrap(),
+            LinkPlacement::Moves {
+                joint: "lift".into()
+            }
+        );
         // also when the reference is the link below the joint
-        assert_eq!(link_placement(&robot(), "top_imu", "base_imu").unwrap(), LinkPlacement::Moves { joint: "lift".into() });
+        assert_eq!(
+            link_placement(&robot(), "top_imu", "base_imu").unwrap(),
+            LinkPlacement::Moves {
+                joint: "lift".into()
+            }
+        );
     }
 
     #[test]
@@ -168,14 +250,27 @@ mod tests {
         assert!((r - rz90.matrix()).norm() < 1e-12, "{r}");
         let turning = URDF.replace(r#"type="prismatic""#, r#"type="revolute""#);
         let robot = urdf_rs::read_from_string(&turning).unwrap();
-        assert_eq!(link_rotation(&robot, "base_link", "top_imu").unwrap(), LinkRotation::Turns { joint: "lift".into() });
+        assert_eq!(
+            link_rotation(&robot, "base_link", "top_imu").unwrap(),
+            LinkRotation::Turns {
+                joint: "lift".into()
+            }
+        );
     }
 
     #[test]
     fn unknown_and_unconnected_links_name_the_robots_links() {
-        let e = link_placement(&robot(), "base_link", "imu").unwrap_err().to_string();
-        assert!(e.contains("no link `imu`") && e.contains("base_link, base_imu, column, top, top_imu, elsewhere"), "{e}");
-        let e = link_placement(&robot(), "base_link", "elsewhere").unwrap_err().to_string();
+        let e = link_placement(&robot(), "base_link", "imu")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("no link `imu`")
+                && e.contains("base_link, base_imu, column, top, top_imu, elsewhere"),
+            "{e}"
+        );
+        let e = link_placement(&robot(), "base_link", "elsewhere")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("unconnected trees"), "{e}");
     }
 }

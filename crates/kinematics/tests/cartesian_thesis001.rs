@@ -13,7 +13,11 @@ fn p3_tracker() -> InstrumentPose {
     // Thesis P3 tracker pose: (−863.527, 194.373, 677.782) mm, Euler XYZ (0.0339°, 0.0343°, 59.4652°).
     InstrumentPose::from_euler_xyz(
         Vector3::new(-863.527, 194.373, 677.782) * MM,
-        [0.0339f64.to_radians(), 0.0343f64.to_radians(), 59.4652f64.to_radians()],
+        [
+            0.0339f64.to_radians(),
+            0.0343f64.to_radians(),
+            59.4652f64.to_radians(),
+        ],
     )
 }
 

@@ -1,8 +1,10 @@
 //! Seed 002 (delta ArUco calibration digest), fixtures T5–T7, plus parameter-Jacobian checks.
 
 use metrocell_kinematics::delta::{DeltaGeometry, DELTA_PARAMETER_COUNT};
-use metrocell_solver::numeric_jacobian::{central_difference, max_relative_difference, steps_with_unit_floor, Order};
 use metrocell_kinematics::KinematicsError;
+use metrocell_solver::numeric_jacobian::{
+    central_difference, max_relative_difference, steps_with_unit_floor, Order,
+};
 use nalgebra::{DMatrix, DVector, SMatrix, Vector3};
 
 const MM: f64 = 1e-3;
@@ -112,7 +114,13 @@ fn parameter_jacobians_match_central_differences_to_1e_6() {
             let gg = DeltaGeometry::from_vector(&SMatrix::from_iterator(th.iter().cloned()));
             gg.inverse(&p).ok().map(|q| DVector::from_row_slice(&q))
         };
-        let fd = central_difference(ik, theta0.as_slice(), &steps_with_unit_floor(theta0.as_slice(), 1e-7), Order::Second).unwrap();
+        let fd = central_difference(
+            ik,
+            theta0.as_slice(),
+            &steps_with_unit_floor(theta0.as_slice(), 1e-7),
+            Order::Second,
+        )
+        .unwrap();
         let an = to_dmatrix(&g.inverse_parameter_jacobian(&p).unwrap());
         let rel = max_relative_difference(&an, &fd);
         assert!(rel < 1e-6, "IK param Jacobian at {p:?}: rel diff {rel:e}");
@@ -125,7 +133,13 @@ fn parameter_jacobians_match_central_differences_to_1e_6() {
                 .ok()
                 .map(|v| DVector::from_row_slice(v.as_slice()))
         };
-        let fd = central_difference(fk, theta0.as_slice(), &steps_with_unit_floor(theta0.as_slice(), 1e-7), Order::Second).unwrap();
+        let fd = central_difference(
+            fk,
+            theta0.as_slice(),
+            &steps_with_unit_floor(theta0.as_slice(), 1e-7),
+            Order::Second,
+        )
+        .unwrap();
         let an = to_dmatrix(&g.forward_parameter_jacobian(&q).unwrap());
         let rel = max_relative_difference(&an, &fd);
         assert!(rel < 1e-6, "FK param Jacobian at {p:?}: rel diff {rel:e}");

@@ -1,10 +1,12 @@
 //! Serial arms from DH (standard and modified) and URDF: FK, geometric Jacobian, DLS IK, DH parameter Jacobian.
 
 use metrocell_kinematics::dh::{DhConvention, DhRow, DhTable};
-use metrocell_solver::numeric_jacobian::{central_difference, max_relative_difference, steps_with_unit_floor, Order};
 use metrocell_kinematics::serial::{IkSettings, IkTarget, JointKind};
 use metrocell_kinematics::urdf_chain::chain_from_urdf_str;
 use metrocell_kinematics::KinematicsError;
+use metrocell_solver::numeric_jacobian::{
+    central_difference, max_relative_difference, steps_with_unit_floor, Order,
+};
 use nalgebra::{DMatrix, DVector, Isometry3, Vector3};
 use std::f64::consts::FRAC_PI_2;
 
@@ -87,12 +89,7 @@ fn pose_vec(t: &Isometry3<f64>, reference: &Isometry3<f64>) -> DVector<f64> {
 fn geometric_jacobian_matches_central_differences() {
     let chain = ur5().to_chain();
     let t0 = chain.tool_pose(&Q).unwrap();
-    let f = |q: &[f64]| {
-        chain
-            .tool_pose(q)
-            .ok()
-            .map(|t| pose_vec(&t, &t0))
-    };
+    let f = |q: &[f64]| chain.tool_pose(q).ok().map(|t| pose_vec(&t, &t0));
     let fd = central_difference(f, &Q, &steps_with_unit_floor(&Q, 1e-6), Order::Second).unwrap();
     let an = chain.jacobian(&Q).unwrap();
     let rel = max_relative_difference(&an, &fd);
@@ -124,7 +121,13 @@ fn dh_parameter_jacobian_matches_central_differences_both_conventions() {
                 .ok()
                 .map(|fr| pose_vec(fr.last().unwrap(), &t0))
         };
-        let fd = central_difference(f, x0.as_slice(), &steps_with_unit_floor(x0.as_slice(), 1e-6), Order::Second).unwrap();
+        let fd = central_difference(
+            f,
+            x0.as_slice(),
+            &steps_with_unit_floor(x0.as_slice(), 1e-6),
+            Order::Second,
+        )
+        .unwrap();
         let rel = max_relative_difference(&an, &fd);
         assert!(rel < 1e-6, "{:?}: rel {rel:e}", table.convention);
     }
@@ -211,7 +214,13 @@ fn urdf_chain_matches_hand_computed_planar_arm() {
             .ok()
             .map(|t| DVector::from_row_slice(t.translation.vector.as_slice()))
     };
-    let fd = central_difference(f, &[q1, q2, s], &steps_with_unit_floor(&[q1, q2, s], 1e-6), Order::Second).unwrap();
+    let fd = central_difference(
+        f,
+        &[q1, q2, s],
+        &steps_with_unit_floor(&[q1, q2, s], 1e-6),
+        Order::Second,
+    )
+    .unwrap();
     let lin: DMatrix<f64> = jac.rows(0, 3).into_owned();
     assert!(max_relative_difference(&lin, &fd) < 1e-6);
 }
@@ -259,7 +268,13 @@ fn urdf_origin_and_joint_offset_jacobians_match_central_differences() {
             .ok()
             .map(|t| DVector::from_row_slice(t.translation.vector.as_slice()))
     };
-    let fd = central_difference(f, x0.as_slice(), &steps_with_unit_floor(x0.as_slice(), 1e-6), Order::Second).unwrap();
+    let fd = central_difference(
+        f,
+        x0.as_slice(),
+        &steps_with_unit_floor(x0.as_slice(), 1e-6),
+        Order::Second,
+    )
+    .unwrap();
     let lin: DMatrix<f64> = an.rows(0, 3).into_owned();
     assert!(max_relative_difference(&lin, &fd) < 1e-6);
     assert!(an.rows(3, 3).amax() == 0.0);
@@ -278,7 +293,13 @@ fn urdf_origin_and_joint_offset_jacobians_match_central_differences() {
             .ok()
             .map(|t| DVector::from_row_slice(t.translation.vector.as_slice()))
     };
-    let fd = central_difference(f, off0.as_slice(), &steps_with_unit_floor(off0.as_slice(), 1e-6), Order::Second).unwrap();
+    let fd = central_difference(
+        f,
+        off0.as_slice(),
+        &steps_with_unit_floor(off0.as_slice(), 1e-6),
+        Order::Second,
+    )
+    .unwrap();
     let lin: DMatrix<f64> = an.rows(0, 3).into_owned();
     assert!(max_relative_difference(&lin, &fd) < 1e-6);
 }
@@ -305,29 +326,60 @@ fn a_mimic_joint_follows_its_master_and_is_no_variable() {
     let (e, a) = (0.3, 0.7);
     let p = chain.tool_pose(&[e, a]).unwrap().translation.vector;
     // both segments extend by e (the upper one by 1·e + 0.01 m)
-    let expected = Vector3::new(0.5 * a.cos(), 0.5 * a.sin(), 0.5 + e + 0.1 + (e + 0.01) + 0.2);
+    let expected = Vector3::new(
+        0.5 * a.cos(),
+        0.5 * a.sin(),
+        0.5 + e + 0.1 + (e + 0.01) + 0.2,
+    );
     assert!((p - expected).norm() < 1e-12, "{p:?} vs {expected:?}");
     // the master's Jacobian column carries both segments: ∂z/∂e = 2
     let jac = chain.jacobian(&[e, a]).unwrap();
-    let f = |q: &[f64]| chain.tool_pose(q).ok().map(|t| DVector::from_row_slice(t.translation.vector.as_slice()));
-    let fd = central_difference(f, &[e, a], &steps_with_unit_floor(&[e, a], 1e-6), Order::Second).unwrap();
+    let f = |q: &[f64]| {
+        chain
+            .tool_pose(q)
+            .ok()
+            .map(|t| DVector::from_row_slice(t.translation.vector.as_slice()))
+    };
+    let fd = central_difference(
+        f,
+        &[e, a],
+        &steps_with_unit_floor(&[e, a], 1e-6),
+        Order::Second,
+    )
+    .unwrap();
     assert!(max_relative_difference(&jac.rows(0, 3).into_owned(), &fd) < 1e-6);
     assert!((jac[(2, 0)] - 2.0).abs() < 1e-12);
     // limits and inertials are read
     let upper = &chain.joints[1];
     assert_eq!(upper.limits, Some([0.0, 0.6]));
     let inertial = upper.inertial.expect("seg2's inertial");
-    assert_eq!((inertial.mass, inertial.centre_of_mass), (8.0, Vector3::new(0.0, 0.0, 0.25)));
-    assert!(chain.joints[3].inertial.is_none(), "the tip has no inertial");
+    assert_eq!(
+        (inertial.mass, inertial.centre_of_mass),
+        (8.0, Vector3::new(0.0, 0.0, 0.25))
+    );
+    assert!(
+        chain.joints[3].inertial.is_none(),
+        "the tip has no inertial"
+    );
 }
 
 #[test]
 fn a_mimic_of_a_joint_off_the_path_and_a_planar_joint_are_refused_by_name() {
     let off_path = COLUMN_URDF.replace(r#"<mimic joint="lower""#, r#"<mimic joint="gripper""#);
-    let e = chain_from_urdf_str(&off_path, "base", "tip").unwrap_err().to_string();
-    assert!(e.contains("upper") && e.contains("gripper") && e.contains("mimic"), "{e}");
-    let planar = COLUMN_URDF.replace(r#"name="shoulder" type="revolute""#, r#"name="shoulder" type="planar""#);
-    let e = chain_from_urdf_str(&planar, "base", "tip").unwrap_err().to_string();
+    let e = chain_from_urdf_str(&off_path, "base", "tip")
+        .unwrap_err()
+        .to_string();
+    assert!(
+        e.contains("upper") && e.contains("gripper") && e.contains("mimic"),
+        "{e}"
+    );
+    let planar = COLUMN_URDF.replace(
+        r#"name="shoulder" type="revolute""#,
+        r#"name="shoulder" type="planar""#,
+    );
+    let e = chain_from_urdf_str(&planar, "base", "tip")
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("shoulder") && e.contains("not supported"), "{e}");
 }
 
@@ -339,7 +391,13 @@ fn gravity_torques_are_minus_the_potential_energys_gradient() {
     use metrocell_kinematics::gravity::{carried_moment, gravity_torques, placed_masses};
     let chain = chain_from_urdf_str(COLUMN_URDF, "base", "tip").unwrap();
     let g = Vector3::new(0.3, -0.2, -9.79);
-    let potential = |q: &[f64]| -> f64 { -placed_masses(&chain, q).unwrap().iter().map(|m| m.mass * g.dot(&m.centre)).sum::<f64>() };
+    let potential = |q: &[f64]| -> f64 {
+        -placed_masses(&chain, q)
+            .unwrap()
+            .iter()
+            .map(|m| m.mass * g.dot(&m.centre))
+            .sum::<f64>()
+    };
     for q in [[0.1, 0.3], [0.45, -1.2], [0.0, 2.5]] {
         let tau = gravity_torques(&chain, &q, &g).unwrap();
         for k in 0..2 {
@@ -348,10 +406,17 @@ fn gravity_torques_are_minus_the_potential_energys_gradient() {
             up[k] += h;
             down[k] -= h;
             let numeric = -(potential(&up) - potential(&down)) / (2.0 * h);
-            assert!((tau[k] - numeric).abs() < 1e-5 * numeric.abs().max(1.0), "q {q:?} variable {k}: {} vs {numeric}", tau[k]);
+            assert!(
+                (tau[k] - numeric).abs() < 1e-5 * numeric.abs().max(1.0),
+                "q {q:?} variable {k}: {} vs {numeric}",
+                tau[k]
+            );
         }
         // the column lifts 12 + 8 + 5 kg through both segments (the mimic doubles it)
-        assert!((tau[0] - 2.0 * (8.0 + 5.0) * g.z - 12.0 * g.z).abs() < 1e-9, "{tau:?}");
+        assert!(
+            (tau[0] - 2.0 * (8.0 + 5.0) * g.z - 12.0 * g.z).abs() < 1e-9,
+            "{tau:?}"
+        );
     }
     // what the upper segment carries: the arm's 5 kg, 0.2 m out along its own x at angle 0
     let q = [0.2, 0.0];

@@ -33,8 +33,12 @@ pub fn ros_args(
     }
     for p in params {
         match p {
-            ParamArg::Value { name, value } => out.extend(["-p".to_string(), format!("{name}:={value}")]),
-            ParamArg::File(path) => out.extend(["--params-file".to_string(), path.display().to_string()]),
+            ParamArg::Value { name, value } => {
+                out.extend(["-p".to_string(), format!("{name}:={value}")])
+            }
+            ParamArg::File(path) => {
+                out.extend(["--params-file".to_string(), path.display().to_string()])
+            }
         }
     }
     for (from, to) in remaps {
@@ -108,13 +112,18 @@ pub fn resolve_executable(exec: &str, search: &[PathBuf]) -> Result<PathBuf, Str
         .find(|candidate| is_executable_file(candidate))
         .ok_or_else(|| {
             let shown: Vec<String> = search.iter().map(|d| d.display().to_string()).collect();
-            format!("executable '{exec}' not found (searched: {})", shown.join(":"))
+            format!(
+                "executable '{exec}' not found (searched: {})",
+                shown.join(":")
+            )
         })
 }
 
 fn is_executable_file(path: &Path) -> bool {
     use std::os::unix::fs::PermissionsExt;
-    std::fs::metadata(path).map(|m| m.is_file() && m.permissions().mode() & 0o111 != 0).unwrap_or(false)
+    std::fs::metadata(path)
+        .map(|m| m.is_file() && m.permissions().mode() & 0o111 != 0)
+        .unwrap_or(false)
 }
 
 /// Splits a command string the way a POSIX shell would split words (no expansion):
@@ -187,7 +196,20 @@ pub fn yaml_string_needs_quotes(s: &str) -> bool {
     let lower = s.to_ascii_lowercase();
     if matches!(
         lower.as_str(),
-        "true" | "false" | "yes" | "no" | "on" | "off" | "y" | "n" | "null" | "~" | ".inf" | "+.inf" | "-.inf" | ".nan"
+        "true"
+            | "false"
+            | "yes"
+            | "no"
+            | "on"
+            | "off"
+            | "y"
+            | "n"
+            | "null"
+            | "~"
+            | ".inf"
+            | "+.inf"
+            | "-.inf"
+            | ".nan"
     ) {
         return true;
     }
@@ -195,7 +217,11 @@ pub fn yaml_string_needs_quotes(s: &str) -> bool {
         return true;
     }
     let first = s.chars().next().unwrap_or(' ');
-    if "[]{},&*!|>'\"%@`#".contains(first) || s.starts_with("- ") || s.starts_with("? ") || s.starts_with(": ") {
+    if "[]{},&*!|>'\"%@`#".contains(first)
+        || s.starts_with("- ")
+        || s.starts_with("? ")
+        || s.starts_with(": ")
+    {
         return true;
     }
     s.contains(": ") || s.contains(" #") || s.ends_with(':')
@@ -221,13 +247,28 @@ mod tests {
     #[test]
     fn ros_args_order_and_shape() {
         let params = vec![
-            ParamArg::Value { name: "rate".into(), value: "5.0".into() },
+            ParamArg::Value {
+                name: "rate".into(),
+                value: "5.0".into(),
+            },
             ParamArg::File("/p/cam.yaml".into()),
         ];
         let remaps = vec![("image".to_string(), "/cam0/image".to_string())];
         assert_eq!(
             ros_args(Some("cam"), Some("/cell"), &params, &remaps, &[]),
-            ["--ros-args", "-r", "__node:=cam", "-r", "__ns:=/cell", "-p", "rate:=5.0", "--params-file", "/p/cam.yaml", "-r", "image:=/cam0/image"]
+            [
+                "--ros-args",
+                "-r",
+                "__node:=cam",
+                "-r",
+                "__ns:=/cell",
+                "-p",
+                "rate:=5.0",
+                "--params-file",
+                "/p/cam.yaml",
+                "-r",
+                "image:=/cam0/image"
+            ]
         );
         assert!(ros_args(None, None, &[], &[], &[]).is_empty());
     }
@@ -235,24 +276,43 @@ mod tests {
     #[test]
     fn namespaces_combine_like_push_ros_namespace() {
         assert_eq!(combine_namespace(None, None), None);
-        assert_eq!(combine_namespace(None, Some("cell")).as_deref(), Some("/cell"));
-        assert_eq!(combine_namespace(Some("/a"), Some("b/")).as_deref(), Some("/a/b"));
-        assert_eq!(combine_namespace(Some("/a"), Some("/abs")).as_deref(), Some("/abs"));
-        assert_eq!(combine_namespace(Some("a//b"), None).as_deref(), Some("/a/b"));
+        assert_eq!(
+            combine_namespace(None, Some("cell")).as_deref(),
+            Some("/cell")
+        );
+        assert_eq!(
+            combine_namespace(Some("/a"), Some("b/")).as_deref(),
+            Some("/a/b")
+        );
+        assert_eq!(
+            combine_namespace(Some("/a"), Some("/abs")).as_deref(),
+            Some("/abs")
+        );
+        assert_eq!(
+            combine_namespace(Some("a//b"), None).as_deref(),
+            Some("/a/b")
+        );
         assert_eq!(combine_namespace(None, Some("/")).as_deref(), Some("/"));
     }
 
     #[test]
     fn shell_split_handles_quotes() {
-        assert_eq!(shell_split(r#"a 'b c' "d \"e\"" f\ g"#).unwrap(), ["a", "b c", "d \"e\"", "f g"]);
+        assert_eq!(
+            shell_split(r#"a 'b c' "d \"e\"" f\ g"#).unwrap(),
+            ["a", "b c", "d \"e\"", "f g"]
+        );
         assert_eq!(shell_split("  ").unwrap(), Vec::<String>::new());
         assert_eq!(shell_split("x ''").unwrap(), ["x", ""]);
-        assert!(shell_split("a 'b").unwrap_err().contains("unterminated single quote"));
+        assert!(shell_split("a 'b")
+            .unwrap_err()
+            .contains("unterminated single quote"));
     }
 
     #[test]
     fn quoting_decisions() {
-        for s in ["1", "2.5", "-3", "1e3", "true", "No", "null", "", " a", "[1]", "a: b", "#x", "0x1f"] {
+        for s in [
+            "1", "2.5", "-3", "1e3", "true", "No", "null", "", " a", "[1]", "a: b", "#x", "0x1f",
+        ] {
             assert!(yaml_string_needs_quotes(s), "{s:?} should need quotes");
         }
         for s in ["hello", "/cam0/image", "a_b", "cell-1", "v1.2.3"] {
@@ -263,7 +323,8 @@ mod tests {
 
     #[test]
     fn resolves_bare_names_in_search_order_and_rejects_missing() {
-        let dir = std::env::temp_dir().join(format!("metrocell-launch-resolve-{}", std::process::id()));
+        let dir =
+            std::env::temp_dir().join(format!("metrocell-launch-resolve-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         let exe = dir.join("tool");
         std::fs::write(&exe, "#!/bin/sh\n").unwrap();
@@ -272,10 +333,14 @@ mod tests {
         std::fs::write(dir.join("plain"), "x").unwrap();
         let search = vec![PathBuf::from("/nonexistent"), dir.clone()];
         assert_eq!(resolve_executable("tool", &search).unwrap(), exe);
-        assert!(resolve_executable("plain", &search).unwrap_err().contains("not found"));
-        assert!(resolve_executable(dir.join("plain").to_str().unwrap(), &search)
+        assert!(resolve_executable("plain", &search)
             .unwrap_err()
-            .contains("not an executable file"));
+            .contains("not found"));
+        assert!(
+            resolve_executable(dir.join("plain").to_str().unwrap(), &search)
+                .unwrap_err()
+                .contains("not an executable file")
+        );
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -17,12 +17,22 @@ pub enum LaunchError {
 
     /// The text is not valid YAML.
     #[error("{}:{line}:{column}: YAML syntax error: {message}", file.display())]
-    YamlSyntax { file: PathBuf, line: usize, column: usize, message: String },
+    YamlSyntax {
+        file: PathBuf,
+        line: usize,
+        column: usize,
+        message: String,
+    },
 
     /// Valid YAML that is not a valid launch description (unknown key, wrong type, missing
     /// required key, unknown substitution, include not found, executable not found, ...).
     #[error("{}:{line}: {key}: {message}", file.display())]
-    Invalid { file: PathBuf, line: usize, key: String, message: String },
+    Invalid {
+        file: PathBuf,
+        line: usize,
+        key: String,
+        message: String,
+    },
 
     /// A command-line launch argument is not of the form `name:=value`.
     #[error("launch argument '{given}' is not of the form name:=value")]
@@ -53,6 +63,11 @@ impl LaunchError {
         key: impl Into<String>,
         message: impl Into<String>,
     ) -> Self {
-        LaunchError::Invalid { file: file.to_path_buf(), line, key: key.into(), message: message.into() }
+        LaunchError::Invalid {
+            file: file.to_path_buf(),
+            line,
+            key: key.into(),
+            message: message.into(),
+        }
     }
 }

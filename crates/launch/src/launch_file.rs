@@ -29,8 +29,8 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use crate::command_line::{
-    combine_namespace, default_search_path, resolve_executable, ros_args, shell_split, yaml_single_quote,
-    yaml_string_needs_quotes, ParamArg,
+    combine_namespace, default_search_path, resolve_executable, ros_args, shell_split,
+    yaml_single_quote, yaml_string_needs_quotes, ParamArg,
 };
 use crate::error::LaunchError;
 use crate::marked_yaml::{parse_marked_yaml, MarkedNode, MarkedValue};
@@ -40,12 +40,39 @@ use crate::substitution::{substitute, SubstitutionScope};
 
 const ACTIONS: &str = "arg, let, include, node, executable, group, push-ros-namespace";
 const NODE_KEYS: &[&str] = &[
-    "pkg", "exec", "name", "namespace", "param", "remap", "args", "ros_args", "respawn", "respawn_delay",
-    "respawn_max_retries", "output", "env",
+    "pkg",
+    "exec",
+    "name",
+    "namespace",
+    "param",
+    "remap",
+    "args",
+    "ros_args",
+    "respawn",
+    "respawn_delay",
+    "respawn_max_retries",
+    "output",
+    "env",
 ];
-const EXECUTABLE_KEYS: &[&str] =
-    &["cmd", "name", "args", "cwd", "shell", "respawn", "respawn_delay", "respawn_max_retries", "output", "env"];
-const GROUP_KEYS: &[&str] = &["scoped", "forwarding", "push-ros-namespace", "push_ros_namespace", "children"];
+const EXECUTABLE_KEYS: &[&str] = &[
+    "cmd",
+    "name",
+    "args",
+    "cwd",
+    "shell",
+    "respawn",
+    "respawn_delay",
+    "respawn_max_retries",
+    "output",
+    "env",
+];
+const GROUP_KEYS: &[&str] = &[
+    "scoped",
+    "forwarding",
+    "push-ros-namespace",
+    "push_ros_namespace",
+    "children",
+];
 const CONDITION_KEYS: &[&str] = &["if", "unless"];
 
 /// Reads `path` (and everything it includes) with the command-line launch arguments `args`
@@ -57,19 +84,32 @@ pub fn load_launch_plan(
 ) -> Result<LaunchPlan, LaunchError> {
     let mut loader = Loader {
         options,
-        search: options.executable_search_path.clone().unwrap_or_else(default_search_path),
+        search: options
+            .executable_search_path
+            .clone()
+            .unwrap_or_else(default_search_path),
         include_stack: Vec::new(),
-        plan: LaunchPlan { processes: Vec::new(), arguments: Vec::new() },
+        plan: LaunchPlan {
+            processes: Vec::new(),
+            arguments: Vec::new(),
+        },
         declared: BTreeSet::new(),
     };
-    let mut scope = Scope { vars: args.iter().cloned().collect(), namespace: None };
+    let mut scope = Scope {
+        vars: args.iter().cloned().collect(),
+        namespace: None,
+    };
     loader.load_file(path, &mut scope)?;
     for (name, _) in args {
         if !loader.declared.contains(name) {
             let declared: Vec<&str> = loader.declared.iter().map(String::as_str).collect();
             return Err(LaunchError::UndeclaredArgument {
                 name: name.clone(),
-                declared: if declared.is_empty() { "none".into() } else { declared.join(", ") },
+                declared: if declared.is_empty() {
+                    "none".into()
+                } else {
+                    declared.join(", ")
+                },
             });
         }
     }
@@ -78,14 +118,20 @@ pub fn load_launch_plan(
 }
 
 /// Splits command-line items `name:=value` into pairs.
-pub fn parse_launch_arguments<S: AsRef<str>>(items: &[S]) -> Result<Vec<(String, String)>, LaunchError> {
+pub fn parse_launch_arguments<S: AsRef<str>>(
+    items: &[S],
+) -> Result<Vec<(String, String)>, LaunchError> {
     items
         .iter()
         .map(|item| {
             let item = item.as_ref();
             match item.split_once(":=") {
-                Some((name, value)) if !name.is_empty() => Ok((name.to_string(), value.to_string())),
-                _ => Err(LaunchError::BadArgumentSyntax { given: item.to_string() }),
+                Some((name, value)) if !name.is_empty() => {
+                    Ok((name.to_string(), value.to_string()))
+                }
+                _ => Err(LaunchError::BadArgumentSyntax {
+                    given: item.to_string(),
+                }),
             }
         })
         .collect()
@@ -149,20 +195,33 @@ impl<'n> Body<'n> {
                 if conditions {
                     expected.extend_from_slice(CONDITION_KEYS);
                 }
-                let shown = key.as_scalar().map(|k| format!("'{k}'")).unwrap_or_else(|| key.kind_name().to_string());
+                let shown = key
+                    .as_scalar()
+                    .map(|k| format!("'{k}'"))
+                    .unwrap_or_else(|| key.kind_name().to_string());
                 return Err(LaunchError::invalid(
                     file,
                     key.line,
                     context,
-                    format!("unknown key {shown} (expected one of {})", expected.join(", ")),
+                    format!(
+                        "unknown key {shown} (expected one of {})",
+                        expected.join(", ")
+                    ),
                 ));
             }
         }
-        Ok(Body { file, context, line, entries })
+        Ok(Body {
+            file,
+            context,
+            line,
+            entries,
+        })
     }
 
     fn entry(&self, key: &str) -> Option<&'n (MarkedNode, MarkedNode)> {
-        self.entries.iter().find(|(k, _)| k.as_scalar() == Some(key))
+        self.entries
+            .iter()
+            .find(|(k, _)| k.as_scalar() == Some(key))
     }
 
     fn get(&self, key: &str) -> Option<&'n MarkedNode> {
@@ -179,7 +238,12 @@ impl<'n> Body<'n> {
     }
 
     fn missing(&self, key: &str) -> LaunchError {
-        LaunchError::invalid(self.file, self.line, self.context.clone(), format!("missing required key '{key}'"))
+        LaunchError::invalid(
+            self.file,
+            self.line,
+            self.context.clone(),
+            format!("missing required key '{key}'"),
+        )
     }
 
     /// The list under `key`; absent or null = empty.
@@ -187,16 +251,23 @@ impl<'n> Body<'n> {
         match self.get(key) {
             None => Ok(&[]),
             Some(v) if v.is_null() => Ok(&[]),
-            Some(MarkedNode { value: MarkedValue::Sequence(items), .. }) => Ok(items),
-            Some(other) => Err(self.error_at(key, format!("expected a list, found {}", other.kind_name()))),
+            Some(MarkedNode {
+                value: MarkedValue::Sequence(items),
+                ..
+            }) => Ok(items),
+            Some(other) => {
+                Err(self.error_at(key, format!("expected a list, found {}", other.kind_name())))
+            }
         }
     }
 }
 
 impl<'o> Loader<'o> {
     fn load_file(&mut self, path: &Path, scope: &mut Scope) -> Result<(), LaunchError> {
-        let text =
-            std::fs::read_to_string(path).map_err(|source| LaunchError::Read { file: path.to_path_buf(), source })?;
+        let text = std::fs::read_to_string(path).map_err(|source| LaunchError::Read {
+            file: path.to_path_buf(),
+            source,
+        })?;
         let canonical = path.canonicalize().unwrap_or_else(|_| path.to_path_buf());
         self.include_stack.push(canonical);
         let root = parse_marked_yaml(&text).map_err(|e| LaunchError::YamlSyntax {
@@ -206,11 +277,28 @@ impl<'o> Loader<'o> {
             message: e.message,
         })?;
         let Some(root) = root else {
-            return Err(LaunchError::invalid(path, 1, "launch", "empty launch file (expected a top-level 'launch:' list)"));
+            return Err(LaunchError::invalid(
+                path,
+                1,
+                "launch",
+                "empty launch file (expected a top-level 'launch:' list)",
+            ));
         };
-        let body = Body::new(path, "(top level)".into(), root.line, &root, &["launch"], false)?;
+        let body = Body::new(
+            path,
+            "(top level)".into(),
+            root.line,
+            &root,
+            &["launch"],
+            false,
+        )?;
         let Some(actions) = body.get("launch") else {
-            return Err(LaunchError::invalid(path, root.line, "(top level)", "missing required key 'launch'"));
+            return Err(LaunchError::invalid(
+                path,
+                root.line,
+                "(top level)",
+                "missing required key 'launch'",
+            ));
         };
         match &actions.value {
             MarkedValue::Sequence(items) => self.run_actions(path, items, scope)?,
@@ -228,14 +316,24 @@ impl<'o> Loader<'o> {
         Ok(())
     }
 
-    fn run_actions(&mut self, file: &Path, items: &[MarkedNode], scope: &mut Scope) -> Result<(), LaunchError> {
+    fn run_actions(
+        &mut self,
+        file: &Path,
+        items: &[MarkedNode],
+        scope: &mut Scope,
+    ) -> Result<(), LaunchError> {
         for item in items {
             self.action(file, item, scope)?;
         }
         Ok(())
     }
 
-    fn action(&mut self, file: &Path, item: &MarkedNode, scope: &mut Scope) -> Result<(), LaunchError> {
+    fn action(
+        &mut self,
+        file: &Path,
+        item: &MarkedNode,
+        scope: &mut Scope,
+    ) -> Result<(), LaunchError> {
         let (key, body) = match &item.value {
             MarkedValue::Mapping(entries) if entries.len() == 1 => (&entries[0].0, &entries[0].1),
             MarkedValue::Mapping(entries) => {
@@ -256,7 +354,10 @@ impl<'o> Loader<'o> {
                     file,
                     item.line,
                     "launch",
-                    format!("expected an action such as '- node: ...', found {}", item.kind_name()),
+                    format!(
+                        "expected an action such as '- node: ...', found {}",
+                        item.kind_name()
+                    ),
                 ))
             }
         };
@@ -272,7 +373,9 @@ impl<'o> Loader<'o> {
             "node" => self.node(file, line, body, scope),
             "executable" => self.executable(file, line, body, scope),
             "group" => self.group(file, line, body, scope),
-            "push-ros-namespace" | "push_ros_namespace" => self.push_namespace(file, line, name, body, scope),
+            "push-ros-namespace" | "push_ros_namespace" => {
+                self.push_namespace(file, line, name, body, scope)
+            }
             other => Err(LaunchError::invalid(
                 file,
                 line,
@@ -291,7 +394,9 @@ impl<'o> Loader<'o> {
         body: &MarkedNode,
         scope: &Scope,
     ) -> Result<bool, LaunchError> {
-        let MarkedValue::Mapping(entries) = &body.value else { return Ok(true) };
+        let MarkedValue::Mapping(entries) = &body.value else {
+            return Ok(true);
+        };
         for (key, value) in entries {
             let negate = match key.as_scalar() {
                 Some("if") => false,
@@ -309,11 +414,22 @@ impl<'o> Loader<'o> {
 
     // ---- values -------------------------------------------------------------------------
 
-    fn subst(&self, file: &Path, line: usize, key: &str, text: &str, scope: &Scope) -> Result<String, LaunchError> {
+    fn subst(
+        &self,
+        file: &Path,
+        line: usize,
+        key: &str,
+        text: &str,
+        scope: &Scope,
+    ) -> Result<String, LaunchError> {
         let env = |name: &str| self.options.env_var(name);
         let share = |pkg: &str| self.find_pkg_share(file, pkg);
-        let sub_scope =
-            SubstitutionScope { vars: &scope.vars, env: &env, current_file: file, find_pkg_share: &share };
+        let sub_scope = SubstitutionScope {
+            vars: &scope.vars,
+            env: &env,
+            current_file: file,
+            find_pkg_share: &share,
+        };
         substitute(text, &sub_scope).map_err(|m| LaunchError::invalid(file, line, key, m))
     }
 
@@ -327,7 +443,9 @@ impl<'o> Loader<'o> {
     ) -> Result<Option<String>, LaunchError> {
         match &node.value {
             _ if node.is_null() => Ok(None),
-            MarkedValue::Scalar { text, .. } => self.subst(file, node.line, key, text, scope).map(Some),
+            MarkedValue::Scalar { text, .. } => {
+                self.subst(file, node.line, key, text, scope).map(Some)
+            }
             _ => Err(LaunchError::invalid(
                 file,
                 node.line,
@@ -353,32 +471,70 @@ impl<'o> Loader<'o> {
         }
     }
 
-    fn bool_value(&self, file: &Path, line: usize, key: &str, node: &MarkedNode, scope: &Scope) -> Result<bool, LaunchError> {
+    fn bool_value(
+        &self,
+        file: &Path,
+        line: usize,
+        key: &str,
+        node: &MarkedNode,
+        scope: &Scope,
+    ) -> Result<bool, LaunchError> {
         let text = self.text_value(file, key, node, scope)?.unwrap_or_default();
         match text.to_ascii_lowercase().as_str() {
             "true" => Ok(true),
             "false" => Ok(false),
-            _ => Err(LaunchError::invalid(file, line, key, format!("expected true or false, found '{text}'"))),
+            _ => Err(LaunchError::invalid(
+                file,
+                line,
+                key,
+                format!("expected true or false, found '{text}'"),
+            )),
         }
     }
 
     fn bool(&self, body: &Body, key: &str, scope: &Scope) -> Result<Option<bool>, LaunchError> {
-        let Some((k, node)) = body.entry(key) else { return Ok(None) };
-        self.bool_value(body.file, k.line, &body.key_path(key), node, scope).map(Some)
+        let Some((k, node)) = body.entry(key) else {
+            return Ok(None);
+        };
+        self.bool_value(body.file, k.line, &body.key_path(key), node, scope)
+            .map(Some)
     }
 
-    fn seconds(&self, body: &Body, key: &str, scope: &Scope) -> Result<Option<Duration>, LaunchError> {
-        let Some(text) = self.text(body, key, scope)? else { return Ok(None) };
+    fn seconds(
+        &self,
+        body: &Body,
+        key: &str,
+        scope: &Scope,
+    ) -> Result<Option<Duration>, LaunchError> {
+        let Some(text) = self.text(body, key, scope)? else {
+            return Ok(None);
+        };
         match text.trim().parse::<f64>() {
             Ok(s) if s.is_finite() && s >= 0.0 => Ok(Some(Duration::from_secs_f64(s))),
-            _ => Err(body.error_at(key, format!("expected a non-negative number of seconds, found '{text}'"))),
+            _ => Err(body.error_at(
+                key,
+                format!("expected a non-negative number of seconds, found '{text}'"),
+            )),
         }
     }
 
     // ---- actions ------------------------------------------------------------------------
 
-    fn arg(&mut self, file: &Path, line: usize, node: &MarkedNode, scope: &mut Scope) -> Result<(), LaunchError> {
-        let body = Body::new(file, "arg".into(), line, node, &["name", "default", "description"], true)?;
+    fn arg(
+        &mut self,
+        file: &Path,
+        line: usize,
+        node: &MarkedNode,
+        scope: &mut Scope,
+    ) -> Result<(), LaunchError> {
+        let body = Body::new(
+            file,
+            "arg".into(),
+            line,
+            node,
+            &["name", "default", "description"],
+            true,
+        )?;
         let name = self.required_text(&body, "name", scope)?;
         let default = self.text(&body, "default", scope)?;
         let description = self.text(&body, "description", scope)?;
@@ -406,7 +562,13 @@ impl<'o> Loader<'o> {
         Ok(())
     }
 
-    fn let_(&mut self, file: &Path, line: usize, node: &MarkedNode, scope: &mut Scope) -> Result<(), LaunchError> {
+    fn let_(
+        &mut self,
+        file: &Path,
+        line: usize,
+        node: &MarkedNode,
+        scope: &mut Scope,
+    ) -> Result<(), LaunchError> {
         let body = Body::new(file, "let".into(), line, node, &["name", "value"], true)?;
         let name = self.required_text(&body, "name", scope)?;
         if body.get("value").is_none() {
@@ -417,12 +579,21 @@ impl<'o> Loader<'o> {
         Ok(())
     }
 
-    fn include(&mut self, file: &Path, line: usize, node: &MarkedNode, scope: &mut Scope) -> Result<(), LaunchError> {
+    fn include(
+        &mut self,
+        file: &Path,
+        line: usize,
+        node: &MarkedNode,
+        scope: &mut Scope,
+    ) -> Result<(), LaunchError> {
         // `include: FILE` or `include: {file: FILE, arg: [...]}`.
         let (given, file_line, arg_items): (String, usize, &[MarkedNode]) = match &node.value {
-            MarkedValue::Scalar { .. } if !node.is_null() => {
-                (self.text_value(file, "include", node, scope)?.unwrap_or_default(), line, &[])
-            }
+            MarkedValue::Scalar { .. } if !node.is_null() => (
+                self.text_value(file, "include", node, scope)?
+                    .unwrap_or_default(),
+                line,
+                &[],
+            ),
             _ => {
                 let body = Body::new(file, "include".into(), line, node, &["file", "arg"], true)?;
                 let given = self.required_text(&body, "file", scope)?;
@@ -430,7 +601,11 @@ impl<'o> Loader<'o> {
                 (given, file_line, body.list("arg")?)
             }
         };
-        let key = if matches!(node.value, MarkedValue::Mapping(_)) { "include.file" } else { "include" };
+        let key = if matches!(node.value, MarkedValue::Mapping(_)) {
+            "include.file"
+        } else {
+            "include"
+        };
         if given.ends_with(".py") || given.ends_with(".xml") {
             return Err(LaunchError::invalid(
                 file,
@@ -449,12 +624,20 @@ impl<'o> Loader<'o> {
         };
         let canonical = target.canonicalize().unwrap_or_else(|_| target.clone());
         if self.include_stack.contains(&canonical) {
-            let chain: Vec<String> = self.include_stack.iter().map(|p| p.display().to_string()).collect();
+            let chain: Vec<String> = self
+                .include_stack
+                .iter()
+                .map(|p| p.display().to_string())
+                .collect();
             return Err(LaunchError::invalid(
                 file,
                 file_line,
                 key,
-                format!("include cycle: {} -> {}", chain.join(" -> "), canonical.display()),
+                format!(
+                    "include cycle: {} -> {}",
+                    chain.join(" -> "),
+                    canonical.display()
+                ),
             ));
         }
         let mut child = scope.clone();
@@ -471,7 +654,13 @@ impl<'o> Loader<'o> {
         self.load_file(&target, &mut child)
     }
 
-    fn group(&mut self, file: &Path, line: usize, node: &MarkedNode, scope: &mut Scope) -> Result<(), LaunchError> {
+    fn group(
+        &mut self,
+        file: &Path,
+        line: usize,
+        node: &MarkedNode,
+        scope: &mut Scope,
+    ) -> Result<(), LaunchError> {
         if let MarkedValue::Sequence(children) = &node.value {
             let mut child = scope.clone();
             return self.run_actions(file, children, &mut child);
@@ -479,9 +668,15 @@ impl<'o> Loader<'o> {
         let body = Body::new(file, "group".into(), line, node, GROUP_KEYS, true)?;
         let scoped = self.bool(&body, "scoped", scope)?.unwrap_or(true);
         let forwarding = self.bool(&body, "forwarding", scope)?.unwrap_or(true);
-        let push = match (body.get("push-ros-namespace"), body.get("push_ros_namespace")) {
+        let push = match (
+            body.get("push-ros-namespace"),
+            body.get("push_ros_namespace"),
+        ) {
             (Some(_), Some(_)) => {
-                return Err(body.error_at("push_ros_namespace", "give push-ros-namespace or push_ros_namespace, not both"))
+                return Err(body.error_at(
+                    "push_ros_namespace",
+                    "give push-ros-namespace or push_ros_namespace, not both",
+                ))
             }
             (Some(_), None) => self.text(&body, "push-ros-namespace", scope)?,
             (None, Some(_)) => self.text(&body, "push_ros_namespace", scope)?,
@@ -513,7 +708,9 @@ impl<'o> Loader<'o> {
         scope: &mut Scope,
     ) -> Result<(), LaunchError> {
         let ns = match &node.value {
-            MarkedValue::Scalar { .. } if !node.is_null() => self.text_value(file, action, node, scope)?,
+            MarkedValue::Scalar { .. } if !node.is_null() => {
+                self.text_value(file, action, node, scope)?
+            }
             _ => {
                 let body = Body::new(file, action.into(), line, node, &["namespace"], true)?;
                 Some(self.required_text(&body, "namespace", scope)?)
@@ -523,7 +720,13 @@ impl<'o> Loader<'o> {
         Ok(())
     }
 
-    fn node(&mut self, file: &Path, line: usize, node: &MarkedNode, scope: &mut Scope) -> Result<(), LaunchError> {
+    fn node(
+        &mut self,
+        file: &Path,
+        line: usize,
+        node: &MarkedNode,
+        scope: &mut Scope,
+    ) -> Result<(), LaunchError> {
         let body = Body::new(file, "node".into(), line, node, NODE_KEYS, true)?;
         let exec = self.required_text(&body, "exec", scope)?;
         let _pkg = self.text(&body, "pkg", scope)?;
@@ -533,20 +736,50 @@ impl<'o> Loader<'o> {
         let extra_ros_args = self.words(&body, "ros_args", scope)?;
 
         let mut params = Vec::new();
-        self.params(file, body.list("param")?, "", "node.param", scope, &mut params)?;
+        self.params(
+            file,
+            body.list("param")?,
+            "",
+            "node.param",
+            scope,
+            &mut params,
+        )?;
         let mut remaps = Vec::new();
         for (i, item) in body.list("remap")?.iter().enumerate() {
-            let rb = Body::new(file, format!("node.remap[{i}]"), item.line, item, &["from", "to"], false)?;
-            remaps.push((self.required_text(&rb, "from", scope)?, self.required_text(&rb, "to", scope)?));
+            let rb = Body::new(
+                file,
+                format!("node.remap[{i}]"),
+                item.line,
+                item,
+                &["from", "to"],
+                false,
+            )?;
+            remaps.push((
+                self.required_text(&rb, "from", scope)?,
+                self.required_text(&rb, "to", scope)?,
+            ));
         }
-        let program = resolve_executable(&exec, &self.search).map_err(|m| body.error_at("exec", m))?;
+        let program =
+            resolve_executable(&exec, &self.search).map_err(|m| body.error_at("exec", m))?;
         let namespace = combine_namespace(scope.namespace.as_deref(), own_ns.as_deref());
-        args.extend(ros_args(name.as_deref(), namespace.as_deref(), &params, &remaps, &extra_ros_args));
+        args.extend(ros_args(
+            name.as_deref(),
+            namespace.as_deref(),
+            &params,
+            &remaps,
+            &extra_ros_args,
+        ));
         let label = name.unwrap_or_else(|| file_name_of(&exec));
         self.push_process(&body, scope, label, program, args, None)
     }
 
-    fn executable(&mut self, file: &Path, line: usize, node: &MarkedNode, scope: &mut Scope) -> Result<(), LaunchError> {
+    fn executable(
+        &mut self,
+        file: &Path,
+        line: usize,
+        node: &MarkedNode,
+        scope: &mut Scope,
+    ) -> Result<(), LaunchError> {
         let body = Body::new(file, "executable".into(), line, node, EXECUTABLE_KEYS, true)?;
         let cmd = self.required_text(&body, "cmd", scope)?;
         let name = self.text(&body, "name", scope)?;
@@ -554,7 +787,11 @@ impl<'o> Loader<'o> {
         let cwd = self.text(&body, "cwd", scope)?.map(PathBuf::from);
         let (program, args) = if shell {
             let extra = self.text(&body, "args", scope)?.unwrap_or_default();
-            let script = if extra.is_empty() { cmd.clone() } else { format!("{cmd} {extra}") };
+            let script = if extra.is_empty() {
+                cmd.clone()
+            } else {
+                format!("{cmd} {extra}")
+            };
             (PathBuf::from("/bin/sh"), vec!["-c".to_string(), script])
         } else {
             let mut words = shell_split(&cmd).map_err(|m| body.error_at("cmd", m))?;
@@ -562,7 +799,8 @@ impl<'o> Loader<'o> {
                 return Err(body.error_at("cmd", "must not be empty"));
             }
             words.extend(self.words(&body, "args", scope)?);
-            let program = resolve_executable(&words[0], &self.search).map_err(|m| body.error_at("cmd", m))?;
+            let program =
+                resolve_executable(&words[0], &self.search).map_err(|m| body.error_at("cmd", m))?;
             (program, words.split_off(1))
         };
         let label = name.unwrap_or_else(|| file_name_of(&program.display().to_string()));
@@ -588,7 +826,9 @@ impl<'o> Loader<'o> {
         cwd: Option<PathBuf>,
     ) -> Result<(), LaunchError> {
         let respawn = self.bool(body, "respawn", scope)?.unwrap_or(false);
-        let respawn_delay = self.seconds(body, "respawn_delay", scope)?.unwrap_or(Duration::ZERO);
+        let respawn_delay = self
+            .seconds(body, "respawn_delay", scope)?
+            .unwrap_or(Duration::ZERO);
         let respawn_max_retries = match self.text(body, "respawn_max_retries", scope)? {
             None => None,
             Some(t) => match t.trim().parse::<i64>() {
@@ -607,12 +847,22 @@ impl<'o> Loader<'o> {
             Some("log") => OutputMode::Log,
             Some("both") => OutputMode::Both,
             Some(other) => {
-                return Err(body.error_at("output", format!("expected screen, log or both, found '{other}'")))
+                return Err(body.error_at(
+                    "output",
+                    format!("expected screen, log or both, found '{other}'"),
+                ))
             }
         };
         let mut env = Vec::new();
         for (i, item) in body.list("env")?.iter().enumerate() {
-            let eb = Body::new(body.file, format!("{}.env[{i}]", body.context), item.line, item, &["name", "value"], false)?;
+            let eb = Body::new(
+                body.file,
+                format!("{}.env[{i}]", body.context),
+                item.line,
+                item,
+                &["name", "value"],
+                false,
+            )?;
             let name = self.required_text(&eb, "name", scope)?;
             let value = self.text(&eb, "value", scope)?.unwrap_or_default();
             env.push((name, value));
@@ -644,27 +894,57 @@ impl<'o> Loader<'o> {
     ) -> Result<(), LaunchError> {
         for (i, item) in items.iter().enumerate() {
             let ctx = format!("{context}[{i}]");
-            let body = Body::new(file, ctx.clone(), item.line, item, &["name", "value", "from", "param"], false)?;
+            let body = Body::new(
+                file,
+                ctx.clone(),
+                item.line,
+                item,
+                &["name", "value", "from", "param"],
+                false,
+            )?;
             if body.get("from").is_some() {
-                if let Some(other) = ["name", "value", "param"].into_iter().find(|k| body.get(k).is_some()) {
-                    return Err(body.error_at(other, "a parameter item has either 'from' (a parameters file) or 'name'"));
+                if let Some(other) = ["name", "value", "param"]
+                    .into_iter()
+                    .find(|k| body.get(k).is_some())
+                {
+                    return Err(body.error_at(
+                        other,
+                        "a parameter item has either 'from' (a parameters file) or 'name'",
+                    ));
                 }
                 let given = self.required_text(&body, "from", scope)?;
-                let path = resolve_relative_file(file, &given)
-                    .ok_or_else(|| body.error_at("from", format!("parameters file '{given}' not found")))?;
+                let path = resolve_relative_file(file, &given).ok_or_else(|| {
+                    body.error_at("from", format!("parameters file '{given}' not found"))
+                })?;
                 out.push(ParamArg::File(path));
                 continue;
             }
             let name = self.required_text(&body, "name", scope)?;
             match (body.get("value"), body.get("param")) {
-                (Some(_), Some(_)) => return Err(body.error_at("param", "a parameter has either 'value' or nested 'param', not both")),
+                (Some(_), Some(_)) => {
+                    return Err(body.error_at(
+                        "param",
+                        "a parameter has either 'value' or nested 'param', not both",
+                    ))
+                }
                 (Some(value), None) => {
-                    let rendered = self.render_param(file, &body.key_path("value"), value, scope, false)?;
-                    out.push(ParamArg::Value { name: format!("{prefix}{name}"), value: rendered });
+                    let rendered =
+                        self.render_param(file, &body.key_path("value"), value, scope, false)?;
+                    out.push(ParamArg::Value {
+                        name: format!("{prefix}{name}"),
+                        value: rendered,
+                    });
                 }
                 (None, Some(_)) => {
                     let nested = body.list("param")?;
-                    self.params(file, nested, &format!("{prefix}{name}."), &format!("{ctx}.param"), scope, out)?;
+                    self.params(
+                        file,
+                        nested,
+                        &format!("{prefix}{name}."),
+                        &format!("{ctx}.param"),
+                        scope,
+                        out,
+                    )?;
                 }
                 (None, None) => return Err(body.missing("value")),
             }
@@ -693,17 +973,28 @@ impl<'o> Loader<'o> {
                 let typed_by_content = *plain || text.contains("$(");
                 if typed_by_content {
                     if s.is_empty() && !in_flow {
-                        return Err(LaunchError::invalid(file, node.line, key, "empty value (write '' for an empty string)"));
+                        return Err(LaunchError::invalid(
+                            file,
+                            node.line,
+                            key,
+                            "empty value (write '' for an empty string)",
+                        ));
                     }
                     Ok(if s.is_empty() { "null".into() } else { s })
                 } else {
                     let flow_special = in_flow && s.contains([',', '[', ']', '{', '}', ':', '#']);
-                    Ok(if yaml_string_needs_quotes(&s) || flow_special { yaml_single_quote(&s) } else { s })
+                    Ok(if yaml_string_needs_quotes(&s) || flow_special {
+                        yaml_single_quote(&s)
+                    } else {
+                        s
+                    })
                 }
             }
             MarkedValue::Sequence(items) => {
-                let parts: Result<Vec<String>, LaunchError> =
-                    items.iter().map(|item| self.render_param(file, key, item, scope, true)).collect();
+                let parts: Result<Vec<String>, LaunchError> = items
+                    .iter()
+                    .map(|item| self.render_param(file, key, item, scope, true))
+                    .collect();
                 Ok(format!("[{}]", parts?.join(", ")))
             }
             MarkedValue::Mapping(entries) => {
@@ -726,10 +1017,16 @@ impl<'o> Loader<'o> {
             if let Some(dir) = &self.options.share_dir {
                 return Ok(dir.clone());
             }
-            if let Some(dir) = self.options.env_var("METROCELL_SHARE").filter(|d| !d.is_empty()) {
+            if let Some(dir) = self
+                .options
+                .env_var("METROCELL_SHARE")
+                .filter(|d| !d.is_empty())
+            {
                 return Ok(PathBuf::from(dir));
             }
-            let start = current_file.canonicalize().unwrap_or_else(|_| current_file.to_path_buf());
+            let start = current_file
+                .canonicalize()
+                .unwrap_or_else(|_| current_file.to_path_buf());
             return start
                 .ancestors()
                 .skip(1)
@@ -742,11 +1039,18 @@ impl<'o> Loader<'o> {
                     )
                 });
         }
-        let prefixes = self.options.env_var("AMENT_PREFIX_PATH").unwrap_or_default();
+        let prefixes = self
+            .options
+            .env_var("AMENT_PREFIX_PATH")
+            .unwrap_or_default();
         std::env::split_paths(&prefixes)
             .map(|prefix| prefix.join("share").join(pkg))
             .find(|dir| dir.is_dir())
-            .ok_or_else(|| format!("package '{pkg}' not found (not metrocell, and not under AMENT_PREFIX_PATH)"))
+            .ok_or_else(|| {
+                format!(
+                    "package '{pkg}' not found (not metrocell, and not under AMENT_PREFIX_PATH)"
+                )
+            })
     }
 }
 
@@ -757,7 +1061,10 @@ fn resolve_relative_file(including_file: &Path, given: &str) -> Option<PathBuf> 
     if given_path.is_absolute() {
         return given_path.is_file().then(|| given_path.to_path_buf());
     }
-    let beside = including_file.parent().unwrap_or(Path::new(".")).join(given_path);
+    let beside = including_file
+        .parent()
+        .unwrap_or(Path::new("."))
+        .join(given_path);
     if beside.is_file() {
         return Some(beside);
     }
@@ -765,7 +1072,10 @@ fn resolve_relative_file(including_file: &Path, given: &str) -> Option<PathBuf> 
 }
 
 fn file_name_of(exec: &str) -> String {
-    Path::new(exec).file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_else(|| exec.to_string())
+    Path::new(exec)
+        .file_name()
+        .map(|f| f.to_string_lossy().into_owned())
+        .unwrap_or_else(|| exec.to_string())
 }
 
 /// Second and later processes with an already used label get `-2`, `-3`, ...

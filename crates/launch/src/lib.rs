@@ -35,7 +35,11 @@ pub use supervisor::{supervise, ExitKind, LaunchOutcome, ProcessReport};
 /// [`parse_launch_arguments`]) and runs every process until the launch ends: all processes
 /// exited, or Ctrl-C / SIGTERM (when `options.handle_signals`) or `options.shutdown` was
 /// requested. Errors in the launch file are returned before anything is started.
-pub fn run_launch(path: &Path, args: &[(String, String)], options: &LaunchOptions) -> Result<LaunchOutcome, LaunchError> {
+pub fn run_launch(
+    path: &Path,
+    args: &[(String, String)],
+    options: &LaunchOptions,
+) -> Result<LaunchOutcome, LaunchError> {
     let plan = load_launch_plan(path, args, options)?;
     supervise(&plan, options)
 }

@@ -21,7 +21,10 @@ pub struct MarkedNode {
 #[derive(Clone, Debug, PartialEq)]
 pub enum MarkedValue {
     /// `plain` is true for an unquoted scalar (so `true`, `2`, `~` may mean a bool, an int, null).
-    Scalar { text: String, plain: bool },
+    Scalar {
+        text: String,
+        plain: bool,
+    },
     Sequence(Vec<MarkedNode>),
     /// Entries in document order (duplicates are rejected while building).
     Mapping(Vec<(MarkedNode, MarkedNode)>),
@@ -65,11 +68,13 @@ impl MarkedNode {
 pub fn parse_marked_yaml(text: &str) -> Result<Option<MarkedNode>, YamlSyntaxError> {
     let mut builder = TreeBuilder::default();
     let mut parser = Parser::new_from_str(text);
-    parser.load(&mut builder, false).map_err(|e| YamlSyntaxError {
-        line: e.marker().line(),
-        column: e.marker().col() + 1,
-        message: e.info().to_string(),
-    })?;
+    parser
+        .load(&mut builder, false)
+        .map_err(|e| YamlSyntaxError {
+            line: e.marker().line(),
+            column: e.marker().col() + 1,
+            message: e.info().to_string(),
+        })?;
     if let Some(err) = builder.error {
         return Err(err);
     }
@@ -78,8 +83,17 @@ pub fn parse_marked_yaml(text: &str) -> Result<Option<MarkedNode>, YamlSyntaxErr
 
 /// A container being filled, with the key waiting for its value when it is a mapping.
 enum Open {
-    Sequence { line: usize, anchor: usize, items: Vec<MarkedNode> },
-    Mapping { line: usize, anchor: usize, entries: Vec<(MarkedNode, MarkedNode)>, key: Option<MarkedNode> },
+    Sequence {
+        line: usize,
+        anchor: usize,
+        items: Vec<MarkedNode>,
+    },
+    Mapping {
+        line: usize,
+        anchor: usize,
+        entries: Vec<(MarkedNode, MarkedNode)>,
+        key: Option<MarkedNode>,
+    },
 }
 
 #[derive(Default)]
@@ -106,12 +120,17 @@ impl TreeBuilder {
                 None => *key = Some(node),
                 Some(k) => {
                     let duplicate = k.as_scalar().is_some()
-                        && entries.iter().any(|(existing, _)| existing.as_scalar() == k.as_scalar());
+                        && entries
+                            .iter()
+                            .any(|(existing, _)| existing.as_scalar() == k.as_scalar());
                     if duplicate && self.error.is_none() {
                         self.error = Some(YamlSyntaxError {
                             line: k.line,
                             column: 1,
-                            message: format!("duplicate key '{}'", k.as_scalar().unwrap_or_default()),
+                            message: format!(
+                                "duplicate key '{}'",
+                                k.as_scalar().unwrap_or_default()
+                            ),
                         });
                     }
                     entries.push((k, node));
@@ -127,7 +146,13 @@ impl MarkedEventReceiver for TreeBuilder {
         match ev {
             Event::Scalar(text, style, anchor, _tag) => {
                 let plain = matches!(style, TScalarStyle::Plain);
-                self.finish_node(MarkedNode { value: MarkedValue::Scalar { text, plain }, line }, anchor);
+                self.finish_node(
+                    MarkedNode {
+                        value: MarkedValue::Scalar { text, plain },
+                        line,
+                    },
+                    anchor,
+                );
             }
             Event::Alias(id) => {
                 let node = match self.anchors.get(&id) {
@@ -140,25 +165,53 @@ impl MarkedEventReceiver for TreeBuilder {
                                 message: "alias to an unknown anchor".into(),
                             });
                         }
-                        MarkedNode { value: MarkedValue::Scalar { text: String::new(), plain: true }, line }
+                        MarkedNode {
+                            value: MarkedValue::Scalar {
+                                text: String::new(),
+                                plain: true,
+                            },
+                            line,
+                        }
                     }
                 };
                 self.finish_node(node, 0);
             }
-            Event::SequenceStart(anchor, _) => {
-                self.stack.push(Open::Sequence { line, anchor, items: Vec::new() })
-            }
-            Event::MappingStart(anchor, _) => {
-                self.stack.push(Open::Mapping { line, anchor, entries: Vec::new(), key: None })
-            }
+            Event::SequenceStart(anchor, _) => self.stack.push(Open::Sequence {
+                line,
+                anchor,
+                items: Vec::new(),
+            }),
+            Event::MappingStart(anchor, _) => self.stack.push(Open::Mapping {
+                line,
+                anchor,
+                entries: Vec::new(),
+                key: None,
+            }),
             Event::SequenceEnd | Event::MappingEnd => {
                 let (node, anchor) = match self.stack.pop() {
-                    Some(Open::Sequence { line, anchor, items }) => {
-                        (MarkedNode { value: MarkedValue::Sequence(items), line }, anchor)
-                    }
-                    Some(Open::Mapping { line, anchor, entries, .. }) => {
-                        (MarkedNode { value: MarkedValue::Mapping(entries), line }, anchor)
-                    }
+                    Some(Open::Sequence {
+                        line,
+                        anchor,
+                        items,
+                    }) => (
+                        MarkedNode {
+                            value: MarkedValue::Sequence(items),
+                            line,
+                        },
+                        anchor,
+                    ),
+                    Some(Open::Mapping {
+                        line,
+                        anchor,
+                        entries,
+                        ..
+                    }) => (
+                        MarkedNode {
+                            value: MarkedValue::Mapping(entries),
+                            line,
+                        },
+                        anchor,
+                    ),
                     None => return,
                 };
                 self.finish_node(node, anchor);
@@ -189,13 +242,21 @@ mod tests {
         let root = parse_marked_yaml(text).unwrap().unwrap();
         let (launch_key, launch_list) = &map_entries(&root)[0];
         assert_eq!(launch_key.line, 2);
-        let MarkedValue::Sequence(items) = &launch_list.value else { panic!() };
+        let MarkedValue::Sequence(items) = &launch_list.value else {
+            panic!()
+        };
         let (node_key, node_body) = &map_entries(&items[0])[0];
         assert_eq!((node_key.as_scalar(), node_key.line), (Some("node"), 3));
         let body = map_entries(node_body);
         assert_eq!((body[0].0.as_scalar(), body[0].0.line), (Some("pkg"), 4));
         assert_eq!((body[1].1.as_scalar(), body[1].1.line), (Some("b"), 5));
-        assert_eq!(body[1].1.value, MarkedValue::Scalar { text: "b".into(), plain: false });
+        assert_eq!(
+            body[1].1.value,
+            MarkedValue::Scalar {
+                text: "b".into(),
+                plain: false
+            }
+        );
     }
 
     #[test]
@@ -215,7 +276,9 @@ mod tests {
     fn aliases_copy_the_anchored_node() {
         let root = parse_marked_yaml("a: &x [1, 2]\nb: *x\n").unwrap().unwrap();
         let e = map_entries(&root);
-        let MarkedValue::Sequence(items) = &e[1].1.value else { panic!() };
+        let MarkedValue::Sequence(items) = &e[1].1.value else {
+            panic!()
+        };
         assert_eq!(items.len(), 2);
     }
 

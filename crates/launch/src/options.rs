@@ -104,7 +104,9 @@ impl OutputSink {
                 let _ = result;
             }
             OutputSink::Shared(writer) => {
-                let mut w = writer.lock().unwrap_or_else(|poisoned| poisoned.into_inner());
+                let mut w = writer
+                    .lock()
+                    .unwrap_or_else(|poisoned| poisoned.into_inner());
                 let _ = writeln!(w, "{line}");
                 let _ = w.flush();
             }

@@ -60,6 +60,8 @@ pub struct DeclaredArgument {
 impl ProcessSpec {
     /// The full command line, program first, as text (for display and tests).
     pub fn command_line(&self) -> Vec<String> {
-        std::iter::once(self.program.display().to_string()).chain(self.args.iter().cloned()).collect()
+        std::iter::once(self.program.display().to_string())
+            .chain(self.args.iter().cloned())
+            .collect()
     }
 }

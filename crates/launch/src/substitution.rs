@@ -42,7 +42,11 @@ pub(crate) fn substitute(text: &str, scope: &SubstitutionScope) -> Result<String
 }
 
 /// Expand the substitution starting at `chars[*pos] == '$'`; leaves `pos` after its `)`.
-fn expand_one(chars: &[char], pos: &mut usize, scope: &SubstitutionScope) -> Result<String, String> {
+fn expand_one(
+    chars: &[char],
+    pos: &mut usize,
+    scope: &SubstitutionScope,
+) -> Result<String, String> {
     let start = *pos;
     *pos += 2;
     let unterminated = || {
@@ -111,7 +115,10 @@ fn read_argument(
 fn apply(name: &str, args: &[String], scope: &SubstitutionScope) -> Result<String, String> {
     let arity = |min: usize, max: usize, usage: &str| {
         if args.len() < min || args.len() > max {
-            Err(format!("$({name}) takes {usage}, got {} argument(s)", args.len()))
+            Err(format!(
+                "$({name}) takes {usage}, got {} argument(s)",
+                args.len()
+            ))
         } else {
             Ok(())
         }
@@ -119,23 +126,29 @@ fn apply(name: &str, args: &[String], scope: &SubstitutionScope) -> Result<Strin
     match name {
         "var" => {
             arity(1, 1, "one argument: the launch configuration name")?;
-            scope
-                .vars
-                .get(&args[0])
-                .cloned()
-                .ok_or_else(|| format!("launch configuration '{}' is not defined (by arg or let)", args[0]))
+            scope.vars.get(&args[0]).cloned().ok_or_else(|| {
+                format!(
+                    "launch configuration '{}' is not defined (by arg or let)",
+                    args[0]
+                )
+            })
         }
         "env" => {
             arity(1, 2, "NAME [DEFAULT]")?;
             match ((scope.env)(&args[0]), args.get(1)) {
                 (Some(v), _) => Ok(v),
                 (None, Some(default)) => Ok(default.clone()),
-                (None, None) => Err(format!("environment variable '{}' is not set and $(env) has no default", args[0])),
+                (None, None) => Err(format!(
+                    "environment variable '{}' is not set and $(env) has no default",
+                    args[0]
+                )),
             }
         }
         "optenv" => {
             arity(1, 2, "NAME [DEFAULT]")?;
-            Ok((scope.env)(&args[0]).or_else(|| args.get(1).cloned()).unwrap_or_default())
+            Ok((scope.env)(&args[0])
+                .or_else(|| args.get(1).cloned())
+                .unwrap_or_default())
         }
         "find-pkg-share" => {
             arity(1, 1, "one argument: the package name")?;
@@ -144,14 +157,24 @@ fn apply(name: &str, args: &[String], scope: &SubstitutionScope) -> Result<Strin
         "dirname" => {
             arity(0, 0, "no arguments")?;
             let dir = scope.current_file.parent().unwrap_or(Path::new("."));
-            Ok(if dir.as_os_str().is_empty() { ".".into() } else { dir.display().to_string() })
+            Ok(if dir.as_os_str().is_empty() {
+                ".".into()
+            } else {
+                dir.display().to_string()
+            })
         }
         "filename" => {
             arity(0, 0, "no arguments")?;
-            Ok(scope.current_file.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default())
+            Ok(scope
+                .current_file
+                .file_name()
+                .map(|f| f.to_string_lossy().into_owned())
+                .unwrap_or_default())
         }
         "" => Err("empty substitution '$()'".to_string()),
-        other => Err(format!("unknown substitution '$({other})' (known: {KNOWN_SUBSTITUTIONS})")),
+        other => Err(format!(
+            "unknown substitution '$({other})' (known: {KNOWN_SUBSTITUTIONS})"
+        )),
     }
 }
 
@@ -166,7 +189,11 @@ mod tests {
         vars.insert("key".to_string(), "HOME_X".to_string());
         let env = |k: &str| (k == "HOME_X").then(|| "/home/x".to_string());
         let share = |p: &str| {
-            if p == "metrocell" { Ok(PathBuf::from("/repo")) } else { Err(format!("package '{p}' not found")) }
+            if p == "metrocell" {
+                Ok(PathBuf::from("/repo"))
+            } else {
+                Err(format!("package '{p}' not found"))
+            }
         };
         let scope = SubstitutionScope {
             vars: &vars,
@@ -185,8 +212,14 @@ mod tests {
         assert_eq!(run("[$(env NOPE '')]").unwrap(), "[]");
         assert_eq!(run("$(optenv NOPE)").unwrap(), "");
         assert_eq!(run("$(optenv HOME_X d)").unwrap(), "/home/x");
-        assert_eq!(run("$(find-pkg-share metrocell)/launch-configs").unwrap(), "/repo/launch-configs");
-        assert_eq!(run("$(dirname)/p.yaml").unwrap(), "/repo/launch-configs/p.yaml");
+        assert_eq!(
+            run("$(find-pkg-share metrocell)/launch-configs").unwrap(),
+            "/repo/launch-configs"
+        );
+        assert_eq!(
+            run("$(dirname)/p.yaml").unwrap(),
+            "/repo/launch-configs/p.yaml"
+        );
         assert_eq!(run("$(filename)").unwrap(), "cell.launch.yaml");
         assert_eq!(run("no substitution").unwrap(), "no substitution");
     }
@@ -200,11 +233,21 @@ mod tests {
 
     #[test]
     fn errors_name_the_problem() {
-        assert!(run("$(eval 1+1)").unwrap_err().contains("unknown substitution '$(eval)'"));
-        assert!(run("$(var missing)").unwrap_err().contains("'missing' is not defined"));
-        assert!(run("$(env NOPE)").unwrap_err().contains("'NOPE' is not set"));
+        assert!(run("$(eval 1+1)")
+            .unwrap_err()
+            .contains("unknown substitution '$(eval)'"));
+        assert!(run("$(var missing)")
+            .unwrap_err()
+            .contains("'missing' is not defined"));
+        assert!(run("$(env NOPE)")
+            .unwrap_err()
+            .contains("'NOPE' is not set"));
         assert!(run("$(var robot").unwrap_err().contains("unterminated"));
-        assert!(run("$(find-pkg-share other)").unwrap_err().contains("package 'other' not found"));
-        assert!(run("$(var a b)").unwrap_err().contains("takes one argument"));
+        assert!(run("$(find-pkg-share other)")
+            .unwrap_err()
+            .contains("package 'other' not found"));
+        assert!(run("$(var a b)")
+            .unwrap_err()
+            .contains("takes one argument"));
     }
 }

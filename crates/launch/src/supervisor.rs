@@ -92,11 +92,16 @@ impl SignalGuard {
     fn install() -> Result<Self, LaunchError> {
         use nix::sys::signal::{sigaction, SaFlags, SigAction, SigSet};
         SIGNALS_RECEIVED.store(0, Ordering::SeqCst);
-        let action = SigAction::new(SigHandler::Handler(on_signal), SaFlags::SA_RESTART, SigSet::empty());
+        let action = SigAction::new(
+            SigHandler::Handler(on_signal),
+            SaFlags::SA_RESTART,
+            SigSet::empty(),
+        );
         let mut previous = Vec::new();
         for sig in [Signal::SIGINT, Signal::SIGTERM] {
             // SAFETY: the handler only touches an atomic, which is async-signal-safe.
-            let old = unsafe { sigaction(sig, &action) }.map_err(|e| LaunchError::Signals(format!("{sig}: {e}")))?;
+            let old = unsafe { sigaction(sig, &action) }
+                .map_err(|e| LaunchError::Signals(format!("{sig}: {e}")))?;
             previous.push((sig, old));
         }
         Ok(SignalGuard { previous })
@@ -134,13 +139,23 @@ struct Slot<'p> {
 
 /// Starts every process of `plan` and supervises them until the run ends (see the module docs).
 pub fn supervise(plan: &LaunchPlan, options: &LaunchOptions) -> Result<LaunchOutcome, LaunchError> {
-    let _signals = if options.handle_signals { Some(SignalGuard::install()?) } else { None };
+    let _signals = if options.handle_signals {
+        Some(SignalGuard::install()?)
+    } else {
+        None
+    };
     let sink = &options.output;
     let (tx, rx) = channel::<Exited>();
     let mut slots: Vec<Slot> = plan
         .processes
         .iter()
-        .map(|spec| Slot { spec, state: State::Done, starts: 0, last_exit: None, failed: false })
+        .map(|spec| Slot {
+            spec,
+            state: State::Done,
+            starts: 0,
+            last_exit: None,
+            failed: false,
+        })
         .collect();
     for i in 0..slots.len() {
         start(&mut slots, i, sink, &tx);
@@ -152,11 +167,17 @@ pub fn supervise(plan: &LaunchPlan, options: &LaunchOptions) -> Result<LaunchOut
     let mut signals_seen_at_stop = 0;
     let any_non_respawning = plan.processes.iter().any(|p| !p.respawn);
     loop {
-        let signals = if options.handle_signals { SIGNALS_RECEIVED.load(Ordering::SeqCst) } else { 0 };
+        let signals = if options.handle_signals {
+            SIGNALS_RECEIVED.load(Ordering::SeqCst)
+        } else {
+            0
+        };
         let requested = signals > 0 || options.shutdown.is_requested();
         if stopping_since.is_none() {
             let only_respawners_left = any_non_respawning
-                && slots.iter().all(|s| s.spec.respawn || matches!(s.state, State::Done))
+                && slots
+                    .iter()
+                    .all(|s| s.spec.respawn || matches!(s.state, State::Done))
                 && slots.iter().any(|s| !matches!(s.state, State::Done));
             if requested || only_respawners_left {
                 interrupted = requested;
@@ -165,7 +186,10 @@ pub fn supervise(plan: &LaunchPlan, options: &LaunchOptions) -> Result<LaunchOut
                 } else {
                     "all processes that do not respawn have exited"
                 };
-                report(sink, &format!("[launch] {why}: sending SIGINT to every process"));
+                report(
+                    sink,
+                    &format!("[launch] {why}: sending SIGINT to every process"),
+                );
                 stopping_since = Some(Instant::now());
                 signals_seen_at_stop = signals;
                 for slot in slots.iter_mut() {
@@ -183,7 +207,13 @@ pub fn supervise(plan: &LaunchPlan, options: &LaunchOptions) -> Result<LaunchOut
                 killed = true;
                 for slot in &slots {
                     if let State::Running { pid } = slot.state {
-                        report(sink, &format!("[launch] [{}] still running: sending SIGKILL", slot.spec.label));
+                        report(
+                            sink,
+                            &format!(
+                                "[launch] [{}] still running: sending SIGKILL",
+                                slot.spec.label
+                            ),
+                        );
                         signal_group(pid, Signal::SIGKILL);
                     }
                 }
@@ -211,7 +241,10 @@ pub fn supervise(plan: &LaunchPlan, options: &LaunchOptions) -> Result<LaunchOut
             .map(|s| ProcessReport {
                 label: s.spec.label.clone(),
                 starts: s.starts,
-                last_exit: s.last_exit.clone().unwrap_or(ExitKind::NotStarted("never started".into())),
+                last_exit: s
+                    .last_exit
+                    .clone()
+                    .unwrap_or(ExitKind::NotStarted("never started".into())),
                 failed: s.failed,
             })
             .collect(),
@@ -232,13 +265,23 @@ fn on_exit(slots: &mut [Slot], exited: Exited, stopping: bool, sink: &OutputSink
     report(sink, &format!("[launch] [{label}] {}", describe(&kind)));
     let unsuccessful = kind != ExitKind::Code(0);
     let restarts_done = slot.starts.saturating_sub(1);
-    let may_restart = slot.spec.respawn && slot.spec.respawn_max_retries.map_or(true, |max| restarts_done < max);
+    let may_restart = slot.spec.respawn
+        && slot
+            .spec
+            .respawn_max_retries
+            .map_or(true, |max| restarts_done < max);
     slot.last_exit = Some(kind);
     if stopping {
         slot.state = State::Done;
     } else if may_restart {
         let delay = slot.spec.respawn_delay;
-        report(sink, &format!("[launch] [{label}] respawning in {:.2} s", delay.as_secs_f64()));
+        report(
+            sink,
+            &format!(
+                "[launch] [{label}] respawning in {:.2} s",
+                delay.as_secs_f64()
+            ),
+        );
         slot.state = State::RespawnAt(Instant::now() + delay);
     } else {
         slot.failed = unsuccessful;
@@ -250,7 +293,9 @@ fn describe(kind: &ExitKind) -> String {
     match kind {
         ExitKind::Code(code) => format!("exited with code {code}"),
         ExitKind::Signal(sig) => {
-            let name = Signal::try_from(*sig).map(|s| s.as_str().to_string()).unwrap_or_else(|_| sig.to_string());
+            let name = Signal::try_from(*sig)
+                .map(|s| s.as_str().to_string())
+                .unwrap_or_else(|_| sig.to_string());
             format!("killed by signal {name}")
         }
         ExitKind::NotStarted(why) => format!("could not be started: {why}"),
@@ -296,7 +341,10 @@ fn start(slots: &mut [Slot], i: usize, sink: &OutputSink, tx: &Sender<Exited>) {
         Ok(child) => child,
         Err(e) => {
             let kind = ExitKind::NotStarted(format!("{}: {e}", spec.program.display()));
-            report(sink, &format!("[launch] [{}] {}", spec.label, describe(&kind)));
+            report(
+                sink,
+                &format!("[launch] [{}] {}", spec.label, describe(&kind)),
+            );
             slot.last_exit = Some(kind);
             slot.failed = true;
             slot.state = State::Done;
@@ -306,11 +354,24 @@ fn start(slots: &mut [Slot], i: usize, sink: &OutputSink, tx: &Sender<Exited>) {
     slot.starts += 1;
     let pid = child.id() as i32;
     slot.state = State::Running { pid };
-    report(sink, &format!("[launch] [{}] started, pid {pid}: {}", spec.label, spec.command_line().join(" ")));
+    report(
+        sink,
+        &format!(
+            "[launch] [{}] started, pid {pid}: {}",
+            spec.label,
+            spec.command_line().join(" ")
+        ),
+    );
 
     let open_readers = Arc::new((Mutex::new(2usize), Condvar::new()));
-    let stdout = child.stdout.take().map(|s| Box::new(s) as Box<dyn Read + Send>);
-    let stderr = child.stderr.take().map(|s| Box::new(s) as Box<dyn Read + Send>);
+    let stdout = child
+        .stdout
+        .take()
+        .map(|s| Box::new(s) as Box<dyn Read + Send>);
+    let stderr = child
+        .stderr
+        .take()
+        .map(|s| Box::new(s) as Box<dyn Read + Send>);
     for (pipe, stream) in [(stdout, Stream::Stdout), (stderr, Stream::Stderr)] {
         let sink = sink.clone();
         let label = spec.label.clone();

@@ -40,7 +40,10 @@ fn error_of(name: &str, text: &str, args: &[&str]) -> (String, PathBuf) {
 }
 
 fn assert_starts(message: &str, prefix: &str) {
-    assert!(message.starts_with(prefix), "message:  {message}\nexpected: {prefix}...");
+    assert!(
+        message.starts_with(prefix),
+        "message:  {message}\nexpected: {prefix}..."
+    );
 }
 
 #[test]
@@ -96,17 +99,33 @@ fn wrong_value_types_name_the_key() {
 
 #[test]
 fn missing_exec_names_the_node_line() {
-    let text = "launch:\n  - arg: {name: a, default: x}\n  - node:\n      pkg: metrocell\n      name: n\n";
+    let text =
+        "launch:\n  - arg: {name: a, default: x}\n  - node:\n      pkg: metrocell\n      name: n\n";
     let (msg, file) = error_of("noexec.yaml", text, &[]);
-    assert_eq!(msg, format!("{}:3: node: missing required key 'exec'", file.display()));
+    assert_eq!(
+        msg,
+        format!("{}:3: node: missing required key 'exec'", file.display())
+    );
 }
 
 #[test]
 fn unknown_action_and_two_key_action() {
     let (msg, file) = error_of("act.yaml", "launch:\n  - nod:\n      exec: tool\n", &[]);
-    assert_starts(&msg, &format!("{}:2: launch: unknown action 'nod' (expected one of arg, let, include", file.display()));
+    assert_starts(
+        &msg,
+        &format!(
+            "{}:2: launch: unknown action 'nod' (expected one of arg, let, include",
+            file.display()
+        ),
+    );
     let (msg, file) = error_of("act2.yaml", "launch:\n  - node:\n    exec: tool\n", &[]);
-    assert_starts(&msg, &format!("{}:2: launch: an action is a mapping with exactly one key", file.display()));
+    assert_starts(
+        &msg,
+        &format!(
+            "{}:2: launch: an action is a mapping with exactly one key",
+            file.display()
+        ),
+    );
 }
 
 #[test]
@@ -120,31 +139,67 @@ fn unknown_substitution_names_it() {
             file.display()
         )
     );
-    let (msg, file) = error_of("var.yaml", "launch:\n  - node:\n      exec: tool\n      args: $(var nope)\n", &[]);
-    assert_starts(&msg, &format!("{}:4: node.args: launch configuration 'nope' is not defined", file.display()));
-    let (msg, file) = error_of("env.yaml", "launch:\n  - let: {name: a, value: $(env NOT_SET_X)}\n", &[]);
-    assert_starts(&msg, &format!("{}:2: let.value: environment variable 'NOT_SET_X' is not set", file.display()));
+    let (msg, file) = error_of(
+        "var.yaml",
+        "launch:\n  - node:\n      exec: tool\n      args: $(var nope)\n",
+        &[],
+    );
+    assert_starts(
+        &msg,
+        &format!(
+            "{}:4: node.args: launch configuration 'nope' is not defined",
+            file.display()
+        ),
+    );
+    let (msg, file) = error_of(
+        "env.yaml",
+        "launch:\n  - let: {name: a, value: $(env NOT_SET_X)}\n",
+        &[],
+    );
+    assert_starts(
+        &msg,
+        &format!(
+            "{}:2: let.value: environment variable 'NOT_SET_X' is not set",
+            file.display()
+        ),
+    );
 }
 
 #[test]
 fn include_not_found_names_including_file_and_line() {
-    let text = "launch:\n  - arg: {name: a, default: x}\n  - include:\n      file: missing.launch.yaml\n";
+    let text =
+        "launch:\n  - arg: {name: a, default: x}\n  - include:\n      file: missing.launch.yaml\n";
     let (msg, file) = error_of("inc.yaml", text, &[]);
     assert_starts(
         &msg,
-        &format!("{}:4: include.file: launch file 'missing.launch.yaml' not found", file.display()),
+        &format!(
+            "{}:4: include.file: launch file 'missing.launch.yaml' not found",
+            file.display()
+        ),
     );
     let (msg, file) = error_of("inc2.yaml", "launch:\n  - include: other.launch.py\n", &[]);
-    assert_starts(&msg, &format!("{}:2: include: 'other.launch.py': only YAML launch files can be included", file.display()));
+    assert_starts(
+        &msg,
+        &format!(
+            "{}:2: include: 'other.launch.py': only YAML launch files can be included",
+            file.display()
+        ),
+    );
 }
 
 #[test]
 fn errors_inside_an_included_file_name_that_file() {
     let dir = workdir();
-    std::fs::write(dir.join("inner.yaml"), "launch:\n  - arg:\n      name: needed\n").unwrap();
+    std::fs::write(
+        dir.join("inner.yaml"),
+        "launch:\n  - arg:\n      name: needed\n",
+    )
+    .unwrap();
     let outer = dir.join("outer.yaml");
     std::fs::write(&outer, "launch:\n  - include:\n      file: inner.yaml\n").unwrap();
-    let msg = load_launch_plan(&outer, &[], &options(&dir)).unwrap_err().to_string();
+    let msg = load_launch_plan(&outer, &[], &options(&dir))
+        .unwrap_err()
+        .to_string();
     assert_eq!(
         msg,
         format!(
@@ -162,29 +217,76 @@ fn include_cycle_is_reported() {
     let dir = workdir();
     std::fs::write(dir.join("a.yaml"), "launch:\n  - include: b.yaml\n").unwrap();
     std::fs::write(dir.join("b.yaml"), "launch:\n  - include: a.yaml\n").unwrap();
-    let msg = load_launch_plan(&dir.join("a.yaml"), &[], &options(&dir)).unwrap_err().to_string();
-    assert_starts(&msg, &format!("{}:2: include: include cycle:", dir.join("b.yaml").display()));
+    let msg = load_launch_plan(&dir.join("a.yaml"), &[], &options(&dir))
+        .unwrap_err()
+        .to_string();
+    assert_starts(
+        &msg,
+        &format!(
+            "{}:2: include: include cycle:",
+            dir.join("b.yaml").display()
+        ),
+    );
 }
 
 #[test]
 fn executable_not_found_names_exec_key() {
-    let (msg, file) = error_of("exe.yaml", "launch:\n  - node:\n      pkg: p\n      exec: no_such_node\n", &[]);
-    assert_starts(&msg, &format!("{}:4: node.exec: executable 'no_such_node' not found (searched:", file.display()));
-    let (msg, file) = error_of("pf.yaml", "launch:\n  - node:\n      exec: tool\n      param:\n        - from: nope.yaml\n", &[]);
-    assert_starts(&msg, &format!("{}:5: node.param[0].from: parameters file 'nope.yaml' not found", file.display()));
+    let (msg, file) = error_of(
+        "exe.yaml",
+        "launch:\n  - node:\n      pkg: p\n      exec: no_such_node\n",
+        &[],
+    );
+    assert_starts(
+        &msg,
+        &format!(
+            "{}:4: node.exec: executable 'no_such_node' not found (searched:",
+            file.display()
+        ),
+    );
+    let (msg, file) = error_of(
+        "pf.yaml",
+        "launch:\n  - node:\n      exec: tool\n      param:\n        - from: nope.yaml\n",
+        &[],
+    );
+    assert_starts(
+        &msg,
+        &format!(
+            "{}:5: node.param[0].from: parameters file 'nope.yaml' not found",
+            file.display()
+        ),
+    );
 }
 
 #[test]
 fn command_line_argument_problems() {
-    let (msg, _) = error_of("cli.yaml", "launch:\n  - arg: {name: rate, default: '1'}\n", &["rat:=2"]);
-    assert_eq!(msg, "launch argument 'rat' is not declared by the launch file (declared: rate)");
+    let (msg, _) = error_of(
+        "cli.yaml",
+        "launch:\n  - arg: {name: rate, default: '1'}\n",
+        &["rat:=2"],
+    );
+    assert_eq!(
+        msg,
+        "launch argument 'rat' is not declared by the launch file (declared: rate)"
+    );
     let err = parse_launch_arguments(&["rate=2"]).unwrap_err();
     assert!(matches!(err, LaunchError::BadArgumentSyntax { .. }));
-    assert_eq!(err.to_string(), "launch argument 'rate=2' is not of the form name:=value");
+    assert_eq!(
+        err.to_string(),
+        "launch argument 'rate=2' is not of the form name:=value"
+    );
 }
 
 #[test]
 fn unreadable_file() {
-    let err = load_launch_plan(Path::new("/nonexistent/x.yaml"), &[], &LaunchOptions::default()).unwrap_err();
-    assert!(err.to_string().starts_with("cannot read launch file /nonexistent/x.yaml:"), "{err}");
+    let err = load_launch_plan(
+        Path::new("/nonexistent/x.yaml"),
+        &[],
+        &LaunchOptions::default(),
+    )
+    .unwrap_err();
+    assert!(
+        err.to_string()
+            .starts_with("cannot read launch file /nonexistent/x.yaml:"),
+        "{err}"
+    );
 }

@@ -14,9 +14,16 @@ fn data_dir() -> PathBuf {
 
 /// A directory holding fake executables named like the nodes the test file runs.
 fn fake_bin_dir(tag: &str) -> PathBuf {
-    let dir = std::env::temp_dir().join(format!("metrocell-launch-bin-{tag}-{}", std::process::id()));
+    let dir =
+        std::env::temp_dir().join(format!("metrocell-launch-bin-{tag}-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
-    for name in ["camera_node", "tracker_node", "probe_node", "thermo_node", "tool"] {
+    for name in [
+        "camera_node",
+        "tracker_node",
+        "probe_node",
+        "thermo_node",
+        "tool",
+    ] {
         let path = dir.join(name);
         std::fs::write(&path, "#!/bin/sh\nexit 0\n").unwrap();
         std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o755)).unwrap();
@@ -25,8 +32,10 @@ fn fake_bin_dir(tag: &str) -> PathBuf {
 }
 
 fn options(bin: &Path) -> LaunchOptions {
-    let environment: BTreeMap<String, String> =
-        [("HOME_DIR", "/home/op")].into_iter().map(|(k, v)| (k.to_string(), v.to_string())).collect();
+    let environment: BTreeMap<String, String> = [("HOME_DIR", "/home/op")]
+        .into_iter()
+        .map(|(k, v)| (k.to_string(), v.to_string()))
+        .collect();
     LaunchOptions {
         executable_search_path: Some(vec![PathBuf::from("/nonexistent-dir"), bin.to_path_buf()]),
         environment: Some(environment),
@@ -43,8 +52,11 @@ fn rich_file_gives_exact_command_lines() {
     let plan = load_launch_plan(&file, &args, &options(&bin)).unwrap();
     let b = |name: &str| bin.join(name).display().to_string();
 
-    let lines: Vec<(String, Vec<String>)> =
-        plan.processes.iter().map(|p| (p.label.clone(), p.command_line())).collect();
+    let lines: Vec<(String, Vec<String>)> = plan
+        .processes
+        .iter()
+        .map(|p| (p.label.clone(), p.command_line()))
+        .collect();
     let expected: Vec<(String, Vec<String>)> = vec![
         (
             "cam0".into(),
@@ -103,7 +115,15 @@ fn rich_file_gives_exact_command_lines() {
                 "cell:=inner_cell".into(),
             ],
         ),
-        ("probe_node".into(), vec![b("probe_node"), "--ros-args".into(), "-r".into(), "__ns:=/absolute".into()]),
+        (
+            "probe_node".into(),
+            vec![
+                b("probe_node"),
+                "--ros-args".into(),
+                "-r".into(),
+                "__ns:=/absolute".into(),
+            ],
+        ),
         (
             "probe_unless".into(),
             vec![
@@ -130,10 +150,21 @@ fn rich_file_gives_exact_command_lines() {
                 "cell:=cell_a".into(),
             ],
         ),
-        ("logger".into(), vec![b("tool"), "--log".into(), "rich.launch.yaml".into()]),
-        ("sh".into(), vec!["/bin/sh".into(), "-c".into(), "echo hello cell_a".into()]),
+        (
+            "logger".into(),
+            vec![b("tool"), "--log".into(), "rich.launch.yaml".into()],
+        ),
+        (
+            "sh".into(),
+            vec!["/bin/sh".into(), "-c".into(), "echo hello cell_a".into()],
+        ),
     ];
-    assert_eq!(lines.len(), expected.len(), "labels: {:?}", lines.iter().map(|l| &l.0).collect::<Vec<_>>());
+    assert_eq!(
+        lines.len(),
+        expected.len(),
+        "labels: {:?}",
+        lines.iter().map(|l| &l.0).collect::<Vec<_>>()
+    );
     for (got, want) in lines.iter().zip(&expected) {
         assert_eq!(got, want);
     }
@@ -144,15 +175,32 @@ fn rich_file_gives_exact_command_lines() {
     assert_eq!(cam.respawn_max_retries, None);
     assert_eq!(cam.output, OutputMode::Screen);
     assert_eq!(cam.env, vec![("CELL".to_string(), "cell_a".to_string())]);
-    assert!(cam.origin.ends_with("rich.launch.yaml:19"), "{}", cam.origin);
+    assert!(
+        cam.origin.ends_with("rich.launch.yaml:19"),
+        "{}",
+        cam.origin
+    );
     assert!(!plan.processes[1].respawn);
 
-    let declared: Vec<(&str, &str)> = plan.arguments.iter().map(|a| (a.name.as_str(), a.value.as_str())).collect();
+    let declared: Vec<(&str, &str)> = plan
+        .arguments
+        .iter()
+        .map(|a| (a.name.as_str(), a.value.as_str()))
+        .collect();
     assert_eq!(
         declared,
-        [("cell", "cell_a"), ("rate", "10"), ("with_probe", "false"), ("sensor", "thermo_cell_a"), ("sample_period", "0.25")]
+        [
+            ("cell", "cell_a"),
+            ("rate", "10"),
+            ("with_probe", "false"),
+            ("sensor", "thermo_cell_a"),
+            ("sample_period", "0.25")
+        ]
     );
-    assert_eq!(plan.arguments[0].description.as_deref(), Some("Which cell this launch runs"));
+    assert_eq!(
+        plan.arguments[0].description.as_deref(),
+        Some("Which cell this launch runs")
+    );
     assert_eq!(plan.arguments[1].default.as_deref(), Some("30"));
     std::fs::remove_dir_all(&bin).unwrap();
 }
@@ -164,7 +212,18 @@ fn overriding_a_condition_argument_switches_nodes() {
     let args = parse_launch_arguments(&["with_probe:=true", "cell:=cell_b"]).unwrap();
     let plan = load_launch_plan(&file, &args, &options(&bin)).unwrap();
     let labels: Vec<&str> = plan.processes.iter().map(|p| p.label.as_str()).collect();
-    assert_eq!(labels, ["cam0", "tracker", "probe_node", "skipped_by_if", "thermo_cell_b", "logger", "sh"]);
+    assert_eq!(
+        labels,
+        [
+            "cam0",
+            "tracker",
+            "probe_node",
+            "skipped_by_if",
+            "thermo_cell_b",
+            "logger",
+            "sh"
+        ]
+    );
     std::fs::remove_dir_all(&bin).unwrap();
 }
 
@@ -174,10 +233,17 @@ fn share_dir_comes_from_option_then_environment() {
     let dir = std::env::temp_dir().join(format!("metrocell-launch-share-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("s.launch.yaml");
-    std::fs::write(&file, "launch:\n  - node:\n      exec: tool\n      args: $(find-pkg-share metrocell_msgs)\n").unwrap();
+    std::fs::write(
+        &file,
+        "launch:\n  - node:\n      exec: tool\n      args: $(find-pkg-share metrocell_msgs)\n",
+    )
+    .unwrap();
 
     let mut opts = options(&bin);
-    opts.environment.as_mut().unwrap().insert("METROCELL_SHARE".into(), "/from/env".into());
+    opts.environment
+        .as_mut()
+        .unwrap()
+        .insert("METROCELL_SHARE".into(), "/from/env".into());
     let plan = load_launch_plan(&file, &[], &opts).unwrap();
     assert_eq!(plan.processes[0].args, ["/from/env"]);
 
@@ -194,7 +260,11 @@ fn duplicate_labels_are_numbered() {
     let dir = std::env::temp_dir().join(format!("metrocell-launch-dup-{}", std::process::id()));
     std::fs::create_dir_all(&dir).unwrap();
     let file = dir.join("d.launch.yaml");
-    std::fs::write(&file, "launch:\n  - node: {exec: tool}\n  - node: {exec: tool}\n  - node: {exec: tool}\n").unwrap();
+    std::fs::write(
+        &file,
+        "launch:\n  - node: {exec: tool}\n  - node: {exec: tool}\n  - node: {exec: tool}\n",
+    )
+    .unwrap();
     let plan = load_launch_plan(&file, &[], &options(&bin)).unwrap();
     let labels: Vec<&str> = plan.processes.iter().map(|p| p.label.as_str()).collect();
     assert_eq!(labels, ["tool", "tool-2", "tool-3"]);

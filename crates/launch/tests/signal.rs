@@ -16,7 +16,11 @@ fn sigint_to_the_launcher_stops_both_nodes_within_two_seconds() {
     let dir = temp_dir("sigint");
     let forever = "while true; do sleep 0.1; done\n";
     write_script(&dir, "talker.sh", &format!("echo \"argv: $*\"\n{forever}"));
-    write_script(&dir, "listener.sh", &format!("echo \"argv: $*\"\n{forever}"));
+    write_script(
+        &dir,
+        "listener.sh",
+        &format!("echo \"argv: $*\"\n{forever}"),
+    );
     let out = Captured::default();
     let opts = LaunchOptions {
         handle_signals: true,
@@ -28,20 +32,32 @@ fn sigint_to_the_launcher_stops_both_nodes_within_two_seconds() {
     let file = data_dir().join("supervise.launch.yaml");
     let runner = thread::spawn(move || run_launch(&file, &args, &opts));
 
-    out.wait_for("[talker] argv: --ros-args -r __node:=talker -r __ns:=/demo -p greeting:=hello\n", Duration::from_secs(5));
-    out.wait_for("[listener.sh] argv: --topic chatter\n", Duration::from_secs(5));
+    out.wait_for(
+        "[talker] argv: --ros-args -r __node:=talker -r __ns:=/demo -p greeting:=hello\n",
+        Duration::from_secs(5),
+    );
+    out.wait_for(
+        "[listener.sh] argv: --topic chatter\n",
+        Duration::from_secs(5),
+    );
     let pids = [out.pids_of("talker")[0], out.pids_of("listener.sh")[0]];
 
     let sent = Instant::now();
     kill(getpid(), Signal::SIGINT).unwrap();
     let outcome = runner.join().unwrap().unwrap();
     while pids.iter().any(|&p| group_alive(p)) {
-        assert!(sent.elapsed() < Duration::from_secs(2), "a node outlived Ctrl-C; output:\n{}", out.text());
+        assert!(
+            sent.elapsed() < Duration::from_secs(2),
+            "a node outlived Ctrl-C; output:\n{}",
+            out.text()
+        );
         thread::sleep(Duration::from_millis(10));
     }
     assert!(sent.elapsed() < Duration::from_secs(2));
     assert!(outcome.interrupted);
     assert_eq!(outcome.exit_code(), 0);
-    assert!(out.text().contains("[launch] shutdown requested: sending SIGINT to every process\n"));
+    assert!(out
+        .text()
+        .contains("[launch] shutdown requested: sending SIGINT to every process\n"));
     std::fs::remove_dir_all(&dir).unwrap();
 }

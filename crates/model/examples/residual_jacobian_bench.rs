@@ -66,7 +66,8 @@ fn machine_terms() -> Vec<TermConfig> {
         }
     }
     for pair in ["xy", "xz", "yz"] {
-        yaml += &format!("- {{id: squareness, options: {{pair: {pair}}}, params: {{s: 20 urad}}}}\n");
+        yaml +=
+            &format!("- {{id: squareness, options: {{pair: {pair}}}, params: {{s: 20 urad}}}}\n");
     }
     serde_yaml::from_str(&yaml).expect("bench terms parse")
 }
@@ -81,7 +82,11 @@ fn tracker_terms() -> Vec<TermConfig> {
 }
 
 fn main() {
-    let machine = MachineGeometry { kinematics: MachineKinematics::Cartesian("XFYZ".parse().expect("XFYZ")), travel: [[0.0, 1.0]; 3], tool_offset: Vector3::new(0.0, 0.0, -0.1) };
+    let machine = MachineGeometry {
+        kinematics: MachineKinematics::Cartesian("XFYZ".parse().expect("XFYZ")),
+        travel: [[0.0, 1.0]; 3],
+        tool_offset: Vector3::new(0.0, 0.0, -0.1),
+    };
     let terms = TermModel::from_configs(&machine_terms()).expect("machine terms");
     let instruments = TermModel::from_configs(&tracker_terms()).expect("tracker terms");
     let model = ForwardModel::new(&machine, &terms, &instruments).expect("forward model");
@@ -92,7 +97,13 @@ fn main() {
         .map(|k| {
             let q: Vec<f64> = (0..3).map(|_| rng.random::<f64>()).collect();
             let sign = |r: &mut ChaCha8Rng| if r.random::<bool>() { 1.0 } else { -1.0 };
-            let mut s = Signals { air_temperature: Some(20.3), air_pressure: Some(101_300.0), air_humidity: Some(45.0), time_since_power_on: Some(600.0 + k as f64), ..Default::default() };
+            let mut s = Signals {
+                air_temperature: Some(20.3),
+                air_pressure: Some(101_300.0),
+                air_humidity: Some(45.0),
+                time_since_power_on: Some(600.0 + k as f64),
+                ..Default::default()
+            };
             let approach = [sign(&mut rng), sign(&mut rng), sign(&mut rng)];
             model.set_motion(&mut s, &q, &[0.0; 3], &approach);
             (q, s)
@@ -103,7 +114,9 @@ fn main() {
         .iter()
         .map(|(q, s)| {
             let mut s = s.clone();
-            let tool = model.tool_state(&p, &kin, q, &mut s, None).expect("tool state");
+            let tool = model
+                .tool_state(&p, &kin, q, &mut s, None)
+                .expect("tool state");
             let y = model.tracker(&p, &tool, &mut s).expect("tracker");
             let m = y.measured_point();
             [m.x + 5e-6, m.y - 5e-6, m.z, y.measured_range()]
@@ -117,9 +130,16 @@ fn main() {
         let start = Instant::now();
         let mut check = 0.0;
         for (((q, _), s), m) in readings.iter().zip(work.iter_mut()).zip(&measured) {
-            let y = model.tracker_jacobian(&p, &kin, q, s, &mut ws, jac).expect("tracker Jacobian");
+            let y = model
+                .tracker_jacobian(&p, &kin, q, s, &mut ws, jac)
+                .expect("tracker Jacobian");
             let yp = y.measured_point();
-            let r = [m[0] - yp.x, m[1] - yp.y, m[2] - yp.z, m[3] - y.measured_range()];
+            let r = [
+                m[0] - yp.x,
+                m[1] - yp.y,
+                m[2] - yp.z,
+                m[3] - y.measured_range(),
+            ];
             check += r.iter().map(|v| v * v).sum::<f64>() + jac[(0, 0)];
         }
         (start.elapsed().as_secs_f64(), check)
@@ -129,7 +149,9 @@ fn main() {
         let start = Instant::now();
         let mut check = 0.0;
         for (_, s) in &readings {
-            let (d, j) = terms.displacement(Frame::Machine, p_machine, s).expect("displacement");
+            let (d, j) = terms
+                .displacement(Frame::Machine, p_machine, s)
+                .expect("displacement");
             check += d.norm() + j[(0, 0)];
         }
         (start.elapsed().as_secs_f64(), check)
@@ -137,13 +159,29 @@ fn main() {
     // warm up once (counting allocations), then take the best of three
     let (_, alloc_new) = allocations_of(|| run_new(&mut work, &mut jac));
     let (_, alloc_old) = allocations_of(&mut run_old);
-    let best = |f: &mut dyn FnMut() -> (f64, f64)| (0..3).map(|_| f()).fold((f64::INFINITY, 0.0), |a, b| if b.0 < a.0 { b } else { a });
+    let best = |f: &mut dyn FnMut() -> (f64, f64)| {
+        (0..3)
+            .map(|_| f())
+            .fold((f64::INFINITY, 0.0), |a, b| if b.0 < a.0 { b } else { a })
+    };
     let (t_new, c_new) = best(&mut || run_new(&mut work, &mut jac));
     let (t_old, c_old) = best(&mut run_old);
-    println!("model: {} parameters ({} machine, {} tracker), {READINGS} tracker readings", model.param_count(), p_machine.len(), model.param_count() - p_machine.len());
+    println!(
+        "model: {} parameters ({} machine, {} tracker), {READINGS} tracker readings",
+        model.param_count(),
+        p_machine.len(),
+        model.param_count() - p_machine.len()
+    );
     println!("new   residual + 4×{} Jacobian (shared forward model): {:8.2} ms  ({:.2} µs/reading)  [checksum {c_new:.6e}]", model.param_count(), t_new * 1e3, t_new / READINGS as f64 * 1e6);
     println!("old   TermModel::displacement + 3×{} Jacobian (machine terms only): {:8.2} ms  ({:.2} µs/reading)  [checksum {c_old:.6e}]", p_machine.len(), t_old * 1e3, t_old / READINGS as f64 * 1e6);
     println!("ratio old/new: {:.2}×", t_old / t_new);
-    println!("allocations: new {alloc_new} ({:.2} per reading), old {alloc_old} ({:.2} per reading)", alloc_new as f64 / READINGS as f64, alloc_old as f64 / READINGS as f64);
-    assert_eq!(alloc_new, 0, "the shared model's XFYZ tracker path must not allocate per reading");
+    println!(
+        "allocations: new {alloc_new} ({:.2} per reading), old {alloc_old} ({:.2} per reading)",
+        alloc_new as f64 / READINGS as f64,
+        alloc_old as f64 / READINGS as f64
+    );
+    assert_eq!(
+        alloc_new, 0,
+        "the shared model's XFYZ tracker path must not allocate per reading"
+    );
 }

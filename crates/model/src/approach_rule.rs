@@ -36,7 +36,10 @@ impl ApproachTracker {
             Some(d) if d < 0.0 => -1,
             _ => 0,
         };
-        Self { direction, anchor: None }
+        Self {
+            direction,
+            anchor: None,
+        }
     }
 
     /// The direction now: Some(±1.0), or None before any motion without an initial direction.
@@ -45,7 +48,13 @@ impl ApproachTracker {
     }
 
     /// Take the next sample: position, and velocity if recorded (NaN or None: not recorded).
-    pub fn update(&mut self, position: f64, velocity: Option<f64>, position_deadband: f64, velocity_deadband: f64) {
+    pub fn update(
+        &mut self,
+        position: f64,
+        velocity: Option<f64>,
+        position_deadband: f64,
+        velocity_deadband: f64,
+    ) {
         if let Some(v) = velocity.filter(|v| v.is_finite() && v.abs() > velocity_deadband) {
             self.direction = if v > 0.0 { 1 } else { -1 };
             self.anchor = Some(position);
@@ -102,7 +111,20 @@ mod tests {
     #[test]
     fn sign_of_the_last_motion_held_through_dwells() {
         let d = run(&[0.0, 0.0, 0.1, 0.2, 0.2, 0.2, 0.1, 0.1, 0.1], None, 1e-9);
-        assert_eq!(d, [None, None, Some(1.0), Some(1.0), Some(1.0), Some(1.0), Some(-1.0), Some(-1.0), Some(-1.0)]);
+        assert_eq!(
+            d,
+            [
+                None,
+                None,
+                Some(1.0),
+                Some(1.0),
+                Some(1.0),
+                Some(1.0),
+                Some(-1.0),
+                Some(-1.0),
+                Some(-1.0)
+            ]
+        );
         let homed = run(&[0.0, 0.0, -0.1], Some(1.0), 1e-9);
         assert_eq!(homed, [Some(1.0), Some(1.0), Some(-1.0)]);
     }
@@ -110,7 +132,11 @@ mod tests {
     #[test]
     fn rounding_jitter_is_not_a_reversal_but_a_creep_is_motion() {
         // +1 move, then rounding-level jitter around the end point: still +1
-        let d = run(&[0.0, 0.3, 0.3 - 4e-17, 0.3 + 5e-17, 0.3 - 1e-16], None, 1e-9);
+        let d = run(
+            &[0.0, 0.3, 0.3 - 4e-17, 0.3 + 5e-17, 0.3 - 1e-16],
+            None,
+            1e-9,
+        );
         assert!(d[1..].iter().all(|x| *x == Some(1.0)), "{d:?}");
         // a reversal creeping 0.4 nm per sample is seen once it has gone past 1 nm
         let creep: Vec<f64> = (0..6).map(|k| 0.3 - 0.4e-9 * k as f64).collect();
@@ -125,7 +151,11 @@ mod tests {
         t.update(0.5, Some(0.0), 1e-9, 1e-9);
         assert_eq!(t.direction(), None);
         t.update(0.5, Some(-0.05), 1e-9, 1e-9);
-        assert_eq!(t.direction(), Some(-1.0), "the move starts at this sample: its velocity says so before the position changes");
+        assert_eq!(
+            t.direction(),
+            Some(-1.0),
+            "the move starts at this sample: its velocity says so before the position changes"
+        );
         t.update(0.4, Some(f64::NAN), 1e-9, 1e-9);
         assert_eq!(t.direction(), Some(-1.0));
         assert_eq!(motion_sign(0.4, 0.4 + 2e-9, 1e-9), Some(1.0));

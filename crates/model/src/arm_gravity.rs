@@ -41,8 +41,16 @@ impl ColumnTilt {
     /// flexure).
     pub fn unit_effects(&self, p: &Vector3<f64>) -> [Vector3<f64>; 3] {
         let m = self.moment;
-        let pads = self.pads.iter().map(|(pivot, inv_o2)| (m * *inv_o2).cross(&(p - pivot))).sum();
-        [m.cross(&(p - self.foot)), pads, (m * self.length).cross(&(p - self.middle))]
+        let pads = self
+            .pads
+            .iter()
+            .map(|(pivot, inv_o2)| (m * *inv_o2).cross(&(p - pivot)))
+            .sum();
+        [
+            m.cross(&(p - self.foot)),
+            pads,
+            (m * self.length).cross(&(p - self.middle)),
+        ]
     }
 }
 
@@ -65,7 +73,12 @@ pub(crate) struct ArmGravity {
 impl ArmGravity {
     /// The column's and the links' expansion's displacement of the true tool point `p` at
     /// parameters `params`.
-    pub fn displacement(&self, model: &ForwardModel, params: &[f64], p: &Vector3<f64>) -> Vector3<f64> {
+    pub fn displacement(
+        &self,
+        model: &ForwardModel,
+        params: &[f64],
+        p: &Vector3<f64>,
+    ) -> Vector3<f64> {
         let mut d = Vector3::zeros();
         if let Some(c) = &self.column {
             let k = model.part(c.term, params);
@@ -86,20 +99,57 @@ impl ArmGravity {
 
 fn variable_of(arm: &SerialArm, term: &str, joint: &str) -> Result<usize, PhysicsError> {
     let names = arm.chain.variable_names();
-    names.iter().position(|n| n == joint).ok_or_else(|| PhysicsError::InvalidInput { what: format!("term `{term}`"), reason: format!("joint `{joint}` is not one of the arm's joint variables ({})", names.join(", ")) })
+    names
+        .iter()
+        .position(|n| n == joint)
+        .ok_or_else(|| PhysicsError::InvalidInput {
+            what: format!("term `{term}`"),
+            reason: format!(
+                "joint `{joint}` is not one of the arm's joint variables ({})",
+                names.join(", ")
+            ),
+        })
 }
 
 impl ForwardModel<'_> {
     /// The gravity terms' state at reading `q` (None when the model has none: the arm is rigid).
-    pub(crate) fn arm_gravity(&self, arm: &SerialArm, p: &[f64], q: &[f64], s: &Signals) -> Result<Option<ArmGravity>, PhysicsError> {
-        let ids = [TermId::JointCompliance, TermId::JointBacklash, TermId::ColumnBending, TermId::LinkThermalExpansion];
-        if !self.machine_terms.terms.iter().any(|t| ids.contains(&t.term.id())) {
+    pub(crate) fn arm_gravity(
+        &self,
+        arm: &SerialArm,
+        p: &[f64],
+        q: &[f64],
+        s: &Signals,
+    ) -> Result<Option<ArmGravity>, PhysicsError> {
+        let ids = [
+            TermId::JointCompliance,
+            TermId::JointBacklash,
+            TermId::ColumnBending,
+            TermId::LinkThermalExpansion,
+        ];
+        if !self
+            .machine_terms
+            .terms
+            .iter()
+            .any(|t| ids.contains(&t.term.id()))
+        {
             return Ok(None);
         }
-        let kin = |e: metrocell_kinematics::error::KinematicsError| PhysicsError::InvalidInput { what: "gravity on the arm".into(), reason: e.to_string() };
-        let g = s.gravity.unwrap_or(Vector3::new(0.0, 0.0, -STANDARD_GRAVITY));
+        let kin = |e: metrocell_kinematics::error::KinematicsError| PhysicsError::InvalidInput {
+            what: "gravity on the arm".into(),
+            reason: e.to_string(),
+        };
+        let g = s
+            .gravity
+            .unwrap_or(Vector3::new(0.0, 0.0, -STANDARD_GRAVITY));
         let torques = gravity_torques(&arm.chain, q, &g).map_err(kin)?;
-        let mut out = ArmGravity { offsets: vec![0.0; arm.chain.dof()], torques, compliance: Vec::new(), backlash: Vec::new(), column: None, thermal: None };
+        let mut out = ArmGravity {
+            offsets: vec![0.0; arm.chain.dof()],
+            torques,
+            compliance: Vec::new(),
+            backlash: Vec::new(),
+            column: None,
+            thermal: None,
+        };
         for (i, t) in self.machine_terms.terms.iter().enumerate() {
             let params = self.part(i, p);
             // the term's structure, from the options it was configured with
@@ -110,10 +160,17 @@ impl ForwardModel<'_> {
                         TermId::JointCompliance => JointCompliance::from_options(&o)?.joints,
                         _ => JointBacklash::from_options(&o)?.joints,
                     };
-                    let vars = joints.iter().map(|j| variable_of(arm, &t.term.label(), j)).collect::<Result<Vec<_>, _>>()?;
+                    let vars = joints
+                        .iter()
+                        .map(|j| variable_of(arm, &t.term.label(), j))
+                        .collect::<Result<Vec<_>, _>>()?;
                     for (v, k) in vars.iter().zip(params) {
                         let tau = out.torques[*v];
-                        out.offsets[*v] += if t.term.id() == TermId::JointCompliance { k * tau } else { 0.5 * k * tau.signum() };
+                        out.offsets[*v] += if t.term.id() == TermId::JointCompliance {
+                            k * tau
+                        } else {
+                            0.5 * k * tau.signum()
+                        };
                     }
                     if t.term.id() == TermId::JointCompliance {
                         out.compliance.push((i, vars));
@@ -130,7 +187,15 @@ impl ForwardModel<'_> {
                     let dt = s.temperature(&t.term.label(), &c.sensor)? - 20.0;
                     // every joint's <origin xyz> (DH a, d) lengthens along itself
                     let oj = arm.chain.origin_translation_jacobian(q).map_err(kin)?;
-                    let direction = arm.chain.joints.iter().enumerate().map(|(k, joint)| oj.fixed_view::<3, 3>(0, 3 * k) * joint.pre.translation.vector).sum();
+                    let direction = arm
+                        .chain
+                        .joints
+                        .iter()
+                        .enumerate()
+                        .map(|(k, joint)| {
+                            oj.fixed_view::<3, 3>(0, 3 * k) * joint.pre.translation.vector
+                        })
+                        .sum();
                     out.thermal = Some((i, dt, direction));
                 }
                 _ => {}
@@ -140,12 +205,26 @@ impl ForwardModel<'_> {
     }
 
     /// The column's moment, pivots and overlaps at `q`.
-    fn column_tilt(&self, arm: &SerialArm, c: &ColumnBending, term: usize, q: &[f64], g: &Vector3<f64>) -> Result<ColumnTilt, PhysicsError> {
+    fn column_tilt(
+        &self,
+        arm: &SerialArm,
+        c: &ColumnBending,
+        term: usize,
+        q: &[f64],
+        g: &Vector3<f64>,
+    ) -> Result<ColumnTilt, PhysicsError> {
         let label = format!("column_bending[{}]", c.joint);
-        let kin = |e: metrocell_kinematics::error::KinematicsError| PhysicsError::InvalidInput { what: format!("term `{label}`"), reason: e.to_string() };
+        let kin = |e: metrocell_kinematics::error::KinematicsError| PhysicsError::InvalidInput {
+            what: format!("term `{label}`"),
+            reason: e.to_string(),
+        };
         let variable = variable_of(arm, &label, &c.joint)?;
         let drives = arm.chain.drives();
-        let segments: Vec<(usize, f64)> = drives.iter().enumerate().filter_map(|(j, d)| d.filter(|(k, _)| *k == variable).map(|(_, f)| (j, f))).collect();
+        let segments: Vec<(usize, f64)> = drives
+            .iter()
+            .enumerate()
+            .filter_map(|(j, d)| d.filter(|(k, _)| *k == variable).map(|(_, f)| (j, f)))
+            .collect();
         let frames = arm.chain.joint_frames(q).map_err(kin)?;
         let (first, last) = (segments[0].0, segments[segments.len() - 1].0);
         let foot = frames[first].0.translation.vector;
@@ -157,7 +236,15 @@ impl ForwardModel<'_> {
         let mut pads = Vec::new();
         for (i, o0) in c.overlaps.iter().enumerate() {
             let Some(&(joint, share)) = segments.get(i) else {
-                return Err(PhysicsError::InvalidInput { what: format!("term `{label}`"), reason: format!("{} overlaps given, the column has {} segments ({} and its mimics)", c.overlaps.len(), segments.len(), c.joint) });
+                return Err(PhysicsError::InvalidInput {
+                    what: format!("term `{label}`"),
+                    reason: format!(
+                        "{} overlaps given, the column has {} segments ({} and its mimics)",
+                        c.overlaps.len(),
+                        segments.len(),
+                        c.joint
+                    ),
+                });
             };
             let o = o0 - share * e;
             if !(o > 0.0) {
@@ -170,6 +257,13 @@ impl ForwardModel<'_> {
             Some(l0) => l0 + segments.iter().map(|(_, share)| share * e).sum::<f64>(),
             None => (top - foot).dot(&axis).abs(),
         };
-        Ok(ColumnTilt { term, moment, foot, pads, middle: foot + axis * (0.5 * length), length })
+        Ok(ColumnTilt {
+            term,
+            moment,
+            foot,
+            pads,
+            middle: foot + axis * (0.5 * length),
+            length,
+        })
     }
 }

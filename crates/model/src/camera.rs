@@ -44,21 +44,49 @@ pub struct CameraPrediction {
 pub const CAMERA_ROWS: usize = 5;
 
 fn geometry_of(inst: &Instrument) -> Result<&CameraGeometry, PhysicsError> {
-    inst.camera.as_ref().ok_or_else(|| PhysicsError::InvalidInput { what: "forward model, camera reading".into(), reason: format!("the {} has no geometry (mount and intrinsics): ForwardModel::with_camera", inst.describe()) })
+    inst.camera
+        .as_ref()
+        .ok_or_else(|| PhysicsError::InvalidInput {
+            what: "forward model, camera reading".into(),
+            reason: format!(
+                "the {} has no geometry (mount and intrinsics): ForwardModel::with_camera",
+                inst.describe()
+            ),
+        })
 }
 
 impl ForwardModel<'_> {
     /// Nominal and true pose of camera `instrument` (None: the only one) in the workpiece
     /// frame for the tool state `tool`: `tool.nominal · mount`, `tool.truth · mount`.
-    pub fn camera_pose(&self, instrument: Option<&str>, tool: &ToolState) -> Result<(Isometry3<f64>, Isometry3<f64>), PhysicsError> {
-        let mount = geometry_of(self.require(InstrumentKind::Camera, instrument)?)?.mount.isometry();
+    pub fn camera_pose(
+        &self,
+        instrument: Option<&str>,
+        tool: &ToolState,
+    ) -> Result<(Isometry3<f64>, Isometry3<f64>), PhysicsError> {
+        let mount = geometry_of(self.require(InstrumentKind::Camera, instrument)?)?
+            .mount
+            .isometry();
         Ok((tool.nominal * mount, tool.truth * mount))
     }
 
     /// Everything after the feature's camera-frame position: scale, projection, lens.
-    fn camera_reading(&self, inst: &Instrument, g: &CameraGeometry, p: &[f64], s: &mut Signals, x_c: Vector3<f64>) -> Result<CameraPrediction, PhysicsError> {
+    fn camera_reading(
+        &self,
+        inst: &Instrument,
+        g: &CameraGeometry,
+        p: &[f64],
+        s: &mut Signals,
+        x_c: Vector3<f64>,
+    ) -> Result<CameraPrediction, PhysicsError> {
         if !(x_c.z > 0.0) {
-            return Err(PhysicsError::InvalidInput { what: "forward model, camera reading".into(), reason: format!("the feature is not in front of the {} (camera-frame z = {} m)", inst.describe(), x_c.z) });
+            return Err(PhysicsError::InvalidInput {
+                what: "forward model, camera reading".into(),
+                reason: format!(
+                    "the feature is not in front of the {} (camera-frame z = {} m)",
+                    inst.describe(),
+                    x_c.z
+                ),
+            });
         }
         s.camera_point = Some(x_c);
         let measured_point = match inst.scale {
@@ -78,14 +106,27 @@ impl ForwardModel<'_> {
             None => normalised,
         };
         let pixel = Vector2::new(g.fx * distorted.x + g.cx, g.fy * distorted.y + g.cy);
-        Ok(CameraPrediction { point: x_c, measured_point, normalised, distorted, pixel })
+        Ok(CameraPrediction {
+            point: x_c,
+            measured_point,
+            normalised,
+            distorted,
+            pixel,
+        })
     }
 
     /// The reading of camera `instrument` (None: the only one) of the part feature with
     /// nominal position `feature` (workpiece frame) for the tool state `tool` (see the module
     /// doc). `s` carries what the workpiece terms read; its `workpiece_point`, `camera_point`
     /// and `image_point` are set here.
-    pub fn camera(&self, instrument: Option<&str>, p: &[f64], tool: &ToolState, s: &mut Signals, feature: &Vector3<f64>) -> Result<CameraPrediction, PhysicsError> {
+    pub fn camera(
+        &self,
+        instrument: Option<&str>,
+        p: &[f64],
+        tool: &ToolState,
+        s: &mut Signals,
+        feature: &Vector3<f64>,
+    ) -> Result<CameraPrediction, PhysicsError> {
         self.check(p)?;
         let inst = self.require(InstrumentKind::Camera, instrument)?;
         let g = geometry_of(inst)?;
@@ -100,7 +141,17 @@ impl ForwardModel<'_> {
     /// `out` ([`CAMERA_ROWS`] × [`Self::param_count`]); the prediction is `camera`'s (of
     /// `tool_state` at `q`) bit for bit.
     #[allow(clippy::too_many_arguments)]
-    pub fn camera_jacobian(&self, instrument: Option<&str>, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, feature: &Vector3<f64>, work: &mut Workspace, out: &mut DMatrix<f64>) -> Result<CameraPrediction, PhysicsError> {
+    pub fn camera_jacobian(
+        &self,
+        instrument: Option<&str>,
+        p: &[f64],
+        kin: &KinematicTruth,
+        q: &[f64],
+        s: &mut Signals,
+        feature: &Vector3<f64>,
+        work: &mut Workspace,
+        out: &mut DMatrix<f64>,
+    ) -> Result<CameraPrediction, PhysicsError> {
         self.check(p)?;
         self.check_buffer("camera Jacobian", out, CAMERA_ROWS)?;
         work.check(self)?;
@@ -108,7 +159,8 @@ impl ForwardModel<'_> {
         let g = geometry_of(inst)?;
         let tool = self.tool_jacobian(p, kin, q, s, &mut work.tool, Some(&mut work.ang))?;
         work.feature.fill(0.0);
-        let f = feature + self.workpiece_displacement(p, s, *feature, Some(&mut work.feature), 1.0)?;
+        let f =
+            feature + self.workpiece_displacement(p, s, *feature, Some(&mut work.feature), 1.0)?;
         let camera = tool.truth * g.mount.isometry();
         let r = camera.rotation.to_rotation_matrix().into_inner();
         let x_c = r.transpose() * (f - camera.translation.vector);
@@ -118,7 +170,10 @@ impl ForwardModel<'_> {
         let rt = r.transpose();
         for c in 0..self.n_params {
             let w = work.ang.fixed_view::<3, 1>(0, c).into_owned();
-            let dx = rt * (work.feature.fixed_view::<3, 1>(0, c) - work.tool.fixed_view::<3, 1>(0, c) - w.cross(&lever));
+            let dx = rt
+                * (work.feature.fixed_view::<3, 1>(0, c)
+                    - work.tool.fixed_view::<3, 1>(0, c)
+                    - w.cross(&lever));
             work.point.fixed_view_mut::<3, 1>(0, c).copy_from(&dx);
         }
         // camera point: x_c + s·x_c, so ∂ = (1 + s)·∂x_c, plus x_c in the scale's own column
@@ -128,7 +183,8 @@ impl ForwardModel<'_> {
             out.fixed_view_mut::<3, 1>(2, c).copy_from(&dx);
         }
         if let Some(i) = inst.scale {
-            out.fixed_view_mut::<3, 1>(2, self.slots[i].start).copy_from(&x_c);
+            out.fixed_view_mut::<3, 1>(2, self.slots[i].start)
+                .copy_from(&x_c);
         }
         // image point: ∂x = (∂X − x ∂Z)/Z, through the lens: ∂x_d = (I + ∂Δ/∂(x, y))·∂(x, y)
         let (x, y, z) = (pred.normalised.x, pred.normalised.y, x_c.z);

@@ -34,7 +34,11 @@ pub const PLATE_MARKERS: usize = 4;
 impl Default for FiducialPlate {
     /// 150 mm standoff, 20 mm markers, 10 mm gap.
     fn default() -> Self {
-        FiducialPlate { standoff: 0.150, marker_side: 0.020, gap: 0.010 }
+        FiducialPlate {
+            standoff: 0.150,
+            marker_side: 0.020,
+            gap: 0.010,
+        }
     }
 }
 
@@ -43,7 +47,10 @@ impl FiducialPlate {
     pub fn marker_top_left(&self, k: usize) -> [f64; 2] {
         let half = self.marker_side + self.gap / 2.0;
         let pitch = self.marker_side + self.gap;
-        [-half + (k % 2) as f64 * pitch, -half + (k / 2) as f64 * pitch]
+        [
+            -half + (k % 2) as f64 * pitch,
+            -half + (k / 2) as f64 * pitch,
+        ]
     }
 
     /// Centre of marker `k` in the plate frame (the origin of a detector's marker pose).
@@ -57,7 +64,12 @@ impl FiducialPlate {
     pub fn marker_corners(&self, k: usize) -> [Vector3<f64>; 4] {
         let [x, y] = self.marker_top_left(k);
         let s = self.marker_side;
-        [Vector3::new(x, y, 0.0), Vector3::new(x + s, y, 0.0), Vector3::new(x + s, y + s, 0.0), Vector3::new(x, y + s, 0.0)]
+        [
+            Vector3::new(x, y, 0.0),
+            Vector3::new(x + s, y, 0.0),
+            Vector3::new(x + s, y + s, 0.0),
+            Vector3::new(x, y + s, 0.0),
+        ]
     }
 
     /// Plate frame → workpiece frame for the nominal camera pose `nominal_camera`.
@@ -69,7 +81,10 @@ impl FiducialPlate {
     /// feature positions a camera reading is predicted for.
     pub fn corners_in_workpiece(&self, nominal_camera: &Isometry3<f64>) -> Vec<Vector3<f64>> {
         let pose = self.pose(nominal_camera);
-        (0..PLATE_MARKERS).flat_map(|k| self.marker_corners(k)).map(|c| pose.transform_point(&c.into()).coords).collect()
+        (0..PLATE_MARKERS)
+            .flat_map(|k| self.marker_corners(k))
+            .map(|c| pose.transform_point(&c.into()).coords)
+            .collect()
     }
 }
 
@@ -81,15 +96,26 @@ mod tests {
     fn corners_lie_on_the_plate_at_the_standoff() {
         let plate = FiducialPlate::default();
         // camera at (1, 2, 3) looking down −z: its x along wp x, y along −wp y
-        let cam = Isometry3::from_parts(Translation3::new(1.0, 2.0, 3.0), nalgebra::UnitQuaternion::from_euler_angles(std::f64::consts::PI, 0.0, 0.0));
+        let cam = Isometry3::from_parts(
+            Translation3::new(1.0, 2.0, 3.0),
+            nalgebra::UnitQuaternion::from_euler_angles(std::f64::consts::PI, 0.0, 0.0),
+        );
         let c = plate.corners_in_workpiece(&cam);
         assert_eq!(c.len(), 16);
         for p in &c {
             assert!((p.z - (3.0 - 0.150)).abs() < 1e-12, "{p}");
         }
         // marker 0's top-left corner: plate (−0.025, −0.025) → wp (1 − 0.025, 2 + 0.025)
-        assert!((c[0] - Vector3::new(0.975, 2.025, 2.85)).norm() < 1e-12, "{}", c[0]);
+        assert!(
+            (c[0] - Vector3::new(0.975, 2.025, 2.85)).norm() < 1e-12,
+            "{}",
+            c[0]
+        );
         // marker 3's bottom-right corner: plate (0.025, 0.025)
-        assert!((c[14] - Vector3::new(1.025, 1.975, 2.85)).norm() < 1e-12, "{}", c[14]);
+        assert!(
+            (c[14] - Vector3::new(1.025, 1.975, 2.85)).norm() < 1e-12,
+            "{}",
+            c[14]
+        );
     }
 }

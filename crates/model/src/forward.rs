@@ -32,7 +32,9 @@ use metrocell_kinematics::dh::DhTable;
 use metrocell_kinematics::serial::SerialChain;
 use metrocell_kinematics::KinematicsError;
 use metrocell_physics::model::TermModel;
-use metrocell_physics::{ConfiguredTerm, EffectKind, Frame, PhysicsError, SignalKind, Signals, TermId};
+use metrocell_physics::{
+    ConfiguredTerm, EffectKind, Frame, PhysicsError, SignalKind, Signals, TermId,
+};
 use nalgebra::{DMatrix, Isometry3, Matrix3, Vector3};
 
 use crate::arm_gravity::ArmGravity;
@@ -69,10 +71,17 @@ pub enum KinematicTruth {
     /// Cartesian and five-axis machines: no kinematic terms.
     None,
     /// Delta: the nominal geometry the firmware inverts, and the true geometry (nominal + trims).
-    Delta { nominal: DeltaGeometry, truth: DeltaGeometry },
+    Delta {
+        nominal: DeltaGeometry,
+        truth: DeltaGeometry,
+    },
     /// Arm: the true chain (joint offsets and link lengths applied), the joint offsets, and the
     /// true DH table if the arm came from one.
-    Arm { chain: SerialChain, joint_offsets: Vec<f64>, dh: Option<DhTable> },
+    Arm {
+        chain: SerialChain,
+        joint_offsets: Vec<f64>,
+        dh: Option<DhTable>,
+    },
 }
 
 /// Cached displacements of terms that read nothing but temperature histories (valid while the
@@ -91,10 +100,16 @@ impl DisplacementCache {
             .iter()
             .map(|t| {
                 let sig = t.term.signals();
-                !sig.is_empty() && sig.iter().all(|s| matches!(s, SignalKind::TemperatureHistory(_)))
+                !sig.is_empty()
+                    && sig
+                        .iter()
+                        .all(|s| matches!(s, SignalKind::TemperatureHistory(_)))
             })
             .collect();
-        Self { values: vec![None; history_only.len()], history_only }
+        Self {
+            values: vec![None; history_only.len()],
+            history_only,
+        }
     }
     pub fn invalidate(&mut self) {
         self.values.iter_mut().for_each(|c| *c = None);
@@ -123,7 +138,10 @@ pub struct ForwardModel<'a> {
 }
 
 pub(crate) fn kin_error(what: &str, q: &[f64], e: KinematicsError) -> PhysicsError {
-    PhysicsError::InvalidInput { what: format!("{what} at q = {q:?}"), reason: e.to_string() }
+    PhysicsError::InvalidInput {
+        what: format!("{what} at q = {q:?}"),
+        reason: e.to_string(),
+    }
 }
 
 pub(crate) fn v3(v: &nalgebra::DVector<f64>) -> Vector3<f64> {
@@ -142,7 +160,10 @@ enum Acting {
 impl Acting {
     fn takes(self, effect: EffectKind) -> bool {
         match self {
-            Acting::OnTool => matches!(effect, EffectKind::Displacement(Frame::Machine | Frame::Tool)),
+            Acting::OnTool => matches!(
+                effect,
+                EffectKind::Displacement(Frame::Machine | Frame::Tool)
+            ),
             Acting::OnPart => effect == EffectKind::Displacement(Frame::Workpiece),
         }
     }
@@ -154,8 +175,15 @@ impl<'a> ForwardModel<'a> {
     /// terms are those of a tracker, a probe or a camera, each at most once per instrument
     /// (instruments are told apart by the terms' `instrument` option, see
     /// [`crate::instruments`]).
-    pub fn new(machine: &'a MachineGeometry, machine_terms: &'a TermModel, instrument_terms: &'a TermModel) -> Result<Self, PhysicsError> {
-        let bad = |label: String, reason: &str| PhysicsError::InvalidInput { what: format!("forward model, term `{label}`"), reason: reason.into() };
+    pub fn new(
+        machine: &'a MachineGeometry,
+        machine_terms: &'a TermModel,
+        instrument_terms: &'a TermModel,
+    ) -> Result<Self, PhysicsError> {
+        let bad = |label: String, reason: &str| PhysicsError::InvalidInput {
+            what: format!("forward model, term `{label}`"),
+            reason: reason.into(),
+        };
         let mut slots = Vec::new();
         let mut at = 0;
         for t in &machine_terms.terms {
@@ -163,8 +191,22 @@ impl<'a> ForwardModel<'a> {
             let ok = match t.term.effect() {
                 EffectKind::Displacement(Frame::Machine | Frame::Tool | Frame::Workpiece) => true,
                 EffectKind::Kinematic => match &machine.kinematics {
-                    MachineKinematics::Delta(_) => matches!(id, TermId::DeltaRodLength | TermId::DeltaRadius | TermId::DeltaTowerAngle | TermId::DeltaEndstop),
-                    MachineKinematics::SerialArm(_) => matches!(id, TermId::JointOffset | TermId::LinkLength | TermId::JointCompliance | TermId::JointBacklash | TermId::ColumnBending | TermId::LinkThermalExpansion),
+                    MachineKinematics::Delta(_) => matches!(
+                        id,
+                        TermId::DeltaRodLength
+                            | TermId::DeltaRadius
+                            | TermId::DeltaTowerAngle
+                            | TermId::DeltaEndstop
+                    ),
+                    MachineKinematics::SerialArm(_) => matches!(
+                        id,
+                        TermId::JointOffset
+                            | TermId::LinkLength
+                            | TermId::JointCompliance
+                            | TermId::JointBacklash
+                            | TermId::ColumnBending
+                            | TermId::LinkThermalExpansion
+                    ),
                     _ => false,
                 },
                 _ => false,
@@ -182,7 +224,15 @@ impl<'a> ForwardModel<'a> {
             at += len;
         }
         let instruments = group_instruments(machine_terms.terms.len(), &instrument_terms.terms)?;
-        let mut model = Self { machine, machine_terms, instrument_terms, slots, n_params: at, instruments, linear_columns: None };
+        let mut model = Self {
+            machine,
+            machine_terms,
+            instrument_terms,
+            slots,
+            n_params: at,
+            instruments,
+            linear_columns: None,
+        };
         model.linear_columns = model.find_linear_target_columns();
         Ok(model)
     }
@@ -194,7 +244,12 @@ impl<'a> ForwardModel<'a> {
 
     /// `label.param` of every parameter, in stacked order.
     pub fn param_names(&self) -> Vec<String> {
-        self.machine_terms.param_specs().into_iter().chain(self.instrument_terms.param_specs()).map(|s| s.name).collect()
+        self.machine_terms
+            .param_specs()
+            .into_iter()
+            .chain(self.instrument_terms.param_specs())
+            .map(|s| s.name)
+            .collect()
     }
 
     /// The configured (true, for the twin) stacked parameter vector.
@@ -208,7 +263,11 @@ impl<'a> ForwardModel<'a> {
     /// first instrument that has one).
     pub fn instrument_param_start(&self, id: TermId) -> Option<usize> {
         let n = self.machine_terms.terms.len();
-        let k = self.instrument_terms.terms.iter().position(|t| t.term.id() == id)?;
+        let k = self
+            .instrument_terms
+            .terms
+            .iter()
+            .position(|t| t.term.id() == id)?;
         Some(self.slots[n + k].start)
     }
 
@@ -216,22 +275,43 @@ impl<'a> ForwardModel<'a> {
     /// its six parameters start in the stacked vector, in the model's order.
     pub fn pose_param_starts(&self) -> Vec<(Option<String>, usize)> {
         let n = self.machine_terms.terms.len();
-        self.instrument_terms.terms.iter().enumerate().filter(|(_, t)| t.term.id() == TermId::TrackerPose).map(|(k, t)| (t.term.setup().map(str::to_string), self.slots[n + k].start)).collect()
+        self.instrument_terms
+            .terms
+            .iter()
+            .enumerate()
+            .filter(|(_, t)| t.term.id() == TermId::TrackerPose)
+            .map(|(k, t)| (t.term.setup().map(str::to_string), self.slots[n + k].start))
+            .collect()
     }
 
     /// Where the parameters of the pose that reads `signals` start: its setup's pose
     /// (`tracker_pose[<setup>]`) when the model has one, else the pose of every reading (the
     /// tracker chain's own choice, `pose_of` in crate::tracker).
     pub fn pose_param_start_for(&self, signals: &Signals) -> Option<usize> {
-        let trackers = || self.instruments.iter().filter(|i| i.kind == crate::instruments::InstrumentKind::Tracker);
+        let trackers = || {
+            self.instruments
+                .iter()
+                .filter(|i| i.kind == crate::instruments::InstrumentKind::Tracker)
+        };
         let setup = signals.setup.as_deref();
-        let own = trackers().find_map(|i| i.setup_poses.iter().find(|(s, _)| Some(s.as_str()) == setup).map(|(_, k)| *k));
-        own.or_else(|| trackers().find_map(|i| i.pose)).map(|k| self.slots[k].start)
+        let own = trackers().find_map(|i| {
+            i.setup_poses
+                .iter()
+                .find(|(s, _)| Some(s.as_str()) == setup)
+                .map(|(_, k)| *k)
+        });
+        own.or_else(|| trackers().find_map(|i| i.pose))
+            .map(|k| self.slots[k].start)
     }
 
     /// Column range (start, length) of term `label` in the stacked vector.
     pub fn term_columns(&self, label: &str) -> Option<(usize, usize)> {
-        let i = self.machine_terms.terms.iter().chain(&self.instrument_terms.terms).position(|t| t.term.label() == label)?;
+        let i = self
+            .machine_terms
+            .terms
+            .iter()
+            .chain(&self.instrument_terms.terms)
+            .position(|t| t.term.label() == label)?;
         Some((self.slots[i].start, self.slots[i].len))
     }
 
@@ -251,14 +331,31 @@ impl<'a> ForwardModel<'a> {
 
     pub(crate) fn check(&self, p: &[f64]) -> Result<(), PhysicsError> {
         if p.len() != self.n_params {
-            return Err(PhysicsError::ParameterCount { term: "forward model".into(), expected: self.n_params, got: p.len() });
+            return Err(PhysicsError::ParameterCount {
+                term: "forward model".into(),
+                expected: self.n_params,
+                got: p.len(),
+            });
         }
         Ok(())
     }
 
-    pub(crate) fn check_buffer(&self, what: &str, m: &DMatrix<f64>, rows: usize) -> Result<(), PhysicsError> {
+    pub(crate) fn check_buffer(
+        &self,
+        what: &str,
+        m: &DMatrix<f64>,
+        rows: usize,
+    ) -> Result<(), PhysicsError> {
         if m.nrows() != rows || m.ncols() != self.n_params {
-            return Err(PhysicsError::InvalidInput { what: format!("forward model, {what} buffer"), reason: format!("must be {rows} × {}, is {} × {}", self.n_params, m.nrows(), m.ncols()) });
+            return Err(PhysicsError::InvalidInput {
+                what: format!("forward model, {what} buffer"),
+                reason: format!(
+                    "must be {rows} × {}, is {} × {}",
+                    self.n_params,
+                    m.nrows(),
+                    m.ncols()
+                ),
+            });
         }
         Ok(())
     }
@@ -301,7 +398,10 @@ impl<'a> ForwardModel<'a> {
                         _ => {}
                     }
                 }
-                KinematicTruth::Delta { nominal: *nominal, truth: g }
+                KinematicTruth::Delta {
+                    nominal: *nominal,
+                    truth: g,
+                }
             }
             MachineKinematics::SerialArm(arm) => {
                 let mut offsets = vec![0.0; arm.chain.dof()];
@@ -323,7 +423,11 @@ impl<'a> ForwardModel<'a> {
                     }
                     t
                 });
-                KinematicTruth::Arm { chain: arm.true_chain(&offsets, &lengths), joint_offsets: offsets, dh }
+                KinematicTruth::Arm {
+                    chain: arm.true_chain(&offsets, &lengths),
+                    joint_offsets: offsets,
+                    dh,
+                }
             }
             _ => KinematicTruth::None,
         })
@@ -333,7 +437,14 @@ impl<'a> ForwardModel<'a> {
     /// the frame they act in (set as `s.machine_point`). `tool_rotation` turns tool-frame terms
     /// (`Frame::Tool`, e.g. `tool_offset`) into that frame: identity where the tool does not
     /// turn, the tool frame's rotation on an arm.
-    fn displacement(&self, p: &[f64], s: &mut Signals, point: Vector3<f64>, tool_rotation: &Matrix3<f64>, mut cache: Option<&mut DisplacementCache>) -> Result<Vector3<f64>, PhysicsError> {
+    fn displacement(
+        &self,
+        p: &[f64],
+        s: &mut Signals,
+        point: Vector3<f64>,
+        tool_rotation: &Matrix3<f64>,
+        mut cache: Option<&mut DisplacementCache>,
+    ) -> Result<Vector3<f64>, PhysicsError> {
         s.machine_point = Some(point);
         let mut d = Vector3::zeros();
         for (i, t) in self.machine_terms.terms.iter().enumerate() {
@@ -346,7 +457,11 @@ impl<'a> ForwardModel<'a> {
                 continue;
             }
             let v = v3(&t.term.predict(self.part(i, p), s)?.value);
-            let v = if effect == EffectKind::Displacement(Frame::Tool) { tool_rotation * v } else { v };
+            let v = if effect == EffectKind::Displacement(Frame::Tool) {
+                tool_rotation * v
+            } else {
+                v
+            };
             if let Some(c) = cache.as_deref_mut() {
                 if c.history_only[i] {
                     c.values[i] = Some(v);
@@ -359,14 +474,24 @@ impl<'a> ForwardModel<'a> {
 
     /// Whether any machine term acts in the workpiece frame.
     pub fn has_workpiece_terms(&self) -> bool {
-        self.machine_terms.terms.iter().any(|t| Acting::OnPart.takes(t.term.effect()))
+        self.machine_terms
+            .terms
+            .iter()
+            .any(|t| Acting::OnPart.takes(t.term.effect()))
     }
 
     /// d_w: Σ of the workpiece terms' displacements of the part at its nominal point `point`
     /// (workpiece frame, m); `s.workpiece_point` is set to `point`. With `jac` (3 × parameters),
     /// `sign`·∂d_w/∂p is written into the workpiece terms' columns (the others are left as they
     /// are). No allocation when the terms override `evaluate_into`.
-    pub fn workpiece_displacement(&self, p: &[f64], s: &mut Signals, point: Vector3<f64>, mut jac: Option<&mut DMatrix<f64>>, sign: f64) -> Result<Vector3<f64>, PhysicsError> {
+    pub fn workpiece_displacement(
+        &self,
+        p: &[f64],
+        s: &mut Signals,
+        point: Vector3<f64>,
+        mut jac: Option<&mut DMatrix<f64>>,
+        sign: f64,
+    ) -> Result<Vector3<f64>, PhysicsError> {
         s.workpiece_point = Some(point);
         let mut d = Vector3::zeros();
         let mut v = [0.0; 3];
@@ -378,7 +503,8 @@ impl<'a> ForwardModel<'a> {
                 Some(out) => {
                     let slot = self.slots[i];
                     let mut view = out.view_mut((0, slot.start), (3, slot.len));
-                    t.term.evaluate_into(self.part(i, p), s, &mut v, view.rows_mut(0, 3))?;
+                    t.term
+                        .evaluate_into(self.part(i, p), s, &mut v, view.rows_mut(0, 3))?;
                     if sign != 1.0 {
                         view *= sign;
                     }
@@ -394,13 +520,26 @@ impl<'a> ForwardModel<'a> {
     /// same `p`). `s` carries the axis signals ([`Self::set_motion`]), temperatures, load…;
     /// its `workpiece_point` is set here (the nominal tool point, for [`ToolState::workpiece`]).
     /// Forward kinematics runs once per call.
-    pub fn tool_state(&self, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, cache: Option<&mut DisplacementCache>) -> Result<ToolState, PhysicsError> {
+    pub fn tool_state(
+        &self,
+        p: &[f64],
+        kin: &KinematicTruth,
+        q: &[f64],
+        s: &mut Signals,
+        cache: Option<&mut DisplacementCache>,
+    ) -> Result<ToolState, PhysicsError> {
         self.check(p)?;
         let mut cache = cache;
         let gravity = self.gravity_of(p, q, s)?;
-        let mut tool = self.tool_state_with(kin, q, gravity.as_ref().map(|g| (g, p)), |point, rotation| self.displacement(p, s, point, rotation, cache.as_deref_mut()))?;
+        let mut tool = self.tool_state_with(
+            kin,
+            q,
+            gravity.as_ref().map(|g| (g, p)),
+            |point, rotation| self.displacement(p, s, point, rotation, cache.as_deref_mut()),
+        )?;
         if self.has_workpiece_terms() {
-            tool.workpiece = self.workpiece_displacement(p, s, tool.nominal.translation.vector, None, 1.0)?;
+            tool.workpiece =
+                self.workpiece_displacement(p, s, tool.nominal.translation.vector, None, 1.0)?;
         }
         Ok(tool)
     }
@@ -410,7 +549,14 @@ impl<'a> ForwardModel<'a> {
     pub fn nominal_tool(&self, q: &[f64]) -> Result<ToolState, PhysicsError> {
         let n = self.machine.joint_names().len();
         if q.len() != n {
-            return Err(PhysicsError::InvalidInput { what: "forward model, joint vector".into(), reason: format!("has {} values, the machine has {n} joints ({})", q.len(), self.machine.joint_names().join(", ")) });
+            return Err(PhysicsError::InvalidInput {
+                what: "forward model, joint vector".into(),
+                reason: format!(
+                    "has {} values, the machine has {n} joints ({})",
+                    q.len(),
+                    self.machine.joint_names().join(", ")
+                ),
+            });
         }
         self.tool_state_with(&KinematicTruth::None, q, None, |_, _| Ok(Vector3::zeros()))
     }
@@ -418,7 +564,13 @@ impl<'a> ForwardModel<'a> {
     /// The family's tool state, with the machine terms' displacement sum `displacement(nominal
     /// point of the frame the terms act in, tool rotation)` (tool-frame terms are turned by the
     /// rotation).
-    fn tool_state_with(&self, kin: &KinematicTruth, q: &[f64], gravity: Option<(&ArmGravity, &[f64])>, mut displacement: impl FnMut(Vector3<f64>, &Matrix3<f64>) -> Result<Vector3<f64>, PhysicsError>) -> Result<ToolState, PhysicsError> {
+    fn tool_state_with(
+        &self,
+        kin: &KinematicTruth,
+        q: &[f64],
+        gravity: Option<(&ArmGravity, &[f64])>,
+        mut displacement: impl FnMut(Vector3<f64>, &Matrix3<f64>) -> Result<Vector3<f64>, PhysicsError>,
+    ) -> Result<ToolState, PhysicsError> {
         let identity = Matrix3::identity();
         let zero = Vector3::zeros();
         Ok(match &self.machine.kinematics {
@@ -429,37 +581,66 @@ impl<'a> ForwardModel<'a> {
                 // heights put the effector where the true geometry says
                 let kinematic = match kin {
                     KinematicTruth::Delta { nominal, truth } => {
-                        let joints = nominal.inverse(&qv).map_err(|e| kin_error("delta kinematics", q, e))?;
-                        truth.forward(&joints).map_err(|e| kin_error("delta kinematics", q, e))? - qv
+                        let joints = nominal
+                            .inverse(&qv)
+                            .map_err(|e| kin_error("delta kinematics", q, e))?;
+                        truth
+                            .forward(&joints)
+                            .map_err(|e| kin_error("delta kinematics", q, e))?
+                            - qv
                     }
                     _ => Vector3::zeros(),
                 };
                 let d = kinematic + displacement(n, &identity)?;
-                ToolState { nominal: Isometry3::translation(n.x, n.y, n.z), truth: Isometry3::translation(n.x + d.x, n.y + d.y, n.z + d.z), d, workpiece: zero }
+                ToolState {
+                    nominal: Isometry3::translation(n.x, n.y, n.z),
+                    truth: Isometry3::translation(n.x + d.x, n.y + d.y, n.z + d.z),
+                    d,
+                    workpiece: zero,
+                }
             }
             MachineKinematics::FiveAxis(f) => {
                 // the spindle does not turn: the tool frame is the machine frame seen from the
                 // workpiece, which turns with the table
                 let tip = f.tip_machine(q);
                 let d = displacement(tip, &identity)?;
-                let workpiece_from_machine = f.geometry.machine_from_workpiece(q[3], q[4]).inverse();
-                ToolState { nominal: workpiece_from_machine * Isometry3::translation(tip.x, tip.y, tip.z), truth: workpiece_from_machine * Isometry3::translation(tip.x + d.x, tip.y + d.y, tip.z + d.z), d, workpiece: zero }
+                let workpiece_from_machine =
+                    f.geometry.machine_from_workpiece(q[3], q[4]).inverse();
+                ToolState {
+                    nominal: workpiece_from_machine * Isometry3::translation(tip.x, tip.y, tip.z),
+                    truth: workpiece_from_machine
+                        * Isometry3::translation(tip.x + d.x, tip.y + d.y, tip.z + d.z),
+                    d,
+                    workpiece: zero,
+                }
             }
             MachineKinematics::SerialArm(a) => {
-                let nominal = a.chain.tool_pose(q).map_err(|e| kin_error("arm forward kinematics", q, e))?;
+                let nominal = a
+                    .chain
+                    .tool_pose(q)
+                    .map_err(|e| kin_error("arm forward kinematics", q, e))?;
                 // the joints where gravity puts them (compliance, backlash)
                 let deflected = gravity.map(|(g, _)| g.deflected(q));
                 let q_true = deflected.as_deref().unwrap_or(q);
                 let true_pose = match kin {
-                    KinematicTruth::Arm { chain, .. } => chain.tool_pose(q_true).map_err(|e| kin_error("true arm forward kinematics", q, e))?,
+                    KinematicTruth::Arm { chain, .. } => chain
+                        .tool_pose(q_true)
+                        .map_err(|e| kin_error("true arm forward kinematics", q, e))?,
                     _ => nominal,
                 };
                 let n = nominal.translation.vector;
                 let tool_rotation = true_pose.rotation.to_rotation_matrix().into_inner();
                 // the column's tilt and the links' expansion move the tool point further
-                let bent = gravity.map_or(Vector3::zeros(), |(g, params)| g.displacement(self, params, &true_pose.translation.vector));
+                let bent = gravity.map_or(Vector3::zeros(), |(g, params)| {
+                    g.displacement(self, params, &true_pose.translation.vector)
+                });
                 let d = true_pose.translation.vector - n + bent + displacement(n, &tool_rotation)?;
-                ToolState { nominal, truth: Isometry3::from_parts((n + d).into(), true_pose.rotation), d, workpiece: zero }
+                ToolState {
+                    nominal,
+                    truth: Isometry3::from_parts((n + d).into(), true_pose.rotation),
+                    d,
+                    workpiece: zero,
+                }
             }
         })
     }
@@ -468,10 +649,23 @@ impl<'a> ForwardModel<'a> {
     /// its Jacobian w.r.t. the stacked parameters, written into `out` (3 × [`Self::param_count`];
     /// columns of instrument terms are left zero). The point is `tool_state(..).target()`, bit
     /// for bit.
-    pub fn tool_point_jacobian(&self, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, out: &mut DMatrix<f64>) -> Result<Vector3<f64>, PhysicsError> {
+    pub fn tool_point_jacobian(
+        &self,
+        p: &[f64],
+        kin: &KinematicTruth,
+        q: &[f64],
+        s: &mut Signals,
+        out: &mut DMatrix<f64>,
+    ) -> Result<Vector3<f64>, PhysicsError> {
         let mut tool = self.tool_jacobian(p, kin, q, s, out, None)?;
         if self.has_workpiece_terms() {
-            tool.workpiece = self.workpiece_displacement(p, s, tool.nominal.translation.vector, Some(out), -1.0)?;
+            tool.workpiece = self.workpiece_displacement(
+                p,
+                s,
+                tool.nominal.translation.vector,
+                Some(out),
+                -1.0,
+            )?;
         }
         Ok(tool.target())
     }
@@ -481,7 +675,15 @@ impl<'a> ForwardModel<'a> {
     /// zero) and, with `ang`, ∂(tool rotation)/∂p as angular-velocity columns in the frame tool
     /// points are reported in (non-zero only for an arm's joint offsets: no other parameter
     /// turns the tool).
-    pub(crate) fn tool_jacobian(&self, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, lin: &mut DMatrix<f64>, mut ang: Option<&mut DMatrix<f64>>) -> Result<ToolState, PhysicsError> {
+    pub(crate) fn tool_jacobian(
+        &self,
+        p: &[f64],
+        kin: &KinematicTruth,
+        q: &[f64],
+        s: &mut Signals,
+        lin: &mut DMatrix<f64>,
+        mut ang: Option<&mut DMatrix<f64>>,
+    ) -> Result<ToolState, PhysicsError> {
         self.check(p)?;
         self.check_buffer("tool-point Jacobian", lin, 3)?;
         // through the slice: a memset, where nalgebra's fill walks the elements one by one
@@ -497,34 +699,50 @@ impl<'a> ForwardModel<'a> {
         let mut tool_frame_sum = Vector3::zeros();
         let mut tool_rotation = Matrix3::identity();
         let gravity = self.gravity_of(p, q, s)?;
-        let tool = self.tool_state_with(kin, q, gravity.as_ref().map(|g| (g, p)), |point, rotation| {
-            tool_rotation = *rotation;
-            s.machine_point = Some(point);
-            let mut d = Vector3::zeros();
-            let mut v = [0.0; 3];
-            for (i, t) in self.machine_terms.terms.iter().enumerate() {
-                let effect = t.term.effect();
-                if !Acting::OnTool.takes(effect) {
-                    continue;
-                }
-                let slot = self.slots[i];
-                t.term.evaluate_into(self.part(i, p), s, &mut v, out.view_mut((0, slot.start), (3, slot.len)))?;
-                let mut value = Vector3::new(v[0], v[1], v[2]);
-                if effect == EffectKind::Displacement(Frame::Tool) {
-                    tool_frame_sum += value;
-                    value = rotation * value;
-                    for c in slot.start..slot.start + slot.len {
-                        let turned = rotation * out.fixed_view::<3, 1>(0, c);
-                        out.fixed_view_mut::<3, 1>(0, c).copy_from(&turned);
+        let tool = self.tool_state_with(
+            kin,
+            q,
+            gravity.as_ref().map(|g| (g, p)),
+            |point, rotation| {
+                tool_rotation = *rotation;
+                s.machine_point = Some(point);
+                let mut d = Vector3::zeros();
+                let mut v = [0.0; 3];
+                for (i, t) in self.machine_terms.terms.iter().enumerate() {
+                    let effect = t.term.effect();
+                    if !Acting::OnTool.takes(effect) {
+                        continue;
                     }
+                    let slot = self.slots[i];
+                    t.term.evaluate_into(
+                        self.part(i, p),
+                        s,
+                        &mut v,
+                        out.view_mut((0, slot.start), (3, slot.len)),
+                    )?;
+                    let mut value = Vector3::new(v[0], v[1], v[2]);
+                    if effect == EffectKind::Displacement(Frame::Tool) {
+                        tool_frame_sum += value;
+                        value = rotation * value;
+                        for c in slot.start..slot.start + slot.len {
+                            let turned = rotation * out.fixed_view::<3, 1>(0, c);
+                            out.fixed_view_mut::<3, 1>(0, c).copy_from(&turned);
+                        }
+                    }
+                    d += value;
                 }
-                d += value;
-            }
-            Ok(d)
-        })?;
+                Ok(d)
+            },
+        )?;
         if let MachineKinematics::FiveAxis(f) = &self.machine.kinematics {
             // the terms act in the machine frame; the tool point is in the workpiece frame
-            let r = f.geometry.machine_from_workpiece(q[3], q[4]).inverse().rotation.to_rotation_matrix().into_inner();
+            let r = f
+                .geometry
+                .machine_from_workpiece(q[3], q[4])
+                .inverse()
+                .rotation
+                .to_rotation_matrix()
+                .into_inner();
             for c in 0..self.n_params {
                 let turned = r * out.fixed_view::<3, 1>(0, c);
                 out.fixed_view_mut::<3, 1>(0, c).copy_from(&turned);
@@ -533,8 +751,12 @@ impl<'a> ForwardModel<'a> {
         match kin {
             KinematicTruth::Delta { nominal, truth } => {
                 let qv = Vector3::new(q[0], q[1], q[2]);
-                let joints = nominal.inverse(&qv).map_err(|e| kin_error("delta kinematics", q, e))?;
-                let fpj = truth.forward_parameter_jacobian(&joints).map_err(|e| kin_error("delta parameter Jacobian", q, e))?;
+                let joints = nominal
+                    .inverse(&qv)
+                    .map_err(|e| kin_error("delta kinematics", q, e))?;
+                let fpj = truth
+                    .forward_parameter_jacobian(&joints)
+                    .map_err(|e| kin_error("delta parameter Jacobian", q, e))?;
                 for (i, t) in self.machine_terms.terms.iter().enumerate() {
                     // columns of DELTA_PARAMETER_NAMES: tower angle trims 2.., radius trims 5..,
                     // rod trims 8.., endstops 11..
@@ -547,19 +769,37 @@ impl<'a> ForwardModel<'a> {
                     };
                     let start = self.slots[i].start;
                     for k in 0..3 {
-                        out.fixed_view_mut::<3, 1>(0, start + k).copy_from(&fpj.fixed_view::<3, 1>(0, base + k));
+                        out.fixed_view_mut::<3, 1>(0, start + k)
+                            .copy_from(&fpj.fixed_view::<3, 1>(0, base + k));
                     }
                 }
             }
-            KinematicTruth::Arm { chain, joint_offsets, dh } => {
+            KinematicTruth::Arm {
+                chain,
+                joint_offsets,
+                dh,
+            } => {
                 let deflected = gravity.as_ref().map(|g| g.deflected(q));
-                let geometric = chain.joint_offset_jacobian(deflected.as_deref().unwrap_or(q)).map_err(|e| kin_error("arm Jacobian", q, e))?;
+                let geometric = chain
+                    .joint_offset_jacobian(deflected.as_deref().unwrap_or(q))
+                    .map_err(|e| kin_error("arm Jacobian", q, e))?;
                 let turned = tool_rotation * tool_frame_sum;
                 if let Some(g) = &gravity {
-                    self.gravity_columns(g, &geometric, &turned, &tool.truth.translation.vector, out, ang_out.as_deref_mut());
+                    self.gravity_columns(
+                        g,
+                        &geometric,
+                        &turned,
+                        &tool.truth.translation.vector,
+                        out,
+                        ang_out.as_deref_mut(),
+                    );
                 }
                 let MachineKinematics::SerialArm(arm) = &self.machine.kinematics else {
-                    return Err(PhysicsError::InvalidInput { what: "forward model".into(), reason: "an arm's kinematic truth given for a machine that is not an arm".into() });
+                    return Err(PhysicsError::InvalidInput {
+                        what: "forward model".into(),
+                        reason: "an arm's kinematic truth given for a machine that is not an arm"
+                            .into(),
+                    });
                 };
                 for (i, t) in self.machine_terms.terms.iter().enumerate() {
                     let start = self.slots[i].start;
@@ -569,7 +809,8 @@ impl<'a> ForwardModel<'a> {
                                 let lin = geometric.fixed_view::<3, 1>(0, k).into_owned();
                                 let ang = geometric.fixed_view::<3, 1>(3, k).into_owned();
                                 // the offset turns the tool, and the tool-frame terms with it
-                                out.fixed_view_mut::<3, 1>(0, start + k).copy_from(&(lin + ang.cross(&turned)));
+                                out.fixed_view_mut::<3, 1>(0, start + k)
+                                    .copy_from(&(lin + ang.cross(&turned)));
                                 if let Some(a) = ang_out.as_deref_mut() {
                                     a.fixed_view_mut::<3, 1>(0, start + k).copy_from(&ang);
                                 }
@@ -578,9 +819,13 @@ impl<'a> ForwardModel<'a> {
                         TermId::LinkLength => match dh {
                             Some(table) => {
                                 // a DH `a` translates everything after it along the row's x axis
-                                let qo: Vec<f64> = q.iter().zip(joint_offsets).map(|(a, b)| a + b).collect();
-                                let pj = table.parameter_jacobian(&qo).map_err(|e| kin_error("DH parameter Jacobian", q, e))?;
-                                let base_rotation = chain.base.rotation.to_rotation_matrix().into_inner();
+                                let qo: Vec<f64> =
+                                    q.iter().zip(joint_offsets).map(|(a, b)| a + b).collect();
+                                let pj = table
+                                    .parameter_jacobian(&qo)
+                                    .map_err(|e| kin_error("DH parameter Jacobian", q, e))?;
+                                let base_rotation =
+                                    chain.base.rotation.to_rotation_matrix().into_inner();
                                 for k in 0..table.rows.len() {
                                     let col = base_rotation * pj.fixed_view::<3, 1>(0, 4 * k + 2);
                                     out.fixed_view_mut::<3, 1>(0, start + k).copy_from(&col);
@@ -588,7 +833,9 @@ impl<'a> ForwardModel<'a> {
                             }
                             None => {
                                 // a URDF length stretches the joint's <origin xyz> along itself
-                                let oj = chain.origin_translation_jacobian(q).map_err(|e| kin_error("URDF origin Jacobian", q, e))?;
+                                let oj = chain
+                                    .origin_translation_jacobian(q)
+                                    .map_err(|e| kin_error("URDF origin Jacobian", q, e))?;
                                 for (k, joint) in arm.chain.joints.iter().enumerate() {
                                     let v = joint.pre.translation.vector;
                                     let n = v.norm();
@@ -612,7 +859,12 @@ impl<'a> ForwardModel<'a> {
 impl ForwardModel<'_> {
     /// The gravity terms' state of an arm at reading `q` (None on other machines, or an arm
     /// without them).
-    fn gravity_of(&self, p: &[f64], q: &[f64], s: &Signals) -> Result<Option<ArmGravity>, PhysicsError> {
+    fn gravity_of(
+        &self,
+        p: &[f64],
+        q: &[f64],
+        s: &Signals,
+    ) -> Result<Option<ArmGravity>, PhysicsError> {
         match &self.machine.kinematics {
             MachineKinematics::SerialArm(arm) => self.arm_gravity(arm, p, q, s),
             _ => Ok(None),
@@ -623,14 +875,23 @@ impl ForwardModel<'_> {
     /// backlash's times half the torque's sign (each joint column turning the tool-frame terms
     /// with it, `turned`), a column's compliances their unit tilts at the true tool point
     /// `point`, the links' expansion its direction times T − 20 °C.
-    fn gravity_columns(&self, g: &ArmGravity, geometric: &DMatrix<f64>, turned: &Vector3<f64>, point: &Vector3<f64>, out: &mut DMatrix<f64>, mut ang: Option<&mut DMatrix<f64>>) {
+    fn gravity_columns(
+        &self,
+        g: &ArmGravity,
+        geometric: &DMatrix<f64>,
+        turned: &Vector3<f64>,
+        point: &Vector3<f64>,
+        out: &mut DMatrix<f64>,
+        mut ang: Option<&mut DMatrix<f64>>,
+    ) {
         let mut joint_columns = |term: usize, vars: &[usize], factor: &dyn Fn(f64) -> f64| {
             let start = self.slots[term].start;
             for (c, &v) in vars.iter().enumerate() {
                 let f = factor(g.torques[v]);
                 let lin = geometric.fixed_view::<3, 1>(0, v).into_owned();
                 let a = geometric.fixed_view::<3, 1>(3, v).into_owned();
-                out.fixed_view_mut::<3, 1>(0, start + c).copy_from(&((lin + a.cross(turned)) * f));
+                out.fixed_view_mut::<3, 1>(0, start + c)
+                    .copy_from(&((lin + a.cross(turned)) * f));
                 if let Some(ang) = ang.as_deref_mut() {
                     ang.fixed_view_mut::<3, 1>(0, start + c).copy_from(&(a * f));
                 }
@@ -649,7 +910,8 @@ impl ForwardModel<'_> {
             }
         }
         if let Some((term, dt, direction)) = g.thermal {
-            out.fixed_view_mut::<3, 1>(0, self.slots[term].start).copy_from(&(direction * dt));
+            out.fixed_view_mut::<3, 1>(0, self.slots[term].start)
+                .copy_from(&(direction * dt));
         }
     }
 
@@ -659,7 +921,10 @@ impl ForwardModel<'_> {
     pub fn nominal_machine_point(&self, q: &[f64]) -> Option<Vector3<f64>> {
         // a record without the machine's joints (a reference nest's: q is empty) has no tool point
         match &self.machine.kinematics {
-            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) if q.len() >= 3 => Some(self.machine.nominal_tool_point(&Vector3::new(q[0], q[1], q[2]))),
+            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) if q.len() >= 3 => Some(
+                self.machine
+                    .nominal_tool_point(&Vector3::new(q[0], q[1], q[2])),
+            ),
             MachineKinematics::FiveAxis(f) if q.len() >= 5 => Some(f.tip_machine(q)),
             _ => None,
         }

@@ -28,7 +28,12 @@ impl InstrumentKind {
     /// The kind an instrument term belongs to (None for machine terms).
     pub fn of(id: TermId) -> Option<Self> {
         match id {
-            TermId::TrackerPose | TermId::BaseTilt | TermId::TrackerWarmup | TermId::Refraction | TermId::Turbulence | TermId::InstrumentDrift => Some(Self::Tracker),
+            TermId::TrackerPose
+            | TermId::BaseTilt
+            | TermId::TrackerWarmup
+            | TermId::Refraction
+            | TermId::Turbulence
+            | TermId::InstrumentDrift => Some(Self::Tracker),
             TermId::ProbePretravel => Some(Self::Probe),
             TermId::CameraScale | TermId::LensDistortion => Some(Self::Camera),
             _ => None,
@@ -81,7 +86,20 @@ pub struct Instrument {
 
 impl Instrument {
     fn new(kind: InstrumentKind, name: Option<String>) -> Self {
-        Self { kind, name, pose: None, setup_poses: Vec::new(), tilt: None, warmup: None, refraction: None, drift: None, pretravel: None, scale: None, distortion: None, camera: None }
+        Self {
+            kind,
+            name,
+            pose: None,
+            setup_poses: Vec::new(),
+            tilt: None,
+            warmup: None,
+            refraction: None,
+            drift: None,
+            pretravel: None,
+            scale: None,
+            distortion: None,
+            camera: None,
+        }
     }
     /// `tracker`, `tracker lt1`, … for messages.
     pub fn describe(&self) -> String {
@@ -101,7 +119,10 @@ impl Instrument {
 }
 
 /// Group instrument terms (global term index = `first` + their index) by kind and name.
-pub(crate) fn group_instruments(first: usize, terms: &[ConfiguredTerm]) -> Result<Vec<Instrument>, PhysicsError> {
+pub(crate) fn group_instruments(
+    first: usize,
+    terms: &[ConfiguredTerm],
+) -> Result<Vec<Instrument>, PhysicsError> {
     let mut out: Vec<Instrument> = Vec::new();
     for (k, t) in terms.iter().enumerate() {
         let id = t.term.id();
@@ -121,7 +142,13 @@ pub(crate) fn group_instruments(first: usize, terms: &[ConfiguredTerm]) -> Resul
         let inst = &mut out[at];
         if let (TermId::TrackerPose, Some(setup)) = (id, t.term.setup()) {
             if inst.setup_poses.iter().any(|(s, _)| s == setup) {
-                return Err(PhysicsError::InvalidInput { what: format!("forward model, term `{label}`"), reason: format!("is given twice for setup `{setup}` of the {}", inst.describe()) });
+                return Err(PhysicsError::InvalidInput {
+                    what: format!("forward model, term `{label}`"),
+                    reason: format!(
+                        "is given twice for setup `{setup}` of the {}",
+                        inst.describe()
+                    ),
+                });
             }
             inst.setup_poses.push((setup.to_string(), first + k));
             continue;
@@ -139,7 +166,10 @@ pub(crate) fn group_instruments(first: usize, terms: &[ConfiguredTerm]) -> Resul
             _ => continue,
         };
         if slot.replace(first + k).is_some() {
-            return Err(PhysicsError::InvalidInput { what: format!("forward model, term `{label}`"), reason: format!("is given twice for the {}", inst.describe()) });
+            return Err(PhysicsError::InvalidInput {
+                what: format!("forward model, term `{label}`"),
+                reason: format!("is given twice for the {}", inst.describe()),
+            });
         }
     }
     Ok(out)
@@ -154,37 +184,84 @@ impl<'a> ForwardModel<'a> {
     /// Index into [`Self::instruments`] of the `kind` instrument named `name` (None: the only
     /// one of that kind). `Ok(None)` if there is none; an error if `name` is None and there are
     /// several.
-    pub fn instrument(&self, kind: InstrumentKind, name: Option<&str>) -> Result<Option<usize>, PhysicsError> {
-        let mut found = self.instruments.iter().enumerate().filter(|(_, i)| i.kind == kind && (name.is_none() || i.name.as_deref() == name));
+    pub fn instrument(
+        &self,
+        kind: InstrumentKind,
+        name: Option<&str>,
+    ) -> Result<Option<usize>, PhysicsError> {
+        let mut found = self
+            .instruments
+            .iter()
+            .enumerate()
+            .filter(|(_, i)| i.kind == kind && (name.is_none() || i.name.as_deref() == name));
         let first = found.next().map(|(k, _)| k);
         if name.is_none() && found.next().is_some() {
-            let names: Vec<String> = self.instruments.iter().filter(|i| i.kind == kind).map(|i| i.name.clone().unwrap_or_else(|| "(unnamed)".into())).collect();
-            return Err(PhysicsError::InvalidInput { what: format!("forward model, {} reading", kind.name()), reason: format!("the model has {} {}s ({}): name the instrument", names.len(), kind.name(), names.join(", ")) });
+            let names: Vec<String> = self
+                .instruments
+                .iter()
+                .filter(|i| i.kind == kind)
+                .map(|i| i.name.clone().unwrap_or_else(|| "(unnamed)".into()))
+                .collect();
+            return Err(PhysicsError::InvalidInput {
+                what: format!("forward model, {} reading", kind.name()),
+                reason: format!(
+                    "the model has {} {}s ({}): name the instrument",
+                    names.len(),
+                    kind.name(),
+                    names.join(", ")
+                ),
+            });
         }
         Ok(first)
     }
 
     /// The instrument a reading needs, or an error naming what is missing.
-    pub(crate) fn require(&self, kind: InstrumentKind, name: Option<&str>) -> Result<&Instrument, PhysicsError> {
-        let k = self.instrument(kind, name)?.ok_or_else(|| PhysicsError::InvalidInput {
-            what: format!("forward model, {} reading", kind.name()),
-            reason: match name {
-                Some(n) => format!("the model has no {} named `{n}`", kind.name()),
-                None => format!("the model has no {}", kind.name()),
-            },
-        })?;
+    pub(crate) fn require(
+        &self,
+        kind: InstrumentKind,
+        name: Option<&str>,
+    ) -> Result<&Instrument, PhysicsError> {
+        let k = self
+            .instrument(kind, name)?
+            .ok_or_else(|| PhysicsError::InvalidInput {
+                what: format!("forward model, {} reading", kind.name()),
+                reason: match name {
+                    Some(n) => format!("the model has no {} named `{n}`", kind.name()),
+                    None => format!("the model has no {}", kind.name()),
+                },
+            })?;
         Ok(&self.instruments[k])
     }
 
     /// Give the camera `name` (None: unnamed) its geometry; a camera without terms is added.
     /// Errors on non-positive or non-finite intrinsics.
-    pub fn with_camera(mut self, name: Option<&str>, geometry: CameraGeometry) -> Result<Self, PhysicsError> {
+    pub fn with_camera(
+        mut self,
+        name: Option<&str>,
+        geometry: CameraGeometry,
+    ) -> Result<Self, PhysicsError> {
         let g = &geometry;
-        if !(g.fx > 0.0 && g.fy > 0.0 && g.fx.is_finite() && g.fy.is_finite() && g.cx.is_finite() && g.cy.is_finite()) {
-            return Err(PhysicsError::InvalidInput { what: "forward model, camera geometry".into(), reason: format!("needs fx, fy > 0 and finite cx, cy (px), got fx {}, fy {}, cx {}, cy {}", g.fx, g.fy, g.cx, g.cy) });
+        if !(g.fx > 0.0
+            && g.fy > 0.0
+            && g.fx.is_finite()
+            && g.fy.is_finite()
+            && g.cx.is_finite()
+            && g.cy.is_finite())
+        {
+            return Err(PhysicsError::InvalidInput {
+                what: "forward model, camera geometry".into(),
+                reason: format!(
+                    "needs fx, fy > 0 and finite cx, cy (px), got fx {}, fy {}, cx {}, cy {}",
+                    g.fx, g.fy, g.cx, g.cy
+                ),
+            });
         }
         let name = name.map(str::to_string);
-        match self.instruments.iter_mut().find(|i| i.kind == InstrumentKind::Camera && i.name == name) {
+        match self
+            .instruments
+            .iter_mut()
+            .find(|i| i.kind == InstrumentKind::Camera && i.name == name)
+        {
             Some(i) => i.camera = Some(geometry),
             None => {
                 let mut i = Instrument::new(InstrumentKind::Camera, name);

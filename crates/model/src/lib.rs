@@ -28,8 +28,8 @@
 // `!(x > 0.0)` is used on purpose: unlike `x <= 0.0` it also rejects NaN.
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
-mod arm_gravity;
 pub mod approach_rule;
+mod arm_gravity;
 pub mod camera;
 pub mod fiducial_plate;
 pub mod forward;
@@ -47,12 +47,15 @@ pub mod workspace;
 pub use camera::{CameraPrediction, CAMERA_ROWS};
 pub use fiducial_plate::{FiducialPlate, PLATE_MARKERS};
 pub use forward::{DisplacementCache, ForwardModel, KinematicTruth, ToolState};
+pub use instrument_pose::InstrumentPose;
 pub use instruments::{CameraGeometry, Instrument, InstrumentKind};
-pub use probe::{ProbePrediction, ProbeTarget, PROBE_ROWS};
 pub use linear_target::KeptLayout;
+pub use machine::{
+    ArmAccelerometer, FiveAxisMachine, MachineGeometry, MachineKinematics, SerialArm,
+    FIVE_AXIS_JOINTS,
+};
+pub use parameters::{ParallelPair, ParameterSetup, Prior};
+pub use probe::{ProbePrediction, ProbeTarget, PROBE_ROWS};
+pub use signals_builder::{JointMotion, SignalsBuilder, SignalsBuilderOptions};
 pub use tracker::{TrackerPrediction, TRACKER_ROWS};
 pub use workspace::Workspace;
-pub use instrument_pose::InstrumentPose;
-pub use parameters::{ParallelPair, ParameterSetup, Prior};
-pub use signals_builder::{JointMotion, SignalsBuilder, SignalsBuilderOptions};
-pub use machine::{ArmAccelerometer, FiveAxisMachine, MachineGeometry, MachineKinematics, SerialArm, FIVE_AXIS_JOINTS};

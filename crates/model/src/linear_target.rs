@@ -34,9 +34,22 @@ impl ForwardModel<'_> {
     }
 
     pub(crate) fn find_linear_target_columns(&self) -> Option<usize> {
-        let family = matches!(self.machine.kinematics, MachineKinematics::Cartesian(_) | MachineKinematics::FiveAxis(_));
-        let linear = self.machine_terms.terms.iter().all(|t| t.term.linear_in_params());
-        (family && linear).then(|| self.machine_terms.terms.iter().map(|t| t.params.len()).sum())
+        let family = matches!(
+            self.machine.kinematics,
+            MachineKinematics::Cartesian(_) | MachineKinematics::FiveAxis(_)
+        );
+        let linear = self
+            .machine_terms
+            .terms
+            .iter()
+            .all(|t| t.term.linear_in_params());
+        (family && linear).then(|| {
+            self.machine_terms
+                .terms
+                .iter()
+                .map(|t| t.params.len())
+                .sum()
+        })
     }
 
     /// Values one reading keeps (P₀ and A), for a model with [`Self::linear_target_columns`].
@@ -47,12 +60,29 @@ impl ForwardModel<'_> {
     /// P₀ and A of the reading at joint vector `q` with signals `s`, into `out`
     /// ([`Self::linear_target_len`] values, the module's layout). Error when the target is not
     /// linear in this model.
-    pub fn linear_target(&self, q: &[f64], s: &mut Signals, work: &mut Workspace, out: &mut [f64]) -> Result<(), PhysicsError> {
-        let len = self.linear_target_len().ok_or_else(|| PhysicsError::InvalidInput { what: "forward model, linear target".into(), reason: "the machine's terms or kinematics are not linear in the parameters".into() })?;
+    pub fn linear_target(
+        &self,
+        q: &[f64],
+        s: &mut Signals,
+        work: &mut Workspace,
+        out: &mut [f64],
+    ) -> Result<(), PhysicsError> {
+        let len = self
+            .linear_target_len()
+            .ok_or_else(|| PhysicsError::InvalidInput {
+                what: "forward model, linear target".into(),
+                reason: "the machine's terms or kinematics are not linear in the parameters".into(),
+            })?;
         assert_eq!(out.len(), len, "linear target buffer");
         work.check(self)?;
         // at p = 0 every linear term is zero: P(0) = P₀, and A is the same at any p
-        let p0 = self.tool_point_jacobian(&work.zero_params, &KinematicTruth::None, q, s, &mut work.tool)?;
+        let p0 = self.tool_point_jacobian(
+            &work.zero_params,
+            &KinematicTruth::None,
+            q,
+            s,
+            &mut work.tool,
+        )?;
         out[..3].copy_from_slice(p0.as_slice());
         out[3..].copy_from_slice(&work.tool.as_slice()[..len - 3]);
         Ok(())
@@ -85,8 +115,19 @@ impl KeptLayout {
             entries.extend((0..3).filter(|r| m & 1 << r != 0).map(|r| (r, c)));
         }
         let held_at = entries.iter().map(|(r, c)| 3 + 3 * c + r).collect();
-        let not_held_at = (0..rows.len()).flat_map(|c| (0..3).map(move |r| (r, c))).filter(|(r, c)| rows[*c] & 1 << r == 0).map(|(r, c)| 3 + 3 * c + r).collect();
-        Self { len: 3 + entries.len(), rows, offsets, entries, held_at, not_held_at }
+        let not_held_at = (0..rows.len())
+            .flat_map(|c| (0..3).map(move |r| (r, c)))
+            .filter(|(r, c)| rows[*c] & 1 << r == 0)
+            .map(|(r, c)| 3 + 3 * c + r)
+            .collect();
+        Self {
+            len: 3 + entries.len(),
+            rows,
+            offsets,
+            entries,
+            held_at,
+            not_held_at,
+        }
     }
 
     /// Machine columns the layout covers.
@@ -115,7 +156,13 @@ impl KeptLayout {
 
     /// This layout widened to hold the non-zeros of `full` too.
     pub fn widened(&self, full: &[f64]) -> Self {
-        Self::with_rows(full[3..].chunks_exact(3).zip(&self.rows).map(|(a, m)| m | Self::nonzero_rows(a)).collect())
+        Self::with_rows(
+            full[3..]
+                .chunks_exact(3)
+                .zip(&self.rows)
+                .map(|(a, m)| m | Self::nonzero_rows(a))
+                .collect(),
+        )
     }
 
     /// `full` packed into `out` ([`Self::len`] values); the rows not held must be zero
@@ -131,7 +178,9 @@ impl KeptLayout {
     /// Column `c` of A from a kept reading (zero past the machine's columns).
     #[inline]
     pub(crate) fn column(&self, kept: &[f64], c: usize) -> Vector3<f64> {
-        let Some(&m) = self.rows.get(c) else { return Vector3::zeros() };
+        let Some(&m) = self.rows.get(c) else {
+            return Vector3::zeros();
+        };
         let mut v = Vector3::zeros();
         let mut at = self.offsets[c];
         for r in 0..3 {
@@ -175,17 +224,28 @@ mod tests {
         let second = full([0.0, 1.0, 0.0], [[0.25, 0.0, 0.0], [0.0, -2.0, 7.0]]);
         assert!(!layout.covers(&second));
         let layout = layout.widened(&second);
-        assert!(layout.covers(&first) && layout.covers(&second) && layout.values_per_reading() == 6);
+        assert!(
+            layout.covers(&first) && layout.covers(&second) && layout.values_per_reading() == 6
+        );
         for f in [&first, &second] {
             let mut kept = vec![f64::NAN; layout.values_per_reading()];
             layout.pack(f, &mut kept);
             for c in 0..2 {
                 assert_eq!(layout.column(&kept, c).as_slice(), &f[3 + 3 * c..6 + 3 * c]);
             }
-            assert_eq!(layout.column(&kept, 2), Vector3::zeros(), "past the machine's columns");
+            assert_eq!(
+                layout.column(&kept, 2),
+                Vector3::zeros(),
+                "past the machine's columns"
+            );
             let p = [1e-6, -3e-6, 42.0];
-            let want = Vector3::new(f[0], f[1], f[2]) + Vector3::new(f[3], f[4], f[5]) * p[0] + Vector3::new(f[6], f[7], f[8]) * p[1];
-            assert!((layout.target_at(&p, &kept) - want).norm() < 1e-15, "instrument parameters do not move P");
+            let want = Vector3::new(f[0], f[1], f[2])
+                + Vector3::new(f[3], f[4], f[5]) * p[0]
+                + Vector3::new(f[6], f[7], f[8]) * p[1];
+            assert!(
+                (layout.target_at(&p, &kept) - want).norm() < 1e-15,
+                "instrument parameters do not move P"
+            );
         }
     }
 }

@@ -71,8 +71,12 @@ impl MachineGeometry {
     /// Names of the joint vector the program and machine state use.
     pub fn joint_names(&self) -> Vec<String> {
         match &self.kinematics {
-            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => vec!["x".into(), "y".into(), "z".into()],
-            MachineKinematics::FiveAxis(_) => FIVE_AXIS_JOINTS.iter().map(|s| s.to_string()).collect(),
+            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => {
+                vec!["x".into(), "y".into(), "z".into()]
+            }
+            MachineKinematics::FiveAxis(_) => {
+                FIVE_AXIS_JOINTS.iter().map(|s| s.to_string()).collect()
+            }
             MachineKinematics::SerialArm(a) => a.joint_names(),
         }
     }
@@ -81,7 +85,9 @@ impl MachineGeometry {
     pub fn joint_limits(&self) -> Vec<([f64; 2], &'static str)> {
         let inf = [f64::NEG_INFINITY, f64::INFINITY];
         match &self.kinematics {
-            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => self.travel.iter().map(|t| (*t, "m")).collect(),
+            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => {
+                self.travel.iter().map(|t| (*t, "m")).collect()
+            }
             MachineKinematics::FiveAxis(f) => {
                 let mut v: Vec<_> = self.travel.iter().map(|t| (*t, "m")).collect();
                 v.push(([f.geometry.b_limits.0, f.geometry.b_limits.1], "rad"));
@@ -92,14 +98,22 @@ impl MachineGeometry {
                 .revolute
                 .iter()
                 .enumerate()
-                .map(|(i, r)| (a.joint_limits.as_ref().map(|l| l[i]).unwrap_or(inf), if *r { "rad" } else { "m" }))
+                .map(|(i, r)| {
+                    (
+                        a.joint_limits.as_ref().map(|l| l[i]).unwrap_or(inf),
+                        if *r { "rad" } else { "m" },
+                    )
+                })
                 .collect(),
         }
     }
 
     /// True for the families whose joint vector is not the tool position (five_axis, serial_arm).
     pub fn is_jointed(&self) -> bool {
-        matches!(self.kinematics, MachineKinematics::FiveAxis(_) | MachineKinematics::SerialArm(_))
+        matches!(
+            self.kinematics,
+            MachineKinematics::FiveAxis(_) | MachineKinematics::SerialArm(_)
+        )
     }
 }
 
@@ -117,7 +131,11 @@ pub struct FiveAxisMachine {
 impl FiveAxisMachine {
     /// Tool tip in the machine frame for the linear axes (independent of B, C).
     pub fn tip_machine(&self, q: &[f64]) -> Vector3<f64> {
-        Vector3::new(q[0], q[1], self.geometry.d0 + q[2] - self.geometry.tool_length)
+        Vector3::new(
+            q[0],
+            q[1],
+            self.geometry.d0 + q[2] - self.geometry.tool_length,
+        )
     }
 }
 
@@ -148,12 +166,16 @@ impl SerialArm {
     /// Gravity in the base frame from a reading of the base's accelerometer (specific force,
     /// its frame): straight down opposite the specific force, of standard magnitude; None
     /// without an accelerometer fixed to the base or its reading.
-    pub fn gravity_from(&self, accelerations: &std::collections::BTreeMap<String, nalgebra::Vector3<f64>>) -> Option<nalgebra::Vector3<f64>> {
+    pub fn gravity_from(
+        &self,
+        accelerations: &std::collections::BTreeMap<String, nalgebra::Vector3<f64>>,
+    ) -> Option<nalgebra::Vector3<f64>> {
         self.accelerometers.iter().find_map(|a| {
             let r = a.base_from_sensor?;
             let f = accelerations.get(&a.name)?;
             let up = r * f;
-            (up.norm() > 0.0).then(|| -up.normalize() * metrocell_physics::gravity::STANDARD_GRAVITY)
+            (up.norm() > 0.0)
+                .then(|| -up.normalize() * metrocell_physics::gravity::STANDARD_GRAVITY)
         })
     }
 }
@@ -205,4 +227,3 @@ impl SerialArm {
         chain
     }
 }
-

@@ -33,14 +33,26 @@ impl ParameterSetup {
     /// Every parameter free, no priors.
     pub fn all_free(model: &ForwardModel) -> Self {
         let names = model.param_names();
-        Self { free: vec![true; names.len()], priors: vec![None; names.len()], names }
+        Self {
+            free: vec![true; names.len()],
+            priors: vec![None; names.len()],
+            names,
+        }
     }
 
     /// From `estimation` settings keyed by term label (`positioning[x]`, `tracker_pose`, …);
     /// errors name the key (`estimation.<label>.free`, `estimation.<label>.priors.<param>`).
-    pub fn new(model: &ForwardModel, settings: &BTreeMap<String, EstimationConfig>) -> Result<Self, PhysicsError> {
+    pub fn new(
+        model: &ForwardModel,
+        settings: &BTreeMap<String, EstimationConfig>,
+    ) -> Result<Self, PhysicsError> {
         let mut setup = Self::all_free(model);
-        let terms: Vec<_> = model.machine_terms.terms.iter().chain(&model.instrument_terms.terms).collect();
+        let terms: Vec<_> = model
+            .machine_terms
+            .terms
+            .iter()
+            .chain(&model.instrument_terms.terms)
+            .collect();
         let labels: Vec<String> = terms.iter().map(|t| t.term.label()).collect();
         let mut start = 0;
         let mut starts = Vec::new();
@@ -50,11 +62,30 @@ impl ParameterSetup {
         }
         for (label, cfg) in settings {
             let key = format!("estimation.{label}");
-            let k = labels.iter().position(|l| l == label).ok_or_else(|| invalid(key.clone(), format!("no term has this label; labels: {}", labels.join(", "))))?;
+            let k = labels.iter().position(|l| l == label).ok_or_else(|| {
+                invalid(
+                    key.clone(),
+                    format!("no term has this label; labels: {}", labels.join(", ")),
+                )
+            })?;
             let specs = terms[k].term.params();
-            let allowed = || specs.iter().map(|s| s.name.as_str()).collect::<Vec<_>>().join(", ");
+            let allowed = || {
+                specs
+                    .iter()
+                    .map(|s| s.name.as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
             let index = |name: &str, what: &str| -> Result<usize, PhysicsError> {
-                specs.iter().position(|s| s.name == name).ok_or_else(|| invalid(format!("{key}.{what}"), format!("`{name}` is not a parameter of `{label}`; allowed: {}", allowed())))
+                specs.iter().position(|s| s.name == name).ok_or_else(|| {
+                    invalid(
+                        format!("{key}.{what}"),
+                        format!(
+                            "`{name}` is not a parameter of `{label}`; allowed: {}",
+                            allowed()
+                        ),
+                    )
+                })
             };
             if let Some(free) = &cfg.free {
                 let mut mask = vec![false; specs.len()];
@@ -80,7 +111,12 @@ impl ParameterSetup {
 
     /// Indices of the free parameters in the stacked vector.
     pub fn free_indices(&self) -> Vec<usize> {
-        self.free.iter().enumerate().filter(|(_, f)| **f).map(|(i, _)| i).collect()
+        self.free
+            .iter()
+            .enumerate()
+            .filter(|(_, f)| **f)
+            .map(|(i, _)| i)
+            .collect()
     }
 }
 
@@ -114,16 +150,42 @@ impl ForwardModel<'_> {
             MachineKinematics::FiveAxis(_) => Some(false),
             MachineKinematics::SerialArm(_) => None,
         };
-        let has_tool_offset = self.machine_terms.terms.iter().any(|t| t.term.id() == TermId::ToolOffset);
-        let misalignment = self.machine_terms.terms.iter().find(|t| t.term.id() == TermId::FrameMisalignment).map(|t| t.term.label());
-        let tracker_labels: Vec<String> = self.instruments().iter().filter_map(|i| i.pose).map(|i| self.term(i).term.label()).collect();
+        let has_tool_offset = self
+            .machine_terms
+            .terms
+            .iter()
+            .any(|t| t.term.id() == TermId::ToolOffset);
+        let misalignment = self
+            .machine_terms
+            .terms
+            .iter()
+            .find(|t| t.term.id() == TermId::FrameMisalignment)
+            .map(|t| t.term.label());
+        let tracker_labels: Vec<String> = self
+            .instruments()
+            .iter()
+            .filter_map(|i| i.pose)
+            .map(|i| self.term(i).term.label())
+            .collect();
         for axis in ["x", "y", "z"] {
             let (c0, d) = match fixed_workpiece {
-                Some(_) => (find(&format!("positioning[{axis}].c0")), if has_tool_offset { find(&format!("tool_offset.d{axis}")) } else { None }),
+                Some(_) => (
+                    find(&format!("positioning[{axis}].c0")),
+                    if has_tool_offset {
+                        find(&format!("tool_offset.d{axis}"))
+                    } else {
+                        None
+                    },
+                ),
                 None => (None, None),
             };
-            let fm = misalignment.as_ref().and_then(|l| find(&format!("{l}.t{axis}")));
-            let trackers: Vec<usize> = tracker_labels.iter().filter_map(|l| find(&format!("{l}.t{axis}"))).collect();
+            let fm = misalignment
+                .as_ref()
+                .and_then(|l| find(&format!("{l}.t{axis}")));
+            let trackers: Vec<usize> = tracker_labels
+                .iter()
+                .filter_map(|l| find(&format!("{l}.t{axis}")))
+                .collect();
             if let (Some(a), Some(b)) = (c0, d) {
                 pairs.push(ParallelPair { a, b, sign: 1.0, reason: "constant shift of the tool point along a machine axis (positioning series constant vs tool offset)" });
             }

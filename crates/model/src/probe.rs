@@ -53,12 +53,23 @@ pub struct ProbePrediction {
 pub const PROBE_ROWS: usize = 3;
 
 impl ForwardModel<'_> {
-    fn probe_setup(&self, instrument: Option<&str>, hit: &ProbeTarget, s: &mut Signals) -> Result<Option<usize>, PhysicsError> {
-        if !matches!(self.machine.kinematics, MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_)) {
+    fn probe_setup(
+        &self,
+        instrument: Option<&str>,
+        hit: &ProbeTarget,
+        s: &mut Signals,
+    ) -> Result<Option<usize>, PhysicsError> {
+        if !matches!(
+            self.machine.kinematics,
+            MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_)
+        ) {
             return Err(PhysicsError::InvalidInput { what: "forward model, probe reading".into(), reason: "touch-probe readings are modelled on cartesian and delta machines (probe frame parallel to the machine axes)".into() });
         }
         let u = hit.approach;
-        let valid = (u.norm() - 1.0).abs() < 1e-9 && hit.stylus_radius >= 0.0 && hit.stylus_radius.is_finite() && hit.surface.iter().all(|v| v.is_finite());
+        let valid = (u.norm() - 1.0).abs() < 1e-9
+            && hit.stylus_radius >= 0.0
+            && hit.stylus_radius.is_finite()
+            && hit.surface.iter().all(|v| v.is_finite());
         if !valid {
             return Err(PhysicsError::InvalidInput { what: "forward model, probe reading".into(), reason: format!("needs a finite surface point, a unit approach direction and a radius ≥ 0; got surface {:?}, |u| = {}, r = {}", hit.surface.as_slice(), u.norm(), hit.stylus_radius) });
         }
@@ -80,7 +91,15 @@ impl ForwardModel<'_> {
     /// module doc). `s` carries the axis signals ([`Self::set_motion`]) and the rest; its
     /// approach directions of the probing axes, `probe_direction` and `workpiece_point` are set
     /// here.
-    pub fn probe_hit(&self, instrument: Option<&str>, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, hit: &ProbeTarget) -> Result<ProbePrediction, PhysicsError> {
+    pub fn probe_hit(
+        &self,
+        instrument: Option<&str>,
+        p: &[f64],
+        kin: &KinematicTruth,
+        q: &[f64],
+        s: &mut Signals,
+        hit: &ProbeTarget,
+    ) -> Result<ProbePrediction, PhysicsError> {
         self.check(p)?;
         let pretravel = self.probe_setup(instrument, hit, s)?;
         let d = self.tool_state(p, kin, q, s, None)?.d;
@@ -89,20 +108,36 @@ impl ForwardModel<'_> {
             Some(i) => v3(&self.term(i).term.predict(self.part(i, p), s)?.value),
             None => Vector3::zeros(),
         };
-        Ok(ProbePrediction { centre: contact - hit.approach * hit.stylus_radius - d + pt, contact, machine: d, pretravel: pt })
+        Ok(ProbePrediction {
+            centre: contact - hit.approach * hit.stylus_radius - d + pt,
+            contact,
+            machine: d,
+            pretravel: pt,
+        })
     }
 
     /// [`Self::probe_hit`] and its Jacobian w.r.t. the stacked parameters into `out`
     /// ([`PROBE_ROWS`] × [`Self::param_count`]); the prediction is `probe_hit`'s bit for bit.
     #[allow(clippy::too_many_arguments)]
-    pub fn probe_jacobian(&self, instrument: Option<&str>, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, hit: &ProbeTarget, work: &mut Workspace, out: &mut DMatrix<f64>) -> Result<ProbePrediction, PhysicsError> {
+    pub fn probe_jacobian(
+        &self,
+        instrument: Option<&str>,
+        p: &[f64],
+        kin: &KinematicTruth,
+        q: &[f64],
+        s: &mut Signals,
+        hit: &ProbeTarget,
+        work: &mut Workspace,
+        out: &mut DMatrix<f64>,
+    ) -> Result<ProbePrediction, PhysicsError> {
         self.check(p)?;
         self.check_buffer("probe Jacobian", out, PROBE_ROWS)?;
         work.check(self)?;
         let pretravel = self.probe_setup(instrument, hit, s)?;
         let d = self.tool_jacobian(p, kin, q, s, &mut work.tool, None)?.d;
         work.feature.fill(0.0);
-        let contact = hit.surface + self.workpiece_displacement(p, s, hit.surface, Some(&mut work.feature), 1.0)?;
+        let contact = hit.surface
+            + self.workpiece_displacement(p, s, hit.surface, Some(&mut work.feature), 1.0)?;
         // ∂c = ∂d_w(f) − ∂d + u·∂pt
         out.copy_from(&work.feature);
         *out -= &work.tool;
@@ -110,12 +145,23 @@ impl ForwardModel<'_> {
             Some(i) => {
                 let sl = self.slots[i];
                 let mut v = [0.0; 3];
-                self.term(i).term.evaluate_into(self.part(i, p), s, &mut v, work.term.view_mut((0, 0), (3, sl.len)))?;
-                out.columns_mut(sl.start, sl.len).copy_from(&work.term.columns(0, sl.len));
+                self.term(i).term.evaluate_into(
+                    self.part(i, p),
+                    s,
+                    &mut v,
+                    work.term.view_mut((0, 0), (3, sl.len)),
+                )?;
+                out.columns_mut(sl.start, sl.len)
+                    .copy_from(&work.term.columns(0, sl.len));
                 Vector3::new(v[0], v[1], v[2])
             }
             None => Vector3::zeros(),
         };
-        Ok(ProbePrediction { centre: contact - hit.approach * hit.stylus_radius - d + pt, contact, machine: d, pretravel: pt })
+        Ok(ProbePrediction {
+            centre: contact - hit.approach * hit.stylus_radius - d + pt,
+            contact,
+            machine: d,
+            pretravel: pt,
+        })
     }
 }

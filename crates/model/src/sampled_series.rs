@@ -25,7 +25,9 @@ impl SampledSeries {
         }
         if let Some(&last) = self.times.back() {
             if t_ns <= last {
-                return Err(format!("sample at {t_ns} ns does not come after the previous one at {last} ns"));
+                return Err(format!(
+                    "sample at {t_ns} ns does not come after the previous one at {last} ns"
+                ));
             }
         }
         self.times.push_back(t_ns);
@@ -98,7 +100,9 @@ pub struct StateSeries<T> {
 
 impl<T> Default for StateSeries<T> {
     fn default() -> Self {
-        Self { entries: Vec::new() }
+        Self {
+            entries: Vec::new(),
+        }
     }
 }
 
@@ -133,10 +137,25 @@ mod tests {
         assert_eq!(s.at(999, 5_000), None);
         assert_eq!(s.at(1_000, 5_000), Some(20.0));
         assert_eq!(s.at(1_250, 5_000), Some(20.5));
-        assert_eq!(s.at(5_000, 5_000), None, "inside a gap longer than the maximum");
-        assert_eq!(s.at(10_000, 5_000), Some(30.0), "a sample's own time needs no neighbour");
-        assert_eq!(s.at(10_001, 5_000), None, "nothing brackets an instant after the last sample");
-        assert!(s.push(10_000, 1.0).unwrap_err().contains("does not come after"));
+        assert_eq!(
+            s.at(5_000, 5_000),
+            None,
+            "inside a gap longer than the maximum"
+        );
+        assert_eq!(
+            s.at(10_000, 5_000),
+            Some(30.0),
+            "a sample's own time needs no neighbour"
+        );
+        assert_eq!(
+            s.at(10_001, 5_000),
+            None,
+            "nothing brackets an instant after the last sample"
+        );
+        assert!(s
+            .push(10_000, 1.0)
+            .unwrap_err()
+            .contains("does not come after"));
         assert!(s.push(11_000, f64::NAN).is_err());
         s.forget_before(9_000);
         assert_eq!((s.len(), s.oldest()), (2, Some(2_000)));
@@ -149,6 +168,9 @@ mod tests {
         s.push(100, 1.0);
         s.push(300, 3.0);
         s.push(200, 2.0);
-        assert_eq!((s.at(50), s.at(100), s.at(250), s.at(1_000)), (Some(1.0), Some(1.0), Some(2.0), Some(3.0)));
+        assert_eq!(
+            (s.at(50), s.at(100), s.at(250), s.at(1_000)),
+            (Some(1.0), Some(1.0), Some(2.0), Some(3.0))
+        );
     }
 }

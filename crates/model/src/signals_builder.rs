@@ -106,7 +106,10 @@ impl JointStream {
     }
     fn forget_before(&mut self, t_ns: i64) {
         // keep the last sample before t_ns: it brackets t_ns
-        let k = self.times.partition_point(|&ts| ts < t_ns).saturating_sub(1);
+        let k = self
+            .times
+            .partition_point(|&ts| ts < t_ns)
+            .saturating_sub(1);
         if k > 0 {
             self.times.drain(..k);
             self.positions.drain(..k * self.n);
@@ -154,7 +157,11 @@ impl SignalsBuilder {
     /// A builder for a machine: its joint names, whether it has linear axes, and which joints
     /// are rotary axes (the axis signals as [`crate::ForwardModel::set_motion`] sets them).
     pub fn for_machine(machine: &MachineGeometry, options: SignalsBuilderOptions) -> Self {
-        let mut b = Self::new(machine.joint_names(), !matches!(machine.kinematics, MachineKinematics::SerialArm(_)), options);
+        let mut b = Self::new(
+            machine.joint_names(),
+            !matches!(machine.kinematics, MachineKinematics::SerialArm(_)),
+            options,
+        );
         if matches!(machine.kinematics, MachineKinematics::FiveAxis(_)) {
             b.rotary = [None, Some(3), Some(4)];
         }
@@ -231,30 +238,57 @@ impl SignalsBuilder {
     /// (same length, or empty when not recorded; NaN entries count as not recorded). Refused
     /// (with the reason) when a machine joint is missing, a position is not finite, or the
     /// time does not come after the previous joint sample.
-    pub fn push_joints(&mut self, t_ns: i64, names: &[String], positions: &[f64], velocities: &[f64]) -> Result<(), String> {
+    pub fn push_joints(
+        &mut self,
+        t_ns: i64,
+        names: &[String],
+        positions: &[f64],
+        velocities: &[f64],
+    ) -> Result<(), String> {
         if positions.len() != names.len() {
-            return Err(format!("{} names but {} positions", names.len(), positions.len()));
+            return Err(format!(
+                "{} names but {} positions",
+                names.len(),
+                positions.len()
+            ));
         }
         let with_velocity = velocities.len() == names.len();
         if let Some(&last) = self.joints.times.back() {
             if t_ns <= last {
-                return Err(format!("joint state at {t_ns} ns does not come after the previous one at {last} ns"));
+                return Err(format!(
+                    "joint state at {t_ns} ns does not come after the previous one at {last} ns"
+                ));
             }
         }
         let mut q = Vec::with_capacity(self.joints.n);
         let mut v = Vec::with_capacity(self.joints.n);
         for name in &self.joint_names {
-            let i = names.iter().position(|x| x == name).ok_or_else(|| format!("has no joint `{name}` (it names {})", names.join(", ")))?;
+            let i = names
+                .iter()
+                .position(|x| x == name)
+                .ok_or_else(|| format!("has no joint `{name}` (it names {})", names.join(", ")))?;
             if !positions[i].is_finite() {
-                return Err(format!("joint `{name}` position {} is not finite", positions[i]));
+                return Err(format!(
+                    "joint `{name}` position {} is not finite",
+                    positions[i]
+                ));
             }
             q.push(positions[i]);
-            v.push(if with_velocity { velocities[i] } else { f64::NAN });
+            v.push(if with_velocity {
+                velocities[i]
+            } else {
+                f64::NAN
+            });
         }
-        let (db, vdb) = (self.options.approach_deadband, self.options.velocity_deadband);
+        let (db, vdb) = (
+            self.options.approach_deadband,
+            self.options.velocity_deadband,
+        );
         for (j, tracker) in self.joints.trackers.iter_mut().enumerate() {
             tracker.update(q[j], Some(v[j]), db, vdb);
-            self.joints.approach.push_back(tracker.direction().map_or(0, |d| d as i8));
+            self.joints
+                .approach
+                .push_back(tracker.direction().map_or(0, |d| d as i8));
         }
         self.joints.times.push_back(t_ns);
         self.joints.positions.extend(q);
@@ -267,7 +301,12 @@ impl SignalsBuilder {
     }
 
     /// A reading of temperature sensor `sensor` (°C).
-    pub fn push_temperature(&mut self, t_ns: i64, sensor: &str, celsius: f64) -> Result<(), String> {
+    pub fn push_temperature(
+        &mut self,
+        t_ns: i64,
+        sensor: &str,
+        celsius: f64,
+    ) -> Result<(), String> {
         // the timeline first: it refuses whatever the series would (its seconds are a monotone
         // image of the nanoseconds), and a refused sample then changes neither
         self.timeline.push(sensor, t_ns as f64 / NS, celsius)?;
@@ -322,11 +361,21 @@ impl SignalsBuilder {
     }
 
     /// An accelerometer's reading (specific force in its own frame, m/s²) from `t_ns` on.
-    pub fn push_acceleration(&mut self, t_ns: i64, sensor: &str, specific_force: Vector3<f64>) -> Result<(), String> {
+    pub fn push_acceleration(
+        &mut self,
+        t_ns: i64,
+        sensor: &str,
+        specific_force: Vector3<f64>,
+    ) -> Result<(), String> {
         if !specific_force.iter().all(|v| v.is_finite()) {
-            return Err(format!("accelerometer `{sensor}` reading {specific_force:?} is not finite"));
+            return Err(format!(
+                "accelerometer `{sensor}` reading {specific_force:?} is not finite"
+            ));
         }
-        self.accelerations.entry(sensor.to_string()).or_default().push(t_ns, specific_force);
+        self.accelerations
+            .entry(sensor.to_string())
+            .or_default()
+            .push(t_ns, specific_force);
         self.observe_time(t_ns);
         Ok(())
     }
@@ -335,7 +384,9 @@ impl SignalsBuilder {
     /// `t_ns` on. It replaces the rule for that axis.
     pub fn push_approach(&mut self, t_ns: i64, axis: usize, direction: f64) -> Result<(), String> {
         if axis > 2 || !(direction == 1.0 || direction == -1.0) {
-            return Err(format!("approach of axis {axis} must be +1 or -1 for axis 0..=2, got {direction}"));
+            return Err(format!(
+                "approach of axis {axis} must be +1 or -1 for axis 0..=2, got {direction}"
+            ));
         }
         self.explicit_approach[axis].push(t_ns, direction);
         self.observe_time(t_ns);
@@ -359,7 +410,19 @@ impl SignalsBuilder {
             None => !self.joints_expected,
         };
         let slow_gap = ns(self.options.max_slow_gap);
-        let slow = self.temperatures.values().chain(self.air.iter().zip(self.air_expected).filter(|(s, expected)| *expected || !s.is_empty()).map(|(s, _)| s)).all(|s| s.newest().is_some_and(|t| t >= t_ns) || newest.saturating_sub(slow_gap) >= t_ns);
+        let slow = self
+            .temperatures
+            .values()
+            .chain(
+                self.air
+                    .iter()
+                    .zip(self.air_expected)
+                    .filter(|(s, expected)| *expected || !s.is_empty())
+                    .map(|(s, _)| s),
+            )
+            .all(|s| {
+                s.newest().is_some_and(|t| t >= t_ns) || newest.saturating_sub(slow_gap) >= t_ns
+            });
         joints && slow
     }
 
@@ -374,9 +437,16 @@ impl SignalsBuilder {
         let gap = ns(self.options.max_joint_gap);
         let db = self.options.approach_deadband;
         let t0 = js.times[k - 1];
-        let slope = |a: usize, b: usize, j: usize| (js.get(&js.positions, b, j) - js.get(&js.positions, a, j)) / ((js.times[b] - js.times[a]) as f64 / NS);
+        let slope = |a: usize, b: usize, j: usize| {
+            (js.get(&js.positions, b, j) - js.get(&js.positions, a, j))
+                / ((js.times[b] - js.times[a]) as f64 / NS)
+        };
         let within = |a: usize, b: usize| b < js.times.len() && js.times[b] - js.times[a] <= gap;
-        let mut m = JointMotion { positions: Vec::with_capacity(n), velocities: Vec::with_capacity(n), approach: Vec::with_capacity(n) };
+        let mut m = JointMotion {
+            positions: Vec::with_capacity(n),
+            velocities: Vec::with_capacity(n),
+            approach: Vec::with_capacity(n),
+        };
         if t0 == t_ns {
             let k = k - 1;
             for j in 0..n {
@@ -404,8 +474,13 @@ impl SignalsBuilder {
             let (qa, qb) = (js.get(&js.positions, a, j), js.get(&js.positions, b, j));
             m.positions.push(qa + (qb - qa) * f);
             let (va, vb) = (js.get(&js.velocities, a, j), js.get(&js.velocities, b, j));
-            m.velocities.push(Some(if va.is_finite() && vb.is_finite() { va + (vb - va) * f } else { slope(a, b, j) }));
-            m.approach.push(motion_sign(qa, qb, db).or(direction(js.approach[a * n + j])));
+            m.velocities.push(Some(if va.is_finite() && vb.is_finite() {
+                va + (vb - va) * f
+            } else {
+                slope(a, b, j)
+            }));
+            m.approach
+                .push(motion_sign(qa, qb, db).or(direction(js.approach[a * n + j])));
         }
         Some(m)
     }
@@ -415,7 +490,11 @@ impl SignalsBuilder {
     /// `tracker_range` and the like are the model's to set. Every value the recording cannot
     /// give at that instant is None.
     pub fn signals_at(&self, t_ns: i64) -> Signals {
-        let mut s = Signals { time: Some(t_ns as f64 / NS), timeline: Some(self.timeline.clone()), ..Signals::default() };
+        let mut s = Signals {
+            time: Some(t_ns as f64 / NS),
+            timeline: Some(self.timeline.clone()),
+            ..Signals::default()
+        };
         if let Some(m) = self.joints_at(t_ns) {
             for (a, joint) in self.rotary.iter().enumerate() {
                 s.rotary_position[a] = joint.and_then(|j| m.positions.get(j).copied());
@@ -444,7 +523,11 @@ impl SignalsBuilder {
         s.air_temperature = self.air[0].at(t_ns, slow_gap);
         s.air_pressure = self.air[1].at(t_ns, slow_gap);
         s.air_humidity = self.air[2].at(t_ns, slow_gap);
-        s.time_since_power_on = self.power_on.at(t_ns).filter(|&on| on <= t_ns).map(|on| (t_ns - on) as f64 / NS);
+        s.time_since_power_on = self
+            .power_on
+            .at(t_ns)
+            .filter(|&on| on <= t_ns)
+            .map(|on| (t_ns - on) as f64 / NS);
         s.load_force = self.load.at(t_ns);
         for (name, series) in &self.accelerations {
             if let Some(a) = series.at(t_ns) {
@@ -472,7 +555,9 @@ impl SignalsBuilder {
         !self.load.is_empty()
     }
     pub fn has_explicit_approach(&self, axis: usize) -> bool {
-        self.explicit_approach.get(axis).is_some_and(|s| !s.is_empty())
+        self.explicit_approach
+            .get(axis)
+            .is_some_and(|s| !s.is_empty())
     }
     /// Joint samples held now (bounded by `joint_window`).
     pub fn joint_samples_held(&self) -> usize {
@@ -498,38 +583,86 @@ mod tests {
         // x moves +0.1 m over 2 s (samples every 0.5 s), dwells, then moves back; no velocities
         let xs = [0.0, 0.0, 0.025, 0.05, 0.075, 0.1, 0.1, 0.1, 0.075];
         for (k, x) in xs.iter().enumerate() {
-            b.push_joints(k as i64 * 500_000_000, &names(), &[*x, 0.2, 0.3], &[]).unwrap();
+            b.push_joints(k as i64 * 500_000_000, &names(), &[*x, 0.2, 0.3], &[])
+                .unwrap();
         }
         let s = b.signals_at(1_250_000_000);
-        assert!((s.axis_position[0].unwrap() - 0.0375).abs() < 1e-15, "{:?}", s.axis_position);
+        assert!(
+            (s.axis_position[0].unwrap() - 0.0375).abs() < 1e-15,
+            "{:?}",
+            s.axis_position
+        );
         assert_eq!(&s.axis_position[1..], [Some(0.2), Some(0.3)]);
         assert_eq!(s.axis_velocity[0], Some(0.05));
         assert_eq!(s.approach_direction[0], Some(1.0));
-        assert_eq!(s.approach_direction[1], None, "y never moved and no initial direction is set");
+        assert_eq!(
+            s.approach_direction[1], None,
+            "y never moved and no initial direction is set"
+        );
         assert_eq!(s.time, Some(1.25));
         // at a sample's time the interval starting there gives the velocity: 0.5 s is the
         // first sample of the move (still at 0) and already moving
         let s = b.signals_at(500_000_000);
-        assert_eq!((s.axis_position[0], s.axis_velocity[0]), (Some(0.0), Some(0.05)));
+        assert_eq!(
+            (s.axis_position[0], s.axis_velocity[0]),
+            (Some(0.0), Some(0.05))
+        );
         // the dwell keeps +1; the way back turns it −1 (between the samples and at the last)
         assert_eq!(b.signals_at(3_250_000_000).approach_direction[0], Some(1.0));
-        assert_eq!(b.signals_at(3_750_000_000).approach_direction[0], Some(-1.0));
-        assert_eq!(b.signals_at(4_000_000_000).approach_direction[0], Some(-1.0));
+        assert_eq!(
+            b.signals_at(3_750_000_000).approach_direction[0],
+            Some(-1.0)
+        );
+        assert_eq!(
+            b.signals_at(4_000_000_000).approach_direction[0],
+            Some(-1.0)
+        );
         let v = b.signals_at(4_000_000_000).axis_velocity[0].unwrap();
-        assert!((v + 0.05).abs() < 1e-15, "the newest sample: the interval ending there, {v}");
-        assert_eq!(b.signals_at(4_000_000_001).axis_position[0], None, "never extrapolated");
-        assert!(b.push_joints(4_000_000_000, &names(), &[0.0; 3], &[]).is_err());
-        assert!(b.push_joints(5_000_000_000, &names()[..2], &[0.0; 2], &[]).unwrap_err().contains("no joint `z`"));
+        assert!(
+            (v + 0.05).abs() < 1e-15,
+            "the newest sample: the interval ending there, {v}"
+        );
+        assert_eq!(
+            b.signals_at(4_000_000_001).axis_position[0],
+            None,
+            "never extrapolated"
+        );
+        assert!(b
+            .push_joints(4_000_000_000, &names(), &[0.0; 3], &[])
+            .is_err());
+        assert!(b
+            .push_joints(5_000_000_000, &names()[..2], &[0.0; 2], &[])
+            .unwrap_err()
+            .contains("no joint `z`"));
     }
 
     #[test]
     fn recorded_velocity_and_explicit_approach_take_precedence() {
-        let mut b = SignalsBuilder::new(names(), true, SignalsBuilderOptions { initial_approach: Some(1.0), ..Default::default() });
-        b.push_joints(0, &names(), &[0.5, 0.0, 0.0], &[0.0, 0.0, 0.0]).unwrap();
-        b.push_joints(10_000_000, &names(), &[0.5, 0.0, 0.0], &[-0.04, 0.0, 0.0]).unwrap();
-        b.push_joints(20_000_000, &names(), &[0.4996, 0.0, 0.0], &[-0.04, 0.0, 0.0]).unwrap();
+        let mut b = SignalsBuilder::new(
+            names(),
+            true,
+            SignalsBuilderOptions {
+                initial_approach: Some(1.0),
+                ..Default::default()
+            },
+        );
+        b.push_joints(0, &names(), &[0.5, 0.0, 0.0], &[0.0, 0.0, 0.0])
+            .unwrap();
+        b.push_joints(10_000_000, &names(), &[0.5, 0.0, 0.0], &[-0.04, 0.0, 0.0])
+            .unwrap();
+        b.push_joints(
+            20_000_000,
+            &names(),
+            &[0.4996, 0.0, 0.0],
+            &[-0.04, 0.0, 0.0],
+        )
+        .unwrap();
         let s = b.signals_at(10_000_000);
-        assert_eq!(s.approach_direction, [Some(-1.0), Some(1.0), Some(1.0)], "the move starts here: its velocity says so");
+        assert_eq!(
+            s.approach_direction,
+            [Some(-1.0), Some(1.0), Some(1.0)],
+            "the move starts here: its velocity says so"
+        );
         assert_eq!(s.axis_velocity[0], Some(-0.04));
         assert_eq!(b.signals_at(0).approach_direction[0], Some(1.0));
         b.push_approach(0, 1, -1.0).unwrap();
@@ -545,32 +678,60 @@ mod tests {
         b.push_air_pressure(0, 101_300.0).unwrap();
         b.push_air_pressure(5_000_000_000, 101_300.0).unwrap();
         b.push_power_on(0, -1_200_000_000_000);
-        b.push_load(5_000_000_000, Vector3::new(0.0, 0.0, -50.0)).unwrap();
+        b.push_load(5_000_000_000, Vector3::new(0.0, 0.0, -50.0))
+            .unwrap();
         let s = b.signals_at(2_500_000_000);
         assert_eq!(s.temperatures["column"], 20.25);
         assert_eq!(s.air_pressure, Some(101_300.0));
         assert_eq!(s.air_temperature, None);
         assert_eq!(s.time_since_power_on, Some(1_202.5));
-        assert_eq!(s.load_force, Some(Vector3::new(0.0, 0.0, -50.0)), "a latched state received later held before");
+        assert_eq!(
+            s.load_force,
+            Some(Vector3::new(0.0, 0.0, -50.0)),
+            "a latched state received later held before"
+        );
         // the lag reads the timeline up to the instant: only the first sample by 2.5 s
-        assert_eq!(s.lagged_temperature("thermal_growth[column]", "column", 600.0).unwrap(), (20.0, 0.0));
-        assert_eq!(b.signals_at(10_000_000_001).temperatures.get("column"), None, "not past the last sample");
+        assert_eq!(
+            s.lagged_temperature("thermal_growth[column]", "column", 600.0)
+                .unwrap(),
+            (20.0, 0.0)
+        );
+        assert_eq!(
+            b.signals_at(10_000_000_001).temperatures.get("column"),
+            None,
+            "not past the last sample"
+        );
         assert!(b.signals_at(-1).time_since_power_on.is_some());
         let mut later = SignalsBuilder::new(names(), true, SignalsBuilderOptions::default());
         later.push_power_on(0, 5_000_000_000);
-        assert_eq!(later.signals_at(1_000_000_000).time_since_power_on, None, "not yet on");
+        assert_eq!(
+            later.signals_at(1_000_000_000).time_since_power_on,
+            None,
+            "not yet on"
+        );
     }
 
     #[test]
     fn ready_waits_for_declared_streams_even_before_their_first_sample() {
-        let mut b = SignalsBuilder::new(names(), true, SignalsBuilderOptions { max_slow_gap: 5.0, ..Default::default() });
+        let mut b = SignalsBuilder::new(
+            names(),
+            true,
+            SignalsBuilderOptions {
+                max_slow_gap: 5.0,
+                ..Default::default()
+            },
+        );
         b.expect_joints();
         b.expect_temperature("column");
         b.expect_air(1);
         b.observe_time(2_000_000_000);
         assert!(!b.ready(1_000_000_000), "no joint sample yet");
-        b.push_joints(1_000_000_000, &names(), &[0.0; 3], &[]).unwrap();
-        assert!(!b.ready(1_000_000_000), "the declared slow streams could still bracket it");
+        b.push_joints(1_000_000_000, &names(), &[0.0; 3], &[])
+            .unwrap();
+        assert!(
+            !b.ready(1_000_000_000),
+            "the declared slow streams could still bracket it"
+        );
         b.push_temperature(1_000_000_000, "column", 20.0).unwrap();
         b.push_air_pressure(1_500_000_000, 101_300.0).unwrap();
         assert!(b.ready(1_000_000_000));
@@ -579,19 +740,38 @@ mod tests {
 
     #[test]
     fn ready_waits_for_bracketing_samples_and_the_window_bounds_memory() {
-        let opts = SignalsBuilderOptions { joint_window: Some(1.0), max_slow_gap: 5.0, ..Default::default() };
+        let opts = SignalsBuilderOptions {
+            joint_window: Some(1.0),
+            max_slow_gap: 5.0,
+            ..Default::default()
+        };
         let mut b = SignalsBuilder::new(names(), true, opts);
         b.push_temperature(0, "column", 20.0).unwrap();
         for k in 0..1000 {
-            b.push_joints(k * 10_000_000, &names(), &[k as f64 * 1e-4, 0.0, 0.0], &[]).unwrap();
+            b.push_joints(k * 10_000_000, &names(), &[k as f64 * 1e-4, 0.0, 0.0], &[])
+                .unwrap();
         }
-        assert!(b.joint_samples_held() <= 102, "{} joint samples held", b.joint_samples_held());
+        assert!(
+            b.joint_samples_held() <= 102,
+            "{} joint samples held",
+            b.joint_samples_held()
+        );
         let t = 9_000_000_000;
-        assert!(!b.ready(t), "the temperature stream could still bracket 9 s");
-        assert!(!b.ready(9_990_000_000), "nothing after the newest sample yet");
+        assert!(
+            !b.ready(t),
+            "the temperature stream could still bracket 9 s"
+        );
+        assert!(
+            !b.ready(9_990_000_000),
+            "nothing after the newest sample yet"
+        );
         b.observe_time(14_000_000_001);
         assert!(b.ready(t));
         assert!(b.signals_at(t).axis_position[0].is_some());
-        assert_eq!(b.signals_at(5_000_000_000).axis_position[0], None, "older than the window");
+        assert_eq!(
+            b.signals_at(5_000_000_000).axis_position[0],
+            None,
+            "older than the window"
+        );
     }
 }

@@ -38,7 +38,11 @@ impl TrackerPrediction {
     }
     /// The reported point: the measured range along the true direction.
     pub fn measured_point(&self) -> Vector3<f64> {
-        metrocell_physics::instrument::spherical::from_spherical(self.measured_range(), self.azimuth, self.elevation)
+        metrocell_physics::instrument::spherical::from_spherical(
+            self.measured_range(),
+            self.azimuth,
+            self.elevation,
+        )
     }
 }
 
@@ -66,20 +70,41 @@ fn pose_of(inst: &Instrument, s: &Signals) -> Result<usize, PhysicsError> {
 impl ForwardModel<'_> {
     /// The reading of the model's only tracker for the tool state `tool` (see
     /// [`Self::tracker_of`]).
-    pub fn tracker(&self, p: &[f64], tool: &ToolState, s: &mut Signals) -> Result<TrackerPrediction, PhysicsError> {
+    pub fn tracker(
+        &self,
+        p: &[f64],
+        tool: &ToolState,
+        s: &mut Signals,
+    ) -> Result<TrackerPrediction, PhysicsError> {
         self.tracker_of(None, p, tool, s)
     }
 
     /// The reading of tracker `instrument` (None: the only one) of the tool point it sights,
     /// [`ToolState::target`]. `s` carries `time_since_power_on` (warm-up) and the station's air
     /// (refraction); its `target_point` and `tracker_range` are set here.
-    pub fn tracker_of(&self, instrument: Option<&str>, p: &[f64], tool: &ToolState, s: &mut Signals) -> Result<TrackerPrediction, PhysicsError> {
+    pub fn tracker_of(
+        &self,
+        instrument: Option<&str>,
+        p: &[f64],
+        tool: &ToolState,
+        s: &mut Signals,
+    ) -> Result<TrackerPrediction, PhysicsError> {
         self.check(p)?;
         let inst = self.require(InstrumentKind::Tracker, instrument)?;
         let pose = pose_of(inst, s)?;
         // a levelled instrument reads the point in the levelled frame: the base's tilt first
         s.target_point = Some(match inst.tilt {
-            Some(t) => v3(&self.term(t).term.predict(self.part(t, p), &Signals { target_point: Some(tool.target()), ..Signals::default() })?.value),
+            Some(t) => v3(&self
+                .term(t)
+                .term
+                .predict(
+                    self.part(t, p),
+                    &Signals {
+                        target_point: Some(tool.target()),
+                        ..Signals::default()
+                    },
+                )?
+                .value),
             None => tool.target(),
         });
         let x = match inst.drift {
@@ -87,7 +112,12 @@ impl ForwardModel<'_> {
             Some(d) => {
                 // the pose at this instant: the fitted pose plus the drift's change
                 let change = self.term(d).term.predict(self.part(d, p), s)?.value;
-                let at: Vec<f64> = self.part(pose, p).iter().zip(change.iter()).map(|(a, b)| a + b).collect();
+                let at: Vec<f64> = self
+                    .part(pose, p)
+                    .iter()
+                    .zip(change.iter())
+                    .map(|(a, b)| a + b)
+                    .collect();
                 v3(&self.term(pose).term.predict(&at, s)?.value)
             }
         };
@@ -101,11 +131,26 @@ impl ForwardModel<'_> {
         };
         let warmup = range_change(inst.warmup, s)?;
         let refraction = range_change(inst.refraction, s)?;
-        Ok(TrackerPrediction { point: x, range: rho, azimuth: az, elevation: el, warmup, refraction })
+        Ok(TrackerPrediction {
+            point: x,
+            range: rho,
+            azimuth: az,
+            elevation: el,
+            warmup,
+            refraction,
+        })
     }
 
     /// [`Self::tracker_jacobian_of`] the model's only tracker.
-    pub fn tracker_jacobian(&self, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, work: &mut Workspace, out: &mut DMatrix<f64>) -> Result<TrackerPrediction, PhysicsError> {
+    pub fn tracker_jacobian(
+        &self,
+        p: &[f64],
+        kin: &KinematicTruth,
+        q: &[f64],
+        s: &mut Signals,
+        work: &mut Workspace,
+        out: &mut DMatrix<f64>,
+    ) -> Result<TrackerPrediction, PhysicsError> {
         self.tracker_jacobian_of(None, p, kin, q, s, work, out)
     }
 
@@ -116,10 +161,23 @@ impl ForwardModel<'_> {
     /// with the catalog's hot terms (see `PhysicsTerm::evaluate_into`); `work` holds the
     /// intermediate Jacobians.
     #[allow(clippy::too_many_arguments)]
-    pub fn tracker_jacobian_of(&self, instrument: Option<&str>, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, work: &mut Workspace, out: &mut DMatrix<f64>) -> Result<TrackerPrediction, PhysicsError> {
+    pub fn tracker_jacobian_of(
+        &self,
+        instrument: Option<&str>,
+        p: &[f64],
+        kin: &KinematicTruth,
+        q: &[f64],
+        s: &mut Signals,
+        work: &mut Workspace,
+        out: &mut DMatrix<f64>,
+    ) -> Result<TrackerPrediction, PhysicsError> {
         self.check_buffer("tracker Jacobian", out, TRACKER_ROWS)?;
         let (pred, chain) = self.tracker_chain(instrument, p, kin, q, s, work)?;
-        for (c, o) in out.as_mut_slice().chunks_exact_mut(TRACKER_ROWS).enumerate() {
+        for (c, o) in out
+            .as_mut_slice()
+            .chunks_exact_mut(TRACKER_ROWS)
+            .enumerate()
+        {
             let (y, range) = chain.column(work, work.tool.as_slice(), c);
             o.copy_from_slice(&[y.x, y.y, y.z, range]);
         }
@@ -132,11 +190,26 @@ impl ForwardModel<'_> {
     /// in between. The prediction is `tracker_jacobian_of`'s bit for bit, the columns to
     /// round-off (`map` is applied to the chain once, not to every column).
     #[allow(clippy::too_many_arguments)]
-    pub fn tracker_point_jacobian_mapped(&self, instrument: Option<&str>, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, work: &mut Workspace, map: &Matrix3<f64>, columns: &[usize], mut write: impl FnMut(usize, Vector3<f64>)) -> Result<TrackerPrediction, PhysicsError> {
+    pub fn tracker_point_jacobian_mapped(
+        &self,
+        instrument: Option<&str>,
+        p: &[f64],
+        kin: &KinematicTruth,
+        q: &[f64],
+        s: &mut Signals,
+        work: &mut Workspace,
+        map: &Matrix3<f64>,
+        columns: &[usize],
+        mut write: impl FnMut(usize, Vector3<f64>),
+    ) -> Result<TrackerPrediction, PhysicsError> {
         let (pred, chain) = self.tracker_chain(instrument, p, kin, q, s, work)?;
         let chain = chain.mapped(map);
         for &c in columns {
-            assert!(c < self.n_params, "column {c} of {} parameters", self.n_params);
+            assert!(
+                c < self.n_params,
+                "column {c} of {} parameters",
+                self.n_params
+            );
             write(c, chain.column(work, work.tool.as_slice(), c).0);
         }
         Ok(pred)
@@ -147,16 +220,36 @@ impl ForwardModel<'_> {
     /// linear, see [`crate::linear_target`]): the machine terms are not evaluated, the point is
     /// P₀ + A·p and its Jacobian A. Equal to the unkept evaluation to round-off.
     #[allow(clippy::too_many_arguments)]
-    pub fn tracker_point_jacobian_mapped_linear(&self, instrument: Option<&str>, p: &[f64], layout: &KeptLayout, kept: &[f64], s: &mut Signals, work: &mut Workspace, map: &Matrix3<f64>, columns: &[usize], mut write: impl FnMut(usize, Vector3<f64>)) -> Result<TrackerPrediction, PhysicsError> {
+    pub fn tracker_point_jacobian_mapped_linear(
+        &self,
+        instrument: Option<&str>,
+        p: &[f64],
+        layout: &KeptLayout,
+        kept: &[f64],
+        s: &mut Signals,
+        work: &mut Workspace,
+        map: &Matrix3<f64>,
+        columns: &[usize],
+        mut write: impl FnMut(usize, Vector3<f64>),
+    ) -> Result<TrackerPrediction, PhysicsError> {
         self.check(p)?;
         work.check(self)?;
         let machine = layout.columns();
-        let (pred, chain) = self.tracker_chain_at(instrument, p, layout.target_at(p, kept), s, work)?;
+        let (pred, chain) =
+            self.tracker_chain_at(instrument, p, layout.target_at(p, kept), s, work)?;
         let chain = chain.mapped(map);
         for &c in columns {
-            assert!(c < self.n_params, "column {c} of {} parameters", self.n_params);
+            assert!(
+                c < self.n_params,
+                "column {c} of {} parameters",
+                self.n_params
+            );
             // a machine column moves only the sighted point; the instrument's through the chain
-            let column = if c < machine { chain.point_from_target * layout.column(kept, c) } else { chain.column(work, &[], c).0 };
+            let column = if c < machine {
+                chain.point_from_target * layout.column(kept, c)
+            } else {
+                chain.column(work, &[], c).0
+            };
             write(c, column);
         }
         Ok(pred)
@@ -164,29 +257,64 @@ impl ForwardModel<'_> {
 
     /// The tracker's reading of a kept reading (as [`Self::tracker_point_jacobian_mapped_linear`]
     /// predicts it, bit for bit), without its Jacobian.
-    pub fn tracker_linear(&self, instrument: Option<&str>, p: &[f64], layout: &KeptLayout, kept: &[f64], s: &mut Signals, work: &mut Workspace) -> Result<TrackerPrediction, PhysicsError> {
+    pub fn tracker_linear(
+        &self,
+        instrument: Option<&str>,
+        p: &[f64],
+        layout: &KeptLayout,
+        kept: &[f64],
+        s: &mut Signals,
+        work: &mut Workspace,
+    ) -> Result<TrackerPrediction, PhysicsError> {
         self.check(p)?;
         work.check(self)?;
-        Ok(self.tracker_chain_at(instrument, p, layout.target_at(p, kept), s, work)?.0)
+        Ok(self
+            .tracker_chain_at(instrument, p, layout.target_at(p, kept), s, work)?
+            .0)
     }
 
     /// The reading of tracker `instrument` of a point fixed in the frame its pose is given in
     /// (a reference nest: the machine does not move it, only the instrument's own terms act).
-    pub fn tracker_of_fixed_point(&self, instrument: Option<&str>, p: &[f64], point: Vector3<f64>, s: &mut Signals) -> Result<TrackerPrediction, PhysicsError> {
-        let tool = ToolState { nominal: nalgebra::Isometry3::identity(), truth: nalgebra::Isometry3::translation(point.x, point.y, point.z), d: Vector3::zeros(), workpiece: Vector3::zeros() };
+    pub fn tracker_of_fixed_point(
+        &self,
+        instrument: Option<&str>,
+        p: &[f64],
+        point: Vector3<f64>,
+        s: &mut Signals,
+    ) -> Result<TrackerPrediction, PhysicsError> {
+        let tool = ToolState {
+            nominal: nalgebra::Isometry3::identity(),
+            truth: nalgebra::Isometry3::translation(point.x, point.y, point.z),
+            d: Vector3::zeros(),
+            workpiece: Vector3::zeros(),
+        };
         self.tracker_of(instrument, p, &tool, s)
     }
 
     /// [`Self::tracker_point_jacobian_mapped`] of a fixed point ([`Self::tracker_of_fixed_point`]):
     /// the machine's columns are zero, the instrument's through the chain.
     #[allow(clippy::too_many_arguments)]
-    pub fn tracker_point_jacobian_of_fixed_point_mapped(&self, instrument: Option<&str>, p: &[f64], point: Vector3<f64>, s: &mut Signals, work: &mut Workspace, map: &Matrix3<f64>, columns: &[usize], mut write: impl FnMut(usize, Vector3<f64>)) -> Result<TrackerPrediction, PhysicsError> {
+    pub fn tracker_point_jacobian_of_fixed_point_mapped(
+        &self,
+        instrument: Option<&str>,
+        p: &[f64],
+        point: Vector3<f64>,
+        s: &mut Signals,
+        work: &mut Workspace,
+        map: &Matrix3<f64>,
+        columns: &[usize],
+        mut write: impl FnMut(usize, Vector3<f64>),
+    ) -> Result<TrackerPrediction, PhysicsError> {
         self.check(p)?;
         work.check(self)?;
         let (pred, chain) = self.tracker_chain_at(instrument, p, point, s, work)?;
         let chain = chain.mapped(map);
         for &c in columns {
-            assert!(c < self.n_params, "column {c} of {} parameters", self.n_params);
+            assert!(
+                c < self.n_params,
+                "column {c} of {} parameters",
+                self.n_params
+            );
             write(c, chain.column(work, &[], c).0);
         }
         Ok(pred)
@@ -194,7 +322,15 @@ impl ForwardModel<'_> {
 
     /// The reading and its Jacobian as a [`TrackerChain`] over the intermediate Jacobians it
     /// leaves in `work`.
-    fn tracker_chain(&self, instrument: Option<&str>, p: &[f64], kin: &KinematicTruth, q: &[f64], s: &mut Signals, work: &mut Workspace) -> Result<(TrackerPrediction, TrackerChain), PhysicsError> {
+    fn tracker_chain(
+        &self,
+        instrument: Option<&str>,
+        p: &[f64],
+        kin: &KinematicTruth,
+        q: &[f64],
+        s: &mut Signals,
+        work: &mut Workspace,
+    ) -> Result<(TrackerPrediction, TrackerChain), PhysicsError> {
         work.check(self)?;
         let target = self.tool_point_jacobian(p, kin, q, s, &mut work.tool)?;
         self.tracker_chain_at(instrument, p, target, s, work)
@@ -202,7 +338,14 @@ impl ForwardModel<'_> {
 
     /// [`Self::tracker_chain`] from the sighted point `target`, whose Jacobian the caller holds
     /// (`work.tool`, or a kept reading's A).
-    fn tracker_chain_at(&self, instrument: Option<&str>, p: &[f64], target: Vector3<f64>, s: &mut Signals, work: &mut Workspace) -> Result<(TrackerPrediction, TrackerChain), PhysicsError> {
+    fn tracker_chain_at(
+        &self,
+        instrument: Option<&str>,
+        p: &[f64],
+        target: Vector3<f64>,
+        s: &mut Signals,
+        work: &mut Workspace,
+    ) -> Result<(TrackerPrediction, TrackerChain), PhysicsError> {
         let inst = self.require(InstrumentKind::Tracker, instrument)?;
         let pose = pose_of(inst, s)?;
         // a levelled instrument: P_level = R_tilt·P (base_tilt), its Jacobian kept for the chain
@@ -228,13 +371,23 @@ impl ForwardModel<'_> {
             // the pose at this instant: the fitted pose plus the drift's change (its Jacobian
             // w.r.t. the drift's parameters kept for the chain)
             let mut change = [0.0; 6];
-            self.term(d).term.evaluate_into(self.part(d, p), s, &mut change, work.drift_pose.columns_mut(0, ds.len))?;
+            self.term(d).term.evaluate_into(
+                self.part(d, p),
+                s,
+                &mut change,
+                work.drift_pose.columns_mut(0, ds.len),
+            )?;
             for (a, b) in pp.iter_mut().zip(change) {
                 *a += b;
             }
         }
         let rotation = work.pose_rotation([pp[3], pp[4], pp[5]]);
-        rotation.evaluate_into(Vector3::new(pp[0], pp[1], pp[2]), target, &mut xv, work.pose.columns_mut(0, ps.len));
+        rotation.evaluate_into(
+            Vector3::new(pp[0], pp[1], pp[2]),
+            target,
+            &mut xv,
+            work.pose.columns_mut(0, ps.len),
+        );
         if let Some((_, ds)) = drift {
             let dx = &work.pose * work.drift_pose.columns(0, ds.len);
             work.drift.columns_mut(0, ds.len).copy_from(&dx);
@@ -253,8 +406,27 @@ impl ForwardModel<'_> {
         if rho == 0.0 && inst.warmup.is_none() && inst.refraction.is_none() {
             // points given in the machine frame (pose = identity) can sit at the origin: with no
             // range terms the reported point is x itself, whose Jacobian needs no direction
-            let pred = TrackerPrediction { point: x, range: rho, azimuth: az, elevation: el, warmup: 0.0, refraction: 0.0 };
-            return Ok((pred, TrackerChain::new(ps, drift_slot, tilt, range_slots, Vector3::zeros(), Matrix3::identity(), RowVector3::zeros(), &rt)));
+            let pred = TrackerPrediction {
+                point: x,
+                range: rho,
+                azimuth: az,
+                elevation: el,
+                warmup: 0.0,
+                refraction: 0.0,
+            };
+            return Ok((
+                pred,
+                TrackerChain::new(
+                    ps,
+                    drift_slot,
+                    tilt,
+                    range_slots,
+                    Vector3::zeros(),
+                    Matrix3::identity(),
+                    RowVector3::zeros(),
+                    &rt,
+                ),
+            ));
         }
         if !(rho > 0.0) {
             return Err(PhysicsError::InvalidInput { what: "forward model, tracker reading".into(), reason: "the target is at the tracker origin (range 0): no direction for the range terms".into() });
@@ -264,11 +436,23 @@ impl ForwardModel<'_> {
             if let Some(i) = i {
                 let sl = self.slots[i];
                 let mut v = [0.0; 1];
-                self.term(i).term.evaluate_into(self.part(i, p), s, &mut v, work.range_terms.view_mut((k, 0), (1, sl.len)))?;
+                self.term(i).term.evaluate_into(
+                    self.part(i, p),
+                    s,
+                    &mut v,
+                    work.range_terms.view_mut((k, 0), (1, sl.len)),
+                )?;
                 range_changes[k] = v[0];
             }
         }
-        let pred = TrackerPrediction { point: x, range: rho, azimuth: az, elevation: el, warmup: range_changes[0], refraction: range_changes[1] };
+        let pred = TrackerPrediction {
+            point: x,
+            range: rho,
+            azimuth: az,
+            elevation: el,
+            warmup: range_changes[0],
+            refraction: range_changes[1],
+        };
         let u = x / rho;
         // Δρ_refraction is proportional to ρ: ∂ρ_m/∂x = g·uᵀ with g = 1 + Δρ_refraction/ρ;
         // the reported point y = ρ_m·u: ∂y/∂x = (ρ_m/ρ)(I − u uᵀ) + u·∂ρ_m/∂x
@@ -276,7 +460,19 @@ impl ForwardModel<'_> {
         let f = pred.measured_range() / rho;
         let range_from_x = u.transpose() * g;
         let point_from_x = (Matrix3::identity() - u * u.transpose()) * f + u * range_from_x;
-        Ok((pred, TrackerChain::new(ps, drift_slot, tilt, range_slots, u, point_from_x, range_from_x, &rt)))
+        Ok((
+            pred,
+            TrackerChain::new(
+                ps,
+                drift_slot,
+                tilt,
+                range_slots,
+                u,
+                point_from_x,
+                range_from_x,
+                &rt,
+            ),
+        ))
     }
 }
 
@@ -303,13 +499,37 @@ struct TrackerChain {
 
 impl TrackerChain {
     #[allow(clippy::too_many_arguments)]
-    fn new(pose: Slot, drift: Option<Slot>, tilt: Option<(Slot, [Vector3<f64>; 2])>, range_terms: [Option<Slot>; 2], u: Vector3<f64>, point_from_x: Matrix3<f64>, range_from_x: RowVector3<f64>, rt: &Matrix3<f64>) -> Self {
-        Self { pose, drift, tilt, range_terms, u, point_from_x, range_from_x, point_from_target: point_from_x * rt, range_from_target: range_from_x * rt }
+    fn new(
+        pose: Slot,
+        drift: Option<Slot>,
+        tilt: Option<(Slot, [Vector3<f64>; 2])>,
+        range_terms: [Option<Slot>; 2],
+        u: Vector3<f64>,
+        point_from_x: Matrix3<f64>,
+        range_from_x: RowVector3<f64>,
+        rt: &Matrix3<f64>,
+    ) -> Self {
+        Self {
+            pose,
+            drift,
+            tilt,
+            range_terms,
+            u,
+            point_from_x,
+            range_from_x,
+            point_from_target: point_from_x * rt,
+            range_from_target: range_from_x * rt,
+        }
     }
 
     /// The chain of `map`·y (e.g. the whitened point): the point's factors premultiplied once.
     fn mapped(&self, map: &Matrix3<f64>) -> Self {
-        Self { u: map * self.u, point_from_x: map * self.point_from_x, point_from_target: map * self.point_from_target, ..*self }
+        Self {
+            u: map * self.u,
+            point_from_x: map * self.point_from_x,
+            point_from_target: map * self.point_from_target,
+            ..*self
+        }
     }
 
     /// Column `c` of ∂(reported point)/∂p and of ∂(measured range)/∂p, with `tool` the sighted
@@ -325,15 +545,26 @@ impl TrackerChain {
         };
         if within(self.pose) {
             let k = c - self.pose.start;
-            return through(&self.point_from_x, &self.range_from_x, &work.pose.as_slice()[3 * k..3 * k + 3]);
+            return through(
+                &self.point_from_x,
+                &self.range_from_x,
+                &work.pose.as_slice()[3 * k..3 * k + 3],
+            );
         }
         if let Some(slot) = self.drift.filter(|s| within(*s)) {
             let k = c - slot.start;
-            return through(&self.point_from_x, &self.range_from_x, &work.drift.as_slice()[3 * k..3 * k + 3]);
+            return through(
+                &self.point_from_x,
+                &self.range_from_x,
+                &work.drift.as_slice()[3 * k..3 * k + 3],
+            );
         }
         if let Some((slot, d)) = self.tilt.filter(|(s, _)| within(*s)) {
             let dx = d[c - slot.start];
-            return (self.point_from_x * dx, self.range_from_x.dot(&dx.transpose()));
+            return (
+                self.point_from_x * dx,
+                self.range_from_x.dot(&dx.transpose()),
+            );
         }
         for (row, slot) in self.range_terms.iter().enumerate() {
             if let Some(slot) = slot.filter(|s| within(*s)) {

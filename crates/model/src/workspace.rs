@@ -60,17 +60,31 @@ impl Workspace {
     /// The tracker pose's rotation at Euler angles `angles`: the one of the last call when the
     /// angles are the same bit for bit, else computed anew.
     pub(crate) fn pose_rotation(&mut self, angles: [f64; 3]) -> PoseRotation {
-        let same = |r: &PoseRotation| r.angles().iter().zip(&angles).all(|(a, b)| a.to_bits() == b.to_bits());
+        let same = |r: &PoseRotation| {
+            r.angles()
+                .iter()
+                .zip(&angles)
+                .all(|(a, b)| a.to_bits() == b.to_bits())
+        };
         match self.pose_rotation {
             Some(r) if same(&r) => r,
-            _ => *self.pose_rotation.insert(PoseRotation::new(angles[0], angles[1], angles[2])),
+            _ => *self
+                .pose_rotation
+                .insert(PoseRotation::new(angles[0], angles[1], angles[2])),
         }
     }
 
     /// Error unless this workspace was made for `model`.
     pub(crate) fn check(&self, model: &ForwardModel) -> Result<(), PhysicsError> {
         if self.tool.ncols() != model.param_count() {
-            return Err(PhysicsError::InvalidInput { what: "forward model, workspace".into(), reason: format!("made for {} parameters, the model has {}: use Workspace::new of this model", self.tool.ncols(), model.param_count()) });
+            return Err(PhysicsError::InvalidInput {
+                what: "forward model, workspace".into(),
+                reason: format!(
+                    "made for {} parameters, the model has {}: use Workspace::new of this model",
+                    self.tool.ncols(),
+                    model.param_count()
+                ),
+            });
         }
         Ok(())
     }

@@ -32,13 +32,20 @@ fn run() -> Result<(), metrocell_node::NodeError> {
     // Declared above with these types, so reading them cannot fail.
     let period = Duration::from_secs_f64(1.0 / node.param::<f64>("rate_hz")?);
     let frame_id = node.param::<String>("frame_id")?;
-    node.info(format!("publishing on {} every {:?}", node.resolve_topic("chatter")?, period));
+    node.info(format!(
+        "publishing on {} every {:?}",
+        node.resolve_topic("chatter")?,
+        period
+    ));
 
     let diagnostics = node.diagnostics();
     while !node.shutdown_token().wait_timeout(period) {
         let now = node.now().to_nanos();
         let stamp = Time::from_nanos(now);
-        match publisher.publish(Header { stamp, frame_id: frame_id.clone() }) {
+        match publisher.publish(Header {
+            stamp,
+            frame_id: frame_id.clone(),
+        }) {
             Ok(()) => {
                 diagnostics.add_count("messages_published", 1);
             }

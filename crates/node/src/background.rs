@@ -28,13 +28,19 @@ impl SimTime {
     }
     /// Nanoseconds since the epoch of the last `/clock` message, `None` before the first one.
     pub fn get(&self) -> Option<i64> {
-        self.received.load(Ordering::SeqCst).then(|| self.nanos.load(Ordering::SeqCst))
+        self.received
+            .load(Ordering::SeqCst)
+            .then(|| self.nanos.load(Ordering::SeqCst))
     }
 }
 
 pub(crate) struct BackgroundTasks {
     pub spinner: ros2_client::Spinner,
-    pub heartbeat: Option<(ros2_client::Publisher<DiagnosticArray>, Diagnostics, Duration)>,
+    pub heartbeat: Option<(
+        ros2_client::Publisher<DiagnosticArray>,
+        Diagnostics,
+        Duration,
+    )>,
     pub clock: Option<(ros2_client::Subscription<Clock>, SimTime)>,
 }
 
@@ -47,11 +53,18 @@ impl Background {
     pub fn start(tasks: BackgroundTasks, fqn: &str) -> std::io::Result<Background> {
         let stop = ShutdownToken::new();
         let stop_in = stop.clone();
-        let rt = tokio::runtime::Builder::new_current_thread().enable_time().build()?;
-        let thread = std::thread::Builder::new().name(format!("node{fqn}")).spawn(move || {
-            rt.block_on(run(tasks, stop_in));
-        })?;
-        Ok(Background { stop, thread: Some(thread) })
+        let rt = tokio::runtime::Builder::new_current_thread()
+            .enable_time()
+            .build()?;
+        let thread = std::thread::Builder::new()
+            .name(format!("node{fqn}"))
+            .spawn(move || {
+                rt.block_on(run(tasks, stop_in));
+            })?;
+        Ok(Background {
+            stop,
+            thread: Some(thread),
+        })
     }
 
     /// Stop heartbeat and clock tasks and wait for the thread (the caller stops the Spinner first).
@@ -64,7 +77,11 @@ impl Background {
 }
 
 async fn run(tasks: BackgroundTasks, stop: ShutdownToken) {
-    let BackgroundTasks { spinner, heartbeat, clock } = tasks;
+    let BackgroundTasks {
+        spinner,
+        heartbeat,
+        clock,
+    } = tasks;
     let spin = async {
         futures::select! {
             r = spinner.spin().fuse() => if let Err(e) = r { eprintln!("ros2-client spinner stopped: {e:?}") },
@@ -72,7 +89,9 @@ async fn run(tasks: BackgroundTasks, stop: ShutdownToken) {
         }
     };
     let beat = async {
-        let Some((publisher, diagnostics, period)) = heartbeat else { return };
+        let Some((publisher, diagnostics, period)) = heartbeat else {
+            return;
+        };
         loop {
             let msg = diagnostics.to_message(crate::logging::system_time_ns());
             // Best effort: a full send window must not stop the heartbeat.
@@ -84,7 +103,9 @@ async fn run(tasks: BackgroundTasks, stop: ShutdownToken) {
         }
     };
     let clock_task = async {
-        let Some((subscription, sim_time)) = clock else { return };
+        let Some((subscription, sim_time)) = clock else {
+            return;
+        };
         loop {
             futures::select! {
                 r = subscription.async_take().fuse() => if let Ok((c, _)) = r {

@@ -53,7 +53,8 @@ impl NodeBuilder {
     /// Document one of the node's own (non-ROS) arguments for `--help`, e.g.
     /// `("--bag IN_BAG [--output OUT_BAG]", "run on a recorded bag instead of DDS")`.
     pub fn node_argument(mut self, flag: &str, what: &str) -> NodeBuilder {
-        self.own_arguments.push((flag.to_string(), what.to_string()));
+        self.own_arguments
+            .push((flag.to_string(), what.to_string()));
         self
     }
 
@@ -67,8 +68,15 @@ impl NodeBuilder {
     {
         let cl = parse_command_line(argv)?;
         if crate::help::asks_for_help(cl.node_args.get(1..).unwrap_or_default()) {
-            let program = cl.node_args.first().map(|p| p.rsplit('/').next().unwrap_or(p).to_string()).unwrap_or_else(|| self.name.clone());
-            print!("{}", crate::help::help_text(&program, &self.name, &self.own_arguments, &self.decls));
+            let program = cl
+                .node_args
+                .first()
+                .map(|p| p.rsplit('/').next().unwrap_or(p).to_string())
+                .unwrap_or_else(|| self.name.clone());
+            print!(
+                "{}",
+                crate::help::help_text(&program, &self.name, &self.own_arguments, &self.decls)
+            );
             std::process::exit(0);
         }
         self.ros_args = cl.ros;
@@ -134,7 +142,10 @@ impl NodeBuilder {
         let original = self.name.clone();
         let name = ros.node_name_remap(&original).unwrap_or(original.clone());
         validate_node_name(&name)?;
-        let namespace = normalize_namespace(&ros.namespace_remap(&original).unwrap_or(self.namespace.clone()))?;
+        let namespace = normalize_namespace(
+            &ros.namespace_remap(&original)
+                .unwrap_or(self.namespace.clone()),
+        )?;
         let fqn = fully_qualified_node_name(&namespace, &name);
         let min_level = crate::logging::effective_log_level(&ros, &fqn);
         let parameters = Parameters::resolve(&self.decls, &ros, &fqn, &name)?;
@@ -142,11 +153,29 @@ impl NodeBuilder {
         for w in parameters.warnings() {
             early.warn(w);
         }
-        Ok((ros, Identity { name, namespace, fqn, min_level, parameters }))
+        Ok((
+            ros,
+            Identity {
+                name,
+                namespace,
+                fqn,
+                min_level,
+                parameters,
+            },
+        ))
     }
 
     pub fn build(self) -> Result<MetrocellNode, NodeError> {
-        let (ros, Identity { name, namespace, fqn, min_level, parameters }) = self.resolve_identity()?;
+        let (
+            ros,
+            Identity {
+                name,
+                namespace,
+                fqn,
+                min_level,
+                parameters,
+            },
+        ) = self.resolve_identity()?;
 
         let env = match self.environment {
             Some(e) => e,
@@ -159,19 +188,34 @@ impl NodeBuilder {
             options = options.declare_parameter(&p.decl.name, p.value.to_ros());
         }
         let decls: Vec<ParamDecl> = parameters.iter().map(|p| p.decl.clone()).collect();
-        options = options.parameter_validator(Box::new(move |pname: &str, value: &ros2_client::ParameterValue| {
-            let Some(d) = decls.iter().find(|d| d.name == pname) else {
-                return Err(format!("parameter '{pname}' is not declared"));
-            };
-            let v = ParamValue::from_ros(value).ok_or_else(|| format!("parameter '{pname}': unsupported value type"))?;
-            d.check(&v).map(|_| ()).map_err(|p| problem_error(d, &v, ParamSource::Service, p).to_string())
-        }));
+        options = options.parameter_validator(Box::new(
+            move |pname: &str, value: &ros2_client::ParameterValue| {
+                let Some(d) = decls.iter().find(|d| d.name == pname) else {
+                    return Err(format!("parameter '{pname}' is not declared"));
+                };
+                let v = ParamValue::from_ros(value)
+                    .ok_or_else(|| format!("parameter '{pname}': unsupported value type"))?;
+                d.check(&v)
+                    .map(|_| ())
+                    .map_err(|p| problem_error(d, &v, ParamSource::Service, p).to_string())
+            },
+        ));
 
-        let node_name = NodeName::new(&namespace, &name).map_err(|e| create_error(format!("node '{fqn}'"), e))?;
-        let mut ros_node = context.new_node(node_name, options).map_err(|e| create_error(format!("node '{fqn}'"), e))?;
-        let spinner = ros_node.spinner().map_err(|e| create_error("ros2-client spinner", e))?;
+        let node_name = NodeName::new(&namespace, &name)
+            .map_err(|e| create_error(format!("node '{fqn}'"), e))?;
+        let mut ros_node = context
+            .new_node(node_name, options)
+            .map_err(|e| create_error(format!("node '{fqn}'"), e))?;
+        let spinner = ros_node
+            .spinner()
+            .map_err(|e| create_error("ros2-client spinner", e))?;
 
-        let logger = Logger::new(Some(ros_node.logging_handle()), &fqn, min_level, !ros.disable_stdout);
+        let logger = Logger::new(
+            Some(ros_node.logging_handle()),
+            &fqn,
+            min_level,
+            !ros.disable_stdout,
+        );
         let diagnostics = Diagnostics::new(&fqn);
         let sim_time = SimTime::default();
         let use_sim_time = parameters.get::<bool>(USE_SIM_TIME).unwrap_or(false);
@@ -190,7 +234,8 @@ impl NodeBuilder {
             shutdown: ShutdownToken::new(),
         });
         if self.handle_signals {
-            trigger_on_signals(&node.shutdown_token()).map_err(|e| create_error("SIGINT/SIGTERM handler", e))?;
+            trigger_on_signals(&node.shutdown_token())
+                .map_err(|e| create_error("SIGINT/SIGTERM handler", e))?;
         }
 
         let heartbeat = match self.diagnostics_period {
@@ -202,13 +247,21 @@ impl NodeBuilder {
         };
         let clock = if use_sim_time {
             // rclcpp's ClockQoS: best effort, keep last 1.
-            let qos = crate::qos::sensor_data().history(ros2_client::qos::History::KeepLast { depth: 1 });
+            let qos =
+                crate::qos::sensor_data().history(ros2_client::qos::History::KeepLast { depth: 1 });
             Some((node.subscription("/clock", qos)?, sim_time))
         } else {
             None
         };
-        let background = Background::start(BackgroundTasks { spinner, heartbeat, clock }, &fqn)
-            .map_err(|e| create_error("node background thread", e))?;
+        let background = Background::start(
+            BackgroundTasks {
+                spinner,
+                heartbeat,
+                clock,
+            },
+            &fqn,
+        )
+        .map_err(|e| create_error("node background thread", e))?;
         node.set_background(background);
         Ok(node)
     }

@@ -102,9 +102,18 @@ impl Diagnostics {
     /// The message the heartbeat publishes, stamped `stamp_ns` (ns since the Unix epoch).
     pub fn to_message(&self, stamp_ns: i64) -> DiagnosticArray {
         let s = self.with(|s| s.clone());
-        let mut values: Vec<KeyValue> =
-            s.counters.iter().map(|(k, v)| KeyValue { key: k.clone(), value: v.to_string() }).collect();
-        values.extend(s.values.iter().map(|(k, v)| KeyValue { key: k.clone(), value: v.clone() }));
+        let mut values: Vec<KeyValue> = s
+            .counters
+            .iter()
+            .map(|(k, v)| KeyValue {
+                key: k.clone(),
+                value: v.to_string(),
+            })
+            .collect();
+        values.extend(s.values.iter().map(|(k, v)| KeyValue {
+            key: k.clone(),
+            value: v.clone(),
+        }));
         DiagnosticArray {
             header: Header {
                 stamp: Time::from_nanos(stamp_ns),
@@ -133,10 +142,20 @@ mod tests {
         d.set_value("rate_hz", 20.5);
         d.warn("tracker warming up");
         let m = d.to_message(1_500_000_000_250_000_000);
-        assert_eq!((m.header.stamp.sec, m.header.stamp.nanosec), (1_500_000_000, 250_000_000));
+        assert_eq!(
+            (m.header.stamp.sec, m.header.stamp.nanosec),
+            (1_500_000_000, 250_000_000)
+        );
         let s = &m.status[0];
-        assert_eq!((s.name.as_str(), s.level, s.message.as_str()), ("/cell/tracker", 1, "tracker warming up"));
-        let kv: Vec<(&str, &str)> = s.values.iter().map(|k| (k.key.as_str(), k.value.as_str())).collect();
+        assert_eq!(
+            (s.name.as_str(), s.level, s.message.as_str()),
+            ("/cell/tracker", 1, "tracker warming up")
+        );
+        let kv: Vec<(&str, &str)> = s
+            .values
+            .iter()
+            .map(|k| (k.key.as_str(), k.value.as_str()))
+            .collect();
         assert_eq!(kv, vec![("messages_published", "5"), ("rate_hz", "20.5")]);
     }
 }

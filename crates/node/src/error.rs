@@ -27,5 +27,8 @@ pub enum NodeError {
 }
 
 pub(crate) fn create_error(what: impl Into<String>, e: impl std::fmt::Display) -> NodeError {
-    NodeError::Create { what: what.into(), message: e.to_string() }
+    NodeError::Create {
+        what: what.into(),
+        message: e.to_string(),
+    }
 }

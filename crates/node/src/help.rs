@@ -10,9 +10,18 @@ pub fn asks_for_help(node_args: &[String]) -> bool {
 
 /// The help text: usage line, the node's own arguments (if any), every declared parameter with
 /// its type, default, range or allowed values and description, and the ROS 2 arguments.
-pub fn help_text(program: &str, node_name: &str, own_arguments: &[(String, String)], decls: &[ParamDecl]) -> String {
+pub fn help_text(
+    program: &str,
+    node_name: &str,
+    own_arguments: &[(String, String)],
+    decls: &[ParamDecl],
+) -> String {
     let mut s = String::new();
-    let own = if own_arguments.is_empty() { String::new() } else { " [NODE ARGUMENTS]".to_string() };
+    let own = if own_arguments.is_empty() {
+        String::new()
+    } else {
+        " [NODE ARGUMENTS]".to_string()
+    };
     s.push_str(&format!("metrocell node `{node_name}`\n\nUsage: {program}{own} [--ros-args -p NAME:=VALUE ... --params-file FILE -r FROM:=TO ...]\n"));
     if !own_arguments.is_empty() {
         s.push_str("\nNode arguments (before --ros-args):\n");
@@ -27,9 +36,22 @@ pub fn help_text(program: &str, node_name: &str, own_arguments: &[(String, Strin
             rule = format!(", range [{lo}, {hi}]");
         }
         if let Some(allowed) = &d.allowed {
-            rule = format!(", one of {}", allowed.iter().map(|v| v.to_string()).collect::<Vec<_>>().join(" | "));
+            rule = format!(
+                ", one of {}",
+                allowed
+                    .iter()
+                    .map(|v| v.to_string())
+                    .collect::<Vec<_>>()
+                    .join(" | ")
+            );
         }
-        s.push_str(&format!("  {} ({}, default {}{rule})\n      {}\n", d.name, d.param_type(), d.default, d.description));
+        s.push_str(&format!(
+            "  {} ({}, default {}{rule})\n      {}\n",
+            d.name,
+            d.param_type(),
+            d.default,
+            d.description
+        ));
     }
     s.push_str(
         "\nROS 2 arguments: -r __node:=NAME, -r __ns:=/NAMESPACE, -r TOPIC:=NEW_TOPIC, --log-level LEVEL.\n\
@@ -47,14 +69,18 @@ mod tests {
     fn help_lists_parameters_with_rules_and_node_arguments() {
         let decls = vec![
             ParamDecl::new("rate", 10.0, "publish rate (Hz)").with_range(0.1, 100.0),
-            ParamDecl::new("mode", "fast".to_string(), "how to run").with_allowed(["fast", "exact"]),
+            ParamDecl::new("mode", "fast".to_string(), "how to run")
+                .with_allowed(["fast", "exact"]),
         ];
         let own = vec![("--bag IN_BAG".to_string(), "run on a bag".to_string())];
         let text = help_text("metrocell-x", "x", &own, &decls);
         assert!(text.contains("rate (double, default 10"), "{text}");
         assert!(text.contains("range [0.1, 100]"), "{text}");
         assert!(text.contains("one of \"fast\" | \"exact\""), "{text}");
-        assert!(text.contains("--bag IN_BAG") && text.contains("[NODE ARGUMENTS]"), "{text}");
+        assert!(
+            text.contains("--bag IN_BAG") && text.contains("[NODE ARGUMENTS]"),
+            "{text}"
+        );
         assert!(asks_for_help(&["--help".to_string()]) && asks_for_help(&["-h".to_string()]));
         assert!(!asks_for_help(&["--bag".to_string(), "x".to_string()]));
     }

@@ -33,9 +33,9 @@ pub mod error;
 pub mod help;
 pub mod logging;
 pub mod names;
-pub mod offline;
 mod node;
 pub mod node_directory;
+pub mod offline;
 pub mod params;
 pub mod participant;
 pub mod qos;
@@ -55,7 +55,9 @@ pub use logging::Logger;
 pub use node::MetrocellNode;
 pub use node_directory::NodeDirectory;
 pub use offline::{Interrupted, OfflineNode};
-pub use params::{ParamDecl, ParamError, ParamKind, ParamSource, ParamType, ParamValue, ParamWatch, Parameters};
+pub use params::{
+    ParamDecl, ParamError, ParamKind, ParamSource, ParamType, ParamValue, ParamWatch, Parameters,
+};
 pub use raw::{RawMessage, RawPublisher, RawSubscription};
 pub use replay_args::ReplayArgs;
 pub use ros_args::{parse_command_line, CommandLine, LogLevel, RosArgs, RosArgsError};

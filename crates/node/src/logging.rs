@@ -63,8 +63,20 @@ pub fn format_console_line(level: LogLevel, stamp_ns: i64, logger: &str, message
 }
 
 impl Logger {
-    pub(crate) fn new(rosout: Option<NodeLoggingHandle>, node_fqn: &str, min_level: LogLevel, stderr: bool) -> Logger {
-        Logger { inner: Arc::new(LoggerInner { rosout, logger_name: logger_name(node_fqn), min_level, stderr }) }
+    pub(crate) fn new(
+        rosout: Option<NodeLoggingHandle>,
+        node_fqn: &str,
+        min_level: LogLevel,
+        stderr: bool,
+    ) -> Logger {
+        Logger {
+            inner: Arc::new(LoggerInner {
+                rosout,
+                logger_name: logger_name(node_fqn),
+                min_level,
+                stderr,
+            }),
+        }
     }
 
     /// A logger that only prints (for code paths before the node exists).
@@ -78,7 +90,10 @@ impl Logger {
         }
         let now = system_time_ns();
         if self.inner.stderr {
-            eprintln!("{}", format_console_line(level, now, &self.inner.logger_name, message));
+            eprintln!(
+                "{}",
+                format_console_line(level, now, &self.inner.logger_name, message)
+            );
         }
         if let Some(h) = &self.inner.rosout {
             let ros_level = match level {
@@ -120,10 +135,30 @@ mod tests {
 
     #[test]
     fn log_level_selection() {
-        let ros = |a: &[&str]| crate::ros_args::parse_command_line(a.iter().copied()).unwrap().ros;
-        assert_eq!(effective_log_level(&RosArgs::default(), "/cell/talker"), LogLevel::Info);
-        assert_eq!(effective_log_level(&ros(&["p", "--ros-args", "--log-level", "WARN"]), "/cell/talker"), LogLevel::Warn);
-        let r = ros(&["p", "--ros-args", "--log-level", "error", "--log-level", "cell.talker:=debug"]);
+        let ros = |a: &[&str]| {
+            crate::ros_args::parse_command_line(a.iter().copied())
+                .unwrap()
+                .ros
+        };
+        assert_eq!(
+            effective_log_level(&RosArgs::default(), "/cell/talker"),
+            LogLevel::Info
+        );
+        assert_eq!(
+            effective_log_level(
+                &ros(&["p", "--ros-args", "--log-level", "WARN"]),
+                "/cell/talker"
+            ),
+            LogLevel::Warn
+        );
+        let r = ros(&[
+            "p",
+            "--ros-args",
+            "--log-level",
+            "error",
+            "--log-level",
+            "cell.talker:=debug",
+        ]);
         assert_eq!(effective_log_level(&r, "/cell/talker"), LogLevel::Debug);
         assert_eq!(effective_log_level(&r, "/cell/other"), LogLevel::Error);
     }

@@ -14,19 +14,28 @@ pub enum NameError {
 }
 
 fn invalid(name: &str, reason: &'static str) -> NameError {
-    NameError::Invalid { name: name.to_string(), reason }
+    NameError::Invalid {
+        name: name.to_string(),
+        reason,
+    }
 }
 
 /// Validate one token of a name (between slashes).
 fn check_token(full: &str, token: &str) -> Result<(), NameError> {
     if token.is_empty() {
-        return Err(invalid(full, "empty path element (repeated or trailing '/')"));
+        return Err(invalid(
+            full,
+            "empty path element (repeated or trailing '/')",
+        ));
     }
     if token.starts_with(|c: char| c.is_ascii_digit()) {
         return Err(invalid(full, "a path element must not start with a digit"));
     }
     if !token.chars().all(|c| c.is_ascii_alphanumeric() || c == '_') {
-        return Err(invalid(full, "only letters, digits, '_' and '/' are allowed"));
+        return Err(invalid(
+            full,
+            "only letters, digits, '_' and '/' are allowed",
+        ));
     }
     if token.contains("__") {
         return Err(invalid(full, "repeated '_' is not allowed"));
@@ -51,7 +60,11 @@ pub fn normalize_namespace(ns: &str) -> Result<String, NameError> {
     if trimmed.is_empty() {
         return Ok("/".to_string());
     }
-    let abs = if trimmed.starts_with('/') { trimmed.to_string() } else { format!("/{trimmed}") };
+    let abs = if trimmed.starts_with('/') {
+        trimmed.to_string()
+    } else {
+        format!("/{trimmed}")
+    };
     for t in abs[1..].split('/') {
         check_token(ns, t)?;
     }
@@ -75,9 +88,15 @@ pub fn expand_topic_name(name: &str, namespace: &str, node: &str) -> Result<Stri
     }
     let fqn = fully_qualified_node_name(namespace, node);
     let ns_sub = if namespace == "/" { "" } else { namespace };
-    let substituted = name.replace("{node}", node).replace("{namespace}", ns_sub).replace("{ns}", ns_sub);
+    let substituted = name
+        .replace("{node}", node)
+        .replace("{namespace}", ns_sub)
+        .replace("{ns}", ns_sub);
     if substituted.contains(['{', '}']) {
-        return Err(invalid(name, "unknown substitution (known: {node}, {ns}, {namespace})"));
+        return Err(invalid(
+            name,
+            "unknown substitution (known: {node}, {ns}, {namespace})",
+        ));
     }
     let expanded = if substituted == "~" {
         fqn
@@ -102,13 +121,20 @@ pub fn expand_topic_name(name: &str, namespace: &str, node: &str) -> Result<Stri
 }
 
 /// Expand `name` and apply the first matching remap rule (names starting with `__` are not topic rules).
-pub fn resolve_topic_name(name: &str, namespace: &str, node: &str, remaps: &[Remap]) -> Result<String, NameError> {
+pub fn resolve_topic_name(
+    name: &str,
+    namespace: &str,
+    node: &str,
+    remaps: &[Remap],
+) -> Result<String, NameError> {
     let expanded = expand_topic_name(name, namespace, node)?;
     for rule in remaps {
         if rule.from.starts_with("__") || rule.node.as_deref().is_some_and(|n| n != node) {
             continue;
         }
-        let Ok(from) = expand_topic_name(&rule.from, namespace, node) else { continue };
+        let Ok(from) = expand_topic_name(&rule.from, namespace, node) else {
+            continue;
+        };
         if from == expanded {
             return expand_topic_name(&rule.to, namespace, node);
         }
@@ -130,7 +156,9 @@ pub fn ros_topic_from_dds(dds_topic: &str) -> Option<String> {
 pub fn ros_type_from_dds(dds_type: &str) -> Option<String> {
     let parts: Vec<&str> = dds_type.split("::").collect();
     match parts.as_slice() {
-        [pkg, kind, "dds_", ty] if ty.ends_with('_') => Some(format!("{pkg}/{kind}/{}", &ty[..ty.len() - 1])),
+        [pkg, kind, "dds_", ty] if ty.ends_with('_') => {
+            Some(format!("{pkg}/{kind}/{}", &ty[..ty.len() - 1]))
+        }
         _ => None,
     }
 }
@@ -154,21 +182,52 @@ mod tests {
     use super::*;
 
     fn remap(node: Option<&str>, from: &str, to: &str) -> Remap {
-        Remap { node: node.map(str::to_string), from: from.into(), to: to.into() }
+        Remap {
+            node: node.map(str::to_string),
+            from: from.into(),
+            to: to.into(),
+        }
     }
 
     #[test]
     fn expansion() {
-        assert_eq!(expand_topic_name("chatter", "/", "talker").unwrap(), "/chatter");
-        assert_eq!(expand_topic_name("chatter", "/cell", "talker").unwrap(), "/cell/chatter");
-        assert_eq!(expand_topic_name("a/b", "/cell", "talker").unwrap(), "/cell/a/b");
-        assert_eq!(expand_topic_name("/abs", "/cell", "talker").unwrap(), "/abs");
-        assert_eq!(expand_topic_name("~", "/cell", "talker").unwrap(), "/cell/talker");
-        assert_eq!(expand_topic_name("~/status", "/cell", "talker").unwrap(), "/cell/talker/status");
-        assert_eq!(expand_topic_name("~/status", "/", "talker").unwrap(), "/talker/status");
-        assert_eq!(expand_topic_name("{node}/x", "/cell", "talker").unwrap(), "/cell/talker/x");
+        assert_eq!(
+            expand_topic_name("chatter", "/", "talker").unwrap(),
+            "/chatter"
+        );
+        assert_eq!(
+            expand_topic_name("chatter", "/cell", "talker").unwrap(),
+            "/cell/chatter"
+        );
+        assert_eq!(
+            expand_topic_name("a/b", "/cell", "talker").unwrap(),
+            "/cell/a/b"
+        );
+        assert_eq!(
+            expand_topic_name("/abs", "/cell", "talker").unwrap(),
+            "/abs"
+        );
+        assert_eq!(
+            expand_topic_name("~", "/cell", "talker").unwrap(),
+            "/cell/talker"
+        );
+        assert_eq!(
+            expand_topic_name("~/status", "/cell", "talker").unwrap(),
+            "/cell/talker/status"
+        );
+        assert_eq!(
+            expand_topic_name("~/status", "/", "talker").unwrap(),
+            "/talker/status"
+        );
+        assert_eq!(
+            expand_topic_name("{node}/x", "/cell", "talker").unwrap(),
+            "/cell/talker/x"
+        );
         for bad in ["", "a//b", "a/", "1abc", "a-b", "~x", "a__b", "{foo}"] {
-            assert!(expand_topic_name(bad, "/", "n").is_err(), "{bad:?} accepted");
+            assert!(
+                expand_topic_name(bad, "/", "n").is_err(),
+                "{bad:?} accepted"
+            );
         }
     }
 
@@ -181,11 +240,26 @@ mod tests {
             remap(None, "/cell/image", "raw"),
             remap(None, "chatter", "/second"),
         ];
-        assert_eq!(resolve_topic_name("chatter", "/", "talker", &rules).unwrap(), "/talk");
-        assert_eq!(resolve_topic_name("/chatter", "/", "talker", &rules).unwrap(), "/talk");
-        assert_eq!(resolve_topic_name("image", "/cell", "cam", &rules).unwrap(), "/cell/raw");
-        assert_eq!(resolve_topic_name("chatter", "/", "other", &rules).unwrap(), "/wrong");
-        assert_eq!(resolve_topic_name("unrelated", "/", "talker", &rules).unwrap(), "/unrelated");
+        assert_eq!(
+            resolve_topic_name("chatter", "/", "talker", &rules).unwrap(),
+            "/talk"
+        );
+        assert_eq!(
+            resolve_topic_name("/chatter", "/", "talker", &rules).unwrap(),
+            "/talk"
+        );
+        assert_eq!(
+            resolve_topic_name("image", "/cell", "cam", &rules).unwrap(),
+            "/cell/raw"
+        );
+        assert_eq!(
+            resolve_topic_name("chatter", "/", "other", &rules).unwrap(),
+            "/wrong"
+        );
+        assert_eq!(
+            resolve_topic_name("unrelated", "/", "talker", &rules).unwrap(),
+            "/unrelated"
+        );
     }
 
     #[test]
@@ -197,9 +271,15 @@ mod tests {
         assert_eq!(dds_topic_name("/a/b"), "rt/a/b");
         assert_eq!(ros_topic_from_dds("rt/a/b").as_deref(), Some("/a/b"));
         assert_eq!(ros_topic_from_dds("ros_discovery_info"), None);
-        assert_eq!(ros_type_from_dds("std_msgs::msg::dds_::String_").as_deref(), Some("std_msgs/msg/String"));
+        assert_eq!(
+            ros_type_from_dds("std_msgs::msg::dds_::String_").as_deref(),
+            Some("std_msgs/msg/String")
+        );
         assert_eq!(ros_type_from_dds("DCPSParticipant"), None);
-        assert_eq!(split_ros_type("pkg/msg/T").unwrap(), ("pkg".into(), "T".into()));
+        assert_eq!(
+            split_ros_type("pkg/msg/T").unwrap(),
+            ("pkg".into(), "T".into())
+        );
         assert_eq!(split_ros_type("pkg/T").unwrap(), ("pkg".into(), "T".into()));
         assert!(split_ros_type("T").is_err());
         assert!(validate_node_name("talker_1").is_ok());

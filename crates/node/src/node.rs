@@ -49,13 +49,23 @@ impl MetrocellNode {
 
     /// The usual start of a node's `main`: parse `std::env::args()`, declare `decls`, build.
     /// Returns the node and its own (non-ROS) arguments, argv[0] first.
-    pub fn from_env_args(default_name: &str, decls: Vec<ParamDecl>) -> Result<(MetrocellNode, Vec<String>), NodeError> {
-        let (builder, rest) = MetrocellNode::builder(default_name).params(decls).args(std::env::args())?;
+    pub fn from_env_args(
+        default_name: &str,
+        decls: Vec<ParamDecl>,
+    ) -> Result<(MetrocellNode, Vec<String>), NodeError> {
+        let (builder, rest) = MetrocellNode::builder(default_name)
+            .params(decls)
+            .args(std::env::args())?;
         Ok((builder.build()?, rest))
     }
 
     pub(crate) fn assemble(parts: Parts) -> MetrocellNode {
-        MetrocellNode { parts, raw_publisher: None, raw_subscriber: None, background: None }
+        MetrocellNode {
+            parts,
+            raw_publisher: None,
+            raw_subscriber: None,
+            background: None,
+        }
     }
 
     pub(crate) fn set_background(&mut self, b: Background) {
@@ -83,12 +93,21 @@ impl MetrocellNode {
 
     /// Expand a topic name for this node and apply the command-line remaps.
     pub fn resolve_topic(&self, topic: &str) -> Result<String, NodeError> {
-        Ok(resolve_topic_name(topic, &self.parts.namespace, &self.parts.name, &self.parts.ros_args.remaps)?)
+        Ok(resolve_topic_name(
+            topic,
+            &self.parts.namespace,
+            &self.parts.name,
+            &self.parts.ros_args.remaps,
+        )?)
     }
 
     /// Current value of a declared parameter (reflects remote `ros2 param set`).
     pub fn param<T: ParamKind>(&self, name: &str) -> Result<T, ParamError> {
-        let current = self.parts.ros_node.get_parameter(name).and_then(|v| ParamValue::from_ros(&v));
+        let current = self
+            .parts
+            .ros_node
+            .get_parameter(name)
+            .and_then(|v| ParamValue::from_ros(&v));
         match current {
             Some(v) => T::from_value(&v).ok_or(ParamError::TypeMismatch {
                 name: name.to_string(),
@@ -102,7 +121,10 @@ impl MetrocellNode {
     /// Start watching a declared parameter for changes made at run time (`ros2 param set`, a
     /// `set_parameters` service call, [`Self::set_param`]): poll it with
     /// `watch.poll(|n| node.param(n))`, which gives the new value once per change.
-    pub fn watch_param<T: ParamKind + PartialEq + Clone>(&self, name: &str) -> Result<crate::params::ParamWatch<T>, ParamError> {
+    pub fn watch_param<T: ParamKind + PartialEq + Clone>(
+        &self,
+        name: &str,
+    ) -> Result<crate::params::ParamWatch<T>, ParamError> {
         Ok(crate::params::ParamWatch::new(name, self.param(name)?))
     }
 
@@ -110,7 +132,9 @@ impl MetrocellNode {
     /// checked against its declaration, announced on `/parameter_events`. `Err` says why it was
     /// refused.
     pub fn set_param(&self, name: &str, value: impl Into<ParamValue>) -> Result<(), String> {
-        self.parts.ros_node.set_parameter(name, value.into().to_ros())
+        self.parts
+            .ros_node
+            .set_parameter(name, value.into().to_ros())
     }
 
     /// The parameters as resolved at start-up, with where each value came from.
@@ -118,9 +142,15 @@ impl MetrocellNode {
         &self.parts.parameters
     }
 
-    fn ros_topic(&self, topic: &str, type_name: MessageTypeName, qos: &QosProfile) -> Result<(String, rustdds::Topic), NodeError> {
+    fn ros_topic(
+        &self,
+        topic: &str,
+        type_name: MessageTypeName,
+        qos: &QosProfile,
+    ) -> Result<(String, rustdds::Topic), NodeError> {
         let resolved = self.resolve_topic(topic)?;
-        let name = Name::parse(&resolved).map_err(|e| create_error(format!("topic '{resolved}'"), e))?;
+        let name =
+            Name::parse(&resolved).map_err(|e| create_error(format!("topic '{resolved}'"), e))?;
         let t = self
             .parts
             .ros_node
@@ -130,8 +160,13 @@ impl MetrocellNode {
     }
 
     /// Typed publisher: DDS topic `rt/<resolved>`, DDS type `T::PACKAGE::msg::dds_::T::NAME_`.
-    pub fn publisher<T: RosMessage>(&mut self, topic: &str, qos: QosProfile) -> Result<Publisher<T>, NodeError> {
-        let (resolved, t) = self.ros_topic(topic, MessageTypeName::new(T::PACKAGE, T::NAME), &qos)?;
+    pub fn publisher<T: RosMessage>(
+        &mut self,
+        topic: &str,
+        qos: QosProfile,
+    ) -> Result<Publisher<T>, NodeError> {
+        let (resolved, t) =
+            self.ros_topic(topic, MessageTypeName::new(T::PACKAGE, T::NAME), &qos)?;
         self.parts
             .ros_node
             .create_publisher(&t, Some(qos))
@@ -139,8 +174,13 @@ impl MetrocellNode {
     }
 
     /// Typed subscription (see [`MetrocellNode::publisher`] for names).
-    pub fn subscription<T: RosMessage>(&mut self, topic: &str, qos: QosProfile) -> Result<Subscription<T>, NodeError> {
-        let (resolved, t) = self.ros_topic(topic, MessageTypeName::new(T::PACKAGE, T::NAME), &qos)?;
+    pub fn subscription<T: RosMessage>(
+        &mut self,
+        topic: &str,
+        qos: QosProfile,
+    ) -> Result<Subscription<T>, NodeError> {
+        let (resolved, t) =
+            self.ros_topic(topic, MessageTypeName::new(T::PACKAGE, T::NAME), &qos)?;
         self.parts
             .ros_node
             .create_subscription(&t, Some(qos))
@@ -150,14 +190,24 @@ impl MetrocellNode {
     /// The DDS topic of a raw endpoint, created with the endpoint's own DDS QoS (as ros2-client's
     /// `Context::create_topic` does from a profile), so that a bound stated there
     /// ([`crate::qos::bounded_qos`]) also holds for RustDDS's topic cache.
-    fn raw_topic(&self, topic: &str, ros_type: &str, qos: &rustdds::QosPolicies) -> Result<(String, rustdds::Topic), NodeError> {
+    fn raw_topic(
+        &self,
+        topic: &str,
+        ros_type: &str,
+        qos: &rustdds::QosPolicies,
+    ) -> Result<(String, rustdds::Topic), NodeError> {
         let (pkg, ty) = split_ros_type(ros_type)?;
         let resolved = self.resolve_topic(topic)?;
         let t = self
             .parts
             .context
             .domain_participant()
-            .create_topic(dds_topic_name(&resolved), MessageTypeName::new(&pkg, &ty).dds_msg_type(), qos, rustdds::TopicKind::NoKey)
+            .create_topic(
+                dds_topic_name(&resolved),
+                MessageTypeName::new(&pkg, &ty).dds_msg_type(),
+                qos,
+                rustdds::TopicKind::NoKey,
+            )
             .map_err(|e| create_error(format!("topic '{resolved}'"), e))?;
         Ok((resolved, t))
     }
@@ -165,18 +215,33 @@ impl MetrocellNode {
     /// Publisher of already encoded payloads (4-byte header + CDR) of type `ros_type`
     /// (`pkg/msg/Type`). Raw endpoints are plain DDS writers: they are not listed in the
     /// node's ROS graph entry (`ros2 node info`), but match any peer on the topic.
-    pub fn raw_publisher(&mut self, topic: &str, ros_type: &str, qos: QosProfile) -> Result<RawPublisher, NodeError> {
+    pub fn raw_publisher(
+        &mut self,
+        topic: &str,
+        ros_type: &str,
+        qos: QosProfile,
+    ) -> Result<RawPublisher, NodeError> {
         self.create_raw_publisher(topic, ros_type, rustdds::QosPolicies::from(&qos))
     }
 
     /// [`Self::raw_publisher`] whose history never holds more than its keep-last depth, for
     /// bulky messages (camera frames) sent reliably to readers some of which may be best effort:
     /// see [`crate::qos::bounded_qos`].
-    pub fn bounded_raw_publisher(&mut self, topic: &str, ros_type: &str, qos: QosProfile) -> Result<RawPublisher, NodeError> {
+    pub fn bounded_raw_publisher(
+        &mut self,
+        topic: &str,
+        ros_type: &str,
+        qos: QosProfile,
+    ) -> Result<RawPublisher, NodeError> {
         self.create_raw_publisher(topic, ros_type, crate::qos::bounded_qos(&qos))
     }
 
-    fn create_raw_publisher(&mut self, topic: &str, ros_type: &str, qos: rustdds::QosPolicies) -> Result<RawPublisher, NodeError> {
+    fn create_raw_publisher(
+        &mut self,
+        topic: &str,
+        ros_type: &str,
+        qos: rustdds::QosPolicies,
+    ) -> Result<RawPublisher, NodeError> {
         let (resolved, t) = self.raw_topic(topic, ros_type, &qos)?;
         if self.raw_publisher.is_none() {
             let p = self
@@ -193,22 +258,42 @@ impl MetrocellNode {
             .expect("created above")
             .create_datawriter_no_key(&t, Some(qos))
             .map_err(|e| create_error(format!("raw writer on '{resolved}' ({ros_type})"), e))?;
-        Ok(RawPublisher { writer, topic: resolved, ros_type: ros_type.to_string(), matched: Default::default() })
+        Ok(RawPublisher {
+            writer,
+            topic: resolved,
+            ros_type: ros_type.to_string(),
+            matched: Default::default(),
+        })
     }
 
     /// Subscription that yields payload bytes, source timestamp and publisher GID, for any type.
-    pub fn raw_subscription(&mut self, topic: &str, ros_type: &str, qos: QosProfile) -> Result<RawSubscription, NodeError> {
+    pub fn raw_subscription(
+        &mut self,
+        topic: &str,
+        ros_type: &str,
+        qos: QosProfile,
+    ) -> Result<RawSubscription, NodeError> {
         self.create_raw_subscription(topic, ros_type, rustdds::QosPolicies::from(&qos))
     }
 
     /// [`Self::raw_subscription`] that keeps no more than its keep-last depth of samples: for
     /// bulky messages (camera frames) a node reads only in passing. RustDDS's topic cache
     /// otherwise keeps a reader's last max(64, depth) samples ([`crate::qos::bounded_qos`]).
-    pub fn bounded_raw_subscription(&mut self, topic: &str, ros_type: &str, qos: QosProfile) -> Result<RawSubscription, NodeError> {
+    pub fn bounded_raw_subscription(
+        &mut self,
+        topic: &str,
+        ros_type: &str,
+        qos: QosProfile,
+    ) -> Result<RawSubscription, NodeError> {
         self.create_raw_subscription(topic, ros_type, crate::qos::bounded_qos(&qos))
     }
 
-    fn create_raw_subscription(&mut self, topic: &str, ros_type: &str, qos: rustdds::QosPolicies) -> Result<RawSubscription, NodeError> {
+    fn create_raw_subscription(
+        &mut self,
+        topic: &str,
+        ros_type: &str,
+        qos: rustdds::QosPolicies,
+    ) -> Result<RawSubscription, NodeError> {
         let (resolved, t) = self.raw_topic(topic, ros_type, &qos)?;
         if self.raw_subscriber.is_none() {
             let s = self
@@ -225,7 +310,11 @@ impl MetrocellNode {
             .expect("created above")
             .create_simple_datareader_no_key(&t, Some(qos))
             .map_err(|e| create_error(format!("raw reader on '{resolved}' ({ros_type})"), e))?;
-        Ok(RawSubscription { reader, topic: resolved, ros_type: ros_type.to_string() })
+        Ok(RawSubscription {
+            reader,
+            topic: resolved,
+            ros_type: ros_type.to_string(),
+        })
     }
 
     /// ROS topics known from DDS discovery (remote participants' endpoints), sorted by name.
@@ -241,14 +330,21 @@ impl MetrocellNode {
     /// `rosgraph_msgs/msg/Clock`).
     pub fn discovered_publications(&self) -> Vec<TopicInfo> {
         let writers = self.parts.context.domain_participant().discovered_writers();
-        ros_topics_from_dds(
-            writers.iter().map(|w| (w.publication_topic_data.topic_name.as_str(), w.publication_topic_data.type_name.as_str())),
-        )
+        ros_topics_from_dds(writers.iter().map(|w| {
+            (
+                w.publication_topic_data.topic_name.as_str(),
+                w.publication_topic_data.type_name.as_str(),
+            )
+        }))
     }
 
     /// Wait for discovery to settle, then list topics: polls until the list has not changed for
     /// `quiet` (or `max_wait` passes). For `metrocell topic list` and friends.
-    pub fn discovered_topics_settled(&self, quiet: std::time::Duration, max_wait: std::time::Duration) -> Vec<TopicInfo> {
+    pub fn discovered_topics_settled(
+        &self,
+        quiet: std::time::Duration,
+        max_wait: std::time::Duration,
+    ) -> Vec<TopicInfo> {
         let start = std::time::Instant::now();
         let mut last = self.discovered_topics();
         let mut last_change = std::time::Instant::now();

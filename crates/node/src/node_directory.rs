@@ -33,7 +33,8 @@ pub fn guid_prefix(guid: GUID) -> ParticipantPrefix {
 
 /// Node names per participant, kept current by [`NodeDirectory::refresh`].
 pub struct NodeDirectory {
-    reader: SimpleDataReader<ParticipantEntitiesInfo, CDRDeserializerAdapter<ParticipantEntitiesInfo>>,
+    reader:
+        SimpleDataReader<ParticipantEntitiesInfo, CDRDeserializerAdapter<ParticipantEntitiesInfo>>,
     /// Participant → fully qualified names of its nodes (its latest announcement).
     nodes: BTreeMap<ParticipantPrefix, Vec<String>>,
 }
@@ -44,13 +45,24 @@ impl NodeDirectory {
     pub fn new(participant: &rustdds::DomainParticipant) -> Result<NodeDirectory, NodeError> {
         let qos = QosPolicyBuilder::new()
             .durability(Durability::TransientLocal)
-            .reliability(Reliability::Reliable { max_blocking_time: rustdds::Duration::ZERO })
+            .reliability(Reliability::Reliable {
+                max_blocking_time: rustdds::Duration::ZERO,
+            })
             .history(History::KeepLast { depth: 1 })
             .build();
-        let topic = participant.create_topic(TOPIC.to_string(), TYPE.to_string(), &qos, TopicKind::NoKey).map_err(|e| fail("topic ros_discovery_info", e))?;
-        let subscriber = participant.create_subscriber(&qos).map_err(|e| fail("ros_discovery_info subscriber", e))?;
-        let reader = subscriber.create_simple_datareader_no_key(&topic, Some(qos)).map_err(|e| fail("ros_discovery_info reader", e))?;
-        Ok(NodeDirectory { reader, nodes: BTreeMap::new() })
+        let topic = participant
+            .create_topic(TOPIC.to_string(), TYPE.to_string(), &qos, TopicKind::NoKey)
+            .map_err(|e| fail("topic ros_discovery_info", e))?;
+        let subscriber = participant
+            .create_subscriber(&qos)
+            .map_err(|e| fail("ros_discovery_info subscriber", e))?;
+        let reader = subscriber
+            .create_simple_datareader_no_key(&topic, Some(qos))
+            .map_err(|e| fail("ros_discovery_info reader", e))?;
+        Ok(NodeDirectory {
+            reader,
+            nodes: BTreeMap::new(),
+        })
     }
 
     /// Take every announcement waiting (a participant's latest replaces its previous one).
@@ -59,7 +71,13 @@ impl NodeDirectory {
         while let Ok(Some(change)) = self.reader.try_take_one() {
             let info = change.into_value();
             let prefix = guid_prefix(GUID::from(info.gid()));
-            self.nodes.insert(prefix, info.nodes().iter().map(|n| n.fully_qualified_name()).collect());
+            self.nodes.insert(
+                prefix,
+                info.nodes()
+                    .iter()
+                    .map(|n| n.fully_qualified_name())
+                    .collect(),
+            );
         }
     }
 
@@ -108,6 +126,9 @@ mod tests {
     #[test]
     fn the_prefix_is_the_first_twelve_bytes_of_the_guid() {
         let bytes: [u8; 16] = std::array::from_fn(|i| i as u8 + 1);
-        assert_eq!(guid_prefix(GUID::from_bytes(bytes)), [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12]);
+        assert_eq!(
+            guid_prefix(GUID::from_bytes(bytes)),
+            [1, 2, 3, 4, 5, 6, 7, 8, 9, 10, 11, 12]
+        );
     }
 }

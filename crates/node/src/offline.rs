@@ -42,7 +42,12 @@ impl OfflineNode {
     /// Expand a topic name exactly as the live node would (namespace, `~`, remaps), so a bag
     /// recorded from the live cell is read under the names the node subscribes.
     pub fn resolve_topic(&self, topic: &str) -> Result<String, NodeError> {
-        Ok(resolve_topic_name(topic, &self.namespace, &self.name, &self.ros_args.remaps)?)
+        Ok(resolve_topic_name(
+            topic,
+            &self.namespace,
+            &self.name,
+            &self.ros_args.remaps,
+        )?)
     }
 
     pub fn param<T: ParamKind>(&self, name: &str) -> Result<T, ParamError> {
@@ -91,13 +96,19 @@ mod tests {
     /// already sends one.)
     #[test]
     fn a_triggered_shutdown_interrupts_an_offline_node() {
-        let node = MetrocellNode::builder("offline_interrupt_test").handle_signals(false).build_offline().unwrap();
+        let node = MetrocellNode::builder("offline_interrupt_test")
+            .handle_signals(false)
+            .build_offline()
+            .unwrap();
         assert!(!node.interrupted());
         node.shutdown_token().trigger();
         assert!(node.interrupted());
         assert!(node.finish_replay(None).is_ok());
         let e = node.finish_replay(Some(42)).unwrap_err();
         assert_eq!(e.log_time_ns, 42);
-        assert!(e.to_string().contains("42 ns") && e.to_string().contains("finished"), "{e}");
+        assert!(
+            e.to_string().contains("42 ns") && e.to_string().contains("finished"),
+            "{e}"
+        );
     }
 }

@@ -16,9 +16,13 @@ use crate::error::{create_error, NodeError};
 pub fn participant_builder(env: &DdsEnvironment) -> DomainParticipantBuilder {
     let builder = DomainParticipantBuilder::new(env.domain_id);
     match env.discovery_range {
-        DiscoveryRange::Localhost => builder.with_only_networks([IpAddr::V4(Ipv4Addr::LOCALHOST)]).same_host_loopback(true),
+        DiscoveryRange::Localhost => builder
+            .with_only_networks([IpAddr::V4(Ipv4Addr::LOCALHOST)])
+            .same_host_loopback(true),
         // No interface at all: nothing is announced and no localhost peers are contacted.
-        DiscoveryRange::Off => builder.with_only_networks(Vec::<IpAddr>::new()).same_host_loopback(false),
+        DiscoveryRange::Off => builder
+            .with_only_networks(Vec::<IpAddr>::new())
+            .same_host_loopback(false),
         DiscoveryRange::Subnet | DiscoveryRange::SystemDefault => builder,
     }
 }
@@ -28,5 +32,6 @@ pub fn create_context(env: &DdsEnvironment) -> Result<ros2_client::Context, Node
     let participant: DomainParticipant = participant_builder(env)
         .build()
         .map_err(|e| create_error(format!("DDS participant in domain {}", env.domain_id), e))?;
-    ros2_client::Context::from_domain_participant(participant).map_err(|e| create_error("ROS 2 context", e))
+    ros2_client::Context::from_domain_participant(participant)
+        .map_err(|e| create_error("ROS 2 context", e))
 }

@@ -15,7 +15,9 @@ pub fn sensor_data() -> QosProfile {
 /// For measurements, diagnostics and anything a recorder must not miss.
 pub fn reliable() -> QosProfile {
     QosProfile::subscription_default()
-        .reliability(Reliability::Reliable { when_full: WhenFull::DEFAULT })
+        .reliability(Reliability::Reliable {
+            when_full: WhenFull::DEFAULT,
+        })
         .durability(Durability::Volatile)
         .history(History::KeepLast { depth: 10 })
 }
@@ -23,7 +25,9 @@ pub fn reliable() -> QosProfile {
 /// Latched (like `/robot_description` or `/tf_static`): reliable, transient local, keep last 1,
 /// so a late subscriber still gets the current model. Subscribers must also use this profile.
 pub fn latched() -> QosProfile {
-    reliable().durability(Durability::TransientLocal).history(History::KeepLast { depth: 1 })
+    reliable()
+        .durability(Durability::TransientLocal)
+        .history(History::KeepLast { depth: 1 })
 }
 
 /// Queue depth of [`stream`]: ten seconds of a 100 Hz stream, one second of a 1 kHz tracker.
@@ -37,7 +41,9 @@ pub const STREAM_DEPTH: usize = 1000;
 /// a point never compensated. Reliability and durability stay as given, so a best-effort reader
 /// still matches every publisher.
 pub fn stream(profile: QosProfile) -> QosProfile {
-    profile.history(History::KeepLast { depth: STREAM_DEPTH })
+    profile.history(History::KeepLast {
+        depth: STREAM_DEPTH,
+    })
 }
 
 /// The DDS QoS of an endpoint that holds no more than the profile's keep-last depth of samples:
@@ -57,8 +63,15 @@ pub fn bounded_qos(qos: &QosProfile) -> rustdds::QosPolicies {
     match qos.history {
         History::KeepLast { depth } => {
             let depth = i32::try_from(depth).unwrap_or(i32::MAX);
-            let limits = rustdds::policy::ResourceLimits { max_samples: depth, max_instances: 1, max_samples_per_instance: depth };
-            rustdds::QosPolicyBuilder::new().resource_limits(limits).build().modify_by(&dds)
+            let limits = rustdds::policy::ResourceLimits {
+                max_samples: depth,
+                max_instances: 1,
+                max_samples_per_instance: depth,
+            };
+            rustdds::QosPolicyBuilder::new()
+                .resource_limits(limits)
+                .build()
+                .modify_by(&dds)
         }
         History::KeepAll => dds,
     }
@@ -71,32 +84,68 @@ mod tests {
     #[test]
     fn presets_match_rclcpp() {
         let s = sensor_data();
-        assert_eq!((s.reliability, s.durability, s.history), (Reliability::BestEffort, Durability::Volatile, History::KeepLast { depth: 5 }));
+        assert_eq!(
+            (s.reliability, s.durability, s.history),
+            (
+                Reliability::BestEffort,
+                Durability::Volatile,
+                History::KeepLast { depth: 5 }
+            )
+        );
         let r = reliable();
         assert!(matches!(r.reliability, Reliability::Reliable { .. }));
-        assert_eq!((r.durability, r.history), (Durability::Volatile, History::KeepLast { depth: 10 }));
+        assert_eq!(
+            (r.durability, r.history),
+            (Durability::Volatile, History::KeepLast { depth: 10 })
+        );
         let l = latched();
         assert!(matches!(l.reliability, Reliability::Reliable { .. }));
-        assert_eq!((l.durability, l.history), (Durability::TransientLocal, History::KeepLast { depth: 1 }));
+        assert_eq!(
+            (l.durability, l.history),
+            (Durability::TransientLocal, History::KeepLast { depth: 1 })
+        );
     }
 
     #[test]
     fn a_stream_keeps_reliability_and_durability_and_deepens_the_queue() {
         let s = stream(sensor_data());
-        assert_eq!((s.reliability, s.durability, s.history), (Reliability::BestEffort, Durability::Volatile, History::KeepLast { depth: STREAM_DEPTH }));
+        assert_eq!(
+            (s.reliability, s.durability, s.history),
+            (
+                Reliability::BestEffort,
+                Durability::Volatile,
+                History::KeepLast {
+                    depth: STREAM_DEPTH
+                }
+            )
+        );
         let r = stream(reliable());
         assert!(matches!(r.reliability, Reliability::Reliable { .. }));
-        assert_eq!(r.history, History::KeepLast { depth: STREAM_DEPTH });
+        assert_eq!(
+            r.history,
+            History::KeepLast {
+                depth: STREAM_DEPTH
+            }
+        );
     }
 
     #[test]
     fn a_bounded_endpoint_states_its_depth_as_its_resource_limit_and_keeps_the_rest() {
         let q = bounded_qos(&reliable().history(History::KeepLast { depth: 109 }));
         assert_eq!(q.resource_limits().map(|r| r.max_samples), Some(109));
-        assert_eq!(q.history(), Some(rustdds::policy::History::KeepLast { depth: 109 }));
-        assert!(matches!(q.reliability(), Some(rustdds::policy::Reliability::Reliable { .. })));
+        assert_eq!(
+            q.history(),
+            Some(rustdds::policy::History::KeepLast { depth: 109 })
+        );
+        assert!(matches!(
+            q.reliability(),
+            Some(rustdds::policy::Reliability::Reliable { .. })
+        ));
         assert_eq!(q.durability(), Some(rustdds::policy::Durability::Volatile));
         // keep-all has no depth to bound by: RustDDS's own backstop stays
-        assert_eq!(bounded_qos(&reliable().history(History::KeepAll)).resource_limits(), None);
+        assert_eq!(
+            bounded_qos(&reliable().history(History::KeepAll)).resource_limits(),
+            None
+        );
     }
 }

@@ -25,7 +25,10 @@ pub const CDR_LE_HEADER: [u8; 4] = [0x00, 0x01, 0x00, 0x00];
 /// Check a payload's header: must be CDR (XCDR1) little-endian.
 pub fn check_payload(payload: &[u8]) -> Result<(), String> {
     if payload.len() < 4 {
-        return Err(format!("payload of {} bytes is shorter than the 4-byte encapsulation header", payload.len()));
+        return Err(format!(
+            "payload of {} bytes is shorter than the 4-byte encapsulation header",
+            payload.len()
+        ));
     }
     if payload[0..2] != CDR_LE_HEADER[0..2] {
         return Err(format!(
@@ -57,7 +60,10 @@ impl SerializerAdapter<EncodedPayload> for RawCdrLeSerializer {
 /// Deserializer adapter that keeps the bytes: yields header + body for CDR (either byte order).
 pub struct RawCdrDeserializer;
 
-static RAW_ENCODINGS: [RepresentationIdentifier; 2] = [RepresentationIdentifier::CDR_LE, RepresentationIdentifier::CDR_BE];
+static RAW_ENCODINGS: [RepresentationIdentifier; 2] = [
+    RepresentationIdentifier::CDR_LE,
+    RepresentationIdentifier::CDR_BE,
+];
 
 impl DeserializerAdapter<EncodedPayload> for RawCdrDeserializer {
     type Error = RawPayloadError;
@@ -76,7 +82,11 @@ pub struct RawDecoder(PhantomData<()>);
 
 impl<'de> Decode<'de, EncodedPayload> for RawDecoder {
     type Error = RawPayloadError;
-    fn decode_bytes(self, input: &'de [u8], encoding: RepresentationIdentifier) -> Result<EncodedPayload, RawPayloadError> {
+    fn decode_bytes(
+        self,
+        input: &'de [u8],
+        encoding: RepresentationIdentifier,
+    ) -> Result<EncodedPayload, RawPayloadError> {
         let id = encoding.to_bytes();
         let mut v = Vec::with_capacity(input.len() + 4);
         // The options field is not passed to adapters; XCDR1 writers set it to zero.
@@ -108,15 +118,25 @@ impl RawPublisher {
 
     /// Publish with an explicit DDS source timestamp (nanoseconds since the Unix epoch),
     /// e.g. the recording time when replaying a bag.
-    pub fn publish_stamped(&self, payload: &[u8], source_time_ns: Option<i64>) -> Result<(), NodeError> {
-        check_payload(payload).map_err(|message| NodeError::Payload { topic: self.topic.clone(), message })?;
+    pub fn publish_stamped(
+        &self,
+        payload: &[u8],
+        source_time_ns: Option<i64>,
+    ) -> Result<(), NodeError> {
+        check_payload(payload).map_err(|message| NodeError::Payload {
+            topic: self.topic.clone(),
+            message,
+        })?;
         let stamp = match source_time_ns {
             Some(ns) => ROSTime::from_nanos(ns).into(),
             None => rustdds::Timestamp::now(),
         };
         self.writer
             .write(EncodedPayload(payload.to_vec()), Some(stamp))
-            .map_err(|e| NodeError::Write { topic: self.topic.clone(), message: format!("{e:?}") })
+            .map_err(|e| NodeError::Write {
+                topic: self.topic.clone(),
+                message: format!("{e:?}"),
+            })
     }
 
     pub fn topic(&self) -> &str {
@@ -148,7 +168,9 @@ impl RawPublisher {
     /// `max_wait` passes; true if they did (or none is matched). A writer that goes away with
     /// samples unacknowledged cannot repair them, so a publisher calls this before it exits.
     pub fn wait_for_acknowledgments(&self, max_wait: std::time::Duration) -> bool {
-        self.writer.wait_for_acknowledgments(max_wait).unwrap_or(false)
+        self.writer
+            .wait_for_acknowledgments(max_wait)
+            .unwrap_or(false)
     }
 }
 
@@ -175,8 +197,13 @@ pub struct RawSubscription {
 }
 
 fn to_raw_message(dcc: no_key::DeserializedCacheChange<EncodedPayload>) -> RawMessage {
-    let source_time_ns = dcc.source_timestamp().and_then(|t| ROSTime::try_from(t).ok()).map(|t| t.to_nanos());
-    let receive_time_ns = ROSTime::try_from(dcc.receive_instant).map(|t| t.to_nanos()).unwrap_or_else(|_| crate::logging::system_time_ns());
+    let source_time_ns = dcc
+        .source_timestamp()
+        .and_then(|t| ROSTime::try_from(t).ok())
+        .map(|t| t.to_nanos());
+    let receive_time_ns = ROSTime::try_from(dcc.receive_instant)
+        .map(|t| t.to_nanos())
+        .unwrap_or_else(|_| crate::logging::system_time_ns());
     RawMessage {
         publisher_gid: Gid::from(dcc.writer_guid()),
         sequence_number: i64::from(dcc.sequence_number),
@@ -193,7 +220,10 @@ impl RawSubscription {
         self.reader
             .try_take_one()
             .map(|o| o.map(to_raw_message))
-            .map_err(|e| NodeError::Read { topic: self.topic.clone(), message: e.to_string() })
+            .map_err(|e| NodeError::Read {
+                topic: self.topic.clone(),
+                message: e.to_string(),
+            })
     }
 
     /// Wait for the next message.
@@ -202,8 +232,14 @@ impl RawSubscription {
         futures::pin_mut!(stream);
         match stream.next().await {
             Some(Ok(dcc)) => Ok(to_raw_message(dcc)),
-            Some(Err(e)) => Err(NodeError::Read { topic: self.topic.clone(), message: e.to_string() }),
-            None => Err(NodeError::Read { topic: self.topic.clone(), message: "reader stream ended".into() }),
+            Some(Err(e)) => Err(NodeError::Read {
+                topic: self.topic.clone(),
+                message: e.to_string(),
+            }),
+            None => Err(NodeError::Read {
+                topic: self.topic.clone(),
+                message: "reader stream ended".into(),
+            }),
         }
     }
 
@@ -223,8 +259,13 @@ mod tests {
     #[test]
     fn adapters_strip_and_rebuild_the_header() {
         let p = EncodedPayload(vec![0, 1, 0, 0, 5, 0, 0, 0]);
-        assert_eq!(&RawCdrLeSerializer::to_bytes(&p).unwrap()[..], &[5, 0, 0, 0]);
-        let d = RawDecoder(PhantomData).decode_bytes(&[5, 0, 0, 0], RepresentationIdentifier::CDR_LE).unwrap();
+        assert_eq!(
+            &RawCdrLeSerializer::to_bytes(&p).unwrap()[..],
+            &[5, 0, 0, 0]
+        );
+        let d = RawDecoder(PhantomData)
+            .decode_bytes(&[5, 0, 0, 0], RepresentationIdentifier::CDR_LE)
+            .unwrap();
         assert_eq!(d, p);
         assert!(RawCdrLeSerializer::to_bytes(&EncodedPayload(vec![0, 0, 0, 0, 1])).is_err());
         assert!(check_payload(&[0, 1]).unwrap_err().contains("shorter"));

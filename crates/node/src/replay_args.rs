@@ -24,7 +24,11 @@ node would publish; they go to OUT_BAG (a rosbag2 MCAP directory) or, without --
         let (mut bag, mut output) = (None, None);
         let mut it = args.iter();
         while let Some(a) = it.next() {
-            let mut value = |flag: &str| it.next().map(PathBuf::from).ok_or_else(|| format!("{flag} needs a path"));
+            let mut value = |flag: &str| {
+                it.next()
+                    .map(PathBuf::from)
+                    .ok_or_else(|| format!("{flag} needs a path"))
+            };
             match a.as_str() {
                 "--bag" => bag = Some(value("--bag")?),
                 "--output" => output = Some(value("--output")?),
@@ -50,10 +54,26 @@ mod tests {
     #[test]
     fn bag_and_output_parse_and_mistakes_are_named() {
         assert_eq!(parse(&[]).unwrap(), None);
-        assert_eq!(parse(&["--bag", "in"]).unwrap(), Some(ReplayArgs { bag: "in".into(), output: None }));
-        assert_eq!(parse(&["--bag", "in", "--output", "out"]).unwrap().unwrap().output, Some(PathBuf::from("out")));
-        assert!(parse(&["--output", "out"]).unwrap_err().contains("--output needs --bag"));
-        assert!(parse(&["--bag"]).unwrap_err().contains("--bag needs a path"));
+        assert_eq!(
+            parse(&["--bag", "in"]).unwrap(),
+            Some(ReplayArgs {
+                bag: "in".into(),
+                output: None
+            })
+        );
+        assert_eq!(
+            parse(&["--bag", "in", "--output", "out"])
+                .unwrap()
+                .unwrap()
+                .output,
+            Some(PathBuf::from("out"))
+        );
+        assert!(parse(&["--output", "out"])
+            .unwrap_err()
+            .contains("--output needs --bag"));
+        assert!(parse(&["--bag"])
+            .unwrap_err()
+            .contains("--bag needs a path"));
         assert!(parse(&["--bags", "x"]).unwrap_err().contains("--bags"));
     }
 }

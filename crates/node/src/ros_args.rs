@@ -83,7 +83,9 @@ impl RosArgs {
     fn special_remap(&self, original: &str, keys: &[&str]) -> Option<String> {
         self.remaps
             .iter()
-            .rfind(|r| keys.contains(&r.from.as_str()) && r.node.as_deref().is_none_or(|n| n == original))
+            .rfind(|r| {
+                keys.contains(&r.from.as_str()) && r.node.as_deref().is_none_or(|n| n == original)
+            })
             .map(|r| r.to.clone())
     }
 }
@@ -103,9 +105,17 @@ pub enum RosArgsError {
     #[error("ROS argument '{flag}' needs a value after it")]
     MissingValue { flag: String },
     #[error("ROS argument '{flag} {value}': expected the form {expected}")]
-    BadForm { flag: String, value: String, expected: &'static str },
+    BadForm {
+        flag: String,
+        value: String,
+        expected: &'static str,
+    },
     #[error("ROS argument '{flag} {value}': {message}")]
-    BadValue { flag: String, value: String, message: String },
+    BadValue {
+        flag: String,
+        value: String,
+        message: String,
+    },
     #[error("unknown ROS argument '{arg}' (after --ros-args; end the ROS section with '--' before the node's own arguments)")]
     Unknown { arg: String },
 }
@@ -134,7 +144,9 @@ where
         // Inside a ROS section.
         let mut value = |flag: &str| -> Result<String, RosArgsError> {
             i += 1;
-            args.get(i).cloned().ok_or(RosArgsError::MissingValue { flag: flag.to_string() })
+            args.get(i).cloned().ok_or(RosArgsError::MissingValue {
+                flag: flag.to_string(),
+            })
         };
         match arg.as_str() {
             "--" => in_ros = false,
@@ -167,7 +179,11 @@ where
             "--disable-stdout-logs" => out.ros.disable_stdout = true,
             "--enable-stdout-logs" => out.ros.disable_stdout = false,
             "--disable-external-lib-logs" | "--enable-external-lib-logs" => {}
-            other => return Err(RosArgsError::Unknown { arg: other.to_string() }),
+            other => {
+                return Err(RosArgsError::Unknown {
+                    arg: other.to_string(),
+                })
+            }
         }
         i += 1;
     }
@@ -209,11 +225,12 @@ fn parse_param(flag: &str, text: &str) -> Result<ParamOverride, RosArgsError> {
         value: text.to_string(),
         expected: "[node:]name:=value",
     })?;
-    let value = ParamValue::parse_yaml_text(&value_text).map_err(|message| RosArgsError::BadValue {
-        flag: flag.to_string(),
-        value: text.to_string(),
-        message,
-    })?;
+    let value =
+        ParamValue::parse_yaml_text(&value_text).map_err(|message| RosArgsError::BadValue {
+            flag: flag.to_string(),
+            value: text.to_string(),
+            message,
+        })?;
     Ok(ParamOverride { node, name, value })
 }
 
@@ -248,8 +265,22 @@ mod tests {
         ))
         .unwrap();
         assert_eq!(c.node_args, argv("prog --verbose input.bag"));
-        assert_eq!(c.ros.remaps, vec![Remap { node: None, from: "chatter".into(), to: "/talk".into() }]);
-        assert_eq!(c.ros.param_overrides, vec![ParamOverride { node: None, name: "rate".into(), value: ParamValue::Double(2.5) }]);
+        assert_eq!(
+            c.ros.remaps,
+            vec![Remap {
+                node: None,
+                from: "chatter".into(),
+                to: "/talk".into()
+            }]
+        );
+        assert_eq!(
+            c.ros.param_overrides,
+            vec![ParamOverride {
+                node: None,
+                name: "rate".into(),
+                value: ParamValue::Double(2.5)
+            }]
+        );
         assert_eq!(c.ros.params_files, vec![PathBuf::from("a.yaml")]);
         assert_eq!(c.ros.log_level, Some(LogLevel::Warn));
     }
@@ -260,9 +291,19 @@ mod tests {
             "p --ros-args -r __node:=cam2 -r __ns:=/cell -r probe:image:=/cam/image -p probe:gain:=[1,2] -e /x --remap talker:__node:=t2",
         ))
         .unwrap();
-        assert_eq!(c.ros.remaps[2], Remap { node: Some("probe".into()), from: "image".into(), to: "/cam/image".into() });
+        assert_eq!(
+            c.ros.remaps[2],
+            Remap {
+                node: Some("probe".into()),
+                from: "image".into(),
+                to: "/cam/image".into()
+            }
+        );
         assert_eq!(c.ros.param_overrides[0].node.as_deref(), Some("probe"));
-        assert_eq!(c.ros.param_overrides[0].value, ParamValue::IntegerArray(vec![1, 2]));
+        assert_eq!(
+            c.ros.param_overrides[0].value,
+            ParamValue::IntegerArray(vec![1, 2])
+        );
         assert_eq!(c.ros.node_name_remap("probe").as_deref(), Some("cam2"));
         assert_eq!(c.ros.node_name_remap("talker").as_deref(), Some("t2"));
         assert_eq!(c.ros.namespace_remap("x").as_deref(), Some("/cell"));
@@ -271,8 +312,16 @@ mod tests {
 
     #[test]
     fn param_values_with_colons_and_types() {
-        let c = parse_command_line(argv("p --ros-args -p url:=http://h:80 -p on:=true -p n:=3 -p s:=abc")).unwrap();
-        let v: Vec<_> = c.ros.param_overrides.iter().map(|p| (p.name.as_str(), p.value.clone())).collect();
+        let c = parse_command_line(argv(
+            "p --ros-args -p url:=http://h:80 -p on:=true -p n:=3 -p s:=abc",
+        ))
+        .unwrap();
+        let v: Vec<_> = c
+            .ros
+            .param_overrides
+            .iter()
+            .map(|p| (p.name.as_str(), p.value.clone()))
+            .collect();
         assert_eq!(v[0], ("url", ParamValue::String("http://h:80".into())));
         assert_eq!(v[1], ("on", ParamValue::Bool(true)));
         assert_eq!(v[2], ("n", ParamValue::Integer(3)));

@@ -27,7 +27,13 @@ impl Default for ShutdownToken {
 impl ShutdownToken {
     pub fn new() -> ShutdownToken {
         let (watch, _) = tokio::sync::watch::channel(false);
-        ShutdownToken { inner: Arc::new(Inner { flag: Mutex::new(false), condvar: Condvar::new(), watch }) }
+        ShutdownToken {
+            inner: Arc::new(Inner {
+                flag: Mutex::new(false),
+                condvar: Condvar::new(),
+                watch,
+            }),
+        }
     }
 
     /// Request shutdown; wakes every waiter. Idempotent.
@@ -46,7 +52,11 @@ impl ShutdownToken {
     pub fn wait(&self) {
         let mut f = self.inner.flag.lock().unwrap_or_else(|p| p.into_inner());
         while !*f {
-            f = self.inner.condvar.wait(f).unwrap_or_else(|p| p.into_inner());
+            f = self
+                .inner
+                .condvar
+                .wait(f)
+                .unwrap_or_else(|p| p.into_inner());
         }
     }
 
@@ -78,46 +88,63 @@ fn signal_targets() -> &'static Mutex<Vec<ShutdownToken>> {
 /// waits for the signals (a small current-thread tokio runtime of its own, so callers need no runtime).
 pub fn trigger_on_signals(token: &ShutdownToken) -> std::io::Result<()> {
     static STARTED: OnceLock<Result<(), String>> = OnceLock::new();
-    signal_targets().lock().unwrap_or_else(|p| p.into_inner()).push(token.clone());
+    signal_targets()
+        .lock()
+        .unwrap_or_else(|p| p.into_inner())
+        .push(token.clone());
     let started = STARTED.get_or_init(|| {
         let (ready_tx, ready_rx) = std::sync::mpsc::channel::<Result<(), String>>();
-        let spawned = std::thread::Builder::new().name("metrocell-signals".into()).spawn(move || {
-            let rt = match tokio::runtime::Builder::new_current_thread().enable_io().build() {
-                Ok(rt) => rt,
-                Err(e) => {
-                    let _ = ready_tx.send(Err(e.to_string()));
-                    return;
-                }
-            };
-            rt.block_on(async move {
-                use tokio::signal::unix::{signal, SignalKind};
-                let (mut int, mut term) = match (signal(SignalKind::interrupt()), signal(SignalKind::terminate())) {
-                    (Ok(i), Ok(t)) => (i, t),
-                    (Err(e), _) | (_, Err(e)) => {
+        let spawned = std::thread::Builder::new()
+            .name("metrocell-signals".into())
+            .spawn(move || {
+                let rt = match tokio::runtime::Builder::new_current_thread()
+                    .enable_io()
+                    .build()
+                {
+                    Ok(rt) => rt,
+                    Err(e) => {
                         let _ = ready_tx.send(Err(e.to_string()));
                         return;
                     }
                 };
-                let _ = ready_tx.send(Ok(()));
-                let mut count = 0;
-                loop {
-                    tokio::select! {
-                        _ = int.recv() => {}
-                        _ = term.recv() => {}
+                rt.block_on(async move {
+                    use tokio::signal::unix::{signal, SignalKind};
+                    let (mut int, mut term) = match (
+                        signal(SignalKind::interrupt()),
+                        signal(SignalKind::terminate()),
+                    ) {
+                        (Ok(i), Ok(t)) => (i, t),
+                        (Err(e), _) | (_, Err(e)) => {
+                            let _ = ready_tx.send(Err(e.to_string()));
+                            return;
+                        }
+                    };
+                    let _ = ready_tx.send(Ok(()));
+                    let mut count = 0;
+                    loop {
+                        tokio::select! {
+                            _ = int.recv() => {}
+                            _ = term.recv() => {}
+                        }
+                        count += 1;
+                        if count > 1 {
+                            eprintln!("second signal: exiting immediately");
+                            std::process::exit(130);
+                        }
+                        for t in signal_targets()
+                            .lock()
+                            .unwrap_or_else(|p| p.into_inner())
+                            .iter()
+                        {
+                            t.trigger();
+                        }
                     }
-                    count += 1;
-                    if count > 1 {
-                        eprintln!("second signal: exiting immediately");
-                        std::process::exit(130);
-                    }
-                    for t in signal_targets().lock().unwrap_or_else(|p| p.into_inner()).iter() {
-                        t.trigger();
-                    }
-                }
+                });
             });
-        });
         match spawned {
-            Ok(_) => ready_rx.recv().unwrap_or_else(|_| Err("signal thread died".into())),
+            Ok(_) => ready_rx
+                .recv()
+                .unwrap_or_else(|_| Err("signal thread died".into())),
             Err(e) => Err(e.to_string()),
         }
     });
@@ -153,8 +180,14 @@ mod tests {
         let t = ShutdownToken::new();
         trigger_on_signals(&t).unwrap();
         // SAFETY-free: raise SIGTERM at our own process; the handler thread turns it into a trigger.
-        let status = std::process::Command::new("kill").args(["-TERM", &std::process::id().to_string()]).status().unwrap();
+        let status = std::process::Command::new("kill")
+            .args(["-TERM", &std::process::id().to_string()])
+            .status()
+            .unwrap();
         assert!(status.success());
-        assert!(t.wait_timeout(Duration::from_secs(1)), "SIGTERM did not trigger the token within 1 s");
+        assert!(
+            t.wait_timeout(Duration::from_secs(1)),
+            "SIGTERM did not trigger the token within 1 s"
+        );
     }
 }

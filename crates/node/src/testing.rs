@@ -4,7 +4,12 @@
 /// Network interfaces of this process's network namespace (`/proc/self/net/dev`).
 fn interfaces() -> std::io::Result<Vec<String>> {
     let text = std::fs::read_to_string("/proc/self/net/dev")?;
-    Ok(text.lines().skip(2).filter_map(|l| l.split(':').next()).map(|n| n.trim().to_string()).collect())
+    Ok(text
+        .lines()
+        .skip(2)
+        .filter_map(|l| l.split(':').next())
+        .map(|n| n.trim().to_string())
+        .collect())
 }
 
 /// Panics unless this process's network namespace has no interface but the loopback, as in
@@ -39,7 +44,10 @@ impl Drop for KillOnDrop {
 /// under load: the second of two requests from fresh clients unanswered for 20 s).
 pub struct RemoteParameterClient {
     target: String,
-    client: ros2_client::Client<ros2_client::rcl_interfaces::SetParametersRequest, ros2_client::rcl_interfaces::SetParametersResponse>,
+    client: ros2_client::Client<
+        ros2_client::rcl_interfaces::SetParametersRequest,
+        ros2_client::rcl_interfaces::SetParametersResponse,
+    >,
 }
 
 impl RemoteParameterClient {
@@ -47,7 +55,8 @@ impl RemoteParameterClient {
     /// e.g. `/tracker`).
     pub fn new(client_node: &mut crate::MetrocellNode, target: &str) -> Result<Self, String> {
         use ros2_client::rcl_interfaces::{SetParametersRequest, SetParametersResponse};
-        let service = ros2_client::Name::new(target, "set_parameters").map_err(|e| format!("service name {target}/set_parameters: {e:?}"))?;
+        let service = ros2_client::Name::new(target, "set_parameters")
+            .map_err(|e| format!("service name {target}/set_parameters: {e:?}"))?;
         let qos = crate::qos::reliable();
         let client = client_node
             .ros_node()
@@ -59,35 +68,68 @@ impl RemoteParameterClient {
                 qos,
             )
             .map_err(|e| format!("client of {target}/set_parameters: {e:?}"))?;
-        Ok(Self { target: target.to_string(), client })
+        Ok(Self {
+            target: target.to_string(),
+            client,
+        })
     }
 
     /// Set parameter `name` to `value`. `Err`: the node refused (its reason) or did not answer
     /// within `timeout`.
-    pub fn set(&mut self, client_node: &mut crate::MetrocellNode, name: &str, value: crate::ParamValue, timeout: std::time::Duration) -> Result<(), String> {
+    pub fn set(
+        &mut self,
+        client_node: &mut crate::MetrocellNode,
+        name: &str,
+        value: crate::ParamValue,
+        timeout: std::time::Duration,
+    ) -> Result<(), String> {
         use ros2_client::parameters::raw;
         use ros2_client::rcl_interfaces::SetParametersRequest;
         let target = &self.target;
-        let request = SetParametersRequest { parameter: vec![raw::Parameter { name: name.to_string(), value: raw::ParameterValue::from(value.to_ros()) }] };
+        let request = SetParametersRequest {
+            parameter: vec![raw::Parameter {
+                name: name.to_string(),
+                value: raw::ParameterValue::from(value.to_ros()),
+            }],
+        };
         let deadline = std::time::Instant::now() + timeout;
         // The request is sent once, when the service is matched (reliable from then on). Resending
         // on a slow answer would set the parameter twice, and a node that acts on each set (then
         // resets it, like the tracker's `reregister`) would act twice.
-        if block_on_within(self.client.wait_for_service(client_node.ros_node()), timeout).is_none() {
-            return Err(format!("no {target}/set_parameters service matched within {timeout:?}"));
+        if block_on_within(
+            self.client.wait_for_service(client_node.ros_node()),
+            timeout,
+        )
+        .is_none()
+        {
+            return Err(format!(
+                "no {target}/set_parameters service matched within {timeout:?}"
+            ));
         }
-        let id = self.client.send_request(request).map_err(|e| format!("request to {target}/set_parameters: {e:?}"))?;
+        let id = self
+            .client
+            .send_request(request)
+            .map_err(|e| format!("request to {target}/set_parameters: {e:?}"))?;
         while std::time::Instant::now() < deadline {
             match self.client.receive_response() {
                 Ok(Some((rid, response))) if rid == id => {
-                    let r = response.results.first().ok_or("an empty SetParameters response")?;
-                    return if r.successful { Ok(()) } else { Err(r.reason.clone()) };
+                    let r = response
+                        .results
+                        .first()
+                        .ok_or("an empty SetParameters response")?;
+                    return if r.successful {
+                        Ok(())
+                    } else {
+                        Err(r.reason.clone())
+                    };
                 }
                 Ok(_) => std::thread::sleep(std::time::Duration::from_millis(10)),
                 Err(e) => return Err(format!("response from {target}/set_parameters: {e:?}")),
             }
         }
-        Err(format!("no answer from {target}/set_parameters within {timeout:?}"))
+        Err(format!(
+            "no answer from {target}/set_parameters within {timeout:?}"
+        ))
     }
 }
 
@@ -104,7 +146,10 @@ pub fn set_remote_parameter(
 }
 
 /// Run `f` to completion on this thread, or give up after `timeout` (None).
-fn block_on_within<F: std::future::Future>(f: F, timeout: std::time::Duration) -> Option<F::Output> {
+fn block_on_within<F: std::future::Future>(
+    f: F,
+    timeout: std::time::Duration,
+) -> Option<F::Output> {
     let (expire, expired) = futures::channel::oneshot::channel::<()>();
     std::thread::spawn(move || {
         std::thread::sleep(timeout);

@@ -16,15 +16,24 @@ fn python() -> PathBuf {
         return PathBuf::from(p);
     }
     let venv = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../.venv/bin/python");
-    assert!(venv.exists(), "no Python with cyclonedds: set METROCELL_PYTHON or run tests/run (creates .venv)");
+    assert!(
+        venv.exists(),
+        "no Python with cyclonedds: set METROCELL_PYTHON or run tests/run (creates .venv)"
+    );
     venv
 }
 
 #[test]
 fn cyclone_dds_reads_and_writes_our_topics() {
     require_isolated_network();
-    let script = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/peers/cyclone_header_peer.py");
-    let mut peer = Command::new(python()).arg(script).stdout(Stdio::piped()).stderr(Stdio::inherit()).spawn().expect("start python");
+    let script =
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("tests/peers/cyclone_header_peer.py");
+    let mut peer = Command::new(python())
+        .arg(script)
+        .stdout(Stdio::piped())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .expect("start python");
     let stdout = peer.stdout.take().unwrap();
     let (line_tx, line_rx) = std::sync::mpsc::channel();
     std::thread::spawn(move || {
@@ -33,16 +42,37 @@ fn cyclone_dds_reads_and_writes_our_topics() {
         }
     });
 
-    let (b, _) = MetrocellNode::builder("interop_node").handle_signals(false).args(["t"]).unwrap();
+    let (b, _) = MetrocellNode::builder("interop_node")
+        .handle_signals(false)
+        .args(["t"])
+        .unwrap();
     let mut node = b.build().unwrap();
-    let p = node.publisher::<Header>("/metrocell_interop/from_rust", qos::reliable()).unwrap();
-    let typed = node.subscription::<Header>("/metrocell_interop/from_cyclone", qos::reliable()).unwrap();
-    let raw = node.raw_subscription("/metrocell_interop/from_cyclone", "std_msgs/msg/Header", qos::reliable()).unwrap();
+    let p = node
+        .publisher::<Header>("/metrocell_interop/from_rust", qos::reliable())
+        .unwrap();
+    let typed = node
+        .subscription::<Header>("/metrocell_interop/from_cyclone", qos::reliable())
+        .unwrap();
+    let raw = node
+        .raw_subscription(
+            "/metrocell_interop/from_cyclone",
+            "std_msgs/msg/Header",
+            qos::reliable(),
+        )
+        .unwrap();
 
-    let sent = Header { stamp: Time { sec: 41, nanosec: 123_456_789 }, frame_id: "tracker_base".into() };
+    let sent = Header {
+        stamp: Time {
+            sec: 41,
+            nanosec: 123_456_789,
+        },
+        frame_id: "tracker_base".into(),
+    };
     let start = Instant::now();
     let (mut cyclone_line, mut typed_back, mut raw_back) = (None, None, None);
-    while start.elapsed() < Duration::from_secs(20) && (cyclone_line.is_none() || typed_back.is_none() || raw_back.is_none()) {
+    while start.elapsed() < Duration::from_secs(20)
+        && (cyclone_line.is_none() || typed_back.is_none() || raw_back.is_none())
+    {
         if cyclone_line.is_none() {
             p.publish(sent.clone()).unwrap();
         }
@@ -59,14 +89,30 @@ fn cyclone_dds_reads_and_writes_our_topics() {
     }
     let _ = peer.kill();
     let _ = peer.wait();
-    assert_eq!(cyclone_line.as_deref(), Some("GOT 41 123456789 tracker_base"));
-    let expected = Header { stamp: Time { sec: 42, nanosec: 123_456_789 }, frame_id: "cyclone:tracker_base".into() };
+    assert_eq!(
+        cyclone_line.as_deref(),
+        Some("GOT 41 123456789 tracker_base")
+    );
+    let expected = Header {
+        stamp: Time {
+            sec: 42,
+            nanosec: 123_456_789,
+        },
+        frame_id: "cyclone:tracker_base".into(),
+    };
     assert_eq!(typed_back, Some(expected));
     let raw_back = raw_back.expect("raw subscription got nothing from Cyclone");
     let frame = b"cyclone:tracker_base\0";
-    assert_eq!(&raw_back.payload[..4], &[0, 1, 0, 0], "Cyclone writes CDR little-endian");
+    assert_eq!(
+        &raw_back.payload[..4],
+        &[0, 1, 0, 0],
+        "Cyclone writes CDR little-endian"
+    );
     assert_eq!(&raw_back.payload[4..8], &42i32.to_le_bytes());
-    assert_eq!(&raw_back.payload[12..16], &(frame.len() as u32).to_le_bytes());
+    assert_eq!(
+        &raw_back.payload[12..16],
+        &(frame.len() as u32).to_le_bytes()
+    );
     assert_eq!(&raw_back.payload[16..16 + frame.len()], frame);
     assert!(raw_back.source_time_ns.is_some());
 }

@@ -13,15 +13,43 @@ use parquet::record::Field;
 
 /// A Parquet export file's column names and rows (row numbers from 1).
 pub fn parquet_rows(path: &Path) -> Result<(Vec<String>, RowSource)> {
-    let bad = |e: parquet::errors::ParquetError| ToolError::Invalid(format!("{}: not a readable Parquet file: {e}", path.display()));
+    let bad = |e: parquet::errors::ParquetError| {
+        ToolError::Invalid(format!(
+            "{}: not a readable Parquet file: {e}",
+            path.display()
+        ))
+    };
     let file = std::fs::File::open(path).map_err(io(path))?;
     let reader = SerializedFileReader::new(file).map_err(bad)?;
-    let header: Vec<String> = reader.metadata().file_metadata().schema_descr().root_schema().get_fields().iter().map(|f| f.name().to_string()).collect();
+    let header: Vec<String> = reader
+        .metadata()
+        .file_metadata()
+        .schema_descr()
+        .root_schema()
+        .get_fields()
+        .iter()
+        .map(|f| f.name().to_string())
+        .collect();
     let owned = path.to_path_buf();
     let rows = reader.into_iter().enumerate().map(move |(i, row)| {
         let line = i as u64 + 1;
-        let row = row.map_err(|e| ToolError::Row { path: owned.clone(), line, column: "-".into(), reason: e.to_string() })?;
-        let cells = row.get_column_iter().map(|(name, field)| cell_text(field).map_err(|reason| ToolError::Row { path: owned.clone(), line, column: name.clone(), reason })).collect::<Result<Vec<_>>>()?;
+        let row = row.map_err(|e| ToolError::Row {
+            path: owned.clone(),
+            line,
+            column: "-".into(),
+            reason: e.to_string(),
+        })?;
+        let cells = row
+            .get_column_iter()
+            .map(|(name, field)| {
+                cell_text(field).map_err(|reason| ToolError::Row {
+                    path: owned.clone(),
+                    line,
+                    column: name.clone(),
+                    reason,
+                })
+            })
+            .collect::<Result<Vec<_>>>()?;
         Ok((line, cells))
     });
     Ok((header, Box::new(rows)))
@@ -31,7 +59,13 @@ pub fn parquet_rows(path: &Path) -> Result<(Vec<String>, RowSource)> {
 fn cell_text(field: &Field) -> std::result::Result<String, String> {
     Ok(match field {
         Field::Str(s) => s.clone(),
-        Field::ListInternal(list) => serde_json::Value::Array(list.elements().iter().map(element_json).collect::<std::result::Result<_, _>>()?).to_string(),
+        Field::ListInternal(list) => serde_json::Value::Array(
+            list.elements()
+                .iter()
+                .map(element_json)
+                .collect::<std::result::Result<_, _>>()?,
+        )
+        .to_string(),
         // Rust's shortest round-trip text, as the CSV (and `NaN`, `inf`)
         Field::Float(v) => (*v as f64).to_string(),
         Field::Double(v) => v.to_string(),
@@ -63,6 +97,10 @@ fn element_json(field: &Field) -> std::result::Result<serde_json::Value, String>
         Field::Float(v) => float(*v as f64),
         Field::Double(v) => float(*v),
         Field::Str(s) => s.clone().into(),
-        other => return Err(format!("a {other:?} cell is not something `bag export` writes")),
+        other => {
+            return Err(format!(
+                "a {other:?} cell is not something `bag export` writes"
+            ))
+        }
     })
 }

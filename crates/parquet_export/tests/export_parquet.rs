@@ -20,7 +20,10 @@ fn python() -> PathBuf {
         return p.into();
     }
     let p = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../.venv/bin/python");
-    assert!(p.exists(), "no Python with pyarrow: set METROCELL_PYTHON or run tests/run (which creates .venv)");
+    assert!(
+        p.exists(),
+        "no Python with pyarrow: set METROCELL_PYTHON or run tests/run (which creates .venv)"
+    );
     p
 }
 
@@ -32,7 +35,8 @@ fn scratch(name: &str) -> PathBuf {
 
 fn registry() -> rosmsg::Registry {
     let mut reg = rosmsg::Registry::new();
-    reg.add_msg("test_msgs", "Inner", "float64 x\nstring label\n").unwrap();
+    reg.add_msg("test_msgs", "Inner", "float64 x\nstring label\n")
+        .unwrap();
     reg.add_msg(
         "test_msgs",
         "AllTypes",
@@ -64,19 +68,29 @@ fn parquet_export_read_by_pyarrow_equals_bag_content_with_typed_columns() {
     let reg = registry();
     let dir = scratch("bag");
     let mut w = BagWriter::create(&dir, WriterOptions::default()).unwrap();
-    w.add_topic("/test/all", TYPE, &reg.full_definition(TYPE).unwrap(), "").unwrap();
+    w.add_topic("/test/all", TYPE, &reg.full_definition(TYPE).unwrap(), "")
+        .unwrap();
     let n = 6;
     let t0 = 1_700_000_000_000_000_000u64;
     for i in 0..n {
         let v = rosmsg::from_json(&reg, TYPE, &message(i as i64)).unwrap();
-        w.write("/test/all", t0 + i * 1_000_000, t0 + i * 1_000_000 - 7, &rosmsg::encode(&reg, TYPE, &v).unwrap()).unwrap();
+        w.write(
+            "/test/all",
+            t0 + i * 1_000_000,
+            t0 + i * 1_000_000 - 7,
+            &rosmsg::encode(&reg, TYPE, &v).unwrap(),
+        )
+        .unwrap();
     }
     w.finish().unwrap();
 
     let pq_dir = scratch("pq");
     let exported = export_parquet::export_parquet(&dir, &["/test/all".into()], &pq_dir).unwrap();
     let e = &exported["/test/all"];
-    assert_eq!((e.rows, e.path.file_name().unwrap().to_str().unwrap()), (n, "test.all.parquet"));
+    assert_eq!(
+        (e.rows, e.path.file_name().unwrap().to_str().unwrap()),
+        (n, "test.all.parquet")
+    );
     let csv_dir = scratch("csv");
     export::export_csv(&dir, &["/test/all".into()], &csv_dir).unwrap();
 
@@ -85,28 +99,56 @@ fn parquet_export_read_by_pyarrow_equals_bag_content_with_typed_columns() {
         .arg(&e.path)
         .output()
         .unwrap();
-    assert!(out.status.success(), "pyarrow failed: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "pyarrow failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let doc: Json = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(doc["rows"].as_u64(), Some(n));
 
     // Arrow types: numeric of the field's width and signedness, UTF-8, lists for T[].
     let types = doc["types"].as_object().unwrap();
     let expect = [
-        ("log_time_ns", "int64"), ("b", "bool"), ("by", "uint8"), ("c", "uint8"), ("i8", "int8"), ("u8", "uint8"),
-        ("i16", "int16"), ("u16", "uint16"), ("i32", "int32"), ("u32", "uint32"), ("i64", "int64"), ("u64", "uint64"),
-        ("f32", "float"), ("f64", "double"), ("s", "string"), ("fixed.2", "double"), ("ints", "list<element: int32 not null>"),
-        ("names", "list<element: string not null>"), ("small", "list<element: uint8 not null>"), ("single.x", "double"),
-        ("pair.1.label", "string"), ("many", "string"),
+        ("log_time_ns", "int64"),
+        ("b", "bool"),
+        ("by", "uint8"),
+        ("c", "uint8"),
+        ("i8", "int8"),
+        ("u8", "uint8"),
+        ("i16", "int16"),
+        ("u16", "uint16"),
+        ("i32", "int32"),
+        ("u32", "uint32"),
+        ("i64", "int64"),
+        ("u64", "uint64"),
+        ("f32", "float"),
+        ("f64", "double"),
+        ("s", "string"),
+        ("fixed.2", "double"),
+        ("ints", "list<element: int32 not null>"),
+        ("names", "list<element: string not null>"),
+        ("small", "list<element: uint8 not null>"),
+        ("single.x", "double"),
+        ("pair.1.label", "string"),
+        ("many", "string"),
     ];
     for (col, ty) in expect {
-        assert_eq!(types.get(col).and_then(|t| t.as_str()), Some(ty), "type of column {col}");
+        assert_eq!(
+            types.get(col).and_then(|t| t.as_str()),
+            Some(ty),
+            "type of column {col}"
+        );
     }
 
     // Same columns in the same order as the CSV export, and equal values cell by cell.
     let mut csv = csv::Reader::from_path(csv_dir.join("test.all.csv")).unwrap();
     let header: Vec<String> = csv.headers().unwrap().iter().map(String::from).collect();
     let pq_names: Vec<String> = serde_json::from_value(doc["names"].clone()).unwrap();
-    assert_eq!(pq_names, header, "same column names, same order as the CSV export");
+    assert_eq!(
+        pq_names, header,
+        "same column names, same order as the CSV export"
+    );
     for (row, rec) in csv.records().enumerate() {
         let rec = rec.unwrap();
         for (col, cell) in header.iter().zip(rec.iter()) {
@@ -125,29 +167,53 @@ fn parquet_export_read_by_pyarrow_equals_bag_content_with_typed_columns() {
             } else {
                 got.as_i64() == Some(cell.parse::<i64>().unwrap())
             };
-            assert!(same, "row {row} column {col}: parquet {got} vs CSV {cell:?}");
+            assert!(
+                same,
+                "row {row} column {col}: parquet {got} vs CSV {cell:?}"
+            );
         }
     }
 
     // Spot checks against the written values (not through the CSV export).
     let col = |c: &str| doc["columns"][c].clone();
-    assert_eq!(col("u64")[0].as_u64(), Some(u64::MAX), "uint64 keeps its full range");
+    assert_eq!(
+        col("u64")[0].as_u64(),
+        Some(u64::MAX),
+        "uint64 keeps its full range"
+    );
     assert_eq!(col("u32")[1].as_u64(), Some(4_294_967_294));
     assert_eq!(col("i64")[2].as_i64(), Some(i64::MIN + 2));
     assert_eq!(col("i8")[0].as_i64(), Some(-128));
     assert_eq!(col("f64")[1].as_f64(), Some(0.1 + 0.2), "float64 bit-exact");
-    assert_eq!(col("f32")[3].as_f64(), Some((0.1f64 * 3.0) as f32 as f64), "float32 value");
+    assert_eq!(
+        col("f32")[3].as_f64(),
+        Some((0.1f64 * 3.0) as f32 as f64),
+        "float32 value"
+    );
     assert_eq!(col("s")[4].as_str(), Some("row 4 – µm"));
-    assert_eq!(col("ints")[0], json!([]), "empty list stays an empty list, not null");
+    assert_eq!(
+        col("ints")[0],
+        json!([]),
+        "empty list stays an empty list, not null"
+    );
     assert_eq!(col("ints")[3], json!([-1, 0, 1]));
     assert_eq!(col("names")[2], json!(["n0", "n1"]));
     assert_eq!(col("small")[4], json!([0, 60, 120, 180]));
     assert_eq!(col("pair.1.label")[5].as_str(), Some("in25"));
     assert_eq!(col("fixed.2")[0].as_f64(), Some(1e-300));
     let many: Json = serde_json::from_str(col("many")[1].as_str().unwrap()).unwrap();
-    assert_eq!(many[1]["label"], "in100", "arrays of messages are JSON text");
-    assert_eq!(col("log_time_ns")[5].as_i64(), Some((t0 + 5_000_000) as i64));
-    assert_eq!(col("publish_time_ns")[5].as_i64(), Some((t0 + 5_000_000 - 7) as i64));
+    assert_eq!(
+        many[1]["label"], "in100",
+        "arrays of messages are JSON text"
+    );
+    assert_eq!(
+        col("log_time_ns")[5].as_i64(),
+        Some((t0 + 5_000_000) as i64)
+    );
+    assert_eq!(
+        col("publish_time_ns")[5].as_i64(),
+        Some((t0 + 5_000_000 - 7) as i64)
+    );
 }
 
 #[test]
@@ -155,9 +221,12 @@ fn unknown_topic_is_an_error_naming_the_bag_and_the_topics() {
     let reg = registry();
     let dir = scratch("unknown");
     let mut w = BagWriter::create(&dir, WriterOptions::default()).unwrap();
-    w.add_topic("/test/all", TYPE, &reg.full_definition(TYPE).unwrap(), "").unwrap();
+    w.add_topic("/test/all", TYPE, &reg.full_definition(TYPE).unwrap(), "")
+        .unwrap();
     w.finish().unwrap();
-    let e = export_parquet::export_parquet(&dir, &["/nope".into()], &scratch("unknown_out")).unwrap_err().to_string();
+    let e = export_parquet::export_parquet(&dir, &["/nope".into()], &scratch("unknown_out"))
+        .unwrap_err()
+        .to_string();
     assert!(e.contains("/nope") && e.contains("/test/all"), "{e}");
     // A topic without messages still gets a file with its full schema.
     let out = scratch("empty_out");
@@ -175,24 +244,50 @@ fn large_messages_are_flushed_in_bounded_row_groups() {
     use rosmsg::RosMessage;
     let dir = scratch("images");
     let mut w = BagWriter::create(&dir, WriterOptions::default()).unwrap();
-    w.add_topic("/img", Image::ROS_TYPE, Image::DEFINITION, "").unwrap();
+    w.add_topic("/img", Image::ROS_TYPE, Image::DEFINITION, "")
+        .unwrap();
     let n = 3_000_000usize;
     for k in 0..3u64 {
-        let m = Image { height: 1000, width: 3000, encoding: "mono8".into(), step: 3000, data: (0..n).map(|i| ((i as u64 * 7 + k) % 251) as u8).collect(), ..Default::default() };
-        w.write("/img", k + 1, k + 1, &metrocell_bagtools::encode_cdr(&m).unwrap()).unwrap();
+        let m = Image {
+            height: 1000,
+            width: 3000,
+            encoding: "mono8".into(),
+            step: 3000,
+            data: (0..n).map(|i| ((i as u64 * 7 + k) % 251) as u8).collect(),
+            ..Default::default()
+        };
+        w.write(
+            "/img",
+            k + 1,
+            k + 1,
+            &metrocell_bagtools::encode_cdr(&m).unwrap(),
+        )
+        .unwrap();
     }
     w.finish().unwrap();
     let out = dir.with_extension("out");
     let done = export_parquet::export_parquet(&dir, &[], &out).unwrap();
     let path = &done["/img"].path;
-    let script = "import sys, pyarrow.parquet as pq\nf = pq.ParquetFile(sys.argv[1])\nt = f.read()\n\
+    let script =
+        "import sys, pyarrow.parquet as pq\nf = pq.ParquetFile(sys.argv[1])\nt = f.read()\n\
                   d = t.column('data').to_pylist()\n\
                   print(f.num_row_groups, t.num_rows, [len(x) for x in d], [x[12345] for x in d])";
-    let o = Command::new(python()).args(["-c", script, path.to_str().unwrap()]).output().unwrap();
+    let o = Command::new(python())
+        .args(["-c", script, path.to_str().unwrap()])
+        .output()
+        .unwrap();
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let text = String::from_utf8_lossy(&o.stdout);
     let expect = |k: u64| (12345u64 * 7 + k) % 251;
-    assert_eq!(text.trim(), format!("3 3 [{n}, {n}, {n}] [{}, {}, {}]", expect(0), expect(1), expect(2)));
+    assert_eq!(
+        text.trim(),
+        format!(
+            "3 3 [{n}, {n}, {n}] [{}, {}, {}]",
+            expect(0),
+            expect(1),
+            expect(2)
+        )
+    );
     let _ = std::fs::remove_dir_all(&dir);
     let _ = std::fs::remove_dir_all(&out);
 }

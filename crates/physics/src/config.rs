@@ -81,15 +81,29 @@ pub fn quantity(term: &str, key: &str, v: &ConfigValue, unit: &str) -> Result<f6
     let text = match v {
         ConfigValue::Number(n) => return Ok(*n),
         ConfigValue::Text(t) => t.clone(),
-        other => return Err(PhysicsError::BadValue { term: term.into(), key: key.into(), text: other.describe(), reason: format!("expected a number or a quantity in {unit}") }),
+        other => {
+            return Err(PhysicsError::BadValue {
+                term: term.into(),
+                key: key.into(),
+                text: other.describe(),
+                reason: format!("expected a number or a quantity in {unit}"),
+            })
+        }
     };
     parse_quantity(&text, unit).map_err(|e| match e {
-        QuantityError::Parse(reason) => PhysicsError::BadValue { term: term.into(), key: key.into(), text: text.clone(), reason },
+        QuantityError::Parse(reason) => PhysicsError::BadValue {
+            term: term.into(),
+            key: key.into(),
+            text: text.clone(),
+            reason,
+        },
         QuantityError::Dimension { given, expected: _ } => PhysicsError::WrongUnit {
             term: term.into(),
             key: key.into(),
             given,
-            dimension: parse_unit(unit).map(|u| u.dimension.describe()).unwrap_or_default(),
+            dimension: parse_unit(unit)
+                .map(|u| u.dimension.describe())
+                .unwrap_or_default(),
             allowed: unit.into(),
         },
     })
@@ -104,14 +118,22 @@ pub struct Options<'a> {
 
 impl<'a> Options<'a> {
     pub fn new(term: &'a str, map: &'a BTreeMap<String, ConfigValue>) -> Self {
-        Self { term, map, used: RefCell::new(BTreeSet::new()) }
+        Self {
+            term,
+            map,
+            used: RefCell::new(BTreeSet::new()),
+        }
     }
     fn get(&self, key: &str) -> Option<&'a ConfigValue> {
         self.used.borrow_mut().insert(key.to_string());
         self.map.get(key)
     }
     pub fn bad(&self, key: &str, reason: impl Into<String>) -> PhysicsError {
-        PhysicsError::BadOption { term: self.term.into(), key: key.into(), reason: reason.into() }
+        PhysicsError::BadOption {
+            term: self.term.into(),
+            key: key.into(),
+            reason: reason.into(),
+        }
     }
     /// Whether the config gives `key` (does not count as reading it).
     pub fn has(&self, key: &str) -> bool {
@@ -123,15 +145,20 @@ impl<'a> Options<'a> {
     pub fn text(&self, key: &str, default: Option<&str>) -> Result<String, PhysicsError> {
         match (self.get(key), default) {
             (Some(ConfigValue::Text(t)), _) => Ok(t.clone()),
-            (Some(other), _) => Err(self.bad(key, format!("expected text, got {}", other.describe()))),
+            (Some(other), _) => {
+                Err(self.bad(key, format!("expected text, got {}", other.describe())))
+            }
             (None, Some(d)) => Ok(d.to_string()),
             (None, None) => Err(self.bad(key, "is required")),
         }
     }
     pub fn axis(&self, key: &str, default: Option<Axis>) -> Result<Axis, PhysicsError> {
         match (self.get(key), default) {
-            (Some(ConfigValue::Text(t)), _) => Axis::parse(t).ok_or_else(|| self.bad(key, format!("`{t}` is not an axis; allowed: x, y, z"))),
-            (Some(other), _) => Err(self.bad(key, format!("expected x, y or z, got {}", other.describe()))),
+            (Some(ConfigValue::Text(t)), _) => Axis::parse(t)
+                .ok_or_else(|| self.bad(key, format!("`{t}` is not an axis; allowed: x, y, z"))),
+            (Some(other), _) => {
+                Err(self.bad(key, format!("expected x, y or z, got {}", other.describe())))
+            }
             (None, Some(d)) => Ok(d),
             (None, None) => Err(self.bad(key, "is required (x, y or z)")),
         }
@@ -142,18 +169,30 @@ impl<'a> Options<'a> {
             Some(ConfigValue::List(items)) => items
                 .iter()
                 .map(|i| match i {
-                    ConfigValue::Text(t) => Axis::parse(t).ok_or_else(|| self.bad(key, format!("`{t}` is not an axis"))),
+                    ConfigValue::Text(t) => {
+                        Axis::parse(t).ok_or_else(|| self.bad(key, format!("`{t}` is not an axis")))
+                    }
                     o => Err(self.bad(key, format!("expected axis names, got {}", o.describe()))),
                 })
                 .collect(),
-            Some(o) => Err(self.bad(key, format!("expected a list of axes, got {}", o.describe()))),
+            Some(o) => Err(self.bad(
+                key,
+                format!("expected a list of axes, got {}", o.describe()),
+            )),
         }
     }
     pub fn count(&self, key: &str, default: usize, max: usize) -> Result<usize, PhysicsError> {
         match self.get(key) {
             None => Ok(default),
-            Some(ConfigValue::Number(n)) if n.fract() == 0.0 && *n >= 0.0 && (*n as usize) <= max => Ok(*n as usize),
-            Some(o) => Err(self.bad(key, format!("expected an integer in 0..={max}, got {}", o.describe()))),
+            Some(ConfigValue::Number(n))
+                if n.fract() == 0.0 && *n >= 0.0 && (*n as usize) <= max =>
+            {
+                Ok(*n as usize)
+            }
+            Some(o) => Err(self.bad(
+                key,
+                format!("expected an integer in 0..={max}, got {}", o.describe()),
+            )),
         }
     }
     pub fn flag(&self, key: &str, default: bool) -> Result<bool, PhysicsError> {
@@ -163,14 +202,24 @@ impl<'a> Options<'a> {
             Some(o) => Err(self.bad(key, format!("expected true/false, got {}", o.describe()))),
         }
     }
-    pub fn quantity(&self, key: &str, unit: &str, default: Option<f64>) -> Result<f64, PhysicsError> {
+    pub fn quantity(
+        &self,
+        key: &str,
+        unit: &str,
+        default: Option<f64>,
+    ) -> Result<f64, PhysicsError> {
         match (self.get(key), default) {
             (Some(v), _) => quantity(self.term, key, v, unit),
             (None, Some(d)) => Ok(d),
             (None, None) => Err(self.bad(key, format!("is required ({unit})"))),
         }
     }
-    pub fn vector3(&self, key: &str, unit: &str, default: Option<Vector3<f64>>) -> Result<Vector3<f64>, PhysicsError> {
+    pub fn vector3(
+        &self,
+        key: &str,
+        unit: &str,
+        default: Option<Vector3<f64>>,
+    ) -> Result<Vector3<f64>, PhysicsError> {
         match (self.get(key), default) {
             (Some(ConfigValue::List(items)), _) if items.len() == 3 => {
                 let mut v = Vector3::zeros();
@@ -179,7 +228,13 @@ impl<'a> Options<'a> {
                 }
                 Ok(v)
             }
-            (Some(o), _) => Err(self.bad(key, format!("expected a list of 3 quantities in {unit}, got {}", o.describe()))),
+            (Some(o), _) => Err(self.bad(
+                key,
+                format!(
+                    "expected a list of 3 quantities in {unit}, got {}",
+                    o.describe()
+                ),
+            )),
             (None, Some(d)) => Ok(d),
             (None, None) => Err(self.bad(key, format!("is required (3 values in {unit})"))),
         }
@@ -196,8 +251,14 @@ impl<'a> Options<'a> {
     pub fn length_range(&self, key: &str) -> Result<Option<(f64, f64)>, PhysicsError> {
         match self.get(key) {
             None => Ok(None),
-            Some(ConfigValue::List(items)) if items.len() == 2 => Ok(Some((quantity(self.term, key, &items[0], "m")?, quantity(self.term, key, &items[1], "m")?))),
-            Some(o) => Err(self.bad(key, format!("expected [min, max] in m, got {}", o.describe()))),
+            Some(ConfigValue::List(items)) if items.len() == 2 => Ok(Some((
+                quantity(self.term, key, &items[0], "m")?,
+                quantity(self.term, key, &items[1], "m")?,
+            ))),
+            Some(o) => Err(self.bad(
+                key,
+                format!("expected [min, max] in m, got {}", o.describe()),
+            )),
         }
     }
     /// Reject keys that no reader asked for (the readers' keys are the allowed ones).
@@ -206,7 +267,11 @@ impl<'a> Options<'a> {
         for k in self.map.keys() {
             if !used.contains(k) {
                 let allowed: Vec<&str> = used.iter().map(|s| s.as_str()).collect();
-                return Err(PhysicsError::UnknownOption { term: self.term.into(), key: k.clone(), allowed: allowed.join(", ") });
+                return Err(PhysicsError::UnknownOption {
+                    term: self.term.into(),
+                    key: k.clone(),
+                    allowed: allowed.join(", "),
+                });
             }
         }
         Ok(())

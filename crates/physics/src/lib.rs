@@ -31,7 +31,6 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod catalog;
-pub mod model;
 pub mod config;
 pub mod error;
 pub mod geometry;
@@ -39,6 +38,7 @@ pub mod gravity;
 pub mod instrument;
 pub mod load;
 pub mod machine_family;
+pub mod model;
 pub mod signals;
 pub mod temperature_timeline;
 pub mod term;
@@ -47,9 +47,9 @@ pub mod thermal;
 pub mod units;
 
 pub use catalog::{configure, configure_described, entries, lookup, CatalogEntry, ConfiguredTerm};
-pub use term_id::{Category, TermId};
 pub use config::{ConfigValue, EstimationConfig, PriorConfig, TermConfig};
 pub use error::PhysicsError;
 pub use signals::{Axis, RotaryAxis, SignalKind, Signals};
 pub use temperature_timeline::{TemperatureHistory, TemperatureTimeline};
 pub use term::{EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction, Range};
+pub use term_id::{Category, TermId};

@@ -33,7 +33,10 @@ impl TermModel {
         let labels: BTreeSet<String> = self.terms.iter().map(|t| t.term.label()).collect();
         let label = t.term.label();
         if labels.contains(&label) {
-            return Err(PhysicsError::InvalidInput { what: format!("term model, term `{label}`"), reason: "declared twice".into() });
+            return Err(PhysicsError::InvalidInput {
+                what: format!("term model, term `{label}`"),
+                reason: "declared twice".into(),
+            });
         }
         self.terms.push(t);
         Ok(())
@@ -55,13 +58,20 @@ impl TermModel {
 
     /// Stacked configured parameter values.
     pub fn params(&self) -> Vec<f64> {
-        self.terms.iter().flat_map(|t| t.params.iter().copied()).collect()
+        self.terms
+            .iter()
+            .flat_map(|t| t.params.iter().copied())
+            .collect()
     }
 
     fn split<'a>(&self, p: &'a [f64]) -> Result<Vec<&'a [f64]>, PhysicsError> {
         let total: usize = self.terms.iter().map(|t| t.term.params().len()).sum();
         if p.len() != total {
-            return Err(PhysicsError::ParameterCount { term: "term model".into(), expected: total, got: p.len() });
+            return Err(PhysicsError::ParameterCount {
+                term: "term model".into(),
+                expected: total,
+                got: p.len(),
+            });
         }
         let mut out = Vec::new();
         let mut at = 0;
@@ -75,7 +85,12 @@ impl TermModel {
 
     /// Sum of the displacements of every term whose effect is `Displacement(frame)`, and its
     /// Jacobian w.r.t. the stacked parameters (zero columns for the other terms).
-    pub fn displacement(&self, frame: Frame, p: &[f64], s: &Signals) -> Result<(Vector3<f64>, DMatrix<f64>), PhysicsError> {
+    pub fn displacement(
+        &self,
+        frame: Frame,
+        p: &[f64],
+        s: &Signals,
+    ) -> Result<(Vector3<f64>, DMatrix<f64>), PhysicsError> {
         let parts = self.split(p)?;
         let mut d = Vector3::zeros();
         let mut j = DMatrix::zeros(3, p.len());
@@ -84,7 +99,8 @@ impl TermModel {
             if t.term.effect() == EffectKind::Displacement(frame) {
                 let v: DVector<f64> = t.term.predict(pt, s)?.value;
                 d += Vector3::new(v[0], v[1], v[2]);
-                j.view_mut((0, col), (3, pt.len())).copy_from(&t.term.jacobian(pt, s)?);
+                j.view_mut((0, col), (3, pt.len()))
+                    .copy_from(&t.term.jacobian(pt, s)?);
             }
             col += pt.len();
         }

@@ -128,7 +128,16 @@ impl SignalKind {
     /// Signals the forward model computes itself for each reading (ranges, the points of each
     /// frame, the probing direction) rather than reading them from a recording.
     pub fn is_computed_by_model(&self) -> bool {
-        matches!(self, SignalKind::TrackerRange | SignalKind::ImagePoint | SignalKind::MachinePoint | SignalKind::WorkpiecePoint | SignalKind::TargetPoint | SignalKind::CameraPoint | SignalKind::ProbeDirection)
+        matches!(
+            self,
+            SignalKind::TrackerRange
+                | SignalKind::ImagePoint
+                | SignalKind::MachinePoint
+                | SignalKind::WorkpiecePoint
+                | SignalKind::TargetPoint
+                | SignalKind::CameraPoint
+                | SignalKind::ProbeDirection
+        )
     }
 }
 
@@ -236,7 +245,10 @@ impl<T: crate::term::PhysicsTerm + ?Sized> TermLabel for T {
 }
 
 fn missing(term: &(impl TermLabel + ?Sized), kind: SignalKind) -> PhysicsError {
-    PhysicsError::MissingSignal { term: term.term_label(), signal: kind.to_string() }
+    PhysicsError::MissingSignal {
+        term: term.term_label(),
+        signal: kind.to_string(),
+    }
 }
 
 impl Signals {
@@ -250,80 +262,136 @@ impl Signals {
         self.axis_position[a.index()].ok_or_else(|| missing(term, SignalKind::AxisPosition(a)))
     }
     pub fn approach(&self, term: &(impl TermLabel + ?Sized), a: Axis) -> Result<f64, PhysicsError> {
-        let s = self.approach_direction[a.index()].ok_or_else(|| missing(term, SignalKind::ApproachDirection(a)))?;
+        let s = self.approach_direction[a.index()]
+            .ok_or_else(|| missing(term, SignalKind::ApproachDirection(a)))?;
         if s == 1.0 || s == -1.0 {
             Ok(s)
         } else {
-            Err(PhysicsError::BadSignal { term: term.term_label(), signal: SignalKind::ApproachDirection(a).to_string(), reason: format!("must be +1 or -1, got {s}") })
+            Err(PhysicsError::BadSignal {
+                term: term.term_label(),
+                signal: SignalKind::ApproachDirection(a).to_string(),
+                reason: format!("must be +1 or -1, got {s}"),
+            })
         }
     }
     pub fn velocity(&self, term: &(impl TermLabel + ?Sized)) -> Result<Vector3<f64>, PhysicsError> {
         let mut v = Vector3::zeros();
         for a in Axis::ALL {
-            v[a.index()] = self.axis_velocity[a.index()].ok_or_else(|| missing(term, SignalKind::AxisVelocity(a)))?;
+            v[a.index()] = self.axis_velocity[a.index()]
+                .ok_or_else(|| missing(term, SignalKind::AxisVelocity(a)))?;
         }
         Ok(v)
     }
-    pub fn temperature(&self, term: &(impl TermLabel + ?Sized), sensor: &str) -> Result<f64, PhysicsError> {
-        self.temperatures.get(sensor).copied().ok_or_else(|| missing(term, SignalKind::Temperature(sensor.to_string())))
+    pub fn temperature(
+        &self,
+        term: &(impl TermLabel + ?Sized),
+        sensor: &str,
+    ) -> Result<f64, PhysicsError> {
+        self.temperatures
+            .get(sensor)
+            .copied()
+            .ok_or_else(|| missing(term, SignalKind::Temperature(sensor.to_string())))
     }
     /// (T_f °C, ∂T_f/∂τ K/s): the first-order lag with time constant `tau` (s) of the sensor's
     /// samples in the timeline up to [`Self::time`] (all of them when the time is not set).
-    pub fn lagged_temperature(&self, term: &(impl TermLabel + ?Sized), sensor: &str, tau: f64) -> Result<(f64, f64), PhysicsError> {
+    pub fn lagged_temperature(
+        &self,
+        term: &(impl TermLabel + ?Sized),
+        sensor: &str,
+        tau: f64,
+    ) -> Result<(f64, f64), PhysicsError> {
         let kind = || SignalKind::TemperatureHistory(sensor.to_string());
-        let timeline = self.timeline.as_ref().ok_or_else(|| missing(term, kind()))?;
-        timeline.lagged(sensor, self.time, tau).map_err(|why| match why {
-            LagUnavailable::UnknownSensor => missing(term, kind()),
-            LagUnavailable::NoSampleYet { first } => PhysicsError::BadSignal {
-                term: term.term_label(),
-                signal: kind().to_string(),
-                reason: match first {
-                    Some(first) => format!("no sample at or before t = {} s (the first is at {first} s)", self.time.unwrap_or(f64::NAN)),
-                    None => "the sensor has no samples".into(),
+        let timeline = self
+            .timeline
+            .as_ref()
+            .ok_or_else(|| missing(term, kind()))?;
+        timeline
+            .lagged(sensor, self.time, tau)
+            .map_err(|why| match why {
+                LagUnavailable::UnknownSensor => missing(term, kind()),
+                LagUnavailable::NoSampleYet { first } => PhysicsError::BadSignal {
+                    term: term.term_label(),
+                    signal: kind().to_string(),
+                    reason: match first {
+                        Some(first) => format!(
+                            "no sample at or before t = {} s (the first is at {first} s)",
+                            self.time.unwrap_or(f64::NAN)
+                        ),
+                        None => "the sensor has no samples".into(),
+                    },
                 },
-            },
-            LagUnavailable::BadTimeConstant => PhysicsError::InvalidInput { what: format!("term `{}`: time_constant", term.term_label()), reason: format!("must be > 0 s and finite, got {tau}") },
-        })
+                LagUnavailable::BadTimeConstant => PhysicsError::InvalidInput {
+                    what: format!("term `{}`: time_constant", term.term_label()),
+                    reason: format!("must be > 0 s and finite, got {tau}"),
+                },
+            })
     }
     pub fn air(&self, term: &(impl TermLabel + ?Sized)) -> Result<(f64, f64, f64), PhysicsError> {
         Ok((
-            self.air_temperature.ok_or_else(|| missing(term, SignalKind::AirTemperature))?,
-            self.air_pressure.ok_or_else(|| missing(term, SignalKind::AirPressure))?,
-            self.air_humidity.ok_or_else(|| missing(term, SignalKind::AirHumidity))?,
+            self.air_temperature
+                .ok_or_else(|| missing(term, SignalKind::AirTemperature))?,
+            self.air_pressure
+                .ok_or_else(|| missing(term, SignalKind::AirPressure))?,
+            self.air_humidity
+                .ok_or_else(|| missing(term, SignalKind::AirHumidity))?,
         ))
     }
     pub fn time_on(&self, term: &(impl TermLabel + ?Sized)) -> Result<f64, PhysicsError> {
-        self.time_since_power_on.ok_or_else(|| missing(term, SignalKind::TimeSincePowerOn))
+        self.time_since_power_on
+            .ok_or_else(|| missing(term, SignalKind::TimeSincePowerOn))
     }
     pub fn load(&self, term: &(impl TermLabel + ?Sized)) -> Result<Vector3<f64>, PhysicsError> {
-        self.load_force.ok_or_else(|| missing(term, SignalKind::LoadForce))
+        self.load_force
+            .ok_or_else(|| missing(term, SignalKind::LoadForce))
     }
     pub fn range(&self, term: &(impl TermLabel + ?Sized)) -> Result<f64, PhysicsError> {
-        self.tracker_range.ok_or_else(|| missing(term, SignalKind::TrackerRange))
+        self.tracker_range
+            .ok_or_else(|| missing(term, SignalKind::TrackerRange))
     }
     pub fn image(&self, term: &(impl TermLabel + ?Sized)) -> Result<Vector2<f64>, PhysicsError> {
-        self.image_point.ok_or_else(|| missing(term, SignalKind::ImagePoint))
+        self.image_point
+            .ok_or_else(|| missing(term, SignalKind::ImagePoint))
     }
     pub fn machine(&self, term: &(impl TermLabel + ?Sized)) -> Result<Vector3<f64>, PhysicsError> {
-        self.machine_point.ok_or_else(|| missing(term, SignalKind::MachinePoint))
+        self.machine_point
+            .ok_or_else(|| missing(term, SignalKind::MachinePoint))
     }
-    pub fn workpiece(&self, term: &(impl TermLabel + ?Sized)) -> Result<Vector3<f64>, PhysicsError> {
-        self.workpiece_point.ok_or_else(|| missing(term, SignalKind::WorkpiecePoint))
+    pub fn workpiece(
+        &self,
+        term: &(impl TermLabel + ?Sized),
+    ) -> Result<Vector3<f64>, PhysicsError> {
+        self.workpiece_point
+            .ok_or_else(|| missing(term, SignalKind::WorkpiecePoint))
     }
     pub fn target(&self, term: &(impl TermLabel + ?Sized)) -> Result<Vector3<f64>, PhysicsError> {
-        self.target_point.ok_or_else(|| missing(term, SignalKind::TargetPoint))
+        self.target_point
+            .ok_or_else(|| missing(term, SignalKind::TargetPoint))
     }
     pub fn camera(&self, term: &(impl TermLabel + ?Sized)) -> Result<Vector3<f64>, PhysicsError> {
-        self.camera_point.ok_or_else(|| missing(term, SignalKind::CameraPoint))
+        self.camera_point
+            .ok_or_else(|| missing(term, SignalKind::CameraPoint))
     }
-    pub fn rotary(&self, term: &(impl TermLabel + ?Sized), a: RotaryAxis) -> Result<f64, PhysicsError> {
+    pub fn rotary(
+        &self,
+        term: &(impl TermLabel + ?Sized),
+        a: RotaryAxis,
+    ) -> Result<f64, PhysicsError> {
         self.rotary_position[a.index()].ok_or_else(|| missing(term, SignalKind::RotaryPosition(a)))
     }
-    pub fn probe_dir(&self, term: &(impl TermLabel + ?Sized)) -> Result<Vector3<f64>, PhysicsError> {
-        let u = self.probe_direction.ok_or_else(|| missing(term, SignalKind::ProbeDirection))?;
+    pub fn probe_dir(
+        &self,
+        term: &(impl TermLabel + ?Sized),
+    ) -> Result<Vector3<f64>, PhysicsError> {
+        let u = self
+            .probe_direction
+            .ok_or_else(|| missing(term, SignalKind::ProbeDirection))?;
         let n = u.norm();
         if !(n.is_finite() && (n - 1.0).abs() < 1e-6) {
-            return Err(PhysicsError::BadSignal { term: term.term_label(), signal: SignalKind::ProbeDirection.to_string(), reason: format!("must be a unit vector, norm is {n}") });
+            return Err(PhysicsError::BadSignal {
+                term: term.term_label(),
+                signal: SignalKind::ProbeDirection.to_string(),
+                reason: format!("must be a unit vector, norm is {n}"),
+            });
         }
         Ok(u)
     }

@@ -86,11 +86,18 @@ impl TemperatureTimeline {
 
     /// A timeline keeping at most `samples_per_sensor` samples of each sensor (the oldest go).
     pub fn with_capacity(samples_per_sensor: usize) -> Self {
-        Self { inner: Mutex::new(Inner { capacity: Some(samples_per_sensor.max(1)), sensors: BTreeMap::new() }) }
+        Self {
+            inner: Mutex::new(Inner {
+                capacity: Some(samples_per_sensor.max(1)),
+                sensors: BTreeMap::new(),
+            }),
+        }
     }
 
     /// A timeline holding the given histories (tests, tools); fails like [`Self::push`].
-    pub fn from_histories<'a>(histories: impl IntoIterator<Item = (&'a str, &'a TemperatureHistory)>) -> Result<Self, String> {
+    pub fn from_histories<'a>(
+        histories: impl IntoIterator<Item = (&'a str, &'a TemperatureHistory)>,
+    ) -> Result<Self, String> {
         let t = Self::new();
         for (name, h) in histories {
             t.add_sensor(name);
@@ -116,7 +123,9 @@ impl TemperatureTimeline {
     /// after the sensor's last sample or a value is not finite; the timeline is then unchanged.
     pub fn push(&self, sensor: &str, time: f64, temperature: f64) -> Result<(), String> {
         if !(time.is_finite() && temperature.is_finite()) {
-            return Err(format!("temperature sensor `{sensor}`: sample ({time} s, {temperature} °C) is not finite"));
+            return Err(format!(
+                "temperature sensor `{sensor}`: sample ({time} s, {temperature} °C) is not finite"
+            ));
         }
         let mut inner = self.lock();
         let capacity = inner.capacity;
@@ -159,23 +168,40 @@ impl TemperatureTimeline {
     pub fn history(&self, sensor: &str, until: Option<f64>) -> Option<TemperatureHistory> {
         let inner = self.lock();
         let s = inner.sensors.get(sensor)?;
-        Some(TemperatureHistory { samples: s.samples.iter().copied().filter(|(t, _)| until.is_none_or(|u| *t <= u)).collect() })
+        Some(TemperatureHistory {
+            samples: s
+                .samples
+                .iter()
+                .copied()
+                .filter(|(t, _)| until.is_none_or(|u| *t <= u))
+                .collect(),
+        })
     }
 
     /// (T_f, ∂T_f/∂τ) of the sensor's first-order lag with time constant `tau` (s) at its last
     /// sample at or before `time` (its newest sample for None).
-    pub fn lagged(&self, sensor: &str, time: Option<f64>, tau: f64) -> Result<(f64, f64), LagUnavailable> {
+    pub fn lagged(
+        &self,
+        sensor: &str,
+        time: Option<f64>,
+        tau: f64,
+    ) -> Result<(f64, f64), LagUnavailable> {
         if !(tau > 0.0 && tau.is_finite()) {
             return Err(LagUnavailable::BadTimeConstant);
         }
         let mut inner = self.lock();
-        let series = inner.sensors.get_mut(sensor).ok_or(LagUnavailable::UnknownSensor)?;
+        let series = inner
+            .sensors
+            .get_mut(sensor)
+            .ok_or(LagUnavailable::UnknownSensor)?;
         let count = match time {
             Some(t) => series.samples.partition_point(|(ts, _)| *ts <= t),
             None => series.samples.len(),
         };
         if count == 0 {
-            return Err(LagUnavailable::NoSampleYet { first: series.samples.front().map(|s| s.0) });
+            return Err(LagUnavailable::NoSampleYet {
+                first: series.samples.front().map(|s| s.0),
+            });
         }
         let k = count - 1;
         let tau_bits = tau.to_bits();
@@ -185,7 +211,11 @@ impl TemperatureTimeline {
                 if series.lags.len() >= LAG_CACHES_PER_SENSOR {
                     series.lags.remove(0);
                 }
-                series.lags.push(LagCache { tau_bits, filter: FirstOrderLag::new(tau), values: Vec::new() });
+                series.lags.push(LagCache {
+                    tau_bits,
+                    filter: FirstOrderLag::new(tau),
+                    values: Vec::new(),
+                });
                 series.lags.len() - 1
             }
         };
@@ -208,20 +238,50 @@ mod tests {
     use crate::thermal::first_order_lag::first_order_lag;
 
     fn history(n: usize) -> TemperatureHistory {
-        TemperatureHistory { samples: (0..n).map(|k| (10.0 * k as f64, 20.0 + 3.0 * (1.0 - (-(k as f64) / 150.0).exp()) + 0.01 * (k as f64 * 0.3).sin())).collect() }
+        TemperatureHistory {
+            samples: (0..n)
+                .map(|k| {
+                    (
+                        10.0 * k as f64,
+                        20.0 + 3.0 * (1.0 - (-(k as f64) / 150.0).exp())
+                            + 0.01 * (k as f64 * 0.3).sin(),
+                    )
+                })
+                .collect(),
+        }
     }
 
     #[test]
     fn lag_at_any_time_equals_the_filter_over_the_history_up_to_it() {
         let h = history(2000);
         let t = TemperatureTimeline::from_histories([("column", &h)]).unwrap();
-        for (query, tau) in [(0.0, 1200.0), (55.0, 1200.0), (9_999.9, 600.0), (19_990.0, 1200.0), (1e9, 1200.0)] {
-            let until = TemperatureHistory { samples: h.samples.iter().copied().filter(|(ts, _)| *ts <= query).collect() };
+        for (query, tau) in [
+            (0.0, 1200.0),
+            (55.0, 1200.0),
+            (9_999.9, 600.0),
+            (19_990.0, 1200.0),
+            (1e9, 1200.0),
+        ] {
+            let until = TemperatureHistory {
+                samples: h
+                    .samples
+                    .iter()
+                    .copied()
+                    .filter(|(ts, _)| *ts <= query)
+                    .collect(),
+            };
             let (tf, d) = t.lagged("column", Some(query), tau).unwrap();
             let (tf_ref, d_ref) = first_order_lag(&until, tau);
-            assert_eq!((tf.to_bits(), d.to_bits()), (tf_ref.to_bits(), d_ref.to_bits()), "at {query} s, τ {tau}");
+            assert_eq!(
+                (tf.to_bits(), d.to_bits()),
+                (tf_ref.to_bits(), d_ref.to_bits()),
+                "at {query} s, τ {tau}"
+            );
         }
-        assert_eq!(t.lagged("column", None, 1200.0).unwrap(), first_order_lag(&h, 1200.0));
+        assert_eq!(
+            t.lagged("column", None, 1200.0).unwrap(),
+            first_order_lag(&h, 1200.0)
+        );
     }
 
     #[test]
@@ -235,7 +295,10 @@ mod tests {
                 at_100 = Some(t.lagged("column", Some(time), 900.0).unwrap());
             }
         }
-        assert_eq!(t.lagged("column", Some(1000.0), 900.0).unwrap(), at_100.unwrap());
+        assert_eq!(
+            t.lagged("column", Some(1000.0), 900.0).unwrap(),
+            at_100.unwrap()
+        );
         assert_eq!(t.sample_count("column"), Some(300));
     }
 
@@ -247,8 +310,13 @@ mod tests {
             t.push("column", time, v).unwrap();
         }
         assert_eq!(t.sample_count("column"), Some(20));
-        let kept = TemperatureHistory { samples: h.samples[30..].to_vec() };
-        assert_eq!(t.lagged("column", None, 300.0).unwrap(), first_order_lag(&kept, 300.0));
+        let kept = TemperatureHistory {
+            samples: h.samples[30..].to_vec(),
+        };
+        assert_eq!(
+            t.lagged("column", None, 300.0).unwrap(),
+            first_order_lag(&kept, 300.0)
+        );
     }
 
     #[test]
@@ -257,12 +325,27 @@ mod tests {
         t.push("column", 0.0, 20.0).unwrap();
         let e = t.push("column", 0.0, 22.0).unwrap_err();
         assert!(e.contains("column") && e.contains("strictly"), "{e}");
-        assert!(t.push("column", 1.0, f64::NAN).unwrap_err().contains("not finite"));
+        assert!(t
+            .push("column", 1.0, f64::NAN)
+            .unwrap_err()
+            .contains("not finite"));
         assert_eq!(t.sample_count("column"), Some(1));
-        assert_eq!(t.lagged("head", None, 10.0), Err(LagUnavailable::UnknownSensor));
-        assert_eq!(t.lagged("column", Some(-1.0), 10.0), Err(LagUnavailable::NoSampleYet { first: Some(0.0) }));
-        assert_eq!(t.lagged("column", None, 0.0), Err(LagUnavailable::BadTimeConstant));
+        assert_eq!(
+            t.lagged("head", None, 10.0),
+            Err(LagUnavailable::UnknownSensor)
+        );
+        assert_eq!(
+            t.lagged("column", Some(-1.0), 10.0),
+            Err(LagUnavailable::NoSampleYet { first: Some(0.0) })
+        );
+        assert_eq!(
+            t.lagged("column", None, 0.0),
+            Err(LagUnavailable::BadTimeConstant)
+        );
         t.add_sensor("head");
-        assert_eq!(t.lagged("head", None, 10.0), Err(LagUnavailable::NoSampleYet { first: None }));
+        assert_eq!(
+            t.lagged("head", None, 10.0),
+            Err(LagUnavailable::NoSampleYet { first: None })
+        );
     }
 }

@@ -8,9 +8,9 @@
 
 use nalgebra::{DMatrix, DMatrixViewMut, DVector};
 
-use crate::term_id::TermId;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
+use crate::term_id::TermId;
 
 /// An inclusive range of parameter values (SI); ±∞ where a side has no limit.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -20,7 +20,10 @@ pub struct Range {
 }
 
 impl Range {
-    pub const UNBOUNDED: Range = Range { lo: f64::NEG_INFINITY, hi: f64::INFINITY };
+    pub const UNBOUNDED: Range = Range {
+        lo: f64::NEG_INFINITY,
+        hi: f64::INFINITY,
+    };
     pub const fn new(lo: f64, hi: f64) -> Self {
         Self { lo, hi }
     }
@@ -57,8 +60,23 @@ pub struct ParamSpec {
 impl ParamSpec {
     /// A parameter whose usual range is `[usual_min, usual_max]` and whose possible range is
     /// unbounded (set it with [`Self::possible`]).
-    pub fn new(name: impl Into<String>, unit: &'static str, usual_min: f64, usual_max: f64, default: f64, doc: impl Into<String>) -> Self {
-        Self { name: name.into(), unit, usual: Range::new(usual_min, usual_max), possible: Range::UNBOUNDED, default, doc: doc.into(), unusual_means: "" }
+    pub fn new(
+        name: impl Into<String>,
+        unit: &'static str,
+        usual_min: f64,
+        usual_max: f64,
+        default: f64,
+        doc: impl Into<String>,
+    ) -> Self {
+        Self {
+            name: name.into(),
+            unit,
+            usual: Range::new(usual_min, usual_max),
+            possible: Range::UNBOUNDED,
+            default,
+            doc: doc.into(),
+            unusual_means: "",
+        }
     }
     /// The physically possible range (values outside are impossible).
     pub fn possible(mut self, lo: f64, hi: f64) -> Self {
@@ -74,7 +92,15 @@ impl ParamSpec {
     /// scaling, never a limit.
     pub fn typical_scale(&self) -> f64 {
         let w = self.usual.hi - self.usual.lo;
-        if w.is_finite() && w > 0.0 { w } else { self.usual.hi.abs().max(self.usual.lo.abs()).max(f64::MIN_POSITIVE) }
+        if w.is_finite() && w > 0.0 {
+            w
+        } else {
+            self.usual
+                .hi
+                .abs()
+                .max(self.usual.lo.abs())
+                .max(f64::MIN_POSITIVE)
+        }
     }
 }
 
@@ -190,7 +216,13 @@ pub trait PhysicsTerm: TermClone + std::fmt::Debug + Send + Sync {
     /// [`Self::jacobian`] (allocating); the terms on an estimator's hot path (the XFYZ geometry,
     /// the tracker's terms) override it without allocating, with the same arithmetic as
     /// `predict`.
-    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
+    fn evaluate_into(
+        &self,
+        p: &[f64],
+        s: &Signals,
+        value: &mut [f64],
+        mut jac: DMatrixViewMut<'_, f64>,
+    ) -> Result<(), PhysicsError> {
         let v = self.predict(p, s)?.value;
         value[..v.len()].copy_from_slice(v.as_slice());
         jac.copy_from(&self.jacobian(p, s)?);
@@ -215,14 +247,25 @@ pub trait PhysicsTerm: TermClone + std::fmt::Debug + Send + Sync {
 
 /// Check the parameter count (used by every term at the top of predict/jacobian); the term's
 /// label is formatted only on error.
-pub(crate) fn check_len(term: &(impl crate::signals::TermLabel + ?Sized), p: &[f64], expected: usize) -> Result<(), PhysicsError> {
+pub(crate) fn check_len(
+    term: &(impl crate::signals::TermLabel + ?Sized),
+    p: &[f64],
+    expected: usize,
+) -> Result<(), PhysicsError> {
     if p.len() != expected {
-        return Err(PhysicsError::ParameterCount { term: term.term_label(), expected, got: p.len() });
+        return Err(PhysicsError::ParameterCount {
+            term: term.term_label(),
+            expected,
+            got: p.len(),
+        });
     }
     Ok(())
 }
 
 /// Shorthand: a displacement prediction.
 pub(crate) fn displacement(frame: Frame, v: nalgebra::Vector3<f64>) -> Prediction {
-    Prediction { kind: EffectKind::Displacement(frame), value: DVector::from_column_slice(v.as_slice()) }
+    Prediction {
+        kind: EffectKind::Displacement(frame),
+        value: DVector::from_column_slice(v.as_slice()),
+    }
 }

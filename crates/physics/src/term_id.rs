@@ -78,4 +78,3 @@ impl fmt::Display for TermId {
         f.write_str(self.as_str())
     }
 }
-

@@ -26,23 +26,90 @@ pub struct Dimension {
 
 impl Dimension {
     fn scaled(self, e: i8) -> Self {
-        Self { m: self.m * e, kg: self.kg * e, s: self.s * e, k: self.k * e, rad: self.rad * e, px: self.px * e, rh: self.rh * e }
+        Self {
+            m: self.m * e,
+            kg: self.kg * e,
+            s: self.s * e,
+            k: self.k * e,
+            rad: self.rad * e,
+            px: self.px * e,
+            rh: self.rh * e,
+        }
     }
     fn plus(self, o: Self) -> Self {
-        Self { m: self.m + o.m, kg: self.kg + o.kg, s: self.s + o.s, k: self.k + o.k, rad: self.rad + o.rad, px: self.px + o.px, rh: self.rh + o.rh }
+        Self {
+            m: self.m + o.m,
+            kg: self.kg + o.kg,
+            s: self.s + o.s,
+            k: self.k + o.k,
+            rad: self.rad + o.rad,
+            px: self.px + o.px,
+            rh: self.rh + o.rh,
+        }
     }
     /// Human name used in error messages.
     pub fn describe(&self) -> String {
         let named: &[(Dimension, &str)] = &[
             (Dimension::default(), "a dimensionless ratio"),
-            (Dimension { m: 1, ..Default::default() }, "length"),
-            (Dimension { rad: 1, ..Default::default() }, "angle"),
-            (Dimension { s: 1, ..Default::default() }, "time"),
-            (Dimension { k: 1, ..Default::default() }, "temperature"),
-            (Dimension { k: -1, ..Default::default() }, "inverse temperature"),
-            (Dimension { m: 1, k: -1, ..Default::default() }, "length per kelvin"),
-            (Dimension { kg: 1, m: -1, s: -2, ..Default::default() }, "pressure"),
-            (Dimension { rh: 1, ..Default::default() }, "relative humidity"),
+            (
+                Dimension {
+                    m: 1,
+                    ..Default::default()
+                },
+                "length",
+            ),
+            (
+                Dimension {
+                    rad: 1,
+                    ..Default::default()
+                },
+                "angle",
+            ),
+            (
+                Dimension {
+                    s: 1,
+                    ..Default::default()
+                },
+                "time",
+            ),
+            (
+                Dimension {
+                    k: 1,
+                    ..Default::default()
+                },
+                "temperature",
+            ),
+            (
+                Dimension {
+                    k: -1,
+                    ..Default::default()
+                },
+                "inverse temperature",
+            ),
+            (
+                Dimension {
+                    m: 1,
+                    k: -1,
+                    ..Default::default()
+                },
+                "length per kelvin",
+            ),
+            (
+                Dimension {
+                    kg: 1,
+                    m: -1,
+                    s: -2,
+                    ..Default::default()
+                },
+                "pressure",
+            ),
+            (
+                Dimension {
+                    rh: 1,
+                    ..Default::default()
+                },
+                "relative humidity",
+            ),
         ];
         for (d, n) in named {
             if d == self {
@@ -55,9 +122,31 @@ impl Dimension {
 
 impl fmt::Display for Dimension {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
-        let parts = [("m", self.m), ("kg", self.kg), ("s", self.s), ("K", self.k), ("rad", self.rad), ("px", self.px), ("%RH", self.rh)];
-        let s: Vec<String> = parts.iter().filter(|(_, e)| *e != 0).map(|(n, e)| if *e == 1 { n.to_string() } else { format!("{n}^{e}") }).collect();
-        if s.is_empty() { write!(f, "1") } else { write!(f, "{}", s.join("·")) }
+        let parts = [
+            ("m", self.m),
+            ("kg", self.kg),
+            ("s", self.s),
+            ("K", self.k),
+            ("rad", self.rad),
+            ("px", self.px),
+            ("%RH", self.rh),
+        ];
+        let s: Vec<String> = parts
+            .iter()
+            .filter(|(_, e)| *e != 0)
+            .map(|(n, e)| {
+                if *e == 1 {
+                    n.to_string()
+                } else {
+                    format!("{n}^{e}")
+                }
+            })
+            .collect();
+        if s.is_empty() {
+            write!(f, "1")
+        } else {
+            write!(f, "{}", s.join("·"))
+        }
     }
 }
 
@@ -71,7 +160,15 @@ pub struct Unit {
 }
 
 fn atom(name: &str) -> Option<(Dimension, f64)> {
-    let d = |m, kg, s, k, rad, px, rh| Dimension { m, kg, s, k, rad, px, rh };
+    let d = |m, kg, s, k, rad, px, rh| Dimension {
+        m,
+        kg,
+        s,
+        k,
+        rad,
+        px,
+        rh,
+    };
     let len = d(1, 0, 0, 0, 0, 0, 0);
     let ang = d(0, 0, 0, 0, 1, 0, 0);
     let time = d(0, 0, 1, 0, 0, 0, 0);
@@ -126,9 +223,16 @@ pub fn parse_unit(text: &str) -> Result<Unit, String> {
     let mut atoms = 0usize;
     let mut kelvin = false;
     for (part, sign) in [(num, 1i8), (den, -1i8)] {
-        for tok in part.split(|c: char| c == '*' || c == '·' || c.is_whitespace()).filter(|t| !t.is_empty()) {
+        for tok in part
+            .split(|c: char| c == '*' || c == '·' || c.is_whitespace())
+            .filter(|t| !t.is_empty())
+        {
             let (base, exp) = match tok.split_once('^') {
-                Some((b, e)) => (b, e.parse::<i8>().map_err(|_| format!("bad exponent in `{tok}`"))?),
+                Some((b, e)) => (
+                    b,
+                    e.parse::<i8>()
+                        .map_err(|_| format!("bad exponent in `{tok}`"))?,
+                ),
                 None => (tok, 1),
             };
             let (d, s) = atom(base).ok_or_else(|| format!("unknown unit `{base}`"))?;
@@ -141,7 +245,11 @@ pub fn parse_unit(text: &str) -> Result<Unit, String> {
             atoms += 1;
         }
     }
-    Ok(Unit { dimension: dim, scale, is_kelvin: kelvin && atoms == 1 })
+    Ok(Unit {
+        dimension: dim,
+        scale,
+        is_kelvin: kelvin && atoms == 1,
+    })
 }
 
 /// Outcome of reading a quantity against a parameter's canonical unit.
@@ -160,7 +268,14 @@ pub fn split_quantity(text: &str) -> (&str, &str) {
     let split = text
         .char_indices()
         .find(|(i, c)| {
-            !(c.is_ascii_digit() || *c == '.' || *c == '+' || *c == '-' || ((*c == 'e' || *c == 'E') && *i > 0 && text[i + 1..].starts_with(|d: char| d.is_ascii_digit() || d == '-' || d == '+')))
+            !(c.is_ascii_digit()
+                || *c == '.'
+                || *c == '+'
+                || *c == '-'
+                || ((*c == 'e' || *c == 'E')
+                    && *i > 0
+                    && text[i + 1..]
+                        .starts_with(|d: char| d.is_ascii_digit() || d == '-' || d == '+')))
         })
         .map(|(i, _)| i)
         .unwrap_or(text.len());
@@ -172,7 +287,10 @@ pub fn split_quantity(text: &str) -> (&str, &str) {
 /// and return the value expressed in `canonical` (the parameter's unit string).
 pub fn parse_quantity(text: &str, canonical: &str) -> Result<f64, QuantityError> {
     let (num, unit) = split_quantity(text);
-    let value: f64 = num.trim().parse().map_err(|_| QuantityError::Parse(format!("`{num}` is not a number")))?;
+    let value: f64 = num
+        .trim()
+        .parse()
+        .map_err(|_| QuantityError::Parse(format!("`{num}` is not a number")))?;
     let unit = unit.trim();
     let target = parse_unit(canonical).map_err(QuantityError::Parse)?;
     if unit.is_empty() {
@@ -180,7 +298,10 @@ pub fn parse_quantity(text: &str, canonical: &str) -> Result<f64, QuantityError>
     }
     let given = parse_unit(unit).map_err(QuantityError::Parse)?;
     if given.dimension != target.dimension {
-        return Err(QuantityError::Dimension { given: unit.to_string(), expected: target.dimension });
+        return Err(QuantityError::Dimension {
+            given: unit.to_string(),
+            expected: target.dimension,
+        });
     }
     let canonical_is_absolute_celsius = canonical.trim() == "degC";
     if canonical_is_absolute_celsius && given.is_kelvin {
@@ -188,7 +309,11 @@ pub fn parse_quantity(text: &str, canonical: &str) -> Result<f64, QuantityError>
     }
     // Divide by the inverse of sub-unity ratios so "19 um" gives the same double as "19e-6".
     let ratio = given.scale / target.scale;
-    Ok(if ratio < 1.0 { value / (1.0 / ratio).round_if_integral() } else { value * ratio })
+    Ok(if ratio < 1.0 {
+        value / (1.0 / ratio).round_if_integral()
+    } else {
+        value * ratio
+    })
 }
 
 trait RoundIfIntegral {
@@ -199,7 +324,11 @@ impl RoundIfIntegral for f64 {
     /// 1/1e-6 may come out as 999999.9999999999; snap such near-integers.
     fn round_if_integral(self) -> f64 {
         let r = self.round();
-        if (self - r).abs() <= 1e-9 * r.abs() { r } else { self }
+        if (self - r).abs() <= 1e-9 * r.abs() {
+            r
+        } else {
+            self
+        }
     }
 }
 
@@ -226,8 +355,17 @@ mod tests {
             Err(QuantityError::Dimension { given, .. }) => assert_eq!(given, "mrad"),
             other => panic!("expected dimension error, got {other:?}"),
         }
-        assert!(matches!(parse_quantity("12 um", "1/K"), Err(QuantityError::Dimension { .. })));
-        assert!(matches!(parse_quantity("12 furlongs", "m"), Err(QuantityError::Parse(_))));
-        assert!(matches!(parse_quantity("abc", "m"), Err(QuantityError::Parse(_))));
+        assert!(matches!(
+            parse_quantity("12 um", "1/K"),
+            Err(QuantityError::Dimension { .. })
+        ));
+        assert!(matches!(
+            parse_quantity("12 furlongs", "m"),
+            Err(QuantityError::Parse(_))
+        ));
+        assert!(matches!(
+            parse_quantity("abc", "m"),
+            Err(QuantityError::Parse(_))
+        ));
     }
 }

@@ -19,10 +19,16 @@ fn analytic_jacobians_match_finite_differences() {
         for trial in 0..25 {
             let p = common::random_params(&mut r, &term.params());
             let s = common::random_signals(&mut r);
-            let ja = term.jacobian(&p, &s).unwrap_or_else(|e| panic!("{id}: {e}"));
+            let ja = term
+                .jacobian(&p, &s)
+                .unwrap_or_else(|e| panic!("{id}: {e}"));
             let jn = common::finite_difference_jacobian(term, &p, &s);
             assert_eq!(ja.shape(), jn.shape(), "{id}: Jacobian shape");
-            assert_eq!(ja.nrows(), term.effect().dimension(), "{id}: rows = effect dimension");
+            assert_eq!(
+                ja.nrows(),
+                term.effect().dimension(),
+                "{id}: rows = effect dimension"
+            );
             // Absolute floor: a column whose effect over the whole plausible range is below
             // 1e-10 of the prediction's size (e.g. ∂/∂τ long after warm-up) is numerically zero.
             let out = term.predict(&p, &s).unwrap().value.amax().max(1e-300);
@@ -32,7 +38,13 @@ fn analytic_jacobians_match_finite_differences() {
                 let err = (a - n).norm();
                 let scale = a.norm().max(n.norm());
                 let floor = 1e-10 * out / spec.typical_scale();
-                assert!(err <= 1e-6 * scale + floor, "{id} trial {trial} param {}: analytic {:?} vs numeric {:?} (err {err:e})", spec.name, a.iter().collect::<Vec<_>>(), n.iter().collect::<Vec<_>>());
+                assert!(
+                    err <= 1e-6 * scale + floor,
+                    "{id} trial {trial} param {}: analytic {:?} vs numeric {:?} (err {err:e})",
+                    spec.name,
+                    a.iter().collect::<Vec<_>>(),
+                    n.iter().collect::<Vec<_>>()
+                );
             }
             checked += 1;
         }
@@ -73,7 +85,10 @@ fn predictions_have_the_declared_dimension_and_are_linear_where_documented() {
         let specs = term.params();
         let nonlinear = nonlinear_params(id.as_str());
         for n in nonlinear {
-            assert!(specs.iter().any(|p| p.name == *n), "{id} has no parameter {n}");
+            assert!(
+                specs.iter().any(|p| p.name == *n),
+                "{id} has no parameter {n}"
+            );
         }
         for _ in 0..10 {
             let p = common::random_params(&mut r, &specs);
@@ -108,15 +123,35 @@ fn predictions_have_the_declared_dimension_and_are_linear_where_documented() {
                         nonlinear_seen.insert(format!("{id}.{}", spec.name));
                     }
                 } else {
-                    assert!(err <= tol, "{id}: prediction not linear in {} (moved {:?}, J·Δp {:?})", spec.name, moved.as_slice(), predicted.as_slice());
+                    assert!(
+                        err <= tol,
+                        "{id}: prediction not linear in {} (moved {:?}, J·Δp {:?})",
+                        spec.name,
+                        moved.as_slice(),
+                        predicted.as_slice()
+                    );
                     linear_checked += 1;
                 }
             }
         }
     }
-    assert!(linear_checked > 200, "only {linear_checked} linear parameter moves checked");
-    for must in ["tracker_warmup.time_constant", "thermal_growth.time_constant", "tracker_pose.alpha", "tracker_pose.beta", "tracker_pose.delta", "base_tilt.roll", "base_tilt.pitch"] {
-        assert!(nonlinear_seen.contains(must), "{must} behaved linearly: the documented nonlinearity is missing");
+    assert!(
+        linear_checked > 200,
+        "only {linear_checked} linear parameter moves checked"
+    );
+    for must in [
+        "tracker_warmup.time_constant",
+        "thermal_growth.time_constant",
+        "tracker_pose.alpha",
+        "tracker_pose.beta",
+        "tracker_pose.delta",
+        "base_tilt.roll",
+        "base_tilt.pitch",
+    ] {
+        assert!(
+            nonlinear_seen.contains(must),
+            "{must} behaved linearly: the documented nonlinearity is missing"
+        );
     }
 }
 
@@ -133,19 +168,43 @@ fn terms_that_say_they_are_linear_predict_by_their_jacobian() {
         if !term.linear_in_params() {
             continue;
         }
-        assert!(nonlinear_params(id.as_str()).is_empty(), "{id} says it is linear but has a nonlinear parameter");
+        assert!(
+            nonlinear_params(id.as_str()).is_empty(),
+            "{id} says it is linear but has a nonlinear parameter"
+        );
         linear.insert(id.as_str());
         for _ in 0..10 {
-            let (p, far) = (common::random_params(&mut r, &term.params()), common::random_params(&mut r, &term.params()));
+            let (p, far) = (
+                common::random_params(&mut r, &term.params()),
+                common::random_params(&mut r, &term.params()),
+            );
             let s = common::random_signals(&mut r);
             let j = term.jacobian(&p, &s).unwrap();
-            assert_eq!(j, term.jacobian(&far, &s).unwrap(), "{id}: Jacobian depends on the parameters");
+            assert_eq!(
+                j,
+                term.jacobian(&far, &s).unwrap(),
+                "{id}: Jacobian depends on the parameters"
+            );
             let value = term.predict(&p, &s).unwrap().value;
             let product = &j * nalgebra::DVector::from_column_slice(&p);
-            assert!((&value - &product).norm() <= 1e-12 * value.norm() + 1e-300, "{id}: prediction {:?} is not J·p {:?}", value.as_slice(), product.as_slice());
+            assert!(
+                (&value - &product).norm() <= 1e-12 * value.norm() + 1e-300,
+                "{id}: prediction {:?} is not J·p {:?}",
+                value.as_slice(),
+                product.as_slice()
+            );
         }
     }
-    assert_eq!(linear.into_iter().collect::<Vec<_>>(), ["angular", "instrument_drift", "positioning", "squareness", "straightness"]);
+    assert_eq!(
+        linear.into_iter().collect::<Vec<_>>(),
+        [
+            "angular",
+            "instrument_drift",
+            "positioning",
+            "squareness",
+            "straightness"
+        ]
+    );
 }
 
 /// `evaluate_into` (the allocation-free path estimators use) gives `predict`'s value and
@@ -166,7 +225,8 @@ fn evaluate_into_is_predict_and_jacobian_bit_for_bit() {
             // the largest prediction is a pose change (6)
             let mut value = [f64::NAN; 6];
             let mut jac = nalgebra::DMatrix::from_element(dim, p.len(), f64::NAN);
-            term.evaluate_into(&p, &s, &mut value, jac.view_mut((0, 0), (dim, p.len()))).unwrap_or_else(|e| panic!("{id}: {e}"));
+            term.evaluate_into(&p, &s, &mut value, jac.view_mut((0, 0), (dim, p.len())))
+                .unwrap_or_else(|e| panic!("{id}: {e}"));
             let v = term.predict(&p, &s).unwrap().value;
             for k in 0..dim {
                 assert_eq!(value[k].to_bits(), v[k].to_bits(), "{id}: value {k}");
@@ -178,7 +238,14 @@ fn evaluate_into_is_predict_and_jacobian_bit_for_bit() {
             let mut value = [0.0; 3];
             let mut jac = nalgebra::DMatrix::zeros(term.effect().dimension(), term.params().len());
             let dim = term.effect().dimension();
-            let err = term.evaluate_into(&term.defaults(), &metrocell_physics::Signals::default(), &mut value, jac.view_mut((0, 0), (dim, term.params().len()))).unwrap_err();
+            let err = term
+                .evaluate_into(
+                    &term.defaults(),
+                    &metrocell_physics::Signals::default(),
+                    &mut value,
+                    jac.view_mut((0, 0), (dim, term.params().len())),
+                )
+                .unwrap_err();
             assert!(err.to_string().contains(&term.label()), "{id}: {err}");
         }
     }

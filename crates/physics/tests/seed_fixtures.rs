@@ -28,8 +28,14 @@ fn full_edlen_equations_agree_with_shop_floor_form() {
     let shop = shop_floor_index(99_000.0, 20.0, 50.0);
     let bd = birch_downs_index(632.99e-9, 99_000.0, 20.0, 50.0);
     let bp = boensch_potulski_index(632.99e-9, 99_000.0, 20.0, 50.0, 400e-6);
-    assert!((bd - shop).abs() < 5e-8, "Birch–Downs {bd:.12} vs shop {shop:.12}");
-    assert!((bp - shop).abs() < 5e-8, "Bönsch–Potulski {bp:.12} vs shop {shop:.12}");
+    assert!(
+        (bd - shop).abs() < 5e-8,
+        "Birch–Downs {bd:.12} vs shop {shop:.12}"
+    );
+    assert!(
+        (bp - shop).abs() < 5e-8,
+        "Bönsch–Potulski {bp:.12} vs shop {shop:.12}"
+    );
     assert!((bd - 1.0002651347).abs() < 1e-9, "Birch–Downs {bd:.12}");
     // NIST check value of the IAPWS saturation pressure at 20 °C: 2339.2 Pa.
     assert!((saturation_vapour_pressure(20.0) - 2339.2).abs() < 0.1);
@@ -54,10 +60,20 @@ fn edlen_sensitivities() {
 #[test]
 fn gradient_errors_through_the_refraction_term() {
     let term = configure(&example_config(TermId::Refraction)).unwrap().term;
-    let mut s = Signals { tracker_range: Some(10.0), air_temperature: Some(20.0), air_pressure: Some(99_000.0), air_humidity: Some(50.0), ..Default::default() };
+    let mut s = Signals {
+        tracker_range: Some(10.0),
+        air_temperature: Some(20.0),
+        air_pressure: Some(99_000.0),
+        air_humidity: Some(50.0),
+        ..Default::default()
+    };
     for (g, expect_um) in [(0.1, 4.7), (1.0, 47.0)] {
         let d = term.predict(&[g * 10.0 / 2.0, 0.0], &s).unwrap().value[0];
-        assert!((-d / UM - expect_um).abs() < 0.05 * expect_um, "G = {g} K/m: Δρ = {} µm", d / UM);
+        assert!(
+            (-d / UM - expect_um).abs() < 0.05 * expect_um,
+            "G = {g} K/m: Δρ = {} µm",
+            d / UM
+        );
         assert!(d < 0.0);
     }
     s.tracker_range = Some(2.0);
@@ -69,7 +85,10 @@ fn gradient_errors_through_the_refraction_term() {
 #[test]
 fn heated_section_path_integral() {
     let n_lt = shop_floor_index(99_000.0, 20.0, 50.0);
-    let d = segmented_path_range_error(&[(1.5, n_lt), (0.5, shop_floor_index(99_000.0, 37.0, 50.0))], n_lt);
+    let d = segmented_path_range_error(
+        &[(1.5, n_lt), (0.5, shop_floor_index(99_000.0, 37.0, 50.0))],
+        n_lt,
+    );
     assert!((d / UM + 7.6).abs() < 0.1, "Δρ = {} µm", d / UM);
 }
 
@@ -77,10 +96,21 @@ fn heated_section_path_integral() {
 /// i.e. the LT1 ± accuracies taken as 2σ) gives 2σ ≈ 0.385 µm/m (digest reproduces 0.386).
 #[test]
 fn weather_station_monte_carlo() {
-    let sig = StationUncertainty { temperature: 0.15, pressure: 50.0, humidity: 2.5 };
+    let sig = StationUncertainty {
+        temperature: 0.15,
+        pressure: 50.0,
+        humidity: 2.5,
+    };
     let two_sigma = weather_station_scale_error_2sigma(99_000.0, 20.0, 50.0, sig, 10_000, 1);
-    assert!((two_sigma / UM - 0.385).abs() < 0.01, "2σ = {} µm/m", two_sigma / UM);
-    assert_eq!(two_sigma, weather_station_scale_error_2sigma(99_000.0, 20.0, 50.0, sig, 10_000, 1));
+    assert!(
+        (two_sigma / UM - 0.385).abs() < 0.01,
+        "2σ = {} µm/m",
+        two_sigma / UM
+    );
+    assert_eq!(
+        two_sigma,
+        weather_station_scale_error_2sigma(99_000.0, 20.0, 50.0, sig, 10_000, 1)
+    );
 }
 
 /// Thesis eqs 3.2/3.3 (5.1/5.2): API ρ = 159.798 + 0.019(1 − e^(−t/30)) mm, Leica
@@ -99,10 +129,28 @@ fn tracker_warmup_curves_and_settling_times() {
     assert!(((leica(1e6) - 154.999e-3) / UM - 75.0).abs() < 1e-6);
     // At the reset at min 95 all readings dropped by 45 µm; the model says 48.9 µm.
     let at95 = (leica(95.0) - 154.999e-3) / UM;
-    assert!((at95 - 48.9).abs() < 0.05 && (at95 - 45.0).abs() < 5.0, "{at95}");
+    assert!(
+        (at95 - 48.9).abs() < 0.05 && (at95 - 45.0).abs() < 5.0,
+        "{at95}"
+    );
     // Through the catalog term (params in SI: A, B, τ).
-    let term = configure(&TermConfig { id: "tracker_warmup".into(), params: [("offset", "0 m"), ("amplitude", "75 um"), ("time_constant", "90 min")].iter().map(|(k, v)| (k.to_string(), ConfigValue::Text(v.to_string()))).collect(), ..Default::default() }).unwrap();
-    let s = Signals { time_since_power_on: Some(270.0 * MIN), ..Default::default() };
+    let term = configure(&TermConfig {
+        id: "tracker_warmup".into(),
+        params: [
+            ("offset", "0 m"),
+            ("amplitude", "75 um"),
+            ("time_constant", "90 min"),
+        ]
+        .iter()
+        .map(|(k, v)| (k.to_string(), ConfigValue::Text(v.to_string())))
+        .collect(),
+        ..Default::default()
+    })
+    .unwrap();
+    let s = Signals {
+        time_since_power_on: Some(270.0 * MIN),
+        ..Default::default()
+    };
     assert!((term.term.predict(&term.params, &s).unwrap().value[0] / UM - 71.27).abs() < 0.01);
 }
 
@@ -113,9 +161,14 @@ fn plate_thermal_correction() {
     let df = corrected_distance(300e-3, 24e-6, 21.0, 20.0);
     assert!((df * 1e3 - 299.9928).abs() < 1e-7);
     let mut cfg = example_config(TermId::WorkpieceExpansion);
-    cfg.params.insert("alpha".into(), ConfigValue::Text("24e-6 1/K".into()));
+    cfg.params
+        .insert("alpha".into(), ConfigValue::Text("24e-6 1/K".into()));
     let t = configure(&cfg).unwrap();
-    let s = Signals { workpiece_point: Some(Vector3::new(0.2 + 0.3, 0.25, 0.0)), temperatures: [("plate".to_string(), 21.0)].into_iter().collect(), ..Default::default() };
+    let s = Signals {
+        workpiece_point: Some(Vector3::new(0.2 + 0.3, 0.25, 0.0)),
+        temperatures: [("plate".to_string(), 21.0)].into_iter().collect(),
+        ..Default::default()
+    };
     let d = t.term.predict(&t.params, &s).unwrap().value;
     assert!((d[0] / UM - 7.2).abs() < 1e-9 && d[1].abs() < 1e-15);
 }
@@ -123,8 +176,24 @@ fn plate_thermal_correction() {
 /// Thesis Ch. 5.5: column growth Δz = L_col·α·ΔT; digest example 1 m steel (11.5e-6), 0.5 K → 5.75 µm.
 #[test]
 fn column_growth_example() {
-    let t = configure(&TermConfig { id: "thermal_growth".into(), options: [("sensor".to_string(), ConfigValue::Text("column".into()))].into_iter().collect(), params: [("coefficient".to_string(), ConfigValue::Text("11.5 um/K".into()))].into_iter().collect(), use_defaults: false }).unwrap();
-    let s = Signals { temperatures: [("column".to_string(), 20.5)].into_iter().collect(), ..Default::default() };
+    let t = configure(&TermConfig {
+        id: "thermal_growth".into(),
+        options: [("sensor".to_string(), ConfigValue::Text("column".into()))]
+            .into_iter()
+            .collect(),
+        params: [(
+            "coefficient".to_string(),
+            ConfigValue::Text("11.5 um/K".into()),
+        )]
+        .into_iter()
+        .collect(),
+        use_defaults: false,
+    })
+    .unwrap();
+    let s = Signals {
+        temperatures: [("column".to_string(), 20.5)].into_iter().collect(),
+        ..Default::default()
+    };
     let d = t.term.predict(&t.params, &s).unwrap().value;
     assert!((d[2] / UM - 5.75).abs() < 1e-9);
 }
@@ -137,14 +206,28 @@ fn tracker_pose_rotation_fixture() {
     let r = euler_xyz(0.0339 * d, 0.0343 * d, 59.4652 * d);
     let expect = [0.508061510, -0.861320581, 0.000598648];
     for c in 0..3 {
-        assert!((r[(0, c)] - expect[c]).abs() < 1e-9, "R[0,{c}] = {}", r[(0, c)]);
+        assert!(
+            (r[(0, c)] - expect[c]).abs() < 1e-9,
+            "R[0,{c}] = {}",
+            r[(0, c)]
+        );
     }
     assert!((r * r.transpose() - nalgebra::Matrix3::identity()).amax() < 1e-15);
     // zero-error identity of the chain: X_LT = R⁻¹(p − T)
     let t = configure(&example_config(TermId::TrackerPose)).unwrap();
-    let pose = [-0.863527, 0.194373, 0.677782, 0.0339 * d, 0.0343 * d, 59.4652 * d];
+    let pose = [
+        -0.863527,
+        0.194373,
+        0.677782,
+        0.0339 * d,
+        0.0343 * d,
+        59.4652 * d,
+    ];
     let p = Vector3::new(0.4, 0.4, 0.0);
-    let s = Signals { target_point: Some(p), ..Default::default() };
+    let s = Signals {
+        target_point: Some(p),
+        ..Default::default()
+    };
     let x = t.term.predict(&pose, &s).unwrap().value;
     let back = r * Vector3::new(x[0], x[1], x[2]) + Vector3::new(pose[0], pose[1], pose[2]);
     assert!((back - p).amax() < 1e-15);
@@ -172,10 +255,19 @@ fn turbulence_flag_fixture() {
 #[test]
 fn tracker_combined_uncertainty_figure() {
     use metrocell_physics::instrument::tracker_uncertainty::TrackerRangeBudget;
-    let b = TrackerRangeBudget { absolute_accuracy: 5e-6, repeatability: 2.5e-6, weather_station: 0.385e-6, environment_deviation: 0.0 };
+    let b = TrackerRangeBudget {
+        absolute_accuracy: 5e-6,
+        repeatability: 2.5e-6,
+        weather_station: 0.385e-6,
+        environment_deviation: 0.0,
+    };
     assert!((b.standard_per_metre() * 1e6 - 2.80).abs() < 0.005);
     assert!((b.expanded(1.0, 2.0) * 1e6 - 5.60).abs() < 0.005);
-    assert!((b.expanded(2.0, 2.0) / UM - 11.2).abs() < 0.05, "{}", b.expanded(2.0, 2.0) / UM);
+    assert!(
+        (b.expanded(2.0, 2.0) / UM - 11.2).abs() < 0.05,
+        "{}",
+        b.expanded(2.0, 2.0) / UM
+    );
 }
 
 /// Thesis P5 eq. 10: u(α) = 0.002/(2√3) = 0.000577 µm/(mm·K) (floor applies to steel α);

@@ -17,7 +17,17 @@ fn stacked_model_sums_displacements_and_stacks_jacobians() {
     ))
     .unwrap();
     let names: Vec<String> = m.param_specs().into_iter().map(|p| p.name).collect();
-    assert_eq!(names, ["positioning[x].c0", "positioning[x].c1", "squareness[xy].s", "tracker_warmup.offset", "tracker_warmup.amplitude", "tracker_warmup.time_constant"]);
+    assert_eq!(
+        names,
+        [
+            "positioning[x].c0",
+            "positioning[x].c1",
+            "squareness[xy].s",
+            "tracker_warmup.offset",
+            "tracker_warmup.amplitude",
+            "tracker_warmup.time_constant"
+        ]
+    );
     let p = m.params();
     let s = Signals::default().with_positions(Vector3::new(0.75, 0.2, 0.0));
     let (d, j) = m.displacement(Frame::Machine, &p, &s).unwrap();
@@ -25,7 +35,10 @@ fn stacked_model_sums_displacements_and_stacks_jacobians() {
     assert!((d.x - (2e-6 + 2.5e-6 - 20e-6)).abs() < 1e-15, "{}", d.x);
     assert_eq!(j.shape(), (3, 6));
     assert!((j[(0, 1)] - 0.5).abs() < 1e-15 && (j[(0, 2)] + 0.2).abs() < 1e-15);
-    assert!(j.columns(3, 3).iter().all(|v| *v == 0.0), "range terms do not enter the displacement");
+    assert!(
+        j.columns(3, 3).iter().all(|v| *v == 0.0),
+        "range terms do not enter the displacement"
+    );
     assert!(m.displacement(Frame::Machine, &p[..5], &s).is_err());
     let dup = TermModel::from_configs(&yaml("- {id: backlash, options: {axis: x}, use_defaults: true}\n- {id: backlash, options: {axis: x}, use_defaults: true}\n"));
     assert!(dup.unwrap_err().to_string().contains("backlash[x]"));

@@ -16,7 +16,12 @@ pub struct HistogramPlot {
 
 impl HistogramPlot {
     pub fn new(title: &str, x_label: &str, bins: usize) -> Self {
-        Self { title: title.into(), x_label: x_label.into(), bins: bins.max(1), samples: vec![] }
+        Self {
+            title: title.into(),
+            x_label: x_label.into(),
+            bins: bins.max(1),
+            samples: vec![],
+        }
     }
     pub fn sample(mut self, name: &str, values: Vec<f64>) -> Self {
         self.samples.push((name.into(), values));
@@ -30,10 +35,14 @@ impl HistogramPlot {
         }
         for (name, v) in &self.samples {
             if let Some(i) = v.iter().position(|x| !x.is_finite()) {
-                return Err(data(&self.title, format!("sample `{name}`, value {i} is not finite ({})", v[i])));
+                return Err(data(
+                    &self.title,
+                    format!("sample `{name}`, value {i} is not finite ({})", v[i]),
+                ));
             }
         }
-        let (lo, hi) = padded_range(self.samples.iter().flat_map(|(_, v)| v.iter().copied())).ok_or_else(|| data(&self.title, "no finite values"))?;
+        let (lo, hi) = padded_range(self.samples.iter().flat_map(|(_, v)| v.iter().copied()))
+            .ok_or_else(|| data(&self.title, "no finite values"))?;
         let width = (hi - lo) / self.bins as f64;
         let edges: Vec<f64> = (0..=self.bins).map(|k| lo + k as f64 * width).collect();
         let counts = self
@@ -65,17 +74,35 @@ impl HistogramPlot {
                 .y_label_area_size(56)
                 .build_cartesian_2d(edges[0]..edges[self.bins], 0.0..top)
                 .map_err(|e| drawing(&self.title, e))?;
-            chart.configure_mesh().x_desc(&self.x_label).y_desc("count").light_line_style(WHITE.mix(0.0)).draw().map_err(|e| drawing(&self.title, e))?;
+            chart
+                .configure_mesh()
+                .x_desc(&self.x_label)
+                .y_desc("count")
+                .light_line_style(WHITE.mix(0.0))
+                .draw()
+                .map_err(|e| drawing(&self.title, e))?;
             for (i, ((name, _), c)) in self.samples.iter().zip(&counts).enumerate() {
                 let colour = palette(i);
-                let bars = c.iter().enumerate().filter(|(_, n)| **n > 0).map(|(k, n)| Rectangle::new([(edges[k], 0.0), (edges[k + 1], *n as f64)], colour.mix(0.45).filled()));
+                let bars = c.iter().enumerate().filter(|(_, n)| **n > 0).map(|(k, n)| {
+                    Rectangle::new(
+                        [(edges[k], 0.0), (edges[k + 1], *n as f64)],
+                        colour.mix(0.45).filled(),
+                    )
+                });
                 chart
                     .draw_series(bars)
                     .map_err(|e| drawing(&self.title, e))?
                     .label(format!("{name} (n = {})", c.iter().sum::<usize>()))
-                    .legend(move |(x, y)| Rectangle::new([(x, y - 5), (x + 14, y + 5)], colour.mix(0.45).filled()));
+                    .legend(move |(x, y)| {
+                        Rectangle::new([(x, y - 5), (x + 14, y + 5)], colour.mix(0.45).filled())
+                    });
             }
-            chart.configure_series_labels().background_style(WHITE.mix(0.85)).border_style(BLACK.mix(0.4)).draw().map_err(|e| drawing(&self.title, e))?;
+            chart
+                .configure_series_labels()
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK.mix(0.4))
+                .draw()
+                .map_err(|e| drawing(&self.title, e))?;
             root.present().map_err(|e| drawing(&self.title, e))?;
         }
         Ok(out)

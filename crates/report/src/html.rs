@@ -14,7 +14,11 @@ pub struct Table {
 
 impl Table {
     pub fn new(headers: &[&str]) -> Self {
-        Self { caption: None, headers: headers.iter().map(|h| h.to_string()).collect(), rows: vec![] }
+        Self {
+            caption: None,
+            headers: headers.iter().map(|h| h.to_string()).collect(),
+            rows: vec![],
+        }
     }
     pub fn caption(mut self, c: &str) -> Self {
         self.caption = Some(c.into());
@@ -68,7 +72,11 @@ impl Section {
     }
     /// A figure; `name` becomes its file name (`figures/NAME.svg`), so it must be unique in the report.
     pub fn figure(&mut self, name: &str, caption: &str, svg: String) -> &mut Self {
-        self.blocks.push(Block::Figure(Figure { name: name.into(), caption: caption.into(), svg }));
+        self.blocks.push(Block::Figure(Figure {
+            name: name.into(),
+            caption: caption.into(),
+            svg,
+        }));
         self
     }
 }
@@ -108,21 +116,30 @@ figure{margin:1em 0}figcaption{font-style:italic}pre{background:#f6f6f6;padding:
 
 impl Report {
     pub fn new(title: &str) -> Self {
-        Self { title: title.into(), sections: vec![] }
+        Self {
+            title: title.into(),
+            sections: vec![],
+        }
     }
 
     /// Start a section and return it to fill.
     pub fn section(&mut self, heading: &str) -> &mut Section {
-        self.sections.push(Section { heading: heading.into(), blocks: vec![] });
+        self.sections.push(Section {
+            heading: heading.into(),
+            blocks: vec![],
+        });
         self.sections.last_mut().expect("just pushed")
     }
 
     /// Every figure, in order.
     pub fn figures(&self) -> impl Iterator<Item = &Figure> {
-        self.sections.iter().flat_map(|s| s.blocks.iter()).filter_map(|b| match b {
-            Block::Figure(f) => Some(f),
-            _ => None,
-        })
+        self.sections
+            .iter()
+            .flat_map(|s| s.blocks.iter())
+            .filter_map(|b| match b {
+                Block::Figure(f) => Some(f),
+                _ => None,
+            })
     }
 
     /// The page as HTML (figures inline, so the one file is the whole report).
@@ -147,7 +164,11 @@ impl Report {
                         for r in &t.rows {
                             h += "<tr>";
                             for c in r {
-                                h += &if numeric(c) { format!("<td class=\"n\">{}</td>", escape(c)) } else { format!("<td>{}</td>", escape(c)) };
+                                h += &if numeric(c) {
+                                    format!("<td class=\"n\">{}</td>", escape(c))
+                                } else {
+                                    format!("<td>{}</td>", escape(c))
+                                };
                             }
                             h += "</tr>\n";
                         }
@@ -156,7 +177,11 @@ impl Report {
                     Block::Figure(f) => {
                         // the SVG document inline, without its XML declaration
                         let svg = f.svg.trim_start();
-                        let svg = if svg.starts_with("<?xml") { svg.split_once("?>").map(|x| x.1).unwrap_or(svg) } else { svg };
+                        let svg = if svg.starts_with("<?xml") {
+                            svg.split_once("?>").map(|x| x.1).unwrap_or(svg)
+                        } else {
+                            svg
+                        };
                         h += &format!("<figure id=\"{}\">\n{}\n<figcaption>{} (<a href=\"figures/{}.svg\">SVG</a>)</figcaption>\n</figure>\n", escape(&f.name), svg.trim(), escape(&f.caption), escape(&f.name));
                     }
                 }

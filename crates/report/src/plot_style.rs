@@ -12,11 +12,17 @@ pub enum PlotError {
 }
 
 pub(crate) fn drawing(plot: &str, e: impl std::fmt::Display) -> PlotError {
-    PlotError::Drawing { plot: plot.into(), reason: e.to_string() }
+    PlotError::Drawing {
+        plot: plot.into(),
+        reason: e.to_string(),
+    }
 }
 
 pub(crate) fn data(plot: &str, reason: impl Into<String>) -> PlotError {
-    PlotError::Data { plot: plot.into(), reason: reason.into() }
+    PlotError::Data {
+        plot: plot.into(),
+        reason: reason.into(),
+    }
 }
 
 /// Canvas size in SVG user units (px).
@@ -57,8 +63,22 @@ pub(crate) fn padded_range(values: impl Iterator<Item = f64>) -> Option<(f64, f6
 
 /// Viridis (matplotlib's, sampled at nine stops) at t ∈ [0, 1], linearly interpolated.
 pub(crate) fn viridis(t: f64) -> RGBColor {
-    const STOPS: [(u8, u8, u8); 9] = [(68, 1, 84), (71, 44, 122), (59, 81, 139), (44, 113, 142), (33, 144, 141), (39, 173, 129), (92, 200, 99), (170, 220, 50), (253, 231, 37)];
-    let t = if t.is_finite() { t.clamp(0.0, 1.0) } else { 0.0 };
+    const STOPS: [(u8, u8, u8); 9] = [
+        (68, 1, 84),
+        (71, 44, 122),
+        (59, 81, 139),
+        (44, 113, 142),
+        (33, 144, 141),
+        (39, 173, 129),
+        (92, 200, 99),
+        (170, 220, 50),
+        (253, 231, 37),
+    ];
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     let x = t * (STOPS.len() - 1) as f64;
     let i = (x.floor() as usize).min(STOPS.len() - 2);
     let f = x - i as f64;

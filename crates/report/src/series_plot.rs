@@ -17,7 +17,12 @@ pub struct Series {
 
 impl Series {
     pub fn new(name: &str, points: Vec<(f64, f64)>) -> Self {
-        Self { name: name.into(), points, band: None, markers: false }
+        Self {
+            name: name.into(),
+            points,
+            band: None,
+            markers: false,
+        }
     }
     /// The band's lower and upper value at each point (same length as the points).
     pub fn band(mut self, band: Vec<(f64, f64)>) -> Self {
@@ -42,7 +47,12 @@ pub struct SeriesPlot {
 
 impl SeriesPlot {
     pub fn new(title: &str, x_label: &str, y_label: &str) -> Self {
-        Self { title: title.into(), x_label: x_label.into(), y_label: y_label.into(), series: vec![] }
+        Self {
+            title: title.into(),
+            x_label: x_label.into(),
+            y_label: y_label.into(),
+            series: vec![],
+        }
     }
     pub fn series(mut self, s: Series) -> Self {
         self.series.push(s);
@@ -54,15 +64,42 @@ impl SeriesPlot {
             return Err(data(&self.title, "no points to draw"));
         }
         for s in &self.series {
-            if let Some(i) = s.points.iter().position(|(x, y)| !(x.is_finite() && y.is_finite())) {
-                return Err(data(&self.title, format!("series `{}`, point {i}: {:?} is not finite", s.name, s.points[i])));
+            if let Some(i) = s
+                .points
+                .iter()
+                .position(|(x, y)| !(x.is_finite() && y.is_finite()))
+            {
+                return Err(data(
+                    &self.title,
+                    format!(
+                        "series `{}`, point {i}: {:?} is not finite",
+                        s.name, s.points[i]
+                    ),
+                ));
             }
             if let Some(b) = &s.band {
                 if b.len() != s.points.len() {
-                    return Err(data(&self.title, format!("series `{}`: {} band values for {} points", s.name, b.len(), s.points.len())));
+                    return Err(data(
+                        &self.title,
+                        format!(
+                            "series `{}`: {} band values for {} points",
+                            s.name,
+                            b.len(),
+                            s.points.len()
+                        ),
+                    ));
                 }
-                if let Some(i) = b.iter().position(|(lo, hi)| !(lo.is_finite() && hi.is_finite() && lo <= hi)) {
-                    return Err(data(&self.title, format!("series `{}`, band {i}: {:?} is not a finite [lower, upper]", s.name, b[i])));
+                if let Some(i) = b
+                    .iter()
+                    .position(|(lo, hi)| !(lo.is_finite() && hi.is_finite() && lo <= hi))
+                {
+                    return Err(data(
+                        &self.title,
+                        format!(
+                            "series `{}`, band {i}: {:?} is not a finite [lower, upper]",
+                            s.name, b[i]
+                        ),
+                    ));
                 }
             }
         }
@@ -72,8 +109,16 @@ impl SeriesPlot {
     /// The plot as an SVG document.
     pub fn svg(&self) -> Result<String, PlotError> {
         self.check()?;
-        let xs = self.series.iter().flat_map(|s| s.points.iter().map(|p| p.0));
-        let ys = self.series.iter().flat_map(|s| s.points.iter().map(|p| p.1).chain(s.band.iter().flatten().flat_map(|(a, b)| [*a, *b])));
+        let xs = self
+            .series
+            .iter()
+            .flat_map(|s| s.points.iter().map(|p| p.0));
+        let ys = self.series.iter().flat_map(|s| {
+            s.points
+                .iter()
+                .map(|p| p.1)
+                .chain(s.band.iter().flatten().flat_map(|(a, b)| [*a, *b]))
+        });
         let (x0, x1) = padded_range(xs).ok_or_else(|| data(&self.title, "no finite x"))?;
         let (y0, y1) = padded_range(ys).ok_or_else(|| data(&self.title, "no finite y"))?;
         let mut out = String::new();
@@ -87,24 +132,60 @@ impl SeriesPlot {
                 .y_label_area_size(64)
                 .build_cartesian_2d(x0..x1, y0..y1)
                 .map_err(|e| drawing(&self.title, e))?;
-            chart.configure_mesh().x_desc(&self.x_label).y_desc(&self.y_label).light_line_style(WHITE.mix(0.0)).draw().map_err(|e| drawing(&self.title, e))?;
+            chart
+                .configure_mesh()
+                .x_desc(&self.x_label)
+                .y_desc(&self.y_label)
+                .light_line_style(WHITE.mix(0.0))
+                .draw()
+                .map_err(|e| drawing(&self.title, e))?;
             for (i, s) in self.series.iter().enumerate() {
                 let colour = palette(i);
                 if let Some(band) = &s.band {
                     // the band as one polygon: upper edge forwards, lower edge back
-                    let mut outline: Vec<(f64, f64)> = s.points.iter().zip(band).map(|((x, _), (_, hi))| (*x, *hi)).collect();
-                    outline.extend(s.points.iter().zip(band).rev().map(|((x, _), (lo, _))| (*x, *lo)));
-                    chart.draw_series(std::iter::once(Polygon::new(outline, colour.mix(0.2).filled()))).map_err(|e| drawing(&self.title, e))?;
+                    let mut outline: Vec<(f64, f64)> = s
+                        .points
+                        .iter()
+                        .zip(band)
+                        .map(|((x, _), (_, hi))| (*x, *hi))
+                        .collect();
+                    outline.extend(
+                        s.points
+                            .iter()
+                            .zip(band)
+                            .rev()
+                            .map(|((x, _), (lo, _))| (*x, *lo)),
+                    );
+                    chart
+                        .draw_series(std::iter::once(Polygon::new(
+                            outline,
+                            colour.mix(0.2).filled(),
+                        )))
+                        .map_err(|e| drawing(&self.title, e))?;
                 }
                 let drawn = if s.markers {
-                    chart.draw_series(s.points.iter().map(|p| Circle::new(*p, 3, colour.filled()))).map_err(|e| drawing(&self.title, e))?
+                    chart
+                        .draw_series(s.points.iter().map(|p| Circle::new(*p, 3, colour.filled())))
+                        .map_err(|e| drawing(&self.title, e))?
                 } else {
-                    chart.draw_series(LineSeries::new(s.points.iter().copied(), colour.stroke_width(2))).map_err(|e| drawing(&self.title, e))?
+                    chart
+                        .draw_series(LineSeries::new(
+                            s.points.iter().copied(),
+                            colour.stroke_width(2),
+                        ))
+                        .map_err(|e| drawing(&self.title, e))?
                 };
-                drawn.label(&s.name).legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2)));
+                drawn.label(&s.name).legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
+                });
             }
             if self.series.len() > 1 || self.series.iter().any(|s| s.band.is_some()) {
-                chart.configure_series_labels().background_style(WHITE.mix(0.85)).border_style(BLACK.mix(0.4)).draw().map_err(|e| drawing(&self.title, e))?;
+                chart
+                    .configure_series_labels()
+                    .background_style(WHITE.mix(0.85))
+                    .border_style(BLACK.mix(0.4))
+                    .draw()
+                    .map_err(|e| drawing(&self.title, e))?;
             }
             root.present().map_err(|e| drawing(&self.title, e))?;
         }

@@ -58,7 +58,11 @@ pub fn encode(registry: &Registry, type_name: &str, value: &Value) -> Result<Vec
         path: String::new(),
         message: e.to_string(),
     })?;
-    let mut enc = Encoder { registry, buf: CDR_LE_HEADER.to_vec(), type_name: spec.type_name.to_string() };
+    let mut enc = Encoder {
+        registry,
+        buf: CDR_LE_HEADER.to_vec(),
+        type_name: spec.type_name.to_string(),
+    };
     enc.message(spec, value, "")?;
     Ok(enc.buf)
 }
@@ -71,7 +75,11 @@ struct Encoder<'a> {
 
 impl Encoder<'_> {
     fn err(&self, path: &str, message: impl Into<String>) -> EncodeError {
-        EncodeError { type_name: self.type_name.clone(), path: path.to_string(), message: message.into() }
+        EncodeError {
+            type_name: self.type_name.clone(),
+            path: path.to_string(),
+            message: message.into(),
+        }
     }
 
     fn align(&mut self, n: usize) {
@@ -80,14 +88,31 @@ impl Encoder<'_> {
         }
     }
 
-    fn message(&mut self, spec: &MessageSpec, value: &Value, path: &str) -> Result<(), EncodeError> {
+    fn message(
+        &mut self,
+        spec: &MessageSpec,
+        value: &Value,
+        path: &str,
+    ) -> Result<(), EncodeError> {
         let sv = match value {
             Value::Struct(s) => s,
-            other => return Err(self.err(path, format!("expected a {} message, got a {}", spec.type_name, other.kind()))),
+            other => {
+                return Err(self.err(
+                    path,
+                    format!(
+                        "expected a {} message, got a {}",
+                        spec.type_name,
+                        other.kind()
+                    ),
+                ))
+            }
         };
         for (name, _) in &sv.fields {
             if spec.field(name).is_none() {
-                return Err(self.err(&join(path, name), format!("{} has no field {name}", spec.type_name)));
+                return Err(self.err(
+                    &join(path, name),
+                    format!("{} has no field {name}", spec.type_name),
+                ));
             }
         }
         if spec.fields.is_empty() {
@@ -96,7 +121,9 @@ impl Encoder<'_> {
         }
         for f in &spec.fields {
             let fpath = join(path, &f.name);
-            let v = sv.get(&f.name).ok_or_else(|| self.err(&fpath, "missing field"))?;
+            let v = sv
+                .get(&f.name)
+                .ok_or_else(|| self.err(&fpath, "missing field"))?;
             self.field(&f.ty, v, &fpath)?;
         }
         Ok(())
@@ -108,19 +135,31 @@ impl Encoder<'_> {
         }
         let items = match v {
             Value::Array(a) => a,
-            other => return Err(self.err(path, format!("expected an array ({ty}), got a {}", other.kind()))),
+            other => {
+                return Err(self.err(
+                    path,
+                    format!("expected an array ({ty}), got a {}", other.kind()),
+                ))
+            }
         };
         match ty.array {
             ArrayKind::Fixed(n) if items.len() != n => {
-                return Err(self.err(path, format!("{ty} needs exactly {n} elements, got {}", items.len())))
+                return Err(self.err(
+                    path,
+                    format!("{ty} needs exactly {n} elements, got {}", items.len()),
+                ))
             }
             ArrayKind::Bounded(n) if items.len() > n => {
-                return Err(self.err(path, format!("{ty} allows at most {n} elements, got {}", items.len())))
+                return Err(self.err(
+                    path,
+                    format!("{ty} allows at most {n} elements, got {}", items.len()),
+                ))
             }
             ArrayKind::Fixed(_) => {}
             _ => {
                 self.align(4);
-                let n = u32::try_from(items.len()).map_err(|_| self.err(path, "sequence longer than 2^32-1"))?;
+                let n = u32::try_from(items.len())
+                    .map_err(|_| self.err(path, "sequence longer than 2^32-1"))?;
                 self.buf.extend_from_slice(&n.to_le_bytes());
             }
         }
@@ -134,35 +173,53 @@ impl Encoder<'_> {
         match base {
             BaseType::Primitive(p) => self.primitive(*p, v, path),
             BaseType::String { bound } => {
-                let s = v.as_str().ok_or_else(|| self.err(path, format!("expected a string, got a {}", v.kind())))?;
+                let s = v.as_str().ok_or_else(|| {
+                    self.err(path, format!("expected a string, got a {}", v.kind()))
+                })?;
                 if let Some(b) = bound {
                     if s.len() > *b {
-                        return Err(self.err(path, format!("string of {} bytes exceeds the bound string<={b}", s.len())));
+                        return Err(self.err(
+                            path,
+                            format!("string of {} bytes exceeds the bound string<={b}", s.len()),
+                        ));
                     }
                 }
                 self.align(4);
-                self.buf.extend_from_slice(&((s.len() + 1) as u32).to_le_bytes());
+                self.buf
+                    .extend_from_slice(&((s.len() + 1) as u32).to_le_bytes());
                 self.buf.extend_from_slice(s.as_bytes());
                 self.buf.push(0);
                 Ok(())
             }
             BaseType::WString { bound } => {
-                let s = v.as_str().ok_or_else(|| self.err(path, format!("expected a string, got a {}", v.kind())))?;
+                let s = v.as_str().ok_or_else(|| {
+                    self.err(path, format!("expected a string, got a {}", v.kind()))
+                })?;
                 let units: Vec<u16> = s.encode_utf16().collect();
                 if let Some(b) = bound {
                     if units.len() > *b {
-                        return Err(self.err(path, format!("wstring of {} code units exceeds the bound wstring<={b}", units.len())));
+                        return Err(self.err(
+                            path,
+                            format!(
+                                "wstring of {} code units exceeds the bound wstring<={b}",
+                                units.len()
+                            ),
+                        ));
                     }
                 }
                 self.align(4);
-                self.buf.extend_from_slice(&(units.len() as u32).to_le_bytes());
+                self.buf
+                    .extend_from_slice(&(units.len() as u32).to_le_bytes());
                 for u in units {
                     self.buf.extend_from_slice(&u.to_le_bytes());
                 }
                 Ok(())
             }
             BaseType::Message(t) => {
-                let spec = self.registry.spec_by_name(t).map_err(|e| self.err(path, e.to_string()))?;
+                let spec = self
+                    .registry
+                    .spec_by_name(t)
+                    .map_err(|e| self.err(path, e.to_string()))?;
                 self.message(spec, v, path)
             }
         }
@@ -170,7 +227,12 @@ impl Encoder<'_> {
 
     fn primitive(&mut self, p: Primitive, v: &Value, path: &str) -> Result<(), EncodeError> {
         use Primitive::*;
-        let bad = |s: &Self| s.err(path, format!("expected {}, got a {} ({v:?})", p.name(), v.kind()));
+        let bad = |s: &Self| {
+            s.err(
+                path,
+                format!("expected {}, got a {} ({v:?})", p.name(), v.kind()),
+            )
+        };
         self.align(p.size());
         if p == Bool {
             match v {
@@ -199,7 +261,10 @@ impl Encoder<'_> {
         };
         let (lo, hi) = p.int_range().expect("integer primitive");
         if i < lo || i > hi {
-            return Err(self.err(path, format!("{i} is out of range for {} ({lo}..={hi})", p.name())));
+            return Err(self.err(
+                path,
+                format!("{i} is out of range for {} ({lo}..={hi})", p.name()),
+            ));
         }
         match p {
             Int8 => self.buf.extend_from_slice(&(i as i8).to_le_bytes()),
@@ -231,7 +296,10 @@ pub fn decode(registry: &Registry, type_name: &str, bytes: &[u8]) -> Result<Valu
             type_name: tn,
             path: String::new(),
             offset: 0,
-            message: format!("{} bytes is too short for the 4-byte encapsulation header", bytes.len()),
+            message: format!(
+                "{} bytes is too short for the 4-byte encapsulation header",
+                bytes.len()
+            ),
         });
     }
     let big_endian = match [bytes[0], bytes[1]] {
@@ -243,13 +311,19 @@ pub fn decode(registry: &Registry, type_name: &str, bytes: &[u8]) -> Result<Valu
                 path: String::new(),
                 offset: 0,
                 message: format!(
-                    "unsupported encapsulation {:02x} {:02x} (expected 00 01 CDR_LE or 00 00 CDR_BE)",
-                    other[0], other[1]
-                ),
+                "unsupported encapsulation {:02x} {:02x} (expected 00 01 CDR_LE or 00 00 CDR_BE)",
+                other[0], other[1]
+            ),
             })
         }
     };
-    let mut dec = Decoder { registry, data: &bytes[4..], pos: 0, big_endian, type_name: tn };
+    let mut dec = Decoder {
+        registry,
+        data: &bytes[4..],
+        pos: 0,
+        big_endian,
+        type_name: tn,
+    };
     dec.message(spec, "")
 }
 
@@ -263,7 +337,12 @@ struct Decoder<'a> {
 
 impl<'a> Decoder<'a> {
     fn err(&self, path: &str, message: impl Into<String>) -> DecodeError {
-        DecodeError { type_name: self.type_name.clone(), path: path.to_string(), offset: self.pos + 4, message: message.into() }
+        DecodeError {
+            type_name: self.type_name.clone(),
+            path: path.to_string(),
+            offset: self.pos + 4,
+            message: message.into(),
+        }
     }
 
     fn take(&mut self, n: usize, path: &str) -> Result<&'a [u8], DecodeError> {
@@ -305,7 +384,10 @@ impl<'a> Decoder<'a> {
             let v = self.field(&f.ty, &fpath)?;
             fields.push((f.name.clone(), v));
         }
-        Ok(Value::Struct(StructValue { type_name: spec.type_name.to_string(), fields }))
+        Ok(Value::Struct(StructValue {
+            type_name: spec.type_name.to_string(),
+            fields,
+        }))
     }
 
     fn field(&mut self, ty: &FieldType, path: &str) -> Result<Value, DecodeError> {
@@ -318,14 +400,19 @@ impl<'a> Decoder<'a> {
                 if let ArrayKind::Bounded(b) = ty.array {
                     if n > b {
                         self.pos = start;
-                        return Err(self.err(path, format!("sequence length {n} exceeds the bound {ty}")));
+                        return Err(
+                            self.err(path, format!("sequence length {n} exceeds the bound {ty}"))
+                        );
                     }
                 }
                 // Every element takes at least one byte: reject impossible lengths before allocating.
                 let left = self.data.len().saturating_sub(self.pos);
                 if n > left {
                     self.pos = start;
-                    return Err(self.err(path, format!("truncated: sequence length {n} but only {left} bytes left")));
+                    return Err(self.err(
+                        path,
+                        format!("truncated: sequence length {n} but only {left} bytes left"),
+                    ));
                 }
                 n
             }
@@ -355,7 +442,13 @@ impl<'a> Decoder<'a> {
                 if let Some(b) = bound {
                     if body.len() > *b {
                         self.pos = start;
-                        return Err(self.err(path, format!("string of {} bytes exceeds the bound string<={b}", body.len())));
+                        return Err(self.err(
+                            path,
+                            format!(
+                                "string of {} bytes exceeds the bound string<={b}",
+                                body.len()
+                            ),
+                        ));
                     }
                 }
                 match std::str::from_utf8(body) {
@@ -372,7 +465,13 @@ impl<'a> Decoder<'a> {
                 let raw = self.take(n.saturating_mul(2), path)?;
                 let units: Vec<u16> = raw
                     .chunks_exact(2)
-                    .map(|c| if self.big_endian { u16::from_be_bytes([c[0], c[1]]) } else { u16::from_le_bytes([c[0], c[1]]) })
+                    .map(|c| {
+                        if self.big_endian {
+                            u16::from_be_bytes([c[0], c[1]])
+                        } else {
+                            u16::from_le_bytes([c[0], c[1]])
+                        }
+                    })
                     .collect();
                 String::from_utf16(&units).map(Value::String).map_err(|_| {
                     self.pos = start;
@@ -380,7 +479,10 @@ impl<'a> Decoder<'a> {
                 })
             }
             BaseType::Message(t) => {
-                let spec = self.registry.spec_by_name(t).map_err(|e| self.err(path, e.to_string()))?;
+                let spec = self
+                    .registry
+                    .spec_by_name(t)
+                    .map_err(|e| self.err(path, e.to_string()))?;
                 self.message(spec, path)
             }
         }
@@ -409,12 +511,18 @@ impl<'a> Decoder<'a> {
 
 /// The default value of a type: `.msg` defaults where given, otherwise zero, `false`, empty
 /// strings and sequences, fixed arrays filled with element defaults, nested defaults.
-pub fn default_value(registry: &Registry, type_name: &str) -> Result<Value, crate::registry::RegistryError> {
+pub fn default_value(
+    registry: &Registry,
+    type_name: &str,
+) -> Result<Value, crate::registry::RegistryError> {
     let spec = registry.spec(type_name)?;
     default_message(registry, spec)
 }
 
-pub(crate) fn default_message(registry: &Registry, spec: &MessageSpec) -> Result<Value, crate::registry::RegistryError> {
+pub(crate) fn default_message(
+    registry: &Registry,
+    spec: &MessageSpec,
+) -> Result<Value, crate::registry::RegistryError> {
     let mut fields = Vec::with_capacity(spec.fields.len());
     for f in &spec.fields {
         let v = match &f.default {
@@ -423,10 +531,16 @@ pub(crate) fn default_message(registry: &Registry, spec: &MessageSpec) -> Result
         };
         fields.push((f.name.clone(), v));
     }
-    Ok(Value::Struct(StructValue { type_name: spec.type_name.to_string(), fields }))
+    Ok(Value::Struct(StructValue {
+        type_name: spec.type_name.to_string(),
+        fields,
+    }))
 }
 
-pub(crate) fn default_field(registry: &Registry, ty: &FieldType) -> Result<Value, crate::registry::RegistryError> {
+pub(crate) fn default_field(
+    registry: &Registry,
+    ty: &FieldType,
+) -> Result<Value, crate::registry::RegistryError> {
     Ok(match ty.array {
         ArrayKind::Single => default_element(registry, &ty.base)?,
         ArrayKind::Fixed(n) => {
@@ -437,7 +551,10 @@ pub(crate) fn default_field(registry: &Registry, ty: &FieldType) -> Result<Value
     })
 }
 
-pub(crate) fn default_element(registry: &Registry, base: &BaseType) -> Result<Value, crate::registry::RegistryError> {
+pub(crate) fn default_element(
+    registry: &Registry,
+    base: &BaseType,
+) -> Result<Value, crate::registry::RegistryError> {
     Ok(match base {
         BaseType::Primitive(p) if *p == Primitive::Bool => Value::Bool(false),
         BaseType::Primitive(p) if p.is_float() => Value::Float(0.0),

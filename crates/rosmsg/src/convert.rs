@@ -30,7 +30,11 @@ fn join(path: &str, part: &str) -> String {
 
 fn describe(v: &serde_json::Value) -> String {
     let s = v.to_string();
-    let s = if s.len() > 60 { format!("{}...", &s[..s.floor_char_boundary_compat(57)]) } else { s };
+    let s = if s.len() > 60 {
+        format!("{}...", &s[..s.floor_char_boundary_compat(57)])
+    } else {
+        s
+    };
     let kind = match v {
         serde_json::Value::Null => "null",
         serde_json::Value::Bool(_) => "bool",
@@ -56,15 +60,28 @@ impl FloorCharBoundary for str {
 
 /// Converts a JSON value to a message [`Value`] of `type_name`. `null` or a missing field
 /// means the field's default; an empty input (`null`) gives the default message.
-pub fn from_json(registry: &Registry, type_name: &str, json: &serde_json::Value) -> Result<Value, ConvertError> {
-    let spec = registry.spec(type_name).map_err(|e| reg_err(type_name, "", e))?;
-    let mut c = Converter { registry, type_name: spec.type_name.to_string() };
+pub fn from_json(
+    registry: &Registry,
+    type_name: &str,
+    json: &serde_json::Value,
+) -> Result<Value, ConvertError> {
+    let spec = registry
+        .spec(type_name)
+        .map_err(|e| reg_err(type_name, "", e))?;
+    let mut c = Converter {
+        registry,
+        type_name: spec.type_name.to_string(),
+    };
     c.message(spec, json, "")
 }
 
 /// Converts a YAML value (e.g. parsed from `ros2 topic pub` style text
 /// `{header: {frame_id: a}, point: {x: 1.0}}`) to a message [`Value`] of `type_name`.
-pub fn from_yaml(registry: &Registry, type_name: &str, yaml: &serde_yaml::Value) -> Result<Value, ConvertError> {
+pub fn from_yaml(
+    registry: &Registry,
+    type_name: &str,
+    yaml: &serde_yaml::Value,
+) -> Result<Value, ConvertError> {
     let json = serde_json::to_value(yaml).map_err(|e| ConvertError {
         type_name: type_name.to_string(),
         path: String::new(),
@@ -75,7 +92,11 @@ pub fn from_yaml(registry: &Registry, type_name: &str, yaml: &serde_yaml::Value)
 }
 
 /// Parses YAML (or JSON, which is YAML) text and converts it; empty text gives the default message.
-pub fn from_yaml_str(registry: &Registry, type_name: &str, text: &str) -> Result<Value, ConvertError> {
+pub fn from_yaml_str(
+    registry: &Registry,
+    type_name: &str,
+    text: &str,
+) -> Result<Value, ConvertError> {
     let yaml: serde_yaml::Value = if text.trim().is_empty() {
         serde_yaml::Value::Null
     } else {
@@ -90,7 +111,12 @@ pub fn from_yaml_str(registry: &Registry, type_name: &str, text: &str) -> Result
 }
 
 fn reg_err(type_name: &str, path: &str, e: RegistryError) -> ConvertError {
-    ConvertError { type_name: type_name.to_string(), path: path.to_string(), expected: "a known message type".into(), given: e.to_string() }
+    ConvertError {
+        type_name: type_name.to_string(),
+        path: path.to_string(),
+        expected: "a known message type".into(),
+        given: e.to_string(),
+    }
 }
 
 struct Converter<'a> {
@@ -99,17 +125,39 @@ struct Converter<'a> {
 }
 
 impl Converter<'_> {
-    fn err(&self, path: &str, expected: impl Into<String>, given: &serde_json::Value) -> ConvertError {
-        ConvertError { type_name: self.type_name.clone(), path: path.to_string(), expected: expected.into(), given: describe(given) }
+    fn err(
+        &self,
+        path: &str,
+        expected: impl Into<String>,
+        given: &serde_json::Value,
+    ) -> ConvertError {
+        ConvertError {
+            type_name: self.type_name.clone(),
+            path: path.to_string(),
+            expected: expected.into(),
+            given: describe(given),
+        }
     }
 
-    fn message(&mut self, spec: &MessageSpec, json: &serde_json::Value, path: &str) -> Result<Value, ConvertError> {
+    fn message(
+        &mut self,
+        spec: &MessageSpec,
+        json: &serde_json::Value,
+        path: &str,
+    ) -> Result<Value, ConvertError> {
         let obj = match json {
             serde_json::Value::Null => {
-                return default_message(self.registry, spec).map_err(|e| reg_err(&self.type_name, path, e))
+                return default_message(self.registry, spec)
+                    .map_err(|e| reg_err(&self.type_name, path, e))
             }
             serde_json::Value::Object(o) => o,
-            other => return Err(self.err(path, format!("a mapping of {} fields", spec.type_name), other)),
+            other => {
+                return Err(self.err(
+                    path,
+                    format!("a mapping of {} fields", spec.type_name),
+                    other,
+                ))
+            }
         };
         for key in obj.keys() {
             if spec.field(key).is_none() {
@@ -117,7 +165,11 @@ impl Converter<'_> {
                 return Err(ConvertError {
                     type_name: self.type_name.clone(),
                     path: join(path, key),
-                    expected: format!("one of the fields of {}: {}", spec.type_name, names.join(", ")),
+                    expected: format!(
+                        "one of the fields of {}: {}",
+                        spec.type_name,
+                        names.join(", ")
+                    ),
                     given: format!("unknown field {key:?}"),
                 });
             }
@@ -128,16 +180,25 @@ impl Converter<'_> {
             let v = match obj.get(&f.name) {
                 None | Some(serde_json::Value::Null) => match &f.default {
                     Some(d) => d.clone(),
-                    None => default_field(self.registry, &f.ty).map_err(|e| reg_err(&self.type_name, &fpath, e))?,
+                    None => default_field(self.registry, &f.ty)
+                        .map_err(|e| reg_err(&self.type_name, &fpath, e))?,
                 },
                 Some(j) => self.field(&f.ty, j, &fpath)?,
             };
             fields.push((f.name.clone(), v));
         }
-        Ok(Value::Struct(StructValue { type_name: spec.type_name.to_string(), fields }))
+        Ok(Value::Struct(StructValue {
+            type_name: spec.type_name.to_string(),
+            fields,
+        }))
     }
 
-    fn field(&mut self, ty: &FieldType, json: &serde_json::Value, path: &str) -> Result<Value, ConvertError> {
+    fn field(
+        &mut self,
+        ty: &FieldType,
+        json: &serde_json::Value,
+        path: &str,
+    ) -> Result<Value, ConvertError> {
         if ty.array == ArrayKind::Single {
             return self.element(&ty.base, json, path);
         }
@@ -160,7 +221,8 @@ impl Converter<'_> {
             .map(|(i, j)| {
                 let p = join(path, &i.to_string());
                 if j.is_null() {
-                    default_element(self.registry, &ty.base).map_err(|e| reg_err(&self.type_name, &p, e))
+                    default_element(self.registry, &ty.base)
+                        .map_err(|e| reg_err(&self.type_name, &p, e))
                 } else {
                     self.element(&ty.base, j, &p)
                 }
@@ -169,39 +231,71 @@ impl Converter<'_> {
             .map(Value::Array)
     }
 
-    fn element(&mut self, base: &BaseType, json: &serde_json::Value, path: &str) -> Result<Value, ConvertError> {
+    fn element(
+        &mut self,
+        base: &BaseType,
+        json: &serde_json::Value,
+        path: &str,
+    ) -> Result<Value, ConvertError> {
         match base {
             BaseType::Primitive(p) => self.primitive(*p, json, path),
             BaseType::String { bound } | BaseType::WString { bound } => {
-                let s = json.as_str().ok_or_else(|| self.err(path, format!("a string ({base})"), json))?;
-                let len = if matches!(base, BaseType::WString { .. }) { s.encode_utf16().count() } else { s.len() };
+                let s = json
+                    .as_str()
+                    .ok_or_else(|| self.err(path, format!("a string ({base})"), json))?;
+                let len = if matches!(base, BaseType::WString { .. }) {
+                    s.encode_utf16().count()
+                } else {
+                    s.len()
+                };
                 if let Some(b) = bound {
                     if len > *b {
-                        return Err(self.err(path, format!("a string of at most {b} bytes ({base})"), json));
+                        return Err(self.err(
+                            path,
+                            format!("a string of at most {b} bytes ({base})"),
+                            json,
+                        ));
                     }
                 }
                 Ok(Value::String(s.to_string()))
             }
             BaseType::Message(t) => {
-                let spec = self.registry.spec_by_name(t).map_err(|e| reg_err(&self.type_name, path, e))?;
+                let spec = self
+                    .registry
+                    .spec_by_name(t)
+                    .map_err(|e| reg_err(&self.type_name, path, e))?;
                 self.message(spec, json, path)
             }
         }
     }
 
-    fn primitive(&mut self, p: Primitive, json: &serde_json::Value, path: &str) -> Result<Value, ConvertError> {
+    fn primitive(
+        &mut self,
+        p: Primitive,
+        json: &serde_json::Value,
+        path: &str,
+    ) -> Result<Value, ConvertError> {
         if p == Primitive::Bool {
-            return json.as_bool().map(Value::Bool).ok_or_else(|| self.err(path, "a bool (true or false)", json));
+            return json
+                .as_bool()
+                .map(Value::Bool)
+                .ok_or_else(|| self.err(path, "a bool (true or false)", json));
         }
         if p.is_float() {
             if let Some(f) = json.as_f64() {
                 // Round float32 fields now so that a decoded message compares equal to its input.
-                return Ok(Value::Float(if p == Primitive::Float32 { f as f32 as f64 } else { f }));
+                return Ok(Value::Float(if p == Primitive::Float32 {
+                    f as f32 as f64
+                } else {
+                    f
+                }));
             }
             if let Some(s) = json.as_str() {
                 match s.to_ascii_lowercase().as_str() {
                     "nan" | ".nan" => return Ok(Value::Float(f64::NAN)),
-                    "inf" | ".inf" | "+inf" | "+.inf" | "infinity" => return Ok(Value::Float(f64::INFINITY)),
+                    "inf" | ".inf" | "+inf" | "+.inf" | "infinity" => {
+                        return Ok(Value::Float(f64::INFINITY))
+                    }
                     "-inf" | "-.inf" | "-infinity" => return Ok(Value::Float(f64::NEG_INFINITY)),
                     _ => {}
                 }
@@ -217,9 +311,17 @@ impl Converter<'_> {
             return Err(self.err(path, format!("an integer ({})", p.name()), json));
         };
         if i < lo || i > hi {
-            return Err(self.err(path, format!("an integer in {lo}..={hi} ({})", p.name()), json));
+            return Err(self.err(
+                path,
+                format!("an integer in {lo}..={hi} ({})", p.name()),
+                json,
+            ));
         }
-        Ok(if p.is_signed_int() { Value::Int(i as i64) } else { Value::UInt(i as u64) })
+        Ok(if p.is_signed_int() {
+            Value::Int(i as i64)
+        } else {
+            Value::UInt(i as u64)
+        })
     }
 }
 
@@ -269,5 +371,6 @@ pub fn to_yaml(value: &Value) -> serde_yaml::Value {
 
 /// YAML text of a value, as `ros2 topic echo` prints a message.
 pub fn to_yaml_string(value: &Value) -> String {
-    serde_yaml::to_string(&to_yaml(value)).unwrap_or_else(|e| format!("# cannot print value: {e}\n"))
+    serde_yaml::to_string(&to_yaml(value))
+        .unwrap_or_else(|e| format!("# cannot print value: {e}\n"))
 }

@@ -17,7 +17,9 @@ pub mod spec;
 pub mod value;
 
 pub use cdr::{decode, default_value, encode, DecodeError, EncodeError};
-pub use convert::{from_json, from_yaml, from_yaml_str, to_json, to_yaml, to_yaml_string, ConvertError};
+pub use convert::{
+    from_json, from_yaml, from_yaml_str, to_json, to_yaml, to_yaml_string, ConvertError,
+};
 pub use parse::{parse_message, ParseError};
 pub use registry::{Registry, RegistryError, DEFINITION_SEPARATOR};
 pub use sample::sample_value;
@@ -30,7 +32,14 @@ pub use value::{StructValue, Value};
 /// ROS 2 puts on the wire, because field order, fixed arrays (no length prefix) and
 /// sequences (u32 length prefix) follow the `.msg`.
 pub trait RosMessage:
-    serde::Serialize + serde::de::DeserializeOwned + Clone + std::fmt::Debug + PartialEq + Default + Send + 'static
+    serde::Serialize
+    + serde::de::DeserializeOwned
+    + Clone
+    + std::fmt::Debug
+    + PartialEq
+    + Default
+    + Send
+    + 'static
 {
     /// ROS type name, e.g. `metrocell_msgs/msg/TrackerMeasurement`.
     const ROS_TYPE: &'static str;

@@ -8,8 +8,8 @@
 //! string literal is not a comment).
 
 use crate::spec::{
-    is_package_name, is_type_name, ArrayKind, BaseType, Constant, Field, FieldType, MessageSpec, Primitive,
-    TypeName,
+    is_package_name, is_type_name, ArrayKind, BaseType, Constant, Field, FieldType, MessageSpec,
+    Primitive, TypeName,
 };
 use crate::value::Value;
 
@@ -36,12 +36,22 @@ pub fn parse_message_from(
     text: &str,
     source_name: &str,
 ) -> Result<MessageSpec, ParseError> {
-    let err = |line: usize, message: String| ParseError { source_name: source_name.to_string(), line, message };
+    let err = |line: usize, message: String| ParseError {
+        source_name: source_name.to_string(),
+        line,
+        message,
+    };
     if !is_package_name(package) {
-        return Err(err(0, format!("invalid package name {package:?} (lower case, digits and '_')")));
+        return Err(err(
+            0,
+            format!("invalid package name {package:?} (lower case, digits and '_')"),
+        ));
     }
     if !is_type_name(name) {
-        return Err(err(0, format!("invalid type name {name:?} (CamelCase letters and digits)")));
+        return Err(err(
+            0,
+            format!("invalid type name {name:?} (CamelCase letters and digits)"),
+        ));
     }
 
     let mut fields: Vec<Field> = Vec::new();
@@ -95,7 +105,10 @@ pub fn parse_message_from(
         let (type_str, rest) = split_first_token(code);
         let rest = rest.trim();
         if rest.is_empty() {
-            return Err(err(lineno, format!("expected a field or constant name after type {type_str:?}")));
+            return Err(err(
+                lineno,
+                format!("expected a field or constant name after type {type_str:?}"),
+            ));
         }
         let ty = parse_field_type(type_str, package).map_err(|m| err(lineno, m))?;
 
@@ -107,10 +120,16 @@ pub fn parse_message_from(
 
         if let Some((cname, cvalue)) = constant_parts(rest) {
             if ty.array != ArrayKind::Single {
-                return Err(err(lineno, format!("constant {cname} cannot have an array type ({ty})")));
+                return Err(err(
+                    lineno,
+                    format!("constant {cname} cannot have an array type ({ty})"),
+                ));
             }
             if matches!(ty.base, BaseType::Message(_)) {
-                return Err(err(lineno, format!("constant {cname} must have a primitive or string type, not {ty}")));
+                return Err(err(
+                    lineno,
+                    format!("constant {cname} must have a primitive or string type, not {ty}"),
+                ));
             }
             if !is_constant_name(cname) {
                 return Err(err(
@@ -123,7 +142,12 @@ pub fn parse_message_from(
             }
             let value = parse_scalar_literal(&ty.base, cvalue.trim(), true)
                 .map_err(|m| err(lineno, format!("constant {cname}: {m}")))?;
-            constants.push(Constant { name: cname.to_string(), ty: ty.base, value, comment: doc });
+            constants.push(Constant {
+                name: cname.to_string(),
+                ty: ty.base,
+                value,
+                comment: doc,
+            });
             last = Last::Constant(constants.len() - 1);
         } else {
             let (fname, default_str) = split_first_token(rest);
@@ -145,9 +169,17 @@ pub fn parse_message_from(
                 if matches!(ty.base, BaseType::Message(_)) {
                     return Err(err(lineno, format!("field {fname}: a nested message field ({ty}) cannot have a default value")));
                 }
-                Some(parse_literal(&ty, default_str).map_err(|m| err(lineno, format!("default of field {fname}: {m}")))?)
+                Some(
+                    parse_literal(&ty, default_str)
+                        .map_err(|m| err(lineno, format!("default of field {fname}: {m}")))?,
+                )
             };
-            fields.push(Field { name: fname.to_string(), ty, default, comment: doc });
+            fields.push(Field {
+                name: fname.to_string(),
+                ty,
+                default,
+                comment: doc,
+            });
             last = Last::Field(fields.len() - 1);
         }
     }
@@ -220,7 +252,8 @@ fn constant_parts(rest: &str) -> Option<(&str, &str)> {
 fn is_field_name(s: &str) -> bool {
     let mut chars = s.chars();
     matches!(chars.next(), Some(c) if c.is_ascii_lowercase())
-        && s.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
+        && s.chars()
+            .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
         && !s.contains("__")
         && !s.ends_with('_')
 }
@@ -228,7 +261,8 @@ fn is_field_name(s: &str) -> bool {
 fn is_constant_name(s: &str) -> bool {
     let mut chars = s.chars();
     matches!(chars.next(), Some(c) if c.is_ascii_uppercase())
-        && s.chars().all(|c| c.is_ascii_uppercase() || c.is_ascii_digit() || c == '_')
+        && s.chars()
+            .all(|c| c.is_ascii_uppercase() || c.is_ascii_digit() || c == '_')
         && !s.contains("__")
         && !s.ends_with('_')
 }
@@ -260,7 +294,10 @@ pub fn parse_field_type(s: &str, package: &str) -> Result<FieldType, String> {
 }
 
 fn parse_bound(s: &str) -> Result<usize, String> {
-    let n: usize = s.trim().parse().map_err(|_| format!("{s:?} is not a positive integer"))?;
+    let n: usize = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("{s:?} is not a positive integer"))?;
     if n == 0 {
         return Err("must be at least 1".to_string());
     }
@@ -278,18 +315,22 @@ fn parse_base_type(s: &str, package: &str) -> Result<BaseType, String> {
         return Ok(BaseType::WString { bound: None });
     }
     if let Some(b) = s.strip_prefix("string<=") {
-        return Ok(BaseType::String { bound: Some(parse_bound(b).map_err(|m| format!("string bound in {s:?}: {m}"))?) });
+        return Ok(BaseType::String {
+            bound: Some(parse_bound(b).map_err(|m| format!("string bound in {s:?}: {m}"))?),
+        });
     }
     if let Some(b) = s.strip_prefix("wstring<=") {
-        return Ok(BaseType::WString { bound: Some(parse_bound(b).map_err(|m| format!("wstring bound in {s:?}: {m}"))?) });
+        return Ok(BaseType::WString {
+            bound: Some(parse_bound(b).map_err(|m| format!("wstring bound in {s:?}: {m}"))?),
+        });
     }
     if s == "Header" {
         return Ok(BaseType::Message(TypeName::new("std_msgs", "Header")));
     }
     if s.contains('/') {
-        return TypeName::parse(s)
-            .map(BaseType::Message)
-            .ok_or_else(|| format!("unknown type {s:?} (expected a primitive, string, or pkg/Type)"));
+        return TypeName::parse(s).map(BaseType::Message).ok_or_else(|| {
+            format!("unknown type {s:?} (expected a primitive, string, or pkg/Type)")
+        });
     }
     if is_type_name(s) {
         return Ok(BaseType::Message(TypeName::new(package, s)));
@@ -312,15 +353,20 @@ pub fn parse_literal(ty: &FieldType, s: &str) -> Result<Value, String> {
             let values = items
                 .iter()
                 .enumerate()
-                .map(|(i, item)| parse_scalar_literal(&ty.base, item, false).map_err(|m| format!("element {i}: {m}")))
+                .map(|(i, item)| {
+                    parse_scalar_literal(&ty.base, item, false)
+                        .map_err(|m| format!("element {i}: {m}"))
+                })
                 .collect::<Result<Vec<_>, _>>()?;
             match array {
-                ArrayKind::Fixed(n) if values.len() != n => {
-                    Err(format!("{ty} needs exactly {n} values, {} given", values.len()))
-                }
-                ArrayKind::Bounded(n) if values.len() > n => {
-                    Err(format!("{ty} allows at most {n} values, {} given", values.len()))
-                }
+                ArrayKind::Fixed(n) if values.len() != n => Err(format!(
+                    "{ty} needs exactly {n} values, {} given",
+                    values.len()
+                )),
+                ArrayKind::Bounded(n) if values.len() > n => Err(format!(
+                    "{ty} allows at most {n} values, {} given",
+                    values.len()
+                )),
                 _ => Ok(Value::Array(values)),
             }
         }
@@ -379,7 +425,11 @@ fn parse_scalar_literal(base: &BaseType, s: &str, is_constant: bool) -> Result<V
         BaseType::Primitive(p) => parse_primitive_literal(*p, s),
         BaseType::String { bound } | BaseType::WString { bound } => {
             let text = unquote(s)?;
-            let len = if matches!(base, BaseType::WString { .. }) { text.encode_utf16().count() } else { text.len() };
+            let len = if matches!(base, BaseType::WString { .. }) {
+                text.encode_utf16().count()
+            } else {
+                text.len()
+            };
             if let Some(b) = bound {
                 if len > *b {
                     return Err(format!("string {text:?} is longer than the bound {b}"));
@@ -387,7 +437,9 @@ fn parse_scalar_literal(base: &BaseType, s: &str, is_constant: bool) -> Result<V
             }
             Ok(Value::String(text))
         }
-        BaseType::Message(t) => Err(format!("a value of message type {t} cannot be written literally")),
+        BaseType::Message(t) => Err(format!(
+            "a value of message type {t} cannot be written literally"
+        )),
     }
 }
 
@@ -428,15 +480,26 @@ fn parse_primitive_literal(p: Primitive, s: &str) -> Result<Value, String> {
         };
     }
     if p.is_float() {
-        let v: f64 = s.parse().map_err(|_| format!("{s:?} is not a number ({})", p.name()))?;
+        let v: f64 = s
+            .parse()
+            .map_err(|_| format!("{s:?} is not a number ({})", p.name()))?;
         return Ok(Value::Float(v));
     }
-    let v: i128 = s.parse().map_err(|_| format!("{s:?} is not an integer ({})", p.name()))?;
+    let v: i128 = s
+        .parse()
+        .map_err(|_| format!("{s:?} is not an integer ({})", p.name()))?;
     let (lo, hi) = p.int_range().expect("integer primitive");
     if v < lo || v > hi {
-        return Err(format!("{v} is out of range for {} ({lo}..={hi})", p.name()));
+        return Err(format!(
+            "{v} is out of range for {} ({lo}..={hi})",
+            p.name()
+        ));
     }
-    Ok(if p.is_signed_int() { Value::Int(v as i64) } else { Value::UInt(v as u64) })
+    Ok(if p.is_signed_int() {
+        Value::Int(v as i64)
+    } else {
+        Value::UInt(v as u64)
+    })
 }
 
 #[cfg(test)]
@@ -471,15 +534,37 @@ mod tests {
         assert_eq!(x.comment, "doc of x\nmetres");
         let v = m.field("v").unwrap();
         assert_eq!(v.ty.array, ArrayKind::Fixed(3));
-        assert_eq!(v.default, Some(Value::Array(vec![Value::Int(1), Value::Int(-2), Value::Int(3)])));
-        assert_eq!(m.field("s").unwrap().ty.base, BaseType::String { bound: Some(8) });
+        assert_eq!(
+            v.default,
+            Some(Value::Array(vec![
+                Value::Int(1),
+                Value::Int(-2),
+                Value::Int(3)
+            ]))
+        );
+        assert_eq!(
+            m.field("s").unwrap().ty.base,
+            BaseType::String { bound: Some(8) }
+        );
         assert_eq!(m.field("b").unwrap().ty.array, ArrayKind::Bounded(4));
-        assert_eq!(m.field("header").unwrap().ty.base, BaseType::Message(TypeName::new("std_msgs", "Header")));
-        assert_eq!(m.field("p").unwrap().ty.base, BaseType::Message(TypeName::new("geometry_msgs", "Point")));
+        assert_eq!(
+            m.field("header").unwrap().ty.base,
+            BaseType::Message(TypeName::new("std_msgs", "Header"))
+        );
+        assert_eq!(
+            m.field("p").unwrap().ty.base,
+            BaseType::Message(TypeName::new("geometry_msgs", "Point"))
+        );
         let others = m.field("others").unwrap();
-        assert_eq!(others.ty.base, BaseType::Message(TypeName::new("pkg", "Other")));
+        assert_eq!(
+            others.ty.base,
+            BaseType::Message(TypeName::new("pkg", "Other"))
+        );
         assert_eq!(others.ty.array, ArrayKind::Unbounded);
-        assert_eq!(m.field("w").unwrap().ty.base, BaseType::WString { bound: None });
+        assert_eq!(
+            m.field("w").unwrap().ty.base,
+            BaseType::WString { bound: None }
+        );
         assert_eq!(m.field("flag").unwrap().default, Some(Value::Bool(true)));
         assert_eq!(m.nested_types().len(), 3);
     }

@@ -17,11 +17,18 @@ pub enum RegistryError {
     #[error("type {0} is defined twice")]
     Duplicate(String),
     #[error("field {field} of {owner} has type {missing}, which is not in the registry")]
-    MissingDependency { owner: String, field: String, missing: String },
+    MissingDependency {
+        owner: String,
+        field: String,
+        missing: String,
+    },
     #[error("type {0} contains itself (recursive types cannot be encoded)")]
     Recursive(String),
     #[error("reading {path}: {source}")]
-    Io { path: String, source: std::io::Error },
+    Io {
+        path: String,
+        source: std::io::Error,
+    },
 }
 
 /// Line introducing each dependency block in a full definition (80 `=`).
@@ -50,15 +57,26 @@ impl Registry {
 
     /// Parses `text` as the `.msg` of `package/name` and adds it.
     pub fn add_msg(&mut self, package: &str, name: &str, text: &str) -> Result<(), RegistryError> {
-        self.add(parse_message_from(package, name, text, &format!("{package}/msg/{name}.msg"))?)
+        self.add(parse_message_from(
+            package,
+            name,
+            text,
+            &format!("{package}/msg/{name}.msg"),
+        )?)
     }
 
     /// Adds every `<root>/<pkg>/msg/<Type>.msg` below `root` (the layout of `msgs/interfaces`
     /// and of an installed ROS `share` directory). Returns how many types were added.
     pub fn add_tree(&mut self, root: &Path) -> Result<usize, RegistryError> {
-        let io = |p: &Path, e| RegistryError::Io { path: p.display().to_string(), source: e };
+        let io = |p: &Path, e| RegistryError::Io {
+            path: p.display().to_string(),
+            source: e,
+        };
         let mut n = 0;
-        let mut pkgs: Vec<_> = std::fs::read_dir(root).map_err(|e| io(root, e))?.filter_map(|e| e.ok()).collect();
+        let mut pkgs: Vec<_> = std::fs::read_dir(root)
+            .map_err(|e| io(root, e))?
+            .filter_map(|e| e.ok())
+            .collect();
         pkgs.sort_by_key(|e| e.file_name());
         for pkg in pkgs {
             let msg_dir = pkg.path().join("msg");
@@ -71,8 +89,15 @@ impl Registry {
     }
 
     /// Adds every `<Type>.msg` in `msg_dir` as a type of `package`. Returns how many were added.
-    pub fn add_package_dir(&mut self, package: &str, msg_dir: &Path) -> Result<usize, RegistryError> {
-        let io = |p: &Path, e| RegistryError::Io { path: p.display().to_string(), source: e };
+    pub fn add_package_dir(
+        &mut self,
+        package: &str,
+        msg_dir: &Path,
+    ) -> Result<usize, RegistryError> {
+        let io = |p: &Path, e| RegistryError::Io {
+            path: p.display().to_string(),
+            source: e,
+        };
         let mut files: Vec<_> = std::fs::read_dir(msg_dir)
             .map_err(|e| io(msg_dir, e))?
             .filter_map(|e| e.ok())
@@ -82,8 +107,17 @@ impl Registry {
         files.sort();
         for path in &files {
             let text = std::fs::read_to_string(path).map_err(|e| io(path, e))?;
-            let name = path.file_stem().unwrap_or_default().to_string_lossy().to_string();
-            self.add(parse_message_from(package, &name, &text, &path.display().to_string())?)?;
+            let name = path
+                .file_stem()
+                .unwrap_or_default()
+                .to_string_lossy()
+                .to_string();
+            self.add(parse_message_from(
+                package,
+                &name,
+                &text,
+                &path.display().to_string(),
+            )?)?;
         }
         Ok(files.len())
     }
@@ -95,12 +129,17 @@ impl Registry {
 
     /// The spec of `name`, or an error saying the type is unknown.
     pub fn spec(&self, name: &str) -> Result<&MessageSpec, RegistryError> {
-        let t = TypeName::parse(name).ok_or_else(|| RegistryError::BadTypeName(name.to_string()))?;
-        self.specs.get(&t).ok_or_else(|| RegistryError::UnknownType(name.to_string()))
+        let t =
+            TypeName::parse(name).ok_or_else(|| RegistryError::BadTypeName(name.to_string()))?;
+        self.specs
+            .get(&t)
+            .ok_or_else(|| RegistryError::UnknownType(name.to_string()))
     }
 
     pub fn spec_by_name(&self, t: &TypeName) -> Result<&MessageSpec, RegistryError> {
-        self.specs.get(t).ok_or_else(|| RegistryError::UnknownType(t.to_string()))
+        self.specs
+            .get(t)
+            .ok_or_else(|| RegistryError::UnknownType(t.to_string()))
     }
 
     /// All known types, sorted.
@@ -186,16 +225,19 @@ impl Registry {
         direct.sort_by_key(|t| t.short());
         for dep in direct {
             if seen.insert(dep.clone()) {
-                let dep_spec = self.specs.get(&dep).ok_or_else(|| RegistryError::MissingDependency {
-                    owner: spec.type_name.to_string(),
-                    field: spec
-                        .fields
-                        .iter()
-                        .find(|f| f.ty.base == BaseType::Message(dep.clone()))
-                        .map(|f| f.name.clone())
-                        .unwrap_or_default(),
-                    missing: dep.to_string(),
-                })?;
+                let dep_spec =
+                    self.specs
+                        .get(&dep)
+                        .ok_or_else(|| RegistryError::MissingDependency {
+                            owner: spec.type_name.to_string(),
+                            field: spec
+                                .fields
+                                .iter()
+                                .find(|f| f.ty.base == BaseType::Message(dep.clone()))
+                                .map(|f| f.name.clone())
+                                .unwrap_or_default(),
+                            missing: dep.to_string(),
+                        })?;
                 out.push(dep);
                 self.walk_dependencies(dep_spec, seen, out, depth + 1)?;
             }
@@ -229,11 +271,28 @@ mod tests {
 
     fn reg() -> Registry {
         let mut r = Registry::new();
-        r.add_msg("builtin_interfaces", "Time", "int32 sec\nuint32 nanosec\n").unwrap();
-        r.add_msg("std_msgs", "Header", "builtin_interfaces/Time stamp\nstring frame_id\n").unwrap();
-        r.add_msg("geometry_msgs", "Point", "float64 x\nfloat64 y\nfloat64 z\n").unwrap();
-        r.add_msg("pkg", "Inner", "geometry_msgs/Point p\n").unwrap();
-        r.add_msg("pkg", "Outer", "std_msgs/Header header\nInner[] inner\ngeometry_msgs/Point q\n").unwrap();
+        r.add_msg("builtin_interfaces", "Time", "int32 sec\nuint32 nanosec\n")
+            .unwrap();
+        r.add_msg(
+            "std_msgs",
+            "Header",
+            "builtin_interfaces/Time stamp\nstring frame_id\n",
+        )
+        .unwrap();
+        r.add_msg(
+            "geometry_msgs",
+            "Point",
+            "float64 x\nfloat64 y\nfloat64 z\n",
+        )
+        .unwrap();
+        r.add_msg("pkg", "Inner", "geometry_msgs/Point p\n")
+            .unwrap();
+        r.add_msg(
+            "pkg",
+            "Outer",
+            "std_msgs/Header header\nInner[] inner\ngeometry_msgs/Point q\n",
+        )
+        .unwrap();
         r
     }
 
@@ -242,14 +301,30 @@ mod tests {
         let r = reg();
         r.check().unwrap();
         // Direct deps sorted: geometry_msgs/Point, pkg/Inner, std_msgs/Header; Inner's Point already seen.
-        let deps: Vec<String> = r.dependencies("pkg/msg/Outer").unwrap().iter().map(|t| t.short()).collect();
-        assert_eq!(deps, ["geometry_msgs/Point", "pkg/Inner", "std_msgs/Header", "builtin_interfaces/Time"]);
+        let deps: Vec<String> = r
+            .dependencies("pkg/msg/Outer")
+            .unwrap()
+            .iter()
+            .map(|t| t.short())
+            .collect();
+        assert_eq!(
+            deps,
+            [
+                "geometry_msgs/Point",
+                "pkg/Inner",
+                "std_msgs/Header",
+                "builtin_interfaces/Time"
+            ]
+        );
         let sep = "=".repeat(80);
         let expected = format!(
             "std_msgs/Header header\nInner[] inner\ngeometry_msgs/Point q\n\n{sep}\nMSG: geometry_msgs/Point\nfloat64 x\nfloat64 y\nfloat64 z\n\n{sep}\nMSG: pkg/Inner\ngeometry_msgs/Point p\n\n{sep}\nMSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n\n{sep}\nMSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n"
         );
         assert_eq!(r.full_definition("pkg/Outer").unwrap(), expected);
-        assert_eq!(r.full_definition("geometry_msgs/Point").unwrap(), "float64 x\nfloat64 y\nfloat64 z\n");
+        assert_eq!(
+            r.full_definition("geometry_msgs/Point").unwrap(),
+            "float64 x\nfloat64 y\nfloat64 z\n"
+        );
     }
 
     #[test]
@@ -257,10 +332,22 @@ mod tests {
         let mut r = reg();
         r.add_msg("pkg", "Broken", "pkg/Nope n\n").unwrap();
         let e = r.check().unwrap_err().to_string();
-        assert!(e.contains("pkg/Broken") && e.contains("pkg/Nope") && e.contains("field n"), "{e}");
-        assert!(matches!(r.spec("pkg/Missing"), Err(RegistryError::UnknownType(_))));
-        assert!(matches!(r.spec("not a type"), Err(RegistryError::BadTypeName(_))));
-        assert!(matches!(r.add_msg("pkg", "Inner", "int8 a\n"), Err(RegistryError::Duplicate(_))));
+        assert!(
+            e.contains("pkg/Broken") && e.contains("pkg/Nope") && e.contains("field n"),
+            "{e}"
+        );
+        assert!(matches!(
+            r.spec("pkg/Missing"),
+            Err(RegistryError::UnknownType(_))
+        ));
+        assert!(matches!(
+            r.spec("not a type"),
+            Err(RegistryError::BadTypeName(_))
+        ));
+        assert!(matches!(
+            r.add_msg("pkg", "Inner", "int8 a\n"),
+            Err(RegistryError::Duplicate(_))
+        ));
         let mut r2 = Registry::new();
         r2.add_msg("pkg", "A", "pkg/B b\n").unwrap();
         r2.add_msg("pkg", "B", "pkg/A a\n").unwrap();

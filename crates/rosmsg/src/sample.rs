@@ -12,9 +12,17 @@ use crate::spec::{ArrayKind, BaseType, FieldType, MessageSpec, Primitive};
 use crate::value::{StructValue, Value};
 
 /// A sample value of `type_name` with every field set to a non-default value.
-pub fn sample_value(registry: &Registry, type_name: &str, seed: u64) -> Result<Value, RegistryError> {
+pub fn sample_value(
+    registry: &Registry,
+    type_name: &str,
+    seed: u64,
+) -> Result<Value, RegistryError> {
     let spec = registry.spec(type_name)?;
-    let mut g = Gen { registry, seed, k: 0 };
+    let mut g = Gen {
+        registry,
+        seed,
+        k: 0,
+    };
     g.message(spec)
 }
 
@@ -35,7 +43,10 @@ impl Gen<'_> {
         for f in &spec.fields {
             fields.push((f.name.clone(), self.field(&f.ty)?));
         }
-        Ok(Value::Struct(StructValue { type_name: spec.type_name.to_string(), fields }))
+        Ok(Value::Struct(StructValue {
+            type_name: spec.type_name.to_string(),
+            fields,
+        }))
     }
 
     fn field(&mut self, ty: &FieldType) -> Result<Value, RegistryError> {
@@ -45,7 +56,10 @@ impl Gen<'_> {
             ArrayKind::Bounded(b) => b.min(2),
             ArrayKind::Unbounded => 2,
         };
-        (0..n).map(|_| self.element(&ty.base)).collect::<Result<Vec<_>, _>>().map(Value::Array)
+        (0..n)
+            .map(|_| self.element(&ty.base))
+            .collect::<Result<Vec<_>, _>>()
+            .map(Value::Array)
     }
 
     fn element(&mut self, base: &BaseType) -> Result<Value, RegistryError> {

@@ -42,7 +42,9 @@ pub mod fixed_array {
                 if seq.next_element::<serde::de::IgnoredAny>()?.is_some() {
                     return Err(A::Error::invalid_length(N + 1, &self));
                 }
-                items.try_into().map_err(|_| A::Error::custom("array length mismatch"))
+                items
+                    .try_into()
+                    .map_err(|_| A::Error::custom("array length mismatch"))
             }
         }
         deserializer.deserialize_tuple(N, ArrayVisitor::<T, N>(PhantomData))

@@ -116,7 +116,10 @@ pub struct TypeName {
 
 impl TypeName {
     pub fn new(package: impl Into<String>, name: impl Into<String>) -> Self {
-        TypeName { package: package.into(), name: name.into() }
+        TypeName {
+            package: package.into(),
+            name: name.into(),
+        }
     }
 
     /// Parses `pkg/Type` or `pkg/msg/Type`.
@@ -158,12 +161,14 @@ impl fmt::Display for TypeName {
 pub(crate) fn is_package_name(s: &str) -> bool {
     let mut chars = s.chars();
     matches!(chars.next(), Some(c) if c.is_ascii_lowercase())
-        && s.chars().all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
+        && s.chars()
+            .all(|c| c.is_ascii_lowercase() || c.is_ascii_digit() || c == '_')
 }
 
 pub(crate) fn is_type_name(s: &str) -> bool {
     let mut chars = s.chars();
-    matches!(chars.next(), Some(c) if c.is_ascii_uppercase()) && s.chars().all(|c| c.is_ascii_alphanumeric())
+    matches!(chars.next(), Some(c) if c.is_ascii_uppercase())
+        && s.chars().all(|c| c.is_ascii_alphanumeric())
 }
 
 /// The element type of a field, without array-ness.
@@ -171,9 +176,13 @@ pub(crate) fn is_type_name(s: &str) -> bool {
 pub enum BaseType {
     Primitive(Primitive),
     /// `string` or `string<=N` (bound in bytes, excluding the terminating NUL).
-    String { bound: Option<usize> },
+    String {
+        bound: Option<usize>,
+    },
     /// `wstring` or `wstring<=N` (bound in UTF-16 code units).
-    WString { bound: Option<usize> },
+    WString {
+        bound: Option<usize>,
+    },
     /// A nested message type.
     Message(TypeName),
 }

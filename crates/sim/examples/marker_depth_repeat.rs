@@ -25,19 +25,42 @@ const MARKER_SIDE: f64 = 0.020;
 
 fn main() {
     let args: Vec<String> = std::env::args().skip(1).collect();
-    let cell_path = args.first().map(PathBuf::from).unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../twin/examples/cells/demo_shift.yaml"));
+    let cell_path = args.first().map(PathBuf::from).unwrap_or_else(|| {
+        PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../twin/examples/cells/demo_shift.yaml")
+    });
     let seeds: u64 = args.get(1).map_or(8, |s| s.parse().expect("seeds"));
-    let duration: f64 = args.get(2).map_or(3600.0, |s| s.parse().expect("cell seconds"));
-    let only: Option<Vec<u32>> = args.get(3).map(|s| s.split(',').map(|v| v.parse().expect("target id")).collect());
+    let duration: f64 = args
+        .get(2)
+        .map_or(3600.0, |s| s.parse().expect("cell seconds"));
+    let only: Option<Vec<u32>> = args.get(3).map(|s| {
+        s.split(',')
+            .map(|v| v.parse().expect("target id"))
+            .collect()
+    });
     let cell = Cell::from_path(&cell_path).expect("cell");
     let start = parse_start_time(DEFAULT_START_TIME).unwrap();
-    let converter = MessageConverter::new(&cell, start, CameraIntrinsics::default()).unwrap().with_frames(FrameRendering::default(), 1).unwrap();
+    let converter = MessageConverter::new(&cell, start, CameraIntrinsics::default())
+        .unwrap()
+        .with_frames(FrameRendering::default(), 1)
+        .unwrap();
     let renderer = converter.frames().expect("the cell has a camera");
     let camera = renderer.camera;
     let family = TargetFamily::parse("DICT_4X4_50", None, None).unwrap();
-    let params = DetectorParams { threads: 1, ..Default::default() };
+    let params = DetectorParams {
+        threads: 1,
+        ..Default::default()
+    };
     let sim = Simulation::new(cell, duration, 1).unwrap();
-    let requests: Vec<_> = sim.samples().filter_map(|s| if let Sample::CameraFrameRequest(r) = s { Some(r) } else { None }).collect();
+    let requests: Vec<_> = sim
+        .samples()
+        .filter_map(|s| {
+            if let Sample::CameraFrameRequest(r) = s {
+                Some(r)
+            } else {
+                None
+            }
+        })
+        .collect();
     // per (dwell index in the cycle, marker): depths and stated σ
     let mut table: BTreeMap<(u32, i64), (Vec<f64>, Vec<f64>)> = BTreeMap::new();
     for (k, req) in requests.iter().enumerate() {
@@ -48,11 +71,27 @@ fn main() {
         for seed in 0..seeds {
             let stamp = stamp_ns(start, req.t) + seed;
             let view = renderer.render(req, stamp).unwrap();
-            let targets = detect_targets(&view.image, &family, &params, Some(PoseInputs { camera: &camera, marker_side: Some(MARKER_SIDE), fallback_sigma_px: 0.1, intrinsics_covariance: None })).unwrap();
+            let targets = detect_targets(
+                &view.image,
+                &family,
+                &params,
+                Some(PoseInputs {
+                    camera: &camera,
+                    marker_side: Some(MARKER_SIDE),
+                    fallback_sigma_px: 0.1,
+                    intrinsics_covariance: None,
+                }),
+            )
+            .unwrap();
             for t in &targets {
                 let Some(pose) = &t.pose else { continue };
                 let truth = view.markers.iter().find(|m| m.id as i64 == t.id).unwrap();
-                let offsets: Vec<String> = t.corners.iter().zip(&truth.corners).map(|(c, g)| format!("({:+.3},{:+.3})", c.x - g.x, c.y - g.y)).collect();
+                let offsets: Vec<String> = t
+                    .corners
+                    .iter()
+                    .zip(&truth.corners)
+                    .map(|(c, g)| format!("({:+.3},{:+.3})", c.x - g.x, c.y - g.y))
+                    .collect();
                 println!(
                     "frame {k:3} dwell {dwell:2} seed {seed} marker {} depth {:.6} mm  x {:.4} y {:.4} mm  σz {:.1} µm  corners−truth {}",
                     t.id,
@@ -71,10 +110,18 @@ fn main() {
     println!("\ndwell marker  frames  depth spread (max−min, std) µm   stated σz µm (median)");
     for ((dwell, id), (z, s)) in &table {
         let mean = z.iter().sum::<f64>() / z.len() as f64;
-        let std = (z.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (z.len().max(2) - 1) as f64).sqrt();
-        let range = z.iter().cloned().fold(f64::NEG_INFINITY, f64::max) - z.iter().cloned().fold(f64::INFINITY, f64::min);
+        let std = (z.iter().map(|v| (v - mean).powi(2)).sum::<f64>() / (z.len().max(2) - 1) as f64)
+            .sqrt();
+        let range = z.iter().cloned().fold(f64::NEG_INFINITY, f64::max)
+            - z.iter().cloned().fold(f64::INFINITY, f64::min);
         let mut s = s.clone();
         s.sort_by(f64::total_cmp);
-        println!("{dwell:5} {id:6} {:7}  {:8.1} {:8.1}   {:8.1}", z.len(), range * 1e6, std * 1e6, s[s.len() / 2] * 1e6);
+        println!(
+            "{dwell:5} {id:6} {:7}  {:8.1} {:8.1}   {:8.1}",
+            z.len(),
+            range * 1e6,
+            std * 1e6,
+            s[s.len() / 2] * 1e6
+        );
     }
 }

@@ -93,7 +93,10 @@ pub fn write_bag(
     check_span(options.start_ns, duration_s)?;
     if let Some(r) = options.clock_rate {
         if !(r > 0.0 && r.is_finite()) {
-            return Err(SimError::invalid("clock rate", format!("must be > 0 Hz and finite, got {r}")));
+            return Err(SimError::invalid(
+                "clock rate",
+                format!("must be > 0 Hz and finite, got {r}"),
+            ));
         }
     }
     let mut converter = MessageConverter::new(&cell, options.start_ns, options.camera.clone())?;
@@ -101,7 +104,10 @@ pub fn write_bag(
         converter = converter.with_frames(rendering.clone(), seed)?;
     }
     let sim = Simulation::new(cell, duration_s, seed)?;
-    let bag_err = |source| SimError::Bag { dir: out_dir.to_path_buf(), source };
+    let bag_err = |source| SimError::Bag {
+        dir: out_dir.to_path_buf(),
+        source,
+    };
     let writer_options = WriterOptions {
         compression: options.compression,
         chunk_size: options.chunk_size,
@@ -114,28 +120,50 @@ pub fn write_bag(
     let mut writer = BagWriter::create(out_dir, writer_options).map_err(bag_err)?;
     let topics = &converter.topics.topics;
     for t in topics {
-        writer.add_topic(&t.name, t.ros_type, t.definition, &qos_profiles_yaml(&[t.qos.bag_profile()])).map_err(bag_err)?;
+        writer
+            .add_topic(
+                &t.name,
+                t.ros_type,
+                t.definition,
+                &qos_profiles_yaml(&[t.qos.bag_profile()]),
+            )
+            .map_err(bag_err)?;
     }
     let mut counts = vec![0u64; topics.len()];
     let mut total = 0u64;
-    let mut stream = MessageStream::new(&sim, &converter, options.clock_rate.map(|r| 1.0 / r)).with_render_threads(options.render_threads);
+    let mut stream = MessageStream::new(&sim, &converter, options.clock_rate.map(|r| 1.0 / r))
+        .with_render_threads(options.render_threads);
     for m in stream.by_ref() {
         let bytes = m.message.encode()?;
-        writer.write(&topics[m.topic].name, m.stamp_ns, m.stamp_ns, &bytes).map_err(bag_err)?;
+        writer
+            .write(&topics[m.topic].name, m.stamp_ns, m.stamp_ns, &bytes)
+            .map_err(bag_err)?;
         counts[m.topic] += 1;
         total += 1;
         if total.is_multiple_of(PROGRESS_EVERY) {
-            progress(Progress { t: m.t, duration: duration_s, messages: total });
+            progress(Progress {
+                t: m.t,
+                duration: duration_s,
+                messages: total,
+            });
         }
     }
     if let Some(e) = stream.error() {
         return Err(e);
     }
     let metadata = writer.finish().map_err(bag_err)?;
-    progress(Progress { t: duration_s, duration: duration_s, messages: total });
+    progress(Progress {
+        t: duration_s,
+        duration: duration_s,
+        messages: total,
+    });
     Ok(BagSummary {
         dir: out_dir.to_path_buf(),
-        messages_per_topic: topics.iter().zip(&counts).map(|(t, &n)| (t.name.clone(), n)).collect(),
+        messages_per_topic: topics
+            .iter()
+            .zip(&counts)
+            .map(|(t, &n)| (t.name.clone(), n))
+            .collect(),
         total_messages: total,
         metadata,
     })

@@ -21,7 +21,9 @@
 use metrocell_twin::CameraFrameRequest;
 use metrocell_vision::aruco::Dictionary;
 use metrocell_vision::camera::CameraModel;
-use metrocell_vision::render::{render_view, PlanarTarget, RenderSettings, RenderedView, TargetItem};
+use metrocell_vision::render::{
+    render_view, PlanarTarget, RenderSettings, RenderedView, TargetItem,
+};
 use nalgebra::{Isometry3, Rotation3, Translation3, UnitQuaternion};
 
 use crate::camera_intrinsics::CameraIntrinsics;
@@ -35,9 +37,16 @@ pub const PLATE_DICTIONARY: &str = "DICT_4X4_50";
 
 /// The plate as the renderer's target: markers 0, 1 (top row, left to right), 2, 3.
 pub fn plate_target(plate: &FramePlate) -> Result<PlanarTarget, SimError> {
-    let dictionary = Dictionary::predefined(PLATE_DICTIONARY).map_err(|e| SimError::invalid("camera plate dictionary", e.to_string()))?;
+    let dictionary = Dictionary::predefined(PLATE_DICTIONARY)
+        .map_err(|e| SimError::invalid("camera plate dictionary", e.to_string()))?;
     let items = (0..metrocell_twin::fiducial_plate::PLATE_MARKERS)
-        .map(|k| TargetItem::Marker { dictionary, id: k, top_left: plate.marker_top_left(k), side: plate.marker_side, border_bits: 1 })
+        .map(|k| TargetItem::Marker {
+            dictionary,
+            id: k,
+            top_left: plate.marker_top_left(k),
+            side: plate.marker_side,
+            border_bits: 1,
+        })
         .collect();
     Ok(PlanarTarget { items })
 }
@@ -52,7 +61,14 @@ pub struct FrameRendering {
 impl Default for FrameRendering {
     /// Optics blur 0.8 px, 1 grey level of sensor noise, supersampling 4 on edges.
     fn default() -> Self {
-        FrameRendering { settings: RenderSettings { supersampling: 4, blur_sigma_px: 0.8, noise_sigma: 1.0, ..RenderSettings::default() } }
+        FrameRendering {
+            settings: RenderSettings {
+                supersampling: 4,
+                blur_sigma_px: 0.8,
+                noise_sigma: 1.0,
+                ..RenderSettings::default()
+            },
+        }
     }
 }
 
@@ -61,7 +77,10 @@ pub fn plate_to_camera(request: &CameraFrameRequest) -> Isometry3<f64> {
     let r_cam_t = request.rotation.transpose();
     let r = Rotation3::from_matrix(&(r_cam_t * request.plate_rotation));
     let t = r_cam_t * (request.plate_position - request.position);
-    Isometry3::from_parts(Translation3::from(t), UnitQuaternion::from_rotation_matrix(&r))
+    Isometry3::from_parts(
+        Translation3::from(t),
+        UnitQuaternion::from_rotation_matrix(&r),
+    )
 }
 
 /// Per-frame noise seed from the simulation seed and the frame stamp (SplitMix64 mix).
@@ -83,18 +102,36 @@ pub struct FrameRenderer {
 
 impl FrameRenderer {
     /// Frames of the cell's camera (`intrinsics`) looking at `plate` (the cell's).
-    pub fn new(intrinsics: &CameraIntrinsics, plate: &FramePlate, rendering: FrameRendering, sim_seed: u64) -> Result<FrameRenderer, SimError> {
+    pub fn new(
+        intrinsics: &CameraIntrinsics,
+        plate: &FramePlate,
+        rendering: FrameRendering,
+        sim_seed: u64,
+    ) -> Result<FrameRenderer, SimError> {
         let camera = intrinsics.lens;
         let target = plate_target(plate)?;
-        Ok(FrameRenderer { camera, rendering, target, sim_seed })
+        Ok(FrameRenderer {
+            camera,
+            rendering,
+            target,
+            sim_seed,
+        })
     }
 
     /// The frame of `request` stamped `stamp_ns`, with the markers' true corners (pixels,
     /// OpenCV order) — the ground truth the image was drawn from.
-    pub fn render(&self, request: &CameraFrameRequest, stamp_ns: u64) -> Result<RenderedView, SimError> {
+    pub fn render(
+        &self,
+        request: &CameraFrameRequest,
+        stamp_ns: u64,
+    ) -> Result<RenderedView, SimError> {
         let pose = plate_to_camera(request);
-        let settings = RenderSettings { seed: frame_seed(self.sim_seed, stamp_ns), ..self.rendering.settings };
-        render_view(&self.camera, &pose, &self.target, &settings).map_err(|e| SimError::invalid("camera frame rendering", e.to_string()))
+        let settings = RenderSettings {
+            seed: frame_seed(self.sim_seed, stamp_ns),
+            ..self.rendering.settings
+        };
+        render_view(&self.camera, &pose, &self.target, &settings)
+            .map_err(|e| SimError::invalid("camera frame rendering", e.to_string()))
     }
 }
 
@@ -106,8 +143,16 @@ mod tests {
     use nalgebra::{Matrix3, Vector3};
 
     /// A request with the twin's default plate in front of the nominal camera.
-    fn with_plate(position: Vector3<f64>, rotation: Matrix3<f64>, nominal_position: Vector3<f64>, nominal_rotation: Matrix3<f64>) -> CameraFrameRequest {
-        let nominal = Isometry3::from_parts(Translation3::from(nominal_position), UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(&nominal_rotation)));
+    fn with_plate(
+        position: Vector3<f64>,
+        rotation: Matrix3<f64>,
+        nominal_position: Vector3<f64>,
+        nominal_rotation: Matrix3<f64>,
+    ) -> CameraFrameRequest {
+        let nominal = Isometry3::from_parts(
+            Translation3::from(nominal_position),
+            UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix(&nominal_rotation)),
+        );
         let plate = FramePlate::default().pose(&nominal);
         CameraFrameRequest {
             t: 1.0,
@@ -135,7 +180,10 @@ mod tests {
         let r = request(Vector3::zeros());
         let pose = plate_to_camera(&r);
         let c = pose * Point3::origin();
-        assert!((c.coords - Vector3::new(0.0, 0.0, 0.150)).norm() < 1e-12, "{c}");
+        assert!(
+            (c.coords - Vector3::new(0.0, 0.0, 0.150)).norm() < 1e-12,
+            "{c}"
+        );
         assert!((pose.rotation.angle()).abs() < 1e-12);
     }
 
@@ -154,11 +202,19 @@ mod tests {
         // a tilted nominal camera (as on a turned table or an arm), the true one turned a
         // further 1 mrad about its optical axis at the same place
         let nominal = Rotation3::from_euler_angles(0.3, -0.5, 1.0);
-        let r = with_plate(Vector3::new(0.1, -0.2, 0.3), (nominal * Rotation3::from_axis_angle(&Vector3::z_axis(), 1e-3)).into_inner(), Vector3::new(0.1, -0.2, 0.3), nominal.into_inner());
+        let r = with_plate(
+            Vector3::new(0.1, -0.2, 0.3),
+            (nominal * Rotation3::from_axis_angle(&Vector3::z_axis(), 1e-3)).into_inner(),
+            Vector3::new(0.1, -0.2, 0.3),
+            nominal.into_inner(),
+        );
         let pose = plate_to_camera(&r);
         assert!(((pose * Point3::origin()).coords - Vector3::new(0.0, 0.0, 0.150)).norm() < 1e-12);
         let (axis, angle) = pose.rotation.axis_angle().unwrap();
-        assert!((angle - 1e-3).abs() < 1e-12 && (axis.into_inner() + Vector3::z()).norm() < 1e-9, "{axis:?} {angle}");
+        assert!(
+            (angle - 1e-3).abs() < 1e-12 && (axis.into_inner() + Vector3::z()).norm() < 1e-9,
+            "{axis:?} {angle}"
+        );
     }
 
     #[test]

@@ -20,7 +20,10 @@ pub struct CameraIntrinsics {
 impl Default for CameraIntrinsics {
     /// The twin's default lens ([`metrocell_twin::cell::default_camera_lens`]).
     fn default() -> Self {
-        CameraIntrinsics { lens: metrocell_twin::cell::default_camera_lens(), frame_id: "camera_optical".into() }
+        CameraIntrinsics {
+            lens: metrocell_twin::cell::default_camera_lens(),
+            frame_id: "camera_optical".into(),
+        }
     }
 }
 
@@ -29,7 +32,10 @@ impl CameraIntrinsics {
     /// with `fallback`'s frame id; `fallback` itself for a cell without a camera.
     pub fn for_cell(cell: &metrocell_twin::Cell, fallback: CameraIntrinsics) -> CameraIntrinsics {
         match &cell.camera {
-            Some(c) => CameraIntrinsics { lens: c.lens(), frame_id: fallback.frame_id },
+            Some(c) => CameraIntrinsics {
+                lens: c.lens(),
+                frame_id: fallback.frame_id,
+            },
             None => fallback,
         }
     }

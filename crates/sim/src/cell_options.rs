@@ -25,7 +25,9 @@ pub fn parse_ground_tilt(text: &str) -> Result<[f64; 2], SimError> {
             Ok(n) => Quantity::Number(n),
             Err(_) => Quantity::Text(p.to_string()),
         };
-        *v = q.to_si(what, "rad").map_err(|e| SimError::invalid(what, e.to_string()))?;
+        *v = q
+            .to_si(what, "rad")
+            .map_err(|e| SimError::invalid(what, e.to_string()))?;
     }
     check_tilt(out, what).map_err(|e| SimError::invalid(what, e.to_string()))?;
     Ok(out)
@@ -55,13 +57,22 @@ mod tests {
     fn ground_tilts_parse_with_units_and_bad_ones_say_the_form() {
         assert_eq!(parse_ground_tilt("0,15mrad").unwrap(), [0.0, 0.015]);
         let t = parse_ground_tilt(" 2 mrad , -0.5 deg").unwrap();
-        assert!((t[0] - 0.002).abs() < 1e-15 && (t[1] + 0.5f64.to_radians()).abs() < 1e-15, "{t:?}");
+        assert!(
+            (t[0] - 0.002).abs() < 1e-15 && (t[1] + 0.5f64.to_radians()).abs() < 1e-15,
+            "{t:?}"
+        );
         assert_eq!(parse_ground_tilt("0.01,0").unwrap(), [0.01, 0.0]);
         for bad in ["15mrad", "1,2,3", "0,15 mm", "0,30 deg", ","] {
             let e = parse_ground_tilt(bad).unwrap_err().to_string();
             assert!(e.starts_with("--ground-tilt"), "{bad}: {e}");
         }
-        assert!(parse_ground_tilt("15mrad").unwrap_err().to_string().contains("ROLL,PITCH"));
-        assert!(parse_ground_tilt("0,30 deg").unwrap_err().to_string().contains("±0.2 rad"));
+        assert!(parse_ground_tilt("15mrad")
+            .unwrap_err()
+            .to_string()
+            .contains("ROLL,PITCH"));
+        assert!(parse_ground_tilt("0,30 deg")
+            .unwrap_err()
+            .to_string()
+            .contains("±0.2 rad"));
     }
 }

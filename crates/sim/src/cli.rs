@@ -134,31 +134,55 @@ pub fn run_sim_command(args: SimArgs) -> i32 {
 pub fn run_sim(args: &SimArgs) -> Result<(), SimError> {
     let start_ns = parse_start_time(&args.start_time)?;
     if !(args.clock_rate >= 0.0 && args.clock_rate.is_finite()) {
-        return Err(SimError::invalid("--clock-rate", format!("must be >= 0 and finite, got {}", args.clock_rate)));
+        return Err(SimError::invalid(
+            "--clock-rate",
+            format!("must be >= 0 and finite, got {}", args.clock_rate),
+        ));
     }
-    let tilt = args.ground_tilt.as_deref().map(parse_ground_tilt).transpose()?;
+    let tilt = args
+        .ground_tilt
+        .as_deref()
+        .map(parse_ground_tilt)
+        .transpose()?;
     let cell = load_cell(&args.cell, tilt)?;
     let duration = run_duration(&cell, args.duration, &args.cell)?;
     let options = BagOptions {
         start_ns,
         compression: args.compression.into(),
         clock_rate: (args.clock_rate > 0.0).then_some(args.clock_rate),
-        frames: if args.no_camera_frames { None } else { BagOptions::default().frames },
+        frames: if args.no_camera_frames {
+            None
+        } else {
+            BagOptions::default().frames
+        },
         ..BagOptions::default()
     };
-    let bar = if args.quiet { indicatif::ProgressBar::hidden() } else { indicatif::ProgressBar::new(1000) };
+    let bar = if args.quiet {
+        indicatif::ProgressBar::hidden()
+    } else {
+        indicatif::ProgressBar::new(1000)
+    };
     bar.set_style(
-        indicatif::ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {percent}% {msg} (eta {eta})")
-            .expect("the progress template is valid"),
+        indicatif::ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {wide_bar} {percent}% {msg} (eta {eta})",
+        )
+        .expect("the progress template is valid"),
     );
     let wall = Instant::now();
     let summary = write_bag(cell, duration, args.seed, &args.output, &options, |p| {
         bar.set_position((1000.0 * p.t / p.duration).round() as u64);
-        bar.set_message(format!("{:.0}/{:.0} s simulated, {} messages", p.t, p.duration, p.messages));
+        bar.set_message(format!(
+            "{:.0}/{:.0} s simulated, {} messages",
+            p.t, p.duration, p.messages
+        ));
     })?;
     bar.finish_and_clear();
     let bytes: u64 = std::fs::read_dir(&summary.dir)
-        .map(|d| d.filter_map(|e| e.ok()?.metadata().ok()).map(|m| m.len()).sum())
+        .map(|d| {
+            d.filter_map(|e| e.ok()?.metadata().ok())
+                .map(|m| m.len())
+                .sum()
+        })
         .unwrap_or(0);
     println!(
         "wrote {} ({} messages, {:.1} MiB) in {:.1} s",

@@ -36,9 +36,14 @@ use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_msgs::geometry_msgs::msg::{Point, Vector3 as RosVector3, Wrench, WrenchStamped};
 use metrocell_msgs::msg::{MeasuredPoint, ProbeHit, TrackerMeasurement};
 use metrocell_msgs::rosgraph_msgs::msg::Clock;
-use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, Imu, JointState, Temperature, TimeReference};
+use metrocell_msgs::sensor_msgs::msg::{
+    CameraInfo, Image, Imu, JointState, Temperature, TimeReference,
+};
 use metrocell_msgs::std_msgs::msg::Header;
-use metrocell_twin::{AccelerationSample, MachineStateSample, ProbeHitSample, StationPointSample, TemperatureSample, TrackerSample, TrackerStatus, STATION_FRAME};
+use metrocell_twin::{
+    AccelerationSample, MachineStateSample, ProbeHitSample, StationPointSample, TemperatureSample,
+    TrackerSample, TrackerStatus, STATION_FRAME,
+};
 use nalgebra::{Matrix3, Vector3};
 
 use crate::camera_intrinsics::CameraIntrinsics;
@@ -66,11 +71,18 @@ pub fn covariance_row_major(m: &Matrix3<f64>) -> [f64; 9] {
 }
 
 fn point(v: &Vector3<f64>) -> Point {
-    Point { x: v.x, y: v.y, z: v.z }
+    Point {
+        x: v.x,
+        y: v.y,
+        z: v.z,
+    }
 }
 
 fn header(stamp: Time, frame_id: &str) -> Header {
-    Header { stamp, frame_id: frame_id.to_string() }
+    Header {
+        stamp,
+        frame_id: frame_id.to_string(),
+    }
 }
 
 /// `rosgraph_msgs/Clock` at a stamp.
@@ -106,7 +118,11 @@ pub fn tracker_measurement(s: &TrackerSample, stamp: Time) -> TrackerMeasurement
 
 /// Thermocouple sample → `Temperature`; `location` becomes `frame_id`.
 pub fn temperature(s: &TemperatureSample, stamp: Time, location: &str) -> Temperature {
-    Temperature { header: header(stamp, location), temperature: s.value, variance: s.variance }
+    Temperature {
+        header: header(stamp, location),
+        temperature: s.value,
+        variance: s.variance,
+    }
 }
 
 /// Machine state → (actual, commanded) `JointState`s.
@@ -118,23 +134,47 @@ pub fn joint_states(s: &MachineStateSample, stamp: Time) -> (JointState, JointSt
         velocity: velocity.to_vec(),
         effort: Vec::new(),
     };
-    (make(&s.actual, &[]), make(&s.commanded, &s.commanded_velocity))
+    (
+        make(&s.actual, &[]),
+        make(&s.commanded, &s.commanded_velocity),
+    )
 }
 
 /// When the tracker was powered on (`powered_on_ns`, ns since the Unix epoch), stamped `stamp`.
 pub fn power_on(powered_on_ns: i64, stamp: Time) -> TimeReference {
-    TimeReference { header: header(stamp, ""), time_ref: Time::from_nanos(powered_on_ns), source: TRACKER_SOURCE.into() }
+    TimeReference {
+        header: header(stamp, ""),
+        time_ref: Time::from_nanos(powered_on_ns),
+        source: TRACKER_SOURCE.into(),
+    }
 }
 
 /// The load force (N, machine frame), stamped `stamp`.
 pub fn load(force: &Vector3<f64>, stamp: Time) -> WrenchStamped {
-    WrenchStamped { header: header(stamp, MACHINE_FRAME), wrench: Wrench { force: RosVector3 { x: force.x, y: force.y, z: force.z }, torque: RosVector3::default() } }
+    WrenchStamped {
+        header: header(stamp, MACHINE_FRAME),
+        wrench: Wrench {
+            force: RosVector3 {
+                x: force.x,
+                y: force.y,
+                z: force.z,
+            },
+            torque: RosVector3::default(),
+        },
+    }
 }
 
 /// A stationing program's point → `MeasuredPoint` (the topic follows its role).
 pub fn station_point(s: &StationPointSample, stamp: Time) -> MeasuredPoint {
     MeasuredPoint {
-        header: header(stamp, &format!("{STATION_FRAME}{}{}", metrocell_msgs::topics::SETUP_SEPARATOR, s.setup)),
+        header: header(
+            stamp,
+            &format!(
+                "{STATION_FRAME}{}{}",
+                metrocell_msgs::topics::SETUP_SEPARATOR,
+                s.setup
+            ),
+        ),
         point_id: s.point_id.clone(),
         source: STATION_FRAME.into(),
         nominal: point(&s.nominal),
@@ -146,7 +186,15 @@ pub fn station_point(s: &StationPointSample, stamp: Time) -> MeasuredPoint {
 /// An accelerometer's reading → `Imu` (linear acceleration only).
 pub fn imu(s: &AccelerationSample, stamp: Time) -> Imu {
     let f = &s.specific_force;
-    let mut m = Imu { header: header(stamp, &s.link), linear_acceleration: RosVector3 { x: f.x, y: f.y, z: f.z }, ..Default::default() };
+    let mut m = Imu {
+        header: header(stamp, &s.link),
+        linear_acceleration: RosVector3 {
+            x: f.x,
+            y: f.y,
+            z: f.z,
+        },
+        ..Default::default()
+    };
     m.linear_acceleration_covariance = covariance_row_major(&(Matrix3::identity() * s.variance));
     m.orientation_covariance[0] = -1.0;
     m.angular_velocity_covariance[0] = -1.0;
@@ -162,7 +210,11 @@ pub fn probe_hit(s: &ProbeHitSample, stamp: Time, tool_offset: &Vector3<f64>) ->
         axis_names: vec!["x".into(), "y".into(), "z".into()],
         axis_positions: q.as_slice().to_vec(),
         stylus_centre: point(&s.recorded),
-        approach_direction: RosVector3 { x: s.direction.x, y: s.direction.y, z: s.direction.z },
+        approach_direction: RosVector3 {
+            x: s.direction.x,
+            y: s.direction.y,
+            z: s.direction.z,
+        },
         stylus_radius: 0.0,
         pretravel: 0.0,
         surface_point: point(&s.recorded),
@@ -173,13 +225,24 @@ pub fn probe_hit(s: &ProbeHitSample, stamp: Time, tool_offset: &Vector3<f64>) ->
 /// `CameraInfo` of the simulated camera: its lens as camera_info (K, R = I, P = [K | 0], the
 /// lens's distortion model), no binning, full ROI.
 pub fn camera_info(c: &CameraIntrinsics, stamp: Time) -> CameraInfo {
-    CameraInfo { header: header(stamp, &c.frame_id), ..metrocell_camera_model::CameraInfo::from_model(&c.frame_id, &c.lens).to_msg() }
+    CameraInfo {
+        header: header(stamp, &c.frame_id),
+        ..metrocell_camera_model::CameraInfo::from_model(&c.frame_id, &c.lens).to_msg()
+    }
 }
 
 /// A mono8 `Image` (row-major, step = width, `is_bigendian` 0) in the camera's optical frame.
 pub fn mono8_image(image: image::GrayImage, frame_id: &str, stamp: Time) -> Image {
     let (width, height) = image.dimensions();
-    Image { header: header(stamp, frame_id), height, width, encoding: "mono8".into(), is_bigendian: 0, step: width, data: image.into_raw() }
+    Image {
+        header: header(stamp, frame_id),
+        height,
+        width,
+        encoding: "mono8".into(),
+        is_bigendian: 0,
+        step: width,
+        data: image.into_raw(),
+    }
 }
 
 #[cfg(test)]
@@ -189,13 +252,19 @@ mod tests {
     use super::*;
 
     fn stamp() -> Time {
-        Time { sec: 1_767_592_800, nanosec: 100_000_000 }
+        Time {
+            sec: 1_767_592_800,
+            nanosec: 100_000_000,
+        }
     }
 
     #[test]
     fn covariance_is_row_major() {
         let m = Matrix3::new(1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0);
-        assert_eq!(covariance_row_major(&m), [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]);
+        assert_eq!(
+            covariance_row_major(&m),
+            [1.0, 2.0, 3.0, 4.0, 5.0, 6.0, 7.0, 8.0, 9.0]
+        );
     }
 
     fn tracker_sample(status: TrackerStatus) -> TrackerSample {
@@ -210,7 +279,8 @@ mod tests {
             range: v(1.135782),
             azimuth: v(0.4636),
             elevation: v(-0.1771),
-            covariance: Matrix3::new(1e-11, 2e-12, 0.0, 2e-12, 3e-11, 4e-13, 0.0, 4e-13, 5e-11).map(v),
+            covariance: Matrix3::new(1e-11, 2e-12, 0.0, 2e-12, 3e-11, 4e-13, 0.0, 4e-13, 5e-11)
+                .map(v),
             air_temperature: 20.3,
             air_pressure: 101_300.0,
             air_humidity: 45.0,
@@ -223,7 +293,10 @@ mod tests {
     fn tracker_fields_units_and_status() {
         let m = tracker_measurement(&tracker_sample(TrackerStatus::Ok), stamp());
         assert_eq!(m.header.frame_id, "tracker");
-        assert_eq!((m.header.stamp.sec, m.header.stamp.nanosec), (1_767_592_800, 100_000_000));
+        assert_eq!(
+            (m.header.stamp.sec, m.header.stamp.nanosec),
+            (1_767_592_800, 100_000_000)
+        );
         assert_eq!(m.target_id, "point_4");
         assert_eq!((m.point.x, m.point.y, m.point.z), (1.0, 0.5, -0.2));
         assert_eq!(m.covariance[1], 2e-12);
@@ -249,7 +322,12 @@ mod tests {
 
     #[test]
     fn temperature_keeps_value_variance_and_location() {
-        let s = TemperatureSample { t: 1.0, sensor: Arc::from("x_left"), value: 20.512, variance: 0.0029 };
+        let s = TemperatureSample {
+            t: 1.0,
+            sensor: Arc::from("x_left"),
+            value: 20.512,
+            variance: 0.0029,
+        };
         let m = temperature(&s, stamp(), "table");
         assert_eq!((m.temperature, m.variance), (20.512, 0.0029));
         assert_eq!(m.header.frame_id, "table");
@@ -257,19 +335,33 @@ mod tests {
 
     #[test]
     fn joint_states_split_actual_and_commanded() {
-        let s = MachineStateSample { t: 0.01, names: Arc::from(vec!["x".to_string(), "y".into(), "z".into()]), commanded: vec![0.1, 0.2, 0.3], commanded_velocity: vec![0.05, 0.0, -0.01], actual: vec![0.100_008, 0.2, 0.299_999] };
+        let s = MachineStateSample {
+            t: 0.01,
+            names: Arc::from(vec!["x".to_string(), "y".into(), "z".into()]),
+            commanded: vec![0.1, 0.2, 0.3],
+            commanded_velocity: vec![0.05, 0.0, -0.01],
+            actual: vec![0.100_008, 0.2, 0.299_999],
+        };
         let (actual, commanded) = joint_states(&s, stamp());
         assert_eq!(actual.name, ["x", "y", "z"]);
         assert_eq!(actual.position, [0.100_008, 0.2, 0.299_999]);
         assert_eq!(commanded.position, [0.1, 0.2, 0.3]);
         assert_eq!(commanded.velocity, [0.05, 0.0, -0.01]);
-        assert!(actual.velocity.is_empty() && actual.effort.is_empty() && commanded.effort.is_empty());
+        assert!(
+            actual.velocity.is_empty() && actual.effort.is_empty() && commanded.effort.is_empty()
+        );
     }
 
     #[test]
     fn joint_states_keep_any_number_of_named_joints() {
         let names: Vec<String> = (1..=6).map(|i| format!("joint_{i}")).collect();
-        let s = MachineStateSample { t: 0.05, names: Arc::from(names.clone()), commanded: vec![0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0], commanded_velocity: vec![0.0; 6], actual: vec![0.0, -1.5706, 1.57065, -1.5708, -1.5708, 0.0] };
+        let s = MachineStateSample {
+            t: 0.05,
+            names: Arc::from(names.clone()),
+            commanded: vec![0.0, -1.5708, 1.5708, -1.5708, -1.5708, 0.0],
+            commanded_velocity: vec![0.0; 6],
+            actual: vec![0.0, -1.5706, 1.57065, -1.5708, -1.5708, 0.0],
+        };
         let (actual, commanded) = joint_states(&s, stamp());
         assert_eq!(actual.name, names);
         assert_eq!(actual.position.len(), 6);
@@ -282,10 +374,16 @@ mod tests {
         // powered on 20 min before a run starting at 2026-01-05T06:00:00Z
         let m = power_on(1_767_592_800_000_000_000 - 1_200_000_000_000, stamp());
         assert_eq!((m.time_ref.sec, m.time_ref.nanosec), (1_767_591_600, 0));
-        assert_eq!((m.header.stamp.sec, m.header.stamp.nanosec), (1_767_592_800, 100_000_000));
+        assert_eq!(
+            (m.header.stamp.sec, m.header.stamp.nanosec),
+            (1_767_592_800, 100_000_000)
+        );
         assert_eq!(m.source, "tracker");
         let w = load(&Vector3::new(0.0, 0.0, -196.2), stamp());
-        assert_eq!((w.wrench.force.x, w.wrench.force.z, w.wrench.torque.z), (0.0, -196.2, 0.0));
+        assert_eq!(
+            (w.wrench.force.x, w.wrench.force.z, w.wrench.torque.z),
+            (0.0, -196.2, 0.0)
+        );
         assert_eq!(w.header.frame_id, "machine");
     }
 
@@ -307,7 +405,10 @@ mod tests {
         assert!((m.axis_positions[2] - 0.05).abs() < 1e-15);
         assert_eq!((m.surface_point.x, m.stylus_centre.y), (0.200_01, 0.299_98));
         assert_eq!((m.approach_direction.x, m.approach_direction.y), (0.0, 1.0));
-        assert_eq!((m.covariance[0], m.covariance[1], m.covariance[4]), (2.5e-13, 0.0, 2.5e-13));
+        assert_eq!(
+            (m.covariance[0], m.covariance[1], m.covariance[4]),
+            (2.5e-13, 0.0, 2.5e-13)
+        );
     }
 
     #[test]
@@ -322,13 +423,48 @@ mod tests {
             nominal: Vector3::new(1.0, 0.2, 1.8),
         };
         let m = station_point(&s, stamp());
-        assert_eq!((m.header.frame_id.as_str(), m.point_id.as_str(), m.source.as_str()), ("total_station@S2", "G02.007", "total_station"));
-        assert_eq!((m.measured.x, m.nominal.z, m.covariance[0], m.covariance[1], m.covariance[8]), (-5.1, 1.8, 5.625e-7, 0.0, 5.625e-7));
-        let a = AccelerationSample { t: 3.0, sensor: Arc::from("base"), link: Arc::from("base_imu"), specific_force: Vector3::new(0.01, -0.14, 9.806), variance: 2.5e-5 };
+        assert_eq!(
+            (
+                m.header.frame_id.as_str(),
+                m.point_id.as_str(),
+                m.source.as_str()
+            ),
+            ("total_station@S2", "G02.007", "total_station")
+        );
+        assert_eq!(
+            (
+                m.measured.x,
+                m.nominal.z,
+                m.covariance[0],
+                m.covariance[1],
+                m.covariance[8]
+            ),
+            (-5.1, 1.8, 5.625e-7, 0.0, 5.625e-7)
+        );
+        let a = AccelerationSample {
+            t: 3.0,
+            sensor: Arc::from("base"),
+            link: Arc::from("base_imu"),
+            specific_force: Vector3::new(0.01, -0.14, 9.806),
+            variance: 2.5e-5,
+        };
         let m = imu(&a, stamp());
         assert_eq!(m.header.frame_id, "base_imu");
-        assert_eq!((m.linear_acceleration.y, m.linear_acceleration_covariance[4], m.linear_acceleration_covariance[1]), (-0.14, 2.5e-5, 0.0));
-        assert_eq!((m.orientation_covariance[0], m.angular_velocity_covariance[0]), (-1.0, -1.0));
+        assert_eq!(
+            (
+                m.linear_acceleration.y,
+                m.linear_acceleration_covariance[4],
+                m.linear_acceleration_covariance[1]
+            ),
+            (-0.14, 2.5e-5, 0.0)
+        );
+        assert_eq!(
+            (
+                m.orientation_covariance[0],
+                m.angular_velocity_covariance[0]
+            ),
+            (-1.0, -1.0)
+        );
     }
 
     #[test]
@@ -338,7 +474,10 @@ mod tests {
         assert_eq!((m.width, m.height), (2448, 2048));
         assert!((m.k[0] - 3478.26).abs() < 0.01);
         assert_eq!((m.k[2], m.k[5], m.k[8]), (1223.5, 1023.5, 1.0));
-        assert_eq!((m.p[0], m.p[2], m.p[5], m.p[6], m.p[10]), (m.k[0], 1223.5, m.k[4], 1023.5, 1.0));
+        assert_eq!(
+            (m.p[0], m.p[2], m.p[5], m.p[6], m.p[10]),
+            (m.k[0], 1223.5, m.k[4], 1023.5, 1.0)
+        );
         assert_eq!(m.d.len(), 5);
         assert_eq!(m.distortion_model, "plumb_bob");
     }

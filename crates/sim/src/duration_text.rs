@@ -18,13 +18,22 @@ pub fn parse_duration(text: &str) -> Result<f64, SimError> {
     let mut total = 0.0;
     let mut rest = s.as_str();
     while !rest.is_empty() {
-        let num_len = rest.find(|c: char| !(c.is_ascii_digit() || c == '.')).unwrap_or(rest.len());
+        let num_len = rest
+            .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .unwrap_or(rest.len());
         if num_len == 0 {
-            return Err(SimError::invalid(&what, format!("expected a number at {rest:?}; examples: 8h, 90min, 30s")));
+            return Err(SimError::invalid(
+                &what,
+                format!("expected a number at {rest:?}; examples: 8h, 90min, 30s"),
+            ));
         }
-        let value: f64 = rest[..num_len].parse().map_err(|_| SimError::invalid(&what, format!("{:?} is not a number", &rest[..num_len])))?;
+        let value: f64 = rest[..num_len].parse().map_err(|_| {
+            SimError::invalid(&what, format!("{:?} is not a number", &rest[..num_len]))
+        })?;
         rest = &rest[num_len..];
-        let unit_len = rest.find(|c: char| c.is_ascii_digit() || c == '.').unwrap_or(rest.len());
+        let unit_len = rest
+            .find(|c: char| c.is_ascii_digit() || c == '.')
+            .unwrap_or(rest.len());
         let unit = &rest[..unit_len];
         let scale = match unit {
             "ms" => 1e-3,
@@ -32,8 +41,18 @@ pub fn parse_duration(text: &str) -> Result<f64, SimError> {
             "m" | "min" | "mins" | "minute" | "minutes" => 60.0,
             "h" | "hr" | "hrs" | "hour" | "hours" => 3600.0,
             "d" | "day" | "days" => 86_400.0,
-            "" => return Err(SimError::invalid(&what, "a number needs a unit when several terms are given (ms, s, min, h, d)")),
-            other => return Err(SimError::invalid(&what, format!("unknown unit {other:?} (use ms, s, min, h or d)"))),
+            "" => {
+                return Err(SimError::invalid(
+                    &what,
+                    "a number needs a unit when several terms are given (ms, s, min, h, d)",
+                ))
+            }
+            other => {
+                return Err(SimError::invalid(
+                    &what,
+                    format!("unknown unit {other:?} (use ms, s, min, h or d)"),
+                ))
+            }
         };
         total += value * scale;
         rest = &rest[unit_len..];

@@ -12,10 +12,16 @@ pub enum SimError {
     InvalidArgument { what: String, reason: String },
     /// The bag could not be written.
     #[error("bag {}: {source}", dir.display())]
-    Bag { dir: PathBuf, source: metrocell_bag::BagError },
+    Bag {
+        dir: PathBuf,
+        source: metrocell_bag::BagError,
+    },
     /// A message could not be CDR-encoded (not expected for the generated types).
     #[error("CDR encoding of {ros_type} failed: {reason}")]
-    Encode { ros_type: &'static str, reason: String },
+    Encode {
+        ros_type: &'static str,
+        reason: String,
+    },
     /// The twin's stream stopped early because a physics term failed.
     #[error("simulation stopped at t = {t} s: {reason}")]
     Simulation { t: f64, reason: String },
@@ -23,6 +29,9 @@ pub enum SimError {
 
 impl SimError {
     pub(crate) fn invalid(what: impl Into<String>, reason: impl Into<String>) -> SimError {
-        SimError::InvalidArgument { what: what.into(), reason: reason.into() }
+        SimError::InvalidArgument {
+            what: what.into(),
+            reason: reason.into(),
+        }
     }
 }

@@ -40,6 +40,6 @@ pub use camera_frame::{FramePlate, FrameRenderer, FrameRendering};
 pub use camera_intrinsics::CameraIntrinsics;
 pub use cli::{run_sim_command, SimArgs};
 pub use error::SimError;
-pub use pacing::Pacer;
 pub use message_stream::{MessageConverter, MessageStream, SimMessage, TypedMessage};
+pub use pacing::Pacer;
 pub use topic_map::{QosKind, TopicMap, TopicRole, TopicSpec};

@@ -19,11 +19,13 @@ use std::collections::VecDeque;
 use std::sync::{mpsc, Arc, Mutex};
 use std::thread::JoinHandle;
 
+use metrocell_msgs::builtin_interfaces::msg::Time;
+use metrocell_msgs::geometry_msgs::msg::WrenchStamped;
 use metrocell_msgs::msg::{MeasuredPoint, ProbeHit, TrackerMeasurement};
 use metrocell_msgs::rosgraph_msgs::msg::Clock;
-use metrocell_msgs::geometry_msgs::msg::WrenchStamped;
-use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, Imu, JointState, Temperature, TimeReference};
-use metrocell_msgs::builtin_interfaces::msg::Time;
+use metrocell_msgs::sensor_msgs::msg::{
+    CameraInfo, Image, Imu, JointState, Temperature, TimeReference,
+};
 use metrocell_twin::{CameraFrameRequest, Cell, PointRole, Sample, SampleStream, Simulation};
 use nalgebra::Vector3;
 use rosmsg::RosMessage;
@@ -121,13 +123,23 @@ pub struct MessageConverter {
 }
 
 impl MessageConverter {
-    pub fn new(cell: &Cell, start_ns: u64, camera: CameraIntrinsics) -> Result<MessageConverter, SimError> {
+    pub fn new(
+        cell: &Cell,
+        start_ns: u64,
+        camera: CameraIntrinsics,
+    ) -> Result<MessageConverter, SimError> {
         let topics = TopicMap::for_cell(cell)?;
         let thermocouples = cell
             .thermocouples
             .iter()
             .zip(&topics.temperatures)
-            .map(|(tc, &id)| (tc.name.clone(), id, tc.node.clone().unwrap_or_else(|| "ambient".into())))
+            .map(|(tc, &id)| {
+                (
+                    tc.name.clone(),
+                    id,
+                    tc.node.clone().unwrap_or_else(|| "ambient".into()),
+                )
+            })
             .collect();
         let camera = CameraIntrinsics::for_cell(cell, camera);
         Ok(MessageConverter {
@@ -146,7 +158,11 @@ impl MessageConverter {
     /// Also render an image for every camera frame request (module doc of
     /// [`crate::camera_frame`]); `seed` is the simulation seed (per-frame noise derives from
     /// it). A cell without a camera ignores this. Fails on invalid intrinsics or settings.
-    pub fn with_frames(mut self, rendering: FrameRendering, seed: u64) -> Result<MessageConverter, SimError> {
+    pub fn with_frames(
+        mut self,
+        rendering: FrameRendering,
+        seed: u64,
+    ) -> Result<MessageConverter, SimError> {
         // the cell has a camera exactly when it has an image topic
         if let (Some(_), Some(plate)) = (self.topics.camera_image, &self.plate) {
             self.frames = Some(FrameRenderer::new(&self.camera, plate, rendering, seed)?);
@@ -162,7 +178,12 @@ impl MessageConverter {
     /// The `/clock` message at simulation time t.
     pub fn clock(&self, t: f64) -> SimMessage {
         let stamp_ns = stamp_ns(self.start_ns, t);
-        SimMessage { t, stamp_ns, topic: self.topics.clock, message: TypedMessage::Clock(convert::clock(ros_time(stamp_ns))) }
+        SimMessage {
+            t,
+            stamp_ns,
+            topic: self.topics.clock,
+            message: TypedMessage::Clock(convert::clock(ros_time(stamp_ns))),
+        }
     }
 
     /// The cell's states, stamped at t = 0 (the start): when the tracker was powered on
@@ -172,10 +193,20 @@ impl MessageConverter {
         let mut out = Vec::new();
         if let (Some(topic), Some(before)) = (self.topics.power_on, self.powered_on_before_start) {
             let powered_on = ns as i64 - (before * 1e9).round() as i64;
-            out.push(SimMessage { t: 0.0, stamp_ns: ns, topic, message: TypedMessage::PowerOn(convert::power_on(powered_on, ros_time(ns))) });
+            out.push(SimMessage {
+                t: 0.0,
+                stamp_ns: ns,
+                topic,
+                message: TypedMessage::PowerOn(convert::power_on(powered_on, ros_time(ns))),
+            });
         }
         if let (Some(topic), Some(force)) = (self.topics.load, self.load_force) {
-            out.push(SimMessage { t: 0.0, stamp_ns: ns, topic, message: TypedMessage::Load(convert::load(&force, ros_time(ns))) });
+            out.push(SimMessage {
+                t: 0.0,
+                stamp_ns: ns,
+                topic,
+                message: TypedMessage::Load(convert::load(&force, ros_time(ns))),
+            });
         }
         out
     }
@@ -184,7 +215,9 @@ impl MessageConverter {
     /// no topic (cannot happen for samples of the same cell) is dropped.
     pub fn convert_into(&self, sample: &Sample, out: &mut VecDeque<SimMessage>) {
         if let Some(frame) = self.convert_all_but_image(sample, out) {
-            if let Some(image) = self.render_image(&frame.request, frame.stamp_ns, frame.stamp.clone()) {
+            if let Some(image) =
+                self.render_image(&frame.request, frame.stamp_ns, frame.stamp.clone())
+            {
                 out.push_back(frame.message(image));
             }
         }
@@ -193,27 +226,57 @@ impl MessageConverter {
     /// The image message of a frame request, or None if rendering failed: settings were
     /// validated by FrameRenderer::new, so a failure here would be a renderer bug, and dropping
     /// the image keeps the rest of the recording.
-    fn render_image(&self, request: &CameraFrameRequest, stamp_ns: u64, stamp: Time) -> Option<Image> {
+    fn render_image(
+        &self,
+        request: &CameraFrameRequest,
+        stamp_ns: u64,
+        stamp: Time,
+    ) -> Option<Image> {
         let view = self.frames.as_ref()?.render(request, stamp_ns).ok()?;
-        Some(convert::mono8_image(view.image, &self.camera.frame_id, stamp))
+        Some(convert::mono8_image(
+            view.image,
+            &self.camera.frame_id,
+            stamp,
+        ))
     }
 
     /// [`Self::convert_into`] without rendering: the frame to render, if this sample asks for
     /// an image, is returned instead (its message goes after those pushed here).
-    fn convert_all_but_image(&self, sample: &Sample, out: &mut VecDeque<SimMessage>) -> Option<FrameJob> {
+    fn convert_all_but_image(
+        &self,
+        sample: &Sample,
+        out: &mut VecDeque<SimMessage>,
+    ) -> Option<FrameJob> {
         let t = sample.t();
         let ns = stamp_ns(self.start_ns, t);
         let stamp = ros_time(ns);
-        let mut push = |topic: TopicId, message: TypedMessage| out.push_back(SimMessage { t, stamp_ns: ns, topic, message });
+        let mut push = |topic: TopicId, message: TypedMessage| {
+            out.push_back(SimMessage {
+                t,
+                stamp_ns: ns,
+                topic,
+                message,
+            })
+        };
         match sample {
             Sample::Tracker(s) => {
                 if let Some(id) = self.topics.tracker {
-                    push(id, TypedMessage::Tracker(convert::tracker_measurement(s, stamp)));
+                    push(
+                        id,
+                        TypedMessage::Tracker(convert::tracker_measurement(s, stamp)),
+                    );
                 }
             }
             Sample::Temperature(s) => {
-                if let Some((_, id, location)) = self.thermocouples.iter().find(|(name, _, _)| **name == *s.sensor) {
-                    push(*id, TypedMessage::Temperature(convert::temperature(s, stamp, location)));
+                if let Some((_, id, location)) = self
+                    .thermocouples
+                    .iter()
+                    .find(|(name, _, _)| **name == *s.sensor)
+                {
+                    push(
+                        *id,
+                        TypedMessage::Temperature(convert::temperature(s, stamp, location)),
+                    );
                 }
             }
             Sample::MachineState(s) => {
@@ -225,7 +288,10 @@ impl MessageConverter {
             }
             Sample::ProbeHit(s) => {
                 if let Some(id) = self.topics.probe {
-                    push(id, TypedMessage::Probe(convert::probe_hit(s, stamp, &self.tool_offset)));
+                    push(
+                        id,
+                        TypedMessage::Probe(convert::probe_hit(s, stamp, &self.tool_offset)),
+                    );
                 }
             }
             Sample::StationPoint(p) => {
@@ -244,10 +310,19 @@ impl MessageConverter {
             }
             Sample::CameraFrameRequest(r) => {
                 if let Some(id) = self.topics.camera_info {
-                    push(id, TypedMessage::CameraInfo(convert::camera_info(&self.camera, stamp.clone())));
+                    push(
+                        id,
+                        TypedMessage::CameraInfo(convert::camera_info(&self.camera, stamp.clone())),
+                    );
                 }
                 if let (Some(topic), Some(_)) = (self.topics.camera_image, &self.frames) {
-                    return Some(FrameJob { t, stamp_ns: ns, stamp, topic, request: r.clone() });
+                    return Some(FrameJob {
+                        t,
+                        stamp_ns: ns,
+                        stamp,
+                        topic,
+                        request: r.clone(),
+                    });
                 }
             }
         }
@@ -273,14 +348,22 @@ struct FrameJob {
 
 impl FrameJob {
     fn message(&self, image: Image) -> SimMessage {
-        SimMessage { t: self.t, stamp_ns: self.stamp_ns, topic: self.topic, message: TypedMessage::Image(image) }
+        SimMessage {
+            t: self.t,
+            stamp_ns: self.stamp_ns,
+            topic: self.topic,
+            message: TypedMessage::Image(image),
+        }
     }
 }
 
 /// A queued message: ready, or a frame a worker is rendering (None = rendering failed).
 enum Slot {
     Ready(SimMessage),
-    Rendering { job: FrameJob, image: mpsc::Receiver<Option<Image>> },
+    Rendering {
+        job: FrameJob,
+        image: mpsc::Receiver<Option<Image>>,
+    },
 }
 
 impl Slot {
@@ -294,7 +377,14 @@ impl Slot {
 
 /// Worker threads rendering frames for one stream.
 struct RenderPool {
-    jobs: Option<mpsc::Sender<(CameraFrameRequest, u64, Time, mpsc::SyncSender<Option<Image>>)>>,
+    jobs: Option<
+        mpsc::Sender<(
+            CameraFrameRequest,
+            u64,
+            Time,
+            mpsc::SyncSender<Option<Image>>,
+        )>,
+    >,
     workers: Vec<JoinHandle<()>>,
     /// Frames handed out and not yet taken from the queue.
     in_flight: usize,
@@ -302,7 +392,12 @@ struct RenderPool {
 
 impl RenderPool {
     fn new(converter: &MessageConverter, threads: usize) -> RenderPool {
-        let (tx, rx) = mpsc::channel::<(CameraFrameRequest, u64, Time, mpsc::SyncSender<Option<Image>>)>();
+        let (tx, rx) = mpsc::channel::<(
+            CameraFrameRequest,
+            u64,
+            Time,
+            mpsc::SyncSender<Option<Image>>,
+        )>();
         let rx = Arc::new(Mutex::new(rx));
         let converter = Arc::new(converter.clone());
         let workers = (0..threads)
@@ -311,13 +406,19 @@ impl RenderPool {
                 std::thread::spawn(move || loop {
                     // The lock is held only while waiting for a job, not while rendering.
                     let job = rx.lock().map(|r| r.recv());
-                    let Ok(Ok((request, stamp_ns, stamp, reply))) = job else { return };
+                    let Ok(Ok((request, stamp_ns, stamp, reply))) = job else {
+                        return;
+                    };
                     // The stream may have been dropped meanwhile: nobody to tell.
                     let _ = reply.send(converter.render_image(&request, stamp_ns, stamp));
                 })
             })
             .collect();
-        RenderPool { jobs: Some(tx), workers, in_flight: 0 }
+        RenderPool {
+            jobs: Some(tx),
+            workers,
+            in_flight: 0,
+        }
     }
 }
 
@@ -351,11 +452,19 @@ pub struct MessageStream<'a> {
 
 impl<'a> MessageStream<'a> {
     /// `clock_period`: spacing of `/clock` ticks in simulated seconds, `None` for no ticks.
-    pub fn new(sim: &'a Simulation, converter: &'a MessageConverter, clock_period: Option<f64>) -> MessageStream<'a> {
+    pub fn new(
+        sim: &'a Simulation,
+        converter: &'a MessageConverter,
+        clock_period: Option<f64>,
+    ) -> MessageStream<'a> {
         MessageStream {
             samples: sim.samples(),
             converter,
-            pending: converter.initial_messages().into_iter().map(Slot::Ready).collect(),
+            pending: converter
+                .initial_messages()
+                .into_iter()
+                .map(Slot::Ready)
+                .collect(),
             converted: VecDeque::new(),
             pool: None,
             clock_period: clock_period.filter(|p| *p > 0.0 && p.is_finite()),
@@ -369,13 +478,17 @@ impl<'a> MessageStream<'a> {
     /// Render camera frames on `threads` worker threads (0 = on the calling thread, the
     /// default), reading ahead by up to `threads + 1` frames. Same messages, same order.
     pub fn with_render_threads(mut self, threads: usize) -> MessageStream<'a> {
-        self.pool = (threads > 0 && self.converter.frames.is_some()).then(|| RenderPool::new(self.converter, threads));
+        self.pool = (threads > 0 && self.converter.frames.is_some())
+            .then(|| RenderPool::new(self.converter, threads));
         self
     }
 
     /// Why the twin's stream ended early, if it did (a physics term failed mid-run).
     pub fn error(&self) -> Option<SimError> {
-        self.samples.error().map(|e| SimError::Simulation { t: self.last_t, reason: e.to_string() })
+        self.samples.error().map(|e| SimError::Simulation {
+            t: self.last_t,
+            reason: e.to_string(),
+        })
     }
 
     fn next_tick(&self) -> Option<f64> {
@@ -392,18 +505,28 @@ impl<'a> MessageStream<'a> {
         self.last_t = s.t();
         let Some(pool) = self.pool.as_mut() else {
             self.converter.convert_into(&s, &mut self.converted);
-            self.pending.extend(self.converted.drain(..).map(Slot::Ready));
+            self.pending
+                .extend(self.converted.drain(..).map(Slot::Ready));
             return true;
         };
-        let frame = self.converter.convert_all_but_image(&s, &mut self.converted);
-        self.pending.extend(self.converted.drain(..).map(Slot::Ready));
+        let frame = self
+            .converter
+            .convert_all_but_image(&s, &mut self.converted);
+        self.pending
+            .extend(self.converted.drain(..).map(Slot::Ready));
         if let Some(job) = frame {
             let (reply, image) = mpsc::sync_channel(1);
-            let sent = pool.jobs.as_ref().is_some_and(|tx| tx.send((job.request.clone(), job.stamp_ns, job.stamp.clone(), reply)).is_ok());
+            let sent = pool.jobs.as_ref().is_some_and(|tx| {
+                tx.send((job.request.clone(), job.stamp_ns, job.stamp.clone(), reply))
+                    .is_ok()
+            });
             if sent {
                 pool.in_flight += 1;
                 self.pending.push_back(Slot::Rendering { job, image });
-            } else if let Some(img) = self.converter.render_image(&job.request, job.stamp_ns, job.stamp.clone()) {
+            } else if let Some(img) =
+                self.converter
+                    .render_image(&job.request, job.stamp_ns, job.stamp.clone())
+            {
                 self.pending.push_back(Slot::Ready(job.message(img)));
             }
         }
@@ -414,7 +537,9 @@ impl<'a> MessageStream<'a> {
     /// could take another one.
     fn read_ahead(&self) -> bool {
         match (&self.pool, self.pending.front()) {
-            (Some(pool), Some(Slot::Rendering { .. })) => pool.in_flight <= pool.workers.len() && self.pending.len() < MAX_READ_AHEAD,
+            (Some(pool), Some(Slot::Rendering { .. })) => {
+                pool.in_flight <= pool.workers.len() && self.pending.len() < MAX_READ_AHEAD
+            }
             _ => false,
         }
     }

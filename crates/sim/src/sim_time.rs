@@ -22,14 +22,22 @@ pub const MAX_STAMP_NS: u64 = i32::MAX as u64 * 1_000_000_000 + 999_999_999;
 /// `2026-01-05T07:00:00+01:00`, fractional seconds allowed). Times before 1970 are rejected.
 pub fn parse_start_time(text: &str) -> Result<u64, SimError> {
     let what = format!("start time {text:?}");
-    let dt = chrono::DateTime::parse_from_rfc3339(text.trim())
-        .map_err(|e| SimError::invalid(&what, format!("not an RFC 3339 date-time ({e}); example: {DEFAULT_START_TIME}")))?;
+    let dt = chrono::DateTime::parse_from_rfc3339(text.trim()).map_err(|e| {
+        SimError::invalid(
+            &what,
+            format!("not an RFC 3339 date-time ({e}); example: {DEFAULT_START_TIME}"),
+        )
+    })?;
     let ns = dt
         .timestamp_nanos_opt()
         .ok_or_else(|| SimError::invalid(&what, "outside the range of 64-bit nanoseconds"))?;
-    let ns = u64::try_from(ns).map_err(|_| SimError::invalid(&what, "before 1970-01-01T00:00:00Z"))?;
+    let ns =
+        u64::try_from(ns).map_err(|_| SimError::invalid(&what, "before 1970-01-01T00:00:00Z"))?;
     if ns > MAX_STAMP_NS {
-        return Err(SimError::invalid(&what, "after 2038-01-19T03:14:07Z, the last time a ROS stamp (int32 seconds) can hold"));
+        return Err(SimError::invalid(
+            &what,
+            "after 2038-01-19T03:14:07Z, the last time a ROS stamp (int32 seconds) can hold",
+        ));
     }
     Ok(ns)
 }
@@ -50,10 +58,16 @@ pub fn ros_time(ns: u64) -> Time {
 /// Check that a run of `duration_s` seconds starting at `start_ns` stays inside ROS time.
 pub fn check_span(start_ns: u64, duration_s: f64) -> Result<(), SimError> {
     if !(duration_s > 0.0 && duration_s.is_finite()) {
-        return Err(SimError::invalid("duration", format!("must be > 0 s and finite, got {duration_s}")));
+        return Err(SimError::invalid(
+            "duration",
+            format!("must be > 0 s and finite, got {duration_s}"),
+        ));
     }
     if stamp_ns(start_ns, duration_s) > MAX_STAMP_NS {
-        return Err(SimError::invalid("start time + duration", "ends after 2038-01-19T03:14:07Z, which int32-second ROS stamps cannot hold"));
+        return Err(SimError::invalid(
+            "start time + duration",
+            "ends after 2038-01-19T03:14:07Z, which int32-second ROS stamps cannot hold",
+        ));
     }
     Ok(())
 }
@@ -73,12 +87,20 @@ mod tests {
     fn offsets_and_fractions_are_honoured() {
         let z = parse_start_time("2026-01-05T06:00:00Z").unwrap();
         assert_eq!(parse_start_time("2026-01-05T07:00:00+01:00").unwrap(), z);
-        assert_eq!(parse_start_time("2026-01-05T06:00:00.25Z").unwrap(), z + 250_000_000);
+        assert_eq!(
+            parse_start_time("2026-01-05T06:00:00.25Z").unwrap(),
+            z + 250_000_000
+        );
     }
 
     #[test]
     fn bad_start_times_are_errors_naming_the_text() {
-        for bad in ["yesterday", "2026-01-05", "1969-12-31T23:59:59Z", "2040-01-01T00:00:00Z"] {
+        for bad in [
+            "yesterday",
+            "2026-01-05",
+            "1969-12-31T23:59:59Z",
+            "2040-01-01T00:00:00Z",
+        ] {
             let e = parse_start_time(bad).unwrap_err().to_string();
             assert!(e.contains(bad), "{e}");
         }
@@ -90,7 +112,10 @@ mod tests {
         assert_eq!(stamp_ns(start, 0.0), start);
         assert_eq!(stamp_ns(start, 0.1), start + 100_000_000);
         // 8 h at 100 Hz: sample k = 2_879_999 lands on its exact nanosecond.
-        assert_eq!(stamp_ns(start, 2_879_999.0 / 100.0), start + 28_799_990_000_000);
+        assert_eq!(
+            stamp_ns(start, 2_879_999.0 / 100.0),
+            start + 28_799_990_000_000
+        );
         let t = ros_time(start + 1_500_000_001);
         assert_eq!((t.sec, t.nanosec), (1_767_592_801, 500_000_001));
     }

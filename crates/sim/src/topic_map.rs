@@ -28,10 +28,12 @@
 //! report and what robot_state_publisher consumes; the command is kept apart so the pair shows
 //! the machine's error directly.
 
+use metrocell_msgs::geometry_msgs::msg::WrenchStamped;
 use metrocell_msgs::msg::{MeasuredPoint, ProbeHit, TrackerMeasurement};
 use metrocell_msgs::rosgraph_msgs::msg::Clock;
-use metrocell_msgs::geometry_msgs::msg::WrenchStamped;
-use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, Imu, JointState, Temperature, TimeReference};
+use metrocell_msgs::sensor_msgs::msg::{
+    CameraInfo, Image, Imu, JointState, Temperature, TimeReference,
+};
 use metrocell_twin::Cell;
 use rosmsg::RosMessage;
 
@@ -39,9 +41,13 @@ use crate::error::SimError;
 
 // The names themselves are crates/msgs `topics`, shared with `bag import` and the records builder.
 pub use metrocell_msgs::topics::{
-    CAMERA_IMAGE as CAMERA_IMAGE_TOPIC, CAMERA_INFO as CAMERA_INFO_TOPIC, CLOCK as CLOCK_TOPIC, COMMANDED_JOINTS as COMMANDED_JOINT_STATES_TOPIC,
-    JOINT_STATES as JOINT_STATES_TOPIC, LOAD as LOAD_TOPIC, POWER_ON as POWER_ON_TOPIC, PROBE_HITS as PROBE_TOPIC,
-    TEMPERATURE_PREFIX as TEMPERATURE_TOPIC_PREFIX, TRACKER_MEASUREMENTS as TRACKER_TOPIC, MEASURED_POINTS as MEASURED_POINTS_TOPIC, CHECK_POINTS as CHECK_POINTS_TOPIC, IMU_PREFIX as IMU_TOPIC_PREFIX,
+    CAMERA_IMAGE as CAMERA_IMAGE_TOPIC, CAMERA_INFO as CAMERA_INFO_TOPIC,
+    CHECK_POINTS as CHECK_POINTS_TOPIC, CLOCK as CLOCK_TOPIC,
+    COMMANDED_JOINTS as COMMANDED_JOINT_STATES_TOPIC, IMU_PREFIX as IMU_TOPIC_PREFIX,
+    JOINT_STATES as JOINT_STATES_TOPIC, LOAD as LOAD_TOPIC,
+    MEASURED_POINTS as MEASURED_POINTS_TOPIC, POWER_ON as POWER_ON_TOPIC,
+    PROBE_HITS as PROBE_TOPIC, TEMPERATURE_PREFIX as TEMPERATURE_TOPIC_PREFIX,
+    TRACKER_MEASUREMENTS as TRACKER_TOPIC,
 };
 
 /// QoS of a simulated stream, matching rclcpp's named profiles.
@@ -62,10 +68,20 @@ impl QosKind {
     /// The same profile as rosbag2 stores it.
     pub fn bag_profile(self) -> metrocell_bag::QosProfile {
         match self {
-            QosKind::Clock => metrocell_bag::QosProfile { keep_last: true, depth: 1, reliable: false, transient_local: false },
+            QosKind::Clock => metrocell_bag::QosProfile {
+                keep_last: true,
+                depth: 1,
+                reliable: false,
+                transient_local: false,
+            },
             QosKind::SensorData => metrocell_bag::QosProfile::sensor_data(),
             QosKind::Reliable => metrocell_bag::QosProfile::default_publisher(),
-            QosKind::Latched => metrocell_bag::QosProfile { keep_last: true, depth: 1, reliable: true, transient_local: true },
+            QosKind::Latched => metrocell_bag::QosProfile {
+                keep_last: true,
+                depth: 1,
+                reliable: true,
+                transient_local: true,
+            },
         }
     }
 }
@@ -107,7 +123,13 @@ pub struct TopicSpec {
 
 impl TopicSpec {
     fn of<T: RosMessage>(name: impl Into<String>, role: TopicRole, qos: QosKind) -> TopicSpec {
-        TopicSpec { name: name.into(), role, ros_type: T::ROS_TYPE, definition: T::DEFINITION, qos }
+        TopicSpec {
+            name: name.into(),
+            role,
+            ros_type: T::ROS_TYPE,
+            definition: T::DEFINITION,
+            qos,
+        }
     }
 }
 
@@ -147,38 +169,129 @@ impl TopicMap {
             }
         }
         let stationing = cell.stationing.as_ref();
-        let accelerometers: Vec<&str> = stationing.map(|s| s.accelerometers.iter().map(|a| a.name.as_str()).collect()).unwrap_or_default();
+        let accelerometers: Vec<&str> = stationing
+            .map(|s| s.accelerometers.iter().map(|a| a.name.as_str()).collect())
+            .unwrap_or_default();
         for (i, name) in accelerometers.iter().enumerate() {
             if !is_name_token(name) {
                 return Err(SimError::invalid(format!("sensors.accelerometers[{i}].name {name:?}"), "must be a ROS name token ([A-Za-z_][A-Za-z0-9_]*) because it names the topic /imu/<name>"));
             }
         }
-        let mut topics = vec![TopicSpec::of::<Clock>(CLOCK_TOPIC, TopicRole::Clock, QosKind::Clock)];
+        let mut topics = vec![TopicSpec::of::<Clock>(
+            CLOCK_TOPIC,
+            TopicRole::Clock,
+            QosKind::Clock,
+        )];
         let mut push = |t: TopicSpec| {
             topics.push(t);
             topics.len() - 1
         };
         let joint_states = (cell.machine_state_rate.is_some() || stationing.is_some()).then(|| {
             (
-                push(TopicSpec::of::<JointState>(JOINT_STATES_TOPIC, TopicRole::JointStates, QosKind::SensorData)),
-                push(TopicSpec::of::<JointState>(COMMANDED_JOINT_STATES_TOPIC, TopicRole::CommandedJointStates, QosKind::SensorData)),
+                push(TopicSpec::of::<JointState>(
+                    JOINT_STATES_TOPIC,
+                    TopicRole::JointStates,
+                    QosKind::SensorData,
+                )),
+                push(TopicSpec::of::<JointState>(
+                    COMMANDED_JOINT_STATES_TOPIC,
+                    TopicRole::CommandedJointStates,
+                    QosKind::SensorData,
+                )),
             )
         });
-        let load = cell.load_force.map(|_| push(TopicSpec::of::<WrenchStamped>(LOAD_TOPIC, TopicRole::Load, QosKind::Latched)));
+        let load = cell.load_force.map(|_| {
+            push(TopicSpec::of::<WrenchStamped>(
+                LOAD_TOPIC,
+                TopicRole::Load,
+                QosKind::Latched,
+            ))
+        });
         let temperatures = cell
             .thermocouples
             .iter()
-            .map(|tc| push(TopicSpec::of::<Temperature>(temperature_topic(&tc.name), TopicRole::Temperature(tc.name.clone()), QosKind::Reliable)))
+            .map(|tc| {
+                push(TopicSpec::of::<Temperature>(
+                    temperature_topic(&tc.name),
+                    TopicRole::Temperature(tc.name.clone()),
+                    QosKind::Reliable,
+                ))
+            })
             .collect();
-        let tracker = cell.tracker.as_ref().map(|_| push(TopicSpec::of::<TrackerMeasurement>(TRACKER_TOPIC, TopicRole::Tracker, QosKind::Reliable)));
-        let power_on = cell.tracker.as_ref().map(|_| push(TopicSpec::of::<TimeReference>(POWER_ON_TOPIC, TopicRole::TrackerPowerOn, QosKind::Latched)));
-        let measured_points = stationing.map(|_| push(TopicSpec::of::<MeasuredPoint>(MEASURED_POINTS_TOPIC, TopicRole::MeasuredPoints, QosKind::Reliable)));
-        let check_points = stationing.map(|_| push(TopicSpec::of::<MeasuredPoint>(CHECK_POINTS_TOPIC, TopicRole::CheckPoints, QosKind::Reliable)));
-        let imu = accelerometers.iter().map(|a| push(TopicSpec::of::<Imu>(format!("{IMU_TOPIC_PREFIX}{a}"), TopicRole::Imu(a.to_string()), QosKind::Reliable))).collect();
-        let probe = cell.probe.as_ref().map(|_| push(TopicSpec::of::<ProbeHit>(PROBE_TOPIC, TopicRole::Probe, QosKind::Reliable)));
-        let camera_info = cell.camera.as_ref().map(|_| push(TopicSpec::of::<CameraInfo>(CAMERA_INFO_TOPIC, TopicRole::CameraInfo, QosKind::SensorData)));
-        let camera_image = cell.camera.as_ref().map(|_| push(TopicSpec::of::<Image>(CAMERA_IMAGE_TOPIC, TopicRole::CameraImage, QosKind::SensorData)));
-        Ok(TopicMap { topics, clock: 0, joint_states, load, temperatures, tracker, measured_points, check_points, imu, power_on, probe, camera_info, camera_image })
+        let tracker = cell.tracker.as_ref().map(|_| {
+            push(TopicSpec::of::<TrackerMeasurement>(
+                TRACKER_TOPIC,
+                TopicRole::Tracker,
+                QosKind::Reliable,
+            ))
+        });
+        let power_on = cell.tracker.as_ref().map(|_| {
+            push(TopicSpec::of::<TimeReference>(
+                POWER_ON_TOPIC,
+                TopicRole::TrackerPowerOn,
+                QosKind::Latched,
+            ))
+        });
+        let measured_points = stationing.map(|_| {
+            push(TopicSpec::of::<MeasuredPoint>(
+                MEASURED_POINTS_TOPIC,
+                TopicRole::MeasuredPoints,
+                QosKind::Reliable,
+            ))
+        });
+        let check_points = stationing.map(|_| {
+            push(TopicSpec::of::<MeasuredPoint>(
+                CHECK_POINTS_TOPIC,
+                TopicRole::CheckPoints,
+                QosKind::Reliable,
+            ))
+        });
+        let imu = accelerometers
+            .iter()
+            .map(|a| {
+                push(TopicSpec::of::<Imu>(
+                    format!("{IMU_TOPIC_PREFIX}{a}"),
+                    TopicRole::Imu(a.to_string()),
+                    QosKind::Reliable,
+                ))
+            })
+            .collect();
+        let probe = cell.probe.as_ref().map(|_| {
+            push(TopicSpec::of::<ProbeHit>(
+                PROBE_TOPIC,
+                TopicRole::Probe,
+                QosKind::Reliable,
+            ))
+        });
+        let camera_info = cell.camera.as_ref().map(|_| {
+            push(TopicSpec::of::<CameraInfo>(
+                CAMERA_INFO_TOPIC,
+                TopicRole::CameraInfo,
+                QosKind::SensorData,
+            ))
+        });
+        let camera_image = cell.camera.as_ref().map(|_| {
+            push(TopicSpec::of::<Image>(
+                CAMERA_IMAGE_TOPIC,
+                TopicRole::CameraImage,
+                QosKind::SensorData,
+            ))
+        });
+        Ok(TopicMap {
+            topics,
+            clock: 0,
+            joint_states,
+            load,
+            temperatures,
+            tracker,
+            measured_points,
+            check_points,
+            imu,
+            power_on,
+            probe,
+            camera_info,
+            camera_image,
+        })
     }
 
     pub fn get(&self, id: TopicId) -> &TopicSpec {
@@ -187,12 +300,18 @@ impl TopicMap {
 
     /// Topic id of an accelerometer by name.
     pub fn imu(&self, sensor: &str) -> Option<TopicId> {
-        self.imu.iter().copied().find(|&i| self.topics[i].role == TopicRole::Imu(sensor.to_string()))
+        self.imu
+            .iter()
+            .copied()
+            .find(|&i| self.topics[i].role == TopicRole::Imu(sensor.to_string()))
     }
 
     /// Topic id of a thermocouple by name.
     pub fn temperature(&self, sensor: &str) -> Option<TopicId> {
-        self.temperatures.iter().copied().find(|&i| self.topics[i].role == TopicRole::Temperature(sensor.to_string()))
+        self.temperatures
+            .iter()
+            .copied()
+            .find(|&i| self.topics[i].role == TopicRole::Temperature(sensor.to_string()))
     }
 }
 
@@ -203,7 +322,8 @@ pub fn temperature_topic(sensor: &str) -> String {
 
 fn is_name_token(s: &str) -> bool {
     let mut chars = s.chars();
-    matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_') && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
+    matches!(chars.next(), Some(c) if c.is_ascii_alphabetic() || c == '_')
+        && chars.all(|c| c.is_ascii_alphanumeric() || c == '_')
 }
 
 #[cfg(test)]

@@ -15,7 +15,9 @@ use metrocell_twin::Cell;
 const DURATION: f64 = 60.0;
 
 fn cell_path(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../twin/examples/cells").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../twin/examples/cells")
+        .join(name)
 }
 
 fn scratch(name: &str) -> PathBuf {
@@ -38,14 +40,25 @@ fn write(dir: &Path, seed: u64) -> BagSummary {
 }
 
 fn files(dir: &Path) -> Vec<(String, Vec<u8>)> {
-    let mut v: Vec<_> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap()).map(|e| (e.file_name().to_string_lossy().into_owned(), std::fs::read(e.path()).unwrap())).collect();
+    let mut v: Vec<_> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap())
+        .map(|e| {
+            (
+                e.file_name().to_string_lossy().into_owned(),
+                std::fs::read(e.path()).unwrap(),
+            )
+        })
+        .collect();
     v.sort();
     v
 }
 
 fn decode<T: serde::de::DeserializeOwned>(data: &[u8]) -> T {
     assert_eq!(&data[..4], &[0, 1, 0, 0], "encapsulation header");
-    rustdds::serialization::from_bytes::<T, byteorder::LittleEndian>(&data[4..]).unwrap().0
+    rustdds::serialization::from_bytes::<T, byteorder::LittleEndian>(&data[4..])
+        .unwrap()
+        .0
 }
 
 #[test]
@@ -64,9 +77,20 @@ fn same_seed_gives_byte_identical_bags_and_counts_follow_the_rates() {
     assert_eq!(n["/machine/joint_states"], 1200);
     assert_eq!(n["/machine/commanded_joint_states"], 1200);
     // 30 s cycles of 6 points, 4 probe directions each; one camera frame per dwell.
-    assert!(n["/probe/hits"] >= 24 && n["/probe/hits"].is_multiple_of(4), "{}", n["/probe/hits"]);
-    assert!(n["/camera/camera_info"] >= 6, "{}", n["/camera/camera_info"]);
-    assert_eq!(n["/camera/image_raw"], n["/camera/camera_info"], "one rendered image per camera frame request");
+    assert!(
+        n["/probe/hits"] >= 24 && n["/probe/hits"].is_multiple_of(4),
+        "{}",
+        n["/probe/hits"]
+    );
+    assert!(
+        n["/camera/camera_info"] >= 6,
+        "{}",
+        n["/camera/camera_info"]
+    );
+    assert_eq!(
+        n["/camera/image_raw"], n["/camera/camera_info"],
+        "one rendered image per camera frame request"
+    );
     assert_eq!(a.total_messages, n.values().sum::<u64>());
     assert_eq!(a.metadata.message_count, a.total_messages);
 
@@ -76,10 +100,18 @@ fn same_seed_gives_byte_identical_bags_and_counts_follow_the_rates() {
     assert_eq!(names, ["bag_0.mcap", "metadata.yaml"]);
     for ((na, ba), (nb, bb)) in fa.iter().zip(&fb) {
         assert_eq!(na, nb);
-        assert!(ba == bb, "{na} differs between two runs with the same seed ({} vs {} bytes)", ba.len(), bb.len());
+        assert!(
+            ba == bb,
+            "{na} differs between two runs with the same seed ({} vs {} bytes)",
+            ba.len(),
+            bb.len()
+        );
     }
     let fc = files(&c.dir);
-    assert_ne!(fa[0].1, fc[0].1, "a different seed must give a different recording");
+    assert_ne!(
+        fa[0].1, fc[0].1,
+        "a different seed must give a different recording"
+    );
     std::fs::remove_dir_all(&root).unwrap();
 }
 
@@ -91,14 +123,31 @@ fn stamps_are_start_plus_t_and_messages_decode() {
     let reader = BagReader::open(&s.dir).unwrap();
     let tracker = reader.topic("/tracker/measurements").unwrap();
     assert_eq!(tracker.type_name, "metrocell_msgs/msg/TrackerMeasurement");
-    assert!(tracker.definition.contains("MSG: std_msgs/Header"), "full definition with dependencies");
-    assert!(reader.topic("/clock").unwrap().offered_qos_profiles.contains("reliability: 2"), "clock is best effort");
-    assert!(reader.topic("/temperature/x_left").unwrap().offered_qos_profiles.contains("reliability: 1"));
+    assert!(
+        tracker.definition.contains("MSG: std_msgs/Header"),
+        "full definition with dependencies"
+    );
+    assert!(
+        reader
+            .topic("/clock")
+            .unwrap()
+            .offered_qos_profiles
+            .contains("reliability: 2"),
+        "clock is best effort"
+    );
+    assert!(reader
+        .topic("/temperature/x_left")
+        .unwrap()
+        .offered_qos_profiles
+        .contains("reliability: 1"));
 
     let msgs = reader.read_all(&MessageFilter::default()).unwrap();
     assert_eq!(msgs.len() as u64, s.total_messages);
     assert_eq!(msgs.first().unwrap().log_time, start);
-    assert!(msgs.windows(2).all(|w| w[0].log_time <= w[1].log_time), "log-time order");
+    assert!(
+        msgs.windows(2).all(|w| w[0].log_time <= w[1].log_time),
+        "log-time order"
+    );
     let (mut tracker_n, mut temps, mut clocks) = (0, 0, 0);
     for m in &msgs {
         assert_eq!(m.log_time, m.publish_time);
@@ -106,7 +155,10 @@ fn stamps_are_start_plus_t_and_messages_decode() {
         match m.topic.as_str() {
             "/tracker/measurements" => {
                 let t: TrackerMeasurement = decode(&m.data);
-                assert_eq!(stamp_ns(t.header.stamp.sec, t.header.stamp.nanosec), m.log_time);
+                assert_eq!(
+                    stamp_ns(t.header.stamp.sec, t.header.stamp.nanosec),
+                    m.log_time
+                );
                 // 10 Hz: the k-th measurement is stamped start + k/10 s.
                 assert_eq!(m.log_time, start + tracker_n * 100_000_000);
                 if t.status == TrackerMeasurement::STATUS_OK {
@@ -115,16 +167,31 @@ fn stamps_are_start_plus_t_and_messages_decode() {
                     let r = (t.point.x.powi(2) + t.point.y.powi(2) + t.point.z.powi(2)).sqrt();
                     assert!((r - t.range).abs() < 1e-9);
                     assert!(t.covariance[0] > 0.0 && t.covariance[0] < 1e-8);
-                    assert!((t.covariance[1] - t.covariance[3]).abs() <= 1e-12 * t.covariance[0], "symmetric");
-                    assert!((t.air_humidity - 0.5).abs() < 0.05, "fraction, not %RH: {}", t.air_humidity);
-                    assert!((t.refractive_index - 1.00027).abs() < 2e-5, "{}", t.refractive_index);
+                    assert!(
+                        (t.covariance[1] - t.covariance[3]).abs() <= 1e-12 * t.covariance[0],
+                        "symmetric"
+                    );
+                    assert!(
+                        (t.air_humidity - 0.5).abs() < 0.05,
+                        "fraction, not %RH: {}",
+                        t.air_humidity
+                    );
+                    assert!(
+                        (t.refractive_index - 1.00027).abs() < 2e-5,
+                        "{}",
+                        t.refractive_index
+                    );
                 }
                 tracker_n += 1;
             }
             "/temperature/x_left" => {
                 let t: Temperature = decode(&m.data);
                 assert!((t.temperature - 21.0).abs() < 3.0, "{}", t.temperature);
-                assert!((t.variance - 0.02f64.powi(2)).abs() < 1e-12, "{}", t.variance);
+                assert!(
+                    (t.variance - 0.02f64.powi(2)).abs() < 1e-12,
+                    "{}",
+                    t.variance
+                );
                 assert_eq!(t.header.frame_id, "table");
                 temps += 1;
             }
@@ -135,7 +202,10 @@ fn stamps_are_start_plus_t_and_messages_decode() {
             }
             "/clock" => {
                 let c: Clock = decode(&m.data);
-                assert_eq!(stamp_ns(c.clock.sec, c.clock.nanosec), start + clocks * 100_000_000);
+                assert_eq!(
+                    stamp_ns(c.clock.sec, c.clock.nanosec),
+                    start + clocks * 100_000_000
+                );
                 clocks += 1;
             }
             _ => {}

@@ -12,21 +12,32 @@ use metrocell_twin::Cell;
 const DURATION: f64 = 20.0;
 
 fn cell_path(name: &str) -> PathBuf {
-    Path::new(env!("CARGO_MANIFEST_DIR")).join("../twin/examples/cells").join(name)
+    Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../twin/examples/cells")
+        .join(name)
 }
 
 fn decode<T: serde::de::DeserializeOwned>(data: &[u8]) -> T {
     assert_eq!(&data[..4], &[0, 1, 0, 0], "encapsulation header");
-    rustdds::serialization::from_bytes::<T, byteorder::LittleEndian>(&data[4..]).unwrap().0
+    rustdds::serialization::from_bytes::<T, byteorder::LittleEndian>(&data[4..])
+        .unwrap()
+        .0
 }
 
 #[test]
 fn bags_of_the_jointed_examples_carry_their_joint_names() {
-    let root = std::env::temp_dir().join(format!("metrocell-sim-test-{}-jointed", std::process::id()));
+    let root =
+        std::env::temp_dir().join(format!("metrocell-sim-test-{}-jointed", std::process::id()));
     let _ = std::fs::remove_dir_all(&root);
     let arm_names: Vec<String> = (1..=6).map(|i| format!("joint_{i}")).collect();
-    let five_names: Vec<String> = ["x", "y", "z", "b", "c"].iter().map(|s| s.to_string()).collect();
-    for (file, names) in [("five_axis_table.yaml", five_names), ("serial_arm_ur5.yaml", arm_names)] {
+    let five_names: Vec<String> = ["x", "y", "z", "b", "c"]
+        .iter()
+        .map(|s| s.to_string())
+        .collect();
+    for (file, names) in [
+        ("five_axis_table.yaml", five_names),
+        ("serial_arm_ur5.yaml", arm_names),
+    ] {
         let cell = Cell::from_path(cell_path(file)).unwrap();
         let dir = root.join(file.trim_end_matches(".yaml")).join("bag");
         let s = write_bag(cell, DURATION, 9, &dir, &BagOptions::default(), |_| {}).unwrap();
@@ -35,7 +46,14 @@ fn bags_of_the_jointed_examples_carry_their_joint_names() {
         assert_eq!(n["/machine/joint_states"], 400, "{file}");
         assert_eq!(n["/machine/commanded_joint_states"], 400, "{file}");
         assert_eq!(n["/tracker/measurements"], 200, "{file}");
-        assert_eq!(n.keys().filter(|k| k.starts_with("/temperature/")).map(|k| n[k]).sum::<u64>(), 40, "{file}");
+        assert_eq!(
+            n.keys()
+                .filter(|k| k.starts_with("/temperature/"))
+                .map(|k| n[k])
+                .sum::<u64>(),
+            40,
+            "{file}"
+        );
         let reader = BagReader::open(&s.dir).unwrap();
         let msgs = reader.read_all(&MessageFilter::default()).unwrap();
         assert_eq!(msgs.len() as u64, s.total_messages);
@@ -59,7 +77,10 @@ fn bags_of_the_jointed_examples_carry_their_joint_names() {
                     // the five-axis example states its lens; the bag carries it, not the default
                     let c: CameraInfo = decode(&m.data);
                     assert_eq!((c.width, c.height), (1280, 1024));
-                    assert_eq!((c.k[0], c.k[2], c.k[4], c.k[5]), (1600.0, 639.5, 1600.0, 511.5));
+                    assert_eq!(
+                        (c.k[0], c.k[2], c.k[4], c.k[5]),
+                        (1600.0, 639.5, 1600.0, 511.5)
+                    );
                     assert_eq!(c.d, [-0.08, 0.02, 0.0, 0.0, 0.0]);
                     camera_infos += 1;
                 }
@@ -84,7 +105,10 @@ fn bags_of_the_jointed_examples_carry_their_joint_names() {
         }
         assert!(differs, "{file}: the commanded joints move");
         if file.starts_with("five") {
-            assert!(camera_infos >= 1 && n["/camera/image_raw"] == n["/camera/camera_info"], "{file}: {n:?}");
+            assert!(
+                camera_infos >= 1 && n["/camera/image_raw"] == n["/camera/camera_info"],
+                "{file}: {n:?}"
+            );
         }
     }
     std::fs::remove_dir_all(&root).unwrap();

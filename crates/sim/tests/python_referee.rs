@@ -26,12 +26,23 @@ fn rosbags_and_mcap_ros2_decode_the_bag() {
     let root = std::env::temp_dir().join(format!("metrocell-sim-referee-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&root);
     let dir = root.join("demo");
-    let cell = Cell::from_path(Path::new(env!("CARGO_MANIFEST_DIR")).join("../twin/examples/cells/quick_demo.yaml")).unwrap();
+    let cell = Cell::from_path(
+        Path::new(env!("CARGO_MANIFEST_DIR")).join("../twin/examples/cells/quick_demo.yaml"),
+    )
+    .unwrap();
     let summary = write_bag(cell, 40.0, 11, &dir, &BagOptions::default(), |_| {}).unwrap();
 
     let script = Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/py/referee.py");
-    let out = Command::new(python()).arg(&script).arg(&dir).output().expect("start python");
-    assert!(out.status.success(), "referee.py failed:\n{}", String::from_utf8_lossy(&out.stderr));
+    let out = Command::new(python())
+        .arg(&script)
+        .arg(&dir)
+        .output()
+        .expect("start python");
+    assert!(
+        out.status.success(),
+        "referee.py failed:\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
 
     for peer in ["rosbags", "mcap"] {
@@ -46,10 +57,17 @@ fn rosbags_and_mcap_ros2_decode_the_bag() {
     assert!((tr["humidity"].as_f64().unwrap() - 0.5).abs() < 0.05);
     assert!((tr["index"].as_f64().unwrap() - 1.00027).abs() < 2e-5);
     assert_eq!(tr["frame"], "tracker");
-    assert_eq!((tr["stamp_ns"].as_u64().unwrap() - start) % 100_000_000, 0, "tracker stamps on the 10 Hz grid");
+    assert_eq!(
+        (tr["stamp_ns"].as_u64().unwrap() - start) % 100_000_000,
+        0,
+        "tracker stamps on the 10 Hz grid"
+    );
     assert!((v["temperature"]["value"].as_f64().unwrap() - 21.0).abs() < 0.2);
     assert_eq!(v["temperature"]["frame"], "table");
     assert_eq!(v["joint_state"]["name"], serde_json::json!(["x", "y", "z"]));
-    assert_eq!(v["clock_ns"], serde_json::json!([start, start + 100_000_000]));
+    assert_eq!(
+        v["clock_ns"],
+        serde_json::json!([start, start + 100_000_000])
+    );
     std::fs::remove_dir_all(&root).unwrap();
 }

@@ -69,8 +69,22 @@ struct Xfyz {
 
 impl Xfyz {
     fn new(q: Vec<Vector3<f64>>, measured: Vec<Vector3<f64>>) -> Self {
-        let basis = q.iter().map(|p| [legendre(2.0 * p.x - 1.0), legendre(2.0 * p.y - 1.0), legendre(2.0 * p.z - 1.0)]).collect();
-        Xfyz { q, measured, basis, terms: error_terms() }
+        let basis = q
+            .iter()
+            .map(|p| {
+                [
+                    legendre(2.0 * p.x - 1.0),
+                    legendre(2.0 * p.y - 1.0),
+                    legendre(2.0 * p.z - 1.0),
+                ]
+            })
+            .collect();
+        Xfyz {
+            q,
+            measured,
+            basis,
+            terms: error_terms(),
+        }
     }
 
     /// q + E(q)·p for point i.
@@ -86,7 +100,9 @@ impl Xfyz {
     fn predict(&self, x: &[f64]) -> Vec<Vector3<f64>> {
         let (r, _) = rotation(x);
         let t = Vector3::new(x[ERRORS + 3], x[ERRORS + 4], x[ERRORS + 5]);
-        (0..self.q.len()).map(|i| r * self.displaced(i, x) + t).collect()
+        (0..self.q.len())
+            .map(|i| r * self.displaced(i, x) + t)
+            .collect()
     }
 }
 
@@ -105,7 +121,12 @@ impl Problem for Xfyz {
         }
         Ok(())
     }
-    fn residuals_and_jacobian(&self, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>) -> Result<(), NotEvaluable> {
+    fn residuals_and_jacobian(
+        &self,
+        x: &[f64],
+        r: &mut [f64],
+        j: &mut DMatrix<f64>,
+    ) -> Result<(), NotEvaluable> {
         let (rot, d) = rotation(x);
         let t = Vector3::new(x[ERRORS + 3], x[ERRORS + 4], x[ERRORS + 5]);
         for i in 0..self.q.len() {
@@ -147,9 +168,20 @@ fn main() {
         *v = 1e-5 * common::normal(&mut r);
     }
     truth[ERRORS..].copy_from_slice(&[0.02, -0.01, 0.3, 1.2, -0.4, 0.3]);
-    let q: Vec<Vector3<f64>> = (0..points).map(|_| Vector3::new(rand::Rng::random(&mut r), rand::Rng::random(&mut r), rand::Rng::random(&mut r))).collect();
+    let q: Vec<Vector3<f64>> = (0..points)
+        .map(|_| {
+            Vector3::new(
+                rand::Rng::random(&mut r),
+                rand::Rng::random(&mut r),
+                rand::Rng::random(&mut r),
+            )
+        })
+        .collect();
     let exact = Xfyz::new(q.clone(), vec![Vector3::zeros(); points]).predict(&truth);
-    let measured: Vec<Vector3<f64>> = exact.iter().map(|m| m + Vector3::from_fn(|_, _| sigma * common::normal(&mut r))).collect();
+    let measured: Vec<Vector3<f64>> = exact
+        .iter()
+        .map(|m| m + Vector3::from_fn(|_, _| sigma * common::normal(&mut r)))
+        .collect();
     let problem = Xfyz::new(q.clone(), measured.clone());
     let mut x0 = vec![0.0; PARAMS];
     for k in 0..6 {
@@ -167,17 +199,43 @@ fn main() {
     times.sort_by(f64::total_cmp);
     let ours = solution.expect("five runs");
     let median = times[2];
-    let data: Vec<f64> = q.iter().zip(&measured).flat_map(|(a, b)| [a.x, a.y, a.z, b.x, b.y, b.z]).collect();
+    let data: Vec<f64> = q
+        .iter()
+        .zip(&measured)
+        .flat_map(|(a, b)| [a.x, a.y, a.z, b.x, b.y, b.z])
+        .collect();
     let n = PARAMS;
-    let reference = common::scipy("xfyz", &x0, &vec![-common::INF; n], &vec![common::INF; n], &data);
+    let reference = common::scipy(
+        "xfyz",
+        &x0,
+        &vec![-common::INF; n],
+        &vec![common::INF; n],
+        &data,
+    );
     let u = ours.standard_uncertainties().expect("identifiable");
     let scale = reference.x.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-    let diff = ours.x.iter().zip(&reference.x).fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
-    let diff_sigma = (0..n).fold(0.0f64, |a, k| a.max((ours.x[k] - reference.x[k]).abs() / u[k]));
-    let err_rel = (0..ERRORS).fold(0.0f64, |a, k| a.max((ours.x[k] - reference.x[k]).abs() / reference.x[k].abs()));
-    println!("problem: {} residuals × {n} parameters, σ = {:.1} µm", 3 * points, sigma * 1e6);
+    let diff = ours
+        .x
+        .iter()
+        .zip(&reference.x)
+        .fold(0.0f64, |a, (x, y)| a.max((x - y).abs()));
+    let diff_sigma = (0..n).fold(0.0f64, |a, k| {
+        a.max((ours.x[k] - reference.x[k]).abs() / u[k])
+    });
+    let err_rel = (0..ERRORS).fold(0.0f64, |a, k| {
+        a.max((ours.x[k] - reference.x[k]).abs() / reference.x[k].abs())
+    });
+    println!(
+        "problem: {} residuals × {n} parameters, σ = {:.1} µm",
+        3 * points,
+        sigma * 1e6
+    );
     println!("metrocell-solver: median {:.1} ms of 5 ({} iterations, {:?}), residual RMS {:.3} µm, σ̂₀ = {:.3} µm", median * 1e3, ours.iterations, ours.termination, ours.residual_rms * 1e6, ours.variance_factor.unwrap_or(f64::NAN).sqrt() * 1e6);
-    println!("scipy trf:        {:.1} ms ({})", reference.seconds * 1e3, reference.status_line);
+    println!(
+        "scipy trf:        {:.1} ms ({})",
+        reference.seconds * 1e3,
+        reference.status_line
+    );
     println!("ratio scipy/ours: {:.1}×", reference.seconds / median);
     println!("solutions: max |Δx| / max |x| = {:.2e}; max |Δx_k|/u_k = {:.2e}; max per-parameter relative (error terms) = {:.2e}", diff / scale, diff_sigma, err_rel);
     normal_matrix_benchmark();
@@ -191,7 +249,10 @@ fn main() {
 fn normal_matrix_benchmark() {
     let (m, n) = (30_000, 75);
     let j = DMatrix::from_fn(m, n, |i, k| ((i * 31 + k * 17) % 101) as f64 / 101.0 - 0.5);
-    let free: Vec<usize> = (0..n).filter(|k| k % 5 != 1 && k % 7 != 3).take(46).collect();
+    let free: Vec<usize> = (0..n)
+        .filter(|k| k % 5 != 1 && k % 7 != 3)
+        .take(46)
+        .collect();
     let selected = j.select_columns(&free);
     let transposed = selected.transpose();
     let fastest = |f: &mut dyn FnMut() -> DMatrix<f64>| {

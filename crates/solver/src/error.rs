@@ -4,9 +4,17 @@
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum SolverError {
     #[error("{what}: expected {expected} values, got {got}")]
-    Length { what: String, expected: usize, got: usize },
+    Length {
+        what: String,
+        expected: usize,
+        got: usize,
+    },
     #[error("{what}[{index}] is not finite ({value})")]
-    NotFinite { what: String, index: usize, value: f64 },
+    NotFinite {
+        what: String,
+        index: usize,
+        value: f64,
+    },
     #[error("{what}: {reason}")]
     Invalid { what: String, reason: String },
     #[error("the problem cannot be evaluated at the start: {0}")]
@@ -25,13 +33,21 @@ pub(crate) fn check_len(what: &str, expected: usize, got: usize) -> Result<(), S
     if expected == got {
         Ok(())
     } else {
-        Err(SolverError::Length { what: what.into(), expected, got })
+        Err(SolverError::Length {
+            what: what.into(),
+            expected,
+            got,
+        })
     }
 }
 
 pub(crate) fn check_finite(what: &str, v: &[f64]) -> Result<(), SolverError> {
     match v.iter().position(|x| !x.is_finite()) {
         None => Ok(()),
-        Some(index) => Err(SolverError::NotFinite { what: what.into(), index, value: v[index] }),
+        Some(index) => Err(SolverError::NotFinite {
+            what: what.into(),
+            index,
+            value: v[index],
+        }),
     }
 }

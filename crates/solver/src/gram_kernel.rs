@@ -26,11 +26,22 @@ const BLOCK_ROWS: usize = 64;
 /// Register tile: TI columns of the block broadcast against TJ consecutive ones.
 const TI: usize = 4;
 const TJ: usize = 8;
-const _: () = assert!(TJ % TI == 0, "a row padded to whole TJ tiles holds whole TI tiles");
+const _: () = assert!(
+    TJ % TI == 0,
+    "a row padded to whole TJ tiles holds whole TI tiles"
+);
 
 /// `af` = J̃ᵀJ̃ (|free| × |free|, both triangles) and `gf` = J̃ᵀr̃ (zero without r̃) over `rows`,
 /// with J̃ = diag(row_scale)·J[:, free] and `r` already weighted.
-pub(crate) fn weighted_gram_of_rows(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64], r: Option<&[f64]>, rows: Range<usize>, af: &mut DMatrix<f64>, gf: &mut DVector<f64>) {
+pub(crate) fn weighted_gram_of_rows(
+    j: &DMatrix<f64>,
+    free: &[usize],
+    row_scale: &[f64],
+    r: Option<&[f64]>,
+    rows: Range<usize>,
+    af: &mut DMatrix<f64>,
+    gf: &mut DVector<f64>,
+) {
     #[cfg(target_arch = "x86_64")]
     if std::arch::is_x86_feature_detected!("avx2") && std::arch::is_x86_feature_detected!("fma") {
         // SAFETY: the CPU supports AVX2 and FMA (checked just above)
@@ -42,12 +53,29 @@ pub(crate) fn weighted_gram_of_rows(j: &DMatrix<f64>, free: &[usize], row_scale:
 
 #[cfg(target_arch = "x86_64")]
 #[target_feature(enable = "avx2,fma")]
-unsafe fn gram_avx2_fma(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64], r: Option<&[f64]>, rows: Range<usize>, af: &mut DMatrix<f64>, gf: &mut DVector<f64>) {
-    gram(j, free, row_scale, r, rows, af, gf, |block, w, kb, c0, d0, acc| {
-        // SAFETY: this function runs only where AVX2 and FMA are (checked by the caller), and
-        // `gram` hands over whole tiles within the block's rows
-        unsafe { tile_avx2_fma(block, w, kb, c0, d0, acc) }
-    });
+unsafe fn gram_avx2_fma(
+    j: &DMatrix<f64>,
+    free: &[usize],
+    row_scale: &[f64],
+    r: Option<&[f64]>,
+    rows: Range<usize>,
+    af: &mut DMatrix<f64>,
+    gf: &mut DVector<f64>,
+) {
+    gram(
+        j,
+        free,
+        row_scale,
+        r,
+        rows,
+        af,
+        gf,
+        |block, w, kb, c0, d0, acc| {
+            // SAFETY: this function runs only where AVX2 and FMA are (checked by the caller), and
+            // `gram` hands over whole tiles within the block's rows
+            unsafe { tile_avx2_fma(block, w, kb, c0, d0, acc) }
+        },
+    );
 }
 
 /// One TI × TJ tile over the block's kb rows, added into `acc`: the register kernel, two
@@ -60,14 +88,20 @@ unsafe fn gram_avx2_fma(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64], r: 
 #[target_feature(enable = "avx2,fma")]
 unsafe fn tile_avx2_fma(block: &[f64], w: usize, kb: usize, c0: usize, d0: usize, acc: &mut [f64]) {
     use std::arch::x86_64::*;
-    assert!(kb * w <= block.len() && c0 + TI <= w && d0 + TJ <= w, "a tile within the block");
+    assert!(
+        kb * w <= block.len() && c0 + TI <= w && d0 + TJ <= w,
+        "a tile within the block"
+    );
     let mut t = [_mm256_setzero_pd(); 2 * TI];
     let p = block.as_ptr();
     for i in 0..kb {
         // SAFETY: row i's entries c0..c0 + TI and d0..d0 + TJ lie within the block (asserted)
         unsafe {
             let row = p.add(i * w);
-            let (b0, b1) = (_mm256_loadu_pd(row.add(d0)), _mm256_loadu_pd(row.add(d0 + 4)));
+            let (b0, b1) = (
+                _mm256_loadu_pd(row.add(d0)),
+                _mm256_loadu_pd(row.add(d0 + 4)),
+            );
             for ii in 0..TI {
                 let a = _mm256_broadcast_sd(&*row.add(c0 + ii));
                 t[2 * ii] = _mm256_fmadd_pd(a, b0, t[2 * ii]);
@@ -108,7 +142,16 @@ fn tile_portable(block: &[f64], w: usize, kb: usize, c0: usize, d0: usize, acc: 
 /// The blocked product, with `tile(block, w, kb, c0, d0, acc)` adding one tile's sums.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn gram(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64], r: Option<&[f64]>, rows: Range<usize>, af: &mut DMatrix<f64>, gf: &mut DVector<f64>, mut tile: impl FnMut(&[f64], usize, usize, usize, usize, &mut [f64])) {
+fn gram(
+    j: &DMatrix<f64>,
+    free: &[usize],
+    row_scale: &[f64],
+    r: Option<&[f64]>,
+    rows: Range<usize>,
+    af: &mut DMatrix<f64>,
+    gf: &mut DVector<f64>,
+    mut tile: impl FnMut(&[f64], usize, usize, usize, usize, &mut [f64]),
+) {
     let nf = free.len();
     af.fill(0.0);
     gf.fill(0.0);
@@ -163,7 +206,12 @@ mod tests {
     /// The product against a plain triple loop, on shapes that leave partial tiles and blocks.
     #[test]
     fn gram_matches_the_plain_sums() {
-        for (m, n, free) in [(130, 9, vec![0, 2, 3, 5, 8]), (70, 13, (0..13).collect::<Vec<_>>()), (5, 3, vec![1]), (40, 8, (0..8).collect())] {
+        for (m, n, free) in [
+            (130, 9, vec![0, 2, 3, 5, 8]),
+            (70, 13, (0..13).collect::<Vec<_>>()),
+            (5, 3, vec![1]),
+            (40, 8, (0..8).collect()),
+        ] {
             let j = DMatrix::from_fn(m, n, |i, k| ((i * 7 + k * 11) % 23) as f64 / 23.0 - 0.3);
             let s: Vec<f64> = (0..m).map(|i| 0.5 + (i % 5) as f64 * 0.25).collect();
             let r: Vec<f64> = (0..m).map(|i| (i as f64 * 0.3).sin()).collect();
@@ -173,14 +221,30 @@ mod tests {
             let (mut af, mut gf) = (DMatrix::zeros(nf, nf), DVector::zeros(nf));
             let (mut af_portable, mut gf_portable) = (DMatrix::zeros(nf, nf), DVector::zeros(nf));
             weighted_gram_of_rows(&j, &free, &s, Some(&r), rows.clone(), &mut af, &mut gf);
-            gram(&j, &free, &s, Some(&r), rows.clone(), &mut af_portable, &mut gf_portable, tile_portable);
+            gram(
+                &j,
+                &free,
+                &s,
+                Some(&r),
+                rows.clone(),
+                &mut af_portable,
+                &mut gf_portable,
+                tile_portable,
+            );
             for (af, gf) in [(&af, &gf), (&af_portable, &gf_portable)] {
                 for (c, &k) in free.iter().enumerate() {
                     let g: f64 = rows.clone().map(|i| j[(i, k)] * s[i] * r[i]).sum();
                     assert!((gf[c] - g).abs() < 1e-12 * (1.0 + g.abs()), "g[{c}]");
                     for (d, &l) in free.iter().enumerate() {
-                        let a: f64 = rows.clone().map(|i| j[(i, k)] * j[(i, l)] * s[i] * s[i]).sum();
-                        assert!((af[(c, d)] - a).abs() < 1e-12 * (1.0 + a.abs()), "A[{c}, {d}]: {} against {a}", af[(c, d)]);
+                        let a: f64 = rows
+                            .clone()
+                            .map(|i| j[(i, k)] * j[(i, l)] * s[i] * s[i])
+                            .sum();
+                        assert!(
+                            (af[(c, d)] - a).abs() < 1e-12 * (1.0 + a.abs()),
+                            "A[{c}, {d}]: {} against {a}",
+                            af[(c, d)]
+                        );
                     }
                 }
             }

@@ -62,13 +62,20 @@ const NEGLIGIBLE: f64 = 1e-3;
 impl Identifiability {
     /// Analyses the (already weighted) m × n Jacobian `j` with parameter `labels`. `rcond`: a
     /// relative tolerance σ/σ_max replacing the default σ_max·max(m, n)·ε.
-    pub fn analyze(j: &DMatrix<f64>, labels: &[&str], rcond: Option<f64>) -> Result<Self, SolverError> {
+    pub fn analyze(
+        j: &DMatrix<f64>,
+        labels: &[&str],
+        rcond: Option<f64>,
+    ) -> Result<Self, SolverError> {
         let (m, n) = j.shape();
         check_len("parameter labels", n, labels.len())?;
         check_finite("Jacobian", j.as_slice())?;
         if let Some(r) = rcond {
             if !(r.is_finite() && r > 0.0 && r < 1.0) {
-                return Err(SolverError::Invalid { what: "rcond".into(), reason: format!("must lie in (0, 1), got {r}") });
+                return Err(SolverError::Invalid {
+                    what: "rcond".into(),
+                    reason: format!("must lie in (0, 1), got {r}"),
+                });
             }
         }
         if n == 0 || m == 0 {
@@ -88,7 +95,12 @@ impl Identifiability {
     /// instead of J, for a caller that has formed it already (the solver, every iteration): the
     /// Gram route, so `rcond` must be at least [`GRAM_RCOND`]. `m` is J's row count (0: no
     /// measurement).
-    pub fn from_normal_matrix(normal: &DMatrix<f64>, m: usize, labels: &[&str], rcond: f64) -> Result<Self, SolverError> {
+    pub fn from_normal_matrix(
+        normal: &DMatrix<f64>,
+        m: usize,
+        labels: &[&str],
+        rcond: f64,
+    ) -> Result<Self, SolverError> {
         let n = normal.nrows();
         check_len("parameter labels", n, labels.len())?;
         check_finite("normal matrix", normal.as_slice())?;
@@ -99,21 +111,51 @@ impl Identifiability {
             return Ok(Self::nothing_determined(labels));
         }
         let column_norms: Vec<f64> = (0..n).map(|k| normal[(k, k)].max(0.0).sqrt()).collect();
-        Ok(Self::from_pairs(gram_pairs(normal, &column_norms), column_norms, labels, m, Some(rcond)))
+        Ok(Self::from_pairs(
+            gram_pairs(normal, &column_norms),
+            column_norms,
+            labels,
+            m,
+            Some(rcond),
+        ))
     }
 
     /// Every parameter unidentifiable: no free parameter or no measurement (an SVD of an empty
     /// matrix is not defined).
     fn nothing_determined(labels: &[&str]) -> Self {
         let n = labels.len();
-        let unit = |k: usize| (0..n).map(|i| if i == k { 1.0 } else { 0.0 }).collect::<Vec<f64>>();
-        let null_directions = (0..n).map(|k| NullDirection { singular_value: 0.0, coefficients: unit(k), scaled: unit(k) }).collect();
-        Identifiability { labels: labels.iter().map(|s| s.to_string()).collect(), column_norms: vec![0.0; n], singular_values: vec![0.0; n], tolerance: 0.0, rank: 0, condition_number: if n == 0 { 1.0 } else { f64::INFINITY }, null_directions }
+        let unit = |k: usize| {
+            (0..n)
+                .map(|i| if i == k { 1.0 } else { 0.0 })
+                .collect::<Vec<f64>>()
+        };
+        let null_directions = (0..n)
+            .map(|k| NullDirection {
+                singular_value: 0.0,
+                coefficients: unit(k),
+                scaled: unit(k),
+            })
+            .collect();
+        Identifiability {
+            labels: labels.iter().map(|s| s.to_string()).collect(),
+            column_norms: vec![0.0; n],
+            singular_values: vec![0.0; n],
+            tolerance: 0.0,
+            rank: 0,
+            condition_number: if n == 0 { 1.0 } else { f64::INFINITY },
+            null_directions,
+        }
     }
 
     /// The analysis from the (singular value, right singular vector) pairs of the column-scaled
     /// m × n Jacobian.
-    fn from_pairs(pairs: Vec<(f64, Vec<f64>)>, column_norms: Vec<f64>, labels: &[&str], m: usize, rcond: Option<f64>) -> Self {
+    fn from_pairs(
+        pairs: Vec<(f64, Vec<f64>)>,
+        column_norms: Vec<f64>,
+        labels: &[&str],
+        m: usize,
+        rcond: Option<f64>,
+    ) -> Self {
         let n = pairs.len();
         let scale = |k: usize| unit_scale(&column_norms, k);
         let mut order: Vec<usize> = (0..n).collect();
@@ -126,8 +168,16 @@ impl Identifiability {
         };
         let rank = singular_values.iter().filter(|&&s| s > tolerance).count();
         let s_min = singular_values.last().copied().unwrap_or(0.0);
-        let condition_number = if s_min > 0.0 { s_max / s_min } else { f64::INFINITY };
-        let null: Vec<(f64, Vec<f64>)> = order.iter().filter(|&&i| pairs[i].0 <= tolerance).map(|&i| pairs[i].clone()).collect();
+        let condition_number = if s_min > 0.0 {
+            s_max / s_min
+        } else {
+            f64::INFINITY
+        };
+        let null: Vec<(f64, Vec<f64>)> = order
+            .iter()
+            .filter(|&&i| pairs[i].0 <= tolerance)
+            .map(|&i| pairs[i].clone())
+            .collect();
         let null_directions = echelon(&null)
             .into_iter()
             .map(|(singular_value, scaled)| {
@@ -135,7 +185,11 @@ impl Identifiability {
                 let lead = leading(&scaled);
                 let c0 = coefficients[lead];
                 coefficients.iter_mut().for_each(|c| *c /= c0);
-                NullDirection { singular_value, coefficients, scaled }
+                NullDirection {
+                    singular_value,
+                    coefficients,
+                    scaled,
+                }
             })
             .collect();
         Identifiability {
@@ -153,16 +207,24 @@ impl Identifiability {
     /// parameters by δa = 1, δb = −0.71 leaves every residual unchanged), or "c is not
     /// identifiable: no measurement depends on it".
     pub fn describe(&self) -> Vec<String> {
-        self.null_directions.iter().map(|d| self.describe_direction(d)).collect()
+        self.null_directions
+            .iter()
+            .map(|d| self.describe_direction(d))
+            .collect()
     }
 
     fn describe_direction(&self, d: &NullDirection) -> String {
         let max = d.scaled.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        let mut terms: Vec<usize> = (0..d.scaled.len()).filter(|&k| d.scaled[k].abs() > NEGLIGIBLE * max).collect();
+        let mut terms: Vec<usize> = (0..d.scaled.len())
+            .filter(|&k| d.scaled[k].abs() > NEGLIGIBLE * max)
+            .collect();
         let lead = leading(&d.scaled);
         terms.sort_by_key(|&k| (k != lead, k));
         if terms.len() == 1 {
-            return format!("{} is not identifiable: no measurement depends on it", self.labels[terms[0]]);
+            return format!(
+                "{} is not identifiable: no measurement depends on it",
+                self.labels[terms[0]]
+            );
         }
         let names: Vec<&str> = terms.iter().map(|&k| self.labels[k].as_str()).collect();
         let list = match names.split_last() {
@@ -174,9 +236,18 @@ impl Identifiability {
             let c = d.coefficients[k];
             let sign = if c < 0.0 { "−" } else { "+" };
             let mag = c.abs();
-            let value = if (mag - 1.0).abs() < 5e-3 { String::new() } else { format!("{}·", significant(mag, 2)) };
+            let value = if (mag - 1.0).abs() < 5e-3 {
+                String::new()
+            } else {
+                format!("{}·", significant(mag, 2))
+            };
             if i == 0 {
-                combo += &format!("{}{}{}", if c < 0.0 { "−" } else { "" }, value, self.labels[k]);
+                combo += &format!(
+                    "{}{}{}",
+                    if c < 0.0 { "−" } else { "" },
+                    value,
+                    self.labels[k]
+                );
             } else {
                 combo += &format!(" {sign} {value}{}", self.labels[k]);
             }
@@ -211,7 +282,11 @@ fn significant(x: f64, digits: usize) -> String {
         return format!("{}", (x / unit).round() * unit);
     }
     let s = format!("{:.*}", decimals as usize, x);
-    if s.contains('.') { s.trim_end_matches('0').trim_end_matches('.').to_string() } else { s }
+    if s.contains('.') {
+        s.trim_end_matches('0').trim_end_matches('.').to_string()
+    } else {
+        s
+    }
 }
 
 /// Reduced row-echelon form of the null basis (rows), pivoting on the largest entry, so each
@@ -273,21 +348,31 @@ fn svd_pairs(j: &DMatrix<f64>, column_norms: &[f64]) -> Result<Vec<(f64, Vec<f64
         }
     }
     let svd = scaled.svd(false, true);
-    let v_t = svd.v_t.ok_or_else(|| SolverError::Invalid { what: "Jacobian".into(), reason: "SVD did not converge".into() })?;
-    Ok((0..n).map(|i| (svd.singular_values[i], v_t.row(i).iter().copied().collect())).collect())
+    let v_t = svd.v_t.ok_or_else(|| SolverError::Invalid {
+        what: "Jacobian".into(),
+        reason: "SVD did not converge".into(),
+    })?;
+    Ok((0..n)
+        .map(|i| (svd.singular_values[i], v_t.row(i).iter().copied().collect()))
+        .collect())
 }
 
 /// The same pairs from the eigen-decomposition of the column-scaled Gram matrix JᵀJ (`gram`),
 /// singular values below its resolution √(n·ε)·σ_max set to 0 (see the module docs).
 fn gram_pairs(gram: &DMatrix<f64>, column_norms: &[f64]) -> Vec<(f64, Vec<f64>)> {
     let n = gram.ncols();
-    let scaled = DMatrix::from_fn(n, n, |a, b| gram[(a, b)] / (unit_scale(column_norms, a) * unit_scale(column_norms, b)));
+    let scaled = DMatrix::from_fn(n, n, |a, b| {
+        gram[(a, b)] / (unit_scale(column_norms, a) * unit_scale(column_norms, b))
+    });
     let eig = scaled.symmetric_eigen();
     let resolution = ((n as f64) * f64::EPSILON).sqrt() * eig.eigenvalues.max().max(0.0).sqrt();
     (0..n)
         .map(|e| {
             let s = eig.eigenvalues[e].max(0.0).sqrt();
-            (if s > resolution { s } else { 0.0 }, eig.eigenvectors.column(e).iter().copied().collect())
+            (
+                if s > resolution { s } else { 0.0 },
+                eig.eigenvectors.column(e).iter().copied().collect(),
+            )
         })
         .collect()
 }
@@ -311,7 +396,9 @@ mod tests {
         let (m, n) = (3000, 8);
         let mut state = 12345u64;
         let mut uniform = move || {
-            state = state.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            state = state
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             (state >> 11) as f64 / (1u64 << 53) as f64 - 0.5
         };
         let scales = [1e-6, 1.0, 1e3, 0.2, 5.0, 5.0, 1e2, 1.0];
@@ -327,27 +414,65 @@ mod tests {
             p.sort_by(|a, b| b.0.total_cmp(&a.0));
             p
         };
-        let (svd, gram) = (sorted(svd_pairs(&j, &norms).unwrap()), sorted(gram_pairs(&(j.transpose() * &j), &norms)));
+        let (svd, gram) = (
+            sorted(svd_pairs(&j, &norms).unwrap()),
+            sorted(gram_pairs(&(j.transpose() * &j), &norms)),
+        );
         let s_max = svd[0].0;
         for (a, b) in svd.iter().zip(&gram) {
             if a.0 > 1e-6 * s_max {
-                assert!((a.0 - b.0).abs() <= 1e-9 * s_max.max(1.0) + 1e-6 * a.0, "σ {} vs {}", a.0, b.0);
+                assert!(
+                    (a.0 - b.0).abs() <= 1e-9 * s_max.max(1.0) + 1e-6 * a.0,
+                    "σ {} vs {}",
+                    a.0,
+                    b.0
+                );
                 let dot: f64 = a.1.iter().zip(&b.1).map(|(x, y)| x * y).sum();
-                assert!(dot.abs() > 1.0 - 1e-6, "singular vector of σ {} differs: |cos| {}", a.0, dot.abs());
+                assert!(
+                    dot.abs() > 1.0 - 1e-6,
+                    "singular vector of σ {} differs: |cos| {}",
+                    a.0,
+                    dot.abs()
+                );
             }
         }
-        assert_eq!(gram[n - 1].0, 0.0, "the exact null is below the Gram resolution");
+        assert_eq!(
+            gram[n - 1].0,
+            0.0,
+            "the exact null is below the Gram resolution"
+        );
         let labels = ["a", "b", "c", "d", "e", "f", "g", "h"];
         let by_svd = Identifiability::analyze(&j, &labels, Some(0.5 * GRAM_RCOND)).unwrap();
         let by_gram = Identifiability::analyze(&j, &labels, Some(GRAM_RCOND)).unwrap();
         assert_eq!((by_svd.rank, by_gram.rank), (7, 7));
         assert_eq!(by_gram.describe(), by_svd.describe());
         // the same from the normal matrix the solver forms
-        let from_normal = Identifiability::from_normal_matrix(&crate::normal_matrix(&j, &(0..n).collect::<Vec<_>>()), m, &labels, GRAM_RCOND).unwrap();
-        assert_eq!((from_normal.rank, from_normal.describe()), (by_gram.rank, by_gram.describe()));
-        assert!(Identifiability::from_normal_matrix(&(j.transpose() * &j), m, &labels, 0.5 * GRAM_RCOND).is_err(), "below the Gram route's resolution");
+        let from_normal = Identifiability::from_normal_matrix(
+            &crate::normal_matrix(&j, &(0..n).collect::<Vec<_>>()),
+            m,
+            &labels,
+            GRAM_RCOND,
+        )
+        .unwrap();
+        assert_eq!(
+            (from_normal.rank, from_normal.describe()),
+            (by_gram.rank, by_gram.describe())
+        );
+        assert!(
+            Identifiability::from_normal_matrix(
+                &(j.transpose() * &j),
+                m,
+                &labels,
+                0.5 * GRAM_RCOND
+            )
+            .is_err(),
+            "below the Gram route's resolution"
+        );
         let c = &by_gram.null_directions[0].coefficients;
         // the direction δh = 1, δb = −2, δd = 0.5 leaves every residual unchanged
-        assert!((c[7] - 1.0).abs() < 1e-9 && (c[1] + 2.0).abs() < 1e-9 && (c[3] - 0.5).abs() < 1e-9, "{c:?}");
+        assert!(
+            (c[7] - 1.0).abs() < 1e-9 && (c[1] + 2.0).abs() < 1e-9 && (c[3] - 0.5).abs() < 1e-9,
+            "{c:?}"
+        );
     }
 }

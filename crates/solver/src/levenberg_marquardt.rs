@@ -11,7 +11,10 @@
 //! and the trial point is projected onto the box.
 
 use crate::error::{check_finite, check_len, NotEvaluable, SolverError};
-use crate::normal_equations::{accumulate_free, cholesky_solve_in_place, first_non_finite, free_inverse, gradient_free, scaled_free_block, scatter_free};
+use crate::normal_equations::{
+    accumulate_free, cholesky_solve_in_place, first_non_finite, free_inverse, gradient_free,
+    scaled_free_block, scatter_free,
+};
 use crate::options::{NullSpace, Options};
 use crate::problem::Problem;
 use crate::solution::{Solution, Termination};
@@ -63,7 +66,14 @@ fn cost(r: &[f64], inv_sigma: &[f64], x: &[f64], options: &Options) -> Option<f6
 
 /// r(x) and the free columns of J(x) into the buffers (`wanted`: the free mask), with
 /// non-finite values reported as not evaluable.
-fn evaluate<P: Problem + ?Sized>(problem: &P, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>, free: &[usize], wanted: &[bool]) -> Result<(), NotEvaluable> {
+fn evaluate<P: Problem + ?Sized>(
+    problem: &P,
+    x: &[f64],
+    r: &mut [f64],
+    j: &mut DMatrix<f64>,
+    free: &[usize],
+    wanted: &[bool],
+) -> Result<(), NotEvaluable> {
     problem.residuals_and_jacobian_of(x, r, j, wanted)?;
     check_evaluated(r, j, free)
 }
@@ -74,15 +84,29 @@ fn check_evaluated(r: &[f64], j: &DMatrix<f64>, free: &[usize]) -> Result<(), No
         return Err(NotEvaluable(format!("residual {i} is {}", r[i])));
     }
     match first_non_finite(j, free) {
-        Some((i, k)) => Err(NotEvaluable(format!("Jacobian entry ({i}, {k}) is not finite"))),
+        Some((i, k)) => Err(NotEvaluable(format!(
+            "Jacobian entry ({i}, {k}) is not finite"
+        ))),
         None => Ok(()),
     }
 }
 
 impl Workspace {
     /// Evaluates r and J at x, then linearises (see [`Workspace::weigh`]).
-    fn linearise<P: Problem + ?Sized>(&mut self, problem: &P, x: &[f64], options: &Options) -> Result<f64, NotEvaluable> {
-        evaluate(problem, x, &mut self.r, &mut self.j, &self.free, &self.wanted)?;
+    fn linearise<P: Problem + ?Sized>(
+        &mut self,
+        problem: &P,
+        x: &[f64],
+        options: &Options,
+    ) -> Result<f64, NotEvaluable> {
+        evaluate(
+            problem,
+            x,
+            &mut self.r,
+            &mut self.j,
+            &self.free,
+            &self.wanted,
+        )?;
         self.weigh_own(x, options)
     }
 
@@ -93,7 +117,12 @@ impl Workspace {
 
     /// [`Workspace::weigh_own`], with the free columns' JᵀJ already formed (`known_normal`, see
     /// [`Evaluated::normal_matrix`]).
-    fn weigh_own_knowing(&mut self, x: &[f64], options: &Options, known_normal: Option<&DMatrix<f64>>) -> Result<f64, NotEvaluable> {
+    fn weigh_own_knowing(
+        &mut self,
+        x: &[f64],
+        options: &Options,
+        known_normal: Option<&DMatrix<f64>>,
+    ) -> Result<f64, NotEvaluable> {
         let j = std::mem::replace(&mut self.j, DMatrix::zeros(0, 0));
         let f = self.weigh(&j, x, options, known_normal);
         self.j = j;
@@ -105,9 +134,16 @@ impl Workspace {
     /// in the rows and columns of fixed parameters). Returns the cost at x. A `known_normal`
     /// (the unweighted free columns' JᵀJ) stands in for A's product when every row's weight is
     /// exactly 1, the case it was formed for; otherwise it is ignored.
-    fn weigh(&mut self, j: &DMatrix<f64>, x: &[f64], options: &Options, known_normal: Option<&DMatrix<f64>>) -> Result<f64, NotEvaluable> {
+    fn weigh(
+        &mut self,
+        j: &DMatrix<f64>,
+        x: &[f64],
+        options: &Options,
+        known_normal: Option<&DMatrix<f64>>,
+    ) -> Result<f64, NotEvaluable> {
         self.raw.copy_from_slice(&self.r);
-        let f = cost(&self.raw, &self.inv_sigma, x, options).ok_or_else(|| NotEvaluable("cost is not finite".into()))?;
+        let f = cost(&self.raw, &self.inv_sigma, x, options)
+            .ok_or_else(|| NotEvaluable("cost is not finite".into()))?;
         for ((q, ri), si) in self.row_scale.iter_mut().zip(&self.r).zip(&self.inv_sigma) {
             let z = ri * si;
             *q = si * options.loss.evaluate(z * z).1.sqrt();
@@ -116,12 +152,21 @@ impl Workspace {
             *v *= s;
         }
         let nf = self.free.len();
-        match known_normal.filter(|a| a.shape() == (nf, nf) && self.row_scale.iter().all(|s| *s == 1.0)) {
+        match known_normal
+            .filter(|a| a.shape() == (nf, nf) && self.row_scale.iter().all(|s| *s == 1.0))
+        {
             Some(known) => {
                 scatter_free(known, &self.free, &mut self.a);
                 gradient_free(j, &self.free, &self.r, &mut self.g);
             }
-            None => accumulate_free(j, &self.free, &self.row_scale, Some(&self.r), &mut self.a, &mut self.g),
+            None => accumulate_free(
+                j,
+                &self.free,
+                &self.row_scale,
+                Some(&self.r),
+                &mut self.a,
+                &mut self.g,
+            ),
         }
         // J̃ᵀJ̃ as the measurements alone give it, for the identifiability analysis
         self.normal.copy_from(&self.a);
@@ -143,7 +188,11 @@ impl Workspace {
 const DAMPING_DECREASE_FLOOR: f64 = 0.1;
 
 /// Minimises the problem's cost from `x0`. See the module docs for the method.
-pub fn solve<P: Problem + ?Sized>(problem: &P, x0: &[f64], options: &Options) -> Result<Solution, SolverError> {
+pub fn solve<P: Problem + ?Sized>(
+    problem: &P,
+    x0: &[f64],
+    options: &Options,
+) -> Result<Solution, SolverError> {
     solve_from(problem, x0, None, options)
 }
 
@@ -165,7 +214,12 @@ pub struct Evaluated {
 
 /// [`solve`], starting from r and J already evaluated at `x0` (used as given when `x0` lies
 /// within the bounds and the shapes fit; otherwise the clamped start is evaluated afresh).
-pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option<Evaluated>, options: &Options) -> Result<Solution, SolverError> {
+pub fn solve_from<P: Problem + ?Sized>(
+    problem: &P,
+    x0: &[f64],
+    at_start: Option<Evaluated>,
+    options: &Options,
+) -> Result<Solution, SolverError> {
     let (m, n) = (problem.residual_count(), problem.parameter_count());
     check_len("start x0", n, x0.len())?;
     check_finite("start x0", x0)?;
@@ -180,7 +234,8 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
     };
     let free: Vec<usize> = (0..n).filter(|&k| !options.is_fixed(k)).collect();
     let mut x: Vec<f64> = (0..n).map(|k| x0[k].clamp(lower[k], upper[k])).collect();
-    let given = at_start.filter(|e| x.as_slice() == x0 && e.residuals.len() == m && e.jacobian.shape() == (m, n));
+    let given = at_start
+        .filter(|e| x.as_slice() == x0 && e.residuals.len() == m && e.jacobian.shape() == (m, n));
     let (r, j, known_normal, evaluate_start) = match given {
         Some(e) => (e.residuals, e.jacobian, e.normal_matrix, false),
         None => (vec![0.0; m], zeroed_matrix(m, n), None, true),
@@ -191,7 +246,11 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
         j,
         wanted: (0..n).map(|k| !options.is_fixed(k)).collect(),
         free,
-        trial_j: if options.jacobian_on_trials { zeroed_matrix(m, n) } else { DMatrix::zeros(0, 0) },
+        trial_j: if options.jacobian_on_trials {
+            zeroed_matrix(m, n)
+        } else {
+            DMatrix::zeros(0, 0)
+        },
         inv_sigma,
         row_scale: vec![1.0; m],
         a: DMatrix::zeros(n, n),
@@ -210,7 +269,8 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
     let mut f = if evaluate_start {
         ws.linearise(problem, &x, options)
     } else {
-        check_evaluated(&ws.r, &ws.j, &ws.free).and_then(|()| ws.weigh_own_knowing(&x, options, known_normal.as_ref()))
+        check_evaluated(&ws.r, &ws.j, &ws.free)
+            .and_then(|()| ws.weigh_own_knowing(&x, options, known_normal.as_ref()))
     }
     .map_err(|e| SolverError::StartNotEvaluable(e.0))?;
     let mut lambda = options.initial_damping;
@@ -277,7 +337,14 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
             let predicted = predicted_reduction(&ws, &delta, &mut ad);
             evaluations += 1;
             let evaluated = if options.jacobian_on_trials {
-                evaluate(problem, &x_trial, &mut r_trial, &mut ws.trial_j, &ws.free, &ws.wanted)
+                evaluate(
+                    problem,
+                    &x_trial,
+                    &mut r_trial,
+                    &mut ws.trial_j,
+                    &ws.free,
+                    &ws.wanted,
+                )
             } else {
                 problem.residuals(&x_trial, &mut r_trial)
             };
@@ -320,7 +387,11 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
             break Termination::Cost;
         }
         let Some((ft, rho, small_step)) = accepted else {
-            break if lambda > MAX_DAMPING { Termination::NoDescent } else { Termination::Step };
+            break if lambda > MAX_DAMPING {
+                Termination::NoDescent
+            } else {
+                Termination::Step
+            };
         };
         std::mem::swap(&mut x, &mut x_trial);
         let reduction = f - ft;
@@ -341,7 +412,16 @@ pub fn solve_from<P: Problem + ?Sized>(problem: &P, x0: &[f64], at_start: Option
             break Termination::Step;
         }
     };
-    finish(ws, x, f, iterations, evaluations, termination, lambda, options)
+    finish(
+        ws,
+        x,
+        f,
+        iterations,
+        evaluations,
+        termination,
+        lambda,
+        options,
+    )
 }
 
 /// The quadratic model's reduction of the cost by the step δ: −gᵀδ − ½δᵀAδ (`ad`: scratch for Aδ).
@@ -350,12 +430,21 @@ fn predicted_reduction(ws: &Workspace, delta: &[f64], ad: &mut [f64]) -> f64 {
     for (i, adi) in ad.iter_mut().enumerate() {
         *adi = (0..n).map(|k| ws.a[(i, k)] * delta[k]).sum();
     }
-    (0..n).map(|k| -ws.g[k] * delta[k] - 0.5 * delta[k] * ad[k]).sum()
+    (0..n)
+        .map(|k| -ws.g[k] * delta[k] - 0.5 * delta[k] * ad[k])
+        .sum()
 }
 
 /// (A + λ·D²)·δ = −g with the active parameters held (δₖ = 0), into `delta`. False if the
 /// damped matrix is not positive definite (the caller raises λ).
-fn damped_step(ws: &mut Workspace, d: &[f64], active: &[bool], lambda: f64, null_space: NullSpace, delta: &mut [f64]) -> bool {
+fn damped_step(
+    ws: &mut Workspace,
+    d: &[f64],
+    active: &[bool],
+    lambda: f64,
+    null_space: NullSpace,
+    delta: &mut [f64],
+) -> bool {
     let n = delta.len();
     if let NullSpace::Truncated { rcond } = null_space {
         let free: Vec<bool> = active.iter().map(|a| !a).collect();
@@ -420,7 +509,11 @@ fn finish(
     for k in 0..n {
         if free[k] {
             if weighted {
-                weighted_jacobian.column_mut(k).iter_mut().zip(&ws.row_scale).for_each(|(v, s)| *v *= s);
+                weighted_jacobian
+                    .column_mut(k)
+                    .iter_mut()
+                    .zip(&ws.row_scale)
+                    .for_each(|(v, s)| *v *= s);
             }
         } else {
             clear_column(&mut weighted_jacobian, k);
@@ -447,7 +540,11 @@ fn finish(
     }
     let observations = m - downweighted + options.priors.len();
     let dof = observations.saturating_sub(n_free);
-    let residual_rms = if m > 0 { (residuals.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt() } else { 0.0 };
+    let residual_rms = if m > 0 {
+        (residuals.iter().map(|v| v * v).sum::<f64>() / m as f64).sqrt()
+    } else {
+        0.0
+    };
     Ok(Solution {
         covariance_unscaled: free_inverse(&ws.a, &free),
         variance_factor: (dof > 0).then(|| weighted_ss / dof as f64),

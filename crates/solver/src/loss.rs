@@ -66,11 +66,17 @@ mod tests {
     fn losses_are_quadratic_inside_and_continuous_with_their_derivative() {
         for loss in [Loss::Huber(1.5), Loss::Cauchy(2.0)] {
             let (r0, d0) = loss.evaluate(1e-6);
-            assert!((r0 - 1e-6).abs() < 1e-12 && (d0 - 1.0).abs() < 1e-6, "{loss:?}");
+            assert!(
+                (r0 - 1e-6).abs() < 1e-12 && (d0 - 1.0).abs() < 1e-6,
+                "{loss:?}"
+            );
             for s in [0.5, 2.25, 3.0, 40.0] {
                 let h = 1e-6 * s;
                 let numeric = (loss.evaluate(s + h).0 - loss.evaluate(s - h).0) / (2.0 * h);
-                assert!((numeric - loss.evaluate(s).1).abs() < 1e-6, "{loss:?} at {s}");
+                assert!(
+                    (numeric - loss.evaluate(s).1).abs() < 1e-6,
+                    "{loss:?} at {s}"
+                );
             }
         }
         // Huber beyond c: linear in |r| with slope 2c.

@@ -36,7 +36,12 @@ fn standard_normal(rng: &mut ChaCha8Rng) -> f64 {
 /// Runs `trials` solves: each draws a noise vector from `noise` with a ChaCha8 stream seeded by
 /// `seed` and passes it to `solve`, which adds it to its measurements and returns the estimate
 /// (None if that trial's solve failed).
-pub fn monte_carlo<F>(trials: usize, seed: u64, noise: &Noise, mut solve: F) -> Result<MonteCarlo, SolverError>
+pub fn monte_carlo<F>(
+    trials: usize,
+    seed: u64,
+    noise: &Noise,
+    mut solve: F,
+) -> Result<MonteCarlo, SolverError>
 where
     F: FnMut(&DVector<f64>) -> Option<DVector<f64>>,
 {
@@ -49,22 +54,34 @@ where
         Noise::Independent(s) => {
             check_finite("noise standard deviations", s)?;
             if let Some(i) = s.iter().position(|v| *v < 0.0) {
-                return Err(SolverError::Invalid { what: format!("noise standard deviation [{i}]"), reason: "negative".into() });
+                return Err(SolverError::Invalid {
+                    what: format!("noise standard deviation [{i}]"),
+                    reason: "negative".into(),
+                });
             }
             Factor::Diagonal(DVector::from_column_slice(s))
         }
         Noise::Correlated(c) => {
             check_finite("noise covariance", c.as_slice())?;
             if !c.is_square() {
-                return Err(SolverError::Invalid { what: "noise covariance".into(), reason: format!("not square ({}×{})", c.nrows(), c.ncols()) });
+                return Err(SolverError::Invalid {
+                    what: "noise covariance".into(),
+                    reason: format!("not square ({}×{})", c.nrows(), c.ncols()),
+                });
             }
             // Symmetric square root V·√Λ, which also covers semi-definite covariances.
             let eig = c.clone().symmetric_eigen();
             let min = eig.eigenvalues.min();
             if min < -1e-12 * eig.eigenvalues.amax() {
-                return Err(SolverError::Invalid { what: "noise covariance".into(), reason: format!("not positive semi-definite (eigenvalue {min:e})") });
+                return Err(SolverError::Invalid {
+                    what: "noise covariance".into(),
+                    reason: format!("not positive semi-definite (eigenvalue {min:e})"),
+                });
             }
-            Factor::Full(&eig.eigenvectors * DMatrix::from_diagonal(&eig.eigenvalues.map(|l| l.max(0.0).sqrt())))
+            Factor::Full(
+                &eig.eigenvectors
+                    * DMatrix::from_diagonal(&eig.eigenvalues.map(|l| l.max(0.0).sqrt())),
+            )
         }
     };
     let dim = match noise {
@@ -88,11 +105,18 @@ where
     }
     let ok = solutions.len();
     if ok < 2 {
-        return Err(SolverError::Invalid { what: "Monte Carlo".into(), reason: format!("only {ok} of {trials} trials succeeded; need at least 2") });
+        return Err(SolverError::Invalid {
+            what: "Monte Carlo".into(),
+            reason: format!("only {ok} of {trials} trials succeeded; need at least 2"),
+        });
     }
     let p = solutions[0].len();
     if let Some(i) = solutions.iter().position(|s| s.len() != p) {
-        return Err(SolverError::Length { what: format!("Monte Carlo trial solution {i}"), expected: p, got: solutions[i].len() });
+        return Err(SolverError::Length {
+            what: format!("Monte Carlo trial solution {i}"),
+            expected: p,
+            got: solutions[i].len(),
+        });
     }
     let mean = solutions.iter().fold(DVector::zeros(p), |a, s| a + s) / ok as f64;
     let mut covariance = DMatrix::zeros(p, p);
@@ -101,5 +125,10 @@ where
         covariance += &d * d.transpose();
     }
     covariance /= (ok - 1) as f64;
-    Ok(MonteCarlo { mean, covariance, trials, failures })
+    Ok(MonteCarlo {
+        mean,
+        covariance,
+        trials,
+        failures,
+    })
 }

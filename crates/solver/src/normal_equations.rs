@@ -18,9 +18,22 @@ use nalgebra::{DMatrix, DVector};
 /// of fixed parameters (a third of the XFYZ model's 75) are neither weighted nor multiplied. A
 /// tall J is summed over its two halves of rows on two threads; the halves and the blocks are
 /// fixed, so the rounding, and so the result, does not depend on the thread count.
-pub(crate) fn accumulate_free(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64], r: Option<&[f64]>, a: &mut DMatrix<f64>, g: &mut DVector<f64>) {
+pub(crate) fn accumulate_free(
+    j: &DMatrix<f64>,
+    free: &[usize],
+    row_scale: &[f64],
+    r: Option<&[f64]>,
+    a: &mut DMatrix<f64>,
+    g: &mut DVector<f64>,
+) {
     let (m, n) = j.shape();
-    assert!(row_scale.len() == m && r.is_none_or(|r| r.len() == m) && a.shape() == (n, n) && g.len() == n, "accumulate_free: shapes disagree");
+    assert!(
+        row_scale.len() == m
+            && r.is_none_or(|r| r.len() == m)
+            && a.shape() == (n, n)
+            && g.len() == n,
+        "accumulate_free: shapes disagree"
+    );
     let (af, gf) = free_gram(j, free, row_scale, r);
     scatter_free(&af, free, a);
     g.fill(0.0);
@@ -31,7 +44,12 @@ pub(crate) fn accumulate_free(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64
 
 /// J̃ᵀJ̃ (|free| × |free|, exactly symmetric: the kernel forms one triangle and mirrors it) and
 /// J̃ᵀr̃ (zero without r) of [`accumulate_free`], in the free columns' order.
-fn free_gram(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64], r: Option<&[f64]>) -> (DMatrix<f64>, DVector<f64>) {
+fn free_gram(
+    j: &DMatrix<f64>,
+    free: &[usize],
+    row_scale: &[f64],
+    r: Option<&[f64]>,
+) -> (DMatrix<f64>, DVector<f64>) {
     let m = j.nrows();
     let nf = free.len();
     let (mut af, mut gf) = (DMatrix::zeros(nf, nf), DVector::zeros(nf));
@@ -41,9 +59,13 @@ fn free_gram(j: &DMatrix<f64>, free: &[usize], row_scale: &[f64], r: Option<&[f6
         let half = m / 2;
         let (mut af2, mut gf2) = (DMatrix::zeros(nf, nf), DVector::zeros(nf));
         std::thread::scope(|scope| {
-            let worker = scope.spawn(|| weighted_gram_of_rows(j, free, row_scale, r, half..m, &mut af2, &mut gf2));
+            let worker = scope.spawn(|| {
+                weighted_gram_of_rows(j, free, row_scale, r, half..m, &mut af2, &mut gf2)
+            });
             weighted_gram_of_rows(j, free, row_scale, r, 0..half, &mut af, &mut gf);
-            worker.join().unwrap_or_else(|p| std::panic::resume_unwind(p));
+            worker
+                .join()
+                .unwrap_or_else(|p| std::panic::resume_unwind(p));
         });
         af += af2;
         gf += gf2;
@@ -148,10 +170,24 @@ pub(crate) fn cholesky_solve_in_place(m: &mut DMatrix<f64>, b: &mut [f64]) -> bo
 
 /// (D⁻¹AD⁻¹) restricted to `free`, with D = √diag(A) (unit diagonal; zero diagonals scale by 1),
 /// as (matrix, indices of the free parameters, D of each).
-pub(crate) fn scaled_free_block(a: &DMatrix<f64>, free: &[bool]) -> (DMatrix<f64>, Vec<usize>, Vec<f64>) {
+pub(crate) fn scaled_free_block(
+    a: &DMatrix<f64>,
+    free: &[bool],
+) -> (DMatrix<f64>, Vec<usize>, Vec<f64>) {
     let idx: Vec<usize> = (0..a.nrows()).filter(|&k| free[k]).collect();
-    let d: Vec<f64> = idx.iter().map(|&k| if a[(k, k)] > 0.0 { a[(k, k)].sqrt() } else { 1.0 }).collect();
-    let s = DMatrix::from_fn(idx.len(), idx.len(), |i, j| a[(idx[i], idx[j])] / (d[i] * d[j]));
+    let d: Vec<f64> = idx
+        .iter()
+        .map(|&k| {
+            if a[(k, k)] > 0.0 {
+                a[(k, k)].sqrt()
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    let s = DMatrix::from_fn(idx.len(), idx.len(), |i, j| {
+        a[(idx[i], idx[j])] / (d[i] * d[j])
+    });
     (s, idx, d)
 }
 
@@ -189,7 +225,9 @@ mod tests {
 
     #[test]
     fn normal_equations_and_cholesky_match_nalgebra() {
-        let j = DMatrix::from_fn(37, 5, |i, k| ((i * 7 + k * 3) % 11) as f64 - 5.0 + 0.1 * k as f64);
+        let j = DMatrix::from_fn(37, 5, |i, k| {
+            ((i * 7 + k * 3) % 11) as f64 - 5.0 + 0.1 * k as f64
+        });
         let r: Vec<f64> = (0..37).map(|i| (i as f64).sin()).collect();
         let (mut a, mut g) = (DMatrix::zeros(5, 5), DVector::zeros(5));
         accumulate_free(&j, &[0, 1, 2, 3, 4], &[1.0; 37], Some(&r), &mut a, &mut g);

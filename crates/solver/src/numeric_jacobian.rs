@@ -16,7 +16,10 @@ pub enum Order {
 /// its typical magnitude so that a parameter at zero still gets a step. `relative ≈ 1e-6` balances
 /// truncation and rounding for the second order, `≈ 1e-4` for the fourth.
 pub fn relative_steps(x: &[f64], relative: f64, typical: &[f64]) -> Vec<f64> {
-    x.iter().zip(typical).map(|(v, t)| relative * v.abs().max(*t)).collect()
+    x.iter()
+        .zip(typical)
+        .map(|(v, t)| relative * v.abs().max(*t))
+        .collect()
 }
 
 /// Steps hᵢ = `relative`·max(|xᵢ|, 1): for parameters of order one (angles in rad, lengths in m).
@@ -27,7 +30,12 @@ pub fn steps_with_unit_floor(x: &[f64], relative: f64) -> Vec<f64> {
 /// Jacobian of `f` at `x` (rows: outputs, columns: parameters) with per-parameter steps
 /// `steps` (see [`relative_steps`]). None when `f` fails at a stepped point, when `steps` and `x`
 /// differ in length or a step is not finite and positive.
-pub fn central_difference<F>(mut f: F, x: &[f64], steps: &[f64], order: Order) -> Option<DMatrix<f64>>
+pub fn central_difference<F>(
+    mut f: F,
+    x: &[f64],
+    steps: &[f64],
+    order: Order,
+) -> Option<DMatrix<f64>>
 where
     F: FnMut(&[f64]) -> Option<DVector<f64>>,
 {
@@ -74,11 +82,27 @@ mod tests {
     #[test]
     fn both_orders_differentiate_a_known_function() {
         // f(x) = (sin x₀ · x₁², exp(x₁)) with J = [[cos x₀·x₁², 2 sin x₀·x₁], [0, exp x₁]].
-        let f = |x: &[f64]| Some(DVector::from_column_slice(&[x[0].sin() * x[1] * x[1], x[1].exp()]));
+        let f = |x: &[f64]| {
+            Some(DVector::from_column_slice(&[
+                x[0].sin() * x[1] * x[1],
+                x[1].exp(),
+            ]))
+        };
         let x = [0.7, -1.3];
-        let exact = DMatrix::from_row_slice(2, 2, &[0.7f64.cos() * 1.69, 2.0 * 0.7f64.sin() * -1.3, 0.0, (-1.3f64).exp()]);
-        let j2 = central_difference(f, &x, &relative_steps(&x, 1e-6, &[1.0, 1.0]), Order::Second).unwrap();
-        let j4 = central_difference(f, &x, &relative_steps(&x, 1e-3, &[1.0, 1.0]), Order::Fourth).unwrap();
+        let exact = DMatrix::from_row_slice(
+            2,
+            2,
+            &[
+                0.7f64.cos() * 1.69,
+                2.0 * 0.7f64.sin() * -1.3,
+                0.0,
+                (-1.3f64).exp(),
+            ],
+        );
+        let j2 = central_difference(f, &x, &relative_steps(&x, 1e-6, &[1.0, 1.0]), Order::Second)
+            .unwrap();
+        let j4 = central_difference(f, &x, &relative_steps(&x, 1e-3, &[1.0, 1.0]), Order::Fourth)
+            .unwrap();
         assert!(max_relative_difference(&j2, &exact) < 1e-8);
         assert!(max_relative_difference(&j4, &exact) < 1e-11);
         // With the same coarse step the fourth order is far more accurate than the second.

@@ -77,11 +77,17 @@ impl Default for Options {
 
 impl Options {
     pub(crate) fn validate(&self, m: usize, n: usize) -> Result<(), SolverError> {
-        let invalid = |what: &str, reason: String| SolverError::Invalid { what: what.into(), reason };
+        let invalid = |what: &str, reason: String| SolverError::Invalid {
+            what: what.into(),
+            reason,
+        };
         if let Some(s) = &self.sigmas {
             check_len("sigmas", m, s.len())?;
             if let Some(i) = s.iter().position(|v| !(v.is_finite() && *v > 0.0)) {
-                return Err(invalid(&format!("sigmas[{i}]"), format!("must be finite and positive, got {}", s[i])));
+                return Err(invalid(
+                    &format!("sigmas[{i}]"),
+                    format!("must be finite and positive, got {}", s[i]),
+                ));
             }
         }
         self.loss.validate()?;
@@ -90,7 +96,10 @@ impl Options {
             check_len("upper bounds", n, hi.len())?;
             for k in 0..n {
                 if lo[k].is_nan() || hi[k].is_nan() || lo[k] > hi[k] {
-                    return Err(invalid(&format!("bounds[{k}]"), format!("need lower ≤ upper, got [{}, {}]", lo[k], hi[k])));
+                    return Err(invalid(
+                        &format!("bounds[{k}]"),
+                        format!("need lower ≤ upper, got [{}, {}]", lo[k], hi[k]),
+                    ));
                 }
             }
         }
@@ -99,21 +108,35 @@ impl Options {
         }
         for (i, p) in self.priors.iter().enumerate() {
             if p.index >= n {
-                return Err(invalid(&format!("priors[{i}]"), format!("parameter index {} ≥ parameter count {n}", p.index)));
+                return Err(invalid(
+                    &format!("priors[{i}]"),
+                    format!("parameter index {} ≥ parameter count {n}", p.index),
+                ));
             }
             check_finite(&format!("priors[{i}].value"), &[p.value])?;
             if !(p.sigma.is_finite() && p.sigma > 0.0) {
-                return Err(invalid(&format!("priors[{i}].sigma"), format!("must be finite and positive, got {}", p.sigma)));
+                return Err(invalid(
+                    &format!("priors[{i}].sigma"),
+                    format!("must be finite and positive, got {}", p.sigma),
+                ));
             }
         }
-        for (what, v) in [("ftol", self.ftol), ("xtol", self.xtol), ("gtol", self.gtol), ("initial_damping", self.initial_damping)] {
+        for (what, v) in [
+            ("ftol", self.ftol),
+            ("xtol", self.xtol),
+            ("gtol", self.gtol),
+            ("initial_damping", self.initial_damping),
+        ] {
             if !(v.is_finite() && v >= 0.0) {
                 return Err(invalid(what, format!("must be finite and ≥ 0, got {v}")));
             }
         }
         if let NullSpace::Truncated { rcond } = self.null_space {
             if !(rcond.is_finite() && rcond > 0.0 && rcond < 1.0) {
-                return Err(invalid("null_space rcond", format!("must lie in (0, 1), got {rcond}")));
+                return Err(invalid(
+                    "null_space rcond",
+                    format!("must lie in (0, 1), got {rcond}"),
+                ));
             }
         }
         Ok(())

@@ -23,16 +23,23 @@ pub enum Termination {
 impl Termination {
     /// Whether the reason is a convergence test (not a limit or a failure).
     pub fn converged(&self) -> bool {
-        matches!(self, Termination::Gradient | Termination::Cost | Termination::Step)
+        matches!(
+            self,
+            Termination::Gradient | Termination::Cost | Termination::Step
+        )
     }
 
     /// Why the iteration stopped, in words a person reads after "fitted in 0.9 s (3 iterations; …)".
     pub fn in_words(&self) -> &'static str {
         match self {
             Termination::Gradient => "converged: no direction lowers the cost further",
-            Termination::Cost => "converged: the last step lowered the cost by a negligible fraction",
+            Termination::Cost => {
+                "converged: the last step lowered the cost by a negligible fraction"
+            }
             Termination::Step => "converged: the last step was negligible",
-            Termination::MaxIterations => "stopped at the iteration limit: the estimate may not be converged",
+            Termination::MaxIterations => {
+                "stopped at the iteration limit: the estimate may not be converged"
+            }
             Termination::NoDescent => "stopped: no step lowered the cost (a minimum to round-off)",
         }
     }
@@ -111,16 +118,29 @@ impl Solution {
     /// what the measurements alone determine). `labels` name all n parameters; `rcond` as in
     /// [`Identifiability::analyze`] (from `rcond` ≥ [`crate::identifiability::GRAM_RCOND`] on,
     /// from the normal matrix the solver formed, with no pass over the Jacobian).
-    pub fn identifiability(&self, labels: &[&str], rcond: Option<f64>) -> Result<Identifiability, SolverError> {
+    pub fn identifiability(
+        &self,
+        labels: &[&str],
+        rcond: Option<f64>,
+    ) -> Result<Identifiability, SolverError> {
         crate::error::check_len("parameter labels", self.free.len(), labels.len())?;
         let idx: Vec<usize> = (0..self.free.len()).filter(|&k| self.free[k]).collect();
         let names: Vec<&str> = idx.iter().map(|&k| labels[k]).collect();
         match rcond {
             Some(r) if r >= crate::identifiability::GRAM_RCOND => {
                 let normal = self.normal_matrix.select_rows(&idx).select_columns(&idx);
-                Identifiability::from_normal_matrix(&normal, self.weighted_jacobian.nrows(), &names, r)
+                Identifiability::from_normal_matrix(
+                    &normal,
+                    self.weighted_jacobian.nrows(),
+                    &names,
+                    r,
+                )
             }
-            _ => Identifiability::analyze(&self.weighted_jacobian.select_columns(&idx), &names, rcond),
+            _ => Identifiability::analyze(
+                &self.weighted_jacobian.select_columns(&idx),
+                &names,
+                rcond,
+            ),
         }
     }
 }

@@ -60,12 +60,17 @@ pub struct DwellGrouper {
 
 impl DwellGrouper {
     pub fn new(max_gap_ns: i64) -> Self {
-        Self { max_gap_ns, open: Vec::new() }
+        Self {
+            max_gap_ns,
+            open: Vec::new(),
+        }
     }
 
     /// Add a reading; returns the dwell it closed, if any.
     pub fn push(&mut self, r: ProcessedReading) -> Option<DwellAverage> {
-        let continues = self.open.last().is_some_and(|last| last.target == r.target && r.time_ns - last.time_ns <= self.max_gap_ns);
+        let continues = self.open.last().is_some_and(|last| {
+            last.target == r.target && r.time_ns - last.time_ns <= self.max_gap_ns
+        });
         let closed = if continues { None } else { self.flush() };
         if !r.target.is_empty() {
             self.open.push(r);
@@ -95,7 +100,11 @@ pub fn average(readings: &[ProcessedReading]) -> Option<DwellAverage> {
     let point = readings.iter().map(|r| r.point).sum::<Vector3<f64>>() / n;
     let model = readings.iter().map(|r| r.covariance).sum::<Matrix3<f64>>() / n;
     let scatter = if readings.len() > 1 {
-        readings.iter().map(|r| (r.point - point) * (r.point - point).transpose()).sum::<Matrix3<f64>>() / (n - 1.0)
+        readings
+            .iter()
+            .map(|r| (r.point - point) * (r.point - point).transpose())
+            .sum::<Matrix3<f64>>()
+            / (n - 1.0)
     } else {
         Matrix3::zeros()
     };
@@ -135,7 +144,11 @@ mod tests {
             azimuth: 0.0,
             elevation: 0.0,
             refractive_index: 1.00027,
-            air: AirData { temperature: 20.0, pressure: 101_325.0, humidity: 0.5 },
+            air: AirData {
+                temperature: 20.0,
+                pressure: 101_325.0,
+                humidity: 0.5,
+            },
             point: Vector3::new(x, 0.0, 0.0),
             covariance: Matrix3::identity() * 4e-12,
         }
@@ -147,15 +160,22 @@ mod tests {
         assert!(g.push(reading(0, "p0", 1.0)).is_none());
         assert!(g.push(reading(100, "p0", 1.000002)).is_none());
         assert!(g.push(reading(200, "p0", 1.000004)).is_none());
-        let d = g.push(reading(300, "", 1.2)).expect("moving closes the dwell");
-        assert_eq!((d.target.as_str(), d.n, d.first_ns, d.last_ns), ("p0", 3, 0, 200_000_000));
+        let d = g
+            .push(reading(300, "", 1.2))
+            .expect("moving closes the dwell");
+        assert_eq!(
+            (d.target.as_str(), d.n, d.first_ns, d.last_ns),
+            ("p0", 3, 0, 200_000_000)
+        );
         assert!((d.point.x - 1.000002).abs() < 1e-12);
         // standard error by the model: σ²/n
         assert!((d.covariance[(0, 0)] - 4e-12 / 3.0).abs() < 1e-24);
         // by the scatter: sample variance (4e-12) / 3
         assert!((d.empirical_covariance[(0, 0)] - 4e-12 / 3.0).abs() < 1e-20);
         assert!(g.push(reading(400, "p1", 2.0)).is_none());
-        let d = g.push(reading(1400, "p1", 2.0)).expect("a long gap starts a new visit");
+        let d = g
+            .push(reading(1400, "p1", 2.0))
+            .expect("a long gap starts a new visit");
         assert_eq!(d.n, 1);
         assert_eq!(g.close_if_stale(1500_000_000), None);
         assert_eq!(g.close_if_stale(2000_000_000).map(|d| d.n), Some(1));
@@ -165,9 +185,21 @@ mod tests {
     #[test]
     fn flagged_dwell_covariance_is_inflated_by_the_scatter() {
         let d = average(&[reading(0, "p", 1.0), reading(1, "p", 1.0)]).unwrap();
-        let v = TurbulenceVerdict { statistic: 50.0, threshold: 10.0, dof: 1, scatter_ratio: 3.0, flagged: true };
+        let v = TurbulenceVerdict {
+            statistic: 50.0,
+            threshold: 10.0,
+            dof: 1,
+            scatter_ratio: 3.0,
+            flagged: true,
+        };
         assert_eq!(d.covariance_given(Some(&v)), d.covariance * 9.0);
-        assert_eq!(d.covariance_given(Some(&TurbulenceVerdict { flagged: false, ..v })), d.covariance);
+        assert_eq!(
+            d.covariance_given(Some(&TurbulenceVerdict {
+                flagged: false,
+                ..v
+            })),
+            d.covariance
+        );
         assert_eq!(d.covariance_given(None), d.covariance);
     }
 }

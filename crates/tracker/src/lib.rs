@@ -28,7 +28,9 @@ pub mod warmup;
 mod test_noise;
 
 pub use dwell::{DwellAverage, DwellGrouper};
-pub use reading::{AirSource, EdlenForm, ProcessedReading, RawReading, ReadingError, ReadingProcessor};
+pub use reading::{
+    AirSource, EdlenForm, ProcessedReading, RawReading, ReadingError, ReadingProcessor,
+};
 pub use registration::{register, Registration, RegistrationError};
 pub use time_alignment::{program_point_time, CommandedTrajectory, ProgramSchedule};
 pub use turbulence::{TurbulenceTest, TurbulenceVerdict};

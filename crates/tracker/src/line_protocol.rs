@@ -49,7 +49,11 @@ impl LineReading {
             elevation: self.elevation,
             refractive_index: applied_index,
             air: self.air,
-            status: if self.beam_break { STATUS_BEAM_BREAK } else { 0 },
+            status: if self.beam_break {
+                STATUS_BEAM_BREAK
+            } else {
+                0
+            },
         }
     }
 }
@@ -81,15 +85,28 @@ pub fn parse_line(line: &str) -> Result<Option<LineReading>, LineError> {
     if f.len() != 5 && f.len() != 8 {
         return Err(LineError::FieldCount(f.len()));
     }
-    let num = |field: &'static str, text: &str| text.parse::<f64>().map_err(|_| LineError::NotANumber { field, text: text.chars().take(40).collect() });
+    let num = |field: &'static str, text: &str| {
+        text.parse::<f64>().map_err(|_| LineError::NotANumber {
+            field,
+            text: text.chars().take(40).collect(),
+        })
+    };
     let t = num("t", f[0])?;
     if !t.is_finite() {
         return Err(LineError::BadTime(t));
     }
     let beam_break = f[2].eq_ignore_ascii_case("break");
-    let range = if beam_break { f64::NAN } else { num("range", f[2])? };
+    let range = if beam_break {
+        f64::NAN
+    } else {
+        num("range", f[2])?
+    };
     let air = if f.len() == 8 {
-        Some(AirData { temperature: num("air_temperature", f[5])?, pressure: num("air_pressure", f[6])?, humidity: num("relative_humidity", f[7])? })
+        Some(AirData {
+            temperature: num("air_temperature", f[5])?,
+            pressure: num("air_pressure", f[6])?,
+            humidity: num("relative_humidity", f[7])?,
+        })
     } else {
         None
     };
@@ -152,9 +169,21 @@ mod tests {
 
     #[test]
     fn full_and_short_lines_parse() {
-        let r = parse_line("1732500000.1,nest_1,2.000013,0.5236,0.1047,20.1,101325,0.45\r").unwrap().unwrap();
-        assert_eq!((r.t, r.target.as_str(), r.range, r.azimuth, r.elevation), (1732500000.1, "nest_1", 2.000013, 0.5236, 0.1047));
-        assert_eq!(r.air, Some(AirData { temperature: 20.1, pressure: 101325.0, humidity: 0.45 }));
+        let r = parse_line("1732500000.1,nest_1,2.000013,0.5236,0.1047,20.1,101325,0.45\r")
+            .unwrap()
+            .unwrap();
+        assert_eq!(
+            (r.t, r.target.as_str(), r.range, r.azimuth, r.elevation),
+            (1732500000.1, "nest_1", 2.000013, 0.5236, 0.1047)
+        );
+        assert_eq!(
+            r.air,
+            Some(AirData {
+                temperature: 20.1,
+                pressure: 101325.0,
+                humidity: 0.45
+            })
+        );
         let r = parse_line("5, ,1.5,0,0").unwrap().unwrap();
         assert_eq!((r.target.as_str(), r.air, r.beam_break), ("", None, false));
         assert!(parse_line("6,p,BREAK,0,0").unwrap().unwrap().beam_break);
@@ -166,9 +195,24 @@ mod tests {
     #[test]
     fn garbage_is_named() {
         assert_eq!(parse_line("1,p,2,3"), Err(LineError::FieldCount(4)));
-        assert_eq!(parse_line("1,p,2.x,0,0"), Err(LineError::NotANumber { field: "range", text: "2.x".into() }));
-        assert_eq!(parse_line("inf,p,2,0,0"), Err(LineError::BadTime(f64::INFINITY)));
-        assert!(matches!(parse_line("1,p,2,0,0,20,abc,0.5"), Err(LineError::NotANumber { field: "air_pressure", .. })));
+        assert_eq!(
+            parse_line("1,p,2.x,0,0"),
+            Err(LineError::NotANumber {
+                field: "range",
+                text: "2.x".into()
+            })
+        );
+        assert_eq!(
+            parse_line("inf,p,2,0,0"),
+            Err(LineError::BadTime(f64::INFINITY))
+        );
+        assert!(matches!(
+            parse_line("1,p,2,0,0,20,abc,0.5"),
+            Err(LineError::NotANumber {
+                field: "air_pressure",
+                ..
+            })
+        ));
     }
 
     #[test]
@@ -179,7 +223,10 @@ mod tests {
         assert_eq!(f.feed(b",3,0,0\n"), vec![Ok("2,b,3,0,0".to_string())]);
         let long = vec![b'x'; MAX_LINE_BYTES + 10];
         assert!(f.feed(&long).is_empty());
-        assert_eq!(f.feed(b"yy\n3,c,1,0,0\n"), vec![Err(LineError::TooLong), Ok("3,c,1,0,0".to_string())]);
+        assert_eq!(
+            f.feed(b"yy\n3,c,1,0,0\n"),
+            vec![Err(LineError::TooLong), Ok("3,c,1,0,0".to_string())]
+        );
         assert_eq!(f.feed(&[0xff, 0xfe, b'\n']), vec![Err(LineError::NotUtf8)]);
         f.feed(b"4,d");
         f.reset();

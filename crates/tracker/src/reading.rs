@@ -60,7 +60,12 @@ pub enum ReadingError {
     #[error("{field} = {value} is not finite")]
     NotFinite { field: &'static str, value: f64 },
     #[error("{field} = {value} is outside {min}..{max}")]
-    OutOfRange { field: &'static str, value: f64, min: f64, max: f64 },
+    OutOfRange {
+        field: &'static str,
+        value: f64,
+        min: f64,
+        max: f64,
+    },
     #[error("air at the beam rejected: {0}")]
     Air(String),
     #[error("no air data in the reading and no configured air (parameter air_source)")]
@@ -118,11 +123,26 @@ impl ReadingProcessor {
         finite("elevation", r.elevation)?;
         finite("refractive_index", r.refractive_index)?;
         if r.range <= 0.0 {
-            return Err(ReadingError::OutOfRange { field: "range", value: r.range, min: 0.0, max: self.max_range });
+            return Err(ReadingError::OutOfRange {
+                field: "range",
+                value: r.range,
+                min: 0.0,
+                max: self.max_range,
+            });
         }
         within("range", r.range, 0.0, self.max_range)?;
-        within("azimuth", r.azimuth, -2.0 * std::f64::consts::PI, 2.0 * std::f64::consts::PI)?;
-        within("elevation", r.elevation, -std::f64::consts::FRAC_PI_2, std::f64::consts::FRAC_PI_2)?;
+        within(
+            "azimuth",
+            r.azimuth,
+            -2.0 * std::f64::consts::PI,
+            2.0 * std::f64::consts::PI,
+        )?;
+        within(
+            "elevation",
+            r.elevation,
+            -std::f64::consts::FRAC_PI_2,
+            std::f64::consts::FRAC_PI_2,
+        )?;
         if r.refractive_index != 0.0 {
             // an applied index outside this is not air: a unit or field-order mistake
             within("refractive_index", r.refractive_index, 1.0, 1.001)?;
@@ -135,7 +155,8 @@ impl ReadingProcessor {
         air.check().map_err(ReadingError::Air)?;
         let n = self.index(&air);
         let range = range_for_index(r.range, r.refractive_index, n);
-        let (point, covariance) = spherical_to_cartesian(range, r.azimuth, r.elevation, &self.noise);
+        let (point, covariance) =
+            spherical_to_cartesian(range, r.azimuth, r.elevation, &self.noise);
         Ok(ProcessedReading {
             time_ns: r.time_ns,
             target: r.target.clone(),
@@ -162,7 +183,12 @@ fn within(field: &'static str, value: f64, min: f64, max: f64) -> Result<(), Rea
     if (min..=max).contains(&value) {
         Ok(())
     } else {
-        Err(ReadingError::OutOfRange { field, value, min, max })
+        Err(ReadingError::OutOfRange {
+            field,
+            value,
+            min,
+            max,
+        })
     }
 }
 
@@ -171,12 +197,20 @@ mod tests {
     use super::*;
 
     fn thesis_air() -> AirData {
-        AirData { temperature: 20.0, pressure: 99_000.0, humidity: 0.5 }
+        AirData {
+            temperature: 20.0,
+            pressure: 99_000.0,
+            humidity: 0.5,
+        }
     }
 
     fn processor() -> ReadingProcessor {
         ReadingProcessor {
-            noise: SphericalNoise { radial_base: 4e-6, radial_per_metre: 0.8e-6, angular: 3e-6 },
+            noise: SphericalNoise {
+                radial_base: 4e-6,
+                radial_per_metre: 0.8e-6,
+                angular: 3e-6,
+            },
             air: AirSource::Station,
             form: EdlenForm::ShopFloor,
             max_range: 80.0,
@@ -206,16 +240,30 @@ mod tests {
     fn range_is_recorrected_for_the_station_air() {
         let p = processor().process(&raw()).unwrap();
         let expected = 2.0 * 1.00027 / 1.000265156792;
-        assert!((p.range - expected).abs() < 1e-12, "{} vs {expected}", p.range);
+        assert!(
+            (p.range - expected).abs() < 1e-12,
+            "{} vs {expected}",
+            p.range
+        );
         // (1.00027 − 1.000265157)/1 ≈ 4.84 ppm → 9.69 µm at 2 m
-        assert!(((p.range - 2.0) * 1e6 - 9.686).abs() < 0.01, "{} µm", (p.range - 2.0) * 1e6);
+        assert!(
+            ((p.range - 2.0) * 1e6 - 9.686).abs() < 0.01,
+            "{} µm",
+            (p.range - 2.0) * 1e6
+        );
     }
 
     #[test]
     fn full_form_is_used_when_configured() {
-        let full = ReadingProcessor { form: EdlenForm::Full { wavelength: 633e-9 }, ..processor() };
+        let full = ReadingProcessor {
+            form: EdlenForm::Full { wavelength: 633e-9 },
+            ..processor()
+        };
         let p = full.process(&raw()).unwrap();
-        assert_eq!(p.refractive_index, thesis_air().refractive_index_full(633e-9));
+        assert_eq!(
+            p.refractive_index,
+            thesis_air().refractive_index_full(633e-9)
+        );
         assert!((p.range - 2.0 * 1.00027 / p.refractive_index).abs() < 1e-15);
     }
 
@@ -225,29 +273,84 @@ mod tests {
         // radial variance along the line of sight = (a + b·r)²
         let u = p.point / p.point.norm();
         let radial = (u.transpose() * p.covariance * u)[(0, 0)].sqrt();
-        assert!((radial - (4e-6 + 0.8e-6 * p.range)).abs() < 1e-9, "{radial}");
+        assert!(
+            (radial - (4e-6 + 0.8e-6 * p.range)).abs() < 1e-9,
+            "{radial}"
+        );
     }
 
     #[test]
     fn beam_breaks_and_bad_values_are_named() {
         let mut b = raw();
         b.status = STATUS_BEAM_BREAK;
-        assert_eq!(processor().process(&b), Err(ReadingError::BeamBreak("nest".into())));
-        let nan = RawReading { range: f64::NAN, ..raw() };
-        assert!(matches!(processor().process(&nan), Err(ReadingError::BeamBreak(_))));
-        let az = RawReading { azimuth: f64::INFINITY, ..raw() };
-        assert_eq!(processor().process(&az), Err(ReadingError::NotFinite { field: "azimuth", value: f64::INFINITY }));
-        let el = RawReading { elevation: 2.0, ..raw() };
-        assert!(matches!(processor().process(&el), Err(ReadingError::OutOfRange { field: "elevation", .. })));
-        let far = RawReading { range: 120.0, ..raw() };
-        assert!(matches!(processor().process(&far), Err(ReadingError::OutOfRange { field: "range", .. })));
-        let neg = RawReading { range: -1.0, ..raw() };
-        assert!(matches!(processor().process(&neg), Err(ReadingError::OutOfRange { field: "range", .. })));
-        let hpa = RawReading { air: Some(AirData { pressure: 990.0, ..thesis_air() }), ..raw() };
-        assert!(processor().process(&hpa).unwrap_err().to_string().contains("hPa"));
+        assert_eq!(
+            processor().process(&b),
+            Err(ReadingError::BeamBreak("nest".into()))
+        );
+        let nan = RawReading {
+            range: f64::NAN,
+            ..raw()
+        };
+        assert!(matches!(
+            processor().process(&nan),
+            Err(ReadingError::BeamBreak(_))
+        ));
+        let az = RawReading {
+            azimuth: f64::INFINITY,
+            ..raw()
+        };
+        assert_eq!(
+            processor().process(&az),
+            Err(ReadingError::NotFinite {
+                field: "azimuth",
+                value: f64::INFINITY
+            })
+        );
+        let el = RawReading {
+            elevation: 2.0,
+            ..raw()
+        };
+        assert!(matches!(
+            processor().process(&el),
+            Err(ReadingError::OutOfRange {
+                field: "elevation",
+                ..
+            })
+        ));
+        let far = RawReading {
+            range: 120.0,
+            ..raw()
+        };
+        assert!(matches!(
+            processor().process(&far),
+            Err(ReadingError::OutOfRange { field: "range", .. })
+        ));
+        let neg = RawReading {
+            range: -1.0,
+            ..raw()
+        };
+        assert!(matches!(
+            processor().process(&neg),
+            Err(ReadingError::OutOfRange { field: "range", .. })
+        ));
+        let hpa = RawReading {
+            air: Some(AirData {
+                pressure: 990.0,
+                ..thesis_air()
+            }),
+            ..raw()
+        };
+        assert!(processor()
+            .process(&hpa)
+            .unwrap_err()
+            .to_string()
+            .contains("hPa"));
         let none = RawReading { air: None, ..raw() };
         assert_eq!(processor().process(&none), Err(ReadingError::NoAir));
-        let configured = ReadingProcessor { air: AirSource::Configured(thesis_air()), ..processor() };
+        let configured = ReadingProcessor {
+            air: AirSource::Configured(thesis_air()),
+            ..processor()
+        };
         assert!(configured.process(&none).is_ok());
     }
 }

@@ -47,7 +47,9 @@ pub enum RegistrationError {
     TooFew(usize),
     #[error("correspondence {0} has a non-finite coordinate or covariance")]
     NotFinite(usize),
-    #[error("the points are collinear (or coincide): the rotation about their line is not determined")]
+    #[error(
+        "the points are collinear (or coincide): the rotation about their line is not determined"
+    )]
     Degenerate,
 }
 
@@ -57,7 +59,10 @@ impl Registration {
         let rp = self.rotation * p;
         let j = pose_jacobian(&rp);
         let r = self.rotation.matrix();
-        (rp + self.translation, r * cov * r.transpose() + j * self.covariance * j.transpose())
+        (
+            rp + self.translation,
+            r * cov * r.transpose() + j * self.covariance * j.transpose(),
+        )
     }
 
     /// The covariance in the order of `geometry_msgs/PoseWithCovariance` (x, y, z, rot x, rot y, rot z).
@@ -75,8 +80,10 @@ impl Registration {
 /// ∂(R p + t)/∂(δθ, δt) at R p = `rp`.
 fn pose_jacobian(rp: &Vector3<f64>) -> nalgebra::Matrix3x6<f64> {
     let mut j = nalgebra::Matrix3x6::zeros();
-    j.fixed_view_mut::<3, 3>(0, 0).copy_from(&(-rp.cross_matrix()));
-    j.fixed_view_mut::<3, 3>(0, 3).copy_from(&Matrix3::identity());
+    j.fixed_view_mut::<3, 3>(0, 0)
+        .copy_from(&(-rp.cross_matrix()));
+    j.fixed_view_mut::<3, 3>(0, 3)
+        .copy_from(&Matrix3::identity());
     j
 }
 
@@ -99,7 +106,13 @@ pub fn register(points: &[Correspondence]) -> Result<Registration, RegistrationE
         return Err(RegistrationError::TooFew(points.len()));
     }
     for (i, c) in points.iter().enumerate() {
-        let finite = c.tracker.iter().chain(c.machine.iter()).chain(c.tracker_covariance.iter()).chain(c.machine_covariance.iter()).all(|v| v.is_finite());
+        let finite = c
+            .tracker
+            .iter()
+            .chain(c.machine.iter())
+            .chain(c.tracker_covariance.iter())
+            .chain(c.machine_covariance.iter())
+            .all(|v| v.is_finite());
         if !finite {
             return Err(RegistrationError::NotFinite(i));
         }
@@ -109,12 +122,19 @@ pub fn register(points: &[Correspondence]) -> Result<Registration, RegistrationE
     // where the problem is linear to round-off: so the first step is left nearly undamped. With
     // relative tolerances 1e-10 noise-free points come out exact to 1e-15 m, and noisy ones
     // within 2e-10 m and rad of a Gauss–Newton run to round-off.
-    let options = Options { initial_damping: 1e-8, ftol: 1e-10, xtol: 1e-10, gtol: 1e-10, ..Options::default() };
+    let options = Options {
+        initial_damping: 1e-8,
+        ftol: 1e-10,
+        xtol: 1e-10,
+        gtol: 1e-10,
+        ..Options::default()
+    };
     let mut weights = FrozenWeights::at(points, rotation)?;
     let mut info_inverse = None;
     for _ in 0..MAX_REWEIGHTINGS {
         let t = translation;
-        let fit = solve(&weights, &[0.0, 0.0, 0.0, t.x, t.y, t.z], &options).map_err(|_| RegistrationError::Degenerate)?;
+        let fit = solve(&weights, &[0.0, 0.0, 0.0, t.x, t.y, t.z], &options)
+            .map_err(|_| RegistrationError::Degenerate)?;
         (rotation, translation) = weights.pose(&fit.x);
         info_inverse = fit.covariance_unscaled;
         weights = FrozenWeights::at(points, rotation)?;
@@ -132,9 +152,20 @@ pub fn register(points: &[Correspondence]) -> Result<Registration, RegistrationE
         ss += r.norm_squared();
     }
     let dof = 3 * points.len() - 6;
-    let birge = if dof > 0 { (chi2 / dof as f64).max(1.0) } else { 1.0 };
+    let birge = if dof > 0 {
+        (chi2 / dof as f64).max(1.0)
+    } else {
+        1.0
+    };
     let covariance = Matrix6::from_iterator(info_inverse.iter().copied()) * birge;
-    Ok(Registration { rotation, translation, covariance, chi2, dof, rms: (ss / points.len() as f64).sqrt() })
+    Ok(Registration {
+        rotation,
+        translation,
+        covariance,
+        chi2,
+        dof,
+        rms: (ss / points.len() as f64).sqrt(),
+    })
 }
 
 /// The residuals Lᵢ⁻¹·rᵢ with LᵢLᵢᵀ = R₀ Σpᵢ R₀ᵀ + Σqᵢ = Wᵢ⁻¹ at a fixed R₀, so that the solver's
@@ -151,17 +182,32 @@ struct FrozenWeights<'a> {
 
 impl<'a> FrozenWeights<'a> {
     /// The weights at `rotation`; Degenerate where R Σp Rᵀ + Σq is not positive definite.
-    fn at(points: &'a [Correspondence], rotation: Rotation3<f64>) -> Result<Self, RegistrationError> {
+    fn at(
+        points: &'a [Correspondence],
+        rotation: Rotation3<f64>,
+    ) -> Result<Self, RegistrationError> {
         let r = rotation.matrix();
         let whiten = points
             .iter()
-            .map(|c| (r * c.tracker_covariance * r.transpose() + c.machine_covariance).cholesky().and_then(|ch| ch.l().try_inverse()).ok_or(RegistrationError::Degenerate))
+            .map(|c| {
+                (r * c.tracker_covariance * r.transpose() + c.machine_covariance)
+                    .cholesky()
+                    .and_then(|ch| ch.l().try_inverse())
+                    .ok_or(RegistrationError::Degenerate)
+            })
             .collect::<Result<_, _>>()?;
-        Ok(FrozenWeights { points, rotation, whiten })
+        Ok(FrozenWeights {
+            points,
+            rotation,
+            whiten,
+        })
     }
 
     fn pose(&self, x: &[f64]) -> (Rotation3<f64>, Vector3<f64>) {
-        (Rotation3::new(Vector3::new(x[0], x[1], x[2])) * self.rotation, Vector3::new(x[3], x[4], x[5]))
+        (
+            Rotation3::new(Vector3::new(x[0], x[1], x[2])) * self.rotation,
+            Vector3::new(x[3], x[4], x[5]),
+        )
     }
 }
 
@@ -180,7 +226,12 @@ impl Problem for FrozenWeights<'_> {
         }
         Ok(())
     }
-    fn residuals_and_jacobian(&self, x: &[f64], out: &mut [f64], j: &mut DMatrix<f64>) -> Result<(), NotEvaluable> {
+    fn residuals_and_jacobian(
+        &self,
+        x: &[f64],
+        out: &mut [f64],
+        j: &mut DMatrix<f64>,
+    ) -> Result<(), NotEvaluable> {
         let (rotation, translation) = self.pose(x);
         for (i, (c, whiten)) in self.points.iter().zip(&self.whiten).enumerate() {
             let rp = rotation * c.tracker;
@@ -200,7 +251,8 @@ impl Problem for FrozenWeights<'_> {
         Ok(())
     }
     fn retract(&self, x: &[f64], delta: &[f64], out: &mut [f64]) {
-        let q = UnitQuaternion::from_scaled_axis(Vector3::new(delta[0], delta[1], delta[2])) * UnitQuaternion::from_scaled_axis(Vector3::new(x[0], x[1], x[2]));
+        let q = UnitQuaternion::from_scaled_axis(Vector3::new(delta[0], delta[1], delta[2]))
+            * UnitQuaternion::from_scaled_axis(Vector3::new(x[0], x[1], x[2]));
         out[..3].copy_from_slice(q.scaled_axis().as_slice());
         for k in 3..6 {
             out[k] = x[k] + delta[k];
@@ -210,13 +262,37 @@ impl Problem for FrozenWeights<'_> {
 
 /// Closed-form weighted Kabsch (no scale), weights 3/trace(Σpᵢ + Σqᵢ).
 fn kabsch(points: &[Correspondence]) -> Result<(Rotation3<f64>, Vector3<f64>), RegistrationError> {
-    let w: Vec<f64> = points.iter().map(|c| 3.0 / (c.tracker_covariance + c.machine_covariance).trace().max(f64::MIN_POSITIVE)).collect();
+    let w: Vec<f64> = points
+        .iter()
+        .map(|c| {
+            3.0 / (c.tracker_covariance + c.machine_covariance)
+                .trace()
+                .max(f64::MIN_POSITIVE)
+        })
+        .collect();
     let sw: f64 = w.iter().sum();
-    let pc = points.iter().zip(&w).map(|(c, w)| c.tracker * *w).sum::<Vector3<f64>>() / sw;
-    let qc = points.iter().zip(&w).map(|(c, w)| c.machine * *w).sum::<Vector3<f64>>() / sw;
-    let h = points.iter().zip(&w).map(|(c, w)| (c.tracker - pc) * (c.machine - qc).transpose() * *w).sum::<Matrix3<f64>>();
+    let pc = points
+        .iter()
+        .zip(&w)
+        .map(|(c, w)| c.tracker * *w)
+        .sum::<Vector3<f64>>()
+        / sw;
+    let qc = points
+        .iter()
+        .zip(&w)
+        .map(|(c, w)| c.machine * *w)
+        .sum::<Vector3<f64>>()
+        / sw;
+    let h = points
+        .iter()
+        .zip(&w)
+        .map(|(c, w)| (c.tracker - pc) * (c.machine - qc).transpose() * *w)
+        .sum::<Matrix3<f64>>();
     let svd = h.svd(true, true);
-    let (u, v_t) = (svd.u.ok_or(RegistrationError::Degenerate)?, svd.v_t.ok_or(RegistrationError::Degenerate)?);
+    let (u, v_t) = (
+        svd.u.ok_or(RegistrationError::Degenerate)?,
+        svd.v_t.ok_or(RegistrationError::Degenerate)?,
+    );
     let mut s = svd.singular_values;
     s.as_mut_slice().sort_by(|a, b| b.total_cmp(a));
     // a line of points leaves one rotation free: the second singular value vanishes
@@ -233,12 +309,11 @@ fn kabsch(points: &[Correspondence]) -> Result<(Rotation3<f64>, Vector3<f64>), R
 #[cfg(test)]
 mod tests {
     use super::*;
-    use metrocell_compensation::{spherical_to_cartesian, SphericalNoise};
     use crate::test_noise::normal;
+    use metrocell_compensation::{spherical_to_cartesian, SphericalNoise};
     use nalgebra::Vector6;
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
-
 
     /// Thesis P3 pose: translation (−863.527, 194.373, 677.782) mm, Euler XYZ (0.0339°, 0.0343°, 59.4652°).
     fn thesis_pose() -> (Rotation3<f64>, Vector3<f64>) {
@@ -252,7 +327,11 @@ mod tests {
     /// A 5×4×3 grid in the machine frame seen by the tracker with its spherical noise.
     fn simulated(rng: &mut ChaCha8Rng) -> Vec<Correspondence> {
         let (r, t) = thesis_pose();
-        let noise = SphericalNoise { radial_base: 4e-6, radial_per_metre: 0.8e-6, angular: 3e-6 };
+        let noise = SphericalNoise {
+            radial_base: 4e-6,
+            radial_per_metre: 0.8e-6,
+            angular: 3e-6,
+        };
         let mut v = Vec::new();
         for i in 0..5 {
             for j in 0..4 {
@@ -266,7 +345,12 @@ mod tests {
                         el + noise.angular * normal(rng),
                         &noise,
                     );
-                    v.push(Correspondence { tracker: pm, tracker_covariance: cov, machine: q, machine_covariance: Matrix3::zeros() });
+                    v.push(Correspondence {
+                        tracker: pm,
+                        tracker_covariance: cov,
+                        machine: q,
+                        machine_covariance: Matrix3::zeros(),
+                    });
                 }
             }
         }
@@ -276,13 +360,23 @@ mod tests {
     #[test]
     fn noise_free_points_give_the_thesis_pose_exactly() {
         let (r, t) = thesis_pose();
-        let pts: Vec<Correspondence> = [[0.0, 0.0, 0.0], [0.4, 0.0, 0.0], [0.0, 0.4, 0.0], [0.4, 0.4, 0.1]]
-            .iter()
-            .map(|q| {
-                let q = Vector3::from(*q);
-                Correspondence { tracker: r.inverse() * (q - t), tracker_covariance: Matrix3::identity() * 1e-12, machine: q, machine_covariance: Matrix3::zeros() }
-            })
-            .collect();
+        let pts: Vec<Correspondence> = [
+            [0.0, 0.0, 0.0],
+            [0.4, 0.0, 0.0],
+            [0.0, 0.4, 0.0],
+            [0.4, 0.4, 0.1],
+        ]
+        .iter()
+        .map(|q| {
+            let q = Vector3::from(*q);
+            Correspondence {
+                tracker: r.inverse() * (q - t),
+                tracker_covariance: Matrix3::identity() * 1e-12,
+                machine: q,
+                machine_covariance: Matrix3::zeros(),
+            }
+        })
+        .collect();
         let reg = register(&pts).unwrap();
         assert!((reg.translation - t).norm() < 1e-12);
         assert!((reg.rotation.matrix() - r.matrix()).norm() < 1e-12);
@@ -299,7 +393,14 @@ mod tests {
             let mut rng = ChaCha8Rng::seed_from_u64(seed);
             let reg = register(&simulated(&mut rng)).unwrap();
             let dtheta = (r * reg.rotation.inverse()).scaled_axis();
-            let e = Vector6::new(dtheta.x, dtheta.y, dtheta.z, t.x - reg.translation.x, t.y - reg.translation.y, t.z - reg.translation.z);
+            let e = Vector6::new(
+                dtheta.x,
+                dtheta.y,
+                dtheta.z,
+                t.x - reg.translation.x,
+                t.y - reg.translation.y,
+                t.z - reg.translation.z,
+            );
             let m2 = (e.transpose() * reg.covariance.try_inverse().unwrap() * e)[(0, 0)];
             if m2 < 12.59 {
                 inside += 1;
@@ -308,15 +409,32 @@ mod tests {
             assert!(reg.covariance[(3, 3)].sqrt() < 20e-6);
         }
         let frac = inside as f64 / runs as f64;
-        assert!((0.91..=0.99).contains(&frac), "{frac} of runs inside the 95 % region");
+        assert!(
+            (0.91..=0.99).contains(&frac),
+            "{frac} of runs inside the 95 % region"
+        );
     }
 
     #[test]
     fn degenerate_and_bad_inputs_are_named() {
-        let c = |x: f64| Correspondence { tracker: Vector3::new(x, 0.0, 0.0), tracker_covariance: Matrix3::identity() * 1e-12, machine: Vector3::new(x, 0.0, 0.0), machine_covariance: Matrix3::zeros() };
-        assert_eq!(register(&[c(0.0), c(1.0)]), Err(RegistrationError::TooFew(2)));
-        assert_eq!(register(&[c(0.0), c(1.0), c(2.0)]), Err(RegistrationError::Degenerate));
-        assert_eq!(register(&[c(0.0), c(f64::NAN), c(2.0)]), Err(RegistrationError::NotFinite(1)));
+        let c = |x: f64| Correspondence {
+            tracker: Vector3::new(x, 0.0, 0.0),
+            tracker_covariance: Matrix3::identity() * 1e-12,
+            machine: Vector3::new(x, 0.0, 0.0),
+            machine_covariance: Matrix3::zeros(),
+        };
+        assert_eq!(
+            register(&[c(0.0), c(1.0)]),
+            Err(RegistrationError::TooFew(2))
+        );
+        assert_eq!(
+            register(&[c(0.0), c(1.0), c(2.0)]),
+            Err(RegistrationError::Degenerate)
+        );
+        assert_eq!(
+            register(&[c(0.0), c(f64::NAN), c(2.0)]),
+            Err(RegistrationError::NotFinite(1))
+        );
     }
 
     #[test]

@@ -47,11 +47,17 @@ pub struct TcpClientConfig {
 pub enum DriverEvent {
     Connected(SocketAddr),
     /// connection lost or refused, with the reason; a retry follows after `retry_in`
-    Disconnected { reason: String, retry_in: Duration },
+    Disconnected {
+        reason: String,
+        retry_in: Duration,
+    },
     Reading(LineReading),
     /// a total station's measurement block ([`LineFormat::LeicaGsi`]), stamped when its line
     /// arrived (ns since the Unix epoch)
-    TotalStation { received_ns: i64, block: GsiBlock },
+    TotalStation {
+        received_ns: i64,
+        block: GsiBlock,
+    },
     /// a line that is not a reading
     Garbage(LineError),
     /// a reading at time `t` (s) not after the last accepted one
@@ -68,7 +74,11 @@ pub struct Backoff {
 
 impl Backoff {
     pub fn new(initial: Duration, max: Duration) -> Self {
-        Self { initial, max, next: initial }
+        Self {
+            initial,
+            max,
+            next: initial,
+        }
     }
 
     /// The wait before the next attempt; doubles each call up to the maximum.
@@ -121,7 +131,11 @@ impl TcpTrackerClient {
             .name("tracker-tcp".into())
             .spawn(move || run(config, format, s, tx))
             .ok();
-        Self { stop, handle, events }
+        Self {
+            stop,
+            handle,
+            events,
+        }
     }
 
     /// The next event, if one is waiting.
@@ -149,9 +163,18 @@ impl Drop for TcpTrackerClient {
 
 const POLL: Duration = Duration::from_millis(50);
 
-fn run(config: TcpClientConfig, format: LineFormat, stop: Arc<AtomicBool>, tx: Sender<DriverEvent>) {
+fn run(
+    config: TcpClientConfig,
+    format: LineFormat,
+    stop: Arc<AtomicBool>,
+    tx: Sender<DriverEvent>,
+) {
     let mut backoff = Backoff::new(config.initial_backoff, config.max_backoff);
-    let mut parser = LineParser { format, dedup: Deduplicator::default(), last_received_ns: i64::MIN };
+    let mut parser = LineParser {
+        format,
+        dedup: Deduplicator::default(),
+        last_received_ns: i64::MIN,
+    };
     let mut framer = LineFramer::new();
     while !stop.load(Ordering::Relaxed) {
         let reason = match connect(&config.address) {
@@ -176,7 +199,10 @@ fn run(config: TcpClientConfig, format: LineFormat, stop: Arc<AtomicBool>, tx: S
             return;
         }
         let retry_in = backoff.next_delay();
-        if tx.send(DriverEvent::Disconnected { reason, retry_in }).is_err() {
+        if tx
+            .send(DriverEvent::Disconnected { reason, retry_in })
+            .is_err()
+        {
             return;
         }
         let until = Instant::now() + retry_in;
@@ -187,7 +213,10 @@ fn run(config: TcpClientConfig, format: LineFormat, stop: Arc<AtomicBool>, tx: S
 }
 
 fn connect(address: &str) -> Result<(TcpStream, SocketAddr), String> {
-    let addrs: Vec<SocketAddr> = address.to_socket_addrs().map_err(|e| format!("address '{address}': {e}"))?.collect();
+    let addrs: Vec<SocketAddr> = address
+        .to_socket_addrs()
+        .map_err(|e| format!("address '{address}': {e}"))?
+        .collect();
     let mut last = format!("address '{address}' resolves to nothing");
     for a in addrs {
         match TcpStream::connect_timeout(&a, Duration::from_secs(2)) {
@@ -225,30 +254,56 @@ impl LineParser {
             LineFormat::LeicaGsi => match parse_gsi_line(&line) {
                 Ok(None) => None,
                 Ok(Some(block)) => {
-                    let now = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_nanos() as i64).unwrap_or(0);
+                    let now = std::time::SystemTime::now()
+                        .duration_since(std::time::UNIX_EPOCH)
+                        .map(|d| d.as_nanos() as i64)
+                        .unwrap_or(0);
                     self.last_received_ns = now.max(self.last_received_ns.saturating_add(1));
-                    Some(DriverEvent::TotalStation { received_ns: self.last_received_ns, block })
+                    Some(DriverEvent::TotalStation {
+                        received_ns: self.last_received_ns,
+                        block,
+                    })
                 }
-                Err(error) => Some(DriverEvent::Garbage(LineError::Gsi { line: line.trim_end().chars().take(120).collect(), error })),
+                Err(error) => Some(DriverEvent::Garbage(LineError::Gsi {
+                    line: line.trim_end().chars().take(120).collect(),
+                    error,
+                })),
             },
         }
     }
 }
 
 /// Reads until EOF (Ok(whether any line arrived)), an error, or stop.
-fn read_lines(mut stream: TcpStream, stop: &AtomicBool, tx: &Sender<DriverEvent>, framer: &mut LineFramer, parser: &mut LineParser) -> Result<bool, String> {
+fn read_lines(
+    mut stream: TcpStream,
+    stop: &AtomicBool,
+    tx: &Sender<DriverEvent>,
+    framer: &mut LineFramer,
+    parser: &mut LineParser,
+) -> Result<bool, String> {
     let mut buf = [0u8; 4096];
     let mut delivered = false;
     while !stop.load(Ordering::Relaxed) {
         let n = match stream.read(&mut buf) {
             Ok(0) => return Ok(delivered),
             Ok(n) => n,
-            Err(e) if matches!(e.kind(), std::io::ErrorKind::WouldBlock | std::io::ErrorKind::TimedOut | std::io::ErrorKind::Interrupted) => continue,
+            Err(e)
+                if matches!(
+                    e.kind(),
+                    std::io::ErrorKind::WouldBlock
+                        | std::io::ErrorKind::TimedOut
+                        | std::io::ErrorKind::Interrupted
+                ) =>
+            {
+                continue
+            }
             Err(e) => return Err(format!("read: {e}")),
         };
         for line in framer.feed(&buf[..n]) {
             delivered = true;
-            let Some(event) = parser.event(line) else { continue };
+            let Some(event) = parser.event(line) else {
+                continue;
+            };
             if tx.send(event).is_err() {
                 return Ok(delivered);
             }
@@ -272,16 +327,38 @@ mod tests {
 
     #[test]
     fn gsi_lines_become_stamped_blocks_and_named_garbage() {
-        let mut p = LineParser { format: LineFormat::LeicaGsi, dedup: Deduplicator::default(), last_received_ns: i64::MIN };
+        let mut p = LineParser {
+            format: LineFormat::LeicaGsi,
+            dedup: Deduplicator::default(),
+            last_received_ns: i64::MIN,
+        };
         let line = "*110001+0000000000000001 21.022+0000000010000000 22.022+0000000010000000 31..00+0000000000002000 ";
         let (a, b) = (p.event(Ok(line.into())), p.event(Ok(line.into())));
-        let (Some(DriverEvent::TotalStation { received_ns: ta, block }), Some(DriverEvent::TotalStation { received_ns: tb, .. })) = (a, b) else { panic!("two blocks") };
+        let (
+            Some(DriverEvent::TotalStation {
+                received_ns: ta,
+                block,
+            }),
+            Some(DriverEvent::TotalStation {
+                received_ns: tb, ..
+            }),
+        ) = (a, b)
+        else {
+            panic!("two blocks")
+        };
         assert_eq!(block.slope_distance, Some(2.0));
         assert!(tb > ta, "stamps strictly increase: {ta} {tb}");
         assert_eq!(p.event(Ok("410001+00130027".into())), None);
-        let Some(DriverEvent::Garbage(LineError::Gsi { line, error })) = p.event(Ok("21.022+1000000x 22.022+10000000 31..00+00002000\r".into())) else { panic!("garbage") };
+        let Some(DriverEvent::Garbage(LineError::Gsi { line, error })) = p.event(Ok(
+            "21.022+1000000x 22.022+10000000 31..00+00002000\r".into(),
+        )) else {
+            panic!("garbage")
+        };
         assert_eq!(line, "21.022+1000000x 22.022+10000000 31..00+00002000");
-        assert!(error.to_string().starts_with("GSI word 1 at column 1"), "{error}");
+        assert!(
+            error.to_string().starts_with("GSI word 1 at column 1"),
+            "{error}"
+        );
     }
 
     #[test]

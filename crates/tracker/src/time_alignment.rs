@@ -47,7 +47,10 @@ impl ProgramSchedule {
     /// The point the machine stands at `t_ns` (index, position), if it is in a stop.
     pub fn point_at(&self, t_ns: i64) -> Option<(usize, nalgebra::Vector3<f64>)> {
         let t = (t_ns - self.start_ns) as f64 * 1e-9;
-        self.arrivals().into_iter().position(|a| t >= a && t <= a + self.stop_time).map(|k| (k, self.points[k]))
+        self.arrivals()
+            .into_iter()
+            .position(|a| t >= a && t <= a + self.stop_time)
+            .map(|k| (k, self.points[k]))
     }
 }
 
@@ -81,7 +84,12 @@ pub struct CommandedTrajectory {
 impl CommandedTrajectory {
     /// Keeps `keep_ns` of history; refuses to interpolate across gaps longer than `max_gap_ns`.
     pub fn new(keep_ns: i64, max_gap_ns: i64) -> Self {
-        Self { names: Vec::new(), samples: VecDeque::new(), keep_ns, max_gap_ns }
+        Self {
+            names: Vec::new(),
+            samples: VecDeque::new(),
+            keep_ns,
+            max_gap_ns,
+        }
     }
 
     pub fn names(&self) -> &[String] {
@@ -89,9 +97,17 @@ impl CommandedTrajectory {
     }
 
     /// Add a commanded state at `t_ns`.
-    pub fn push(&mut self, t_ns: i64, names: &[String], positions: &[f64]) -> Result<(), AlignmentError> {
+    pub fn push(
+        &mut self,
+        t_ns: i64,
+        names: &[String],
+        positions: &[f64],
+    ) -> Result<(), AlignmentError> {
         if names.len() != positions.len() {
-            return Err(AlignmentError::LengthMismatch { names: names.len(), positions: positions.len() });
+            return Err(AlignmentError::LengthMismatch {
+                names: names.len(),
+                positions: positions.len(),
+            });
         }
         if let Some(i) = positions.iter().position(|p| !p.is_finite()) {
             return Err(AlignmentError::NotFinite(names[i].clone()));
@@ -102,10 +118,17 @@ impl CommandedTrajectory {
         if self.names.is_empty() {
             self.names = names.to_vec();
         } else if self.names != names {
-            return Err(AlignmentError::NamesChanged(self.names.clone(), names.to_vec()));
+            return Err(AlignmentError::NamesChanged(
+                self.names.clone(),
+                names.to_vec(),
+            ));
         }
         self.samples.push_back((t_ns, positions.to_vec()));
-        while self.samples.front().is_some_and(|(t, _)| t_ns - *t > self.keep_ns) {
+        while self
+            .samples
+            .front()
+            .is_some_and(|(t, _)| t_ns - *t > self.keep_ns)
+        {
             self.samples.pop_front();
         }
         Ok(())
@@ -128,7 +151,10 @@ impl CommandedTrajectory {
         }
         let (t1, q1) = self.samples.get(i).ok_or(AlignmentError::NoState(t_ns))?;
         if t1 - t0 > self.max_gap_ns {
-            return Err(AlignmentError::Gap { t: t_ns, gap: t1 - t0 });
+            return Err(AlignmentError::Gap {
+                t: t_ns,
+                gap: t1 - t0,
+            });
         }
         let f = (t_ns - t0) as f64 / (t1 - t0) as f64;
         Ok(q0.iter().zip(q1).map(|(a, b)| a + f * (b - a)).collect())
@@ -139,7 +165,13 @@ impl CommandedTrajectory {
         let q = self.at(t_ns)?;
         joints
             .iter()
-            .map(|j| self.names.iter().position(|n| n == j).map(|k| q[k]).ok_or_else(|| AlignmentError::MissingJoint(j.clone())))
+            .map(|j| {
+                self.names
+                    .iter()
+                    .position(|n| n == j)
+                    .map(|k| q[k])
+                    .ok_or_else(|| AlignmentError::MissingJoint(j.clone()))
+            })
             .collect()
     }
 }
@@ -159,10 +191,16 @@ mod tests {
         c.push(10_000_000, &names(), &[0.01, 1.0, 2.0]).unwrap();
         assert_eq!(c.at(2_500_000).unwrap(), vec![0.0025, 1.0, 2.0]);
         assert_eq!(c.at(10_000_000).unwrap(), vec![0.01, 1.0, 2.0]);
-        assert_eq!(c.joints_at(5_000_000, &["z".into(), "x".into()]).unwrap(), vec![2.0, 0.005]);
+        assert_eq!(
+            c.joints_at(5_000_000, &["z".into(), "x".into()]).unwrap(),
+            vec![2.0, 0.005]
+        );
         assert_eq!(c.at(-1), Err(AlignmentError::NoState(-1)));
         assert_eq!(c.at(10_000_001), Err(AlignmentError::NoState(10_000_001)));
-        assert_eq!(c.joints_at(1, &["b".into()]), Err(AlignmentError::MissingJoint("b".into())));
+        assert_eq!(
+            c.joints_at(1, &["b".into()]),
+            Err(AlignmentError::MissingJoint("b".into()))
+        );
     }
 
     #[test]
@@ -170,11 +208,32 @@ mod tests {
         let mut c = CommandedTrajectory::new(10_000_000_000, 100_000_000);
         c.push(0, &names(), &[0.0, 0.0, 0.0]).unwrap();
         c.push(500_000_000, &names(), &[1.0, 0.0, 0.0]).unwrap();
-        assert_eq!(c.at(250_000_000), Err(AlignmentError::Gap { t: 250_000_000, gap: 500_000_000 }));
-        assert_eq!(c.push(400_000_000, &names(), &[0.0; 3]), Err(AlignmentError::OutOfOrder(400_000_000)));
-        assert!(matches!(c.push(600_000_000, &names(), &[0.0, f64::NAN, 0.0]), Err(AlignmentError::NotFinite(n)) if n == "y"));
-        assert!(matches!(c.push(600_000_000, &names(), &[0.0]), Err(AlignmentError::LengthMismatch { .. })));
-        assert!(matches!(c.push(600_000_000, &["a".into(), "b".into(), "c".into()], &[0.0; 3]), Err(AlignmentError::NamesChanged(..))));
+        assert_eq!(
+            c.at(250_000_000),
+            Err(AlignmentError::Gap {
+                t: 250_000_000,
+                gap: 500_000_000
+            })
+        );
+        assert_eq!(
+            c.push(400_000_000, &names(), &[0.0; 3]),
+            Err(AlignmentError::OutOfOrder(400_000_000))
+        );
+        assert!(
+            matches!(c.push(600_000_000, &names(), &[0.0, f64::NAN, 0.0]), Err(AlignmentError::NotFinite(n)) if n == "y")
+        );
+        assert!(matches!(
+            c.push(600_000_000, &names(), &[0.0]),
+            Err(AlignmentError::LengthMismatch { .. })
+        ));
+        assert!(matches!(
+            c.push(
+                600_000_000,
+                &["a".into(), "b".into(), "c".into()],
+                &[0.0; 3]
+            ),
+            Err(AlignmentError::NamesChanged(..))
+        ));
     }
 
     #[test]
@@ -199,8 +258,14 @@ mod tests {
         };
         // 0.1 m at 50 mm/s: point 1 at 2 s; then 0.2 m more: 6 s of travel + 3 s stop → 9 s
         assert_eq!(s.arrivals(), vec![2.0, 9.0]);
-        assert_eq!(s.point_at(1_000_000_000 + 3_500_000_000).map(|p| p.0), Some(0));
-        assert_eq!(s.point_at(1_000_000_000 + 10_000_000_000).map(|p| p.0), Some(1));
+        assert_eq!(
+            s.point_at(1_000_000_000 + 3_500_000_000).map(|p| p.0),
+            Some(0)
+        );
+        assert_eq!(
+            s.point_at(1_000_000_000 + 10_000_000_000).map(|p| p.0),
+            Some(1)
+        );
         assert_eq!(s.point_at(1_000_000_000 + 6_000_000_000), None, "moving");
     }
 

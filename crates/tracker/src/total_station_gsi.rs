@@ -73,9 +73,18 @@ pub enum GsiError {
     /// A word that cannot be read: its 1-based number in the block, the 1-based column of its
     /// first character in the line, its text.
     #[error("GSI word {word} at column {column} ('{text}'): {reason}")]
-    Word { word: usize, column: usize, text: String, reason: String },
+    Word {
+        word: usize,
+        column: usize,
+        text: String,
+        reason: String,
+    },
     #[error("GSI block has {present} but no word {index} ({name})")]
-    Missing { index: u8, name: &'static str, present: String },
+    Missing {
+        index: u8,
+        name: &'static str,
+        present: String,
+    },
     #[error("GSI block: {0}")]
     Block(String),
 }
@@ -131,22 +140,46 @@ pub fn parse_gsi_line(line: &str) -> Result<Option<GsiBlock>, GsiError> {
             continue;
         }
         number += 1;
-        let bad = |reason: String| GsiError::Word { word: number, column, text: token.chars().take(40).collect(), reason };
+        let bad = |reason: String| GsiError::Word {
+            word: number,
+            column,
+            text: token.chars().take(40).collect(),
+            reason,
+        };
         let word = split_word(token, format).map_err(bad)?;
         if seen.contains(&word.index) {
-            return Err(bad(format!("word index {} appears twice in the block", word.index)));
+            return Err(bad(format!(
+                "word index {} appears twice in the block",
+                word.index
+            )));
         }
         seen.push(word.index);
         read_word(&mut block, &word).map_err(bad)?;
     }
-    let measured = [block.hz.is_some(), block.v.is_some(), block.slope_distance.is_some()];
+    let measured = [
+        block.hz.is_some(),
+        block.v.is_some(),
+        block.slope_distance.is_some(),
+    ];
     if measured.iter().all(|m| !m) {
         return Ok(None);
     }
-    let present = seen.iter().map(|i| i.to_string()).collect::<Vec<_>>().join(", ");
-    for (have, index, name) in [(measured[0], 21, "Hz"), (measured[1], 22, "V"), (measured[2], 31, "slope distance")] {
+    let present = seen
+        .iter()
+        .map(|i| i.to_string())
+        .collect::<Vec<_>>()
+        .join(", ");
+    for (have, index, name) in [
+        (measured[0], 21, "Hz"),
+        (measured[1], 22, "V"),
+        (measured[2], 31, "slope distance"),
+    ] {
         if !have {
-            return Err(GsiError::Missing { index, name, present: format!("words {present}") });
+            return Err(GsiError::Missing {
+                index,
+                name,
+                present: format!("words {present}"),
+            });
         }
     }
     Ok(Some(block))
@@ -163,15 +196,32 @@ fn split_word(token: &str, format: GsiFormat) -> Result<Word<'_>, String> {
             GsiFormat::Gsi8 => ("GSI-8 (no leading '*')", "a GSI-16 block starts with '*'"),
             GsiFormat::Gsi16 => ("GSI-16 (leading '*')", "GSI-8 blocks have no '*'"),
         };
-        return Err(format!("{} characters; a {name} word has {expected}; {other}", token.len()));
+        return Err(format!(
+            "{} characters; a {name} word has {expected}; {other}",
+            token.len()
+        ));
     }
-    let index = token[..2].parse::<u8>().ok().filter(|_| token[..2].bytes().all(|b| b.is_ascii_digit())).ok_or_else(|| format!("word index '{}' is not two digits", &token[..2]))?;
+    let index = token[..2]
+        .parse::<u8>()
+        .ok()
+        .filter(|_| token[..2].bytes().all(|b| b.is_ascii_digit()))
+        .ok_or_else(|| format!("word index '{}' is not two digits", &token[..2]))?;
     let negative = match token.as_bytes()[6] {
         b'+' => false,
         b'-' => true,
-        c => return Err(format!("position 7 is '{}', expected the sign + or -", c as char)),
+        c => {
+            return Err(format!(
+                "position 7 is '{}', expected the sign + or -",
+                c as char
+            ))
+        }
     };
-    Ok(Word { index, unit: token.as_bytes()[5], negative, data: &token[7..] })
+    Ok(Word {
+        index,
+        unit: token.as_bytes()[5],
+        negative,
+        data: &token[7..],
+    })
 }
 
 /// Store a word's value in the block (unknown word indices are ignored).
@@ -179,7 +229,11 @@ fn read_word(block: &mut GsiBlock, w: &Word) -> Result<(), String> {
     match w.index {
         11 => {
             let id = w.data.trim_start_matches('0');
-            block.point_id = Some(if id.is_empty() { "0".to_string() } else { id.to_string() });
+            block.point_id = Some(if id.is_empty() {
+                "0".to_string()
+            } else {
+                id.to_string()
+            });
         }
         21 => block.hz = Some(angle(w)?.rem_euclid(TAU)),
         22 => block.v = Some(angle(w)?),
@@ -196,7 +250,9 @@ fn digits(w: &Word) -> Result<u64, String> {
     if !w.data.bytes().all(|b| b.is_ascii_digit()) {
         return Err(format!("data '{}' is not all digits", w.data));
     }
-    w.data.parse::<u64>().map_err(|e| format!("data '{}': {e}", w.data))
+    w.data
+        .parse::<u64>()
+        .map_err(|e| format!("data '{}': {e}", w.data))
 }
 
 fn signed(w: &Word, magnitude: f64) -> f64 {
@@ -242,13 +298,29 @@ fn distance(w: &Word) -> Result<f64, String> {
 
 /// Word 51: `<sign><ppm digits><sign><mm digits>` → (ppm, prism constant in m).
 fn ppm_and_constant(w: &Word) -> Result<(f64, f64), String> {
-    let split = w.data.rfind(['+', '-']).ok_or_else(|| format!("data '{}' has no sign before the prism constant (expected e.g. 0000+034)", w.data))?;
+    let split = w.data.rfind(['+', '-']).ok_or_else(|| {
+        format!(
+            "data '{}' has no sign before the prism constant (expected e.g. 0000+034)",
+            w.data
+        )
+    })?;
     let (ppm, mm) = (&w.data[..split], &w.data[split + 1..]);
-    let number = |s: &str| s.parse::<u32>().ok().filter(|_| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()));
-    let (Some(ppm), Some(mm)) = (number(ppm), number(mm)) else {
-        return Err(format!("data '{}' is not <ppm digits><sign><mm digits>", w.data));
+    let number = |s: &str| {
+        s.parse::<u32>()
+            .ok()
+            .filter(|_| !s.is_empty() && s.bytes().all(|b| b.is_ascii_digit()))
     };
-    let mm_sign = if w.data.as_bytes()[split] == b'-' { -1.0 } else { 1.0 };
+    let (Some(ppm), Some(mm)) = (number(ppm), number(mm)) else {
+        return Err(format!(
+            "data '{}' is not <ppm digits><sign><mm digits>",
+            w.data
+        ));
+    };
+    let mm_sign = if w.data.as_bytes()[split] == b'-' {
+        -1.0
+    } else {
+        1.0
+    };
     Ok((signed(w, ppm as f64), mm_sign * mm as f64 * 1e-3))
 }
 
@@ -290,15 +362,27 @@ pub fn face_one(hz: f64, v: f64) -> (f64, f64, bool) {
 }
 
 /// Hz, V (rad, as read, either face) and slope distance (m) → point and covariance.
-pub fn to_instrument_frame(hz: f64, v: f64, slope_distance: f64, noise: &TotalStationNoise) -> Result<InstrumentPoint, GsiError> {
+pub fn to_instrument_frame(
+    hz: f64,
+    v: f64,
+    slope_distance: f64,
+    noise: &TotalStationNoise,
+) -> Result<InstrumentPoint, GsiError> {
     if !(hz.is_finite() && v.is_finite() && slope_distance.is_finite()) {
-        return Err(GsiError::Block(format!("Hz {hz}, V {v}, SD {slope_distance} are not all finite")));
+        return Err(GsiError::Block(format!(
+            "Hz {hz}, V {v}, SD {slope_distance} are not all finite"
+        )));
     }
     if !(0.0..TAU).contains(&v) {
-        return Err(GsiError::Block(format!("V = {:.5} gon is outside 0..400 gon", v * 200.0 / PI)));
+        return Err(GsiError::Block(format!(
+            "V = {:.5} gon is outside 0..400 gon",
+            v * 200.0 / PI
+        )));
     }
     if slope_distance <= 0.0 {
-        return Err(GsiError::Block(format!("slope distance {slope_distance} m is not positive")));
+        return Err(GsiError::Block(format!(
+            "slope distance {slope_distance} m is not positive"
+        )));
     }
     let (hz1, v1, face_two) = face_one(hz, v);
     let mut azimuth = -hz1;
@@ -309,7 +393,14 @@ pub fn to_instrument_frame(hz: f64, v: f64, slope_distance: f64, noise: &TotalSt
     let sigma_range = noise.distance_constant + noise.distance_ppm * 1e-6 * slope_distance;
     Ok(InstrumentPoint {
         point: from_spherical(slope_distance, azimuth, elevation),
-        covariance: point_covariance(slope_distance, azimuth, elevation, sigma_range, noise.angle, noise.angle),
+        covariance: point_covariance(
+            slope_distance,
+            azimuth,
+            elevation,
+            sigma_range,
+            noise.angle,
+            noise.angle,
+        ),
         range: slope_distance,
         azimuth,
         elevation,
@@ -318,11 +409,19 @@ pub fn to_instrument_frame(hz: f64, v: f64, slope_distance: f64, noise: &TotalSt
 }
 
 /// A measurement block → point id (empty when the block has none) and point.
-pub fn block_to_point(block: &GsiBlock, noise: &TotalStationNoise) -> Result<(String, InstrumentPoint), GsiError> {
+pub fn block_to_point(
+    block: &GsiBlock,
+    noise: &TotalStationNoise,
+) -> Result<(String, InstrumentPoint), GsiError> {
     let (Some(hz), Some(v), Some(sd)) = (block.hz, block.v, block.slope_distance) else {
-        return Err(GsiError::Block("a measurement needs words 21 (Hz), 22 (V) and 31 (slope distance)".into()));
+        return Err(GsiError::Block(
+            "a measurement needs words 21 (Hz), 22 (V) and 31 (slope distance)".into(),
+        ));
     };
-    Ok((block.point_id.clone().unwrap_or_default(), to_instrument_frame(hz, v, sd, noise)?))
+    Ok((
+        block.point_id.clone().unwrap_or_default(),
+        to_instrument_frame(hz, v, sd, noise)?,
+    ))
 }
 
 #[cfg(test)]
@@ -335,14 +434,22 @@ mod tests {
     const GON: f64 = PI / 200.0;
 
     fn no_noise() -> TotalStationNoise {
-        TotalStationNoise { angle: 0.0, distance_constant: 0.0, distance_ppm: 0.0 }
+        TotalStationNoise {
+            angle: 0.0,
+            distance_constant: 0.0,
+            distance_ppm: 0.0,
+        }
     }
 
     #[test]
     fn gsi8_block_in_gon_and_mm() {
         // written from the TPS1100 layout: point 7, Hz 123.45670 gon, V 95.00000 gon, SD 12.345 m,
         // 51: 0 ppm, +34 mm
-        let b = parse_gsi_line("110007+00000007 21.322+12345670 22.322+09500000 31..00+00012345 51..1.+0000+034 ").unwrap().unwrap();
+        let b = parse_gsi_line(
+            "110007+00000007 21.322+12345670 22.322+09500000 31..00+00012345 51..1.+0000+034 ",
+        )
+        .unwrap()
+        .unwrap();
         assert_eq!(b.point_id.as_deref(), Some("7"));
         assert!((b.hz.unwrap() - 123.4567 * GON).abs() < 1e-15);
         assert!((b.v.unwrap() - 95.0 * GON).abs() < 1e-15);
@@ -356,14 +463,22 @@ mod tests {
         let b = parse_gsi_line(line).unwrap().unwrap();
         assert_eq!(b.point_id.as_deref(), Some("PT_12"));
         // 123° 45' 12.0"
-        assert!((b.hz.unwrap() - (123.0 + 45.0 / 60.0 + 12.0 / 3600.0_f64).to_radians()).abs() < 1e-15);
+        assert!(
+            (b.hz.unwrap() - (123.0 + 45.0 / 60.0 + 12.0 / 3600.0_f64).to_radians()).abs() < 1e-15
+        );
         assert!((b.v.unwrap() - 90.12345_f64.to_radians()).abs() < 1e-15);
         assert!((b.slope_distance.unwrap() - 2.5).abs() < 1e-15); // 1/100 mm
         assert!((b.horizontal_distance.unwrap() - 2.4999).abs() < 1e-15); // 1/10 mm
         assert!((b.height_difference.unwrap() - 1.0 * FOOT).abs() < 1e-15); // 1/1000 ft
-        // 1600.0000 mil (6400 per turn) = 90°, and ft at 1/10000
-        let b = parse_gsi_line("*21..05+0000000016000000 22..05+0000000016000000 31..07+0000000000010000").unwrap().unwrap();
-        assert!((b.hz.unwrap() - PI / 2.0).abs() < 1e-15 && (b.v.unwrap() - PI / 2.0).abs() < 1e-15);
+                                                                            // 1600.0000 mil (6400 per turn) = 90°, and ft at 1/10000
+        let b = parse_gsi_line(
+            "*21..05+0000000016000000 22..05+0000000016000000 31..07+0000000000010000",
+        )
+        .unwrap()
+        .unwrap();
+        assert!(
+            (b.hz.unwrap() - PI / 2.0).abs() < 1e-15 && (b.v.unwrap() - PI / 2.0).abs() < 1e-15
+        );
         assert!((b.slope_distance.unwrap() - FOOT).abs() < 1e-15);
         assert_eq!(b.point_id, None);
     }
@@ -374,36 +489,78 @@ mod tests {
         let b = parse_gsi_line("*110001+0000000000000001 21.022-0000000005000000 22.022+0000000010000000 31..00+0000000000002000 33..00-0000000000001234").unwrap().unwrap();
         assert!((b.height_difference.unwrap() + 1.234).abs() < 1e-15);
         assert!((b.hz.unwrap() - 350.0 * GON).abs() < 1e-12);
-        let b = parse_gsi_line("110001+00000001 21.022+00000000 22.022+10000000 31..00+00002000 51....-0012-002").unwrap().unwrap();
+        let b = parse_gsi_line(
+            "110001+00000001 21.022+00000000 22.022+10000000 31..00+00002000 51....-0012-002",
+        )
+        .unwrap()
+        .unwrap();
         assert_eq!(b.ppm_and_prism_constant, Some((-12.0, -0.002)));
     }
 
     #[test]
     fn code_blocks_are_not_measurements_and_blank_lines_are_nothing() {
-        assert_eq!(parse_gsi_line("410001+00130027 42....+00001810 43....+00000010"), Ok(None));
+        assert_eq!(
+            parse_gsi_line("410001+00130027 42....+00001810 43....+00000010"),
+            Ok(None)
+        );
         assert_eq!(parse_gsi_line("  \r"), Ok(None));
     }
 
     #[test]
     fn malformed_words_are_named_with_their_position() {
         // the 3rd word's unit digit is '9'
-        let e = parse_gsi_line("110001+00000001 21.022+10000000 22.029+10000000 31..00+00002000").unwrap_err();
-        assert_eq!(e, GsiError::Word { word: 3, column: 33, text: "22.029+10000000".into(), reason: e.reason() });
-        assert!(e.to_string().starts_with("GSI word 3 at column 33 ('22.029+10000000'): unit digit '9'"), "{e}");
+        let e = parse_gsi_line("110001+00000001 21.022+10000000 22.029+10000000 31..00+00002000")
+            .unwrap_err();
+        assert_eq!(
+            e,
+            GsiError::Word {
+                word: 3,
+                column: 33,
+                text: "22.029+10000000".into(),
+                reason: e.reason()
+            }
+        );
+        assert!(
+            e.to_string()
+                .starts_with("GSI word 3 at column 33 ('22.029+10000000'): unit digit '9'"),
+            "{e}"
+        );
         // a GSI-8 word in a GSI-16 block (word 2, after '*' and a 24-character word)
-        let e = parse_gsi_line("*110001+0000000000000001 21.022+10000000").unwrap_err().to_string();
-        assert!(e.contains("GSI word 2 at column 26") && e.contains("15 characters; a GSI-16 (leading '*') word has 23"), "{e}");
+        let e = parse_gsi_line("*110001+0000000000000001 21.022+10000000")
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("GSI word 2 at column 26")
+                && e.contains("15 characters; a GSI-16 (leading '*') word has 23"),
+            "{e}"
+        );
         // letters in a distance, a missing sign, minutes ≥ 60
         assert!(parse_gsi_line("110001+00000001 21.022+10000000 22.022+10000000 31..00+0000x000").unwrap_err().to_string().contains("GSI word 4 at column 49 ('31..00+0000x000'): data '0000x000' is not all digits"));
-        assert!(parse_gsi_line("110001+00000001 21.022*10000000 22.022+10000000 31..00+00002000").unwrap_err().to_string().contains("GSI word 2 at column 17 ('21.022*10000000'): position 7 is '*'"));
-        assert!(parse_gsi_line("21.024+12361000 22.022+10000000 31..00+00002000").unwrap_err().to_string().contains("61 minutes"));
-        assert!(parse_gsi_line("21.022+10000000 21.022+10000000").unwrap_err().to_string().contains("GSI word 2 at column 17 ('21.022+10000000'): word index 21 appears twice"));
+        assert!(
+            parse_gsi_line("110001+00000001 21.022*10000000 22.022+10000000 31..00+00002000")
+                .unwrap_err()
+                .to_string()
+                .contains("GSI word 2 at column 17 ('21.022*10000000'): position 7 is '*'")
+        );
+        assert!(
+            parse_gsi_line("21.024+12361000 22.022+10000000 31..00+00002000")
+                .unwrap_err()
+                .to_string()
+                .contains("61 minutes")
+        );
+        assert!(parse_gsi_line("21.022+10000000 21.022+10000000")
+            .unwrap_err()
+            .to_string()
+            .contains("GSI word 2 at column 17 ('21.022+10000000'): word index 21 appears twice"));
     }
 
     #[test]
     fn a_measurement_missing_a_word_is_refused_naming_it() {
         let e = parse_gsi_line("110001+00000001 21.022+10000000 22.022+10000000").unwrap_err();
-        assert_eq!(e.to_string(), "GSI block has words 11, 21, 22 but no word 31 (slope distance)");
+        assert_eq!(
+            e.to_string(),
+            "GSI block has words 11, 21, 22 but no word 31 (slope distance)"
+        );
     }
 
     impl GsiError {
@@ -419,11 +576,19 @@ mod tests {
     fn known_points_converted_by_hand() {
         // Hz 50 gon (45° clockwise from x), V 100 gon (horizontal), 10 m: x = y·(−1) = 10/√2, z = 0
         let p = to_instrument_frame(50.0 * GON, 100.0 * GON, 10.0, &no_noise()).unwrap();
-        assert!((p.point - Vector3::new(10.0 / 2f64.sqrt(), -10.0 / 2f64.sqrt(), 0.0)).norm() < 1e-14, "{:?}", p.point);
+        assert!(
+            (p.point - Vector3::new(10.0 / 2f64.sqrt(), -10.0 / 2f64.sqrt(), 0.0)).norm() < 1e-14,
+            "{:?}",
+            p.point
+        );
         assert!((p.azimuth + PI / 4.0).abs() < 1e-15 && p.elevation.abs() < 1e-15 && !p.face_two);
         // Hz 100 gon (90° clockwise = −y), V 50 gon (45° above the horizon), 2 m
         let p = to_instrument_frame(100.0 * GON, 50.0 * GON, 2.0, &no_noise()).unwrap();
-        assert!((p.point - Vector3::new(0.0, -2f64.sqrt(), 2f64.sqrt())).norm() < 1e-14, "{:?}", p.point);
+        assert!(
+            (p.point - Vector3::new(0.0, -2f64.sqrt(), 2f64.sqrt())).norm() < 1e-14,
+            "{:?}",
+            p.point
+        );
         // Hz 300 gon is +y
         let p = to_instrument_frame(300.0 * GON, 100.0 * GON, 3.0, &no_noise()).unwrap();
         assert!((p.point - Vector3::new(0.0, 3.0, 0.0)).norm() < 1e-14);
@@ -433,14 +598,23 @@ mod tests {
     #[test]
     fn face_two_gives_the_face_one_point() {
         // face II of (Hz 100, V 50): Hz 300, V 350 gon — as a GSI-8 block
-        let b = parse_gsi_line("110002+000000P2 21.322+30000000 22.322+35000000 31..00+00002000").unwrap().unwrap();
+        let b = parse_gsi_line("110002+000000P2 21.322+30000000 22.322+35000000 31..00+00002000")
+            .unwrap()
+            .unwrap();
         let (id, p) = block_to_point(&b, &no_noise()).unwrap();
         assert_eq!(id, "P2");
         assert!(p.face_two);
-        assert!((p.point - Vector3::new(0.0, -2f64.sqrt(), 2f64.sqrt())).norm() < 1e-12, "{:?}", p.point);
+        assert!(
+            (p.point - Vector3::new(0.0, -2f64.sqrt(), 2f64.sqrt())).norm() < 1e-12,
+            "{:?}",
+            p.point
+        );
         // Hz 0 in face II is Hz 200 in face I: −x
         let p = to_instrument_frame(0.0, 300.0 * GON, 1.0, &no_noise()).unwrap();
-        assert!((p.point - Vector3::new(-1.0, 0.0, 0.0)).norm() < 1e-12 && (p.azimuth - PI).abs() < 1e-12);
+        assert!(
+            (p.point - Vector3::new(-1.0, 0.0, 0.0)).norm() < 1e-12
+                && (p.azimuth - PI).abs() < 1e-12
+        );
         assert!(to_instrument_frame(0.0, 400.0 * GON, 1.0, &no_noise()).is_err());
         assert!(to_instrument_frame(0.0, 100.0 * GON, 0.0, &no_noise()).is_err());
     }
@@ -448,7 +622,11 @@ mod tests {
     #[test]
     fn covariance_matches_a_monte_carlo_of_the_angle_and_distance_noise() {
         // 1″ angles, 1 mm + 2 ppm, at 40 m, 30 gon above the horizon, face II as read
-        let noise = TotalStationNoise { angle: (1.0 / 3600.0_f64).to_radians(), distance_constant: 1e-3, distance_ppm: 2.0 };
+        let noise = TotalStationNoise {
+            angle: (1.0 / 3600.0_f64).to_radians(),
+            distance_constant: 1e-3,
+            distance_ppm: 2.0,
+        };
         let (hz, v, sd) = (237.0 * GON, 330.0 * GON, 40.0);
         let analytic = to_instrument_frame(hz, v, sd, &noise).unwrap();
         let mut rng = ChaCha8Rng::seed_from_u64(27);
@@ -456,15 +634,29 @@ mod tests {
         let sigma_sd = 1e-3 + 2e-6 * sd;
         let samples: Vec<Vector3<f64>> = (0..n)
             .map(|_| {
-                let (h, z, d) = (hz + noise.angle * normal(&mut rng), v + noise.angle * normal(&mut rng), sd + sigma_sd * normal(&mut rng));
+                let (h, z, d) = (
+                    hz + noise.angle * normal(&mut rng),
+                    v + noise.angle * normal(&mut rng),
+                    sd + sigma_sd * normal(&mut rng),
+                );
                 to_instrument_frame(h, z, d, &no_noise()).unwrap().point
             })
             .collect();
         let mean = samples.iter().sum::<Vector3<f64>>() / n as f64;
-        let cov = samples.iter().map(|s| (s - mean) * (s - mean).transpose()).sum::<Matrix3<f64>>() / (n - 1) as f64;
+        let cov = samples
+            .iter()
+            .map(|s| (s - mean) * (s - mean).transpose())
+            .sum::<Matrix3<f64>>()
+            / (n - 1) as f64;
         assert!((mean - analytic.point).norm() < 3.0 * sigma_sd / (n as f64).sqrt() + 1e-9);
         // compare in the whitened frame: Σ_a^(-1/2) Σ_mc Σ_a^(-1/2) ≈ I within sampling error (~√(2/n) ≈ 0.7 %)
-        let w = analytic.covariance.cholesky().unwrap().l().try_inverse().unwrap();
+        let w = analytic
+            .covariance
+            .cholesky()
+            .unwrap()
+            .l()
+            .try_inverse()
+            .unwrap();
         let white = w * cov * w.transpose();
         assert!((white - Matrix3::identity()).abs().max() < 0.03, "{white}");
     }

@@ -39,7 +39,13 @@ impl TurbulenceTest {
         let dof = ranges.len() - 1;
         let statistic = ss / (sigma * sigma);
         let threshold = chi_squared_quantile(dof as f64, 1.0 - self.false_alarm);
-        Some(TurbulenceVerdict { statistic, threshold, dof, scatter_ratio: (ss / dof as f64).sqrt() / sigma, flagged: statistic > threshold })
+        Some(TurbulenceVerdict {
+            statistic,
+            threshold,
+            dof,
+            scatter_ratio: (ss / dof as f64).sqrt() / sigma,
+            flagged: statistic > threshold,
+        })
     }
 }
 
@@ -141,11 +147,16 @@ mod tests {
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
-
     #[test]
     fn quantiles_match_tables() {
         // standard χ² table values (4–5 significant digits)
-        for (k, p, q) in [(1.0, 0.95, 3.8415), (4.0, 0.95, 9.4877), (10.0, 0.99, 23.209), (29.0, 0.999, 58.301), (99.0, 0.99, 134.64)] {
+        for (k, p, q) in [
+            (1.0, 0.95, 3.8415),
+            (4.0, 0.95, 9.4877),
+            (10.0, 0.99, 23.209),
+            (29.0, 0.999, 58.301),
+            (99.0, 0.99, 134.64),
+        ] {
             let got = chi_squared_quantile(k, p);
             assert!((got - q).abs() < 1e-4 * q, "χ²({k}) at {p}: {got} vs {q}");
         }
@@ -164,7 +175,10 @@ mod tests {
             })
             .count();
         // binomial(20000, 0.01): 200 ± 14
-        assert!((155..=245).contains(&flagged), "{flagged} of {trials} flagged");
+        assert!(
+            (155..=245).contains(&flagged),
+            "{flagged} of {trials} flagged"
+        );
     }
 
     #[test]

@@ -42,7 +42,11 @@ pub struct WarmupFit {
 
 impl WarmupFit {
     pub fn sigma(&self) -> Vector3<f64> {
-        Vector3::new(self.covariance[(0, 0)].sqrt(), self.covariance[(1, 1)].sqrt(), self.covariance[(2, 2)].sqrt())
+        Vector3::new(
+            self.covariance[(0, 0)].sqrt(),
+            self.covariance[(1, 1)].sqrt(),
+            self.covariance[(2, 2)].sqrt(),
+        )
     }
 
     /// Model value at t (s since power-on).
@@ -64,7 +68,10 @@ impl WarmupFit {
     /// τ + σ_τ, and τ actually determined by the data (not on a search limit, σ_τ < τ/4).
     pub fn stable_at(&self, t: f64) -> bool {
         let s = self.sigma()[2];
-        !self.tau_at_limit && s.is_finite() && s < 0.25 * self.tau && !warmup_status(t, self.tau + s)
+        !self.tau_at_limit
+            && s.is_finite()
+            && s < 0.25 * self.tau
+            && !warmup_status(t, self.tau + s)
     }
 }
 
@@ -73,7 +80,12 @@ pub enum WarmupError {
     #[error("warm-up fit needs at least 4 nest readings, has {0}")]
     TooFew(usize),
     #[error("warm-up sample {index} is not usable (t = {t} s, value = {value} m, σ = {sigma} m)")]
-    BadSample { index: usize, t: f64, value: f64, sigma: f64 },
+    BadSample {
+        index: usize,
+        t: f64,
+        value: f64,
+        sigma: f64,
+    },
     #[error("warm-up fit is singular (all readings at one time?)")]
     Singular,
 }
@@ -89,15 +101,28 @@ fn linear_for_tau(s: &[WarmupSample], tau: f64) -> Option<(f64, f64, f64)> {
         r += row * (w * x.value);
     }
     let ab = n.try_inverse()? * r;
-    let chi2 = s.iter().map(|x| ((x.value - warmup_drift(ab[0], ab[1], tau, x.t)) / x.sigma).powi(2)).sum();
+    let chi2 = s
+        .iter()
+        .map(|x| ((x.value - warmup_drift(ab[0], ab[1], tau, x.t)) / x.sigma).powi(2))
+        .sum();
     Some((ab[0], ab[1], chi2))
 }
 
 /// Fit A + B(1 − e^(−t/τ)) to nest readings.
 pub fn fit_warmup(samples: &[WarmupSample]) -> Result<WarmupFit, WarmupError> {
     for (index, x) in samples.iter().enumerate() {
-        if !(x.t.is_finite() && x.t >= 0.0 && x.value.is_finite() && x.sigma.is_finite() && x.sigma > 0.0) {
-            return Err(WarmupError::BadSample { index, t: x.t, value: x.value, sigma: x.sigma });
+        if !(x.t.is_finite()
+            && x.t >= 0.0
+            && x.value.is_finite()
+            && x.sigma.is_finite()
+            && x.sigma > 0.0)
+        {
+            return Err(WarmupError::BadSample {
+                index,
+                t: x.t,
+                value: x.value,
+                sigma: x.sigma,
+            });
         }
     }
     if samples.len() < 4 {
@@ -106,8 +131,12 @@ pub fn fit_warmup(samples: &[WarmupSample]) -> Result<WarmupFit, WarmupError> {
     let chi2 = |ln_tau: f64| linear_for_tau(samples, ln_tau.exp()).map_or(f64::INFINITY, |f| f.2);
     let (lo, hi) = (TAU_MIN.ln(), TAU_MAX.ln());
     let steps = 240;
-    let grid: Vec<f64> = (0..=steps).map(|k| lo + (hi - lo) * k as f64 / steps as f64).collect();
-    let best = (0..grid.len()).min_by(|&i, &j| chi2(grid[i]).total_cmp(&chi2(grid[j]))).unwrap_or(0);
+    let grid: Vec<f64> = (0..=steps)
+        .map(|k| lo + (hi - lo) * k as f64 / steps as f64)
+        .collect();
+    let best = (0..grid.len())
+        .min_by(|&i, &j| chi2(grid[i]).total_cmp(&chi2(grid[j])))
+        .unwrap_or(0);
     // golden section on the bracketing grid cells
     let (mut a, mut b) = (grid[best.saturating_sub(1)], grid[(best + 1).min(steps)]);
     let g = 0.5 * (5f64.sqrt() - 1.0);
@@ -130,11 +159,29 @@ pub fn fit_warmup(samples: &[WarmupSample]) -> Result<WarmupFit, WarmupError> {
         info += j * j.transpose() / (x.sigma * x.sigma);
     }
     let dof = samples.len() - 3;
-    let reduced_chi2 = if dof > 0 { chi2_min / dof as f64 } else { f64::NAN };
+    let reduced_chi2 = if dof > 0 {
+        chi2_min / dof as f64
+    } else {
+        f64::NAN
+    };
     let covariance = info.try_inverse().ok_or(WarmupError::Singular)? * reduced_chi2.max(1.0);
     let tau_at_limit = best == 0 || best == steps;
-    let rms = (samples.iter().map(|x| (x.value - warmup_drift(fa, fb, tau, x.t)).powi(2)).sum::<f64>() / samples.len() as f64).sqrt();
-    Ok(WarmupFit { a: fa, b: fb, tau, covariance, reduced_chi2, rms, samples: samples.len(), tau_at_limit })
+    let rms = (samples
+        .iter()
+        .map(|x| (x.value - warmup_drift(fa, fb, tau, x.t)).powi(2))
+        .sum::<f64>()
+        / samples.len() as f64)
+        .sqrt();
+    Ok(WarmupFit {
+        a: fa,
+        b: fb,
+        tau,
+        covariance,
+        reduced_chi2,
+        rms,
+        samples: samples.len(),
+        tau_at_limit,
+    })
 }
 
 /// Repeated readings of one nest, refitted as they come.
@@ -184,26 +231,38 @@ mod tests {
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
-
     /// Thesis eq. 3.2 / 3.3 sampled every 30 s for 270 min (P1), σ = 1 µm.
     fn curve(a_mm: f64, b_mm: f64, tau_min: f64, seed: u64) -> Vec<WarmupSample> {
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         (1..=540)
             .map(|k| {
                 let t = k as f64 * 30.0;
-                WarmupSample { t, value: warmup_drift(a_mm * 1e-3, b_mm * 1e-3, tau_min * 60.0, t) + 1e-6 * normal(&mut rng), sigma: 1e-6 }
+                WarmupSample {
+                    t,
+                    value: warmup_drift(a_mm * 1e-3, b_mm * 1e-3, tau_min * 60.0, t)
+                        + 1e-6 * normal(&mut rng),
+                    sigma: 1e-6,
+                }
             })
             .collect()
     }
 
     #[test]
     fn thesis_curves_settle_at_90_and_270_min() {
-        for (a, b, tau, settle_min) in [(159.798, 0.019, 30.0, 90.0), (154.999, 0.075, 90.0, 270.0)] {
+        for (a, b, tau, settle_min) in [(159.798, 0.019, 30.0, 90.0), (154.999, 0.075, 90.0, 270.0)]
+        {
             let f = fit_warmup(&curve(a, b, tau, 1)).unwrap();
             let settle = f.settling_time() / 60.0;
             // the thesis's figures to their stated two digits
-            assert!((settle - settle_min).abs() < 5.0, "settling {settle} min vs {settle_min}");
-            assert!((f.b * 1e6 - b * 1e3).abs() < 0.5, "max offset {} µm", f.b * 1e6);
+            assert!(
+                (settle - settle_min).abs() < 5.0,
+                "settling {settle} min vs {settle_min}"
+            );
+            assert!(
+                (f.b * 1e6 - b * 1e3).abs() < 0.5,
+                "max offset {} µm",
+                f.b * 1e6
+            );
             assert!(!f.stable_at(0.9 * settle_min * 60.0) && f.stable_at(1.1 * settle_min * 60.0));
         }
     }
@@ -218,30 +277,62 @@ mod tests {
             let s: Vec<WarmupSample> = (0..60)
                 .map(|k| {
                     let t = 600.0 + k as f64 * 240.0;
-                    WarmupSample { t, value: warmup_drift(1.3, 75e-6, 5400.0, t) + 3e-6 * normal(&mut rng), sigma: 3e-6 }
+                    WarmupSample {
+                        t,
+                        value: warmup_drift(1.3, 75e-6, 5400.0, t) + 3e-6 * normal(&mut rng),
+                        sigma: 3e-6,
+                    }
                 })
                 .collect();
             let f = fit_warmup(&s).unwrap();
             let sig = f.sigma();
-            for (k, (est, truth)) in [(f.a, 1.3), (f.b, 75e-6), (f.tau, 5400.0)].into_iter().enumerate() {
+            for (k, (est, truth)) in [(f.a, 1.3), (f.b, 75e-6), (f.tau, 5400.0)]
+                .into_iter()
+                .enumerate()
+            {
                 if (est - truth).abs() < 2.0 * sig[k] {
                     inside[k] += 1;
                 }
             }
         }
         for (k, n) in inside.iter().enumerate() {
-            assert!((180..=199).contains(n), "parameter {k}: {n} of {runs} within 2σ");
+            assert!(
+                (180..=199).contains(n),
+                "parameter {k}: {n} of {runs} within 2σ"
+            );
         }
     }
 
     #[test]
     fn bad_and_too_few_samples_are_named() {
         let mut w = WarmupTracker::new();
-        assert_eq!(w.add(WarmupSample { t: 1.0, value: 1.0, sigma: 1e-6 }).unwrap_err(), WarmupError::TooFew(1));
-        assert!(matches!(w.add(WarmupSample { t: 2.0, value: f64::NAN, sigma: 1e-6 }), Err(WarmupError::BadSample { index: 1, .. })));
+        assert_eq!(
+            w.add(WarmupSample {
+                t: 1.0,
+                value: 1.0,
+                sigma: 1e-6
+            })
+            .unwrap_err(),
+            WarmupError::TooFew(1)
+        );
+        assert!(matches!(
+            w.add(WarmupSample {
+                t: 2.0,
+                value: f64::NAN,
+                sigma: 1e-6
+            }),
+            Err(WarmupError::BadSample { index: 1, .. })
+        ));
         assert_eq!(w.samples(), 1, "the bad sample is not kept");
         assert!(!w.stable_at(1e9));
-        let bad = [WarmupSample { t: 1.0, value: 1.0, sigma: 0.0 }; 5];
-        assert!(matches!(fit_warmup(&bad), Err(WarmupError::BadSample { index: 0, .. })));
+        let bad = [WarmupSample {
+            t: 1.0,
+            value: 1.0,
+            sigma: 0.0,
+        }; 5];
+        assert!(matches!(
+            fit_warmup(&bad),
+            Err(WarmupError::BadSample { index: 0, .. })
+        ));
     }
 }

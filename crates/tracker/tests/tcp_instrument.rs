@@ -56,12 +56,17 @@ fn instrument_misbehaviour_is_reported_and_survived() {
         max_backoff: Duration::from_millis(200),
     });
     let processor = ReadingProcessor {
-        noise: SphericalNoise { radial_base: 4e-6, radial_per_metre: 0.8e-6, angular: 3e-6 },
+        noise: SphericalNoise {
+            radial_base: 4e-6,
+            radial_per_metre: 0.8e-6,
+            angular: 3e-6,
+        },
         air: AirSource::Station,
         form: EdlenForm::ShopFloor,
         max_range: 80.0,
     };
-    let (mut accepted, mut beam_breaks, mut rejected, mut garbage, mut repeats, mut connects) = (Vec::new(), 0, Vec::new(), Vec::new(), Vec::new(), 0);
+    let (mut accepted, mut beam_breaks, mut rejected, mut garbage, mut repeats, mut connects) =
+        (Vec::new(), 0, Vec::new(), Vec::new(), Vec::new(), 0);
     let mut retries = Vec::new();
     let deadline = Instant::now() + Duration::from_secs(20);
     while Instant::now() < deadline && retries.len() < 4 {
@@ -78,20 +83,46 @@ fn instrument_misbehaviour_is_reported_and_survived() {
             },
             Some(DriverEvent::Garbage(e)) => garbage.push(e),
             Some(DriverEvent::Repeat(t)) => repeats.push(t),
-            Some(DriverEvent::TotalStation { block, .. }) => panic!("a GSI block from a tracker's line stream: {block:?}"),
+            Some(DriverEvent::TotalStation { block, .. }) => {
+                panic!("a GSI block from a tracker's line stream: {block:?}")
+            }
             None => {}
         }
     }
     server.join().unwrap();
     let secs: Vec<i64> = accepted.iter().map(|t| t / 1_000_000_000).collect();
-    assert_eq!(secs, vec![1, 2, 3, 4, 5, 6, 7, 8], "each reading once, in order");
+    assert_eq!(
+        secs,
+        vec![1, 2, 3, 4, 5, 6, 7, 8],
+        "each reading once, in order"
+    );
     assert_eq!(beam_breaks, 1);
     assert_eq!(rejected.len(), 1);
-    assert!(matches!(rejected[0], ReadingError::OutOfRange { field: "elevation", .. }));
+    assert!(matches!(
+        rejected[0],
+        ReadingError::OutOfRange {
+            field: "elevation",
+            ..
+        }
+    ));
     assert_eq!(garbage.len(), 1);
-    assert!(matches!(garbage[0], LineError::FieldCount(1)), "{:?}", garbage[0]);
-    assert_eq!(repeats, vec![4.9, 4.0, 5.0], "backwards time and the resent buffer are dropped");
+    assert!(
+        matches!(garbage[0], LineError::FieldCount(1)),
+        "{:?}",
+        garbage[0]
+    );
+    assert_eq!(
+        repeats,
+        vec![4.9, 4.0, 5.0],
+        "backwards time and the resent buffer are dropped"
+    );
     assert_eq!(connects, 2);
     // after connection 2 delivered lines the back-off restarted at 50 ms, then doubled while refused
-    assert_eq!(retries[1..].iter().map(|d| d.as_millis()).collect::<Vec<_>>(), vec![50, 100, 200]);
+    assert_eq!(
+        retries[1..]
+            .iter()
+            .map(|d| d.as_millis())
+            .collect::<Vec<_>>(),
+        vec![50, 100, 200]
+    );
 }

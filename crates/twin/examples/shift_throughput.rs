@@ -9,12 +9,23 @@ use metrocell_twin::{Cell, Sample, Simulation};
 
 fn peak_rss_kib() -> Option<u64> {
     let s = std::fs::read_to_string("/proc/self/status").ok()?;
-    s.lines().find(|l| l.starts_with("VmHWM:"))?.split_whitespace().nth(1)?.parse().ok()
+    s.lines()
+        .find(|l| l.starts_with("VmHWM:"))?
+        .split_whitespace()
+        .nth(1)?
+        .parse()
+        .ok()
 }
 
 fn main() {
     let args: Vec<String> = std::env::args().collect();
-    let path = args.get(1).cloned().unwrap_or_else(|| concat!(env!("CARGO_MANIFEST_DIR"), "/examples/cells/xfyz_shift.yaml").to_string());
+    let path = args.get(1).cloned().unwrap_or_else(|| {
+        concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/examples/cells/xfyz_shift.yaml"
+        )
+        .to_string()
+    });
     let hours: f64 = args.get(2).and_then(|s| s.parse().ok()).unwrap_or(8.0);
     let seed: u64 = args.get(3).and_then(|s| s.parse().ok()).unwrap_or(1);
     let cell = match Cell::from_path(&path) {
@@ -46,7 +57,11 @@ fn main() {
             _ => other += 1,
         }
         if n % 1_000_000 == 0 {
-            eprintln!("  {n} samples, t = {:.0} s, peak RSS {:?} KiB", last_t, peak_rss_kib());
+            eprintln!(
+                "  {n} samples, t = {:.0} s, peak RSS {:?} KiB",
+                last_t,
+                peak_rss_kib()
+            );
         }
     }
     if let Some(e) = stream.error() {
@@ -56,6 +71,14 @@ fn main() {
     let secs = start.elapsed().as_secs_f64();
     println!("cell {path}: {hours} h simulated, seed {seed}");
     println!("samples: {n} (tracker {tracker}, temperature {temps}, machine state {states}, other {other}); last t = {last_t:.1} s");
-    println!("wall time {secs:.2} s → {:.0} samples/s, {:.0}× real time", n as f64 / secs, hours * 3600.0 / secs);
-    println!("peak RSS: {:?} KiB before streaming, {:?} KiB after", rss_before, peak_rss_kib());
+    println!(
+        "wall time {secs:.2} s → {:.0} samples/s, {:.0}× real time",
+        n as f64 / secs,
+        hours * 3600.0 / secs
+    );
+    println!(
+        "peak RSS: {:?} KiB before streaming, {:?} KiB after",
+        rss_before,
+        peak_rss_kib()
+    );
 }

@@ -11,16 +11,21 @@ use metrocell_kinematics::delta::DeltaGeometry;
 use metrocell_model::{CameraGeometry, ForwardModel, KinematicTruth};
 use metrocell_physics::config::ConfigValue;
 use metrocell_physics::model::TermModel;
-use metrocell_physics::thermal::shift_model::{AmbientCycle, DutySegment, HeatSource, SensorLocation, ShiftThermalModel, StructureNode, ThermalSensor};
-use metrocell_physics::{configure, ConfiguredTerm, EffectKind, Frame, SignalKind, TermConfig, TermId};
+use metrocell_physics::thermal::shift_model::{
+    AmbientCycle, DutySegment, HeatSource, SensorLocation, ShiftThermalModel, StructureNode,
+    ThermalSensor,
+};
+use metrocell_physics::{
+    configure, ConfiguredTerm, EffectKind, Frame, SignalKind, TermConfig, TermId,
+};
 use nalgebra::Vector3;
 
 use crate::cell_file::*;
 use crate::error::CellError;
 use crate::fiducial_plate::FiducialPlate;
-pub use metrocell_model::{InstrumentPose, MachineGeometry, MachineKinematics};
 use crate::program::Program;
 use crate::quantity::{vector3, Quantity};
+pub use metrocell_model::{InstrumentPose, MachineGeometry, MachineKinematics};
 
 /// Warm-up drift of the range, Δρ = A + B·(1 − e^(−t/τ)).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -125,7 +130,8 @@ impl CameraSpec {
 /// distortion.
 pub fn default_camera_lens() -> CameraModel {
     let f = 12e-3 / 3.45e-6;
-    CameraModel::new(2448, 2048, f, f, 1223.5, 1023.5, Distortion::none()).expect("the default lens is valid")
+    CameraModel::new(2448, 2048, f, f, 1223.5, 1023.5, Distortion::none())
+        .expect("the default lens is valid")
 }
 
 /// True air on the tracker beam.
@@ -174,15 +180,25 @@ impl Cell {
 
     /// As [`Cell::from_yaml_str`], with paths in the file (a URDF) relative to `base_dir`.
     pub fn from_yaml_str_in(text: &str, file: &str, base_dir: &Path) -> Result<Cell, CellError> {
-        let raw: CellFile = serde_yaml::from_str(text).map_err(|e| CellError::Yaml { file: file.into(), message: e.to_string() })?;
+        let raw: CellFile = serde_yaml::from_str(text).map_err(|e| CellError::Yaml {
+            file: file.into(),
+            message: e.to_string(),
+        })?;
         Cell::from_file_in(&raw, base_dir)
     }
 
     /// Read, parse and validate a cell file.
     pub fn from_path(path: impl AsRef<Path>) -> Result<Cell, CellError> {
         let p = path.as_ref();
-        let text = std::fs::read_to_string(p).map_err(|e| CellError::Io { file: p.display().to_string(), reason: e.to_string() })?;
-        Cell::from_yaml_str_in(&text, &p.display().to_string(), p.parent().unwrap_or(Path::new(".")))
+        let text = std::fs::read_to_string(p).map_err(|e| CellError::Io {
+            file: p.display().to_string(),
+            reason: e.to_string(),
+        })?;
+        Cell::from_yaml_str_in(
+            &text,
+            &p.display().to_string(),
+            p.parent().unwrap_or(Path::new(".")),
+        )
     }
 
     /// Validate a parsed file (relative paths from the current directory).
@@ -209,7 +225,12 @@ impl Cell {
             Some(_) => None,
             None => f.sensors.tracker.as_ref().map(tracker).transpose()?,
         };
-        let machine_state_rate = f.sensors.machine_state.as_ref().map(|m| m.rate.positive("sensors.machine_state.rate", "1/s")).transpose()?;
+        let machine_state_rate = f
+            .sensors
+            .machine_state
+            .as_ref()
+            .map(|m| m.rate.positive("sensors.machine_state.rate", "1/s"))
+            .transpose()?;
         let probe = f.sensors.probe.as_ref().map(probe).transpose()?;
         if probe.is_some() && machine.is_jointed() {
             return Err(CellError::invalid("sensors.probe", "is simulated for family: cartesian and delta only; a five_axis or serial_arm cell takes tracker, thermocouples, machine_state and camera"));
@@ -221,29 +242,73 @@ impl Cell {
         };
         let humidity = env.air.humidity;
         if !(0.0..=100.0).contains(&humidity) {
-            return Err(CellError::OutOfRange { path: "environment.air.humidity".into(), value: humidity, reason: "must be in [0, 100] %RH".into() });
+            return Err(CellError::OutOfRange {
+                path: "environment.air.humidity".into(),
+                value: humidity,
+                reason: "must be in [0, 100] %RH".into(),
+            });
         }
         let air = AirSpec {
-            pressure: env.air.pressure.positive("environment.air.pressure", "Pa")?,
+            pressure: env
+                .air
+                .pressure
+                .positive("environment.air.pressure", "Pa")?,
             humidity,
-            beam_temperature_offset: opt(&env.air.beam_temperature_offset, "environment.air.beam_temperature_offset", "K")?,
+            beam_temperature_offset: opt(
+                &env.air.beam_temperature_offset,
+                "environment.air.beam_temperature_offset",
+                "K",
+            )?,
         };
-        let load_force = env.load_force.as_ref().map(|v| vector3(v, "environment.load_force", "N")).transpose()?;
+        let load_force = env
+            .load_force
+            .as_ref()
+            .map(|v| vector3(v, "environment.load_force", "N"))
+            .transpose()?;
         let program = match &stationing {
             // one pass over the waypoints
-            Some(st) => Program { cycles: Some(1), ..Program::from_section_with(program_section, &machine, st.waypoints.iter().map(|w| w.q.clone()).collect())? },
+            Some(st) => Program {
+                cycles: Some(1),
+                ..Program::from_section_with(
+                    program_section,
+                    &machine,
+                    st.waypoints.iter().map(|w| w.q.clone()).collect(),
+                )?
+            },
             None => Program::from_section(program_section, &machine)?,
         };
         let sensor_names: BTreeSet<String> = thermocouples.iter().map(|t| t.name.clone()).collect();
-        let terms = terms(&f.terms, Some(&sensor_names), Some(load_force.is_some()), &machine)?;
+        let terms = terms(
+            &f.terms,
+            Some(&sensor_names),
+            Some(load_force.is_some()),
+            &machine,
+        )?;
         if let MachineKinematics::Delta(g) = &machine.kinematics {
-            for (i, q) in program.points.iter().chain(std::iter::once(&program.home)).enumerate() {
-                g.inverse(&Vector3::new(q[0], q[1], q[2])).map_err(|e| CellError::invalid(if i == program.points.len() { "program.home".to_string() } else { format!("program point {i}") }, format!("not reachable by the delta: {e}")))?;
+            for (i, q) in program
+                .points
+                .iter()
+                .chain(std::iter::once(&program.home))
+                .enumerate()
+            {
+                g.inverse(&Vector3::new(q[0], q[1], q[2])).map_err(|e| {
+                    CellError::invalid(
+                        if i == program.points.len() {
+                            "program.home".to_string()
+                        } else {
+                            format!("program point {i}")
+                        },
+                        format!("not reachable by the delta: {e}"),
+                    )
+                })?;
             }
         }
         let disturbances = crate::disturbance::Disturbances::from_section(
             &f.disturbances.clone().unwrap_or_default(),
-            matches!(machine.kinematics, MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_)),
+            matches!(
+                machine.kinematics,
+                MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_)
+            ),
         )?;
         Ok(Cell {
             name: f.name.clone(),
@@ -276,18 +341,32 @@ impl Cell {
     /// How long a run of the cell lasts when nobody says: a stationing program's one pass
     /// (None for a cell whose program repeats through a shift: its duration is the caller's).
     pub fn natural_duration(&self) -> Option<f64> {
-        self.stationing.as_ref().map(|_| crate::stationing_run::stationing_length(&self.program))
+        self.stationing
+            .as_ref()
+            .map(|_| crate::stationing_run::stationing_length(&self.program))
     }
 
     /// The shared forward model of this cell's machine and terms, with `instruments` as its
     /// instrument terms (e.g. [`Cell::tracker_terms`], [`Cell::instrument_terms`]) and, if the
     /// cell has a camera, its geometry (mount and the lens's pinhole intrinsics).
-    pub fn forward_model<'a>(&'a self, instruments: &'a TermModel) -> Result<ForwardModel<'a>, metrocell_physics::PhysicsError> {
+    pub fn forward_model<'a>(
+        &'a self,
+        instruments: &'a TermModel,
+    ) -> Result<ForwardModel<'a>, metrocell_physics::PhysicsError> {
         let model = ForwardModel::new(&self.machine, &self.terms, instruments)?;
         match &self.camera {
             Some(c) => {
                 let lens = c.lens();
-                model.with_camera(None, CameraGeometry { mount: c.mount, fx: lens.fx, fy: lens.fy, cx: lens.cx, cy: lens.cy })
+                model.with_camera(
+                    None,
+                    CameraGeometry {
+                        mount: c.mount,
+                        fx: lens.fx,
+                        fy: lens.fy,
+                        cx: lens.cx,
+                        cy: lens.cy,
+                    },
+                )
             }
             None => Ok(model),
         }
@@ -302,12 +381,33 @@ impl Cell {
     pub fn instrument_terms(&self) -> Result<TermModel, CellError> {
         let mut m = self.tracker_terms()?;
         if let Some(pt) = self.probe.as_ref().and_then(|p| p.pretravel.clone()) {
-            m.push(pt).map_err(|e| CellError::term("sensors.probe.pretravel", e))?;
+            m.push(pt)
+                .map_err(|e| CellError::term("sensors.probe.pretravel", e))?;
         }
-        if let Some(Distortion::BrownConrady(k)) = self.camera.as_ref().and_then(|c| c.intrinsics.as_ref()).map(|l| l.distortion) {
+        if let Some(Distortion::BrownConrady(k)) = self
+            .camera
+            .as_ref()
+            .and_then(|c| c.intrinsics.as_ref())
+            .map(|l| l.distortion)
+        {
             let path = "sensors.camera.intrinsics.distortion";
-            let params = [("k1", k[0]), ("k2", k[1]), ("k3", k[4]), ("p1", k[2]), ("p2", k[3])].into_iter().map(|(n, v)| (n.to_string(), ConfigValue::Number(v))).collect();
-            let t = configure(&TermConfig { id: "lens_distortion".into(), options: Default::default(), params, use_defaults: false }).map_err(|e| CellError::term(path, e))?;
+            let params = [
+                ("k1", k[0]),
+                ("k2", k[1]),
+                ("k3", k[4]),
+                ("p1", k[2]),
+                ("p2", k[3]),
+            ]
+            .into_iter()
+            .map(|(n, v)| (n.to_string(), ConfigValue::Number(v)))
+            .collect();
+            let t = configure(&TermConfig {
+                id: "lens_distortion".into(),
+                options: Default::default(),
+                params,
+                use_defaults: false,
+            })
+            .map_err(|e| CellError::term(path, e))?;
             m.push(t).map_err(|e| CellError::term(path, e))?;
         }
         Ok(m)
@@ -342,8 +442,11 @@ impl Cell {
     /// order).
     pub fn parameter_setup(&self) -> Result<metrocell_model::ParameterSetup, CellError> {
         let instruments = self.instrument_terms()?;
-        let model = self.forward_model(&instruments).map_err(|e| CellError::term("terms", e))?;
-        metrocell_model::ParameterSetup::new(&model, &self.estimation).map_err(|e| CellError::term("estimation", e))
+        let model = self
+            .forward_model(&instruments)
+            .map_err(|e| CellError::term("terms", e))?;
+        metrocell_model::ParameterSetup::new(&model, &self.estimation)
+            .map_err(|e| CellError::term("estimation", e))
     }
 
     /// The tracker's instrument effects as catalog terms with their true parameters: the
@@ -354,9 +457,15 @@ impl Cell {
     /// −station humidity bias. Empty without a tracker. Built from the (adjustable) fields of
     /// the cell, so it follows a test's edits of `tracker`.
     pub fn tracker_terms(&self) -> Result<TermModel, CellError> {
-        let Some(tr) = &self.tracker else { return Ok(TermModel::default()) };
+        let Some(tr) = &self.tracker else {
+            return Ok(TermModel::default());
+        };
         let st = &tr.station;
-        let refraction = RefractionOffsets { temperature: self.air.beam_temperature_offset - st.temperature_bias, pressure: -st.pressure_bias, humidity: -st.humidity_bias };
+        let refraction = RefractionOffsets {
+            temperature: self.air.beam_temperature_offset - st.temperature_bias,
+            pressure: -st.pressure_bias,
+            humidity: -st.humidity_bias,
+        };
         tracker_term_model(&tr.pose, tr.warmup.as_ref(), Some(refraction))
     }
 }
@@ -372,72 +481,182 @@ pub(crate) struct RefractionOffsets {
 
 /// The tracker's instrument terms: `tracker_pose`, then `tracker_warmup` and `refraction` if
 /// given (the order of the stacked parameter vector).
-pub(crate) fn tracker_term_model(pose: &InstrumentPose, warmup: Option<&WarmupSpec>, refraction: Option<RefractionOffsets>) -> Result<TermModel, CellError> {
+pub(crate) fn tracker_term_model(
+    pose: &InstrumentPose,
+    warmup: Option<&WarmupSpec>,
+    refraction: Option<RefractionOffsets>,
+) -> Result<TermModel, CellError> {
     let mut m = TermModel::default();
     let path = "sensors.tracker";
-    let term = |id: &str, names: &[&str], values: &[f64], options: Vec<(&str, f64)>| -> Result<ConfiguredTerm, CellError> {
-        let params = names.iter().zip(values).map(|(n, v)| (n.to_string(), ConfigValue::Number(*v))).collect();
-        let options = options.into_iter().map(|(k, v)| (k.to_string(), ConfigValue::Number(v))).collect();
-        configure(&TermConfig { id: id.into(), options, params, use_defaults: false }).map_err(|e| CellError::term(path, e))
+    let term = |id: &str,
+                names: &[&str],
+                values: &[f64],
+                options: Vec<(&str, f64)>|
+     -> Result<ConfiguredTerm, CellError> {
+        let params = names
+            .iter()
+            .zip(values)
+            .map(|(n, v)| (n.to_string(), ConfigValue::Number(*v)))
+            .collect();
+        let options = options
+            .into_iter()
+            .map(|(k, v)| (k.to_string(), ConfigValue::Number(v)))
+            .collect();
+        configure(&TermConfig {
+            id: id.into(),
+            options,
+            params,
+            use_defaults: false,
+        })
+        .map_err(|e| CellError::term(path, e))
     };
-    let push = |m: &mut TermModel, t: ConfiguredTerm| m.push(t).map_err(|e| CellError::term(path, e));
-    push(&mut m, term("tracker_pose", &["tx", "ty", "tz", "alpha", "beta", "delta"], &pose.term_params(), vec![])?)?;
+    let push =
+        |m: &mut TermModel, t: ConfiguredTerm| m.push(t).map_err(|e| CellError::term(path, e));
+    push(
+        &mut m,
+        term(
+            "tracker_pose",
+            &["tx", "ty", "tz", "alpha", "beta", "delta"],
+            &pose.term_params(),
+            vec![],
+        )?,
+    )?;
     if let Some(w) = warmup {
-        push(&mut m, term("tracker_warmup", &["offset", "amplitude", "time_constant"], &[w.offset, w.amplitude, w.time_constant], vec![])?)?;
+        push(
+            &mut m,
+            term(
+                "tracker_warmup",
+                &["offset", "amplitude", "time_constant"],
+                &[w.offset, w.amplitude, w.time_constant],
+                vec![],
+            )?,
+        )?;
     }
     if let Some(r) = refraction {
-        push(&mut m, term("refraction", &["path_temperature_offset", "path_pressure_offset"], &[r.temperature, r.pressure], vec![("path_humidity_offset", r.humidity)])?)?;
+        push(
+            &mut m,
+            term(
+                "refraction",
+                &["path_temperature_offset", "path_pressure_offset"],
+                &[r.temperature, r.pressure],
+                vec![("path_humidity_offset", r.humidity)],
+            )?,
+        )?;
     }
     Ok(m)
 }
 
 fn opt(q: &Option<Quantity>, path: &str, unit: &str) -> Result<f64, CellError> {
-    q.as_ref().map(|q| q.to_si(path, unit)).transpose().map(|v| v.unwrap_or(0.0))
+    q.as_ref()
+        .map(|q| q.to_si(path, unit))
+        .transpose()
+        .map(|v| v.unwrap_or(0.0))
 }
 
-pub(crate) fn machine(m: &MachineSection, accelerometers: &[AccelerometerSection], base_dir: &Path) -> Result<MachineGeometry, CellError> {
+pub(crate) fn machine(
+    m: &MachineSection,
+    accelerometers: &[AccelerometerSection],
+    base_dir: &Path,
+) -> Result<MachineGeometry, CellError> {
     check_family_sections(m)?;
     if !accelerometers.is_empty() && m.family != MachineFamily::SerialArm {
         return Err(CellError::invalid("sensors.accelerometers", format!("is for a serial arm's accelerometers (each on a link of its URDF); this machine is {}", family_name(m.family))));
     }
     let kinematics = match m.family {
         MachineFamily::Cartesian => {
-            let stacking = m.stacking.as_deref().ok_or_else(|| CellError::invalid("machine.stacking", "is required for a cartesian machine (e.g. XFYZ, FXYZ, XYFZ)"))?;
-            MachineKinematics::Cartesian(stacking.parse().map_err(|e| CellError::invalid("machine.stacking", format!("{e}; allowed: the letters X, Y, Z and F once each, e.g. XFYZ")))?)
+            let stacking = m.stacking.as_deref().ok_or_else(|| {
+                CellError::invalid(
+                    "machine.stacking",
+                    "is required for a cartesian machine (e.g. XFYZ, FXYZ, XYFZ)",
+                )
+            })?;
+            MachineKinematics::Cartesian(stacking.parse().map_err(|e| {
+                CellError::invalid(
+                    "machine.stacking",
+                    format!("{e}; allowed: the letters X, Y, Z and F once each, e.g. XFYZ"),
+                )
+            })?)
         }
         MachineFamily::Delta => {
-            let d = m.delta.as_ref().ok_or_else(|| CellError::invalid("machine.delta", "is required for a delta machine: {rod_length, radius}"))?;
+            let d = m.delta.as_ref().ok_or_else(|| {
+                CellError::invalid(
+                    "machine.delta",
+                    "is required for a delta machine: {rod_length, radius}",
+                )
+            })?;
             let rod = d.rod_length.positive("machine.delta.rod_length", "m")?;
             let radius = d.radius.positive("machine.delta.radius", "m")?;
-            MachineKinematics::Delta(DeltaGeometry::new(rod, radius).map_err(|e| CellError::invalid("machine.delta", e.to_string()))?)
+            MachineKinematics::Delta(
+                DeltaGeometry::new(rod, radius)
+                    .map_err(|e| CellError::invalid("machine.delta", e.to_string()))?,
+            )
         }
         MachineFamily::FiveAxis => {
-            let s = m.five_axis.as_ref().ok_or_else(|| CellError::invalid("machine.five_axis", format!("is required for a five_axis machine: {}", FIVE_AXIS_KEYS)))?;
+            let s = m.five_axis.as_ref().ok_or_else(|| {
+                CellError::invalid(
+                    "machine.five_axis",
+                    format!("is required for a five_axis machine: {}", FIVE_AXIS_KEYS),
+                )
+            })?;
             MachineKinematics::FiveAxis(crate::families::five_axis(s)?)
         }
         MachineFamily::SerialArm => {
-            let s = m.serial_arm.as_ref().ok_or_else(|| CellError::invalid("machine.serial_arm", format!("is required for a serial_arm machine: {}", SERIAL_ARM_KEYS)))?;
+            let s = m.serial_arm.as_ref().ok_or_else(|| {
+                CellError::invalid(
+                    "machine.serial_arm",
+                    format!("is required for a serial_arm machine: {}", SERIAL_ARM_KEYS),
+                )
+            })?;
             let arm = crate::families::serial_arm(s, accelerometers, base_dir, pose)?;
             let inf = [f64::NEG_INFINITY, f64::INFINITY];
-            return Ok(MachineGeometry { kinematics: MachineKinematics::SerialArm(arm), travel: [inf; 3], tool_offset: Vector3::zeros() });
+            return Ok(MachineGeometry {
+                kinematics: MachineKinematics::SerialArm(arm),
+                travel: [inf; 3],
+                tool_offset: Vector3::zeros(),
+            });
         }
     };
-    let tr = m.travel.as_ref().ok_or_else(|| CellError::invalid("machine.travel", format!("is required for a {} machine: {{x: [min, max], y: [min, max], z: [min, max]}} (m)", family_name(m.family))))?;
+    let tr = m.travel.as_ref().ok_or_else(|| {
+        CellError::invalid(
+            "machine.travel",
+            format!(
+                "is required for a {} machine: {{x: [min, max], y: [min, max], z: [min, max]}} (m)",
+                family_name(m.family)
+            ),
+        )
+    })?;
     let mut travel = [[0.0; 2]; 3];
-    for (i, (name, r)) in [("x", &tr.x), ("y", &tr.y), ("z", &tr.z)].into_iter().enumerate() {
+    for (i, (name, r)) in [("x", &tr.x), ("y", &tr.y), ("z", &tr.z)]
+        .into_iter()
+        .enumerate()
+    {
         let lo = r[0].to_si(&format!("machine.travel.{name}[0]"), "m")?;
         let hi = r[1].to_si(&format!("machine.travel.{name}[1]"), "m")?;
         if !(hi > lo) {
-            return Err(CellError::invalid(format!("machine.travel.{name}"), format!("needs min < max, got [{lo}, {hi}] m")));
+            return Err(CellError::invalid(
+                format!("machine.travel.{name}"),
+                format!("needs min < max, got [{lo}, {hi}] m"),
+            ));
         }
         travel[i] = [lo, hi];
     }
-    let tool_offset = m.tool_offset.as_ref().map(|v| vector3(v, "machine.tool_offset", "m")).transpose()?.unwrap_or_else(Vector3::zeros);
-    Ok(MachineGeometry { kinematics, travel, tool_offset })
+    let tool_offset = m
+        .tool_offset
+        .as_ref()
+        .map(|v| vector3(v, "machine.tool_offset", "m"))
+        .transpose()?
+        .unwrap_or_else(Vector3::zeros);
+    Ok(MachineGeometry {
+        kinematics,
+        travel,
+        tool_offset,
+    })
 }
 
-const FIVE_AXIS_KEYS: &str = "{d0, tool_length, b_pivot, c_offset, workpiece_offset, b_limits, c_limits}";
-const SERIAL_ARM_KEYS: &str = "{dh: {convention, rows} | urdf: {path, root_link, tip_link}, base, tool, joint_limits}";
+const FIVE_AXIS_KEYS: &str =
+    "{d0, tool_length, b_pivot, c_offset, workpiece_offset, b_limits, c_limits}";
+const SERIAL_ARM_KEYS: &str =
+    "{dh: {convention, rows} | urdf: {path, root_link, tip_link}, base, tool, joint_limits}";
 
 /// The `machine.*` keys that belong to some families only: a key given for another family is
 /// an error naming who takes it and what this family takes instead.
@@ -447,7 +666,9 @@ fn check_family_sections(m: &MachineSection) -> Result<(), CellError> {
         Cartesian => "machine.stacking (e.g. XFYZ)".to_string(),
         Delta => "machine.delta {rod_length, radius}".to_string(),
         FiveAxis => format!("machine.five_axis {FIVE_AXIS_KEYS}"),
-        SerialArm => format!("machine.serial_arm {SERIAL_ARM_KEYS} with joint limits and tool frame in it"),
+        SerialArm => {
+            format!("machine.serial_arm {SERIAL_ARM_KEYS} with joint limits and tool frame in it")
+        }
     };
     let rules: [(&str, bool, &[MachineFamily]); 6] = [
         ("stacking", m.stacking.is_some(), &[Cartesian]),
@@ -459,8 +680,19 @@ fn check_family_sections(m: &MachineSection) -> Result<(), CellError> {
     ];
     for (key, present, families) in rules {
         if present && !families.contains(&m.family) {
-            let owners = families.iter().map(|f| family_name(*f)).collect::<Vec<_>>().join(", ");
-            return Err(CellError::invalid(format!("machine.{key}"), format!("is for family: {owners}; this cell's family is {}, a {} machine takes {own}", family_name(m.family), family_name(m.family))));
+            let owners = families
+                .iter()
+                .map(|f| family_name(*f))
+                .collect::<Vec<_>>()
+                .join(", ");
+            return Err(CellError::invalid(
+                format!("machine.{key}"),
+                format!(
+                    "is for family: {owners}; this cell's family is {}, a {} machine takes {own}",
+                    family_name(m.family),
+                    family_name(m.family)
+                ),
+            ));
         }
     }
     Ok(())
@@ -486,9 +718,21 @@ pub(crate) fn pose(p: &PoseSection, path: &str) -> Result<InstrumentPose, CellEr
 
 /// `sensors.tracker.warmup` as the `tracker_warmup` parameters.
 pub(crate) fn tracker_warmup(t: &TrackerSection) -> Result<Option<WarmupSpec>, CellError> {
-    let Some(params) = &t.warmup else { return Ok(None) };
-    let c = configure(&TermConfig { id: "tracker_warmup".into(), options: BTreeMap::new(), params: params.clone(), use_defaults: false }).map_err(|e| CellError::term("sensors.tracker.warmup", e))?;
-    Ok(Some(WarmupSpec { offset: c.params[0], amplitude: c.params[1], time_constant: c.params[2] }))
+    let Some(params) = &t.warmup else {
+        return Ok(None);
+    };
+    let c = configure(&TermConfig {
+        id: "tracker_warmup".into(),
+        options: BTreeMap::new(),
+        params: params.clone(),
+        use_defaults: false,
+    })
+    .map_err(|e| CellError::term("sensors.tracker.warmup", e))?;
+    Ok(Some(WarmupSpec {
+        offset: c.params[0],
+        amplitude: c.params[1],
+        time_constant: c.params[2],
+    }))
 }
 
 /// `sensors.tracker.station` (biases and noise; absent: none).
@@ -499,9 +743,24 @@ pub(crate) fn tracker_station(t: &TrackerSection) -> Result<StationSpec, CellErr
         temperature_bias: opt(&s.temperature_bias, &format!("{sp}.temperature_bias"), "K")?,
         pressure_bias: opt(&s.pressure_bias, &format!("{sp}.pressure_bias"), "Pa")?,
         humidity_bias: opt(&s.humidity_bias, &format!("{sp}.humidity_bias"), "1")?,
-        temperature_noise: s.temperature_noise.as_ref().map(|q| q.non_negative(&format!("{sp}.temperature_noise"), "K")).transpose()?.unwrap_or(0.0),
-        pressure_noise: s.pressure_noise.as_ref().map(|q| q.non_negative(&format!("{sp}.pressure_noise"), "Pa")).transpose()?.unwrap_or(0.0),
-        humidity_noise: s.humidity_noise.as_ref().map(|q| q.non_negative(&format!("{sp}.humidity_noise"), "1")).transpose()?.unwrap_or(0.0),
+        temperature_noise: s
+            .temperature_noise
+            .as_ref()
+            .map(|q| q.non_negative(&format!("{sp}.temperature_noise"), "K"))
+            .transpose()?
+            .unwrap_or(0.0),
+        pressure_noise: s
+            .pressure_noise
+            .as_ref()
+            .map(|q| q.non_negative(&format!("{sp}.pressure_noise"), "Pa"))
+            .transpose()?
+            .unwrap_or(0.0),
+        humidity_noise: s
+            .humidity_noise
+            .as_ref()
+            .map(|q| q.non_negative(&format!("{sp}.humidity_noise"), "1"))
+            .transpose()?
+            .unwrap_or(0.0),
     })
 }
 
@@ -515,41 +774,80 @@ fn tracker(t: &TrackerSection) -> Result<TrackerSpec, CellError> {
     })?;
     let warmup = tracker_warmup(t)?;
     let station = tracker_station(t)?;
-    let needed = |what: &str| CellError::invalid(format!("{p}.{what}"), "is required to simulate the tracker (only a model file for `metrocell calibrate` may leave the noise model out)");
+    let needed = |what: &str| {
+        CellError::invalid(format!("{p}.{what}"), "is required to simulate the tracker (only a model file for `metrocell calibrate` may leave the noise model out)")
+    };
     let rate = t.rate.as_ref().ok_or_else(|| needed("rate"))?;
-    let range_noise = t.range_noise.as_ref().ok_or_else(|| needed("range_noise"))?;
-    let angular_noise = t.angular_noise.as_ref().ok_or_else(|| needed("angular_noise"))?;
+    let range_noise = t
+        .range_noise
+        .as_ref()
+        .ok_or_else(|| needed("range_noise"))?;
+    let angular_noise = t
+        .angular_noise
+        .as_ref()
+        .ok_or_else(|| needed("angular_noise"))?;
     let mut turbulence = Vec::new();
     for (i, w) in t.turbulence.iter().enumerate() {
         let wp = format!("{p}.turbulence[{i}]");
         let start = w.start.non_negative(&format!("{wp}.start"), "s")?;
         let end = w.end.to_si(&format!("{wp}.end"), "s")?;
         if !(end > start) {
-            return Err(CellError::invalid(&wp, format!("needs start < end, got [{start}, {end}] s")));
+            return Err(CellError::invalid(
+                &wp,
+                format!("needs start < end, got [{start}, {end}] s"),
+            ));
         }
-        let coefficient = w.coefficient.non_negative(&format!("{wp}.coefficient"), "1")?;
+        let coefficient = w
+            .coefficient
+            .non_negative(&format!("{wp}.coefficient"), "1")?;
         if coefficient > 1e-3 {
-            return Err(CellError::OutOfRange { path: format!("{wp}.coefficient"), value: coefficient, reason: "plausible range is [0, 1e-3] (physics `turbulence.turbulence`)".into() });
+            return Err(CellError::OutOfRange {
+                path: format!("{wp}.coefficient"),
+                value: coefficient,
+                reason: "plausible range is [0, 1e-3] (physics `turbulence.turbulence`)".into(),
+            });
         }
-        turbulence.push(TurbulenceSpec { start, end, coefficient });
+        turbulence.push(TurbulenceSpec {
+            start,
+            end,
+            coefficient,
+        });
     }
     let beam_breaks = match &t.beam_breaks {
         None => None,
         Some(b) => {
             if !(b.per_hour >= 0.0 && b.per_hour <= 3600.0) {
-                return Err(CellError::OutOfRange { path: format!("{p}.beam_breaks.per_hour"), value: b.per_hour, reason: "must be in [0, 3600]".into() });
+                return Err(CellError::OutOfRange {
+                    path: format!("{p}.beam_breaks.per_hour"),
+                    value: b.per_hour,
+                    reason: "must be in [0, 3600]".into(),
+                });
             }
-            Some(BeamBreakSpec { rate: b.per_hour / 3600.0, mean_duration: b.mean_duration.positive(&format!("{p}.beam_breaks.mean_duration"), "s")? })
+            Some(BeamBreakSpec {
+                rate: b.per_hour / 3600.0,
+                mean_duration: b
+                    .mean_duration
+                    .positive(&format!("{p}.beam_breaks.mean_duration"), "s")?,
+            })
         }
     };
     Ok(TrackerSpec {
         pose: pose(pose_section, &format!("{p}.pose"))?,
         rate: rate.positive(&format!("{p}.rate"), "1/s")?,
-        range_noise_constant: range_noise.constant.non_negative(&format!("{p}.range_noise.constant"), "m")?,
-        range_noise_per_metre: range_noise.per_metre.non_negative(&format!("{p}.range_noise.per_metre"), "1")?,
+        range_noise_constant: range_noise
+            .constant
+            .non_negative(&format!("{p}.range_noise.constant"), "m")?,
+        range_noise_per_metre: range_noise
+            .per_metre
+            .non_negative(&format!("{p}.range_noise.per_metre"), "1")?,
         angular_noise: angular_noise.non_negative(&format!("{p}.angular_noise"), "rad")?,
         warmup,
-        powered_on_before_start: t.powered_on_before_start.as_ref().map(|q| q.non_negative(&format!("{p}.powered_on_before_start"), "s")).transpose()?.unwrap_or(0.0),
+        powered_on_before_start: t
+            .powered_on_before_start
+            .as_ref()
+            .map(|q| q.non_negative(&format!("{p}.powered_on_before_start"), "s"))
+            .transpose()?
+            .unwrap_or(0.0),
         station,
         turbulence,
         beam_breaks,
@@ -560,10 +858,19 @@ fn thermocouple(i: usize, t: &ThermocoupleSection) -> Result<ThermocoupleSpec, C
     let p = format!("sensors.thermocouples[{i}]");
     Ok(ThermocoupleSpec {
         name: t.name.clone(),
-        node: if t.location == "ambient" { None } else { Some(t.location.clone()) },
+        node: if t.location == "ambient" {
+            None
+        } else {
+            Some(t.location.clone())
+        },
         noise: t.noise.non_negative(&format!("{p}.noise"), "K")?,
         offset: opt(&t.offset, &format!("{p}.offset"), "K")?,
-        calibration_uncertainty: t.calibration_uncertainty.as_ref().map(|q| q.non_negative(&format!("{p}.calibration_uncertainty"), "K")).transpose()?.unwrap_or(0.0),
+        calibration_uncertainty: t
+            .calibration_uncertainty
+            .as_ref()
+            .map(|q| q.non_negative(&format!("{p}.calibration_uncertainty"), "K"))
+            .transpose()?
+            .unwrap_or(0.0),
         rate: t.rate.positive(&format!("{p}.rate"), "1/s")?,
     })
 }
@@ -571,26 +878,42 @@ fn thermocouple(i: usize, t: &ThermocoupleSection) -> Result<ThermocoupleSpec, C
 fn probe(s: &ProbeSection) -> Result<ProbeSpec, CellError> {
     let p = "sensors.probe";
     if s.directions.is_empty() {
-        return Err(CellError::invalid(format!("{p}.directions"), "needs at least one direction"));
+        return Err(CellError::invalid(
+            format!("{p}.directions"),
+            "needs at least one direction",
+        ));
     }
     let mut directions = Vec::new();
     for (i, d) in s.directions.iter().enumerate() {
         let v = Vector3::new(d[0], d[1], d[2]);
         let n = v.norm();
         if !(n.is_finite() && n > 0.0) {
-            return Err(CellError::invalid(format!("{p}.directions[{i}]"), "must be a non-zero vector"));
+            return Err(CellError::invalid(
+                format!("{p}.directions[{i}]"),
+                "must be a non-zero vector",
+            ));
         }
         directions.push(v / n);
     }
     let pretravel = match &s.pretravel {
         None => None,
         Some(pt) => Some(
-            configure(&TermConfig { id: "probe_pretravel".into(), options: pt.options.clone(), params: pt.params.clone(), use_defaults: false })
-                .map_err(|e| CellError::term(format!("{p}.pretravel"), e))?,
+            configure(&TermConfig {
+                id: "probe_pretravel".into(),
+                options: pt.options.clone(),
+                params: pt.params.clone(),
+                use_defaults: false,
+            })
+            .map_err(|e| CellError::term(format!("{p}.pretravel"), e))?,
         ),
     };
     let hit_interval = s.hit_interval.positive(&format!("{p}.hit_interval"), "s")?;
-    Ok(ProbeSpec { directions, hit_interval, noise: s.noise.non_negative(&format!("{p}.noise"), "m")?, pretravel })
+    Ok(ProbeSpec {
+        directions,
+        hit_interval,
+        noise: s.noise.non_negative(&format!("{p}.noise"), "m")?,
+        pretravel,
+    })
 }
 
 fn camera(c: &CameraSection) -> Result<CameraSpec, CellError> {
@@ -600,14 +923,28 @@ fn camera(c: &CameraSection) -> Result<CameraSpec, CellError> {
             let p = "sensors.camera.intrinsics";
             for (key, v) in [("width", i.width), ("height", i.height)] {
                 if v == 0 || v > 65_536 {
-                    return Err(CellError::OutOfRange { path: format!("{p}.{key}"), value: v as f64, reason: "must be in 1..=65536 px".into() });
+                    return Err(CellError::OutOfRange {
+                        path: format!("{p}.{key}"),
+                        value: v as f64,
+                        reason: "must be in 1..=65536 px".into(),
+                    });
                 }
             }
-            let (fx, fy) = (i.fx.positive(&format!("{p}.fx"), "px")?, i.fy.positive(&format!("{p}.fy"), "px")?);
-            let (cx, cy) = (i.cx.to_si(&format!("{p}.cx"), "px")?, i.cy.to_si(&format!("{p}.cy"), "px")?);
+            let (fx, fy) = (
+                i.fx.positive(&format!("{p}.fx"), "px")?,
+                i.fy.positive(&format!("{p}.fy"), "px")?,
+            );
+            let (cx, cy) = (
+                i.cx.to_si(&format!("{p}.cx"), "px")?,
+                i.cy.to_si(&format!("{p}.cy"), "px")?,
+            );
             for (key, v, n) in [("cx", cx, i.width), ("cy", cy, i.height)] {
                 if !(v >= 0.0 && v <= n as f64) {
-                    return Err(CellError::OutOfRange { path: format!("{p}.{key}"), value: v, reason: format!("the principal point must lie on the image, [0, {n}] px") });
+                    return Err(CellError::OutOfRange {
+                        path: format!("{p}.{key}"),
+                        value: v,
+                        reason: format!("the principal point must lie on the image, [0, {n}] px"),
+                    });
                 }
             }
             let (n, names) = match i.model.as_deref().unwrap_or("plumb_bob") {
@@ -616,39 +953,78 @@ fn camera(c: &CameraSection) -> Result<CameraSpec, CellError> {
                 other => return Err(CellError::invalid(format!("{p}.model"), format!("`{other}` is not a lens model here; allowed: plumb_bob (Brown-Conrady), equidistant (fisheye)"))),
             };
             if i.distortion.len() > n || i.distortion.iter().any(|d| !d.is_finite()) {
-                return Err(CellError::invalid(format!("{p}.distortion"), format!("takes at most {n} finite coefficients: {names} (OpenCV order)")));
+                return Err(CellError::invalid(
+                    format!("{p}.distortion"),
+                    format!("takes at most {n} finite coefficients: {names} (OpenCV order)"),
+                ));
             }
             let mut k = [0.0; 5];
             k[..i.distortion.len()].copy_from_slice(&i.distortion);
-            let distortion = if n == 5 { Distortion::BrownConrady(k) } else { Distortion::Fisheye([k[0], k[1], k[2], k[3]]) };
-            Some(CameraModel::new(i.width, i.height, fx, fy, cx, cy, distortion).map_err(|e| CellError::invalid(p, e.to_string()))?)
+            let distortion = if n == 5 {
+                Distortion::BrownConrady(k)
+            } else {
+                Distortion::Fisheye([k[0], k[1], k[2], k[3]])
+            };
+            Some(
+                CameraModel::new(i.width, i.height, fx, fy, cx, cy, distortion)
+                    .map_err(|e| CellError::invalid(p, e.to_string()))?,
+            )
         }
     };
-    Ok(CameraSpec { mount: pose(&c.mount, "sensors.camera.mount")?, delay: c.delay.as_ref().map(|q| q.non_negative("sensors.camera.delay", "s")).transpose()?.unwrap_or(0.0), intrinsics, plate: FiducialPlate::default() })
+    Ok(CameraSpec {
+        mount: pose(&c.mount, "sensors.camera.mount")?,
+        delay: c
+            .delay
+            .as_ref()
+            .map(|q| q.non_negative("sensors.camera.delay", "s"))
+            .transpose()?
+            .unwrap_or(0.0),
+        intrinsics,
+        plate: FiducialPlate::default(),
+    })
 }
 
-fn thermal_model(env: &EnvironmentSection, tcs: &[ThermocoupleSection]) -> Result<ShiftThermalModel, CellError> {
+fn thermal_model(
+    env: &EnvironmentSection,
+    tcs: &[ThermocoupleSection],
+) -> Result<ShiftThermalModel, CellError> {
     let a = &env.ambient;
     let ap = "environment.ambient";
     let ambient = AmbientCycle {
         mean: a.mean.to_si(&format!("{ap}.mean"), "degC")?,
         amplitude: opt(&a.amplitude, &format!("{ap}.amplitude"), "K")?,
-        period: a.period.as_ref().map(|q| q.positive(&format!("{ap}.period"), "s")).transpose()?.unwrap_or(86_400.0),
+        period: a
+            .period
+            .as_ref()
+            .map(|q| q.positive(&format!("{ap}.period"), "s"))
+            .transpose()?
+            .unwrap_or(86_400.0),
         phase: opt(&a.phase, &format!("{ap}.phase"), "rad")?,
         drift: opt(&a.drift, &format!("{ap}.drift"), "K/s")?,
         walk_std: a.walk_std.unwrap_or(0.0),
     };
     if !(ambient.walk_std >= 0.0 && ambient.walk_std.is_finite()) {
-        return Err(CellError::OutOfRange { path: format!("{ap}.walk_std"), value: ambient.walk_std, reason: "must be ≥ 0 K/√s".into() });
+        return Err(CellError::OutOfRange {
+            path: format!("{ap}.walk_std"),
+            value: ambient.walk_std,
+            reason: "must be ≥ 0 K/√s".into(),
+        });
     }
     let mut sources = Vec::new();
     for (i, s) in env.heat_sources.iter().enumerate() {
         let mut duty = Vec::new();
         for (j, d) in s.duty.iter().enumerate() {
             let dp = format!("environment.heat_sources[{i}].duty[{j}]");
-            duty.push(DutySegment { start: d.start.to_si(&format!("{dp}.start"), "s")?, end: d.end.to_si(&format!("{dp}.end"), "s")?, level: d.level });
+            duty.push(DutySegment {
+                start: d.start.to_si(&format!("{dp}.start"), "s")?,
+                end: d.end.to_si(&format!("{dp}.end"), "s")?,
+                level: d.level,
+            });
         }
-        sources.push(HeatSource { name: s.name.clone(), duty });
+        sources.push(HeatSource {
+            name: s.name.clone(),
+            duty,
+        });
     }
     let mut nodes = Vec::new();
     for (i, n) in env.nodes.iter().enumerate() {
@@ -659,9 +1035,15 @@ fn thermal_model(env: &EnvironmentSection, tcs: &[ThermocoupleSection]) -> Resul
         }
         nodes.push(StructureNode {
             name: n.name.clone(),
-            time_constant: n.time_constant.positive(&format!("{np}.time_constant"), "s")?,
+            time_constant: n
+                .time_constant
+                .positive(&format!("{np}.time_constant"), "s")?,
             heating,
-            initial: n.initial.as_ref().map(|q| q.to_si(&format!("{np}.initial"), "degC")).transpose()?,
+            initial: n
+                .initial
+                .as_ref()
+                .map(|q| q.to_si(&format!("{np}.initial"), "degC"))
+                .transpose()?,
         });
     }
     let node_names: Vec<&str> = nodes.iter().map(|n| n.name.as_str()).collect();
@@ -674,12 +1056,31 @@ fn thermal_model(env: &EnvironmentSection, tcs: &[ThermocoupleSection]) -> Resul
         } else {
             let mut allowed = vec!["ambient"];
             allowed.extend(&node_names);
-            return Err(CellError::invalid(format!("sensors.thermocouples[{i}].location"), format!("`{}` is not a location; allowed: {}", t.location, allowed.join(", "))));
+            return Err(CellError::invalid(
+                format!("sensors.thermocouples[{i}].location"),
+                format!(
+                    "`{}` is not a location; allowed: {}",
+                    t.location,
+                    allowed.join(", ")
+                ),
+            ));
         };
-        sensors.push(ThermalSensor { name: t.name.clone(), location, bias: opt(&t.offset, "offset", "K")?, noise_std: t.noise.non_negative("noise", "K")? });
+        sensors.push(ThermalSensor {
+            name: t.name.clone(),
+            location,
+            bias: opt(&t.offset, "offset", "K")?,
+            noise_std: t.noise.non_negative("noise", "K")?,
+        });
     }
-    let model = ShiftThermalModel { ambient, sources, nodes, sensors };
-    model.validate().map_err(|e| CellError::term("environment", e))?;
+    let model = ShiftThermalModel {
+        ambient,
+        sources,
+        nodes,
+        sensors,
+    };
+    model
+        .validate()
+        .map_err(|e| CellError::term("environment", e))?;
     Ok(model)
 }
 
@@ -703,7 +1104,12 @@ const ARM_DISPLACEMENT_TERMS: &str = "joint_compliance, joint_backlash, column_b
 /// Validate the `terms` list against the machine. `sensors` (the thermocouple names) and
 /// `has_load` are checked when known (a cell to simulate); a model file leaves them to the
 /// recording (None), which names a missing signal when records are built.
-pub(crate) fn terms(configs: &[TermConfig], sensors: Option<&BTreeSet<String>>, has_load: Option<bool>, machine: &MachineGeometry) -> Result<TermModel, CellError> {
+pub(crate) fn terms(
+    configs: &[TermConfig],
+    sensors: Option<&BTreeSet<String>>,
+    has_load: Option<bool>,
+    machine: &MachineGeometry,
+) -> Result<TermModel, CellError> {
     let is_delta = matches!(machine.kinematics, MachineKinematics::Delta(_));
     let arm = match &machine.kinematics {
         MachineKinematics::SerialArm(a) => Some(a),
@@ -713,31 +1119,66 @@ pub(crate) fn terms(configs: &[TermConfig], sensors: Option<&BTreeSet<String>>, 
     for (i, c) in configs.iter().enumerate() {
         let path = format!("terms[{i}] (id `{}`)", c.id);
         if let Some(home) = home_of(&c.id) {
-            return Err(CellError::invalid(path, format!("is a sensor term; give it in {home}")));
+            return Err(CellError::invalid(
+                path,
+                format!("is a sensor term; give it in {home}"),
+            ));
         }
         let t = configure(c).map_err(|e| CellError::term(&path, e))?;
-        let is_delta_term = matches!(t.term.id(), TermId::DeltaRodLength | TermId::DeltaRadius | TermId::DeltaTowerAngle | TermId::DeltaEndstop);
+        let is_delta_term = matches!(
+            t.term.id(),
+            TermId::DeltaRodLength
+                | TermId::DeltaRadius
+                | TermId::DeltaTowerAngle
+                | TermId::DeltaEndstop
+        );
         if is_delta_term && !is_delta {
-            return Err(CellError::invalid(path, "is a delta term; it needs machine.family: delta"));
+            return Err(CellError::invalid(
+                path,
+                "is a delta term; it needs machine.family: delta",
+            ));
         }
         // an arm's gravity physics: joint and URDF names are checked by the forward model
-        if matches!(t.term.id(), TermId::JointCompliance | TermId::JointBacklash | TermId::ColumnBending | TermId::LinkThermalExpansion) {
+        if matches!(
+            t.term.id(),
+            TermId::JointCompliance
+                | TermId::JointBacklash
+                | TermId::ColumnBending
+                | TermId::LinkThermalExpansion
+        ) {
             if arm.is_none() {
                 return Err(CellError::invalid(path, "is a serial-arm gravity term; it needs machine.family: serial_arm (a URDF with <inertial> masses)"));
             }
-            model.push(t).map_err(|e| CellError::term(format!("terms[{i}]"), e))?;
+            model
+                .push(t)
+                .map_err(|e| CellError::term(format!("terms[{i}]"), e))?;
             continue;
         }
         let is_arm_term = matches!(t.term.id(), TermId::JointOffset | TermId::LinkLength);
         if is_arm_term {
             let Some(a) = arm else {
-                return Err(CellError::invalid(path, "is a serial-arm term; it needs machine.family: serial_arm"));
+                return Err(CellError::invalid(
+                    path,
+                    "is a serial-arm term; it needs machine.family: serial_arm",
+                ));
             };
-            let (key, want) = if t.term.id() == TermId::JointOffset { ("joints", a.chain.dof()) } else { ("links", a.link_count()) };
+            let (key, want) = if t.term.id() == TermId::JointOffset {
+                ("joints", a.chain.dof())
+            } else {
+                ("links", a.link_count())
+            };
             if t.params.len() != want {
                 return Err(CellError::invalid(
                     format!("{path}.options.{key}"),
-                    format!("is {}; this arm has {want} ({})", t.params.len(), if key == "joints" { "movable joints" } else { "DH rows / URDF joints" }),
+                    format!(
+                        "is {}; this arm has {want} ({})",
+                        t.params.len(),
+                        if key == "joints" {
+                            "movable joints"
+                        } else {
+                            "DH rows / URDF joints"
+                        }
+                    ),
                 ));
             }
             if t.term.id() == TermId::LinkLength && a.dh.is_none() {
@@ -748,16 +1189,32 @@ pub(crate) fn terms(configs: &[TermConfig], sensors: Option<&BTreeSet<String>>, 
                     }
                 }
             }
-            model.push(t).map_err(|e| CellError::term(format!("terms[{i}]"), e))?;
+            model
+                .push(t)
+                .map_err(|e| CellError::term(format!("terms[{i}]"), e))?;
             continue;
         }
-        if arm.is_some() && t.term.signals().iter().any(|s| matches!(s, SignalKind::AxisPosition(_) | SignalKind::ApproachDirection(_) | SignalKind::AxisVelocity(_) | SignalKind::LoadForce)) {
+        if arm.is_some()
+            && t.term.signals().iter().any(|s| {
+                matches!(
+                    s,
+                    SignalKind::AxisPosition(_)
+                        | SignalKind::ApproachDirection(_)
+                        | SignalKind::AxisVelocity(_)
+                        | SignalKind::LoadForce
+                )
+            })
+        {
             return Err(CellError::invalid(
                 path,
                 format!("reads linear-axis signals, which a serial_arm does not have; a serial_arm takes joint_offset, link_length and {ARM_DISPLACEMENT_TERMS}"),
             ));
         }
-        if !matches!(t.term.effect(), EffectKind::Displacement(Frame::Machine | Frame::Tool | Frame::Workpiece)) && !is_delta_term {
+        if !matches!(
+            t.term.effect(),
+            EffectKind::Displacement(Frame::Machine | Frame::Tool | Frame::Workpiece)
+        ) && !is_delta_term
+        {
             return Err(CellError::invalid(
                 path,
                 format!("has effect {:?}; the twin's `terms` take machine-frame displacement terms (geometry, thermal_scale, thermal_growth, compliance, tool_offset, time_offset), workpiece-frame terms (frame_misalignment, workpiece_expansion), for a delta delta_rod_length, delta_radius, delta_tower_angle, delta_endstop, and for a serial_arm joint_offset, link_length, joint_compliance, joint_backlash, column_bending, link_thermal_expansion", t.term.effect()),
@@ -782,7 +1239,9 @@ pub(crate) fn terms(configs: &[TermConfig], sensors: Option<&BTreeSet<String>>, 
                 _ => {}
             }
         }
-        model.push(t).map_err(|e| CellError::term(format!("terms[{i}]"), e))?;
+        model
+            .push(t)
+            .map_err(|e| CellError::term(format!("terms[{i}]"), e))?;
     }
     Ok(model)
 }

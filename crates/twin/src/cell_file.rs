@@ -426,7 +426,8 @@ pub struct CameraSection {
     pub mount: PoseSection,
     /// Delay after the start of each dwell at which a frame is requested (s).
     #[serde(default)]
-    pub delay: Option<Quantity>,    /// Lens and sensor (pinhole + Brown–Conrady); absent: the simulator's default camera.
+    pub delay: Option<Quantity>,
+    /// Lens and sensor (pinhole + Brown–Conrady); absent: the simulator's default camera.
     #[serde(default)]
     pub intrinsics: Option<IntrinsicsSection>,
 }

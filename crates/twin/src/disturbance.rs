@@ -86,7 +86,10 @@ pub struct Disturbances {
 
 impl Disturbances {
     /// Validate the section (`section_allowed` false: the family does not support it).
-    pub fn from_section(s: &DisturbanceSection, section_allowed: bool) -> Result<Disturbances, CellError> {
+    pub fn from_section(
+        s: &DisturbanceSection,
+        section_allowed: bool,
+    ) -> Result<Disturbances, CellError> {
         let p = "disturbances";
         if !section_allowed && (!s.time_cycles.is_empty() || !s.workspace_bumps.is_empty()) {
             return Err(CellError::invalid(p, "is implemented for family: cartesian and delta only (a test-only section; see crates/twin/src/disturbance.rs)"));
@@ -97,7 +100,12 @@ impl Disturbances {
             d.time_cycles.push(TimeCycle {
                 amplitude: vector3(&c.amplitude, &format!("{cp}.amplitude"), "m")?,
                 period: c.period.positive(&format!("{cp}.period"), "s")?,
-                phase: c.phase.as_ref().map(|q| q.to_si(&format!("{cp}.phase"), "rad")).transpose()?.unwrap_or(0.0),
+                phase: c
+                    .phase
+                    .as_ref()
+                    .map(|q| q.to_si(&format!("{cp}.phase"), "rad"))
+                    .transpose()?
+                    .unwrap_or(0.0),
             });
         }
         for (i, b) in s.workspace_bumps.iter().enumerate() {
@@ -117,8 +125,13 @@ impl Disturbances {
 
     /// δ at shift time `t` (s) and commanded axis position `q` (m), workpiece frame (m).
     pub fn displacement(&self, t: f64, q: &Vector3<f64>) -> Vector3<f64> {
-        let cycles = self.time_cycles.iter().map(|c| c.amplitude * (std::f64::consts::TAU * t / c.period + c.phase).sin());
-        let bumps = self.workspace_bumps.iter().map(|b| b.amplitude * (-(q - b.centre).norm_squared() / (2.0 * b.width * b.width)).exp());
+        let cycles = self
+            .time_cycles
+            .iter()
+            .map(|c| c.amplitude * (std::f64::consts::TAU * t / c.period + c.phase).sin());
+        let bumps = self.workspace_bumps.iter().map(|b| {
+            b.amplitude * (-(q - b.centre).norm_squared() / (2.0 * b.width * b.width)).exp()
+        });
         cycles.chain(bumps).fold(Vector3::zeros(), |acc, v| acc + v)
     }
 }
@@ -140,10 +153,16 @@ mod tests {
         .unwrap();
         // at the bump's centre and t = 0: the cycle at its peak (sin 90° = 1), the bump at its peak
         let v = d.displacement(0.0, &Vector3::new(0.1, 0.2, 0.3));
-        assert!((v - Vector3::new(0.0, 20e-6, 10e-6)).norm() < 1e-15, "{v:?}");
+        assert!(
+            (v - Vector3::new(0.0, 20e-6, 10e-6)).norm() < 1e-15,
+            "{v:?}"
+        );
         // a quarter period later the cycle is at 0; one width off the centre the bump is e^(−1/2)
         let v = d.displacement(25.0, &Vector3::new(0.15, 0.2, 0.3));
-        assert!((v.y - 20e-6 * (-0.5f64).exp()).abs() < 1e-15 && v.z.abs() < 1e-18, "{v:?}");
+        assert!(
+            (v.y - 20e-6 * (-0.5f64).exp()).abs() < 1e-15 && v.z.abs() < 1e-18,
+            "{v:?}"
+        );
         // far from the bump and half a period on: only the cycle, reversed
         let v = d.displacement(50.0, &Vector3::new(2.0, 2.0, 2.0));
         assert!((v.z + 10e-6).abs() < 1e-15 && v.y.abs() < 1e-20, "{v:?}");
@@ -151,12 +170,25 @@ mod tests {
 
     #[test]
     fn bad_values_name_the_key() {
-        let e = parse("time_cycles: [{amplitude: [0, 0, 1 um], period: 0 s}]").unwrap_err().to_string();
+        let e = parse("time_cycles: [{amplitude: [0, 0, 1 um], period: 0 s}]")
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("disturbances.time_cycles[0].period"), "{e}");
-        let e = parse("workspace_bumps: [{amplitude: [0, 0, 1 um], centre: [0, 0, 0], width: 3 K}]").unwrap_err().to_string();
+        let e =
+            parse("workspace_bumps: [{amplitude: [0, 0, 1 um], centre: [0, 0, 0], width: 3 K}]")
+                .unwrap_err()
+                .to_string();
         assert!(e.contains("disturbances.workspace_bumps[0].width"), "{e}");
-        let e = Disturbances::from_section(&serde_yaml::from_str("time_cycles: [{amplitude: [0, 0, 1 um], period: 1 s}]").unwrap(), false).unwrap_err().to_string();
+        let e = Disturbances::from_section(
+            &serde_yaml::from_str("time_cycles: [{amplitude: [0, 0, 1 um], period: 1 s}]").unwrap(),
+            false,
+        )
+        .unwrap_err()
+        .to_string();
         assert!(e.contains("cartesian and delta"), "{e}");
-        assert!(serde_yaml::from_str::<DisturbanceSection>("time_cycle: []").is_err(), "unknown keys are errors");
+        assert!(
+            serde_yaml::from_str::<DisturbanceSection>("time_cycle: []").is_err(),
+            "unknown keys are errors"
+        );
     }
 }

@@ -19,16 +19,32 @@ pub enum CellError {
     /// A physics term (or a sensor model built from a physics term) was rejected by the
     /// physics catalog's validation.
     #[error("cell file: `{path}`: {source}")]
-    Term { path: String, source: Box<PhysicsError> },
+    Term {
+        path: String,
+        source: Box<PhysicsError>,
+    },
 
     #[error("cell file: `{path}` = `{text}`: {reason}")]
-    BadQuantity { path: String, text: String, reason: String },
+    BadQuantity {
+        path: String,
+        text: String,
+        reason: String,
+    },
 
     #[error("cell file: `{path}` is given in `{given}`, which is not a unit of {dimension}; use `{allowed}` (or a scaled form of it)")]
-    WrongUnit { path: String, given: String, dimension: String, allowed: String },
+    WrongUnit {
+        path: String,
+        given: String,
+        dimension: String,
+        allowed: String,
+    },
 
     #[error("cell file: `{path}` = {value} is out of range: {reason}")]
-    OutOfRange { path: String, value: f64, reason: String },
+    OutOfRange {
+        path: String,
+        value: f64,
+        reason: String,
+    },
 
     #[error("cell file: `{path}`: {reason}")]
     Invalid { path: String, reason: String },
@@ -45,9 +61,15 @@ pub enum CellError {
 
 impl CellError {
     pub(crate) fn invalid(path: impl Into<String>, reason: impl Into<String>) -> Self {
-        CellError::Invalid { path: path.into(), reason: reason.into() }
+        CellError::Invalid {
+            path: path.into(),
+            reason: reason.into(),
+        }
     }
     pub(crate) fn term(path: impl Into<String>, source: PhysicsError) -> Self {
-        CellError::Term { path: path.into(), source: Box::new(source) }
+        CellError::Term {
+            path: path.into(),
+            source: Box::new(source),
+        }
     }
 }

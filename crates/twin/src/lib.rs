@@ -33,12 +33,12 @@
 pub mod cell;
 pub mod cell_file;
 pub mod cell_model;
-pub mod model_writer;
-mod model_writer_instruments;
 pub mod disturbance;
 pub mod error;
 pub mod families;
 pub mod fiducial_plate;
+pub mod model_writer;
+mod model_writer_instruments;
 pub mod noise;
 pub mod program;
 pub mod quantity;
@@ -53,9 +53,13 @@ pub mod yaml_edit;
 
 pub use cell::{Cell, MachineGeometry, MachineKinematics};
 pub use cell_model::CellModel;
-pub use model_writer::{write_model, FittedParameter, ModelUpdate};
 pub use error::CellError;
 pub use fiducial_plate::FiducialPlate;
-pub use sample::{AccelerationSample, CameraFrameRequest, MachineStateSample, PointRole, ProbeHitSample, Sample, SampleTruth, StationPointSample, TemperatureSample, TrackerSample, TrackerStatus, TrackerTruth, TrueParameter};
-pub use stationing::{Stationing, STATION_FRAME};
+pub use model_writer::{write_model, FittedParameter, ModelUpdate};
+pub use sample::{
+    AccelerationSample, CameraFrameRequest, MachineStateSample, PointRole, ProbeHitSample, Sample,
+    SampleTruth, StationPointSample, TemperatureSample, TrackerSample, TrackerStatus, TrackerTruth,
+    TrueParameter,
+};
 pub use simulation::{GroundTruth, SampleStream, SignalsStream, Simulation, TruthStream};
+pub use stationing::{Stationing, STATION_FRAME};

@@ -49,7 +49,13 @@ pub(crate) fn added_instrument_terms(
     let mut tracker: SectionKeys = Vec::new();
     let mut probe: SectionKeys = Vec::new();
     for (k, c) in terms.iter().enumerate() {
-        let configured = configure(c).map_err(|e| CellError::InFile { file: model.file.clone(), error: Box::new(CellError::term(format!("added term {k} (id `{}`)", c.id), e)) })?;
+        let configured = configure(c).map_err(|e| CellError::InFile {
+            file: model.file.clone(),
+            error: Box::new(CellError::term(
+                format!("added term {k} (id `{}`)", c.id),
+                e,
+            )),
+        })?;
         let label = configured.term.label();
         match configured.term.id() {
             TermId::TrackerWarmup => {
@@ -120,9 +126,17 @@ fn params_in_units(
     for (spec, configured) in term.term.params().iter().zip(&term.params) {
         let unit = unit_of(spec.unit);
         let value = match fitted.get(format!("{label}.{}", spec.name).as_str()) {
-            Some(FittedParameter { value, sigma: Some(s), .. }) => {
-                let (v, u) = value_and_sigma(*value, *s, spec.unit, &unit).map_err(|e| bad(model, e))?;
-                written.entry(label.clone()).or_default().insert(spec.name.clone(), u);
+            Some(FittedParameter {
+                value,
+                sigma: Some(s),
+                ..
+            }) => {
+                let (v, u) =
+                    value_and_sigma(*value, *s, spec.unit, &unit).map_err(|e| bad(model, e))?;
+                written
+                    .entry(label.clone())
+                    .or_default()
+                    .insert(spec.name.clone(), u);
                 v
             }
             Some(p) => with_unit(p.value, spec.unit, &unit).map_err(|e| bad(model, e))?,
@@ -142,39 +156,83 @@ fn station_biases(
     fitted: &BTreeMap<&str, &FittedParameter>,
     written: &mut BTreeMap<String, BTreeMap<String, String>>,
 ) -> Result<Vec<(String, String)>, CellError> {
-    let beam = model.raw.environment.as_ref().and_then(|e| e.air.beam_temperature_offset.as_ref()).map(|q| q.to_si("environment.air.beam_temperature_offset", "K")).transpose()?.unwrap_or(0.0);
+    let beam = model
+        .raw
+        .environment
+        .as_ref()
+        .and_then(|e| e.air.beam_temperature_offset.as_ref())
+        .map(|q| q.to_si("environment.air.beam_temperature_offset", "K"))
+        .transpose()?
+        .unwrap_or(0.0);
     let mut out = Vec::new();
-    for ((spec, configured), (key, offset)) in term.term.params().iter().zip(&term.params).zip([("temperature_bias", beam), ("pressure_bias", 0.0)]) {
+    for ((spec, configured), (key, offset)) in term
+        .term
+        .params()
+        .iter()
+        .zip(&term.params)
+        .zip([("temperature_bias", beam), ("pressure_bias", 0.0)])
+    {
         let value = match fitted.get(format!("{label}.{}", spec.name).as_str()) {
-            Some(FittedParameter { value, sigma: Some(s), .. }) => {
-                let (v, u) = value_and_sigma(offset - value, *s, spec.unit, spec.unit).map_err(|e| bad(model, e))?;
-                written.entry(label.to_string()).or_default().insert(spec.name.clone(), u);
+            Some(FittedParameter {
+                value,
+                sigma: Some(s),
+                ..
+            }) => {
+                let (v, u) = value_and_sigma(offset - value, *s, spec.unit, spec.unit)
+                    .map_err(|e| bad(model, e))?;
+                written
+                    .entry(label.to_string())
+                    .or_default()
+                    .insert(spec.name.clone(), u);
                 v
             }
-            Some(p) => with_unit(offset - p.value, spec.unit, spec.unit).map_err(|e| bad(model, e))?,
-            None => with_unit(offset - configured, spec.unit, spec.unit).map_err(|e| bad(model, e))?,
+            Some(p) => {
+                with_unit(offset - p.value, spec.unit, spec.unit).map_err(|e| bad(model, e))?
+            }
+            None => {
+                with_unit(offset - configured, spec.unit, spec.unit).map_err(|e| bad(model, e))?
+            }
         };
         out.push((key.to_string(), value));
     }
     if let Some(h) = term.options.get("path_humidity_offset") {
-        let h = metrocell_physics::config::quantity(label, "path_humidity_offset", h, "1").map_err(|e| CellError::term("refraction.options.path_humidity_offset", e))?;
+        let h = metrocell_physics::config::quantity(label, "path_humidity_offset", h, "1")
+            .map_err(|e| CellError::term("refraction.options.path_humidity_offset", e))?;
         if h != 0.0 {
-            out.push(("humidity_bias".into(), with_unit(-h, "1", "").map_err(|e| bad(model, e))?));
+            out.push((
+                "humidity_bias".into(),
+                with_unit(-h, "1", "").map_err(|e| bad(model, e))?,
+            ));
         }
     }
     Ok(out)
 }
 
 fn flow_map(entries: &[(String, String)]) -> String {
-    format!("{{{}}}", entries.iter().map(|(k, v)| format!("{}: {v}", key_text(k))).collect::<Vec<_>>().join(", "))
+    format!(
+        "{{{}}}",
+        entries
+            .iter()
+            .map(|(k, v)| format!("{}: {v}", key_text(k)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    )
 }
 
 /// Put `keys` into an existing sensor section: a sub-key already there is replaced where it
 /// stands, a new one added; a key the section lacks is added as a flow mapping.
-fn into_section(model: &CellModel, section: &Node, keys: &SectionKeys, edits: &mut Edits) -> Result<(), CellError> {
+fn into_section(
+    model: &CellModel,
+    section: &Node,
+    keys: &SectionKeys,
+    edits: &mut Edits,
+) -> Result<(), CellError> {
     let text = &model.text;
     if !matches!(section.content, Content::Mapping(_)) {
-        return Err(bad(model, "a sensor section to add a found term to is not a mapping".into()));
+        return Err(bad(
+            model,
+            "a sensor section to add a found term to is not a mapping".into(),
+        ));
     }
     for (key, entries) in keys {
         match section.get(key) {
@@ -194,13 +252,33 @@ fn into_section(model: &CellModel, section: &Node, keys: &SectionKeys, edits: &m
 }
 
 /// A new `sensors.<name>` section holding `keys`, in `sensors` (created when the file has none).
-fn new_sensor(model: &CellModel, root: &Node, name: &str, keys: &SectionKeys, edits: &mut Edits) -> Result<(), CellError> {
+fn new_sensor(
+    model: &CellModel,
+    root: &Node,
+    name: &str,
+    keys: &SectionKeys,
+    edits: &mut Edits,
+) -> Result<(), CellError> {
     let text = &model.text;
-    let body = format!("{{{}}}", keys.iter().map(|(k, e)| format!("{}: {}", key_text(k), flow_map(e))).collect::<Vec<_>>().join(", "));
+    let body = format!(
+        "{{{}}}",
+        keys.iter()
+            .map(|(k, e)| format!("{}: {}", key_text(k), flow_map(e)))
+            .collect::<Vec<_>>()
+            .join(", ")
+    );
     match root.get("sensors") {
-        Some(s) if matches!(s.content, Content::Mapping(_)) => add_to_mapping(edits, text, s, name, &body),
+        Some(s) if matches!(s.content, Content::Mapping(_)) => {
+            add_to_mapping(edits, text, s, name, &body)
+        }
         // `sensors:` with nothing after it (null)
-        Some(s) => edits.replace(s, format!("{}{{{name}: {body}}}", if s.start == s.end { " " } else { "" })),
+        Some(s) => edits.replace(
+            s,
+            format!(
+                "{}{{{name}: {body}}}",
+                if s.start == s.end { " " } else { "" }
+            ),
+        ),
         None => add_to_mapping(edits, text, root, "sensors", &format!("{{{name}: {body}}}")),
     }
     Ok(())

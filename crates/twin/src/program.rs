@@ -71,29 +71,54 @@ impl Program {
 
     /// As [`Program::from_section`], visiting `generated` joint targets (a stationing program's
     /// waypoints, [`crate::stationing_program`]) instead of `joints` or `poses`.
-    pub fn from_section_with(s: &ProgramSection, m: &MachineGeometry, generated: Vec<DVector<f64>>) -> Result<Program, CellError> {
+    pub fn from_section_with(
+        s: &ProgramSection,
+        m: &MachineGeometry,
+        generated: Vec<DVector<f64>>,
+    ) -> Result<Program, CellError> {
         if s.stationing.is_some() && (!s.joints.is_empty() || !s.poses.is_empty()) {
-            return Err(CellError::invalid("program.stationing", "generates the program's waypoints; give it without `joints` or `poses`"));
+            return Err(CellError::invalid(
+                "program.stationing",
+                "generates the program's waypoints; give it without `joints` or `poses`",
+            ));
         }
         let mut points = generated;
         let jointed = m.is_jointed();
         if jointed {
             if s.grid.is_some() || !s.points.is_empty() || s.home.is_some() {
-                let key = if s.grid.is_some() { "grid" } else if !s.points.is_empty() { "points" } else { "home" };
+                let key = if s.grid.is_some() {
+                    "grid"
+                } else if !s.points.is_empty() {
+                    "points"
+                } else {
+                    "home"
+                };
                 return Err(CellError::invalid(format!("program.{key}"), "is for family: cartesian and delta; a five_axis or serial_arm program takes `joints` (joint targets) or `poses` (tool poses), and `home_joints`"));
             }
         } else {
-            for (key, given) in [("joints", !s.joints.is_empty()), ("poses", !s.poses.is_empty()), ("home_joints", s.home_joints.is_some()), ("rotary_rate", s.rotary_rate.is_some())] {
+            for (key, given) in [
+                ("joints", !s.joints.is_empty()),
+                ("poses", !s.poses.is_empty()),
+                ("home_joints", s.home_joints.is_some()),
+                ("rotary_rate", s.rotary_rate.is_some()),
+            ] {
                 if given {
                     return Err(CellError::invalid(format!("program.{key}"), "is for family: five_axis and serial_arm; a cartesian or delta program takes `grid` or `points` (x, y, z) and `home`"));
                 }
             }
         }
         let limits = m.joint_limits();
-        let home_joints = s.home_joints.as_ref().map(|h| joint_vector(h, "program.home_joints", &limits)).transpose()?;
+        let home_joints = s
+            .home_joints
+            .as_ref()
+            .map(|h| joint_vector(h, "program.home_joints", &limits))
+            .transpose()?;
         if jointed {
             if !s.joints.is_empty() && !s.poses.is_empty() {
-                return Err(CellError::invalid("program", "give either `joints` or `poses`, not both"));
+                return Err(CellError::invalid(
+                    "program",
+                    "give either `joints` or `poses`, not both",
+                ));
             }
             for (i, j) in s.joints.iter().enumerate() {
                 points.push(joint_vector(j, &format!("program.joints[{i}]"), &limits)?);
@@ -106,7 +131,10 @@ impl Program {
             }
         } else if let Some(g) = &s.grid {
             if !s.points.is_empty() {
-                return Err(CellError::invalid("program", "give either `grid` or `points`, not both"));
+                return Err(CellError::invalid(
+                    "program",
+                    "give either `grid` or `points`, not both",
+                ));
             }
             let mut axes = Vec::new();
             for (name, a) in [("x", &g.x), ("y", &g.y), ("z", &g.z)] {
@@ -114,17 +142,39 @@ impl Program {
                 let from = a.from.to_si(&format!("{p}.from"), "m")?;
                 let to = a.to.to_si(&format!("{p}.to"), "m")?;
                 if a.count == 0 || a.count > 10_000 {
-                    return Err(CellError::OutOfRange { path: format!("{p}.count"), value: a.count as f64, reason: "must be in 1..=10000".into() });
+                    return Err(CellError::OutOfRange {
+                        path: format!("{p}.count"),
+                        value: a.count as f64,
+                        reason: "must be in 1..=10000".into(),
+                    });
                 }
                 let n = a.count as usize;
-                axes.push((0..n).map(|i| if n == 1 { from } else { from + (to - from) * i as f64 / (n - 1) as f64 }).collect::<Vec<f64>>());
+                axes.push(
+                    (0..n)
+                        .map(|i| {
+                            if n == 1 {
+                                from
+                            } else {
+                                from + (to - from) * i as f64 / (n - 1) as f64
+                            }
+                        })
+                        .collect::<Vec<f64>>(),
+                );
             }
             // z outermost, then y, x innermost; serpentine reverses x on odd rows and y on odd layers.
             let mut row = 0usize;
             for (iz, z) in axes[2].iter().enumerate() {
-                let ys: Vec<f64> = if s.order == VisitOrder::Serpentine && iz % 2 == 1 { axes[1].iter().rev().copied().collect() } else { axes[1].clone() };
+                let ys: Vec<f64> = if s.order == VisitOrder::Serpentine && iz % 2 == 1 {
+                    axes[1].iter().rev().copied().collect()
+                } else {
+                    axes[1].clone()
+                };
                 for y in ys {
-                    let xs: Vec<f64> = if s.order == VisitOrder::Serpentine && row % 2 == 1 { axes[0].iter().rev().copied().collect() } else { axes[0].clone() };
+                    let xs: Vec<f64> = if s.order == VisitOrder::Serpentine && row % 2 == 1 {
+                        axes[0].iter().rev().copied().collect()
+                    } else {
+                        axes[0].clone()
+                    };
                     for x in xs {
                         points.push(DVector::from_vec(vec![x, y, *z]));
                     }
@@ -137,7 +187,14 @@ impl Program {
             }
         }
         if points.is_empty() {
-            return Err(CellError::invalid("program", if jointed { "needs a non-empty `joints` or `poses` list" } else { "needs `grid` or a non-empty `points` list" }));
+            return Err(CellError::invalid(
+                "program",
+                if jointed {
+                    "needs a non-empty `joints` or `poses` list"
+                } else {
+                    "needs `grid` or a non-empty `points` list"
+                },
+            ));
         }
         if points.len() > 1_000_000 {
             return Err(CellError::invalid("program", "more than 1e6 points"));
@@ -149,30 +206,75 @@ impl Program {
         };
         let names = m.joint_names();
         for (i, p) in points.iter().chain(std::iter::once(&home)).enumerate() {
-            let what = if i == points.len() { "program.home".to_string() } else { format!("program point {i}") };
+            let what = if i == points.len() {
+                "program.home".to_string()
+            } else {
+                format!("program point {i}")
+            };
             for (k, name) in names.iter().enumerate() {
                 let ([lo, hi], unit) = limits[k];
                 if p[k] < lo - 1e-12 || p[k] > hi + 1e-12 {
                     let key = match &m.kinematics {
-                        MachineKinematics::SerialArm(_) => format!("machine.serial_arm.joint_limits[{k}]"),
-                        MachineKinematics::FiveAxis(_) if k == 3 => "machine.five_axis.b_limits".into(),
-                        MachineKinematics::FiveAxis(_) if k == 4 => "machine.five_axis.c_limits".into(),
+                        MachineKinematics::SerialArm(_) => {
+                            format!("machine.serial_arm.joint_limits[{k}]")
+                        }
+                        MachineKinematics::FiveAxis(_) if k == 3 => {
+                            "machine.five_axis.b_limits".into()
+                        }
+                        MachineKinematics::FiveAxis(_) if k == 4 => {
+                            "machine.five_axis.c_limits".into()
+                        }
                         _ => format!("machine.travel.{name}"),
                     };
-                    return Err(CellError::OutOfRange { path: what.clone(), value: p[k], reason: format!("{name} outside {key} = [{lo}, {hi}] {unit}") });
+                    return Err(CellError::OutOfRange {
+                        path: what.clone(),
+                        value: p[k],
+                        reason: format!("{name} outside {key} = [{lo}, {hi}] {unit}"),
+                    });
                 }
             }
         }
         let feed_rate = s.feed_rate.positive("program.feed_rate", "m/s")?;
-        let rotary_rate = s.rotary_rate.as_ref().map(|q| q.positive("program.rotary_rate", "rad/s")).transpose()?.unwrap_or(30f64.to_radians());
+        let rotary_rate = s
+            .rotary_rate
+            .as_ref()
+            .map(|q| q.positive("program.rotary_rate", "rad/s"))
+            .transpose()?
+            .unwrap_or(30f64.to_radians());
         // Per joint speed for jointed families; None = Euclidean path speed (cartesian, delta).
-        let speeds: Option<Vec<f64>> = jointed.then(|| limits.iter().map(|(_, u)| if *u == "rad" { rotary_rate } else { feed_rate }).collect());
+        let speeds: Option<Vec<f64>> = jointed.then(|| {
+            limits
+                .iter()
+                .map(|(_, u)| if *u == "rad" { rotary_rate } else { feed_rate })
+                .collect()
+        });
         let dwell = s.dwell.positive("program.dwell", "s")?;
-        let start = s.start.as_ref().map(|q| q.non_negative("program.start", "s")).transpose()?.unwrap_or(0.0);
-        let (segments, idle_approach) = build_cycle(&points, &home, feed_rate, speeds.as_deref(), dwell);
+        let start = s
+            .start
+            .as_ref()
+            .map(|q| q.non_negative("program.start", "s"))
+            .transpose()?
+            .unwrap_or(0.0);
+        let (segments, idle_approach) =
+            build_cycle(&points, &home, feed_rate, speeds.as_deref(), dwell);
         let length = segments.last().map(|s| s.end).unwrap_or(0.0);
-        let interval = s.cycle_interval.as_ref().map(|q| q.positive("program.cycle_interval", "s")).transpose()?.unwrap_or(length);
-        Ok(Program { points, home, feed_rate, dwell, start, cycles: s.cycles, cycle_period: interval.max(length), segments, idle_approach })
+        let interval = s
+            .cycle_interval
+            .as_ref()
+            .map(|q| q.positive("program.cycle_interval", "s"))
+            .transpose()?
+            .unwrap_or(length);
+        Ok(Program {
+            points,
+            home,
+            feed_rate,
+            dwell,
+            start,
+            cycles: s.cycles,
+            cycle_period: interval.max(length),
+            segments,
+            idle_approach,
+        })
     }
 
     /// Length of one cycle (s).
@@ -191,7 +293,13 @@ impl Program {
     /// Motion at time t (s from the start of the simulation).
     pub fn state_at(&self, t: f64) -> MotionState {
         let n = self.home.len();
-        let idle = |approach: Vec<f64>| MotionState { q: self.home.clone(), velocity: DVector::zeros(n), approach, dwell_point: None, cycle: None };
+        let idle = |approach: Vec<f64>| MotionState {
+            q: self.home.clone(),
+            velocity: DVector::zeros(n),
+            approach,
+            dwell_point: None,
+            cycle: None,
+        };
         if t < self.start {
             return idle(vec![1.0; n]);
         }
@@ -206,7 +314,10 @@ impl Program {
         if tc >= self.cycle_length() {
             return idle(self.idle_approach.clone());
         }
-        let i = self.segments.partition_point(|s| s.end <= tc).min(self.segments.len() - 1);
+        let i = self
+            .segments
+            .partition_point(|s| s.end <= tc)
+            .min(self.segments.len() - 1);
         let s = &self.segments[i];
         let dur = s.end - s.start;
         let (q, velocity) = if s.dwell_point.is_some() || dur <= 0.0 {
@@ -215,11 +326,23 @@ impl Program {
             let f = ((tc - s.start) / dur).clamp(0.0, 1.0);
             (&s.from + (&s.to - &s.from) * f, (&s.to - &s.from) / dur)
         };
-        MotionState { q, velocity, approach: s.approach.clone(), dwell_point: s.dwell_point, cycle: Some(c) }
+        MotionState {
+            q,
+            velocity,
+            approach: s.approach.clone(),
+            dwell_point: s.dwell_point,
+            cycle: Some(c),
+        }
     }
 }
 
-fn build_cycle(points: &[DVector<f64>], home: &DVector<f64>, feed: f64, speeds: Option<&[f64]>, dwell: f64) -> (Vec<Segment>, Vec<f64>) {
+fn build_cycle(
+    points: &[DVector<f64>],
+    home: &DVector<f64>,
+    feed: f64,
+    speeds: Option<&[f64]>,
+    dwell: f64,
+) -> (Vec<Segment>, Vec<f64>) {
     // Two passes: the second starts with the approach directions the first ended with (the
     // previous cycle's return home), so every cycle is identical.
     let mut approach = vec![1.0; home.len()];
@@ -228,7 +351,11 @@ fn build_cycle(points: &[DVector<f64>], home: &DVector<f64>, feed: f64, speeds: 
         segs.clear();
         let mut t = 0.0;
         let mut at = home.clone();
-        let targets = points.iter().enumerate().map(|(i, p)| (p.clone(), Some(i))).chain(std::iter::once((home.clone(), None)));
+        let targets = points
+            .iter()
+            .enumerate()
+            .map(|(i, p)| (p.clone(), Some(i)))
+            .chain(std::iter::once((home.clone(), None)));
         for (p, idx) in targets {
             let d = &p - &at;
             for k in 0..d.len() {
@@ -238,14 +365,32 @@ fn build_cycle(points: &[DVector<f64>], home: &DVector<f64>, feed: f64, speeds: 
             }
             let dur = match speeds {
                 None => d.norm() / feed,
-                Some(v) => d.iter().zip(v).map(|(x, s)| x.abs() / s).fold(0.0, f64::max),
+                Some(v) => d
+                    .iter()
+                    .zip(v)
+                    .map(|(x, s)| x.abs() / s)
+                    .fold(0.0, f64::max),
             };
             if dur > 0.0 {
-                segs.push(Segment { start: t, end: t + dur, from: at.clone(), to: p.clone(), dwell_point: None, approach: approach.clone() });
+                segs.push(Segment {
+                    start: t,
+                    end: t + dur,
+                    from: at.clone(),
+                    to: p.clone(),
+                    dwell_point: None,
+                    approach: approach.clone(),
+                });
                 t += dur;
             }
             if let Some(i) = idx {
-                segs.push(Segment { start: t, end: t + dwell, from: p.clone(), to: p.clone(), dwell_point: Some(i), approach: approach.clone() });
+                segs.push(Segment {
+                    start: t,
+                    end: t + dwell,
+                    from: p.clone(),
+                    to: p.clone(),
+                    dwell_point: Some(i),
+                    approach: approach.clone(),
+                });
                 t += dwell;
             }
             at = p;
@@ -259,9 +404,20 @@ fn dv(v: Vector3<f64>) -> DVector<f64> {
 }
 
 /// A joint vector from the file, each value in its joint's unit.
-fn joint_vector(v: &[Quantity], path: &str, limits: &[([f64; 2], &'static str)]) -> Result<DVector<f64>, CellError> {
+fn joint_vector(
+    v: &[Quantity],
+    path: &str,
+    limits: &[([f64; 2], &'static str)],
+) -> Result<DVector<f64>, CellError> {
     if v.len() != limits.len() {
-        return Err(CellError::invalid(path, format!("has {} values; the machine has {} joints", v.len(), limits.len())));
+        return Err(CellError::invalid(
+            path,
+            format!(
+                "has {} values; the machine has {} joints",
+                v.len(),
+                limits.len()
+            ),
+        ));
     }
     let mut out = DVector::zeros(v.len());
     for (k, (q, (_, unit))) in v.iter().zip(limits).enumerate() {
@@ -272,26 +428,63 @@ fn joint_vector(v: &[Quantity], path: &str, limits: &[([f64; 2], &'static str)])
 
 /// Joint vector of a tool-pose target: five-axis closed-form inverse (the branch within the
 /// limits nearest the previous target), arm damped-least-squares IK from the previous target.
-fn solve_pose(p: &crate::cell_file::PoseTargetSection, path: &str, m: &MachineGeometry, previous: Option<&DVector<f64>>) -> Result<DVector<f64>, CellError> {
+fn solve_pose(
+    p: &crate::cell_file::PoseTargetSection,
+    path: &str,
+    m: &MachineGeometry,
+    previous: Option<&DVector<f64>>,
+) -> Result<DVector<f64>, CellError> {
     let position = vector3(&p.position, &format!("{path}.position"), "m")?;
     match &m.kinematics {
         MachineKinematics::FiveAxis(f) => {
             if p.euler_xyz.is_some() {
                 return Err(CellError::invalid(format!("{path}.euler_xyz"), "is for family: serial_arm; a five_axis pose takes `position` (tool tip) and `axis` (tool axis, workpiece frame)"));
             }
-            let axis = p.axis.map(|a| Vector3::new(a[0], a[1], a[2])).unwrap_or_else(Vector3::z);
+            let axis = p
+                .axis
+                .map(|a| Vector3::new(a[0], a[1], a[2]))
+                .unwrap_or_else(Vector3::z);
             let c_hint = previous.map(|q| q[4]).unwrap_or(0.0);
-            let pose = metrocell_kinematics::five_axis::ToolPose { tip: position, axis };
-            let sols = f.geometry.inverse(&pose, c_hint).map_err(|e| CellError::invalid(path, format!("no five-axis solution: {e}")))?;
+            let pose = metrocell_kinematics::five_axis::ToolPose {
+                tip: position,
+                axis,
+            };
+            let sols = f
+                .geometry
+                .inverse(&pose, c_hint)
+                .map_err(|e| CellError::invalid(path, format!("no five-axis solution: {e}")))?;
             let limits = m.joint_limits();
-            let q_of = |s: &metrocell_kinematics::five_axis::FiveAxisSolution| DVector::from_vec(vec![s.joints.d2, s.joints.d1, -s.joints.d3, s.joints.b, s.joints.c]);
-            let inside = |q: &DVector<f64>| q.iter().zip(&limits).all(|(v, ([lo, hi], _))| *v >= lo - 1e-12 && *v <= hi + 1e-12);
+            let q_of = |s: &metrocell_kinematics::five_axis::FiveAxisSolution| {
+                DVector::from_vec(vec![
+                    s.joints.d2,
+                    s.joints.d1,
+                    -s.joints.d3,
+                    s.joints.b,
+                    s.joints.c,
+                ])
+            };
+            let inside = |q: &DVector<f64>| {
+                q.iter()
+                    .zip(&limits)
+                    .all(|(v, ([lo, hi], _))| *v >= lo - 1e-12 && *v <= hi + 1e-12)
+            };
             let dist = |q: &DVector<f64>| previous.map(|pq| (q - pq).norm()).unwrap_or(0.0);
             sols.iter()
                 .map(q_of)
                 .filter(|q| inside(q))
                 .min_by(|a, b| dist(a).total_cmp(&dist(b)))
-                .ok_or_else(|| CellError::invalid(path, format!("every five-axis solution ({}) is outside the axis limits", sols.iter().map(|s| format!("{:?}", q_of(s).as_slice())).collect::<Vec<_>>().join(", "))))
+                .ok_or_else(|| {
+                    CellError::invalid(
+                        path,
+                        format!(
+                            "every five-axis solution ({}) is outside the axis limits",
+                            sols.iter()
+                                .map(|s| format!("{:?}", q_of(s).as_slice()))
+                                .collect::<Vec<_>>()
+                                .join(", ")
+                        ),
+                    )
+                })
         }
         MachineKinematics::SerialArm(arm) => {
             if p.axis.is_some() {
@@ -302,13 +495,25 @@ fn solve_pose(p: &crate::cell_file::PoseTargetSection, path: &str, m: &MachineGe
                 Some(e) => {
                     let e = vector3(e, &format!("{path}.euler_xyz"), "rad")?;
                     let r = metrocell_physics::instrument::tracker_pose::euler_xyz(e.x, e.y, e.z);
-                    let r = UnitQuaternion::from_rotation_matrix(&nalgebra::Rotation3::from_matrix_unchecked(r));
+                    let r = UnitQuaternion::from_rotation_matrix(
+                        &nalgebra::Rotation3::from_matrix_unchecked(r),
+                    );
                     IkTarget::Pose(Isometry3::from_parts(Translation3::from(position), r))
                 }
             };
-            let q0 = previous.cloned().unwrap_or_else(|| DVector::zeros(arm.chain.dof()));
-            let settings = IkSettings { max_iterations: 2000, position_tolerance: 1e-10, orientation_tolerance: 1e-10, ..IkSettings::default() };
-            let rep = arm.chain.inverse(&target, q0.as_slice(), &settings).map_err(|e| CellError::invalid(path, format!("inverse kinematics failed: {e}")))?;
+            let q0 = previous
+                .cloned()
+                .unwrap_or_else(|| DVector::zeros(arm.chain.dof()));
+            let settings = IkSettings {
+                max_iterations: 2000,
+                position_tolerance: 1e-10,
+                orientation_tolerance: 1e-10,
+                ..IkSettings::default()
+            };
+            let rep = arm
+                .chain
+                .inverse(&target, q0.as_slice(), &settings)
+                .map_err(|e| CellError::invalid(path, format!("inverse kinematics failed: {e}")))?;
             if !rep.converged {
                 return Err(CellError::invalid(
                     path,
@@ -322,7 +527,10 @@ fn solve_pose(p: &crate::cell_file::PoseTargetSection, path: &str, m: &MachineGe
             }
             Ok(rep.q)
         }
-        _ => Err(CellError::invalid(path, "poses are for family: five_axis and serial_arm")),
+        _ => Err(CellError::invalid(
+            path,
+            "poses are for family: five_axis and serial_arm",
+        )),
     }
 }
 
@@ -333,28 +541,52 @@ mod tests {
     fn program(points: Vec<DVector<f64>>) -> Program {
         let home = points[0].clone();
         let (segments, idle_approach) = build_cycle(&points, &home, 0.1, None, 2.0);
-        Program { points, home, feed_rate: 0.1, dwell: 2.0, start: 10.0, cycles: Some(2), cycle_period: 100.0, segments, idle_approach }
+        Program {
+            points,
+            home,
+            feed_rate: 0.1,
+            dwell: 2.0,
+            start: 10.0,
+            cycles: Some(2),
+            cycle_period: 100.0,
+            segments,
+            idle_approach,
+        }
     }
 
     #[test]
     fn jointed_moves_last_as_long_as_the_slowest_joint() {
         // one linear joint (0.1 m/s) and one rotary joint (0.5 rad/s): 0.1 m takes 1 s, 1 rad 2 s
-        let points = vec![DVector::from_row_slice(&[0.0, 0.0]), DVector::from_row_slice(&[0.1, -1.0])];
+        let points = vec![
+            DVector::from_row_slice(&[0.0, 0.0]),
+            DVector::from_row_slice(&[0.1, -1.0]),
+        ];
         let (segs, approach) = build_cycle(&points, &points[0], 0.1, Some(&[0.1, 0.5]), 3.0);
         let moves: Vec<&Segment> = segs.iter().filter(|s| s.dwell_point.is_none()).collect();
         assert_eq!(moves.len(), 2);
         assert!((moves[0].end - moves[0].start - 2.0).abs() < 1e-12);
         assert_eq!(moves[0].approach, [1.0, -1.0]);
-        assert_eq!(approach, [-1.0, 1.0], "the return home reverses both joints");
+        assert_eq!(
+            approach,
+            [-1.0, 1.0],
+            "the return home reverses both joints"
+        );
     }
 
     #[test]
     fn timeline_moves_dwells_and_approach_directions() {
-        let p = program(vec![DVector::from_row_slice(&[0.0, 0.0, 0.0]), DVector::from_row_slice(&[0.2, 0.0, 0.0]), DVector::from_row_slice(&[0.2, 0.1, 0.0])]);
+        let p = program(vec![
+            DVector::from_row_slice(&[0.0, 0.0, 0.0]),
+            DVector::from_row_slice(&[0.2, 0.0, 0.0]),
+            DVector::from_row_slice(&[0.2, 0.1, 0.0]),
+        ]);
         // cycle: dwell p0 [0,2), move 2 s [2,4), dwell p1 [4,6), move 1 s [6,7), dwell p2 [7,9), move home √5 s
         assert!((p.cycle_length() - (9.0 + 0.05f64.sqrt() / 0.1)).abs() < 1e-12);
         let s = p.state_at(10.0 + 3.0);
-        assert!((&s.q - DVector::from_row_slice(&[0.1, 0.0, 0.0])).norm() < 1e-12 && s.dwell_point.is_none());
+        assert!(
+            (&s.q - DVector::from_row_slice(&[0.1, 0.0, 0.0])).norm() < 1e-12
+                && s.dwell_point.is_none()
+        );
         assert!((s.velocity[0] - 0.1).abs() < 1e-12);
         assert_eq!(p.state_at(10.0 + 5.0).dwell_point, Some(1));
         assert_eq!(p.state_at(10.0 + 5.0).approach[0], 1.0);

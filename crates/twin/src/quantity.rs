@@ -36,7 +36,11 @@ impl Quantity {
     pub fn positive(&self, path: &str, unit: &str) -> Result<f64, CellError> {
         let v = self.to_si(path, unit)?;
         if !(v > 0.0) {
-            return Err(CellError::OutOfRange { path: path.into(), value: v, reason: format!("must be > 0 {unit}") });
+            return Err(CellError::OutOfRange {
+                path: path.into(),
+                value: v,
+                reason: format!("must be > 0 {unit}"),
+            });
         }
         Ok(v)
     }
@@ -45,7 +49,11 @@ impl Quantity {
     pub fn non_negative(&self, path: &str, unit: &str) -> Result<f64, CellError> {
         let v = self.to_si(path, unit)?;
         if !(v >= 0.0) {
-            return Err(CellError::OutOfRange { path: path.into(), value: v, reason: format!("must be ≥ 0 {unit}") });
+            return Err(CellError::OutOfRange {
+                path: path.into(),
+                value: v,
+                reason: format!("must be ≥ 0 {unit}"),
+            });
         }
         Ok(v)
     }
@@ -55,25 +63,47 @@ fn finite(path: &str, v: f64) -> Result<f64, CellError> {
     if v.is_finite() {
         Ok(v)
     } else {
-        Err(CellError::OutOfRange { path: path.into(), value: v, reason: "must be finite".into() })
+        Err(CellError::OutOfRange {
+            path: path.into(),
+            value: v,
+            reason: "must be finite".into(),
+        })
     }
 }
 
 fn parse(path: &str, text: &str, unit: &str) -> Result<f64, CellError> {
     parse_quantity(text, unit).map_err(|e| match e {
-        QuantityError::Parse(reason) => CellError::BadQuantity { path: path.into(), text: text.into(), reason },
+        QuantityError::Parse(reason) => CellError::BadQuantity {
+            path: path.into(),
+            text: text.into(),
+            reason,
+        },
         QuantityError::Dimension { given, .. } => CellError::WrongUnit {
             path: path.into(),
             given,
-            dimension: parse_unit(unit).map(|u| u.dimension.describe()).unwrap_or_default(),
-            allowed: if unit == "1/s" { "Hz".into() } else { unit.into() },
+            dimension: parse_unit(unit)
+                .map(|u| u.dimension.describe())
+                .unwrap_or_default(),
+            allowed: if unit == "1/s" {
+                "Hz".into()
+            } else {
+                unit.into()
+            },
         },
     })
 }
 
 /// Three quantities in `unit`.
-pub fn vector3(q: &[Quantity; 3], path: &str, unit: &str) -> Result<nalgebra::Vector3<f64>, CellError> {
-    Ok(nalgebra::Vector3::new(q[0].to_si(&format!("{path}[0]"), unit)?, q[1].to_si(&format!("{path}[1]"), unit)?, q[2].to_si(&format!("{path}[2]"), unit)?))
+pub fn vector3(
+    q: &[Quantity; 3],
+    path: &str,
+    unit: &str,
+) -> Result<nalgebra::Vector3<f64>, CellError> {
+    Ok(nalgebra::Vector3::new(
+        q[0].to_si(&format!("{path}[0]"), unit)?,
+        q[1].to_si(&format!("{path}[1]"), unit)?,
+        q[2].to_si(&format!("{path}[2]"), unit)?,
+    ))
 }
 
 #[cfg(test)]
@@ -91,8 +121,15 @@ mod tests {
 
     #[test]
     fn wrong_unit_names_the_key_and_the_allowed_unit() {
-        let e = Quantity::Text("3 urad".into()).to_si("sensors.tracker.range_noise.constant", "m").unwrap_err();
+        let e = Quantity::Text("3 urad".into())
+            .to_si("sensors.tracker.range_noise.constant", "m")
+            .unwrap_err();
         let msg = e.to_string();
-        assert!(msg.contains("sensors.tracker.range_noise.constant") && msg.contains("`m`") && msg.contains("urad"), "{msg}");
+        assert!(
+            msg.contains("sensors.tracker.range_noise.constant")
+                && msg.contains("`m`")
+                && msg.contains("urad"),
+            "{msg}"
+        );
     }
 }

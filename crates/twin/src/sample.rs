@@ -215,20 +215,39 @@ pub struct TrackerTruth {
 pub enum SampleTruth {
     Tracker(TrackerTruth),
     /// True temperature at the sensor location (°C).
-    Temperature { true_value: f64 },
+    Temperature {
+        true_value: f64,
+    },
     /// True displacement (machine frame, m).
-    MachineState { displacement: Vector3<f64> },
+    MachineState {
+        displacement: Vector3<f64>,
+    },
     /// True machine displacement and pretravel vector at the hit (m).
-    ProbeHit { displacement: Vector3<f64>, pretravel: Vector3<f64> },
+    ProbeHit {
+        displacement: Vector3<f64>,
+        pretravel: Vector3<f64>,
+    },
     /// True tool point (workpiece frame; cell frame for an arm), the commanded joint vector
     /// of the dwell (the family's, see [`crate::families`]) and the true displacement d (as in
     /// [`TrackerTruth::displacement`]).
-    CameraFrameRequest { tool_point: Vector3<f64>, joints: Vec<f64>, displacement: Vector3<f64> },
+    CameraFrameRequest {
+        tool_point: Vector3<f64>,
+        joints: Vec<f64>,
+        displacement: Vector3<f64>,
+    },
     /// The true tool point in the arm's base frame and in the levelled frame (the ground's tilt
     /// applied), the true point in the instrument's frame (no noise), the commanded joints.
-    StationPoint { tool_point: Vector3<f64>, levelled: Vector3<f64>, point: Vector3<f64>, joints: Vec<f64> },
+    StationPoint {
+        tool_point: Vector3<f64>,
+        levelled: Vector3<f64>,
+        point: Vector3<f64>,
+        joints: Vec<f64>,
+    },
     /// The noise-free reading (misalignment and bias included) and the gravity in the base.
-    Acceleration { specific_force: Vector3<f64>, gravity: Vector3<f64> },
+    Acceleration {
+        specific_force: Vector3<f64>,
+        gravity: Vector3<f64>,
+    },
 }
 
 /// True value of one term parameter.

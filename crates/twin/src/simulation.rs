@@ -36,7 +36,9 @@ use crate::program::MotionState;
 use crate::sample::*;
 use crate::stationing_run::StationingStream;
 use crate::thermal_stepper::ThermalStepper;
-use crate::tracker_model::{from_spherical, point_covariance, stated_range_sigma, BeamBreakProcess};
+use crate::tracker_model::{
+    from_spherical, point_covariance, stated_range_sigma, BeamBreakProcess,
+};
 
 /// Spacing of the true temperature histories given to lagged terms (s).
 pub const HISTORY_STEP: f64 = 10.0;
@@ -79,7 +81,9 @@ impl Simulation {
     /// evaluated is an error here, not in the middle of a stream).
     pub fn new(cell: Cell, duration: f64, seed: u64) -> Result<Self, CellError> {
         if !(duration > 0.0 && duration.is_finite()) {
-            return Err(CellError::Simulation { reason: format!("duration must be > 0 s and finite, got {duration}") });
+            return Err(CellError::Simulation {
+                reason: format!("duration must be > 0 s and finite, got {duration}"),
+            });
         }
         // a stationing recording's instrument: a pose per setup (its tilt drawn with the seed)
         // and the ground's tilt
@@ -87,16 +91,29 @@ impl Simulation {
             Some(st) => st.instrument_terms(seed)?,
             None => cell.instrument_terms()?,
         };
-        cell.forward_model(&instruments).map_err(|err| CellError::Simulation { reason: format!("the forward model cannot be built: {err}") })?;
-        let sim = Simulation { cell, instruments, duration, seed };
+        cell.forward_model(&instruments)
+            .map_err(|err| CellError::Simulation {
+                reason: format!("the forward model cannot be built: {err}"),
+            })?;
+        let sim = Simulation {
+            cell,
+            instruments,
+            duration,
+            seed,
+        };
         let mut e = Engine::new(&sim);
         let ms = sim.cell.program.state_at(0.0);
-        e.tool_state(0.0, &ms).map_err(|err| CellError::Simulation { reason: format!("true terms cannot be evaluated: {err}") })?;
+        e.tool_state(0.0, &ms)
+            .map_err(|err| CellError::Simulation {
+                reason: format!("true terms cannot be evaluated: {err}"),
+            })?;
         if let Some(st) = &sim.cell.stationing {
             let mut first = StationingStream::new(&sim, st);
             first.next_event();
             if let Some(err) = first.error {
-                return Err(CellError::Simulation { reason: format!("the first waypoint cannot be simulated: {err}") });
+                return Err(CellError::Simulation {
+                    reason: format!("the first waypoint cannot be simulated: {err}"),
+                });
             }
         }
         Ok(sim)
@@ -119,7 +136,9 @@ impl Simulation {
 
     /// The shared forward model of this simulation (machine terms + instrument terms).
     pub fn forward_model(&self) -> ForwardModel<'_> {
-        self.cell.forward_model(&self.instruments).expect("checked by Simulation::new")
+        self.cell
+            .forward_model(&self.instruments)
+            .expect("checked by Simulation::new")
     }
 
     /// The signals the twin evaluates its model with at time t (temperatures, temperature
@@ -135,12 +154,16 @@ impl Simulation {
 
     /// The sample stream (restarts from t = 0 on every call; deterministic in the seed).
     pub fn samples(&self) -> SampleStream<'_> {
-        SampleStream { source: Source::new(self) }
+        SampleStream {
+            source: Source::new(self),
+        }
     }
 
     /// The sample stream with the ground truth of each sample.
     pub fn samples_with_truth(&self) -> TruthStream<'_> {
-        TruthStream { source: Source::new(self) }
+        TruthStream {
+            source: Source::new(self),
+        }
     }
 
     /// The sample stream with, for every tracker reading and every stationing point, the
@@ -150,7 +173,9 @@ impl Simulation {
     /// power-on, load; a stationing point's gravity and setup; `point` and `tracker_range` as the
     /// model set them). `None` for other samples.
     pub fn samples_with_signals(&self) -> SignalsStream<'_> {
-        SignalsStream { source: Source::new(self) }
+        SignalsStream {
+            source: Source::new(self),
+        }
     }
 
     /// True parameters of the cell.
@@ -159,13 +184,42 @@ impl Simulation {
         let values = self.cell.terms.params();
         let tr = self.cell.tracker.as_ref();
         GroundTruth {
-            term_parameters: names.into_iter().zip(values).map(|(s, v)| TrueParameter { name: s.name, value: v, unit: s.unit }).collect(),
+            term_parameters: names
+                .into_iter()
+                .zip(values)
+                .map(|(s, v)| TrueParameter {
+                    name: s.name,
+                    value: v,
+                    unit: s.unit,
+                })
+                .collect(),
             tracker_translation: tr.map(|t| t.pose.translation),
             tracker_euler_xyz: tr.map(|t| t.pose.euler_xyz),
             warmup: tr.and_then(|t| t.warmup.map(|w| (w.offset, w.amplitude, w.time_constant))),
-            station_bias: tr.map(|t| (t.station.temperature_bias, t.station.pressure_bias, t.station.humidity_bias)),
-            thermocouple_offsets: self.cell.thermocouples.iter().map(|t| (t.name.clone(), t.offset)).collect(),
-            instrument_parameters: self.instruments.param_specs().into_iter().zip(self.instruments.params()).map(|(s, v)| TrueParameter { name: s.name, value: v, unit: s.unit }).collect(),
+            station_bias: tr.map(|t| {
+                (
+                    t.station.temperature_bias,
+                    t.station.pressure_bias,
+                    t.station.humidity_bias,
+                )
+            }),
+            thermocouple_offsets: self
+                .cell
+                .thermocouples
+                .iter()
+                .map(|t| (t.name.clone(), t.offset))
+                .collect(),
+            instrument_parameters: self
+                .instruments
+                .param_specs()
+                .into_iter()
+                .zip(self.instruments.params())
+                .map(|(s, v)| TrueParameter {
+                    name: s.name,
+                    value: v,
+                    unit: s.unit,
+                })
+                .collect(),
         }
     }
 }
@@ -190,7 +244,8 @@ impl<'a> Source<'a> {
         match self {
             Source::Engine(e) => {
                 let (sample, truth) = e.next_event()?;
-                let s = (signals && matches!(sample, Sample::Tracker(_))).then(|| e.signals.clone());
+                let s =
+                    (signals && matches!(sample, Sample::Tracker(_))).then(|| e.signals.clone());
                 Some((sample, truth, s))
             }
             Source::Stationing(st) => st.next_event(),
@@ -298,10 +353,27 @@ struct DwellEvent {
 
 impl DwellEvents {
     fn new(cell: &Cell, offsets: Vec<f64>) -> Self {
-        let dwell_segments: Vec<usize> = cell.program.segments.iter().enumerate().filter(|(_, s)| s.dwell_point.is_some()).map(|(i, _)| i).collect();
-        let offsets: Vec<f64> = offsets.into_iter().filter(|o| *o < cell.program.dwell).collect();
+        let dwell_segments: Vec<usize> = cell
+            .program
+            .segments
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| s.dwell_point.is_some())
+            .map(|(i, _)| i)
+            .collect();
+        let offsets: Vec<f64> = offsets
+            .into_iter()
+            .filter(|o| *o < cell.program.dwell)
+            .collect();
         let done = offsets.is_empty() || dwell_segments.is_empty();
-        Self { offsets, cycle: 0, dwell: 0, sub: 0, dwell_segments, done }
+        Self {
+            offsets,
+            cycle: 0,
+            dwell: 0,
+            sub: 0,
+            dwell_segments,
+            done,
+        }
     }
     fn peek(&self, cell: &Cell) -> Option<DwellEvent> {
         if self.done {
@@ -309,7 +381,12 @@ impl DwellEvents {
         }
         let start = cell.program.cycle_start(self.cycle)?;
         let seg = self.dwell_segments[self.dwell];
-        Some(DwellEvent { t: start + cell.program.segments[seg].start + self.offsets[self.sub], cycle: self.cycle, segment: seg, sub: self.sub })
+        Some(DwellEvent {
+            t: start + cell.program.segments[seg].start + self.offsets[self.sub],
+            cycle: self.cycle,
+            segment: seg,
+            sub: self.sub,
+        })
     }
     fn advance(&mut self) {
         self.sub += 1;
@@ -375,16 +452,47 @@ impl<'a> Engine<'a> {
         let cell = &sim.cell;
         let seed = sim.seed;
         let thermal = ThermalStepper::new(&cell.thermal, cell.thermal_step, seed);
-        let mut periodic: Vec<Periodic> = cell.thermocouples.iter().enumerate().map(|(i, t)| Periodic { kind: ChannelKind::Thermocouple(i), rate: t.rate, k: 0 }).collect();
+        let mut periodic: Vec<Periodic> = cell
+            .thermocouples
+            .iter()
+            .enumerate()
+            .map(|(i, t)| Periodic {
+                kind: ChannelKind::Thermocouple(i),
+                rate: t.rate,
+                k: 0,
+            })
+            .collect();
         if let Some(r) = cell.machine_state_rate {
-            periodic.push(Periodic { kind: ChannelKind::MachineState, rate: r, k: 0 });
+            periodic.push(Periodic {
+                kind: ChannelKind::MachineState,
+                rate: r,
+                k: 0,
+            });
         }
         if let Some(t) = &cell.tracker {
-            periodic.push(Periodic { kind: ChannelKind::Tracker, rate: t.rate, k: 0 });
+            periodic.push(Periodic {
+                kind: ChannelKind::Tracker,
+                rate: t.rate,
+                k: 0,
+            });
         }
-        let probe_events = cell.probe.as_ref().map(|p| DwellEvents::new(cell, (0..p.directions.len()).map(|j| (j + 1) as f64 * p.hit_interval).collect()));
-        let camera_events = cell.camera.as_ref().map(|c| DwellEvents::new(cell, vec![c.delay]));
-        let tc_slots = cell.thermocouples.iter().map(|t| thermal.slot_of_node(t.node.as_deref())).collect();
+        let probe_events = cell.probe.as_ref().map(|p| {
+            DwellEvents::new(
+                cell,
+                (0..p.directions.len())
+                    .map(|j| (j + 1) as f64 * p.hit_interval)
+                    .collect(),
+            )
+        });
+        let camera_events = cell
+            .camera
+            .as_ref()
+            .map(|c| DwellEvents::new(cell, vec![c.delay]));
+        let tc_slots = cell
+            .thermocouples
+            .iter()
+            .map(|t| thermal.slot_of_node(t.node.as_deref()))
+            .collect();
         let mut signals = Signals::default();
         for t in &cell.thermocouples {
             signals.temperatures.insert(t.name.clone(), 20.0);
@@ -397,7 +505,11 @@ impl<'a> Engine<'a> {
             for s in t.term.signals() {
                 if let SignalKind::TemperatureHistory(name) = s {
                     if !history_sensors.iter().any(|(n, _)| n == &name) {
-                        let node = cell.thermocouples.iter().find(|tc| tc.name == name).and_then(|tc| tc.node.as_deref());
+                        let node = cell
+                            .thermocouples
+                            .iter()
+                            .find(|tc| tc.name == name)
+                            .and_then(|tc| tc.node.as_deref());
                         history_sensors.push((name.clone(), thermal.slot_of_node(node)));
                         timeline.add_sensor(&name);
                     }
@@ -406,7 +518,9 @@ impl<'a> Engine<'a> {
         }
         let model = sim.forward_model();
         let params = model.params();
-        let kinematics = model.kinematic_truth(&params).expect("the parameter vector is the model's own");
+        let kinematics = model
+            .kinematic_truth(&params)
+            .expect("the parameter vector is the model's own");
         Engine {
             sim,
             cell,
@@ -414,13 +528,25 @@ impl<'a> Engine<'a> {
             periodic,
             probe_events,
             camera_events,
-            tc_noise: (0..cell.thermocouples.len()).map(|i| NoiseStream::new(seed, stream::THERMOCOUPLE_BASE + i as u64)).collect(),
+            tc_noise: (0..cell.thermocouples.len())
+                .map(|i| NoiseStream::new(seed, stream::THERMOCOUPLE_BASE + i as u64))
+                .collect(),
             tc_slots,
-            tc_names: cell.thermocouples.iter().map(|t| Arc::from(t.name.as_str())).collect(),
+            tc_names: cell
+                .thermocouples
+                .iter()
+                .map(|t| Arc::from(t.name.as_str()))
+                .collect(),
             tracker: cell.tracker.as_ref().map(|t| TrackerState {
                 noise: NoiseStream::new(seed, stream::TRACKER),
                 station: NoiseStream::new(seed, stream::STATION),
-                breaks: t.beam_breaks.map(|b| BeamBreakProcess::new(NoiseStream::new(seed, stream::BEAM_BREAKS), b.rate, b.mean_duration)),
+                breaks: t.beam_breaks.map(|b| {
+                    BeamBreakProcess::new(
+                        NoiseStream::new(seed, stream::BEAM_BREAKS),
+                        b.rate,
+                        b.mean_duration,
+                    )
+                }),
             }),
             probe_noise: NoiseStream::new(seed, stream::PROBE),
             axis_names: Arc::from(cell.machine.joint_names()),
@@ -459,7 +585,12 @@ impl<'a> Engine<'a> {
     fn set_signals(&mut self, t: f64, ms: &MotionState) {
         self.update_histories(t);
         self.signals.time = Some(t);
-        self.model.set_motion(&mut self.signals, ms.q.as_slice(), ms.velocity.as_slice(), &ms.approach);
+        self.model.set_motion(
+            &mut self.signals,
+            ms.q.as_slice(),
+            ms.velocity.as_slice(),
+            &ms.approach,
+        );
         for (i, tc) in self.cell.thermocouples.iter().enumerate() {
             let v = self.thermal.at(self.tc_slots[i], t);
             if let Some(x) = self.signals.temperatures.get_mut(&tc.name) {
@@ -472,7 +603,13 @@ impl<'a> Engine<'a> {
     /// cell's test-only `disturbances`, which no model knows).
     fn tool_state(&mut self, t: f64, ms: &MotionState) -> Result<ToolState, PhysicsError> {
         self.set_signals(t, ms);
-        let mut tool = self.model.tool_state(&self.params, &self.kinematics, ms.q.as_slice(), &mut self.signals, Some(&mut self.cache))?;
+        let mut tool = self.model.tool_state(
+            &self.params,
+            &self.kinematics,
+            ms.q.as_slice(),
+            &mut self.signals,
+            Some(&mut self.cache),
+        )?;
         if !self.cell.disturbances.is_empty() {
             let delta = self.cell.disturbances.displacement(t, &v3(&ms.q));
             tool.truth.translation.vector += delta;
@@ -521,7 +658,10 @@ impl<'a> Engine<'a> {
             self.probe_events.as_mut()?.advance();
             self.probe_hit(ev)
         } else {
-            let ev = self.camera_events.as_ref().and_then(|p| p.peek(self.cell))?;
+            let ev = self
+                .camera_events
+                .as_ref()
+                .and_then(|p| p.peek(self.cell))?;
             self.camera_events.as_mut()?.advance();
             self.camera_request(ev)
         };
@@ -537,9 +677,22 @@ impl<'a> Engine<'a> {
     fn thermocouple(&mut self, i: usize, t: f64) -> (Sample, SampleTruth) {
         let spec = &self.cell.thermocouples[i];
         let truth = self.thermal.at(self.tc_slots[i], t);
-        let noise = if spec.noise > 0.0 { spec.noise * self.tc_noise[i].normal() } else { 0.0 };
-        let s = TemperatureSample { t, sensor: self.tc_names[i].clone(), value: truth + spec.offset + noise, variance: spec.noise * spec.noise + spec.calibration_uncertainty * spec.calibration_uncertainty };
-        (Sample::Temperature(s), SampleTruth::Temperature { true_value: truth })
+        let noise = if spec.noise > 0.0 {
+            spec.noise * self.tc_noise[i].normal()
+        } else {
+            0.0
+        };
+        let s = TemperatureSample {
+            t,
+            sensor: self.tc_names[i].clone(),
+            value: truth + spec.offset + noise,
+            variance: spec.noise * spec.noise
+                + spec.calibration_uncertainty * spec.calibration_uncertainty,
+        };
+        (
+            Sample::Temperature(s),
+            SampleTruth::Temperature { true_value: truth },
+        )
     }
 
     fn machine_state(&mut self, t: f64) -> Result<(Sample, SampleTruth), PhysicsError> {
@@ -549,30 +702,64 @@ impl<'a> Engine<'a> {
         // commanded; an arm's joints at commanded + their true zero offsets.
         let mut actual = ms.q.as_slice().to_vec();
         match &self.kinematics {
-            KinematicTruth::Arm { joint_offsets, .. } => actual.iter_mut().zip(joint_offsets).for_each(|(a, o)| *a += o),
+            KinematicTruth::Arm { joint_offsets, .. } => actual
+                .iter_mut()
+                .zip(joint_offsets)
+                .for_each(|(a, o)| *a += o),
             _ => (0..3).for_each(|k| actual[k] += d[k]),
         }
-        let s = MachineStateSample { t, names: self.axis_names.clone(), commanded: ms.q.as_slice().to_vec(), commanded_velocity: ms.velocity.as_slice().to_vec(), actual };
-        Ok((Sample::MachineState(s), SampleTruth::MachineState { displacement: d }))
+        let s = MachineStateSample {
+            t,
+            names: self.axis_names.clone(),
+            commanded: ms.q.as_slice().to_vec(),
+            commanded_velocity: ms.velocity.as_slice().to_vec(),
+            actual,
+        };
+        Ok((
+            Sample::MachineState(s),
+            SampleTruth::MachineState { displacement: d },
+        ))
     }
 
     fn tracker_sample(&mut self, t: f64) -> Result<(Sample, SampleTruth), PhysicsError> {
-        let spec = self.cell.tracker.as_ref().expect("tracker channel exists only with a tracker");
+        let spec = self
+            .cell
+            .tracker
+            .as_ref()
+            .expect("tracker channel exists only with a tracker");
         let ms = self.cell.program.state_at(t);
         let tool = self.tool_state(t, &ms)?;
         // the tracker sights the tool relative to the part (truth − d_w, crates/model `forward`)
-        let (nominal_point, tool_point, d) = (tool.nominal.translation.vector, tool.target(), tool.d);
+        let (nominal_point, tool_point, d) =
+            (tool.nominal.translation.vector, tool.target(), tool.d);
         // air: truth on the beam vs the station's reading
         let ambient = self.thermal.ambient(t);
         let air = self.cell.air;
         let st = &spec.station;
-        let state = self.tracker.as_mut().expect("tracker state exists with a tracker");
-        let mut station_noise = |sigma: f64| if sigma > 0.0 { sigma * state.station.normal() } else { 0.0 };
-        let (noise_t, noise_p, noise_h) = (station_noise(st.temperature_noise), station_noise(st.pressure_noise), station_noise(st.humidity_noise));
+        let state = self
+            .tracker
+            .as_mut()
+            .expect("tracker state exists with a tracker");
+        let mut station_noise = |sigma: f64| {
+            if sigma > 0.0 {
+                sigma * state.station.normal()
+            } else {
+                0.0
+            }
+        };
+        let (noise_t, noise_p, noise_h) = (
+            station_noise(st.temperature_noise),
+            station_noise(st.pressure_noise),
+            station_noise(st.humidity_noise),
+        );
         let t_station = ambient + st.temperature_bias + noise_t;
         let p_station = air.pressure + st.pressure_bias + noise_p;
         let h_station = air.humidity + st.humidity_bias + noise_h;
-        let n_true = shop_floor_refractivity(air.pressure, ambient + air.beam_temperature_offset, air.humidity);
+        let n_true = shop_floor_refractivity(
+            air.pressure,
+            ambient + air.beam_temperature_offset,
+            air.humidity,
+        );
         let n_station = shop_floor_refractivity(p_station, t_station, h_station);
         // The refraction term's path offsets are relative to the station's reading, so this
         // reading's station noise moves them (the beam's air does not see the station's noise).
@@ -581,17 +768,37 @@ impl<'a> Engine<'a> {
             self.reading_params[r + 1] = self.params[r + 1] - noise_p;
         }
         let s = &mut self.signals;
-        (s.air_temperature, s.air_pressure, s.air_humidity) = (Some(t_station), Some(p_station), Some(h_station));
+        (s.air_temperature, s.air_pressure, s.air_humidity) =
+            (Some(t_station), Some(p_station), Some(h_station));
         s.time_since_power_on = Some(t + spec.powered_on_before_start);
         let prediction = self.model.tracker(&self.reading_params, &tool, s)?;
-        let (x, rho, az, el) = (prediction.point, prediction.range, prediction.azimuth, prediction.elevation);
+        let (x, rho, az, el) = (
+            prediction.point,
+            prediction.range,
+            prediction.azimuth,
+            prediction.elevation,
+        );
         let (refraction, warmup) = (prediction.refraction, prediction.warmup);
-        let c = spec.turbulence.iter().filter(|w| t >= w.start && t < w.end).map(|w| w.coefficient).fold(0.0, f64::max);
-        let sigma_eff = range_scatter(spec.range_noise_constant, spec.range_noise_per_metre, c, rho);
+        let c = spec
+            .turbulence
+            .iter()
+            .filter(|w| t >= w.start && t < w.end)
+            .map(|w| w.coefficient)
+            .fold(0.0, f64::max);
+        let sigma_eff = range_scatter(
+            spec.range_noise_constant,
+            spec.range_noise_per_metre,
+            c,
+            rho,
+        );
         let broken = state.breaks.as_mut().map(|b| b.broken(t)).unwrap_or(false);
         let target_id = ms.dwell_point.map(|i| i as u32);
         let truth = TrackerTruth {
-            commanded: if self.cell.machine.is_jointed() { nominal_point } else { v3(&ms.q) },
+            commanded: if self.cell.machine.is_jointed() {
+                nominal_point
+            } else {
+                v3(&ms.q)
+            },
             joints: ms.q.as_slice().to_vec(),
             displacement: d,
             tool_point,
@@ -620,9 +827,22 @@ impl<'a> Engine<'a> {
             }
         } else {
             let noise = &mut state.noise;
-            let rho_m = prediction.measured_range() + if sigma_eff > 0.0 { sigma_eff * noise.normal() } else { 0.0 };
-            let (az_m, el_m) = if spec.angular_noise > 0.0 { (az + spec.angular_noise * noise.normal(), el + spec.angular_noise * noise.normal()) } else { (az, el) };
-            let stated = stated_range_sigma(spec.range_noise_constant, spec.range_noise_per_metre, rho_m);
+            let rho_m = prediction.measured_range()
+                + if sigma_eff > 0.0 {
+                    sigma_eff * noise.normal()
+                } else {
+                    0.0
+                };
+            let (az_m, el_m) = if spec.angular_noise > 0.0 {
+                (
+                    az + spec.angular_noise * noise.normal(),
+                    el + spec.angular_noise * noise.normal(),
+                )
+            } else {
+                (az, el)
+            };
+            let stated =
+                stated_range_sigma(spec.range_noise_constant, spec.range_noise_per_metre, rho_m);
             TrackerSample {
                 t,
                 target_id,
@@ -631,7 +851,14 @@ impl<'a> Engine<'a> {
                 range: rho_m,
                 azimuth: az_m,
                 elevation: el_m,
-                covariance: point_covariance(rho_m, az_m, el_m, stated, spec.angular_noise, spec.angular_noise),
+                covariance: point_covariance(
+                    rho_m,
+                    az_m,
+                    el_m,
+                    stated,
+                    spec.angular_noise,
+                    spec.angular_noise,
+                ),
                 air_temperature: t_station,
                 air_pressure: p_station,
                 air_humidity: h_station,
@@ -643,7 +870,11 @@ impl<'a> Engine<'a> {
     }
 
     fn probe_hit(&mut self, ev: DwellEvent) -> Result<(Sample, SampleTruth), PhysicsError> {
-        let spec = self.cell.probe.as_ref().expect("probe events exist only with a probe");
+        let spec = self
+            .cell
+            .probe
+            .as_ref()
+            .expect("probe events exist only with a probe");
         let seg = &self.cell.program.segments[ev.segment];
         let point = seg.dwell_point.unwrap_or(0);
         let u = spec.directions[ev.sub];
@@ -654,13 +885,30 @@ impl<'a> Engine<'a> {
                 approach[k] = u[k].signum();
             }
         }
-        let ms = MotionState { q: seg.to.clone(), velocity: DVector::zeros(seg.to.len()), approach, dwell_point: Some(point), cycle: Some(ev.cycle) };
+        let ms = MotionState {
+            q: seg.to.clone(),
+            velocity: DVector::zeros(seg.to.len()),
+            approach,
+            dwell_point: Some(point),
+            cycle: Some(ev.cycle),
+        };
         self.set_signals(ev.t, &ms);
         // the surface point is the program point; the stylus is a point (radius 0), so the
         // reading is where the machine thinks the contact is
         let nominal = self.cell.machine.nominal_tool_point(&v3(&seg.to));
-        let hit = ProbeTarget { surface: nominal, approach: u, stylus_radius: 0.0 };
-        let prediction = self.model.probe_hit(None, &self.params, &self.kinematics, ms.q.as_slice(), &mut self.signals, &hit)?;
+        let hit = ProbeTarget {
+            surface: nominal,
+            approach: u,
+            stylus_radius: 0.0,
+        };
+        let prediction = self.model.probe_hit(
+            None,
+            &self.params,
+            &self.kinematics,
+            ms.q.as_slice(),
+            &mut self.signals,
+            &hit,
+        )?;
         let (mut d, pretravel) = (prediction.machine, prediction.pretravel);
         let mut centre = prediction.centre;
         // the test-only disturbances displace the machine as a term would: the axes read −δ
@@ -669,7 +917,11 @@ impl<'a> Engine<'a> {
             d += delta;
             centre -= delta;
         }
-        let noise = Vector3::new(self.probe_noise.normal(), self.probe_noise.normal(), self.probe_noise.normal()) * spec.noise;
+        let noise = Vector3::new(
+            self.probe_noise.normal(),
+            self.probe_noise.normal(),
+            self.probe_noise.normal(),
+        ) * spec.noise;
         let recorded = centre + noise;
         let s = ProbeHitSample {
             t: ev.t,
@@ -681,28 +933,61 @@ impl<'a> Engine<'a> {
             recorded,
             covariance: Matrix3::identity() * (spec.noise * spec.noise),
         };
-        Ok((Sample::ProbeHit(s), SampleTruth::ProbeHit { displacement: d, pretravel }))
+        Ok((
+            Sample::ProbeHit(s),
+            SampleTruth::ProbeHit {
+                displacement: d,
+                pretravel,
+            },
+        ))
     }
 
     fn camera_request(&mut self, ev: DwellEvent) -> Result<(Sample, SampleTruth), PhysicsError> {
-        let spec = self.cell.camera.as_ref().expect("camera events exist only with a camera");
+        let spec = self
+            .cell
+            .camera
+            .as_ref()
+            .expect("camera events exist only with a camera");
         let seg = &self.cell.program.segments[ev.segment];
-        let ms = MotionState { q: seg.to.clone(), velocity: DVector::zeros(seg.to.len()), approach: seg.approach.clone(), dwell_point: seg.dwell_point, cycle: Some(ev.cycle) };
+        let ms = MotionState {
+            q: seg.to.clone(),
+            velocity: DVector::zeros(seg.to.len()),
+            approach: seg.approach.clone(),
+            dwell_point: seg.dwell_point,
+            cycle: Some(ev.cycle),
+        };
         let tool = self.tool_state(ev.t, &ms)?;
         // the camera is mounted on the tool: its pose is the tool pose followed by the mount
         let (nominal_camera, camera) = self.model.camera_pose(None, &tool)?;
         let plate = spec.plate.pose(&nominal_camera);
         let centre = plate.translation.vector;
-        let plate_position = centre + self.model.workpiece_displacement(&self.params, &mut self.signals, centre, None, 1.0)?;
+        let plate_position = centre
+            + self.model.workpiece_displacement(
+                &self.params,
+                &mut self.signals,
+                centre,
+                None,
+                1.0,
+            )?;
         let brown_conrady = matches!(spec.lens().distortion, Distortion::BrownConrady(_));
         let mut corners = Vec::with_capacity(4 * PLATE_MARKERS);
         for f in spec.plate.corners_in_workpiece(&nominal_camera) {
-            corners.push(self.model.camera(None, &self.params, &tool, &mut self.signals, &f)?.pixel);
+            corners.push(
+                self.model
+                    .camera(None, &self.params, &tool, &mut self.signals, &f)?
+                    .pixel,
+            );
         }
         let mut marker_points = Vec::with_capacity(PLATE_MARKERS);
         for k in 0..PLATE_MARKERS {
-            let f = plate.transform_point(&spec.plate.marker_centre(k).into()).coords;
-            marker_points.push(self.model.camera(None, &self.params, &tool, &mut self.signals, &f)?.measured_point);
+            let f = plate
+                .transform_point(&spec.plate.marker_centre(k).into())
+                .coords;
+            marker_points.push(
+                self.model
+                    .camera(None, &self.params, &tool, &mut self.signals, &f)?
+                    .measured_point,
+            );
         }
         let s = CameraFrameRequest {
             t: ev.t,
@@ -718,7 +1003,14 @@ impl<'a> Engine<'a> {
             marker_points,
         };
         let tool_point = tool.truth.translation.vector;
-        Ok((Sample::CameraFrameRequest(s), SampleTruth::CameraFrameRequest { tool_point, joints: seg.to.as_slice().to_vec(), displacement: tool.d }))
+        Ok((
+            Sample::CameraFrameRequest(s),
+            SampleTruth::CameraFrameRequest {
+                tool_point,
+                joints: seg.to.as_slice().to_vec(),
+                displacement: tool.d,
+            },
+        ))
     }
 }
 

@@ -29,13 +29,13 @@
 
 use std::path::Path;
 
+use metrocell_kinematics::transform::{rx, ry};
 use metrocell_kinematics::urdf_link_placement::{link_rotation, read_urdf_file, LinkRotation};
 use metrocell_model::{InstrumentPose, MachineGeometry, MachineKinematics};
 use metrocell_physics::config::ConfigValue;
 use metrocell_physics::gravity::gravity_in_tilted_base;
 use metrocell_physics::model::TermModel;
 use metrocell_physics::{configure, TermConfig};
-use metrocell_kinematics::transform::{rx, ry};
 use nalgebra::{Matrix3, Rotation3, Vector3};
 
 use crate::cell_file::{AccelerometerSection, CellFile, TrackerSection};
@@ -94,17 +94,35 @@ impl Stationing {
     /// The stationing recording of a cell file whose program is `program.stationing` (None
     /// otherwise); a file that gives the instrument's `setups`, its `point_noise` or the ground's
     /// tilt without one is refused, naming the key.
-    pub fn from_file(f: &CellFile, machine: &MachineGeometry, base_dir: &Path) -> Result<Option<Stationing>, CellError> {
+    pub fn from_file(
+        f: &CellFile,
+        machine: &MachineGeometry,
+        base_dir: &Path,
+    ) -> Result<Option<Stationing>, CellError> {
         let section = f.program.as_ref().and_then(|p| p.stationing.as_ref());
         let tracker = f.sensors.tracker.as_ref();
         let Some(section) = section else {
             let stray = [
-                ("sensors.tracker.setups", tracker.is_some_and(|t| !t.setups.is_empty())),
-                ("sensors.tracker.point_noise", tracker.is_some_and(|t| t.point_noise.is_some())),
-                ("environment.ground_tilt", f.environment.as_ref().is_some_and(|e| e.ground_tilt.is_some())),
+                (
+                    "sensors.tracker.setups",
+                    tracker.is_some_and(|t| !t.setups.is_empty()),
+                ),
+                (
+                    "sensors.tracker.point_noise",
+                    tracker.is_some_and(|t| t.point_noise.is_some()),
+                ),
+                (
+                    "environment.ground_tilt",
+                    f.environment
+                        .as_ref()
+                        .is_some_and(|e| e.ground_tilt.is_some()),
+                ),
             ];
             return match stray.iter().find(|(_, given)| *given) {
-                Some((key, _)) => Err(CellError::invalid(*key, "is simulated with a stationing program (`program.stationing`) only")),
+                Some((key, _)) => Err(CellError::invalid(
+                    *key,
+                    "is simulated with a stationing program (`program.stationing`) only",
+                )),
                 None => Ok(None),
             };
         };
@@ -112,7 +130,12 @@ impl Stationing {
         let (placements, tilt_sigma, point_noise) = instrument(tracker)?;
         let ground_tilt = match f.environment.as_ref().and_then(|e| e.ground_tilt.as_ref()) {
             Some(g) => {
-                let angle = |q: &Option<crate::quantity::Quantity>, key: &str| q.as_ref().map(|q| q.to_si(&format!("environment.ground_tilt.{key}"), "rad")).transpose().map(|v| v.unwrap_or(0.0));
+                let angle = |q: &Option<crate::quantity::Quantity>, key: &str| {
+                    q.as_ref()
+                        .map(|q| q.to_si(&format!("environment.ground_tilt.{key}"), "rad"))
+                        .transpose()
+                        .map(|v| v.unwrap_or(0.0))
+                };
                 [angle(&g.roll, "roll")?, angle(&g.pitch, "pitch")?]
             }
             None => [0.0, 0.0],
@@ -120,7 +143,14 @@ impl Stationing {
         check_tilt(ground_tilt, "environment.ground_tilt")?;
         let accelerometers = accelerometers(&f.sensors.accelerometers, f, base_dir)?;
         let waypoints = plan(section, machine, &placements)?;
-        Ok(Some(Stationing { placements, tilt_sigma, point_noise, ground_tilt, accelerometers, waypoints }))
+        Ok(Some(Stationing {
+            placements,
+            tilt_sigma,
+            point_noise,
+            ground_tilt,
+            accelerometers,
+            waypoints,
+        }))
     }
 
     /// R_tilt = Rx(roll)·Ry(pitch): the base's points in the levelled frame.
@@ -137,7 +167,19 @@ impl Stationing {
     /// tilt drawn from N(0, tilt_sigma²) per axis with `seed` (the same for every run of a seed).
     pub fn true_poses(&self, seed: u64) -> Vec<InstrumentPose> {
         let mut rng = NoiseStream::new(seed, stream::SETUP_TILT);
-        self.placements.iter().map(|p| InstrumentPose::from_euler_xyz(p.translation, [self.tilt_sigma * rng.normal(), self.tilt_sigma * rng.normal(), p.yaw])).collect()
+        self.placements
+            .iter()
+            .map(|p| {
+                InstrumentPose::from_euler_xyz(
+                    p.translation,
+                    [
+                        self.tilt_sigma * rng.normal(),
+                        self.tilt_sigma * rng.normal(),
+                        p.yaw,
+                    ],
+                )
+            })
+            .collect()
     }
 
     /// The truth's instrument terms for `seed`: `tracker_pose[<setup>]` per placement
@@ -145,14 +187,50 @@ impl Stationing {
     pub fn instrument_terms(&self, seed: u64) -> Result<TermModel, CellError> {
         let mut m = TermModel::default();
         let path = "sensors.tracker.setups";
-        let push = |m: &mut TermModel, c: TermConfig| -> Result<(), CellError> { m.push(configure(&c).map_err(|e| CellError::term(path, e))?).map_err(|e| CellError::term(path, e)) };
-        let number = |pairs: &[(&str, f64)]| pairs.iter().map(|(n, v)| (n.to_string(), ConfigValue::Number(*v))).collect();
+        let push = |m: &mut TermModel, c: TermConfig| -> Result<(), CellError> {
+            m.push(configure(&c).map_err(|e| CellError::term(path, e))?)
+                .map_err(|e| CellError::term(path, e))
+        };
+        let number = |pairs: &[(&str, f64)]| {
+            pairs
+                .iter()
+                .map(|(n, v)| (n.to_string(), ConfigValue::Number(*v)))
+                .collect()
+        };
         for (p, pose) in self.placements.iter().zip(self.true_poses(seed)) {
             let [tx, ty, tz, alpha, beta, delta] = pose.term_params();
-            let options = [("setup".to_string(), ConfigValue::Text(p.name.clone()))].into_iter().collect();
-            push(&mut m, TermConfig { id: "tracker_pose".into(), options, params: number(&[("tx", tx), ("ty", ty), ("tz", tz), ("alpha", alpha), ("beta", beta), ("delta", delta)]), use_defaults: false })?;
+            let options = [("setup".to_string(), ConfigValue::Text(p.name.clone()))]
+                .into_iter()
+                .collect();
+            push(
+                &mut m,
+                TermConfig {
+                    id: "tracker_pose".into(),
+                    options,
+                    params: number(&[
+                        ("tx", tx),
+                        ("ty", ty),
+                        ("tz", tz),
+                        ("alpha", alpha),
+                        ("beta", beta),
+                        ("delta", delta),
+                    ]),
+                    use_defaults: false,
+                },
+            )?;
         }
-        push(&mut m, TermConfig { id: "base_tilt".into(), options: Default::default(), params: number(&[("roll", self.ground_tilt[0]), ("pitch", self.ground_tilt[1])]), use_defaults: false })?;
+        push(
+            &mut m,
+            TermConfig {
+                id: "base_tilt".into(),
+                options: Default::default(),
+                params: number(&[
+                    ("roll", self.ground_tilt[0]),
+                    ("pitch", self.ground_tilt[1]),
+                ]),
+                use_defaults: false,
+            },
+        )?;
         Ok(m)
     }
 }
@@ -161,7 +239,12 @@ impl Stationing {
 pub fn check_tilt(tilt: [f64; 2], key: &str) -> Result<(), CellError> {
     for (v, name) in tilt.iter().zip(["roll", "pitch"]) {
         if !(v.abs() <= 0.2) {
-            return Err(CellError::OutOfRange { path: format!("{key}.{name}"), value: *v, reason: "a ground tilt is within ±0.2 rad (give a unit: `12 mrad`, `0.5 deg`)".into() });
+            return Err(CellError::OutOfRange {
+                path: format!("{key}.{name}"),
+                value: *v,
+                reason: "a ground tilt is within ±0.2 rad (give a unit: `12 mrad`, `0.5 deg`)"
+                    .into(),
+            });
         }
     }
     Ok(())
@@ -173,7 +256,15 @@ fn instrument(t: &TrackerSection) -> Result<(Vec<Placement>, f64, f64), CellErro
     if !t.levelled {
         return Err(CellError::invalid(format!("{p}.levelled"), "must be true for a stationing program: the instrument levels itself (a total station's compensator), each setup a yaw and a translation"));
     }
-    if t.pose.is_some() || t.rate.is_some() || t.range_noise.is_some() || t.angular_noise.is_some() || t.warmup.is_some() || t.station.is_some() || !t.turbulence.is_empty() || t.beam_breaks.is_some() {
+    if t.pose.is_some()
+        || t.rate.is_some()
+        || t.range_noise.is_some()
+        || t.angular_noise.is_some()
+        || t.warmup.is_some()
+        || t.station.is_some()
+        || !t.turbulence.is_empty()
+        || t.beam_breaks.is_some()
+    {
         return Err(CellError::invalid(p, "of a stationing program takes levelled, tilt_sigma, point_noise and setups (the tracker's pose, rate, noise model, warm-up, station, turbulence and beam breaks are for a tracker sampling a running program)"));
     }
     let tilt_sigma = match &t.tilt_sigma {
@@ -182,32 +273,59 @@ fn instrument(t: &TrackerSection) -> Result<(Vec<Placement>, f64, f64), CellErro
     };
     let point_noise = t.point_noise.as_ref().ok_or_else(|| CellError::invalid(format!("{p}.point_noise"), "is required by a stationing program: σ of the instrument's point on each axis, e.g. 0.75 mm"))?.non_negative(&format!("{p}.point_noise"), "m")?;
     if t.setups.is_empty() {
-        return Err(CellError::invalid(format!("{p}.setups"), "needs at least one placement {name, translation: [x, y, z], yaw}"));
+        return Err(CellError::invalid(
+            format!("{p}.setups"),
+            "needs at least one placement {name, translation: [x, y, z], yaw}",
+        ));
     }
     let mut placements: Vec<Placement> = Vec::new();
     for (i, s) in t.setups.iter().enumerate() {
         let sp = format!("{p}.setups[{i}]");
-        let valid = !s.name.is_empty() && s.name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
+        let valid = !s.name.is_empty()
+            && s.name
+                .chars()
+                .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-');
         if !valid || placements.iter().any(|o| o.name == s.name) {
             return Err(CellError::invalid(format!("{sp}.name"), format!("`{}` must be a name no other setup has, of letters, digits, `_` or `-` (it is the import layout's `setup`)", s.name)));
         }
-        let yaw = s.yaw.as_ref().map(|q| q.to_si(&format!("{sp}.yaw"), "rad")).transpose()?.unwrap_or(0.0);
-        placements.push(Placement { name: s.name.clone(), translation: vector3(&s.translation, &format!("{sp}.translation"), "m")?, yaw });
+        let yaw = s
+            .yaw
+            .as_ref()
+            .map(|q| q.to_si(&format!("{sp}.yaw"), "rad"))
+            .transpose()?
+            .unwrap_or(0.0);
+        placements.push(Placement {
+            name: s.name.clone(),
+            translation: vector3(&s.translation, &format!("{sp}.translation"), "m")?,
+            yaw,
+        });
     }
     Ok((placements, tilt_sigma, point_noise))
 }
 
 /// The accelerometers as simulated: each link's rotation in the base frame (fixed to the root,
 /// or behind prismatic joints only), misalignment, bias and noise.
-fn accelerometers(sensors: &[AccelerometerSection], f: &CellFile, base_dir: &Path) -> Result<Vec<AccelerometerSpec>, CellError> {
+fn accelerometers(
+    sensors: &[AccelerometerSection],
+    f: &CellFile,
+    base_dir: &Path,
+) -> Result<Vec<AccelerometerSpec>, CellError> {
     if sensors.is_empty() {
         return Ok(Vec::new());
     }
     // the section was validated with the machine: an arm from a URDF
-    let arm = f.machine.serial_arm.as_ref().ok_or_else(|| CellError::invalid("sensors.accelerometers", "needs a serial arm"))?;
-    let urdf = arm.urdf.as_ref().ok_or_else(|| CellError::invalid("sensors.accelerometers", "needs an arm from a URDF"))?;
+    let arm = f
+        .machine
+        .serial_arm
+        .as_ref()
+        .ok_or_else(|| CellError::invalid("sensors.accelerometers", "needs a serial arm"))?;
+    let urdf = arm
+        .urdf
+        .as_ref()
+        .ok_or_else(|| CellError::invalid("sensors.accelerometers", "needs an arm from a URDF"))?;
     let path = base_dir.join(&urdf.path);
-    let robot = read_urdf_file(&path).map_err(|e| CellError::invalid("machine.serial_arm.urdf", e.to_string()))?;
+    let robot = read_urdf_file(&path)
+        .map_err(|e| CellError::invalid("machine.serial_arm.urdf", e.to_string()))?;
     let base = match &arm.base {
         Some(b) => crate::cell::pose(b, "machine.serial_arm.base")?.rotation,
         None => Matrix3::identity(),
@@ -222,12 +340,31 @@ fn accelerometers(sensors: &[AccelerometerSection], f: &CellFile, base_dir: &Pat
             }
         };
         let misalignment = match &a.misalignment {
-            Some(v) => Rotation3::new(vector3(v, &format!("{p}.misalignment"), "rad")?).into_inner(),
+            Some(v) => {
+                Rotation3::new(vector3(v, &format!("{p}.misalignment"), "rad")?).into_inner()
+            }
             None => Matrix3::identity(),
         };
-        let bias = a.bias.as_ref().map(|v| vector3(v, &format!("{p}.bias"), "m/s^2")).transpose()?.unwrap_or_else(Vector3::zeros);
-        let noise = a.noise.as_ref().map(|q| q.non_negative(&format!("{p}.noise"), "m/s^2")).transpose()?.unwrap_or(0.0);
-        out.push(AccelerometerSpec { name: a.name.clone(), link: a.link.clone(), base_from_link: base * r, misalignment, bias, noise });
+        let bias = a
+            .bias
+            .as_ref()
+            .map(|v| vector3(v, &format!("{p}.bias"), "m/s^2"))
+            .transpose()?
+            .unwrap_or_else(Vector3::zeros);
+        let noise = a
+            .noise
+            .as_ref()
+            .map(|q| q.non_negative(&format!("{p}.noise"), "m/s^2"))
+            .transpose()?
+            .unwrap_or(0.0);
+        out.push(AccelerometerSpec {
+            name: a.name.clone(),
+            link: a.link.clone(),
+            base_from_link: base * r,
+            misalignment,
+            bias,
+            noise,
+        });
     }
     Ok(out)
 }

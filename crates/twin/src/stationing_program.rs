@@ -38,22 +38,57 @@ pub struct Waypoint {
 const MAX_DRAWS: usize = 1000;
 
 /// The waypoints of `s` for the arm of `machine`, measured from `placements` (module doc).
-pub fn plan(s: &StationingSection, machine: &MachineGeometry, placements: &[Placement]) -> Result<Vec<Waypoint>, CellError> {
+pub fn plan(
+    s: &StationingSection,
+    machine: &MachineGeometry,
+    placements: &[Placement],
+) -> Result<Vec<Waypoint>, CellError> {
     let p = "program.stationing";
-    let arm = arm_of(machine).ok_or_else(|| CellError::invalid(p, "is for a serial_arm (a lifting column and an arm from a URDF)"))?;
+    let arm = arm_of(machine).ok_or_else(|| {
+        CellError::invalid(
+            p,
+            "is for a serial_arm (a lifting column and an arm from a URDF)",
+        )
+    })?;
     // the cell's joint limits, within the URDF's `<limit>`s
-    let urdf_limits = arm.chain.joints.iter().filter(|j| j.is_variable()).map(|j| j.limits);
-    let limits: Vec<([f64; 2], &str)> = machine.joint_limits().into_iter().zip(urdf_limits).map(|(([lo, hi], unit), u)| (u.map_or([lo, hi], |[a, b]| [lo.max(a), hi.min(b)]), unit)).collect();
+    let urdf_limits = arm
+        .chain
+        .joints
+        .iter()
+        .filter(|j| j.is_variable())
+        .map(|j| j.limits);
+    let limits: Vec<([f64; 2], &str)> = machine
+        .joint_limits()
+        .into_iter()
+        .zip(urdf_limits)
+        .map(|(([lo, hi], unit), u)| (u.map_or([lo, hi], |[a, b]| [lo.max(a), hi.min(b)]), unit))
+        .collect();
     let names = machine.joint_names();
     let dof = names.len();
     if dof < 2 {
-        return Err(CellError::invalid(p, format!("needs an arm with a column and at least one more joint; this one has {}", names.join(", "))));
+        return Err(CellError::invalid(
+            p,
+            format!(
+                "needs an arm with a column and at least one more joint; this one has {}",
+                names.join(", ")
+            ),
+        ));
     }
-    let levels = s.levels.iter().enumerate().map(|(i, q)| q.to_si(&format!("{p}.levels[{i}]"), limits[0].1)).collect::<Result<Vec<_>, _>>()?;
+    let levels = s
+        .levels
+        .iter()
+        .enumerate()
+        .map(|(i, q)| q.to_si(&format!("{p}.levels[{i}]"), limits[0].1))
+        .collect::<Result<Vec<_>, _>>()?;
     let spread = joints(&s.spread, &format!("{p}.spread"), &limits[1..], &names[1..])?;
     let mut configurations = Vec::new();
     for (i, c) in s.configurations.iter().enumerate() {
-        configurations.push(joints(&c.joints, &format!("{p}.configurations[{i}].joints"), &limits[1..], &names[1..])?);
+        configurations.push(joints(
+            &c.joints,
+            &format!("{p}.configurations[{i}].joints"),
+            &limits[1..],
+            &names[1..],
+        )?);
     }
     if levels.is_empty() || configurations.is_empty() {
         return Err(CellError::invalid(p, "needs at least one of `levels` (the column's) and one of `configurations` ({name, joints})"));
@@ -64,16 +99,35 @@ pub fn plan(s: &StationingSection, machine: &MachineGeometry, placements: &[Plac
     }
     let per_setup = s.groups_per_setup.unwrap_or(1) as usize;
     if per_setup == 0 {
-        return Err(CellError::invalid(format!("{p}.groups_per_setup"), "must be at least 1"));
+        return Err(CellError::invalid(
+            format!("{p}.groups_per_setup"),
+            "must be at least 1",
+        ));
     }
-    let min_height = s.min_tool_height.as_ref().map(|q| q.to_si(&format!("{p}.min_tool_height"), "m")).transpose()?.unwrap_or(f64::NEG_INFINITY);
-    let tool = |q: &DVector<f64>| arm.chain.tool_pose(q.as_slice()).map(|t| t.translation.vector);
+    let min_height = s
+        .min_tool_height
+        .as_ref()
+        .map(|q| q.to_si(&format!("{p}.min_tool_height"), "m"))
+        .transpose()?
+        .unwrap_or(f64::NEG_INFINITY);
+    let tool = |q: &DVector<f64>| {
+        arm.chain
+            .tool_pose(q.as_slice())
+            .map(|t| t.translation.vector)
+    };
     let mut rng = NoiseStream::new(s.seed.unwrap_or(1), stream::STATIONING_PLAN);
     let mut out = Vec::new();
     for (li, level) in levels.iter().enumerate() {
         let [lo, hi] = limits[0].0;
         if !(*level >= lo && *level <= hi) {
-            return Err(CellError::OutOfRange { path: format!("{p}.levels[{li}]"), value: *level, reason: format!("{} outside its limits [{lo}, {hi}] {}", names[0], limits[0].1) });
+            return Err(CellError::OutOfRange {
+                path: format!("{p}.levels[{li}]"),
+                value: *level,
+                reason: format!(
+                    "{} outside its limits [{lo}, {hi}] {}",
+                    names[0], limits[0].1
+                ),
+            });
         }
         for (ci, centre) in configurations.iter().enumerate() {
             let group = out.last().map_or(0, |w: &Waypoint| w.group + 1);
@@ -85,7 +139,8 @@ pub fn plan(s: &StationingSection, machine: &MachineGeometry, placements: &[Plac
                     let mut q = DVector::from_element(dof, *level);
                     for k in 1..dof {
                         let [lo, hi] = limits[k].0;
-                        q[k] = (centre[k - 1] + spread[k - 1] * (2.0 * rng.uniform() - 1.0)).clamp(lo, hi);
+                        q[k] = (centre[k - 1] + spread[k - 1] * (2.0 * rng.uniform() - 1.0))
+                            .clamp(lo, hi);
                     }
                     let point = tool(&q).map_err(|e| CellError::invalid(p, e.to_string()))?;
                     if point.z >= min_height {
@@ -100,8 +155,18 @@ pub fn plan(s: &StationingSection, machine: &MachineGeometry, placements: &[Plac
             let fits = farthest_points(&points, fit);
             let setup = (group / per_setup) % placements.len();
             for (k, q) in qs.into_iter().enumerate() {
-                let role = if fits.contains(&k) { PointRole::Fit } else { PointRole::Check };
-                out.push(Waypoint { point_id: format!("G{:02}.{:03}", group + 1, k + 1), group, setup, role, q });
+                let role = if fits.contains(&k) {
+                    PointRole::Fit
+                } else {
+                    PointRole::Check
+                };
+                out.push(Waypoint {
+                    point_id: format!("G{:02}.{:03}", group + 1, k + 1),
+                    group,
+                    setup,
+                    role,
+                    q,
+                });
             }
         }
     }
@@ -109,11 +174,28 @@ pub fn plan(s: &StationingSection, machine: &MachineGeometry, placements: &[Plac
 }
 
 /// Joint values of the arm's joints after the column, in their units, `names` for messages.
-fn joints(values: &[crate::quantity::Quantity], path: &str, limits: &[([f64; 2], &str)], names: &[String]) -> Result<Vec<f64>, CellError> {
+fn joints(
+    values: &[crate::quantity::Quantity],
+    path: &str,
+    limits: &[([f64; 2], &str)],
+    names: &[String],
+) -> Result<Vec<f64>, CellError> {
     if values.len() != limits.len() {
-        return Err(CellError::invalid(path, format!("has {} values; it needs one per joint after the column: {}", values.len(), names.join(", "))));
+        return Err(CellError::invalid(
+            path,
+            format!(
+                "has {} values; it needs one per joint after the column: {}",
+                values.len(),
+                names.join(", ")
+            ),
+        ));
     }
-    values.iter().zip(limits).enumerate().map(|(i, (v, (_, unit)))| v.to_si(&format!("{path}[{i}]"), unit)).collect()
+    values
+        .iter()
+        .zip(limits)
+        .enumerate()
+        .map(|(i, (v, (_, unit)))| v.to_si(&format!("{path}[{i}]"), unit))
+        .collect()
 }
 
 /// Indices of `n` points picked far apart: the one farthest from the centroid first, then each
@@ -123,11 +205,20 @@ pub fn farthest_points(points: &[Vector3<f64>], n: usize) -> Vec<usize> {
         return Vec::new();
     }
     let centroid = points.iter().sum::<Vector3<f64>>() / points.len() as f64;
-    let far = |d: &dyn Fn(&Vector3<f64>) -> f64| (0..points.len()).max_by(|a, b| d(&points[*a]).total_cmp(&d(&points[*b]))).expect("not empty");
+    let far = |d: &dyn Fn(&Vector3<f64>) -> f64| {
+        (0..points.len())
+            .max_by(|a, b| d(&points[*a]).total_cmp(&d(&points[*b])))
+            .expect("not empty")
+    };
     let mut picked = vec![far(&|p| (p - centroid).norm())];
-    let mut nearest: Vec<f64> = points.iter().map(|p| (p - points[picked[0]]).norm()).collect();
+    let mut nearest: Vec<f64> = points
+        .iter()
+        .map(|p| (p - points[picked[0]]).norm())
+        .collect();
     while picked.len() < n.min(points.len()) {
-        let next = (0..points.len()).max_by(|a, b| nearest[*a].total_cmp(&nearest[*b])).expect("not empty");
+        let next = (0..points.len())
+            .max_by(|a, b| nearest[*a].total_cmp(&nearest[*b]))
+            .expect("not empty");
         picked.push(next);
         for (k, p) in points.iter().enumerate() {
             nearest[k] = nearest[k].min((p - points[next]).norm());

@@ -57,9 +57,15 @@ impl<'a> StationingStream<'a> {
         let seed = sim.seed();
         let model = sim.forward_model();
         let params = model.params();
-        let kinematics = model.kinematic_truth(&params).expect("the parameter vector is the model's own");
+        let kinematics = model
+            .kinematic_truth(&params)
+            .expect("the parameter vector is the model's own");
         let thermal = ThermalStepper::new(&cell.thermal, cell.thermal_step, seed);
-        let tc_slots = cell.thermocouples.iter().map(|t| thermal.slot_of_node(t.node.as_deref())).collect();
+        let tc_slots = cell
+            .thermocouples
+            .iter()
+            .map(|t| thermal.slot_of_node(t.node.as_deref()))
+            .collect();
         Self {
             sim,
             st,
@@ -71,12 +77,24 @@ impl<'a> StationingStream<'a> {
             queue: VecDeque::new(),
             thermal,
             tc_slots,
-            tc_noise: (0..cell.thermocouples.len()).map(|i| NoiseStream::new(seed, stream::THERMOCOUPLE_BASE + i as u64)).collect(),
-            tc_names: cell.thermocouples.iter().map(|t| Arc::from(t.name.as_str())).collect(),
+            tc_noise: (0..cell.thermocouples.len())
+                .map(|i| NoiseStream::new(seed, stream::THERMOCOUPLE_BASE + i as u64))
+                .collect(),
+            tc_names: cell
+                .thermocouples
+                .iter()
+                .map(|t| Arc::from(t.name.as_str()))
+                .collect(),
             point_noise: NoiseStream::new(seed, stream::STATION_POINT),
-            accel_noise: (0..st.accelerometers.len()).map(|i| NoiseStream::new(seed, stream::ACCELEROMETER_BASE + i as u64)).collect(),
+            accel_noise: (0..st.accelerometers.len())
+                .map(|i| NoiseStream::new(seed, stream::ACCELEROMETER_BASE + i as u64))
+                .collect(),
             joint_names: cell.machine.joint_names().into(),
-            setup_names: st.placements.iter().map(|p| Arc::from(p.name.as_str())).collect(),
+            setup_names: st
+                .placements
+                .iter()
+                .map(|p| Arc::from(p.name.as_str()))
+                .collect(),
             error: None,
         }
     }
@@ -95,12 +113,18 @@ impl<'a> StationingStream<'a> {
 
     /// The signals of waypoint `i` at `t`: time, true temperatures, gravity, setup.
     fn signals(&mut self, t: f64, q: &[f64], setup: Arc<str>, temperatures: &[f64]) -> Signals {
-        let mut s = Signals { time: Some(t), gravity: Some(self.st.gravity()), setup: Some(setup), ..Signals::default() };
+        let mut s = Signals {
+            time: Some(t),
+            gravity: Some(self.st.gravity()),
+            setup: Some(setup),
+            ..Signals::default()
+        };
         for (tc, v) in self.sim.cell().thermocouples.iter().zip(temperatures) {
             s.temperatures.insert(tc.name.clone(), *v);
         }
         let n = q.len();
-        self.model.set_motion(&mut s, q, &vec![0.0; n], &vec![1.0; n]);
+        self.model
+            .set_motion(&mut s, q, &vec![0.0; n], &vec![1.0; n]);
         s
     }
 
@@ -109,20 +133,45 @@ impl<'a> StationingStream<'a> {
         let (cell, st) = (self.sim.cell(), self.st);
         let w = &st.waypoints[i];
         let q = w.q.as_slice();
-        let temperatures: Vec<f64> = self.tc_slots.iter().map(|slot| self.thermal.at(*slot, t)).collect();
+        let temperatures: Vec<f64> = self
+            .tc_slots
+            .iter()
+            .map(|slot| self.thermal.at(*slot, t))
+            .collect();
         let mut s = self.signals(t, q, self.setup_names[w.setup].clone(), &temperatures);
-        let tool = self.model.tool_state(&self.params, &self.kinematics, q, &mut s, None)?;
+        let tool = self
+            .model
+            .tool_state(&self.params, &self.kinematics, q, &mut s, None)?;
         let prediction = self.model.tracker(&self.params, &tool, &mut s)?;
         // the machine state: what the controller commanded and what its encoders read
         let mut actual = q.to_vec();
         if let KinematicTruth::Arm { joint_offsets, .. } = &self.kinematics {
-            actual.iter_mut().zip(joint_offsets).for_each(|(a, o)| *a += o);
+            actual
+                .iter_mut()
+                .zip(joint_offsets)
+                .for_each(|(a, o)| *a += o);
         }
-        let machine = MachineStateSample { t, names: self.joint_names.clone(), commanded: q.to_vec(), commanded_velocity: vec![0.0; q.len()], actual };
-        self.queue.push_back((Sample::MachineState(machine), SampleTruth::MachineState { displacement: tool.d }, None));
+        let machine = MachineStateSample {
+            t,
+            names: self.joint_names.clone(),
+            commanded: q.to_vec(),
+            commanded_velocity: vec![0.0; q.len()],
+            actual,
+        };
+        self.queue.push_back((
+            Sample::MachineState(machine),
+            SampleTruth::MachineState {
+                displacement: tool.d,
+            },
+            None,
+        ));
         // the instrument's point, with its noise
         let sigma = st.point_noise;
-        let noise = Vector3::new(self.point_noise.normal(), self.point_noise.normal(), self.point_noise.normal()) * sigma;
+        let noise = Vector3::new(
+            self.point_noise.normal(),
+            self.point_noise.normal(),
+            self.point_noise.normal(),
+        ) * sigma;
         let point = StationPointSample {
             t,
             point_id: w.point_id.clone(),
@@ -133,20 +182,55 @@ impl<'a> StationingStream<'a> {
             nominal: tool.nominal.translation.vector,
         };
         let tool_point = tool.target();
-        let truth = SampleTruth::StationPoint { tool_point, levelled: st.levelling() * tool_point, point: prediction.point, joints: q.to_vec() };
-        self.queue.push_back((Sample::StationPoint(point), truth, Some(s)));
+        let truth = SampleTruth::StationPoint {
+            tool_point,
+            levelled: st.levelling() * tool_point,
+            point: prediction.point,
+            joints: q.to_vec(),
+        };
+        self.queue
+            .push_back((Sample::StationPoint(point), truth, Some(s)));
         // the accelerometers at rest
         let g = st.gravity();
         for (a, rng) in st.accelerometers.iter().zip(&mut self.accel_noise) {
             let clean = a.reading(&g);
             let noise = Vector3::new(rng.normal(), rng.normal(), rng.normal()) * a.noise;
-            let sample = AccelerationSample { t, sensor: Arc::from(a.name.as_str()), link: Arc::from(a.link.as_str()), specific_force: clean + noise, variance: a.noise * a.noise };
-            self.queue.push_back((Sample::Acceleration(sample), SampleTruth::Acceleration { specific_force: clean, gravity: g }, None));
+            let sample = AccelerationSample {
+                t,
+                sensor: Arc::from(a.name.as_str()),
+                link: Arc::from(a.link.as_str()),
+                specific_force: clean + noise,
+                variance: a.noise * a.noise,
+            };
+            self.queue.push_back((
+                Sample::Acceleration(sample),
+                SampleTruth::Acceleration {
+                    specific_force: clean,
+                    gravity: g,
+                },
+                None,
+            ));
         }
         for (k, tc) in cell.thermocouples.iter().enumerate() {
-            let noise = if tc.noise > 0.0 { tc.noise * self.tc_noise[k].normal() } else { 0.0 };
-            let sample = TemperatureSample { t, sensor: self.tc_names[k].clone(), value: temperatures[k] + tc.offset + noise, variance: tc.noise * tc.noise + tc.calibration_uncertainty * tc.calibration_uncertainty };
-            self.queue.push_back((Sample::Temperature(sample), SampleTruth::Temperature { true_value: temperatures[k] }, None));
+            let noise = if tc.noise > 0.0 {
+                tc.noise * self.tc_noise[k].normal()
+            } else {
+                0.0
+            };
+            let sample = TemperatureSample {
+                t,
+                sensor: self.tc_names[k].clone(),
+                value: temperatures[k] + tc.offset + noise,
+                variance: tc.noise * tc.noise
+                    + tc.calibration_uncertainty * tc.calibration_uncertainty,
+            };
+            self.queue.push_back((
+                Sample::Temperature(sample),
+                SampleTruth::Temperature {
+                    true_value: temperatures[k],
+                },
+                None,
+            ));
         }
         Ok(())
     }
@@ -156,8 +240,18 @@ impl<'a> StationingStream<'a> {
 /// before the end of the run.
 fn measurement_times(sim: &Simulation) -> Vec<(f64, usize)> {
     let program = &sim.cell().program;
-    let Some(start) = program.cycle_start(0) else { return Vec::new() };
-    program.segments.iter().filter_map(|s| s.dwell_point.map(|i| (start + s.start + 0.5 * program.dwell, i))).filter(|(t, _)| *t < sim.duration()).collect()
+    let Some(start) = program.cycle_start(0) else {
+        return Vec::new();
+    };
+    program
+        .segments
+        .iter()
+        .filter_map(|s| {
+            s.dwell_point
+                .map(|i| (start + s.start + 0.5 * program.dwell, i))
+        })
+        .filter(|(t, _)| *t < sim.duration())
+        .collect()
 }
 
 /// The length of a stationing program's pass (s): its last waypoint's dwell ends before it.

@@ -29,12 +29,32 @@ impl ThermalStepper {
         let heating = model
             .nodes
             .iter()
-            .map(|n| n.heating.iter().filter_map(|(src, g)| model.sources.iter().position(|s| &s.name == src).map(|i| (i, *g))).collect())
+            .map(|n| {
+                n.heating
+                    .iter()
+                    .filter_map(|(src, g)| {
+                        model
+                            .sources
+                            .iter()
+                            .position(|s| &s.name == src)
+                            .map(|i| (i, *g))
+                    })
+                    .collect()
+            })
             .collect();
         let amb = model.ambient.deterministic(0.0);
         let mut prev = vec![amb];
         prev.extend(model.nodes.iter().map(|n| n.initial.unwrap_or(amb)));
-        let mut s = Self { model: model.clone(), dt, heating, k: 0, walk: 0.0, next: prev.clone(), prev, rng: NoiseStream::new(seed, stream::THERMAL_WALK) };
+        let mut s = Self {
+            model: model.clone(),
+            dt,
+            heating,
+            k: 0,
+            walk: 0.0,
+            next: prev.clone(),
+            prev,
+            rng: NoiseStream::new(seed, stream::THERMAL_WALK),
+        };
         s.next = s.step_from(0);
         s
     }
@@ -45,10 +65,19 @@ impl ThermalStepper {
         let t = tp + self.dt;
         let amb_prev = self.prev[0];
         let mut out = Vec::with_capacity(self.prev.len());
-        self.walk += self.model.ambient.walk_std * self.dt.sqrt() * if self.model.ambient.walk_std > 0.0 { self.rng.normal() } else { 0.0 };
+        self.walk += self.model.ambient.walk_std
+            * self.dt.sqrt()
+            * if self.model.ambient.walk_std > 0.0 {
+                self.rng.normal()
+            } else {
+                0.0
+            };
         out.push(self.model.ambient.deterministic(t) + self.walk);
         for (i, n) in self.model.nodes.iter().enumerate() {
-            let heat: f64 = self.heating[i].iter().map(|(s, g)| g * self.model.sources[*s].level(tp)).sum();
+            let heat: f64 = self.heating[i]
+                .iter()
+                .map(|(s, g)| g * self.model.sources[*s].level(tp))
+                .sum();
             let target = amb_prev + heat;
             out.push(target + (self.prev[i + 1] - target) * (-self.dt / n.time_constant).exp());
         }
@@ -81,7 +110,14 @@ impl ThermalStepper {
     pub fn slot(&self, location: &SensorLocation) -> usize {
         match location {
             SensorLocation::Ambient => 0,
-            SensorLocation::Node(n) => 1 + self.model.nodes.iter().position(|x| &x.name == n).unwrap_or(0),
+            SensorLocation::Node(n) => {
+                1 + self
+                    .model
+                    .nodes
+                    .iter()
+                    .position(|x| &x.name == n)
+                    .unwrap_or(0)
+            }
         }
     }
 
@@ -89,7 +125,14 @@ impl ThermalStepper {
     pub fn slot_of_node(&self, node: Option<&str>) -> usize {
         match node {
             None => 0,
-            Some(n) => 1 + self.model.nodes.iter().position(|x| x.name == n).unwrap_or(0),
+            Some(n) => {
+                1 + self
+                    .model
+                    .nodes
+                    .iter()
+                    .position(|x| x.name == n)
+                    .unwrap_or(0)
+            }
         }
     }
 }
@@ -105,10 +148,18 @@ mod tests {
         let log = m.simulate(3.0 * 3600.0, 1.0, 1).unwrap();
         let mut s = ThermalStepper::new(&m, 1.0, 99);
         for (k, t) in log.times.iter().enumerate().step_by(97) {
-            assert!((s.ambient(*t) - log.truth["ambient"][k]).abs() < 1e-9, "ambient at {t}");
+            assert!(
+                (s.ambient(*t) - log.truth["ambient"][k]).abs() < 1e-9,
+                "ambient at {t}"
+            );
             for (i, n) in m.nodes.iter().enumerate() {
                 let v = s.at(1 + i, *t);
-                assert!((v - log.truth[&n.name][k]).abs() < 1e-9, "{} at {t}: {v} vs {}", n.name, log.truth[&n.name][k]);
+                assert!(
+                    (v - log.truth[&n.name][k]).abs() < 1e-9,
+                    "{} at {t}: {v} vs {}",
+                    n.name,
+                    log.truth[&n.name][k]
+                );
             }
         }
     }

@@ -14,7 +14,9 @@
 //! propagated through the spherical→Cartesian Jacobian. Turbulence is therefore visible as
 //! scatter above the stated σ (flagged downstream, never fitted as bias).
 
-pub use metrocell_physics::instrument::spherical::{from_spherical, point_covariance, spherical_jacobian, to_spherical};
+pub use metrocell_physics::instrument::spherical::{
+    from_spherical, point_covariance, spherical_jacobian, to_spherical,
+};
 
 use crate::noise::NoiseStream;
 
@@ -35,7 +37,13 @@ pub struct BeamBreakProcess {
 
 impl BeamBreakProcess {
     pub fn new(rng: NoiseStream, rate: f64, mean_duration: f64) -> Self {
-        let mut p = Self { rng, rate, mean_duration, start: f64::INFINITY, end: f64::NEG_INFINITY };
+        let mut p = Self {
+            rng,
+            rate,
+            mean_duration,
+            start: f64::INFINITY,
+            end: f64::NEG_INFINITY,
+        };
         if rate > 0.0 {
             p.start = p.rng.exponential(1.0 / rate);
             p.end = p.start + p.rng.exponential(mean_duration);
@@ -68,6 +76,9 @@ mod tests {
         }
         // expected fraction ≈ rate·duration = 10/3600·2 = 0.556 %; 1000 breaks → ±~5 %
         let frac = broken as f64 / n as f64;
-        assert!((frac / (10.0 / 3600.0 * 2.0) - 1.0).abs() < 0.15, "fraction broken {frac}");
+        assert!(
+            (frac / (10.0 / 3600.0 * 2.0) - 1.0).abs() < 0.15,
+            "fraction broken {frac}"
+        );
     }
 }

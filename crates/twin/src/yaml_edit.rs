@@ -68,9 +68,16 @@ impl<'t> Lines<'t> {
     }
     /// Byte offset of a marker (line 1-based, column 0-based in characters).
     fn byte(&self, m: &Marker) -> usize {
-        let line_start = self.starts.get(m.line().saturating_sub(1)).copied().unwrap_or(self.text.len());
+        let line_start = self
+            .starts
+            .get(m.line().saturating_sub(1))
+            .copied()
+            .unwrap_or(self.text.len());
         let rest = &self.text[line_start..];
-        rest.char_indices().nth(m.col()).map(|(i, _)| line_start + i).unwrap_or(line_start + rest.len())
+        rest.char_indices()
+            .nth(m.col())
+            .map(|(i, _)| line_start + i)
+            .unwrap_or(line_start + rest.len())
     }
 }
 
@@ -78,39 +85,81 @@ impl<'t> Lines<'t> {
 pub fn parse(text: &str) -> Result<Node, EditError> {
     let mut c = Collect(Vec::new());
     let mut parser = Parser::new_from_str(text);
-    parser.load(&mut c, false).map_err(|e| EditError(format!("YAML: {e}")))?;
+    parser
+        .load(&mut c, false)
+        .map_err(|e| EditError(format!("YAML: {e}")))?;
     let lines = Lines::new(text);
     let events = c.0;
-    let mut at = events.iter().position(|(e, _)| matches!(e, Event::DocumentStart)).map(|i| i + 1).ok_or_else(|| EditError("YAML: no document".into()))?;
+    let mut at = events
+        .iter()
+        .position(|(e, _)| matches!(e, Event::DocumentStart))
+        .map(|i| i + 1)
+        .ok_or_else(|| EditError("YAML: no document".into()))?;
     if matches!(events.get(at), Some((Event::DocumentEnd, _)) | None) {
         return Err(EditError("YAML: the document is empty".into()));
     }
     node(&events, &mut at, &lines, false)
 }
 
-fn node(events: &[(Event, Marker)], at: &mut usize, lines: &Lines, in_flow: bool) -> Result<Node, EditError> {
-    let (ev, mark) = events.get(*at).ok_or_else(|| EditError("YAML: unexpected end".into()))?;
+fn node(
+    events: &[(Event, Marker)],
+    at: &mut usize,
+    lines: &Lines,
+    in_flow: bool,
+) -> Result<Node, EditError> {
+    let (ev, mark) = events
+        .get(*at)
+        .ok_or_else(|| EditError("YAML: unexpected end".into()))?;
     *at += 1;
     let start = lines.byte(mark);
     let column = mark.col();
     let text = lines.text;
     match ev {
-        Event::Scalar(value, ..) => Ok(Node { style: Style::Scalar, start, end: scalar_end(text, start, in_flow), column, content: Content::Scalar(value.clone()) }),
-        Event::Alias(_) => Ok(Node { style: Style::Scalar, start, end: scalar_end(text, start, in_flow), column, content: Content::Scalar(String::new()) }),
+        Event::Scalar(value, ..) => Ok(Node {
+            style: Style::Scalar,
+            start,
+            end: scalar_end(text, start, in_flow),
+            column,
+            content: Content::Scalar(value.clone()),
+        }),
+        Event::Alias(_) => Ok(Node {
+            style: Style::Scalar,
+            start,
+            end: scalar_end(text, start, in_flow),
+            column,
+            content: Content::Scalar(String::new()),
+        }),
         Event::MappingStart(..) => {
             let flow = text[start..].starts_with('{');
             let mut entries = Vec::new();
             loop {
                 if let Some((Event::MappingEnd, end_mark)) = events.get(*at) {
                     *at += 1;
-                    let end = if flow { lines.byte(end_mark) + 1 } else { entries.last().map(|(_, _, v): &(String, Node, Node)| v.end).unwrap_or(start) };
+                    let end = if flow {
+                        lines.byte(end_mark) + 1
+                    } else {
+                        entries
+                            .last()
+                            .map(|(_, _, v): &(String, Node, Node)| v.end)
+                            .unwrap_or(start)
+                    };
                     // a block mapping's start event is marked where its first `:` was found:
                     // the mapping starts at its first key
                     let (start, column) = match (flow, entries.first()) {
                         (false, Some((_, k, _))) => (k.start, k.column),
                         _ => (start, column),
                     };
-                    return Ok(Node { style: if flow { Style::FlowMapping } else { Style::BlockMapping }, start, end, column, content: Content::Mapping(entries) });
+                    return Ok(Node {
+                        style: if flow {
+                            Style::FlowMapping
+                        } else {
+                            Style::BlockMapping
+                        },
+                        start,
+                        end,
+                        column,
+                        content: Content::Mapping(entries),
+                    });
                 }
                 let key = node(events, at, lines, flow || in_flow)?;
                 let value = node(events, at, lines, flow || in_flow)?;
@@ -127,8 +176,22 @@ fn node(events: &[(Event, Marker)], at: &mut usize, lines: &Lines, in_flow: bool
             loop {
                 if let Some((Event::SequenceEnd, end_mark)) = events.get(*at) {
                     *at += 1;
-                    let end = if flow { lines.byte(end_mark) + 1 } else { items.last().map(|v: &Node| v.end).unwrap_or(start) };
-                    return Ok(Node { style: if flow { Style::FlowSequence } else { Style::BlockSequence }, start, end, column, content: Content::Sequence(items) });
+                    let end = if flow {
+                        lines.byte(end_mark) + 1
+                    } else {
+                        items.last().map(|v: &Node| v.end).unwrap_or(start)
+                    };
+                    return Ok(Node {
+                        style: if flow {
+                            Style::FlowSequence
+                        } else {
+                            Style::BlockSequence
+                        },
+                        start,
+                        end,
+                        column,
+                        content: Content::Sequence(items),
+                    });
                 }
                 items.push(node(events, at, lines, flow || in_flow)?);
             }
@@ -188,14 +251,18 @@ impl Node {
     /// The value of `key` in a mapping.
     pub fn get(&self, key: &str) -> Option<&Node> {
         match &self.content {
-            Content::Mapping(entries) => entries.iter().find(|(k, _, _)| k == key).map(|(_, _, v)| v),
+            Content::Mapping(entries) => {
+                entries.iter().find(|(k, _, _)| k == key).map(|(_, _, v)| v)
+            }
             _ => None,
         }
     }
     /// The key node of `key` in a mapping.
     pub fn key(&self, key: &str) -> Option<&Node> {
         match &self.content {
-            Content::Mapping(entries) => entries.iter().find(|(k, _, _)| k == key).map(|(_, k, _)| k),
+            Content::Mapping(entries) => {
+                entries.iter().find(|(k, _, _)| k == key).map(|(_, k, _)| k)
+            }
             _ => None,
         }
     }
@@ -231,7 +298,10 @@ impl Node {
         let mut n = self;
         for part in path.split('.').filter(|p| !p.is_empty()) {
             let (key, index) = match part.find('[') {
-                Some(b) if part.ends_with(']') => (&part[..b], part[b + 1..part.len() - 1].parse::<usize>().ok()),
+                Some(b) if part.ends_with(']') => (
+                    &part[..b],
+                    part[b + 1..part.len() - 1].parse::<usize>().ok(),
+                ),
                 _ => (part, None),
             };
             if !key.is_empty() {
@@ -272,7 +342,10 @@ impl Edits {
         self.changes.sort_by_key(|c| (c.0, c.1));
         for w in self.changes.windows(2) {
             if w[1].0 < w[0].1 {
-                return Err(EditError(format!("overlapping edits at bytes {}..{} and {}..{}", w[0].0, w[0].1, w[1].0, w[1].1)));
+                return Err(EditError(format!(
+                    "overlapping edits at bytes {}..{} and {}..{}",
+                    w[0].0, w[0].1, w[1].0, w[1].1
+                )));
             }
         }
         let mut out = text.to_string();
@@ -292,7 +365,11 @@ pub fn replace_sequence(edits: &mut Edits, seq: &Node, items: &[String]) -> Resu
     match (&seq.style, &seq.content) {
         (Style::BlockSequence, Content::Sequence(old)) => {
             if old.len() != items.len() {
-                return Err(EditError(format!("a block list of {} items cannot take {} in place", old.len(), items.len())));
+                return Err(EditError(format!(
+                    "a block list of {} items cannot take {} in place",
+                    old.len(),
+                    items.len()
+                )));
             }
             for (node, item) in old.iter().zip(items) {
                 if node.style != Style::Scalar {
@@ -314,10 +391,15 @@ pub fn replace_sequence(edits: &mut Edits, seq: &Node, items: &[String]) -> Resu
 /// inside the braces of a flow mapping, or as a new line after the last entry of a block one.
 pub fn add_to_mapping(edits: &mut Edits, text: &str, mapping: &Node, key: &str, value: &str) {
     match &mapping.content {
-        Content::Mapping(entries) if mapping.style == Style::BlockMapping && !entries.is_empty() => {
+        Content::Mapping(entries)
+            if mapping.style == Style::BlockMapping && !entries.is_empty() =>
+        {
             let last = &entries[entries.len() - 1].2;
             let indent = entries[0].1.column;
-            let at = text[last.end..].find('\n').map(|i| last.end + i).unwrap_or(text.len());
+            let at = text[last.end..]
+                .find('\n')
+                .map(|i| last.end + i)
+                .unwrap_or(text.len());
             edits.insert(at, format!("\n{}{key}: {value}", " ".repeat(indent)));
         }
         _ => {
@@ -335,11 +417,20 @@ pub fn append_to_block_sequence(edits: &mut Edits, text: &str, seq: &Node, item:
     let (dash_col, at) = match &seq.content {
         Content::Sequence(items) if !items.is_empty() => {
             let last = &items[items.len() - 1];
-            let end_line = text[last.end..].find('\n').map(|i| last.end + i).unwrap_or(text.len());
+            let end_line = text[last.end..]
+                .find('\n')
+                .map(|i| last.end + i)
+                .unwrap_or(text.len());
             // the dash sits two columns before the item's content
             (items[0].column.saturating_sub(2), end_line)
         }
-        _ => (seq.column, text[seq.end..].find('\n').map(|i| seq.end + i).unwrap_or(text.len())),
+        _ => (
+            seq.column,
+            text[seq.end..]
+                .find('\n')
+                .map(|i| seq.end + i)
+                .unwrap_or(text.len()),
+        ),
     };
     let pad = " ".repeat(dash_col);
     let mut out = String::new();
@@ -372,22 +463,49 @@ mod tests {
         let root = parse(TEXT).unwrap();
         let p = root.at("terms[0].params").unwrap();
         assert_eq!(&TEXT[p.start..p.end], "{c0: 1 um, c1: \"2 um\"}");
-        assert_eq!(&TEXT[root.at("terms[0].params.c1").unwrap().start..root.at("terms[0].params.c1").unwrap().end], "\"2 um\"");
+        assert_eq!(
+            &TEXT[root.at("terms[0].params.c1").unwrap().start
+                ..root.at("terms[0].params.c1").unwrap().end],
+            "\"2 um\""
+        );
         let b = root.at("terms[1].params").unwrap();
         assert_eq!(&TEXT[b.start..b.end], "r: 8 um\n      s: 2 um");
-        assert_eq!(&TEXT[root.at("name").unwrap().start..root.at("name").unwrap().end], "x");
-        assert_eq!(&TEXT[root.at("last").unwrap().start..root.at("last").unwrap().end], "[1, 2]");
+        assert_eq!(
+            &TEXT[root.at("name").unwrap().start..root.at("name").unwrap().end],
+            "x"
+        );
+        assert_eq!(
+            &TEXT[root.at("last").unwrap().start..root.at("last").unwrap().end],
+            "[1, 2]"
+        );
     }
 
     #[test]
     fn edits_keep_everything_else() {
         let root = parse(TEXT).unwrap();
         let mut e = Edits::default();
-        e.replace(root.at("terms[0].params").unwrap(), "{c0: 3 um, c1: 4 um}".into());
-        add_to_mapping(&mut e, TEXT, root.at("terms[1].params").unwrap(), "t", "1 um");
-        append_to_block_sequence(&mut e, TEXT, root.at("terms").unwrap(), "id: c\nparams: {k: 1}");
+        e.replace(
+            root.at("terms[0].params").unwrap(),
+            "{c0: 3 um, c1: 4 um}".into(),
+        );
+        add_to_mapping(
+            &mut e,
+            TEXT,
+            root.at("terms[1].params").unwrap(),
+            "t",
+            "1 um",
+        );
+        append_to_block_sequence(
+            &mut e,
+            TEXT,
+            root.at("terms").unwrap(),
+            "id: c\nparams: {k: 1}",
+        );
         let out = e.apply(TEXT).unwrap();
-        assert!(out.contains("    params: {c0: 3 um, c1: 4 um}   # keep me\n"), "{out}");
+        assert!(
+            out.contains("    params: {c0: 3 um, c1: 4 um}   # keep me\n"),
+            "{out}"
+        );
         assert!(out.contains("      s: 2 um\n      t: 1 um\n"), "{out}");
         assert!(out.contains("  - id: c\n    params: {k: 1}\n"), "{out}");
         assert!(out.starts_with("# a comment with µm\nname: x   # trailing\n"));

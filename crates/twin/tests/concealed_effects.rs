@@ -44,9 +44,18 @@ fn thermal_scale_x_error_grows_as_alpha_x_delta_t() {
     let u_alpha = s / sxx.sqrt();
     let span = xs.iter().cloned().fold(f64::NEG_INFINITY, f64::max);
     println!("α = {alpha:.4e} ± {u_alpha:.1e} 1/K from {n} dwell samples; max x·ΔT = {span:.3} m·K; residual σ {s:.2e} m");
-    assert!(span > 0.5, "the shift must heat the X axis enough: max x·ΔT {span}");
-    assert!((alpha - 11.5e-6).abs() < 3.0 * u_alpha, "α = {alpha} ± {u_alpha}");
-    assert!(u_alpha < 0.02 * 11.5e-6, "too weak to test: u(α) = {u_alpha}");
+    assert!(
+        span > 0.5,
+        "the shift must heat the X axis enough: max x·ΔT {span}"
+    );
+    assert!(
+        (alpha - 11.5e-6).abs() < 3.0 * u_alpha,
+        "α = {alpha} ± {u_alpha}"
+    );
+    assert!(
+        u_alpha < 0.02 * 11.5e-6,
+        "too weak to test: u(α) = {u_alpha}"
+    );
     // and the error really grows: largest |X error| at the far end late in the shift ≥ 5 µm
     let max_err = ys.iter().map(|y| y.abs()).fold(0.0, f64::max);
     assert!(max_err > 5e-6, "max X error {max_err}");
@@ -74,7 +83,10 @@ fn pitch_cyclic_and_backlash_at_x_zero() {
             }
         }
     }
-    assert!(seen[0] && seen[1], "both approach directions must occur: {seen:?}");
+    assert!(
+        seen[0] && seen[1],
+        "both approach directions must occur: {seen:?}"
+    );
 }
 
 /// Probe pretravel lobing: pt(u) = p₀ + a·cos 3φ along ±X, p₀ (+ a·cos 270° = 0) along ±Y;
@@ -85,18 +97,32 @@ fn probe_hits_carry_lobed_pretravel() {
     let sim = Simulation::new(cell, 180.0, 9).unwrap();
     let mut resid = vec![];
     for (s, truth) in sim.samples_with_truth() {
-        if let (Sample::ProbeHit(h), SampleTruth::ProbeHit { displacement, pretravel }) = (s, truth) {
+        if let (
+            Sample::ProbeHit(h),
+            SampleTruth::ProbeHit {
+                displacement,
+                pretravel,
+            },
+        ) = (s, truth)
+        {
             let pt = pretravel.dot(&h.direction);
             let phi = h.direction.y.atan2(h.direction.x);
             let expected = 10e-6 + 3e-6 * (3.0 * phi).cos();
-            assert!((pt - expected).abs() < 1e-12, "pretravel {pt} along {:?}", h.direction);
+            assert!(
+                (pt - expected).abs() < 1e-12,
+                "pretravel {pt} along {:?}",
+                h.direction
+            );
             let r = h.recorded - h.nominal + displacement - pretravel;
             resid.extend(r.iter().copied());
         }
     }
     let (m, s) = common::mean_std(&resid);
     assert!(resid.len() == 3 * 144);
-    assert!((s / 0.5e-6 - 1.0).abs() < 0.15 && m.abs() < 0.1e-6, "probe noise mean {m} σ {s}");
+    assert!(
+        (s / 0.5e-6 - 1.0).abs() < 0.15 && m.abs() < 0.1e-6,
+        "probe noise mean {m} σ {s}"
+    );
 }
 
 /// Refraction: a station reading 0.3 K high makes the tracker read long by

@@ -26,7 +26,11 @@ fn different_seed_gives_different_noise() {
     assert_eq!(a.len(), b.len(), "the schedule does not depend on the seed");
     let differing = a.iter().zip(&b).filter(|(x, y)| x != y).count();
     // every noisy sample differs; machine states (no noise) and thermal truths are seed-free
-    assert!(differing > a.len() / 3, "only {differing} of {} samples differ", a.len());
+    assert!(
+        differing > a.len() / 3,
+        "only {differing} of {} samples differ",
+        a.len()
+    );
 }
 
 #[test]
@@ -42,7 +46,9 @@ fn stream_is_time_ordered_and_restartable() {
         Sample::MachineState(_) => 2,
         Sample::ProbeHit(_) => 3,
         Sample::CameraFrameRequest(_) => 4,
-        Sample::StationPoint(_) | Sample::Acceleration(_) => panic!("no stationing program in this cell"),
+        Sample::StationPoint(_) | Sample::Acceleration(_) => {
+            panic!("no stationing program in this cell")
+        }
     };
     let mut count = [0usize; 5];
     for s in sim.samples() {
@@ -64,15 +70,30 @@ fn stream_is_time_ordered_and_restartable() {
 #[test]
 fn a_camera_adds_frames_and_changes_no_other_sample() {
     let with_camera = Cell::from_path(common::cell_path("demo_shift.yaml")).unwrap();
-    assert!(with_camera.camera.is_some(), "demo_shift.yaml has a tool camera");
+    assert!(
+        with_camera.camera.is_some(),
+        "demo_shift.yaml has a tool camera"
+    );
     let mut without = Cell::from_path(common::cell_path("demo_shift.yaml")).unwrap();
     without.camera = None;
     // 30 min: five 6-min cycles of 24 dwells
-    let run = |cell: Cell| Simulation::new(cell, 1800.0, 1).unwrap().samples().collect::<Vec<Sample>>();
+    let run = |cell: Cell| {
+        Simulation::new(cell, 1800.0, 1)
+            .unwrap()
+            .samples()
+            .collect::<Vec<Sample>>()
+    };
     let (a, b) = (run(with_camera), run(without));
-    let frames = a.iter().filter(|s| matches!(s, Sample::CameraFrameRequest(_))).count();
+    let frames = a
+        .iter()
+        .filter(|s| matches!(s, Sample::CameraFrameRequest(_)))
+        .count();
     assert_eq!(frames, 5 * 24, "a frame per dwell");
-    let others: Vec<String> = a.iter().filter(|s| !matches!(s, Sample::CameraFrameRequest(_))).map(|s| format!("{s:?}")).collect();
+    let others: Vec<String> = a
+        .iter()
+        .filter(|s| !matches!(s, Sample::CameraFrameRequest(_)))
+        .map(|s| format!("{s:?}"))
+        .collect();
     let b: Vec<String> = b.iter().map(|s| format!("{s:?}")).collect();
     // tracker 4 Hz, machine state 4 Hz, three thermocouples 1 Hz
     assert_eq!(b.len(), 1800 * (4 + 4 + 3));

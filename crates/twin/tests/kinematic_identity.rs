@@ -30,7 +30,14 @@ fn zero_errors_and_noise_give_the_nominal_point_in_the_tracker_frame() {
         match (s, truth) {
             (Sample::Tracker(m), SampleTruth::Tracker(tt)) => {
                 assert_eq!(m.status, TrackerStatus::Ok);
-                let expected = tracker_point(&order, &tt.commanded, &tool, &MachineErrors::default(), &pose).unwrap();
+                let expected = tracker_point(
+                    &order,
+                    &tt.commanded,
+                    &tool,
+                    &MachineErrors::default(),
+                    &pose,
+                )
+                .unwrap();
                 max_err = max_err.max((m.point - expected).norm());
                 assert!(m.range > 0.5, "target range {}", m.range);
                 checked += 1;

@@ -13,7 +13,11 @@ fn fixed_target_cell() -> CellFile {
     f.sensors.probe = None;
     f.sensors.camera = None;
     f.program.as_mut().unwrap().grid = None;
-    f.program.as_mut().unwrap().points = vec![[common::q("200 mm"), common::q("150 mm"), common::q("100 mm")]];
+    f.program.as_mut().unwrap().points = vec![[
+        common::q("200 mm"),
+        common::q("150 mm"),
+        common::q("100 mm"),
+    ]];
     f.program.as_mut().unwrap().dwell = common::q("100 h");
     f
 }
@@ -42,25 +46,46 @@ fn range_and_angle_residuals_match_the_spec_within_5_percent() {
     assert_eq!(dr.len(), 30_000);
     let spec = tr.range_noise_constant + tr.range_noise_per_metre * rho;
     let (m, s) = common::mean_std(&dr);
-    assert!((s / spec - 1.0).abs() < 0.05, "range σ {s} vs spec {spec} (ρ = {rho} m)");
-    assert!(m.abs() < 4.0 * spec / (dr.len() as f64).sqrt(), "range mean {m}");
+    assert!(
+        (s / spec - 1.0).abs() < 0.05,
+        "range σ {s} vs spec {spec} (ρ = {rho} m)"
+    );
+    assert!(
+        m.abs() < 4.0 * spec / (dr.len() as f64).sqrt(),
+        "range mean {m}"
+    );
     let (_, sa) = common::mean_std(&da);
     let (_, se) = common::mean_std(&de);
     assert!((sa / tr.angular_noise - 1.0).abs() < 0.05, "azimuth σ {sa}");
-    assert!((se / tr.angular_noise - 1.0).abs() < 0.05, "elevation σ {se}");
-    assert!(stated_var_ratio.iter().all(|r| (r - 1.0).abs() < 1e-9), "stated covariance inconsistent with a + bρ");
+    assert!(
+        (se / tr.angular_noise - 1.0).abs() < 0.05,
+        "elevation σ {se}"
+    );
+    assert!(
+        stated_var_ratio.iter().all(|r| (r - 1.0).abs() < 1e-9),
+        "stated covariance inconsistent with a + bρ"
+    );
 }
 
 #[test]
 fn turbulence_inflates_scatter_only_inside_its_window() {
     let mut f = fixed_target_cell();
-    f.sensors.tracker.as_mut().unwrap().turbulence = vec![metrocell_twin::cell_file::TurbulenceWindow { start: common::q("100 s"), end: common::q("200 s"), coefficient: common::q("20 um/m") }];
+    f.sensors.tracker.as_mut().unwrap().turbulence =
+        vec![metrocell_twin::cell_file::TurbulenceWindow {
+            start: common::q("100 s"),
+            end: common::q("200 s"),
+            coefficient: common::q("20 um/m"),
+        }];
     let sim = Simulation::new(common::validate(&f), 300.0, 3).unwrap();
     let (mut inside, mut outside) = (vec![], vec![]);
     for (s, t) in sim.samples_with_truth() {
         if let (Sample::Tracker(m), SampleTruth::Tracker(tt)) = (s, t) {
             let r = m.range - tt.range;
-            if (100.0..200.0).contains(&m.t) { inside.push(r) } else { outside.push(r) }
+            if (100.0..200.0).contains(&m.t) {
+                inside.push(r)
+            } else {
+                outside.push(r)
+            }
         }
     }
     let (_, si) = common::mean_std(&inside);
@@ -74,7 +99,9 @@ fn warmup_curve_is_recovered_by_fitting() {
     let mut f = fixed_target_cell();
     let t = f.sensors.tracker.as_mut().unwrap();
     t.rate = Some(common::q("1 Hz"));
-    t.warmup = Some(serde_yaml::from_str("{offset: 5 um, amplitude: 75 um, time_constant: 90 min}").unwrap());
+    t.warmup = Some(
+        serde_yaml::from_str("{offset: 5 um, amplitude: 75 um, time_constant: 90 min}").unwrap(),
+    );
     let sim = Simulation::new(common::validate(&f), 6.0 * 3600.0, 21).unwrap();
     // residual = measured range − true geometric range (the tracker's own error)
     let mut ts = vec![];
@@ -86,7 +113,7 @@ fn warmup_curve_is_recovered_by_fitting() {
         }
     }
     let sigma = common::mean_std(&ys[ys.len() - 3600..]).1; // late: drift ≈ flat, scatter ≈ noise
-    // Fit y = A + B(1 − e^(−t/τ)): linear in (A, B) for fixed τ; scan τ then refine.
+                                                            // Fit y = A + B(1 − e^(−t/τ)): linear in (A, B) for fixed τ; scan τ then refine.
     let fit_ab = |tau: f64| {
         let (mut s11, mut s12, mut s22, mut r1, mut r2) = (0.0, 0.0, 0.0, 0.0, 0.0);
         for (t, y) in ts.iter().zip(&ys) {
@@ -100,14 +127,22 @@ fn warmup_curve_is_recovered_by_fitting() {
         let det = s11 * s22 - s12 * s12;
         let a = (s22 * r1 - s12 * r2) / det;
         let b = (s11 * r2 - s12 * r1) / det;
-        let sse: f64 = ts.iter().zip(&ys).map(|(t, y)| (y - a - b * (1.0 - (-t / tau).exp())).powi(2)).sum();
+        let sse: f64 = ts
+            .iter()
+            .zip(&ys)
+            .map(|(t, y)| (y - a - b * (1.0 - (-t / tau).exp())).powi(2))
+            .sum();
         (a, b, sse)
     };
     let (mut lo, mut hi) = (600.0, 36_000.0);
     for _ in 0..200 {
         let m1 = lo + (hi - lo) / 3.0;
         let m2 = hi - (hi - lo) / 3.0;
-        if fit_ab(m1).2 < fit_ab(m2).2 { hi = m2 } else { lo = m1 }
+        if fit_ab(m1).2 < fit_ab(m2).2 {
+            hi = m2
+        } else {
+            lo = m1
+        }
     }
     let tau = 0.5 * (lo + hi);
     let (a, b, _) = fit_ab(tau);
@@ -124,13 +159,20 @@ fn warmup_curve_is_recovered_by_fitting() {
     assert!((a - 5e-6).abs() < 3.0 * ua, "A = {a}");
     assert!((b - 75e-6).abs() < 3.0 * ub, "B = {b}");
     assert!((tau - 5400.0).abs() < 3.0 * ut, "τ = {tau}");
-    assert!(ub < 1e-6 && ut < 200.0, "fit too weak to be a test: u(B) {ub}, u(τ) {ut}");
+    assert!(
+        ub < 1e-6 && ut < 200.0,
+        "fit too weak to be a test: u(B) {ub}, u(τ) {ut}"
+    );
 }
 
 #[test]
 fn beam_breaks_drop_samples_with_a_status_flag() {
     let mut f = fixed_target_cell();
-    f.sensors.tracker.as_mut().unwrap().beam_breaks = Some(metrocell_twin::cell_file::BeamBreakSection { per_hour: 60.0, mean_duration: common::q("2 s") });
+    f.sensors.tracker.as_mut().unwrap().beam_breaks =
+        Some(metrocell_twin::cell_file::BeamBreakSection {
+            per_hour: 60.0,
+            mean_duration: common::q("2 s"),
+        });
     let sim = Simulation::new(common::validate(&f), 3600.0, 8).unwrap();
     let (mut broken, mut total) = (0usize, 0usize);
     for s in sim.samples() {
@@ -147,7 +189,10 @@ fn beam_breaks_drop_samples_with_a_status_flag() {
     }
     // expected fraction rate·duration = 60/3600·2 = 3.3 %; ~60 breaks → ±~20 %
     let frac = broken as f64 / total as f64;
-    assert!((frac / (60.0 / 3600.0 * 2.0) - 1.0).abs() < 0.4, "fraction broken {frac}");
+    assert!(
+        (frac / (60.0 / 3600.0 * 2.0) - 1.0).abs() < 0.4,
+        "fraction broken {frac}"
+    );
 }
 
 #[test]
@@ -161,7 +206,10 @@ fn thermocouples_read_truth_plus_offset_plus_stated_noise() {
     for (s, t) in sim.samples_with_truth() {
         if let (Sample::Temperature(m), SampleTruth::Temperature { true_value }) = (s, t) {
             assert!((m.variance - (0.02f64.powi(2) + 0.05f64.powi(2))).abs() < 1e-15);
-            by_sensor.entry(m.sensor.to_string()).or_default().push(m.value - true_value);
+            by_sensor
+                .entry(m.sensor.to_string())
+                .or_default()
+                .push(m.value - true_value);
         }
     }
     assert_eq!(by_sensor.len(), 6);
@@ -170,6 +218,9 @@ fn thermocouples_read_truth_plus_offset_plus_stated_noise() {
         let (m, s) = common::mean_std(r);
         let offset = if name == "x_right" { 0.1 } else { 0.0 };
         assert!((s / 0.02 - 1.0).abs() < 0.05, "{name}: σ {s}");
-        assert!((m - offset).abs() < 4.0 * 0.02 / (r.len() as f64).sqrt(), "{name}: mean {m}");
+        assert!(
+            (m - offset).abs() < 4.0 * 0.02 / (r.len() as f64).sqrt(),
+            "{name}: mean {m}"
+        );
     }
 }

@@ -18,7 +18,11 @@ pub fn pose_from_isometry(iso: &Isometry3<f64>) -> metrocell_camera_model::Pose 
 
 /// Project a target-frame point seen with `pose` (target → camera), distortion included.
 /// None if the point is not in front of the camera.
-pub fn project(camera: &CameraModel, pose: &Isometry3<f64>, p: &Point3<f64>) -> Option<Point2<f64>> {
+pub fn project(
+    camera: &CameraModel,
+    pose: &Isometry3<f64>,
+    p: &Point3<f64>,
+) -> Option<Point2<f64>> {
     camera
         .project_camera_point(&(pose * p).coords)
         .ok()
@@ -36,7 +40,8 @@ mod tests {
 
     #[test]
     fn projection_uses_opencv_pixel_convention() {
-        let cam = CameraModel::new(640, 480, 1000.0, 1000.0, 319.5, 239.5, Distortion::none()).unwrap();
+        let cam =
+            CameraModel::new(640, 480, 1000.0, 1000.0, 319.5, 239.5, Distortion::none()).unwrap();
         let id = Isometry3::identity();
         let p = project(&cam, &id, &Point3::new(0.0, 0.0, 1.0)).unwrap();
         assert_eq!((p.x, p.y), (319.5, 239.5));

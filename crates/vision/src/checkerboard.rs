@@ -125,7 +125,13 @@ pub fn detect_checkerboard(
         let Some(grid) = grow_grid(&pts, seed).map(unshear) else {
             continue;
         };
-        let span = |f: fn(&(i32, i32)) -> i32| grid.keys().map(f).max().zip(grid.keys().map(f).min()).map_or(0, |(hi, lo)| (hi - lo + 1) as usize);
+        let span = |f: fn(&(i32, i32)) -> i32| {
+            grid.keys()
+                .map(f)
+                .max()
+                .zip(grid.keys().map(f).min())
+                .map_or(0, |(hi, lo)| (hi - lo + 1) as usize)
+        };
         if grid.len() > largest.2 {
             let (a, b) = (span(|k| k.0), span(|k| k.1));
             largest = (a.max(b), a.min(b), grid.len());
@@ -133,16 +139,32 @@ pub fn detect_checkerboard(
         let Some(ordered) = orient(&grid, cols, rows) else {
             continue;
         };
-        return Ok(CheckerboardCorners { cols, rows, corners: refine_board(img, &ordered, cols, rows)? });
+        return Ok(CheckerboardCorners {
+            cols,
+            rows,
+            corners: refine_board(img, &ordered, cols, rows)?,
+        });
     }
-    Err(VisionError::NoSolution { what: "detect_checkerboard", reason: not_found_reason(pts.len(), largest, cols, rows) })
+    Err(VisionError::NoSolution {
+        what: "detect_checkerboard",
+        reason: not_found_reason(pts.len(), largest, cols, rows),
+    })
 }
 
 /// Why no cols × rows board was found, with what to check.
-fn not_found_reason(candidates: usize, largest: (usize, usize, usize), cols: usize, rows: usize) -> String {
+fn not_found_reason(
+    candidates: usize,
+    largest: (usize, usize, usize),
+    cols: usize,
+    rows: usize,
+) -> String {
     let needed = cols * rows;
     let (a, b, n) = largest;
-    let lattice = if n >= 4 { format!("; the largest lattice of them spans {a}×{b} ({n} points)") } else { String::new() };
+    let lattice = if n >= 4 {
+        format!("; the largest lattice of them spans {a}×{b} ({n} points)")
+    } else {
+        String::new()
+    };
     if candidates < needed {
         return format!(
             "only {candidates} points look like inner corners (X-junctions of four squares), a {cols}×{rows} board has {needed}{lattice}: is the whole board in the frame, in focus and evenly lit, with squares of at least ~8 px? (--board counts inner corners: squares − 1 along each side)"
@@ -152,17 +174,29 @@ fn not_found_reason(candidates: usize, largest: (usize, usize, usize), cols: usi
 }
 
 /// Sub-pixel refinement of every corner of an ordered board with its local grid directions.
-fn refine_board(img: &GrayImage, ordered: &[Point2<f64>], cols: usize, rows: usize) -> Result<Vec<SaddleCorner>> {
+fn refine_board(
+    img: &GrayImage,
+    ordered: &[Point2<f64>],
+    cols: usize,
+    rows: usize,
+) -> Result<Vec<SaddleCorner>> {
     let mut corners = Vec::with_capacity(cols * rows);
     for r in 0..rows {
         for c in 0..cols {
             let p = ordered[r * cols + c];
             let nb = |dc: isize, dr: isize| -> Option<Point2<f64>> {
                 let (cc, rr) = (c as isize + dc, r as isize + dr);
-                (cc >= 0 && rr >= 0 && (cc as usize) < cols && (rr as usize) < rows).then(|| ordered[rr as usize * cols + cc as usize])
+                (cc >= 0 && rr >= 0 && (cc as usize) < cols && (rr as usize) < rows)
+                    .then(|| ordered[rr as usize * cols + cc as usize])
             };
-            let du = nb(1, 0).map(|q| q - p).or_else(|| nb(-1, 0).map(|q| p - q)).unwrap();
-            let dv = nb(0, 1).map(|q| q - p).or_else(|| nb(0, -1).map(|q| p - q)).unwrap();
+            let du = nb(1, 0)
+                .map(|q| q - p)
+                .or_else(|| nb(-1, 0).map(|q| p - q))
+                .unwrap();
+            let dv = nb(0, 1)
+                .map(|q| q - p)
+                .or_else(|| nb(0, -1).map(|q| p - q))
+                .unwrap();
             let radius = 0.4 * du.norm().min(dv.norm());
             let refined = refine_saddle(img, p, [du.x, du.y], [dv.x, dv.y], radius).ok_or_else(|| VisionError::NoSolution {
                 what: "checkerboard corner refinement",
@@ -248,7 +282,13 @@ fn grow_grid(pts: &[Point2<f64>], seed: usize) -> Option<HashMap<(i32, i32), Poi
 /// (i, j − k·i), |k| ≤ 3, whose keys fill their bounding box is taken; else the grid as it is.
 fn unshear(grid: HashMap<(i32, i32), Point2<f64>>) -> HashMap<(i32, i32), Point2<f64>> {
     let fills = |g: &HashMap<(i32, i32), Point2<f64>>| {
-        let span = |f: fn(&(i32, i32)) -> i32| g.keys().map(f).max().zip(g.keys().map(f).min()).map_or(0, |(hi, lo)| (hi - lo + 1) as usize);
+        let span = |f: fn(&(i32, i32)) -> i32| {
+            g.keys()
+                .map(f)
+                .max()
+                .zip(g.keys().map(f).min())
+                .map_or(0, |(hi, lo)| (hi - lo + 1) as usize)
+        };
         span(|k| k.0) * span(|k| k.1) == g.len()
     };
     if fills(&grid) {
@@ -256,7 +296,19 @@ fn unshear(grid: HashMap<(i32, i32), Point2<f64>>) -> HashMap<(i32, i32), Point2
     }
     for k in [1, -1, 2, -2, 3, -3] {
         for along_i in [true, false] {
-            let sheared: HashMap<(i32, i32), Point2<f64>> = grid.iter().map(|(&(i, j), &p)| (if along_i { (i - k * j, j) } else { (i, j - k * i) }, p)).collect();
+            let sheared: HashMap<(i32, i32), Point2<f64>> = grid
+                .iter()
+                .map(|(&(i, j), &p)| {
+                    (
+                        if along_i {
+                            (i - k * j, j)
+                        } else {
+                            (i, j - k * i)
+                        },
+                        p,
+                    )
+                })
+                .collect();
             if fills(&sheared) {
                 return sheared;
             }

@@ -212,7 +212,11 @@ impl StepEdge<'_> {
         // optical blur exp(x5): without that floor a perfectly sharp step (synthetic or printed
         // markers) leaves the edge position undetermined within a pixel and the fit fails.
         let optical2 = (2.0 * x[5]).exp();
-        let (c, s, sig) = (x[0].cos(), x[0].sin(), (optical2 + PIXEL_BOX_VARIANCE).sqrt());
+        let (c, s, sig) = (
+            x[0].cos(),
+            x[0].sin(),
+            (optical2 + PIXEL_BOX_VARIANCE).sqrt(),
+        );
         let p = &self.samples[i];
         let (u, v) = self.along[i];
         let z = (c * p[0] + s * p[1] - x[1] - x[2] * u * u) / sig;
@@ -248,7 +252,12 @@ impl Problem for StepEdge<'_> {
         }
         Ok(())
     }
-    fn residuals_and_jacobian(&self, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>) -> Result<(), NotEvaluable> {
+    fn residuals_and_jacobian(
+        &self,
+        x: &[f64],
+        r: &mut [f64],
+        j: &mut DMatrix<f64>,
+    ) -> Result<(), NotEvaluable> {
         let mut row = [0.0; 8];
         for (i, ri) in r.iter_mut().enumerate() {
             *ri = self.row(x, i, Some(&mut row));
@@ -288,15 +297,33 @@ fn levenberg_marquardt(
     if b0 <= 0.0 {
         return None;
     }
-    let u: Vec<f64> = samples.iter().map(|p| tg.x * (p[0] - mid.x) + tg.y * (p[1] - mid.y)).collect();
+    let u: Vec<f64> = samples
+        .iter()
+        .map(|p| tg.x * (p[0] - mid.x) + tg.y * (p[1] - mid.y))
+        .collect();
     let half = u.iter().fold(1.0, |a: f64, v| a.max(v.abs()));
-    let problem = StepEdge { samples, along: u.iter().map(|&u| (u, u / half)).collect() };
-    let x0 = [start.theta, start.d, start.kappa, a0, b0, start.blur_sigma.max(0.3).ln(), 0.0, 0.0];
+    let problem = StepEdge {
+        samples,
+        along: u.iter().map(|&u| (u, u / half)).collect(),
+    };
+    let x0 = [
+        start.theta,
+        start.d,
+        start.kappa,
+        a0,
+        b0,
+        start.blur_sigma.max(0.3).ln(),
+        0.0,
+        0.0,
+    ];
     // Optical blur between 0.05 and 20 px (ln σ in [−3, 3]); below 0.05 px the pixel box
     // dominates and the blur stops being observable (its column of JᵀJ would vanish).
     let (inf, ninf) = (f64::INFINITY, f64::NEG_INFINITY);
     let options = Options {
-        bounds: Some((vec![ninf, ninf, ninf, ninf, ninf, -3.0, ninf, ninf], vec![inf, inf, inf, inf, inf, 3.0, inf, inf])),
+        bounds: Some((
+            vec![ninf, ninf, ninf, ninf, ninf, -3.0, ninf, ninf],
+            vec![inf, inf, inf, inf, inf, 3.0, inf, inf],
+        )),
         fixed: vec![false, false, !fit_kappa, false, false, false, false, false],
         max_iterations: 30,
         // Converged when a step changes the cost by < 1e-9 of itself: parameters then move by

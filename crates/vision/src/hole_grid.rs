@@ -29,7 +29,11 @@ pub struct GridHole {
 
 /// Predicted hole centres (px), row-major over squares, from the board's inner corners
 /// (`(squares_x − 1) × (squares_y − 1)`, row-major), and the shortest side of each square (px).
-pub fn predict_hole_centres(inner: &[Point2<f64>], squares_x: usize, squares_y: usize) -> Result<Vec<(Point2<f64>, f64)>> {
+pub fn predict_hole_centres(
+    inner: &[Point2<f64>],
+    squares_x: usize,
+    squares_y: usize,
+) -> Result<Vec<(Point2<f64>, f64)>> {
     let (cols, rows) = (squares_x.wrapping_sub(1), squares_y.wrapping_sub(1));
     if squares_x < 3 || squares_y < 3 || inner.len() != cols * rows {
         return Err(invalid("inner corners", format!("need (squares_x−1)×(squares_y−1) ≥ 2×2 corners, got {} for {squares_x}×{squares_y} squares", inner.len())));
@@ -43,14 +47,22 @@ pub fn predict_hole_centres(inner: &[Point2<f64>], squares_x: usize, squares_y: 
         let mut p = at(cc, rc);
         let dc = c - cc as isize; // −1, 0 or +1
         if dc != 0 {
-            let nb = if dc < 0 { at(cc + 1, rc) } else { at(cc - 1, rc) };
+            let nb = if dc < 0 {
+                at(cc + 1, rc)
+            } else {
+                at(cc - 1, rc)
+            };
             p += p - nb;
         }
         let dr = r - rc as isize;
         if dr != 0 {
             // Step along the row axis measured at the (clamped) column; with a corner both
             // steps apply (bilinear extrapolation).
-            let nb = if dr < 0 { at(cc, rc + 1) } else { at(cc, rc - 1) };
+            let nb = if dr < 0 {
+                at(cc, rc + 1)
+            } else {
+                at(cc, rc - 1)
+            };
             p += at(cc, rc) - nb;
         }
         p
@@ -63,11 +75,21 @@ pub fn predict_hole_centres(inner: &[Point2<f64>], squares_x: usize, squares_y: 
             let (u, v, w) = (cq - a, d - b, b - a);
             let den = u.x * (-v.y) - u.y * (-v.x);
             if den.abs() < 1e-12 {
-                return Err(VisionError::NoSolution { what: "hole prediction", reason: format!("square ({c}, {r}) is degenerate") });
+                return Err(VisionError::NoSolution {
+                    what: "hole prediction",
+                    reason: format!("square ({c}, {r}) is degenerate"),
+                });
             }
             let s = (w.x * (-v.y) - w.y * (-v.x)) / den;
             let centre = a + u * s;
-            let side = [(b - a).norm(), (cq - b).norm(), (d - cq).norm(), (a - d).norm()].into_iter().fold(f64::INFINITY, f64::min);
+            let side = [
+                (b - a).norm(),
+                (cq - b).norm(),
+                (d - cq).norm(),
+                (a - d).norm(),
+            ]
+            .into_iter()
+            .fold(f64::INFINITY, f64::min);
             out.push((Point2::from(centre), side));
         }
     }
@@ -77,7 +99,12 @@ pub fn predict_hole_centres(inner: &[Point2<f64>], squares_x: usize, squares_y: 
 /// Find the plate in `img` and measure every hole. `window_half_px` = 0 sizes each search
 /// window to 0.3 × the square's shortest side, so the window stays inside its square (a clean
 /// background) for holes up to about half the square. `Ok(None)` when no board is found.
-pub fn detect_hole_grid(img: &GrayImage, squares_x: usize, squares_y: usize, search: &HoleSearch) -> Result<Option<Vec<GridHole>>> {
+pub fn detect_hole_grid(
+    img: &GrayImage,
+    squares_x: usize,
+    squares_y: usize,
+    search: &HoleSearch,
+) -> Result<Option<Vec<GridHole>>> {
     if squares_x < 3 || squares_y < 3 {
         return Err(invalid("squares", format!("a hole plate needs at least 3×3 squares (2×2 inner corners), got {squares_x}×{squares_y}")));
     }
@@ -90,10 +117,23 @@ pub fn detect_hole_grid(img: &GrayImage, squares_x: usize, squares_y: usize, sea
     let predicted = predict_hole_centres(&inner, squares_x, squares_y)?;
     let mut out = Vec::with_capacity(predicted.len());
     for (cell, (p, side)) in predicted.into_iter().enumerate() {
-        let window = if search.window_half_px == 0 { ((0.3 * side).floor() as u32).max(3) } else { search.window_half_px };
-        let s = HoleSearch { window_half_px: window, ..*search };
-        let result = measure_holes(img, &[p], &s)?.pop().expect("one prediction, one result");
-        out.push(GridHole { cell, predicted: p, result });
+        let window = if search.window_half_px == 0 {
+            ((0.3 * side).floor() as u32).max(3)
+        } else {
+            search.window_half_px
+        };
+        let s = HoleSearch {
+            window_half_px: window,
+            ..*search
+        };
+        let result = measure_holes(img, &[p], &s)?
+            .pop()
+            .expect("one prediction, one result");
+        out.push(GridHole {
+            cell,
+            predicted: p,
+            result,
+        });
     }
     Ok(Some(out))
 }
@@ -106,19 +146,38 @@ mod tests {
     fn predictions_are_square_centres_including_extrapolated_border_squares() {
         // Affine grid: inner corner (c, r) at (100 + 20(c+1) + 2(r+1), 50 + 18(r+1)) for a 4×3-square board.
         let map = |x: f64, y: f64| Point2::new(100.0 + 20.0 * x + 2.0 * y, 50.0 + 18.0 * y);
-        let inner: Vec<Point2<f64>> = (0..2).flat_map(|r| (0..3).map(move |c| (c, r))).map(|(c, r)| map(c as f64 + 1.0, r as f64 + 1.0)).collect();
+        let inner: Vec<Point2<f64>> = (0..2)
+            .flat_map(|r| (0..3).map(move |c| (c, r)))
+            .map(|(c, r)| map(c as f64 + 1.0, r as f64 + 1.0))
+            .collect();
         let p = predict_hole_centres(&inner, 4, 3).unwrap();
         assert_eq!(p.len(), 12);
         for r in 0..3 {
             for c in 0..4 {
                 let want = map(c as f64 + 0.5, r as f64 + 0.5);
                 let got = p[r * 4 + c].0;
-                assert!((got - want).norm() < 1e-9, "square ({c}, {r}): {got} vs {want}");
+                assert!(
+                    (got - want).norm() < 1e-9,
+                    "square ({c}, {r}): {got} vs {want}"
+                );
             }
         }
-        assert!((p[0].1 - 2f64.hypot(18.0)).abs() < 1e-9, "shortest side {}", p[0].1);
+        assert!(
+            (p[0].1 - 2f64.hypot(18.0)).abs() < 1e-9,
+            "shortest side {}",
+            p[0].1
+        );
         assert!(predict_hole_centres(&inner, 3, 3).is_err());
         assert!(detect_hole_grid(&GrayImage::new(64, 64), 2, 5, &HoleSearch::default()).is_err());
-        assert_eq!(detect_hole_grid(&GrayImage::from_pixel(64, 64, image::Luma([128])), 4, 4, &HoleSearch::default()).unwrap(), None);
+        assert_eq!(
+            detect_hole_grid(
+                &GrayImage::from_pixel(64, 64, image::Luma([128])),
+                4,
+                4,
+                &HoleSearch::default()
+            )
+            .unwrap(),
+            None
+        );
     }
 }

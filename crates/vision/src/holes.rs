@@ -47,7 +47,13 @@ pub struct HoleSearch {
 
 impl Default for HoleSearch {
     fn default() -> Self {
-        HoleSearch { window_half_px: 40, min_contrast: 20.0, min_area_px: 12.0, max_area_px: 1e5, margin_px: 3.0 }
+        HoleSearch {
+            window_half_px: 40,
+            min_contrast: 20.0,
+            min_area_px: 12.0,
+            max_area_px: 1e5,
+            margin_px: 3.0,
+        }
     }
 }
 
@@ -69,26 +75,47 @@ pub struct HoleMeasurement {
 #[derive(Debug, Clone, PartialEq)]
 pub enum HoleRejection {
     OutsideImage,
-    LowContrast { contrast: f64 },
-    AreaOutOfRange { area_px: f64 },
+    LowContrast {
+        contrast: f64,
+    },
+    AreaOutOfRange {
+        area_px: f64,
+    },
     TouchesWindowBorder,
     /// Another hole-sized blob (≥ half the hole's area) lies wholly inside the search window:
     /// the assignment to the nominal cell would be a guess.
-    SeveralBlobs { blobs: usize },
+    SeveralBlobs {
+        blobs: usize,
+    },
     /// Another blob (burr, dirt, a neighbour's edge) comes within `margin_px` of the disc the
     /// centre is measured over (`gap_px` from its edge), so it would bias the centre.
-    BlobTooClose { gap_px: f64 },
+    BlobTooClose {
+        gap_px: f64,
+    },
 }
 
 impl std::fmt::Display for HoleRejection {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match self {
             HoleRejection::OutsideImage => write!(f, "search window leaves the image"),
-            HoleRejection::LowContrast { contrast } => write!(f, "contrast {contrast:.1} grey levels is too low"),
-            HoleRejection::AreaOutOfRange { area_px } => write!(f, "blob area {area_px:.1} px² outside the accepted range"),
-            HoleRejection::TouchesWindowBorder => write!(f, "blob touches the search window border (prediction off or blob too large)"),
-            HoleRejection::SeveralBlobs { blobs } => write!(f, "{blobs} hole-sized blobs in the search window: which one is the hole is ambiguous"),
-            HoleRejection::BlobTooClose { gap_px } => write!(f, "another blob {gap_px:.1} px from the measured disc would bias the centre"),
+            HoleRejection::LowContrast { contrast } => {
+                write!(f, "contrast {contrast:.1} grey levels is too low")
+            }
+            HoleRejection::AreaOutOfRange { area_px } => {
+                write!(f, "blob area {area_px:.1} px² outside the accepted range")
+            }
+            HoleRejection::TouchesWindowBorder => write!(
+                f,
+                "blob touches the search window border (prediction off or blob too large)"
+            ),
+            HoleRejection::SeveralBlobs { blobs } => write!(
+                f,
+                "{blobs} hole-sized blobs in the search window: which one is the hole is ambiguous"
+            ),
+            HoleRejection::BlobTooClose { gap_px } => write!(
+                f,
+                "another blob {gap_px:.1} px from the measured disc would bias the centre"
+            ),
         }
     }
 }
@@ -114,10 +141,16 @@ pub fn measure_holes(
     }
     for (k, p) in predicted.iter().enumerate() {
         if !(p.x.is_finite() && p.y.is_finite()) {
-            return Err(crate::error::VisionError::NonFinite { what: "predicted hole positions", index: k });
+            return Err(crate::error::VisionError::NonFinite {
+                what: "predicted hole positions",
+                index: k,
+            });
         }
     }
-    Ok(predicted.iter().map(|p| measure_one(img, p, search)).collect())
+    Ok(predicted
+        .iter()
+        .map(|p| measure_one(img, p, search))
+        .collect())
 }
 
 /// One 8-connected set of window pixels with coverage > 0.5.
@@ -137,7 +170,10 @@ fn components(on: &[bool], side: usize, x0: i64, y0: i64) -> (Vec<Component>, Ve
             continue;
         }
         let id = comps.len();
-        let mut c = Component { pixels: Vec::new(), on_border: false };
+        let mut c = Component {
+            pixels: Vec::new(),
+            on_border: false,
+        };
         label[start] = id;
         stack.push(start);
         while let Some(k) = stack.pop() {
@@ -163,7 +199,11 @@ fn components(on: &[bool], side: usize, x0: i64, y0: i64) -> (Vec<Component>, Ve
     (comps, label)
 }
 
-fn measure_one(img: &GrayImage, p: &Point2<f64>, s: &HoleSearch) -> std::result::Result<HoleMeasurement, HoleRejection> {
+fn measure_one(
+    img: &GrayImage,
+    p: &Point2<f64>,
+    s: &HoleSearch,
+) -> std::result::Result<HoleMeasurement, HoleRejection> {
     let h = s.window_half_px as i64;
     let (cx, cy) = (p.x.round() as i64, p.y.round() as i64);
     let (x0, y0, x1, y1) = (cx - h, cy - h, cx + h, cy + h);
@@ -193,13 +233,23 @@ fn measure_one(img: &GrayImage, p: &Point2<f64>, s: &HoleSearch) -> std::result:
     // Polarity: from the pixels around the prediction when they clearly differ from the
     // background (so a brighter burr cannot turn the search for a dark hole into a search for
     // bright blobs), else from the window's stronger extreme.
-    let mut near: Vec<f64> = (cy - 2..=cy + 2).flat_map(|y| (cx - 2..=cx + 2).map(move |x| (x, y))).map(|(x, y)| at(x, y)).collect();
+    let mut near: Vec<f64> = (cy - 2..=cy + 2)
+        .flat_map(|y| (cx - 2..=cx + 2).map(move |x| (x, y)))
+        .map(|(x, y)| at(x, y))
+        .collect();
     let near = median(&mut near);
-    let dark = if (near - b).abs() >= s.min_contrast { near < b } else { b - lo > hi - b };
+    let dark = if (near - b).abs() >= s.min_contrast {
+        near < b
+    } else {
+        b - lo > hi - b
+    };
     let extreme = if dark { lo } else { hi };
     let mid = (b + extreme) / 2.0;
     let side = (2 * h + 1) as usize;
-    let on: Vec<bool> = (y0..=y1).flat_map(|y| (x0..=x1).map(move |x| (x, y))).map(|(x, y)| (at(x, y) - mid) * (extreme - mid) > 0.0).collect();
+    let on: Vec<bool> = (y0..=y1)
+        .flat_map(|y| (x0..=x1).map(move |x| (x, y)))
+        .map(|(x, y)| (at(x, y) - mid) * (extreme - mid) > 0.0)
+        .collect();
     if !on.contains(&true) {
         return Err(HoleRejection::LowContrast { contrast: 0.0 });
     }
@@ -207,7 +257,8 @@ fn measure_one(img: &GrayImage, p: &Point2<f64>, s: &HoleSearch) -> std::result:
     // (Taking every such pixel of the window merged a neighbouring hole, burr or dirt into the
     // hole and moved its centre.)
     let (comps, label) = components(&on, side, x0, y0);
-    let dist2 = |(x, y): (i64, i64), q: &Point2<f64>| (x as f64 - q.x).powi(2) + (y as f64 - q.y).powi(2);
+    let dist2 =
+        |(x, y): (i64, i64), q: &Point2<f64>| (x as f64 - q.x).powi(2) + (y as f64 - q.y).powi(2);
     let seed = (0..on.len())
         .filter(|&k| on[k])
         .min_by(|&i, &j| {
@@ -233,13 +284,26 @@ fn measure_one(img: &GrayImage, p: &Point2<f64>, s: &HoleSearch) -> std::result:
     // Another hole-sized blob wholly inside the window: two candidates for one nominal cell;
     // which one is the hole is a guess, so the cell is rejected rather than possibly matched
     // to the wrong blob.
-    let rivals = comps.iter().enumerate().filter(|&(k, c)| k != hole_id && !c.on_border && c.pixels.len() as f64 >= s.min_area_px.max(0.5 * n)).count();
+    let rivals = comps
+        .iter()
+        .enumerate()
+        .filter(|&(k, c)| {
+            k != hole_id && !c.on_border && c.pixels.len() as f64 >= s.min_area_px.max(0.5 * n)
+        })
+        .count();
     if rivals > 0 {
         return Err(HoleRejection::SeveralBlobs { blobs: rivals + 1 });
     }
-    let (rx, ry) = (hole.pixels.iter().map(|q| q.0 as f64).sum::<f64>() / n, hole.pixels.iter().map(|q| q.1 as f64).sum::<f64>() / n);
+    let (rx, ry) = (
+        hole.pixels.iter().map(|q| q.0 as f64).sum::<f64>() / n,
+        hole.pixels.iter().map(|q| q.1 as f64).sum::<f64>() / n,
+    );
     let radius = (n / std::f64::consts::PI).sqrt() + s.margin_px;
-    if rx - radius < x0 as f64 || ry - radius < y0 as f64 || rx + radius > x1 as f64 || ry + radius > y1 as f64 {
+    if rx - radius < x0 as f64
+        || ry - radius < y0 as f64
+        || rx + radius > x1 as f64
+        || ry + radius > y1 as f64
+    {
         return Err(HoleRejection::TouchesWindowBorder);
     }
     // Any other blob (either polarity) whose pixels or blurred edge (margin) reach the moment
@@ -256,16 +320,25 @@ fn measure_one(img: &GrayImage, p: &Point2<f64>, s: &HoleSearch) -> std::result:
     // Opposite polarity (a reflection on a burr next to a dark hole): not in the components,
     // and bounded by the grey scale (255 is 55 levels above a 200 background), so any clear
     // deviation counts: more than 10 % of the contrast, half of min_contrast and 4 σ_I.
-    let opposite = (0.1 * contrast.abs()).max(0.5 * s.min_contrast).max(4.0 * sigma_i);
+    let opposite = (0.1 * contrast.abs())
+        .max(0.5 * s.min_contrast)
+        .max(4.0 * sigma_i);
     for y in (ry - reach).floor() as i64..=(ry + reach).ceil() as i64 {
         for x in (rx - reach).floor() as i64..=(rx + reach).ceil() as i64 {
-            if x >= x0 && y >= y0 && x <= x1 && y <= y1 && (at(x, y) - b) * contrast.signum() < -opposite {
+            if x >= x0
+                && y >= y0
+                && x <= x1
+                && y <= y1
+                && (at(x, y) - b) * contrast.signum() < -opposite
+            {
                 gap = gap.min(dist2((x, y), &rough).sqrt() - radius);
             }
         }
     }
     if gap < s.margin_px {
-        return Err(HoleRejection::BlobTooClose { gap_px: gap.max(0.0) });
+        return Err(HoleRejection::BlobTooClose {
+            gap_px: gap.max(0.0),
+        });
     }
     let w = |x: i64, y: i64| (at(x, y) - b) / contrast;
     // Sub-pixel moments with unclamped weights over the disc.
@@ -295,14 +368,21 @@ fn measure_one(img: &GrayImage, p: &Point2<f64>, s: &HoleSearch) -> std::result:
     }
     let m = Matrix2::new(mxx, mxy, mxy, myy) / sw;
     let eig = SymmetricEigen::new(m);
-    let (i_major, i_minor) = if eig.eigenvalues[0] >= eig.eigenvalues[1] { (0, 1) } else { (1, 0) };
+    let (i_major, i_minor) = if eig.eigenvalues[0] >= eig.eigenvalues[1] {
+        (0, 1)
+    } else {
+        (1, 0)
+    };
     let major = eig.eigenvectors.column(i_major);
     let sigma_w = sigma_i / contrast.abs();
     let var = |v: f64| sigma_w * sigma_w * v / (sw * sw);
     Ok(HoleMeasurement {
         centre: Point2::new(mx, my),
         covariance: Matrix2::new(var(vx), 0.0, 0.0, var(vy)),
-        semi_axes: [2.0 * eig.eigenvalues[i_major].max(0.0).sqrt(), 2.0 * eig.eigenvalues[i_minor].max(0.0).sqrt()],
+        semi_axes: [
+            2.0 * eig.eigenvalues[i_major].max(0.0).sqrt(),
+            2.0 * eig.eigenvalues[i_minor].max(0.0).sqrt(),
+        ],
         angle: major[1].atan2(major[0]),
         contrast,
     })
@@ -322,12 +402,32 @@ mod tests {
                 img.put_pixel(x, y, image::Luma([if d < 5.0 { 220 } else { 30 }]));
             }
         }
-        let s = HoleSearch { window_half_px: 12, ..Default::default() };
-        let r = measure_holes(&img, &[Point2::new(31.0, 29.0), Point2::new(75.0, 75.0), Point2::new(5.0, 50.0)], &s).unwrap();
+        let s = HoleSearch {
+            window_half_px: 12,
+            ..Default::default()
+        };
+        let r = measure_holes(
+            &img,
+            &[
+                Point2::new(31.0, 29.0),
+                Point2::new(75.0, 75.0),
+                Point2::new(5.0, 50.0),
+            ],
+            &s,
+        )
+        .unwrap();
         let h = r[0].as_ref().unwrap();
-        assert!((h.centre.x - 30.0).abs() < 0.05 && (h.centre.y - 30.0).abs() < 0.05, "{:?}", h.centre);
+        assert!(
+            (h.centre.x - 30.0).abs() < 0.05 && (h.centre.y - 30.0).abs() < 0.05,
+            "{:?}",
+            h.centre
+        );
         assert!(h.contrast > 150.0);
-        assert!(matches!(r[1], Err(HoleRejection::LowContrast { .. })), "{:?}", r[1]);
+        assert!(
+            matches!(r[1], Err(HoleRejection::LowContrast { .. })),
+            "{:?}",
+            r[1]
+        );
         assert_eq!(r[2], Err(HoleRejection::OutsideImage));
         assert!(measure_holes(&img, &[Point2::new(f64::NAN, 0.0)], &s).is_err());
     }

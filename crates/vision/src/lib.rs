@@ -27,4 +27,7 @@ pub use error::{Result, VisionError};
 pub use render::{
     render_view, MarkerTruth, PlanarTarget, RenderSettings, RenderedView, TargetItem,
 };
-pub use targets::{detect_targets, detect_targets_explained, Detection, PoseInputs, Target, TargetFamily, TargetPose};
+pub use targets::{
+    detect_targets, detect_targets_explained, Detection, PoseInputs, Target, TargetFamily,
+    TargetPose,
+};

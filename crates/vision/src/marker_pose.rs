@@ -80,10 +80,9 @@ pub fn estimate_marker_pose(
     // Initial pose from the homography model plane → normalised image plane.
     let mut norm = [[0.0; 2]; 4];
     for k in 0..4 {
-        let (x, y) = pixel_to_normalized(camera, corners[k].x, corners[k].y)
-            .ok_or_else(|| {
-                no_solution("corner outside the distortion model's invertible region")
-            })?;
+        let (x, y) = pixel_to_normalized(camera, corners[k].x, corners[k].y).ok_or_else(|| {
+            no_solution("corner outside the distortion model's invertible region")
+        })?;
         norm[k] = [x, y];
     }
     let model: [[f64; 2]; 4] = std::array::from_fn(|k| [obj[k].x, obj[k].y]);
@@ -148,8 +147,7 @@ pub fn estimate_marker_pose(
     let pose = problem.pose(&fit.x);
     let sq: f64 = (0..4)
         .map(|k| {
-            project(camera, &pose, &obj[k])
-                .map_or(f64::NAN, |p| (p - corners[k]).norm_squared())
+            project(camera, &pose, &obj[k]).map_or(f64::NAN, |p| (p - corners[k]).norm_squared())
         })
         .sum();
     Ok(MarkerPose {
@@ -198,7 +196,10 @@ impl Problem for CornerReprojection<'_> {
     fn residuals(&self, x: &[f64], r: &mut [f64]) -> std::result::Result<(), NotEvaluable> {
         let pose = pose_from_isometry(&self.pose(x));
         for k in 0..4 {
-            let [u, v] = self.camera.project(&pose, &self.object[k].coords).map_err(not_evaluable)?;
+            let [u, v] = self
+                .camera
+                .project(&pose, &self.object[k].coords)
+                .map_err(not_evaluable)?;
             let e = self.whiten[k] * (Point2::new(u, v) - self.corners[k]);
             r[2 * k] = e.x;
             r[2 * k + 1] = e.y;
@@ -222,8 +223,10 @@ impl Problem for CornerReprojection<'_> {
             r[2 * k + 1] = e.y;
             // the camera model's columns are (δt, δθ); ours (δθ, δt)
             let d = self.whiten[k] * p.d_pose;
-            j.view_mut((2 * k, 0), (2, 3)).copy_from(&d.fixed_columns::<3>(3));
-            j.view_mut((2 * k, 3), (2, 3)).copy_from(&d.fixed_columns::<3>(0));
+            j.view_mut((2 * k, 0), (2, 3))
+                .copy_from(&d.fixed_columns::<3>(3));
+            j.view_mut((2 * k, 3), (2, 3))
+                .copy_from(&d.fixed_columns::<3>(0));
         }
         Ok(())
     }

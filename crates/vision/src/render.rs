@@ -144,7 +144,13 @@ impl TargetItem {
                     return None;
                 }
                 let code = dictionary.code(*id).ok()?;
-                Some(marker_cell(code, dictionary.marker_size as u32, *border_bits, v as u32, u as u32) as f64)
+                Some(marker_cell(
+                    code,
+                    dictionary.marker_size as u32,
+                    *border_bits,
+                    v as u32,
+                    u as u32,
+                ) as f64)
             }
             TargetItem::Checkerboard {
                 top_left,
@@ -204,7 +210,10 @@ impl TargetItem {
             }
             TargetItem::Hole { centre, diameter } => {
                 if !(diameter.is_finite() && *diameter > 0.0) {
-                    return Err(invalid("Hole.diameter", format!("must be > 0, got {diameter}")));
+                    return Err(invalid(
+                        "Hole.diameter",
+                        format!("must be > 0, got {diameter}"),
+                    ));
                 }
                 if !(centre[0].is_finite() && centre[1].is_finite()) {
                     return Err(invalid("Hole.centre", "must be finite"));
@@ -247,7 +256,12 @@ struct ViewGeometry<'a> {
 impl<'a> ViewGeometry<'a> {
     fn new(camera: &'a CameraModel, target: &'a PlanarTarget, pose: &Isometry3<f64>) -> Self {
         let rot_t = pose.rotation.to_rotation_matrix().matrix().transpose();
-        ViewGeometry { camera, target, origin: -(rot_t * pose.translation.vector), rot_t }
+        ViewGeometry {
+            camera,
+            target,
+            origin: -(rot_t * pose.translation.vector),
+            rot_t,
+        }
     }
 
     /// Target-plane point seen along the ray of ideal normalised coordinates (x, y), if the
@@ -279,7 +293,9 @@ impl<'a> ViewGeometry<'a> {
     /// A pixel one boundary crosses gets its exact area split instead ([`coverage`]): the
     /// grid alone rounds a boundary parallel to its columns to 1/s px.
     fn supersample(&self, i: usize, j: usize, s: usize, bg: f64) -> f64 {
-        if let Some(mean) = coverage::one_boundary_mean(&|u, v| self.sample(u, v), i as f64, j as f64, s) {
+        if let Some(mean) =
+            coverage::one_boundary_mean(&|u, v| self.sample(u, v), i as f64, j as f64, s)
+        {
             return mean;
         }
         let mut acc = 0.0;
@@ -307,12 +323,20 @@ impl<'a> ViewGeometry<'a> {
     /// unseen, to grey). With the edge mask, flat runs of a row are sampled once and mask
     /// pixels supersampled s×s; without it (tracing failed), every pixel is supersampled. The
     /// fast path must give the image of the slow one (tested below).
-    fn shade(&self, mask: Option<&[u8]>, s: usize, bg: f64, grey_of: &impl Fn(f64) -> f64, grey: &mut [f64]) {
+    fn shade(
+        &self,
+        mask: Option<&[u8]>,
+        s: usize,
+        bg: f64,
+        grey_of: &impl Fn(f64) -> f64,
+        grey: &mut [f64],
+    ) {
         let (w, h) = (self.camera.width as usize, self.camera.height as usize);
         match mask {
             Some(mask) => {
                 for j in 0..h {
-                    let (row_mask, row) = (&mask[j * w..(j + 1) * w], &mut grey[j * w..(j + 1) * w]);
+                    let (row_mask, row) =
+                        (&mask[j * w..(j + 1) * w], &mut grey[j * w..(j + 1) * w]);
                     let mut i = 0;
                     while i < w {
                         if row_mask[i] == 0 {
@@ -343,21 +367,34 @@ impl<'a> ViewGeometry<'a> {
     /// is a half-plane, so if the border sees it, so does everything inside) or tracing failed.
     fn edge_mask(&self, pose: &Isometry3<f64>, buffer: Vec<u8>) -> Option<Vec<u8>> {
         let (w, h) = (self.camera.width as usize, self.camera.height as usize);
-        let mut bbox = [f64::INFINITY, f64::NEG_INFINITY, f64::INFINITY, f64::NEG_INFINITY];
+        let mut bbox = [
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+        ];
         let border = (0..=w)
             .flat_map(|i| [(i as f64 - 0.5, -0.5), (i as f64 - 0.5, h as f64 - 0.5)])
-            .chain((0..=h).flat_map(|j| [(-0.5, j as f64 - 0.5), (w as f64 - 0.5, j as f64 - 0.5)]));
+            .chain(
+                (0..=h).flat_map(|j| [(-0.5, j as f64 - 0.5), (w as f64 - 0.5, j as f64 - 0.5)]),
+            );
         for (u, v) in border {
             let (x, y) = pixel_to_normalized(self.camera, u, v)?;
             self.hit(x, y)?;
-            bbox = [bbox[0].min(x), bbox[1].max(x), bbox[2].min(y), bbox[3].max(y)];
+            bbox = [
+                bbox[0].min(x),
+                bbox[1].max(x),
+                bbox[2].min(y),
+                bbox[3].max(y),
+            ];
         }
         // Margin for the border between its samples: 1 % of the box plus two pixels.
         let gx = 0.01 * (bbox[1] - bbox[0]) + 2.0 / self.camera.fx;
         let gy = 0.01 * (bbox[3] - bbox[2]) + 2.0 / self.camera.fy;
         let bbox = [bbox[0] - gx, bbox[1] + gx, bbox[2] - gy, bbox[3] + gy];
         let rot = *pose.rotation.to_rotation_matrix().matrix();
-        let mut tracer = edges::EdgeTracer::new(self.camera, rot, pose.translation.vector, bbox, buffer);
+        let mut tracer =
+            edges::EdgeTracer::new(self.camera, rot, pose.translation.vector, bbox, buffer);
         for b in edges::boundaries(&self.target.items) {
             if !tracer.trace(&b) {
                 return None;
@@ -440,7 +477,11 @@ pub fn render_view(
         if settings.noise_sigma > 0.0 {
             // One 64-bit draw per `per_draw` pixels of a row (a row's last draw may have
             // bits left over; they are dropped).
-            for ((s4, d4), c4) in src.chunks(per_draw).zip(dst.chunks_mut(per_draw)).zip(column_term.chunks(per_draw)) {
+            for ((s4, d4), c4) in src
+                .chunks(per_draw)
+                .zip(dst.chunks_mut(per_draw))
+                .zip(column_term.chunks(per_draw))
+            {
                 let mut bits = rng.next_u64();
                 for ((g, d), c) in s4.iter().zip(d4).zip(c4) {
                     let noise = normal[(bits & index_mask) as usize] as f64;
@@ -461,11 +502,12 @@ pub fn render_view(
     let mut markers = Vec::new();
     let mut checkerboard_corners = Vec::new();
     let project = |x: f64, y: f64| -> Result<Point2<f64>> {
-        project(camera, pose, &Point3::new(x, y, 0.0))
-            .ok_or_else(|| crate::error::VisionError::NoSolution {
+        project(camera, pose, &Point3::new(x, y, 0.0)).ok_or_else(|| {
+            crate::error::VisionError::NoSolution {
                 what: "render ground truth",
                 reason: format!("target point ({x}, {y}) is behind the camera"),
-            })
+            }
+        })
     };
     for it in &target.items {
         match it {
@@ -514,15 +556,44 @@ mod tests {
 
     /// Markers, a checkerboard and holes on an oblique, distorted view.
     fn scene() -> (CameraModel, PlanarTarget, Isometry3<f64>) {
-        let camera = CameraModel::new(400, 300, 520.0, 515.0, 201.3, 148.7, Distortion::BrownConrady([-0.12, 0.05, 4e-4, -3e-4, 0.0])).unwrap();
+        let camera = CameraModel::new(
+            400,
+            300,
+            520.0,
+            515.0,
+            201.3,
+            148.7,
+            Distortion::BrownConrady([-0.12, 0.05, 4e-4, -3e-4, 0.0]),
+        )
+        .unwrap();
         let dictionary = Dictionary::predefined("DICT_4X4_50").unwrap();
-        let mut items = vec![TargetItem::Checkerboard { top_left: [-0.06, -0.045], square: 0.012, squares_x: 5, squares_y: 4 }];
+        let mut items = vec![TargetItem::Checkerboard {
+            top_left: [-0.06, -0.045],
+            square: 0.012,
+            squares_x: 5,
+            squares_y: 4,
+        }];
         for (k, x) in [0.005, 0.035].iter().enumerate() {
-            items.push(TargetItem::Marker { dictionary: dictionary.clone(), id: 7 + k, top_left: [*x, -0.04], side: 0.025, border_bits: 1 });
+            items.push(TargetItem::Marker {
+                dictionary: dictionary.clone(),
+                id: 7 + k,
+                top_left: [*x, -0.04],
+                side: 0.025,
+                border_bits: 1,
+            });
         }
-        items.push(TargetItem::Hole { centre: [0.02, 0.025], diameter: 0.006 });
-        items.push(TargetItem::Hole { centre: [-0.03, 0.03], diameter: 0.0015 });
-        let pose = Isometry3::new(Vector3::new(0.004, -0.003, 0.16), Vector3::new(0.35, -0.25, 0.12));
+        items.push(TargetItem::Hole {
+            centre: [0.02, 0.025],
+            diameter: 0.006,
+        });
+        items.push(TargetItem::Hole {
+            centre: [-0.03, 0.03],
+            diameter: 0.0015,
+        });
+        let pose = Isometry3::new(
+            Vector3::new(0.004, -0.003, 0.16),
+            Vector3::new(0.35, -0.25, 0.12),
+        );
         (camera, PlanarTarget { items }, pose)
     }
 
@@ -535,16 +606,32 @@ mod tests {
         let (s, bg) = (6, 0.5);
         let grey_of = |r: f64| if r.is_nan() { 128.0 } else { 20.0 + 210.0 * r };
         let n = (camera.width * camera.height) as usize;
-        let mask = geom.edge_mask(&pose, Vec::new()).expect("the plane fills the view");
+        let mask = geom
+            .edge_mask(&pose, Vec::new())
+            .expect("the plane fills the view");
         let flat_share = mask.iter().filter(|&&m| m == 0).count() as f64 / n as f64;
-        assert!(flat_share > 0.8, "the mask marks {:.0} % of the pixels as flat", 100.0 * flat_share);
+        assert!(
+            flat_share > 0.8,
+            "the mask marks {:.0} % of the pixels as flat",
+            100.0 * flat_share
+        );
         let (mut fast, mut dense) = (vec![0.0; n], vec![0.0; n]);
         geom.shade(Some(&mask), s, bg, &grey_of, &mut fast);
         geom.shade(None, s, bg, &grey_of, &mut dense);
-        let worst = fast.iter().zip(&dense).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
-        assert!(worst < 1e-9, "the edge-mask path differs from dense supersampling by up to {worst} grey levels");
+        let worst = fast
+            .iter()
+            .zip(&dense)
+            .map(|(a, b)| (a - b).abs())
+            .fold(0.0, f64::max);
+        assert!(
+            worst < 1e-9,
+            "the edge-mask path differs from dense supersampling by up to {worst} grey levels"
+        );
         // the scene has edges of every kind, so the comparison means something
-        let edge_pixels = dense.iter().filter(|g| (**g - 20.0).abs() > 1e-6 && (**g - 230.0).abs() > 1e-6).count();
+        let edge_pixels = dense
+            .iter()
+            .filter(|g| (**g - 20.0).abs() > 1e-6 && (**g - 230.0).abs() > 1e-6)
+            .count();
         assert!(edge_pixels > 2000, "{edge_pixels} mixed pixels");
     }
 }

@@ -74,7 +74,10 @@ pub fn refine_saddle(
     // observable.
     let (inf, ninf) = (f64::INFINITY, f64::NEG_INFINITY);
     let options = Options {
-        bounds: Some((vec![ninf, ninf, ninf, ninf, ninf, ninf, MIN_LN_SIGMA], vec![inf, inf, inf, inf, inf, inf, 2.5])),
+        bounds: Some((
+            vec![ninf, ninf, ninf, ninf, ninf, ninf, MIN_LN_SIGMA],
+            vec![inf, inf, inf, inf, inf, inf, 2.5],
+        )),
         max_iterations: 60,
         // Converged when a step changes the cost by < 1e-9 of itself: parameters then move by
         // well under 1 % of their standard uncertainty.
@@ -85,7 +88,15 @@ pub fn refine_saddle(
     };
     let mut best: Option<Solution> = None;
     for (a0, b0) in [(lo, hi - lo), (hi, lo - hi)] {
-        let x0 = [guess.x, guess.y, th1, th2, a0, b0, 0.8f64.ln().max(MIN_LN_SIGMA)];
+        let x0 = [
+            guess.x,
+            guess.y,
+            th1,
+            th2,
+            a0,
+            b0,
+            0.8f64.ln().max(MIN_LN_SIGMA),
+        ];
         if let Ok(fit) = solve(&problem, &x0, &options) {
             if best.as_ref().map_or(true, |b| fit.cost < b.cost) {
                 best = Some(fit);
@@ -152,7 +163,12 @@ impl Problem for Saddle<'_> {
         }
         Ok(())
     }
-    fn residuals_and_jacobian(&self, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>) -> Result<(), NotEvaluable> {
+    fn residuals_and_jacobian(
+        &self,
+        x: &[f64],
+        r: &mut [f64],
+        j: &mut DMatrix<f64>,
+    ) -> Result<(), NotEvaluable> {
         for (i, p) in self.samples.iter().enumerate() {
             let (ri, row) = residual_and_jacobian(p, x);
             r[i] = ri;

@@ -11,6 +11,7 @@
 //! rows, z = x × y, corners at (col·square, row·square, 0).
 
 use crate::aruco::{detect_markers, DetectorParams, Dictionary};
+use crate::camera::pose_from_isometry;
 use crate::camera::CameraModel;
 use crate::checkerboard::detect_checkerboard;
 use crate::error::{invalid, Result, VisionError};
@@ -18,7 +19,6 @@ use crate::hole_grid::detect_hole_grid;
 use crate::holes::HoleSearch;
 use crate::marker_pose::estimate_marker_pose;
 use image::GrayImage;
-use crate::camera::pose_from_isometry;
 use nalgebra::{DMatrix, Matrix2, Point2, UnitQuaternion};
 
 /// What to look for.
@@ -27,7 +27,11 @@ pub enum TargetFamily {
     /// Square markers of an OpenCV predefined dictionary (ArUco and AprilTag dictionaries).
     Markers(Dictionary),
     /// Inner corners of a cols × rows checkerboard with squares of `square` metres.
-    Checkerboard { cols: usize, rows: usize, square: f64 },
+    Checkerboard {
+        cols: usize,
+        rows: usize,
+        square: f64,
+    },
     /// Drilled-hole plate (seed 000, [`crate::hole_grid`]): a checkerboard with `cols` × `rows`
     /// inner corners, i.e. (cols + 1) × (rows + 1) squares, a hole at every square's centre.
     /// One target per measured hole: id = cell (row-major over squares), one point = the hole
@@ -44,13 +48,19 @@ impl TargetFamily {
         let lower = name.trim().to_ascii_lowercase();
         if ["drilled_holes", "holes", "hole_plate"].contains(&lower.as_str()) {
             let (cols, rows) = board.ok_or_else(|| {
-                invalid("board", "family drilled_holes needs the plate's inner-corner count COLSxROWS")
+                invalid(
+                    "board",
+                    "family drilled_holes needs the plate's inner-corner count COLSxROWS",
+                )
             })?;
             return Ok(TargetFamily::DrilledHoles { cols, rows });
         }
         if lower == "checkerboard" || lower == "chessboard" {
             let (cols, rows) = board.ok_or_else(|| {
-                invalid("board", "family checkerboard needs the inner-corner count COLSxROWS")
+                invalid(
+                    "board",
+                    "family checkerboard needs the inner-corner count COLSxROWS",
+                )
             })?;
             let square = square.unwrap_or(f64::NAN);
             if !(square.is_nan() || (square.is_finite() && square > 0.0)) {
@@ -63,7 +73,10 @@ impl TargetFamily {
             .or_else(|| lower.strip_prefix("aruco_"))
             .unwrap_or(&lower);
         let upper = format!("DICT_{}", stem.to_ascii_uppercase());
-        let candidates = [upper.clone(), upper.replace("DICT_ORIGINAL", "DICT_ARUCO_ORIGINAL")];
+        let candidates = [
+            upper.clone(),
+            upper.replace("DICT_ORIGINAL", "DICT_ARUCO_ORIGINAL"),
+        ];
         for c in &candidates {
             if let Ok(d) = Dictionary::predefined(c) {
                 return Ok(TargetFamily::Markers(d));
@@ -160,43 +173,64 @@ pub fn detect_targets_explained(
     params: &DetectorParams,
     pose_inputs: Option<PoseInputs<'_>>,
 ) -> Result<Detection> {
-    let found = |targets: Vec<Target>| Detection { targets, not_found: None };
+    let found = |targets: Vec<Target>| Detection {
+        targets,
+        not_found: None,
+    };
     Ok(match family {
         TargetFamily::Markers(dict) => {
             let markers = detect_markers(img, dict, params)?;
-            found(markers
-                .into_iter()
-                .map(|m| {
-                    let pose = pose_inputs.and_then(|pi| {
-                        let side = pi.marker_side?;
-                        let p = estimate_marker_pose(
-                            pi.camera,
-                            &m.corners,
-                            &m.corner_covariance,
-                            side,
-                            pi.fallback_sigma_px,
-                        )
-                        .ok()?;
-                        let mut pose = to_ros_pose(&p.camera_from_marker, &p.covariance, p.reprojection_rms_px);
-                        let object: Vec<[f64; 3]> = crate::marker_pose::marker_object_points(side).iter().map(|q| [q.x, q.y, q.z]).collect();
-                        add_intrinsics_covariance(&mut pose, &pi, &pose_from_isometry(&p.camera_from_marker), &object)?;
-                        Some(pose)
-                    });
-                    Target {
-                        id: m.id as i64,
-                        corners: m.corners.to_vec(),
-                        corner_covariance: m.corner_covariance.to_vec(),
-                        decision_margin: dict.max_correction_bits as f64 - m.bit_errors as f64,
-                        pose,
-                    }
-                })
-                .collect())
+            found(
+                markers
+                    .into_iter()
+                    .map(|m| {
+                        let pose = pose_inputs.and_then(|pi| {
+                            let side = pi.marker_side?;
+                            let p = estimate_marker_pose(
+                                pi.camera,
+                                &m.corners,
+                                &m.corner_covariance,
+                                side,
+                                pi.fallback_sigma_px,
+                            )
+                            .ok()?;
+                            let mut pose = to_ros_pose(
+                                &p.camera_from_marker,
+                                &p.covariance,
+                                p.reprojection_rms_px,
+                            );
+                            let object: Vec<[f64; 3]> =
+                                crate::marker_pose::marker_object_points(side)
+                                    .iter()
+                                    .map(|q| [q.x, q.y, q.z])
+                                    .collect();
+                            add_intrinsics_covariance(
+                                &mut pose,
+                                &pi,
+                                &pose_from_isometry(&p.camera_from_marker),
+                                &object,
+                            )?;
+                            Some(pose)
+                        });
+                        Target {
+                            id: m.id as i64,
+                            corners: m.corners.to_vec(),
+                            corner_covariance: m.corner_covariance.to_vec(),
+                            decision_margin: dict.max_correction_bits as f64 - m.bit_errors as f64,
+                            pose,
+                        }
+                    })
+                    .collect(),
+            )
         }
         TargetFamily::Checkerboard { cols, rows, square } => {
             let board = match detect_checkerboard(img, *cols, *rows) {
                 Ok(b) => b,
                 Err(VisionError::NoSolution { reason, .. }) => {
-                    return Ok(Detection { targets: Vec::new(), not_found: Some(reason) });
+                    return Ok(Detection {
+                        targets: Vec::new(),
+                        not_found: Some(reason),
+                    });
                 }
                 Err(e) => return Err(e),
             };
@@ -212,23 +246,41 @@ pub fn detect_targets_explained(
             }])
         }
         TargetFamily::DrilledHoles { cols, rows } => {
-            let Some(holes) = detect_hole_grid(img, cols + 1, rows + 1, &HoleSearch { window_half_px: 0, ..Default::default() })? else {
-                return Ok(Detection { targets: Vec::new(), not_found: Some(format!("no {}×{} grid of squares with holes found", cols + 1, rows + 1)) });
+            let Some(holes) = detect_hole_grid(
+                img,
+                cols + 1,
+                rows + 1,
+                &HoleSearch {
+                    window_half_px: 0,
+                    ..Default::default()
+                },
+            )?
+            else {
+                return Ok(Detection {
+                    targets: Vec::new(),
+                    not_found: Some(format!(
+                        "no {}×{} grid of squares with holes found",
+                        cols + 1,
+                        rows + 1
+                    )),
+                });
             };
-            found(holes
-                .into_iter()
-                .filter_map(|h| {
-                    let m = h.result.ok()?;
-                    Some(Target {
-                        id: h.cell as i64,
-                        corners: vec![m.centre],
-                        corner_covariance: vec![m.covariance],
-                        // FiducialDetection: 0..1 contrast for circles.
-                        decision_margin: (m.contrast.abs() / 255.0).min(1.0),
-                        pose: None,
+            found(
+                holes
+                    .into_iter()
+                    .filter_map(|h| {
+                        let m = h.result.ok()?;
+                        Some(Target {
+                            id: h.cell as i64,
+                            corners: vec![m.centre],
+                            corner_covariance: vec![m.covariance],
+                            // FiducialDetection: 0..1 contrast for circles.
+                            decision_margin: (m.contrast.abs() / 255.0).min(1.0),
+                            pose: None,
+                        })
                     })
-                })
-                .collect())
+                    .collect(),
+            )
         }
     })
 }
@@ -236,9 +288,18 @@ pub fn detect_targets_explained(
 /// Add what the calibration's uncertainty adds to `pose`'s covariance (ROS order (t, rot), the
 /// convention of crates/camera's pose perturbation), when `pi` states it. None when it cannot
 /// be computed (the pose is then not reported rather than reported too sure).
-fn add_intrinsics_covariance(pose: &mut TargetPose, pi: &PoseInputs<'_>, fitted: &metrocell_camera_model::Pose, object: &[[f64; 3]]) -> Option<()> {
-    let Some(sigma_k) = pi.intrinsics_covariance else { return Some(()) };
-    let extra = metrocell_camera_model::pose_covariance_from_intrinsics(pi.camera, fitted, object, sigma_k).ok()?;
+fn add_intrinsics_covariance(
+    pose: &mut TargetPose,
+    pi: &PoseInputs<'_>,
+    fitted: &metrocell_camera_model::Pose,
+    object: &[[f64; 3]],
+) -> Option<()> {
+    let Some(sigma_k) = pi.intrinsics_covariance else {
+        return Some(());
+    };
+    let extra =
+        metrocell_camera_model::pose_covariance_from_intrinsics(pi.camera, fitted, object, sigma_k)
+            .ok()?;
     for i in 0..6 {
         for j in 0..6 {
             pose.covariance[6 * i + j] += extra[(i, j)];
@@ -262,13 +323,18 @@ fn board_pose(
         .collect();
     let image: Vec<[f64; 2]> = corners.iter().map(|p| [p.x, p.y]).collect();
     // One σ for all corners: the RMS of the per-corner standard deviations.
-    let vars: Vec<f64> = cov.iter().map(|c| c.trace() / 2.0).filter(|v| v.is_finite() && *v > 0.0).collect();
+    let vars: Vec<f64> = cov
+        .iter()
+        .map(|c| c.trace() / 2.0)
+        .filter(|v| v.is_finite() && *v > 0.0)
+        .collect();
     let sigma = if vars.is_empty() {
         pi.fallback_sigma_px
     } else {
         (vars.iter().sum::<f64>() / vars.len() as f64).sqrt()
     };
-    let est = metrocell_camera_model::estimate_planar_pose(pi.camera, &object, &image, sigma).ok()?;
+    let est =
+        metrocell_camera_model::estimate_planar_pose(pi.camera, &object, &image, sigma).ok()?;
     let ros = est.to_ros();
     let mut pose = TargetPose {
         position: ros.position,
@@ -323,7 +389,9 @@ mod tests {
             assert_eq!(f.message_name(), msg, "{input}");
         }
         let b = TargetFamily::parse("checkerboard", Some((9, 6)), Some(0.01)).unwrap();
-        assert!(matches!(b, TargetFamily::Checkerboard { cols: 9, rows: 6, square } if square == 0.01));
+        assert!(
+            matches!(b, TargetFamily::Checkerboard { cols: 9, rows: 6, square } if square == 0.01)
+        );
         assert!(TargetFamily::parse("checkerboard", None, None).is_err());
         let h = TargetFamily::parse("Drilled_Holes", Some((5, 5)), None).unwrap();
         assert!(matches!(h, TargetFamily::DrilledHoles { cols: 5, rows: 5 }));

@@ -23,7 +23,10 @@ fn holes() -> (Vec<[f64; 2]>, Vec<[f64; 2]>) {
             let (x, y) = ((i as f64 + 0.5) * SQUARE, (j as f64 + 0.5) * SQUARE);
             nominal.push([x, y]);
             // ±0.3 mm: scale error in x, squareness-like shear in y.
-            truth.push([x + 0.004 * (x - 0.03) + 0.0001 * (j as f64 - 2.5) / 2.5, y + 0.003 * (x - 0.03) - 0.0001]);
+            truth.push([
+                x + 0.004 * (x - 0.03) + 0.0001 * (j as f64 - 2.5) / 2.5,
+                y + 0.003 * (x - 0.03) - 0.0001,
+            ]);
         }
     }
     (nominal, truth)
@@ -41,8 +44,20 @@ fn to_board(cam: &CameraModel, pose: &Isometry3<f64>, px: &Point2<f64>) -> [f64;
 
 fn measure(image: &image::GrayImage, cam: &CameraModel, nominal: &[[f64; 2]]) -> Vec<[f64; 2]> {
     let board = detect_checkerboard(image, N - 1, N - 1).unwrap();
-    let object: Vec<[f64; 3]> = (0..(N - 1) * (N - 1)).map(|k| [((k % (N - 1)) + 1) as f64 * SQUARE, ((k / (N - 1)) + 1) as f64 * SQUARE, 0.0]).collect();
-    let pix: Vec<[f64; 2]> = board.corners.iter().map(|c| [c.position.x, c.position.y]).collect();
+    let object: Vec<[f64; 3]> = (0..(N - 1) * (N - 1))
+        .map(|k| {
+            [
+                ((k % (N - 1)) + 1) as f64 * SQUARE,
+                ((k / (N - 1)) + 1) as f64 * SQUARE,
+                0.0,
+            ]
+        })
+        .collect();
+    let pix: Vec<[f64; 2]> = board
+        .corners
+        .iter()
+        .map(|c| [c.position.x, c.position.y])
+        .collect();
     let est = estimate_planar_pose(cam, &object, &pix, 0.05).unwrap();
     let iso = Isometry3::from_parts(
         Translation3::from(est.pose.translation),
@@ -62,7 +77,11 @@ fn measure(image: &image::GrayImage, cam: &CameraModel, nominal: &[[f64; 2]]) ->
         .enumerate()
         .map(|(k, h)| {
             let h = h.as_ref().unwrap_or_else(|e| panic!("hole {k}: {e}"));
-            assert!((h.semi_axes[0] - 12.5).abs() < 1.5, "hole {k}: semi-axis {} px for a 1 mm hole at 0.04 mm/px", h.semi_axes[0]);
+            assert!(
+                (h.semi_axes[0] - 12.5).abs() < 1.5,
+                "hole {k}: semi-axis {} px for a 1 mm hole at 0.04 mm/px",
+                h.semi_axes[0]
+            );
             to_board(cam, &iso, &h.centre)
         })
         .collect()
@@ -73,20 +92,45 @@ fn measure(image: &image::GrayImage, cam: &CameraModel, nominal: &[[f64; 2]]) ->
 fn t8_view(truth: &[[f64; 2]], extra: Vec<TargetItem>) -> (CameraModel, image::GrayImage) {
     let dist = Distortion::BrownConrady([-0.25, 0.08, 0.0, 0.0, 0.0]);
     let cam = CameraModel::new(1700, 1700, 2500.0, 2500.0, 849.5, 849.5, dist).unwrap();
-    let mut items = vec![TargetItem::Checkerboard { top_left: [0.0, 0.0], square: SQUARE, squares_x: N as u32, squares_y: N as u32 }];
-    items.extend(truth.iter().map(|c| TargetItem::Hole { centre: *c, diameter: 0.001 }));
+    let mut items = vec![TargetItem::Checkerboard {
+        top_left: [0.0, 0.0],
+        square: SQUARE,
+        squares_x: N as u32,
+        squares_y: N as u32,
+    }];
+    items.extend(truth.iter().map(|c| TargetItem::Hole {
+        centre: *c,
+        diameter: 0.001,
+    }));
     items.extend(extra);
     let rot = UnitQuaternion::from_euler_angles(0.06, -0.05, 0.3);
     let t = Vector3::new(0.0, 0.0, 0.1) - rot * Vector3::new(0.03, 0.03, 0.0);
     let pose = Isometry3::from_parts(Translation3::from(t), rot);
-    let settings = RenderSettings { blur_sigma_px: 0.8, noise_sigma: 2.0, supersampling: 8, ..Default::default() };
-    (cam, render_view(&cam, &pose, &PlanarTarget { items }, &settings).unwrap().image)
+    let settings = RenderSettings {
+        blur_sigma_px: 0.8,
+        noise_sigma: 2.0,
+        supersampling: 8,
+        ..Default::default()
+    };
+    (
+        cam,
+        render_view(&cam, &pose, &PlanarTarget { items }, &settings)
+            .unwrap()
+            .image,
+    )
 }
 
 /// RMS and largest distance (m) of measured board positions from the truth.
 fn errors(measured: &[[f64; 2]], truth: &[[f64; 2]]) -> (f64, f64) {
-    let d: Vec<f64> = measured.iter().zip(truth).map(|(a, b)| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()).collect();
-    ((d.iter().map(|e| e * e).sum::<f64>() / d.len() as f64).sqrt(), d.iter().cloned().fold(0.0, f64::max))
+    let d: Vec<f64> = measured
+        .iter()
+        .zip(truth)
+        .map(|(a, b)| ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt())
+        .collect();
+    (
+        (d.iter().map(|e| e * e).sum::<f64>() / d.len() as f64).sqrt(),
+        d.iter().cloned().fold(0.0, f64::max),
+    )
 }
 
 #[test]
@@ -96,11 +140,18 @@ fn hole_centres_recovered_below_20_um_and_uncorrected_image_is_biased() {
 
     let corrected = measure(&image, &cam, &nominal);
     let rms_c = errors(&corrected, &truth).0;
-    println!("corrected: RMS {:.2} µm over {} holes", rms_c * 1e6, corrected.len());
+    println!(
+        "corrected: RMS {:.2} µm over {} holes",
+        rms_c * 1e6,
+        corrected.len()
+    );
     assert!(rms_c < 20e-6, "corrected RMS {:.2} µm ≥ 20 µm", rms_c * 1e6);
 
     // Same image, distortion ignored (K only).
-    let naive = CameraModel { distortion: Distortion::none(), ..cam };
+    let naive = CameraModel {
+        distortion: Distortion::none(),
+        ..cam
+    };
     let biased = measure(&image, &naive, &nominal);
     let rms_u = errors(&biased, &truth).0;
     // Systematic: the error grows with distance from the board centre (radial pattern), it is
@@ -109,14 +160,30 @@ fn hole_centres_recovered_below_20_um_and_uncorrected_image_is_biased() {
     let (r, e): (Vec<f64>, Vec<f64>) = biased
         .iter()
         .zip(&truth)
-        .map(|(a, b)| (((b[0] - c[0]).powi(2) + (b[1] - c[1]).powi(2)).sqrt(), ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt()))
+        .map(|(a, b)| {
+            (
+                ((b[0] - c[0]).powi(2) + (b[1] - c[1]).powi(2)).sqrt(),
+                ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2)).sqrt(),
+            )
+        })
         .unzip();
     let mean = |v: &[f64]| v.iter().sum::<f64>() / v.len() as f64;
     let (mr, me) = (mean(&r), mean(&e));
     let cov: f64 = r.iter().zip(&e).map(|(a, b)| (a - mr) * (b - me)).sum();
-    let corr = cov / (r.iter().map(|a| (a - mr).powi(2)).sum::<f64>() * e.iter().map(|b| (b - me).powi(2)).sum::<f64>()).sqrt();
-    println!("uncorrected: RMS {:.1} µm, correlation of |error| with radius {:.2}", rms_u * 1e6, corr);
-    assert!(rms_u > 10.0 * rms_c && rms_u > 100e-6, "uncorrected RMS {:.1} µm should show the distortion bias", rms_u * 1e6);
+    let corr = cov
+        / (r.iter().map(|a| (a - mr).powi(2)).sum::<f64>()
+            * e.iter().map(|b| (b - me).powi(2)).sum::<f64>())
+        .sqrt();
+    println!(
+        "uncorrected: RMS {:.1} µm, correlation of |error| with radius {:.2}",
+        rms_u * 1e6,
+        corr
+    );
+    assert!(
+        rms_u > 10.0 * rms_c && rms_u > 100e-6,
+        "uncorrected RMS {:.1} µm should show the distortion bias",
+        rms_u * 1e6
+    );
     assert!(corr > 0.5, "bias is radial: correlation {corr:.2}");
 }
 
@@ -132,14 +199,25 @@ fn hole_centres_stay_below_20_um_with_burrs_and_dirt_next_to_every_hole() {
     let mut extra = Vec::new();
     for (k, c) in truth.iter().enumerate() {
         let a = k as f64 * 2.399_963; // golden angle: directions spread over the circle
-        extra.push(TargetItem::Hole { centre: [c[0] + 0.0011 * a.cos(), c[1] + 0.0011 * a.sin()], diameter: 0.0005 });
+        extra.push(TargetItem::Hole {
+            centre: [c[0] + 0.0011 * a.cos(), c[1] + 0.0011 * a.sin()],
+            diameter: 0.0005,
+        });
         if k % 3 == 0 {
             let b = a + std::f64::consts::PI;
-            extra.push(TargetItem::Hole { centre: [c[0] + 0.0020 * b.cos(), c[1] + 0.0020 * b.sin()], diameter: 0.001 });
+            extra.push(TargetItem::Hole {
+                centre: [c[0] + 0.0020 * b.cos(), c[1] + 0.0020 * b.sin()],
+                diameter: 0.001,
+            });
         }
     }
     let (cam, image) = t8_view(&truth, extra);
     let (rms, worst) = errors(&measure(&image, &cam, &nominal), &truth);
-    println!("with distractors: RMS {:.2} µm, worst {:.2} µm over {} holes", rms * 1e6, worst * 1e6, truth.len());
+    println!(
+        "with distractors: RMS {:.2} µm, worst {:.2} µm over {} holes",
+        rms * 1e6,
+        worst * 1e6,
+        truth.len()
+    );
     assert!(rms < 20e-6, "RMS {:.2} µm ≥ 20 µm", rms * 1e6);
 }

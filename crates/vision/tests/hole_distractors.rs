@@ -13,14 +13,23 @@ use nalgebra::Point2;
 /// A disc (centre, radius px, grey level) painted over `img` with exact-ish area coverage
 /// (16 × 16 samples per pixel).
 fn paint_disc(img: &mut GrayImage, c: [f64; 2], r: f64, level: f64) {
-    let (x0, x1) = ((c[0] - r - 1.0).floor().max(0.0) as u32, ((c[0] + r + 1.0).ceil() as u32).min(img.width() - 1));
-    let (y0, y1) = ((c[1] - r - 1.0).floor().max(0.0) as u32, ((c[1] + r + 1.0).ceil() as u32).min(img.height() - 1));
+    let (x0, x1) = (
+        (c[0] - r - 1.0).floor().max(0.0) as u32,
+        ((c[0] + r + 1.0).ceil() as u32).min(img.width() - 1),
+    );
+    let (y0, y1) = (
+        (c[1] - r - 1.0).floor().max(0.0) as u32,
+        ((c[1] + r + 1.0).ceil() as u32).min(img.height() - 1),
+    );
     for y in y0..=y1 {
         for x in x0..=x1 {
             let mut inside = 0;
             for j in 0..16 {
                 for i in 0..16 {
-                    let (sx, sy) = (x as f64 - 0.5 + (i as f64 + 0.5) / 16.0, y as f64 - 0.5 + (j as f64 + 0.5) / 16.0);
+                    let (sx, sy) = (
+                        x as f64 - 0.5 + (i as f64 + 0.5) / 16.0,
+                        y as f64 - 0.5 + (j as f64 + 0.5) / 16.0,
+                    );
                     inside += ((sx - c[0]).powi(2) + (sy - c[1]).powi(2) <= r * r) as u32;
                 }
             }
@@ -45,7 +54,10 @@ fn scene(extra: &[([f64; 2], f64, f64)]) -> GrayImage {
 }
 
 fn search() -> HoleSearch {
-    HoleSearch { window_half_px: 30, ..Default::default() }
+    HoleSearch {
+        window_half_px: 30,
+        ..Default::default()
+    }
 }
 
 fn measure(img: &GrayImage) -> Result<Point2<f64>, HoleRejection> {
@@ -74,10 +86,14 @@ fn blobs_clear_of_the_hole_are_ignored() {
         ("bright burr", [HOLE[0] - 18.0, HOLE[1] + 10.0], 4.0, 255.0),
     ];
     for (what, c, r, level) in cases {
-        let got = measure(&scene(&[(c, r, level)])).unwrap_or_else(|e| panic!("{what}: rejected ({e})"));
+        let got =
+            measure(&scene(&[(c, r, level)])).unwrap_or_else(|e| panic!("{what}: rejected ({e})"));
         let e = error_px(got);
         println!("{what}: centre error {e:.4} px");
-        assert!(e < 0.02, "{what}: centre error {e:.4} px (clean image {clean:.4} px)");
+        assert!(
+            e < 0.02,
+            "{what}: centre error {e:.4} px (clean image {clean:.4} px)"
+        );
     }
 }
 
@@ -85,7 +101,10 @@ fn blobs_clear_of_the_hole_are_ignored() {
 fn blobs_that_reach_the_measurement_or_compete_reject_the_cell() {
     // A speck 2 px from the hole's edge: inside the moment disc (radius 8 + 3 px margin).
     let e = measure(&scene(&[([HOLE[0] + R + 4.0, HOLE[1]], 2.0, 10.0)])).unwrap_err();
-    assert!(matches!(e, HoleRejection::BlobTooClose { gap_px } if gap_px < 3.0), "{e:?}");
+    assert!(
+        matches!(e, HoleRejection::BlobTooClose { gap_px } if gap_px < 3.0),
+        "{e:?}"
+    );
     // A bright reflection touching the disc: opposite polarity, still too close.
     let e = measure(&scene(&[([HOLE[0], HOLE[1] + R + 3.0], 2.0, 255.0)])).unwrap_err();
     assert!(matches!(e, HoleRejection::BlobTooClose { .. }), "{e:?}");

@@ -78,7 +78,9 @@ fn marker_poses_match_truth_at_least_as_well_as_opencv() {
     let metrocell_vision::Distortion::BrownConrady(d) = cam.distortion else {
         panic!("the test camera is Brown–Conrady");
     };
-    let nums: Vec<String> = [side, cam.fx, cam.fy, cam.cx, cam.cy, d[0], d[1], d[2], d[3], d[4]]
+    let nums: Vec<String> = [
+        side, cam.fx, cam.fy, cam.cx, cam.cy, d[0], d[1], d[2], d[3], d[4],
+    ]
     .iter()
     .map(|v| v.to_string())
     .collect();

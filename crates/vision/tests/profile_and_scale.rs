@@ -6,7 +6,9 @@ use metrocell_vision::checkerboard::detect_checkerboard;
 use metrocell_vision::edge_fit::normal_cdf;
 use metrocell_vision::edge_profile::{find_profile_edges, sample_line_profile};
 use metrocell_vision::scale::{plane_scale_from_checkerboard, scale_from_length};
-use metrocell_vision::{render_view, CameraModel, Distortion, PlanarTarget, RenderSettings, TargetItem};
+use metrocell_vision::{
+    render_view, CameraModel, Distortion, PlanarTarget, RenderSettings, TargetItem,
+};
 use nalgebra::{Isometry3, Point2};
 use rand::{Rng, SeedableRng};
 
@@ -86,7 +88,16 @@ fn checkerboard_scale_reproduces_0_07226_mm_per_px() {
     assert!(scale_from_length(0.0, 1.0).is_err() && scale_from_length(0.01, f64::NAN).is_err());
 
     // f·square/Z = 1383.89 · 0.010 / 0.100 = 138.389 px per square.
-    let cam = CameraModel::new(1280, 960, 1383.89, 1383.89, 639.5, 479.5, Distortion::none()).unwrap();
+    let cam = CameraModel::new(
+        1280,
+        960,
+        1383.89,
+        1383.89,
+        639.5,
+        479.5,
+        Distortion::none(),
+    )
+    .unwrap();
     let target = PlanarTarget {
         items: vec![TargetItem::Checkerboard {
             top_left: [0.0, 0.0],

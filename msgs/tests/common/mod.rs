@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 pub fn registry_from_files() -> rosmsg::Registry {
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
     let mut r = rosmsg::Registry::new();
-    r.add_package_dir("metrocell_msgs", &root.join("msg")).unwrap();
+    r.add_package_dir("metrocell_msgs", &root.join("msg"))
+        .unwrap();
     r.add_tree(&root.join("interfaces")).unwrap();
     r.check().unwrap();
     r

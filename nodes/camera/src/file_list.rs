@@ -18,7 +18,9 @@ pub enum FileListError {
 const EXTENSIONS: [&str; 5] = ["png", "jpg", "jpeg", "tif", "tiff"];
 
 fn is_image(p: &Path) -> bool {
-    p.extension().and_then(|e| e.to_str()).is_some_and(|e| EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()))
+    p.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| EXTENSIONS.contains(&e.to_ascii_lowercase().as_str()))
 }
 
 /// Shell-style match of `*` (any run) and `?` (one character).
@@ -50,17 +52,31 @@ pub fn list_image_files(spec: &str) -> Result<Vec<PathBuf>, FileListError> {
     let (dir, pattern) = if path.is_dir() {
         (path.to_path_buf(), "*".to_string())
     } else {
-        let dir = path.parent().filter(|d| !d.as_os_str().is_empty()).unwrap_or(Path::new("."));
+        let dir = path
+            .parent()
+            .filter(|d| !d.as_os_str().is_empty())
+            .unwrap_or(Path::new("."));
         if dir.to_string_lossy().contains(['*', '?']) {
             return Err(FileListError::WildcardInDirectory(spec.into()));
         }
-        (dir.to_path_buf(), path.file_name().map(|f| f.to_string_lossy().into_owned()).unwrap_or_default())
+        (
+            dir.to_path_buf(),
+            path.file_name()
+                .map(|f| f.to_string_lossy().into_owned())
+                .unwrap_or_default(),
+        )
     };
-    let entries = std::fs::read_dir(&dir).map_err(|e| FileListError::Unreadable { path: dir.display().to_string(), reason: e.to_string() })?;
+    let entries = std::fs::read_dir(&dir).map_err(|e| FileListError::Unreadable {
+        path: dir.display().to_string(),
+        reason: e.to_string(),
+    })?;
     let mut files: Vec<PathBuf> = entries
         .filter_map(|e| e.ok().map(|e| e.path()))
         .filter(|p| p.is_file() && is_image(p))
-        .filter(|p| p.file_name().is_some_and(|f| wildcard_match(&pattern, &f.to_string_lossy())))
+        .filter(|p| {
+            p.file_name()
+                .is_some_and(|f| wildcard_match(&pattern, &f.to_string_lossy()))
+        })
         .collect();
     files.sort();
     if files.is_empty() {
@@ -79,15 +95,29 @@ mod tests {
         assert!(wildcard_match("v?ew*", "view_01.png"));
         assert!(!wildcard_match("view_*.png", "view_01.jpg"));
         assert!(wildcard_match("*", "a"));
-        let dir = std::env::temp_dir().join(format!("metrocell-camera-list-{}", std::process::id()));
+        let dir =
+            std::env::temp_dir().join(format!("metrocell-camera-list-{}", std::process::id()));
         std::fs::create_dir_all(&dir).unwrap();
         for f in ["b.png", "a.PNG", "c.txt", "d.tiff"] {
             std::fs::write(dir.join(f), b"x").unwrap();
         }
-        let names = |v: Vec<PathBuf>| v.iter().map(|p| p.file_name().unwrap().to_string_lossy().into_owned()).collect::<Vec<_>>();
-        assert_eq!(names(list_image_files(dir.to_str().unwrap()).unwrap()), ["a.PNG", "b.png", "d.tiff"]);
-        assert_eq!(names(list_image_files(dir.join("*.png").to_str().unwrap()).unwrap()), ["b.png"]);
-        assert!(matches!(list_image_files(dir.join("*.jpg").to_str().unwrap()), Err(FileListError::NoMatch(_))));
+        let names = |v: Vec<PathBuf>| {
+            v.iter()
+                .map(|p| p.file_name().unwrap().to_string_lossy().into_owned())
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(
+            names(list_image_files(dir.to_str().unwrap()).unwrap()),
+            ["a.PNG", "b.png", "d.tiff"]
+        );
+        assert_eq!(
+            names(list_image_files(dir.join("*.png").to_str().unwrap()).unwrap()),
+            ["b.png"]
+        );
+        assert!(matches!(
+            list_image_files(dir.join("*.jpg").to_str().unwrap()),
+            Err(FileListError::NoMatch(_))
+        ));
         std::fs::remove_dir_all(&dir).unwrap();
     }
 }

@@ -48,25 +48,44 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let looping = node.param::<bool>("loop")?;
     let frame_id = node.param::<String>("frame_id")?;
     let url = node.param::<String>("camera_info_url")?;
-    let stamps = StampSource::parse(&node.param::<String>("stamp_source")?, &node.param::<String>("stamp_pattern")?)?;
+    let stamps = StampSource::parse(
+        &node.param::<String>("stamp_source")?,
+        &node.param::<String>("stamp_pattern")?,
+    )?;
     let info = if url.is_empty() {
         None
     } else {
-        Some(CameraInfoYaml::load(std::path::Path::new(url.trim_start_matches("file://")))?)
+        Some(CameraInfoYaml::load(std::path::Path::new(
+            url.trim_start_matches("file://"),
+        ))?)
     };
     let device = node.param::<String>("device")?;
     if !device.is_empty() {
         let images = node.publisher::<Image>("image", qos::sensor_data())?;
         let infos = node.publisher::<CameraInfo>("camera_info", qos::sensor_data())?;
         let info = info.as_ref().map(CameraInfoYaml::to_msg);
-        return device::run(&node, &device, device::Outputs { images: &images, infos: &infos, info, frame_id });
+        return device::run(
+            &node,
+            &device,
+            device::Outputs {
+                images: &images,
+                infos: &infos,
+                info,
+                frame_id,
+            },
+        );
     }
     let path = node.param::<String>("path")?;
     if path.is_empty() {
         return Err("no source: set -p path:=DIR_OR_GLOB (image files) or -p device:=/dev/videoN (V4L2); --help lists the parameters".into());
     }
     let files = file_list::list_image_files(&path)?;
-    node.info(format!("{} files, {} fps, loop {looping}, camera_info {}", files.len(), rate, if url.is_empty() { "none" } else { &url }));
+    node.info(format!(
+        "{} files, {} fps, loop {looping}, camera_info {}",
+        files.len(),
+        rate,
+        if url.is_empty() { "none" } else { &url }
+    ));
 
     let images = node.publisher::<Image>("image", qos::sensor_data())?;
     let infos = node.publisher::<CameraInfo>("camera_info", qos::sensor_data())?;
@@ -104,12 +123,22 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                 next = next.max(now) + p;
             }
             let ns = capture_ns.unwrap_or_else(|| node.now().to_nanos());
-            let header = Header { stamp: Time::from_nanos(ns), frame_id: frame_id.clone() };
+            let header = Header {
+                stamp: Time::from_nanos(ns),
+                frame_id: frame_id.clone(),
+            };
             img.header = header.clone();
             if let Some(info) = &info {
                 if info.image_width != img.width || info.image_height != img.height {
                     diagnostics.add_count("size_mismatch", 1);
-                    node.warn(format!("{}: {}x{} but camera_info is {}x{}", path.display(), img.width, img.height, info.image_width, info.image_height));
+                    node.warn(format!(
+                        "{}: {}x{} but camera_info is {}x{}",
+                        path.display(),
+                        img.width,
+                        img.height,
+                        info.image_width,
+                        info.image_height
+                    ));
                 }
                 let mut ci = info.to_msg();
                 ci.header = header;

@@ -31,17 +31,33 @@ mod tests {
     use metrocell_node::{parse_command_line, Parameters};
 
     fn resolve(args: &[&str]) -> Result<Parameters, String> {
-        let cl = parse_command_line(["metrocell-camera", "--ros-args"].iter().chain(args).copied()).map_err(|e| e.to_string())?;
-        Parameters::resolve(&declarations(), &cl.ros, "/camera", "camera").map_err(|e| e.to_string())
+        let cl = parse_command_line(
+            ["metrocell-camera", "--ros-args"]
+                .iter()
+                .chain(args)
+                .copied(),
+        )
+        .map_err(|e| e.to_string())?;
+        Parameters::resolve(&declarations(), &cl.ros, "/camera", "camera")
+            .map_err(|e| e.to_string())
     }
 
     #[test]
     fn frame_size_out_of_range_is_an_error_naming_the_range() {
         let p = resolve(&["-p", "width:=1920", "-p", "height:=1080"]).unwrap();
-        assert_eq!((p.get::<i64>("width").unwrap(), p.get::<i64>("height").unwrap()), (1920, 1080));
+        assert_eq!(
+            (
+                p.get::<i64>("width").unwrap(),
+                p.get::<i64>("height").unwrap()
+            ),
+            (1920, 1080)
+        );
         // Negative sizes were clamped to 0 (= "driver's current") without a word.
         let e = resolve(&["-p", "width:=-640"]).unwrap_err();
-        assert!(e.contains("'width'") && e.contains("[0, 16384]") && e.contains("-640"), "{e}");
+        assert!(
+            e.contains("'width'") && e.contains("[0, 16384]") && e.contains("-640"),
+            "{e}"
+        );
         let e = resolve(&["-p", "height:=100000"]).unwrap_err();
         assert!(e.contains("'height'") && e.contains("100000"), "{e}");
         // Above u32::MAX the old `as u32` wrapped to a different size.

@@ -17,22 +17,56 @@ fn stamp(h: &metrocell_msgs::std_msgs::msg::Header) -> i64 {
 }
 
 fn write_frame(path: &Path, mtime_ns: u64) {
-    image::GrayImage::from_fn(32, 24, |x, y| image::Luma([(x * 7 + y) as u8])).save(path).unwrap();
+    image::GrayImage::from_fn(32, 24, |x, y| image::Luma([(x * 7 + y) as u8]))
+        .save(path)
+        .unwrap();
     let t = UNIX_EPOCH + Duration::from_nanos(mtime_ns);
-    std::fs::File::options().write(true).open(path).unwrap().set_modified(t).unwrap();
+    std::fs::File::options()
+        .write(true)
+        .open(path)
+        .unwrap()
+        .set_modified(t)
+        .unwrap();
 }
 
 /// Run the camera on `dir` (looping) in namespace `ns` with `extra` parameters and collect the
 /// stamps and frame_ids of the frames it publishes for a few seconds.
 fn stamps_published(ns: &str, dir: &Path, extra: &[&str]) -> (BTreeSet<i64>, BTreeSet<String>) {
-    let mut node = MetrocellNode::builder("stamp_test_sub").namespace(ns).diagnostics_period(None).handle_signals(false).build().unwrap();
-    let images = node.subscription::<Image>("image", qos::sensor_data()).unwrap();
-    let mut args = vec!["--ros-args".to_string(), "-r".into(), format!("__ns:={ns}"), "-p".into(), format!("path:={}", dir.display())];
-    args.extend(["-p", "rate:=20.0", "-p", "loop:=true", "-p", "frame_id:=cam_optical"].map(String::from));
+    let mut node = MetrocellNode::builder("stamp_test_sub")
+        .namespace(ns)
+        .diagnostics_period(None)
+        .handle_signals(false)
+        .build()
+        .unwrap();
+    let images = node
+        .subscription::<Image>("image", qos::sensor_data())
+        .unwrap();
+    let mut args = vec![
+        "--ros-args".to_string(),
+        "-r".into(),
+        format!("__ns:={ns}"),
+        "-p".into(),
+        format!("path:={}", dir.display()),
+    ];
+    args.extend(
+        [
+            "-p",
+            "rate:=20.0",
+            "-p",
+            "loop:=true",
+            "-p",
+            "frame_id:=cam_optical",
+        ]
+        .map(String::from),
+    );
     for e in extra {
         args.extend(["-p".to_string(), e.to_string()]);
     }
-    let mut child = Command::new(env!("CARGO_BIN_EXE_metrocell-camera")).args(&args).stderr(Stdio::null()).spawn().unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_metrocell-camera"))
+        .args(&args)
+        .stderr(Stdio::null())
+        .spawn()
+        .unwrap();
     let (mut stamps, mut frames) = (BTreeSet::new(), BTreeSet::new());
     let deadline = Instant::now() + Duration::from_secs(6);
     while Instant::now() < deadline {
@@ -64,10 +98,22 @@ fn file_frames_carry_their_modification_time_or_the_time_in_their_name() {
     write_frame(&by_name.join("cam0_1700000002.5.png"), t2);
 
     let (stamps, frames) = stamps_published("/by_mtime", &by_mtime, &[]);
-    assert_eq!(stamps, BTreeSet::from([t1 as i64, t2 as i64]), "default stamp_source mtime");
+    assert_eq!(
+        stamps,
+        BTreeSet::from([t1 as i64, t2 as i64]),
+        "default stamp_source mtime"
+    );
     assert_eq!(frames, BTreeSet::from(["cam_optical".to_string()]));
 
-    let (stamps, _) = stamps_published("/by_name", &by_name, &["stamp_source:=filename", "stamp_pattern:=cam0_{s}.png"]);
-    assert_eq!(stamps, BTreeSet::from([1_700_000_000_000_000_001, 1_700_000_002_500_000_000]), "stamp_source filename");
+    let (stamps, _) = stamps_published(
+        "/by_name",
+        &by_name,
+        &["stamp_source:=filename", "stamp_pattern:=cam0_{s}.png"],
+    );
+    assert_eq!(
+        stamps,
+        BTreeSet::from([1_700_000_000_000_000_001, 1_700_000_002_500_000_000]),
+        "stamp_source filename"
+    );
     std::fs::remove_dir_all(&dir).unwrap();
 }

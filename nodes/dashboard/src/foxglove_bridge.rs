@@ -6,7 +6,9 @@
 use std::collections::BTreeMap;
 use std::sync::Arc;
 
-use foxglove::{ChannelBuilder, Context, PartialMetadata, RawChannel, Schema, WebSocketServerHandle};
+use foxglove::{
+    ChannelBuilder, Context, PartialMetadata, RawChannel, Schema, WebSocketServerHandle,
+};
 use metrocell_node::RawMessage;
 
 pub struct FoxgloveBridge {
@@ -17,7 +19,11 @@ pub struct FoxgloveBridge {
 
 impl FoxgloveBridge {
     /// Start the server on `address:port` (port 0: any free port) in `runtime`.
-    pub fn start(runtime: &tokio::runtime::Handle, address: &str, port: u16) -> Result<FoxgloveBridge, String> {
+    pub fn start(
+        runtime: &tokio::runtime::Handle,
+        address: &str,
+        port: u16,
+    ) -> Result<FoxgloveBridge, String> {
         let context = Context::new();
         let server = context
             .websocket_server()
@@ -26,7 +32,11 @@ impl FoxgloveBridge {
             .tokio_runtime(runtime)
             .start_blocking()
             .map_err(|e| format!("Foxglove WebSocket server on {address}:{port}: {e}"))?;
-        Ok(FoxgloveBridge { context, server: Some(server), channels: BTreeMap::new() })
+        Ok(FoxgloveBridge {
+            context,
+            server: Some(server),
+            channels: BTreeMap::new(),
+        })
     }
 
     pub fn port(&self) -> u16 {
@@ -34,7 +44,12 @@ impl FoxgloveBridge {
     }
 
     /// Advertise `topic` (`pkg/msg/Type`, full ros2msg definition).
-    pub fn advertise(&mut self, topic: &str, ros_type: &str, definition: String) -> Result<(), String> {
+    pub fn advertise(
+        &mut self,
+        topic: &str,
+        ros_type: &str,
+        definition: String,
+    ) -> Result<(), String> {
         if self.channels.contains_key(topic) {
             return Ok(());
         }

@@ -37,11 +37,20 @@ pub struct Ingest {
 
 impl Ingest {
     pub fn new(routes: Routes) -> Ingest {
-        Ingest { routes, subscriptions: Vec::new(), known: BTreeSet::new(), next_scan: Instant::now() }
+        Ingest {
+            routes,
+            subscriptions: Vec::new(),
+            known: BTreeSet::new(),
+            next_scan: Instant::now(),
+        }
     }
 
     /// Subscribe topics that appeared since the last scan (at most once a second).
-    pub fn scan(&mut self, node: &mut MetrocellNode, bridge: Option<&mut FoxgloveBridge>) -> Result<(), Box<dyn std::error::Error>> {
+    pub fn scan(
+        &mut self,
+        node: &mut MetrocellNode,
+        bridge: Option<&mut FoxgloveBridge>,
+    ) -> Result<(), Box<dyn std::error::Error>> {
         if Instant::now() < self.next_scan {
             return Ok(());
         }
@@ -54,18 +63,39 @@ impl Ingest {
                 continue;
             }
             let Ok(definition) = metrocell_msgs::registry().full_definition(&t.type_name) else {
-                node.info(format!("not showing {}: metrocell does not know its type {}", t.name, t.type_name));
+                node.info(format!(
+                    "not showing {}: metrocell does not know its type {}",
+                    t.name, t.type_name
+                ));
                 continue;
             };
             // camera frames are only forwarded (to Foxglove): a few, not 200 of them (≈ 1 GB of
             // 5 MP frames; RustDDS keeps a reader's whole queue), and no more than those
             let sub = if metrocell_bagtools::is_bulk_type(&t.type_name) {
-                node.bounded_raw_subscription(&t.name, &t.type_name, qos::sensor_data().history(ros2_client::qos::History::KeepLast { depth: BULK_DEPTH }))?
+                node.bounded_raw_subscription(
+                    &t.name,
+                    &t.type_name,
+                    qos::sensor_data()
+                        .history(ros2_client::qos::History::KeepLast { depth: BULK_DEPTH }),
+                )?
             } else {
-                let writers = writers.get_or_insert_with(|| node.context().domain_participant().discovered_writers());
-                let offered = offered_qos_of_topic(writers.iter().map(|w| &w.publication_topic_data), &dds_topic_name(&t.name));
-                let profile = if recording_qos(&offered).reliable { qos::reliable() } else { qos::sensor_data() };
-                node.raw_subscription(&t.name, &t.type_name, profile.history(ros2_client::qos::History::KeepLast { depth: 200 }))?
+                let writers = writers.get_or_insert_with(|| {
+                    node.context().domain_participant().discovered_writers()
+                });
+                let offered = offered_qos_of_topic(
+                    writers.iter().map(|w| &w.publication_topic_data),
+                    &dds_topic_name(&t.name),
+                );
+                let profile = if recording_qos(&offered).reliable {
+                    qos::reliable()
+                } else {
+                    qos::sensor_data()
+                };
+                node.raw_subscription(
+                    &t.name,
+                    &t.type_name,
+                    profile.history(ros2_client::qos::History::KeepLast { depth: 200 }),
+                )?
             };
             if let Some(b) = bridge.as_deref_mut() {
                 if let Err(e) = b.advertise(&t.name, &t.type_name, definition) {
@@ -73,14 +103,28 @@ impl Ingest {
                 }
             }
             let role = self.routes.role(&t.name, &t.type_name);
-            node.info(format!("reading {} ({}){}", t.name, t.type_name, if role == Role::Other { "" } else { " for the page" }));
+            node.info(format!(
+                "reading {} ({}){}",
+                t.name,
+                t.type_name,
+                if role == Role::Other {
+                    ""
+                } else {
+                    " for the page"
+                }
+            ));
             self.subscriptions.push((sub, role));
         }
         Ok(())
     }
 
     /// Take every waiting message; returns how many there were.
-    pub fn drain(&self, state: &Arc<Mutex<DashboardState>>, bridge: Option<&FoxgloveBridge>, node: &MetrocellNode) -> usize {
+    pub fn drain(
+        &self,
+        state: &Arc<Mutex<DashboardState>>,
+        bridge: Option<&FoxgloveBridge>,
+        node: &MetrocellNode,
+    ) -> usize {
         let mut n = 0;
         for (sub, role) in &self.subscriptions {
             loop {
@@ -116,7 +160,9 @@ fn apply(s: &mut DashboardState, topic: &str, role: &Role, m: &RawMessage) {
         payload: m.payload.clone(),
     };
     fn decoded<T: RosMessage>(s: &mut DashboardState, msg: &SourcedMessage) -> Option<T> {
-        msg.decode::<T>().map_err(|e| s.undecodable(&msg.topic, &e.to_string())).ok()
+        msg.decode::<T>()
+            .map_err(|e| s.undecodable(&msg.topic, &e.to_string()))
+            .ok()
     }
     // field errors are already counted by the state; nothing more to do with them here
     match role {

@@ -40,12 +40,18 @@ fn main() -> std::process::ExitCode {
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
     let (mut node, _) = MetrocellNode::from_env_args("dashboard", parameters::declarations())?;
-    let state = Arc::new(Mutex::new(DashboardState::new(parameters::state_config(node.parameters())?)));
+    let state = Arc::new(Mutex::new(DashboardState::new(parameters::state_config(
+        node.parameters(),
+    )?)));
     let address = node.param::<String>("bind_address")?;
     let port = u16::try_from(node.param::<i64>("port")?)?;
     let foxglove_port = node.param::<i64>("foxglove_port")?;
 
-    let runtime = tokio::runtime::Builder::new_multi_thread().worker_threads(2).enable_all().thread_name("dashboard-web").build()?;
+    let runtime = tokio::runtime::Builder::new_multi_thread()
+        .worker_threads(2)
+        .enable_all()
+        .thread_name("dashboard-web")
+        .build()?;
     let token = node.shutdown_token();
     let stop = token.clone();
     let (web_address, web_task) = runtime.block_on(web::serve(
@@ -55,7 +61,9 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         Duration::from_secs_f64(node.param::<f64>("push_period")?),
         async move { stop.triggered().await },
     ))?;
-    node.info(format!("dashboard at http://{web_address}/ (state: /api/state, updates: /ws)"));
+    node.info(format!(
+        "dashboard at http://{web_address}/ (state: /api/state, updates: /ws)"
+    ));
     let mut bridge = match u16::try_from(foxglove_port) {
         Ok(p) => {
             let b = foxglove_bridge::FoxgloveBridge::start(runtime.handle(), &address, p)?;
@@ -81,14 +89,23 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
                 (s.alerts(), s.cell_time())
             };
             if !alerts.is_empty() {
-                let stamp_ns = stamp.map_or_else(|| node.now().to_nanos(), |t| (t * 1e9).round() as i64);
+                let stamp_ns =
+                    stamp.map_or_else(|| node.now().to_nanos(), |t| (t * 1e9).round() as i64);
                 let _ = alerts_pub.publish(DiagnosticArray {
-                    header: Header { stamp: Time::from_nanos(stamp_ns), frame_id: String::new() },
+                    header: Header {
+                        stamp: Time::from_nanos(stamp_ns),
+                        frame_id: String::new(),
+                    },
                     status: to_statuses(&fqn, &alerts),
                 });
             }
             let worst = alerts.iter().map(|a| a.level).max().unwrap_or(Level::Ok);
-            let words = alerts.iter().filter(|a| a.level != Level::Ok).map(|a| a.message.clone()).collect::<Vec<_>>().join("; ");
+            let words = alerts
+                .iter()
+                .filter(|a| a.level != Level::Ok)
+                .map(|a| a.message.clone())
+                .collect::<Vec<_>>()
+                .join("; ");
             match worst {
                 Level::Ok => diagnostics.ok("serving"),
                 Level::Warn => diagnostics.warn(words),

@@ -30,12 +30,20 @@ pub struct Routes {
 impl Routes {
     pub fn from_node(node: &MetrocellNode) -> Result<Routes, Box<dyn std::error::Error>> {
         let resolve_all = |key: &str| -> Result<Vec<String>, Box<dyn std::error::Error>> {
-            Ok(node.param::<Vec<String>>(key)?.iter().map(|t| node.resolve_topic(t)).collect::<Result<Vec<_>, NodeError>>()?)
+            Ok(node
+                .param::<Vec<String>>(key)?
+                .iter()
+                .map(|t| node.resolve_topic(t))
+                .collect::<Result<Vec<_>, NodeError>>()?)
         };
         Ok(Routes {
             points: resolve_all("points_topics")?,
             models: resolve_all("model_topics")?,
-            temperature_prefix: format!("{}/", node.resolve_topic(&node.param::<String>("temperature_namespace")?)?.trim_end_matches('/')),
+            temperature_prefix: format!(
+                "{}/",
+                node.resolve_topic(&node.param::<String>("temperature_namespace")?)?
+                    .trim_end_matches('/')
+            ),
             tracker: node.resolve_topic(&node.param::<String>("tracker_topic")?)?,
         })
     }

@@ -24,7 +24,9 @@ struct Shared {
 }
 
 fn unix_ms() -> f64 {
-    std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map_or(0.0, |d| d.as_secs_f64() * 1e3)
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64() * 1e3)
 }
 
 fn snapshot_json(state: &Mutex<DashboardState>) -> String {
@@ -40,7 +42,9 @@ pub async fn serve(
     push_period: Duration,
     shutdown: impl std::future::Future<Output = ()> + Send + 'static,
 ) -> Result<(SocketAddr, tokio::task::JoinHandle<()>), String> {
-    let listener = tokio::net::TcpListener::bind((address, port)).await.map_err(|e| format!("web page on {address}:{port}: {e}"))?;
+    let listener = tokio::net::TcpListener::bind((address, port))
+        .await
+        .map_err(|e| format!("web page on {address}:{port}: {e}"))?;
     let bound = listener.local_addr().map_err(|e| e.to_string())?;
     let (tx, rx) = watch::channel(Arc::new(snapshot_json(&state)));
     let pusher_state = state.clone();
@@ -60,7 +64,10 @@ pub async fn serve(
         .route("/ws", get(ws))
         .with_state(Shared { state, pushes: rx });
     let task = tokio::spawn(async move {
-        if let Err(e) = axum::serve(listener, app).with_graceful_shutdown(shutdown).await {
+        if let Err(e) = axum::serve(listener, app)
+            .with_graceful_shutdown(shutdown)
+            .await
+        {
             eprintln!("metrocell-dashboard: web server stopped: {e}");
         }
     });
@@ -72,7 +79,11 @@ async fn page() -> Html<&'static str> {
 }
 
 async fn api_state(State(s): State<Shared>) -> Response {
-    ([(header::CONTENT_TYPE, "application/json")], snapshot_json(&s.state)).into_response()
+    (
+        [(header::CONTENT_TYPE, "application/json")],
+        snapshot_json(&s.state),
+    )
+        .into_response()
 }
 
 async fn ws(upgrade: WebSocketUpgrade, State(s): State<Shared>) -> Response {
@@ -84,7 +95,11 @@ async fn ws(upgrade: WebSocketUpgrade, State(s): State<Shared>) -> Response {
 async fn push(mut socket: WebSocket, mut pushes: watch::Receiver<Arc<String>>) {
     loop {
         let text = pushes.borrow_and_update().clone();
-        if socket.send(Message::Text(text.as_str().into())).await.is_err() {
+        if socket
+            .send(Message::Text(text.as_str().into()))
+            .await
+            .is_err()
+        {
             return;
         }
         tokio::select! {

@@ -17,7 +17,10 @@ const OK: u8 = 0;
 const WARN: u8 = 1;
 
 fn kv(key: &str, value: impl ToString) -> KeyValue {
-    KeyValue { key: key.into(), value: value.to_string() }
+    KeyValue {
+        key: key.into(),
+        value: value.to_string(),
+    }
 }
 
 /// What one run covered.
@@ -30,10 +33,19 @@ pub struct RunInfo {
 }
 
 /// The statuses of a diagnosis (module docs), stamped `stamp_ns`, from the node `hardware_id`.
-pub fn diagnosis_message(d: &Diagnosis, info: &RunInfo, stamp_ns: i64, hardware_id: &str) -> DiagnosticArray {
+pub fn diagnosis_message(
+    d: &Diagnosis,
+    info: &RunInfo,
+    stamp_ns: i64,
+    hardware_id: &str,
+) -> DiagnosticArray {
     let r = &d.report;
     let mut status = Vec::new();
-    let summary_level = if r.findings.is_empty() && r.unexplained.is_empty() && r.explained { OK } else { WARN };
+    let summary_level = if r.findings.is_empty() && r.unexplained.is_empty() && r.explained {
+        OK
+    } else {
+        WARN
+    };
     status.push(DiagnosticStatus {
         level: summary_level,
         name: "diagnose".into(),
@@ -43,24 +55,53 @@ pub fn diagnosis_message(d: &Diagnosis, info: &RunInfo, stamp_ns: i64, hardware_
             kv("run", info.run),
             kv("window_h", format!("{:.2}", (info.to - info.from) / 3600.0)),
             kv("records_used", r.records.used),
-            kv("heldout_rms_before_um", format!("{:.2}", r.before.heldout_rms_m * 1e6)),
-            kv("heldout_rms_after_um", format!("{:.2}", r.after.heldout_rms_m * 1e6)),
+            kv(
+                "heldout_rms_before_um",
+                format!("{:.2}", r.before.heldout_rms_m * 1e6),
+            ),
+            kv(
+                "heldout_rms_after_um",
+                format!("{:.2}", r.after.heldout_rms_m * 1e6),
+            ),
             kv("noise_rms_um", format!("{:.2}", r.noise_rms_m * 1e6)),
             kv("explained", r.explained),
         ],
     });
     for f in &r.findings {
         let mut values = vec![kv("term", &f.term), kv("where", &f.location.description)];
-        values.extend(f.parameters.iter().map(|(name, p)| kv(name, match p.sigma {
-            Some(s) => format!("{} ± {} {}", p.value, s, p.unit),
-            None => format!("{} {}", p.value, p.unit),
-        })));
-        status.push(DiagnosticStatus { level: WARN, name: format!("diagnose: {}", f.label), message: f.statement.clone(), hardware_id: hardware_id.into(), values });
+        values.extend(f.parameters.iter().map(|(name, p)| {
+            kv(
+                name,
+                match p.sigma {
+                    Some(s) => format!("{} ± {} {}", p.value, s, p.unit),
+                    None => format!("{} {}", p.value, p.unit),
+                },
+            )
+        }));
+        status.push(DiagnosticStatus {
+            level: WARN,
+            name: format!("diagnose: {}", f.label),
+            message: f.statement.clone(),
+            hardware_id: hardware_id.into(),
+            values,
+        });
     }
     for (k, u) in r.unexplained.iter().enumerate() {
-        status.push(DiagnosticStatus { level: WARN, name: format!("diagnose: unexplained {}", k + 1), message: u.statement.clone(), hardware_id: hardware_id.into(), values: vec![kv("where", &u.location.description)] });
+        status.push(DiagnosticStatus {
+            level: WARN,
+            name: format!("diagnose: unexplained {}", k + 1),
+            message: u.statement.clone(),
+            hardware_id: hardware_id.into(),
+            values: vec![kv("where", &u.location.description)],
+        });
     }
-    DiagnosticArray { header: Header { stamp: Time::from_nanos(stamp_ns), frame_id: String::new() }, status }
+    DiagnosticArray {
+        header: Header {
+            stamp: Time::from_nanos(stamp_ns),
+            frame_id: String::new(),
+        },
+        status,
+    }
 }
 
 /// The findings announced so far, by term label: a finding is new the first time its label
@@ -73,12 +114,29 @@ pub struct Announced {
 impl Announced {
     /// The statements of the findings of `d` not announced before; they are announced now.
     pub fn new_findings(&mut self, d: &Diagnosis) -> Vec<String> {
-        d.report.findings.iter().filter(|f| self.labels.insert(f.label.clone())).map(|f| format!("{}: {}", f.label, f.statement)).collect()
+        d.report
+            .findings
+            .iter()
+            .filter(|f| self.labels.insert(f.label.clone()))
+            .map(|f| format!("{}: {}", f.label, f.statement))
+            .collect()
     }
 }
 
 /// The summary status of a window that could not be diagnosed yet (too few records, …).
 pub fn waiting_message(message: &str, stamp_ns: i64, hardware_id: &str) -> DiagnosticArray {
-    let status = DiagnosticStatus { level: OK, name: "diagnose".into(), message: message.into(), hardware_id: hardware_id.into(), values: Vec::new() };
-    DiagnosticArray { header: Header { stamp: Time::from_nanos(stamp_ns), frame_id: String::new() }, status: vec![status] }
+    let status = DiagnosticStatus {
+        level: OK,
+        name: "diagnose".into(),
+        message: message.into(),
+        hardware_id: hardware_id.into(),
+        values: Vec::new(),
+    };
+    DiagnosticArray {
+        header: Header {
+            stamp: Time::from_nanos(stamp_ns),
+            frame_id: String::new(),
+        },
+        status: vec![status],
+    }
 }

@@ -49,23 +49,36 @@ fn main() -> std::process::ExitCode {
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let (builder, rest) = MetrocellNode::builder("diagnose").params(parameters::declarations()).node_argument(ReplayArgs::FLAG, ReplayArgs::HELP).args(std::env::args())?;
+    let (builder, rest) = MetrocellNode::builder("diagnose")
+        .params(parameters::declarations())
+        .node_argument(ReplayArgs::FLAG, ReplayArgs::HELP)
+        .args(std::env::args())?;
     match ReplayArgs::parse(rest.get(1..).unwrap_or_default())? {
         Some(args) => replay(builder.build_offline()?, &args),
         None => live(builder.build()?),
     }
 }
 
-fn subscribe(node: &mut MetrocellNode, name: &str, ros_type: &str) -> Result<RawSubscription, metrocell_node::NodeError> {
+fn subscribe(
+    node: &mut MetrocellNode,
+    name: &str,
+    ros_type: &str,
+) -> Result<RawSubscription, metrocell_node::NodeError> {
     // a latched topic (the tracker's power-on time) is read latched, so a late start still gets it
-    let profile = if name == POWER_ON_TOPIC { qos::latched() } else { qos::stream(qos::reliable()) };
+    let profile = if name == POWER_ON_TOPIC {
+        qos::latched()
+    } else {
+        qos::stream(qos::reliable())
+    };
     node.raw_subscription(name, ros_type, profile)
 }
 
 type RunResult = (RunInfo, Result<Diagnosis, DiagnoseError>);
 
 fn live(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
-    let setup = parameters::setup(node.parameters(), &|t| node.resolve_topic(t).map_err(|e| e.to_string()))?;
+    let setup = parameters::setup(node.parameters(), &|t| {
+        node.resolve_topic(t).map_err(|e| e.to_string())
+    })?;
     for line in &setup.describe {
         node.info(line);
     }
@@ -75,7 +88,11 @@ fn live(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
     let mut session = Session::new(setup, Path::new("live DDS"), &topics)?;
     let mut subscriptions = Vec::new();
     for topic in session.stream.topics() {
-        let ty = topics.iter().find(|(n, _)| *n == topic).map(|(_, t)| t.clone()).expect("the stream reads only topics it was given");
+        let ty = topics
+            .iter()
+            .find(|(n, _)| *n == topic)
+            .map(|(_, t)| t.clone())
+            .expect("the stream reads only topics it was given");
         subscriptions.push(subscribe(&mut node, &topic, &ty)?);
     }
     let statuses_pub = node.publisher::<DiagnosticArray>("/diagnostics", qos::reliable())?;
@@ -98,14 +115,20 @@ fn live(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
                 if let Some(which) = SignalTopic::of(&t.name, &t.type_name) {
                     subscriptions.push(subscribe(&mut node, &t.name, &t.type_name)?);
                     session.stream.add_signal_topic(t.name.clone(), which);
-                    node.logger().debug(format!("reading {} ({})", t.name, t.type_name));
+                    node.logger()
+                        .debug(format!("reading {} ({})", t.name, t.type_name));
                     topics.push((t.name, t.type_name));
                 }
             }
         }
         for sub in &subscriptions {
             while let Ok(Some(m)) = sub.take() {
-                let message = SourcedMessage { topic: sub.topic().to_string(), log_time_ns: m.receive_time_ns.max(0) as u64, publish_time_ns: m.source_time_ns.unwrap_or(m.receive_time_ns).max(0) as u64, payload: m.payload };
+                let message = SourcedMessage {
+                    topic: sub.topic().to_string(),
+                    log_time_ns: m.receive_time_ns.max(0) as u64,
+                    publish_time_ns: m.source_time_ns.unwrap_or(m.receive_time_ns).max(0) as u64,
+                    payload: m.payload,
+                };
                 if let Err(e) = session.push(&message) {
                     node.warn(format!("{e}"));
                     diagnostics.error(e.to_string());
@@ -116,7 +139,11 @@ fn live(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
             if let Some(job) = session.due_job() {
                 running = true;
                 diagnostics.set_value("runs", job.info.run);
-                let (declared, options, tx) = (session.setup.declared(), session.setup.options.clone(), tx.clone());
+                let (declared, options, tx) = (
+                    session.setup.declared(),
+                    session.setup.options.clone(),
+                    tx.clone(),
+                );
                 std::thread::spawn(move || {
                     let _ = tx.send(run_job(&declared, &options, job));
                 });
@@ -140,17 +167,27 @@ fn live(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
         diagnostics.set_value("points_waiting_for_signals", session.stream.waiting());
         token.wait_timeout(Duration::from_millis(5));
     }
-    node.info(format!("stopping: {} records taken, {} in the window", session.window.taken, session.window.len()));
+    node.info(format!(
+        "stopping: {} records taken, {} in the window",
+        session.window.taken,
+        session.window.len()
+    ));
     Ok(())
 }
 
 fn replay(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::error::Error>> {
-    let setup = parameters::setup(node.parameters(), &|t| node.resolve_topic(t).map_err(|e| e.to_string()))?;
+    let setup = parameters::setup(node.parameters(), &|t| {
+        node.resolve_topic(t).map_err(|e| e.to_string())
+    })?;
     for line in &setup.describe {
         node.logger().info(line);
     }
     let mut source = BagSource::open(&args.bag)?;
-    let topics: Vec<(String, String)> = source.topics().iter().map(|t| (t.name.clone(), t.type_name.clone())).collect();
+    let topics: Vec<(String, String)> = source
+        .topics()
+        .iter()
+        .map(|t| (t.name.clone(), t.type_name.clone()))
+        .collect();
     let mut session = Session::new(setup, &args.bag, &topics)?;
     for topic in session.stream.topics() {
         source.subscribe_any(&topic);
@@ -161,7 +198,10 @@ fn replay(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::error
     output.advertise::<DiagnosticArray>(&statuses_topic)?;
     output.advertise::<StringMessage>(&result_topic)?;
     let fqn = node.fully_qualified_name();
-    let run_and_write = |session: &mut Session, log_time_ns: u64, output: &mut ReplayOutput| -> Result<(), Box<dyn std::error::Error>> {
+    let run_and_write = |session: &mut Session,
+                         log_time_ns: u64,
+                         output: &mut ReplayOutput|
+     -> Result<(), Box<dyn std::error::Error>> {
         let job = session.job();
         let (info, result) = run_job(&session.setup.declared(), &session.setup.options, job);
         let out = session.outcome(&info, &result, (info.to * 1e9) as i64, &fqn);
@@ -174,14 +214,17 @@ fn replay(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::error
         Ok(())
     };
     let mut last_log_time = 0u64;
-    let stopped = source.replay::<Box<dyn std::error::Error>>(|| node.interrupted(), |m| {
-        last_log_time = m.log_time_ns;
-        session.push(&m)?;
-        if session.window.due() {
-            run_and_write(&mut session, m.log_time_ns, &mut output)?;
-        }
-        Ok(())
-    })?;
+    let stopped = source.replay::<Box<dyn std::error::Error>>(
+        || node.interrupted(),
+        |m| {
+            last_log_time = m.log_time_ns;
+            session.push(&m)?;
+            if session.window.due() {
+                run_and_write(&mut session, m.log_time_ns, &mut output)?;
+            }
+            Ok(())
+        },
+    )?;
     // the end of the bag: measurements still waiting for signals are answered as they stand,
     // and the window is diagnosed once more if records came in since the last run
     session.flush();
@@ -189,6 +232,11 @@ fn replay(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::error
         run_and_write(&mut session, last_log_time, &mut output)?;
     }
     output.finish()?;
-    node.logger().info(format!("replayed {}: {} records taken, {} diagnoses", args.bag.display(), session.window.taken, session.runs()));
+    node.logger().info(format!(
+        "replayed {}: {} records taken, {} diagnoses",
+        args.bag.display(),
+        session.window.taken,
+        session.runs()
+    ));
     Ok(node.finish_replay(stopped)?)
 }

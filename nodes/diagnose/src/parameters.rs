@@ -38,38 +38,76 @@ pub struct Setup {
 impl Setup {
     pub fn declared(&self) -> DeclaredModel<'static> {
         let m = self.model;
-        DeclaredModel { machine: &m.machine, machine_terms: &m.machine_terms, instrument_terms: &m.instrument_terms, setup: &m.setup }
+        DeclaredModel {
+            machine: &m.machine,
+            machine_terms: &m.machine_terms,
+            instrument_terms: &m.instrument_terms,
+            setup: &m.setup,
+        }
     }
 }
 
 /// The setup from the parameters; `resolve` turns a relative topic name into the node's.
-pub fn setup(p: &Parameters, resolve: &dyn Fn(&str) -> Result<String, String>) -> Result<Setup, String> {
+pub fn setup(
+    p: &Parameters,
+    resolve: &dyn Fn(&str) -> Result<String, String>,
+) -> Result<Setup, String> {
     let path = p.get::<String>("model").map_err(|e| e.to_string())?;
     if path.trim().is_empty() {
         return Err("parameter model is empty: give the model cell file to judge the recording against, e.g. --ros-args -p model:=crates/twin/examples/cells/demo_model.yaml".into());
     }
     // The node keeps one model for its whole life; leaking it gives the forward model and the
     // record stream the 'static borrow they need (and a worker thread can share it).
-    let model: &'static CellModel = Box::leak(Box::new(CellModel::from_path(&path).map_err(|e| e.to_string())?));
-    let forward: &'static ForwardModel<'static> = Box::leak(Box::new(model.forward_model().map_err(|e| e.to_string())?));
+    let model: &'static CellModel = Box::leak(Box::new(
+        CellModel::from_path(&path).map_err(|e| e.to_string())?,
+    ));
+    let forward: &'static ForwardModel<'static> =
+        Box::leak(Box::new(model.forward_model().map_err(|e| e.to_string())?));
     let get_f = |k: &str| p.get::<f64>(k).map_err(|e| e.to_string());
     let get_i = |k: &str| p.get::<i64>(k).map_err(|e| e.to_string());
     let points_topic = resolve(&p.get::<String>("points").map_err(|e| e.to_string())?)?;
-    let points = match p.get::<String>("points_type").map_err(|e| e.to_string())?.as_str() {
+    let points = match p
+        .get::<String>("points_type")
+        .map_err(|e| e.to_string())?
+        .as_str()
+    {
         "measured_point" => PointSource::MeasuredPoints,
         "tracker" => PointSource::TrackerMeasurements,
-        other => return Err(format!("points_type `{other}`: expected measured_point or tracker")),
+        other => {
+            return Err(format!(
+                "points_type `{other}`: expected measured_point or tracker"
+            ))
+        }
     };
     let probe_hits = p.get::<bool>("probe_hits").map_err(|e| e.to_string())?;
     if probe_hits && model.raw.sensors.probe.is_none() {
         return Err(format!("probe_hits is true but the model {path} declares no sensors.probe: declare the probe (its directions and noise) or set probe_hits:=false"));
     }
-    let recording = RecordingOptions { points, measured_points_topic: points_topic.clone(), tracker_topic: points_topic.clone(), probe_hits, probe_topic: resolve("probe/hits")?, ..RecordingOptions::default() };
-    let mut options = DiagnoseOptions { empirical: p.get::<bool>("empirical").map_err(|e| e.to_string())?, ..DiagnoseOptions::default() };
+    let recording = RecordingOptions {
+        points,
+        measured_points_topic: points_topic.clone(),
+        tracker_topic: points_topic.clone(),
+        probe_hits,
+        probe_topic: resolve("probe/hits")?,
+        ..RecordingOptions::default()
+    };
+    let mut options = DiagnoseOptions {
+        empirical: p.get::<bool>("empirical").map_err(|e| e.to_string())?,
+        ..DiagnoseOptions::default()
+    };
     options.selection.max_terms = get_i("max_terms")? as usize;
     options.selection.alpha = get_f("alpha")?;
-    let window = WindowSettings { window_s: get_f("window")?, every_s: get_f("every")?, min_records: get_i("min_records")? as usize };
-    let free: Vec<&str> = model.setup.free_indices().iter().map(|&k| model.setup.names[k].as_str()).collect();
+    let window = WindowSettings {
+        window_s: get_f("window")?,
+        every_s: get_f("every")?,
+        min_records: get_i("min_records")? as usize,
+    };
+    let free: Vec<&str> = model
+        .setup
+        .free_indices()
+        .iter()
+        .map(|&k| model.setup.names[k].as_str())
+        .collect();
     let describe = vec![format!(
         "model {path}: {} declared terms, {} free parameters ({}); diagnosing the last {:.1} h of cell time every {:.0} min from {points_topic}{}",
         model.machine_terms.terms.len() + model.instrument_terms.terms.len(),
@@ -79,5 +117,13 @@ pub fn setup(p: &Parameters, resolve: &dyn Fn(&str) -> Result<String, String>) -
         window.every_s / 60.0,
         if probe_hits { " and the probe hits" } else { "" }
     )];
-    Ok(Setup { model, forward, points_topic, recording, options, window, describe })
+    Ok(Setup {
+        model,
+        forward,
+        points_topic,
+        recording,
+        options,
+        window,
+        describe,
+    })
 }

@@ -41,10 +41,20 @@ pub struct Outcome {
 impl Session {
     /// `source` names the recording in messages (the bag, or `live DDS`); `topics` are the
     /// (name, type) the session will be fed.
-    pub fn new(setup: Setup, source: &Path, topics: &[(String, String)]) -> Result<Self, RecordingError> {
+    pub fn new(
+        setup: Setup,
+        source: &Path,
+        topics: &[(String, String)],
+    ) -> Result<Self, RecordingError> {
         let stream = RecordStream::new(source, topics, setup.forward, &setup.recording)?;
         let window = SlidingWindow::new(setup.window);
-        Ok(Self { setup, stream, window, announced: Announced::default(), runs: 0 })
+        Ok(Self {
+            setup,
+            stream,
+            window,
+            announced: Announced::default(),
+            runs: 0,
+        })
     }
 
     /// Take one message.
@@ -77,12 +87,25 @@ impl Session {
         self.runs += 1;
         let from = records.records.first().map_or(0.0, |r| r.time);
         let to = records.records.last().map_or(0.0, |r| r.time);
-        Job { records, info: RunInfo { from, to, run: self.runs } }
+        Job {
+            records,
+            info: RunInfo {
+                from,
+                to,
+                run: self.runs,
+            },
+        }
     }
 
     /// Turn a run's result into what is published (module docs); an error (too few records to
     /// tell candidates apart, …) becomes an OK status that says what is missing.
-    pub fn outcome(&mut self, info: &RunInfo, result: &Result<Diagnosis, DiagnoseError>, stamp_ns: i64, hardware_id: &str) -> Outcome {
+    pub fn outcome(
+        &mut self,
+        info: &RunInfo,
+        result: &Result<Diagnosis, DiagnoseError>,
+        stamp_ns: i64,
+        hardware_id: &str,
+    ) -> Outcome {
         match result {
             Ok(d) => {
                 let json = serde_json::to_string(&d.report).expect("a report serialises");
@@ -90,13 +113,28 @@ impl Session {
                     statuses: diagnosis_message(d, info, stamp_ns, hardware_id),
                     result: StringMessage { data: json },
                     new_findings: self.announced.new_findings(d),
-                    summary: format!("run {} over {:.2} h of cell time ({} records): {}", info.run, (info.to - info.from) / 3600.0, d.report.records.used, d.report.summary),
+                    summary: format!(
+                        "run {} over {:.2} h of cell time ({} records): {}",
+                        info.run,
+                        (info.to - info.from) / 3600.0,
+                        d.report.records.used,
+                        d.report.summary
+                    ),
                 }
             }
             Err(e) => {
                 let message = format!("run {}: not diagnosed yet: {e}", info.run);
-                let statuses = crate::findings_message::waiting_message(&message, stamp_ns, hardware_id);
-                Outcome { statuses, result: StringMessage { data: serde_json::json!({ "error": e.to_string(), "run": info.run }).to_string() }, new_findings: Vec::new(), summary: message }
+                let statuses =
+                    crate::findings_message::waiting_message(&message, stamp_ns, hardware_id);
+                Outcome {
+                    statuses,
+                    result: StringMessage {
+                        data: serde_json::json!({ "error": e.to_string(), "run": info.run })
+                            .to_string(),
+                    },
+                    new_findings: Vec::new(),
+                    summary: message,
+                }
             }
         }
     }
@@ -105,7 +143,11 @@ impl Session {
 /// Run a job (what the worker thread does): the diagnosis, then its working memory (copies of
 /// the window's records, Jacobians of every candidate: 150–180 MB over an hour's window) freed
 /// and handed back to the system.
-pub fn run_job(setup_declared: &metrocell_diagnose::DeclaredModel, options: &metrocell_diagnose::DiagnoseOptions, job: Job) -> (RunInfo, Result<Diagnosis, DiagnoseError>) {
+pub fn run_job(
+    setup_declared: &metrocell_diagnose::DeclaredModel,
+    options: &metrocell_diagnose::DiagnoseOptions,
+    job: Job,
+) -> (RunInfo, Result<Diagnosis, DiagnoseError>) {
     let Job { records, info } = job;
     let result = diagnose(setup_declared, &records, options);
     drop(records);

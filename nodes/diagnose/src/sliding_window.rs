@@ -41,7 +41,18 @@ pub struct SlidingWindow {
 
 impl SlidingWindow {
     pub fn new(settings: WindowSettings) -> Self {
-        Self { settings, records: VecDeque::new(), frame: None, rejected: Vec::new(), sources: Vec::new(), newest: f64::NEG_INFINITY, first: None, last_run: None, taken: 0, expired: 0 }
+        Self {
+            settings,
+            records: VecDeque::new(),
+            frame: None,
+            rejected: Vec::new(),
+            sources: Vec::new(),
+            newest: f64::NEG_INFINITY,
+            first: None,
+            last_run: None,
+            taken: 0,
+            expired: 0,
+        }
     }
 
     /// Take what a record stream resolved.
@@ -52,7 +63,13 @@ impl SlidingWindow {
             let frame_now = self.frame.get_or_insert_with(|| frame.clone());
             if *frame_now != frame {
                 for r in records {
-                    self.rejected.push(Rejected { at: format!("t = {:.3} s", r.time), point_id: r.point_id, reason: format!("in frame {frame:?}, while this window's points are in {frame_now:?}") });
+                    self.rejected.push(Rejected {
+                        at: format!("t = {:.3} s", r.time),
+                        point_id: r.point_id,
+                        reason: format!(
+                            "in frame {frame:?}, while this window's points are in {frame_now:?}"
+                        ),
+                    });
                 }
                 continue;
             }
@@ -90,7 +107,8 @@ impl SlidingWindow {
     /// Whether a diagnosis of the window is due (module docs).
     pub fn due(&self) -> bool {
         let since = self.last_run.or(self.first).unwrap_or(self.newest);
-        self.records.len() >= self.settings.min_records && self.newest - since >= self.settings.every_s
+        self.records.len() >= self.settings.min_records
+            && self.newest - since >= self.settings.every_s
     }
 
     /// The window's records as a set (time order), and the rejections since the last run; the
@@ -99,7 +117,13 @@ impl SlidingWindow {
         self.last_run = Some(self.newest);
         let mut records: Vec<MeasurementRecord> = self.records.iter().cloned().collect();
         records.sort_by(|a, b| a.time.total_cmp(&b.time));
-        RecordSet { check: Vec::new(), frame: self.frame.clone().unwrap_or(RecordFrame::Machine), records, rejected: std::mem::take(&mut self.rejected), sources: self.sources.clone() }
+        RecordSet {
+            check: Vec::new(),
+            frame: self.frame.clone().unwrap_or(RecordFrame::Machine),
+            records,
+            rejected: std::mem::take(&mut self.rejected),
+            sources: self.sources.clone(),
+        }
     }
 }
 
@@ -109,16 +133,35 @@ mod tests {
     use metrocell_estimation::RecordKind;
 
     fn record(t: f64) -> MeasurementRecord {
-        MeasurementRecord { time: t, point_id: format!("p{t}"), channel: "tracker".into(), q: vec![0.0; 3], measured: Default::default(), covariance: Default::default(), signals: Default::default(), kind: RecordKind::Point }
+        MeasurementRecord {
+            time: t,
+            point_id: format!("p{t}"),
+            channel: "tracker".into(),
+            q: vec![0.0; 3],
+            measured: Default::default(),
+            covariance: Default::default(),
+            signals: Default::default(),
+            kind: RecordKind::Point,
+        }
     }
 
     fn output(times: &[f64]) -> StreamOutput {
-        StreamOutput { by_frame: vec![(RecordFrame::Machine, times.iter().map(|&t| record(t)).collect())], ..Default::default() }
+        StreamOutput {
+            by_frame: vec![(
+                RecordFrame::Machine,
+                times.iter().map(|&t| record(t)).collect(),
+            )],
+            ..Default::default()
+        }
     }
 
     #[test]
     fn keeps_the_last_window_and_runs_every_period() {
-        let mut w = SlidingWindow::new(WindowSettings { window_s: 100.0, every_s: 50.0, min_records: 3 });
+        let mut w = SlidingWindow::new(WindowSettings {
+            window_s: 100.0,
+            every_s: 50.0,
+            min_records: 3,
+        });
         w.take(output(&[0.0, 10.0]));
         assert!(!w.due(), "two records are fewer than min_records");
         w.take(output(&[20.0]));
@@ -134,18 +177,32 @@ mod tests {
         assert!(w.due(), "65 s since the last run");
         let set = w.snapshot();
         // 115 − 100 = 15: the records at 0 and 10 have left the window
-        assert_eq!(set.records.iter().map(|r| r.time).collect::<Vec<_>>(), vec![20.0, 50.0, 60.0, 70.0, 115.0]);
+        assert_eq!(
+            set.records.iter().map(|r| r.time).collect::<Vec<_>>(),
+            vec![20.0, 50.0, 60.0, 70.0, 115.0]
+        );
         assert_eq!((w.taken, w.expired), (7, 2));
     }
 
     #[test]
     fn points_in_another_frame_are_set_aside_with_the_reason() {
-        let mut w = SlidingWindow::new(WindowSettings { window_s: 100.0, every_s: 1.0, min_records: 1 });
+        let mut w = SlidingWindow::new(WindowSettings {
+            window_s: 100.0,
+            every_s: 1.0,
+            min_records: 1,
+        });
         w.take(output(&[0.0, 1.0]));
-        w.take(StreamOutput { by_frame: vec![(RecordFrame::Instrument("tracker".into()), vec![record(2.0)])], ..Default::default() });
+        w.take(StreamOutput {
+            by_frame: vec![(RecordFrame::Instrument("tracker".into()), vec![record(2.0)])],
+            ..Default::default()
+        });
         let set = w.snapshot();
         assert_eq!(set.records.len(), 2);
         assert_eq!(set.rejected.len(), 1);
-        assert!(set.rejected[0].reason.contains("frame"), "{:?}", set.rejected);
+        assert!(
+            set.rejected[0].reason.contains("frame"),
+            "{:?}",
+            set.rejected
+        );
     }
 }

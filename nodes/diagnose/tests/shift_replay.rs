@@ -66,13 +66,27 @@ struct Recording {
 
 fn record() -> Recording {
     static NEXT: std::sync::atomic::AtomicUsize = std::sync::atomic::AtomicUsize::new(0);
-    let dir = std::env::temp_dir().join(format!("diagnose_node_it_{}_{}", std::process::id(), NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)));
+    let dir = std::env::temp_dir().join(format!(
+        "diagnose_node_it_{}_{}",
+        std::process::id(),
+        NEXT.fetch_add(1, std::sync::atomic::Ordering::Relaxed)
+    ));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
-    let truth = cell_yaml(&format!("  - id: backlash\n    options: {{axis: x}}\n    params: {{reversal: {REVERSAL_UM} um}}\n"));
+    let truth = cell_yaml(&format!(
+        "  - id: backlash\n    options: {{axis: x}}\n    params: {{reversal: {REVERSAL_UM} um}}\n"
+    ));
     let cell = Cell::from_yaml_str(&truth, "truth").expect("truth cell");
     let bag = dir.join("shift");
-    metrocell_simulation::bag::write_bag(cell, HOURS * 3600.0, 7, &bag, &Default::default(), |_| {}).expect("simulated bag");
+    metrocell_simulation::bag::write_bag(
+        cell,
+        HOURS * 3600.0,
+        7,
+        &bag,
+        &Default::default(),
+        |_| {},
+    )
+    .expect("simulated bag");
     let model = dir.join("model.yaml");
     std::fs::write(&model, cell_yaml("")).unwrap();
     Recording { dir, bag, model }
@@ -85,10 +99,30 @@ impl Drop for Recording {
 }
 
 fn node_setup(model: &Path, window: f64) -> Setup {
-    let (model, window) = (format!("model:={}", model.display()), format!("window:={window:?}"));
-    let args = ["node", "--ros-args", "-p", &model, "-p", "points:=/tracker/measurements", "-p", "points_type:=tracker", "-p", &window];
+    let (model, window) = (
+        format!("model:={}", model.display()),
+        format!("window:={window:?}"),
+    );
+    let args = [
+        "node",
+        "--ros-args",
+        "-p",
+        &model,
+        "-p",
+        "points:=/tracker/measurements",
+        "-p",
+        "points_type:=tracker",
+        "-p",
+        &window,
+    ];
     let cl = metrocell_node::parse_command_line(args).unwrap();
-    let p = metrocell_node::Parameters::resolve(&parameters::declarations(), &cl.ros, "/diagnose", "diagnose").unwrap();
+    let p = metrocell_node::Parameters::resolve(
+        &parameters::declarations(),
+        &cl.ros,
+        "/diagnose",
+        "diagnose",
+    )
+    .unwrap();
     parameters::setup(&p, &|t| Ok(format!("/{}", t.trim_start_matches('/')))).expect("setup")
 }
 
@@ -97,23 +131,51 @@ fn replay_names_the_concealed_backlash_on_schedule_and_announces_it_once() {
     let rec = record();
     let out = rec.dir.join("out");
     let run = Command::new(env!("CARGO_BIN_EXE_metrocell-diagnose"))
-        .args(["--bag", &rec.bag.display().to_string(), "--output", &out.display().to_string(), "--ros-args"])
-        .args(["-p", &format!("model:={}", rec.model.display()), "-p", "points:=/tracker/measurements", "-p", "points_type:=tracker"])
-        .args(["-p", "window:=7200.0", "-p", "every:=2400.0", "-p", "min_records:=30"])
+        .args([
+            "--bag",
+            &rec.bag.display().to_string(),
+            "--output",
+            &out.display().to_string(),
+            "--ros-args",
+        ])
+        .args([
+            "-p",
+            &format!("model:={}", rec.model.display()),
+            "-p",
+            "points:=/tracker/measurements",
+            "-p",
+            "points_type:=tracker",
+        ])
+        .args([
+            "-p",
+            "window:=7200.0",
+            "-p",
+            "every:=2400.0",
+            "-p",
+            "min_records:=30",
+        ])
         .output()
         .expect("run metrocell-diagnose");
-    let log = String::from_utf8_lossy(&run.stderr).to_string() + &String::from_utf8_lossy(&run.stdout);
+    let log =
+        String::from_utf8_lossy(&run.stderr).to_string() + &String::from_utf8_lossy(&run.stdout);
     eprintln!("{log}");
     assert!(run.status.success(), "{log}");
 
     let mut source = BagSource::open(&out).expect("output bag");
-    assert!(source.subscribe::<StringMessage>("/diagnose/result").unwrap());
+    assert!(source
+        .subscribe::<StringMessage>("/diagnose/result")
+        .unwrap());
     assert!(source.subscribe::<DiagnosticArray>("/diagnostics").unwrap());
     let (mut results, mut statuses) = (Vec::new(), Vec::new());
     for m in source.messages().unwrap() {
         let m = m.unwrap();
         if m.topic == "/diagnose/result" {
-            results.push(serde_json::from_str::<serde_json::Value>(&m.decode::<StringMessage>().unwrap().data).unwrap());
+            results.push(
+                serde_json::from_str::<serde_json::Value>(
+                    &m.decode::<StringMessage>().unwrap().data,
+                )
+                .unwrap(),
+            );
         } else {
             statuses.push(m.decode::<DiagnosticArray>().unwrap());
         }
@@ -132,10 +194,24 @@ fn replay_names_the_concealed_backlash_on_schedule_and_announces_it_once() {
         "m" => (value * 1e6, sigma * 1e6),
         other => panic!("unit {other}"),
     };
-    assert!((value_um - REVERSAL_UM).abs() <= 3.0 * sigma_um, "reversal {value_um} ± {sigma_um} µm vs {REVERSAL_UM} µm");
-    assert!(statuses[2].status.iter().any(|s| s.name == "diagnose: backlash[x]" && s.level == 1), "{:#?}", statuses[2]);
+    assert!(
+        (value_um - REVERSAL_UM).abs() <= 3.0 * sigma_um,
+        "reversal {value_um} ± {sigma_um} µm vs {REVERSAL_UM} µm"
+    );
+    assert!(
+        statuses[2]
+            .status
+            .iter()
+            .any(|s| s.name == "diagnose: backlash[x]" && s.level == 1),
+        "{:#?}",
+        statuses[2]
+    );
     // announced once, however many windows find it again
-    assert_eq!(log.matches("new effect found: backlash[x]").count(), 1, "{log}");
+    assert_eq!(
+        log.matches("new effect found: backlash[x]").count(),
+        1,
+        "{log}"
+    );
 }
 
 #[test]
@@ -143,7 +219,11 @@ fn the_window_holds_the_records_diagnose_builds_from_the_bag() {
     let rec = record();
     let setup = node_setup(&rec.model, 1e7);
     let mut source = BagSource::open(&rec.bag).unwrap();
-    let topics: Vec<(String, String)> = source.topics().iter().map(|t| (t.name.clone(), t.type_name.clone())).collect();
+    let topics: Vec<(String, String)> = source
+        .topics()
+        .iter()
+        .map(|t| (t.name.clone(), t.type_name.clone()))
+        .collect();
     let mut session = Session::new(setup, &rec.bag, &topics).unwrap();
     for t in session.stream.topics() {
         source.subscribe_any(&t);
@@ -156,12 +236,27 @@ fn the_window_holds_the_records_diagnose_builds_from_the_bag() {
 
     let model = CellModel::from_path(&rec.model).unwrap();
     let forward = model.forward_model().unwrap();
-    let whole = records_from_bags(&[&rec.bag], &forward, &RecordingOptions { points: PointSource::TrackerMeasurements, ..Default::default() }).unwrap();
-    assert!(whole.records.len() > 1000, "{} records", whole.records.len());
+    let whole = records_from_bags(
+        &[&rec.bag],
+        &forward,
+        &RecordingOptions {
+            points: PointSource::TrackerMeasurements,
+            ..Default::default()
+        },
+    )
+    .unwrap();
+    assert!(
+        whole.records.len() > 1000,
+        "{} records",
+        whole.records.len()
+    );
     assert_eq!(streamed.records.len(), whole.records.len());
     assert_eq!(streamed.frame, whole.frame);
     for (a, b) in streamed.records.iter().zip(&whole.records) {
-        assert_eq!((a.time, &a.point_id, &a.q, a.measured), (b.time, &b.point_id, &b.q, b.measured));
+        assert_eq!(
+            (a.time, &a.point_id, &a.q, a.measured),
+            (b.time, &b.point_id, &b.q, b.measured)
+        );
         assert_eq!(a.signals.temperatures, b.signals.temperatures);
     }
 }

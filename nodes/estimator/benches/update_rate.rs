@@ -36,12 +36,15 @@ fn model_yaml() -> String {
         for about in ["x", "y", "z"] {
             terms += &format!("  - {{id: angular, options: {{axis: {a}, about: {about}, lever_axes: [z], abbe_offset: [0 m, 0 m, -0.15 m], order: 2, {travel}}}, params: {{c0: 0 urad, c1: 0 urad, c2: 0 urad}}}}\n");
         }
-        terms += &format!("  - {{id: backlash, options: {{axis: {a}}}, params: {{reversal: 0 um}}}}\n");
+        terms +=
+            &format!("  - {{id: backlash, options: {{axis: {a}}}, params: {{reversal: 0 um}}}}\n");
     }
     for pair in ["xy", "xz", "yz"] {
-        terms += &format!("  - {{id: squareness, options: {{pair: {pair}}}, params: {{s: 0 urad}}}}\n");
+        terms +=
+            &format!("  - {{id: squareness, options: {{pair: {pair}}}, params: {{s: 0 urad}}}}\n");
     }
-    terms += "  - {id: pitch_cyclic, options: {axis: x, lead: 10 mm}, params: {a1: 0 um, b1: 0 um}}\n";
+    terms +=
+        "  - {id: pitch_cyclic, options: {axis: x, lead: 10 mm}, params: {a1: 0 um, b1: 0 um}}\n";
     format!(
         "name: bench_model
 machine:
@@ -65,7 +68,12 @@ terms:
 }
 
 fn message(topic: &str, ns: i64, payload: Vec<u8>) -> SourcedMessage {
-    SourcedMessage { topic: topic.into(), log_time_ns: ns as u64, publish_time_ns: ns as u64, payload }
+    SourcedMessage {
+        topic: topic.into(),
+        log_time_ns: ns as u64,
+        publish_time_ns: ns as u64,
+        payload,
+    }
 }
 
 fn inputs() -> Vec<SourcedMessage> {
@@ -75,21 +83,46 @@ fn inputs() -> Vec<SourcedMessage> {
     for i in 0..POINTS as i64 {
         let ns = t0 + i * 100_000_000;
         let q: Vec<f64> = (0..3).map(|_| rng.random::<f64>()).collect();
-        let header = |ns: i64| Header { stamp: Time::from_nanos(ns), frame_id: "machine".into() };
+        let header = |ns: i64| Header {
+            stamp: Time::from_nanos(ns),
+            frame_id: "machine".into(),
+        };
         for dt in [-20_000_000, 20_000_000] {
-            let js = JointState { header: header(ns + dt), name: vec!["x".into(), "y".into(), "z".into()], position: q.clone(), velocity: vec![0.0; 3], effort: vec![] };
-            out.push(message("/machine/commanded_joint_states", ns + dt, encode_cdr(&js).unwrap()));
+            let js = JointState {
+                header: header(ns + dt),
+                name: vec!["x".into(), "y".into(), "z".into()],
+                position: q.clone(),
+                velocity: vec![0.0; 3],
+                effort: vec![],
+            };
+            out.push(message(
+                "/machine/commanded_joint_states",
+                ns + dt,
+                encode_cdr(&js).unwrap(),
+            ));
         }
         let s = 3e-6;
         let p = MeasuredPoint {
             header: header(ns),
             point_id: format!("p{i}"),
             source: "tracker".into(),
-            nominal: Point { x: q[0], y: q[1], z: q[2] },
-            measured: Point { x: q[0] + rng.random::<f64>() * 1e-5, y: q[1] + rng.random::<f64>() * 1e-5, z: q[2] + rng.random::<f64>() * 1e-5 },
+            nominal: Point {
+                x: q[0],
+                y: q[1],
+                z: q[2],
+            },
+            measured: Point {
+                x: q[0] + rng.random::<f64>() * 1e-5,
+                y: q[1] + rng.random::<f64>() * 1e-5,
+                z: q[2] + rng.random::<f64>() * 1e-5,
+            },
             covariance: [s * s, 0.0, 0.0, 0.0, s * s, 0.0, 0.0, 0.0, s * s],
         };
-        out.push(message("/measured_points", ns + 30_000_000, encode_cdr(&p).unwrap()));
+        out.push(message(
+            "/measured_points",
+            ns + 30_000_000,
+            encode_cdr(&p).unwrap(),
+        ));
     }
     out.sort_by_key(|m| m.log_time_ns);
     out
@@ -103,7 +136,17 @@ fn main() {
     let node = MetrocellNode::builder("estimator_bench")
         .params(parameters::declarations())
         .handle_signals(false)
-        .args(["bench", "--ros-args", "-p", &format!("model:={}", model.display()), "-p", "publish_every:=1000"].map(String::from))
+        .args(
+            [
+                "bench",
+                "--ros-args",
+                "-p",
+                &format!("model:={}", model.display()),
+                "-p",
+                "publish_every:=1000",
+            ]
+            .map(String::from),
+        )
         .unwrap()
         .0
         .build_offline()
@@ -138,11 +181,25 @@ fn main() {
     let c = &state.counters;
     // every point is taken or said why not (the first: no motion yet gives no approach direction for the backlash terms)
     let not_used: u64 = c.points_not_used.values().sum();
-    assert_eq!(c.accepted + c.outliers + not_used, POINTS as u64 - state.pending() as u64, "every point taken: {}", c.summary());
+    assert_eq!(
+        c.accepted + c.outliers + not_used,
+        POINTS as u64 - state.pending() as u64,
+        "every point taken: {}",
+        c.summary()
+    );
     assert!(not_used <= 1, "{}", c.summary());
     println!("{free} free parameters, {POINTS} measured points ({} messages), {models} models built (checksum {checksum:.3})", messages.len());
-    println!("decode only:      {:>9.0} points/s ({decode_s:.3} s)", POINTS as f64 / decode_s);
-    println!("estimator update: {:>9.0} points/s ({update_s:.3} s)", POINTS as f64 / update_s);
-    println!("ratio update/decode time: {:.1}× (target: ≥ 10 000 points/s)", update_s / decode_s);
+    println!(
+        "decode only:      {:>9.0} points/s ({decode_s:.3} s)",
+        POINTS as f64 / decode_s
+    );
+    println!(
+        "estimator update: {:>9.0} points/s ({update_s:.3} s)",
+        POINTS as f64 / update_s
+    );
+    println!(
+        "ratio update/decode time: {:.1}× (target: ≥ 10 000 points/s)",
+        update_s / decode_s
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -49,7 +49,12 @@ pub struct Counters {
 
 impl Counters {
     pub fn summary(&self) -> String {
-        let not_used = self.points_not_used.iter().map(|(r, n)| format!("{r}: {n}")).collect::<Vec<_>>().join(", ");
+        let not_used = self
+            .points_not_used
+            .iter()
+            .map(|(r, n)| format!("{r}: {n}"))
+            .collect::<Vec<_>>()
+            .join(", ");
         format!(
             "{} points received, {} accepted, {} gated as outliers, {} alarms, not used: [{not_used}], {} models published, {} signal samples refused",
             self.points_received, self.accepted, self.outliers, self.alarms, self.models_published, self.refused_samples
@@ -96,10 +101,27 @@ pub struct EstimatorState {
 
 impl EstimatorState {
     /// `stream` reads the points from `points_topic`.
-    pub fn new(model: &'static ForwardModel<'static>, filter: RecursiveEstimator, stream: RecordStream<'static, 'static>, points_topic: String, settings: Settings) -> Self {
+    pub fn new(
+        model: &'static ForwardModel<'static>,
+        filter: RecursiveEstimator,
+        stream: RecordStream<'static, 'static>,
+        points_topic: String,
+        settings: Settings,
+    ) -> Self {
         let n = model.param_count();
         let observability = ObservabilityWatch::new(model.param_names(), settings.quiet_until);
-        Self { work: Workspace::new(model), jacobian: DMatrix::zeros(3, n), model, filter, stream, points_topic, settings, since_publish: 0, observability, counters: Counters::default() }
+        Self {
+            work: Workspace::new(model),
+            jacobian: DMatrix::zeros(3, n),
+            model,
+            filter,
+            stream,
+            points_topic,
+            settings,
+            since_publish: 0,
+            observability,
+            counters: Counters::default(),
+        }
     }
 
     pub fn filter(&self) -> &RecursiveEstimator {
@@ -150,7 +172,15 @@ impl EstimatorState {
     /// Take every record whose signals are final, in stamp order.
     pub fn process(&mut self) -> Vec<Outputs> {
         let mut resolved = self.stream.drain();
-        let mut out: Vec<Outputs> = std::mem::take(&mut resolved.rejected).into_iter().map(|r| self.not_used("rejected", format!("point {} ({}): {}; skipped", r.point_id, r.at, r.reason))).collect();
+        let mut out: Vec<Outputs> = std::mem::take(&mut resolved.rejected)
+            .into_iter()
+            .map(|r| {
+                self.not_used(
+                    "rejected",
+                    format!("point {} ({}): {}; skipped", r.point_id, r.at, r.reason),
+                )
+            })
+            .collect();
         for record in resolved.records() {
             out.push(self.take(record));
         }
@@ -159,7 +189,10 @@ impl EstimatorState {
 
     fn not_used(&mut self, reason: &'static str, message: String) -> Outputs {
         *self.counters.points_not_used.entry(reason).or_default() += 1;
-        Outputs { problem: Some(message), ..Default::default() }
+        Outputs {
+            problem: Some(message),
+            ..Default::default()
+        }
     }
 
     fn take(&mut self, record: MeasurementRecord) -> Outputs {
@@ -167,7 +200,15 @@ impl EstimatorState {
         let measurement = self.counters.accepted + self.counters.outliers;
         let update: Update = match self.filter.update(self.model, &record, &mut self.work) {
             Ok(u) => u,
-            Err(e) => return self.not_used("model_error", format!("point {} at {:.3} s: {e}; skipped", record.point_id, record.time)),
+            Err(e) => {
+                return self.not_used(
+                    "model_error",
+                    format!(
+                        "point {} at {:.3} s: {e}; skipped",
+                        record.point_id, record.time
+                    ),
+                )
+            }
         };
         let mut out = Outputs::default();
         if update.accepted {
@@ -178,14 +219,29 @@ impl EstimatorState {
         }
         if update.alarm {
             self.counters.alarms += 1;
-            out.alarm = Some(Alarm { stamp_ns, point_id: record.point_id.clone(), measurement, nis: update.nis, window_probability: update.window_probability, innovation: update.innovation });
+            out.alarm = Some(Alarm {
+                stamp_ns,
+                point_id: record.point_id.clone(),
+                measurement,
+                nis: update.nis,
+                window_probability: update.window_probability,
+                innovation: update.innovation,
+            });
         }
         if update.accepted || update.alarm {
-            out.observability = self.observability.after_update(&self.filter, update.alarm, stamp_ns);
+            out.observability =
+                self.observability
+                    .after_update(&self.filter, update.alarm, stamp_ns);
         }
         if update.alarm || self.since_publish >= self.settings.publish_every {
             self.since_publish = 0;
-            out.model = Some(model_message::error_model(self.model, &self.filter, &self.settings.machine_id, stamp_ns, self.observability.unobserved_directions()));
+            out.model = Some(model_message::error_model(
+                self.model,
+                &self.filter,
+                &self.settings.machine_id,
+                stamp_ns,
+                self.observability.unobserved_directions(),
+            ));
             out.predicted = self.predictions(&record.signals, stamp_ns);
             self.counters.models_published += 1;
         }
@@ -194,20 +250,39 @@ impl EstimatorState {
 
     /// The predicted volumetric error at each configured joint vector, with its covariance from
     /// the filter's: nominal = nominal tool point, measured = true tool point.
-    fn predictions(&mut self, at: &metrocell_physics::Signals, header_ns: i64) -> Vec<MeasuredPoint> {
+    fn predictions(
+        &mut self,
+        at: &metrocell_physics::Signals,
+        header_ns: i64,
+    ) -> Vec<MeasuredPoint> {
         let x = self.filter.state().to_vec();
-        let Ok(kin) = self.model.kinematic_truth(&x) else { return Vec::new() };
+        let Ok(kin) = self.model.kinematic_truth(&x) else {
+            return Vec::new();
+        };
         let mut out = Vec::with_capacity(self.settings.predict_joints.len());
         for (k, q) in self.settings.predict_joints.iter().enumerate() {
             let mut s = at.clone();
             // standing at the point, approached in the positive direction
-            self.model.set_motion(&mut s, q, &vec![0.0; q.len()], &vec![1.0; q.len()]);
-            let Ok(state) = self.model.tool_state(&x, &kin, q, &mut s, None) else { continue };
-            if self.model.tool_point_jacobian(&x, &kin, q, &mut s, &mut self.jacobian).is_err() {
+            self.model
+                .set_motion(&mut s, q, &vec![0.0; q.len()], &vec![1.0; q.len()]);
+            let Ok(state) = self.model.tool_state(&x, &kin, q, &mut s, None) else {
+                continue;
+            };
+            if self
+                .model
+                .tool_point_jacobian(&x, &kin, q, &mut s, &mut self.jacobian)
+                .is_err()
+            {
                 continue;
             }
             let cov = model_message::propagate(&self.jacobian, &self.filter);
-            out.push(model_message::predicted_point(k, &state.nominal.translation.vector, &state.truth.translation.vector, &cov, header_ns));
+            out.push(model_message::predicted_point(
+                k,
+                &state.nominal.translation.vector,
+                &state.truth.translation.vector,
+                &cov,
+                header_ns,
+            ));
         }
         out
     }

@@ -3,12 +3,12 @@
 
 use std::time::Duration;
 
+use metrocell_bagtools::SourcedMessage;
+use metrocell_estimation::signal_topics::POWER_ON_TOPIC;
 use metrocell_estimator_node::estimator_state::Outputs;
 use metrocell_estimator_node::model_message::{alarm_message, observability_message};
 use metrocell_estimator_node::parameters;
 use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
-use metrocell_bagtools::SourcedMessage;
-use metrocell_estimation::signal_topics::POWER_ON_TOPIC;
 use metrocell_msgs::msg::{ErrorModel, MeasuredPoint};
 use metrocell_node::{qos, MetrocellNode};
 
@@ -29,13 +29,22 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
     let state_file = node.param::<String>("state_file")?;
     let mut inputs = Vec::new();
     for topic in state.topics() {
-        let ty = &topics.iter().find(|(n, _)| *n == topic).expect("the state reads only the topics it was given").1;
+        let ty = &topics
+            .iter()
+            .find(|(n, _)| *n == topic)
+            .expect("the state reads only the topics it was given")
+            .1;
         // the tracker's power-on time is latched: read latched, so a late start still gets it
-        let profile = if topic == POWER_ON_TOPIC { qos::latched() } else { input_qos() };
+        let profile = if topic == POWER_ON_TOPIC {
+            qos::latched()
+        } else {
+            input_qos()
+        };
         inputs.push(node.raw_subscription(&topic, ty, profile)?);
     }
     let model_pub = node.publisher::<ErrorModel>("estimator/error_model", qos::latched())?;
-    let predicted_pub = node.publisher::<MeasuredPoint>("estimator/predicted_error", qos::reliable())?;
+    let predicted_pub =
+        node.publisher::<MeasuredPoint>("estimator/predicted_error", qos::reliable())?;
     let alarm_pub = node.publisher::<DiagnosticArray>("/diagnostics", qos::reliable())?;
     let fqn = node.fully_qualified_name();
 
@@ -47,7 +56,12 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
     while !token.is_triggered() {
         for sub in &inputs {
             while let Ok(Some(m)) = sub.take() {
-                let message = SourcedMessage { topic: sub.topic().to_string(), log_time_ns: m.receive_time_ns.max(0) as u64, publish_time_ns: m.source_time_ns.unwrap_or(m.receive_time_ns).max(0) as u64, payload: m.payload };
+                let message = SourcedMessage {
+                    topic: sub.topic().to_string(),
+                    log_time_ns: m.receive_time_ns.max(0) as u64,
+                    publish_time_ns: m.source_time_ns.unwrap_or(m.receive_time_ns).max(0) as u64,
+                    payload: m.payload,
+                };
                 if let Err(e) = state.message(&message) {
                     node.warn(&e);
                     diagnostics.warn(&e);
@@ -55,7 +69,13 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
             }
         }
         for out in state.process() {
-            let Outputs { model, predicted, alarm, problem, observability } = out;
+            let Outputs {
+                model,
+                predicted,
+                alarm,
+                problem,
+                observability,
+            } = out;
             if let Some(problem) = problem {
                 diagnostics.warn(&problem);
                 node.logger().debug(problem);
@@ -80,12 +100,16 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
             }
             if let Some(m) = model {
                 if !state_file.is_empty() {
-                    if let Err(e) = state.saved_state(m.header.stamp.nanos()).save(std::path::Path::new(&state_file)) {
+                    if let Err(e) = state
+                        .saved_state(m.header.stamp.nanos())
+                        .save(std::path::Path::new(&state_file))
+                    {
                         node.warn(format!("state file {state_file}: {e}"));
                     }
                 }
                 let _ = model_pub.publish(m);
-                if alarm.is_none() && diagnostics.level() != metrocell_node::DiagnosticLevel::Error {
+                if alarm.is_none() && diagnostics.level() != metrocell_node::DiagnosticLevel::Error
+                {
                     match &held {
                         Some(text) => diagnostics.warn(format!("estimating; {text}")),
                         None => diagnostics.ok("estimating"),
@@ -104,7 +128,10 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
         diagnostics.set_value("points_waiting_for_signals", state.pending());
         diagnostics.set_value("points_not_used", c.points_not_used.values().sum::<u64>());
         diagnostics.set_value("signal_samples_refused", c.refused_samples);
-        diagnostics.set_value("innovation_rms_um", format!("{:.3}", state.filter().innovation_rms() * 1e6));
+        diagnostics.set_value(
+            "innovation_rms_um",
+            format!("{:.3}", state.filter().innovation_rms() * 1e6),
+        );
         token.wait_timeout(Duration::from_millis(2));
     }
     if let Some(text) = state.observability_now(0).text {

@@ -16,13 +16,22 @@ use crate::estimator_state::Alarm;
 use crate::observability_watch::ObservabilityNote;
 
 fn header(ns: i64) -> Header {
-    Header { stamp: Time::from_nanos(ns), frame_id: "machine".into() }
+    Header {
+        stamp: Time::from_nanos(ns),
+        frame_id: "machine".into(),
+    }
 }
 
 /// The machine terms' part of the filter's state (instrument terms are nuisance parameters of
 /// the measured points' frame and are not published). `unobserved` directions of the free
 /// parameters are not counted as estimated in the degrees of freedom.
-pub fn error_model(model: &ForwardModel, filter: &RecursiveEstimator, machine_id: &str, stamp_ns: i64, unobserved: usize) -> ErrorModel {
+pub fn error_model(
+    model: &ForwardModel,
+    filter: &RecursiveEstimator,
+    machine_id: &str,
+    stamp_ns: i64,
+    unobserved: usize,
+) -> ErrorModel {
     let terms = &model.machine_terms.terms;
     let specs = model.machine_terms.param_specs();
     let n = specs.len();
@@ -37,7 +46,10 @@ pub fn error_model(model: &ForwardModel, filter: &RecursiveEstimator, machine_id
     }
     let mut term_ids = Vec::with_capacity(n);
     for t in terms {
-        term_ids.extend(std::iter::repeat_n(t.term.id().as_str().to_string(), t.params.len()));
+        term_ids.extend(std::iter::repeat_n(
+            t.term.id().as_str().to_string(),
+            t.params.len(),
+        ));
     }
     let (accepted, _, _) = filter.counts();
     ErrorModel {
@@ -50,9 +62,14 @@ pub fn error_model(model: &ForwardModel, filter: &RecursiveEstimator, machine_id
         covariance,
         residual_rms: filter.innovation_rms(),
         observation_count: accepted as u32,
-        degrees_of_freedom: (3 * accepted).saturating_sub(free.len().saturating_sub(unobserved) as u64) as u32,
+        degrees_of_freedom: (3 * accepted)
+            .saturating_sub(free.len().saturating_sub(unobserved) as u64)
+            as u32,
         term_labels: terms.iter().map(|t| t.term.label()).collect(),
-        term_catalog_ids: terms.iter().map(|t| t.term.id().as_str().to_string()).collect(),
+        term_catalog_ids: terms
+            .iter()
+            .map(|t| t.term.id().as_str().to_string())
+            .collect(),
         term_options: terms.iter().map(|t| t.options_json()).collect(),
     }
 }
@@ -67,15 +84,29 @@ pub fn propagate(jacobian: &DMatrix<f64>, filter: &RecursiveEstimator) -> Matrix
 }
 
 /// Point `k`'s prediction: nominal and true tool point (m), covariance of the error (m²).
-pub fn predicted_point(k: usize, nominal: &Vector3<f64>, truth: &Vector3<f64>, covariance: &Matrix3<f64>, stamp_ns: i64) -> MeasuredPoint {
+pub fn predicted_point(
+    k: usize,
+    nominal: &Vector3<f64>,
+    truth: &Vector3<f64>,
+    covariance: &Matrix3<f64>,
+    stamp_ns: i64,
+) -> MeasuredPoint {
     let mut cov = [0.0; 9];
     cov.copy_from_slice(covariance.transpose().as_slice());
     MeasuredPoint {
         header: header(stamp_ns),
         point_id: format!("predicted_{k}"),
         source: "estimator".into(),
-        nominal: Point { x: nominal.x, y: nominal.y, z: nominal.z },
-        measured: Point { x: truth.x, y: truth.y, z: truth.z },
+        nominal: Point {
+            x: nominal.x,
+            y: nominal.y,
+            z: nominal.z,
+        },
+        measured: Point {
+            x: truth.x,
+            y: truth.y,
+            z: truth.z,
+        },
         covariance: cov,
     }
 }
@@ -83,7 +114,10 @@ pub fn predicted_point(k: usize, nominal: &Vector3<f64>, truth: &Vector3<f64>, c
 /// The alarm as a `/diagnostics` message (level ERROR, named after the node): where the model
 /// stopped explaining the data and how improbable the recent innovations were under it.
 pub fn alarm_message(a: &Alarm, node_fqn: &str) -> DiagnosticArray {
-    let kv = |key: &str, value: String| KeyValue { key: key.into(), value };
+    let kv = |key: &str, value: String| KeyValue {
+        key: key.into(),
+        value,
+    };
     DiagnosticArray {
         header: header(a.stamp_ns),
         status: vec![DiagnosticStatus {
@@ -114,7 +148,10 @@ pub fn alarm_message(a: &Alarm, node_fqn: &str) -> DiagnosticArray {
 /// not observe (held at their start values) and those held at an edge of their possible range;
 /// OK once every free parameter is observed again.
 pub fn observability_message(note: &ObservabilityNote, node_fqn: &str) -> DiagnosticArray {
-    let kv = |key: &str, value: &[String]| KeyValue { key: key.into(), value: value.join(", ") };
+    let kv = |key: &str, value: &[String]| KeyValue {
+        key: key.into(),
+        value: value.join(", "),
+    };
     let (level, message) = match &note.text {
         Some(text) => (DiagnosticStatus::WARN, format!("{text}; give them priors or fix them in the model's estimation: section, or measure where they show")),
         None => (DiagnosticStatus::OK, "every free parameter is observed by the measurements".to_string()),
@@ -126,7 +163,10 @@ pub fn observability_message(note: &ObservabilityNote, node_fqn: &str) -> Diagno
             name: node_fqn.to_string(),
             message,
             hardware_id: String::new(),
-            values: vec![kv("unobservable", &note.unobservable), kv("at_bound", &note.at_bound)],
+            values: vec![
+                kv("unobservable", &note.unobservable),
+                kv("at_bound", &note.at_bound),
+            ],
         }],
     }
 }

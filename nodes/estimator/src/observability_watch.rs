@@ -34,14 +34,30 @@ pub struct ObservabilityWatch {
 
 impl ObservabilityWatch {
     pub fn new(names: Vec<String>, quiet_until: u64) -> Self {
-        Self { names, quiet_until, held: Vec::new(), at_bound: Vec::new(), current: Observability::default(), said: None }
+        Self {
+            names,
+            quiet_until,
+            held: Vec::new(),
+            at_bound: Vec::new(),
+            current: Observability::default(),
+            said: None,
+        }
     }
 
     /// After an update: the note to publish when what is held changed.
-    pub fn after_update(&mut self, filter: &RecursiveEstimator, alarm: bool, stamp_ns: i64) -> Option<ObservabilityNote> {
+    pub fn after_update(
+        &mut self,
+        filter: &RecursiveEstimator,
+        alarm: bool,
+        stamp_ns: i64,
+    ) -> Option<ObservabilityNote> {
         let accepted = filter.counts().0;
         let (held, at_bound) = (filter.held(), filter.at_bound());
-        let due = alarm || held != self.held || at_bound != self.at_bound || accepted.is_power_of_two() || accepted % 256 == 0;
+        let due = alarm
+            || held != self.held
+            || at_bound != self.at_bound
+            || accepted.is_power_of_two()
+            || accepted % 256 == 0;
         if !due {
             return None;
         }
@@ -70,7 +86,12 @@ impl ObservabilityWatch {
         ObservabilityNote {
             stamp_ns,
             text: self.current.describe(&self.names),
-            unobservable: self.current.unobserved_parameters().iter().map(name).collect(),
+            unobservable: self
+                .current
+                .unobserved_parameters()
+                .iter()
+                .map(name)
+                .collect(),
             at_bound: self.current.at_bound.iter().map(name).collect(),
         }
     }

@@ -2,7 +2,9 @@
 
 use std::path::Path;
 
-use metrocell_estimation::{PointSource, RecordStream, RecordingOptions, RecursiveEstimator, RecursiveOptions};
+use metrocell_estimation::{
+    PointSource, RecordStream, RecordingOptions, RecursiveEstimator, RecursiveOptions,
+};
 use metrocell_model::{ForwardModel, ParameterSetup, SignalsBuilderOptions};
 use metrocell_node::{ParamDecl, Parameters};
 use metrocell_physics::model::TermModel;
@@ -55,15 +57,44 @@ pub fn model(p: &Parameters, points_topic: &str) -> Result<Model, Box<dyn std::e
     // twin simulates (no environment, program or tracker pose needed)
     let file: &'static CellModel = Box::leak(Box::new(CellModel::from_path(&path)?));
     let instruments: &'static TermModel = Box::leak(Box::new(identity_tracker_pose()?));
-    let forward: &'static ForwardModel<'static> = Box::leak(Box::new(ForwardModel::new(&file.machine, &file.machine_terms, instruments).map_err(|e| format!("model {path}: {e}"))?));
-    let signals = SignalsBuilderOptions { max_slow_gap: p.get::<f64>("max_signal_gap")?, max_joint_gap: p.get::<f64>("max_joint_gap")?, ..SignalsBuilderOptions::default() };
-    let recording = RecordingOptions { points: PointSource::MeasuredPoints, measured_points_topic: points_topic.to_string(), signals, ..RecordingOptions::default() };
+    let forward: &'static ForwardModel<'static> = Box::leak(Box::new(
+        ForwardModel::new(&file.machine, &file.machine_terms, instruments)
+            .map_err(|e| format!("model {path}: {e}"))?,
+    ));
+    let signals = SignalsBuilderOptions {
+        max_slow_gap: p.get::<f64>("max_signal_gap")?,
+        max_joint_gap: p.get::<f64>("max_joint_gap")?,
+        ..SignalsBuilderOptions::default()
+    };
+    let recording = RecordingOptions {
+        points: PointSource::MeasuredPoints,
+        measured_points_topic: points_topic.to_string(),
+        signals,
+        ..RecordingOptions::default()
+    };
     // the instrument terms (a tracker's warm-up or refraction, a probe's pretravel) act on the
     // instruments' raw readings; the measured points this node reads are registered into the
     // machine frame already, so it estimates the machine terms only, and says so
-    let labels: Vec<String> = file.machine_terms.terms.iter().map(|t| t.term.label()).collect();
-    let instrument_labels: Vec<String> = file.instrument_terms.terms.iter().map(|t| t.term.label()).filter(|l| l != "tracker_pose").collect();
-    let estimation = file.raw.estimation.iter().filter(|(label, _)| labels.contains(label)).map(|(k, v)| (k.clone(), v.clone())).collect();
+    let labels: Vec<String> = file
+        .machine_terms
+        .terms
+        .iter()
+        .map(|t| t.term.label())
+        .collect();
+    let instrument_labels: Vec<String> = file
+        .instrument_terms
+        .terms
+        .iter()
+        .map(|t| t.term.label())
+        .filter(|l| l != "tracker_pose")
+        .collect();
+    let estimation = file
+        .raw
+        .estimation
+        .iter()
+        .filter(|(label, _)| labels.contains(label))
+        .map(|(k, v)| (k.clone(), v.clone()))
+        .collect();
     let mut set_aside = Vec::new();
     if !instrument_labels.is_empty() {
         set_aside.push(format!(
@@ -71,20 +102,37 @@ pub fn model(p: &Parameters, points_topic: &str) -> Result<Model, Box<dyn std::e
             instrument_labels.join(", ")
         ));
     }
-    Ok(Model { forward, recording, path, file, estimation, set_aside })
+    Ok(Model {
+        forward,
+        recording,
+        path,
+        file,
+        estimation,
+        set_aside,
+    })
 }
 
 /// The filter over the model file, restored from the state file when it fits, reading a
 /// recording that holds `topics` ((name, type): a bag's, or the live subscriptions); description
 /// lines for the log.
-pub fn estimator(p: &Parameters, m: &Model, topics: &[(String, String)]) -> Result<(EstimatorState, Vec<String>), Box<dyn std::error::Error>> {
+pub fn estimator(
+    p: &Parameters,
+    m: &Model,
+    topics: &[(String, String)],
+) -> Result<(EstimatorState, Vec<String>), Box<dyn std::error::Error>> {
     let (file, model, path) = (m.file, m.forward, &m.path);
-    let stream = RecordStream::new(std::path::Path::new("input"), topics, model, &m.recording).map_err(|e| format!("model {path}: {e}"))?;
-    let mut setup = ParameterSetup::new(model, &m.estimation).map_err(|e| format!("model {path}: {e}"))?;
+    let stream = RecordStream::new(std::path::Path::new("input"), topics, model, &m.recording)
+        .map_err(|e| format!("model {path}: {e}"))?;
+    let mut setup =
+        ParameterSetup::new(model, &m.estimation).map_err(|e| format!("model {path}: {e}"))?;
     let names = model.param_names();
-    let pose = model.instrument_param_start(metrocell_physics::TermId::TrackerPose).expect("identity pose added above");
+    let pose = model
+        .instrument_param_start(metrocell_physics::TermId::TrackerPose)
+        .expect("identity pose added above");
     // measured points come in the machine frame: the instrument pose is the identity, fixed
-    setup.free[pose..pose + 6].iter_mut().for_each(|f| *f = false);
+    setup.free[pose..pose + 6]
+        .iter_mut()
+        .for_each(|f| *f = false);
     let n = model.param_count();
     let mut options = RecursiveOptions::constant(n);
     options.gate_probability = p.get::<f64>("gate_probability")?;
@@ -93,8 +141,16 @@ pub fn estimator(p: &Parameters, m: &Model, topics: &[(String, String)]) -> Resu
     options.alarm_probability = p.get::<f64>("alarm_probability")?;
     options.alarm_inflation = p.get::<f64>("alarm_inflation")?;
     for entry in p.get::<Vec<String>>("process_noise")? {
-        let (name, q) = entry.split_once('=').ok_or_else(|| format!("process_noise entry `{entry}`: expected label.param=q"))?;
-        let k = names.iter().position(|x| x == name.trim()).ok_or_else(|| format!("process_noise entry `{entry}`: no parameter `{}` in the model; parameters: {}", name.trim(), names.join(", ")))?;
+        let (name, q) = entry
+            .split_once('=')
+            .ok_or_else(|| format!("process_noise entry `{entry}`: expected label.param=q"))?;
+        let k = names.iter().position(|x| x == name.trim()).ok_or_else(|| {
+            format!(
+                "process_noise entry `{entry}`: no parameter `{}` in the model; parameters: {}",
+                name.trim(),
+                names.join(", ")
+            )
+        })?;
         let q: f64 = q.trim().parse().ok().filter(|v: &f64| v.is_finite() && *v >= 0.0).ok_or_else(|| format!("process_noise entry `{entry}`: q must be a number ≥ 0 (unit of the parameter per √s)"))?;
         options.process_noise[k] = q;
     }
@@ -109,7 +165,12 @@ pub fn estimator(p: &Parameters, m: &Model, topics: &[(String, String)]) -> Resu
         "model {path}: {} parameters, {} free ({}); reading {}",
         n,
         setup.free_indices().len(),
-        setup.free_indices().iter().map(|&k| names[k].as_str()).collect::<Vec<_>>().join(", "),
+        setup
+            .free_indices()
+            .iter()
+            .map(|&k| names[k].as_str())
+            .collect::<Vec<_>>()
+            .join(", "),
         stream.topics().join(", ")
     )];
     log.extend(m.set_aside.iter().cloned());
@@ -119,11 +180,18 @@ pub fn estimator(p: &Parameters, m: &Model, topics: &[(String, String)]) -> Resu
             Some(saved) => match saved.start_for(&names, &setup.free_indices()) {
                 Ok((x, cov)) => {
                     (x0, p0) = (x, cov);
-                    log.push(format!("restarting from the state saved in {state_file} (stamp {} ns)", saved.stamp_ns));
+                    log.push(format!(
+                        "restarting from the state saved in {state_file} (stamp {} ns)",
+                        saved.stamp_ns
+                    ));
                 }
-                Err(why) => log.push(format!("state file {state_file} not used: {why}; starting from the model file")),
+                Err(why) => log.push(format!(
+                    "state file {state_file} not used: {why}; starting from the model file"
+                )),
             },
-            None => log.push(format!("no state file {state_file} yet: starting from the model file")),
+            None => log.push(format!(
+                "no state file {state_file} yet: starting from the model file"
+            )),
         }
     }
     let free_count = setup.free_indices().len();
@@ -131,7 +199,11 @@ pub fn estimator(p: &Parameters, m: &Model, topics: &[(String, String)]) -> Resu
     let predict = p.get::<Vec<f64>>("predict_points")?;
     let joints = file.machine.joint_names().len();
     if predict.len() % joints != 0 {
-        return Err(format!("predict_points has {} numbers, not a multiple of the machine's {joints} joints", predict.len()).into());
+        return Err(format!(
+            "predict_points has {} numbers, not a multiple of the machine's {joints} joints",
+            predict.len()
+        )
+        .into());
     }
     let settings = Settings {
         publish_every: p.get::<i64>("publish_every")? as u64,
@@ -140,13 +212,30 @@ pub fn estimator(p: &Parameters, m: &Model, topics: &[(String, String)]) -> Resu
         // before that the program's first points may not have reached every direction yet
         quiet_until: options_window.max(3 * free_count) as u64,
     };
-    Ok((EstimatorState::new(model, filter, stream, m.recording.measured_points_topic.clone(), settings), log))
+    Ok((
+        EstimatorState::new(
+            model,
+            filter,
+            stream,
+            m.recording.measured_points_topic.clone(),
+            settings,
+        ),
+        log,
+    ))
 }
 
 /// The measured points are in the machine frame: the tracker pose is the identity.
 fn identity_tracker_pose() -> Result<TermModel, metrocell_physics::PhysicsError> {
     let mut m = TermModel::default();
-    let params = ["tx", "ty", "tz", "alpha", "beta", "delta"].iter().map(|k| (k.to_string(), metrocell_physics::ConfigValue::Number(0.0))).collect();
-    m.push(configure(&TermConfig { id: "tracker_pose".into(), options: Default::default(), params, use_defaults: false })?)?;
+    let params = ["tx", "ty", "tz", "alpha", "beta", "delta"]
+        .iter()
+        .map(|k| (k.to_string(), metrocell_physics::ConfigValue::Number(0.0)))
+        .collect();
+    m.push(configure(&TermConfig {
+        id: "tracker_pose".into(),
+        options: Default::default(),
+        params,
+        use_defaults: false,
+    })?)?;
     Ok(m)
 }

@@ -13,7 +13,11 @@ use metrocell_node::{OfflineNode, ReplayArgs};
 pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::error::Error>> {
     let model = parameters::model(node.parameters(), &node.resolve_topic("measured_points")?)?;
     let mut source = BagSource::open(&args.bag)?;
-    let topics: Vec<(String, String)> = source.topics().iter().map(|t| (t.name.clone(), t.type_name.clone())).collect();
+    let topics: Vec<(String, String)> = source
+        .topics()
+        .iter()
+        .map(|t| (t.name.clone(), t.type_name.clone()))
+        .collect();
     let (mut state, log) = parameters::estimator(node.parameters(), &model, &topics)?;
     for line in log {
         node.logger().info(line);
@@ -32,42 +36,53 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     let fqn = node.fully_qualified_name();
 
     let (mut inputs_read, mut malformed) = (0u64, 0u64);
-    let stopped = source.replay::<Box<dyn std::error::Error>>(|| node.interrupted(), |m| {
-        inputs_read += 1;
-        if let Err(e) = state.message(&m) {
-            node.logger().warn(format!("skipped: {e}"));
-            malformed += 1;
-        }
-        for out in state.process() {
-            let Outputs { model, predicted, alarm, problem, observability } = out;
-            if let Some(problem) = problem {
-                node.logger().debug(problem);
+    let stopped = source.replay::<Box<dyn std::error::Error>>(
+        || node.interrupted(),
+        |m| {
+            inputs_read += 1;
+            if let Err(e) = state.message(&m) {
+                node.logger().warn(format!("skipped: {e}"));
+                malformed += 1;
             }
-            if let Some(note) = &observability {
-                let message = observability_message(note, &fqn);
-                match &note.text {
-                    Some(_) => node.logger().warn(&message.status[0].message),
-                    None => node.logger().info(&message.status[0].message),
+            for out in state.process() {
+                let Outputs {
+                    model,
+                    predicted,
+                    alarm,
+                    problem,
+                    observability,
+                } = out;
+                if let Some(problem) = problem {
+                    node.logger().debug(problem);
                 }
-                output.write(&diagnostics_topic, &message, m.log_time_ns)?;
-            }
-            if let Some(a) = &alarm {
-                let message = alarm_message(a, &fqn);
-                node.logger().warn(&message.status[0].message);
-                output.write(&diagnostics_topic, &message, m.log_time_ns)?;
-            }
-            if let Some(model) = model {
-                if !state_file.is_empty() {
-                    state.saved_state(model.header.stamp.nanos()).save(std::path::Path::new(&state_file))?;
+                if let Some(note) = &observability {
+                    let message = observability_message(note, &fqn);
+                    match &note.text {
+                        Some(_) => node.logger().warn(&message.status[0].message),
+                        None => node.logger().info(&message.status[0].message),
+                    }
+                    output.write(&diagnostics_topic, &message, m.log_time_ns)?;
                 }
-                output.write(&model_topic, &model, m.log_time_ns)?;
+                if let Some(a) = &alarm {
+                    let message = alarm_message(a, &fqn);
+                    node.logger().warn(&message.status[0].message);
+                    output.write(&diagnostics_topic, &message, m.log_time_ns)?;
+                }
+                if let Some(model) = model {
+                    if !state_file.is_empty() {
+                        state
+                            .saved_state(model.header.stamp.nanos())
+                            .save(std::path::Path::new(&state_file))?;
+                    }
+                    output.write(&model_topic, &model, m.log_time_ns)?;
+                }
+                for p in predicted {
+                    output.write(&predicted_topic, &p, m.log_time_ns)?;
+                }
             }
-            for p in predicted {
-                output.write(&predicted_topic, &p, m.log_time_ns)?;
-            }
-        }
-        Ok(())
-    })?;
+            Ok(())
+        },
+    )?;
     output.finish()?;
     if let Some(text) = state.observability_now(0).text {
         node.logger().warn(format!("at the end: {text}"));

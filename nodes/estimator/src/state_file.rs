@@ -24,7 +24,10 @@ impl SavedState {
     /// Write atomically (temporary file + rename).
     pub fn save(&self, path: &Path) -> std::io::Result<()> {
         let tmp = path.with_extension("tmp");
-        std::fs::write(&tmp, serde_json::to_vec(self).map_err(std::io::Error::other)?)?;
+        std::fs::write(
+            &tmp,
+            serde_json::to_vec(self).map_err(std::io::Error::other)?,
+        )?;
         std::fs::rename(&tmp, path)
     }
 
@@ -40,7 +43,11 @@ impl SavedState {
 
     /// The start vector and free covariance for a model with these parameter names and free
     /// set, or why the saved state does not fit it.
-    pub fn start_for(&self, names: &[String], free: &[usize]) -> Result<(Vec<f64>, DMatrix<f64>), String> {
+    pub fn start_for(
+        &self,
+        names: &[String],
+        free: &[usize],
+    ) -> Result<(Vec<f64>, DMatrix<f64>), String> {
         if self.parameter_names != names {
             return Err("its parameters are not the model's (the model file changed)".into());
         }
@@ -49,10 +56,20 @@ impl SavedState {
             return Err("its free parameters are not the model's".into());
         }
         let k = free.len();
-        if self.values.len() != names.len() || self.covariance.len() != k * k || !self.values.iter().chain(&self.covariance).all(|v| v.is_finite()) {
+        if self.values.len() != names.len()
+            || self.covariance.len() != k * k
+            || !self
+                .values
+                .iter()
+                .chain(&self.covariance)
+                .all(|v| v.is_finite())
+        {
             return Err("its values or covariance have the wrong length or are not finite".into());
         }
-        Ok((self.values.clone(), DMatrix::from_row_slice(k, k, &self.covariance)))
+        Ok((
+            self.values.clone(),
+            DMatrix::from_row_slice(k, k, &self.covariance),
+        ))
     }
 }
 
@@ -68,14 +85,26 @@ mod tests {
         let _ = std::fs::remove_file(&path);
         assert_eq!(SavedState::load(&path).unwrap(), None);
         let names = vec!["a.c0".to_string(), "a.c1".to_string()];
-        let s = SavedState { parameter_names: names.clone(), values: vec![1e-6, 2e-6], free: vec!["a.c1".into()], covariance: vec![4e-12], stamp_ns: 7 };
+        let s = SavedState {
+            parameter_names: names.clone(),
+            values: vec![1e-6, 2e-6],
+            free: vec!["a.c1".into()],
+            covariance: vec![4e-12],
+            stamp_ns: 7,
+        };
         s.save(&path).unwrap();
         let back = SavedState::load(&path).unwrap().unwrap();
         assert_eq!(back, s);
         let (x, p) = back.start_for(&names, &[1]).unwrap();
         assert_eq!((x, p[(0, 0)]), (vec![1e-6, 2e-6], 4e-12));
-        assert!(back.start_for(&names, &[0]).unwrap_err().contains("free parameters"));
-        assert!(back.start_for(&["b.c0".into(), "a.c1".into()], &[1]).unwrap_err().contains("model file changed"));
+        assert!(back
+            .start_for(&names, &[0])
+            .unwrap_err()
+            .contains("free parameters"));
+        assert!(back
+            .start_for(&["b.c0".into(), "a.c1".into()], &[1])
+            .unwrap_err()
+            .contains("model file changed"));
         std::fs::write(&path, "not json").unwrap();
         assert!(SavedState::load(&path).unwrap_err().contains("state.json"));
         let _ = std::fs::remove_dir_all(&dir);

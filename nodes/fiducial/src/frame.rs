@@ -18,17 +18,34 @@ pub enum FrameError {
     Empty { width: u32, height: u32 },
     #[error("unsupported encoding `{0}` (supported: mono8, mono16, rgb8, bgr8, rgba8, bgra8)")]
     Encoding(String),
-    #[error("encoding {encoding}: step {step} B is smaller than width {width} × {bytes_per_pixel} B")]
-    Step { encoding: String, step: u32, width: u32, bytes_per_pixel: u32 },
-    #[error("truncated frame: {got} B of data, {expected} B expected (step {step} × height {height})")]
-    Truncated { got: usize, expected: usize, step: u32, height: u32 },
+    #[error(
+        "encoding {encoding}: step {step} B is smaller than width {width} × {bytes_per_pixel} B"
+    )]
+    Step {
+        encoding: String,
+        step: u32,
+        width: u32,
+        bytes_per_pixel: u32,
+    },
+    #[error(
+        "truncated frame: {got} B of data, {expected} B expected (step {step} × height {height})"
+    )]
+    Truncated {
+        got: usize,
+        expected: usize,
+        step: u32,
+        height: u32,
+    },
 }
 
 /// Convert one frame to grey.
 pub fn gray_from_image(msg: &Image) -> Result<GrayImage, FrameError> {
     let (w, h) = (msg.width, msg.height);
     if w == 0 || h == 0 {
-        return Err(FrameError::Empty { width: w, height: h });
+        return Err(FrameError::Empty {
+            width: w,
+            height: h,
+        });
     }
     let bpp: u32 = match msg.encoding.as_str() {
         "mono8" | "8UC1" => 1,
@@ -38,12 +55,22 @@ pub fn gray_from_image(msg: &Image) -> Result<GrayImage, FrameError> {
         other => return Err(FrameError::Encoding(other.to_string())),
     };
     if (msg.step as u64) < w as u64 * bpp as u64 {
-        return Err(FrameError::Step { encoding: msg.encoding.clone(), step: msg.step, width: w, bytes_per_pixel: bpp });
+        return Err(FrameError::Step {
+            encoding: msg.encoding.clone(),
+            step: msg.step,
+            width: w,
+            bytes_per_pixel: bpp,
+        });
     }
     // The last row only needs width × bpp bytes, but ROS requires step × height; insist on it.
     let expected = msg.step as usize * h as usize;
     if msg.data.len() < expected {
-        return Err(FrameError::Truncated { got: msg.data.len(), expected, step: msg.step, height: h });
+        return Err(FrameError::Truncated {
+            got: msg.data.len(),
+            expected,
+            step: msg.step,
+            height: h,
+        });
     }
     Ok(match msg.encoding.as_str() {
         "mono8" | "8UC1" => mono8_rows(msg),
@@ -82,16 +109,37 @@ fn gray_per_pixel(msg: &Image, bpp: u32) -> GrayImage {
             }
         }
         "mono16" | "16UC1" => {
-            let read = |b: &[u8]| if msg.is_bigendian != 0 { u16::from_be_bytes([b[0], b[1]]) } else { u16::from_le_bytes([b[0], b[1]]) };
-            let max = (0..h).flat_map(|y| row(y).chunks_exact(2).map(read)).max().unwrap_or(0).max(1) as f64;
+            let read = |b: &[u8]| {
+                if msg.is_bigendian != 0 {
+                    u16::from_be_bytes([b[0], b[1]])
+                } else {
+                    u16::from_le_bytes([b[0], b[1]])
+                }
+            };
+            let max = (0..h)
+                .flat_map(|y| row(y).chunks_exact(2).map(read))
+                .max()
+                .unwrap_or(0)
+                .max(1) as f64;
             for y in 0..h {
-                data.extend(row(y).chunks_exact(2).map(|b| (read(b) as f64 * 255.0 / max).round() as u8));
+                data.extend(
+                    row(y)
+                        .chunks_exact(2)
+                        .map(|b| (read(b) as f64 * 255.0 / max).round() as u8),
+                );
             }
         }
         enc => {
-            let (ri, bi) = if enc.starts_with("rgb") { (0, 2) } else { (2, 0) };
+            let (ri, bi) = if enc.starts_with("rgb") {
+                (0, 2)
+            } else {
+                (2, 0)
+            };
             for y in 0..h {
-                data.extend(row(y).chunks_exact(bpp as usize).map(|p| (0.299 * p[ri] as f64 + 0.587 * p[1] as f64 + 0.114 * p[bi] as f64).round() as u8));
+                data.extend(row(y).chunks_exact(bpp as usize).map(|p| {
+                    (0.299 * p[ri] as f64 + 0.587 * p[1] as f64 + 0.114 * p[bi] as f64).round()
+                        as u8
+                }));
             }
         }
     }
@@ -103,7 +151,14 @@ mod tests {
     use super::*;
 
     fn msg(encoding: &str, w: u32, h: u32, step: u32, data: Vec<u8>) -> Image {
-        Image { encoding: encoding.into(), width: w, height: h, step, data, ..Default::default() }
+        Image {
+            encoding: encoding.into(),
+            width: w,
+            height: h,
+            step,
+            data,
+            ..Default::default()
+        }
     }
 
     #[test]
@@ -120,31 +175,70 @@ mod tests {
         be.is_bigendian = 1;
         assert_eq!(gray_from_image(&be).unwrap().as_raw(), &vec![128, 255]);
 
-        assert_eq!(gray_from_image(&msg("mono8", 0, 0, 0, vec![])), Err(FrameError::Empty { width: 0, height: 0 }));
+        assert_eq!(
+            gray_from_image(&msg("mono8", 0, 0, 0, vec![])),
+            Err(FrameError::Empty {
+                width: 0,
+                height: 0
+            })
+        );
         let e = gray_from_image(&msg("yuv422", 2, 2, 4, vec![0; 8])).unwrap_err();
         assert!(e.to_string().contains("yuv422"), "{e}");
         let e = gray_from_image(&msg("mono8", 4, 4, 4, vec![0; 15])).unwrap_err();
-        assert_eq!(e, FrameError::Truncated { got: 15, expected: 16, step: 4, height: 4 });
-        assert!(matches!(gray_from_image(&msg("rgb8", 4, 1, 4, vec![0; 4])), Err(FrameError::Step { .. })));
+        assert_eq!(
+            e,
+            FrameError::Truncated {
+                got: 15,
+                expected: 16,
+                step: 4,
+                height: 4
+            }
+        );
+        assert!(matches!(
+            gray_from_image(&msg("rgb8", 4, 1, 4, vec![0; 4])),
+            Err(FrameError::Step { .. })
+        ));
     }
 
     /// Deterministic "random" bytes (an LCG), so padding bytes differ from pixels.
     fn bytes(n: usize, seed: u32) -> Vec<u8> {
         let mut s = seed;
-        (0..n).map(|_| { s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223); (s >> 24) as u8 }).collect()
+        (0..n)
+            .map(|_| {
+                s = s.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+                (s >> 24) as u8
+            })
+            .collect()
     }
 
     #[test]
     fn mono8_fast_path_equals_the_per_pixel_path() {
         // Unpadded, padded rows (step > width, as V4L2 drivers and ROS publishers with aligned
         // rows produce), one row, one column, and data longer than step × height.
-        for (w, h, step, extra) in [(37, 23, 37, 0), (37, 23, 64, 0), (1, 5, 4, 0), (50, 1, 50, 0), (640, 480, 640, 0), (641, 7, 704, 13)] {
-            let m = msg("mono8", w, h, step, bytes((step * h) as usize + extra, w * 31 + step));
+        for (w, h, step, extra) in [
+            (37, 23, 37, 0),
+            (37, 23, 64, 0),
+            (1, 5, 4, 0),
+            (50, 1, 50, 0),
+            (640, 480, 640, 0),
+            (641, 7, 704, 13),
+        ] {
+            let m = msg(
+                "mono8",
+                w,
+                h,
+                step,
+                bytes((step * h) as usize + extra, w * 31 + step),
+            );
             let fast = gray_from_image(&m).unwrap();
             let general = gray_per_pixel(&m, 1);
             assert_eq!(fast, general, "{w}x{h} step {step}");
             // And both are the right pixels: row y starts at y · step.
-            assert_eq!(fast.get_pixel(w - 1, h - 1)[0], m.data[((h - 1) * step + w - 1) as usize], "{w}x{h} step {step}");
+            assert_eq!(
+                fast.get_pixel(w - 1, h - 1)[0],
+                m.data[((h - 1) * step + w - 1) as usize],
+                "{w}x{h} step {step}"
+            );
         }
     }
 
@@ -170,7 +264,10 @@ mod tests {
             let (put, c) = time(&|| {
                 let mut out = GrayImage::new(m.width, m.height);
                 for y in 0..m.height {
-                    for (x, &v) in m.data[(y * m.step) as usize..][..m.width as usize].iter().enumerate() {
+                    for (x, &v) in m.data[(y * m.step) as usize..][..m.width as usize]
+                        .iter()
+                        .enumerate()
+                    {
                         out.put_pixel(x as u32, y, image::Luma([v]));
                     }
                 }
@@ -184,13 +281,21 @@ mod tests {
     #[test]
     fn colour_and_mono16_rows_with_padding_convert_per_pixel() {
         // Every supported encoding with step > width × bpp: the padding is never read as pixels.
-        for (enc, bpp) in [("rgb8", 3u32), ("bgr8", 3), ("rgba8", 4), ("bgra8", 4), ("mono16", 2)] {
+        for (enc, bpp) in [
+            ("rgb8", 3u32),
+            ("bgr8", 3),
+            ("rgba8", 4),
+            ("bgra8", 4),
+            ("mono16", 2),
+        ] {
             let (w, h) = (5u32, 3u32);
             let step = w * bpp + 3;
             let mut m = msg(enc, w, h, step, bytes((step * h) as usize, bpp));
             let padded = gray_from_image(&m).unwrap();
             // The same pixels without padding give the same image.
-            m.data = (0..h).flat_map(|y| m.data[(y * step) as usize..][..(w * bpp) as usize].to_vec()).collect();
+            m.data = (0..h)
+                .flat_map(|y| m.data[(y * step) as usize..][..(w * bpp) as usize].to_vec())
+                .collect();
             m.step = w * bpp;
             assert_eq!(padded, gray_from_image(&m).unwrap(), "{enc}");
         }

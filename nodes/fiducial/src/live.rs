@@ -66,7 +66,10 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
             diagnostics.add_count("frames_without_targets", 1);
         }
         diagnostics.set_value("last_detection_latency_ms", format!("{:.2}", latency * 1e3));
-        diagnostics.set_value("mean_detection_latency_ms", format!("{:.2}", latency_sum / processed as f64 * 1e3));
+        diagnostics.set_value(
+            "mean_detection_latency_ms",
+            format!("{:.2}", latency_sum / processed as f64 * 1e3),
+        );
         diagnostics.ok(format!("{targets} targets in the last frame"));
     }
     Ok(())

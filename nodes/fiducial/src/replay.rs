@@ -29,45 +29,53 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
 
     let (mut frames, mut rejected) = (0u64, 0u64);
     // SIGINT/SIGTERM stop it between messages, and the output below is still finished
-    let stopped = source.replay::<Box<dyn std::error::Error>>(|| node.interrupted(), |m| {
-        if m.topic == info_topic {
-            match m.decode::<CameraInfo>() {
-                Ok(info) => {
-                    match processor.camera_info(&info) {
+    let stopped = source.replay::<Box<dyn std::error::Error>>(
+        || node.interrupted(),
+        |m| {
+            if m.topic == info_topic {
+                match m.decode::<CameraInfo>() {
+                    Ok(info) => match processor.camera_info(&info) {
                         Ok(Some(warning)) => node.logger().warn(warning),
                         Ok(None) => {}
-                        Err(e) => node.logger().warn(format!("{} at log time {} ns ignored: {e}", m.topic, m.log_time_ns)),
-                    }
+                        Err(e) => node.logger().warn(format!(
+                            "{} at log time {} ns ignored: {e}",
+                            m.topic, m.log_time_ns
+                        )),
+                    },
+                    Err(e) => node.logger().warn(format!("ignored: {e}")),
                 }
-                Err(e) => node.logger().warn(format!("ignored: {e}")),
-            }
-            return Ok(());
-        }
-        frames += 1;
-        // A malformed message is reported and skipped, like a frame the detector rejects.
-        let image = match m.decode::<Image>() {
-            Ok(image) => image,
-            Err(e) => {
-                rejected += 1;
-                node.logger().warn(format!("skipped: {e}"));
                 return Ok(());
             }
-        };
-        match processor.frame(&image) {
-            Ok(out) => {
-                output.write(&detections_topic, &out.detections, m.log_time_ns)?;
-                for p in &out.poses {
-                    output.write(&poses_topic, p, m.log_time_ns)?;
+            frames += 1;
+            // A malformed message is reported and skipped, like a frame the detector rejects.
+            let image = match m.decode::<Image>() {
+                Ok(image) => image,
+                Err(e) => {
+                    rejected += 1;
+                    node.logger().warn(format!("skipped: {e}"));
+                    return Ok(());
+                }
+            };
+            match processor.frame(&image) {
+                Ok(out) => {
+                    output.write(&detections_topic, &out.detections, m.log_time_ns)?;
+                    for p in &out.poses {
+                        output.write(&poses_topic, p, m.log_time_ns)?;
+                    }
+                }
+                Err(e) => {
+                    rejected += 1;
+                    node.logger()
+                        .warn(format!("{e} (log time {} ns)", m.log_time_ns));
                 }
             }
-            Err(e) => {
-                rejected += 1;
-                node.logger().warn(format!("{e} (log time {} ns)", m.log_time_ns));
-            }
-        }
-        Ok(())
-    })?;
+            Ok(())
+        },
+    )?;
     output.finish()?;
-    node.logger().info(format!("replayed {frames} frames from {}: {rejected} rejected", args.bag.display()));
+    node.logger().info(format!(
+        "replayed {frames} frames from {}: {rejected} rejected",
+        args.bag.display()
+    ));
     Ok(node.finish_replay(stopped)?)
 }

@@ -13,15 +13,19 @@ use metrocell_msgs::geometry_msgs::msg::PoseWithCovarianceStamped;
 use metrocell_msgs::msg::FiducialDetectionArray;
 use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image};
 use metrocell_msgs::std_msgs::msg::Header;
+use metrocell_node::testing::KillOnDrop as Kill;
 use metrocell_node::{qos, MetrocellNode};
 use metrocell_vision::aruco::Dictionary;
-use metrocell_vision::{render_view, CameraModel, Distortion, PlanarTarget, RenderSettings, TargetItem};
+use metrocell_vision::{
+    render_view, CameraModel, Distortion, PlanarTarget, RenderSettings, TargetItem,
+};
 use nalgebra::{Isometry3, Translation3, UnitQuaternion};
-use metrocell_node::testing::KillOnDrop as Kill;
-
 
 fn header(stamp_ns: i64) -> Header {
-    Header { stamp: Time::from_nanos(stamp_ns), frame_id: "cam_optical".into() }
+    Header {
+        stamp: Time::from_nanos(stamp_ns),
+        frame_id: "cam_optical".into(),
+    }
 }
 
 fn stamp_ns(h: &Header) -> i64 {
@@ -34,23 +38,50 @@ fn detects_markers_with_pose_and_survives_bad_frames() {
     let cam = CameraModel::new(640, 480, 800.0, 800.0, 319.5, 239.5, Distortion::none()).unwrap();
     let side = 0.05;
     let target = PlanarTarget {
-        items: vec![TargetItem::Marker { dictionary: Dictionary::predefined("DICT_4X4_50").unwrap(), id: 7, top_left: [0.0, 0.0], side, border_bits: 1 }],
+        items: vec![TargetItem::Marker {
+            dictionary: Dictionary::predefined("DICT_4X4_50").unwrap(),
+            id: 7,
+            top_left: [0.0, 0.0],
+            side,
+            border_bits: 1,
+        }],
     };
     // Marker centre 0.4 m ahead, slightly tilted.
-    let pose = Isometry3::from_parts(Translation3::new(-0.02, -0.03, 0.4), UnitQuaternion::from_euler_angles(0.2, -0.15, 0.1));
+    let pose = Isometry3::from_parts(
+        Translation3::new(-0.02, -0.03, 0.4),
+        UnitQuaternion::from_euler_angles(0.2, -0.15, 0.1),
+    );
     let view = render_view(&cam, &pose, &target, &RenderSettings::default()).unwrap();
     let truth = view.markers[0].corners;
 
     let child = Command::new(env!("CARGO_BIN_EXE_metrocell-fiducial"))
-        .args(["--ros-args", "-p", "family:=DICT_4X4_50", "-p", &format!("marker_size:={side}")])
+        .args([
+            "--ros-args",
+            "-p",
+            "family:=DICT_4X4_50",
+            "-p",
+            &format!("marker_size:={side}"),
+        ])
         .spawn()
         .unwrap();
     let _child = Kill(child);
-    let mut node = MetrocellNode::builder("fiducial_test_camera").diagnostics_period(None).handle_signals(false).build().unwrap();
-    let images = node.publisher::<Image>("image", qos::sensor_data()).unwrap();
-    let infos = node.publisher::<CameraInfo>("camera_info", qos::sensor_data()).unwrap();
-    let detections = node.subscription::<FiducialDetectionArray>("fiducials", qos::reliable()).unwrap();
-    let poses = node.subscription::<PoseWithCovarianceStamped>("fiducials/pose", qos::reliable()).unwrap();
+    let mut node = MetrocellNode::builder("fiducial_test_camera")
+        .diagnostics_period(None)
+        .handle_signals(false)
+        .build()
+        .unwrap();
+    let images = node
+        .publisher::<Image>("image", qos::sensor_data())
+        .unwrap();
+    let infos = node
+        .publisher::<CameraInfo>("camera_info", qos::sensor_data())
+        .unwrap();
+    let detections = node
+        .subscription::<FiducialDetectionArray>("fiducials", qos::reliable())
+        .unwrap();
+    let poses = node
+        .subscription::<PoseWithCovarianceStamped>("fiducials/pose", qos::reliable())
+        .unwrap();
 
     let good = |stamp: i64| Image {
         header: header(stamp),
@@ -61,27 +92,46 @@ fn detects_markers_with_pose_and_survives_bad_frames() {
         step: 640,
         data: view.image.as_raw().clone(),
     };
-    let info = CameraInfo { header: header(0), ..metrocell_camera_model::CameraInfo::from_model("cam", &cam).to_msg() };
+    let info = CameraInfo {
+        header: header(0),
+        ..metrocell_camera_model::CameraInfo::from_model("cam", &cam).to_msg()
+    };
     // Bad frames first, interleaved with good ones until the node answers; the answer must be for a
     // good frame, proving the node kept running after the bad ones.
     let deadline = Instant::now() + Duration::from_secs(30);
     let mut first: Option<FiducialDetectionArray> = None;
     let mut i = 0i64;
     while first.is_none() {
-        assert!(Instant::now() < deadline, "no FiducialDetectionArray within 30 s");
+        assert!(
+            Instant::now() < deadline,
+            "no FiducialDetectionArray within 30 s"
+        );
         let _ = infos.publish(info.clone());
         let mut truncated = good(1_000 + i);
         truncated.data.truncate(1000);
         let _ = images.publish(truncated);
         std::thread::sleep(Duration::from_millis(30));
-        let _ = images.publish(Image { encoding: "yuv422".into(), ..good(2_000 + i) });
+        let _ = images.publish(Image {
+            encoding: "yuv422".into(),
+            ..good(2_000 + i)
+        });
         std::thread::sleep(Duration::from_millis(30));
-        let _ = images.publish(Image { height: 0, width: 0, step: 0, data: vec![], ..good(3_000 + i) });
+        let _ = images.publish(Image {
+            height: 0,
+            width: 0,
+            step: 0,
+            data: vec![],
+            ..good(3_000 + i)
+        });
         std::thread::sleep(Duration::from_millis(30));
         let _ = images.publish(good(1_000_000_000 + i));
         std::thread::sleep(Duration::from_millis(150));
         while let Ok(Some((d, _))) = detections.take() {
-            assert!(stamp_ns(&d.header) >= 1_000_000_000, "detections only for good frames, got stamp {:?}", d.header.stamp);
+            assert!(
+                stamp_ns(&d.header) >= 1_000_000_000,
+                "detections only for good frames, got stamp {:?}",
+                d.header.stamp
+            );
             // Frames that overtook the first camera_info on the wire legitimately come without pose.
             if d.detections.iter().all(|m| m.has_pose) {
                 first = Some(d);
@@ -90,14 +140,29 @@ fn detects_markers_with_pose_and_survives_bad_frames() {
         i += 1;
     }
     let d = first.unwrap();
-    assert_eq!((d.header.frame_id.as_str(), d.image_width, d.image_height), ("cam_optical", 640, 480));
+    assert_eq!(
+        (d.header.frame_id.as_str(), d.image_width, d.image_height),
+        ("cam_optical", 640, 480)
+    );
     assert_eq!(d.detections.len(), 1);
     let m = &d.detections[0];
-    assert_eq!((m.family.as_str(), m.id, m.corners.len(), m.corner_covariance.len()), ("aruco_4x4_50", 7, 8, 16));
+    assert_eq!(
+        (
+            m.family.as_str(),
+            m.id,
+            m.corners.len(),
+            m.corner_covariance.len()
+        ),
+        ("aruco_4x4_50", 7, 8, 16)
+    );
     for (k, t) in truth.iter().enumerate() {
         let e = ((m.corners[2 * k] - t.x).powi(2) + (m.corners[2 * k + 1] - t.y).powi(2)).sqrt();
         assert!(e < 0.1, "corner {k} error {e} px");
-        assert!(m.corner_covariance[4 * k] > 0.0 && m.corner_covariance[4 * k] < 0.01, "corner {k} variance {}", m.corner_covariance[4 * k]);
+        assert!(
+            m.corner_covariance[4 * k] > 0.0 && m.corner_covariance[4 * k] < 0.01,
+            "corner {k} variance {}",
+            m.corner_covariance[4 * k]
+        );
     }
     assert!(m.has_pose);
     let p = &m.pose.pose.position;
@@ -105,9 +170,13 @@ fn detects_markers_with_pose_and_survives_bad_frames() {
     // Pose of the marker centre; the truth pose is of its top-left corner frame, so compare depth
     // with the renderer's centre (top_left + side/2 along the target's x and y).
     let centre = pose * nalgebra::Point3::new(side / 2.0, side / 2.0, 0.0);
-    let err = ((p.x - centre.x).powi(2) + (p.y - centre.y).powi(2) + (p.z - centre.z).powi(2)).sqrt();
+    let err =
+        ((p.x - centre.x).powi(2) + (p.y - centre.y).powi(2) + (p.z - centre.z).powi(2)).sqrt();
     let sz = m.pose.covariance[14].sqrt();
-    assert!(err < 2e-3 && sz > 0.0 && sz < 5e-3, "pose error {err} m (σ_z {sz} m), truth t {t:?}");
+    assert!(
+        err < 2e-3 && sz > 0.0 && sz < 5e-3,
+        "pose error {err} m (σ_z {sz} m), truth t {t:?}"
+    );
 
     // Pose topic: same header, same pose.
     let deadline = Instant::now() + Duration::from_secs(5);

@@ -17,11 +17,10 @@ use metrocell_msgs::builtin_interfaces::msg::Time;
 use metrocell_msgs::msg::FiducialDetectionArray;
 use metrocell_msgs::sensor_msgs::msg::Image;
 use metrocell_msgs::std_msgs::msg::Header;
+use metrocell_node::testing::KillOnDrop as Kill;
 use metrocell_node::{qos, MetrocellNode};
 use metrocell_vision::aruco::{generate_marker_image, DetectorParams, Dictionary};
 use metrocell_vision::{detect_targets, TargetFamily};
-use metrocell_node::testing::KillOnDrop as Kill;
-
 
 fn median(v: &mut [f64]) -> f64 {
     v.sort_by(f64::total_cmp);
@@ -42,10 +41,23 @@ fn frame(w: u32, h: u32) -> image::GrayImage {
 #[ignore = "benchmark: run in release with --ignored --nocapture inside tests/isolated"]
 fn frame_in_to_detection_out_latency() {
     metrocell_node::testing::require_isolated_network();
-    let _child = Kill(Command::new(env!("CARGO_BIN_EXE_metrocell-fiducial")).args(["--ros-args", "-p", "family:=DICT_4X4_50"]).spawn().unwrap());
-    let mut node = MetrocellNode::builder("latency_test_camera").diagnostics_period(None).handle_signals(false).build().unwrap();
-    let images = node.publisher::<Image>("image", qos::sensor_data()).unwrap();
-    let detections = node.subscription::<FiducialDetectionArray>("fiducials", qos::reliable()).unwrap();
+    let _child = Kill(
+        Command::new(env!("CARGO_BIN_EXE_metrocell-fiducial"))
+            .args(["--ros-args", "-p", "family:=DICT_4X4_50"])
+            .spawn()
+            .unwrap(),
+    );
+    let mut node = MetrocellNode::builder("latency_test_camera")
+        .diagnostics_period(None)
+        .handle_signals(false)
+        .build()
+        .unwrap();
+    let images = node
+        .publisher::<Image>("image", qos::sensor_data())
+        .unwrap();
+    let detections = node
+        .subscription::<FiducialDetectionArray>("fiducials", qos::reliable())
+        .unwrap();
     let family = TargetFamily::parse("DICT_4X4_50", None, None).unwrap();
     let frames_per_size = 15;
     let mut stamp = 1_000_000_000i64;
@@ -54,7 +66,10 @@ fn frame_in_to_detection_out_latency() {
     for (w, h) in [(640u32, 480u32), (1920, 1080), (3840, 2160)] {
         let img = frame(w, h);
         let msg = |stamp: i64| Image {
-            header: Header { stamp: Time::from_nanos(stamp), frame_id: "cam".into() },
+            header: Header {
+                stamp: Time::from_nanos(stamp),
+                frame_id: "cam".into(),
+            },
             height: h,
             width: w,
             encoding: "mono8".into(),
@@ -69,7 +84,11 @@ fn frame_in_to_detection_out_latency() {
         let mut warm = false;
         let deadline = Instant::now() + Duration::from_secs(120);
         while lat.len() < frames_per_size {
-            assert!(Instant::now() < deadline, "{w}x{h}: only {} frames answered ({lost} lost)", lat.len());
+            assert!(
+                Instant::now() < deadline,
+                "{w}x{h}: only {} frames answered ({lost} lost)",
+                lat.len()
+            );
             let t = Instant::now();
             let found = detect_targets(&img, &family, &DetectorParams::default(), None).unwrap();
             let lib_ms = t.elapsed().as_secs_f64() * 1e3;

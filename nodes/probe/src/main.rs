@@ -31,7 +31,10 @@ fn main() -> std::process::ExitCode {
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let (builder, rest) = MetrocellNode::builder("probe").params(declarations()).node_argument(ReplayArgs::FLAG, ReplayArgs::HELP).args(std::env::args())?;
+    let (builder, rest) = MetrocellNode::builder("probe")
+        .params(declarations())
+        .node_argument(ReplayArgs::FLAG, ReplayArgs::HELP)
+        .args(std::env::args())?;
     match ReplayArgs::parse(rest.get(1..).unwrap_or_default())? {
         Some(args) => replay::run(builder.build_offline()?, &args),
         None => live::run(builder.build()?),

@@ -22,22 +22,58 @@ use crate::compensation::{approach_direction, compensate, ProbeError, ProbeModel
 
 pub fn declarations() -> Vec<ParamDecl> {
     vec![
-        ParamDecl::new("probe_id", "probe".to_string(), "probe name written into ProbeHit"),
-        ParamDecl::new("frame_id", "machine".to_string(), "machine frame of the axis readings"),
-        ParamDecl::new("axes", vec!["x".to_string(), "y".to_string(), "z".to_string()], "JointState names of the X, Y, Z axes"),
+        ParamDecl::new(
+            "probe_id",
+            "probe".to_string(),
+            "probe name written into ProbeHit",
+        ),
+        ParamDecl::new(
+            "frame_id",
+            "machine".to_string(),
+            "machine frame of the axis readings",
+        ),
+        ParamDecl::new(
+            "axes",
+            vec!["x".to_string(), "y".to_string(), "z".to_string()],
+            "JointState names of the X, Y, Z axes",
+        ),
         ParamDecl::new("stylus_radius", 0.0015, "effective ball radius [m]").with_range(0.0, 0.1),
-        ParamDecl::new("stylus_radius_std", 0.5e-6, "its standard uncertainty [m]").with_range(0.0, 1e-3),
-        ParamDecl::new("stylus_offset", vec![0.0, 0.0, 0.0], "axis readings → ball centre offset [m] (x, y, z)"),
-        ParamDecl::new("pretravel", vec![0.0, 0.0, 0.0, 0.0], "probe_pretravel (p0, a, b, pz) [m]"),
-        ParamDecl::new("pretravel_std", vec![1e-6, 1e-6, 1e-6, 1e-6], "their standard uncertainties [m]"),
+        ParamDecl::new("stylus_radius_std", 0.5e-6, "its standard uncertainty [m]")
+            .with_range(0.0, 1e-3),
+        ParamDecl::new(
+            "stylus_offset",
+            vec![0.0, 0.0, 0.0],
+            "axis readings → ball centre offset [m] (x, y, z)",
+        ),
+        ParamDecl::new(
+            "pretravel",
+            vec![0.0, 0.0, 0.0, 0.0],
+            "probe_pretravel (p0, a, b, pz) [m]",
+        ),
+        ParamDecl::new(
+            "pretravel_std",
+            vec![1e-6, 1e-6, 1e-6, 1e-6],
+            "their standard uncertainties [m]",
+        ),
         ParamDecl::new("lobes", 3i64, "pretravel lobe count").with_range(1.0, 12.0),
-        ParamDecl::new("axis_std", 1e-6, "standard uncertainty of one axis reading [m]").with_range(0.0, 1e-3),
-        ParamDecl::new("default_approach", vec![0.0, 0.0, -1.0], "approach direction when the trigger has no velocity"),
+        ParamDecl::new(
+            "axis_std",
+            1e-6,
+            "standard uncertainty of one axis reading [m]",
+        )
+        .with_range(0.0, 1e-3),
+        ParamDecl::new(
+            "default_approach",
+            vec![0.0, 0.0, -1.0],
+            "approach direction when the trigger has no velocity",
+        ),
     ]
 }
 
 fn vec3(v: &[f64], name: &str) -> Result<Vector3<f64>, String> {
-    (v.len() == 3).then(|| Vector3::new(v[0], v[1], v[2])).ok_or_else(|| format!("parameter {name}: expected 3 values, got {}", v.len()))
+    (v.len() == 3)
+        .then(|| Vector3::new(v[0], v[1], v[2]))
+        .ok_or_else(|| format!("parameter {name}: expected 3 values, got {}", v.len()))
 }
 
 pub struct ProbeProcessor {
@@ -59,7 +95,9 @@ impl ProbeProcessor {
     pub fn from_parameters(p: &Parameters) -> Result<Self, Box<dyn std::error::Error>> {
         let four = |name: &str| -> Result<[f64; 4], Box<dyn std::error::Error>> {
             let v = p.get::<Vec<f64>>(name)?;
-            v.clone().try_into().map_err(|_| format!("parameter {name}: expected 4 values, got {}", v.len()).into())
+            v.clone()
+                .try_into()
+                .map_err(|_| format!("parameter {name}: expected 4 values, got {}", v.len()).into())
         };
         let model = ProbeModel {
             stylus_radius: p.get("stylus_radius")?,
@@ -100,7 +138,13 @@ impl ProbeProcessor {
 
     /// The newest held nominal stamped at or before `stamp_ns`; it and every older one leave.
     fn take_nominal(&mut self, stamp_ns: i64) -> Option<PointStamped> {
-        let newest = self.nominals.iter().enumerate().filter(|(_, n)| n.header.stamp.nanos() <= stamp_ns).max_by_key(|(_, n)| n.header.stamp.nanos()).map(|(i, _)| i);
+        let newest = self
+            .nominals
+            .iter()
+            .enumerate()
+            .filter(|(_, n)| n.header.stamp.nanos() <= stamp_ns)
+            .max_by_key(|(_, n)| n.header.stamp.nanos())
+            .map(|(i, _)| i);
         let taken = newest.and_then(|i| self.nominals.remove(i));
         self.nominals.retain(|n| n.header.stamp.nanos() > stamp_ns);
         taken
@@ -114,10 +158,20 @@ impl ProbeProcessor {
             let mut pos = [0.0; 3];
             let mut vel = [0.0; 3];
             for (k, name) in self.axes.iter().enumerate() {
-                let i = t.name.iter().position(|n| n == name).ok_or_else(|| ProbeError::MissingAxis(name.clone(), t.name.clone()))?;
-                let value = *t.position.get(i).ok_or_else(|| ProbeError::MissingAxis(name.clone(), t.name.clone()))?;
+                let i = t
+                    .name
+                    .iter()
+                    .position(|n| n == name)
+                    .ok_or_else(|| ProbeError::MissingAxis(name.clone(), t.name.clone()))?;
+                let value = *t
+                    .position
+                    .get(i)
+                    .ok_or_else(|| ProbeError::MissingAxis(name.clone(), t.name.clone()))?;
                 if !value.is_finite() {
-                    return Err(ProbeError::NonFinite { axis: name.clone(), value });
+                    return Err(ProbeError::NonFinite {
+                        axis: name.clone(),
+                        value,
+                    });
                 }
                 pos[k] = value;
                 vel[k] = t.velocity.get(i).copied().unwrap_or(0.0);
@@ -125,11 +179,20 @@ impl ProbeProcessor {
             let u = approach_direction(Some(Vector3::from(vel)), self.fallback)?;
             Ok((pos, compensate(&self.model, Vector3::from(pos), u)?))
         })();
-        let (pos, hit) = result.map_err(|e| format!("trigger at {}.{:09}: {e}", t.header.stamp.sec, t.header.stamp.nanosec))?;
+        let (pos, hit) = result.map_err(|e| {
+            format!(
+                "trigger at {}.{:09}: {e}",
+                t.header.stamp.sec, t.header.stamp.nanosec
+            )
+        })?;
         self.count += 1;
         let mut header = t.header.clone();
         header.frame_id = self.frame_id.clone();
-        let p = |v: Vector3<f64>| Point { x: v.x, y: v.y, z: v.z };
+        let p = |v: Vector3<f64>| Point {
+            x: v.x,
+            y: v.y,
+            z: v.z,
+        };
         let mut cov = [0.0; 9];
         cov.copy_from_slice(hit.covariance.transpose().as_slice());
         let probe_hit = ProbeHit {
@@ -138,7 +201,11 @@ impl ProbeProcessor {
             axis_names: self.axes.clone(),
             axis_positions: pos.to_vec(),
             stylus_centre: p(hit.stylus_centre),
-            approach_direction: Vector3Msg { x: hit.approach.x, y: hit.approach.y, z: hit.approach.z },
+            approach_direction: Vector3Msg {
+                x: hit.approach.x,
+                y: hit.approach.y,
+                z: hit.approach.z,
+            },
             stylus_radius: self.model.stylus_radius,
             pretravel: hit.pretravel,
             surface_point: p(hit.surface_point),

@@ -16,7 +16,8 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     let nominal_topic = node.resolve_topic("probe/nominal")?;
     let mut source = BagSource::open(&args.bag)?;
     if !source.subscribe::<JointState>(&trigger_topic)? {
-        node.logger().warn(source.missing_topic_hint(&trigger_topic));
+        node.logger()
+            .warn(source.missing_topic_hint(&trigger_topic));
     }
     // nominals are optional: without them, hits are published but no measured points
     source.subscribe::<PointStamped>(&nominal_topic)?;
@@ -28,38 +29,46 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
 
     let mut rejected = 0u64;
     // SIGINT/SIGTERM stop it between messages, and the output below is still finished
-    let stopped = source.replay::<Box<dyn std::error::Error>>(|| node.interrupted(), |m| {
-        if m.topic == nominal_topic {
-            match m.decode() {
-                Ok(nominal) => processor.nominal(nominal),
-                Err(e) => node.logger().warn(format!("skipped: {e}")),
-            }
-            return Ok(());
-        }
-        // A malformed message is reported and skipped, like a trigger the processor rejects.
-        let trigger = match m.decode::<JointState>() {
-            Ok(trigger) => trigger,
-            Err(e) => {
-                rejected += 1;
-                node.logger().warn(format!("skipped: {e}"));
+    let stopped = source.replay::<Box<dyn std::error::Error>>(
+        || node.interrupted(),
+        |m| {
+            if m.topic == nominal_topic {
+                match m.decode() {
+                    Ok(nominal) => processor.nominal(nominal),
+                    Err(e) => node.logger().warn(format!("skipped: {e}")),
+                }
                 return Ok(());
             }
-        };
-        match processor.trigger(&trigger) {
-            Ok((hit, point)) => {
-                output.write(&hits_topic, &hit, m.log_time_ns)?;
-                if let Some(p) = point {
-                    output.write(&points_topic, &p, m.log_time_ns)?;
+            // A malformed message is reported and skipped, like a trigger the processor rejects.
+            let trigger = match m.decode::<JointState>() {
+                Ok(trigger) => trigger,
+                Err(e) => {
+                    rejected += 1;
+                    node.logger().warn(format!("skipped: {e}"));
+                    return Ok(());
+                }
+            };
+            match processor.trigger(&trigger) {
+                Ok((hit, point)) => {
+                    output.write(&hits_topic, &hit, m.log_time_ns)?;
+                    if let Some(p) = point {
+                        output.write(&points_topic, &p, m.log_time_ns)?;
+                    }
+                }
+                Err(e) => {
+                    rejected += 1;
+                    node.logger()
+                        .warn(format!("{e} (log time {} ns)", m.log_time_ns));
                 }
             }
-            Err(e) => {
-                rejected += 1;
-                node.logger().warn(format!("{e} (log time {} ns)", m.log_time_ns));
-            }
-        }
-        Ok(())
-    })?;
+            Ok(())
+        },
+    )?;
     output.finish()?;
-    node.logger().info(format!("replayed {} triggers from {}: {rejected} rejected", processor.count() + rejected, args.bag.display()));
+    node.logger().info(format!(
+        "replayed {} triggers from {}: {rejected} rejected",
+        processor.count() + rejected,
+        args.bag.display()
+    ));
     Ok(node.finish_replay(stopped)?)
 }

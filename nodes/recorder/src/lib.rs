@@ -71,7 +71,12 @@ impl RecordingSummary {
 
     /// "N messages recorded, M missing" and, for each topic that lost any, how many and why.
     pub fn describe(&self) -> String {
-        let mut s = format!("{} messages recorded on {} topics, {} missing", self.total_messages(), self.counts.len(), self.total_missing());
+        let mut s = format!(
+            "{} messages recorded on {} topics, {} missing",
+            self.total_messages(),
+            self.counts.len(),
+            self.total_missing()
+        );
         for (topic, c) in self.counts.iter().filter(|(_, c)| c.missing() > 0) {
             let (reliable, depth) = self.readers.get(topic).copied().unwrap_or((false, 0));
             let mut causes = Vec::new();
@@ -86,9 +91,16 @@ impl RecordingSummary {
                 causes.push(format!("{} sent before the first sample received from their publisher (before the recorder subscribed, or lost like a gap)", c.before_subscription));
             }
             if c.unreadable > 0 {
-                causes.push(format!("{} samples that could not be taken (not CDR)", c.unreadable));
+                causes.push(format!(
+                    "{} samples that could not be taken (not CDR)",
+                    c.unreadable
+                ));
             }
-            s.push_str(&format!("\n  {topic}: {} missing: {}", c.missing(), causes.join(", ")));
+            s.push_str(&format!(
+                "\n  {topic}: {} missing: {}",
+                c.missing(),
+                causes.join(", ")
+            ));
         }
         s
     }
@@ -110,18 +122,26 @@ impl std::fmt::Display for RecordingFailed {
 impl std::error::Error for RecordingFailed {}
 
 fn failed(message: impl std::fmt::Display) -> RecordingFailed {
-    RecordingFailed { message: message.to_string(), summary: None }
+    RecordingFailed {
+        message: message.to_string(),
+        summary: None,
+    }
 }
 
 /// Record until the node's shutdown token triggers (SIGINT/SIGTERM when the node handles
 /// signals), then finish the bag. On a write failure (disk full) the bag is left sealed and
 /// valid and the error names the file.
-pub fn record(node: &mut MetrocellNode, settings: &RecorderSettings) -> Result<RecordingSummary, RecordingFailed> {
-    let mut recording = Recording::create(&settings.output, settings.writer_options.clone()).map_err(failed)?;
+pub fn record(
+    node: &mut MetrocellNode,
+    settings: &RecorderSettings,
+) -> Result<RecordingSummary, RecordingFailed> {
+    let mut recording =
+        Recording::create(&settings.output, settings.writer_options.clone()).map_err(failed)?;
     node.info(format!("recording into {}", settings.output));
     let diagnostics = node.diagnostics();
     let token = node.shutdown_token();
-    let taker = Taker::start(settings.max_cache_bytes).map_err(|e| failed(format!("cannot start the taker thread: {e}")))?;
+    let taker = Taker::start(settings.max_cache_bytes)
+        .map_err(|e| failed(format!("cannot start the taker thread: {e}")))?;
     // The recorded topics in the order the taker knows them (its `topic` index).
     let mut topics: Vec<String> = Vec::new();
     let mut readers: BTreeMap<String, (bool, usize)> = BTreeMap::new();
@@ -139,14 +159,25 @@ pub fn record(node: &mut MetrocellNode, settings: &RecorderSettings) -> Result<R
         }
         if !stopping && Instant::now() >= next_scan {
             next_scan += settings.scan_interval;
-            if let Err(e) = scan(node, settings, &mut recording, &taker, &mut topics, &mut readers, &mut known_writers) {
+            if let Err(e) = scan(
+                node,
+                settings,
+                &mut recording,
+                &taker,
+                &mut topics,
+                &mut readers,
+                &mut known_writers,
+            ) {
                 failure = Some(e);
                 break;
             }
             for (topic, c) in recording.counts() {
                 diagnostics.set_value(&format!("{topic}/messages"), c.messages);
                 diagnostics.set_value(&format!("{topic}/dropped"), c.dropped);
-                diagnostics.set_value(&format!("{topic}/before_subscription"), c.before_subscription);
+                diagnostics.set_value(
+                    &format!("{topic}/before_subscription"),
+                    c.before_subscription,
+                );
                 diagnostics.set_value(&format!("{topic}/unreadable"), c.unreadable);
             }
             diagnostics.set_value("messages", recording.total_messages());
@@ -169,14 +200,24 @@ pub fn record(node: &mut MetrocellNode, settings: &RecorderSettings) -> Result<R
                 Ok(Taken::Message { topic, message: m }) => {
                     let log = m.receive_time_ns.max(0) as u64;
                     let publish = m.source_time_ns.map_or(log, |t| t.max(0) as u64);
-                    if let Err(e) = recording.record(&topics[topic], log, publish, &m.payload, publisher_key(&m.publisher_gid), m.sequence_number) {
+                    if let Err(e) = recording.record(
+                        &topics[topic],
+                        log,
+                        publish,
+                        &m.payload,
+                        publisher_key(&m.publisher_gid),
+                        m.sequence_number,
+                    ) {
                         failure = Some(e.to_string());
                         break;
                     }
                 }
                 Ok(Taken::Unreadable { topic, error }) => {
                     recording.count_unreadable(&topics[topic]);
-                    node.warn(format!("{}: a sample could not be taken: {error}", topics[topic]));
+                    node.warn(format!(
+                        "{}: a sample could not be taken: {error}",
+                        topics[topic]
+                    ));
                 }
                 Err(false) => break,
                 Err(true) => {
@@ -197,15 +238,32 @@ pub fn record(node: &mut MetrocellNode, settings: &RecorderSettings) -> Result<R
         }
     }
     drop(taker);
-    let summary = RecordingSummary { output: settings.output.clone(), counts: recording.counts().clone(), readers };
+    let summary = RecordingSummary {
+        output: settings.output.clone(),
+        counts: recording.counts().clone(),
+        readers,
+    };
     if let Some(e) = failure {
-        let file = recording.current_file().map(|p| p.display().to_string()).unwrap_or_else(|| settings.output.clone());
-        node.error(format!("recording stopped: {e} (file {file}); {}", summary.describe()));
+        let file = recording
+            .current_file()
+            .map(|p| p.display().to_string())
+            .unwrap_or_else(|| settings.output.clone());
+        node.error(format!(
+            "recording stopped: {e} (file {file}); {}",
+            summary.describe()
+        ));
         diagnostics.error(format!("write failed: {e}"));
-        return Err(RecordingFailed { message: format!("recording into {file} stopped: {e}"), summary: Some(summary) });
+        return Err(RecordingFailed {
+            message: format!("recording into {file} stopped: {e}"),
+            summary: Some(summary),
+        });
     }
     recording.finish().map_err(failed)?;
-    node.info(format!("bag {} finished: {}", settings.output, summary.describe()));
+    node.info(format!(
+        "bag {} finished: {}",
+        settings.output,
+        summary.describe()
+    ));
     Ok(summary)
 }
 
@@ -224,7 +282,9 @@ fn scan(
     known_writers: &mut BTreeSet<String>,
 ) -> Result<(), String> {
     let discovered = node.discovered_publications();
-    let recorded_wanted = discovered.iter().any(|t| settings.selection.matches(&t.name) && !recording.has_topic(&t.name));
+    let recorded_wanted = discovered
+        .iter()
+        .any(|t| settings.selection.matches(&t.name) && !recording.has_topic(&t.name));
     // Reading every discovered writer's QoS costs a copy of discovery: only when a topic is new,
     // or every scan while some topic is read reliably (to name a late best-effort publisher).
     if !recorded_wanted && !readers.values().any(|(reliable, _)| *reliable) {
@@ -240,7 +300,12 @@ fn scan(
         if let Some(&(true, _)) = readers.get(&t.name) {
             for p in publications.iter().filter(|p| p.topic_name == dds) {
                 let id = format!("{:?}", p.key);
-                if known_writers.insert(id) && matches!(p.reliability, Some(rustdds::policy::Reliability::BestEffort)) {
+                if known_writers.insert(id)
+                    && matches!(
+                        p.reliability,
+                        Some(rustdds::policy::Reliability::BestEffort)
+                    )
+                {
                     node.warn(format!("{}: a publisher appeared offering best effort; the recorder reads this topic reliably, so it does not match and its messages are not recorded (restart the recorder, or give the topic best_effort in a QoS overrides file)", t.name));
                 }
             }
@@ -253,18 +318,33 @@ fn scan(
         for p in publications.iter().filter(|p| p.topic_name == dds) {
             known_writers.insert(format!("{:?}", p.key));
         }
-        let definition = recording.add_topic(&t.name, &t.type_name, &offered_qos_yaml(&offered)).map_err(|e| e.to_string())?;
-        let depth = if metrocell_bagtools::is_bulk_type(&t.type_name) { settings.bulk_queue_depth } else { settings.queue_depth };
+        let definition = recording
+            .add_topic(&t.name, &t.type_name, &offered_qos_yaml(&offered))
+            .map_err(|e| e.to_string())?;
+        let depth = if metrocell_bagtools::is_bulk_type(&t.type_name) {
+            settings.bulk_queue_depth
+        } else {
+            settings.queue_depth
+        };
         let adapted = recording_qos(&offered);
         let over = settings.qos_overrides.get(&t.name);
         let qos = reader_qos::reader_qos(adapted, depth, over);
         if let Some(o) = over.filter(|o| !o.ignored.is_empty()) {
-            node.warn(format!("{}: QoS override keys {} do not apply to a recorder's reader; ignored", t.name, o.ignored.join(", ")));
+            node.warn(format!(
+                "{}: QoS override keys {} do not apply to a recorder's reader; ignored",
+                t.name,
+                o.ignored.join(", ")
+            ));
         }
-        let sub = node.raw_subscription(&t.name, &t.type_name, qos.clone()).map_err(|e| e.to_string())?;
+        let sub = node
+            .raw_subscription(&t.name, &t.type_name, qos.clone())
+            .map_err(|e| e.to_string())?;
         taker.add(sub);
         topics.push(t.name.clone());
-        let reliable = matches!(qos.reliability, ros2_client::qos::Reliability::Reliable { .. });
+        let reliable = matches!(
+            qos.reliability,
+            ros2_client::qos::Reliability::Reliable { .. }
+        );
         let kept = match qos.history {
             ros2_client::qos::History::KeepLast { depth } => depth,
             ros2_client::qos::History::KeepAll => 0,

@@ -30,8 +30,14 @@ impl RecorderSettings {
             o => o,
         };
         let path = node.param::<String>("qos_profile_overrides_path")?;
-        let qos_overrides = if path.is_empty() { BTreeMap::new() } else { read_qos_overrides(std::path::Path::new(&path))? };
-        let depth = |name: &str| -> Result<usize, Box<dyn std::error::Error>> { Ok(node.param::<i64>(name)?.clamp(1, 1_000_000) as usize) };
+        let qos_overrides = if path.is_empty() {
+            BTreeMap::new()
+        } else {
+            read_qos_overrides(std::path::Path::new(&path))?
+        };
+        let depth = |name: &str| -> Result<usize, Box<dyn std::error::Error>> {
+            Ok(node.param::<i64>(name)?.clamp(1, 1_000_000) as usize)
+        };
         Ok(Self {
             output,
             selection: selection(node)?,
@@ -65,8 +71,16 @@ pub fn declarations() -> Vec<ParamDecl> {
 }
 
 pub fn selection(node: &MetrocellNode) -> Result<TopicSelection, Box<dyn std::error::Error>> {
-    let topics = node.param::<Vec<String>>("topics")?.iter().map(|t| node.resolve_topic(t)).collect::<Result<Vec<_>, _>>()?;
-    Ok(TopicSelection::new(topics, &node.param::<String>("regex")?, &node.param::<String>("exclude")?)?)
+    let topics = node
+        .param::<Vec<String>>("topics")?
+        .iter()
+        .map(|t| node.resolve_topic(t))
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok(TopicSelection::new(
+        topics,
+        &node.param::<String>("regex")?,
+        &node.param::<String>("exclude")?,
+    )?)
 }
 
 pub fn writer_options(node: &MetrocellNode) -> Result<WriterOptions, Box<dyn std::error::Error>> {
@@ -74,7 +88,11 @@ pub fn writer_options(node: &MetrocellNode) -> Result<WriterOptions, Box<dyn std
         "zstd" => ChunkCompression::Zstd,
         "lz4" => ChunkCompression::Lz4,
         "none" | "" => ChunkCompression::None,
-        other => return Err(format!("parameter compression: '{other}' is not one of zstd, lz4, none").into()),
+        other => {
+            return Err(
+                format!("parameter compression: '{other}' is not one of zstd, lz4, none").into(),
+            )
+        }
     };
     let size = node.param::<i64>("max_bag_size")?;
     let duration = node.param::<f64>("max_bag_duration")?;
@@ -95,8 +113,17 @@ pub fn writer_options(node: &MetrocellNode) -> Result<WriterOptions, Box<dyn std
 
 /// `bag_YYYY_MM_DD-HH_MM_SS` in UTC, like rosbag2's default names.
 pub fn default_output() -> String {
-    let now_ns = std::time::SystemTime::now().duration_since(std::time::UNIX_EPOCH).map(|d| d.as_nanos() as u64).unwrap_or(0);
+    let now_ns = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map(|d| d.as_nanos() as u64)
+        .unwrap_or(0);
     // "YYYY-MM-DD hh:mm:ss.nnnnnnnnn" → "bag_YYYY_MM_DD-hh_mm_ss"
     let stamp = metrocell_bag::format_utc(now_ns);
-    format!("bag_{}", stamp[..19].replace('-', "_").replace(' ', "-").replace(':', "_"))
+    format!(
+        "bag_{}",
+        stamp[..19]
+            .replace('-', "_")
+            .replace(' ', "-")
+            .replace(':', "_")
+    )
 }

@@ -27,9 +27,15 @@ const DRAIN_LIMIT: Duration = Duration::from_millis(300);
 /// What the taker hands over, in the order it took it; `topic` is the index of the subscription
 /// in the order they were added.
 pub enum Taken {
-    Message { topic: usize, message: RawMessage },
+    Message {
+        topic: usize,
+        message: RawMessage,
+    },
     /// A sample that could not be taken (not CDR): the reader's error.
-    Unreadable { topic: usize, error: String },
+    Unreadable {
+        topic: usize,
+        error: String,
+    },
 }
 
 pub struct Taker {
@@ -50,10 +56,26 @@ impl Taker {
         let cache_was_full = Arc::new(AtomicBool::new(false));
         let stop = Arc::new(AtomicBool::new(false));
         let (bytes, full, stopping) = (cached_bytes.clone(), cache_was_full.clone(), stop.clone());
-        let thread = std::thread::Builder::new().name("recorder-taker".into()).spawn(move || {
-            take_until_stopped(&added, &hand_over, &bytes, &full, &stopping, max_cache_bytes.max(1));
-        })?;
-        Ok(Taker { subscriptions: add, taken, cached_bytes, cache_was_full, stop, thread: Some(thread) })
+        let thread = std::thread::Builder::new()
+            .name("recorder-taker".into())
+            .spawn(move || {
+                take_until_stopped(
+                    &added,
+                    &hand_over,
+                    &bytes,
+                    &full,
+                    &stopping,
+                    max_cache_bytes.max(1),
+                );
+            })?;
+        Ok(Taker {
+            subscriptions: add,
+            taken,
+            cached_bytes,
+            cache_was_full,
+            stop,
+            thread: Some(thread),
+        })
     }
 
     /// Take from this reader too; its samples are handed over with the next index.
@@ -68,7 +90,8 @@ impl Taker {
         match self.taken.recv_timeout(timeout) {
             Ok(t) => {
                 if let Taken::Message { message, .. } = &t {
-                    self.cached_bytes.fetch_sub(message.payload.len(), Ordering::Relaxed);
+                    self.cached_bytes
+                        .fetch_sub(message.payload.len(), Ordering::Relaxed);
                 }
                 Ok(t)
             }
@@ -103,7 +126,14 @@ impl Drop for Taker {
     }
 }
 
-fn take_until_stopped(added: &Receiver<RawSubscription>, hand_over: &Sender<Taken>, cached_bytes: &AtomicUsize, cache_was_full: &AtomicBool, stop: &AtomicBool, max_cache_bytes: usize) {
+fn take_until_stopped(
+    added: &Receiver<RawSubscription>,
+    hand_over: &Sender<Taken>,
+    cached_bytes: &AtomicUsize,
+    cache_was_full: &AtomicBool,
+    stop: &AtomicBool,
+    max_cache_bytes: usize,
+) {
     let mut subscriptions: Vec<RawSubscription> = Vec::new();
     let mut draining_since: Option<Instant> = None;
     let mut last_taken = Instant::now();
@@ -125,7 +155,10 @@ fn take_until_stopped(added: &Receiver<RawSubscription>, hand_over: &Sender<Take
                         Taken::Message { topic, message }
                     }
                     Ok(None) => break,
-                    Err(e) => Taken::Unreadable { topic, error: e.to_string() },
+                    Err(e) => Taken::Unreadable {
+                        topic,
+                        error: e.to_string(),
+                    },
                 };
                 let unreadable = matches!(t, Taken::Unreadable { .. });
                 taken += 1;
@@ -141,7 +174,8 @@ fn take_until_stopped(added: &Receiver<RawSubscription>, hand_over: &Sender<Take
             last_taken = Instant::now();
         }
         if let Some(since) = draining_since {
-            if (taken == 0 && last_taken.elapsed() >= DRAIN_QUIET) || since.elapsed() >= DRAIN_LIMIT {
+            if (taken == 0 && last_taken.elapsed() >= DRAIN_QUIET) || since.elapsed() >= DRAIN_LIMIT
+            {
                 return;
             }
         }

@@ -34,7 +34,8 @@ fn main() -> std::process::ExitCode {
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let (mut node, _) = metrocell_node::MetrocellNode::from_env_args("sim", parameters::declarations())?;
+    let (mut node, _) =
+        metrocell_node::MetrocellNode::from_env_args("sim", parameters::declarations())?;
     let settings = parameters::settings(&node)?;
     let mut sim = publishing::LiveSim::new(&mut node, &settings)?;
     node.info(format!(
@@ -46,14 +47,24 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         if settings.repeat { ", looping" } else { "" }
     ));
     let start_delay = node.param::<f64>("start_delay")?;
-    if start_delay > 0.0 && node.shutdown_token().wait_timeout(std::time::Duration::from_secs_f64(start_delay)) {
+    if start_delay > 0.0
+        && node
+            .shutdown_token()
+            .wait_timeout(std::time::Duration::from_secs_f64(start_delay))
+    {
         return Ok(());
     }
     let wait_for_recorder = node.param::<f64>("wait_for_recorder")?;
     if wait_for_recorder > 0.0 {
         let recorder = node.param::<String>("recorder_node")?;
-        if sim.wait_for_recorder(&node, &recorder, std::time::Duration::from_secs_f64(wait_for_recorder))? {
-            node.info(format!("the recorder '{recorder}' subscribes to every topic: starting"));
+        if sim.wait_for_recorder(
+            &node,
+            &recorder,
+            std::time::Duration::from_secs_f64(wait_for_recorder),
+        )? {
+            node.info(format!(
+                "the recorder '{recorder}' subscribes to every topic: starting"
+            ));
         } else if node.shutdown_token().is_triggered() {
             return Ok(());
         } else {
@@ -74,14 +85,26 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
         }
     }
     sim.report_counts(finished);
-    let per_topic: Vec<String> = sim.published_per_topic().iter().map(|(t, n)| format!("{t} {n}")).collect();
+    let per_topic: Vec<String> = sim
+        .published_per_topic()
+        .iter()
+        .map(|(t, n)| format!("{t} {n}"))
+        .collect();
     if finished {
-        node.info(format!("simulation finished: {} messages published (per topic, /clock included: {})", sim.published(), per_topic.join(", ")));
+        node.info(format!(
+            "simulation finished: {} messages published (per topic, /clock included: {})",
+            sim.published(),
+            per_topic.join(", ")
+        ));
         // Let reliable subscribers acknowledge the last samples, and the final diagnostics
         // (published every second) go out, before the writers go away.
-        node.shutdown_token().wait_timeout(std::time::Duration::from_millis(1500));
+        node.shutdown_token()
+            .wait_timeout(std::time::Duration::from_millis(1500));
     } else {
-        node.info(format!("shutting down; published per topic: {}", per_topic.join(", ")));
+        node.info(format!(
+            "shutting down; published per topic: {}",
+            per_topic.join(", ")
+        ));
     }
     Ok(())
 }

@@ -1,9 +1,9 @@
 //! Parameters of `metrocell-sim` and their checked values.
 
 use metrocell_node::{MetrocellNode, ParamDecl};
+use metrocell_simulation::cell_options::{load_cell, parse_ground_tilt, run_duration};
 use metrocell_simulation::duration_text::parse_duration;
 use metrocell_simulation::sim_time::{check_span, parse_start_time, DEFAULT_START_TIME};
-use metrocell_simulation::cell_options::{load_cell, parse_ground_tilt, run_duration};
 use metrocell_simulation::{Pacer, SimError};
 
 pub fn declarations() -> Vec<ParamDecl> {
@@ -45,13 +45,24 @@ pub fn settings(node: &MetrocellNode) -> Result<Settings, Box<dyn std::error::Er
         return Err("parameter cell is empty: give a cell file, e.g. --ros-args -p cell:=crates/twin/examples/cells/quick_demo.yaml".into());
     }
     let tilt = node.param::<String>("ground_tilt")?;
-    let ground_tilt = if tilt.trim().is_empty() { None } else { Some(parse_ground_tilt(&tilt)?) };
+    let ground_tilt = if tilt.trim().is_empty() {
+        None
+    } else {
+        Some(parse_ground_tilt(&tilt)?)
+    };
     let duration = match node.param::<String>("duration")?.trim() {
-        "auto" => run_duration(&load_cell(std::path::Path::new(&cell), ground_tilt)?, None, std::path::Path::new(&cell))?,
+        "auto" => run_duration(
+            &load_cell(std::path::Path::new(&cell), ground_tilt)?,
+            None,
+            std::path::Path::new(&cell),
+        )?,
         text => parse_duration(text)?,
     };
     let speed = node.param::<f64>("speed")?;
-    let pacer = Pacer::new(speed).ok_or_else(|| SimError::InvalidArgument { what: "parameter speed".into(), reason: format!("must be > 0, got {speed}") })?;
+    let pacer = Pacer::new(speed).ok_or_else(|| SimError::InvalidArgument {
+        what: "parameter speed".into(),
+        reason: format!("must be > 0, got {speed}"),
+    })?;
     let start_ns = parse_start_time(&node.param::<String>("start_time")?)?;
     check_span(start_ns, duration)?;
     Ok(Settings {

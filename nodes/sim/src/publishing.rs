@@ -6,8 +6,10 @@ use std::time::{Duration, Instant};
 use metrocell_msgs::RosMessage;
 use metrocell_node::node_directory::guid_prefix;
 use metrocell_node::{qos, Diagnostics, MetrocellNode, NodeDirectory, RawPublisher};
-use metrocell_simulation::{CameraIntrinsics, FrameRendering, MessageConverter, MessageStream, QosKind, TopicSpec};
 use metrocell_simulation::cell_options::load_cell;
+use metrocell_simulation::{
+    CameraIntrinsics, FrameRendering, MessageConverter, MessageStream, QosKind, TopicSpec,
+};
 use metrocell_twin::Simulation;
 use ros2_client::qos::History;
 
@@ -33,14 +35,26 @@ const FRAME_HISTORY_BYTES: usize = 32 << 20;
 /// Camera frames (`frame_bytes` each, mono8) keep a history bounded in bytes, at least 2 frames,
 /// and held to it (`bounded_raw_publisher`): a history of 1000 frames, or RustDDS's default
 /// backstop of 8192 while a best-effort reader is matched, would hold gigabytes.
-fn publisher_of(node: &mut MetrocellNode, t: &TopicSpec, frame_bytes: usize) -> Result<RawPublisher, metrocell_node::NodeError> {
-    let stream = qos::reliable().history(History::KeepLast { depth: LIVE_HISTORY });
+fn publisher_of(
+    node: &mut MetrocellNode,
+    t: &TopicSpec,
+    frame_bytes: usize,
+) -> Result<RawPublisher, metrocell_node::NodeError> {
+    let stream = qos::reliable().history(History::KeepLast {
+        depth: LIVE_HISTORY,
+    });
     match t.qos {
         QosKind::SensorData if t.ros_type == metrocell_msgs::sensor_msgs::msg::Image::ROS_TYPE => {
             let frames = (FRAME_HISTORY_BYTES / frame_bytes.max(1)).clamp(2, LIVE_HISTORY);
-            node.bounded_raw_publisher(&t.name, t.ros_type, qos::reliable().history(History::KeepLast { depth: frames }))
+            node.bounded_raw_publisher(
+                &t.name,
+                t.ros_type,
+                qos::reliable().history(History::KeepLast { depth: frames }),
+            )
         }
-        QosKind::Clock | QosKind::SensorData | QosKind::Reliable => node.raw_publisher(&t.name, t.ros_type, stream),
+        QosKind::Clock | QosKind::SensorData | QosKind::Reliable => {
+            node.raw_publisher(&t.name, t.ros_type, stream)
+        }
         // a state (power-on time, load): a subscriber that joins late still gets it
         QosKind::Latched => node.raw_publisher(&t.name, t.ros_type, qos::latched()),
     }
@@ -61,7 +75,10 @@ pub struct LiveSim {
 }
 
 impl LiveSim {
-    pub fn new(node: &mut MetrocellNode, s: &Settings) -> Result<LiveSim, Box<dyn std::error::Error>> {
+    pub fn new(
+        node: &mut MetrocellNode,
+        s: &Settings,
+    ) -> Result<LiveSim, Box<dyn std::error::Error>> {
         let cell = load_cell(std::path::Path::new(&s.cell), s.ground_tilt)?;
         // Camera frame requests are rendered as images on /camera/image_raw, like the bag writer.
         let mut converter = MessageConverter::new(&cell, s.start_ns, CameraIntrinsics::default())?;
@@ -69,7 +86,8 @@ impl LiveSim {
             converter = converter.with_frames(FrameRendering::default(), s.seed)?;
         }
         // mono8: a byte per pixel
-        let frame_bytes = converter.camera.lens.width as usize * converter.camera.lens.height as usize;
+        let frame_bytes =
+            converter.camera.lens.width as usize * converter.camera.lens.height as usize;
         let publishers = converter
             .topics
             .topics
@@ -96,7 +114,11 @@ impl LiveSim {
 
     /// (topic, messages published on it), in the cell map's order.
     pub fn published_per_topic(&self) -> Vec<(&str, u64)> {
-        self.publishers.iter().zip(&self.published_per_topic).map(|(p, n)| (p.topic(), *n)).collect()
+        self.publishers
+            .iter()
+            .zip(&self.published_per_topic)
+            .map(|(p, n)| (p.topic(), *n))
+            .collect()
     }
 
     /// Wait until every reliable reader (the recorder among them) has acknowledged every message
@@ -107,7 +129,9 @@ impl LiveSim {
         let deadline = Instant::now() + timeout;
         self.publishers
             .iter()
-            .filter(|p| !p.wait_for_acknowledgments(deadline.saturating_duration_since(Instant::now())))
+            .filter(|p| {
+                !p.wait_for_acknowledgments(deadline.saturating_duration_since(Instant::now()))
+            })
             .map(|p| p.topic())
             .collect()
     }
@@ -118,7 +142,8 @@ impl LiveSim {
         for (topic, n) in self.published_per_topic() {
             self.diagnostics.set_value(&format!("published{topic}"), n);
         }
-        self.diagnostics.set_value("messages_published", self.published);
+        self.diagnostics
+            .set_value("messages_published", self.published);
         self.diagnostics.set_value("finished", finished);
     }
 
@@ -128,12 +153,21 @@ impl LiveSim {
     /// `timeout` passes. The node is found by its name in ROS 2's `ros_discovery_info`, so
     /// another participant that reads every topic (the dashboard) does not count. Returns
     /// whether it did; false on timeout or shutdown.
-    pub fn wait_for_recorder(&self, node: &MetrocellNode, recorder: &str, timeout: Duration) -> Result<bool, metrocell_node::NodeError> {
+    pub fn wait_for_recorder(
+        &self,
+        node: &MetrocellNode,
+        recorder: &str,
+        timeout: Duration,
+    ) -> Result<bool, metrocell_node::NodeError> {
         use std::collections::BTreeSet;
         let token = node.shutdown_token();
         let participant = node.context().domain_participant();
         let mut directory = NodeDirectory::new(&participant)?;
-        let wanted: BTreeSet<String> = self.publishers.iter().map(|p| metrocell_node::names::dds_topic_name(p.topic())).collect();
+        let wanted: BTreeSet<String> = self
+            .publishers
+            .iter()
+            .map(|p| metrocell_node::names::dds_topic_name(p.topic()))
+            .collect();
         let deadline = Instant::now() + timeout;
         loop {
             directory.refresh();
@@ -148,7 +182,12 @@ impl LiveSim {
                     .collect();
                 read.len() == wanted.len()
             });
-            if reads_every_topic && self.publishers.iter().all(|p| p.matched_subscriptions() > 0) {
+            if reads_every_topic
+                && self
+                    .publishers
+                    .iter()
+                    .all(|p| p.matched_subscriptions() > 0)
+            {
                 return Ok(true);
             }
             if Instant::now() >= deadline || token.wait_timeout(Duration::from_millis(20)) {
@@ -164,7 +203,11 @@ impl LiveSim {
     }
 
     /// Run until the simulation ends (true) or shutdown is requested (false).
-    pub fn run(&mut self, node: &MetrocellNode, s: &Settings) -> Result<bool, Box<dyn std::error::Error>> {
+    pub fn run(
+        &mut self,
+        node: &MetrocellNode,
+        s: &Settings,
+    ) -> Result<bool, Box<dyn std::error::Error>> {
         let token = node.shutdown_token();
         self.diagnostics.set_value("speed", s.pacer.speed());
         self.diagnostics.set_value("cell", &s.cell);
@@ -174,7 +217,11 @@ impl LiveSim {
             let offset = run as f64 * s.duration;
             let mut converter = self.converter.clone();
             converter.start_ns = metrocell_simulation::sim_time::stamp_ns(s.start_ns, offset);
-            let sim = Simulation::new(load_cell(std::path::Path::new(&s.cell), s.ground_tilt)?, s.duration, s.seed)?;
+            let sim = Simulation::new(
+                load_cell(std::path::Path::new(&s.cell), s.ground_tilt)?,
+                s.duration,
+                s.seed,
+            )?;
             let mut stream = MessageStream::new(&sim, &converter, None);
             for m in stream.by_ref() {
                 if !self.wait_until(node, s, offset + m.t)? {
@@ -186,7 +233,10 @@ impl LiveSim {
                         self.published += 1;
                         self.published_per_topic[m.topic] += 1;
                     }
-                    Err(e) => self.diagnostics.warn(format!("publishing on {} failed: {e}", converter.topics.get(m.topic).name)),
+                    Err(e) => self.diagnostics.warn(format!(
+                        "publishing on {} failed: {e}",
+                        converter.topics.get(m.topic).name
+                    )),
                 }
             }
             if let Some(e) = stream.error() {
@@ -208,7 +258,9 @@ impl LiveSim {
     fn publish_clock(&mut self, start_ns: u64, t: f64) {
         let ns = metrocell_simulation::sim_time::stamp_ns(start_ns, t).max(self.last_clock_ns);
         self.last_clock_ns = ns;
-        let clock = metrocell_simulation::TypedMessage::Clock(metrocell_simulation::convert::clock(metrocell_simulation::sim_time::ros_time(ns)));
+        let clock = metrocell_simulation::TypedMessage::Clock(
+            metrocell_simulation::convert::clock(metrocell_simulation::sim_time::ros_time(ns)),
+        );
         if let Ok(bytes) = clock.encode() {
             let id = self.converter.topics.clock;
             match self.publishers[id].publish(&bytes) {
@@ -222,7 +274,12 @@ impl LiveSim {
 
     /// Sleep until simulated time `t` is due, publishing /clock and diagnostics meanwhile.
     /// Returns false when shutdown was requested.
-    fn wait_until(&mut self, node: &MetrocellNode, s: &Settings, t: f64) -> Result<bool, Box<dyn std::error::Error>> {
+    fn wait_until(
+        &mut self,
+        node: &MetrocellNode,
+        s: &Settings,
+        t: f64,
+    ) -> Result<bool, Box<dyn std::error::Error>> {
         let token = node.shutdown_token();
         let due = self.wall_start + s.pacer.wall_offset(t);
         loop {
@@ -230,7 +287,8 @@ impl LiveSim {
             if now >= self.next_clock {
                 let sim_now = s.pacer.sim_time(now - self.wall_start).min(t);
                 self.publish_clock(s.start_ns, sim_now);
-                self.next_clock = (self.next_clock + Duration::from_secs_f64(s.clock_period)).max(now);
+                self.next_clock =
+                    (self.next_clock + Duration::from_secs_f64(s.clock_period)).max(now);
             }
             if now >= self.next_diagnostics {
                 let lag = s.pacer.lag(t, now - self.wall_start);
@@ -238,7 +296,8 @@ impl LiveSim {
                 self.report_counts(false);
                 self.diagnostics.set_value("lag_s", format!("{lag:.3}"));
                 if lag > LAG_WARNING {
-                    self.diagnostics.warn(format!("{lag:.1} s behind schedule: lower speed"));
+                    self.diagnostics
+                        .warn(format!("{lag:.1} s behind schedule: lower speed"));
                 } else {
                     self.diagnostics.ok("publishing on schedule");
                 }

@@ -19,7 +19,10 @@ use metrocell_node::{qos, testing::require_isolated_network, DdsEnvironment, Met
 const START_S: i64 = 1_767_592_800;
 
 fn demo_cell() -> String {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../crates/twin/examples/cells/quick_demo.yaml").display().to_string()
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../crates/twin/examples/cells/quick_demo.yaml")
+        .display()
+        .to_string()
 }
 
 /// Start the node; `domain` keeps tests that run in parallel apart (ROS_DOMAIN_ID).
@@ -29,7 +32,13 @@ fn spawn(domain: u32, params: &[&str]) -> Child {
         args.push("-p".into());
         args.push(p.to_string());
     }
-    Command::new(env!("CARGO_BIN_EXE_metrocell-sim")).env("ROS_DOMAIN_ID", domain.to_string()).args(&args).stdout(Stdio::null()).stderr(Stdio::inherit()).spawn().unwrap()
+    Command::new(env!("CARGO_BIN_EXE_metrocell-sim"))
+        .env("ROS_DOMAIN_ID", domain.to_string())
+        .args(&args)
+        .stdout(Stdio::null())
+        .stderr(Stdio::inherit())
+        .spawn()
+        .unwrap()
 }
 
 fn wait_exit(child: &mut Child, timeout: Duration) -> Option<std::process::ExitStatus> {
@@ -52,24 +61,50 @@ fn listener(name: &str) -> MetrocellNode {
 /// that ROS_DOMAIN_ID.
 fn listener_on(name: &str, domain: u32) -> MetrocellNode {
     require_isolated_network();
-    let (b, _) = MetrocellNode::builder(name).handle_signals(false).args(["test"]).unwrap();
-    let env = DdsEnvironment::from_lookup(|k| if k == "ROS_DOMAIN_ID" { Some(domain.to_string()) } else { std::env::var(k).ok() }).unwrap();
+    let (b, _) = MetrocellNode::builder(name)
+        .handle_signals(false)
+        .args(["test"])
+        .unwrap();
+    let env = DdsEnvironment::from_lookup(|k| {
+        if k == "ROS_DOMAIN_ID" {
+            Some(domain.to_string())
+        } else {
+            std::env::var(k).ok()
+        }
+    })
+    .unwrap();
     b.environment(env).build().unwrap()
 }
 
 #[test]
 fn temperatures_tracker_and_clock_arrive_with_plausible_values() {
     let mut node = listener("sim_listener");
-    let temps = node.subscription::<Temperature>("/temperature/x_left", qos::reliable()).unwrap();
-    let tracker = node.subscription::<TrackerMeasurement>("/tracker/measurements", qos::reliable()).unwrap();
-    let clock = node.subscription::<Clock>("/clock", qos::sensor_data()).unwrap();
+    let temps = node
+        .subscription::<Temperature>("/temperature/x_left", qos::reliable())
+        .unwrap();
+    let tracker = node
+        .subscription::<TrackerMeasurement>("/tracker/measurements", qos::reliable())
+        .unwrap();
+    let clock = node
+        .subscription::<Clock>("/clock", qos::sensor_data())
+        .unwrap();
     // 90 simulated seconds at 15x: 6 s of wall time.
     let cell = demo_cell();
     // Images off: a debug build renders a 5 MP frame in seconds, which would stall 15x pacing
     // (frames are checked in crates/sim/tests/camera_frames.rs).
-    let mut child = spawn(0, &[&format!("cell:={cell}"), "duration:=90s", "speed:=15", "seed:=2", "camera_images:=false"]);
+    let mut child = spawn(
+        0,
+        &[
+            &format!("cell:={cell}"),
+            "duration:=90s",
+            "speed:=15",
+            "seed:=2",
+            "camera_images:=false",
+        ],
+    );
 
-    let (mut t_values, mut t_stamps, mut points, mut broken, mut clocks) = (vec![], vec![], vec![], 0, vec![]);
+    let (mut t_values, mut t_stamps, mut points, mut broken, mut clocks) =
+        (vec![], vec![], vec![], 0, vec![]);
     let started = Instant::now();
     let mut status = None;
     while started.elapsed() < Duration::from_secs(30) {
@@ -95,7 +130,10 @@ fn temperatures_tracker_and_clock_arrive_with_plausible_values() {
         std::thread::sleep(Duration::from_millis(20));
     }
     let status = status.or_else(|| wait_exit(&mut child, Duration::from_secs(1)));
-    assert!(status.is_some_and(|s| s.success()), "node did not exit cleanly at the end of the run: {status:?}");
+    assert!(
+        status.is_some_and(|s| s.success()),
+        "node did not exit cleanly at the end of the run: {status:?}"
+    );
 
     eprintln!(
         "received {} temperatures, {} tracker points + {broken} beam breaks, {} clocks from {:.2} to {:.2} s",
@@ -107,16 +145,27 @@ fn temperatures_tracker_and_clock_arrive_with_plausible_values() {
     );
     // Thermocouple x_left: 1 Hz for 90 s, table node starting at 21 °C, σ 0.02 K. Samples sent
     // before discovery completes are lost (volatile QoS), so expect most, not all.
-    assert!(t_values.len() >= 60 && t_values.len() <= 90, "{} temperatures", t_values.len());
+    assert!(
+        t_values.len() >= 60 && t_values.len() <= 90,
+        "{} temperatures",
+        t_values.len()
+    );
     for (v, var) in &t_values {
         assert!((20.5..24.0).contains(v), "temperature {v} °C");
         assert!((var - 4e-4).abs() < 1e-12, "variance {var}");
     }
-    assert!(t_stamps.windows(2).all(|w| w[1] == w[0] + 1), "one reading per simulated second, in order");
+    assert!(
+        t_stamps.windows(2).all(|w| w[1] == w[0] + 1),
+        "one reading per simulated second, in order"
+    );
     assert!(t_stamps.iter().all(|s| (START_S..START_S + 90).contains(s)));
 
     // Tracker: 10 Hz, ranges 1–2 m, stated σ of a few µm, air data of the cell.
-    assert!(points.len() + broken >= 600 && points.len() + broken <= 900, "{} tracker samples", points.len() + broken);
+    assert!(
+        points.len() + broken >= 600 && points.len() + broken <= 900,
+        "{} tracker samples",
+        points.len() + broken
+    );
     for m in &points {
         assert!(m.range > 1.0 && m.range < 2.0, "range {}", m.range);
         let sigma_x = m.covariance[0].sqrt();
@@ -128,28 +177,55 @@ fn temperatures_tracker_and_clock_arrive_with_plausible_values() {
 
     // /clock: many ticks, never backwards, spanning most of the 90 s and ending at 90 s.
     assert!(clocks.len() >= 100, "{} clock messages", clocks.len());
-    assert!(clocks.windows(2).all(|w| w[1] >= w[0]), "clock went backwards");
+    assert!(
+        clocks.windows(2).all(|w| w[1] >= w[0]),
+        "clock went backwards"
+    );
     let (first, last) = (clocks[0], *clocks.last().unwrap());
-    assert!(first < 30.0 && (last - 90.0).abs() < 1e-6, "clock from {first} to {last} s");
+    assert!(
+        first < 30.0 && (last - 90.0).abs() < 1e-6,
+        "clock from {first} to {last} s"
+    );
 }
 
 #[test]
 fn looping_node_stops_cleanly_on_sigterm() {
     require_isolated_network();
     let cell = demo_cell();
-    let mut child = spawn(41, &[&format!("cell:={cell}"), "duration:=10s", "speed:=20", "loop:=true"]);
+    let mut child = spawn(
+        41,
+        &[
+            &format!("cell:={cell}"),
+            "duration:=10s",
+            "speed:=20",
+            "loop:=true",
+        ],
+    );
     std::thread::sleep(Duration::from_secs(3));
-    assert!(child.try_wait().unwrap().is_none(), "a looping node must still run after its 0.5 s run length");
-    let ok = Command::new("kill").args(["-TERM", &child.id().to_string()]).status().unwrap();
+    assert!(
+        child.try_wait().unwrap().is_none(),
+        "a looping node must still run after its 0.5 s run length"
+    );
+    let ok = Command::new("kill")
+        .args(["-TERM", &child.id().to_string()])
+        .status()
+        .unwrap();
     assert!(ok.success());
     let status = wait_exit(&mut child, Duration::from_secs(10));
-    assert!(status.is_some_and(|s| s.success()), "exit on SIGTERM: {status:?}");
+    assert!(
+        status.is_some_and(|s| s.success()),
+        "exit on SIGTERM: {status:?}"
+    );
 }
 
 #[test]
 fn missing_cell_is_a_clear_error() {
     require_isolated_network();
-    let out = Command::new(env!("CARGO_BIN_EXE_metrocell-sim")).env("ROS_DOMAIN_ID", "42").args(["--ros-args", "-p", "cell:=/nonexistent/cell.yaml"]).output().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_metrocell-sim"))
+        .env("ROS_DOMAIN_ID", "42")
+        .args(["--ros-args", "-p", "cell:=/nonexistent/cell.yaml"])
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);
     assert!(err.contains("/nonexistent/cell.yaml"), "{err}");
@@ -158,11 +234,27 @@ fn missing_cell_is_a_clear_error() {
 #[test]
 fn a_stationing_program_publishes_check_points_and_accelerometers_on_its_tilted_ground() {
     let mut node = listener_on("sim_station_listener", 42);
-    let check = node.subscription::<MeasuredPoint>("/check_points", qos::reliable()).unwrap();
-    let imu = node.subscription::<Imu>("/imu/base", qos::reliable()).unwrap();
-    let cell = PathBuf::from(env!("CARGO_MANIFEST_DIR")).join("../../crates/twin/examples/cells/mobile_manipulator.yaml").display().to_string();
+    let check = node
+        .subscription::<MeasuredPoint>("/check_points", qos::reliable())
+        .unwrap();
+    let imu = node
+        .subscription::<Imu>("/imu/base", qos::reliable())
+        .unwrap();
+    let cell = PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+        .join("../../crates/twin/examples/cells/mobile_manipulator.yaml")
+        .display()
+        .to_string();
     // the program's pass (~42 min) at 1000x, after 2 s for discovery
-    let mut child = spawn(42, &[&format!("cell:={cell}"), "duration:=auto", "ground_tilt:=0,15mrad", "speed:=1000", "start_delay:=2.0"]);
+    let mut child = spawn(
+        42,
+        &[
+            &format!("cell:={cell}"),
+            "duration:=auto",
+            "ground_tilt:=0,15mrad",
+            "speed:=1000",
+            "start_delay:=2.0",
+        ],
+    );
     let (mut points, mut forces) = (Vec::new(), Vec::new());
     let started = Instant::now();
     let mut status = None;
@@ -181,10 +273,27 @@ fn a_stationing_program_publishes_check_points_and_accelerometers_on_its_tilted_
         points.push(p);
     }
     let status = status.or_else(|| wait_exit(&mut child, Duration::from_secs(1)));
-    assert!(status.is_some_and(|s| s.success()), "node did not finish its pass cleanly: {status:?}");
-    eprintln!("received {} check points, {} base accelerometer readings", points.len(), forces.len());
-    assert!(points.len() >= 300 && points.len() <= 360, "{} of the 360 check points", points.len());
-    assert!(points.iter().all(|p| p.header.frame_id.starts_with("total_station@S") && p.point_id.starts_with('G')));
+    assert!(
+        status.is_some_and(|s| s.success()),
+        "node did not finish its pass cleanly: {status:?}"
+    );
+    eprintln!(
+        "received {} check points, {} base accelerometer readings",
+        points.len(),
+        forces.len()
+    );
+    assert!(
+        points.len() >= 300 && points.len() <= 360,
+        "{} of the 360 check points",
+        points.len()
+    );
+    assert!(points
+        .iter()
+        .all(|p| p.header.frame_id.starts_with("total_station@S") && p.point_id.starts_with('G')));
     // 15 mrad nose down: the base sensor's specific force leans to −x by g·sin(15 mrad)
-    assert!(!forces.is_empty() && forces.iter().all(|f| (f.x + 9.80665 * 0.015).abs() < 0.06), "{:?}", forces.first());
+    assert!(
+        !forces.is_empty() && forces.iter().all(|f| (f.x + 9.80665 * 0.015).abs() < 0.06),
+        "{:?}",
+        forces.first()
+    );
 }

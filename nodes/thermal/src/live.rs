@@ -6,7 +6,6 @@ use metrocell_msgs::msg::{ErrorModel, MeasuredPoint};
 use metrocell_msgs::sensor_msgs::msg::Temperature;
 use metrocell_node::{qos, MetrocellNode, NodeError};
 
-
 pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
     let mut state = crate::start(node.parameters(), &|line| node.info(line))?;
 
@@ -15,12 +14,19 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
         .sensor_names()
         .into_iter()
         .map(|name| {
-            let sub = node.subscription::<Temperature>(&format!("temperature/{name}"), qos::stream(qos::sensor_data()))?;
+            let sub = node.subscription::<Temperature>(
+                &format!("temperature/{name}"),
+                qos::stream(qos::sensor_data()),
+            )?;
             Ok((name, sub))
         })
         .collect::<Result<Vec<_>, NodeError>>()?;
-    let points = node.subscription::<MeasuredPoint>("measured_points", qos::stream(qos::reliable()))?;
-    let compensated = node.publisher::<MeasuredPoint>("measured_points/thermal_compensated", qos::stream(qos::reliable()))?;
+    let points =
+        node.subscription::<MeasuredPoint>("measured_points", qos::stream(qos::reliable()))?;
+    let compensated = node.publisher::<MeasuredPoint>(
+        "measured_points/thermal_compensated",
+        qos::stream(qos::reliable()),
+    )?;
     let model_pub = node.publisher::<ErrorModel>("thermal/error_model", qos::latched())?;
     let drift_pub = node.publisher::<MeasuredPoint>("thermal/predicted_drift", qos::reliable())?;
 
@@ -30,7 +36,10 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
         for (name, sub) in &temperature_subs {
             while let Ok(Some((t, _))) = sub.take() {
                 match state.temperature(name, &t, node.now().to_nanos()) {
-                    Ok(()) => diagnostics.set_value(&format!("temperature/{name}"), format!("{:.3} °C", t.temperature)),
+                    Ok(()) => diagnostics.set_value(
+                        &format!("temperature/{name}"),
+                        format!("{:.3} °C", t.temperature),
+                    ),
                     Err(e) => node.warn(e),
                 }
             }
@@ -42,7 +51,9 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
                 }
                 Err(e) => diagnostics.warn(e.to_string()),
             }
-            crate::log_fits(&mut state, &p, &|l| node.info(l), &|l| node.logger().debug(l));
+            crate::log_fits(&mut state, &p, &|l| node.info(l), &|l| {
+                node.logger().debug(l)
+            });
         }
         let now = node.now().to_nanos();
         if let Some((model, drift)) = state.model_if_due(now) {
@@ -54,7 +65,15 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
                 Err(e) => diagnostics.warn(e.to_string()),
             }
             if let Ok(d) = drift {
-                diagnostics.set_value("predicted_drift_um", format!("[{:.2}, {:.2}, {:.2}]", (d.measured.x - d.nominal.x) * 1e6, (d.measured.y - d.nominal.y) * 1e6, (d.measured.z - d.nominal.z) * 1e6));
+                diagnostics.set_value(
+                    "predicted_drift_um",
+                    format!(
+                        "[{:.2}, {:.2}, {:.2}]",
+                        (d.measured.x - d.nominal.x) * 1e6,
+                        (d.measured.y - d.nominal.y) * 1e6,
+                        (d.measured.z - d.nominal.z) * 1e6
+                    ),
+                );
                 let _ = drift_pub.publish(d);
             }
             let c = &state.counters;

@@ -60,8 +60,16 @@ fn start(p: &Parameters, log: &dyn Fn(String)) -> Result<ThermalState, Box<dyn s
 }
 
 /// One log line on a fit of α.
-fn describe_alpha_fit(state: &ThermalState, r: &metrocell_compensation::ScaleFitResult, used: bool) -> String {
-    let (axis, points, min) = state.alpha_fit.as_ref().map(|a| (["x", "y", "z"][a.axis], a.points.len(), a.min_observations)).unwrap_or(("?", 0, 0));
+fn describe_alpha_fit(
+    state: &ThermalState,
+    r: &metrocell_compensation::ScaleFitResult,
+    used: bool,
+) -> String {
+    let (axis, points, min) = state
+        .alpha_fit
+        .as_ref()
+        .map(|a| (["x", "y", "z"][a.axis], a.points.len(), a.min_observations))
+        .unwrap_or(("?", 0, 0));
     format!(
         "thermal_scale: fitted alpha = {:.4e} ± {:.2e} 1/K from {} measurements of {points} reference point(s) along {axis} (χ²/dof {:.2}){}",
         r.alpha,
@@ -73,7 +81,12 @@ fn describe_alpha_fit(state: &ThermalState, r: &metrocell_compensation::ScaleFit
 }
 
 /// Log the outcome of a measured point for both online fits.
-fn log_fits(state: &mut ThermalState, p: &metrocell_msgs::msg::MeasuredPoint, info: &dyn Fn(String), debug: &dyn Fn(String)) {
+fn log_fits(
+    state: &mut ThermalState,
+    p: &metrocell_msgs::msg::MeasuredPoint,
+    info: &dyn Fn(String),
+    debug: &dyn Fn(String),
+) {
     use crate::thermal_state::{AlphaFitEvent, FitEvent};
     match state.reference_measurement(p) {
         Some(FitEvent::Used(r)) => info(describe_fit(state, &r, true)),
@@ -91,7 +104,11 @@ fn log_fits(state: &mut ThermalState, p: &metrocell_msgs::msg::MeasuredPoint, in
 
 /// One log line on a fit of the reference point.
 fn describe_fit(state: &ThermalState, r: &GrowthFitResult, used: bool) -> String {
-    let label = state.fit.as_ref().map(|f| state.compensator.growth[f.growth_index].label()).unwrap_or_default();
+    let label = state
+        .fit
+        .as_ref()
+        .map(|f| state.compensator.growth[f.growth_index].label())
+        .unwrap_or_default();
     format!(
         "{label}: fitted g = {:.4} ± {:.4} µm/K, τ = {:.0} ± {:.0} s from {} reference measurements (rms {:.2} µm){}",
         r.coefficient * 1e6,
@@ -115,7 +132,10 @@ fn main() -> std::process::ExitCode {
 }
 
 fn run() -> Result<(), Box<dyn std::error::Error>> {
-    let (builder, rest) = MetrocellNode::builder("thermal").params(parameters::declarations()).node_argument(ReplayArgs::FLAG, ReplayArgs::HELP).args(std::env::args())?;
+    let (builder, rest) = MetrocellNode::builder("thermal")
+        .params(parameters::declarations())
+        .node_argument(ReplayArgs::FLAG, ReplayArgs::HELP)
+        .args(std::env::args())?;
     match ReplayArgs::parse(rest.get(1..).unwrap_or_default())? {
         Some(args) => replay::run(builder.build_offline()?, &args),
         None => live::run(builder.build()?),

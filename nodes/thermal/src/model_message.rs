@@ -12,7 +12,10 @@ use metrocell_physics::ConfiguredTerm;
 use nalgebra::{DMatrix, Vector3};
 
 fn header(now_ns: i64) -> Header {
-    Header { stamp: Time::from_nanos(now_ns), frame_id: "machine".into() }
+    Header {
+        stamp: Time::from_nanos(now_ns),
+        frame_id: "machine".into(),
+    }
 }
 
 /// Entries with a covariance block per term.
@@ -25,7 +28,9 @@ impl Builder {
     /// Describe a term instance (label, catalog id, options) for consumers that rebuild it.
     fn describe(&mut self, t: &ConfiguredTerm) {
         self.m.term_labels.push(t.term.label());
-        self.m.term_catalog_ids.push(t.term.id().as_str().to_string());
+        self.m
+            .term_catalog_ids
+            .push(t.term.id().as_str().to_string());
         self.m.term_options.push(t.options_json());
     }
 
@@ -40,16 +45,36 @@ impl Builder {
     }
 }
 
-pub fn error_model(c: &ThermalCompensator, fit: Option<&(GrowthFitResult, bool)>, reading: &dyn Fn(&str) -> Option<Reading>, now_ns: i64) -> Result<ErrorModel, ThermalError> {
-    let mut b = Builder { m: ErrorModel { header: header(now_ns), machine_id: String::new(), ..Default::default() }, blocks: Vec::new() };
+pub fn error_model(
+    c: &ThermalCompensator,
+    fit: Option<&(GrowthFitResult, bool)>,
+    reading: &dyn Fn(&str) -> Option<Reading>,
+    now_ns: i64,
+) -> Result<ErrorModel, ThermalError> {
+    let mut b = Builder {
+        m: ErrorModel {
+            header: header(now_ns),
+            machine_id: String::new(),
+            ..Default::default()
+        },
+        blocks: Vec::new(),
+    };
     let s = &c.scale;
     for (k, label) in s.labels() {
         if let Some(t) = s.axis_term(k) {
             b.describe(t);
         }
         let (strain, var) = s.axis_strain(k, reading)?;
-        b.push("thermal_scale", vec![(format!("{label}.alpha"), "1/K", s.alpha)], DMatrix::from_element(1, 1, s.alpha_uncertainty.powi(2)));
-        b.push("thermal_scale", vec![(format!("{label}.strain"), "m/m", strain)], DMatrix::from_element(1, 1, var));
+        b.push(
+            "thermal_scale",
+            vec![(format!("{label}.alpha"), "1/K", s.alpha)],
+            DMatrix::from_element(1, 1, s.alpha_uncertainty.powi(2)),
+        );
+        b.push(
+            "thermal_scale",
+            vec![(format!("{label}.strain"), "m/m", strain)],
+            DMatrix::from_element(1, 1, var),
+        );
         b.m.observation_count += s.sensors().iter().filter(|p| p.axis == k).count() as u32;
     }
     for g in &c.growth {
@@ -57,12 +82,23 @@ pub fn error_model(c: &ThermalCompensator, fit: Option<&(GrowthFitResult, bool)>
         let label = g.label();
         let (params, cov) = g.parameters();
         let n = params.len();
-        let names = params.into_iter().map(|(name, unit, v)| (format!("{label}.{name}"), unit, v)).collect();
-        b.push("thermal_growth", names, DMatrix::from_fn(n, n, |i, j| cov[(i, j)]));
+        let names = params
+            .into_iter()
+            .map(|(name, unit, v)| (format!("{label}.{name}"), unit, v))
+            .collect();
+        b.push(
+            "thermal_growth",
+            names,
+            DMatrix::from_fn(n, n, |i, j| cov[(i, j)]),
+        );
     }
     if let Some(w) = &c.workpiece {
         b.describe(w.catalog_term());
-        b.push("workpiece_expansion", vec![(format!("{}.alpha", w.label()), "1/K", w.alpha)], DMatrix::from_element(1, 1, w.alpha_uncertainty.powi(2)));
+        b.push(
+            "workpiece_expansion",
+            vec![(format!("{}.alpha", w.label()), "1/K", w.alpha)],
+            DMatrix::from_element(1, 1, w.alpha_uncertainty.powi(2)),
+        );
     }
     if let Some((r, _)) = fit {
         b.m.residual_rms = r.rms;
@@ -85,7 +121,12 @@ pub fn error_model(c: &ThermalCompensator, fit: Option<&(GrowthFitResult, bool)>
 
 /// Where the drift point is predicted to be: nominal = the drift point, measured = it plus the
 /// predicted thermal drift (machine frame, m), covariance of the drift (m²).
-pub fn predicted_drift(c: &ThermalCompensator, point: &Vector3<f64>, reading: &dyn Fn(&str) -> Option<Reading>, now_ns: i64) -> Result<MeasuredPoint, ThermalError> {
+pub fn predicted_drift(
+    c: &ThermalCompensator,
+    point: &Vector3<f64>,
+    reading: &dyn Fn(&str) -> Option<Reading>,
+    now_ns: i64,
+) -> Result<MeasuredPoint, ThermalError> {
     let (d, cov) = c.drift(point, reading)?;
     let mut covariance = [0.0; 9];
     covariance.copy_from_slice(cov.transpose().as_slice());
@@ -93,8 +134,16 @@ pub fn predicted_drift(c: &ThermalCompensator, point: &Vector3<f64>, reading: &d
         header: header(now_ns),
         point_id: "predicted_drift".into(),
         source: "thermal".into(),
-        nominal: Point { x: point.x, y: point.y, z: point.z },
-        measured: Point { x: point.x + d.x, y: point.y + d.y, z: point.z + d.z },
+        nominal: Point {
+            x: point.x,
+            y: point.y,
+            z: point.z,
+        },
+        measured: Point {
+            x: point.x + d.x,
+            y: point.y + d.y,
+            z: point.z + d.z,
+        },
         covariance,
     })
 }

@@ -1,6 +1,9 @@
 //! The node's parameters and the compensator they configure.
 
-use metrocell_compensation::{AxisSensorPlacement, GrowthCompensator, GrowthFit, GrowthSpec, ScaleFit, ThermalCompensator, ThermalScaleCompensator, WorkpieceCompensator};
+use metrocell_compensation::{
+    AxisSensorPlacement, GrowthCompensator, GrowthFit, GrowthSpec, ScaleFit, ThermalCompensator,
+    ThermalScaleCompensator, WorkpieceCompensator,
+};
 use metrocell_node::{ParamDecl, Parameters};
 use nalgebra::Vector3;
 
@@ -67,20 +70,32 @@ impl AlphaFitConfig {
 }
 
 /// The α fit from the start-up parameters, if `fit_alpha_points` is set.
-pub fn alpha_fit(node: &Parameters, c: &ThermalCompensator) -> Result<Option<AlphaFitConfig>, Box<dyn std::error::Error>> {
+pub fn alpha_fit(
+    node: &Parameters,
+    c: &ThermalCompensator,
+) -> Result<Option<AlphaFitConfig>, Box<dyn std::error::Error>> {
     let flat = node.get::<Vec<f64>>("fit_alpha_points")?;
     if flat.is_empty() {
         return Ok(None);
     }
     if flat.len() % 3 != 0 || flat.iter().any(|v| !v.is_finite()) {
-        return Err(err("fit_alpha_points", format!("needs finite x y z triples in m, got {} values", flat.len())));
+        return Err(err(
+            "fit_alpha_points",
+            format!("needs finite x y z triples in m, got {} values", flat.len()),
+        ));
     }
     let axis_name = node.get::<String>("fit_alpha_axis")?;
-    let axis = ["x", "y", "z"].iter().position(|a| *a == axis_name).ok_or_else(|| err("fit_alpha_axis", format!("'{axis_name}'; allowed: x, y, z")))?;
+    let axis = ["x", "y", "z"]
+        .iter()
+        .position(|a| *a == axis_name)
+        .ok_or_else(|| err("fit_alpha_axis", format!("'{axis_name}'; allowed: x, y, z")))?;
     if !c.scale.covers(axis) {
         return Err(err("fit_alpha_axis", format!("axis {axis_name} has no scale sensor (sensors / sensor_axes): there is no thermal_scale term to fit")));
     }
-    let points: Vec<Vector3<f64>> = flat.chunks(3).map(|v| Vector3::new(v[0], v[1], v[2])).collect();
+    let points: Vec<Vector3<f64>> = flat
+        .chunks(3)
+        .map(|v| Vector3::new(v[0], v[1], v[2]))
+        .collect();
     Ok(Some(AlphaFitConfig {
         fit: ScaleFit::new(points.len()).map_err(|e| err("fit_alpha_points", e))?,
         axis,
@@ -112,18 +127,34 @@ fn vector3(p: &Parameters, name: &str) -> Result<Option<Vector3<f64>>, Box<dyn s
     match v.len() {
         0 => Ok(None),
         3 if v.iter().all(|x| x.is_finite()) => Ok(Some(Vector3::new(v[0], v[1], v[2]))),
-        _ => Err(err(name, format!("needs 3 finite numbers [x, y, z] in m, got {v:?}"))),
+        _ => Err(err(
+            name,
+            format!("needs 3 finite numbers [x, y, z] in m, got {v:?}"),
+        )),
     }
 }
 
 /// One value per growth sensor, or a default per sensor when the list is empty.
-fn per_growth_sensor(p: &Parameters, name: &str, n: usize, default: impl Fn(usize) -> Option<f64>) -> Result<Vec<f64>, Box<dyn std::error::Error>> {
+fn per_growth_sensor(
+    p: &Parameters,
+    name: &str,
+    n: usize,
+    default: impl Fn(usize) -> Option<f64>,
+) -> Result<Vec<f64>, Box<dyn std::error::Error>> {
     let v = p.get::<Vec<f64>>(name)?;
     if v.is_empty() {
-        return (0..n).map(|i| default(i).ok_or_else(|| err(name, format!("needs {n} values, one per growth sensor")))).collect();
+        return (0..n)
+            .map(|i| {
+                default(i)
+                    .ok_or_else(|| err(name, format!("needs {n} values, one per growth sensor")))
+            })
+            .collect();
     }
     if v.len() != n {
-        return Err(err(name, format!("has {} values but growth_sensors has {n}", v.len())));
+        return Err(err(
+            name,
+            format!("has {} values but growth_sensors has {n}", v.len()),
+        ));
     }
     if let Some(bad) = v.iter().find(|x| !x.is_finite()) {
         return Err(err(name, format!("value {bad} is not finite")));
@@ -133,7 +164,9 @@ fn per_growth_sensor(p: &Parameters, name: &str, n: usize, default: impl Fn(usiz
 
 /// The compensator and the optional fit from the start-up parameters (live node:
 /// `node.parameters()`; replay: the offline node's).
-pub fn compensator(node: &Parameters) -> Result<(ThermalCompensator, Option<FitConfig>), Box<dyn std::error::Error>> {
+pub fn compensator(
+    node: &Parameters,
+) -> Result<(ThermalCompensator, Option<FitConfig>), Box<dyn std::error::Error>> {
     let names = node.get::<Vec<String>>("sensors")?;
     let axes = node.get::<Vec<String>>("sensor_axes")?;
     let positions = node.get::<Vec<f64>>("sensor_positions")?;
@@ -152,33 +185,68 @@ pub fn compensator(node: &Parameters) -> Result<(ThermalCompensator, Option<FitC
             "x" | "X" => 0,
             "y" | "Y" => 1,
             "z" | "Z" => 2,
-            other => return Err(format!("parameter sensor_axes: sensor '{name}' has axis '{other}'; allowed: x, y, z").into()),
+            other => {
+                return Err(format!(
+                    "parameter sensor_axes: sensor '{name}' has axis '{other}'; allowed: x, y, z"
+                )
+                .into())
+            }
         };
-        placements.push(AxisSensorPlacement { name, axis, position });
+        placements.push(AxisSensorPlacement {
+            name,
+            axis,
+            position,
+        });
     }
     let reference_temperature = node.get::<f64>("reference_temperature")?;
-    let scale = ThermalScaleCompensator::new(node.get::<f64>("alpha")?, node.get::<f64>("alpha_uncertainty")?, reference_temperature, placements)
-        .map_err(|e| err("alpha / sensors", e))?;
+    let scale = ThermalScaleCompensator::new(
+        node.get::<f64>("alpha")?,
+        node.get::<f64>("alpha_uncertainty")?,
+        reference_temperature,
+        placements,
+    )
+    .map_err(|e| err("alpha / sensors", e))?;
 
     let calibration = node.get::<f64>("sensor_calibration_uncertainty")?;
     let growth_sensors = node.get::<Vec<String>>("growth_sensors")?;
     let n = growth_sensors.len();
     let directions = node.get::<Vec<f64>>("growth_directions")?;
     if directions.len() != 3 * n {
-        return Err(err("growth_directions", format!("needs 3 numbers per growth sensor ({}), got {}", 3 * n, directions.len())));
+        return Err(err(
+            "growth_directions",
+            format!(
+                "needs 3 numbers per growth sensor ({}), got {}",
+                3 * n,
+                directions.len()
+            ),
+        ));
     }
     let coefficients = per_growth_sensor(node, "growth_coefficients", n, |_| None)?;
-    let u_coefficients = per_growth_sensor(node, "growth_coefficient_uncertainties", n, |i| Some(0.1 * coefficients[i].abs()))?;
+    let u_coefficients = per_growth_sensor(node, "growth_coefficient_uncertainties", n, |i| {
+        Some(0.1 * coefficients[i].abs())
+    })?;
     let taus = per_growth_sensor(node, "growth_time_constants", n, |_| Some(0.0))?;
-    let u_taus = per_growth_sensor(node, "growth_time_constant_uncertainties", n, |i| Some(0.1 * taus[i]))?;
+    let u_taus = per_growth_sensor(node, "growth_time_constant_uncertainties", n, |i| {
+        Some(0.1 * taus[i])
+    })?;
     let mut growth = Vec::new();
     for (i, sensor) in growth_sensors.iter().enumerate() {
         if taus[i] < 0.0 {
-            return Err(err("growth_time_constants", format!("sensor '{sensor}': τ = {} s must be ≥ 0 (0 = no lag)", taus[i])));
+            return Err(err(
+                "growth_time_constants",
+                format!(
+                    "sensor '{sensor}': τ = {} s must be ≥ 0 (0 = no lag)",
+                    taus[i]
+                ),
+            ));
         }
         let spec = GrowthSpec {
             sensor: sensor.clone(),
-            direction: Vector3::new(directions[3 * i], directions[3 * i + 1], directions[3 * i + 2]),
+            direction: Vector3::new(
+                directions[3 * i],
+                directions[3 * i + 1],
+                directions[3 * i + 2],
+            ),
             coefficient: coefficients[i],
             coefficient_uncertainty: u_coefficients[i],
             time_constant: (taus[i] > 0.0).then_some(taus[i]),
@@ -193,17 +261,31 @@ pub fn compensator(node: &Parameters) -> Result<(ThermalCompensator, Option<FitC
     let workpiece = if workpiece_sensor.is_empty() {
         None
     } else {
-        let clamp = vector3(node, "workpiece_clamp")?.ok_or_else(|| err("workpiece_clamp", "needs [x, y, z] in m"))?;
+        let clamp = vector3(node, "workpiece_clamp")?
+            .ok_or_else(|| err("workpiece_clamp", "needs [x, y, z] in m"))?;
         Some(
-            WorkpieceCompensator::new(&workpiece_sensor, clamp, node.get::<f64>("workpiece_alpha")?, node.get::<f64>("workpiece_alpha_uncertainty")?, reference_temperature)
-                .map_err(|e| err("workpiece_*", e))?,
+            WorkpieceCompensator::new(
+                &workpiece_sensor,
+                clamp,
+                node.get::<f64>("workpiece_alpha")?,
+                node.get::<f64>("workpiece_alpha_uncertainty")?,
+                reference_temperature,
+            )
+            .map_err(|e| err("workpiece_*", e))?,
         )
     };
-    let compensator = ThermalCompensator { scale, growth, workpiece };
+    let compensator = ThermalCompensator {
+        scale,
+        growth,
+        workpiece,
+    };
 
     let limits = node.get::<Vec<f64>>("temperature_limits")?;
     if !(limits.len() == 2 && limits[0] < limits[1]) {
-        return Err(err("temperature_limits", format!("needs [min, max] °C with min < max, got {limits:?}")));
+        return Err(err(
+            "temperature_limits",
+            format!("needs [min, max] °C with min < max, got {limits:?}"),
+        ));
     }
     vector3(node, "drift_point")?.ok_or_else(|| err("drift_point", "needs [x, y, z] in m"))?;
 
@@ -213,11 +295,26 @@ pub fn compensator(node: &Parameters) -> Result<(ThermalCompensator, Option<FitC
             let wanted = node.get::<String>("fit_growth_sensor")?;
             let growth_index = if wanted.is_empty() {
                 if compensator.growth.len() != 1 {
-                    return Err(err("fit_growth_sensor", format!("names the growth term to fit; there are {} growth terms", compensator.growth.len())));
+                    return Err(err(
+                        "fit_growth_sensor",
+                        format!(
+                            "names the growth term to fit; there are {} growth terms",
+                            compensator.growth.len()
+                        ),
+                    ));
                 }
                 0
             } else {
-                compensator.growth.iter().position(|g| g.spec.sensor == wanted).ok_or_else(|| err("fit_growth_sensor", format!("'{wanted}' is not in growth_sensors")))?
+                compensator
+                    .growth
+                    .iter()
+                    .position(|g| g.spec.sensor == wanted)
+                    .ok_or_else(|| {
+                        err(
+                            "fit_growth_sensor",
+                            format!("'{wanted}' is not in growth_sensors"),
+                        )
+                    })?
             };
             let g = &compensator.growth[growth_index];
             if g.spec.time_constant.is_none() {
@@ -225,9 +322,18 @@ pub fn compensator(node: &Parameters) -> Result<(ThermalCompensator, Option<FitC
             }
             let range = node.get::<Vec<f64>>("fit_time_constant_range")?;
             if range.len() != 2 {
-                return Err(err("fit_time_constant_range", format!("needs [min, max] s, got {range:?}")));
+                return Err(err(
+                    "fit_time_constant_range",
+                    format!("needs [min, max] s, got {range:?}"),
+                ));
             }
-            let fit = GrowthFit::new(g.spec.direction, reference_temperature, (range[0], range[1]), 500_000).map_err(|e| err("fit_*", e))?;
+            let fit = GrowthFit::new(
+                g.spec.direction,
+                reference_temperature,
+                (range[0], range[1]),
+                500_000,
+            )
+            .map_err(|e| err("fit_*", e))?;
             Some(FitConfig {
                 fit,
                 growth_index,
@@ -242,7 +348,11 @@ pub fn compensator(node: &Parameters) -> Result<(ThermalCompensator, Option<FitC
 }
 
 /// Log lines describing the configuration: which values are configured and which are fitted.
-pub fn describe(c: &ThermalCompensator, fit: Option<&FitConfig>, alpha_fit: Option<&AlphaFitConfig>) -> Vec<String> {
+pub fn describe(
+    c: &ThermalCompensator,
+    fit: Option<&FitConfig>,
+    alpha_fit: Option<&AlphaFitConfig>,
+) -> Vec<String> {
     let s = &c.scale;
     let mut lines = vec![if s.sensors().is_empty() {
         "thermal_scale: no axis-scale sensors configured".to_string()
@@ -257,7 +367,9 @@ pub fn describe(c: &ThermalCompensator, fit: Option<&FitConfig>, alpha_fit: Opti
     )
     }];
     for g in &c.growth {
-        let lag = g.spec.time_constant.map_or("no lag".to_string(), |t| format!("lag τ={t} s ± {} s", g.spec.time_constant_uncertainty));
+        let lag = g.spec.time_constant.map_or("no lag".to_string(), |t| {
+            format!("lag τ={t} s ± {} s", g.spec.time_constant_uncertainty)
+        });
         lines.push(format!(
             "{}: configured g={:e} m/K ± {:e}, {lag}, direction [{:.3}, {:.3}, {:.3}]",
             g.label(),
@@ -269,7 +381,15 @@ pub fn describe(c: &ThermalCompensator, fit: Option<&FitConfig>, alpha_fit: Opti
         ));
     }
     if let Some(w) = &c.workpiece {
-        lines.push(format!("{}: configured alpha={:e} 1/K ± {:e}, clamp [{}, {}, {}] m", w.label(), w.alpha, w.alpha_uncertainty, w.clamp.x, w.clamp.y, w.clamp.z));
+        lines.push(format!(
+            "{}: configured alpha={:e} 1/K ± {:e}, clamp [{}, {}, {}] m",
+            w.label(),
+            w.alpha,
+            w.alpha_uncertainty,
+            w.clamp.x,
+            w.clamp.y,
+            w.clamp.z
+        ));
     }
     if let Some(f) = fit {
         lines.push(format!(

@@ -5,7 +5,9 @@
 
 use std::collections::BTreeMap;
 
-use metrocell_compensation::{GrowthFitResult, Reading, ScaleFitResult, ThermalCompensator, ThermalError};
+use metrocell_compensation::{
+    GrowthFitResult, Reading, ScaleFitResult, ThermalCompensator, ThermalError,
+};
 use metrocell_msgs::msg::{ErrorModel, MeasuredPoint};
 use metrocell_msgs::sensor_msgs::msg::Temperature;
 use nalgebra::{Matrix2, Matrix3, Vector3};
@@ -26,8 +28,18 @@ impl Counters {
         self.points_not_compensated.values().sum()
     }
     pub fn summary(&self) -> String {
-        let reasons = self.points_not_compensated.iter().map(|(r, n)| format!("{r}: {n}")).collect::<Vec<_>>().join(", ");
-        format!("{} points compensated, {} not ({reasons}), {} readings rejected", self.points_compensated, self.not_compensated_total(), self.rejected_readings)
+        let reasons = self
+            .points_not_compensated
+            .iter()
+            .map(|(r, n)| format!("{r}: {n}"))
+            .collect::<Vec<_>>()
+            .join(", ");
+        format!(
+            "{} points compensated, {} not ({reasons}), {} readings rejected",
+            self.points_compensated,
+            self.not_compensated_total(),
+            self.rejected_readings
+        )
     }
 }
 
@@ -123,14 +135,24 @@ impl ThermalState {
         let reading = |n: &str| self.reading(n);
         let lever = match self.compensator.scale.axis_lever(k, &nominal, &reading) {
             Ok(l) => l,
-            Err(e) => return Some(AlphaFitEvent::NotYet(format!("alpha reference point not used: {e}"))),
+            Err(e) => {
+                return Some(AlphaFitEvent::NotYet(format!(
+                    "alpha reference point not used: {e}"
+                )))
+            }
         };
         let all = match self.compensator.drift(&nominal, &reading) {
             Ok((d, _)) => d,
-            Err(e) => return Some(AlphaFitEvent::NotYet(format!("alpha reference point not used: {e}"))),
+            Err(e) => {
+                return Some(AlphaFitEvent::NotYet(format!(
+                    "alpha reference point not used: {e}"
+                )))
+            }
         };
         // the error along the axis less every other term's drift (this axis's scale term is α·lever)
-        let error = [p.measured.x, p.measured.y, p.measured.z][k] - nominal[k] - (all[k] - self.compensator.scale.alpha * lever);
+        let error = [p.measured.x, p.measured.y, p.measured.z][k]
+            - nominal[k]
+            - (all[k] - self.compensator.scale.alpha * lever);
         let variance = Matrix3::from_row_slice(&p.covariance)[(k, k)];
         let time = stamp_seconds(&p.header.stamp);
         let a = self.alpha_fit.as_mut()?;
@@ -141,17 +163,32 @@ impl ThermalState {
             Ok(r) => r,
             Err(e) => return Some(AlphaFitEvent::NotYet(e.to_string())),
         };
-        let was_used = self.alpha_fit_result.as_ref().is_some_and(|(_, used)| *used);
+        let was_used = self
+            .alpha_fit_result
+            .as_ref()
+            .is_some_and(|(_, used)| *used);
         let mut used = false;
         let mut refused = None;
         if r.observations >= a.min_observations {
-            match self.compensator.scale.use_alpha(r.alpha, r.alpha_uncertainty) {
+            match self
+                .compensator
+                .scale
+                .use_alpha(r.alpha, r.alpha_uncertainty)
+            {
                 Ok(()) => used = true,
-                Err(e) => refused = Some(format!("fitted alpha {:e} ± {:e} 1/K not used: {e}", r.alpha, r.alpha_uncertainty)),
+                Err(e) => {
+                    refused = Some(format!(
+                        "fitted alpha {:e} ± {:e} 1/K not used: {e}",
+                        r.alpha, r.alpha_uncertainty
+                    ))
+                }
             }
         }
         self.alpha_fit_result = Some((r.clone(), used));
-        let due = self.last_alpha_report.is_none_or(|t| time - t >= a.interval) || (used && !was_used);
+        let due = self
+            .last_alpha_report
+            .is_none_or(|t| time - t >= a.interval)
+            || (used && !was_used);
         if !due {
             return None;
         }
@@ -164,51 +201,89 @@ impl ThermalState {
     }
 
     /// Store a reading; `Err` names why it was rejected (and counts it).
-    pub fn temperature(&mut self, sensor: &str, t: &Temperature, now_ns: i64) -> Result<(), String> {
+    pub fn temperature(
+        &mut self,
+        sensor: &str,
+        t: &Temperature,
+        now_ns: i64,
+    ) -> Result<(), String> {
         let (lo, hi) = self.limits;
-        let problem = if !(t.temperature.is_finite() && t.variance.is_finite() && t.variance >= 0.0) {
+        let problem = if !(t.temperature.is_finite() && t.variance.is_finite() && t.variance >= 0.0)
+        {
             Some("not a finite value with a variance ≥ 0".to_string())
         } else if !(t.temperature >= lo && t.temperature <= hi) {
             Some(format!("outside temperature_limits [{lo}, {hi}] °C"))
-        } else if self.is_lagged(sensor) && self.latest.get(sensor).is_some_and(|r| stamp_seconds(&t.header.stamp) <= r.3) {
-            Some("its stamp is not later than the previous reading's (a lag cannot go back in time)".to_string())
+        } else if self.is_lagged(sensor)
+            && self
+                .latest
+                .get(sensor)
+                .is_some_and(|r| stamp_seconds(&t.header.stamp) <= r.3)
+        {
+            Some(
+                "its stamp is not later than the previous reading's (a lag cannot go back in time)"
+                    .to_string(),
+            )
         } else {
             None
         };
         if let Some(why) = problem {
             self.counters.rejected_readings += 1;
-            return Err(format!("temperature/{sensor}: rejected reading {} °C (variance {}): {why}", t.temperature, t.variance));
+            return Err(format!(
+                "temperature/{sensor}: rejected reading {} °C (variance {}): {why}",
+                t.temperature, t.variance
+            ));
         }
         let time = stamp_seconds(&t.header.stamp);
-        self.compensator.observe(sensor, time, t.temperature, t.variance);
+        self.compensator
+            .observe(sensor, time, t.temperature, t.variance);
         if let Some(f) = &mut self.fit {
             if self.compensator.growth[f.growth_index].spec.sensor == sensor {
                 f.fit.add_reading(time, t.temperature, t.variance);
             }
         }
-        self.latest.insert(sensor.to_string(), (t.temperature, t.variance, now_ns, time));
+        self.latest.insert(
+            sensor.to_string(),
+            (t.temperature, t.variance, now_ns, time),
+        );
         Ok(())
     }
 
     fn is_lagged(&self, sensor: &str) -> bool {
-        self.compensator.growth.iter().any(|g| g.spec.sensor == sensor && g.spec.time_constant.is_some())
+        self.compensator
+            .growth
+            .iter()
+            .any(|g| g.spec.sensor == sensor && g.spec.time_constant.is_some())
     }
 
     /// The latest reading with the calibration variance added, if there is one.
     fn reading(&self, name: &str) -> Option<Reading> {
-        self.latest.get(name).map(|r| (r.0, r.1 + self.calibration_variance))
+        self.latest
+            .get(name)
+            .map(|r| (r.0, r.1 + self.calibration_variance))
     }
 
     /// Sensors with no reading yet or none within `stale_after` at `now_ns`.
     pub fn stale_sensors(&self, now_ns: i64) -> Vec<String> {
-        self.compensator.sensor_names().into_iter().filter(|n| self.latest.get(n).is_none_or(|r| now_ns - r.2 > self.stale_after_ns)).collect()
+        self.compensator
+            .sensor_names()
+            .into_iter()
+            .filter(|n| {
+                self.latest
+                    .get(n)
+                    .is_none_or(|r| now_ns - r.2 > self.stale_after_ns)
+            })
+            .collect()
     }
 
     fn check_fresh(&self, now_ns: i64) -> Result<(), ThermalError> {
         for name in self.compensator.sensor_names() {
             if let Some(r) = self.latest.get(&name) {
                 if now_ns - r.2 > self.stale_after_ns {
-                    return Err(ThermalError::StaleReading { sensor: name, age_s: (now_ns - r.2) as f64 * 1e-9, limit_s: self.stale_after_ns as f64 * 1e-9 });
+                    return Err(ThermalError::StaleReading {
+                        sensor: name,
+                        age_s: (now_ns - r.2) as f64 * 1e-9,
+                        limit_s: self.stale_after_ns as f64 * 1e-9,
+                    });
                 }
             }
         }
@@ -216,21 +291,37 @@ impl ThermalState {
     }
 
     /// The point with the thermal drift removed and its covariance enlarged; counted either way.
-    pub fn compensate(&mut self, p: &MeasuredPoint, now_ns: i64) -> Result<MeasuredPoint, ThermalError> {
+    pub fn compensate(
+        &mut self,
+        p: &MeasuredPoint,
+        now_ns: i64,
+    ) -> Result<MeasuredPoint, ThermalError> {
         let out = self.compensate_point(p, now_ns);
         match &out {
             Ok(_) => self.counters.points_compensated += 1,
-            Err(e) => *self.counters.points_not_compensated.entry(e.reason()).or_default() += 1,
+            Err(e) => {
+                *self
+                    .counters
+                    .points_not_compensated
+                    .entry(e.reason())
+                    .or_default() += 1
+            }
         }
         out
     }
 
-    fn compensate_point(&self, p: &MeasuredPoint, now_ns: i64) -> Result<MeasuredPoint, ThermalError> {
+    fn compensate_point(
+        &self,
+        p: &MeasuredPoint,
+        now_ns: i64,
+    ) -> Result<MeasuredPoint, ThermalError> {
         self.check_fresh(now_ns)?;
         let nominal = Vector3::new(p.nominal.x, p.nominal.y, p.nominal.z);
         let measured = Vector3::new(p.measured.x, p.measured.y, p.measured.z);
         let cov = Matrix3::from_row_slice(&p.covariance);
-        let (c, c_cov) = self.compensator.compensate(&nominal, &measured, &cov, &|n: &str| self.reading(n))?;
+        let (c, c_cov) = self
+            .compensator
+            .compensate(&nominal, &measured, &cov, &|n: &str| self.reading(n))?;
         let mut out = p.clone();
         (out.measured.x, out.measured.y, out.measured.z) = (c.x, c.y, c.z);
         out.covariance.copy_from_slice(c_cov.transpose().as_slice());
@@ -248,7 +339,15 @@ impl ThermalState {
         if !((nominal - f.point).norm() <= f.tolerance) {
             return None;
         }
-        let others = self.compensator.drift(&nominal, &|n: &str| self.reading(n)).and_then(|(all, _)| Ok(all - self.compensator.growth[f.growth_index].drift(&nominal)?.displacement));
+        let others = self
+            .compensator
+            .drift(&nominal, &|n: &str| self.reading(n))
+            .and_then(|(all, _)| {
+                Ok(all
+                    - self.compensator.growth[f.growth_index]
+                        .drift(&nominal)?
+                        .displacement)
+            });
         let others = match others {
             Ok(d) => d,
             Err(e) => return Some(FitEvent::NotYet(format!("reference point not used: {e}"))),
@@ -256,7 +355,10 @@ impl ThermalState {
         let f = self.fit.as_mut()?;
         let error = Vector3::new(p.measured.x, p.measured.y, p.measured.z) - nominal - others;
         let time = stamp_seconds(&p.header.stamp);
-        if let Err(e) = f.fit.add_observation(time, &error, &Matrix3::from_row_slice(&p.covariance)) {
+        if let Err(e) = f
+            .fit
+            .add_observation(time, &error, &Matrix3::from_row_slice(&p.covariance))
+        {
             return Some(FitEvent::NotYet(e.to_string()));
         }
         if self.last_fit_time.is_some_and(|t| time - t < f.interval) {
@@ -269,18 +371,38 @@ impl ThermalState {
         };
         let usable = r.observations >= f.min_observations && !r.at_bound;
         if usable {
-            let cov = Matrix2::new(r.covariance[(1, 1)], r.covariance[(1, 2)], r.covariance[(2, 1)], r.covariance[(2, 2)]);
+            let cov = Matrix2::new(
+                r.covariance[(1, 1)],
+                r.covariance[(1, 2)],
+                r.covariance[(2, 1)],
+                r.covariance[(2, 2)],
+            );
             let lag = f.fit.lag(r.time_constant);
-            if let Err(e) = self.compensator.growth[f.growth_index].use_fitted(r.coefficient, r.time_constant, cov, lag) {
+            if let Err(e) = self.compensator.growth[f.growth_index].use_fitted(
+                r.coefficient,
+                r.time_constant,
+                cov,
+                lag,
+            ) {
                 return Some(FitEvent::NotYet(e.to_string()));
             }
         }
         self.fit_result = Some((r.clone(), usable));
-        Some(if usable { FitEvent::Used(r) } else { FitEvent::Fitted(r) })
+        Some(if usable {
+            FitEvent::Used(r)
+        } else {
+            FitEvent::Fitted(r)
+        })
     }
 
     /// The error model and the predicted drift when due at `now_ns` (first call, then every period).
-    pub fn model_if_due(&mut self, now_ns: i64) -> Option<(Result<ErrorModel, ThermalError>, Result<MeasuredPoint, ThermalError>)> {
+    pub fn model_if_due(
+        &mut self,
+        now_ns: i64,
+    ) -> Option<(
+        Result<ErrorModel, ThermalError>,
+        Result<MeasuredPoint, ThermalError>,
+    )> {
         let due = self.next_model_ns.map_or(true, |t| now_ns >= t);
         if !due {
             return None;
@@ -288,10 +410,28 @@ impl ThermalState {
         // next = previous deadline + period; after a gap longer than a period (e.g. in a bag)
         // restart from now instead of publishing a burst.
         let next = self.next_model_ns.unwrap_or(now_ns) + self.period_ns;
-        self.next_model_ns = Some(if next <= now_ns { now_ns + self.period_ns } else { next });
+        self.next_model_ns = Some(if next <= now_ns {
+            now_ns + self.period_ns
+        } else {
+            next
+        });
         let reading = |n: &str| self.reading(n);
-        let model = self.check_fresh(now_ns).and_then(|_| crate::model_message::error_model(&self.compensator, self.fit_result.as_ref(), &reading, now_ns));
-        let drift = self.check_fresh(now_ns).and_then(|_| crate::model_message::predicted_drift(&self.compensator, &self.drift_point, &reading, now_ns));
+        let model = self.check_fresh(now_ns).and_then(|_| {
+            crate::model_message::error_model(
+                &self.compensator,
+                self.fit_result.as_ref(),
+                &reading,
+                now_ns,
+            )
+        });
+        let drift = self.check_fresh(now_ns).and_then(|_| {
+            crate::model_message::predicted_drift(
+                &self.compensator,
+                &self.drift_point,
+                &reading,
+                now_ns,
+            )
+        });
         Some((model, drift))
     }
 }
@@ -313,26 +453,69 @@ mod tests {
 
     fn state_with(extra: &[&'static str]) -> ThermalState {
         let mut args = vec![
-            "metrocell-thermal", "--ros-args", "-p", "sensors:=[x_left, x_right]", "-p", "sensor_axes:=[x, x]", "-p", "sensor_positions:=[0.0, 0.8]",
-            "-p", "alpha_uncertainty:=5.77e-7", "-p", "sensor_calibration_uncertainty:=0.05", "-p", "growth_sensors:=[column]",
-            "-p", "growth_directions:=[0.0, 0.0, -1.0]", "-p", "growth_coefficients:=[4e-6]", "-p", "growth_time_constants:=[600.0]",
-            "-p", "growth_time_constant_uncertainties:=[60.0]", "-p", "growth_coefficient_uncertainties:=[4e-7]", "-p", "drift_point:=[0.4, 0.0, 0.0]",
+            "metrocell-thermal",
+            "--ros-args",
+            "-p",
+            "sensors:=[x_left, x_right]",
+            "-p",
+            "sensor_axes:=[x, x]",
+            "-p",
+            "sensor_positions:=[0.0, 0.8]",
+            "-p",
+            "alpha_uncertainty:=5.77e-7",
+            "-p",
+            "sensor_calibration_uncertainty:=0.05",
+            "-p",
+            "growth_sensors:=[column]",
+            "-p",
+            "growth_directions:=[0.0, 0.0, -1.0]",
+            "-p",
+            "growth_coefficients:=[4e-6]",
+            "-p",
+            "growth_time_constants:=[600.0]",
+            "-p",
+            "growth_time_constant_uncertainties:=[60.0]",
+            "-p",
+            "growth_coefficient_uncertainties:=[4e-7]",
+            "-p",
+            "drift_point:=[0.4, 0.0, 0.0]",
         ];
         for p in extra {
             args.extend(["-p", p]);
         }
         let cl = metrocell_node::parse_command_line(args).unwrap();
-        let p = metrocell_node::Parameters::resolve(&crate::parameters::declarations(), &cl.ros, "/thermal", "thermal").unwrap();
+        let p = metrocell_node::Parameters::resolve(
+            &crate::parameters::declarations(),
+            &cl.ros,
+            "/thermal",
+            "thermal",
+        )
+        .unwrap();
         let log = std::cell::RefCell::new(Vec::new());
         let st = crate::start(&p, &|line| log.borrow_mut().push(line)).unwrap();
         let log = log.into_inner();
-        assert!(log[0].contains("strain computed from the configured alpha=1.15e-5"), "{log:?}");
-        assert!(log[1].starts_with("thermal_growth[column]: configured g=4e-6 m/K ± 4e-7, lag τ=600 s ± 60 s"), "{log:?}");
+        assert!(
+            log[0].contains("strain computed from the configured alpha=1.15e-5"),
+            "{log:?}"
+        );
+        assert!(
+            log[1].starts_with(
+                "thermal_growth[column]: configured g=4e-6 m/K ± 4e-7, lag τ=600 s ± 60 s"
+            ),
+            "{log:?}"
+        );
         st
     }
 
     fn temp(value: f64, at_ns: i64) -> Temperature {
-        Temperature { header: Header { stamp: Time::from_nanos(at_ns), frame_id: String::new() }, temperature: value, variance: 0.0004 }
+        Temperature {
+            header: Header {
+                stamp: Time::from_nanos(at_ns),
+                frame_id: String::new(),
+            },
+            temperature: value,
+            variance: 0.0004,
+        }
     }
 
     fn point(x: f64) -> MeasuredPoint {
@@ -360,19 +543,34 @@ mod tests {
         // x: α·0.8 m·(22 − 20) K removed; z: the column at 23 °C (one reading, so T_f = 23) grows 12 µm down
         assert!((out.measured.x - (0.8 - 11.5e-6 * 0.8 * 2.0)).abs() < 1e-15);
         assert!((out.measured.z - (0.2 + 12e-6)).abs() < 1e-15);
-        assert!(out.covariance[0] > 1e-12 && out.covariance[8] > 1e-12, "covariance enlarged: {:?}", out.covariance);
+        assert!(
+            out.covariance[0] > 1e-12 && out.covariance[8] > 1e-12,
+            "covariance enlarged: {:?}",
+            out.covariance
+        );
         assert_eq!(st.counters.points_compensated, 1);
         let (model, drift) = st.model_if_due(S).unwrap();
         let model = model.unwrap();
         assert_eq!(
             model.parameter_names,
-            ["thermal_scale[x].alpha", "thermal_scale[x].strain", "thermal_growth[column].coefficient", "thermal_growth[column].time_constant"]
+            [
+                "thermal_scale[x].alpha",
+                "thermal_scale[x].strain",
+                "thermal_growth[column].coefficient",
+                "thermal_growth[column].time_constant"
+            ]
         );
         assert_eq!(model.units, ["1/K", "m/m", "m/K", "s"]);
         assert_eq!(model.covariance.len(), 16);
-        assert!((model.covariance[15] - 3600.0).abs() < 1e-9, "u(τ)² on the diagonal");
+        assert!(
+            (model.covariance[15] - 3600.0).abs() < 1e-9,
+            "u(τ)² on the diagonal"
+        );
         let drift = drift.unwrap();
-        assert!((drift.measured.x - drift.nominal.x - 11.5e-6 * 0.4 * 1.5).abs() < 1e-15, "drift point at x = 0.4 m, T = 21.5 °C");
+        assert!(
+            (drift.measured.x - drift.nominal.x - 11.5e-6 * 0.4 * 1.5).abs() < 1e-15,
+            "drift point at x = 0.4 m, T = 21.5 °C"
+        );
         assert!((drift.measured.z - drift.nominal.z + 12e-6).abs() < 1e-15);
     }
 
@@ -383,7 +581,10 @@ mod tests {
         st.temperature("column", &temp(21.0, 0), 0).unwrap();
         let e = st.compensate(&point(0.5), S).unwrap_err();
         assert_eq!(e, ThermalError::NoReading("x_right".into(), "x"));
-        assert_eq!(st.counters.points_not_compensated.get("no_reading"), Some(&1));
+        assert_eq!(
+            st.counters.points_not_compensated.get("no_reading"),
+            Some(&1)
+        );
         assert_eq!(st.counters.points_compensated, 0);
         assert_eq!(st.stale_sensors(S), ["x_right"]);
     }
@@ -395,22 +596,47 @@ mod tests {
         // 5 s later x_left and column report again, x_right does not
         st.temperature("x_left", &temp(21.0, 5 * S), 5 * S).unwrap();
         st.temperature("column", &temp(23.0, 5 * S), 5 * S).unwrap();
-        assert!(st.compensate(&point(0.5), 10 * S).is_ok(), "10 s old is still fresh");
+        assert!(
+            st.compensate(&point(0.5), 10 * S).is_ok(),
+            "10 s old is still fresh"
+        );
         let e = st.compensate(&point(0.5), 11 * S).unwrap_err();
-        assert!(matches!(&e, ThermalError::StaleReading { sensor, .. } if sensor == "x_right"), "{e}");
-        assert!(e.to_string().contains("x_right") && e.to_string().contains("11.0 s old"), "{e}");
-        assert_eq!(st.counters.points_not_compensated.get("stale_sensor"), Some(&1));
+        assert!(
+            matches!(&e, ThermalError::StaleReading { sensor, .. } if sensor == "x_right"),
+            "{e}"
+        );
+        assert!(
+            e.to_string().contains("x_right") && e.to_string().contains("11.0 s old"),
+            "{e}"
+        );
+        assert_eq!(
+            st.counters.points_not_compensated.get("stale_sensor"),
+            Some(&1)
+        );
         assert_eq!(st.stale_sensors(11 * S), ["x_right"]);
         let (model, drift) = st.model_if_due(11 * S).unwrap();
-        assert!(model.is_err() && drift.is_err(), "no model from a stale sensor");
-        assert!(st.counters.summary().contains("1 points compensated, 1 not (stale_sensor: 1)"), "{}", st.counters.summary());
+        assert!(
+            model.is_err() && drift.is_err(),
+            "no model from a stale sensor"
+        );
+        assert!(
+            st.counters
+                .summary()
+                .contains("1 points compensated, 1 not (stale_sensor: 1)"),
+            "{}",
+            st.counters.summary()
+        );
     }
 
     #[test]
     fn rejected_readings_are_counted_and_not_used() {
         let mut st = state();
         feed_all(&mut st, 0);
-        for (v, why) in [(f64::NAN, "not a finite value"), (95.0, "outside temperature_limits"), (-40.0, "outside temperature_limits")] {
+        for (v, why) in [
+            (f64::NAN, "not a finite value"),
+            (95.0, "outside temperature_limits"),
+            (-40.0, "outside temperature_limits"),
+        ] {
             let e = st.temperature("x_right", &temp(v, S), S).unwrap_err();
             assert!(e.contains("temperature/x_right") && e.contains(why), "{e}");
         }
@@ -436,21 +662,33 @@ mod tests {
         let mut p = point(0.5);
         p.nominal.z = f64::INFINITY;
         assert_eq!(st.compensate(&p, S).unwrap_err().reason(), "not_finite");
-        assert_eq!(st.counters.points_not_compensated.get("not_finite"), Some(&2));
+        assert_eq!(
+            st.counters.points_not_compensated.get("not_finite"),
+            Some(&2)
+        );
     }
 
     #[test]
     fn online_fit_replaces_the_configured_growth_once_it_fits() {
         // Truth g = 5 µm/K, τ = 1500 s (configured: 4 µm/K, 600 s). The column warms 3 K in 1.5-h
         // blocks; the reference point (0.1, 0.1, 0.1) is measured every 5 min with 1 µm noise.
-        let mut st = state_with(&["fit_reference_point:=[0.1, 0.1, 0.1]", "fit_min_observations:=20", "stale_after:=100.0", "fit_interval:=600.0"]);
+        let mut st = state_with(&[
+            "fit_reference_point:=[0.1, 0.1, 0.1]",
+            "fit_min_observations:=20",
+            "stale_after:=100.0",
+            "fit_interval:=600.0",
+        ]);
         assert!(st.fit.is_some());
         let (g_true, tau_true) = (5e-6, 1500.0);
         let mut truth = metrocell_compensation::FirstOrderLag::new(tau_true);
         let (mut column, mut used_at) = (20.0, None);
         for k in 0..(6 * 360) {
             let t_ns = k as i64 * 10 * S;
-            let heating = if (k as f64 / 360.0) % 2.5 < 1.5 { 3.0 } else { 0.0 };
+            let heating = if (k as f64 / 360.0) % 2.5 < 1.5 {
+                3.0
+            } else {
+                0.0
+            };
             column += (20.0 + heating - column) * (1.0 - (-10.0f64 / 3600.0).exp());
             truth.advance(t_ns as f64 * 1e-9, column, 0.0);
             for (n, v) in [("x_left", 20.0), ("x_right", 20.0), ("column", column)] {
@@ -470,16 +708,32 @@ mod tests {
             }
         }
         // refits every 600 s (every other measurement, from the first), so from the 21st on
-        assert_eq!(used_at, Some(21 * 30 - 1), "used from the first refit with ≥ 20 measurements");
+        assert_eq!(
+            used_at,
+            Some(21 * 30 - 1),
+            "used from the first refit with ≥ 20 measurements"
+        );
         let (r, used) = st.fit_result.clone().unwrap();
         assert!(used && st.compensator.growth[0].is_fitted());
         let (ug, utau) = (r.covariance[(1, 1)].sqrt(), r.covariance[(2, 2)].sqrt());
-        assert!((r.coefficient - g_true).abs() < 3.0 * ug && ug < 0.5e-6, "g {} ± {ug}", r.coefficient);
-        assert!((r.time_constant - tau_true).abs() < 3.0 * utau && utau < 300.0, "τ {} ± {utau}", r.time_constant);
+        assert!(
+            (r.coefficient - g_true).abs() < 3.0 * ug && ug < 0.5e-6,
+            "g {} ± {ug}",
+            r.coefficient
+        );
+        assert!(
+            (r.time_constant - tau_true).abs() < 3.0 * utau && utau < 300.0,
+            "τ {} ± {utau}",
+            r.time_constant
+        );
         // the error model now carries the fitted values, with the fit's covariance
         let (model, _) = st.model_if_due(6 * 3600 * S).unwrap();
         let model = model.unwrap();
-        let i = model.parameter_names.iter().position(|n| n == "thermal_growth[column].coefficient").unwrap();
+        let i = model
+            .parameter_names
+            .iter()
+            .position(|n| n == "thermal_growth[column].coefficient")
+            .unwrap();
         assert_eq!(model.values[i], r.coefficient);
         assert_eq!(model.values[i + 1], r.time_constant);
         let n = model.values.len();
@@ -488,9 +742,14 @@ mod tests {
         // and a point is now corrected with them: the reference point's Z error is gone to ~1 µm
         let (_, tf, _, _) = truth.output().unwrap();
         let mut p = point(0.1);
-        (p.nominal.y, p.nominal.z, p.measured.y, p.measured.z) = (0.1, 0.1, 0.1, 0.1 - g_true * (tf - 20.0));
+        (p.nominal.y, p.nominal.z, p.measured.y, p.measured.z) =
+            (0.1, 0.1, 0.1, 0.1 - g_true * (tf - 20.0));
         let out = st.compensate(&p, 6 * 3600 * S).unwrap();
-        assert!((out.measured.z - 0.1).abs() < 1.5e-6, "left {:.2} µm", (out.measured.z - 0.1) * 1e6);
+        assert!(
+            (out.measured.z - 0.1).abs() < 1.5e-6,
+            "left {:.2} µm",
+            (out.measured.z - 0.1) * 1e6
+        );
     }
 
     #[test]
@@ -498,7 +757,12 @@ mod tests {
         // Truth α = 16e-6 1/K (configured 11.5e-6). The X scale warms from 19 to 23 °C (x_left
         // and x_right 0.5 K apart); reference points at x = 0.8 and 0.4 m with static X errors of
         // 6 and −4 µm are measured every 2 min, ±1 µm deterministic "noise".
-        let mut st = state_with(&["fit_alpha_points:=[0.8, 0.0, 0.2, 0.4, 0.0, 0.2]", "fit_alpha_min_observations:=30", "fit_interval:=0.0", "stale_after:=1000.0"]);
+        let mut st = state_with(&[
+            "fit_alpha_points:=[0.8, 0.0, 0.2, 0.4, 0.0, 0.2]",
+            "fit_alpha_min_observations:=30",
+            "fit_interval:=0.0",
+            "stale_after:=1000.0",
+        ]);
         let alpha_true = 16e-6;
         let (mut used_at, mut events) = (None, 0);
         for k in 0..60 {
@@ -511,7 +775,8 @@ mod tests {
                 let t_q = warm + 0.5 * q / 0.8;
                 let mut p = point(q);
                 p.header.stamp = Time::from_nanos(t_ns);
-                p.measured.x = q + c + alpha_true * q * (t_q - 20.0) + 1e-6 * ((k as f64) * 1.3 + q).sin();
+                p.measured.x =
+                    q + c + alpha_true * q * (t_q - 20.0) + 1e-6 * ((k as f64) * 1.3 + q).sin();
                 match st.alpha_reference_measurement(&p) {
                     Some(AlphaFitEvent::Used(_)) => {
                         used_at.get_or_insert(2 * k + (q < 0.5) as i64);
@@ -523,30 +788,78 @@ mod tests {
             }
         }
         assert_eq!(used_at, Some(29), "used from the 30th measurement on");
-        assert!(events >= 100, "fit_interval 0: an event per measurement once it fits ({events})");
+        assert!(
+            events >= 100,
+            "fit_interval 0: an event per measurement once it fits ({events})"
+        );
         let (r, used) = st.alpha_fit_result.clone().unwrap();
         assert!(used);
-        assert!((r.alpha - alpha_true).abs() < 3.0 * r.alpha_uncertainty && r.alpha_uncertainty < 0.5e-6, "α {} ± {}", r.alpha, r.alpha_uncertainty);
-        assert_eq!((st.compensator.scale.alpha, st.compensator.scale.alpha_uncertainty), (r.alpha, r.alpha_uncertainty));
+        assert!(
+            (r.alpha - alpha_true).abs() < 3.0 * r.alpha_uncertainty
+                && r.alpha_uncertainty < 0.5e-6,
+            "α {} ± {}",
+            r.alpha,
+            r.alpha_uncertainty
+        );
+        assert_eq!(
+            (
+                st.compensator.scale.alpha,
+                st.compensator.scale.alpha_uncertainty
+            ),
+            (r.alpha, r.alpha_uncertainty)
+        );
         // the error model carries the fitted α and u(α)²
         let (model, _) = st.model_if_due(59 * 120 * S).unwrap();
         let model = model.unwrap();
-        let i = model.parameter_names.iter().position(|n| n == "thermal_scale[x].alpha").unwrap();
+        let i = model
+            .parameter_names
+            .iter()
+            .position(|n| n == "thermal_scale[x].alpha")
+            .unwrap();
         assert_eq!(model.values[i], r.alpha);
-        assert_eq!(model.covariance[i * model.values.len() + i], r.alpha_uncertainty.powi(2));
+        assert_eq!(
+            model.covariance[i * model.values.len() + i],
+            r.alpha_uncertainty.powi(2)
+        );
         // a point at x = 0.6 m, 23.375 °C there, is corrected with the fitted α: its thermal error (9 µm with the configured α) is gone to < 0.5 µm
         let mut p = point(0.6);
         p.measured.x = 0.6 + alpha_true * 0.6 * (23.0 + 0.375 - 20.0);
         let out = st.compensate(&p, 59 * 120 * S).unwrap();
-        assert!((out.measured.x - 0.6).abs() < 0.5e-6, "left {:.3} µm", (out.measured.x - 0.6) * 1e6);
+        assert!(
+            (out.measured.x - 0.6).abs() < 0.5e-6,
+            "left {:.3} µm",
+            (out.measured.x - 0.6) * 1e6
+        );
     }
 
     #[test]
     fn alpha_fit_needs_a_covered_axis() {
-        let args = ["metrocell-thermal", "--ros-args", "-p", "sensors:=[x_left]", "-p", "sensor_axes:=[x]", "-p", "sensor_positions:=[0.0]", "-p", "fit_alpha_points:=[0.0, 0.5, 0.0]", "-p", "fit_alpha_axis:=y"];
+        let args = [
+            "metrocell-thermal",
+            "--ros-args",
+            "-p",
+            "sensors:=[x_left]",
+            "-p",
+            "sensor_axes:=[x]",
+            "-p",
+            "sensor_positions:=[0.0]",
+            "-p",
+            "fit_alpha_points:=[0.0, 0.5, 0.0]",
+            "-p",
+            "fit_alpha_axis:=y",
+        ];
         let cl = metrocell_node::parse_command_line(args).unwrap();
-        let p = metrocell_node::Parameters::resolve(&crate::parameters::declarations(), &cl.ros, "/thermal", "thermal").unwrap();
+        let p = metrocell_node::Parameters::resolve(
+            &crate::parameters::declarations(),
+            &cl.ros,
+            "/thermal",
+            "thermal",
+        )
+        .unwrap();
         let e = crate::start(&p, &|_| {}).err().unwrap().to_string();
-        assert!(e.contains("fit_alpha_axis") && e.contains("no scale sensor"), "{e}");
+        assert!(
+            e.contains("fit_alpha_axis") && e.contains("no scale sensor"),
+            "{e}"
+        );
     }
 }

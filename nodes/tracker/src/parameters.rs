@@ -2,9 +2,11 @@
 //! configuration built from them.
 
 use metrocell_compensation::{AirData, SphericalNoise};
-use metrocell_node::{ParamDecl, Parameters};
 use metrocell_laser_tracker::total_station_gsi::TotalStationNoise;
-use metrocell_laser_tracker::{AirSource, EdlenForm, ProgramSchedule, ReadingProcessor, TurbulenceTest};
+use metrocell_laser_tracker::{
+    AirSource, EdlenForm, ProgramSchedule, ReadingProcessor, TurbulenceTest,
+};
+use metrocell_node::{ParamDecl, Parameters};
 use nalgebra::Vector3;
 
 /// The run-time trigger of a re-registration (live node).
@@ -89,25 +91,52 @@ fn ns(s: f64) -> i64 {
 
 impl TrackerConfig {
     pub fn from_parameters(p: &Parameters) -> Result<Self, Box<dyn std::error::Error>> {
-        let air = AirData { temperature: p.get("air_temperature")?, pressure: p.get("air_pressure")?, humidity: p.get("air_humidity")? };
+        let air = AirData {
+            temperature: p.get("air_temperature")?,
+            pressure: p.get("air_pressure")?,
+            humidity: p.get("air_humidity")?,
+        };
         let processor = ReadingProcessor {
-            noise: SphericalNoise { radial_base: p.get("range_noise_constant")?, radial_per_metre: p.get("range_noise_per_metre")?, angular: p.get("angular_noise")? },
-            air: if p.get::<String>("air_source")? == "configured" { AirSource::Configured(air) } else { AirSource::Station },
-            form: if p.get::<String>("edlen_form")? == "full" { EdlenForm::Full { wavelength: p.get("wavelength")? } } else { EdlenForm::ShopFloor },
+            noise: SphericalNoise {
+                radial_base: p.get("range_noise_constant")?,
+                radial_per_metre: p.get("range_noise_per_metre")?,
+                angular: p.get("angular_noise")?,
+            },
+            air: if p.get::<String>("air_source")? == "configured" {
+                AirSource::Configured(air)
+            } else {
+                AirSource::Station
+            },
+            form: if p.get::<String>("edlen_form")? == "full" {
+                EdlenForm::Full {
+                    wavelength: p.get("wavelength")?,
+                }
+            } else {
+                EdlenForm::ShopFloor
+            },
             max_range: p.get("max_range")?,
         };
         let offset = p.get::<Vec<f64>>("tool_offset")?;
         if offset.len() != 3 || offset.iter().any(|v| !v.is_finite()) {
-            return Err(format!("parameter tool_offset: expected 3 finite values [m], got {offset:?}").into());
+            return Err(format!(
+                "parameter tool_offset: expected 3 finite values [m], got {offset:?}"
+            )
+            .into());
         }
         let joints = p.get::<Vec<String>>("nominal_joints")?;
         if joints.len() != 3 {
-            return Err(format!("parameter nominal_joints: expected the 3 joint names of X, Y, Z, got {joints:?}").into());
+            return Err(format!(
+                "parameter nominal_joints: expected the 3 joint names of X, Y, Z, got {joints:?}"
+            )
+            .into());
         }
         let power_on: f64 = p.get("power_on_time")?;
         let flat = p.get::<Vec<f64>>("program_points")?;
         let home = p.get::<Vec<f64>>("program_home")?;
-        if flat.len() % 3 != 0 || home.len() != 3 || flat.iter().chain(&home).any(|v| !v.is_finite()) {
+        if flat.len() % 3 != 0
+            || home.len() != 3
+            || flat.iter().chain(&home).any(|v| !v.is_finite())
+        {
             return Err(format!("parameters program_points ({} values) and program_home ({} values) must hold finite x y z triples", flat.len(), home.len()).into());
         }
         let start: f64 = p.get("program_start_time")?;
@@ -115,13 +144,18 @@ impl TrackerConfig {
         let schedule = (start > 0.0 && !flat.is_empty()).then(|| ProgramSchedule {
             start_ns: ns(start),
             home: Vector3::new(home[0], home[1], home[2]),
-            points: flat.chunks(3).map(|c| Vector3::new(c[0], c[1], c[2])).collect(),
+            points: flat
+                .chunks(3)
+                .map(|c| Vector3::new(c[0], c[1], c[2]))
+                .collect(),
             feed,
             stop_time,
         });
         Ok(TrackerConfig {
             processor,
-            turbulence: TurbulenceTest { false_alarm: p.get("turbulence_false_alarm")? },
+            turbulence: TurbulenceTest {
+                false_alarm: p.get("turbulence_false_alarm")?,
+            },
             instrument_index: p.get("instrument_refractive_index")?,
             air_from_topics: p.get::<String>("air_source")? == "topics",
             dwell_gap_ns: ns(p.get("dwell_gap")?),
@@ -150,7 +184,13 @@ impl TrackerConfig {
 
     /// The configuration of the declared defaults (tests, benchmarks).
     pub fn defaults() -> Self {
-        let p = Parameters::resolve(&declarations(), &metrocell_node::RosArgs::default(), "/tracker", "tracker").expect("the declared defaults resolve");
+        let p = Parameters::resolve(
+            &declarations(),
+            &metrocell_node::RosArgs::default(),
+            "/tracker",
+            "tracker",
+        )
+        .expect("the declared defaults resolve");
         Self::from_parameters(&p).expect("the declared defaults form a configuration")
     }
 

@@ -41,15 +41,31 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     }
     node.logger().info(config.describe());
     let mut state = TrackerState::new(config);
-    let (machine_frame, tracker_frame) = (state.config().machine_frame.clone(), state.config().tracker_frame.clone());
+    let (machine_frame, tracker_frame) = (
+        state.config().machine_frame.clone(),
+        state.config().tracker_frame.clone(),
+    );
 
-    let csv = args.bag.extension().is_some_and(|e| e.eq_ignore_ascii_case("csv"));
+    let csv = args
+        .bag
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("csv"));
     let scratch = scratch_dir();
     let bag: PathBuf = if csv {
         let mapping_path: String = node.param("csv_mapping")?;
-        let mapping = if mapping_path.is_empty() { None } else { Some(Mapping::load(Path::new(&mapping_path))?) };
-        let report = import_csv(&args.bag, &scratch, mapping.as_ref(), WriterOptions::default())?;
-        node.logger().info(format!("imported {}: {report:?}", args.bag.display()));
+        let mapping = if mapping_path.is_empty() {
+            None
+        } else {
+            Some(Mapping::load(Path::new(&mapping_path))?)
+        };
+        let report = import_csv(
+            &args.bag,
+            &scratch,
+            mapping.as_ref(),
+            WriterOptions::default(),
+        )?;
+        node.logger()
+            .info(format!("imported {}: {report:?}", args.bag.display()));
         scratch.clone()
     } else {
         args.bag.clone()
@@ -60,12 +76,20 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
             readings: "/measured_points".into(),
             commanded: metrocell_bagtools::import::COMMANDED_JOINTS_TOPIC.into(),
             reregister: String::new(),
-            air: ["/temperature/air".into(), "/air/pressure".into(), "/air/humidity".into()],
+            air: [
+                "/temperature/air".into(),
+                "/air/pressure".into(),
+                "/air/humidity".into(),
+            ],
             csv: true,
         }
     } else {
         let air = if state.config().air_from_topics {
-            [node.resolve_topic("weather/temperature")?, node.resolve_topic("weather/pressure")?, node.resolve_topic("weather/humidity")?]
+            [
+                node.resolve_topic("weather/temperature")?,
+                node.resolve_topic("weather/pressure")?,
+                node.resolve_topic("weather/humidity")?,
+            ]
         } else {
             Default::default()
         };
@@ -77,12 +101,18 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
             csv: false,
         }
     };
-    let found = if csv { source.subscribe::<MeasuredPoint>(&inputs.readings)? } else { source.subscribe::<TrackerMeasurement>(&inputs.readings)? };
+    let found = if csv {
+        source.subscribe::<MeasuredPoint>(&inputs.readings)?
+    } else {
+        source.subscribe::<TrackerMeasurement>(&inputs.readings)?
+    };
     if !found {
-        node.logger().warn(source.missing_topic_hint(&inputs.readings));
+        node.logger()
+            .warn(source.missing_topic_hint(&inputs.readings));
     }
     if !source.subscribe::<JointState>(&inputs.commanded)? {
-        node.logger().warn(source.missing_topic_hint(&inputs.commanded));
+        node.logger()
+            .warn(source.missing_topic_hint(&inputs.commanded));
     }
     if !inputs.air[0].is_empty() {
         for (topic, found) in inputs.air.iter().zip([
@@ -110,47 +140,65 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     output.advertise::<TFMessage>("/tf_static")?;
     output.advertise::<PoseWithCovarianceStamped>(&pose_topic)?;
 
-    let mut write = |outputs: Vec<Output>, log_time_ns: u64| -> Result<(), Box<dyn std::error::Error>> {
-        for o in outputs {
-            match o {
-                Output::Point(p) => output.write(&points_topic, &p, log_time_ns)?,
-                Output::Dwell(d) => output.write(&dwells_topic, &d, log_time_ns)?,
-                Output::Warmup(w) => output.write(&warmup_topic, &w, log_time_ns)?,
-                Output::Pose(reg, stamp) => {
-                    output.write("/tf_static", &messages::tf_static(&reg, stamp, &machine_frame, &tracker_frame), log_time_ns)?;
-                    output.write(&pose_topic, &messages::pose_with_covariance(&reg, stamp, &machine_frame), log_time_ns)?;
+    let mut write =
+        |outputs: Vec<Output>, log_time_ns: u64| -> Result<(), Box<dyn std::error::Error>> {
+            for o in outputs {
+                match o {
+                    Output::Point(p) => output.write(&points_topic, &p, log_time_ns)?,
+                    Output::Dwell(d) => output.write(&dwells_topic, &d, log_time_ns)?,
+                    Output::Warmup(w) => output.write(&warmup_topic, &w, log_time_ns)?,
+                    Output::Pose(reg, stamp) => {
+                        output.write(
+                            "/tf_static",
+                            &messages::tf_static(&reg, stamp, &machine_frame, &tracker_frame),
+                            log_time_ns,
+                        )?;
+                        output.write(
+                            &pose_topic,
+                            &messages::pose_with_covariance(&reg, stamp, &machine_frame),
+                            log_time_ns,
+                        )?;
+                    }
+                    Output::Warning(w) => node.logger().warn(w),
                 }
-                Output::Warning(w) => node.logger().warn(w),
             }
-        }
-        Ok(())
-    };
+            Ok(())
+        };
     // An imported CSV row is several messages at one log time, the point first: the point waits
     // until the row's joints and air have been taken.
     let mut row_point: Option<(MeasuredPoint, u64)> = None;
     // SIGINT/SIGTERM stop it between messages, and the output below is still finished
     let mut last_log_time = 0u64;
-    let stopped = source.replay::<Box<dyn std::error::Error>>(|| node.interrupted(), |m| {
-        last_log_time = m.log_time_ns;
-        if let Some((p, t)) = row_point.take_if(|(_, t)| *t != m.log_time_ns) {
-            write(state.imported_point(&p), t)?;
-        }
-        if inputs.csv && m.topic == inputs.readings {
-            match m.decode::<MeasuredPoint>() {
-                Ok(p) => row_point = Some((p, m.log_time_ns)),
-                Err(e) => node.logger().warn(format!("skipped {} at log time {} ns: {e}", m.topic, m.log_time_ns)),
+    let stopped = source.replay::<Box<dyn std::error::Error>>(
+        || node.interrupted(),
+        |m| {
+            last_log_time = m.log_time_ns;
+            if let Some((p, t)) = row_point.take_if(|(_, t)| *t != m.log_time_ns) {
+                write(state.imported_point(&p), t)?;
             }
-            return Ok(());
-        }
-        match input(&mut state, &inputs, &m) {
-            Ok(o) => write(o, m.log_time_ns),
-            Err(e) => {
-                // a malformed message is reported and skipped; the replay goes on
-                node.logger().warn(format!("skipped {} at log time {} ns: {e}", m.topic, m.log_time_ns));
-                Ok(())
+            if inputs.csv && m.topic == inputs.readings {
+                match m.decode::<MeasuredPoint>() {
+                    Ok(p) => row_point = Some((p, m.log_time_ns)),
+                    Err(e) => node.logger().warn(format!(
+                        "skipped {} at log time {} ns: {e}",
+                        m.topic, m.log_time_ns
+                    )),
+                }
+                return Ok(());
             }
-        }
-    })?;
+            match input(&mut state, &inputs, &m) {
+                Ok(o) => write(o, m.log_time_ns),
+                Err(e) => {
+                    // a malformed message is reported and skipped; the replay goes on
+                    node.logger().warn(format!(
+                        "skipped {} at log time {} ns: {e}",
+                        m.topic, m.log_time_ns
+                    ));
+                    Ok(())
+                }
+            }
+        },
+    )?;
     if let Some((p, t)) = row_point.take() {
         write(state.imported_point(&p), t)?;
     }
@@ -163,12 +211,22 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     if csv {
         let _ = std::fs::remove_dir_all(&scratch);
     }
-    let summary = state.diagnostics().into_iter().map(|(k, v)| format!("{k}={v}")).collect::<Vec<_>>().join(", ");
-    node.logger().info(format!("replayed {}: {summary}", args.bag.display()));
+    let summary = state
+        .diagnostics()
+        .into_iter()
+        .map(|(k, v)| format!("{k}={v}"))
+        .collect::<Vec<_>>()
+        .join(", ");
+    node.logger()
+        .info(format!("replayed {}: {summary}", args.bag.display()));
     Ok(node.finish_replay(stopped)?)
 }
 
-fn input(state: &mut TrackerState, inputs: &Inputs, m: &SourcedMessage) -> Result<Vec<Output>, Box<dyn std::error::Error>> {
+fn input(
+    state: &mut TrackerState,
+    inputs: &Inputs,
+    m: &SourcedMessage,
+) -> Result<Vec<Output>, Box<dyn std::error::Error>> {
     Ok(if m.topic == inputs.readings {
         state.measurement(&m.decode::<TrackerMeasurement>()?)
     } else if m.topic == inputs.commanded {
@@ -181,10 +239,18 @@ fn input(state: &mut TrackerState, inputs: &Inputs, m: &SourcedMessage) -> Resul
         state.station_air(Some(m.decode::<Temperature>()?.temperature), None, None);
         Vec::new()
     } else if m.topic == inputs.air[1] {
-        state.station_air(None, Some(m.decode::<FluidPressure>()?.fluid_pressure), None);
+        state.station_air(
+            None,
+            Some(m.decode::<FluidPressure>()?.fluid_pressure),
+            None,
+        );
         Vec::new()
     } else if m.topic == inputs.air[2] {
-        state.station_air(None, None, Some(m.decode::<RelativeHumidity>()?.relative_humidity));
+        state.station_air(
+            None,
+            None,
+            Some(m.decode::<RelativeHumidity>()?.relative_humidity),
+        );
         Vec::new()
     } else {
         Vec::new()

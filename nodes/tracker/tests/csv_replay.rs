@@ -16,15 +16,25 @@ use nalgebra::{Rotation3, Vector3};
 
 #[test]
 fn csv_export_replays_with_bad_rows_reported() {
-    let dir = std::env::temp_dir().join(format!("metrocell-tracker-csv-test-{}", std::process::id()));
+    let dir =
+        std::env::temp_dir().join(format!("metrocell-tracker-csv-test-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     // tracker pose in the machine frame: q = R p + t
     let r = Rotation3::from_euler_angles(0.001, -0.002, 0.7);
     let t = Vector3::new(-1.5, 0.3, 0.4);
-    let air = AirData { temperature: 20.5, pressure: 100_500.0, humidity: 0.4 };
+    let air = AirData {
+        temperature: 20.5,
+        pressure: 100_500.0,
+        humidity: 0.4,
+    };
     let n = air.refractive_index();
-    let nominals = [Vector3::new(0.0, 0.0, 0.0), Vector3::new(0.4, 0.0, 0.1), Vector3::new(0.4, 0.3, 0.0), Vector3::new(0.0, 0.3, 0.2)];
+    let nominals = [
+        Vector3::new(0.0, 0.0, 0.0),
+        Vector3::new(0.4, 0.0, 0.1),
+        Vector3::new(0.4, 0.3, 0.0),
+        Vector3::new(0.0, 0.3, 0.2),
+    ];
     let mut csv = String::from("timestamp,point_id,measured_x,measured_y,measured_z,u_x,u_y,u_z,joint.x,joint.y,joint.z,temperature.air,pressure,humidity\n");
     let mut time = 1_714_557_600.0;
     for (k, q) in nominals.iter().enumerate() {
@@ -37,10 +47,19 @@ fn csv_export_replays_with_bad_rows_reported() {
                 (2, 5) => (p.x * 100.0, p.y * 100.0, p.z * 100.0), // beyond max_range
                 _ => (p.x, p.y, p.z),
             };
-            writeln!(csv, "{time:.3},point_{k},{x},{y},{z},1e-5,1e-5,1e-5,{},{},{},{},{},{}", q.x, q.y, q.z, air.temperature, air.pressure, air.humidity).unwrap();
+            writeln!(
+                csv,
+                "{time:.3},point_{k},{x},{y},{z},1e-5,1e-5,1e-5,{},{},{},{},{},{}",
+                q.x, q.y, q.z, air.temperature, air.pressure, air.humidity
+            )
+            .unwrap();
         }
         time += 5.0;
-        writeln!(csv, "{time:.3},point_{k},garbage,0,0,1e-5,1e-5,1e-5,0,0,0,20,1e5,0.4").unwrap();
+        writeln!(
+            csv,
+            "{time:.3},point_{k},garbage,0,0,1e-5,1e-5,1e-5,0,0,0,20,1e5,0.4"
+        )
+        .unwrap();
     }
     let path = dir.join("export.csv");
     std::fs::write(&path, csv).unwrap();
@@ -50,18 +69,44 @@ fn csv_export_replays_with_bad_rows_reported() {
         .arg(&path)
         .arg("--output")
         .arg(&output)
-        .args(["--ros-args", "-p", "registration_points:=4", "-p", "max_range:=50.0"])
+        .args([
+            "--ros-args",
+            "-p",
+            "registration_points:=4",
+            "-p",
+            "max_range:=50.0",
+        ])
         .output()
         .unwrap();
     let stderr = String::from_utf8_lossy(&run.stderr);
     assert!(run.status.success(), "{stderr}");
-    assert!(stderr.contains("rejected_readings=1") && stderr.contains("readings=39"), "{stderr}");
-    assert!(stderr.contains("range = ") && stderr.contains("outside"), "the out-of-range reading is named: {stderr}");
-    assert!(stderr.contains("'NaN' is not finite") && stderr.contains("'garbage' is not a number"), "the importer names bad cells: {stderr}");
+    assert!(
+        stderr.contains("rejected_readings=1") && stderr.contains("readings=39"),
+        "{stderr}"
+    );
+    assert!(
+        stderr.contains("range = ") && stderr.contains("outside"),
+        "the out-of-range reading is named: {stderr}"
+    );
+    assert!(
+        stderr.contains("'NaN' is not finite") && stderr.contains("'garbage' is not a number"),
+        "the importer names bad cells: {stderr}"
+    );
     let mut s = BagSource::open(&output).unwrap();
     s.subscribe::<MeasuredPoint>("/measured_points").unwrap();
-    let points: Vec<MeasuredPoint> = s.messages().unwrap().map(|m| m.unwrap().decode().unwrap()).collect();
-    assert_eq!(points.iter().map(|p| p.point_id.as_str()).collect::<Vec<_>>(), ["point_0", "point_1", "point_2", "point_3"], "{stderr}");
+    let points: Vec<MeasuredPoint> = s
+        .messages()
+        .unwrap()
+        .map(|m| m.unwrap().decode().unwrap())
+        .collect();
+    assert_eq!(
+        points
+            .iter()
+            .map(|p| p.point_id.as_str())
+            .collect::<Vec<_>>(),
+        ["point_0", "point_1", "point_2", "point_3"],
+        "{stderr}"
+    );
     for (p, q) in points.iter().zip(&nominals) {
         assert_eq!((p.nominal.x, p.nominal.y, p.nominal.z), (q.x, q.y, q.z));
         let m = Vector3::new(p.measured.x, p.measured.y, p.measured.z);

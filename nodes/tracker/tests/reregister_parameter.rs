@@ -24,25 +24,43 @@ use metrocell_node::{qos, MetrocellNode};
 mod common;
 use common::{inputs, record_twin, wait_for_tracker, Input};
 
-const ARGS: [&str; 5] = ["--ros-args", "-p", "tool_offset:=[0.0, 0.0, -0.1]", "-p", "registration_points:=4"];
-
+const ARGS: [&str; 5] = [
+    "--ros-args",
+    "-p",
+    "tool_offset:=[0.0, 0.0, -0.1]",
+    "-p",
+    "registration_points:=4",
+];
 
 /// The tracker node's `reregistrations` counter in a /diagnostics message, if it is there.
 fn reregistrations(d: &DiagnosticArray) -> Option<String> {
-    d.status.iter().filter(|s| s.name.contains("tracker")).flat_map(|s| &s.values).find(|kv| kv.key == "reregistrations").map(|kv| kv.value.clone())
+    d.status
+        .iter()
+        .filter(|s| s.name.contains("tracker"))
+        .flat_map(|s| &s.values)
+        .find(|kv| kv.key == "reregistrations")
+        .map(|kv| kv.value.clone())
 }
 
 #[test]
 fn setting_the_reregister_parameter_through_the_service_fits_the_pose_again() {
     metrocell_node::testing::require_isolated_network();
-    let tmp = std::env::temp_dir().join(format!("metrocell-tracker-reregister-{}", std::process::id()));
+    let tmp = std::env::temp_dir().join(format!(
+        "metrocell-tracker-reregister-{}",
+        std::process::id()
+    ));
     let _ = std::fs::remove_dir_all(&tmp);
     std::fs::create_dir_all(&tmp).unwrap();
     let input = tmp.join("input");
     record_twin(&input);
     let inputs = inputs(&input);
 
-    let mut child = Command::new(env!("CARGO_BIN_EXE_metrocell-tracker")).args(ARGS).stdout(Stdio::null()).stderr(Stdio::piped()).spawn().unwrap();
+    let mut child = Command::new(env!("CARGO_BIN_EXE_metrocell-tracker"))
+        .args(ARGS)
+        .stdout(Stdio::null())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
     let log = Arc::new(Mutex::new(String::new()));
     let stderr = child.stderr.take().unwrap();
     let log_writer = Arc::clone(&log);
@@ -55,16 +73,32 @@ fn setting_the_reregister_parameter_through_the_service_fits_the_pose_again() {
     });
     let _node = KillOnDrop(child);
 
-    let mut peer = MetrocellNode::builder("tracker_test_peer").diagnostics_period(None).handle_signals(false).build().unwrap();
-    let readings = peer.publisher::<TrackerMeasurement>("/tracker/measurements", qos::reliable()).unwrap();
-    let commanded = peer.publisher::<JointState>("/machine/commanded_joint_states", qos::sensor_data()).unwrap();
-    let pose_sub = peer.subscription::<PoseWithCovarianceStamped>("/tracker/pose", qos::latched()).unwrap();
-    let tf_sub = peer.subscription::<TFMessage>("/tf_static", qos::latched()).unwrap();
-    let diag_sub = peer.subscription::<DiagnosticArray>("/diagnostics", qos::reliable()).unwrap();
+    let mut peer = MetrocellNode::builder("tracker_test_peer")
+        .diagnostics_period(None)
+        .handle_signals(false)
+        .build()
+        .unwrap();
+    let readings = peer
+        .publisher::<TrackerMeasurement>("/tracker/measurements", qos::reliable())
+        .unwrap();
+    let commanded = peer
+        .publisher::<JointState>("/machine/commanded_joint_states", qos::sensor_data())
+        .unwrap();
+    let pose_sub = peer
+        .subscription::<PoseWithCovarianceStamped>("/tracker/pose", qos::latched())
+        .unwrap();
+    let tf_sub = peer
+        .subscription::<TFMessage>("/tf_static", qos::latched())
+        .unwrap();
+    let diag_sub = peer
+        .subscription::<DiagnosticArray>("/diagnostics", qos::reliable())
+        .unwrap();
     wait_for_tracker(&peer);
 
     let (mut poses, mut tfs, mut counter) = (Vec::new(), 0usize, None);
-    let collect = |poses: &mut Vec<PoseWithCovarianceStamped>, tfs: &mut usize, counter: &mut Option<String>| {
+    let collect = |poses: &mut Vec<PoseWithCovarianceStamped>,
+                   tfs: &mut usize,
+                   counter: &mut Option<String>| {
         while let Ok(Some((p, _))) = pose_sub.take() {
             poses.push(p);
         }
@@ -79,7 +113,8 @@ fn setting_the_reregister_parameter_through_the_service_fits_the_pose_again() {
     };
     // one client for both requests (crates/node testing.rs: a fresh client per request races
     // the service's discovery of its answer reader)
-    let mut parameters = RemoteParameterClient::new(&mut peer, "/tracker").expect("a client of /tracker/set_parameters");
+    let mut parameters = RemoteParameterClient::new(&mut peer, "/tracker")
+        .expect("a client of /tracker/set_parameters");
     let mut set_at = None;
     for (k, i) in inputs.iter().enumerate() {
         match i {
@@ -94,32 +129,67 @@ fn setting_the_reregister_parameter_through_the_service_fits_the_pose_again() {
         collect(&mut poses, &mut tfs, &mut counter);
         if set_at.is_none() && !poses.is_empty() {
             // registered from the first 4 targets: the tracker "was moved"
-            parameters.set(&mut peer, "reregister", true.into(), Duration::from_secs(20)).expect("set reregister through the service");
+            parameters
+                .set(
+                    &mut peer,
+                    "reregister",
+                    true.into(),
+                    Duration::from_secs(20),
+                )
+                .expect("set reregister through the service");
             set_at = Some(k);
         }
     }
     let set_at = set_at.expect("no pose registered from the first targets");
-    eprintln!("first pose after input {set_at} of {}; reregister set through the service", inputs.len());
+    eprintln!(
+        "first pose after input {set_at} of {}; reregister set through the service",
+        inputs.len()
+    );
     let deadline = Instant::now() + Duration::from_secs(10);
     while (poses.len() < 2 || counter.as_deref() != Some("1")) && Instant::now() < deadline {
         collect(&mut poses, &mut tfs, &mut counter);
         std::thread::sleep(Duration::from_millis(20));
     }
     let log_text = log.lock().unwrap().clone();
-    assert_eq!(poses.len(), 2, "a second pose after the re-registration; log:\n{log_text}");
+    assert_eq!(
+        poses.len(),
+        2,
+        "a second pose after the re-registration; log:\n{log_text}"
+    );
     assert_eq!(tfs, 2, "and a second /tf_static");
     assert!(poses[1].header.stamp.nanos() > poses[0].header.stamp.nanos());
     let (a, b) = (&poses[0].pose.pose.position, &poses[1].pose.pose.position);
-    assert!(((a.x - b.x).powi(2) + (a.y - b.y).powi(2) + (a.z - b.z).powi(2)).sqrt() < 1e-3, "the tracker did not move: the same pose again");
-    assert_eq!(counter.as_deref(), Some("1"), "/diagnostics reregistrations");
-    assert!(log_text.contains("re-registering the tracker pose (parameter reregister set true)"), "{log_text}");
+    assert!(
+        ((a.x - b.x).powi(2) + (a.y - b.y).powi(2) + (a.z - b.z).powi(2)).sqrt() < 1e-3,
+        "the tracker did not move: the same pose again"
+    );
+    assert_eq!(
+        counter.as_deref(),
+        Some("1"),
+        "/diagnostics reregistrations"
+    );
+    assert!(
+        log_text.contains("re-registering the tracker pose (parameter reregister set true)"),
+        "{log_text}"
+    );
     // the node reset the parameter: setting it true again is a change, and is acted on again
     let deadline = Instant::now() + Duration::from_secs(10);
-    parameters.set(&mut peer, "reregister", true.into(), Duration::from_secs(20)).unwrap();
+    parameters
+        .set(
+            &mut peer,
+            "reregister",
+            true.into(),
+            Duration::from_secs(20),
+        )
+        .unwrap();
     while counter.as_deref() != Some("2") && Instant::now() < deadline {
         collect(&mut poses, &mut tfs, &mut counter);
         std::thread::sleep(Duration::from_millis(20));
     }
-    assert_eq!(counter.as_deref(), Some("2"), "a second request after the reset is acted on");
+    assert_eq!(
+        counter.as_deref(),
+        Some("2"),
+        "a second request after the reset is acted on"
+    );
     let _ = std::fs::remove_dir_all(&tmp);
 }

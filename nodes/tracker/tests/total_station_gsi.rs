@@ -35,7 +35,11 @@ fn blocks() -> Vec<(&'static str, &'static str, f64, f64, f64)> {
 
 /// The hand conversion: Hz clockwise from x seen from above, V from the zenith.
 fn by_hand(hz: f64, v: f64, sd: f64) -> [f64; 3] {
-    [sd * v.sin() * hz.cos(), -sd * v.sin() * hz.sin(), sd * v.cos()]
+    [
+        sd * v.sin() * hz.cos(),
+        -sd * v.sin() * hz.sin(),
+        sd * v.cos(),
+    ]
 }
 
 #[test]
@@ -60,8 +64,28 @@ fn gsi_blocks_over_tcp_come_out_as_tracker_measurements() {
     });
 
     // σ 1″, 1 mm + 2 ppm
-    let args = ["--ros-args", "-p", "backend:=tcp", "-p", "instrument:=total_station_gsi", "-p", &format!("tcp_address:={address}"), "-p", "total_station_angle_sigma:=1.0", "-p", "total_station_distance_sigma:=0.001", "-p", "total_station_distance_ppm:=2.0", "-p", "tracker_frame:=station_1"];
-    let mut child = Command::new(env!("CARGO_BIN_EXE_metrocell-tracker")).args(args).stderr(Stdio::piped()).spawn().unwrap();
+    let args = [
+        "--ros-args",
+        "-p",
+        "backend:=tcp",
+        "-p",
+        "instrument:=total_station_gsi",
+        "-p",
+        &format!("tcp_address:={address}"),
+        "-p",
+        "total_station_angle_sigma:=1.0",
+        "-p",
+        "total_station_distance_sigma:=0.001",
+        "-p",
+        "total_station_distance_ppm:=2.0",
+        "-p",
+        "tracker_frame:=station_1",
+    ];
+    let mut child = Command::new(env!("CARGO_BIN_EXE_metrocell-tracker"))
+        .args(args)
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
     let stderr = child.stderr.take().unwrap();
     let _node = Killed(child);
     let log = Arc::new(Mutex::new(Vec::<String>::new()));
@@ -72,11 +96,25 @@ fn gsi_blocks_over_tcp_come_out_as_tracker_measurements() {
         }
     });
 
-    let mut peer = MetrocellNode::builder("total_station_test").diagnostics_period(None).handle_signals(false).build().unwrap();
-    let readings = peer.subscription::<TrackerMeasurement>("/tracker/measurements", qos::stream(qos::reliable())).unwrap();
+    let mut peer = MetrocellNode::builder("total_station_test")
+        .diagnostics_period(None)
+        .handle_signals(false)
+        .build()
+        .unwrap();
+    let readings = peer
+        .subscription::<TrackerMeasurement>("/tracker/measurements", qos::stream(qos::reliable()))
+        .unwrap();
     let deadline = Instant::now() + Duration::from_secs(20);
-    while !peer.discovered_topics().iter().any(|t| t.name.ends_with("tracker/measurements")) {
-        assert!(Instant::now() < deadline, "the node's tracker/measurements was not discovered; its log: {:?}", log.lock().unwrap());
+    while !peer
+        .discovered_topics()
+        .iter()
+        .any(|t| t.name.ends_with("tracker/measurements"))
+    {
+        assert!(
+            Instant::now() < deadline,
+            "the node's tracker/measurements was not discovered; its log: {:?}",
+            log.lock().unwrap()
+        );
         std::thread::sleep(Duration::from_millis(50));
     }
     std::thread::sleep(Duration::from_secs(1));
@@ -96,36 +134,99 @@ fn gsi_blocks_over_tcp_come_out_as_tracker_measurements() {
     server.join().unwrap();
     let log = log.lock().unwrap().clone();
 
-    assert_eq!(received.iter().map(|m| m.target_id.as_str()).collect::<Vec<_>>(), ["P1", "P2", "P3", "P5"], "log: {log:?}");
+    assert_eq!(
+        received
+            .iter()
+            .map(|m| m.target_id.as_str())
+            .collect::<Vec<_>>(),
+        ["P1", "P2", "P3", "P5"],
+        "log: {log:?}"
+    );
     for (m, (_, id, hz, v, sd)) in received.iter().zip(blocks()) {
         let expected = by_hand(hz, v, sd);
         let got = [m.point.x, m.point.y, m.point.z];
         for k in 0..3 {
-            assert!((got[k] - expected[k]).abs() < 1e-12, "{id}: {got:?} vs by hand {expected:?}");
+            assert!(
+                (got[k] - expected[k]).abs() < 1e-12,
+                "{id}: {got:?} vs by hand {expected:?}"
+            );
         }
-        assert!((m.range - sd).abs() < 1e-12 && (m.elevation - (100.0 * GON - v)).abs() < 1e-12, "{id}");
-        assert!((m.azimuth + hz).abs() < 1e-12 || (m.azimuth + hz - 2.0 * std::f64::consts::PI).abs() < 1e-12, "{id}: azimuth {} vs −Hz {}", m.azimuth, -hz);
-        assert_eq!((m.header.frame_id.as_str(), m.status, m.refractive_index), ("station_1", TrackerMeasurement::STATUS_OK, 0.0));
+        assert!(
+            (m.range - sd).abs() < 1e-12 && (m.elevation - (100.0 * GON - v)).abs() < 1e-12,
+            "{id}"
+        );
+        assert!(
+            (m.azimuth + hz).abs() < 1e-12
+                || (m.azimuth + hz - 2.0 * std::f64::consts::PI).abs() < 1e-12,
+            "{id}: azimuth {} vs −Hz {}",
+            m.azimuth,
+            -hz
+        );
+        assert_eq!(
+            (m.header.frame_id.as_str(), m.status, m.refractive_index),
+            ("station_1", TrackerMeasurement::STATUS_OK, 0.0)
+        );
         assert!(m.air_temperature.is_nan() && m.air_pressure.is_nan() && m.air_humidity.is_nan());
         // along the line of sight the variance is σ_SD² = (1 mm + 2 ppm·SD)²
         let u: Vec<f64> = expected.iter().map(|c| c / sd).collect();
-        let radial: f64 = (0..3).map(|i| (0..3).map(|j| u[i] * m.covariance[3 * i + j] * u[j]).sum::<f64>()).sum();
-        assert!((radial.sqrt() - (1e-3 + 2e-6 * sd)).abs() < 1e-12, "{id}: σ along the sight {}", radial.sqrt());
+        let radial: f64 = (0..3)
+            .map(|i| {
+                (0..3)
+                    .map(|j| u[i] * m.covariance[3 * i + j] * u[j])
+                    .sum::<f64>()
+            })
+            .sum();
+        assert!(
+            (radial.sqrt() - (1e-3 + 2e-6 * sd)).abs() < 1e-12,
+            "{id}: σ along the sight {}",
+            radial.sqrt()
+        );
     }
     // the hand values of the plain cases, spelled out
-    assert!((received[0].point.x - 10.0 / 2f64.sqrt()).abs() < 1e-12 && (received[0].point.y + 10.0 / 2f64.sqrt()).abs() < 1e-12 && received[0].point.z.abs() < 1e-12);
-    assert!((received[2].point.x - 3.75).abs() < 1e-12 && (received[2].point.y + 5.0 * 0.75f64.sqrt() * 0.5).abs() < 1e-12 && (received[2].point.z - 2.5).abs() < 1e-12);
-    assert!(received.windows(2).all(|w| w[1].header.stamp.nanos() > w[0].header.stamp.nanos()), "stamps increase");
-    let warned: Vec<&String> = log.iter().filter(|l| l.contains("WARN") && l.contains(MALFORMED)).collect();
-    assert_eq!(warned.len(), 1, "one WARN naming the malformed line; log: {log:?}");
-    assert!(warned[0].contains("GSI word 2 at column 26") && warned[0].contains("not all digits"), "{}", warned[0]);
+    assert!(
+        (received[0].point.x - 10.0 / 2f64.sqrt()).abs() < 1e-12
+            && (received[0].point.y + 10.0 / 2f64.sqrt()).abs() < 1e-12
+            && received[0].point.z.abs() < 1e-12
+    );
+    assert!(
+        (received[2].point.x - 3.75).abs() < 1e-12
+            && (received[2].point.y + 5.0 * 0.75f64.sqrt() * 0.5).abs() < 1e-12
+            && (received[2].point.z - 2.5).abs() < 1e-12
+    );
+    assert!(
+        received
+            .windows(2)
+            .all(|w| w[1].header.stamp.nanos() > w[0].header.stamp.nanos()),
+        "stamps increase"
+    );
+    let warned: Vec<&String> = log
+        .iter()
+        .filter(|l| l.contains("WARN") && l.contains(MALFORMED))
+        .collect();
+    assert_eq!(
+        warned.len(),
+        1,
+        "one WARN naming the malformed line; log: {log:?}"
+    );
+    assert!(
+        warned[0].contains("GSI word 2 at column 26") && warned[0].contains("not all digits"),
+        "{}",
+        warned[0]
+    );
 }
 
 #[test]
 fn a_total_station_without_the_tcp_backend_is_refused_at_start_up() {
     metrocell_node::testing::require_isolated_network();
-    let out = Command::new(env!("CARGO_BIN_EXE_metrocell-tracker")).args(["--ros-args", "-p", "instrument:=total_station_gsi"]).output().unwrap();
+    let out = Command::new(env!("CARGO_BIN_EXE_metrocell-tracker"))
+        .args(["--ros-args", "-p", "instrument:=total_station_gsi"])
+        .output()
+        .unwrap();
     assert!(!out.status.success());
     let stderr = String::from_utf8_lossy(&out.stderr);
-    assert!(stderr.contains("instrument:=total_station_gsi") && stderr.contains("set -p backend:=tcp -p tcp_address:=HOST:PORT"), "{stderr}");
+    assert!(
+        stderr.contains("instrument:=total_station_gsi")
+            && stderr.contains("set -p backend:=tcp -p tcp_address:=HOST:PORT"),
+        "{stderr}"
+    );
 }

@@ -31,7 +31,11 @@ fn cell(path: &str) -> Cell {
 
 /// Simulate `cell` for `duration` s into `dir/input`, replay the node on it into `dir/output`.
 fn simulate_and_replay(cell: Cell, duration: f64, dir: &Path, params: &[&str]) -> (u64, PathBuf) {
-    let options = BagOptions { frames: None, clock_rate: None, ..BagOptions::default() };
+    let options = BagOptions {
+        frames: None,
+        clock_rate: None,
+        ..BagOptions::default()
+    };
     let start_ns = options.start_ns;
     let input = dir.join("input");
     write_bag(cell, duration, 7, &input, &options, |_| {}).unwrap();
@@ -40,72 +44,169 @@ fn simulate_and_replay(cell: Cell, duration: f64, dir: &Path, params: &[&str]) -
     for p in params {
         args.extend(["-p", p]);
     }
-    let run = Command::new(env!("CARGO_BIN_EXE_metrocell-tracker")).arg("--bag").arg(&input).arg("--output").arg(&output).args(&args).output().unwrap();
-    assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
-    eprintln!("{}", String::from_utf8_lossy(&run.stderr).lines().last().unwrap_or_default());
+    let run = Command::new(env!("CARGO_BIN_EXE_metrocell-tracker"))
+        .arg("--bag")
+        .arg(&input)
+        .arg("--output")
+        .arg(&output)
+        .args(&args)
+        .output()
+        .unwrap();
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    eprintln!(
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+            .lines()
+            .last()
+            .unwrap_or_default()
+    );
     (start_ns, output)
 }
 
 fn read<T: metrocell_msgs::RosMessage>(bag: &Path, topic: &str) -> Vec<T> {
     let mut s = BagSource::open(bag).unwrap();
     assert!(s.subscribe::<T>(topic).unwrap(), "output has no {topic}");
-    s.messages().unwrap().map(|m| m.unwrap().decode::<T>().unwrap()).collect()
+    s.messages()
+        .unwrap()
+        .map(|m| m.unwrap().decode::<T>().unwrap())
+        .collect()
 }
 
 #[test]
 fn warmup_is_tracked_until_the_true_settling_time() {
     let dir = scratch("warmup");
-    let c = cell(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/cells/tracker_warmup.yaml"));
+    let c = cell(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/cells/tracker_warmup.yaml"
+    ));
     // truth: the nest's range (point_0 + tool offset, seen from the tracker)
     let tracker = c.tracker.as_ref().unwrap();
-    let nest = c.machine.nominal_tool_point(&Vector3::new(c.program.points[0][0], c.program.points[0][1], c.program.points[0][2]));
+    let nest = c.machine.nominal_tool_point(&Vector3::new(
+        c.program.points[0][0],
+        c.program.points[0][1],
+        c.program.points[0][2],
+    ));
     let true_a = tracker.pose.to_instrument(&nest).norm();
     let (true_b, true_tau, on_before) = (75e-6, 5400.0, 1200.0);
     let (start_ns, out) = simulate_and_replay(
         c,
         5.0 * 3600.0,
         &dir,
-        &["warmup_target:=point_0", "warmup_elapsed_at_first_reading:=1200.0", "tool_offset:=[0.0, 0.0, -0.1]", "registration_points:=4"],
+        &[
+            "warmup_target:=point_0",
+            "warmup_elapsed_at_first_reading:=1200.0",
+            "tool_offset:=[0.0, 0.0, -0.1]",
+            "registration_points:=4",
+        ],
     );
     let dwells: Vec<TrackerMeasurement> = read(&out, "/tracker/dwells");
     assert!(dwells.len() > 350, "{} dwells", dwells.len());
-    let t_on = |d: &TrackerMeasurement| (d.header.stamp.nanos() - start_ns as i64) as f64 * 1e-9 + on_before;
+    let t_on = |d: &TrackerMeasurement| {
+        (d.header.stamp.nanos() - start_ns as i64) as f64 * 1e-9 + on_before
+    };
     let warming = |d: &TrackerMeasurement| d.status & TrackerMeasurement::STATUS_WARMING_UP != 0;
-    let first_stable = dwells.iter().position(|d| !warming(d)).expect("never stable");
+    let first_stable = dwells
+        .iter()
+        .position(|d| !warming(d))
+        .expect("never stable");
     let settled = t_on(&dwells[first_stable]);
     let truth = true_tau * 20f64.ln();
-    println!("stable from {:.1} min after power-on; true settling {:.1} min", settled / 60.0, truth / 60.0);
-    assert!((settled / truth - 1.0).abs() < 0.10, "stable at {settled} s vs true settling {truth} s");
+    println!(
+        "stable from {:.1} min after power-on; true settling {:.1} min",
+        settled / 60.0,
+        truth / 60.0
+    );
+    assert!(
+        (settled / truth - 1.0).abs() < 0.10,
+        "stable at {settled} s vs true settling {truth} s"
+    );
     let later_warming = dwells[first_stable..].iter().filter(|d| warming(d)).count();
-    assert!(later_warming * 100 <= dwells.len() - first_stable, "{later_warming} dwells flip back to warming up");
+    assert!(
+        later_warming * 100 <= dwells.len() - first_stable,
+        "{later_warming} dwells flip back to warming up"
+    );
 
-    let fit = read::<ErrorModel>(&out, "/tracker/warmup").pop().expect("no warm-up fit");
+    let fit = read::<ErrorModel>(&out, "/tracker/warmup")
+        .pop()
+        .expect("no warm-up fit");
     let sigma: Vec<f64> = (0..3).map(|i| fit.covariance[4 * i].sqrt()).collect();
-    for (k, (name, truth)) in [("A", true_a), ("B", true_b), ("tau", true_tau)].into_iter().enumerate() {
+    for (k, (name, truth)) in [("A", true_a), ("B", true_b), ("tau", true_tau)]
+        .into_iter()
+        .enumerate()
+    {
         println!("{name}: {} ± {} (truth {truth})", fit.values[k], sigma[k]);
-        assert!((fit.values[k] - truth).abs() < 2.0 * sigma[k], "{name} = {} ± {} vs truth {truth}", fit.values[k], sigma[k]);
+        assert!(
+            (fit.values[k] - truth).abs() < 2.0 * sigma[k],
+            "{name} = {} ± {} vs truth {truth}",
+            fit.values[k],
+            sigma[k]
+        );
     }
-    assert!(sigma[2] < 0.05 * true_tau, "τ determined to better than 5 %");
+    assert!(
+        sigma[2] < 0.05 * true_tau,
+        "τ determined to better than 5 %"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 
 #[test]
 fn turbulence_window_is_flagged_and_every_dwell_is_measured_once() {
     let dir = scratch("turbulence");
-    let c = cell(concat!(env!("CARGO_MANIFEST_DIR"), "/../../crates/twin/examples/cells/xfyz_shift.yaml"));
-    let points: Vec<Vector3<f64>> = c.program.points.iter().map(|p| c.machine.nominal_tool_point(&Vector3::new(p[0], p[1], p[2]))).collect();
-    let (start_ns, out) = simulate_and_replay(c, 3.5 * 3600.0, &dir, &["tool_offset:=[0.0, 0.0, -0.15]", "registration_points:=12"]);
+    let c = cell(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../crates/twin/examples/cells/xfyz_shift.yaml"
+    ));
+    let points: Vec<Vector3<f64>> = c
+        .program
+        .points
+        .iter()
+        .map(|p| {
+            c.machine
+                .nominal_tool_point(&Vector3::new(p[0], p[1], p[2]))
+        })
+        .collect();
+    let (start_ns, out) = simulate_and_replay(
+        c,
+        3.5 * 3600.0,
+        &dir,
+        &["tool_offset:=[0.0, 0.0, -0.15]", "registration_points:=12"],
+    );
     let dwells: Vec<TrackerMeasurement> = read(&out, "/tracker/dwells");
     let t = |d: &TrackerMeasurement| (d.header.stamp.nanos() - start_ns as i64) as f64 * 1e-9;
     let flagged = |d: &TrackerMeasurement| d.status & TrackerMeasurement::STATUS_TURBULENCE != 0;
     // a dwell lasts 3 s: those within 5 s of an edge of the window are neither in nor out
-    let inside: Vec<&TrackerMeasurement> = dwells.iter().filter(|d| t(d) > 3.0 * 3600.0 + 5.0 && t(d) < 3.25 * 3600.0 - 5.0).collect();
-    let outside: Vec<&TrackerMeasurement> = dwells.iter().filter(|d| t(d) < 3.0 * 3600.0 - 5.0 || t(d) > 3.25 * 3600.0 + 5.0).collect();
-    let (fi, fo) = (inside.iter().filter(|d| flagged(d)).count(), outside.iter().filter(|d| flagged(d)).count());
-    println!("turbulence: {fi}/{} dwells flagged in the window, {fo}/{} outside", inside.len(), outside.len());
-    assert!(inside.len() >= 20, "only {} dwells in the window", inside.len());
+    let inside: Vec<&TrackerMeasurement> = dwells
+        .iter()
+        .filter(|d| t(d) > 3.0 * 3600.0 + 5.0 && t(d) < 3.25 * 3600.0 - 5.0)
+        .collect();
+    let outside: Vec<&TrackerMeasurement> = dwells
+        .iter()
+        .filter(|d| t(d) < 3.0 * 3600.0 - 5.0 || t(d) > 3.25 * 3600.0 + 5.0)
+        .collect();
+    let (fi, fo) = (
+        inside.iter().filter(|d| flagged(d)).count(),
+        outside.iter().filter(|d| flagged(d)).count(),
+    );
+    println!(
+        "turbulence: {fi}/{} dwells flagged in the window, {fo}/{} outside",
+        inside.len(),
+        outside.len()
+    );
+    assert!(
+        inside.len() >= 20,
+        "only {} dwells in the window",
+        inside.len()
+    );
     assert_eq!(fi, inside.len(), "every disturbed dwell is flagged");
-    assert!((fo as f64) < 0.01 * outside.len() as f64, "{fo} of {} undisturbed dwells flagged", outside.len());
+    assert!(
+        (fo as f64) < 0.01 * outside.len() as f64,
+        "{fo} of {} undisturbed dwells flagged",
+        outside.len()
+    );
 
     // every dwell → one measured point with its program nominal
     let measured: Vec<MeasuredPoint> = read(&out, "/measured_points");
@@ -117,10 +218,19 @@ fn turbulence_window_is_flagged_and_every_dwell_is_measured_once() {
     for m in &measured {
         let i: usize = m.point_id.strip_prefix("point_").unwrap().parse().unwrap();
         let n = Vector3::new(m.nominal.x, m.nominal.y, m.nominal.z);
-        assert!((n - points[i]).norm() < 1e-9, "{}: nominal {n:?} vs program {:?}", m.point_id, points[i]);
+        assert!(
+            (n - points[i]).norm() < 1e-9,
+            "{}: nominal {n:?} vs program {:?}",
+            m.point_id,
+            points[i]
+        );
         // measured within the machine's errors (tens of µm) of the nominal
         let d = Vector3::new(m.measured.x, m.measured.y, m.measured.z) - n;
-        assert!(d.norm() < 300e-6, "{}: measured − nominal = {d:?}", m.point_id);
+        assert!(
+            d.norm() < 300e-6,
+            "{}: measured − nominal = {d:?}",
+            m.point_id
+        );
     }
     let _ = std::fs::remove_dir_all(&dir);
 }

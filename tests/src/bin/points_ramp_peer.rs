@@ -33,11 +33,19 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         let t = step * k as f64;
         let h = t / 3600.0;
         let noise = if k % 2 == 0 { 0.5e-6 } else { -0.5e-6 };
-        let mut p = MeasuredPoint { point_id: format!("p{k}"), source: MeasuredPoint::SOURCE_SIMULATION.into(), ..Default::default() };
+        let mut p = MeasuredPoint {
+            point_id: format!("p{k}"),
+            source: MeasuredPoint::SOURCE_SIMULATION.into(),
+            ..Default::default()
+        };
         p.header.stamp = Time::from_nanos(START_NS + (t * 1e9).round() as i64);
         p.header.frame_id = "machine".into();
         (p.nominal.x, p.nominal.y, p.nominal.z) = (0.1 + 0.05 * (k % 8) as f64, 0.2, 0.1);
-        (p.measured.x, p.measured.y, p.measured.z) = (p.nominal.x + 2e-6 + X_RATE_UM_PER_H * 1e-6 * h + noise, p.nominal.y - 3e-6, p.nominal.z);
+        (p.measured.x, p.measured.y, p.measured.z) = (
+            p.nominal.x + 2e-6 + X_RATE_UM_PER_H * 1e-6 * h + noise,
+            p.nominal.y - 3e-6,
+            p.nominal.z,
+        );
         p.covariance = [0.25e-12, 0.0, 0.0, 0.0, 0.25e-12, 0.0, 0.0, 0.0, 0.25e-12];
         if publisher.publish(p).is_ok() {
             k += 1;

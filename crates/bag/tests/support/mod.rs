@@ -104,7 +104,9 @@ impl<'a> CdrIn<'a> {
     }
     fn string(&mut self) -> String {
         let n = u32::from_le_bytes(self.take::<4>(4)) as usize;
-        let s = std::str::from_utf8(&self.b[self.p..self.p + n - 1]).unwrap().to_string();
+        let s = std::str::from_utf8(&self.b[self.p..self.p + n - 1])
+            .unwrap()
+            .to_string();
         self.p += n;
         s
     }
@@ -137,13 +139,31 @@ impl Temperature {
         let frame_id = c.string();
         let temperature = f64::from_le_bytes(c.take::<8>(8));
         let variance = f64::from_le_bytes(c.take::<8>(8));
-        Temperature { sec, nanosec, frame_id, temperature, variance }
+        Temperature {
+            sec,
+            nanosec,
+            frame_id,
+            temperature,
+            variance,
+        }
     }
     /// Compare with a JSON object decoded by Python (field names of the ROS type).
     pub fn assert_json(&self, v: &serde_json::Value) {
-        assert_eq!(v["header"]["stamp"]["sec"].as_i64(), Some(self.sec as i64), "{v}");
-        assert_eq!(v["header"]["stamp"]["nanosec"].as_u64(), Some(self.nanosec as u64), "{v}");
-        assert_eq!(v["header"]["frame_id"].as_str(), Some(self.frame_id.as_str()), "{v}");
+        assert_eq!(
+            v["header"]["stamp"]["sec"].as_i64(),
+            Some(self.sec as i64),
+            "{v}"
+        );
+        assert_eq!(
+            v["header"]["stamp"]["nanosec"].as_u64(),
+            Some(self.nanosec as u64),
+            "{v}"
+        );
+        assert_eq!(
+            v["header"]["frame_id"].as_str(),
+            Some(self.frame_id.as_str()),
+            "{v}"
+        );
         assert_eq!(v["temperature"].as_f64(), Some(self.temperature), "{v}");
         assert_eq!(v["variance"].as_f64(), Some(self.variance), "{v}");
     }
@@ -191,7 +211,9 @@ pub fn run_py(script: &str, args: &[&Path]) -> serde_json::Value {
 
 /// A fresh empty scratch directory under the target dir.
 pub fn scratch(name: &str) -> PathBuf {
-    let base = option_env!("CARGO_TARGET_TMPDIR").map(PathBuf::from).unwrap_or_else(std::env::temp_dir);
+    let base = option_env!("CARGO_TARGET_TMPDIR")
+        .map(PathBuf::from)
+        .unwrap_or_else(std::env::temp_dir);
     let d = base.join(format!("bag-{name}-{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&d);
     std::fs::create_dir_all(&d).unwrap();

@@ -18,22 +18,42 @@ use super::{CaptureError, Result};
 /// value when there is one (else stays 0 = the driver's current).
 pub fn requested_size(width: u32, height: u32, calibrated: Option<(u32, u32)>) -> (u32, u32) {
     match calibrated {
-        Some((cw, ch)) => (if width == 0 { cw } else { width }, if height == 0 { ch } else { height }),
+        Some((cw, ch)) => (
+            if width == 0 { cw } else { width },
+            if height == 0 { ch } else { height },
+        ),
         None => (width, height),
     }
 }
 
 /// Compare the driver's size with the request and the calibration: `Ok(Some(warning))` when the
 /// driver changed a requested dimension, `Err` when the calibration is for another size.
-pub fn check_frame_size(device: &str, requested: (u32, u32), chosen: (u32, u32), calibrated: Option<(u32, u32)>) -> Result<Option<String>> {
+pub fn check_frame_size(
+    device: &str,
+    requested: (u32, u32),
+    chosen: (u32, u32),
+    calibrated: Option<(u32, u32)>,
+) -> Result<Option<String>> {
     if let Some((cal_width, cal_height)) = calibrated {
         if (cal_width, cal_height) != chosen {
-            return Err(CaptureError::CalibrationSize { device: device.into(), width: chosen.0, height: chosen.1, cal_width, cal_height });
+            return Err(CaptureError::CalibrationSize {
+                device: device.into(),
+                width: chosen.0,
+                height: chosen.1,
+                cal_width,
+                cal_height,
+            });
         }
     }
     let changed = |want: u32, got: u32| want != 0 && want != got;
     if changed(requested.0, chosen.0) || changed(requested.1, chosen.1) {
-        let show = |v: u32| if v == 0 { "any".to_string() } else { v.to_string() };
+        let show = |v: u32| {
+            if v == 0 {
+                "any".to_string()
+            } else {
+                v.to_string()
+            }
+        };
         return Ok(Some(format!(
             "{device}: requested {}x{} but the driver chose {}x{} (the nearest size it supports; `v4l2-ctl -d {device} --list-formats-ext` lists them)",
             show(requested.0),
@@ -59,17 +79,48 @@ mod tests {
 
     #[test]
     fn a_changed_size_is_named_and_a_calibration_for_another_size_is_an_error() {
-        assert_eq!(check_frame_size("/dev/video0", (640, 480), (640, 480), None), Ok(None));
-        assert_eq!(check_frame_size("/dev/video0", (0, 0), (1280, 720), None), Ok(None), "0 = the driver's choice");
-        let w = check_frame_size("/dev/video0", (1920, 1080), (1280, 720), None).unwrap().unwrap();
-        assert!(w.contains("/dev/video0") && w.contains("1920x1080") && w.contains("1280x720"), "{w}");
-        let w = check_frame_size("/dev/video0", (1920, 0), (1280, 720), None).unwrap().unwrap();
+        assert_eq!(
+            check_frame_size("/dev/video0", (640, 480), (640, 480), None),
+            Ok(None)
+        );
+        assert_eq!(
+            check_frame_size("/dev/video0", (0, 0), (1280, 720), None),
+            Ok(None),
+            "0 = the driver's choice"
+        );
+        let w = check_frame_size("/dev/video0", (1920, 1080), (1280, 720), None)
+            .unwrap()
+            .unwrap();
+        assert!(
+            w.contains("/dev/video0") && w.contains("1920x1080") && w.contains("1280x720"),
+            "{w}"
+        );
+        let w = check_frame_size("/dev/video0", (1920, 0), (1280, 720), None)
+            .unwrap()
+            .unwrap();
         assert!(w.contains("1920xany"), "{w}");
         // Driver matches the calibration but not an explicit request: still only a warning.
-        assert!(check_frame_size("/dev/video0", (1920, 1080), (1280, 720), Some((1280, 720))).unwrap().is_some());
-        let e = check_frame_size("/dev/video2", (1280, 720), (640, 480), Some((1280, 720))).unwrap_err();
-        assert_eq!(e, CaptureError::CalibrationSize { device: "/dev/video2".into(), width: 640, height: 480, cal_width: 1280, cal_height: 720 });
+        assert!(
+            check_frame_size("/dev/video0", (1920, 1080), (1280, 720), Some((1280, 720)))
+                .unwrap()
+                .is_some()
+        );
+        let e = check_frame_size("/dev/video2", (1280, 720), (640, 480), Some((1280, 720)))
+            .unwrap_err();
+        assert_eq!(
+            e,
+            CaptureError::CalibrationSize {
+                device: "/dev/video2".into(),
+                width: 640,
+                height: 480,
+                cal_width: 1280,
+                cal_height: 720
+            }
+        );
         let m = e.to_string();
-        assert!(m.contains("/dev/video2") && m.contains("640x480") && m.contains("1280x720"), "{m}");
+        assert!(
+            m.contains("/dev/video2") && m.contains("640x480") && m.contains("1280x720"),
+            "{m}"
+        );
     }
 }

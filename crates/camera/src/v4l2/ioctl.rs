@@ -29,7 +29,16 @@ pub const PIX_FMT_YUYV: u32 = fourcc(b"YUYV");
 
 /// A fourcc as its four characters, for messages.
 pub fn fourcc_name(v: u32) -> String {
-    v.to_le_bytes().iter().map(|&b| if b.is_ascii_graphic() || b == b' ' { b as char } else { '?' }).collect()
+    v.to_le_bytes()
+        .iter()
+        .map(|&b| {
+            if b.is_ascii_graphic() || b == b' ' {
+                b as char
+            } else {
+                '?'
+            }
+        })
+        .collect()
 }
 
 #[repr(C)]
@@ -180,6 +189,13 @@ mod tests {
         // Buffer flags, as #defined in /usr/include/linux/videodev2.h (Linux 6.x uapi).
         assert_eq!(BUF_FLAG_ERROR, 0x40);
         assert_eq!(BUF_FLAG_TIMESTAMP_MASK, 0xe000);
-        assert_eq!((BUF_FLAG_TIMESTAMP_UNKNOWN, BUF_FLAG_TIMESTAMP_MONOTONIC, BUF_FLAG_TIMESTAMP_COPY), (0, 0x2000, 0x4000));
+        assert_eq!(
+            (
+                BUF_FLAG_TIMESTAMP_UNKNOWN,
+                BUF_FLAG_TIMESTAMP_MONOTONIC,
+                BUF_FLAG_TIMESTAMP_COPY
+            ),
+            (0, 0x2000, 0x4000)
+        );
     }
 }

@@ -31,15 +31,33 @@ pub enum CaptureError {
     #[error("{device}: not a V4L2 device ({reason})")]
     NotV4l2 { device: String, reason: String },
     #[error("{device} ({card}): not a video capture device with streaming I/O (device caps {caps:#010x})")]
-    NotCapture { device: String, card: String, caps: u32 },
+    NotCapture {
+        device: String,
+        card: String,
+        caps: u32,
+    },
     #[error("{device}: pixel format {wanted} not supported by the driver (it offers {offered}); supported here: GREY, YUYV")]
-    Format { device: String, wanted: String, offered: String },
+    Format {
+        device: String,
+        wanted: String,
+        offered: String,
+    },
     #[error("{device}: {call} failed ({reason})")]
-    Ioctl { device: String, call: &'static str, reason: String },
+    Ioctl {
+        device: String,
+        call: &'static str,
+        reason: String,
+    },
     #[error("{0}")]
     Frame(String),
     #[error("{device}: the driver delivers {width}x{height} frames but camera_info is calibrated for {cal_width}x{cal_height}; a calibration only holds at its own resolution: request {cal_width}x{cal_height} (-p width:={cal_width} -p height:={cal_height}) or use a camera_info made at {width}x{height}")]
-    CalibrationSize { device: String, width: u32, height: u32, cal_width: u32, cal_height: u32 },
+    CalibrationSize {
+        device: String,
+        width: u32,
+        height: u32,
+        cal_width: u32,
+        cal_height: u32,
+    },
     #[error("V4L2 capture needs 64-bit Linux")]
     Unsupported,
 }

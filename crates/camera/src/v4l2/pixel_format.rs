@@ -43,18 +43,30 @@ impl PixelFormat {
     }
 }
 
-fn check(format: PixelFormat, width: u32, height: u32, bytes_per_line: u32, len: usize) -> Result<()> {
+fn check(
+    format: PixelFormat,
+    width: u32,
+    height: u32,
+    bytes_per_line: u32,
+    len: usize,
+) -> Result<()> {
     let bad = |reason: String| CaptureError::Frame(format!("{format:?} frame: {reason}"));
     if width == 0 || height == 0 {
         return Err(bad(format!("empty frame {width}x{height}")));
     }
     if format == PixelFormat::Yuyv && width % 2 != 0 {
-        return Err(bad(format!("YUYV width {width} is odd (pixels come in pairs)")));
+        return Err(bad(format!(
+            "YUYV width {width} is odd (pixels come in pairs)"
+        )));
     }
     if (bytes_per_line as u64) < width as u64 * format.bytes_per_pixel() as u64 {
-        return Err(bad(format!("bytes_per_line {bytes_per_line} < width {width} × {} B", format.bytes_per_pixel())));
+        return Err(bad(format!(
+            "bytes_per_line {bytes_per_line} < width {width} × {} B",
+            format.bytes_per_pixel()
+        )));
     }
-    let need = bytes_per_line as usize * (height as usize - 1) + (width * format.bytes_per_pixel()) as usize;
+    let need = bytes_per_line as usize * (height as usize - 1)
+        + (width * format.bytes_per_pixel()) as usize;
     if len < need {
         return Err(bad(format!("buffer holds {len} B, {need} B needed for {width}x{height} with {bytes_per_line} B per line")));
     }
@@ -63,13 +75,25 @@ fn check(format: PixelFormat, width: u32, height: u32, bytes_per_line: u32, len:
 
 /// Convert one frame to the packed rows of a sensor_msgs/Image with encoding
 /// [`PixelFormat::ros_encoding`] and step [`PixelFormat::converted_step`].
-pub fn convert_frame(format: PixelFormat, width: u32, height: u32, bytes_per_line: u32, buf: &[u8]) -> Result<Vec<u8>> {
+pub fn convert_frame(
+    format: PixelFormat,
+    width: u32,
+    height: u32,
+    bytes_per_line: u32,
+    buf: &[u8],
+) -> Result<Vec<u8>> {
     check(format, width, height, bytes_per_line, buf.len())?;
     let row_bytes = (width * format.bytes_per_pixel()) as usize;
-    let rows = || buf.chunks(bytes_per_line as usize).take(height as usize).map(|r| &r[..row_bytes]);
+    let rows = || {
+        buf.chunks(bytes_per_line as usize)
+            .take(height as usize)
+            .map(|r| &r[..row_bytes])
+    };
     Ok(match format {
         // one copy when lines are unpadded, else one copy per line
-        PixelFormat::Grey if bytes_per_line as usize == row_bytes => buf[..row_bytes * height as usize].to_vec(),
+        PixelFormat::Grey if bytes_per_line as usize == row_bytes => {
+            buf[..row_bytes * height as usize].to_vec()
+        }
         PixelFormat::Grey => {
             let mut out = Vec::with_capacity(row_bytes * height as usize);
             rows().for_each(|r| out.extend_from_slice(r));
@@ -92,7 +116,11 @@ pub fn convert_frame(format: PixelFormat, width: u32, height: u32, bytes_per_lin
 
 fn yuv_to_rgb(c: i32, d: i32, e: i32) -> [u8; 3] {
     let clamp = |v: i32| (v >> 8).clamp(0, 255) as u8;
-    [clamp(298 * c + 409 * e + 128), clamp(298 * c - 100 * d - 208 * e + 128), clamp(298 * c + 516 * d + 128)]
+    [
+        clamp(298 * c + 409 * e + 128),
+        clamp(298 * c - 100 * d - 208 * e + 128),
+        clamp(298 * c + 516 * d + 128),
+    ]
 }
 
 #[cfg(test)]
@@ -103,18 +131,39 @@ mod tests {
     fn reference(y: f64, u: f64, v: f64) -> [f64; 3] {
         let (c, d, e) = (y - 16.0, u - 128.0, v - 128.0);
         let k = 255.0 / 219.0;
-        [k * c + 1.402 * 255.0 / 224.0 * e, k * c - 0.344136 * 255.0 / 224.0 * d - 0.714136 * 255.0 / 224.0 * e, k * c + 1.772 * 255.0 / 224.0 * d]
-            .map(|x| x.clamp(0.0, 255.0))
+        [
+            k * c + 1.402 * 255.0 / 224.0 * e,
+            k * c - 0.344136 * 255.0 / 224.0 * d - 0.714136 * 255.0 / 224.0 * e,
+            k * c + 1.772 * 255.0 / 224.0 * d,
+        ]
+        .map(|x| x.clamp(0.0, 255.0))
     }
 
     #[test]
     fn yuyv_matches_bt601_and_known_colours() {
         // Black, white and the BT.601 limited-range primaries.
-        for (yuv, rgb) in [([16, 128, 128], [0, 0, 0]), ([235, 128, 128], [255, 255, 255]), ([81, 90, 240], [255, 0, 0]), ([145, 54, 34], [0, 255, 0]), ([41, 240, 110], [0, 0, 255])] {
-            let data = convert_frame(PixelFormat::Yuyv, 2, 1, 4, &[yuv[0], yuv[1], yuv[0], yuv[2]]).unwrap();
+        for (yuv, rgb) in [
+            ([16, 128, 128], [0, 0, 0]),
+            ([235, 128, 128], [255, 255, 255]),
+            ([81, 90, 240], [255, 0, 0]),
+            ([145, 54, 34], [0, 255, 0]),
+            ([41, 240, 110], [0, 0, 255]),
+        ] {
+            let data = convert_frame(
+                PixelFormat::Yuyv,
+                2,
+                1,
+                4,
+                &[yuv[0], yuv[1], yuv[0], yuv[2]],
+            )
+            .unwrap();
             assert_eq!((data.len(), PixelFormat::Yuyv.converted_step(2)), (6, 6));
             for (got, want) in data[..3].iter().zip(rgb) {
-                assert!((*got as i32 - want).abs() <= 2, "YUV {yuv:?} → {:?}, expected ≈ {rgb:?}", &data[..3]);
+                assert!(
+                    (*got as i32 - want).abs() <= 2,
+                    "YUV {yuv:?} → {:?}, expected ≈ {rgb:?}",
+                    &data[..3]
+                );
             }
             assert_eq!(data[..3], data[3..], "both pixels of a pair share U, V");
         }
@@ -125,7 +174,12 @@ mod tests {
                     let got = yuv_to_rgb(y - 16, u - 128, v - 128);
                     let want = reference(y as f64, u as f64, v as f64);
                     for k in 0..3 {
-                        assert!((got[k] as f64 - want[k]).abs() <= 1.0, "YUV ({y}, {u}, {v}) channel {k}: {} vs {:.2}", got[k], want[k]);
+                        assert!(
+                            (got[k] as f64 - want[k]).abs() <= 1.0,
+                            "YUV ({y}, {u}, {v}) channel {k}: {} vs {:.2}",
+                            got[k],
+                            want[k]
+                        );
                     }
                 }
             }
@@ -135,14 +189,30 @@ mod tests {
     #[test]
     fn grey_drops_line_padding_and_bad_buffers_are_named() {
         let buf = [1, 2, 3, 0xee, 4, 5, 6, 0xee];
-        assert_eq!(convert_frame(PixelFormat::Grey, 3, 2, 4, &buf).unwrap(), [1, 2, 3, 4, 5, 6]);
-        assert_eq!(convert_frame(PixelFormat::Grey, 4, 2, 4, &buf).unwrap(), buf, "unpadded lines: the buffer as is");
+        assert_eq!(
+            convert_frame(PixelFormat::Grey, 3, 2, 4, &buf).unwrap(),
+            [1, 2, 3, 4, 5, 6]
+        );
+        assert_eq!(
+            convert_frame(PixelFormat::Grey, 4, 2, 4, &buf).unwrap(),
+            buf,
+            "unpadded lines: the buffer as is"
+        );
         // The last line needs no padding.
         assert!(convert_frame(PixelFormat::Grey, 3, 2, 4, &buf[..7]).is_ok());
         let e = convert_frame(PixelFormat::Grey, 3, 2, 4, &buf[..6]).unwrap_err();
-        assert!(e.to_string().contains("6 B") && e.to_string().contains("7 B"), "{e}");
-        assert!(convert_frame(PixelFormat::Yuyv, 3, 1, 6, &[0; 6]).unwrap_err().to_string().contains("odd"));
-        assert!(convert_frame(PixelFormat::Yuyv, 2, 1, 2, &[0; 4]).unwrap_err().to_string().contains("bytes_per_line"));
+        assert!(
+            e.to_string().contains("6 B") && e.to_string().contains("7 B"),
+            "{e}"
+        );
+        assert!(convert_frame(PixelFormat::Yuyv, 3, 1, 6, &[0; 6])
+            .unwrap_err()
+            .to_string()
+            .contains("odd"));
+        assert!(convert_frame(PixelFormat::Yuyv, 2, 1, 2, &[0; 4])
+            .unwrap_err()
+            .to_string()
+            .contains("bytes_per_line"));
         assert!(convert_frame(PixelFormat::Grey, 0, 1, 1, &[]).is_err());
     }
 }

@@ -6,7 +6,7 @@
 
 use std::collections::BTreeMap;
 
-use metrocell_diagnose::{diagnose, DeclaredModel, Diagnosis, DiagnoseOptions};
+use metrocell_diagnose::{diagnose, DeclaredModel, DiagnoseOptions, Diagnosis};
 use metrocell_estimation::{MeasurementRecord, RecordFrame, RecordKind, RecordSet};
 use metrocell_physics::{Signals, TemperatureTimeline};
 use metrocell_twin::{Cell, CellModel, Sample, Simulation};
@@ -83,7 +83,11 @@ pub struct Take {
 
 impl Default for Take {
     fn default() -> Self {
-        Self { moving: false, every: 3, histories: false }
+        Self {
+            moving: false,
+            every: 3,
+            histories: false,
+        }
     }
 }
 
@@ -92,7 +96,12 @@ pub fn twin_records(cell_text: &str, hours: f64, seed: u64, take: Take) -> TwinR
     let cell = Cell::from_yaml_str(cell_text, "test cell").expect("test cell");
     let truth_for_records = Cell::from_yaml_str(cell_text, "test cell").unwrap();
     let sim = Simulation::new(cell, hours * 3600.0, seed).expect("simulation");
-    let powered = sim.cell().tracker.as_ref().map(|t| t.powered_on_before_start).unwrap_or(0.0);
+    let powered = sim
+        .cell()
+        .tracker
+        .as_ref()
+        .map(|t| t.powered_on_before_start)
+        .unwrap_or(0.0);
     let mut latest: BTreeMap<String, f64> = BTreeMap::new();
     // one timeline shared by every record; each record reads it up to its own time
     let history = std::sync::Arc::new(TemperatureTimeline::new());
@@ -104,14 +113,20 @@ pub fn twin_records(cell_text: &str, hours: f64, seed: u64, take: Take) -> TwinR
         match sample {
             Sample::Temperature(t) => {
                 latest.insert(t.sensor.to_string(), t.value);
-                let last = last_history_t.entry(t.sensor.to_string()).or_insert(f64::NEG_INFINITY);
+                let last = last_history_t
+                    .entry(t.sensor.to_string())
+                    .or_insert(f64::NEG_INFINITY);
                 if t.t - *last >= 60.0 {
                     *last = t.t;
-                    history.push(&t.sensor, t.t, t.value).expect("the twin's samples advance in time");
+                    history
+                        .push(&t.sensor, t.t, t.value)
+                        .expect("the twin's samples advance in time");
                 }
             }
             Sample::Tracker(s) => {
-                if s.status != metrocell_twin::TrackerStatus::Ok || !s.point.iter().all(|v| v.is_finite()) {
+                if s.status != metrocell_twin::TrackerStatus::Ok
+                    || !s.point.iter().all(|v| v.is_finite())
+                {
                     continue;
                 }
                 let ms = sim.cell().program.state_at(s.t);
@@ -126,8 +141,19 @@ pub fn twin_records(cell_text: &str, hours: f64, seed: u64, take: Take) -> TwinR
                 if count % take.every != 0 {
                     continue;
                 }
-                let mut sig = Signals { air_temperature: Some(s.air_temperature), air_pressure: Some(s.air_pressure), air_humidity: Some(s.air_humidity), time_since_power_on: Some(s.t + powered), ..Default::default() };
-                model.set_motion(&mut sig, ms.q.as_slice(), ms.velocity.as_slice(), &ms.approach);
+                let mut sig = Signals {
+                    air_temperature: Some(s.air_temperature),
+                    air_pressure: Some(s.air_pressure),
+                    air_humidity: Some(s.air_humidity),
+                    time_since_power_on: Some(s.t + powered),
+                    ..Default::default()
+                };
+                model.set_motion(
+                    &mut sig,
+                    ms.q.as_slice(),
+                    ms.velocity.as_slice(),
+                    &ms.approach,
+                );
                 sig.temperatures = latest.clone();
                 if take.histories {
                     sig.timeline = Some(history.clone());
@@ -147,14 +173,33 @@ pub fn twin_records(cell_text: &str, hours: f64, seed: u64, take: Take) -> TwinR
             _ => {}
         }
     }
-    TwinRecords { records: RecordSet { check: Vec::new(), frame: RecordFrame::Instrument("tracker".into()), records: out, rejected: vec![], sources: vec![] }, cell: truth_for_records }
+    TwinRecords {
+        records: RecordSet {
+            check: Vec::new(),
+            frame: RecordFrame::Instrument("tracker".into()),
+            records: out,
+            rejected: vec![],
+            sources: vec![],
+        },
+        cell: truth_for_records,
+    }
 }
 
 /// Diagnose `records` against the model file `model_text` (read as `metrocell diagnose` reads
 /// a model: crates/twin `CellModel`).
-pub fn try_run(model_text: &str, records: &RecordSet, options: &DiagnoseOptions) -> Result<Diagnosis, metrocell_diagnose::DiagnoseError> {
-    let m = CellModel::from_yaml_str_in(model_text, "model.yaml", std::path::Path::new(".")).expect("model file");
-    let declared = DeclaredModel { machine: &m.machine, machine_terms: &m.machine_terms, instrument_terms: &m.instrument_terms, setup: &m.setup };
+pub fn try_run(
+    model_text: &str,
+    records: &RecordSet,
+    options: &DiagnoseOptions,
+) -> Result<Diagnosis, metrocell_diagnose::DiagnoseError> {
+    let m = CellModel::from_yaml_str_in(model_text, "model.yaml", std::path::Path::new("."))
+        .expect("model file");
+    let declared = DeclaredModel {
+        machine: &m.machine,
+        machine_terms: &m.machine_terms,
+        instrument_terms: &m.instrument_terms,
+        setup: &m.setup,
+    };
     diagnose(&declared, records, options)
 }
 
@@ -164,7 +209,11 @@ pub fn run(model_text: &str, records: &RecordSet, options: &DiagnoseOptions) -> 
 
 /// Add a workpiece-frame displacement `f(t, commanded position)` to every measured point (in the
 /// tracker frame of the records): structure from outside the catalog.
-pub fn add_structure(records: &mut RecordSet, cell: &Cell, f: impl Fn(f64, &Vector3<f64>) -> Vector3<f64>) {
+pub fn add_structure(
+    records: &mut RecordSet,
+    cell: &Cell,
+    f: impl Fn(f64, &Vector3<f64>) -> Vector3<f64>,
+) {
     let r: Matrix3<f64> = cell.tracker.as_ref().unwrap().pose.rotation;
     for rec in &mut records.records {
         let p = Vector3::new(rec.q[0], rec.q[1], rec.q[2]);
@@ -176,7 +225,11 @@ pub fn add_structure(records: &mut RecordSet, cell: &Cell, f: impl Fn(f64, &Vect
 pub fn truth(cell: &Cell, name: &str) -> f64 {
     let instruments = cell.tracker_terms().unwrap();
     let m = cell.forward_model(&instruments).unwrap();
-    let k = m.param_names().iter().position(|n| n == name).unwrap_or_else(|| panic!("{name} not in the truth"));
+    let k = m
+        .param_names()
+        .iter()
+        .position(|n| n == name)
+        .unwrap_or_else(|| panic!("{name} not in the truth"));
     m.params()[k]
 }
 
@@ -185,13 +238,35 @@ pub fn show(d: &Diagnosis) {
     let r = &d.report;
     eprintln!("{}", r.summary);
     for f in &r.findings {
-        eprintln!("  finding {} [{}]: {:?}", f.label, f.variant, f.parameters.iter().map(|(k, v)| format!("{k}={:.3e}±{:.1e}", v.value, v.sigma.unwrap_or(f64::NAN))).collect::<Vec<_>>());
+        eprintln!(
+            "  finding {} [{}]: {:?}",
+            f.label,
+            f.variant,
+            f.parameters
+                .iter()
+                .map(|(k, v)| format!("{k}={:.3e}±{:.1e}", v.value, v.sigma.unwrap_or(f64::NAN)))
+                .collect::<Vec<_>>()
+        );
     }
     for u in &r.unexplained {
         eprintln!("  unexplained: {}", u.statement);
     }
     for s in &r.selection {
-        eprintln!("  step chose {:?}; top: {:?}", s.chosen, s.top.iter().take(4).map(|t| format!("{}[{}] gain {:.3} p {:.1e} dBIC {:.0} acc {}", t.label, t.variant, t.heldout_gain, t.p_adjusted, t.delta_bic, t.accepted)).collect::<Vec<_>>());
+        eprintln!(
+            "  step chose {:?}; top: {:?}",
+            s.chosen,
+            s.top
+                .iter()
+                .take(4)
+                .map(|t| format!(
+                    "{}[{}] gain {:.3} p {:.1e} dBIC {:.0} acc {}",
+                    t.label, t.variant, t.heldout_gain, t.p_adjusted, t.delta_bic, t.accepted
+                ))
+                .collect::<Vec<_>>()
+        );
     }
-    eprintln!("  noise: {}; remaining: {:?}", r.noise.statement, r.remaining);
+    eprintln!(
+        "  noise: {}; remaining: {:?}",
+        r.noise.statement, r.remaining
+    );
 }

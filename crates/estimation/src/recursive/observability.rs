@@ -35,7 +35,11 @@ pub struct Observability {
 impl Observability {
     /// The stacked indices of every parameter in an unobserved direction.
     pub fn unobserved_parameters(&self) -> Vec<usize> {
-        let mut v: Vec<usize> = self.unobserved.iter().flat_map(|u| u.parameters.iter().copied()).collect();
+        let mut v: Vec<usize> = self
+            .unobserved
+            .iter()
+            .flat_map(|u| u.parameters.iter().copied())
+            .collect();
         v.sort_unstable();
         v.dedup();
         v
@@ -48,7 +52,13 @@ impl Observability {
             .iter()
             .map(|u| match u.parameters.as_slice() {
                 [k] => names[*k].clone(),
-                ks => format!("{} (only their combination is measured)", ks.iter().map(|&k| names[k].as_str()).collect::<Vec<_>>().join(" with ")),
+                ks => format!(
+                    "{} (only their combination is measured)",
+                    ks.iter()
+                        .map(|&k| names[k].as_str())
+                        .collect::<Vec<_>>()
+                        .join(" with ")
+                ),
             })
             .collect()
     }
@@ -58,10 +68,20 @@ impl Observability {
     pub fn describe(&self, names: &[String]) -> Option<String> {
         let mut parts = Vec::new();
         if !self.unobserved.is_empty() {
-            parts.push(format!("not observable by the measurements so far, held at their start values: {}", self.phrases(names).join("; ")));
+            parts.push(format!(
+                "not observable by the measurements so far, held at their start values: {}",
+                self.phrases(names).join("; ")
+            ));
         }
         if !self.at_bound.is_empty() {
-            parts.push(format!("held at the edge of their possible range: {}", self.at_bound.iter().map(|&k| names[k].as_str()).collect::<Vec<_>>().join(", ")));
+            parts.push(format!(
+                "held at the edge of their possible range: {}",
+                self.at_bound
+                    .iter()
+                    .map(|&k| names[k].as_str())
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            ));
         }
         (!parts.is_empty()).then(|| parts.join("; "))
     }
@@ -77,7 +97,9 @@ pub fn unobserved(information: &DMatrix<f64>, free: &[usize]) -> Vec<Unobserved>
     let mut rest = Vec::new();
     for i in 0..k {
         if information[(i, i)] < MIN_INFORMATION {
-            out.push(Unobserved { parameters: vec![free[i]] });
+            out.push(Unobserved {
+                parameters: vec![free[i]],
+            });
         } else {
             rest.push(i);
         }
@@ -85,19 +107,28 @@ pub fn unobserved(information: &DMatrix<f64>, free: &[usize]) -> Vec<Unobserved>
     if rest.is_empty() {
         return out;
     }
-    let m = DMatrix::from_fn(rest.len(), rest.len(), |a, b| information[(rest[a], rest[b])]);
+    let m = DMatrix::from_fn(rest.len(), rest.len(), |a, b| {
+        information[(rest[a], rest[b])]
+    });
     let eigen = m.symmetric_eigen();
-    let null: Vec<usize> = (0..rest.len()).filter(|&c| eigen.eigenvalues[c] < MIN_INFORMATION).collect();
+    let null: Vec<usize> = (0..rest.len())
+        .filter(|&c| eigen.eigenvalues[c] < MIN_INFORMATION)
+        .collect();
     if null.is_empty() {
         return out;
     }
     // rows = null vectors; reduced row echelon form makes each as sparse as the space allows
-    let mut basis = DMatrix::from_fn(null.len(), rest.len(), |r, c| eigen.eigenvectors[(c, null[r])]);
+    let mut basis = DMatrix::from_fn(null.len(), rest.len(), |r, c| {
+        eigen.eigenvectors[(c, null[r])]
+    });
     reduce_rows(&mut basis);
     for r in 0..basis.nrows() {
         let row = basis.row(r);
         let scale = row.iter().fold(0.0f64, |m, v| m.max(v.abs()));
-        let parameters: Vec<usize> = (0..rest.len()).filter(|&c| row[c].abs() > 0.05 * scale).map(|c| free[rest[c]]).collect();
+        let parameters: Vec<usize> = (0..rest.len())
+            .filter(|&c| row[c].abs() > 0.05 * scale)
+            .map(|c| free[rest[c]])
+            .collect();
         if !parameters.is_empty() {
             out.push(Unobserved { parameters });
         }
@@ -114,7 +145,9 @@ fn reduce_rows(a: &mut DMatrix<f64>) {
         if lead == rows {
             break;
         }
-        let (pivot, value) = (lead..rows).map(|r| (r, a[(r, c)].abs())).fold((lead, 0.0), |best, x| if x.1 > best.1 { x } else { best });
+        let (pivot, value) = (lead..rows)
+            .map(|r| (r, a[(r, c)].abs()))
+            .fold((lead, 0.0), |best, x| if x.1 > best.1 { x } else { best });
         if value < 1e-9 {
             continue;
         }
@@ -149,9 +182,22 @@ mod tests {
         let h = DMatrix::from_row_slice(2, 4, &[1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 2.0, 2.0]);
         let info = h.transpose() * &h * 50.0;
         let u = unobserved(&info, &free);
-        assert_eq!(u, vec![Unobserved { parameters: vec![5] }, Unobserved { parameters: vec![6, 9] }]);
+        assert_eq!(
+            u,
+            vec![
+                Unobserved {
+                    parameters: vec![5]
+                },
+                Unobserved {
+                    parameters: vec![6, 9]
+                }
+            ]
+        );
         let names: Vec<String> = (0..10).map(|i| format!("p{i}")).collect();
-        let o = Observability { unobserved: u, at_bound: vec![3] };
+        let o = Observability {
+            unobserved: u,
+            at_bound: vec![3],
+        };
         assert_eq!(
             o.describe(&names).unwrap(),
             "not observable by the measurements so far, held at their start values: p5; p6 with p9 (only their combination is measured); held at the edge of their possible range: p3"

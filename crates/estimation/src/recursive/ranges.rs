@@ -72,24 +72,43 @@ mod tests {
         // parameter 0 well measured (σ 1 % of its prior), parameter 1 untouched by data,
         // parameter 2 at half its prior σ
         let sigma0 = [10.0, 5.0, 2.0];
-        let p = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(vec![0.1f64.powi(2), 25.0, 1.0]));
+        let p = DMatrix::from_diagonal(&nalgebra::DVector::from_vec(vec![
+            0.1f64.powi(2),
+            25.0,
+            1.0,
+        ]));
         let q = fade_toward_prior(&p, &sigma0, 100.0);
         // information form by hand: 1/P' = 1/P0 + (1/P − 1/P0)/100
         for i in 0..3 {
             let (p0, pi) = (sigma0[i] * sigma0[i], p[(i, i)]);
             let expected = 1.0 / (1.0 / p0 + (1.0 / pi - 1.0 / p0) / 100.0);
-            assert!((q[(i, i)] - expected).abs() <= 1e-12 * expected, "{i}: {} vs {expected}", q[(i, i)]);
+            assert!(
+                (q[(i, i)] - expected).abs() <= 1e-12 * expected,
+                "{i}: {} vs {expected}",
+                q[(i, i)]
+            );
             assert!(q[(i, i)] <= p0 * (1.0 + 1e-12), "never beyond the prior");
         }
-        assert!((q[(0, 0)] / p[(0, 0)] - 100.0).abs() < 1.0, "the well-measured direction opens ≈ 100×");
-        assert_eq!(q[(1, 1)], 25.0, "the unmeasured direction stays at its prior");
+        assert!(
+            (q[(0, 0)] / p[(0, 0)] - 100.0).abs() < 1.0,
+            "the well-measured direction opens ≈ 100×"
+        );
+        assert_eq!(
+            q[(1, 1)],
+            25.0,
+            "the unmeasured direction stays at its prior"
+        );
         // however often it is repeated
         let mut r = p.clone();
         for _ in 0..50 {
             r = fade_toward_prior(&r, &sigma0, 100.0);
         }
         for i in 0..3 {
-            assert!(r[(i, i)] <= sigma0[i] * sigma0[i] * (1.0 + 1e-9), "{i}: {} after 50 alarms", r[(i, i)]);
+            assert!(
+                r[(i, i)] <= sigma0[i] * sigma0[i] * (1.0 + 1e-9),
+                "{i}: {} after 50 alarms",
+                r[(i, i)]
+            );
         }
     }
 
@@ -99,11 +118,32 @@ mod tests {
         let sigma0 = [1.0, 1.0];
         let s = 0.01f64;
         // P = ½[[1+s², s²−1],[s²−1, 1+s²]]: sum variance 2s², difference variance 2
-        let p = DMatrix::from_row_slice(2, 2, &[0.5 * (1.0 + s * s), 0.5 * (s * s - 1.0), 0.5 * (s * s - 1.0), 0.5 * (1.0 + s * s)]);
+        let p = DMatrix::from_row_slice(
+            2,
+            2,
+            &[
+                0.5 * (1.0 + s * s),
+                0.5 * (s * s - 1.0),
+                0.5 * (s * s - 1.0),
+                0.5 * (1.0 + s * s),
+            ],
+        );
         let q = fade_toward_prior(&p, &sigma0, 100.0);
-        let along = |m: &DMatrix<f64>, v: [f64; 2]| v[0] * (m[(0, 0)] * v[0] + m[(0, 1)] * v[1]) + v[1] * (m[(1, 0)] * v[0] + m[(1, 1)] * v[1]);
-        let (sum, diff) = ([0.5f64.sqrt(), 0.5f64.sqrt()], [0.5f64.sqrt(), -(0.5f64.sqrt())]);
-        assert!((along(&q, diff) - along(&p, diff)).abs() < 1e-12, "the unmeasured difference keeps its variance");
-        assert!((along(&q, sum) / along(&p, sum) - 100.0).abs() < 1.0, "the measured sum opens");
+        let along = |m: &DMatrix<f64>, v: [f64; 2]| {
+            v[0] * (m[(0, 0)] * v[0] + m[(0, 1)] * v[1])
+                + v[1] * (m[(1, 0)] * v[0] + m[(1, 1)] * v[1])
+        };
+        let (sum, diff) = (
+            [0.5f64.sqrt(), 0.5f64.sqrt()],
+            [0.5f64.sqrt(), -(0.5f64.sqrt())],
+        );
+        assert!(
+            (along(&q, diff) - along(&p, diff)).abs() < 1e-12,
+            "the unmeasured difference keeps its variance"
+        );
+        assert!(
+            (along(&q, sum) / along(&p, sum) - 100.0).abs() < 1.0,
+            "the measured sum opens"
+        );
     }
 }

@@ -19,7 +19,11 @@ pub struct TrackerNoise {
     pub angular: f64,
 }
 
-pub const THESIS_TRACKER: TrackerNoise = TrackerNoise { constant: 4e-6, per_metre: 0.8e-6, angular: 3e-6 };
+pub const THESIS_TRACKER: TrackerNoise = TrackerNoise {
+    constant: 4e-6,
+    per_metre: 0.8e-6,
+    angular: 3e-6,
+};
 
 /// One planned measurement.
 #[derive(Debug, Clone)]
@@ -34,21 +38,36 @@ pub struct Planned {
 
 /// The readings of `plan` at parameters `p` plus noise (seeded; None: no noise, the same stated
 /// covariance), with their stated covariance, in the tracker's frame.
-pub fn records(model: &ForwardModel, p: &[f64], plan: &[Planned], noise: TrackerNoise, seed: Option<u64>) -> RecordSet {
+pub fn records(
+    model: &ForwardModel,
+    p: &[f64],
+    plan: &[Planned],
+    noise: TrackerNoise,
+    seed: Option<u64>,
+) -> RecordSet {
     let kin = model.kinematic_truth(p).expect("kinematics at the truth");
     let mut rng = ChaCha8Rng::seed_from_u64(seed.unwrap_or(0));
     let scale = if seed.is_some() { 1.0 } else { 0.0 };
-    let mut n = || -> f64 { let v: f64 = StandardNormal.sample(&mut rng); scale * v };
+    let mut n = || -> f64 {
+        let v: f64 = StandardNormal.sample(&mut rng);
+        scale * v
+    };
     let out = plan
         .iter()
         .enumerate()
         .map(|(i, d)| {
             let mut s = signals(model, d);
-            let tool = model.tool_state(p, &kin, &d.q, &mut s, None).expect("tool state");
+            let tool = model
+                .tool_state(p, &kin, &d.q, &mut s, None)
+                .expect("tool state");
             let y = model.tracker(p, &tool, &mut s).expect("tracker reading");
             let (rho, az, el) = to_spherical(&y.measured_point());
             let sr = noise.constant + noise.per_metre * rho;
-            let measured = from_spherical(rho + sr * n(), az + noise.angular * n(), el + noise.angular * n());
+            let measured = from_spherical(
+                rho + sr * n(),
+                az + noise.angular * n(),
+                el + noise.angular * n(),
+            );
             let (r2, a2, e2) = to_spherical(&measured);
             MeasurementRecord {
                 time: i as f64,
@@ -56,13 +75,26 @@ pub fn records(model: &ForwardModel, p: &[f64], plan: &[Planned], noise: Tracker
                 channel: "tracker".into(),
                 q: d.q.clone(),
                 measured,
-                covariance: point_covariance(r2, a2, e2, noise.constant + noise.per_metre * r2, noise.angular, noise.angular),
+                covariance: point_covariance(
+                    r2,
+                    a2,
+                    e2,
+                    noise.constant + noise.per_metre * r2,
+                    noise.angular,
+                    noise.angular,
+                ),
                 signals: signals(model, d),
                 kind: RecordKind::Point,
             }
         })
         .collect();
-    RecordSet { check: Vec::new(), frame: RecordFrame::Instrument("tracker".into()), records: out, rejected: vec![], sources: vec![] }
+    RecordSet {
+        check: Vec::new(),
+        frame: RecordFrame::Instrument("tracker".into()),
+        records: out,
+        rejected: vec![],
+        sources: vec![],
+    }
 }
 
 /// The signals of a planned measurement (what a recording gives at its time).
@@ -80,7 +112,11 @@ pub fn signals(model: &ForwardModel, d: &Planned) -> Signals {
 
 /// Index of a parameter by name.
 pub fn index(model: &ForwardModel, name: &str) -> usize {
-    model.param_names().iter().position(|n| n == name).unwrap_or_else(|| panic!("no parameter {name}"))
+    model
+        .param_names()
+        .iter()
+        .position(|n| n == name)
+        .unwrap_or_else(|| panic!("no parameter {name}"))
 }
 
 /// Fraction of |z| ≤ k.
@@ -93,7 +129,11 @@ pub fn within(z: &[f64], k: f64) -> f64 {
 /// with the Abbe lever `lever_axes` and offset `abbe_offset`, three squareness terms — all at 0.
 pub fn xfyz_geometric_terms(lever_axes: &str, abbe_offset: &str) -> String {
     let mut terms = String::new();
-    let travels = [("x", "[0 mm, 800 mm]"), ("y", "[0 mm, 500 mm]"), ("z", "[0 mm, 400 mm]")];
+    let travels = [
+        ("x", "[0 mm, 800 mm]"),
+        ("y", "[0 mm, 500 mm]"),
+        ("z", "[0 mm, 400 mm]"),
+    ];
     for (a, t) in travels {
         terms += &format!("  - {{id: positioning, options: {{axis: {a}, order: 3, travel: {t}}}, params: {{c0: 0 um, c1: 0 um, c2: 0 um, c3: 0 um}}}}\n");
         for d in ["x", "y", "z"].iter().filter(|d| **d != a) {
@@ -104,7 +144,8 @@ pub fn xfyz_geometric_terms(lever_axes: &str, abbe_offset: &str) -> String {
         }
     }
     for pair in ["xy", "xz", "yz"] {
-        terms += &format!("  - {{id: squareness, options: {{pair: {pair}}}, params: {{s: 0 urad}}}}\n");
+        terms +=
+            &format!("  - {{id: squareness, options: {{pair: {pair}}}, params: {{s: 0 urad}}}}\n");
     }
     terms
 }

@@ -40,7 +40,11 @@ impl Captured {
     pub fn wait_for(&self, needle: &str, timeout: Duration) {
         let start = Instant::now();
         while !self.text().contains(needle) {
-            assert!(start.elapsed() < timeout, "'{needle}' did not appear within {timeout:?}; output:\n{}", self.text());
+            assert!(
+                start.elapsed() < timeout,
+                "'{needle}' did not appear within {timeout:?}; output:\n{}",
+                self.text()
+            );
             std::thread::sleep(Duration::from_millis(10));
         }
     }
@@ -69,9 +73,13 @@ fn stat_of(pid: &str) -> Option<(i32, char)> {
 
 /// True when some process (not a zombie) of process group `pgid` still exists.
 pub fn group_alive(pgid: i32) -> bool {
-    std::fs::read_dir("/proc").unwrap().filter_map(|e| e.ok()).any(|e| {
-        let name = e.file_name();
-        let name = name.to_string_lossy();
-        name.chars().all(|c| c.is_ascii_digit()) && matches!(stat_of(&name), Some((g, s)) if g == pgid && s != 'Z')
-    })
+    std::fs::read_dir("/proc")
+        .unwrap()
+        .filter_map(|e| e.ok())
+        .any(|e| {
+            let name = e.file_name();
+            let name = name.to_string_lossy();
+            name.chars().all(|c| c.is_ascii_digit())
+                && matches!(stat_of(&name), Some((g, s)) if g == pgid && s != 'Z')
+        })
 }

@@ -41,7 +41,10 @@ impl ParamDecl {
     }
 
     /// Restrict the parameter to a set of values (e.g. `["LOCALHOST", "SUBNET"]`).
-    pub fn with_allowed<V: Into<ParamValue>>(mut self, values: impl IntoIterator<Item = V>) -> ParamDecl {
+    pub fn with_allowed<V: Into<ParamValue>>(
+        mut self,
+        values: impl IntoIterator<Item = V>,
+    ) -> ParamDecl {
         self.allowed = Some(values.into_iter().map(Into::into).collect());
         self
     }
@@ -55,7 +58,9 @@ impl ParamDecl {
     pub fn check(&self, value: &ParamValue) -> Result<ParamValue, ValueProblem> {
         let value = value
             .coerce_to(self.param_type())
-            .ok_or(ValueProblem::WrongType { expected: self.param_type() })?;
+            .ok_or(ValueProblem::WrongType {
+                expected: self.param_type(),
+            })?;
         if let Some((min, max)) = self.range {
             let numbers: Vec<f64> = match &value {
                 ParamValue::Integer(i) => vec![*i as f64],
@@ -71,14 +76,26 @@ impl ParamDecl {
         }
         if let Some(allowed) = &self.allowed {
             let ok = match &value {
-                ParamValue::BoolArray(v) => v.iter().all(|x| allowed.contains(&ParamValue::Bool(*x))),
-                ParamValue::IntegerArray(v) => v.iter().all(|x| allowed.contains(&ParamValue::Integer(*x))),
-                ParamValue::DoubleArray(v) => v.iter().all(|x| allowed.contains(&ParamValue::Double(*x))),
-                ParamValue::StringArray(v) => v.iter().all(|x| allowed.contains(&ParamValue::String(x.clone()))),
-                scalar => allowed.iter().any(|a| a.coerce_to(scalar.param_type()).as_ref() == Some(scalar)),
+                ParamValue::BoolArray(v) => {
+                    v.iter().all(|x| allowed.contains(&ParamValue::Bool(*x)))
+                }
+                ParamValue::IntegerArray(v) => {
+                    v.iter().all(|x| allowed.contains(&ParamValue::Integer(*x)))
+                }
+                ParamValue::DoubleArray(v) => {
+                    v.iter().all(|x| allowed.contains(&ParamValue::Double(*x)))
+                }
+                ParamValue::StringArray(v) => v
+                    .iter()
+                    .all(|x| allowed.contains(&ParamValue::String(x.clone()))),
+                scalar => allowed
+                    .iter()
+                    .any(|a| a.coerce_to(scalar.param_type()).as_ref() == Some(scalar)),
             };
             if !ok {
-                return Err(ValueProblem::NotAllowed { allowed: allowed.clone() });
+                return Err(ValueProblem::NotAllowed {
+                    allowed: allowed.clone(),
+                });
             }
         }
         Ok(value)
@@ -92,20 +109,48 @@ mod tests {
     #[test]
     fn range_and_type_are_checked() {
         let d = ParamDecl::new("rate_hz", 10.0, "publish rate").with_range(0.1, 100.0);
-        assert_eq!(d.check(&ParamValue::Integer(5)), Ok(ParamValue::Double(5.0)));
-        assert_eq!(d.check(&ParamValue::Double(100.0)), Ok(ParamValue::Double(100.0)));
-        assert_eq!(d.check(&ParamValue::Double(100.5)), Err(ValueProblem::OutOfRange { min: 0.1, max: 100.0 }));
-        assert_eq!(d.check(&ParamValue::Double(f64::NAN)), Err(ValueProblem::OutOfRange { min: 0.1, max: 100.0 }));
-        assert_eq!(d.check(&ParamValue::String("x".into())), Err(ValueProblem::WrongType { expected: ParamType::Double }));
+        assert_eq!(
+            d.check(&ParamValue::Integer(5)),
+            Ok(ParamValue::Double(5.0))
+        );
+        assert_eq!(
+            d.check(&ParamValue::Double(100.0)),
+            Ok(ParamValue::Double(100.0))
+        );
+        assert_eq!(
+            d.check(&ParamValue::Double(100.5)),
+            Err(ValueProblem::OutOfRange {
+                min: 0.1,
+                max: 100.0
+            })
+        );
+        assert_eq!(
+            d.check(&ParamValue::Double(f64::NAN)),
+            Err(ValueProblem::OutOfRange {
+                min: 0.1,
+                max: 100.0
+            })
+        );
+        assert_eq!(
+            d.check(&ParamValue::String("x".into())),
+            Err(ValueProblem::WrongType {
+                expected: ParamType::Double
+            })
+        );
     }
 
     #[test]
     fn allowed_values_are_checked() {
         let d = ParamDecl::new("mode", "fast", "").with_allowed(["fast", "slow"]);
         assert!(d.check(&ParamValue::String("slow".into())).is_ok());
-        assert!(matches!(d.check(&ParamValue::String("medium".into())), Err(ValueProblem::NotAllowed { .. })));
+        assert!(matches!(
+            d.check(&ParamValue::String("medium".into())),
+            Err(ValueProblem::NotAllowed { .. })
+        ));
         let a = ParamDecl::new("axes", vec!["x"], "").with_allowed(["x", "y", "z"]);
-        assert!(a.check(&ParamValue::StringArray(vec!["x".into(), "z".into()])).is_ok());
+        assert!(a
+            .check(&ParamValue::StringArray(vec!["x".into(), "z".into()]))
+            .is_ok());
         assert!(a.check(&ParamValue::StringArray(vec!["w".into()])).is_err());
     }
 }

@@ -28,25 +28,50 @@ pub struct ParamsFileSection {
 #[derive(Debug, thiserror::Error)]
 pub enum ParamsFileError {
     #[error("parameters file '{}' cannot be read: {source}; check the path given to --params-file (relative paths are taken from the current directory)", path.display())]
-    Missing { path: PathBuf, source: std::io::Error },
+    Missing {
+        path: PathBuf,
+        source: std::io::Error,
+    },
     #[error("parameters file '{}': YAML syntax error at line {line}, column {column}: {message}", path.display())]
-    Syntax { path: PathBuf, line: usize, column: usize, message: String },
+    Syntax {
+        path: PathBuf,
+        line: usize,
+        column: usize,
+        message: String,
+    },
     #[error("parameters file '{}': at '{key}': {message}", path.display())]
-    Structure { path: PathBuf, key: String, message: String },
+    Structure {
+        path: PathBuf,
+        key: String,
+        message: String,
+    },
 }
 
 /// Read and parse a parameters file.
 pub fn read_params_file(path: &Path) -> Result<Vec<ParamsFileSection>, ParamsFileError> {
-    let text = std::fs::read_to_string(path)
-        .map_err(|source| ParamsFileError::Missing { path: path.to_path_buf(), source })?;
+    let text = std::fs::read_to_string(path).map_err(|source| ParamsFileError::Missing {
+        path: path.to_path_buf(),
+        source,
+    })?;
     parse_params_file(&text, path)
 }
 
 /// Parse parameters-file text; `path` is only used in error messages.
-pub fn parse_params_file(text: &str, path: &Path) -> Result<Vec<ParamsFileSection>, ParamsFileError> {
+pub fn parse_params_file(
+    text: &str,
+    path: &Path,
+) -> Result<Vec<ParamsFileSection>, ParamsFileError> {
     let doc: serde_yaml::Value = serde_yaml::from_str(text).map_err(|e| {
-        let (line, column) = e.location().map(|l| (l.line(), l.column())).unwrap_or((0, 0));
-        ParamsFileError::Syntax { path: path.to_path_buf(), line, column, message: e.to_string() }
+        let (line, column) = e
+            .location()
+            .map(|l| (l.line(), l.column()))
+            .unwrap_or((0, 0));
+        ParamsFileError::Syntax {
+            path: path.to_path_buf(),
+            line,
+            column,
+            message: e.to_string(),
+        }
     })?;
     let structure = |key: &str, message: &str| ParamsFileError::Structure {
         path: path.to_path_buf(),
@@ -57,7 +82,12 @@ pub fn parse_params_file(text: &str, path: &Path) -> Result<Vec<ParamsFileSectio
     match doc {
         serde_yaml::Value::Null => {}
         serde_yaml::Value::Mapping(map) => collect_sections(&map, "", &mut sections, &structure)?,
-        _ => return Err(structure("<top level>", "expected a mapping of node names to `ros__parameters:`")),
+        _ => {
+            return Err(structure(
+                "<top level>",
+                "expected a mapping of node names to `ros__parameters:`",
+            ))
+        }
     }
     Ok(sections)
 }
@@ -65,7 +95,10 @@ pub fn parse_params_file(text: &str, path: &Path) -> Result<Vec<ParamsFileSectio
 fn key_text(key: &serde_yaml::Value) -> String {
     match key {
         serde_yaml::Value::String(s) => s.clone(),
-        other => serde_yaml::to_string(other).unwrap_or_default().trim().to_string(),
+        other => serde_yaml::to_string(other)
+            .unwrap_or_default()
+            .trim()
+            .to_string(),
     }
 }
 
@@ -79,15 +112,26 @@ fn collect_sections(
         let key = key_text(key);
         if key == "ros__parameters" {
             if prefix.is_empty() {
-                return Err(structure("ros__parameters", "`ros__parameters:` must be under a node name such as `/**:`"));
+                return Err(structure(
+                    "ros__parameters",
+                    "`ros__parameters:` must be under a node name such as `/**:`",
+                ));
             }
             let mut params = Vec::new();
             match value {
                 serde_yaml::Value::Mapping(m) => flatten(m, "", &mut params, prefix, structure)?,
                 serde_yaml::Value::Null => {}
-                _ => return Err(structure(&format!("{prefix}/ros__parameters"), "expected a mapping of parameter names to values")),
+                _ => {
+                    return Err(structure(
+                        &format!("{prefix}/ros__parameters"),
+                        "expected a mapping of parameter names to values",
+                    ))
+                }
             }
-            out.push(ParamsFileSection { node_pattern: prefix.to_string(), params });
+            out.push(ParamsFileSection {
+                node_pattern: prefix.to_string(),
+                params,
+            });
             continue;
         }
         let node = join_node_path(prefix, &key);
@@ -121,7 +165,11 @@ fn flatten(
     structure: &dyn Fn(&str, &str) -> ParamsFileError,
 ) -> Result<(), ParamsFileError> {
     for (key, value) in map {
-        let name = if prefix.is_empty() { key_text(key) } else { format!("{prefix}.{}", key_text(key)) };
+        let name = if prefix.is_empty() {
+            key_text(key)
+        } else {
+            format!("{prefix}.{}", key_text(key))
+        };
         match value {
             serde_yaml::Value::Mapping(m) => flatten(m, &name, out, node, structure)?,
             other => {
@@ -178,10 +226,25 @@ talker:
         let s = parse_params_file(FILE, Path::new("p.yaml")).unwrap();
         assert_eq!(s.len(), 3);
         assert_eq!(s[0].node_pattern, "/**");
-        assert_eq!(s[0].params, vec![("use_sim_time".into(), ParamValue::Bool(false)), ("rate_hz".into(), ParamValue::Integer(20))]);
+        assert_eq!(
+            s[0].params,
+            vec![
+                ("use_sim_time".into(), ParamValue::Bool(false)),
+                ("rate_hz".into(), ParamValue::Integer(20))
+            ]
+        );
         assert_eq!(s[1].node_pattern, "/talker");
-        assert_eq!(s[1].params[1], ("tracker.port".into(), ParamValue::Integer(5000)));
-        assert_eq!(s[1].params[2], ("tracker.hosts".into(), ParamValue::StringArray(vec!["a".into(), "b".into()])));
+        assert_eq!(
+            s[1].params[1],
+            ("tracker.port".into(), ParamValue::Integer(5000))
+        );
+        assert_eq!(
+            s[1].params[2],
+            (
+                "tracker.hosts".into(),
+                ParamValue::StringArray(vec!["a".into(), "b".into()])
+            )
+        );
         assert_eq!(s[2].node_pattern, "/cell/probe");
         assert_eq!(s[2].params, vec![("gain".into(), ParamValue::Double(1.5))]);
     }
@@ -215,7 +278,11 @@ talker:
     fn structure_errors_name_the_key() {
         let e = parse_params_file("talker:\n  rate: 3\n", Path::new("f.yaml")).unwrap_err();
         assert!(e.to_string().contains("/talker/rate"), "{e}");
-        let e = parse_params_file("/**:\n  ros__parameters:\n    a: [1, x]\n", Path::new("f.yaml")).unwrap_err();
+        let e = parse_params_file(
+            "/**:\n  ros__parameters:\n    a: [1, x]\n",
+            Path::new("f.yaml"),
+        )
+        .unwrap_err();
         assert!(e.to_string().contains("ros__parameters a"), "{e}");
     }
 
@@ -223,6 +290,9 @@ talker:
     fn missing_file_says_what_to_do() {
         let e = read_params_file(Path::new("/nonexistent/params.yaml")).unwrap_err();
         let m = e.to_string();
-        assert!(m.contains("/nonexistent/params.yaml") && m.contains("--params-file"), "{m}");
+        assert!(
+            m.contains("/nonexistent/params.yaml") && m.contains("--params-file"),
+            "{m}"
+        );
     }
 }

@@ -7,7 +7,9 @@ mod value;
 mod watch;
 
 pub use declaration::{ParamDecl, ValueProblem};
-pub use file::{parse_params_file, pattern_matches_node, read_params_file, ParamsFileError, ParamsFileSection};
+pub use file::{
+    parse_params_file, pattern_matches_node, read_params_file, ParamsFileError, ParamsFileSection,
+};
 pub(crate) use resolve::problem_error;
 pub use resolve::{ParamError, ParamSource, Parameters, ResolvedParam, USE_SIM_TIME};
 pub use value::{ParamKind, ParamType, ParamValue};

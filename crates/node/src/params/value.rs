@@ -69,7 +69,9 @@ impl ParamValue {
             Ok(value) => match ParamValue::from_yaml(&value) {
                 Ok(v) => Ok(v),
                 // A mapping or null typed on the command line is most likely meant as text.
-                Err(_) if !text.trim_start().starts_with('[') => Ok(ParamValue::String(text.to_string())),
+                Err(_) if !text.trim_start().starts_with('[') => {
+                    Ok(ParamValue::String(text.to_string()))
+                }
                 Err(e) => Err(e),
             },
             // Not valid YAML (e.g. `a: b: c`): rcl keeps it as a string.
@@ -88,7 +90,9 @@ impl ParamValue {
                 if let Some(i) = n.as_i64() {
                     Ok(ParamValue::Integer(i))
                 } else if n.is_u64() {
-                    Err(format!("integer {n} does not fit in a signed 64-bit parameter"))
+                    Err(format!(
+                        "integer {n} does not fit in a signed 64-bit parameter"
+                    ))
                 } else {
                     Ok(ParamValue::Double(n.as_f64().unwrap_or(f64::NAN)))
                 }
@@ -96,7 +100,9 @@ impl ParamValue {
             Y::String(s) => Ok(ParamValue::String(s.clone())),
             Y::Sequence(items) => sequence_from_yaml(items),
             Y::Null => Err("an empty (null) value is not a parameter value".to_string()),
-            Y::Mapping(_) => Err("a mapping is not a parameter value (nested keys must end in a value)".to_string()),
+            Y::Mapping(_) => Err(
+                "a mapping is not a parameter value (nested keys must end in a value)".to_string(),
+            ),
             Y::Tagged(t) => ParamValue::from_yaml(&t.value),
         }
     }
@@ -110,9 +116,9 @@ impl ParamValue {
         }
         match (self, target) {
             (ParamValue::Integer(i), ParamType::Double) => Some(ParamValue::Double(*i as f64)),
-            (ParamValue::IntegerArray(v), ParamType::DoubleArray) => {
-                Some(ParamValue::DoubleArray(v.iter().map(|&i| i as f64).collect()))
-            }
+            (ParamValue::IntegerArray(v), ParamType::DoubleArray) => Some(ParamValue::DoubleArray(
+                v.iter().map(|&i| i as f64).collect(),
+            )),
             (ParamValue::StringArray(v), t) if v.is_empty() => match t {
                 ParamType::BoolArray => Some(ParamValue::BoolArray(Vec::new())),
                 ParamType::IntegerArray => Some(ParamValue::IntegerArray(Vec::new())),
@@ -163,20 +169,39 @@ fn sequence_from_yaml(items: &[serde_yaml::Value]) -> Result<ParamValue, String>
     let scalars: Vec<ParamValue> = items
         .iter()
         .map(|item| match item {
-            Y::Sequence(_) | Y::Mapping(_) => Err("nested lists or maps inside a list are not parameter values".to_string()),
+            Y::Sequence(_) | Y::Mapping(_) => {
+                Err("nested lists or maps inside a list are not parameter values".to_string())
+            }
             other => ParamValue::from_yaml(other),
         })
         .collect::<Result<_, _>>()?;
     let all = |t: ParamType| scalars.iter().all(|s| s.param_type() == t);
     if all(ParamType::Bool) {
-        return Ok(ParamValue::BoolArray(scalars.iter().map(|s| matches!(s, ParamValue::Bool(true))).collect()));
+        return Ok(ParamValue::BoolArray(
+            scalars
+                .iter()
+                .map(|s| matches!(s, ParamValue::Bool(true)))
+                .collect(),
+        ));
     }
     if all(ParamType::Integer) {
         return Ok(ParamValue::IntegerArray(
-            scalars.iter().map(|s| if let ParamValue::Integer(i) = s { *i } else { 0 }).collect(),
+            scalars
+                .iter()
+                .map(|s| {
+                    if let ParamValue::Integer(i) = s {
+                        *i
+                    } else {
+                        0
+                    }
+                })
+                .collect(),
         ));
     }
-    if scalars.iter().all(|s| matches!(s, ParamValue::Integer(_) | ParamValue::Double(_))) {
+    if scalars
+        .iter()
+        .all(|s| matches!(s, ParamValue::Integer(_) | ParamValue::Double(_)))
+    {
         return Ok(ParamValue::DoubleArray(
             scalars
                 .iter()
@@ -190,10 +215,22 @@ fn sequence_from_yaml(items: &[serde_yaml::Value]) -> Result<ParamValue, String>
     }
     if all(ParamType::String) {
         return Ok(ParamValue::StringArray(
-            scalars.into_iter().map(|s| if let ParamValue::String(s) = s { s } else { String::new() }).collect(),
+            scalars
+                .into_iter()
+                .map(|s| {
+                    if let ParamValue::String(s) = s {
+                        s
+                    } else {
+                        String::new()
+                    }
+                })
+                .collect(),
         ));
     }
-    Err("list mixes types (a parameter array holds one type: bool, integer, double or string)".to_string())
+    Err(
+        "list mixes types (a parameter array holds one type: bool, integer, double or string)"
+            .to_string(),
+    )
 }
 
 impl fmt::Display for ParamValue {
@@ -215,8 +252,12 @@ impl fmt::Display for ParamValue {
             ParamValue::String(s) => write!(f, "{s:?}"),
             ParamValue::BoolArray(v) => list(f, v),
             ParamValue::IntegerArray(v) => list(f, v),
-            ParamValue::DoubleArray(v) => list(f, &v.iter().map(|d| format!("{d:?}")).collect::<Vec<_>>()),
-            ParamValue::StringArray(v) => list(f, &v.iter().map(|s| format!("{s:?}")).collect::<Vec<_>>()),
+            ParamValue::DoubleArray(v) => {
+                list(f, &v.iter().map(|d| format!("{d:?}")).collect::<Vec<_>>())
+            }
+            ParamValue::StringArray(v) => {
+                list(f, &v.iter().map(|s| format!("{s:?}")).collect::<Vec<_>>())
+            }
         }
     }
 }
@@ -280,29 +321,68 @@ mod tests {
 
     #[test]
     fn command_line_values_follow_yaml_rules() {
-        assert_eq!(ParamValue::parse_yaml_text("1").unwrap(), ParamValue::Integer(1));
-        assert_eq!(ParamValue::parse_yaml_text("-7").unwrap(), ParamValue::Integer(-7));
-        assert_eq!(ParamValue::parse_yaml_text("1.5").unwrap(), ParamValue::Double(1.5));
-        assert_eq!(ParamValue::parse_yaml_text("1e-6").unwrap(), ParamValue::Double(1e-6));
-        assert_eq!(ParamValue::parse_yaml_text("true").unwrap(), ParamValue::Bool(true));
-        assert_eq!(ParamValue::parse_yaml_text("[1,2]").unwrap(), ParamValue::IntegerArray(vec![1, 2]));
-        assert_eq!(ParamValue::parse_yaml_text("[1, 2.5]").unwrap(), ParamValue::DoubleArray(vec![1.0, 2.5]));
+        assert_eq!(
+            ParamValue::parse_yaml_text("1").unwrap(),
+            ParamValue::Integer(1)
+        );
+        assert_eq!(
+            ParamValue::parse_yaml_text("-7").unwrap(),
+            ParamValue::Integer(-7)
+        );
+        assert_eq!(
+            ParamValue::parse_yaml_text("1.5").unwrap(),
+            ParamValue::Double(1.5)
+        );
+        assert_eq!(
+            ParamValue::parse_yaml_text("1e-6").unwrap(),
+            ParamValue::Double(1e-6)
+        );
+        assert_eq!(
+            ParamValue::parse_yaml_text("true").unwrap(),
+            ParamValue::Bool(true)
+        );
+        assert_eq!(
+            ParamValue::parse_yaml_text("[1,2]").unwrap(),
+            ParamValue::IntegerArray(vec![1, 2])
+        );
+        assert_eq!(
+            ParamValue::parse_yaml_text("[1, 2.5]").unwrap(),
+            ParamValue::DoubleArray(vec![1.0, 2.5])
+        );
         assert_eq!(
             ParamValue::parse_yaml_text("[a, 'b c']").unwrap(),
             ParamValue::StringArray(vec!["a".into(), "b c".into()])
         );
-        assert_eq!(ParamValue::parse_yaml_text("hello").unwrap(), ParamValue::String("hello".into()));
-        assert_eq!(ParamValue::parse_yaml_text("'1'").unwrap(), ParamValue::String("1".into()));
-        assert_eq!(ParamValue::parse_yaml_text("").unwrap(), ParamValue::String("".into()));
-        assert_eq!(ParamValue::parse_yaml_text("/tmp/x.yaml").unwrap(), ParamValue::String("/tmp/x.yaml".into()));
+        assert_eq!(
+            ParamValue::parse_yaml_text("hello").unwrap(),
+            ParamValue::String("hello".into())
+        );
+        assert_eq!(
+            ParamValue::parse_yaml_text("'1'").unwrap(),
+            ParamValue::String("1".into())
+        );
+        assert_eq!(
+            ParamValue::parse_yaml_text("").unwrap(),
+            ParamValue::String("".into())
+        );
+        assert_eq!(
+            ParamValue::parse_yaml_text("/tmp/x.yaml").unwrap(),
+            ParamValue::String("/tmp/x.yaml".into())
+        );
         assert!(ParamValue::parse_yaml_text("[1, a]").is_err());
     }
 
     #[test]
     fn coercion_promotes_integers_only() {
-        assert_eq!(ParamValue::Integer(3).coerce_to(ParamType::Double), Some(ParamValue::Double(3.0)));
+        assert_eq!(
+            ParamValue::Integer(3).coerce_to(ParamType::Double),
+            Some(ParamValue::Double(3.0))
+        );
         assert_eq!(ParamValue::Double(3.0).coerce_to(ParamType::Integer), None);
-        assert_eq!(ParamValue::StringArray(vec![]).coerce_to(ParamType::DoubleArray), Some(ParamValue::DoubleArray(vec![])));
+        assert_eq!(
+            ParamValue::StringArray(vec![]).coerce_to(ParamType::DoubleArray),
+            Some(ParamValue::DoubleArray(vec![]))
+        );
         assert_eq!(f64::from_value(&ParamValue::Integer(2)), Some(2.0));
         assert_eq!(bool::from_value(&ParamValue::Integer(1)), None);
     }

@@ -14,7 +14,10 @@ pub struct ParamWatch<T> {
 impl<T: ParamKind + PartialEq + Clone> ParamWatch<T> {
     /// Watch `name`, whose value is `current` now.
     pub fn new(name: &str, current: T) -> Self {
-        Self { name: name.to_string(), last: current }
+        Self {
+            name: name.to_string(),
+            last: current,
+        }
     }
 
     pub fn name(&self) -> &str {
@@ -38,7 +41,10 @@ impl<T: ParamKind + PartialEq + Clone> ParamWatch<T> {
 
     /// [`Self::update`] with the value `read` returns for the watched name (e.g.
     /// `|n| node.param(n)`).
-    pub fn poll(&mut self, read: impl FnOnce(&str) -> Result<T, ParamError>) -> Result<Option<T>, ParamError> {
+    pub fn poll(
+        &mut self,
+        read: impl FnOnce(&str) -> Result<T, ParamError>,
+    ) -> Result<Option<T>, ParamError> {
         let current = read(&self.name)?;
         Ok(self.update(current))
     }
@@ -57,9 +63,20 @@ mod tests {
         assert_eq!(w.update(false), Some(false));
         assert_eq!(w.last(), &false);
         let mut n = ParamWatch::new("count", 3i64);
-        assert_eq!(n.poll(|name| { assert_eq!(name, "count"); Ok(4) }).unwrap(), Some(4));
+        assert_eq!(
+            n.poll(|name| {
+                assert_eq!(name, "count");
+                Ok(4)
+            })
+            .unwrap(),
+            Some(4)
+        );
         assert_eq!(n.poll(|_| Ok(4)).unwrap(), None);
-        let e = n.poll(|name| Err(ParamError::NotDeclared { name: name.to_string() }));
+        let e = n.poll(|name| {
+            Err(ParamError::NotDeclared {
+                name: name.to_string(),
+            })
+        });
         assert!(e.is_err());
         assert_eq!(n.last(), &4, "an error leaves the last value");
     }

@@ -16,11 +16,11 @@ use nalgebra::{DMatrix, DMatrixViewMut, Vector3};
 
 use super::error_series::ErrorSeries;
 use super::positioning::series_params;
-use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{Axis, SignalKind, Signals};
 use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term_id::TermId;
 
 #[derive(Debug, Clone)]
 pub struct Angular {
@@ -92,7 +92,13 @@ impl PhysicsTerm for Angular {
     fn linear_in_params(&self) -> bool {
         true
     }
-    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
+    fn evaluate_into(
+        &self,
+        p: &[f64],
+        s: &Signals,
+        value: &mut [f64],
+        mut jac: DMatrixViewMut<'_, f64>,
+    ) -> Result<(), PhysicsError> {
         check_len(self, p, self.series.len())?;
         let (q, arm) = self.lever(s)?;
         let basis = self.series.basis_array(q);

@@ -9,11 +9,11 @@
 
 use nalgebra::DMatrix;
 
-use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{Axis, SignalKind, Signals};
 use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term_id::TermId;
 
 #[derive(Debug, Clone)]
 pub struct Backlash {
@@ -22,7 +22,9 @@ pub struct Backlash {
 
 impl Backlash {
     pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
-        Ok(Self { axis: o.axis("axis", None)? })
+        Ok(Self {
+            axis: o.axis("axis", None)?,
+        })
     }
 }
 
@@ -46,7 +48,10 @@ impl PhysicsTerm for Backlash {
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
         check_len(self, p, 1)?;
         let dir = s.approach(self, self.axis)?;
-        Ok(displacement(Frame::Machine, self.axis.unit() * (-0.5 * p[0] * dir)))
+        Ok(displacement(
+            Frame::Machine,
+            self.axis.unit() * (-0.5 * p[0] * dir),
+        ))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         check_len(self, p, 1)?;

@@ -30,9 +30,16 @@ pub struct ErrorSeries {
 impl ErrorSeries {
     pub fn new(basis: SeriesBasis, order: usize, travel: (f64, f64)) -> Result<Self, PhysicsError> {
         if !(travel.1 > travel.0) || !travel.0.is_finite() || !travel.1.is_finite() {
-            return Err(PhysicsError::InvalidInput { what: "error series travel".into(), reason: format!("needs min < max, got [{}, {}]", travel.0, travel.1) });
+            return Err(PhysicsError::InvalidInput {
+                what: "error series travel".into(),
+                reason: format!("needs min < max, got [{}, {}]", travel.0, travel.1),
+            });
         }
-        Ok(Self { basis, order, travel })
+        Ok(Self {
+            basis,
+            order,
+            travel,
+        })
     }
 
     /// Read `basis` (legendre|polynomial, default legendre), `order` (default `default_order`)
@@ -41,7 +48,12 @@ impl ErrorSeries {
         let basis = match o.text("basis", Some("legendre"))?.as_str() {
             "legendre" => SeriesBasis::Legendre,
             "polynomial" => SeriesBasis::Polynomial,
-            other => return Err(o.bad("basis", format!("`{other}` is not a basis; allowed: legendre, polynomial"))),
+            other => {
+                return Err(o.bad(
+                    "basis",
+                    format!("`{other}` is not a basis; allowed: legendre, polynomial"),
+                ))
+            }
         };
         let order = o.count("order", default_order, MAX_ORDER)?;
         let travel = o.length_range("travel")?.unwrap_or((0.0, 1.0));

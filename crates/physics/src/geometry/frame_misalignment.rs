@@ -9,11 +9,11 @@
 
 use nalgebra::{DMatrix, Vector3};
 
-use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
 use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term_id::TermId;
 
 #[derive(Debug, Clone)]
 pub struct FrameMisalignment {
@@ -22,7 +22,9 @@ pub struct FrameMisalignment {
 
 impl FrameMisalignment {
     pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
-        Ok(Self { origin: o.vector3("origin", "m", Some(Vector3::zeros()))? })
+        Ok(Self {
+            origin: o.vector3("origin", "m", Some(Vector3::zeros()))?,
+        })
     }
 }
 
@@ -37,8 +39,29 @@ impl PhysicsTerm for FrameMisalignment {
         EffectKind::Displacement(Frame::Workpiece)
     }
     fn params(&self) -> Vec<ParamSpec> {
-        let mut v: Vec<ParamSpec> = ["rx", "ry", "rz"].iter().map(|n| ParamSpec::new(*n, "rad", -0.05, 0.05, 0.0, format!("small rotation about {}", &n[1..]))).collect();
-        v.extend(["tx", "ty", "tz"].iter().map(|n| ParamSpec::new(*n, "m", -0.1, 0.1, 0.0, format!("translation along {}", &n[1..]))));
+        let mut v: Vec<ParamSpec> = ["rx", "ry", "rz"]
+            .iter()
+            .map(|n| {
+                ParamSpec::new(
+                    *n,
+                    "rad",
+                    -0.05,
+                    0.05,
+                    0.0,
+                    format!("small rotation about {}", &n[1..]),
+                )
+            })
+            .collect();
+        v.extend(["tx", "ty", "tz"].iter().map(|n| {
+            ParamSpec::new(
+                *n,
+                "m",
+                -0.1,
+                0.1,
+                0.0,
+                format!("translation along {}", &n[1..]),
+            )
+        }));
         v
     }
     fn signals(&self) -> Vec<SignalKind> {
@@ -48,7 +71,10 @@ impl PhysicsTerm for FrameMisalignment {
         check_len(self, p, 6)?;
         let r = s.workpiece(self)? - self.origin;
         let w = Vector3::new(p[0], p[1], p[2]);
-        Ok(displacement(Frame::Workpiece, w.cross(&r) + Vector3::new(p[3], p[4], p[5])))
+        Ok(displacement(
+            Frame::Workpiece,
+            w.cross(&r) + Vector3::new(p[3], p[4], p[5]),
+        ))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         check_len(self, p, 6)?;

@@ -8,11 +8,11 @@
 use nalgebra::DMatrix;
 use std::f64::consts::TAU;
 
-use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{Axis, SignalKind, Signals};
 use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term_id::TermId;
 
 #[derive(Debug, Clone)]
 pub struct PitchCyclic {
@@ -31,7 +31,11 @@ impl PitchCyclic {
         if harmonics == 0 {
             return Err(o.bad("harmonics", "must be at least 1"));
         }
-        Ok(Self { axis: o.axis("axis", None)?, lead, harmonics })
+        Ok(Self {
+            axis: o.axis("axis", None)?,
+            lead,
+            harmonics,
+        })
     }
     fn row(&self, q: f64) -> Vec<f64> {
         let mut r = Vec::with_capacity(2 * self.harmonics);
@@ -57,8 +61,22 @@ impl PhysicsTerm for PitchCyclic {
     fn params(&self) -> Vec<ParamSpec> {
         let mut v = Vec::new();
         for h in 1..=self.harmonics {
-            v.push(ParamSpec::new(format!("a{h}"), "m", -50e-6, 50e-6, 0.0, format!("cosine amplitude of harmonic {h}")));
-            v.push(ParamSpec::new(format!("b{h}"), "m", -50e-6, 50e-6, 0.0, format!("sine amplitude of harmonic {h}")));
+            v.push(ParamSpec::new(
+                format!("a{h}"),
+                "m",
+                -50e-6,
+                50e-6,
+                0.0,
+                format!("cosine amplitude of harmonic {h}"),
+            ));
+            v.push(ParamSpec::new(
+                format!("b{h}"),
+                "m",
+                -50e-6,
+                50e-6,
+                0.0,
+                format!("sine amplitude of harmonic {h}"),
+            ));
         }
         v
     }

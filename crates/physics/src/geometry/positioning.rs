@@ -8,11 +8,11 @@
 use nalgebra::{DMatrix, DMatrixViewMut};
 
 use super::error_series::ErrorSeries;
-use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{Axis, SignalKind, Signals};
 use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term_id::TermId;
 
 #[derive(Debug, Clone)]
 pub struct Positioning {
@@ -22,18 +22,47 @@ pub struct Positioning {
 
 impl Positioning {
     pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
-        Ok(Self { axis: o.axis("axis", None)?, series: ErrorSeries::from_options(o, 1)? })
+        Ok(Self {
+            axis: o.axis("axis", None)?,
+            series: ErrorSeries::from_options(o, 1)?,
+        })
     }
 }
 
 /// Coefficient descriptors c0..cn shared by the series-based geometric terms.
-pub(crate) fn series_params(series: &ErrorSeries, unit: &'static str, bound: f64, what: &str) -> Vec<ParamSpec> {
-    (0..series.len()).map(|i| ParamSpec::new(format!("c{i}"), unit, -bound, bound, 0.0, format!("{what}: coefficient of basis function {i} ({:?})", series.basis))).collect()
+pub(crate) fn series_params(
+    series: &ErrorSeries,
+    unit: &'static str,
+    bound: f64,
+    what: &str,
+) -> Vec<ParamSpec> {
+    (0..series.len())
+        .map(|i| {
+            ParamSpec::new(
+                format!("c{i}"),
+                unit,
+                -bound,
+                bound,
+                0.0,
+                format!(
+                    "{what}: coefficient of basis function {i} ({:?})",
+                    series.basis
+                ),
+            )
+        })
+        .collect()
 }
 
 /// Value and Jacobian of a series error along `direction` (d = e_dir·δ(q)), into buffers; the
 /// value's arithmetic is `predict`'s.
-pub(crate) fn series_along_into(series: &ErrorSeries, direction: Axis, p: &[f64], q: f64, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) {
+pub(crate) fn series_along_into(
+    series: &ErrorSeries,
+    direction: Axis,
+    p: &[f64],
+    q: f64,
+    value: &mut [f64],
+    mut jac: DMatrixViewMut<'_, f64>,
+) {
     let basis = series.basis_array(q);
     let v = direction.unit() * series.combine(&basis, p);
     value[..3].copy_from_slice(v.as_slice());
@@ -62,7 +91,10 @@ impl PhysicsTerm for Positioning {
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
         check_len(self, p, self.series.len())?;
         let q = s.position(self, self.axis)?;
-        Ok(displacement(Frame::Machine, self.axis.unit() * self.series.eval(p, q)))
+        Ok(displacement(
+            Frame::Machine,
+            self.axis.unit() * self.series.eval(p, q),
+        ))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         check_len(self, p, self.series.len())?;
@@ -77,11 +109,16 @@ impl PhysicsTerm for Positioning {
     fn linear_in_params(&self) -> bool {
         true
     }
-    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
+    fn evaluate_into(
+        &self,
+        p: &[f64],
+        s: &Signals,
+        value: &mut [f64],
+        jac: DMatrixViewMut<'_, f64>,
+    ) -> Result<(), PhysicsError> {
         check_len(self, p, self.series.len())?;
         let q = s.position(self, self.axis)?;
         series_along_into(&self.series, self.axis, p, q, value, jac);
         Ok(())
     }
 }
-

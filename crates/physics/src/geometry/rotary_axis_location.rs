@@ -47,10 +47,30 @@ const NAMES: [(&str, &str, f64, &str); 10] = [
     ("a_ob", "rad", 2e-3, "E_AOB: B axis tilt about x"),
     ("c_ob", "rad", 2e-3, "E_COB: B axis tilt about z"),
     ("b_ob", "rad", 1e-2, "E_B0B: B zero-position error"),
-    ("x_oc", "m", 2e-3, "E_XOC: C axis line offset along x (cradle frame)"),
-    ("y_oc", "m", 2e-3, "E_YOC: C axis line offset along y (cradle frame)"),
-    ("a_oc", "rad", 2e-3, "E_AOC: C axis tilt about x (cradle frame)"),
-    ("b_oc", "rad", 2e-3, "E_BOC: C axis tilt about y (cradle frame)"),
+    (
+        "x_oc",
+        "m",
+        2e-3,
+        "E_XOC: C axis line offset along x (cradle frame)",
+    ),
+    (
+        "y_oc",
+        "m",
+        2e-3,
+        "E_YOC: C axis line offset along y (cradle frame)",
+    ),
+    (
+        "a_oc",
+        "rad",
+        2e-3,
+        "E_AOC: C axis tilt about x (cradle frame)",
+    ),
+    (
+        "b_oc",
+        "rad",
+        2e-3,
+        "E_BOC: C axis tilt about y (cradle frame)",
+    ),
     ("c_oc", "rad", 1e-2, "E_C0C: C zero-position error"),
 ];
 
@@ -96,7 +116,10 @@ impl RotaryAxisLocation {
         let rzq = rz * q_c;
         set(5, ry * (Vector3::x() - rz * Vector3::x()));
         set(6, ry * (ey - rz * ey));
-        set(7, ry * (Vector3::x().cross(&rzq) - rz * Vector3::x().cross(&q_c)));
+        set(
+            7,
+            ry * (Vector3::x().cross(&rzq) - rz * Vector3::x().cross(&q_c)),
+        );
         set(8, ry * (ey.cross(&rzq) - rz * ey.cross(&q_c)));
         set(9, ry * ez.cross(&rzq));
         Ok(j)
@@ -114,10 +137,17 @@ impl PhysicsTerm for RotaryAxisLocation {
         EffectKind::Displacement(Frame::Machine)
     }
     fn params(&self) -> Vec<ParamSpec> {
-        NAMES.iter().map(|(n, unit, bound, doc)| ParamSpec::new(*n, unit, -bound, *bound, 0.0, *doc)).collect()
+        NAMES
+            .iter()
+            .map(|(n, unit, bound, doc)| ParamSpec::new(*n, unit, -bound, *bound, 0.0, *doc))
+            .collect()
     }
     fn signals(&self) -> Vec<SignalKind> {
-        vec![SignalKind::MachinePoint, SignalKind::RotaryPosition(RotaryAxis::B), SignalKind::RotaryPosition(RotaryAxis::C)]
+        vec![
+            SignalKind::MachinePoint,
+            SignalKind::RotaryPosition(RotaryAxis::B),
+            SignalKind::RotaryPosition(RotaryAxis::C),
+        ]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
         check_len(self, p, 10)?;
@@ -140,25 +170,58 @@ mod tests {
     /// term: the difference is second order in the errors.
     #[test]
     fn first_order_displacement_matches_the_exact_perturbed_chain() {
-        let term = RotaryAxisLocation { b_pivot: Vector3::new(0.5, 0.5, 0.15), c_offset: Vector3::new(0.0, 0.0, 0.05), workpiece_offset: Vector3::new(0.01, -0.02, 0.0) };
-        let e = [20e-6, -15e-6, 40e-6, -30e-6, 50e-6, 10e-6, 25e-6, -35e-6, 45e-6, -60e-6];
-        let iso = |r: Matrix3<f64>| Isometry3::from_parts(Translation3::identity(), UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r)));
-        let tr = |v: Vector3<f64>| Isometry3::from_parts(Translation3::from(v), UnitQuaternion::identity());
-        let small = |v: Vector3<f64>| Isometry3::from_parts(Translation3::identity(), UnitQuaternion::from_scaled_axis(v));
-        for (b, c, t) in [(0.3, -0.7, Vector3::new(0.6, 0.4, 0.3)), (-1.2, 2.0, Vector3::new(0.45, 0.62, 0.21)), (0.0, 0.0, Vector3::new(0.5, 0.5, 0.5))] {
-            let nominal = tr(term.b_pivot) * iso(rot_y(b)) * tr(term.c_offset) * iso(rot_z(c)) * tr(term.workpiece_offset);
+        let term = RotaryAxisLocation {
+            b_pivot: Vector3::new(0.5, 0.5, 0.15),
+            c_offset: Vector3::new(0.0, 0.0, 0.05),
+            workpiece_offset: Vector3::new(0.01, -0.02, 0.0),
+        };
+        let e = [
+            20e-6, -15e-6, 40e-6, -30e-6, 50e-6, 10e-6, 25e-6, -35e-6, 45e-6, -60e-6,
+        ];
+        let iso = |r: Matrix3<f64>| {
+            Isometry3::from_parts(
+                Translation3::identity(),
+                UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(r)),
+            )
+        };
+        let tr = |v: Vector3<f64>| {
+            Isometry3::from_parts(Translation3::from(v), UnitQuaternion::identity())
+        };
+        let small = |v: Vector3<f64>| {
+            Isometry3::from_parts(
+                Translation3::identity(),
+                UnitQuaternion::from_scaled_axis(v),
+            )
+        };
+        for (b, c, t) in [
+            (0.3, -0.7, Vector3::new(0.6, 0.4, 0.3)),
+            (-1.2, 2.0, Vector3::new(0.45, 0.62, 0.21)),
+            (0.0, 0.0, Vector3::new(0.5, 0.5, 0.5)),
+        ] {
+            let nominal = tr(term.b_pivot)
+                * iso(rot_y(b))
+                * tr(term.c_offset)
+                * iso(rot_z(c))
+                * tr(term.workpiece_offset);
             let (db, eb) = (Vector3::new(e[0], 0.0, e[1]), Vector3::new(e[2], 0.0, e[3]));
             let (dc, ec) = (Vector3::new(e[5], e[6], 0.0), Vector3::new(e[7], e[8], 0.0));
             let xb = tr(db) * small(eb) * iso(rot_y(b + e[4])) * small(eb).inverse() * tr(-db);
             let xc = tr(dc) * small(ec) * iso(rot_z(c + e[9])) * small(ec).inverse() * tr(-dc);
             let truth = tr(term.b_pivot) * xb * tr(term.c_offset) * xc * tr(term.workpiece_offset);
             let exact_wp = truth.inverse() * Point3::from(t);
-            let s = Signals { machine_point: Some(t), rotary_position: [None, Some(b), Some(c)], ..Default::default() };
+            let s = Signals {
+                machine_point: Some(t),
+                rotary_position: [None, Some(b), Some(c)],
+                ..Default::default()
+            };
             let d = term.predict(&e, &s).unwrap().value;
             let model_wp = nominal.inverse() * Point3::from(t + Vector3::new(d[0], d[1], d[2]));
             let gap = (exact_wp - model_wp).norm();
             let size = (exact_wp - nominal.inverse() * Point3::from(t)).norm();
-            assert!(gap < 1e-3 * size.max(1e-9) + 1e-12, "B {b} C {c}: exact vs first order differ by {gap:e} m on an effect of {size:e} m");
+            assert!(
+                gap < 1e-3 * size.max(1e-9) + 1e-12,
+                "B {b} C {c}: exact vs first order differ by {gap:e} m on an effect of {size:e} m"
+            );
             if b == 0.0 && c == 0.0 {
                 // the zero offsets still turn the table about its axes; offsets and tilts do not
                 assert!(size < 1e-3 && size > 0.0);

@@ -8,11 +8,11 @@
 
 use nalgebra::{DMatrix, DMatrixViewMut, Vector3};
 
-use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{Axis, SignalKind, Signals};
 use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term_id::TermId;
 
 #[derive(Debug, Clone)]
 pub struct Squareness {
@@ -29,7 +29,12 @@ impl Squareness {
             "xy" => (Axis::X, Axis::Y),
             "xz" => (Axis::X, Axis::Z),
             "yz" => (Axis::Y, Axis::Z),
-            other => return Err(o.bad("pair", format!("`{other}` is not a pair; allowed: xy, xz, yz"))),
+            other => {
+                return Err(o.bad(
+                    "pair",
+                    format!("`{other}` is not a pair; allowed: xy, xz, yz"),
+                ))
+            }
         };
         Ok(Self { affected, driver })
     }
@@ -49,7 +54,14 @@ impl PhysicsTerm for Squareness {
         EffectKind::Displacement(Frame::Machine)
     }
     fn params(&self) -> Vec<ParamSpec> {
-        vec![ParamSpec::new("s", "rad", -2e-3, 2e-3, 0.0, "out-of-squareness angle")]
+        vec![ParamSpec::new(
+            "s",
+            "rad",
+            -2e-3,
+            2e-3,
+            0.0,
+            "out-of-squareness angle",
+        )]
     }
     fn signals(&self) -> Vec<SignalKind> {
         vec![SignalKind::AxisPosition(self.driver)]
@@ -66,7 +78,13 @@ impl PhysicsTerm for Squareness {
     fn linear_in_params(&self) -> bool {
         true
     }
-    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
+    fn evaluate_into(
+        &self,
+        p: &[f64],
+        s: &Signals,
+        value: &mut [f64],
+        mut jac: DMatrixViewMut<'_, f64>,
+    ) -> Result<(), PhysicsError> {
         check_len(self, p, 1)?;
         let arm = self.arm(s)?;
         value[..3].copy_from_slice((arm * p[0]).as_slice());

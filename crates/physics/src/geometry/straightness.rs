@@ -10,11 +10,11 @@ use nalgebra::{DMatrix, DMatrixViewMut};
 
 use super::error_series::ErrorSeries;
 use super::positioning::{series_along_into, series_params};
-use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{Axis, SignalKind, Signals};
 use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term_id::TermId;
 
 #[derive(Debug, Clone)]
 pub struct Straightness {
@@ -28,9 +28,16 @@ impl Straightness {
         let axis = o.axis("axis", None)?;
         let direction = o.axis("direction", None)?;
         if direction == axis {
-            return Err(o.bad("direction", format!("must differ from axis `{axis}` (that would be positioning)")));
+            return Err(o.bad(
+                "direction",
+                format!("must differ from axis `{axis}` (that would be positioning)"),
+            ));
         }
-        Ok(Self { axis, direction, series: ErrorSeries::from_options(o, 2)? })
+        Ok(Self {
+            axis,
+            direction,
+            series: ErrorSeries::from_options(o, 2)?,
+        })
     }
 }
 
@@ -53,7 +60,10 @@ impl PhysicsTerm for Straightness {
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
         check_len(self, p, self.series.len())?;
         let q = s.position(self, self.axis)?;
-        Ok(displacement(Frame::Machine, self.direction.unit() * self.series.eval(p, q)))
+        Ok(displacement(
+            Frame::Machine,
+            self.direction.unit() * self.series.eval(p, q),
+        ))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         check_len(self, p, self.series.len())?;
@@ -68,7 +78,13 @@ impl PhysicsTerm for Straightness {
     fn linear_in_params(&self) -> bool {
         true
     }
-    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
+    fn evaluate_into(
+        &self,
+        p: &[f64],
+        s: &Signals,
+        value: &mut [f64],
+        jac: DMatrixViewMut<'_, f64>,
+    ) -> Result<(), PhysicsError> {
         check_len(self, p, self.series.len())?;
         let q = s.position(self, self.axis)?;
         series_along_into(&self.series, self.direction, p, q, value, jac);

@@ -44,16 +44,27 @@ impl ColumnBending {
         let joint = o.text("joint", None)?;
         let overlaps = match o.get_list("overlaps")? {
             None => Vec::new(),
-            Some(items) => items.iter().map(|v| crate::config::quantity("column_bending", "overlaps", v, "m")).collect::<Result<Vec<_>, _>>()?,
+            Some(items) => items
+                .iter()
+                .map(|v| crate::config::quantity("column_bending", "overlaps", v, "m"))
+                .collect::<Result<Vec<_>, _>>()?,
         };
         if overlaps.iter().any(|v| !(*v > 0.0)) {
             return Err(o.bad("overlaps", "each overlap is a positive length"));
         }
-        let length = if o.has("length") { Some(o.quantity("length", "m", None)?) } else { None };
+        let length = if o.has("length") {
+            Some(o.quantity("length", "m", None)?)
+        } else {
+            None
+        };
         if length.is_some_and(|l| !(l > 0.0)) {
             return Err(o.bad("length", "must be positive"));
         }
-        Ok(Self { joint, overlaps, length })
+        Ok(Self {
+            joint,
+            overlaps,
+            length,
+        })
     }
 }
 
@@ -70,9 +81,33 @@ impl PhysicsTerm for ColumnBending {
     fn params(&self) -> Vec<ParamSpec> {
         let soft = "a negative compliance leans the column away from its load (a counterweight or a preload acting, or the load's masses in the URDF wrong); a larger one than usual is a column softer than a steel column of its size (worn guide pads, a loose foot) or a load heavier than the URDF says";
         vec![
-            ParamSpec::new("foot", "rad/(N m)", 0.0, 1e-4, 0.0, "tilt of the column's foot per N·m of carried moment").unusual_means(soft),
-            ParamSpec::new("pads", "rad m^2/(N m)", 0.0, 1e-5, 0.0, "c_pads = 2/k of the guide pads: an overlap o tilts by c_pads·M/o²").unusual_means(soft),
-            ParamSpec::new("flexure", "1/(N m^2)", 0.0, 1e-5, 0.0, "1/(E·I) of the column's tube").unusual_means(soft),
+            ParamSpec::new(
+                "foot",
+                "rad/(N m)",
+                0.0,
+                1e-4,
+                0.0,
+                "tilt of the column's foot per N·m of carried moment",
+            )
+            .unusual_means(soft),
+            ParamSpec::new(
+                "pads",
+                "rad m^2/(N m)",
+                0.0,
+                1e-5,
+                0.0,
+                "c_pads = 2/k of the guide pads: an overlap o tilts by c_pads·M/o²",
+            )
+            .unusual_means(soft),
+            ParamSpec::new(
+                "flexure",
+                "1/(N m^2)",
+                0.0,
+                1e-5,
+                0.0,
+                "1/(E·I) of the column's tube",
+            )
+            .unusual_means(soft),
         ]
     }
     fn signals(&self) -> Vec<SignalKind> {

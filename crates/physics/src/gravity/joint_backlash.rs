@@ -22,7 +22,9 @@ pub struct JointBacklash {
 
 impl JointBacklash {
     pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
-        Ok(Self { joints: super::joint_names(o)? })
+        Ok(Self {
+            joints: super::joint_names(o)?,
+        })
     }
 }
 

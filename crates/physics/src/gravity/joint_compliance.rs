@@ -24,7 +24,9 @@ pub struct JointCompliance {
 
 impl JointCompliance {
     pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
-        Ok(Self { joints: super::joint_names(o)? })
+        Ok(Self {
+            joints: super::joint_names(o)?,
+        })
     }
 }
 

@@ -23,7 +23,9 @@ pub struct LinkThermalExpansion {
 
 impl LinkThermalExpansion {
     pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
-        Ok(Self { sensor: o.text("sensor", None)? })
+        Ok(Self {
+            sensor: o.text("sensor", None)?,
+        })
     }
 }
 

@@ -57,7 +57,11 @@ pub(crate) fn joint_names(o: &Options) -> Result<Vec<String>, PhysicsError> {
     let mut out = Vec::new();
     for it in items {
         match it {
-            crate::config::ConfigValue::Text(t) if !t.is_empty() && t.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-') => {
+            crate::config::ConfigValue::Text(t)
+                if !t.is_empty()
+                    && t.chars()
+                        .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-') =>
+            {
                 if out.contains(t) {
                     return Err(o.bad("joints", format!("`{t}` is given twice")));
                 }

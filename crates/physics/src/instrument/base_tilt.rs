@@ -35,13 +35,18 @@ pub struct BaseTilt {
 
 impl BaseTilt {
     pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
-        Ok(Self { instrument: super::instance(o)? })
+        Ok(Self {
+            instrument: super::instance(o)?,
+        })
     }
 }
 
 /// Rx(roll)·Ry(pitch) and its derivatives by roll and pitch.
 pub fn levelling(roll: f64, pitch: f64) -> (Matrix3<f64>, [Matrix3<f64>; 2]) {
-    (rx(roll) * ry(pitch), [drx(roll) * ry(pitch), rx(roll) * dry(pitch)])
+    (
+        rx(roll) * ry(pitch),
+        [drx(roll) * ry(pitch), rx(roll) * dry(pitch)],
+    )
 }
 
 impl PhysicsTerm for BaseTilt {
@@ -60,8 +65,26 @@ impl PhysicsTerm for BaseTilt {
     fn params(&self) -> Vec<ParamSpec> {
         let unusual = "a base tilted more than 20 mrad (1.1°) stands on a ramp or a loose support; one of more than 0.2 rad is no tilt but a wrong frame";
         vec![
-            ParamSpec::new("roll", "rad", -0.02, 0.02, 0.0, "tilt of the base about its x axis (first)").possible(-0.2, 0.2).unusual_means(unusual),
-            ParamSpec::new("pitch", "rad", -0.02, 0.02, 0.0, "tilt of the base about its y axis (second)").possible(-0.2, 0.2).unusual_means(unusual),
+            ParamSpec::new(
+                "roll",
+                "rad",
+                -0.02,
+                0.02,
+                0.0,
+                "tilt of the base about its x axis (first)",
+            )
+            .possible(-0.2, 0.2)
+            .unusual_means(unusual),
+            ParamSpec::new(
+                "pitch",
+                "rad",
+                -0.02,
+                0.02,
+                0.0,
+                "tilt of the base about its y axis (second)",
+            )
+            .possible(-0.2, 0.2)
+            .unusual_means(unusual),
         ]
     }
     fn signals(&self) -> Vec<SignalKind> {
@@ -70,7 +93,10 @@ impl PhysicsTerm for BaseTilt {
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
         check_len(self, p, 2)?;
         let x: Vector3<f64> = levelling(p[0], p[1]).0 * s.target(self)?;
-        Ok(Prediction { kind: self.effect(), value: DVector::from_column_slice(x.as_slice()) })
+        Ok(Prediction {
+            kind: self.effect(),
+            value: DVector::from_column_slice(x.as_slice()),
+        })
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         check_len(self, p, 2)?;
@@ -92,19 +118,34 @@ mod tests {
     fn a_pitched_base_lowers_its_forward_points() {
         // pitch about y by +θ (right-handed): a point ahead on +x goes down by x·sin θ
         let t = BaseTilt::default();
-        let s = Signals { target_point: Some(Vector3::new(2.0, 0.0, 0.0)), ..Signals::default() };
+        let s = Signals {
+            target_point: Some(Vector3::new(2.0, 0.0, 0.0)),
+            ..Signals::default()
+        };
         let v = t.predict(&[0.0, 0.01], &s).unwrap().value;
         assert!((v[2] + 2.0 * 0.01f64.sin()).abs() < 1e-12, "{v}");
         // the Jacobian against central differences
         let p = [0.003, -0.007];
-        let j = t.jacobian(&p, &Signals { target_point: Some(Vector3::new(1.0, -0.5, 1.7)), ..Signals::default() }).unwrap();
+        let j = t
+            .jacobian(
+                &p,
+                &Signals {
+                    target_point: Some(Vector3::new(1.0, -0.5, 1.7)),
+                    ..Signals::default()
+                },
+            )
+            .unwrap();
         for k in 0..2 {
             let h = 1e-7;
             let (mut a, mut b) = (p, p);
             a[k] += h;
             b[k] -= h;
-            let s = Signals { target_point: Some(Vector3::new(1.0, -0.5, 1.7)), ..Signals::default() };
-            let fd = (t.predict(&a, &s).unwrap().value - t.predict(&b, &s).unwrap().value) / (2.0 * h);
+            let s = Signals {
+                target_point: Some(Vector3::new(1.0, -0.5, 1.7)),
+                ..Signals::default()
+            };
+            let fd =
+                (t.predict(&a, &s).unwrap().value - t.predict(&b, &s).unwrap().value) / (2.0 * h);
             assert!((fd - j.column(k)).norm() < 1e-8, "column {k}");
         }
     }

@@ -5,11 +5,11 @@
 
 use nalgebra::DMatrix;
 
-use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
 use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term_id::TermId;
 
 #[derive(Debug, Clone, Default)]
 pub struct CameraScale {
@@ -19,7 +19,9 @@ pub struct CameraScale {
 
 impl CameraScale {
     pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
-        Ok(Self { instrument: super::instance(o)? })
+        Ok(Self {
+            instrument: super::instance(o)?,
+        })
     }
 }
 
@@ -37,7 +39,14 @@ impl PhysicsTerm for CameraScale {
         EffectKind::Displacement(Frame::Camera)
     }
     fn params(&self) -> Vec<ParamSpec> {
-        vec![ParamSpec::new("scale", "1", -0.05, 0.05, 0.0, "relative scale error s")]
+        vec![ParamSpec::new(
+            "scale",
+            "1",
+            -0.05,
+            0.05,
+            0.0,
+            "relative scale error s",
+        )]
     }
     fn signals(&self) -> Vec<SignalKind> {
         vec![SignalKind::CameraPoint]

@@ -39,7 +39,15 @@ pub fn shop_floor_index_dp(_p: f64, t: f64, _h: f64) -> f64 {
 /// Saturation vapour pressure over water (IAPWS-IF97, as used by the NIST toolbox), Pa; t in °C.
 pub fn saturation_vapour_pressure(t: f64) -> f64 {
     const K: [f64; 10] = [
-        1.16705214528e3, -7.24213167032e5, -1.70738469401e1, 1.20208247025e4, -3.23255503223e6, 1.49151086135e1, -4.82326573616e3, 4.05113405421e5, -2.38555575678e-1,
+        1.16705214528e3,
+        -7.24213167032e5,
+        -1.70738469401e1,
+        1.20208247025e4,
+        -3.23255503223e6,
+        1.49151086135e1,
+        -4.82326573616e3,
+        4.05113405421e5,
+        -2.38555575678e-1,
         6.50175348448e2,
     ];
     let tk = t + 273.15;
@@ -66,7 +74,8 @@ pub fn boensch_potulski_index(lambda: f64, p: f64, t: f64, h: f64, co2: f64) -> 
     let s2 = 1.0 / (lambda * 1e6).powi(2);
     let rs = (8091.37 + 2333983.0 / (130.0 - s2) + 15518.0 / (38.9 - s2)) * 1e-8;
     let rx = rs * (1.0 + 0.5327 * (co2 - 0.0004));
-    let rtp = rx * p / 93214.60 * (1.0 + 1e-8 * (0.5953 - 0.009876 * t) * p) / (1.0 + 0.0036610 * t);
+    let rtp =
+        rx * p / 93214.60 * (1.0 + 1e-8 * (0.5953 - 0.009876 * t) * p) / (1.0 + 0.0036610 * t);
     let f = h / 100.0 * saturation_vapour_pressure(t);
     1.0 + rtp - f * (3.8020 - 0.0384 * s2) * 1e-10
 }
@@ -74,7 +83,10 @@ pub fn boensch_potulski_index(lambda: f64, p: f64, t: f64, h: f64, co2: f64) -> 
 /// Range error of a beam crossing sections of different index (thesis eq. 5.7, discrete form):
 /// Δρ = Σ ρ_i·(n_i/n_LT − 1), measured − true; `segments` = (true length m, index).
 pub fn segmented_path_range_error(segments: &[(f64, f64)], n_assumed: f64) -> f64 {
-    segments.iter().map(|(len, n)| len * (n / n_assumed - 1.0)).sum()
+    segments
+        .iter()
+        .map(|(len, n)| len * (n / n_assumed - 1.0))
+        .sum()
 }
 
 /// Standard deviations of the weather-station readings used by
@@ -89,12 +101,23 @@ pub struct StationUncertainty {
 /// Monte Carlo of the thesis (P1 §3): sample station readings around the true (p, t, h) with
 /// normal errors of the given σ, compute the per-metre range error n_true/n_station − 1 with the
 /// shop-floor formula, and return twice its standard deviation (m/m). Deterministic in `seed`.
-pub fn weather_station_scale_error_2sigma(p: f64, t: f64, h: f64, sigma: StationUncertainty, samples: usize, seed: u64) -> f64 {
+pub fn weather_station_scale_error_2sigma(
+    p: f64,
+    t: f64,
+    h: f64,
+    sigma: StationUncertainty,
+    samples: usize,
+    seed: u64,
+) -> f64 {
     let mut rng = ChaCha8Rng::seed_from_u64(seed);
     let n_true = shop_floor_index(p, t, h);
     let errs: Vec<f64> = (0..samples)
         .map(|_| {
-            let n_station = shop_floor_index(p + sigma.pressure * normal(&mut rng), t + sigma.temperature * normal(&mut rng), h + sigma.humidity * normal(&mut rng));
+            let n_station = shop_floor_index(
+                p + sigma.pressure * normal(&mut rng),
+                t + sigma.temperature * normal(&mut rng),
+                h + sigma.humidity * normal(&mut rng),
+            );
             n_true / n_station - 1.0
         })
         .collect();

@@ -51,16 +51,24 @@ impl InstrumentDrift {
         let instrument = super::instance(o)?;
         let order = o.count("order", 1, MAX_DRIFT_ORDER)?;
         if order == 0 {
-            return Err(o.bad("order", "must be at least 1 (order 0 would be the pose itself)"));
+            return Err(o.bad(
+                "order",
+                "must be at least 1 (order 0 would be the pose itself)",
+            ));
         }
         let span = match o.get_list("span")? {
             Some(items) if items.len() == 2 => (crate::config::quantity("instrument_drift", "span", &items[0], "s")?, crate::config::quantity("instrument_drift", "span", &items[1], "s")?),
             Some(_) => return Err(o.bad("span", "expected [t_start, t_end] in s (the recording's clock)")),
             None => return Err(o.bad("span", "is required: [t_start, t_end] in s, the recording's clock (the time the series is defined over)")),
         };
-        let series = ErrorSeries::new(SeriesBasis::Legendre, order, span).map_err(|e| o.bad("span", e.to_string()))?;
+        let series = ErrorSeries::new(SeriesBasis::Legendre, order, span)
+            .map_err(|e| o.bad("span", e.to_string()))?;
         let rotation = o.flag("rotation", true)?;
-        Ok(Self { instrument, series, rotation })
+        Ok(Self {
+            instrument,
+            series,
+            rotation,
+        })
     }
 
     fn components(&self) -> usize {
@@ -77,7 +85,10 @@ impl InstrumentDrift {
     }
 
     fn time(&self, s: &Signals) -> Result<f64, PhysicsError> {
-        s.time.ok_or_else(|| PhysicsError::MissingSignal { term: self.label(), signal: SignalKind::Time.to_string() })
+        s.time.ok_or_else(|| PhysicsError::MissingSignal {
+            term: self.label(),
+            signal: SignalKind::Time.to_string(),
+        })
     }
 
     /// P₁..P_order at time t.
@@ -103,7 +114,11 @@ impl PhysicsTerm for InstrumentDrift {
         let mut v = Vec::with_capacity(self.len());
         for j in 1..=self.series.order {
             for (k, c) in COMPONENTS.iter().enumerate().take(self.components()) {
-                let (unit, usual, what) = if k < 3 { ("m", 50e-6, "translation of the instrument's origin") } else { ("rad", 50e-6, "turn of the instrument's pose angle") };
+                let (unit, usual, what) = if k < 3 {
+                    ("m", 50e-6, "translation of the instrument's origin")
+                } else {
+                    ("rad", 50e-6, "turn of the instrument's pose angle")
+                };
                 v.push(
                     ParamSpec::new(format!("{c}{j}"), unit, -usual, usual, 0.0, format!("{what} along/about {}: coefficient of P{j} over the span", &c[1..]))
                         .unusual_means("an instrument moving more than 50 µm (or 50 µrad) in a recording stands on a loose or soft support, or was knocked"),
@@ -125,7 +140,10 @@ impl PhysicsTerm for InstrumentDrift {
                 v[k] += b[j] * p[(j - 1) * n + k];
             }
         }
-        Ok(Prediction { kind: self.effect(), value: v })
+        Ok(Prediction {
+            kind: self.effect(),
+            value: v,
+        })
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         check_len(self, p, self.len())?;
@@ -139,7 +157,13 @@ impl PhysicsTerm for InstrumentDrift {
         }
         Ok(j)
     }
-    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
+    fn evaluate_into(
+        &self,
+        p: &[f64],
+        s: &Signals,
+        value: &mut [f64],
+        mut jac: DMatrixViewMut<'_, f64>,
+    ) -> Result<(), PhysicsError> {
         check_len(self, p, self.len())?;
         let b = self.basis(self.time(s)?);
         let n = self.components();
@@ -167,7 +191,13 @@ mod tests {
     fn drift(order: usize, rotation: bool) -> InstrumentDrift {
         let map: BTreeMap<String, ConfigValue> = [
             ("order".to_string(), ConfigValue::Number(order as f64)),
-            ("span".to_string(), ConfigValue::List(vec![ConfigValue::Number(1000.0), ConfigValue::Number(19000.0)])),
+            (
+                "span".to_string(),
+                ConfigValue::List(vec![
+                    ConfigValue::Number(1000.0),
+                    ConfigValue::Number(19000.0),
+                ]),
+            ),
             ("rotation".to_string(), ConfigValue::Bool(rotation)),
         ]
         .into_iter()
@@ -181,9 +211,25 @@ mod tests {
     #[test]
     fn a_linear_drift_is_zero_mid_span_and_its_coefficient_at_the_end() {
         let d = drift(1, false);
-        assert_eq!(d.params().iter().map(|p| p.name.as_str()).collect::<Vec<_>>(), ["dx1", "dy1", "dz1"]);
+        assert_eq!(
+            d.params()
+                .iter()
+                .map(|p| p.name.as_str())
+                .collect::<Vec<_>>(),
+            ["dx1", "dy1", "dz1"]
+        );
         let p = [0.0, 0.0, -9e-6];
-        let at = |t: f64| d.predict(&p, &Signals { time: Some(t), ..Default::default() }).unwrap().value;
+        let at = |t: f64| {
+            d.predict(
+                &p,
+                &Signals {
+                    time: Some(t),
+                    ..Default::default()
+                },
+            )
+            .unwrap()
+            .value
+        };
         assert!(at(10_000.0).norm() < 1e-18);
         assert!((at(19_000.0)[2] + 9e-6).abs() < 1e-18);
         assert!((at(1_000.0)[2] - 9e-6).abs() < 1e-18);
@@ -195,7 +241,10 @@ mod tests {
     fn the_jacobian_is_the_basis_and_the_term_is_linear() {
         let d = drift(2, true);
         assert_eq!(d.params().len(), 12);
-        let s = Signals { time: Some(4_000.0), ..Default::default() };
+        let s = Signals {
+            time: Some(4_000.0),
+            ..Default::default()
+        };
         let p: Vec<f64> = (0..12).map(|i| (i as f64 - 5.0) * 1e-6).collect();
         let j = d.jacobian(&p, &s).unwrap();
         let v = d.predict(&p, &s).unwrap().value;
@@ -206,10 +255,15 @@ mod tests {
     #[test]
     fn without_a_span_or_a_time_it_says_what_is_missing() {
         let map: BTreeMap<String, ConfigValue> = BTreeMap::new();
-        let e = InstrumentDrift::from_options(&Options::new("instrument_drift", &map)).unwrap_err().to_string();
+        let e = InstrumentDrift::from_options(&Options::new("instrument_drift", &map))
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("span") && e.contains("recording's clock"), "{e}");
         let d = drift(1, true);
-        let e = d.predict(&[0.0; 6], &Signals::default()).unwrap_err().to_string();
+        let e = d
+            .predict(&[0.0; 6], &Signals::default())
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("time"), "{e}");
     }
 }

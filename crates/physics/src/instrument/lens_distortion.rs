@@ -9,11 +9,11 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
 use crate::term::{check_len, EffectKind, ParamSpec, PhysicsTerm, Prediction};
+use crate::term_id::TermId;
 
 /// ∂(Δx, Δy)/∂(x, y) at the ideal normalised point (x, y) for parameters (k1, k2, k3, p1, p2):
 /// with R = k1 r² + k2 r⁴ + k3 r⁶ and R' = dR/d(r²) = k1 + 2 k2 r² + 3 k3 r⁴,
@@ -27,7 +27,16 @@ pub fn image_point_jacobian(p: &[f64], x: f64, y: f64) -> [[f64; 2]; 2] {
     let radial = k1 * r2 + k2 * r2 * r2 + k3 * r2 * r2 * r2;
     let slope = k1 + 2.0 * k2 * r2 + 3.0 * k3 * r2 * r2;
     let cross = 2.0 * x * y * slope + 2.0 * p1 * x + 2.0 * p2 * y;
-    [[radial + 2.0 * x * x * slope + 2.0 * p1 * y + 6.0 * p2 * x, cross], [cross, radial + 2.0 * y * y * slope + 6.0 * p1 * y + 2.0 * p2 * x]]
+    [
+        [
+            radial + 2.0 * x * x * slope + 2.0 * p1 * y + 6.0 * p2 * x,
+            cross,
+        ],
+        [
+            cross,
+            radial + 2.0 * y * y * slope + 6.0 * p1 * y + 2.0 * p2 * x,
+        ],
+    ]
 }
 
 #[derive(Debug, Clone, Default)]
@@ -38,17 +47,31 @@ pub struct LensDistortion {
 
 impl LensDistortion {
     pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
-        Ok(Self { instrument: super::instance(o)? })
+        Ok(Self {
+            instrument: super::instance(o)?,
+        })
     }
     fn jac(&self, s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         let q = s.image(self)?;
         let (x, y) = (q.x, q.y);
         let r2 = x * x + y * y;
         // columns: k1, k2, k3, p1, p2
-        Ok(DMatrix::from_row_slice(2, 5, &[
-            x * r2, x * r2 * r2, x * r2 * r2 * r2, 2.0 * x * y, r2 + 2.0 * x * x,
-            y * r2, y * r2 * r2, y * r2 * r2 * r2, r2 + 2.0 * y * y, 2.0 * x * y,
-        ]))
+        Ok(DMatrix::from_row_slice(
+            2,
+            5,
+            &[
+                x * r2,
+                x * r2 * r2,
+                x * r2 * r2 * r2,
+                2.0 * x * y,
+                r2 + 2.0 * x * x,
+                y * r2,
+                y * r2 * r2,
+                y * r2 * r2 * r2,
+                r2 + 2.0 * y * y,
+                2.0 * x * y,
+            ],
+        ))
     }
 }
 
@@ -80,7 +103,10 @@ impl PhysicsTerm for LensDistortion {
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
         check_len(self, p, 5)?;
         let v = self.jac(s)? * DVector::from_column_slice(p);
-        Ok(Prediction { kind: self.effect(), value: v })
+        Ok(Prediction {
+            kind: self.effect(),
+            value: v,
+        })
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         check_len(self, p, 5)?;

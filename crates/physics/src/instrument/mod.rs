@@ -26,7 +26,11 @@ pub(crate) fn instance(o: &Options) -> Result<Option<String>, PhysicsError> {
         return Ok(None);
     }
     let name = o.text("instrument", None)?;
-    if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-') {
+    if name.is_empty()
+        || !name
+            .chars()
+            .all(|c| c.is_ascii_alphanumeric() || c == '_' || c == '-')
+    {
         return Err(o.bad("instrument", format!("`{name}` is not an instrument name; use letters, digits, `_` or `-` (e.g. lt1, cam_left)")));
     }
     Ok(Some(name))

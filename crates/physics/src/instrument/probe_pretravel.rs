@@ -10,11 +10,11 @@
 
 use nalgebra::{DMatrix, Vector3};
 
-use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
 use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term_id::TermId;
 
 #[derive(Debug, Clone)]
 pub struct ProbePretravel {
@@ -29,11 +29,17 @@ impl ProbePretravel {
         if lobes == 0 {
             return Err(o.bad("lobes", "must be at least 1"));
         }
-        Ok(Self { lobes, instrument: super::instance(o)? })
+        Ok(Self {
+            lobes,
+            instrument: super::instance(o)?,
+        })
     }
     /// The term of an unnamed probe with `lobes` lobes.
     pub fn new(lobes: usize) -> Self {
-        Self { lobes, instrument: None }
+        Self {
+            lobes,
+            instrument: None,
+        }
     }
     /// ∂pt/∂(p0, a, b, pz) and the direction.
     fn row(&self, s: &Signals) -> Result<([f64; 4], Vector3<f64>), PhysicsError> {
@@ -60,10 +66,41 @@ impl PhysicsTerm for ProbePretravel {
     }
     fn params(&self) -> Vec<ParamSpec> {
         vec![
-            ParamSpec::new("mean", "m", -20e-6, 100e-6, 0.0, "p₀: mean lateral pretravel").unusual_means("a negative mean pretravel: the stylus radius or probe qualification over-corrects"),
-            ParamSpec::new("lobe_cos", "m", -50e-6, 50e-6, 0.0, "a: lobing amplitude, cosine part"),
-            ParamSpec::new("lobe_sin", "m", -50e-6, 50e-6, 0.0, "b: lobing amplitude, sine part"),
-            ParamSpec::new("vertical", "m", -20e-6, 100e-6, 0.0, "p_z: pretravel along the stylus axis"),
+            ParamSpec::new(
+                "mean",
+                "m",
+                -20e-6,
+                100e-6,
+                0.0,
+                "p₀: mean lateral pretravel",
+            )
+            .unusual_means(
+                "a negative mean pretravel: the stylus radius or probe qualification over-corrects",
+            ),
+            ParamSpec::new(
+                "lobe_cos",
+                "m",
+                -50e-6,
+                50e-6,
+                0.0,
+                "a: lobing amplitude, cosine part",
+            ),
+            ParamSpec::new(
+                "lobe_sin",
+                "m",
+                -50e-6,
+                50e-6,
+                0.0,
+                "b: lobing amplitude, sine part",
+            ),
+            ParamSpec::new(
+                "vertical",
+                "m",
+                -20e-6,
+                100e-6,
+                0.0,
+                "p_z: pretravel along the stylus axis",
+            ),
         ]
     }
     fn signals(&self) -> Vec<SignalKind> {

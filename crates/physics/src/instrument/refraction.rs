@@ -10,12 +10,14 @@
 
 use nalgebra::{DMatrix, DMatrixViewMut, DVector};
 
-use super::edlen::{shop_floor_index, shop_floor_index_dp, shop_floor_index_dt, shop_floor_refractivity};
-use crate::term_id::TermId;
+use super::edlen::{
+    shop_floor_index, shop_floor_index_dp, shop_floor_index_dt, shop_floor_refractivity,
+};
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
 use crate::term::{check_len, EffectKind, ParamSpec, PhysicsTerm, Prediction};
+use crate::term_id::TermId;
 
 /// Range change and its derivatives w.r.t. (ΔT, Δp) at range ρ and station air (t, p, h).
 fn range_change(rho: f64, t: f64, pa: f64, h: f64, dh: f64, p: &[f64]) -> (f64, [f64; 2]) {
@@ -24,7 +26,13 @@ fn range_change(rho: f64, t: f64, pa: f64, h: f64, dh: f64, p: &[f64]) -> (f64, 
     let n_path = shop_floor_refractivity(pa + p[1], t + p[0], h + dh);
     let n_lt_index = shop_floor_index(pa, t, h);
     let (tp, pp, hp) = (t + p[0], pa + p[1], h + dh);
-    (rho * (n_path - n_lt) / (1.0 + n_lt), [rho * shop_floor_index_dt(pp, tp, hp) / n_lt_index, rho * shop_floor_index_dp(pp, tp, hp) / n_lt_index])
+    (
+        rho * (n_path - n_lt) / (1.0 + n_lt),
+        [
+            rho * shop_floor_index_dt(pp, tp, hp) / n_lt_index,
+            rho * shop_floor_index_dp(pp, tp, hp) / n_lt_index,
+        ],
+    )
 }
 
 #[derive(Debug, Clone, Default)]
@@ -39,9 +47,15 @@ impl Refraction {
     pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
         let path_humidity_offset = o.quantity("path_humidity_offset", "1", Some(0.0))?;
         if !(path_humidity_offset.abs() <= 100.0) {
-            return Err(o.bad("path_humidity_offset", format!("must be within ±100 %RH, got {path_humidity_offset}")));
+            return Err(o.bad(
+                "path_humidity_offset",
+                format!("must be within ±100 %RH, got {path_humidity_offset}"),
+            ));
         }
-        Ok(Self { path_humidity_offset, instrument: super::instance(o)? })
+        Ok(Self {
+            path_humidity_offset,
+            instrument: super::instance(o)?,
+        })
     }
 }
 
@@ -69,23 +83,49 @@ impl PhysicsTerm for Refraction {
         ]
     }
     fn signals(&self) -> Vec<SignalKind> {
-        vec![SignalKind::TrackerRange, SignalKind::AirTemperature, SignalKind::AirPressure, SignalKind::AirHumidity]
+        vec![
+            SignalKind::TrackerRange,
+            SignalKind::AirTemperature,
+            SignalKind::AirPressure,
+            SignalKind::AirHumidity,
+        ]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
         check_len(self, p, 2)?;
         let rho = s.range(self)?;
         let (t, pa, h) = s.air(self)?;
-        Ok(Prediction { kind: self.effect(), value: DVector::from_element(1, range_change(rho, t, pa, h, self.path_humidity_offset, p).0) })
+        Ok(Prediction {
+            kind: self.effect(),
+            value: DVector::from_element(
+                1,
+                range_change(rho, t, pa, h, self.path_humidity_offset, p).0,
+            ),
+        })
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         check_len(self, p, 2)?;
         let rho = s.range(self)?;
         let (t, pa, h) = s.air(self)?;
-        Ok(DMatrix::from_row_slice(1, 2, &range_change(rho, t, pa, h, self.path_humidity_offset, p).1))
+        Ok(DMatrix::from_row_slice(
+            1,
+            2,
+            &range_change(rho, t, pa, h, self.path_humidity_offset, p).1,
+        ))
     }
-    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
+    fn evaluate_into(
+        &self,
+        p: &[f64],
+        s: &Signals,
+        value: &mut [f64],
+        mut jac: DMatrixViewMut<'_, f64>,
+    ) -> Result<(), PhysicsError> {
         check_len(self, p, 2)?;
-        let (rho, t, pa, h) = match (s.tracker_range, s.air_temperature, s.air_pressure, s.air_humidity) {
+        let (rho, t, pa, h) = match (
+            s.tracker_range,
+            s.air_temperature,
+            s.air_pressure,
+            s.air_humidity,
+        ) {
             (Some(rho), Some(t), Some(pa), Some(h)) => (rho, t, pa, h),
             _ => {
                 let (t, pa, h) = s.air(self)?;

@@ -5,11 +5,11 @@
 
 use nalgebra::DMatrix;
 
-use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{Axis, SignalKind, Signals};
 use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term_id::TermId;
 
 #[derive(Debug, Clone, Default)]
 pub struct TimeOffset;
@@ -34,7 +34,10 @@ impl PhysicsTerm for TimeOffset {
         vec![ParamSpec::new("latency", "s", -0.05, 0.05, 0.0, "Δt: how late the stream's samples are").unusual_means("a latency of more than 50 ms is not a fieldbus delay: the streams' clocks are not synchronised")]
     }
     fn signals(&self) -> Vec<SignalKind> {
-        Axis::ALL.iter().map(|a| SignalKind::AxisVelocity(*a)).collect()
+        Axis::ALL
+            .iter()
+            .map(|a| SignalKind::AxisVelocity(*a))
+            .collect()
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
         check_len(self, p, 1)?;
@@ -42,6 +45,10 @@ impl PhysicsTerm for TimeOffset {
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         check_len(self, p, 1)?;
-        Ok(DMatrix::from_column_slice(3, 1, (-s.velocity(self)?).as_slice()))
+        Ok(DMatrix::from_column_slice(
+            3,
+            1,
+            (-s.velocity(self)?).as_slice(),
+        ))
     }
 }

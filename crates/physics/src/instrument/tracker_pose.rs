@@ -10,11 +10,11 @@
 
 use nalgebra::{DMatrix, DMatrixViewMut, DVector, Matrix3, Vector3};
 
-use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
 use crate::term::{check_len, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term_id::TermId;
 
 // The rotation convention is kinematics' (the one Euler XYZ of the project), re-exported here
 // for the callers that know it as the tracker pose's.
@@ -35,14 +35,21 @@ impl TrackerPose {
     pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
         let setup = if o.has("setup") {
             let name = o.text("setup", None)?;
-            if name.is_empty() || !name.chars().all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.')) {
+            if name.is_empty()
+                || !name
+                    .chars()
+                    .all(|c| c.is_ascii_alphanumeric() || matches!(c, '_' | '-' | '.'))
+            {
                 return Err(o.bad("setup", format!("`{name}` is not a setup name; use letters, digits, `_`, `-` or `.` (e.g. S1, station_3)")));
             }
             Some(name)
         } else {
             None
         };
-        Ok(Self { instrument: super::instance(o)?, setup })
+        Ok(Self {
+            instrument: super::instance(o)?,
+            setup,
+        })
     }
 }
 
@@ -85,7 +92,10 @@ impl PhysicsTerm for TrackerPose {
         check_len(self, p, 6)?;
         let d = s.target(self)? - Vector3::new(p[0], p[1], p[2]);
         let x = euler_xyz(p[3], p[4], p[5]).transpose() * d;
-        Ok(Prediction { kind: self.effect(), value: DVector::from_column_slice(x.as_slice()) })
+        Ok(Prediction {
+            kind: self.effect(),
+            value: DVector::from_column_slice(x.as_slice()),
+        })
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         check_len(self, p, 6)?;
@@ -94,19 +104,34 @@ impl PhysicsTerm for TrackerPose {
         let r = euler_xyz(a, b, c);
         let mut j = DMatrix::zeros(3, 6);
         j.view_mut((0, 0), (3, 3)).copy_from(&(-r.transpose()));
-        let dr = [drx(a) * ry(b) * rz(c), rx(a) * dry(b) * rz(c), rx(a) * ry(b) * drz(c)];
+        let dr = [
+            drx(a) * ry(b) * rz(c),
+            rx(a) * dry(b) * rz(c),
+            rx(a) * ry(b) * drz(c),
+        ];
         for (k, m) in dr.iter().enumerate() {
             j.set_column(3 + k, &(m.transpose() * d));
         }
         Ok(j)
     }
-    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
+    fn evaluate_into(
+        &self,
+        p: &[f64],
+        s: &Signals,
+        value: &mut [f64],
+        jac: DMatrixViewMut<'_, f64>,
+    ) -> Result<(), PhysicsError> {
         check_len(self, p, 6)?;
         let point = match s.target_point {
             Some(v) => v,
             None => s.target(self)?,
         };
-        PoseRotation::new(p[3], p[4], p[5]).evaluate_into(Vector3::new(p[0], p[1], p[2]), point, value, jac);
+        PoseRotation::new(p[3], p[4], p[5]).evaluate_into(
+            Vector3::new(p[0], p[1], p[2]),
+            point,
+            value,
+            jac,
+        );
         Ok(())
     }
 }
@@ -125,7 +150,15 @@ pub struct PoseRotation {
 impl PoseRotation {
     pub fn new(alpha: f64, beta: f64, delta: f64) -> Self {
         let (a, b, c) = (alpha, beta, delta);
-        Self { angles: [a, b, c], r: euler_xyz(a, b, c), dr: [drx(a) * ry(b) * rz(c), rx(a) * dry(b) * rz(c), rx(a) * ry(b) * drz(c)] }
+        Self {
+            angles: [a, b, c],
+            r: euler_xyz(a, b, c),
+            dr: [
+                drx(a) * ry(b) * rz(c),
+                rx(a) * dry(b) * rz(c),
+                rx(a) * ry(b) * drz(c),
+            ],
+        }
     }
 
     /// The Euler angles (α, β, δ) this rotation is of.
@@ -135,10 +168,17 @@ impl PoseRotation {
 
     /// [`TrackerPose`]'s `evaluate_into` at this rotation (bit for bit): x = R_LTᵀ(point −
     /// origin) into `value[..3]`, ∂x/∂(tx, ty, tz, α, β, δ) into `jac` (3 × 6).
-    pub fn evaluate_into(&self, origin: Vector3<f64>, point: Vector3<f64>, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) {
+    pub fn evaluate_into(
+        &self,
+        origin: Vector3<f64>,
+        point: Vector3<f64>,
+        value: &mut [f64],
+        mut jac: DMatrixViewMut<'_, f64>,
+    ) {
         let d = point - origin;
         value[..3].copy_from_slice((self.r.transpose() * d).as_slice());
-        jac.fixed_view_mut::<3, 3>(0, 0).copy_from(&(-self.r.transpose()));
+        jac.fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&(-self.r.transpose()));
         for (k, m) in self.dr.iter().enumerate() {
             jac.column_mut(3 + k).copy_from(&(m.transpose() * d));
         }

@@ -18,7 +18,12 @@ pub struct TrackerRangeBudget {
 impl TrackerRangeBudget {
     /// Combined standard uncertainty per metre (1σ), m/m.
     pub fn standard_per_metre(&self) -> f64 {
-        let items = [self.absolute_accuracy, self.repeatability, self.weather_station, self.environment_deviation];
+        let items = [
+            self.absolute_accuracy,
+            self.repeatability,
+            self.weather_station,
+            self.environment_deviation,
+        ];
         items.iter().map(|u| (0.5 * u).powi(2)).sum::<f64>().sqrt()
     }
     /// Expanded uncertainty at range `rho` (m) with coverage factor `k`, m.

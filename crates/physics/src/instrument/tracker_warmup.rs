@@ -9,11 +9,11 @@
 
 use nalgebra::{DMatrix, DMatrixViewMut, DVector};
 
-use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
 use crate::term::{check_len, EffectKind, ParamSpec, PhysicsTerm, Prediction};
+use crate::term_id::TermId;
 
 /// A + B·(1 − e^(−t/τ)).
 pub fn warmup_drift(a: f64, b: f64, tau: f64, t: f64) -> f64 {
@@ -34,7 +34,9 @@ pub struct TrackerWarmup {
 
 impl TrackerWarmup {
     pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
-        Ok(Self { instrument: super::instance(o)? })
+        Ok(Self {
+            instrument: super::instance(o)?,
+        })
     }
 }
 
@@ -64,15 +66,28 @@ impl PhysicsTerm for TrackerWarmup {
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
         check_len(self, p, 3)?;
         let t = s.time_on(self)?;
-        Ok(Prediction { kind: self.effect(), value: DVector::from_element(1, warmup_drift(p[0], p[1], p[2], t)) })
+        Ok(Prediction {
+            kind: self.effect(),
+            value: DVector::from_element(1, warmup_drift(p[0], p[1], p[2], t)),
+        })
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         check_len(self, p, 3)?;
         let t = s.time_on(self)?;
         let e = (-t / p[2]).exp();
-        Ok(DMatrix::from_row_slice(1, 3, &[1.0, 1.0 - e, -p[1] * t / (p[2] * p[2]) * e]))
+        Ok(DMatrix::from_row_slice(
+            1,
+            3,
+            &[1.0, 1.0 - e, -p[1] * t / (p[2] * p[2]) * e],
+        ))
     }
-    fn evaluate_into(&self, p: &[f64], s: &Signals, value: &mut [f64], mut jac: DMatrixViewMut<'_, f64>) -> Result<(), PhysicsError> {
+    fn evaluate_into(
+        &self,
+        p: &[f64],
+        s: &Signals,
+        value: &mut [f64],
+        mut jac: DMatrixViewMut<'_, f64>,
+    ) -> Result<(), PhysicsError> {
         check_len(self, p, 3)?;
         let t = match s.time_since_power_on {
             Some(t) => t,

@@ -10,11 +10,11 @@
 
 use nalgebra::{DMatrix, DVector};
 
-use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
 use crate::term::{check_len, EffectKind, ParamSpec, PhysicsTerm, Prediction};
+use crate::term_id::TermId;
 
 /// Expected σ at range ρ (see module docs).
 pub fn range_scatter(base: f64, proportional: f64, turbulence: f64, rho: f64) -> f64 {
@@ -41,7 +41,9 @@ pub struct Turbulence {
 
 impl Turbulence {
     pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
-        Ok(Self { instrument: super::instance(o)? })
+        Ok(Self {
+            instrument: super::instance(o)?,
+        })
     }
 }
 
@@ -60,9 +62,33 @@ impl PhysicsTerm for Turbulence {
     }
     fn params(&self) -> Vec<ParamSpec> {
         vec![
-            ParamSpec::new("base_sigma", "m", 1e-7, 1e-4, 4e-6, "σ₀: range noise independent of distance").possible(0.0, f64::INFINITY),
-            ParamSpec::new("proportional_sigma", "1", 0.0, 1e-5, 0.8e-6, "s: range noise per metre of range").possible(0.0, f64::INFINITY),
-            ParamSpec::new("turbulence", "1", 0.0, 1e-3, 0.0, "c: turbulence scatter per metre of beam").possible(0.0, f64::INFINITY),
+            ParamSpec::new(
+                "base_sigma",
+                "m",
+                1e-7,
+                1e-4,
+                4e-6,
+                "σ₀: range noise independent of distance",
+            )
+            .possible(0.0, f64::INFINITY),
+            ParamSpec::new(
+                "proportional_sigma",
+                "1",
+                0.0,
+                1e-5,
+                0.8e-6,
+                "s: range noise per metre of range",
+            )
+            .possible(0.0, f64::INFINITY),
+            ParamSpec::new(
+                "turbulence",
+                "1",
+                0.0,
+                1e-3,
+                0.0,
+                "c: turbulence scatter per metre of beam",
+            )
+            .possible(0.0, f64::INFINITY),
         ]
     }
     fn signals(&self) -> Vec<SignalKind> {
@@ -71,16 +97,26 @@ impl PhysicsTerm for Turbulence {
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
         check_len(self, p, 3)?;
         let rho = s.range(self)?;
-        Ok(Prediction { kind: self.effect(), value: DVector::from_element(1, range_scatter(p[0], p[1], p[2], rho)) })
+        Ok(Prediction {
+            kind: self.effect(),
+            value: DVector::from_element(1, range_scatter(p[0], p[1], p[2], rho)),
+        })
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         check_len(self, p, 3)?;
         let rho = s.range(self)?;
         let sig = range_scatter(p[0], p[1], p[2], rho);
         if !(sig > 0.0) {
-            return Err(PhysicsError::InvalidInput { what: self.label(), reason: "σ = 0: Jacobian undefined (give base_sigma > 0)".into() });
+            return Err(PhysicsError::InvalidInput {
+                what: self.label(),
+                reason: "σ = 0: Jacobian undefined (give base_sigma > 0)".into(),
+            });
         }
         let inst = p[0] + p[1] * rho;
-        Ok(DMatrix::from_row_slice(1, 3, &[inst / sig, inst * rho / sig, p[2] * rho * rho / sig]))
+        Ok(DMatrix::from_row_slice(
+            1,
+            3,
+            &[inst / sig, inst * rho / sig, p[2] * rho * rho / sig],
+        ))
     }
 }

@@ -10,11 +10,11 @@
 
 use nalgebra::DMatrix;
 
-use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{Axis, SignalKind, Signals};
 use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term_id::TermId;
 
 #[derive(Debug, Clone)]
 pub struct Compliance {
@@ -24,7 +24,10 @@ pub struct Compliance {
 
 impl Compliance {
     pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
-        Ok(Self { extension_axis: o.axis("extension_axis", None)?, extension_origin: o.quantity("extension_origin", "m", Some(0.0))? })
+        Ok(Self {
+            extension_axis: o.axis("extension_axis", None)?,
+            extension_origin: o.quantity("extension_origin", "m", Some(0.0))?,
+        })
     }
     fn row(&self, s: &Signals) -> Result<([f64; 3], nalgebra::Vector3<f64>), PhysicsError> {
         let e = s.position(self, self.extension_axis)? - self.extension_origin;
@@ -50,12 +53,18 @@ impl PhysicsTerm for Compliance {
         ]
     }
     fn signals(&self) -> Vec<SignalKind> {
-        vec![SignalKind::AxisPosition(self.extension_axis), SignalKind::LoadForce]
+        vec![
+            SignalKind::AxisPosition(self.extension_axis),
+            SignalKind::LoadForce,
+        ]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
         check_len(self, p, 3)?;
         let (r, f) = self.row(s)?;
-        Ok(displacement(Frame::Machine, f * (r[0] * p[0] + r[1] * p[1] + r[2] * p[2])))
+        Ok(displacement(
+            Frame::Machine,
+            f * (r[0] * p[0] + r[1] * p[1] + r[2] * p[2]),
+        ))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         check_len(self, p, 3)?;

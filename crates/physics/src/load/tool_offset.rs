@@ -8,11 +8,11 @@
 
 use nalgebra::{DMatrix, Vector3};
 
-use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
 use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term_id::TermId;
 
 #[derive(Debug, Clone, Default)]
 pub struct ToolOffset;
@@ -34,7 +34,19 @@ impl PhysicsTerm for ToolOffset {
         EffectKind::Displacement(Frame::Tool)
     }
     fn params(&self) -> Vec<ParamSpec> {
-        ["dx", "dy", "dz"].iter().map(|n| ParamSpec::new(*n, "m", -0.05, 0.05, 0.0, format!("tool offset error along {}", &n[1..]))).collect()
+        ["dx", "dy", "dz"]
+            .iter()
+            .map(|n| {
+                ParamSpec::new(
+                    *n,
+                    "m",
+                    -0.05,
+                    0.05,
+                    0.0,
+                    format!("tool offset error along {}", &n[1..]),
+                )
+            })
+            .collect()
     }
     fn signals(&self) -> Vec<SignalKind> {
         vec![]

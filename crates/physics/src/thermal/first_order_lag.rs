@@ -39,7 +39,10 @@ struct LagState {
 
 impl FirstOrderLag {
     pub fn new(time_constant: f64) -> Self {
-        Self { time_constant, state: None }
+        Self {
+            time_constant,
+            state: None,
+        }
     }
 
     /// Feed a reading at `time` (s) of variance `variance` (K²). A reading not later than the
@@ -48,7 +51,14 @@ impl FirstOrderLag {
         let tau = self.time_constant;
         match &mut self.state {
             None => {
-                self.state = Some(LagState { time, value: temperature, d_value_d_tau: 0.0, variance, input: temperature, input_variance: variance });
+                self.state = Some(LagState {
+                    time,
+                    value: temperature,
+                    d_value_d_tau: 0.0,
+                    variance,
+                    input: temperature,
+                    input_variance: variance,
+                });
                 true
             }
             Some(s) if time > s.time => {
@@ -57,7 +67,8 @@ impl FirstOrderLag {
                 let slope = (temperature - s.input) / dt;
                 // the state's distance from the ramp's steady response at its start
                 let gap = s.value - s.input + tau * slope;
-                s.d_value_d_tau = -slope + (s.d_value_d_tau + slope) * e + gap * e * dt / (tau * tau);
+                s.d_value_d_tau =
+                    -slope + (s.d_value_d_tau + slope) * e + gap * e * dt / (tau * tau);
                 s.value = temperature - tau * slope + gap * e;
                 // T_f[k] = w₁·T[k] + w₀·T[k−1] + e·T_f[k−1]
                 let c = tau / dt;
@@ -74,7 +85,8 @@ impl FirstOrderLag {
 
     /// (time of the last reading s, T_f °C, ∂T_f/∂τ K/s, variance of T_f K²), if fed yet.
     pub fn output(&self) -> Option<(f64, f64, f64, f64)> {
-        self.state.map(|s| (s.time, s.value, s.d_value_d_tau, s.variance))
+        self.state
+            .map(|s| (s.time, s.value, s.d_value_d_tau, s.variance))
     }
 }
 
@@ -86,7 +98,8 @@ pub fn first_order_lag(history: &TemperatureHistory, tau: f64) -> (f64, f64) {
     for &(t, v) in &history.samples {
         lag.advance(t, v, 0.0);
     }
-    lag.output().map_or((f64::NAN, f64::NAN), |(_, v, d, _)| (v, d))
+    lag.output()
+        .map_or((f64::NAN, f64::NAN), |(_, v, d, _)| (v, d))
 }
 
 #[cfg(test)]
@@ -113,7 +126,9 @@ mod tests {
             y += h / 6.0 * (k1 + 2.0 * k2 + 2.0 * k3 + k4);
             t += h;
         }
-        let samples: Vec<(f64, f64)> = (0..=20).map(|k| (k as f64 * 600.0, t_of(k as f64 * 600.0))).collect();
+        let samples: Vec<(f64, f64)> = (0..=20)
+            .map(|k| (k as f64 * 600.0, t_of(k as f64 * 600.0)))
+            .collect();
         let (tf, _) = first_order_lag(&TemperatureHistory { samples }, tau);
         // the hold of each reading over its interval would be ~0.05 K off at this slope
         assert!((tf - y).abs() < 3e-3, "filter {tf} vs truth {y}");
@@ -121,13 +136,24 @@ mod tests {
 
     #[test]
     fn the_tau_derivative_matches_central_differences() {
-        let samples: Vec<(f64, f64)> = (0..200).map(|k| (k as f64 * 37.0 + (k % 3) as f64 * 11.0, 20.0 + (k as f64 * 0.05).sin() + 0.004 * k as f64)).collect();
+        let samples: Vec<(f64, f64)> = (0..200)
+            .map(|k| {
+                (
+                    k as f64 * 37.0 + (k % 3) as f64 * 11.0,
+                    20.0 + (k as f64 * 0.05).sin() + 0.004 * k as f64,
+                )
+            })
+            .collect();
         let h = TemperatureHistory { samples };
         for tau in [300.0, 1200.0, 5000.0] {
             let (_, d) = first_order_lag(&h, tau);
             let step = 1e-4 * tau;
-            let numeric = (first_order_lag(&h, tau + step).0 - first_order_lag(&h, tau - step).0) / (2.0 * step);
-            assert!((d - numeric).abs() <= 1e-5 * numeric.abs().max(1e-9), "τ {tau}: analytic {d} vs numeric {numeric}");
+            let numeric = (first_order_lag(&h, tau + step).0 - first_order_lag(&h, tau - step).0)
+                / (2.0 * step);
+            assert!(
+                (d - numeric).abs() <= 1e-5 * numeric.abs().max(1e-9),
+                "τ {tau}: analytic {d} vs numeric {numeric}"
+            );
         }
     }
 
@@ -149,18 +175,31 @@ mod tests {
         let (w1, w0) = (1.0 - 100.0 * (1.0 - e), 100.0 * (1.0 - e) - e);
         let settled = 0.04 * (w1 * w1 + w0 * w0) / (1.0 - e * e);
         assert!(var < settled && var > 0.8 * settled, "{var} vs {settled}");
-        assert!(!lag.advance(50.0, 30.0, 0.0), "a reading from the past is refused");
+        assert!(
+            !lag.advance(50.0, 30.0, 0.0),
+            "a reading from the past is refused"
+        );
     }
 
     #[test]
     fn derivative_matches_central_differences() {
-        let samples: Vec<(f64, f64)> = (0..300).map(|k| (k as f64 * 11.0, 20.0 + 2.0 * (1.0 - (-(k as f64) / 90.0).exp()))).collect();
+        let samples: Vec<(f64, f64)> = (0..300)
+            .map(|k| {
+                (
+                    k as f64 * 11.0,
+                    20.0 + 2.0 * (1.0 - (-(k as f64) / 90.0).exp()),
+                )
+            })
+            .collect();
         let h = TemperatureHistory { samples };
         let tau = 900.0;
         let (_, d) = first_order_lag(&h, tau);
         let step = 1e-3;
-        let numeric = (first_order_lag(&h, tau + step).0 - first_order_lag(&h, tau - step).0) / (2.0 * step);
+        let numeric =
+            (first_order_lag(&h, tau + step).0 - first_order_lag(&h, tau - step).0) / (2.0 * step);
         assert!((d - numeric).abs() < 1e-7 * d.abs(), "{d} vs {numeric}");
-        assert!(first_order_lag(&TemperatureHistory::default(), tau).0.is_nan());
+        assert!(first_order_lag(&TemperatureHistory::default(), tau)
+            .0
+            .is_nan());
     }
 }

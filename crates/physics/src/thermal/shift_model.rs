@@ -58,7 +58,12 @@ pub struct HeatSource {
 
 impl HeatSource {
     pub fn level(&self, t: f64) -> f64 {
-        self.duty.iter().filter(|s| t >= s.start && t < s.end).map(|s| s.level).sum::<f64>().min(1.0)
+        self.duty
+            .iter()
+            .filter(|s| t >= s.start && t < s.end)
+            .map(|s| s.level)
+            .sum::<f64>()
+            .min(1.0)
     }
 }
 
@@ -113,7 +118,9 @@ impl TemperatureLog {
     /// One sensor as a [`TemperatureHistory`] (for `thermal_growth` with lag).
     pub fn history(&self, sensor: &str) -> Option<TemperatureHistory> {
         let v = self.sensors.get(sensor)?;
-        Some(TemperatureHistory { samples: self.times.iter().copied().zip(v.iter().copied()).collect() })
+        Some(TemperatureHistory {
+            samples: self.times.iter().copied().zip(v.iter().copied()).collect(),
+        })
     }
     /// History truncated at time t (inclusive) — what a causal filter has seen at t.
     pub fn history_until(&self, sensor: &str, t: f64) -> Option<TemperatureHistory> {
@@ -162,14 +169,20 @@ impl TemperatureLog {
 }
 
 fn invalid(what: &str, reason: String) -> PhysicsError {
-    PhysicsError::InvalidInput { what: format!("shift thermal model: {what}"), reason }
+    PhysicsError::InvalidInput {
+        what: format!("shift thermal model: {what}"),
+        reason,
+    }
 }
 
 impl ShiftThermalModel {
     /// Check names, references, time constants and duty levels.
     pub fn validate(&self) -> Result<(), PhysicsError> {
         if !(self.ambient.period > 0.0) {
-            return Err(invalid("ambient.period", format!("must be > 0 s, got {}", self.ambient.period)));
+            return Err(invalid(
+                "ambient.period",
+                format!("must be > 0 s, got {}", self.ambient.period),
+            ));
         }
         if self.ambient.walk_std < 0.0 {
             return Err(invalid("ambient.walk_std", "must be ≥ 0".into()));
@@ -181,21 +194,36 @@ impl ShiftThermalModel {
         for s in &self.sources {
             for d in &s.duty {
                 if !(d.level >= 0.0 && d.level <= 1.0 && d.end > d.start) {
-                    return Err(invalid(&format!("source `{}` duty", s.name), format!("needs start < end and level in [0, 1], got [{}, {}) level {}", d.start, d.end, d.level)));
+                    return Err(invalid(
+                        &format!("source `{}` duty", s.name),
+                        format!(
+                            "needs start < end and level in [0, 1], got [{}, {}) level {}",
+                            d.start, d.end, d.level
+                        ),
+                    ));
                 }
             }
         }
         let nodes: BTreeSet<&str> = self.nodes.iter().map(|n| n.name.as_str()).collect();
         if nodes.len() != self.nodes.len() || nodes.contains("ambient") {
-            return Err(invalid("nodes", "duplicate node name (or a node called `ambient`)".into()));
+            return Err(invalid(
+                "nodes",
+                "duplicate node name (or a node called `ambient`)".into(),
+            ));
         }
         for n in &self.nodes {
             if !(n.time_constant > 0.0) {
-                return Err(invalid(&format!("node `{}`", n.name), format!("time_constant must be > 0 s, got {}", n.time_constant)));
+                return Err(invalid(
+                    &format!("node `{}`", n.name),
+                    format!("time_constant must be > 0 s, got {}", n.time_constant),
+                ));
             }
             for (src, _) in &n.heating {
                 if !sources.contains(src.as_str()) {
-                    return Err(invalid(&format!("node `{}`", n.name), format!("heating refers to unknown source `{src}`")));
+                    return Err(invalid(
+                        &format!("node `{}`", n.name),
+                        format!("heating refers to unknown source `{src}`"),
+                    ));
                 }
             }
         }
@@ -206,18 +234,29 @@ impl ShiftThermalModel {
             }
             if let SensorLocation::Node(n) = &s.location {
                 if !nodes.contains(n.as_str()) {
-                    return Err(invalid(&format!("sensor `{}`", s.name), format!("refers to unknown node `{n}`")));
+                    return Err(invalid(
+                        &format!("sensor `{}`", s.name),
+                        format!("refers to unknown node `{n}`"),
+                    ));
                 }
             }
             if s.noise_std < 0.0 {
-                return Err(invalid(&format!("sensor `{}`", s.name), "noise_std must be ≥ 0".into()));
+                return Err(invalid(
+                    &format!("sensor `{}`", s.name),
+                    "noise_std must be ≥ 0".into(),
+                ));
             }
         }
         Ok(())
     }
 
     /// Simulate from t = 0 to `duration` with step `dt` (s); deterministic in `seed`.
-    pub fn simulate(&self, duration: f64, dt: f64, seed: u64) -> Result<TemperatureLog, PhysicsError> {
+    pub fn simulate(
+        &self,
+        duration: f64,
+        dt: f64,
+        seed: u64,
+    ) -> Result<TemperatureLog, PhysicsError> {
         self.validate()?;
         if !(dt > 0.0) || !(duration >= 0.0) || duration / dt > 1e7 {
             return Err(invalid("simulate", format!("needs dt > 0, duration ≥ 0 and at most 1e7 steps, got dt {dt}, duration {duration}")));
@@ -226,15 +265,34 @@ impl ShiftThermalModel {
         let steps = (duration / dt).round() as usize;
         let mut walk = 0.0;
         let mut amb = self.ambient.deterministic(0.0);
-        let mut temps: Vec<f64> = self.nodes.iter().map(|n| n.initial.unwrap_or(amb)).collect();
-        let mut log = TemperatureLog { times: Vec::with_capacity(steps + 1), sensors: BTreeMap::new(), truth: BTreeMap::new() };
+        let mut temps: Vec<f64> = self
+            .nodes
+            .iter()
+            .map(|n| n.initial.unwrap_or(amb))
+            .collect();
+        let mut log = TemperatureLog {
+            times: Vec::with_capacity(steps + 1),
+            sensors: BTreeMap::new(),
+            truth: BTreeMap::new(),
+        };
         for k in 0..=steps {
             let t = k as f64 * dt;
             if k > 0 {
                 // advance nodes over [t − dt, t) with inputs held at t − dt
                 let tp = t - dt;
                 for (n, temp) in self.nodes.iter().zip(temps.iter_mut()) {
-                    let heat: f64 = n.heating.iter().map(|(src, g)| g * self.sources.iter().find(|s| &s.name == src).map(|s| s.level(tp)).unwrap_or(0.0)).sum();
+                    let heat: f64 = n
+                        .heating
+                        .iter()
+                        .map(|(src, g)| {
+                            g * self
+                                .sources
+                                .iter()
+                                .find(|s| &s.name == src)
+                                .map(|s| s.level(tp))
+                                .unwrap_or(0.0)
+                        })
+                        .sum();
                     let target = amb + heat;
                     *temp = target + (*temp - target) * (-dt / n.time_constant).exp();
                 }
@@ -249,10 +307,19 @@ impl ShiftThermalModel {
             for s in &self.sensors {
                 let truth = match &s.location {
                     SensorLocation::Ambient => amb,
-                    SensorLocation::Node(n) => temps[self.nodes.iter().position(|x| &x.name == n).unwrap_or(0)],
+                    SensorLocation::Node(n) => {
+                        temps[self.nodes.iter().position(|x| &x.name == n).unwrap_or(0)]
+                    }
                 };
-                let noise = if s.noise_std > 0.0 { s.noise_std * normal(&mut rng) } else { 0.0 };
-                log.sensors.entry(s.name.clone()).or_default().push(truth + s.bias + noise);
+                let noise = if s.noise_std > 0.0 {
+                    s.noise_std * normal(&mut rng)
+                } else {
+                    0.0
+                };
+                log.sensors
+                    .entry(s.name.clone())
+                    .or_default()
+                    .push(truth + s.bias + noise);
             }
         }
         Ok(log)
@@ -264,19 +331,66 @@ impl ShiftThermalModel {
     /// `head`, `table`, `x_left`, `x_right` (0.02 K noise).
     pub fn example_machine_shift() -> Self {
         let h = 3600.0;
-        let work = |lvl: f64| vec![
-            DutySegment { start: 0.5 * h, end: 2.5 * h, level: lvl },
-            DutySegment { start: 2.75 * h, end: 4.5 * h, level: lvl },
-            DutySegment { start: 5.0 * h, end: 7.5 * h, level: lvl },
-        ];
-        let node = |name: &str, tau: f64, heating: Vec<(&str, f64)>| StructureNode { name: name.into(), time_constant: tau, heating: heating.into_iter().map(|(s, g)| (s.to_string(), g)).collect(), initial: None };
-        let sensor = |name: &str, loc: SensorLocation| ThermalSensor { name: name.into(), location: loc, bias: 0.0, noise_std: 0.02 };
+        let work = |lvl: f64| {
+            vec![
+                DutySegment {
+                    start: 0.5 * h,
+                    end: 2.5 * h,
+                    level: lvl,
+                },
+                DutySegment {
+                    start: 2.75 * h,
+                    end: 4.5 * h,
+                    level: lvl,
+                },
+                DutySegment {
+                    start: 5.0 * h,
+                    end: 7.5 * h,
+                    level: lvl,
+                },
+            ]
+        };
+        let node = |name: &str, tau: f64, heating: Vec<(&str, f64)>| StructureNode {
+            name: name.into(),
+            time_constant: tau,
+            heating: heating
+                .into_iter()
+                .map(|(s, g)| (s.to_string(), g))
+                .collect(),
+            initial: None,
+        };
+        let sensor = |name: &str, loc: SensorLocation| ThermalSensor {
+            name: name.into(),
+            location: loc,
+            bias: 0.0,
+            noise_std: 0.02,
+        };
         ShiftThermalModel {
-            ambient: AmbientCycle { mean: 20.0, amplitude: 1.0, period: 24.0 * h, phase: -std::f64::consts::FRAC_PI_2, drift: 0.1 / h, walk_std: 0.002 },
-            sources: vec![HeatSource { name: "axis_motors".into(), duty: work(0.6) }, HeatSource { name: "spindle".into(), duty: work(0.8) }],
+            ambient: AmbientCycle {
+                mean: 20.0,
+                amplitude: 1.0,
+                period: 24.0 * h,
+                phase: -std::f64::consts::FRAC_PI_2,
+                drift: 0.1 / h,
+                walk_std: 0.002,
+            },
+            sources: vec![
+                HeatSource {
+                    name: "axis_motors".into(),
+                    duty: work(0.6),
+                },
+                HeatSource {
+                    name: "spindle".into(),
+                    duty: work(0.8),
+                },
+            ],
             nodes: vec![
                 node("column", h, vec![("axis_motors", 1.5), ("spindle", 1.0)]),
-                node("head", h / 3.0, vec![("spindle", 4.0), ("axis_motors", 0.5)]),
+                node(
+                    "head",
+                    h / 3.0,
+                    vec![("spindle", 4.0), ("axis_motors", 0.5)],
+                ),
                 node("table", 2.0 * h, vec![("axis_motors", 0.8)]),
             ],
             sensors: vec![

@@ -16,11 +16,11 @@
 
 use nalgebra::{DMatrix, Vector3};
 
-use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
 use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term_id::TermId;
 
 pub use crate::thermal::first_order_lag::first_order_lag;
 
@@ -39,10 +39,19 @@ impl ThermalGrowth {
         if !(n > 0.0) {
             return Err(o.bad("direction", "must be a non-zero vector"));
         }
-        Ok(Self { sensor: o.text("sensor", None)?, direction: direction / n, lag: o.flag("lag", false)?, reference_temperature: o.quantity("reference_temperature", "degC", Some(20.0))? })
+        Ok(Self {
+            sensor: o.text("sensor", None)?,
+            direction: direction / n,
+            lag: o.flag("lag", false)?,
+            reference_temperature: o.quantity("reference_temperature", "degC", Some(20.0))?,
+        })
     }
     fn n_params(&self) -> usize {
-        if self.lag { 2 } else { 1 }
+        if self.lag {
+            2
+        } else {
+            1
+        }
     }
     /// (T_f − T_ref, ∂T_f/∂τ)
     fn state(&self, p: &[f64], s: &Signals) -> Result<(f64, f64), PhysicsError> {
@@ -50,7 +59,10 @@ impl ThermalGrowth {
             let (tf, d) = s.lagged_temperature(self, &self.sensor, p[1])?;
             Ok((tf - self.reference_temperature, d))
         } else {
-            Ok((s.temperature(self, &self.sensor)? - self.reference_temperature, 0.0))
+            Ok((
+                s.temperature(self, &self.sensor)? - self.reference_temperature,
+                0.0,
+            ))
         }
     }
 }

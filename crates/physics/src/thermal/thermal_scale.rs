@@ -10,11 +10,11 @@
 
 use nalgebra::DMatrix;
 
-use crate::term_id::TermId;
 use crate::config::{quantity, ConfigValue, Options};
 use crate::error::PhysicsError;
 use crate::signals::{Axis, SignalKind, Signals};
 use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term_id::TermId;
 
 /// A temperature sensor at a position along an axis.
 #[derive(Debug, Clone, PartialEq)]
@@ -58,7 +58,14 @@ pub(crate) fn read_sensors(o: &Options, term: &str) -> Result<Vec<AxisSensor>, P
                     Some(ConfigValue::Text(t)) => t.clone(),
                     _ => return Err(o.bad("sensors", "each sensor needs a text `name`")),
                 };
-                let position = quantity(term, "sensors.position", m.get("position").ok_or_else(|| o.bad("sensors", format!("sensor `{name}` needs a `position` (m)")))?, "m")?;
+                let position = quantity(
+                    term,
+                    "sensors.position",
+                    m.get("position").ok_or_else(|| {
+                        o.bad("sensors", format!("sensor `{name}` needs a `position` (m)"))
+                    })?,
+                    "m",
+                )?;
                 out.push(AxisSensor { name, position });
             }
             _ => return Err(o.bad("sensors", "each sensor must be a map {name, position}")),
@@ -80,12 +87,20 @@ pub struct ThermalScale {
 
 impl ThermalScale {
     pub fn from_options(o: &Options) -> Result<Self, PhysicsError> {
-        Ok(Self { axis: o.axis("axis", None)?, sensors: read_sensors(o, "thermal_scale")?, reference_temperature: o.quantity("reference_temperature", "degC", Some(20.0))? })
+        Ok(Self {
+            axis: o.axis("axis", None)?,
+            sensors: read_sensors(o, "thermal_scale")?,
+            reference_temperature: o.quantity("reference_temperature", "degC", Some(20.0))?,
+        })
     }
     /// α-free part: q·(T(q) − T_ref).
     fn lever(&self, s: &Signals) -> Result<f64, PhysicsError> {
         let q = s.position(self, self.axis)?;
-        let temps = self.sensors.iter().map(|x| Ok((x.position, s.temperature(self, &x.name)?))).collect::<Result<Vec<_>, PhysicsError>>()?;
+        let temps = self
+            .sensors
+            .iter()
+            .map(|x| Ok((x.position, s.temperature(self, &x.name)?)))
+            .collect::<Result<Vec<_>, PhysicsError>>()?;
         Ok(q * (interpolate_temperature(&temps, q) - self.reference_temperature))
     }
 }
@@ -107,15 +122,26 @@ impl PhysicsTerm for ThermalScale {
     }
     fn signals(&self) -> Vec<SignalKind> {
         let mut v = vec![SignalKind::AxisPosition(self.axis)];
-        v.extend(self.sensors.iter().map(|x| SignalKind::Temperature(x.name.clone())));
+        v.extend(
+            self.sensors
+                .iter()
+                .map(|x| SignalKind::Temperature(x.name.clone())),
+        );
         v
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
         check_len(self, p, 1)?;
-        Ok(displacement(Frame::Machine, self.axis.unit() * (p[0] * self.lever(s)?)))
+        Ok(displacement(
+            Frame::Machine,
+            self.axis.unit() * (p[0] * self.lever(s)?),
+        ))
     }
     fn jacobian(&self, p: &[f64], s: &Signals) -> Result<DMatrix<f64>, PhysicsError> {
         check_len(self, p, 1)?;
-        Ok(DMatrix::from_column_slice(3, 1, (self.axis.unit() * self.lever(s)?).as_slice()))
+        Ok(DMatrix::from_column_slice(
+            3,
+            1,
+            (self.axis.unit() * self.lever(s)?).as_slice(),
+        ))
     }
 }

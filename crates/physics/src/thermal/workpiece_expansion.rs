@@ -10,11 +10,11 @@
 
 use nalgebra::{DMatrix, Vector3};
 
-use crate::term_id::TermId;
 use crate::config::Options;
 use crate::error::PhysicsError;
 use crate::signals::{SignalKind, Signals};
 use crate::term::{check_len, displacement, EffectKind, Frame, ParamSpec, PhysicsTerm, Prediction};
+use crate::term_id::TermId;
 
 /// Distance from the clamp point referred back to T_ref (thesis P2 eq. 2):
 /// d_f = d₀·(1 + α·(T_ref − T)).
@@ -38,7 +38,8 @@ impl WorkpieceExpansion {
         })
     }
     fn lever(&self, s: &Signals) -> Result<Vector3<f64>, PhysicsError> {
-        Ok((s.workpiece(self)? - self.clamp) * (s.temperature(self, &self.sensor)? - self.reference_temperature))
+        Ok((s.workpiece(self)? - self.clamp)
+            * (s.temperature(self, &self.sensor)? - self.reference_temperature))
     }
 }
 
@@ -58,7 +59,10 @@ impl PhysicsTerm for WorkpieceExpansion {
             .unusual_means("outside −2 … 30 µm/m/K the part is not at the temperature its sensor reads, or the material is not a metal (polymers reach 50–200 µm/m/K)")]
     }
     fn signals(&self) -> Vec<SignalKind> {
-        vec![SignalKind::WorkpiecePoint, SignalKind::Temperature(self.sensor.clone())]
+        vec![
+            SignalKind::WorkpiecePoint,
+            SignalKind::Temperature(self.sensor.clone()),
+        ]
     }
     fn predict(&self, p: &[f64], s: &Signals) -> Result<Prediction, PhysicsError> {
         check_len(self, p, 1)?;

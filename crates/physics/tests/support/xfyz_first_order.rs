@@ -69,7 +69,11 @@ impl GeometricErrorModel {
     /// All 21 errors zero, every series with the given shape (e.g. one per axis travel).
     pub fn zeros(series: [ErrorSeries; 3]) -> Self {
         let comp = |a: usize| std::array::from_fn(|_| (series[a], vec![0.0; series[a].len()]));
-        Self { translation: std::array::from_fn(comp), rotation: std::array::from_fn(comp), squareness: SquarenessValues::default() }
+        Self {
+            translation: std::array::from_fn(comp),
+            rotation: std::array::from_fn(comp),
+            squareness: SquarenessValues::default(),
+        }
     }
 
     /// Evaluate the six error motions of `axis` at position q.
@@ -89,11 +93,19 @@ impl GeometricErrorModel {
     pub fn validate(&self) -> Result<(), PhysicsError> {
         for a in Axis::ALL {
             for c in 0..3 {
-                for (kind, (s, k)) in [("translation", &self.translation[a.index()][c]), ("rotation", &self.rotation[a.index()][c])] {
+                for (kind, (s, k)) in [
+                    ("translation", &self.translation[a.index()][c]),
+                    ("rotation", &self.rotation[a.index()][c]),
+                ] {
                     if k.len() != s.len() {
                         return Err(PhysicsError::InvalidInput {
                             what: format!("geometric error model, axis {a}, {kind} component {c}"),
-                            reason: format!("series of order {} needs {} coefficients, got {}", s.order, s.len(), k.len()),
+                            reason: format!(
+                                "series of order {} needs {} coefficients, got {}",
+                                s.order,
+                                s.len(),
+                                k.len()
+                            ),
                         });
                     }
                 }
@@ -104,11 +116,18 @@ impl GeometricErrorModel {
 }
 
 /// First-order volumetric error E = P − (T + q) of the XFYZ chain (see the module docs).
-pub fn xfyz_volumetric_error_first_order(q: &Vector3<f64>, tool: &Vector3<f64>, errors: &dyn Fn(Axis, f64) -> AxisErrorValues, sq: &SquarenessValues) -> Vector3<f64> {
+pub fn xfyz_volumetric_error_first_order(
+    q: &Vector3<f64>,
+    tool: &Vector3<f64>,
+    errors: &dyn Fn(Axis, f64) -> AxisErrorValues,
+    sq: &SquarenessValues,
+) -> Vector3<f64> {
     let ex = errors(Axis::X, q.x);
     let ey = errors(Axis::Y, q.y);
     let ez = errors(Axis::Z, q.z);
-    ey.translation + ez.translation - ex.translation - Vector3::new(q.y * sq.xy + q.z * sq.xz, q.z * sq.yz, 0.0)
+    ey.translation + ez.translation
+        - ex.translation
+        - Vector3::new(q.y * sq.xy + q.z * sq.xz, q.z * sq.yz, 0.0)
         + ez.rotation.cross(tool)
         + ey.rotation.cross(&(tool + Vector3::new(0.0, 0.0, q.z)))
         - ex.rotation.cross(&(tool + q))

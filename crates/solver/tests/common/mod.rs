@@ -31,7 +31,12 @@ pub struct Linear {
 
 impl Linear {
     pub fn new(a: DMatrix<f64>, y: Vec<f64>) -> Self {
-        Linear { a, y, unwanted: 0.0, nan_at: None }
+        Linear {
+            a,
+            y,
+            unwanted: 0.0,
+            nan_at: None,
+        }
     }
 }
 
@@ -49,10 +54,21 @@ impl Problem for Linear {
         }
         Ok(())
     }
-    fn residuals_and_jacobian(&self, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>) -> Result<(), NotEvaluable> {
+    fn residuals_and_jacobian(
+        &self,
+        x: &[f64],
+        r: &mut [f64],
+        j: &mut DMatrix<f64>,
+    ) -> Result<(), NotEvaluable> {
         self.residuals_and_jacobian_of(x, r, j, &vec![true; self.a.ncols()])
     }
-    fn residuals_and_jacobian_of(&self, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>, wanted: &[bool]) -> Result<(), NotEvaluable> {
+    fn residuals_and_jacobian_of(
+        &self,
+        x: &[f64],
+        r: &mut [f64],
+        j: &mut DMatrix<f64>,
+        wanted: &[bool],
+    ) -> Result<(), NotEvaluable> {
         self.residuals(x, r)?;
         for k in 0..self.a.ncols() {
             if wanted[k] {
@@ -82,7 +98,12 @@ impl Problem for Rosenbrock {
         r[1] = 1.0 - x[0];
         Ok(())
     }
-    fn residuals_and_jacobian(&self, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>) -> Result<(), NotEvaluable> {
+    fn residuals_and_jacobian(
+        &self,
+        x: &[f64],
+        r: &mut [f64],
+        j: &mut DMatrix<f64>,
+    ) -> Result<(), NotEvaluable> {
         self.residuals(x, r)?;
         j.copy_from_slice(&[-20.0 * x[0], -1.0, 10.0, 0.0]);
         Ok(())
@@ -104,7 +125,10 @@ impl Decay {
     pub fn simulate(seed: u64, n: usize, truth: &[f64], sigma: f64) -> Decay {
         let mut r = rng(seed);
         let t: Vec<f64> = (0..n).map(|i| 10.0 * i as f64 / (n - 1) as f64).collect();
-        let y = t.iter().map(|&ti| Self::model(truth, ti) + sigma * normal(&mut r)).collect();
+        let y = t
+            .iter()
+            .map(|&ti| Self::model(truth, ti) + sigma * normal(&mut r))
+            .collect();
         Decay { t, y }
     }
     pub fn data(&self) -> Vec<f64> {
@@ -121,14 +145,22 @@ impl Problem for Decay {
     }
     fn residuals(&self, x: &[f64], r: &mut [f64]) -> Result<(), NotEvaluable> {
         if !(x[2] > 0.0) {
-            return Err(NotEvaluable(format!("time constant τ = {} must be positive", x[2])));
+            return Err(NotEvaluable(format!(
+                "time constant τ = {} must be positive",
+                x[2]
+            )));
         }
         for i in 0..self.t.len() {
             r[i] = Self::model(x, self.t[i]) - self.y[i];
         }
         Ok(())
     }
-    fn residuals_and_jacobian(&self, x: &[f64], r: &mut [f64], j: &mut DMatrix<f64>) -> Result<(), NotEvaluable> {
+    fn residuals_and_jacobian(
+        &self,
+        x: &[f64],
+        r: &mut [f64],
+        j: &mut DMatrix<f64>,
+    ) -> Result<(), NotEvaluable> {
         self.residuals(x, r)?;
         for (i, &t) in self.t.iter().enumerate() {
             let e = (-t / x[2]).exp();
@@ -177,7 +209,12 @@ impl Problem for Circle {
         }
         Ok(())
     }
-    fn residuals_and_jacobian(&self, p: &[f64], r: &mut [f64], j: &mut DMatrix<f64>) -> Result<(), NotEvaluable> {
+    fn residuals_and_jacobian(
+        &self,
+        p: &[f64],
+        r: &mut [f64],
+        j: &mut DMatrix<f64>,
+    ) -> Result<(), NotEvaluable> {
         for i in 0..self.x.len() {
             let (dx, dy) = (self.x[i] - p[0], self.y[i] - p[1]);
             let d = dx.hypot(dy);
@@ -199,7 +236,10 @@ pub fn python() -> String {
         return p;
     }
     let venv = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../.venv/bin/python");
-    assert!(venv.exists(), "no Python with scipy: set METROCELL_PYTHON or run tests/run (creates .venv)");
+    assert!(
+        venv.exists(),
+        "no Python with scipy: set METROCELL_PYTHON or run tests/run (creates .venv)"
+    );
     venv.to_string_lossy().into_owned()
 }
 
@@ -211,7 +251,10 @@ pub struct Reference {
 }
 
 fn line(v: &[f64]) -> String {
-    v.iter().map(|x| format!("{x:e}")).collect::<Vec<_>>().join(" ")
+    v.iter()
+        .map(|x| format!("{x:e}"))
+        .collect::<Vec<_>>()
+        .join(" ")
 }
 
 /// Runs `tests/scipy_reference.py` on problem `name` (see there for the protocol).
@@ -224,15 +267,44 @@ pub fn scipy(name: &str, x0: &[f64], lower: &[f64], upper: &[f64], data: &[f64])
         .stderr(Stdio::piped())
         .spawn()
         .expect("start python");
-    let input = format!("{name}\n{}\n{}\n{}\n{}\n", line(x0), line(lower), line(upper), line(data));
-    child.stdin.take().unwrap().write_all(input.as_bytes()).unwrap();
+    let input = format!(
+        "{name}\n{}\n{}\n{}\n{}\n",
+        line(x0),
+        line(lower),
+        line(upper),
+        line(data)
+    );
+    child
+        .stdin
+        .take()
+        .unwrap()
+        .write_all(input.as_bytes())
+        .unwrap();
     let out = child.wait_with_output().unwrap();
-    assert!(out.status.success(), "scipy reference failed: {}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "scipy reference failed: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     let text = String::from_utf8(out.stdout).unwrap();
     let mut lines = text.lines();
-    let x = lines.next().unwrap().split_whitespace().map(|v| v.parse().unwrap()).collect();
-    let seconds = lines.next().unwrap().trim_start_matches("seconds ").parse().unwrap();
-    Reference { x, seconds, status_line: lines.next().unwrap_or("").to_string() }
+    let x = lines
+        .next()
+        .unwrap()
+        .split_whitespace()
+        .map(|v| v.parse().unwrap())
+        .collect();
+    let seconds = lines
+        .next()
+        .unwrap()
+        .trim_start_matches("seconds ")
+        .parse()
+        .unwrap();
+    Reference {
+        x,
+        seconds,
+        status_line: lines.next().unwrap_or("").to_string(),
+    }
 }
 
 pub const INF: f64 = f64::INFINITY;

@@ -12,7 +12,11 @@ pub fn cell_path(name: &str) -> String {
 /// Example cell `file` with `from` replaced by `to` (which must occur exactly once).
 pub fn edited_example(file: &str, from: &str, to: &str) -> String {
     let text = std::fs::read_to_string(cell_path(file)).unwrap();
-    assert_eq!(text.matches(from).count(), 1, "edit target `{from}` must occur once");
+    assert_eq!(
+        text.matches(from).count(),
+        1,
+        "edit target `{from}` must occur once"
+    );
     text.replace(from, to)
 }
 
@@ -59,7 +63,10 @@ pub fn quiet_tracker(f: &mut CellFile) {
 pub fn mean_std(v: &[f64]) -> (f64, f64) {
     let n = v.len() as f64;
     let m = v.iter().sum::<f64>() / n;
-    (m, (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt())
+    (
+        m,
+        (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (n - 1.0)).sqrt(),
+    )
 }
 
 /// A planar two-link URDF arm (shoulder at 0.3 m height, links 0.5 m and 0.4 m, fixed flange).
@@ -75,7 +82,13 @@ pub const TWO_LINK_URDF: &str = r#"<robot name="two_link">
 /// Every column of the analytic Jacobian `j` of `reading` at `p` (rows of one unit) against
 /// 4th-order central differences: |analytic − central| ≤ 1e-6 × (the column's largest entry) +
 /// the stencil's rounding. Returns the number of columns checked.
-pub fn check_columns(what: &str, names: &[String], p: &[f64], j: &nalgebra::DMatrix<f64>, reading: impl Fn(&[f64]) -> Vec<f64>) -> usize {
+pub fn check_columns(
+    what: &str,
+    names: &[String],
+    p: &[f64],
+    j: &nalgebra::DMatrix<f64>,
+    reading: impl Fn(&[f64]) -> Vec<f64>,
+) -> usize {
     let y = reading(p);
     let y_scale = y.iter().fold(0.0f64, |a, v| a.max(v.abs()));
     // a column below 1e-9 of the largest entry is zero up to rounding (e.g. the arm's last
@@ -102,9 +115,13 @@ pub fn check_columns(what: &str, names: &[String], p: &[f64], j: &nalgebra::DMat
             let err = (fd - col[r]).abs();
             // plus the rounding error of the stencil itself (≈ 18·ε·|y|/(12·h))
             let rounding = 4.0 * f64::EPSILON * y_scale / h;
-            assert!(err <= 1e-6 * scale + rounding, "{what}: ∂y{r}/∂{} analytic {} vs central {fd} (column scale {scale})", names[c], col[r]);
+            assert!(
+                err <= 1e-6 * scale + rounding,
+                "{what}: ∂y{r}/∂{} analytic {} vs central {fd} (column scale {scale})",
+                names[c],
+                col[r]
+            );
         }
     }
     p.len()
 }
-

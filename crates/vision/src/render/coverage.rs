@@ -27,7 +27,12 @@ const CHECK_MARGIN_PX: f64 = 1e-3;
 /// Mean of `sample` (reflectance, NaN where unseen) over the unit square centred at (cx, cy)
 /// when one boundary between two reflectances crosses it, or None (the caller samples the
 /// pixel on its s×s grid).
-pub(super) fn one_boundary_mean(sample: &impl Fn(f64, f64) -> f64, cx: f64, cy: f64, s: usize) -> Option<f64> {
+pub(super) fn one_boundary_mean(
+    sample: &impl Fn(f64, f64) -> f64,
+    cx: f64,
+    cy: f64,
+    s: usize,
+) -> Option<f64> {
     let (x0, y0) = (cx - 0.5, cy - 0.5);
     // Perimeter position t ∈ [0, 4): top edge left → right, right edge down, bottom edge
     // right → left, left edge up (clockwise on screen).
@@ -60,7 +65,9 @@ pub(super) fn one_boundary_mean(sample: &impl Fn(f64, f64) -> f64, cx: f64, cy: 
     // Crossing in the perimeter interval [k, k + 1]·step, between values `before` and after.
     let crossing = |k: usize| -> f64 {
         let before = ring[k];
-        bisect(k as f64 * step, (k + 1) as f64 * step, |t| value(at(t)) == before)
+        bisect(k as f64 * step, (k + 1) as f64 * step, |t| {
+            value(at(t)) == before
+        })
     };
     let (ta, tb) = (crossing(ka), crossing(kb));
     let (a, b) = (at(ta), at(tb));
@@ -85,13 +92,18 @@ pub(super) fn one_boundary_mean(sample: &impl Fn(f64, f64) -> f64, cx: f64, cy: 
         corner += 1.0;
     }
     polygon.push(b);
-    let twice_area: f64 = (0..polygon.len()).map(|k| {
-        let (p, q) = (polygon[k], polygon[(k + 1) % polygon.len()]);
-        p[0] * q[1] - q[0] * p[1]
-    }).sum();
+    let twice_area: f64 = (0..polygon.len())
+        .map(|k| {
+            let (p, q) = (polygon[k], polygon[(k + 1) % polygon.len()]);
+            p[0] * q[1] - q[0] * p[1]
+        })
+        .sum();
     let mut area_inside = 0.5 * twice_area.abs();
     // The boundary's bow off the chord, on AB's perpendicular bisector within the pixel.
-    let normal = [-chord[1] / length * orientation, chord[0] / length * orientation];
+    let normal = [
+        -chord[1] / length * orientation,
+        chord[0] / length * orientation,
+    ];
     let middle = [0.5 * (a[0] + b[0]), 0.5 * (a[1] + b[1])];
     let reach = 0.75; // half the pixel's diagonal bounds every distance within it
     let along = |h: f64| [middle[0] + h * normal[0], middle[1] + h * normal[1]];
@@ -124,8 +136,12 @@ pub(super) fn one_boundary_mean(sample: &impl Fn(f64, f64) -> f64, cx: f64, cy: 
     let margin = 0.1 * bow.abs() + CHECK_MARGIN_PX;
     for j in 0..s {
         for i in 0..s {
-            let p = [x0 + (i as f64 + 0.5) / s as f64, y0 + (j as f64 + 0.5) / s as f64];
-            let x = 2.0 * ((p[0] - middle[0]) * chord[0] + (p[1] - middle[1]) * chord[1]) / (length * length);
+            let p = [
+                x0 + (i as f64 + 0.5) / s as f64,
+                y0 + (j as f64 + 0.5) / s as f64,
+            ];
+            let x = 2.0 * ((p[0] - middle[0]) * chord[0] + (p[1] - middle[1]) * chord[1])
+                / (length * length);
             let d = side(p) - bow * (1.0 - x * x);
             if d.abs() < margin {
                 continue;
@@ -163,7 +179,10 @@ mod tests {
         let mut acc = 0.0;
         for j in 0..m {
             for i in 0..m {
-                acc += f(-0.5 + (i as f64 + 0.5) / m as f64, -0.5 + (j as f64 + 0.5) / m as f64);
+                acc += f(
+                    -0.5 + (i as f64 + 0.5) / m as f64,
+                    -0.5 + (j as f64 + 0.5) / m as f64,
+                );
             }
         }
         acc / (m * m) as f64
@@ -172,13 +191,25 @@ mod tests {
     /// A straight boundary at any angle and offset: the exact area of the half-plane's share.
     #[test]
     fn a_straight_boundary_gives_the_exact_area() {
-        for (angle, offset) in [(0.0f64, 0.13), (0.0, -0.37), (1e-5, 0.2), (0.4, 0.05), (1.3, -0.2), (-2.2, 0.31), (std::f64::consts::FRAC_PI_2, 0.01)] {
+        for (angle, offset) in [
+            (0.0f64, 0.13),
+            (0.0, -0.37),
+            (1e-5, 0.2),
+            (0.4, 0.05),
+            (1.3, -0.2),
+            (-2.2, 0.31),
+            (std::f64::consts::FRAC_PI_2, 0.01),
+        ] {
             let (c, sn) = (angle.cos(), angle.sin());
             // white (1) where c·x + sn·y > offset, pixel centred at the origin
             let f = |x: f64, y: f64| if c * x + sn * y > offset { 1.0 } else { 0.0 };
-            let got = one_boundary_mean(&f, 0.0, 0.0, 4).unwrap_or_else(|| panic!("angle {angle} offset {offset}: no split"));
+            let got = one_boundary_mean(&f, 0.0, 0.0, 4)
+                .unwrap_or_else(|| panic!("angle {angle} offset {offset}: no split"));
             let want = grid_mean(&f);
-            assert!((got - want).abs() < 2e-4, "angle {angle} offset {offset}: {got} vs {want}");
+            assert!(
+                (got - want).abs() < 2e-4,
+                "angle {angle} offset {offset}: {got} vs {want}"
+            );
         }
     }
 
@@ -187,7 +218,13 @@ mod tests {
     #[test]
     fn a_curved_boundary_is_corrected_for_its_bow() {
         let (r, cx) = (5.0, 5.3); // circle of 5 px radius centred 5.3 px to the right
-        let f = |x: f64, y: f64| if (x - cx).powi(2) + y * y < r * r { 0.0 } else { 1.0 };
+        let f = |x: f64, y: f64| {
+            if (x - cx).powi(2) + y * y < r * r {
+                0.0
+            } else {
+                1.0
+            }
+        };
         let got = one_boundary_mean(&f, 0.0, 0.0, 4).expect("one boundary");
         let want = grid_mean(&f);
         assert!((got - want).abs() < 1e-3, "{got} vs {want}");

@@ -25,7 +25,8 @@ pub(super) fn blur_near_edges(grey: &mut [f64], mask: &[u8], w: usize, h: usize,
         }
     }
     let active = |tx: usize, ty: usize| {
-        (ty.saturating_sub(1)..(ty + 2).min(th)).any(|y| (tx.saturating_sub(1)..(tx + 2).min(tw)).any(|x| marked[y * tw + x]))
+        (ty.saturating_sub(1)..(ty + 2).min(th))
+            .any(|y| (tx.saturating_sub(1)..(tx + 2).min(tw)).any(|x| marked[y * tw + x]))
     };
     let clamp = |v: isize, n: usize| v.clamp(0, n as isize - 1) as usize;
     // Blurred tiles are kept aside until all are done: each reads its neighbours unblurred.
@@ -77,7 +78,8 @@ pub(super) fn blur_near_edges(grey: &mut [f64], mask: &[u8], w: usize, h: usize,
     }
     for (x0, x1, y0, y1, out) in done {
         for y in y0..y1 {
-            grey[y * w + x0..y * w + x1].copy_from_slice(&out[(y - y0) * (x1 - x0)..(y - y0 + 1) * (x1 - x0)]);
+            grey[y * w + x0..y * w + x1]
+                .copy_from_slice(&out[(y - y0) * (x1 - x0)..(y - y0 + 1) * (x1 - x0)]);
         }
     }
 }
@@ -98,7 +100,8 @@ mod tests {
             for x in 0..w {
                 let (fx, fy) = (x as f64, y as f64);
                 grey[y * w + x] = if side(fx, fy) < 0.0 { 20.0 } else { 235.0 };
-                let corners = [(-0.5, -0.5), (0.5, -0.5), (-0.5, 0.5), (0.5, 0.5)].map(|(dx, dy)| side(fx + dx, fy + dy) < 0.0);
+                let corners = [(-0.5, -0.5), (0.5, -0.5), (-0.5, 0.5), (0.5, 0.5)]
+                    .map(|(dx, dy)| side(fx + dx, fy + dy) < 0.0);
                 if corners.iter().any(|&c| c != corners[0]) {
                     mask[y * w + x] = 1;
                     grey[y * w + x] = 127.5;
@@ -109,7 +112,11 @@ mod tests {
             let full = gaussian_blur_f64(&grey, w, h, sigma);
             let mut near = grey.clone();
             blur_near_edges(&mut near, &mask, w, h, sigma);
-            let worst = full.iter().zip(&near).map(|(a, b)| (a - b).abs()).fold(0.0, f64::max);
+            let worst = full
+                .iter()
+                .zip(&near)
+                .map(|(a, b)| (a - b).abs())
+                .fold(0.0, f64::max);
             assert!(worst < 1e-9, "σ = {sigma}: worst difference {worst}");
             assert!(near != grey, "σ = {sigma}: the edge was blurred");
         }

@@ -43,7 +43,13 @@ pub(super) fn boundaries(items: &[TargetItem]) -> Vec<Boundary> {
     };
     for it in items {
         match it {
-            TargetItem::Marker { dictionary, id, top_left: [x0, y0], side, border_bits } => {
+            TargetItem::Marker {
+                dictionary,
+                id,
+                top_left: [x0, y0],
+                side,
+                border_bits,
+            } => {
                 let n = dictionary.marker_size as u32;
                 let cells = n + 2 * border_bits;
                 let code = dictionary.code(*id).unwrap_or(0);
@@ -58,7 +64,10 @@ pub(super) fn boundaries(items: &[TargetItem]) -> Vec<Boundary> {
                         match (differs, run) {
                             (true, None) => run = Some(r),
                             (false, Some(r0)) => {
-                                out.push(Boundary::Segment([x0 + at(k), y0 + at(r0)], [x0 + at(k), y0 + at(r)]));
+                                out.push(Boundary::Segment(
+                                    [x0 + at(k), y0 + at(r0)],
+                                    [x0 + at(k), y0 + at(r)],
+                                ));
                                 run = None;
                             }
                             _ => {}
@@ -70,7 +79,10 @@ pub(super) fn boundaries(items: &[TargetItem]) -> Vec<Boundary> {
                         match (differs, run) {
                             (true, None) => run = Some(c),
                             (false, Some(c0)) => {
-                                out.push(Boundary::Segment([x0 + at(c0), y0 + at(k)], [x0 + at(c), y0 + at(k)]));
+                                out.push(Boundary::Segment(
+                                    [x0 + at(c0), y0 + at(k)],
+                                    [x0 + at(c), y0 + at(k)],
+                                ));
                                 run = None;
                             }
                             _ => {}
@@ -78,8 +90,16 @@ pub(super) fn boundaries(items: &[TargetItem]) -> Vec<Boundary> {
                     }
                 }
             }
-            TargetItem::Checkerboard { top_left: [x0, y0], square, squares_x, squares_y } => {
-                let (x1, y1) = (x0 + *squares_x as f64 * square, y0 + *squares_y as f64 * square);
+            TargetItem::Checkerboard {
+                top_left: [x0, y0],
+                square,
+                squares_x,
+                squares_y,
+            } => {
+                let (x1, y1) = (
+                    x0 + *squares_x as f64 * square,
+                    y0 + *squares_y as f64 * square,
+                );
                 for k in 0..=*squares_x {
                     let x = x0 + k as f64 * square;
                     out.push(Boundary::Segment([x, *y0], [x, y1]));
@@ -89,7 +109,10 @@ pub(super) fn boundaries(items: &[TargetItem]) -> Vec<Boundary> {
                     out.push(Boundary::Segment([*x0, y], [x1, y]));
                 }
             }
-            TargetItem::Hole { centre, diameter } => out.push(Boundary::Circle { centre: *centre, radius: diameter / 2.0 }),
+            TargetItem::Hole { centre, diameter } => out.push(Boundary::Circle {
+                centre: *centre,
+                radius: diameter / 2.0,
+            }),
         }
     }
     out
@@ -111,11 +134,26 @@ pub(super) struct EdgeTracer<'a> {
 
 impl<'a> EdgeTracer<'a> {
     /// `buffer`: storage for the mask (any content; reused to spare fresh pages).
-    pub fn new(camera: &'a CameraModel, rot: Matrix3<f64>, trans: Vector3<f64>, bbox: [f64; 4], mut buffer: Vec<u8>) -> Self {
+    pub fn new(
+        camera: &'a CameraModel,
+        rot: Matrix3<f64>,
+        trans: Vector3<f64>,
+        bbox: [f64; 4],
+        mut buffer: Vec<u8>,
+    ) -> Self {
         let (w, h) = (camera.width as usize, camera.height as usize);
         buffer.clear();
         buffer.resize(w * h, 0);
-        EdgeTracer { camera, rot, trans, bbox, w, h, mask: buffer, chords: 0 }
+        EdgeTracer {
+            camera,
+            rot,
+            trans,
+            bbox,
+            w,
+            h,
+            mask: buffer,
+            chords: 0,
+        }
     }
 
     fn to_camera(&self, p: [f64; 2]) -> Vector3<f64> {
@@ -172,7 +210,9 @@ impl<'a> EdgeTracer<'a> {
                     return false;
                 }
                 let (rot, r) = (self.rot, *radius);
-                self.trace_curve(0.0, std::f64::consts::TAU, move |t| c + rot * Vector3::new(r * t.cos(), r * t.sin(), 0.0))
+                self.trace_curve(0.0, std::f64::consts::TAU, move |t| {
+                    c + rot * Vector3::new(r * t.cos(), r * t.sin(), 0.0)
+                })
             }
         }
     }
@@ -235,20 +275,36 @@ mod tests {
     #[test]
     fn marker_boundaries_are_the_outline_and_the_bit_changes_only() {
         let dictionary = Dictionary::predefined("DICT_4X4_50").unwrap();
-        let item = TargetItem::Marker { dictionary, id: 0, top_left: [0.0, 0.0], side: 6.0, border_bits: 1 };
+        let item = TargetItem::Marker {
+            dictionary,
+            id: 0,
+            top_left: [0.0, 0.0],
+            side: 6.0,
+            border_bits: 1,
+        };
         let b = boundaries(std::slice::from_ref(&item));
         // Every boundary segment separates different reflectances along its whole length,
         // except the outline (paper on the outside).
         let refl = |x: f64, y: f64| item.reflectance(x, y).unwrap_or(1.0);
         let mut internal = 0;
         for s in &b[4..] {
-            let Boundary::Segment(p, q) = s else { panic!("{s:?}") };
+            let Boundary::Segment(p, q) = s else {
+                panic!("{s:?}")
+            };
             internal += 1;
             let vertical = p[0] == q[0];
-            let (lo, hi) = if vertical { (p[1].min(q[1]), p[1].max(q[1])) } else { (p[0].min(q[0]), p[0].max(q[0])) };
+            let (lo, hi) = if vertical {
+                (p[1].min(q[1]), p[1].max(q[1]))
+            } else {
+                (p[0].min(q[0]), p[0].max(q[0]))
+            };
             let mut t = lo + 0.5;
             while t < hi {
-                let (l, r) = if vertical { (refl(p[0] - 0.5, t), refl(p[0] + 0.5, t)) } else { (refl(t, p[1] - 0.5), refl(t, p[1] + 0.5)) };
+                let (l, r) = if vertical {
+                    (refl(p[0] - 0.5, t), refl(p[0] + 0.5, t))
+                } else {
+                    (refl(t, p[1] - 0.5), refl(t, p[1] + 0.5))
+                };
                 assert_ne!(l, r, "{s:?} at {t}");
                 t += 1.0;
             }
@@ -258,7 +314,8 @@ mod tests {
         let on = |x: f64, y: f64| {
             b.iter().any(|s| match s {
                 Boundary::Segment(p, q) => {
-                    (p[0] == q[0] && p[0] == x && y > p[1].min(q[1]) && y < p[1].max(q[1])) || (p[1] == q[1] && p[1] == y && x > p[0].min(q[0]) && x < p[0].max(q[0]))
+                    (p[0] == q[0] && p[0] == x && y > p[1].min(q[1]) && y < p[1].max(q[1]))
+                        || (p[1] == q[1] && p[1] == y && x > p[0].min(q[0]) && x < p[0].max(q[0]))
                 }
                 _ => false,
             })
@@ -278,8 +335,23 @@ mod tests {
 
     #[test]
     fn a_traced_line_marks_a_thin_band_that_covers_it() {
-        let cam = CameraModel::new(200, 100, 100.0, 100.0, 99.5, 49.5, Distortion::BrownConrady([-0.2, 0.05, 0.001, -0.001, 0.0])).unwrap();
-        let mut t = EdgeTracer::new(&cam, Matrix3::identity(), Vector3::new(0.0, 0.0, 1.0), [-2.0, 2.0, -1.0, 1.0], Vec::new());
+        let cam = CameraModel::new(
+            200,
+            100,
+            100.0,
+            100.0,
+            99.5,
+            49.5,
+            Distortion::BrownConrady([-0.2, 0.05, 0.001, -0.001, 0.0]),
+        )
+        .unwrap();
+        let mut t = EdgeTracer::new(
+            &cam,
+            Matrix3::identity(),
+            Vector3::new(0.0, 0.0, 1.0),
+            [-2.0, 2.0, -1.0, 1.0],
+            Vec::new(),
+        );
         let (a, b) = ([-0.7, -0.3], [0.8, 0.35]);
         assert!(t.trace(&Boundary::Segment(a, b)));
         // Every point of the projected line lies in a marked pixel.
@@ -293,9 +365,15 @@ mod tests {
         // The band is thin: about 2 pixels per unit of length, not a blob.
         let marked = t.mask.iter().filter(|&&m| m == 1).count();
         let len = {
-            let ([u0, v0], [u1, v1]) = (t.pixel(&Vector3::new(a[0], a[1], 1.0)), t.pixel(&Vector3::new(b[0], b[1], 1.0)));
+            let ([u0, v0], [u1, v1]) = (
+                t.pixel(&Vector3::new(a[0], a[1], 1.0)),
+                t.pixel(&Vector3::new(b[0], b[1], 1.0)),
+            );
             (u1 - u0).hypot(v1 - v0)
         };
-        assert!((marked as f64) < 3.0 * len, "{marked} pixels for a {len} px line");
+        assert!(
+            (marked as f64) < 3.0 * len,
+            "{marked} pixels for a {len} px line"
+        );
     }
 }

@@ -60,10 +60,10 @@ fn stated_sigmas_cover_the_truth_at_their_rates() {
         "coverage over {total} coefficient draws: 1σ {:.3}, 2σ {:.3}, 3σ {:.4}",
         rate[0], rate[1], rate[2]
     );
-    // 3600 coefficient draws: binomial σ of a 68 % rate is 0.8 %; bands ±3 of those
-    // (the max(1, χ²/dof) widening makes the rates a little conservative, never low)
+    // 3600 coefficient draws (9 per plate share its χ²): binomial σ of a 68 % rate ≈ 0.8 %;
+    // the max(1, χ²/dof) widening makes the rates conservative (seed 7: 0.712), never low
     assert!(
-        (0.659..=0.72).contains(&rate[0]),
+        (0.659..=0.735).contains(&rate[0]),
         "1σ coverage {:.3}",
         rate[0]
     );

@@ -30,6 +30,7 @@ mod compensate;
 mod demo;
 mod diagnose_command;
 mod launch_command;
+mod router;
 mod topic;
 mod vision;
 
@@ -72,6 +73,9 @@ enum Command {
     Diagnose(diagnose_command::DiagnoseArgs),
     /// Start the nodes of a ROS 2 YAML launch file, each as its own process
     Launch(launch_command::LaunchArgs),
+    /// CNC router calibration from a drilled plate (seed 000): fit the planar error field, compensate G-code
+    #[command(subcommand)]
+    Router(router::RouterCommand),
     /// Simulate a cell into a bag, faster than real time (the digital twin)
     Sim(metrocell_simulation::SimArgs),
     /// Inspect and publish on topics (list, echo, pub, hz), like `ros2 topic`
@@ -117,6 +121,7 @@ fn main() {
         Command::Diagnose(args) => diagnose_command::run(args),
         Command::Detect(args) => vision::detect::run(args),
         Command::Launch(args) => launch_command::run(args),
+        Command::Router(command) => router::run(command),
         Command::Sim(args) => metrocell_simulation::run_sim_command(args),
         Command::Topic(command) => topic::run(command),
     };

@@ -164,6 +164,60 @@ impl PlanarFieldFit {
     }
 }
 
+/// One hole predicted by a fit that did not see its block of the plate.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HeldOutHole {
+    pub hole: HoleError,
+    /// The block (a column of holes: one X1 position) it was held out with.
+    pub block: usize,
+    /// Measured − predicted (mm): what compensation with that fit would leave.
+    pub residual_mm: (f64, f64),
+    /// The prediction's standard uncertainty (mm).
+    pub prediction_sigma_mm: (f64, f64),
+}
+
+/// Blocked cross-validation: the holes are grouped into columns (equal X1 to 1 µm); each column
+/// is predicted by the field fitted to all the others. Blocks of the workspace, never random
+/// holes, so a hole's neighbours cannot vouch for it. Columns whose removal leaves the field
+/// undetermined (fewer than 3 columns left) are an error.
+pub fn cross_validate_by_columns(
+    holes: &[HoleError],
+    x3: f64,
+) -> Result<Vec<HeldOutHole>, PlanarFitError> {
+    let mut columns: Vec<f64> = Vec::new();
+    for h in holes {
+        if !columns.iter().any(|c| (c - h.nominal_mm.0).abs() < 1e-3) {
+            columns.push(h.nominal_mm.0);
+        }
+    }
+    columns.sort_by(f64::total_cmp);
+    if columns.len() < 4 {
+        return Err(PlanarFitError::Degenerate {
+            block: "a held-out column",
+            reason: format!(
+                "{} columns leave fewer than 3 to fit when one is held out",
+                columns.len()
+            ),
+        });
+    }
+    let mut out = Vec::with_capacity(holes.len());
+    for (block, c) in columns.iter().enumerate() {
+        let in_block = |h: &HoleError| (h.nominal_mm.0 - c).abs() < 1e-3;
+        let train: Vec<HoleError> = holes.iter().filter(|h| !in_block(h)).copied().collect();
+        let fit = fit_planar_field(&train, x3)?;
+        for h in holes.iter().filter(|h| in_block(h)) {
+            let ((ex, ey), sigma) = fit.predict_mm(h.nominal_mm.0, h.nominal_mm.1);
+            out.push(HeldOutHole {
+                hole: *h,
+                block,
+                residual_mm: (h.error_mm.0 - ex, h.error_mm.1 - ey),
+                prediction_sigma_mm: sigma,
+            });
+        }
+    }
+    Ok(out)
+}
+
 struct Block {
     values: DVector<f64>,
     covariance: DMatrix<f64>,

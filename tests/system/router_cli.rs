@@ -1,0 +1,147 @@
+//! `metrocell router fit` end to end on a plate written by tests/py/router_plate.py (seed 000's
+//! eq. 7 with Table 2's B72 coefficients evaluated in numpy, not by metrocell): the coefficients
+//! come back within 3 of the σ the command prints, the held-out columns' mean |e| falls from the
+//! simulated ~1.5 mm to within 1.5× the measurement noise, and — on a noise-free plate — the
+//! paper's compensation example (T4: X_t = (100, 100) → X_c = (100.0842, 98.2160), first order)
+//! comes out of the compensated G-code.
+//!
+//! Run: `cargo build -p metrocell-cli && METROCELL_PYTHON=.venv/bin/python cargo test -p metrocell-system-tests --test router_cli -- --nocapture`
+
+use std::path::{Path, PathBuf};
+use std::time::Duration;
+
+use system_tests::{bin, piped, python, run, workspace_root};
+
+const B72: [f64; 9] = [
+    1.01e-5, 5.20e-3, -7.10e-3, 4.85e-3, 1.11e-2, 1.03e-2, -1.12e-5, -2.01e-5, -1.55e-5,
+];
+
+fn plate(dir: &Path, sigma: f64, seed: u64) -> PathBuf {
+    std::fs::create_dir_all(dir).unwrap();
+    let csv = dir.join(format!("plate_{seed}.csv"));
+    let out = run(
+        piped(python())
+            .arg(workspace_root().join("tests/py/router_plate.py"))
+            .arg(&csv)
+            .arg(sigma.to_string())
+            .arg(seed.to_string()),
+        Duration::from_secs(60),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    csv
+}
+
+fn router_fit(args: &[&std::ffi::OsStr]) -> String {
+    let out = run(
+        piped(bin("metrocell")).arg("router").arg("fit").args(args),
+        Duration::from_secs(60),
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+    println!("{stdout}");
+    assert!(
+        out.status.success(),
+        "router fit failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    stdout
+}
+
+/// "  after / measurement noise (…): 0.93"
+fn figure(stdout: &str, prefix: &str) -> f64 {
+    let line = stdout
+        .lines()
+        .find(|l| l.trim_start().starts_with(prefix))
+        .unwrap_or_else(|| panic!("no `{prefix}` in:\n{stdout}"));
+    line.rsplit(':').next().unwrap().trim().parse().unwrap()
+}
+
+#[test]
+fn fit_recovers_b72_within_its_sigma_and_held_out_columns_reach_the_noise() {
+    let dir = std::env::temp_dir().join(format!("metrocell-router-{}", std::process::id()));
+    for seed in [1, 2, 3] {
+        let csv = plate(&dir, 0.022, seed);
+        let stdout = router_fit(&["--errors".as_ref(), csv.as_os_str()]);
+        // "  A = +1.0123e-5 ± 1.2e-7   X2² in e_x"
+        for (name, truth) in ["A", "B", "C", "D", "E", "F", "G", "H", "I"]
+            .iter()
+            .zip(B72)
+        {
+            let line = stdout
+                .lines()
+                .find(|l| l.trim_start().starts_with(&format!("{name} =")))
+                .unwrap();
+            let rest = line.split_once('=').unwrap().1;
+            let (v, s) = rest.split_once('±').unwrap();
+            let v: f64 = v.trim().parse().unwrap();
+            let s: f64 = s.split_whitespace().next().unwrap().parse().unwrap();
+            assert!(
+                (v - truth).abs() <= 3.0 * s,
+                "seed {seed}: {name} = {v} ± {s}, truth {truth}"
+            );
+        }
+        let ratio = figure(&stdout, "after / measurement noise");
+        assert!(
+            ratio <= 1.5,
+            "seed {seed}: held-out mean |e| is {ratio}× the noise"
+        );
+        // before: the simulated plate's mean |e| ≈ 1.44 mm (seed 000 T5) and ISO 2768-c is missed
+        let mean_before: f64 = stdout
+            .lines()
+            .find(|l| l.trim_start().starts_with("mean "))
+            .and_then(|l| l.split_whitespace().nth(1))
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(
+            (mean_before - 1.44).abs() < 0.02,
+            "mean |e| before {mean_before}"
+        );
+        assert!(stdout.contains("before ISO 2768-v"), "{stdout}");
+        assert!(stdout.contains("after ISO 2768-f"), "{stdout}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn noise_free_plate_reproduces_the_papers_compensation_example() {
+    let dir = std::env::temp_dir().join(format!("metrocell-router-t4-{}", std::process::id()));
+    let csv = plate(&dir, 0.0, 0);
+    let part = dir.join("part.nc");
+    std::fs::write(&part, "G21 G90\nG1 X100 Y100 F600\nG1 X0 Y0 Z5\n").unwrap();
+    let out = dir.join("part_comp.nc");
+    router_fit(&[
+        "--errors".as_ref(),
+        csv.as_os_str(),
+        "--gcode".as_ref(),
+        part.as_os_str(),
+        "-o".as_ref(),
+        out.as_os_str(),
+        "--first-order".as_ref(),
+    ]);
+    let text = std::fs::read_to_string(&out).unwrap();
+    // the moves are split where the field bends them (pieces of ~3 mm): the one piece that ends
+    // near X100 ends at the programmed point (100, 100)
+    let x_of = |l: &str| -> Option<f64> {
+        l.split_whitespace().find(|t| t.starts_with('X'))?[1..]
+            .parse()
+            .ok()
+    };
+    let ends: Vec<&str> = text
+        .lines()
+        .filter(|l| x_of(l).is_some_and(|x| (x - 100.0).abs() < 0.5))
+        .collect();
+    assert_eq!(ends.len(), 1, "{text}");
+    let line = ends[0];
+    let word = |w: char| -> f64 {
+        line.split_whitespace().find(|t| t.starts_with(w)).unwrap()[1..]
+            .parse()
+            .unwrap()
+    };
+    assert!((word('X') - 100.0842).abs() < 5e-5, "{line}");
+    assert!((word('Y') - 98.2160).abs() < 5e-5, "{line}");
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -276,7 +276,7 @@ fn diagnose_recording(share: &Path, cell: &Path, bag: &Path, report: Option<Path
         &model,
         &[bag.to_path_buf()],
         &metrocell_diagnose::DiagnoseOptions::default(),
-        metrocell_estimation::PointSource::TrackerMeasurements,
+        metrocell_records::PointSource::TrackerMeasurements,
     )
     .and_then(|(m, d)| {
         crate::diagnose_command::write_report(

@@ -7,7 +7,7 @@ use clap::{Args, ValueEnum};
 use metrocell_diagnose::html_report::html_report;
 use metrocell_diagnose::residual_table::residuals_csv;
 use metrocell_diagnose::{diagnose, DeclaredModel, DiagnoseOptions, Diagnosis, Strategy};
-use metrocell_estimation::{records_from_bags, PointSource, RecordingOptions};
+use metrocell_records::{records_from_bags, PointSource, RecordingOptions};
 use metrocell_twin::{write_model, CellModel, FittedParameter, ModelUpdate};
 
 #[derive(Clone, Copy, Debug, ValueEnum)]

@@ -12,9 +12,8 @@ use std::time::Instant;
 
 use anyhow::Context;
 use metrocell_estimation::fit_summary::summary_lines;
-use metrocell_estimation::{
-    fit, records_from_bags, rms, Fit, FitOptions, PointSource, RecordSet, RecordingOptions,
-};
+use metrocell_estimation::{fit, rms, Fit, FitOptions, RecordSet};
+use metrocell_records::{records_from_bags, PointSource, RecordingOptions};
 use metrocell_solver::Loss;
 use metrocell_twin::{write_model, CellModel, FittedParameter, ModelUpdate};
 

@@ -11,9 +11,9 @@ use std::path::Path;
 use std::sync::Arc;
 
 use anyhow::{bail, Context};
-use metrocell_estimation::recordings::signals_from_bag;
 use metrocell_model::SignalsBuilderOptions;
 use metrocell_physics::{SignalKind, Signals, TemperatureTimeline};
+use metrocell_records::recordings::signals_from_bag;
 use metrocell_twin::CellModel;
 use nalgebra::Vector3;
 

@@ -10,7 +10,8 @@
 use std::time::Instant;
 
 use metrocell_diagnose::{diagnose, DeclaredModel, DiagnoseOptions};
-use metrocell_estimation::{fit, records_from_bags, FitOptions, RecordingOptions};
+use metrocell_estimation::{fit, FitOptions};
+use metrocell_records::{records_from_bags, RecordingOptions};
 use metrocell_twin::CellModel;
 
 fn main() {

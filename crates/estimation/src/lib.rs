@@ -1,23 +1,18 @@
 //! # metrocell-estimation — learning a machine's error model from measurements
 //!
 //! Pure functions, no DDS; used by `metrocell calibrate`, the estimator node and `diagnose`.
+//! Records in, estimates out: the records are built from bags and live messages by
+//! crates/records (`metrocell_records::records_from_bags`, `RecordStream`), so this crate links
+//! neither the bag stack nor the messages.
 //!
 //! * [`records`] — measurement records (what was measured — a tracker or machine-frame point, a
 //!   probe hit, a camera point — with its covariance, its commanded joints and the signals at its
 //!   time) and the frame they are in.
-//! * [`recordings`] — [`records_from_bags`]: bags (the nodes', `metrocell sim`'s, `bag import`'s)
-//!   → a [`RecordSet`] for the shared model, signals by the model's `SignalsBuilder`; missing
-//!   signals named with the topics and columns that would provide them.
-//! * [`record_stream`] — the same, one message at a time ([`RecordStream`]): what a bag
-//!   replay and a live node (the `diagnose` node) feed, records out in time order.
-//! * [`instrument_readings`] — probe hits and camera marker poses in a recording → what their
-//!   records measure and what the model needs to predict them.
-//! * [`signal_topics`] — the recorded topics that carry signals and how each message feeds the
-//!   signals builder (shared with the online estimator).
 //! * [`residuals`] — measured − predicted on the shared forward model (crates/model), whitened
 //!   by each record's covariance, with the model's analytic Jacobian: a solver problem.
 //! * [`fit`] — batch identification of the declared free parameters: registration of the
-//!   instrument frame, bounded robust Levenberg–Marquardt, scaled covariance, identifiability.
+//!   instrument frame (crates/kinematics `registration`), bounded robust Levenberg–Marquardt,
+//!   scaled covariance, identifiability.
 //! * [`fit_summary`] — a fit in words: values ± σ in µm/µrad, what is not identifiable and
 //!   why, residuals before/after, consistency with the stated noise, outliers and skipped records.
 //! * [`error_functions`] — the fitted error along each axis with its uncertainty band
@@ -51,17 +46,13 @@ pub mod fit;
 pub mod fit_summary;
 pub mod general_tolerance;
 pub mod improvement;
-pub mod instrument_readings;
 pub mod method_comparison;
 mod record_chunks;
-pub mod record_stream;
-pub mod recordings;
 pub mod records;
 pub mod recursive;
 pub mod reference_nests;
 pub mod residuals;
 pub mod sequential_anova;
-pub mod signal_topics;
 pub mod uncertainty_budget;
 pub mod volumetric_monte_carlo;
 
@@ -70,8 +61,6 @@ pub use fit::{
     fit, inseparable, rms, start_vector, BoundSide, Fit, FitError, FitOptions, HeldParameter,
     ParameterEstimate, RecordNote,
 };
-pub use record_stream::{declared_topics, RecordStream, StreamOutput};
-pub use recordings::{records_from_bags, PointSource, RecordingError, RecordingOptions};
 pub use records::{MeasurementRecord, RecordFrame, RecordKind, RecordSet, Rejected};
 pub use recursive::{RecursiveEstimator, RecursiveOptions, Update};
 pub use reference_nests::{estimate_nests, is_reference};

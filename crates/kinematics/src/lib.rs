@@ -22,6 +22,7 @@ pub mod five_axis;
 pub mod frame_alignment;
 pub mod gravity;
 pub mod instrument_pose;
+pub mod registration;
 pub mod serial;
 pub mod serial_ik;
 pub mod transform;

@@ -6,7 +6,8 @@
 //! * [`dwell`]: consecutive readings of one target grouped and averaged, with standard error.
 //! * [`turbulence`]: the χ² test of a dwell's range scatter against the noise model.
 //! * [`warmup`]: fit of A + B(1 − e^(−t/τ)) to repeated nest readings, and the "stable" flag.
-//! * [`registration`]: weighted Kabsch fit of the tracker pose in the machine frame, 6×6 covariance.
+//! * [`registration`] (crates/kinematics, re-exported): weighted Kabsch fit of the tracker pose
+//!   in the machine frame, 6×6 covariance.
 //! * [`time_alignment`]: commanded machine position at a measurement's time; the thesis's T_v.
 //! * [`line_protocol`] and [`tcp_client`]: the ASCII line driver for trackers that stream readings.
 //! * [`total_station_gsi`]: Leica GSI-8/GSI-16 blocks from a total station → point and covariance
@@ -17,7 +18,8 @@
 pub mod dwell;
 pub mod line_protocol;
 pub mod reading;
-pub mod registration;
+// the frame registration lives below the tracker and the estimation crates (crates/kinematics)
+pub use metrocell_kinematics::registration;
 pub mod tcp_client;
 pub mod time_alignment;
 pub mod total_station_gsi;

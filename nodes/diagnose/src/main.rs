@@ -3,7 +3,7 @@
 //! Reads the measured points (`measured_points`, metrocell_msgs/MeasuredPoint in the machine
 //! frame — or raw tracker readings with `points_type:=tracker`), the commanded joints
 //! (`/machine/commanded_joint_states`) and every signal topic it finds (`/temperature/<sensor>`,
-//! `/tracker/power_on`, air, load: the table of crates/estimation `signal_topics`), turns them
+//! `/tracker/power_on`, air, load: the table of crates/records `signal_topics`), turns them
 //! into measurement records exactly as `metrocell diagnose` does from a bag, and every `every`
 //! seconds of cell time diagnoses the last `window` seconds against the model file (`model`):
 //! the declared parameters fitted, the residuals located, the missing physics named and its
@@ -33,10 +33,10 @@ use metrocell_diagnose::{DiagnoseError, Diagnosis};
 use metrocell_diagnose_node::findings_message::RunInfo;
 use metrocell_diagnose_node::parameters;
 use metrocell_diagnose_node::session::{run_job, Session};
-use metrocell_estimation::signal_topics::{SignalTopic, POWER_ON_TOPIC};
 use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
 use metrocell_msgs::std_msgs::msg::String as StringMessage;
 use metrocell_node::{qos, MetrocellNode, OfflineNode, RawSubscription, ReplayArgs};
+use metrocell_records::signal_topics::{SignalTopic, POWER_ON_TOPIC};
 
 fn main() -> std::process::ExitCode {
     match run() {
@@ -84,7 +84,7 @@ fn live(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
     }
     // the points, the commanded joints and every signal a declared term reads (more are added
     // as discovery finds them)
-    let mut topics = metrocell_estimation::declared_topics(setup.forward, &setup.recording);
+    let mut topics = metrocell_records::declared_topics(setup.forward, &setup.recording);
     let mut session = Session::new(setup, Path::new("live DDS"), &topics)?;
     let mut subscriptions = Vec::new();
     for topic in session.stream.topics() {

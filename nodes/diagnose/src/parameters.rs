@@ -1,9 +1,9 @@
 //! Parameters of `metrocell-diagnose` and the session they set up.
 
 use metrocell_diagnose::{DeclaredModel, DiagnoseOptions};
-use metrocell_estimation::{PointSource, RecordingOptions};
 use metrocell_model::ForwardModel;
 use metrocell_node::{ParamDecl, Parameters};
+use metrocell_records::{PointSource, RecordingOptions};
 use metrocell_twin::CellModel;
 
 use crate::sliding_window::WindowSettings;

@@ -7,9 +7,10 @@ use std::path::Path;
 
 use metrocell_bagtools::SourcedMessage;
 use metrocell_diagnose::{diagnose, DiagnoseError, Diagnosis};
-use metrocell_estimation::{RecordSet, RecordStream, RecordingError};
+use metrocell_estimation::RecordSet;
 use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
 use metrocell_msgs::std_msgs::msg::String as StringMessage;
+use metrocell_records::{RecordStream, RecordingError};
 
 use crate::findings_message::{diagnosis_message, Announced, RunInfo};
 use crate::parameters::Setup;

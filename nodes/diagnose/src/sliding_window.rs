@@ -1,6 +1,6 @@
 //! The records of the last `window` seconds of cell time, and when to diagnose them again.
 //!
-//! Records arrive from a [`metrocell_estimation::RecordStream`] in time order per kind (points,
+//! Records arrive from a [`metrocell_records::RecordStream`] in time order per kind (points,
 //! probe hits). The window holds those whose time lies within `window` of the newest; a run is
 //! due once `every` seconds of cell time have passed since the last one and the window holds at
 //! least `min_records`. Time is the records' own (their header stamps): a shift replayed from a
@@ -8,7 +8,8 @@
 
 use std::collections::VecDeque;
 
-use metrocell_estimation::{MeasurementRecord, RecordFrame, RecordSet, Rejected, StreamOutput};
+use metrocell_estimation::{MeasurementRecord, RecordFrame, RecordSet, Rejected};
+use metrocell_records::StreamOutput;
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct WindowSettings {

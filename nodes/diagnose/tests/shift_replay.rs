@@ -10,9 +10,9 @@ use std::process::Command;
 use metrocell_bagtools::BagSource;
 use metrocell_diagnose_node::parameters::{self, Setup};
 use metrocell_diagnose_node::session::Session;
-use metrocell_estimation::{records_from_bags, PointSource, RecordingOptions};
 use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
 use metrocell_msgs::std_msgs::msg::String as StringMessage;
+use metrocell_records::{records_from_bags, PointSource, RecordingOptions};
 use metrocell_twin::{Cell, CellModel};
 
 const HOURS: f64 = 2.0;

@@ -1,5 +1,5 @@
 //! The node's logic, the same live and on a bag: messages in, outputs out, no clock. Messages
-//! go into a [`RecordStream`] (crates/estimation: the records `metrocell calibrate` and
+//! go into a [`RecordStream`] (crates/records: the records `metrocell calibrate` and
 //! `diagnose` build from a bag, here one at a time, judged on header stamps only), which holds a
 //! measured point until every signal stream has a sample stamped at or after it (so the signals
 //! at its time are final and a replay sees the same numbers as the live run), or until some
@@ -9,9 +9,10 @@
 use std::collections::BTreeMap;
 
 use metrocell_bagtools::SourcedMessage;
-use metrocell_estimation::{MeasurementRecord, RecordStream, RecursiveEstimator, Update};
+use metrocell_estimation::{MeasurementRecord, RecursiveEstimator, Update};
 use metrocell_model::{ForwardModel, Workspace};
 use metrocell_msgs::msg::{ErrorModel, MeasuredPoint};
+use metrocell_records::RecordStream;
 use nalgebra::{DMatrix, Vector3};
 
 use crate::model_message;

@@ -4,13 +4,13 @@
 use std::time::Duration;
 
 use metrocell_bagtools::SourcedMessage;
-use metrocell_estimation::signal_topics::POWER_ON_TOPIC;
 use metrocell_estimator_node::estimator_state::Outputs;
 use metrocell_estimator_node::model_message::{alarm_message, observability_message};
 use metrocell_estimator_node::parameters;
 use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
 use metrocell_msgs::msg::{ErrorModel, MeasuredPoint};
 use metrocell_node::{qos, MetrocellNode};
+use metrocell_records::signal_topics::POWER_ON_TOPIC;
 
 /// Every input is read reliably with a deep queue: a lost joint state or reading would change
 /// the interpolated signals, and the live estimate would no longer equal the replay's.
@@ -21,7 +21,7 @@ fn input_qos() -> metrocell_node::QosProfile {
 pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
     let model = parameters::model(node.parameters(), &node.resolve_topic("measured_points")?)?;
     // the points, the commanded joints and every signal a term of the model reads
-    let topics = metrocell_estimation::declared_topics(model.forward, &model.recording);
+    let topics = metrocell_records::declared_topics(model.forward, &model.recording);
     let (mut state, log) = parameters::estimator(node.parameters(), &model, &topics)?;
     for line in log {
         node.info(line);

@@ -3,7 +3,7 @@
 //! Subscribes `measured_points` (metrocell_msgs/MeasuredPoint, machine frame),
 //! `machine/commanded_joint_states` (sensor_msgs/JointState) and the topic of every signal a term
 //! of the model reads (`temperature/<sensor>`, `/tracker/power_on`, `/machine/load`), turned into
-//! measurement records as `metrocell calibrate` does from a bag (crates/estimation `RecordStream`); keeps a recursive estimator (an extended Kalman filter with
+//! measurement records as `metrocell calibrate` does from a bag (crates/records `RecordStream`); keeps a recursive estimator (an extended Kalman filter with
 //! random-walk drift for the parameters named in `process_noise`) over the model cell file
 //! (`model`); publishes `estimator/error_model` (metrocell_msgs/ErrorModel, latched: every
 //! parameter `label.param` with its SI unit and the covariance, each term described),

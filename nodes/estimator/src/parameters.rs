@@ -2,13 +2,12 @@
 
 use std::path::Path;
 
-use metrocell_estimation::{
-    PointSource, RecordStream, RecordingOptions, RecursiveEstimator, RecursiveOptions,
-};
+use metrocell_estimation::{RecursiveEstimator, RecursiveOptions};
 use metrocell_model::{ForwardModel, ParameterSetup, SignalsBuilderOptions};
 use metrocell_node::{ParamDecl, Parameters};
 use metrocell_physics::model::TermModel;
 use metrocell_physics::{configure, TermConfig};
+use metrocell_records::{PointSource, RecordStream, RecordingOptions};
 use metrocell_twin::CellModel;
 
 use crate::estimator_state::{EstimatorState, Settings};

@@ -12,12 +12,12 @@
 
 use std::path::{Path, PathBuf};
 
-use metrocell_estimation::instrument_readings::{marker_measurements, record_kind, CameraFeatures};
-use metrocell_estimation::recordings::{records_from_bags, RecordingOptions};
 use metrocell_estimation::residuals::PointResiduals;
 use metrocell_estimation::{MeasurementRecord, RecordKind};
 use metrocell_msgs::msg::{FiducialDetection, FiducialDetectionArray};
 use metrocell_physics::model::TermModel;
+use metrocell_records::instrument_readings::{marker_measurements, record_kind, CameraFeatures};
+use metrocell_records::recordings::{records_from_bags, RecordingOptions};
 use metrocell_simulation::sim_time::{parse_start_time, stamp_ns, DEFAULT_START_TIME};
 use metrocell_simulation::{
     write_bag, BagOptions, CameraIntrinsics, FrameRendering, MessageConverter,

@@ -1,7 +1,7 @@
 //! Benchmark: measurement records from an 8-hour shift bag against a loop that only decodes
 //! the same messages (the floor any reader of the bag pays), measured in the same run.
 //!
-//!   cargo run --release -p metrocell-estimation --example records_bench -- \
+//!   cargo run --release -p metrocell-records --example records_bench -- \
 //!       [--cell crates/twin/examples/cells/xfyz_shift.yaml] [--duration 28800] [--bag DIR] [--runs 3]
 //!
 //! Without an existing `--bag` it first simulates the cell (no camera frames) into one, as
@@ -12,13 +12,13 @@ use std::path::PathBuf;
 use std::time::Instant;
 
 use metrocell_bagtools::BagSource;
-use metrocell_estimation::recordings::{records_from_bags, RecordingOptions, TRACKER_TOPIC};
-use metrocell_estimation::signal_topics::SignalTopic;
 use metrocell_msgs::geometry_msgs::msg::WrenchStamped;
 use metrocell_msgs::msg::TrackerMeasurement;
 use metrocell_msgs::sensor_msgs::msg::{
     FluidPressure, JointState, RelativeHumidity, Temperature, TimeReference,
 };
+use metrocell_records::recordings::{records_from_bags, RecordingOptions, TRACKER_TOPIC};
+use metrocell_records::signal_topics::SignalTopic;
 use metrocell_simulation::{write_bag, BagOptions};
 use metrocell_twin::Cell;
 

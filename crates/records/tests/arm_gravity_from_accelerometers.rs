@@ -13,7 +13,7 @@ use std::process::Command;
 
 use metrocell_bag::WriterOptions;
 use metrocell_bagtools::import::{import_csv, Mapping};
-use metrocell_estimation::recordings::{records_from_bags, RecordingOptions};
+use metrocell_records::recordings::{records_from_bags, RecordingOptions};
 use metrocell_twin::CellModel;
 use nalgebra::{Rotation3, Vector3};
 

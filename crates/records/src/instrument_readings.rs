@@ -26,7 +26,7 @@ use metrocell_model::{FiducialPlate, ForwardModel, ProbeTarget, PLATE_MARKERS};
 use metrocell_msgs::msg::{FiducialDetectionArray, ProbeHit};
 use nalgebra::{Matrix3, Vector3};
 
-use crate::records::RecordKind;
+use metrocell_estimation::records::RecordKind;
 
 /// Where the markers a camera detects are, nominally (workpiece frame).
 #[derive(Debug, Clone, PartialEq)]

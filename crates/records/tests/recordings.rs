@@ -15,9 +15,6 @@ use std::path::{Path, PathBuf};
 
 use metrocell_bag::{BagWriter, WriterOptions};
 use metrocell_bagtools::import::{import_csv, Mapping};
-use metrocell_estimation::recordings::{
-    records_from_bags, signals_from_bag, PointSource, RecordingError, RecordingOptions,
-};
 use metrocell_estimation::residuals::PointResiduals;
 use metrocell_model::SignalsBuilderOptions;
 use metrocell_msgs::builtin_interfaces::msg::Time;
@@ -25,6 +22,9 @@ use metrocell_msgs::geometry_msgs::msg::Point;
 use metrocell_msgs::msg::MeasuredPoint;
 use metrocell_msgs::std_msgs::msg::Header;
 use metrocell_msgs::RosMessage;
+use metrocell_records::recordings::{
+    records_from_bags, signals_from_bag, PointSource, RecordingError, RecordingOptions,
+};
 use metrocell_simulation::sim_time::{parse_start_time, stamp_ns, DEFAULT_START_TIME};
 use metrocell_simulation::{write_bag, BagOptions};
 use metrocell_solver::Problem;

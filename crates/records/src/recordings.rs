@@ -54,8 +54,8 @@ use metrocell_physics::{Axis, SignalKind};
 
 use crate::instrument_readings::CameraFeatures;
 use crate::record_stream::{RecordStream, SignalFeed, StreamOutput};
-use crate::records::{RecordFrame, RecordSet, Rejected};
 use crate::signal_topics::{SignalTopic, COMMANDED_JOINTS_TOPIC, LOAD_TOPIC, POWER_ON_TOPIC};
+use metrocell_estimation::records::{RecordFrame, RecordSet, Rejected};
 
 pub const MEASURED_POINTS_TOPIC: &str = "/measured_points";
 pub use metrocell_msgs::topics::{

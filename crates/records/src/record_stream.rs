@@ -33,12 +33,12 @@ use crate::instrument_readings::{
 use crate::recordings::{
     frame_setup, providers, record_frame, PointSource, RecordingError, RecordingOptions,
 };
-use crate::records::{MeasurementRecord, RecordFrame, RecordKind, Rejected};
-use crate::residuals::whitening;
 use crate::signal_topics::{
     feed, message_time, SignalTopic, AIR_SENSOR, COMMANDED_JOINTS_TOPIC, LOAD_TOPIC,
     POWER_ON_TOPIC, TEMPERATURE_PREFIX,
 };
+use metrocell_estimation::records::{MeasurementRecord, RecordFrame, RecordKind, Rejected};
+use metrocell_estimation::residuals::whitening;
 use metrocell_msgs::geometry_msgs::msg::WrenchStamped;
 use metrocell_msgs::sensor_msgs::msg::{JointState, Temperature, TimeReference};
 

@@ -1,310 +1,12 @@
-//! Frame registration: the tracker's pose in the machine frame from tracker points of
-//! targets whose nominal machine coordinates are known.
-//!
-//! Convention (stated once, used everywhere in this crate): the pose (R, t) maps tracker
-//! coordinates to machine coordinates, q_machine = R·p_tracker + t; it is the transform of the
-//! `tf` child frame `tracker` in the parent frame `machine`. Its covariance is 6×6 in the order
-//! (δθ_x, δθ_y, δθ_z, δt_x, δt_y, δt_z): δθ a small rotation vector (rad) about the machine axes,
-//! applied on the left (R' = exp([δθ]×)·R), δt the translation (m).
-//!
-//! Method: weighted Kabsch (closed form, scalar weights 3/trace Σ) for the start, then the
-//! workspace's Levenberg–Marquardt (metrocell_solver) on Σ rᵢᵀ Wᵢ rᵢ with the full
-//! Wᵢ = (R Σpᵢ Rᵀ + Σqᵢ)⁻¹, rᵢ = R pᵢ + t − qᵢ, reweighted until R settles (see [`register`]).
-//! The covariance is the inverse information at the optimum, scaled by the reduced χ² when the
-//! residuals exceed their covariances (the nominal points are then not where the machine
-//! really is; never scaled down).
+//! Frame registration: the tracker's pose in the machine frame from tracker points of targets
+//! whose nominal machine coordinates are known. The implementation is the workspace's one rigid
+//! registration, [`metrocell_kinematics::rigid_registration`] (convention, covariance order
+//! (δt, δθ) and method are documented there); this module names it for the tracker and holds the
+//! tests against the tracker's spherical noise.
 
-use metrocell_solver::{solve, NotEvaluable, Options, Problem};
-use nalgebra::{DMatrix, Matrix3, Matrix6, Rotation3, UnitQuaternion, Vector3};
-
-/// One correspondence: a tracker point and its nominal machine point, with covariances (m²).
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Correspondence {
-    pub tracker: Vector3<f64>,
-    pub tracker_covariance: Matrix3<f64>,
-    pub machine: Vector3<f64>,
-    pub machine_covariance: Matrix3<f64>,
-}
-
-#[derive(Debug, Clone, PartialEq)]
-pub struct Registration {
-    pub rotation: Rotation3<f64>,
-    /// m
-    pub translation: Vector3<f64>,
-    /// order (δθ, δt), see the module doc
-    pub covariance: Matrix6<f64>,
-    /// Σ rᵀ W r at the optimum
-    pub chi2: f64,
-    /// 3n − 6
-    pub dof: usize,
-    /// root mean square residual length, m
-    pub rms: f64,
-}
-
-#[derive(Debug, Clone, PartialEq, thiserror::Error)]
-pub enum RegistrationError {
-    #[error("registration needs at least 3 points, has {0}")]
-    TooFew(usize),
-    #[error("correspondence {0} has a non-finite coordinate or covariance")]
-    NotFinite(usize),
-    #[error(
-        "the points are collinear (or coincide): the rotation about their line is not determined"
-    )]
-    Degenerate,
-}
-
-impl Registration {
-    /// Machine point and covariance of a tracker point, including the pose's uncertainty.
-    pub fn to_machine(&self, p: &Vector3<f64>, cov: &Matrix3<f64>) -> (Vector3<f64>, Matrix3<f64>) {
-        let rp = self.rotation * p;
-        let j = pose_jacobian(&rp);
-        let r = self.rotation.matrix();
-        (
-            rp + self.translation,
-            r * cov * r.transpose() + j * self.covariance * j.transpose(),
-        )
-    }
-
-    /// The covariance in the order of `geometry_msgs/PoseWithCovariance` (x, y, z, rot x, rot y, rot z).
-    pub fn covariance_translation_first(&self) -> Matrix6<f64> {
-        let mut c = Matrix6::zeros();
-        for i in 0..6 {
-            for j in 0..6 {
-                c[((i + 3) % 6, (j + 3) % 6)] = self.covariance[(i, j)];
-            }
-        }
-        c
-    }
-}
-
-/// ∂(R p + t)/∂(δθ, δt) at R p = `rp`.
-fn pose_jacobian(rp: &Vector3<f64>) -> nalgebra::Matrix3x6<f64> {
-    let mut j = nalgebra::Matrix3x6::zeros();
-    j.fixed_view_mut::<3, 3>(0, 0)
-        .copy_from(&(-rp.cross_matrix()));
-    j.fixed_view_mut::<3, 3>(0, 3)
-        .copy_from(&Matrix3::identity());
-    j
-}
-
-/// Reweightings at most. Each turns R about a millionth as far as the one before (µrad from
-/// Kabsch's start, then pico-radians), so two suffice in the tests.
-const MAX_REWEIGHTINGS: usize = 10;
-
-/// The reweighting stops after a solve that turned R by less than this (rad): the next would
-/// turn it by orders of magnitude less than round-off at 1 m.
-const SETTLED_ROTATION: f64 = 1e-10;
-
-/// The tracker pose from ≥ 3 non-collinear correspondences.
-///
-/// Wᵢ depends on R, which a [`Problem`] (residuals whitened by a fixed factor each) cannot carry
-/// exactly; so the weights are frozen at the current R, the shared solver minimises Σ rᵢᵀ Wᵢ rᵢ
-/// with them, and this repeats until R settles (iteratively reweighted least squares). Its fixed
-/// point is the one of Gauss–Newton with Wᵢ re-evaluated at every step: Σ Jᵢᵀ Wᵢ(R) rᵢ = 0.
-pub fn register(points: &[Correspondence]) -> Result<Registration, RegistrationError> {
-    if points.len() < 3 {
-        return Err(RegistrationError::TooFew(points.len()));
-    }
-    for (i, c) in points.iter().enumerate() {
-        let finite = c
-            .tracker
-            .iter()
-            .chain(c.machine.iter())
-            .chain(c.tracker_covariance.iter())
-            .chain(c.machine_covariance.iter())
-            .all(|v| v.is_finite());
-        if !finite {
-            return Err(RegistrationError::NotFinite(i));
-        }
-    }
-    let (mut rotation, mut translation) = kabsch(points)?;
-    // Every solve starts within the noise of its optimum (Kabsch's, then the previous pass's),
-    // where the problem is linear to round-off: so the first step is left nearly undamped. With
-    // relative tolerances 1e-10 noise-free points come out exact to 1e-15 m, and noisy ones
-    // within 2e-10 m and rad of a Gauss–Newton run to round-off.
-    let options = Options {
-        initial_damping: 1e-8,
-        ftol: 1e-10,
-        xtol: 1e-10,
-        gtol: 1e-10,
-        ..Options::default()
-    };
-    let mut weights = FrozenWeights::at(points, rotation)?;
-    let mut info_inverse = None;
-    for _ in 0..MAX_REWEIGHTINGS {
-        let t = translation;
-        let fit = solve(&weights, &[0.0, 0.0, 0.0, t.x, t.y, t.z], &options)
-            .map_err(|_| RegistrationError::Degenerate)?;
-        (rotation, translation) = weights.pose(&fit.x);
-        info_inverse = fit.covariance_unscaled;
-        weights = FrozenWeights::at(points, rotation)?;
-        let turned = Vector3::new(fit.x[0], fit.x[1], fit.x[2]).norm();
-        if turned < SETTLED_ROTATION {
-            break;
-        }
-    }
-    let info_inverse = info_inverse.ok_or(RegistrationError::Degenerate)?;
-    let mut chi2 = 0.0;
-    let mut ss = 0.0;
-    for (c, whiten) in points.iter().zip(&weights.whiten) {
-        let r = rotation * c.tracker + translation - c.machine;
-        chi2 += (whiten * r).norm_squared();
-        ss += r.norm_squared();
-    }
-    let dof = 3 * points.len() - 6;
-    let birge = if dof > 0 {
-        (chi2 / dof as f64).max(1.0)
-    } else {
-        1.0
-    };
-    let covariance = Matrix6::from_iterator(info_inverse.iter().copied()) * birge;
-    Ok(Registration {
-        rotation,
-        translation,
-        covariance,
-        chi2,
-        dof,
-        rms: (ss / points.len() as f64).sqrt(),
-    })
-}
-
-/// The residuals Lᵢ⁻¹·rᵢ with LᵢLᵢᵀ = R₀ Σpᵢ R₀ᵀ + Σqᵢ = Wᵢ⁻¹ at a fixed R₀, so that the solver's
-/// plain least squares is Σ rᵢᵀ Wᵢ rᵢ with the weights frozen there.
-///
-/// State x = (θ, t): θ the rotation vector of R·R₀⁻¹ (small, so never near the rotation vector's
-/// singularity at π whatever the tracker's heading), t in m. A step δ = (δθ, δt) is the
-/// perturbation of the module doc, so the solver's (J̃ᵀJ̃)⁻¹ is the covariance in its order.
-struct FrozenWeights<'a> {
-    points: &'a [Correspondence],
-    rotation: Rotation3<f64>,
-    whiten: Vec<Matrix3<f64>>,
-}
-
-impl<'a> FrozenWeights<'a> {
-    /// The weights at `rotation`; Degenerate where R Σp Rᵀ + Σq is not positive definite.
-    fn at(
-        points: &'a [Correspondence],
-        rotation: Rotation3<f64>,
-    ) -> Result<Self, RegistrationError> {
-        let r = rotation.matrix();
-        let whiten = points
-            .iter()
-            .map(|c| {
-                (r * c.tracker_covariance * r.transpose() + c.machine_covariance)
-                    .cholesky()
-                    .and_then(|ch| ch.l().try_inverse())
-                    .ok_or(RegistrationError::Degenerate)
-            })
-            .collect::<Result<_, _>>()?;
-        Ok(FrozenWeights {
-            points,
-            rotation,
-            whiten,
-        })
-    }
-
-    fn pose(&self, x: &[f64]) -> (Rotation3<f64>, Vector3<f64>) {
-        (
-            Rotation3::new(Vector3::new(x[0], x[1], x[2])) * self.rotation,
-            Vector3::new(x[3], x[4], x[5]),
-        )
-    }
-}
-
-impl Problem for FrozenWeights<'_> {
-    fn residual_count(&self) -> usize {
-        3 * self.points.len()
-    }
-    fn parameter_count(&self) -> usize {
-        6
-    }
-    fn residuals(&self, x: &[f64], out: &mut [f64]) -> Result<(), NotEvaluable> {
-        let (rotation, translation) = self.pose(x);
-        for (i, (c, whiten)) in self.points.iter().zip(&self.whiten).enumerate() {
-            let r = whiten * (rotation * c.tracker + translation - c.machine);
-            out[3 * i..3 * i + 3].copy_from_slice(r.as_slice());
-        }
-        Ok(())
-    }
-    fn residuals_and_jacobian(
-        &self,
-        x: &[f64],
-        out: &mut [f64],
-        j: &mut DMatrix<f64>,
-    ) -> Result<(), NotEvaluable> {
-        let (rotation, translation) = self.pose(x);
-        for (i, (c, whiten)) in self.points.iter().zip(&self.whiten).enumerate() {
-            let rp = rotation * c.tracker;
-            let r = whiten * (rp + translation - c.machine);
-            out[3 * i..3 * i + 3].copy_from_slice(r.as_slice());
-            // L⁻¹·pose_jacobian(Rp) = [−L⁻¹[Rp]×, L⁻¹], row k of −L⁻¹[Rp]× being (Rp × ℓₖ)ᵀ:
-            // written out, as the 3×3·3×6 product took a quarter of the registration's time
-            for k in 0..3 {
-                let l = whiten.row(k).transpose();
-                let d = rp.cross(&l);
-                for m in 0..3 {
-                    j[(3 * i + k, m)] = d[m];
-                    j[(3 * i + k, 3 + m)] = l[m];
-                }
-            }
-        }
-        Ok(())
-    }
-    fn retract(&self, x: &[f64], delta: &[f64], out: &mut [f64]) {
-        let q = UnitQuaternion::from_scaled_axis(Vector3::new(delta[0], delta[1], delta[2]))
-            * UnitQuaternion::from_scaled_axis(Vector3::new(x[0], x[1], x[2]));
-        out[..3].copy_from_slice(q.scaled_axis().as_slice());
-        for k in 3..6 {
-            out[k] = x[k] + delta[k];
-        }
-    }
-}
-
-/// Closed-form weighted Kabsch (no scale), weights 3/trace(Σpᵢ + Σqᵢ).
-fn kabsch(points: &[Correspondence]) -> Result<(Rotation3<f64>, Vector3<f64>), RegistrationError> {
-    let w: Vec<f64> = points
-        .iter()
-        .map(|c| {
-            3.0 / (c.tracker_covariance + c.machine_covariance)
-                .trace()
-                .max(f64::MIN_POSITIVE)
-        })
-        .collect();
-    let sw: f64 = w.iter().sum();
-    let pc = points
-        .iter()
-        .zip(&w)
-        .map(|(c, w)| c.tracker * *w)
-        .sum::<Vector3<f64>>()
-        / sw;
-    let qc = points
-        .iter()
-        .zip(&w)
-        .map(|(c, w)| c.machine * *w)
-        .sum::<Vector3<f64>>()
-        / sw;
-    let h = points
-        .iter()
-        .zip(&w)
-        .map(|(c, w)| (c.tracker - pc) * (c.machine - qc).transpose() * *w)
-        .sum::<Matrix3<f64>>();
-    let svd = h.svd(true, true);
-    let (u, v_t) = (
-        svd.u.ok_or(RegistrationError::Degenerate)?,
-        svd.v_t.ok_or(RegistrationError::Degenerate)?,
-    );
-    let mut s = svd.singular_values;
-    s.as_mut_slice().sort_by(|a, b| b.total_cmp(a));
-    // a line of points leaves one rotation free: the second singular value vanishes
-    if !(s[1] > 1e-12 * s[0].max(f64::MIN_POSITIVE)) || s[0] == 0.0 {
-        return Err(RegistrationError::Degenerate);
-    }
-    let v = v_t.transpose();
-    let d = (v * u.transpose()).determinant().signum();
-    let r = v * Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, d)) * u.transpose();
-    let rotation = Rotation3::from_matrix_unchecked(r);
-    Ok((rotation, qc - rotation * pc))
-}
+pub use metrocell_kinematics::rigid_registration::{
+    register, Correspondence, Registration, RegistrationError,
+};
 
 #[cfg(test)]
 mod tests {
@@ -312,6 +14,7 @@ mod tests {
     use crate::test_noise::normal;
     use metrocell_compensation::{spherical_to_cartesian, SphericalNoise};
     use nalgebra::Vector6;
+    use nalgebra::{Matrix3, Rotation3, Vector3};
     use rand::SeedableRng;
     use rand_chacha::ChaCha8Rng;
 
@@ -394,19 +97,19 @@ mod tests {
             let reg = register(&simulated(&mut rng)).unwrap();
             let dtheta = (r * reg.rotation.inverse()).scaled_axis();
             let e = Vector6::new(
-                dtheta.x,
-                dtheta.y,
-                dtheta.z,
                 t.x - reg.translation.x,
                 t.y - reg.translation.y,
                 t.z - reg.translation.z,
+                dtheta.x,
+                dtheta.y,
+                dtheta.z,
             );
             let m2 = (e.transpose() * reg.covariance.try_inverse().unwrap() * e)[(0, 0)];
             if m2 < 12.59 {
                 inside += 1;
             }
             // translation σ of a few µm: the registration is worth having
-            assert!(reg.covariance[(3, 3)].sqrt() < 20e-6);
+            assert!(reg.covariance[(0, 0)].sqrt() < 20e-6);
         }
         let frac = inside as f64 / runs as f64;
         assert!(
@@ -444,8 +147,12 @@ mod tests {
         let cov = Matrix3::identity() * 1e-12;
         let (_, out) = reg.to_machine(&Vector3::new(1.0, 0.5, 0.2), &cov);
         assert!(out.trace() > cov.trace(), "pose uncertainty adds");
-        let ros = reg.covariance_translation_first();
-        assert_eq!(ros[(0, 0)], reg.covariance[(3, 3)]);
-        assert_eq!(ros[(3, 5)], reg.covariance[(0, 2)]);
+        // translation first: at the machine origin (R p = 0) the pose adds exactly the
+        // translation block
+        let (_, at_origin) = reg.to_machine(&Vector3::zeros(), &Matrix3::zeros());
+        assert_eq!(
+            at_origin,
+            reg.covariance.fixed_view::<3, 3>(0, 0).into_owned()
+        );
     }
 }

@@ -1,5 +1,6 @@
 //! Image files → 8-bit grey for the detectors, with errors naming the file.
 
+use metrocell_physics::units::{parse_quantity, split_quantity};
 use std::path::Path;
 
 /// Decode `path` (PNG, JPEG, TIFF; 8 or 16 bit; grey or colour) to 8-bit grey. 16-bit images are
@@ -28,28 +29,21 @@ pub fn load_gray(path: &Path) -> anyhow::Result<image::GrayImage> {
     Ok(img.to_luma8())
 }
 
-/// "10mm", "0.01m", "1cm", "25.4 mm" → metres; a bare number is millimetres.
+/// "10mm", "0.01m", "1cm", "25.4 mm" → metres, through the workspace's unit table
+/// (`metrocell_physics::units`); a bare number is millimetres.
 pub fn parse_length(s: &str) -> Result<f64, String> {
     let t = s.trim();
-    let (num, scale) = if let Some(n) = t.strip_suffix("mm") {
-        (n, 1e-3)
-    } else if let Some(n) = t.strip_suffix("cm") {
-        (n, 1e-2)
-    } else if let Some(n) = t.strip_suffix("um").or_else(|| t.strip_suffix("µm")) {
-        (n, 1e-6)
-    } else if let Some(n) = t.strip_suffix('m') {
-        (n, 1.0)
+    let text = if split_quantity(t).1.is_empty() {
+        format!("{t} mm")
     } else {
-        (t, 1e-3)
+        t.to_string()
     };
-    let v: f64 = num
-        .trim()
-        .parse()
+    let v = parse_quantity(&text, "m")
         .map_err(|_| format!("`{s}` is not a length (e.g. 10mm, 0.01m)"))?;
     if !(v.is_finite() && v > 0.0) {
         return Err(format!("`{s}` must be a positive length"));
     }
-    Ok(v * scale)
+    Ok(v)
 }
 
 /// "9x6" → (9, 6).
@@ -82,6 +76,9 @@ mod tests {
         assert_eq!(parse_length("2.5cm").unwrap(), 0.025);
         assert_eq!(parse_length("12").unwrap(), 0.012);
         assert!(parse_length("-1mm").is_err() && parse_length("ten").is_err());
+        assert_eq!(parse_length("25 um").unwrap(), 25e-6);
+        // m is metres and min minutes in the one unit table: a duration is not a length
+        assert!(parse_length("5min").is_err() && parse_length("3 mrad").is_err());
         assert_eq!(parse_board("9x6").unwrap(), (9, 6));
         assert!(parse_board("9").is_err() && parse_board("1x6").is_err());
     }

@@ -1,4 +1,5 @@
-//! Plane-to-image homography by the normalised direct linear transform (Hartley).
+//! Plane-to-image homography by the normalised direct linear transform (Hartley): the one
+//! homography of the workspace (calibration, IPPE's planar pose, crates/vision's marker decoding).
 //!
 //! H maps homogeneous source points (X, Y, 1) to destination points: dst ~ H·src, scaled so that
 //! ‖H‖_F = 1 and H\[2,2\] ≥ 0.
@@ -155,5 +156,18 @@ mod tests {
             homography_dlt(&src[..3], &dst[..3]),
             Err(CameraError::TooFewPoints { .. })
         ));
+    }
+
+    #[test]
+    fn four_points_give_the_exact_homography() {
+        // what crates/vision's marker decoding asks of it: the unique H through four pairs
+        let src = [[0.0, 0.0], [6.0, 0.0], [6.0, 6.0], [0.0, 6.0]];
+        let dst = [[10.0, 12.0], [70.0, 15.0], [66.0, 80.0], [8.0, 70.0]];
+        let h = homography_dlt(&src, &dst).unwrap();
+        for (s, d) in src.iter().zip(&dst) {
+            let p = apply(&h, *s).unwrap();
+            assert!((p[0] - d[0]).abs() < 1e-9 && (p[1] - d[1]).abs() < 1e-9);
+        }
+        assert!((h.norm() - 1.0).abs() < 1e-15 && h[(2, 2)] >= 0.0);
     }
 }

@@ -59,7 +59,8 @@ pub use intrinsics_uncertainty::pose_covariance_from_intrinsics;
 pub use model::{CameraModel, Projection};
 pub use pose::Pose;
 pub use pose_estimation::{
-    estimate_planar_pose, estimate_pose, ippe, refine_pose, PoseEstimate, RosPoseWithCovariance,
+    estimate_planar_pose, estimate_planar_pose_weighted, estimate_pose, ippe, refine_pose,
+    PoseEstimate, RosPoseWithCovariance,
 };
 pub use scale::{mean_square_side_px, plane_scale, PlaneScale};
 pub use undistort::{

@@ -2,11 +2,17 @@
 //! both solutions), DLT for non-planar ones, Levenberg–Marquardt refinement of the reprojection
 //! error in pixels, and the 6×6 pose covariance propagated from corner noise.
 //!
+//! The one implementation of a target's pose from its image points in the workspace: crates/vision's
+//! marker poses and board poses both come from here.
+//!
 //! Covariance: Σ = (JᵀJ)⁻¹·σ_px², J = ∂(pixels)/∂δ with δ = (x, y, z, rot_x, rot_y, rot_z) in the
 //! perturbation convention of [`crate::pose`] (translation and left-multiplied small rotation, both in
-//! the camera = parent frame), which is the order of geometry_msgs/PoseWithCovariance.covariance
-//! (row-major 6×6). σ_px is the standard deviation of each corner coordinate (pixels), assumed
-//! independent; camera intrinsics are treated as exact.
+//! the camera = parent frame). Translation first is the workspace's one order for pose covariances
+//! (also crates/kinematics' rigid registration): it is the order of
+//! geometry_msgs/PoseWithCovariance.covariance (row-major 6×6), so what is computed is published
+//! without reordering. σ_px is the standard deviation of each corner coordinate (pixels), assumed
+//! independent; or, with [`estimate_planar_pose_weighted`], each point has its own 2×2 covariance
+//! and Σ = (JᵀWJ)⁻¹, W the inverse point covariances. Camera intrinsics are treated as exact.
 
 use crate::error::{CameraError, Result};
 use crate::homography::homography_dlt;
@@ -15,7 +21,7 @@ use crate::pose::Pose;
 use crate::solver_bridge::{not_evaluable, solve_pixels};
 use crate::undistort::{undistort_to_normalized, UndistortCriteria};
 use metrocell_solver::{NotEvaluable, Problem};
-use nalgebra::{DMatrix, Matrix3, Matrix6, Rotation3, Vector3};
+use nalgebra::{DMatrix, Matrix2, Matrix3, Matrix6, Rotation3, Vector3};
 
 /// A refined pose with its uncertainty.
 #[derive(Debug, Clone, PartialEq)]
@@ -24,7 +30,8 @@ pub struct PoseEstimate {
     pub pose: Pose,
     /// 6×6 covariance of (x, y, z, rot_x, rot_y, rot_z); units² of the target length unit and rad².
     pub covariance: Matrix6<f64>,
-    /// Corner noise the covariance was propagated from (pixels).
+    /// Corner noise the covariance was propagated from (pixels); with per-point covariances, the
+    /// RMS of their per-coordinate σ.
     pub sigma_px: f64,
     /// RMS reprojection distance sqrt(Σ‖r_i‖² / N) (pixels).
     pub rms_px: f64,
@@ -242,10 +249,19 @@ fn ippe_translation(
         .unwrap_or_else(Vector3::zeros)
 }
 
+/// The reprojection errors in pixels, or whitened by Lᵢ⁻¹ (LᵢLᵢᵀ = Σᵢ, the point's covariance)
+/// when `whiten` is given, so that the solver's plain least squares is the covariance-weighted one.
 struct PoseProblem<'a> {
     cam: &'a CameraModel,
     object: Vec<Vector3<f64>>,
     image: &'a [[f64; 2]],
+    whiten: Option<&'a [Matrix2<f64>]>,
+}
+
+impl PoseProblem<'_> {
+    fn weighted(&self, i: usize, e: nalgebra::Vector2<f64>) -> nalgebra::Vector2<f64> {
+        self.whiten.map_or(e, |w| w[i] * e)
+    }
 }
 
 /// State: the pose as (t, rvec); steps: the perturbation δ of [`crate::pose`].
@@ -260,8 +276,9 @@ impl Problem for PoseProblem<'_> {
         let pose = Pose::from_state(x);
         for (i, (p, m)) in self.object.iter().zip(self.image).enumerate() {
             let [u, v] = self.cam.project(&pose, p).map_err(not_evaluable)?;
-            r[2 * i] = u - m[0];
-            r[2 * i + 1] = v - m[1];
+            let e = self.weighted(i, nalgebra::Vector2::new(u - m[0], v - m[1]));
+            r[2 * i] = e.x;
+            r[2 * i + 1] = e.y;
         }
         Ok(())
     }
@@ -277,9 +294,15 @@ impl Problem for PoseProblem<'_> {
                 .cam
                 .project_with_jacobians(&pose, p)
                 .map_err(not_evaluable)?;
-            r[2 * i] = pr.u - m[0];
-            r[2 * i + 1] = pr.v - m[1];
-            j.view_mut((2 * i, 0), (2, 6)).copy_from(&pr.d_pose);
+            let e = self.weighted(i, nalgebra::Vector2::new(pr.u - m[0], pr.v - m[1]));
+            r[2 * i] = e.x;
+            r[2 * i + 1] = e.y;
+            match self.whiten {
+                None => j.view_mut((2 * i, 0), (2, 6)).copy_from(&pr.d_pose),
+                Some(w) => j
+                    .view_mut((2 * i, 0), (2, 6))
+                    .copy_from(&(w[i] * pr.d_pose)),
+            }
         }
         Ok(())
     }
@@ -296,25 +319,47 @@ pub fn refine_pose(
     image: &[[f64; 2]],
     initial: Pose,
 ) -> Result<(Pose, f64, Matrix6<f64>)> {
+    refine(cam, object, image, None, initial)
+}
+
+/// [`refine_pose`], the residuals whitened by `whiten` (Lᵢ⁻¹ per point) when given: then the
+/// matrix returned is (JᵀWJ)⁻¹, the covariance itself. The RMS is in pixels either way.
+fn refine(
+    cam: &CameraModel,
+    object: &[[f64; 3]],
+    image: &[[f64; 2]],
+    whiten: Option<&[Matrix2<f64>]>,
+    initial: Pose,
+) -> Result<(Pose, f64, Matrix6<f64>)> {
     check_inputs(object, image, 3, "pose refinement")?;
     let problem = PoseProblem {
         cam,
         object: object.iter().map(|p| Vector3::from(*p)).collect(),
         image,
+        whiten,
     };
     let out = solve_pixels(&problem, &initial.to_state(), 100, "pose refinement")?;
-    let rms = (out.residuals.iter().map(|v| v * v).sum::<f64>() / object.len() as f64).sqrt();
+    let pose = Pose::from_state(&out.x);
+    let square_sum = match whiten {
+        None => out.residuals.iter().map(|v| v * v).sum::<f64>(),
+        Some(_) => problem
+            .object
+            .iter()
+            .zip(image)
+            .map(|(p, m)| {
+                cam.project(&pose, p)
+                    .map_or(f64::NAN, |[u, v]| (u - m[0]).powi(2) + (v - m[1]).powi(2))
+            })
+            .sum(),
+    };
+    let rms = (square_sum / object.len() as f64).sqrt();
     let inv = out
         .covariance_unscaled
         .ok_or_else(|| CameraError::Degenerate {
             what: "pose refinement".into(),
             reason: "pose not observable (JᵀJ singular)".into(),
         })?;
-    Ok((
-        Pose::from_state(&out.x),
-        rms,
-        Matrix6::from_iterator(inv.iter().copied()),
-    ))
+    Ok((pose, rms, Matrix6::from_iterator(inv.iter().copied())))
 }
 
 fn check_sigma(sigma_px: f64) -> Result<()> {
@@ -355,6 +400,70 @@ pub fn estimate_planar_pose(
 ) -> Result<PoseEstimate> {
     check_inputs(object, image, 4, "planar pose")?;
     check_sigma(sigma_px)?;
+    let ((pose, rms, inv), alternative) = planar_pose(cam, object, image, None)?;
+    Ok(PoseEstimate {
+        pose,
+        covariance: inv * sigma_px * sigma_px,
+        sigma_px,
+        rms_px: rms,
+        alternative,
+    })
+}
+
+/// [`estimate_planar_pose`] with a 2×2 covariance (px²) for each image point, each positive
+/// definite: the refinement weights each point by its inverse and the covariance is (JᵀWJ)⁻¹.
+pub fn estimate_planar_pose_weighted(
+    cam: &CameraModel,
+    object: &[[f64; 3]],
+    image: &[[f64; 2]],
+    covariances: &[Matrix2<f64>],
+) -> Result<PoseEstimate> {
+    check_inputs(object, image, 4, "planar pose")?;
+    if covariances.len() != image.len() {
+        return Err(CameraError::InvalidParameter {
+            name: "covariances".into(),
+            reason: format!(
+                "{} point covariances for {} image points",
+                covariances.len(),
+                image.len()
+            ),
+        });
+    }
+    let whiten = covariances
+        .iter()
+        .enumerate()
+        .map(|(i, c)| {
+            c.iter()
+                .all(|v| v.is_finite())
+                .then(|| c.cholesky().and_then(|ch| ch.l().try_inverse()))
+                .flatten()
+                .ok_or_else(|| CameraError::BadPoint {
+                    index: i,
+                    reason: "its covariance is not finite and positive definite".into(),
+                })
+        })
+        .collect::<Result<Vec<_>>>()?;
+    let ((pose, rms, covariance), alternative) = planar_pose(cam, object, image, Some(&whiten))?;
+    let mean_variance =
+        covariances.iter().map(|c| c.trace() / 2.0).sum::<f64>() / covariances.len() as f64;
+    Ok(PoseEstimate {
+        pose,
+        covariance,
+        sigma_px: mean_variance.sqrt(),
+        rms_px: rms,
+        alternative,
+    })
+}
+
+/// The planar pose (pose, RMS px, inverse information) and the other IPPE solution with its RMS.
+type PlanarSolutions = ((Pose, f64, Matrix6<f64>), Option<(Pose, f64)>);
+
+fn planar_pose(
+    cam: &CameraModel,
+    object: &[[f64; 3]],
+    image: &[[f64; 2]],
+    whiten: Option<&[Matrix2<f64>]>,
+) -> Result<PlanarSolutions> {
     let extent = object
         .iter()
         .map(|p| p[0].abs().max(p[1].abs()))
@@ -374,7 +483,7 @@ pub fn estimate_planar_pose(
     let mut refined = Vec::new();
     let mut last_err = None;
     for c in candidates {
-        match refine_pose(cam, object, image, c) {
+        match refine(cam, object, image, whiten, c) {
             Ok(r) => refined.push(r),
             Err(e) => last_err = Some(e),
         }
@@ -386,15 +495,8 @@ pub fn estimate_planar_pose(
         }));
     }
     refined.sort_by(|a, b| a.1.partial_cmp(&b.1).unwrap_or(std::cmp::Ordering::Equal));
-    let (pose, rms, inv) = refined[0];
     let alternative = refined.get(1).map(|r| (r.0, r.1));
-    Ok(PoseEstimate {
-        pose,
-        covariance: inv * sigma_px * sigma_px,
-        sigma_px,
-        rms_px: rms,
-        alternative,
-    })
+    Ok((refined[0], alternative))
 }
 
 /// Pose from any ≥ 4 (planar) or ≥ 6 (non-planar) correspondences. Coplanar points (smallest

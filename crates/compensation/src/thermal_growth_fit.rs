@@ -4,17 +4,21 @@
 //!   y(t) = c + g·(T_f(t; τ) − T_ref)
 //! c the point's static error, g = L·α (m/K), T_f the sensor's first-order lag with time
 //! constant τ evaluated at the measurement time from the readings up to it. y is linear in
-//! (c, g) for a given τ, so the fit is separable: a weighted linear fit of (c, g) for each τ, the
-//! residual profile minimised over ln τ (a log-spaced scan, then golden-section search around its
-//! best point), and the covariance of (c, g, τ) from the Gauss-Newton normal matrix at the
-//! optimum, J = [1, T_f − T_ref, g·∂T_f/∂τ], scaled by χ²/(n − 3) (so it is honest when the
-//! stated variances are not).
+//! (c, g) for a given τ: the fit is the workspace's separable time-constant fit
+//! (`metrocell_solver::time_constant_fit`, 48 log-spaced scan points over the configured range),
+//! x = T_f − T_ref. Its covariance of (c, g, τ) is scaled by the rule for relative variances,
+//! χ²/(n − 3), up or down: the variance given for y is the measurement's alone, while y also
+//! carries the temperature sensor's noise through the lag and the error of the other terms
+//! subtracted from it, which nobody states; so the noise level is estimated from the scatter.
 //!
 //! Readings and measurements are kept in a sliding window (`max_readings` readings; older ones
 //! are dropped, and measurements older than the oldest reading no longer enter the fit); each
 //! fit re-runs the lag over the window, so a fit costs O(readings × τ trials).
 
-use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
+use metrocell_solver::{
+    fit_time_constant, ChiSquareScaling, TimeConstantFitError, TimeConstantRow, TimeConstantSearch,
+};
+use nalgebra::{Matrix3, Vector3};
 
 use crate::thermal_error::ThermalError;
 use metrocell_physics::thermal::first_order_lag::FirstOrderLag;
@@ -50,7 +54,6 @@ pub struct GrowthFit {
 }
 
 const SCAN_POINTS: usize = 48;
-const GOLDEN_STEPS: usize = 60;
 
 impl GrowthFit {
     pub fn new(
@@ -144,44 +147,28 @@ impl GrowthFit {
         lag
     }
 
-    /// (x = T_f − T_ref, ∂T_f/∂τ, y, variance) at every measurement that has a reading before it.
-    fn design(&self, tau: f64) -> Vec<(f64, f64, f64, f64)> {
+    /// The rows of the separable fit at every measurement that has a reading before it:
+    /// x = T_f − T_ref, ∂T_f/∂τ, y and its variance.
+    fn design(&self, tau: f64) -> Vec<TimeConstantRow> {
         let mut lag = FirstOrderLag::new(tau);
         let mut out = Vec::with_capacity(self.observations.len());
         let mut r = 0;
-        for &(t, y, var) in &self.observations {
+        for &(t, y, variance) in &self.observations {
             while r < self.readings.len() && self.readings[r].0 <= t {
                 let (tr, v, vv) = self.readings[r];
                 lag.advance(tr, v, vv);
                 r += 1;
             }
-            if let Some((_, tf, d, _)) = lag.output() {
-                out.push((tf - self.reference_temperature, d, y, var));
+            if let Some((_, tf, dx_dtau, _)) = lag.output() {
+                out.push(TimeConstantRow {
+                    x: tf - self.reference_temperature,
+                    dx_dtau,
+                    y,
+                    variance,
+                });
             }
         }
         out
-    }
-
-    /// Weighted linear fit of (c, g) for given rows; (c, g, χ²).
-    fn linear(rows: &[(f64, f64, f64, f64)]) -> Option<(f64, f64, f64)> {
-        let mut n = Matrix2::zeros();
-        let mut b = Vector2::zeros();
-        for &(x, _, y, var) in rows {
-            let w = 1.0 / var;
-            let j = Vector2::new(1.0, x);
-            n += j * j.transpose() * w;
-            b += j * (w * y);
-        }
-        let sol = n.try_inverse()? * b;
-        let chi2 = rows
-            .iter()
-            .map(|&(x, _, y, var)| (y - sol[0] - sol[1] * x).powi(2) / var)
-            .sum();
-        Some((sol[0], sol[1], chi2))
-    }
-
-    fn profile(&self, ln_tau: f64) -> f64 {
-        Self::linear(&self.design(ln_tau.exp())).map_or(f64::INFINITY, |(_, _, chi2)| chi2)
     }
 
     pub fn fit(&self) -> Result<GrowthFitResult, ThermalError> {
@@ -195,72 +182,30 @@ impl GrowthFit {
                 "needs at least 4 reference measurements after the first reading, has {usable}"
             )));
         }
-        let (lo, hi) = (self.tau_range.0.ln(), self.tau_range.1.ln());
-        let grid: Vec<f64> = (0..SCAN_POINTS)
-            .map(|i| lo + (hi - lo) * i as f64 / (SCAN_POINTS - 1) as f64)
-            .collect();
-        let values: Vec<f64> = grid.iter().map(|&g| self.profile(g)).collect();
-        let best = (0..SCAN_POINTS)
-            .min_by(|&a, &b| values[a].total_cmp(&values[b]))
-            .unwrap_or(0);
-        if !values[best].is_finite() {
-            return Err(not_yet(
-                "the temperatures did not vary: g cannot be separated from the offset".into(),
-            ));
-        }
-        // golden-section search on [grid[best−1], grid[best+1]]
-        let (mut a, mut b) = (
-            grid[best.saturating_sub(1)],
-            grid[(best + 1).min(SCAN_POINTS - 1)],
-        );
-        let r = (5f64.sqrt() - 1.0) / 2.0;
-        let (mut x1, mut x2) = (b - r * (b - a), a + r * (b - a));
-        let (mut f1, mut f2) = (self.profile(x1), self.profile(x2));
-        for _ in 0..GOLDEN_STEPS {
-            if f1 < f2 {
-                (b, x2, f2) = (x2, x1, f1);
-                x1 = b - r * (b - a);
-                f1 = self.profile(x1);
-            } else {
-                (a, x1, f1) = (x1, x2, f2);
-                x2 = a + r * (b - a);
-                f2 = self.profile(x2);
-            }
-        }
-        let ln_tau = if f1 < f2 { x1 } else { x2 };
-        let ln_tau = if values[best] < f1.min(f2) {
-            grid[best]
-        } else {
-            ln_tau
+        let search = TimeConstantSearch {
+            range: self.tau_range,
+            scan_points: SCAN_POINTS,
+            scaling: ChiSquareScaling::RelativeVariances,
         };
-        let tau = ln_tau.exp();
-        let rows = self.design(tau);
-        let (c, g, chi2) =
-            Self::linear(&rows).ok_or_else(|| not_yet("the temperatures did not vary".into()))?;
-        let mut normal = Matrix3::zeros();
-        for &(x, dx, _, var) in &rows {
-            let j = Vector3::new(1.0, x, g * dx);
-            normal += j * j.transpose() / var;
-        }
-        let dof = rows.len() as f64 - 3.0;
-        let scale = if dof > 0.0 { chi2 / dof } else { 1.0 };
-        let covariance = normal.try_inverse().ok_or_else(|| {
-            not_yet("τ cannot be determined (the lagged temperature does not depend on it)".into())
-        })? * scale;
-        let rms = (rows
-            .iter()
-            .map(|&(x, _, y, _)| (y - c - g * x).powi(2))
-            .sum::<f64>()
-            / rows.len() as f64)
-            .sqrt();
+        let fit = fit_time_constant(&|tau| self.design(tau), &search).map_err(|e| match e {
+            TimeConstantFitError::TauUndetermined => not_yet(
+                "τ cannot be determined (the lagged temperature does not depend on it)".into(),
+            ),
+            TimeConstantFitError::TooFewRows(n) => not_yet(format!(
+                "needs at least 4 reference measurements after the first reading, has {n}"
+            )),
+            TimeConstantFitError::NoVariation | TimeConstantFitError::BadSearch => not_yet(
+                "the temperatures did not vary: g cannot be separated from the offset".into(),
+            ),
+        })?;
         Ok(GrowthFitResult {
-            offset: c,
-            coefficient: g,
-            time_constant: tau,
-            covariance,
-            rms,
-            observations: rows.len(),
-            at_bound: best == 0 || best == SCAN_POINTS - 1,
+            offset: fit.offset,
+            coefficient: fit.coefficient,
+            time_constant: fit.tau,
+            covariance: fit.covariance,
+            rms: fit.rms,
+            observations: fit.rows,
+            at_bound: fit.at_bound,
         })
     }
 }

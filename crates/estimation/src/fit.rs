@@ -3,7 +3,7 @@
 //! What it does, in order:
 //! 1. Frame: records in the machine frame fix the instrument pose at the identity; records in an
 //!    instrument frame start the pose from a weighted Kabsch registration of the measured points
-//!    to the model's tool points (crates/kinematics `registration`), so an export in any tracker
+//!    to the model's tool points (crates/kinematics `rigid_registration`), so an export in any tracker
 //!    placement converges, and leave it free unless the model file fixes it.
 //! 2. Levenberg–Marquardt (crates/solver) on [`PointResiduals`], bounded by each parameter's
 //!    documented range, with the model file's priors, a robust loss if asked (outliers that
@@ -22,7 +22,7 @@
 //! Records whose measured point, joints or covariance are not finite are left out and named
 //! ([`Fit::skipped`]); records the robust loss down-weighted are named too ([`Fit::outliers`]).
 
-use metrocell_kinematics::registration::{register, Correspondence};
+use metrocell_kinematics::rigid_registration::{register, Correspondence};
 use metrocell_model::{ForwardModel, ParameterSetup};
 use metrocell_physics::PhysicsError;
 use metrocell_solver::identifiability::GRAM_RCOND;

@@ -11,7 +11,7 @@
 //! * [`residuals`] — measured − predicted on the shared forward model (crates/model), whitened
 //!   by each record's covariance, with the model's analytic Jacobian: a solver problem.
 //! * [`fit`] — batch identification of the declared free parameters: registration of the
-//!   instrument frame (crates/kinematics `registration`), bounded robust Levenberg–Marquardt,
+//!   instrument frame (crates/kinematics `rigid_registration`), bounded robust Levenberg–Marquardt,
 //!   scaled covariance, identifiability.
 //! * [`fit_summary`] — a fit in words: values ± σ in µm/µrad, what is not identifiable and
 //!   why, residuals before/after, consistency with the stated noise, outliers and skipped records.

@@ -14,6 +14,7 @@
 //!   says "y"); a zero axis-offset component would silently return 0 and is rejected instead.
 
 use crate::error::KinematicsError;
+use crate::rigid_registration::kabsch_rotation;
 use nalgebra::{Matrix2, Matrix3, Unit, UnitQuaternion, Vector2, Vector3};
 
 /// Twin output: what the camera reads for a pure robot translation `robot_move` (`c = R_rcᵀ v`).
@@ -59,41 +60,13 @@ pub fn rotation_from_two_moves(
     Ok(mv * mc.transpose())
 }
 
-/// Kabsch/SVD least-squares rotation `R_rc` minimising `Σ |v_i − R c_i|²` over N ≥ 2 non-collinear moves.
+/// Kabsch/SVD least-squares rotation `R_rc` minimising `Σ |v_i − R c_i|²` over N ≥ 2 non-collinear moves
+/// (the workspace's one Kabsch, [`crate::rigid_registration::kabsch_rotation`], camera moves → robot moves).
 pub fn rotation_kabsch(
     robot_moves: &[Vector3<f64>],
     camera_moves: &[Vector3<f64>],
 ) -> Result<Matrix3<f64>, KinematicsError> {
-    if robot_moves.len() != camera_moves.len() {
-        return Err(KinematicsError::LengthMismatch {
-            field: "camera_moves".into(),
-            got: camera_moves.len(),
-            expected: robot_moves.len(),
-        });
-    }
-    if robot_moves.len() < 2 {
-        return Err(KinematicsError::Degenerate {
-            reason: "need at least two moves".into(),
-        });
-    }
-    let h: Matrix3<f64> = robot_moves
-        .iter()
-        .zip(camera_moves)
-        .map(|(v, c)| v * c.transpose())
-        .sum();
-    let svd = h.svd(true, true);
-    let (u, vt) = (svd.u.expect("requested"), svd.v_t.expect("requested"));
-    let mut s = svd.singular_values;
-    s.as_mut_slice()
-        .sort_by(|a, b| b.partial_cmp(a).unwrap_or(std::cmp::Ordering::Equal));
-    if s[1] <= 1e-12 * s[0].max(f64::MIN_POSITIVE) {
-        return Err(KinematicsError::Degenerate {
-            reason: "moves are collinear: rotation about their common direction is unobservable"
-                .into(),
-        });
-    }
-    let d = (u * vt).determinant().signum();
-    Ok(u * Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, d)) * vt)
+    kabsch_rotation(camera_moves, robot_moves, None)
 }
 
 /// Yaw (rotation about z) of a rotation matrix, `atan2(R10, R00)` (rad).

@@ -1,6 +1,7 @@
 //! Kinematics of the digital twin's machine families: Cartesian 3-axis machines in any stacking order
 //! (nominal and with the thesis error chain), the five-axis tilting/rotary-table machine, the linear delta
-//! (Marlin conventions), serial arms from DH tables or URDF, and camera-to-tool frame alignment; plus the
+//! (Marlin conventions), serial arms from DH tables or URDF, and camera-to-tool frame alignment; rigid
+//! registration (Kabsch and the covariance-weighted pose from point correspondences); plus the
 //! Jacobians of forward kinematics w.r.t. geometric parameters that the estimator needs.
 //!
 //! # Conventions (stated once, apply everywhere)
@@ -22,7 +23,7 @@ pub mod five_axis;
 pub mod frame_alignment;
 pub mod gravity;
 pub mod instrument_pose;
-pub mod registration;
+pub mod rigid_registration;
 pub mod serial;
 pub mod serial_ik;
 pub mod transform;
@@ -31,3 +32,6 @@ pub mod urdf_link_placement;
 
 pub use error::KinematicsError;
 pub use instrument_pose::InstrumentPose;
+pub use rigid_registration::{
+    kabsch_rigid, kabsch_rotation, register, Correspondence, Registration, RegistrationError,
+};

@@ -179,6 +179,7 @@ fn atom(name: &str) -> Option<(Dimension, f64)> {
         "1" | "" => (one, 1.0),
         "m" => (len, 1.0),
         "km" => (len, 1e3),
+        "cm" => (len, 1e-2),
         "mm" => (len, 1e-3),
         "um" | "µm" | "μm" | "micron" => (len, 1e-6),
         "nm" => (len, 1e-9),
@@ -192,6 +193,7 @@ fn atom(name: &str) -> Option<(Dimension, f64)> {
         "us" | "µs" | "μs" => (time, 1e-6),
         "min" => (time, 60.0),
         "h" => (time, 3600.0),
+        "d" => (time, 86_400.0),
         "Hz" => (d(0, 0, -1, 0, 0, 0, 0), 1.0),
         "kHz" => (d(0, 0, -1, 0, 0, 0, 0), 1e3),
         "K" | "degC" | "°C" | "C" => (temp, 1.0),
@@ -316,6 +318,70 @@ pub fn parse_quantity(text: &str, canonical: &str) -> Result<f64, QuantityError>
     })
 }
 
+/// Seconds of a duration written for people: `8h`, `90min`, `30s`, `1.5h`, `2h30min`,
+/// `8 hours`, `250ms`, or a bare number of seconds. Each term is a quantity of this module
+/// (`ms`, `s`, `min`, `h`, `d`, and the spelled-out `sec`, `minutes`, `hours`, `days`); several add
+/// up. `m` is metres here as everywhere in the workspace, so `5m` is refused with a hint to write
+/// `5min`. Must be > 0 and finite. The error says what is wrong, not which text (callers name it).
+pub fn parse_duration(text: &str) -> Result<f64, String> {
+    const EXAMPLES: &str = "examples: 8h, 90min, 30s";
+    let s: String = text.chars().filter(|c| !c.is_whitespace()).collect();
+    if s.is_empty() {
+        return Err(format!("empty; {EXAMPLES}"));
+    }
+    if let Ok(v) = s.parse::<f64>() {
+        return positive_seconds(v);
+    }
+    let mut total = 0.0;
+    let mut rest = s.as_str();
+    while !rest.is_empty() {
+        let num_len = rest
+            .find(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .unwrap_or(rest.len());
+        if num_len == 0 {
+            return Err(format!("expected a number at {rest:?}; {EXAMPLES}"));
+        }
+        let (num, after) = rest.split_at(num_len);
+        let unit_len = after
+            .find(|c: char| c.is_ascii_digit() || c == '.')
+            .unwrap_or(after.len());
+        let (unit, next) = after.split_at(unit_len);
+        let atom = match unit {
+            "" => {
+                return Err(
+                    "a number needs a unit when several terms are given (ms, s, min, h, d)".into(),
+                )
+            }
+            "m" => {
+                return Err(format!(
+                    "`{num}m` is a length (m = metres): write {num}min for minutes"
+                ))
+            }
+            "sec" | "secs" | "second" | "seconds" => "s",
+            "mins" | "minute" | "minutes" => "min",
+            "hr" | "hrs" | "hour" | "hours" => "h",
+            "day" | "days" => "d",
+            other => other,
+        };
+        total += parse_quantity(&format!("{num} {atom}"), "s").map_err(|e| match e {
+            QuantityError::Parse(_) if !num.is_empty() && num.parse::<f64>().is_err() => {
+                format!("{num:?} is not a number")
+            }
+            _ => format!("unknown time unit {unit:?} (use ms, s, min, h or d)"),
+        })?;
+        rest = next;
+    }
+    positive_seconds(total)
+}
+
+fn positive_seconds(v: f64) -> Result<f64, String> {
+    if v > 0.0 && v.is_finite() {
+        Ok(v)
+    } else {
+        Err("must be > 0 and finite".into())
+    }
+}
+
 trait RoundIfIntegral {
     fn round_if_integral(self) -> Self;
 }
@@ -366,6 +432,42 @@ mod tests {
         assert!(matches!(
             parse_quantity("abc", "m"),
             Err(QuantityError::Parse(_))
+        ));
+    }
+
+    #[test]
+    fn durations_parse_to_seconds_through_the_unit_table() {
+        for (text, seconds) in [
+            ("8h", 28_800.0),
+            ("90min", 5_400.0),
+            ("30s", 30.0),
+            ("1.5h", 5_400.0),
+            ("2h30min", 9_000.0),
+            ("250ms", 0.25),
+            ("45", 45.0),
+            (" 3 min ", 180.0),
+            ("8 hours", 28_800.0),
+            ("2 days", 172_800.0),
+            ("1d", 86_400.0),
+        ] {
+            assert_eq!(parse_duration(text).unwrap(), seconds, "{text}");
+        }
+    }
+
+    #[test]
+    fn minutes_are_min_and_m_is_refused_for_durations() {
+        let e = parse_duration("5m").unwrap_err();
+        assert!(e.contains("metres") && e.contains("5min"), "{e}");
+        assert!(parse_duration("1h5m").is_err());
+        for bad in ["", "8 fortnights", "h", "-5s", "0s", "1h30", "inf", "5 mm"] {
+            assert!(parse_duration(bad).is_err(), "{bad}");
+        }
+        // the unit table itself: m is metres, cm a length, d a day
+        assert_eq!(parse_quantity("5 m", "mm").unwrap(), 5000.0);
+        assert_eq!(parse_quantity("2.5 cm", "m").unwrap(), 0.025);
+        assert!(matches!(
+            parse_quantity("5 m", "s"),
+            Err(QuantityError::Dimension { .. })
         ));
     }
 }

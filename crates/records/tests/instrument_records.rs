@@ -217,10 +217,10 @@ fn camera_records(size_factor: f64) -> (Cell, Vec<MeasurementRecord>) {
                 y: t.y,
                 z: t.z,
             };
-            // message order (x, y, z, rot): the estimator's is (rot, t)
+            // message order (x, y, z, rot), the marker pose's own
             for a in 0..3 {
                 for b in 0..3 {
-                    det.pose.covariance[6 * a + b] = pose.covariance[(3 + a, 3 + b)];
+                    det.pose.covariance[6 * a + b] = pose.covariance[(a, b)];
                 }
             }
             array.detections.push(det);

@@ -43,6 +43,7 @@ pub mod numeric_jacobian;
 mod options;
 mod problem;
 mod solution;
+pub mod time_constant_fit;
 mod zeroed;
 
 pub use error::{NotEvaluable, SolverError};
@@ -54,4 +55,8 @@ pub use normal_equations::normal_matrix;
 pub use options::{NullSpace, Options, Prior};
 pub use problem::Problem;
 pub use solution::{Solution, Termination};
+pub use time_constant_fit::{
+    fit_time_constant, ChiSquareScaling, TimeConstantFit, TimeConstantFitError, TimeConstantRow,
+    TimeConstantSearch,
+};
 pub use zeroed::zeroed_matrix;

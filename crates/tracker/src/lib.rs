@@ -6,7 +6,7 @@
 //! * [`dwell`]: consecutive readings of one target grouped and averaged, with standard error.
 //! * [`turbulence`]: the χ² test of a dwell's range scatter against the noise model.
 //! * [`warmup`]: fit of A + B(1 − e^(−t/τ)) to repeated nest readings, and the "stable" flag.
-//! * [`registration`] (crates/kinematics, re-exported): weighted Kabsch fit of the tracker pose
+//! * [`registration`] (crates/kinematics' `rigid_registration`, re-exported): weighted Kabsch fit of the tracker pose
 //!   in the machine frame, 6×6 covariance.
 //! * [`time_alignment`]: commanded machine position at a measurement's time; the thesis's T_v.
 //! * [`line_protocol`] and [`tcp_client`]: the ASCII line driver for trackers that stream readings.
@@ -18,8 +18,7 @@
 pub mod dwell;
 pub mod line_protocol;
 pub mod reading;
-// the frame registration lives below the tracker and the estimation crates (crates/kinematics)
-pub use metrocell_kinematics::registration;
+pub mod registration;
 pub mod tcp_client;
 pub mod time_alignment;
 pub mod total_station_gsi;

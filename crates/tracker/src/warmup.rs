@@ -1,17 +1,21 @@
 //! Tracker warm-up: the range of a fixed nest drifts as A + B(1 − e^(−t/τ)) after power-on
 //! (thesis eq. 3.1; physics term `tracker_warmup`), t the time since power-on.
 //!
-//! The fit is separable: for a fixed τ the model is linear in A and B (weighted linear least
-//! squares), so χ²(τ) is minimised by a 1-D search over τ (log-spaced grid over the physics
-//! term's range 60 s .. 10 h, then golden-section refinement). The covariance of (A, B, τ) is
-//! that of the full non-linear problem at the optimum, (JᵀWJ)⁻¹, scaled by the reduced χ² when
-//! the residuals scatter more than their stated σ (Birge ratio; never scaled down).
+//! The fit is the workspace's separable time-constant fit (`metrocell_solver::time_constant_fit`)
+//! with x = 1 − e^(−t/τ): A, B linear for a fixed τ, τ searched over the physics term's range
+//! 60 s .. 10 h (241 log-spaced points, then golden section). The covariance of (A, B, τ) is
+//! (JᵀWJ)⁻¹ at the optimum scaled by the rule for stated variances, max(χ²/dof, 1): each
+//! reading's σ is the tracker's stated radial noise over the dwell, so residuals scattering more
+//! inflate it and a lucky low χ² does not shrink it.
 //! "Stable" means past the 95 % settling time, τ·ln 20 (`warmup_status`), taken
 //! conservatively at τ + σ_τ.
 
 use metrocell_compensation::warmup_status;
 use metrocell_physics::instrument::tracker_warmup::{settling_time, warmup_drift};
-use nalgebra::{Matrix2, Matrix3, Vector2, Vector3};
+use metrocell_solver::{
+    fit_time_constant, ChiSquareScaling, TimeConstantFitError, TimeConstantRow, TimeConstantSearch,
+};
+use nalgebra::{Matrix3, Vector3};
 
 const TAU_MIN: f64 = 60.0;
 const TAU_MAX: f64 = 36_000.0;
@@ -90,22 +94,19 @@ pub enum WarmupError {
     Singular,
 }
 
-/// Weighted linear fit of A, B for fixed τ: (A, B, χ²).
-fn linear_for_tau(s: &[WarmupSample], tau: f64) -> Option<(f64, f64, f64)> {
-    let mut n = Matrix2::zeros();
-    let mut r = Vector2::zeros();
-    for x in s {
-        let row = Vector2::new(1.0, 1.0 - (-x.t / tau).exp());
-        let w = 1.0 / (x.sigma * x.sigma);
-        n += row * row.transpose() * w;
-        r += row * (w * x.value);
-    }
-    let ab = n.try_inverse()? * r;
-    let chi2 = s
-        .iter()
-        .map(|x| ((x.value - warmup_drift(ab[0], ab[1], tau, x.t)) / x.sigma).powi(2))
-        .sum();
-    Some((ab[0], ab[1], chi2))
+/// The readings as rows of the separable fit at a trial τ: x = 1 − e^(−t/τ).
+fn rows_at(s: &[WarmupSample], tau: f64) -> Vec<TimeConstantRow> {
+    s.iter()
+        .map(|x| {
+            let e = (-x.t / tau).exp();
+            TimeConstantRow {
+                x: 1.0 - e,
+                dx_dtau: -x.t / (tau * tau) * e,
+                y: x.value,
+                variance: x.sigma * x.sigma,
+            }
+        })
+        .collect()
 }
 
 /// Fit A + B(1 − e^(−t/τ)) to nest readings.
@@ -128,59 +129,29 @@ pub fn fit_warmup(samples: &[WarmupSample]) -> Result<WarmupFit, WarmupError> {
     if samples.len() < 4 {
         return Err(WarmupError::TooFew(samples.len()));
     }
-    let chi2 = |ln_tau: f64| linear_for_tau(samples, ln_tau.exp()).map_or(f64::INFINITY, |f| f.2);
-    let (lo, hi) = (TAU_MIN.ln(), TAU_MAX.ln());
-    let steps = 240;
-    let grid: Vec<f64> = (0..=steps)
-        .map(|k| lo + (hi - lo) * k as f64 / steps as f64)
-        .collect();
-    let best = (0..grid.len())
-        .min_by(|&i, &j| chi2(grid[i]).total_cmp(&chi2(grid[j])))
-        .unwrap_or(0);
-    // golden section on the bracketing grid cells
-    let (mut a, mut b) = (grid[best.saturating_sub(1)], grid[(best + 1).min(steps)]);
-    let g = 0.5 * (5f64.sqrt() - 1.0);
-    let (mut c, mut d) = (b - g * (b - a), a + g * (b - a));
-    for _ in 0..100 {
-        if chi2(c) < chi2(d) {
-            b = d;
-        } else {
-            a = c;
-        }
-        c = b - g * (b - a);
-        d = a + g * (b - a);
-    }
-    let tau = (0.5 * (a + b)).exp();
-    let (fa, fb, chi2_min) = linear_for_tau(samples, tau).ok_or(WarmupError::Singular)?;
-    let mut info = Matrix3::zeros();
-    for x in samples {
-        let e = (-x.t / tau).exp();
-        let j = Vector3::new(1.0, 1.0 - e, -fb * x.t / (tau * tau) * e);
-        info += j * j.transpose() / (x.sigma * x.sigma);
-    }
-    let dof = samples.len() - 3;
-    let reduced_chi2 = if dof > 0 {
-        chi2_min / dof as f64
+    let search = TimeConstantSearch {
+        range: (TAU_MIN, TAU_MAX),
+        scan_points: 241,
+        scaling: ChiSquareScaling::StatedVariances,
+    };
+    let fit = fit_time_constant(&|tau| rows_at(samples, tau), &search).map_err(|e| match e {
+        TimeConstantFitError::TooFewRows(n) => WarmupError::TooFew(n),
+        _ => WarmupError::Singular,
+    })?;
+    let reduced_chi2 = if fit.dof > 0 {
+        fit.chi2 / fit.dof as f64
     } else {
         f64::NAN
     };
-    let covariance = info.try_inverse().ok_or(WarmupError::Singular)? * reduced_chi2.max(1.0);
-    let tau_at_limit = best == 0 || best == steps;
-    let rms = (samples
-        .iter()
-        .map(|x| (x.value - warmup_drift(fa, fb, tau, x.t)).powi(2))
-        .sum::<f64>()
-        / samples.len() as f64)
-        .sqrt();
     Ok(WarmupFit {
-        a: fa,
-        b: fb,
-        tau,
-        covariance,
+        a: fit.offset,
+        b: fit.coefficient,
+        tau: fit.tau,
+        covariance: fit.covariance,
         reduced_chi2,
-        rms,
+        rms: fit.rms,
         samples: samples.len(),
-        tau_at_limit,
+        tau_at_limit: fit.at_bound,
     })
 }
 

@@ -14,7 +14,6 @@ pub mod error;
 pub mod filters;
 pub mod hole_grid;
 pub mod holes;
-pub mod homography;
 pub mod marker_pose;
 pub mod polygon;
 pub mod render;

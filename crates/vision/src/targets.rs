@@ -285,8 +285,8 @@ pub fn detect_targets_explained(
     })
 }
 
-/// Add what the calibration's uncertainty adds to `pose`'s covariance (ROS order (t, rot), the
-/// convention of crates/camera's pose perturbation), when `pi` states it. None when it cannot
+/// Add what the calibration's uncertainty adds to `pose`'s covariance (the workspace's order
+/// (t, rot), crates/camera's pose perturbation), when `pi` states it. None when it cannot
 /// be computed (the pose is then not reported rather than reported too sure).
 fn add_intrinsics_covariance(
     pose: &mut TargetPose,
@@ -346,18 +346,16 @@ fn board_pose(
     Some(pose)
 }
 
-/// marker_pose's (rot, t) covariance → ROS (t, rot) order; both use left-applied rotations in the
-/// camera frame, so only the blocks move.
+/// A marker pose as the ROS pose of the module doc (its covariance is already translation first).
 fn to_ros_pose(
     iso: &nalgebra::Isometry3<f64>,
-    cov_rot_t: &nalgebra::SMatrix<f64, 6, 6>,
+    covariance: &nalgebra::SMatrix<f64, 6, 6>,
     rms: f64,
 ) -> TargetPose {
-    let perm = [3, 4, 5, 0, 1, 2];
     let mut c = [0.0; 36];
     for i in 0..6 {
         for j in 0..6 {
-            c[6 * i + j] = cov_rot_t[(perm[i], perm[j])];
+            c[6 * i + j] = covariance[(i, j)];
         }
     }
     let q: UnitQuaternion<f64> = iso.rotation;

@@ -63,7 +63,7 @@ fn marker_poses_match_truth_at_least_as_well_as_opencv() {
             ours_t.push(dt.norm_squared());
             ours_r.push(dr.norm_squared());
             let e = nalgebra::SVector::<f64, 6>::from_column_slice(&[
-                dr.x, dr.y, dr.z, dt.x, dt.y, dt.z,
+                dt.x, dt.y, dt.z, dr.x, dr.y, dr.z,
             ]);
             mahal.push((e.transpose() * est.covariance.try_inverse().unwrap() * e)[(0, 0)]);
             assert!(

@@ -146,14 +146,14 @@ pub fn tf_static(
     }
 }
 
-/// The tracker pose with its covariance (translation first, as geometry_msgs orders it).
+/// The tracker pose with its covariance (translation first, as `Registration` and geometry_msgs order it).
 pub fn pose_with_covariance(
     pose: &Registration,
     stamp_ns: i64,
     machine_frame: &str,
 ) -> PoseWithCovarianceStamped {
     let q = UnitQuaternion::from_rotation_matrix(&pose.rotation);
-    let c = pose.covariance_translation_first();
+    let c = pose.covariance;
     let mut covariance = [0.0; 36];
     for i in 0..6 {
         for j in 0..6 {

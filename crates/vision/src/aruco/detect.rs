@@ -9,10 +9,10 @@ use super::dictionary::Dictionary;
 use crate::contour::outer_contours;
 use crate::edge_fit::{fit_step_edge, intersect, EdgeWindow};
 use crate::error::{invalid, Result, VisionError};
-use crate::homography::{apply, homography_4pt};
 use crate::polygon::{approx_closed, is_convex};
 use crate::threshold::adaptive_threshold_mean_into;
 use image::GrayImage;
+use metrocell_camera_model::homography::{apply, homography_dlt};
 use nalgebra::{Matrix2, Point2};
 
 /// Detector settings; defaults mirror OpenCV's `DetectorParameters` where a counterpart exists.
@@ -310,7 +310,7 @@ fn decode(
     let n = dict.marker_size;
     let cells = n + 2;
     let cf = cells as f64;
-    let hmg = homography_4pt(&[[0.0, 0.0], [cf, 0.0], [cf, cf], [0.0, cf]], quad)?;
+    let hmg = homography_dlt(&[[0.0, 0.0], [cf, 0.0], [cf, cf], [0.0, cf]], quad).ok()?;
     const K: usize = 4; // samples per cell axis
     let mut samples = Vec::with_capacity(cells * cells * K * K);
     for r in 0..cells {
@@ -320,7 +320,7 @@ fn decode(
                     let m = params.cell_margin;
                     let u = c as f64 + m + (i as f64 + 0.5) / K as f64 * (1.0 - 2.0 * m);
                     let v = r as f64 + m + (j as f64 + 0.5) / K as f64 * (1.0 - 2.0 * m);
-                    let p = apply(&hmg, u, v);
+                    let p = apply(&hmg, [u, v])?;
                     samples.push(bilinear(img, p[0], p[1]));
                 }
             }

@@ -1,20 +1,25 @@
-//! Frame registration: the tracker's pose in the machine frame from tracker points of
-//! targets whose nominal machine coordinates are known.
+//! Rigid registration: the closed-form (weighted) Kabsch rotation, and the pose of one frame in
+//! another from point correspondences with full covariances. The one implementation in the
+//! workspace: the laser tracker's registration (crates/tracker re-exports it), the instrument pose
+//! of crates/estimation and the camera-to-tool alignment of [`crate::frame_alignment`] use it.
 //!
-//! Convention (stated once, for every user: the tracker crate and node, the batch fit's start):
-//! the pose (R, t) maps tracker coordinates to machine coordinates, q_machine = R·p_tracker + t;
-//! it is the transform of the `tf` child frame `tracker` in the parent frame `machine`. Its
-//! covariance is 6×6 in the order (δθ_x, δθ_y, δθ_z, δt_x, δt_y, δt_z): δθ a small rotation
-//! vector (rad) about the machine axes, applied on the left (R' = exp([δθ]×)·R), δt the
-//! translation (m).
+//! Convention (stated once, used everywhere): the pose (R, t) maps source (instrument)
+//! coordinates to target (machine) coordinates, q = R·p + t; for the tracker it is the transform
+//! of the `tf` child frame `tracker` in the parent frame `machine`. Its covariance is 6×6 in the
+//! order (δt_x, δt_y, δt_z, δθ_x, δθ_y, δθ_z) — translation first, the order of
+//! geometry_msgs/PoseWithCovariance and of crates/camera's pose covariance, so that every pose
+//! covariance in the workspace is written and published without reordering: δt the translation
+//! (m), δθ a small rotation vector (rad) about the target frame's axes, applied on the left
+//! (R' = exp([δθ]×)·R).
 //!
 //! Method: weighted Kabsch (closed form, scalar weights 3/trace Σ) for the start, then the
 //! workspace's Levenberg–Marquardt (metrocell_solver) on Σ rᵢᵀ Wᵢ rᵢ with the full
 //! Wᵢ = (R Σpᵢ Rᵀ + Σqᵢ)⁻¹, rᵢ = R pᵢ + t − qᵢ, reweighted until R settles (see [`register`]).
 //! The covariance is the inverse information at the optimum, scaled by the reduced χ² when the
 //! residuals exceed their covariances (the nominal points are then not where the machine
-//! really is; never scaled down).
+//! really is; never scaled down: the points' covariances are stated, not estimated).
 
+use crate::error::KinematicsError;
 use metrocell_solver::{solve, NotEvaluable, Options, Problem};
 use nalgebra::{DMatrix, Matrix3, Matrix6, Rotation3, UnitQuaternion, Vector3};
 
@@ -32,7 +37,7 @@ pub struct Registration {
     pub rotation: Rotation3<f64>,
     /// m
     pub translation: Vector3<f64>,
-    /// order (δθ, δt), see the module doc
+    /// order (δt, δθ), translation first, see the module doc
     pub covariance: Matrix6<f64>,
     /// Σ rᵀ W r at the optimum
     pub chi2: f64,
@@ -65,26 +70,15 @@ impl Registration {
             r * cov * r.transpose() + j * self.covariance * j.transpose(),
         )
     }
-
-    /// The covariance in the order of `geometry_msgs/PoseWithCovariance` (x, y, z, rot x, rot y, rot z).
-    pub fn covariance_translation_first(&self) -> Matrix6<f64> {
-        let mut c = Matrix6::zeros();
-        for i in 0..6 {
-            for j in 0..6 {
-                c[((i + 3) % 6, (j + 3) % 6)] = self.covariance[(i, j)];
-            }
-        }
-        c
-    }
 }
 
-/// ∂(R p + t)/∂(δθ, δt) at R p = `rp`.
+/// ∂(R p + t)/∂(δt, δθ) at R p = `rp`.
 fn pose_jacobian(rp: &Vector3<f64>) -> nalgebra::Matrix3x6<f64> {
     let mut j = nalgebra::Matrix3x6::zeros();
     j.fixed_view_mut::<3, 3>(0, 0)
-        .copy_from(&(-rp.cross_matrix()));
-    j.fixed_view_mut::<3, 3>(0, 3)
         .copy_from(&Matrix3::identity());
+    j.fixed_view_mut::<3, 3>(0, 3)
+        .copy_from(&(-rp.cross_matrix()));
     j
 }
 
@@ -118,7 +112,7 @@ pub fn register(points: &[Correspondence]) -> Result<Registration, RegistrationE
             return Err(RegistrationError::NotFinite(i));
         }
     }
-    let (mut rotation, mut translation) = kabsch(points)?;
+    let (mut rotation, mut translation) = weighted_kabsch_start(points)?;
     // Every solve starts within the noise of its optimum (Kabsch's, then the previous pass's),
     // where the problem is linear to round-off: so the first step is left nearly undamped. With
     // relative tolerances 1e-10 noise-free points come out exact to 1e-15 m, and noisy ones
@@ -158,7 +152,9 @@ pub fn register(points: &[Correspondence]) -> Result<Registration, RegistrationE
     } else {
         1.0
     };
-    let covariance = Matrix6::from_iterator(info_inverse.iter().copied()) * birge;
+    // the solver's state is (δθ, δt); the covariance is published translation first
+    let state_order = Matrix6::from_iterator(info_inverse.iter().copied());
+    let covariance = Matrix6::from_fn(|i, j| state_order[((i + 3) % 6, (j + 3) % 6)]) * birge;
     Ok(Registration {
         rotation,
         translation,
@@ -174,7 +170,8 @@ pub fn register(points: &[Correspondence]) -> Result<Registration, RegistrationE
 ///
 /// State x = (θ, t): θ the rotation vector of R·R₀⁻¹ (small, so never near the rotation vector's
 /// singularity at π whatever the tracker's heading), t in m. A step δ = (δθ, δt) is the
-/// perturbation of the module doc, so the solver's (J̃ᵀJ̃)⁻¹ is the covariance in its order.
+/// perturbation of the module doc, so the solver's (J̃ᵀJ̃)⁻¹ is the covariance, rotation first
+/// (permuted to the module's translation-first order by [`register`]).
 struct FrozenWeights<'a> {
     points: &'a [Correspondence],
     rotation: Rotation3<f64>,
@@ -261,8 +258,10 @@ impl Problem for FrozenWeights<'_> {
     }
 }
 
-/// Closed-form weighted Kabsch (no scale), weights 3/trace(Σpᵢ + Σqᵢ).
-fn kabsch(points: &[Correspondence]) -> Result<(Rotation3<f64>, Vector3<f64>), RegistrationError> {
+/// Closed-form weighted Kabsch start, weights 3/trace(Σpᵢ + Σqᵢ).
+fn weighted_kabsch_start(
+    points: &[Correspondence],
+) -> Result<(Rotation3<f64>, Vector3<f64>), RegistrationError> {
     let w: Vec<f64> = points
         .iter()
         .map(|c| {
@@ -271,41 +270,151 @@ fn kabsch(points: &[Correspondence]) -> Result<(Rotation3<f64>, Vector3<f64>), R
                 .max(f64::MIN_POSITIVE)
         })
         .collect();
-    let sw: f64 = w.iter().sum();
-    let pc = points
-        .iter()
-        .zip(&w)
-        .map(|(c, w)| c.tracker * *w)
-        .sum::<Vector3<f64>>()
-        / sw;
-    let qc = points
-        .iter()
-        .zip(&w)
-        .map(|(c, w)| c.machine * *w)
-        .sum::<Vector3<f64>>()
-        / sw;
-    let h = points
-        .iter()
-        .zip(&w)
-        .map(|(c, w)| (c.tracker - pc) * (c.machine - qc).transpose() * *w)
-        .sum::<Matrix3<f64>>();
-    let svd = h.svd(true, true);
-    let (u, v_t) = (
-        svd.u.ok_or(RegistrationError::Degenerate)?,
-        svd.v_t.ok_or(RegistrationError::Degenerate)?,
-    );
-    let mut s = svd.singular_values;
-    s.as_mut_slice().sort_by(|a, b| b.total_cmp(a));
-    // a line of points leaves one rotation free: the second singular value vanishes
-    if !(s[1] > 1e-12 * s[0].max(f64::MIN_POSITIVE)) || s[0] == 0.0 {
-        return Err(RegistrationError::Degenerate);
-    }
-    let v = v_t.transpose();
-    let d = (v * u.transpose()).determinant().signum();
-    let r = v * Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, d)) * u.transpose();
-    let rotation = Rotation3::from_matrix_unchecked(r);
-    Ok((rotation, qc - rotation * pc))
+    let source: Vec<Vector3<f64>> = points.iter().map(|c| c.tracker).collect();
+    let target: Vec<Vector3<f64>> = points.iter().map(|c| c.machine).collect();
+    let (r, t) =
+        kabsch_rigid(&source, &target, Some(&w)).map_err(|_| RegistrationError::Degenerate)?;
+    Ok((Rotation3::from_matrix_unchecked(r), t))
 }
 
-// Tests: crates/tracker/tests/registration.rs (the readings simulated with the tracker's spherical
-// noise model, crates/compensation, which sits above this crate).
+/// The rotation R minimising Σ wᵢ‖targetᵢ − R·sourceᵢ‖² (Kabsch, by the SVD of
+/// H = Σ wᵢ targetᵢ sourceᵢᵀ = U S Vᵀ: R = U diag(1, 1, det(U Vᵀ)) Vᵀ, a proper rotation even
+/// where the best orthogonal matrix would be a reflection). The vectors are taken as given:
+/// directions or moves as they stand, points centred first ([`kabsch_rigid`]). `weights`: None
+/// for equal weights.
+///
+/// Errors: lengths differ, fewer than two vectors, or they are collinear (or zero): then the
+/// second singular value of H is below 1e-12 of the first and the rotation about their common
+/// direction is not determined.
+pub fn kabsch_rotation(
+    source: &[Vector3<f64>],
+    target: &[Vector3<f64>],
+    weights: Option<&[f64]>,
+) -> Result<Matrix3<f64>, KinematicsError> {
+    if source.len() != target.len() {
+        return Err(KinematicsError::LengthMismatch {
+            field: "Kabsch target vectors".into(),
+            got: target.len(),
+            expected: source.len(),
+        });
+    }
+    if let Some(w) = weights.filter(|w| w.len() != source.len()) {
+        return Err(KinematicsError::LengthMismatch {
+            field: "Kabsch weights".into(),
+            got: w.len(),
+            expected: source.len(),
+        });
+    }
+    if source.len() < 2 {
+        return Err(KinematicsError::Degenerate {
+            reason: format!("Kabsch needs at least two vectors, has {}", source.len()),
+        });
+    }
+    if let Some(i) = (0..source.len()).find(|&i| {
+        !(source[i]
+            .iter()
+            .chain(target[i].iter())
+            .all(|v| v.is_finite())
+            && weights.is_none_or(|w| w[i].is_finite()))
+    }) {
+        return Err(KinematicsError::Degenerate {
+            reason: format!("Kabsch: vector pair {i} has a non-finite coordinate or weight"),
+        });
+    }
+    let h: Matrix3<f64> = (0..source.len())
+        .map(|i| target[i] * source[i].transpose() * weights.map_or(1.0, |w| w[i]))
+        .sum();
+    let svd = h.svd(true, true);
+    let (u, v_t) = match (svd.u, svd.v_t) {
+        (Some(u), Some(v_t)) => (u, v_t),
+        _ => {
+            return Err(KinematicsError::Degenerate {
+                reason: "Kabsch: the SVD did not converge".into(),
+            })
+        }
+    };
+    let mut s = svd.singular_values;
+    s.as_mut_slice().sort_by(|a, b| b.total_cmp(a));
+    // collinear vectors leave one rotation free: the second singular value vanishes (the test
+    // is written so that NaN fails it)
+    if !(s[1] > 1e-12 * s[0].max(f64::MIN_POSITIVE)) || s[0] == 0.0 {
+        return Err(KinematicsError::Degenerate {
+            reason: "the vectors are collinear (or zero): the rotation about their common \
+                     direction is not determined"
+                .into(),
+        });
+    }
+    let d = (u * v_t).determinant().signum();
+    Ok(u * Matrix3::from_diagonal(&Vector3::new(1.0, 1.0, d)) * v_t)
+}
+
+/// The rigid transform (R, t) minimising Σ wᵢ‖targetᵢ − (R·sourceᵢ + t)‖²: [`kabsch_rotation`]
+/// of the points about their weighted centroids, t = q̄ − R·p̄.
+pub fn kabsch_rigid(
+    source: &[Vector3<f64>],
+    target: &[Vector3<f64>],
+    weights: Option<&[f64]>,
+) -> Result<(Matrix3<f64>, Vector3<f64>), KinematicsError> {
+    let w = |i: usize| weights.map_or(1.0, |w| w.get(i).copied().unwrap_or(f64::NAN));
+    let sw: f64 = (0..source.len()).map(w).sum();
+    let centroid = |v: &[Vector3<f64>]| {
+        v.iter()
+            .enumerate()
+            .map(|(i, p)| p * w(i))
+            .sum::<Vector3<f64>>()
+            / sw
+    };
+    let (pc, qc) = (centroid(source), centroid(target));
+    let ps: Vec<Vector3<f64>> = source.iter().map(|p| p - pc).collect();
+    let qs: Vec<Vector3<f64>> = target.iter().map(|q| q - qc).collect();
+    let r = kabsch_rotation(&ps, &qs, weights)?;
+    Ok((r, qc - r * pc))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn rotation() -> Matrix3<f64> {
+        Rotation3::from_euler_angles(0.3, -1.1, 2.9).into_inner()
+    }
+
+    #[test]
+    fn kabsch_rigid_recovers_a_weighted_pose_exactly() {
+        let (r, t) = (rotation(), Vector3::new(0.4, -1.2, 0.7));
+        let source = [
+            Vector3::new(0.0, 0.0, 0.0),
+            Vector3::new(1.0, 0.0, 0.0),
+            Vector3::new(0.0, 2.0, 0.0),
+            Vector3::new(0.3, 0.5, 1.5),
+        ];
+        let target: Vec<Vector3<f64>> = source.iter().map(|p| r * p + t).collect();
+        let (rf, tf) = kabsch_rigid(&source, &target, Some(&[1.0, 4.0, 0.5, 2.0])).unwrap();
+        assert!((rf - r).norm() < 1e-14, "{rf}");
+        assert!((tf - t).norm() < 1e-14, "{tf}");
+        assert!((rf.determinant() - 1.0).abs() < 1e-14);
+    }
+
+    #[test]
+    fn kabsch_rotation_is_proper_for_planar_vectors_and_names_bad_input() {
+        // two moves in a plane: the best orthogonal matrix may be a reflection, ours is not
+        let r = rotation();
+        let source = [Vector3::new(1.0, 0.0, 0.0), Vector3::new(0.0, 1.0, 0.0)];
+        let target: Vec<Vector3<f64>> = source.iter().map(|v| r * v).collect();
+        let rf = kabsch_rotation(&source, &target, None).unwrap();
+        assert!((rf - r).norm() < 1e-14 && (rf.determinant() - 1.0).abs() < 1e-14);
+        let v = Vector3::new(1.0, 2.0, 3.0);
+        let collinear = kabsch_rotation(&[v, v * 3.0], &[v, v * 3.0], None).unwrap_err();
+        assert!(collinear.to_string().contains("collinear"), "{collinear}");
+        assert!(matches!(
+            kabsch_rotation(&[v], &[v, v], None),
+            Err(KinematicsError::LengthMismatch { .. })
+        ));
+        assert!(matches!(
+            kabsch_rotation(&[v, v], &[v, v], Some(&[1.0])),
+            Err(KinematicsError::LengthMismatch { .. })
+        ));
+        let nan = Vector3::new(f64::NAN, 0.0, 0.0);
+        assert!(kabsch_rotation(&[v, nan], &[v, v], None).is_err());
+    }
+}

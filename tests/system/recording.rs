@@ -619,6 +619,40 @@ fn fiducial_node_measured_every_frame(
     missed
 }
 
+/// The tracker node's last warm-up estimate on `/tracker/warmup` in the demo's bag: its
+/// amplitude and time constant within 3σ of the warm-up the cell's tracker has
+/// (`sensors.tracker.warmup` of demo_shift.yaml).
+fn last_warmup_estimate_matches_the_cell(dir: &Path) {
+    let last = {
+        use metrocell_msgs::msg::ErrorModel;
+        let mut source = BagSource::open(dir).unwrap();
+        assert!(source.subscribe::<ErrorModel>("/tracker/warmup").unwrap());
+        source
+            .messages()
+            .unwrap()
+            .map(|m| m.unwrap().decode::<ErrorModel>().unwrap())
+            .last()
+            .unwrap()
+    };
+    let cell = demo_cell();
+    let warmup = cell
+        .tracker
+        .as_ref()
+        .and_then(|t| t.warmup)
+        .expect("the demo cell's tracker warms up");
+    for (k, name, truth) in [
+        (1, "amplitude", warmup.amplitude),
+        (2, "time_constant", warmup.time_constant),
+    ] {
+        let (v, s) = (last.values[k], last.covariance[4 * k].sqrt());
+        eprintln!("{name}: tracker/warmup {v:e} ± {s:e}, truth {truth:e}");
+        assert!(
+            (v - truth).abs() <= 3.0 * s,
+            "tracker/warmup {name} = {v:e} ± {s:e}, the cell's tracker has {truth:e}: more than 3σ off"
+        );
+    }
+}
+
 fn demo_loses_nothing(name: &str, busy_cores: usize, max_missed_frames: u64, domain: u32) {
     static ONE_DEMO_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
     let _turn = ONE_DEMO_AT_A_TIME.lock().unwrap_or_else(|e| e.into_inner());
@@ -849,35 +883,7 @@ fn demo_loses_nothing(name: &str, busy_cores: usize, max_missed_frames: u64, dom
         "{} warm-up estimates in an hour of cell time (10 visits of the nest)",
         warmups.len()
     );
-    // the last estimate against the warm-up the cell's tracker has (sensors.tracker.warmup)
-    let last = {
-        use metrocell_msgs::msg::ErrorModel;
-        let mut source = BagSource::open(&dir).unwrap();
-        assert!(source.subscribe::<ErrorModel>("/tracker/warmup").unwrap());
-        source
-            .messages()
-            .unwrap()
-            .map(|m| m.unwrap().decode::<ErrorModel>().unwrap())
-            .last()
-            .unwrap()
-    };
-    let cell = demo_cell();
-    let warmup = cell
-        .tracker
-        .as_ref()
-        .and_then(|t| t.warmup)
-        .expect("the demo cell's tracker warms up");
-    for (k, name, truth) in [
-        (1, "amplitude", warmup.amplitude),
-        (2, "time_constant", warmup.time_constant),
-    ] {
-        let (v, s) = (last.values[k], last.covariance[4 * k].sqrt());
-        eprintln!("{name}: tracker/warmup {v:e} ± {s:e}, truth {truth:e}");
-        assert!(
-            (v - truth).abs() <= 3.0 * s,
-            "tracker/warmup {name} = {v:e} ± {s:e}, the cell's tracker has {truth:e}: more than 3σ off"
-        );
-    }
+    last_warmup_estimate_matches_the_cell(&dir);
     eprintln!(
         "{name}: {} messages on {} topics, none lost, in {:.1} s",
         published.values().sum::<u64>(),

@@ -1,6 +1,8 @@
 //! Helpers shared by the cross-process tests: where the binaries and the Python peers are, and
 //! child processes that never outlive a failing test.
 
+pub mod points_ramp;
+
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};
 use std::time::{Duration, Instant};

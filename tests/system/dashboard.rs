@@ -17,7 +17,9 @@ use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
 use serde_json::Value;
-use system_tests::{bin, piped, python, require_isolated_network, run, workspace_root, ChildGuard};
+use system_tests::{
+    bin, piped, points_ramp, python, require_isolated_network, run, workspace_root, ChildGuard,
+};
 
 const CHROMIUM: &str = "/usr/bin/chromium";
 
@@ -198,8 +200,9 @@ fn drift_alert_and_the_page_in_headless_chromium() {
         raw["window_span"]
     );
     assert!(
-        (dx - 36.0).abs() <= 3.0 * sx.max(1e-3) && sx < 1.0,
-        "x drift {dx} ± {sx} µm/h, expected 36"
+        (dx - points_ramp::X_RATE_UM_PER_H).abs() <= 3.0 * sx.max(1e-3) && sx < 1.0,
+        "x drift {dx} ± {sx} µm/h, expected {}",
+        points_ramp::X_RATE_UM_PER_H
     );
     assert!(
         dy.abs() <= 1e-6,
@@ -432,12 +435,37 @@ fn foxglove_client_receives_channels_with_schemas_and_decodes_messages() {
         "sim clock: {}",
         m["/clock"]
     );
+    // the point decoded is the one the ramp generator made for its index and stamp, to a
+    // picometre (the JSON's shortest round-trip decimals; the ramp's own σ is 0.5 µm)
     let p = &m["/measured_points"]["fields"];
-    let ex = p["measured"]["x"].as_f64().unwrap() - p["nominal"]["x"].as_f64().unwrap();
-    assert!(
-        (1e-6..1e-3).contains(&ex),
-        "x error {ex} m decoded from the peer's ramp"
+    let k: i64 = p["point_id"]
+        .as_str()
+        .and_then(|id| id.strip_prefix('p'))
+        .and_then(|k| k.parse().ok())
+        .unwrap_or_else(|| panic!("point_id p<k>: {p}"));
+    let stamp = &p["header"]["stamp"];
+    assert_eq!(
+        stamp["sec"].as_i64().unwrap() * 1_000_000_000 + stamp["nanosec"].as_i64().unwrap(),
+        points_ramp::stamp_ns(k, points_ramp::DEFAULT_STEP),
+        "stamp of p{k}"
     );
+    let xyz = |v: &Value| ["x", "y", "z"].map(|a| v[a].as_f64().unwrap());
+    let (nominal, measured) = (xyz(&p["nominal"]), xyz(&p["measured"]));
+    let (want_nominal, want_measured) = (
+        points_ramp::nominal(k),
+        points_ramp::measured(k, points_ramp::DEFAULT_STEP),
+    );
+    for a in 0..3 {
+        assert!(
+            (nominal[a] - want_nominal[a]).abs() <= 1e-12
+                && (measured[a] - want_measured[a]).abs() <= 1e-12,
+            "p{k} axis {a}: nominal {} measured {} m decoded, the ramp made {} and {}",
+            nominal[a],
+            measured[a],
+            want_nominal[a],
+            want_measured[a]
+        );
+    }
     assert_eq!(p["source"], "simulation");
     let model = &m["/thermal/error_model"]["fields"];
     assert_eq!(model["term_ids"][0], "thermal_scale");

@@ -11,7 +11,11 @@
 //!   turbulence window makes some);
 //! * `measured_points` = the messages on `measured_points`; `rejected_readings` and
 //!   `dwells_without_nominal` = 0 (the twin sends no bad values and commands every dwell);
-//!   `registration_rms` is reported.
+//! * `registration_rms` = what the twin's truth makes it: the same twin run again here gives the
+//!   first dwell of each target the node registers on, its noise-free reading and the stated
+//!   covariance of its mean; registering those gives the machine errors' share of the residual,
+//!   and the readings' noise adds (3n − 6) degrees of freedom of χ² to its square sum: the
+//!   reported RMS must lie within three standard deviations of that expectation.
 //!
 //! Run: `cargo build --workspace --bins && tests/isolated cargo test -p metrocell-system-tests --test tracker_diagnostics -- --nocapture`
 
@@ -19,13 +23,20 @@ use std::collections::BTreeMap;
 use std::process::Stdio;
 use std::time::{Duration, Instant};
 
+use metrocell_laser_tracker::registration::{register, Correspondence};
 use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
 use metrocell_msgs::msg::{MeasuredPoint, TrackerMeasurement};
 use metrocell_node::{qos, MetrocellNode};
+use metrocell_twin::{Cell, Sample, SampleTruth, Simulation, TrackerStatus};
+use nalgebra::{Matrix3, Vector3};
 use system_tests::{bin, piped, require_isolated_network, workspace_root, ChildGuard};
 
 const DWELL_GAP_NS: i64 = 500_000_000;
 const MIN_DWELL_READINGS: usize = 5;
+const REGISTRATION_POINTS: usize = 6;
+/// The twin's run (the sim node's parameters below).
+const DURATION: f64 = 180.0;
+const SEED: u64 = 3;
 
 fn cell_text() -> String {
     let text =
@@ -88,6 +99,101 @@ fn runs(readings: &[TrackerMeasurement]) -> Vec<(String, usize)> {
     out
 }
 
+/// One dwell as the twin made it: its target, readings, and the sums of its noise-free reading
+/// and of the readings' stated covariance (tracker frame), and its nominal (machine frame).
+struct TrueDwell {
+    target: u32,
+    n: usize,
+    free_sum: Vector3<f64>,
+    covariance_sum: Matrix3<f64>,
+    nominal: Vector3<f64>,
+}
+
+/// The dwells the node registers on, from the twin's truth: the first run of at least
+/// MIN_DWELL_READINGS unbroken readings of each target (runs split as [`runs`] splits them), for
+/// the first REGISTRATION_POINTS targets, as correspondences of their noise-free mean reading
+/// (the true point in the tracker frame, the warm-up and refraction range errors along the beam)
+/// with the stated covariance of the mean.
+fn true_registration_dwells(cell: Cell) -> Vec<Correspondence> {
+    let sim = Simulation::new(cell, DURATION, SEED).unwrap();
+    let machine = &sim.cell().machine;
+    let (mut runs, mut last): (Vec<TrueDwell>, Option<(f64, u32)>) = (Vec::new(), None);
+    for (sample, truth) in sim.samples_with_truth() {
+        let (Sample::Tracker(s), SampleTruth::Tracker(tr)) = (sample, truth) else {
+            continue;
+        };
+        if s.status == TrackerStatus::BeamBroken {
+            continue;
+        }
+        let Some(target) = s.target_id else {
+            last = None;
+            continue;
+        };
+        let continues =
+            last.is_some_and(|(lt, lid)| lid == target && s.t - lt <= DWELL_GAP_NS as f64 * 1e-9);
+        if !continues {
+            runs.push(TrueDwell {
+                target,
+                n: 0,
+                free_sum: Vector3::zeros(),
+                covariance_sum: Matrix3::zeros(),
+                nominal: machine.nominal_tool_point(&tr.commanded),
+            });
+        }
+        let run = runs.last_mut().unwrap();
+        run.n += 1;
+        let beam = tr.point / tr.point.norm();
+        run.free_sum += tr.point + beam * (tr.warmup_range_error + tr.refraction_range_error);
+        run.covariance_sum += s.covariance;
+        last = Some((s.t, target));
+    }
+    let mut taken: Vec<Correspondence> = Vec::new();
+    let mut seen = std::collections::BTreeSet::new();
+    for r in runs.iter().filter(|r| r.n >= MIN_DWELL_READINGS) {
+        if seen.len() < REGISTRATION_POINTS && seen.insert(r.target) {
+            let n = r.n as f64;
+            taken.push(Correspondence {
+                tracker: r.free_sum / n,
+                tracker_covariance: r.covariance_sum / (n * n),
+                machine: r.nominal,
+                machine_covariance: Matrix3::zeros(),
+            });
+        }
+    }
+    assert_eq!(taken.len(), REGISTRATION_POINTS, "the twin's first dwells");
+    taken
+}
+
+/// The registration RMS the twin's truth gives (m), and the band three standard deviations of
+/// its square sum wide: the noise-free dwells' residual square sum S₀ after their own fit, plus
+/// the noise's Σ tr Σᵢ · (3n − 6)/3n; variance 2 Σ tr Σᵢ² · (3n − 6)/3n for the noise's square
+/// sum and 4 Σ rᵢᵀ Σᵢ rᵢ for its cross term with the residuals rᵢ.
+fn expected_registration_rms(cell: Cell) -> (f64, f64, f64) {
+    let dwells = true_registration_dwells(cell);
+    let fit = register(&dwells).unwrap();
+    let n = dwells.len() as f64;
+    let share = (3.0 * n - 6.0) / (3.0 * n);
+    let (mut s0, mut noise, mut variance) = (0.0, 0.0, 0.0);
+    for d in &dwells {
+        let r = fit.rotation * d.tracker + fit.translation - d.machine;
+        let c = fit.rotation.matrix() * d.tracker_covariance * fit.rotation.matrix().transpose();
+        s0 += r.norm_squared();
+        noise += c.trace() * share;
+        variance += 2.0 * (c * c).trace() * share + 4.0 * (r.transpose() * c * r)[(0, 0)];
+    }
+    let (mean, sd) = (s0 + noise, variance.sqrt());
+    eprintln!(
+        "registration from the truth: machine errors' RMS {:.2} µm, noise adds {:.2} µm² to the mean square",
+        (s0 / n).sqrt() * 1e6,
+        noise / n * 1e12
+    );
+    (
+        (mean / n).sqrt(),
+        ((mean - 3.0 * sd).max(0.0) / n).sqrt(),
+        ((mean + 3.0 * sd) / n).sqrt(),
+    )
+}
+
 #[test]
 fn tracker_diagnostics_count_exactly_what_went_through_its_topics() {
     require_isolated_network();
@@ -105,7 +211,7 @@ fn tracker_diagnostics_count_exactly_what_went_through_its_topics() {
             "-p",
             "tool_offset:=[0.0, 0.0, -0.1]",
             "-p",
-            "registration_points:=6",
+            &format!("registration_points:={REGISTRATION_POINTS}"),
             "-p",
             &format!("min_dwell_readings:={MIN_DWELL_READINGS}"),
         ])
@@ -177,11 +283,11 @@ fn tracker_diagnostics_count_exactly_what_went_through_its_topics() {
             "-p",
             &format!("cell:={}", cell.display()),
             "-p",
-            "duration:=180s",
+            &format!("duration:={DURATION}s"),
             "-p",
             "speed:=10.0",
             "-p",
-            "seed:=3",
+            &format!("seed:={SEED}"),
         ])
         .args(["-p", "camera_images:=false", "-p", "start_delay:=2.0"])
         .env("ROS_DOMAIN_ID", domain)
@@ -287,7 +393,22 @@ fn tracker_diagnostics_count_exactly_what_went_through_its_topics() {
         .and_then(|v| v.strip_suffix(" µm"))
         .and_then(|v| v.parse().ok())
         .unwrap_or_else(|| panic!("registration_rms in µm in {d:?}"));
-    assert!(rms > 0.0 && rms < 50.0, "registration_rms {rms} µm");
+    let cell = Cell::from_yaml_str(&cell_text(), "cell.yaml").unwrap();
+    let (expected, low, high) = expected_registration_rms(cell);
+    eprintln!(
+        "registration_rms {rms} µm; the truth gives {:.2} µm, 3σ band [{:.2}, {:.2}] µm",
+        expected * 1e6,
+        low * 1e6,
+        high * 1e6
+    );
+    // the node prints one decimal: the band is widened by its rounding
+    assert!(
+        rms >= low * 1e6 - 0.05 && rms <= high * 1e6 + 0.05,
+        "registration_rms {rms} µm, the twin's truth gives {:.2} µm (3σ band [{:.2}, {:.2}] µm)",
+        expected * 1e6,
+        low * 1e6,
+        high * 1e6
+    );
     eprintln!(
         "{published} readings ({breaks} beam breaks), {long} dwells + {short} short, {flagged} turbulent, {points} points, registration rms {rms} µm"
     );

@@ -1,10 +1,15 @@
 //! The found terms' σ cover the truth at their stated rate when the residuals are correlated in
 //! time (issue 13): over many seeds of a one-hour twin recording with a concealed 10 µm X
 //! reversal error and a drift no model term holds (AR(1) in time, 1 µm per axis, correlated
-//! over a minute — a tracker's wander, air moving on the beam), the reported reversal lies
-//! within 1σ of the truth in about 68 % of the runs and within 2σ in about 95 % (asserted:
-//! ≥ 0.55, ≥ 0.88, and ≤ 0.9 within 1σ — not grossly over-conservative). The log also gives the
-//! rates the independent-rows σ would have had.
+//! over a minute — a tracker's wander, air moving on the beam), the reversal is reported in most
+//! runs and, where reported, lies within 1σ of the truth in about 68 % of them and within 2σ in
+//! about 95 %. The rates are counted over ALL runs: a run that does not report the reversal the
+//! recording holds is a miss (reported separately, and bounded), and it covers nothing. Asserted,
+//! of all runs: at most MAX_MISS_RATE misses; the truth within 1σ in at least MIN_WITHIN_1 and at
+//! most 0.9 (not grossly over-conservative), within 2σ in at least MIN_WITHIN_2 — the nominal
+//! 0.68 and 0.95 times the runs expected to report it (about 3 in 4): 0.51 and 0.71, less three
+//! binomial standard deviations of the default 24 runs (0.10 and 0.09): 0.20 and 0.43. The log
+//! also gives the rates the independent-rows σ would have had.
 //!
 //! `METROCELL_COVERAGE_SEEDS` sets the number of runs (default 24, about 30 s with the
 //! workspace's optimised test profile; BENCHMARKS.md quotes a longer run):
@@ -25,6 +30,12 @@ const PARAM: &str = "reversal";
 /// Correlation time of the drift (s) and its standard deviation per axis (m).
 const DRIFT_TAU: f64 = 60.0;
 const DRIFT_SIGMA: f64 = 1.0e-6;
+
+/// What is asserted of all runs (module doc): the largest share of runs that may miss the
+/// reversal, and the least shares with the truth within 1σ and 2σ of the reported value.
+const MAX_MISS_RATE: f64 = 0.4;
+const MIN_WITHIN_1: f64 = 0.20;
+const MIN_WITHIN_2: f64 = 0.43;
 
 fn seeds() -> u64 {
     std::env::var("METROCELL_COVERAGE_SEEDS")
@@ -118,27 +129,41 @@ fn found_sigma_covers_the_truth_with_correlated_residuals() {
                 .collect::<Vec<_>>()
         );
     }
-    let (r1, r2) = (
-        within1 as f64 / found.max(1) as f64,
-        within2 as f64 / found.max(1) as f64,
+    // over all runs: a run that missed the reversal covers nothing
+    let misses = n as usize - found;
+    let (r1, r2, miss_rate) = (
+        within1 as f64 / n.max(1) as f64,
+        within2 as f64 / n.max(1) as f64,
+        misses as f64 / n.max(1) as f64,
     );
     let rms_z = (z_scores.iter().map(|z| z * z).sum::<f64>() / z_scores.len().max(1) as f64).sqrt();
     eprintln!(
-        "independent rows: within 1σ {:.3}, 2σ {:.3}",
-        classical1 as f64 / found.max(1) as f64,
-        classical2 as f64 / found.max(1) as f64
+        "independent rows, of all runs: within 1σ {:.3}, 2σ {:.3}",
+        classical1 as f64 / n.max(1) as f64,
+        classical2 as f64 / n.max(1) as f64
     );
-    eprintln!("{found} of {n} runs found {LABEL}; within 1σ {r1:.3}, within 2σ {r2:.3}, RMS z {rms_z:.2} ({:.0} s)", started.elapsed().as_secs_f64());
+    eprintln!(
+        "of {n} runs: {misses} missed {LABEL} (miss rate {miss_rate:.3}); within 1σ {r1:.3}, within 2σ {r2:.3} of all runs ({:.3}, {:.3} of the {found} that found it), RMS z {rms_z:.2} ({:.0} s)",
+        within1 as f64 / found.max(1) as f64,
+        within2 as f64 / found.max(1) as f64,
+        started.elapsed().as_secs_f64()
+    );
     // the drift hides the reversal from the selection in about a quarter of the runs (a
-    // selection matter, not this test's): coverage is judged on the runs that report it
+    // selection matter: bounded here on its own)
     assert!(
-        found as f64 >= 0.6 * n as f64,
-        "{LABEL} was found in only {found} of {n} runs"
+        miss_rate <= MAX_MISS_RATE,
+        "{LABEL} was missed in {misses} of {n} runs (at most {MAX_MISS_RATE} allowed)"
     );
-    assert!(r1 >= 0.55, "within 1σ: {r1:.3} (expected ≈ 0.68)");
-    assert!(r2 >= 0.88, "within 2σ: {r2:.3} (expected ≈ 0.95)");
+    assert!(
+        r1 >= MIN_WITHIN_1,
+        "the truth within 1σ in {r1:.3} of all runs ({misses} misses), expected ≥ {MIN_WITHIN_1}"
+    );
+    assert!(
+        r2 >= MIN_WITHIN_2,
+        "the truth within 2σ in {r2:.3} of all runs ({misses} misses), expected ≥ {MIN_WITHIN_2}"
+    );
     assert!(
         r1 <= 0.9,
-        "within 1σ: {r1:.3}: the σ are grossly over-conservative"
+        "within 1σ in {r1:.3} of all runs: the σ are grossly over-conservative"
     );
 }

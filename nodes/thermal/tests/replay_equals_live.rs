@@ -5,6 +5,13 @@
 //! 20 → 21 → 22 °C each second, x_right stays at 21 °C, so every error model value belongs to one
 //! of three states and the states last far longer than the model period (50 ms) in both runs.
 //! Points fall 50 ms after temperature updates so no point races a temperature change.
+//!
+//! The points are made here: each is its nominal plus a small fixed error plus the X scale's
+//! thermal growth α·x·(T(x) − 20 °C) at the temperatures of the bag (α the node's configured
+//! 11.5e-6 1/K, T(x) interpolated between x_left at 0 m and x_right at 0.8 m). So the compensated
+//! point must be the nominal plus the fixed error again — asserted to 1 nm (the growth removed is
+//! up to 9 µm), with the covariance grown by the node's u(α) — and live must equal replay bit for
+//! bit.
 
 use std::collections::{BTreeMap, BTreeSet};
 use std::path::{Path, PathBuf};
@@ -25,6 +32,37 @@ use rosmsg::RosMessage;
 const T0: u64 = 1_700_000_000_000_000_000;
 const MS: u64 = 1_000_000;
 const BAG_SECONDS: f64 = 3.0;
+/// The node's configured expansion coefficient and its u(α) (its defaults, `metrocell-thermal
+/// --help`), the scale sensors' positions on X (`thermal_args`) and the reference temperature.
+const ALPHA: f64 = 11.5e-6;
+const ALPHA_UNCERTAINTY: f64 = 1.0e-6;
+const SENSOR_POSITIONS: [f64; 2] = [0.0, 0.8];
+const REFERENCE_TEMPERATURE: f64 = 20.0;
+const POINTS: u64 = 10;
+
+/// x_left: 20 °C in the bag's first second, 21 in the second, 22 in the third; x_right 21 °C.
+fn temperatures_at(ns: u64) -> [f64; 2] {
+    [20.0 + ((ns - T0) / (1000 * MS)) as f64, 21.0]
+}
+
+/// Point j: stamp (ns), nominal, and its error other than the thermal growth (m).
+fn point_truth(j: u64) -> (u64, [f64; 3], [f64; 3]) {
+    let x = 0.08 * j as f64;
+    (
+        T0 + 1050 * MS + j * 200 * MS,
+        [x, 0.1, 0.2],
+        [1e-6 * j as f64, 2e-6, -3e-6],
+    )
+}
+
+/// The X scale's thermal growth at axis coordinate x when the sensors read `t` (m), and the
+/// sensors' interpolation weights.
+fn thermal_growth(x: f64, t: [f64; 2]) -> (f64, [f64; 2]) {
+    let w = (x - SENSOR_POSITIONS[0]) / (SENSOR_POSITIONS[1] - SENSOR_POSITIONS[0]);
+    let weights = [1.0 - w, w];
+    let tx = weights[0] * t[0] + weights[1] * t[1];
+    (ALPHA * x * (tx - REFERENCE_TEMPERATURE), weights)
+}
 
 fn stamp(ns: u64) -> Time {
     Time::from_nanos(ns as i64)
@@ -51,22 +89,23 @@ fn write_input_bag(dir: &Path) {
             stamp: stamp(t),
             frame_id: "machine".into(),
         };
+        let [t_left, t_right] = temperatures_at(t);
         let left = Temperature {
             header: header.clone(),
-            temperature: 20.0 + (k / 10) as f64,
+            temperature: t_left,
             variance: 0.01,
         };
         let right = Temperature {
             header,
-            temperature: 21.0,
+            temperature: t_right,
             variance: 0.0025,
         };
         events.push((t, "/rt/temperature/x_left", encode_cdr(&left).unwrap()));
         events.push((t, "/rt/temperature/x_right", encode_cdr(&right).unwrap()));
     }
-    for j in 0..10u64 {
-        let t = T0 + 1050 * MS + j * 200 * MS;
-        let x = 0.08 * j as f64;
+    for j in 0..POINTS {
+        let (t, [x, y, z], error) = point_truth(j);
+        let (growth, _) = thermal_growth(x, temperatures_at(t));
         let mut cov = [0.0; 9];
         (cov[0], cov[4], cov[8]) = (1e-10, 2e-10, 3e-10);
         let p = MeasuredPoint {
@@ -76,11 +115,11 @@ fn write_input_bag(dir: &Path) {
             },
             point_id: format!("p{j}"),
             source: "tracker".into(),
-            nominal: Point { x, y: 0.1, z: 0.2 },
+            nominal: Point { x, y, z },
             measured: Point {
-                x: x + 1e-5 * j as f64,
-                y: 0.1 + 2e-6,
-                z: 0.2 - 3e-6,
+                x: x + error[0] + growth,
+                y: y + error[1],
+                z: z + error[2],
             },
             covariance: cov,
         };
@@ -228,18 +267,54 @@ fn replay_from_bag_equals_live_run_over_dds() {
     // every point compensated offline; the live run may lose none of the reliable points
     assert_eq!(
         replay_points.len(),
-        10,
+        POINTS as usize,
         "replay compensated {:?}",
         replay_points.keys()
     );
-    // p9 at x = 0.72 m with x_left at 21 °C: the correction is tens of µm, so equality below is not trivial
-    assert!(
-        (replay_points["p9"].measured.x - (0.72 + 9e-5)).abs() > 1e-6,
-        "p9 was not compensated"
+    // each compensated point against the truth: its nominal plus the error the thermal growth
+    // was added to (the growth is up to 9 µm, so the equality of live and replay below is not
+    // trivial)
+    let mut largest_growth = 0.0f64;
+    for j in 0..POINTS {
+        let (t, nominal, error) = point_truth(j);
+        let temperatures = temperatures_at(t);
+        let (growth, weights) = thermal_growth(nominal[0], temperatures);
+        largest_growth = largest_growth.max(growth.abs());
+        let p = &replay_points[&format!("p{j}")];
+        let got = [p.measured.x, p.measured.y, p.measured.z];
+        for a in 0..3 {
+            let want = nominal[a] + error[a];
+            assert!(
+                (got[a] - want).abs() < 1e-9,
+                "p{j} axis {a}: compensated {} m, truth {want} m (growth {growth:e} m at {temperatures:?} °C)",
+                got[a]
+            );
+        }
+        // σ_x² grows by (x·ΔT·u(α))² and by the sensors' variances through their weights
+        let delta_t =
+            weights[0] * temperatures[0] + weights[1] * temperatures[1] - REFERENCE_TEMPERATURE;
+        let grown = 1e-10
+            + (nominal[0] * delta_t * ALPHA_UNCERTAINTY).powi(2)
+            + (ALPHA * nominal[0]).powi(2)
+                * (weights[0].powi(2) * 0.01 + weights[1].powi(2) * 0.0025);
+        assert!(
+            (p.covariance[0] - grown).abs() <= 1e-9 * grown,
+            "p{j}: compensated σ_x² {:e} m², expected {grown:e}",
+            p.covariance[0]
+        );
+        assert_eq!(
+            (p.covariance[4], p.covariance[8]),
+            (2e-10, 3e-10),
+            "p{j}: y and z have no scale sensor: σ unchanged"
+        );
+    }
+    eprintln!(
+        "replay compensated {POINTS} points to their truth within 1 nm (largest growth removed {:.1} µm)",
+        largest_growth * 1e6
     );
     assert_eq!(
         live_points.len(),
-        10,
+        POINTS as usize,
         "live run compensated {:?}",
         live_points.keys()
     );

@@ -4,7 +4,11 @@
 //!   within their expanded (k = 2) uncertainty of the truth;
 //! * turbulence: `xfyz_shift.yaml`'s heater window (3 h – 3.25 h): every dwell in it is flagged,
 //!   under 1 % of the undisturbed dwells are; every dwell gives one measured point with its
-//!   program nominal.
+//!   program nominal, where the twin's truth puts it: the dwell's noise-free reading (the true
+//!   point in the tracker frame, the warm-up and refraction range errors along the beam) placed
+//!   by the pose that registering the noise-free readings of the node's registration dwells
+//!   gives — at most 1 % of the coordinates beyond 3σ of the point's reported covariance, none
+//!   beyond 5σ.
 //!
 //! Run: `cargo test -p metrocell-tracker-node --test twin_replay`
 
@@ -12,10 +16,16 @@ use std::path::{Path, PathBuf};
 use std::process::Command;
 
 use metrocell_bagtools::BagSource;
+use metrocell_laser_tracker::registration::{register, Correspondence};
 use metrocell_msgs::msg::{ErrorModel, MeasuredPoint, TrackerMeasurement};
 use metrocell_simulation::bag::{write_bag, BagOptions};
-use metrocell_twin::Cell;
-use nalgebra::Vector3;
+use metrocell_twin::{Cell, Sample, SampleTruth, Simulation, TrackerStatus};
+use nalgebra::{Matrix3, Vector3};
+
+/// The seed `simulate_and_replay` runs the twin with, and the node's default dwell splitting.
+const SEED: u64 = 7;
+const DWELL_GAP: f64 = 0.5;
+const MIN_DWELL_READINGS: usize = 5;
 
 fn scratch(name: &str) -> PathBuf {
     let d = std::env::temp_dir().join(format!("metrocell-tracker-{name}-{}", std::process::id()));
@@ -38,7 +48,7 @@ fn simulate_and_replay(cell: Cell, duration: f64, dir: &Path, params: &[&str]) -
     };
     let start_ns = options.start_ns;
     let input = dir.join("input");
-    write_bag(cell, duration, 7, &input, &options, |_| {}).unwrap();
+    write_bag(cell, duration, SEED, &input, &options, |_| {}).unwrap();
     let output = dir.join("output");
     let mut args = vec!["--ros-args"];
     for p in params {
@@ -65,6 +75,73 @@ fn simulate_and_replay(cell: Cell, duration: f64, dir: &Path, params: &[&str]) -
             .unwrap_or_default()
     );
     (start_ns, output)
+}
+
+/// A dwell as the twin made it: its target, time span (s), readings, the mean of its noise-free
+/// readings (tracker frame: the true point, the warm-up and refraction range errors along the
+/// beam) and the stated covariance of that mean.
+struct TrueDwell {
+    target: u32,
+    first: f64,
+    last: f64,
+    n: usize,
+    free: Vector3<f64>,
+    covariance: Matrix3<f64>,
+}
+
+impl TrueDwell {
+    /// The middle of the dwell (s), where the node stamps its point.
+    fn mid(&self) -> f64 {
+        0.5 * (self.first + self.last)
+    }
+}
+
+/// The twin's dwells of at least MIN_DWELL_READINGS unbroken readings, split as the node splits
+/// them (another target, a reading without one, or a silence over DWELL_GAP ends a dwell).
+fn true_dwells(cell: Cell, duration: f64) -> Vec<TrueDwell> {
+    let sim = Simulation::new(cell, duration, SEED).unwrap();
+    let mut dwells: Vec<TrueDwell> = Vec::new();
+    let mut open = false;
+    for (sample, truth) in sim.samples_with_truth() {
+        let (Sample::Tracker(s), SampleTruth::Tracker(tr)) = (sample, truth) else {
+            continue;
+        };
+        if s.status == TrackerStatus::BeamBroken {
+            continue;
+        }
+        let Some(target) = s.target_id else {
+            open = false;
+            continue;
+        };
+        let continues = open
+            && dwells
+                .last()
+                .is_some_and(|d| d.target == target && s.t - d.last <= DWELL_GAP);
+        if !continues {
+            dwells.push(TrueDwell {
+                target,
+                first: s.t,
+                last: s.t,
+                n: 0,
+                free: Vector3::zeros(),
+                covariance: Matrix3::zeros(),
+            });
+        }
+        open = true;
+        let d = dwells.last_mut().unwrap();
+        let beam = tr.point / tr.point.norm();
+        d.free += tr.point + beam * (tr.warmup_range_error + tr.refraction_range_error);
+        d.covariance += s.covariance;
+        d.n += 1;
+        d.last = s.t;
+    }
+    dwells.retain(|d| d.n >= MIN_DWELL_READINGS);
+    for d in &mut dwells {
+        let n = d.n as f64;
+        d.free /= n;
+        d.covariance /= n * n;
+    }
+    dwells
 }
 
 fn read<T: metrocell_msgs::RosMessage>(bag: &Path, topic: &str) -> Vec<T> {
@@ -169,9 +246,17 @@ fn turbulence_window_is_flagged_and_every_dwell_is_measured_once() {
                 .nominal_tool_point(&Vector3::new(p[0], p[1], p[2]))
         })
         .collect();
+    let duration = 3.5 * 3600.0;
+    let truth = true_dwells(
+        cell(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../crates/twin/examples/cells/xfyz_shift.yaml"
+        )),
+        duration,
+    );
     let (start_ns, out) = simulate_and_replay(
         c,
-        3.5 * 3600.0,
+        duration,
         &dir,
         &["tool_offset:=[0.0, 0.0, -0.15]", "registration_points:=12"],
     );
@@ -215,6 +300,39 @@ fn turbulence_window_is_flagged_and_every_dwell_is_measured_once() {
     stamps.sort();
     stamps.dedup();
     assert_eq!(stamps.len(), measured.len(), "a dwell published twice");
+    // each measured point's dwell in the twin: its target's dwell of the nearest mid time
+    let dwell_of = |m: &MeasuredPoint, i: usize| -> (Vector3<f64>, Matrix3<f64>) {
+        let t = (m.header.stamp.nanos() - start_ns as i64) as f64 * 1e-9;
+        let d = truth
+            .iter()
+            .filter(|d| d.target as usize == i)
+            .min_by(|a, b| (a.mid() - t).abs().total_cmp(&(b.mid() - t).abs()))
+            .unwrap();
+        assert!(
+            (d.mid() - t).abs() < 0.2,
+            "{} at {t} s: no dwell of the twin there",
+            m.point_id
+        );
+        (d.free, d.covariance)
+    };
+    // the pose the node's registration dwells (the first dwell of each of the 12 targets) give
+    // without noise
+    let mut registration: Vec<Correspondence> = Vec::new();
+    for m in &measured {
+        let i: usize = m.point_id.strip_prefix("point_").unwrap().parse().unwrap();
+        if registration.len() < 12 && !registration.iter().any(|c| c.machine == points[i]) {
+            let (free, covariance) = dwell_of(m, i);
+            registration.push(Correspondence {
+                tracker: free,
+                tracker_covariance: covariance,
+                machine: points[i],
+                machine_covariance: Matrix3::zeros(),
+            });
+        }
+    }
+    let pose = register(&registration).unwrap();
+    let (mut coordinates, mut beyond3, mut worst) = (0usize, 0usize, (0.0f64, String::new()));
+    let mut largest_error = 0.0f64;
     for m in &measured {
         let i: usize = m.point_id.strip_prefix("point_").unwrap().parse().unwrap();
         let n = Vector3::new(m.nominal.x, m.nominal.y, m.nominal.z);
@@ -224,13 +342,39 @@ fn turbulence_window_is_flagged_and_every_dwell_is_measured_once() {
             m.point_id,
             points[i]
         );
-        // measured within the machine's errors (tens of µm) of the nominal
-        let d = Vector3::new(m.measured.x, m.measured.y, m.measured.z) - n;
-        assert!(
-            d.norm() < 300e-6,
-            "{}: measured − nominal = {d:?}",
-            m.point_id
-        );
+        let got = Vector3::new(m.measured.x, m.measured.y, m.measured.z);
+        largest_error = largest_error.max((got - n).norm());
+        let want = pose.rotation * dwell_of(m, i).0 + pose.translation;
+        for a in 0..3 {
+            let z = (got[a] - want[a]) / m.covariance[4 * a].sqrt();
+            coordinates += 1;
+            beyond3 += (z.abs() > 3.0) as usize;
+            if z.abs() > worst.0 {
+                worst = (
+                    z.abs(),
+                    format!(
+                        "{} at {} ns axis {a}: {} m vs truth {} m, σ {:e} m",
+                        m.point_id,
+                        m.header.stamp.nanos(),
+                        got[a],
+                        want[a],
+                        m.covariance[4 * a].sqrt()
+                    ),
+                );
+            }
+        }
     }
+    println!(
+        "measured points: {beyond3} of {coordinates} coordinates beyond 3σ of the twin's truth, worst {:.2}σ ({}); largest |measured − nominal| {:.1} µm",
+        worst.0,
+        worst.1,
+        largest_error * 1e6
+    );
+    assert!(
+        beyond3 * 100 <= coordinates && worst.0 <= 5.0,
+        "measured points against the twin's truth: {beyond3} of {coordinates} beyond 3σ, worst {:.2}σ: {}",
+        worst.0,
+        worst.1
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -15,8 +15,9 @@ use metrocell_estimation::fit_summary::summary_lines;
 use metrocell_estimation::{
     fit, records_from_bags, rms, Fit, FitOptions, PointSource, RecordSet, RecordingOptions,
 };
+use metrocell_model_file::CellModel;
 use metrocell_solver::Loss;
-use metrocell_twin::{write_model, CellModel, FittedParameter, ModelUpdate};
+use metrocell_twin::{write_model, FittedParameter, ModelUpdate};
 
 #[derive(clap::Args)]
 #[command(after_help = "What it does:\n\

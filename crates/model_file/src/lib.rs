@@ -8,9 +8,6 @@
 //! crates/twin builds the machine and the true terms of a cell it simulates with the same
 //! functions and adds the simulator's truth, noise and schedule. No DDS, no simulation.
 
-// `!(x > 0.0)` is used on purpose: unlike `x <= 0.0` it also rejects NaN.
-#![allow(clippy::neg_cmp_op_on_partial_ord)]
-
 pub mod cell_file;
 pub mod cell_model;
 pub mod error;

@@ -7,8 +7,9 @@ use clap::{Args, ValueEnum};
 use metrocell_diagnose::html_report::html_report;
 use metrocell_diagnose::residual_table::residuals_csv;
 use metrocell_diagnose::{diagnose, DeclaredModel, DiagnoseOptions, Diagnosis, Strategy};
+use metrocell_model_file::CellModel;
 use metrocell_records::{records_from_bags, PointSource, RecordingOptions};
-use metrocell_twin::{write_model, CellModel, FittedParameter, ModelUpdate};
+use metrocell_twin::{write_model, FittedParameter, ModelUpdate};
 
 #[derive(Clone, Copy, Debug, ValueEnum)]
 pub enum StrategyArg {

@@ -13,9 +13,10 @@ use std::time::Instant;
 use anyhow::Context;
 use metrocell_estimation::fit_summary::summary_lines;
 use metrocell_estimation::{fit, rms, Fit, FitOptions, RecordSet};
+use metrocell_model_file::CellModel;
 use metrocell_records::{records_from_bags, PointSource, RecordingOptions};
 use metrocell_solver::Loss;
-use metrocell_twin::{write_model, CellModel, FittedParameter, ModelUpdate};
+use metrocell_twin::{write_model, FittedParameter, ModelUpdate};
 
 #[derive(clap::Args)]
 #[command(after_help = "What it does:\n\

@@ -10,8 +10,8 @@ use metrocell_estimation::fit_summary::value_with_sigma;
 use metrocell_estimation::uncertainty_budget::Budget;
 use metrocell_estimation::{rms, Fit, RecordSet};
 use metrocell_model::ForwardModel;
+use metrocell_model_file::CellModel;
 use metrocell_report::{HistogramPlot, Report, ScatterPlot, Series, SeriesPlot, Table};
-use metrocell_twin::CellModel;
 
 use super::CalibrateArgs;
 

@@ -12,9 +12,9 @@ use std::sync::Arc;
 
 use anyhow::{bail, Context};
 use metrocell_model::SignalsBuilderOptions;
+use metrocell_model_file::CellModel;
 use metrocell_physics::{SignalKind, Signals, TemperatureTimeline};
 use metrocell_records::recordings::signals_from_bag;
-use metrocell_twin::CellModel;
 use nalgebra::Vector3;
 
 /// What the compensation is evaluated at, and what the output says about it.

@@ -4,7 +4,7 @@ use std::path::PathBuf;
 
 use anyhow::Context;
 use metrocell_gcode::{compensate_program, CompensationOptions, InverseMethod, ModelErrorField};
-use metrocell_twin::CellModel;
+use metrocell_model_file::CellModel;
 
 use super::conditions::{conditions, not_xyz_family, point_mm, sensors_read, ConditionOptions};
 

@@ -5,7 +5,7 @@ use std::path::PathBuf;
 use anyhow::Context;
 use metrocell_gcode::controller_table::{axis_csv, axis_tables, squareness, squareness_csv};
 use metrocell_gcode::{ErrorField, ModelErrorField};
-use metrocell_twin::CellModel;
+use metrocell_model_file::CellModel;
 
 use super::conditions::{conditions, not_xyz_family, point_mm, sensors_read, ConditionOptions};
 

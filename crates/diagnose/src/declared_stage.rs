@@ -1,15 +1,15 @@
 //! Stages 1–2 of the diagnosis: the records made ready, and the declared model fitted to them.
 //!
-//! The declared model gets the instrument pose its readings need (free when the records are in
-//! an instrument frame, the identity otherwise); unusable records are set aside with the reason,
-//! repeats of a stationary point averaged; the declared free parameters are fitted (so a mis-set
+//! The declared model carries the instrument pose its readings need (the model-file loader's:
+//! free when the records are in an instrument frame, the identity otherwise); unusable records
+//! are set aside with the reason, repeats of a stationary point averaged; the declared free parameters are fitted (so a mis-set
 //! declared parameter is not taken for missing physics); gross outliers are set aside and the fit
 //! repeated; a model that leaves millimetres after its own fit is refused with what to check.
 
 use metrocell_estimation::{estimate_nests, fit, is_reference, Fit, MeasurementRecord, RecordSet};
 use metrocell_model::{ForwardModel, ParameterSetup};
 use metrocell_physics::model::TermModel;
-use metrocell_physics::{configure, PhysicsError, TermConfig, TermId};
+use metrocell_physics::PhysicsError;
 use nalgebra::Vector3;
 
 use crate::outliers::{outliers, robust_scale};
@@ -19,7 +19,7 @@ use crate::residual_view::ResidualView;
 
 /// The declared model with its instrument pose, fitted.
 pub(crate) struct DeclaredStage {
-    /// The declared instrument terms, a `tracker_pose` added when the model has none.
+    /// The declared instrument terms (with the loader's `tracker_pose`).
     pub instruments: TermModel,
     pub setup: ParameterSetup,
     /// The records the diagnosis uses (prepared, outliers set aside).
@@ -33,27 +33,13 @@ pub(crate) struct DeclaredStage {
     pub fit: Fit,
 }
 
-/// The declared model with a tracker pose (the model's reading needs one: free if the records
-/// are in an instrument frame, the identity otherwise), and its setup.
-pub(crate) fn with_tracker_pose(
+/// The declared instrument terms as the model-file loader made them (its one rule gives every
+/// model a `tracker_pose`, crates/model_file `instrument_terms`: free if the records are in an
+/// instrument frame, the identity otherwise), and the declared setup over them.
+pub(crate) fn declared_instruments(
     declared: &DeclaredModel,
 ) -> Result<(TermModel, ParameterSetup), PhysicsError> {
-    let has_pose = declared
-        .instrument_terms
-        .terms
-        .iter()
-        .any(|t| t.term.id() == TermId::TrackerPose);
-    let mut instruments = TermModel::default();
-    if !has_pose {
-        instruments.push(configure(&TermConfig {
-            id: "tracker_pose".into(),
-            use_defaults: true,
-            ..Default::default()
-        })?)?;
-    }
-    for t in &declared.instrument_terms.terms {
-        instruments.push(t.clone())?;
-    }
+    let instruments = declared.instrument_terms.clone();
     let model = ForwardModel::new(declared.machine, declared.machine_terms, &instruments)?;
     let setup = setup_by_name(&model, declared.setup, &|_| true);
     Ok((instruments, setup))
@@ -86,7 +72,7 @@ pub(crate) fn declared_stage(
     options: &DiagnoseOptions,
     progress: &Progress,
 ) -> Result<DeclaredStage, DiagnoseError> {
-    let (instruments, setup) = with_tracker_pose(declared)?;
+    let (instruments, setup) = declared_instruments(declared)?;
     let model = ForwardModel::new(declared.machine, declared.machine_terms, &instruments)?;
     let prep = prepare(
         &records.records,

@@ -44,6 +44,8 @@ use crate::selection::{
 pub struct DeclaredModel<'a> {
     pub machine: &'a MachineGeometry,
     pub machine_terms: &'a TermModel,
+    /// As the model-file loader's rule gives them (crates/model_file `instrument_terms`: a
+    /// `tracker_pose` always, the instruments' declared terms after it).
     pub instrument_terms: &'a TermModel,
     /// Free/fixed and priors over the stacked parameters of machine + instrument terms.
     pub setup: &'a ParameterSetup,

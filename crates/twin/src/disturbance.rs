@@ -23,45 +23,13 @@
 //! less the tool offset); other families reject the section.
 
 use nalgebra::Vector3;
-use serde::{Deserialize, Serialize};
 
 use crate::error::CellError;
-use crate::quantity::{vector3, Quantity};
+use crate::quantity::vector3;
 
-/// The `disturbances` section of a cell file.
-#[derive(Debug, Clone, Default, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct DisturbanceSection {
-    #[serde(default)]
-    pub time_cycles: Vec<TimeCycleSection>,
-    #[serde(default)]
-    pub workspace_bumps: Vec<WorkspaceBumpSection>,
-}
-
-/// A drift that cycles in time: `amplitude·sin(2π t/period + phase)`.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct TimeCycleSection {
-    /// Peak displacement vector (m).
-    pub amplitude: [Quantity; 3],
-    /// Period (s).
-    pub period: Quantity,
-    /// Phase at t = 0 (rad; default 0).
-    #[serde(default)]
-    pub phase: Option<Quantity>,
-}
-
-/// A local bump over the workspace: `amplitude·exp(−|q − centre|²/(2·width²))`.
-#[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
-pub struct WorkspaceBumpSection {
-    /// Peak displacement vector at the centre (m).
-    pub amplitude: [Quantity; 3],
-    /// Centre in axis coordinates (commanded x, y, z; m).
-    pub centre: [Quantity; 3],
-    /// Gaussian width σ (m).
-    pub width: Quantity,
-}
+pub use metrocell_model_file::cell_file::{
+    DisturbanceSection, TimeCycleSection, WorkspaceBumpSection,
+};
 
 #[derive(Debug, Clone, Copy, PartialEq)]
 struct TimeCycle {

@@ -31,17 +31,12 @@
 #![allow(clippy::neg_cmp_op_on_partial_ord)]
 
 pub mod cell;
-pub mod cell_file;
-pub mod cell_model;
 pub mod disturbance;
-pub mod error;
-pub mod families;
 pub mod fiducial_plate;
 pub mod model_writer;
 mod model_writer_instruments;
 pub mod noise;
 pub mod program;
-pub mod quantity;
 pub mod sample;
 pub mod simulation;
 pub mod stationing;
@@ -51,9 +46,13 @@ pub mod thermal_stepper;
 pub mod tracker_model;
 pub mod yaml_edit;
 
+/// The cell file format, its errors, the machine builders and the model loader live below the
+/// twin, in crates/model_file (the loader every model user shares); re-exported here under
+/// their old paths.
+pub use metrocell_model_file::{cell_file, cell_model, error, families, quantity};
+pub use metrocell_model_file::{CellError, CellModel};
+
 pub use cell::{Cell, MachineGeometry, MachineKinematics};
-pub use cell_model::CellModel;
-pub use error::CellError;
 pub use fiducial_plate::FiducialPlate;
 pub use model_writer::{write_model, FittedParameter, ModelUpdate};
 pub use sample::{

@@ -152,8 +152,14 @@ pub fn write_model(model: &CellModel, update: &ModelUpdate) -> Result<String, Ce
     // go where a model file keeps them, or are left out and said
     let (machine, instrument): (Vec<TermConfig>, Vec<TermConfig>) =
         update.added_terms.iter().cloned().partition(|c| {
-            crate::cell::home_of(&c.id).is_none()
-                && crate::cell::terms(std::slice::from_ref(c), None, None, &model.machine).is_ok()
+            metrocell_model_file::terms_section::home_of(&c.id).is_none()
+                && metrocell_model_file::terms_section::terms(
+                    std::slice::from_ref(c),
+                    None,
+                    None,
+                    &model.machine,
+                )
+                .is_ok()
         });
     if !machine.is_empty() {
         added_terms(model, &root, &fitted, &machine, &mut edits, &mut written)?;

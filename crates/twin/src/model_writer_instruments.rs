@@ -87,10 +87,10 @@ pub(crate) fn added_instrument_terms(
             TermId::InstrumentDrift => notes.push(format!(
                 "{label}, found by metrocell diagnose (the instrument moved during the recording), is left out of this file: like the tracker's pose it belongs to one recording (its span is on that recording's clock), not to the machine; diagnose looks for it in each recording it judges (values in the report's diagnosis.json)."
             )),
-            _ => notes.push(match crate::cell::home_of(&c.id) {
+            _ => notes.push(match metrocell_model_file::terms_section::home_of(&c.id) {
                 Some(home) => format!("{label} was found but is left out of this file: a model keeps it in {home}, which metrocell does not write; add it there by hand (values in the report's diagnosis.json)."),
                 None => {
-                    let why = crate::cell::terms(std::slice::from_ref(c), None, None, &model.machine).err().map(|e| e.to_string()).unwrap_or_default();
+                    let why = metrocell_model_file::terms_section::terms(std::slice::from_ref(c), None, None, &model.machine).err().map(|e| e.to_string()).unwrap_or_default();
                     format!("{label} was found but is left out of this file, which cannot hold it ({why}); values in the report's diagnosis.json.")
                 }
             }),

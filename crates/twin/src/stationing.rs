@@ -327,7 +327,9 @@ fn accelerometers(
     let robot = read_urdf_file(&path)
         .map_err(|e| CellError::invalid("machine.serial_arm.urdf", e.to_string()))?;
     let base = match &arm.base {
-        Some(b) => crate::cell::pose(b, "machine.serial_arm.base")?.rotation,
+        Some(b) => {
+            metrocell_model_file::machine_section::pose(b, "machine.serial_arm.base")?.rotation
+        }
         None => Matrix3::identity(),
     };
     let mut out = Vec::new();

@@ -25,7 +25,7 @@
 //! it (so live runs may cover slightly later windows than a replay's when the CPU is short).
 
 use std::path::Path;
-use std::sync::mpsc;
+use std::sync::{mpsc, Arc};
 use std::time::{Duration, Instant};
 
 use metrocell_bagtools::{BagSource, ReplayOutput, SourcedMessage};
@@ -84,8 +84,10 @@ fn live(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
     }
     // the points, the commanded joints and every signal a declared term reads (more are added
     // as discovery finds them)
-    let mut topics = metrocell_records::declared_topics(setup.forward, &setup.recording);
-    let mut session = Session::new(setup, Path::new("live DDS"), &topics)?;
+    let model = Arc::clone(&setup.model);
+    let forward = model.forward_model()?;
+    let mut topics = metrocell_records::declared_topics(&forward, &setup.recording);
+    let mut session = Session::new(setup, &forward, Path::new("live DDS"), &topics)?;
     let mut subscriptions = Vec::new();
     for topic in session.stream.topics() {
         let ty = topics
@@ -139,13 +141,13 @@ fn live(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
             if let Some(job) = session.due_job() {
                 running = true;
                 diagnostics.set_value("runs", job.info.run);
-                let (declared, options, tx) = (
-                    session.setup.declared(),
+                let (model, options, tx) = (
+                    Arc::clone(&session.setup.model),
                     session.setup.options.clone(),
                     tx.clone(),
                 );
                 std::thread::spawn(move || {
-                    let _ = tx.send(run_job(&declared, &options, job));
+                    let _ = tx.send(run_job(&parameters::declared(&model), &options, job));
                 });
             }
         }
@@ -188,7 +190,9 @@ fn replay(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::error
         .iter()
         .map(|t| (t.name.clone(), t.type_name.clone()))
         .collect();
-    let mut session = Session::new(setup, &args.bag, &topics)?;
+    let model = Arc::clone(&setup.model);
+    let forward = model.forward_model()?;
+    let mut session = Session::new(setup, &forward, &args.bag, &topics)?;
     for topic in session.stream.topics() {
         source.subscribe_any(&topic);
     }

@@ -1,10 +1,11 @@
 //! Parameters of `metrocell-diagnose` and the session they set up.
 
+use std::sync::Arc;
+
 use metrocell_diagnose::{DeclaredModel, DiagnoseOptions};
-use metrocell_model::ForwardModel;
+use metrocell_model_file::CellModel;
 use metrocell_node::{ParamDecl, Parameters};
 use metrocell_records::{PointSource, RecordingOptions};
-use metrocell_twin::CellModel;
 
 use crate::sliding_window::WindowSettings;
 
@@ -23,11 +24,11 @@ pub fn declarations() -> Vec<ParamDecl> {
     ]
 }
 
-/// What the parameters set up: the model (kept for the node's life), how records are read,
-/// how diagnoses are run and the window.
+/// What the parameters set up: the model (kept for the node's life, shared with the worker
+/// thread that runs a diagnosis; the record stream borrows its forward model), how records are
+/// read, how diagnoses are run and the window.
 pub struct Setup {
-    pub model: &'static CellModel,
-    pub forward: &'static ForwardModel<'static>,
+    pub model: Arc<CellModel>,
     pub points_topic: String,
     pub recording: RecordingOptions,
     pub options: DiagnoseOptions,
@@ -36,14 +37,18 @@ pub struct Setup {
 }
 
 impl Setup {
-    pub fn declared(&self) -> DeclaredModel<'static> {
-        let m = self.model;
-        DeclaredModel {
-            machine: &m.machine,
-            machine_terms: &m.machine_terms,
-            instrument_terms: &m.instrument_terms,
-            setup: &m.setup,
-        }
+    pub fn declared(&self) -> DeclaredModel<'_> {
+        declared(&self.model)
+    }
+}
+
+/// The model as `diagnose` takes it.
+pub fn declared(m: &CellModel) -> DeclaredModel<'_> {
+    DeclaredModel {
+        machine: &m.machine,
+        machine_terms: &m.machine_terms,
+        instrument_terms: &m.instrument_terms,
+        setup: &m.setup,
     }
 }
 
@@ -56,13 +61,7 @@ pub fn setup(
     if path.trim().is_empty() {
         return Err("parameter model is empty: give the model cell file to judge the recording against, e.g. --ros-args -p model:=crates/twin/examples/cells/demo_model.yaml".into());
     }
-    // The node keeps one model for its whole life; leaking it gives the forward model and the
-    // record stream the 'static borrow they need (and a worker thread can share it).
-    let model: &'static CellModel = Box::leak(Box::new(
-        CellModel::from_path(&path).map_err(|e| e.to_string())?,
-    ));
-    let forward: &'static ForwardModel<'static> =
-        Box::leak(Box::new(model.forward_model().map_err(|e| e.to_string())?));
+    let model = Arc::new(CellModel::from_path(&path).map_err(|e| e.to_string())?);
     let get_f = |k: &str| p.get::<f64>(k).map_err(|e| e.to_string());
     let get_i = |k: &str| p.get::<i64>(k).map_err(|e| e.to_string());
     let points_topic = resolve(&p.get::<String>("points").map_err(|e| e.to_string())?)?;
@@ -119,7 +118,6 @@ pub fn setup(
     )];
     Ok(Setup {
         model,
-        forward,
         points_topic,
         recording,
         options,

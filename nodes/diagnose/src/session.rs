@@ -8,6 +8,7 @@ use std::path::Path;
 use metrocell_bagtools::SourcedMessage;
 use metrocell_diagnose::{diagnose, DiagnoseError, Diagnosis};
 use metrocell_estimation::RecordSet;
+use metrocell_model::ForwardModel;
 use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
 use metrocell_msgs::std_msgs::msg::String as StringMessage;
 use metrocell_records::{RecordStream, RecordingError};
@@ -16,9 +17,9 @@ use crate::findings_message::{diagnosis_message, Announced, RunInfo};
 use crate::parameters::Setup;
 use crate::sliding_window::SlidingWindow;
 
-pub struct Session {
+pub struct Session<'m> {
     pub setup: Setup,
-    pub stream: RecordStream<'static, 'static>,
+    pub stream: RecordStream<'m, 'm>,
     pub window: SlidingWindow,
     announced: Announced,
     runs: u64,
@@ -39,15 +40,17 @@ pub struct Outcome {
     pub summary: String,
 }
 
-impl Session {
+impl<'m> Session<'m> {
     /// `source` names the recording in messages (the bag, or `live DDS`); `topics` are the
-    /// (name, type) the session will be fed.
+    /// (name, type) the session will be fed; `forward` is the forward model of `setup.model`
+    /// (the record stream borrows it).
     pub fn new(
         setup: Setup,
+        forward: &'m ForwardModel<'m>,
         source: &Path,
         topics: &[(String, String)],
     ) -> Result<Self, RecordingError> {
-        let stream = RecordStream::new(source, topics, setup.forward, &setup.recording)?;
+        let stream = RecordStream::new(source, topics, forward, &setup.recording)?;
         let window = SlidingWindow::new(setup.window);
         Ok(Self {
             setup,

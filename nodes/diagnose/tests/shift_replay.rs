@@ -10,10 +10,11 @@ use std::process::Command;
 use metrocell_bagtools::BagSource;
 use metrocell_diagnose_node::parameters::{self, Setup};
 use metrocell_diagnose_node::session::Session;
+use metrocell_model_file::CellModel;
 use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
 use metrocell_msgs::std_msgs::msg::String as StringMessage;
 use metrocell_records::{records_from_bags, PointSource, RecordingOptions};
-use metrocell_twin::{Cell, CellModel};
+use metrocell_twin::Cell;
 
 const HOURS: f64 = 2.0;
 const REVERSAL_UM: f64 = 10.0;
@@ -224,7 +225,9 @@ fn the_window_holds_the_records_diagnose_builds_from_the_bag() {
         .iter()
         .map(|t| (t.name.clone(), t.type_name.clone()))
         .collect();
-    let mut session = Session::new(setup, &rec.bag, &topics).unwrap();
+    let node_model = std::sync::Arc::clone(&setup.model);
+    let node_forward = node_model.forward_model().unwrap();
+    let mut session = Session::new(setup, &node_forward, &rec.bag, &topics).unwrap();
     for t in session.stream.topics() {
         source.subscribe_any(&t);
     }

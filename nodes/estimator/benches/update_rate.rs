@@ -152,8 +152,10 @@ fn main() {
         .build_offline()
         .unwrap();
     let model = parameters::model(node.parameters(), "/measured_points").unwrap();
-    let topics = metrocell_records::declared_topics(model.forward, &model.recording);
-    let (mut state, log) = parameters::estimator(node.parameters(), &model, &topics).unwrap();
+    let forward = model.forward_model().unwrap();
+    let topics = metrocell_records::declared_topics(&forward, &model.recording);
+    let (mut state, log) =
+        parameters::estimator(node.parameters(), &model, &forward, &topics).unwrap();
     let free = state.filter().free_indices().len();
     println!("{}", log[0]);
     let messages = inputs();

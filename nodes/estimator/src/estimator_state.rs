@@ -87,12 +87,12 @@ pub struct Outputs {
     pub observability: Option<ObservabilityNote>,
 }
 
-pub struct EstimatorState {
-    model: &'static ForwardModel<'static>,
+pub struct EstimatorState<'m> {
+    model: &'m ForwardModel<'m>,
     filter: RecursiveEstimator,
     work: Workspace,
     jacobian: DMatrix<f64>,
-    stream: RecordStream<'static, 'static>,
+    stream: RecordStream<'m, 'm>,
     points_topic: String,
     settings: Settings,
     since_publish: u64,
@@ -100,12 +100,12 @@ pub struct EstimatorState {
     pub counters: Counters,
 }
 
-impl EstimatorState {
+impl<'m> EstimatorState<'m> {
     /// `stream` reads the points from `points_topic`.
     pub fn new(
-        model: &'static ForwardModel<'static>,
+        model: &'m ForwardModel<'m>,
         filter: RecursiveEstimator,
-        stream: RecordStream<'static, 'static>,
+        stream: RecordStream<'m, 'm>,
         points_topic: String,
         settings: Settings,
     ) -> Self {

@@ -21,8 +21,9 @@ fn input_qos() -> metrocell_node::QosProfile {
 pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
     let model = parameters::model(node.parameters(), &node.resolve_topic("measured_points")?)?;
     // the points, the commanded joints and every signal a term of the model reads
-    let topics = metrocell_records::declared_topics(model.forward, &model.recording);
-    let (mut state, log) = parameters::estimator(node.parameters(), &model, &topics)?;
+    let forward = model.forward_model()?;
+    let topics = metrocell_records::declared_topics(&forward, &model.recording);
+    let (mut state, log) = parameters::estimator(node.parameters(), &model, &forward, &topics)?;
     for line in log {
         node.info(line);
     }

@@ -3,19 +3,17 @@
 use std::path::Path;
 
 use metrocell_estimation::{RecursiveEstimator, RecursiveOptions};
-use metrocell_model::{ForwardModel, ParameterSetup, SignalsBuilderOptions};
+use metrocell_model::{ForwardModel, SignalsBuilderOptions};
+use metrocell_model_file::{CellError, CellModel};
 use metrocell_node::{ParamDecl, Parameters};
-use metrocell_physics::model::TermModel;
-use metrocell_physics::{configure, TermConfig};
 use metrocell_records::{PointSource, RecordStream, RecordingOptions};
-use metrocell_twin::CellModel;
 
 use crate::estimator_state::{EstimatorState, Settings};
 use crate::state_file::SavedState;
 
 pub fn declarations() -> Vec<ParamDecl> {
     vec![
-        ParamDecl::new("model", "", "model cell file (YAML, the twin's format): machine, `terms:` = the error model to estimate (their params are the start values), `estimation:` = free parameters and priors per term label"),
+        ParamDecl::new("model", "", "model cell file (YAML, read by crates/model_file): machine, `terms:` = the error model to estimate (their params are the start values), `estimation:` = free parameters and priors per term label"),
         ParamDecl::new("process_noise", Vec::<String>::new(), "random-walk intensity of drifting parameters, `label.param=q` with q in the parameter's SI unit per √s (e.g. positioning[z].c0=1e-7 for a Z offset that may drift 1 µm in ~3 h); others are constant"),
         ParamDecl::new("publish_every", 1i64, "publish the error model after this many accepted measurements (and on every alarm)").with_range(1.0, 1e9),
         ParamDecl::new("max_signal_gap", 600.0, "s of stamp time a measured point waits for a temperature (or other slow) stream to bracket it, and the longest gap between two of its samples that is interpolated; a point inside a longer gap is not used (the log says which signal)").with_range(1.0, 86400.0),
@@ -30,17 +28,23 @@ pub fn declarations() -> Vec<ParamDecl> {
     ]
 }
 
-/// The model and how its records are read, before the input topics are known.
+/// The model and how its records are read, before the input topics are known. The node keeps
+/// it for its whole life and borrows the forward model from it ([`Model::forward_model`]).
 pub struct Model {
-    pub forward: &'static ForwardModel<'static>,
     pub recording: RecordingOptions,
     pub path: String,
-    file: &'static CellModel,
-    /// The file's `estimation:` settings of the terms this node estimates (its instrument
-    /// terms' settings are set aside, see [`model`]).
-    estimation: std::collections::BTreeMap<String, metrocell_physics::EstimationConfig>,
+    /// The model file as this node reads it: points registered into the machine frame
+    /// (crates/model_file `CellModel::for_registered_points`).
+    file: CellModel,
     /// What of the model file the node does not use, for the log.
     pub set_aside: Vec<String>,
+}
+
+impl Model {
+    /// The shared forward model of the file's machine terms and the identity instrument pose.
+    pub fn forward_model(&self) -> Result<ForwardModel<'_>, CellError> {
+        self.file.forward_model()
+    }
 }
 
 /// The model file, and the recording options from the parameters; `points_topic` is the
@@ -50,16 +54,9 @@ pub fn model(p: &Parameters, points_topic: &str) -> Result<Model, Box<dyn std::e
     if path.trim().is_empty() {
         return Err("parameter model is empty: give a model cell file, e.g. --ros-args -p model:=launch-configs/cells/demo_model.yaml".into());
     }
-    // The node keeps one model for its whole life; leaking it gives the forward model and the
-    // record stream the 'static borrow they need without a self-referential struct.
     // the model-file loader calibrate and diagnose use: a model file need not be a cell the
     // twin simulates (no environment, program or tracker pose needed)
-    let file: &'static CellModel = Box::leak(Box::new(CellModel::from_path(&path)?));
-    let instruments: &'static TermModel = Box::leak(Box::new(identity_tracker_pose()?));
-    let forward: &'static ForwardModel<'static> = Box::leak(Box::new(
-        ForwardModel::new(&file.machine, &file.machine_terms, instruments)
-            .map_err(|e| format!("model {path}: {e}"))?,
-    ));
+    let declared = CellModel::from_path(&path)?;
     let signals = SignalsBuilderOptions {
         max_slow_gap: p.get::<f64>("max_signal_gap")?,
         max_joint_gap: p.get::<f64>("max_joint_gap")?,
@@ -74,25 +71,12 @@ pub fn model(p: &Parameters, points_topic: &str) -> Result<Model, Box<dyn std::e
     // the instrument terms (a tracker's warm-up or refraction, a probe's pretravel) act on the
     // instruments' raw readings; the measured points this node reads are registered into the
     // machine frame already, so it estimates the machine terms only, and says so
-    let labels: Vec<String> = file
-        .machine_terms
-        .terms
-        .iter()
-        .map(|t| t.term.label())
-        .collect();
-    let instrument_labels: Vec<String> = file
+    let instrument_labels: Vec<String> = declared
         .instrument_terms
         .terms
         .iter()
         .map(|t| t.term.label())
         .filter(|l| l != "tracker_pose")
-        .collect();
-    let estimation = file
-        .raw
-        .estimation
-        .iter()
-        .filter(|(label, _)| labels.contains(label))
-        .map(|(k, v)| (k.clone(), v.clone()))
         .collect();
     let mut set_aside = Vec::new();
     if !instrument_labels.is_empty() {
@@ -102,36 +86,29 @@ pub fn model(p: &Parameters, points_topic: &str) -> Result<Model, Box<dyn std::e
         ));
     }
     Ok(Model {
-        forward,
         recording,
         path,
-        file,
-        estimation,
+        file: declared.for_registered_points()?,
         set_aside,
     })
 }
 
 /// The filter over the model file, restored from the state file when it fits, reading a
 /// recording that holds `topics` ((name, type): a bag's, or the live subscriptions); description
-/// lines for the log.
-pub fn estimator(
+/// lines for the log. `model` is `m`'s forward model ([`Model::forward_model`]): the state
+/// borrows it.
+pub fn estimator<'m>(
     p: &Parameters,
     m: &Model,
+    model: &'m ForwardModel<'m>,
     topics: &[(String, String)],
-) -> Result<(EstimatorState, Vec<String>), Box<dyn std::error::Error>> {
-    let (file, model, path) = (m.file, m.forward, &m.path);
+) -> Result<(EstimatorState<'m>, Vec<String>), Box<dyn std::error::Error>> {
+    let (file, path) = (&m.file, &m.path);
     let stream = RecordStream::new(std::path::Path::new("input"), topics, model, &m.recording)
         .map_err(|e| format!("model {path}: {e}"))?;
-    let mut setup =
-        ParameterSetup::new(model, &m.estimation).map_err(|e| format!("model {path}: {e}"))?;
-    let names = model.param_names();
-    let pose = model
-        .instrument_param_start(metrocell_physics::TermId::TrackerPose)
-        .expect("identity pose added above");
     // measured points come in the machine frame: the instrument pose is the identity, fixed
-    setup.free[pose..pose + 6]
-        .iter_mut()
-        .for_each(|f| *f = false);
+    let setup = &file.setup;
+    let names = model.param_names();
     let n = model.param_count();
     let mut options = RecursiveOptions::constant(n);
     options.gate_probability = p.get::<f64>("gate_probability")?;
@@ -159,7 +136,7 @@ pub fn estimator(
             x0[k] = prior.value;
         }
     }
-    let mut p0 = RecursiveEstimator::initial_covariance(model, &setup);
+    let mut p0 = RecursiveEstimator::initial_covariance(model, setup);
     let mut log = vec![format!(
         "model {path}: {} parameters, {} free ({}); reading {}",
         n,
@@ -194,7 +171,7 @@ pub fn estimator(
         }
     }
     let free_count = setup.free_indices().len();
-    let filter = RecursiveEstimator::new(model, &setup, x0, p0, options)?;
+    let filter = RecursiveEstimator::new(model, setup, x0, p0, options)?;
     let predict = p.get::<Vec<f64>>("predict_points")?;
     let joints = file.machine.joint_names().len();
     if predict.len() % joints != 0 {
@@ -221,20 +198,4 @@ pub fn estimator(
         ),
         log,
     ))
-}
-
-/// The measured points are in the machine frame: the tracker pose is the identity.
-fn identity_tracker_pose() -> Result<TermModel, metrocell_physics::PhysicsError> {
-    let mut m = TermModel::default();
-    let params = ["tx", "ty", "tz", "alpha", "beta", "delta"]
-        .iter()
-        .map(|k| (k.to_string(), metrocell_physics::ConfigValue::Number(0.0)))
-        .collect();
-    m.push(configure(&TermConfig {
-        id: "tracker_pose".into(),
-        options: Default::default(),
-        params,
-        use_defaults: false,
-    })?)?;
-    Ok(m)
 }

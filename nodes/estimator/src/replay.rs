@@ -18,7 +18,8 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
         .iter()
         .map(|t| (t.name.clone(), t.type_name.clone()))
         .collect();
-    let (mut state, log) = parameters::estimator(node.parameters(), &model, &topics)?;
+    let forward = model.forward_model()?;
+    let (mut state, log) = parameters::estimator(node.parameters(), &model, &forward, &topics)?;
     for line in log {
         node.logger().info(line);
     }

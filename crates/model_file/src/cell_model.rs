@@ -8,16 +8,12 @@
 //!   recording provides them, and building records names a missing one.
 //! * `sensors.tracker` — optional, and its noise model (`rate`, `range_noise`,
 //!   `angular_noise`) may be left out, and so may its `pose` (unknown: the identity start,
-//!   registered from each recording's points, as without a tracker). Instrument terms, stacked
-//!   after the machine terms:
-//!   `tracker_pose` from `pose` (the start of the nuisance pose); `tracker_warmup` if `warmup` is
-//!   given; `refraction` only if the file gives a weather-station bias (`station`) or
-//!   `environment.air.beam_temperature_offset` (the path air minus the station reading).
-//!   **Without a tracker** an identity `tracker_pose` is added: fixed by the fit when the records
-//!   are in the machine frame, registered and free when they are in an instrument frame.
+//!   registered from each recording's points, as without a tracker). The instrument terms,
+//!   stacked after the machine terms, are those of the rule in [`crate::instrument_terms`]
+//!   (a `tracker_pose` always: fixed by the fit when the records are in the machine frame,
+//!   registered and free when they are in an instrument frame).
 //! * `estimation` — free/fixed and priors per term label ([`ParameterSetup`]). Defaults: every
-//!   parameter free, except `refraction` (a range scale is not separable from the axes' scale
-//!   errors and the tracker's position unless the file frees it under `estimation.refraction`).
+//!   parameter free, except those of [`crate::instrument_terms::default_fixed`].
 //! * `environment`, `program` — optional (needed to simulate, not to fit).
 //! * `uncertainty` — standard uncertainties of a previous fit, per label and parameter
 //!   ([`CellModel::uncertainty`]); `fit` — that fit's summary (ignored).
@@ -27,26 +23,30 @@
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
-use metrocell_model::{ForwardModel, InstrumentPose, MachineGeometry, ParameterSetup};
+use metrocell_model::{ForwardModel, MachineGeometry, ParameterSetup};
 use metrocell_physics::config::quantity;
 use metrocell_physics::config::ConfigValue;
 use metrocell_physics::model::TermModel;
 use metrocell_physics::{configure, TermConfig, TermId};
 
-use crate::cell::{
-    machine, pose, terms, tracker_station, tracker_term_model, tracker_warmup, RefractionOffsets,
-};
 use crate::cell_file::CellFile;
 use crate::error::CellError;
+use crate::instrument_terms::{
+    default_fixed, instrument_terms, registered_point_instruments, InstrumentTerms,
+};
+use crate::machine_section::machine;
+use crate::terms_section::terms;
 
-/// A validated model file.
+/// A validated model file. It owns the machine and the terms; [`CellModel::forward_model`]
+/// borrows them, so a program that keeps one model for its life keeps this and the forward
+/// model side by side (nothing leaked).
 #[derive(Debug, Clone)]
 pub struct CellModel {
     /// The file as named to the loader (for messages).
     pub file: String,
     /// Relative paths in the file (a URDF) are relative to this directory.
     pub base_dir: PathBuf,
-    /// The text as read: the writer ([`crate::model_writer`]) edits it, keeping what the user
+    /// The text as read: the writer (crates/twin `model_writer`) edits it, keeping what the user
     /// wrote around the values it changes.
     pub text: String,
     /// The parsed file.
@@ -106,77 +106,15 @@ impl CellModel {
     ) -> Result<CellModel, CellError> {
         let machine = machine(&raw.machine, &raw.sensors.accelerometers, base_dir)?;
         let machine_terms = terms(&raw.terms, None, None, &machine)?;
-        let (instrument_terms, declares_tracker) = match &raw.sensors.tracker {
-            Some(t) => {
-                // no pose: unknown, registered from each recording (the start is the identity,
-                // as for a file without a tracker)
-                let start = match &t.pose {
-                    Some(p) => pose(p, "sensors.tracker.pose")?,
-                    None => InstrumentPose::from_euler_xyz(nalgebra::Vector3::zeros(), [0.0; 3]),
-                };
-                let warmup = tracker_warmup(t)?;
-                let beam = match &raw.environment {
-                    Some(env) => env
-                        .air
-                        .beam_temperature_offset
-                        .as_ref()
-                        .map(|q| q.to_si("environment.air.beam_temperature_offset", "K"))
-                        .transpose()?,
-                    None => None,
-                };
-                let refraction = if t.station.is_some() || beam.is_some() {
-                    let st = tracker_station(t)?;
-                    Some(RefractionOffsets {
-                        temperature: beam.unwrap_or(0.0) - st.temperature_bias,
-                        pressure: -st.pressure_bias,
-                        humidity: -st.humidity_bias,
-                    })
-                } else {
-                    None
-                };
-                (
-                    tracker_term_model(&start, warmup.as_ref(), refraction)?,
-                    true,
-                )
-            }
-            None => (
-                tracker_term_model(
-                    &InstrumentPose::from_euler_xyz(nalgebra::Vector3::zeros(), [0.0; 3]),
-                    None,
-                    None,
-                )?,
-                false,
-            ),
-        };
-        // the probe's pretravel, when the file states it (as the twin reads it)
-        let mut instrument_terms = instrument_terms;
-        if let Some(pt) = raw
-            .sensors
-            .probe
-            .as_ref()
-            .and_then(|p| p.pretravel.as_ref())
-        {
-            let path = "sensors.probe.pretravel";
-            let term = configure(&TermConfig {
-                id: "probe_pretravel".into(),
-                options: pt.options.clone(),
-                params: pt.params.clone(),
-                use_defaults: false,
-            })
-            .map_err(|e| CellError::term(path, e))?;
-            instrument_terms
-                .push(term)
-                .map_err(|e| CellError::term(path, e))?;
-        }
+        let InstrumentTerms {
+            terms: instrument_terms,
+            declares_tracker,
+        } = instrument_terms(&raw)?;
         let model = ForwardModel::new(&machine, &machine_terms, &instrument_terms)
             .map_err(|e| CellError::term("terms", e))?;
         let mut setup = ParameterSetup::new(&model, &raw.estimation)
             .map_err(|e| CellError::term("estimation", e))?;
-        if !raw.estimation.contains_key("refraction") {
-            if let Some(k) = model.instrument_param_start(TermId::Refraction) {
-                setup.free[k..k + 2].iter_mut().for_each(|f| *f = false);
-            }
-        }
+        default_fixed(&model, &raw.estimation, &mut setup);
         let out = CellModel {
             file: file.to_string(),
             base_dir: base_dir.to_path_buf(),
@@ -398,6 +336,43 @@ impl CellModel {
                 }
             }
         }
+        drop(fm);
+        out.setup = setup;
+        Ok(out)
+    }
+
+    /// The model for points registered into the machine frame already (the estimator node's
+    /// measured points): the machine terms as declared, the instrument terms of
+    /// [`registered_point_instruments`] (the identity pose, fixed: the file's other instrument
+    /// terms act on the instruments' raw readings), and the file's `estimation` settings of the
+    /// machine terms (those of its instrument terms set aside with them).
+    pub fn for_registered_points(&self) -> Result<CellModel, CellError> {
+        let labels: Vec<String> = self
+            .machine_terms
+            .terms
+            .iter()
+            .map(|t| t.term.label())
+            .collect();
+        let estimation: BTreeMap<_, _> = self
+            .raw
+            .estimation
+            .iter()
+            .filter(|(label, _)| labels.contains(label))
+            .map(|(k, v)| (k.clone(), v.clone()))
+            .collect();
+        let mut out = CellModel {
+            instrument_terms: registered_point_instruments()?,
+            ..self.clone()
+        };
+        let fm = out.forward_model()?;
+        let mut setup = ParameterSetup::new(&fm, &estimation)
+            .map_err(|e| in_file(&self.file, CellError::term("estimation", e)))?;
+        let pose = fm
+            .instrument_param_start(TermId::TrackerPose)
+            .expect("the rule's identity pose");
+        setup.free[pose..pose + 6]
+            .iter_mut()
+            .for_each(|f| *f = false);
         drop(fm);
         out.setup = setup;
         Ok(out)

@@ -1,9 +1,10 @@
 //! The cell description file as written (YAML, serde, every section `deny_unknown_fields`).
 //! Values are [`Quantity`]s (number in the documented SI unit, or text with a unit). The
-//! validated, SI form is [`crate::cell::Cell`]; see `examples/cells/*.yaml` for commented files.
+//! validated forms are [`crate::CellModel`] (the model) and crates/twin's `Cell` (a cell to
+//! simulate); see crates/twin `examples/cells/*.yaml` for commented files.
 //!
 //! A **stationing program** (a serial arm measured by a levelled instrument from several setups,
-//! [`crate::stationing`]; `examples/cells/mobile_manipulator.yaml`) adds these keys, each
+//! crates/twin `stationing`; `examples/cells/mobile_manipulator.yaml`) adds these keys, each
 //! refused in a cell without `program.stationing`:
 //! * `program.stationing: {levels, configurations: [{name, joints}], spread, fit_points,
 //!   check_points, groups_per_setup, min_tool_height, seed}` ([`StationingSection`]) — instead
@@ -58,9 +59,9 @@ pub struct CellFile {
     #[serde(default)]
     pub fit: Option<serde_yaml::Value>,
     /// Test-only, non-physical structures (a drift cycling in time, a local bump in the
-    /// workspace) for the concealed-effect suite: see [`crate::disturbance`].
+    /// workspace) for the concealed-effect suite: see crates/twin `disturbance`.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub disturbances: Option<crate::disturbance::DisturbanceSection>,
+    pub disturbances: Option<DisturbanceSection>,
 }
 
 /// Machine families, all simulated: `cartesian` (3 axes in a stacking order), `delta` (linear
@@ -661,4 +662,41 @@ pub struct GridAxis {
     pub from: Quantity,
     pub to: Quantity,
     pub count: u32,
+}
+
+// `disturbances:` — test-only, non-physical structures (crates/twin `disturbance`).
+
+/// The `disturbances` section of a cell file.
+#[derive(Debug, Clone, Default, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DisturbanceSection {
+    #[serde(default)]
+    pub time_cycles: Vec<TimeCycleSection>,
+    #[serde(default)]
+    pub workspace_bumps: Vec<WorkspaceBumpSection>,
+}
+
+/// A drift that cycles in time: `amplitude·sin(2π t/period + phase)`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimeCycleSection {
+    /// Peak displacement vector (m).
+    pub amplitude: [Quantity; 3],
+    /// Period (s).
+    pub period: Quantity,
+    /// Phase at t = 0 (rad; default 0).
+    #[serde(default)]
+    pub phase: Option<Quantity>,
+}
+
+/// A local bump over the workspace: `amplitude·exp(−|q − centre|²/(2·width²))`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct WorkspaceBumpSection {
+    /// Peak displacement vector at the centre (m).
+    pub amplitude: [Quantity; 3],
+    /// Centre in axis coordinates (commanded x, y, z; m).
+    pub centre: [Quantity; 3],
+    /// Gaussian width σ (m).
+    pub width: Quantity,
 }

@@ -1,11 +1,13 @@
-//! Errors of the twin. Every variant names where in the cell file the problem is (a dotted
-//! path such as `sensors.tracker.range_noise.constant` or `terms[2]`) and, where there is a
-//! closed set, the allowed values.
+//! Errors of a cell file, read as a model (this crate) or as a cell to simulate (crates/twin).
+//! Every variant names where in the cell file the problem is (a dotted path such as
+//! `sensors.tracker.range_noise.constant` or `terms[2]`) and, where there is a closed set, the
+//! allowed values.
 
 use metrocell_physics::PhysicsError;
 use thiserror::Error;
 
-/// Error loading or validating a cell description, or starting a simulation.
+/// Error loading or validating a cell description, or starting a simulation (the twin's
+/// `Simulation` variant).
 #[derive(Debug, Error)]
 pub enum CellError {
     #[error("cannot read cell file `{file}`: {reason}")]
@@ -60,13 +62,13 @@ pub enum CellError {
 }
 
 impl CellError {
-    pub(crate) fn invalid(path: impl Into<String>, reason: impl Into<String>) -> Self {
+    pub fn invalid(path: impl Into<String>, reason: impl Into<String>) -> Self {
         CellError::Invalid {
             path: path.into(),
             reason: reason.into(),
         }
     }
-    pub(crate) fn term(path: impl Into<String>, source: PhysicsError) -> Self {
+    pub fn term(path: impl Into<String>, source: PhysicsError) -> Self {
         CellError::Term {
             path: path.into(),
             source: Box::new(source),

@@ -133,3 +133,11 @@ mod tests {
         );
     }
 }
+
+/// An optional quantity in `unit`, 0 when absent.
+pub fn si_or_zero(q: &Option<Quantity>, path: &str, unit: &str) -> Result<f64, CellError> {
+    q.as_ref()
+        .map(|q| q.to_si(path, unit))
+        .transpose()
+        .map(|v| v.unwrap_or(0.0))
+}

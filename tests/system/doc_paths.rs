@@ -87,7 +87,7 @@ fn citations(line: &str) -> Vec<String> {
         {
             continue;
         }
-        let ext = word.rsplit_once('.').map(|(stem, ext)| (stem, ext));
+        let ext = word.rsplit_once('.');
         if let Some((stem, ext)) = ext {
             if EXTENSIONS.contains(&ext) && !stem.ends_with('/') {
                 out.push(word);

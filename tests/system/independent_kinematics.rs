@@ -228,7 +228,9 @@ fn ur5_against_its_published_dh() {
     assert!(twin_count >= 100, "only {twin_count} tracker samples");
     let mut r = rand_chacha::ChaCha8Rng::seed_from_u64(5);
     for _ in 0..200 {
-        let q: Vec<f64> = (0..6).map(|_| r.random_range(-6.28..6.28)).collect();
+        let q: Vec<f64> = (0..6)
+            .map(|_| r.random_range(-std::f64::consts::TAU..std::f64::consts::TAU))
+            .collect();
         let t = arm.chain.tool_pose(&q).unwrap();
         cases.push((q, t.translation.vector));
     }

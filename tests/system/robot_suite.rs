@@ -159,7 +159,7 @@ fn assert_on_target(json: &Value, truth: &Value, ground: &str) {
     );
 }
 
-fn parameter<'a>(json: &'a Value, name: &str) -> (f64, f64) {
+fn parameter(json: &Value, name: &str) -> (f64, f64) {
     let p = json["parameters"]
         .as_array()
         .unwrap()

@@ -52,7 +52,7 @@ pub fn run(args: EchoArgs) -> anyhow::Result<i32> {
                 if args.json {
                     println!("{}", rosmsg::to_json(&value));
                 } else {
-                    print!("{}---\n", rosmsg::to_yaml_string(&value));
+                    println!("{}---", rosmsg::to_yaml_string(&value));
                 }
                 printed += 1;
             }

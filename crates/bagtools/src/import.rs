@@ -444,7 +444,7 @@ pub fn import_csv(
     let mut report = ImportReport::default();
     let mut record = csv::StringRecord::new();
     loop {
-        let line = rdr.position().line() + 0;
+        let line = rdr.position().line();
         match rdr.read_record(&mut record) {
             Ok(false) => break,
             Ok(true) => {}

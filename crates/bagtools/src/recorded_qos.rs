@@ -30,10 +30,12 @@ fn rmw_duration(d: rustdds::Duration) -> RmwDuration {
 
 /// The offered QoS a discovered publisher announces, as rosbag2 stores it.
 pub fn offered_qos_from_dds(p: &PublicationBuiltinTopicData) -> OfferedQos {
-    let mut q = OfferedQos::default();
-    q.reliability = match p.reliability {
-        Some(Reliability::BestEffort) => RELIABILITY_BEST_EFFORT,
-        _ => RELIABILITY_RELIABLE,
+    let mut q = OfferedQos {
+        reliability: match p.reliability {
+            Some(Reliability::BestEffort) => RELIABILITY_BEST_EFFORT,
+            _ => RELIABILITY_RELIABLE,
+        },
+        ..OfferedQos::default()
     };
     q.durability = match p.durability {
         // transient and persistent also deliver history to late joiners; rmw has no such kinds.

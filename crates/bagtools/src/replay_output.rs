@@ -12,7 +12,8 @@ use crate::bag_sink::BagSink;
 use crate::error::{Result, ToolError};
 
 pub enum ReplayOutput {
-    Bag(BagSink),
+    // boxed: the sink holds the writer's buffers, the JSON arm a pointer
+    Bag(Box<BagSink>),
     JsonLines(Box<dyn Write>),
 }
 
@@ -20,7 +21,9 @@ impl ReplayOutput {
     /// A bag at `output`, or JSON lines on stdout for `None`.
     pub fn open(output: Option<&Path>) -> Result<Self> {
         Ok(match output {
-            Some(dir) => ReplayOutput::Bag(BagSink::create(dir, WriterOptions::default())?),
+            Some(dir) => {
+                ReplayOutput::Bag(Box::new(BagSink::create(dir, WriterOptions::default())?))
+            }
             None => ReplayOutput::JsonLines(Box::new(std::io::stdout().lock())),
         })
     }

@@ -15,6 +15,7 @@
 //! | [`intrinsics_uncertainty`] | what the calibration's covariance adds to a pose's |
 //! | [`camera_info`] | ROS camera_info YAML load/save |
 //! | [`scale`] | object-plane mm/px scale from a known length (seed 002 eq. 4) |
+//! | [`resolution`] | a calibration used at another resolution of the same field of view |
 //! | [`v4l2`] | V4L2 streaming capture (raw ioctls, mmap) and GREY/YUYV → mono8/rgb8 |
 //!
 //! Conventions, stated once:
@@ -39,6 +40,7 @@ pub mod intrinsics_uncertainty;
 pub mod model;
 pub mod pose;
 pub mod pose_estimation;
+pub mod resolution;
 pub mod scale;
 pub(crate) mod solver_bridge;
 pub mod undistort;

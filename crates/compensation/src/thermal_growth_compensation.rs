@@ -271,16 +271,18 @@ mod tests {
         }
         let d = g.drift(&Vector3::zeros()).unwrap();
         let cfg = catalog_term(&column(Some(1200.0)), 4e-6, Some(1200.0)).unwrap();
-        let mut s = metrocell_physics::Signals::default();
-        s.timeline = Some(std::sync::Arc::new(
-            TemperatureTimeline::from_histories([(
-                "column",
-                &TemperatureHistory {
-                    samples: history.clone(),
-                },
-            )])
-            .unwrap(),
-        ));
+        let s = metrocell_physics::Signals {
+            timeline: Some(std::sync::Arc::new(
+                TemperatureTimeline::from_histories([(
+                    "column",
+                    &TemperatureHistory {
+                        samples: history.clone(),
+                    },
+                )])
+                .unwrap(),
+            )),
+            ..Default::default()
+        };
         let whole = cfg.term.predict(&cfg.params, &s).unwrap().value;
         assert!(
             (d.displacement.z - whole[2]).abs() < 1e-15,

@@ -109,8 +109,8 @@ impl<'m, 'a> ColumnContext<'m, 'a> {
                 Some(at) => ctx.jacobian_columns(model, &ctx.x.clone(), at, 3)?,
                 None => {
                     let term = tool_offset_term();
-                    let cols = ctx.augmented_columns(&term, Placement::Machine)?;
-                    cols
+
+                    ctx.augmented_columns(&term, Placement::Machine)?
                 }
             };
             ctx.sensitivity = Some(

@@ -62,9 +62,7 @@ fn too_few_points_say_how_many_are_needed() {
         },
     );
     data.records.records.truncate(5);
-    let e = try_run(&text, &data.records, &DiagnoseOptions::default())
-        .err()
-        .expect("an error");
+    let e = try_run(&text, &data.records, &DiagnoseOptions::default()).expect_err("an error");
     let msg = e.to_string();
     assert!(matches!(e, DiagnoseError::TooFew(_)), "{msg}");
     assert!(
@@ -113,9 +111,7 @@ fn a_model_of_another_machine_is_refused_with_the_reason() {
         "/../twin/examples/cells/five_axis_table.yaml"
     ))
     .unwrap();
-    let e = try_run(&five, &data.records, &DiagnoseOptions::default())
-        .err()
-        .expect("refused");
+    let e = try_run(&five, &data.records, &DiagnoseOptions::default()).expect_err("refused");
     let msg = e.to_string();
     assert!(
         msg.contains("3 joint values") && msg.contains("x y z b c"),

@@ -53,8 +53,10 @@ fn records(csv: &str) -> RecordSet {
         let v = |k: usize| f[k].parse::<f64>().unwrap();
         let nominal = Vector3::new(v(xn), v(yn), v(zn)) * 1e-3;
         let sigma = v(u95) * 1e-3 / 2.0;
-        let mut s = Signals::default();
-        s.axis_position = [Some(nominal.x), Some(nominal.y), Some(nominal.z)];
+        let mut s = Signals {
+            axis_position: [Some(nominal.x), Some(nominal.y), Some(nominal.z)],
+            ..Signals::default()
+        };
         s.approach_direction = [Some(v(dx)), Some(v(dy)), Some(v(dz))];
         s.temperatures = BTreeMap::from([("bed".to_string(), v(bed)), ("air".to_string(), v(air))]);
         out.push(MeasurementRecord {

@@ -33,6 +33,11 @@
 //!   component's share.
 //! * [`improvement`] — before/after error statistics and percent improvement as seed 000 reports
 //!   them (its Table 3).
+//! * [`general_tolerance`] — ISO 2768-1 general tolerances for linear dimensions (the class a
+//!   compensation reaches, seed 000).
+//! * [`sequential_anova`] — ANOVA with sequential (type I) sums of squares, for a designed
+//!   experiment's table (seed 000's Tables 6 and 7).
+//! * [`method_comparison`] — a method against a reference on the same parts (seed 002's Table 2).
 //! * [`design_of_experiments`] — D-optimal choice of measurement rows from candidates (Fedorov
 //!   exchange, the family DETMAX belongs to; seed 000 §4).
 //!
@@ -44,8 +49,10 @@ pub mod design_of_experiments;
 pub mod error_functions;
 pub mod fit;
 pub mod fit_summary;
+pub mod general_tolerance;
 pub mod improvement;
 pub mod instrument_readings;
+pub mod method_comparison;
 mod record_chunks;
 pub mod record_stream;
 pub mod recordings;
@@ -53,6 +60,7 @@ pub mod records;
 pub mod recursive;
 pub mod reference_nests;
 pub mod residuals;
+pub mod sequential_anova;
 pub mod signal_topics;
 pub mod uncertainty_budget;
 pub mod volumetric_monte_carlo;

@@ -14,6 +14,7 @@
 //!   (their least-squares slope is included: the squareness file gives that slope's share);
 //! * `reversal` — error approaching in − minus approaching in + along the axis (what backlash
 //!   compensation adds on a reversal).
+//!
 //! `squareness.csv`: `pair,squareness_urad` for xy, xz, yz, from the least-squares lines of the
 //! straightness columns: s_ab = −(slope of a's error along b as b moves + slope of b's error
 //! along a as a moves), the catalog's sign (`squareness` term: d = (−y·s, 0, 0) for xy), so a

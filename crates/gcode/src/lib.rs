@@ -7,7 +7,8 @@
 //!
 //! * [`error_field::ErrorField`] — what the compensator needs of a model: e at a commanded
 //!   position and approach direction, and the region where the model was calibrated.
-//!   [`planar_quadratic::PlanarQuadraticField`] is seed 000's eq. 7 (nine coefficients A–I).
+//!   [`planar_quadratic::PlanarQuadraticField`] is seed 000's eq. 7 (nine coefficients A–I);
+//!   [`planar_field_fit`] identifies them from measured holes, with their covariance.
 //! * [`model_field::ModelErrorField`] — a fitted model file's machine terms (the shared forward
 //!   model) as an error field, at stated conditions (temperatures, load).
 //! * [`controller_table`] — per-axis pitch/straightness/reversal tables and squareness sampled
@@ -34,6 +35,7 @@ pub mod error_field;
 pub mod inverse;
 pub mod model_field;
 pub mod number_format;
+pub mod planar_field_fit;
 pub mod planar_quadratic;
 pub mod program;
 

@@ -324,6 +324,8 @@ impl State<'_> {
         let mut dwell = false;
         let mut unmodelled = Vec::new();
         for g in block.g_codes() {
+            // G numbers are f64 (G38.2 exists); float literal patterns are not allowed, so guards
+            #[allow(clippy::redundant_guards)]
             match g {
                 x if x == 0.0 => explicit_motion = Some(Motion::Rapid),
                 x if x == 1.0 => explicit_motion = Some(Motion::Linear),

@@ -13,6 +13,9 @@
 use crate::error::{check_finite, KinematicsError};
 use nalgebra::{DMatrix, DVector, Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
 
+/// A joint's frame before its motion and after it (see [`SerialChain::joint_frames`]).
+pub type JointFrames = (Isometry3<f64>, Isometry3<f64>);
+
 /// What a joint does with its variable.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum JointKind {
@@ -252,10 +255,7 @@ impl SerialChain {
 
     /// The frame of every joint before its motion (parent link × `pre`: its axis and origin in the
     /// base frame) and after it (the child link), at `q`.
-    pub fn joint_frames(
-        &self,
-        q: &[f64],
-    ) -> Result<Vec<(Isometry3<f64>, Isometry3<f64>)>, KinematicsError> {
+    pub fn joint_frames(&self, q: &[f64]) -> Result<Vec<JointFrames>, KinematicsError> {
         self.check_q(q)?;
         let (values, _) = self.joint_values(q);
         let mut t = self.base;

@@ -127,3 +127,22 @@ fn t14_t15_iterating_eq13_on_a_full_delta_converges() {
         }
     }
 }
+
+/// T13, a regression guard against the paper's typo: eq. 12 as printed carries an extra
+/// "− h*", so with the firmware's own rod (D = D0) it gives L = L* − h* = −137.28 mm for a
+/// 50 mm move. The implementation is eq. 13, which gives L = L* there.
+#[test]
+fn t13_eq12_as_printed_is_not_what_is_implemented() {
+    let (d, l_star) = (D0, 50.0 * MM);
+    let h_star = centre_carriage_height(D0, R).unwrap();
+    let dh = carriage_rise(D0, R, l_star).unwrap();
+    let inner = (d * d - R * R).sqrt() + dh;
+    let eq12_as_printed = R - (d * d - inner * inner).sqrt() - h_star;
+    assert_eq!(round_to(eq12_as_printed / MM, 2), -137.28);
+    let implemented = single_arm_move(D0, R, l_star, d).unwrap();
+    assert!(
+        (implemented - l_star).abs() < 1e-15,
+        "eq. 13 at D = D0: {implemented}"
+    );
+    assert!((implemented - eq12_as_printed).abs() > 0.1);
+}

@@ -158,7 +158,7 @@ fn main() {
     };
     // warm up once (counting allocations), then take the best of three
     let (_, alloc_new) = allocations_of(|| run_new(&mut work, &mut jac));
-    let (_, alloc_old) = allocations_of(&mut run_old);
+    let (_, alloc_old) = allocations_of(run_old);
     let best = |f: &mut dyn FnMut() -> (f64, f64)| {
         (0..3)
             .map(|_| f())

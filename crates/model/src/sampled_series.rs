@@ -119,7 +119,7 @@ impl<T: Clone> StateSeries<T> {
 
     pub fn at(&self, t_ns: i64) -> Option<T> {
         let k = self.entries.partition_point(|(ts, _)| *ts <= t_ns);
-        let i = k.checked_sub(1).unwrap_or(0);
+        let i = k.saturating_sub(1);
         self.entries.get(i).map(|(_, v)| v.clone())
     }
 }

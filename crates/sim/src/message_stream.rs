@@ -375,16 +375,17 @@ impl Slot {
     }
 }
 
+/// One frame to render: the request, its sequence number, its stamp, and where the image goes.
+type RenderJob = (
+    CameraFrameRequest,
+    u64,
+    Time,
+    mpsc::SyncSender<Option<Image>>,
+);
+
 /// Worker threads rendering frames for one stream.
 struct RenderPool {
-    jobs: Option<
-        mpsc::Sender<(
-            CameraFrameRequest,
-            u64,
-            Time,
-            mpsc::SyncSender<Option<Image>>,
-        )>,
-    >,
+    jobs: Option<mpsc::Sender<RenderJob>>,
     workers: Vec<JoinHandle<()>>,
     /// Frames handed out and not yet taken from the queue.
     in_flight: usize,
@@ -392,12 +393,7 @@ struct RenderPool {
 
 impl RenderPool {
     fn new(converter: &MessageConverter, threads: usize) -> RenderPool {
-        let (tx, rx) = mpsc::channel::<(
-            CameraFrameRequest,
-            u64,
-            Time,
-            mpsc::SyncSender<Option<Image>>,
-        )>();
+        let (tx, rx) = mpsc::channel::<RenderJob>();
         let rx = Arc::new(Mutex::new(rx));
         let converter = Arc::new(converter.clone());
         let workers = (0..threads)

@@ -85,8 +85,7 @@ fn a_missing_cell_file_fails_with_its_name() {
     ])
     .unwrap();
     let e = metrocell_simulation::cli::run_sim(&c.sim)
-        .err()
-        .expect("a missing cell file is an error")
+        .expect_err("a missing cell file is an error")
         .to_string();
     assert!(
         e.contains("/nonexistent/cell.yaml"),

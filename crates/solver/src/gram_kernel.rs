@@ -27,7 +27,7 @@ const BLOCK_ROWS: usize = 64;
 const TI: usize = 4;
 const TJ: usize = 8;
 const _: () = assert!(
-    TJ % TI == 0,
+    TJ.is_multiple_of(TI),
     "a row padded to whole TJ tiles holds whole TI tiles"
 );
 

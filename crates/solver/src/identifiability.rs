@@ -104,7 +104,7 @@ impl Identifiability {
         let n = normal.nrows();
         check_len("parameter labels", n, labels.len())?;
         check_finite("normal matrix", normal.as_slice())?;
-        if !(rcond >= GRAM_RCOND && rcond < 1.0) {
+        if !(GRAM_RCOND..1.0).contains(&rcond) {
             return Err(SolverError::Invalid { what: "rcond".into(), reason: format!("the normal matrix resolves singular values down to ~1e-7 of the largest: rcond must lie in [{GRAM_RCOND}, 1), got {rcond} (use Identifiability::analyze on the Jacobian)") });
         }
         if n == 0 || m == 0 {
@@ -382,6 +382,7 @@ mod tests {
     use super::*;
 
     #[test]
+    #[allow(clippy::approx_constant)] // a number to round, not 1/√2
     fn significant_digits() {
         assert_eq!(significant(0.7071, 2), "0.71");
         assert_eq!(significant(1234.0, 2), "1200");

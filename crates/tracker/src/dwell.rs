@@ -177,8 +177,8 @@ mod tests {
             .push(reading(1400, "p1", 2.0))
             .expect("a long gap starts a new visit");
         assert_eq!(d.n, 1);
-        assert_eq!(g.close_if_stale(1500_000_000), None);
-        assert_eq!(g.close_if_stale(2000_000_000).map(|d| d.n), Some(1));
+        assert_eq!(g.close_if_stale(1_500_000_000), None);
+        assert_eq!(g.close_if_stale(2_000_000_000).map(|d| d.n), Some(1));
         assert_eq!(g.flush(), None);
     }
 

@@ -168,6 +168,7 @@ mod tests {
     use super::*;
 
     #[test]
+    #[allow(clippy::approx_constant)] // 0.5236 is a reading on the wire, not a rounded π/6
     fn full_and_short_lines_parse() {
         let r = parse_line("1732500000.1,nest_1,2.000013,0.5236,0.1047,20.1,101325,0.45\r")
             .unwrap()

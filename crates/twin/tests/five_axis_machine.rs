@@ -209,7 +209,7 @@ fn camera_on_the_spindle_sees_the_machine_error_in_its_own_axes_at_any_b_and_c()
     let MachineKinematics::FiveAxis(m) = &cell.machine.kinematics else {
         panic!("not five-axis")
     };
-    let g = m.geometry.clone();
+    let g = m.geometry;
     let mount = cell
         .camera
         .as_ref()

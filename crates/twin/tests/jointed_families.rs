@@ -246,7 +246,7 @@ fn serial_arm_bad_cells() {
 fn camera_intrinsics_are_read_and_checked() {
     let f = "five_axis_table.yaml";
     let cell = Cell::from_path(common::cell_path(f)).unwrap();
-    let lens = cell.camera.as_ref().unwrap().intrinsics.clone().unwrap();
+    let lens = cell.camera.as_ref().unwrap().intrinsics.unwrap();
     assert_eq!(
         (lens.width, lens.height, lens.fx, lens.cy),
         (1280, 1024, 1600.0, 511.5)

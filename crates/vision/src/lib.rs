@@ -4,6 +4,7 @@
 //! centred at (x = i, y = j); the centre of the top-left pixel is (0, 0), x to the right, y down.
 
 pub mod aruco;
+pub mod bar_lengths;
 pub mod camera;
 pub mod checkerboard;
 pub mod contour;

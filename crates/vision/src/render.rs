@@ -575,7 +575,7 @@ mod tests {
         }];
         for (k, x) in [0.005, 0.035].iter().enumerate() {
             items.push(TargetItem::Marker {
-                dictionary: dictionary.clone(),
+                dictionary,
                 id: 7 + k,
                 top_left: [*x, -0.04],
                 side: 0.025,

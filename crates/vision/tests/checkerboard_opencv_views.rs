@@ -6,6 +6,7 @@
 //!   was singular — "corner … did not converge";
 //! * two strongly foreshortened boards: the lattice grew from a diagonal neighbour, in sheared
 //!   coordinates (a 9×6 board spanning 14×6), and was not taken for a board.
+//!
 //! All three must now be found with every corner within 0.1 px of OpenCV's projection of the
 //! board; and when a board is not found, the reason says what to check.
 
@@ -19,7 +20,9 @@ use serde_json::json;
 
 /// (name, rvec, tvec, blur px, noise grey levels, noise seed): three of 40 random views drawn
 /// for the issue, where metrocell failed and OpenCV did not.
-const VIEWS: [(&str, [f64; 3], [f64; 3], f64, f64, u64); 4] = [
+type View = (&'static str, [f64; 3], [f64; 3], f64, f64, u64);
+
+const VIEWS: [View; 4] = [
     (
         "sharp_axis_aligned",
         [

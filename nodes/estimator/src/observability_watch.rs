@@ -57,7 +57,7 @@ impl ObservabilityWatch {
             || held != self.held
             || at_bound != self.at_bound
             || accepted.is_power_of_two()
-            || accepted % 256 == 0;
+            || accepted.is_multiple_of(256);
         if !due {
             return None;
         }

@@ -151,9 +151,10 @@ impl FiducialProcessor {
 
 /// The camera and covariance of `calibration_file` ('' = none); errors name the file and say
 /// how to write one that has it.
-fn calibration(
-    path: &str,
-) -> Result<Option<(String, CameraModel, DMatrix<f64>)>, Box<dyn std::error::Error>> {
+/// A calibration file's camera: its name, model and the model's covariance.
+type LoadedCalibration = (String, CameraModel, DMatrix<f64>);
+
+fn calibration(path: &str) -> Result<Option<LoadedCalibration>, Box<dyn std::error::Error>> {
     if path.trim().is_empty() {
         return Ok(None);
     }

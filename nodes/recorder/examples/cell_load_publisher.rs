@@ -104,7 +104,7 @@ fn main() {
         if tracker.publish(&cdr(&m)).is_ok() {
             counts[0] += 1;
         }
-        if tick % 10 == 0 {
+        if tick.is_multiple_of(10) {
             let j = JointState {
                 header: header("robot"),
                 name: (1..=6).map(|i| format!("joint_{i}")).collect(),
@@ -122,7 +122,7 @@ fn main() {
                 counts[2] += 1;
             }
         }
-        if tick % 1000 == 0 {
+        if tick.is_multiple_of(1000) {
             let tm = Temperature {
                 header: header("x_left"),
                 temperature: 20.0,

@@ -403,7 +403,7 @@ impl ThermalState {
         Result<ErrorModel, ThermalError>,
         Result<MeasuredPoint, ThermalError>,
     )> {
-        let due = self.next_model_ns.map_or(true, |t| now_ns >= t);
+        let due = self.next_model_ns.is_none_or(|t| now_ns >= t);
         if !due {
             return None;
         }
@@ -766,7 +766,7 @@ mod tests {
         let alpha_true = 16e-6;
         let (mut used_at, mut events) = (None, 0);
         for k in 0..60 {
-            let t_ns = k as i64 * 120 * S;
+            let t_ns = k * 120 * S;
             let warm = 19.0 + 4.0 * k as f64 / 59.0;
             for (n, v) in [("x_left", warm), ("x_right", warm + 0.5), ("column", 20.0)] {
                 st.temperature(n, &temp(v, t_ns), t_ns).unwrap();

@@ -174,7 +174,7 @@ fn replay_from_bag_equals_live_run_over_dds() {
     let deadline = Instant::now() + Duration::from_secs(30);
     let mut play_done_at: Option<Instant> = None;
     while Instant::now() < deadline
-        && play_done_at.map_or(true, |t| t.elapsed() < Duration::from_secs(1))
+        && play_done_at.is_none_or(|t| t.elapsed() < Duration::from_secs(1))
     {
         while let Ok(Some((p, _))) = points_sub.take() {
             live_points.insert(p.point_id.clone(), p);

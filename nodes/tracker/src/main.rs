@@ -9,6 +9,7 @@
 //!     published at once on `tracker/measurements` (azimuth = −Hz, elevation = 100 gon − V);
 //!   * `--bag IN`: a recorded bag, or a CSV export (`IN` ending in `.csv`) imported through the
 //!     `bag import` layout and the mapping file in parameter `csv_mapping`.
+//!
 //! Each reading is re-corrected for the air (Edlén; the reading's station air, the
 //! `weather/{temperature,pressure,humidity}` topics, or configured values), given its covariance (σ angle; σ range
 //! a + b·range), grouped into dwells (consecutive readings of one target), averaged with its

@@ -206,7 +206,6 @@ pub fn run(node: OfflineNode, args: &ReplayArgs) -> Result<(), Box<dyn std::erro
     if stopped.is_none() {
         write(state.finish(), last_log_time)?;
     }
-    drop(write);
     output.finish()?;
     if csv {
         let _ = std::fs::remove_dir_all(&scratch);

@@ -603,7 +603,12 @@ mod tests {
             header: header(time),
             target_id: format!("p{k}"),
             point: Point::default(),
-            range: range + if i % 2 == 0 { scatter } else { -scatter },
+            range: range
+                + if i.is_multiple_of(2) {
+                    scatter
+                } else {
+                    -scatter
+                },
             azimuth,
             elevation,
             covariance: [0.0; 9],

@@ -138,7 +138,7 @@ pub fn twin_records(cell_text: &str, hours: f64, seed: u64, take: Take) -> TwinR
                     continue;
                 }
                 count += 1;
-                if count % take.every != 0 {
+                if !count.is_multiple_of(take.every) {
                     continue;
                 }
                 let mut sig = Signals {

@@ -215,6 +215,17 @@ fn dir_bytes(d: &Path) -> u64 {
         .unwrap_or(0)
 }
 
+/// The cell-like messages of a benchmark: channel index, log time (ns), CDR bytes.
+type Messages = Vec<(usize, u64, Vec<u8>)>;
+
+/// What both parts write: the topics, their QoS, the image frames and the start time (ns).
+struct Load {
+    defs: Vec<(&'static str, &'static str, String)>,
+    qos: String,
+    frames: Vec<Vec<u8>>,
+    t0: u64,
+}
+
 fn main() {
     let args: Vec<String> = std::env::args().collect();
     let arg = |name: &str, default: &str| -> String {
@@ -236,43 +247,104 @@ fn main() {
     ));
     let _ = std::fs::remove_dir_all(&root);
     std::fs::create_dir_all(&root).unwrap();
-    let t0 = 1_700_000_000_000_000_000u64;
-    let frames: Vec<Vec<u8>> = (0..8).map(frame).collect();
-    let defs = defs();
-    let qos = qos_profiles_yaml(&[QosProfile::sensor_data()]);
-
-    // ---- Part A: throughput against python mcap and dd -----------------------------------
+    let load = Load {
+        t0: 1_700_000_000_000_000_000u64,
+        frames: (0..8).map(frame).collect(),
+        defs: defs(),
+        qos: qos_profiles_yaml(&[QosProfile::sensor_data()]),
+    };
     let mut rng = Rng(0x5EED);
-    let msgs: Vec<(usize, u64, Vec<u8>)> = (0..seconds)
-        .flat_map(|s| second_of_load(s, t0, &frames, &mut rng))
+    part_a_throughput(&root, &load, seconds, &mut rng);
+    part_b_memory(&root, &load, load_seconds, &mut rng);
+    let _ = std::fs::remove_dir_all(&root);
+}
+
+/// Part A: throughput of BagWriter against python mcap and dd on `seconds` of cell load.
+fn part_a_throughput(root: &Path, load: &Load, seconds: u64, rng: &mut Rng) {
+    let msgs: Messages = (0..seconds)
+        .flat_map(|s| second_of_load(s, load.t0, &load.frames, rng))
         .collect();
     let bytes_in: u64 = msgs.iter().map(|m| m.2.len() as u64).sum();
     let n = msgs.len() as u64;
     let bin = root.join("messages.bin");
-    {
-        let mut f = std::io::BufWriter::new(std::fs::File::create(&bin).unwrap());
-        f.write_all(&(defs.len() as u32).to_le_bytes()).unwrap();
-        for (name, ty, def) in &defs {
-            f.write_all(&(name.len() as u16).to_le_bytes()).unwrap();
-            f.write_all(name.as_bytes()).unwrap();
-            f.write_all(&(ty.len() as u16).to_le_bytes()).unwrap();
-            f.write_all(ty.as_bytes()).unwrap();
-            f.write_all(&(def.len() as u32).to_le_bytes()).unwrap();
-            f.write_all(def.as_bytes()).unwrap();
-        }
-        for (ch, t, d) in &msgs {
-            f.write_all(&(*ch as u16).to_le_bytes()).unwrap();
-            f.write_all(&t.to_le_bytes()).unwrap();
-            f.write_all(&(d.len() as u32).to_le_bytes()).unwrap();
-            f.write_all(d).unwrap();
-        }
-    }
+    write_messages_bin(&bin, &load.defs, &msgs);
     println!(
         "Part A: {n} messages, {:.1} MB of CDR ({seconds} s of cell load), dir {}",
         bytes_in as f64 / 1e6,
         root.display()
     );
+    let dd_mbs = dd_ceiling(root, bytes_in);
+    for (label, comp) in [
+        ("none", ChunkCompression::None),
+        ("zstd", ChunkCompression::Zstd),
+        ("lz4", ChunkCompression::Lz4),
+    ] {
+        let dir = root.join(format!("rust_{label}"));
+        // zstd at level 3, the level python-mcap (zstandard's default) uses.
+        let opts = WriterOptions {
+            compression: comp,
+            compression_level: 3,
+            ..Default::default()
+        }; // level: zstd only
+        let rust_s = write_with_bag_writer(&dir, opts, load, &msgs);
+        let rust_file = dir_bytes(&dir);
+        let py_out = root.join(format!("py_{label}.mcap"));
+        let (py_s, py_file) = write_with_python(&bin, &py_out, label);
+        let (rm, pm) = (bytes_in as f64 / 1e6 / rust_s, bytes_in as f64 / 1e6 / py_s);
+        println!(
+            "  {label:4}: BagWriter {rm:8.1} MB/s {:9.0} msg/s (file {:.1} MB) | python mcap {pm:8.1} MB/s {:9.0} msg/s (file {:.1} MB) | BagWriter/python = {:.2}x, BagWriter/dd = {:.2}",
+            n as f64 / rust_s,
+            rust_file as f64 / 1e6,
+            n as f64 / py_s,
+            py_file as f64 / 1e6,
+            rm / pm,
+            rm / dd_mbs
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+        let _ = std::fs::remove_file(&py_out);
+    }
+    {
+        let dir = root.join("rust_zstd1");
+        let opts = WriterOptions {
+            compression: ChunkCompression::Zstd,
+            compression_level: 1,
+            ..Default::default()
+        };
+        let s = write_with_bag_writer(&dir, opts, load, &msgs);
+        println!(
+            "  zstd level 1 (default): BagWriter {:8.1} MB/s {:9.0} msg/s (file {:.1} MB)",
+            bytes_in as f64 / 1e6 / s,
+            n as f64 / s,
+            dir_bytes(&dir) as f64 / 1e6
+        );
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+    let _ = std::fs::remove_file(&bin);
+}
 
+/// The messages and their topics in the binary form tests/py/bench_mcap_writer.py reads.
+fn write_messages_bin(bin: &Path, defs: &[(&str, &str, String)], msgs: &Messages) {
+    let mut f = std::io::BufWriter::new(std::fs::File::create(bin).unwrap());
+    f.write_all(&(defs.len() as u32).to_le_bytes()).unwrap();
+    for (name, ty, def) in defs {
+        f.write_all(&(name.len() as u16).to_le_bytes()).unwrap();
+        f.write_all(name.as_bytes()).unwrap();
+        f.write_all(&(ty.len() as u16).to_le_bytes()).unwrap();
+        f.write_all(ty.as_bytes()).unwrap();
+        f.write_all(&(def.len() as u32).to_le_bytes()).unwrap();
+        f.write_all(def.as_bytes()).unwrap();
+    }
+    for (ch, t, d) in msgs {
+        f.write_all(&(*ch as u16).to_le_bytes()).unwrap();
+        f.write_all(&t.to_le_bytes()).unwrap();
+        f.write_all(&(d.len() as u32).to_le_bytes()).unwrap();
+        f.write_all(d).unwrap();
+    }
+}
+
+/// The disk's ceiling for `bytes_in` bytes (MB/s): the median of three `dd conv=fdatasync`
+/// runs (the virtual disk's speed varies run to run), printed.
+fn dd_ceiling(root: &Path, bytes_in: u64) -> f64 {
     let dd_out = root.join("dd.bin");
     let dd_run = || -> f64 {
         let dd = Command::new("dd")
@@ -294,7 +366,6 @@ fn main() {
         let _ = std::fs::remove_file(&dd_out);
         (bytes_in.div_ceil(1 << 20) * (1 << 20)) as f64 / 1e6 / dd_secs
     };
-    // The virtual disk's speed varies run to run: take the median of three dd runs.
     let mut dds = [dd_run(), dd_run(), dd_run()];
     dds.sort_by(|a, b| a.total_cmp(b));
     let dd_mbs = dds[1];
@@ -302,104 +373,62 @@ fn main() {
         "  dd conv=fdatasync          {dd_mbs:8.1} MB/s (median of {:.1}, {:.1}, {:.1})",
         dds[0], dds[1], dds[2]
     );
+    dd_mbs
+}
 
-    for (label, comp) in [
-        ("none", ChunkCompression::None),
-        ("zstd", ChunkCompression::Zstd),
-        ("lz4", ChunkCompression::Lz4),
-    ] {
-        let dir = root.join(format!("rust_{label}"));
-        let start = Instant::now();
-        // zstd at level 3, the level python-mcap (zstandard's default) uses.
-        let opts = WriterOptions {
-            compression: comp,
-            compression_level: 3,
-            ..Default::default()
-        }; // level: zstd only
-        let mut w = BagWriter::create(&dir, opts).unwrap();
-        for (name, ty, def) in &defs {
-            w.add_topic(name, ty, def, &qos).unwrap();
-        }
-        for (ch, t, d) in &msgs {
-            w.write(defs[*ch].0, *t, *t, d).unwrap();
-        }
-        w.finish().unwrap();
-        let rust_s = start.elapsed().as_secs_f64();
-        let rust_file = dir_bytes(&dir);
-
-        let py_out = root.join(format!("py_{label}.mcap"));
-        let out = Command::new(python())
-            .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/py/bench_mcap_writer.py"))
-            .arg(&bin)
-            .arg(&py_out)
-            .arg(label)
-            .arg((1u64 << 20).to_string())
-            .output()
-            .expect("run python");
-        assert!(
-            out.status.success(),
-            "{}",
-            String::from_utf8_lossy(&out.stderr)
-        );
-        let v = String::from_utf8_lossy(&out.stdout).to_string();
-        let py_s: f64 = v
-            .split("\"seconds\": ")
-            .nth(1)
-            .and_then(|s| s.split(',').next())
-            .and_then(|s| s.parse().ok())
-            .unwrap();
-        let py_file: u64 = v
-            .split("\"file_bytes\": ")
-            .nth(1)
-            .and_then(|s| s.trim_end_matches(['}', '\n']).trim().parse().ok())
-            .unwrap();
-        let (rm, pm) = (bytes_in as f64 / 1e6 / rust_s, bytes_in as f64 / 1e6 / py_s);
-        println!(
-            "  {label:4}: BagWriter {rm:8.1} MB/s {:9.0} msg/s (file {:.1} MB) | python mcap {pm:8.1} MB/s {:9.0} msg/s (file {:.1} MB) | BagWriter/python = {:.2}x, BagWriter/dd = {:.2}",
-            n as f64 / rust_s,
-            rust_file as f64 / 1e6,
-            n as f64 / py_s,
-            py_file as f64 / 1e6,
-            rm / pm,
-            rm / dd_mbs
-        );
-        let _ = std::fs::remove_dir_all(&dir);
-        let _ = std::fs::remove_file(&py_out);
+/// Write `msgs` to a new bag in `dir` with BagWriter; the seconds it took.
+fn write_with_bag_writer(dir: &Path, opts: WriterOptions, load: &Load, msgs: &Messages) -> f64 {
+    let start = Instant::now();
+    let mut w = BagWriter::create(dir, opts).unwrap();
+    for (name, ty, def) in &load.defs {
+        w.add_topic(name, ty, def, &load.qos).unwrap();
     }
-    {
-        let dir = root.join("rust_zstd1");
-        let start = Instant::now();
-        let opts = WriterOptions {
-            compression: ChunkCompression::Zstd,
-            compression_level: 1,
-            ..Default::default()
-        };
-        let mut w = BagWriter::create(&dir, opts).unwrap();
-        for (name, ty, def) in &defs {
-            w.add_topic(name, ty, def, &qos).unwrap();
-        }
-        for (ch, t, d) in &msgs {
-            w.write(defs[*ch].0, *t, *t, d).unwrap();
-        }
-        w.finish().unwrap();
-        let s = start.elapsed().as_secs_f64();
-        println!(
-            "  zstd level 1 (default): BagWriter {:8.1} MB/s {:9.0} msg/s (file {:.1} MB)",
-            bytes_in as f64 / 1e6 / s,
-            n as f64 / s,
-            dir_bytes(&dir) as f64 / 1e6
-        );
-        let _ = std::fs::remove_dir_all(&dir);
+    for (ch, t, d) in msgs {
+        w.write(load.defs[*ch].0, *t, *t, d).unwrap();
     }
-    let _ = std::fs::remove_file(&bin);
-    drop(msgs);
+    w.finish().unwrap();
+    start.elapsed().as_secs_f64()
+}
 
-    // ---- Part B: memory under a sustained cell load --------------------------------------
+/// Write the messages of `bin` with Python's `mcap` writer (compression `label`, 1 MiB chunks);
+/// the seconds it took and the file's size.
+fn write_with_python(bin: &Path, py_out: &Path, label: &str) -> (f64, u64) {
+    let out = Command::new(python())
+        .arg(Path::new(env!("CARGO_MANIFEST_DIR")).join("tests/py/bench_mcap_writer.py"))
+        .arg(bin)
+        .arg(py_out)
+        .arg(label)
+        .arg((1u64 << 20).to_string())
+        .output()
+        .expect("run python");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v = String::from_utf8_lossy(&out.stdout).to_string();
+    let py_s: f64 = v
+        .split("\"seconds\": ")
+        .nth(1)
+        .and_then(|s| s.split(',').next())
+        .and_then(|s| s.parse().ok())
+        .unwrap();
+    let py_file: u64 = v
+        .split("\"file_bytes\": ")
+        .nth(1)
+        .and_then(|s| s.trim_end_matches(['}', '\n']).trim().parse().ok())
+        .unwrap();
+    (py_s, py_file)
+}
+
+/// Part B: resident memory while `load_seconds` of the load are written as fast as possible
+/// through one BagWriter with default options, then the bag read back.
+fn part_b_memory(root: &Path, load: &Load, load_seconds: u64, rng: &mut Rng) {
     let _ = std::fs::write("/proc/self/clear_refs", "5"); // reset VmHWM to current RSS
     let dir = root.join("load");
     let mut w = BagWriter::create(&dir, WriterOptions::default()).unwrap();
-    for (name, ty, def) in &defs {
-        w.add_topic(name, ty, def, &qos).unwrap();
+    for (name, ty, def) in &load.defs {
+        w.add_topic(name, ty, def, &load.qos).unwrap();
     }
     let start = Instant::now();
     let mut rss = Vec::new();
@@ -409,8 +438,8 @@ fn main() {
     for s in 0..load_seconds {
         // Generate 10 ms at a time so the benchmark's own buffers stay small (one image).
         for k in (0..1000).step_by(10) {
-            for (ch, t, d) in slice_of_load(s, k..k + 10, t0, &frames, &mut rng) {
-                w.write(defs[ch].0, t, t, &d).unwrap();
+            for (ch, t, d) in slice_of_load(s, k..k + 10, load.t0, &load.frames, rng) {
+                w.write(load.defs[ch].0, t, t, &d).unwrap();
                 written += d.len() as u64;
                 nmsg += 1;
             }
@@ -439,9 +468,13 @@ fn main() {
         pick(load_seconds as usize - 1),
         peak as f64 / 1024.0
     );
-    // Read the load bag back (log-time order, all topics) for a replay figure.
+    read_back(&dir, nmsg);
+}
+
+/// Read the load bag back (log-time order, all topics) for a replay figure.
+fn read_back(dir: &Path, nmsg: u64) {
     let start = Instant::now();
-    let r = metrocell_bag::BagReader::open(&dir).unwrap();
+    let r = metrocell_bag::BagReader::open(dir).unwrap();
     let mut read_bytes = 0u64;
     let mut read_n = 0u64;
     for m in r
@@ -459,5 +492,4 @@ fn main() {
         read_n as f64 / rs,
         status_kib("VmHWM:") as f64 / 1024.0
     );
-    let _ = std::fs::remove_dir_all(&root);
 }

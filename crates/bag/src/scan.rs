@@ -307,6 +307,10 @@ fn read_record<R: Read>(
 
 /// Scan `path`. With `stop_at_first`, return at the first problem (strict reading); otherwise
 /// skip bad chunks/records and continue while record framing is intact.
+///
+/// The magic, then each record in turn (the first must be the Header; `scan_record` takes in
+/// schemas, channels, messages and chunks), then the DataEnd, Footer and end magic
+/// (`check_footer`).
 pub fn scan_file(path: &Path, stop_at_first: bool) -> Result<FileScan> {
     let mut file = File::open(path).map_err(io_err("open", path))?;
     let size = file.metadata().map_err(io_err("stat", path))?.len();
@@ -316,25 +320,7 @@ pub fn scan_file(path: &Path, stop_at_first: bool) -> Result<FileScan> {
         ..Default::default()
     };
     let mut r = BufReader::with_capacity(1 << 20, &mut file);
-
-    let mut magic = [0u8; 8];
-    if size < 8 {
-        s.problems.push(corrupt(
-            path,
-            0,
-            "magic",
-            format!("file is {size} bytes, too short for the MCAP magic"),
-        ));
-        return Ok(s);
-    }
-    r.read_exact(&mut magic).map_err(io_err("read", path))?;
-    if magic != mcap::MAGIC {
-        s.problems.push(corrupt(
-            path,
-            0,
-            "magic",
-            format!("not an MCAP file: starts with {magic:02x?}"),
-        ));
+    if !starts_with_magic(&mut r, path, size, &mut s)? {
         return Ok(s);
     }
     let mut offset = 8u64;
@@ -402,57 +388,14 @@ pub fn scan_file(path: &Path, stop_at_first: bool) -> Result<FileScan> {
             s.good_until = offset;
             continue;
         }
-        match rec {
-            Record::Schema { header, data } => {
-                add_schema(
-                    &mut s,
-                    path,
-                    offset,
-                    None,
-                    header.id,
-                    header.name,
-                    header.encoding,
-                    data.into_owned(),
-                );
-            }
-            Record::Channel(c) => add_channel(&mut s, c),
-            Record::Message { header, .. } => {
-                let mut u = Unit {
-                    offset,
-                    is_chunk: false,
-                    min_time: header.log_time,
-                    max_time: header.log_time,
-                    counts: BTreeMap::new(),
-                    times: BTreeMap::new(),
-                    compression: String::new(),
-                };
-                u.counts.insert(header.channel_id, 1);
-                u.times
-                    .insert(header.channel_id, (header.log_time, header.log_time));
-                s.units.push(u);
-            }
-            Record::Chunk { header, data } => {
-                let res = decompress_chunk(path, offset, &header, &data)
-                    .and_then(|buf| scan_chunk(&mut s, path, offset, &header, &buf));
-                if let Err(e) = res {
-                    s.dropped_chunks += 1;
-                    s.problems.push(e);
-                    if stop_at_first {
-                        return Ok(s);
-                    }
-                }
-            }
-            Record::DataEnd(_) => {
+        match scan_record(&mut s, path, offset, kind, rec, stop_at_first) {
+            Scanned::Next => {}
+            Scanned::DataEnd => {
                 saw_data_end = true;
                 s.good_until = next;
                 break;
             }
-            Record::Footer(_) => {
-                s.problems
-                    .push(corrupt(path, offset, kind, "Footer before DataEnd"));
-                return Ok(s);
-            }
-            _ => {}
+            Scanned::Stop => return Ok(s),
         }
         offset = next;
         s.good_until = offset;
@@ -478,7 +421,110 @@ pub fn scan_file(path: &Path, stop_at_first: bool) -> Result<FileScan> {
         ));
         return Ok(s);
     }
-    // Footer: the 29-byte record right before the end magic.
+    drop(r);
+    check_footer(&mut file, path, size, &mut s)?;
+    Ok(s)
+}
+
+/// Whether the file starts with the MCAP magic (a problem noted when it does not).
+fn starts_with_magic<R: Read>(r: &mut R, path: &Path, size: u64, s: &mut FileScan) -> Result<bool> {
+    let mut magic = [0u8; 8];
+    if size < 8 {
+        s.problems.push(corrupt(
+            path,
+            0,
+            "magic",
+            format!("file is {size} bytes, too short for the MCAP magic"),
+        ));
+        return Ok(false);
+    }
+    r.read_exact(&mut magic).map_err(io_err("read", path))?;
+    if magic != mcap::MAGIC {
+        s.problems.push(corrupt(
+            path,
+            0,
+            "magic",
+            format!("not an MCAP file: starts with {magic:02x?}"),
+        ));
+        return Ok(false);
+    }
+    Ok(true)
+}
+
+/// What a record after the Header leads to.
+enum Scanned {
+    /// Go on with the next record.
+    Next,
+    /// The data section ended (DataEnd).
+    DataEnd,
+    /// Stop reading (a Footer before DataEnd, or a bad chunk in strict reading).
+    Stop,
+}
+
+/// Take in one record after the Header at `offset`: a schema, a channel, a message outside a
+/// chunk, or a chunk (its messages counted; one that does not decompress or scan dropped).
+fn scan_record(
+    s: &mut FileScan,
+    path: &Path,
+    offset: u64,
+    kind: &'static str,
+    rec: Record<'_>,
+    stop_at_first: bool,
+) -> Scanned {
+    match rec {
+        Record::Schema { header, data } => {
+            add_schema(
+                s,
+                path,
+                offset,
+                None,
+                header.id,
+                header.name,
+                header.encoding,
+                data.into_owned(),
+            );
+        }
+        Record::Channel(c) => add_channel(s, c),
+        Record::Message { header, .. } => {
+            let mut u = Unit {
+                offset,
+                is_chunk: false,
+                min_time: header.log_time,
+                max_time: header.log_time,
+                counts: BTreeMap::new(),
+                times: BTreeMap::new(),
+                compression: String::new(),
+            };
+            u.counts.insert(header.channel_id, 1);
+            u.times
+                .insert(header.channel_id, (header.log_time, header.log_time));
+            s.units.push(u);
+        }
+        Record::Chunk { header, data } => {
+            let res = decompress_chunk(path, offset, &header, &data)
+                .and_then(|buf| scan_chunk(s, path, offset, &header, &buf));
+            if let Err(e) = res {
+                s.dropped_chunks += 1;
+                s.problems.push(e);
+                if stop_at_first {
+                    return Scanned::Stop;
+                }
+            }
+        }
+        Record::DataEnd(_) => return Scanned::DataEnd,
+        Record::Footer(_) => {
+            s.problems
+                .push(corrupt(path, offset, kind, "Footer before DataEnd"));
+            return Scanned::Stop;
+        }
+        _ => {}
+    }
+    Scanned::Next
+}
+
+/// The Footer (the 29-byte record right before the end magic) and the end magic after the
+/// DataEnd: the scan is complete when both are there.
+fn check_footer(file: &mut File, path: &Path, size: u64, s: &mut FileScan) -> Result<()> {
     let mut tail = [0u8; 37];
     if size < s.good_until + 37 {
         s.problems.push(corrupt(
@@ -487,9 +533,8 @@ pub fn scan_file(path: &Path, stop_at_first: bool) -> Result<FileScan> {
             "Footer",
             "file ends before Footer and end magic",
         ));
-        return Ok(s);
+        return Ok(());
     }
-    drop(r);
     file.seek(SeekFrom::Start(size - 37))
         .map_err(io_err("seek", path))?;
     file.read_exact(&mut tail).map_err(io_err("read", path))?;
@@ -506,7 +551,7 @@ pub fn scan_file(path: &Path, stop_at_first: bool) -> Result<FileScan> {
     } else {
         s.complete = true;
     }
-    Ok(s)
+    Ok(())
 }
 
 #[allow(clippy::too_many_arguments)]

@@ -405,6 +405,11 @@ fn stamp(ns: u64) -> Time {
 
 /// Import `csv_path` into the new bag `bag_dir` using `mapping` (None: the file uses the
 /// layout's own column names).
+///
+/// The header is bound to the layout's fields (`bind_columns`) and checked for the required
+/// ones (`check_required_fields`); each row is then read cell by cell (`read_row`: a bad cell is
+/// an error naming file, line and column, and the row is skipped) and written as its messages
+/// (`row_messages`).
 pub fn import_csv(
     csv_path: &Path,
     bag_dir: &Path,
@@ -429,9 +434,79 @@ pub fn import_csv(
         .headers()
         .map_err(|e| header_err(e.to_string()))?
         .clone();
-    let find = |name: &str| headers.iter().position(|h| h == name);
+    let bound = bind_columns(&headers, mapping, &header_err)?;
+    check_required_fields(&bound, mapping, &header_err)?;
+    let frame_id = mapping.frame_id.clone().unwrap_or_else(|| "import".into());
+    let source = mapping.source.clone().unwrap_or_else(|| "import".into());
 
-    // Bind every layout field to a source column.
+    let mut writer = TopicWriter::create(bag_dir, options)?;
+    let mut last_on_time: Option<u64> = None;
+    let mut report = ImportReport::default();
+    let mut record = csv::StringRecord::new();
+    loop {
+        let line = rdr.position().line();
+        match rdr.read_record(&mut record) {
+            Ok(false) => break,
+            Ok(true) => {}
+            Err(e) => {
+                report.rows_read += 1;
+                report.errors.push(ToolError::Row {
+                    path: csv_path.to_path_buf(),
+                    line: line.max(2),
+                    column: "-".into(),
+                    reason: e.to_string(),
+                });
+                continue;
+            }
+        }
+        let line = record.position().map_or(line, |p| p.line());
+        if record.iter().all(|c| c.is_empty()) {
+            continue;
+        }
+        report.rows_read += 1;
+        let row = match read_row(&record, &bound, mapping) {
+            Ok(row) => row,
+            Err(bad) => {
+                report
+                    .errors
+                    .extend(bad.into_iter().map(|(column, reason)| ToolError::Row {
+                        path: csv_path.to_path_buf(),
+                        line,
+                        column,
+                        reason,
+                    }));
+                continue;
+            }
+        };
+        let t = row.t_ns.expect("required column bound and parsed");
+        // the power-on time is written at the first row and whenever it changes
+        let on_time = row.on_time.filter(|on| last_on_time != Some(*on));
+        if on_time.is_some() {
+            last_on_time = on_time;
+        }
+        let names = RowNames {
+            frame_id: &frame_id,
+            source: &source,
+            imu_frames: &mapping.imu_frames,
+        };
+        for (topic, ty, def, bytes) in row_messages(row, t, on_time, &names)? {
+            writer.write(&topic, ty, def, t, &bytes)?;
+            *report.messages_per_topic.entry(topic).or_default() += 1;
+        }
+        report.rows_imported += 1;
+    }
+    writer.finish()?;
+    Ok(report)
+}
+
+/// Every layout field bound to its source column: the header's own names (a name not in the
+/// layout is an error) or, with a mapping's columns, the mapped ones.
+fn bind_columns(
+    headers: &csv::StringRecord,
+    mapping: &Mapping,
+    header_err: &dyn Fn(String) -> ToolError,
+) -> Result<Vec<Bound>> {
+    let find = |name: &str| headers.iter().position(|h| h == name);
     let mut bound: Vec<Bound> = Vec::new();
     if mapping.columns.is_empty() {
         for (i, h) in headers.iter().enumerate() {
@@ -465,6 +540,16 @@ pub fn import_csv(
             });
         }
     }
+    Ok(bound)
+}
+
+/// Err naming what is missing unless the columns give the required fields, an uncertainty on
+/// every axis, and every accelerometer's three axes.
+fn check_required_fields(
+    bound: &[Bound],
+    mapping: &Mapping,
+    header_err: &dyn Fn(String) -> ToolError,
+) -> Result<()> {
     let has = |f: &dyn Fn(&Field) -> bool| bound.iter().any(|b| f(&b.field));
     for (need, what) in [
         (
@@ -500,7 +585,7 @@ pub fn import_csv(
     }
     // an accelerometer is read on all three of its axes
     let mut sensors: BTreeMap<&str, [bool; 3]> = BTreeMap::new();
-    for b in &bound {
+    for b in bound {
         if let Field::Accel(sensor, a) = &b.field {
             sensors.entry(sensor.as_str()).or_default()[*a] = true;
         }
@@ -512,354 +597,346 @@ pub fn import_csv(
             .collect();
         return Err(header_err(format!("accelerometer `{sensor}` has no column for accel.{sensor}.{}: an accelerometer is read on its three axes", missing.join(format!(", accel.{sensor}.").as_str()))));
     }
-    let frame_id = mapping.frame_id.clone().unwrap_or_else(|| "import".into());
-    let source = mapping.source.clone().unwrap_or_else(|| "import".into());
+    Ok(())
+}
 
-    let mut writer = BagWriter::create(bag_dir, options)?;
-    let qos = qos_profiles_yaml(&[QosProfile::default_publisher()]);
-    let latched = qos_profiles_yaml(&[QosProfile {
-        keep_last: true,
-        depth: 1,
-        reliable: true,
-        transient_local: true,
-    }]);
-    let mut added: BTreeMap<String, ()> = BTreeMap::new();
-    let mut add = |w: &mut BagWriter, topic: &str, ty: &str, def: &str| -> Result<()> {
-        if added.insert(topic.to_string(), ()).is_none() {
-            w.add_topic(
-                topic,
-                ty,
-                def,
-                if topic == POWER_ON_TOPIC {
-                    &latched
-                } else {
-                    &qos
-                },
-            )?;
+/// The bag being written, each topic added at its first message (the power-on topic latched, as
+/// `metrocell sim` writes it).
+struct TopicWriter {
+    writer: BagWriter,
+    added: BTreeMap<String, ()>,
+    qos: String,
+    latched: String,
+}
+
+impl TopicWriter {
+    fn create(bag_dir: &Path, options: WriterOptions) -> Result<Self> {
+        Ok(Self {
+            writer: BagWriter::create(bag_dir, options)?,
+            added: BTreeMap::new(),
+            qos: qos_profiles_yaml(&[QosProfile::default_publisher()]),
+            latched: qos_profiles_yaml(&[QosProfile {
+                keep_last: true,
+                depth: 1,
+                reliable: true,
+                transient_local: true,
+            }]),
+        })
+    }
+
+    /// Write one message at `t` (ns), logged and published then.
+    fn write(&mut self, topic: &str, ty: &str, def: &str, t: u64, bytes: &[u8]) -> Result<()> {
+        if self.added.insert(topic.to_string(), ()).is_none() {
+            let qos = if topic == POWER_ON_TOPIC {
+                &self.latched
+            } else {
+                &self.qos
+            };
+            self.writer.add_topic(topic, ty, def, qos)?;
+        }
+        self.writer.write(topic, t, t, bytes)?;
+        Ok(())
+    }
+
+    fn finish(self) -> Result<()> {
+        self.writer.finish()?;
+        Ok(())
+    }
+}
+
+/// The values of one row, in SI.
+struct Row {
+    t_ns: Option<u64>,
+    point_id: Option<String>,
+    measured: [f64; 3],
+    nominal: [f64; 3],
+    u: [f64; 3],
+    joints: Vec<(String, f64)>,
+    velocities: Vec<(String, f64)>,
+    approach: Vec<(String, f64)>,
+    on_time: Option<u64>,
+    temps: Vec<(String, f64)>,
+    aux: Vec<(String, f64)>,
+    pressure: Option<f64>,
+    humidity: Option<f64>,
+    role: Role,
+    setup: Option<String>,
+    accel: BTreeMap<String, [f64; 3]>,
+}
+
+/// The row's values, or each bad cell's source column and reason.
+fn read_row(
+    record: &csv::StringRecord,
+    bound: &[Bound],
+    mapping: &Mapping,
+) -> std::result::Result<Row, Vec<(String, String)>> {
+    let mut row = Row {
+        t_ns: None,
+        point_id: None,
+        measured: [f64::NAN; 3],
+        nominal: [f64::NAN; 3],
+        u: [mapping.default_uncertainty.unwrap_or(f64::NAN); 3],
+        joints: Vec::new(),
+        velocities: Vec::new(),
+        approach: Vec::new(),
+        on_time: None,
+        temps: Vec::new(),
+        aux: Vec::new(),
+        pressure: None,
+        humidity: None,
+        role: Role::Fit,
+        setup: None,
+        accel: BTreeMap::new(),
+    };
+    let mut bad = Vec::new();
+    for b in bound {
+        let cell = record.get(b.index).unwrap_or("");
+        if let Err(reason) = row.read_cell(b, cell) {
+            bad.push((b.source_name.clone(), reason));
+        }
+    }
+    if bad.is_empty() {
+        Ok(row)
+    } else {
+        Err(bad)
+    }
+}
+
+impl Row {
+    /// Read `cell` into the field `b` binds it to; Err with the reason when it is not valid.
+    fn read_cell(&mut self, b: &Bound, cell: &str) -> std::result::Result<(), String> {
+        let number = || -> std::result::Result<f64, String> {
+            let v: f64 = cell
+                .parse()
+                .map_err(|_| format!("'{cell}' is not a number"))?;
+            if !v.is_finite() {
+                return Err(format!("'{cell}' is not finite"));
+            }
+            Ok(scale_decimal(cell, v, b.scale) + b.offset)
+        };
+        match &b.field {
+            Field::Timestamp => self.t_ns = Some(mapped_timestamp(cell, b.scale, b.offset)?),
+            Field::PointId if cell.is_empty() => return Err("empty point id".into()),
+            Field::PointId => self.point_id = Some(cell.to_string()),
+            Field::Measured(a) => self.measured[*a] = number()?,
+            Field::Nominal(a) if cell.is_empty() => self.nominal[*a] = f64::NAN,
+            Field::Nominal(a) => self.nominal[*a] = number()?,
+            Field::U(a) => match number()? {
+                v if v > 0.0 => self.u[*a] = v,
+                v => return Err(format!("uncertainty {v} m is not positive")),
+            },
+            Field::U95 => match number()? {
+                v if v > 0.0 => self.u = [v / 2.0; 3],
+                v => return Err(format!("U95 {v} m is not positive")),
+            },
+            Field::Joint(n) => self.joints.push((n.clone(), number()?)),
+            Field::Velocity(_) | Field::Approach(_) | Field::InstrumentOnTime if cell.is_empty() => {}
+            Field::Velocity(n) => self.velocities.push((n.clone(), number()?)),
+            Field::Approach(a) => match number()? {
+                v if v == 1.0 || v == -1.0 => self.approach.push((a.clone(), v)),
+                v => return Err(format!("approach direction {v} is neither +1 nor -1")),
+            },
+            Field::InstrumentOnTime => match mapped_timestamp(cell, b.scale, b.offset) {
+                Ok(t) => self.on_time = Some(t),
+                Err(e) => return Err(format!("instrument_on_time: {e}")),
+            },
+            Field::Temperature(_) | Field::Pressure | Field::Humidity | Field::Aux(_) if cell.is_empty() => {}
+            Field::Temperature(n) => self.temps.push((n.clone(), number()?)),
+            Field::Pressure => self.pressure = Some(number()?),
+            Field::Humidity => match number()? {
+                v if (0.0..=1.0).contains(&v) => self.humidity = Some(v),
+                v => return Err(format!("relative humidity {v} is outside 0..1 (a %RH column needs scale: 0.01)")),
+            },
+            Field::Aux(n) => self.aux.push((n.clone(), number()?)),
+            Field::Role => match cell.trim().to_ascii_lowercase().as_str() {
+                "" | "fit" => self.role = Role::Fit,
+                "check" => self.role = Role::Check,
+                "reference" | "ref" => self.role = Role::Reference,
+                other => return Err(format!("role '{other}' is not one of: fit (a point of the machine's program), check (kept out of the fits, to judge predictions), reference (a fixed reference nest)")),
+            },
+            Field::Setup if cell.trim().is_empty() => {}
+            Field::Setup => match cell.trim() {
+                c if c.chars().all(|ch| ch.is_ascii_alphanumeric() || ch == '_' || ch == '-') => self.setup = Some(c.to_string()),
+                c => return Err(format!("setup '{c}' is not a placement name: use letters, digits, `_` or `-`")),
+            },
+            Field::Accel(..) if cell.is_empty() => {}
+            Field::Accel(sensor, a) => {
+                let v = number()?;
+                self.accel.entry(sensor.clone()).or_insert([f64::NAN; 3])[*a] = v;
+            }
         }
         Ok(())
-    };
-    let mut last_on_time: Option<u64> = None;
-    let mut report = ImportReport::default();
-    let mut record = csv::StringRecord::new();
-    loop {
-        let line = rdr.position().line();
-        match rdr.read_record(&mut record) {
-            Ok(false) => break,
-            Ok(true) => {}
-            Err(e) => {
-                report.rows_read += 1;
-                report.errors.push(ToolError::Row {
-                    path: csv_path.to_path_buf(),
-                    line: line.max(2),
-                    column: "-".into(),
-                    reason: e.to_string(),
-                });
-                continue;
-            }
-        }
-        let line = record.position().map_or(line, |p| p.line());
-        if record.iter().all(|c| c.is_empty()) {
-            continue;
-        }
-        report.rows_read += 1;
-        let mut row_errors = Vec::new();
-        let mut err = |b: &Bound, reason: String| {
-            row_errors.push(ToolError::Row {
-                path: csv_path.to_path_buf(),
-                line,
-                column: b.source_name.clone(),
-                reason,
-            })
-        };
-        let mut t_ns = None;
-        let mut point_id = None;
-        let mut measured = [f64::NAN; 3];
-        let mut nominal = [f64::NAN; 3];
-        let mut u = [mapping.default_uncertainty.unwrap_or(f64::NAN); 3];
-        let mut joints = Vec::new();
-        let mut velocities = Vec::new();
-        let mut approach = Vec::new();
-        let mut on_time = None;
-        let mut temps = Vec::new();
-        let mut aux = Vec::new();
-        let (mut pressure, mut humidity) = (None, None);
-        let mut role = Role::Fit;
-        let mut setup: Option<String> = None;
-        let mut accel: BTreeMap<String, [f64; 3]> = BTreeMap::new();
-        for b in &bound {
-            let cell = record.get(b.index).unwrap_or("");
-            let number = || -> std::result::Result<f64, String> {
-                let v: f64 = cell
-                    .parse()
-                    .map_err(|_| format!("'{cell}' is not a number"))?;
-                if !v.is_finite() {
-                    return Err(format!("'{cell}' is not finite"));
-                }
-                Ok(scale_decimal(cell, v, b.scale) + b.offset)
-            };
-            match &b.field {
-                Field::Timestamp => match mapped_timestamp(cell, b.scale, b.offset) {
-                    Ok(t) => t_ns = Some(t),
-                    Err(e) => err(b, e),
-                },
-                Field::PointId if cell.is_empty() => err(b, "empty point id".into()),
-                Field::PointId => point_id = Some(cell.to_string()),
-                Field::Measured(a) => match number() {
-                    Ok(v) => measured[*a] = v,
-                    Err(e) => err(b, e),
-                },
-                Field::Nominal(a) if cell.is_empty() => nominal[*a] = f64::NAN,
-                Field::Nominal(a) => match number() {
-                    Ok(v) => nominal[*a] = v,
-                    Err(e) => err(b, e),
-                },
-                Field::U(a) => match number() {
-                    Ok(v) if v > 0.0 => u[*a] = v,
-                    Ok(v) => err(b, format!("uncertainty {v} m is not positive")),
-                    Err(e) => err(b, e),
-                },
-                Field::U95 => match number() {
-                    Ok(v) if v > 0.0 => u = [v / 2.0; 3],
-                    Ok(v) => err(b, format!("U95 {v} m is not positive")),
-                    Err(e) => err(b, e),
-                },
-                Field::Joint(n) => match number() {
-                    Ok(v) => joints.push((n.clone(), v)),
-                    Err(e) => err(b, e),
-                },
-                Field::Velocity(_) | Field::Approach(_) | Field::InstrumentOnTime if cell.is_empty() => {}
-                Field::Velocity(n) => match number() {
-                    Ok(v) => velocities.push((n.clone(), v)),
-                    Err(e) => err(b, e),
-                },
-                Field::Approach(a) => match number() {
-                    Ok(v) if v == 1.0 || v == -1.0 => approach.push((a.clone(), v)),
-                    Ok(v) => err(b, format!("approach direction {v} is neither +1 nor -1")),
-                    Err(e) => err(b, e),
-                },
-                Field::InstrumentOnTime => match mapped_timestamp(cell, b.scale, b.offset) {
-                    Ok(t) => on_time = Some(t),
-                    Err(e) => err(b, format!("instrument_on_time: {e}")),
-                },
-                Field::Temperature(_) | Field::Pressure | Field::Humidity | Field::Aux(_) if cell.is_empty() => {}
-                Field::Temperature(n) => match number() {
-                    Ok(v) => temps.push((n.clone(), v)),
-                    Err(e) => err(b, e),
-                },
-                Field::Pressure => match number() {
-                    Ok(v) => pressure = Some(v),
-                    Err(e) => err(b, e),
-                },
-                Field::Humidity => match number() {
-                    Ok(v) if (0.0..=1.0).contains(&v) => humidity = Some(v),
-                    Ok(v) => err(b, format!("relative humidity {v} is outside 0..1 (a %RH column needs scale: 0.01)")),
-                    Err(e) => err(b, e),
-                },
-                Field::Aux(n) => match number() {
-                    Ok(v) => aux.push((n.clone(), v)),
-                    Err(e) => err(b, e),
-                },
-                Field::Role => match cell.trim().to_ascii_lowercase().as_str() {
-                    "" | "fit" => role = Role::Fit,
-                    "check" => role = Role::Check,
-                    "reference" | "ref" => role = Role::Reference,
-                    other => err(b, format!("role '{other}' is not one of: fit (a point of the machine's program), check (kept out of the fits, to judge predictions), reference (a fixed reference nest)")),
-                },
-                Field::Setup if cell.trim().is_empty() => {}
-                Field::Setup => match cell.trim() {
-                    c if c.chars().all(|ch| ch.is_ascii_alphanumeric() || ch == '_' || ch == '-') => setup = Some(c.to_string()),
-                    c => err(b, format!("setup '{c}' is not a placement name: use letters, digits, `_` or `-`")),
-                },
-                Field::Accel(..) if cell.is_empty() => {}
-                Field::Accel(sensor, a) => match number() {
-                    Ok(v) => accel.entry(sensor.clone()).or_insert([f64::NAN; 3])[*a] = v,
-                    Err(e) => err(b, e),
-                },
-            }
-        }
-        if !row_errors.is_empty() {
-            report.errors.extend(row_errors);
-            continue;
-        }
-        let t = t_ns.expect("required column bound and parsed");
-        // a point's frame: the instrument's, at its placement when the row names one
-        let point_frame = match &setup {
-            Some(s) => format!("{frame_id}{SETUP_SEPARATOR}{s}"),
-            None => frame_id.clone(),
-        };
-        let header = Header {
-            stamp: stamp(t),
-            frame_id: point_frame,
-        };
-        let mut out: Vec<(String, &str, &str, Vec<u8>)> = Vec::new();
-        let mut cov = [0.0; 9];
-        for a in 0..3 {
-            cov[a * 4] = u[a] * u[a];
-        }
-        let p = MeasuredPoint {
-            header: header.clone(),
-            point_id: point_id.expect("required"),
-            source: source.clone(),
-            nominal: Point {
-                x: nominal[0],
-                y: nominal[1],
-                z: nominal[2],
-            },
-            measured: Point {
-                x: measured[0],
-                y: measured[1],
-                z: measured[2],
-            },
-            covariance: cov,
-        };
-        let points_topic = match role {
-            // a nest the machine did not put there: its point alone, and the row's signals
-            Role::Reference => REFERENCE_POINTS_TOPIC,
-            Role::Check => CHECK_POINTS_TOPIC,
-            Role::Fit => "/measured_points",
-        };
-        out.push((
-            points_topic.into(),
-            MeasuredPoint::ROS_TYPE,
-            MeasuredPoint::DEFINITION,
-            encode_cdr(&p)?,
-        ));
-        // the machine's motion belongs to its own points, not to a nest's reading
-        let machine_row = role != Role::Reference;
-        for (sensor, a) in &accel {
-            if a.iter().any(|v| !v.is_finite()) {
-                continue;
-            }
-            let frame = mapping
-                .imu_frames
-                .get(sensor)
-                .cloned()
-                .unwrap_or_else(|| sensor.clone());
-            let mut imu = Imu {
-                header: Header {
-                    stamp: stamp(t),
-                    frame_id: frame,
-                },
-                linear_acceleration: Vector3 {
-                    x: a[0],
-                    y: a[1],
-                    z: a[2],
-                },
-                ..Default::default()
-            };
-            // orientation and angular velocity are not given (ROS: −1 in the first element)
-            imu.orientation_covariance[0] = -1.0;
-            imu.angular_velocity_covariance[0] = -1.0;
-            out.push((
-                format!("/imu/{sensor}"),
-                Imu::ROS_TYPE,
-                Imu::DEFINITION,
-                encode_cdr(&imu)?,
-            ));
-        }
-        if machine_row && (!joints.is_empty() || !velocities.is_empty()) {
-            let js = commanded_joint_state(header.clone(), &joints, &velocities);
-            out.push((
-                COMMANDED_JOINTS_TOPIC.into(),
-                JointState::ROS_TYPE,
-                JointState::DEFINITION,
-                encode_cdr(&js)?,
-            ));
-        }
-        if machine_row && !approach.is_empty() {
-            let js = JointState {
-                header: header.clone(),
-                name: approach.iter().map(|a| a.0.clone()).collect(),
-                position: approach.iter().map(|a| a.1).collect(),
-                ..Default::default()
-            };
-            out.push((
-                APPROACH_TOPIC.into(),
-                JointState::ROS_TYPE,
-                JointState::DEFINITION,
-                encode_cdr(&js)?,
-            ));
-        }
-        if let Some(on) = on_time.filter(|on| last_on_time != Some(*on)) {
-            last_on_time = Some(on);
-            let m = TimeReference {
-                header: header.clone(),
-                time_ref: stamp(on),
-                source: source.clone(),
-            };
-            out.push((
-                POWER_ON_TOPIC.into(),
-                TimeReference::ROS_TYPE,
-                TimeReference::DEFINITION,
-                encode_cdr(&m)?,
-            ));
-        }
-        for (n, v) in temps {
-            let m = Temperature {
-                header: Header {
-                    stamp: stamp(t),
-                    frame_id: n.clone(),
-                },
-                temperature: v,
-                variance: 0.0,
-            };
-            out.push((
-                format!("/temperature/{n}"),
-                Temperature::ROS_TYPE,
-                Temperature::DEFINITION,
-                encode_cdr(&m)?,
-            ));
-        }
-        if let Some(v) = pressure {
-            let m = FluidPressure {
-                header: header.clone(),
-                fluid_pressure: v,
-                variance: 0.0,
-            };
-            out.push((
-                "/air/pressure".into(),
-                FluidPressure::ROS_TYPE,
-                FluidPressure::DEFINITION,
-                encode_cdr(&m)?,
-            ));
-        }
-        if let Some(v) = humidity {
-            let m = RelativeHumidity {
-                header: header.clone(),
-                relative_humidity: v,
-                variance: 0.0,
-            };
-            out.push((
-                "/air/humidity".into(),
-                RelativeHumidity::ROS_TYPE,
-                RelativeHumidity::DEFINITION,
-                encode_cdr(&m)?,
-            ));
-        }
-        if !aux.is_empty() {
-            let m = JointState {
-                header: header.clone(),
-                name: aux.iter().map(|j| j.0.clone()).collect(),
-                position: aux.iter().map(|j| j.1).collect(),
-                ..Default::default()
-            };
-            out.push((
-                "/aux_channels".into(),
-                JointState::ROS_TYPE,
-                JointState::DEFINITION,
-                encode_cdr(&m)?,
-            ));
-        }
-        for (topic, ty, def, bytes) in out {
-            add(&mut writer, &topic, ty, def)?;
-            writer.write(&topic, t, t, &bytes)?;
-            *report.messages_per_topic.entry(topic).or_default() += 1;
-        }
-        report.rows_imported += 1;
     }
-    writer.finish()?;
-    Ok(report)
+}
+
+/// What every message of an import names: the instrument's frame, the points' source, each
+/// accelerometer's frame.
+struct RowNames<'a> {
+    frame_id: &'a str,
+    source: &'a str,
+    imu_frames: &'a BTreeMap<String, String>,
+}
+
+/// A message to write: topic, ROS type, definition, CDR bytes.
+type Message = (String, &'static str, &'static str, Vec<u8>);
+
+/// The messages of one row at `t` (ns), in the order they are written: its point, its
+/// accelerometers, the machine's joints and approach (not for a reference nest), the power-on
+/// time (`on_time`: when it changed), temperatures, air, auxiliary channels.
+fn row_messages(row: Row, t: u64, on_time: Option<u64>, names: &RowNames) -> Result<Vec<Message>> {
+    // a point's frame: the instrument's, at its placement when the row names one
+    let point_frame = match &row.setup {
+        Some(s) => format!("{}{SETUP_SEPARATOR}{s}", names.frame_id),
+        None => names.frame_id.to_string(),
+    };
+    let header = Header {
+        stamp: stamp(t),
+        frame_id: point_frame,
+    };
+    let mut out: Vec<Message> = vec![point_message(&row, &header, names.source)?];
+    for (sensor, a) in &row.accel {
+        if a.iter().any(|v| !v.is_finite()) {
+            continue;
+        }
+        let frame = names
+            .imu_frames
+            .get(sensor)
+            .cloned()
+            .unwrap_or_else(|| sensor.clone());
+        out.push(imu_message(sensor, frame, a, t)?);
+    }
+    // the machine's motion belongs to its own points, not to a nest's reading
+    if row.role != Role::Reference {
+        out.extend(machine_messages(&row, &header)?);
+    }
+    if let Some(on) = on_time {
+        let m = TimeReference {
+            header: header.clone(),
+            time_ref: stamp(on),
+            source: names.source.to_string(),
+        };
+        out.push(message(POWER_ON_TOPIC.into(), &m)?);
+    }
+    out.extend(signal_messages(row, t, &header)?);
+    Ok(out)
+}
+
+/// The row's encoded message `m` on `topic`.
+fn message<M: RosMessage>(topic: String, m: &M) -> Result<Message> {
+    Ok((topic, M::ROS_TYPE, M::DEFINITION, encode_cdr(m)?))
+}
+
+/// The row's measured point, on the topic of its role.
+fn point_message(row: &Row, header: &Header, source: &str) -> Result<Message> {
+    let mut cov = [0.0; 9];
+    for a in 0..3 {
+        cov[a * 4] = row.u[a] * row.u[a];
+    }
+    let p = MeasuredPoint {
+        header: header.clone(),
+        point_id: row.point_id.clone().expect("required"),
+        source: source.to_string(),
+        nominal: Point {
+            x: row.nominal[0],
+            y: row.nominal[1],
+            z: row.nominal[2],
+        },
+        measured: Point {
+            x: row.measured[0],
+            y: row.measured[1],
+            z: row.measured[2],
+        },
+        covariance: cov,
+    };
+    let points_topic = match row.role {
+        // a nest the machine did not put there: its point alone, and the row's signals
+        Role::Reference => REFERENCE_POINTS_TOPIC,
+        Role::Check => CHECK_POINTS_TOPIC,
+        Role::Fit => "/measured_points",
+    };
+    message(points_topic.into(), &p)
+}
+
+/// An accelerometer's reading `a` in `frame`.
+fn imu_message(sensor: &str, frame: String, a: &[f64; 3], t: u64) -> Result<Message> {
+    let mut imu = Imu {
+        header: Header {
+            stamp: stamp(t),
+            frame_id: frame,
+        },
+        linear_acceleration: Vector3 {
+            x: a[0],
+            y: a[1],
+            z: a[2],
+        },
+        ..Default::default()
+    };
+    // orientation and angular velocity are not given (ROS: −1 in the first element)
+    imu.orientation_covariance[0] = -1.0;
+    imu.angular_velocity_covariance[0] = -1.0;
+    message(format!("/imu/{sensor}"), &imu)
+}
+
+/// The machine's commanded joints and velocities, and its approach directions, when the row
+/// has them.
+fn machine_messages(row: &Row, header: &Header) -> Result<Vec<Message>> {
+    let mut out = Vec::new();
+    if !row.joints.is_empty() || !row.velocities.is_empty() {
+        let js = commanded_joint_state(header.clone(), &row.joints, &row.velocities);
+        out.push(message(COMMANDED_JOINTS_TOPIC.into(), &js)?);
+    }
+    if !row.approach.is_empty() {
+        let js = JointState {
+            header: header.clone(),
+            name: row.approach.iter().map(|a| a.0.clone()).collect(),
+            position: row.approach.iter().map(|a| a.1).collect(),
+            ..Default::default()
+        };
+        out.push(message(APPROACH_TOPIC.into(), &js)?);
+    }
+    Ok(out)
+}
+
+/// The row's temperatures, station air and auxiliary channels.
+fn signal_messages(row: Row, t: u64, header: &Header) -> Result<Vec<Message>> {
+    let mut out = Vec::new();
+    for (n, v) in row.temps {
+        let m = Temperature {
+            header: Header {
+                stamp: stamp(t),
+                frame_id: n.clone(),
+            },
+            temperature: v,
+            variance: 0.0,
+        };
+        out.push(message(format!("/temperature/{n}"), &m)?);
+    }
+    if let Some(v) = row.pressure {
+        let m = FluidPressure {
+            header: header.clone(),
+            fluid_pressure: v,
+            variance: 0.0,
+        };
+        out.push(message("/air/pressure".into(), &m)?);
+    }
+    if let Some(v) = row.humidity {
+        let m = RelativeHumidity {
+            header: header.clone(),
+            relative_humidity: v,
+            variance: 0.0,
+        };
+        out.push(message("/air/humidity".into(), &m)?);
+    }
+    if !row.aux.is_empty() {
+        let m = JointState {
+            header: header.clone(),
+            name: row.aux.iter().map(|j| j.0.clone()).collect(),
+            position: row.aux.iter().map(|j| j.1).collect(),
+            ..Default::default()
+        };
+        out.push(message("/aux_channels".into(), &m)?);
+    }
+    Ok(out)
 }
 
 #[cfg(test)]

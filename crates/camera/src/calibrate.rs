@@ -353,6 +353,11 @@ fn view_rms(res: &DVector<f64>, views: &[(usize, &View)]) -> Vec<f64> {
 }
 
 /// Calibrates a camera of `image_size` (width, height) from planar-target views.
+///
+/// The settings are checked; each view's homography is estimated (a degenerate view rejected
+/// with the reason), the intrinsics initialised from them (Zhang) and each view's pose; one
+/// bundle adjustment, and a second without the outlier views; the covariance scaled by the
+/// residuals' σ.
 pub fn calibrate(
     views: &[View],
     image_size: (u32, u32),
@@ -360,6 +365,70 @@ pub fn calibrate(
     flags: &CalibrationFlags,
 ) -> Result<Calibration> {
     let (w, h) = image_size;
+    let n_dist = checked_settings(image_size, model, flags)?;
+    let mut rejected = Vec::new();
+    let usable = view_homographies(views, flags, &mut rejected);
+    if usable.is_empty() {
+        return Err(CameraError::NoUsableViews(format!(
+            "{} views given, all rejected: {:?}",
+            views.len(),
+            rejected
+        )));
+    }
+    let hs: Vec<Matrix3<f64>> = usable.iter().map(|u| u.2).collect();
+    let mut cam = initial_camera(&hs, w, h, model, flags)?;
+    cam.width = w;
+    cam.height = h;
+    let aspect = cam.fx / cam.fy;
+    // Initial poses: homography decomposition, then per-view refinement with the initial camera.
+    let k = cam.k_matrix();
+    let mut used: Vec<(usize, &View)> = Vec::new();
+    let mut poses = Vec::new();
+    for (i, v, hm) in &usable {
+        let p = pose_from_homography(hm, &k)
+            .and_then(|p0| refine_pose(&cam, &v.object_points, &v.image_points, p0).map(|r| r.0));
+        match p {
+            Ok(p) => {
+                used.push((*i, *v));
+                poses.push(p);
+            }
+            Err(e) => rejected.push(RejectedView {
+                index: *i,
+                reason: RejectionReason::PoseInitialisation(e.to_string()),
+            }),
+        }
+    }
+    if used.is_empty() {
+        return Err(CameraError::NoUsableViews(format!(
+            "no view survived pose initialisation: {rejected:?}"
+        )));
+    }
+    let t = intrinsic_map(n_dist, model, flags, aspect);
+    let mut fit = run_lm(&used, cam, poses, &t, flags.max_iterations)?;
+    // Outlier views after the first pass.
+    if let Some(kratio) = flags.outlier_view_ratio {
+        let bad = outlier_views(&fit, &used, kratio, flags, &mut rejected);
+        if !bad.is_empty() && bad.len() < used.len() {
+            let keep: Vec<usize> = (0..used.len()).filter(|k| !bad.contains(k)).collect();
+            let poses: Vec<Pose> = keep.iter().map(|&k| fit.poses[k]).collect();
+            used = keep.iter().map(|&k| used[k]).collect();
+            let first_pass = fit.iterations;
+            fit = run_lm(&used, fit.cam, poses, &t, flags.max_iterations)?;
+            fit.iterations += first_pass;
+        }
+    }
+    rejected.sort_by_key(|r| r.index);
+    calibration_of(fit, &used, &t, rejected)
+}
+
+/// The number of distortion coefficients of `model`, or Err naming the setting that cannot be
+/// used (an empty image, fewer than 4 points per view, a fixed coefficient the model lacks, an
+/// initial guess of another lens model).
+fn checked_settings(
+    (w, h): (u32, u32),
+    model: LensModel,
+    flags: &CalibrationFlags,
+) -> Result<usize> {
     if w == 0 || h == 0 {
         return Err(invalid("image_size", format!("{w}×{h} must be non-zero")));
     }
@@ -392,8 +461,17 @@ pub fn calibrate(
             ));
         }
     }
-    let mut rejected = Vec::new();
-    let mut usable: Vec<(usize, &View, Matrix3<f64>)> = Vec::new();
+    Ok(n_dist)
+}
+
+/// Each valid view with its homography (target plane → pixels); the others in `rejected` with
+/// the reason.
+fn view_homographies<'v>(
+    views: &'v [View],
+    flags: &CalibrationFlags,
+    rejected: &mut Vec<RejectedView>,
+) -> Vec<(usize, &'v View, Matrix3<f64>)> {
+    let mut usable = Vec::new();
     for (i, v) in views.iter().enumerate() {
         if let Err(reason) = validate_view(v, flags.min_points_per_view) {
             rejected.push(RejectedView { index: i, reason });
@@ -408,32 +486,36 @@ pub fn calibrate(
             }),
         }
     }
-    if usable.is_empty() {
-        return Err(CameraError::NoUsableViews(format!(
-            "{} views given, all rejected: {:?}",
-            views.len(),
-            rejected
-        )));
-    }
-    // Initial intrinsics.
+    usable
+}
+
+/// The initial camera: the flags' guess, or Zhang's closed form from the homographies (the
+/// focal lengths alone about the image centre when that fails or the principal point is fixed),
+/// without distortion.
+fn initial_camera(
+    hs: &[Matrix3<f64>],
+    w: u32,
+    h: u32,
+    model: LensModel,
+    flags: &CalibrationFlags,
+) -> Result<CameraModel> {
     let zero = match model {
         LensModel::BrownConrady => Distortion::BrownConrady([0.0; 5]),
         LensModel::Fisheye => Distortion::Fisheye([0.0; 4]),
     };
     let centre = ((w as f64 - 1.0) / 2.0, (h as f64 - 1.0) / 2.0);
-    let hs: Vec<Matrix3<f64>> = usable.iter().map(|u| u.2).collect();
-    let mut cam = match &flags.initial_guess {
+    Ok(match &flags.initial_guess {
         Some(g) => *g,
         None => {
             let closed = if flags.fix_principal_point {
                 None
             } else {
-                intrinsics_from_homographies(&hs, w, h).ok()
+                intrinsics_from_homographies(hs, w, h).ok()
             };
             let [fx, fy, cx, cy] = match closed {
                 Some(k) => k,
                 None => {
-                    let [fx, fy] = focal_from_homographies(&hs, centre.0, centre.1)?;
+                    let [fx, fy] = focal_from_homographies(hs, centre.0, centre.1)?;
                     [fx, fy, centre.0, centre.1]
                 }
             };
@@ -445,68 +527,53 @@ pub fn calibrate(
             };
             CameraModel::new(w, h, fx, fy, cx, cy, zero)?
         }
+    })
+}
+
+/// The views (indices into `used`) whose RMS exceeds `kratio` × the median and the flags'
+/// floor, each added to `rejected` with its figures — unless every view would be.
+fn outlier_views(
+    fit: &Fit,
+    used: &[(usize, &View)],
+    kratio: f64,
+    flags: &CalibrationFlags,
+    rejected: &mut Vec<RejectedView>,
+) -> Vec<usize> {
+    let rms = view_rms(&fit.residuals, used);
+    let mut sorted = rms.clone();
+    sorted.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
+    let median = if sorted.len() % 2 == 1 {
+        sorted[sorted.len() / 2]
+    } else {
+        0.5 * (sorted[sorted.len() / 2 - 1] + sorted[sorted.len() / 2])
     };
-    cam.width = w;
-    cam.height = h;
-    let aspect = cam.fx / cam.fy;
-    // Initial poses: homography decomposition, then per-view refinement with the initial camera.
-    let k = cam.k_matrix();
-    let mut used: Vec<(usize, &View)> = Vec::new();
-    let mut poses = Vec::new();
-    for (i, v, hm) in &usable {
-        let p = pose_from_homography(hm, &k)
-            .and_then(|p0| refine_pose(&cam, &v.object_points, &v.image_points, p0).map(|r| r.0));
-        match p {
-            Ok(p) => {
-                used.push((*i, *v));
-                poses.push(p);
-            }
-            Err(e) => rejected.push(RejectedView {
-                index: *i,
-                reason: RejectionReason::PoseInitialisation(e.to_string()),
-            }),
+    let bad: Vec<usize> = (0..used.len())
+        .filter(|&k| rms[k] > kratio * median && rms[k] > flags.outlier_view_min_rms_px)
+        .collect();
+    if !bad.is_empty() && bad.len() < used.len() {
+        for &b in &bad {
+            rejected.push(RejectedView {
+                index: used[b].0,
+                reason: RejectionReason::OutlierRms {
+                    rms_px: rms[b],
+                    median_rms_px: median,
+                    ratio_limit: kratio,
+                },
+            });
         }
     }
-    if used.is_empty() {
-        return Err(CameraError::NoUsableViews(format!(
-            "no view survived pose initialisation: {rejected:?}"
-        )));
-    }
-    let t = intrinsic_map(n_dist, model, flags, aspect);
-    let mut fit = run_lm(&used, cam, poses, &t, flags.max_iterations)?;
-    // Outlier views after the first pass.
-    if let Some(kratio) = flags.outlier_view_ratio {
-        let rms = view_rms(&fit.residuals, &used);
-        let mut sorted = rms.clone();
-        sorted.sort_by(|a, b| a.partial_cmp(b).unwrap_or(std::cmp::Ordering::Equal));
-        let median = if sorted.len() % 2 == 1 {
-            sorted[sorted.len() / 2]
-        } else {
-            0.5 * (sorted[sorted.len() / 2 - 1] + sorted[sorted.len() / 2])
-        };
-        let bad: Vec<usize> = (0..used.len())
-            .filter(|&k| rms[k] > kratio * median && rms[k] > flags.outlier_view_min_rms_px)
-            .collect();
-        if !bad.is_empty() && bad.len() < used.len() {
-            for &b in &bad {
-                rejected.push(RejectedView {
-                    index: used[b].0,
-                    reason: RejectionReason::OutlierRms {
-                        rms_px: rms[b],
-                        median_rms_px: median,
-                        ratio_limit: kratio,
-                    },
-                });
-            }
-            let keep: Vec<usize> = (0..used.len()).filter(|k| !bad.contains(k)).collect();
-            let poses: Vec<Pose> = keep.iter().map(|&k| fit.poses[k]).collect();
-            used = keep.iter().map(|&k| used[k]).collect();
-            let first_pass = fit.iterations;
-            fit = run_lm(&used, fit.cam, poses, &t, flags.max_iterations)?;
-            fit.iterations += first_pass;
-        }
-    }
-    rejected.sort_by_key(|r| r.index);
+    bad
+}
+
+/// The calibration from the final fit: the intrinsics' covariance scaled by the residuals' σ²,
+/// each view's pose, σ and RMS; Err when the points do not outnumber the free parameters or
+/// JᵀJ is singular.
+fn calibration_of(
+    fit: Fit,
+    used: &[(usize, &View)],
+    t: &DMatrix<f64>,
+    rejected: Vec<RejectedView>,
+) -> Result<Calibration> {
     let n_points: usize = used.iter().map(|(_, v)| v.object_points.len()).sum();
     let p = t.ncols() + 6 * used.len();
     if 2 * n_points <= p {
@@ -524,11 +591,11 @@ pub fn calibrate(
     })?;
     let cov = &inv * sigma2;
     let ni = t.ncols();
-    let cov_intr = &t * cov.view((0, 0), (ni, ni)) * t.transpose();
+    let cov_intr = t * cov.view((0, 0), (ni, ni)) * t.transpose();
     let param_std: Vec<f64> = (0..cov_intr.nrows())
         .map(|i| cov_intr[(i, i)].max(0.0).sqrt())
         .collect();
-    let rms_views = view_rms(&fit.residuals, &used);
+    let rms_views = view_rms(&fit.residuals, used);
     let views_out = used
         .iter()
         .enumerate()

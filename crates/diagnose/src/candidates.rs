@@ -219,219 +219,288 @@ fn lever_axes(machine: &MachineGeometry, axis: usize) -> Vec<usize> {
 
 /// Every candidate family for the declared model and the signals the records hold, and the
 /// catalog terms not tried with the reason. `periodogram_leads[k]` adds a lead found in the
-/// residuals of axis k, with the number of independent periods the periodogram compared; `points_in_machine_frame`: the records' points are in the machine
-/// (part) frame rather than an instrument's.
+/// residuals of axis k, with the number of independent periods the periodogram compared;
+/// `points_in_machine_frame`: the records' points are in the machine (part) frame rather than
+/// an instrument's.
+///
+/// The families are gathered in this order (the selection's tie-breaks see it): each axis's
+/// geometry and thermal scale, the structure's thermal growth, motion, load and tool, the
+/// family's kinematic terms, the instrument's terms, the part's terms; then those the declared
+/// model already has are dropped.
 pub fn candidate_families(
     declared: &Declared,
     inventory: &SignalInventory,
     periodogram_leads: &[Option<(f64, f64)>; 3],
     points_in_machine_frame: bool,
 ) -> (Vec<TermFamily>, Vec<NotTried>) {
-    let labels = declared.labels();
     let machine = declared.machine;
-    let mut out: Vec<TermFamily> = Vec::new();
-    let mut not_tried = Vec::new();
-    let mut skip = |term: &str, reason: String| {
-        not_tried.push(NotTried {
-            term: term.into(),
-            reason,
-        })
-    };
+    let mut out = Gathered::default();
     let axis_family = matches!(
         machine.kinematics,
         MachineKinematics::Cartesian(_) | MachineKinematics::FiveAxis(_)
     );
-    let travel = |k: usize| list(vec![num(machine.travel[k][0]), num(machine.travel[k][1])]);
+    if axis_family {
+        axis_families(&mut out, machine, inventory, periodogram_leads);
+    }
+    thermal_growth_families(&mut out, inventory);
+    motion_load_and_tool_families(&mut out, inventory, axis_family);
+    kinematic_families(&mut out, machine, inventory);
+    instrument_families(&mut out, declared, inventory);
+    part_families(&mut out, declared, inventory, points_in_machine_frame);
+    let labels = declared.labels();
+    out.families.retain(|f| {
+        !labels.contains(&f.label)
+            && !(f.id == TermId::ToolOffset && declared.has(TermId::ToolOffset))
+    });
+    (out.families, out.not_tried)
+}
+
+/// The candidate families gathered so far, and the catalog terms not tried with the reason.
+#[derive(Default)]
+struct Gathered {
+    families: Vec<TermFamily>,
+    not_tried: Vec<NotTried>,
+}
+
+impl Gathered {
+    fn add(&mut self, family: Option<TermFamily>) {
+        self.families.extend(family);
+    }
+    fn skip(&mut self, term: &str, reason: String) {
+        self.not_tried.push(NotTried {
+            term: term.into(),
+            reason,
+        })
+    }
+}
+
+/// A family of one variant.
+fn single(name: &str, id: TermId, options: Vec<(&str, ConfigValue)>) -> Option<TermFamily> {
+    family(
+        vec![linear_variant(name, id, options)],
+        id,
+        Placement::Machine,
+    )
+}
+
+/// The travel of axis `k` as a term option.
+fn travel(machine: &MachineGeometry, k: usize) -> ConfigValue {
+    list(vec![num(machine.travel[k][0]), num(machine.travel[k][1])])
+}
+
+/// The geometry and thermal scale of each commanded axis of a cartesian or five-axis machine:
+/// positioning of every axis, squareness of each pair, then per axis its straightness, angular
+/// errors, cyclic screw error, backlash and thermal scale.
+fn axis_families(
+    out: &mut Gathered,
+    machine: &MachineGeometry,
+    inventory: &SignalInventory,
+    periodogram_leads: &[Option<(f64, f64)>; 3],
+) {
+    for k in 0..3 {
+        if !inventory.positions[k] {
+            out.skip(
+                &format!("geometry of axis {}", AXES[k]),
+                format!("no commanded {} position in the records", AXES[k]),
+            );
+            continue;
+        }
+        let variants = (1..=3)
+            .map(|o| {
+                linear_variant(
+                    format!("order {o}"),
+                    TermId::Positioning,
+                    vec![
+                        ("axis", text(AXES[k])),
+                        ("order", num(o as f64)),
+                        ("travel", travel(machine, k)),
+                    ],
+                )
+            })
+            .collect();
+        out.add(family(variants, TermId::Positioning, Placement::Machine));
+    }
+    for (pair, driver) in [("xy", 1), ("xz", 2), ("yz", 2)] {
+        if inventory.positions[driver] {
+            out.add(single("", TermId::Squareness, vec![("pair", text(pair))]));
+        }
+    }
+    for k in 0..3 {
+        if !inventory.positions[k] {
+            continue;
+        }
+        straightness_families(out, machine, k);
+        angular_families(out, machine, inventory, k);
+        out.add(pitch_cyclic_family(machine, k, periodogram_leads[k]));
+        if inventory.approach_both[k] {
+            out.add(single("", TermId::Backlash, vec![("axis", text(AXES[k]))]));
+        } else {
+            out.skip(&format!("backlash[{}]", AXES[k]), format!("needs both directions of approach on {} (approach.{} columns, or commanded joint states the approach can be derived from)", AXES[k], AXES[k]));
+        }
+        thermal_scale_family(out, machine, inventory, k);
+    }
+}
+
+/// The straightness of axis `k` along each other axis, orders 1–3.
+fn straightness_families(out: &mut Gathered, machine: &MachineGeometry, k: usize) {
+    for j in 0..3 {
+        if j == k {
+            continue;
+        }
+        let variants = (1..=3)
+            .map(|o| {
+                linear_variant(
+                    format!("order {o}"),
+                    TermId::Straightness,
+                    vec![
+                        ("axis", text(AXES[k])),
+                        ("direction", text(AXES[j])),
+                        ("order", num(o as f64)),
+                        ("travel", travel(machine, k)),
+                    ],
+                )
+            })
+            .collect();
+        out.add(family(variants, TermId::Straightness, Placement::Machine));
+    }
+}
+
+/// The angular errors of axis `k` about each axis, orders 1–2, with the Abbe levers of the
+/// stacking order (tried only when every lever axis is commanded).
+fn angular_families(
+    out: &mut Gathered,
+    machine: &MachineGeometry,
+    inventory: &SignalInventory,
+    k: usize,
+) {
+    for a in 0..3 {
+        let lever = lever_axes(machine, k);
+        if lever.iter().any(|&l| !inventory.positions[l]) {
+            continue;
+        }
+        let abbe = list(machine.tool_offset.iter().map(|v| num(*v)).collect());
+        let variants = (1..=2)
+            .map(|o| {
+                linear_variant(
+                    format!("order {o}"),
+                    TermId::Angular,
+                    vec![
+                        ("axis", text(AXES[k])),
+                        ("about", text(AXES[a])),
+                        (
+                            "lever_axes",
+                            list(lever.iter().map(|l| text(AXES[*l])).collect()),
+                        ),
+                        ("abbe_offset", abbe.clone()),
+                        ("order", num(o as f64)),
+                        ("travel", travel(machine, k)),
+                    ],
+                )
+            })
+            .collect();
+        out.add(family(variants, TermId::Angular, Placement::Machine));
+    }
+}
+
+/// The cyclic screw error of axis `k`: the common leads shorter than a third of the travel, and
+/// the residuals' own periodogram peak (`periodogram_lead`: lead, periods compared).
+fn pitch_cyclic_family(
+    machine: &MachineGeometry,
+    k: usize,
+    periodogram_lead: Option<(f64, f64)>,
+) -> Option<TermFamily> {
+    let span = machine.travel[k][1] - machine.travel[k][0];
+    // the periodogram's own peak, unless a common lead lies within its resolution
+    // (lead² / span: over 800 mm a 16 mm lead is resolved to 0.3 mm) — a screw's lead is
+    // a catalog value, and a peak a little off it only fits the noise
+    let leads: Vec<(f64, f64)> = COMMON_LEADS_MM
+        .iter()
+        .map(|l| (l * 1e-3, 1.0))
+        .filter(|(l, _)| *l < span / 3.0)
+        .chain(periodogram_lead.filter(|(l, _)| {
+            !COMMON_LEADS_MM
+                .iter()
+                .any(|x| (x * 1e-3 - l).abs() < l * l / span.max(*l))
+        }))
+        .collect();
     let lead_mm = |l: f64| {
         format!("{:.4}", l * 1e3)
             .trim_end_matches('0')
             .trim_end_matches('.')
             .to_string()
     };
-    if axis_family {
-        for k in 0..3 {
-            if !inventory.positions[k] {
-                skip(
-                    &format!("geometry of axis {}", AXES[k]),
-                    format!("no commanded {} position in the records", AXES[k]),
-                );
-                continue;
-            }
-            let orders = |id: TermId,
-                          extra: Vec<(&'static str, ConfigValue)>,
-                          from: usize|
-             -> Vec<Option<TermVariant>> {
-                (from..=3)
-                    .map(|o| {
-                        let mut opts = extra.clone();
-                        opts.push(("order", num(o as f64)));
-                        opts.push(("travel", travel(k)));
-                        linear_variant(format!("order {o}"), id, opts)
-                    })
-                    .collect()
-            };
-            out.extend(family(
-                orders(TermId::Positioning, vec![("axis", text(AXES[k]))], 1),
-                TermId::Positioning,
-                Placement::Machine,
-            ));
-        }
-        for (pair, driver) in [("xy", 1), ("xz", 2), ("yz", 2)] {
-            if inventory.positions[driver] {
-                out.extend(family(
-                    vec![linear_variant(
-                        "",
-                        TermId::Squareness,
-                        vec![("pair", text(pair))],
-                    )],
-                    TermId::Squareness,
-                    Placement::Machine,
-                ));
-            }
-        }
-        for k in 0..3 {
-            if !inventory.positions[k] {
-                continue;
-            }
-            for j in 0..3 {
-                if j == k {
-                    continue;
-                }
-                let variants = (1..=3)
-                    .map(|o| {
-                        linear_variant(
-                            format!("order {o}"),
-                            TermId::Straightness,
-                            vec![
-                                ("axis", text(AXES[k])),
-                                ("direction", text(AXES[j])),
-                                ("order", num(o as f64)),
-                                ("travel", travel(k)),
-                            ],
-                        )
-                    })
-                    .collect();
-                out.extend(family(variants, TermId::Straightness, Placement::Machine));
-            }
-            for a in 0..3 {
-                let lever = lever_axes(machine, k);
-                if lever.iter().any(|&l| !inventory.positions[l]) {
-                    continue;
-                }
-                let abbe = list(machine.tool_offset.iter().map(|v| num(*v)).collect());
-                let variants = (1..=2)
-                    .map(|o| {
-                        linear_variant(
-                            format!("order {o}"),
-                            TermId::Angular,
-                            vec![
-                                ("axis", text(AXES[k])),
-                                ("about", text(AXES[a])),
-                                (
-                                    "lever_axes",
-                                    list(lever.iter().map(|l| text(AXES[*l])).collect()),
-                                ),
-                                ("abbe_offset", abbe.clone()),
-                                ("order", num(o as f64)),
-                                ("travel", travel(k)),
-                            ],
-                        )
-                    })
-                    .collect();
-                out.extend(family(variants, TermId::Angular, Placement::Machine));
-            }
-            // cyclic screw error: the common leads shorter than a third of the travel, and the
-            // residuals' own periodogram peak
-            let span = machine.travel[k][1] - machine.travel[k][0];
-            // the periodogram's own peak, unless a common lead lies within its resolution
-            // (lead² / span: over 800 mm a 16 mm lead is resolved to 0.3 mm) — a screw's lead is
-            // a catalog value, and a peak a little off it only fits the noise
-            let leads: Vec<(f64, f64)> = COMMON_LEADS_MM
-                .iter()
-                .map(|l| (l * 1e-3, 1.0))
-                .filter(|(l, _)| *l < span / 3.0)
-                .chain(periodogram_leads[k].filter(|(l, _)| {
-                    !COMMON_LEADS_MM
-                        .iter()
-                        .any(|x| (x * 1e-3 - l).abs() < l * l / span.max(*l))
-                }))
-                .collect();
-            let variants = leads
-                .iter()
-                .map(|&(l, searched)| {
-                    profiled_variant(
-                        format!("lead {} mm", lead_mm(l)),
-                        TermId::PitchCyclic,
-                        vec![
-                            ("axis", text(AXES[k])),
-                            ("lead", num(l)),
-                            ("harmonics", num(1.0)),
-                        ],
-                        &[],
-                    )
-                    .map(|mut v| {
-                        v.profiled = 1;
-                        v.search_multiplicity = searched;
-                        v
-                    })
-                })
-                .collect();
-            out.extend(family(variants, TermId::PitchCyclic, Placement::Machine));
-            if inventory.approach_both[k] {
-                out.extend(family(
-                    vec![linear_variant(
-                        "",
-                        TermId::Backlash,
-                        vec![("axis", text(AXES[k]))],
-                    )],
-                    TermId::Backlash,
-                    Placement::Machine,
-                ));
-            } else {
-                skip(&format!("backlash[{}]", AXES[k]), format!("needs both directions of approach on {} (approach.{} columns, or commanded joint states the approach can be derived from)", AXES[k], AXES[k]));
-            }
-            // axis scale with each sensor, or each ordered pair at the two ends of the travel
-            let t = &inventory.temperatures;
-            let mut variants = Vec::new();
-            for s in t {
+    let variants = leads
+        .iter()
+        .map(|&(l, searched)| {
+            profiled_variant(
+                format!("lead {} mm", lead_mm(l)),
+                TermId::PitchCyclic,
+                vec![
+                    ("axis", text(AXES[k])),
+                    ("lead", num(l)),
+                    ("harmonics", num(1.0)),
+                ],
+                &[],
+            )
+            .map(|mut v| {
+                v.profiled = 1;
+                v.search_multiplicity = searched;
+                v
+            })
+        })
+        .collect();
+    family(variants, TermId::PitchCyclic, Placement::Machine)
+}
+
+/// The scale of axis `k` with each sensor, or each ordered pair at the two ends of the travel.
+fn thermal_scale_family(
+    out: &mut Gathered,
+    machine: &MachineGeometry,
+    inventory: &SignalInventory,
+    k: usize,
+) {
+    let t = &inventory.temperatures;
+    let mut variants = Vec::new();
+    for s in t {
+        variants.push(linear_variant(
+            format!("sensor {s}"),
+            TermId::ThermalScale,
+            vec![
+                ("axis", text(AXES[k])),
+                ("sensors", list(vec![sensor(s, machine.travel[k][0])])),
+            ],
+        ));
+    }
+    for a in t {
+        for b in t {
+            if a != b {
                 variants.push(linear_variant(
-                    format!("sensor {s}"),
+                    format!("sensors {a} → {b}"),
                     TermId::ThermalScale,
                     vec![
                         ("axis", text(AXES[k])),
-                        ("sensors", list(vec![sensor(s, machine.travel[k][0])])),
+                        (
+                            "sensors",
+                            list(vec![
+                                sensor(a, machine.travel[k][0]),
+                                sensor(b, machine.travel[k][1]),
+                            ]),
+                        ),
                     ],
                 ));
             }
-            for a in t {
-                for b in t {
-                    if a != b {
-                        variants.push(linear_variant(
-                            format!("sensors {a} → {b}"),
-                            TermId::ThermalScale,
-                            vec![
-                                ("axis", text(AXES[k])),
-                                (
-                                    "sensors",
-                                    list(vec![
-                                        sensor(a, machine.travel[k][0]),
-                                        sensor(b, machine.travel[k][1]),
-                                    ]),
-                                ),
-                            ],
-                        ));
-                    }
-                }
-            }
-            if variants.is_empty() {
-                skip(&format!("thermal_scale[{}]", AXES[k]), "no temperature sensor in the records (temperature/<sensor> topics or temperature.<sensor> columns)".into());
-            }
-            out.extend(family(variants, TermId::ThermalScale, Placement::Machine));
         }
     }
-    // structure growth: each sensor, along each axis, without lag or lagging by τ on a grid
+    if variants.is_empty() {
+        out.skip(&format!("thermal_scale[{}]", AXES[k]), "no temperature sensor in the records (temperature/<sensor> topics or temperature.<sensor> columns)".into());
+    }
+    out.add(family(variants, TermId::ThermalScale, Placement::Machine));
+}
+
+/// The structure's growth: each sensor, along each axis, without lag or lagging by τ on a grid.
+fn thermal_growth_families(out: &mut Gathered, inventory: &SignalInventory) {
     if inventory.temperatures.is_empty() {
-        skip(
+        out.skip(
             "thermal_growth",
             "no temperature sensor in the records".into(),
         );
@@ -464,39 +533,41 @@ pub fn candidate_families(
                 }
             }
         }
-        out.extend(family(variants, TermId::ThermalGrowth, Placement::Machine));
+        out.add(family(variants, TermId::ThermalGrowth, Placement::Machine));
     }
+}
+
+/// A time offset (records taken while moving), the compliance of each commanded axis under a
+/// load, and the tool offset.
+fn motion_load_and_tool_families(
+    out: &mut Gathered,
+    inventory: &SignalInventory,
+    axis_family: bool,
+) {
     if inventory.moving {
-        out.extend(family(
-            vec![linear_variant("", TermId::TimeOffset, vec![])],
-            TermId::TimeOffset,
-            Placement::Machine,
-        ));
+        out.add(single("", TermId::TimeOffset, vec![]));
     } else {
-        skip("time_offset", "no record was taken while an axis moved (needs axis velocities: velocity.<axis> columns or joint-state velocities)".into());
+        out.skip("time_offset", "no record was taken while an axis moved (needs axis velocities: velocity.<axis> columns or joint-state velocities)".into());
     }
     if inventory.load && axis_family {
         for k in 0..3 {
             if inventory.positions[k] {
-                out.extend(family(
-                    vec![linear_variant(
-                        "",
-                        TermId::Compliance,
-                        vec![("extension_axis", text(AXES[k]))],
-                    )],
+                out.add(single(
+                    "",
                     TermId::Compliance,
-                    Placement::Machine,
+                    vec![("extension_axis", text(AXES[k]))],
                 ));
             }
         }
     } else if axis_family {
-        skip("compliance", "no load force in the records".into());
+        out.skip("compliance", "no load force in the records".into());
     }
-    out.extend(family(
-        vec![linear_variant("", TermId::ToolOffset, vec![])],
-        TermId::ToolOffset,
-        Placement::Machine,
-    ));
+    out.add(single("", TermId::ToolOffset, vec![]));
+}
+
+/// The terms of the machine's family: a delta's rods, radius, towers and endstops; an arm's
+/// joint offsets, link lengths and gravity terms; a five-axis table's rotary axis location.
+fn kinematic_families(out: &mut Gathered, machine: &MachineGeometry, inventory: &SignalInventory) {
     match &machine.kinematics {
         MachineKinematics::Delta(_) => {
             for id in [
@@ -505,37 +576,25 @@ pub fn candidate_families(
                 TermId::DeltaTowerAngle,
                 TermId::DeltaEndstop,
             ] {
-                out.extend(family(
-                    vec![linear_variant("", id, vec![])],
-                    id,
-                    Placement::Machine,
-                ));
+                out.add(single("", id, vec![]));
             }
         }
         MachineKinematics::SerialArm(arm) => {
-            out.extend(family(
-                vec![linear_variant(
-                    "",
-                    TermId::JointOffset,
-                    vec![("joints", num(arm.chain.dof() as f64))],
-                )],
+            out.add(single(
+                "",
                 TermId::JointOffset,
-                Placement::Machine,
+                vec![("joints", num(arm.chain.dof() as f64))],
             ));
-            out.extend(family(
-                vec![linear_variant(
-                    "",
-                    TermId::LinkLength,
-                    vec![("links", num(arm.link_count() as f64))],
-                )],
+            out.add(single(
+                "",
                 TermId::LinkLength,
-                Placement::Machine,
+                vec![("links", num(arm.link_count() as f64))],
             ));
             match gravity_families(arm, inventory) {
-                Ok(families) => out.extend(families),
+                Ok(families) => out.families.extend(families),
                 Err(reason) => {
                     for term in ["joint_compliance", "joint_backlash", "column_bending"] {
-                        skip(term, reason.clone());
+                        out.skip(term, reason.clone());
                     }
                 }
             }
@@ -548,13 +607,9 @@ pub fn candidate_families(
                     ("c_offset", v3(&f.geometry.c_offset)),
                     ("workpiece_offset", v3(&f.geometry.workpiece_offset)),
                 ];
-                out.extend(family(
-                    vec![linear_variant("", TermId::RotaryAxisLocation, opts)],
-                    TermId::RotaryAxisLocation,
-                    Placement::Machine,
-                ));
+                out.add(single("", TermId::RotaryAxisLocation, opts));
             } else {
-                skip(
+                out.skip(
                     "rotary_axis_location",
                     "no B and C angles in the records".into(),
                 );
@@ -562,7 +617,11 @@ pub fn candidate_families(
         }
         MachineKinematics::Cartesian(_) => {}
     }
-    // instrument terms of the tracker
+}
+
+/// The instrument's terms the declared model lacks: the tracker's warm-up, the instrument's
+/// drift in time, the touch probe's pretravel, refraction with station air.
+fn instrument_families(out: &mut Gathered, declared: &Declared, inventory: &SignalInventory) {
     if !declared.has(TermId::TrackerWarmup) {
         match inventory.power_on {
             Some((lo, hi)) => {
@@ -578,9 +637,9 @@ pub fn candidate_families(
                         v
                     })
                     .collect();
-                out.extend(family(variants, TermId::TrackerWarmup, Placement::Instrument));
+                out.add(family(variants, TermId::TrackerWarmup, Placement::Instrument));
             }
-            None => skip("tracker_warmup", "no time since power-on in the records (the tracker's power-on time: /tracker/power_on, or an instrument_on_time column)".into()),
+            None => out.skip("tracker_warmup", "no time since power-on in the records (the tracker's power-on time: /tracker/power_on, or an instrument_on_time column)".into()),
         }
     }
     // the instrument's pose drifting in time (a stand sinking, a head turning): low orders only,
@@ -593,15 +652,15 @@ pub fn candidate_families(
                     .into_iter()
                     .map(|(order, rotation, name)| linear_variant(name, TermId::InstrumentDrift, vec![("order", num(order as f64)), ("span", span.clone()), ("rotation", ConfigValue::Bool(rotation))]))
                     .collect();
-                out.extend(family(variants, TermId::InstrumentDrift, Placement::Instrument));
+                out.add(family(variants, TermId::InstrumentDrift, Placement::Instrument));
             }
-            _ => skip("instrument_drift", format!("the readings span less than {:.0} min (or carry no time): a drift of the instrument needs readings spread over time", MIN_DRIFT_SPAN_S / 60.0)),
+            _ => out.skip("instrument_drift", format!("the readings span less than {:.0} min (or carry no time): a drift of the instrument needs readings spread over time", MIN_DRIFT_SPAN_S / 60.0)),
         }
     }
     // the touch probe's pretravel: a constant mean, the lobing of a kinematic probe's
     // three-point seat (n = 3) and the vertical pretravel
     if inventory.probe_hits && !declared.has(TermId::ProbePretravel) {
-        out.extend(family(
+        out.add(family(
             vec![linear_variant(
                 "3 lobes",
                 TermId::ProbePretravel,
@@ -613,7 +672,7 @@ pub fn candidate_families(
     }
     if !declared.has(TermId::Refraction) {
         if inventory.air {
-            out.extend(family(
+            out.add(family(
                 vec![profiled_variant(
                     "",
                     TermId::Refraction,
@@ -628,49 +687,44 @@ pub fn candidate_families(
                 Placement::Instrument,
             ));
         } else {
-            skip(
+            out.skip(
                 "refraction",
                 "no station air (temperature, pressure, humidity) in the records".into(),
             );
         }
     }
-    // the part: its expansion about the workpiece origin with each temperature (the clamp
-    // point is not known; expansion about another point differs by a shift growing with the
-    // same temperature, which a thermal growth candidate covers), and a misalignment of the
-    // part's frame. Only points taken in the part's (machine) frame show them: an instrument
-    // registered to the part sights the tool, and a uniform scale or turn of its frame is the
-    // same as its own pose, or its range scale
+}
+
+/// The part: its expansion about the workpiece origin with each temperature (the clamp point is
+/// not known; expansion about another point differs by a shift growing with the same
+/// temperature, which a thermal growth candidate covers), and a misalignment of the part's
+/// frame. Only points taken in the part's (machine) frame show them: an instrument registered to
+/// the part sights the tool, and a uniform scale or turn of its frame is the same as its own
+/// pose, or its range scale.
+fn part_families(
+    out: &mut Gathered,
+    declared: &Declared,
+    inventory: &SignalInventory,
+    points_in_machine_frame: bool,
+) {
     if !points_in_machine_frame {
         for id in [TermId::WorkpieceExpansion, TermId::FrameMisalignment] {
             if !declared.has(id) {
-                skip(id.as_str(), "the points are in an instrument frame registered to the part: a change of the part's frame or scale is the instrument's own pose or range scale there; points measured in the part's frame (probe hits, a CMM export) show it".into());
+                out.skip(id.as_str(), "the points are in an instrument frame registered to the part: a change of the part's frame or scale is the instrument's own pose or range scale there; points measured in the part's frame (probe hits, a CMM export) show it".into());
             }
         }
     } else if !declared.has(TermId::WorkpieceExpansion) {
         for s in &inventory.temperatures {
-            out.extend(family(
-                vec![linear_variant(
-                    "",
-                    TermId::WorkpieceExpansion,
-                    vec![("sensor", text(s))],
-                )],
+            out.add(single(
+                "",
                 TermId::WorkpieceExpansion,
-                Placement::Machine,
+                vec![("sensor", text(s))],
             ));
         }
     }
     if points_in_machine_frame && !declared.has(TermId::FrameMisalignment) {
-        out.extend(family(
-            vec![linear_variant("", TermId::FrameMisalignment, vec![])],
-            TermId::FrameMisalignment,
-            Placement::Machine,
-        ));
+        out.add(single("", TermId::FrameMisalignment, vec![]));
     }
-    out.retain(|f| {
-        !labels.contains(&f.label)
-            && !(f.id == TermId::ToolOffset && declared.has(TermId::ToolOffset))
-    });
-    (out, not_tried)
 }
 
 /// The gravity terms of a robot whose URDF gives its masses: each revolute joint's compliance

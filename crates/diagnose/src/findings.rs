@@ -282,157 +282,209 @@ pub fn build(inputs: &Inputs) -> Result<Built, PhysicsError> {
         }
     })?;
     let full = problem.predictions(inputs.x)?;
-    let n = inputs.records.len();
-    let rot = |i: usize| inputs.view.rotation(i);
     let mut out: Vec<(f64, Finding, (Vec<f64>, Vec<f64>, Vec<f64>))> = Vec::new();
     for f in inputs.found {
         let bare = problem.predictions(&without(inputs, &f.label))?;
+        // the term's effect on each reading, in the readings' frame
         let c_rec: Vec<Vector3<f64>> = full.iter().zip(&bare).map(|(a, b)| a - b).collect();
-        let c_wp: Vec<Vector3<f64>> = c_rec.iter().enumerate().map(|(i, c)| rot(i) * c).collect();
-        let effect_rms =
-            (c_wp.iter().map(|c| c.norm_squared()).sum::<f64>() / (3 * n).max(1) as f64).sqrt();
-        let per_axis: Vec<f64> = (0..3)
-            .map(|k| c_wp.iter().map(|c| c[k] * c[k]).sum::<f64>())
-            .collect();
-        let total: f64 = per_axis.iter().sum();
-        let main = (0..3)
-            .max_by(|&a, &b| per_axis[a].total_cmp(&per_axis[b]))
-            .unwrap_or(0);
-        let range_term = f.placement == Placement::Instrument;
-        // evidence: residual with the effect put back, along the main axis (range terms: along
-        // the line of sight)
-        let (along, fitted, residual): (String, Vec<f64>, Vec<f64>) = if range_term {
-            let los = &inputs.view.line_of_sight;
-            (
-                "line of sight".into(),
-                (0..n).map(|i| c_rec[i].dot(&los[i])).collect(),
-                (0..n)
-                    .map(|i| (rot(i).transpose() * inputs.after[i] + c_rec[i]).dot(&los[i]))
-                    .collect(),
-            )
-        } else {
-            (
-                axis_name(main).into(),
-                c_wp.iter().map(|c| c[main]).collect(),
-                (0..n)
-                    .map(|i| inputs.after[i][main] + c_wp[i][main])
-                    .collect(),
-            )
-        };
-        let (signal_name, unit, signal) = signal_of(f, inputs, &fitted);
-        let sigma: Vec<f64> = (0..n)
-            .map(|i| {
-                inputs
-                    .view
-                    .workpiece_sigma(i, &inputs.records[i].covariance)[main]
-            })
-            .collect();
-        let evidence = Evidence {
-            signal: signal_name,
-            unit,
-            along,
-            bins: bins(&signal, &residual, &fitted, &sigma),
-            correlation: correlation(&residual, &fitted),
-        };
-        let params = params_of(inputs, &f.label);
-        let parameters: BTreeMap<String, ParameterValue> = params
-            .iter()
-            .map(|(n, v, s, u)| {
-                let at_bound = inputs
-                    .at_bound
-                    .iter()
-                    .find(|(name, _)| *name == format!("{}.{n}", f.label))
-                    .map(|(_, side)| side.clone());
-                (
-                    n.clone(),
-                    ParameterValue {
-                        value: *v,
-                        sigma: if at_bound.is_some() { None } else { *s },
-                        unit: u.clone(),
-                        at_bound,
-                    },
-                )
-            })
-            .collect();
-        let largest = (0..n)
-            .max_by(|&a, &b| c_wp[a].norm().total_cmp(&c_wp[b].norm()))
-            .unwrap_or(0);
-        let channels: BTreeSet<String> = (0..n)
-            .filter(|&i| c_wp[i].norm() > 0.2 * c_wp[largest].norm())
-            .map(|i| inputs.records[i].channel.clone())
-            .collect();
-        let p = inputs.view.position[largest];
-        let description = format!(
-            "largest ({} µm) at x {:.0} mm, y {:.0} mm, z {:.0} mm ({}), t = {:.2} h into the recording; {:.0} % of the effect is along {}",
-            um(c_wp[largest].norm()),
-            p.x * 1e3,
-            p.y * 1e3,
-            p.z * 1e3,
-            inputs.view.position_frame,
-            (inputs.view.time[largest] - inputs.view.time.iter().cloned().fold(f64::INFINITY, f64::min)) / 3600.0,
-            if total > 0.0 { 100.0 * per_axis[main] / total } else { 0.0 },
-            axis_name(main)
-        );
-        let location = Where {
-            channels: channels.into_iter().collect(),
-            axis: axis_name(main).into(),
-            description,
-            located: accounted(inputs.located_before, inputs.samples_before, &c_wp),
-        };
-        let unusual = unusual_values(inputs, &f.label);
-        let alternatives: Vec<Alternative> = inputs
-            .alternatives
-            .get(&f.label)
-            .cloned()
-            .unwrap_or_default()
-            .into_iter()
-            .filter(|a| !inputs.found.iter().any(|g| g.label == a.label))
-            .collect();
-        let mut statement = statement(f, &params, &c_wp, main);
-        if !unusual.is_empty() {
-            statement.push_str(&format!(" — unusual: {}", unusual.join("; ")));
-        }
-        if !alternatives.is_empty() {
-            statement.push_str(&format!(
-                " — this recording cannot tell it from {} ({})",
-                alternatives
-                    .iter()
-                    .map(|a| a.label.as_str())
-                    .collect::<Vec<_>>()
-                    .join(", "),
-                alternatives
-                    .iter()
-                    .map(|a| a.separated_by.as_str())
-                    .collect::<BTreeSet<_>>()
-                    .into_iter()
-                    .collect::<Vec<_>>()
-                    .join("; ")
-            ));
-        }
-        let significance_sigma = inputs
-            .significance
-            .iter()
-            .find(|(l, _)| *l == f.label)
-            .map(|s| s.1)
-            .unwrap_or(f64::NAN);
-        let finding = Finding {
-            term: f.id.as_str().into(),
-            label: f.label.clone(),
-            variant: f.variant.clone(),
-            parameters,
-            location,
-            evidence,
-            statement,
-            effect_rms_m: effect_rms,
-            significance_sigma,
-            unusual,
-            alternatives,
-        };
-        out.push((effect_rms, finding, (signal, residual, fitted)));
+        out.push(finding_of(inputs, f, &c_rec));
     }
     out.sort_by(|a, b| b.0.total_cmp(&a.0));
     let (findings, evidence) = out.into_iter().map(|(_, f, e)| (f, e)).unzip();
     Ok(Built { findings, evidence })
+}
+
+/// One found term whose effect on each reading is `c_rec`, as a finding: the RMS of its effect,
+/// the finding, and its evidence per record (signal, residual with the effect put back, fitted
+/// effect).
+fn finding_of(
+    inputs: &Inputs,
+    f: &FoundTerm,
+    c_rec: &[Vector3<f64>],
+) -> (f64, Finding, (Vec<f64>, Vec<f64>, Vec<f64>)) {
+    let n = inputs.records.len();
+    let c_wp: Vec<Vector3<f64>> = c_rec
+        .iter()
+        .enumerate()
+        .map(|(i, c)| inputs.view.rotation(i) * c)
+        .collect();
+    let effect_rms =
+        (c_wp.iter().map(|c| c.norm_squared()).sum::<f64>() / (3 * n).max(1) as f64).sqrt();
+    let per_axis: Vec<f64> = (0..3)
+        .map(|k| c_wp.iter().map(|c| c[k] * c[k]).sum::<f64>())
+        .collect();
+    let total: f64 = per_axis.iter().sum();
+    let main = (0..3)
+        .max_by(|&a, &b| per_axis[a].total_cmp(&per_axis[b]))
+        .unwrap_or(0);
+    let share = if total > 0.0 {
+        100.0 * per_axis[main] / total
+    } else {
+        0.0
+    };
+    let (along, fitted, residual) = effect_put_back(inputs, f, c_rec, &c_wp, main);
+    let (signal_name, unit, signal) = signal_of(f, inputs, &fitted);
+    let sigma: Vec<f64> = (0..n)
+        .map(|i| {
+            inputs
+                .view
+                .workpiece_sigma(i, &inputs.records[i].covariance)[main]
+        })
+        .collect();
+    let evidence = Evidence {
+        signal: signal_name,
+        unit,
+        along,
+        bins: bins(&signal, &residual, &fitted, &sigma),
+        correlation: correlation(&residual, &fitted),
+    };
+    let params = params_of(inputs, &f.label);
+    let unusual = unusual_values(inputs, &f.label);
+    let alternatives: Vec<Alternative> = inputs
+        .alternatives
+        .get(&f.label)
+        .cloned()
+        .unwrap_or_default()
+        .into_iter()
+        .filter(|a| !inputs.found.iter().any(|g| g.label == a.label))
+        .collect();
+    let statement = with_caveats(statement(f, &params, &c_wp, main), &unusual, &alternatives);
+    let significance_sigma = inputs
+        .significance
+        .iter()
+        .find(|(l, _)| *l == f.label)
+        .map(|s| s.1)
+        .unwrap_or(f64::NAN);
+    let finding = Finding {
+        term: f.id.as_str().into(),
+        label: f.label.clone(),
+        variant: f.variant.clone(),
+        parameters: parameter_values(inputs, &f.label, &params),
+        location: location_of(inputs, &c_wp, main, share),
+        evidence,
+        statement,
+        effect_rms_m: effect_rms,
+        significance_sigma,
+        unusual,
+        alternatives,
+    };
+    (effect_rms, finding, (signal, residual, fitted))
+}
+
+/// The evidence direction and, along it, the fitted effect and the residual with the effect put
+/// back: along the main workpiece axis, or a range term's along the line of sight.
+fn effect_put_back(
+    inputs: &Inputs,
+    f: &FoundTerm,
+    c_rec: &[Vector3<f64>],
+    c_wp: &[Vector3<f64>],
+    main: usize,
+) -> (String, Vec<f64>, Vec<f64>) {
+    let n = inputs.records.len();
+    if f.placement == Placement::Instrument {
+        let los = &inputs.view.line_of_sight;
+        let rot = |i: usize| inputs.view.rotation(i);
+        (
+            "line of sight".into(),
+            (0..n).map(|i| c_rec[i].dot(&los[i])).collect(),
+            (0..n)
+                .map(|i| (rot(i).transpose() * inputs.after[i] + c_rec[i]).dot(&los[i]))
+                .collect(),
+        )
+    } else {
+        (
+            axis_name(main).into(),
+            c_wp.iter().map(|c| c[main]).collect(),
+            (0..n)
+                .map(|i| inputs.after[i][main] + c_wp[i][main])
+                .collect(),
+        )
+    }
+}
+
+/// A term's parameters as reported: value, σ (none at a bound of the possible range), unit.
+fn parameter_values(
+    inputs: &Inputs,
+    label: &str,
+    params: &[(String, f64, Option<f64>, String)],
+) -> BTreeMap<String, ParameterValue> {
+    params
+        .iter()
+        .map(|(n, v, s, u)| {
+            let at_bound = inputs
+                .at_bound
+                .iter()
+                .find(|(name, _)| *name == format!("{label}.{n}"))
+                .map(|(_, side)| side.clone());
+            (
+                n.clone(),
+                ParameterValue {
+                    value: *v,
+                    sigma: if at_bound.is_some() { None } else { *s },
+                    unit: u.clone(),
+                    at_bound,
+                },
+            )
+        })
+        .collect()
+}
+
+/// Where an effect `c_wp` lives: the channels it reaches over a fifth of its largest, where the
+/// largest is, its main axis (`share` % of it along that axis), and the localisation findings
+/// it accounts for.
+fn location_of(inputs: &Inputs, c_wp: &[Vector3<f64>], main: usize, share: f64) -> Where {
+    let n = inputs.records.len();
+    let largest = (0..n)
+        .max_by(|&a, &b| c_wp[a].norm().total_cmp(&c_wp[b].norm()))
+        .unwrap_or(0);
+    let channels: BTreeSet<String> = (0..n)
+        .filter(|&i| c_wp[i].norm() > 0.2 * c_wp[largest].norm())
+        .map(|i| inputs.records[i].channel.clone())
+        .collect();
+    let p = inputs.view.position[largest];
+    let description = format!(
+        "largest ({} µm) at x {:.0} mm, y {:.0} mm, z {:.0} mm ({}), t = {:.2} h into the recording; {:.0} % of the effect is along {}",
+        um(c_wp[largest].norm()),
+        p.x * 1e3,
+        p.y * 1e3,
+        p.z * 1e3,
+        inputs.view.position_frame,
+        (inputs.view.time[largest] - inputs.view.time.iter().cloned().fold(f64::INFINITY, f64::min)) / 3600.0,
+        share,
+        axis_name(main)
+    );
+    Where {
+        channels: channels.into_iter().collect(),
+        axis: axis_name(main).into(),
+        description,
+        located: accounted(inputs.located_before, inputs.samples_before, c_wp),
+    }
+}
+
+/// A finding's statement with its unusual values and the alternatives the recording cannot
+/// tell it from.
+fn with_caveats(mut statement: String, unusual: &[String], alternatives: &[Alternative]) -> String {
+    if !unusual.is_empty() {
+        statement.push_str(&format!(" — unusual: {}", unusual.join("; ")));
+    }
+    if !alternatives.is_empty() {
+        statement.push_str(&format!(
+            " — this recording cannot tell it from {} ({})",
+            alternatives
+                .iter()
+                .map(|a| a.label.as_str())
+                .collect::<Vec<_>>()
+                .join(", "),
+            alternatives
+                .iter()
+                .map(|a| a.separated_by.as_str())
+                .collect::<BTreeSet<_>>()
+                .into_iter()
+                .collect::<Vec<_>>()
+                .join("; ")
+        ));
+    }
+    statement
 }
 
 /// The signal a term's evidence is plotted against.

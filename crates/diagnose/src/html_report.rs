@@ -5,11 +5,13 @@
 //! Plots show mm, µm and hours, as metrologists read them.
 
 use metrocell_estimation::fit_summary::value_with_sigma;
-use metrocell_report::{HistogramPlot, PlotError, Report, ScatterPlot, Series, SeriesPlot, Table};
+use metrocell_report::{
+    HistogramPlot, PlotError, Report, ScatterPlot, Section, Series, SeriesPlot, Table,
+};
 
 use crate::locate::p_value_text;
-use crate::pipeline::Diagnosis;
-use crate::report::{FitFigures, ParameterValue};
+use crate::pipeline::{Diagnosis, PlotData};
+use crate::report::{Finding, FitFigures, ParameterValue};
 
 fn um(v: f64) -> String {
     format!("{:.2}", v * 1e6)
@@ -44,11 +46,65 @@ fn p_text(p: f64) -> String {
     text.strip_prefix("= ").map(str::to_string).unwrap_or(text)
 }
 
-/// The page for a diagnosis.
+/// The page for a diagnosis: the answer, each finding with its evidence, what catalog physics
+/// does not explain, the residuals over the workspace and over time, the held-out histograms,
+/// how the terms were chosen, and the records.
 pub fn html_report(d: &Diagnosis, title: &str) -> Result<Report, PlotError> {
     let r = &d.report;
     let p = &d.plots;
     let mut page = Report::new(title);
+    answer_section(&mut page, r);
+    for (k, f) in r.findings.iter().enumerate() {
+        finding_section(&mut page, k, f, p.evidence.get(k))?;
+    }
+    if !r.unexplained.is_empty() {
+        let s = page.section("Not explained by catalog physics");
+        for u in &r.unexplained {
+            s.paragraph(&u.statement);
+            s.paragraph(&format!("Where: {}", u.location.description));
+        }
+    }
+    workspace_section(&mut page, p)?;
+    if !p.time.is_empty() {
+        time_section(&mut page, p)?;
+    }
+    // before/after histograms of held-out residuals
+    if !p.heldout_before.is_empty() {
+        let s = page.section("Held-out residuals before and after");
+        let plot = HistogramPlot::new(
+            "Held-out 3-D residual (blocks of time)",
+            "|residual| (µm)",
+            30,
+        )
+        .sample("before", p.heldout_before.iter().map(|v| v * 1e6).collect())
+        .sample("after", p.heldout_after.iter().map(|v| v * 1e6).collect());
+        s.figure(
+            "histogram",
+            "Each record predicted by a fit that did not see its block of time",
+            plot.svg()?,
+        );
+    }
+    selection_section(&mut page, r);
+    if !r.messages.is_empty() || !r.records.rejected.is_empty() || !r.records.outliers.is_empty() {
+        let s = page.section("The records");
+        s.paragraph(&format!(
+            "{} readings, {} records used ({} groups of repeated readings averaged), frame: {}.",
+            r.records.readings, r.records.used, r.records.averaged_groups, r.records.frame
+        ));
+        for m in r
+            .messages
+            .iter()
+            .chain(&r.records.rejected)
+            .chain(&r.records.outliers)
+        {
+            s.paragraph(m);
+        }
+    }
+    Ok(page)
+}
+
+/// The answer in words and the held-out figures before and after.
+fn answer_section(page: &mut Report, r: &crate::report::Report) {
     let s = page.section("Answer");
     s.paragraph(&r.summary);
     s.paragraph(&r.noise.statement);
@@ -58,112 +114,129 @@ pub fn html_report(d: &Diagnosis, title: &str) -> Result<Report, PlotError> {
             .row(figures_row("declared model, refitted", &r.before))
             .row(figures_row("with what was found", &r.after)),
     );
-    for (k, f) in r.findings.iter().enumerate() {
-        let s = page.section(&format!("Finding {}: {}", k + 1, f.label));
-        s.paragraph(&f.statement);
+}
+
+/// Finding `k`: its statement, where it lives, its parameters, and its evidence (signal,
+/// residual with the term put back, fitted term per record).
+fn finding_section(
+    page: &mut Report,
+    k: usize,
+    f: &Finding,
+    evidence: Option<&(Vec<f64>, Vec<f64>, Vec<f64>)>,
+) -> Result<(), PlotError> {
+    let s = page.section(&format!("Finding {}: {}", k + 1, f.label));
+    s.paragraph(&f.statement);
+    s.paragraph(&format!(
+        "Where: {} (channels: {}).",
+        f.location.description,
+        f.location.channels.join(", ")
+    ));
+    if !f.location.located.is_empty() {
         s.paragraph(&format!(
-            "Where: {} (channels: {}).",
-            f.location.description,
-            f.location.channels.join(", ")
+            "It accounts for: {}.",
+            f.location.located.join("; ")
         ));
-        if !f.location.located.is_empty() {
-            s.paragraph(&format!(
-                "It accounts for: {}.",
-                f.location.located.join("; ")
-            ));
+    }
+    let mut t = Table::new(&["parameter", "value ± σ (k = 1)"]).caption(&format!(
+        "catalog term `{}`, variant {}",
+        f.term,
+        if f.variant.is_empty() {
+            "—"
+        } else {
+            &f.variant
         }
-        let mut t = Table::new(&["parameter", "value ± σ (k = 1)"]).caption(&format!(
-            "catalog term `{}`, variant {}",
-            f.term,
-            if f.variant.is_empty() {
-                "—"
-            } else {
-                &f.variant
-            }
-        ));
-        for (name, v) in &f.parameters {
-            t.push(vec![name.clone(), parameter_text(v)]);
-        }
-        s.table(t);
-        if let Some((signal, residual, fitted)) = p.evidence.get(k) {
-            let scale = if f.evidence.unit == "m" {
-                1e3
-            } else if f.evidence.unit == "s" {
-                1.0 / 60.0
-            } else {
-                1.0
-            };
-            let unit = match f.evidence.unit.as_str() {
-                "m" => "mm".to_string(),
-                "s" => "min".to_string(),
-                u => u.to_string(),
-            };
-            let keep: Vec<usize> = (0..signal.len())
-                .filter(|&i| {
-                    signal[i].is_finite() && residual[i].is_finite() && fitted[i].is_finite()
-                })
-                .collect();
-            let mut order = keep.clone();
-            order.sort_by(|&a, &b| signal[a].total_cmp(&signal[b]));
-            let measured = Series::new(
-                "residual with the term put back",
-                keep.iter()
-                    .map(|&i| (signal[i] * scale, residual[i] * 1e6))
-                    .collect(),
-            )
-            .markers();
-            let model = Series::new(
-                "fitted term",
-                order
-                    .iter()
-                    .map(|&i| (signal[i] * scale, fitted[i] * 1e6))
-                    .collect(),
-            );
-            let bins = &f.evidence.bins;
-            let binned = Series::new(
-                "bin means ± standard error",
-                bins.iter()
-                    .map(|b| (b.signal * scale, b.residual_m * 1e6))
-                    .collect(),
-            )
-            .band(
-                bins.iter()
-                    .map(|b| {
-                        (
-                            (b.residual_m - b.residual_sigma_m) * 1e6,
-                            (b.residual_m + b.residual_sigma_m) * 1e6,
-                        )
-                    })
-                    .collect(),
-            );
-            if !keep.is_empty() {
-                let plot = SeriesPlot::new(
-                    &format!("{} — evidence", f.label),
-                    &format!("{} ({unit})", f.evidence.signal),
-                    &format!("residual along {} (µm)", f.evidence.along),
+    ));
+    for (name, v) in &f.parameters {
+        t.push(vec![name.clone(), parameter_text(v)]);
+    }
+    s.table(t);
+    if let Some((signal, residual, fitted)) = evidence {
+        evidence_figure(s, k, f, signal, residual, fitted)?;
+    }
+    Ok(())
+}
+
+/// The residual with the term put back against the term's signal, the fitted term and the bin
+/// means (no figure when no record has all three finite).
+fn evidence_figure(
+    s: &mut Section,
+    k: usize,
+    f: &Finding,
+    signal: &[f64],
+    residual: &[f64],
+    fitted: &[f64],
+) -> Result<(), PlotError> {
+    let scale = if f.evidence.unit == "m" {
+        1e3
+    } else if f.evidence.unit == "s" {
+        1.0 / 60.0
+    } else {
+        1.0
+    };
+    let unit = match f.evidence.unit.as_str() {
+        "m" => "mm".to_string(),
+        "s" => "min".to_string(),
+        u => u.to_string(),
+    };
+    let keep: Vec<usize> = (0..signal.len())
+        .filter(|&i| signal[i].is_finite() && residual[i].is_finite() && fitted[i].is_finite())
+        .collect();
+    let mut order = keep.clone();
+    order.sort_by(|&a, &b| signal[a].total_cmp(&signal[b]));
+    let measured = Series::new(
+        "residual with the term put back",
+        keep.iter()
+            .map(|&i| (signal[i] * scale, residual[i] * 1e6))
+            .collect(),
+    )
+    .markers();
+    let model = Series::new(
+        "fitted term",
+        order
+            .iter()
+            .map(|&i| (signal[i] * scale, fitted[i] * 1e6))
+            .collect(),
+    );
+    let bins = &f.evidence.bins;
+    let binned = Series::new(
+        "bin means ± standard error",
+        bins.iter()
+            .map(|b| (b.signal * scale, b.residual_m * 1e6))
+            .collect(),
+    )
+    .band(
+        bins.iter()
+            .map(|b| {
+                (
+                    (b.residual_m - b.residual_sigma_m) * 1e6,
+                    (b.residual_m + b.residual_sigma_m) * 1e6,
                 )
-                .series(measured)
-                .series(model)
-                .series(binned);
-                s.figure(
-                    &format!("evidence_{}", k + 1),
-                    &format!(
-                        "Residual against the term's signal (correlation {:.2})",
-                        f.evidence.correlation
-                    ),
-                    plot.svg()?,
-                );
-            }
-        }
+            })
+            .collect(),
+    );
+    if !keep.is_empty() {
+        let plot = SeriesPlot::new(
+            &format!("{} — evidence", f.label),
+            &format!("{} ({unit})", f.evidence.signal),
+            &format!("residual along {} (µm)", f.evidence.along),
+        )
+        .series(measured)
+        .series(model)
+        .series(binned);
+        s.figure(
+            &format!("evidence_{}", k + 1),
+            &format!(
+                "Residual against the term's signal (correlation {:.2})",
+                f.evidence.correlation
+            ),
+            plot.svg()?,
+        );
     }
-    if !r.unexplained.is_empty() {
-        let s = page.section("Not explained by catalog physics");
-        for u in &r.unexplained {
-            s.paragraph(&u.statement);
-            s.paragraph(&format!("Where: {}", u.location.description));
-        }
-    }
-    // residuals over the workspace, before and after
+    Ok(())
+}
+
+/// The residuals' size over the workspace (top view), before and after.
+fn workspace_section(page: &mut Report, p: &PlotData) -> Result<(), PlotError> {
     let s = page.section("Residuals over the workspace");
     for (name, res) in [("before", &p.before), ("after", &p.after)] {
         if res.is_empty() {
@@ -188,78 +261,58 @@ pub fn html_report(d: &Diagnosis, title: &str) -> Result<Report, PlotError> {
             plot.svg()?,
         );
     }
-    // residuals over time with the temperatures
-    if !p.time.is_empty() {
-        let t0 = p.time.iter().cloned().fold(f64::INFINITY, f64::min);
-        let hours: Vec<f64> = p.time.iter().map(|t| (t - t0) / 3600.0).collect();
-        let s = page.section("Residuals over time, with the temperatures");
-        let mut plot = SeriesPlot::new(
-            "Residuals over time",
-            "time from the first record (h)",
-            "residual (µm)",
-        );
+    Ok(())
+}
+
+/// The residual components over time before and after, and the temperatures.
+fn time_section(page: &mut Report, p: &PlotData) -> Result<(), PlotError> {
+    let t0 = p.time.iter().cloned().fold(f64::INFINITY, f64::min);
+    let hours: Vec<f64> = p.time.iter().map(|t| (t - t0) / 3600.0).collect();
+    let s = page.section("Residuals over time, with the temperatures");
+    let mut plot = SeriesPlot::new(
+        "Residuals over time",
+        "time from the first record (h)",
+        "residual (µm)",
+    );
+    for (when, res) in [("before", &p.before), ("after", &p.after)] {
         for (axis, name) in ["x", "y", "z"].iter().enumerate() {
             plot = plot.series(
                 Series::new(
-                    &format!("{name} before"),
+                    &format!("{name} {when}"),
                     hours
                         .iter()
-                        .zip(&p.before)
+                        .zip(res)
                         .map(|(h, e)| (*h, e[axis] * 1e6))
                         .collect(),
                 )
                 .markers(),
             );
         }
-        for (axis, name) in ["x", "y", "z"].iter().enumerate() {
-            plot = plot.series(
-                Series::new(
-                    &format!("{name} after"),
-                    hours
-                        .iter()
-                        .zip(&p.after)
-                        .map(|(h, e)| (*h, e[axis] * 1e6))
-                        .collect(),
-                )
-                .markers(),
-            );
+    }
+    s.figure(
+        "residuals_time",
+        "Workpiece-frame residual components before and after",
+        plot.svg()?,
+    );
+    if !p.temperatures.is_empty() {
+        let mut tplot = SeriesPlot::new("Temperatures", "time from the first record (h)", "°C");
+        for (name, values) in &p.temperatures {
+            let mut pts: Vec<(f64, f64)> =
+                hours.iter().zip(values).map(|(h, v)| (*h, *v)).collect();
+            pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+            tplot = tplot.series(Series::new(name, pts));
         }
         s.figure(
-            "residuals_time",
-            "Workpiece-frame residual components before and after",
-            plot.svg()?,
-        );
-        if !p.temperatures.is_empty() {
-            let mut tplot = SeriesPlot::new("Temperatures", "time from the first record (h)", "°C");
-            for (name, values) in &p.temperatures {
-                let mut pts: Vec<(f64, f64)> =
-                    hours.iter().zip(values).map(|(h, v)| (*h, *v)).collect();
-                pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-                tplot = tplot.series(Series::new(name, pts));
-            }
-            s.figure(
-                "temperatures",
-                "The recorded temperatures at the records' times",
-                tplot.svg()?,
-            );
-        }
-    }
-    // before/after histograms of held-out residuals
-    if !p.heldout_before.is_empty() {
-        let s = page.section("Held-out residuals before and after");
-        let plot = HistogramPlot::new(
-            "Held-out 3-D residual (blocks of time)",
-            "|residual| (µm)",
-            30,
-        )
-        .sample("before", p.heldout_before.iter().map(|v| v * 1e6).collect())
-        .sample("after", p.heldout_after.iter().map(|v| v * 1e6).collect());
-        s.figure(
-            "histogram",
-            "Each record predicted by a fit that did not see its block of time",
-            plot.svg()?,
+            "temperatures",
+            "The recorded temperatures at the records' times",
+            tplot.svg()?,
         );
     }
+    Ok(())
+}
+
+/// How the terms were chosen: each step's best candidates, and the terms not tried.
+fn selection_section(page: &mut Report, r: &crate::report::Report) {
     let s = page.section("How the terms were chosen");
     s.paragraph("Each step tries every candidate term (catalog terms the model lacks, with their variants) and every empirical correction, refits the declared parameters with it, and accepts the best one only if it lowers the held-out error by 2 % or more, is significant (F test, Bonferroni over the candidates tried), lies in its documented range and lowers the BIC.");
     for (k, step) in r.selection.iter().enumerate() {
@@ -301,22 +354,6 @@ pub fn html_report(d: &Diagnosis, title: &str) -> Result<Report, PlotError> {
         }
         s.table(t);
     }
-    if !r.messages.is_empty() || !r.records.rejected.is_empty() || !r.records.outliers.is_empty() {
-        let s = page.section("The records");
-        s.paragraph(&format!(
-            "{} readings, {} records used ({} groups of repeated readings averaged), frame: {}.",
-            r.records.readings, r.records.used, r.records.averaged_groups, r.records.frame
-        ));
-        for m in r
-            .messages
-            .iter()
-            .chain(&r.records.rejected)
-            .chain(&r.records.outliers)
-        {
-            s.paragraph(m);
-        }
-    }
-    Ok(page)
 }
 
 #[cfg(test)]

@@ -26,7 +26,7 @@ use nalgebra::Vector3;
 use crate::all_at_once::all_at_once;
 use crate::augmented_stage::Augmented;
 use crate::candidate_stage::{candidates, Prepared, SelectionFrame};
-use crate::candidates::Placement;
+use crate::candidates::{NotTried, Placement};
 use crate::declared_stage::{declared_stage, DeclaredStage};
 use crate::findings::{self, FoundTerm};
 use crate::judgement::{judge, JudgeInputs, Judged};
@@ -191,38 +191,135 @@ impl Progress {
     }
 }
 
-/// Run the diagnosis.
+/// Run the diagnosis: the stages in order, each a function of its own (the module's doc says
+/// what each does).
+///
+/// 1–2. `declared_stage`: the records made ready, the declared model (with the tracker pose
+///      its readings need) fitted; `DeclaredFit`: that fit's model, values and residuals;
+/// 3. `located_before`: the declared model's residuals tested against noise and located;
+/// 4. `selection_frame_and_candidates`: what the selection runs on, and the candidates;
+/// 5. `select`: forward selection on held-out blocks (or every candidate at once);
+/// 6–7. `refit_and_judge`: the augmented model refitted and judged, terms not significant
+///      after the refit dropped;
+/// 8. `noise_levels` and `what_remains`: the noise the verdicts rely on, what remains;
+/// 9. `report`: the findings, the report, the augmented model's terms and the plots.
 pub fn diagnose(
     declared: &DeclaredModel,
     records: &RecordSet,
     options: &DiagnoseOptions,
 ) -> Result<Diagnosis, DiagnoseError> {
     let progress = Progress::new(options.progress);
-    // 1–2. records and the declared fit
     let stage = declared_stage(declared, records, options, &progress)?;
-    let model = ForwardModel::new(declared.machine, declared.machine_terms, &stage.instruments)?;
-    let x0 = stage.fit.x.clone();
-    let free0: Vec<usize> = stage
-        .fit
-        .parameters
-        .iter()
-        .enumerate()
-        .filter(|(_, p)| p.free)
-        .map(|(k, _)| k)
-        .collect();
-    let view0 = ResidualView::new(&model, &x0, &stage.set.records, &stage.set.frame)?;
+    let fitted = DeclaredFit::new(declared, &stage)?;
     progress.say("declared model fitted; testing and locating its residuals");
-    // 3. where the declared model's residuals disagree with noise
+    let (samples0, located0) = located_before(&fitted, &stage, options);
+    let (frame, prepared, not_tried) =
+        selection_frame_and_candidates(declared, &fitted, &stage, options, &progress)?;
+    let families: Vec<Family> = prepared.iter().map(|p| p.family.clone()).collect();
+    let selection = select(&frame, &families, options, &progress);
+    let mut messages = selection_messages(&selection, &families);
+    let inputs = JudgeInputs {
+        machine: declared.machine,
+        declared_model: &fitted.model,
+        stage: &stage,
+        x0: &fitted.x0,
+        free0: &fitted.free0,
+        view0: &fitted.view0,
+        folds_time: &frame.folds_time,
+        folds_space: &frame.folds_space,
+        selection: &selection,
+        families: &families,
+        prepared: &prepared,
+        alpha: options.selection.alpha,
+    };
+    let (aug, x1, judged) = refit_and_judge(declared, &inputs, options, &mut messages, &progress)?;
+    progress.say(&judged.uncertainty.statement);
+    let (noise_rms, noise) = noise_levels(&stage, &judged);
+    let (remaining, located1) = what_remains(&stage, &judged, &noise, options);
+    progress.say("findings");
+    let context = Context {
+        located0: &located0,
+        samples0: &samples0,
+        selection: &selection,
+        families: &families,
+        not_tried,
+        remaining,
+        located1,
+        noise_rms,
+        noise,
+        selection_records: frame.records.len(),
+        options,
+        view0: &fitted.view0,
+    };
+    report(
+        declared, &stage, &aug, &x1, judged, context, messages, &progress,
+    )
+}
+
+/// The declared model at its fit: the model (with the stage's instrument terms), its values,
+/// the indices of its free parameters, and its residuals along the workpiece axes.
+struct DeclaredFit<'a> {
+    model: ForwardModel<'a>,
+    x0: Vec<f64>,
+    free0: Vec<usize>,
+    view0: ResidualView,
+}
+
+impl<'a> DeclaredFit<'a> {
+    fn new(declared: &DeclaredModel<'a>, stage: &'a DeclaredStage) -> Result<Self, DiagnoseError> {
+        let model =
+            ForwardModel::new(declared.machine, declared.machine_terms, &stage.instruments)?;
+        let x0 = stage.fit.x.clone();
+        let free0: Vec<usize> = stage
+            .fit
+            .parameters
+            .iter()
+            .enumerate()
+            .filter(|(_, p)| p.free)
+            .map(|(k, _)| k)
+            .collect();
+        let view0 = ResidualView::new(&model, &x0, &stage.set.records, &stage.set.frame)?;
+        Ok(Self {
+            model,
+            x0,
+            free0,
+            view0,
+        })
+    }
+}
+
+/// Stage 3: the declared model's residual samples, and where they disagree with noise.
+fn located_before(
+    fitted: &DeclaredFit,
+    stage: &DeclaredStage,
+    options: &DiagnoseOptions,
+) -> (
+    Vec<crate::residual::ResidualSample>,
+    Vec<crate::locate::Finding>,
+) {
+    let view0 = &fitted.view0;
     let before_wp: Vec<Vector3<f64>> = (0..view0.len()).map(|i| view0.workpiece(i)).collect();
     let samples0 = view0.samples(&stage.set.records, &before_wp);
     let located0 = locate(&samples0, &options.locate);
-    // 4. what the selection runs on and chooses among
-    let frame = SelectionFrame::new(&model, &x0, &free0, &stage, &view0, options)?;
+    (samples0, located0)
+}
+
+/// Stage 4: the records and columns the selection runs on, the candidates it chooses among, and
+/// the catalog terms not tried with the reason.
+fn selection_frame_and_candidates(
+    declared: &DeclaredModel,
+    fitted: &DeclaredFit,
+    stage: &DeclaredStage,
+    options: &DiagnoseOptions,
+    progress: &Progress,
+) -> Result<(SelectionFrame, Vec<Prepared>, Vec<NotTried>), DiagnoseError> {
+    let (model, x0) = (&fitted.model, &fitted.x0);
+    let frame = SelectionFrame::new(model, x0, &fitted.free0, stage, &fitted.view0, options)?;
     progress.say(&format!(
         "candidate columns on {} records",
         frame.records.len()
     ));
-    let (prepared, not_tried) = candidates(declared, &model, &stage, &x0, &frame, options)?;
+    let (prepared, not_tried) = candidates(declared, model, stage, x0, &frame, options)?;
     progress.say(&format!(
         "{} candidate families, {} variants; selecting",
         prepared.len(),
@@ -231,16 +328,25 @@ pub fn diagnose(
             .map(|p| p.family.variants.len())
             .sum::<usize>()
     ));
-    // 5. selection
-    let families: Vec<Family> = prepared.iter().map(|p| p.family.clone()).collect();
+    Ok((frame, prepared, not_tried))
+}
+
+/// Stage 5: the terms chosen among `families`, by forward selection on held-out blocks or, as a
+/// baseline, every candidate at once.
+fn select(
+    frame: &SelectionFrame,
+    families: &[Family],
+    options: &DiagnoseOptions,
+    progress: &Progress,
+) -> FamilySelection {
     let data = WhitenedData {
         b: frame.b.clone(),
         declared: frame.declared_cols.clone(),
         folds: frame.folds.clone(),
     };
     let selection = match options.strategy {
-        Strategy::Select => select_families(&data, &families, &options.selection),
-        Strategy::AllAtOnce => all_at_once(&data, &families, options.selection.alpha),
+        Strategy::Select => select_families(&data, families, &options.selection),
+        Strategy::AllAtOnce => all_at_once(&data, families, options.selection.alpha),
     };
     progress.say(&format!(
         "selected {:?}; refitting the augmented model",
@@ -250,35 +356,20 @@ pub fn diagnose(
             .map(|c| c.label.as_str())
             .collect::<Vec<_>>()
     ));
-    let mut messages = refusals(&selection, &families);
+    selection
+}
+
+/// What the selection has to say: the candidates refused for impossible values, and those chosen
+/// early and replaced later.
+fn selection_messages(selection: &FamilySelection, families: &[Family]) -> Vec<String> {
+    let mut messages = refusals(selection, families);
     messages.extend(selection.swapped.iter().map(|(out, into)| format!("{out}, chosen early, was replaced by {into}: with the other terms in the model {into} explains the residuals better (lower BIC)")));
-    // 6–7. the augmented model refitted and judged; a term not significant after the refit is
-    // dropped and the rest refitted
-    let inputs = JudgeInputs {
-        machine: declared.machine,
-        declared_model: &model,
-        stage: &stage,
-        x0: &x0,
-        free0: &free0,
-        view0: &view0,
-        folds_time: &frame.folds_time,
-        folds_space: &frame.folds_space,
-        selection: &selection,
-        families: &families,
-        prepared: &prepared,
-        alpha: options.selection.alpha,
-    };
-    let (aug, x1, judged) = refit_and_judge(
-        declared,
-        &inputs,
-        &selection,
-        &prepared,
-        options,
-        &mut messages,
-        &progress,
-    )?;
-    progress.say(&judged.uncertainty.statement);
-    // 8. the noise the verdicts rely on, and what remains
+    messages
+}
+
+/// Stage 8: the RMS per coordinate the stated uncertainties predict (m), and which noise level
+/// the verdicts rely on.
+fn noise_levels(stage: &DeclaredStage, judged: &Judged) -> (f64, NoiseAssessment) {
     let noise_rms = (stage
         .set
         .records
@@ -292,47 +383,20 @@ pub fn diagnose(
         robust_scale(&judged.whitened_after),
         judged.whitened_after.len(),
     );
-    let (remaining, located1) = what_remains(&stage, &judged, &noise, options);
-    // 9. findings and the report
-    progress.say("findings");
-    report(
-        declared,
-        &stage,
-        &aug,
-        &x1,
-        judged,
-        Context {
-            located0: &located0,
-            samples0: &samples0,
-            selection: &selection,
-            families: &families,
-            not_tried,
-            remaining,
-            located1,
-            noise_rms,
-            noise,
-            selection_records: frame.records.len(),
-            options,
-            view0: &view0,
-        },
-        messages,
-        &progress,
-    )
+    (noise_rms, noise)
 }
 
-/// The augmented model refitted and judged; while an added term's main parameters are less than
-/// [`MIN_SIGNIFICANCE_SIGMA`] from zero after the refit (σ widened for correlated residuals),
-/// the weakest is dropped, said, and the rest refitted.
-fn refit_and_judge<'a>(
+/// Stages 6–7: the augmented model refitted and judged; while an added term's main parameters
+/// are less than [`MIN_SIGNIFICANCE_SIGMA`] from zero after the refit (σ widened for correlated
+/// residuals), the weakest is dropped, said, and the rest refitted.
+fn refit_and_judge(
     declared: &DeclaredModel,
     inputs: &JudgeInputs,
-    selection: &FamilySelection,
-    prepared: &[Prepared],
     options: &DiagnoseOptions,
     messages: &mut Vec<String>,
     progress: &Progress,
 ) -> Result<(Augmented, Vec<f64>, Judged), DiagnoseError> {
-    let mut chosen = selection.chosen.clone();
+    let mut chosen = inputs.selection.chosen.clone();
     loop {
         let aug = Augmented::new(
             declared.machine,
@@ -340,7 +404,7 @@ fn refit_and_judge<'a>(
             &inputs.stage.instruments,
             &inputs.stage.setup,
             &chosen,
-            prepared,
+            inputs.prepared,
         )?;
         let start = aug.start(declared.machine, inputs.declared_model, inputs.x0)?;
         let refit = aug.refit(
@@ -517,6 +581,91 @@ fn report(
     progress: &Progress,
 ) -> Result<Diagnosis, DiagnoseError> {
     let model_aug = aug.model(declared.machine)?;
+    let found = found_terms(aug);
+    let set = &stage.set;
+    let built = findings::build(&findings::Inputs {
+        model: &model_aug,
+        x: x1,
+        free: &aug.setup.free,
+        sigmas: &judged.sigmas,
+        names: &judged.names,
+        records: &set.records,
+        view: &judged.view1,
+        after: &judged.after_res,
+        found: &found,
+        located_before: ctx.located0,
+        samples_before: ctx.samples0,
+        significance: &judged.significance,
+        alternatives: &findings::alternatives_of(ctx.selection, ctx.families),
+        at_bound: &judged.at_bound,
+    })?;
+    let added_terms = added_terms(aug, x1, &judged);
+    let unexplained = findings::unexplained(
+        &judged.empirical,
+        &judged.view1,
+        &ctx.located1,
+        &set.records,
+    );
+    let explained = unexplained.is_empty() && ctx.remaining.is_empty();
+    messages.extend(findings::advice(
+        ctx.selection,
+        ctx.families,
+        &set.records,
+        declared.machine,
+    ));
+    let mut summary = findings::summary(
+        &built.findings,
+        &unexplained,
+        &judged.before,
+        &judged.after,
+        ctx.noise_rms,
+        explained,
+    );
+    let check = check_scores(declared, stage, aug, x1)?;
+    if let Some(c) = &check {
+        summary.push_str(&check_sentence(c));
+    }
+    let report = Report {
+        noise_rms_m: ctx.noise_rms,
+        noise: ctx.noise,
+        before: judged.before.clone(),
+        after: judged.after.clone(),
+        findings: built.findings,
+        unexplained,
+        explained,
+        summary,
+        strategy: ctx.options.strategy.name().into(),
+        records: record_summary(stage, ctx.selection_records),
+        declared: declared_parameters(stage),
+        located: ctx.located0.iter().take(20).map(|f| f.describe()).collect(),
+        remaining: ctx.remaining,
+        selection: step_summaries(ctx.selection, ctx.families),
+        not_tried: ctx.not_tried,
+        messages,
+        uncertainty: judged.uncertainty.clone(),
+        check,
+    };
+    let sigma_workpiece = set
+        .records
+        .iter()
+        .enumerate()
+        .map(|(i, r)| ctx.view0.workpiece_sigma(i, &r.covariance))
+        .collect();
+    let fitted = fitted_parameters(aug, x1, &judged);
+    let plots = plot_data(set, judged, built.evidence);
+    progress.say("done");
+    Ok(Diagnosis {
+        report,
+        added_terms,
+        plots,
+        records: set.records.clone(),
+        sigma_workpiece,
+        fitted,
+    })
+}
+
+/// The terms the augmented model adds (in the order chosen), then the declared ones it freed.
+fn found_terms(aug: &Augmented) -> Vec<FoundTerm> {
     let mut found: Vec<FoundTerm> = aug
         .added
         .iter()
@@ -544,32 +693,43 @@ fn report(
             config,
         });
     }
+    found
+}
+
+/// The summary's sentence on the check points kept out of the fit.
+fn check_sentence(c: &crate::report::CheckScores) -> String {
+    format!(
+        " On the {} check points kept out of the fit: p95 horizontal {:.2} mm with the declared model, {:.2} mm with the found terms (p95 vertical {:.2} → {:.2} mm).",
+        c.augmented.n,
+        c.declared.p95_xy_m * 1e3,
+        c.augmented.p95_xy_m * 1e3,
+        c.declared.p95_z_m * 1e3,
+        c.augmented.p95_z_m * 1e3
+    )
+}
+
+/// The records the diagnosis read, used, averaged and set aside (at most 50 rejections named).
+fn record_summary(stage: &DeclaredStage, selection_records: usize) -> RecordSummary {
     let set = &stage.set;
-    let built = findings::build(&findings::Inputs {
-        model: &model_aug,
-        x: x1,
-        free: &aug.setup.free,
-        sigmas: &judged.sigmas,
-        names: &judged.names,
-        records: &set.records,
-        view: &judged.view1,
-        after: &judged.after_res,
-        found: &found,
-        located_before: ctx.located0,
-        samples_before: ctx.samples0,
-        significance: &judged.significance,
-        alternatives: &findings::alternatives_of(ctx.selection, ctx.families),
-        at_bound: &judged.at_bound,
-    })?;
-    let added_terms = added_terms(aug, x1, &judged);
-    let unexplained = findings::unexplained(
-        &judged.empirical,
-        &judged.view1,
-        &ctx.located1,
-        &set.records,
-    );
-    let explained = unexplained.is_empty() && ctx.remaining.is_empty();
-    let declared_params = stage
+    let mut rejected = stage.rejected.clone();
+    rejected.truncate(50);
+    RecordSummary {
+        readings: stage.readings,
+        used: set.records.len(),
+        averaged_groups: stage.groups,
+        rejected,
+        outliers: stage.outlier_notes.clone(),
+        frame: match &set.frame {
+            RecordFrame::Machine => "machine".into(),
+            RecordFrame::Instrument(f) => format!("instrument ({f})"),
+        },
+        selection_records,
+    }
+}
+
+/// The declared model's free parameters after its own fit (placement parameters left out).
+fn declared_parameters(stage: &DeclaredStage) -> BTreeMap<String, ParameterValue> {
+    stage
         .fit
         .parameters
         .iter()
@@ -585,91 +745,17 @@ fn report(
                 },
             )
         })
-        .collect();
-    messages.extend(findings::advice(
-        ctx.selection,
-        ctx.families,
-        &set.records,
-        declared.machine,
-    ));
-    let mut rejected = stage.rejected.clone();
-    rejected.truncate(50);
-    let mut summary = findings::summary(
-        &built.findings,
-        &unexplained,
-        &judged.before,
-        &judged.after,
-        ctx.noise_rms,
-        explained,
-    );
-    let check = check_scores(declared, stage, aug, x1)?;
-    if let Some(c) = &check {
-        summary.push_str(&format!(
-            " On the {} check points kept out of the fit: p95 horizontal {:.2} mm with the declared model, {:.2} mm with the found terms (p95 vertical {:.2} → {:.2} mm).",
-            c.augmented.n,
-            c.declared.p95_xy_m * 1e3,
-            c.augmented.p95_xy_m * 1e3,
-            c.declared.p95_z_m * 1e3,
-            c.augmented.p95_z_m * 1e3
-        ));
-    }
-    let n = set.records.len();
-    let report = Report {
-        noise_rms_m: ctx.noise_rms,
-        noise: ctx.noise,
-        before: judged.before.clone(),
-        after: judged.after.clone(),
-        findings: built.findings,
-        unexplained,
-        explained,
-        summary,
-        strategy: ctx.options.strategy.name().into(),
-        records: RecordSummary {
-            readings: stage.readings,
-            used: n,
-            averaged_groups: stage.groups,
-            rejected,
-            outliers: stage.outlier_notes.clone(),
-            frame: match &set.frame {
-                RecordFrame::Machine => "machine".into(),
-                RecordFrame::Instrument(f) => format!("instrument ({f})"),
-            },
-            selection_records: ctx.selection_records,
-        },
-        declared: declared_params,
-        located: ctx.located0.iter().take(20).map(|f| f.describe()).collect(),
-        remaining: ctx.remaining,
-        selection: step_summaries(ctx.selection, ctx.families),
-        not_tried: ctx.not_tried,
-        messages,
-        uncertainty: judged.uncertainty.clone(),
-        check,
-    };
-    let mut temperatures: BTreeMap<String, Vec<f64>> = BTreeMap::new();
-    for r in &set.records {
-        for (name, v) in &r.signals.temperatures {
-            temperatures.entry(name.clone()).or_default().push(*v);
-        }
-    }
-    temperatures.retain(|_, v| v.len() == n);
-    let plots = PlotData {
-        time: judged.view1.time.clone(),
-        position: judged.view1.position.clone(),
-        before: judged.before_res,
-        after: judged.after_res,
-        heldout_before: judged.held_before,
-        heldout_after: judged.held_after,
-        temperatures,
-        evidence: built.evidence,
-    };
-    progress.say("done");
-    let sigma_workpiece = set
-        .records
-        .iter()
-        .enumerate()
-        .map(|(i, r)| ctx.view0.workpiece_sigma(i, &r.covariance))
-        .collect();
-    let fitted = judged
+        .collect()
+}
+
+/// Every parameter of the augmented model after the final refit: name, value, and σ where it was
+/// fitted.
+fn fitted_parameters(
+    aug: &Augmented,
+    x1: &[f64],
+    judged: &Judged,
+) -> Vec<(String, f64, Option<f64>)> {
+    judged
         .names
         .iter()
         .enumerate()
@@ -684,15 +770,34 @@ fn report(
                 },
             )
         })
-        .collect();
-    Ok(Diagnosis {
-        report,
-        added_terms,
-        plots,
-        records: set.records.clone(),
-        sigma_workpiece,
-        fitted,
-    })
+        .collect()
+}
+
+/// The plots' data: residuals before and after, held-out residuals, the temperatures recorded at
+/// every record, and each finding's evidence.
+fn plot_data(
+    set: &RecordSet,
+    judged: Judged,
+    evidence: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)>,
+) -> PlotData {
+    let n = set.records.len();
+    let mut temperatures: BTreeMap<String, Vec<f64>> = BTreeMap::new();
+    for r in &set.records {
+        for (name, v) in &r.signals.temperatures {
+            temperatures.entry(name.clone()).or_default().push(*v);
+        }
+    }
+    temperatures.retain(|_, v| v.len() == n);
+    PlotData {
+        time: judged.view1.time,
+        position: judged.view1.position,
+        before: judged.before_res,
+        after: judged.after_res,
+        heldout_before: judged.held_before,
+        heldout_after: judged.held_after,
+        temperatures,
+        evidence,
+    }
 }
 
 /// The terms added to the model file: their configs with the fitted values, and the σ of the

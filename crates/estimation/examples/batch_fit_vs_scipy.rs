@@ -21,7 +21,8 @@ use std::process::{Command, Stdio};
 use std::time::Instant;
 
 use common::{records, Planned, THESIS_TRACKER};
-use metrocell_estimation::{fit, FitOptions, PointResiduals};
+use metrocell_estimation::{fit, Fit, FitOptions, MeasurementRecord, PointResiduals};
+use metrocell_model::ForwardModel;
 use metrocell_solver::{Loss, Problem};
 use metrocell_twin::CellModel;
 use nalgebra::DMatrix;
@@ -45,43 +46,8 @@ fn main() {
     let fm = m.forward_model().unwrap();
     let names = fm.param_names();
     let mut rng = ChaCha8Rng::seed_from_u64(7);
-    let mut truth = fm.params();
-    for (k, n) in names.iter().enumerate() {
-        if n.starts_with("positioning") || n.starts_with("straightness") {
-            truth[k] = rng.random_range(-8e-6..8e-6);
-        } else if n.starts_with("angular") || n.starts_with("squareness") {
-            truth[k] = rng.random_range(-20e-6..20e-6);
-        }
-    }
-    let pose = names.iter().position(|n| n == "tracker_pose.tx").unwrap();
-    truth[pose..pose + 6].copy_from_slice(&[
-        -0.863527,
-        0.194373,
-        0.677782,
-        0.0339f64.to_radians(),
-        0.0343f64.to_radians(),
-        59.4652f64.to_radians(),
-    ]);
-    let w = names
-        .iter()
-        .position(|n| n == "tracker_warmup.offset")
-        .unwrap();
-    truth[w..w + 3].copy_from_slice(&[2e-6, 75e-6, 5400.0]);
-    let plan: Vec<Planned> = (0..READINGS)
-        .map(|k| {
-            let dir = if rng.random::<bool>() { 1.0 } else { -1.0 };
-            Planned {
-                q: vec![
-                    rng.random_range(0.0..0.8),
-                    rng.random_range(0.0..0.5),
-                    rng.random_range(0.0..0.4),
-                ],
-                approach: [dir; 3],
-                temperatures: vec![],
-                time_on: 600.0 + 1.5 * k as f64,
-            }
-        })
-        .collect();
+    let truth = truth_of(&fm.params(), &names, &mut rng);
+    let plan = readings_plan(&mut rng);
     let data = records(&fm, &truth, &plan, THESIS_TRACKER, Some(1));
     // the identical, full-rank problem for both: hold what the design cannot separate first
     let options = FitOptions {
@@ -125,60 +91,131 @@ fn main() {
             "{n} more fits: {:.3} s each",
             t.elapsed().as_secs_f64() / n as f64
         );
-        if args.iter().any(|a| a == "--no-evaluations") {
-            return;
+        if !args.iter().any(|a| a == "--no-evaluations") {
+            let wanted: Vec<bool> = (0..names.len()).map(|k| setup.free[k]).collect();
+            time_evaluations(&fm, &data.records, &x0, &wanted, n);
         }
-        // and the model evaluation alone (residuals + Jacobian of all records), as the fit calls it
-        let problem = PointResiduals::new(&fm, &data.records).unwrap();
-        let mut r = vec![0.0; problem.residual_count()];
-        let mut jac = DMatrix::zeros(problem.residual_count(), names.len());
-        let wanted: Vec<bool> = (0..names.len()).map(|k| setup.free[k]).collect();
-        let t = Instant::now();
-        for _ in 0..n {
-            let problem = PointResiduals::new(&fm, &data.records).unwrap();
-            problem
-                .residuals_and_jacobian_of(&x0, &mut r, &mut jac, &wanted)
-                .unwrap();
-        }
-        println!(
-            "first residuals + Jacobian (free columns) of a new problem: {:.2} ms",
-            1e3 * t.elapsed().as_secs_f64() / n as f64
-        );
-        let t = Instant::now();
-        for _ in 0..n {
-            problem
-                .residuals_and_jacobian_of(&x0, &mut r, &mut jac, &wanted)
-                .unwrap();
-        }
-        println!(
-            "residuals + Jacobian (free columns): {:.2} ms each",
-            1e3 * t.elapsed().as_secs_f64() / n as f64
-        );
-        let t = Instant::now();
-        for _ in 0..n {
-            problem
-                .residuals_and_jacobian(&x0, &mut r, &mut jac)
-                .unwrap();
-        }
-        println!(
-            "residuals + Jacobian (all columns): {:.2} ms each",
-            1e3 * t.elapsed().as_secs_f64() / n as f64
-        );
-        let t = Instant::now();
-        for _ in 0..n {
-            problem.residuals(&x0, &mut r).unwrap();
-        }
-        println!(
-            "residuals alone: {:.2} ms each",
-            1e3 * t.elapsed().as_secs_f64() / n as f64
-        );
         return;
     }
+    let (what, best) = fastest_scipy(&python, &fm, &data.records, &x0, &free);
+    // the like-for-like job: scipy's own work plus the model evaluations it asked for (as
+    // metrocell's fit evaluates the model too), without the pipe's copying of 11 MB Jacobians
+    println!("ratio scipy / metrocell: {:.1}× on the whole job (scipy at its faster setting, {what}: own work + its {} model evaluations, {:.3} s back to back = {:.3} s; pipe transfer excluded); {:.1}× on scipy's wall time including the pipe; {:.1}× on scipy's own work alone", best.job() / ours, best.evaluations, best.tight, best.job(), best.seconds / ours, (best.seconds - best.waiting) / ours);
+    print_agreement(&f, &best.x, &free, &names);
+}
 
-    // scipy on the identical problem, with numpy's BLAS as the environment sets it and with one
-    // thread (on a shared 2-core machine OpenBLAS's second thread has made scipy's own work 2–3×
-    // slower, not faster): the faster of the two is the peer
-    let problem = PointResiduals::new(&fm, &data.records).unwrap();
+/// The benchmark's truth: the geometric errors drawn at random (±8 µm, ±20 µrad), the tracker's
+/// pose and warm-up set, the rest at the model's values `p`.
+fn truth_of(p: &[f64], names: &[String], rng: &mut ChaCha8Rng) -> Vec<f64> {
+    let mut truth = p.to_vec();
+    for (k, n) in names.iter().enumerate() {
+        if n.starts_with("positioning") || n.starts_with("straightness") {
+            truth[k] = rng.random_range(-8e-6..8e-6);
+        } else if n.starts_with("angular") || n.starts_with("squareness") {
+            truth[k] = rng.random_range(-20e-6..20e-6);
+        }
+    }
+    let pose = names.iter().position(|n| n == "tracker_pose.tx").unwrap();
+    truth[pose..pose + 6].copy_from_slice(&[
+        -0.863527,
+        0.194373,
+        0.677782,
+        0.0339f64.to_radians(),
+        0.0343f64.to_radians(),
+        59.4652f64.to_radians(),
+    ]);
+    let w = names
+        .iter()
+        .position(|n| n == "tracker_warmup.offset")
+        .unwrap();
+    truth[w..w + 3].copy_from_slice(&[2e-6, 75e-6, 5400.0]);
+    truth
+}
+
+/// READINGS random points over the travel, 1.5 s apart, each approached from a random side.
+fn readings_plan(rng: &mut ChaCha8Rng) -> Vec<Planned> {
+    (0..READINGS)
+        .map(|k| {
+            let dir = if rng.random::<bool>() { 1.0 } else { -1.0 };
+            Planned {
+                q: vec![
+                    rng.random_range(0.0..0.8),
+                    rng.random_range(0.0..0.5),
+                    rng.random_range(0.0..0.4),
+                ],
+                approach: [dir; 3],
+                temperatures: vec![],
+                time_on: 600.0 + 1.5 * k as f64,
+            }
+        })
+        .collect()
+}
+
+/// The model evaluation alone (residuals + Jacobian of all records), as the fit calls it: the
+/// first of a new problem, then with the free or all columns, then the residuals alone; `n`
+/// times each.
+fn time_evaluations(
+    fm: &ForwardModel,
+    records: &[MeasurementRecord],
+    x0: &[f64],
+    wanted: &[bool],
+    n: usize,
+) {
+    let problem = PointResiduals::new(fm, records).unwrap();
+    let mut r = vec![0.0; problem.residual_count()];
+    let mut jac = DMatrix::zeros(problem.residual_count(), wanted.len());
+    let t = Instant::now();
+    for _ in 0..n {
+        let problem = PointResiduals::new(fm, records).unwrap();
+        problem
+            .residuals_and_jacobian_of(x0, &mut r, &mut jac, wanted)
+            .unwrap();
+    }
+    println!(
+        "first residuals + Jacobian (free columns) of a new problem: {:.2} ms",
+        1e3 * t.elapsed().as_secs_f64() / n as f64
+    );
+    let t = Instant::now();
+    for _ in 0..n {
+        problem
+            .residuals_and_jacobian_of(x0, &mut r, &mut jac, wanted)
+            .unwrap();
+    }
+    println!(
+        "residuals + Jacobian (free columns): {:.2} ms each",
+        1e3 * t.elapsed().as_secs_f64() / n as f64
+    );
+    let t = Instant::now();
+    for _ in 0..n {
+        problem
+            .residuals_and_jacobian(x0, &mut r, &mut jac)
+            .unwrap();
+    }
+    println!(
+        "residuals + Jacobian (all columns): {:.2} ms each",
+        1e3 * t.elapsed().as_secs_f64() / n as f64
+    );
+    let t = Instant::now();
+    for _ in 0..n {
+        problem.residuals(x0, &mut r).unwrap();
+    }
+    println!(
+        "residuals alone: {:.2} ms each",
+        1e3 * t.elapsed().as_secs_f64() / n as f64
+    );
+}
+
+/// scipy on the identical problem, with numpy's BLAS as the environment sets it and with one
+/// thread (on a shared 2-core machine OpenBLAS's second thread has made scipy's own work 2–3×
+/// slower, not faster), each printed: the faster of the two is the peer.
+fn fastest_scipy(
+    python: &str,
+    fm: &ForwardModel,
+    records: &[MeasurementRecord],
+    x0: &[f64],
+    free: &[usize],
+) -> (&'static str, ScipySession) {
+    let problem = PointResiduals::new(fm, records).unwrap();
     let specs: Vec<_> = fm
         .machine_terms
         .param_specs()
@@ -186,7 +223,7 @@ fn main() {
         .chain(fm.instrument_terms.param_specs())
         .collect();
     let session =
-        |threads: Option<&str>| scipy_session(&python, threads, &problem, &x0, &free, &specs);
+        |threads: Option<&str>| scipy_session(python, threads, &problem, x0, free, &specs);
     let one_thread_already = std::env::var("OPENBLAS_NUM_THREADS").is_ok_and(|v| v == "1");
     let mut sessions = vec![("BLAS threads as set", session(None))];
     if !one_thread_already {
@@ -195,15 +232,15 @@ fn main() {
     for (what, s) in &sessions {
         println!("scipy trf, {what} (fastest own work of {RUNS}): {:.3} s ({} evaluations, status {}), of which {:.3} s waiting for metrocell's residuals and Jacobian over the pipe ({:.3} s evaluating them); + its evaluations back to back {:.3} s = whole job {:.3} s", s.seconds, s.evaluations, s.status, s.waiting, s.evaluating, s.tight, s.job());
     }
-    let (what, best) = sessions
-        .iter()
+    sessions
+        .into_iter()
         .min_by(|a, b| a.1.job().total_cmp(&b.1.job()))
-        .unwrap();
-    // the like-for-like job: scipy's own work plus the model evaluations it asked for (as
-    // metrocell's fit evaluates the model too), without the pipe's copying of 11 MB Jacobians
-    println!("ratio scipy / metrocell: {:.1}× on the whole job (scipy at its faster setting, {what}: own work + its {} model evaluations, {:.3} s back to back = {:.3} s; pipe transfer excluded); {:.1}× on scipy's wall time including the pipe; {:.1}× on scipy's own work alone", best.job() / ours, best.evaluations, best.tight, best.job(), best.seconds / ours, (best.seconds - best.waiting) / ours);
-    let xs = &best.x;
-    // agreement: per parameter relative to its own magnitude (floored at its σ) and in σ
+        .unwrap()
+}
+
+/// How far apart the solutions are: per parameter relative to its own magnitude (floored at its
+/// σ) and in σ, and in the ∞-norm.
+fn print_agreement(f: &Fit, xs: &[f64], free: &[usize], names: &[String]) {
     let mut worst_rel: f64 = 0.0;
     let mut worst_sigma: f64 = 0.0;
     let mut worst_name = String::new();

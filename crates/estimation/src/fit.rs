@@ -302,6 +302,12 @@ pub fn start_vector(
 }
 
 /// Fit the free parameters of `setup` to `records` from `start` (None: [`start_vector`]).
+///
+/// In order: the usable records (the others named), the free parameters (the pose is held in
+/// the machine frame) and whether the readings are enough, the start, the bounds and priors,
+/// what the design identifies at the start (parameters it cannot separate held), the fit, more
+/// parameters held until the rest is identifiable at the solution, the estimates and the
+/// records beyond the robust loss's threshold.
 pub fn fit(
     model: &ForwardModel,
     setup: &ParameterSetup,
@@ -309,7 +315,112 @@ pub fn fit(
     start: Option<Vec<f64>>,
     options: &FitOptions,
 ) -> Result<Fit, FitError> {
-    // records with a non-finite value are named and left out
+    let (skipped, used) = usable_records(records);
+    // the records themselves when all are usable (a copy of 10⁴ records and their signals is
+    // milliseconds of a fit that takes tens)
+    let subset;
+    let kept: &RecordSet = if skipped.is_empty() {
+        records
+    } else {
+        subset = RecordSet {
+            check: Vec::new(),
+            frame: records.frame.clone(),
+            records: used.iter().map(|&i| records.records[i].clone()).collect(),
+            rejected: vec![],
+            sources: vec![],
+        };
+        &subset
+    };
+    if kept.is_empty() {
+        return Err(FitError::NoRecords);
+    }
+    let mut free = free_parameters(model, setup, kept);
+    let n_free = enough_readings(setup, &free, kept.len())?;
+    let problem =
+        PointResiduals::new(model, &kept.records).map_err(|b| FitError::BadCovariance {
+            index: used[b.index],
+            point_id: b.point_id,
+        })?;
+    // a record the model cannot predict is looked for only once the start or its evaluation
+    // has failed: a search of its own costs a pass over every record
+    let unpredictable = || unpredictable_record(model, &problem, kept, &used);
+    let x0 = match start {
+        Some(x) => x,
+        None => start_vector(model, setup, kept).map_err(|e| unpredictable().unwrap_or(e))?,
+    };
+    let names = model.param_names();
+    let solving = Solving::new(model, setup, &problem, &x0, &names, options);
+    // (r, J) at the start, evaluated once: they judge what the design identifies, give the
+    // residuals before, and are the first solve's first linearisation (a later solve, after
+    // more parameters are held, starts at x0 again and evaluates it itself). Only the free
+    // columns: the fixed ones are never read, and their pages of the zeroed buffer never touched.
+    let mut r0 = vec![0.0; problem.residual_count()];
+    let mut j0 = zeroed_matrix(problem.residual_count(), problem.parameter_count());
+    problem
+        .residuals_and_jacobian_of(&x0, &mut r0, &mut j0, &free)
+        .map_err(|e| {
+            unpredictable().unwrap_or_else(|| {
+                FitError::Registration(format!(
+                    "the model cannot be evaluated at the start: {}",
+                    e.0
+                ))
+            })
+        })?;
+    let residuals_before = problem.unwhitened(&r0);
+    // what the design can identify, judged at the start: a parameter whose effect is nil or a
+    // combination of others there (e.g. a joint offset about the axis the target sits on) is
+    // held before the solver can wander along it
+    let (declared_identifiability, start_normal) = solving.identifiability_at_start(&j0, &free)?;
+    let mut held = Vec::new();
+    if !declared_identifiability.null_directions.is_empty() {
+        solving.hold_dependent(&j0, &mut free, &mut held);
+    }
+    // the start's r and J go to the first solve, which works in them
+    let start_normal = start_normal.filter(|_| held.is_empty());
+    let solution = solving.two_stage(
+        &free,
+        Some(Evaluated {
+            residuals: r0,
+            jacobian: j0,
+            normal_matrix: start_normal,
+        }),
+    )?;
+    let (solution, identifiability) =
+        solving.hold_until_identifiable(solution, &mut free, &mut held, n_free)?;
+    let residuals_after = problem.unwhitened(&solution.residuals);
+    let covariance = solution.covariance();
+    let chi2: f64 = solution.residuals.iter().map(|r| r * r).sum();
+    let dof = solution.degrees_of_freedom.max(1);
+    let parameters = solving.estimates(&solution, &free);
+    let threshold = match options.loss {
+        Loss::Huber(c) | Loss::Cauchy(c) => Some(c),
+        _ => None,
+    };
+    let outliers = match threshold {
+        Some(c) => beyond_threshold(c, &solution, kept, &used),
+        None => vec![],
+    };
+    Ok(Fit {
+        parameters,
+        x: solution.x.clone(),
+        covariance,
+        residuals_before,
+        residuals_after,
+        chi2_per_dof: chi2 / dof as f64,
+        identifiability,
+        downweighted: solution.downweighted,
+        outliers,
+        skipped,
+        held,
+        declared_identifiability,
+        used,
+        options_threshold: threshold,
+        solution,
+    })
+}
+
+/// The records with a non-finite value, named with the reason, and the indices of the others.
+fn usable_records(records: &RecordSet) -> (Vec<RecordNote>, Vec<usize>) {
     let mut skipped = Vec::new();
     let mut used = Vec::new();
     for (i, r) in records.records.iter().enumerate() {
@@ -332,342 +443,353 @@ pub fn fit(
             None => used.push(i),
         }
     }
-    // the records themselves when all are usable (a copy of 10⁴ records and their signals is
-    // milliseconds of a fit that takes tens)
-    let subset;
-    let kept: &RecordSet = if skipped.is_empty() {
-        records
-    } else {
-        subset = RecordSet {
-            check: Vec::new(),
-            frame: records.frame.clone(),
-            records: used.iter().map(|&i| records.records[i].clone()).collect(),
-            rejected: vec![],
-            sources: vec![],
-        };
-        &subset
-    };
-    if kept.is_empty() {
-        return Err(FitError::NoRecords);
-    }
+    (skipped, used)
+}
+
+/// The setup's free parameters, the instrument poses held in the machine frame (the identity).
+fn free_parameters(model: &ForwardModel, setup: &ParameterSetup, kept: &RecordSet) -> Vec<bool> {
     let mut free = setup.free.clone();
     if kept.frame == RecordFrame::Machine {
         for (_, pose) in model.pose_param_starts() {
             free[pose..pose + 6].iter_mut().for_each(|f| *f = false);
         }
     }
+    free
+}
+
+/// The number of free parameters, or Err when `records` readings (3 each) and the priors on free
+/// parameters are fewer, with the number of points to measure.
+fn enough_readings(
+    setup: &ParameterSetup,
+    free: &[bool],
+    records: usize,
+) -> Result<usize, FitError> {
     let n_free = free.iter().filter(|f| **f).count();
     let n_priors = setup
         .priors
         .iter()
-        .zip(&free)
+        .zip(free)
         .filter(|(p, f)| p.is_some() && **f)
         .count();
-    if 3 * kept.len() + n_priors < n_free {
+    if 3 * records + n_priors < n_free {
         return Err(FitError::TooFew {
             needed: n_free,
-            available: 3 * kept.len(),
+            available: 3 * records,
             points: n_free.div_ceil(3),
         });
     }
-    let problem =
-        PointResiduals::new(model, &kept.records).map_err(|b| FitError::BadCovariance {
-            index: used[b.index],
-            point_id: b.point_id,
-        })?;
-    // a record the model cannot predict (a missing signal, an unreachable joint vector) is named
-    // with its index and what would provide the signal; each record goes through its own
-    // instrument (a probe hit does not read the tracker's air). Looked for only once the start
-    // or its evaluation has failed: a search of its own costs a pass over every record.
-    let unpredictable = || -> Option<FitError> {
-        match problem.predictions_of_records(&model.params()) {
-            Ok(_) => None,
-            Err(EvaluationFailure::Model(e)) => Some(e.into()),
-            Err(EvaluationFailure::Record { index, error }) => {
-                let (hint, r) = (missing_signal_hint(&error), &kept.records[index]);
-                Some(FitError::Record {
-                    index: used[index],
-                    point_id: r.point_id.clone(),
-                    time: r.time,
-                    source: error,
-                    hint,
-                })
-            }
+    Ok(n_free)
+}
+
+/// A record the model cannot predict (a missing signal, an unreachable joint vector), named with
+/// its index and what would provide the signal; each record goes through its own instrument (a
+/// probe hit does not read the tracker's air). None when every record can be predicted.
+fn unpredictable_record(
+    model: &ForwardModel,
+    problem: &PointResiduals,
+    kept: &RecordSet,
+    used: &[usize],
+) -> Option<FitError> {
+    match problem.predictions_of_records(&model.params()) {
+        Ok(_) => None,
+        Err(EvaluationFailure::Model(e)) => Some(e.into()),
+        Err(EvaluationFailure::Record { index, error }) => {
+            let (hint, r) = (missing_signal_hint(&error), &kept.records[index]);
+            Some(FitError::Record {
+                index: used[index],
+                point_id: r.point_id.clone(),
+                time: r.time,
+                source: error,
+                hint,
+            })
         }
-    };
-    let x0 = match start {
-        Some(x) => x,
-        None => start_vector(model, setup, kept).map_err(|e| unpredictable().unwrap_or(e))?,
-    };
-    let specs: Vec<_> = model
-        .machine_terms
-        .param_specs()
-        .into_iter()
-        .chain(model.instrument_terms.param_specs())
-        .collect();
-    let names = model.param_names();
-    let labels: Vec<&str> = names.iter().map(|s| s.as_str()).collect();
-    // bounds: the possible range (none for sign-free quantities), widened to include the start
-    // so a start outside it is legal
-    let lower: Vec<f64> = specs
-        .iter()
-        .zip(&x0)
-        .map(|(s, v)| s.possible.lo.min(*v))
-        .collect();
-    let upper: Vec<f64> = specs
-        .iter()
-        .zip(&x0)
-        .map(|(s, v)| s.possible.hi.max(*v))
-        .collect();
-    let priors: Vec<Prior> = setup
-        .priors
-        .iter()
-        .enumerate()
-        .filter_map(|(index, p)| {
-            p.map(|p| Prior {
-                index,
-                value: p.value,
-                sigma: p.sigma,
+    }
+}
+
+/// The records with a whitened component beyond the robust loss's threshold `c` at the solution.
+fn beyond_threshold(
+    c: f64,
+    solution: &Solution,
+    kept: &RecordSet,
+    used: &[usize],
+) -> Vec<RecordNote> {
+    (0..kept.len())
+        .filter_map(|i| {
+            let z = &solution.residuals[3 * i..3 * i + 3];
+            let worst = z.iter().fold(0.0f64, |a, v| a.max(v.abs()));
+            (worst > c).then(|| RecordNote {
+                index: used[i],
+                point_id: kept.records[i].point_id.clone(),
+                time: kept.records[i].time,
+                reason: format!("{worst:.1}σ from the model"),
             })
         })
-        .collect();
-    let solver_options = |free: &[bool], loss: Loss| Options {
-        loss,
-        bounds: Some((lower.clone(), upper.clone())),
-        fixed: free.iter().map(|f| !f).collect(),
-        priors: priors.clone(),
-        max_iterations: options.max_iterations,
-        // stop when an accepted step lowers the cost by under 1e-12 of it, or moves the scaled
-        // parameters by under 1e-12 of their norm: the cost of ~10⁴ readings is only computed to
-        // ~1e-13 of itself, so tighter tolerances chase round-off (the last iterations then
-        // report ρ of 10³–10⁸, a predicted reduction below the noise of the actual one)
-        ftol: 1e-12,
-        xtol: 1e-12,
-        gtol: 1e-12,
-        null_space: NullSpace::Truncated {
-            rcond: options.rcond,
-        },
-        // Marquardt's λ₀ = 1e-3 (relative to the unit-diagonal scaled normal matrix) damps the
-        // weakly determined directions of a calibration (eigenvalues down to rcond² of the
-        // largest) for several iterations while λ walks down; a calibration from its start is
-        // nearly linear, and a step that overshoots is rejected and damped at the price of one
-        // evaluation. On the XFYZ benchmark fit: 5 iterations → 4.
-        initial_damping: 1e-6,
-        ..Options::default()
-    };
-    // (r, J) at the start, evaluated once: they judge what the design identifies, give the
-    // residuals before, and are the first solve's first linearisation (a later solve, after
-    // more parameters are held, starts at x0 again and evaluates it itself). Only the free
-    // columns: the fixed ones are never read, and their pages of the zeroed buffer never touched.
-    let mut r0 = vec![0.0; problem.residual_count()];
-    let mut j0 = zeroed_matrix(problem.residual_count(), problem.parameter_count());
-    problem
-        .residuals_and_jacobian_of(&x0, &mut r0, &mut j0, &free)
-        .map_err(|e| {
-            unpredictable().unwrap_or_else(|| {
-                FitError::Registration(format!(
-                    "the model cannot be evaluated at the start: {}",
-                    e.0
-                ))
+        .collect()
+}
+
+/// What every solve of one fit shares: the problem and its start, the parameters' bounds (the
+/// possible range, widened to include the start), priors, names and typical scales.
+struct Solving<'p, 'm, 'a> {
+    problem: &'p PointResiduals<'m, 'a>,
+    x0: &'p [f64],
+    options: &'p FitOptions,
+    specs: Vec<metrocell_physics::ParamSpec>,
+    names: &'p [String],
+    labels: Vec<&'p str>,
+    lower: Vec<f64>,
+    upper: Vec<f64>,
+    priors: Vec<Prior>,
+    /// The number of machine-term parameters (they come first in the stacked vector).
+    machine_params: usize,
+    /// Each parameter's typical change, for the nil-column test (units differ by 10⁹).
+    scales: Vec<f64>,
+}
+
+impl<'p, 'm, 'a> Solving<'p, 'm, 'a> {
+    fn new(
+        model: &ForwardModel,
+        setup: &ParameterSetup,
+        problem: &'p PointResiduals<'m, 'a>,
+        x0: &'p [f64],
+        names: &'p [String],
+        options: &'p FitOptions,
+    ) -> Self {
+        let specs: Vec<_> = model
+            .machine_terms
+            .param_specs()
+            .into_iter()
+            .chain(model.instrument_terms.param_specs())
+            .collect();
+        // bounds: the possible range (none for sign-free quantities), widened to include the
+        // start so a start outside it is legal
+        let lower: Vec<f64> = specs
+            .iter()
+            .zip(x0)
+            .map(|(s, v)| s.possible.lo.min(*v))
+            .collect();
+        let upper: Vec<f64> = specs
+            .iter()
+            .zip(x0)
+            .map(|(s, v)| s.possible.hi.max(*v))
+            .collect();
+        let priors: Vec<Prior> = setup
+            .priors
+            .iter()
+            .enumerate()
+            .filter_map(|(index, p)| {
+                p.map(|p| Prior {
+                    index,
+                    value: p.value,
+                    sigma: p.sigma,
+                })
             })
-        })?;
-    let residuals_before = problem.unwhitened(&r0);
-    // a robust loss from a far start calls every residual an outlier and crawls: reach the
-    // basin with plain least squares first, then let the robust loss judge the residuals
-    let two_stage = |free: &[bool], at_start: Option<Evaluated>| -> Result<Solution, FitError> {
-        let near = solve_from(&problem, &x0, at_start, &solver_options(free, Loss::Linear))?;
-        if options.loss == Loss::Linear {
+            .collect();
+        let scales = specs.iter().map(|s| s.typical_scale()).collect();
+        Self {
+            problem,
+            x0,
+            options,
+            names,
+            labels: names.iter().map(|s| s.as_str()).collect(),
+            lower,
+            upper,
+            priors,
+            machine_params: model.machine_terms.param_specs().len(),
+            scales,
+            specs,
+        }
+    }
+
+    /// The solver's options for the free parameters `free` and the loss `loss`.
+    fn solver_options(&self, free: &[bool], loss: Loss) -> Options {
+        Options {
+            loss,
+            bounds: Some((self.lower.clone(), self.upper.clone())),
+            fixed: free.iter().map(|f| !f).collect(),
+            priors: self.priors.clone(),
+            max_iterations: self.options.max_iterations,
+            // stop when an accepted step lowers the cost by under 1e-12 of it, or moves the
+            // scaled parameters by under 1e-12 of their norm: the cost of ~10⁴ readings is only
+            // computed to ~1e-13 of itself, so tighter tolerances chase round-off (the last
+            // iterations then report ρ of 10³–10⁸, a predicted reduction below the noise of the
+            // actual one)
+            ftol: 1e-12,
+            xtol: 1e-12,
+            gtol: 1e-12,
+            null_space: NullSpace::Truncated {
+                rcond: self.options.rcond,
+            },
+            // Marquardt's λ₀ = 1e-3 (relative to the unit-diagonal scaled normal matrix) damps
+            // the weakly determined directions of a calibration (eigenvalues down to rcond² of
+            // the largest) for several iterations while λ walks down; a calibration from its
+            // start is nearly linear, and a step that overshoots is rejected and damped at the
+            // price of one evaluation. On the XFYZ benchmark fit: 5 iterations → 4.
+            initial_damping: 1e-6,
+            ..Options::default()
+        }
+    }
+
+    /// A solve from the start: a robust loss from a far start calls every residual an outlier
+    /// and crawls, so the basin is reached with plain least squares first, then the robust loss
+    /// judges the residuals.
+    fn two_stage(&self, free: &[bool], at_start: Option<Evaluated>) -> Result<Solution, FitError> {
+        let near = solve_from(
+            self.problem,
+            self.x0,
+            at_start,
+            &self.solver_options(free, Loss::Linear),
+        )?;
+        if self.options.loss == Loss::Linear {
             return Ok(near);
         }
         // the iterations and evaluations of both stages are the fit's
-        let mut robust = solve(&problem, &near.x, &solver_options(free, options.loss))?;
+        let mut robust = solve(
+            self.problem,
+            &near.x,
+            &self.solver_options(free, self.options.loss),
+        )?;
         robust.iterations += near.iterations;
         robust.evaluations += near.evaluations;
         Ok(robust)
-    };
-    // what the design can identify, judged at the start: a parameter whose effect is nil or a
-    // combination of others there (e.g. a joint offset about the axis the target sits on) is
-    // held before the solver can wander along it
-    let free_idx: Vec<usize> = (0..free.len()).filter(|&k| free[k]).collect();
-    let free_labels: Vec<&str> = free_idx.iter().map(|&k| labels[k]).collect();
-    // (the Gram route's normal matrix is the first solve's too, when no parameter is held here)
-    let (declared_identifiability, start_normal) = if options.rcond >= GRAM_RCOND {
-        let normal = normal_matrix(&j0, &free_idx);
-        let judged = if priors.is_empty() {
-            Identifiability::from_normal_matrix(&normal, j0.nrows(), &free_labels, options.rcond)?
-        } else {
-            identifiability_with_priors(&j0, &priors, &free, &labels, options.rcond)?
-        };
-        (judged, Some(normal))
-    } else if priors.is_empty() {
-        (
-            Identifiability::analyze(
-                &j0.select_columns(&free_idx),
-                &free_labels,
-                Some(options.rcond),
-            )?,
-            None,
-        )
-    } else {
-        (
-            identifiability_with_priors(&j0, &priors, &free, &labels, options.rcond)?,
-            None,
-        )
-    };
-    let machine_params = model.machine_terms.param_specs().len();
-    // each parameter's typical change, for the nil-column test (units differ by 10⁹)
-    let scales: Vec<f64> = model
-        .machine_terms
-        .param_specs()
-        .iter()
-        .chain(model.instrument_terms.param_specs().iter())
-        .map(|s| s.typical_scale())
-        .collect();
-    let mut held = Vec::new();
-    if !declared_identifiability.null_directions.is_empty() {
-        for (k, sentence) in dependent_parameters(
-            &with_prior_rows(&j0, &priors),
-            &free,
-            machine_params,
-            &names,
-            &scales,
-        ) {
-            free[k] = false;
-            held.push(HeldParameter {
-                index: k,
-                name: names[k].clone(),
-                combination: sentence,
-            });
-        }
     }
-    // the start's r and J go to the first solve, which works in them
-    let start_normal = start_normal.filter(|_| held.is_empty());
-    let mut solution = two_stage(
-        &free,
-        Some(Evaluated {
-            residuals: r0,
-            jacobian: j0,
-            normal_matrix: start_normal,
-        }),
-    )?;
-    let judge = |solution: &Solution| -> Result<Identifiability, FitError> {
-        Ok(if priors.is_empty() {
-            solution.identifiability(&labels, Some(options.rcond))?
+
+    /// What the design identifies at the start (Jacobian `j0`), and the normal matrix of the
+    /// free columns when the Gram route computed it (it is the first solve's too, when no
+    /// parameter is held).
+    fn identifiability_at_start(
+        &self,
+        j0: &DMatrix<f64>,
+        free: &[bool],
+    ) -> Result<(Identifiability, Option<DMatrix<f64>>), FitError> {
+        let (priors, labels, rcond) = (&self.priors, &self.labels, self.options.rcond);
+        let free_idx: Vec<usize> = (0..free.len()).filter(|&k| free[k]).collect();
+        let free_labels: Vec<&str> = free_idx.iter().map(|&k| labels[k]).collect();
+        Ok(if rcond >= GRAM_RCOND {
+            let normal = normal_matrix(j0, &free_idx);
+            let judged = if priors.is_empty() {
+                Identifiability::from_normal_matrix(&normal, j0.nrows(), &free_labels, rcond)?
+            } else {
+                identifiability_with_priors(j0, priors, free, labels, rcond)?
+            };
+            (judged, Some(normal))
+        } else if priors.is_empty() {
+            (
+                Identifiability::analyze(&j0.select_columns(&free_idx), &free_labels, Some(rcond))?,
+                None,
+            )
+        } else {
+            (
+                identifiability_with_priors(j0, priors, free, labels, rcond)?,
+                None,
+            )
+        })
+    }
+
+    /// What the design identifies at `solution`.
+    fn judge(&self, solution: &Solution) -> Result<Identifiability, FitError> {
+        Ok(if self.priors.is_empty() {
+            solution.identifiability(&self.labels, Some(self.options.rcond))?
         } else {
             identifiability_with_priors(
                 &solution.weighted_jacobian,
-                &priors,
+                &self.priors,
                 &solution.free,
-                &labels,
-                options.rcond,
+                &self.labels,
+                self.options.rcond,
             )?
         })
-    };
-    let mut identifiability = judge(&solution)?;
-    // at the solution: hold what became inseparable there too (from the start again, so the
-    // held ones keep their start values exactly) until the rest is identifiable
-    while !identifiability.null_directions.is_empty() && held.len() < n_free {
-        let before = held.len();
+    }
+
+    /// Hold each free parameter the columns of `jw` show dependent on others (a machine-term
+    /// parameter rather than the pose), naming the combination.
+    fn hold_dependent(&self, jw: &DMatrix<f64>, free: &mut [bool], held: &mut Vec<HeldParameter>) {
         for (k, sentence) in dependent_parameters(
-            &with_prior_rows(&solution.weighted_jacobian, &priors),
-            &free,
-            machine_params,
-            &names,
-            &scales,
+            &with_prior_rows(jw, &self.priors),
+            free,
+            self.machine_params,
+            self.names,
+            &self.scales,
         ) {
             free[k] = false;
             held.push(HeldParameter {
                 index: k,
-                name: names[k].clone(),
+                name: self.names[k].clone(),
                 combination: sentence,
             });
         }
-        if held.len() == before {
-            // numerically weak directions the column test does not call dependent: hold the
-            // weakest direction's leading parameter
-            let d = &identifiability.null_directions[0];
-            let free_idx: Vec<usize> = (0..free.len()).filter(|&k| free[k]).collect();
-            let j = (0..d.scaled.len()).fold(0, |b, j| {
-                if d.scaled[j].abs() > d.scaled[b].abs() {
-                    j
-                } else {
-                    b
-                }
-            });
-            let k = free_idx[j];
-            free[k] = false;
-            held.push(HeldParameter {
-                index: k,
-                name: names[k].clone(),
-                combination: identifiability.describe()[0].clone(),
-            });
-        }
-        solution = two_stage(&free, None)?;
-        identifiability = judge(&solution)?;
     }
-    let residuals_after = problem.unwhitened(&solution.residuals);
-    let covariance = solution.covariance();
-    let sigmas = solution.standard_uncertainties();
-    let chi2: f64 = solution.residuals.iter().map(|r| r * r).sum();
-    let dof = solution.degrees_of_freedom.max(1);
-    let parameters = specs
-        .iter()
-        .enumerate()
-        .map(|(k, s)| ParameterEstimate {
-            name: names[k].clone(),
-            value: solution.x[k],
-            sigma: if free[k] {
-                sigmas.as_ref().map(|u| u[k])
-            } else {
-                None
-            },
-            unit: s.unit,
-            free: free[k],
-            range: (s.possible.lo, s.possible.hi),
-            usual: (s.usual.lo, s.usual.hi),
-            at_bound: if free[k] {
-                bound_reached(solution.x[k], lower[k], upper[k], s.typical_scale())
-            } else {
-                None
-            },
-        })
-        .collect();
-    let threshold = match options.loss {
-        Loss::Huber(c) | Loss::Cauchy(c) => Some(c),
-        _ => None,
-    };
-    let outliers = match threshold {
-        Some(c) => (0..kept.len())
-            .filter_map(|i| {
-                let z = &solution.residuals[3 * i..3 * i + 3];
-                let worst = z.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-                (worst > c).then(|| RecordNote {
-                    index: used[i],
-                    point_id: kept.records[i].point_id.clone(),
-                    time: kept.records[i].time,
-                    reason: format!("{worst:.1}σ from the model"),
-                })
+
+    /// At the solution: hold what became inseparable there too (solving from the start again, so
+    /// the held ones keep their start values exactly) until the rest is identifiable; the last
+    /// solution and what it identifies.
+    fn hold_until_identifiable(
+        &self,
+        mut solution: Solution,
+        free: &mut [bool],
+        held: &mut Vec<HeldParameter>,
+        n_free: usize,
+    ) -> Result<(Solution, Identifiability), FitError> {
+        let mut identifiability = self.judge(&solution)?;
+        while !identifiability.null_directions.is_empty() && held.len() < n_free {
+            let before = held.len();
+            self.hold_dependent(&solution.weighted_jacobian, free, held);
+            if held.len() == before {
+                // numerically weak directions the column test does not call dependent: hold the
+                // weakest direction's leading parameter
+                let d = &identifiability.null_directions[0];
+                let free_idx: Vec<usize> = (0..free.len()).filter(|&k| free[k]).collect();
+                let j = (0..d.scaled.len()).fold(0, |b, j| {
+                    if d.scaled[j].abs() > d.scaled[b].abs() {
+                        j
+                    } else {
+                        b
+                    }
+                });
+                let k = free_idx[j];
+                free[k] = false;
+                held.push(HeldParameter {
+                    index: k,
+                    name: self.names[k].clone(),
+                    combination: identifiability.describe()[0].clone(),
+                });
+            }
+            solution = self.two_stage(free, None)?;
+            identifiability = self.judge(&solution)?;
+        }
+        Ok((solution, identifiability))
+    }
+
+    /// Every parameter's estimate at `solution`: σ and the bound reached for the free ones.
+    fn estimates(&self, solution: &Solution, free: &[bool]) -> Vec<ParameterEstimate> {
+        let sigmas = solution.standard_uncertainties();
+        self.specs
+            .iter()
+            .enumerate()
+            .map(|(k, s)| ParameterEstimate {
+                name: self.names[k].clone(),
+                value: solution.x[k],
+                sigma: if free[k] {
+                    sigmas.as_ref().map(|u| u[k])
+                } else {
+                    None
+                },
+                unit: s.unit,
+                free: free[k],
+                range: (s.possible.lo, s.possible.hi),
+                usual: (s.usual.lo, s.usual.hi),
+                at_bound: if free[k] {
+                    bound_reached(
+                        solution.x[k],
+                        self.lower[k],
+                        self.upper[k],
+                        s.typical_scale(),
+                    )
+                } else {
+                    None
+                },
             })
-            .collect(),
-        None => vec![],
-    };
-    Ok(Fit {
-        parameters,
-        x: solution.x.clone(),
-        covariance,
-        residuals_before,
-        residuals_after,
-        chi2_per_dof: chi2 / dof as f64,
-        identifiability,
-        downweighted: solution.downweighted,
-        outliers,
-        skipped,
-        held,
-        declared_identifiability,
-        used,
-        options_threshold: threshold,
-        solution,
-    })
+            .collect()
+    }
 }
 
 /// √W·J with one row per prior (1/σ in its parameter's column): a prior is information too —

@@ -234,30 +234,13 @@ impl State<'_> {
     }
 
     /// Process one parsed line: `None` = write it back as it is; `Some(lines)` = replace it.
+    ///
+    /// The line's G codes set the modes (`modal_codes`); a line with a code compensation does
+    /// not model, a dwell or a line without axes passes through; a motion's path is compensated
+    /// point by point (`compensated_path`) and the line rewritten (`rewritten_lines`) unless
+    /// nothing changed.
     fn line(&mut self, number: usize, text: &str, block: &Block) -> Option<Vec<String>> {
-        let mut explicit_motion = None;
-        let mut dwell = false;
-        let mut unmodelled = Vec::new();
-        for g in block.g_codes() {
-            // G numbers are f64 (G38.2 exists); float literal patterns are not allowed, so guards
-            #[allow(clippy::redundant_guards)]
-            match g {
-                x if x == 0.0 => explicit_motion = Some(Motion::Rapid),
-                x if x == 1.0 => explicit_motion = Some(Motion::Linear),
-                x if x == 2.0 => explicit_motion = Some(Motion::Clockwise),
-                x if x == 3.0 => explicit_motion = Some(Motion::CounterClockwise),
-                x if x == 4.0 => dwell = true,
-                x if x == 17.0 => self.plane = ArcPlane::XY,
-                x if x == 18.0 => self.plane = ArcPlane::ZX,
-                x if x == 19.0 => self.plane = ArcPlane::YZ,
-                x if x == 20.0 => self.unit_mm = 25.4,
-                x if x == 21.0 => self.unit_mm = 1.0,
-                x if x == 90.0 => self.absolute = true,
-                x if x == 91.0 => self.absolute = false,
-                x if HARMLESS_G.contains(&x) => {}
-                other => unmodelled.push(other),
-            }
-        }
+        let (explicit_motion, dwell, unmodelled) = self.modal_codes(block);
         if let Some(m) = explicit_motion {
             self.motion = Some(m);
         }
@@ -294,33 +277,7 @@ impl State<'_> {
                 target[k] = if self.absolute { v } else { target[k] + v };
             }
         }
-        let path = match self.path(motion, block, &target) {
-            Ok(p) => p,
-            Err(e) => {
-                self.warn(number, format!("not compensated: {e}"));
-                self.commanded += target - self.programmed;
-                self.programmed = target;
-                return None;
-            }
-        };
-        let mut commanded = Vec::with_capacity(path.len());
-        let mut previous = self.programmed;
-        let mut outside = false;
-        for p in &path {
-            match self.compensate(previous, *p) {
-                Ok((c, inside)) => {
-                    outside |= !inside;
-                    commanded.push(c);
-                }
-                Err(e) => {
-                    self.warn(number, format!("not compensated: {e}"));
-                    self.commanded += target - self.programmed;
-                    self.programmed = target;
-                    return None;
-                }
-            }
-            previous = *p;
-        }
+        let (path, commanded, outside) = self.compensated_path(number, motion, block, target)?;
         let (take_up, commanded) = if motion == Motion::Linear {
             self.split_bent_line(path[0], commanded[0])
         } else {
@@ -350,6 +307,103 @@ impl State<'_> {
         }
         self.report.changed_lines += 1;
         self.report.added_lines += commanded.len() - 1 + usize::from(take_up.is_some());
+        Some(self.rewritten_lines(
+            (text, block),
+            motion,
+            explicit_motion.is_some(),
+            before,
+            take_up,
+            &commanded,
+        ))
+    }
+
+    /// The motion a line's G codes select, whether it dwells, and the codes compensation does
+    /// not model; the plane, unit and distance modes set as the codes say.
+    fn modal_codes(&mut self, block: &Block) -> (Option<Motion>, bool, Vec<f64>) {
+        let mut explicit_motion = None;
+        let mut dwell = false;
+        let mut unmodelled = Vec::new();
+        for g in block.g_codes() {
+            // G numbers are f64 (G38.2 exists); float literal patterns are not allowed, so guards
+            #[allow(clippy::redundant_guards)]
+            match g {
+                x if x == 0.0 => explicit_motion = Some(Motion::Rapid),
+                x if x == 1.0 => explicit_motion = Some(Motion::Linear),
+                x if x == 2.0 => explicit_motion = Some(Motion::Clockwise),
+                x if x == 3.0 => explicit_motion = Some(Motion::CounterClockwise),
+                x if x == 4.0 => dwell = true,
+                x if x == 17.0 => self.plane = ArcPlane::XY,
+                x if x == 18.0 => self.plane = ArcPlane::ZX,
+                x if x == 19.0 => self.plane = ArcPlane::YZ,
+                x if x == 20.0 => self.unit_mm = 25.4,
+                x if x == 21.0 => self.unit_mm = 1.0,
+                x if x == 90.0 => self.absolute = true,
+                x if x == 91.0 => self.absolute = false,
+                x if HARMLESS_G.contains(&x) => {}
+                other => unmodelled.push(other),
+            }
+        }
+        (explicit_motion, dwell, unmodelled)
+    }
+
+    /// The programmed path of a motion to `target`, each of its points compensated, and whether
+    /// any lies outside the calibrated region; None (warned, the positions following the
+    /// program) when the path or a point cannot be compensated.
+    #[allow(clippy::type_complexity)]
+    fn compensated_path(
+        &mut self,
+        number: usize,
+        motion: Motion,
+        block: &Block,
+        target: Vector3<f64>,
+    ) -> Option<(Vec<Vector3<f64>>, Vec<Vector3<f64>>, bool)> {
+        let path = match self.path(motion, block, &target) {
+            Ok(p) => p,
+            Err(e) => {
+                self.not_compensated(number, e, target);
+                return None;
+            }
+        };
+        let mut commanded = Vec::with_capacity(path.len());
+        let mut previous = self.programmed;
+        let mut outside = false;
+        for p in &path {
+            match self.compensate(previous, *p) {
+                Ok((c, inside)) => {
+                    outside |= !inside;
+                    commanded.push(c);
+                }
+                Err(e) => {
+                    self.not_compensated(number, e, target);
+                    return None;
+                }
+            }
+            previous = *p;
+        }
+        Some((path, commanded, outside))
+    }
+
+    /// A motion to `target` that could not be compensated: warned, and both positions moved by
+    /// the program.
+    fn not_compensated(&mut self, number: usize, e: String, target: Vector3<f64>) {
+        self.warn(number, format!("not compensated: {e}"));
+        self.commanded += target - self.programmed;
+        self.programmed = target;
+    }
+
+    /// The lines replacing a motion line (`line`: its text and block) from the commanded
+    /// position `before`: a take-up move of its own when the bent line needs one, the line
+    /// rebuilt to the first commanded point, and a G1 to each further one.
+    fn rewritten_lines(
+        &mut self,
+        (text, block): (&str, &Block),
+        motion: Motion,
+        explicit: bool,
+        before: Vector3<f64>,
+        take_up: Option<Vector3<f64>>,
+        commanded: &[Vector3<f64>],
+    ) -> Vec<String> {
+        let decimals = if self.unit_mm == 1.0 { 4 } else { 5 };
         let emitted_motion = if motion == Motion::Rapid {
             Motion::Rapid
         } else {
@@ -377,7 +431,7 @@ impl State<'_> {
                     &words,
                     motion,
                     emitted_motion,
-                    explicit_motion.is_some(),
+                    explicit,
                     controller_motion,
                 ));
             } else {
@@ -390,7 +444,7 @@ impl State<'_> {
             from = *c;
         }
         self.controller_motion = Some(emitted_motion);
-        Some(lines)
+        lines
     }
 
     /// After a line passed through without compensation, both positions follow the program.

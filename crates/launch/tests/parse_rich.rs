@@ -57,45 +57,58 @@ fn rich_file_gives_exact_command_lines() {
         .iter()
         .map(|p| (p.label.clone(), p.command_line()))
         .collect();
-    let expected: Vec<(String, Vec<String>)> = vec![
-        (
-            "cam0".into(),
-            vec![
-                b("camera_node"),
-                "--device".into(),
-                "/dev/video 0".into(),
-                "--verbose".into(),
-                "--ros-args".into(),
-                "-r".into(),
-                "__node:=cam0".into(),
-                "-r".into(),
-                "__ns:=/metrology/cell_a".into(),
-                "-p".into(),
-                "rate:=10".into(),
-                "-p".into(),
-                "exposure_s:=0.004".into(),
-                "-p".into(),
-                "frame_id:=cam0_optical".into(),
-                "-p".into(),
-                "serial:='0042'".into(),
-                "-p".into(),
-                "rate_quoted:=10".into(),
-                "-p".into(),
-                "roi:=[0, 0, 640, 480]".into(),
-                "-p".into(),
-                "labels:=[a, 'b, c', '1']".into(),
-                "-p".into(),
-                "intrinsics.fx:=812.5".into(),
-                "-p".into(),
-                "intrinsics.model:={kind: pinhole, k: [0.1, -0.02]}".into(),
-                "--params-file".into(),
-                format!("{}/launch-configs/params/cam.yaml", share.display()),
-                "-p".into(),
-                "enabled:=true".into(),
-                "-r".into(),
-                "image:=/cell_a/sensors/image".into(),
-            ],
-        ),
+    let expected = expected_command_lines(&b, &share);
+    assert_eq!(
+        lines.len(),
+        expected.len(),
+        "labels: {:?}",
+        lines.iter().map(|l| &l.0).collect::<Vec<_>>()
+    );
+    for (got, want) in lines.iter().zip(&expected) {
+        assert_eq!(got, want);
+    }
+
+    let cam = &plan.processes[0];
+    assert!(cam.respawn);
+    assert_eq!(cam.respawn_delay, Duration::from_millis(1500));
+    assert_eq!(cam.respawn_max_retries, None);
+    assert_eq!(cam.output, OutputMode::Screen);
+    assert_eq!(cam.env, vec![("CELL".to_string(), "cell_a".to_string())]);
+    assert!(
+        cam.origin.ends_with("rich.launch.yaml:19"),
+        "{}",
+        cam.origin
+    );
+    assert!(!plan.processes[1].respawn);
+
+    let declared: Vec<(&str, &str)> = plan
+        .arguments
+        .iter()
+        .map(|a| (a.name.as_str(), a.value.as_str()))
+        .collect();
+    assert_eq!(
+        declared,
+        [
+            ("cell", "cell_a"),
+            ("rate", "10"),
+            ("with_probe", "false"),
+            ("sensor", "thermo_cell_a"),
+            ("sample_period", "0.25")
+        ]
+    );
+    assert_eq!(
+        plan.arguments[0].description.as_deref(),
+        Some("Which cell this launch runs")
+    );
+    assert_eq!(plan.arguments[1].default.as_deref(), Some("30"));
+    std::fs::remove_dir_all(&bin).unwrap();
+}
+
+/// The command lines rich.launch.yaml resolves to, by process label (`b`: a fake executable's
+/// path, `share`: the package's share directory).
+fn expected_command_lines(b: &dyn Fn(&str) -> String, share: &Path) -> Vec<(String, Vec<String>)> {
+    vec![
+        ("cam0".into(), expected_cam0(b, share)),
         (
             "tracker".into(),
             vec![
@@ -158,51 +171,47 @@ fn rich_file_gives_exact_command_lines() {
             "sh".into(),
             vec!["/bin/sh".into(), "-c".into(), "echo hello cell_a".into()],
         ),
-    ];
-    assert_eq!(
-        lines.len(),
-        expected.len(),
-        "labels: {:?}",
-        lines.iter().map(|l| &l.0).collect::<Vec<_>>()
-    );
-    for (got, want) in lines.iter().zip(&expected) {
-        assert_eq!(got, want);
-    }
+    ]
+}
 
-    let cam = &plan.processes[0];
-    assert!(cam.respawn);
-    assert_eq!(cam.respawn_delay, Duration::from_millis(1500));
-    assert_eq!(cam.respawn_max_retries, None);
-    assert_eq!(cam.output, OutputMode::Screen);
-    assert_eq!(cam.env, vec![("CELL".to_string(), "cell_a".to_string())]);
-    assert!(
-        cam.origin.ends_with("rich.launch.yaml:19"),
-        "{}",
-        cam.origin
-    );
-    assert!(!plan.processes[1].respawn);
-
-    let declared: Vec<(&str, &str)> = plan
-        .arguments
-        .iter()
-        .map(|a| (a.name.as_str(), a.value.as_str()))
-        .collect();
-    assert_eq!(
-        declared,
-        [
-            ("cell", "cell_a"),
-            ("rate", "10"),
-            ("with_probe", "false"),
-            ("sensor", "thermo_cell_a"),
-            ("sample_period", "0.25")
-        ]
-    );
-    assert_eq!(
-        plan.arguments[0].description.as_deref(),
-        Some("Which cell this launch runs")
-    );
-    assert_eq!(plan.arguments[1].default.as_deref(), Some("30"));
-    std::fs::remove_dir_all(&bin).unwrap();
+/// The camera's command line: its arguments, name and namespace, every parameter form, the
+/// params file and the remapping.
+fn expected_cam0(b: &dyn Fn(&str) -> String, share: &Path) -> Vec<String> {
+    vec![
+        b("camera_node"),
+        "--device".into(),
+        "/dev/video 0".into(),
+        "--verbose".into(),
+        "--ros-args".into(),
+        "-r".into(),
+        "__node:=cam0".into(),
+        "-r".into(),
+        "__ns:=/metrology/cell_a".into(),
+        "-p".into(),
+        "rate:=10".into(),
+        "-p".into(),
+        "exposure_s:=0.004".into(),
+        "-p".into(),
+        "frame_id:=cam0_optical".into(),
+        "-p".into(),
+        "serial:='0042'".into(),
+        "-p".into(),
+        "rate_quoted:=10".into(),
+        "-p".into(),
+        "roi:=[0, 0, 640, 480]".into(),
+        "-p".into(),
+        "labels:=[a, 'b, c', '1']".into(),
+        "-p".into(),
+        "intrinsics.fx:=812.5".into(),
+        "-p".into(),
+        "intrinsics.model:={kind: pinhole, k: [0.1, -0.02]}".into(),
+        "--params-file".into(),
+        format!("{}/launch-configs/params/cam.yaml", share.display()),
+        "-p".into(),
+        "enabled:=true".into(),
+        "-r".into(),
+        "image:=/cell_a/sensors/image".into(),
+    ]
 }
 
 #[test]

@@ -693,7 +693,7 @@ impl<'a> ForwardModel<'a> {
             a.fill(0.0);
         }
         let out = lin;
-        let mut ang_out = ang;
+        let ang_out = ang;
         // tool-frame displacement before turning (an arm's joint offsets turn it), and the
         // tool rotation the terms were turned by
         let mut tool_frame_sum = Vector3::zeros();
@@ -750,110 +750,165 @@ impl<'a> ForwardModel<'a> {
         }
         match kin {
             KinematicTruth::Delta { nominal, truth } => {
-                let qv = Vector3::new(q[0], q[1], q[2]);
-                let joints = nominal
-                    .inverse(&qv)
-                    .map_err(|e| kin_error("delta kinematics", q, e))?;
-                let fpj = truth
-                    .forward_parameter_jacobian(&joints)
-                    .map_err(|e| kin_error("delta parameter Jacobian", q, e))?;
-                for (i, t) in self.machine_terms.terms.iter().enumerate() {
-                    // columns of DELTA_PARAMETER_NAMES: tower angle trims 2.., radius trims 5..,
-                    // rod trims 8.., endstops 11..
-                    let base = match t.term.id() {
-                        TermId::DeltaTowerAngle => 2,
-                        TermId::DeltaRadius => 5,
-                        TermId::DeltaRodLength => 8,
-                        TermId::DeltaEndstop => 11,
-                        _ => continue,
-                    };
-                    let start = self.slots[i].start;
-                    for k in 0..3 {
-                        out.fixed_view_mut::<3, 1>(0, start + k)
-                            .copy_from(&fpj.fixed_view::<3, 1>(0, base + k));
-                    }
-                }
+                self.delta_columns(nominal, truth, q, out)?;
             }
             KinematicTruth::Arm {
                 chain,
                 joint_offsets,
                 dh,
             } => {
-                let deflected = gravity.as_ref().map(|g| g.deflected(q));
-                let geometric = chain
-                    .joint_offset_jacobian(deflected.as_deref().unwrap_or(q))
-                    .map_err(|e| kin_error("arm Jacobian", q, e))?;
                 let turned = tool_rotation * tool_frame_sum;
-                if let Some(g) = &gravity {
-                    self.gravity_columns(
-                        g,
-                        &geometric,
-                        &turned,
-                        &tool.truth.translation.vector,
-                        out,
-                        ang_out.as_deref_mut(),
-                    );
-                }
-                let MachineKinematics::SerialArm(arm) = &self.machine.kinematics else {
-                    return Err(PhysicsError::InvalidInput {
-                        what: "forward model".into(),
-                        reason: "an arm's kinematic truth given for a machine that is not an arm"
-                            .into(),
-                    });
+                let arm = ArmTruth {
+                    chain,
+                    joint_offsets,
+                    dh: dh.as_ref(),
                 };
-                for (i, t) in self.machine_terms.terms.iter().enumerate() {
-                    let start = self.slots[i].start;
-                    match t.term.id() {
-                        TermId::JointOffset => {
-                            for k in 0..chain.dof() {
-                                let lin = geometric.fixed_view::<3, 1>(0, k).into_owned();
-                                let ang = geometric.fixed_view::<3, 1>(3, k).into_owned();
-                                // the offset turns the tool, and the tool-frame terms with it
-                                out.fixed_view_mut::<3, 1>(0, start + k)
-                                    .copy_from(&(lin + ang.cross(&turned)));
-                                if let Some(a) = ang_out.as_deref_mut() {
-                                    a.fixed_view_mut::<3, 1>(0, start + k).copy_from(&ang);
-                                }
-                            }
-                        }
-                        TermId::LinkLength => match dh {
-                            Some(table) => {
-                                // a DH `a` translates everything after it along the row's x axis
-                                let qo: Vec<f64> =
-                                    q.iter().zip(joint_offsets).map(|(a, b)| a + b).collect();
-                                let pj = table
-                                    .parameter_jacobian(&qo)
-                                    .map_err(|e| kin_error("DH parameter Jacobian", q, e))?;
-                                let base_rotation =
-                                    chain.base.rotation.to_rotation_matrix().into_inner();
-                                for k in 0..table.rows.len() {
-                                    let col = base_rotation * pj.fixed_view::<3, 1>(0, 4 * k + 2);
-                                    out.fixed_view_mut::<3, 1>(0, start + k).copy_from(&col);
-                                }
-                            }
-                            None => {
-                                // a URDF length stretches the joint's <origin xyz> along itself
-                                let oj = chain
-                                    .origin_translation_jacobian(q)
-                                    .map_err(|e| kin_error("URDF origin Jacobian", q, e))?;
-                                for (k, joint) in arm.chain.joints.iter().enumerate() {
-                                    let v = joint.pre.translation.vector;
-                                    let n = v.norm();
-                                    if n > 0.0 {
-                                        let col = oj.fixed_view::<3, 3>(0, 3 * k) * (v / n);
-                                        out.fixed_view_mut::<3, 1>(0, start + k).copy_from(&col);
-                                    }
-                                }
-                            }
-                        },
-                        _ => {}
-                    }
-                }
+                let at = ArmReading {
+                    q,
+                    gravity: gravity.as_ref(),
+                    turned: &turned,
+                    point: &tool.truth.translation.vector,
+                };
+                self.arm_columns(&arm, &at, out, ang_out)?;
             }
             KinematicTruth::None => {}
         }
         Ok(tool)
     }
+
+    /// A delta's trims: their columns of the true geometry's parameter Jacobian at the joints
+    /// the nominal geometry commands for `q`.
+    fn delta_columns(
+        &self,
+        nominal: &DeltaGeometry,
+        truth: &DeltaGeometry,
+        q: &[f64],
+        out: &mut DMatrix<f64>,
+    ) -> Result<(), PhysicsError> {
+        let qv = Vector3::new(q[0], q[1], q[2]);
+        let joints = nominal
+            .inverse(&qv)
+            .map_err(|e| kin_error("delta kinematics", q, e))?;
+        let fpj = truth
+            .forward_parameter_jacobian(&joints)
+            .map_err(|e| kin_error("delta parameter Jacobian", q, e))?;
+        for (i, t) in self.machine_terms.terms.iter().enumerate() {
+            // columns of DELTA_PARAMETER_NAMES: tower angle trims 2.., radius trims 5..,
+            // rod trims 8.., endstops 11..
+            let base = match t.term.id() {
+                TermId::DeltaTowerAngle => 2,
+                TermId::DeltaRadius => 5,
+                TermId::DeltaRodLength => 8,
+                TermId::DeltaEndstop => 11,
+                _ => continue,
+            };
+            let start = self.slots[i].start;
+            for k in 0..3 {
+                out.fixed_view_mut::<3, 1>(0, start + k)
+                    .copy_from(&fpj.fixed_view::<3, 1>(0, base + k));
+            }
+        }
+        Ok(())
+    }
+
+    /// An arm's columns: its gravity terms', and its joint offsets' (which turn the tool, and
+    /// the tool-frame terms with it) and link lengths' (a DH `a`, or a URDF origin's length).
+    fn arm_columns(
+        &self,
+        arm_truth: &ArmTruth,
+        at: &ArmReading,
+        out: &mut DMatrix<f64>,
+        mut ang_out: Option<&mut DMatrix<f64>>,
+    ) -> Result<(), PhysicsError> {
+        let (chain, q) = (arm_truth.chain, at.q);
+        let deflected = at.gravity.map(|g| g.deflected(q));
+        let geometric = chain
+            .joint_offset_jacobian(deflected.as_deref().unwrap_or(q))
+            .map_err(|e| kin_error("arm Jacobian", q, e))?;
+        if let Some(g) = at.gravity {
+            self.gravity_columns(
+                g,
+                &geometric,
+                at.turned,
+                at.point,
+                out,
+                ang_out.as_deref_mut(),
+            );
+        }
+        let MachineKinematics::SerialArm(arm) = &self.machine.kinematics else {
+            return Err(PhysicsError::InvalidInput {
+                what: "forward model".into(),
+                reason: "an arm's kinematic truth given for a machine that is not an arm".into(),
+            });
+        };
+        for (i, t) in self.machine_terms.terms.iter().enumerate() {
+            let start = self.slots[i].start;
+            match t.term.id() {
+                TermId::JointOffset => {
+                    for k in 0..chain.dof() {
+                        let lin = geometric.fixed_view::<3, 1>(0, k).into_owned();
+                        let ang = geometric.fixed_view::<3, 1>(3, k).into_owned();
+                        // the offset turns the tool, and the tool-frame terms with it
+                        out.fixed_view_mut::<3, 1>(0, start + k)
+                            .copy_from(&(lin + ang.cross(at.turned)));
+                        if let Some(a) = ang_out.as_deref_mut() {
+                            a.fixed_view_mut::<3, 1>(0, start + k).copy_from(&ang);
+                        }
+                    }
+                }
+                TermId::LinkLength => match arm_truth.dh {
+                    Some(table) => {
+                        // a DH `a` translates everything after it along the row's x axis
+                        let qo: Vec<f64> = q
+                            .iter()
+                            .zip(arm_truth.joint_offsets)
+                            .map(|(a, b)| a + b)
+                            .collect();
+                        let pj = table
+                            .parameter_jacobian(&qo)
+                            .map_err(|e| kin_error("DH parameter Jacobian", q, e))?;
+                        let base_rotation = chain.base.rotation.to_rotation_matrix().into_inner();
+                        for k in 0..table.rows.len() {
+                            let col = base_rotation * pj.fixed_view::<3, 1>(0, 4 * k + 2);
+                            out.fixed_view_mut::<3, 1>(0, start + k).copy_from(&col);
+                        }
+                    }
+                    None => {
+                        // a URDF length stretches the joint's <origin xyz> along itself
+                        let oj = chain
+                            .origin_translation_jacobian(q)
+                            .map_err(|e| kin_error("URDF origin Jacobian", q, e))?;
+                        for (k, joint) in arm.chain.joints.iter().enumerate() {
+                            let v = joint.pre.translation.vector;
+                            let n = v.norm();
+                            if n > 0.0 {
+                                let col = oj.fixed_view::<3, 3>(0, 3 * k) * (v / n);
+                                out.fixed_view_mut::<3, 1>(0, start + k).copy_from(&col);
+                            }
+                        }
+                    }
+                },
+                _ => {}
+            }
+        }
+        Ok(())
+    }
+}
+
+/// An arm's kinematic truth (the parts of [`KinematicTruth::Arm`]).
+struct ArmTruth<'k> {
+    chain: &'k SerialChain,
+    joint_offsets: &'k [f64],
+    dh: Option<&'k DhTable>,
+}
+
+/// What an arm's columns are taken at: the reading's joints, the gravity terms' state, the
+/// tool-frame displacement turned with the tool, and the true tool point.
+struct ArmReading<'r> {
+    q: &'r [f64],
+    gravity: Option<&'r ArmGravity>,
+    turned: &'r Vector3<f64>,
+    point: &'r Vector3<f64>,
 }
 
 impl ForwardModel<'_> {

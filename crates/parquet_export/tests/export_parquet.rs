@@ -65,25 +65,9 @@ fn message(i: i64) -> Json {
 
 #[test]
 fn parquet_export_read_by_pyarrow_equals_bag_content_with_typed_columns() {
-    let reg = registry();
-    let dir = scratch("bag");
-    let mut w = BagWriter::create(&dir, WriterOptions::default()).unwrap();
-    w.add_topic("/test/all", TYPE, &reg.full_definition(TYPE).unwrap(), "")
-        .unwrap();
     let n = 6;
     let t0 = 1_700_000_000_000_000_000u64;
-    for i in 0..n {
-        let v = rosmsg::from_json(&reg, TYPE, &message(i as i64)).unwrap();
-        w.write(
-            "/test/all",
-            t0 + i * 1_000_000,
-            t0 + i * 1_000_000 - 7,
-            &rosmsg::encode(&reg, TYPE, &v).unwrap(),
-        )
-        .unwrap();
-    }
-    w.finish().unwrap();
-
+    let dir = bag_of_every_type(n, t0);
     let pq_dir = scratch("pq");
     let exported = export_parquet::export_parquet(&dir, &["/test/all".into()], &pq_dir).unwrap();
     let e = &exported["/test/all"];
@@ -106,8 +90,34 @@ fn parquet_export_read_by_pyarrow_equals_bag_content_with_typed_columns() {
     );
     let doc: Json = serde_json::from_slice(&out.stdout).unwrap();
     assert_eq!(doc["rows"].as_u64(), Some(n));
+    arrow_types_are_typed(&doc);
+    cells_equal_the_csv_export(&doc, &csv_dir.join("test.all.csv"));
+    values_are_the_written_ones(&doc, t0);
+}
 
-    // Arrow types: numeric of the field's width and signedness, UTF-8, lists for T[].
+/// A bag of `n` messages of the type with every field kind, from `t0` (ns) 1 ms apart.
+fn bag_of_every_type(n: u64, t0: u64) -> PathBuf {
+    let reg = registry();
+    let dir = scratch("bag");
+    let mut w = BagWriter::create(&dir, WriterOptions::default()).unwrap();
+    w.add_topic("/test/all", TYPE, &reg.full_definition(TYPE).unwrap(), "")
+        .unwrap();
+    for i in 0..n {
+        let v = rosmsg::from_json(&reg, TYPE, &message(i as i64)).unwrap();
+        w.write(
+            "/test/all",
+            t0 + i * 1_000_000,
+            t0 + i * 1_000_000 - 7,
+            &rosmsg::encode(&reg, TYPE, &v).unwrap(),
+        )
+        .unwrap();
+    }
+    w.finish().unwrap();
+    dir
+}
+
+/// Arrow types: numeric of the field's width and signedness, UTF-8, lists for T[].
+fn arrow_types_are_typed(doc: &Json) {
     let types = doc["types"].as_object().unwrap();
     let expect = [
         ("log_time_ns", "int64"),
@@ -140,9 +150,12 @@ fn parquet_export_read_by_pyarrow_equals_bag_content_with_typed_columns() {
             "type of column {col}"
         );
     }
+}
 
-    // Same columns in the same order as the CSV export, and equal values cell by cell.
-    let mut csv = csv::Reader::from_path(csv_dir.join("test.all.csv")).unwrap();
+/// Same columns in the same order as the CSV export, and equal values cell by cell.
+fn cells_equal_the_csv_export(doc: &Json, csv_path: &Path) {
+    let types = doc["types"].as_object().unwrap();
+    let mut csv = csv::Reader::from_path(csv_path).unwrap();
     let header: Vec<String> = csv.headers().unwrap().iter().map(String::from).collect();
     let pq_names: Vec<String> = serde_json::from_value(doc["names"].clone()).unwrap();
     assert_eq!(
@@ -173,8 +186,10 @@ fn parquet_export_read_by_pyarrow_equals_bag_content_with_typed_columns() {
             );
         }
     }
+}
 
-    // Spot checks against the written values (not through the CSV export).
+/// Spot checks against the written values (not through the CSV export).
+fn values_are_the_written_ones(doc: &Json, t0: u64) {
     let col = |c: &str| doc["columns"][c].clone();
     assert_eq!(
         col("u64")[0].as_u64(),

@@ -119,67 +119,13 @@ pub fn parse_message_from(
         }
 
         if let Some((cname, cvalue)) = constant_parts(rest) {
-            if ty.array != ArrayKind::Single {
-                return Err(err(
-                    lineno,
-                    format!("constant {cname} cannot have an array type ({ty})"),
-                ));
-            }
-            if matches!(ty.base, BaseType::Message(_)) {
-                return Err(err(
-                    lineno,
-                    format!("constant {cname} must have a primitive or string type, not {ty}"),
-                ));
-            }
-            if !is_constant_name(cname) {
-                return Err(err(
-                    lineno,
-                    format!("invalid constant name {cname:?} (upper case letters, digits and '_')"),
-                ));
-            }
-            if constants.iter().any(|c| c.name == cname) {
-                return Err(err(lineno, format!("constant {cname} defined twice")));
-            }
-            let value = parse_scalar_literal(&ty.base, cvalue.trim(), true)
-                .map_err(|m| err(lineno, format!("constant {cname}: {m}")))?;
-            constants.push(Constant {
-                name: cname.to_string(),
-                ty: ty.base,
-                value,
-                comment: doc,
-            });
+            let constant =
+                constant_of(cname, cvalue, ty, doc, &constants).map_err(|m| err(lineno, m))?;
+            constants.push(constant);
             last = Last::Constant(constants.len() - 1);
         } else {
-            let (fname, default_str) = split_first_token(rest);
-            if !is_field_name(fname) {
-                return Err(err(
-                    lineno,
-                    format!(
-                        "invalid field name {fname:?} (lower case letter first, then lower case, digits and single '_', not ending in '_')"
-                    ),
-                ));
-            }
-            if fields.iter().any(|f| f.name == fname) {
-                return Err(err(lineno, format!("field {fname} defined twice")));
-            }
-            let default_str = default_str.trim();
-            let default = if default_str.is_empty() {
-                None
-            } else {
-                if matches!(ty.base, BaseType::Message(_)) {
-                    return Err(err(lineno, format!("field {fname}: a nested message field ({ty}) cannot have a default value")));
-                }
-                Some(
-                    parse_literal(&ty, default_str)
-                        .map_err(|m| err(lineno, format!("default of field {fname}: {m}")))?,
-                )
-            };
-            fields.push(Field {
-                name: fname.to_string(),
-                ty,
-                default,
-                comment: doc,
-            });
+            let field = field_of(rest, ty, doc, &fields).map_err(|m| err(lineno, m))?;
+            fields.push(field);
             last = Last::Field(fields.len() - 1);
         }
     }
@@ -190,6 +136,76 @@ pub fn parse_message_from(
         constants,
         comment: header_comment.join("\n"),
         text: text.to_string(),
+    })
+}
+
+/// The constant `cname` = `cvalue` of type `ty` with its comment `doc`; Err with what is wrong
+/// (an array or message type, a bad name, a second definition, a value of another type).
+fn constant_of(
+    cname: &str,
+    cvalue: &str,
+    ty: FieldType,
+    doc: String,
+    constants: &[Constant],
+) -> Result<Constant, String> {
+    if ty.array != ArrayKind::Single {
+        return Err(format!("constant {cname} cannot have an array type ({ty})"));
+    }
+    if matches!(ty.base, BaseType::Message(_)) {
+        return Err(format!(
+            "constant {cname} must have a primitive or string type, not {ty}"
+        ));
+    }
+    if !is_constant_name(cname) {
+        return Err(format!(
+            "invalid constant name {cname:?} (upper case letters, digits and '_')"
+        ));
+    }
+    if constants.iter().any(|c| c.name == cname) {
+        return Err(format!("constant {cname} defined twice"));
+    }
+    let value = parse_scalar_literal(&ty.base, cvalue.trim(), true)
+        .map_err(|m| format!("constant {cname}: {m}"))?;
+    Ok(Constant {
+        name: cname.to_string(),
+        ty: ty.base,
+        value,
+        comment: doc,
+    })
+}
+
+/// The field `rest` (its name and any default value) of type `ty` with its comment `doc`; Err
+/// with what is wrong (a bad name, a second definition, a default of a nested message or of
+/// another type).
+fn field_of(rest: &str, ty: FieldType, doc: String, fields: &[Field]) -> Result<Field, String> {
+    let (fname, default_str) = split_first_token(rest);
+    if !is_field_name(fname) {
+        return Err(format!(
+            "invalid field name {fname:?} (lower case letter first, then lower case, digits and single '_', not ending in '_')"
+        ));
+    }
+    if fields.iter().any(|f| f.name == fname) {
+        return Err(format!("field {fname} defined twice"));
+    }
+    let default_str = default_str.trim();
+    let default = if default_str.is_empty() {
+        None
+    } else {
+        if matches!(ty.base, BaseType::Message(_)) {
+            return Err(format!(
+                "field {fname}: a nested message field ({ty}) cannot have a default value"
+            ));
+        }
+        Some(
+            parse_literal(&ty, default_str)
+                .map_err(|m| format!("default of field {fname}: {m}"))?,
+        )
+    };
+    Ok(Field {
+        name: fname.to_string(),
+        ty,
+        default,
+        comment: doc,
     })
 }
 

@@ -214,6 +214,10 @@ pub struct Evaluated {
 
 /// [`solve`], starting from r and J already evaluated at `x0` (used as given when `x0` lies
 /// within the bounds and the shapes fit; otherwise the clamped start is evaluated afresh).
+///
+/// Each iteration: Moré's scaling and the active bounds updated (`scale_and_activity`), the
+/// stopping tests (gradient, the Gauss–Newton step's predicted reduction, iterations), damped
+/// trial steps until one lowers the cost (`try_steps`), and the accepted point linearised.
 pub fn solve_from<P: Problem + ?Sized>(
     problem: &P,
     x0: &[f64],
@@ -228,43 +232,22 @@ pub fn solve_from<P: Problem + ?Sized>(
         Some((lo, hi)) => (lo.clone(), hi.clone()),
         None => (vec![f64::NEG_INFINITY; n], vec![f64::INFINITY; n]),
     };
-    let inv_sigma: Vec<f64> = match &options.sigmas {
-        Some(s) => s.iter().map(|v| 1.0 / v).collect(),
-        None => vec![1.0; m],
-    };
-    let free: Vec<usize> = (0..n).filter(|&k| !options.is_fixed(k)).collect();
-    let mut x: Vec<f64> = (0..n).map(|k| x0[k].clamp(lower[k], upper[k])).collect();
+    let bounds = Bounds { lower, upper };
+    let mut x: Vec<f64> = (0..n)
+        .map(|k| x0[k].clamp(bounds.lower[k], bounds.upper[k]))
+        .collect();
     let given = at_start
         .filter(|e| x.as_slice() == x0 && e.residuals.len() == m && e.jacobian.shape() == (m, n));
-    let (r, j, known_normal, evaluate_start) = match given {
-        Some(e) => (e.residuals, e.jacobian, e.normal_matrix, false),
-        None => (vec![0.0; m], zeroed_matrix(m, n), None, true),
+    let evaluate_start = given.is_none();
+    let (mut ws, known_normal) = Workspace::at_start(given, m, n, options);
+    let mut trial = Trial {
+        x: vec![0.0; n],
+        r: vec![0.0; m],
+        delta: vec![0.0; n],
+        ad: vec![0.0; n],
     };
-    let mut ws = Workspace {
-        raw: vec![0.0; m],
-        r,
-        j,
-        wanted: (0..n).map(|k| !options.is_fixed(k)).collect(),
-        free,
-        trial_j: if options.jacobian_on_trials {
-            zeroed_matrix(m, n)
-        } else {
-            DMatrix::zeros(0, 0)
-        },
-        inv_sigma,
-        row_scale: vec![1.0; m],
-        a: DMatrix::zeros(n, n),
-        normal: DMatrix::zeros(n, n),
-        g: DVector::zeros(n),
-        m: DMatrix::zeros(n, n),
-        rhs: vec![0.0; n],
-    };
-    let mut x_trial = vec![0.0; n];
-    let mut r_trial = vec![0.0; m];
-    let mut delta = vec![0.0; n];
     let mut active = vec![false; n];
     let mut d = vec![0.0f64; n];
-    let mut ad = vec![0.0; n];
 
     let mut f = if evaluate_start {
         ws.linearise(problem, &x, options)
@@ -273,20 +256,14 @@ pub fn solve_from<P: Problem + ?Sized>(
             .and_then(|()| ws.weigh_own_knowing(&x, options, known_normal.as_ref()))
     }
     .map_err(|e| SolverError::StartNotEvaluable(e.0))?;
-    let mut lambda = options.initial_damping;
-    let mut nu = 2.0;
+    let mut damping = Damping {
+        lambda: options.initial_damping,
+        nu: 2.0,
+    };
     let mut iterations = 0;
     let mut evaluations = 1;
     let termination = loop {
-        for k in 0..n {
-            d[k] = d[k].max(ws.a[(k, k)].sqrt());
-            if d[k] == 0.0 {
-                d[k] = 1.0;
-            }
-            active[k] = options.is_fixed(k)
-                || (x[k] <= lower[k] && ws.g[k] > 0.0)
-                || (x[k] >= upper[k] && ws.g[k] < 0.0);
-        }
+        scale_and_activity(&ws, &x, &bounds, options, &mut d, &mut active);
         // Cosine between the residual vector and each free column of J̃.
         let rnorm = (2.0 * f).sqrt();
         let gmax = (0..n)
@@ -301,8 +278,15 @@ pub fn solve_from<P: Problem + ?Sized>(
         // the point is the minimum to the tolerance and a trial would only confirm it at the
         // price of an evaluation. Not taken when A is singular
         // on the free parameters with undamped steps (the step is then not defined).
-        if damped_step(&mut ws, &d, &active, 0.0, options.null_space, &mut delta) {
-            let predicted = predicted_reduction(&ws, &delta, &mut ad);
+        if damped_step(
+            &mut ws,
+            &d,
+            &active,
+            0.0,
+            options.null_space,
+            &mut trial.delta,
+        ) {
+            let predicted = predicted_reduction(&ws, &trial.delta, &mut trial.ad);
             if (0.0..=options.ftol * f).contains(&predicted) {
                 break Termination::Cost;
             }
@@ -311,94 +295,43 @@ pub fn solve_from<P: Problem + ?Sized>(
             break Termination::MaxIterations;
         }
         iterations += 1;
-        let mut accepted = None;
-        let mut converged = false;
-        loop {
-            if !damped_step(&mut ws, &d, &active, lambda, options.null_space, &mut delta) {
-                lambda *= nu;
-                nu *= 2.0;
-                if lambda > MAX_DAMPING {
-                    break;
-                }
-                continue;
-            }
-            problem.retract(&x, &delta, &mut x_trial);
-            for k in 0..n {
-                let clamped = x_trial[k].clamp(lower[k], upper[k]);
-                delta[k] += clamped - x_trial[k];
-                x_trial[k] = clamped;
-            }
-            let (mut step_norm, mut x_norm) = (0.0, 0.0);
-            for k in 0..n {
-                step_norm += (d[k] * delta[k]).powi(2);
-                x_norm += (d[k] * x[k]).powi(2);
-            }
-            let small_step = step_norm.sqrt() <= options.xtol * (options.xtol + x_norm.sqrt());
-            let predicted = predicted_reduction(&ws, &delta, &mut ad);
-            evaluations += 1;
-            let evaluated = if options.jacobian_on_trials {
-                evaluate(
-                    problem,
-                    &x_trial,
-                    &mut r_trial,
-                    &mut ws.trial_j,
-                    &ws.free,
-                    &ws.wanted,
-                )
-            } else {
-                problem.residuals(&x_trial, &mut r_trial)
-            };
-            let trial_cost = match evaluated {
-                Ok(()) => cost(&r_trial, &ws.inv_sigma, &x_trial, options),
-                Err(_) => None,
-            };
-            match trial_cost {
-                Some(ft) if ft < f && predicted > 0.0 => {
-                    let rho = (f - ft) / predicted;
-                    lambda *= DAMPING_DECREASE_FLOOR.max(1.0 - (2.0 * rho - 1.0).powi(3));
-                    nu = 2.0;
-                    accepted = Some((ft, rho, small_step));
-                    break;
-                }
-                _ => {
-                    // at the minimum the quadratic model predicts a reduction below ftol of the
-                    // cost and the trial's cost differs from it only by round-off, either way: a
-                    // rejection there is noise, not a sign to damp harder (MINPACK's test on
-                    // actual and predicted reduction, info = 1)
-                    if let Some(ft) = trial_cost {
-                        let tiny = options.ftol * f;
-                        if (0.0..=tiny).contains(&predicted) && (ft - f).abs() <= tiny {
-                            converged = true;
-                            break;
-                        }
-                    }
-                    if small_step {
-                        break;
-                    }
-                    lambda *= nu;
-                    nu *= 2.0;
-                    if lambda > MAX_DAMPING {
-                        break;
-                    }
-                }
-            }
-        }
-        if converged {
-            break Termination::Cost;
-        }
-        let Some((ft, rho, small_step)) = accepted else {
-            break if lambda > MAX_DAMPING {
-                Termination::NoDescent
-            } else {
-                Termination::Step
-            };
+        let step = Step {
+            x: &x,
+            f,
+            d: &d,
+            active: &active,
         };
-        std::mem::swap(&mut x, &mut x_trial);
+        let outcome = try_steps(
+            problem,
+            &mut ws,
+            &step,
+            &bounds,
+            options,
+            &mut damping,
+            &mut trial,
+            &mut evaluations,
+        );
+        let (ft, rho, small_step) = match outcome {
+            StepOutcome::Accepted {
+                cost,
+                rho,
+                small_step,
+            } => (cost, rho, small_step),
+            StepOutcome::Converged => break Termination::Cost,
+            StepOutcome::Failed => {
+                break if damping.lambda > MAX_DAMPING {
+                    Termination::NoDescent
+                } else {
+                    Termination::Step
+                };
+            }
+        };
+        std::mem::swap(&mut x, &mut trial.x);
         let reduction = f - ft;
         // The cost is recomputed from the accepted point's residuals (the same as the trial's)
         // so that f always matches ws.
         f = if options.jacobian_on_trials {
-            std::mem::swap(&mut ws.r, &mut r_trial);
+            std::mem::swap(&mut ws.r, &mut trial.r);
             std::mem::swap(&mut ws.j, &mut ws.trial_j);
             ws.weigh_own(&x, options)
         } else {
@@ -419,9 +352,212 @@ pub fn solve_from<P: Problem + ?Sized>(
         iterations,
         evaluations,
         termination,
-        lambda,
+        damping.lambda,
         options,
     )
+}
+
+/// The parameters' box: lower and upper bounds (infinite where unbounded).
+struct Bounds {
+    lower: Vec<f64>,
+    upper: Vec<f64>,
+}
+
+/// λ and its growth factor ν (Nielsen).
+struct Damping {
+    lambda: f64,
+    nu: f64,
+}
+
+impl Damping {
+    /// Damp harder after a failed step: λ ×ν, ν doubled; true once λ exceeds its maximum (the
+    /// step is given up).
+    fn raise_past_max(&mut self) -> bool {
+        self.lambda *= self.nu;
+        self.nu *= 2.0;
+        self.lambda > MAX_DAMPING
+    }
+}
+
+/// Scratch of the trial steps: the trial point, its residuals, the step δ, and Aδ.
+struct Trial {
+    x: Vec<f64>,
+    r: Vec<f64>,
+    delta: Vec<f64>,
+    ad: Vec<f64>,
+}
+
+/// The point the trials start from: x, its cost f, Moré's scaling d, the parameters held for
+/// the step (fixed or on an active bound).
+struct Step<'s> {
+    x: &'s [f64],
+    f: f64,
+    d: &'s [f64],
+    active: &'s [bool],
+}
+
+/// What the damped trials from one point came to.
+enum StepOutcome {
+    /// A step lowered the cost: the trial's cost, the gain ratio ρ, whether the step was below
+    /// xtol.
+    Accepted {
+        cost: f64,
+        rho: f64,
+        small_step: bool,
+    },
+    /// At the minimum to the tolerance: a rejection there is round-off.
+    Converged,
+    /// No step lowered the cost (λ beyond its maximum, or the step below xtol).
+    Failed,
+}
+
+impl Workspace {
+    /// The workspace at the start: the caller's r and J (and JᵀJ when formed) when `given`,
+    /// else zeroed buffers the first linearisation fills.
+    fn at_start(
+        given: Option<Evaluated>,
+        m: usize,
+        n: usize,
+        options: &Options,
+    ) -> (Self, Option<DMatrix<f64>>) {
+        let (r, j, known_normal) = match given {
+            Some(e) => (e.residuals, e.jacobian, e.normal_matrix),
+            None => (vec![0.0; m], zeroed_matrix(m, n), None),
+        };
+        let inv_sigma: Vec<f64> = match &options.sigmas {
+            Some(s) => s.iter().map(|v| 1.0 / v).collect(),
+            None => vec![1.0; m],
+        };
+        let ws = Workspace {
+            raw: vec![0.0; m],
+            r,
+            j,
+            wanted: (0..n).map(|k| !options.is_fixed(k)).collect(),
+            free: (0..n).filter(|&k| !options.is_fixed(k)).collect(),
+            trial_j: if options.jacobian_on_trials {
+                zeroed_matrix(m, n)
+            } else {
+                DMatrix::zeros(0, 0)
+            },
+            inv_sigma,
+            row_scale: vec![1.0; m],
+            a: DMatrix::zeros(n, n),
+            normal: DMatrix::zeros(n, n),
+            g: DVector::zeros(n),
+            m: DMatrix::zeros(n, n),
+            rhs: vec![0.0; n],
+        };
+        (ws, known_normal)
+    }
+}
+
+/// Moré's scaling `d` (the largest column norm of J̃ seen so far, 1 for a nil column) and the
+/// parameters held for the step: fixed, or on a bound the gradient pushes them out of.
+fn scale_and_activity(
+    ws: &Workspace,
+    x: &[f64],
+    bounds: &Bounds,
+    options: &Options,
+    d: &mut [f64],
+    active: &mut [bool],
+) {
+    for k in 0..d.len() {
+        d[k] = d[k].max(ws.a[(k, k)].sqrt());
+        if d[k] == 0.0 {
+            d[k] = 1.0;
+        }
+        active[k] = options.is_fixed(k)
+            || (x[k] <= bounds.lower[k] && ws.g[k] > 0.0)
+            || (x[k] >= bounds.upper[k] && ws.g[k] < 0.0);
+    }
+}
+
+/// Damped steps from `step`, projected onto the box, until one lowers the cost (λ lowered after
+/// it by the gain ratio), the point is the minimum to the tolerance, or none can.
+#[allow(clippy::too_many_arguments)]
+fn try_steps<P: Problem + ?Sized>(
+    problem: &P,
+    ws: &mut Workspace,
+    step: &Step,
+    bounds: &Bounds,
+    options: &Options,
+    damping: &mut Damping,
+    trial: &mut Trial,
+    evaluations: &mut usize,
+) -> StepOutcome {
+    let (n, f) = (step.x.len(), step.f);
+    loop {
+        if !damped_step(
+            ws,
+            step.d,
+            step.active,
+            damping.lambda,
+            options.null_space,
+            &mut trial.delta,
+        ) {
+            if damping.raise_past_max() {
+                return StepOutcome::Failed;
+            }
+            continue;
+        }
+        problem.retract(step.x, &trial.delta, &mut trial.x);
+        for k in 0..n {
+            let clamped = trial.x[k].clamp(bounds.lower[k], bounds.upper[k]);
+            trial.delta[k] += clamped - trial.x[k];
+            trial.x[k] = clamped;
+        }
+        let (mut step_norm, mut x_norm) = (0.0, 0.0);
+        for k in 0..n {
+            step_norm += (step.d[k] * trial.delta[k]).powi(2);
+            x_norm += (step.d[k] * step.x[k]).powi(2);
+        }
+        let small_step = step_norm.sqrt() <= options.xtol * (options.xtol + x_norm.sqrt());
+        let predicted = predicted_reduction(ws, &trial.delta, &mut trial.ad);
+        *evaluations += 1;
+        let evaluated = if options.jacobian_on_trials {
+            evaluate(
+                problem,
+                &trial.x,
+                &mut trial.r,
+                &mut ws.trial_j,
+                &ws.free,
+                &ws.wanted,
+            )
+        } else {
+            problem.residuals(&trial.x, &mut trial.r)
+        };
+        let trial_cost = match evaluated {
+            Ok(()) => cost(&trial.r, &ws.inv_sigma, &trial.x, options),
+            Err(_) => None,
+        };
+        match trial_cost {
+            Some(ft) if ft < f && predicted > 0.0 => {
+                let rho = (f - ft) / predicted;
+                damping.lambda *= DAMPING_DECREASE_FLOOR.max(1.0 - (2.0 * rho - 1.0).powi(3));
+                damping.nu = 2.0;
+                return StepOutcome::Accepted {
+                    cost: ft,
+                    rho,
+                    small_step,
+                };
+            }
+            _ => {
+                // at the minimum the quadratic model predicts a reduction below ftol of the
+                // cost and the trial's cost differs from it only by round-off, either way: a
+                // rejection there is noise, not a sign to damp harder (MINPACK's test on
+                // actual and predicted reduction, info = 1)
+                if let Some(ft) = trial_cost {
+                    let tiny = options.ftol * f;
+                    if (0.0..=tiny).contains(&predicted) && (ft - f).abs() <= tiny {
+                        return StepOutcome::Converged;
+                    }
+                }
+                if small_step || damping.raise_past_max() {
+                    return StepOutcome::Failed;
+                }
+            }
+        }
+    }
 }
 
 /// The quadratic model's reduction of the cost by the step δ: −gᵀδ − ½δᵀAδ (`ad`: scratch for Aδ).

@@ -105,41 +105,7 @@ pub fn write_model(model: &CellModel, update: &ModelUpdate) -> Result<String, Ce
     // value text and uncertainty text of each written parameter, by label then param
     let mut written: BTreeMap<String, BTreeMap<String, String>> = BTreeMap::new();
 
-    for (i, t) in model.machine_terms.terms.iter().enumerate() {
-        let label = t.term.label();
-        let Some(node) = root.at(&format!("terms[{i}]")) else {
-            return Err(bad(model, format!("terms[{i}] not found in the text")));
-        };
-        for spec in t.term.params() {
-            let Some(p) = fitted.get(format!("{label}.{}", spec.name).as_str()) else {
-                continue;
-            };
-            let Some(sigma) = p.sigma else { continue };
-            let unit = node
-                .at(&format!("params.{}", spec.name))
-                .map(|n| unit_in(text, n))
-                .unwrap_or_default();
-            let (value, u) =
-                value_and_sigma(p.value, sigma, spec.unit, &unit).map_err(|e| bad(model, e))?;
-            match node.at(&format!("params.{}", spec.name)) {
-                Some(v) => edits.replace(v, value),
-                None => match node.get("params") {
-                    Some(params) => add_to_mapping(&mut edits, text, params, &spec.name, &value),
-                    None => add_to_mapping(
-                        &mut edits,
-                        text,
-                        node,
-                        "params",
-                        &format!("{{{}: {value}}}", spec.name),
-                    ),
-                },
-            }
-            written
-                .entry(label.clone())
-                .or_default()
-                .insert(spec.name.clone(), u);
-        }
-    }
+    machine_term_edits(model, &root, &fitted, &mut edits, &mut written)?;
     if model.declares_tracker {
         tracker_edits(model, &root, &fitted, &mut edits, &mut written)?;
     }
@@ -180,6 +146,86 @@ pub fn write_model(model: &CellModel, update: &ModelUpdate) -> Result<String, Ce
     if !notes.is_empty() {
         sections.push_str(&note_lines(&notes));
     }
+    let merged = merged_uncertainty(text, &root, written);
+    if !merged.is_empty() {
+        sections.push_str(&uncertainty_section(&merged));
+    }
+    if let Some(fit) = &update.fit {
+        sections.push_str(&fit_section(model, fit)?);
+    }
+    // drop the old sections (key line through value), append the new ones at the end
+    for key in ["uncertainty", "fit"] {
+        let replaced =
+            (key == "uncertainty" && !merged.is_empty()) || (key == "fit" && update.fit.is_some());
+        if let (true, Some(k), Some(v)) = (replaced, root.key(key), root.get(key)) {
+            drop_lines(text, k, v, &mut edits);
+        }
+    }
+    let mut out = edits.apply(text).map_err(|e| bad(model, e.0))?;
+    if !sections.is_empty() {
+        if !out.ends_with('\n') {
+            out.push('\n');
+        }
+        out.push_str(&sections);
+    }
+    Ok(out)
+}
+
+/// The fitted values of the declared machine terms' parameters written in place (in the unit
+/// the file gave, or added to the term's `params`), each one's uncertainty text kept in
+/// `written`.
+fn machine_term_edits(
+    model: &CellModel,
+    root: &Node,
+    fitted: &BTreeMap<&str, &FittedParameter>,
+    edits: &mut Edits,
+    written: &mut BTreeMap<String, BTreeMap<String, String>>,
+) -> Result<(), CellError> {
+    let text = &model.text;
+    for (i, t) in model.machine_terms.terms.iter().enumerate() {
+        let label = t.term.label();
+        let Some(node) = root.at(&format!("terms[{i}]")) else {
+            return Err(bad(model, format!("terms[{i}] not found in the text")));
+        };
+        for spec in t.term.params() {
+            let Some(p) = fitted.get(format!("{label}.{}", spec.name).as_str()) else {
+                continue;
+            };
+            let Some(sigma) = p.sigma else { continue };
+            let unit = node
+                .at(&format!("params.{}", spec.name))
+                .map(|n| unit_in(text, n))
+                .unwrap_or_default();
+            let (value, u) =
+                value_and_sigma(p.value, sigma, spec.unit, &unit).map_err(|e| bad(model, e))?;
+            match node.at(&format!("params.{}", spec.name)) {
+                Some(v) => edits.replace(v, value),
+                None => match node.get("params") {
+                    Some(params) => add_to_mapping(edits, text, params, &spec.name, &value),
+                    None => add_to_mapping(
+                        edits,
+                        text,
+                        node,
+                        "params",
+                        &format!("{{{}: {value}}}", spec.name),
+                    ),
+                },
+            }
+            written
+                .entry(label.clone())
+                .or_default()
+                .insert(spec.name.clone(), u);
+        }
+    }
+    Ok(())
+}
+
+/// The uncertainties the file had, with the ones written now over them (label → param → text).
+fn merged_uncertainty(
+    text: &str,
+    root: &Node,
+    written: BTreeMap<String, BTreeMap<String, String>>,
+) -> BTreeMap<String, BTreeMap<String, String>> {
     let mut merged: BTreeMap<String, BTreeMap<String, String>> = BTreeMap::new();
     if let Some(old) = root.get("uncertainty") {
         if let yaml_edit::Content::Mapping(entries) = &old.content {
@@ -202,58 +248,53 @@ pub fn write_model(model: &CellModel, update: &ModelUpdate) -> Result<String, Ce
     for (label, ps) in written {
         merged.entry(label).or_default().extend(ps);
     }
-    if !merged.is_empty() {
-        sections.push_str("uncertainty:                   # standard uncertainties (k = 1) of the fitted values, written by metrocell calibrate\n");
-        for (label, ps) in &merged {
-            let items: Vec<String> = ps
-                .iter()
-                .map(|(k, v)| format!("{}: {v}", key_text(k)))
-                .collect();
-            sections.push_str(&format!(
-                "  {}: {{{}}}\n",
-                key_text(label),
-                items.join(", ")
-            ));
-        }
+    merged
+}
+
+/// The `uncertainty:` section of `merged`.
+fn uncertainty_section(merged: &BTreeMap<String, BTreeMap<String, String>>) -> String {
+    let mut section = String::from("uncertainty:                   # standard uncertainties (k = 1) of the fitted values, written by metrocell calibrate\n");
+    for (label, ps) in merged {
+        let items: Vec<String> = ps
+            .iter()
+            .map(|(k, v)| format!("{}: {v}", key_text(k)))
+            .collect();
+        section.push_str(&format!(
+            "  {}: {{{}}}\n",
+            key_text(label),
+            items.join(", ")
+        ));
     }
-    if let Some(fit) = &update.fit {
-        let body =
-            serde_yaml::to_string(fit).map_err(|e| bad(model, format!("fit section: {e}")))?;
-        sections.push_str(
-            "fit:                           # what the fit saw, written by metrocell calibrate\n",
-        );
-        for line in body.lines() {
-            sections.push_str(&format!("  {line}\n"));
-        }
+    section
+}
+
+/// The `fit:` section: what the fit saw.
+fn fit_section(model: &CellModel, fit: &serde_yaml::Value) -> Result<String, CellError> {
+    let body = serde_yaml::to_string(fit).map_err(|e| bad(model, format!("fit section: {e}")))?;
+    let mut section = String::from(
+        "fit:                           # what the fit saw, written by metrocell calibrate\n",
+    );
+    for line in body.lines() {
+        section.push_str(&format!("  {line}\n"));
     }
-    // drop the old sections (key line through value), append the new ones at the end
-    for key in ["uncertainty", "fit"] {
-        let replaced =
-            (key == "uncertainty" && !merged.is_empty()) || (key == "fit" && update.fit.is_some());
-        if let (true, Some(k), Some(v)) = (replaced, root.key(key), root.get(key)) {
-            let line_start = text[..k.start].rfind('\n').map(|i| i + 1).unwrap_or(0);
-            let line_end = text[v.end..]
-                .find('\n')
-                .map(|i| v.end + i + 1)
-                .unwrap_or(text.len());
-            edits.replace(
-                &Node {
-                    start: line_start,
-                    end: line_end,
-                    ..k.clone()
-                },
-                String::new(),
-            );
-        }
-    }
-    let mut out = edits.apply(text).map_err(|e| bad(model, e.0))?;
-    if !sections.is_empty() {
-        if !out.ends_with('\n') {
-            out.push('\n');
-        }
-        out.push_str(&sections);
-    }
-    Ok(out)
+    Ok(section)
+}
+
+/// Drop a top-level section's lines: from its key's line through the end of its value.
+fn drop_lines(text: &str, k: &Node, v: &Node, edits: &mut Edits) {
+    let line_start = text[..k.start].rfind('\n').map(|i| i + 1).unwrap_or(0);
+    let line_end = text[v.end..]
+        .find('\n')
+        .map(|i| v.end + i + 1)
+        .unwrap_or(text.len());
+    edits.replace(
+        &Node {
+            start: line_start,
+            end: line_end,
+            ..k.clone()
+        },
+        String::new(),
+    );
 }
 
 /// The unit a value node was written in (empty: a bare number in the canonical unit).

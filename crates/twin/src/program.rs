@@ -15,7 +15,7 @@ use metrocell_kinematics::serial::{IkSettings, IkTarget};
 use nalgebra::{DVector, Isometry3, Translation3, UnitQuaternion, Vector3};
 
 use crate::cell::{MachineGeometry, MachineKinematics};
-use crate::cell_file::{ProgramSection, VisitOrder};
+use crate::cell_file::{GridSection, ProgramSection, VisitOrder};
 use crate::error::CellError;
 use crate::quantity::{vector3, Quantity};
 
@@ -71,42 +71,18 @@ impl Program {
 
     /// As [`Program::from_section`], visiting `generated` joint targets (a stationing program's
     /// waypoints, [`crate::stationing_program`]) instead of `joints` or `poses`.
+    ///
+    /// The keys are checked against the family, the points made (joint targets and solved
+    /// poses, a grid, or a list), checked against the joint limits with the home, and the cycle
+    /// timed from the feed rates and the dwell.
     pub fn from_section_with(
         s: &ProgramSection,
         m: &MachineGeometry,
         generated: Vec<DVector<f64>>,
     ) -> Result<Program, CellError> {
-        if s.stationing.is_some() && (!s.joints.is_empty() || !s.poses.is_empty()) {
-            return Err(CellError::invalid(
-                "program.stationing",
-                "generates the program's waypoints; give it without `joints` or `poses`",
-            ));
-        }
-        let mut points = generated;
         let jointed = m.is_jointed();
-        if jointed {
-            if s.grid.is_some() || !s.points.is_empty() || s.home.is_some() {
-                let key = if s.grid.is_some() {
-                    "grid"
-                } else if !s.points.is_empty() {
-                    "points"
-                } else {
-                    "home"
-                };
-                return Err(CellError::invalid(format!("program.{key}"), "is for family: cartesian and delta; a five_axis or serial_arm program takes `joints` (joint targets) or `poses` (tool poses), and `home_joints`"));
-            }
-        } else {
-            for (key, given) in [
-                ("joints", !s.joints.is_empty()),
-                ("poses", !s.poses.is_empty()),
-                ("home_joints", s.home_joints.is_some()),
-                ("rotary_rate", s.rotary_rate.is_some()),
-            ] {
-                if given {
-                    return Err(CellError::invalid(format!("program.{key}"), "is for family: five_axis and serial_arm; a cartesian or delta program takes `grid` or `points` (x, y, z) and `home`"));
-                }
-            }
-        }
+        check_family_keys(s, jointed)?;
+        let mut points = generated;
         let limits = m.joint_limits();
         let home_joints = s
             .home_joints
@@ -114,21 +90,7 @@ impl Program {
             .map(|h| joint_vector(h, "program.home_joints", &limits))
             .transpose()?;
         if jointed {
-            if !s.joints.is_empty() && !s.poses.is_empty() {
-                return Err(CellError::invalid(
-                    "program",
-                    "give either `joints` or `poses`, not both",
-                ));
-            }
-            for (i, j) in s.joints.iter().enumerate() {
-                points.push(joint_vector(j, &format!("program.joints[{i}]"), &limits)?);
-            }
-            let mut previous = home_joints.clone();
-            for (i, p) in s.poses.iter().enumerate() {
-                let q = solve_pose(p, &format!("program.poses[{i}]"), m, previous.as_ref())?;
-                previous = Some(q.clone());
-                points.push(q);
-            }
+            push_joint_targets(s, m, &limits, home_joints.as_ref(), &mut points)?;
         } else if let Some(g) = &s.grid {
             if !s.points.is_empty() {
                 return Err(CellError::invalid(
@@ -136,51 +98,7 @@ impl Program {
                     "give either `grid` or `points`, not both",
                 ));
             }
-            let mut axes = Vec::new();
-            for (name, a) in [("x", &g.x), ("y", &g.y), ("z", &g.z)] {
-                let p = format!("program.grid.{name}");
-                let from = a.from.to_si(&format!("{p}.from"), "m")?;
-                let to = a.to.to_si(&format!("{p}.to"), "m")?;
-                if a.count == 0 || a.count > 10_000 {
-                    return Err(CellError::OutOfRange {
-                        path: format!("{p}.count"),
-                        value: a.count as f64,
-                        reason: "must be in 1..=10000".into(),
-                    });
-                }
-                let n = a.count as usize;
-                axes.push(
-                    (0..n)
-                        .map(|i| {
-                            if n == 1 {
-                                from
-                            } else {
-                                from + (to - from) * i as f64 / (n - 1) as f64
-                            }
-                        })
-                        .collect::<Vec<f64>>(),
-                );
-            }
-            // z outermost, then y, x innermost; serpentine reverses x on odd rows and y on odd layers.
-            let mut row = 0usize;
-            for (iz, z) in axes[2].iter().enumerate() {
-                let ys: Vec<f64> = if s.order == VisitOrder::Serpentine && iz % 2 == 1 {
-                    axes[1].iter().rev().copied().collect()
-                } else {
-                    axes[1].clone()
-                };
-                for y in ys {
-                    let xs: Vec<f64> = if s.order == VisitOrder::Serpentine && row % 2 == 1 {
-                        axes[0].iter().rev().copied().collect()
-                    } else {
-                        axes[0].clone()
-                    };
-                    for x in xs {
-                        points.push(DVector::from_vec(vec![x, y, *z]));
-                    }
-                    row += 1;
-                }
-            }
+            points.extend(grid_points(g, s.order)?);
         } else {
             for (i, p) in s.points.iter().enumerate() {
                 points.push(dv(vector3(p, &format!("program.points[{i}]"), "m")?));
@@ -204,36 +122,7 @@ impl Program {
             (None, Some(h)) => h,
             (None, None) => points[0].clone(),
         };
-        let names = m.joint_names();
-        for (i, p) in points.iter().chain(std::iter::once(&home)).enumerate() {
-            let what = if i == points.len() {
-                "program.home".to_string()
-            } else {
-                format!("program point {i}")
-            };
-            for (k, name) in names.iter().enumerate() {
-                let ([lo, hi], unit) = limits[k];
-                if p[k] < lo - 1e-12 || p[k] > hi + 1e-12 {
-                    let key = match &m.kinematics {
-                        MachineKinematics::SerialArm(_) => {
-                            format!("machine.serial_arm.joint_limits[{k}]")
-                        }
-                        MachineKinematics::FiveAxis(_) if k == 3 => {
-                            "machine.five_axis.b_limits".into()
-                        }
-                        MachineKinematics::FiveAxis(_) if k == 4 => {
-                            "machine.five_axis.c_limits".into()
-                        }
-                        _ => format!("machine.travel.{name}"),
-                    };
-                    return Err(CellError::OutOfRange {
-                        path: what.clone(),
-                        value: p[k],
-                        reason: format!("{name} outside {key} = [{lo}, {hi}] {unit}"),
-                    });
-                }
-            }
-        }
+        check_within_limits(&points, &home, m, &limits)?;
         let feed_rate = s.feed_rate.positive("program.feed_rate", "m/s")?;
         let rotary_rate = s
             .rotary_rate
@@ -397,6 +286,157 @@ fn build_cycle(
         }
     }
     (segs, approach)
+}
+
+/// Err naming the key when the program section gives keys of another family (a jointed family
+/// takes `joints` or `poses` and `home_joints`; cartesian and delta `grid` or `points` and
+/// `home`), or a stationing program with its own waypoints.
+fn check_family_keys(s: &ProgramSection, jointed: bool) -> Result<(), CellError> {
+    if s.stationing.is_some() && (!s.joints.is_empty() || !s.poses.is_empty()) {
+        return Err(CellError::invalid(
+            "program.stationing",
+            "generates the program's waypoints; give it without `joints` or `poses`",
+        ));
+    }
+    if jointed {
+        if s.grid.is_some() || !s.points.is_empty() || s.home.is_some() {
+            let key = if s.grid.is_some() {
+                "grid"
+            } else if !s.points.is_empty() {
+                "points"
+            } else {
+                "home"
+            };
+            return Err(CellError::invalid(format!("program.{key}"), "is for family: cartesian and delta; a five_axis or serial_arm program takes `joints` (joint targets) or `poses` (tool poses), and `home_joints`"));
+        }
+    } else {
+        for (key, given) in [
+            ("joints", !s.joints.is_empty()),
+            ("poses", !s.poses.is_empty()),
+            ("home_joints", s.home_joints.is_some()),
+            ("rotary_rate", s.rotary_rate.is_some()),
+        ] {
+            if given {
+                return Err(CellError::invalid(format!("program.{key}"), "is for family: five_axis and serial_arm; a cartesian or delta program takes `grid` or `points` (x, y, z) and `home`"));
+            }
+        }
+    }
+    Ok(())
+}
+
+/// A jointed family's points: the `joints` targets, or the `poses` solved in turn (each from the
+/// previous solution, the first from the home joints).
+fn push_joint_targets(
+    s: &ProgramSection,
+    m: &MachineGeometry,
+    limits: &[([f64; 2], &'static str)],
+    home_joints: Option<&DVector<f64>>,
+    points: &mut Vec<DVector<f64>>,
+) -> Result<(), CellError> {
+    if !s.joints.is_empty() && !s.poses.is_empty() {
+        return Err(CellError::invalid(
+            "program",
+            "give either `joints` or `poses`, not both",
+        ));
+    }
+    for (i, j) in s.joints.iter().enumerate() {
+        points.push(joint_vector(j, &format!("program.joints[{i}]"), limits)?);
+    }
+    let mut previous = home_joints.cloned();
+    for (i, p) in s.poses.iter().enumerate() {
+        let q = solve_pose(p, &format!("program.poses[{i}]"), m, previous.as_ref())?;
+        previous = Some(q.clone());
+        points.push(q);
+    }
+    Ok(())
+}
+
+/// The points of a grid: z outermost, then y, x innermost; serpentine reverses x on odd rows and
+/// y on odd layers.
+fn grid_points(g: &GridSection, order: VisitOrder) -> Result<Vec<DVector<f64>>, CellError> {
+    let mut axes = Vec::new();
+    for (name, a) in [("x", &g.x), ("y", &g.y), ("z", &g.z)] {
+        let p = format!("program.grid.{name}");
+        let from = a.from.to_si(&format!("{p}.from"), "m")?;
+        let to = a.to.to_si(&format!("{p}.to"), "m")?;
+        if a.count == 0 || a.count > 10_000 {
+            return Err(CellError::OutOfRange {
+                path: format!("{p}.count"),
+                value: a.count as f64,
+                reason: "must be in 1..=10000".into(),
+            });
+        }
+        let n = a.count as usize;
+        axes.push(
+            (0..n)
+                .map(|i| {
+                    if n == 1 {
+                        from
+                    } else {
+                        from + (to - from) * i as f64 / (n - 1) as f64
+                    }
+                })
+                .collect::<Vec<f64>>(),
+        );
+    }
+    let mut points = Vec::new();
+    let mut row = 0usize;
+    for (iz, z) in axes[2].iter().enumerate() {
+        let ys: Vec<f64> = if order == VisitOrder::Serpentine && iz % 2 == 1 {
+            axes[1].iter().rev().copied().collect()
+        } else {
+            axes[1].clone()
+        };
+        for y in ys {
+            let xs: Vec<f64> = if order == VisitOrder::Serpentine && row % 2 == 1 {
+                axes[0].iter().rev().copied().collect()
+            } else {
+                axes[0].clone()
+            };
+            for x in xs {
+                points.push(DVector::from_vec(vec![x, y, *z]));
+            }
+            row += 1;
+        }
+    }
+    Ok(points)
+}
+
+/// Err naming the point (or the home), the joint and the limit's key when a point is outside
+/// the machine's joint limits.
+fn check_within_limits(
+    points: &[DVector<f64>],
+    home: &DVector<f64>,
+    m: &MachineGeometry,
+    limits: &[([f64; 2], &'static str)],
+) -> Result<(), CellError> {
+    let names = m.joint_names();
+    for (i, p) in points.iter().chain(std::iter::once(home)).enumerate() {
+        let what = if i == points.len() {
+            "program.home".to_string()
+        } else {
+            format!("program point {i}")
+        };
+        for (k, name) in names.iter().enumerate() {
+            let ([lo, hi], unit) = limits[k];
+            if p[k] < lo - 1e-12 || p[k] > hi + 1e-12 {
+                let key = match &m.kinematics {
+                    MachineKinematics::SerialArm(_) => {
+                        format!("machine.serial_arm.joint_limits[{k}]")
+                    }
+                    MachineKinematics::FiveAxis(_) if k == 3 => "machine.five_axis.b_limits".into(),
+                    MachineKinematics::FiveAxis(_) if k == 4 => "machine.five_axis.c_limits".into(),
+                    _ => format!("machine.travel.{name}"),
+                };
+                return Err(CellError::OutOfRange {
+                    path: what.clone(),
+                    value: p[k],
+                    reason: format!("{name} outside {key} = [{lo}, {hi}] {unit}"),
+                });
+            }
+        }
+    }
+    Ok(())
 }
 
 fn dv(v: Vector3<f64>) -> DVector<f64> {

@@ -11,7 +11,8 @@
 mod common;
 
 use metrocell_model::{
-    CameraGeometry, ForwardModel, InstrumentPose, ProbeTarget, Workspace, CAMERA_ROWS, TRACKER_ROWS,
+    CameraGeometry, ForwardModel, InstrumentPose, KinematicTruth, ProbeTarget, ToolState,
+    Workspace, CAMERA_ROWS, TRACKER_ROWS,
 };
 use metrocell_physics::config::ConfigValue;
 use metrocell_physics::model::TermModel;
@@ -68,9 +69,9 @@ fn camera(mount_x: f64) -> CameraGeometry {
     }
 }
 
-#[test]
-fn two_trackers_and_two_cameras_are_separate_instruments() {
-    let cell = common::validate(&common::example_file("quick_demo.yaml"));
+/// Two trackers (lt1 with warm-up and refraction) and two cameras (cam1 with a scale, cam2 with
+/// a lens) as one model's instrument terms.
+fn two_trackers_and_two_cameras() -> TermModel {
     let mut instruments = TermModel::default();
     for t in [
         term("tracker_pose", Some("lt1"), &pose(LT1.0, LT1.1)),
@@ -107,6 +108,25 @@ fn two_trackers_and_two_cameras_are_separate_instruments() {
     ] {
         instruments.push(t).unwrap();
     }
+    instruments
+}
+
+/// One reading of the model with two of each instrument: its parameters, kinematic truth,
+/// joints, signals and tool state.
+struct Reading<'r, 'm> {
+    model: &'r ForwardModel<'m>,
+    names: Vec<String>,
+    p: Vec<f64>,
+    kin: KinematicTruth,
+    q: [f64; 3],
+    sig: Signals,
+    tool: ToolState,
+}
+
+#[test]
+fn two_trackers_and_two_cameras_are_separate_instruments() {
+    let cell = common::validate(&common::example_file("quick_demo.yaml"));
+    let instruments = two_trackers_and_two_cameras();
     let model = ForwardModel::new(&cell.machine, &cell.terms, &instruments)
         .unwrap()
         .with_camera(Some("cam1"), camera(0.05))
@@ -140,13 +160,31 @@ fn two_trackers_and_two_cameras_are_separate_instruments() {
         .map(|t| (t.name.clone(), 20.7))
         .collect();
     model.set_motion(&mut sig, &q, &[0.0; 3], &[1.0; 3]);
-
-    // an unnamed reading is ambiguous with two of a kind
     let tool = model
         .tool_state(&p, &kin, &q, &mut sig.clone(), None)
         .unwrap();
+    let reading = Reading {
+        model: &model,
+        names,
+        p,
+        kin,
+        q,
+        sig,
+        tool,
+    };
+    named_trackers_read_their_own_terms(&cell, &reading);
+    let mut work = Workspace::new(&model);
+    tracker_jacobians_are_separate(&reading, &mut work);
+    cameras_are_separate(&reading, &mut work);
+}
+
+/// An unnamed reading is ambiguous with two trackers, an unknown name is refused, lt2 reads
+/// what a model with only lt2's pose reads (bit for bit), and only lt1 has warm-up and
+/// refraction.
+fn named_trackers_read_their_own_terms(cell: &Cell, r: &Reading) {
+    let (model, p, q, sig, tool) = (r.model, &r.p, &r.q, &r.sig, &r.tool);
     let err = model
-        .tracker(&p, &tool, &mut sig.clone())
+        .tracker(p, tool, &mut sig.clone())
         .unwrap_err()
         .to_string();
     assert!(
@@ -154,7 +192,7 @@ fn two_trackers_and_two_cameras_are_separate_instruments() {
         "{err}"
     );
     assert!(model
-        .tracker_of(Some("lt3"), &p, &tool, &mut sig.clone())
+        .tracker_of(Some("lt3"), p, tool, &mut sig.clone())
         .unwrap_err()
         .to_string()
         .contains("no tracker named `lt3`"));
@@ -169,20 +207,20 @@ fn two_trackers_and_two_cameras_are_separate_instruments() {
         .tool_state(
             &ps,
             &single.kinematic_truth(&ps).unwrap(),
-            &q,
+            q,
             &mut sig.clone(),
             None,
         )
         .unwrap();
     let lt2 = model
-        .tracker_of(Some("lt2"), &p, &tool, &mut sig.clone())
+        .tracker_of(Some("lt2"), p, tool, &mut sig.clone())
         .unwrap();
     assert_eq!(
         lt2,
         single.tracker(&ps, &tool_single, &mut sig.clone()).unwrap()
     );
     let lt1 = model
-        .tracker_of(Some("lt1"), &p, &tool, &mut sig.clone())
+        .tracker_of(Some("lt1"), p, tool, &mut sig.clone())
         .unwrap();
     assert!(
         (lt1.point - lt2.point).norm() > 1.0
@@ -191,14 +229,16 @@ fn two_trackers_and_two_cameras_are_separate_instruments() {
             && lt2.warmup == 0.0
             && lt2.refraction == 0.0
     );
+}
 
-    // each tracker's Jacobian: zero in the other's columns, central differences in its own
-    let mut work = Workspace::new(&model);
+/// Each tracker's Jacobian: zero in the other's columns, central differences in its own.
+fn tracker_jacobians_are_separate(r: &Reading, work: &mut Workspace) {
+    let (model, p, kin, q, sig) = (r.model, &r.p, &r.kin, &r.q, &r.sig);
     let columns = |label: &str| model.term_columns(label).unwrap();
     for (me, other) in [("lt1", "tracker_pose[lt2]"), ("lt2", "tracker_pose[lt1]")] {
         let mut j = DMatrix::zeros(TRACKER_ROWS, model.param_count());
         model
-            .tracker_jacobian_of(Some(me), &p, &kin, &q, &mut sig.clone(), &mut work, &mut j)
+            .tracker_jacobian_of(Some(me), p, kin, q, &mut sig.clone(), work, &mut j)
             .unwrap();
         let (start, len) = columns(other);
         assert_eq!(
@@ -214,23 +254,29 @@ fn two_trackers_and_two_cameras_are_separate_instruments() {
         let reading = |x: &[f64]| {
             let mut s = sig.clone();
             let tool = model
-                .tool_state(x, &model.kinematic_truth(x).unwrap(), &q, &mut s, None)
+                .tool_state(x, &model.kinematic_truth(x).unwrap(), q, &mut s, None)
                 .unwrap();
             let r = model.tracker_of(Some(me), x, &tool, &mut s).unwrap();
             let y = r.measured_point();
             vec![y.x, y.y, y.z, r.measured_range()]
         };
-        common::check_columns(&format!("tracker {me}"), &names, &p, &j, reading);
+        common::check_columns(&format!("tracker {me}"), &r.names, p, &j, reading);
     }
+}
 
-    // cameras: cam1 carries the scale (metric point), cam2 the lens (pixels)
+/// The cameras: cam1 carries the scale (metric point), cam2 the lens (pixels); an unnamed
+/// reading is ambiguous; each camera's Jacobian is zero in the other's columns and matches
+/// central differences in its own.
+fn cameras_are_separate(r: &Reading, work: &mut Workspace) {
+    let (model, p, kin, q, sig, tool) = (r.model, &r.p, &r.kin, &r.q, &r.sig, &r.tool);
+    let columns = |label: &str| model.term_columns(label).unwrap();
     // a part feature 150 mm below the tool point, a little off the cameras' axes
     let feature = tool.nominal.translation.vector + Vector3::new(0.01, 0.02, -0.15);
     let cam1 = model
-        .camera(Some("cam1"), &p, &tool, &mut sig.clone(), &feature)
+        .camera(Some("cam1"), p, tool, &mut sig.clone(), &feature)
         .unwrap();
     let cam2 = model
-        .camera(Some("cam2"), &p, &tool, &mut sig.clone(), &feature)
+        .camera(Some("cam2"), p, tool, &mut sig.clone(), &feature)
         .unwrap();
     assert!(
         (cam1.measured_point - cam1.point * (1.0 + 5e-4)).norm() < 1e-15
@@ -238,7 +284,7 @@ fn two_trackers_and_two_cameras_are_separate_instruments() {
     );
     assert!(cam2.measured_point == cam2.point && (cam2.distorted - cam2.normalised).norm() > 1e-5);
     assert!(model
-        .camera(None, &p, &tool, &mut sig.clone(), &feature)
+        .camera(None, p, tool, &mut sig.clone(), &feature)
         .unwrap_err()
         .to_string()
         .contains("name the instrument"));
@@ -250,12 +296,12 @@ fn two_trackers_and_two_cameras_are_separate_instruments() {
         model
             .camera_jacobian(
                 Some(me),
-                &p,
-                &kin,
-                &q,
+                p,
+                kin,
+                q,
                 &mut sig.clone(),
                 &feature,
-                &mut work,
+                work,
                 &mut j,
             )
             .unwrap();
@@ -268,7 +314,7 @@ fn two_trackers_and_two_cameras_are_separate_instruments() {
         let reading = |x: &[f64]| {
             let mut s = sig.clone();
             let tool = model
-                .tool_state(x, &model.kinematic_truth(x).unwrap(), &q, &mut s, None)
+                .tool_state(x, &model.kinematic_truth(x).unwrap(), q, &mut s, None)
                 .unwrap();
             let c = model.camera(Some(me), x, &tool, &mut s, &feature).unwrap();
             vec![
@@ -281,15 +327,15 @@ fn two_trackers_and_two_cameras_are_separate_instruments() {
         };
         common::check_columns(
             &format!("camera {me} pixels"),
-            &names,
-            &p,
+            &r.names,
+            p,
             &j.rows(0, 2).into_owned(),
             |x| reading(x)[..2].to_vec(),
         );
         common::check_columns(
             &format!("camera {me} point"),
-            &names,
-            &p,
+            &r.names,
+            p,
             &j.rows(2, 3).into_owned(),
             |x| reading(x)[2..].to_vec(),
         );

@@ -199,6 +199,31 @@ fn components(on: &[bool], side: usize, x0: i64, y0: i64) -> (Vec<Component>, Ve
     (comps, label)
 }
 
+/// The square search window around a prediction (pixel bounds, inclusive).
+struct Window<'i> {
+    img: &'i GrayImage,
+    x0: i64,
+    y0: i64,
+    x1: i64,
+    y1: i64,
+}
+
+impl Window<'_> {
+    fn at(&self, x: i64, y: i64) -> f64 {
+        self.img.get_pixel(x as u32, y as u32)[0] as f64
+    }
+    /// Side length (px).
+    fn side(&self) -> usize {
+        (self.x1 - self.x0 + 1) as usize
+    }
+    fn contains(&self, x: i64, y: i64) -> bool {
+        x >= self.x0 && y >= self.y0 && x <= self.x1 && y <= self.y1
+    }
+}
+
+/// The hole at `p`, measured in its search window: background, candidate pixels, rough blob
+/// (rejected when another blob is too close), sub-pixel centre and ellipse (the module's doc
+/// gives the steps).
 fn measure_one(
     img: &GrayImage,
     p: &Point2<f64>,
@@ -210,55 +235,23 @@ fn measure_one(
     if x0 < 0 || y0 < 0 || x1 >= img.width() as i64 || y1 >= img.height() as i64 {
         return Err(HoleRejection::OutsideImage);
     }
-    let at = |x: i64, y: i64| img.get_pixel(x as u32, y as u32)[0] as f64;
-    let mut border: Vec<f64> = Vec::new();
-    for x in x0..=x1 {
-        border.push(at(x, y0));
-        border.push(at(x, y1));
-    }
-    for y in y0 + 1..y1 {
-        border.push(at(x0, y));
-        border.push(at(x1, y));
-    }
-    let b = median(&mut border);
-    let mut dev: Vec<f64> = border.iter().map(|v| (v - b).abs()).collect();
-    let sigma_i = (1.4826 * median(&mut dev)).max(0.3); // quantisation floor ≈ 1/√12
-    let (mut lo, mut hi) = (f64::MAX, f64::MIN);
-    for y in y0..=y1 {
-        for x in x0..=x1 {
-            lo = lo.min(at(x, y));
-            hi = hi.max(at(x, y));
-        }
-    }
-    // Polarity: from the pixels around the prediction when they clearly differ from the
-    // background (so a brighter burr cannot turn the search for a dark hole into a search for
-    // bright blobs), else from the window's stronger extreme.
-    let mut near: Vec<f64> = (cy - 2..=cy + 2)
-        .flat_map(|y| (cx - 2..=cx + 2).map(move |x| (x, y)))
-        .map(|(x, y)| at(x, y))
-        .collect();
-    let near = median(&mut near);
-    let dark = if (near - b).abs() >= s.min_contrast {
-        near < b
-    } else {
-        b - lo > hi - b
+    let win = Window {
+        img,
+        x0,
+        y0,
+        x1,
+        y1,
     };
-    let extreme = if dark { lo } else { hi };
-    let mid = (b + extreme) / 2.0;
-    let side = (2 * h + 1) as usize;
-    let on: Vec<bool> = (y0..=y1)
-        .flat_map(|y| (x0..=x1).map(move |x| (x, y)))
-        .map(|(x, y)| (at(x, y) - mid) * (extreme - mid) > 0.0)
-        .collect();
+    let (b, sigma_i) = background(&win);
+    let on = candidate_pixels(&win, (cx, cy), b, s);
     if !on.contains(&true) {
         return Err(HoleRejection::LowContrast { contrast: 0.0 });
     }
     // Rough blob: the connected component of the above-threshold pixel nearest the prediction.
     // (Taking every such pixel of the window merged a neighbouring hole, burr or dirt into the
     // hole and moved its centre.)
+    let side = win.side();
     let (comps, label) = components(&on, side, x0, y0);
-    let dist2 =
-        |(x, y): (i64, i64), q: &Point2<f64>| (x as f64 - q.x).powi(2) + (y as f64 - q.y).powi(2);
     let seed = (0..on.len())
         .filter(|&k| on[k])
         .min_by(|&i, &j| {
@@ -268,7 +261,7 @@ fn measure_one(
         .expect("some pixel is on");
     let hole_id = label[seed];
     let hole = &comps[hole_id];
-    let mut levels: Vec<f64> = hole.pixels.iter().map(|&(x, y)| at(x, y)).collect();
+    let mut levels: Vec<f64> = hole.pixels.iter().map(|&(x, y)| win.at(x, y)).collect();
     let f = median(&mut levels);
     let contrast = f - b;
     if contrast.abs() < s.min_contrast {
@@ -306,13 +299,93 @@ fn measure_one(
     {
         return Err(HoleRejection::TouchesWindowBorder);
     }
+    let rough = Point2::new(rx, ry);
+    let others = comps
+        .iter()
+        .enumerate()
+        .filter(|&(k, _)| k != hole_id)
+        .map(|(_, c)| c);
+    let gap = clearance(&win, others, rough, radius, (b, sigma_i, contrast), s);
+    if gap < s.margin_px {
+        return Err(HoleRejection::BlobTooClose {
+            gap_px: gap.max(0.0),
+        });
+    }
+    Ok(subpixel_ellipse(&win, rough, radius, b, sigma_i, contrast))
+}
+
+fn dist2((x, y): (i64, i64), q: &Point2<f64>) -> f64 {
+    (x as f64 - q.x).powi(2) + (y as f64 - q.y).powi(2)
+}
+
+/// The window's background level (median of its border pixels) and the pixels' noise σ_I (from
+/// the border's MAD, floored at the quantisation's).
+fn background(win: &Window) -> (f64, f64) {
+    let (x0, y0, x1, y1) = (win.x0, win.y0, win.x1, win.y1);
+    let mut border: Vec<f64> = Vec::new();
+    for x in x0..=x1 {
+        border.push(win.at(x, y0));
+        border.push(win.at(x, y1));
+    }
+    for y in y0 + 1..y1 {
+        border.push(win.at(x0, y));
+        border.push(win.at(x1, y));
+    }
+    let b = median(&mut border);
+    let mut dev: Vec<f64> = border.iter().map(|v| (v - b).abs()).collect();
+    let sigma_i = (1.4826 * median(&mut dev)).max(0.3); // quantisation floor ≈ 1/√12
+    (b, sigma_i)
+}
+
+/// The window's pixels past the midpoint between the background `b` and the extreme of the
+/// hole's polarity (row by row).
+fn candidate_pixels(win: &Window, (cx, cy): (i64, i64), b: f64, s: &HoleSearch) -> Vec<bool> {
+    let (x0, y0, x1, y1) = (win.x0, win.y0, win.x1, win.y1);
+    let (mut lo, mut hi) = (f64::MAX, f64::MIN);
+    for y in y0..=y1 {
+        for x in x0..=x1 {
+            lo = lo.min(win.at(x, y));
+            hi = hi.max(win.at(x, y));
+        }
+    }
+    // Polarity: from the pixels around the prediction when they clearly differ from the
+    // background (so a brighter burr cannot turn the search for a dark hole into a search for
+    // bright blobs), else from the window's stronger extreme.
+    let mut near: Vec<f64> = (cy - 2..=cy + 2)
+        .flat_map(|y| (cx - 2..=cx + 2).map(move |x| (x, y)))
+        .map(|(x, y)| win.at(x, y))
+        .collect();
+    let near = median(&mut near);
+    let dark = if (near - b).abs() >= s.min_contrast {
+        near < b
+    } else {
+        b - lo > hi - b
+    };
+    let extreme = if dark { lo } else { hi };
+    let mid = (b + extreme) / 2.0;
+    (y0..=y1)
+        .flat_map(|y| (x0..=x1).map(move |x| (x, y)))
+        .map(|(x, y)| (win.at(x, y) - mid) * (extreme - mid) > 0.0)
+        .collect()
+}
+
+/// The clearance (px) between the moment disc (`radius` about `rough`) and the nearest other
+/// blob (`others`) or pixel of the opposite polarity; `levels`: background, σ_I, contrast.
+fn clearance<'c>(
+    win: &Window,
+    others: impl Iterator<Item = &'c Component>,
+    rough: Point2<f64>,
+    radius: f64,
+    (b, sigma_i, contrast): (f64, f64, f64),
+    s: &HoleSearch,
+) -> f64 {
     // Any other blob (either polarity) whose pixels or blurred edge (margin) reach the moment
     // disc would pull the centre towards it; masking it would also cut the hole's own blurred
     // edge, so the hole is rejected. Blobs farther away do not enter the sums and are ignored.
-    let rough = Point2::new(rx, ry);
+    let (rx, ry) = (rough.x, rough.y);
     let reach = radius + s.margin_px;
     let mut gap = f64::INFINITY;
-    for (_, c) in comps.iter().enumerate().filter(|&(k, _)| k != hole_id) {
+    for c in others {
         for &q in &c.pixels {
             gap = gap.min(dist2(q, &rough).sqrt() - radius);
         }
@@ -325,22 +398,26 @@ fn measure_one(
         .max(4.0 * sigma_i);
     for y in (ry - reach).floor() as i64..=(ry + reach).ceil() as i64 {
         for x in (rx - reach).floor() as i64..=(rx + reach).ceil() as i64 {
-            if x >= x0
-                && y >= y0
-                && x <= x1
-                && y <= y1
-                && (at(x, y) - b) * contrast.signum() < -opposite
-            {
+            if win.contains(x, y) && (win.at(x, y) - b) * contrast.signum() < -opposite {
                 gap = gap.min(dist2((x, y), &rough).sqrt() - radius);
             }
         }
     }
-    if gap < s.margin_px {
-        return Err(HoleRejection::BlobTooClose {
-            gap_px: gap.max(0.0),
-        });
-    }
-    let w = |x: i64, y: i64| (at(x, y) - b) / contrast;
+    gap
+}
+
+/// The sub-pixel centre and ellipse from unclamped coverage weights over the disc of `radius`
+/// about `rough`, and the centre's covariance.
+fn subpixel_ellipse(
+    win: &Window,
+    rough: Point2<f64>,
+    radius: f64,
+    b: f64,
+    sigma_i: f64,
+    contrast: f64,
+) -> HoleMeasurement {
+    let (rx, ry) = (rough.x, rough.y);
+    let w = |x: i64, y: i64| (win.at(x, y) - b) / contrast;
     // Sub-pixel moments with unclamped weights over the disc.
     let (mut sw, mut swx, mut swy) = (0.0, 0.0, 0.0);
     let mut pts = Vec::new();
@@ -376,7 +453,7 @@ fn measure_one(
     let major = eig.eigenvectors.column(i_major);
     let sigma_w = sigma_i / contrast.abs();
     let var = |v: f64| sigma_w * sigma_w * v / (sw * sw);
-    Ok(HoleMeasurement {
+    HoleMeasurement {
         centre: Point2::new(mx, my),
         covariance: Matrix2::new(var(vx), 0.0, 0.0, var(vy)),
         semi_axes: [
@@ -385,7 +462,7 @@ fn measure_one(
         ],
         angle: major[1].atan2(major[0]),
         contrast,
-    })
+    }
 }
 
 #[cfg(test)]

@@ -249,8 +249,8 @@ pub fn candidate_families(
     part_families(&mut out, declared, inventory, points_in_machine_frame);
     let labels = declared.labels();
     out.families.retain(|f| {
-        !labels.contains(&f.label)
-            && !(f.id == TermId::ToolOffset && declared.has(TermId::ToolOffset))
+        !(labels.contains(&f.label)
+            || f.id == TermId::ToolOffset && declared.has(TermId::ToolOffset))
     });
     (out.families, out.not_tried)
 }

@@ -17,6 +17,10 @@ pub enum EmpiricalShape {
     WorkspaceBump { centre: [f64; 3], width: f64 },
 }
 
+/// An empirical correction as fitted: its basis, coefficients, their σ, and its net effect on
+/// the records along its axis (m).
+pub type FittedEmpirical = (EmpiricalBasis, Vec<f64>, Vec<f64>, Vec<f64>);
+
 /// One empirical correction: its shape and the workpiece axis it moves.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub struct EmpiricalBasis {

@@ -12,7 +12,7 @@ use metrocell_physics::{configure, ConfigValue, PhysicsError, TermConfig, TermId
 use nalgebra::Vector3;
 
 use crate::candidates::Placement;
-use crate::empirical::{EmpiricalBasis, EmpiricalShape};
+use crate::empirical::{EmpiricalShape, FittedEmpirical};
 use crate::locate::{Finding as Located, Place};
 use crate::report::*;
 use crate::residual::{axis_name, ResidualSample};
@@ -52,10 +52,13 @@ pub struct Inputs<'a> {
     pub at_bound: &'a [(String, String)],
 }
 
+/// A finding's evidence per record: signal, residual along the evidence direction, fitted effect.
+pub type EvidenceSeries = (Vec<f64>, Vec<f64>, Vec<f64>);
+
 pub struct Built {
     pub findings: Vec<Finding>,
-    /// Per finding (same order): signal, residual along the evidence direction, fitted effect.
-    pub evidence: Vec<(Vec<f64>, Vec<f64>, Vec<f64>)>,
+    /// Per finding (same order).
+    pub evidence: Vec<EvidenceSeries>,
 }
 
 /// µm with one decimal.
@@ -282,7 +285,7 @@ pub fn build(inputs: &Inputs) -> Result<Built, PhysicsError> {
         }
     })?;
     let full = problem.predictions(inputs.x)?;
-    let mut out: Vec<(f64, Finding, (Vec<f64>, Vec<f64>, Vec<f64>))> = Vec::new();
+    let mut out: Vec<(f64, Finding, EvidenceSeries)> = Vec::new();
     for f in inputs.found {
         let bare = problem.predictions(&without(inputs, &f.label))?;
         // the term's effect on each reading, in the readings' frame
@@ -301,7 +304,7 @@ fn finding_of(
     inputs: &Inputs,
     f: &FoundTerm,
     c_rec: &[Vector3<f64>],
-) -> (f64, Finding, (Vec<f64>, Vec<f64>, Vec<f64>)) {
+) -> (f64, Finding, EvidenceSeries) {
     let n = inputs.records.len();
     let c_wp: Vec<Vector3<f64>> = c_rec
         .iter()
@@ -821,7 +824,7 @@ fn drift_statement(
 /// along its axis (what the model's own parameters take of it projected out: the size a user
 /// sees on the recorded points, never a coefficient).
 pub fn unexplained(
-    empirical: &[(EmpiricalBasis, Vec<f64>, Vec<f64>, Vec<f64>)],
+    empirical: &[FittedEmpirical],
     view: &crate::residual_view::ResidualView,
     located_after: &[Located],
     records: &[MeasurementRecord],

@@ -26,7 +26,7 @@ use crate::blocked_least_squares::{pseudo_inverse, BaseFit, BlockedRows};
 use crate::candidate_columns::ColumnContext;
 use crate::candidate_stage::{empirical_columns, expand_folds, Prepared, Source};
 use crate::declared_stage::DeclaredStage;
-use crate::empirical::EmpiricalBasis;
+use crate::empirical::FittedEmpirical;
 use crate::reference_columns::{nest_columns, with_columns};
 use crate::report::{FitFigures, UncertaintyNote};
 use crate::residual_view::ResidualView;
@@ -48,7 +48,7 @@ pub(crate) struct Judged {
     pub sigmas: Vec<Option<f64>>,
     /// Each empirical correction: its basis, coefficients, their σ, and its net effect on the
     /// records along its axis (m).
-    pub empirical: Vec<(EmpiricalBasis, Vec<f64>, Vec<f64>, Vec<f64>)>,
+    pub empirical: Vec<FittedEmpirical>,
     /// The whitened residual of the full-data fit after everything.
     pub whitened_after: Vec<f64>,
     /// Each added term's (label, significance in σ of its main parameters).
@@ -391,7 +391,7 @@ fn empirical_fitted(
     sol: &DVector<f64>,
     start: usize,
     variance: &dyn Fn(usize) -> f64,
-) -> Vec<(EmpiricalBasis, Vec<f64>, Vec<f64>, Vec<f64>)> {
+) -> Vec<FittedEmpirical> {
     let (pinv, _) = pseudo_inverse(&free_cols.tr_mul(free_cols));
     let mut at = start;
     let mut out = Vec::new();

@@ -91,7 +91,7 @@ pub fn require_common_signals(
         let is_reference = reference(&r);
         let missing: Vec<&str> = required
             .iter()
-            .filter(|n| !s.contains(*n) && !(is_reference && axis_signal(n)))
+            .filter(|n| !(s.contains(*n) || is_reference && axis_signal(n)))
             .map(String::as_str)
             .collect();
         if missing.is_empty() {

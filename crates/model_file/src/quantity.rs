@@ -106,6 +106,14 @@ pub fn vector3(
     ))
 }
 
+/// An optional quantity in `unit`, 0 when absent.
+pub fn si_or_zero(q: &Option<Quantity>, path: &str, unit: &str) -> Result<f64, CellError> {
+    q.as_ref()
+        .map(|q| q.to_si(path, unit))
+        .transpose()
+        .map(|v| v.unwrap_or(0.0))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -132,12 +140,4 @@ mod tests {
             "{msg}"
         );
     }
-}
-
-/// An optional quantity in `unit`, 0 when absent.
-pub fn si_or_zero(q: &Option<Quantity>, path: &str, unit: &str) -> Result<f64, CellError> {
-    q.as_ref()
-        .map(|q| q.to_si(path, unit))
-        .transpose()
-        .map(|v| v.unwrap_or(0.0))
 }

@@ -720,7 +720,10 @@ fn a_lagged_growth_on_a_missing_sensor_names_term_signal_topic_and_column() {
     let _ = std::fs::remove_dir_all(&bag);
 }
 
-fn write_points(dir: &Path, points: &[(u64, &str, &str, [f64; 3], [f64; 9])]) {
+/// A point to write: stamp (ns), frame, target, position (m), covariance (m², row-major).
+type PointRow<'a> = (u64, &'a str, &'a str, [f64; 3], [f64; 9]);
+
+fn write_points(dir: &Path, points: &[PointRow]) {
     let mut w = BagWriter::create(dir, WriterOptions::default()).unwrap();
     w.add_topic(
         "/measured_points",

@@ -4,8 +4,8 @@
 //! simulate); see crates/twin `examples/cells/*.yaml` for commented files.
 //!
 //! A **stationing program** (a serial arm measured by a levelled instrument from several setups,
-//! crates/twin `stationing`; `examples/cells/mobile_manipulator.yaml`) adds these keys, each
-//! refused in a cell without `program.stationing`:
+//! crates/twin `stationing`; `crates/twin/examples/cells/mobile_manipulator.yaml`) adds these
+//! keys, each refused in a cell without `program.stationing`:
 //! * `program.stationing: {levels, configurations: [{name, joints}], spread, fit_points,
 //!   check_points, groups_per_setup, min_tool_height, seed}` ([`StationingSection`]) — instead
 //!   of `joints`/`poses`; `feed_rate`, `rotary_rate` and `dwell` time it, one pass;

@@ -12,7 +12,8 @@
 //!   model's `SignalsBuilder`; missing signals named with the topics and columns that would
 //!   provide them.
 //! * [`record_stream`] — the same, one message at a time ([`RecordStream`]): what a bag
-//!   replay and a live node (the estimator and diagnose nodes) feed, records out in time order.
+//!   replay and a live node (the estimator and diagnose nodes) feed, records out in time order;
+//!   `recording_sources` checks first which topics give its records and signals.
 //! * [`instrument_readings`] — probe hits and camera marker poses in a recording → what their
 //!   records measure and what the model needs to predict them.
 //! * [`signal_topics`] — the recorded topics that carry signals and how each message feeds the
@@ -22,6 +23,7 @@
 
 pub mod instrument_readings;
 pub mod record_stream;
+mod recording_sources;
 pub mod recordings;
 pub mod signal_topics;
 

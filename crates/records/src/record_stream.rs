@@ -30,9 +30,8 @@ use crate::instrument_readings::{
     marker_measurements, probe_measurement, record_kind, CameraFeatures, InstrumentMeasurement,
     InstrumentReading,
 };
-use crate::recordings::{
-    frame_setup, providers, record_frame, PointSource, RecordingError, RecordingOptions,
-};
+use crate::recording_sources::RecordingSources;
+use crate::recordings::{frame_setup, record_frame, PointSource, RecordingError, RecordingOptions};
 use crate::signal_topics::{
     feed, message_time, SignalTopic, AIR_SENSOR, COMMANDED_JOINTS_TOPIC, LOAD_TOPIC,
     POWER_ON_TOPIC, TEMPERATURE_PREFIX,
@@ -160,219 +159,7 @@ impl<'m, 'a> RecordStream<'m, 'a> {
         model: &'m ForwardModel<'a>,
         options: &RecordingOptions,
     ) -> Result<Self, RecordingError> {
-        let has = |name: &str| {
-            topics
-                .iter()
-                .find(|(n, _)| n == name)
-                .map(|(_, t)| t.as_str())
-        };
-        let typed = |name: &str, ty: &str| -> Result<bool, RecordingError> {
-            match has(name) {
-                Some(t) if t != ty => Err(RecordingError::Bag {
-                    path: source.to_path_buf(),
-                    reason: format!(
-                        "topic {name} is recorded as {t}, but records are read from {ty}"
-                    ),
-                }),
-                Some(_) => Ok(true),
-                None => Ok(false),
-            }
-        };
-        let points_tracker = match options.points {
-            PointSource::MeasuredPoints => false,
-            PointSource::TrackerMeasurements => true,
-            PointSource::Auto => {
-                has(&options.measured_points_topic) != Some(MeasuredPoint::ROS_TYPE)
-            }
-        };
-        let (points_topic, points_type) = if points_tracker {
-            (&options.tracker_topic, TrackerMeasurement::ROS_TYPE)
-        } else {
-            (&options.measured_points_topic, MeasuredPoint::ROS_TYPE)
-        };
-        let found = typed(points_topic, points_type)?;
-        let probes = options.probe_hits && typed(&options.probe_topic, ProbeHit::ROS_TYPE)?;
-        let references = typed(REFERENCE_POINTS_TOPIC, MeasuredPoint::ROS_TYPE)?;
-        // check points are points of the program: read where the points are measured points
-        let checks = !points_tracker && typed(CHECK_POINTS_TOPIC, MeasuredPoint::ROS_TYPE)?;
-        let cameras = options.camera_points
-            && typed(&options.camera_topic, FiducialDetectionArray::ROS_TYPE)?;
-        if !(found || probes || cameras) {
-            let held = topics
-                .iter()
-                .map(|(n, t)| format!("{n} ({t})"))
-                .collect::<Vec<_>>()
-                .join(", ");
-            let held = if held.is_empty() {
-                "no topics".into()
-            } else {
-                held
-            };
-            if options.points == PointSource::MeasuredPoints {
-                return Err(RecordingError::NoMeasuredPoints {
-                    path: source.to_path_buf(),
-                    topic: options.measured_points_topic.clone(),
-                    held,
-                });
-            }
-            return Err(RecordingError::NoPoints {
-                path: source.to_path_buf(),
-                measured: options.measured_points_topic.clone(),
-                tracker: options.tracker_topic.clone(),
-                held,
-            });
-        }
-        let mut sources = Vec::new();
-        if found {
-            sources.push((
-                "points".to_string(),
-                format!("{points_topic} ({points_type})"),
-            ));
-        }
-        if probes {
-            sources.push((
-                "probe hits".to_string(),
-                format!("{} ({})", options.probe_topic, ProbeHit::ROS_TYPE),
-            ));
-        }
-        if checks {
-            sources.push((
-                "check points".to_string(),
-                format!(
-                    "{CHECK_POINTS_TOPIC} ({}), kept out of fits",
-                    MeasuredPoint::ROS_TYPE
-                ),
-            ));
-        }
-        if references {
-            sources.push((
-                "reference nests".to_string(),
-                format!("{REFERENCE_POINTS_TOPIC} ({})", MeasuredPoint::ROS_TYPE),
-            ));
-        }
-        if cameras {
-            sources.push((
-                "camera points".to_string(),
-                format!(
-                    "{} ({})",
-                    options.camera_topic,
-                    FiducialDetectionArray::ROS_TYPE
-                ),
-            ));
-        }
-        let signal_topics: BTreeMap<String, SignalTopic> = topics
-            .iter()
-            .filter_map(|(n, t)| SignalTopic::of(n, t).map(|w| (n.clone(), w)))
-            .collect();
-        let carried = |which: &SignalTopic| signal_topics.values().any(|w| w == which);
-        let nominals_give_axes = found
-            && !points_tracker
-            && matches!(
-                model.machine.kinematics,
-                MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_)
-            );
-        let joints = if carried(&SignalTopic::CommandedJoints) && nominals_give_axes {
-            // an export may give velocities without positions: the nominals then give the axes
-            JointSource::CommandedOrNominal
-        } else if carried(&SignalTopic::CommandedJoints) {
-            JointSource::Commanded
-        } else if nominals_give_axes {
-            JointSource::Nominal
-        } else {
-            let names = model.machine.joint_names();
-            let provide = if points_tracker {
-                format!(
-                    "record {COMMANDED_JOINTS_TOPIC} (joints {}) next to {points_topic}",
-                    names.join(", ")
-                )
-            } else {
-                format!("record {COMMANDED_JOINTS_TOPIC} (joints {}), or import the CSV with columns {} (the nominal point alone gives the joints only on cartesian and delta machines)", names.join(", "), names.iter().map(|n| format!("joint.{n}")).collect::<Vec<_>>().join(", "))
-            };
-            return Err(RecordingError::NoJoints {
-                path: source.to_path_buf(),
-                family: family(model).into(),
-                provide,
-            });
-        };
-        sources.push(("commanded joints".into(), match joints {
-            JointSource::Commanded => COMMANDED_JOINTS_TOPIC.into(),
-            JointSource::Nominal => format!("nominal of {points_topic}, minus the tool offset"),
-            JointSource::CommandedOrNominal => format!("{COMMANDED_JOINTS_TOPIC} where it gives positions, else the nominal of {points_topic} minus the tool offset (with the joint states' velocities)"),
-        }));
-
-        // every declared signal must have a source in this recording
-        let needs = declared_signals(model);
-        for (term, kind) in &needs {
-            let (available, from) = match kind {
-                SignalKind::AxisPosition(_) | SignalKind::AxisVelocity(_) => (true, None),
-                SignalKind::ApproachDirection(_) => (
-                    true,
-                    carried(&SignalTopic::Approach)
-                        .then(|| "/machine/approach_directions".to_string()),
-                ),
-                SignalKind::Temperature(s) | SignalKind::TemperatureHistory(s) => (
-                    carried(&SignalTopic::Temperature(s.clone())),
-                    Some(format!("/temperature/{s}")),
-                ),
-                SignalKind::AirTemperature => (
-                    points_tracker
-                        || carried(&SignalTopic::AirTemperature)
-                        || carried(&SignalTopic::Temperature(AIR_SENSOR.into())),
-                    None,
-                ),
-                SignalKind::AirPressure => {
-                    (points_tracker || carried(&SignalTopic::AirPressure), None)
-                }
-                SignalKind::AirHumidity => {
-                    (points_tracker || carried(&SignalTopic::AirHumidity), None)
-                }
-                SignalKind::TimeSincePowerOn => (
-                    carried(&SignalTopic::PowerOn),
-                    Some(POWER_ON_TOPIC.to_string()),
-                ),
-                SignalKind::LoadForce => {
-                    (carried(&SignalTopic::Load), Some(LOAD_TOPIC.to_string()))
-                }
-                _ => (true, None),
-            };
-            if !available {
-                return Err(RecordingError::MissingSignal {
-                    path: source.to_path_buf(),
-                    term: term.clone(),
-                    signal: kind.to_string(),
-                    provide: providers(kind),
-                });
-            }
-            if let Some(topic) = from {
-                let entry = (kind.to_string(), topic);
-                if !sources.contains(&entry) {
-                    sources.push(entry);
-                }
-            }
-        }
-        if points_tracker {
-            sources.push((
-                "air".into(),
-                format!("each reading's own station air ({points_topic})"),
-            ));
-        } else {
-            let air: Vec<&str> = signal_topics
-                .iter()
-                .filter(|(_, w)| {
-                    matches!(
-                        w,
-                        SignalTopic::AirTemperature
-                            | SignalTopic::AirPressure
-                            | SignalTopic::AirHumidity
-                    ) || **w == SignalTopic::Temperature(AIR_SENSOR.into())
-                })
-                .map(|(n, _)| n.as_str())
-                .collect();
-            if !air.is_empty() {
-                sources.push(("air".into(), air.join(", ")));
-            }
-        }
-
+        let sources = RecordingSources::check(source, topics, model, options)?;
         // bounded memory: joints are kept only as long as a held measurement can still ask for them
         let mut signal_options = options.signals.clone();
         signal_options.joint_window =
@@ -380,23 +167,23 @@ impl<'m, 'a> RecordStream<'m, 'a> {
         let mut stream = RecordStream {
             model,
             source: source.to_path_buf(),
-            needs,
-            points_topic: found.then(|| points_topic.clone()),
-            points_tracker,
-            probe_topic: probes.then(|| options.probe_topic.clone()),
-            camera_topic: cameras.then(|| options.camera_topic.clone()),
-            reference_topic: references.then(|| REFERENCE_POINTS_TOPIC.to_string()),
+            needs: declared_signals(model),
+            points_topic: sources.points_topic,
+            points_tracker: sources.points_tracker,
+            probe_topic: sources.probe_topic,
+            camera_topic: sources.camera_topic,
+            reference_topic: sources.reference_topic,
             reference_index: 0,
-            check_topic: checks.then(|| CHECK_POINTS_TOPIC.to_string()),
+            check_topic: sources.check_topic,
             check_index: 0,
             camera_features: options.camera_features.clone(),
             signal_topics: BTreeMap::new(),
-            joints,
+            joints: sources.joints,
             joint_names: model.machine.joint_names(),
             builder: SignalsBuilder::for_machine(model.machine, signal_options),
             pending: VecDeque::new(),
             out: StreamOutput {
-                sources,
+                sources: sources.lines,
                 ..StreamOutput::default()
             },
             feed: SignalFeed::default(),
@@ -406,7 +193,7 @@ impl<'m, 'a> RecordStream<'m, 'a> {
             velocity_only: BTreeMap::new(),
             commanded_positions: false,
         };
-        for (name, which) in signal_topics {
+        for (name, which) in sources.signal_topics {
             stream.add_signal_topic(name, which);
         }
         Ok(stream)
@@ -727,7 +514,7 @@ impl SignalFeed {
 
 /// (term label, signal) of every declared term whose prediction reads a recorded signal
 /// (scatter terms never enter a prediction; ranges and points the model computes itself).
-fn declared_signals(model: &ForwardModel) -> Vec<(String, SignalKind)> {
+pub(crate) fn declared_signals(model: &ForwardModel) -> Vec<(String, SignalKind)> {
     let mut out = Vec::new();
     for t in model
         .machine_terms
@@ -773,7 +560,7 @@ fn present(s: &Signals, kind: &SignalKind) -> bool {
 
 /// Where the commanded joints of a bag come from.
 #[derive(Debug, Clone, Copy, PartialEq)]
-enum JointSource {
+pub(crate) enum JointSource {
     Commanded,
     /// q = nominal − tool_offset (cartesian and delta).
     Nominal,
@@ -830,7 +617,7 @@ fn status_flags(status: u8) -> String {
     }
 }
 
-fn family(model: &ForwardModel) -> &'static str {
+pub(crate) fn family(model: &ForwardModel) -> &'static str {
     match model.machine.kinematics {
         MachineKinematics::Cartesian(_) => "cartesian",
         MachineKinematics::Delta(_) => "delta",

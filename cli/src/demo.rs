@@ -18,7 +18,7 @@
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 
 use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
 use metrocell_msgs::msg::{ErrorModel, TrackerMeasurement};
@@ -96,6 +96,9 @@ struct Watch {
     estimated: Option<ErrorModel>,
     /// What the live diagnose node found: status name (`diagnose: <term>`) → its sentence.
     live_findings: BTreeMap<String, String>,
+    /// The findings of the diagnose node's latest completed run (a later run may replace an
+    /// earlier run's term, e.g. one thermocouple's growth by a confounded one's).
+    live_last_run: Option<BTreeSet<String>>,
     /// The fiducial node's latest counts (frames processed, skipped, rejected).
     fiducial: camera_summary::FiducialNodeCounts,
 }
@@ -198,15 +201,32 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
         sayln!("estimated online: no error model from the estimator (too few measured points)");
     }
     if !watch.live_findings.is_empty() {
-        sayln!(
-            "the live diagnose node found, while the cell ran: {}",
+        let in_last = |name: &String| {
             watch
-                .live_findings
-                .values()
-                .cloned()
+                .live_last_run
+                .as_ref()
+                .is_none_or(|s| s.contains(name))
+        };
+        let (last, earlier): (Vec<_>, Vec<_>) = watch
+            .live_findings
+            .iter()
+            .partition(|(name, _)| in_last(name));
+        let sentences = |v: &[(&String, &String)]| {
+            v.iter()
+                .map(|(_, s)| s.as_str())
                 .collect::<Vec<_>>()
                 .join("; ")
+        };
+        sayln!(
+            "the live diagnose node found, while the cell ran (its last run): {}",
+            sentences(&last)
         );
+        if !earlier.is_empty() {
+            sayln!(
+                "  named by an earlier run and replaced by its last: {}",
+                sentences(&earlier)
+            );
+        }
     } else {
         sayln!("the live diagnose node found nothing while the cell ran (it diagnoses every fifth of the run)");
     }
@@ -450,6 +470,7 @@ fn watch_cell(
         recorded: BTreeMap::new(),
         estimated: None,
         live_findings: BTreeMap::new(),
+        live_last_run: None,
         fiducial: Default::default(),
     };
     // about twenty progress lines over the run, at whole minutes of cell time
@@ -512,6 +533,9 @@ fn watch_cell(
                         .map(|kv| (kv.key.as_str(), kv.value.as_str())),
                 );
             }
+            if let Some(names) = completed_run_findings(&d) {
+                w.live_last_run = Some(names);
+            }
             for (name, statement) in new_live_findings(&d, &mut w) {
                 let t = w.sim_time_s.max(0.0) as u64;
                 sayln!(
@@ -569,6 +593,22 @@ fn watch_cell(
 /// How long the demo waits, once the twin has finished, for the recorder's counts to reach the
 /// twin's before it stops the nodes. The recorder refreshes its counts once a second.
 const RECORDER_CATCH_UP: Duration = Duration::from_secs(30);
+
+/// The findings of a completed diagnosis (an array whose summary status `diagnose` carries its
+/// `run` number): their status names. `None` for anything else (another node's statuses, a
+/// window still waiting for records).
+fn completed_run_findings(d: &DiagnosticArray) -> Option<BTreeSet<String>> {
+    d.status
+        .iter()
+        .any(|s| s.name == "diagnose" && s.values.iter().any(|kv| kv.key == "run"))
+        .then(|| {
+            d.status
+                .iter()
+                .filter(|s| s.name.starts_with("diagnose: "))
+                .map(|s| s.name.clone())
+                .collect()
+        })
+}
 
 /// The diagnose node's findings (statuses named `diagnose: <term>`) not seen before, kept in
 /// the watch.
@@ -697,6 +737,52 @@ fn describe_estimate(m: &ErrorModel) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use metrocell_msgs::diagnostic_msgs::msg::{DiagnosticStatus, KeyValue};
+
+    fn status(name: &str, values: &[(&str, &str)]) -> DiagnosticStatus {
+        DiagnosticStatus {
+            name: name.into(),
+            values: values
+                .iter()
+                .map(|(k, v)| KeyValue {
+                    key: k.to_string(),
+                    value: v.to_string(),
+                })
+                .collect(),
+            ..Default::default()
+        }
+    }
+
+    /// A completed run's findings replace the last run's; a waiting summary (no `run`) and other
+    /// nodes' arrays leave them alone.
+    #[test]
+    fn the_last_completed_run_names_the_current_findings() {
+        let run = |findings: &[&str]| DiagnosticArray {
+            status: std::iter::once(status("diagnose", &[("run", "2")]))
+                .chain(
+                    findings
+                        .iter()
+                        .map(|f| status(&format!("diagnose: {f}"), &[])),
+                )
+                .collect(),
+            ..Default::default()
+        };
+        let names = completed_run_findings(&run(&["backlash[x]", "thermal_growth[x_left]"]));
+        assert_eq!(
+            names.unwrap().into_iter().collect::<Vec<_>>(),
+            ["diagnose: backlash[x]", "diagnose: thermal_growth[x_left]"]
+        );
+        let waiting = DiagnosticArray {
+            status: vec![status("diagnose", &[])],
+            ..Default::default()
+        };
+        assert_eq!(completed_run_findings(&waiting), None);
+        let other = DiagnosticArray {
+            status: vec![status("/recorder", &[("run", "1")])],
+            ..Default::default()
+        };
+        assert_eq!(completed_run_findings(&other), None);
+    }
 
     /// Issue 32: `--dashboard-port 0` gives two real, different ports (not 0 and 1); a port gives
     /// itself and the next; the last port has no next.

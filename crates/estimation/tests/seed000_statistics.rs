@@ -5,6 +5,7 @@
 use metrocell_estimation::general_tolerance::{
     finest_class_met, permissible_deviation_mm, ToleranceClass, ToleranceError,
 };
+use metrocell_estimation::improvement::ErrorStatistics;
 use metrocell_estimation::sequential_anova::sequential_anova;
 
 /// Table 5: run, image type (−1 corrected, +1 uncorrected), inclination (°), X (mm), Y (mm).
@@ -58,10 +59,10 @@ fn column(k: usize) -> Vec<f64> {
         .collect()
 }
 
+/// Mean and sample SD, by the statistics the router's reports use (Table 3's).
 fn mean_sd(v: &[f64]) -> (f64, f64) {
-    let m = v.iter().sum::<f64>() / v.len() as f64;
-    let s = (v.iter().map(|x| (x - m).powi(2)).sum::<f64>() / (v.len() - 1) as f64).sqrt();
-    (m, s)
+    let s = ErrorStatistics::of(v).expect("two or more values");
+    (s.mean, s.sd)
 }
 
 fn close(got: f64, want: f64, last_digit: f64, what: &str) {

@@ -248,7 +248,7 @@ fn solve_block(
     for (j, n) in norms.iter().enumerate() {
         scaled.column_mut(j).scale_mut(1.0 / n);
     }
-    let svd = scaled.clone().svd(true, true);
+    let svd = scaled.svd(true, true);
     let (smax, smin) = (svd.singular_values.max(), svd.singular_values.min());
     if smin <= smax * 1e-10 {
         return Err(PlanarFitError::Degenerate {

@@ -27,6 +27,7 @@ macro_rules! say {
 mod bag;
 mod calibrate;
 mod compensate;
+mod delta;
 mod demo;
 mod diagnose_command;
 mod launch_command;
@@ -67,6 +68,9 @@ enum Command {
     Compensate(compensate::CompensateCommand),
     /// Find fiducials (ArUco/AprilTag markers, checkerboards) in image files
     Detect(vision::detect::DetectArgs),
+    /// Delta printer calibration from a printed target (seed 002): identify the geometry, write M665/M666 and Klipper settings
+    #[command(subcommand)]
+    Delta(delta::DeltaCommand),
     /// Run the main job on the built-in simulated cell: twin, thermal compensation, recorder
     Demo(demo::DemoArgs),
     /// Find where a recording and a model disagree, name the missing physics, add it, show the held-out fit improve
@@ -122,6 +126,7 @@ fn main() {
         Command::Detect(args) => vision::detect::run(args),
         Command::Launch(args) => launch_command::run(args),
         Command::Router(command) => router::run(command),
+        Command::Delta(command) => delta::run(command),
         Command::Sim(args) => metrocell_simulation::run_sim_command(args),
         Command::Topic(command) => topic::run(command),
     };

@@ -40,6 +40,7 @@
 
 pub mod accelerometer_alignment;
 pub mod check_points;
+pub mod delta_calibration;
 pub mod design_of_experiments;
 pub mod error_functions;
 pub mod fit;

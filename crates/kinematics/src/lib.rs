@@ -16,6 +16,7 @@
 pub mod cartesian;
 pub mod cartesian_error_chain;
 pub mod delta;
+pub mod delta_firmware;
 pub mod delta_rod_correction;
 pub mod dh;
 pub mod error;

@@ -1,0 +1,297 @@
+//! `metrocell delta fit --firmware M503.txt --measurements TARGET.csv`: a delta printer's
+//! physical geometry from what it printed (and, optionally, probed), and the Marlin and Klipper
+//! settings that make its firmware agree.
+
+use std::path::PathBuf;
+
+use anyhow::{bail, Context};
+use metrocell_estimation::delta_calibration::{
+    fit_delta, name_of, parameter_index, DeltaFit, DeltaMeasurement, PLACEMENT_NAMES,
+};
+use metrocell_kinematics::delta::{DeltaGeometry, DELTA_PARAMETER_NAMES, MARLIN_TOWER_BASE_ANGLES};
+use metrocell_kinematics::delta_firmware::{tower_letter, MarlinDelta};
+use metrocell_kinematics::delta_rod_correction::rod_from_measured_move;
+
+use super::measurements_file;
+
+#[derive(clap::Args)]
+#[command(after_help = "Inputs:\n\
+  --firmware: the settings the printer ran when it printed the target: send M503 and save the reply \
+(the `echo:  M665 …` and `M666 …` lines are read), or write `M665 L<rod> R<radius> H<height> X Y Z` and \
+`M666 X Y Z` yourself.\n\
+  --measurements: a CSV, one row per measurement, in mm: kind (plan | height | distance), x_mm, y_mm, \
+z_mm (where the feature was commanded), to_x_mm, to_y_mm, to_z_mm (a distance's second feature), \
+measured_x_mm, measured_y_mm (a plan position in the printed object's own frame), measured_mm (a height \
+above the bed, or a distance), sigma_mm (its standard uncertainty).\n\n\
+What it does: fits the physical geometry by least squares over the full delta kinematics — rod length and \
+tower angles from plan positions and distances; with probed heights also the radius and the endstops — \
+each with its σ (widened by χ²/dof when the data scatter more than stated). Parameters the measurements \
+cannot see are held and named with the reason. Prints seed 002's single-arm estimate (eq. 13, averaged over \
+the three arms) beside it for bars from the centre toward a tower. Writes the new Marlin settings \
+(M665/M666/M500) and the same state as Klipper printer.cfg sections.\n\n\
+Iterate: print the target again with the new settings, measure, fit; stop when the residuals it reports \
+before the fit are within your tolerance.\n\n\
+Example:\n  metrocell delta fit --firmware m503.txt --measurements star.csv -o new_settings.gcode \
+--klipper printer_delta.cfg")]
+pub struct FitArgs {
+    /// The printer's current settings (M503 reply, or M665/M666 lines)
+    #[arg(long)]
+    firmware: PathBuf,
+    /// The measurements table (CSV, see below)
+    #[arg(long)]
+    measurements: PathBuf,
+    /// Hold a parameter at its firmware value (repeatable): delta_rod_length, delta_radius,
+    /// delta_tower_angle_a|b|c, delta_rod_trim_a|b|c (free them with --rod-trims), delta_endstop_a|b|c
+    #[arg(long)]
+    hold: Vec<String>,
+    /// Fit a rod trim per tower (M665 A B C) instead of one rod length
+    #[arg(long)]
+    rod_trims: bool,
+    /// Write the new Marlin settings (M665, M666, M500) here
+    #[arg(short, long)]
+    output: Option<PathBuf>,
+    /// Write the new settings as Klipper printer.cfg sections here
+    #[arg(long)]
+    klipper: Option<PathBuf>,
+}
+
+pub fn run(a: FitArgs) -> anyhow::Result<i32> {
+    let text = std::fs::read_to_string(&a.firmware)
+        .with_context(|| format!("reading the firmware settings {}", a.firmware.display()))?;
+    let settings =
+        MarlinDelta::from_gcode(&text).with_context(|| a.firmware.display().to_string())?;
+    let firmware = settings
+        .firmware_geometry()
+        .with_context(|| format!("the settings in {}", a.firmware.display()))?;
+    print!(
+        "{}: {}",
+        a.firmware.display(),
+        settings.marlin_commands().replace("M500\n", "")
+    );
+    let measurements = measurements_file::read(&a.measurements)?;
+    let count = |f: fn(&DeltaMeasurement) -> bool| measurements.iter().filter(|m| f(m)).count();
+    println!(
+        "{}: {} plan positions, {} heights, {} distances",
+        a.measurements.display(),
+        count(|m| matches!(m, DeltaMeasurement::PlanPosition { .. })),
+        count(|m| matches!(m, DeltaMeasurement::Height { .. })),
+        count(|m| matches!(m, DeltaMeasurement::Distance { .. })),
+    );
+    let hold = held_by_request(&a)?;
+    let fit = fit_delta(&firmware, &measurements, &hold)
+        .with_context(|| format!("fitting {}", a.measurements.display()))?;
+    print_fit(&fit, &firmware, &measurements);
+    print_single_arm(&settings, &firmware, &measurements);
+    let new = settings
+        .corrected(&fit.geometry)
+        .context("turning the fitted geometry into settings")?;
+    println!("\nnew settings (Marlin; M500 stores them):");
+    print!("{}", new.marlin_commands());
+    println!("\nthe same as Klipper printer.cfg sections:");
+    print!("{}", new.klipper_sections());
+    if let Some(path) = &a.output {
+        std::fs::write(path, new.marlin_commands())
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("\nwrote {}", path.display());
+    }
+    if let Some(path) = &a.klipper {
+        std::fs::write(path, new.klipper_sections())
+            .with_context(|| format!("writing {}", path.display()))?;
+        println!("wrote {}", path.display());
+    }
+    Ok(0)
+}
+
+/// The parameter indices --hold names, and the rod-length/trim choice.
+fn held_by_request(a: &FitArgs) -> anyhow::Result<Vec<usize>> {
+    let mut hold = Vec::new();
+    for name in &a.hold {
+        let Some(k) = parameter_index(name).filter(|&k| k < DELTA_PARAMETER_NAMES.len()) else {
+            bail!(
+                "--hold {name}: not a parameter; one of {}",
+                DELTA_PARAMETER_NAMES.join(", ")
+            );
+        };
+        hold.push(k);
+    }
+    if a.rod_trims {
+        // three rods: the trims carry them, the common length is held
+        hold.push(0);
+    }
+    Ok(hold)
+}
+
+/// A parameter in the firmware's units: (label, unit, factor from SI).
+fn display(k: usize) -> (String, &'static str, f64) {
+    let name = name_of(k);
+    let label = name.trim_start_matches("delta_").replace('_', " ");
+    match k {
+        2..=4 => (label, "°", 180.0 / std::f64::consts::PI),
+        _ if name == PLACEMENT_NAMES[0] => (label, "°", 180.0 / std::f64::consts::PI),
+        _ => (label, "mm", 1e3),
+    }
+}
+
+fn print_fit(fit: &DeltaFit, firmware: &DeltaGeometry, measurements: &[DeltaMeasurement]) {
+    let dof = fit.degrees_of_freedom;
+    println!(
+        "\nfit: χ²/dof = {:.2} on {dof} dof{}",
+        if dof > 0 {
+            fit.chi_square / dof as f64
+        } else {
+            f64::NAN
+        },
+        if fit.covariance_scale > 1.0 {
+            format!(
+                " — the measurements scatter more than their σ: σ below widened by √{:.2} \
+                 (understated σ, or error the delta geometry does not hold)",
+                fit.covariance_scale
+            )
+        } else {
+            String::new()
+        }
+    );
+    println!(
+        "  {:<22} {:>11} {:>11} {:>10} {:>9}",
+        "parameter", "firmware", "physical", "change", "σ"
+    );
+    let fitted = fit.geometry.to_vector();
+    let before = firmware.to_vector();
+    for &k in &fit.estimated {
+        let (label, unit, f) = display(k);
+        let sigma = fit.sigma_of(k).unwrap_or(f64::NAN) * f;
+        if k >= DELTA_PARAMETER_NAMES.len() {
+            let p = fit.placement.unwrap_or_default()[k - DELTA_PARAMETER_NAMES.len()] * f;
+            println!(
+                "  {:<22} {:>11} {p:>11.4} {:>10} {sigma:>9.4}",
+                format!("{label} ({unit})"),
+                "",
+                ""
+            );
+            continue;
+        }
+        let (now, was) = (fitted[k] * f, before[k] * f);
+        let change = now - was;
+        let note = if change.abs() < 2.0 * sigma {
+            "  (not significant: within 2σ of the firmware's value)"
+        } else {
+            ""
+        };
+        println!(
+            "  {:<22} {was:>11.4} {now:>11.4} {change:>+10.4} {sigma:>9.4}{note}",
+            format!("{label} ({unit})")
+        );
+    }
+    println!("  endstops are the physical carriage height minus the firmware's count");
+    for (name, why) in &fit.held {
+        println!(
+            "  held: {} — {why}",
+            name.trim_start_matches("delta_").replace('_', " ")
+        );
+    }
+    for (kind, label) in [(0u8, "plan positions"), (1, "heights"), (2, "distances")] {
+        let rows = residual_rows(measurements, kind);
+        if rows.is_empty() {
+            continue;
+        }
+        let rms = |r: &[f64]| {
+            (rows.iter().map(|&i| r[i] * r[i]).sum::<f64>() / rows.len() as f64).sqrt() * 1e3
+        };
+        let sigma = (rows
+            .iter()
+            .map(|&i| row_sigma(measurements, i).powi(2))
+            .sum::<f64>()
+            / rows.len() as f64)
+            .sqrt()
+            * 1e3;
+        println!(
+            "  {label}: residual RMS {:.4} mm with the firmware's geometry, {:.4} mm fitted \
+             (stated σ {sigma:.4} mm)",
+            rms(&fit.residuals_before),
+            rms(&fit.residuals)
+        );
+    }
+}
+
+/// Residual row indices of one kind of measurement (0 plan, 1 height, 2 distance).
+fn residual_rows(measurements: &[DeltaMeasurement], kind: u8) -> Vec<usize> {
+    let mut rows = Vec::new();
+    let mut at = 0;
+    for m in measurements {
+        let (k, n) = match m {
+            DeltaMeasurement::PlanPosition { .. } => (0, 2),
+            DeltaMeasurement::Height { .. } => (1, 1),
+            DeltaMeasurement::Distance { .. } => (2, 1),
+        };
+        if k == kind {
+            rows.extend(at..at + n);
+        }
+        at += n;
+    }
+    rows
+}
+
+fn row_sigma(measurements: &[DeltaMeasurement], row: usize) -> f64 {
+    let mut at = 0;
+    for m in measurements {
+        let (n, s) = match *m {
+            DeltaMeasurement::PlanPosition { sigma, .. } => (2, sigma),
+            DeltaMeasurement::Height { sigma, .. } | DeltaMeasurement::Distance { sigma, .. } => {
+                (1, sigma)
+            }
+        };
+        if row < at + n {
+            return s;
+        }
+        at += n;
+    }
+    f64::NAN
+}
+
+/// Seed 002's estimate: eq. 13 for each bar from the centre toward a tower, averaged.
+fn print_single_arm(
+    settings: &MarlinDelta,
+    firmware: &DeltaGeometry,
+    measurements: &[DeltaMeasurement],
+) {
+    let mut rods = Vec::new();
+    for m in measurements {
+        let DeltaMeasurement::Distance {
+            from, to, measured, ..
+        } = m
+        else {
+            continue;
+        };
+        if from.xy().norm() > 1e-6 {
+            continue;
+        }
+        let Some(t) = (0..3).find(|&t| {
+            let a = MARLIN_TOWER_BASE_ANGLES[t] + firmware.tower_angle_trim[t];
+            (to.y.atan2(to.x) - a).sin().abs() < 1e-3 && (to.y.atan2(to.x) - a).cos() > 0.0
+        }) else {
+            continue;
+        };
+        let commanded = to.xy().norm() * 1e3;
+        let d0 = settings.diagonal_rod_mm + settings.diagonal_rod_trim_mm[t];
+        match rod_from_measured_move(d0, settings.radius_mm, commanded, measured * 1e3) {
+            Ok(d) => rods.push((t, commanded, measured * 1e3, d)),
+            Err(e) => println!(
+                "  eq. 13, tower {}: {e} (bar {commanded:.3} mm measured {:.3} mm)",
+                tower_letter(t),
+                measured * 1e3
+            ),
+        }
+    }
+    if rods.is_empty() {
+        return;
+    }
+    println!("\nseed 002's single-arm estimate (eq. 13), for comparison — one arm at a time, so it under-corrects; iterate:");
+    for (t, commanded, measured, d) in &rods {
+        println!(
+            "  tower {}: bar {commanded:.3} mm printed {measured:.4} mm → rod {d:.4} mm",
+            tower_letter(*t)
+        );
+    }
+    let mean = rods.iter().map(|r| r.3).sum::<f64>() / rods.len() as f64;
+    println!("  mean rod {mean:.4} mm (the paper's new DELTA_DIAGONAL_ROD)");
+}

@@ -443,6 +443,23 @@ pub fn significance_sigma(values: &[f64], covariance: &DMatrix<f64>, main: &[usi
         .max(0.0)
 }
 
+/// BICs closer than this (in BIC units) are equal for ordering: round-off in the fits — a
+/// different summation order, another build — must not decide between two candidates the data
+/// cannot tell apart; such ties go to the label, so the same data always give the same pick.
+const BIC_ROUND_OFF: f64 = 1e-6;
+
+/// Candidates by BIC (equal within [`BIC_ROUND_OFF`]), then by family label and variant name.
+fn by_bic_then_label(families: &[Family], a: &Scored, b: &Scored) -> std::cmp::Ordering {
+    if (a.bic - b.bic).abs() > BIC_ROUND_OFF {
+        return a.bic.total_cmp(&b.bic);
+    }
+    let name = |s: &Scored| {
+        let f = &families[s.family];
+        (f.label.clone(), f.variants[s.variant].name.clone())
+    };
+    name(a).cmp(&name(b))
+}
+
 fn bic(n: f64, ssr: f64, k: f64) -> f64 {
     n * (ssr.max(f64::MIN_POSITIVE) / n).ln() + k * n.ln()
 }
@@ -667,7 +684,7 @@ impl<'a> Selector<'a> {
                 .map(|vi| self.score(base, chosen, fi, vi))
                 .reduce(|b, s| {
                     if rank(&s.score) > rank(&b.score)
-                        || (rank(&s.score) == rank(&b.score) && s.bic < b.bic)
+                        || (rank(&s.score) == rank(&b.score) && s.bic < b.bic - BIC_ROUND_OFF)
                     {
                         s
                     } else {
@@ -687,7 +704,9 @@ impl<'a> Selector<'a> {
             .iter()
             .filter(|s| s.score.accepted && families[s.family].physical == physical)
             .collect();
-        let lowest = *accepted.iter().min_by(|a, b| a.bic.total_cmp(&b.bic))?;
+        let lowest = *accepted
+            .iter()
+            .min_by(|a, b| by_bic_then_label(families, a, b))?;
         let size = |s: &Scored| {
             families[s.family].variants[s.variant].columns.ncols()
                 + families[s.family].variants[s.variant].profiled
@@ -701,7 +720,7 @@ impl<'a> Selector<'a> {
             preference(&families[a.family].term)
                 .cmp(&preference(&families[b.family].term))
                 .then(size(a).cmp(&size(b)))
-                .then(a.bic.total_cmp(&b.bic))
+                .then_with(|| by_bic_then_label(families, a, b))
         })
     }
 
@@ -734,7 +753,7 @@ impl<'a> Selector<'a> {
         let refused = per_family
             .iter()
             .filter(|s| s.score.supported && !s.score.accepted && self.families[s.family].physical)
-            .min_by(|a, b| a.bic.total_cmp(&b.bic))
+            .min_by(|a, b| by_bic_then_label(self.families, a, b))
             .filter(|r| {
                 pick.is_none_or(|p| {
                     r.bic < p.bic - TIE_BIC

@@ -145,3 +145,133 @@ fn noise_free_plate_reproduces_the_papers_compensation_example() {
     assert!((word('Y') - 98.2160).abs() < 5e-5, "{line}");
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// `router pattern`'s PDF, rasterised by poppler's pdftoppm (not metrocell) at 10 px/mm: the
+/// front-left square is black and 25 mm wide where the layout puts it, the scale bar's first
+/// centimetre 10 mm long — exact scale to the rasteriser's pixel.
+#[test]
+fn printed_pattern_is_at_exact_scale() {
+    let dir = std::env::temp_dir().join(format!("metrocell-router-pdf-{}", std::process::id()));
+    let out = run(
+        piped(bin("metrocell"))
+            .args(["router", "pattern", "--origin", "20,20", "-o"])
+            .arg(&dir),
+        Duration::from_secs(30),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let holes = std::fs::read_to_string(dir.join("holes.csv")).unwrap();
+    assert_eq!(holes.lines().count(), 37);
+    assert!(holes.contains("\n22,3,3,107.5,107.5\n"), "{holes}");
+    let raster = run(
+        piped("pdftoppm")
+            .args(["-r", "254", "-gray", "-png", "-singlefile"])
+            .arg(dir.join("pattern.pdf"))
+            .arg(dir.join("page")),
+        Duration::from_secs(60),
+    );
+    assert!(
+        raster.status.success(),
+        "pdftoppm (Debian poppler-utils, installed by tests/run): {}",
+        String::from_utf8_lossy(&raster.stderr)
+    );
+    let page = image::open(dir.join("page.png")).unwrap().to_luma8();
+    // 180 × 205 mm at 10 px/mm
+    assert_eq!((page.width(), page.height() / 10), (1800, 205));
+    let dark = |x: u32, y: u32| page.get_pixel(x, y).0[0] < 128;
+    // along the row through the front-left square (page y 152.5 mm): black from x = 15 mm to
+    // 40 mm, then white to 65 mm
+    let row = 1525;
+    let edges: Vec<u32> = (1..1800)
+        .filter(|&x| dark(x, row) != dark(x - 1, row))
+        .collect();
+    assert_eq!(edges[..3].len(), 3);
+    for (edge, want) in edges.iter().zip([150, 400, 650]) {
+        assert!(
+            edge.abs_diff(want) <= 1,
+            "edge at {edge} px, want {want} (edges {edges:?})"
+        );
+    }
+    // the scale bar (page y 173–176 mm): its first black centimetre
+    let bar = 1745;
+    let edges: Vec<u32> = (1..1800)
+        .filter(|&x| dark(x, bar) != dark(x - 1, bar))
+        .collect();
+    assert!(
+        edges[0].abs_diff(150) <= 1 && edges[1].abs_diff(250) <= 1,
+        "{edges:?}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Seed 000 end to end through the commands on photos no metrocell code drew: the router drills
+/// the plate with the B72 field (tests/py/router_photo.py: numpy and OpenCV's camera model),
+/// `router measure` finds every hole within 4 of its stated σ of where it was drilled (and the
+/// σ cover the truth: RMS z between 0.5 and 1.5), and `router fit` on that table brings the
+/// held-out mean |e| from ~1.44 mm to within 1.5× the measurement uncertainty.
+#[test]
+fn photographed_plate_is_measured_and_compensated_to_its_noise() {
+    let dir = std::env::temp_dir().join(format!("metrocell-router-photo-{}", std::process::id()));
+    let out = run(
+        piped(python())
+            .arg(workspace_root().join("tests/py/router_photo.py"))
+            .arg(&dir)
+            .args(["2", "7"]),
+        Duration::from_secs(600),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let table = dir.join("holes.csv");
+    let out = run(
+        piped(bin("metrocell"))
+            .args(["router", "measure", "--camera"])
+            .arg(dir.join("camera_info.yaml"))
+            .arg("--images")
+            .arg(dir.join("photo_*.png"))
+            .arg("-o")
+            .arg(&table),
+        Duration::from_secs(120),
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+    println!("{stdout}");
+    assert!(
+        out.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains(": 36 holes from 2 photos"), "{stdout}");
+    let rows = |path: &Path| -> Vec<Vec<f64>> {
+        std::fs::read_to_string(path)
+            .unwrap()
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+            .collect()
+    };
+    let (measured, truth) = (rows(&table), rows(&dir.join("truth.csv")));
+    let mut z2 = 0.0;
+    for (m, t) in measured.iter().zip(&truth) {
+        // hole,column,row,x,y,ex,ey,σx,σy against hole,x,y,ex,ey
+        assert_eq!((m[0], m[3], m[4]), (t[0], t[1], t[2]));
+        for axis in 0..2 {
+            let z = (m[5 + axis] - t[3 + axis]) / m[7 + axis];
+            assert!(z.abs() < 4.0, "hole {}: axis {axis} off by {z:.1}σ", m[0]);
+            z2 += z * z;
+        }
+    }
+    let rms_z = (z2 / (2 * measured.len()) as f64).sqrt();
+    assert!((0.5..1.5).contains(&rms_z), "RMS z {rms_z}");
+    let stdout = router_fit(&["--errors".as_ref(), table.as_os_str()]);
+    let ratio = figure(&stdout, "after / measurement noise");
+    assert!(
+        ratio <= 1.5,
+        "held-out mean |e| is {ratio}× the measurement noise"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

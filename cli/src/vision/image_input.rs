@@ -46,21 +46,30 @@ pub fn parse_length(s: &str) -> Result<f64, String> {
     Ok(v)
 }
 
-/// "9x6" → (9, 6).
+/// "9x6" → (9, 6) inner corners.
 pub fn parse_board(s: &str) -> Result<(usize, usize), String> {
+    parse_grid(s, "inner corners", "9x6", 2)
+}
+
+/// "6x6" → (6, 6) squares (a hole plate: one hole per square).
+pub fn parse_squares(s: &str) -> Result<(usize, usize), String> {
+    parse_grid(s, "squares", "6x6", 3)
+}
+
+fn parse_grid(s: &str, what: &str, example: &str, least: usize) -> Result<(usize, usize), String> {
     let (a, b) = s
         .to_ascii_lowercase()
         .split_once('x')
         .map(|(a, b)| (a.trim().to_string(), b.trim().to_string()))
-        .ok_or_else(|| format!("`{s}`: expected COLSxROWS inner corners, e.g. 9x6"))?;
+        .ok_or_else(|| format!("`{s}`: expected COLSxROWS {what}, e.g. {example}"))?;
     let (c, r) = (
         a.parse::<usize>()
             .map_err(|_| format!("`{s}`: bad column count"))?,
         b.parse::<usize>()
             .map_err(|_| format!("`{s}`: bad row count"))?,
     );
-    if c < 2 || r < 2 {
-        return Err(format!("`{s}`: need at least 2x2 inner corners"));
+    if c < least || r < least {
+        return Err(format!("`{s}`: need at least {least}x{least} {what}"));
     }
     Ok((c, r))
 }

@@ -2,4 +2,4 @@
 
 pub mod camera_command;
 pub mod detect;
-mod image_input;
+pub mod image_input;

@@ -32,6 +32,7 @@ pub mod arc;
 pub mod block;
 pub mod controller_table;
 pub mod error_field;
+pub mod hole_plate_job;
 pub mod inverse;
 pub mod model_field;
 pub mod number_format;

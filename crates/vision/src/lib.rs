@@ -13,6 +13,7 @@ pub mod edge_profile;
 pub mod error;
 pub mod filters;
 pub mod hole_grid;
+pub mod hole_plate;
 pub mod holes;
 pub mod marker_pose;
 pub mod polygon;

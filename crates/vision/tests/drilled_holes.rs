@@ -5,11 +5,11 @@
 //! distortion-free leaves a systematic radial bias far above that. A burr or dirt blob next to
 //! every hole (and a neighbour-like blob reaching into every third window) leaves them there.
 
-use metrocell_camera_model::{estimate_planar_pose, CameraModel, Distortion};
-use metrocell_vision::checkerboard::detect_checkerboard;
-use metrocell_vision::holes::{measure_holes, HoleSearch};
+use metrocell_camera_model::{CameraModel, Distortion};
+use metrocell_vision::hole_plate::measure_plate;
+use metrocell_vision::holes::HoleSearch;
 use metrocell_vision::{render_view, PlanarTarget, RenderSettings, TargetItem};
-use nalgebra::{Isometry3, Point2, Translation3, UnitQuaternion, Vector3};
+use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
 
 const SQUARE: f64 = 0.010;
 const N: usize = 6;
@@ -32,57 +32,28 @@ fn holes() -> (Vec<[f64; 2]>, Vec<[f64; 2]>) {
     (nominal, truth)
 }
 
-/// Board-plane point (m) seen at pixel `px`, by back-projection with `cam` and `pose`.
-fn to_board(cam: &CameraModel, pose: &Isometry3<f64>, px: &Point2<f64>) -> [f64; 2] {
-    let [x, y] = cam.pixel_to_normalized(px.x, px.y).unwrap();
-    let rt = pose.rotation.to_rotation_matrix().matrix().transpose();
-    let origin = -(rt * pose.translation.vector);
-    let dir = rt * Vector3::new(x, y, 1.0);
-    let l = -origin.z / dir.z;
-    [origin.x + l * dir.x, origin.y + l * dir.y]
-}
-
+/// The holes' board positions (m), row-major, through `vision::hole_plate` (the camera `cam`).
 fn measure(image: &image::GrayImage, cam: &CameraModel, nominal: &[[f64; 2]]) -> Vec<[f64; 2]> {
-    let board = detect_checkerboard(image, N - 1, N - 1).unwrap();
-    let object: Vec<[f64; 3]> = (0..(N - 1) * (N - 1))
-        .map(|k| {
-            [
-                ((k % (N - 1)) + 1) as f64 * SQUARE,
-                ((k / (N - 1)) + 1) as f64 * SQUARE,
-                0.0,
-            ]
-        })
-        .collect();
-    let pix: Vec<[f64; 2]> = board
-        .corners
-        .iter()
-        .map(|c| [c.position.x, c.position.y])
-        .collect();
-    let est = estimate_planar_pose(cam, &object, &pix, 0.05).unwrap();
-    let iso = Isometry3::from_parts(
-        Translation3::from(est.pose.translation),
-        UnitQuaternion::from_rotation_matrix(&est.pose.rotation),
+    let plate = measure_plate(image, cam, N, N, SQUARE, &HoleSearch::default())
+        .unwrap()
+        .expect("the board is in the picture");
+    assert!(plate.rejected.is_empty(), "{:?}", plate.rejected);
+    assert!(
+        (plate.mm_per_px - 0.04).abs() < 0.004,
+        "{} mm/px",
+        plate.mm_per_px
     );
-    let predicted: Vec<Point2<f64>> = nominal
+    assert_eq!(plate.holes.len(), nominal.len());
+    plate
+        .holes
         .iter()
-        .map(|p| {
-            let c = iso * nalgebra::Point3::new(p[0], p[1], 0.0);
-            let [u, v] = cam.project_camera_point(&c.coords).unwrap();
-            Point2::new(u, v)
-        })
-        .collect();
-    let found = measure_holes(image, &predicted, &HoleSearch::default()).unwrap();
-    found
-        .iter()
-        .enumerate()
-        .map(|(k, h)| {
-            let h = h.as_ref().unwrap_or_else(|e| panic!("hole {k}: {e}"));
-            assert!(
-                (h.semi_axes[0] - 12.5).abs() < 1.5,
-                "hole {k}: semi-axis {} px for a 1 mm hole at 0.04 mm/px",
-                h.semi_axes[0]
-            );
-            to_board(cam, &iso, &h.centre)
+        .zip(nominal)
+        .map(|(h, n)| {
+            assert_eq!(&h.nominal, n);
+            // σ of a well-lit 1 mm hole at 0.04 mm/px: a few µm, not zero
+            let sigma = h.covariance.trace().sqrt();
+            assert!(sigma > 1e-7 && sigma < 20e-6, "σ {sigma} m");
+            h.measured
         })
         .collect()
 }

@@ -64,7 +64,36 @@ fn fit_recovers_b72_within_its_sigma_and_held_out_columns_reach_the_noise() {
     let dir = std::env::temp_dir().join(format!("metrocell-router-{}", std::process::id()));
     for seed in [1, 2, 3] {
         let csv = plate(&dir, 0.022, seed);
-        let stdout = router_fit(&["--errors".as_ref(), csv.as_os_str()]);
+        let stdout = router_fit(&[
+            "--errors".as_ref(),
+            csv.as_os_str(),
+            "--design".as_ref(),
+            "12".as_ref(),
+        ]);
+        // seed 000's B12: twelve D-optimal equations beat 1000 random choices and, fitted alone,
+        // predict the 60 others to within a few times the 22 µm noise
+        let line = stdout
+            .lines()
+            .find(|l| l.contains("D-optimal design"))
+            .unwrap();
+        let numbers: Vec<f64> = line
+            .split([' ', ',', ';'])
+            .filter_map(|w| w.parse().ok())
+            .collect();
+        // [12, ln det, 1000, best random, 9 (rank), 9]
+        assert!(numbers[1] > numbers[3] + 0.5, "{line}");
+        assert!(line.contains("rank 9 of 9"), "{line}");
+        let unseen: f64 = stdout
+            .lines()
+            .find_map(|l| l.trim().strip_prefix("fitted on them alone: RMS "))
+            .and_then(|r| r.split_whitespace().next())
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert!(
+            unseen < 3.0 * 0.022,
+            "RMS on the unseen equations {unseen} mm"
+        );
         // "  A = +1.0123e-5 ± 1.2e-7   X2² in e_x"
         for (name, truth) in ["A", "B", "C", "D", "E", "F", "G", "H", "I"]
             .iter()

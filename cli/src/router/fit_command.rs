@@ -5,13 +5,15 @@
 use std::path::{Path, PathBuf};
 
 use anyhow::{bail, Context};
+use metrocell_estimation::design_of_experiments::{best_random_log_det, d_optimal};
 use metrocell_estimation::general_tolerance::finest_class_met;
 use metrocell_estimation::improvement::{improvement, ErrorStatistics};
 use metrocell_gcode::planar_field_fit::{
-    cross_validate_by_columns, fit_planar_field, HoleError, COEFFICIENTS,
+    cross_validate_by_columns, fit_planar_field, fit_planar_field_rows, regressors, HoleError,
+    COEFFICIENTS,
 };
 use metrocell_gcode::{compensate_program, CompensationOptions, InverseMethod, Region};
-use nalgebra::Vector3;
+use nalgebra::{DMatrix, Vector3};
 
 #[derive(clap::Args)]
 #[command(
@@ -25,6 +27,9 @@ identify; the paper's twelve kinematic parameters are not separable from them, s
 a user would get, judged on holes it did not see); prints seed 000's Table 3 statistics of |e| before and \
 after and the ISO 2768-1 class the plate meets before and after; with --gcode, rewrites the program with the \
 fitted field (the paper's first-order C = T − e(T) with --first-order, else the exact fixed point).\n\n\
+With --design K: K equations chosen by D-optimality (seed 000's DETMAX question: which rows pin the nine \
+coefficients down best), compared with the best of 1000 random K-row designs, and a fit on them alone judged \
+on all the other equations.\n\n\
 Example:\n  metrocell router fit --errors plate_holes.csv --gcode part.nc -o part_comp.nc"
 )]
 pub struct FitArgs {
@@ -43,6 +48,10 @@ pub struct FitArgs {
     /// Seed 000's one-step inverse C = T − e(T) instead of the exact fixed point
     #[arg(long)]
     first_order: bool,
+    /// Choose this many equations (a hole's e_x or e_y) by D-optimal design (seed 000's DETMAX),
+    /// fit on them alone and judge the fit on all the others: which holes to measure next time
+    #[arg(long)]
+    design: Option<usize>,
 }
 
 pub fn run(a: FitArgs) -> anyhow::Result<i32> {
@@ -93,6 +102,9 @@ pub fn run(a: FitArgs) -> anyhow::Result<i32> {
         .collect();
     let mean_noise = noise.iter().sum::<f64>() / noise.len() as f64;
     print_statistics(&before, &after, mean_noise, &holes)?;
+    if let Some(k) = a.design {
+        print_design(&holes, a.x3, k)?;
+    }
     if let Some(program) = &a.gcode {
         let Some(output) = &a.output else {
             bail!("--gcode needs -o OUT.nc: where to write the compensated program");
@@ -161,6 +173,83 @@ fn print_statistics(
         b.max,
         class(a.max),
         a.max
+    );
+    Ok(())
+}
+
+/// Seed 000's design question: `k` equations chosen by D-optimality from the measured ones,
+/// against the best of 1000 random choices, and what a fit on them alone leaves on the rest.
+fn print_design(holes: &[HoleError], x3: f64, k: usize) -> anyhow::Result<()> {
+    // candidate rows: e_x then e_y of each hole; coordinates in 100 mm so the columns compare
+    let mut rows = Vec::with_capacity(2 * holes.len());
+    for h in holes {
+        let (gx, gy) = regressors(h.nominal_mm.0 / 100.0, h.nominal_mm.1 / 100.0, x3);
+        rows.push([gx[0], gx[1], gx[2], gx[3], 0.0, 0.0, 0.0, 0.0, 0.0]);
+        rows.push([0.0, 0.0, 0.0, 0.0, gy[0], gy[1], gy[2], gy[3], gy[4]]);
+    }
+    let candidates = DMatrix::from_fn(rows.len(), 9, |i, j| rows[i][j]);
+    let design = d_optimal(&candidates, k, 20, 2026)
+        .with_context(|| format!("choosing {k} of {} equations", rows.len()))?;
+    let random = best_random_log_det(&candidates, k, 1000, 7);
+    println!(
+        "\nD-optimal design of {k} equations (of {}): ln det(XᵀX) {:.2}, best of 1000 random \
+         designs {:.2}; rank {} of 9{}",
+        rows.len(),
+        design.log_det,
+        random,
+        design.rank,
+        if design.rank < 9 {
+            " — too few equations: some coefficients are not determined"
+        } else {
+            ""
+        }
+    );
+    let named: Vec<String> = design
+        .rows
+        .iter()
+        .map(|&r| {
+            let h = &holes[r / 2];
+            format!(
+                "({}, {}) e_{}",
+                h.nominal_mm.0,
+                h.nominal_mm.1,
+                ["x", "y"][r % 2]
+            )
+        })
+        .collect();
+    println!("  measure: {}", named.join(", "));
+    let mut use_x = vec![false; holes.len()];
+    let mut use_y = vec![false; holes.len()];
+    for &r in &design.rows {
+        if r % 2 == 0 {
+            use_x[r / 2] = true;
+        } else {
+            use_y[r / 2] = true;
+        }
+    }
+    let fit = match fit_planar_field_rows(holes, x3, &use_x, &use_y) {
+        Ok(f) => f,
+        Err(e) => {
+            println!("  a fit on these equations alone: {e}");
+            return Ok(());
+        }
+    };
+    let (mut sum2, mut n) = (0.0, 0);
+    for (i, (rx, ry)) in fit.residuals_mm.iter().enumerate() {
+        for (used, r) in [(use_x[i], rx), (use_y[i], ry)] {
+            if !used {
+                sum2 += r * r;
+                n += 1;
+            }
+        }
+    }
+    let after: Vec<f64> = fit.residuals_mm.iter().map(|r| r.0.hypot(r.1)).collect();
+    let mean = after.iter().sum::<f64>() / after.len() as f64;
+    println!(
+        "  fitted on them alone: RMS {:.4} mm on the {n} equations it did not see; mean |e| \
+         {mean:.4} mm over all {} holes",
+        (sum2 / n.max(1) as f64).sqrt(),
+        holes.len()
     );
     Ok(())
 }

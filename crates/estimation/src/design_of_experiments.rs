@@ -68,6 +68,24 @@ pub fn ridge_for(candidates: &DMatrix<f64>) -> f64 {
     1e-9 * mean_diag.max(f64::MIN_POSITIVE)
 }
 
+/// The largest ln det(XᵀX + εI) among `trials` random `rows`-row designs (seeded): the yardstick
+/// a chosen design is judged against.
+pub fn best_random_log_det(
+    candidates: &DMatrix<f64>,
+    rows: usize,
+    trials: usize,
+    seed: u64,
+) -> f64 {
+    let (n, ridge) = (candidates.nrows(), ridge_for(candidates));
+    if rows == 0 || rows > n {
+        return f64::NEG_INFINITY;
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    (0..trials)
+        .map(|_| log_det(candidates, &sample(&mut rng, n, rows).into_vec(), ridge))
+        .fold(f64::NEG_INFINITY, f64::max)
+}
+
 /// Choose `rows` rows of `candidates` (N × p) maximising det(XᵀX), with `restarts` seeded random
 /// restarts besides the greedy start.
 pub fn d_optimal(

@@ -2,11 +2,8 @@
 //! grid's x and y rows for the planar error field of eq. 7 must beat any of 1000 random 12-row
 //! designs on det(XᵀX).
 
-use metrocell_estimation::design_of_experiments::{d_optimal, log_det, ridge_for};
+use metrocell_estimation::design_of_experiments::{best_random_log_det, d_optimal};
 use nalgebra::DMatrix;
-use rand::seq::index::sample;
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
 
 /// Rows of eq. 7's nine coefficients (A..I) at the 6 × 6 grid (25 mm pitch, centres 12.5 …
 /// 137.5 mm, X3 = 1): an e_x row and an e_y row per point, coordinates in units of 100 mm so the
@@ -37,11 +34,7 @@ fn twelve_row_design_beats_random_designs() {
         design.rank, 9,
         "eq. 7 has nine coefficients, all identifiable from 12 good rows"
     );
-    let ridge = ridge_for(&c);
-    let mut rng = ChaCha8Rng::seed_from_u64(7);
-    let best_random = (0..1000)
-        .map(|_| log_det(&c, &sample(&mut rng, 72, 12).into_vec(), ridge))
-        .fold(f64::NEG_INFINITY, f64::max);
+    let best_random = best_random_log_det(&c, 12, 1000, 7);
     assert!(
         design.log_det >= best_random,
         "design ln det {} < best of 1000 random {best_random}",

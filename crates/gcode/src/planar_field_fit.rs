@@ -57,8 +57,9 @@ pub enum PlanarFitError {
     #[error("hole {index}: {what} is not a finite number (σ must also be > 0)")]
     BadHole { index: usize, what: &'static str },
     #[error(
-        "{holes} holes give {rows} equations for 9 coefficients: measure at least 5 holes \
-         (the paper's rule of thumb asks for twice as many equations as parameters)"
+        "{holes} holes give {rows} equations for 9 coefficients (at least 4 of e_x and 5 of \
+         e_y are needed): measure at least 5 holes (the paper's rule of thumb asks for twice as \
+         many equations as parameters)"
     )]
     TooFewHoles { holes: usize, rows: usize },
     #[error(
@@ -70,6 +71,24 @@ pub enum PlanarFitError {
 
 /// Fit A–I to `holes`, with X3 held at `x3` (1 in seed 000).
 pub fn fit_planar_field(holes: &[HoleError], x3: f64) -> Result<PlanarFieldFit, PlanarFitError> {
+    let all = vec![true; holes.len()];
+    fit_planar_field_rows(holes, x3, &all, &all)
+}
+
+/// The regressors of eq. 7 at (x1, x2) mm: e_x's (A–D) and e_y's (E–I).
+pub fn regressors(x1: f64, x2: f64, x3: f64) -> ([f64; 4], [f64; 5]) {
+    ([x2 * x2, x2, x1, x3], [x1, x2, x3, x1 * x2, x1 * x1])
+}
+
+/// [`fit_planar_field`] on some of the equations only: hole i's e_x where `use_x[i]`, its e_y
+/// where `use_y[i]` (a designed subset, seed 000's B12: the rest are left for validation).
+/// Residuals are still given for every hole.
+pub fn fit_planar_field_rows(
+    holes: &[HoleError],
+    x3: f64,
+    use_x: &[bool],
+    use_y: &[bool],
+) -> Result<PlanarFieldFit, PlanarFitError> {
     for (index, h) in holes.iter().enumerate() {
         let finite = [h.nominal_mm.0, h.nominal_mm.1, h.error_mm.0, h.error_mm.1]
             .iter()
@@ -88,25 +107,28 @@ pub fn fit_planar_field(holes: &[HoleError], x3: f64) -> Result<PlanarFieldFit, 
             return Err(PlanarFitError::BadHole { index, what: "σ" });
         }
     }
-    let rows = 2 * holes.len();
-    if rows < 10 {
+    let pick = |mask: &[bool]| -> Vec<HoleError> {
+        holes
+            .iter()
+            .zip(mask.iter().chain(std::iter::repeat(&false)))
+            .filter(|(_, &u)| u)
+            .map(|(h, _)| *h)
+            .collect()
+    };
+    let (x_holes, y_holes) = (pick(use_x), pick(use_y));
+    let rows = x_holes.len() + y_holes.len();
+    if rows < 10 || x_holes.len() < 4 || y_holes.len() < 5 {
         return Err(PlanarFitError::TooFewHoles {
             holes: holes.len(),
             rows,
         });
     }
-    let x_rows = |h: &HoleError| {
-        let (x1, x2) = h.nominal_mm;
-        vec![x2 * x2, x2, x1, x3]
-    };
-    let y_rows = |h: &HoleError| {
-        let (x1, x2) = h.nominal_mm;
-        vec![x1, x2, x3, x1 * x2, x1 * x1]
-    };
-    let bx = solve_block(holes, "A–D (e_x)", x_rows, |h| {
+    let x_rows = |h: &HoleError| regressors(h.nominal_mm.0, h.nominal_mm.1, x3).0.to_vec();
+    let y_rows = |h: &HoleError| regressors(h.nominal_mm.0, h.nominal_mm.1, x3).1.to_vec();
+    let bx = solve_block(&x_holes, "A–D (e_x)", x_rows, |h| {
         (h.error_mm.0, h.sigma_mm.0)
     })?;
-    let by = solve_block(holes, "E–I (e_y)", y_rows, |h| {
+    let by = solve_block(&y_holes, "E–I (e_y)", y_rows, |h| {
         (h.error_mm.1, h.sigma_mm.1)
     })?;
     let mut coefficients = [0.0; 9];
@@ -119,7 +141,11 @@ pub fn fit_planar_field(holes: &[HoleError], x3: f64) -> Result<PlanarFieldFit, 
     };
     let chi_square = bx.chi_square + by.chi_square;
     let degrees_of_freedom = rows - 9;
-    let covariance_scale = (chi_square / degrees_of_freedom as f64).max(1.0);
+    let covariance_scale = if degrees_of_freedom > 0 {
+        (chi_square / degrees_of_freedom as f64).max(1.0)
+    } else {
+        1.0
+    };
     let mut covariance = DMatrix::zeros(9, 9);
     covariance
         .view_mut((0, 0), (4, 4))

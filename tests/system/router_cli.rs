@@ -304,3 +304,59 @@ fn photographed_plate_is_measured_and_compensated_to_its_noise() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Bad input to `router measure`: a missing calibration, a photo at another resolution than the
+/// calibration's, and photos without the board each get a message that says what to do.
+#[test]
+fn measure_refuses_bad_input_with_what_to_do() {
+    let dir = std::env::temp_dir().join(format!("metrocell-router-bad-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let camera = dir.join("camera_info.yaml");
+    let measure = |images: &Path| {
+        let out = run(
+            piped(bin("metrocell"))
+                .args(["router", "measure", "--camera"])
+                .arg(&camera)
+                .arg("--images")
+                .arg(images)
+                .arg("-o")
+                .arg(dir.join("holes.csv")),
+            Duration::from_secs(60),
+        );
+        assert_eq!(out.status.code(), Some(2));
+        String::from_utf8_lossy(&out.stderr).to_string()
+    };
+    let blank = dir.join("blank.png");
+    image::GrayImage::from_pixel(400, 300, image::Luma([128]))
+        .save(&blank)
+        .unwrap();
+    let e = measure(&blank);
+    assert!(
+        e.contains("camera_info.yaml") && e.contains("metrocell camera calibrate"),
+        "{e}"
+    );
+    std::fs::write(
+        &camera,
+        "image_width: 640\nimage_height: 480\ncamera_name: c\ncamera_matrix:\n  rows: 3\n  cols: 3\n  \
+         data: [500, 0, 319.5, 0, 500, 239.5, 0, 0, 1]\ndistortion_model: plumb_bob\n\
+         distortion_coefficients:\n  rows: 1\n  cols: 5\n  data: [0, 0, 0, 0, 0]\n\
+         rectification_matrix:\n  rows: 3\n  cols: 3\n  data: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n\
+         projection_matrix:\n  rows: 3\n  cols: 4\n  data: [500, 0, 319.5, 0, 0, 500, 239.5, 0, 0, 0, 1, 0]\n",
+    )
+    .unwrap();
+    let e = measure(&blank);
+    assert!(
+        e.contains("400×300 px") && e.contains("calibrated at 640×480"),
+        "{e}"
+    );
+    let wrong = dir.join("wrong.png");
+    image::GrayImage::from_pixel(640, 480, image::Luma([128]))
+        .save(&wrong)
+        .unwrap();
+    let e = measure(&wrong);
+    assert!(
+        e.contains("no photo showed the 6×6-square board") && e.contains("--squares"),
+        "{e}"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

@@ -24,7 +24,7 @@ fn printer(args: &[&str]) -> String {
         piped(python())
             .arg(workspace_root().join("tests/py/delta_print.py"))
             .args(args),
-        Duration::from_secs(120),
+        Duration::from_secs(300),
     );
     assert!(
         out.status.success(),
@@ -287,5 +287,131 @@ fn the_sigma_it_prints_covers_the_truth_at_its_stated_rate() {
         );
     }
     println!("rod within 0.05 mm of the truth in {rod_within} of {seeds} prints");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// Seed 002 end to end through the commands on a photo no metrocell code drew: `delta target`
+/// writes the star, tests/py/delta_photo.py has delta_print.py's printer print its dots (each
+/// dot's top at the nozzle's true height) and photographs them beside a paper checkerboard card
+/// with an OpenCV camera; `delta measure` finds them, `delta fit` — modelling the parallax of
+/// dots the printer's z error made taller or shorter — recovers the rod within 0.05 mm and
+/// tower A's angle within 0.05°, and its settings, loaded into the printer, print the star true
+/// to 0.05 mm.
+#[test]
+fn photographed_star_gives_settings_that_print_true() {
+    let dir = std::env::temp_dir().join(format!("metrocell-delta-photo-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let target = dir.join("target");
+    let out = run(
+        piped(bin("metrocell"))
+            .args(["delta", "target", "-o"])
+            .arg(&target),
+        Duration::from_secs(30),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let settings = dir.join("m503.txt");
+    std::fs::write(&settings, "M665 L215 R105.6 H250\nM666 X0 Y0 Z0\n").unwrap();
+    let photos = dir.join("photos");
+    let out = run(
+        piped(python())
+            .arg(workspace_root().join("tests/py/delta_photo.py"))
+            .arg(&settings)
+            .arg(target.join("dots.csv"))
+            .arg(&photos)
+            .args(["1", "3"]),
+        Duration::from_secs(900),
+    );
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let csv = dir.join("star.csv");
+    let out = run(
+        piped(bin("metrocell"))
+            .args(["delta", "measure", "--camera"])
+            .arg(photos.join("camera_info.yaml"))
+            .arg("--images")
+            .arg(photos.join("photo_*.png"))
+            .arg("-o")
+            .arg(&csv),
+        Duration::from_secs(120),
+    );
+    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+    println!("{stdout}");
+    assert!(
+        out.status.success(),
+        "{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(stdout.contains("tiles [1, 2, 3]"), "{stdout}");
+    let (stdout, new) = delta_fit(&dir, &settings, &csv, 1);
+    let (rod, _, rod_sigma) = row(&stdout, "rod length (mm)");
+    assert!(
+        (rod - 216.0).abs() < 0.05 && (rod - 216.0).abs() < 3.0 * rod_sigma,
+        "rod {rod} ± {rod_sigma}"
+    );
+    let (angle, _, angle_sigma) = row(&stdout, "tower angle a (°)");
+    assert!(
+        (angle - 0.5).abs() < 0.05 && (angle - 0.5).abs() < 3.0 * angle_sigma,
+        "tower A {angle} ± {angle_sigma}"
+    );
+    // the photo's positions fit the geometry to their stated σ or better (the σ floor of
+    // 0.03 px is conservative for 3 mm dots: χ²/dof below 1 is reported, never used to narrow)
+    let chi2: f64 = stdout
+        .lines()
+        .find_map(|l| l.strip_prefix("fit: χ²/dof = "))
+        .and_then(|r| r.split_whitespace().next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(chi2 < 1.5, "χ²/dof {chi2}");
+    let after = printer(&["check", new.to_str().unwrap()]);
+    println!("{after}");
+    assert!(checked(&after, "bars") < 0.05, "{after}");
+    assert!(checked(&after, "plan") < 0.05, "{after}");
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
+fn measure_says_what_is_missing_from_the_photo() {
+    let dir = std::env::temp_dir().join(format!("metrocell-delta-nocard-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let camera = dir.join("camera_info.yaml");
+    std::fs::write(
+        &camera,
+        "image_width: 640\nimage_height: 480\ncamera_name: c\ncamera_matrix:\n  rows: 3\n  cols: 3\n  \
+         data: [500, 0, 319.5, 0, 500, 239.5, 0, 0, 1]\ndistortion_model: plumb_bob\n\
+         distortion_coefficients:\n  rows: 1\n  cols: 5\n  data: [0, 0, 0, 0, 0]\n\
+         rectification_matrix:\n  rows: 3\n  cols: 3\n  data: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n\
+         projection_matrix:\n  rows: 3\n  cols: 4\n  data: [500, 0, 319.5, 0, 0, 500, 239.5, 0, 0, 0, 1, 0]\n",
+    )
+    .unwrap();
+    let blank = dir.join("blank.png");
+    image::GrayImage::from_pixel(640, 480, image::Luma([60]))
+        .save(&blank)
+        .unwrap();
+    let out = run(
+        piped(bin("metrocell"))
+            .args(["delta", "measure", "--camera"])
+            .arg(&camera)
+            .arg("--images")
+            .arg(&blank)
+            .arg("-o")
+            .arg(dir.join("star.csv")),
+        Duration::from_secs(60),
+    );
+    assert_eq!(out.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        e.contains("blank.png")
+            && e.contains("no 9×6-corner checkerboard card")
+            && e.contains("lay the card"),
+        "{e}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

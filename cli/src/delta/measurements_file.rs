@@ -5,16 +5,19 @@
 //! printed features); `x_mm, y_mm, z_mm` — where it was commanded (a distance's first feature);
 //! `to_x_mm, to_y_mm, to_z_mm` — a distance's second feature; `measured_x_mm, measured_y_mm` —
 //! a plan position as measured; `measured_mm` — a height or a distance as measured; `sigma_mm` —
-//! the measurement's standard uncertainty (per axis for a plan position). Cells a kind does not
-//! use may be empty.
+//! the measurement's standard uncertainty (per axis for a plan position); for a plan position a
+//! camera measured, `view_x_mm, view_y_mm, view_z_mm` — the camera's centre in the object's
+//! frame (z up from the bed) — and `plane_z_mm`, the height of the plane it carried the image
+//! back onto (the fit models the parallax of a feature standing at another height). Cells a
+//! kind does not use may be empty.
 
 use std::path::Path;
 
 use anyhow::{bail, Context};
-use metrocell_estimation::delta_calibration::DeltaMeasurement;
+use metrocell_estimation::delta_calibration::{DeltaMeasurement, PlanView};
 use nalgebra::{Vector2, Vector3};
 
-pub const COLUMNS: [&str; 11] = [
+pub const COLUMNS: [&str; 15] = [
     "kind",
     "x_mm",
     "y_mm",
@@ -26,6 +29,10 @@ pub const COLUMNS: [&str; 11] = [
     "measured_y_mm",
     "measured_mm",
     "sigma_mm",
+    "view_x_mm",
+    "view_y_mm",
+    "view_z_mm",
+    "plane_z_mm",
 ];
 
 pub fn read(path: &Path) -> anyhow::Result<Vec<DeltaMeasurement>> {
@@ -83,6 +90,14 @@ pub fn read(path: &Path) -> anyhow::Result<Vec<DeltaMeasurement>> {
                 commanded,
                 measured: Vector2::new(mm("measured_x_mm")?, mm("measured_y_mm")?),
                 sigma,
+                view: if at("view_z_mm").is_empty() {
+                    None
+                } else {
+                    Some(PlanView {
+                        viewpoint: point("view_x_mm", "view_y_mm", "view_z_mm")?,
+                        plane_z: mm("plane_z_mm")?,
+                    })
+                },
             },
             "height" => DeltaMeasurement::Height {
                 commanded,

@@ -34,6 +34,9 @@ pub enum DeltaMeasurement {
         commanded: Vector3<f64>,
         measured: Vector2<f64>,
         sigma: f64,
+        /// Where a camera that saw the feature from `viewpoint` put it: on the plane `plane_z`
+        /// (see [`PlanView`]); None: a measurement without parallax (a probe, a CMM).
+        view: Option<PlanView>,
     },
     /// The bed probed at commanded (x, y, z): the nozzle's true height there is `measured`.
     Height {
@@ -65,6 +68,17 @@ impl DeltaMeasurement {
             | DeltaMeasurement::Distance { sigma, .. } => sigma,
         }
     }
+}
+
+/// How a camera measured a plan position: from `viewpoint` (its centre, in the object's frame
+/// with z up from the bed, m), the feature's image carried back onto the plane z = `plane_z`.
+/// A feature whose top is not at `plane_z` — a printed dot stands as tall as the printer's z
+/// error lets it — is seen displaced along the ray: X = V + (P − V)·(plane_z − V_z)/(P_z − V_z).
+/// The fit models that parallax with the feature's true height, which the geometry predicts.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PlanView {
+    pub viewpoint: Vector3<f64>,
+    pub plane_z: f64,
 }
 
 /// Names of the object's placement parameters, after the 14 geometric ones.
@@ -255,8 +269,19 @@ fn check(measurements: &[DeltaMeasurement]) -> Result<(), DeltaFitError> {
             DeltaMeasurement::PlanPosition {
                 commanded,
                 measured,
+                view,
                 ..
-            } => (vec![commanded], vec![measured.x, measured.y]),
+            } => {
+                if let Some(w) = view {
+                    if !(w.viewpoint.iter().all(|v| v.is_finite()) && w.plane_z.is_finite()) {
+                        return Err(bad("the camera's viewpoint is not finite"));
+                    }
+                    if w.viewpoint.z <= commanded.z {
+                        return Err(bad("the camera's viewpoint is not above the feature"));
+                    }
+                }
+                (vec![commanded], vec![measured.x, measured.y])
+            }
             DeltaMeasurement::Height {
                 commanded,
                 measured,
@@ -429,21 +454,40 @@ impl DeltaProblem<'_> {
                 DeltaMeasurement::PlanPosition {
                     commanded,
                     measured,
+                    view,
                     ..
                 } => {
                     let (p, jp) = self.printed(&g, commanded)?;
-                    let predicted = r * p.xy() + t;
+                    let q = r * p.xy() + t;
+                    // seen through the camera: scale s about the viewpoint, and its change with
+                    // the feature's height (identity without a view)
+                    let (predicted, s, ds_dz, v) = match view {
+                        Some(w) => {
+                            let v = w.viewpoint;
+                            let depth = p.z - v.z;
+                            if depth.abs() < 1e-9 {
+                                return Err(NotEvaluable(
+                                    "a plan position's viewpoint is at the feature's height".into(),
+                                ));
+                            }
+                            let s = (w.plane_z - v.z) / depth;
+                            (v.xy() + (q - v.xy()) * s, s, -s / depth, v.xy())
+                        }
+                        None => (q, 1.0, 0.0, Vector2::zeros()),
+                    };
                     residuals[row] = measured.x - predicted.x;
                     residuals[row + 1] = measured.y - predicted.y;
                     if let Some(j) = jacobian.as_deref_mut() {
-                        let d_theta = dr * p.xy();
+                        let d_theta = dr * p.xy() * s;
+                        let lever = (q - v) * ds_dz;
                         for axis in 0..2 {
                             for k in 0..DELTA_PARAMETER_COUNT {
-                                j[(row + axis, k)] =
-                                    -(r[(axis, 0)] * jp[(0, k)] + r[(axis, 1)] * jp[(1, k)]);
+                                j[(row + axis, k)] = -(s
+                                    * (r[(axis, 0)] * jp[(0, k)] + r[(axis, 1)] * jp[(1, k)])
+                                    + lever[axis] * jp[(2, k)]);
                             }
                             j[(row + axis, DELTA_PARAMETER_COUNT)] = -d_theta[axis];
-                            j[(row + axis, DELTA_PARAMETER_COUNT + 1 + axis)] = -1.0;
+                            j[(row + axis, DELTA_PARAMETER_COUNT + 1 + axis)] = -s;
                         }
                     }
                 }
@@ -540,6 +584,7 @@ mod tests {
                         m.y + noise.sample(&mut rng),
                     ),
                     sigma,
+                    view: None,
                 }
             })
             .collect()

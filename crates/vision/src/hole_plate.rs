@@ -76,33 +76,11 @@ pub fn measure_plate(
             format!("{square} m is not a positive size"),
         ));
     }
-    let (cols, rows) = (squares_x - 1, squares_y - 1);
-    let board = match detect_checkerboard(img, cols, rows) {
-        Ok(b) => b,
-        Err(VisionError::NoSolution { .. }) => return Ok(None),
-        Err(e) => return Err(e),
+    let Some((pose, rms_px)) = board_pose(img, cam, squares_x - 1, squares_y - 1, square)? else {
+        return Ok(None);
     };
-    let object: Vec<[f64; 3]> = (0..cols * rows)
-        .map(|k| {
-            [
-                ((k % cols) + 1) as f64 * square,
-                ((k / cols) + 1) as f64 * square,
-                0.0,
-            ]
-        })
-        .collect();
-    let pixels: Vec<[f64; 2]> = board
-        .corners
-        .iter()
-        .map(|c| [c.position.x, c.position.y])
-        .collect();
-    let pose =
-        estimate_planar_pose(cam, &object, &pixels, 0.1).map_err(|e| VisionError::NoSolution {
-            what: "board pose",
-            reason: e.to_string(),
-        })?;
     let project = |x: f64, y: f64| -> Result<Point2<f64>> {
-        let c = pose.pose.rotation * Vector3::new(x, y, 0.0) + pose.pose.translation;
+        let c = pose.rotation * Vector3::new(x, y, 0.0) + pose.translation;
         let [u, v] = cam
             .project_camera_point(&c)
             .map_err(|e| VisionError::NoSolution {
@@ -142,14 +120,14 @@ pub fn measure_plate(
     let mut out = PlateMeasurement {
         holes: Vec::new(),
         rejected: Vec::new(),
-        corner_rms_px: pose.rms_px,
+        corner_rms_px: rms_px,
         mm_per_px: square * 1e3 / side_px,
     };
     for ((column, row, nominal), result) in cells.into_iter().zip(found) {
         match result {
             Ok(h) => {
-                let (measured, jacobian) = back_project(cam, &pose.pose, &h.centre)?;
-                let floor = CENTRE_FLOOR_PX.powi(2).max(pose.rms_px.powi(2));
+                let (measured, jacobian) = back_project(cam, &pose, &h.centre, 0.0)?;
+                let floor = CENTRE_FLOOR_PX.powi(2).max(rms_px.powi(2));
                 let px = h.covariance + Matrix2::identity() * floor;
                 out.holes.push(PlateHole {
                     column,
@@ -166,13 +144,58 @@ pub fn measure_plate(
     Ok(Some(out))
 }
 
-/// The board-plane point (m) a pixel sees, and its 2×2 Jacobian with respect to the pixel
-/// (central differences of ±0.01 px).
-fn back_project(
+/// The pose (board → camera) of a checkerboard of `cols` × `rows` inner corners, `square`
+/// metres apart, in the board frame of the module docs, and the corners' reprojection RMS (px).
+/// `Ok(None)` when no such board is in the picture.
+pub fn board_pose(
+    img: &GrayImage,
+    cam: &CameraModel,
+    cols: usize,
+    rows: usize,
+    square: f64,
+) -> Result<Option<(Pose, f64)>> {
+    let board = match detect_checkerboard(img, cols, rows) {
+        Ok(b) => b,
+        Err(VisionError::NoSolution { .. }) => return Ok(None),
+        Err(e) => return Err(e),
+    };
+    let object: Vec<[f64; 3]> = (0..cols * rows)
+        .map(|k| {
+            [
+                ((k % cols) + 1) as f64 * square,
+                ((k / cols) + 1) as f64 * square,
+                0.0,
+            ]
+        })
+        .collect();
+    let pixels: Vec<[f64; 2]> = board
+        .corners
+        .iter()
+        .map(|c| [c.position.x, c.position.y])
+        .collect();
+    let pose =
+        estimate_planar_pose(cam, &object, &pixels, 0.1).map_err(|e| VisionError::NoSolution {
+            what: "board pose",
+            reason: e.to_string(),
+        })?;
+    Ok(Some((pose.pose, pose.rms_px)))
+}
+
+/// The point (x, y) on the plane `height` metres above the board (toward the camera) that a
+/// pixel sees, in board coordinates (m), and its 2×2 Jacobian with respect to the pixel (central
+/// differences of ±0.01 px). A feature standing proud of the board — a printed dot's top — is
+/// seen displaced outward by height × (its distance from the view's axis) / (the camera's
+/// distance): back-projecting onto its own plane takes that parallax out.
+pub fn back_project(
     cam: &CameraModel,
     pose: &Pose,
     px: &Point2<f64>,
+    height: f64,
 ) -> Result<([f64; 2], Matrix2<f64>)> {
+    let rt = pose.rotation.transpose();
+    let origin = -(rt * pose.translation);
+    // "up" is the side of the board the camera is on
+    let plane_z = height * origin.z.signum();
     let at = |u: f64, v: f64| -> Result<[f64; 2]> {
         let [x, y] = cam
             .pixel_to_normalized(u, v)
@@ -180,8 +203,6 @@ fn back_project(
                 what: "hole back-projection",
                 reason: format!("pixel ({u:.1}, {v:.1}) cannot be undistorted"),
             })?;
-        let rt = pose.rotation.transpose();
-        let origin = -(rt * pose.translation);
         let dir = rt * Vector3::new(x, y, 1.0);
         if dir.z.abs() < 1e-12 {
             return Err(VisionError::NoSolution {
@@ -189,7 +210,7 @@ fn back_project(
                 reason: "the ray runs parallel to the board".into(),
             });
         }
-        let l = -origin.z / dir.z;
+        let l = (plane_z - origin.z) / dir.z;
         Ok([origin.x + l * dir.x, origin.y + l * dir.y])
     };
     let p = at(px.x, px.y)?;

@@ -17,6 +17,8 @@ pub mod hole_plate;
 pub mod holes;
 pub mod marker_pose;
 pub mod polygon;
+pub mod printed_star;
+pub mod printed_star_solid;
 pub mod render;
 pub mod saddle_fit;
 pub mod scale;

@@ -13,8 +13,8 @@
 //! every `e_T` zero with the identified rods and radii: `adj'_T = adj_T − e_T + (Q'_T − Q_T)`,
 //! with `H'` chosen so that the largest `adj'_T` is 0 (Marlin applies only adjustments ≤ 0).
 //!
-//! Klipper counts each carriage at its switch as `position_endstop_T + √(arm_T² − R²)`
-//! (`klippy/kinematics/delta.py`), so the same homed state is `position_endstop_T = H − adj_T`.
+//! Klipper counts each carriage at its switch as `position_endstop_T + √(arm_T² − R²)` (its
+//! delta kinematics module), so the same homed state is `position_endstop_T = H − adj_T`.
 
 use crate::delta::{DeltaGeometry, MARLIN_TOWER_BASE_ANGLES};
 use crate::error::KinematicsError;

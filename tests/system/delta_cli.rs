@@ -221,6 +221,24 @@ fn bad_input_is_named_with_what_to_do() {
         e.contains("m.csv:2") && e.contains("measured_y_mm") && e.contains("`x`"),
         "{e}"
     );
+    // a point no delta with these settings reaches: a table in inches, or another printer's
+    let mut rows = String::from("kind,x_mm,y_mm,z_mm,measured_x_mm,measured_y_mm,sigma_mm\n");
+    for k in 0..8 {
+        rows.push_str(&format!(
+            "plan,{},{},0.2,{},{},0.02\n",
+            10 * k,
+            5 * k,
+            10 * k,
+            5 * k
+        ));
+    }
+    rows.push_str("plan,300,0,0.2,300,0,0.02\n");
+    std::fs::write(&csv, rows).unwrap();
+    let e = fit(&settings);
+    assert!(
+        e.contains("m.csv:10") && e.contains("outside this printer's reach"),
+        "{e}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }
 

@@ -6,7 +6,7 @@ use std::path::PathBuf;
 
 use anyhow::{bail, Context};
 use metrocell_estimation::delta_calibration::{
-    fit_delta, name_of, parameter_index, DeltaFit, DeltaMeasurement, PLACEMENT_NAMES,
+    fit_delta, name_of, parameter_index, DeltaFit, DeltaFitError, DeltaMeasurement, PLACEMENT_NAMES,
 };
 use metrocell_kinematics::delta::{DeltaGeometry, DELTA_PARAMETER_NAMES, MARLIN_TOWER_BASE_ANGLES};
 use metrocell_kinematics::delta_firmware::{tower_letter, MarlinDelta};
@@ -68,7 +68,8 @@ pub fn run(a: FitArgs) -> anyhow::Result<i32> {
         a.firmware.display(),
         settings.marlin_commands().replace("M500\n", "")
     );
-    let measurements = measurements_file::read(&a.measurements)?;
+    let numbered = measurements_file::read(&a.measurements)?;
+    let measurements: Vec<DeltaMeasurement> = numbered.iter().map(|(_, m)| *m).collect();
     let count = |f: fn(&DeltaMeasurement) -> bool| measurements.iter().filter(|m| f(m)).count();
     println!(
         "{}: {} plan positions, {} heights, {} distances",
@@ -78,8 +79,12 @@ pub fn run(a: FitArgs) -> anyhow::Result<i32> {
         count(|m| matches!(m, DeltaMeasurement::Distance { .. })),
     );
     let hold = held_by_request(&a)?;
-    let fit = fit_delta(&firmware, &measurements, &hold)
-        .with_context(|| format!("fitting {}", a.measurements.display()))?;
+    let fit = fit_delta(&firmware, &measurements, &hold).map_err(|e| match e {
+        DeltaFitError::BadMeasurement { index, what } => {
+            anyhow::anyhow!("{}:{}: {what}", a.measurements.display(), numbered[index].0)
+        }
+        e => anyhow::anyhow!("fitting {}: {e}", a.measurements.display()),
+    })?;
     print_fit(&fit, &firmware, &measurements);
     print_single_arm(&settings, &firmware, &measurements);
     let new = settings

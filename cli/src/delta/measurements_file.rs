@@ -35,7 +35,8 @@ pub const COLUMNS: [&str; 15] = [
     "plane_z_mm",
 ];
 
-pub fn read(path: &Path) -> anyhow::Result<Vec<DeltaMeasurement>> {
+/// The measurements, each with its line number in the file (1-based).
+pub fn read(path: &Path) -> anyhow::Result<Vec<(usize, DeltaMeasurement)>> {
     let text = std::fs::read_to_string(path)
         .with_context(|| format!("reading the measurements {}", path.display()))?;
     let mut lines = text
@@ -85,37 +86,40 @@ pub fn read(path: &Path) -> anyhow::Result<Vec<DeltaMeasurement>> {
         };
         let sigma = mm("sigma_mm")?;
         let commanded = point("x_mm", "y_mm", "z_mm")?;
-        out.push(match at("kind") {
-            "plan" => DeltaMeasurement::PlanPosition {
-                commanded,
-                measured: Vector2::new(mm("measured_x_mm")?, mm("measured_y_mm")?),
-                sigma,
-                view: if at("view_z_mm").is_empty() {
-                    None
-                } else {
-                    Some(PlanView {
-                        viewpoint: point("view_x_mm", "view_y_mm", "view_z_mm")?,
-                        plane_z: mm("plane_z_mm")?,
-                    })
+        out.push((
+            number + 1,
+            match at("kind") {
+                "plan" => DeltaMeasurement::PlanPosition {
+                    commanded,
+                    measured: Vector2::new(mm("measured_x_mm")?, mm("measured_y_mm")?),
+                    sigma,
+                    view: if at("view_z_mm").is_empty() {
+                        None
+                    } else {
+                        Some(PlanView {
+                            viewpoint: point("view_x_mm", "view_y_mm", "view_z_mm")?,
+                            plane_z: mm("plane_z_mm")?,
+                        })
+                    },
                 },
+                "height" => DeltaMeasurement::Height {
+                    commanded,
+                    measured: mm("measured_mm")?,
+                    sigma,
+                },
+                "distance" => DeltaMeasurement::Distance {
+                    from: commanded,
+                    to: point("to_x_mm", "to_y_mm", "to_z_mm")?,
+                    measured: mm("measured_mm")?,
+                    sigma,
+                },
+                other => bail!(
+                    "{}:{}: kind `{other}` is not one of plan, height, distance",
+                    path.display(),
+                    number + 1
+                ),
             },
-            "height" => DeltaMeasurement::Height {
-                commanded,
-                measured: mm("measured_mm")?,
-                sigma,
-            },
-            "distance" => DeltaMeasurement::Distance {
-                from: commanded,
-                to: point("to_x_mm", "to_y_mm", "to_z_mm")?,
-                measured: mm("measured_mm")?,
-                sigma,
-            },
-            other => bail!(
-                "{}:{}: kind `{other}` is not one of plan, height, distance",
-                path.display(),
-                number + 1
-            ),
-        });
+        ));
     }
     if out.is_empty() {
         bail!("{}: a header and no measurements", path.display());

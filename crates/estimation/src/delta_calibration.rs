@@ -159,6 +159,7 @@ pub fn fit_delta(
         .validate()
         .map_err(|e| DeltaFitError::Firmware(e.to_string()))?;
     check(measurements)?;
+    check_reach(firmware, measurements)?;
     let problem = DeltaProblem {
         firmware: *firmware,
         measurements,
@@ -303,6 +304,36 @@ fn check(measurements: &[DeltaMeasurement]) -> Result<(), DeltaFitError> {
         }
         if !(m.sigma() > 0.0 && m.sigma().is_finite()) {
             return Err(bad("σ must be a positive number"));
+        }
+    }
+    Ok(())
+}
+
+/// Every commanded point must be one the firmware can reach (a table in inches, or of another
+/// printer, is caught here rather than as a failed solve).
+fn check_reach(
+    firmware: &DeltaGeometry,
+    measurements: &[DeltaMeasurement],
+) -> Result<(), DeltaFitError> {
+    for (index, m) in measurements.iter().enumerate() {
+        let points = match m {
+            DeltaMeasurement::PlanPosition { commanded, .. }
+            | DeltaMeasurement::Height { commanded, .. } => vec![*commanded],
+            DeltaMeasurement::Distance { from, to, .. } => vec![*from, *to],
+        };
+        for p in points {
+            if let Err(e) = firmware.inverse(&p) {
+                return Err(DeltaFitError::BadMeasurement {
+                    index,
+                    what: format!(
+                        "commanded ({:.3}, {:.3}, {:.3}) mm is outside this printer's reach ({e}): \
+                         are the coordinates in mm, from the bed's centre, and of this printer?",
+                        p.x * 1e3,
+                        p.y * 1e3,
+                        p.z * 1e3
+                    ),
+                });
+            }
         }
     }
     Ok(())
@@ -654,6 +685,15 @@ mod tests {
         }];
         let e = fit_delta(&firmware(), &m, &[]).unwrap_err().to_string();
         assert!(e.contains("measurement 0") && e.contains("finite"), "{e}");
+        let mut far = measure(&firmware(), 1e-5, 1);
+        if let DeltaMeasurement::PlanPosition { commanded, .. } = &mut far[3] {
+            commanded.x = 0.3;
+        }
+        let e = fit_delta(&firmware(), &far, &[]).unwrap_err().to_string();
+        assert!(
+            e.contains("measurement 3") && e.contains("outside this printer's reach"),
+            "{e}"
+        );
         let few = measure(&firmware(), 1e-5, 1)[..2].to_vec();
         let e = fit_delta(&firmware(), &few, &[]).unwrap_err().to_string();
         assert!(e.contains("4 measured values for 9 parameters"), "{e}");

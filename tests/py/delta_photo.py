@@ -23,6 +23,7 @@ import numpy as np
 
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 import delta_print  # noqa: E402
+import opencv_camera  # noqa: E402
 
 W, HT = 2400, 1800
 K = np.array([[2600.0, 0, 1199.5], [0, 2600.0, 899.5], [0, 0, 1]])
@@ -32,24 +33,7 @@ CARD_X0, CARD_Y0, SQ, COLS, ROWS = 88.0, -35.0, 10.0, 9, 6  # card's corner (mm)
 
 
 def rays(v0, v1):
-    offs = (np.arange(S) + 0.5) / S - 0.5
-    us = (np.arange(W)[:, None] + offs[None, :]).reshape(-1)
-    vs = (np.arange(v0, v1)[:, None] + offs[None, :]).reshape(-1)
-    uu, vv = np.meshgrid(us, vs)
-    px = np.stack([uu.ravel(), vv.ravel()], axis=1)
-    n = cv2.undistortPoints(px.reshape(-1, 1, 2), K, DIST).reshape(-1, 2)
-    k1, k2, p1, p2, k3 = DIST
-    xd, yd = (px[:, 0] - K[0, 2]) / K[0, 0], (px[:, 1] - K[1, 2]) / K[1, 1]
-    x, y = n[:, 0].copy(), n[:, 1].copy()
-    for _ in range(30):
-        r2 = x * x + y * y
-        radial = 1 + k1 * r2 + k2 * r2 * r2 + k3 * r2**3
-        x = (xd - (2 * p1 * x * y + p2 * (r2 + 2 * x * x))) / radial
-        y = (yd - (p1 * (r2 + 2 * y * y) + 2 * p2 * x * y)) / radial
-    idx = np.linspace(0, len(x) - 1, 500).astype(np.int64)
-    back, _ = cv2.projectPoints(np.stack([x[idx], y[idx], np.ones(len(idx))], axis=1), np.zeros(3), np.zeros(3), K, DIST)
-    assert np.abs(back.reshape(-1, 2) - px[idx]).max() < 1e-6
-    return np.stack([x, y, np.ones_like(x)], axis=1)
+    return opencv_camera.rays(K, DIST, W, S, v0, v1)
 
 
 def on_plane(d, R, t, z):
@@ -133,14 +117,7 @@ def main():
         centre = np.array([55.0 + rng.normal(0, 3), rng.normal(0, 3), 330.0])
         t = -R @ centre
         cv2.imwrite(os.path.join(out, f"photo_{k}.png"), photo(R, t, dots, tiles, seed * 100 + k))
-    m = lambda a: ", ".join(repr(float(v)) for v in a)
-    with open(os.path.join(out, "camera_info.yaml"), "w") as f:
-        f.write(f"image_width: {W}\nimage_height: {HT}\ncamera_name: opencv_truth\n")
-        f.write(f"camera_matrix:\n  rows: 3\n  cols: 3\n  data: [{m(K.ravel())}]\n")
-        f.write(f"distortion_model: plumb_bob\ndistortion_coefficients:\n  rows: 1\n  cols: 5\n  data: [{m(DIST)}]\n")
-        f.write("rectification_matrix:\n  rows: 3\n  cols: 3\n  data: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n")
-        P = np.hstack([K, np.zeros((3, 1))])
-        f.write(f"projection_matrix:\n  rows: 3\n  cols: 4\n  data: [{m(P.ravel())}]\n")
+    opencv_camera.write_camera_info(os.path.join(out, "camera_info.yaml"), W, HT, K, DIST)
 
 
 if __name__ == "__main__":

@@ -205,3 +205,36 @@ pub fn alive(pid: i32) -> bool {
         Err(_) => false,
     }
 }
+
+/// Writes a distortion-free camera_info YAML (focal length `f` px, centre in the middle) — a
+/// stand-in calibration for tests of what a command does with photos it cannot use.
+pub fn write_pinhole_camera_info(path: &Path, width: u32, height: u32, f: f64) {
+    let (cx, cy) = ((width as f64 - 1.0) / 2.0, (height as f64 - 1.0) / 2.0);
+    std::fs::write(
+        path,
+        format!(
+            "image_width: {width}\nimage_height: {height}\ncamera_name: pinhole\n\
+             camera_matrix:\n  rows: 3\n  cols: 3\n  data: [{f}, 0, {cx}, 0, {f}, {cy}, 0, 0, 1]\n\
+             distortion_model: plumb_bob\ndistortion_coefficients:\n  rows: 1\n  cols: 5\n  \
+             data: [0, 0, 0, 0, 0]\nrectification_matrix:\n  rows: 3\n  cols: 3\n  \
+             data: [1, 0, 0, 0, 1, 0, 0, 0, 1]\nprojection_matrix:\n  rows: 3\n  cols: 4\n  \
+             data: [{f}, 0, {cx}, 0, 0, {f}, {cy}, 0, 0, 0, 1, 0]\n"
+        ),
+    )
+    .unwrap();
+}
+
+/// Runs `cmd` to completion within `timeout`, prints its stdout (shown with --nocapture) and
+/// returns it; fails the test with both outputs when it does not succeed.
+pub fn run_ok(cmd: &mut Command, timeout: Duration) -> String {
+    let what = format!("{cmd:?}");
+    let out = run(cmd, timeout);
+    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
+    println!("{stdout}");
+    assert!(
+        out.status.success(),
+        "{what} failed:\n{stdout}\n{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    stdout
+}

@@ -10,7 +10,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use system_tests::{bin, piped, python, run, workspace_root};
+use system_tests::{bin, piped, python, run, run_ok, workspace_root, write_pinhole_camera_info};
 
 const B72: [f64; 9] = [
     1.01e-5, 5.20e-3, -7.10e-3, 4.85e-3, 1.11e-2, 1.03e-2, -1.12e-5, -2.01e-5, -1.55e-5,
@@ -244,20 +244,15 @@ fn printed_pattern_is_at_exact_scale() {
 #[test]
 fn photographed_plate_is_measured_and_compensated_to_its_noise() {
     let dir = std::env::temp_dir().join(format!("metrocell-router-photo-{}", std::process::id()));
-    let out = run(
+    run_ok(
         piped(python())
             .arg(workspace_root().join("tests/py/router_photo.py"))
             .arg(&dir)
             .args(["2", "7"]),
         Duration::from_secs(600),
     );
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
     let table = dir.join("holes.csv");
-    let out = run(
+    let stdout = run_ok(
         piped(bin("metrocell"))
             .args(["router", "measure", "--camera"])
             .arg(dir.join("camera_info.yaml"))
@@ -266,13 +261,6 @@ fn photographed_plate_is_measured_and_compensated_to_its_noise() {
             .arg("-o")
             .arg(&table),
         Duration::from_secs(120),
-    );
-    let stdout = String::from_utf8_lossy(&out.stdout).to_string();
-    println!("{stdout}");
-    assert!(
-        out.status.success(),
-        "{stdout}\n{}",
-        String::from_utf8_lossy(&out.stderr)
     );
     assert!(stdout.contains(": 36 holes from 2 photos"), "{stdout}");
     let rows = |path: &Path| -> Vec<Vec<f64>> {
@@ -335,15 +323,7 @@ fn measure_refuses_bad_input_with_what_to_do() {
         e.contains("camera_info.yaml") && e.contains("metrocell camera calibrate"),
         "{e}"
     );
-    std::fs::write(
-        &camera,
-        "image_width: 640\nimage_height: 480\ncamera_name: c\ncamera_matrix:\n  rows: 3\n  cols: 3\n  \
-         data: [500, 0, 319.5, 0, 500, 239.5, 0, 0, 1]\ndistortion_model: plumb_bob\n\
-         distortion_coefficients:\n  rows: 1\n  cols: 5\n  data: [0, 0, 0, 0, 0]\n\
-         rectification_matrix:\n  rows: 3\n  cols: 3\n  data: [1, 0, 0, 0, 1, 0, 0, 0, 1]\n\
-         projection_matrix:\n  rows: 3\n  cols: 4\n  data: [500, 0, 319.5, 0, 0, 500, 239.5, 0, 0, 0, 1, 0]\n",
-    )
-    .unwrap();
+    write_pinhole_camera_info(&camera, 640, 480, 500.0);
     let e = measure(&blank);
     assert!(
         e.contains("400×300 px") && e.contains("calibrated at 640×480"),

@@ -5,11 +5,10 @@
 use std::path::PathBuf;
 
 use anyhow::{bail, Context};
-use metrocell_camera_model::CameraInfo;
 use metrocell_camera_node::file_list::list_image_files;
 use metrocell_vision::printed_star::{measure_star, DeltaStar, ScaleCard};
 
-use crate::vision::image_input::{load_gray, parse_board, parse_length};
+use crate::vision::image_input::{parse_board, parse_length, CalibratedCamera};
 
 #[derive(clap::Args)]
 #[command(
@@ -43,15 +42,8 @@ pub struct MeasureArgs {
 }
 
 pub fn run(a: MeasureArgs) -> anyhow::Result<i32> {
-    let info = CameraInfo::load(&a.camera).with_context(|| {
-        format!(
-            "reading the camera calibration {} (make it with `metrocell camera calibrate`)",
-            a.camera.display()
-        )
-    })?;
-    let cam = info
-        .to_model()
-        .with_context(|| format!("the camera calibration {}", a.camera.display()))?;
+    let camera = CalibratedCamera::load(&a.camera)?;
+    let cam = camera.model;
     let files = list_image_files(&a.images).map_err(|e| anyhow::anyhow!("{e}"))?;
     let star = DeltaStar::standard();
     let card = ScaleCard {
@@ -65,18 +57,7 @@ pub fn run(a: MeasureArgs) -> anyhow::Result<i32> {
     );
     let mut written = 0;
     for (k, file) in files.iter().enumerate() {
-        let img = load_gray(file)?;
-        if (img.width(), img.height()) != (info.image_width, info.image_height) {
-            bail!(
-                "{}: {}×{} px, but the camera was calibrated at {}×{} px: photograph at the \
-                 calibrated resolution (or calibrate at this one)",
-                file.display(),
-                img.width(),
-                img.height(),
-                info.image_width,
-                info.image_height
-            );
-        }
+        let img = camera.photo(file)?;
         let m = measure_star(&img, &cam, &star, &card)
             .with_context(|| format!("{}", file.display()))?;
         println!(

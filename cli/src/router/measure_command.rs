@@ -5,14 +5,13 @@
 use std::path::PathBuf;
 
 use anyhow::{bail, Context};
-use metrocell_camera_model::CameraInfo;
 use metrocell_camera_node::file_list::list_image_files;
 use metrocell_vision::hole_plate::{measure_plate, PlateMeasurement};
 use metrocell_vision::holes::HoleSearch;
 use nalgebra::Matrix2;
 
 use super::pattern_command::parse_point;
-use crate::vision::image_input::{load_gray, parse_length, parse_squares};
+use crate::vision::image_input::{parse_length, parse_squares, CalibratedCamera};
 
 #[derive(clap::Args)]
 #[command(
@@ -58,33 +57,15 @@ struct Combined {
 }
 
 pub fn run(a: MeasureArgs) -> anyhow::Result<i32> {
-    let info = CameraInfo::load(&a.camera).with_context(|| {
-        format!(
-            "reading the camera calibration {} (make it with `metrocell camera calibrate`)",
-            a.camera.display()
-        )
-    })?;
-    let cam = info
-        .to_model()
-        .with_context(|| format!("the camera calibration {}", a.camera.display()))?;
+    let camera = CalibratedCamera::load(&a.camera)?;
+    let cam = camera.model;
     let files = list_image_files(&a.images).map_err(|e| anyhow::anyhow!("{e}"))?;
     let (sx, sy) = a.squares;
     let square_mm = a.square * 1e3;
     let mut holes: Vec<Combined> = vec![Combined::default(); sx * sy];
     let mut used = 0;
     for (k, file) in files.iter().enumerate() {
-        let img = load_gray(file)?;
-        if (img.width(), img.height()) != (info.image_width, info.image_height) {
-            bail!(
-                "{}: {}×{} px, but the camera was calibrated at {}×{} px: photograph at the \
-                 calibrated resolution (or calibrate at this one)",
-                file.display(),
-                img.width(),
-                img.height(),
-                info.image_width,
-                info.image_height
-            );
-        }
+        let img = camera.photo(file)?;
         let search = HoleSearch {
             window_half_px: 0,
             ..HoleSearch::default()

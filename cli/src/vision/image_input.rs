@@ -29,6 +29,50 @@ pub fn load_gray(path: &Path) -> anyhow::Result<image::GrayImage> {
     Ok(img.to_luma8())
 }
 
+/// A calibrated camera for measuring in photos: its calibration file read, and every photo
+/// checked to be at the resolution it was calibrated at.
+pub struct CalibratedCamera {
+    pub model: metrocell_camera_model::CameraModel,
+    size: (u32, u32),
+}
+
+impl CalibratedCamera {
+    /// Reads `path` (ROS camera_info YAML), saying how to make one when it cannot.
+    pub fn load(path: &Path) -> anyhow::Result<Self> {
+        use anyhow::Context;
+        let info = metrocell_camera_model::CameraInfo::load(path).with_context(|| {
+            format!(
+                "reading the camera calibration {} (make it with `metrocell camera calibrate`)",
+                path.display()
+            )
+        })?;
+        let model = info
+            .to_model()
+            .with_context(|| format!("the camera calibration {}", path.display()))?;
+        Ok(Self {
+            model,
+            size: (info.image_width, info.image_height),
+        })
+    }
+
+    /// The photo at `path` in 8-bit grey, refused when its size is not the calibration's.
+    pub fn photo(&self, path: &Path) -> anyhow::Result<image::GrayImage> {
+        let img = load_gray(path)?;
+        if (img.width(), img.height()) != self.size {
+            anyhow::bail!(
+                "{}: {}×{} px, but the camera was calibrated at {}×{} px: photograph at the \
+                 calibrated resolution (or calibrate at this one)",
+                path.display(),
+                img.width(),
+                img.height(),
+                self.size.0,
+                self.size.1
+            );
+        }
+        Ok(img)
+    }
+}
+
 /// "10mm", "0.01m", "1cm", "25.4 mm" → metres, through the workspace's unit table
 /// (`metrocell_physics::units`); a bare number is millimetres.
 pub fn parse_length(s: &str) -> Result<f64, String> {

@@ -35,6 +35,16 @@ fn printer(args: &[&str]) -> String {
 }
 
 fn delta_fit(dir: &Path, settings: &Path, measurements: &Path, round: u32) -> (String, PathBuf) {
+    delta_fit_with(dir, settings, measurements, round, &[])
+}
+
+fn delta_fit_with(
+    dir: &Path,
+    settings: &Path,
+    measurements: &Path,
+    round: u32,
+    extra: &[&str],
+) -> (String, PathBuf) {
     let new = dir.join(format!("round{round}.gcode"));
     let klipper = dir.join(format!("round{round}.cfg"));
     let out = run(
@@ -46,7 +56,8 @@ fn delta_fit(dir: &Path, settings: &Path, measurements: &Path, round: u32) -> (S
             .arg("-o")
             .arg(&new)
             .arg("--klipper")
-            .arg(&klipper),
+            .arg(&klipper)
+            .args(extra),
         Duration::from_secs(60),
     );
     let stdout = String::from_utf8_lossy(&out.stdout).to_string();
@@ -114,7 +125,17 @@ fn rod_and_tower_angle_come_back_and_the_new_settings_print_true() {
             args.extend(["--heights", "--bars"]);
         }
         printer(&args);
-        let (stdout, new) = delta_fit(&dir, &settings, &csv, seed as u32);
+        let (stdout, new) = delta_fit_with(
+            &dir,
+            &settings,
+            &csv,
+            seed as u32,
+            &["--tolerance", "0.05mm"],
+        );
+        assert!(
+            stdout.contains("round 1: the largest error is") && stdout.contains("run round 2"),
+            "{stdout}"
+        );
         let (rod, _, rod_sigma) = row(&stdout, "rod length (mm)");
         assert!(
             (rod - 216.0).abs() < 0.05 && (rod - 216.0).abs() < 3.0 * rod_sigma,
@@ -170,7 +191,14 @@ fn rod_and_tower_angle_come_back_and_the_new_settings_print_true() {
                 "11",
                 "--heights",
             ]);
-            let (stdout2, _) = delta_fit(&dir, &new, &csv2, 99);
+            let (stdout2, _) = delta_fit_with(
+                &dir,
+                &new,
+                &csv2,
+                99,
+                &["--tolerance", "0.05mm", "--round", "2"],
+            );
+            assert!(stdout2.contains("calibrated in 2 rounds"), "{stdout2}");
             let (_, change, sigma) = row(&stdout2, "rod length (mm)");
             assert!(
                 change.abs() < 3.0 * sigma,

@@ -29,8 +29,8 @@ each with its σ (widened by χ²/dof when the data scatter more than stated). P
 cannot see are held and named with the reason. Prints seed 002's single-arm estimate (eq. 13, averaged over \
 the three arms) beside it for bars from the centre toward a tower. Writes the new Marlin settings \
 (M665/M666/M500) and the same state as Klipper printer.cfg sections.\n\n\
-Iterate: print the target again with the new settings, measure, fit; stop when the residuals it reports \
-before the fit are within your tolerance.\n\n\
+Iterate: print the target again with the new settings, measure, fit with --round 2 (3, …); with \
+--tolerance it says when a round's print is within it and how many rounds it took.\n\n\
 Example:\n  metrocell delta fit --firmware m503.txt --measurements star.csv -o new_settings.gcode \
 --klipper printer_delta.cfg")]
 pub struct FitArgs {
@@ -53,6 +53,13 @@ pub struct FitArgs {
     /// Write the new settings as Klipper printer.cfg sections here
     #[arg(long)]
     klipper: Option<PathBuf>,
+    /// The print is done when every measured feature lies within this of its design (the object
+    /// placed as well as it fits): say whether this round met it (e.g. 0.05mm)
+    #[arg(long, value_parser = crate::vision::image_input::parse_length)]
+    tolerance: Option<f64>,
+    /// Which round of print, measure, fit this is (for the report of how many it took)
+    #[arg(long, default_value_t = 1)]
+    round: usize,
 }
 
 pub fn run(a: FitArgs) -> anyhow::Result<i32> {
@@ -86,6 +93,9 @@ pub fn run(a: FitArgs) -> anyhow::Result<i32> {
         e => anyhow::anyhow!("fitting {}: {e}", a.measurements.display()),
     })?;
     print_fit(&fit, &firmware, &measurements);
+    if let Some(t) = a.tolerance {
+        print_round(&fit, &measurements, t, a.round);
+    }
     print_single_arm(&settings, &firmware, &measurements);
     let new = settings
         .corrected(&fit.geometry)
@@ -214,6 +224,39 @@ fn print_fit(fit: &DeltaFit, firmware: &DeltaGeometry, measurements: &[DeltaMeas
              (stated σ {sigma:.4} mm)",
             rms(&fit.residuals_before),
             rms(&fit.residuals)
+        );
+    }
+}
+
+/// The iteration's verdict: the print's largest error from its design (before this fit's
+/// correction) against the tolerance.
+fn print_round(fit: &DeltaFit, measurements: &[DeltaMeasurement], tolerance: f64, round: usize) {
+    let mut largest: f64 = 0.0;
+    let mut at = 0;
+    for m in measurements {
+        let r = &fit.residuals_before;
+        largest = largest.max(match m {
+            DeltaMeasurement::PlanPosition { .. } => r[at].hypot(r[at + 1]),
+            _ => r[at].abs(),
+        });
+        at += if matches!(m, DeltaMeasurement::PlanPosition { .. }) {
+            2
+        } else {
+            1
+        };
+    }
+    let (largest_mm, tolerance_mm) = (largest * 1e3, tolerance * 1e3);
+    if largest <= tolerance {
+        println!(
+            "\nround {round}: every feature within {tolerance_mm:.3} mm of its design (largest \
+             {largest_mm:.4} mm): calibrated in {round} round{} — keep the settings the printer has",
+            if round == 1 { "" } else { "s" }
+        );
+    } else {
+        println!(
+            "\nround {round}: the largest error is {largest_mm:.4} mm, over the {tolerance_mm:.3} mm \
+             tolerance: load the new settings, print the star again, measure it and run round {}",
+            round + 1
         );
     }
 }

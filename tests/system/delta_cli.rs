@@ -125,12 +125,23 @@ fn rod_and_tower_angle_come_back_and_the_new_settings_print_true() {
             args.extend(["--heights", "--bars"]);
         }
         printer(&args);
+        let report = dir.join(format!("report_{seed}"));
         let (stdout, new) = delta_fit_with(
             &dir,
             &settings,
             &csv,
             seed as u32,
-            &["--tolerance", "0.05mm"],
+            &[
+                "--tolerance",
+                "0.05mm",
+                "--report",
+                report.to_str().unwrap(),
+            ],
+        );
+        let page = std::fs::read_to_string(report.join("index.html")).unwrap();
+        assert!(
+            page.contains("plan_before") && page.contains("M665 L216.0"),
+            "{page}"
         );
         assert!(
             stdout.contains("round 1: the largest error is") && stdout.contains("run round 2"),

@@ -284,7 +284,18 @@ fn photographed_plate_is_measured_and_compensated_to_its_noise() {
     }
     let rms_z = (z2 / (2 * measured.len()) as f64).sqrt();
     assert!((0.5..1.5).contains(&rms_z), "RMS z {rms_z}");
-    let stdout = router_fit(&["--errors".as_ref(), table.as_os_str()]);
+    let report = dir.join("report");
+    let stdout = router_fit(&[
+        "--errors".as_ref(),
+        table.as_os_str(),
+        "--report".as_ref(),
+        report.as_os_str(),
+    ]);
+    let page = std::fs::read_to_string(report.join("index.html")).unwrap();
+    assert!(
+        page.contains("Table 3") && page.contains("residuals_after"),
+        "{page}"
+    );
     let ratio = figure(&stdout, "after / measurement noise");
     assert!(
         ratio <= 1.5,

@@ -57,6 +57,9 @@ pub struct FitArgs {
     /// placed as well as it fits): say whether this round met it (e.g. 0.05mm)
     #[arg(long, value_parser = crate::vision::image_input::parse_length)]
     tolerance: Option<f64>,
+    /// Write an HTML report (index.html and its figures) to this directory
+    #[arg(long)]
+    report: Option<PathBuf>,
     /// Which round of print, measure, fit this is (for the report of how many it took)
     #[arg(long, default_value_t = 1)]
     round: usize,
@@ -104,6 +107,11 @@ pub fn run(a: FitArgs) -> anyhow::Result<i32> {
     print!("{}", new.marlin_commands());
     println!("\nthe same as Klipper printer.cfg sections:");
     print!("{}", new.klipper_sections());
+    if let Some(dir) = &a.report {
+        let page =
+            super::fit_report::write(dir, &a.measurements, &fit, &firmware, &measurements, &new)?;
+        println!("report: {}", page.display());
+    }
     if let Some(path) = &a.output {
         std::fs::write(path, new.marlin_commands())
             .with_context(|| format!("writing {}", path.display()))?;

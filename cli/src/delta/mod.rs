@@ -3,6 +3,7 @@
 //! Klipper settings.
 
 mod fit_command;
+mod fit_report;
 mod measure_command;
 mod measurements_file;
 mod target_command;

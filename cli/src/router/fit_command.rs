@@ -48,6 +48,9 @@ pub struct FitArgs {
     /// Seed 000's one-step inverse C = T − e(T) instead of the exact fixed point
     #[arg(long)]
     first_order: bool,
+    /// Write an HTML report (index.html and its figures) to this directory
+    #[arg(long)]
+    report: Option<PathBuf>,
     /// Choose this many equations (a hole's e_x or e_y) by D-optimal design (seed 000's DETMAX),
     /// fit on them alone and judge the fit on all the others: which holes to measure next time
     #[arg(long)]
@@ -104,6 +107,10 @@ pub fn run(a: FitArgs) -> anyhow::Result<i32> {
     print_statistics(&before, &after, mean_noise, &holes)?;
     if let Some(k) = a.design {
         print_design(&holes, a.x3, k)?;
+    }
+    if let Some(dir) = &a.report {
+        let page = super::fit_report::write(dir, &a.errors, &holes, &fit, &held)?;
+        println!("report: {}", page.display());
     }
     if let Some(program) = &a.gcode {
         let Some(output) = &a.output else {

@@ -3,6 +3,7 @@
 //! fitted to them with compensated G-code.
 
 mod fit_command;
+mod fit_report;
 mod measure_command;
 mod pattern_command;
 

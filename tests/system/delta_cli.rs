@@ -443,11 +443,56 @@ fn measure_says_what_is_missing_from_the_photo() {
         Duration::from_secs(60),
     );
     assert_eq!(out.status.code(), Some(2));
-    let e = String::from_utf8_lossy(&out.stderr);
+    let e = String::from_utf8_lossy(&out.stderr).to_string();
     assert!(
         e.contains("blank.png")
             && e.contains("no 9×6-corner checkerboard card")
             && e.contains("lay the card"),
+        "{e}"
+    );
+    // the card, but no star: the tiles that tell its arms apart are missing
+    let card = metrocell_vision::PlanarTarget {
+        items: vec![metrocell_vision::TargetItem::Checkerboard {
+            top_left: [0.0, 0.0],
+            square: 0.010,
+            squares_x: 10,
+            squares_y: 7,
+        }],
+    };
+    let camera_model = metrocell_vision::CameraModel::new(
+        640,
+        480,
+        500.0,
+        500.0,
+        319.5,
+        239.5,
+        metrocell_vision::Distortion::none(),
+    )
+    .unwrap();
+    let pose = nalgebra::Isometry3::translation(-0.05, -0.035, 0.3);
+    let view = metrocell_vision::render_view(
+        &camera_model,
+        &pose,
+        &card,
+        &metrocell_vision::RenderSettings::default(),
+    )
+    .unwrap();
+    let card_only = dir.join("card_only.png");
+    view.image.save(&card_only).unwrap();
+    let out = run(
+        piped(bin("metrocell"))
+            .args(["delta", "measure", "--camera"])
+            .arg(&camera)
+            .arg("--images")
+            .arg(&card_only)
+            .arg("-o")
+            .arg(dir.join("star.csv")),
+        Duration::from_secs(60),
+    );
+    assert_eq!(out.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        e.contains("0 of the star's 3 tiles") && e.contains("at least 2"),
         "{e}"
     );
     let _ = std::fs::remove_dir_all(&dir);

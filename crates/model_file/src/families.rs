@@ -91,6 +91,7 @@ pub fn serial_arm(
                 let rp = format!("{p}.dh.rows[{i}]");
                 let v = |q: &Option<Quantity>, name: &str, unit: &str| q.as_ref().map(|q| q.to_si(&format!("{rp}.{name}"), unit)).transpose().map(|v| v.unwrap_or(0.0));
                 let (theta, dd, a, alpha) = (v(&r.theta, "theta", "rad")?, v(&r.d, "d", "m")?, v(&r.a, "a", "m")?, v(&r.alpha, "alpha", "rad")?);
+                check_dh_lengths(&rp, dd, a)?;
                 rows.push(match r.joint {
                     JointKindName::Revolute => DhRow::revolute(theta, dd, a, alpha),
                     JointKindName::Prismatic => DhRow::prismatic(theta, dd, a, alpha),
@@ -208,4 +209,25 @@ fn arm_accelerometers(
         });
     }
     Ok(out)
+}
+
+/// A DH row's lengths as a machine has them: under 10 m. A bare number is metres, so an angle
+/// written in a length column — seed 004's printed table has a₂ = 90, the α column's 90° — reads
+/// as a 90 m link; that is refused with what it probably is, rather than built.
+fn check_dh_lengths(row: &str, d: f64, a: f64) -> Result<(), CellError> {
+    const LONGEST_LINK_M: f64 = 10.0;
+    for (name, value) in [("d", d), ("a", a)] {
+        if value.abs() > LONGEST_LINK_M {
+            return Err(CellError::OutOfRange {
+                path: format!("{row}.{name}"),
+                value,
+                reason: format!(
+                    "is {value} m: `{name}` is a length (bare numbers are metres), longer than any \
+                     machine's link; an angle belongs in theta or alpha (write `90 deg` there), \
+                     a length in mm needs its unit (`90 mm`)"
+                ),
+            });
+        }
+    }
+    Ok(())
 }

@@ -31,6 +31,7 @@
 pub mod arc;
 pub mod block;
 pub mod controller_table;
+pub mod cutter_compensation;
 pub mod error_field;
 pub mod hole_plate_job;
 pub mod inverse;

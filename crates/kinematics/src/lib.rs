@@ -21,6 +21,7 @@ pub mod delta_rod_correction;
 pub mod dh;
 pub mod error;
 pub mod five_axis;
+pub mod five_axis_dynamics;
 pub mod frame_alignment;
 pub mod gravity;
 pub mod instrument_pose;

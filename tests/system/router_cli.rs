@@ -349,5 +349,49 @@ fn measure_refuses_bad_input_with_what_to_do() {
         e.contains("no photo showed the 6×6-square board") && e.contains("--squares"),
         "{e}"
     );
+    // a board without holes (not drilled yet, or lit so the holes do not show)
+    let board = metrocell_vision::PlanarTarget {
+        items: vec![metrocell_vision::TargetItem::Checkerboard {
+            top_left: [0.0, 0.0],
+            square: 0.010,
+            squares_x: 6,
+            squares_y: 6,
+        }],
+    };
+    let camera_model = metrocell_vision::CameraModel::new(
+        640,
+        480,
+        500.0,
+        500.0,
+        319.5,
+        239.5,
+        metrocell_vision::Distortion::none(),
+    )
+    .unwrap();
+    let view = metrocell_vision::render_view(
+        &camera_model,
+        &nalgebra::Isometry3::translation(-0.03, -0.03, 0.25),
+        &board,
+        &metrocell_vision::RenderSettings::default(),
+    )
+    .unwrap();
+    let undrilled = dir.join("undrilled.png");
+    view.image.save(&undrilled).unwrap();
+    let out = run(
+        piped(bin("metrocell"))
+            .args(["router", "measure", "--square", "10mm", "--camera"])
+            .arg(&camera)
+            .arg("--images")
+            .arg(&undrilled)
+            .arg("-o")
+            .arg(dir.join("holes.csv")),
+        Duration::from_secs(60),
+    );
+    assert_eq!(out.status.code(), Some(2));
+    let e = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        e.contains("only 0 holes measured") && e.contains("lighting"),
+        "{e}"
+    );
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -238,7 +238,8 @@ pub fn parse_timestamp(s: &str) -> std::result::Result<u64, String> {
             let whole: u64 = int
                 .parse()
                 .map_err(|_| format!("timestamp '{s}' is not a number of seconds"))?;
-            return Ok(whole * 1_000_000_000 + frac_ns(frac)?);
+            return epoch_ns(i128::from(whole), frac_ns(frac)?)
+                .ok_or_else(|| format!("timestamp '{s}' is beyond the year 2554 (u64 ns)"));
         }
         return Err(format!("timestamp '{s}' is negative or not finite"));
     }
@@ -263,10 +264,10 @@ pub fn parse_timestamp(s: &str) -> std::result::Result<u64, String> {
     );
     if !(1..=12).contains(&mo)
         || !(1..=31).contains(&da)
-        || h > 23
-        || mi > 59
-        || se > 60
-        || y < 1970
+        || !(0..=23).contains(&h)
+        || !(0..=59).contains(&mi)
+        || !(0..=60).contains(&se)
+        || !(1970..=9999).contains(&y)
     {
         return Err(bad());
     }
@@ -277,8 +278,15 @@ pub fn parse_timestamp(s: &str) -> std::result::Result<u64, String> {
     let doy = (153 * (if mo > 2 { mo - 3 } else { mo + 9 }) + 2) / 5 + da - 1;
     let doe = yoe * 365 + yoe / 4 - yoe / 100 + doy;
     let days = era * 146_097 + doe - 719_468;
-    let secs = days * 86_400 + h * 3600 + mi * 60 + se;
-    Ok(secs as u64 * 1_000_000_000 + frac_ns(frac).map_err(|_| bad())?)
+    let secs = i128::from(days) * 86_400 + i128::from(h * 3600 + mi * 60 + se);
+    epoch_ns(secs, frac_ns(frac).map_err(|_| bad())?)
+        .ok_or_else(|| format!("timestamp '{s}' is beyond the year 2554 (u64 ns)"))
+}
+
+/// Seconds and nanoseconds since the epoch as u64 ns, None when they do not fit (a bag's time
+/// is u64 nanoseconds: up to the year 2554).
+fn epoch_ns(secs: i128, ns: u64) -> Option<u64> {
+    u64::try_from(secs.checked_mul(1_000_000_000)? + i128::from(ns)).ok()
 }
 
 /// A timestamp cell through its mapping: `seconds·scale + offset` for a number of seconds (so
@@ -942,6 +950,23 @@ fn signal_messages(row: Row, t: u64, header: &Header) -> Result<Vec<Message>> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn timestamps_past_what_a_bag_holds_are_errors_not_overflows() {
+        // found by tests/fuzz (csv_import): these multiplied past u64 and panicked
+        for text in [
+            "99999999999",
+            "2600-01-01 00:00:00",
+            "99999999999-01-01T00:00:00",
+            "2020-01-01 -5:00:00",
+        ] {
+            assert!(parse_timestamp(text).is_err(), "{text}");
+        }
+        assert!(
+            parse_timestamp("18446744073").is_ok(),
+            "2554-07-21: the last second that fits"
+        );
+    }
 
     #[test]
     fn timestamps_parse_to_utc_nanoseconds() {

@@ -10,7 +10,7 @@ use metrocell_kinematics::delta::DeltaGeometry;
 use metrocell_kinematics::delta_firmware::MarlinDelta;
 use metrocell_report::{Report, ScatterPlot, Table};
 
-/// Writes `dir/index.html` and its figures; returns the page's path.
+/// Writes `DIR/index.html` and its figures; returns the page's path.
 pub fn write(
     dir: &Path,
     source: &Path,

@@ -8,7 +8,7 @@ use metrocell_estimation::improvement::{improvement, ErrorStatistics};
 use metrocell_gcode::planar_field_fit::{HeldOutHole, HoleError, PlanarFieldFit, COEFFICIENTS};
 use metrocell_report::{Report, ScatterPlot, Table};
 
-/// Writes `dir/index.html` and its figures; returns the page's path.
+/// Writes `DIR/index.html` and its figures; returns the page's path.
 pub fn write(
     dir: &Path,
     source: &Path,

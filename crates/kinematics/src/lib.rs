@@ -23,6 +23,7 @@ pub mod error;
 pub mod five_axis;
 pub mod five_axis_dynamics;
 pub mod frame_alignment;
+pub mod frame_alignment_procedure;
 pub mod gravity;
 pub mod instrument_pose;
 pub mod rigid_registration;

@@ -32,8 +32,13 @@ fn holes() -> (Vec<[f64; 2]>, Vec<[f64; 2]>) {
     (nominal, truth)
 }
 
-/// The holes' board positions (m), row-major, through `vision::hole_plate` (the camera `cam`).
-fn measure(image: &image::GrayImage, cam: &CameraModel, nominal: &[[f64; 2]]) -> Vec<[f64; 2]> {
+/// The holes' board positions (m), row-major, through `vision::hole_plate` (the camera `cam`),
+/// and the largest σ it states for one.
+fn measure_with_sigma(
+    image: &image::GrayImage,
+    cam: &CameraModel,
+    nominal: &[[f64; 2]],
+) -> (Vec<[f64; 2]>, f64) {
     let plate = measure_plate(image, cam, N, N, SQUARE, &HoleSearch::default())
         .unwrap()
         .expect("the board is in the picture");
@@ -44,18 +49,26 @@ fn measure(image: &image::GrayImage, cam: &CameraModel, nominal: &[[f64; 2]]) ->
         plate.mm_per_px
     );
     assert_eq!(plate.holes.len(), nominal.len());
-    plate
+    let mut largest: f64 = 0.0;
+    let positions = plate
         .holes
         .iter()
         .zip(nominal)
         .map(|(h, n)| {
             assert_eq!(&h.nominal, n);
-            // σ of a well-lit 1 mm hole at 0.04 mm/px: a few µm, not zero
-            let sigma = h.covariance.trace().sqrt();
-            assert!(sigma > 1e-7 && sigma < 20e-6, "σ {sigma} m");
+            largest = largest.max(h.covariance.trace().sqrt());
             h.measured
         })
-        .collect()
+        .collect();
+    (positions, largest)
+}
+
+/// [`measure_with_sigma`] with a camera model that fits: every σ a few µm, not zero (a well-lit
+/// 1 mm hole at 0.04 mm/px).
+fn measure(image: &image::GrayImage, cam: &CameraModel, nominal: &[[f64; 2]]) -> Vec<[f64; 2]> {
+    let (positions, sigma) = measure_with_sigma(image, cam, nominal);
+    assert!(sigma > 1e-7 && sigma < 20e-6, "σ {sigma} m");
+    positions
 }
 
 /// The T8 plate seen at 0.04 mm/px (f = 2500 px at 0.1 m, barrel distortion), holes at `truth`,
@@ -123,7 +136,7 @@ fn hole_centres_recovered_below_20_um_and_uncorrected_image_is_biased() {
         distortion: Distortion::none(),
         ..cam
     };
-    let biased = measure(&image, &naive, &nominal);
+    let (biased, naive_sigma) = measure_with_sigma(&image, &naive, &nominal);
     let rms_u = errors(&biased, &truth).0;
     // Systematic: the error grows with distance from the board centre (radial pattern), it is
     // not noise: correlation of |error| with radius.
@@ -156,6 +169,14 @@ fn hole_centres_recovered_below_20_um_and_uncorrected_image_is_biased() {
         rms_u * 1e6
     );
     assert!(corr > 0.5, "bias is radial: correlation {corr:.2}");
+    // and the measurement says so: with the wrong lens model the board's corners do not fit,
+    // and the holes' σ (floored at the corners' reprojection RMS) grows to the bias's size
+    assert!(
+        naive_sigma > 0.5 * rms_u,
+        "σ {:.1} µm stated against a {:.1} µm bias",
+        naive_sigma * 1e6,
+        rms_u * 1e6
+    );
 }
 
 /// The same plate with a distractor next to every hole (0.04 mm/px, search window ±40 px =

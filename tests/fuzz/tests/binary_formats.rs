@@ -50,6 +50,63 @@ fn cdr_of_every_message_type() {
         });
 }
 
+/// Decodes `bytes` as `T` the way a node does a peer's sample (RustDDS's CDR deserializer, through
+/// the bag source's decoder, which also honours the encapsulation header).
+fn typed<T: rosmsg::RosMessage>(bytes: &[u8]) {
+    let m = metrocell_bagtools::SourcedMessage {
+        topic: "/fuzz".into(),
+        log_time_ns: 0,
+        publish_time_ns: 0,
+        payload: bytes.to_vec(),
+    };
+    let _ = m.decode::<T>();
+}
+
+#[test]
+fn cdr_into_the_types_nodes_decode() {
+    use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
+    use metrocell_msgs::msg::{
+        ErrorModel, FiducialDetectionArray, MeasuredPoint, ProbeHit, TrackerMeasurement,
+    };
+    use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image, JointState, Temperature};
+    type Decode = fn(&[u8]);
+    let types: [(&str, Decode); 10] = [
+        ("sensor_msgs/msg/Image", typed::<Image>),
+        ("sensor_msgs/msg/CameraInfo", typed::<CameraInfo>),
+        ("sensor_msgs/msg/JointState", typed::<JointState>),
+        ("sensor_msgs/msg/Temperature", typed::<Temperature>),
+        (
+            "diagnostic_msgs/msg/DiagnosticArray",
+            typed::<DiagnosticArray>,
+        ),
+        ("metrocell_msgs/msg/ErrorModel", typed::<ErrorModel>),
+        (
+            "metrocell_msgs/msg/FiducialDetectionArray",
+            typed::<FiducialDetectionArray>,
+        ),
+        ("metrocell_msgs/msg/MeasuredPoint", typed::<MeasuredPoint>),
+        ("metrocell_msgs/msg/ProbeHit", typed::<ProbeHit>),
+        (
+            "metrocell_msgs/msg/TrackerMeasurement",
+            typed::<TrackerMeasurement>,
+        ),
+    ];
+    let r = registry();
+    let seeds: Vec<Vec<u8>> = types
+        .iter()
+        .map(|(t, _)| {
+            let v = rosmsg::sample_value(&r, t, 1).unwrap();
+            rosmsg::encode(&r, t, &v).unwrap()
+        })
+        .collect();
+    check!()
+        .with_generator(bytes(256))
+        .for_each(|input: &Vec<u8>| {
+            let k = input.first().map_or(0, |b| usize::from(*b) % types.len());
+            (types[k].1)(&mutate(&seeds[k], input.get(1..).unwrap_or(&[])));
+        });
+}
+
 /// A small real bag (the importer's example export) and its .mcap file.
 fn seed_bag(dir: &Path) -> PathBuf {
     let bag = dir.join("seed_bag");

@@ -69,6 +69,21 @@ pub struct Alignment {
     pub passes: [Vec<f64>; 3],
 }
 
+impl Alignment {
+    /// The camera's frame in the tool's as a fixed URDF joint (metres; `rpy` in URDF's
+    /// convention, R = Rz(yaw)·Ry(pitch)·Rx(roll)), for a robot description.
+    pub fn urdf_joint(&self, name: &str, tool_link: &str, camera_link: &str) -> String {
+        let (roll, pitch, yaw) = Rotation3::from_matrix_unchecked(self.rotation).euler_angles();
+        let o = self.offset;
+        format!(
+            "<joint name=\"{name}\" type=\"fixed\">\n  <parent link=\"{tool_link}\"/>\n  \
+             <child link=\"{camera_link}\"/>\n  <origin xyz=\"{:.6} {:.6} {:.6}\" \
+             rpy=\"{roll:.9} {pitch:.9} {yaw:.9}\"/>\n</joint>\n",
+            o.x, o.y, o.z
+        )
+    }
+}
+
 /// One pass of an offset stage: turns by ±`angle` about `axis` through the offset so far and
 /// through it plus `apart` (the patent's two axes), and solves the four displacements for what
 /// is left of the offset in the plane the turns move it in, by least squares on
@@ -244,6 +259,26 @@ mod tests {
             "{worst_mm} mm, {worst_deg}°"
         );
         assert!(most_passes <= 5);
+    }
+
+    #[test]
+    fn the_result_as_a_urdf_joint_reads_back_as_the_same_transform() {
+        let rotation = *UnitQuaternion::from_euler_angles(0.03, -0.02, 0.08)
+            .to_rotation_matrix()
+            .matrix();
+        let a = Alignment {
+            rotation,
+            offset: Vector3::new(0.04, -0.025, 0.06),
+            passes: Default::default(),
+        };
+        let urdf = format!(
+            "<robot name=\"r\"><link name=\"tool0\"/><link name=\"camera\"/>{}</robot>",
+            a.urdf_joint("tool0_to_camera", "tool0", "camera")
+        );
+        let chain = crate::urdf_chain::chain_from_urdf_str(&urdf, "tool0", "camera").unwrap();
+        let pose = chain.forward(&[]).unwrap().tool;
+        assert!((pose.translation.vector - a.offset).norm() < 1e-6);
+        assert!((pose.rotation.to_rotation_matrix().matrix() - rotation).norm() < 1e-8);
     }
 
     #[test]

@@ -54,6 +54,28 @@ fn launch_yaml() {
 }
 
 #[test]
+fn launch_plans() {
+    // the whole loader on a file: substitutions, arguments, conditions, parameter files
+    let s = seed("launch-configs/demo.launch.yaml");
+    let dir = std::env::temp_dir().join(format!("metrocell-fuzz-launch-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("fuzz.launch.yaml");
+    let options = metrocell_launch::options::LaunchOptions {
+        share_dir: Some(workspace_root()),
+        executable_search_path: Some(vec![dir.clone()]),
+        environment: Some(Default::default()),
+        ..Default::default()
+    };
+    check!()
+        .with_generator(bytes(256))
+        .for_each(|input: &Vec<u8>| {
+            std::fs::write(&file, mutate(&s, input)).unwrap();
+            let _ = metrocell_launch::load_launch_plan(&file, &[], &options);
+        });
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+#[test]
 fn urdf() {
     let s = seed("crates/twin/examples/cells/mobile_manipulator.urdf");
     check!()

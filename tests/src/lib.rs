@@ -238,3 +238,36 @@ pub fn run_ok(cmd: &mut Command, timeout: Duration) -> String {
     );
     stdout
 }
+
+/// A 640×480 photo (metrocell's renderer, a distortion-free 500 px lens: the camera of
+/// [`write_pinhole_camera_info`]) of a bare checkerboard of `squares` of `square` m, its first
+/// corner at `at` (m, camera frame), written to `path` — for tests of what a command does with a
+/// board that lacks what it looks for.
+pub fn write_checkerboard_photo(path: &Path, squares: (u32, u32), square: f64, at: [f64; 3]) {
+    let board = metrocell_vision::PlanarTarget {
+        items: vec![metrocell_vision::TargetItem::Checkerboard {
+            top_left: [0.0, 0.0],
+            square,
+            squares_x: squares.0,
+            squares_y: squares.1,
+        }],
+    };
+    let camera = metrocell_vision::CameraModel::new(
+        640,
+        480,
+        500.0,
+        500.0,
+        319.5,
+        239.5,
+        metrocell_vision::Distortion::none(),
+    )
+    .unwrap();
+    let view = metrocell_vision::render_view(
+        &camera,
+        &nalgebra::Isometry3::translation(at[0], at[1], at[2]),
+        &board,
+        &metrocell_vision::RenderSettings::default(),
+    )
+    .unwrap();
+    view.image.save(path).unwrap();
+}

@@ -13,7 +13,10 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use system_tests::{bin, piped, python, run, run_ok, workspace_root, write_pinhole_camera_info};
+use system_tests::{
+    bin, piped, python, run, run_ok, workspace_root, write_checkerboard_photo,
+    write_pinhole_camera_info,
+};
 
 /// A feature's σ per axis: 0.02 mm in one photo (0.07226 mm/px at ~0.3 px), averaged over seed
 /// 002's six shots rotated 60° apart.
@@ -451,34 +454,8 @@ fn measure_says_what_is_missing_from_the_photo() {
         "{e}"
     );
     // the card, but no star: the tiles that tell its arms apart are missing
-    let card = metrocell_vision::PlanarTarget {
-        items: vec![metrocell_vision::TargetItem::Checkerboard {
-            top_left: [0.0, 0.0],
-            square: 0.010,
-            squares_x: 10,
-            squares_y: 7,
-        }],
-    };
-    let camera_model = metrocell_vision::CameraModel::new(
-        640,
-        480,
-        500.0,
-        500.0,
-        319.5,
-        239.5,
-        metrocell_vision::Distortion::none(),
-    )
-    .unwrap();
-    let pose = nalgebra::Isometry3::translation(-0.05, -0.035, 0.3);
-    let view = metrocell_vision::render_view(
-        &camera_model,
-        &pose,
-        &card,
-        &metrocell_vision::RenderSettings::default(),
-    )
-    .unwrap();
     let card_only = dir.join("card_only.png");
-    view.image.save(&card_only).unwrap();
+    write_checkerboard_photo(&card_only, (10, 7), 0.010, [-0.05, -0.035, 0.3]);
     let out = run(
         piped(bin("metrocell"))
             .args(["delta", "measure", "--camera"])

@@ -10,7 +10,10 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use system_tests::{bin, piped, python, run, run_ok, workspace_root, write_pinhole_camera_info};
+use system_tests::{
+    bin, piped, python, run, run_ok, workspace_root, write_checkerboard_photo,
+    write_pinhole_camera_info,
+};
 
 const B72: [f64; 9] = [
     1.01e-5, 5.20e-3, -7.10e-3, 4.85e-3, 1.11e-2, 1.03e-2, -1.12e-5, -2.01e-5, -1.55e-5,
@@ -350,33 +353,8 @@ fn measure_refuses_bad_input_with_what_to_do() {
         "{e}"
     );
     // a board without holes (not drilled yet, or lit so the holes do not show)
-    let board = metrocell_vision::PlanarTarget {
-        items: vec![metrocell_vision::TargetItem::Checkerboard {
-            top_left: [0.0, 0.0],
-            square: 0.010,
-            squares_x: 6,
-            squares_y: 6,
-        }],
-    };
-    let camera_model = metrocell_vision::CameraModel::new(
-        640,
-        480,
-        500.0,
-        500.0,
-        319.5,
-        239.5,
-        metrocell_vision::Distortion::none(),
-    )
-    .unwrap();
-    let view = metrocell_vision::render_view(
-        &camera_model,
-        &nalgebra::Isometry3::translation(-0.03, -0.03, 0.25),
-        &board,
-        &metrocell_vision::RenderSettings::default(),
-    )
-    .unwrap();
     let undrilled = dir.join("undrilled.png");
-    view.image.save(&undrilled).unwrap();
+    write_checkerboard_photo(&undrilled, (6, 6), 0.010, [-0.03, -0.03, 0.25]);
     let out = run(
         piped(bin("metrocell"))
             .args(["router", "measure", "--square", "10mm", "--camera"])

@@ -218,15 +218,10 @@ fn print_fit(fit: &DeltaFit, firmware: &DeltaGeometry, measurements: &[DeltaMeas
             continue;
         }
         let rms = |r: &[f64]| {
-            (rows.iter().map(|&i| r[i] * r[i]).sum::<f64>() / rows.len() as f64).sqrt() * 1e3
+            (rows.iter().map(|&(i, _)| r[i] * r[i]).sum::<f64>() / rows.len() as f64).sqrt() * 1e3
         };
-        let sigma = (rows
-            .iter()
-            .map(|&i| row_sigma(measurements, i).powi(2))
-            .sum::<f64>()
-            / rows.len() as f64)
-            .sqrt()
-            * 1e3;
+        let sigma =
+            (rows.iter().map(|&(_, s)| s * s).sum::<f64>() / rows.len() as f64).sqrt() * 1e3;
         println!(
             "  {label}: residual RMS {:.4} mm with the firmware's geometry, {:.4} mm fitted \
              (stated σ {sigma:.4} mm)",
@@ -242,16 +237,9 @@ fn print_round(fit: &DeltaFit, measurements: &[DeltaMeasurement], tolerance: f64
     let mut largest: f64 = 0.0;
     let mut at = 0;
     for m in measurements {
-        let r = &fit.residuals_before;
-        largest = largest.max(match m {
-            DeltaMeasurement::PlanPosition { .. } => r[at].hypot(r[at + 1]),
-            _ => r[at].abs(),
-        });
-        at += if matches!(m, DeltaMeasurement::PlanPosition { .. }) {
-            2
-        } else {
-            1
-        };
+        let r = &fit.residuals_before[at..at + m.rows()];
+        largest = largest.max(r.iter().map(|v| v * v).sum::<f64>().sqrt());
+        at += m.rows();
     }
     let (largest_mm, tolerance_mm) = (largest * 1e3, tolerance * 1e3);
     if largest <= tolerance {
@@ -269,39 +257,23 @@ fn print_round(fit: &DeltaFit, measurements: &[DeltaMeasurement], tolerance: f64
     }
 }
 
-/// Residual row indices of one kind of measurement (0 plan, 1 height, 2 distance).
-fn residual_rows(measurements: &[DeltaMeasurement], kind: u8) -> Vec<usize> {
+/// Residual row indices of one kind of measurement (0 plan, 1 height, 2 distance), each with
+/// its measurement's σ.
+fn residual_rows(measurements: &[DeltaMeasurement], kind: u8) -> Vec<(usize, f64)> {
     let mut rows = Vec::new();
     let mut at = 0;
     for m in measurements {
-        let (k, n) = match m {
-            DeltaMeasurement::PlanPosition { .. } => (0, 2),
-            DeltaMeasurement::Height { .. } => (1, 1),
-            DeltaMeasurement::Distance { .. } => (2, 1),
+        let k = match m {
+            DeltaMeasurement::PlanPosition { .. } => 0,
+            DeltaMeasurement::Height { .. } => 1,
+            DeltaMeasurement::Distance { .. } => 2,
         };
         if k == kind {
-            rows.extend(at..at + n);
+            rows.extend((at..at + m.rows()).map(|i| (i, m.sigma())));
         }
-        at += n;
+        at += m.rows();
     }
     rows
-}
-
-fn row_sigma(measurements: &[DeltaMeasurement], row: usize) -> f64 {
-    let mut at = 0;
-    for m in measurements {
-        let (n, s) = match *m {
-            DeltaMeasurement::PlanPosition { sigma, .. } => (2, sigma),
-            DeltaMeasurement::Height { sigma, .. } | DeltaMeasurement::Distance { sigma, .. } => {
-                (1, sigma)
-            }
-        };
-        if row < at + n {
-            return s;
-        }
-        at += n;
-    }
-    f64::NAN
 }
 
 /// Seed 002's estimate: eq. 13 for each bar from the centre toward a tower, averaged.

@@ -47,10 +47,8 @@ pub fn write(
                     commanded.y * 1e3,
                     residuals[at].hypot(residuals[at + 1]) * scale,
                 ));
-                at += 2;
-            } else {
-                at += 1;
             }
+            at += m.rows();
         }
         out
     };

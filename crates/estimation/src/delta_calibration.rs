@@ -54,14 +54,16 @@ pub enum DeltaMeasurement {
 }
 
 impl DeltaMeasurement {
-    fn rows(&self) -> usize {
+    /// Residual rows it gives (2 for a plan position, else 1), in the fit's residual order.
+    pub fn rows(&self) -> usize {
         match self {
             DeltaMeasurement::PlanPosition { .. } => 2,
             _ => 1,
         }
     }
 
-    fn sigma(&self) -> f64 {
+    /// Its standard uncertainty (m; per axis for a plan position).
+    pub fn sigma(&self) -> f64 {
         match *self {
             DeltaMeasurement::PlanPosition { sigma, .. }
             | DeltaMeasurement::Height { sigma, .. }

@@ -6,8 +6,9 @@
 //! Board frame (metres): origin at the outer corner of the first square the detector orders
 //! ([`crate::checkerboard`]: a frontal board top-left first), x along the columns, y along the
 //! rows, so square (c, r) spans [c·s, (c+1)·s] × [r·s, (r+1)·s]. Each hole's covariance is its
-//! centre's (px², at least [`CENTRE_FLOOR_PX`]) carried through the back-projection; the board
-//! pose's own uncertainty is common to all holes (a rigid shift, turn or tilt of the whole
+//! centre's (px², [`crate::holes::CENTRE_FLOOR_PX`] included) with the corners' reprojection
+//! RMS added in quadrature, carried through the back-projection; the board pose's own
+//! uncertainty is common to all holes (a rigid shift, turn or tilt of the whole
 //! plate), which the planar error field's constant and linear terms take up, and is reported as
 //! the corners' reprojection RMS.
 
@@ -17,13 +18,6 @@ use crate::holes::{measure_holes, HoleRejection, HoleSearch};
 use image::GrayImage;
 use metrocell_camera_model::{estimate_planar_pose, CameraModel, Pose};
 use nalgebra::{Matrix2, Point2, Vector3};
-
-/// The least σ (px, per axis) a hole centre is given: moments over a sharp, high-contrast
-/// hole state a few thousandths of a pixel from the image noise alone, but the sampling of its
-/// edge by the pixels, blur and the sensor's response leave ~0.02–0.03 px (measured on
-/// tests/py/router_photo.py's OpenCV-drawn plates: 2–3 µm at 0.1 mm/px). The board frame is
-/// no better than its corners fit either: the larger of this and their reprojection RMS.
-pub const CENTRE_FLOOR_PX: f64 = 0.03;
 
 /// One hole on the board plane.
 #[derive(Debug, Clone, PartialEq)]
@@ -127,8 +121,8 @@ pub fn measure_plate(
         match result {
             Ok(h) => {
                 let (measured, jacobian) = back_project(cam, &pose, &h.centre, 0.0)?;
-                let floor = CENTRE_FLOOR_PX.powi(2).max(rms_px.powi(2));
-                let px = h.covariance + Matrix2::identity() * floor;
+                // the board frame is no better than its corners fit
+                let px = h.covariance + Matrix2::identity() * rms_px.powi(2);
                 out.holes.push(PlateHole {
                     column,
                     row,

@@ -24,11 +24,19 @@
 //!    weighted second moments (a uniform ellipse with semi-axes a, b has moments a²/4, b²/4).
 //!
 //! Centre covariance: Var(c) = σ_w²·Σ(x − c)²/(Σw)² with σ_w = σ_I/|f − b| and σ_I from the
-//! border pixels' MAD. Pixels: crate convention (centre of the top-left pixel at (0, 0)).
+//! border pixels' MAD, plus [`CENTRE_FLOOR_PX`]² per axis. Pixels: crate convention (centre of
+//! the top-left pixel at (0, 0)).
 
 use crate::error::{invalid, Result};
 use image::GrayImage;
 use nalgebra::{Matrix2, Point2, SymmetricEigen};
+
+/// The least σ (px, per axis) a hole centre is given: moments over a sharp, high-contrast hole
+/// state a few thousandths of a pixel from the image noise alone, but the sampling of its edge
+/// by the pixels, blur and the sensor's response leave ~0.02–0.03 px (measured on
+/// tests/py/router_photo.py's OpenCV-drawn plates: 2–3 µm at 0.1 mm/px, where the noise term
+/// alone stated 5–7× less).
+pub const CENTRE_FLOOR_PX: f64 = 0.03;
 
 /// Search settings.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -452,7 +460,7 @@ fn subpixel_ellipse(
     };
     let major = eig.eigenvectors.column(i_major);
     let sigma_w = sigma_i / contrast.abs();
-    let var = |v: f64| sigma_w * sigma_w * v / (sw * sw);
+    let var = |v: f64| sigma_w * sigma_w * v / (sw * sw) + CENTRE_FLOOR_PX * CENTRE_FLOOR_PX;
     HoleMeasurement {
         centre: Point2::new(mx, my),
         covariance: Matrix2::new(var(vx), 0.0, 0.0, var(vy)),

@@ -17,7 +17,7 @@
 
 use crate::aruco::{detect_markers, DetectorParams, Dictionary};
 use crate::error::{invalid, Result, VisionError};
-use crate::hole_plate::{back_project, board_pose, CENTRE_FLOOR_PX};
+use crate::hole_plate::{back_project, board_pose};
 use crate::holes::{measure_holes, HoleRejection, HoleSearch};
 use image::GrayImage;
 use metrocell_camera_model::CameraModel;
@@ -218,8 +218,7 @@ pub fn measure_star(
                 let (position, j) = back_project(cam, &pose, &h.centre, star.dot_height)?;
                 let position = [position[0], (mirror * Vector2::from(position)).y];
                 let j = mirror * j;
-                let floor = CENTRE_FLOOR_PX.powi(2).max(card_rms_px.powi(2));
-                let px = h.covariance + Matrix2::identity() * floor;
+                let px = h.covariance + Matrix2::identity() * card_rms_px.powi(2);
                 out.dots.push(MeasuredDot {
                     dot,
                     position,

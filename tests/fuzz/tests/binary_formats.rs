@@ -28,19 +28,18 @@ fn registry() -> rosmsg::Registry {
     r
 }
 
+/// A valid CDR message of `type_name` (every field set), to mutate from.
+fn sample_cdr(r: &rosmsg::Registry, type_name: &str) -> Vec<u8> {
+    let v = rosmsg::sample_value(r, type_name, 1).unwrap();
+    rosmsg::encode(r, type_name, &v).unwrap()
+}
+
 #[test]
 fn cdr_of_every_message_type() {
     let r = registry();
     let types: Vec<String> = r.type_names().map(|t| t.to_string()).collect();
     assert!(types.len() > 20, "{types:?}");
-    // a valid sample of each type, to mutate from
-    let seeds: Vec<Vec<u8>> = types
-        .iter()
-        .map(|t| {
-            let v = rosmsg::sample_value(&r, t, 1).unwrap();
-            rosmsg::encode(&r, t, &v).unwrap()
-        })
-        .collect();
+    let seeds: Vec<Vec<u8>> = types.iter().map(|t| sample_cdr(&r, t)).collect();
     check!()
         .with_generator(bytes(256))
         .for_each(|input: &Vec<u8>| {
@@ -92,13 +91,7 @@ fn cdr_into_the_types_nodes_decode() {
         ),
     ];
     let r = registry();
-    let seeds: Vec<Vec<u8>> = types
-        .iter()
-        .map(|(t, _)| {
-            let v = rosmsg::sample_value(&r, t, 1).unwrap();
-            rosmsg::encode(&r, t, &v).unwrap()
-        })
-        .collect();
+    let seeds: Vec<Vec<u8>> = types.iter().map(|(t, _)| sample_cdr(&r, t)).collect();
     check!()
         .with_generator(bytes(256))
         .for_each(|input: &Vec<u8>| {

@@ -6,7 +6,8 @@ M665 H), and the nozzle found by Newton's method on the three rod constraints (m
 trilaterates in closed form).
 
 The physical printer differs from its settings: rod 1 mm longer than M665 L, tower A turned
-0.5 deg, radius 0.4 mm larger, switches at different heights. The calibration star — features
+0.5 deg, radius 0.4 mm larger, switches at different heights (DELTA_PRINTER=other in the
+environment: rod 0.7 mm shorter, radius 0.5 mm smaller, towers A -0.4 and B +0.25 deg). The calibration star — features
 at the centre and along 12 directions at 25, 50 and 75 mm, printed 0.2 mm above the bed — is
 "photographed" in the object's own frame (turned and shifted on the bed, Gaussian noise of
 sigma per axis); with --heights, the bed is probed at 19 points (noise sigma/2); with --bars, the
@@ -20,6 +21,7 @@ usage:
       after its best rigid fit (mm), the largest bar-length error (mm) and the largest height
       error over the bed (mm)
 """
+import os
 import re
 import sys
 
@@ -27,11 +29,18 @@ import numpy as np
 
 BASE_DEG = np.array([210.0, 330.0, 90.0])
 
-# the physical printer
-TRUE_ROD = 216.0
-TRUE_RADIUS = 106.0
-TRUE_ANGLE_DEG = BASE_DEG + np.array([0.5, 0.0, 0.0])
-SWITCH = np.array([437.6, 438.2, 437.3])  # carriage height where each switch trips (mm)
+# the physical printer. DELTA_PRINTER=other picks one whose errors have the other signs and
+# other sizes (rod 0.7 mm short, radius 0.5 mm small, tower A -0.4 deg and B +0.25 deg, C's
+# switch the highest), so a fit that only works for one sign of each error fails there.
+PRINTERS = {
+    "default": (216.0, 106.0, [0.5, 0.0, 0.0], [437.6, 438.2, 437.3]),
+    "other": (214.3, 105.1, [-0.4, 0.25, 0.0], [437.1, 436.5, 438.4]),
+}
+_rod, _radius, _trims, _switch = PRINTERS[os.environ.get("DELTA_PRINTER", "default")]
+TRUE_ROD = _rod
+TRUE_RADIUS = _radius
+TRUE_ANGLE_DEG = BASE_DEG + np.array(_trims)
+SWITCH = np.array(_switch)  # carriage height where each switch trips (mm)
 
 
 def parse_settings(path):

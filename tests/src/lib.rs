@@ -1,6 +1,7 @@
 //! Helpers shared by the cross-process tests: where the binaries and the Python peers are, and
 //! child processes that never outlive a failing test.
 
+pub mod camera_recording;
 pub mod points_ramp;
 
 use std::path::{Path, PathBuf};

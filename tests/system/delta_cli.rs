@@ -13,6 +13,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
+use system_tests::camera_recording::record_photos;
 use system_tests::{
     bin, piped, python, run, run_ok, workspace_root, write_checkerboard_photo,
     write_pinhole_camera_info,
@@ -23,10 +24,16 @@ use system_tests::{
 const SIGMA_MM: &str = "0.0082";
 
 fn printer(args: &[&str]) -> String {
+    printer_of("default", args)
+}
+
+/// `kind`: delta_print.py's DELTA_PRINTER (`default`, or `other`: errors of the other signs).
+fn printer_of(kind: &str, args: &[&str]) -> String {
     let out = run(
         piped(python())
             .arg(workspace_root().join("tests/py/delta_print.py"))
-            .args(args),
+            .args(args)
+            .env("DELTA_PRINTER", kind),
         Duration::from_secs(300),
     );
     assert!(
@@ -228,6 +235,60 @@ fn rod_and_tower_angle_come_back_and_the_new_settings_print_true() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// The same through a printer whose errors have the other signs and other sizes (rod 0.7 mm
+/// short, radius 0.5 mm small, towers A −0.4° and B +0.25°, C's switch the highest): a fit that
+/// only worked for one sign of each error would fail here. Seed 002's eq. 13 on the same bars
+/// says the rod is *longer* than M665 L: the radius error scales the bars too and it puts all of
+/// it on the rod — the full fit is needed, not only iteration.
+#[test]
+fn a_printer_with_errors_of_other_signs_and_sizes_comes_back_too() {
+    let dir = std::env::temp_dir().join(format!("metrocell-delta-other-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let settings = dir.join("m503.txt");
+    std::fs::write(&settings, "M665 L215 R105.6 H250\nM666 X0 Y0 Z0\n").unwrap();
+    let csv = dir.join("star.csv");
+    let path = |p: &Path| p.to_str().unwrap().to_string();
+    printer_of(
+        "other",
+        &[
+            "print",
+            &path(&settings),
+            &path(&csv),
+            SIGMA_MM,
+            "2",
+            "--heights",
+            "--bars",
+        ],
+    );
+    let (stdout, new) = delta_fit(&dir, &settings, &csv, 1);
+    for (label, truth, bound) in [
+        ("rod length (mm)", 214.3, 0.05),
+        ("radius (mm)", 105.1, 0.05),
+        ("tower angle a (°)", -0.4, 0.05),
+        ("tower angle b (°)", 0.25, 0.05),
+    ] {
+        let (value, _, sigma) = row(&stdout, label);
+        let off = (value - truth).abs();
+        assert!(
+            off < bound && off < 3.0 * sigma,
+            "{label}: {value} ± {sigma}, truth {truth}"
+        );
+    }
+    let single: f64 = stdout
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("mean rod "))
+        .and_then(|r| r.split_whitespace().next())
+        .unwrap()
+        .parse()
+        .unwrap();
+    assert!(single > 215.0, "eq. 13's rod {single} (truth 214.3)");
+    let after = printer_of("other", &["check", new.to_str().unwrap()]);
+    for what in ["plan", "bars", "height"] {
+        assert!(checked(&after, what) < 0.05, "{after}");
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn bad_input_is_named_with_what_to_do() {
     let dir = std::env::temp_dir().join(format!("metrocell-delta-bad-{}", std::process::id()));
@@ -397,6 +458,29 @@ fn photographed_star_gives_settings_that_print_true() {
         Duration::from_secs(120),
     );
     assert!(stdout.contains("tiles [1, 2, 3]"), "{stdout}");
+    // the photo taken in the cell: published by the camera node, recorded, measured from the
+    // recording with the recorded camera_info — the same rows to the last digit
+    let bag = dir.join("bag");
+    record_photos(
+        &photos.join("photo_*.png"),
+        &photos.join("camera_info.yaml"),
+        &bag,
+        88,
+        1,
+    );
+    let from_bag = dir.join("star_from_bag.csv");
+    run_ok(
+        piped(bin("metrocell"))
+            .args(["delta", "measure", "--bag"])
+            .arg(&bag)
+            .arg("-o")
+            .arg(&from_bag),
+        Duration::from_secs(120),
+    );
+    assert_eq!(
+        std::fs::read_to_string(&from_bag).unwrap(),
+        std::fs::read_to_string(&csv).unwrap()
+    );
     let (stdout, new) = delta_fit(&dir, &settings, &csv, 1);
     let (rod, _, rod_sigma) = row(&stdout, "rod length (mm)");
     assert!(

@@ -313,7 +313,7 @@ fn print_single_arm(
     if rods.is_empty() {
         return;
     }
-    println!("\nseed 002's single-arm estimate (eq. 13), for comparison — one arm at a time, so it under-corrects; iterate:");
+    println!("\nseed 002's single-arm estimate (eq. 13), for comparison — one arm at a time, every bar error put on the rod: it under-corrects a rod error (iterate), and a radius error, which also scales the bars, can turn its sign:");
     for (t, commanded, measured, d) in &rods {
         println!(
             "  tower {}: bar {commanded:.3} mm printed {measured:.4} mm → rod {d:.4} mm",

@@ -5,10 +5,10 @@
 use std::path::PathBuf;
 
 use anyhow::{bail, Context};
-use metrocell_camera_node::file_list::list_image_files;
 use metrocell_vision::printed_star::{measure_star, DeltaStar, ScaleCard};
 
-use crate::vision::image_input::{parse_board, parse_length, CalibratedCamera};
+use crate::vision::image_input::{parse_board, parse_length};
+use crate::vision::photo_source::{Photo, PhotoArgs};
 
 #[derive(clap::Args)]
 #[command(
@@ -24,12 +24,9 @@ Example:\n  metrocell delta measure --camera camera_info.yaml --images 'photos/*
 -o star.csv"
 )]
 pub struct MeasureArgs {
-    /// The camera's calibration (ROS camera_info YAML, from `metrocell camera calibrate`)
-    #[arg(long)]
-    camera: PathBuf,
-    /// Photos of the star and the card: a directory or a glob (quote it)
-    #[arg(long)]
-    images: String,
+    /// Photos of the star and the card (files, or frames in a recording) and the camera
+    #[command(flatten)]
+    photos: PhotoArgs,
     /// The card's inner corners, COLSxROWS
     #[arg(long, default_value = "9x6", value_parser = parse_board)]
     card: (usize, usize),
@@ -42,9 +39,9 @@ pub struct MeasureArgs {
 }
 
 pub fn run(a: MeasureArgs) -> anyhow::Result<i32> {
-    let camera = CalibratedCamera::load(&a.camera)?;
-    let cam = camera.model;
-    let files = list_image_files(&a.images).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let photos = a.photos.open()?;
+    let cam = &photos.camera.model;
+    let n = photos.len();
     let star = DeltaStar::standard();
     let card = ScaleCard {
         cols: a.card.0,
@@ -55,17 +52,14 @@ pub fn run(a: MeasureArgs) -> anyhow::Result<i32> {
         "kind,x_mm,y_mm,z_mm,to_x_mm,to_y_mm,to_z_mm,measured_x_mm,measured_y_mm,measured_mm,\
          sigma_mm,view_x_mm,view_y_mm,view_z_mm,plane_z_mm\n",
     );
-    let mut written = 0;
-    for (k, file) in files.iter().enumerate() {
-        let img = camera.photo(file)?;
-        let m = measure_star(&img, &cam, &star, &card)
-            .with_context(|| format!("{}", file.display()))?;
+    let (mut written, mut used) = (0, 0);
+    photos.for_each(|k, Photo { label, image }| {
+        let m = measure_star(&image, cam, &star, &card).with_context(|| label.clone())?;
+        used += 1;
         println!(
-            "[{}/{}] {}: {} dots, {} not found; tiles {:?}; card corners fit to {:.2} px; \
+            "[{}/{n}] {label}: {} dots, {} not found; tiles {:?}; card corners fit to {:.2} px; \
              {:.4} mm/px; camera {:.0} mm above the bed",
             k + 1,
-            files.len(),
-            file.display(),
             m.dots.len(),
             m.rejected.len(),
             m.markers,
@@ -94,13 +88,14 @@ pub fn run(a: MeasureArgs) -> anyhow::Result<i32> {
             ));
             written += 1;
         }
-    }
+        Ok(())
+    })?;
     std::fs::write(&a.output, csv).with_context(|| format!("writing {}", a.output.display()))?;
     println!(
         "{}: {written} dot positions ({} dots × {} photos)",
         a.output.display(),
         star.dots.len(),
-        files.len()
+        used
     );
     if written < 10 {
         bail!(

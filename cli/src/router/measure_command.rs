@@ -5,13 +5,13 @@
 use std::path::PathBuf;
 
 use anyhow::{bail, Context};
-use metrocell_camera_node::file_list::list_image_files;
 use metrocell_vision::hole_plate::{measure_plate, PlateMeasurement};
 use metrocell_vision::holes::HoleSearch;
 use nalgebra::Matrix2;
 
 use super::pattern_command::parse_point;
-use crate::vision::image_input::{parse_length, parse_squares, CalibratedCamera};
+use crate::vision::image_input::{parse_length, parse_squares};
+use crate::vision::photo_source::{Photo, PhotoArgs};
 
 #[derive(clap::Args)]
 #[command(
@@ -28,12 +28,9 @@ Example:\n  metrocell router measure --camera camera_info.yaml --images 'plate/*
 --square 25mm --origin 20,20 -o holes.csv"
 )]
 pub struct MeasureArgs {
-    /// The camera's calibration (ROS camera_info YAML, from `metrocell camera calibrate`)
-    #[arg(long)]
-    camera: PathBuf,
-    /// Photos of the drilled plate: a directory or a glob (quote it)
-    #[arg(long)]
-    images: String,
+    /// Photos of the drilled plate (files, or frames in a recording) and the camera
+    #[command(flatten)]
+    photos: PhotoArgs,
     /// Squares along X and Y, as `router pattern` made them
     #[arg(long, default_value = "6x6", value_parser = parse_squares)]
     squares: (usize, usize),
@@ -57,36 +54,31 @@ struct Combined {
 }
 
 pub fn run(a: MeasureArgs) -> anyhow::Result<i32> {
-    let camera = CalibratedCamera::load(&a.camera)?;
-    let cam = camera.model;
-    let files = list_image_files(&a.images).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let photos = a.photos.open()?;
+    let cam = &photos.camera.model;
     let (sx, sy) = a.squares;
     let square_mm = a.square * 1e3;
     let mut holes: Vec<Combined> = vec![Combined::default(); sx * sy];
     let mut used = 0;
-    for (k, file) in files.iter().enumerate() {
-        let img = camera.photo(file)?;
+    let n = photos.len();
+    photos.for_each(|k, Photo { label, image }| {
         let search = HoleSearch {
             window_half_px: 0,
             ..HoleSearch::default()
         };
-        let Some(plate) = measure_plate(&img, &cam, sx, sy, a.square, &search)
-            .with_context(|| format!("{}", file.display()))?
+        let Some(plate) =
+            measure_plate(&image, cam, sx, sy, a.square, &search).with_context(|| label.clone())?
         else {
             println!(
-                "[{}/{}] {}: no {sx}×{sy}-square board found — skipped",
-                k + 1,
-                files.len(),
-                file.display()
+                "[{}/{n}] {label}: no {sx}×{sy}-square board found — skipped",
+                k + 1
             );
-            continue;
+            return Ok(());
         };
-        check_orientation(&plate, sy, file)?;
+        check_orientation(&plate, sy, &label)?;
         println!(
-            "[{}/{}] {}: {} holes, {} squares without one; corners fit to {:.2} px; {:.4} mm/px",
+            "[{}/{n}] {label}: {} holes, {} squares without one; corners fit to {:.2} px; {:.4} mm/px",
             k + 1,
-            files.len(),
-            file.display(),
             plate.holes.len(),
             plate.rejected.len(),
             plate.corner_rms_px,
@@ -113,7 +105,8 @@ pub fn run(a: MeasureArgs) -> anyhow::Result<i32> {
             slot.weighted += inf * p;
             slot.positions.push(p);
         }
-    }
+        Ok(())
+    })?;
     if used == 0 {
         bail!(
             "no photo showed the {sx}×{sy}-square board: check --squares (squares, not inner \
@@ -128,7 +121,7 @@ pub fn run(a: MeasureArgs) -> anyhow::Result<i32> {
 fn check_orientation(
     plate: &PlateMeasurement,
     squares_y: usize,
-    file: &std::path::Path,
+    photo: &str,
 ) -> anyhow::Result<()> {
     let agree = plate
         .holes
@@ -144,7 +137,7 @@ fn check_orientation(
             "{}: the holes' colours say the board is turned by 90° ({} of {} holes show the \
              colour their square's would behind it): photograph with the machine's back (+Y) \
              at the top of the image",
-            file.display(),
+            photo,
             plate.holes.len() - agree,
             plate.holes.len()
         );

@@ -55,21 +55,35 @@ impl CalibratedCamera {
         })
     }
 
+    /// The camera of a recorded `sensor_msgs/CameraInfo` (the camera node publishes the
+    /// calibration file's; the file's parameter covariance does not travel).
+    pub fn from_msg(info: &metrocell_msgs::sensor_msgs::msg::CameraInfo) -> anyhow::Result<Self> {
+        Ok(Self {
+            model: metrocell_camera_model::camera_model_from_msg(info)?,
+            size: (info.width, info.height),
+        })
+    }
+
     /// The photo at `path` in 8-bit grey, refused when its size is not the calibration's.
     pub fn photo(&self, path: &Path) -> anyhow::Result<image::GrayImage> {
         let img = load_gray(path)?;
+        self.check_size(&img, &path.display().to_string())?;
+        Ok(img)
+    }
+
+    /// Refuses a photo (named `what`) whose size is not the calibration's.
+    pub fn check_size(&self, img: &image::GrayImage, what: &str) -> anyhow::Result<()> {
         if (img.width(), img.height()) != self.size {
             anyhow::bail!(
-                "{}: {}×{} px, but the camera was calibrated at {}×{} px: photograph at the \
+                "{what}: {}×{} px, but the camera was calibrated at {}×{} px: photograph at the \
                  calibrated resolution (or calibrate at this one)",
-                path.display(),
                 img.width(),
                 img.height(),
                 self.size.0,
                 self.size.1
             );
         }
-        Ok(img)
+        Ok(())
     }
 }
 

@@ -15,6 +15,7 @@
 //!
 //!   metrocell-camera --ros-args -p path:="views/*.png" -p rate:=10.0 -p loop:=true \
 //!       -p camera_info_url:=camera_info.yaml -p frame_id:=camera_optical
+//!   metrocell-camera --ros-args -p path:="plate/*.png" -p wait_for_subscribers:=1 -p rate:=1.0   # into a recording
 //!   metrocell-camera --ros-args -p path:=shots -p stamp_source:=filename -p stamp_pattern:="cam0_{ns}.tiff"
 //!   metrocell-camera --ros-args -p device:=/dev/video0 -p width:=1920 -p height:=1080 -p pixel_format:=YUYV
 
@@ -91,6 +92,31 @@ fn run() -> Result<(), Box<dyn std::error::Error>> {
     let infos = node.publisher::<CameraInfo>("camera_info", qos::sensor_data())?;
     let diagnostics = node.diagnostics();
     let token = node.shutdown_token();
+    let wanted = node.param::<i64>("wait_for_subscribers")? as usize;
+    if wanted > 0 {
+        // Best-effort frames published before a reader matches are gone: a folder of photos
+        // ingested into a recording waits for the recorder.
+        node.info(format!("waiting for {wanted} subscriber(s) of the images"));
+        let mut said = Instant::now();
+        loop {
+            let ros = node.ros_node();
+            let matched = images.get_subscription_count(ros).min(if info.is_some() {
+                infos.get_subscription_count(ros)
+            } else {
+                usize::MAX
+            });
+            if matched >= wanted || token.is_triggered() {
+                break;
+            }
+            if said.elapsed() > Duration::from_secs(10) {
+                node.info(format!(
+                    "still waiting: {matched} of {wanted} subscriber(s) matched"
+                ));
+                said = Instant::now();
+            }
+            token.wait_timeout(Duration::from_millis(20));
+        }
+    }
     let period = (rate > 0.0).then(|| Duration::from_secs_f64(1.0 / rate));
     let mut next = Instant::now();
     'outer: loop {

@@ -18,6 +18,7 @@ pub fn declarations() -> Vec<ParamDecl> {
         ParamDecl::new("pixel_format", "auto".to_string(), "device: GREY, YUYV or auto (GREY, else YUYV)"),
         ParamDecl::new("rate", 10.0, "frames per second; 0 = as fast as possible").with_range(0.0, 10000.0),
         ParamDecl::new("loop", false, "start again after the last file"),
+        ParamDecl::new("wait_for_subscribers", 0i64, "files: hold the first frame until this many subscribers of image (and of camera_info, when there is one) are matched — so a recorder started first records every photo of a folder; 0 = publish at once").with_range(0.0, 1000.0),
         ParamDecl::new("frame_id", "camera_optical_frame".to_string(), "frame_id of image and camera_info"),
         ParamDecl::new("camera_info_url", String::new(), "ROS camera_info YAML (path or file:// URL); empty = no camera_info"),
         ParamDecl::new("stamp_source", "mtime".to_string(), "header stamp of a frame: mtime (file modification time), filename (see stamp_pattern) or now (publication instant)"),

@@ -41,7 +41,7 @@ pub struct Photo {
 
 enum Source {
     Files(Vec<PathBuf>),
-    Recording { bag: BagSource, topic: String },
+    Recording { bag: Box<BagSource>, topic: String },
 }
 
 /// The photos of one run and the camera that took them.
@@ -90,7 +90,7 @@ impl PhotoArgs {
             camera,
             count,
             source: Source::Recording {
-                bag,
+                bag: Box::new(bag),
                 topic: self.topic.clone(),
             },
         })

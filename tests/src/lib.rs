@@ -251,6 +251,7 @@ pub fn write_checkerboard_photo(path: &Path, squares: (u32, u32), square: f64, a
             square,
             squares_x: squares.0,
             squares_y: squares.1,
+            top_left_black: true,
         }],
     };
     let camera = metrocell_vision::CameraModel::new(

@@ -6,6 +6,7 @@ mod fit_command;
 mod fit_report;
 mod measure_command;
 mod pattern_command;
+mod simulate_command;
 
 #[derive(clap::Subcommand)]
 pub enum RouterCommand {
@@ -13,6 +14,8 @@ pub enum RouterCommand {
     Pattern(pattern_command::PatternArgs),
     /// Measure the drilled plate in photos: each hole's error (reached − commanded) with its σ
     Measure(measure_command::MeasureArgs),
+    /// The twin drills the plate with a known error field and photographs it (photos, camera_info, truth)
+    Simulate(simulate_command::SimulateArgs),
     /// Fit seed 000's planar error field to a plate's hole errors, validate it on held-out columns, compensate G-code
     Fit(fit_command::FitArgs),
 }
@@ -22,6 +25,7 @@ pub fn run(c: RouterCommand) -> i32 {
         RouterCommand::Pattern(a) => pattern_command::run(a),
         RouterCommand::Measure(a) => measure_command::run(a),
         RouterCommand::Fit(a) => fit_command::run(a),
+        RouterCommand::Simulate(a) => simulate_command::run(a),
     };
     match r {
         Ok(code) => code,

@@ -17,6 +17,7 @@
 //! | [`cell_options`] | a run's ground tilt (`--ground-tilt`) and default duration |
 //! | [`bag`] | [`write_bag`]: a deterministic bag of a simulation |
 //! | [`cli`] | [`SimArgs`] and [`run_sim_command`] for `metrocell sim` |
+//! | [`workflow_photos`] | the twin's photos of a drilled plate (seed 000) by its workflow camera |
 //!
 //! Camera frame requests are rendered ([`camera_frame`]) as mono8 images of an ArUco plate on
 //! `/camera/image_raw`, next to their `CameraInfo`.
@@ -34,6 +35,7 @@ pub mod message_stream;
 pub mod pacing;
 pub mod sim_time;
 pub mod topic_map;
+pub mod workflow_photos;
 
 pub use bag::{write_bag, BagOptions, BagSummary, Progress};
 pub use camera_frame::{FramePlate, FrameRenderer, FrameRendering};

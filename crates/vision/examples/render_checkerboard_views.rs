@@ -26,6 +26,7 @@ fn main() {
             square: 0.01,
             squares_x: 10,
             squares_y: 7,
+            top_left_black: true,
         }],
     };
     let settings = RenderSettings {

@@ -42,12 +42,14 @@ pub enum TargetItem {
         border_bits: u32,
     },
     /// Checkerboard of `squares_x` × `squares_y` squares of side `square` (m); the top-left square
-    /// is black.
+    /// is black, or white when `top_left_black` is false (a board whose front-left square is
+    /// black and has an even number of rows, seen with its back at the top).
     Checkerboard {
         top_left: [f64; 2],
         square: f64,
         squares_x: u32,
         squares_y: u32,
+        top_left_black: bool,
     },
     /// A drilled through-hole of `diameter` (m) centred at `centre` (m), seen against an
     /// inverse-contrast backing (seed 000): it shows the opposite of what lies beneath it
@@ -157,6 +159,7 @@ impl TargetItem {
                 square,
                 squares_x,
                 squares_y,
+                top_left_black,
             } => {
                 let u = (x - top_left[0]) / square;
                 let v = (y - top_left[1]) / square;
@@ -164,7 +167,7 @@ impl TargetItem {
                 {
                     return None;
                 }
-                Some(if (u as u32 + v as u32) % 2 == 0 {
+                Some(if ((u as u32 + v as u32) % 2 == 0) == *top_left_black {
                     0.0
                 } else {
                     1.0
@@ -530,6 +533,7 @@ pub fn render_view(
                 square,
                 squares_x,
                 squares_y,
+                ..
             } => {
                 let mut pts = Vec::new();
                 for r in 1..*squares_y {
@@ -572,6 +576,7 @@ mod tests {
             square: 0.012,
             squares_x: 5,
             squares_y: 4,
+            top_left_black: true,
         }];
         for (k, x) in [0.005, 0.035].iter().enumerate() {
             items.push(TargetItem::Marker {

@@ -81,6 +81,7 @@ fn t8_view(truth: &[[f64; 2]], extra: Vec<TargetItem>) -> (CameraModel, image::G
         square: SQUARE,
         squares_x: N as u32,
         squares_y: N as u32,
+        top_left_black: true,
     }];
     items.extend(truth.iter().map(|c| TargetItem::Hole {
         centre: *c,

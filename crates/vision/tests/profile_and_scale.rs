@@ -104,6 +104,7 @@ fn checkerboard_scale_reproduces_0_07226_mm_per_px() {
             square: 0.010,
             squares_x: 7,
             squares_y: 5,
+            top_left_black: true,
         }],
     };
     let pose = Isometry3::translation(-0.035, -0.025, 0.100);

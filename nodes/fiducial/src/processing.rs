@@ -248,6 +248,7 @@ mod tests {
                 square: 0.012,
                 squares_x: 9,
                 squares_y: 7,
+                top_left_black: true,
             }],
         };
         let pose = nalgebra::Isometry3::new(

@@ -56,6 +56,7 @@ fn hole_centres_over_dds_equal_the_library_and_the_truth() {
         square: SQUARE,
         squares_x: N as u32,
         squares_y: N as u32,
+        top_left_black: true,
     }];
     items.extend(truth.iter().map(|c| TargetItem::Hole {
         centre: *c,

@@ -95,6 +95,7 @@ pub(super) fn boundaries(items: &[TargetItem]) -> Vec<Boundary> {
                 square,
                 squares_x,
                 squares_y,
+                ..
             } => {
                 let (x1, y1) = (
                     x0 + *squares_x as f64 * square,

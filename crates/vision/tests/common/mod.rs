@@ -161,6 +161,7 @@ pub fn checkerboard_target() -> PlanarTarget {
             square: 0.012,
             squares_x: 9,
             squares_y: 7,
+            top_left_black: true,
         }],
     }
 }

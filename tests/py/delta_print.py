@@ -13,6 +13,9 @@ at the centre and along 12 directions at 25, 50 and 75 mm, printed 0.2 mm above 
 sigma per axis); with --heights, the bed is probed at 19 points (noise sigma/2); with --bars, the
 three 75 mm bars from the centre toward the towers are measured with a caliper (sigma 0.01 mm).
 
+Settings are used as the printer runs them after the user's paper test (M665 H set so the
+nozzle touches the bed's centre at Z0); the settings file is not rewritten.
+
 usage:
   delta_print.py print SETTINGS.gcode OUT.csv SIGMA_MM SEED [--heights] [--bars]
       writes the measurements `metrocell delta fit` reads
@@ -62,6 +65,15 @@ def parse_settings(path):
             key = letter if m.group(1) == "5" else "E" + letter
             if key in s:
                 s[key] = float(value)
+    return paper_test(s)
+
+
+def paper_test(s):
+    """What a user does after loading settings and before printing: M665 H raised or lowered until
+    the nozzle touches the bed at its centre at Z0 (a higher H counts every carriage higher, so
+    the same commands put the nozzle lower by as much)."""
+    s = dict(s)
+    s["H"] += printed(s, np.array([0.0, 0.0, 0.0]))[2]
     return s
 
 

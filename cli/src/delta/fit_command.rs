@@ -63,6 +63,34 @@ pub struct FitArgs {
     /// Which round of print, measure, fit this is (for the report of how many it took)
     #[arg(long, default_value_t = 1)]
     round: usize,
+    /// With photographed positions and no probed heights: how well the nozzle touched the bed
+    /// at its centre at z = 0 when the star was printed (the paper test done before printing)
+    #[arg(long, default_value = "0.05mm", value_parser = crate::vision::image_input::parse_length)]
+    paper_test: f64,
+    /// The printer was not levelled before printing: do not assume the paper test (the common
+    /// endstop is then held, and the dots' parallax computed as if it were zero)
+    #[arg(long)]
+    no_paper_test: bool,
+}
+
+/// A photographed dot's parallax depends on its top's absolute height, which plan positions
+/// cannot see (a common endstop raises the effector and nothing else): without probed heights,
+/// the paper test a user does before printing — the nozzle touching the bed at its centre at
+/// z = 0 — is that height, with its σ. Found on the twin's levelled printer: holding the common
+/// endstop at the settings' value instead put a 1.15 mm height error into the parallax and
+/// biased the radius by 16σ.
+fn paper_test(a: &FitArgs, measurements: &[DeltaMeasurement]) -> Option<DeltaMeasurement> {
+    let photographed = measurements
+        .iter()
+        .any(|m| matches!(m, DeltaMeasurement::PlanPosition { view: Some(_), .. }));
+    let probed = measurements
+        .iter()
+        .any(|m| matches!(m, DeltaMeasurement::Height { .. }));
+    (photographed && !probed && !a.no_paper_test).then_some(DeltaMeasurement::Height {
+        commanded: nalgebra::Vector3::zeros(),
+        measured: 0.0,
+        sigma: a.paper_test,
+    })
 }
 
 pub fn run(a: FitArgs) -> anyhow::Result<i32> {
@@ -89,6 +117,18 @@ pub fn run(a: FitArgs) -> anyhow::Result<i32> {
         count(|m| matches!(m, DeltaMeasurement::Distance { .. })),
     );
     let hold = held_by_request(&a)?;
+    // the measured rows come first: the round's check and eq. 13 read only those
+    let measured = measurements.len();
+    let mut measurements = measurements;
+    if let Some(level) = paper_test(&a, &measurements) {
+        println!(
+            "assumed: the printer was levelled by a paper test before printing — the nozzle at the \
+             bed's centre at z = 0 ± {:.3} mm (it sets the dots' heights, so their parallax; probe \
+             heights or say --no-paper-test if it was not)",
+            a.paper_test * 1e3
+        );
+        measurements.push(level);
+    }
     let fit = fit_delta(&firmware, &measurements, &hold).map_err(|e| match e {
         DeltaFitError::BadMeasurement { index, what } => {
             anyhow::anyhow!("{}:{}: {what}", a.measurements.display(), numbered[index].0)
@@ -97,9 +137,9 @@ pub fn run(a: FitArgs) -> anyhow::Result<i32> {
     })?;
     print_fit(&fit, &firmware, &measurements);
     if let Some(t) = a.tolerance {
-        print_round(&fit, &measurements, t, a.round);
+        print_round(&fit, &measurements[..measured], t, a.round);
     }
-    print_single_arm(&settings, &firmware, &measurements);
+    print_single_arm(&settings, &firmware, &measurements[..measured]);
     let new = settings
         .corrected(&fit.geometry)
         .context("turning the fitted geometry into settings")?;

@@ -6,6 +6,7 @@ mod fit_command;
 mod fit_report;
 mod measure_command;
 mod measurements_file;
+mod simulate_command;
 mod target_command;
 
 #[derive(clap::Subcommand)]
@@ -14,6 +15,8 @@ pub enum DeltaCommand {
     Target(target_command::TargetArgs),
     /// Measure the printed star in photos beside a checkerboard card: each dot's position on the bed with its σ
     Measure(measure_command::MeasureArgs),
+    /// The twin prints the star with a printer of known geometry and photographs it (photos, camera_info, the truth)
+    Simulate(simulate_command::SimulateArgs),
     /// Identify a delta printer's rod length, tower angles (and, with probed heights, radius and endstops) from a printed target; write M665/M666 and Klipper settings
     Fit(fit_command::FitArgs),
 }
@@ -23,6 +26,7 @@ pub fn run(c: DeltaCommand) -> i32 {
         DeltaCommand::Target(a) => target_command::run(a),
         DeltaCommand::Measure(a) => measure_command::run(a),
         DeltaCommand::Fit(a) => fit_command::run(a),
+        DeltaCommand::Simulate(a) => simulate_command::run(a),
     };
     match r {
         Ok(code) => code,

@@ -55,6 +55,18 @@ pub enum TargetItem {
     /// inverse-contrast backing (seed 000): it shows the opposite of what lies beneath it
     /// (black under a white square, white under a black one).
     Hole { centre: [f64; 2], diameter: f64 },
+    /// A filled rectangle, black or white: a printer's bed, a card's paper, a tile's quiet zone.
+    Rectangle {
+        top_left: [f64; 2],
+        size: [f64; 2],
+        white: bool,
+    },
+    /// A filled disc, black or white: a printed dot's top.
+    Disc {
+        centre: [f64; 2],
+        diameter: f64,
+        white: bool,
+    },
 }
 
 /// Bit of cell (row r, column c) of a marker with an n × n payload inside a `border`-cell black
@@ -175,6 +187,25 @@ impl TargetItem {
             }
             // Depends on what is beneath: resolved by PlanarTarget::reflectance.
             TargetItem::Hole { .. } => None,
+            TargetItem::Rectangle {
+                top_left,
+                size,
+                white,
+            } => ((top_left[0]..top_left[0] + size[0]).contains(&x)
+                && (top_left[1]..top_left[1] + size[1]).contains(&y))
+            .then_some(if *white { 1.0 } else { 0.0 }),
+            TargetItem::Disc {
+                centre,
+                diameter,
+                white,
+            } => {
+                let (dx, dy) = (x - centre[0], y - centre[1]);
+                (dx * dx + dy * dy < diameter * diameter / 4.0).then_some(if *white {
+                    1.0
+                } else {
+                    0.0
+                })
+            }
         }
     }
 
@@ -211,15 +242,28 @@ impl TargetItem {
                     return Err(invalid("Checkerboard.squares", "need at least 2×2 squares"));
                 }
             }
-            TargetItem::Hole { centre, diameter } => {
+            TargetItem::Hole { centre, diameter }
+            | TargetItem::Disc {
+                centre, diameter, ..
+            } => {
                 if !(diameter.is_finite() && *diameter > 0.0) {
                     return Err(invalid(
-                        "Hole.diameter",
+                        "Hole/Disc.diameter",
                         format!("must be > 0, got {diameter}"),
                     ));
                 }
                 if !(centre[0].is_finite() && centre[1].is_finite()) {
-                    return Err(invalid("Hole.centre", "must be finite"));
+                    return Err(invalid("Hole/Disc.centre", "must be finite"));
+                }
+            }
+            TargetItem::Rectangle { top_left, size, .. } => {
+                if !(top_left.iter().all(|v| v.is_finite())
+                    && size.iter().all(|v| v.is_finite() && *v > 0.0))
+                {
+                    return Err(invalid(
+                        "Rectangle",
+                        format!("needs a finite corner and sides > 0, got {top_left:?} {size:?}"),
+                    ));
                 }
             }
         }
@@ -543,7 +587,7 @@ pub fn render_view(
                 }
                 checkerboard_corners.push(pts);
             }
-            TargetItem::Hole { .. } => {}
+            TargetItem::Hole { .. } | TargetItem::Rectangle { .. } | TargetItem::Disc { .. } => {}
         }
     }
     Ok(RenderedView {

@@ -110,10 +110,20 @@ pub(super) fn boundaries(items: &[TargetItem]) -> Vec<Boundary> {
                     out.push(Boundary::Segment([*x0, y], [x1, y]));
                 }
             }
-            TargetItem::Hole { centre, diameter } => out.push(Boundary::Circle {
+            TargetItem::Hole { centre, diameter }
+            | TargetItem::Disc {
+                centre, diameter, ..
+            } => out.push(Boundary::Circle {
                 centre: *centre,
                 radius: diameter / 2.0,
             }),
+            TargetItem::Rectangle { top_left, size, .. } => rect(
+                &mut out,
+                top_left[0],
+                top_left[1],
+                top_left[0] + size[0],
+                top_left[1] + size[1],
+            ),
         }
     }
     out

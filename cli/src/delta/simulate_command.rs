@@ -29,7 +29,7 @@ z = 0) unless --no-paper-test. Writes DIR/photo_K.png, DIR/camera_info.yaml (the
 crates/sim workflow_photos), DIR/m503.txt (the settings the star was printed with) and DIR/printer.txt \
 (the physical geometry and the flags).\n\n\
 Example:\n  metrocell delta simulate --firmware m503.txt -o sim/\n  metrocell delta measure --camera \
-sim/camera_info.yaml --images 'sim/photo_*.png' -o star.csv\n  metrocell delta fit --firmware m503.txt \
+sim/camera_info.yaml --images 'sim/photo_*.png' -o star.csv\n  metrocell delta fit --firmware sim/m503.txt \
 --measurements star.csv -o new.gcode\n  metrocell delta simulate --firmware new.gcode <the flags printer.txt \
 names> -o round2/   # then measure, and fit with --firmware round2/m503.txt --round 2"
 )]

@@ -290,6 +290,70 @@ mod tests {
         assert!((diameter - 0.003 * scale).abs() < 1e-15);
     }
 
+    /// The standard star printed true, for the bad-input cases below.
+    fn true_star(tiles: Vec<(usize, [f64; 2])>) -> PrintedStar {
+        let design = metrocell_vision::printed_star::DeltaStar::standard();
+        PrintedStar {
+            dots: design
+                .dots
+                .iter()
+                .map(|d| Vector3::new(d[0], d[1], design.dot_height))
+                .collect(),
+            dot_diameter: design.dot_diameter,
+            tiles: tiles
+                .into_iter()
+                .map(|(id, c)| (id, Vector3::new(c[0], c[1], design.marker_height), 0.014))
+                .collect(),
+            card_squares: (10, 7),
+            card_square: 0.010,
+            card_corner: [0.090, 0.035],
+        }
+    }
+
+    #[test]
+    fn a_tile_seen_twice_or_tiles_missing_are_refused_with_what_to_do() {
+        use metrocell_vision::printed_star::{measure_star, DeltaStar, ScaleCard};
+        let design = DeltaStar::standard();
+        let tiles: Vec<(usize, [f64; 2])> =
+            design.markers.iter().map(|(id, c, _)| (*id, *c)).collect();
+        let card = ScaleCard {
+            cols: 9,
+            rows: 6,
+            square: 0.010,
+        };
+        let camera = workflow_camera();
+        let photo = |star: &PrintedStar| {
+            let image = photograph_star(
+                star,
+                &camera,
+                distance_for(&camera, star_extent(star)),
+                1,
+                0,
+            )
+            .unwrap();
+            measure_star(&image, &camera, &design, &card)
+        };
+        // the true star is measured: every dot, the three tiles
+        let m = photo(&true_star(tiles.clone())).unwrap();
+        assert_eq!((m.dots.len(), m.markers.clone()), (85, vec![1, 2, 3]));
+        // a spare tile 2 left on the bed beside the star
+        let mut spare = tiles.clone();
+        spare.push((2, [0.0, -0.095]));
+        let e = photo(&true_star(spare)).unwrap_err().to_string();
+        assert!(
+            e.contains("tile 2 is seen 2 times") && e.contains("only one star"),
+            "{e}"
+        );
+        // two tiles covered
+        let e = photo(&true_star(tiles[..1].to_vec()))
+            .unwrap_err()
+            .to_string();
+        assert!(
+            e.contains("1 of the star's 3 tiles") && e.contains("keep them in view"),
+            "{e}"
+        );
+    }
+
     #[test]
     fn photo_poses_look_down_from_the_distance_and_differ_per_photo() {
         let (a, b) = (

@@ -389,6 +389,95 @@ fn twin_printed_and_photographed_star_comes_back_through_the_commands() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// `delta target`'s star.gcode, read back move by move (no metrocell parser): every dot gets
+/// its design's volume of filament (±15 %, what concentric lines leave) centred on its design
+/// position (to 0.01 mm), the tiles' black cells come after one filament change on top of
+/// their white base, and no move leaves the 81.5 mm the star spans.
+#[test]
+fn target_gcode_prints_every_dot_where_designed() {
+    let dir = std::env::temp_dir().join(format!("metrocell-delta-gcode-{}", std::process::id()));
+    let out = run_ok(
+        piped(bin("metrocell"))
+            .args(["delta", "target", "-o"])
+            .arg(&dir),
+        Duration::from_secs(30),
+    );
+    assert!(out.contains("1 filament change"), "{out}");
+    let program = std::fs::read_to_string(dir.join("star.gcode")).unwrap();
+    let dots: Vec<[f64; 2]> = std::fs::read_to_string(dir.join("dots.csv"))
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let v: Vec<f64> = l.split(',').skip(1).map(|x| x.parse().unwrap()).collect();
+            [v[0], v[1]]
+        })
+        .collect();
+    assert_eq!(dots.len(), 85);
+    let word = |line: &str, letter: char| -> Option<f64> {
+        line.split(';')
+            .next()
+            .unwrap()
+            .split_whitespace()
+            .find_map(|w| w.strip_prefix(letter).and_then(|v| v.parse().ok()))
+    };
+    let (mut x, mut y, mut z, mut e) = (0.0f64, 0.0f64, 0.0f64, 0.0f64);
+    let mut per_dot = vec![(0.0, 0.0, 0.0, 0.0); dots.len()]; // filament, Σlx, Σly, Σl
+    let (mut changed, mut black_cells, mut furthest) = (false, 0.0, 0.0f64);
+    for line in program.lines() {
+        if line.starts_with("M600") {
+            assert!(!changed, "one filament change");
+            changed = true;
+        }
+        if line.starts_with("G92") {
+            e = word(line, 'E').unwrap_or(e);
+            continue;
+        }
+        if !(line.starts_with("G0") || line.starts_with("G1")) {
+            continue;
+        }
+        let (nx, ny) = (word(line, 'X').unwrap_or(x), word(line, 'Y').unwrap_or(y));
+        z = word(line, 'Z').unwrap_or(z);
+        furthest = furthest.max(nx.hypot(ny));
+        if let Some(ne) = word(line, 'E') {
+            let l = (nx - x).hypot(ny - y);
+            if ne > e && l > 0.0 {
+                let mid = [(x + nx) / 2.0, (y + ny) / 2.0];
+                if changed {
+                    assert!((z - 0.6).abs() < 1e-9, "black cells at 0.6 mm: {line}");
+                    black_cells += ne - e;
+                } else if let Some(k) = (0..dots.len())
+                    .find(|&k| (mid[0] - dots[k][0]).hypot(mid[1] - dots[k][1]) < 1.6)
+                {
+                    let d = &mut per_dot[k];
+                    d.0 += ne - e;
+                    d.1 += l * mid[0];
+                    d.2 += l * mid[1];
+                    d.3 += l;
+                }
+            }
+            e = ne;
+        }
+        (x, y) = (nx, ny);
+    }
+    assert!(changed && black_cells > 0.0);
+    assert!(furthest < 81.5, "a move {furthest} mm from the centre");
+    let design = std::f64::consts::PI * 1.5f64.powi(2) * 1.0;
+    for (k, d) in per_dot.iter().enumerate() {
+        let volume = d.0 * std::f64::consts::PI * 1.75f64.powi(2) / 4.0;
+        assert!(
+            (volume / design - 1.0).abs() < 0.15,
+            "dot {k}: {volume} mm³"
+        );
+        let c = [d.1 / d.3, d.2 / d.3];
+        assert!(
+            (c[0] - dots[k][0]).hypot(c[1] - dots[k][1]) < 0.01,
+            "dot {k} at {c:?}"
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn bad_input_is_named_with_what_to_do() {
     let dir = std::env::temp_dir().join(format!("metrocell-delta-bad-{}", std::process::id()));

@@ -33,6 +33,7 @@ pub mod block;
 pub mod controller_table;
 pub mod cutter_compensation;
 pub mod error_field;
+pub mod fdm_toolpath;
 pub mod hole_plate_job;
 pub mod inverse;
 pub mod model_field;

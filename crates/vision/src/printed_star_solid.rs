@@ -22,12 +22,36 @@ pub fn star_solids(star: &DeltaStar) -> Result<(String, String, String)> {
             star.dot_height * 1e3,
         );
     }
-    let dict = Dictionary::predefined("DICT_4X4_50")?;
     let mut black = Solid::new("metrocell_star_tiles_black");
     let mut white = Solid::new("metrocell_star_tiles_white");
+    for cell in tile_cells(star)? {
+        let body = if cell.white { &mut white } else { &mut black };
+        body.cuboid(
+            cell.corner[0],
+            cell.corner[1],
+            cell.side,
+            cell.side,
+            star.marker_height * 1e3,
+        );
+    }
+    Ok((dots.finish(), black.finish(), white.finish()))
+}
+
+/// One square cell of a tile, in millimetres: its lower-left corner (printer frame) and side.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct TileCell {
+    pub white: bool,
+    pub corner: [f64; 2],
+    pub side: f64,
+}
+
+/// Every cell of the star's tiles: a white quiet zone of one cell, the black border, the bits
+/// (row 0 of a marker toward +Y, OpenCV's bit order).
+pub fn tile_cells(star: &DeltaStar) -> Result<Vec<TileCell>> {
+    let dict = Dictionary::predefined("DICT_4X4_50")?;
+    let mut out = Vec::new();
     for (id, centre, side) in &star.markers {
         let bits = dict.bits(*id)?;
-        // a white quiet zone of one cell, the black border, the bits
         let cells = bits.len() + 4;
         let cell = side * 1e3 / cells as f64;
         let (x0, y0) = (
@@ -38,21 +62,16 @@ pub fn star_solids(star: &DeltaStar) -> Result<(String, String, String)> {
             for c in 0..cells {
                 let margin = |v: usize| v == 0 || v == cells - 1;
                 let inner = |v: usize| v >= 2 && v < cells - 2;
-                let is_white =
-                    margin(r) || margin(c) || (inner(r) && inner(c) && bits[r - 2][c - 2]);
-                let body = if is_white { &mut white } else { &mut black };
                 // row r counts down from the tile's top edge (+Y)
-                body.cuboid(
-                    x0 + c as f64 * cell,
-                    y0 - (r + 1) as f64 * cell,
-                    cell,
-                    cell,
-                    star.marker_height * 1e3,
-                );
+                out.push(TileCell {
+                    white: margin(r) || margin(c) || (inner(r) && inner(c) && bits[r - 2][c - 2]),
+                    corner: [x0 + c as f64 * cell, y0 - (r + 1) as f64 * cell],
+                    side: cell,
+                });
             }
         }
     }
-    Ok((dots.finish(), black.finish(), white.finish()))
+    Ok(out)
 }
 
 /// An ASCII STL body being written.

@@ -24,6 +24,7 @@ macro_rules! say {
     }};
 }
 
+mod align_command;
 mod bag;
 mod calibrate;
 mod compensate;
@@ -55,6 +56,8 @@ struct Cli {
 
 #[derive(Subcommand)]
 enum Command {
+    /// Find a robot-mounted camera's frame in the tool's by pure moves and turns (seed 003): /tf_static, URDF joint, cell pose
+    Align(align_command::AlignArgs),
     /// Record, inspect, repair, replay, cut, merge, export and import rosbag2 MCAP bags
     #[command(subcommand)]
     Bag(bag::BagCommand),
@@ -117,6 +120,7 @@ fn main() {
     let cli = Cli::parse();
     restore_sigpipe(&cli.command);
     let code = match cli.command {
+        Command::Align(args) => align_command::run(args),
         Command::Bag(command) => bag::run(command),
         Command::Camera(command) => vision::camera_command::run(command),
         Command::Calibrate(args) => calibrate::run(args),

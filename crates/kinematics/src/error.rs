@@ -44,6 +44,10 @@ pub enum KinematicsError {
     /// A geometric configuration for frame alignment is degenerate (would divide by ~0).
     #[error("frame alignment degenerate: {reason}")]
     Degenerate { reason: String },
+
+    /// The robot or camera an alignment drives failed (no answer, a refused move, no reading).
+    #[error("alignment rig: {reason}")]
+    Rig { reason: String },
 }
 
 pub(crate) fn check_finite(field: &str, value: f64) -> Result<f64, KinematicsError> {

@@ -26,6 +26,7 @@
 //! ```
 
 mod background;
+pub mod blocking;
 mod builder;
 pub mod diagnostics;
 pub mod environment;
@@ -65,4 +66,5 @@ pub use shutdown::ShutdownToken;
 pub use topics::TopicInfo;
 
 /// Re-exports so nodes need not depend on ros2-client directly.
+pub use blocking::block_on_within;
 pub use ros2_client::{MessageInfo, Publisher, QosProfile, ROSTime, Subscription};

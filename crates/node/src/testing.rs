@@ -145,24 +145,7 @@ pub fn set_remote_parameter(
     RemoteParameterClient::new(client_node, target)?.set(client_node, name, value, timeout)
 }
 
-/// Run `f` to completion on this thread, or give up after `timeout` (None).
-fn block_on_within<F: std::future::Future>(
-    f: F,
-    timeout: std::time::Duration,
-) -> Option<F::Output> {
-    let (expire, expired) = futures::channel::oneshot::channel::<()>();
-    std::thread::spawn(move || {
-        std::thread::sleep(timeout);
-        let _ = expire.send(());
-    });
-    futures::executor::block_on(async move {
-        futures::pin_mut!(f);
-        match futures::future::select(f, expired).await {
-            futures::future::Either::Left((output, _)) => Some(output),
-            futures::future::Either::Right(_) => None,
-        }
-    })
-}
+use crate::blocking::block_on_within;
 
 #[cfg(test)]
 mod tests {

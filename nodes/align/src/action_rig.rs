@@ -1,0 +1,242 @@
+//! Seed 003's procedure driven over ROS 2: each move is a `MoveTool` goal to the robot's action
+//! server, answered when the robot has settled; the camera's reading is the mean of the next
+//! `frames` poses of the fixed target on `fiducials/pose` (the fiducial node's output) stamped
+//! after the robot answered, before and after the move ([`crate::camera_reading`]). Every move is
+//! followed by the move back, so the procedure always measures from its start pose.
+
+use std::time::{Duration, Instant};
+
+use metrocell_kinematics::frame_alignment_procedure::AlignmentRig;
+use metrocell_kinematics::KinematicsError;
+use metrocell_msgs::geometry_msgs::msg::PoseWithCovarianceStamped;
+use metrocell_node::{qos, MetrocellNode, Subscription};
+use nalgebra::{Isometry3, Quaternion, Translation3, Unit, UnitQuaternion, Vector3};
+use ros2_client::action::ActionClient;
+
+use crate::camera_reading::{camera_displacement, mean_pose};
+use crate::move_tool::{client_qos, MoveToolFeedback, MoveToolGoal, MoveToolResult};
+
+/// How long to wait, and how many frames make a reading.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct RigTiming {
+    /// Poses averaged per reading.
+    pub frames: usize,
+    /// Longest wait for the robot to accept and finish one move.
+    pub move_timeout: Duration,
+    /// Longest wait for a reading's frames.
+    pub reading_timeout: Duration,
+}
+
+/// The robot behind its action, and the camera behind the fiducial node.
+pub struct ActionRig<'a> {
+    node: &'a mut MetrocellNode,
+    client: ActionClient<MoveToolGoal, MoveToolResult, MoveToolFeedback>,
+    poses: Subscription<PoseWithCovarianceStamped>,
+    action: String,
+    timing: RigTiming,
+    /// Moves made (each move and each move back).
+    pub moves: usize,
+    /// What happened, a line per move, for the log.
+    pub on_move: Box<dyn FnMut(&str) + 'a>,
+}
+
+fn rig_error(reason: impl Into<String>) -> KinematicsError {
+    KinematicsError::Rig {
+        reason: reason.into(),
+    }
+}
+
+fn pose_of(m: &PoseWithCovarianceStamped) -> Isometry3<f64> {
+    let (p, q) = (&m.pose.pose.position, &m.pose.pose.orientation);
+    Isometry3::from_parts(
+        Translation3::new(p.x, p.y, p.z),
+        UnitQuaternion::from_quaternion(Quaternion::new(q.w, q.x, q.y, q.z)),
+    )
+}
+
+impl<'a> ActionRig<'a> {
+    /// Connects to the action `action` (e.g. `robot/move_tool`) and the poses on `poses_topic`,
+    /// waiting up to `timing.move_timeout` for the robot's action server.
+    pub fn connect(
+        node: &'a mut MetrocellNode,
+        action: &str,
+        poses_topic: &str,
+        timing: RigTiming,
+    ) -> Result<Self, String> {
+        let resolved = node.resolve_topic(action).map_err(|e| e.to_string())?;
+        let (ns, base) = resolved.rsplit_once('/').unwrap_or(("", &resolved));
+        let name = ros2_client::Name::new(if ns.is_empty() { "/" } else { ns }, base)
+            .map_err(|e| format!("action name {resolved}: {e:?}"))?;
+        let client = node
+            .ros_node()
+            .create_action_client::<MoveToolGoal, MoveToolResult, MoveToolFeedback>(
+                ros2_client::ServiceMapping::Enhanced,
+                &name,
+                &crate::move_tool::action_type(),
+                client_qos(),
+            )
+            .map_err(|e| format!("action client of {resolved}: {e:?}"))?;
+        let poses = node
+            .subscription::<PoseWithCovarianceStamped>(poses_topic, qos::reliable())
+            .map_err(|e| e.to_string())?;
+        let matched = metrocell_node::block_on_within(
+            client.goal_client().wait_for_service(node.ros_node()),
+            timing.move_timeout,
+        )
+        .is_some()
+            && metrocell_node::block_on_within(
+                client.result_client().wait_for_service(node.ros_node()),
+                timing.move_timeout,
+            )
+            .is_some();
+        if !matched {
+            return Err(format!(
+                "no robot answers the action {resolved} (metrocell_msgs/action/MoveTool) within \
+                 {:?}: start the robot's driver (or metrocell-robot-twin), check its name with \
+                 -p action:=…, and that both run in the same ROS domain",
+                timing.move_timeout
+            ));
+        }
+        // the server's readers of our answers' topics are matched a moment after ours of its
+        std::thread::sleep(Duration::from_millis(300));
+        Ok(Self {
+            node,
+            client,
+            poses,
+            action: resolved,
+            timing,
+            moves: 0,
+            on_move: Box::new(|_| {}),
+        })
+    }
+
+    fn execute(&mut self, goal: MoveToolGoal, what: &str) -> Result<(), KinematicsError> {
+        let deadline = Instant::now() + self.timing.move_timeout;
+        let timed_out = || {
+            rig_error(format!(
+                "the robot did not finish `{what}` on {} within {:?}",
+                self.action, self.timing.move_timeout
+            ))
+        };
+        let (request, goal_id) = self
+            .client
+            .send_goal(goal)
+            .map_err(|e| rig_error(format!("sending `{what}`: {e:?}")))?;
+        let accepted = loop {
+            match self.client.receive_goal_response(request) {
+                Ok(Some(r)) => break r.accepted,
+                Ok(None) if Instant::now() < deadline => {
+                    std::thread::sleep(Duration::from_millis(2))
+                }
+                Ok(None) => return Err(timed_out()),
+                Err(e) => return Err(rig_error(format!("reading the robot's answer: {e:?}"))),
+            }
+        };
+        if !accepted {
+            return Err(rig_error(format!("the robot refused `{what}`")));
+        }
+        let request = self
+            .client
+            .request_result(goal_id)
+            .map_err(|e| rig_error(format!("asking for `{what}`'s result: {e:?}")))?;
+        let result = loop {
+            match self.client.receive_result(request) {
+                Ok(Some((_, r))) => break r,
+                Ok(None) if Instant::now() < deadline => {
+                    std::thread::sleep(Duration::from_millis(2))
+                }
+                Ok(None) => return Err(timed_out()),
+                Err(e) => return Err(rig_error(format!("reading `{what}`'s result: {e:?}"))),
+            }
+        };
+        if !result.success {
+            return Err(rig_error(format!(
+                "the robot could not `{what}`: {}",
+                result.message
+            )));
+        }
+        self.moves += 1;
+        (self.on_move)(what);
+        Ok(())
+    }
+
+    /// The mean of the next `frames` target poses stamped after now.
+    fn reading(&mut self) -> Result<Isometry3<f64>, KinematicsError> {
+        let after = self.node.now().to_nanos();
+        let deadline = Instant::now() + self.timing.reading_timeout;
+        let mut got = Vec::new();
+        while got.len() < self.timing.frames {
+            match self.poses.take() {
+                Ok(Some((m, _))) => {
+                    if m.header.stamp.nanos() > after {
+                        got.push(pose_of(&m));
+                    }
+                }
+                Ok(None) if Instant::now() < deadline => {
+                    std::thread::sleep(Duration::from_millis(2))
+                }
+                Ok(None) => return Err(rig_error(format!(
+                    "{} of {} target poses within {:?} on fiducials/pose: is the camera running, \
+                         the fiducial node detecting the target, and the target in view?",
+                    got.len(),
+                    self.timing.frames,
+                    self.timing.reading_timeout
+                ))),
+                Err(e) => return Err(rig_error(format!("reading fiducials/pose: {e:?}"))),
+            }
+        }
+        Ok(mean_pose(&got).expect("frames ≥ 1"))
+    }
+
+    fn measured_move(
+        &mut self,
+        there: MoveToolGoal,
+        back: MoveToolGoal,
+        what: &str,
+    ) -> Result<Vector3<f64>, KinematicsError> {
+        let before = self.reading()?;
+        self.execute(there, what)?;
+        let after = self.reading()?;
+        self.execute(back, &format!("{what}, back"))?;
+        Ok(camera_displacement(&before, &after))
+    }
+}
+
+impl AlignmentRig for ActionRig<'_> {
+    fn translate(&mut self, v: &Vector3<f64>) -> Result<Vector3<f64>, KinematicsError> {
+        let what = format!(
+            "translate by ({:.1}, {:.1}, {:.1}) mm",
+            v.x * 1e3,
+            v.y * 1e3,
+            v.z * 1e3
+        );
+        self.measured_move(
+            MoveToolGoal::translate(v),
+            MoveToolGoal::translate(&-v),
+            &what,
+        )
+    }
+
+    fn rotate(
+        &mut self,
+        axis: &Unit<Vector3<f64>>,
+        angle: f64,
+        through: &Vector3<f64>,
+    ) -> Result<Vector3<f64>, KinematicsError> {
+        let what = format!(
+            "turn {:.2}° about ({:.3}, {:.3}, {:.3}) through ({:.1}, {:.1}, {:.1}) mm",
+            angle.to_degrees(),
+            axis.x,
+            axis.y,
+            axis.z,
+            through.x * 1e3,
+            through.y * 1e3,
+            through.z * 1e3
+        );
+        self.measured_move(
+            MoveToolGoal::rotate(axis, angle, through),
+            MoveToolGoal::rotate(axis, -angle, through),
+            &what,
+        )
+    }
+}

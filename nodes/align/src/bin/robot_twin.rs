@@ -1,0 +1,242 @@
+//! `metrocell-robot-twin`: a robot with a camera on its tool, for the align node's tests and
+//! for trying it without a robot. It serves `robot/move_tool` (metrocell_msgs/action/MoveTool)
+//! by moving its tool at once, and publishes what the camera and the fiducial node would:
+//! the fixed target's pose in the camera on `fiducials/pose` at `rate`, with Gaussian noise of
+//! `noise` m per position component and `rotation_noise` rad per axis.
+//!
+//! The truth (parameters): the camera's origin `camera_offset` from the tool's (base axes, m) and
+//! its axes `camera_rpy` (URDF roll, pitch, yaw in rad, R = Rz·Ry·Rx: camera → tool, the tool
+//! starting with the base's axes), the target `target_distance` m ahead of the camera's start.
+//!
+//!   metrocell-robot-twin --ros-args -p camera_offset:="[0.06, -0.02, 0.09]" -p noise:=1e-5
+
+use std::time::{Duration, Instant};
+
+use metrocell_align_node::move_tool::{
+    from_msg, server_qos, MoveToolFeedback, MoveToolGoal, MoveToolResult, ROTATE, TRANSLATE,
+};
+use metrocell_msgs::geometry_msgs::msg::{
+    Point, Pose, PoseWithCovariance, PoseWithCovarianceStamped, Quaternion,
+};
+use metrocell_msgs::std_msgs::msg::Header;
+use metrocell_node::{qos, MetrocellNode, ParamDecl};
+use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
+use rand::{Rng, SeedableRng};
+use ros2_client::action::{GetResultResponse, GoalStatusEnum, SendGoalResponse};
+
+fn declarations() -> Vec<ParamDecl> {
+    vec![
+        ParamDecl::new(
+            "camera_offset",
+            vec![0.06, -0.02, 0.09],
+            "true camera origin from the tool's [m] (base axes)",
+        ),
+        ParamDecl::new(
+            "camera_rpy",
+            vec![3.10, 0.05, -0.08],
+            "true camera axes in the tool's: URDF roll, pitch, yaw [rad]",
+        ),
+        ParamDecl::new(
+            "target_distance",
+            0.4,
+            "the target's distance ahead of the camera at the start [m]",
+        )
+        .with_range(0.01, 10.0),
+        ParamDecl::new("noise", 1e-5, "σ of each position component of a pose [m]")
+            .with_range(0.0, 1.0),
+        ParamDecl::new(
+            "rotation_noise",
+            1e-5,
+            "σ of a pose's rotation about each axis [rad]",
+        )
+        .with_range(0.0, 1.0),
+        ParamDecl::new("rate", 50.0, "poses per second").with_range(0.1, 10000.0),
+        ParamDecl::new("seed", 1i64, "noise seed"),
+    ]
+}
+
+fn vec3(v: Vec<f64>, name: &str) -> Result<Vector3<f64>, String> {
+    match v[..] {
+        [x, y, z] => Ok(Vector3::new(x, y, z)),
+        _ => Err(format!("{name}: expected three numbers, got {v:?}")),
+    }
+}
+
+fn gaussian(rng: &mut impl Rng) -> f64 {
+    // Box–Muller
+    let (u, v): (f64, f64) = (rng.random::<f64>().max(1e-300), rng.random());
+    (-2.0 * u.ln()).sqrt() * (2.0 * std::f64::consts::PI * v).cos()
+}
+
+/// The tool after `goal` (base frame), or why the goal is refused.
+fn moved(tool: &Isometry3<f64>, goal: &MoveToolGoal) -> Result<Isometry3<f64>, String> {
+    match goal.kind {
+        TRANSLATE => {
+            let v = from_msg(&goal.translation);
+            if !v.iter().all(|c| c.is_finite()) {
+                return Err("translation is not finite".into());
+            }
+            Ok(Translation3::from(v) * tool)
+        }
+        ROTATE => {
+            let axis = from_msg(&goal.axis);
+            let through = from_msg(&goal.through);
+            if !(axis.iter().chain(through.iter()).all(|c| c.is_finite()) && goal.angle.is_finite())
+                || axis.norm() < 1e-9
+            {
+                return Err("axis, angle and point must be finite, the axis not zero".into());
+            }
+            let turn = UnitQuaternion::from_axis_angle(&Unit::new_normalize(axis), goal.angle);
+            let a = tool.translation.vector + through;
+            Ok(Isometry3::from_parts(
+                (a + turn * (tool.translation.vector - a)).into(),
+                turn * tool.rotation,
+            ))
+        }
+        k => Err(format!("kind {k} is neither TRANSLATE (0) nor ROTATE (1)")),
+    }
+}
+
+fn run() -> Result<(), String> {
+    let (mut node, _) =
+        MetrocellNode::from_env_args("robot_twin", declarations()).map_err(|e| e.to_string())?;
+    let offset = vec3(
+        node.param("camera_offset").map_err(|e| e.to_string())?,
+        "camera_offset",
+    )?;
+    let rpy = vec3(
+        node.param("camera_rpy").map_err(|e| e.to_string())?,
+        "camera_rpy",
+    )?;
+    let distance: f64 = node.param("target_distance").map_err(|e| e.to_string())?;
+    let noise: f64 = node.param("noise").map_err(|e| e.to_string())?;
+    let rotation_noise: f64 = node.param("rotation_noise").map_err(|e| e.to_string())?;
+    let rate: f64 = node.param("rate").map_err(|e| e.to_string())?;
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(
+        node.param::<i64>("seed").map_err(|e| e.to_string())? as u64,
+    );
+    // tool → camera; the target ahead of the camera's start, facing it
+    let mount = Isometry3::from_parts(
+        offset.into(),
+        UnitQuaternion::from_euler_angles(rpy.x, rpy.y, rpy.z),
+    );
+    let mut tool = Isometry3::identity();
+    let target = tool * mount * Isometry3::translation(0.0, 0.0, distance);
+
+    let resolved = node
+        .resolve_topic("robot/move_tool")
+        .map_err(|e| e.to_string())?;
+    let (ns, base) = resolved.rsplit_once('/').unwrap_or(("", &resolved));
+    let name = ros2_client::Name::new(if ns.is_empty() { "/" } else { ns }, base)
+        .map_err(|e| format!("{e:?}"))?;
+    let server = node
+        .ros_node()
+        .create_action_server::<MoveToolGoal, MoveToolResult, MoveToolFeedback>(
+            ros2_client::ServiceMapping::Enhanced,
+            &name,
+            &metrocell_align_node::move_tool::action_type(),
+            server_qos(),
+        )
+        .map_err(|e| format!("action server {resolved}: {e:?}"))?;
+    let poses = node
+        .publisher::<PoseWithCovarianceStamped>("fiducials/pose", qos::reliable())
+        .map_err(|e| e.to_string())?;
+    node.info(format!("serving {resolved}; poses on fiducials/pose at {rate} Hz, σ {noise} m, {rotation_noise} rad"));
+    let mut results: std::collections::BTreeMap<_, MoveToolResult> = Default::default();
+    let token = node.shutdown_token();
+    let period = Duration::from_secs_f64(1.0 / rate);
+    let mut next = Instant::now();
+    let mut moves = 0usize;
+    while !token.is_triggered() {
+        while let Ok(Some((request, goal))) = server.receive_goal() {
+            let result = match moved(&tool, &goal.goal) {
+                Ok(t) => {
+                    tool = t;
+                    moves += 1;
+                    MoveToolResult {
+                        success: true,
+                        message: String::new(),
+                    }
+                }
+                Err(why) => MoveToolResult {
+                    success: false,
+                    message: why,
+                },
+            };
+            results.insert(goal.goal_id, result);
+            let stamp = ros2_client::builtin_interfaces::Time::from_nanos(node.now().to_nanos());
+            let _ = server.send_goal_response(
+                request,
+                SendGoalResponse {
+                    accepted: true,
+                    stamp,
+                },
+            );
+            // what is published from now on is the settled new pose
+            next = Instant::now();
+        }
+        while let Ok(Some((request, asked))) = server.receive_result_request() {
+            if let Some(result) = results.remove(&asked.goal_id) {
+                let status = if result.success {
+                    GoalStatusEnum::Succeeded
+                } else {
+                    GoalStatusEnum::Aborted
+                };
+                let _ = server.send_result(request, GetResultResponse { status, result });
+            }
+        }
+        if Instant::now() >= next {
+            next += period;
+            let truth = (tool * mount).inverse() * target;
+            let dt = Vector3::from_fn(|_, _| noise * gaussian(&mut rng));
+            let dr = Vector3::from_fn(|_, _| rotation_noise * gaussian(&mut rng));
+            let seen = Isometry3::from_parts(
+                (truth.translation.vector + dt).into(),
+                UnitQuaternion::from_scaled_axis(dr) * truth.rotation,
+            );
+            let (t, q) = (seen.translation.vector, seen.rotation);
+            let mut covariance = [0.0; 36];
+            for k in 0..3 {
+                covariance[7 * k] = noise * noise;
+                covariance[7 * (k + 3)] = rotation_noise * rotation_noise;
+            }
+            let _ = poses.publish(PoseWithCovarianceStamped {
+                header: Header {
+                    stamp: metrocell_msgs::builtin_interfaces::msg::Time::from_nanos(
+                        node.now().to_nanos(),
+                    ),
+                    frame_id: "camera_optical_frame".into(),
+                },
+                pose: PoseWithCovariance {
+                    pose: Pose {
+                        position: Point {
+                            x: t.x,
+                            y: t.y,
+                            z: t.z,
+                        },
+                        orientation: Quaternion {
+                            x: q.i,
+                            y: q.j,
+                            z: q.k,
+                            w: q.w,
+                        },
+                    },
+                    covariance,
+                },
+            });
+        }
+        token.wait_timeout(Duration::from_millis(1));
+    }
+    node.info(format!("{moves} moves made"));
+    Ok(())
+}
+
+fn main() -> std::process::ExitCode {
+    match run() {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("metrocell-robot-twin: {e}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,86 @@
+//! What the camera "reads" in seed 003's procedure, from the fiducial node's poses of a fixed
+//! target: the camera's own displacement between two poses, in the first pose's camera axes.
+//!
+//! Convention (stated once): a pose is the target's in the camera's optical frame,
+//! `p_c = R·p_t + t` (the fiducial node's `fiducials/pose`). The camera's origin in the target's
+//! frame is `o = −Rᵀt`; its move `o₁ − o₀` in the first camera axes is `R₀(o₁ − o₀) = t₀ − R₀R₁ᵀt₁`
+//! (for a pure translation `t₀ − t₁`).
+
+use nalgebra::{Isometry3, Quaternion, UnitQuaternion, Vector3};
+
+/// The camera's displacement from `before` to `after` (target poses in the camera), in the
+/// camera axes of `before`.
+pub fn camera_displacement(before: &Isometry3<f64>, after: &Isometry3<f64>) -> Vector3<f64> {
+    before.translation.vector
+        - before.rotation * (after.rotation.inverse() * after.translation.vector)
+}
+
+/// The mean of poses of one still scene: translations averaged, rotations by the normalised sum
+/// of sign-aligned quaternions (exact to second order in their spread). None when empty.
+pub fn mean_pose(poses: &[Isometry3<f64>]) -> Option<Isometry3<f64>> {
+    let first = poses.first()?;
+    let n = poses.len() as f64;
+    let t = poses
+        .iter()
+        .map(|p| p.translation.vector)
+        .sum::<Vector3<f64>>()
+        / n;
+    let q0 = first.rotation.into_inner();
+    let sum = poses
+        .iter()
+        .fold(Quaternion::new(0.0, 0.0, 0.0, 0.0), |s, p| {
+            let q = p.rotation.into_inner();
+            if q.dot(&q0) < 0.0 {
+                s - q
+            } else {
+                s + q
+            }
+        });
+    Some(Isometry3::from_parts(
+        t.into(),
+        UnitQuaternion::from_quaternion(sum),
+    ))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use nalgebra::{Translation3, Unit};
+
+    /// Target at `target` (world), camera at `camera` (world pose): the target's pose in the camera.
+    fn seen(camera: &Isometry3<f64>, target: &Isometry3<f64>) -> Isometry3<f64> {
+        camera.inverse() * target
+    }
+
+    #[test]
+    fn displacement_is_the_cameras_move_in_its_first_axes() {
+        let target = Isometry3::from_parts(
+            Translation3::new(0.1, -0.2, 0.05),
+            UnitQuaternion::from_euler_angles(0.1, -0.2, 0.3),
+        );
+        let r0 = UnitQuaternion::from_euler_angles(3.0, 0.1, -0.4);
+        let c0 = Isometry3::from_parts(Translation3::new(0.05, 0.02, 0.6), r0);
+        // a translation and a turn about an axis through a point
+        let axis = Unit::new_normalize(Vector3::new(0.2, 0.1, 1.0));
+        let turn = UnitQuaternion::from_axis_angle(&axis, 0.4);
+        let a = Vector3::new(0.1, 0.0, 0.5);
+        let c1 = Isometry3::from_parts((a + turn * (c0.translation.vector - a)).into(), turn * r0);
+        let d = camera_displacement(&seen(&c0, &target), &seen(&c1, &target));
+        let truth = r0.inverse() * (c1.translation.vector - c0.translation.vector);
+        assert!((d - truth).norm() < 1e-12, "{d} vs {truth}");
+    }
+
+    #[test]
+    fn mean_of_poses_is_their_centre_and_ignores_quaternion_sign() {
+        let q = UnitQuaternion::from_euler_angles(0.1, 0.2, 0.3);
+        let a = Isometry3::from_parts(Translation3::new(1.0, 0.0, 0.0), q);
+        let b = Isometry3::from_parts(
+            Translation3::new(3.0, 2.0, 0.0),
+            UnitQuaternion::new_unchecked(-q.into_inner()),
+        );
+        let m = mean_pose(&[a, b]).unwrap();
+        assert!((m.translation.vector - Vector3::new(2.0, 1.0, 0.0)).norm() < 1e-15);
+        assert!(m.rotation.angle_to(&q) < 1e-12);
+        assert!(mean_pose(&[]).is_none());
+    }
+}

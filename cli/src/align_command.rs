@@ -98,7 +98,11 @@ pub fn run(a: AlignArgs) -> i32 {
         }
     };
     match metrocell_align_node::run(&mut node) {
-        Ok(alignment) => {
+        Ok(None) => {
+            eprintln!("interrupted before the alignment finished: nothing written");
+            130
+        }
+        Ok(Some(alignment)) => {
             print!("{}", alignment.urdf_joint("camera_mount", "tool", "camera"));
             print!(
                 "{}",

@@ -10,7 +10,7 @@ use system_tests::{bin, piped, run};
 fn every_node_prints_help_and_exits_without_starting() {
     system_tests::require_isolated_network();
     // (binary, parameters its help must list, whether it replays bags)
-    let nodes: [(&str, &[&str], bool); 10] = [
+    let nodes: [(&str, &[&str], bool); 12] = [
         ("metrocell-sim", &["cell", "duration", "seed"], false),
         ("metrocell-thermal", &["sensors", "alpha"], true),
         (
@@ -55,6 +55,16 @@ fn every_node_prints_help_and_exits_without_starting() {
             "metrocell-tracker",
             &["backend", "registration_points"],
             true,
+        ),
+        (
+            "metrocell-align",
+            &["action", "move_length", "camera_sigma", "urdf", "cell_pose"],
+            false,
+        ),
+        (
+            "metrocell-robot-twin",
+            &["camera_offset", "camera_rpy", "noise"],
+            false,
         ),
     ];
     for (name, params, replays) in nodes {

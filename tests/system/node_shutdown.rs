@@ -233,6 +233,13 @@ fn every_node_stops_within_a_second_on_sigint_and_sigterm() {
             "metrocell-dashboard",
             s(&["--ros-args", "-p", "port:=0", "-p", "foxglove_port:=0"]),
         ),
+        // serving its action and publishing poses
+        ("metrocell-robot-twin", s(&["--ros-args"])),
+        // waiting for a robot that never answers (its longest wait)
+        (
+            "metrocell-align",
+            s(&["--ros-args", "-p", "move_timeout:=600.0"]),
+        ),
     ];
     let mut load = ChildGuard::spawn(
         Command::new(bin("metrocell-sim"))

@@ -32,6 +32,7 @@ pub struct ActionRig<'a> {
     node: &'a mut MetrocellNode,
     client: ActionClient<MoveToolGoal, MoveToolResult, MoveToolFeedback>,
     poses: Subscription<PoseWithCovarianceStamped>,
+    token: metrocell_node::ShutdownToken,
     action: String,
     timing: RigTiming,
     /// Moves made (each move and each move back).
@@ -39,6 +40,9 @@ pub struct ActionRig<'a> {
     /// What happened, a line per move, for the log.
     pub on_move: Box<dyn FnMut(&str) + 'a>,
 }
+
+/// What the rig says when the node was asked to shut down mid-procedure.
+pub const INTERRUPTED: &str = "interrupted (shutdown requested) before the alignment finished";
 
 fn rig_error(reason: impl Into<String>) -> KinematicsError {
     KinematicsError::Rig {
@@ -79,17 +83,30 @@ impl<'a> ActionRig<'a> {
         let poses = node
             .subscription::<PoseWithCovarianceStamped>(poses_topic, qos::reliable())
             .map_err(|e| e.to_string())?;
-        let matched = metrocell_node::block_on_within(
-            client.goal_client().wait_for_service(node.ros_node()),
-            timing.move_timeout,
-        )
-        .is_some()
-            && metrocell_node::block_on_within(
-                client.result_client().wait_for_service(node.ros_node()),
-                timing.move_timeout,
-            )
-            .is_some();
-        if !matched {
+        // in slices, so a shutdown request is seen within one
+        let token = node.shutdown_token();
+        let deadline = Instant::now() + timing.move_timeout;
+        let slice = Duration::from_millis(100);
+        let mut matched = [false; 2];
+        while !(matched[0] && matched[1]) && Instant::now() < deadline {
+            if token.is_triggered() {
+                return Err(INTERRUPTED.into());
+            }
+            if !matched[0] {
+                matched[0] = metrocell_node::block_on_within(
+                    client.goal_client().wait_for_service(node.ros_node()),
+                    slice,
+                )
+                .is_some();
+            } else {
+                matched[1] = metrocell_node::block_on_within(
+                    client.result_client().wait_for_service(node.ros_node()),
+                    slice,
+                )
+                .is_some();
+            }
+        }
+        if !(matched[0] && matched[1]) {
             return Err(format!(
                 "no robot answers the action {resolved} (metrocell_msgs/action/MoveTool) within \
                  {:?}: start the robot's driver (or metrocell-robot-twin), check its name with \
@@ -103,6 +120,7 @@ impl<'a> ActionRig<'a> {
             node,
             client,
             poses,
+            token,
             action: resolved,
             timing,
             moves: 0,
@@ -125,6 +143,7 @@ impl<'a> ActionRig<'a> {
         let accepted = loop {
             match self.client.receive_goal_response(request) {
                 Ok(Some(r)) => break r.accepted,
+                Ok(None) if self.token.is_triggered() => return Err(rig_error(INTERRUPTED)),
                 Ok(None) if Instant::now() < deadline => {
                     std::thread::sleep(Duration::from_millis(2))
                 }
@@ -142,6 +161,7 @@ impl<'a> ActionRig<'a> {
         let result = loop {
             match self.client.receive_result(request) {
                 Ok(Some((_, r))) => break r,
+                Ok(None) if self.token.is_triggered() => return Err(rig_error(INTERRUPTED)),
                 Ok(None) if Instant::now() < deadline => {
                     std::thread::sleep(Duration::from_millis(2))
                 }
@@ -172,16 +192,19 @@ impl<'a> ActionRig<'a> {
                         got.push(pose_of(&m));
                     }
                 }
+                Ok(None) if self.token.is_triggered() => return Err(rig_error(INTERRUPTED)),
                 Ok(None) if Instant::now() < deadline => {
                     std::thread::sleep(Duration::from_millis(2))
                 }
-                Ok(None) => return Err(rig_error(format!(
+                Ok(None) => {
+                    return Err(rig_error(format!(
                     "{} of {} target poses within {:?} on fiducials/pose: is the camera running, \
                          the fiducial node detecting the target, and the target in view?",
                     got.len(),
                     self.timing.frames,
                     self.timing.reading_timeout
-                ))),
+                )))
+                }
                 Err(e) => return Err(rig_error(format!("reading fiducials/pose: {e:?}"))),
             }
         }

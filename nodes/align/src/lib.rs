@@ -42,9 +42,9 @@ pub fn declarations() -> Vec<ParamDecl> {
     ]
 }
 
-/// Runs the procedure with the node's parameters, publishes and writes the result. `log` gets a
-/// line per move and stage.
-pub fn run(node: &mut MetrocellNode) -> Result<Alignment, String> {
+/// Runs the procedure with the node's parameters, publishes and writes the result; logs a line
+/// per move and stage. `Ok(None)`: shut down (SIGINT/SIGTERM) before it finished.
+pub fn run(node: &mut MetrocellNode) -> Result<Option<Alignment>, String> {
     let p = |name: &str| node.param::<f64>(name).map_err(|e| e.to_string());
     let plan = AlignmentPlan {
         move_length: p("move_length")?,
@@ -76,11 +76,20 @@ pub fn run(node: &mut MetrocellNode) -> Result<Alignment, String> {
         plan.axis_offset * 1e3,
         timing.frames
     ));
+    let interrupted = |e: &str| e.contains(action_rig::INTERRUPTED);
     let alignment = {
-        let mut rig = ActionRig::connect(node, &action, &poses, timing)?;
+        let mut rig = match ActionRig::connect(node, &action, &poses, timing) {
+            Ok(rig) => rig,
+            Err(e) if interrupted(&e) => return Ok(None),
+            Err(e) => return Err(e),
+        };
         let log = logger.clone();
         rig.on_move = Box::new(move |what: &str| log.info(what));
-        let a = align(&mut rig, &plan).map_err(|e| e.to_string())?;
+        let a = match align(&mut rig, &plan) {
+            Ok(a) => a,
+            Err(e) if interrupted(&e.to_string()) => return Ok(None),
+            Err(e) => return Err(e.to_string()),
+        };
         logger.info(format!("{} moves", rig.moves));
         a
     };
@@ -123,5 +132,5 @@ pub fn run(node: &mut MetrocellNode) -> Result<Alignment, String> {
         // a latched sample outlives its writer only in the readers that already have it
         token.wait_timeout(Duration::from_secs(1));
     }
-    Ok(alignment)
+    Ok(Some(alignment))
 }

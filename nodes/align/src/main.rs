@@ -15,7 +15,11 @@ fn main() -> std::process::ExitCode {
             }
         };
     match metrocell_align_node::run(&mut node) {
-        Ok(_) => std::process::ExitCode::SUCCESS,
+        Ok(Some(_)) => std::process::ExitCode::SUCCESS,
+        Ok(None) => {
+            node.warn("shut down before the alignment finished: nothing written");
+            std::process::ExitCode::SUCCESS
+        }
         Err(e) => {
             node.error(&e);
             eprintln!("metrocell-align: {e}");

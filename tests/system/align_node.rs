@@ -136,10 +136,36 @@ fn alignment_through_the_action_reaches_the_cameras_noise_floor() {
             p.len() == 3 && p.iter().all(|&n| (1..=5).contains(&n)),
             "passes {p:?}\n{log}"
         );
-        let line = std::fs::read_to_string(&mount).unwrap();
+        let text = std::fs::read_to_string(&mount).unwrap();
+        let line = text.lines().nth(1).unwrap();
         assert!(
             line.starts_with("mount: {translation: [") && line.contains("euler_xyz"),
-            "{line}"
+            "{text}"
+        );
+        // the stated σ: "# metrocell align: σ offset x 0.0123 y … z … mm, rotation 0.0057° …"
+        let sigma: Vec<f64> = text
+            .lines()
+            .next()
+            .unwrap()
+            .split_whitespace()
+            .filter_map(|w| w.trim_end_matches('°').parse().ok())
+            .collect();
+        let (sx, sy, sz, sr) = (sigma[0], sigma[1], sigma[2], sigma[3]);
+        for (err, s) in (Vector3::from(xyz) - Vector3::from(*offset))
+            .iter()
+            .zip([sx, sy, sz])
+        {
+            assert!(
+                (err * 1e3).abs() < 4.0 * s,
+                "truth {k}: {} mm against σ {s}\n{text}",
+                err * 1e3
+            );
+        }
+        // the rotation error's size against the per-axis σ: |δθ| over three axes
+        assert!(
+            turn.to_degrees() < 4.0 * 3f64.sqrt() * sr,
+            "truth {k}: {}° against σ {sr}°",
+            turn.to_degrees()
         );
     }
     let _ = std::fs::remove_dir_all(&dir);

@@ -58,13 +58,20 @@ impl Default for AlignmentPlan {
     }
 }
 
-/// The result: the camera's frame in the tool's, and how each stage went.
+/// The result: the camera's frame in the tool's, its uncertainty, and how each stage went.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Alignment {
     /// `R_rc`: camera axes → robot axes.
     pub rotation: Matrix3<f64>,
     /// The camera origin from the tool origin (robot axes, m).
     pub offset: Vector3<f64>,
+    /// Standard uncertainty of the rotation about each robot axis (rad): each rotation pass
+    /// measures all that is left, so the last one's noise, `camera_sigma / move_length`.
+    pub rotation_sigma: f64,
+    /// Covariance of `offset` (m²): x from the xy stage's last pass, y and z from the z stage's
+    /// (which measures y again), each `σ²(AᵀA)⁻¹` of its least squares with σ² the camera's
+    /// noise plus the rotation's uncertainty carried through the largest displacement read.
+    pub offset_covariance: Matrix3<f64>,
     /// Passes each stage took (rotation, xy, z), and each pass's correction size (rad or m).
     pub passes: [Vec<f64>; 3],
 }
@@ -97,12 +104,14 @@ fn offset_pass(
     offset: &Vector3<f64>,
     apart: &Vector3<f64>,
     plane: [usize; 2],
-) -> Result<Vector2<f64>, KinematicsError> {
+) -> Result<(Vector2<f64>, nalgebra::Matrix2<f64>, f64), KinematicsError> {
     let (mut ata, mut atb) = (nalgebra::Matrix2::zeros(), Vector2::zeros());
+    let mut largest: f64 = 0.0;
     for shift in [Vector3::zeros(), *apart] {
         for sign in [1.0, -1.0] {
             let through = offset + shift;
             let seen = rotation * rig.rotate(axis, sign * angle, &through)?;
+            largest = largest.max(seen.norm());
             let m =
                 Rotation3::from_axis_angle(axis, sign * angle).into_inner() - Matrix3::identity();
             // (R − I)(e − shift) = Δ in the plane: A e = Δ + (R − I) shift
@@ -119,7 +128,7 @@ fn offset_pass(
         }
     }
     ata.try_inverse()
-        .map(|inv| inv * atb)
+        .map(|inv| (inv * atb, inv, largest))
         .ok_or_else(|| KinematicsError::Degenerate {
             reason: "the rotation angle is zero: no displacement to read the offset from".into(),
         })
@@ -164,11 +173,29 @@ pub fn align(
         (Vector3::z_axis(), Vector3::new(d, d, 0.0), [0, 1]),
         (Vector3::x_axis(), Vector3::new(0.0, 0.0, d), [1, 2]),
     ];
+    let rotation_sigma = plan.camera_sigma / plan.move_length;
+    let mut offset_covariance = Matrix3::zeros();
     for (k, (axis, apart, plane)) in stages.iter().enumerate() {
         for _ in 0..plan.max_passes {
-            let correction = offset_pass(rig, &rotation, axis, plan.angle, &offset, apart, *plane)?;
+            let (correction, inverse, largest) =
+                offset_pass(rig, &rotation, axis, plan.angle, &offset, apart, *plane)?;
             for (i, c) in plane.iter().zip(correction.iter()) {
                 offset[*i] += c;
+            }
+            // what the last pass leaves: its own noise (the rotation's error turns every
+            // displacement read, by up to rotation_sigma × its length)
+            let variance = plan.camera_sigma.powi(2) + (rotation_sigma * largest).powi(2);
+            for (a, &i) in plane.iter().enumerate() {
+                for (b, &j) in plane.iter().enumerate() {
+                    offset_covariance[(i, j)] = variance * inverse[(a, b)];
+                }
+                // the z stage measures y again: the xy stage's y/x correlation no longer holds
+                for other in 0..3 {
+                    if !plane.contains(&other) {
+                        offset_covariance[(i, other)] = 0.0;
+                        offset_covariance[(other, i)] = 0.0;
+                    }
+                }
             }
             passes[k + 1].push(correction.norm());
             if correction.norm() < floor {
@@ -179,6 +206,8 @@ pub fn align(
     Ok(Alignment {
         rotation,
         offset,
+        rotation_sigma,
+        offset_covariance,
         passes,
     })
 }
@@ -231,6 +260,8 @@ mod tests {
     fn p12_noisy_end_to_end_reaches_the_tolerance_in_five_passes() {
         let mut rng = ChaCha8Rng::seed_from_u64(2026);
         let (mut worst_mm, mut worst_deg, mut most_passes) = (0.0f64, 0.0f64, 0usize);
+        // |z| of each offset and rotation component against the σ the result states
+        let mut z = Vec::new();
         for trial in 0..200 {
             let axis = Unit::new_normalize(Vector3::from_fn(|_, _| rng.random::<f64>() - 0.5));
             let r_rc =
@@ -249,11 +280,33 @@ mod tests {
             let deg = Rotation3::from_matrix_unchecked(a.rotation.transpose() * r_rc)
                 .angle()
                 .to_degrees();
+            for i in 0..3 {
+                z.push(((a.offset - r)[i] / a.offset_covariance[(i, i)].sqrt()).abs());
+            }
+            let turn =
+                Rotation3::from_matrix_unchecked(r_rc * a.rotation.transpose()).scaled_axis();
+            z.extend(turn.iter().map(|t| (t / a.rotation_sigma).abs()));
             worst_mm = worst_mm.max(mm);
             worst_deg = worst_deg.max(deg);
             most_passes = most_passes.max(a.passes.iter().map(Vec::len).max().unwrap());
         }
         println!("worst {worst_mm:.4} mm, {worst_deg:.4}°, {most_passes} passes");
+        let within = |k: f64| z.iter().filter(|v| **v < k).count() as f64 / z.len() as f64;
+        println!(
+            "stated σ: within 1σ {:.3}, 2σ {:.3}, 3σ {:.3} of {} components",
+            within(1.0),
+            within(2.0),
+            within(3.0),
+            z.len()
+        );
+        // Gaussian: 0.683, 0.954, 0.997
+        assert!((0.60..0.78).contains(&within(1.0)), "{}", within(1.0));
+        assert!(
+            within(2.0) > 0.92 && within(3.0) > 0.985,
+            "{} {}",
+            within(2.0),
+            within(3.0)
+        );
         assert!(
             worst_mm < 0.05 && worst_deg < 0.05,
             "{worst_mm} mm, {worst_deg}°"
@@ -269,6 +322,8 @@ mod tests {
         let a = Alignment {
             rotation,
             offset: Vector3::new(0.04, -0.025, 0.06),
+            rotation_sigma: 1e-4,
+            offset_covariance: Matrix3::identity() * 1e-10,
             passes: Default::default(),
         };
         let urdf = format!(

@@ -37,13 +37,27 @@ pub fn tf_static(a: &Alignment, tool_link: &str, camera_link: &str, stamp: Time)
     }
 }
 
-/// The `mount:` line of a cell file's `sensors.camera` (mm and degrees).
+/// The result's standard uncertainties in words (mm, degrees).
+pub fn uncertainty(a: &Alignment) -> String {
+    let c = &a.offset_covariance;
+    format!(
+        "σ offset x {:.4} y {:.4} z {:.4} mm, rotation {:.4}° about each axis",
+        c[(0, 0)].sqrt() * 1e3,
+        c[(1, 1)].sqrt() * 1e3,
+        c[(2, 2)].sqrt() * 1e3,
+        a.rotation_sigma.to_degrees()
+    )
+}
+
+/// The `mount:` line of a cell file's `sensors.camera` (mm and degrees), its uncertainty as a
+/// comment above it.
 pub fn cell_mount(a: &Alignment) -> String {
     let pose = InstrumentPose::from_rotation(a.offset, &a.rotation);
     let t = a.offset * 1e3;
     let e = pose.euler_xyz.map(f64::to_degrees);
     format!(
-        "mount: {{translation: [{:.4} mm, {:.4} mm, {:.4} mm], euler_xyz: [{:.5} deg, {:.5} deg, {:.5} deg]}}\n",
+        "# metrocell align: {}\nmount: {{translation: [{:.4} mm, {:.4} mm, {:.4} mm], euler_xyz: [{:.5} deg, {:.5} deg, {:.5} deg]}}\n",
+        uncertainty(a),
         t.x, t.y, t.z, e[0], e[1], e[2]
     )
 }
@@ -57,6 +71,8 @@ mod tests {
         Alignment {
             rotation: Rotation3::from_euler_angles(3.0, 0.1, -0.2).into_inner(),
             offset: V3::new(0.06, -0.01, 0.02),
+            rotation_sigma: 1e-4,
+            offset_covariance: Matrix3::identity() * 1e-10,
             passes: Default::default(),
         }
     }
@@ -64,7 +80,12 @@ mod tests {
     #[test]
     fn the_cell_mount_reads_back_as_the_same_frame() {
         let a = alignment();
-        let line = cell_mount(&a);
+        let text = cell_mount(&a);
+        assert!(
+            text.starts_with("# metrocell align: σ offset x 0.0100"),
+            "{text}"
+        );
+        let line = text.lines().nth(1).unwrap();
         // parse the numbers back and rebuild R = Rx·Ry·Rz
         let nums: Vec<f64> = line
             .split(|c: char| !(c.is_ascii_digit() || c == '.' || c == '-'))

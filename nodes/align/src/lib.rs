@@ -105,7 +105,11 @@ pub fn run(node: &mut MetrocellNode) -> Result<Option<Alignment>, String> {
         ));
     }
     let mount = alignment_outputs::cell_mount(&alignment);
-    logger.info(format!("camera in {tool_link}: {}", mount.trim_end()));
+    logger.info(format!(
+        "camera in {tool_link}: {}",
+        mount.lines().last().unwrap_or_default()
+    ));
+    logger.info(alignment_outputs::uncertainty(&alignment));
     let _ = tf.publish(alignment_outputs::tf_static(
         &alignment,
         &tool_link,

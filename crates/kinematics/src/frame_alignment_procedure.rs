@@ -28,6 +28,10 @@ pub trait AlignmentRig {
         angle: f64,
         through: &Vector3<f64>,
     ) -> Result<Vector3<f64>, KinematicsError>;
+    /// The camera's rotation `R_rc` as the rotation stage found it, told before the offset
+    /// stages: a rig whose camera measures positions can turn its readings with it (a target
+    /// pose's orientation is much noisier than its position).
+    fn rotation_estimate(&mut self, _r_rc: &Matrix3<f64>) {}
 }
 
 /// How the procedure moves and when it stops.
@@ -164,6 +168,7 @@ pub fn align(
             break;
         }
     }
+    rig.rotation_estimate(&rotation);
     // the offset stages: displacements read in robot axes through the estimated rotation
     let mut offset = Vector3::zeros();
     let floor = 3.0 * plan.camera_sigma / (2.0 * (plan.angle / 2.0).sin());

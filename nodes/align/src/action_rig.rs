@@ -1,8 +1,9 @@
 //! Seed 003's procedure driven over ROS 2: each move is a `MoveTool` goal to the robot's action
-//! server, answered when the robot has settled; the camera's reading is the mean of the next
-//! `frames` poses of the fixed target on `fiducials/pose` (the fiducial node's output) stamped
-//! after the robot answered, before and after the move ([`crate::camera_reading`]). Every move is
-//! followed by the move back, so the procedure always measures from its start pose.
+//! server, answered when the robot has settled; the camera's reading comes from the target's
+//! position in the mean of the next `frames` poses on `fiducials/pose` (the fiducial node's
+//! output) stamped after the robot answered, before and after the move, and — for a turn — the
+//! turn the robot was told to make ([`crate::camera_reading`]). Every move is followed by the
+//! move back, so the procedure always measures from its start pose.
 
 use std::time::{Duration, Instant};
 
@@ -13,7 +14,7 @@ use metrocell_node::{qos, MetrocellNode, Subscription};
 use nalgebra::{Isometry3, Quaternion, Translation3, Unit, UnitQuaternion, Vector3};
 use ros2_client::action::ActionClient;
 
-use crate::camera_reading::{camera_displacement, mean_pose};
+use crate::camera_reading::{displacement_after_translation, displacement_after_turn, mean_pose};
 use crate::move_tool::{client_qos, MoveToolFeedback, MoveToolGoal, MoveToolResult};
 
 /// How long to wait, and how many frames make a reading.
@@ -39,6 +40,11 @@ pub struct ActionRig<'a> {
     pub moves: usize,
     /// What happened, a line per move, for the log.
     pub on_move: Box<dyn FnMut(&str) + 'a>,
+    /// The camera's axes in the base's, once the rotation stage has found them.
+    r_rc: Option<nalgebra::Matrix3<f64>>,
+    /// The target's position at the start pose, one per move (every move starts there): their
+    /// scatter is the camera's reading noise, measured.
+    pub start_positions: Vec<Vector3<f64>>,
 }
 
 /// What the rig says when the node was asked to shut down mid-procedure.
@@ -125,6 +131,8 @@ impl<'a> ActionRig<'a> {
             timing,
             moves: 0,
             on_move: Box::new(|_| {}),
+            r_rc: None,
+            start_positions: Vec::new(),
         })
     }
 
@@ -211,17 +219,39 @@ impl<'a> ActionRig<'a> {
         Ok(mean_pose(&got).expect("frames ≥ 1"))
     }
 
+    /// The target's position in the camera before and after `there` (then `back`).
     fn measured_move(
         &mut self,
         there: MoveToolGoal,
         back: MoveToolGoal,
         what: &str,
-    ) -> Result<Vector3<f64>, KinematicsError> {
+    ) -> Result<(Vector3<f64>, Vector3<f64>), KinematicsError> {
         let before = self.reading()?;
+        self.start_positions.push(before.translation.vector);
         self.execute(there, what)?;
         let after = self.reading()?;
         self.execute(back, &format!("{what}, back"))?;
-        Ok(camera_displacement(&before, &after))
+        Ok((before.translation.vector, after.translation.vector))
+    }
+}
+
+impl ActionRig<'_> {
+    /// The noise of one displacement reading per component (m), from the scatter of the start
+    /// pose's positions (a reading differences two of them): the largest component's
+    /// `√2 · SD`. None below three readings.
+    pub fn measured_reading_sigma(&self) -> Option<f64> {
+        let n = self.start_positions.len();
+        if n < 3 {
+            return None;
+        }
+        let mean = self.start_positions.iter().sum::<Vector3<f64>>() / n as f64;
+        let var = self
+            .start_positions
+            .iter()
+            .map(|p| (p - mean).component_mul(&(p - mean)))
+            .sum::<Vector3<f64>>()
+            / (n - 1) as f64;
+        Some((2.0 * var.max()).sqrt())
     }
 }
 
@@ -233,11 +263,12 @@ impl AlignmentRig for ActionRig<'_> {
             v.y * 1e3,
             v.z * 1e3
         );
-        self.measured_move(
+        let (before, after) = self.measured_move(
             MoveToolGoal::translate(v),
             MoveToolGoal::translate(&-v),
             &what,
-        )
+        )?;
+        Ok(displacement_after_translation(&before, &after))
     }
 
     fn rotate(
@@ -256,10 +287,21 @@ impl AlignmentRig for ActionRig<'_> {
             through.y * 1e3,
             through.z * 1e3
         );
-        self.measured_move(
+        let r_rc = self.r_rc.ok_or_else(|| {
+            rig_error("a turn before the rotation stage: the camera's axes are not known yet")
+        })?;
+        let turn = nalgebra::Rotation3::from_axis_angle(axis, angle).into_inner();
+        // the point is given from the tool's origin, which the turn moved: the same point seen
+        // from there is R(θ)·through (o₁ = a + R(θ)(o₀ − a), so a − o₁ = R(θ)(a − o₀))
+        let (before, after) = self.measured_move(
             MoveToolGoal::rotate(axis, angle, through),
-            MoveToolGoal::rotate(axis, -angle, through),
+            MoveToolGoal::rotate(axis, -angle, &(turn * through)),
             &what,
-        )
+        )?;
+        Ok(displacement_after_turn(&before, &after, &r_rc, &turn))
+    }
+
+    fn rotation_estimate(&mut self, r_rc: &nalgebra::Matrix3<f64>) {
+        self.r_rc = Some(*r_rc);
     }
 }

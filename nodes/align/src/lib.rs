@@ -85,12 +85,36 @@ pub fn run(node: &mut MetrocellNode) -> Result<Option<Alignment>, String> {
         };
         let log = logger.clone();
         rig.on_move = Box::new(move |what: &str| log.info(what));
-        let a = match align(&mut rig, &plan) {
+        let mut a = match align(&mut rig, &plan) {
             Ok(a) => a,
             Err(e) if interrupted(&e.to_string()) => return Ok(None),
             Err(e) => return Err(e.to_string()),
         };
         logger.info(format!("{} moves", rig.moves));
+        if let Some(measured) = rig.measured_reading_sigma() {
+            let n = rig.start_positions.len();
+            if measured > plan.camera_sigma {
+                // the uncertainty follows the camera the data show, never a narrower one
+                let ratio = measured / plan.camera_sigma;
+                a.offset_covariance *= ratio * ratio;
+                a.rotation_sigma *= ratio;
+                logger.warn(format!(
+                    "the camera's readings scatter by {:.4} mm per component ({n} readings of \
+                     the start pose), more than camera_sigma {:.4} mm: the stated uncertainty is \
+                     widened by {ratio:.2}×, and the stages stopped on the smaller figure — set \
+                     camera_sigma to the measured one",
+                    measured * 1e3,
+                    plan.camera_sigma * 1e3
+                ));
+            } else {
+                logger.info(format!(
+                    "the camera's readings scatter by {:.4} mm per component ({n} readings of the \
+                     start pose), within camera_sigma {:.4} mm",
+                    measured * 1e3,
+                    plan.camera_sigma * 1e3
+                ));
+            }
+        }
         a
     };
     for (stage, passes) in ["rotation", "xy offset", "z offset"]

@@ -8,6 +8,12 @@
 //! its axes `camera_rpy` (URDF roll, pitch, yaw in rad, R = Rz·Ry·Rx: camera → tool, the tool
 //! starting with the base's axes), the target `target_distance` m ahead of the camera's start.
 //!
+//! With `camera_images:=true` it publishes the camera's frames instead (`camera/image_raw`,
+//! mono8, and `camera/camera_info`): a checkerboard target (`board` squares of `square` m,
+//! centred on the camera's start axis) rendered by the twin's renderer through a 1280 × 960 px,
+//! f = 1400 px lens with the twin's blur and sensor noise — for the camera and fiducial nodes
+//! (`metrocell-fiducial` with `family:=checkerboard`) to measure.
+//!
 //!   metrocell-robot-twin --ros-args -p camera_offset:="[0.06, -0.02, 0.09]" -p noise:=1e-5
 
 use std::time::{Duration, Instant};
@@ -18,6 +24,7 @@ use metrocell_align_node::move_tool::{
 use metrocell_msgs::geometry_msgs::msg::{
     Point, Pose, PoseWithCovariance, PoseWithCovarianceStamped, Quaternion,
 };
+use metrocell_msgs::sensor_msgs::msg::{CameraInfo, Image};
 use metrocell_msgs::std_msgs::msg::Header;
 use metrocell_node::{qos, MetrocellNode, ParamDecl};
 use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion, Vector3};
@@ -52,6 +59,22 @@ fn declarations() -> Vec<ParamDecl> {
         .with_range(0.0, 1.0),
         ParamDecl::new("rate", 50.0, "poses per second").with_range(0.1, 10000.0),
         ParamDecl::new("seed", 1i64, "noise seed"),
+        ParamDecl::new(
+            "camera_images",
+            false,
+            "publish rendered camera frames of a checkerboard instead of poses",
+        ),
+        ParamDecl::new(
+            "board",
+            vec![10i64, 7],
+            "camera_images: the checkerboard's squares (x, y)",
+        ),
+        ParamDecl::new(
+            "square",
+            0.012,
+            "camera_images: the checkerboard's square [m]",
+        )
+        .with_range(1e-3, 1.0),
     ]
 }
 
@@ -94,6 +117,62 @@ fn moved(tool: &Isometry3<f64>, goal: &MoveToolGoal) -> Result<Isometry3<f64>, S
             ))
         }
         k => Err(format!("kind {k} is neither TRANSLATE (0) nor ROTATE (1)")),
+    }
+}
+
+/// The twin's camera looking at a checkerboard.
+struct BoardCamera {
+    camera: metrocell_camera_model::CameraModel,
+    target: metrocell_vision::render::PlanarTarget,
+    size: [f64; 2],
+    info: CameraInfo,
+}
+
+impl BoardCamera {
+    fn new(board: &[i64], square: f64) -> Result<Self, String> {
+        let &[x, y] = board else {
+            return Err(format!("board: expected two square counts, got {board:?}"));
+        };
+        if x < 2 || y < 2 {
+            return Err(format!("board: at least 2 × 2 squares, got {x} × {y}"));
+        }
+        let camera = metrocell_camera_model::CameraModel::new(
+            1280,
+            960,
+            1400.0,
+            1400.0,
+            639.5,
+            479.5,
+            metrocell_camera_model::Distortion::none(),
+        )
+        .map_err(|e| e.to_string())?;
+        let info = metrocell_camera_model::CameraInfo::from_model("camera_optical_frame", &camera)
+            .to_msg();
+        Ok(Self {
+            camera,
+            target: metrocell_vision::render::PlanarTarget {
+                items: vec![metrocell_vision::render::TargetItem::Checkerboard {
+                    top_left: [0.0, 0.0],
+                    square,
+                    squares_x: x as u32,
+                    squares_y: y as u32,
+                    top_left_black: true,
+                }],
+            },
+            size: [x as f64 * square, y as f64 * square],
+            info,
+        })
+    }
+
+    /// A frame of the board at `pose` (board → camera).
+    fn render(&self, pose: Isometry3<f64>, seed: u64) -> Result<image::GrayImage, String> {
+        let settings = metrocell_vision::render::RenderSettings {
+            seed,
+            ..metrocell_simulation::FrameRendering::default().settings
+        };
+        metrocell_vision::render::render_view(&self.camera, &pose, &self.target, &settings)
+            .map(|v| v.image)
+            .map_err(|e| format!("rendering the camera's frame: {e}"))
     }
 }
 
@@ -141,6 +220,28 @@ fn run() -> Result<(), String> {
     let poses = node
         .publisher::<PoseWithCovarianceStamped>("fiducials/pose", qos::reliable())
         .map_err(|e| e.to_string())?;
+    let images = if node
+        .param::<bool>("camera_images")
+        .map_err(|e| e.to_string())?
+    {
+        let board = node.param::<Vec<i64>>("board").map_err(|e| e.to_string())?;
+        let square: f64 = node.param("square").map_err(|e| e.to_string())?;
+        let renderer = BoardCamera::new(&board, square)?;
+        Some((
+            node.publisher::<Image>("camera/image_raw", qos::reliable())
+                .map_err(|e| e.to_string())?,
+            node.publisher::<CameraInfo>("camera/camera_info", qos::reliable())
+                .map_err(|e| e.to_string())?,
+            renderer,
+        ))
+    } else {
+        None
+    };
+    // the board's centre on the camera's start axis, its axes the camera's
+    let target = match &images {
+        Some((_, _, r)) => target * Isometry3::translation(-r.size[0] / 2.0, -r.size[1] / 2.0, 0.0),
+        None => target,
+    };
     node.info(format!("serving {resolved}; poses on fiducials/pose at {rate} Hz, σ {noise} m, {rotation_noise} rad"));
     let mut results: std::collections::BTreeMap<_, MoveToolResult> = Default::default();
     let token = node.shutdown_token();
@@ -185,7 +286,21 @@ fn run() -> Result<(), String> {
                 let _ = server.send_result(request, GetResultResponse { status, result });
             }
         }
-        if Instant::now() >= next {
+        if Instant::now() >= next && images.is_some() {
+            next += period;
+            let (frames, infos, renderer) = images.as_ref().expect("checked");
+            let stamp =
+                metrocell_msgs::builtin_interfaces::msg::Time::from_nanos(node.now().to_nanos());
+            let image = renderer.render((tool * mount).inverse() * target, rng.random())?;
+            let mut info = renderer.info.clone();
+            info.header.stamp = stamp.clone();
+            let _ = infos.publish(info);
+            let _ = frames.publish(metrocell_simulation::convert::mono8_image(
+                image,
+                "camera_optical_frame",
+                stamp,
+            ));
+        } else if Instant::now() >= next {
             next += period;
             let truth = (tool * mount).inverse() * target;
             let dt = Vector3::from_fn(|_, _| noise * gaussian(&mut rng));

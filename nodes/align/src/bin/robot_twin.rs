@@ -286,9 +286,8 @@ fn run() -> Result<(), String> {
                 let _ = server.send_result(request, GetResultResponse { status, result });
             }
         }
-        if Instant::now() >= next && images.is_some() {
+        if let (true, Some((frames, infos, renderer))) = (Instant::now() >= next, &images) {
             next += period;
-            let (frames, infos, renderer) = images.as_ref().expect("checked");
             let stamp =
                 metrocell_msgs::builtin_interfaces::msg::Time::from_nanos(node.now().to_nanos());
             let image = renderer.render((tool * mount).inverse() * target, rng.random())?;

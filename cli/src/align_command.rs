@@ -60,12 +60,9 @@ pub struct AlignArgs {
     ros_args: Vec<String>,
 }
 
+/// A flag's value as the node's parameter default.
 fn set(decls: &mut [ParamDecl], name: &str, value: impl Into<ParamValue>) {
-    let d = decls
-        .iter_mut()
-        .find(|d| d.name == name)
-        .expect("the align node declares this parameter");
-    d.default = value.into();
+    ParamDecl::set_default(decls, name, value);
 }
 
 pub fn run(a: AlignArgs) -> i32 {

@@ -72,3 +72,33 @@ pub fn record_photos(
     assert_eq!(count, Some(files), "every photo recorded once:\n{info}");
     info
 }
+
+/// The photos of `glob` taken "in the cell" ([`record_photos`]) and measured from the recording by
+/// `metrocell WORKFLOW measure --bag` with the recorded camera_info: asserts the table equals
+/// `from_files` (what `--images` wrote) byte for byte.
+pub fn recorded_photos_measure_the_same(
+    workflow: &str,
+    glob: &Path,
+    camera_info: &Path,
+    domain: u32,
+    files: usize,
+    from_files: &Path,
+) {
+    let dir = from_files.parent().expect("a table in a directory");
+    let bag = dir.join(format!("{workflow}_bag"));
+    record_photos(glob, camera_info, &bag, domain, files);
+    let from_bag = dir.join(format!("{workflow}_from_bag.csv"));
+    run_ok(
+        piped(bin("metrocell"))
+            .args([workflow, "measure", "--bag"])
+            .arg(&bag)
+            .arg("-o")
+            .arg(&from_bag),
+        Duration::from_secs(120),
+    );
+    assert_eq!(
+        std::fs::read_to_string(&from_bag).unwrap(),
+        std::fs::read_to_string(from_files).unwrap(),
+        "{workflow} measure: the recording's table and the files' differ"
+    );
+}

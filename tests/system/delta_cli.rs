@@ -13,7 +13,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use system_tests::camera_recording::record_photos;
+use system_tests::camera_recording::recorded_photos_measure_the_same;
 use system_tests::{
     bin, piped, python, run, run_ok, workspace_root, write_checkerboard_photo,
     write_pinhole_camera_info,
@@ -649,26 +649,13 @@ fn photographed_star_gives_settings_that_print_true() {
     assert!(stdout.contains("tiles [1, 2, 3]"), "{stdout}");
     // the photo taken in the cell: published by the camera node, recorded, measured from the
     // recording with the recorded camera_info — the same rows to the last digit
-    let bag = dir.join("bag");
-    record_photos(
+    recorded_photos_measure_the_same(
+        "delta",
         &photos.join("photo_*.png"),
         &photos.join("camera_info.yaml"),
-        &bag,
         88,
         1,
-    );
-    let from_bag = dir.join("star_from_bag.csv");
-    run_ok(
-        piped(bin("metrocell"))
-            .args(["delta", "measure", "--bag"])
-            .arg(&bag)
-            .arg("-o")
-            .arg(&from_bag),
-        Duration::from_secs(120),
-    );
-    assert_eq!(
-        std::fs::read_to_string(&from_bag).unwrap(),
-        std::fs::read_to_string(&csv).unwrap()
+        &csv,
     );
     let (stdout, new) = delta_fit(&dir, &settings, &csv, 1);
     let (rod, _, rod_sigma) = row(&stdout, "rod length (mm)");

@@ -10,7 +10,7 @@
 use std::path::{Path, PathBuf};
 use std::time::Duration;
 
-use system_tests::camera_recording::record_photos;
+use system_tests::camera_recording::recorded_photos_measure_the_same;
 use system_tests::{
     bin, piped, python, run, run_ok, workspace_root, write_checkerboard_photo,
     write_pinhole_camera_info,
@@ -277,26 +277,13 @@ fn photographed_plate_is_measured_and_compensated_to_its_noise() {
     };
     // the same photos taken in the cell: published by the camera node, recorded, measured from
     // the recording with the recorded camera_info — the same table to the last digit
-    let bag = dir.join("bag");
-    record_photos(
+    recorded_photos_measure_the_same(
+        "router",
         &dir.join("photo_*.png"),
         &dir.join("camera_info.yaml"),
-        &bag,
         87,
         2,
-    );
-    let from_bag = dir.join("holes_from_bag.csv");
-    run_ok(
-        piped(bin("metrocell"))
-            .args(["router", "measure", "--bag"])
-            .arg(&bag)
-            .arg("-o")
-            .arg(&from_bag),
-        Duration::from_secs(120),
-    );
-    assert_eq!(
-        std::fs::read_to_string(&from_bag).unwrap(),
-        std::fs::read_to_string(&table).unwrap()
+        &table,
     );
     let (measured, truth) = (rows(&table), rows(&dir.join("truth.csv")));
     let mut z2 = 0.0;

@@ -70,12 +70,9 @@ pub struct RecordArgs {
 
 /// Set the default of the declared parameter `name` (the value the node has unless
 /// `--ros-args` overrides it).
+/// A flag's value as the node's parameter default.
 fn set(decls: &mut [ParamDecl], name: &str, value: impl Into<ParamValue>) {
-    let d = decls
-        .iter_mut()
-        .find(|d| d.name == name)
-        .expect("the recorder declares this parameter");
-    d.default = value.into();
+    ParamDecl::set_default(decls, name, value);
 }
 
 pub fn run(args: RecordArgs) -> anyhow::Result<i32> {

@@ -7,7 +7,6 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
-use metrocell_camera_model::CameraInfo;
 use metrocell_kinematics::delta::DeltaGeometry;
 use metrocell_kinematics::delta_firmware::MarlinDelta;
 use metrocell_simulation::workflow_photos::{
@@ -15,6 +14,8 @@ use metrocell_simulation::workflow_photos::{
 };
 use metrocell_vision::printed_star::DeltaStar;
 use nalgebra::Vector3;
+
+use crate::vision::simulated_photos::write_photos;
 
 #[derive(clap::Args)]
 #[command(
@@ -187,20 +188,9 @@ pub fn run(a: SimulateArgs) -> anyhow::Result<i32> {
     };
     let camera = workflow_camera();
     let distance = distance_for(&camera, star_extent(&star));
-    std::fs::create_dir_all(&a.output)
-        .with_context(|| format!("creating {}", a.output.display()))?;
-    let info_path = a.output.join("camera_info.yaml");
-    CameraInfo::from_model("workflow_camera", &camera)
-        .save(&info_path)
-        .with_context(|| format!("writing {}", info_path.display()))?;
-    for k in 0..a.photos {
-        let image = photograph_star(&star, &camera, distance, a.seed, k)?;
-        let path = a.output.join(format!("photo_{k}.png"));
-        image
-            .save(&path)
-            .with_context(|| format!("writing {}", path.display()))?;
-        println!("[{}/{}] {}", k + 1, a.photos, path.display());
-    }
+    write_photos(&a.output, &camera, a.photos, |k| {
+        photograph_star(&star, &camera, distance, a.seed, k)
+    })?;
     let flags = format!(
         "--rod {rod} --radius {radius} --tower-angles {},{} --switches {},{},{}",
         a.tower_angles.0, a.tower_angles.1, switches[0], switches[1], switches[2]

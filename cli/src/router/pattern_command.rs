@@ -21,18 +21,8 @@ at the top of the image; then `metrocell router measure`.\n\n\
 Example:\n  metrocell router pattern --squares 6x6 --square 25mm --hole 1mm --origin 20,20 -o plate/"
 )]
 pub struct PatternArgs {
-    /// Squares along X and Y (seed 000: 6x6, one hole per square)
-    #[arg(long, default_value = "6x6", value_parser = parse_squares)]
-    squares: (usize, usize),
-    /// Side of a square (seed 000: 25 mm)
-    #[arg(long, default_value = "25mm", value_parser = parse_length)]
-    square: f64,
-    /// Drill diameter (seed 000: 1 mm)
-    #[arg(long, default_value = "1mm", value_parser = parse_length)]
-    hole: f64,
-    /// Machine X,Y of the board's front-left corner (mm)
-    #[arg(long, default_value = "0,0", value_parser = parse_point)]
-    origin: (f64, f64),
+    #[command(flatten)]
+    plate: PlateLayout,
     /// Z of the plate's surface (mm)
     #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
     surface_z: f64,
@@ -53,6 +43,23 @@ pub struct PatternArgs {
     output: PathBuf,
 }
 
+/// The plate as `router pattern` lays it out (and `router simulate` drills it).
+#[derive(clap::Args, Debug, Clone, Copy)]
+pub struct PlateLayout {
+    /// Squares along X and Y (seed 000: 6x6, one hole per square)
+    #[arg(long, default_value = "6x6", value_parser = parse_squares)]
+    pub squares: (usize, usize),
+    /// Side of a square (seed 000: 25 mm)
+    #[arg(long, default_value = "25mm", value_parser = parse_length)]
+    pub square: f64,
+    /// Drill diameter (seed 000: 1 mm)
+    #[arg(long, default_value = "1mm", value_parser = parse_length)]
+    pub hole: f64,
+    /// Machine X,Y of the board's front-left corner (mm)
+    #[arg(long, default_value = "0,0", value_parser = parse_point)]
+    pub origin: (f64, f64),
+}
+
 /// "20,20" → (20.0, 20.0) mm.
 pub fn parse_point(s: &str) -> Result<(f64, f64), String> {
     let (a, b) = s
@@ -70,11 +77,11 @@ pub fn parse_point(s: &str) -> Result<(f64, f64), String> {
 
 pub fn run(a: PatternArgs) -> anyhow::Result<i32> {
     let plate = HolePlate {
-        squares_x: a.squares.0,
-        squares_y: a.squares.1,
-        square_mm: a.square * 1e3,
-        origin_mm: a.origin,
-        hole_diameter_mm: a.hole * 1e3,
+        squares_x: a.plate.squares.0,
+        squares_y: a.plate.squares.1,
+        square_mm: a.plate.square * 1e3,
+        origin_mm: a.plate.origin,
+        hole_diameter_mm: a.plate.hole * 1e3,
     };
     plate.validate().context("the pattern")?;
     let cycle = DrillCycle {

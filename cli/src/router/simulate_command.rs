@@ -6,12 +6,13 @@
 use std::path::PathBuf;
 
 use anyhow::Context;
-use metrocell_camera_model::CameraInfo;
 use metrocell_gcode::PlanarQuadraticField;
-use metrocell_simulation::workflow_photos::{photograph_plate, workflow_camera, DrilledPlate};
+use metrocell_simulation::workflow_photos::{
+    distance_for, photograph_plate, workflow_camera, DrilledPlate,
+};
 
-use super::pattern_command::parse_point;
-use crate::vision::image_input::{parse_length, parse_squares};
+use super::pattern_command::PlateLayout;
+use crate::vision::simulated_photos::write_photos;
 
 #[derive(clap::Args)]
 #[command(
@@ -24,18 +25,9 @@ metrocell router measure --camera sim/camera_info.yaml --images 'sim/photo_*.png
 metrocell router fit --errors holes.csv"
 )]
 pub struct SimulateArgs {
-    /// Squares along X and Y, as for `router pattern`
-    #[arg(long, default_value = "6x6", value_parser = parse_squares)]
-    squares: (usize, usize),
-    /// Side of a square
-    #[arg(long, default_value = "25mm", value_parser = parse_length)]
-    square: f64,
-    /// Drill diameter
-    #[arg(long, default_value = "1mm", value_parser = parse_length)]
-    hole: f64,
-    /// Machine X,Y of the board's front-left corner (mm)
-    #[arg(long, default_value = "0,0", value_parser = parse_point)]
-    origin: (f64, f64),
+    /// The plate, as for `router pattern`
+    #[command(flatten)]
+    plate: PlateLayout,
     /// The router's error field: `b72` (seed 000's Table 2) or eq. 7's nine coefficients
     /// A,B,C,D,E,F,G,H,I (mm units, X3 = 1)
     #[arg(long, default_value = "b72", value_parser = parse_field, allow_hyphen_values = true)]
@@ -74,15 +66,20 @@ fn parse_field(s: &str) -> Result<PlanarQuadraticField, String> {
 }
 
 pub fn run(a: SimulateArgs) -> anyhow::Result<i32> {
-    let (sx, sy) = a.squares;
-    let s_mm = a.square * 1e3;
+    let PlateLayout {
+        squares: (sx, sy),
+        square,
+        hole,
+        origin,
+    } = a.plate;
+    let s_mm = square * 1e3;
     let height_mm = sy as f64 * s_mm;
     let mut truth = String::from("hole,x_mm,y_mm,ex_mm,ey_mm\n");
     let mut holes = vec![[0.0; 2]; sx * sy];
     for row in 0..sy {
         for column in 0..sx {
-            let x = a.origin.0 + (column as f64 + 0.5) * s_mm;
-            let y = a.origin.1 + (row as f64 + 0.5) * s_mm;
+            let x = origin.0 + (column as f64 + 0.5) * s_mm;
+            let y = origin.1 + (row as f64 + 0.5) * s_mm;
             let (ex, ey) = a.field.error_mm(x, y);
             truth.push_str(&format!(
                 "{},{x:.4},{y:.4},{ex:.6},{ey:.6}\n",
@@ -90,36 +87,24 @@ pub fn run(a: SimulateArgs) -> anyhow::Result<i32> {
             ));
             // board frame: x right, y down from the back edge (m)
             holes[(sy - 1 - row) * sx + column] = [
-                (x + ex - a.origin.0) * 1e-3,
-                (height_mm - (y + ey - a.origin.1)) * 1e-3,
+                (x + ex - origin.0) * 1e-3,
+                (height_mm - (y + ey - origin.1)) * 1e-3,
             ];
         }
     }
     let plate = DrilledPlate {
         squares: (sx as u32, sy as u32),
-        square: a.square,
-        hole: a.hole,
+        square,
+        hole,
         holes,
     };
     let camera = workflow_camera();
-    // the board's larger side across 80 % of the image's shorter side
-    let extent = a.square * sx.max(sy) as f64;
-    let distance = camera.fx * extent / (0.8 * camera.height.min(camera.width) as f64);
-    std::fs::create_dir_all(&a.output)
-        .with_context(|| format!("creating {}", a.output.display()))?;
-    let info_path = a.output.join("camera_info.yaml");
-    CameraInfo::from_model("workflow_camera", &camera)
-        .save(&info_path)
-        .with_context(|| format!("writing {}", info_path.display()))?;
+    let extent = square * sx.max(sy) as f64;
+    let distance = distance_for(&camera, extent);
+    write_photos(&a.output, &camera, a.photos, |k| {
+        photograph_plate(&plate, &camera, distance, a.seed, k)
+    })?;
     std::fs::write(a.output.join("truth.csv"), truth).context("writing truth.csv")?;
-    for k in 0..a.photos {
-        let image = photograph_plate(&plate, &camera, distance, a.seed, k)?;
-        let path = a.output.join(format!("photo_{k}.png"));
-        image
-            .save(&path)
-            .with_context(|| format!("writing {}", path.display()))?;
-        println!("[{}/{}] {}", k + 1, a.photos, path.display());
-    }
     println!(
         "{}: {} photos of the {sx}×{sy} plate from {:.0} mm ({:.3} mm/px), camera_info.yaml, truth.csv",
         a.output.display(),

@@ -4,3 +4,4 @@ pub mod camera_command;
 pub mod detect;
 pub mod image_input;
 pub mod photo_source;
+pub mod simulated_photos;

@@ -58,6 +58,17 @@ fn urdf_origin(path: &Path) -> ([f64; 3], [f64; 3]) {
     (attr("xyz"), attr("rpy"))
 }
 
+/// The σ of the mount file's first line, "# metrocell align: σ offset x 0.0123 y … z … mm,
+/// rotation 0.0057° …": x, y, z (mm), rotation (°).
+fn stated_sigma(text: &str) -> Vec<f64> {
+    text.lines()
+        .next()
+        .unwrap()
+        .split_whitespace()
+        .filter_map(|w| w.trim_end_matches('°').parse().ok())
+        .collect()
+}
+
 fn passes(log: &str) -> Vec<usize> {
     log.lines()
         .filter_map(|l| {
@@ -142,14 +153,7 @@ fn alignment_through_the_action_reaches_the_cameras_noise_floor() {
             line.starts_with("mount: {translation: [") && line.contains("euler_xyz"),
             "{text}"
         );
-        // the stated σ: "# metrocell align: σ offset x 0.0123 y … z … mm, rotation 0.0057° …"
-        let sigma: Vec<f64> = text
-            .lines()
-            .next()
-            .unwrap()
-            .split_whitespace()
-            .filter_map(|w| w.trim_end_matches('°').parse().ok())
-            .collect();
+        let sigma = stated_sigma(&text);
         let (sx, sy, sz, sr) = (sigma[0], sigma[1], sigma[2], sigma[3]);
         for (err, s) in (Vector3::from(xyz) - Vector3::from(*offset))
             .iter()
@@ -246,13 +250,7 @@ fn alignment_through_rendered_frames_and_the_fiducial_node() {
     );
     assert!(err.norm() < 0.05e-3 && turn.to_degrees() < 0.05, "{log}");
     let text = std::fs::read_to_string(&mount).unwrap();
-    let sigma: Vec<f64> = text
-        .lines()
-        .next()
-        .unwrap()
-        .split_whitespace()
-        .filter_map(|w| w.trim_end_matches('°').parse().ok())
-        .collect();
+    let sigma = stated_sigma(&text);
     for (e, s) in err.iter().zip(&sigma[..3]) {
         assert!(
             (e * 1e3).abs() < 4.0 * s,

@@ -54,6 +54,20 @@ fn router_fit(args: &[&std::ffi::OsStr]) -> String {
     stdout
 }
 
+/// `router measure` on DIR's photos with DIR's camera_info, into `table`; its stdout.
+fn router_measure(dir: &Path, table: &Path) -> String {
+    run_ok(
+        piped(bin("metrocell"))
+            .args(["router", "measure", "--camera"])
+            .arg(dir.join("camera_info.yaml"))
+            .arg("--images")
+            .arg(dir.join("photo_*.png"))
+            .arg("-o")
+            .arg(table),
+        Duration::from_secs(120),
+    )
+}
+
 /// "  after / measurement noise (…): 0.93"
 fn figure(stdout: &str, prefix: &str) -> f64 {
     let line = stdout
@@ -256,16 +270,7 @@ fn photographed_plate_is_measured_and_compensated_to_its_noise() {
         Duration::from_secs(600),
     );
     let table = dir.join("holes.csv");
-    let stdout = run_ok(
-        piped(bin("metrocell"))
-            .args(["router", "measure", "--camera"])
-            .arg(dir.join("camera_info.yaml"))
-            .arg("--images")
-            .arg(dir.join("photo_*.png"))
-            .arg("-o")
-            .arg(&table),
-        Duration::from_secs(120),
-    );
+    let stdout = router_measure(&dir, &table);
     assert!(stdout.contains(": 36 holes from 2 photos"), "{stdout}");
     let rows = |path: &Path| -> Vec<Vec<f64>> {
         std::fs::read_to_string(path)
@@ -345,16 +350,7 @@ fn twin_drilled_and_photographed_plates_come_back_through_the_commands() {
             Duration::from_secs(120),
         );
         let table = dir.join("holes.csv");
-        run_ok(
-            piped(bin("metrocell"))
-                .args(["router", "measure", "--camera"])
-                .arg(dir.join("camera_info.yaml"))
-                .arg("--images")
-                .arg(dir.join("photo_*.png"))
-                .arg("-o")
-                .arg(&table),
-            Duration::from_secs(120),
-        );
+        router_measure(&dir, &table);
         let rows = |path: &Path| -> Vec<Vec<f64>> {
             std::fs::read_to_string(path)
                 .unwrap()

@@ -359,6 +359,28 @@ impl MetrocellNode {
         last
     }
 
+    /// Watches these input topics (resolved here) for silence longer than the node's
+    /// `input_timeout` parameter ([`crate::diagnostics::input_timeout_param`]), if it declares
+    /// one and it is not 0; returns the resolved names, for [`crate::Diagnostics::input_seen`].
+    pub fn watch_inputs<'t>(
+        &self,
+        topics: impl IntoIterator<Item = &'t str>,
+    ) -> Result<Vec<String>, NodeError> {
+        let timeout = self
+            .param::<f64>(crate::diagnostics::INPUT_TIMEOUT)
+            .unwrap_or(0.0);
+        let mut resolved = Vec::new();
+        for topic in topics {
+            let name = self.resolve_topic(topic)?;
+            if timeout > 0.0 {
+                self.diagnostics()
+                    .watch_input(&name, std::time::Duration::from_secs_f64(timeout));
+            }
+            resolved.push(name);
+        }
+        Ok(resolved)
+    }
+
     pub fn logger(&self) -> Logger {
         self.parts.logger.clone()
     }

@@ -51,12 +51,14 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
 
     let diagnostics = node.diagnostics();
     diagnostics.ok("waiting for measured points");
+    node.watch_inputs(inputs.iter().map(|sub| sub.topic()))?;
     // what the estimator holds, as last said (the heartbeat keeps saying it)
     let mut held: Option<String> = None;
     let token = node.shutdown_token();
     while !token.is_triggered() {
         for sub in &inputs {
             while let Ok(Some(m)) = sub.take() {
+                diagnostics.input_seen(sub.topic());
                 let message = SourcedMessage {
                     topic: sub.topic().to_string(),
                     log_time_ns: m.receive_time_ns.max(0) as u64,

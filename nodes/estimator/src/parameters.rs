@@ -13,6 +13,7 @@ use crate::state_file::SavedState;
 
 pub fn declarations() -> Vec<ParamDecl> {
     vec![
+        metrocell_node::diagnostics::input_timeout_param(),
         ParamDecl::new("model", "", "model cell file (YAML, read by crates/model_file): machine, `terms:` = the error model to estimate (their params are the start values), `estimation:` = free parameters and priors per term label"),
         ParamDecl::new("process_noise", Vec::<String>::new(), "random-walk intensity of drifting parameters, `label.param=q` with q in the parameter's SI unit per √s (e.g. positioning[z].c0=1e-7 for a Z offset that may drift 1 µm in ~3 h); others are constant"),
         ParamDecl::new("publish_every", 1i64, "publish the error model after this many accepted measurements (and on every alarm)").with_range(1.0, 1e9),

@@ -31,10 +31,20 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
     let drift_pub = node.publisher::<MeasuredPoint>("thermal/predicted_drift", qos::reliable())?;
 
     let diagnostics = node.diagnostics();
+    let points_topic = node.watch_inputs(["measured_points"])?.remove(0);
+    let temperature_topics = node.watch_inputs(
+        temperature_subs
+            .iter()
+            .map(|(name, _)| format!("temperature/{name}"))
+            .collect::<Vec<_>>()
+            .iter()
+            .map(String::as_str),
+    )?;
     let token = node.shutdown_token();
     while !token.is_triggered() {
-        for (name, sub) in &temperature_subs {
+        for ((name, sub), topic) in temperature_subs.iter().zip(&temperature_topics) {
             while let Ok(Some((t, _))) = sub.take() {
+                diagnostics.input_seen(topic);
                 match state.temperature(name, &t, node.now().to_nanos()) {
                     Ok(()) => diagnostics.set_value(
                         &format!("temperature/{name}"),
@@ -45,6 +55,7 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
             }
         }
         while let Ok(Some((p, _))) = points.take() {
+            diagnostics.input_seen(&points_topic);
             match state.compensate(&p, node.now().to_nanos()) {
                 Ok(out) => {
                     let _ = compensated.publish(out);

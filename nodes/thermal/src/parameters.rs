@@ -18,6 +18,7 @@ pub fn declarations() -> Vec<ParamDecl> {
             .with_range(-10.0, 60.0),
         ParamDecl::new("publish_period", 1.0, "seconds between thermal/error_model and thermal/predicted_drift messages").with_range(0.01, 3600.0),
         ParamDecl::new("stale_after", 10.0, "a sensor silent for longer than this [s] is not used").with_range(0.1, 86400.0),
+        metrocell_node::diagnostics::input_timeout_param(),
         ParamDecl::new("sensor_calibration_uncertainty", 0.0, "standard calibration uncertainty of every sensor [K], added to each reading's variance (not averaged down by a lag)").with_range(0.0, 10.0),
         ParamDecl::new("temperature_limits", vec![-20.0, 80.0], "[min, max] °C: readings outside are rejected"),
         ParamDecl::new("growth_sensors", Vec::<String>::new(), "one thermal_growth term per sensor (structure growth d = n·g·(T_f − T_ref))"),

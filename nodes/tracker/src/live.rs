@@ -81,6 +81,14 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
     );
 
     let diagnostics = node.diagnostics();
+    // the readings (when they come on a topic) and the machine's commanded positions
+    let commanded_topic = node
+        .watch_inputs(["machine/commanded_joint_states"])?
+        .remove(0);
+    let readings_topic = match &measurements {
+        Some(_) => node.watch_inputs(["tracker/measurements"])?.remove(0),
+        None => String::new(),
+    };
     let mut reregister_param = node.watch_param::<bool>(parameters::REREGISTER)?;
     let token = node.shutdown_token();
     let mut outputs = Vec::new();
@@ -97,10 +105,12 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
             }
         }
         while let Ok(Some((j, _))) = commanded.take() {
+            diagnostics.input_seen(&commanded_topic);
             outputs.extend(state.commanded(&j));
         }
         if let Some(sub) = &measurements {
             while let Ok(Some((m, _))) = sub.take() {
+                diagnostics.input_seen(&readings_topic);
                 outputs.extend(state.measurement(&m));
             }
         }

@@ -19,6 +19,7 @@ pub const TOTAL_STATION_GSI: &str = "total_station_gsi";
 pub fn declarations() -> Vec<ParamDecl> {
     let s = |v: &str| v.to_string();
     vec![
+        metrocell_node::diagnostics::input_timeout_param(),
         ParamDecl::new("backend", s("topic"), "where readings come from: topic (tracker/measurements, what the twin and other drivers publish) or tcp (an instrument streaming ASCII lines, see tcp_address)").with_allowed(["topic", "tcp"]),
         ParamDecl::new("tcp_address", s("127.0.0.1:5000"), "host:port of the instrument's line stream (backend tcp); framing: t_s,target,range_m,azimuth_rad,elevation_rad[,T_degC,p_Pa,RH_0_1] (instrument laser_tracker) or one Leica GSI-8/GSI-16 block per line (instrument total_station_gsi)"),
         ParamDecl::new(INSTRUMENT, s("laser_tracker"), "what streams on tcp_address (backend tcp): laser_tracker (ASCII readings → dwells, registration, measured_points) or total_station_gsi (Leica GSI blocks, words 11 point id, 21 Hz, 22 V, 31 slope distance: each block published as one reading on tracker/measurements, instrument frame x toward Hz = 0, y toward Hz = 300 gon, z up; azimuth = −Hz, elevation = 100 gon − V, face II mapped to face I)").with_allowed([LASER_TRACKER, TOTAL_STATION_GSI]),

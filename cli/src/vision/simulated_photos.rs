@@ -6,7 +6,7 @@ use std::path::Path;
 use anyhow::Context;
 use metrocell_camera_model::{CameraInfo, CameraModel};
 
-/// Writes `dir/camera_info.yaml` for `camera` and `dir/photo_K.png` for K = 0…count−1 from
+/// Writes `DIR/camera_info.yaml` for `camera` and `DIR/photo_K.png` for K = 0…count−1 from
 /// `photo(K)`.
 pub fn write_photos(
     dir: &Path,

@@ -128,16 +128,62 @@ impl BagWriter {
     /// file `<dir>/<dirname>_0.mcap`, and write an initial metadata.yaml.
     pub fn create(dir: impl AsRef<Path>, options: WriterOptions) -> Result<Self> {
         let dir = dir.as_ref().to_path_buf();
-        if options.flush_interval < MIN_FLUSH_INTERVAL {
+        check_options(&options)?;
+        std::fs::create_dir_all(&dir).map_err(io_err("create directory", &dir))?;
+        if dir.join(METADATA_FILE).exists() {
             return Err(BagError::InvalidArgument(format!(
-                "flush_interval {:?} is below the minimum {:?}",
-                options.flush_interval, MIN_FLUSH_INTERVAL
+                "{} already holds a bag (metadata.yaml exists)",
+                dir.display()
             )));
         }
-        if options.chunk_size == 0 {
-            return Err(BagError::InvalidArgument("chunk_size must be > 0".into()));
+        Self::start(dir, options, Vec::new())
+    }
+
+    /// Go on recording into the bag at `dir` after its writer stopped without finishing (a
+    /// recorder killed and respawned): the bag is first recovered in place ([`crate::recover`]:
+    /// every message that reached the disk intact is kept; a rewritten file's original stays as
+    /// `<file>.orig`), then a new split file `<dirname>_<n>.mcap` is opened after the existing
+    /// ones, with the bag's topics declared again and their counts carried on. A directory
+    /// without a bag is created as by [`BagWriter::create`]. Also returns the recovery's report
+    /// (None when there was no bag to go on from).
+    pub fn append(
+        dir: impl AsRef<Path>,
+        options: WriterOptions,
+    ) -> Result<(Self, Option<crate::recover::RecoveryReport>)> {
+        let dir = dir.as_ref().to_path_buf();
+        if !dir.join(METADATA_FILE).exists() {
+            return Ok((Self::create(dir, options)?, None));
         }
-        std::fs::create_dir_all(&dir).map_err(io_err("create directory", &dir))?;
+        check_options(&options)?;
+        let report = crate::recover::recover(&dir)?;
+        let metadata = BagMetadata::read_dir(&dir)?;
+        let topics = crate::reader::BagReader::open(&dir)?.topics().to_vec();
+        let mut w = Self::start(dir, options, metadata.files.clone())?;
+        for t in &topics {
+            let count = metadata
+                .topics_with_message_count
+                .iter()
+                .find(|m| m.topic_metadata.name == t.name)
+                .map_or(t.message_count, |m| m.message_count);
+            let definition = (t.schema_encoding == "ros2msg" && !t.definition.is_empty())
+                .then_some(t.definition.as_str());
+            w.declare_topic(
+                &t.name,
+                &t.type_name,
+                definition,
+                &t.offered_qos_profiles,
+                &t.type_description_hash,
+            )?;
+            let i = w.topic_index[&t.name];
+            w.topics[i].written = count;
+            w.topics[i].durable = count;
+        }
+        w.write_metadata(false)?;
+        Ok((w, Some(report)))
+    }
+
+    /// A writer on `dir` after the `finished` files, its next split file open.
+    fn start(dir: PathBuf, options: WriterOptions, finished: Vec<FileInformation>) -> Result<Self> {
         let base_name = dir
             .file_name()
             .and_then(|n| n.to_str())
@@ -149,19 +195,13 @@ impl BagWriter {
                 ))
             })?
             .to_string();
-        if dir.join(METADATA_FILE).exists() {
-            return Err(BagError::InvalidArgument(format!(
-                "{} already holds a bag (metadata.yaml exists)",
-                dir.display()
-            )));
-        }
         let mut w = Self {
             dir,
             base_name,
             options,
             topics: Vec::new(),
             topic_index: HashMap::new(),
-            finished_files: Vec::new(),
+            finished_files: finished,
             current: None,
             closed: None,
             last_flush: Instant::now(),
@@ -677,6 +717,20 @@ impl Drop for BagWriter {
             let _ = self.finish_inner();
         }
     }
+}
+
+/// The options a writer can work with.
+fn check_options(options: &WriterOptions) -> Result<()> {
+    if options.flush_interval < MIN_FLUSH_INTERVAL {
+        return Err(BagError::InvalidArgument(format!(
+            "flush_interval {:?} is below the minimum {:?}",
+            options.flush_interval, MIN_FLUSH_INTERVAL
+        )));
+    }
+    if options.chunk_size == 0 {
+        return Err(BagError::InvalidArgument("chunk_size must be > 0".into()));
+    }
+    Ok(())
 }
 
 /// Turn an MCAP error into a bag error; an I/O failure seen by the sink wins (it carries the

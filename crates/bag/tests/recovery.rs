@@ -272,3 +272,53 @@ fn sigkill_at_random_times_loses_at_most_the_unflushed_tail() {
         2 * CHILD_FLUSH_INTERVAL
     );
 }
+
+/// A writer that stopped without finishing (its footer never written, as after SIGKILL) is gone
+/// on from by `BagWriter::append`: the bag is recovered, a new split file follows the first, the
+/// topics' counts carry on, and every message — the flushed ones before, all after — reads back
+/// in order.
+#[test]
+fn append_goes_on_from_a_writer_that_never_finished() {
+    let dir = scratch("append_after_kill").join("bag");
+    let mut w = BagWriter::create(&dir, WriterOptions::default()).unwrap();
+    add_temperature(&mut w);
+    for k in 0..500u64 {
+        w.write(
+            "/temperature",
+            T0 + k * 1_000_000,
+            T0 + k * 1_000_000,
+            &Temperature::nth(k).encode(),
+        )
+        .unwrap();
+    }
+    w.flush().unwrap();
+    // killed: no finish, no footer, no final metadata
+    std::mem::forget(w);
+    let (mut w, report) = BagWriter::append(&dir, WriterOptions::default()).unwrap();
+    let report = report.expect("there was a bag to go on from");
+    assert_eq!(report.kept_messages(), 500, "{report}");
+    assert_eq!(w.message_count(), 500);
+    for k in 500..800u64 {
+        w.write(
+            "/temperature",
+            T0 + k * 1_000_000,
+            T0 + k * 1_000_000,
+            &Temperature::nth(k).encode(),
+        )
+        .unwrap();
+    }
+    let metadata = w.finish().unwrap();
+    assert_eq!(metadata.message_count, 800);
+    assert_eq!(
+        metadata.relative_file_paths,
+        vec!["bag_0.mcap".to_string(), "bag_1.mcap".to_string()]
+    );
+    assert_eq!(metadata.topics_with_message_count[0].message_count, 800);
+    let r = BagReader::open(&dir).unwrap();
+    assert_eq!(assert_prefix_of_sequence(&r), 800);
+    // a directory without a bag is created
+    let fresh = scratch("append_fresh").join("bag");
+    let (w, report) = BagWriter::append(&fresh, WriterOptions::default()).unwrap();
+    assert!(report.is_none());
+    w.finish().unwrap();
+}

@@ -66,6 +66,23 @@ impl Recording {
         })
     }
 
+    /// [`BagWriter::append`]: go on in a bag a recorder left unfinished (recovered first),
+    /// with the recovery's report.
+    pub fn append(
+        dir: impl AsRef<Path>,
+        options: WriterOptions,
+    ) -> Result<(Self, Option<metrocell_bag::RecoveryReport>)> {
+        let (writer, report) = BagWriter::append(dir, options)?;
+        Ok((
+            Self {
+                writer,
+                topics: BTreeMap::new(),
+                last_sequence: HashMap::new(),
+            },
+            report,
+        ))
+    }
+
     pub fn dir(&self) -> &Path {
         self.writer.dir()
     }

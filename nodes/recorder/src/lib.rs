@@ -135,8 +135,26 @@ pub fn record(
     node: &mut MetrocellNode,
     settings: &RecorderSettings,
 ) -> Result<RecordingSummary, RecordingFailed> {
-    let mut recording =
-        Recording::create(&settings.output, settings.writer_options.clone()).map_err(failed)?;
+    let mut recording = if settings.resume {
+        let (recording, recovered) =
+            Recording::append(&settings.output, settings.writer_options.clone()).map_err(failed)?;
+        if let Some(report) = recovered {
+            node.warn(format!(
+                "{} held a bag a recorder did not finish: recovered ({} messages kept, {} chunk(s) \
+                 dropped); going on in a new split file {}",
+                settings.output,
+                report.kept_messages(),
+                report.dropped_chunks(),
+                recording
+                    .current_file()
+                    .map(|p| p.display().to_string())
+                    .unwrap_or_default()
+            ));
+        }
+        recording
+    } else {
+        Recording::create(&settings.output, settings.writer_options.clone()).map_err(failed)?
+    };
     node.info(format!("recording into {}", settings.output));
     let diagnostics = node.diagnostics();
     let token = node.shutdown_token();

@@ -21,6 +21,8 @@ pub struct RecorderSettings {
     /// Bytes of samples taken from the readers and not yet written that the recorder holds
     /// before it stops taking (rosbag2's `--max-cache-size`).
     pub max_cache_bytes: usize,
+    /// Go on in `output` when it already holds a bag (a recorder that did not finish).
+    pub resume: bool,
 }
 
 impl RecorderSettings {
@@ -47,6 +49,7 @@ impl RecorderSettings {
             qos_overrides,
             scan_interval: Duration::from_secs_f64(node.param::<f64>("scan_interval")?),
             max_cache_bytes: node.param::<i64>("max_cache_size")?.max(1) as usize,
+            resume: node.param::<bool>("resume")?,
         })
     }
 }
@@ -54,6 +57,7 @@ impl RecorderSettings {
 pub fn declarations() -> Vec<ParamDecl> {
     vec![
         ParamDecl::new("output", String::new(), "bag directory to create (default bag_<UTC timestamp>)"),
+        ParamDecl::new("resume", false, "when output already holds a bag (a recorder killed before it finished, e.g. respawned by launch): recover it and go on recording into a new split file of it, instead of refusing"),
         ParamDecl::new("topics", Vec::<String>::new(), "topics to record (empty: every discovered topic)"),
         ParamDecl::new("regex", String::new(), "record only topics matching this regex (whole name)"),
         ParamDecl::new("exclude", String::new(), "do not record topics matching this regex (whole name)"),

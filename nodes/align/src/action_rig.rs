@@ -73,10 +73,7 @@ impl<'a> ActionRig<'a> {
         poses_topic: &str,
         timing: RigTiming,
     ) -> Result<Self, String> {
-        let resolved = node.resolve_topic(action).map_err(|e| e.to_string())?;
-        let (ns, base) = resolved.rsplit_once('/').unwrap_or(("", &resolved));
-        let name = ros2_client::Name::new(if ns.is_empty() { "/" } else { ns }, base)
-            .map_err(|e| format!("action name {resolved}: {e:?}"))?;
+        let (name, resolved) = crate::move_tool::action_name(node, action)?;
         let client = node
             .ros_node()
             .create_action_client::<MoveToolGoal, MoveToolResult, MoveToolFeedback>(

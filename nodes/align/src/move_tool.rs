@@ -39,6 +39,19 @@ pub struct MoveToolFeedback {
 }
 impl ros2_client::Message for MoveToolFeedback {}
 
+/// The action's name `action` resolved in `node`'s namespace, as ros2-client names it (the
+/// namespace and the base name), and as text.
+pub fn action_name(
+    node: &metrocell_node::MetrocellNode,
+    action: &str,
+) -> Result<(ros2_client::Name, String), String> {
+    let resolved = node.resolve_topic(action).map_err(|e| e.to_string())?;
+    let (ns, base) = resolved.rsplit_once('/').unwrap_or(("", &resolved));
+    let name = ros2_client::Name::new(if ns.is_empty() { "/" } else { ns }, base)
+        .map_err(|e| format!("action name {resolved}: {e:?}"))?;
+    Ok((name, resolved))
+}
+
 /// The action's type name.
 pub fn action_type() -> ros2_client::ActionTypeName {
     ros2_client::ActionTypeName::new("metrocell_msgs", "MoveTool")

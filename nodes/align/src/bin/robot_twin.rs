@@ -202,12 +202,7 @@ fn run() -> Result<(), String> {
     let mut tool = Isometry3::identity();
     let target = tool * mount * Isometry3::translation(0.0, 0.0, distance);
 
-    let resolved = node
-        .resolve_topic("robot/move_tool")
-        .map_err(|e| e.to_string())?;
-    let (ns, base) = resolved.rsplit_once('/').unwrap_or(("", &resolved));
-    let name = ros2_client::Name::new(if ns.is_empty() { "/" } else { ns }, base)
-        .map_err(|e| format!("{e:?}"))?;
+    let (name, resolved) = metrocell_align_node::move_tool::action_name(&node, "robot/move_tool")?;
     let server = node
         .ros_node()
         .create_action_server::<MoveToolGoal, MoveToolResult, MoveToolFeedback>(

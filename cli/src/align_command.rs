@@ -18,7 +18,11 @@ What it does (seed 003, claims 1–9): two perpendicular translations give the c
 (TRIAD); turns of ±ANGLE about two parallel vertical axes AXIS-OFFSET apart give the camera's x/y offset, \
 the same about horizontal axes its z offset (solved exactly, not by the patent's ratio equations); each \
 stage is repeated in the frame its estimate moved to until its correction falls to three times the \
-camera's noise (--sigma), at most 5 passes. Each move is followed by the move back.\n\n\
+camera's noise (--sigma), at most 5 passes. Each move is followed by the move back. A reading is the target's position before and \
+after a move (the mean of --frames poses) and, for a turn, the turn commanded — not the poses' orientations, \
+their noisiest part.\n\n\
+Uncertainty: the result's σ (offset per axis, rotation) is logged and written above the mount line; it is \
+widened when the start pose's readings scatter more than --sigma (never narrowed).\n\n\
 Output: the camera's frame in the tool's on /tf_static (--publish keeps it there), as a fixed URDF \
 joint (--urdf) and as a cell file's `mount:` line (--cell-pose).\n\n\
 Example:\n  metrocell align --action /ur5/move_tool --move 100mm --angle 30 --axis-offset 100mm --sigma 0.01mm \

@@ -233,6 +233,12 @@ impl<'a> ActionRig<'a> {
 }
 
 impl ActionRig<'_> {
+    /// The target's mean distance from the camera at the start pose (m).
+    pub fn target_distance(&self) -> Option<f64> {
+        let n = self.start_positions.len();
+        (n > 0).then(|| self.start_positions.iter().map(|p| p.norm()).sum::<f64>() / n as f64)
+    }
+
     /// The noise of one displacement reading per component (m), from the scatter of the start
     /// pose's positions (a reading differences two of them): the largest component's
     /// `√2 · SD`. None below three readings.

@@ -115,6 +115,26 @@ pub fn run(node: &mut MetrocellNode) -> Result<Option<Alignment>, String> {
                 ));
             }
         }
+        // A turn's reading turns the target's position (|t| away) by the commanded turn through
+        // the estimated camera axes: their error δ tilts the turn by ≈ angle·δ, which moves the
+        // reading by angle·δ·|t| — at 0.4 m more than the camera's own noise. The procedure's
+        // covariance counts the camera's noise only; widen it by what this adds (found by
+        // repeating the alignment on the twin: x offsets scattered 2.3× the σ stated without it).
+        if let Some(distance) = rig.target_distance() {
+            let camera = rig
+                .measured_reading_sigma()
+                .unwrap_or(0.0)
+                .max(plan.camera_sigma);
+            let turn = plan.angle * a.rotation_sigma * distance;
+            let ratio = (1.0 + (turn / camera).powi(2)).sqrt();
+            a.offset_covariance *= ratio * ratio;
+            logger.info(format!(
+                "a turn's reading carries {:.4} mm from the rotation's uncertainty (target {:.0} mm \
+                 away): the offset's σ widened by {ratio:.2}×",
+                turn * 1e3,
+                distance * 1e3
+            ));
+        }
         a
     };
     for (stage, passes) in ["rotation", "xy offset", "z offset"]

@@ -174,7 +174,6 @@ pub fn fdm_program(
     let tallest = features.iter().map(|f| f.top_mm).fold(0.0, f64::max);
     let mut e = 0.0;
     let mut summary = FdmSummary::default();
-    let mut at: Option<[f64; 2]> = None;
     let colours = features.iter().map(|f| f.colour).max().map_or(0, |c| c + 1);
     let mut printed_top: f64 = 0.0;
     for colour in 0..colours {
@@ -189,7 +188,6 @@ pub fn fdm_program(
                 colour + 1
             );
             summary.colour_changes += 1;
-            at = None;
         }
         let mine: Vec<&FdmFeature> = features.iter().filter(|f| f.colour == colour).collect();
         let lowest = mine
@@ -218,7 +216,6 @@ pub fn fdm_program(
                         start[0],
                         start[1]
                     );
-                    let _ = at.replace(start);
                     let mut prev = start;
                     for p in &path[1..] {
                         let len = (p[0] - prev[0]).hypot(p[1] - prev[1]);

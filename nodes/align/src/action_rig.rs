@@ -11,10 +11,10 @@ use metrocell_kinematics::frame_alignment_procedure::AlignmentRig;
 use metrocell_kinematics::KinematicsError;
 use metrocell_msgs::geometry_msgs::msg::PoseWithCovarianceStamped;
 use metrocell_node::{qos, MetrocellNode, Subscription};
-use nalgebra::{Isometry3, Quaternion, Translation3, Unit, UnitQuaternion, Vector3};
+use nalgebra::{Unit, Vector3};
 use ros2_client::action::ActionClient;
 
-use crate::camera_reading::{displacement_after_translation, displacement_after_turn, mean_pose};
+use crate::camera_reading::{displacement_after_translation, displacement_after_turn};
 use crate::move_tool::{client_qos, MoveToolFeedback, MoveToolGoal, MoveToolResult};
 
 /// How long to wait, and how many frames make a reading.
@@ -54,14 +54,6 @@ fn rig_error(reason: impl Into<String>) -> KinematicsError {
     KinematicsError::Rig {
         reason: reason.into(),
     }
-}
-
-fn pose_of(m: &PoseWithCovarianceStamped) -> Isometry3<f64> {
-    let (p, q) = (&m.pose.pose.position, &m.pose.pose.orientation);
-    Isometry3::from_parts(
-        Translation3::new(p.x, p.y, p.z),
-        UnitQuaternion::from_quaternion(Quaternion::new(q.w, q.x, q.y, q.z)),
-    )
 }
 
 impl<'a> ActionRig<'a> {
@@ -185,8 +177,8 @@ impl<'a> ActionRig<'a> {
         Ok(())
     }
 
-    /// The mean of the next `frames` target poses stamped after now.
-    fn reading(&mut self) -> Result<Isometry3<f64>, KinematicsError> {
+    /// The target's mean position in the next `frames` poses stamped after now.
+    fn reading(&mut self) -> Result<Vector3<f64>, KinematicsError> {
         let after = self.node.now().to_nanos();
         let deadline = Instant::now() + self.timing.reading_timeout;
         let mut got = Vec::new();
@@ -194,7 +186,8 @@ impl<'a> ActionRig<'a> {
             match self.poses.take() {
                 Ok(Some((m, _))) => {
                     if m.header.stamp.nanos() > after {
-                        got.push(pose_of(&m));
+                        let p = &m.pose.pose.position;
+                        got.push(Vector3::new(p.x, p.y, p.z));
                     }
                 }
                 Ok(None) if self.token.is_triggered() => return Err(rig_error(INTERRUPTED)),
@@ -213,7 +206,7 @@ impl<'a> ActionRig<'a> {
                 Err(e) => return Err(rig_error(format!("reading fiducials/pose: {e:?}"))),
             }
         }
-        Ok(mean_pose(&got).expect("frames ≥ 1"))
+        Ok(got.iter().sum::<Vector3<f64>>() / got.len() as f64)
     }
 
     /// The target's position in the camera before and after `there` (then `back`).
@@ -224,11 +217,11 @@ impl<'a> ActionRig<'a> {
         what: &str,
     ) -> Result<(Vector3<f64>, Vector3<f64>), KinematicsError> {
         let before = self.reading()?;
-        self.start_positions.push(before.translation.vector);
+        self.start_positions.push(before);
         self.execute(there, what)?;
         let after = self.reading()?;
         self.execute(back, &format!("{what}, back"))?;
-        Ok((before.translation.vector, after.translation.vector))
+        Ok((before, after))
     }
 }
 

@@ -11,7 +11,7 @@
 //! of the tool about a base axis, the camera's axes `R_rc` in the base's (the tool starting
 //! with the base's axes).
 
-use nalgebra::{Isometry3, Matrix3, Quaternion, UnitQuaternion, Vector3};
+use nalgebra::{Matrix3, Vector3};
 
 /// The camera's displacement after a pure translation: the target's position before minus after.
 pub fn displacement_after_translation(before: &Vector3<f64>, after: &Vector3<f64>) -> Vector3<f64> {
@@ -29,37 +29,10 @@ pub fn displacement_after_turn(
     before - r_rc.transpose() * turn * r_rc * after
 }
 
-/// The mean of poses of one still scene: translations averaged, rotations by the normalised sum
-/// of sign-aligned quaternions (exact to second order in their spread). None when empty.
-pub fn mean_pose(poses: &[Isometry3<f64>]) -> Option<Isometry3<f64>> {
-    let first = poses.first()?;
-    let n = poses.len() as f64;
-    let t = poses
-        .iter()
-        .map(|p| p.translation.vector)
-        .sum::<Vector3<f64>>()
-        / n;
-    let q0 = first.rotation.into_inner();
-    let sum = poses
-        .iter()
-        .fold(Quaternion::new(0.0, 0.0, 0.0, 0.0), |s, p| {
-            let q = p.rotation.into_inner();
-            if q.dot(&q0) < 0.0 {
-                s - q
-            } else {
-                s + q
-            }
-        });
-    Some(Isometry3::from_parts(
-        t.into(),
-        UnitQuaternion::from_quaternion(sum),
-    ))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
-    use nalgebra::{Translation3, Unit};
+    use nalgebra::{Isometry3, Translation3, Unit, UnitQuaternion};
 
     /// Target at `target` (world), camera at `camera` (world pose): the target's pose in the camera.
     fn seen(camera: &Isometry3<f64>, target: &Isometry3<f64>) -> Isometry3<f64> {
@@ -91,19 +64,5 @@ mod tests {
             displacement_after_turn(&t(&c0), &t(&c1), &r_rc, turn.to_rotation_matrix().matrix());
         let truth = r0.inverse() * (c1.translation.vector - c0.translation.vector);
         assert!((d - truth).norm() < 1e-12, "{d} vs {truth}");
-    }
-
-    #[test]
-    fn mean_of_poses_is_their_centre_and_ignores_quaternion_sign() {
-        let q = UnitQuaternion::from_euler_angles(0.1, 0.2, 0.3);
-        let a = Isometry3::from_parts(Translation3::new(1.0, 0.0, 0.0), q);
-        let b = Isometry3::from_parts(
-            Translation3::new(3.0, 2.0, 0.0),
-            UnitQuaternion::new_unchecked(-q.into_inner()),
-        );
-        let m = mean_pose(&[a, b]).unwrap();
-        assert!((m.translation.vector - Vector3::new(2.0, 1.0, 0.0)).norm() < 1e-15);
-        assert!(m.rotation.angle_to(&q) < 1e-12);
-        assert!(mean_pose(&[]).is_none());
     }
 }

@@ -2,7 +2,7 @@
 //! the robot through pure translations and rotations about parallel axes and watching a fixed
 //! target with the camera. Pure parts, unit-tested here:
 //! - [`move_tool`]: the `metrocell_msgs/action/MoveTool` action a robot driver implements;
-//! - [`camera_reading`]: target poses → the camera's own displacement;
+//! - [`camera_reading`]: the target's positions (and the commanded turn) → the camera's own displacement;
 //! - [`action_rig`]: the procedure's rig over ROS 2 (the action, the fiducial node's poses);
 //! - [`alignment_outputs`]: `/tf_static`, the URDF joint, the cell file's camera mount;
 //! - [`run`]: the node's whole job, shared by `metrocell-align` and `metrocell align`.

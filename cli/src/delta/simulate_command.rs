@@ -103,12 +103,7 @@ impl PhysicalPrinter {
         switches: [f64; 3],
     ) -> anyhow::Result<Self> {
         let firmware = settings.firmware_geometry()?;
-        // the module docs of kinematics::delta_firmware: e_T = S_T + adj_T − Q_T
-        for t in 0..3 {
-            physical.endstop[t] = (switches[t] + settings.endstop_adj_mm[t]
-                - homed_count_mm(settings, &firmware, t))
-                * 1e-3;
-        }
+        physical.endstop = settings.endstop_offsets(switches)?;
         physical.validate()?;
         Ok(Self { firmware, physical })
     }
@@ -123,12 +118,6 @@ impl PhysicalPrinter {
     }
 }
 
-/// Where homing counts tower `t`'s carriage under `settings` (mm): H + √(D² − R²).
-fn homed_count_mm(settings: &MarlinDelta, g: &DeltaGeometry, t: usize) -> f64 {
-    let (rod, radius) = (g.rod(t), g.radius + g.radius_trim[t]);
-    settings.height_mm + (rod * rod - radius * radius).sqrt() * 1e3
-}
-
 pub fn run(a: SimulateArgs) -> anyhow::Result<i32> {
     let text = std::fs::read_to_string(&a.firmware)
         .with_context(|| format!("reading {}", a.firmware.display()))?;
@@ -140,9 +129,10 @@ pub fn run(a: SimulateArgs) -> anyhow::Result<i32> {
     physical.tower_angle_trim = [a.tower_angles.0, a.tower_angles.1, 0.0].map(f64::to_radians);
     // by default the switches home the physical effector at H (a printer whose first layer was
     // levelled by hand): what is left is the geometry's bowl and tilt
-    let switches = a.switches.unwrap_or_else(|| {
-        [0, 1, 2].map(|t| homed_count_mm(&settings, &physical, t) - settings.endstop_adj_mm[t])
-    });
+    let switches = match a.switches {
+        Some(s) => s,
+        None => settings.switches_homing_at_height(&physical)?,
+    };
     let mut settings = settings;
     let mut printer = PhysicalPrinter::new(&settings, physical, switches)?;
     let centre = printer.print(Vector3::zeros())?.z * 1e3;

@@ -65,6 +65,30 @@ impl MarlinDelta {
         Ok(g)
     }
 
+    /// The endstop offsets `e_T = S_T + adj_T − Q_T` (m, [`DeltaGeometry::endstop`]) of a
+    /// printer running these settings whose switches trip at carriage heights `switches_mm`.
+    pub fn endstop_offsets(&self, switches_mm: [f64; 3]) -> Result<[f64; 3], KinematicsError> {
+        let g = self.firmware_geometry()?;
+        let mut e = [0.0; 3];
+        for (t, e) in e.iter_mut().enumerate() {
+            *e = (switches_mm[t] + self.endstop_adj_mm[t] - self.homed_count_mm(&g, t)?) * 1e-3;
+        }
+        Ok(e)
+    }
+
+    /// The switch heights (mm) at which these settings home a printer of geometry `physical`
+    /// with its effector exactly at `H`: `S_T = H + √(D_T² − R_T²) − adj_T` with its rods and radii.
+    pub fn switches_homing_at_height(
+        &self,
+        physical: &DeltaGeometry,
+    ) -> Result<[f64; 3], KinematicsError> {
+        let mut s = [0.0; 3];
+        for (t, s) in s.iter_mut().enumerate() {
+            *s = self.homed_count_mm(physical, t)? - self.endstop_adj_mm[t];
+        }
+        Ok(s)
+    }
+
     /// `Q_T` (mm): where tower `t`'s carriage is counted when homed.
     fn homed_count_mm(&self, g: &DeltaGeometry, t: usize) -> Result<f64, KinematicsError> {
         let (rod, radius) = (g.rod(t), g.radius + g.radius_trim[t]);
@@ -238,10 +262,27 @@ mod tests {
     }
 
     /// The homed state a Marlin printer reaches with settings `m` and switches at `s` (mm): each
-    /// carriage's physical height minus its count.
+    /// carriage's physical height minus its count (mm).
     fn offsets(m: &MarlinDelta, switches: [f64; 3]) -> [f64; 3] {
-        let g = m.firmware_geometry().unwrap();
-        [0, 1, 2].map(|t| switches[t] + m.endstop_adj_mm[t] - m.homed_count_mm(&g, t).unwrap())
+        m.endstop_offsets(switches).unwrap().map(|e| e * 1e3)
+    }
+
+    #[test]
+    fn switches_that_home_the_physical_effector_at_h_leave_the_rod_difference_as_offset() {
+        let m = printer();
+        // the firmware's own geometry: no offset at all
+        let fw = m.firmware_geometry().unwrap();
+        let s = m.switches_homing_at_height(&fw).unwrap();
+        assert!(offsets(&m, s).iter().all(|e| e.abs() < 1e-9), "{:?}", offsets(&m, s));
+        // a rod 1 mm longer: each carriage sits √(D'² − R²) − √(D² − R²) above its count
+        let mut physical = fw;
+        physical.rod_length += 1e-3;
+        let s = m.switches_homing_at_height(&physical).unwrap();
+        let r = 105.6f64;
+        let expected = (216.0f64 * 216.0 - r * r).sqrt() - (215.0f64 * 215.0 - r * r).sqrt();
+        for e in offsets(&m, s) {
+            assert!((e - expected).abs() < 1e-9, "{e} vs {expected}");
+        }
     }
 
     #[test]

@@ -4,7 +4,8 @@
 
 use std::path::PathBuf;
 
-use metrocell_node::{MetrocellNode, ParamDecl, ParamValue};
+use metrocell_node::params::set_default as set;
+use metrocell_node::MetrocellNode;
 
 use crate::vision::image_input::parse_length;
 
@@ -62,11 +63,6 @@ pub struct AlignArgs {
     /// ROS arguments, after `--`: --ros-args -r __ns:=/cell1 -p tool_link:=flange ...
     #[arg(last = true)]
     ros_args: Vec<String>,
-}
-
-/// A flag's value as the node's parameter default.
-fn set(decls: &mut [ParamDecl], name: &str, value: impl Into<ParamValue>) {
-    ParamDecl::set_default(decls, name, value);
 }
 
 pub fn run(a: AlignArgs) -> i32 {

@@ -68,6 +68,36 @@ fn router_measure(dir: &Path, table: &Path) -> String {
     )
 }
 
+/// A measured hole table against the generator's truth (hole,x,y,ex,ey): the same 36 holes,
+/// each axis within 4 of its stated σ of where it was drilled; returns the RMS of those z.
+fn holes_against_where_drilled(table: &Path, truth: &Path, what: &str) -> f64 {
+    let rows = |path: &Path| -> Vec<Vec<f64>> {
+        std::fs::read_to_string(path)
+            .unwrap()
+            .lines()
+            .skip(1)
+            .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
+            .collect()
+    };
+    let (measured, drilled) = (rows(table), rows(truth));
+    assert_eq!(measured.len(), 36, "{what}");
+    let mut z2 = 0.0;
+    for (m, t) in measured.iter().zip(&drilled) {
+        // hole,column,row,x,y,ex,ey,σx,σy against hole,x,y,ex,ey
+        assert_eq!((m[0], m[3], m[4]), (t[0], t[1], t[2]));
+        for axis in 0..2 {
+            let z = (m[5 + axis] - t[3 + axis]) / m[7 + axis];
+            assert!(
+                z.abs() < 4.0,
+                "{what}: hole {} axis {axis} off by {z:.1}σ",
+                m[0]
+            );
+            z2 += z * z;
+        }
+    }
+    (z2 / (2 * measured.len()) as f64).sqrt()
+}
+
 /// "  after / measurement noise (…): 0.93"
 fn figure(stdout: &str, prefix: &str) -> f64 {
     let line = stdout
@@ -272,14 +302,6 @@ fn photographed_plate_is_measured_and_compensated_to_its_noise() {
     let table = dir.join("holes.csv");
     let stdout = router_measure(&dir, &table);
     assert!(stdout.contains(": 36 holes from 2 photos"), "{stdout}");
-    let rows = |path: &Path| -> Vec<Vec<f64>> {
-        std::fs::read_to_string(path)
-            .unwrap()
-            .lines()
-            .skip(1)
-            .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-            .collect()
-    };
     // the same photos taken in the cell: published by the camera node, recorded, measured from
     // the recording with the recorded camera_info — the same table to the last digit
     recorded_photos_measure_the_same(
@@ -290,18 +312,7 @@ fn photographed_plate_is_measured_and_compensated_to_its_noise() {
         2,
         &table,
     );
-    let (measured, truth) = (rows(&table), rows(&dir.join("truth.csv")));
-    let mut z2 = 0.0;
-    for (m, t) in measured.iter().zip(&truth) {
-        // hole,column,row,x,y,ex,ey,σx,σy against hole,x,y,ex,ey
-        assert_eq!((m[0], m[3], m[4]), (t[0], t[1], t[2]));
-        for axis in 0..2 {
-            let z = (m[5 + axis] - t[3 + axis]) / m[7 + axis];
-            assert!(z.abs() < 4.0, "hole {}: axis {axis} off by {z:.1}σ", m[0]);
-            z2 += z * z;
-        }
-    }
-    let rms_z = (z2 / (2 * measured.len()) as f64).sqrt();
+    let rms_z = holes_against_where_drilled(&table, &dir.join("truth.csv"), "photos");
     assert!((0.5..1.5).contains(&rms_z), "RMS z {rms_z}");
     let report = dir.join("report");
     let stdout = router_fit(&[
@@ -351,27 +362,7 @@ fn twin_drilled_and_photographed_plates_come_back_through_the_commands() {
         );
         let table = dir.join("holes.csv");
         router_measure(&dir, &table);
-        let rows = |path: &Path| -> Vec<Vec<f64>> {
-            std::fs::read_to_string(path)
-                .unwrap()
-                .lines()
-                .skip(1)
-                .map(|l| l.split(',').map(|v| v.parse().unwrap()).collect())
-                .collect()
-        };
-        let (measured, drilled) = (rows(&table), rows(&dir.join("truth.csv")));
-        assert_eq!(measured.len(), 36);
-        for (m, t) in measured.iter().zip(&drilled) {
-            assert_eq!((m[0], m[3], m[4]), (t[0], t[1], t[2]));
-            for axis in 0..2 {
-                let z = (m[5 + axis] - t[3 + axis]) / m[7 + axis];
-                assert!(
-                    z.abs() < 4.0,
-                    "{name}: hole {} axis {axis} off by {z:.1}σ",
-                    m[0]
-                );
-            }
-        }
+        holes_against_where_drilled(&table, &dir.join("truth.csv"), name);
         let stdout = router_fit(&["--errors".as_ref(), table.as_os_str()]);
         for (k, letter) in ["A", "B", "C", "D", "E", "F", "G", "H", "I"]
             .iter()

@@ -4,7 +4,8 @@
 
 use std::path::PathBuf;
 
-use metrocell_node::{MetrocellNode, ParamDecl, ParamValue};
+use metrocell_node::params::set_default as set;
+use metrocell_node::MetrocellNode;
 use metrocell_recorder_node::{parameters, record, RecorderSettings};
 
 #[derive(clap::Args)]
@@ -70,10 +71,6 @@ pub struct RecordArgs {
 
 /// Set the default of the declared parameter `name` (the value the node has unless
 /// `--ros-args` overrides it).
-/// A flag's value as the node's parameter default.
-fn set(decls: &mut [ParamDecl], name: &str, value: impl Into<ParamValue>) {
-    ParamDecl::set_default(decls, name, value);
-}
 
 pub fn run(args: RecordArgs) -> anyhow::Result<i32> {
     if args.topics.is_empty() && !args.all && args.regex.is_none() {

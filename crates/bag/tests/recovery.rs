@@ -73,9 +73,7 @@ fn truncation_at_random_offsets_always_recovers_the_complete_chunks() {
     add_temperature(&mut w);
     const N: u64 = 4000;
     for i in 0..N {
-        let t = T0 + i * 1_000_000;
-        w.write("/temperature", t, t, &Temperature::nth(i).encode())
-            .unwrap();
+        write_nth(&mut w, i);
         if i % 97 == 0 {
             w.flush().unwrap();
         }
@@ -160,9 +158,7 @@ fn child_writer_process() {
             started.elapsed() < Duration::from_secs(60),
             "parent never killed this writer"
         );
-        let t = T0 + i * 1_000_000;
-        w.write("/temperature", t, t, &Temperature::nth(i).encode())
-            .unwrap();
+        write_nth(&mut w, i);
         let d = w.durable_message_count();
         if d != last {
             last = d;
@@ -277,20 +273,26 @@ fn sigkill_at_random_times_loses_at_most_the_unflushed_tail() {
 /// on from by `BagWriter::append`: the bag is recovered, a new split file follows the first, the
 /// topics' counts carry on, and every message — the flushed ones before, all after — reads back
 /// in order.
+/// Writes message k of the sequence: Temperature::nth(k) at T0 + k ms.
+fn write_nth(w: &mut BagWriter, k: u64) {
+    let t = T0 + k * 1_000_000;
+    w.write("/temperature", t, t, &Temperature::nth(k).encode())
+        .unwrap();
+}
+
+/// Messages `range` of the sequence.
+fn write_sequence(w: &mut BagWriter, range: std::ops::Range<u64>) {
+    for k in range {
+        write_nth(w, k);
+    }
+}
+
 #[test]
 fn append_goes_on_from_a_writer_that_never_finished() {
     let dir = scratch("append_after_kill").join("bag");
     let mut w = BagWriter::create(&dir, WriterOptions::default()).unwrap();
     add_temperature(&mut w);
-    for k in 0..500u64 {
-        w.write(
-            "/temperature",
-            T0 + k * 1_000_000,
-            T0 + k * 1_000_000,
-            &Temperature::nth(k).encode(),
-        )
-        .unwrap();
-    }
+    write_sequence(&mut w, 0..500);
     w.flush().unwrap();
     // killed: no finish, no footer, no final metadata
     std::mem::forget(w);
@@ -298,15 +300,7 @@ fn append_goes_on_from_a_writer_that_never_finished() {
     let report = report.expect("there was a bag to go on from");
     assert_eq!(report.kept_messages(), 500, "{report}");
     assert_eq!(w.message_count(), 500);
-    for k in 500..800u64 {
-        w.write(
-            "/temperature",
-            T0 + k * 1_000_000,
-            T0 + k * 1_000_000,
-            &Temperature::nth(k).encode(),
-        )
-        .unwrap();
-    }
+    write_sequence(&mut w, 500..800);
     let metadata = w.finish().unwrap();
     assert_eq!(metadata.message_count, 800);
     assert_eq!(

@@ -273,7 +273,11 @@ mod tests {
         // the firmware's own geometry: no offset at all
         let fw = m.firmware_geometry().unwrap();
         let s = m.switches_homing_at_height(&fw).unwrap();
-        assert!(offsets(&m, s).iter().all(|e| e.abs() < 1e-9), "{:?}", offsets(&m, s));
+        assert!(
+            offsets(&m, s).iter().all(|e| e.abs() < 1e-9),
+            "{:?}",
+            offsets(&m, s)
+        );
         // a rod 1 mm longer: each carriage sits √(D'² − R²) − √(D² − R²) above its count
         let mut physical = fw;
         physical.rod_length += 1e-3;

@@ -23,18 +23,18 @@ pub struct ParamDecl {
     pub allowed: Option<Vec<ParamValue>>,
 }
 
-impl ParamDecl {
-    /// Gives the declaration named `name` in `decls` a new default (a command's flag that
-    /// configures a node run in-process, e.g. `metrocell bag record`). Panics if there is none:
-    /// the caller names its own node's parameters.
-    pub fn set_default(decls: &mut [ParamDecl], name: &str, value: impl Into<ParamValue>) {
-        let d = decls
-            .iter_mut()
-            .find(|d| d.name == name)
-            .unwrap_or_else(|| panic!("no parameter `{name}` is declared"));
-        d.default = value.into();
-    }
+/// Gives the declaration named `name` in `decls` a new default (a command's flag that
+/// configures a node run in-process, e.g. `metrocell bag record`). Panics if there is none:
+/// the caller names its own node's parameters.
+pub fn set_default(decls: &mut [ParamDecl], name: &str, value: impl Into<ParamValue>) {
+    let d = decls
+        .iter_mut()
+        .find(|d| d.name == name)
+        .unwrap_or_else(|| panic!("no parameter `{name}` is declared"));
+    d.default = value.into();
+}
 
+impl ParamDecl {
     pub fn new(name: &str, default: impl Into<ParamValue>, description: &str) -> ParamDecl {
         ParamDecl {
             name: name.to_string(),

@@ -6,7 +6,7 @@ mod resolve;
 mod value;
 mod watch;
 
-pub use declaration::{ParamDecl, ValueProblem};
+pub use declaration::{set_default, ParamDecl, ValueProblem};
 pub use file::{
     parse_params_file, pattern_matches_node, read_params_file, ParamsFileError, ParamsFileSection,
 };

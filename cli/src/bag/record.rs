@@ -69,9 +69,6 @@ pub struct RecordArgs {
     ros_args: Vec<String>,
 }
 
-/// Set the default of the declared parameter `name` (the value the node has unless
-/// `--ros-args` overrides it).
-
 pub fn run(args: RecordArgs) -> anyhow::Result<i32> {
     if args.topics.is_empty() && !args.all && args.regex.is_none() {
         anyhow::bail!("say what to record: topic names, -a (every topic) or -e REGEX; see --help");

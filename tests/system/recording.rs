@@ -75,9 +75,13 @@ fn wait_for_line(rx: &mpsc::Receiver<String>, needle: &str, timeout: Duration) {
     }
 }
 
+/// Stops a recorder with SIGINT and waits for it to finish its bag. The bound is generous: a
+/// recorder stops taking samples within 0.4 s, but finishing syncs the bag to disk, and with the
+/// busy-demo test writing its bag at the same time an fsync took 10 s once (the recorder logs how
+/// long finishing took when it is slow). How quickly nodes stop is node_shutdown.rs's test.
 fn stop(mut guard: ChildGuard) {
     interrupt(guard.pid());
-    let deadline = Instant::now() + Duration::from_secs(10);
+    let deadline = Instant::now() + Duration::from_secs(60);
     loop {
         if let Some(status) = guard.child().try_wait().unwrap() {
             assert!(status.success(), "recorder exits 0 on SIGINT, got {status}");
@@ -85,7 +89,7 @@ fn stop(mut guard: ChildGuard) {
         }
         assert!(
             Instant::now() < deadline,
-            "recorder did not stop within 10 s of SIGINT"
+            "recorder did not stop within 60 s of SIGINT"
         );
         std::thread::sleep(Duration::from_millis(20));
     }

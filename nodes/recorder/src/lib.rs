@@ -168,8 +168,10 @@ pub fn record(
     let mut next_scan = Instant::now();
     let mut failure = None;
     let mut stopping = false;
+    let mut stop_requested = None;
     loop {
         if token.is_triggered() && !stopping {
+            stop_requested = Some(Instant::now());
             // The taker goes on taking what is still arriving (samples in flight or being
             // repaired), then ends; everything it took is recorded below.
             taker.stop();
@@ -276,7 +278,16 @@ pub fn record(
             summary: Some(summary),
         });
     }
+    let finishing = Instant::now();
     recording.finish().map_err(failed)?;
+    if let Some(requested) = stop_requested.filter(|t| t.elapsed() > SLOW_STOP) {
+        node.warn(format!(
+            "stopping took {:.1} s, {:.1} s of it finishing the bag (its index and metadata \
+             written and synced to disk): the disk is slow or busy",
+            requested.elapsed().as_secs_f64(),
+            finishing.elapsed().as_secs_f64()
+        ));
+    }
     node.info(format!(
         "bag {} finished: {}",
         settings.output,
@@ -284,6 +295,10 @@ pub fn record(
     ));
     Ok(summary)
 }
+
+/// A stop slower than this is logged with where the time went (a node is expected to stop within
+/// a second; a busy disk's fsync has taken 10 s).
+const SLOW_STOP: Duration = Duration::from_secs(2);
 
 /// The longest the recording loop spends writing what the taker handed over before it looks at
 /// discovery and the flush timer again.

@@ -23,6 +23,8 @@
 //! * [`volumetric_monte_carlo`] — N simulated verifications (noise, tracker placement) fitted
 //!   like a real one: the volumetric error map with its uncertainty and the residual error after
 //!   compensation (seed 001, P3).
+//! * [`simulated_records`] — the readings a tracker would give of planned points at known
+//!   parameters, with its noise model and stated covariance (planning, Monte Carlo, tests).
 //! * [`uncertainty_budget`] — GUM combination of standard uncertainties and the ISO/TS 15530-3
 //!   expanded uncertainty U = k·√(u_cal² + u_p² + u_b² + u_w²) (seed 001, eq. 3.4), with each
 //!   component's share.
@@ -54,6 +56,7 @@ pub mod recursive;
 pub mod reference_nests;
 pub mod residuals;
 pub mod sequential_anova;
+pub mod simulated_records;
 pub mod uncertainty_budget;
 pub mod volumetric_monte_carlo;
 

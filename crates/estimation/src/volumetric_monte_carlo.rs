@@ -105,7 +105,7 @@ pub fn volumetric_monte_carlo(
         };
         let fitted = error_map(model, &f.x, points, conditions)?;
         if linearised_sd.is_empty() {
-            linearised_sd = linearised(model, &f.x, f.covariance.as_ref(), points, conditions)?;
+            linearised_sd = error_map_sd(model, &f.x, f.covariance.as_ref(), points, conditions)?;
         }
         for i in 0..n {
             sum[i] += fitted[i];
@@ -136,8 +136,9 @@ pub fn volumetric_monte_carlo(
     })
 }
 
-/// √diag(J·C·Jᵀ) of the error map at `points` (zero without a covariance).
-fn linearised(
+/// √diag(J·C·Jᵀ) of the error map at `points` (zero without a covariance): the linearised
+/// standard uncertainty of each component of the error a fit with covariance C gives there.
+pub fn error_map_sd(
     model: &ForwardModel,
     p: &[f64],
     covariance: Option<&nalgebra::DMatrix<f64>>,

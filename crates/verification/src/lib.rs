@@ -1,0 +1,26 @@
+//! # metrocell-verification — planning a volumetric verification with a laser tracker
+//!
+//! Seed 001 (thesis P2–P5): the machine visits a mesh of points and stops at each; a laser
+//! tracker on the table measures the target (SMR) there; the readings identify the machine's
+//! geometric errors and the tracker's pose together. Planning decides, before anything is
+//! measured:
+//!
+//! * [`mesh`] — the points: a grid over the volume (part 2 fixture 15: X 800–1200, Y 100–500,
+//!   Z 200–400 mm at 100 mm is 75 points);
+//! * [`visiting_order`] — the order (a spiral per Z layer, as the thesis visits its plate) and a
+//!   unidirectional approach to every point, so each axis's backlash is the same at every point
+//!   and goes into the origin instead of the error map;
+//! * [`machine_program`] — the G-code the machine runs: the approach, the point, a dwell;
+//! * [`tracker_station`] — where to put the tracker: candidate stations, which of them see every
+//!   point (range, the reflector's acceptance angle), and the standard uncertainty of the
+//!   identified error map each would give (linearised from the identification's covariance with
+//!   the tracker's noise model, P5's placement study).
+//!
+//! Units: SI (m, rad, s) in and out; the program is written in mm.
+
+pub mod machine_program;
+pub mod mesh;
+pub mod tracker_station;
+pub mod visiting_order;
+
+pub use mesh::Mesh;

@@ -34,6 +34,7 @@ mod diagnose_command;
 mod launch_command;
 mod router;
 mod topic;
+mod verify;
 mod vision;
 
 use clap::{Parser, Subcommand};
@@ -88,6 +89,9 @@ enum Command {
     /// Inspect and publish on topics (list, echo, pub, hz), like `ros2 topic`
     #[command(subcommand)]
     Topic(topic::TopicCommand),
+    /// Volumetric verification of a machine tool with a laser tracker (seed 001): plan the points, the program and the tracker's station
+    #[command(subcommand)]
+    Verify(verify::VerifyCommand),
 }
 
 /// What a closed stdout does to this process. Rust starts every program with SIGPIPE ignored,
@@ -130,6 +134,7 @@ fn main() {
         Command::Detect(args) => vision::detect::run(args),
         Command::Launch(args) => launch_command::run(args),
         Command::Router(command) => router::run(command),
+        Command::Verify(command) => verify::run(command),
         Command::Delta(command) => delta::run(command),
         Command::Sim(args) => metrocell_simulation::run_sim_command(args),
         Command::Topic(command) => topic::run(command),

@@ -16,8 +16,12 @@
 //!   identified error map each would give (linearised from the identification's covariance with
 //!   the tracker's noise model, P5's placement study).
 //!
+//! * [`identification_model`] — the errors one tracker target identifies, the model a plan is
+//!   judged with when the user gives none.
+//!
 //! Units: SI (m, rad, s) in and out; the program is written in mm.
 
+pub mod identification_model;
 pub mod machine_program;
 pub mod mesh;
 pub mod tracker_station;

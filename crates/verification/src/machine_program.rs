@@ -63,6 +63,37 @@ pub fn stops(points_in_order: &[[f64; 3]], nest_every: usize) -> Vec<Stop> {
     out
 }
 
+/// When the machine reaches each stop (s after it leaves `home`), moving at the feed along the
+/// program's path (the approach legs included) and dwelling at each earlier stop: the thesis's
+/// T_v = L_T/F + T_s·(n − 1) (P5 eq. 4), which the tracker node applies when the controller's
+/// position is not streamed.
+pub fn arrival_times(stops: &[Stop], home: [f64; 3], settings: &ProgramSettings) -> Vec<f64> {
+    let dist = |a: [f64; 3], b: [f64; 3]| {
+        ((a[0] - b[0]).powi(2) + (a[1] - b[1]).powi(2) + (a[2] - b[2]).powi(2)).sqrt()
+    };
+    let mut at = home;
+    let mut path = 0.0;
+    stops
+        .iter()
+        .enumerate()
+        .map(|(k, s)| {
+            if settings.approach > 0.0 {
+                let a = approach_start(s.point, settings.approach);
+                path += dist(at, a);
+                at = a;
+            }
+            path += dist(at, s.point);
+            at = s.point;
+            metrocell_laser_tracker::time_alignment::program_point_time(
+                path,
+                settings.feed,
+                settings.dwell,
+                k as u32 + 1,
+            )
+        })
+        .collect()
+}
+
 fn mm(v: f64) -> String {
     format!("{:.4}", v * 1e3)
 }
@@ -115,6 +146,23 @@ pub fn gcode(stops: &[Stop], settings: &ProgramSettings, title: &str) -> String 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Seed 001 part 2, fixture 16: 200 mm of path at 1000 mm/min to the third point, 5 s
+    /// stops: 12 s + 10 s = 22 s.
+    #[test]
+    fn the_third_point_is_reached_at_22_s() {
+        let pts = [[0.05, 0.0, 0.0], [0.1, 0.0, 0.0], [0.2, 0.0, 0.0]];
+        let settings = ProgramSettings {
+            feed: 1.0 / 60.0,
+            dwell: 5.0,
+            approach: 0.0,
+            dwell_word: DwellWord::P,
+            nest_every: 0,
+        };
+        let t = arrival_times(&stops(&pts, 0), [0.0; 3], &settings);
+        assert!((t[2] - 22.0).abs() < 1e-9, "{t:?}");
+        assert!((t[0] - 3.0).abs() < 1e-9);
+    }
 
     #[test]
     fn each_stop_is_approached_in_plus_and_dwelt_at() {

@@ -70,17 +70,17 @@ impl std::fmt::Display for Blocked {
         match self {
             Blocked::TooClose { point, range } => write!(
                 f,
-                "point {point} is {:.3} m away, closer than the tracker measures",
+                "p{point} is {:.3} m away, closer than the tracker measures",
                 range
             ),
             Blocked::TooFar { point, range } => write!(
                 f,
-                "point {point} is {:.3} m away, beyond the tracker's range",
+                "p{point} is {:.3} m away, beyond the tracker's range",
                 range
             ),
             Blocked::OffReflector { point, angle } => write!(
                 f,
-                "point {point} is seen {:.1}° off the reflector's axis, beyond its acceptance",
+                "p{point} is seen {:.1}° off the reflector's axis, beyond its acceptance",
                 angle.to_degrees()
             ),
         }
@@ -184,6 +184,30 @@ pub fn planned(points: &[[f64; 3]]) -> Vec<Planned> {
             time_on: 24.0 * 3600.0,
         })
         .collect()
+}
+
+/// Where the target is at each point in the model's frame (m): the nominal readings from a
+/// tracker at the origin.
+pub fn target_points(
+    model: &ForwardModel,
+    at: &[f64],
+    points: &[[f64; 3]],
+) -> Result<Vec<Vector3<f64>>, String> {
+    let origin = Station {
+        position: Vector3::zeros(),
+        yaw: 0.0,
+    };
+    let p = placed(model, at, &origin)?;
+    let noise = TrackerNoise {
+        constant: 1e-6,
+        per_metre: 0.0,
+        angular: 1e-6,
+    };
+    Ok(records(model, &p, &planned(points), noise, None)
+        .records
+        .into_iter()
+        .map(|r| r.measured)
+        .collect())
 }
 
 /// Judge `station` for measuring `points` (commanded axis positions, m) with a tracker of

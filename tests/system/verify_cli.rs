@@ -212,3 +212,218 @@ fn a_station_that_cannot_see_the_points_is_refused_with_what_to_do() {
         "{err}"
     );
 }
+
+/// The twin's machine: the errors a single tracker target identifies, with values of both
+/// signs at tens of µm (the gauge parts — offsets, the straightnesses' linear terms, which the
+/// tracker's pose takes — zero, so the identified map and the truth share their convention).
+const TRUE_TERMS: &str = "
+  - {id: positioning, options: {axis: x, order: 3, travel: [800 mm, 1200 mm]}, params: {c0: 0 um, c1: 25 um, c2: -10 um, c3: 4 um}}
+  - {id: positioning, options: {axis: y, order: 3, travel: [100 mm, 500 mm]}, params: {c0: 0 um, c1: -15 um, c2: 8 um, c3: 0 um}}
+  - {id: positioning, options: {axis: z, order: 2, travel: [200 mm, 400 mm]}, params: {c0: 0 um, c1: 10 um, c2: 0 um}}
+  - {id: straightness, options: {axis: x, direction: y, order: 3, travel: [800 mm, 1200 mm]}, params: {c0: 0 um, c1: 0 um, c2: 6 um, c3: 0 um}}
+  - {id: straightness, options: {axis: x, direction: z, order: 3, travel: [800 mm, 1200 mm]}, params: {c0: 0 um, c1: 0 um, c2: 0 um, c3: -5 um}}
+  - {id: straightness, options: {axis: y, direction: x, order: 3, travel: [100 mm, 500 mm]}, params: {c0: 0 um, c1: 0 um, c2: -7 um, c3: 0 um}}
+  - {id: straightness, options: {axis: z, direction: x, order: 2, travel: [200 mm, 400 mm]}, params: {c0: 0 um, c1: 0 um, c2: 5 um}}
+  - {id: squareness, options: {pair: xy}, params: {s: 40 urad}}
+  - {id: squareness, options: {pair: xz}, params: {s: -25 urad}}
+  - {id: squareness, options: {pair: yz}, params: {s: 30 urad}}
+";
+
+fn csv_rows(path: &Path) -> Vec<Vec<String>> {
+    std::fs::read_to_string(path)
+        .unwrap()
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').map(String::from).collect())
+        .collect()
+}
+
+/// The acceptance's second point on the twin: the plan run by the twin's machine (its errors
+/// known), recorded, and reported — over twelve seeds the identified map's error against the
+/// truth falls within the report's Monte Carlo u at its stated rate, and the residual
+/// volumetric error the report states after compensation is what compensating really leaves
+/// (on average within 1.5×; single runs beyond the report's 95 % bound for one run's mean
+/// about one in twenty).
+#[test]
+fn a_verification_of_the_twin_reports_an_uncertainty_that_covers_the_truth() {
+    let dir = std::env::temp_dir().join(format!("verify_twin_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let plan_dir = dir.join("plan");
+    let o = plan(&plan_dir, &["--dwell", "3s"]);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stops = csv_rows(&plan_dir.join("points.csv"));
+    let station = csv_rows(&plan_dir.join("stations.csv")).remove(0);
+    let points: Vec<String> = stops
+        .iter()
+        .map(|r| format!("    [{} mm, {} mm, {} mm]", r[2], r[3], r[4]))
+        .collect();
+    let cell = format!(
+        "name: verify_twin
+machine:
+  family: cartesian
+  stacking: XFYZ
+  travel: {{x: [800 mm, 1200 mm], y: [100 mm, 500 mm], z: [200 mm, 400 mm]}}
+sensors:
+  tracker:
+    pose: {{translation: [{} mm, {} mm, {} mm], euler_xyz: [0 deg, 0 deg, {} deg]}}
+    rate: 2 Hz
+    range_noise: {{constant: 4 um, per_metre: 0.8 um/m}}
+    angular_noise: 3 urad
+  machine_state: {{rate: 10 Hz}}
+environment:
+  ambient: {{mean: 20 degC}}
+  air: {{pressure: 101.3 kPa, humidity: 50}}
+program:
+  points: [
+{}
+  ]
+  feed_rate: 1000 mm/min
+  dwell: 3 s
+  cycles: 3
+terms:
+{TRUE_TERMS}",
+        station[1],
+        station[2],
+        station[3],
+        station[4],
+        points.join(",\n")
+    );
+    let cell_path = dir.join("cell.yaml");
+    std::fs::write(&cell_path, &cell).unwrap();
+    let truth = metrocell_twin::CellModel::from_path(&cell_path).unwrap();
+    let tfm = truth.forward_model().unwrap();
+    let (mut z, mut actual, mut stated, mut p95) = (vec![], vec![], vec![], vec![]);
+    // VERIFY_TWIN_SEEDS=N runs another number (4 seeds gave 0.50 within 1σ once: too few to judge)
+    let seeds: u64 = std::env::var("VERIFY_TWIN_SEEDS")
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(12);
+    for seed in 1..=seeds {
+        let bag = dir.join(format!("bag{seed}"));
+        let sim = run(
+            Command::new(bin("metrocell"))
+                .args([
+                    "sim",
+                    "--quiet",
+                    "--duration",
+                    "70min",
+                    "--seed",
+                    &seed.to_string(),
+                    "--cell",
+                ])
+                .arg(&cell_path)
+                .arg("-o")
+                .arg(&bag)
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped()),
+            Duration::from_secs(300),
+        );
+        assert!(
+            sim.status.success(),
+            "{}",
+            String::from_utf8_lossy(&sim.stderr)
+        );
+        let rep = dir.join(format!("report{seed}"));
+        let o = run(
+            Command::new(bin("metrocell"))
+                .args([
+                    "verify", "report", "--trials", "40", "--mpe-a", "5um", "--mpe-k", "200",
+                    "--mpe-b", "8um", "--model",
+                ])
+                .arg(plan_dir.join("model.yaml"))
+                .arg(&bag)
+                .arg("-o")
+                .arg(&rep)
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped()),
+            Duration::from_secs(600),
+        );
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            o.status.success(),
+            "{text}\n{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        if seed == 1 {
+            println!("{text}");
+        }
+        let rows = csv_rows(&rep.join("map.csv"));
+        assert_eq!(rows.len(), 75, "every mesh point in the map");
+        let q: Vec<Vec<f64>> = rows
+            .iter()
+            .map(|r| {
+                (1..=3)
+                    .map(|k| r[k].parse::<f64>().unwrap() * 1e-3)
+                    .collect()
+            })
+            .collect();
+        let true_map = metrocell_estimation::volumetric_monte_carlo::error_map(
+            &tfm,
+            &tfm.params(),
+            &q,
+            &metrocell_physics::Signals::default(),
+        )
+        .unwrap();
+        let mut residual = 0.0;
+        for (r, t) in rows.iter().zip(&true_map) {
+            let e: Vec<f64> = (4..=6).map(|k| r[k].parse::<f64>().unwrap()).collect();
+            let u: Vec<f64> = (8..=10).map(|k| r[k].parse::<f64>().unwrap()).collect();
+            let d: Vec<f64> = (0..3).map(|c| e[c] - t[c] * 1e6).collect();
+            for c in 0..3 {
+                z.push(d[c] / u[c]);
+            }
+            if std::env::var("VERIFY_TWIN_DEBUG").is_ok() && r[0] == "0" {
+                println!(
+                    "seed {seed} point 0: e {e:?} truth {:?} u {u:?}",
+                    t.map(|v| v * 1e6)
+                );
+            }
+            residual += (d[0] * d[0] + d[1] * d[1] + d[2] * d[2]).sqrt();
+        }
+        actual.push(residual / rows.len() as f64);
+        let json: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(rep.join("verification.json")).unwrap())
+                .unwrap();
+        stated.push(json["residual_after_um"]["mean"].as_f64().unwrap());
+        p95.push(
+            json["residual_after_um"]["trial_mean_p95"]
+                .as_f64()
+                .unwrap(),
+        );
+        assert!(rep.join("index.html").exists());
+        let lengths = json["length_test"].as_array().unwrap();
+        assert!(lengths.len() >= 50, "{} lengths", lengths.len());
+        assert!(
+            lengths.iter().all(|l| l["decision_after"].is_string()),
+            "each length judged"
+        );
+    }
+    let within = |k: f64| z.iter().filter(|v| v.abs() <= k).count() as f64 / z.len() as f64;
+    println!(
+        "map error / stated u over {seeds} seeds × 75 points × 3: within 1σ {:.3}, 2σ {:.3}, 3σ {:.3}; \
+         residual after compensation: actual {actual:.2?} µm, stated {stated:.2?} µm, one run's 95 % bound {p95:.2?} µm",
+        within(1.0),
+        within(2.0),
+        within(3.0)
+    );
+    assert!((0.55..0.80).contains(&within(1.0)), "{}", within(1.0));
+    assert!(within(2.0) > 0.9, "{}", within(2.0));
+    assert!(within(3.0) > 0.98, "{}", within(3.0));
+    // the residual compensation really leaves, on average over the runs, within 1.5× what
+    // the reports state; single runs above their 95 % bound about one in twenty
+    let n = actual.len() as f64;
+    let (mean_actual, mean_stated) = (
+        actual.iter().sum::<f64>() / n,
+        stated.iter().sum::<f64>() / n,
+    );
+    assert!(
+        mean_actual <= 1.5 * mean_stated,
+        "actual {mean_actual} µm vs stated {mean_stated} µm"
+    );
+    let over = actual.iter().zip(&p95).filter(|(a, p)| a > p).count();
+    assert!(
+        over as f64 <= 0.05 * n + 2.0,
+        "{over} of {n} runs above their 95 % bound"
+    );
+    let _ = std::fs::remove_dir_all(&dir);
+}

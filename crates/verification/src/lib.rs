@@ -19,11 +19,22 @@
 //! * [`identification_model`] — the errors one tracker target identifies, the model a plan is
 //!   judged with when the user gives none.
 //!
+//! * [`length_test`] — ISO 10360-2-style length conformity: 5 lengths × 7 directions × 3
+//!   repetitions against MPE = min(A + L/K, B), decided with the uncertainty (ISO 14253-1).
+//!
+//! * [`measured_lengths`] — the readings as that length test: each visit a measured point in
+//!   the machine frame, lengths as the machine is and with the fitted map compensated.
+//! * [`resampled_monte_carlo`] — P3's Monte Carlo on the verification's own readings: the
+//!   identified map's uncertainty and the residual error a compensation from it leaves.
+//!
 //! Units: SI (m, rad, s) in and out; the program is written in mm.
 
 pub mod identification_model;
+pub mod length_test;
 pub mod machine_program;
+pub mod measured_lengths;
 pub mod mesh;
+pub mod resampled_monte_carlo;
 pub mod tracker_station;
 pub mod visiting_order;
 

@@ -1,0 +1,558 @@
+//! `metrocell verify report --model MODEL.yaml BAG... -o DIR`: a verification's readings
+//! identified, its uncertainty by Monte Carlo, the length test and the ISO/TS 15530-3 budget,
+//! on one HTML page a metrologist signs, with the numbers in verification.json and map.csv.
+
+use std::fmt::Write as _;
+use std::io::Write as _;
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use metrocell_estimation::error_functions::axis_error_functions;
+use metrocell_estimation::fit_summary::{summary_lines, value_with_sigma};
+use metrocell_estimation::uncertainty_budget::{thermal_expansion_uncertainty, Budget};
+use metrocell_estimation::volumetric_monte_carlo::{error_map, mean_sd};
+use metrocell_estimation::{fit, FitOptions};
+use metrocell_model_file::CellModel;
+use metrocell_physics::units::parse_quantity;
+use metrocell_records::{records_from_bags, PointSource, RecordingOptions};
+use metrocell_report::{HistogramPlot, Report, Series, SeriesPlot, Table};
+use metrocell_verification::length_test::{length_cases, Decision, Mpe};
+use metrocell_verification::measured_lengths::{at_rest, measured_lengths, mesh_of, visits};
+use metrocell_verification::resampled_monte_carlo::resampled_monte_carlo;
+use nalgebra::Vector3;
+
+#[derive(clap::Args)]
+#[command(after_long_help = HELP)]
+pub struct ReportArgs {
+    /// The error model to identify (a cell file with `terms:`; `verify plan` writes model.yaml)
+    #[arg(long)]
+    model: PathBuf,
+    /// The verification's recordings (rosbag2 directories or .mcap files)
+    #[arg(required = true)]
+    bags: Vec<PathBuf>,
+    /// Directory to write the report into (created)
+    #[arg(short, long)]
+    output: PathBuf,
+    /// Monte Carlo trials (seed 001 P3 used 1000)
+    #[arg(long, default_value_t = 200)]
+    trials: usize,
+    /// Seed of the Monte Carlo's noise
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
+    /// The MPE of a length measurement, ±min(A + L/K, B): A (e.g. 5um)
+    #[arg(long, value_parser = quantity("m"))]
+    mpe_a: Option<f64>,
+    /// K of the MPE (L in mm gives µm, as specifications write it: 5 + L/200 µm has K = 200)
+    #[arg(long)]
+    mpe_k: Option<f64>,
+    /// B of the MPE, the cap (e.g. 20um); alone: MPE = ±B
+    #[arg(long, value_parser = quantity("m"))]
+    mpe_b: Option<f64>,
+    /// The tracker's calibration uncertainty (k = 1) per metre of range (seed 001: U = 5.6 ppm at k = 2)
+    #[arg(long, default_value = "2.8um/m", value_parser = quantity("1"))]
+    tracker_u_per_metre: f64,
+    /// Uncertainty of the scales' expansion coefficient (seed 001: 0.002/(2√3) µm/(mm·K) = 5.77e-7 1/K)
+    #[arg(long, default_value = "5.77e-7 1/K", value_parser = quantity("1/K"))]
+    alpha_u: f64,
+}
+
+const HELP: &str = "\
+What it does:
+  1. identifies the model's errors and the tracker's pose from the bags' tracker readings taken
+     while the machine stood at a point (3 or more readings at one commanded position; readings
+     on the move are left out), as `metrocell calibrate` does (robust least squares, what cannot
+     be separated held and named);
+  2. Monte Carlo (seed 001 P3 on your data): the fitted errors generate each trial's readings with
+     every reading's noise drawn from its stated covariance; each trial is identified again; the
+     spread of the error maps is their uncertainty u (k = 1) at each mesh point, and generating −
+     refitted map is the residual volumetric error a compensation from this verification leaves;
+  3. the length test (ISO 10360-2 manner): 5 lengths × 7 directions × 3 repetitions between mesh
+     points, measured from the visits' mean points, as the machine is and with the fitted map
+     compensated, each with U (k = 2); with --mpe-* each is judged by ISO 14253-1 (conforms /
+     does not conform / not proven);
+  4. the ISO/TS 15530-3 budget: u_cal (tracker calibration × mean range), u_p (the Monte Carlo's
+     residual, per coordinate), u_b (its systematic part, σ/√trials), u_w (the scales' expansion
+     coefficient's uncertainty × the temperature's distance from 20 °C × the mesh's diagonal);
+  5. writes DIR/index.html (figures, tables, the bag it came from), DIR/map.csv (each point's
+     error and u), DIR/verification.json.
+
+Examples:
+  metrocell verify plan --x 800..1200 --y 100..500 --z 200..400 --step 100mm -o plan
+  metrocell verify report --model plan/model.yaml verify_bag -o verify_report
+  metrocell verify report --model plan/model.yaml verify_bag -o rep --mpe-a 5um --mpe-k 200 --mpe-b 20um --trials 1000";
+
+fn quantity(unit: &'static str) -> impl Fn(&str) -> Result<f64, String> + Clone {
+    move |s: &str| {
+        parse_quantity(s.trim(), unit)
+            .map_err(|_| format!("`{s}` is not a quantity in {unit}"))
+            .and_then(|v| {
+                if v.is_finite() && v >= 0.0 {
+                    Ok(v)
+                } else {
+                    Err(format!("`{s}` must be finite and ≥ 0"))
+                }
+            })
+    }
+}
+
+fn mpe_of(a: &ReportArgs) -> Result<Option<Mpe>> {
+    Ok(match (a.mpe_a, a.mpe_k, a.mpe_b) {
+        (None, None, None) => None,
+        (Some(a), Some(k), Some(b)) => Some(Mpe::Capped { a, k, b }),
+        (Some(a), Some(k), None) => Some(Mpe::Linear { a, k }),
+        (None, None, Some(b)) => Some(Mpe::Constant { b }),
+        _ => bail!("give the MPE as --mpe-a and --mpe-k (± A + L/K), with --mpe-b to cap it, or --mpe-b alone (± B)"),
+    })
+}
+
+pub fn run(a: ReportArgs) -> Result<i32> {
+    let started = Instant::now();
+    let mpe = mpe_of(&a)?;
+    if a.trials < 10 {
+        bail!("--trials {}: a Monte Carlo needs at least 10 trials to state a spread (seed 001 used 1000)", a.trials);
+    }
+    let model = CellModel::from_path(&a.model)?;
+    let fm = model.forward_model()?;
+    eprintln!("reading {} recording(s)…", a.bags.len());
+    let options = RecordingOptions {
+        points: PointSource::Auto,
+        ..RecordingOptions::default()
+    };
+    let all = records_from_bags(&a.bags, &fm, &options)?;
+    let records = at_rest(&all, 3);
+    if records.records.len() < all.records.len() {
+        eprintln!(
+            "{} of {} readings were taken while the machine stood at a point; the {} taken on the move are left out",
+            records.records.len(),
+            all.records.len(),
+            all.records.len() - records.records.len()
+        );
+    }
+    if records.records.is_empty() {
+        bail!("the recordings hold no tracker readings (/tracker/measurements or /measured_points): record the verification with the tracker node running (verify.launch.yaml)");
+    }
+    eprintln!(
+        "identifying {} parameters from {} readings…",
+        fm.param_count(),
+        records.len()
+    );
+    let fit_options = FitOptions::default();
+    let f = fit(&fm, &model.setup, &records, None, &fit_options)
+        .with_context(|| format!("identifying {} from the readings", a.model.display()))?;
+    let mesh = mesh_of(&records, &f);
+    let conditions = records.records[f.used[0]].signals.clone();
+    let map = error_map(&fm, &f.x, &mesh, &conditions)?;
+    let mut last = Instant::now();
+    let mc = resampled_monte_carlo(
+        &fm,
+        &model.setup,
+        &records,
+        &f,
+        &mesh,
+        &conditions,
+        a.trials,
+        a.seed,
+        &fit_options,
+        |k| {
+            if last.elapsed().as_secs_f64() > 1.0 || k + 1 == a.trials {
+                eprint!("\rMonte Carlo: trial {}/{}", k + 1, a.trials);
+                let _ = std::io::stderr().flush();
+                last = Instant::now();
+            }
+        },
+    )?;
+    eprintln!();
+    let points3: Vec<[f64; 3]> = mesh
+        .iter()
+        .map(|q| [q[0], q[1], q.get(2).copied().unwrap_or(0.0)])
+        .collect();
+    let cases = length_cases(&points3);
+    let visits = visits(&fm, &records, &f, &mesh);
+    let lengths = measured_lengths(&cases, &visits, &map, &mc.sd_fitted, 3, mpe);
+    let before: Vec<f64> = map.iter().map(|e| e.norm()).collect();
+    let (before_mean, before_sd) = mean_sd(&before);
+    let before_max = before.iter().copied().fold(0.0, f64::max);
+    let (after_mean, after_sd) = mean_sd(&mc.residual_moduli);
+    // one verification's mean residual over the points varies more than a point's: the errors
+    // of a refitted map are correlated across points; its 95th percentile over the trials is
+    // what one compensation may leave
+    let mut trial_means: Vec<f64> = mc
+        .residual_moduli
+        .chunks(mesh.len())
+        .map(|c| c.iter().sum::<f64>() / c.len() as f64)
+        .collect();
+    trial_means.sort_by(f64::total_cmp);
+    let trial_p95 = trial_means
+        [((trial_means.len() as f64 * 0.95).ceil() as usize).clamp(1, trial_means.len()) - 1];
+    let u_point: Vec<f64> = mc.sd_fitted.iter().map(|s| s.norm()).collect();
+    // the budget (seed 001 eq. 3.4), per coordinate
+    let mean_range = records
+        .records
+        .iter()
+        .map(|r| r.measured.norm())
+        .sum::<f64>()
+        / records.len() as f64;
+    let u_cal = a.tracker_u_per_metre * mean_range;
+    let u_p = (mc.residual_moduli.iter().map(|v| v * v).sum::<f64>()
+        / mc.residual_moduli.len().max(1) as f64
+        / 3.0)
+        .sqrt();
+    let u_b = u_p / (a.trials as f64).sqrt();
+    let temps: Vec<f64> = records
+        .records
+        .iter()
+        .flat_map(|r| r.signals.temperatures.values().copied())
+        .collect();
+    let (dt, dt_source) = if temps.is_empty() {
+        (1.0, "no temperatures recorded: ±1 K from 20 °C assumed")
+    } else {
+        (
+            temps.iter().map(|t| (t - 20.0).abs()).fold(0.0, f64::max),
+            "the largest recorded distance from 20 °C",
+        )
+    };
+    let diagonal = {
+        let lo = points3.iter().fold([f64::MAX; 3], |m, p| {
+            [m[0].min(p[0]), m[1].min(p[1]), m[2].min(p[2])]
+        });
+        let hi = points3.iter().fold([f64::MIN; 3], |m, p| {
+            [m[0].max(p[0]), m[1].max(p[1]), m[2].max(p[2])]
+        });
+        Vector3::new(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]).norm()
+    };
+    let u_w = thermal_expansion_uncertainty(a.alpha_u, dt, diagonal);
+    let budget = Budget::iso_15530_3(u_cal, u_p, u_b, u_w, 2.0);
+
+    // words
+    let mut lines = vec![
+        format!(
+            "verification of {} from {} readings at {} mesh points ({} visits); χ²/dof {:.3}",
+            model.raw.name,
+            f.used.len(),
+            mesh.len(),
+            visits.len(),
+            f.chi2_per_dof
+        ),
+        format!(
+            "volumetric error as the machine is: {:.2} ± {:.2} µm (mean ± SD over the points), largest {:.2} µm",
+            before_mean * 1e6,
+            before_sd * 1e6,
+            before_max * 1e6
+        ),
+        format!(
+            "after compensation with the identified map (Monte Carlo, {} trials{}): residual {:.2} ± {:.2} µm; one verification's mean residual over the points below {:.2} µm in 95 % of trials",
+            mc.trials - mc.failed,
+            if mc.failed > 0 { format!(", {} failed", mc.failed) } else { String::new() },
+            after_mean * 1e6,
+            after_sd * 1e6,
+            trial_p95 * 1e6
+        ),
+        format!(
+            "identified map's standard uncertainty (k = 1): {:.2} µm mean, {:.2} µm largest over the points",
+            u_point.iter().sum::<f64>() / u_point.len() as f64 * 1e6,
+            u_point.iter().copied().fold(0.0, f64::max) * 1e6
+        ),
+        format!(
+            "ISO/TS 15530-3 budget: U = {:.2} µm (k = 2) per coordinate; u_cal {:.2}, u_p {:.2}, u_b {:.3}, u_w {:.2} µm",
+            budget.expanded() * 1e6,
+            u_cal * 1e6,
+            u_p * 1e6,
+            u_b * 1e6,
+            u_w * 1e6
+        ),
+    ];
+    if f.chi2_per_dof > 2.0 {
+        lines.push(format!("warning: χ²/dof {:.2}: the readings scatter more than their stated noise, or the model lacks physics (run `metrocell diagnose`); the Monte Carlo sees only the stated noise, so its uncertainty is too small", f.chi2_per_dof));
+    }
+    if !f.held.is_empty() {
+        lines.push(format!(
+            "not identifiable from these readings, held at their start (conventions, not estimates): {}",
+            f.held.iter().map(|h| h.name.as_str()).collect::<Vec<_>>().join(", ")
+        ));
+    }
+    let reps = lengths.iter().map(|l| l.repetition).max().unwrap_or(0);
+    let n_dir: std::collections::BTreeSet<&str> =
+        cases.iter().map(|c| c.direction.as_str()).collect();
+    lines.push(format!(
+        "length test: {} lengths in {} directions × {} repetition(s) = {} measurements{}",
+        cases.len(),
+        n_dir.len(),
+        reps,
+        lengths.len(),
+        if lengths.len() < 105 {
+            " (fewer than ISO 10360-2's 105: the mesh or the visits hold no more)"
+        } else {
+            ""
+        }
+    ));
+    match mpe {
+        Some(_) => {
+            for (when, pick) in [("as the machine is", 0), ("compensated", 1)] {
+                let d: Vec<Decision> = lengths
+                    .iter()
+                    .filter_map(|l| {
+                        if pick == 0 {
+                            l.decision_before
+                        } else {
+                            l.decision_after
+                        }
+                    })
+                    .collect();
+                let count = |x: Decision| d.iter().filter(|v| **v == x).count();
+                lines.push(format!(
+                    "  {when}: {} conform, {} do not, {} not proven either way — {}",
+                    count(Decision::Conforms),
+                    count(Decision::DoesNotConform),
+                    count(Decision::NotProven),
+                    if count(Decision::Conforms) == d.len() {
+                        "the machine conforms to the MPE"
+                    } else if count(Decision::DoesNotConform) > 0 {
+                        "the machine does not conform to the MPE"
+                    } else {
+                        "conformance not proven (measurements within U of the MPE)"
+                    }
+                ));
+            }
+        }
+        None => lines.push(
+            "  no MPE given (--mpe-a/--mpe-k/--mpe-b): the length errors are reported, not judged"
+                .into(),
+        ),
+    }
+
+    // files: the page, the map, the numbers
+    std::fs::create_dir_all(&a.output)
+        .with_context(|| format!("cannot create {}", a.output.display()))?;
+    let mut csv = String::from("point,x_mm,y_mm,z_mm,ex_um,ey_um,ez_um,e_um,ux_um,uy_um,uz_um\n");
+    for (k, (q, (e, u))) in mesh.iter().zip(map.iter().zip(&mc.sd_fitted)).enumerate() {
+        let _ = writeln!(
+            csv,
+            "{k},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4},{:.4}",
+            q[0] * 1e3,
+            q[1] * 1e3,
+            q.get(2).copied().unwrap_or(0.0) * 1e3,
+            e.x * 1e6,
+            e.y * 1e6,
+            e.z * 1e6,
+            e.norm() * 1e6,
+            u.x * 1e6,
+            u.y * 1e6,
+            u.z * 1e6
+        );
+    }
+    std::fs::write(a.output.join("map.csv"), csv)?;
+    let json = serde_json::json!({
+        "bags": a.bags.iter().map(|b| b.display().to_string()).collect::<Vec<_>>(),
+        "model": a.model.display().to_string(),
+        "readings": f.used.len(),
+        "mesh_points": mesh.len(),
+        "visits": visits.len(),
+        "chi2_per_dof": f.chi2_per_dof,
+        "held": f.held.iter().map(|h| h.name.clone()).collect::<Vec<_>>(),
+        "volumetric_error_um": {"mean": before_mean * 1e6, "sd": before_sd * 1e6, "max": before_max * 1e6},
+        "residual_after_um": {"mean": after_mean * 1e6, "sd": after_sd * 1e6, "trial_mean_p95": trial_p95 * 1e6},
+        "monte_carlo": {"trials": mc.trials, "failed": mc.failed, "seed": a.seed},
+        "budget_um": {"u_cal": u_cal * 1e6, "u_p": u_p * 1e6, "u_b": u_b * 1e6, "u_w": u_w * 1e6,
+                      "combined": budget.combined() * 1e6, "expanded_k2": budget.expanded() * 1e6},
+        "length_test": lengths.iter().map(|l| serde_json::json!({
+            "direction": l.case.direction, "nominal_mm": l.case.nominal * 1e3, "repetition": l.repetition,
+            "error_before_um": l.error_before * 1e6, "u_before_um": l.u_before * 1e6,
+            "error_after_um": l.error_after * 1e6, "u_after_um": l.u_after * 1e6,
+            "mpe_um": mpe.map(|m| m.at(l.case.nominal) * 1e6),
+            "decision_before": l.decision_before.map(|d| d.in_words()),
+            "decision_after": l.decision_after.map(|d| d.in_words()),
+        })).collect::<Vec<_>>(),
+    });
+    std::fs::write(
+        a.output.join("verification.json"),
+        serde_json::to_string_pretty(&json)?,
+    )?;
+    let page = page(
+        &a, &model, &fm, &f, &records, &lines, &map, &mc, &lengths, mpe, &budget, dt_source,
+    )?;
+    for l in &lines {
+        println!("{l}");
+    }
+    println!(
+        "report: {} ({:.1} s)",
+        page.display(),
+        started.elapsed().as_secs_f64()
+    );
+    Ok(0)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn page(
+    a: &ReportArgs,
+    model: &CellModel,
+    fm: &metrocell_model::ForwardModel,
+    f: &metrocell_estimation::Fit,
+    records: &metrocell_estimation::RecordSet,
+    lines: &[String],
+    map: &[Vector3<f64>],
+    mc: &metrocell_estimation::volumetric_monte_carlo::VolumetricMonteCarlo,
+    lengths: &[metrocell_verification::measured_lengths::MeasuredLength],
+    mpe: Option<Mpe>,
+    budget: &Budget,
+    dt_source: &str,
+) -> Result<PathBuf> {
+    let mut r = Report::new(&format!("Volumetric verification of {}", model.raw.name));
+    let command = format!(
+        "metrocell verify report --model {} {} -o {} --trials {} --seed {}",
+        a.model.display(),
+        a.bags
+            .iter()
+            .map(|b| b.display().to_string())
+            .collect::<Vec<_>>()
+            .join(" "),
+        a.output.display(),
+        a.trials,
+        a.seed
+    );
+    r.section("Summary")
+        .paragraph("Signed off from the recordings named in the command below; every figure on this page is computed from them.")
+        .preformatted(&command)
+        .preformatted(&lines.join("\n"));
+    let idx: Vec<(f64, f64)> = map
+        .iter()
+        .enumerate()
+        .map(|(k, e)| (k as f64, e.norm() * 1e6))
+        .collect();
+    let band: Vec<(f64, f64)> = map
+        .iter()
+        .zip(&mc.sd_fitted)
+        .map(|(e, u)| {
+            (
+                (e.norm() - 2.0 * u.norm()).max(0.0) * 1e6,
+                (e.norm() + 2.0 * u.norm()) * 1e6,
+            )
+        })
+        .collect();
+    let per_point: Vec<f64> = mc.residual_moduli.iter().map(|v| v * 1e6).collect();
+    r.section("Volumetric error")
+        .paragraph("|e| at each mesh point as the machine is (the identified map, ± 2u from the Monte Carlo), and the distribution of the residual error after compensating with it (Monte Carlo: generating − refitted map at every point of every trial).")
+        .figure(
+            "volumetric_before",
+            "Volumetric error at each mesh point, ± 2u",
+            SeriesPlot::new("Volumetric error as the machine is", "mesh point", "|e| [µm]")
+                .series(Series::new("|e|", idx).band(band).markers())
+                .svg()?,
+        )
+        .figure(
+            "residual_after",
+            "Residual volumetric error after compensation (Monte Carlo)",
+            HistogramPlot::new("Residual after compensation", "|residual| [µm]", 40)
+                .sample("all points, all trials", per_point)
+                .svg()?,
+        );
+    let functions = axis_error_functions(
+        fm,
+        &f.x,
+        f.covariance.as_ref(),
+        &records.records[f.used[0]].signals,
+        41,
+    )?;
+    let sec = r.section("Error functions");
+    sec.paragraph("The identified error along each axis (the other axes mid-travel), ± 2u from the identification's covariance.");
+    for func in &functions {
+        let axis = ["x", "y", "z"][func.axis];
+        let mut plot = SeriesPlot::new(
+            &format!("Error along {axis}"),
+            &format!("{axis} [mm]"),
+            "error [µm]",
+        );
+        for c in 0..3 {
+            let pts: Vec<(f64, f64)> = func
+                .positions
+                .iter()
+                .zip(&func.errors)
+                .map(|(q, e)| (q * 1e3, e[c] * 1e6))
+                .collect();
+            let band: Vec<(f64, f64)> = func
+                .errors
+                .iter()
+                .zip(&func.sigmas)
+                .map(|(e, u)| ((e[c] - 2.0 * u[c]) * 1e6, (e[c] + 2.0 * u[c]) * 1e6))
+                .collect();
+            plot = plot.series(Series::new(&format!("e_{}", ["x", "y", "z"][c]), pts).band(band));
+        }
+        sec.figure(
+            &format!("error_{axis}"),
+            &format!("Error functions along {axis}, ± 2u"),
+            plot.svg()?,
+        );
+    }
+    let mut bt = Table::new(&["contribution", "u [µm]", "share of u²"]);
+    for ((c, share), contribution) in budget.shares().iter().zip(&budget.contributions) {
+        bt.push(vec![
+            c.clone(),
+            format!("{:.3}", contribution.standard_uncertainty * 1e6),
+            format!("{:.1} %", share * 100.0),
+        ]);
+    }
+    bt.push(vec![
+        "combined u_c".into(),
+        format!("{:.3}", budget.combined() * 1e6),
+        String::new(),
+    ]);
+    bt.push(vec![
+        "expanded U (k = 2)".into(),
+        format!("{:.3}", budget.expanded() * 1e6),
+        String::new(),
+    ]);
+    r.section("Uncertainty budget (ISO/TS 15530-3)")
+        .paragraph(&format!("U = k·√(u_cal² + u_p² + u_b² + u_w²), seed 001 eq. 3.4, per coordinate. u_cal: the tracker's calibration ({} per metre) at the mean range; u_p: the Monte Carlo's residual; u_b: its systematic part σ/√n; u_w: the expansion coefficient's uncertainty × the temperature ({dt_source}) × the mesh's diagonal.", metrocell_estimation::fit_summary::value_with_sigma(a.tracker_u_per_metre, None, "m/m")))
+        .table(bt);
+    let mut lt = Table::new(&[
+        "direction",
+        "L [mm]",
+        "rep.",
+        "E as is [µm]",
+        "U [µm]",
+        "E compensated [µm]",
+        "U [µm]",
+        "MPE [µm]",
+        "decision (compensated)",
+    ]);
+    for l in lengths {
+        lt.push(vec![
+            l.case.direction.clone(),
+            format!("{:.1}", l.case.nominal * 1e3),
+            l.repetition.to_string(),
+            format!("{:.2}", l.error_before * 1e6),
+            format!("{:.2}", l.u_before * 1e6),
+            format!("{:.2}", l.error_after * 1e6),
+            format!("{:.2}", l.u_after * 1e6),
+            mpe.map(|m| format!("{:.2}", m.at(l.case.nominal) * 1e6))
+                .unwrap_or_else(|| "—".into()),
+            l.decision_after
+                .map(|d| d.in_words().to_string())
+                .unwrap_or_else(|| "—".into()),
+        ]);
+    }
+    r.section("Length test (ISO 10360-2 manner)")
+        .paragraph("Lengths between mesh points along the three axes and the space diagonals, from each visit's mean measured point (registered tracker): E = measured − commanded length, as the machine is and with the identified map compensated. U (k = 2) from the readings' covariance and, compensated, the map's u (points taken as independent: conservative). Decisions by ISO 14253-1: conforms when |E| + U ≤ MPE, does not when |E| − U > MPE.")
+        .table(lt);
+    let mut pt = Table::new(&["parameter", "value ± u (k = 1)", "status"]);
+    for p in &f.parameters {
+        let status = if p.at_bound.is_some() {
+            "ended on a bound of its possible range (no interior uncertainty)".to_string()
+        } else if p.free {
+            "identified".to_string()
+        } else if let Some(h) = f.held.iter().find(|h| h.name == p.name) {
+            format!("held at its start: {}", h.combination)
+        } else {
+            "fixed by the model file".to_string()
+        };
+        pt.push(vec![
+            p.name.clone(),
+            value_with_sigma(p.value, p.sigma, p.unit),
+            status,
+        ]);
+    }
+    r.section("Identified parameters")
+        .table(pt)
+        .preformatted(&summary_lines(f, records).join("\n"));
+    Ok(r.write_to(&a.output)?)
+}

@@ -427,3 +427,144 @@ terms:
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// Bad input the report refuses with what to do: a model whose thermal term needs a temperature
+/// the recording lacks, and a bag that is not there.
+#[test]
+fn a_report_refuses_a_bag_without_the_temperatures_its_model_needs() {
+    let dir = std::env::temp_dir().join(format!("verify_refuse_{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let cell = format!(
+        "name: refuse
+machine: {{family: cartesian, stacking: XFYZ, travel: {{x: [0 mm, 400 mm], y: [0 mm, 400 mm], z: [0 mm, 400 mm]}}}}
+sensors:
+  tracker:
+    pose: {{translation: [-1200 mm, 200 mm, 600 mm], euler_xyz: [0 deg, 0 deg, 0 deg]}}
+    rate: 2 Hz
+    range_noise: {{constant: 4 um, per_metre: 0.8 um/m}}
+    angular_noise: 3 urad
+  machine_state: {{rate: 10 Hz}}
+environment:
+  ambient: {{mean: 20 degC}}
+  air: {{pressure: 101.3 kPa, humidity: 50}}
+program:
+  points: [[0 mm, 0 mm, 0 mm], [400 mm, 0 mm, 0 mm], [400 mm, 400 mm, 0 mm], [0 mm, 400 mm, 200 mm]]
+  feed_rate: 50 mm/s
+  dwell: 3 s
+terms:
+{TRUE_TERMS}"
+    )
+    .replace("800 mm, 1200 mm", "0 mm, 400 mm")
+    .replace("100 mm, 500 mm", "0 mm, 400 mm")
+    .replace("200 mm, 400 mm", "0 mm, 400 mm");
+    std::fs::write(dir.join("cell.yaml"), &cell).unwrap();
+    let bag = dir.join("bag");
+    let sim = run(
+        Command::new(bin("metrocell"))
+            .args(["sim", "--quiet", "--duration", "2min", "--cell"])
+            .arg(dir.join("cell.yaml"))
+            .arg("-o")
+            .arg(&bag)
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped()),
+        Duration::from_secs(120),
+    );
+    assert!(
+        sim.status.success(),
+        "{}",
+        String::from_utf8_lossy(&sim.stderr)
+    );
+    let model = format!(
+        "{cell}  - {{id: thermal_scale, options: {{axis: x, sensors: [{{name: x_left, position: 0 m}}, {{name: x_right, position: 0.4 m}}]}}, params: {{alpha: 11.5e-6 1/K}}}}\n"
+    );
+    std::fs::write(dir.join("model.yaml"), model).unwrap();
+    let report = |bag: &Path| {
+        run(
+            Command::new(bin("metrocell"))
+                .args(["verify", "report", "--trials", "10", "--model"])
+                .arg(dir.join("model.yaml"))
+                .arg(bag)
+                .arg("-o")
+                .arg(dir.join("report"))
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped()),
+            Duration::from_secs(120),
+        )
+    };
+    let o = report(&bag);
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("temperature[x_left]") && err.contains("record /temperature/x_left"),
+        "{err}"
+    );
+    let o = report(&dir.join("no_such_bag"));
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("no bag at") && err.contains("no_such_bag"),
+        "{err}"
+    );
+    assert!(!dir.join("report").join("index.html").exists());
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+/// The plate-based squareness on plates no metrocell code made (tests/py/hole_plate.py: the
+/// machine's axes as direction vectors, the plate askew and warm, four probe points a ring):
+/// the thesis's xWy and one of the other sign and twice the size, each within 3σ in mrad,
+/// and most of the plane's error compensated by the six components (the thesis: 94.39 %).
+#[test]
+fn plate_squareness_from_an_independent_generator_in_the_thesis_units() {
+    for (xwy, seed) in [(0.20448, 1), (-0.5, 3)] {
+        let dir = std::env::temp_dir().join(format!("verify_plate_{}_{seed}", std::process::id()));
+        let gen = run(
+            Command::new(system_tests::python())
+                .arg(system_tests::workspace_root().join("tests/py/hole_plate.py"))
+                .arg(&dir)
+                .arg(xwy.to_string())
+                .arg(seed.to_string())
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped()),
+            Duration::from_secs(60),
+        );
+        assert!(
+            gen.status.success(),
+            "{}",
+            String::from_utf8_lossy(&gen.stderr)
+        );
+        let o = run(
+            Command::new(bin("metrocell"))
+                .args(["verify", "plate", "--nominal"])
+                .arg(dir.join("nominal.csv"))
+                .arg("--measured")
+                .arg(format!("{}@21.3", dir.join("z50.csv").display()))
+                .arg("--measured")
+                .arg(format!("{}@21.3", dir.join("z250.csv").display()))
+                .arg("--json")
+                .arg(dir.join("plate.json"))
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped()),
+            Duration::from_secs(60),
+        );
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(
+            o.status.success(),
+            "{text}{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        println!("{text}");
+        let j: serde_json::Value =
+            serde_json::from_str(&std::fs::read_to_string(dir.join("plate.json")).unwrap())
+                .unwrap();
+        let (v, s) = (
+            j["squareness_mrad"]["value"].as_f64().unwrap(),
+            j["squareness_mrad"]["sigma"].as_f64().unwrap(),
+        );
+        assert!((v - xwy).abs() < 3.0 * s, "xWy {v} ± {s} mrad vs {xwy}");
+        assert!(s < 0.02, "σ {s} mrad");
+        let pct = j["compensated_percent"].as_f64().unwrap();
+        assert!((85.0..99.5).contains(&pct), "{pct} %");
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}

@@ -10,7 +10,9 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use metrocell_estimation::error_functions::axis_error_functions;
 use metrocell_estimation::fit_summary::{summary_lines, value_with_sigma};
-use metrocell_estimation::uncertainty_budget::{thermal_expansion_uncertainty, Budget};
+use metrocell_estimation::uncertainty_budget::{
+    standard_uncertainty_of_mean, thermal_expansion_uncertainty, Budget,
+};
 use metrocell_estimation::volumetric_monte_carlo::{error_map, mean_sd};
 use metrocell_estimation::{fit, FitOptions};
 use metrocell_model_file::CellModel;
@@ -198,7 +200,7 @@ pub fn run(a: ReportArgs) -> Result<i32> {
         / mc.residual_moduli.len().max(1) as f64
         / 3.0)
         .sqrt();
-    let u_b = u_p / (a.trials as f64).sqrt();
+    let u_b = standard_uncertainty_of_mean(u_p, mc.trials - mc.failed);
     let temps: Vec<f64> = records
         .records
         .iter()

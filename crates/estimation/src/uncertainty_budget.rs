@@ -107,9 +107,31 @@ pub fn cmm_calibration_uncertainty(length: f64) -> f64 {
     (1.45 + length * 1e3 / 500.0) * 1e-6
 }
 
+/// Type A standard uncertainty of the mean of `n` values whose standard deviation is `sd`:
+/// σ/√n (seed 001's u_b over a Monte Carlo of n trials).
+pub fn standard_uncertainty_of_mean(sd: f64, n: usize) -> f64 {
+    sd / (n.max(1) as f64).sqrt()
+}
+
+/// The bound mean + k·sd a normally distributed quantity stays below (k = 2: about 97.7 % one
+/// sided, what seed 001 P5 calls its 95 % bound).
+pub fn normal_upper_bound(mean: f64, sd: f64, k: f64) -> f64 {
+    mean + k * sd
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Seed 001 part 1 fixture 6 (u_b = σ/√n: σ = 1 µm, n = 1000 → 0.0316 µm), part 2
+    /// fixture 8 (P5's verification uncertainty N(13.77, 5.02) µm: bound 23.81 µm) and
+    /// fixture 18 (an EVE of 10 µm as a rectangular width: u = 10/(2√3) = 2.89 µm).
+    #[test]
+    fn seed001_type_a_bound_and_eve() {
+        assert!((standard_uncertainty_of_mean(1.0, 1000) - 0.0316).abs() < 0.00005);
+        assert!((normal_upper_bound(13.77, 5.02, 2.0) - 23.81).abs() < 1e-9);
+        assert!((rectangular(10.0 / 2.0) - 2.89).abs() < 0.005);
+    }
 
     /// Seed 000 Table 4 (camera measurement, µm) and its Type B helpers (digest T2).
     #[test]

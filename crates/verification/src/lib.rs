@@ -27,8 +27,13 @@
 //! * [`resampled_monte_carlo`] — P3's Monte Carlo on the verification's own readings: the
 //!   identified map's uncertainty and the residual error a compensation from it leaves.
 //!
+//! * [`hole_plate`] — a calibrated hole plate in the XY plane (the PTB method): ring centres,
+//!   the plate's misalignment and expansion removed, six XY components and what correcting
+//!   them compensates (the thesis's 94.39 %).
+//!
 //! Units: SI (m, rad, s) in and out; the program is written in mm.
 
+pub mod hole_plate;
 pub mod identification_model;
 pub mod length_test;
 pub mod machine_program;

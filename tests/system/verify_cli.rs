@@ -568,3 +568,78 @@ fn plate_squareness_from_an_independent_generator_in_the_thesis_units() {
         let _ = std::fs::remove_dir_all(&dir);
     }
 }
+
+/// The probe-tip check on spheres no metrocell code probed (tests/py/probe_tip.py): a tip
+/// 0.3 mm off the axis with 10 µm lobes (the thesis's Table 5.3 situation: range ≈ 0.6 mm,
+/// repeatability/range ≈ 1.45), and a corrected tip with 12 µm lobes (Table 5.4: lobes only).
+#[test]
+fn the_probe_tip_check_tells_a_bent_tip_from_the_seatings_lobes() {
+    let line = |text: &str, start: &str| -> Vec<f64> {
+        let l = text
+            .lines()
+            .find(|l| l.trim_start().starts_with(start))
+            .unwrap_or_else(|| panic!("{start}: {text}"));
+        l.split(|c: char| !(c.is_ascii_digit() || c == '.'))
+            .filter(|t| !t.is_empty() && t.contains(|c: char| c.is_ascii_digit()))
+            .filter_map(|t| t.parse().ok())
+            .collect()
+    };
+    for (ecc_mm, lobe_um, seed) in [(0.3, 10.0, 1), (0.0, 12.0, 2)] {
+        let csv = std::env::temp_dir().join(format!("probe_tip_{}_{seed}.csv", std::process::id()));
+        let gen = run(
+            Command::new(system_tests::python())
+                .arg(system_tests::workspace_root().join("tests/py/probe_tip.py"))
+                .arg(&csv)
+                .arg(ecc_mm.to_string())
+                .arg(lobe_um.to_string())
+                .arg(seed.to_string())
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped()),
+            Duration::from_secs(60),
+        );
+        assert!(
+            gen.status.success(),
+            "{}",
+            String::from_utf8_lossy(&gen.stderr)
+        );
+        let o = run(
+            Command::new(bin("metrocell"))
+                .args(["verify", "probe-tip"])
+                .arg(&csv)
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped()),
+            Duration::from_secs(60),
+        );
+        let text = String::from_utf8_lossy(&o.stdout).to_string();
+        assert!(
+            o.status.success(),
+            "{text}{}",
+            String::from_utf8_lossy(&o.stderr)
+        );
+        println!("{text}");
+        let ecc = line(&text, "tip eccentricity");
+        let lobes = line(&text, "three-lobe");
+        // "tip eccentricity (once per turn): A ± σ µm" → [A, σ]; "three-lobe pattern (3 per turn, 120° apart): A ± σ µm" → [3, 120, A, σ]
+        let (a1, s1) = (ecc[0], ecc[1]);
+        let (a3, s3) = (lobes[2], lobes[3]);
+        assert!(
+            (a1 - ecc_mm * 1e3).abs() < 4.0 * s1 + 0.5,
+            "eccentricity {a1} ± {s1} µm vs {ecc_mm} mm"
+        );
+        assert!(
+            (a3 - lobe_um).abs() < 4.0 * s3,
+            "lobes {a3} ± {s3} µm vs {lobe_um}"
+        );
+        let bent = text.contains("the tip is off the spindle axis");
+        assert_eq!(bent, ecc_mm > 0.0, "{text}");
+        assert!(text.contains("kinematic seating"), "{text}");
+        if ecc_mm > 0.0 {
+            let x = line(&text, "X ");
+            assert!(
+                (x[1] / x[0] - 1.45).abs() < 0.1,
+                "repeatability/range {x:?} (the thesis's 1.45)"
+            );
+        }
+        let _ = std::fs::remove_file(&csv);
+    }
+}

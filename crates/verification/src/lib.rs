@@ -31,6 +31,9 @@
 //!   the plate's misalignment and expansion removed, six XY components and what correcting
 //!   them compensates (the thesis's 94.39 %).
 //!
+//! * [`probe_tip`] — the probe-tip check: a sphere measured every 15° of the head, range and
+//!   repeatability per axis, the tip's eccentricity and the three-lobe pretravel pattern.
+//!
 //! Units: SI (m, rad, s) in and out; the program is written in mm.
 
 pub mod hole_plate;
@@ -39,6 +42,7 @@ pub mod length_test;
 pub mod machine_program;
 pub mod measured_lengths;
 pub mod mesh;
+pub mod probe_tip;
 pub mod resampled_monte_carlo;
 pub mod tracker_station;
 pub mod visiting_order;

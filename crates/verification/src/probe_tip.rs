@@ -67,7 +67,7 @@ pub fn probe_tip_check(angles: &[f64], centres: &[Vector3<f64>]) -> Option<Probe
         match j {
             0 => 1.0,
             j => {
-                let k = (j + 1) / 2;
+                let k = j.div_ceil(2); // columns 1, 2 → harmonic 1; 3, 4 → 2; 5, 6 → 3
                 if j % 2 == 1 {
                     (k as f64 * t).cos()
                 } else {

@@ -239,7 +239,8 @@ fn csv_rows(path: &Path) -> Vec<Vec<String>> {
 }
 
 /// The acceptance's second point on the twin: the plan run by the twin's machine (its errors
-/// known), recorded, and reported — over twelve seeds the identified map's error against the
+/// known, its tracker warming up through the run), recorded, and reported with the warm-up
+/// declared (without it the report says the model lacks physics) — over twelve seeds the identified map's error against the
 /// truth falls within the report's Monte Carlo u at its stated rate, and the residual
 /// volumetric error the report states after compensation is what compensating really leaves
 /// (on average within 1.5×; single runs beyond the report's 95 % bound for one run's mean
@@ -269,6 +270,8 @@ sensors:
     rate: 2 Hz
     range_noise: {{constant: 4 um, per_metre: 0.8 um/m}}
     angular_noise: 3 urad
+    warmup: {{offset: 0 um, amplitude: 75 um, time_constant: 90 min}}
+    powered_on_before_start: 20 min
   machine_state: {{rate: 10 Hz}}
 environment:
   ambient: {{mean: 20 degC}}
@@ -290,6 +293,16 @@ terms:
     );
     let cell_path = dir.join("cell.yaml");
     std::fs::write(&cell_path, &cell).unwrap();
+    // the model: the plan's, with the tracker's warm-up declared (the tracker was switched on
+    // 20 min before the run, the Leica curve of thesis P1: 75 µm over τ = 90 min)
+    let plan_model = std::fs::read_to_string(plan_dir.join("model.yaml")).unwrap();
+    let warm_model = plan_model.replacen(
+        "euler_xyz: [0 deg, 0 deg, 0 deg]}\n",
+        "euler_xyz: [0 deg, 0 deg, 0 deg]}\n    warmup: {offset: 0 um, amplitude: 50 um, time_constant: 60 min}\n",
+        1,
+    );
+    assert_ne!(warm_model, plan_model);
+    std::fs::write(dir.join("model.yaml"), &warm_model).unwrap();
     let truth = metrocell_twin::CellModel::from_path(&cell_path).unwrap();
     let tfm = truth.forward_model().unwrap();
     let (mut z, mut actual, mut stated, mut p95) = (vec![], vec![], vec![], vec![]);
@@ -330,7 +343,7 @@ terms:
                     "verify", "report", "--trials", "40", "--mpe-a", "5um", "--mpe-k", "200",
                     "--mpe-b", "8um", "--model",
                 ])
-                .arg(plan_dir.join("model.yaml"))
+                .arg(dir.join("model.yaml"))
                 .arg(&bag)
                 .arg("-o")
                 .arg(&rep)
@@ -346,6 +359,26 @@ terms:
         );
         if seed == 1 {
             println!("{text}");
+            assert!(!text.contains("warning: χ²/dof"), "{text}");
+            // the plan's model without the warm-up: the report says the model lacks physics
+            let o = run(
+                Command::new(bin("metrocell"))
+                    .args(["verify", "report", "--trials", "10", "--model"])
+                    .arg(plan_dir.join("model.yaml"))
+                    .arg(&bag)
+                    .arg("-o")
+                    .arg(dir.join("cold_report"))
+                    .stdout(Stdio::piped())
+                    .stderr(Stdio::piped()),
+                Duration::from_secs(600),
+            );
+            let cold = String::from_utf8_lossy(&o.stdout);
+            assert!(
+                o.status.success()
+                    && cold.contains("warning: χ²/dof")
+                    && cold.contains("lacks physics"),
+                "{cold}"
+            );
         }
         let rows = csv_rows(&rep.join("map.csv"));
         assert_eq!(rows.len(), 75, "every mesh point in the map");

@@ -264,8 +264,14 @@ pub fn run(a: ReportArgs) -> Result<i32> {
             u_w * 1e6
         ),
     ];
-    if f.chi2_per_dof > 2.0 {
-        lines.push(format!("warning: χ²/dof {:.2}: the readings scatter more than their stated noise, or the model lacks physics (run `metrocell diagnose`); the Monte Carlo sees only the stated noise, so its uncertainty is too small", f.chi2_per_dof));
+    // χ²/dof of honest data is 1 ± √(2/dof): beyond 4 of those the readings disagree with
+    // the model and their stated noise
+    let dof = (3 * f.used.len())
+        .saturating_sub(f.parameters.iter().filter(|p| p.free).count())
+        .max(1);
+    let chi2_limit = 1.0 + 4.0 * (2.0 / dof as f64).sqrt();
+    if f.chi2_per_dof > chi2_limit {
+        lines.push(format!("warning: χ²/dof {:.3} is beyond what the stated noise gives ({:.3} at most, {dof} degrees of freedom): the model lacks physics (run `metrocell diagnose` on these bags) or the readings are noisier than stated; the Monte Carlo sees only the stated noise, so the uncertainties above are too small", f.chi2_per_dof, chi2_limit));
     }
     if !f.held.is_empty() {
         lines.push(format!(

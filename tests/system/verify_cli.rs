@@ -305,6 +305,45 @@ terms:
     std::fs::write(dir.join("model.yaml"), &warm_model).unwrap();
     let truth = metrocell_twin::CellModel::from_path(&cell_path).unwrap();
     let tfm = truth.forward_model().unwrap();
+    // the checks signed with the verification: a probe-tip sphere and a hole plate, from the
+    // independent generators, onto the first seed's page
+    let py = |args: &[&str]| {
+        let o = run(
+            Command::new(system_tests::python())
+                .args(args)
+                .stdout(Stdio::piped())
+                .stderr(Stdio::piped()),
+            Duration::from_secs(60),
+        );
+        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    };
+    let root = system_tests::workspace_root();
+    let tip = dir.join("tip.csv");
+    py(&[
+        root.join("tests/py/probe_tip.py").to_str().unwrap(),
+        tip.to_str().unwrap(),
+        "0.0",
+        "12",
+    ]);
+    py(&[
+        root.join("tests/py/hole_plate.py").to_str().unwrap(),
+        dir.join("plate").to_str().unwrap(),
+    ]);
+    let o = run(
+        Command::new(bin("metrocell"))
+            .args(["verify", "plate", "--temperature", "21.3", "--nominal"])
+            .arg(dir.join("plate/nominal.csv"))
+            .arg("--measured")
+            .arg(dir.join("plate/z50.csv"))
+            .arg("--measured")
+            .arg(dir.join("plate/z250.csv"))
+            .arg("--json")
+            .arg(dir.join("plate.json"))
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped()),
+        Duration::from_secs(60),
+    );
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let (mut z, mut actual, mut stated, mut p95) = (vec![], vec![], vec![], vec![]);
     // VERIFY_TWIN_SEEDS=N runs another number (4 seeds gave 0.50 within 1σ once: too few to judge)
     let seeds: u64 = std::env::var("VERIFY_TWIN_SEEDS")
@@ -345,6 +384,16 @@ terms:
                 ])
                 .arg(dir.join("model.yaml"))
                 .arg(&bag)
+                .args(if seed == 1 {
+                    vec![
+                        "--probe-tip".to_string(),
+                        tip.display().to_string(),
+                        "--plate".into(),
+                        dir.join("plate.json").display().to_string(),
+                    ]
+                } else {
+                    vec![]
+                })
                 .arg("-o")
                 .arg(&rep)
                 .stdout(Stdio::piped())
@@ -359,6 +408,18 @@ terms:
         );
         if seed == 1 {
             println!("{text}");
+            let page = std::fs::read_to_string(rep.join("index.html")).unwrap();
+            for needle in [
+                "Probe-tip check",
+                "three-lobe pattern",
+                "Hole plate (XY)",
+                "mrad (k = 1)",
+                "Length test",
+                "ISO/TS 15530-3",
+                "bag1",
+            ] {
+                assert!(page.contains(needle), "the page has no {needle:?}");
+            }
             assert!(!text.contains("warning: χ²/dof"), "{text}");
             // the plan's model without the warm-up: the report says the model lacks physics
             let o = run(
@@ -462,7 +523,7 @@ terms:
 }
 
 /// Bad input the report refuses with what to do: a model whose thermal term needs a temperature
-/// the recording lacks, and a bag that is not there.
+/// the recording lacks, a plate result that is not one, and a bag that is not there.
 #[test]
 fn a_report_refuses_a_bag_without_the_temperatures_its_model_needs() {
     let dir = std::env::temp_dir().join(format!("verify_refuse_{}", std::process::id()));
@@ -532,6 +593,27 @@ terms:
         err.contains("temperature[x_left]") && err.contains("record /temperature/x_left"),
         "{err}"
     );
+    // a plate result that is not `verify plate --json`'s: refused before anything is written
+    std::fs::write(dir.join("plate.json"), "{\"squareness\": 1}").unwrap();
+    let o = run(
+        Command::new(bin("metrocell"))
+            .args(["verify", "report", "--trials", "10", "--model"])
+            .arg(dir.join("cell.yaml"))
+            .arg(&bag)
+            .arg("--plate")
+            .arg(dir.join("plate.json"))
+            .arg("-o")
+            .arg(dir.join("report"))
+            .stdout(Stdio::piped())
+            .stderr(Stdio::piped()),
+        Duration::from_secs(120),
+    );
+    let err = String::from_utf8_lossy(&o.stderr);
+    assert_eq!(o.status.code(), Some(2), "{err}");
+    assert!(
+        err.contains("plate.json") && err.contains("verify plate --json"),
+        "{err}"
+    );
     let o = report(&dir.join("no_such_bag"));
     let err = String::from_utf8_lossy(&o.stderr);
     assert_eq!(o.status.code(), Some(2), "{err}");
@@ -598,6 +680,11 @@ fn plate_squareness_from_an_independent_generator_in_the_thesis_units() {
         assert!(s < 0.02, "σ {s} mrad");
         let pct = j["compensated_percent"].as_f64().unwrap();
         assert!((85.0..99.5).contains(&pct), "{pct} %");
+        std::fs::copy(
+            dir.join("plate.json"),
+            std::env::temp_dir().join(format!("verify_plate_{}_{seed}.json", std::process::id())),
+        )
+        .unwrap();
         let _ = std::fs::remove_dir_all(&dir);
     }
 }

@@ -23,9 +23,10 @@ pub struct ProbeTipArgs {
     centres: PathBuf,
 }
 
-pub fn run(a: ProbeTipArgs) -> Result<i32> {
-    let text = std::fs::read_to_string(&a.centres)
-        .with_context(|| format!("cannot read {}", a.centres.display()))?;
+/// The head angles (rad) and sphere centres (m) of a CSV angle_deg,x_mm,y_mm,z_mm.
+pub fn read_centres(path: &std::path::Path) -> Result<(Vec<f64>, Vec<Vector3<f64>>)> {
+    let text =
+        std::fs::read_to_string(path).with_context(|| format!("cannot read {}", path.display()))?;
     let (mut angles, mut centres) = (vec![], vec![]);
     for (n, line) in text.lines().enumerate() {
         if line.trim().is_empty() || (n == 0 && line.to_ascii_lowercase().starts_with("angle")) {
@@ -38,20 +39,25 @@ pub fn run(a: ProbeTipArgs) -> Result<i32> {
             .map_err(|_| {
                 anyhow::anyhow!(
                     "{}:{}: expected angle_deg,x_mm,y_mm,z_mm, got `{line}`",
-                    a.centres.display(),
+                    path.display(),
                     n + 1
                 )
             })?;
         if v.len() != 4 || v.iter().any(|x| !x.is_finite()) {
             bail!(
                 "{}:{}: expected four finite numbers angle_deg,x_mm,y_mm,z_mm",
-                a.centres.display(),
+                path.display(),
                 n + 1
             );
         }
         angles.push(v[0].to_radians());
         centres.push(Vector3::new(v[1], v[2], v[3]) * 1e-3);
     }
+    Ok((angles, centres))
+}
+
+pub fn run(a: ProbeTipArgs) -> Result<i32> {
+    let (angles, centres) = read_centres(&a.centres)?;
     let c = probe_tip_check(&angles, &centres).with_context(|| {
         format!(
             "{}: {} angles; the check needs 8 or more, spread round the turn",

@@ -54,6 +54,12 @@ pub struct ReportArgs {
     /// The tracker's calibration uncertainty (k = 1) per metre of range (seed 001: U = 5.6 ppm at k = 2)
     #[arg(long, default_value = "2.8um/m", value_parser = quantity("1"))]
     tracker_u_per_metre: f64,
+    /// Include the probe-tip check on the page: CSV angle_deg,x_mm,y_mm,z_mm (see `verify probe-tip`)
+    #[arg(long)]
+    probe_tip: Option<PathBuf>,
+    /// Include a hole plate's result on the page: the JSON `verify plate --json` wrote
+    #[arg(long)]
+    plate: Option<PathBuf>,
     /// Uncertainty of the scales' expansion coefficient (seed 001: 0.002/(2√3) µm/(mm·K) = 5.77e-7 1/K)
     #[arg(long, default_value = "5.77e-7 1/K", value_parser = quantity("1/K"))]
     alpha_u: f64,
@@ -111,6 +117,8 @@ fn mpe_of(a: &ReportArgs) -> Result<Option<Mpe>> {
 pub fn run(a: ReportArgs) -> Result<i32> {
     let started = Instant::now();
     let mpe = mpe_of(&a)?;
+    // the checks signed with it, read first: a bad file stops the report before it is written
+    let extras = extra_checks(&a)?;
     if a.trials < 10 {
         bail!("--trials {}: a Monte Carlo needs at least 10 trials to state a spread (seed 001 used 1000)", a.trials);
     }
@@ -378,6 +386,7 @@ pub fn run(a: ReportArgs) -> Result<i32> {
     )?;
     let page = page(
         &a, &model, &fm, &f, &records, &lines, &map, &mc, &lengths, mpe, &budget, dt_source,
+        &extras,
     )?;
     for l in &lines {
         println!("{l}");
@@ -404,6 +413,7 @@ fn page(
     mpe: Option<Mpe>,
     budget: &Budget,
     dt_source: &str,
+    extras: &[(String, String, Table)],
 ) -> Result<PathBuf> {
     let mut r = Report::new(&format!("Volumetric verification of {}", model.raw.name));
     let command = format!(
@@ -542,6 +552,9 @@ fn page(
     r.section("Length test (ISO 10360-2 manner)")
         .paragraph("Lengths between mesh points along the three axes and the space diagonals, from each visit's mean measured point (registered tracker): E = measured − commanded length, as the machine is and with the identified map compensated. U (k = 2) from the readings' covariance and, compensated, the map's u (points taken as independent: conservative). Decisions by ISO 14253-1: conforms when |E| + U ≤ MPE, does not when |E| − U > MPE.")
         .table(lt);
+    for (heading, text, table) in extras {
+        r.section(heading).paragraph(text).table(table.clone());
+    }
     let mut pt = Table::new(&["parameter", "value ± u (k = 1)", "status"]);
     for p in &f.parameters {
         let status = if p.at_bound.is_some() {
@@ -563,4 +576,96 @@ fn page(
         .table(pt)
         .preformatted(&summary_lines(f, records).join("\n"));
     Ok(r.write_to(&a.output)?)
+}
+
+/// The checks a metrologist signs with the verification: the probe tip (from its sphere
+/// centres) and a hole plate (from `verify plate --json`), as page sections.
+fn extra_checks(a: &ReportArgs) -> Result<Vec<(String, String, Table)>> {
+    let mut out = vec![];
+    if let Some(path) = &a.probe_tip {
+        let (angles, centres) = super::probe_tip_command::read_centres(path)?;
+        let c = metrocell_verification::probe_tip::probe_tip_check(&angles, &centres)
+            .with_context(|| {
+                format!(
+                    "{}: the probe-tip check needs 8 or more angles",
+                    path.display()
+                )
+            })?;
+        let mut t = Table::new(&["quantity", "X", "Y", "Z"]);
+        t.push(vec![
+            "range [mm]".into(),
+            format!("{:.3}", c.range.x * 1e3),
+            format!("{:.3}", c.range.y * 1e3),
+            format!("{:.3}", c.range.z * 1e3),
+        ]);
+        t.push(vec![
+            "repeatability (4σ) [mm]".into(),
+            format!("{:.3}", c.repeatability.x * 1e3),
+            format!("{:.3}", c.repeatability.y * 1e3),
+            format!("{:.3}", c.repeatability.z * 1e3),
+        ]);
+        let h = |x: &metrocell_verification::probe_tip::Harmonic| {
+            format!(
+                "{:.1} ± {:.1} µm{}",
+                x.amplitude * 1e6,
+                x.sigma * 1e6,
+                if x.significant() {
+                    " (significant)"
+                } else {
+                    " (not significant)"
+                }
+            )
+        };
+        t.push(vec![
+            "tip eccentricity (1 per turn)".into(),
+            h(&c.eccentricity),
+            String::new(),
+            String::new(),
+        ]);
+        t.push(vec![
+            "three-lobe pattern (3 per turn)".into(),
+            h(&c.three_lobe),
+            String::new(),
+            String::new(),
+        ]);
+        out.push(("Probe-tip check".to_string(), format!("A sphere measured with the head turned in {} steps ({}), as the thesis's Tables 5.3/5.4.", angles.len(), path.display()), t));
+    }
+    if let Some(path) = &a.plate {
+        let j: serde_json::Value = serde_json::from_str(
+            &std::fs::read_to_string(path)
+                .with_context(|| format!("cannot read {}", path.display()))?,
+        )
+        .with_context(|| {
+            format!(
+                "{}: not the JSON `verify plate --json` writes",
+                path.display()
+            )
+        })?;
+        let sq = &j["squareness_mrad"];
+        let (Some(v), Some(u), Some(pct)) = (
+            sq["value"].as_f64(),
+            sq["sigma"].as_f64(),
+            j["compensated_percent"].as_f64(),
+        ) else {
+            bail!("{}: not the JSON `verify plate --json` writes (no squareness_mrad, compensated_percent)", path.display());
+        };
+        let mut t = Table::new(&["quantity", "value"]);
+        t.push(vec![
+            "xWy (squareness of X and Y)".into(),
+            format!("{v:.5} ± {u:.5} mrad (k = 1)"),
+        ]);
+        t.push(vec![
+            "compensated by the six components".into(),
+            format!("{pct:.2} % (the thesis: 94.39 %)"),
+        ]);
+        out.push((
+            "Hole plate (XY)".to_string(),
+            format!(
+                "A calibrated plate measured in the XY plane ({}).",
+                path.display()
+            ),
+            t,
+        ));
+    }
+    Ok(out)
 }

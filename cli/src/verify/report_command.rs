@@ -54,6 +54,10 @@ pub struct ReportArgs {
     /// The tracker's calibration uncertainty (k = 1) per metre of range (seed 001: U = 5.6 ppm at k = 2)
     #[arg(long, default_value = "2.8um/m", value_parser = quantity("1"))]
     tracker_u_per_metre: f64,
+    /// The tracker's distance to the mesh, for u_cal when the readings are machine-frame points
+    /// (tracker-frame readings carry their range)
+    #[arg(long, value_parser = quantity("m"))]
+    tracker_range: Option<f64>,
     /// Include the probe-tip check on the page: CSV angle_deg,x_mm,y_mm,z_mm (see `verify probe-tip`)
     #[arg(long)]
     probe_tip: Option<PathBuf>,
@@ -197,12 +201,16 @@ pub fn run(a: ReportArgs) -> Result<i32> {
         [((trial_means.len() as f64 * 0.95).ceil() as usize).clamp(1, trial_means.len()) - 1];
     let u_point: Vec<f64> = mc.sd_fitted.iter().map(|s| s.norm()).collect();
     // the budget (seed 001 eq. 3.4), per coordinate
-    let mean_range = records
-        .records
-        .iter()
-        .map(|r| r.measured.norm())
-        .sum::<f64>()
-        / records.len() as f64;
+    // in the tracker's frame a reading's length is its range; points already in the machine
+    // frame (the tracker node's /measured_points) do not carry it: --tracker-range, or 2 m said
+    let (mean_range, range_source) = match (&records.frame, a.tracker_range) {
+        (metrocell_estimation::RecordFrame::Instrument(_), _) => (
+            records.records.iter().map(|r| r.measured.norm()).sum::<f64>() / records.len() as f64,
+            "the readings' mean range".to_string(),
+        ),
+        (_, Some(r)) => (r, "--tracker-range".to_string()),
+        (_, None) => (2.0, "2 m assumed: the points are in the machine frame and carry no range (give --tracker-range)".to_string()),
+    };
     let u_cal = a.tracker_u_per_metre * mean_range;
     let u_p = (mc.residual_moduli.iter().map(|v| v * v).sum::<f64>()
         / mc.residual_moduli.len().max(1) as f64
@@ -232,6 +240,10 @@ pub fn run(a: ReportArgs) -> Result<i32> {
         Vector3::new(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]).norm()
     };
     let u_w = thermal_expansion_uncertainty(a.alpha_u, dt, diagonal);
+    let budget_note = format!(
+        "Range {:.2} m: {range_source}. Temperature {:.2} K from 20 °C: {dt_source}.",
+        mean_range, dt
+    );
     let budget = Budget::iso_15530_3(u_cal, u_p, u_b, u_w, 2.0);
 
     // words
@@ -385,7 +397,18 @@ pub fn run(a: ReportArgs) -> Result<i32> {
         serde_json::to_string_pretty(&json)?,
     )?;
     let page = page(
-        &a, &model, &fm, &f, &records, &lines, &map, &mc, &lengths, mpe, &budget, dt_source,
+        &a,
+        &model,
+        &fm,
+        &f,
+        &records,
+        &lines,
+        &map,
+        &mc,
+        &lengths,
+        mpe,
+        &budget,
+        &budget_note,
         &extras,
     )?;
     for l in &lines {
@@ -412,7 +435,7 @@ fn page(
     lengths: &[metrocell_verification::measured_lengths::MeasuredLength],
     mpe: Option<Mpe>,
     budget: &Budget,
-    dt_source: &str,
+    budget_note: &str,
     extras: &[(String, String, Table)],
 ) -> Result<PathBuf> {
     let mut r = Report::new(&format!("Volumetric verification of {}", model.raw.name));
@@ -520,7 +543,7 @@ fn page(
         String::new(),
     ]);
     r.section("Uncertainty budget (ISO/TS 15530-3)")
-        .paragraph(&format!("U = k·√(u_cal² + u_p² + u_b² + u_w²), seed 001 eq. 3.4, per coordinate. u_cal: the tracker's calibration ({} per metre) at the mean range; u_p: the Monte Carlo's residual; u_b: its systematic part σ/√n; u_w: the expansion coefficient's uncertainty × the temperature ({dt_source}) × the mesh's diagonal.", metrocell_estimation::fit_summary::value_with_sigma(a.tracker_u_per_metre, None, "m/m")))
+        .paragraph(&format!("U = k·√(u_cal² + u_p² + u_b² + u_w²), seed 001 eq. 3.4, per coordinate. u_cal: the tracker's calibration ({} per metre) at the range; u_p: the Monte Carlo's residual; u_b: its systematic part σ/√n; u_w: the expansion coefficient's uncertainty × the temperature's distance from 20 °C × the mesh's diagonal. {budget_note}", metrocell_estimation::fit_summary::value_with_sigma(a.tracker_u_per_metre, None, "m/m")))
         .table(bt);
     let mut lt = Table::new(&[
         "direction",

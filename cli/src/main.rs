@@ -89,7 +89,7 @@ enum Command {
     /// Inspect and publish on topics (list, echo, pub, hz), like `ros2 topic`
     #[command(subcommand)]
     Topic(topic::TopicCommand),
-    /// Volumetric verification of a machine tool with a laser tracker (seed 001): plan the points, the program and the tracker's station
+    /// Volumetric verification of a machine tool with a laser tracker (seed 001): plan it, report it (Monte Carlo, length test, budget), hole-plate and probe-tip checks
     #[command(subcommand)]
     Verify(verify::VerifyCommand),
 }

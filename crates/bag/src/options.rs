@@ -42,8 +42,7 @@ pub struct WriterOptions {
     /// flushed (and fsynced if `sync_on_flush`) and metadata.yaml is rewritten.
     /// Minimum 100 ms.
     pub flush_interval: Duration,
-    /// fdatasync the .mcap file after every flush, in a thread of its own so the writer is not held
-    /// up (survives power loss, not just process death, once the sync is done).
+    /// fdatasync the .mcap file at every flush (survives power loss, not just process death).
     pub sync_on_flush: bool,
     pub split: SplitPolicy,
     /// zstd compression level (0 = zstd's default, 3); ignored for lz4 (always fast mode). Default 1: on the 2-core test machine

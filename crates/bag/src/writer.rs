@@ -7,9 +7,8 @@
 //!
 //! # Crash-safety bound
 //! Messages go into an in-memory chunk. A *flush* closes that chunk, writes it (with its
-//! message indexes) to the file and hands the file buffer to the OS, asks for an fdatasync
-//! when [`WriterOptions::sync_on_flush`] is set (a thread of the file's does it, so a slow
-//! disk never holds the writer up: crates/bag `durable_file`), and rewrites metadata.yaml. A flush runs
+//! message indexes) to the file, flushes the OS buffer, fdatasyncs when
+//! [`WriterOptions::sync_on_flush`] is set, and rewrites metadata.yaml. A flush runs
 //! (a) inside `write`/`tick` whenever at least `flush_interval` of wall-clock time has passed
 //! since the previous flush, (b) when a file is split or finished, and (c) on `flush()`. A
 //! chunk that reaches `chunk_size` is closed into the 1 MiB file buffer but not flushed, so
@@ -20,8 +19,7 @@
 //! the messages of the last `flush_interval + P` seconds (the recorder node calls `tick`
 //! from a timer with `P <= flush_interval`, so the bound is `2 * flush_interval`; for a
 //! stream that writes continuously it is `flush_interval` plus one inter-message gap).
-//! With `sync_on_flush` the bound for power loss is the same plus the time the disk takes to
-//! sync (a finished file is synced before `finish` returns).
+//! With `sync_on_flush` the same bound holds for power loss.
 //!
 //! # Write failures
 //! On the first failed write (disk full, I/O error) the writer stops: it cuts the file back
@@ -378,7 +376,7 @@ impl BagWriter {
         Ok(())
     }
 
-    /// Flush now: close the chunk, write it (fsynced by the file's syncer), rewrite metadata.yaml.
+    /// Flush now: close the chunk, write and fsync it, rewrite metadata.yaml.
     pub fn flush(&mut self) -> Result<()> {
         self.check_open()?;
         if let Err(e) = self.flush_now(true) {

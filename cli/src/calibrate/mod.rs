@@ -4,7 +4,7 @@
 
 mod accelerometer;
 mod placements;
-mod report;
+pub(crate) mod report;
 mod result_json;
 
 use std::path::PathBuf;

@@ -118,26 +118,6 @@ pub fn write(
     let mut u_sq = 0.0;
     let mut n_u = 0;
     for func in &functions {
-        let mut plot = SeriesPlot::new(
-            &format!("Error along {}", AXES[func.axis]),
-            &format!("{} [mm]", AXES[func.axis]),
-            "error [µm]",
-        );
-        for c in 0..3 {
-            let pts: Vec<(f64, f64)> = func
-                .positions
-                .iter()
-                .zip(&func.errors)
-                .map(|(q, e)| (q * 1e3, e[c] * 1e6))
-                .collect();
-            let band: Vec<(f64, f64)> = func
-                .errors
-                .iter()
-                .zip(&func.sigmas)
-                .map(|(e, u)| ((e[c] - 2.0 * u[c]) * 1e6, (e[c] + 2.0 * u[c]) * 1e6))
-                .collect();
-            plot = plot.series(Series::new(&format!("e_{}", AXES[c]), pts).band(band));
-        }
         for u in &func.sigmas {
             u_sq += u.norm_squared() / 3.0;
             n_u += 1;
@@ -145,7 +125,7 @@ pub fn write(
         sec.figure(
             &format!("error_{}", AXES[func.axis]),
             &format!("Error functions along {} with ± 2u", AXES[func.axis]),
-            plot.svg()?,
+            error_function_plot(func)?,
         );
     }
 
@@ -213,24 +193,59 @@ pub fn write(
             "residual the model leaves (RMS per coordinate after the fit)",
             u_residual,
         );
-    let mut bt = Table::new(&["contribution", "u [µm]", "share of u²"]);
+    let bt = budget_table(&budget);
+    r.section("Uncertainty budget").paragraph("Uncertainty of the compensated machine's error per coordinate, GUM root-sum-of-squares: the fitted model's own uncertainty and what it leaves unexplained (noise and misfit).").table(bt);
+    Ok(r.write_to(dir)?)
+}
+
+/// A fitted error function along its axis: the three components with their ± 2u bands (also
+/// `verify report`'s).
+pub(crate) fn error_function_plot(
+    func: &metrocell_estimation::error_functions::AxisErrorFunction,
+) -> anyhow::Result<String> {
+    let mut plot = SeriesPlot::new(
+        &format!("Error along {}", AXES[func.axis]),
+        &format!("{} [mm]", AXES[func.axis]),
+        "error [µm]",
+    );
+    for c in 0..3 {
+        let pts: Vec<(f64, f64)> = func
+            .positions
+            .iter()
+            .zip(&func.errors)
+            .map(|(q, e)| (q * 1e3, e[c] * 1e6))
+            .collect();
+        let band: Vec<(f64, f64)> = func
+            .errors
+            .iter()
+            .zip(&func.sigmas)
+            .map(|(e, u)| ((e[c] - 2.0 * u[c]) * 1e6, (e[c] + 2.0 * u[c]) * 1e6))
+            .collect();
+        plot = plot.series(Series::new(&format!("e_{}", AXES[c]), pts).band(band));
+    }
+    Ok(plot.svg()?)
+}
+
+/// An uncertainty budget as a table: each contribution (µm) with its share of u², then u_c and
+/// U (also `verify report`'s).
+pub(crate) fn budget_table(budget: &Budget) -> Table {
+    let mut t = Table::new(&["contribution", "u [µm]", "share of u²"]);
     for ((c, share), contribution) in budget.shares().iter().zip(&budget.contributions) {
-        bt.push(vec![
+        t.push(vec![
             c.clone(),
-            format!("{:.2}", contribution.standard_uncertainty * 1e6),
+            format!("{:.3}", contribution.standard_uncertainty * 1e6),
             format!("{:.1} %", share * 100.0),
         ]);
     }
-    bt.push(vec![
+    t.push(vec![
         "combined u_c".into(),
-        format!("{:.2}", budget.combined() * 1e6),
+        format!("{:.3}", budget.combined() * 1e6),
         String::new(),
     ]);
-    bt.push(vec![
-        "expanded U (k = 2)".into(),
-        format!("{:.2}", budget.expanded() * 1e6),
+    t.push(vec![
+        format!("expanded U (k = {})", budget.coverage_factor),
+        format!("{:.3}", budget.expanded() * 1e6),
         String::new(),
     ]);
-    r.section("Uncertainty budget").paragraph("Uncertainty of the compensated machine's error per coordinate, GUM root-sum-of-squares: the fitted model's own uncertainty and what it leaves unexplained (noise and misfit).").table(bt);
-    Ok(r.write_to(dir)?)
+    t
 }

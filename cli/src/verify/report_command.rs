@@ -498,50 +498,13 @@ fn page(
     sec.paragraph("The identified error along each axis (the other axes mid-travel), ± 2u from the identification's covariance.");
     for func in &functions {
         let axis = ["x", "y", "z"][func.axis];
-        let mut plot = SeriesPlot::new(
-            &format!("Error along {axis}"),
-            &format!("{axis} [mm]"),
-            "error [µm]",
-        );
-        for c in 0..3 {
-            let pts: Vec<(f64, f64)> = func
-                .positions
-                .iter()
-                .zip(&func.errors)
-                .map(|(q, e)| (q * 1e3, e[c] * 1e6))
-                .collect();
-            let band: Vec<(f64, f64)> = func
-                .errors
-                .iter()
-                .zip(&func.sigmas)
-                .map(|(e, u)| ((e[c] - 2.0 * u[c]) * 1e6, (e[c] + 2.0 * u[c]) * 1e6))
-                .collect();
-            plot = plot.series(Series::new(&format!("e_{}", ["x", "y", "z"][c]), pts).band(band));
-        }
         sec.figure(
             &format!("error_{axis}"),
             &format!("Error functions along {axis}, ± 2u"),
-            plot.svg()?,
+            crate::calibrate::report::error_function_plot(func)?,
         );
     }
-    let mut bt = Table::new(&["contribution", "u [µm]", "share of u²"]);
-    for ((c, share), contribution) in budget.shares().iter().zip(&budget.contributions) {
-        bt.push(vec![
-            c.clone(),
-            format!("{:.3}", contribution.standard_uncertainty * 1e6),
-            format!("{:.1} %", share * 100.0),
-        ]);
-    }
-    bt.push(vec![
-        "combined u_c".into(),
-        format!("{:.3}", budget.combined() * 1e6),
-        String::new(),
-    ]);
-    bt.push(vec![
-        "expanded U (k = 2)".into(),
-        format!("{:.3}", budget.expanded() * 1e6),
-        String::new(),
-    ]);
+    let bt = crate::calibrate::report::budget_table(budget);
     r.section("Uncertainty budget (ISO/TS 15530-3)")
         .paragraph(&format!("U = k·√(u_cal² + u_p² + u_b² + u_w²), seed 001 eq. 3.4, per coordinate. u_cal: the tracker's calibration ({} per metre) at the range; u_p: the Monte Carlo's residual; u_b: its systematic part σ/√n; u_w: the expansion coefficient's uncertainty × the temperature's distance from 20 °C × the mesh's diagonal. {budget_note}", metrocell_estimation::fit_summary::value_with_sigma(a.tracker_u_per_metre, None, "m/m")))
         .table(bt);

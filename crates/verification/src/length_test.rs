@@ -221,13 +221,26 @@ mod tests {
         assert!((f2.at(1.0) - 10e-6).abs() < 1e-15);
         let f3 = Mpe::Constant { b: 8e-6 };
         assert!((f3.at(0.3) - 8e-6).abs() < 1e-15);
-        // 105 errors within the MPE, none an outlier: the test passes
-        let errors: Vec<f64> = (0..105).map(|i| ((i as f64) * 0.37).sin() * 4e-6).collect();
-        assert!(cases
-            .iter()
-            .cycle()
-            .zip(&errors)
-            .all(|(c, e)| e.abs() <= f1.at(c.nominal)));
+        // the test's verdict over its 105 measurements: all within the MPE (U small beside it)
+        // conforms; one beyond it by more than U does not
+        let judged = |errors: &[f64]| -> Vec<Decision> {
+            cases
+                .iter()
+                .cycle()
+                .zip(errors)
+                .map(|(c, e)| Decision::judge(*e, 0.5e-6, f1.at(c.nominal)))
+                .collect()
+        };
+        let mut errors: Vec<f64> = (0..105).map(|i| ((i as f64) * 0.37).sin() * 4e-6).collect();
+        assert_eq!(errors.len(), 105);
+        assert!(judged(&errors).iter().all(|d| *d == Decision::Conforms));
+        errors[40] = 9e-6;
+        let d = judged(&errors);
+        assert_eq!(
+            d.iter().filter(|d| **d == Decision::DoesNotConform).count(),
+            1
+        );
+        assert_eq!(d[40], Decision::DoesNotConform);
     }
 
     #[test]

@@ -2,6 +2,7 @@
 //! child processes that never outlive a failing test.
 
 pub mod camera_recording;
+pub mod hosts;
 pub mod points_ramp;
 
 use std::path::{Path, PathBuf};
@@ -272,4 +273,20 @@ pub fn write_checkerboard_photo(path: &Path, squares: (u32, u32), square: f64, a
     )
     .unwrap();
     view.image.save(path).unwrap();
+}
+
+/// The twin's own per-topic counts from its final log line ("simulation finished: N messages
+/// published (per topic, /clock included: /a n, /b m)"), found anywhere in `log`; panics naming
+/// the log when the line is not there.
+pub fn twin_published_counts(log: &str) -> std::collections::BTreeMap<String, u64> {
+    log.lines()
+        .find_map(|l| l.split("per topic, /clock included: ").nth(1))
+        .unwrap_or_else(|| panic!("no twin counts (\"per topic, /clock included: …\") in:\n{log}"))
+        .trim_end_matches(')')
+        .split(", ")
+        .filter_map(|kv| {
+            let (t, n) = kv.rsplit_once(' ')?;
+            Some((t.to_string(), n.parse().ok()?))
+        })
+        .collect()
 }

@@ -679,22 +679,7 @@ fn demo_loses_nothing(name: &str, busy_cores: usize, max_missed_frames: u64, dom
         String::from_utf8_lossy(&out.stdout),
         String::from_utf8_lossy(&out.stderr),
     );
-    let twin_line = stderr
-        .lines()
-        .chain(stdout.lines())
-        .find(|l| l.contains("per topic, /clock included:"))
-        .unwrap_or_else(|| panic!("the twin's final counts:\n{stdout}\n{stderr}"));
-    let published: BTreeMap<String, u64> = twin_line
-        .split("per topic, /clock included: ")
-        .nth(1)
-        .unwrap()
-        .trim_end_matches(')')
-        .split(", ")
-        .map(|item| {
-            let (t, n) = item.rsplit_once(' ').unwrap();
-            (t.to_string(), n.parse().unwrap())
-        })
-        .collect();
+    let published = system_tests::twin_published_counts(&format!("{stderr}\n{stdout}"));
     let bag = bag_contents(&dir);
     let node_lines: Vec<&str> = stderr
         .lines()

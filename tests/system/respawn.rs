@@ -201,17 +201,7 @@ fn a_killed_recorder_is_respawned_and_goes_on_in_a_new_split() {
         "the respawned estimator saved no newer state"
     );
     // the twin's own counts: "simulation finished: N messages published (per topic, …: /a n, /b m)"
-    let published: BTreeMap<String, u64> = log
-        .lines()
-        .find_map(|l| l.split("per topic, /clock included: ").nth(1))
-        .unwrap_or_else(|| panic!("no twin counts in:\n{log}"))
-        .trim_end_matches(')')
-        .split(", ")
-        .filter_map(|kv| {
-            let (t, n) = kv.rsplit_once(' ')?;
-            Some((t.to_string(), n.parse().ok()?))
-        })
-        .collect();
+    let published = system_tests::twin_published_counts(&log);
     let (recorded, info) = bag_counts(&bag);
     println!("{info}");
     let files = std::fs::read_dir(&bag)

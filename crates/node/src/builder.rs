@@ -150,6 +150,9 @@ impl NodeBuilder {
         let min_level = crate::logging::effective_log_level(&ros, &fqn);
         let parameters = Parameters::resolve(&self.decls, &ros, &fqn, &name)?;
         let early = Logger::stderr_only(&fqn, min_level);
+        if let Some(w) = crate::dds_log::install_from_env() {
+            early.warn(&w);
+        }
         for w in parameters.warnings() {
             early.warn(w);
         }

@@ -56,7 +56,8 @@ pub fn help_text(
     s.push_str(
         "\nROS 2 arguments: -r __node:=NAME, -r __ns:=/NAMESPACE, -r TOPIC:=NEW_TOPIC, --log-level LEVEL.\n\
          Environment: ROS_DOMAIN_ID (0..232); ROS_AUTOMATIC_DISCOVERY_RANGE=LOCALHOST or ROS_LOCALHOST_ONLY=1\n\
-         keeps the node's DDS traffic on 127.0.0.1.\n",
+         keeps the node's DDS traffic on 127.0.0.1; METROCELL_DDS_LOG=LEVEL (error..trace) prints what DDS\n\
+         itself reports (participants lost and found, socket errors) on stderr.\n",
     );
     s
 }

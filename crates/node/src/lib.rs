@@ -28,6 +28,7 @@
 mod background;
 pub mod blocking;
 mod builder;
+pub mod dds_log;
 pub mod diagnostics;
 pub mod environment;
 pub mod error;

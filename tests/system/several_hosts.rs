@@ -1,0 +1,295 @@
+//! The cell across several hosts (issue 31, item 5): three test hosts — network namespaces of
+//! their own joined by veth cables to one switch (`system_tests::hosts`), inside tests/isolated —
+//! each running its part of the cell from its own launch file, as three machines on a plant's
+//! network would: `machine` the twin (the machine's controller, its tracker and thermocouples),
+//! `metrology` the tracker and estimator nodes, `office` the recorder. Checked:
+//! - the nodes discover each other across the switch with nothing configured but the domain, and
+//!   the cell runs: the office's bag holds the machine's topics and the metrology host's points;
+//! - the machine's cable is pulled for 5 s mid-shift: the tracker node reports its input stalled
+//!   on /diagnostics within its `input_timeout` (the office records that report), and receiving
+//!   again once the cable is back — the cell heals without a restart;
+//! - nothing the twin published reliably is lost: while the participants' lease (RustDDS: 50 s)
+//!   holds, DDS repairs the cut from the writers' histories — recorded = published, per topic,
+//!   against the twin's own counts.
+//!
+//! A cable pulled for longer than the lease does not heal with RustDDS 0.15.1: the participants
+//! rediscover each other but the user endpoints are not matched again (the issue-31 note has the
+//! DDS log). `a_cell_cut_off_for_longer_than_the_lease_heals_too` says what should happen and is
+//! ignored until it does (`-- --ignored` runs it).
+//!
+//! Run: `cargo build --workspace --bins && tests/isolated cargo test -p metrocell-system-tests --test several_hosts -- --nocapture`
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::time::{Duration, Instant};
+
+use metrocell_bag::{BagReader, MessageFilter};
+use rosmsg::Value;
+use system_tests::hosts::TestHosts;
+use system_tests::{bin, workspace_root, ChildGuard};
+
+/// The tracker node's stall report (WARN) and its recovery (OK) as the bag holds them: (stamp in
+/// s of the bag's log time, level, message) of every status of `name`.
+fn statuses(bag: &Path, name: &str) -> Vec<(f64, u8, String)> {
+    let reader = BagReader::open(bag).unwrap();
+    let registry = metrocell_msgs::registry();
+    let mut out = Vec::new();
+    for m in reader
+        .read_all(&MessageFilter {
+            topics: Some(vec!["/diagnostics".into()]),
+            ..Default::default()
+        })
+        .unwrap()
+    {
+        let v = rosmsg::decode(registry, "diagnostic_msgs/msg/DiagnosticArray", &m.data).unwrap();
+        let Value::Struct(array) = v else { continue };
+        let Some(Value::Array(list)) = array.get("status") else {
+            continue;
+        };
+        for s in list {
+            let Value::Struct(s) = s else { continue };
+            let field = |k: &str| s.get(k).cloned();
+            if let (Some(Value::String(n)), Some(level), Some(Value::String(msg))) =
+                (field("name"), field("level"), field("message"))
+            {
+                let level = match level {
+                    Value::UInt(l) => l as u8,
+                    Value::Int(l) => l as u8,
+                    _ => continue,
+                };
+                if n == name {
+                    out.push((m.log_time as f64 * 1e-9, level, msg));
+                }
+            }
+        }
+    }
+    out
+}
+
+/// What one run of the three-host cell left: the logs, the twin's counts, the bag's counts, the
+/// tracker's input statuses (bag log time in s), and each cut as (start, end) in bag log time.
+struct CellRun {
+    logs: String,
+    published: BTreeMap<String, u64>,
+    recorded: BTreeMap<String, u64>,
+    /// Log times (s) of the measured points the metrology host published, as recorded.
+    points: Vec<f64>,
+    statuses: Vec<(f64, u8, String)>,
+    cuts: Vec<(f64, f64)>,
+}
+
+fn unix_now() -> f64 {
+    std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .unwrap()
+        .as_secs_f64()
+}
+
+/// Runs the cell for `cell_seconds` at 30× across the three hosts, pulling the machine's cable
+/// at each (wall seconds after start, for seconds) of `cuts`, on ROS domain `domain`.
+fn run_cell(cell_seconds: u32, cuts: &[(f64, f64)], domain: &str) -> CellRun {
+    let hosts = TestHosts::create(&["machine", "metrology", "office"]);
+    let dir = std::env::temp_dir().join(format!("several_hosts_{}_{domain}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    let bag = dir.join("shift_bag");
+    let cell = workspace_root().join("launch-configs/cells/quick_demo.yaml");
+    // each host's launch file, as three machines of a plant would hold them
+    let machine = dir.join("machine.launch.yaml");
+    std::fs::write(
+        &machine,
+        format!(
+            "launch:\n\
+             - node:\n    pkg: metrocell\n    exec: metrocell-sim\n    name: sim\n    param:\n\
+             \x20   - {{name: cell, value: \"{}\"}}\n\
+             \x20   - {{name: duration, value: \"{cell_seconds}s\"}}\n\
+             \x20   - {{name: speed, value: 30.0}}\n\
+             \x20   - {{name: wait_for_recorder, value: 60.0}}\n\
+             \x20   - {{name: recorder_node, value: recorder}}\n\
+             \x20   - {{name: camera_images, value: false}}\n",
+            cell.display()
+        ),
+    )
+    .unwrap();
+    let metrology = dir.join("metrology.launch.yaml");
+    std::fs::write(
+        &metrology,
+        "launch:\n\
+         - node:\n    pkg: metrocell\n    exec: metrocell-tracker\n    name: tracker\n    param:\n\
+         \x20   - {name: tool_offset, value: [0.0, 0.0, -0.1]}\n\
+         \x20   - {name: registration_points, value: 6}\n\
+         \x20   - {name: input_timeout, value: 1.0}\n",
+    )
+    .unwrap();
+    let office = dir.join("office.launch.yaml");
+    std::fs::write(
+        &office,
+        format!(
+            "launch:\n\
+             - node:\n    pkg: metrocell\n    exec: metrocell-recorder\n    name: recorder\n    param:\n\
+             \x20   - {{name: output, value: \"{}\"}}\n\
+             \x20   - {{name: flush_interval, value: 0.5}}\n",
+            bag.display()
+        ),
+    )
+    .unwrap();
+    let launch = |host: &str, file: &Path| {
+        let mut c = hosts.command(host, bin("metrocell"));
+        c.arg("launch").arg(file).env("ROS_DOMAIN_ID", domain);
+        ChildGuard::spawn(&mut c)
+    };
+    let office_run = launch("office", &office);
+    let metrology_run = launch("metrology", &metrology);
+    let started = Instant::now();
+    let machine_run = launch("machine", &machine);
+    let mut cut_times = Vec::new();
+    for &(at, length) in cuts {
+        std::thread::sleep(Duration::from_secs_f64(at).saturating_sub(started.elapsed()));
+        let from = unix_now();
+        hosts.cut("machine");
+        std::thread::sleep(Duration::from_secs_f64(length));
+        hosts.restore("machine");
+        cut_times.push((from, unix_now()));
+        println!("the machine's cable pulled at {at:.1} s for {length:.1} s");
+    }
+    let machine_out =
+        machine_run.wait_output(Duration::from_secs(60 + u64::from(cell_seconds) / 10));
+    // a moment for the last reliable samples, then the other two are stopped as by Ctrl-C
+    std::thread::sleep(Duration::from_secs(2));
+    system_tests::interrupt(metrology_run.pid());
+    system_tests::interrupt(office_run.pid());
+    let office_out = office_run.wait_output(Duration::from_secs(60));
+    let metrology_out = metrology_run.wait_output(Duration::from_secs(60));
+    let mut logs = String::new();
+    for (host, out) in [
+        ("machine", &machine_out),
+        ("metrology", &metrology_out),
+        ("office", &office_out),
+    ] {
+        logs += &format!(
+            "--- {host} ({})\n{}{}",
+            out.status,
+            String::from_utf8_lossy(&out.stdout),
+            String::from_utf8_lossy(&out.stderr)
+        );
+    }
+    assert!(
+        machine_out.status.success()
+            && office_out.status.success()
+            && metrology_out.status.success(),
+        "a host's launch failed:\n{logs}"
+    );
+    let published = system_tests::twin_published_counts(&logs);
+    let mut recorded: BTreeMap<String, u64> = BTreeMap::new();
+    let mut points = Vec::new();
+    for m in BagReader::open(&bag)
+        .unwrap()
+        .read_all(&MessageFilter::default())
+        .unwrap()
+    {
+        *recorded.entry(m.topic.clone()).or_default() += 1;
+        if m.topic == "/measured_points" {
+            points.push(m.log_time as f64 * 1e-9);
+        }
+    }
+    let statuses = statuses(&bag, "/tracker: /tracker/measurements");
+    let _ = std::fs::remove_dir_all(&dir);
+    CellRun {
+        logs,
+        published,
+        recorded,
+        points,
+        statuses,
+        cuts: cut_times,
+    }
+}
+
+/// Every topic the twin publishes reliably and the recorder records once per message (latched
+/// and best-effort topics, and the twin's /clock, are outside the count).
+fn reliable_twin_topics(published: &BTreeMap<String, u64>) -> Vec<(&String, u64)> {
+    published
+        .iter()
+        .filter(|(t, _)| {
+            !(t.as_str() == "/clock"
+                || t.starts_with("/camera/image")
+                || t.as_str() == "/tracker/power_on")
+        })
+        .map(|(t, &n)| (t, n))
+        .collect()
+}
+
+/// Whether the tracker said its input stalled during `cut` (WARN within `timeout` + 1.5 s of the
+/// cable being pulled) and receiving again within 3 s of its return; the times it took.
+fn stall_reported(run: &CellRun, cut: (f64, f64), timeout: f64) -> (Option<f64>, Option<f64>) {
+    let warn = run
+        .statuses
+        .iter()
+        .find(|s| s.0 > cut.0 && s.1 == 1 && s.2.contains("stalled or went away"))
+        .map(|s| s.0 - cut.0)
+        .filter(|&dt| dt <= timeout + 1.5);
+    let ok = run
+        .statuses
+        .iter()
+        .find(|s| s.0 > cut.1 && s.1 == 0)
+        .map(|s| s.0 - cut.1)
+        .filter(|&dt| dt <= 3.0);
+    (warn, ok)
+}
+
+#[test]
+fn the_cell_runs_across_three_hosts_and_heals_after_a_pulled_cable() {
+    // 30 min of cell time at 30×: 60 s; the cable out from 14 s to 19 s
+    let run = run_cell(1800, &[(14.0, 5.0)], "91");
+    println!("{}", run.logs);
+    // across the switch: the machine's topics and the metrology host's points, in the office
+    let mut lost = Vec::new();
+    for (topic, n) in reliable_twin_topics(&run.published) {
+        let got = run.recorded.get(topic).copied().unwrap_or(0);
+        println!("{topic}: {got} of {n} recorded");
+        if got != n {
+            lost.push(format!("{topic}: {got} of {n}"));
+        }
+    }
+    assert!(
+        lost.is_empty(),
+        "a 5-s cut within the lease is repaired by DDS: every reliable message recorded, but {lost:?}"
+    );
+    let cut = run.cuts[0];
+    let before = run.points.iter().filter(|&&t| t < cut.0).count();
+    let after = run.points.iter().filter(|&&t| t > cut.1 + 1.0).count();
+    println!(
+        "measured points from the metrology host: {} in all, {before} before the cut, {after} after it",
+        run.points.len()
+    );
+    assert!(
+        before > 0 && after > 0,
+        "the tracker measures across the switch before and after the cut"
+    );
+    let (warn, ok) = stall_reported(&run, cut, 1.0);
+    println!("stall reported {warn:?} s after the cut, receiving again {ok:?} s after the cable returned");
+    assert!(
+        warn.is_some() && ok.is_some(),
+        "the tracker's input status around the cut {cut:?}: {:?}",
+        run.statuses
+            .iter()
+            .filter(|s| s.0 > cut.0 - 2.0 && s.0 < cut.1 + 5.0)
+            .collect::<Vec<_>>()
+    );
+}
+
+#[test]
+#[ignore = "RustDDS 0.15.1 rediscovers the participant after its lease expired but does not match the user endpoints again (issue 31 note)"]
+fn a_cell_cut_off_for_longer_than_the_lease_heals_too() {
+    // 1 h of cell time at 30×: 120 s; the cable out from 14 s to 74 s (the lease is 50 s)
+    let run = run_cell(3600, &[(14.0, 60.0)], "90");
+    println!("{}", run.logs);
+    let cut = run.cuts[0];
+    let after = run.points.iter().filter(|&&t| t > cut.1 + 15.0).count();
+    let (warn, ok) = stall_reported(&run, cut, 1.0);
+    println!("points after the cut: {after}; stall reported after {warn:?} s, receiving again after {ok:?} s");
+    assert!(warn.is_some(), "the stall is reported");
+    assert!(
+        after > 0,
+        "the tracker measures again once the cable is back"
+    );
+}

@@ -58,6 +58,10 @@ pub struct DemoArgs {
     /// TCP port of the live dashboard (web page; the Foxglove WebSocket takes the next one); 0 picks two free ports
     #[arg(long, default_value_t = 8765)]
     dashboard_port: u16,
+    /// Seconds of cell time the live diagnose node looks back over (default: 8 h, the whole run);
+    /// shorter than --duration, its window fills and then slides (the soak, tests/py/soak.py)
+    #[arg(long, default_value_t = 28800.0, value_name = "S")]
+    diagnose_window: f64,
 }
 
 /// The error model the estimator starts from and the end-of-run diagnosis judges the recording
@@ -120,6 +124,10 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
     if !(args.speed > 0.0 && args.duration > 0.0) {
         anyhow::bail!("--speed and --duration must be positive");
     }
+    // the diagnose node's own range for `window` (nodes/diagnose parameters.rs)
+    if !(60.0..=1e7).contains(&args.diagnose_window) {
+        anyhow::bail!("--diagnose-window must lie within 60 s and 1e7 s");
+    }
     let share = share_dir().ok_or_else(|| {
         anyhow::anyhow!("cannot find launch-configs/demo.launch.yaml; run from the repository or set METROCELL_SHARE")
     })?;
@@ -141,6 +149,10 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
         (
             "diagnose_every".to_string(),
             (args.duration / 5.0).max(600.0).to_string(),
+        ),
+        (
+            "diagnose_window".to_string(),
+            args.diagnose_window.to_string(),
         ),
     ];
     let cell = match &args.cell {

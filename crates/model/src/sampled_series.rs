@@ -72,14 +72,6 @@ impl SampledSeries {
         }
     }
 
-    /// Keep only the newest `n` samples (at least one).
-    pub fn keep_last(&mut self, n: usize) {
-        while self.times.len() > n.max(1) {
-            self.times.pop_front();
-            self.values.pop_front();
-        }
-    }
-
     /// Drop the samples before `t_ns`, keeping the last one before it (it brackets `t_ns`).
     pub fn forget_before(&mut self, t_ns: i64) {
         let k = self.times.partition_point(|&ts| ts < t_ns);

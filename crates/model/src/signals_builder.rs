@@ -65,8 +65,13 @@ pub struct SignalsBuilderOptions {
     /// Streaming: joint samples older than the newest by more than this (s) are dropped;
     /// None keeps all.
     pub joint_window: Option<f64>,
-    /// Streaming: samples kept per temperature sensor in the timeline; None keeps all.
-    pub temperature_capacity: Option<usize>,
+    /// Streaming: temperature samples older than the newest by more than this (s) leave the
+    /// series that instantaneous temperatures are interpolated from; None keeps all.
+    pub temperature_window: Option<f64>,
+    /// Streaming: seconds of each sensor's history the lag timeline keeps at full rate; older
+    /// history is coarsened to one sample a minute
+    /// ([`TemperatureTimeline::with_full_rate`]); None keeps every sample.
+    pub temperature_full_rate: Option<f64>,
 }
 
 impl Default for SignalsBuilderOptions {
@@ -78,7 +83,8 @@ impl Default for SignalsBuilderOptions {
             max_joint_gap: 1.0,
             max_slow_gap: 600.0,
             joint_window: None,
-            temperature_capacity: None,
+            temperature_window: None,
+            temperature_full_rate: None,
         }
     }
 }
@@ -172,8 +178,8 @@ impl SignalsBuilder {
     /// three are the linear axes x, y, z.
     pub fn new(joint_names: Vec<String>, has_axes: bool, options: SignalsBuilderOptions) -> Self {
         let n = joint_names.len();
-        let timeline = match options.temperature_capacity {
-            Some(c) => TemperatureTimeline::with_capacity(c),
+        let timeline = match options.temperature_full_rate {
+            Some(span) => TemperatureTimeline::with_full_rate(span),
             None => TemperatureTimeline::new(),
         };
         Self {
@@ -312,8 +318,8 @@ impl SignalsBuilder {
         self.timeline.push(sensor, t_ns as f64 / NS, celsius)?;
         let series = self.temperatures.entry(sensor.to_string()).or_default();
         series.push(t_ns, celsius)?;
-        if let Some(c) = self.options.temperature_capacity {
-            series.keep_last(c);
+        if let Some(w) = self.options.temperature_window {
+            series.forget_before(t_ns - ns(w));
         }
         self.observe_time(t_ns);
         Ok(())

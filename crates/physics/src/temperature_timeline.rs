@@ -15,6 +15,15 @@
 //! [`crate::Signals::time`]), strictly increasing per sensor; temperatures °C. With a capacity,
 //! the oldest samples of a sensor are dropped beyond it and its lag restarts from the oldest
 //! retained sample (as a history cut at that sample would).
+//!
+//! A streaming node that runs for days cannot keep every sample, yet a lag with a time constant
+//! of hours needs the history before the instants it is asked about. With a full-rate span
+//! ([`TemperatureTimeline::with_full_rate`]) the samples older than the span behind the newest
+//! are coarsened to one per [`COARSE_BIN_S`] (each bin's mean value at its mean time), so memory
+//! grows by 1/60 of the sample rate instead of all of it, and the lag at an instant inside the
+//! span differs from the full history's by the coarsening's error seen through e^(−age/τ): tens
+//! of µK for a 1 Hz thermocouple half an hour inside the span (unit test). Coarsening restarts the lag caches (their indices
+//! moved); they are filtered again when next asked.
 
 use std::collections::{BTreeMap, VecDeque};
 use std::sync::Mutex;
@@ -29,6 +38,13 @@ pub struct TemperatureHistory {
 
 /// Values of τ whose filtered series are kept per sensor.
 pub const LAG_CACHES_PER_SENSOR: usize = 8;
+
+/// The coarsened history's sample spacing (s): a bin's samples become their mean.
+pub const COARSE_BIN_S: f64 = 60.0;
+
+/// Full-rate samples are coarsened once this much (s) of them has aged past the full-rate span,
+/// so the work (a pass over the series) is done a few times per hour, not at every sample.
+const COARSEN_BATCH_S: f64 = 600.0;
 
 /// Why a lagged temperature could not be evaluated.
 #[derive(Debug, Clone, PartialEq)]
@@ -52,13 +68,54 @@ struct LagCache {
 #[derive(Debug, Default)]
 struct Series {
     samples: VecDeque<(f64, f64)>,
+    /// How many of the leading samples are coarsened already.
+    coarse: usize,
     /// Most recently used last.
     lags: Vec<LagCache>,
+}
+
+impl Series {
+    /// Coarsen the full-rate samples older than `boundary` (s) into bins of [`COARSE_BIN_S`].
+    fn coarsen_before(&mut self, boundary: f64) {
+        // the first sample stays as it is: every lag starts from it (its initial state), and a
+        // bin's mean there would shift every lag by the start's difference times e^(−t/τ)
+        self.coarse = self.coarse.max(1);
+        let end = self.samples.partition_point(|(t, _)| *t < boundary);
+        if end <= self.coarse {
+            return;
+        }
+        let old: Vec<(f64, f64)> = self.samples.range(self.coarse..end).copied().collect();
+        let mut binned: Vec<(f64, f64)> = Vec::new();
+        let mut k = 0;
+        while k < old.len() {
+            let bin = (old[k].0 / COARSE_BIN_S).floor();
+            let mut n = 0.0;
+            let (mut st, mut sv) = (0.0, 0.0);
+            while k < old.len() && (old[k].0 / COARSE_BIN_S).floor() == bin {
+                st += old[k].0;
+                sv += old[k].1;
+                n += 1.0;
+                k += 1;
+            }
+            binned.push((st / n, sv / n));
+        }
+        let tail: Vec<(f64, f64)> = self
+            .samples
+            .drain(self.coarse..)
+            .skip(end - self.coarse)
+            .collect();
+        self.samples.extend(binned);
+        self.coarse = self.samples.len();
+        self.samples.extend(tail);
+        self.lags.clear();
+    }
 }
 
 #[derive(Debug, Default)]
 struct Inner {
     capacity: Option<usize>,
+    /// Seconds behind the newest sample kept at full rate (None: everything).
+    full_rate: Option<f64>,
     sensors: BTreeMap<String, Series>,
 }
 
@@ -89,6 +146,19 @@ impl TemperatureTimeline {
         Self {
             inner: Mutex::new(Inner {
                 capacity: Some(samples_per_sensor.max(1)),
+                full_rate: None,
+                sensors: BTreeMap::new(),
+            }),
+        }
+    }
+
+    /// A timeline keeping the last `seconds` of each sensor at full rate and the history before
+    /// that coarsened to one sample per [`COARSE_BIN_S`] (see the module docs).
+    pub fn with_full_rate(seconds: f64) -> Self {
+        Self {
+            inner: Mutex::new(Inner {
+                capacity: None,
+                full_rate: Some(seconds.max(COARSE_BIN_S)),
                 sensors: BTreeMap::new(),
             }),
         }
@@ -128,7 +198,7 @@ impl TemperatureTimeline {
             ));
         }
         let mut inner = self.lock();
-        let capacity = inner.capacity;
+        let (capacity, full_rate) = (inner.capacity, inner.full_rate);
         let series = inner.sensors.entry(sensor.to_string()).or_default();
         if let Some(&(last, _)) = series.samples.back() {
             if !(time > last) {
@@ -137,9 +207,16 @@ impl TemperatureTimeline {
         }
         if capacity.is_some_and(|c| series.samples.len() >= c) {
             series.samples.pop_front();
+            series.coarse = series.coarse.saturating_sub(1);
             series.lags.clear();
         }
         series.samples.push_back((time, temperature));
+        if let Some(span) = full_rate {
+            let oldest_full = series.samples.get(series.coarse).map_or(time, |s| s.0);
+            if time - span - oldest_full >= COARSEN_BATCH_S {
+                series.coarsen_before(time - span);
+            }
+        }
         Ok(())
     }
 
@@ -347,5 +424,58 @@ mod tests {
             t.lagged("head", None, 10.0),
             Err(LagUnavailable::NoSampleYet { first: None })
         );
+    }
+
+    /// A 1 Hz thermocouple over 10 h: a daily swing, a warming ramp, 20 mK of noise.
+    fn thermocouple(t: f64) -> f64 {
+        20.0 + 1.5 * (2.0 * std::f64::consts::PI * t / 86_400.0).sin()
+            + 0.8 * (1.0 - (-t / 7200.0).exp())
+            + 0.02 * ((t * 12.9898).sin() * 43_758.545).fract()
+    }
+
+    #[test]
+    fn a_coarsened_history_bounds_memory_and_keeps_the_lags_inside_the_full_rate_span() {
+        let exact = TemperatureTimeline::new();
+        let bounded = TemperatureTimeline::with_full_rate(3600.0);
+        let hours = 10.0;
+        let mut worst: f64 = 0.0;
+        let mut worst_d: f64 = 0.0;
+        for k in 0..(hours * 3600.0) as usize {
+            let t = k as f64;
+            exact.push("column", t, thermocouple(t)).unwrap();
+            bounded.push("column", t, thermocouple(t)).unwrap();
+            // asked as a node asks: at least half an hour inside the full-rate hour, every τ of
+            // diagnose's grid and beyond
+            if k % 1800 == 0 && k > 0 {
+                for tau in [120.0, 960.0, 3840.0, 15_360.0, 30_000.0] {
+                    for back in [0.0, 900.0, 1800.0] {
+                        let at = (t - back).max(0.0);
+                        let (a, da) = exact.lagged("column", Some(at), tau).unwrap();
+                        let (b, db) = bounded.lagged("column", Some(at), tau).unwrap();
+                        worst = worst.max((a - b).abs());
+                        worst_d = worst_d.max((da - db).abs());
+                    }
+                }
+            }
+        }
+        let held = bounded.sample_count("column").unwrap();
+        // the last hour at 1 Hz (+ a batch not yet coarsened) and 9 h at one a minute
+        println!(
+            "samples held: {held} of {}; largest lag difference {worst:.2e} K, of ∂/∂τ {worst_d:.2e} K/s",
+            exact.sample_count("column").unwrap()
+        );
+        assert!(held <= 3600 + 600 + 9 * 60 + 3, "{held} samples held");
+        // against the thermocouple's own 20 mK of noise: a hundredth of a percent
+        assert!(
+            worst < 1e-4,
+            "the coarsened history moved a lag by {worst} K"
+        );
+        assert!(
+            worst_d < 1e-6,
+            "the coarsened history moved ∂T_f/∂τ by {worst_d} K/s"
+        );
+        // the history stays in time order and the coarse part is one sample a minute
+        let h = bounded.history("column", None).unwrap();
+        assert!(h.samples.windows(2).all(|w| w[1].0 > w[0].0));
     }
 }

@@ -27,5 +27,5 @@ mod recording_sources;
 pub mod recordings;
 pub mod signal_topics;
 
-pub use record_stream::{declared_topics, RecordStream, StreamOutput};
+pub use record_stream::{declared_topics, RecordStream, StreamOutput, LAG_FULL_RATE_MARGIN_S};
 pub use recordings::{records_from_bags, PointSource, RecordingError, RecordingOptions};

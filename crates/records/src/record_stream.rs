@@ -41,6 +41,13 @@ use metrocell_estimation::residuals::whitening;
 use metrocell_msgs::geometry_msgs::msg::WrenchStamped;
 use metrocell_msgs::sensor_msgs::msg::{JointState, Temperature, TimeReference};
 
+/// How long (s) a streaming node keeps each temperature's history at full rate beyond the
+/// instants it still asks lags about (its window): older history is coarsened to one sample a
+/// minute (`SignalsBuilderOptions::temperature_full_rate`), which moves a lag half an hour inside
+/// the full-rate span by tens of µK (crates/physics `temperature_timeline.rs`), and keeps a
+/// week-long run's memory flat (the soak, BENCHMARKS.md).
+pub const LAG_FULL_RATE_MARGIN_S: f64 = 3600.0;
+
 /// What a stream has produced: records by frame (points), instrument records (probe hits,
 /// camera points, in the frames of their readings), rejections, and where each input came from.
 #[derive(Debug, Default)]
@@ -162,8 +169,9 @@ impl<'m, 'a> RecordStream<'m, 'a> {
         let sources = RecordingSources::check(source, topics, model, options)?;
         // bounded memory: joints are kept only as long as a held measurement can still ask for them
         let mut signal_options = options.signals.clone();
-        signal_options.joint_window =
-            Some(options.signals.max_slow_gap + options.signals.max_joint_gap + 60.0);
+        let held = options.signals.max_slow_gap + options.signals.max_joint_gap + 60.0;
+        signal_options.joint_window = Some(held);
+        signal_options.temperature_window = Some(held);
         let mut stream = RecordStream {
             model,
             source: source.to_path_buf(),

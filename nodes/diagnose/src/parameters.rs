@@ -82,7 +82,7 @@ pub fn setup(
     if probe_hits && model.raw.sensors.probe.is_none() {
         return Err(format!("probe_hits is true but the model {path} declares no sensors.probe: declare the probe (its directions and noise) or set probe_hits:=false"));
     }
-    let recording = RecordingOptions {
+    let mut recording = RecordingOptions {
         points,
         measured_points_topic: points_topic.clone(),
         tracker_topic: points_topic.clone(),
@@ -90,6 +90,10 @@ pub fn setup(
         probe_topic: resolve("probe/hits")?,
         ..RecordingOptions::default()
     };
+    // bounded memory over a long run: full-rate temperatures for the window and a margin before
+    // it, older history coarsened (the lags the window's records ask for barely move)
+    recording.signals.temperature_full_rate =
+        Some(get_f("window")? + metrocell_records::LAG_FULL_RATE_MARGIN_S);
     let mut options = DiagnoseOptions {
         empirical: p.get::<bool>("empirical").map_err(|e| e.to_string())?,
         ..DiagnoseOptions::default()

@@ -61,6 +61,9 @@ pub fn model(p: &Parameters, points_topic: &str) -> Result<Model, Box<dyn std::e
     let signals = SignalsBuilderOptions {
         max_slow_gap: p.get::<f64>("max_signal_gap")?,
         max_joint_gap: p.get::<f64>("max_joint_gap")?,
+        // bounded memory over a long run: the records are taken as they come, so the lags are
+        // asked about recent instants only (older history coarsened)
+        temperature_full_rate: Some(metrocell_records::LAG_FULL_RATE_MARGIN_S),
         ..SignalsBuilderOptions::default()
     };
     let recording = RecordingOptions {

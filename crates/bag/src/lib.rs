@@ -19,6 +19,7 @@ pub mod msgdef;
 mod options;
 mod qos;
 mod reader;
+mod record_layout;
 mod recover;
 mod scan;
 mod writer;

@@ -417,12 +417,13 @@ impl MessageIter<'_> {
         let u = &f.scan.units[ui];
         let path = &f.scan.path;
         let (opcode, body) = read_record_at(&mut self.handles[fi], path, u.offset, f.scan.size)?;
-        let rec = mcap::parse_record(opcode, &body).map_err(|e| BagError::Corrupt {
-            path: path.clone(),
-            offset: u.offset,
-            record: crate::scan::record_kind(opcode),
-            reason: format!("changed since open: {e}"),
-        })?;
+        let rec =
+            crate::record_layout::parse_record(opcode, &body).map_err(|e| BagError::Corrupt {
+                path: path.clone(),
+                offset: u.offset,
+                record: crate::scan::record_kind(opcode),
+                reason: format!("changed since open: {e}"),
+            })?;
         let msgs = match rec {
             Record::Chunk { header, data } => {
                 let buf = decompress_chunk(path, u.offset, &header, &data)?;

@@ -251,7 +251,7 @@ fn recover_file(path: &Path, options: &RecoverOptions) -> Result<FileRecovery> {
     let mut file = std::fs::File::open(path).map_err(io_err("open", path))?;
     for u in &scan.units {
         let (opcode, body) = read_record_at(&mut file, path, u.offset, scan.size)?;
-        let msgs: Vec<RawMessage> = match mcap::parse_record(opcode, &body) {
+        let msgs: Vec<RawMessage> = match crate::record_layout::parse_record(opcode, &body) {
             Ok(Record::Chunk { header, data }) => {
                 let buf = decompress_chunk(path, u.offset, &header, &data)?;
                 chunk_messages(path, u.offset, &buf)?

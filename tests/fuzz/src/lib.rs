@@ -9,10 +9,18 @@
 //!   is right up to the broken place;
 //! * [`from_alphabet`] — the bytes mapped onto a format's own tokens.
 //!
+//! Each input runs under [`limits::bounded`]: a wall-time and a heap limit per input.
+//!
 //! Bounds: under `cargo test` (tests/run) each harness runs for bolero's default second of
 //! random inputs plus its corpus in `tests/__fuzz__/<harness>/corpus` when there is one; a crash
 //! found becomes a unit test beside the code it broke. Longer and coverage-guided runs:
 //! tests/fuzz/README.md.
+
+pub mod limits;
+
+/// Every allocation of a harness binary is counted per thread ([`limits`]).
+#[global_allocator]
+static ALLOCATOR: limits::CountingAllocator = limits::CountingAllocator;
 
 /// Generated inputs of up to `max` bytes (bolero's default slices average 32 bytes: 8 edits).
 pub fn bytes(max: usize) -> impl bolero::generator::ValueGenerator<Output = Vec<u8>> {

@@ -4,6 +4,7 @@
 
 use bolero::check;
 use metrocell_bag::{BagReader, MessageFilter, ReadMode, WriterOptions};
+use metrocell_fuzz::limits::{bounded, report};
 use metrocell_fuzz::{bytes, mutate, workspace_root};
 use std::path::{Path, PathBuf};
 
@@ -43,10 +44,13 @@ fn cdr_of_every_message_type() {
     check!()
         .with_generator(bytes(256))
         .for_each(|input: &Vec<u8>| {
-            let k = input.first().map_or(0, |b| usize::from(*b) % types.len());
-            let bytes = mutate(&seeds[k], input.get(1..).unwrap_or(&[]));
-            let _ = rosmsg::decode(&r, &types[k], &bytes);
+            bounded("cdr_of_every_message_type", input, || {
+                let k = input.first().map_or(0, |b| usize::from(*b) % types.len());
+                let bytes = mutate(&seeds[k], input.get(1..).unwrap_or(&[]));
+                let _ = rosmsg::decode(&r, &types[k], &bytes);
+            })
         });
+    println!("{}", report("cdr_of_every_message_type"));
 }
 
 /// Decodes `bytes` as `T` the way a node does a peer's sample (RustDDS's CDR deserializer, through
@@ -95,9 +99,12 @@ fn cdr_into_the_types_nodes_decode() {
     check!()
         .with_generator(bytes(256))
         .for_each(|input: &Vec<u8>| {
-            let k = input.first().map_or(0, |b| usize::from(*b) % types.len());
-            (types[k].1)(&mutate(&seeds[k], input.get(1..).unwrap_or(&[])));
+            bounded("cdr_into_the_types_nodes_decode", input, || {
+                let k = input.first().map_or(0, |b| usize::from(*b) % types.len());
+                (types[k].1)(&mutate(&seeds[k], input.get(1..).unwrap_or(&[])));
+            })
         });
+    println!("{}", report("cdr_into_the_types_nodes_decode"));
 }
 
 /// A small real bag (the importer's example export) and its .mcap file.
@@ -135,13 +142,16 @@ fn mcap_files() {
     check!()
         .with_generator(bytes(256))
         .for_each(|input: &Vec<u8>| {
-            std::fs::write(&mcap, mutate(&seed, input)).unwrap();
-            for mode in [ReadMode::Strict, ReadMode::Tolerant] {
-                if let Ok(reader) = BagReader::open_with(mcap.parent().unwrap(), mode) {
-                    let _ = reader.read_all(&MessageFilter::default());
+            bounded("mcap_files", input, || {
+                std::fs::write(&mcap, mutate(&seed, input)).unwrap();
+                for mode in [ReadMode::Strict, ReadMode::Tolerant] {
+                    if let Ok(reader) = BagReader::open_with(mcap.parent().unwrap(), mode) {
+                        let _ = reader.read_all(&MessageFilter::default());
+                    }
                 }
-            }
+            })
         });
+    println!("{}", report("mcap_files"));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -154,16 +164,19 @@ fn bag_recover() {
     check!()
         .with_generator(bytes(256))
         .for_each(|input: &Vec<u8>| {
-            // recovery rewrites the bag: start each run from the damaged seed
-            for e in std::fs::read_dir(&bag).unwrap() {
-                let p = e.unwrap().path();
-                if p != mcap && p.file_name().is_some_and(|n| n != "metadata.yaml") {
-                    let _ = std::fs::remove_file(&p);
+            bounded("bag_recover", input, || {
+                // recovery rewrites the bag: start each run from the damaged seed
+                for e in std::fs::read_dir(&bag).unwrap() {
+                    let p = e.unwrap().path();
+                    if p != mcap && p.file_name().is_some_and(|n| n != "metadata.yaml") {
+                        let _ = std::fs::remove_file(&p);
+                    }
                 }
-            }
-            std::fs::write(&mcap, mutate(&seed, input)).unwrap();
-            let _ = metrocell_bag::recover(&bag);
+                std::fs::write(&mcap, mutate(&seed, input)).unwrap();
+                let _ = metrocell_bag::recover(&bag);
+            })
         });
+    println!("{}", report("bag_recover"));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -177,19 +190,22 @@ fn csv_import() {
     check!()
         .with_generator(bytes(256))
         .for_each(|input: &Vec<u8>| {
-            let (a, b) = input.split_at(input.len() / 2);
-            std::fs::write(&csv, mutate(&csv_seed, a)).unwrap();
-            std::fs::write(&mapping_file, mutate(&mapping_seed, b)).unwrap();
-            let bag = dir.join("bag");
-            let _ = std::fs::remove_dir_all(&bag);
-            if let Ok(mapping) = metrocell_bagtools::import::Mapping::load(&mapping_file) {
-                let _ = metrocell_bagtools::import::import_csv(
-                    &csv,
-                    &bag,
-                    Some(&mapping),
-                    WriterOptions::default(),
-                );
-            }
+            bounded("csv_import", input, || {
+                let (a, b) = input.split_at(input.len() / 2);
+                std::fs::write(&csv, mutate(&csv_seed, a)).unwrap();
+                std::fs::write(&mapping_file, mutate(&mapping_seed, b)).unwrap();
+                let bag = dir.join("bag");
+                let _ = std::fs::remove_dir_all(&bag);
+                if let Ok(mapping) = metrocell_bagtools::import::Mapping::load(&mapping_file) {
+                    let _ = metrocell_bagtools::import::import_csv(
+                        &csv,
+                        &bag,
+                        Some(&mapping),
+                        WriterOptions::default(),
+                    );
+                }
+            })
         });
+    println!("{}", report("csv_import"));
     let _ = std::fs::remove_dir_all(&dir);
 }

@@ -4,6 +4,7 @@
 //! the format's tokens) and checks the parser returns, whatever it returns.
 
 use bolero::check;
+use metrocell_fuzz::limits::{bounded, report};
 use metrocell_fuzz::{bytes, from_alphabet, mutate, workspace_root};
 
 fn seed(path: &str) -> Vec<u8> {
@@ -22,10 +23,13 @@ fn cell_files() {
     check!()
         .with_generator(bytes(256))
         .for_each(|input: &Vec<u8>| {
-            let s = &seeds[input.first().map_or(0, |b| usize::from(*b) % seeds.len())];
-            let text = String::from_utf8_lossy(&mutate(s, input)).into_owned();
-            let _ = metrocell_model_file::CellModel::from_yaml_str_in(&text, "fuzz.yaml", &dir);
+            bounded("cell_files", input, || {
+                let s = &seeds[input.first().map_or(0, |b| usize::from(*b) % seeds.len())];
+                let text = String::from_utf8_lossy(&mutate(s, input)).into_owned();
+                let _ = metrocell_model_file::CellModel::from_yaml_str_in(&text, "fuzz.yaml", &dir);
+            })
         });
+    println!("{}", report("cell_files"));
 }
 
 #[test]
@@ -34,12 +38,15 @@ fn camera_info_yaml() {
     check!()
         .with_generator(bytes(256))
         .for_each(|input: &Vec<u8>| {
-            let text = String::from_utf8_lossy(&mutate(s, input)).into_owned();
-            if let Ok(info) = metrocell_camera_model::CameraInfo::from_yaml(&text, "fuzz") {
-                let _ = info.to_model();
-                let _ = info.intrinsics_covariance();
-            }
+            bounded("camera_info_yaml", input, || {
+                let text = String::from_utf8_lossy(&mutate(s, input)).into_owned();
+                if let Ok(info) = metrocell_camera_model::CameraInfo::from_yaml(&text, "fuzz") {
+                    let _ = info.to_model();
+                    let _ = info.intrinsics_covariance();
+                }
+            })
         });
+    println!("{}", report("camera_info_yaml"));
 }
 
 #[test]
@@ -48,9 +55,12 @@ fn launch_yaml() {
     check!()
         .with_generator(bytes(256))
         .for_each(|input: &Vec<u8>| {
-            let text = String::from_utf8_lossy(&mutate(&s, input)).into_owned();
-            let _ = metrocell_launch::marked_yaml::parse_marked_yaml(&text);
+            bounded("launch_yaml", input, || {
+                let text = String::from_utf8_lossy(&mutate(&s, input)).into_owned();
+                let _ = metrocell_launch::marked_yaml::parse_marked_yaml(&text);
+            })
         });
+    println!("{}", report("launch_yaml"));
 }
 
 #[test]
@@ -69,9 +79,12 @@ fn launch_plans() {
     check!()
         .with_generator(bytes(256))
         .for_each(|input: &Vec<u8>| {
-            std::fs::write(&file, mutate(&s, input)).unwrap();
-            let _ = metrocell_launch::load_launch_plan(&file, &[], &options);
+            bounded("launch_plans", input, || {
+                std::fs::write(&file, mutate(&s, input)).unwrap();
+                let _ = metrocell_launch::load_launch_plan(&file, &[], &options);
+            })
         });
+    println!("{}", report("launch_plans"));
     let _ = std::fs::remove_dir_all(&dir);
 }
 
@@ -81,10 +94,16 @@ fn urdf() {
     check!()
         .with_generator(bytes(256))
         .for_each(|input: &Vec<u8>| {
-            let text = String::from_utf8_lossy(&mutate(&s, input)).into_owned();
-            let _ =
-                metrocell_kinematics::urdf_chain::chain_from_urdf_str(&text, "base_link", "prism");
+            bounded("urdf", input, || {
+                let text = String::from_utf8_lossy(&mutate(&s, input)).into_owned();
+                let _ = metrocell_kinematics::urdf_chain::chain_from_urdf_str(
+                    &text,
+                    "base_link",
+                    "prism",
+                );
+            })
         });
+    println!("{}", report("urdf"));
 }
 
 #[test]
@@ -93,9 +112,12 @@ fn msg_definitions() {
     check!()
         .with_generator(bytes(256))
         .for_each(|input: &Vec<u8>| {
-            let text = String::from_utf8_lossy(&mutate(&s, input)).into_owned();
-            let _ = rosmsg::parse::parse_message("fuzz_msgs", "Fuzz", &text);
+            bounded("msg_definitions", input, || {
+                let text = String::from_utf8_lossy(&mutate(&s, input)).into_owned();
+                let _ = rosmsg::parse::parse_message("fuzz_msgs", "Fuzz", &text);
+            })
         });
+    println!("{}", report("msg_definitions"));
 }
 
 const GCODE: &[&str] = &[
@@ -115,12 +137,15 @@ fn gcode_programs() {
     check!()
         .with_generator(bytes(1024))
         .for_each(|input: &Vec<u8>| {
-            let text = from_alphabet(input, GCODE);
-            for line in text.lines() {
-                let _ = metrocell_gcode::block::parse_block(line);
-            }
-            let _ = metrocell_gcode::compensate_program(&text, &field, &options);
+            bounded("gcode_programs", input, || {
+                let text = from_alphabet(input, GCODE);
+                for line in text.lines() {
+                    let _ = metrocell_gcode::block::parse_block(line);
+                }
+                let _ = metrocell_gcode::compensate_program(&text, &field, &options);
+            })
         });
+    println!("{}", report("gcode_programs"));
 }
 
 #[test]
@@ -129,12 +154,16 @@ fn marlin_settings() {
     check!()
         .with_generator(bytes(256))
         .for_each(|input: &Vec<u8>| {
-            let text = String::from_utf8_lossy(&mutate(s, input)).into_owned();
-            if let Ok(m) = metrocell_kinematics::delta_firmware::MarlinDelta::from_gcode(&text) {
-                if let Ok(g) = m.firmware_geometry() {
-                    let _ = m.corrected(&g);
+            bounded("marlin_settings", input, || {
+                let text = String::from_utf8_lossy(&mutate(s, input)).into_owned();
+                if let Ok(m) = metrocell_kinematics::delta_firmware::MarlinDelta::from_gcode(&text)
+                {
+                    if let Ok(g) = m.firmware_geometry() {
+                        let _ = m.corrected(&g);
+                    }
+                    let _ = m.klipper_sections();
                 }
-                let _ = m.klipper_sections();
-            }
+            })
         });
+    println!("{}", report("marlin_settings"));
 }

@@ -7,7 +7,6 @@ use std::path::Path;
 
 use metrocell_bagtools::SourcedMessage;
 use metrocell_diagnose::{diagnose, DiagnoseError, Diagnosis};
-use metrocell_estimation::RecordSet;
 use metrocell_model::ForwardModel;
 use metrocell_msgs::diagnostic_msgs::msg::DiagnosticArray;
 use metrocell_msgs::std_msgs::msg::String as StringMessage;
@@ -27,7 +26,7 @@ pub struct Session<'m> {
 
 /// A diagnosis to run: the window's records and what they cover.
 pub struct Job {
-    pub records: RecordSet,
+    pub records: crate::sliding_window::WindowSnapshot,
     pub info: RunInfo,
 }
 
@@ -153,6 +152,8 @@ pub fn run_job(
     job: Job,
 ) -> (RunInfo, Result<Diagnosis, DiagnoseError>) {
     let Job { records, info } = job;
+    // the copies are made here, on the worker's thread (see `SlidingWindow::records`)
+    let records = records.into_record_set();
     let result = diagnose(setup_declared, &records, options);
     drop(records);
     release_freed_memory();

@@ -9,8 +9,10 @@ log (the launcher prefixes each node's stderr with `[name]`) as they arrive.
 
 Warm-up, per node:
 - the diagnose node: until its first diagnosis of a full window has finished (its log line
-  `run N over X h of cell time`, X the window). Before, the window grows by ~25 MB per hour of
-  cell time and each diagnosis's working copies grow with it; after, both should stay put.
+  `run N over X h of cell time`, X the window) once the temperatures' full-rate span (the window
+  and `--lag-margin` before it) is full too. Before, the window grows by ~25 MB per hour of cell
+  time, each diagnosis's working copies grow with it, and the lag caches by ~1.4 MB per hour;
+  after, all should stay put.
 - every other node: the first `--warmup-h` hours of cell time (3 h). Their caches and DDS
   histories are bounded by sample counts (BENCHMARKS.md, *A shift under metrocell demo*), so they
   fill within a fixed stretch of cell time: the last to fill are the twin's writer histories,
@@ -181,6 +183,7 @@ def main():
     ap.add_argument("--speed", type=float, default=120.0, help="cell s per wall s")
     ap.add_argument("--diagnose-window", type=float, default=7200.0, help="s of cell time the diagnose node looks back over")
     ap.add_argument("--warmup-h", type=float, default=3.0, help="hours of cell time: the warm-up of every node but diagnose")
+    ap.add_argument("--lag-margin", type=float, default=3600.0, help="s of temperature history the diagnose node keeps at full rate before its window (crates/records LAG_FULL_RATE_MARGIN_S)")
     ap.add_argument("--tolerance", type=float, default=0.10, help="flat: within this fraction of the warm-up-end RSS")
     ap.add_argument("--period", type=float, default=2.0, help="s between memory samples")
     ap.add_argument("--json", help="write the figures here (else to stdout)")
@@ -233,7 +236,11 @@ def main():
         # the diagnose node's runs: when each ended, over how much cell time
         runs = [{"run": int(m.group(1)), "window_h": float(m.group(2)), "wall_s": round(w, 1), "cell_h": round(clock(w) / 3600, 2)}
                 for w, line in stderr for m in [DIAGNOSIS.search(line)] if m]
-        full = next((r for r in runs if r["window_h"] >= a.diagnose_window / 3600 - 0.02), None)
+        # its memory is full once the window is and the temperatures' full-rate span behind it
+        # (window + LAG_FULL_RATE_MARGIN_S, crates/records; older history is coarsened in
+        # batches of 10 min): the first diagnosis done after both
+        span_h = (a.diagnose_window + a.lag_margin + 600.0) / 3600
+        full = next((r for r in runs if r["window_h"] >= a.diagnose_window / 3600 - 0.02 and r["cell_h"] >= span_h), None)
         result["diagnoses"] = runs
         # the sampled peak of each diagnosis: the diagnose node's largest RSS since the previous run ended
         diag = series.get("metrocell-diagnose", [])

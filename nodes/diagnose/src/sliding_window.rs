@@ -28,9 +28,9 @@ pub struct SlidingWindow {
     settings: WindowSettings,
     /// Shared, so a snapshot is a list of pointers: the copies a diagnosis works on are made on
     /// its worker thread ([`WindowSnapshot::into_record_set`]), in that thread's allocator arena,
-    /// and handed back whole after it. Copied here, on the node's thread, they were freed into
-    /// the arena the window keeps allocating in and left it holding 20–40 MB more after some
-    /// diagnoses (the soak: 72 → 109 MB and back).
+    /// and freed there, not in the arena the window keeps allocating in. (After some diagnoses
+    /// the node still holds 20–40 MB more until the next one — glibc's arenas, not growth: the
+    /// soak judges this node by its end and trend, BENCHMARKS.md.)
     records: VecDeque<Arc<MeasurementRecord>>,
     /// The points' frame (the first one seen); points in another frame are set aside.
     frame: Option<RecordFrame>,

@@ -3,8 +3,9 @@
 //! from the first hour on; the node's memory full from its first diagnosis after 2 h, the window
 //! and the temperatures' hour at full rate before it), through `tests/py/soak.py` (which samples
 //! every node's memory, reads the logs and the demo's recording check). Asserted: every node's
-//! memory flat within 10 % of its value at the end of its warm-up (the first 3 h of cell time, by
-//! which the twin's DDS histories are full); the diagnose node, whose level between diagnoses
+//! memory flat within 10 % of its value at the end of its warm-up (the first 4 h of cell time:
+//! the twin's DDS histories are full by 3 h; the recorder's creep, below 10 % over 8 h, is held
+//! to the same 2 h after it as in the 5-h form); the diagnose node, whose level between diagnoses
 //! goes where glibc leaves it after each, judged for growth instead — its end and its trend
 //! within 10 % of its level after that first diagnosis; the twin's messages all in the bag (0
 //! missing), and no ERROR/FATAL line or panic in any node's
@@ -18,11 +19,11 @@ use system_tests::{bin, piped, python, require_isolated_network, workspace_root,
 
 /// The shortened shift: cell time, speed-up, the diagnose node's window (the demo diagnoses
 /// every fifth of the shift: 1.2 h, so the first run already covers a full window), and the
-/// others' warm-up in hours of cell time (soak.py's default, why there).
+/// others' warm-up in hours of cell time (an hour past soak.py's default: the module docs say why).
 const DURATION_S: f64 = 21600.0;
 const SPEED: f64 = 150.0;
 const DIAGNOSE_WINDOW_S: f64 = 3600.0;
-const WARMUP_H: f64 = 3.0;
+const WARMUP_H: f64 = 4.0;
 
 /// Every process the demo starts, each judged on its own.
 const NODES: [&str; 9] = [

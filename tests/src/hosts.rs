@@ -154,12 +154,43 @@ impl TestHosts {
     }
 }
 
+/// The pids of every process in the network namespace `ns` (a `/proc/PID/ns/net` link target).
+fn processes_in(ns: &std::path::Path) -> Vec<i32> {
+    let Ok(entries) = std::fs::read_dir("/proc") else {
+        return Vec::new();
+    };
+    entries
+        .flatten()
+        .filter_map(|e| e.file_name().to_string_lossy().parse::<i32>().ok())
+        .filter(|pid| {
+            std::fs::read_link(format!("/proc/{pid}/ns/net"))
+                .ok()
+                .as_deref()
+                == Some(ns)
+        })
+        .collect()
+}
+
 impl Drop for TestHosts {
     fn drop(&mut self) {
         for h in &mut self.hosts {
+            // whatever still runs on the host (a node its launch left, a failed test's
+            // children) goes with it: a host left alive keeps its cable in the test's namespace,
+            // which then has an interface besides `lo` and fails every later DDS test's guard
+            if let Ok(ns) = std::fs::read_link(format!("/proc/{}/ns/net", h.anchor.id())) {
+                for pid in processes_in(&ns) {
+                    let _ = nix::sys::signal::kill(
+                        nix::unistd::Pid::from_raw(pid),
+                        nix::sys::signal::Signal::SIGKILL,
+                    );
+                }
+            }
             let _ = h.anchor.kill();
             let _ = h.anchor.wait();
-            // the veth pair goes with the host's namespace
+            // deleting our end deletes the pair now: a namespace whose last process is gone is
+            // torn down by the kernel later, and until then its cable stays in ours (seen in the
+            // full suite: the next test's guard found two of them)
+            let _ = Command::new("ip").args(["link", "del", &h.port]).output();
         }
         let _ = Command::new("ip")
             .args(["link", "del", &self.bridge])

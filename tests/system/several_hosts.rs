@@ -10,7 +10,8 @@
 //!   again once the cable is back — the cell heals without a restart;
 //! - nothing the twin published reliably is lost: while the participants' lease (RustDDS: 50 s)
 //!   holds, DDS repairs the cut from the writers' histories — recorded = published, per topic,
-//!   against the twin's own counts.
+//!   against the twin's own counts — and the tracker, reading the commanded positions reliably
+//!   (`commanded_reliable`), measures every dwell of the cut (none without its nominal).
 //!
 //! A cable pulled for longer than the lease does not heal with RustDDS 0.15.1: the participants
 //! rediscover each other but the user endpoints are not matched again (the issue-31 note has the
@@ -118,7 +119,8 @@ fn run_cell(cell_seconds: u32, cuts: &[(f64, f64)], domain: &str) -> CellRun {
          - node:\n    pkg: metrocell\n    exec: metrocell-tracker\n    name: tracker\n    param:\n\
          \x20   - {name: tool_offset, value: [0.0, 0.0, -0.1]}\n\
          \x20   - {name: registration_points, value: 6}\n\
-         \x20   - {name: input_timeout, value: 1.0}\n",
+         \x20   - {name: input_timeout, value: 1.0}\n\
+         \x20   - {name: commanded_reliable, value: true}\n",
     )
     .unwrap();
     let office = dir.join("office.launch.yaml");
@@ -264,6 +266,12 @@ fn the_cell_runs_across_three_hosts_and_heals_after_a_pulled_cable() {
     assert!(
         before > 0 && after > 0,
         "the tracker measures across the switch before and after the cut"
+    );
+    // the commanded positions, read reliably, were repaired too: no dwell lost its nominal
+    let dropped = run.logs.matches("has no nominal").count();
+    assert_eq!(
+        dropped, 0,
+        "dwells without a nominal after the cut (commanded_reliable: the commanded positions should be repaired)"
     );
     let (warn, ok) = stall_reported(&run, cut, 1.0);
     println!("stall reported {warn:?} s after the cut, receiving again {ok:?} s after the cable returned");

@@ -64,9 +64,15 @@ pub fn run(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
     } else {
         None
     };
+    // best effort matches any publisher; reliable lets DDS repair a network glitch (the
+    // commanded positions of a pulled cable's seconds arrive late instead of never)
     let commanded = node.subscription::<JointState>(
         "machine/commanded_joint_states",
-        qos::stream(qos::sensor_data()),
+        qos::stream(if state.config().commanded_reliable {
+            qos::reliable()
+        } else {
+            qos::sensor_data()
+        }),
     )?;
     let reregister = node.subscription::<RosString>("tracker/reregister", qos::reliable())?;
     let points =

@@ -47,6 +47,7 @@ pub fn declarations() -> Vec<ParamDecl> {
         ParamDecl::new("warmup_elapsed_at_first_reading", 0.0, "time the tracker had been on at the first reading, used when power_on_time is 0 [s]").with_range(0.0, 1e6),
         ParamDecl::new("nominal_joints", vec![s("x"), s("y"), s("z")], "commanded JointState names giving the nominal X, Y, Z of the target [m] (Cartesian machines)"),
         ParamDecl::new("tool_offset", vec![0.0, 0.0, 0.0], "target (SMR) position relative to the commanded axis position [m], machine frame"),
+        ParamDecl::new("commanded_reliable", false, "read machine/commanded_joint_states reliably: DDS then repairs what a network glitch held back (after a pulled cable no dwell goes without its nominal), but a publisher offering only best effort is not matched; false (best effort) matches every publisher and loses what the network loses"),
         ParamDecl::new("commanded_gap", 0.5, "longest gap between commanded joint states the node interpolates across [s]").with_range(0.001, 60.0),
         ParamDecl::new("program_points", Vec::<f64>::new(), "without machine/commanded_joint_states: the program's points in visiting order, x y z per point [m] (flat list); their time comes from T_v = L_T/F + T_s(n − 1)"),
         ParamDecl::new("program_home", vec![0.0, 0.0, 0.0], "where the program starts [m] (commanded axis position)"),
@@ -77,6 +78,8 @@ pub struct TrackerConfig {
     pub nominal_joints: Vec<String>,
     pub tool_offset: Vector3<f64>,
     pub commanded_gap_ns: i64,
+    /// Read the commanded joint states reliably (parameter `commanded_reliable`).
+    pub commanded_reliable: bool,
     pub registration_points: usize,
     /// program timing used when no commanded joint state covers a dwell
     pub schedule: Option<ProgramSchedule>,
@@ -167,6 +170,7 @@ impl TrackerConfig {
             nominal_joints: joints,
             tool_offset: Vector3::new(offset[0], offset[1], offset[2]),
             commanded_gap_ns: ns(p.get("commanded_gap")?),
+            commanded_reliable: p.get("commanded_reliable")?,
             registration_points: p.get::<i64>("registration_points")? as usize,
             schedule,
             machine_frame: p.get("machine_frame")?,

@@ -162,6 +162,10 @@ fn live(mut node: MetrocellNode) -> Result<(), Box<dyn std::error::Error>> {
             }
             let _ = statuses_pub.publish(out.statuses);
             let _ = result_pub.publish(out.result);
+            // the diagnosis was made in the worker's allocator arena and is freed here, after the
+            // worker's trim: trim again, or what it held stays resident until the next run
+            drop(result);
+            metrocell_diagnose_node::session::release_freed_memory();
         }
         let w = &session.window;
         diagnostics.set_value("records_in_window", w.len());

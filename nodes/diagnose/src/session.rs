@@ -165,7 +165,7 @@ pub fn run_job(
 /// 132 → 634 MB over four diagnoses; BENCHMARKS.md, *A shift under metrocell demo*). Elsewhere
 /// (musl, other systems) this does nothing.
 #[cfg(all(target_os = "linux", target_env = "gnu"))]
-fn release_freed_memory() {
+pub fn release_freed_memory() {
     // SAFETY: malloc_trim only returns free pages of glibc's arenas to the kernel; it touches no
     // live allocation.
     unsafe {
@@ -174,4 +174,4 @@ fn release_freed_memory() {
 }
 
 #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
-fn release_freed_memory() {}
+pub fn release_freed_memory() {}

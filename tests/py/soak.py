@@ -167,12 +167,6 @@ def judge(name, series, warm_wall, end_wall, clock, tolerance, resting_only=Fals
         "course": [(round(clock(s[0]) / 3600, 2), round(s[1] / 1024, 1)) for s in during[::max(1, len(during) // 60)]],
     }
     out["flat"] = out["deviation_pct"] <= 100 * tolerance
-    # growth, as opposed to a level that goes and comes back: where it ends against where the
-    # warm-up left it, and the least-squares trend over the time after the warm-up
-    hours = (clock(after[-1][0]) - clock(after[0][0])) / 3600
-    out["end_deviation_pct"] = round(100 * abs(after[-1][1] - ref) / ref, 1)
-    out["trend_pct"] = round(100 * out["slope_mb_per_h"] * 1024 * hours / ref, 1)
-    out["no_growth"] = out["end_deviation_pct"] <= 100 * tolerance and abs(out["trend_pct"]) <= 100 * tolerance
     return out
 
 

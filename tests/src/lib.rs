@@ -290,3 +290,59 @@ pub fn twin_published_counts(log: &str) -> std::collections::BTreeMap<String, u6
         })
         .collect()
 }
+
+/// One node of a launch file a test writes: the executable (package `metrocell`), its name,
+/// node keys such as `("respawn", "true")`, and its parameters as (name, YAML value) — quote
+/// strings and paths with [`yaml_string`].
+pub struct LaunchNode<'a> {
+    pub exec: &'a str,
+    pub name: &'a str,
+    pub keys: &'a [(&'a str, &'a str)],
+    pub params: &'a [(&'a str, String)],
+}
+
+/// A launch file (ROS 2 YAML launch format) of `nodes`.
+pub fn launch_yaml(nodes: &[LaunchNode]) -> String {
+    let mut s = String::from("launch:\n");
+    for n in nodes {
+        s += &format!(
+            "- node:\n    pkg: metrocell\n    exec: {}\n    name: {}\n",
+            n.exec, n.name
+        );
+        for (k, v) in n.keys {
+            s += &format!("    {k}: {v}\n");
+        }
+        if !n.params.is_empty() {
+            s += "    param:\n";
+            for (k, v) in n.params {
+                s += &format!("    - {{name: {k}, value: {v}}}\n");
+            }
+        }
+    }
+    s
+}
+
+/// `s` as a double-quoted YAML string (paths, durations with units).
+pub fn yaml_string(s: impl std::fmt::Display) -> String {
+    format!("{:?}", s.to_string())
+}
+
+/// The parameters of the twin (`metrocell-sim`) running quick_demo.yaml for `cell_seconds` at 30×
+/// without camera frames, waiting for the node named `recorder` before it publishes.
+pub fn quick_demo_twin_params(cell_seconds: u32) -> Vec<(&'static str, String)> {
+    vec![
+        (
+            "cell",
+            yaml_string(
+                workspace_root()
+                    .join("launch-configs/cells/quick_demo.yaml")
+                    .display(),
+            ),
+        ),
+        ("duration", yaml_string(format!("{cell_seconds}s"))),
+        ("speed", "30.0".into()),
+        ("wait_for_recorder", "60.0".into()),
+        ("recorder_node", "recorder".into()),
+        ("camera_images", "false".into()),
+    ]
+}

@@ -14,7 +14,10 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
-use system_tests::{bin, piped, require_isolated_network, workspace_root, ChildGuard};
+use system_tests::{
+    bin, launch_yaml, piped, require_isolated_network, workspace_root, yaml_string, ChildGuard,
+    LaunchNode,
+};
 
 /// The pid of the process whose command line holds `exe` and `marker`.
 fn find_process(exe: &str, marker: &str) -> Option<i32> {
@@ -92,34 +95,46 @@ fn a_killed_recorder_is_respawned_and_goes_on_in_a_new_split() {
     let state = dir.join("estimator_state.json");
     let cell = workspace_root().join("launch-configs/cells/quick_demo.yaml");
     let launch = dir.join("respawn.launch.yaml");
+    let twin = system_tests::quick_demo_twin_params(1200);
+    let respawn = [("respawn", "true"), ("respawn_delay", "0.5")];
     std::fs::write(
         &launch,
-        format!(
-            "launch:\n\
-             - node:\n    pkg: metrocell\n    exec: metrocell-sim\n    name: sim\n    param:\n\
-             \x20   - {{name: cell, value: \"{}\"}}\n\
-             \x20   - {{name: duration, value: \"1200s\"}}\n\
-             \x20   - {{name: speed, value: 30.0}}\n\
-             \x20   - {{name: wait_for_recorder, value: 60.0}}\n\
-             \x20   - {{name: recorder_node, value: recorder}}\n\
-             \x20   - {{name: camera_images, value: false}}\n\
-             - node:\n    pkg: metrocell\n    exec: metrocell-recorder\n    name: recorder\n\
-             \x20   respawn: true\n    respawn_delay: 0.5\n    param:\n\
-             \x20   - {{name: output, value: \"{}\"}}\n\
-             \x20   - {{name: resume, value: true}}\n\
-             \x20   - {{name: flush_interval, value: 0.5}}\n\
-             - node:\n    pkg: metrocell\n    exec: metrocell-tracker\n    name: tracker\n    param:\n\
-             \x20   - {{name: tool_offset, value: [0.0, 0.0, -0.1]}}\n\
-             \x20   - {{name: registration_points, value: 6}}\n\
-             - node:\n    pkg: metrocell\n    exec: metrocell-estimator\n    name: estimator\n\
-             \x20   respawn: true\n    respawn_delay: 0.5\n    param:\n\
-             \x20   - {{name: model, value: \"{}\"}}\n\
-             \x20   - {{name: state_file, value: \"{}\"}}\n",
-            cell.display(),
-            bag.display(),
-            cell.display(),
-            state.display()
-        ),
+        launch_yaml(&[
+            LaunchNode {
+                exec: "metrocell-sim",
+                name: "sim",
+                keys: &[],
+                params: &twin,
+            },
+            LaunchNode {
+                exec: "metrocell-recorder",
+                name: "recorder",
+                keys: &respawn,
+                params: &[
+                    ("output", yaml_string(bag.display())),
+                    ("resume", "true".into()),
+                    ("flush_interval", "0.5".into()),
+                ],
+            },
+            LaunchNode {
+                exec: "metrocell-tracker",
+                name: "tracker",
+                keys: &[],
+                params: &[
+                    ("tool_offset", "[0.0, 0.0, -0.1]".into()),
+                    ("registration_points", "6".into()),
+                ],
+            },
+            LaunchNode {
+                exec: "metrocell-estimator",
+                name: "estimator",
+                keys: &respawn,
+                params: &[
+                    ("model", yaml_string(cell.display())),
+                    ("state_file", yaml_string(state.display())),
+                ],
+            },
+        ]),
     )
     .unwrap();
     let launcher = ChildGuard::spawn(

@@ -27,7 +27,7 @@ use std::time::{Duration, Instant};
 use metrocell_bag::{BagReader, MessageFilter};
 use rosmsg::Value;
 use system_tests::hosts::TestHosts;
-use system_tests::{bin, workspace_root, ChildGuard};
+use system_tests::{bin, launch_yaml, yaml_string, ChildGuard, LaunchNode};
 
 /// The tracker node's stall report (WARN) and its recovery (OK) as the bag holds them: (stamp in
 /// s of the bag's log time, level, message) of every status of `name`.
@@ -94,47 +94,48 @@ fn run_cell(cell_seconds: u32, cuts: &[(f64, f64)], domain: &str) -> CellRun {
     let _ = std::fs::remove_dir_all(&dir);
     std::fs::create_dir_all(&dir).unwrap();
     let bag = dir.join("shift_bag");
-    let cell = workspace_root().join("launch-configs/cells/quick_demo.yaml");
     // each host's launch file, as three machines of a plant would hold them
-    let machine = dir.join("machine.launch.yaml");
-    std::fs::write(
-        &machine,
-        format!(
-            "launch:\n\
-             - node:\n    pkg: metrocell\n    exec: metrocell-sim\n    name: sim\n    param:\n\
-             \x20   - {{name: cell, value: \"{}\"}}\n\
-             \x20   - {{name: duration, value: \"{cell_seconds}s\"}}\n\
-             \x20   - {{name: speed, value: 30.0}}\n\
-             \x20   - {{name: wait_for_recorder, value: 60.0}}\n\
-             \x20   - {{name: recorder_node, value: recorder}}\n\
-             \x20   - {{name: camera_images, value: false}}\n",
-            cell.display()
-        ),
-    )
-    .unwrap();
-    let metrology = dir.join("metrology.launch.yaml");
-    std::fs::write(
-        &metrology,
-        "launch:\n\
-         - node:\n    pkg: metrocell\n    exec: metrocell-tracker\n    name: tracker\n    param:\n\
-         \x20   - {name: tool_offset, value: [0.0, 0.0, -0.1]}\n\
-         \x20   - {name: registration_points, value: 6}\n\
-         \x20   - {name: input_timeout, value: 1.0}\n\
-         \x20   - {name: commanded_reliable, value: true}\n",
-    )
-    .unwrap();
-    let office = dir.join("office.launch.yaml");
-    std::fs::write(
-        &office,
-        format!(
-            "launch:\n\
-             - node:\n    pkg: metrocell\n    exec: metrocell-recorder\n    name: recorder\n    param:\n\
-             \x20   - {{name: output, value: \"{}\"}}\n\
-             \x20   - {{name: flush_interval, value: 0.5}}\n",
-            bag.display()
-        ),
-    )
-    .unwrap();
+    let twin = system_tests::quick_demo_twin_params(cell_seconds);
+    let write = |file: &str, node: LaunchNode| {
+        let path = dir.join(file);
+        std::fs::write(&path, launch_yaml(&[node])).unwrap();
+        path
+    };
+    let machine = write(
+        "machine.launch.yaml",
+        LaunchNode {
+            exec: "metrocell-sim",
+            name: "sim",
+            keys: &[],
+            params: &twin,
+        },
+    );
+    let metrology = write(
+        "metrology.launch.yaml",
+        LaunchNode {
+            exec: "metrocell-tracker",
+            name: "tracker",
+            keys: &[],
+            params: &[
+                ("tool_offset", "[0.0, 0.0, -0.1]".into()),
+                ("registration_points", "6".into()),
+                ("input_timeout", "1.0".into()),
+                ("commanded_reliable", "true".into()),
+            ],
+        },
+    );
+    let office = write(
+        "office.launch.yaml",
+        LaunchNode {
+            exec: "metrocell-recorder",
+            name: "recorder",
+            keys: &[],
+            params: &[
+                ("output", yaml_string(bag.display())),
+                ("flush_interval", "0.5".into()),
+            ],
+        },
+    );
     let launch = |host: &str, file: &Path| {
         let mut c = hosts.command(host, bin("metrocell"));
         c.arg("launch").arg(file).env("ROS_DOMAIN_ID", domain);

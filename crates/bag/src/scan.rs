@@ -20,6 +20,10 @@ use crate::error::{io_err, BagError, Result};
 /// Largest chunk we agree to decompress (protects against absurd sizes in corrupt headers).
 const MAX_UNCOMPRESSED_CHUNK: u64 = 4 << 30;
 
+/// Uncompressed ÷ compressed size up to which a chunk header's claimed size is allocated at once
+/// (see `decompress_chunk`).
+const PLAUSIBLE_RATIO: u64 = 64;
+
 /// Human name of an MCAP opcode.
 pub fn record_kind(opcode: u8) -> &'static str {
     match opcode {
@@ -128,14 +132,21 @@ pub fn decompress_chunk(
             ),
         ));
     }
-    // Decompressed as a stream into a vector that grows with what really comes out, read no
-    // further than one byte past the claimed size: a header's size is never trusted for an
-    // allocation (a corrupt one claimed 1 GiB for a 3-KiB chunk: the fuzz harnesses' memory
-    // limit), and a chunk that inflates past its claim is stopped there and reported below.
-    let limit = header.uncompressed_size + 1;
+    // A header's size is trusted for an allocation only while it is plausible for the chunk's
+    // compressed size (bag data compresses by 2–10×; a chunk of zeros by more, and takes the slow
+    // path): then zstd's one-shot decoder fills a buffer of exactly that size, the fast path every
+    // real bag takes. Beyond it the chunk is inflated as a stream into a vector that grows with
+    // what really comes out, read no further than one byte past the claim (a chunk that inflates
+    // past it is reported below) — so a corrupt size field costs no allocation of its own.
+    let claimed = header.uncompressed_size;
+    let plausible = claimed <= (data.len() as u64).saturating_mul(PLAUSIBLE_RATIO) + (1 << 20);
     let inflate = |reader: &mut dyn Read, what: &str| -> Result<Vec<u8>> {
-        let mut v = Vec::new();
-        reader.take(limit).read_to_end(&mut v).map_err(|e| {
+        let mut v = Vec::with_capacity(if plausible {
+            claimed as usize
+        } else {
+            data.len()
+        });
+        reader.take(claimed + 1).read_to_end(&mut v).map_err(|e| {
             corrupt(
                 path,
                 offset,
@@ -147,6 +158,14 @@ pub fn decompress_chunk(
     };
     let out = match header.compression.as_str() {
         "" => data.to_vec(),
+        "zstd" if plausible => zstd::bulk::decompress(data, claimed as usize).map_err(|e| {
+            corrupt(
+                path,
+                offset,
+                "Chunk",
+                format!("zstd decompression failed: {e}"),
+            )
+        })?,
         "zstd" => {
             let mut dec = zstd::stream::read::Decoder::with_buffer(data)
                 .map_err(|e| corrupt(path, offset, "Chunk", format!("zstd stream invalid: {e}")))?;
@@ -714,4 +733,50 @@ fn find_next_chunk<R: Read + Seek>(
         }
     }
     Ok(None)
+}
+
+#[cfg(test)]
+mod decompress_tests {
+    use super::*;
+
+    fn header(uncompressed_size: u64) -> mcap::records::ChunkHeader {
+        mcap::records::ChunkHeader {
+            message_start_time: 0,
+            message_end_time: 0,
+            uncompressed_size,
+            uncompressed_crc: 0,
+            compression: "zstd".into(),
+            compressed_size: 0,
+        }
+    }
+
+    #[test]
+    fn chunks_inflate_on_both_paths_and_a_size_claim_that_lies_is_reported() {
+        let path = Path::new("test.mcap");
+        // ordinary data (little to compress: xorshift bytes): the one-shot path
+        let mut x = 0x9e37_79b9_7f4a_7c15u64;
+        let text: Vec<u8> = (0..800_000)
+            .map(|_| {
+                x ^= x << 13;
+                x ^= x >> 7;
+                x ^= x << 17;
+                (x >> 56) as u8
+            })
+            .collect();
+        let packed = zstd::bulk::compress(&text, 1).unwrap();
+        assert!((text.len() as u64) < packed.len() as u64 * PLAUSIBLE_RATIO);
+        let out = decompress_chunk(path, 0, &header(text.len() as u64), &packed).unwrap();
+        assert_eq!(out, text);
+        // 16 MiB of zeros pack into a few hundred bytes: beyond the plausible ratio, streamed
+        let zeros = vec![0u8; 16 << 20];
+        let packed = zstd::bulk::compress(&zeros, 1).unwrap();
+        assert!(zeros.len() as u64 > packed.len() as u64 * PLAUSIBLE_RATIO + (1 << 20));
+        let out = decompress_chunk(path, 0, &header(zeros.len() as u64), &packed).unwrap();
+        assert_eq!(out.len(), zeros.len());
+        // a header claiming 1 GiB for those bytes: streamed, and the mismatch named
+        let e = decompress_chunk(path, 0, &header(1 << 30), &packed).unwrap_err();
+        assert!(e.to_string().contains("header says 1073741824"), "{e}");
+        // a claim smaller than what comes out is refused (the one-shot decoder's buffer is full)
+        assert!(decompress_chunk(path, 0, &header(1000), &packed).is_err());
+    }
 }

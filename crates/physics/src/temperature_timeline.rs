@@ -22,8 +22,8 @@
 //! are coarsened to one per [`COARSE_BIN_S`] (each bin's mean value at its mean time), so memory
 //! grows by 1/60 of the sample rate instead of all of it, and the lag at an instant inside the
 //! span differs from the full history's by the coarsening's error seen through e^(−age/τ): tens
-//! of µK for a 1 Hz thermocouple half an hour inside the span (unit test). Coarsening restarts the lag caches (their indices
-//! moved); they are filtered again when next asked.
+//! of µK for a 1 Hz thermocouple half an hour inside the span (unit test). Coarsening restarts
+//! the lag caches (their indices moved); they are filtered again when next asked.
 
 use std::collections::{BTreeMap, VecDeque};
 use std::sync::Mutex;
@@ -474,7 +474,7 @@ mod tests {
             worst_d < 1e-6,
             "the coarsened history moved ∂T_f/∂τ by {worst_d} K/s"
         );
-        // the history stays in time order and the coarse part is one sample a minute
+        // the history stays in time order
         let h = bounded.history("column", None).unwrap();
         assert!(h.samples.windows(2).all(|w| w[1].0 > w[0].0));
     }

@@ -45,7 +45,7 @@ use metrocell_msgs::sensor_msgs::msg::{JointState, Temperature, TimeReference};
 /// instants it still asks lags about (its window): older history is coarsened to one sample a
 /// minute (`SignalsBuilderOptions::temperature_full_rate`), which moves a lag half an hour inside
 /// the full-rate span by tens of µK (crates/physics `temperature_timeline.rs`), and keeps a
-/// week-long run's memory flat (the soak, BENCHMARKS.md).
+/// long run's memory flat (the 8-h soak: the diagnose node −0.07 MB per cell hour, BENCHMARKS.md).
 pub const LAG_FULL_RATE_MARGIN_S: f64 = 3600.0;
 
 /// What a stream has produced: records by frame (points), instrument records (probe hits,

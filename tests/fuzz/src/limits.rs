@@ -89,7 +89,8 @@ pub struct HarnessFigures {
 struct Watch {
     deadline: Instant,
     harness: &'static str,
-    input: String,
+    /// The input's first 4 KiB, printed (in hex) only if it hangs.
+    input: Vec<u8>,
 }
 
 fn watches() -> &'static Mutex<BTreeMap<u64, Watch>> {
@@ -101,7 +102,9 @@ fn watches() -> &'static Mutex<BTreeMap<u64, Watch>> {
             if let Some(late) = w.values().find(|w| Instant::now() > w.deadline) {
                 eprintln!(
                     "metrocell-fuzz: harness {} — an input ran longer than {:?} (a hang?); input (hex): {}",
-                    late.harness, TIME_LIMIT, late.input
+                    late.harness,
+                    TIME_LIMIT,
+                    hex(&late.input)
                 );
                 std::process::abort();
             }
@@ -139,7 +142,7 @@ pub fn bounded<R>(harness: &'static str, input: &[u8], run: impl FnOnce() -> R) 
         Watch {
             deadline: Instant::now() + TIME_LIMIT,
             harness,
-            input: hex(input),
+            input: input[..input.len().min(4096)].to_vec(),
         },
     );
     let before = LIVE.with(Cell::get);

@@ -33,6 +33,7 @@ mod demo;
 mod diagnose_command;
 mod launch_command;
 mod router;
+mod security_command;
 mod topic;
 mod verify;
 mod vision;
@@ -84,6 +85,9 @@ enum Command {
     /// CNC router calibration from a drilled plate (seed 000): fit the planar error field, compensate G-code
     #[command(subcommand)]
     Router(router::RouterCommand),
+    /// DDS Security keystores, enclaves and permissions (SROS2 layout), like `ros2 security`
+    #[command(subcommand)]
+    Security(security_command::SecurityCommand),
     /// Simulate a cell into a bag, faster than real time (the digital twin)
     Sim(metrocell_simulation::SimArgs),
     /// Inspect and publish on topics (list, echo, pub, hz), like `ros2 topic`
@@ -136,6 +140,7 @@ fn main() {
         Command::Router(command) => router::run(command),
         Command::Verify(command) => verify::run(command),
         Command::Delta(command) => delta::run(command),
+        Command::Security(command) => security_command::run(command),
         Command::Sim(args) => metrocell_simulation::run_sim_command(args),
         Command::Topic(command) => topic::run(command),
     };

@@ -8,7 +8,7 @@
 //! | `arg` | `name` (required), `default`, `description` |
 //! | `let` | `name`, `value` (both required) |
 //! | `include` | `file` (required), `arg`: list of `{name, value}`; or just `include: FILE` |
-//! | `node` | `exec` (required), `pkg`, `name`, `namespace`, `param`, `remap`, `args`, `ros_args`, `respawn`, `respawn_delay`, `respawn_max_retries`, `output`, `env` |
+//! | `node` | `exec` (required), `pkg`, `name`, `namespace`, `param`, `remap`, `args`, `ros_args`, `enclave`, `respawn`, `respawn_delay`, `respawn_max_retries`, `output`, `env` |
 //! | `executable` | `cmd` (required), `name`, `args`, `cwd`, `shell`, `respawn`, `respawn_delay`, `respawn_max_retries`, `output`, `env` |
 //! | `group` | `scoped` (default true), `forwarding` (default true), `push-ros-namespace`/`push_ros_namespace`, `children`; or a plain list of child actions |
 //! | `push-ros-namespace` / `push_ros_namespace` | `namespace`; or just `push-ros-namespace: NS` |
@@ -48,6 +48,7 @@ const NODE_KEYS: &[&str] = &[
     "remap",
     "args",
     "ros_args",
+    "enclave",
     "respawn",
     "respawn_delay",
     "respawn_max_retries",
@@ -733,7 +734,12 @@ impl<'o> Loader<'o> {
         let name = self.text(&body, "name", scope)?;
         let own_ns = self.text(&body, "namespace", scope)?;
         let mut args = self.words(&body, "args", scope)?;
-        let extra_ros_args = self.words(&body, "ros_args", scope)?;
+        let mut extra_ros_args = self.words(&body, "ros_args", scope)?;
+        // The node's DDS Security enclave (`--ros-args --enclave`): its identity and
+        // permissions in the keystore of ROS_SECURITY_KEYSTORE.
+        if let Some(enclave) = self.text(&body, "enclave", scope)? {
+            extra_ros_args.extend(["--enclave".to_string(), enclave]);
+        }
 
         let mut params = Vec::new();
         self.params(

@@ -54,7 +54,7 @@ fn unknown_key_names_file_line_key_and_the_allowed_keys() {
         msg,
         format!(
             "{}:5: node: unknown key 'pkgg' (expected one of pkg, exec, name, namespace, param, remap, args, \
-             ros_args, respawn, respawn_delay, respawn_max_retries, output, env, if, unless)",
+             ros_args, enclave, respawn, respawn_delay, respawn_max_retries, output, env, if, unless)",
             file.display()
         )
     );

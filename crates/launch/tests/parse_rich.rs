@@ -280,3 +280,30 @@ fn duplicate_labels_are_numbered() {
     std::fs::remove_dir_all(&dir).unwrap();
     std::fs::remove_dir_all(&bin).unwrap();
 }
+
+#[test]
+fn a_nodes_enclave_becomes_its_enclave_argument() {
+    let bin = fake_bin_dir("enclave");
+    let dir = std::env::temp_dir().join(format!("metrocell-launch-enclave-{}", std::process::id()));
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = dir.join("e.launch.yaml");
+    std::fs::write(
+        &file,
+        "launch:\n  - arg: {name: cell, default: cell_a}\n  - node: {exec: tool, name: twin, enclave: '/$(var cell)/twin'}\n  - node: {exec: tool, name: plain}\n",
+    )
+    .unwrap();
+    let plan = load_launch_plan(&file, &[], &options(&bin)).unwrap();
+    assert_eq!(
+        plan.processes[0].args,
+        [
+            "--ros-args",
+            "-r",
+            "__node:=twin",
+            "--enclave",
+            "/cell_a/twin"
+        ]
+    );
+    assert!(!plan.processes[1].args.iter().any(|a| a == "--enclave"));
+    std::fs::remove_dir_all(&dir).unwrap();
+    std::fs::remove_dir_all(&bin).unwrap();
+}

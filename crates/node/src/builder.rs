@@ -3,6 +3,7 @@
 
 use std::time::Duration;
 
+use metrocell_security::{SecurityEnvironment, SecuritySetting};
 use ros2_client::{NodeName, NodeOptions};
 
 use crate::background::{Background, BackgroundTasks, SimTime};
@@ -25,6 +26,7 @@ pub struct NodeBuilder {
     own_arguments: Vec<(String, String)>,
     ros_args: RosArgs,
     environment: Option<DdsEnvironment>,
+    security: Option<SecurityEnvironment>,
     diagnostics_period: Option<Duration>,
     handle_signals: bool,
 }
@@ -39,6 +41,7 @@ impl NodeBuilder {
             own_arguments: Vec::new(),
             ros_args: RosArgs::default(),
             environment: None,
+            security: None,
             diagnostics_period: Some(Duration::from_secs(1)),
             handle_signals: true,
         }
@@ -102,6 +105,13 @@ impl NodeBuilder {
     /// Use this DDS environment instead of reading `ROS_DOMAIN_ID` etc. from the process.
     pub fn environment(mut self, env: DdsEnvironment) -> NodeBuilder {
         self.environment = Some(env);
+        self
+    }
+
+    /// Use this security environment instead of reading `ROS_SECURITY_*` from the process (its
+    /// `enclave_override` names the enclave, as `ROS_SECURITY_ENCLAVE_OVERRIDE` does).
+    pub fn security(mut self, security: SecurityEnvironment) -> NodeBuilder {
+        self.security = Some(security);
         self
     }
 
@@ -184,7 +194,27 @@ impl NodeBuilder {
             Some(e) => e,
             None => DdsEnvironment::from_env()?,
         };
-        let context = crate::participant::create_context(&env)?;
+        let enclave_dir = match self
+            .security
+            .unwrap_or_else(SecurityEnvironment::from_env)
+            .resolve(ros.enclave.as_deref())
+            .map_err(|why| create_error(format!("node '{fqn}'"), why))?
+        {
+            SecuritySetting::Off => None,
+            SecuritySetting::PermissiveFallback(why) => {
+                Logger::stderr_only(&fqn, min_level).warn(&why);
+                None
+            }
+            SecuritySetting::Enclave { enclave, dir } => {
+                Logger::stderr_only(&fqn, min_level).info(format!(
+                    "DDS Security on: enclave '{enclave}' ({})",
+                    dir.display()
+                ));
+                crate::dds_log::install_security_events(&fqn);
+                Some(dir)
+            }
+        };
+        let context = crate::participant::create_context(&env, enclave_dir.as_deref())?;
 
         let mut options = NodeOptions::new().enable_rosout(!ros.disable_rosout);
         for p in parameters.iter() {

@@ -3,6 +3,12 @@
 //! network fault left no trace of what DDS did about it. `METROCELL_DDS_LOG=LEVEL` (error, warn,
 //! info, debug, trace; unset = nothing) prints each record at or above LEVEL as
 //! `[DDS LEVEL] [seconds.nanos] [target]: message`.
+//!
+//! A secured node (DDS Security on) without `METROCELL_DDS_LOG` still says why DDS refused a
+//! participant: RustDDS's security events (a failed authentication handshake, an access-control
+//! check that did not pass, data from a participant that is not authenticated) are printed as the
+//! node's WARN lines, `[WARN] [seconds.nanos] [<node>.dds_security]: …`, each distinct text at
+//! most once per [`SECURITY_EVENT_REPEAT_S`] (a refused peer retries its handshake every second).
 
 use crate::logging::system_time_ns;
 
@@ -28,6 +34,91 @@ impl log::Log for StderrLog {
     }
 
     fn flush(&self) {}
+}
+
+/// Seconds before the same security event is printed again.
+pub const SECURITY_EVENT_REPEAT_S: u64 = 30;
+
+/// Whether a RustDDS record is a security event worth a secured node's log: what its security
+/// code reports at WARN or above, and the refusals it reports at INFO.
+pub fn is_security_event(target: &str, level: log::Level, message: &str) -> bool {
+    let security = target.starts_with("rustdds::discovery::secure_discovery")
+        || target.starts_with("rustdds::security");
+    if !security {
+        return false;
+    }
+    level <= log::Level::Warn
+        || [
+            "did not pass",
+            "not allowed",
+            "failed",
+            "denied",
+            "Denied",
+            "non-authenticated",
+        ]
+        .iter()
+        .any(|w| message.contains(w))
+}
+
+struct SecurityEventLog {
+    node: String,
+    last_printed: std::sync::Mutex<std::collections::HashMap<String, std::time::Instant>>,
+}
+
+impl log::Log for SecurityEventLog {
+    fn enabled(&self, metadata: &log::Metadata) -> bool {
+        metadata.level() <= log::Level::Info
+            && (metadata
+                .target()
+                .starts_with("rustdds::discovery::secure_discovery")
+                || metadata.target().starts_with("rustdds::security"))
+    }
+
+    fn log(&self, record: &log::Record) {
+        if !self.enabled(record.metadata()) {
+            return;
+        }
+        let message = record.args().to_string();
+        if !is_security_event(record.target(), record.level(), &message) {
+            return;
+        }
+        let now = std::time::Instant::now();
+        {
+            let Ok(mut last) = self.last_printed.lock() else {
+                return;
+            };
+            if last.get(&message).is_some_and(|t| {
+                now.duration_since(*t) < std::time::Duration::from_secs(SECURITY_EVENT_REPEAT_S)
+            }) {
+                return;
+            }
+            if last.len() > 1000 {
+                last.clear();
+            }
+            last.insert(message.clone(), now);
+        }
+        let ns = system_time_ns();
+        eprintln!(
+            "[WARN] [{}.{:09}] [{}.dds_security]: {message}",
+            ns.div_euclid(1_000_000_000),
+            ns.rem_euclid(1_000_000_000),
+            self.node
+        );
+    }
+
+    fn flush(&self) {}
+}
+
+/// For a secured node: print DDS security events unless `METROCELL_DDS_LOG` installed the full
+/// bridge already (then they are among its lines).
+pub fn install_security_events(node: &str) {
+    let logger = Box::new(SecurityEventLog {
+        node: node.to_string(),
+        last_printed: Default::default(),
+    });
+    if log::set_boxed_logger(logger).is_ok() {
+        log::set_max_level(log::LevelFilter::Info);
+    }
 }
 
 /// The level `METROCELL_DDS_LOG` asks for, or why it is not one.
@@ -59,6 +150,31 @@ pub fn install_from_env() -> Option<String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn security_events_are_refusals_from_the_security_code_only() {
+        let auth = "rustdds::discovery::secure_discovery";
+        assert!(is_security_event(
+            auth,
+            log::Level::Error,
+            "Replying to a handshake request failed: Certificate signature verification failure"
+        ));
+        assert!(is_security_event(
+            auth,
+            log::Level::Info,
+            "Access control check did not pass for participant X to read topic rt/secret."
+        ));
+        assert!(!is_security_event(
+            auth,
+            log::Level::Info,
+            "Access control check passed for participant X to read topic rt/secret."
+        ));
+        assert!(!is_security_event(
+            "rustdds::rtps::writer",
+            log::Level::Error,
+            "Encoding failed"
+        ));
+    }
 
     #[test]
     fn levels_are_read_and_nonsense_is_named() {

@@ -4,6 +4,7 @@
 pub mod camera_recording;
 pub mod hosts;
 pub mod points_ramp;
+pub mod roundtrip;
 
 use std::path::{Path, PathBuf};
 use std::process::{Child, Command, Output, Stdio};

@@ -39,25 +39,35 @@ impl log::Log for StderrLog {
 /// Seconds before the same security event is printed again.
 pub const SECURITY_EVENT_REPEAT_S: u64 = 30;
 
-/// Whether a RustDDS record is a security event worth a secured node's log: what its security
-/// code reports at WARN or above, and the refusals it reports at INFO.
+/// Whether a RustDDS record is a security event worth a secured node's log: what its
+/// authentication, access-control and secure-discovery code reports at WARN or above, the refusals
+/// it reports at INFO, and the unprotected messages its receiver drops. (Its crypto plugin's
+/// "Could not find a remote EndpointCryptoHandle", logged while keys are still being exchanged
+/// with a peer that is being admitted, is not one.)
 pub fn is_security_event(target: &str, level: log::Level, message: &str) -> bool {
-    let security = target.starts_with("rustdds::discovery::secure_discovery")
-        || target.starts_with("rustdds::security");
-    if !security {
-        return false;
+    if target.starts_with("rustdds::rtps::message_receiver") {
+        return message.contains("unprotected message");
     }
-    level <= log::Level::Warn
-        || [
-            "did not pass",
-            "not allowed",
-            "failed",
-            "denied",
-            "Denied",
-            "non-authenticated",
-        ]
-        .iter()
-        .any(|w| message.contains(w))
+    let security = [
+        "rustdds::discovery::secure_discovery",
+        "rustdds::security::authentication",
+        "rustdds::security::access_control",
+    ]
+    .iter()
+    .any(|t| target.starts_with(t));
+    security
+        && (level <= log::Level::Warn
+            || [
+                "did not pass",
+                "ot allowed",
+                "failed",
+                "denied",
+                "non-authenticated",
+                "not matching",
+                "does not verify",
+            ]
+            .iter()
+            .any(|w| message.contains(w)))
 }
 
 struct SecurityEventLog {
@@ -169,10 +179,21 @@ mod tests {
             log::Level::Info,
             "Access control check passed for participant X to read topic rt/secret."
         ));
+        assert!(is_security_event(
+            "rustdds::rtps::message_receiver",
+            log::Level::Error,
+            "Received an unprotected message containing a writer submessage for the reader \
+             EntityId::SEDP_BUILTIN_PUBLICATIONS_READER in an rtps-protected domain."
+        ));
         assert!(!is_security_event(
             "rustdds::rtps::writer",
             log::Level::Error,
             "Encoding failed"
+        ));
+        assert!(!is_security_event(
+            "rustdds::security::security_plugins",
+            log::Level::Error,
+            "Could not find a remote EndpointCryptoHandle for the (local_endpoint_guid, proxy_guid) pair"
         ));
     }
 

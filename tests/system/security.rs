@@ -6,6 +6,8 @@
 //! Checked, each against a positive control that shows the attacker's own side works:
 //! - secured node processes exchange every metrocell message type, field for field (payloads of
 //!   every size: RustDDS needed a patch for those not a multiple of 4 bytes long);
+//! - on the wire, a passive eavesdropper finds the cell's payload nowhere in clear text (and the
+//!   plain participants' everywhere);
 //! - a participant without credentials, one whose certificate comes from another CA (a rogue
 //!   keystore), and one whose certificate was altered can neither read nor inject on a protected
 //!   topic; the secured node says why in its log (unprotected messages dropped, a handshake whose
@@ -26,7 +28,7 @@ use std::time::Duration;
 use metrocell_node::{DdsEnvironment, DiscoveryRange, MetrocellNode};
 use metrocell_security::SecurityEnvironment;
 use system_tests::roundtrip::roundtrip_every_type;
-use system_tests::{bin, piped, require_isolated_network, run, ChildGuard};
+use system_tests::{bin, piped, python, require_isolated_network, run, workspace_root, ChildGuard};
 
 /// A scratch directory of this test process.
 fn scratch(name: &str) -> PathBuf {
@@ -233,6 +235,13 @@ fn participants_without_valid_credentials_can_neither_read_nor_inject() {
         enclave: "/cell/talker",
     };
     let t = 14;
+    // A passive eavesdropper on the network (a raw socket on the namespace's loopback).
+    let sniffer = ChildGuard::spawn(
+        piped(python())
+            .arg(workspace_root().join("tests/py/sniff_udp.py"))
+            .args([&(t - 2).to_string(), "from_talker", "plain_injection"]),
+    );
+    std::thread::sleep(Duration::from_millis(500));
     let listener_secured = listener(t, DOMAIN, &secured("/cell/listener"), "/secret");
     let listener_plain = listener(t, DOMAIN, &Credentials::Plain, "/secret");
     let listener_rogue = listener(t, DOMAIN, &rogue_id, "/secret");
@@ -265,6 +274,13 @@ fn participants_without_valid_credentials_can_neither_read_nor_inject() {
     let (rogue_out, _) = text(&listener_rogue.wait_output(wait));
     let altered_run = altered.wait_output(wait);
     let (_, altered_log) = text(&altered_run);
+    let sniffed = sniffer.wait_output(wait);
+    let (sniffed_out, sniffed_log) = text(&sniffed);
+    assert!(
+        sniffed.status.success(),
+        "the eavesdropper failed: {sniffed_log}"
+    );
+    let sniffed: serde_json::Value = serde_json::from_str(sniffed_out.trim()).unwrap();
 
     // The secured pair talks; nothing else reaches the secured listener.
     let n = received(&secured_out, "from_talker");
@@ -293,6 +309,18 @@ fn participants_without_valid_credentials_can_neither_read_nor_inject() {
             "the {who} participant read the cell"
         );
     }
+    // On the wire: the cell's payload never in clear text (encrypted), the plain pair's is.
+    let on_wire = |m: &str| sniffed["with_marker"][m].as_u64().unwrap();
+    assert!(sniffed["datagrams"].as_u64().unwrap() > 100, "{sniffed}");
+    assert_eq!(
+        on_wire("from_talker"),
+        0,
+        "the cell's data in clear text: {sniffed}"
+    );
+    assert!(
+        on_wire("plain_injection") > 0,
+        "the eavesdropper saw nothing: {sniffed}"
+    );
     // Why, in the secured node's log.
     let security_lines: Vec<&str> = secured_log
         .lines()
@@ -467,4 +495,134 @@ fn enforce_refuses_a_missing_enclave_and_permissive_runs_unsecured_saying_so() {
     assert!(out.status.success(), "{log}");
     assert!(log.contains("WITHOUT security"), "{log}");
     std::fs::remove_dir_all(&dir).unwrap();
+}
+
+#[test]
+fn a_secured_demo_cell_records_everything_and_finds_its_concealed_effects() {
+    require_isolated_network();
+    const DOMAIN: u16 = 101;
+    let dir = scratch("demo");
+    let bag = dir.join("bag");
+    let out = run(
+        piped(bin("metrocell"))
+            .args([
+                "demo",
+                "--quick",
+                "--secure",
+                "--dashboard-port",
+                "0",
+                "--output",
+            ])
+            .arg(&bag)
+            .env("ROS_DOMAIN_ID", DOMAIN.to_string())
+            .env_remove("METROCELL_DDS_LOG"),
+        Duration::from_secs(900),
+    );
+    let (stdout, stderr) = text(&out);
+    // The demo fails when its recording check finds a message missing.
+    assert!(out.status.success(), "{stdout}\n{stderr}");
+    assert!(
+        stdout.contains("DDS Security on:") && stdout.contains("9 enclaves"),
+        "{stdout}"
+    );
+    assert!(stdout.contains("recording check: complete"), "{stdout}");
+    assert!(stdout.contains("diagnose named all 3"), "{stdout}");
+    // Every node ran secured: each said so with its own enclave.
+    for node in [
+        "sim",
+        "tracker",
+        "fiducial",
+        "thermal",
+        "estimator",
+        "diagnose",
+        "recorder",
+        "dashboard",
+    ] {
+        let said = format!("enclave '/metrocell_demo/{node}'");
+        assert!(
+            stdout.contains(&said) || stderr.contains(&said),
+            "{node} did not run secured"
+        );
+    }
+    std::fs::remove_dir_all(&dir).unwrap();
+}
+
+/// Messages with `data` a secured listener got from a secured talker on `topic` (type `ty`,
+/// values `values`, sensor-data QoS) in 10 s.
+fn secured_exchange(domain: u16, topic: &str, ty: &str, values: &str, marker: &str) -> usize {
+    let dir = scratch(&format!("exchange-{domain}"));
+    let ks = keystore(&dir, domain, &["/cell/talker", "/cell/listener"]);
+    let who = |enclave| Credentials::Secured {
+        keystore: &ks,
+        enclave,
+    };
+    let l = ChildGuard::spawn(&mut metrocell_for(
+        12,
+        domain,
+        &who("/cell/listener"),
+        &["topic", "echo", topic, "--type", ty],
+    ));
+    let _t = ChildGuard::spawn(&mut metrocell_for(
+        10,
+        domain,
+        &who("/cell/talker"),
+        &[
+            "topic",
+            "pub",
+            topic,
+            ty,
+            values,
+            "--rate",
+            "5",
+            "--qos",
+            "sensor-data",
+        ],
+    ));
+    let (out, _) = text(&l.wait_output(Duration::from_secs(40)));
+    std::fs::remove_dir_all(&dir).unwrap();
+    out.lines().filter(|l| l.contains(marker)).count()
+}
+
+#[test]
+#[ignore = "RustDDS 0.15.1: an encrypted message over 64 KB (sent as fragments) never decodes (README, 'A secured cell')"]
+fn a_message_over_64_kb_crosses_a_secured_domain() {
+    require_isolated_network();
+    let big = "x".repeat(100_000);
+    let n = secured_exchange(
+        102,
+        "/big",
+        "std_msgs/msg/String",
+        &format!("{{data: {big}}}"),
+        "xxxx",
+    );
+    assert!(n >= 10, "{n} of ~50 arrived");
+}
+
+#[test]
+#[ignore = "RustDDS 0.15.1: /clock published by a node (which, like every node, also reads /clock) never arrives secured (README, 'A secured cell')"]
+fn the_clock_crosses_a_secured_domain() {
+    require_isolated_network();
+    let n = secured_exchange(
+        103,
+        "/clock",
+        "rosgraph_msgs/msg/Clock",
+        "{clock: {sec: 7}}",
+        "sec: 7",
+    );
+    assert!(n >= 10, "{n} of ~50 arrived");
+}
+
+#[test]
+fn a_small_message_on_another_topic_of_the_same_type_crosses_a_secured_domain() {
+    // The control of the two ignored tests above: same type, QoS and size as the clock, another
+    // topic — it arrives.
+    require_isolated_network();
+    let n = secured_exchange(
+        104,
+        "/clock2",
+        "rosgraph_msgs/msg/Clock",
+        "{clock: {sec: 7}}",
+        "sec: 7",
+    );
+    assert!(n >= 10, "{n} of ~50 arrived");
 }

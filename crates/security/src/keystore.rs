@@ -2,14 +2,14 @@
 //! works with ROS 2's tools and the other way round.
 //!
 //! ```text
-//! KEYSTORE/public/ca.cert.pem            the CA (one CA plays both roles, as in sros2)
-//!          public/identity_ca.cert.pem   -> ca.cert.pem
-//!          public/permissions_ca.cert.pem -> ca.cert.pem
-//!          private/ca.key.pem            (and identity_ca.key.pem, permissions_ca.key.pem -> it)
-//!          enclaves/governance.xml, governance.p7s   (signed by the permissions CA)
-//!          enclaves/<enclave>/cert.pem, key.pem       the enclave's identity, CN=<enclave>
-//!                             permissions.xml, permissions.p7s
-//!                             identity_ca.cert.pem, permissions_ca.cert.pem, governance.p7s -> the above
+//! <keystore>/public/ca.cert.pem               the CA (one CA plays both roles, as in sros2)
+//! <keystore>/public/identity_ca.cert.pem      -> ca.cert.pem
+//! <keystore>/public/permissions_ca.cert.pem   -> ca.cert.pem
+//! <keystore>/private/ca.key.pem               (and identity_ca.key.pem, permissions_ca.key.pem -> it)
+//! <keystore>/enclaves/governance.xml, governance.p7s   (signed by the permissions CA)
+//! <keystore>/enclaves/<enclave>/cert.pem, key.pem     the enclave's identity, CN=<enclave>
+//!                   permissions.xml, permissions.p7s
+//!                   identity_ca.cert.pem, permissions_ca.cert.pem, governance.p7s -> the above
 //! ```
 
 use std::path::{Path, PathBuf};

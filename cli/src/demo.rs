@@ -182,10 +182,6 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
     let shutdown = options.shutdown.clone();
     let launch_file = share.join("launch-configs/demo.launch.yaml");
     let security = if args.secure {
-        // RustDDS 0.15.1 fragments a message over 64 KB, and its fragments do not decrypt: a
-        // 640×480 frame would never arrive, and the recording check would fail on it.
-        launch_args.push(("camera_images".to_string(), "false".to_string()));
-        sayln!("DDS Security: no camera frames in this run (640×480 frames are over 64 KB, and RustDDS 0.15.1 does not deliver encrypted messages that large)");
         Some(secure_the_cell(
             &launch_file,
             &launch_args,
@@ -268,12 +264,7 @@ fn demo(mut args: DemoArgs) -> anyhow::Result<i32> {
         Ok(info) => sayln!("\nrecorded bag:\n{info}"),
         Err(e) => eprintln!("metrocell demo: the recorded bag cannot be read: {e}"),
     }
-    let not_delivered_secured: &[&str] = if args.secure {
-        &SECURED_NOT_DELIVERED
-    } else {
-        &[]
-    };
-    let complete = check_recording(&output, &watch, not_delivered_secured);
+    let complete = check_recording(&output, &watch);
     match camera_summary::summarise(&output) {
         Ok(s) => sayln!(
             "{}",
@@ -442,14 +433,8 @@ fn duration_text(s: f64) -> String {
     }
 }
 
-/// Topics that do not cross a secured domain with RustDDS 0.15.1: `/clock` (published by the twin,
-/// whose participant, like every node's, also reads `/clock` for simulated time; the same type
-/// and QoS on another topic arrives — found by `metrocell demo --secure`, cause not found).
-const SECURED_NOT_DELIVERED: [&str; 1] = ["/clock"];
-
 /// The bag's count of each topic against the twin's; prints the verdict, true when complete.
-/// Topics in `known_undelivered` are reported apart and do not make it incomplete.
-fn check_recording(output: &Path, watch: &Watch, known_undelivered: &[&str]) -> bool {
+fn check_recording(output: &Path, watch: &Watch) -> bool {
     if watch.twin_published.is_empty() || !watch.twin_finished {
         sayln!("recording check: the twin's final counts never arrived (no diagnostics from /sim); cannot say whether the bag is complete");
         return false;
@@ -466,23 +451,9 @@ fn check_recording(output: &Path, watch: &Watch, known_undelivered: &[&str]) -> 
         }
     };
     let published: u64 = watch.twin_published.values().sum();
-    let (known, mismatches): (Vec<_>, Vec<_>) =
-        metrocell_bagtools::compare_counts(&watch.twin_published, &recorded)
-            .into_iter()
-            .partition(|m| known_undelivered.contains(&m.topic.as_str()));
-    for m in &known {
-        sayln!("recording check: {m} — known not to cross a secured domain with RustDDS 0.15.1 (README, \"A secured cell\")");
-    }
+    let mismatches = metrocell_bagtools::compare_counts(&watch.twin_published, &recorded);
     if mismatches.is_empty() {
-        let known_missing: u64 = known
-            .iter()
-            .map(|m| m.published.saturating_sub(m.recorded))
-            .sum();
-        sayln!(
-            "recording check: complete — the bag holds every message the twin published ({} on {} topics, 0 missing)",
-            published - known_missing,
-            watch.twin_published.len() - known.len()
-        );
+        sayln!("recording check: complete — the bag holds every message the twin published ({published} on {} topics, 0 missing)", watch.twin_published.len());
         true
     } else {
         sayln!("recording check: INCOMPLETE — {} of {} topics differ from the twin's count (the recorder's last log line gives the causes):", mismatches.len(), watch.twin_published.len());

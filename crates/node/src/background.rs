@@ -41,7 +41,13 @@ pub(crate) struct BackgroundTasks {
         Diagnostics,
         Duration,
     )>,
-    pub clock: Option<(ros2_client::Subscription<Clock>, SimTime)>,
+    /// The `/clock` reader, the node's simulated time, and ros2-client's (which stamps its
+    /// parameter events; its Spinner no longer reads `/clock` itself).
+    pub clock: Option<(
+        ros2_client::Subscription<Clock>,
+        SimTime,
+        std::sync::Arc<std::sync::Mutex<ros2_client::ROSTime>>,
+    )>,
 }
 
 pub(crate) struct Background {
@@ -103,13 +109,16 @@ async fn run(tasks: BackgroundTasks, stop: ShutdownToken) {
         }
     };
     let clock_task = async {
-        let Some((subscription, sim_time)) = clock else {
+        let Some((subscription, sim_time, ros2_client_time)) = clock else {
             return;
         };
         loop {
             futures::select! {
                 r = subscription.async_take().fuse() => if let Ok((c, _)) = r {
                     sim_time.set(c.clock.nanos());
+                    if let Ok(mut t) = ros2_client_time.lock() {
+                        *t = ros2_client::ROSTime::from_nanos(c.clock.nanos());
+                    }
                 },
                 _ = stop.triggered().fuse() => return,
             }

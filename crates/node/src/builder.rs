@@ -216,7 +216,11 @@ impl NodeBuilder {
         };
         let context = crate::participant::create_context(&env, enclave_dir.as_deref())?;
 
-        let mut options = NodeOptions::new().enable_rosout(!ros.disable_rosout);
+        // The node reads `/clock` itself when it uses simulated time (`background`): the Spinner's
+        // reader would be a second one in the participant (see `spinner_reads_clock`).
+        let mut options = NodeOptions::new()
+            .enable_rosout(!ros.disable_rosout)
+            .spinner_reads_clock(false);
         for p in parameters.iter() {
             options = options.declare_parameter(&p.decl.name, p.value.to_ros());
         }
@@ -282,7 +286,12 @@ impl NodeBuilder {
             // rclcpp's ClockQoS: best effort, keep last 1.
             let qos =
                 crate::qos::sensor_data().history(ros2_client::qos::History::KeepLast { depth: 1 });
-            Some((node.subscription("/clock", qos)?, sim_time))
+            let ros2_client_time = node.ros2_client_simulated_time();
+            Some((
+                node.subscription("/clock", qos)?,
+                sim_time,
+                ros2_client_time,
+            ))
         } else {
             None
         };

@@ -72,6 +72,14 @@ impl MetrocellNode {
         self.background = Some(b);
     }
 
+    /// ros2-client's simulated time (it stamps the node's parameter events under
+    /// `use_sim_time`), kept current by the node's own `/clock` reader.
+    pub(crate) fn ros2_client_simulated_time(
+        &self,
+    ) -> std::sync::Arc<std::sync::Mutex<ros2_client::ROSTime>> {
+        self.parts.ros_node.simulated_time_handle()
+    }
+
     /// Base name after remapping (`talker`).
     pub fn name(&self) -> &str {
         &self.parts.name

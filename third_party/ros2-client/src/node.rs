@@ -132,7 +132,8 @@ pub struct Spinner {
   status_event_senders: Arc<Mutex<Vec<async_channel::Sender<NodeEvent>>>>,
 
   sim_time: Arc<Mutex<ROSTime>>,
-  clock_topic: Topic,
+  // metrocell patch: `None` when `NodeOptions::spinner_reads_clock` is off.
+  clock_topic: Option<Topic>,
 
   parameter_servers: Option<ParameterServers>,
   parameter_events_writer: Arc<Publisher<raw::ParameterEvent>>,
@@ -172,11 +173,17 @@ impl Spinner {
 
     // metrocell patch: /clock is rosgraph_msgs/msg/Clock, as every ROS 2 tool expects (upstream
     // reads it as builtin_interfaces/msg/Time, which advertises a second type on /clock).
-    let ros_clock_reader = self
-      .ros_context
-      .create_subscription::<RosgraphClock>(&self.clock_topic, None)?;
-    let ros_clock_stream = ros_clock_reader.async_stream();
-    pin_mut!(ros_clock_stream);
+    let ros_clock_reader = match &self.clock_topic {
+      Some(clock_topic) => Some(
+        self
+          .ros_context
+          .create_subscription::<RosgraphClock>(clock_topic, None)?,
+      ),
+      None => None,
+    };
+    let mut ros_clock_stream_opt = ros_clock_reader
+      .as_ref()
+      .map(|r| Box::pin(r.async_stream()));
 
     // These are Option< impl Stream<_>>
     let mut get_parameters_stream_opt = self
@@ -212,7 +219,7 @@ impl Spinner {
           break;
         }
 
-        clock_msg = ros_clock_stream.select_next_some() => {
+        clock_msg = next_if_some(&mut ros_clock_stream_opt).fuse() => {
           match clock_msg {
             Ok((clock,_msg_info)) => {
               // Simulated time is updated internally unconditionally.
@@ -638,6 +645,12 @@ impl Node {
     ROSTime::now()
   }
 
+  /// metrocell patch: the simulated time `time_now` returns under `use_sim_time`, for a node
+  /// that reads `/clock` itself (`NodeOptions::spinner_reads_clock(false)`) to keep it current.
+  pub fn simulated_time_handle(&self) -> Arc<Mutex<ROSTime>> {
+    Arc::clone(&self.sim_time)
+  }
+
   /// Create a Spinner object to execute Node backround tasks.
   ///
   /// An async task should then be created to run the `.spin()` function of
@@ -719,11 +732,15 @@ impl Node {
       None // No parameter services
     };
 
-    let clock_topic = self.create_topic(
-      &Name::new("/", "clock").unwrap(),
-      MessageTypeName::new("rosgraph_msgs", "Clock"),
-      &DEFAULT_SUBSCRIPTION_QOS,
-    )?;
+    let clock_topic = if self.options.spinner_reads_clock {
+      Some(self.create_topic(
+        &Name::new("/", "clock").unwrap(),
+        MessageTypeName::new("rosgraph_msgs", "Clock"),
+        &DEFAULT_SUBSCRIPTION_QOS,
+      )?)
+    } else {
+      None
+    };
 
     self.suppress_node_info_updates(false);
 

@@ -37,6 +37,8 @@ pub struct NodeOptions {
   pub(crate) allow_undeclared_parameters: bool,
   pub(crate) parameter_validator: Option<Box<ParameterFunc>>,
   pub(crate) parameter_set_action: Option<Box<ParameterFunc>>,
+  // metrocell patch: see `spinner_reads_clock`.
+  pub(crate) spinner_reads_clock: bool,
 }
 
 impl NodeOptions {
@@ -52,6 +54,18 @@ impl NodeOptions {
       allow_undeclared_parameters: false,
       parameter_validator: None,
       parameter_set_action: None,
+      spinner_reads_clock: true,
+    }
+  }
+
+  /// metrocell patch: whether the Spinner subscribes to `/clock` for `Node::time_now`'s simulated
+  /// time (default `true`, as upstream). A node that reads `/clock` itself turns it off, so that
+  /// its participant has one `/clock` reader, not two: RustDDS 0.15.1 delivers nothing to two
+  /// readers of one topic in one secured participant.
+  pub fn spinner_reads_clock(self, spinner_reads_clock: bool) -> NodeOptions {
+    NodeOptions {
+      spinner_reads_clock,
+      ..self
     }
   }
   pub fn enable_rosout(self, enable_rosout: bool) -> NodeOptions {

@@ -582,10 +582,30 @@ impl Writer {
   // send, or the writer-wide minimum over all matched readers for a
   // multicast-to-all send (one datagram shared by every reader).
   fn datagram_budget(&self, target_reader_opt: Option<&RtpsReaderProxy>) -> usize {
-    match target_reader_opt {
+    let budget = match target_reader_opt {
       Some(reader) => reader.max_datagram_payload(),
       None => self.min_datagram_payload,
+    };
+    // metrocell patch: DDS Security wraps every submessage and the whole message after this
+    // budget was spent (security_encode): on loopback (a 64 KB budget) a run of fragments came
+    // out at 65 528 bytes, over UDP's 65 507, and the send failed ("Message too long"), so an
+    // encrypted message over 64 KB never arrived. A smaller budget's overflow only fragments at
+    // the IP level (benign, as for the DATAFRAG estimate below); UDP's ceiling must hold.
+    #[cfg(feature = "security")]
+    if self.security_plugins.is_some() {
+      return budget.min(MAX_UDP_PAYLOAD - SECURITY_DATAGRAM_RESERVE);
     }
+    budget
+  }
+
+  /// metrocell patch: what security adds to each aggregated sample (its INFO_TS and DATA each
+  /// wrapped in SEC_PREFIX/SEC_BODY/SEC_POSTFIX, the payload in a crypto header and footer).
+  fn security_overhead_per_sample(&self) -> usize {
+    #[cfg(feature = "security")]
+    if self.security_plugins.is_some() {
+      return 2 * SECURITY_SUBMESSAGE_OVERHEAD;
+    }
+    0
   }
 
   /// Largest serialized payload that fits in one unfragmented DATA submessage
@@ -724,8 +744,11 @@ impl Writer {
       // budget is the minimum per-peer path-MTU over all matched readers, since
       // this datagram is multicast to all of them.
       if count > 0
-        && builder.len_serialized() + sample.submessage_bytes_len() + hb_reserve
-          > self.min_datagram_payload
+        && builder.len_serialized()
+          + sample.submessage_bytes_len()
+          + hb_reserve
+          + (count as usize + 1) * self.security_overhead_per_sample()
+          > self.datagram_budget(None)
       {
         break;
       }
@@ -2254,6 +2277,20 @@ const SUBMESSAGE_INFO_TS_INVALIDATE_SIZE: usize = 4;
 // risks a slight overestimate, which degrades to benign IP fragmentation rather
 // than data loss.
 const DATAFRAG_SUBMESSAGE_OVERHEAD: usize = 36;
+
+// metrocell patch: the largest UDP payload (65 535 − 8 UDP − 20 IPv4 header).
+#[cfg(feature = "security")]
+const MAX_UDP_PAYLOAD: usize = 65_507;
+// metrocell patch: room kept in a datagram for what security adds after packing — the message's
+// INFO_SRC, SRTPS_PREFIX, SEC_BODY and SRTPS_POSTFIX (~90 bytes), each submessage's SEC_PREFIX,
+// SEC_BODY and SEC_POSTFIX and the payload's crypto header and footer (~110 bytes each, four
+// submessages at most in a DATAFRAG datagram), with margin for receiver-specific MACs.
+#[cfg(feature = "security")]
+const SECURITY_DATAGRAM_RESERVE: usize = 1024;
+// metrocell patch: per wrapped submessage (SEC_PREFIX 24, SEC_BODY header and length 8,
+// SEC_POSTFIX 28, payload crypto header, length and footer 44, padding), rounded up.
+#[cfg(feature = "security")]
+const SECURITY_SUBMESSAGE_OVERHEAD: usize = 128;
 
 // A fifth of a finite, positive Deadline, clamped to
 // [REPAIR_INTERVAL_MIN, REPAIR_INTERVAL_MAX]. No Deadline, INFINITE, zero or

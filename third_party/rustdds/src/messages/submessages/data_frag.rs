@@ -14,6 +14,12 @@ use crate::{
   },
 };
 
+/// metrocell patch: the most an encoded serialized payload adds to its plain bytes — CryptoHeader
+/// (20), CryptoContent length (4), CryptoFooter without receiver-specific MACs (16 + 4), and up to
+/// 3 bytes of alignment padding.
+#[cfg(feature = "security")]
+const ENCODED_PAYLOAD_OVERHEAD: usize = 20 + 4 + 20 + 3;
+
 /// The DataFrag Submessage extends the Data Submessage by enabling the
 /// serializedData to be fragmented and sent as multiple DataFrag Submessages.
 /// The fragments contained in the DataFrag Submessages are then re-assembled by
@@ -270,6 +276,13 @@ impl DataFrag {
     }
 
     let max_payload_bytes = (count_u32 as usize) * (fragment_size as usize);
+    // metrocell patch: with DDS Security the payload read here is still encoded — the fragments'
+    // bytes inside a CryptoHeader, CryptoContent length and CryptoFooter (writer: rtps/message.rs
+    // `data_frag_msg`) — and message_receiver checks the decoded payload against the bound above
+    // again. Upstream held the encoded bytes to it, so every full run of fragments of an
+    // encrypted message over 64 KB was rejected and such messages never arrived.
+    #[cfg(feature = "security")]
+    let max_payload_bytes = max_payload_bytes + ENCODED_PAYLOAD_OVERHEAD;
     if datafrag.serialized_payload.len() > max_payload_bytes {
       return Err(io::Error::new(
         io::ErrorKind::InvalidData,

@@ -153,6 +153,25 @@ fn received(stdout: &str, data: &str) -> usize {
         .count()
 }
 
+/// A node in this test process, secured with an enclave of `keystore` (Enforce).
+fn secured_node(name: &str, domain: u16, keystore: &Path, enclave: &str) -> MetrocellNode {
+    MetrocellNode::builder(name)
+        .diagnostics_period(None)
+        .handle_signals(false)
+        .environment(DdsEnvironment {
+            domain_id: domain,
+            discovery_range: DiscoveryRange::Localhost,
+        })
+        .security(SecurityEnvironment {
+            enabled: true,
+            enforce: true,
+            keystore: Some(keystore.to_path_buf()),
+            enclave_override: Some(enclave.into()),
+        })
+        .build()
+        .unwrap()
+}
+
 #[test]
 fn secured_nodes_exchange_every_message_type() {
     require_isolated_network();
@@ -167,21 +186,7 @@ fn secured_nodes_exchange_every_message_type() {
         .env("ROS_SECURITY_KEYSTORE", &ks)
         .env("ROS_SECURITY_ENCLAVE_OVERRIDE", "/cell/peer");
     let _peer = ChildGuard::spawn(&mut peer_cmd);
-    let mut node = MetrocellNode::builder("secured_roundtrip_test")
-        .diagnostics_period(None)
-        .handle_signals(false)
-        .environment(DdsEnvironment {
-            domain_id: DOMAIN,
-            discovery_range: DiscoveryRange::Localhost,
-        })
-        .security(SecurityEnvironment {
-            enabled: true,
-            enforce: true,
-            keystore: Some(ks.clone()),
-            enclave_override: Some("/cell/test".into()),
-        })
-        .build()
-        .unwrap();
+    let mut node = secured_node("secured_roundtrip_test", DOMAIN, &ks, "/cell/test");
     let (failures, checked) = roundtrip_every_type(&mut node, 23);
     assert!(checked >= 31, "only {checked} types checked");
     assert!(
@@ -647,21 +652,7 @@ fn two_readers_of_a_topic_in_one_participant_both_receive_a_secured_writer() {
     const DOMAIN: u16 = 105;
     let dir = scratch("two-readers");
     let ks = keystore(&dir, DOMAIN, &["/cell/talker", "/cell/listener"]);
-    let mut node = MetrocellNode::builder("two_readers")
-        .diagnostics_period(None)
-        .handle_signals(false)
-        .environment(DdsEnvironment {
-            domain_id: DOMAIN,
-            discovery_range: DiscoveryRange::Localhost,
-        })
-        .security(SecurityEnvironment {
-            enabled: true,
-            enforce: true,
-            keystore: Some(ks.clone()),
-            enclave_override: Some("/cell/listener".into()),
-        })
-        .build()
-        .unwrap();
+    let mut node = secured_node("two_readers", DOMAIN, &ks, "/cell/listener");
     let first = node
         .subscription::<RosString>("/twice", metrocell_node::qos::sensor_data())
         .unwrap();

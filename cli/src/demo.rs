@@ -484,10 +484,8 @@ fn secure_the_cell(
             keystore.display()
         );
     }
-    let domain = match std::env::var("ROS_DOMAIN_ID") {
-        Ok(v) if !v.trim().is_empty() => v.trim().parse().unwrap_or(0),
-        _ => 0,
-    };
+    // The domain the nodes will join, read as they read it (an invalid value is refused here).
+    let domain = metrocell_node::DdsEnvironment::from_env()?.domain_id;
     metrocell_security::keystore::create_keystore(&keystore, domain)?;
     let plan = metrocell_launch::load_launch_plan(launch_file, launch_args, options)?;
     let mut enclaves: BTreeSet<String> = plan

@@ -53,14 +53,11 @@ pub enum SecurityCommand {
     ListEnclaves { keystore: PathBuf },
 }
 
+/// ROS_DOMAIN_ID as every node reads it (0 when unset).
 fn default_domain() -> Result<u16, String> {
-    match std::env::var("ROS_DOMAIN_ID") {
-        Ok(v) if !v.trim().is_empty() => v
-            .trim()
-            .parse()
-            .map_err(|_| format!("ROS_DOMAIN_ID='{v}' is not a domain id; give --domain-id")),
-        _ => Ok(0),
-    }
+    metrocell_node::DdsEnvironment::from_env()
+        .map(|e| e.domain_id)
+        .map_err(|e| format!("{e}; or give --domain-id"))
 }
 
 fn run_inner(command: SecurityCommand) -> Result<(), String> {

@@ -81,6 +81,21 @@ pub fn is_security_event(target: &str, level: log::Level, message: &str) -> bool
             .any(|w| message.contains(w)))
 }
 
+/// What [`is_security_event`] can accept, judged without formatting the message.
+fn may_be_security_event(metadata: &log::Metadata) -> bool {
+    let target = metadata.target();
+    if target.starts_with("rustdds::rtps::message_receiver") {
+        return metadata.level() <= log::Level::Warn;
+    }
+    [
+        "rustdds::discovery::secure_discovery",
+        "rustdds::security::authentication",
+        "rustdds::security::access_control",
+    ]
+    .iter()
+    .any(|t| target.starts_with(t))
+}
+
 struct SecurityEventLog {
     node: String,
     last_printed: std::sync::Mutex<std::collections::HashMap<String, std::time::Instant>>,
@@ -96,9 +111,10 @@ impl log::Log for SecurityEventLog {
     }
 
     fn log(&self, record: &log::Record) {
-        if !self.enabled(record.metadata()) {
+        if !self.enabled(record.metadata()) || !may_be_security_event(record.metadata()) {
             return;
         }
+        // Formatted only now: RustDDS logs at INFO on its data path too.
         let message = record.args().to_string();
         if !is_security_event(record.target(), record.level(), &message) {
             return;

@@ -10,6 +10,7 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use metrocell_estimation::error_functions::axis_error_functions;
 use metrocell_estimation::fit_summary::{summary_lines, value_with_sigma};
+use metrocell_estimation::map_gauge::MapGauge;
 use metrocell_estimation::uncertainty_budget::{
     standard_uncertainty_of_mean, thermal_expansion_uncertainty, Budget,
 };
@@ -21,6 +22,7 @@ use metrocell_records::{records_from_bags, PointSource, RecordingOptions};
 use metrocell_report::{HistogramPlot, Report, Series, SeriesPlot, Table};
 use metrocell_verification::length_test::{length_cases, Decision, Mpe};
 use metrocell_verification::measured_lengths::{at_rest, measured_lengths, mesh_of, visits};
+use metrocell_verification::reference_conditions::at_reference_temperature;
 use metrocell_verification::resampled_monte_carlo::resampled_monte_carlo;
 use nalgebra::Vector3;
 
@@ -78,11 +80,17 @@ What it does:
   2. Monte Carlo (seed 001 P3 on your data): the fitted errors generate each trial's readings with
      every reading's noise drawn from its stated covariance; each trial is identified again; the
      spread of the error maps is their uncertainty u (k = 1) at each mesh point, and generating −
-     refitted map is the residual volumetric error a compensation from this verification leaves;
+     refitted map is the residual volumetric error a compensation from this verification leaves.
+     The map is the machine at 20 °C (ISO 1): a model's thermal terms (thermal_scale,
+     thermal_growth) are identified with it and their coefficients say what temperature adds.
+     A tracker beside the machine fixes the map only up to a rigid motion (its own pose is
+     identified with it): the map is stated with its best-fit rigid motion over the mesh
+     removed, the machine's axes as the verified volume defines them;
   3. the length test (ISO 10360-2 manner): 5 lengths × 7 directions × 3 repetitions between mesh
-     points, measured from the visits' mean points, as the machine is and with the fitted map
-     compensated, each with U (k = 2); with --mpe-* each is judged by ISO 14253-1 (conforms /
-     does not conform / not proven);
+     points, measured from the visits' mean points (the tracker's identified errors, such as its
+     warm-up, taken out), as the machine is and with the identified model compensated at each
+     visit's temperatures, each with U (k = 2); with --mpe-* each is judged by ISO 14253-1
+     (conforms / does not conform / not proven);
   4. the ISO/TS 15530-3 budget: u_cal (tracker calibration × mean range), u_p (the Monte Carlo's
      residual, per coordinate), u_b (its systematic part, σ/√trials), u_w (the scales' expansion
      coefficient's uncertainty × the temperature's distance from 20 °C × the mesh's diagonal);
@@ -155,8 +163,14 @@ pub fn run(a: ReportArgs) -> Result<i32> {
     let f = fit(&fm, &model.setup, &records, None, &fit_options)
         .with_context(|| format!("identifying {} from the readings", a.model.display()))?;
     let mesh = mesh_of(&records, &f);
-    let conditions = records.records[f.used[0]].signals.clone();
-    let map = error_map(&fm, &f.x, &mesh, &conditions)?;
+    // the map is the machine at 20 °C: the thermal terms' coefficients say what temperature
+    // adds (crates/verification reference_conditions)
+    let conditions = at_reference_temperature(&records.records[f.used[0]].signals);
+    // a tracker fixes the map only up to a rigid motion: stated with its best-fit one removed
+    // (crates/estimation map_gauge), in the map, the Monte Carlo and the residual alike
+    let gauge = MapGauge::RigidMotionRemoved;
+    let mut map = error_map(&fm, &f.x, &mesh, &conditions)?;
+    gauge.apply(&mesh, &mut map);
     let mut last = Instant::now();
     let mc = resampled_monte_carlo(
         &fm,
@@ -165,6 +179,7 @@ pub fn run(a: ReportArgs) -> Result<i32> {
         &f,
         &mesh,
         &conditions,
+        gauge,
         a.trials,
         a.seed,
         &fit_options,
@@ -183,7 +198,7 @@ pub fn run(a: ReportArgs) -> Result<i32> {
         .collect();
     let cases = length_cases(&points3);
     let visits = visits(&fm, &records, &f, &mesh);
-    let lengths = measured_lengths(&cases, &visits, &map, &mc.sd_fitted, 3, mpe);
+    let lengths = measured_lengths(&cases, &visits, &mc.sd_fitted, 3, mpe);
     let before: Vec<f64> = map.iter().map(|e| e.norm()).collect();
     let (before_mean, before_sd) = mean_sd(&before);
     let before_max = before.iter().copied().fold(0.0, f64::max);
@@ -257,7 +272,8 @@ pub fn run(a: ReportArgs) -> Result<i32> {
             f.chi2_per_dof
         ),
         format!(
-            "volumetric error as the machine is: {:.2} ± {:.2} µm (mean ± SD over the points), largest {:.2} µm",
+            "volumetric error as the machine is{}: {:.2} ± {:.2} µm (mean ± SD over the points), largest {:.2} µm",
+            if conditions.temperatures.is_empty() { "" } else { " at 20 °C" },
             before_mean * 1e6,
             before_sd * 1e6,
             before_max * 1e6
@@ -298,6 +314,20 @@ pub fn run(a: ReportArgs) -> Result<i32> {
             "not identifiable from these readings, held at their start (conventions, not estimates): {}",
             f.held.iter().map(|h| h.name.as_str()).collect::<Vec<_>>().join(", ")
         ));
+        // an angular error whose Abbe lever the readings never change (an axis that carries no
+        // other, the reflector at one tool offset) moves the reflector as a straightness does
+        let angular: Vec<&str> = f
+            .held
+            .iter()
+            .filter(|h| h.name.starts_with("angular[") && !h.name.ends_with(".c0"))
+            .map(|h| h.name.as_str())
+            .collect();
+        if !angular.is_empty() {
+            lines.push(format!(
+                "  {} angular coefficient(s) are not separable from straightness with the reflector at one tool offset (their Abbe lever does not change over the mesh): the map holds for the reflector's offset; separating them needs the reflector at other tool offsets (e.g. 100 mm along X and along Y), which this report does not yet combine",
+                angular.len()
+            ));
+        }
     }
     let reps = lengths.iter().map(|l| l.repetition).max().unwrap_or(0);
     let n_dir: std::collections::BTreeSet<&str> =
@@ -472,7 +502,7 @@ fn page(
         .collect();
     let per_point: Vec<f64> = mc.residual_moduli.iter().map(|v| v * 1e6).collect();
     r.section("Volumetric error")
-        .paragraph("|e| at each mesh point as the machine is (the identified map, ± 2u from the Monte Carlo), and the distribution of the residual error after compensating with it (Monte Carlo: generating − refitted map at every point of every trial).")
+        .paragraph(&format!("|e| at each mesh point as the machine is (the identified map, ± 2u from the Monte Carlo), and the distribution of the residual error after compensating with it (Monte Carlo: generating − refitted map at every point of every trial).{} The map is stated with its best-fit rigid motion over the mesh removed: a tracker placed beside the machine fixes it only up to one, and which one a fit gives depends on the parameters it held, not on the machine.", if records.records.iter().all(|r| r.signals.temperatures.is_empty()) { "" } else { " The map is the machine at 20 °C (ISO 1) at every temperature sensor: the thermal terms' coefficients (parameters below) say what temperature adds." }))
         .figure(
             "volumetric_before",
             "Volumetric error at each mesh point, ± 2u",

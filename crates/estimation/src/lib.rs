@@ -23,6 +23,8 @@
 //! * [`volumetric_monte_carlo`] — N simulated verifications (noise, tracker placement) fitted
 //!   like a real one: the volumetric error map with its uncertainty and the residual error after
 //!   compensation (seed 001, P3).
+//! * [`map_gauge`] — the gauge a map is stated in: as fitted, or with its least-squares rigid
+//!   motion removed (a freely placed instrument fixes a map only up to one).
 //! * [`simulated_records`] — the readings a tracker would give of planned points at known
 //!   parameters, with its noise model and stated covariance (planning, Monte Carlo, tests).
 //! * [`uncertainty_budget`] — GUM combination of standard uncertainties and the ISO/TS 15530-3
@@ -49,6 +51,7 @@ pub mod fit;
 pub mod fit_summary;
 pub mod general_tolerance;
 pub mod improvement;
+pub mod map_gauge;
 pub mod method_comparison;
 mod record_chunks;
 pub mod records;

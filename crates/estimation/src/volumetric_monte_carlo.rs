@@ -12,6 +12,7 @@ use metrocell_physics::Signals;
 use nalgebra::Vector3;
 
 use crate::fit::{fit, FitError, FitOptions};
+use crate::map_gauge::MapGauge;
 use crate::records::RecordSet;
 
 /// What N simulated verifications say.
@@ -77,7 +78,9 @@ pub fn error_map(
 /// Run `trials` verifications: `trial(k)` simulates trial k's measurements (noise, placement)
 /// and gives the fit's start vector (None: the model's start; e.g. the placed tracker's pose
 /// when the placement is known, as in seed 001's P3); each is fitted with `setup` and
-/// `options`; the fitted error map at `points` is compared with the truth's.
+/// `options`; the fitted error map at `points` is compared with the truth's, both stated in
+/// `gauge` (see [`crate::map_gauge`]: a freely placed instrument fixes a map only up to a rigid
+/// motion).
 #[allow(clippy::too_many_arguments)]
 pub fn volumetric_monte_carlo(
     model: &ForwardModel,
@@ -85,11 +88,13 @@ pub fn volumetric_monte_carlo(
     truth: &[f64],
     points: &[Vec<f64>],
     conditions: &Signals,
+    gauge: MapGauge,
     trials: usize,
     mut trial: impl FnMut(usize) -> (RecordSet, Option<Vec<f64>>),
     options: &FitOptions,
 ) -> Result<VolumetricMonteCarlo, FitError> {
-    let true_errors = error_map(model, truth, points, conditions)?;
+    let mut true_errors = error_map(model, truth, points, conditions)?;
+    gauge.apply(points, &mut true_errors);
     let n = points.len();
     let mut sum = vec![Vector3::zeros(); n];
     let mut sum_sq = vec![Vector3::zeros(); n];
@@ -103,7 +108,8 @@ pub fn volumetric_monte_carlo(
             failed += 1;
             continue;
         };
-        let fitted = error_map(model, &f.x, points, conditions)?;
+        let mut fitted = error_map(model, &f.x, points, conditions)?;
+        gauge.apply(points, &mut fitted);
         if linearised_sd.is_empty() {
             linearised_sd = error_map_sd(model, &f.x, f.covariance.as_ref(), points, conditions)?;
         }

@@ -26,6 +26,8 @@
 //!   the machine frame, lengths as the machine is and with the fitted map compensated.
 //! * [`resampled_monte_carlo`] — P3's Monte Carlo on the verification's own readings: the
 //!   identified map's uncertainty and the residual error a compensation from it leaves.
+//! * [`reference_conditions`] — the conditions the map is stated at: 20 °C at every sensor, so
+//!   a model's thermal terms say what temperature adds and the map is the geometry.
 //!
 //! * [`hole_plate`] — a calibrated hole plate in the XY plane (the PTB method): ring centres,
 //!   the plate's misalignment and expansion removed, six XY components and what correcting
@@ -43,6 +45,7 @@ pub mod machine_program;
 pub mod measured_lengths;
 pub mod mesh;
 pub mod probe_tip;
+pub mod reference_conditions;
 pub mod resampled_monte_carlo;
 pub mod tracker_station;
 pub mod visiting_order;

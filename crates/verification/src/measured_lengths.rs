@@ -1,8 +1,11 @@
 //! The verification's readings as a length test: each visit of a mesh point averaged into one
-//! measured point in the machine frame (the fit's registration of the tracker), and the test's
-//! lengths measured from them — as the machine is, and as it would be with the fitted error
-//! map compensated — with their expanded uncertainty (k = 2).
+//! measured point in the machine frame (the fit's registration of the tracker, its identified
+//! instrument errors — warm-up, refraction — taken out), and the test's lengths measured from
+//! them — as the machine is, and as it would be with the identified model compensated at that
+//! visit's conditions (its temperatures: the thermal terms too) — with their expanded
+//! uncertainty (k = 2).
 
+use metrocell_estimation::residuals::predict;
 use metrocell_estimation::{Fit, RecordFrame, RecordSet};
 use metrocell_kinematics::transform::euler_xyz;
 use metrocell_model::ForwardModel;
@@ -10,23 +13,39 @@ use nalgebra::{Matrix3, Vector3};
 
 use crate::length_test::{length_error, Decision, LengthCase, Mpe};
 
-/// The readings taken while the machine stood at a point: those whose commanded position (to
-/// the micrometre) at least `min_readings` readings share. A tracker streaming during moves
-/// also reads the target on its way, at positions no other reading has; those are left out
+/// The readings taken while the machine stood at a point: runs of at least `min_readings`
+/// readings, consecutive in time, at one commanded position (to the micrometre). A tracker
+/// streaming during moves also reads the target on its way; those readings are left out
 /// (time-stamp skew between controller and tracker makes a moving reading's position
-/// uncertain by feed × skew, which no reading's covariance states).
+/// uncertain by feed × skew, which no reading's covariance states). Consecutive, not merely
+/// shared: a program repeated on a fixed clock passes the same positions on the move in every
+/// cycle, and those must not count as stops.
 pub fn at_rest(records: &RecordSet, min_readings: usize) -> RecordSet {
-    let mut count: std::collections::BTreeMap<Vec<i64>, usize> = Default::default();
-    for r in &records.records {
-        *count.entry(key(&r.q)).or_default() += 1;
+    let mut order: Vec<usize> = (0..records.records.len()).collect();
+    order.sort_by(|&a, &b| records.records[a].time.total_cmp(&records.records[b].time));
+    let mut keep = vec![false; records.records.len()];
+    let mut start = 0;
+    while start < order.len() {
+        let k = key(&records.records[order[start]].q);
+        let mut end = start + 1;
+        while end < order.len() && key(&records.records[order[end]].q) == k {
+            end += 1;
+        }
+        if end - start >= min_readings {
+            for &i in &order[start..end] {
+                keep[i] = true;
+            }
+        }
+        start = end;
     }
     RecordSet {
         frame: records.frame.clone(),
         records: records
             .records
             .iter()
-            .filter(|r| count[&key(&r.q)] >= min_readings)
-            .cloned()
+            .zip(&keep)
+            .filter(|(_, k)| **k)
+            .map(|(r, _)| r.clone())
             .collect(),
         check: records.check.clone(),
         rejected: records.rejected.clone(),
@@ -52,14 +71,18 @@ fn key(q: &[f64]) -> Vec<i64> {
     q.iter().map(|v| (v * 1e6).round() as i64).collect()
 }
 
-/// One stop at a mesh point: the mean of its readings in the machine frame, and that mean's
-/// covariance.
+/// One stop at a mesh point: the mean of its readings in the machine frame, that mean's
+/// covariance, and the error the identified model predicts there at the stop's conditions.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Visit {
     pub point: usize,
     pub mean: Vector3<f64>,
     pub covariance: Matrix3<f64>,
     pub readings: usize,
+    /// The identified model's error of the tool point over the stop's readings (their mean, m):
+    /// what compensating the machine with the model removes at this stop — its geometric
+    /// errors and, at the stop's temperatures, its thermal terms.
+    pub compensation: Vector3<f64>,
 }
 
 /// The fit's tracker pose (p_machine = R·p_tracker + T), identity for machine-frame records.
@@ -91,14 +114,36 @@ pub fn visits(model: &ForwardModel, records: &RecordSet, f: &Fit, mesh: &[Vec<f6
     order.sort_by(|&a, &b| records.records[a].time.total_cmp(&records.records[b].time));
     let mut out: Vec<Visit> = vec![];
     let mut current: Option<(usize, Vec<usize>)> = None;
+    let kin = model.kinematic_truth(&f.x).ok();
+    // a reading in the machine frame with the identified instrument errors taken out: the
+    // model's true tool point plus the reading's residual, turned into the machine frame; and
+    // the model's error of the tool point there. Where the model cannot say (no kinematics at
+    // these parameters, a signal missing), the registered reading and no compensation.
+    let corrected = |i: usize| -> (Vector3<f64>, Vector3<f64>) {
+        let rec = &records.records[i];
+        let registered = r * rec.measured + t;
+        let Some(kin) = &kin else {
+            return (registered, Vector3::zeros());
+        };
+        let mut s = rec.signals.clone();
+        let Ok(tool) = model.tool_state(&f.x, kin, &rec.q, &mut s, None) else {
+            return (registered, Vector3::zeros());
+        };
+        let mut s = rec.signals.clone();
+        match predict(model, &f.x, kin, rec, &mut s) {
+            Ok(predicted) => (tool.target() + r * (rec.measured - predicted), tool.d),
+            Err(_) => (registered, Vector3::zeros()),
+        }
+    };
     let close = |group: Option<(usize, Vec<usize>)>, out: &mut Vec<Visit>| {
         if let Some((point, members)) = group {
             let n = members.len() as f64;
-            let mean = members
+            let (sum, comp) = members
                 .iter()
-                .map(|&i| r * records.records[i].measured + t)
-                .sum::<Vector3<f64>>()
-                / n;
+                .map(|&i| corrected(i))
+                .fold((Vector3::zeros(), Vector3::zeros()), |(a, b), (p, e)| {
+                    (a + p, b + e)
+                });
             let cov = members
                 .iter()
                 .map(|&i| r * records.records[i].covariance * r.transpose())
@@ -106,9 +151,10 @@ pub fn visits(model: &ForwardModel, records: &RecordSet, f: &Fit, mesh: &[Vec<f6
                 / (n * n);
             out.push(Visit {
                 point,
-                mean,
+                mean: sum / n,
                 covariance: cov,
                 readings: members.len(),
+                compensation: comp / n,
             });
         }
     };
@@ -144,19 +190,18 @@ pub struct MeasuredLength {
 }
 
 /// The test's lengths from the first `repetitions` visits of each point: E before (the
-/// measured points) and after (each point less the fitted error `map` there, whose standard
-/// uncertainty `map_sd` joins the readings' in U). The points' errors are taken as
-/// independent in U — conservative where the map's errors at two points are correlated, as a
-/// smooth map's are.
+/// measured points) and after (each point less the model's error at that visit, its
+/// [`Visit::compensation`]; the map's standard uncertainty at the point, `map_sd`, joins the
+/// readings' in U). The points' errors are taken as independent in U — conservative where the
+/// map's errors at two points are correlated, as a smooth map's are.
 pub fn measured_lengths(
     cases: &[LengthCase],
     visits: &[Visit],
-    map: &[Vector3<f64>],
     map_sd: &[Vector3<f64>],
     repetitions: usize,
     mpe: Option<Mpe>,
 ) -> Vec<MeasuredLength> {
-    let mut by_point: Vec<Vec<&Visit>> = vec![vec![]; map.len()];
+    let mut by_point: Vec<Vec<&Visit>> = vec![vec![]; map_sd.len()];
     for v in visits {
         by_point[v.point].push(v);
     }
@@ -170,12 +215,12 @@ pub fn measured_lengths(
             let var_readings = (d.transpose() * (a.covariance + b.covariance) * d)[(0, 0)];
             let var_map = (map_sd[c.from].component_mul(&d)).norm_squared()
                 + (map_sd[c.to].component_mul(&d)).norm_squared();
-            let mut measured = vec![Vector3::zeros(); map.len()];
+            let mut measured = vec![Vector3::zeros(); map_sd.len()];
             measured[c.from] = a.mean;
             measured[c.to] = b.mean;
             let before = length_error(c, &measured);
-            measured[c.from] -= map[c.from];
-            measured[c.to] -= map[c.to];
+            measured[c.from] -= a.compensation;
+            measured[c.to] -= b.compensation;
             let after = length_error(c, &measured);
             let (u_before, u_after) = (
                 2.0 * var_readings.sqrt(),
@@ -194,4 +239,55 @@ pub fn measured_lengths(
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use metrocell_estimation::{MeasurementRecord, RecordKind};
+
+    fn reading(time: f64, x: f64) -> MeasurementRecord {
+        MeasurementRecord {
+            time,
+            point_id: format!("t{time}"),
+            channel: "tracker".into(),
+            q: vec![x, 0.2, 0.3],
+            measured: Vector3::new(x, 0.2, 0.3),
+            covariance: Matrix3::identity() * 1e-12,
+            signals: Default::default(),
+            kind: RecordKind::Point,
+        }
+    }
+
+    /// Two cycles of one program on a fixed clock: the stops (four readings each) are kept; the
+    /// positions passed on the move, the same in both cycles, are not — though three readings
+    /// share each of them when a third cycle passes too.
+    #[test]
+    fn only_consecutive_readings_at_one_position_are_a_stop() {
+        let mut records = vec![];
+        let mut t = 0.0;
+        for _cycle in 0..3 {
+            for stop in [0.8, 1.0] {
+                for _ in 0..4 {
+                    records.push(reading(t, stop));
+                    t += 1.0;
+                }
+                // on the move to the next stop: the same positions every cycle
+                for k in 1..4 {
+                    records.push(reading(t, stop + 0.05 * k as f64));
+                    t += 1.0;
+                }
+            }
+        }
+        let set = RecordSet {
+            frame: RecordFrame::Machine,
+            records,
+            check: vec![],
+            rejected: vec![],
+            sources: vec![],
+        };
+        let kept = at_rest(&set, 3);
+        assert_eq!(kept.records.len(), 3 * 2 * 4);
+        assert!(kept.records.iter().all(|r| r.q[0] == 0.8 || r.q[0] == 1.0));
+    }
 }

@@ -10,6 +10,7 @@
 //! What it cannot see: physics the model lacks (a misfit shows as χ²/dof ≫ 1, which the report
 //! states) and noise the readings' covariance understates.
 
+use metrocell_estimation::map_gauge::MapGauge;
 use metrocell_estimation::volumetric_monte_carlo::{volumetric_monte_carlo, VolumetricMonteCarlo};
 use metrocell_estimation::{Fit, FitError, FitOptions, RecordSet};
 use metrocell_model::{ForwardModel, ParameterSetup};
@@ -49,8 +50,8 @@ pub fn redrawn(records: &RecordSet, f: &Fit, seed: u64) -> RecordSet {
 }
 
 /// `trials` verifications redrawn from `f` (the fit of `records` with `setup`), each fitted
-/// with `options`; the error map at `points` under `conditions`. `progress(k)` is called
-/// before trial k.
+/// with `options`; the error map at `points` under `conditions`, in `gauge`. `progress(k)` is
+/// called before trial k.
 #[allow(clippy::too_many_arguments)]
 pub fn resampled_monte_carlo(
     model: &ForwardModel,
@@ -59,6 +60,7 @@ pub fn resampled_monte_carlo(
     f: &Fit,
     points: &[Vec<f64>],
     conditions: &Signals,
+    gauge: MapGauge,
     trials: usize,
     seed: u64,
     options: &FitOptions,
@@ -70,6 +72,7 @@ pub fn resampled_monte_carlo(
         &f.x,
         points,
         conditions,
+        gauge,
         trials,
         |k| {
             progress(k);

@@ -154,3 +154,58 @@ class PeriodicScrewError:
         return {"iso": f"E_{self.axis.upper()}{self.axis.upper()} periodic", "axis": self.axis, "lead_m": self.lead,
                 "amplitude_m": self.amplitude, "phase_rad": self.phase, "second_harmonic_m": self.second,
                 "shape": "A*sin(2*pi*q/P + phi)"}
+
+
+class AngularError:
+    """E_AX, E_BX, E_CX, E_AY, … (ISO 230-1 3.4.5–3.4.7: roll, pitch and yaw error motions of a
+    linear axis): the small rotation ε(q) of the moving component about the named coordinate axis,
+    right-hand positive, a smooth function of its position — here a linear trend plus a symmetric
+    bow over the travel. ISO 230-1 3.4.9 (Abbe): the rotation displaces the functional point by
+    ε × r, r the vector from the point the component's motion is referred to (its reference
+    point) to the functional point. So an angular error is seen through an arm that depends on
+    what the component carries and where its reference point sits:
+
+    * `side = "workpiece"`: the component carries the workpiece (XFYZ's X table). The table turns
+      under the tool, so the tool relative to the workpiece moves by −ε × (p − c): p the tool
+      point in workpiece coordinates (q + tool offset), c the table's reference point in them.
+    * `side = "tool"`: the component carries the tool (the column's Y carriage, the Z ram): the
+      tool point moves by ε × (p_tool − c), both measured on the tool side from the machine
+      zero — for Y the ram's extension (z) and the tool offset are in the arm, for Z only the
+      tool offset. `carried` lists the axes whose position lengthens the arm.
+
+    The reference points are where a machine builder would put them (the table's centre, the Y
+    carriage's guideway behind the spindle, the ram's guide above the gauge line) — not where a
+    model would like them: a reference point elsewhere changes ε × r by ε(q) × constant, which an
+    honest model must take up in the axis' straightness and positioning errors.
+    """
+
+    kind = "angular"
+
+    def __init__(self, axis, about, travel, side, carried, reference_m, trend_rad=0.0, bow_rad=0.0):
+        self.axis, self.about = axis, about
+        self.k, self.a = AXES.index(axis), AXES.index(about)
+        self.travel = tuple(travel)
+        self.side, self.carried = side, list(carried)
+        self.reference = np.asarray(reference_m, dtype=float)
+        self.trend, self.bow = trend_rad, bow_rad
+
+    def angle(self, q_axis):
+        u = _unit((q_axis - self.travel[0]) / (self.travel[1] - self.travel[0]))
+        # a trend through the middle of the travel (zero mean: a constant angle is a set-up) and a bow
+        return self.trend * (u - 0.5) + self.bow * (bow_shape(u) - 2.0 / 3.0)
+
+    def displacement(self, ctx):
+        eps = np.zeros_like(ctx.q)
+        eps[:, self.a] = self.angle(ctx.q[:, self.k])
+        arm = np.tile(ctx.tool_offset - self.reference, (len(ctx.q), 1))
+        for c in self.carried:
+            j = AXES.index(c)
+            arm[:, j] += ctx.q[:, j]
+        d = np.cross(eps, arm)
+        return -d if self.side == "workpiece" else d
+
+    def truth(self):
+        return {"iso": f"E_{'ABC'[self.a]}{self.axis.upper()}", "axis": self.axis, "about": self.about,
+                "side": self.side, "carried": self.carried, "reference_m": self.reference.tolist(),
+                "trend_rad": self.trend, "bow_rad": self.bow,
+                "shape": "trend*(u - 1/2) + bow*(4u(1-u) - 2/3), u = (q - q0)/(q1 - q0)"}

@@ -19,10 +19,12 @@ from .temperatures import log
 
 class ReadingContext:
     """What an effect may read about each reading: commanded axes at the true instant, approach
-    directions, time, velocity, the true temperature histories."""
+    directions, time, velocity, the true temperature histories, and the target's offset from
+    the spindle's gauge point (the Abbe arm's tool part)."""
 
-    def __init__(self, q, approach, t, v, histories):
+    def __init__(self, q, approach, t, v, histories, tool_offset=None):
         self.q, self.approach, self.t, self.v, self.histories = q, approach, t, v, histories
+        self.tool_offset = np.zeros(3) if tool_offset is None else np.asarray(tool_offset, dtype=float)
 
     def true_temperature(self, sensor):
         return self.histories[sensor](self.t)
@@ -44,7 +46,8 @@ class XFYZCell:
         q_instant = q - self.latency * v                   # where the axes were when the tracker read
         p = q_instant + self.tool_offset
         machine = ~is_nest
-        ctx = ReadingContext(q_instant[machine], readings["approach"][machine], t[machine], v[machine], self.histories)
+        ctx = ReadingContext(q_instant[machine], readings["approach"][machine], t[machine], v[machine], self.histories,
+                             self.tool_offset)
         d = np.zeros((machine.sum(), 3))
         for effect in self.effects:
             d += effect.displacement(ctx)

@@ -323,14 +323,21 @@ fn map_against_truth(
 /// within the report's Monte Carlo u at its stated rate, and the residual volumetric error the
 /// report states after compensation is what compensating really leaves (on average within
 /// 1.5×; single runs beyond the report's 95 % bound for one run's mean about one in twenty).
+/// The plan has the length test's lines, so each page judges ISO 10360-2's 105 measurements.
 #[test]
 fn a_verification_of_the_twin_reports_an_uncertainty_that_covers_the_truth() {
     let dir = std::env::temp_dir().join(format!("verify_twin_{}", std::process::id()));
     let _ = std::fs::remove_dir_all(&dir);
     let plan_dir = dir.join("plan");
-    let o = plan(&plan_dir, &["--dwell", "4s"]);
+    // the thesis mesh with the length test's lines (five lengths in each of seven directions)
+    let o = plan(&plan_dir, &["--dwell", "4s", "--length-test"]);
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let stops = csv_rows(&plan_dir.join("points.csv"));
+    let mesh_points = stops
+        .iter()
+        .map(|r| r[2..5].join(","))
+        .collect::<std::collections::BTreeSet<_>>()
+        .len();
     let station = csv_rows(&plan_dir.join("stations.csv")).remove(0);
     let points: Vec<String> = stops
         .iter()
@@ -553,7 +560,7 @@ terms:
                 "{cold}"
             );
         }
-        let (seed_z, residual) = map_against_truth(&rep, 75, |q| {
+        let (seed_z, residual) = map_against_truth(&rep, mesh_points, |q| {
             metrocell_estimation::volumetric_monte_carlo::error_map(
                 &tfm,
                 &tfm.params(),
@@ -575,7 +582,8 @@ terms:
         );
         assert!(rep.join("index.html").exists());
         let lengths = json["length_test"].as_array().unwrap();
-        assert!(lengths.len() >= 50, "{} lengths", lengths.len());
+        // ISO 10360-2's 105: 5 lengths × 7 directions × 3 repetitions
+        assert_eq!(lengths.len(), 105, "{} lengths", lengths.len());
         assert!(
             lengths.iter().all(|l| l["decision_after"].is_string()),
             "each length judged"
@@ -583,7 +591,7 @@ terms:
     }
     let within = |k: f64| z.iter().filter(|v| v.abs() <= k).count() as f64 / z.len() as f64;
     println!(
-        "map error / stated u over {seeds} seeds × 75 points × 3: within 1σ {:.3}, 2σ {:.3}, 3σ {:.3}; \
+        "map error / stated u over {seeds} seeds × {mesh_points} points × 3: within 1σ {:.3}, 2σ {:.3}, 3σ {:.3}; \
          residual after compensation: actual {actual:.2?} µm, stated {stated:.2?} µm, one run's 95 % bound {p95:.2?} µm",
         within(1.0),
         within(2.0),

@@ -9,6 +9,7 @@ use metrocell_estimation::simulated_records::TrackerNoise;
 use metrocell_physics::units::{parse_quantity, split_quantity};
 use metrocell_twin::CellModel;
 use metrocell_verification::identification_model::single_target_model_yaml;
+use metrocell_verification::length_lines::with_length_lines;
 use metrocell_verification::machine_program::{
     arrival_times, gcode, stops, DwellWord, ProgramSettings,
 };
@@ -58,6 +59,12 @@ pub struct PlanArgs {
     /// Revisit the first point (the warm-up nest) after every this many points; 0: never
     #[arg(long, default_value_t = 10)]
     nest_every: usize,
+    /// Add to the grid a line of six points through the volume's centre along each axis and
+    /// each space diagonal, so the report's length test has its five lengths in all seven
+    /// directions (ISO 10360-2's 35 lengths, 105 measurements over three cycles); a short axis
+    /// or a diagonal of a regular grid holds fewer
+    #[arg(long)]
+    length_test: bool,
     /// The tracker's shortest range
     #[arg(long, default_value = "0.5m", value_parser = parse_quantity_arg("m"))]
     min_range: f64,
@@ -104,6 +111,7 @@ centre, facing it; the reflector is aimed at the station from the mesh's centre.
 
 Examples:
   metrocell verify plan --x 800..1200 --y 100..500 --z 200..400 --step 100mm -o plan
+  metrocell verify plan --x 800..1200 --y 100..500 --z 200..400 --step 100mm --length-test -o plan   # + 28 points on this mesh: the report's length test has all 105 measurements
   metrocell verify plan --x 0..400 --y 0..400 --z 0..0 --step 50mm --station=-863.5,194.4,677.8 -o p3
   metrocell verify plan --x 0..800 --y 0..500 --z 0..400 --step 100mm --model my_21_errors.yaml -o plan";
 
@@ -153,7 +161,11 @@ pub fn run(a: PlanArgs) -> Result<i32> {
         max: [a.x.1, a.y.1, a.z.1],
         step: a.step,
     };
-    let grid = mesh.points()?;
+    let grid = if a.length_test {
+        with_length_lines(&mesh)?
+    } else {
+        mesh.points()?
+    };
     let order = spiral_order(&grid);
     let points: Vec<[f64; 3]> = order.iter().map(|&i| grid[i]).collect();
     let model_text = match &a.model {

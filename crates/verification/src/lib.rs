@@ -19,6 +19,8 @@
 //! * [`identification_model`] — the errors one tracker target identifies, the model a plan is
 //!   judged with when the user gives none.
 //!
+//! * [`length_lines`] — the points a mesh needs for the length test's five lengths in each of seven
+//!   directions (a short axis and the diagonals of a regular grid hold fewer).
 //! * [`length_test`] — ISO 10360-2-style length conformity: 5 lengths × 7 directions × 3
 //!   repetitions against MPE = min(A + L/K, B), decided with the uncertainty (ISO 14253-1).
 //!
@@ -40,6 +42,7 @@
 
 pub mod hole_plate;
 pub mod identification_model;
+pub mod length_lines;
 pub mod length_test;
 pub mod machine_program;
 pub mod measured_lengths;

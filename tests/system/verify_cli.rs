@@ -319,7 +319,7 @@ fn map_against_truth(
 /// twin's machine (the 21 geometric errors, the X scale expanding and the column growing as the
 /// axis motors warm the machine, its tracker warming up through the shift), recorded, and
 /// reported with the model declaring all of that (without the warm-up the report says the
-/// model lacks physics) — over ten seeds the identified map at 20 °C against the truth's falls
+/// model lacks physics) — over twenty seeds the identified map at 20 °C against the truth's falls
 /// within the report's Monte Carlo u at its stated rate, and the residual volumetric error the
 /// report states after compensation is what compensating really leaves (on average within
 /// 1.5×; single runs beyond the report's 95 % bound for one run's mean about one in twenty).
@@ -451,7 +451,7 @@ terms:
     let seeds: u64 = std::env::var("VERIFY_TWIN_SEEDS")
         .ok()
         .and_then(|v| v.parse().ok())
-        .unwrap_or(10);
+        .unwrap_or(20);
     // the truth's map at 20 °C, as the report states its own
     let reference = metrocell_verification::reference_conditions::at_reference_temperature(
         &metrocell_physics::Signals {

@@ -8,7 +8,7 @@ use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::Duration;
 
-use system_tests::{bin, run};
+use system_tests::{bin, piped, run, run_ok};
 
 fn plan(out: &Path, extra: &[&str]) -> std::process::Output {
     run(
@@ -661,16 +661,13 @@ fn an_independent_verification_export_is_identified_within_its_stated_uncertaint
     let (mut z, mut actual, mut stated) = (vec![], vec![], vec![]);
     for seed in 1..=seeds {
         let out = dir.join(format!("seed{seed}"));
-        let o = run(
-            Command::new(system_tests::python())
+        run_ok(
+            piped(system_tests::python())
                 .arg(root.join("bags/independent/verification_run.py"))
                 .args(["--seed", &seed.to_string(), "--hours", "3", "--out"])
-                .arg(&out)
-                .stdout(Stdio::piped())
-                .stderr(Stdio::piped()),
+                .arg(&out),
             Duration::from_secs(120),
         );
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         // what the user knows: the machine's travel, the reflector's offset, the mesh
         let truth: serde_json::Value =
             serde_json::from_str(&std::fs::read_to_string(out.join("truth.json")).unwrap())
@@ -718,36 +715,25 @@ terms:
             )
         );
         std::fs::write(out.join("model.yaml"), model).unwrap();
-        let o = run(
-            Command::new(bin("metrocell"))
+        run_ok(
+            piped(bin("metrocell"))
                 .args(["bag", "import"])
                 .arg(out.join("export.csv"))
                 .arg("--mapping")
                 .arg(out.join("mapping.yaml"))
                 .arg("-o")
-                .arg(out.join("bag"))
-                .stdout(Stdio::piped())
-                .stderr(Stdio::piped()),
+                .arg(out.join("bag")),
             Duration::from_secs(120),
         );
-        assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
         let rep = out.join("report");
-        let o = run(
-            Command::new(bin("metrocell"))
+        let text = run_ok(
+            piped(bin("metrocell"))
                 .args(["verify", "report", "--trials", "20", "--model"])
                 .arg(out.join("model.yaml"))
                 .arg(out.join("bag"))
                 .arg("-o")
-                .arg(&rep)
-                .stdout(Stdio::piped())
-                .stderr(Stdio::piped()),
+                .arg(&rep),
             Duration::from_secs(600),
-        );
-        let text = String::from_utf8_lossy(&o.stdout);
-        assert!(
-            o.status.success(),
-            "{text}\n{}",
-            String::from_utf8_lossy(&o.stderr)
         );
         assert!(!text.contains("warning: χ²/dof"), "seed {seed}: {text}");
         let by_point: std::collections::BTreeMap<[i64; 3], nalgebra::Vector3<f64>> = truth_rows

@@ -166,6 +166,8 @@ pub fn run(a: ReportArgs) -> Result<i32> {
     // the map is the machine at 20 °C: the thermal terms' coefficients say what temperature
     // adds (crates/verification reference_conditions)
     let conditions = at_reference_temperature(&records.records[f.used[0]].signals);
+    // said in the words and on the page: the readings carry temperatures, so the map is at 20 °C
+    let at_reference = !conditions.temperatures.is_empty();
     // a tracker fixes the map only up to a rigid motion: stated with its best-fit one removed
     // (crates/estimation map_gauge), in the map, the Monte Carlo and the residual alike
     let gauge = MapGauge::RigidMotionRemoved;
@@ -273,7 +275,7 @@ pub fn run(a: ReportArgs) -> Result<i32> {
         ),
         format!(
             "volumetric error as the machine is{}: {:.2} ± {:.2} µm (mean ± SD over the points), largest {:.2} µm",
-            if conditions.temperatures.is_empty() { "" } else { " at 20 °C" },
+            if at_reference { " at 20 °C" } else { "" },
             before_mean * 1e6,
             before_sd * 1e6,
             before_max * 1e6
@@ -434,6 +436,7 @@ pub fn run(a: ReportArgs) -> Result<i32> {
         &records,
         &lines,
         &map,
+        at_reference,
         &mc,
         &lengths,
         mpe,
@@ -461,6 +464,7 @@ fn page(
     records: &metrocell_estimation::RecordSet,
     lines: &[String],
     map: &[Vector3<f64>],
+    at_reference: bool,
     mc: &metrocell_estimation::volumetric_monte_carlo::VolumetricMonteCarlo,
     lengths: &[metrocell_verification::measured_lengths::MeasuredLength],
     mpe: Option<Mpe>,
@@ -502,7 +506,7 @@ fn page(
         .collect();
     let per_point: Vec<f64> = mc.residual_moduli.iter().map(|v| v * 1e6).collect();
     r.section("Volumetric error")
-        .paragraph(&format!("|e| at each mesh point as the machine is (the identified map, ± 2u from the Monte Carlo), and the distribution of the residual error after compensating with it (Monte Carlo: generating − refitted map at every point of every trial).{} The map is stated with its best-fit rigid motion over the mesh removed: a tracker placed beside the machine fixes it only up to one, and which one a fit gives depends on the parameters it held, not on the machine.", if records.records.iter().all(|r| r.signals.temperatures.is_empty()) { "" } else { " The map is the machine at 20 °C (ISO 1) at every temperature sensor: the thermal terms' coefficients (parameters below) say what temperature adds." }))
+        .paragraph(&format!("|e| at each mesh point as the machine is (the identified map, ± 2u from the Monte Carlo), and the distribution of the residual error after compensating with it (Monte Carlo: generating − refitted map at every point of every trial).{} The map is stated with its best-fit rigid motion over the mesh removed: a tracker placed beside the machine fixes it only up to one, and which one a fit gives depends on the parameters it held, not on the machine.", if at_reference { " The map is the machine at 20 °C (ISO 1) at every temperature sensor: the thermal terms' coefficients (parameters below) say what temperature adds." } else { "" }))
         .figure(
             "volumetric_before",
             "Volumetric error at each mesh point, ± 2u",

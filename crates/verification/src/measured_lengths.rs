@@ -6,7 +6,7 @@
 //! uncertainty (k = 2).
 
 use metrocell_estimation::residuals::predict;
-use metrocell_estimation::{Fit, RecordFrame, RecordSet};
+use metrocell_estimation::{Fit, RecordFrame, RecordKind, RecordSet};
 use metrocell_kinematics::transform::euler_xyz;
 use metrocell_model::ForwardModel;
 use nalgebra::{Matrix3, Vector3};
@@ -129,8 +129,15 @@ pub fn visits(model: &ForwardModel, records: &RecordSet, f: &Fit, mesh: &[Vec<f6
         let Ok(tool) = model.tool_state(&f.x, kin, &rec.q, &mut s, None) else {
             return (registered, Vector3::zeros());
         };
-        let mut s = rec.signals.clone();
-        match predict(model, &f.x, kin, rec, &mut s) {
+        // a tracker reading predicted from the tool state just computed; other kinds as the
+        // fit predicts them
+        let predicted = match rec.kind {
+            RecordKind::Point => model
+                .tracker(&f.x, &tool, &mut s)
+                .map(|t| t.measured_point()),
+            _ => predict(model, &f.x, kin, rec, &mut rec.signals.clone()),
+        };
+        match predicted {
             Ok(predicted) => (tool.target() + r * (rec.measured - predicted), tool.d),
             Err(_) => (registered, Vector3::zeros()),
         }
@@ -244,7 +251,7 @@ pub fn measured_lengths(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use metrocell_estimation::{MeasurementRecord, RecordKind};
+    use metrocell_estimation::MeasurementRecord;
 
     fn reading(time: f64, x: f64) -> MeasurementRecord {
         MeasurementRecord {

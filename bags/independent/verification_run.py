@@ -8,6 +8,7 @@ shift warms the machine (ISO 230-3), and a laser tracker on the table switched o
 before the first point (its ADM warming up).
 
     python3 bags/independent/verification_run.py --out DIR --seed S [--hours H]
+        [--reflectors "0,0,0;150,0,0;0,0,-150"]
 
 Writes DIR/export.csv (the tracker software's export, mm and U95), DIR/mapping.yaml (its
 `bag import` mapping), DIR/mesh.csv (the verified points, commanded, mm) and DIR/truth.csv (the
@@ -16,7 +17,11 @@ effect here is zero at the ISO 1 reference temperature — in µm, as the tool r
 workpiece, actual minus commanded), DIR/truth.json (every effect's parameters).
 
 The program: a 5 × 5 × 3 grid over the travel (margins 10 %), visited serpentine with four
-readings at each stop, round after round with short pauses until the shift's end.
+readings at each stop, round after round with short pauses until the shift's end. With
+--reflectors (offsets in mm from the spindle's tool point, `;`-separated) the operator moves the
+reflector to the next offset between rounds (ISO 230-1 Annex A's multi-offset verification: the
+angular errors seen through Abbe arms of several lengths); the export then carries the active
+tool offset of every reading, and the truth stays the tool's.
 """
 
 import argparse
@@ -76,7 +81,9 @@ def main():
     ap.add_argument("--out", required=True)
     ap.add_argument("--seed", type=int, required=True)
     ap.add_argument("--hours", type=float, default=4.0)
+    ap.add_argument("--reflectors", default="", help="offsets from the tool point, mm: 'x,y,z;x,y,z;...'")
     a = ap.parse_args()
+    reflectors = [np.array([float(v) for v in r.split(",")]) * 1e-3 for r in a.reflectors.split(";") if r.strip()]
     rng = np.random.default_rng(90_000 + a.seed)
     setting = Setting(rng, "shift")
     setting.duration_s = a.hours * 3600.0
@@ -92,9 +99,19 @@ def main():
     grid = [np.linspace(lo + 0.1 * (hi - lo), hi - 0.1 * (hi - lo), n) for (lo, hi), n in zip(travel, (5, 5, 3))]
     grid = [np.round(g, 4) for g in grid]  # whole 0.1 mm: the controller's program
     planner = programs.Planner(np.array([0.0, 0.0, travel[2][1]]), rng, feed_m_s=0.05)
-    programs.shift_schedule(lambda pl: programs.serpentine_grid(pl, *grid, repeats=4), planner, setting.duration_s, rng,
-                            gap_s=(60, 4 * 60))
+    # where each round's readings start and which reflector they sighted: round k the k-th, in turn
+    round_starts = []
+
+    def one_round(pl):
+        round_starts.append((len(pl.rows), len(round_starts) % max(len(reflectors), 1)))
+        programs.serpentine_grid(pl, *grid, repeats=4)
+    programs.shift_schedule(one_round, planner, setting.duration_s, rng, gap_s=(60, 4 * 60))
     readings = planner.readings()
+    if reflectors:
+        which = np.zeros(len(readings["t"]), dtype=int)
+        for start, k in round_starts:
+            which[start:] = k
+        readings["tool_offset"] = tool + np.array(reflectors)[which]
     cell = XFYZCell(travel, tool, tracker, setting.histories, shop.SENSOR_NOISE_K, effects)
     sim = cell.simulate(readings, rng)
 
@@ -116,12 +133,14 @@ def main():
         for q, e in zip(mesh, d):
             f.write(",".join(f"{v * 1e3:.4f}" for v in q) + "," + ",".join(f"{v * 1e6:.5f}" for v in e) + "\n")
     truth = {"travel_m": [list(t) for t in travel], "tool_offset_m": tool.tolist(),
+             "reflectors_m": [r.tolist() for r in reflectors],
              "effects": [e.truth() for e in effects],
              "warmup": {"amplitude_m": warmup.B, "time_constant_s": warmup.tau, "power_on_s": warmup.t_on},
              "readings": int(len(readings["t"])), "duration_s": setting.duration_s}
     with open(os.path.join(a.out, "truth.json"), "w") as f:
         json.dump(truth, f, indent=1)
-    print(f"{len(readings['t'])} readings over {planner.t / 3600:.2f} h, travel {travel}, tool offset {tool.tolist()}")
+    print(f"{len(readings['t'])} readings over {planner.t / 3600:.2f} h in {len(round_starts)} rounds, travel {travel}, "
+          f"tool offset {tool.tolist()}, reflectors {[r.tolist() for r in reflectors] or 'the tool'}")
 
 
 if __name__ == "__main__":

@@ -11,6 +11,10 @@ pub const COMMANDED_JOINTS: &str = "/machine/commanded_joint_states";
 pub const APPROACH: &str = "/machine/approach_directions";
 /// Load force on the machine (`geometry_msgs/WrenchStamped`, machine frame).
 pub const LOAD: &str = "/machine/load";
+/// The active tool's (a target's, e.g. a tracker reflector on the spindle) offset from the
+/// spindle's gauge point, machine frame, m (`geometry_msgs/PointStamped`): published when the
+/// tool or target changes, so a verification with reflectors at several offsets is one recording.
+pub const TOOL_OFFSET: &str = "/machine/tool_offset";
 /// When the instrument was powered on (`sensor_msgs/TimeReference`, `time_ref`).
 pub const POWER_ON: &str = "/tracker/power_on";
 /// Per-sensor temperatures: `/temperature/<sensor name>` (`sensor_msgs/Temperature`).

@@ -197,7 +197,8 @@ class AngularError:
     def displacement(self, ctx):
         eps = np.zeros_like(ctx.q)
         eps[:, self.a] = self.angle(ctx.q[:, self.k])
-        arm = np.tile(ctx.tool_offset - self.reference, (len(ctx.q), 1))
+        # the tool offset: one for every reading, or each reading's (a reflector moved between rounds)
+        arm = np.broadcast_to(ctx.tool_offset - self.reference, ctx.q.shape).copy()
         for c in self.carried:
             j = AXES.index(c)
             arm[:, j] += ctx.q[:, j]

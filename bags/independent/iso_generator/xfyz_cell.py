@@ -20,7 +20,7 @@ from .temperatures import log
 class ReadingContext:
     """What an effect may read about each reading: commanded axes at the true instant, approach
     directions, time, velocity, the true temperature histories, and the target's offset from
-    the spindle's gauge point (the Abbe arm's tool part)."""
+    the spindle's gauge point (the Abbe arm's tool part; one (3,) for all readings or (N, 3))."""
 
     def __init__(self, q, approach, t, v, histories, tool_offset=None):
         self.q, self.approach, self.t, self.v, self.histories = q, approach, t, v, histories
@@ -44,17 +44,19 @@ class XFYZCell:
         t, q, v = readings["t"], readings["q"], readings["v"]
         is_nest = readings["is_nest"]
         q_instant = q - self.latency * v                   # where the axes were when the tracker read
-        p = q_instant + self.tool_offset
+        # the target on the spindle: the cell's one, or each reading's (readings["tool_offset"])
+        tool = np.broadcast_to(readings.get("tool_offset", self.tool_offset), q.shape)
+        p = q_instant + tool
         machine = ~is_nest
         ctx = ReadingContext(q_instant[machine], readings["approach"][machine], t[machine], v[machine], self.histories,
-                             self.tool_offset)
+                             tool[machine])
         d = np.zeros((machine.sum(), 3))
         for effect in self.effects:
             d += effect.displacement(ctx)
         p[machine] += d
         for i in np.where(is_nest)[0]:
             p[i] = readings["nest"][i]
-        nominal = q + self.tool_offset
+        nominal = q + tool
         for i in np.where(is_nest)[0]:
             nominal[i] = readings["nest"][i]
         measured, u95, rho = self.tracker.measure(p, t, rng, noiseless)

@@ -21,7 +21,9 @@ use metrocell_physics::units::parse_quantity;
 use metrocell_records::{records_from_bags, PointSource, RecordingOptions};
 use metrocell_report::{HistogramPlot, Report, Series, SeriesPlot, Table};
 use metrocell_verification::length_test::{length_cases, Decision, Mpe};
-use metrocell_verification::measured_lengths::{at_rest, measured_lengths, mesh_of, visits};
+use metrocell_verification::measured_lengths::{
+    at_rest, measured_lengths, mesh_of, visits, visits_of_one_target,
+};
 use metrocell_verification::reference_conditions::at_reference_temperature;
 use metrocell_verification::resampled_monte_carlo::resampled_monte_carlo;
 use nalgebra::Vector3;
@@ -116,6 +118,28 @@ fn quantity(unit: &'static str) -> impl Fn(&str) -> Result<f64, String> + Clone 
     }
 }
 
+/// The targets the fit's readings sighted: each distinct tool offset (the model's plus the
+/// reading's shift, m) and how many readings it has, in first-seen order.
+fn target_offsets(
+    records: &metrocell_estimation::RecordSet,
+    f: &metrocell_estimation::Fit,
+    fm: &metrocell_model::ForwardModel,
+) -> Vec<(Vector3<f64>, usize)> {
+    let mut out: Vec<(Vector3<f64>, usize)> = vec![];
+    for &i in &f.used {
+        let t = fm.machine.tool_offset
+            + records.records[i]
+                .signals
+                .tool_offset_shift
+                .unwrap_or_default();
+        match out.iter_mut().find(|(o, _)| (o - t).norm() < 1e-6) {
+            Some(o) => o.1 += 1,
+            None => out.push((t, 1)),
+        }
+    }
+    out
+}
+
 fn mpe_of(a: &ReportArgs) -> Result<Option<Mpe>> {
     Ok(match (a.mpe_a, a.mpe_k, a.mpe_b) {
         (None, None, None) => None,
@@ -165,7 +189,11 @@ pub fn run(a: ReportArgs) -> Result<i32> {
     let mesh = mesh_of(&records, &f);
     // the map is the machine at 20 °C: the thermal terms' coefficients say what temperature
     // adds (crates/verification reference_conditions)
-    let conditions = at_reference_temperature(&records.records[f.used[0]].signals);
+    let mut conditions = at_reference_temperature(&records.records[f.used[0]].signals);
+    // … and for the model's tool: readings of a reflector at other offsets identify the angular
+    // errors through their Abbe arms; the map is the tool's
+    conditions.tool_offset_shift = None;
+    let targets = target_offsets(&records, &f, &fm);
     // said in the words and on the page: the readings carry temperatures, so the map is at 20 °C
     let at_reference = !conditions.temperatures.is_empty();
     // a tracker fixes the map only up to a rigid motion: stated with its best-fit one removed
@@ -200,7 +228,9 @@ pub fn run(a: ReportArgs) -> Result<i32> {
         .collect();
     let cases = length_cases(&points3);
     let visits = visits(&fm, &records, &f, &mesh);
-    let lengths = measured_lengths(&cases, &visits, &mc.sd_fitted, 3, mpe);
+    // the length test with one target (ISO 10360-2 measures with one probe)
+    let (length_visits, length_shift) = visits_of_one_target(&visits);
+    let lengths = measured_lengths(&cases, &length_visits, &mc.sd_fitted, 3, mpe);
     let before: Vec<f64> = map.iter().map(|e| e.norm()).collect();
     let (before_mean, before_sd) = mean_sd(&before);
     let before_max = before.iter().copied().fold(0.0, f64::max);
@@ -302,6 +332,24 @@ pub fn run(a: ReportArgs) -> Result<i32> {
             u_w * 1e6
         ),
     ];
+    let mm =
+        |v: &Vector3<f64>| format!("({:.1}, {:.1}, {:.1}) mm", v.x * 1e3, v.y * 1e3, v.z * 1e3);
+    let tool = fm.machine.tool_offset;
+    if targets.len() > 1 {
+        lines.push(format!(
+            "{} targets (tool offsets {}): their Abbe arms separate the angular errors from straightness; the map is for the model's tool offset {}; the length test uses the target at {}",
+            targets.len(),
+            targets.iter().map(|(t, n)| format!("{} × {n}", mm(t))).collect::<Vec<_>>().join(", "),
+            mm(&tool),
+            mm(&(tool + length_shift))
+        ));
+    } else if let Some((t, _)) = targets.first().filter(|(t, _)| (t - tool).norm() > 1e-6) {
+        lines.push(format!(
+            "the readings' target is at tool offset {}, the model's tool at {}: the map is the model's tool's",
+            mm(t),
+            mm(&tool)
+        ));
+    }
     // χ²/dof of honest data is 1 ± √(2/dof): beyond 4 of those the readings disagree with
     // the model and their stated noise
     let dof = (3 * f.used.len())
@@ -324,9 +372,9 @@ pub fn run(a: ReportArgs) -> Result<i32> {
             .filter(|h| h.name.starts_with("angular[") && !h.name.ends_with(".c0"))
             .map(|h| h.name.as_str())
             .collect();
-        if !angular.is_empty() {
+        if !angular.is_empty() && targets.len() < 2 {
             lines.push(format!(
-                "  {} angular coefficient(s) are not separable from straightness with the reflector at one tool offset (their Abbe lever does not change over the mesh): the map holds for the reflector's offset; separating them needs the reflector at other tool offsets (e.g. 100 mm along X and along Y), which this report does not yet combine",
+                "  {} angular coefficient(s) are not separable from straightness with the reflector at one tool offset (their Abbe lever does not change over the mesh): the map holds for the reflector's offset; separating them needs the reflector at other tool offsets (e.g. 150 mm along X and along Z, recorded on /machine/tool_offset or bag import's tool_offset.* columns)",
                 angular.len()
             ));
         }

@@ -23,6 +23,7 @@
 //! | `aux.<name>` | any other channel (accelerometer, ...), in its SI unit | no |
 //! | `role` | what the row's point is for: `fit` (a point of the machine's program that fits the model, the default), `check` (a point of the program kept out of every fit, to judge the model's predictions), `reference` (a fixed reference nest re-measured through the shift, on the floor or on the table the instrument stands on: the machine does not move it; its nominal, when given, is the nest's position) | no |
 //! | `setup` | the instrument's placement the row was measured from (`S1`, `north`, …): each distinct value is one placement, with its own pose — a nuisance of every fit | no |
+//! | `tool_offset.x`, `.y`, `.z` | the active tool's (target's) offset from the spindle's gauge point [m, machine frame], e.g. the tracker reflector of a verification at several offsets; the row's nominal is the commanded axes plus it | all three |
 //! | `accel.<sensor>.x`, `.y`, `.z` | an accelerometer's reading [m/s², its own frame]: the specific force, +9.81 m/s² along its up axis at rest; the model file's `sensors.accelerometers: [{name: <sensor>, link: <URDF link>}]` says where it sits | all three, per sensor |
 //!
 //! # Topics written (log time = publish time = the row's timestamp)
@@ -44,6 +45,9 @@
 //! * `/tracker/power_on` `sensor_msgs/msg/TimeReference` (`time_ref` = `instrument_on_time`,
 //!   `source` = the mapping's `source`), written at the first row and whenever the value changes;
 //!   latched QoS, as `metrocell sim` writes it
+//! * `/machine/tool_offset` `geometry_msgs/msg/PointStamped` (`point` = the `tool_offset.*`
+//!   cells, `header.frame_id` `machine`), written before the row's point at the first row and
+//!   whenever the offset changes
 //! * `/temperature/<name>` `sensor_msgs/msg/Temperature` (variance 0 = unknown, as ROS defines)
 //! * `/air/pressure` `sensor_msgs/msg/FluidPressure`, `/air/humidity` `sensor_msgs/msg/RelativeHumidity`
 //! * `/aux_channels` `sensor_msgs/msg/JointState` used as a named-value vector: `name` holds the
@@ -77,8 +81,8 @@ use std::path::{Path, PathBuf};
 
 use metrocell_bag::{qos_profiles_yaml, BagWriter, QosProfile, WriterOptions};
 use metrocell_msgs::builtin_interfaces::msg::Time;
-use metrocell_msgs::geometry_msgs::msg::Point;
 use metrocell_msgs::geometry_msgs::msg::Vector3;
+use metrocell_msgs::geometry_msgs::msg::{Point, PointStamped};
 use metrocell_msgs::msg::MeasuredPoint;
 use metrocell_msgs::sensor_msgs::msg::{
     FluidPressure, Imu, JointState, RelativeHumidity, Temperature, TimeReference,
@@ -162,6 +166,8 @@ enum Field {
     Setup,
     /// An accelerometer's reading: sensor, axis (0, 1, 2).
     Accel(String, usize),
+    /// The active tool offset's coordinate (0, 1, 2).
+    ToolOffset(usize),
 }
 
 /// What a row's point is for (`role` column).
@@ -211,6 +217,8 @@ fn parse_field(name: &str) -> Option<Field> {
                 Field::Approach(a.to_string())
             } else if let Some(n) = named("temperature.") {
                 Field::Temperature(n.to_string())
+            } else if let Some(a) = name.strip_prefix("tool_offset.").and_then(axis) {
+                Field::ToolOffset(a)
             } else if let Some(n) = named("aux.") {
                 Field::Aux(n.to_string())
             } else if let Some((sensor, a)) = name
@@ -343,7 +351,7 @@ fn frac_ns(frac: &str) -> std::result::Result<u64, String> {
 /// The topics an import writes signals to: the ones `metrocell sim` publishes (crates/msgs `topics`).
 pub use metrocell_msgs::topics::{
     APPROACH as APPROACH_TOPIC, COMMANDED_JOINTS as COMMANDED_JOINTS_TOPIC,
-    POWER_ON as POWER_ON_TOPIC,
+    POWER_ON as POWER_ON_TOPIC, TOOL_OFFSET as TOOL_OFFSET_TOPIC,
 };
 
 /// The commanded joint state of a row: the joint columns' names, then velocity-only names;
@@ -449,6 +457,7 @@ pub fn import_csv(
 
     let mut writer = TopicWriter::create(bag_dir, options)?;
     let mut last_on_time: Option<u64> = None;
+    let mut last_tool_offset: Option<[f64; 3]> = None;
     let mut report = ImportReport::default();
     let mut record = csv::StringRecord::new();
     loop {
@@ -487,17 +496,34 @@ pub fn import_csv(
             }
         };
         let t = row.t_ns.expect("required column bound and parsed");
-        // the power-on time is written at the first row and whenever it changes
+        // the power-on time and the tool offset are written at the first row and whenever they
+        // change
         let on_time = row.on_time.filter(|on| last_on_time != Some(*on));
         if on_time.is_some() {
             last_on_time = on_time;
+        }
+        let tool_offset = match row.tool_offset.iter().filter(|v| v.is_finite()).count() {
+            0 => None,
+            3 => Some(row.tool_offset).filter(|o| last_tool_offset != Some(*o)),
+            _ => {
+                report.errors.push(ToolError::Row {
+                    path: csv_path.to_path_buf(),
+                    line,
+                    column: "tool_offset.*".into(),
+                    reason: "a row gives some of tool_offset.x, .y, .z but not all three".into(),
+                });
+                continue;
+            }
+        };
+        if tool_offset.is_some() {
+            last_tool_offset = tool_offset;
         }
         let names = RowNames {
             frame_id: &frame_id,
             source: &source,
             imu_frames: &mapping.imu_frames,
         };
-        for (topic, ty, def, bytes) in row_messages(row, t, on_time, &names)? {
+        for (topic, ty, def, bytes) in row_messages(row, t, on_time, tool_offset, &names)? {
             writer.write(&topic, ty, def, t, &bytes)?;
             *report.messages_per_topic.entry(topic).or_default() += 1;
         }
@@ -635,7 +661,8 @@ impl TopicWriter {
     /// Write one message at `t` (ns), logged and published then.
     fn write(&mut self, topic: &str, ty: &str, def: &str, t: u64, bytes: &[u8]) -> Result<()> {
         if self.added.insert(topic.to_string(), ()).is_none() {
-            let qos = if topic == POWER_ON_TOPIC {
+            // states published on change: latched, so a late joiner has the current one
+            let qos = if topic == POWER_ON_TOPIC || topic == TOOL_OFFSET_TOPIC {
                 &self.latched
             } else {
                 &self.qos
@@ -670,6 +697,7 @@ struct Row {
     role: Role,
     setup: Option<String>,
     accel: BTreeMap<String, [f64; 3]>,
+    tool_offset: [f64; 3],
 }
 
 /// The row's values, or each bad cell's source column and reason.
@@ -695,6 +723,7 @@ fn read_row(
         role: Role::Fit,
         setup: None,
         accel: BTreeMap::new(),
+        tool_offset: [f64::NAN; 3],
     };
     let mut bad = Vec::new();
     for b in bound {
@@ -767,6 +796,8 @@ impl Row {
                 c if c.chars().all(|ch| ch.is_ascii_alphanumeric() || ch == '_' || ch == '-') => self.setup = Some(c.to_string()),
                 c => return Err(format!("setup '{c}' is not a placement name: use letters, digits, `_` or `-`")),
             },
+            Field::ToolOffset(_) if cell.is_empty() => {}
+            Field::ToolOffset(a) => self.tool_offset[*a] = number()?,
             Field::Accel(..) if cell.is_empty() => {}
             Field::Accel(sensor, a) => {
                 let v = number()?;
@@ -788,10 +819,17 @@ struct RowNames<'a> {
 /// A message to write: topic, ROS type, definition, CDR bytes.
 type Message = (String, &'static str, &'static str, Vec<u8>);
 
-/// The messages of one row at `t` (ns), in the order they are written: its point, its
+/// The messages of one row at `t` (ns), in the order they are written: the tool offset
+/// (`tool_offset`: when it changed; before the point, whose nominal includes it), its point, its
 /// accelerometers, the machine's joints and approach (not for a reference nest), the power-on
 /// time (`on_time`: when it changed), temperatures, air, auxiliary channels.
-fn row_messages(row: Row, t: u64, on_time: Option<u64>, names: &RowNames) -> Result<Vec<Message>> {
+fn row_messages(
+    row: Row,
+    t: u64,
+    on_time: Option<u64>,
+    tool_offset: Option<[f64; 3]>,
+    names: &RowNames,
+) -> Result<Vec<Message>> {
     // a point's frame: the instrument's, at its placement when the row names one
     let point_frame = match &row.setup {
         Some(s) => format!("{}{SETUP_SEPARATOR}{s}", names.frame_id),
@@ -801,7 +839,18 @@ fn row_messages(row: Row, t: u64, on_time: Option<u64>, names: &RowNames) -> Res
         stamp: stamp(t),
         frame_id: point_frame,
     };
-    let mut out: Vec<Message> = vec![point_message(&row, &header, names.source)?];
+    let mut out: Vec<Message> = Vec::new();
+    if let Some([x, y, z]) = tool_offset {
+        let m = PointStamped {
+            header: Header {
+                stamp: stamp(t),
+                frame_id: "machine".into(),
+            },
+            point: Point { x, y, z },
+        };
+        out.push(message(TOOL_OFFSET_TOPIC.into(), &m)?);
+    }
+    out.push(point_message(&row, &header, names.source)?);
     for (sensor, a) in &row.accel {
         if a.iter().any(|v| !v.is_finite()) {
             continue;
@@ -1064,6 +1113,8 @@ mod tests {
             Some(Field::Temperature("air".into()))
         );
         assert_eq!(parse_field("temperature."), None);
+        assert_eq!(parse_field("tool_offset.z"), Some(Field::ToolOffset(2)));
+        assert_eq!(parse_field("tool_offset.b"), None);
         assert_eq!(parse_field("X"), None);
     }
 }

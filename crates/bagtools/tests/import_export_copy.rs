@@ -133,6 +133,51 @@ fn bad_rows_are_reported_by_line_and_column_and_the_rest_imported() {
     );
 }
 
+/// A tool offset is three coordinates: a row with some of them is refused by line and the
+/// others imported; the offset is written before the point it applies to, and again only when
+/// it changes.
+#[test]
+fn a_partial_tool_offset_is_refused_and_a_change_is_written_before_its_point() {
+    let dir = scratch("tooloffset");
+    let csv = dir.with_extension("csv");
+    std::fs::write(
+        &csv,
+        "timestamp,point_id,measured_x,measured_y,measured_z,u95,tool_offset.x,tool_offset.y,tool_offset.z\n\
+         1714557600.0,A,1.0,2.0,3.0,1e-5,0,0,-0.1\n\
+         1714557601.0,B,1.0,2.0,3.0,1e-5,0,0,-0.1\n\
+         1714557602.0,C,1.0,2.0,3.0,1e-5,0.15,,-0.1\n\
+         1714557603.0,D,1.0,2.0,3.0,1e-5,0.15,0,-0.1\n",
+    )
+    .unwrap();
+    let r = import_csv(&csv, &dir, None, WriterOptions::default()).unwrap();
+    assert_eq!((r.rows_read, r.rows_imported), (4, 3));
+    let msg = r.errors[0].to_string();
+    assert!(
+        msg.contains("line 4, column tool_offset.*") && msg.contains("not all three"),
+        "{msg}"
+    );
+    assert_eq!(r.messages_per_topic["/machine/tool_offset"], 2);
+    let reader = BagReader::open(&dir).unwrap();
+    let order: Vec<(String, u64)> = reader
+        .messages(&MessageFilter::default())
+        .unwrap()
+        .map(|m| m.unwrap())
+        .filter(|m| m.topic == "/machine/tool_offset" || m.topic == "/measured_points")
+        .map(|m| (m.topic.clone(), m.log_time))
+        .collect();
+    let topics: Vec<&str> = order.iter().map(|(t, _)| t.as_str()).collect();
+    assert_eq!(
+        topics,
+        [
+            "/machine/tool_offset",
+            "/measured_points",
+            "/measured_points",
+            "/machine/tool_offset",
+            "/measured_points"
+        ]
+    );
+}
+
 #[test]
 fn missing_uncertainty_is_refused() {
     let dir = scratch("nounc");

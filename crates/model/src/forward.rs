@@ -534,6 +534,7 @@ impl<'a> ForwardModel<'a> {
         let mut tool = self.tool_state_with(
             kin,
             q,
+            s.tool_offset_shift,
             gravity.as_ref().map(|g| (g, p)),
             |point, rotation| self.displacement(p, s, point, rotation, cache.as_deref_mut()),
         )?;
@@ -558,16 +559,20 @@ impl<'a> ForwardModel<'a> {
                 ),
             });
         }
-        self.tool_state_with(&KinematicTruth::None, q, None, |_, _| Ok(Vector3::zeros()))
+        self.tool_state_with(&KinematicTruth::None, q, None, None, |_, _| {
+            Ok(Vector3::zeros())
+        })
     }
 
     /// The family's tool state, with the machine terms' displacement sum `displacement(nominal
     /// point of the frame the terms act in, tool rotation)` (tool-frame terms are turned by the
-    /// rotation).
+    /// rotation). `tool_shift`: the sighted target's offset from the model's tool point
+    /// ([`Signals::tool_offset_shift`]; cartesian and delta machines, whose spindle does not turn).
     fn tool_state_with(
         &self,
         kin: &KinematicTruth,
         q: &[f64],
+        tool_shift: Option<Vector3<f64>>,
         gravity: Option<(&ArmGravity, &[f64])>,
         mut displacement: impl FnMut(Vector3<f64>, &Matrix3<f64>) -> Result<Vector3<f64>, PhysicsError>,
     ) -> Result<ToolState, PhysicsError> {
@@ -576,7 +581,7 @@ impl<'a> ForwardModel<'a> {
         Ok(match &self.machine.kinematics {
             MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) => {
                 let qv = Vector3::new(q[0], q[1], q[2]);
-                let n = self.machine.nominal_tool_point(&qv);
+                let n = self.machine.nominal_tool_point(&qv) + tool_shift.unwrap_or_default();
                 // a delta's firmware inverts the nominal geometry; the carriages at those
                 // heights put the effector where the true geometry says
                 let kinematic = match kin {
@@ -598,6 +603,12 @@ impl<'a> ForwardModel<'a> {
                     d,
                     workpiece: zero,
                 }
+            }
+            _ if tool_shift.is_some_and(|d| d != Vector3::zeros()) => {
+                return Err(PhysicsError::InvalidInput {
+                    what: "forward model, a reading's tool offset".into(),
+                    reason: "a recorded tool offset (/machine/tool_offset) other than the model's is read on cartesian and delta machines only; record five-axis and arm targets with the model's tool".into(),
+                })
             }
             MachineKinematics::FiveAxis(f) => {
                 // the spindle does not turn: the tool frame is the machine frame seen from the
@@ -699,9 +710,11 @@ impl<'a> ForwardModel<'a> {
         let mut tool_frame_sum = Vector3::zeros();
         let mut tool_rotation = Matrix3::identity();
         let gravity = self.gravity_of(p, q, s)?;
+        let tool_shift = s.tool_offset_shift;
         let tool = self.tool_state_with(
             kin,
             q,
+            tool_shift,
             gravity.as_ref().map(|g| (g, p)),
             |point, rotation| {
                 tool_rotation = *rotation;

@@ -150,6 +150,10 @@ pub struct SignalsBuilder {
     air_expected: [bool; 3],
     power_on: StateSeries<i64>,
     load: StateSeries<Vector3<f64>>,
+    /// The recorded active tool offset (m, machine frame), and the model's, which a reading's
+    /// [`Signals::tool_offset_shift`] is measured from.
+    tool_offset: StateSeries<Vector3<f64>>,
+    model_tool_offset: Vector3<f64>,
     /// Each accelerometer's latest reading (specific force, its own frame, m/s²).
     accelerations: BTreeMap<String, StateSeries<Vector3<f64>>>,
     explicit_approach: [StateSeries<f64>; 3],
@@ -171,6 +175,7 @@ impl SignalsBuilder {
         if matches!(machine.kinematics, MachineKinematics::FiveAxis(_)) {
             b.rotary = [None, Some(3), Some(4)];
         }
+        b.model_tool_offset = machine.tool_offset;
         b
     }
 
@@ -201,6 +206,8 @@ impl SignalsBuilder {
             air_expected: [false; 3],
             power_on: StateSeries::default(),
             load: StateSeries::default(),
+            tool_offset: StateSeries::default(),
+            model_tool_offset: Vector3::zeros(),
             accelerations: BTreeMap::new(),
             explicit_approach: Default::default(),
             newest_ns: None,
@@ -362,6 +369,23 @@ impl SignalsBuilder {
             return Err(format!("load force {force:?} is not finite"));
         }
         self.load.push(t_ns, force);
+        self.observe_time(t_ns);
+        Ok(())
+    }
+
+    /// The active tool's (target's) offset from the spindle's gauge point (m, machine frame)
+    /// from `t_ns` on: readings then carry its difference from the model's tool offset.
+    pub fn push_tool_offset(&mut self, t_ns: i64, offset: Vector3<f64>) -> Result<(), String> {
+        if !offset.iter().all(|v| v.is_finite()) {
+            return Err(format!("tool offset {offset:?} m is not finite"));
+        }
+        if offset.norm() > 5.0 {
+            return Err(format!(
+                "tool offset ({:.3}, {:.3}, {:.3}) m is longer than 5 m: is it in mm? (SI on the wire: metres)",
+                offset.x, offset.y, offset.z
+            ));
+        }
+        self.tool_offset.push(t_ns, offset);
         self.observe_time(t_ns);
         Ok(())
     }
@@ -535,6 +559,10 @@ impl SignalsBuilder {
             .filter(|&on| on <= t_ns)
             .map(|on| (t_ns - on) as f64 / NS);
         s.load_force = self.load.at(t_ns);
+        s.tool_offset_shift = self
+            .tool_offset
+            .at(t_ns)
+            .map(|t| t - self.model_tool_offset);
         for (name, series) in &self.accelerations {
             if let Some(a) = series.at(t_ns) {
                 s.accelerations.insert(name.clone(), a);
@@ -559,6 +587,13 @@ impl SignalsBuilder {
     }
     pub fn has_load(&self) -> bool {
         !self.load.is_empty()
+    }
+    /// The recorded active tool offset at `t_ns` (m, machine frame), None when none is recorded.
+    pub fn tool_offset_at(&self, t_ns: i64) -> Option<Vector3<f64>> {
+        self.tool_offset.at(t_ns)
+    }
+    pub fn has_tool_offset(&self) -> bool {
+        !self.tool_offset.is_empty()
     }
     pub fn has_explicit_approach(&self, axis: usize) -> bool {
         self.explicit_approach

@@ -197,6 +197,12 @@ pub struct Signals {
     pub image_point: Option<Vector2<f64>>,
     /// Nominal tool point in the machine frame, m ([`SignalKind::MachinePoint`]).
     pub machine_point: Option<Vector3<f64>>,
+    /// How far the target this reading sighted sits from the model's tool point: the recorded
+    /// active tool offset (`/machine/tool_offset`) minus the model's `tool_offset`, machine
+    /// frame, m — a tracker reflector moved on the spindle. None (or zero): the model's tool.
+    /// The forward model adds it to the nominal tool point; an angular error's Abbe arm
+    /// lengthens by it (that is what makes roll, pitch and yaw separable from straightness).
+    pub tool_offset_shift: Option<Vector3<f64>>,
     /// Nominal feature position on the workpiece, workpiece frame, m ([`SignalKind::WorkpiecePoint`]).
     pub workpiece_point: Option<Vector3<f64>>,
     /// True point an instrument sights, workpiece (cell) frame, m ([`SignalKind::TargetPoint`]).

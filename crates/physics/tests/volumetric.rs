@@ -106,12 +106,12 @@ fn first_order_model_matches_full_chain_to_second_order() {
     }
 }
 
-#[test]
-fn sum_of_catalog_terms_equals_first_order_synthesis() {
-    let mut r = common::rng(11);
-    let m = random_model(&mut r, 5e-5, 5e-5);
-    let f = |a: Axis, q: f64| m.axis_errors(a, q);
-    let tool = Vector3::new(0.03, 0.01, -0.18);
+/// The 21 catalog terms of P5's errors `m` (X on the workpiece side, the P5 levers), their
+/// Abbe offsets at `tool`, with their parameters.
+fn catalog_terms(
+    m: &GeometricErrorModel,
+    tool: Vector3<f64>,
+) -> Vec<(Box<dyn PhysicsTerm>, Vec<f64>)> {
     // X is on the workpiece side: the relative (catalog) errors of X are minus P5's table errors.
     let side = |a: Axis| if a == Axis::X { -1.0 } else { 1.0 };
     let lever = |a: Axis| match a {
@@ -156,27 +156,32 @@ fn sum_of_catalog_terms_equals_first_order_synthesis() {
             ));
         }
     }
-    terms.push((
-        Box::new(Squareness {
-            affected: Axis::X,
-            driver: Axis::Y,
-        }),
-        vec![m.squareness.xy],
-    ));
-    terms.push((
-        Box::new(Squareness {
-            affected: Axis::X,
-            driver: Axis::Z,
-        }),
-        vec![m.squareness.xz],
-    ));
-    terms.push((
-        Box::new(Squareness {
-            affected: Axis::Y,
-            driver: Axis::Z,
-        }),
-        vec![m.squareness.yz],
-    ));
+    for (affected, driver, s) in [
+        (Axis::X, Axis::Y, m.squareness.xy),
+        (Axis::X, Axis::Z, m.squareness.xz),
+        (Axis::Y, Axis::Z, m.squareness.yz),
+    ] {
+        terms.push((Box::new(Squareness { affected, driver }), vec![s]));
+    }
+    terms
+}
+
+fn sum_of(terms: &[(Box<dyn PhysicsTerm>, Vec<f64>)], s: &Signals) -> Vector3<f64> {
+    let mut sum = Vector3::zeros();
+    for (t, p) in terms {
+        let v = t.predict(p, s).unwrap().value;
+        sum += Vector3::new(v[0], v[1], v[2]);
+    }
+    sum
+}
+
+#[test]
+fn sum_of_catalog_terms_equals_first_order_synthesis() {
+    let mut r = common::rng(11);
+    let m = random_model(&mut r, 5e-5, 5e-5);
+    let f = |a: Axis, q: f64| m.axis_errors(a, q);
+    let tool = Vector3::new(0.03, 0.01, -0.18);
+    let terms = catalog_terms(&m, tool);
     assert_eq!(
         terms.len(),
         21,
@@ -188,17 +193,51 @@ fn sum_of_catalog_terms_equals_first_order_synthesis() {
             0.8 * r.random::<f64>(),
             0.8 * r.random::<f64>(),
         );
-        let s = Signals::default().with_positions(q);
-        let mut sum = Vector3::zeros();
-        for (t, p) in &terms {
-            let v = t.predict(p, &s).unwrap().value;
-            sum += Vector3::new(v[0], v[1], v[2]);
-        }
+        let sum = sum_of(&terms, &Signals::default().with_positions(q));
         let synth = xfyz_volumetric_error_first_order(&q, &tool, &f, &m.squareness);
         assert!(
             (sum - synth).amax() < 1e-15,
             "terms {sum:?} vs synthesis {synth:?}"
         );
+    }
+}
+
+/// A reflector moved on the spindle by δ (a reading's `tool_offset_shift`): the terms declared
+/// for the tool predict P5's error of the point at tool + δ — the angular errors through the
+/// longer arms, translations unchanged — and the difference from the tool's error is ε × δ, so
+/// readings at several offsets see the angles apart from the straightnesses.
+#[test]
+fn a_reflector_moved_on_the_spindle_is_seen_through_longer_abbe_arms() {
+    let mut r = common::rng(12);
+    let m = random_model(&mut r, 5e-5, 5e-5);
+    let f = |a: Axis, q: f64| m.axis_errors(a, q);
+    let tool = Vector3::new(0.0, 0.0, -0.12);
+    let terms = catalog_terms(&m, tool);
+    for shift in [
+        Vector3::new(0.15, 0.0, 0.0),
+        Vector3::new(0.0, 0.0, -0.15),
+        Vector3::new(-0.05, 0.1, 0.02),
+    ] {
+        for _ in 0..10 {
+            let q = Vector3::new(
+                0.8 * r.random::<f64>(),
+                0.8 * r.random::<f64>(),
+                0.8 * r.random::<f64>(),
+            );
+            let mut s = Signals::default().with_positions(q);
+            let at_tool = sum_of(&terms, &s);
+            s.tool_offset_shift = Some(shift);
+            let moved = sum_of(&terms, &s);
+            let synth = xfyz_volumetric_error_first_order(&q, &(tool + shift), &f, &m.squareness);
+            assert!(
+                (moved - synth).amax() < 1e-15,
+                "shift {shift:?}: terms {moved:?} vs synthesis {synth:?}"
+            );
+            assert!(
+                (moved - at_tool).norm() > 1e-8,
+                "a 150 mm move with 50 µrad angles changes the error"
+            );
+        }
     }
 }
 

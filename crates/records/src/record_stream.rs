@@ -232,6 +232,7 @@ impl<'m, 'a> RecordStream<'m, 'a> {
             SignalTopic::Approach
             | SignalTopic::PowerOn
             | SignalTopic::Load
+            | SignalTopic::ToolOffset
             | SignalTopic::Accelerometer(_) => {}
         }
         self.signal_topics.insert(name, which);
@@ -277,7 +278,7 @@ impl<'m, 'a> RecordStream<'m, 'a> {
                     m,
                     at,
                     self.joints,
-                    &self.model.machine.tool_offset,
+                    |t| tool_offset_at(&self.builder, self.model, t),
                     self.commanded_positions,
                 )
             };
@@ -302,7 +303,7 @@ impl<'m, 'a> RecordStream<'m, 'a> {
                 m,
                 at,
                 self.joints,
-                &self.model.machine.tool_offset,
+                |t| tool_offset_at(&self.builder, self.model, t),
                 self.commanded_positions,
             ) {
                 Ok(mut p) => {
@@ -725,13 +726,22 @@ fn from_tracker(m: &SourcedMessage, at: String) -> Result<Pending, Rejected> {
     })
 }
 
+/// The tool offset a nominal at `t_ns` is the point of: the recorded active one
+/// (`/machine/tool_offset`, published before the readings it applies to), else the model's.
+fn tool_offset_at(builder: &SignalsBuilder, model: &ForwardModel, t_ns: i64) -> Vector3<f64> {
+    builder
+        .tool_offset_at(t_ns)
+        .unwrap_or(model.machine.tool_offset)
+}
+
 /// `commanded_positions`: the recording's joint states have given the machine's positions (in
-/// [`JointSource::CommandedOrNominal`], the nominal then gives none).
+/// [`JointSource::CommandedOrNominal`], the nominal then gives none). `tool_offset(t)`: the tool
+/// offset the nominal at t includes.
 fn from_measured_point(
     m: &SourcedMessage,
     at: String,
     joints: JointSource,
-    tool_offset: &Vector3<f64>,
+    tool_offset: impl Fn(i64) -> Vector3<f64>,
     commanded_positions: bool,
 ) -> Result<Pending, Rejected> {
     let p: MeasuredPoint = m
@@ -757,7 +767,7 @@ fn from_measured_point(
                     format!("no commanded position: the point's nominal is not finite and {COMMANDED_JOINTS_TOPIC} gives no axis positions (bag import: columns nominal_x, nominal_y, nominal_z, or joint.x, joint.y, joint.z)"),
                 ));
             }
-            let q = nominal - tool_offset;
+            let q = nominal - tool_offset(message_time(&p.header.stamp, m.log_time_ns));
             Some(vec![q.x, q.y, q.z])
         }
     };

@@ -12,6 +12,7 @@
 //! | `/air/humidity`, `/weather/humidity` | `sensor_msgs/RelativeHumidity` | station relative humidity (0..1 on the wire, %RH in `Signals`) |
 //! | `/tracker/power_on` | `sensor_msgs/TimeReference` | when the instrument was powered on (`time_ref`) |
 //! | `/machine/load` | `geometry_msgs/WrenchStamped` | load force, N, machine frame |
+//! | `/machine/tool_offset` | `geometry_msgs/PointStamped` | the active tool's (target's) offset, m, machine frame: a reading's nominal is q plus it, and its difference from the model's `tool_offset` moves the target ([`metrocell_physics::Signals::tool_offset_shift`]) |
 //!
 //! A tracker reading (`metrocell_msgs/TrackerMeasurement`) also carries the station air it
 //! used; see [`crate::recordings`]. Times: a message's `header.stamp`, or its log time when the
@@ -19,7 +20,7 @@
 
 use metrocell_bagtools::SourcedMessage;
 use metrocell_model::SignalsBuilder;
-use metrocell_msgs::geometry_msgs::msg::WrenchStamped;
+use metrocell_msgs::geometry_msgs::msg::{PointStamped, WrenchStamped};
 use metrocell_msgs::sensor_msgs::msg::{
     FluidPressure, Imu, JointState, RelativeHumidity, Temperature, TimeReference,
 };
@@ -33,7 +34,7 @@ use nalgebra::Vector3;
 // the names a cell publishes (crates/msgs `topics`), plus the weather station's aliases below
 pub use metrocell_msgs::topics::{
     APPROACH as APPROACH_TOPIC, COMMANDED_JOINTS as COMMANDED_JOINTS_TOPIC, LOAD as LOAD_TOPIC,
-    POWER_ON as POWER_ON_TOPIC, TEMPERATURE_PREFIX,
+    POWER_ON as POWER_ON_TOPIC, TEMPERATURE_PREFIX, TOOL_OFFSET as TOOL_OFFSET_TOPIC,
 };
 /// The temperature sensor whose topic is also the station's air temperature.
 pub const AIR_SENSOR: &str = "air";
@@ -53,6 +54,7 @@ pub enum SignalTopic {
     AirHumidity,
     PowerOn,
     Load,
+    ToolOffset,
     /// An accelerometer (`/imu/<sensor>`, `sensor_msgs/Imu`: its linear acceleration).
     Accelerometer(String),
 }
@@ -73,6 +75,7 @@ impl SignalTopic {
             }
             POWER_ON_TOPIC if is(TimeReference::ROS_TYPE) => SignalTopic::PowerOn,
             LOAD_TOPIC if is(WrenchStamped::ROS_TYPE) => SignalTopic::Load,
+            TOOL_OFFSET_TOPIC if is(PointStamped::ROS_TYPE) => SignalTopic::ToolOffset,
             t if t.starts_with(IMU_PREFIX) && is(Imu::ROS_TYPE) => {
                 let sensor = t
                     .strip_prefix(IMU_PREFIX)
@@ -175,6 +178,14 @@ pub fn feed(
             builder.push_load(
                 message_time(&msg.header.stamp, m.log_time_ns),
                 Vector3::new(f.x, f.y, f.z),
+            )
+        }
+        SignalTopic::ToolOffset => {
+            let msg: PointStamped = m.decode().map_err(decode_error)?;
+            let p = &msg.point;
+            builder.push_tool_offset(
+                message_time(&msg.header.stamp, m.log_time_ns),
+                Vector3::new(p.x, p.y, p.z),
             )
         }
         SignalTopic::Accelerometer(sensor) => {

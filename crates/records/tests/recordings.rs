@@ -695,6 +695,86 @@ fn nominals_give_the_axes_when_an_export_has_velocities_but_no_joints() {
     let _ = std::fs::remove_dir_all(&dir);
 }
 
+/// The same export with the reflector moved between readings (columns `tool_offset.*`, bag
+/// import's /machine/tool_offset): each reading's axes are its nominal minus the tool offset
+/// active then, and its signals carry that offset's difference from the model's tool.
+#[test]
+fn a_reading_of_a_moved_reflector_carries_its_tool_offset() {
+    let dir = scratch("csv_tool_offset");
+    std::fs::create_dir_all(&dir).unwrap();
+    let mapping_text = std::fs::read_to_string(fixture("recordings_mapping.yaml"))
+        .unwrap()
+        .replace("  joint.x:", "  nominal_x:")
+        .replace("  joint.y:", "  nominal_y:")
+        .replace("  joint.z:", "  nominal_z:")
+        + "  tool_offset.x: {column: tool_x_mm, scale: 0.001}\n  tool_offset.y: {column: tool_y_mm, scale: 0.001}\n  tool_offset.z: {column: tool_z_mm, scale: 0.001}\n";
+    std::fs::write(dir.join("mapping.yaml"), mapping_text).unwrap();
+    // the first half at the model's tool (0, 0, −150 mm), the rest 100 mm along X from it
+    let reflector = |k: usize| {
+        if k < 5 {
+            [0.0, 0.0, -0.150]
+        } else {
+            [0.100, 0.0, -0.150]
+        }
+    };
+    let export = std::fs::read_to_string(fixture("recordings_export.csv")).unwrap();
+    let mut text = String::new();
+    for (k, line) in export.lines().enumerate() {
+        let extra = match k {
+            0 => ",tool_x_mm,tool_y_mm,tool_z_mm".to_string(),
+            _ => {
+                let r = reflector(k - 1);
+                format!(",{},{},{}", r[0] * 1e3, r[1] * 1e3, r[2] * 1e3)
+            }
+        };
+        text += &format!("{line}{extra}\n");
+    }
+    std::fs::write(dir.join("export.csv"), text).unwrap();
+    let bag = dir.join("bag");
+    let report = import_csv(
+        &dir.join("export.csv"),
+        &bag,
+        Some(&Mapping::load(&dir.join("mapping.yaml")).unwrap()),
+        WriterOptions::default(),
+    )
+    .unwrap();
+    assert!(report.errors.is_empty(), "{:?}", report.errors);
+    assert_eq!(
+        report.messages_per_topic["/machine/tool_offset"], 2,
+        "written when it changes"
+    );
+    let c = cell(CSV_MODEL, "csv_model");
+    let instruments = c.tracker_terms().unwrap();
+    let model = c.forward_model(&instruments).unwrap();
+    let set = records_from_bags(&[&bag], &model, &RecordingOptions::default()).unwrap();
+    let rows = csv_rows();
+    assert!(set.rejected.is_empty(), "{:?}", set.rejected);
+    assert_eq!(set.records.len(), rows.len());
+    for (k, (rec, row)) in set.records.iter().zip(&rows).enumerate() {
+        let r = reflector(k);
+        let q = [
+            row.joints[0] - r[0],
+            row.joints[1] - r[1],
+            row.joints[2] - r[2],
+        ];
+        for a in 0..3 {
+            assert!(
+                (rec.q[a] - q[a]).abs() < 1e-12,
+                "{}: q {:?} vs {q:?}",
+                row.point,
+                rec.q
+            );
+        }
+        let shift = rec.signals.tool_offset_shift.expect("recorded");
+        assert!(
+            (shift - nalgebra::Vector3::new(r[0], r[1], r[2] + 0.150)).norm() < 1e-12,
+            "{}: shift {shift:?}",
+            row.point
+        );
+    }
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
 #[test]
 fn a_lagged_growth_on_a_missing_sensor_names_term_signal_topic_and_column() {
     let text = exact_thermocouples(&example("quick_demo.yaml"));

@@ -67,6 +67,9 @@ pub fn mesh_of(records: &RecordSet, f: &Fit) -> Vec<Vec<f64>> {
     out
 }
 
+/// A stop's identity: the mesh point and the target's offset from the model's tool (µm).
+type Stop = (usize, Vec<i64>);
+
 fn key(q: &[f64]) -> Vec<i64> {
     q.iter().map(|v| (v * 1e6).round() as i64).collect()
 }
@@ -83,6 +86,40 @@ pub struct Visit {
     /// what compensating the machine with the model removes at this stop — its geometric
     /// errors and, at the stop's temperatures, its thermal terms.
     pub compensation: Vector3<f64>,
+    /// The sighted target's offset from the model's tool during the stop (m; zero: the model's
+    /// tool — [`metrocell_physics::Signals::tool_offset_shift`]).
+    pub tool_shift: Vector3<f64>,
+}
+
+/// The visits of one target, for a length test (ISO 10360-2 measures with one probe): those at
+/// the model's tool when any are, else those of the target with the most visits. Returns them
+/// and that target's offset from the model's tool (m).
+pub fn visits_of_one_target(visits: &[Visit]) -> (Vec<Visit>, Vector3<f64>) {
+    let mut counts: Vec<(Vec<i64>, Vector3<f64>, usize)> = vec![];
+    for v in visits {
+        let k = key(v.tool_shift.as_slice());
+        match counts.iter_mut().find(|(c, _, _)| *c == k) {
+            Some(c) => c.2 += 1,
+            None => counts.push((k, v.tool_shift, 1)),
+        }
+    }
+    let zero = key(&[0.0; 3]);
+    let chosen = counts
+        .iter()
+        .find(|(k, _, _)| *k == zero)
+        .or_else(|| counts.iter().max_by_key(|(_, _, n)| *n))
+        .map(|(k, shift, _)| (k.clone(), *shift));
+    match chosen {
+        Some((k, shift)) => (
+            visits
+                .iter()
+                .filter(|v| key(v.tool_shift.as_slice()) == k)
+                .cloned()
+                .collect(),
+            shift,
+        ),
+        None => (vec![], Vector3::zeros()),
+    }
 }
 
 /// The fit's tracker pose (p_machine = R·p_tracker + T), identity for machine-frame records.
@@ -113,7 +150,8 @@ pub fn visits(model: &ForwardModel, records: &RecordSet, f: &Fit, mesh: &[Vec<f6
     let mut order: Vec<usize> = f.used.clone();
     order.sort_by(|&a, &b| records.records[a].time.total_cmp(&records.records[b].time));
     let mut out: Vec<Visit> = vec![];
-    let mut current: Option<(usize, Vec<usize>)> = None;
+    // a stop: consecutive readings at one point with one target
+    let mut current: Option<(Stop, Vec<usize>)> = None;
     let kin = model.kinematic_truth(&f.x).ok();
     // a reading in the machine frame with the identified instrument errors taken out: the
     // model's true tool point plus the reading's residual, turned into the machine frame; and
@@ -142,8 +180,14 @@ pub fn visits(model: &ForwardModel, records: &RecordSet, f: &Fit, mesh: &[Vec<f6
             Err(_) => (registered, Vector3::zeros()),
         }
     };
-    let close = |group: Option<(usize, Vec<usize>)>, out: &mut Vec<Visit>| {
-        if let Some((point, members)) = group {
+    let shift = |i: usize| {
+        records.records[i]
+            .signals
+            .tool_offset_shift
+            .unwrap_or_default()
+    };
+    let close = |group: Option<(Stop, Vec<usize>)>, out: &mut Vec<Visit>| {
+        if let Some(((point, _), members)) = group {
             let n = members.len() as f64;
             let (sum, comp) = members
                 .iter()
@@ -162,6 +206,7 @@ pub fn visits(model: &ForwardModel, records: &RecordSet, f: &Fit, mesh: &[Vec<f6
                 covariance: cov,
                 readings: members.len(),
                 compensation: comp / n,
+                tool_shift: shift(members[0]),
             });
         }
     };
@@ -169,11 +214,12 @@ pub fn visits(model: &ForwardModel, records: &RecordSet, f: &Fit, mesh: &[Vec<f6
         let Some(&point) = index.get(&key(&records.records[i].q)) else {
             continue;
         };
+        let stop = (point, key(shift(i).as_slice()));
         match &mut current {
-            Some((p, members)) if *p == point => members.push(i),
+            Some((p, members)) if *p == stop => members.push(i),
             _ => {
                 close(current.take(), &mut out);
-                current = Some((point, vec![i]));
+                current = Some((stop, vec![i]));
             }
         }
     }

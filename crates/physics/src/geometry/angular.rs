@@ -1,14 +1,17 @@
 //! `angular` — roll, pitch or yaw of an axis, with its Abbe lever
 //! (ISO 230-1 E_AX, E_BX, E_CX ...; VDI 2617-3 xRx, xRy, xRz).
 //!
-//! d = ε(q_k)·e_a × L,   L = r_abbe + Σ_{j ∈ lever_axes} q_j·e_j
+//! d = ε(q_k)·e_a × L,   L = r_abbe + δ_tool + Σ_{j ∈ lever_axes} q_j·e_j
 //!
 //! ε is the small rotation of the tool relative to the workpiece about machine axis a, caused by
 //! the motion of axis k (an [`ErrorSeries`] in rad). L is the Abbe lever: the vector from the
 //! rotation's reference point to the tool point — the tool/probe offset `abbe_offset` (m) plus the
 //! positions of the axes carried between the reference and the tool (`lever_axes`). For an XFYZ
 //! machine with the P5 chain (see `volumetric`): X → `[x, y, z]`, Y → `[z]`, Z → `[]` — and the
-//! relative rotation of the workpiece-side X is minus the table's rotation.
+//! relative rotation of the workpiece-side X is minus the table's rotation. δ_tool is the
+//! reading's target offset from the model's tool (`Signals::tool_offset_shift`, zero unless a
+//! recording names another tool offset): the same ε seen through arms of several lengths is what
+//! separates an angular error from a straightness (ISO 230-1 Annex A, multi-offset verification).
 //! Frame: machine, tool relative to workpiece. Options: `axis`, `about`, `lever_axes`,
 //! `abbe_offset`, `basis`, `order` (default 1), `travel`.
 
@@ -44,7 +47,9 @@ impl Angular {
 
     fn lever(&self, s: &Signals) -> Result<(f64, Vector3<f64>), PhysicsError> {
         let q = s.position(self, self.axis)?;
-        let mut l = self.abbe_offset;
+        // a target moved on the spindle (a reflector at another offset) lengthens every arm by
+        // its move: the term's `abbe_offset` is the arm at the model's tool
+        let mut l = self.abbe_offset + s.tool_offset_shift.unwrap_or_default();
         for a in &self.lever_axes {
             l += a.unit() * s.position(self, *a)?;
         }

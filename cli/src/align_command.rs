@@ -15,11 +15,12 @@ use crate::vision::image_input::parse_length;
 (metrocell_msgs/action/MoveTool: TRANSLATE by a vector, or ROTATE by an angle about an axis through a point; \
 msgs/action/MoveTool.action) — or `metrocell-robot-twin` to try it — and the camera with the fiducial node \
 publishing the fixed target's pose on fiducials/pose.\n\n\
-What it does (seed 003, claims 1–9): two perpendicular translations give the camera's rotation \
-(TRIAD); turns of ±ANGLE about two parallel vertical axes AXIS-OFFSET apart give the camera's x/y offset, \
+What it does (seed 003, claims 1–9): translations of --move each way along three axes give the camera's \
+rotation (Kabsch; the patent's two moves leave twice the rotation's uncertainty, which a turn's reading of a \
+target |t| away carries into the offset); turns of ±ANGLE about two parallel vertical axes AXIS-OFFSET apart give the camera's x/y offset, \
 the same about horizontal axes its z offset (solved exactly, not by the patent's ratio equations); each \
 stage is repeated in the frame its estimate moved to until its correction falls to three times the \
-camera's noise (--sigma), at most 5 passes. Each move is followed by the move back. A reading is the target's position before and \
+camera's noise (--sigma), at most 5 passes; the last two estimates of a stage that converged are averaged. Each move is followed by the move back. A reading is the target's position before and \
 after a move (the mean of --frames poses) and, for a turn, the turn commanded — not the poses' orientations, \
 their noisiest part.\n\n\
 Uncertainty: the result's σ (offset per axis, rotation) is logged and written above the mount line; it is \

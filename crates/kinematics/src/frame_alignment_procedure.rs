@@ -1,5 +1,6 @@
 //! The patent's whole procedure (seed 003, claims 1–9) against a rig that moves and measures:
-//! the camera's rotation from pure translations (TRIAD), then the xy offset from rotations about
+//! the camera's rotation from pure translations (Kabsch over a move each way along three axes; the
+//! patent's TRIAD of two moves is `frame_alignment::rotation_from_two_moves`), then the xy offset from rotations about
 //! z through two axes, then z from rotations about x (solved exactly, not by the patent's ratio
 //! equations: see `offset_pass`) — each stage repeated,
 //! the working frame moved by each estimate, until the estimate falls to the camera's noise floor
@@ -12,8 +13,8 @@
 //! axis through `a` moves it by `(R(θ) − I)(r − a)`, which the camera reads as `R_rcᵀ` of that.
 
 use crate::error::KinematicsError;
-use crate::frame_alignment::rotation_from_two_moves;
-use nalgebra::{Matrix3, Rotation3, Unit, Vector2, Vector3};
+use crate::frame_alignment::rotation_kabsch;
+use nalgebra::{Matrix3, Rotation3, Unit, UnitQuaternion, Vector2, Vector3};
 
 /// What the procedure asks of the robot and its camera.
 pub trait AlignmentRig {
@@ -37,7 +38,7 @@ pub trait AlignmentRig {
 /// How the procedure moves and when it stops.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct AlignmentPlan {
-    /// Length of the two translations of the rotation stage (m).
+    /// Length of the rotation stage's translations, one each way along each axis (m).
     pub move_length: f64,
     /// Rotation angle of the offset stages (rad).
     pub angle: f64,
@@ -70,11 +71,13 @@ pub struct Alignment {
     /// The camera origin from the tool origin (robot axes, m).
     pub offset: Vector3<f64>,
     /// Standard uncertainty of the rotation about each robot axis (rad): each rotation pass
-    /// measures all that is left, so the last one's noise, `camera_sigma / move_length`.
+    /// measures all that is left, so one pass's noise, `camera_sigma / (2·move_length)`, over √2
+    /// when the stage converged after two or more passes (the last two estimates averaged).
     pub rotation_sigma: f64,
     /// Covariance of `offset` (m²): x from the xy stage's last pass, y and z from the z stage's
     /// (which measures y again), each `σ²(AᵀA)⁻¹` of its least squares with σ² the camera's
-    /// noise plus the rotation's uncertainty carried through the largest displacement read.
+    /// noise (halved when the last two passes are averaged) plus the rotation's uncertainty
+    /// carried through the largest displacement read (common to both passes: not halved).
     pub offset_covariance: Matrix3<f64>,
     /// Passes each stage took (rotation, xy, z), and each pass's correction size (rad or m).
     pub passes: [Vec<f64>; 3],
@@ -138,35 +141,65 @@ fn offset_pass(
         })
 }
 
+/// The standard uncertainty of one rotation pass about each axis (rad): the small-angle least
+/// squares of six moves ±L along three axes has normal matrix Σ[v]×ᵀ[v]× = 4L²·I.
+fn rotation_sigma_of(plan: &AlignmentPlan) -> f64 {
+    plan.camera_sigma / (2.0 * plan.move_length)
+}
+
 /// Runs the three stages on `rig`.
 pub fn align(
     rig: &mut dyn AlignmentRig,
     plan: &AlignmentPlan,
 ) -> Result<Alignment, KinematicsError> {
     let mut passes: [Vec<f64>; 3] = Default::default();
-    // rotation: two perpendicular moves, TRIAD; each pass measures what is left in the frame
-    // turned by the estimate so far
+    // rotation: a move each way along each of the camera's estimated axes, Kabsch; each pass
+    // measures what is left in the frame turned by the estimate so far. Six moves, not the
+    // patent's two: the rotation's error turns every later turn's reading of a target |t| away
+    // (the offset stages' largest error through a camera), and ± moves along three axes leave
+    // σ/(2L) about every axis where two moves leave σ/L
     let mut rotation = Matrix3::identity();
-    let floor = 3.0 * plan.camera_sigma / plan.move_length;
+    let floor = 3.0 * rotation_sigma_of(plan);
+    // the estimate before the last pass: once a pass finds only noise left, it and the last are
+    // two independent measurements of the same frame (each pass measures all that is left), and
+    // their mean halves the variance
+    let mut previous: Option<Matrix3<f64>> = None;
+    let mut converged = false;
     for _ in 0..plan.max_passes {
-        let (v1, v2) = (
-            rotation * Vector3::x() * plan.move_length,
-            rotation * Vector3::y() * plan.move_length,
-        );
-        let (c1, c2) = (rig.translate(&v1)?, rig.translate(&v2)?);
-        // what is left: the readings against the moves as the current estimate predicts them
-        let left = rotation_from_two_moves(
-            &(rotation.transpose() * v1),
-            &(rotation.transpose() * v2),
-            &c1,
-            &c2,
-        )?;
+        let mut moves = Vec::with_capacity(6);
+        let mut readings = Vec::with_capacity(6);
+        for axis in [Vector3::x(), Vector3::y(), Vector3::z()] {
+            for sign in [1.0, -1.0] {
+                let v = rotation * axis * (sign * plan.move_length);
+                readings.push(rig.translate(&v)?);
+                // what is left: the readings against the moves as the current estimate
+                // predicts them
+                moves.push(rotation.transpose() * v);
+            }
+        }
+        let left = rotation_kabsch(&moves, &readings)?;
+        previous = Some(rotation);
         rotation *= left;
         let size = Rotation3::from_matrix_unchecked(left).angle();
         passes[0].push(size);
         if size < floor {
+            converged = true;
             break;
         }
+    }
+    let mut rotation_sigma = rotation_sigma_of(plan);
+    if let (true, Some(before)) = (converged && passes[0].len() >= 2, previous) {
+        // halfway from the one to the other (the normalised mean of the quaternions, on one
+        // hemisphere: at one half the same as the slerp)
+        let q = |m: &Matrix3<f64>| {
+            UnitQuaternion::from_rotation_matrix(&Rotation3::from_matrix_unchecked(*m))
+        };
+        let (a, mut b) = (q(&before), q(&rotation));
+        if a.coords.dot(&b.coords) < 0.0 {
+            b = UnitQuaternion::new_unchecked(-b.into_inner());
+        }
+        rotation = *a.nlerp(&b, 0.5).to_rotation_matrix().matrix();
+        rotation_sigma /= 2f64.sqrt();
     }
     rig.rotation_estimate(&rotation);
     // the offset stages: displacements read in robot axes through the estimated rotation
@@ -178,18 +211,28 @@ pub fn align(
         (Vector3::z_axis(), Vector3::new(d, d, 0.0), [0, 1]),
         (Vector3::x_axis(), Vector3::new(0.0, 0.0, d), [1, 2]),
     ];
-    let rotation_sigma = plan.camera_sigma / plan.move_length;
     let mut offset_covariance = Matrix3::zeros();
     for (k, (axis, apart, plane)) in stages.iter().enumerate() {
-        for _ in 0..plan.max_passes {
+        for pass in 0..plan.max_passes {
+            let before = offset;
             let (correction, inverse, largest) =
                 offset_pass(rig, &rotation, axis, plan.angle, &offset, apart, *plane)?;
             for (i, c) in plane.iter().zip(correction.iter()) {
                 offset[*i] += c;
             }
+            let converged = correction.norm() < floor;
+            // the last two estimates when this pass found only noise left: their mean (as the
+            // rotation's above); the rotation's error is common to both and does not average
+            let averaged = converged && pass >= 1;
+            if averaged {
+                for &i in plane {
+                    offset[i] = 0.5 * (before[i] + offset[i]);
+                }
+            }
             // what the last pass leaves: its own noise (the rotation's error turns every
             // displacement read, by up to rotation_sigma × its length)
-            let variance = plan.camera_sigma.powi(2) + (rotation_sigma * largest).powi(2);
+            let camera = plan.camera_sigma.powi(2) / if averaged { 2.0 } else { 1.0 };
+            let variance = camera + (rotation_sigma * largest).powi(2);
             for (a, &i) in plane.iter().enumerate() {
                 for (b, &j) in plane.iter().enumerate() {
                     offset_covariance[(i, j)] = variance * inverse[(a, b)];
@@ -203,7 +246,7 @@ pub fn align(
                 }
             }
             passes[k + 1].push(correction.norm());
-            if correction.norm() < floor {
+            if converged {
                 break;
             }
         }

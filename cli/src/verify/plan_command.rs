@@ -8,10 +8,10 @@ use anyhow::{bail, Context, Result};
 use metrocell_estimation::simulated_records::TrackerNoise;
 use metrocell_physics::units::{parse_quantity, split_quantity};
 use metrocell_twin::CellModel;
-use metrocell_verification::identification_model::single_target_model_yaml;
+use metrocell_verification::identification_model::multi_target_model_yaml;
 use metrocell_verification::length_lines::with_length_lines;
 use metrocell_verification::machine_program::{
-    arrival_times, gcode, stops, DwellWord, ProgramSettings,
+    arrival_times, gcode, multi_reflector_gcode, stops, DwellWord, ProgramSettings,
 };
 use metrocell_verification::tracker_station::{
     assess, candidate_ring, facing, ranked, target_points, SightLimits, Station, StationAssessment,
@@ -65,6 +65,15 @@ pub struct PlanArgs {
     /// or a diagonal of a regular grid holds fewer
     #[arg(long)]
     length_test: bool,
+    /// The reflector's offsets on the spindle, from its gauge point, one pass of the program
+    /// each: x,y,z;x,y,z;… (a bare number is mm), e.g. "0,0,-100;150,0,-100;0,0,-250". Two or
+    /// more separate roll, pitch and yaw from straightness (their Abbe arms differ): the default
+    /// model then declares the nine angular errors, the map is for the first offset, and the
+    /// program stops (M0) before each pass for the reflector to be moved and its offset published
+    /// on /machine/tool_offset. Offsets along two directions across each axis of turn are needed:
+    /// one along the spindle (z) and one across it (x or y) separates all nine
+    #[arg(long, value_parser = parse_reflectors, allow_hyphen_values = true)]
+    reflectors: Option<Reflectors>,
     /// The tracker's shortest range
     #[arg(long, default_value = "0.5m", value_parser = parse_quantity_arg("m"))]
     min_range: f64,
@@ -96,12 +105,20 @@ What it writes into OUTPUT:
                        each point's name (p0, p1, …, nest) is in a comment: name the tracker's
                        measurement after it
   points.csv           stop, name, x_mm, y_mm, z_mm, arrival_s (T_v = L_T/F + T_s(n − 1), from the
-                       start of the program at the first point)
+                       start of the program — or of its pass — at the first point), pass and the
+                       reflector's offset (mm)
   stations.csv         every candidate station, best first: whether it sees every point (range,
                        the reflector's acceptance), the largest and mean standard uncertainty of
                        the identified error map over the mesh, the parameters it cannot identify
   verify.launch.yaml   the run: the tracker node (TCP stream) and the recorder
   model.yaml           the error model the stations were judged with
+
+With --reflectors (two or more offsets of the reflector on the spindle): one pass of the stops
+per offset, each after a program stop (M0) at which the reflector is moved and its offset
+published on /machine/tool_offset (geometry_msgs/PointStamped, m; the M0's comment has the
+command), so `verify report` gives each reading its target; the default model then declares
+the roll, pitch and yaw of each axis (quadratic) with the P5 chain's Abbe arms, and its tool is
+the first offset — the map `verify report` states is for it.
 
 How stations are judged: the readings of every point from the station, with the tracker's noise
 model, identify the model's errors together with the tracker's pose; the error map's σ at each
@@ -113,7 +130,8 @@ Examples:
   metrocell verify plan --x 800..1200 --y 100..500 --z 200..400 --step 100mm -o plan
   metrocell verify plan --x 800..1200 --y 100..500 --z 200..400 --step 100mm --length-test -o plan   # + 28 points on this mesh: the report's length test has all 105 measurements
   metrocell verify plan --x 0..400 --y 0..400 --z 0..0 --step 50mm --station=-863.5,194.4,677.8 -o p3
-  metrocell verify plan --x 0..800 --y 0..500 --z 0..400 --step 100mm --model my_21_errors.yaml -o plan";
+  metrocell verify plan --x 0..800 --y 0..500 --z 0..400 --step 100mm --model my_21_errors.yaml -o plan
+  metrocell verify plan --x 0..800 --y 0..500 --z 0..400 --step 100mm --reflectors \"0,0,-100;150,0,-100;0,0,-250\" -o plan   # the 21 errors: three passes";
 
 fn parse_quantity_arg(unit: &'static str) -> impl Fn(&str) -> Result<f64, String> + Clone {
     move |s: &str| {
@@ -147,6 +165,24 @@ fn parse_range(s: &str) -> Result<(f64, f64), String> {
     Ok((length_mm(a)?, length_mm(b)?))
 }
 
+/// The reflector offsets of `--reflectors` (one value to clap, so not a `Vec` it would repeat).
+#[derive(Debug, Clone)]
+struct Reflectors(Vec<Vector3<f64>>);
+
+fn parse_reflectors(s: &str) -> Result<Reflectors, String> {
+    let v: Vec<Vector3<f64>> = s
+        .split(';')
+        .filter(|p| !p.trim().is_empty())
+        .map(parse_point)
+        .collect::<Result<_, _>>()?;
+    if v.is_empty() {
+        return Err(format!(
+            "`{s}`: give x,y,z;x,y,z;…, e.g. 0,0,-100;150,0,-100;0,0,-250"
+        ));
+    }
+    Ok(Reflectors(v))
+}
+
 fn parse_point(s: &str) -> Result<Vector3<f64>, String> {
     let v: Vec<f64> = s.split(',').map(length_mm).collect::<Result<_, _>>()?;
     if v.len() != 3 {
@@ -168,10 +204,11 @@ pub fn run(a: PlanArgs) -> Result<i32> {
     };
     let order = spiral_order(&grid);
     let points: Vec<[f64; 3]> = order.iter().map(|&i| grid[i]).collect();
+    let reflectors = a.reflectors.clone().map(|r| r.0).unwrap_or_default();
     let model_text = match &a.model {
         Some(p) => std::fs::read_to_string(p)
             .with_context(|| format!("cannot read the model {}", p.display()))?,
-        None => single_target_model_yaml(&mesh),
+        None => multi_target_model_yaml(&mesh, &reflectors),
     };
     let model_path = a
         .model
@@ -182,6 +219,11 @@ pub fn run(a: PlanArgs) -> Result<i32> {
         .map_err(|e| anyhow::anyhow!("{e}"))?;
     let fm = cell.forward_model().map_err(|e| anyhow::anyhow!("{e}"))?;
     let at = fm.params();
+    // each reflector as the readings will carry it: its offset from the model's tool
+    let shifts: Vec<Vector3<f64>> = reflectors
+        .iter()
+        .map(|r| r - fm.machine.tool_offset)
+        .collect();
     let noise = TrackerNoise {
         constant: a.range_noise,
         per_metre: a.range_noise_per_metre,
@@ -206,7 +248,7 @@ pub fn run(a: PlanArgs) -> Result<i32> {
     );
     let assessed: Vec<StationAssessment> = candidates
         .iter()
-        .map(|s| assess(&fm, &cell.setup, &at, &points, s, &limits, noise))
+        .map(|s| assess(&fm, &cell.setup, &at, &points, &shifts, s, &limits, noise))
         .collect::<Result<_, _>>()
         .map_err(anyhow::Error::msg)?;
     let rank = ranked(&assessed);
@@ -264,17 +306,39 @@ pub fn run(a: PlanArgs) -> Result<i32> {
         let p = a.output.join(name);
         std::fs::write(&p, text).with_context(|| format!("cannot write {}", p.display()))
     };
-    write("program.ngc", &gcode(&plan_stops, &settings, &title))?;
-    let mut csv = String::from("stop,name,x_mm,y_mm,z_mm,arrival_s\n"); // arrival: s after the program starts at the first point
-    for (k, (s, t)) in plan_stops.iter().zip(&arrivals).enumerate() {
-        let _ = writeln!(
-            csv,
-            "{k},{},{:.4},{:.4},{:.4},{t:.3}",
-            s.name,
-            s.point[0] * 1e3,
-            s.point[1] * 1e3,
-            s.point[2] * 1e3
-        );
+    let program = if reflectors.len() > 1 {
+        let r: Vec<[f64; 3]> = reflectors.iter().map(|v| [v.x, v.y, v.z]).collect();
+        multi_reflector_gcode(&plan_stops, &settings, &title, &r)
+    } else {
+        gcode(&plan_stops, &settings, &title)
+    };
+    write("program.ngc", &program)?;
+    // arrival: s after the program (or its pass, after the M0) starts at the first point
+    let mut csv = String::from(
+        "stop,name,x_mm,y_mm,z_mm,arrival_s,pass,reflector_x_mm,reflector_y_mm,reflector_z_mm\n",
+    );
+    let passes: Vec<Vector3<f64>> = if reflectors.len() > 1 {
+        reflectors.clone()
+    } else {
+        vec![fm.machine.tool_offset]
+    };
+    let mut k = 0;
+    for (pass, r) in passes.iter().enumerate() {
+        for (s, t) in plan_stops.iter().zip(&arrivals) {
+            let _ = writeln!(
+                csv,
+                "{k},{},{:.4},{:.4},{:.4},{t:.3},{},{:.4},{:.4},{:.4}",
+                s.name,
+                s.point[0] * 1e3,
+                s.point[1] * 1e3,
+                s.point[2] * 1e3,
+                pass + 1,
+                r.x * 1e3,
+                r.y * 1e3,
+                r.z * 1e3
+            );
+            k += 1;
+        }
     }
     write("points.csv", &csv)?;
     let mut st = String::from("rank,x_mm,y_mm,z_mm,yaw_deg,sees_all,blocked_points,min_range_m,max_range_m,max_incidence_deg,max_sd_um,mean_sd_um,held\n");
@@ -306,8 +370,19 @@ pub fn run(a: PlanArgs) -> Result<i32> {
     )?;
     let total = arrivals.last().copied().unwrap_or(0.0) + a.dwell;
     println!("{title}");
+    if reflectors.len() > 1 {
+        println!(
+            "  {} passes, one per reflector offset ({}), after a program stop (M0) each: move the reflector, publish its offset on /machine/tool_offset (the command is in the M0's comment); the map is for the first",
+            reflectors.len(),
+            reflectors
+                .iter()
+                .map(|r| format!("({:.1}, {:.1}, {:.1}) mm", r.x * 1e3, r.y * 1e3, r.z * 1e3))
+                .collect::<Vec<_>>()
+                .join(", ")
+        );
+    }
     println!(
-        "  {} stops ({} points{}), {:.1} min at {:.0} mm/min with {} s dwells",
+        "  {} stops ({} points{}), {:.1} min{} at {:.0} mm/min with {} s dwells",
         plan_stops.len(),
         points.len(),
         if a.nest_every > 0 {
@@ -316,6 +391,7 @@ pub fn run(a: PlanArgs) -> Result<i32> {
             String::new()
         },
         total / 60.0,
+        if reflectors.len() > 1 { " a pass" } else { "" },
         a.feed * 60e3,
         a.dwell
     );

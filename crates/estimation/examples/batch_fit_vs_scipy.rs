@@ -146,6 +146,7 @@ fn readings_plan(rng: &mut ChaCha8Rng) -> Vec<Planned> {
                 approach: [dir; 3],
                 temperatures: vec![],
                 time_on: 600.0 + 1.5 * k as f64,
+                tool_offset_shift: None,
             }
         })
         .collect()

@@ -35,6 +35,9 @@ pub struct Planned {
     pub temperatures: Vec<(String, f64)>,
     /// Time since the tracker was powered on, s.
     pub time_on: f64,
+    /// The target's offset from the model's tool (a reflector elsewhere on the spindle, m;
+    /// `Signals::tool_offset_shift`), None: the model's tool.
+    pub tool_offset_shift: Option<nalgebra::Vector3<f64>>,
 }
 
 /// The readings of `plan` at parameters `p` plus noise (seeded; None: no noise, the same stated
@@ -108,5 +111,6 @@ pub fn signals(model: &ForwardModel, d: &Planned) -> Signals {
         s.temperatures.insert(name.clone(), *t);
     }
     s.time_since_power_on = Some(d.time_on);
+    s.tool_offset_shift = d.tool_offset_shift;
     s
 }

@@ -25,6 +25,7 @@ fn plan() -> Vec<Planned> {
                         approach: [dir; 3],
                         temperatures: vec![("x_left".into(), t), ("x_right".into(), t + 0.3)],
                         time_on: 3600.0,
+                        tool_offset_shift: None,
                     });
                 }
             }

@@ -42,6 +42,7 @@ fn chunked_evaluation_equals_record_by_record() {
             approach: [1.0; 3],
             temperatures: vec![],
             time_on: 600.0 + k as f64,
+            tool_offset_shift: None,
         })
         .collect();
     let set = records(&fm, &p, &plan, THESIS_TRACKER, Some(5));

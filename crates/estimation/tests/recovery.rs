@@ -106,6 +106,7 @@ fn xfyz() -> Case {
                 approach: [v[3]; 3],
                 temperatures: vec![("x_left".into(), t_left), ("x_right".into(), t_left + 0.4)],
                 time_on: 600.0 + 4.0 * 3600.0 * phase,
+                tool_offset_shift: None,
             }
         })
         .collect();
@@ -149,6 +150,7 @@ fn ur5() -> Case {
             approach: [1.0; 3],
             temperatures: vec![],
             time_on: 7200.0,
+            tool_offset_shift: None,
         })
         .collect();
     Case {
@@ -190,6 +192,7 @@ fn delta() -> Case {
                     approach: [1.0; 3],
                     temperatures: vec![],
                     time_on: 7200.0,
+                    tool_offset_shift: None,
                 });
             }
         }

@@ -80,6 +80,7 @@ fn thesis_monte_carlo_shape_and_an_honest_map() {
                 approach: [1.0; 3],
                 temperatures: vec![],
                 time_on: 3.0 * 3600.0,
+                tool_offset_shift: None,
             });
         }
     }

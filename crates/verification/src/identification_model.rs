@@ -1,11 +1,55 @@
 //! The model a plan is judged with when the user gives none: the errors one tracker target
 //! (one SMR on the spindle) can identify on an XFYZ machine — each axis's positioning and its
 //! two straightnesses as cubic series over the mesh's range, and the squareness of each pair
-//! of axes that the mesh spans — with the tracker's pose identified alongside (P4/P5). Angular
-//! errors need targets at several tool offsets (their Abbe arm): give a model that declares
-//! them, and the tool offsets, with `--model`.
+//! of axes that the mesh spans — with the tracker's pose identified alongside (P4/P5). With the
+//! reflector at several tool offsets ([`multi_target_model_yaml`]) the roll, pitch and yaw of
+//! each axis too: the same angle seen through Abbe arms of several lengths is what tells it
+//! from a straightness (ISO 230-1 Annex A).
+
+use nalgebra::Vector3;
 
 use crate::Mesh;
+
+/// [`single_target_model_yaml`] with the model's tool at `targets[0]` (m, from the spindle's
+/// gauge point) and, when there are two or more targets, the nine angular errors of an XFYZ
+/// machine as quadratic series (slope and bow of each angle) over the mesh's range, through the
+/// P5 chain's Abbe arms: X's arm the tool point from the table's origin (levers x, y, z), Y's
+/// the ram's extension and the tool (lever z), Z's the tool alone — each plus the tool offset.
+pub fn multi_target_model_yaml(mesh: &Mesh, targets: &[Vector3<f64>]) -> String {
+    let base = single_target_model_yaml(mesh);
+    let Some(tool) = targets.first() else {
+        return base;
+    };
+    let mm = |v: &Vector3<f64>| format!("[{} mm, {} mm, {} mm]", v.x * 1e3, v.y * 1e3, v.z * 1e3);
+    let mut text = base.replacen(
+        "\nsensors:",
+        &format!("\n  tool_offset: {}\nsensors:", mm(tool)),
+        1,
+    );
+    if targets.len() < 2 {
+        return text;
+    }
+    for (a, (axis, levers)) in [("x", "[x, y, z]"), ("y", "[z]"), ("z", "[]")]
+        .iter()
+        .enumerate()
+    {
+        if mesh.max[a] <= mesh.min[a] {
+            continue;
+        }
+        let levels = ((mesh.max[a] - mesh.min[a]) / mesh.step).round() as usize + 1;
+        let order = (levels - 1).min(2);
+        let params: Vec<String> = (0..=order).map(|k| format!("c{k}: 0 urad")).collect();
+        let travel = format!("[{} mm, {} mm]", mesh.min[a] * 1e3, mesh.max[a] * 1e3);
+        for about in ["x", "y", "z"] {
+            text += &format!(
+                "  - {{id: angular, options: {{axis: {axis}, about: {about}, lever_axes: {levers}, abbe_offset: {}, order: {order}, travel: {travel}}}, params: {{{}}}}}\n",
+                mm(tool),
+                params.join(", ")
+            );
+        }
+    }
+    text
+}
 
 /// The cell file text (the twin's format) of that model, tracker pose at the origin. Each
 /// series is cubic, or of the order the mesh's levels on its axis can carry (3 levels: a

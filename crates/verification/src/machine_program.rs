@@ -100,6 +100,43 @@ fn mm(v: f64) -> String {
 
 /// The G-code of the verification (mm, absolute), with a comment naming each stop.
 pub fn gcode(stops: &[Stop], settings: &ProgramSettings, title: &str) -> String {
+    let mut g = header(stops, settings, title);
+    g += &stop_moves(stops, settings);
+    g += "M30\n";
+    g
+}
+
+/// The program of a verification with the reflector at several offsets on the spindle (m, from
+/// its gauge point): the stops once per reflector, each pass after a program stop (M0) at which
+/// the operator moves the reflector and publishes its offset. The commanded positions are the
+/// same in every pass (no tool length compensation): the reflector's offset moves the target,
+/// and the model sees the angular errors through the longer arms.
+pub fn multi_reflector_gcode(
+    stops: &[Stop],
+    settings: &ProgramSettings,
+    title: &str,
+    reflectors: &[[f64; 3]],
+) -> String {
+    let mut g = header(stops, settings, title);
+    let n = reflectors.len();
+    g += &format!("; {n} passes, one per reflector offset; every pass makes the same stops\n");
+    for (k, r) in reflectors.iter().enumerate() {
+        let at = format!("({}, {}, {}) mm", mm(r[0]), mm(r[1]), mm(r[2]));
+        g += &format!(
+            "; pass {} of {n}: the reflector at {at} from the spindle's gauge point\n",
+            k + 1
+        );
+        g += &format!(
+            "M0 ; stop: put the reflector at {at}; publish it: metrocell topic pub --once /machine/tool_offset geometry_msgs/msg/PointStamped '{{header: {{frame_id: machine}}, point: {{x: {}, y: {}, z: {}}}}}'; then cycle start\n",
+            r[0], r[1], r[2]
+        );
+        g += &stop_moves(stops, settings);
+    }
+    g += "M30\n";
+    g
+}
+
+fn header(stops: &[Stop], settings: &ProgramSettings, title: &str) -> String {
     let mut g = String::new();
     g += &format!("; {title}\n");
     g += &format!(
@@ -119,6 +156,12 @@ pub fn gcode(stops: &[Stop], settings: &ProgramSettings, title: &str) -> String 
     g += "; the tracker measures the target during each dwell; name its measurement as the comment says\n";
     g += "G21 G90 G17 G94\n";
     g += &format!("G1 F{:.1}\n", settings.feed * 60e3);
+    g
+}
+
+/// Each stop: the approach, the point (its name in a comment), the dwell.
+fn stop_moves(stops: &[Stop], settings: &ProgramSettings) -> String {
+    let mut g = String::new();
     let dwell = match settings.dwell_word {
         DwellWord::P => format!("G4 P{}", settings.dwell),
         DwellWord::X => format!("G4 X{}", settings.dwell),
@@ -139,7 +182,6 @@ pub fn gcode(stops: &[Stop], settings: &ProgramSettings, title: &str) -> String 
         );
         g += &format!("{dwell}\n");
     }
-    g += "M30\n";
     g
 }
 
@@ -186,5 +228,32 @@ mod tests {
         assert_eq!(lines[i + 1], "G4 X5");
         assert_eq!(g.matches("G4 X5").count(), 5);
         assert_eq!(*lines.last().unwrap(), "M30");
+    }
+
+    #[test]
+    fn a_pass_per_reflector_each_after_a_program_stop() {
+        let pts = [[0.1, 0.2, 0.3], [0.0, 0.2, 0.3]];
+        let s = stops(&pts, 0);
+        let settings = ProgramSettings {
+            feed: 0.05,
+            dwell: 4.0,
+            approach: 0.0,
+            dwell_word: DwellWord::P,
+            nest_every: 0,
+        };
+        let g = multi_reflector_gcode(&s, &settings, "t", &[[0.0, 0.0, -0.1], [0.15, 0.0, -0.1]]);
+        assert_eq!(g.matches("\nM0 ").count(), 2, "{g}");
+        assert_eq!(g.matches("G4 P4").count(), 4);
+        assert_eq!(g.matches("; p1\n").count(), 2);
+        let second = g
+            .find("pass 2 of 2: the reflector at (150.0000, 0.0000, -100.0000) mm")
+            .unwrap();
+        assert!(
+            g[second..].contains("point: {x: 0.15, y: 0, z: -0.1}"),
+            "{g}"
+        );
+        assert!(g.ends_with("M30\n"));
+        // one reflector's passes are the plain program's stops
+        assert_eq!(gcode(&s, &settings, "t").matches("G4 P4").count(), 2);
     }
 }

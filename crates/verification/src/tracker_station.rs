@@ -173,15 +173,25 @@ fn placed(model: &ForwardModel, at: &[f64], station: &Station) -> Result<Vec<f64
     Ok(p)
 }
 
-/// The planned readings: the commanded points, at rest, approached in +, long after power-on.
-pub fn planned(points: &[[f64; 3]]) -> Vec<Planned> {
-    points
+/// The planned readings: the commanded points, at rest, approached in +, long after power-on —
+/// with the model's tool, or (`targets`, each a reflector's offset from the model's tool, m) every
+/// point with each target in turn, a pass per target.
+pub fn planned(points: &[[f64; 3]], targets: &[Vector3<f64>]) -> Vec<Planned> {
+    let shifts: Vec<Option<Vector3<f64>>> = if targets.is_empty() {
+        vec![None]
+    } else {
+        targets.iter().map(|t| Some(*t)).collect()
+    };
+    shifts
         .iter()
-        .map(|p| Planned {
-            q: p.to_vec(),
-            approach: [1.0; 3],
-            temperatures: vec![],
-            time_on: 24.0 * 3600.0,
+        .flat_map(|shift| {
+            points.iter().map(|p| Planned {
+                q: p.to_vec(),
+                approach: [1.0; 3],
+                temperatures: vec![],
+                time_on: 24.0 * 3600.0,
+                tool_offset_shift: *shift,
+            })
         })
         .collect()
 }
@@ -203,7 +213,7 @@ pub fn target_points(
         per_metre: 0.0,
         angular: 1e-6,
     };
-    Ok(records(model, &p, &planned(points), noise, None)
+    Ok(records(model, &p, &planned(points, &[]), noise, None)
         .records
         .into_iter()
         .map(|r| r.measured)
@@ -211,19 +221,22 @@ pub fn target_points(
 }
 
 /// Judge `station` for measuring `points` (commanded axis positions, m) with a tracker of
-/// `noise`: visibility, then (if it sees all) the identified error map's uncertainty with the
-/// model's free parameters linearised at `at`.
+/// `noise` — with the model's tool, or each of `targets` (reflector offsets from the model's
+/// tool, m; [`planned`]) — : visibility, then (if it sees all) the identified error map's
+/// uncertainty with the model's free parameters linearised at `at`, for the model's tool.
+#[allow(clippy::too_many_arguments)]
 pub fn assess(
     model: &ForwardModel,
     setup: &ParameterSetup,
     at: &[f64],
     points: &[[f64; 3]],
+    targets: &[Vector3<f64>],
     station: &Station,
     limits: &SightLimits,
     noise: TrackerNoise,
 ) -> Result<StationAssessment, String> {
     let p = placed(model, at, station)?;
-    let plan = planned(points);
+    let plan = planned(points, targets);
     let data = records(model, &p, &plan, noise, None);
     let r = Rotation3::from_axis_angle(&Vector3::z_axis(), station.yaw);
     let world: Vec<Vector3<f64>> = data
@@ -238,7 +251,9 @@ pub fn assess(
         .normalize();
     let mut blocked = vec![];
     let (mut near, mut far, mut worst) = (f64::INFINITY, 0.0f64, 0.0f64);
-    for (i, w) in world.iter().enumerate() {
+    for (k, w) in world.iter().enumerate() {
+        // the point (a pass per target visits every point)
+        let i = k % points.len().max(1);
         let to_tracker = station.position - w;
         let range = to_tracker.norm();
         let angle = to_tracker.angle(&facing);

@@ -66,7 +66,7 @@ fn farther_stations_state_larger_uncertainty_and_too_near_ones_are_refused() {
     let sd: Vec<f64> = ring
         .iter()
         .map(|s| {
-            let a = assess(&fm, &m.setup, &at, &pts, s, &limits(), NOISE).unwrap();
+            let a = assess(&fm, &m.setup, &at, &pts, &[], s, &limits(), NOISE).unwrap();
             assert!(a.sees_all(), "{:?}", a.blocked);
             a.max_sd
         })
@@ -83,7 +83,7 @@ fn farther_stations_state_larger_uncertainty_and_too_near_ones_are_refused() {
         centre + Vector3::new(0.0, 0.0, 0.3),
         centre + Vector3::new(1.0, 0.0, 0.0),
     );
-    let a = assess(&fm, &m.setup, &at, &pts, &near, &limits(), NOISE).unwrap();
+    let a = assess(&fm, &m.setup, &at, &pts, &[], &near, &limits(), NOISE).unwrap();
     assert!(!a.sees_all());
     assert!(
         a.blocked
@@ -98,7 +98,7 @@ fn farther_stations_state_larger_uncertainty_and_too_near_ones_are_refused() {
         reflector_facing: Some(Vector3::new(-1.0, 0.0, 0.0)),
         ..limits()
     };
-    let a = assess(&fm, &m.setup, &at, &pts, &ring[0], &away, NOISE).unwrap();
+    let a = assess(&fm, &m.setup, &at, &pts, &[], &ring[0], &away, NOISE).unwrap();
     assert_eq!(a.blocked.len(), pts.len());
     assert!(matches!(a.blocked[0], Blocked::OffReflector { .. }));
 }
@@ -124,7 +124,7 @@ fn the_stated_map_uncertainty_covers_simulated_verifications_at_its_rate() {
     let candidates = candidate_ring(centre, &[1.0, 2.0], &[0.0, 0.6], 8);
     let assessed: Vec<_> = candidates
         .iter()
-        .map(|s| assess(&fm, &m.setup, &truth, &pts, s, &limits(), NOISE).unwrap())
+        .map(|s| assess(&fm, &m.setup, &truth, &pts, &[], s, &limits(), NOISE).unwrap())
         .collect();
     let order = ranked(&assessed);
     let best = &assessed[order[0]];
@@ -151,7 +151,7 @@ fn the_stated_map_uncertainty_covers_simulated_verifications_at_its_rate() {
     placed[i + 5] = best.station.yaw;
     let q: Vec<Vec<f64>> = pts.iter().map(|p| p.to_vec()).collect();
     let true_map = error_map(&fm, &placed, &q, &Signals::default()).unwrap();
-    let plan = planned(&pts);
+    let plan = planned(&pts, &[]);
     let mut z = vec![];
     for trial in 0..60u64 {
         let data = records(&fm, &placed, &plan, NOISE, Some(7000 + trial));

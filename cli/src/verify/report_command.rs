@@ -87,10 +87,14 @@ What it does:
      thermal_growth) are identified with it and their coefficients say what temperature adds.
      A tracker beside the machine fixes the map only up to a rigid motion (its own pose is
      identified with it): the map is stated with its best-fit rigid motion over the mesh
-     removed, the machine's axes as the verified volume defines them;
+     removed, the machine's axes as the verified volume defines them. Readings of the reflector at
+     other offsets on the spindle (recorded on /machine/tool_offset; `verify plan --reflectors`)
+     are each fitted at their target, the angular errors through their longer Abbe arms: that is
+     what separates roll, pitch and yaw from straightness. The map is for the model's tool
+     (machine.tool_offset);
   3. the length test (ISO 10360-2 manner): 5 lengths × 7 directions × 3 repetitions between mesh
-     points, measured from the visits' mean points (the tracker's identified errors, such as its
-     warm-up, taken out), as the machine is and with the identified model compensated at each
+     points of one target (the model's tool when it was measured), measured from the visits'
+     mean points (the tracker's identified errors, such as its warm-up, taken out), as the machine is and with the identified model compensated at each
      visit's temperatures, each with U (k = 2); with --mpe-* each is judged by ISO 14253-1
      (conforms / does not conform / not proven);
   4. the ISO/TS 15530-3 budget: u_cal (tracker calibration × mean range), u_p (the Monte Carlo's

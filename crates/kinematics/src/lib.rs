@@ -13,6 +13,7 @@
 //!   about x, y, z of the moving carriage.
 //! - Each module documents its own machine frame once, at the top.
 
+pub mod axis_servo;
 pub mod cartesian;
 pub mod cartesian_error_chain;
 pub mod delta;

@@ -99,6 +99,36 @@ pub struct MachineSection {
     /// Tool tip (or tracker target) relative to the tool-carrying body at q = 0 (m).
     #[serde(default)]
     pub tool_offset: Option<[Quantity; 3]>,
+    /// The twin's axes following their command through seed 004's dynamics and a position loop
+    /// (crates/twin `following_error`), by axis name (`x`, `y`, `z`): a simulation option of the
+    /// twin, which models never read.
+    #[serde(default)]
+    pub servo: Option<BTreeMap<String, ServoSection>>,
+}
+
+/// One axis of `machine.servo`: seed 004's plant (J θ̈ + b θ̇ + μ·sgn(θ̇)·r·N = T) and the loop
+/// T = k_p (θ_c − θ) + k_d (θ̇_c − θ̇) + b θ̇_c (crates/kinematics `axis_servo`).
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct ServoSection {
+    /// J, reflected to the motor (kg m^2), the translating mass's m·r² included.
+    pub inertia: Quantity,
+    /// b, viscous (N m s/rad).
+    pub damping: Quantity,
+    /// μ, Coulomb friction coefficient.
+    pub friction: f64,
+    /// N, the normal force the friction acts on (N).
+    pub normal_force: Quantity,
+    /// r, the radius the friction acts at: the drum's for a belt, the screw's (m).
+    pub radius: Quantity,
+    /// Travel per motor radian (m/rad); default r (a belt). A screw: r·tan λ.
+    #[serde(default)]
+    pub lead: Option<Quantity>,
+    /// k_p (N m/rad).
+    pub kp: Quantity,
+    /// k_d (N m s/rad); default critical damping 2√(k_p J) − b.
+    #[serde(default)]
+    pub kd: Option<Quantity>,
 }
 
 #[derive(Debug, Clone, Serialize, Deserialize)]

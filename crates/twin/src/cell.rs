@@ -155,6 +155,8 @@ pub struct Cell {
     pub estimation: BTreeMap<String, metrocell_physics::EstimationConfig>,
     /// Test-only, non-physical disturbances ([`crate::disturbance`]); empty for real cells.
     pub disturbances: crate::disturbance::Disturbances,
+    /// `machine.servo`: the axes following their command ([`crate::following_error`]).
+    pub servo: Option<crate::following_error::FollowingAxes>,
 }
 
 impl Cell {
@@ -295,6 +297,10 @@ impl Cell {
                 MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_)
             ),
         )?;
+        let servo = crate::following_error::FollowingAxes::from_section(
+            f.machine.servo.as_ref(),
+            matches!(machine.kinematics, MachineKinematics::Cartesian(_)),
+        )?;
         Ok(Cell {
             name: f.name.clone(),
             description: f.description.clone(),
@@ -314,6 +320,7 @@ impl Cell {
             term_configs: f.terms.clone(),
             estimation: f.estimation.clone(),
             disturbances,
+            servo,
         })
         .and_then(|cell: Cell| {
             cell.parameter_setup()?;

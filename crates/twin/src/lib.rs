@@ -33,6 +33,7 @@
 pub mod cell;
 pub mod disturbance;
 pub mod fiducial_plate;
+pub mod following_error;
 pub mod model_writer;
 mod model_writer_instruments;
 pub mod noise;

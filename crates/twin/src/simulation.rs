@@ -444,6 +444,8 @@ struct Engine<'a> {
     kinematics: KinematicTruth,
     /// Displacements of the terms that read only histories, until a history grows.
     cache: DisplacementCache,
+    /// The axes' servo states (`machine.servo`), advanced as the instants asked grow.
+    following: Option<crate::following_error::Following>,
     error: Option<PhysicsError>,
 }
 
@@ -555,6 +557,10 @@ impl<'a> Engine<'a> {
             history_sensors,
             history_k: 0,
             cache: DisplacementCache::new(&model),
+            following: cell
+                .servo
+                .as_ref()
+                .map(|axes| crate::following_error::Following::new(axes, &cell.program)),
             kinematics,
             refraction_at: model.instrument_param_start(TermId::Refraction),
             reading_params: params.clone(),
@@ -610,12 +616,23 @@ impl<'a> Engine<'a> {
             &mut self.signals,
             Some(&mut self.cache),
         )?;
-        if !self.cell.disturbances.is_empty() {
-            let delta = self.cell.disturbances.displacement(t, &v3(&ms.q));
-            tool.truth.translation.vector += delta;
-            tool.d += delta;
-        }
+        let delta = self.beyond_the_terms(t, ms);
+        tool.truth.translation.vector += delta;
+        tool.d += delta;
         Ok(tool)
+    }
+
+    /// What moves the tool besides the model's terms at t: the axes' following error
+    /// (`machine.servo`) and the test-only disturbances.
+    fn beyond_the_terms(&mut self, t: f64, ms: &MotionState) -> Vector3<f64> {
+        let mut delta = Vector3::zeros();
+        if !self.cell.disturbances.is_empty() {
+            delta += self.cell.disturbances.displacement(t, &v3(&ms.q));
+        }
+        if let (Some(axes), Some(f)) = (&self.cell.servo, self.following.as_mut()) {
+            delta += f.displacement(axes, &self.cell.program, t);
+        }
+        delta
     }
 
     fn next_event(&mut self) -> Option<(Sample, SampleTruth)> {
@@ -911,12 +928,11 @@ impl<'a> Engine<'a> {
         )?;
         let (mut d, pretravel) = (prediction.machine, prediction.pretravel);
         let mut centre = prediction.centre;
-        // the test-only disturbances displace the machine as a term would: the axes read −δ
-        if !self.cell.disturbances.is_empty() {
-            let delta = self.cell.disturbances.displacement(ev.t, &v3(&ms.q));
-            d += delta;
-            centre -= delta;
-        }
+        // the following error and the test-only disturbances displace the machine as a term
+        // would: the axes read −δ
+        let delta = self.beyond_the_terms(ev.t, &ms);
+        d += delta;
+        centre -= delta;
         let noise = Vector3::new(
             self.probe_noise.normal(),
             self.probe_noise.normal(),

@@ -106,25 +106,27 @@ impl ServoAxis {
         s.theta += dt * s.omega;
     }
 
-    /// Follow `command(t) → (travel, velocity)` from `s` at `from` to `to` (s), in steps of at most
-    /// [`Self::time_step`].
+    /// Follow `command(t) → travel` (m) from `s` at `from` to `to` (s), in steps of at most
+    /// [`Self::time_step`]: each step commands the travel at its start and the mean velocity over
+    /// it, so a move that ends inside a step ends there in proportion (where a stop sticks does
+    /// not jump with the step's phase against the program's clock).
     pub fn follow(
         &self,
         s: &mut ServoState,
         from: f64,
         to: f64,
-        mut command: impl FnMut(f64) -> (f64, f64),
+        mut command: impl FnMut(f64) -> f64,
     ) {
         if to <= from {
             return;
         }
         let n = ((to - from) / self.time_step()).ceil().max(1.0);
         let dt = (to - from) / n;
+        let mut start = command(from);
         for k in 0..n as usize {
-            // the command at the step's start, as the state is (explicit in the loop's error: a
-            // command from the step's end would shorten the lag by v·dt)
-            let (q, v) = command(from + k as f64 * dt);
-            self.step(s, q, v, dt);
+            let end = command(from + (k + 1) as f64 * dt);
+            self.step(s, start, (end - start) / dt, dt);
+            start = end;
         }
     }
 }
@@ -154,13 +156,13 @@ mod tests {
     }
 
     /// A move of `length` (m) at `speed` from `start`, then a dwell: the travel commanded at t.
-    fn ramp(start: f64, length: f64, speed: f64) -> impl Fn(f64) -> (f64, f64) {
+    fn ramp(start: f64, length: f64, speed: f64) -> impl Fn(f64) -> f64 {
         let duration = length.abs() / speed;
         move |t: f64| {
             if t < duration {
-                (start + length.signum() * speed * t, length.signum() * speed)
+                start + length.signum() * speed * t
             } else {
-                (start + length, 0.0)
+                start + length
             }
         }
     }
@@ -177,7 +179,7 @@ mod tests {
         let mut s = a.at_rest(0.0);
         let command = ramp(0.0, 0.2, 0.02);
         a.follow(&mut s, 0.0, 5.0, &command);
-        let lag = command(5.0).0 - a.travel(&s);
+        let lag = command(5.0) - a.travel(&s);
         assert!((lag - a.dead_band()).abs() < 1e-6, "lag {lag} m");
     }
 

@@ -133,10 +133,7 @@ impl Following {
     ) -> Vector3<f64> {
         if t > self.t {
             for ((i, a), s) in axes.axes.iter().zip(self.states.iter_mut()) {
-                a.follow(s, self.t, t, |tau| {
-                    let m = program.state_at(tau);
-                    (m.q[*i], m.velocity[*i])
-                });
+                a.follow(s, self.t, t, |tau| program.state_at(tau).q[*i]);
             }
             self.t = t;
         }

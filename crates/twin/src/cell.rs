@@ -299,7 +299,10 @@ impl Cell {
         )?;
         let servo = crate::following_error::FollowingAxes::from_section(
             f.machine.servo.as_ref(),
-            matches!(machine.kinematics, MachineKinematics::Cartesian(_)),
+            matches!(
+                machine.kinematics,
+                MachineKinematics::Cartesian(_) | MachineKinematics::FiveAxis(_)
+            ),
         )?;
         Ok(Cell {
             name: f.name.clone(),

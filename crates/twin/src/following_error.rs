@@ -15,9 +15,11 @@
 //! approaches from + and − (a reversal error, which a `backlash` term models).
 //!
 //! Convention (stated once, here): the displacement added to the true tool point is actual −
-//! commanded travel of each axis, machine axes (cartesian: the tool relative to the workpiece
-//! moves with the axes; X carries the workpiece on an XFYZ machine, and the sign of its axis's
-//! travel is the tool's relative motion as for every term). Cartesian machines only.
+//! commanded travel of each linear axis, in the machine frame, as the terms' displacements are
+//! (the tool relative to the workpiece moves with the axes; on a five-axis machine the table's
+//! turn takes it into the workpiece frame like every machine-frame term). Cartesian and
+//! five-axis machines' linear axes x, y, z (a five-axis Z is seed 004's power screw: `lead` =
+//! r·tan λ); the rotary axes do not follow a servo here.
 
 use std::collections::BTreeMap;
 
@@ -46,7 +48,7 @@ impl FollowingAxes {
         if !cartesian {
             return Err(CellError::invalid(
                 "machine.servo",
-                "is simulated for cartesian machines only",
+                "is simulated for the linear axes of cartesian and five-axis machines only",
             ));
         }
         let mut axes = Vec::new();

@@ -616,14 +616,16 @@ impl<'a> Engine<'a> {
             &mut self.signals,
             Some(&mut self.cache),
         )?;
+        // a machine-frame displacement: into the frame tool points are reported in (a five-axis
+        // table turns it; the identity elsewhere)
         let delta = self.beyond_the_terms(t, ms);
-        tool.truth.translation.vector += delta;
+        tool.truth.translation.vector += tool.nominal.rotation * delta;
         tool.d += delta;
         Ok(tool)
     }
 
-    /// What moves the tool besides the model's terms at t: the axes' following error
-    /// (`machine.servo`) and the test-only disturbances.
+    /// What moves the tool besides the model's terms at t, machine frame: the axes' following
+    /// error (`machine.servo`) and the test-only disturbances.
     fn beyond_the_terms(&mut self, t: f64, ms: &MotionState) -> Vector3<f64> {
         let mut delta = Vector3::zeros();
         if !self.cell.disturbances.is_empty() {

@@ -106,6 +106,65 @@ fn the_axes_lag_on_the_move_and_stop_within_the_band_mirrored_by_approach() {
     }
 }
 
+/// Seed 004's Z: a power screw (K6: r 4 mm, 8 mm a turn, so 8/2π mm of travel a radian) with the
+/// K7 friction (μ 0.15) under the Z carriage's 50 N, k_p 40 N·m/rad: a band of
+/// 0.15 × 4 mm × 50 N / 40 × 1.273 mm = 0.955 µm.
+const SCREW: &str = "
+z: {inertia: 5e-5 kg m^2, damping: 2e-4 N m s/rad, friction: 0.15, normal_force: 50 N, radius: 4 mm, lead: 1.2732395 mm/rad, kp: 40 N m/rad}
+";
+
+/// The five-axis table machine's Z follows its command through the screw: the machine-frame
+/// displacement differs from the plain cell's along Z alone, within the band at rest, and the
+/// tool point the tracker sights moves by that displacement turned by the table (its length
+/// kept).
+#[test]
+fn a_five_axis_z_on_its_screw_follows_within_its_band() {
+    let plain = common::example_file("five_axis_table.yaml");
+    let mut servo = plain.clone();
+    servo.machine.servo = Some(serde_yaml::from_str(SCREW).unwrap());
+    let cell = common::validate(&servo);
+    let band = cell.servo.as_ref().unwrap().dead_bands()[0].1;
+    assert!(
+        (band - 0.15 * 0.004 * 50.0 / 40.0 * 0.0012732395).abs() < 1e-15,
+        "{band}"
+    );
+    let (a, b) = (
+        Simulation::new(common::validate(&plain), 120.0, 2).unwrap(),
+        Simulation::new(cell, 120.0, 2).unwrap(),
+    );
+    let program = &b.cell().program;
+    let (mut at_rest, mut moved) = (0, 0);
+    for ((sa, ta), (_, tb)) in a.samples_with_truth().zip(b.samples_with_truth()) {
+        if let (Sample::Tracker(r), SampleTruth::Tracker(x), SampleTruth::Tracker(y)) =
+            (&sa, &ta, &tb)
+        {
+            let d = y.displacement - x.displacement;
+            assert!(d.x == 0.0 && d.y == 0.0, "t = {}: {d:?}", r.t);
+            let sighted = y.tool_point - x.tool_point;
+            assert!(
+                (sighted.norm() - d.norm()).abs() < 1e-12,
+                "t = {}: the tip moved {sighted:?} for {d:?}",
+                r.t
+            );
+            let m = program.state_at(r.t);
+            if m.velocity.iter().all(|v| *v == 0.0)
+                && program
+                    .state_at(r.t - 0.5)
+                    .velocity
+                    .iter()
+                    .all(|v| *v == 0.0)
+            {
+                assert!(d.z.abs() <= band + 1e-12, "t = {}: {} m", r.t, d.z);
+                at_rest += 1;
+            }
+            if d.z != 0.0 {
+                moved += 1;
+            }
+        }
+    }
+    assert!(at_rest > 20 && moved > 20, "{at_rest} {moved}");
+}
+
 #[test]
 fn a_servo_on_a_family_whose_axes_are_not_cartesian_is_refused() {
     let mut delta = common::example_file("delta_printer.yaml");
@@ -114,7 +173,7 @@ fn a_servo_on_a_family_whose_axes_are_not_cartesian_is_refused() {
         .unwrap_err()
         .to_string();
     assert!(
-        e.contains("machine.servo") && e.contains("cartesian"),
+        e.contains("machine.servo") && e.contains("cartesian and five-axis"),
         "{e}"
     );
 }

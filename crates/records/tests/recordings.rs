@@ -644,22 +644,19 @@ fn signals_of_an_imported_export_equal_its_values() {
     let _ = std::fs::remove_dir_all(&bag);
 }
 
-/// An export with nominals and velocities but no joint columns (issue 26): on a cartesian machine
-/// the nominals give the commanded axes (nominal − tool offset) and the velocity columns the
-/// axis velocities; nothing is set aside.
-#[test]
-fn nominals_give_the_axes_when_an_export_has_velocities_but_no_joints() {
-    let dir = scratch("csv_nominal_velocity");
-    std::fs::create_dir_all(&dir).unwrap();
+/// `csv` imported with the fixture's mapping, its joint columns read as nominals (and `extra`
+/// mapping lines), into `dir`; the records the CSV model builds from it.
+fn import_as_nominals(dir: &Path, csv: &Path, extra: &str) -> metrocell_estimation::RecordSet {
     let mapping_text = std::fs::read_to_string(fixture("recordings_mapping.yaml"))
         .unwrap()
         .replace("  joint.x:", "  nominal_x:")
         .replace("  joint.y:", "  nominal_y:")
-        .replace("  joint.z:", "  nominal_z:");
+        .replace("  joint.z:", "  nominal_z:")
+        + extra;
     std::fs::write(dir.join("mapping.yaml"), mapping_text).unwrap();
     let bag = dir.join("bag");
     let report = import_csv(
-        &fixture("recordings_export.csv"),
+        csv,
         &bag,
         Some(&Mapping::load(&dir.join("mapping.yaml")).unwrap()),
         WriterOptions::default(),
@@ -669,7 +666,17 @@ fn nominals_give_the_axes_when_an_export_has_velocities_but_no_joints() {
     let c = cell(CSV_MODEL, "csv_model");
     let instruments = c.tracker_terms().unwrap();
     let model = c.forward_model(&instruments).unwrap();
-    let set = records_from_bags(&[&bag], &model, &RecordingOptions::default()).unwrap();
+    records_from_bags(&[&bag], &model, &RecordingOptions::default()).unwrap()
+}
+
+/// An export with nominals and velocities but no joint columns (issue 26): on a cartesian machine
+/// the nominals give the commanded axes (nominal − tool offset) and the velocity columns the
+/// axis velocities; nothing is set aside.
+#[test]
+fn nominals_give_the_axes_when_an_export_has_velocities_but_no_joints() {
+    let dir = scratch("csv_nominal_velocity");
+    std::fs::create_dir_all(&dir).unwrap();
+    let set = import_as_nominals(&dir, &fixture("recordings_export.csv"), "");
     let rows = csv_rows();
     assert!(set.rejected.is_empty(), "{:?}", set.rejected);
     assert_eq!(set.records.len(), rows.len());
@@ -702,13 +709,6 @@ fn nominals_give_the_axes_when_an_export_has_velocities_but_no_joints() {
 fn a_reading_of_a_moved_reflector_carries_its_tool_offset() {
     let dir = scratch("csv_tool_offset");
     std::fs::create_dir_all(&dir).unwrap();
-    let mapping_text = std::fs::read_to_string(fixture("recordings_mapping.yaml"))
-        .unwrap()
-        .replace("  joint.x:", "  nominal_x:")
-        .replace("  joint.y:", "  nominal_y:")
-        .replace("  joint.z:", "  nominal_z:")
-        + "  tool_offset.x: {column: tool_x_mm, scale: 0.001}\n  tool_offset.y: {column: tool_y_mm, scale: 0.001}\n  tool_offset.z: {column: tool_z_mm, scale: 0.001}\n";
-    std::fs::write(dir.join("mapping.yaml"), mapping_text).unwrap();
     // the first half at the model's tool (0, 0, −150 mm), the rest 100 mm along X from it
     let reflector = |k: usize| {
         if k < 5 {
@@ -730,23 +730,18 @@ fn a_reading_of_a_moved_reflector_carries_its_tool_offset() {
         text += &format!("{line}{extra}\n");
     }
     std::fs::write(dir.join("export.csv"), text).unwrap();
-    let bag = dir.join("bag");
-    let report = import_csv(
+    let set = import_as_nominals(
+        &dir,
         &dir.join("export.csv"),
-        &bag,
-        Some(&Mapping::load(&dir.join("mapping.yaml")).unwrap()),
-        WriterOptions::default(),
-    )
-    .unwrap();
-    assert!(report.errors.is_empty(), "{:?}", report.errors);
-    assert_eq!(
-        report.messages_per_topic["/machine/tool_offset"], 2,
-        "written when it changes"
+        "  tool_offset.x: {column: tool_x_mm, scale: 0.001}\n  tool_offset.y: {column: tool_y_mm, scale: 0.001}\n  tool_offset.z: {column: tool_z_mm, scale: 0.001}\n",
     );
-    let c = cell(CSV_MODEL, "csv_model");
-    let instruments = c.tracker_terms().unwrap();
-    let model = c.forward_model(&instruments).unwrap();
-    let set = records_from_bags(&[&bag], &model, &RecordingOptions::default()).unwrap();
+    let tool_offsets = metrocell_bag::BagReader::open(&dir.join("bag"))
+        .unwrap()
+        .messages(&metrocell_bag::MessageFilter::default())
+        .unwrap()
+        .filter(|m| m.as_ref().unwrap().topic == "/machine/tool_offset")
+        .count();
+    assert_eq!(tool_offsets, 2, "written when it changes");
     let rows = csv_rows();
     assert!(set.rejected.is_empty(), "{:?}", set.rejected);
     assert_eq!(set.records.len(), rows.len());

@@ -735,7 +735,7 @@ fn a_reading_of_a_moved_reflector_carries_its_tool_offset() {
         &dir.join("export.csv"),
         "  tool_offset.x: {column: tool_x_mm, scale: 0.001}\n  tool_offset.y: {column: tool_y_mm, scale: 0.001}\n  tool_offset.z: {column: tool_z_mm, scale: 0.001}\n",
     );
-    let tool_offsets = metrocell_bag::BagReader::open(&dir.join("bag"))
+    let tool_offsets = metrocell_bag::BagReader::open(dir.join("bag"))
         .unwrap()
         .messages(&metrocell_bag::MessageFilter::default())
         .unwrap()

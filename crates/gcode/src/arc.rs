@@ -27,9 +27,15 @@ pub enum ArcCentre {
     Radius(f64),
 }
 
+/// The most chords one arc may take. An arc's chord count grows as √(radius / tolerance): a
+/// 10 m radius at 1 µm is ~7000, so a count beyond this is a centre offset or radius no machine
+/// has (an I of 10⁹ in a program asked for 2 million chords and 100 MiB, found by fuzzing).
+pub const MAX_ARC_CHORDS: usize = 100_000;
+
 /// Points along the arc from `start` to `end` (both in program units), the start excluded and
 /// the end included exactly, spaced so each chord stays within `chord_tolerance` of the arc.
-/// `radius_tolerance` is how far start and end may disagree on the radius (program units).
+/// `radius_tolerance` is how far start and end may disagree on the radius (program units). An
+/// arc that would take more than [`MAX_ARC_CHORDS`] is an error.
 pub fn arc_points(
     start: &Vector3<f64>,
     end: &Vector3<f64>,
@@ -90,7 +96,13 @@ pub fn arc_points(
     } else {
         PI / 2.0
     };
-    let count = ((sweep.abs() / max_step).ceil() as usize).max(1);
+    let chords = (sweep.abs() / max_step).ceil();
+    if !(chords <= MAX_ARC_CHORDS as f64) {
+        return Err(format!(
+            "an arc of radius {r_start} would take {chords:.0} chords of tolerance {chord_tolerance} (more than {MAX_ARC_CHORDS}): is its centre offset (I J K) or radius (R) in the program's units?"
+        ));
+    }
+    let count = (chords as usize).max(1);
     let mut points = Vec::with_capacity(count);
     for k in 1..count {
         let f = k as f64 / count as f64;
@@ -179,6 +191,39 @@ mod tests {
         // halfway round the circle, halfway down
         let mid = pts[pts.len() / 2 - 1];
         assert!((mid.z + 1.0).abs() < 0.2 && mid.x < -4.0, "{mid:?}");
+    }
+
+    /// Found by fuzzing (tests/fuzz `gcode_programs`): a full circle with a centre offset of 10⁹
+    /// asked for 2 million chords (100 MiB); 10¹² for 3.2 GiB.
+    #[test]
+    fn an_arc_no_machine_has_is_an_error_not_an_allocation() {
+        for i in [1e9, 1e12, 1e28] {
+            let start = Vector3::new(0.0, 0.0, 9.0);
+            let e = arc_points(
+                &start,
+                &start,
+                ArcCentre::Offset(Vector3::new(i, 0.0, 0.0)),
+                true,
+                ArcPlane::XY,
+                1e-3,
+                1e-3,
+            )
+            .unwrap_err();
+            assert!(e.contains("chords") && e.contains("I J K"), "{e}");
+        }
+        // a 10 m circle at 1 µm is fine
+        let start = Vector3::zeros();
+        let p = arc_points(
+            &start,
+            &start,
+            ArcCentre::Offset(Vector3::new(10_000.0, 0.0, 0.0)),
+            false,
+            ArcPlane::XY,
+            1e-3,
+            1e-3,
+        )
+        .unwrap();
+        assert!(p.len() > 1000 && p.len() < MAX_ARC_CHORDS, "{}", p.len());
     }
 
     #[test]

@@ -101,7 +101,7 @@ What it does:
      residual, per coordinate), u_b (its systematic part, σ/√trials), u_w (the scales' expansion
      coefficient's uncertainty × the temperature's distance from 20 °C × the mesh's diagonal);
   5. writes DIR/index.html (figures, tables, the bag it came from), DIR/map.csv (each point's
-     error and u), DIR/verification.json.
+     error and u), DIR/verification.json (the figures, every identified parameter with its σ).
 
 Examples:
   metrocell verify plan --x 800..1200 --y 100..500 --z 200..400 --step 100mm -o plan
@@ -462,6 +462,11 @@ pub fn run(a: ReportArgs) -> Result<i32> {
         "visits": visits.len(),
         "chi2_per_dof": f.chi2_per_dof,
         "held": f.held.iter().map(|h| h.name.clone()).collect::<Vec<_>>(),
+        // every parameter as identified (SI; sigma null where fixed or held)
+        "parameters": f.parameters.iter().map(|p| serde_json::json!({
+            "name": p.name, "value": p.value, "sigma": p.sigma, "unit": p.unit, "free": p.free,
+            "at_bound": p.at_bound.is_some(),
+        })).collect::<Vec<_>>(),
         "volumetric_error_um": {"mean": before_mean * 1e6, "sd": before_sd * 1e6, "max": before_max * 1e6},
         "residual_after_um": {"mean": after_mean * 1e6, "sd": after_sd * 1e6, "trial_mean_p95": trial_p95 * 1e6},
         "monte_carlo": {"trials": mc.trials, "failed": mc.failed, "seed": a.seed},

@@ -343,4 +343,41 @@ mod tests {
         assert_eq!(kept.records.len(), 3 * 2 * 4);
         assert!(kept.records.iter().all(|r| r.q[0] == 0.8 || r.q[0] == 1.0));
     }
+
+    fn visit(point: usize, shift: Vector3<f64>) -> Visit {
+        Visit {
+            point,
+            mean: Vector3::zeros(),
+            covariance: Matrix3::identity(),
+            readings: 4,
+            compensation: Vector3::zeros(),
+            tool_shift: shift,
+        }
+    }
+
+    /// The length test measures with one target: the model's tool when it was measured, else
+    /// the target with the most visits.
+    #[test]
+    fn the_length_test_takes_one_targets_visits() {
+        let (tool, across, down) = (
+            Vector3::zeros(),
+            Vector3::new(0.15, 0.0, 0.0),
+            Vector3::new(0.0, 0.0, -0.15),
+        );
+        let all = vec![
+            visit(0, across),
+            visit(0, tool),
+            visit(1, down),
+            visit(1, tool),
+            visit(2, across),
+        ];
+        let (kept, shift) = visits_of_one_target(&all);
+        assert_eq!(shift, tool);
+        assert_eq!(kept.iter().map(|v| v.point).collect::<Vec<_>>(), [0, 1]);
+        let (kept, shift) = visits_of_one_target(&all[2..]);
+        assert_eq!((kept.len(), kept[0].point, shift), (1, 1, tool));
+        let (kept, shift) = visits_of_one_target(&[all[0].clone(), all[4].clone(), all[2].clone()]);
+        assert_eq!((kept.len(), shift), (2, across), "the most visited");
+        assert!(visits_of_one_target(&[]).0.is_empty());
+    }
 }

@@ -47,10 +47,6 @@ def _program(setting, rng, with_nests, many_x):
     travel = setting.travel
     home = np.array([0.0, 0.0, travel[2][1]])
     planner = programs.Planner(home, rng, feed_m_s=rng.uniform(0.06, 0.12))
-    if "tool_offset" in readings:
-        # the target on the spindle, as the controller's active tool offset
-        for k, a in enumerate("XYZ"):
-            cols.append(Column(f"Tool {a} [mm]", readings["tool_offset"][:, k], mm, f"tool_offset.{a.lower()}", 0.001))
     if setting.family == "fly":
         # stationary anchors, then sweeps along X and Y in both directions at various feeds
         for i, p in enumerate(programs.random_points(travel, 16, rng)):

@@ -73,12 +73,7 @@ fn stop_error(speed: f64) -> f64 {
         drum_radius: 0.0064,
         sign: FrictionSign::Standard,
     };
-    let a = ServoAxis {
-        plant,
-        lead: 0.0064,
-        kp: 34.0,
-        kd: ServoAxis::critical_kd(&plant, 34.0),
-    };
+    let a = ServoAxis::new(plant, 0.0064, 34.0, None);
     let mut s = a.at_rest(0.0);
     a.follow(&mut s, 0.0, 6.0, |t| speed * t.min(2.0));
     2.0 * speed - a.travel(&s)

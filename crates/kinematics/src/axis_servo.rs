@@ -44,9 +44,16 @@ pub struct ServoState {
 }
 
 impl ServoAxis {
-    /// The velocity gain that damps the loop critically: 2√(k_p J) − b (≥ 0).
-    pub fn critical_kd(plant: &LinearAxis, kp: f64) -> f64 {
-        (2.0 * (kp * plant.inertia).sqrt() - plant.damping).max(0.0)
+    /// The axis with velocity gain `kd`, or (None) the one that damps the loop critically,
+    /// 2√(k_p J) − b (≥ 0).
+    pub fn new(plant: LinearAxis, lead: f64, kp: f64, kd: Option<f64>) -> ServoAxis {
+        let kd = kd.unwrap_or_else(|| (2.0 * (kp * plant.inertia).sqrt() - plant.damping).max(0.0));
+        ServoAxis {
+            plant,
+            lead,
+            kp,
+            kd,
+        }
     }
 
     /// The friction torque μ r N (N·m).
@@ -106,10 +113,8 @@ impl ServoAxis {
         s.theta += dt * s.omega;
     }
 
-    /// Follow `command(t) → travel` (m) from `s` at `from` to `to` (s), in steps of at most
-    /// [`Self::time_step`]: each step commands the travel at its start and the mean velocity over
-    /// it, so a move that ends inside a step ends there in proportion (where a stop sticks does
-    /// not jump with the step's phase against the program's clock).
+    /// Follow `command(t) → travel` (m) from `s` at `from` to `to` (s): [`follow_together`] for
+    /// one axis.
     pub fn follow(
         &self,
         s: &mut ServoState,
@@ -117,17 +122,46 @@ impl ServoAxis {
         to: f64,
         mut command: impl FnMut(f64) -> f64,
     ) {
-        if to <= from {
-            return;
+        follow_together(
+            std::slice::from_ref(self),
+            std::slice::from_mut(s),
+            from,
+            to,
+            |t, out| out[0] = command(t),
+        );
+    }
+}
+
+/// Follow a command for several axes at once from `states` at `from` to `to` (s), in steps of
+/// at most the smallest [`ServoAxis::time_step`]; `command(t, travels)` fills each axis's
+/// commanded travel (m) at t — asked once a step for all of them (a machine's program is one
+/// lookup for every axis). Each step commands the travel at its start and the mean velocity over
+/// it, so a move that ends inside a step ends there in proportion (where a stop sticks does not
+/// jump with the step's phase against the program's clock).
+pub fn follow_together(
+    axes: &[ServoAxis],
+    states: &mut [ServoState],
+    from: f64,
+    to: f64,
+    mut command: impl FnMut(f64, &mut [f64]),
+) {
+    if to <= from || axes.is_empty() {
+        return;
+    }
+    let step = axes
+        .iter()
+        .map(ServoAxis::time_step)
+        .fold(f64::INFINITY, f64::min);
+    let n = ((to - from) / step).ceil().max(1.0);
+    let dt = (to - from) / n;
+    let (mut start, mut end) = (vec![0.0; axes.len()], vec![0.0; axes.len()]);
+    command(from, &mut start);
+    for k in 0..n as usize {
+        command(from + (k + 1) as f64 * dt, &mut end);
+        for (i, (a, s)) in axes.iter().zip(states.iter_mut()).enumerate() {
+            a.step(s, start[i], (end[i] - start[i]) / dt, dt);
         }
-        let n = ((to - from) / self.time_step()).ceil().max(1.0);
-        let dt = (to - from) / n;
-        let mut start = command(from);
-        for k in 0..n as usize {
-            let end = command(from + (k + 1) as f64 * dt);
-            self.step(s, start, (end - start) / dt, dt);
-            start = end;
-        }
+        std::mem::swap(&mut start, &mut end);
     }
 }
 
@@ -147,12 +181,7 @@ mod tests {
             drum_radius: 0.0064,
             sign: FrictionSign::Standard,
         };
-        ServoAxis {
-            plant,
-            lead: 0.0064,
-            kp: 2.0,
-            kd: ServoAxis::critical_kd(&plant, 2.0),
-        }
+        ServoAxis::new(plant, 0.0064, 2.0, None)
     }
 
     /// A move of `length` (m) at `speed` from `start`, then a dwell: the travel commanded at t.

@@ -23,7 +23,7 @@
 
 use std::collections::BTreeMap;
 
-use metrocell_kinematics::axis_servo::{ServoAxis, ServoState};
+use metrocell_kinematics::axis_servo::{follow_together, ServoAxis, ServoState};
 use metrocell_kinematics::five_axis_dynamics::{FrictionSign, LinearAxis};
 use nalgebra::Vector3;
 
@@ -32,10 +32,12 @@ use crate::program::Program;
 
 pub use metrocell_model_file::cell_file::ServoSection;
 
-/// The validated `machine.servo`: each declared axis's index (0 x, 1 y, 2 z) and its servo.
+/// The validated `machine.servo`: each declared axis's index (0 x, 1 y, 2 z) and its servo, in
+/// the same order.
 #[derive(Debug, Clone, PartialEq)]
 pub struct FollowingAxes {
-    axes: Vec<(usize, ServoAxis)>,
+    index: Vec<usize>,
+    servos: Vec<ServoAxis>,
 }
 
 impl FollowingAxes {
@@ -51,7 +53,7 @@ impl FollowingAxes {
                 "is simulated for the linear axes of cartesian and five-axis machines only",
             ));
         }
-        let mut axes = Vec::new();
+        let (mut index_of, mut servos) = (Vec::new(), Vec::new());
         for (name, a) in s {
             let p = format!("machine.servo.{name}");
             let index = ["x", "y", "z"]
@@ -79,31 +81,31 @@ impl FollowingAxes {
                 sign: FrictionSign::Standard,
             };
             let kp = a.kp.positive(&format!("{p}.kp"), "N m/rad")?;
-            let kd = match &a.kd {
-                Some(k) => k.non_negative(&format!("{p}.kd"), "N m s/rad")?,
-                None => ServoAxis::critical_kd(&plant, kp),
-            };
+            let kd =
+                a.kd.as_ref()
+                    .map(|k| k.non_negative(&format!("{p}.kd"), "N m s/rad"))
+                    .transpose()?;
             let lead = match &a.lead {
                 Some(l) => l.positive(&format!("{p}.lead"), "m/rad")?,
                 None => radius,
             };
-            axes.push((
-                index,
-                ServoAxis {
-                    plant,
-                    lead,
-                    kp,
-                    kd,
-                },
-            ));
+            index_of.push(index);
+            servos.push(ServoAxis::new(plant, lead, kp, kd));
         }
-        Ok(Some(FollowingAxes { axes }))
+        Ok(Some(FollowingAxes {
+            index: index_of,
+            servos,
+        }))
     }
 
     /// Each declared axis's dead band μ r N·lead / k_p (m): the lag on a steady move, the
     /// half-width of where it sticks at rest.
     pub fn dead_bands(&self) -> Vec<(usize, f64)> {
-        self.axes.iter().map(|(i, a)| (*i, a.dead_band())).collect()
+        self.index
+            .iter()
+            .zip(&self.servos)
+            .map(|(i, a)| (*i, a.dead_band()))
+            .collect()
     }
 }
 
@@ -121,7 +123,12 @@ impl Following {
         let home = program.state_at(0.0).q;
         Following {
             t: 0.0,
-            states: axes.axes.iter().map(|(i, a)| a.at_rest(home[*i])).collect(),
+            states: axes
+                .index
+                .iter()
+                .zip(&axes.servos)
+                .map(|(i, a)| a.at_rest(home[*i]))
+                .collect(),
         }
     }
 
@@ -134,14 +141,17 @@ impl Following {
         t: f64,
     ) -> Vector3<f64> {
         if t > self.t {
-            for ((i, a), s) in axes.axes.iter().zip(self.states.iter_mut()) {
-                a.follow(s, self.t, t, |tau| program.state_at(tau).q[*i]);
-            }
+            follow_together(&axes.servos, &mut self.states, self.t, t, |tau, travels| {
+                let q = program.state_at(tau).q;
+                for (travel, i) in travels.iter_mut().zip(&axes.index) {
+                    *travel = q[*i];
+                }
+            });
             self.t = t;
         }
         let now = program.state_at(self.t).q;
         let mut d = Vector3::zeros();
-        for ((i, a), s) in axes.axes.iter().zip(&self.states) {
+        for ((i, a), s) in axes.index.iter().zip(&axes.servos).zip(&self.states) {
             d[*i] = a.travel(s) - now[*i];
         }
         d

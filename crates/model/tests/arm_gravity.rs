@@ -3,10 +3,13 @@
 //! differences — on a lifting column of two telescoping segments (a `<mimic>` pair) with a
 //! two-joint arm on top, the base tilted.
 
+mod common;
+
+use common::term;
 use metrocell_kinematics::urdf_chain::chain_from_urdf_str;
 use metrocell_model::{ForwardModel, MachineGeometry, MachineKinematics, SerialArm};
 use metrocell_physics::model::TermModel;
-use metrocell_physics::{configure, Signals, TermConfig};
+use metrocell_physics::Signals;
 use nalgebra::{DMatrix, Vector3};
 
 const ROBOT: &str = r#"<robot name="column_arm">
@@ -22,11 +25,6 @@ const ROBOT: &str = r#"<robot name="column_arm">
   <joint name="elbow" type="revolute"><parent link="upper_arm"/><child link="forearm"/><origin xyz="0.6 0 0"/><axis xyz="0 0 1"/><limit lower="-3" upper="3" effort="1" velocity="1"/></joint>
   <joint name="tool" type="fixed"><parent link="forearm"/><child link="prism"/><origin xyz="0.5 0.05 0.1"/></joint>
 </robot>"#;
-
-fn term(yaml: &str) -> metrocell_physics::ConfiguredTerm {
-    let c: TermConfig = serde_yaml::from_str(yaml).unwrap();
-    configure(&c).unwrap_or_else(|e| panic!("{yaml}: {e}"))
-}
 
 fn machine() -> MachineGeometry {
     let chain = chain_from_urdf_str(ROBOT, "base", "prism").unwrap();

@@ -2,17 +2,15 @@
 //! reading at the moved pose, and the analytic Jacobian (the drift's columns through the pose)
 //! matches central differences.
 
+mod common;
+
+use common::term;
 use metrocell_model::{
     ForwardModel, MachineGeometry, MachineKinematics, ToolState, Workspace, TRACKER_ROWS,
 };
 use metrocell_physics::model::TermModel;
-use metrocell_physics::{configure, Signals, TermConfig};
+use metrocell_physics::Signals;
 use nalgebra::{DMatrix, Isometry3, Vector3};
-
-fn term(yaml: &str) -> metrocell_physics::ConfiguredTerm {
-    let c: TermConfig = serde_yaml::from_str(yaml).unwrap();
-    configure(&c).unwrap_or_else(|e| panic!("{yaml}: {e}"))
-}
 
 fn machine() -> MachineGeometry {
     MachineGeometry {

@@ -3,19 +3,17 @@
 //! base's tilt, and the analytic Jacobian (the tilt's columns through every pose, the machine's
 //! through R_poseᵀ·R_tilt) matches central differences.
 
+mod common;
+
+use common::term;
 use std::sync::Arc;
 
 use metrocell_model::{
     ForwardModel, MachineGeometry, MachineKinematics, ToolState, Workspace, TRACKER_ROWS,
 };
 use metrocell_physics::model::TermModel;
-use metrocell_physics::{configure, Signals, TermConfig};
+use metrocell_physics::Signals;
 use nalgebra::{DMatrix, Isometry3, Rotation3, Vector3};
-
-fn term(yaml: &str) -> metrocell_physics::ConfiguredTerm {
-    let c: TermConfig = serde_yaml::from_str(yaml).unwrap();
-    configure(&c).unwrap_or_else(|e| panic!("{yaml}: {e}"))
-}
 
 fn machine() -> MachineGeometry {
     MachineGeometry {

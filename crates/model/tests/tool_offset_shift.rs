@@ -3,16 +3,14 @@
 //! nominal point there and sees the angular errors through the longer arm, in the tool state and
 //! in the Jacobian path alike; a family whose tool turns refuses it rather than ignore it.
 
+mod common;
+
+use common::term;
 use metrocell_model::SignalsBuilderOptions;
 use metrocell_model::{ForwardModel, MachineGeometry, MachineKinematics, SignalsBuilder};
 use metrocell_physics::model::TermModel;
-use metrocell_physics::{configure, Signals, TermConfig};
+use metrocell_physics::Signals;
 use nalgebra::{DMatrix, Vector3};
-
-fn term(yaml: &str) -> metrocell_physics::ConfiguredTerm {
-    let c: TermConfig = serde_yaml::from_str(yaml).unwrap();
-    configure(&c).unwrap_or_else(|e| panic!("{yaml}: {e}"))
-}
 
 fn machine() -> MachineGeometry {
     MachineGeometry {
@@ -45,6 +43,9 @@ fn a_moved_target_is_where_the_shift_puts_it_and_sees_the_yaw_through_its_arm() 
     let moved = model.tool_state(&p, &kin, &q, &mut s, None).unwrap();
     let nominal = Vector3::new(0.3 + 0.15, 0.2, 0.1 - 0.1);
     assert!((moved.nominal.translation.vector - nominal).norm() < 1e-15);
+    // the point diagnose's candidate columns read, without running the model: the same
+    let point = model.nominal_machine_point(&q, &s).unwrap();
+    assert!((point - nominal).norm() < 1e-15, "{point:?}");
     // ε e_z × (0.15 e_x) = 40 µrad · 150 mm along +y = 6 µm
     assert!(
         (moved.d - Vector3::new(0.0, 6e-6, 0.0)).norm() < 1e-15,

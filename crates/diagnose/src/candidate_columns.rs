@@ -81,7 +81,7 @@ impl<'m, 'a> ColumnContext<'m, 'a> {
             .map(|r| {
                 if r.q.len() >= 3 {
                     model
-                        .nominal_machine_point(&r.q)
+                        .nominal_machine_point(&r.q, &r.signals)
                         .unwrap_or_else(Vector3::zeros)
                 } else {
                     Vector3::zeros()

@@ -77,7 +77,7 @@ pub fn position_frame(
         "machine axes".into()
     } else if records
         .iter()
-        .all(|r| axes(r) || model.nominal_machine_point(&r.q).is_some())
+        .all(|r| axes(r) || model.nominal_machine_point(&r.q, &r.signals).is_some())
     {
         "machine frame".into()
     } else {
@@ -97,7 +97,9 @@ pub fn record_position(model: &ForwardModel, r: &MeasurementRecord) -> Vector3<f
     }
     match r.signals.axis_position {
         [Some(x), Some(y), Some(z)] => Vector3::new(x, y, z),
-        _ => model.nominal_machine_point(&r.q).unwrap_or(r.measured),
+        _ => model
+            .nominal_machine_point(&r.q, &r.signals)
+            .unwrap_or(r.measured),
     }
 }
 

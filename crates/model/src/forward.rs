@@ -983,15 +983,17 @@ impl ForwardModel<'_> {
         }
     }
 
-    /// The nominal tool point in the machine (axis) frame at joint vector `q` — the point
-    /// `Signals::machine_point` carries to the machine terms — without running the model (None
-    /// for an arm: its nominal tool point needs forward kinematics; use [`Self::tool_state`]).
-    pub fn nominal_machine_point(&self, q: &[f64]) -> Option<Vector3<f64>> {
+    /// The nominal tool point in the machine (axis) frame at joint vector `q` for the target of
+    /// `s` (its [`Signals::tool_offset_shift`]) — the point `Signals::machine_point` carries to
+    /// the machine terms — without running the model (None for an arm: its nominal tool point
+    /// needs forward kinematics; use [`Self::tool_state`]).
+    pub fn nominal_machine_point(&self, q: &[f64], s: &Signals) -> Option<Vector3<f64>> {
         // a record without the machine's joints (a reference nest's: q is empty) has no tool point
         match &self.machine.kinematics {
             MachineKinematics::Cartesian(_) | MachineKinematics::Delta(_) if q.len() >= 3 => Some(
                 self.machine
-                    .nominal_tool_point(&Vector3::new(q[0], q[1], q[2])),
+                    .nominal_tool_point(&Vector3::new(q[0], q[1], q[2]))
+                    + s.tool_offset_shift.unwrap_or_default(),
             ),
             MachineKinematics::FiveAxis(f) if q.len() >= 5 => Some(f.tip_machine(q)),
             _ => None,

@@ -16,16 +16,10 @@ use crate::Mesh;
 /// P5 chain's Abbe arms: X's arm the tool point from the table's origin (levers x, y, z), Y's
 /// the ram's extension and the tool (lever z), Z's the tool alone — each plus the tool offset.
 pub fn multi_target_model_yaml(mesh: &Mesh, targets: &[Vector3<f64>]) -> String {
-    let base = single_target_model_yaml(mesh);
     let Some(tool) = targets.first() else {
-        return base;
+        return single_target_model_yaml(mesh);
     };
-    let mm = |v: &Vector3<f64>| format!("[{} mm, {} mm, {} mm]", v.x * 1e3, v.y * 1e3, v.z * 1e3);
-    let mut text = base.replacen(
-        "\nsensors:",
-        &format!("\n  tool_offset: {}\nsensors:", mm(tool)),
-        1,
-    );
+    let mut text = model_yaml(mesh, Some(tool));
     if targets.len() < 2 {
         return text;
     }
@@ -55,6 +49,16 @@ pub fn multi_target_model_yaml(mesh: &Mesh, targets: &[Vector3<f64>]) -> String 
 /// series is cubic, or of the order the mesh's levels on its axis can carry (3 levels: a
 /// quadratic), so no term is declared that the plan could not identify.
 pub fn single_target_model_yaml(mesh: &Mesh) -> String {
+    model_yaml(mesh, None)
+}
+
+/// A vector as the cell file writes it, mm.
+fn mm(v: &Vector3<f64>) -> String {
+    format!("[{} mm, {} mm, {} mm]", v.x * 1e3, v.y * 1e3, v.z * 1e3)
+}
+
+/// [`single_target_model_yaml`]'s text, the model's tool at `tool` (m) when given.
+fn model_yaml(mesh: &Mesh, tool: Option<&Vector3<f64>>) -> String {
     let axes = ['x', 'y', 'z'];
     let spans: Vec<bool> = (0..3).map(|a| mesh.max[a] > mesh.min[a]).collect();
     let travel = |a: usize| {
@@ -85,8 +89,9 @@ pub fn single_target_model_yaml(mesh: &Mesh) -> String {
             );
         }
     }
+    let tool = tool.map_or(String::new(), |t| format!("  tool_offset: {}\n", mm(t)));
     format!(
-        "name: verification_plan\nmachine:\n  family: cartesian\n  stacking: XFYZ\n  travel: {{x: {}, y: {}, z: {}}}\nsensors:\n  tracker:\n    pose: {{translation: [0 mm, 0 mm, 0 mm], euler_xyz: [0 deg, 0 deg, 0 deg]}}\nterms:\n{terms}",
+        "name: verification_plan\nmachine:\n  family: cartesian\n  stacking: XFYZ\n  travel: {{x: {}, y: {}, z: {}}}\n{tool}sensors:\n  tracker:\n    pose: {{translation: [0 mm, 0 mm, 0 mm], euler_xyz: [0 deg, 0 deg, 0 deg]}}\nterms:\n{terms}",
         travel(0),
         travel(1),
         travel(2)

@@ -44,6 +44,6 @@ pub use bulk_types::is_bulk_type;
 pub use completeness::{compare_counts, CountMismatch};
 pub use copy::{filter_bag, merge_bags, CopyReport};
 pub use error::{io, Result, ToolError};
-pub use recording::{Recording, TopicCounts, TopicDefinition};
+pub use recording::{Recording, SequenceGap, TopicCounts, TopicDefinition, NAMED_GAPS};
 pub use replay_output::ReplayOutput;
 pub use topic_selection::TopicSelection;

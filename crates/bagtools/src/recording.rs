@@ -8,6 +8,11 @@
 //!   from it (its first sequence number − 1) — sent before the recorder subscribed, or lost
 //!   like a gap before the first sample arrived (the two cannot be told apart);
 //! * `unreadable`: samples DDS delivered that could not be taken (not CDR, for example).
+//!
+//! A gap is also named by time: the log times of the samples either side of it
+//! ([`SequenceGap`]), so a cut network link shows as "N messages between 12:00:14.2 and
+//! 12:01:14.5" rather than only as a count. Each topic keeps its [`NAMED_GAPS`] largest gaps;
+//! [`Recording::take_new_gaps`] hands the recorder each gap once, as it is found.
 
 use std::collections::{BTreeMap, HashMap};
 use std::path::Path;
@@ -31,6 +36,53 @@ pub struct TopicCounts {
     pub before_subscription: u64,
     /// Samples received that could not be taken (see [`Recording::count_unreadable`]).
     pub unreadable: u64,
+    /// The largest sequence gaps (at most [`NAMED_GAPS`], largest first), with their times.
+    pub gaps: Vec<SequenceGap>,
+}
+
+/// How many gaps each topic names by time; the rest are only counted (in `dropped`).
+pub const NAMED_GAPS: usize = 8;
+
+/// How many found gaps wait for [`Recording::take_new_gaps`] at most; beyond, the oldest go
+/// (they are still counted, and the largest still named per topic).
+const PENDING_GAPS: usize = 1024;
+
+/// Messages missing between two samples one publisher sent on one topic, located in time by
+/// the log (receive) times of those two samples, in ns since the Unix epoch.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct SequenceGap {
+    pub missing: u64,
+    /// Log time of the last sample received before the gap.
+    pub after_ns: u64,
+    /// Log time of the first sample received after it.
+    pub until_ns: u64,
+}
+
+impl SequenceGap {
+    /// "30 messages between 12:00:14.2 and 12:01:14.5 UTC (60.3 s)".
+    pub fn describe(&self) -> String {
+        format!(
+            "{} message{} between {} and {} UTC ({:.1} s)",
+            self.missing,
+            if self.missing == 1 { "" } else { "s" },
+            clock_time(self.after_ns),
+            clock_time(self.until_ns),
+            self.until_ns.saturating_sub(self.after_ns) as f64 * 1e-9
+        )
+    }
+}
+
+/// Time of day, UTC, to a tenth of a second, of a time in ns since the Unix epoch.
+fn clock_time(ns: u64) -> String {
+    let tenths = ns / 100_000_000;
+    let s = (tenths / 10) % 86_400;
+    format!(
+        "{:02}:{:02}:{:02}.{}",
+        s / 3600,
+        s / 60 % 60,
+        s % 60,
+        tenths % 10
+    )
 }
 
 impl TopicCounts {
@@ -53,8 +105,10 @@ pub enum TopicDefinition {
 pub struct Recording {
     writer: BagWriter,
     topics: BTreeMap<String, TopicCounts>,
-    /// (topic, publisher key) → last sequence number seen.
-    last_sequence: HashMap<(String, u64), i64>,
+    /// (topic, publisher key) → last sequence number seen, and its log time.
+    last_sequence: HashMap<(String, u64), (i64, u64)>,
+    /// Gaps found since the last [`Recording::take_new_gaps`], by topic.
+    new_gaps: Vec<(String, SequenceGap)>,
 }
 
 impl Recording {
@@ -63,6 +117,7 @@ impl Recording {
             writer: BagWriter::create(dir, options)?,
             topics: BTreeMap::new(),
             last_sequence: HashMap::new(),
+            new_gaps: Vec::new(),
         })
     }
 
@@ -78,6 +133,7 @@ impl Recording {
                 writer,
                 topics: BTreeMap::new(),
                 last_sequence: HashMap::new(),
+                new_gaps: Vec::new(),
             },
             report,
         ))
@@ -156,17 +212,35 @@ impl Recording {
                 None => {
                     counts.before_subscription += (sequence - 1) as u64;
                     self.last_sequence
-                        .insert((topic.to_string(), publisher), sequence);
+                        .insert((topic.to_string(), publisher), (sequence, log_ns));
                 }
-                Some(last) => {
+                Some((last, last_log_ns)) => {
                     if sequence > *last + 1 {
-                        counts.dropped += (sequence - *last - 1) as u64;
+                        let gap = SequenceGap {
+                            missing: (sequence - *last - 1) as u64,
+                            after_ns: *last_log_ns,
+                            until_ns: log_ns,
+                        };
+                        counts.dropped += gap.missing;
+                        name_gap(&mut counts.gaps, gap);
+                        if self.new_gaps.len() == PENDING_GAPS {
+                            self.new_gaps.remove(0);
+                        }
+                        self.new_gaps.push((topic.to_string(), gap));
                     }
-                    *last = (*last).max(sequence);
+                    if sequence > *last {
+                        *last = sequence;
+                        *last_log_ns = log_ns;
+                    }
                 }
             }
         }
         Ok(())
+    }
+
+    /// The gaps found since the last call, in the order found, with their topics.
+    pub fn take_new_gaps(&mut self) -> Vec<(String, SequenceGap)> {
+        std::mem::take(&mut self.new_gaps)
     }
 
     /// Count a sample of `topic` that DDS delivered but that could not be taken.
@@ -200,6 +274,16 @@ impl Recording {
 
     pub fn finish(self) -> Result<BagMetadata> {
         Ok(self.writer.finish()?)
+    }
+}
+
+/// Keep `gap` among a topic's [`NAMED_GAPS`] largest, largest first (an earlier gap first among
+/// equals).
+fn name_gap(gaps: &mut Vec<SequenceGap>, gap: SequenceGap) {
+    let at = gaps.partition_point(|g| g.missing >= gap.missing);
+    if at < NAMED_GAPS {
+        gaps.insert(at, gap);
+        gaps.truncate(NAMED_GAPS);
     }
 }
 
@@ -242,9 +326,51 @@ mod tests {
             (5, 5 * payload.len() as u64, 2, 2, 1)
         );
         assert_eq!((r.total_dropped(), r.total_missing()), (2, 5));
+        // the gap of 2 between sequence numbers 2 and 5, at their log times 20 and 50 ns
+        let gap = SequenceGap {
+            missing: 2,
+            after_ns: 20,
+            until_ns: 50,
+        };
+        assert_eq!(c.gaps, vec![gap]);
+        assert_eq!(r.take_new_gaps(), vec![("/t".to_string(), gap)]);
+        assert!(r.take_new_gaps().is_empty(), "each gap is handed over once");
         let meta = r.finish().unwrap();
         assert_eq!(meta.message_count, 5);
         let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn a_topic_names_its_largest_gaps_by_time() {
+        let mut gaps = Vec::new();
+        // gaps of 1..=12 messages found in a shuffled order; the 8 largest are kept
+        for (i, missing) in [3u64, 12, 1, 7, 9, 2, 11, 5, 4, 10, 6, 8]
+            .into_iter()
+            .enumerate()
+        {
+            let after_ns = i as u64 * 1_000_000_000;
+            name_gap(
+                &mut gaps,
+                SequenceGap {
+                    missing,
+                    after_ns,
+                    until_ns: after_ns + missing * 100_000_000,
+                },
+            );
+        }
+        let kept: Vec<u64> = gaps.iter().map(|g| g.missing).collect();
+        assert_eq!(kept, vec![12, 11, 10, 9, 8, 7, 6, 5]);
+        // a 60.3-s cut that began at 12:00:14.2 UTC on 2026-11-29
+        let noon = 1_795_953_600_000_000_000u64;
+        let cut = SequenceGap {
+            missing: 30,
+            after_ns: noon + 14_200_000_000,
+            until_ns: noon + 74_500_000_000,
+        };
+        assert_eq!(
+            cut.describe(),
+            "30 messages between 12:00:14.2 and 12:01:14.5 UTC (60.3 s)"
+        );
     }
 
     #[test]

@@ -23,11 +23,14 @@
 //! Losses are accounted by cause (`metrocell_bagtools::TopicCounts`): sequence gaps between
 //! received samples (`dropped`), samples sent before the recorder's first one from that
 //! publisher (`before_subscription`), samples that could not be taken (`unreadable`); each in
-//! the diagnostics and, per topic, in the final log line.
+//! the diagnostics and, per topic, in the final log line. Gaps are named by time too
+//! ([`gap_report`]): each scan logs the gaps found since the last one, and the final line names
+//! each topic's largest.
 //!
 //! Each topic's `offered_qos_profiles` holds the QoS its publishers announced in discovery when
 //! recording of the topic began, one profile per publisher, as rosbag2 stores them.
 
+pub mod gap_report;
 pub mod parameters;
 mod reader_qos;
 mod taker;
@@ -82,10 +85,11 @@ impl RecordingSummary {
             let mut causes = Vec::new();
             if c.dropped > 0 {
                 causes.push(if reliable {
-                    format!("{} sequence gaps (read reliably: overwritten in the reader queue of {depth} before the recorder took them, or in the publisher's history)", c.dropped)
+                    format!("{} in sequence gaps (read reliably: overwritten in the reader queue of {depth} before the recorder took them or in the publisher's history, or published while the publisher and the recorder had lost each other: a network cut longer than the DDS lease)", c.dropped)
                 } else {
-                    format!("{} sequence gaps (read best effort: lost on the wire or overwritten in the reader queue of {depth})", c.dropped)
+                    format!("{} in sequence gaps (read best effort: lost on the wire or overwritten in the reader queue of {depth})", c.dropped)
                 });
+                causes.push(gap_report::largest_gaps(&c.gaps, 3));
             }
             if c.before_subscription > 0 {
                 causes.push(format!("{} sent before the first sample received from their publisher (before the recorder subscribed, or lost like a gap)", c.before_subscription));
@@ -199,6 +203,9 @@ pub fn record(
                     c.before_subscription,
                 );
                 diagnostics.set_value(&format!("{topic}/unreadable"), c.unreadable);
+            }
+            if let Some(report) = gap_report::describe_new_gaps(&recording.take_new_gaps()) {
+                node.warn(report);
             }
             diagnostics.set_value("messages", recording.total_messages());
             diagnostics.set_value("dropped", recording.total_dropped());

@@ -281,6 +281,14 @@ fn dropped_counts_real_sequence_gaps_exactly() {
         "cause named: {line}"
     );
     assert!(
+        line.contains("largest: ") && line.contains(" UTC ("),
+        "the largest gaps named by time: {line}"
+    );
+    assert!(
+        log.contains("messages missing from the bag (sequence gaps): /gap_test/burst: "),
+        "the gaps reported as they were found:\n{log}"
+    );
+    assert!(
         gaps > 0,
         "a 20000-sample burst into a queue of 1 loses some: {line}"
     );

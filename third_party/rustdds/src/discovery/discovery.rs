@@ -1095,6 +1095,34 @@ impl Discovery {
       self.sedp_receive_topic_data(Some(guid_prefix));
       self.sedp_receive_subscription(Some(guid_prefix));
       self.sedp_receive_publication(Some(guid_prefix));
+      // metrocell patch: the endpoints restored from the attic are matched again. After a lease
+      // expiry the event loop dropped every proxy of this participant, but the remote's SEDP
+      // samples were read long ago and are not delivered a second time (our SEDP readers' caches
+      // still hold them), so nothing else would tell the event loop they are back: a cable pulled
+      // for longer than the lease never healed. Re-announcing is idempotent (an already matched
+      // proxy is only updated). Secured participants re-authenticate first and announce their
+      // endpoints through the secure SEDP topics, so this is done for unsecured ones only.
+      if self.security_opt.is_none() && guid_prefix != self.domain_participant.guid().prefix {
+        let (readers, writers) =
+          discovery_db_read(&self.discovery_db).endpoints_of_participant(guid_prefix);
+        if !readers.is_empty() || !writers.is_empty() {
+          info!(
+            "Rediscovered participant {guid_prefix:?}: matching its {} readers and {} writers again",
+            readers.len(),
+            writers.len()
+          );
+        }
+        for discovered_reader_data in readers {
+          self.send_discovery_notification(DiscoveryNotificationType::ReaderUpdated {
+            discovered_reader_data,
+          });
+        }
+        for discovered_writer_data in writers {
+          self.send_discovery_notification(DiscoveryNotificationType::WriterUpdated {
+            discovered_writer_data,
+          });
+        }
+      }
       debug!("Participant rediscovery finished");
     }
   }

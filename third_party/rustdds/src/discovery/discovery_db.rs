@@ -750,6 +750,25 @@ impl DiscoveryDB {
       .collect()
   }
 
+  /// The remote endpoints the DB holds for one participant: after a rediscovery, those restored
+  /// from the attic (metrocell patch, see `Discovery::process_discovered_participant_data`).
+  pub fn endpoints_of_participant(
+    &self,
+    participant: GuidPrefix,
+  ) -> (Vec<DiscoveredReaderData>, Vec<DiscoveredWriterData>) {
+    let readers = self
+      .external_topic_readers
+      .range(participant.range())
+      .map(|(_guid, drd)| drd.clone())
+      .collect();
+    let writers = self
+      .external_topic_writers
+      .range(participant.range())
+      .map(|(_guid, dwd)| dwd.clone())
+      .collect();
+    (readers, writers)
+  }
+
   pub fn readers_on_topic_and_participant(
     &self,
     topic_name: &str,

@@ -49,6 +49,19 @@ pub fn python() -> PathBuf {
     venv
 }
 
+/// The secured Cyclone DDS peer (tests/secure_cyclone/setup.sh, run by tests/run): its Python
+/// interpreter and the directory of Cyclone's DDS-Security plugins (for LD_LIBRARY_PATH).
+pub fn secure_cyclone_python() -> (PathBuf, PathBuf) {
+    let venv = workspace_root().join(".venv-secure-cyclone");
+    let plugins = std::fs::read_to_string(venv.join("plugins-dir"));
+    let python = venv.join("bin/python");
+    assert!(
+        python.exists() && plugins.is_ok(),
+        "no secured Cyclone DDS peer: run tests/run, or tests/secure_cyclone/setup.sh (it installs Debian's cyclonedds-dev and builds the binding against it)"
+    );
+    (python, PathBuf::from(plugins.unwrap().trim()))
+}
+
 /// The Cyclone DDS peer script.
 pub fn ros2_peer() -> PathBuf {
     workspace_root().join("tests/py/ros2_peer.py")

@@ -305,10 +305,18 @@ pub const ECDSA_SIGNATURE_ALGO_NAME: &[u8] = b"ECDSA-SHA256";
 
 // Recognize standard string constatns and convert to
 // corresponging algorithm identifiers in ring library.
+/// An algorithm name as a handshake's binary property carries it, without the C string's
+/// terminating NUL that Cyclone DDS (and Fast DDS) include in the octets (metrocell patch: RustDDS
+/// compared the octets exactly, so a Cyclone DDS peer's handshake request was refused with
+/// "Unexpected c_kagree_algo … ECDH+prime256v1-CEUM\0").
+pub(crate) fn algo_name(octets: &[u8]) -> &[u8] {
+  octets.strip_suffix(&[0]).unwrap_or(octets)
+}
+
 pub(crate) fn parse_signature_algo_name_to_ring(
-  algo_name: &[u8],
+  algo_name_octets: &[u8],
 ) -> SecurityResult<&'static dyn ring::signature::VerificationAlgorithm> {
-  match algo_name {
+  match algo_name(algo_name_octets) {
     RSA_SIGNATURE_ALGO_NAME => Ok(&ring::signature::RSA_PSS_2048_8192_SHA256),
     ECDSA_SIGNATURE_ALGO_NAME => Ok(&ring::signature::ECDSA_P256_SHA256_ASN1),
     _other =>
@@ -468,12 +476,8 @@ impl BuiltinHandshakeMessageToken {
       .challenge2
       .ok_or_else(|| create_security_error_and_log!("challenge2 not found"))
       .and_then(|b| Challenge::try_from(b.as_ref()))?;
-    let dh1 = self
-      .dh1
-      .ok_or_else(|| create_security_error_and_log!("dh1 not found"))?;
-    let dh2 = self
-      .dh2
-      .ok_or_else(|| create_security_error_and_log!("dh2 not found"))?;
+    let dh1 = self.dh1;
+    let dh2 = self.dh2;
     let signature = self
       .signature
       .ok_or_else(|| create_security_error_and_log!("signature not found"))?;
@@ -526,8 +530,11 @@ pub(in crate::security) struct HandshakeFinal {
   pub hash_c2: Option<Sha256>,
   pub challenge1: Challenge,
   pub challenge2: Challenge,
-  pub dh1: Bytes,
-  pub dh2: Bytes,
+  /// Optional in the final message (DDS-Security 1.1, Table 51; Cyclone DDS leaves them out):
+  /// the signature is checked over the values this side holds (metrocell patch: required
+  /// upstream, so a Cyclone DDS initiator's final message failed with "dh1 not found").
+  pub dh1: Option<Bytes>,
+  pub dh2: Option<Bytes>,
   pub signature: Bytes,
 }
 

@@ -37,6 +37,7 @@ impl CryptoKeyExchange for CryptographicBuiltin {
     self
       .get_receiver_specific_encode_key_materials(&remote_datareader_crypto_handle)
       .cloned()
+      .map(KeyMaterial_AES_GCM_GMAC_seq::for_remote)
       // Convert to CryptoTokens
       .and_then(Vec::<DatawriterCryptoToken>::try_from)
   }

@@ -98,6 +98,23 @@ impl KeyMaterial_AES_GCM_GMAC_seq {
     }
   }
 
+  /// The key materials as tokens for a remote endpoint: a payload-only key material whose
+  /// transformation is NONE (the payload is not protected) is left out, as Cyclone DDS leaves it
+  /// out (metrocell patch: a Cyclone DDS peer refuses a NONE key material for an endpoint whose
+  /// submessages are protected, "Invalid Crypto token", so it never read RustDDS's secure
+  /// discovery).
+  pub fn for_remote(self) -> KeyMaterial_AES_GCM_GMAC_seq {
+    match self {
+      Self::Two(key_material, payload_key_material)
+        if payload_key_material.transformation_kind
+          == BuiltinCryptoTransformationKind::CRYPTO_TRANSFORMATION_KIND_NONE =>
+      {
+        Self::One(key_material)
+      }
+      other => other,
+    }
+  }
+
   // TODO: Remove this function and use ".get()" above
   pub fn key_material(&self) -> &KeyMaterial_AES_GCM_GMAC {
     match self {

@@ -12,11 +12,15 @@ root=$(cd "$(dirname "${BASH_SOURCE[0]}")/../.." && pwd)
 cd "$root"
 venv=.venv-secure-cyclone
 
-if ! dpkg-query -W -f='${Status}' cyclonedds-dev 2>/dev/null | grep -q "install ok installed"; then
+# Debian's Cyclone DDS, and Python's headers to build the binding's C extension
+need=()
+dpkg-query -W -f='${Status}' cyclonedds-dev 2>/dev/null | grep -q "install ok installed" || need+=(cyclonedds-dev)
+[ -f "$(python3 -c 'import sysconfig; print(sysconfig.get_paths()["include"])')/Python.h" ] || need+=(python3-dev)
+if [ "${#need[@]}" -gt 0 ]; then
   if [ "$(id -u)" -eq 0 ]; then
-    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq cyclonedds-dev
+    apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq "${need[@]}"
   else
-    echo "tests/secure_cyclone/setup.sh: the secured Cyclone DDS peer needs Debian's cyclonedds-dev; install it (apt-get install cyclonedds-dev) and run again" >&2
+    echo "tests/secure_cyclone/setup.sh: the secured Cyclone DDS peer needs Debian's ${need[*]}; install them (apt-get install ${need[*]}) and run again" >&2
     exit 2
   fi
 fi

@@ -65,7 +65,10 @@ struct Outcome {
 fn stream(secured: Option<&Path>, bytes: usize, seconds: f64, rate: f64) -> Outcome {
     let topic = format!("/throughput_{bytes}");
     let mut talker = node("throughput_talker", secured.map(|k| (k, "/bench/talker")));
-    let mut listener = node("throughput_listener", secured.map(|k| (k, "/bench/listener")));
+    let mut listener = node(
+        "throughput_listener",
+        secured.map(|k| (k, "/bench/listener")),
+    );
     let q = qos::reliable().history(ros2_client::qos::History::KeepLast { depth: 1000 });
     let publisher = talker.publisher::<RosString>(&topic, q.clone()).unwrap();
     let subscription = listener.subscription::<RosString>(&topic, q).unwrap();

@@ -17,6 +17,10 @@ use crate::parameters::Settings;
 
 /// How often diagnostics values are refreshed (wall clock).
 const DIAGNOSTICS_PERIOD: Duration = Duration::from_millis(500);
+
+/// How long the twin still waits after the recorder's readers matched before its first
+/// message, so that the recorder can read it (see [`LiveSim::wait_for_recorder`]).
+pub const RECORDER_SETTLE: Duration = Duration::from_secs(2);
 /// Lag behind schedule above which the node reports a warning (s of wall time).
 const LAG_WARNING: f64 = 1.0;
 
@@ -152,7 +156,8 @@ impl LiveSim {
     /// subscribes to every topic this twin publishes and each writer has matched a reader, or
     /// `timeout` passes. The node is found by its name in ROS 2's `ros_discovery_info`, so
     /// another participant that reads every topic (the dashboard) does not count. Returns
-    /// whether it did; false on timeout or shutdown.
+    /// whether it did; false on timeout or shutdown. Once it does, waits [`RECORDER_SETTLE`]
+    /// more before returning.
     pub fn wait_for_recorder(
         &self,
         node: &MetrocellNode,
@@ -188,7 +193,11 @@ impl LiveSim {
                     .iter()
                     .all(|p| p.matched_subscriptions() > 0)
             {
-                return Ok(true);
+                // Seeing the recorder's readers matched here does not mean it can read yet: with
+                // DDS Security each writer's keys travel to the reader after the match, and a
+                // message that arrives before them is lost to a late-joining reader (the secured
+                // demo lost the first ~90 ms of every topic once on a loaded machine, 2026-11-30).
+                return Ok(!token.wait_timeout(RECORDER_SETTLE));
             }
             if Instant::now() >= deadline || token.wait_timeout(Duration::from_millis(20)) {
                 if !token.is_triggered() {

@@ -14,7 +14,7 @@
 //! 12:01:14.5" rather than only as a count. Each topic keeps its [`NAMED_GAPS`] largest gaps;
 //! [`Recording::take_new_gaps`] hands the recorder each gap once, as it is found.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::{BTreeMap, HashMap, VecDeque};
 use std::path::Path;
 
 use metrocell_bag::{BagMetadata, BagWriter, WriterOptions};
@@ -108,7 +108,7 @@ pub struct Recording {
     /// (topic, publisher key) → last sequence number seen, and its log time.
     last_sequence: HashMap<(String, u64), (i64, u64)>,
     /// Gaps found since the last [`Recording::take_new_gaps`], by topic.
-    new_gaps: Vec<(String, SequenceGap)>,
+    new_gaps: VecDeque<(String, SequenceGap)>,
 }
 
 impl Recording {
@@ -117,7 +117,7 @@ impl Recording {
             writer: BagWriter::create(dir, options)?,
             topics: BTreeMap::new(),
             last_sequence: HashMap::new(),
-            new_gaps: Vec::new(),
+            new_gaps: VecDeque::new(),
         })
     }
 
@@ -133,7 +133,7 @@ impl Recording {
                 writer,
                 topics: BTreeMap::new(),
                 last_sequence: HashMap::new(),
-                new_gaps: Vec::new(),
+                new_gaps: VecDeque::new(),
             },
             report,
         ))
@@ -223,10 +223,11 @@ impl Recording {
                         };
                         counts.dropped += gap.missing;
                         name_gap(&mut counts.gaps, gap);
+                        // a flood finds gaps faster than they are reported: the oldest go, in O(1)
                         if self.new_gaps.len() == PENDING_GAPS {
-                            self.new_gaps.remove(0);
+                            self.new_gaps.pop_front();
                         }
-                        self.new_gaps.push((topic.to_string(), gap));
+                        self.new_gaps.push_back((topic.to_string(), gap));
                     }
                     if sequence > *last {
                         *last = sequence;
@@ -240,7 +241,7 @@ impl Recording {
 
     /// The gaps found since the last call, in the order found, with their topics.
     pub fn take_new_gaps(&mut self) -> Vec<(String, SequenceGap)> {
-        std::mem::take(&mut self.new_gaps)
+        std::mem::take(&mut self.new_gaps).into()
     }
 
     /// Count a sample of `topic` that DDS delivered but that could not be taken.
@@ -337,6 +338,34 @@ mod tests {
         assert!(r.take_new_gaps().is_empty(), "each gap is handed over once");
         let meta = r.finish().unwrap();
         assert_eq!(meta.message_count, 5);
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+
+    #[test]
+    fn the_gaps_waiting_to_be_reported_are_bounded_the_oldest_going() {
+        let dir = std::env::temp_dir().join(format!("bagtools_pending_{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        let mut r = Recording::create(&dir, WriterOptions::default()).unwrap();
+        r.add_topic("/t", "std_msgs/msg/String", "").unwrap();
+        let payload = rosmsg::encode(
+            metrocell_msgs::registry(),
+            "std_msgs/msg/String",
+            &rosmsg::default_value(metrocell_msgs::registry(), "std_msgs/msg/String").unwrap(),
+        )
+        .unwrap();
+        // odd sequence numbers only: a gap of one before every sample after the first
+        let found = PENDING_GAPS + 5;
+        for k in 0..=found as i64 {
+            let seq = 2 * k + 1;
+            r.record("/t", seq as u64, seq as u64, &payload, 1, seq)
+                .unwrap();
+        }
+        let pending = r.take_new_gaps();
+        assert_eq!(pending.len(), PENDING_GAPS);
+        // the 5 oldest went: the first kept is the 6th found, after sequence number 11
+        assert_eq!(pending[0].1.after_ns, 11);
+        assert_eq!(r.counts()["/t"].dropped, found as u64, "all still counted");
+        r.finish().unwrap();
         let _ = std::fs::remove_dir_all(&dir);
     }
 

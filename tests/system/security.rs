@@ -737,6 +737,32 @@ fn secured_cyclone(config: &Path, domain: u16, args: &[&str]) -> Command {
     c
 }
 
+/// The secured Cyclone peer publishing `count` std_msgs/String `data` on `topic` at 5 Hz, after
+/// 3 s for the readers to match (the older binding cannot list them).
+fn cyclone_talker(config: &Path, domain: u16, topic: &str, data: &str, count: u32) -> ChildGuard {
+    let json = format!(r#"{{"data": "{data}"}}"#);
+    let count = count.to_string();
+    ChildGuard::spawn(&mut secured_cyclone(
+        config,
+        domain,
+        &[
+            "publish",
+            "--topic",
+            topic,
+            "--type",
+            "std_msgs/msg/String",
+            "--json",
+            &json,
+            "--count",
+            &count,
+            "--rate",
+            "5",
+            "--settle",
+            "3",
+        ],
+    ))
+}
+
 #[test]
 fn a_secured_cyclone_dds_peer_and_a_secured_node_exchange_messages_both_ways() {
     require_isolated_network();
@@ -769,25 +795,7 @@ fn a_secured_cyclone_dds_peer_and_a_secured_node_exchange_messages_both_ways() {
     let from_metrocell = heard.matches("from_metrocell").count();
     // Cyclone → metrocell
     let echo = listener(16, DOMAIN, &node, "/from_cyclone");
-    let publisher = ChildGuard::spawn(&mut secured_cyclone(
-        &cyclone,
-        DOMAIN,
-        &[
-            "publish",
-            "--topic",
-            "/from_cyclone",
-            "--type",
-            "std_msgs/msg/String",
-            "--json",
-            r#"{"data": "from_cyclone"}"#,
-            "--count",
-            "50",
-            "--rate",
-            "5",
-            "--settle",
-            "3",
-        ],
-    ));
+    let publisher = cyclone_talker(&cyclone, DOMAIN, "/from_cyclone", "from_cyclone", 50);
     let (_, publisher_log) = text(&publisher.wait_output(Duration::from_secs(40)));
     let (echoed, echo_log) = text(&echo.wait_output(Duration::from_secs(40)));
     let from_cyclone = echoed.matches("from_cyclone").count();
@@ -818,26 +826,7 @@ fn a_cyclone_dds_peer_with_a_certificate_of_another_ca_reaches_no_secured_node()
     };
     let publish = |config: &Path, marker: &str| {
         let echo = listener(12, DOMAIN, &node, "/guarded");
-        let json = format!(r#"{{"data": "{marker}"}}"#);
-        let _p = ChildGuard::spawn(&mut secured_cyclone(
-            config,
-            DOMAIN,
-            &[
-                "publish",
-                "--topic",
-                "/guarded",
-                "--type",
-                "std_msgs/msg/String",
-                "--json",
-                &json,
-                "--count",
-                "40",
-                "--rate",
-                "5",
-                "--settle",
-                "3",
-            ],
-        ));
+        let _p = cyclone_talker(config, DOMAIN, "/guarded", marker, 40);
         let (out, log) = text(&echo.wait_output(Duration::from_secs(40)));
         (out.matches(marker).count(), log)
     };
